@@ -1,0 +1,1 @@
+"""wirecal.cli — the ``wirecal`` command line: a thin click layer over the Python API."""

@@ -1,0 +1,60 @@
+"""The ``wirecal`` command: entry point and shared option handling.
+
+Every command has a Python API twin in :mod:`wirecal.solver` or :mod:`wirecal.gen`;
+the commands only parse options, call it, and print. A :class:`WirecalError` is printed
+as ``error: …`` lines on stderr with exit status 2, never as a traceback.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import sys
+from importlib.metadata import PackageNotFoundError, version
+from typing import Any
+
+import click
+
+from wirecal.solver.errors import WirecalError
+
+
+def _version() -> str:
+    try:
+        return version("wirecal")
+    except PackageNotFoundError:  # pragma: no cover - only in an uninstalled checkout
+        return "unknown"
+
+
+def user_errors(func):
+    """Turn :class:`WirecalError` into a clear message and exit status 2."""
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        try:
+            return func(*args, **kwargs)
+        except WirecalError as exc:
+            for line in exc.problems:
+                click.echo(f"error: {line}", err=True)
+            sys.exit(2)
+    return wrapper
+
+
+def print_json(data: Any) -> None:
+    click.echo(json.dumps(data, indent=2, ensure_ascii=False))
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(_version(), "--version", prog_name="wirecal")
+def main() -> None:
+    """Kinematic calibration of robot arms with a single draw-wire encoder.
+
+    Implements the step-by-step procedure of Boschetti & Sinico: choose the encoder
+    location θ0 and point sets where the wire-length error depends on one parameter
+    at a time (the Ψ analysis), measure, and identify the parameters one by one.
+    Angles are in degrees, lengths in mm. Start with:
+
+        wirecal psi examples/viper_s650/robot.toml examples/viper_s650/paper_plan.toml
+    """
+
+
+# Commands register themselves on import.
+from wirecal.cli import psi as _psi  # noqa: E402,F401

@@ -1,0 +1,31 @@
+"""One error type for every problem a user can fix: bad files, bad options, bad logs."""
+
+from __future__ import annotations
+
+
+class WirecalError(Exception):
+    """A problem the user can act on; ``problems`` holds one line per problem.
+
+    Each line already names where the problem is (``file: key: problem`` or
+    ``file:line: problem``) and, where possible, what to do about it.
+    """
+
+    def __init__(self, problems: str | list[str]):
+        self.problems = [problems] if isinstance(problems, str) else list(problems)
+        super().__init__("\n".join(self.problems))
+
+
+class Problems:
+    """Collects problems about one file so that all are reported at once."""
+
+    def __init__(self, source: str):
+        self.source = source
+        self.items: list[str] = []
+
+    def add(self, key: str, message: str) -> None:
+        where = f"{self.source}: {key}" if key else self.source
+        self.items.append(f"{where}: {message}")
+
+    def raise_if_any(self) -> None:
+        if self.items:
+            raise WirecalError(self.items)

@@ -1,0 +1,125 @@
+"""Identifiability of error parameters from wire lengths: rank, singular values,
+unobservable parameters or combinations, and the observability indices O1–O5
+(Sun & Hollerbach's list) of the distance Jacobian in boundary units.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .kinematics import Model
+from .sensitivity import sensitivity
+
+BASE_PARAMETERS = frozenset({"al0", "a0", "th1", "d1"})
+"""Row 1 of the table: a rigid motion of everything, invisible to any wire length."""
+
+RANK_RTOL = 1e-9
+"""Singular values below RANK_RTOL·σ_max are structural zeros (round-off is ~1e-15)."""
+
+
+@dataclass(frozen=True)
+class Identifiability:
+    names: tuple[str, ...]
+    n_points: int
+    singular_values: np.ndarray
+    rank: int
+    unobservable: tuple[str, ...]                        # single parameters
+    combinations: tuple[tuple[tuple[str, float], ...], ...]  # null-space combinations
+    indices: dict[str, float]                            # O1..O5
+
+    def describe(self) -> list[str]:
+        """The analysis in words, one sentence per line."""
+        m = len(self.names)
+        lines = [f"{self.n_points} points, {m} parameters: the distance Jacobian has rank "
+                 f"{self.rank} of {m}."]
+        for name in self.unobservable:
+            if name in BASE_PARAMETERS:
+                why = ("it moves every calibration point and the encoder location alike "
+                       "(a rigid motion of the whole arm), so no wire length changes")
+            else:
+                why = "no wire length of these points depends on it; add points that move it"
+            lines.append(f"{name} is unobservable: {why}.")
+        for combo in self.combinations:
+            terms = " ".join(f"{c:+.4g}·{n}" for n, c in combo)
+            lines.append(f"{terms} is unobservable: changing these parameters together in "
+                         "this ratio leaves every wire length unchanged (they are redundant; "
+                         "fix all but one).")
+        if self.rank == m:
+            lines.append("Every parameter is identifiable from these points.")
+        o = self.indices
+        lines.append(
+            "Observability: O1 = {O1:.4g}, O2 = {O2:.4g} (inverse condition number), "
+            "O3 = {O3:.4g} (smallest singular value), O4 = {O4:.4g} (noise amplification), "
+            "O5 = {O5:.4g}.".format(**o))
+        return lines
+
+
+def observability_indices(s: np.ndarray, n_rows: int) -> dict[str, float]:
+    """O1–O5 from the singular values σ1 ≥ … ≥ σm of an n_rows × m Jacobian.
+
+    O1 = (σ1⋯σm)^(1/m)/√n (Borm & Menq), O2 = σm/σ1 (Driels & Pathre), O3 = σm
+    (Nahvi & Hollerbach), O4 = σm²/σ1 (noise amplification), O5 = 1/Σ(1/σi).
+    """
+    s = np.asarray(s, dtype=float)
+    if s.size == 0 or s[-1] <= 0:
+        return dict.fromkeys(("O1", "O2", "O3", "O4", "O5"), 0.0)
+    return {
+        "O1": float(np.exp(np.mean(np.log(s))) / np.sqrt(n_rows)),
+        "O2": float(s[-1] / s[0]),
+        "O3": float(s[-1]),
+        "O4": float(s[-1] ** 2 / s[0]),
+        "O5": float(1.0 / np.sum(1.0 / s)),
+    }
+
+
+def analyse(model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray,
+            names: Sequence[str]) -> Identifiability:
+    """Rank, null space and observability of ∂d/∂e over the points ``q_deg``."""
+    names = tuple(names)
+    J = sensitivity(model, q_deg, theta0_deg, names).psi
+    s = np.linalg.svd(J, compute_uv=False) if J.size else np.zeros(0)
+    # Pad to m values: a Jacobian with fewer rows than columns has m − N zero values.
+    s = np.concatenate([s, np.zeros(len(names) - s.size)])
+    tol = RANK_RTOL * (s[0] if s.size and s[0] > 0 else 1.0)
+    rank = int(np.sum(s > tol))
+
+    col_norm = np.linalg.norm(J, axis=0)
+    alone = [k for k in range(len(names)) if col_norm[k] <= tol]
+    rest = [k for k in range(len(names)) if k not in alone]
+    combos: list[tuple[tuple[str, float], ...]] = []
+    if rest and rank < len(rest):
+        _, sr, vt = np.linalg.svd(J[:, rest])
+        sr = np.concatenate([sr, np.zeros(len(rest) - sr.size)])
+        null = vt[sr <= tol]
+        for row in _rref(null):
+            combo = tuple((names[rest[k]], float(c)) for k, c in enumerate(row)
+                          if abs(c) > 1e-6)
+            combos.append(combo)
+    return Identifiability(
+        names=names, n_points=int(J.shape[0]), singular_values=s, rank=rank,
+        unobservable=tuple(names[k] for k in alone), combinations=tuple(combos),
+        indices=observability_indices(np.where(s > tol, s, 0.0), J.shape[0]),
+    )
+
+
+def _rref(a: np.ndarray) -> np.ndarray:
+    """Reduced row echelon form: a sparse, readable basis of the same row space."""
+    a = np.array(a, dtype=float)
+    rows, cols = a.shape
+    r = 0
+    for c in range(cols):
+        if r == rows:
+            break
+        piv = r + int(np.argmax(np.abs(a[r:, c])))
+        if abs(a[piv, c]) < 1e-9:
+            continue
+        a[[r, piv]] = a[[piv, r]]
+        a[r] /= a[r, c]
+        for k in range(rows):
+            if k != r:
+                a[k] -= a[k, c] * a[r]
+        r += 1
+    return a[:r]

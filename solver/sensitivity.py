@@ -1,0 +1,82 @@
+"""The paper's sensitivity analysis (§2.2): Φ_i, Φ_0, Φ_{i−0}, ν̂_i and Ψ_i.
+
+Ψ_{i_j} = ⟨Φ_{i−0, j}, ν̂_i⟩ (paper eq. 16–17) is the first-order change of the wire
+length at point i per unit error of parameter j: mm/deg for angular parameters and
+dimensionless for lengths (paper §2.2). ν̂_i uses Δz = f_z(θ_i) − f_z(θ_0); the paper's
+eq. 12 writes f_y there by typo.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import params as P
+from .kinematics import Model, tool_jacobian
+
+
+def boundary_scale(names: Sequence[str], n_joints: int) -> np.ndarray:
+    """Factor turning per-radian columns into per-degree ones (1 for lengths)."""
+    return np.where(P.angular_mask(names, n_joints), np.pi / 180.0, 1.0)
+
+
+@dataclass(frozen=True)
+class Sensitivity:
+    """Φ and Ψ for a batch of points, in boundary units (mm/deg, mm/mm)."""
+
+    names: tuple[str, ...]
+    phi_i: np.ndarray     # (N, 3, m)  ∂p/∂e at θ_i
+    phi_0: np.ndarray     # (3, m)     ∂p/∂e at θ_0
+    nu: np.ndarray        # (N, 3)     p(θ_i) − p(θ_0), nominal
+    nu_hat: np.ndarray    # (N, 3)     wire direction
+    psi: np.ndarray       # (N, m)
+
+    @property
+    def phi_diff(self) -> np.ndarray:
+        """Φ_{i−0} = Φ_i − Φ_0 (paper eq. 11)."""
+        return self.phi_i - self.phi_0
+
+
+def sensitivity(model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray,
+                names: Sequence[str]) -> Sensitivity:
+    """Φ_i, Φ_0, ν̂_i and Ψ_i at the given model for points ``q_deg`` (N, n) in degrees."""
+    names = tuple(names)
+    scale = boundary_scale(names, model.n_joints)
+    p, J = tool_jacobian(model, np.radians(np.atleast_2d(q_deg)), names)
+    p0, J0 = tool_jacobian(model, np.radians(np.atleast_2d(theta0_deg)), names)
+    nu = p - p0[0]
+    norm = np.linalg.norm(nu, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        nu_hat = nu / norm[:, None]
+    phi_i, phi_0 = J * scale, J0[0] * scale
+    psi = np.einsum("nk,nkm->nm", nu_hat, phi_i - phi_0)
+    return Sensitivity(names, phi_i, phi_0, nu, nu_hat, psi)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Whether a point isolates its step's parameter (paper eq. 18–19)."""
+
+    ok: bool
+    violations: tuple[str, ...]  # later parameters whose |Ψ| exceeds the tolerance
+
+
+DEFAULT_TOL = 0.15
+"""Default tolerance: a later parameter's |Ψ| may reach 15 % of the step's own |Ψ_j|."""
+
+PSI_FLOOR = 0.005
+"""|Ψ| below this (half the paper's printed precision) counts as zero."""
+
+
+def verdict(psi_row: dict[str, float], parameter: str, later: Sequence[str],
+            tol: float = DEFAULT_TOL) -> Verdict:
+    """A point of step j is ``ok`` when |Ψ_t| ≤ max(tol·|Ψ_j|, PSI_FLOOR) for every t > j.
+
+    The set S_j of eq. 19 asks Ψ_t = 0 for every parameter identified after step j
+    (the flowchart's ``t < j`` is the reversed typo listed in DESIGN.md).
+    """
+    limit = max(tol * abs(psi_row[parameter]), PSI_FLOOR)
+    bad = tuple(t for t in later if abs(psi_row[t]) > limit)
+    return Verdict(ok=not bad, violations=bad)
