@@ -118,7 +118,7 @@ def tool_jacobian(model: Model, q: np.ndarray,
     f = frames(model, q)
     p = f.o[:, -1] + f.R_last @ model.tool_point
     n = model.n_joints
-    J = np.empty(p.shape + (len(names),))
+    J = np.empty((*p.shape, len(names)))
     for k, name in enumerate(names):
         par = P.parse(name, n)
         i = par.row

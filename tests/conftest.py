@@ -1,0 +1,29 @@
+"""Shared fixtures: the shipped Viper s650 example and small helpers."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from wirecal.solver.plan import load_plan
+from wirecal.solver.robot import load_robot
+
+ROOT = Path(__file__).resolve().parents[1]
+VIPER = ROOT / "examples" / "viper_s650"
+DATA = Path(__file__).resolve().parent / "data"
+
+
+@pytest.fixture(scope="session")
+def viper():
+    return load_robot(VIPER / "robot.toml")
+
+
+@pytest.fixture(scope="session")
+def paper_plan(viper):
+    return load_plan(VIPER / "paper_plan.toml", viper)
+
+
+@pytest.fixture(scope="session")
+def printed_plan(viper):
+    return load_plan(VIPER / "paper_plan_as_printed.toml", viper)

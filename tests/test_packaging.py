@@ -1,0 +1,26 @@
+"""The wheel holds the namespaced packages and the templates, and nothing top-level generic."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+import zipfile
+
+from .conftest import ROOT
+
+
+def test_wheel_contains_templates_under_the_namespace(tmp_path):
+    # Build from a clean copy: a stale build/ folder could hide missing package data.
+    src = tmp_path / "src"
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
+        ".git", "build", "dist", "*.egg-info", "__pycache__", ".venv", ".*_cache"))
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
+                    "-q", "-w", str(tmp_path / "dist"), str(src)], check=True)
+    wheel = next((tmp_path / "dist").glob("wirecal-*.whl"))
+    names = zipfile.ZipFile(wheel).namelist()
+    assert "wirecal/templates/text/psi.txt.j2" in names
+    assert "wirecal/templates/__init__.py" in names
+    assert "wirecal/solver/kinematics.py" in names and "wirecal/cli/main.py" in names
+    top = {n.split("/")[0] for n in names}
+    assert top <= {"wirecal", next(t for t in top if t.endswith(".dist-info"))}, top
