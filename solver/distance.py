@@ -3,6 +3,10 @@
 The encoder is mounted so that the wire length is zero at θ0 (paper §2.1), so the
 measured quantity at configuration θ_i is d_i = ‖p(θ_i) − p(θ_0)‖, both points
 computed by the same (possibly perturbed) model.
+
+Both functions accept one model with points q (k, n), or T models (a batched model,
+dh (T, n, 4)) with shared points q (k, n) or per-model points q (T, k, n); θ0 is (n,)
+or (T, n). Results are (k,)/(k, m), or (T, k)/(T, k, m) for T models.
 """
 
 from __future__ import annotations
@@ -11,28 +15,45 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .kinematics import Model, tool_jacobian, tool_position
+from .kinematics import Model, repeat, tool_jacobian, tool_position
+
+
+def _stack(model: Model, q: np.ndarray, q0: np.ndarray) -> tuple[Model, np.ndarray, int]:
+    """θ0 and the points of every model as one batch of T·(k+1) configurations."""
+    T = model.dh.shape[0] if model.batched else 1
+    q = np.asarray(q, dtype=float)
+    q = np.broadcast_to(q, (T, *q.shape[-2:]))
+    q0 = np.broadcast_to(np.asarray(q0, dtype=float), (T, q.shape[-1]))
+    Q = np.concatenate([q0[:, None, :], q], axis=1).reshape(-1, q.shape[-1])
+    k1 = q.shape[1] + 1
+    return (repeat(model, k1) if model.batched else model), Q, k1
+
+
+def _shape(model: Model, arr: np.ndarray) -> np.ndarray:
+    return arr if model.batched else arr[0]
 
 
 def wire_lengths(model: Model, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
-    """d_i = ‖p(θ_i) − p(θ_0)‖ for a batch q (N, n) and one θ0 (n,), radians; shape (N,)."""
-    p = tool_position(model, q)
-    p0 = tool_position(model, np.atleast_2d(q0))[0]
-    return np.linalg.norm(p - p0, axis=1)
+    """d_i = ‖p(θ_i) − p(θ_0)‖ for points q and one θ0, radians."""
+    big, Q, k1 = _stack(model, q, q0)
+    p = tool_position(big, Q).reshape(-1, k1, 3)
+    return _shape(model, np.linalg.norm(p[:, 1:] - p[:, :1], axis=2))
 
 
 def wire_jacobian(model: Model, q: np.ndarray, q0: np.ndarray,
                   names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-    """d (N,) and ∂d/∂e (N, m) = ν̂ᵀ (Φ_i − Φ_0) in mm/rad and mm/mm (paper eq. 14–16).
+    """d and ∂d/∂e = ν̂ᵀ (Φ_i − Φ_0) in mm/rad and mm/mm (paper eq. 14–16).
 
     Evaluated at the model given, so the same function serves the Ψ analysis at
     nominal and Gauss–Newton steps at any estimate.
     """
-    p, J = tool_jacobian(model, q, names)
-    p0, J0 = tool_jacobian(model, np.atleast_2d(q0), names)
-    diff = p - p0[0]
-    d = np.linalg.norm(diff, axis=1)
+    big, Q, k1 = _stack(model, q, q0)
+    p, J = tool_jacobian(big, Q, names)
+    p = p.reshape(-1, k1, 3)
+    J = J.reshape(-1, k1, 3, len(names))
+    diff = p[:, 1:] - p[:, :1]
+    d = np.linalg.norm(diff, axis=2)
     with np.errstate(invalid="ignore", divide="ignore"):
-        nu_hat = diff / d[:, None]
-    dd = np.einsum("nk,nkm->nm", nu_hat, J - J0[0])
-    return d, dd
+        nu_hat = diff / d[..., None]
+    dd = np.einsum("tkc,tkcm->tkm", nu_hat, J[:, 1:] - J[:, :1])
+    return _shape(model, d), _shape(model, dd)

@@ -28,17 +28,43 @@ from .robot import Robot
 
 @dataclass(frozen=True)
 class Model:
-    """A concrete kinematic model: the nominal DH table plus error offsets (radians, mm)."""
+    """A concrete kinematic model: the nominal DH table plus error offsets (radians, mm).
 
-    dh: np.ndarray          # (n, 4): α_{i-1}, a_{i-1}, θ offset, d_i
-    tool_point: np.ndarray  # (3,)
+    ``dh`` is (n, 4) for one model, or (N, n, 4) with ``tool_point`` (N, 3) for one model
+    per configuration of a batch (Monte Carlo trials evaluated in one call).
+    """
+
+    dh: np.ndarray          # (n, 4) or (N, n, 4): α_{i-1}, a_{i-1}, θ offset, d_i
+    tool_point: np.ndarray  # (3,) or (N, 3)
 
     @property
     def n_joints(self) -> int:
-        return int(self.dh.shape[0])
+        return int(self.dh.shape[-2])
+
+    @property
+    def batched(self) -> bool:
+        return self.dh.ndim == 3
 
 
 _COL = {"al": 0, "a": 1, "th": 2, "d": 3}
+
+
+def with_errors(base: Robot | Model, names: Sequence[str], values: np.ndarray) -> Model:
+    """The model with offsets ``values`` (m,) or (T, m), internal units, added to ``base``.
+
+    With a (T, m) array the result holds T models (dh (T, n, 4)).
+    """
+    values = np.asarray(values, dtype=float)
+    lead = values.shape[:-1]
+    dh = np.array(np.broadcast_to(base.dh, lead + np.shape(base.dh)[-2:]), dtype=float)
+    tool = np.array(np.broadcast_to(base.tool_point, (*lead, 3)), dtype=float)
+    for k, name in enumerate(names):
+        p = P.parse(name, dh.shape[-2])
+        if p.kind == "tool":
+            tool[..., p.row] += values[..., k]
+        else:
+            dh[..., p.row, _COL[p.kind]] += values[..., k]
+    return Model(dh=dh, tool_point=tool)
 
 
 def perturbed(robot: Robot | Model, errors: Mapping[str, float] | None = None,
@@ -48,22 +74,17 @@ def perturbed(robot: Robot | Model, errors: Mapping[str, float] | None = None,
     ``errors`` maps parameter names to offsets in boundary units (deg, mm) when
     ``units == "deg"``, or in internal units (rad, mm) when ``units == "rad"``.
     """
-    dh = np.array(robot.dh, dtype=float)
-    tool = np.array(robot.tool_point, dtype=float)
-    for name, value in (errors or {}).items():
-        p = P.parse(name, dh.shape[0])
-        v = float(value)
-        if p.angular and units == "deg":
-            v = np.radians(v)
-        if p.kind == "tool":
-            tool[p.row] += v
-        else:
-            dh[p.row, _COL[p.kind]] += v
-    return Model(dh=dh, tool_point=tool)
+    errors = dict(errors or {})
+    names = list(errors)
+    values = np.array([float(errors[n]) for n in names])
+    if units == "deg" and names:
+        values = values * np.where(P.angular_mask(names, robot.dh.shape[-2]), np.pi / 180, 1.0)
+    return with_errors(robot, names, values)
 
 
-def as_model(robot: Robot | Model) -> Model:
-    return robot if isinstance(robot, Model) else perturbed(robot)
+def repeat(model: Model, counts: int) -> Model:
+    """Each model of a batch repeated ``counts`` times in a row (for T trials × k points)."""
+    return Model(np.repeat(model.dh, counts, axis=0), np.repeat(model.tool_point, counts, axis=0))
 
 
 @dataclass(frozen=True)
@@ -76,47 +97,63 @@ class Frames:
     R_last: np.ndarray  # (N, 3, 3) rotation of the last frame
 
 
+def _rotate(R: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """R_k · v_k for a stack of rotations (N, 3, 3) and one vector (3,) or one per row."""
+    if v.ndim == 1:
+        return R @ v
+    return np.einsum("nij,nj->ni", R, v)
+
+
 def frames(model: Model, q: np.ndarray) -> Frames:
-    """All frames of the chain for joint angles ``q`` (N, n) in radians."""
+    """All frames of the chain for joint angles ``q`` (N, n) in radians.
+
+    A batched model (dh (N, n, 4)) gives configuration k its own model k. The rotation
+    is carried as its three columns X, Y, Z; per joint, RotX(α) gives
+    Y' = cα·Y + sα·Z, Z' = −sα·Y + cα·Z, the origin moves by a·X + d·Z', and RotZ(θ)
+    gives X'' = cθ·X + sθ·Y', Y'' = −sθ·X + cθ·Y'.
+    """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     N, n = q.shape
     if n != model.n_joints:
         raise ValueError(f"configurations have {n} joints; the model has {model.n_joints}")
-    alpha, a, off, d = model.dh.T
+    dh = model.dh
+    batched = dh.ndim == 3
+    th = q + dh[..., 2]
+    ct, st = np.cos(th), np.sin(th)
+    ca_all, sa_all = np.cos(dh[..., 0]), np.sin(dh[..., 0])
     x = np.empty((N, n + 1, 3))
     z = np.empty((N, n + 1, 3))
     o = np.empty((N, n + 1, 3))
-    R = np.broadcast_to(np.eye(3), (N, 3, 3)).copy()
+    X = np.broadcast_to([1.0, 0.0, 0.0], (N, 3))
+    Y = np.broadcast_to([0.0, 1.0, 0.0], (N, 3))
+    Z = np.broadcast_to([0.0, 0.0, 1.0], (N, 3))
     pos = np.zeros((N, 3))
-    x[:, 0], z[:, 0], o[:, 0] = R[:, :, 0], R[:, :, 2], pos
-    th = q + off
-    ct, st = np.cos(th), np.sin(th)
+    x[:, 0], z[:, 0], o[:, 0] = X, Z, pos
     for i in range(n):
-        ca, sa = np.cos(alpha[i]), np.sin(alpha[i])
-        # local rotation RotX(α)·RotZ(θ) and translation (a, −sα·d, cα·d)
-        c, s = ct[:, i], st[:, i]
-        L = np.empty((N, 3, 3))
-        L[:, 0, 0], L[:, 0, 1], L[:, 0, 2] = c, -s, 0.0
-        L[:, 1, 0], L[:, 1, 1], L[:, 1, 2] = ca * s, ca * c, -sa
-        L[:, 2, 0], L[:, 2, 1], L[:, 2, 2] = sa * s, sa * c, ca
-        t_local = np.array([a[i], -sa * d[i], ca * d[i]])
-        pos = pos + R @ t_local
-        R = R @ L
-        x[:, i + 1], z[:, i + 1], o[:, i + 1] = R[:, :, 0], R[:, :, 2], pos
-    return Frames(x=x, z=z, o=o, R_last=R)
+        if batched:
+            ca, sa = ca_all[:, i, None], sa_all[:, i, None]
+            a, d = dh[:, i, 1, None], dh[:, i, 3, None]
+        else:
+            ca, sa, a, d = ca_all[i], sa_all[i], dh[i, 1], dh[i, 3]
+        Y, Z = ca * Y + sa * Z, ca * Z - sa * Y
+        pos = pos + a * X + d * Z
+        c, s = ct[:, i, None], st[:, i, None]
+        X, Y = c * X + s * Y, c * Y - s * X
+        x[:, i + 1], z[:, i + 1], o[:, i + 1] = X, Z, pos
+    return Frames(x=x, z=z, o=o, R_last=np.stack([X, Y, Z], axis=2))
 
 
 def tool_position(model: Model, q: np.ndarray) -> np.ndarray:
     """Tool point (wire attachment) in the base frame, shape (N, 3)."""
     f = frames(model, q)
-    return f.o[:, -1] + f.R_last @ model.tool_point
+    return f.o[:, -1] + _rotate(f.R_last, model.tool_point)
 
 
 def tool_jacobian(model: Model, q: np.ndarray,
                   names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
     """Tool point p (N, 3) and ∂p/∂e (N, 3, m) for the named parameters (mm/rad, mm/mm)."""
     f = frames(model, q)
-    p = f.o[:, -1] + f.R_last @ model.tool_point
+    p = f.o[:, -1] + _rotate(f.R_last, model.tool_point)
     n = model.n_joints
     J = np.empty((*p.shape, len(names)))
     for k, name in enumerate(names):

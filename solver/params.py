@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import cache
 
 _PATTERN = re.compile(r"^(th|d|al|a)(\d+)$")
 TOOL_NAMES = ("tool_x", "tool_y", "tool_z")
@@ -36,6 +37,7 @@ class Param:
         return "deg" if self.angular else "mm"
 
 
+@cache
 def parse(name: str, n_joints: int) -> Param:
     """Parse a parameter name; raise ``ValueError`` with the valid range if it is unknown."""
     if name in TOOL_NAMES:

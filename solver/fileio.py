@@ -1,0 +1,30 @@
+"""Writing output files safely: atomically, and never over an existing file unless asked."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+from .errors import WirecalError
+
+
+def write_atomic(path: str | Path, text: str, *, force: bool = False) -> Path:
+    """Write ``text`` to ``path`` via a temporary file and rename, so a reader never sees
+    half a file. Refuse to replace an existing file unless ``force``."""
+    path = Path(path)
+    if path.exists() and not force:
+        raise WirecalError(f"{path}: exists; choose another name or pass --force to replace it")
+    if not path.parent.exists():
+        raise WirecalError(f"{path}: folder {path.parent} does not exist")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
