@@ -57,4 +57,5 @@ def main() -> None:
 
 
 # Commands register themselves on import.
+from wirecal.cli import identify as _identify  # noqa: E402,F401
 from wirecal.cli import psi as _psi  # noqa: E402,F401

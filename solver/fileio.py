@@ -9,14 +9,25 @@ from pathlib import Path
 from .errors import WirecalError
 
 
+def check_writable(paths: list[Path], force: bool = False) -> None:
+    """Refuse, before anything is written, if an output exists (unless ``force``) or its
+    folder is missing; all problems at once."""
+    problems = []
+    for path in map(Path, paths):
+        if path.exists() and not force:
+            problems.append(f"{path}: exists; choose another name or pass --force to "
+                            "replace it")
+        elif not path.parent.is_dir():
+            problems.append(f"{path}: folder {path.parent} does not exist")
+    if problems:
+        raise WirecalError(problems)
+
+
 def write_atomic(path: str | Path, text: str, *, force: bool = False) -> Path:
     """Write ``text`` to ``path`` via a temporary file and rename, so a reader never sees
     half a file. Refuse to replace an existing file unless ``force``."""
     path = Path(path)
-    if path.exists() and not force:
-        raise WirecalError(f"{path}: exists; choose another name or pass --force to replace it")
-    if not path.parent.exists():
-        raise WirecalError(f"{path}: folder {path.parent} does not exist")
+    check_writable([path], force)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:

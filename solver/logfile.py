@@ -14,8 +14,9 @@ Format (UTF-8)::
 ``kind`` is ``zero`` (θ0 at the start of a step, index 0) or ``point``; step and index are
 1-based plan positions; j1..j6 the joints the controller reports (deg); ``counts`` the
 mean of ``samples`` raw counter readings, unwrapped relative to the first of them;
-``spread`` their max − min (counts). A point's wire length is (counts − the first zero's
-counts) × mm_per_count, the difference taken modulo the counter width.
+``spread`` their max − min (counts). A point's wire length is (counts − reference) ×
+mm_per_count, the difference taken modulo the counter width; the reference is the mean of
+the zero readings (each checked against the first: a drift means the wire slipped).
 """
 
 from __future__ import annotations
@@ -357,13 +358,13 @@ def check_log(log: Log, plan: Plan, robot: Robot, tol: Tolerances = Tolerances()
                         "at θ0")
     drift: dict[int, float] = {}
     if first_zero is not None:
-        ref = first_zero.counts
+        first = first_zero.counts
 
-        def wrapped(c):
+        def wrapped(c, ref):
             return (np.asarray(c) - ref + modulus / 2) % modulus - modulus / 2
 
         for s, r in sorted(zeros.items()):
-            drift[s] = float(wrapped(r.counts) * mpc)
+            drift[s] = float(wrapped(r.counts, first) * mpc)
             if abs(drift[s]) > tol.zero_mm:
                 prev = max(s - 1, 1)
                 bad(r, f"zero reading at step {s} is {drift[s]:+.3f} mm from the first "
@@ -374,7 +375,10 @@ def check_log(log: Log, plan: Plan, robot: Robot, tol: Tolerances = Tolerances()
             if s not in zeros:
                 problems.append(f"{src}: step {s} has points but no zero reading; the zero "
                                 "check at θ0 guards against a slipped wire")
-        distance = wrapped(counts) * mpc
+        # The reference is the mean of all zero readings: every length is measured from
+        # it, so its error is common to all points; averaging the steps' zeros shrinks it.
+        ref = first + np.mean([wrapped(r.counts, first) for r in zeros.values()])
+        distance = wrapped(counts, ref) * mpc
         for k in np.flatnonzero(~np.isnan(distance)):
             line = seen[("point", int(step_no[k]), int(index_no[k]))]
             if distance[k] > robot.encoder.range_mm:

@@ -56,14 +56,16 @@ def true_lengths(model: Model, plan: Plan) -> np.ndarray:
 
 def measured_lengths(model: Model, plan: Plan, mm_per_count: float, noise_mm: float,
                      rng: np.random.Generator) -> np.ndarray:
-    """Wire lengths as a log would give them: per-point noise, counts quantised, distance
-    from the zero reading. Vectorised over a batched model (Monte Carlo)."""
+    """Wire lengths as a checked log gives them: per-point noise, counts quantised, each
+    measured from the mean of the steps' zero readings. Vectorised over a batched model
+    (Monte Carlo); the same reading model as :func:`simulate_log` without the counter."""
     d = true_lengths(model, plan)
-    d0 = np.zeros((*d.shape[:-1], 1))
-    noisy = np.concatenate([d0, d], axis=-1) + rng.normal(0.0, noise_mm, (*d.shape[:-1],
-                                                                          d.shape[-1] + 1))
+    n_zero = len(plan.steps)
+    noisy = np.concatenate([np.zeros((*d.shape[:-1], n_zero)), d], axis=-1)
+    noisy = noisy + rng.normal(0.0, noise_mm, noisy.shape)
     counts = np.floor(noisy / mm_per_count + 0.5)
-    return (counts[..., 1:] - counts[..., :1]) * mm_per_count
+    return (counts[..., n_zero:] - counts[..., :n_zero].mean(axis=-1, keepdims=True)) \
+        * mm_per_count
 
 
 def simulate_log(robot: Robot, plan: Plan, errors: dict[str, float], *, seed: int,

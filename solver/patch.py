@@ -1,0 +1,84 @@
+"""Parameter patch files: the identified offsets, and the table to enter in the controller.
+
+The patch (TOML) records, per parameter, the nominal value, the identified offset, the new
+value and its σ, with the plan fingerprint, the log's sha256, the method and the date.
+Beside it, ``<name>.spec.txt`` lists the values to enter in the controller's kinematic
+settings (Adept's SPEC utility).
+"""
+
+from __future__ import annotations
+
+import json
+from datetime import UTC, datetime
+from pathlib import Path
+
+from . import params as P
+from .fileio import check_writable, write_atomic
+from .identify import Estimate
+from .robot import Robot
+
+_FIELD = {"th": "theta offset", "d": "d", "a": "a", "al": "alpha", "tool": "tool point"}
+
+
+def _rows(robot: Robot, estimate: Estimate):
+    for k, name in enumerate(estimate.names):
+        p = P.parse(name, robot.n_joints)
+        nominal = robot.nominal_value(name)
+        offset = float(estimate.values[k])
+        std = None if estimate.std is None else float(estimate.std[k])
+        yield name, p, nominal, offset, nominal + offset, std
+
+
+def patch_text(robot: Robot, estimate: Estimate, *, plan_fingerprint: str, log_path: str,
+               log_sha256: str, version: str, date: datetime | None = None) -> str:
+    date = date or datetime.now(UTC)
+    lines = [
+        "# wirecal patch: identified kinematic error offsets (deg, mm).",
+        "# value = nominal + offset; std is the 1-sigma uncertainty (joint method only).",
+        f"robot = {json.dumps(robot.name, ensure_ascii=False)}",
+        f"plan = {json.dumps(plan_fingerprint)}",
+        f"log = {json.dumps(log_path, ensure_ascii=False)}",
+        f"log_sha256 = {json.dumps(log_sha256)}",
+        f"method = {json.dumps(estimate.method)}",
+        f"date = {json.dumps(date.strftime('%Y-%m-%dT%H:%M:%SZ'))}",
+        f"wirecal = {json.dumps(version)}",
+        f"residual_rms_mm = {estimate.residual_rms_mm!r}",
+    ]
+    for name, p, nominal, offset, value, std in _rows(robot, estimate):
+        lines += ["", f"[parameters.{name}]", f'unit = "{p.unit}"', f"nominal = {nominal!r}",
+                  f"offset = {offset!r}", f"value = {value!r}"]
+        if std is not None:
+            lines.append(f"std = {std!r}")
+    return "\n".join(lines) + "\n"
+
+
+def spec_table(robot: Robot, estimate: Estimate) -> str:
+    """The plain table of new values for the controller's kinematic settings."""
+    lines = [
+        f"Kinematic parameters for {robot.name} identified by wirecal ({estimate.method}).",
+        "Enter the 'new value' column in the controller's kinematic settings (Adept SPEC",
+        "utility: link dimensions and joint calibration offsets). Save a copy of SPEC first.",
+        "DH row i holds alpha(i-1), a(i-1), theta(i), d(i) (Craig). Check the sign",
+        "convention of the controller's joint-offset field on one joint before entering all.",
+        "",
+        f"{'parameter':<10}{'DH row':>7}  {'field':<14}{'unit':<6}{'nominal':>12}"
+        f"{'new value':>12}{'offset':>11}{'sigma':>9}",
+    ]
+    for name, p, nominal, offset, value, std in _rows(robot, estimate):
+        row = "-" if p.kind == "tool" else p.row + 1
+        sigma = f"{std:9.4f}" if std is not None else f"{'-':>9}"
+        lines.append(f"{name:<10}{row!s:>7}  {_FIELD[p.kind]:<14}{p.unit:<6}{nominal:12.4f}"
+                     f"{value:12.4f}{offset:+11.4f}{sigma}")
+    return "\n".join(lines) + "\n"
+
+
+def write_patch(path: str | Path, robot: Robot, estimate: Estimate, *, force: bool = False,
+                **meta) -> tuple[Path, Path]:
+    """Write the patch and its SPEC table beside it, atomically; refuse to overwrite
+    either unless ``force``."""
+    path = Path(path)
+    spec = path.with_name(path.stem + ".spec.txt")
+    check_writable([path, spec], force)
+    write_atomic(path, patch_text(robot, estimate, **meta), force=force)
+    write_atomic(spec, spec_table(robot, estimate), force=force)
+    return path, spec
