@@ -89,8 +89,13 @@ class Estimate:
         return {n: float(v) for n, v in zip(self.names, self.values, strict=True)}
 
 
-def stepwise(problem: Problem, omega: np.ndarray, *, tol: float = 1e-13,
-             max_iter: int = 50) -> tuple[np.ndarray, list[dict]]:
+STEP_TOL = 1e-10
+"""A step's iteration stops when δe_j moves less than this (rad or mm): far below any
+physical effect, and above the round-off of the Gauss–Newton step itself."""
+
+
+def stepwise(problem: Problem, omega: np.ndarray, *, max_iter: int = 50
+             ) -> tuple[np.ndarray, list[dict]]:
     """The paper's step-by-step identification for T data sets at once.
 
     ``omega`` (m,) bounds each parameter in internal units. Returns the estimates
@@ -102,12 +107,12 @@ def stepwise(problem: Problem, omega: np.ndarray, *, tol: float = 1e-13,
     info = []
     for j in range(len(problem.names)):
         sel = problem.step == j + 1
-        info.append(_solve_step(problem, x, j, sel, d[:, sel], omega[j], tol, max_iter))
+        info.append(_solve_step(problem, x, j, sel, d[:, sel], omega[j], max_iter))
     return (x if np.ndim(problem.d) == 2 else x[0]), info
 
 
 def _solve_step(problem: Problem, x: np.ndarray, j: int, sel: np.ndarray, dj: np.ndarray,
-                omega_j: float, tol: float, max_iter: int) -> dict:
+                omega_j: float, max_iter: int) -> dict:
     """Minimise step j's cost over x[:, j] ∈ [−Ω_j, Ω_j] in place (eq. 20)."""
     T, k = dj.shape
     if k == 0:
@@ -125,21 +130,22 @@ def _solve_step(problem: Problem, x: np.ndarray, j: int, sel: np.ndarray, dj: np
     xj = np.zeros(T)
     cost, r, g = evaluate(xj)
     before = cost
+    active = np.ones(T, dtype=bool)
     it = 0
     for it in range(1, max_iter + 1):  # noqa: B007 - the count is reported
-        trial = np.clip(xj - (r * g).sum(axis=1) / np.maximum((g * g).sum(axis=1), 1e-300),
-                        -omega_j, omega_j)
+        gn = -(r * g).sum(axis=1) / np.maximum((g * g).sum(axis=1), 1e-300)
+        trial = np.where(active, np.clip(xj + gn, -omega_j, omega_j), xj)
         new_cost, new_r, new_g = evaluate(trial)
         # Halve the step where the cost rose, so the cost never increases.
-        for _ in range(40):
-            worse = new_cost > cost * (1 + 1e-12) + 1e-300
+        for _ in range(30):
+            worse = active & (new_cost > cost * (1 + 1e-10))
             if not np.any(worse):
                 break
             trial = np.where(worse, 0.5 * (xj + trial), trial)
             new_cost, new_r, new_g = evaluate(trial)
-        moved = np.abs(trial - xj)
+        active &= np.abs(trial - xj) > STEP_TOL
         xj, cost, r, g = trial, new_cost, new_r, new_g
-        if np.all(moved <= tol * np.maximum(1.0, np.abs(xj))):
+        if not np.any(active):
             break
     x[:, j] = xj
     return {"n": k, "iterations": it, "rms_before": np.sqrt(before / k),
@@ -187,16 +193,25 @@ def joint(problem: Problem, x0: np.ndarray, *, loss: str = "linear",
     σ of the residual, (JᵀJ)⁻¹ and the correlations come from the solution; a robust
     ``loss`` (e.g. "soft_l1", with ``f_scale_mm`` the inlier scale) resists outliers.
     """
-    def jac(x):
-        return wire_jacobian(with_errors(problem.base, problem.names, x), problem.q,
-                             problem.q0, problem.names)[1]
+    last: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
 
-    res = least_squares(problem.residuals, x0, jac=jac, method="trf", loss=loss,
-                        f_scale=f_scale_mm, x_scale="jac", xtol=1e-14, ftol=1e-14,
-                        gtol=1e-14, max_nfev=200)
-    r = problem.residuals(res.x)
+    def evaluate(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Residuals and Jacobian from one pass over the chain, reused for the same x."""
+        key = x.tobytes()
+        if key not in last:
+            d, J = wire_jacobian(with_errors(problem.base, problem.names, x), problem.q,
+                                 problem.q0, problem.names)
+            last.clear()
+            last[key] = (d - problem.d, J)
+        return last[key]
+
+    # MINPACK's Levenberg–Marquardt for plain least squares; a robust loss needs "trf".
+    method = "lm" if loss == "linear" else "trf"
+    res = least_squares(lambda x: evaluate(x)[0], x0, jac=lambda x: evaluate(x)[1],
+                        method=method, loss=loss, f_scale=f_scale_mm, x_scale="jac",
+                        xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
+    r, J = evaluate(res.x)
     n, m = r.size, len(problem.names)
-    J = jac(res.x)
     scale = problem.scale
     std = corr = None
     if n > m:

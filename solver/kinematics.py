@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
@@ -149,26 +150,43 @@ def tool_position(model: Model, q: np.ndarray) -> np.ndarray:
     return f.o[:, -1] + _rotate(f.R_last, model.tool_point)
 
 
+@cache
+def _layout(names: tuple[str, ...], n: int) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Column indices and frame numbers of each kind of derivative, for gathering."""
+    groups: dict[str, tuple[list[int], list[int]]] = {}
+    for k, name in enumerate(names):
+        par = P.parse(name, n)
+        frame = par.row + 1 if par.kind in ("th", "d") else par.row
+        cols, frames_ = groups.setdefault(par.kind, ([], []))
+        cols.append(k)
+        frames_.append(frame)
+    return {kind: (np.array(c), np.array(f)) for kind, (c, f) in groups.items()}
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a × b over the last axis (faster than np.cross for stacks of 3-vectors)."""
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
+
+
 def tool_jacobian(model: Model, q: np.ndarray,
                   names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
     """Tool point p (N, 3) and ∂p/∂e (N, 3, m) for the named parameters (mm/rad, mm/mm)."""
     f = frames(model, q)
     p = f.o[:, -1] + _rotate(f.R_last, model.tool_point)
-    n = model.n_joints
     J = np.empty((*p.shape, len(names)))
-    for k, name in enumerate(names):
-        par = P.parse(name, n)
-        i = par.row
-        if par.kind == "th":
-            J[:, :, k] = np.cross(f.z[:, i + 1], p - f.o[:, i + 1])
-        elif par.kind == "d":
-            J[:, :, k] = f.z[:, i + 1]
-        elif par.kind == "a":
-            J[:, :, k] = f.x[:, i]
-        elif par.kind == "al":
-            J[:, :, k] = np.cross(f.x[:, i], p - f.o[:, i])
-        else:  # tool point component
-            J[:, :, k] = f.R_last[:, :, i]
+    for kind, (cols, fr) in _layout(tuple(names), model.n_joints).items():
+        if kind == "th":      # rotation about z_i through o_i
+            J[:, :, cols] = _cross(f.z[:, fr], p[:, None] - f.o[:, fr]).transpose(0, 2, 1)
+        elif kind == "al":    # rotation about x_{i-1} through o_{i-1}
+            J[:, :, cols] = _cross(f.x[:, fr], p[:, None] - f.o[:, fr]).transpose(0, 2, 1)
+        elif kind == "d":     # translation along z_i
+            J[:, :, cols] = f.z[:, fr].transpose(0, 2, 1)
+        elif kind == "a":     # translation along x_{i-1}
+            J[:, :, cols] = f.x[:, fr].transpose(0, 2, 1)
+        else:                 # tool point component: a column of the last frame
+            J[:, :, cols] = f.R_last[:, :, fr]
     return p, J
 
 

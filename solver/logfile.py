@@ -292,6 +292,8 @@ def check_log(log: Log, plan: Plan, robot: Robot, tol: Tolerances = Tolerances()
             and not force:
         problems.append(f"{src}: mm_per_count {log.mm_per_count!r} differs from the robot "
                         f"file's encoder.mm_per_count {robot.encoder.mm_per_count!r}")
+    if problems:  # a log of another plan or robot: row-by-row complaints would be noise
+        raise WirecalError(problems)
 
     q_plan, step_no, index_no = plan.all_points()
     position = {(int(s), int(i)): k for k, (s, i) in enumerate(zip(step_no, index_no,
