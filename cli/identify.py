@@ -186,7 +186,8 @@ def _solve_text(result) -> str:
                   "parameters"]
         for j, s in enumerate(est["stepwise"].steps, 1):
             worst = s.worst_leak
-            leak = f"{worst[0]} {worst[1]:+.3f}/unit" if worst else "-"
+            leak = (f"{worst[0]} {worst[1]:+.3f}/unit" if worst and abs(worst[1]) >= 5e-4
+                    else "none")
             bound = "  ON BOUND Ω" if s.on_bound else ""
             lines.append(f"{j:3d} {s.parameter:<5}{s.n_points:3d} pts  {s.rms_before_mm:8.4f} → "
                          f"{s.rms_after_mm:7.4f} mm  |Ψ| {s.psi_strength:5.2f}  leak {leak}"

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import os
 import tempfile
+import tomllib
 from pathlib import Path
+from typing import Any
 
 from .errors import WirecalError
 
@@ -39,3 +41,17 @@ def write_atomic(path: str | Path, text: str, *, force: bool = False) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def read_toml(path: str | Path, what: str) -> dict[str, Any]:
+    """Parse a TOML input file; any problem is a :class:`WirecalError` naming the file."""
+    path = Path(path)
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise WirecalError(f"{path}: cannot read {what}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise WirecalError(f"{path}: not UTF-8 text (byte {exc.start}); is this a {what}?"
+                           ) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise WirecalError(f"{path}: not valid TOML: {exc}") from None

@@ -21,7 +21,6 @@ import difflib
 import hashlib
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,7 +28,8 @@ from typing import Any
 import numpy as np
 
 from . import params as P
-from .errors import Problems, WirecalError
+from .errors import Problems
+from .fileio import read_toml
 from .robot import Robot
 
 _TOP_KEYS = ("theta0_deg", "order", "step", "robot", "description")
@@ -93,14 +93,7 @@ def fingerprint(plan: Plan) -> str:
 
 def load_plan(path: str | Path, robot: Robot) -> Plan:
     """Read and validate a plan against a robot; raise :class:`WirecalError` listing problems."""
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise WirecalError(f"{path}: cannot read plan file: {exc.strerror or exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise WirecalError(f"{path}: not valid TOML: {exc}") from None
-    return plan_from_dict(data, robot, str(path))
+    return plan_from_dict(read_toml(path, "plan file"), robot, str(path))
 
 
 def plan_from_dict(data: dict[str, Any], robot: Robot, source: str = "<plan>") -> Plan:

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import difflib
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,7 +28,8 @@ from typing import Any
 import numpy as np
 
 from . import params as P
-from .errors import Problems, WirecalError
+from .errors import Problems
+from .fileio import read_toml
 
 _SCHEMA: dict[str, tuple[str, ...]] = {
     "": ("name", "description", "kinematics", "tool", "encoder", "calibration"),
@@ -95,15 +95,7 @@ class Robot:
 
 def load_robot(path: str | Path) -> Robot:
     """Read and validate a robot file; raise :class:`WirecalError` listing every problem."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise WirecalError(f"{path}: cannot read robot file: {exc.strerror or exc}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise WirecalError(f"{path}: not valid TOML: {exc}") from None
+    data = read_toml(path, "robot file")
     return robot_from_dict(data, str(path))
 
 

@@ -13,25 +13,19 @@ from __future__ import annotations
 
 import json
 import math
-import tomllib
 from pathlib import Path
 
 import numpy as np
 
 from . import params as P
 from .errors import Problems, WirecalError
+from .fileio import read_toml
 from .robot import Robot
 
 
 def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
     """The ``[errors]`` table of a truth file, validated against the robot."""
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise WirecalError(f"{path}: cannot read errors file: {exc.strerror or exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise WirecalError(f"{path}: not valid TOML: {exc}") from None
+    data = read_toml(path, "errors file")
     pr = Problems(str(path))
     table = data.get("errors")
     if not isinstance(table, dict):

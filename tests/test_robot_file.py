@@ -103,3 +103,8 @@ def test_unreadable_and_malformed_files(tmp_path):
     bad.write_text("name = \n")
     with pytest.raises(WirecalError, match=r"bad\.toml: not valid TOML"):
         load_robot(bad)
+    binary = tmp_path / "robot.bin"
+    binary.write_bytes(b"name = \"x\"\n\xff\xfe")
+    with pytest.raises(WirecalError, match=r"robot\.bin: not UTF-8 text \(byte 11\); is this a "
+                                           r"robot file\?"):
+        load_robot(binary)
