@@ -35,7 +35,8 @@ _SCHEMA: dict[str, tuple[str, ...]] = {
     "": ("name", "description", "kinematics", "tool", "encoder", "calibration"),
     "kinematics": ("convention", "dh", "joint_min_deg", "joint_max_deg", "joint_speed_deg_s"),
     "tool": ("point_mm",),
-    "encoder": ("mm_per_count", "range_mm", "counter_bits"),
+    "encoder": ("mm_per_count", "range_mm", "counter_bits", "interface", "channel",
+                "belt_mode"),
     "calibration": ("parameters",),
 }
 _REQUIRED = {
@@ -49,11 +50,16 @@ _REQUIRED = {
 
 @dataclass(frozen=True)
 class Encoder:
-    """The draw-wire encoder: scale, measuring range and the width of the controller's counter."""
+    """The draw-wire encoder: scale, measuring range, the width of the controller's counter,
+    and how the controller program reads it: ``interface`` "belt" (DEFBELT/BELT, belt
+    encoder ``channel``, BELT mode ``belt_mode``) or "device" (DEVICE unit ``channel``)."""
 
     mm_per_count: float
     range_mm: float
     counter_bits: int
+    interface: str = "belt"
+    channel: int = 1
+    belt_mode: int = 0
 
 
 @dataclass(frozen=True)
@@ -151,6 +157,16 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
                                   or not 8 <= bits <= 64):
         pr.add("encoder.counter_bits", f"is {bits!r}; give an integer between 8 and 64")
 
+    interface = enc.get("interface", "belt")
+    if interface not in ("belt", "device"):
+        pr.add("encoder.interface", f"is {interface!r}; give \"belt\" (DEFBELT/BELT) or "
+               "\"device\" (DEVICE)")
+    channel = enc.get("channel", 1 if interface == "belt" else 0)
+    mode = enc.get("belt_mode", 0)
+    for key, value in (("channel", channel), ("belt_mode", mode)):
+        if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value <= 16:
+            pr.add(f"encoder.{key}", f"is {value!r}; give a whole number 0–16")
+
     cal = _table(data, "calibration", pr)
     names = cal.get("parameters")
     if "parameters" in cal:
@@ -176,7 +192,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     return Robot(
         name=name.strip(), dh=dh_rad, joint_min_deg=lo, joint_max_deg=hi,
         joint_speed_deg_s=speed, tool_point=point,
-        encoder=Encoder(float(mpc), float(rng), int(bits)),
+        encoder=Encoder(float(mpc), float(rng), int(bits), interface, channel, mode),
         parameters=tuple(names), source=source,
     )
 

@@ -1,0 +1,185 @@
+"""``wirecal gen``: golden file, V+ rules on every generated variant, exact tables, the
+targets of the run against the plan, refusals. (The digital twin's parser replaces the
+lint with a real V+ grammar.)"""
+
+from __future__ import annotations
+
+import os
+import re
+import tomllib
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from wirecal.cli.main import main
+from wirecal.gen.program import GenOptions, module_text
+from wirecal.gen.tables import build_tables
+from wirecal.gen.vplus import double_literal, lint
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.robot import robot_from_dict
+
+from .conftest import VIPER
+
+GOLDEN = VIPER.parents[1] / "tests" / "golden" / "viper_s650" / "WIRECAL.V2"
+
+
+@pytest.fixture(scope="module")
+def module(viper, paper_plan):
+    return module_text(viper, paper_plan)
+
+
+def test_golden_file(module):
+    """The Viper module is byte-for-byte the reviewed one (WIRECAL_UPDATE_GOLDEN=1 rewrites
+    it after an intended change; review the diff)."""
+    if os.environ.get("WIRECAL_UPDATE_GOLDEN"):
+        GOLDEN.write_text(module, encoding="utf-8", newline="\n")
+    assert module == GOLDEN.read_text(encoding="utf-8")
+
+
+def _device_robot(viper):
+    data = tomllib.loads((VIPER / "robot.toml").read_text())
+    data["encoder"].update(interface="device", channel=0)
+    return robot_from_dict(data, "device.toml")
+
+
+@pytest.mark.parametrize("variant", ["paper", "printed", "device", "patch", "options"])
+def test_every_generated_module_follows_the_rules(viper, paper_plan, printed_plan, variant):
+    robot, plan, opt = viper, paper_plan, GenOptions()
+    if variant == "printed":
+        plan = printed_plan
+    elif variant == "device":
+        robot = _device_robot(viper)
+    elif variant == "patch":
+        opt = GenOptions(patch={n: 0.1 for n in plan.order})
+    elif variant == "options":
+        opt = GenOptions(speed=5, accel=10, settle_s=4.5, samples=50, zero_tol_mm=0.05,
+                         log_file="RUN2.CSV")
+    text = module_text(robot, plan, opt)
+    assert lint(text) == []
+    assert all(len(line) <= 80 for line in text.split("\n"))
+    assert text.count(".PROGRAM ") == text.count("\n.END") + (text.startswith(".END"))
+    if variant == "device":
+        assert "DEVICE(0, 0, err, 1)" in text and "DEFBELT" not in text.replace(
+            "; DEFBELT", "")
+    if variant == "options":
+        assert "SPEED 5 ALWAYS" in text and "wc.nsamp = 50" in text and "RUN2.CSV" in text
+
+
+def test_deterministic(viper, paper_plan, module):
+    assert module_text(viper, paper_plan) == module
+
+
+def test_run_moves_exactly_through_the_plan(module, paper_plan):
+    run = module[module.index(".PROGRAM wc.run()"):]
+    run = run[:run.index(".END")]
+    targets = [[float(v) for v in m.split(",")] for m in
+               re.findall(r"SET #wc\.p = #PPOINT\(([^)]*)\)", run)]
+    expected = []
+    for s in paper_plan.steps:
+        expected.append(paper_plan.theta0_deg)
+        expected += list(s.via_deg) + list(s.points_deg)
+    expected.append(paper_plan.theta0_deg)
+    np.testing.assert_array_equal(np.array(targets), np.array(expected))
+    # each point is followed by BREAK and its measurement, with its plan position
+    calls = re.findall(r"CALL wc\.meas\((\d+), (\d+)\)", run)
+    _, step, index = paper_plan.all_points()
+    assert [int(s) for s, i in calls if i == "0"] == list(range(1, 11))
+    assert [(int(a), int(b)) for a, b in calls if b != "0"] == list(zip(step, index,
+                                                                          strict=True))
+    assert run.count("BREAK") == 69 + 10 + 1
+
+
+def _value(literal: str) -> float:
+    m = re.fullmatch(r"(-?)\^D(\d+)(?:/wc\.p10\[(\d+)\])?", literal)
+    if m:
+        return (-1 if m.group(1) else 1) * int(m.group(2)) / 10 ** int(m.group(3) or 0)
+    return float(literal)
+
+
+def test_data_constants_read_back_exactly(module, viper, paper_plan):
+    t = build_tables(viper, paper_plan)
+    values = dict(re.findall(r"^\s+(wc\.\w+\[\d+\]) = (\S+)$", module, flags=re.M))
+    for c in range(70):
+        for k in range(6):
+            idx = c * 8 + k + 1
+            assert abs(_value(values[f"wc.ct[{idx}]"]) - t.ct[c, k]) <= 1e-15
+            assert abs(_value(values[f"wc.st[{idx}]"]) - t.st[c, k]) <= 1e-15
+    for i in range(1, 70):
+        assert abs(_value(values[f"wc.dn[{i}]"]) - t.dn[i]) <= 1e-15 * t.dn[i]
+        assert abs(_value(values[f"wc.dnf[{i}]"]) - t.dnf[i]) <= 1e-15
+    assert _value(values["wc.tp[1]"]) == -60
+
+
+@pytest.mark.parametrize("x", [0.8660254037844387, -1e-3, 295.0, 547.71234567891,
+                               -0.025488, 1e-17, 3.0e8])
+def test_double_literal(x):
+    assert abs(_value(double_literal(x)) - x) <= 2e-16 * abs(x)
+
+
+def test_log_header_and_columns_as_the_reader_expects(module, paper_plan):
+    assert 'CALL wc.write("# wirecal-log 1")' in module
+    fp = paper_plan.fingerprint()
+    assert f'$wc.fpa = "{fp[:32]}"' in module and f'$wc.fpb = "{fp[32:]}"' in module
+    assert 'CALL wc.write("# mm_per_count: 0.025488")' in module
+    assert 'kind,step,index,j1,j2,j3,j4,j5,j6,counts,samples,spread' in module
+    assert "FOPENW (wc.lun)" in module and module.count("IOSTAT(") >= 6
+
+
+def test_point_too_close_to_a_limit_is_refused(viper, paper_plan):
+    with pytest.raises(WirecalError) as info:
+        module_text(viper, paper_plan, GenOptions(margin_deg=2.0))
+    assert info.value.problems == [
+        f"{paper_plan.source}: step 7 (a2) point 6: joint 3 = 255 deg is within 2 deg of its "
+        "limits [-29, 256]; move the point or lower --margin"]
+
+
+def test_bad_options_refused(viper, paper_plan):
+    with pytest.raises(WirecalError) as info:
+        module_text(viper, paper_plan, GenOptions(speed=150, log_file="TOOLONGNAME.CSV"))
+    assert info.value.problems == [
+        "--speed 150: give a percentage in (0, 100]",
+        "controller file name 'TOOLONGNAME.CSV': use 8.3 letters and digits"]
+    quoted = replace(viper, name='Viper "A"')
+    with pytest.raises(WirecalError, match="a V\\+ string holds printable ASCII"):
+        module_text(quoted, paper_plan)
+
+
+BAD = {
+    "missing .END": (".PROGRAM a.b()\n    x = 1\n", "missing .END after a.b"),
+    "declaration after code": (".PROGRAM a.b()\n    x = 1\n    AUTO y\n.END\n",
+                               "declaration after executable steps"),
+    "long line": (".PROGRAM a.b()\n    x = " + "1+" * 40 + "1\n.END\n", "characters (> 80)"),
+    "name collision": (".PROGRAM a.b()\n    wc.averylongname1 = 1\n    wc.averylongname2 = 2\n"
+                       ".END\n", "share their first 15 characters"),
+    "goto missing label": (".PROGRAM a.b()\n    GOTO 100\n.END\n",
+                           "GOTO 100: no such label in a.b"),
+    "named label": (".PROGRAM a.b()\n    GOTO done\n.END\n", "GOTO needs a numeric label"),
+    "kawasaki": (".PROGRAM a.b()\n    JMOVE #p\n.END\n", "keyword of another dialect"),
+    "code outside": ("x = 1\n", "code outside a program"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_lint_rejects(case):
+    text, message = BAD[case]
+    problems = lint(text, "bad.v2")
+    assert any(message in p for p in problems), problems
+
+
+def test_cli_gen(tmp_path):
+    runner = CliRunner()
+    robot, plan = str(VIPER / "robot.toml"), str(VIPER / "paper_plan.toml")
+    r = runner.invoke(main, ["gen", robot, plan, "-o", str(tmp_path / "ctl")])
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "ctl" / "WIRECAL.V2").read_text() == GOLDEN.read_text()
+    again = runner.invoke(main, ["gen", robot, plan, "-o", str(tmp_path / "ctl")])
+    assert again.exit_code == 2 and "exists; choose another name or pass --force" in \
+        again.output
+    bad = tmp_path / "patch.toml"
+    bad.write_text('plan = "0000"\n[parameters.th6]\noffset = 1.0\n')
+    r = runner.invoke(main, ["gen", robot, plan, "-o", str(tmp_path / "p"), "--patch",
+                             str(bad)])
+    assert r.exit_code == 2 and "the patch was solved from another plan" in r.output
+    assert "Usage:" in runner.invoke(main, ["gen", "--help"]).output
