@@ -162,31 +162,18 @@ class Controller:
         for k in range(1, self.n + 1):
             self.fx[k] = [Xn[i] + dX[i] for i in range(3)]
             self.fo0[k] = [On[i] + dO[i] for i in range(3)]
-            can, san = t["ca"][k - 1], t["sa"][k - 1]
-            s, cm1 = sin_cosm1_small(self.eal[k], one)
-            dca = can * cm1 - san * s
-            dsa = san * cm1 + can * s
-            ca, sa = can + dca, san + dsa
-            Yn2 = [can * Yn[i] + san * Zn[i] for i in range(3)]
-            Zn2 = [can * Zn[i] - san * Yn[i] for i in range(3)]
-            dY2 = [ca * dY[i] + sa * dZ[i] + dca * Yn[i] + dsa * Zn[i] for i in range(3)]
-            dZ2 = [ca * dZ[i] - sa * dY[i] + dca * Zn[i] - dsa * Yn[i] for i in range(3)]
+            # twist α_{k-1} + estimate turns (Y, Z); then lengths; then θ_k turns (X, Y)
+            Yn2, Zn2, dY2, dZ2 = _turn(t["ca"][k - 1], t["sa"][k - 1], self.eal[k],
+                                       Yn, Zn, dY, dZ, one)
             an, dn = t["la"][k - 1], t["ld"][k - 1]
             a, d = an + self.ea[k], dn + self.ed[k]
             On = [On[i] + an * Xn[i] + dn * Zn2[i] for i in range(3)]
             dO = [dO[i] + self.ea[k] * Xn[i] + a * dX[i] + self.ed[k] * Zn2[i] + d * dZ2[i]
                   for i in range(3)]
-            ctn, stn = t["ct"][c, k - 1], t["st"][c, k - 1]
             eps = (self.q[c, k - 1] - t["qp"][c, k - 1]) * self.d2r + self.eth[k]
-            s, cm1 = sin_cosm1_small(eps, one)
-            dct = ctn * cm1 - stn * s
-            dst = stn * cm1 + ctn * s
-            ct, st = ctn + dct, stn + dst
-            Xn3 = [ctn * Xn[i] + stn * Yn2[i] for i in range(3)]
-            Yn3 = [ctn * Yn2[i] - stn * Xn[i] for i in range(3)]
-            dX3 = [ct * dX[i] + st * dY2[i] + dct * Xn[i] + dst * Yn2[i] for i in range(3)]
-            dY3 = [ct * dY2[i] - st * dX[i] + dct * Yn2[i] - dst * Xn[i] for i in range(3)]
-            Xn, Yn, Zn, dX, dY, dZ = Xn3, Yn3, Zn2, dX3, dY3, dZ2
+            Xn, Yn, dX, dY = _turn(t["ct"][c, k - 1], t["st"][c, k - 1], eps,
+                                   Xn, Yn2, dX, dY2, one)
+            Zn, dZ = Zn2, dZ2
             self.fz[k] = [Zn[i] + dZ[i] for i in range(3)]
             self.fo[k] = [On[i] + dO[i] for i in range(3)]
         tn = t["tool"]
@@ -278,6 +265,21 @@ class Controller:
         """Estimates in boundary units (deg, mm), identification order."""
         return np.array([float(self.e[j] * self.t["to_boundary"][j - 1])
                          for j in range(1, self.m + 1)])
+
+
+def _turn(cn, sn, eps, U, V, dU, dV, one):
+    """Turn the pair (U, V) by the nominal angle (cos cn, sin sn) plus a small ε, for the
+    nominal vectors and, separately, their deviations (wc.fk's rotation step):
+    U' = c·U + s·V, V' = c·V − s·U with c = cn + δc, s = sn + δs."""
+    s, cm1 = sin_cosm1_small(eps, one)
+    dc = cn * cm1 - sn * s
+    ds = sn * cm1 + cn * s
+    c, sv = cn + dc, sn + ds
+    Un = [cn * U[i] + sn * V[i] for i in range(3)]
+    Vn = [cn * V[i] - sn * U[i] for i in range(3)]
+    dUn = [c * dU[i] + sv * dV[i] + dc * U[i] + ds * V[i] for i in range(3)]
+    dVn = [c * dV[i] - sv * dU[i] + dc * V[i] - ds * U[i] for i in range(3)]
+    return Un, Vn, dUn, dVn
 
 
 def _cross(a, b):
