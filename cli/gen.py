@@ -30,6 +30,8 @@ _D = GenOptions()
 @click.option("--zero-tol", type=float, default=_D.zero_tol_mm, show_default=True,
               help="Largest drift of a zero reading from the first before the run pauses "
                    "(mm).")
+@click.option("--spread-tol", type=float, default=_D.spread_tol_mm, show_default=True,
+              help="Largest spread of a point's samples before the run pauses (mm).")
 @click.option("--margin", type=float, default=_D.margin_deg, show_default=True,
               help="Refuse any target closer than this to a joint limit (deg).")
 @click.option("--log-name", default=_D.log_file, show_default=True,
@@ -38,8 +40,8 @@ _D = GenOptions()
               help="A patch from 'wirecal solve -o': wc.patch then holds its offsets.")
 @click.option("--force", is_flag=True, help="Replace an existing WIRECAL.V2.")
 @user_errors
-def gen(robot, plan, out_dir, speed, accel, settle_s, samples, zero_tol, margin, log_name,
-        patch_file, force):
+def gen(robot, plan, out_dir, speed, accel, settle_s, samples, zero_tol, spread_tol, margin,
+        log_name, patch_file, force):
     """Write the V+/eV+ module that runs PLAN on the controller.
 
     WIRECAL.V2 holds wc.mount (move to θ0, mount the encoder), wc.check (live counts),
@@ -62,7 +64,8 @@ def gen(robot, plan, out_dir, speed, accel, settle_s, samples, zero_tol, margin,
             raise WirecalError(f"{patch_file}: parameters: not a wirecal patch (need "
                                "[parameters.<name>] tables with an offset)") from None
     opt = GenOptions(speed=speed, accel=accel, settle_s=settle_s, samples=samples,
-                     zero_tol_mm=zero_tol, margin_deg=margin, log_file=log_name.upper(),
+                     zero_tol_mm=zero_tol, spread_tol_mm=spread_tol, margin_deg=margin,
+                     log_file=log_name.upper(),
                      patch=patch)
     path = write_module(out_dir, module_text(rb, pl, opt), force=force)
     click.echo(f"wrote {path}: load it on the controller, then run wc.mount, wc.check, "

@@ -35,6 +35,7 @@ class GenOptions:
     settle_s: float = 3.0        # wait after BREAK before reading (paper: 3 s)
     samples: int = 10            # counter readings averaged per point
     zero_tol_mm: float = 0.1     # a zero reading further from the first: the wire slipped
+    spread_tol_mm: float = 0.1   # a point's samples spread wider: the robot still moved
     margin_deg: float = 1.0      # every generated target at least this far inside a limit
     log_file: str = "WCLOG.CSV"
     result_file: str = "WCSOLVE.CSV"
@@ -79,8 +80,10 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
 
 def data_lines(t: Tables, robot: Robot) -> list[str]:
     """The assignments of ``wc.data``: every table value as an exact literal."""
+    # powers of ten first: every DOUBLE literal below divides by one of them
     lines = ["wc.p10[0] = ^D1", "FOR k = 1 TO 22", "    wc.p10[k] = wc.p10[k-1]*10", "END",
-             f"wc.d2r = {double_literal(np.pi / 180)}"]
+             f"wc.d2r = {double_literal(np.pi / 180)}",
+             f"wc.mpc = {double_literal(robot.encoder.mm_per_count)}"]
 
     def put(name, idx, value):
         lines.append(f"{name}[{idx}] = {double_literal(value)}")
@@ -150,7 +153,9 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         m=len(plan.order), stride=STRIDE, axes=AXES,
         speed=_num(opt.speed), accel=_num(opt.accel), settle=_num(opt.settle_s),
         samples=opt.samples, zero_tol=_num(opt.zero_tol_mm), margin=_num(opt.margin_deg),
-        mpc=repr(mpc), mpc_literal=double_literal(mpc), bits=robot.encoder.counter_bits,
+        spread_counts=_num(np.floor(opt.spread_tol_mm / abs(robot.encoder.mm_per_count))),
+        spread_tol=_num(opt.spread_tol_mm),
+        mpc=repr(mpc), bits=robot.encoder.counter_bits,
         half=2 ** (robot.encoder.counter_bits - 1), full=2 ** robot.encoder.counter_bits,
         encoder=robot.encoder, log_file=opt.log_file, result_file=opt.result_file,
         theta0=ppoint(plan.theta0_deg), steps=steps, data=data_lines(tables, robot),

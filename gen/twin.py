@@ -1,0 +1,318 @@
+"""The digital twin: a simulated cell that runs the generated V+ programs as written.
+
+:class:`Cell` is the controller's outside world for :class:`~wirecal.gen.vinterp.Interpreter`:
+a true robot (nominal model + error offsets) whose moves respect the joint limits, a
+draw-wire encoder mounted at θ0 of the true robot (noise per pose, quantisation, ±1-count
+jitter, a wrapping counter, a range limit), a disk in a sandbox folder, a terminal with
+scripted answers, and a clock. Faults can be injected: a wire slip, an encoder failure,
+a full disk, vibration (a large spread), tighter joint limits than the plan assumed.
+
+Error codes of the twin's own making (the V+ manual's codes are used where known:
+−1013 encoder quadrature error, User's Guide p. 354) are listed in ``ERRORS``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.logfile import Log, parse_log
+from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
+
+from .emulate import readings_from_log
+from .program import STRIDE, GenOptions, module_text
+from .vinterp import Interpreter, Outcome, VError, f32
+from .vparse import parse_module
+
+ERRORS = {
+    1: "Success",
+    -500: "*File already exists*",
+    -501: "*File not found*",
+    -514: "*File not open*",
+    -522: "*Device full*",
+    -526: "*No data received*",
+    -1004: "*Joint out of range*",
+    -1013: "*Encoder quadrature error*",
+    -1100: "*Draw-wire range exceeded*",
+}
+
+
+@dataclass(frozen=True)
+class Faults:
+    """Faults to inject into a run (positions are 1-based counts of events)."""
+
+    slip_at_move: int | None = None       # the wire slips when this move starts
+    slip_mm: float = 0.5
+    encoder_fails_at_read: int | None = None
+    disk_full_after_lines: int | None = None
+    vibration_at_move: int | None = None  # readings after this move jitter ±vibration
+    vibration_counts: int = 20
+    joint_max_deg: tuple[float, ...] | None = None   # the controller's own limits
+
+
+@dataclass
+class Cell:
+    """The simulated robot, encoder, disk and terminal (see module docstring)."""
+
+    robot: Robot
+    truth: dict[str, float]
+    mount_deg: np.ndarray
+    disk: Path
+    seed: int = 0
+    noise_mm: float = 0.01
+    counter_start: float = 0.0
+    answers: list[str] = field(default_factory=lambda: ["1"])
+    faults: Faults = Faults()
+    proceed_on_pause: bool = False
+
+    def __post_init__(self):
+        self.rng = np.random.default_rng(self.seed)
+        self.model = perturbed(self.robot, self.truth)
+        self.p0 = tool_position(self.model, np.radians(self.mount_deg)[None])[0]
+        self.joints = tuple(f32(x) for x in self.mount_deg)
+        self.lo = self.robot.joint_min_deg
+        self.hi = (np.asarray(self.faults.joint_max_deg) if self.faults.joint_max_deg
+                   else self.robot.joint_max_deg)
+        self.console: list[str] = []
+        self.clock = 0.0
+        self.moves = 0
+        self.reads = 0
+        self.lines_written = 0
+        self.speed_pct = 100.0
+        self.pose_error = self.rng.normal(0, self.noise_mm)
+        self.slip = 0.0
+        self.belts: dict[str, int] = {}
+        self.luns: dict[int, dict] = {}
+        self.status: dict[int, float] = {}
+        self.pauses: list[str] = []
+
+    # ---- terminal ----
+    def type_(self, text: str) -> None:
+        self.console.append(text)
+
+    def prompt(self, text: str) -> str:
+        self.console.append(text)
+        if not self.answers:
+            raise VError(-526, "*No data received* (no scripted answer to the PROMPT)")
+        answer = self.answers.pop(0)
+        self.console.append(f"> {answer}")
+        return answer
+
+    def on_pause(self) -> bool:
+        self.pauses.append(self.console[-1] if self.console else "")
+        return self.proceed_on_pause
+
+    # ---- motion ----
+    def speed(self, pct: float) -> None:
+        self.speed_pct = pct
+
+    def accel(self, *_args) -> None:
+        pass
+
+    def move(self, target) -> None:
+        q = np.asarray(target, dtype=float)
+        for j in np.flatnonzero((q < self.lo) | (q > self.hi)):
+            raise VError(-1004, f"*Joint {j + 1} out of range* ({q[j]:g} deg)")
+        rate = self.robot.joint_speed_deg_s * self.speed_pct / 100
+        self.clock += float(np.max(np.abs(q - np.asarray(self.joints)) / rate)) + 0.2
+        self.joints = tuple(f32(x) for x in q)
+        self.moves += 1
+        f = self.faults
+        if f.slip_at_move is not None and self.moves == f.slip_at_move:
+            self.slip += f.slip_mm
+        self.pose_error = self.rng.normal(0, self.noise_mm)
+
+    def break_(self) -> None:
+        pass
+
+    def here(self):
+        return self.joints
+
+    def wait(self, seconds: float) -> None:
+        self.clock += seconds
+
+    # ---- encoder ----
+    def enable(self, switch: str) -> None:
+        pass
+
+    def defbelt(self, name: str, encoder: int, scale: float) -> None:
+        self.belts[name] = encoder
+
+    def _counts(self) -> float:
+        self.reads += 1
+        f = self.faults
+        if f.encoder_fails_at_read is not None and self.reads >= f.encoder_fails_at_read:
+            raise VError(-1013, ERRORS[-1013])
+        p = tool_position(self.model, np.radians(self.joints)[None])[0]
+        d = float(np.linalg.norm(p - self.p0)) + self.pose_error + self.slip
+        if d > self.robot.encoder.range_mm:
+            raise VError(-1100, ERRORS[-1100])
+        jitter = float(self.rng.choice((-1, 0, 0, 0, 1)))
+        if f.vibration_at_move is not None and self.moves >= f.vibration_at_move:
+            jitter += float(self.rng.integers(-f.vibration_counts, f.vibration_counts + 1))
+        raw = math.floor(self.counter_start + d / self.robot.encoder.mm_per_count + 0.5)
+        half = 2.0 ** (self.robot.encoder.counter_bits - 1)
+        return (raw + jitter + half) % (2 * half) - half
+
+    def belt(self, name: str, mode: int) -> float:
+        if name not in self.belts:
+            raise VError(-406, f"*Undefined value* {name}")
+        return self._counts()
+
+    def device(self, unit: int, select: int) -> tuple[float, float]:
+        try:
+            return self._counts(), 0.0
+        except VError as e:
+            if e.code == -1013:
+                return 0.0, float(e.code)
+            raise
+
+    # ---- disk ----
+    def attach(self, device: str) -> float:
+        lun = 1 + max(self.luns, default=0)
+        self.luns[lun] = {"device": device, "file": None}
+        self.status[lun] = 1
+        return float(lun)
+
+    def detach(self, lun: int) -> None:
+        self.luns.pop(lun, None)
+
+    def fopen(self, mode: str, lun: int, name: str) -> None:
+        path = self.disk / name.split(":")[-1].upper()
+        if lun not in self.luns:
+            self.status[lun] = -514
+            return
+        if mode == "FOPENW" and path.exists():
+            self.status[lun] = -500
+            return
+        if mode == "FOPENR" and not path.exists():
+            self.status[lun] = -501
+            return
+        if mode != "FOPENR":
+            path.touch()
+        self.luns[lun]["file"] = path
+        self.status[lun] = 1
+
+    def write(self, lun: int, text: str) -> None:
+        unit = self.luns.get(lun)
+        if unit is None or unit["file"] is None:
+            self.status[lun] = -514
+            return
+        f = self.faults
+        if f.disk_full_after_lines is not None and self.lines_written >= f.disk_full_after_lines:
+            self.status[lun] = -522
+            return
+        with open(unit["file"], "a", encoding="ascii", newline="\n") as fh:
+            fh.write(text + "\n")   # written through: a stopped run leaves its lines
+        self.lines_written += 1
+        self.status[lun] = 1
+
+    def fclose(self, lun: int) -> None:
+        unit = self.luns.get(lun)
+        self.status[lun] = 1 if unit and unit["file"] is not None else -514
+        if unit:
+            unit["file"] = None
+
+    def iostat(self, lun: int) -> float:
+        return float(self.status.get(lun, -514))
+
+    def error_text(self, code: int) -> str:
+        return ERRORS.get(code, f"*Error {code}*")
+
+
+@dataclass
+class RunResult:
+    mount: Outcome
+    run: Outcome | None
+    log: Path
+    cell: Cell
+
+
+def run_measurement(robot: Robot, plan: Plan, truth: dict[str, float], disk: Path, *,
+                    seed: int = 0, noise_mm: float = 0.01, counter_start: float | None = None,
+                    faults: Faults = Faults(), options: GenOptions | None = None,
+                    text: str | None = None) -> RunResult:
+    """Generate the module (unless given), run wc.mount (answered 1) and wc.run in the twin."""
+    options = options or GenOptions()
+    disk.mkdir(parents=True, exist_ok=True)
+    text = text if text is not None else module_text(robot, plan, options)
+    rng = np.random.default_rng([seed, 2])
+    start = (float(rng.integers(-2 ** 23, 2 ** 23)) if counter_start is None
+             else counter_start)
+    cell = Cell(robot, truth, plan.theta0_deg, disk, seed=seed, noise_mm=noise_mm,
+                counter_start=start, faults=faults)
+    interp = Interpreter(parse_module(text, "WIRECAL.V2"), cell)
+    mount = interp.execute("wc.mount")
+    run = interp.execute("wc.run") if mount.status == "completed" else None
+    return RunResult(mount, run, disk / options.log_file, cell)
+
+
+def move_of_step(plan: Plan, step: int, point: int = 1) -> int:
+    """The 1-based number of the move that reaches a step's point in wc.run."""
+    moves = 0
+    for j, s in enumerate(plan.steps, 1):
+        moves += 1 + len(s.via_deg)
+        if j == step:
+            return moves + point
+        moves += len(s.points_deg)
+    raise ValueError(step)
+
+
+def controller_solve(robot: Robot, plan: Plan, log: Log, disk: Path, *, polish: bool,
+                     text: str | None = None) -> tuple[dict[str, float], Outcome, int]:
+    """Run the generated controller solver in the twin on a log's readings.
+
+    The readings are loaded into the globals exactly as wc.run leaves them; the result is
+    read back from the file the solver writes. Returns the offsets (deg, mm), the outcome
+    and the number of arithmetic operations executed.
+    """
+    disk.mkdir(parents=True, exist_ok=True)
+    text = text if text is not None else module_text(robot, plan)
+    cell = Cell(robot, {}, plan.theta0_deg, disk)
+    interp = Interpreter(parse_module(text, "WIRECAL.V2"), cell)
+    r = readings_from_log(log, plan)
+    for c in range(len(r.cb)):
+        for k in range(r.q.shape[1]):
+            interp.set_global("wc.q", f32(r.q[c, k]), c * STRIDE + k + 1)
+        if c:
+            interp.set_global("wc.cb", float(r.cb[c]), c)
+            interp.set_global("wc.co", float(r.co[c]), c)
+            interp.set_global("wc.got", -1.0, c)
+    for s in range(len(r.zb)):
+        interp.set_global("wc.zb", float(r.zb[s]), s + 1)
+        interp.set_global("wc.zo", float(r.zo[s]), s + 1)
+    result_file = disk / GenOptions().result_file
+    result_file.unlink(missing_ok=True)
+    interp.ops = 0
+    outcome = interp.execute("wc.solve2" if polish else "wc.solve")
+    if outcome.status != "completed":
+        raise WirecalError(f"the controller solver stopped: {outcome.message} "
+                           f"({outcome.program}, line {outcome.line})")
+    return read_result(result_file), outcome, interp.ops
+
+
+def read_result(path: Path) -> dict[str, float]:
+    """Offsets from the controller solver's result file (``# wirecal-controller-result 1``)."""
+    lines = path.read_text(encoding="ascii").splitlines()
+    if not lines or lines[0] != "# wirecal-controller-result 1":
+        raise WirecalError(f"{path}:1: not a wirecal controller result")
+    out = {}
+    for n, line in enumerate(lines[1:], 2):
+        if line.startswith("#") or line == "parameter,unit,offset":
+            continue
+        try:
+            name, _unit, value = line.split(",")
+            out[name] = float(value)
+        except ValueError:
+            raise WirecalError(f"{path}:{n}: expected 'parameter,unit,offset'") from None
+    return out
+
+
+def load_log(path: Path) -> Log:
+    return parse_log(path.read_text(encoding="utf-8"), str(path))
