@@ -4,16 +4,21 @@ identification from a measurement log."""
 from __future__ import annotations
 
 import re
+import sys
+import tempfile
 from pathlib import Path
 
 import click
 import numpy as np
 
 from wirecal.cli.main import _version, main, print_json, user_errors
+from wirecal.gen.program import GenOptions
+from wirecal.gen.twin import Faults as TwinFaults
+from wirecal.gen.twin import controller_solve, move_of_step, run_measurement
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.fileio import check_writable, write_atomic
 from wirecal.solver.identify import DEFAULT_OMEGA
-from wirecal.solver.logfile import Tolerances, load_measurements
+from wirecal.solver.logfile import Tolerances, load_measurements, read_log
 from wirecal.solver.patch import write_patch
 from wirecal.solver.plan import load_plan
 from wirecal.solver.robot import load_robot
@@ -62,10 +67,13 @@ def _slip(ctx, param, value):
 @click.option("--counter-start", type=float,
               help="Counter value at the first reading [default: random]; near 8388607 "
                    "the 24-bit counter wraps during the run.")
+@click.option("--controller", is_flag=True,
+              help="Run the generated V+ programs (wc.mount, wc.run) in the digital twin: "
+                   "the log is written by the very program a user would load.")
 @click.option("--force", is_flag=True, help="Replace existing output files.")
 @user_errors
 def simulate(robot, plan, log_path, errors_file, scale, seed, noise_mm, samples, truth_out,
-             slip, outliers, outlier_mm, stop_after, counter_start, force):
+             slip, outliers, outlier_mm, stop_after, counter_start, controller, force):
     """Simulate a measurement run of PLAN on a robot with known errors.
 
     The true robot is the nominal one plus error offsets (from --errors, or drawn with
@@ -84,13 +92,42 @@ def simulate(robot, plan, log_path, errors_file, scale, seed, noise_mm, samples,
                                np.random.default_rng([seed, 1]))
     truth_path = Path(truth_out) if truth_out else Path(log_path).with_suffix(".truth.toml")
     check_writable([Path(log_path), truth_path], force)
-    text = simulate_log(rb, pl, errors, seed=seed, noise_mm=noise_mm, samples=samples,
-                        faults=Faults(slip=slip, outliers=outliers, outlier_mm=outlier_mm,
-                                      stop_after=stop_after),
-                        counter_start=counter_start)
+    stopped = None
+    if controller:
+        if outliers or stop_after is not None:
+            raise WirecalError("--outliers and --stop-after apply to the direct simulation; "
+                               "the twin injects its own faults (see the README)")
+        text, stopped = _twin_run(rb, pl, errors, seed, noise_mm, samples, slip,
+                                  counter_start)
+    else:
+        text = simulate_log(rb, pl, errors, seed=seed, noise_mm=noise_mm, samples=samples,
+                            faults=Faults(slip=slip, outliers=outliers,
+                                          outlier_mm=outlier_mm, stop_after=stop_after),
+                            counter_start=counter_start)
     write_atomic(truth_path, truth_text(rb, errors, None if errors_file else seed), force=force)
     write_atomic(log_path, text, force=force)
     click.echo(f"wrote {log_path} ({pl.n_points} points) and the truth to {truth_path}")
+    if stopped:
+        click.echo(f"the controller program stopped: {stopped}", err=True)
+        sys.exit(1)
+
+
+def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
+    """wc.mount and wc.run in the digital twin; the log text and why it stopped, if so."""
+    faults = TwinFaults()
+    if slip is not None:
+        faults = TwinFaults(slip_at_move=move_of_step(pl, slip[0]), slip_mm=slip[1])
+    with tempfile.TemporaryDirectory() as tmp:
+        result = run_measurement(rb, pl, errors, Path(tmp), seed=seed, noise_mm=noise_mm,
+                                 counter_start=counter_start, faults=faults,
+                                 options=GenOptions(samples=samples))
+        text = result.log.read_text(encoding="ascii") if result.log.exists() else ""
+    outcome = result.run or result.mount
+    stopped = None
+    if outcome.status != "completed":
+        stopped = f"{outcome.status} in {outcome.program} line {outcome.line}: " + \
+            " / ".join(result.cell.console[-4:])
+    return text, stopped
 
 
 @main.command()
@@ -99,8 +136,10 @@ def simulate(robot, plan, log_path, errors_file, scale, seed, noise_mm, samples,
 @click.argument("log", type=click.Path(dir_okay=False))
 @click.option("-o", "--output", "patch_path", type=click.Path(dir_okay=False),
               help="Write the patch (TOML) here, and the SPEC table beside it.")
-@click.option("--method", type=click.Choice(["stepwise", "joint", "all"]), default="all",
-              show_default=True, help="Which identification to run and show.")
+@click.option("--method", type=click.Choice(["stepwise", "joint", "all", "controller"]),
+              default="all", show_default=True,
+              help="Which identification to run and show; 'controller' adds the generated "
+                   "V+ solver run in the digital twin beside the Python reference.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--omega", type=click.FloatRange(min=0.0, min_open=True), default=DEFAULT_OMEGA,
               show_default=True, help="Bound Ω of each step (deg or mm) where the plan "
@@ -130,21 +169,59 @@ def solve(robot, plan, log, patch_path, method, as_json, omega, robust, partial,
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
     m = load_measurements(log, pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), force)
-    methods = ("stepwise", "joint") if method == "all" else (method,)
+    methods = ("stepwise", "joint") if method in ("all", "controller") else (method,)
     result = solve_api(rb, pl, m, methods=methods, omega_default=omega, robust=robust,
                        partial=partial)
-    chosen = result.recommended if method == "all" else method
+    chosen = result.recommended if method in ("all", "controller") else method
+    ctl = _controller(rb, pl, log, result) if method == "controller" else None
     if patch_path:
         write_patch(patch_path, rb, result.estimates[chosen], force=force,
                     plan_fingerprint=pl.fingerprint(), log_path=str(log),
                     log_sha256=m.sha256, version=_version())
     if as_json:
-        print_json(result.as_json())
+        data = result.as_json()
+        if ctl:
+            data["methods"]["controller"] = ctl
+        print_json(data)
     else:
         click.echo(_solve_text(result))
+        if ctl:
+            click.echo(_controller_text(ctl))
     if patch_path:
         spec = Path(patch_path).with_name(Path(patch_path).stem + ".spec.txt")
         click.echo(f"wrote {patch_path} ({chosen}) and {spec}", err=as_json)
+
+
+def _controller(rb, pl, log, result) -> dict:
+    """The generated controller solver (wc.solve, wc.solve2) run in the twin on the log."""
+    if result.left_nominal or result.measurements.missing:
+        raise WirecalError("--method controller needs a complete log (the controller solver "
+                           "refuses missing points too)")
+    parsed = read_log(log)
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for key, polish, ref in (("parameters", False, "stepwise"),
+                                 ("polished", True, "joint")):
+            values, _, ops = controller_solve(rb, pl, parsed, Path(tmp), polish=polish)
+            reference = result.estimates[ref].as_dict()
+            out[key] = values
+            out[f"{key}_operations"] = ops
+            out[f"{key}_max_difference"] = max(abs(values[n] - reference[n])
+                                               for n in reference)
+    return out
+
+
+def _controller_text(ctl: dict) -> str:
+    lines = ["", "Controller solver (the generated V+ run in the digital twin):",
+             f"{'parameter':<10}{'wc.solve':>12}{'wc.solve2':>12}"]
+    for name, value in ctl["parameters"].items():
+        lines.append(f"{name:<10}{value:12.4f}{ctl['polished'][name]:12.4f}")
+    lines.append(f"largest difference from the Python reference: "
+                 f"{ctl['parameters_max_difference']:.2g} (stepwise), "
+                 f"{ctl['polished_max_difference']:.2g} (joint) deg/mm; "
+                 f"{ctl['parameters_operations']:,} and {ctl['polished_operations']:,} "
+                 "arithmetic operations")
+    return "\n".join(lines)
 
 
 def _solve_text(result) -> str:

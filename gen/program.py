@@ -21,7 +21,8 @@ from wirecal.solver.robot import Robot
 
 from .tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
 from .templating import render
-from .vplus import check_limits, double_literal, lint, ppoint
+from .vparse import parse_module
+from .vplus import check_limits, double_literal, long_lines, ppoint
 
 MODULE_NAME = "WIRECAL.V2"
 STRIDE = 8   # flattened index c*STRIDE + k (k ≤ 7): tables by configuration and joint
@@ -162,7 +163,11 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         nit=STEP_ITERATIONS, njit=JOINT_ITERATIONS, patch=patch,
         names=list(plan.order),
     )
-    problems = lint(text, MODULE_NAME)
+    problems = long_lines(text, MODULE_NAME)
+    try:
+        parse_module(text, MODULE_NAME)
+    except WirecalError as exc:
+        problems += exc.problems
     if problems:  # a generator defect, never the user's: say so plainly
         raise WirecalError(["internal error: the generated module breaks a V+ rule "
                             "(please report):", *problems[:20]])

@@ -341,6 +341,8 @@ class _Compiler:
     # ---------- expressions: (function, is_double) ----------
     def expr(self, e):
         tag = e[0]
+        if tag == "paren":
+            return self.expr(e[1])
         if tag == "num":
             v = e[1] if e[2] else f32(e[1])
             return (lambda frame: v), e[2]

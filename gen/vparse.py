@@ -85,7 +85,8 @@ class _Build(Transformer):
         return ("num", 0.0, False)
 
     def paren(self, e):
-        return e
+        # kept: "(x)" passes x by value in a CALL (User's Guide p. 42–45)
+        return ("paren", e)
 
     def anyname(self, t):
         return str(t)
@@ -291,8 +292,7 @@ def parse_module(text: str, source: str = "<module>") -> Module:
         problems.append(f"{source}: {current[0]}: missing .END (program starts on line "
                         f"{current[1]})")
         _finish(current, programs, source, problems)
-    if not problems:
-        _check_module(programs, source, problems)
+    _check_module(programs, source, problems)
     if problems:
         raise WirecalError(problems)
     return Module(source, programs)
@@ -533,6 +533,8 @@ class _Checker:
     def kind(self, line, e):
         """The kind of an expression (n, s, l, b), or None after reporting a problem."""
         tag = e[0]
+        if tag == "paren":
+            return self.kind(line, e[1])
         if tag == "num":
             return "n"
         if tag == "str":

@@ -1,16 +1,14 @@
-"""V+ language rules the generator enforces, and exact literal formatting.
+"""V+ literals written exactly, the joint-limit margin, and the line-length rule.
 
-Rules (V+ Language User's Guide v17: program format p. 35–36, names p. 99–100,
-numbers p. 102): ``.PROGRAM name()`` … ``.END``; AUTO/LOCAL/GLOBAL before the first
-executable step; names start with a letter, hold letters, digits, '.' and '_', and
-only their first 15 characters count; labels are integers 0–65535; string literals hold
-ASCII 32–126 without '"'. wirecal keeps lines within 80 characters (the terminal line
-limit, p. 202) and writes no keyword of other dialects (Kawasaki's JMOVE, named labels).
+The language rules a controller checks on load (program format, declarations first,
+15-character names, keywords, labels, type prefixes) are checked by the parser of the
+digital twin (:mod:`wirecal.gen.vparse`), which the generator runs on its own output.
+wirecal also keeps lines within 80 characters (the terminal line limit, User's Guide
+p. 202).
 """
 
 from __future__ import annotations
 
-import re
 from collections.abc import Iterable
 
 import numpy as np
@@ -19,13 +17,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 
-SIGNIFICANT = 15
 MAX_LINE = 80
-NAME = re.compile(r"^[A-Za-z][A-Za-z0-9._]*$")
-FOREIGN = re.compile(r"\b(JMOVE|LMOVE|JAPPRO|LAPPRO|TWAIT|C1MOVE|C2MOVE|HOME)\b")
-DECLARATION = re.compile(r"^\s*(AUTO|LOCAL|GLOBAL)\b")
-PROGRAM = re.compile(r"^\.PROGRAM\s+([A-Za-z][A-Za-z0-9._]*)\((.*)\)\s*(;.*)?$")
-IDENT = re.compile(r"(?<![A-Za-z0-9._^\"])[$#%]?([A-Za-z][A-Za-z0-9._]*)")
 
 
 def joint_literal(x: float) -> str:
@@ -82,90 +74,7 @@ def check_limits(robot: Robot, plan: Plan, margin_deg: float) -> None:
         raise WirecalError(problems)
 
 
-def lint(text: str, source: str = "<module>") -> list[str]:
-    """Problems of a generated module against the rules above (empty when clean)."""
-    problems: list[str] = []
-    names: dict[str, str] = {}
-    in_program = None
-    executable = False
-    labels: set[str] = set()
-    gotos: list[tuple[int, str]] = []
-    for n, line in enumerate(text.split("\n"), 1):
-        where = f"{source}:{n}"
-        if len(line) > MAX_LINE:
-            problems.append(f"{where}: line has {len(line)} characters (> {MAX_LINE})")
-        code = _strip_comment(line).strip()
-        if not code:
-            continue
-        if FOREIGN.search(code):
-            problems.append(f"{where}: keyword of another dialect: {code}")
-        if code.startswith(".PROGRAM"):
-            m = PROGRAM.match(line.strip())
-            if not m:
-                problems.append(f"{where}: malformed .PROGRAM line")
-                continue
-            if in_program:
-                problems.append(f"{where}: .PROGRAM inside {in_program} (missing .END)")
-            in_program, executable = m.group(1), False
-            labels, gotos = set(), []
-            _register(m.group(1), names, where, problems)
-            continue
-        if code == ".END":
-            if not in_program:
-                problems.append(f"{where}: .END without .PROGRAM")
-            for gl, target in gotos:
-                if target not in labels:
-                    problems.append(f"{source}:{gl}: GOTO {target}: no such label in "
-                                    f"{in_program}")
-            in_program = None
-            continue
-        if not in_program:
-            problems.append(f"{where}: code outside a program: {code}")
-            continue
-        m = re.match(r"^(\d+)(\s|$)", code)
-        if m:
-            labels.add(m.group(1))
-            if int(m.group(1)) > 65535:
-                problems.append(f"{where}: label {m.group(1)} above 65535")
-            code = code[m.end():].strip()
-            if not code:
-                continue
-        if DECLARATION.match(code):
-            if executable:
-                problems.append(f"{where}: declaration after executable steps: {code}")
-        else:
-            executable = True
-        g = re.match(r"^GOTO\s+(\S+)$", code)
-        if g:
-            if not g.group(1).isdigit():
-                problems.append(f"{where}: GOTO needs a numeric label, not {g.group(1)}")
-            gotos.append((n, g.group(1)))
-        for s in re.findall(r'"([^"]*)"', code):
-            if any(not 32 <= ord(ch) <= 126 for ch in s):
-                problems.append(f"{where}: string literal with characters outside ASCII "
-                                "32–126")
-        for ident in IDENT.findall(re.sub(r'"[^"]*"', '""', code)):
-            if "." in ident or "_" in ident:
-                _register(ident, names, where, problems)
-    if in_program:
-        problems.append(f"{source}: missing .END after {in_program}")
-    return problems
-
-
-def _strip_comment(line: str) -> str:
-    out, quoted = [], False
-    for ch in line:
-        if ch == '"':
-            quoted = not quoted
-        if ch == ";" and not quoted:
-            break
-        out.append(ch)
-    return "".join(out)
-
-
-def _register(name: str, names: dict[str, str], where: str, problems: list[str]) -> None:
-    key = name.lower()[:SIGNIFICANT]
-    other = names.setdefault(key, name.lower())
-    if other != name.lower():
-        problems.append(f"{where}: {name!r} and {other!r} share their first {SIGNIFICANT} "
-                        "characters")
+def long_lines(text: str, source: str) -> list[str]:
+    """Lines over :data:`MAX_LINE` characters."""
+    return [f"{source}:{n}: line has {len(line)} characters (> {MAX_LINE})"
+            for n, line in enumerate(text.split("\n"), 1) if len(line) > MAX_LINE]
