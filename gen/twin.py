@@ -249,12 +249,13 @@ def run_measurement(robot: Robot, plan: Plan, truth: dict[str, float], disk: Pat
                 counter_start=start, faults=faults)
     interp = Interpreter(parse_module(text, "WIRECAL.V2"), cell)
     mount = interp.execute("wc.mount")
+    cell.moves = 0      # fault positions count the moves of wc.run (see move_of_step)
     run = interp.execute("wc.run") if mount.status == "completed" else None
     return RunResult(mount, run, disk / options.log_file, cell)
 
 
 def move_of_step(plan: Plan, step: int, point: int = 1) -> int:
-    """The 1-based number of the move that reaches a step's point in wc.run."""
+    """The 1-based number of the move of wc.run that reaches a step's point."""
     moves = 0
     for j, s in enumerate(plan.steps, 1):
         moves += 1 + len(s.via_deg)

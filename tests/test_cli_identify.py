@@ -139,3 +139,25 @@ def test_bad_options(tmp_path):
 def test_help(command):
     r = run(command, "--help")
     assert "Usage:" in r.output and len(r.output) > 400
+
+
+def test_simulate_with_the_controller_program_then_solve_on_the_controller(tmp_path):
+    log = tmp_path / "twin.csv"
+    out = run("simulate", ROBOT, PLAN, "-o", log, "--controller", "--seed", 6).output
+    assert "wrote" in out and "written on the controller by wc.run" in log.read_text()
+    data = json.loads(run("solve", ROBOT, PLAN, log, "--method", "controller", "--json")
+                      .output)
+    ctl = data["methods"]["controller"]
+    assert set(ctl["parameters"]) == set(data["methods"]["stepwise"]["parameters"])
+    assert ctl["parameters_max_difference"] <= 1e-4
+    assert ctl["polished_max_difference"] <= 1e-4
+    assert ctl["parameters_operations"] > 5e5
+
+
+def test_simulate_controller_stop_is_reported(tmp_path):
+    log = tmp_path / "slip.csv"
+    r = run("simulate", ROBOT, PLAN, "-o", log, "--controller", "--slip", "2:0.7", ok=False)
+    assert r.exit_code == 1 and "the controller program stopped: paused in wc.meas" in r.output
+    text = log.read_text()   # the slip during step 2 shows at the zero of step 3
+    assert "point,2,6," in text and text.rstrip().split("\n")[-1].startswith("zero,3,0,")
+    assert "moved during step 2" in r.output
