@@ -1,0 +1,207 @@
+"""Inverse kinematics: every solution for a flange pose, with V+ configuration names.
+
+Analytic for 6R arms of the common industrial structure in Craig's convention — α1 = ±90°,
+α2 = 0, α3, α4, α5 = ±90° and a spherical wrist (a4 = a5 = d5 = 0), any lengths and joint
+offsets (row 1's α0, a0 act as a fixed base transform). With φ_i the DH angles
+(q_i + offset_i), s_k = sin α_k:
+
+* wrist centre c = o6 − d6·z6 = o4, which depends on φ1..φ3 only;
+* in frame 1 the wrist centre is (a1 + u_x, −s1(d2 + d3), s1·u_y) with
+  (u_x, u_y) = RotZ(φ2)·(a2 + a3 cφ3 + s3 d4 sφ3, a3 sφ3 − s3 d4 cφ3): the horizontal
+  reach fixes x1 = ±√(r² − (d2 + d3)²) (shoulder: righty/lefty) and φ1, then
+  a3 cφ3 + s3 d4 sφ3 = (|u|² − a2² − a3² − d4²) / 2a2 gives φ3 (elbow: above/below) and φ2;
+* the wrist rotation M = RotX(α3)ᵀ R3ᵀ R6 = RotZ(φ4) RotX(α4) RotZ(φ5) RotX(α5) RotZ(φ6)
+  has m33 = −s4 s5 cφ5, (m13, m23) = s5 sφ5 (cφ4, sφ4), (m31, m32) = s4 sφ5 (cφ6, −sφ6):
+  two solutions ±sφ5 (wrist: noflip/flip).
+
+Each analytic solution is polished by Gauss–Newton on the exact model; arms outside the
+class are solved numerically (damped least squares from many starts). Configuration
+names (wirecal's convention; the V+ manual's exact definitions are unconfirmed):
+righty when the wrist centre lies ahead of the joint-1 axis along the arm (x1 ≥ 0);
+above when the elbow is above the line from joint 2 to the wrist centre; flip when
+the DH angle φ5 = q5 + offset5 is negative (a small offset must not merge the two wrist
+solutions).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .kinematics import Model, frames, joint_jacobian
+
+HALF_PI = np.pi / 2
+
+
+@dataclass(frozen=True)
+class Solution:
+    q: np.ndarray               # joint angles (rad)
+    config: tuple[str, str, str]  # ("righty"|"lefty", "above"|"below", "noflip"|"flip")
+    within_limits: bool
+
+
+def flange_pose(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation (3, 3) and origin (3,) of the last frame for one configuration (rad)."""
+    f = frames(model, np.atleast_2d(q))
+    return f.R_last[0], f.o[0, -1]
+
+
+def analytic_structure(model: Model) -> bool:
+    """Whether :func:`solve` can use the closed form for this model."""
+    dh = np.asarray(model.dh)
+    if dh.ndim != 2 or dh.shape[0] != 6:
+        return False
+    alpha = dh[:, 0]
+    right = [np.isclose(abs(np.sin(alpha[k])), 1, atol=1e-12) for k in (1, 3, 4, 5)]
+    return (all(right) and np.isclose(np.sin(alpha[2]), 0, atol=1e-12)
+            and np.cos(alpha[2]) > 0 and abs(dh[4, 1]) < 1e-12 and abs(dh[5, 1]) < 1e-12
+            and abs(dh[4, 3]) < 1e-12 and abs(dh[2, 1]) > 1e-9)
+
+
+def _rot_x(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def _rot_z(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
+    """Closed-form DH angles φ (8 at most) for a flange pose; see the module doc."""
+    dh = model.dh
+    alpha, a, off, d = dh.T
+    base = _rot_x(alpha[0])
+    Rb, ob = base.T @ R, base.T @ o - np.array([a[0], 0, 0])
+    s1, s3, s4, s5 = (np.sign(np.sin(alpha[k])) for k in (1, 3, 4, 5))
+    c = ob - d[5] * Rb[:, 2]
+    y1 = -s1 * (d[1] + d[2])
+    r2 = c[0] ** 2 + c[1] ** 2
+    out = []
+    if r2 < y1 ** 2:
+        return out
+    for shoulder in (1, -1):
+        x1 = shoulder * np.sqrt(r2 - y1 ** 2)
+        phi1 = np.arctan2(c[1], c[0]) - np.arctan2(y1, x1)
+        ux, uy = x1 - a[1], s1 * (c[2] - d[0])
+        k = (ux ** 2 + uy ** 2 - a[2] ** 2 - a[3] ** 2 - d[3] ** 2) / (2 * a[2])
+        rr = np.hypot(a[3], d[3])
+        if abs(k) > rr * (1 + 1e-12):
+            continue
+        beta = np.arctan2(s3 * d[3], a[3])
+        for elbow in (1, -1):
+            phi3 = beta + elbow * np.arccos(np.clip(k / rr, -1, 1))
+            px = a[2] + a[3] * np.cos(phi3) + s3 * d[3] * np.sin(phi3)
+            py = a[3] * np.sin(phi3) - s3 * d[3] * np.cos(phi3)
+            phi2 = np.arctan2(uy, ux) - np.arctan2(py, px)
+            q123 = np.array([phi1, phi2, phi3]) - off[:3]
+            f = frames(Model(dh, model.tool_point), np.r_[q123, 0, 0, 0][None])
+            X3, Z3 = f.x[0, 3], f.z[0, 3]
+            R3 = np.column_stack([X3, np.cross(Z3, X3), Z3])
+            M = _rot_x(alpha[3]).T @ R3.T @ R
+            h = np.hypot(M[0, 2], M[1, 2])
+            for wrist in (1, -1):
+                s_phi5 = wrist * h
+                phi5 = np.arctan2(s_phi5, -s4 * s5 * M[2, 2])
+                if h > 1e-9:
+                    phi4 = np.arctan2(s5 * M[1, 2] * wrist, s5 * M[0, 2] * wrist)
+                    phi6 = np.arctan2(-s4 * M[2, 1] * wrist, s4 * M[2, 0] * wrist)
+                else:  # wrist singular: φ4 and φ6 turn about one axis; keep φ4 = 0
+                    phi4 = 0.0
+                    N = _rot_x(alpha[4]) @ _rot_z(phi5) @ _rot_x(alpha[5])
+                    X = N.T @ M
+                    phi6 = np.arctan2(X[1, 0], X[0, 0])
+                out.append(np.array([phi1, phi2, phi3, phi4, phi5, phi6]))
+                if h <= 1e-9:
+                    break
+    return out
+
+
+def _pose_error(model, q, R, o):
+    Rq, oq = flange_pose(model, q)
+    E = R @ Rq.T
+    rotvec = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
+    return np.r_[o - oq, rotvec * 1000.0]   # 1 rad of orientation weighs as 1 m
+
+
+def _geometric_jacobian(model, q):
+    f = frames(model, q[None])
+    _, Jp = joint_jacobian(Model(model.dh, np.zeros(3)), q[None])
+    Jw = f.z[0, 1:].T
+    return np.vstack([Jp[0], Jw * 1000.0])
+
+
+def _polish(model, q, R, o, iterations=30):
+    for _ in range(iterations):
+        e = _pose_error(model, q, R, o)
+        if np.max(np.abs(e)) < 1e-10:
+            return q, True
+        J = _geometric_jacobian(model, q)
+        q = q + np.linalg.lstsq(J, e, rcond=None)[0]
+    return q, np.max(np.abs(_pose_error(model, q, R, o))) < 1e-7
+
+
+def solve(model: Model, R: np.ndarray, o: np.ndarray, lo_deg: np.ndarray | None = None,
+          hi_deg: np.ndarray | None = None, seed: int = 0) -> list[Solution]:
+    """Every distinct solution for the flange pose (R, o), each put into the joint limits
+    where a turn of ±360° allows it."""
+    dh = np.asarray(model.dh)
+    candidates = []
+    if analytic_structure(model):
+        candidates = [phi - dh[:, 2] for phi in _analytic(model, R, o)]
+    else:
+        rng = np.random.default_rng(seed)
+        structural = dh.copy()
+        structural[:, 0] = np.round(structural[:, 0] / HALF_PI) * HALF_PI
+        structural[4:, 1] = 0.0
+        structural[4, 3] = 0.0
+        seeds = [phi - dh[:, 2] for phi in _analytic(Model(structural, model.tool_point), R, o)]
+        seeds += list(rng.uniform(-np.pi, np.pi, (24, 6)))
+        candidates = seeds
+    solutions: list[Solution] = []
+    for q0 in candidates:
+        q, ok = _polish(model, np.asarray(q0, dtype=float), R, o)
+        if not ok:
+            continue
+        q = (q + np.pi) % (2 * np.pi) - np.pi
+        q, inside = _into_limits(q, lo_deg, hi_deg)
+        if any(np.allclose(_wrapped(q - s.q), 0, atol=1e-6) for s in solutions):
+            continue
+        solutions.append(Solution(q, configuration(model, q), inside))
+    return solutions
+
+
+def _wrapped(x):
+    return (x + np.pi) % (2 * np.pi) - np.pi
+
+
+def _into_limits(q, lo_deg, hi_deg):
+    if lo_deg is None or hi_deg is None:
+        return q, True
+    lo, hi = np.radians(lo_deg), np.radians(hi_deg)
+    q = q.copy()
+    for j in range(len(q)):
+        for turn in (0.0, 2 * np.pi, -2 * np.pi):
+            if lo[j] <= q[j] + turn <= hi[j]:
+                q[j] += turn
+                break
+    return q, bool(np.all((q >= lo - 1e-12) & (q <= hi + 1e-12)))
+
+
+def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
+    """wirecal's names of a solution's configuration (see the module doc)."""
+    f = frames(model, np.atleast_2d(q))
+    o2, o3 = f.o[0, 2], f.o[0, 3]
+    centre = f.o[0, 4]
+    z1 = f.z[0, 1]
+    r = centre - f.o[0, 1]
+    x1 = r - np.dot(r, z1) * z1
+    ahead = np.dot(x1, f.x[0, 1])
+    line = centre - o2
+    t = np.dot(o3 - o2, line) / max(np.dot(line, line), 1e-300)
+    offset = (o3 - o2) - t * line
+    return ("righty" if ahead >= 0 else "lefty",
+            "above" if offset[2] >= 0 else "below",
+            "flip" if _wrapped(q[4] + model.dh[4, 2]) < 0 else "noflip")
