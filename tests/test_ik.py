@@ -32,7 +32,8 @@ def test_round_trip_analytic(viper, u, calibrated):
     q = _q(viper, u)
     R, o = flange_pose(model, q)
     solutions = solve(model, R, o, viper.joint_min_deg, viper.joint_max_deg)
-    assert any(_same(s.q, q) for s in solutions)
+    singular = abs(np.sin(q[4] + model.dh[4, 2])) < 1e-6   # φ4, φ6 then form a continuum
+    assert singular or any(_same(s.q, q) for s in solutions)
     assert 1 <= len(solutions) <= 8
     for s in solutions:
         R2, o2 = flange_pose(model, s.q)
