@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from wirecal.solver import ik
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import perturbed, tool_position
 from wirecal.solver.logfile import Log, parse_log
@@ -27,7 +28,7 @@ from wirecal.solver.robot import Robot
 
 from .emulate import readings_from_log
 from .program import STRIDE, GenOptions, module_text
-from .vinterp import Interpreter, Outcome, VError, f32
+from .vinterp import Interpreter, Outcome, Trans, VError, f32
 from .vparse import parse_module
 
 ERRORS = {
@@ -56,6 +57,15 @@ class Faults:
     joint_max_deg: tuple[float, ...] | None = None   # the controller's own limits
 
 
+@dataclass(frozen=True)
+class Plate:
+    """A flat plate (granite) for the touch probe: a point on its top face and the face's
+    outward normal, in the robot's base frame (mm)."""
+
+    point: tuple[float, float, float]
+    normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
+
+
 @dataclass
 class Cell:
     """The simulated robot, encoder, disk and terminal (see module docstring)."""
@@ -70,10 +80,16 @@ class Cell:
     answers: list[str] = field(default_factory=lambda: ["1"])
     faults: Faults = Faults()
     proceed_on_pause: bool = False
+    controller: dict[str, float] = field(default_factory=dict)  # the model the controller
+    plate: Plate | None = None                                   # believes: nominal + these
+    probe_mm: tuple[float, float, float] = (0.0, 0.0, 100.0)    # probe tip, flange frame
+    probe_signal: int = 1001
 
     def __post_init__(self):
         self.rng = np.random.default_rng(self.seed)
         self.model = perturbed(self.robot, self.truth)
+        self.believed = perturbed(self.robot, self.controller)
+        self.requested: dict[int, str] = {}
         self.p0 = tool_position(self.model, np.radians(self.mount_deg)[None])[0]
         self.joints = tuple(f32(x) for x in self.mount_deg)
         self.lo = self.robot.joint_min_deg
@@ -115,7 +131,26 @@ class Cell:
     def accel(self, *_args) -> None:
         pass
 
-    def move(self, target) -> None:
+    def configure(self, word: str) -> None:
+        """ABOVE/BELOW, FLIP/NOFLIP, LEFTY/RIGHTY: a request for the next motion."""
+        part = {"LEFTY": 0, "RIGHTY": 0, "ABOVE": 1, "BELOW": 1, "FLIP": 2, "NOFLIP": 2}[word]
+        self.requested[part] = word.lower()
+
+    def _joints_for(self, t: Trans) -> np.ndarray:
+        """The controller's inverse kinematics: its own model, the requested configuration
+        where given, else the current one."""
+        R, p = t.matrix()
+        current = ik.configuration(self.believed, np.radians(self.joints))
+        want = tuple(self.requested.get(k, current[k]) for k in range(3))
+        self.requested = {}
+        for s in ik.solve(self.believed, R, p, self.lo, self.hi):
+            if s.config == want and s.within_limits:
+                return np.degrees(s.q)
+        raise VError(-931, f"*Location out of range* ({'/'.join(want)})")
+
+    def move(self, target, straight: bool = False) -> None:
+        if isinstance(target, Trans):
+            target = self._joints_for(target)
         q = np.asarray(target, dtype=float)
         for j in np.flatnonzero((q < self.lo) | (q > self.hi)):
             raise VError(-1004, f"*Joint {j + 1} out of range* ({q[j]:g} deg)")
@@ -131,8 +166,20 @@ class Cell:
     def break_(self) -> None:
         pass
 
-    def here(self):
-        return self.joints
+    def here(self, transform: bool = False):
+        """HERE: the joints, or the pose the controller computes from them (its model)."""
+        if not transform:
+            return self.joints
+        return Trans.from_matrix(*ik.flange_pose(self.believed, np.radians(self.joints)))
+
+    def sig(self, signal: int) -> float:
+        """SIG: −1 (TRUE) while the touch probe's true tip is on or below the plate."""
+        if signal != self.probe_signal or self.plate is None:
+            return 0.0
+        R, o = ik.flange_pose(self.model, np.radians(self.joints))
+        tip = o + R @ np.asarray(self.probe_mm)
+        depth = np.dot(tip - np.asarray(self.plate.point), np.asarray(self.plate.normal))
+        return -1.0 if depth <= 0 else 0.0
 
     def wait(self, seconds: float) -> None:
         self.clock += seconds

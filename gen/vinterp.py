@@ -18,7 +18,9 @@ import struct
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from .vparse import Module, Program
+import numpy as np
+
+from .vparse import Module, Program, transformation_names
 
 _S = struct.Struct("f")
 
@@ -29,6 +31,42 @@ def f32(x: float) -> float:
         return _S.unpack(_S.pack(x))[0]
     except OverflowError:
         raise VError(-405, "*Floating-point overflow*") from None
+
+
+class Trans:
+    """A V+ transformation: x, y, z (mm) and yaw, pitch, roll (deg), Z-Y-Z Euler angles
+    (R = RotZ(yaw)·RotY(pitch)·RotZ(roll); the convention of Adept's V+, from third-party
+    sources: UNCONFIRMED against the manual)."""
+
+    __slots__ = ("pitch", "roll", "x", "y", "yaw", "z")
+
+    def __init__(self, x, y, z, yaw, pitch, roll):
+        self.x, self.y, self.z = float(x), float(y), float(z)
+        self.yaw, self.pitch, self.roll = float(yaw), float(pitch), float(roll)
+
+    def matrix(self):
+        a, b, c = np.radians([self.yaw, self.pitch, self.roll])
+        ca, sa, cb, sb, cc, sc = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(c), np.sin(c)
+        R = np.array([[ca * cb * cc - sa * sc, -ca * cb * sc - sa * cc, ca * sb],
+                      [sa * cb * cc + ca * sc, -sa * cb * sc + ca * cc, sa * sb],
+                      [-sb * cc, sb * sc, cb]])
+        return R, np.array([self.x, self.y, self.z])
+
+    @classmethod
+    def from_matrix(cls, R, p):
+        sb = float(np.hypot(R[0, 2], R[1, 2]))
+        pitch = np.arctan2(sb, R[2, 2])
+        if sb > 1e-12:
+            yaw, roll = np.arctan2(R[1, 2], R[0, 2]), np.arctan2(R[2, 1], -R[2, 0])
+        else:
+            yaw, roll = 0.0, np.arctan2(R[1, 0], R[0, 0]) * (1 if R[2, 2] > 0 else -1)
+        return cls(*p, *np.degrees([yaw, pitch, roll]))
+
+    def values(self):
+        return (self.x, self.y, self.z, self.yaw, self.pitch, self.roll)
+
+    def shifted(self, dx, dy, dz):
+        return Trans(self.x + dx, self.y + dy, self.z + dz, self.yaw, self.pitch, self.roll)
 
 
 class VError(Exception):
@@ -88,6 +126,7 @@ class Interpreter:
         self._locals: dict[str, tuple[dict, dict]] = {}
         self.where = ("", 0)
         self.ops = 0
+        self.transforms = transformation_names(module.programs)
         for name in module.programs:
             self._locals[name] = ({}, {})
 
@@ -204,6 +243,8 @@ class _Compiler:
     def storage(self, kind: str, name: str, index_fns):
         """(getter, setter, double?) for a variable, compiled."""
         interp = self.i
+        if kind == "n" and name in interp.transforms:
+            kind = "t"
         rounding = kind == "n" and not self.is_double(name)
 
         def undefined():
@@ -488,6 +529,13 @@ class _Compiler:
             return (lambda frame: cell.belt(belt, int(f[1](frame)))), False
         if name == "#ppoint":
             return (lambda frame: tuple(f32(g(frame)) for g in f)), True
+        if name == "trans":
+            return (lambda frame: Trans(*(f32(g(frame)) for g in f))), True
+        if name == "shift":
+            return (lambda frame: f[0](frame).shifted(f[1](frame), f[2](frame),
+                                                      f[3](frame))), True
+        if name == "sig":
+            return (lambda frame: cell.sig(int(f[0](frame)))), False
         raise AssertionError(name)  # pragma: no cover - rejected on load
 
     # ---------- statements ----------
@@ -542,21 +590,30 @@ class _Compiler:
                     raise Pause("PAUSE")
             return pause
         if kind == "set":
-            _, put = self.storage("l", a[0], None)
-            f, _ = self.expr(a[1])
+            _, put = self.storage(a[0], a[1], None)
+            f, _ = self.expr(a[2])
             return lambda frame: put(frame, f(frame))
         if kind == "move":
-            get, _ = self.storage("l", a[0], None)
-            return lambda frame: cell.move(get(frame))
+            get, _ = self.storage(a[0], a[1], None)
+            straight = a[2] == "MOVES"
+            return lambda frame: cell.move(get(frame), straight)
         if kind == "break":
             return lambda frame: cell.break_()
         if kind == "here":
-            _, put = self.storage("l", a[0], None)
-            return lambda frame: put(frame, tuple(cell.here()))
+            _, put = self.storage(a[0], a[1], None)
+            transform = a[0] == "t"
+            return lambda frame: put(frame, cell.here(transform))
+        if kind == "config":
+            word = a[0]
+            return lambda frame: cell.configure(word)
         if kind == "decompose":
-            name, index, loc = a
+            name, index, lkind, loc = a
             start = self.expr(index[0])[0]
-            getloc, _ = self.storage("l", loc, None)
+            get_loc, _ = self.storage(lkind, loc, None)
+
+            def getloc(frame):
+                v = get_loc(frame)
+                return v.values() if isinstance(v, Trans) else v
             at = [0]
             _, put = self.storage("n", name, [lambda frame: at[0]])
 

@@ -37,6 +37,8 @@ FUNCTIONS: dict[str, tuple[tuple[str, ...], str]] = {
     "len": (("s",), "n"), "defined": (("v",), "n"),
     "belt": (("b", "n"), "n"), "device": (("n", "n", "nv", "n"), "n"),
     "#ppoint": (("n",) * 6, "l"),
+    "trans": (("n",) * 6, "t"),
+    "sig": (("n",), "n"),
 }
 
 
@@ -63,6 +65,12 @@ def _parser() -> Lark:
 
 def _kind(token: str) -> str:
     return {"$": "s", "#": "l", "%": "b"}.get(token[:1], "n")
+
+
+def _loc(token) -> tuple[str, str]:
+    """A location operand: a precision point (#name, kind l) or a transformation (t)."""
+    name = str(token).lower()
+    return ("l" if name.startswith("#") else "t"), name
 
 
 @v_args(inline=True)
@@ -185,19 +193,25 @@ class _Build(Transformer):
         return ("pause",)
 
     def set_loc(self, name, e):
-        return ("set", str(name).lower(), e)
+        return ("set", *_loc(name), e)
 
-    def move(self, name):
-        return ("move", str(name).lower())
+    def move(self, kind, name):
+        return ("move", *_loc(name), str(kind).upper())
 
     def break_(self):
         return ("break",)
 
     def here(self, name):
-        return ("here", str(name).lower())
+        return ("here", *_loc(name))
 
     def decompose(self, name, index, loc):
-        return ("decompose", str(name).lower(), index, str(loc).lower())
+        return ("decompose", str(name).lower(), index, *_loc(loc))
+
+    def config(self, word):
+        return ("config", str(word).upper())
+
+    def shift(self, loc, dx, dy, dz):
+        return ("fn", "shift", [loc, dx, dy, dz])
 
     def speed(self, e):
         return ("speed", e)
@@ -407,21 +421,42 @@ def _check_module(programs: dict[str, Program], source: str, problems: list[str]
             problems.append(f"{where}: {bare!r} and {other!r} share their first "
                             f"{SIGNIFICANT} characters")
 
+    transforms = transformation_names(programs)
     for prog in programs.values():
         register(prog.name, f"{source}:{prog.line}: {prog.name}")
         labels = {s[2] for s in prog.body if s[0] == "label"}
-        local = {p[1]: p[0] for p in prog.params}
-        for name in prog.declared:
-            local.setdefault(name, _kind(name))
-        _Checker(prog, programs, source, problems, register, labels).block(prog.body)
+        _Checker(prog, programs, source, problems, register, labels,
+                 transforms).block(prog.body)
+
+
+def transformation_names(programs: dict[str, Program]) -> set[str]:
+    """Names without a prefix that hold transformations (targets of SET or HERE)."""
+    names: set[str] = set()
+
+    def walk(steps):
+        for s in steps:
+            if not isinstance(s, list):
+                if s[0] in ("set", "here") and s[2] == "t":
+                    names.add(s[3])
+            elif s[0] == "case":
+                for _values, body in s[3]:
+                    walk(body)
+            else:
+                walk(s[3])
+                if len(s) > 4:
+                    walk(s[4])
+    for prog in programs.values():
+        walk(prog.body)
+    return names
 
 
 class _Checker:
     """Walks one program: names, functions, argument counts, GOTOs and kinds."""
 
-    def __init__(self, prog, programs, source, problems, register, labels):
+    def __init__(self, prog, programs, source, problems, register, labels, transforms):
         self.prog, self.programs, self.source = prog, programs, source
         self.problems, self.register, self.labels = problems, register, labels
+        self.transforms = transforms
 
     def err(self, line, message):
         self.problems.append(f"{self.source}:{line}: {self.prog.name}: {message}")
@@ -483,10 +518,10 @@ class _Checker:
             if args[0] not in self.labels:
                 self.err(line, f"GOTO {args[0]}: no such label in {self.prog.name}")
         elif kind in ("set",):
-            self.register(args[0], f"{self.source}:{line}: {self.prog.name}")
-            self.need(line, args[1], "l")
+            self.register(args[1], f"{self.source}:{line}: {self.prog.name}")
+            self.need(line, args[2], args[0])
         elif kind in ("move", "here"):
-            self.register(args[0], f"{self.source}:{line}: {self.prog.name}")
+            self.register(args[1], f"{self.source}:{line}: {self.prog.name}")
         elif kind == "decompose":
             self.register(args[0], f"{self.source}:{line}: {self.prog.name}")
             for e in args[1]:
@@ -541,9 +576,14 @@ class _Checker:
             return "s"
         if tag == "var":
             self.var(line, e)
-            return e[1]
+            return "t" if e[1] == "n" and e[2] in self.transforms else e[1]
         if tag == "fn":
             name, args = e[1], e[2]
+            if name == "shift":
+                self.need(line, args[0], "t")
+                for a in args[1:]:
+                    self.need(line, a, "n")
+                return "t"
             spec = FUNCTIONS.get(name)
             if spec is None:
                 self.err(line, f"unknown function {name.upper()}")
@@ -594,4 +634,4 @@ class _Checker:
 
 def _word(kind: str) -> str:
     return {"n": "number", "s": "string ($)", "l": "location (#)", "b": "belt (%)",
-            "v": "variable"}.get(kind, kind)
+            "t": "transformation", "v": "variable"}.get(kind, kind)

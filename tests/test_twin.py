@@ -6,12 +6,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wirecal.gen.twin import Cell, Faults, controller_solve, move_of_step, run_measurement
+from wirecal.gen.twin import (
+    Cell,
+    Faults,
+    Plate,
+    controller_solve,
+    move_of_step,
+    run_measurement,
+)
 from wirecal.gen.vinterp import Interpreter, f32
 from wirecal.gen.vparse import parse_module
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.identify import Problem
-from wirecal.solver.kinematics import perturbed
+from wirecal.solver.kinematics import perturbed, tool_position
 from wirecal.solver.logfile import load_measurements, parse_log, read_log
 from wirecal.solver.solve import solve
 
@@ -195,3 +202,62 @@ def test_wrapped_counter_is_no_fault(twin_run, viper, paper_plan):
     assert twin_run.run.status == "completed"
     m = load_measurements(twin_run.log, paper_plan, viper)
     assert np.all(m.distance_mm > 20) and np.all(m.distance_mm < 650)
+
+
+CONFIG_PROGRAM = """.PROGRAM t.main()
+    AUTO k
+    SET t = TRANS(518, 43, 239, 33, 122, 25)
+{moves}
+.END
+"""
+CONFIGS = (("ABOVE", "NOFLIP"), ("ABOVE", "FLIP"), ("BELOW", "NOFLIP"), ("BELOW", "FLIP"))
+
+
+def _config_run(viper, paper_plan, tmp_path, controller):
+    moves = "\n".join(
+        f"    {a}\n    {b}\n    MOVE t\n    BREAK\n    HERE #p{k}\n    DECOMPOSE q[{6 * k}] = #p{k}"
+        for k, (a, b) in enumerate(CONFIGS))
+    cell = Cell(viper, TRUTH, paper_plan.theta0_deg, tmp_path, controller=controller)
+    interp = Interpreter(parse_module(CONFIG_PROGRAM.format(moves=moves), "t.v2"), cell)
+    out = interp.execute("t.main")
+    assert out.status == "completed", out
+    q = np.array([[interp.get_global("q", 6 * k + j) for j in range(6)] for k in range(4)])
+    true_tips = tool_position(perturbed(viper, TRUTH), np.radians(q))
+    return q, true_tips
+
+
+def test_configuration_changes_reach_one_pose_four_ways(viper, paper_plan, tmp_path):
+    q, tips = _config_run(viper, paper_plan, tmp_path, controller={})
+    assert len({tuple(np.round(row, 3)) for row in q}) == 4           # four joint solutions
+    spread = max(np.linalg.norm(a - b) for a in tips for b in tips)
+    assert spread > 0.5   # a nominal controller on the true robot: the paper's discrepancy
+    _, tips = _config_run(viper, paper_plan, tmp_path, controller=TRUTH)
+    # calibrated: equal up to the joints' single precision (1e-5 deg at 0.5 m ≈ 1e-4 mm)
+    assert max(np.linalg.norm(a - b) for a in tips for b in tips) < 1e-3
+
+
+def test_unreachable_configuration_is_the_controllers_error(viper, paper_plan, tmp_path):
+    src = ".PROGRAM t.main()\n    SET t = TRANS(900, 0, 200, 0, 180, 0)\n    MOVE t\n.END\n"
+    _, out = run_program(viper, paper_plan, tmp_path, src)
+    assert out.status == "error" and out.message.startswith("*Location out of range*")
+
+
+def test_touch_probe_on_a_plate(viper, paper_plan, tmp_path):
+    src = """.PROGRAM t.main()
+    SET t = TRANS(350, 50, 320, 0, 180, 0)
+    MOVES t
+    BREAK
+    WHILE NOT SIG(1001) DO
+        SET t = SHIFT(t BY 0, 0, -0.5)
+        MOVES t
+        BREAK
+    END
+    HERE h
+    DECOMPOSE x[1] = h
+.END
+"""
+    cell = Cell(viper, {}, paper_plan.theta0_deg, tmp_path, plate=Plate((0.0, 0.0, 150.0)))
+    interp = Interpreter(parse_module(src, "t.v2"), cell)
+    assert interp.execute("t.main").status == "completed"
+    z = interp.get_global("x", 3)      # flange z; the probe reaches 100 mm below it
+    assert 249.5 < z <= 250.0 + 1e-6

@@ -45,6 +45,7 @@ INVALID = {
                                                  "a number is needed"),
     "location in arithmetic": (prog("    x = #p+1"), "type-prefix misuse: '+' on a location"),
     "belt typed": (prog("    TYPE %b"), "TYPE cannot print a belt (%)"),
+    "number as transformation": (prog("    SET t = 3"), "a number where a transformation"),
     "unclosed IF": (prog("    IF x THEN\n        y = 1"),
                     "bad.v2:2: t.main: IF is never closed with END"),
     "ELSE without IF": (prog("    ELSE"), "bad.v2:2: t.main: ELSE without IF"),
