@@ -18,11 +18,12 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.fileio import check_writable, write_atomic
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
+from wirecal.solver.validation import CONFIGS, Setup, config_poses, plate_grid
 
 from .tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
 from .templating import render
 from .vparse import parse_module
-from .vplus import check_limits, double_literal, long_lines, ppoint
+from .vplus import check_limits, double_literal, joint_literal, long_lines, ppoint
 
 MODULE_NAME = "WIRECAL.V2"
 STRIDE = 8   # flattened index c*STRIDE + k (k ≤ 7): tables by configuration and joint
@@ -41,6 +42,7 @@ class GenOptions:
     log_file: str = "WCLOG.CSV"
     result_file: str = "WCSOLVE.CSV"
     patch: dict[str, float] | None = None   # identified offsets (deg, mm) for wc.patch
+    validation: Setup | None = None           # adds wc.vcfg and wc.vpln (paper §3.6)
 
 
 def _version() -> str:
@@ -161,7 +163,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         encoder=robot.encoder, log_file=opt.log_file, result_file=opt.result_file,
         theta0=ppoint(plan.theta0_deg), steps=steps, data=data_lines(tables, robot),
         nit=STEP_ITERATIONS, njit=JOINT_ITERATIONS, patch=patch,
-        names=list(plan.order),
+        names=list(plan.order), v=_validation_context(robot, opt),
     )
     problems = long_lines(text, MODULE_NAME)
     try:
@@ -172,6 +174,27 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         raise WirecalError(["internal error: the generated module breaks a V+ rule "
                             "(please report):", *problems[:20]])
     return text
+
+
+def _validation_context(robot: Robot, opt: GenOptions) -> dict | None:
+    setup = opt.validation
+    if setup is None:
+        return None
+    poses = config_poses(robot, setup, opt.margin_deg)
+    index, _, targets = plate_grid(robot, setup, opt.margin_deg)
+    fp = setup.fingerprint()
+
+    def args(values):
+        return ", ".join(joint_literal(x) for x in values)
+    return {
+        "poses": [args(p) for p in poses], "configs": [(a.upper(), f.upper())
+                                                       for a, f in CONFIGS],
+        "grid_points": [(i, j, args(t)) for (i, j), t in zip(index, targets, strict=True)],
+        "grid": setup.grid, "encoder": args(setup.encoder_mm), "probe": args(setup.probe_mm),
+        "signal": setup.signal, "approach": _num(setup.approach_mm),
+        "coarse_steps": int(np.ceil((setup.approach_mm + 3.0) / 0.2)),
+        "fp_a": fp[:32], "fp_b": fp[32:],
+    }
 
 
 def _num(x: float) -> str:

@@ -21,7 +21,7 @@ import numpy as np
 
 from wirecal.solver import ik
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.kinematics import frames, perturbed, tool_position
 from wirecal.solver.logfile import Log, parse_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
@@ -58,12 +58,33 @@ class Faults:
 
 
 @dataclass(frozen=True)
+class Unmodelled:
+    """Physical effects no kinematic parameter can absorb, so that validation figures are
+    not trivially perfect. Joint encoders do not see them: HERE reports the commanded
+    joints, while the encoder wire and the probe see where the arm really is.
+
+    * repeatability: each move lands with independent joint errors of σ chosen so that the
+      tool point scatters by about ``repeatability_mm``/2 (1σ) at 600 mm;
+    * compliance under gravity: joints 2 and 3 sag by ``compliance_deg_per_m`` per metre of
+      horizontal lever arm from their axis to the wrist centre (the weight of the forearm,
+      wrist and tool; 0.01 deg/m gives ≈ 0.05 mm at full reach).
+    """
+
+    repeatability_mm: float = 0.02
+    compliance_deg_per_m: float = 0.01
+
+
+@dataclass(frozen=True)
 class Plate:
     """A flat plate (granite) for the touch probe: a point on its top face and the face's
     outward normal, in the robot's base frame (mm)."""
 
     point: tuple[float, float, float]
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
+
+
+def frames_of(model, q_deg):
+    return frames(model, np.radians(np.atleast_2d(q_deg)))
 
 
 @dataclass
@@ -84,6 +105,8 @@ class Cell:
     plate: Plate | None = None                                   # believes: nominal + these
     probe_mm: tuple[float, float, float] = (0.0, 0.0, 100.0)    # probe tip, flange frame
     probe_signal: int = 1001
+    encoder_point_mm: tuple[float, float, float] | None = None   # fixed encoder (validation)
+    unmodelled: Unmodelled | None = None
 
     def __post_init__(self):
         self.rng = np.random.default_rng(self.seed)
@@ -107,6 +130,9 @@ class Cell:
         self.luns: dict[int, dict] = {}
         self.status: dict[int, float] = {}
         self.pauses: list[str] = []
+        if self.encoder_point_mm is not None:
+            self.p0 = np.asarray(self.encoder_point_mm, dtype=float)
+        self.actual = np.asarray(self.joints, dtype=float)
 
     # ---- terminal ----
     def type_(self, text: str) -> None:
@@ -140,8 +166,13 @@ class Cell:
         """The controller's inverse kinematics: its own model, the requested configuration
         where given, else the current one."""
         R, p = t.matrix()
-        current = ik.configuration(self.believed, np.radians(self.joints))
+        here = np.radians(self.joints)
+        current = ik.configuration(self.believed, here)
         want = tuple(self.requested.get(k, current[k]) for k in range(3))
+        if not self.requested:   # a step in the same configuration: follow it by Newton
+            q, ok = ik.follow(self.believed, here, R, p)
+            if ok and ik.configuration(self.believed, q) == current:
+                return np.degrees(q)
         self.requested = {}
         for s in ik.solve(self.believed, R, p, self.lo, self.hi):
             if s.config == want and s.within_limits:
@@ -157,11 +188,26 @@ class Cell:
         rate = self.robot.joint_speed_deg_s * self.speed_pct / 100
         self.clock += float(np.max(np.abs(q - np.asarray(self.joints)) / rate)) + 0.2
         self.joints = tuple(f32(x) for x in q)
+        self.actual = q + self._unmodelled(q)
         self.moves += 1
         f = self.faults
         if f.slip_at_move is not None and self.moves == f.slip_at_move:
             self.slip += f.slip_mm
         self.pose_error = self.rng.normal(0, self.noise_mm)
+
+    def _unmodelled(self, q_deg: np.ndarray) -> np.ndarray:
+        """Where the arm really is, relative to the commanded joints (deg)."""
+        u = self.unmodelled
+        if u is None:
+            return np.zeros_like(q_deg)
+        sigma = np.degrees(0.5 * u.repeatability_mm / 600.0)
+        dq = self.rng.normal(0.0, sigma, q_deg.shape)
+        f = frames_of(self.model, q_deg)
+        centre = f.o[0, 4]
+        for j in (1, 2):   # joints 2 and 3: lever arm in the horizontal plane
+            lever = np.hypot(*(centre - f.o[0, j + 1])[:2]) / 1000.0
+            dq[j] -= u.compliance_deg_per_m * lever
+        return dq
 
     def break_(self) -> None:
         pass
@@ -176,7 +222,7 @@ class Cell:
         """SIG: −1 (TRUE) while the touch probe's true tip is on or below the plate."""
         if signal != self.probe_signal or self.plate is None:
             return 0.0
-        R, o = ik.flange_pose(self.model, np.radians(self.joints))
+        R, o = ik.flange_pose(self.model, np.radians(self.actual))
         tip = o + R @ np.asarray(self.probe_mm)
         depth = np.dot(tip - np.asarray(self.plate.point), np.asarray(self.plate.normal))
         return -1.0 if depth <= 0 else 0.0
@@ -196,7 +242,7 @@ class Cell:
         f = self.faults
         if f.encoder_fails_at_read is not None and self.reads >= f.encoder_fails_at_read:
             raise VError(-1013, ERRORS[-1013])
-        p = tool_position(self.model, np.radians(self.joints)[None])[0]
+        p = tool_position(self.model, np.radians(self.actual)[None])[0]
         d = float(np.linalg.norm(p - self.p0)) + self.pose_error + self.slip
         if d > self.robot.encoder.range_mm:
             raise VError(-1100, ERRORS[-1100])
@@ -364,3 +410,31 @@ def read_result(path: Path) -> dict[str, float]:
 
 def load_log(path: Path) -> Log:
     return parse_log(path.read_text(encoding="utf-8"), str(path))
+
+
+@dataclass
+class ValidationRun:
+    configuration: Outcome
+    plane: Outcome
+    configuration_log: Path
+    plane_log: Path
+    cell: Cell
+
+
+def run_validation(robot: Robot, plan: Plan, truth: dict[str, float], setup, disk: Path,
+                   text: str, *, controller: dict[str, float], run: int, seed: int = 0,
+                   unmodelled: Unmodelled | None = Unmodelled(),
+                   noise_mm: float = 0.01) -> ValidationRun:
+    """Both validation programs (wc.vcfg, wc.vpln) in the twin. ``controller`` is the model
+    the controller believes: {} before calibration, the identified offsets after."""
+    disk.mkdir(parents=True, exist_ok=True)
+    cell = Cell(robot, truth, plan.theta0_deg, disk, seed=seed, noise_mm=noise_mm,
+                counter_start=float(np.random.default_rng([seed, 5]).integers(-2 ** 22, 2 ** 22)),
+                answers=["1", str(run), "1", str(run)], controller=controller,
+                plate=Plate(tuple(setup.plate_origin_mm)), probe_mm=tuple(setup.probe_mm),
+                probe_signal=setup.signal, encoder_point_mm=tuple(setup.encoder_mm),
+                unmodelled=unmodelled)
+    interp = Interpreter(parse_module(text, "WIRECAL.V2"), cell)
+    cfg = interp.execute("wc.vcfg")
+    pln = interp.execute("wc.vpln")
+    return ValidationRun(cfg, pln, disk / f"WCVCFG{run}.CSV", disk / f"WCVPLN{run}.CSV", cell)
