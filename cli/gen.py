@@ -10,6 +10,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.fileio import read_toml
 from wirecal.solver.plan import load_plan
 from wirecal.solver.robot import load_robot
+from wirecal.solver.validation import load_setup
 
 _D = GenOptions()
 
@@ -38,10 +39,13 @@ _D = GenOptions()
               help="8.3 name of the log the run writes on the controller's disk.")
 @click.option("--patch", "patch_file", type=click.Path(dir_okay=False),
               help="A patch from 'wirecal solve -o': wc.patch then holds its offsets.")
+@click.option("--validation", "setup_file", type=click.Path(dir_okay=False),
+              help="A validation setup: adds wc.vcfg and wc.vpln, the paper's two "
+                   "validation runs (configuration change, plane fit).")
 @click.option("--force", is_flag=True, help="Replace an existing WIRECAL.V2.")
 @user_errors
 def gen(robot, plan, out_dir, speed, accel, settle_s, samples, zero_tol, spread_tol, margin,
-        log_name, patch_file, force):
+        log_name, patch_file, setup_file, force):
     """Write the V+/eV+ module that runs PLAN on the controller.
 
     WIRECAL.V2 holds wc.mount (move to θ0, mount the encoder), wc.check (live counts),
@@ -66,7 +70,7 @@ def gen(robot, plan, out_dir, speed, accel, settle_s, samples, zero_tol, spread_
     opt = GenOptions(speed=speed, accel=accel, settle_s=settle_s, samples=samples,
                      zero_tol_mm=zero_tol, spread_tol_mm=spread_tol, margin_deg=margin,
                      log_file=log_name.upper(),
-                     patch=patch)
+                     patch=patch, validation=load_setup(setup_file) if setup_file else None)
     path = write_module(out_dir, module_text(rb, pl, opt), force=force)
     click.echo(f"wrote {path}: load it on the controller, then run wc.mount, wc.check, "
                "wc.run")

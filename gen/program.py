@@ -192,7 +192,7 @@ def _validation_context(robot: Robot, opt: GenOptions) -> dict | None:
         "grid_points": [(i, j, args(t)) for (i, j), t in zip(index, targets, strict=True)],
         "grid": setup.grid, "encoder": args(setup.encoder_mm), "probe": args(setup.probe_mm),
         "signal": setup.signal, "approach": _num(setup.approach_mm),
-        "coarse_steps": int(np.ceil((setup.approach_mm + 3.0) / 0.2)),
+        "coarse_steps": int(np.ceil(2 * setup.approach_mm)),
         "fp_a": fp[:32], "fp_b": fp[32:],
     }
 

@@ -21,7 +21,7 @@ Setup file (TOML)::
     yaw_deg = 0                   # direction of the grid's first axis about base z
     size_mm = [400, 250]
     grid = [19, 11]
-    approach_mm = 5               # start this far above the plate
+    approach_mm = 20              # start this far above the plate (search down to 2×)
     probe_mm = [0, 0, 100]        # probe tip in the flange frame
     signal = 1001                 # the probe's digital input
 """

@@ -22,5 +22,8 @@ def test_wheel_contains_templates_under_the_namespace(tmp_path):
     assert "wirecal/templates/text/psi.txt.j2" in names
     assert "wirecal/templates/__init__.py" in names
     assert "wirecal/solver/kinematics.py" in names and "wirecal/cli/main.py" in names
+    assert "wirecal/gen/vplus.lark" in names
+    assert "wirecal/examples/viper_s650/robot.toml" in names
+    assert "wirecal/templates/vplus/wirecal.v2.j2" in names
     top = {n.split("/")[0] for n in names}
     assert top <= {"wirecal", next(t for t in top if t.endswith(".dist-info"))}, top

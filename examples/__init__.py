@@ -1,0 +1,1 @@
+"""Example robot files, plans and validation setups (package data: the demo uses them)."""

@@ -1,0 +1,153 @@
+"""``wirecal demo``: the whole chain on the built-in Viper s650, in the digital twin.
+
+Generate the V+ module (calibration and validation programs) for the paper's corrected
+plan; run it on a twin robot with random true errors; identify the parameters on the PC
+and with the controller solver; write the patch; run both validation procedures before
+and after calibration (the controller believing the patch), with unmodelled errors on;
+write the report. Every output goes to one folder and none is overwritten unless asked.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from wirecal.solver.accuracy import workspace
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.fileio import check_writable, write_atomic
+from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.logfile import load_measurements, read_log
+from wirecal.solver.patch import write_patch
+from wirecal.solver.plan import load_plan
+from wirecal.solver.robot import load_robot
+from wirecal.solver.solve import solve
+from wirecal.solver.truth import random_errors, truth_text
+from wirecal.solver.validation import (
+    config_discrepancy,
+    load_setup,
+    plane_residuals,
+    read_validation_log,
+)
+
+from .program import GenOptions, module_text
+from .report import Validation, render_report
+from .twin import controller_solve, run_measurement, run_validation
+
+OUTPUTS = ("truth.toml", "WIRECAL.V2", "WCLOG.CSV", "patch.toml", "patch.spec.txt",
+           "WCVCFG1.CSV", "WCVPLN1.CSV", "WCVCFG2.CSV", "WCVPLN2.CSV", "report.html")
+
+
+@dataclass
+class DemoResult:
+    folder: Path
+    validations: list[Validation]
+    tool_error_mm: dict[str, float]          # mean over the workspace: before, after
+    controller_difference: float
+    seconds: dict[str, float]
+
+
+def example_files(robot: str = "viper_s650") -> dict[str, Path]:
+    """The shipped example: robot, corrected paper plan, validation setup."""
+    here = Path(__file__).resolve().parents[1] / "examples" / robot
+    if not here.is_dir():   # an installed wheel: the examples travel as package data
+        here = Path(str(resources.files("wirecal.examples").joinpath(robot)))
+    return {"robot": here / "robot.toml", "plan": here / "paper_plan.toml",
+            "validation": here / "validation.toml"}
+
+
+def run_demo(folder: str | Path, *, seed: int = 1, scale: float = 1.0, force: bool = False,
+             progress: Callable[[str], None] = lambda s: None) -> DemoResult:
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise WirecalError(f"{folder}: is a file; give a folder for the demo's outputs")
+    folder.mkdir(parents=True, exist_ok=True)
+    check_writable([folder / n for n in OUTPUTS], force)
+    files = example_files()
+    robot = load_robot(files["robot"])
+    plan = load_plan(files["plan"], robot)
+    setup = load_setup(files["validation"])
+    truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
+    seconds: dict[str, float] = {}
+
+    def step(n, text):
+        progress(f"[{n}/7] {text} …")
+        return time.perf_counter()
+
+    t = step(1, "generating the V+ module (calibration and validation programs)")
+    text = module_text(robot, plan, GenOptions(validation=setup))
+    seconds["generate"] = time.perf_counter() - t
+    with tempfile.TemporaryDirectory() as tmp:
+        disk = Path(tmp)
+        t = step(2, "measurement run in the digital twin (wc.mount, wc.run)")
+        run = run_measurement(robot, plan, truth, disk / "cal", seed=seed, text=text)
+        if run.run is None or run.run.status != "completed":
+            raise WirecalError(f"the twin's measurement run stopped: {run.run or run.mount}")
+        seconds["measure"] = time.perf_counter() - t
+        log_path = write_atomic(folder / "WCLOG.CSV", run.log.read_text(encoding="ascii"),
+                                force=force)
+        t = step(3, "identification on the PC (step-by-step and joint)")
+        m = load_measurements(log_path, plan, robot)
+        result = solve(robot, plan, m)
+        seconds["solve"] = time.perf_counter() - t
+        t = step(4, "identification on the controller (wc.solve, wc.solve2 in the twin)")
+        log = read_log(log_path)
+        controller = {}
+        for key, polish, ref in (("parameters", False, "stepwise"), ("polished", True, "joint")):
+            values, _, ops = controller_solve(robot, plan, log, disk / "ctl", polish=polish,
+                                              text=text)
+            reference = result.estimates[ref].as_dict()
+            controller[key] = values
+            controller[f"{key}_operations"] = ops
+            controller[f"{key}_max_difference"] = max(abs(values[n] - reference[n])
+                                                      for n in reference)
+        seconds["controller"] = time.perf_counter() - t
+        identified = result.estimates[result.recommended].as_dict()
+        runs = {}
+        for n, (name, believed) in enumerate((("before", {}), ("after", identified)), 5):
+            t = step(n, f"validation {name} calibration (wc.vcfg, wc.vpln)")
+            v = run_validation(robot, plan, truth, setup, disk / name, text,
+                               controller=believed, run=1 if name == "before" else 2,
+                               seed=seed + 7)
+            for outcome in (v.configuration, v.plane):
+                if outcome.status != "completed":
+                    raise WirecalError(f"the twin's validation run stopped: {outcome}")
+            runs[name] = v
+            seconds[f"validate {name}"] = time.perf_counter() - t
+        validations = [
+            Validation("configuration", *(config_discrepancy(read_validation_log(
+                runs[k].configuration_log, "configuration")) for k in ("before", "after"))),
+            Validation("plane", *(plane_residuals(read_validation_log(
+                runs[k].plane_log, "plane"))[0] for k in ("before", "after"))),
+        ]
+        t = step(7, "report")
+        html = render_report(result, validations, controller, truth)
+        seconds["report"] = time.perf_counter() - t
+        for name, path in (("WCVCFG1.CSV", runs["before"].configuration_log),
+                           ("WCVPLN1.CSV", runs["before"].plane_log),
+                           ("WCVCFG2.CSV", runs["after"].configuration_log),
+                           ("WCVPLN2.CSV", runs["after"].plane_log)):
+            write_atomic(folder / name, path.read_text(encoding="ascii"), force=force)
+    write_atomic(folder / "truth.toml", truth_text(robot, truth, seed), force=force)
+    write_atomic(folder / "WIRECAL.V2", text, force=force)
+    write_patch(folder / "patch.toml", robot, result.estimates[result.recommended],
+                force=force, plan_fingerprint=plan.fingerprint(), log_path="WCLOG.CSV",
+                log_sha256=m.sha256, version=_version())
+    write_atomic(folder / "report.html", html, force=force)
+    q = workspace(robot)
+    true_p = tool_position(perturbed(robot, truth), q)
+    errors = {name: float(np.linalg.norm(tool_position(perturbed(robot, believed), q) - true_p,
+                                         axis=1).mean())
+              for name, believed in (("before", {}), ("after", identified))}
+    return DemoResult(folder, validations, errors, controller["polished_max_difference"],
+                      seconds)
+
+
+def _version() -> str:
+    from .program import _version as v
+    return v()
