@@ -14,7 +14,7 @@ import numpy as np
 from wirecal.cli.main import _version, main, print_json, user_errors
 from wirecal.gen.program import GenOptions
 from wirecal.gen.twin import Faults as TwinFaults
-from wirecal.gen.twin import controller_solve, move_of_step, run_measurement
+from wirecal.gen.twin import controller_comparison, move_of_step, run_measurement
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.fileio import check_writable, write_atomic
 from wirecal.solver.identify import DEFAULT_OMEGA
@@ -197,18 +197,8 @@ def _controller(rb, pl, log, result) -> dict:
     if result.left_nominal or result.measurements.missing:
         raise WirecalError("--method controller needs a complete log (the controller solver "
                            "refuses missing points too)")
-    parsed = read_log(log)
-    out = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for key, polish, ref in (("parameters", False, "stepwise"),
-                                 ("polished", True, "joint")):
-            values, _, ops = controller_solve(rb, pl, parsed, Path(tmp), polish=polish)
-            reference = result.estimates[ref].as_dict()
-            out[key] = values
-            out[f"{key}_operations"] = ops
-            out[f"{key}_max_difference"] = max(abs(values[n] - reference[n])
-                                               for n in reference)
-    return out
+        return controller_comparison(rb, pl, read_log(log), result, Path(tmp))
 
 
 def _controller_text(ctl: dict) -> str:

@@ -37,7 +37,7 @@ from wirecal.solver.validation import (
 
 from .program import GenOptions, module_text
 from .report import Validation, render_report
-from .twin import controller_solve, run_measurement, run_validation
+from .twin import controller_comparison, run_measurement, run_validation
 
 OUTPUTS = ("truth.toml", "WIRECAL.V2", "WCLOG.CSV", "patch.toml", "patch.spec.txt",
            "WCVCFG1.CSV", "WCVPLN1.CSV", "WCVCFG2.CSV", "WCVPLN2.CSV", "report.html")
@@ -96,16 +96,8 @@ def run_demo(folder: str | Path, *, seed: int = 1, scale: float = 1.0, force: bo
         result = solve(robot, plan, m)
         seconds["solve"] = time.perf_counter() - t
         t = step(4, "identification on the controller (wc.solve, wc.solve2 in the twin)")
-        log = read_log(log_path)
-        controller = {}
-        for key, polish, ref in (("parameters", False, "stepwise"), ("polished", True, "joint")):
-            values, _, ops = controller_solve(robot, plan, log, disk / "ctl", polish=polish,
-                                              text=text)
-            reference = result.estimates[ref].as_dict()
-            controller[key] = values
-            controller[f"{key}_operations"] = ops
-            controller[f"{key}_max_difference"] = max(abs(values[n] - reference[n])
-                                                      for n in reference)
+        controller = controller_comparison(robot, plan, read_log(log_path), result,
+                                           disk / "ctl", text=text)
         seconds["controller"] = time.perf_counter() - t
         identified = result.estimates[result.recommended].as_dict()
         runs = {}

@@ -438,3 +438,18 @@ def run_validation(robot: Robot, plan: Plan, truth: dict[str, float], setup, dis
     cfg = interp.execute("wc.vcfg")
     pln = interp.execute("wc.vpln")
     return ValidationRun(cfg, pln, disk / f"WCVCFG{run}.CSV", disk / f"WCVPLN{run}.CSV", cell)
+
+
+def controller_comparison(robot: Robot, plan: Plan, log: Log, reference, disk: Path, *,
+                          text: str | None = None) -> dict:
+    """wc.solve and wc.solve2 in the twin beside the Python reference (a SolveResult):
+    their offsets, the operations each executed and its largest difference (deg, mm)."""
+    out: dict = {}
+    for key, polish, ref in (("parameters", False, "stepwise"), ("polished", True, "joint")):
+        values, _, ops = controller_solve(robot, plan, log, disk / key, polish=polish,
+                                          text=text)
+        expected = reference.estimates[ref].as_dict()
+        out[key] = values
+        out[f"{key}_operations"] = ops
+        out[f"{key}_max_difference"] = max(abs(values[n] - expected[n]) for n in expected)
+    return out

@@ -73,3 +73,24 @@ def test_report_opens_in_a_browser(demo, tmp_path):
                     f"--screenshot={shot}", (folder / "report.html").as_uri()],
                    check=True, timeout=120, capture_output=True)
     assert shot.stat().st_size > 50_000
+
+
+def test_report_command(demo, tmp_path):
+    folder, _ = demo
+    from .conftest import VIPER
+    out = tmp_path / "r.html"
+    r = CliRunner().invoke(main, [
+        "report", str(VIPER / "robot.toml"), str(VIPER / "paper_plan.toml"),
+        str(folder / "WCLOG.CSV"), "-o", str(out),
+        "--config", str(folder / "WCVCFG1.CSV"), str(folder / "WCVCFG2.CSV"),
+        "--plane", str(folder / "WCVPLN1.CSV"), str(folder / "WCVPLN2.CSV"),
+        "--truth", str(folder / "truth.toml")], catch_exceptions=False)
+    assert r.exit_code == 0, r.output
+    html = out.read_text()
+    assert html.count("data:image/png") == 5 and "truth (simulation)" in html
+    bad = CliRunner().invoke(main, ["report", str(VIPER / "robot.toml"),
+                                    str(VIPER / "paper_plan.toml"), str(folder / "WCLOG.CSV"),
+                                    "-o", str(out), "--plane", str(folder / "WCVCFG1.CSV"),
+                                    str(folder / "WCVCFG2.CSV"), "--force"])
+    assert bad.exit_code == 2 and "a 'configuration' log where a 'plane' log is needed" in \
+        bad.output
