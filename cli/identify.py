@@ -61,7 +61,8 @@ def _slip(ctx, param, value):
               help="Fault: the wire slips by MM during STEP (the next zero check sees it).")
 @click.option("--outliers", type=click.IntRange(min=0), default=0,
               help="Fault: this many points get a gross error of ±--outlier-mm.")
-@click.option("--outlier-mm", type=float, default=1.0, show_default=True)
+@click.option("--outlier-mm", type=float, default=1.0, show_default=True,
+              help="Size of each outlier's error (mm, random sign).")
 @click.option("--stop-after", type=click.IntRange(min=0),
               help="Fault: the run stops after this many readings (a partial log).")
 @click.option("--counter-start", type=float,
