@@ -22,7 +22,7 @@ import numpy as np
 from wirecal.solver import ik
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import frames, perturbed, tool_position
-from wirecal.solver.logfile import Log, parse_log
+from wirecal.solver.logfile import Log
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 
@@ -407,9 +407,6 @@ def read_result(path: Path) -> dict[str, float]:
             raise WirecalError(f"{path}:{n}: expected 'parameter,unit,offset'") from None
     return out
 
-
-def load_log(path: Path) -> Log:
-    return parse_log(path.read_text(encoding="utf-8"), str(path))
 
 
 @dataclass

@@ -18,7 +18,7 @@ import struct
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-import numpy as np
+from wirecal.solver import pose
 
 from .vparse import Module, Program, transformation_names
 
@@ -34,9 +34,7 @@ def f32(x: float) -> float:
 
 
 class Trans:
-    """A V+ transformation: x, y, z (mm) and yaw, pitch, roll (deg), Z-Y-Z Euler angles
-    (R = RotZ(yaw)·RotY(pitch)·RotZ(roll); the convention of Adept's V+, from third-party
-    sources: UNCONFIRMED against the manual)."""
+    """A V+ transformation: x, y, z (mm), yaw, pitch, roll (deg; see :mod:`pose`)."""
 
     __slots__ = ("pitch", "roll", "x", "y", "yaw", "z")
 
@@ -45,22 +43,11 @@ class Trans:
         self.yaw, self.pitch, self.roll = float(yaw), float(pitch), float(roll)
 
     def matrix(self):
-        a, b, c = np.radians([self.yaw, self.pitch, self.roll])
-        ca, sa, cb, sb, cc, sc = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(c), np.sin(c)
-        R = np.array([[ca * cb * cc - sa * sc, -ca * cb * sc - sa * cc, ca * sb],
-                      [sa * cb * cc + ca * sc, -sa * cb * sc + ca * cc, sa * sb],
-                      [-sb * cc, sb * sc, cb]])
-        return R, np.array([self.x, self.y, self.z])
+        return pose.matrix(*self.values())
 
     @classmethod
     def from_matrix(cls, R, p):
-        sb = float(np.hypot(R[0, 2], R[1, 2]))
-        pitch = np.arctan2(sb, R[2, 2])
-        if sb > 1e-12:
-            yaw, roll = np.arctan2(R[1, 2], R[0, 2]), np.arctan2(R[2, 1], -R[2, 0])
-        else:
-            yaw, roll = 0.0, np.arctan2(R[1, 0], R[0, 0]) * (1 if R[2, 2] > 0 else -1)
-        return cls(*p, *np.degrees([yaw, pitch, roll]))
+        return cls(*pose.values(R, p))
 
     def values(self):
         return (self.x, self.y, self.z, self.yaw, self.pitch, self.roll)

@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import ik
+from . import ik, pose
 from .errors import Problems, WirecalError
 from .fileio import read_toml
 from .kinematics import Model, perturbed, tool_position
@@ -125,8 +125,6 @@ def config_poses(robot: Robot, setup: Setup, margin_deg: float = 1.0) -> np.ndar
     """``setup.poses`` transformations (x, y, z, yaw, pitch, roll) spread over the
     workspace, each reachable righty in all four configurations within the limits with a
     margin, with wire lengths within the encoder's range in every one."""
-    from wirecal.gen.vinterp import Trans  # the V+ convention of a transformation
-
     model = perturbed(robot)
     rng = np.random.default_rng(setup.seed)
     reach = np.abs(robot.dh[:, 1]).sum() + np.abs(robot.dh[:, 3]).sum()
@@ -136,13 +134,13 @@ def config_poses(robot: Robot, setup: Setup, margin_deg: float = 1.0) -> np.ndar
         az, el = rng.uniform(-np.pi / 2, np.pi / 2), rng.uniform(-0.6, 0.9)
         x, y, z = r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az), r * np.sin(el)
         yaw, pitch, roll = rng.uniform(-90, 90), rng.uniform(100, 170), rng.uniform(-90, 90)
-        t = Trans(*np.round([x, y, z, yaw, pitch, roll], 1))
-        qs = _pose_reachable(model, robot, *t.matrix(), margin_deg)
+        t = tuple(float(v) for v in np.round([x, y, z, yaw, pitch, roll], 1))
+        qs = _pose_reachable(model, robot, *pose.matrix(*t), margin_deg)
         if any(q is None for q in qs):
             continue
         d = np.linalg.norm(tool_position(model, np.array(qs)) - setup.encoder_mm, axis=1)
         if np.all((d > 50) & (d < robot.encoder.range_mm - 50)):
-            out.append(t.values())
+            out.append(t)
             if len(out) == setup.poses:
                 return np.array(out)
     raise WirecalError(f"{setup.source}: configuration.poses: found only {len(out)} of "
@@ -154,8 +152,6 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
     """The grid points on the plate and the flange targets above them (tool pointing down),
     each checked reachable (righty, above, noflip) at the approach height and 5 mm below
     the plate's nominal top."""
-    from wirecal.gen.vinterp import Trans
-
     nx, ny = setup.grid
     u = np.linspace(0, setup.plate_size_mm[0], nx)
     v = np.linspace(0, setup.plate_size_mm[1], ny)
@@ -168,9 +164,10 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
     lo, hi = robot.joint_min_deg + margin_deg, robot.joint_max_deg - margin_deg
     for (i, j), p in zip(index, points, strict=True):
         flange = p + np.array([0, 0, setup.probe_mm[2] + setup.approach_mm])
-        t = Trans(*flange, setup.plate_yaw_deg, 180.0, 0.0)
+        t = (*flange, setup.plate_yaw_deg, 180.0, 0.0)
         for depth in (0.0, setup.approach_mm + 5.0):
-            R, o = t.shifted(0, 0, -depth).matrix()
+            R, o = pose.matrix(*t)
+            o = o - np.array([0, 0, depth])
             ok = any(s.within_limits and s.config == ("righty", "above", "noflip")
                      for s in ik.solve(model, R, o, lo, hi))
             if not ok:
@@ -178,7 +175,7 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
                                 f"{np.round(p, 1).tolist()} is out of reach (righty, above, "
                                 "noflip, tool down); move origin_mm or shrink the plate")
                 break
-        targets.append(t.values())
+        targets.append(t)
     if problems:
         raise WirecalError(problems[:5] + ([f"… and {len(problems) - 5} more"]
                                            if len(problems) > 5 else []))
@@ -300,10 +297,10 @@ def config_discrepancy(log: ValidationLog, bits: int = 24) -> Stats:
     out = []
     half = 2.0 ** (bits - 1)
     incomplete = []
-    for pose in np.unique(rows[:, 0]):
-        r = rows[rows[:, 0] == pose]
+    for number in np.unique(rows[:, 0]):
+        r = rows[rows[:, 0] == number]
         if len(r) != 4:
-            incomplete.append(int(pose))
+            incomplete.append(int(number))
             continue
         c = r[:, 8]
         rel = (c - c[0] + half) % (2 * half) - half

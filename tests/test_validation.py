@@ -8,6 +8,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from wirecal.solver import pose
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.ik import solve
 from wirecal.solver.kinematics import perturbed, tool_position
@@ -36,10 +37,9 @@ def test_config_poses_reachable_four_ways_and_deterministic(viper, setup):
     poses = config_poses(viper, small)
     assert poses.shape == (8, 6)
     np.testing.assert_array_equal(poses, config_poses(viper, small))
-    from wirecal.gen.vinterp import Trans
     model = perturbed(viper)
     for p in poses:
-        sols = [s for s in solve(model, *Trans(*p).matrix(), viper.joint_min_deg + 1,
+        sols = [s for s in solve(model, *pose.matrix(*p), viper.joint_min_deg + 1,
                                  viper.joint_max_deg - 1)
                 if s.within_limits and s.config[0] == "righty"]
         assert {s.config[1:] for s in sols} == set(CONFIGS)
