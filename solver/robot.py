@@ -32,12 +32,14 @@ from .errors import Problems
 from .fileio import read_toml
 
 _SCHEMA: dict[str, tuple[str, ...]] = {
-    "": ("name", "description", "kinematics", "tool", "encoder", "calibration"),
+    "": ("name", "description", "source", "kinematics", "tool", "encoder", "calibration",
+         "geometry"),
     "kinematics": ("convention", "dh", "joint_min_deg", "joint_max_deg", "joint_speed_deg_s"),
     "tool": ("point_mm",),
     "encoder": ("mm_per_count", "range_mm", "counter_bits", "interface", "channel",
                 "belt_mode"),
     "calibration": ("parameters",),
+    "geometry": ("link_radius_mm",),
 }
 _REQUIRED = {
     "": ("name", "kinematics", "tool", "encoder", "calibration"),
@@ -45,7 +47,11 @@ _REQUIRED = {
     "tool": ("point_mm",),
     "encoder": ("mm_per_count", "range_mm", "counter_bits"),
     "calibration": ("parameters",),
+    "geometry": (),
 }
+
+DEFAULT_LINK_RADIUS_MM = 50.0
+"""Capsule radius of a link when the robot file gives none (for the wire clearance)."""
 
 
 @dataclass(frozen=True)
@@ -78,6 +84,7 @@ class Robot:
     encoder: Encoder
     parameters: tuple[str, ...]
     source: str = field(default="<memory>", compare=False)
+    link_radius_mm: np.ndarray | None = None   # capsules between joint frames; see clearance
 
     @property
     def n_joints(self) -> int:
@@ -186,6 +193,12 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
                     except ValueError as exc:
                         pr.add("calibration.parameters", str(exc))
 
+    geometry = _table(data, "geometry", pr)
+    radii = _vector(geometry, "link_radius_mm", "geometry.link_radius_mm",
+                    None if n is None else n - 1, pr)
+    if radii is not None and np.any(radii < 0):
+        pr.add("geometry.link_radius_mm", "radii cannot be negative")
+
     pr.raise_if_any()
     dh_rad = dh.copy()
     dh_rad[:, [0, 2]] = np.radians(dh_rad[:, [0, 2]])
@@ -194,6 +207,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         joint_speed_deg_s=speed, tool_point=point,
         encoder=Encoder(float(mpc), float(rng), int(bits), interface, channel, mode),
         parameters=tuple(names), source=source,
+        link_radius_mm=radii if radii is not None else np.full(n - 1, DEFAULT_LINK_RADIUS_MM),
     )
 
 

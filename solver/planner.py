@@ -1,0 +1,355 @@
+"""Design of experiments (paper §2.2–2.3, §3.4): θ0, the identification order and one point
+set per parameter, for any 6R arm.
+
+Candidates are configurations that move one to three joints away from θ0 (as the paper's
+points do) or all of them; each is screened at once (vectorised) for the joint limits with a
+margin, the wire length (above a minimum, within the encoder's range), the wrist singularity
+and the wire's clearance from the links along the joint-interpolated move from θ0.
+
+* **Order** (§3.4): among the parameters not yet identified, the next is the one that the
+  most informative isolating points single out: points where |Ψ_t| ≤ tol·|Ψ_j| for every
+  other parameter t still unknown (eq. 18–19).
+* **Points**: from the isolating candidates, greedily the set minimising the step's
+  linearised variance *including what earlier estimates leak into it* (their errors reach
+  the step through Ψ_{i,<j}); the paper's criterion (largest |Ψ_j| only) is computed beside
+  it and the reduction reported. Points are kept at least ``spread_deg`` apart.
+* **Visiting order**: per step, from θ0, the shortest-time tour (nearest neighbour, then
+  2-opt) over moves that keep the wire clear and do not turn joint 6 by more than 180°
+  (which would wrap the wire around the flange).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import ik
+from .accuracy import noise_covariance, stepwise_map, tool_error, workspace
+from .clearance import wire_clearance
+from .errors import WirecalError
+from .identifiability import analyse
+from .kinematics import perturbed, tool_position
+from .plan import Plan, Step
+from .robot import Robot
+from .sensitivity import PSI_FLOOR, boundary_scale, sensitivity
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    points_per_step: int = 5
+    tol: float = 0.05                # isolation while designing (stricter than psi's verdict)
+    margin_deg: float = 5.0          # from every joint limit
+    min_wire_mm: float = 40.0
+    range_margin_mm: float = 50.0
+    clearance_mm: float = 10.0       # wire to link capsules
+    spread_deg: float = 4.0          # between the points of one step
+    samples: int = 400               # candidates per joint subset
+    speed_pct: float = 20.0          # for the robot-time estimate (as wirecal gen)
+    settle_s: float = 3.0
+    readings: int = 10
+    seed: int = 0
+    prior: float = 0.5               # typical |offset| (deg, mm) of a still-unknown parameter
+    sigma_mm: float = 0.011          # reading noise, quantisation included
+
+
+@dataclass
+class StepDesign:
+    parameter: str
+    points_deg: np.ndarray
+    strength: float                  # RMS |Ψ_j| of the points
+    leak_ours: float                 # variance factor with our choice
+    leak_paper: float                # … with the paper's criterion (largest |Ψ_j|)
+
+
+@dataclass
+class Design:
+    plan: Plan
+    steps: list[StepDesign]
+    excluded: dict[str, str] = field(default_factory=dict)   # parameter → reason
+    predicted: dict[str, float] = field(default_factory=dict)
+    robot_time_s: float = 0.0
+
+    def header(self) -> str:
+        lines = ["Designed by 'wirecal plan' (Boschetti & Sinico's method, see the README).",
+                 f"theta0 {np.round(self.plan.theta0_deg, 2).tolist()} deg; order "
+                 + " ".join(self.plan.order) + ".",
+                 f"Predicted tool-point error (sigma 0.01 mm, mean over the workspace): "
+                 f"joint {self.predicted['joint']:.4f} mm, step-by-step "
+                 f"{self.predicted['stepwise']:.4f} mm.",
+                 f"Estimated robot time {self.robot_time_s / 60:.1f} min "
+                 f"({self.plan.n_points} points)."]
+        for j, s in enumerate(self.steps, 1):
+            cut = 100 * (1 - s.leak_ours / s.leak_paper) if s.leak_paper > 0 else 0.0
+            lines.append(f"step {j} {s.parameter}: |Psi| {s.strength:.2f}; expected squared "
+                         f"error with noise and leaks {s.leak_ours:.3g} (largest-|Psi| "
+                         f"choice {s.leak_paper:.3g}: {cut:.0f} % less)")
+        for name, why in self.excluded.items():
+            lines.append(f"not planned: {name}: {why}")
+        return "\n".join(lines)
+
+
+def _subsets(n: int):
+    for size in (1, 2, 3):
+        yield from itertools.combinations(range(n), size)
+    yield tuple(range(n))
+
+
+def candidates(robot: Robot, theta0: np.ndarray, opt: PlanOptions, rng) -> np.ndarray:
+    """Configurations (deg) moving a few joints away from θ0, within the limits' margin."""
+    lo = robot.joint_min_deg + opt.margin_deg
+    hi = robot.joint_max_deg - opt.margin_deg
+    out = []
+    for subset in _subsets(robot.n_joints):
+        q = np.tile(theta0, (opt.samples, 1))
+        idx = list(subset)
+        q[:, idx] = rng.uniform(lo[idx], hi[idx], (opt.samples, len(idx)))
+        out.append(q)
+        # the mirror image about θ0: a pair θ0 ± Δ cancels the odd part of a leak, as the
+        # paper's symmetric points do
+        mirror = 2 * theta0 - q
+        inside = np.all((mirror >= lo) & (mirror <= hi), axis=1)
+        out.append(mirror[inside])
+    return np.round(np.concatenate(out), 2)
+
+
+def screen(robot: Robot, theta0: np.ndarray, q: np.ndarray, opt: PlanOptions) -> np.ndarray:
+    """Which candidates are usable: wire length, wrist singularity, clearance of the move."""
+    model = perturbed(robot)
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    d = np.linalg.norm(tool_position(model, np.radians(q)) - p0, axis=1)
+    ok = (d >= opt.min_wire_mm) & (d <= robot.encoder.range_mm - opt.range_margin_mm)
+    if ik.analytic_structure(model):
+        ok &= np.abs(np.sin(np.radians(q[:, 4]) + model.dh[4, 2])) >= np.sin(np.radians(8))
+    radii = robot.link_radius_mm
+    trim = float(np.linalg.norm(robot.tool_point)) + radii[-1] + 15.0
+    for t in np.linspace(0.25, 1.0, 4):      # along the joint-interpolated move from θ0
+        path = np.radians(theta0 + t * (q - theta0))
+        ok &= wire_clearance(model, path, p0, radii, trim) >= opt.clearance_mm
+    return ok
+
+
+def _error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
+    """Mean squared error of a step's estimate (linearised): the reading noise, the error
+    of the earlier estimates leaking in through Ψ_{i,<j} (covariance ``cov_prev``), and the
+    still-unknown later parameters leaking in through Ψ_{i,>j} (each of size ``prior``)."""
+    s = float(psi_j @ psi_j)
+    if s <= 0:
+        return np.inf
+    c = (psi_j @ psi_prev) / s if psi_prev.size else np.zeros(0)
+    earlier = float(c @ cov_prev @ c) if c.size else 0.0
+    later = (psi_j @ psi_next) / s if psi_next.size else np.zeros(0)
+    return opt.sigma_mm ** 2 / s + earlier + opt.prior ** 2 * float(later @ later)
+
+
+def _choose(psi_j, psi_prev, cov_prev, psi_next, q, opt: PlanOptions, criterion: str):
+    """k points by greedy minimum error ("ours") or by largest |Ψ_j| ("paper")."""
+    order = np.argsort(-np.abs(psi_j))[:600]
+    chosen: list[int] = []
+    for _ in range(opt.points_per_step):
+        best, best_val = None, np.inf
+        for i in order:
+            if i in chosen or any(np.max(np.abs(q[i] - q[c])) < opt.spread_deg
+                                  for c in chosen):
+                continue
+            if criterion == "paper":
+                best = i
+                break
+            trial = [*chosen, i]
+            val = _error(psi_j[trial], psi_prev[trial], cov_prev, psi_next[trial], opt)
+            if val < best_val:
+                best, best_val = i, val
+        if best is None:
+            return None
+        chosen.append(best)
+    return chosen
+
+
+def design(robot: Robot, theta0: np.ndarray | None = None,
+           opt: PlanOptions = PlanOptions()) -> Design:
+    """A plan for the robot file's parameters (θ0 chosen when not given)."""
+    if theta0 is not None:
+        return _design_at(robot, np.asarray(theta0, dtype=float), opt)
+    rng = np.random.default_rng([opt.seed, 99])
+    lo, hi = robot.joint_min_deg + 20, robot.joint_max_deg - 20
+    best, problems = None, []
+    for _ in range(6):
+        t0 = np.round(rng.uniform(lo, hi), 0)
+        try:
+            d = _design_at(robot, t0, opt)
+        except WirecalError as exc:
+            problems.append(exc.problems[0])
+            continue
+        score = d.predicted["stepwise"] + d.predicted["joint"] * 5
+        if best is None or score < best[0]:
+            best = (score, d)
+    if best is None:
+        raise WirecalError([f"{robot.source}: no θ0 tried gives a plan; give --theta0",
+                            *problems[:3]])
+    return best[1]
+
+
+def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
+    rng = np.random.default_rng(opt.seed)
+    model = perturbed(robot)
+    for j in np.flatnonzero((theta0 < robot.joint_min_deg + opt.margin_deg)
+                            | (theta0 > robot.joint_max_deg - opt.margin_deg)):
+        raise WirecalError(f"theta0: joint {j + 1} = {theta0[j]:g} deg is within "
+                           f"{opt.margin_deg:g} deg of its limits")
+    q_all = candidates(robot, theta0, opt, rng)
+    q_all = q_all[screen(robot, theta0, q_all, opt)]
+    if len(q_all) < opt.points_per_step:
+        raise WirecalError(f"{robot.source}: almost no usable configuration around θ0 "
+                           f"{theta0.tolist()}: check the encoder range, the link radii and "
+                           "the joint limits")
+    names = list(robot.parameters)
+    excluded: dict[str, str] = {}
+    ident = analyse(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
+    for name in ident.unobservable:
+        excluded[name] = ("unobservable: it moves every point and the encoder alike"
+                          if name in ("th1", "d1", "a0", "al0") else
+                          "unobservable from any candidate configuration")
+    for combo in ident.combinations:
+        last = combo[-1][0]
+        excluded[last] = ("redundant with " + ", ".join(n for n, _ in combo[:-1])
+                          + ": no wire length separates them; keep one")
+    remaining = [n for n in names if n not in excluded]
+    psi = sensitivity(model, q_all, theta0, remaining).psi
+    col = {n: k for k, n in enumerate(remaining)}
+    order, steps, chosen_q = [], [], []
+    k = opt.points_per_step
+    while remaining:
+        best = None
+        for j in remaining:
+            pj = psi[:, col[j]]
+            others = [col[t] for t in remaining if t != j]
+            limit = np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
+            iso = np.all(np.abs(psi[:, others]) <= limit[:, None], axis=1) if others \
+                else np.ones(len(pj), bool)
+            iso &= np.abs(pj) >= 0.05
+            if iso.sum() < k:
+                continue
+            info = float(np.sort(pj[iso] ** 2)[-k:].sum())
+            if best is None or info > best[0]:
+                best = (info, j, np.flatnonzero(iso))
+        if best is None:
+            for j in remaining:
+                excluded[j] = (f"cannot be isolated: no {k} points leave it alone "
+                               f"among {', '.join(t for t in remaining if t != j)}")
+            break
+        _, j, iso = best
+        # error covariance of the earlier estimates (linearised stepwise map)
+        prev = [col[t] for t in order]
+        nxt = [col[t] for t in remaining if t != j]
+        cov_prev = (_stepwise_cov(model, theta0, order, chosen_q, opt) if order
+                    else np.zeros((0, 0)))
+        pj = psi[iso, col[j]]
+        pprev = psi[np.ix_(iso, prev)] if prev else np.zeros((len(iso), 0))
+        pnext = psi[np.ix_(iso, nxt)] if nxt else np.zeros((len(iso), 0))
+        ours = _choose(pj, pprev, cov_prev, pnext, q_all[iso], opt, "ours")
+        paper = _choose(pj, pprev, cov_prev, pnext, q_all[iso], opt, "paper")
+        if ours is None:
+            excluded[j] = f"too few isolating points {opt.spread_deg:g} deg apart"
+            remaining.remove(j)
+            continue
+        pts = q_all[iso][ours]
+        steps.append(StepDesign(
+            j, pts, float(np.sqrt(np.mean(pj[ours] ** 2))),
+            _error(pj[ours], pprev[ours], cov_prev, pnext[ours], opt),
+            _error(pj[paper], pprev[paper], cov_prev, pnext[paper], opt)
+            if paper is not None else np.inf))
+        order.append(j)
+        chosen_q.append(pts)
+        remaining.remove(j)
+    if not order:
+        raise WirecalError(f"{robot.source}: no parameter can be isolated around θ0 "
+                           f"{theta0.tolist()}; try another --theta0")
+    for s in steps:
+        s.points_deg = _tour(robot, theta0, s.points_deg, opt)
+    plan = Plan(theta0, tuple(order), tuple(Step(s.parameter, s.points_deg,
+                                                 np.zeros((0, robot.n_joints)))
+                                            for s in steps), robot=robot.name)
+    d = Design(plan, steps, excluded)
+    d.predicted = predicted_accuracy(robot, plan)
+    d.robot_time_s = robot_time(robot, plan, opt)
+    return d
+
+
+def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarray:
+    """Error covariance (boundary units) of the estimates of the steps planned so far,
+    with the parameters not planned yet left out (their leak is added step by step)."""
+    q = np.concatenate(chosen_q)
+    step = np.concatenate([np.full(len(c), s + 1) for s, c in enumerate(chosen_q)])
+    J = sensitivity(model, q, theta0, order).psi
+    A = stepwise_map(J, step)
+    E = A @ J - np.eye(len(order))
+    return opt.sigma_mm ** 2 * A @ A.T + opt.prior ** 2 * E @ E.T
+
+
+def _move_time(robot: Robot, a: np.ndarray, b: np.ndarray, opt: PlanOptions) -> float:
+    rate = robot.joint_speed_deg_s * opt.speed_pct / 100
+    return float(np.max(np.abs(b - a) / rate)) + 0.5
+
+
+def _tour(robot: Robot, theta0, pts, opt: PlanOptions) -> np.ndarray:
+    """The visiting order from θ0: nearest neighbour, improved by 2-opt; moves that would
+    wrap the wire (joint 6 turning more than 180°) cost a detour through θ0."""
+    def cost(a, b):
+        t = _move_time(robot, a, b, opt)
+        return t if abs(b[-1] - a[-1]) <= 180 else t + 1e3
+    n = len(pts)
+    left, path, here = list(range(n)), [], theta0
+    while left:
+        i = min(left, key=lambda k: cost(here, pts[k]))
+        path.append(i)
+        left.remove(i)
+        here = pts[i]
+
+    def total(p):
+        seq = [theta0, *pts[p], theta0]
+        return sum(cost(a, b) for a, b in itertools.pairwise(seq))
+    improved = True
+    while improved:
+        improved = False
+        for a, b in itertools.combinations(range(n), 2):
+            cand = path[:a] + path[a:b + 1][::-1] + path[b + 1:]
+            if total(cand) < total(path) - 1e-9:
+                path, improved = cand, True
+    return pts[path]
+
+
+def robot_time(robot: Robot, plan: Plan, opt: PlanOptions = PlanOptions()) -> float:
+    """Estimated run time (s): every step from θ0 (zero reading) through its via points
+    and points and back, moves at the program speed, a settle and the readings per stop."""
+    stop = opt.settle_s + 0.02 * opt.readings
+    total = 0.0
+    for s in plan.steps:
+        seq = [plan.theta0_deg, *s.via_deg, *s.points_deg]
+        total += stop * (1 + len(s.points_deg))
+        total += sum(_move_time(robot, a, b, opt) for a, b in itertools.pairwise(seq))
+    total += _move_time(robot, plan.steps[-1].points_deg[-1], plan.theta0_deg, opt)
+    return total
+
+
+def predicted_accuracy(robot: Robot, plan: Plan, sigma_mm: float = 0.01,
+                       prior: float = PlanOptions.prior) -> dict[str, float]:
+    """Mean tool-point error over the workspace: for the joint estimate the Cramér–Rao bound
+    (σ per reading plus the count's quantisation); for the stepwise estimate its linearised
+    map A, noise A·C·Aᵀ plus the bias of parameters leaking into steps before their own,
+    (A·J − I)·P·(A·J − I)ᵀ with true offsets of size ``prior`` (deg, mm)."""
+    model = perturbed(robot)
+    q, step, _ = plan.all_points()
+    names = plan.order
+    J = sensitivity(model, q, plan.theta0_deg, names).psi / boundary_scale(names,
+                                                                           robot.n_joints)
+    s2 = sigma_mm ** 2 + robot.encoder.mm_per_count ** 2 / 12
+    C = noise_covariance(len(q), np.sqrt(s2), np.sqrt(s2 / len(plan.steps)))
+    cov_joint = np.linalg.pinv(J.T @ np.linalg.solve(C, J))
+    A = stepwise_map(J, step)
+    scale = boundary_scale(names, robot.n_joints)         # prior deg → rad
+    E = A @ J - np.eye(len(names))
+    P = np.diag((prior * scale) ** 2)
+    ws = workspace(robot, 500)
+    return {"joint": tool_error(model, names, cov_joint, ws).mean_mm,
+            "stepwise": tool_error(model, names, A @ C @ A.T + E @ P @ E.T, ws).mean_mm}
