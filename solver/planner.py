@@ -13,9 +13,11 @@ and the wire's clearance from the links along the joint-interpolated move from �
   linearised variance *including what earlier estimates leak into it* (their errors reach
   the step through Ψ_{i,<j}); the paper's criterion (largest |Ψ_j| only) is computed beside
   it and the reduction reported. Points are kept at least ``spread_deg`` apart.
-* **Visiting order**: per step, from θ0, the shortest-time tour (nearest neighbour, then
-  2-opt) over moves that keep the wire clear and do not turn joint 6 by more than 180°
-  (which would wrap the wire around the flange).
+* **Motion**: a candidate whose direct move from θ0 would sweep the wire through a link
+  or wrap it around the flange (joint 6 turning more than 180°) is kept if a via point
+  (the arm joints first, or the wrist first) makes the move clear; the via is recorded in
+  the plan. Per step, the visiting order from θ0 and back is the shortest-time tour
+  (nearest neighbour, then 2-opt) over clear moves.
 """
 
 from __future__ import annotations
@@ -61,6 +63,7 @@ class StepDesign:
     strength: float                  # RMS |Ψ_j| of the points
     leak_ours: float                 # variance factor with our choice
     leak_paper: float                # … with the paper's criterion (largest |Ψ_j|)
+    via_deg: np.ndarray              # (0 or 1, n): passed on the way to the first point
 
 
 @dataclass
@@ -79,7 +82,8 @@ class Design:
                  f"joint {self.predicted['joint']:.4f} mm, step-by-step "
                  f"{self.predicted['stepwise']:.4f} mm.",
                  f"Estimated robot time {self.robot_time_s / 60:.1f} min "
-                 f"({self.plan.n_points} points)."]
+                 f"({self.plan.n_points} points, "
+                 f"{sum(len(s.via_deg) for s in self.plan.steps)} via points)."]
         for j, s in enumerate(self.steps, 1):
             cut = 100 * (1 - s.leak_ours / s.leak_paper) if s.leak_paper > 0 else 0.0
             lines.append(f"step {j} {s.parameter}: |Psi| {s.strength:.2f}; expected squared "
@@ -114,20 +118,75 @@ def candidates(robot: Robot, theta0: np.ndarray, opt: PlanOptions, rng) -> np.nd
     return np.round(np.concatenate(out), 2)
 
 
-def screen(robot: Robot, theta0: np.ndarray, q: np.ndarray, opt: PlanOptions) -> np.ndarray:
-    """Which candidates are usable: wire length, wrist singularity, clearance of the move."""
+def move_clearance(robot: Robot, model, p0: np.ndarray, a: np.ndarray, b: np.ndarray,
+                   step_deg: float = 2.0) -> np.ndarray:
+    """The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
+    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion."""
+    a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
+    trim = float(np.linalg.norm(robot.tool_point)) + robot.link_radius_mm[-1] + 15.0
+    count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg)).astype(int)
+    move = np.repeat(np.arange(len(a)), count)
+    first = np.cumsum(count) - count
+    t = (np.arange(len(move)) - first[move] + 1) / count[move]
+    q = np.radians(a[move] + t[:, None] * (b[move] - a[move]))
+    gap = wire_clearance(model, q, p0, robot.link_radius_mm, trim)
+    return np.minimum.reduceat(gap, first) if len(a) else gap
+
+
+def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions,
+            step_deg: float = 2.0) -> np.ndarray:
+    """Moves a → b that keep the wire clear of the links and do not turn joint 6 by more
+    than 180° (which would wrap the wire around the flange)."""
+    a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
+    return ((np.abs(b[:, -1] - a[:, -1]) <= 180)
+            & (move_clearance(robot, model, p0, a, b, step_deg) >= opt.clearance_mm))
+
+
+def reach_ok(robot: Robot, model, p0, theta0, q, via, opt: PlanOptions,
+             step_deg: float = 2.0) -> np.ndarray:
+    """Whether each point q is reached from θ0 with the wire clear: directly, or through
+    its via point (NaN row: none)."""
+    direct = np.isnan(via[:, 0])
+    ok = np.zeros(len(q), bool)
+    ok[direct] = move_ok(robot, model, p0, theta0, q[direct], opt, step_deg)
+    v = via[~direct]
+    ok[~direct] = (move_ok(robot, model, p0, theta0, v, opt, step_deg)
+                   & move_ok(robot, model, p0, v, q[~direct], opt, step_deg))
+    return ok
+
+
+def screen(robot: Robot, theta0: np.ndarray, q: np.ndarray,
+           opt: PlanOptions) -> tuple[np.ndarray, np.ndarray]:
+    """Which candidates are usable (wire length, wrist singularity, a clear move from θ0)
+    and, for those whose direct move is not clear, a via point that makes it clear (the
+    arm joints first, or the wrist first); NaN rows where the direct move is clear. The
+    moves are sampled coarsely here; ``reach_ok`` checks the points chosen from finely."""
+    coarse = 10.0
     model = perturbed(robot)
     p0 = tool_position(model, np.radians(theta0)[None])[0]
-    d = np.linalg.norm(tool_position(model, np.radians(q)) - p0, axis=1)
-    ok = (d >= opt.min_wire_mm) & (d <= robot.encoder.range_mm - opt.range_margin_mm)
+
+    def length_ok(x):
+        d = np.linalg.norm(tool_position(model, np.radians(x)) - p0, axis=1)
+        return (d >= opt.min_wire_mm) & (d <= robot.encoder.range_mm - opt.range_margin_mm)
+    ok = length_ok(q)
     if ik.analytic_structure(model):
         ok &= np.abs(np.sin(np.radians(q[:, 4]) + model.dh[4, 2])) >= np.sin(np.radians(8))
-    radii = robot.link_radius_mm
-    trim = float(np.linalg.norm(robot.tool_point)) + radii[-1] + 15.0
-    for t in np.linspace(0.25, 1.0, 4):      # along the joint-interpolated move from θ0
-        path = np.radians(theta0 + t * (q - theta0))
-        ok &= wire_clearance(model, path, p0, radii, trim) >= opt.clearance_mm
-    return ok
+    via = np.full(q.shape, np.nan)
+    direct = np.zeros(len(q), bool)
+    direct[ok] = move_ok(robot, model, p0, theta0, q[ok], opt, coarse)
+    arm = slice(0, 3)
+    for first in ("arm", "wrist"):
+        need = np.flatnonzero(ok & ~direct & np.isnan(via[:, 0]))
+        if not len(need):
+            break
+        v = np.tile(theta0, (len(need), 1))
+        if first == "arm":
+            v[:, arm] = q[need, arm]
+        else:
+            v[:, 3:] = q[need, 3:]
+        good = length_ok(v) & reach_ok(robot, model, p0, theta0, q[need], v, opt, coarse)
+        via[need[good]] = v[good]
+    return ok & (direct | ~np.isnan(via[:, 0])), via
 
 
 def _error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
@@ -143,16 +202,32 @@ def _error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
     return opt.sigma_mm ** 2 / s + earlier + opt.prior ** 2 * float(later @ later)
 
 
-def _choose(psi_j, psi_prev, cov_prev, psi_next, q, opt: PlanOptions, criterion: str):
-    """k points by greedy minimum error ("ours") or by largest |Ψ_j| ("paper")."""
-    order = np.argsort(-np.abs(psi_j))[:600]
+def _choose(psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, opt: PlanOptions,
+            criterion: str):
+    """k points by greedy minimum error ("ours") or by largest |Ψ_j| ("paper"), at least
+    ``spread_deg`` apart, each pair joined by a clear move (``linked(i, among)``: which
+    of the candidates ``among`` (mask) are reachable from i), at most one needing a via
+    point (it will be visited first)."""
+    top = np.zeros(len(q), bool)
+    top[np.argsort(-np.abs(psi_j))[:600]] = True
+    for _ in range(20):          # a dead end (no k linked points): start elsewhere
+        chosen = _greedy(psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, top, opt,
+                         criterion)
+        if len(chosen) == opt.points_per_step:
+            return chosen
+        if not chosen:
+            break
+        top[chosen[0]] = False
+    return None
+
+
+def _greedy(psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, allowed, opt,
+            criterion) -> list[int]:
+    allowed = allowed.copy()
     chosen: list[int] = []
     for _ in range(opt.points_per_step):
         best, best_val = None, np.inf
-        for i in order:
-            if i in chosen or any(np.max(np.abs(q[i] - q[c])) < opt.spread_deg
-                                  for c in chosen):
-                continue
+        for i in np.flatnonzero(allowed)[np.argsort(-np.abs(psi_j[allowed]))]:
             if criterion == "paper":
                 best = i
                 break
@@ -161,8 +236,12 @@ def _choose(psi_j, psi_prev, cov_prev, psi_next, q, opt: PlanOptions, criterion:
             if val < best_val:
                 best, best_val = i, val
         if best is None:
-            return None
+            return chosen
         chosen.append(best)
+        allowed &= np.max(np.abs(q - q[best]), axis=1) >= opt.spread_deg
+        allowed[allowed] = linked(best, allowed)
+        if has_via[best]:
+            allowed &= ~has_via
     return chosen
 
 
@@ -181,7 +260,7 @@ def design(robot: Robot, theta0: np.ndarray | None = None,
         except WirecalError as exc:
             problems.append(exc.problems[0])
             continue
-        score = d.predicted["stepwise"] + d.predicted["joint"] * 5
+        score = (len(d.excluded), d.predicted["stepwise"] + d.predicted["joint"] * 5)
         if best is None or score < best[0]:
             best = (score, d)
     if best is None:
@@ -198,7 +277,10 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
         raise WirecalError(f"theta0: joint {j + 1} = {theta0[j]:g} deg is within "
                            f"{opt.margin_deg:g} deg of its limits")
     q_all = candidates(robot, theta0, opt, rng)
-    q_all = q_all[screen(robot, theta0, q_all, opt)]
+    usable, via_all = screen(robot, theta0, q_all, opt)
+    q_all, via_all = q_all[usable], via_all[usable]
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    has_via = ~np.isnan(via_all[:, 0])
     if len(q_all) < opt.points_per_step:
         raise WirecalError(f"{robot.source}: almost no usable configuration around θ0 "
                            f"{theta0.tolist()}: check the encoder range, the link radii and "
@@ -239,6 +321,9 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
                                f"among {', '.join(t for t in remaining if t != j)}")
             break
         _, j, iso = best
+        # the most sensitive isolating points, their moves from θ0 checked finely
+        iso = iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")[:600]]
+        iso = iso[reach_ok(robot, model, p0, theta0, q_all[iso], via_all[iso], opt)]
         # error covariance of the earlier estimates (linearised stepwise map)
         prev = [col[t] for t in order]
         nxt = [col[t] for t in remaining if t != j]
@@ -247,28 +332,37 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
         pj = psi[iso, col[j]]
         pprev = psi[np.ix_(iso, prev)] if prev else np.zeros((len(iso), 0))
         pnext = psi[np.ix_(iso, nxt)] if nxt else np.zeros((len(iso), 0))
-        ours = _choose(pj, pprev, cov_prev, pnext, q_all[iso], opt, "ours")
-        paper = _choose(pj, pprev, cov_prev, pnext, q_all[iso], opt, "paper")
+        q_iso = q_all[iso]
+
+        def linked(i, among, q_iso=q_iso):
+            return move_ok(robot, model, p0, q_iso[i], q_iso[among], opt)
+        ours = _choose(pj, pprev, cov_prev, pnext, q_iso, has_via[iso], linked, opt, "ours")
+        paper = _choose(pj, pprev, cov_prev, pnext, q_iso, has_via[iso], linked, opt,
+                        "paper")
         if ours is None:
             excluded[j] = f"too few isolating points {opt.spread_deg:g} deg apart"
             remaining.remove(j)
             continue
-        pts = q_all[iso][ours]
+        pts, vias = q_all[iso][ours], via_all[iso][ours]
+        path = _tour(robot, model, theta0, pts, vias, opt)
+        if path is None:
+            raise WirecalError(f"{robot.source}: step {len(order) + 1} ({j}): no visiting "
+                               "order keeps the wire clear of the links; try another "
+                               "--seed or --theta0, or check the link radii")
+        pts, first_via = pts[path], vias[path[0]]
         steps.append(StepDesign(
             j, pts, float(np.sqrt(np.mean(pj[ours] ** 2))),
             _error(pj[ours], pprev[ours], cov_prev, pnext[ours], opt),
             _error(pj[paper], pprev[paper], cov_prev, pnext[paper], opt)
-            if paper is not None else np.inf))
+            if paper is not None else np.inf,
+            first_via[None] if not np.isnan(first_via[0]) else np.zeros((0, len(theta0)))))
         order.append(j)
         chosen_q.append(pts)
         remaining.remove(j)
     if not order:
         raise WirecalError(f"{robot.source}: no parameter can be isolated around θ0 "
                            f"{theta0.tolist()}; try another --theta0")
-    for s in steps:
-        s.points_deg = _tour(robot, theta0, s.points_deg, opt)
-    plan = Plan(theta0, tuple(order), tuple(Step(s.parameter, s.points_deg,
-                                                 np.zeros((0, robot.n_joints)))
+    plan = Plan(theta0, tuple(order), tuple(Step(s.parameter, s.points_deg, s.via_deg)
                                             for s in steps), robot=robot.name)
     d = Design(plan, steps, excluded)
     d.predicted = predicted_accuracy(robot, plan)
@@ -292,43 +386,51 @@ def _move_time(robot: Robot, a: np.ndarray, b: np.ndarray, opt: PlanOptions) -> 
     return float(np.max(np.abs(b - a) / rate)) + 0.5
 
 
-def _tour(robot: Robot, theta0, pts, opt: PlanOptions) -> np.ndarray:
-    """The visiting order from θ0: nearest neighbour, improved by 2-opt; moves that would
-    wrap the wire (joint 6 turning more than 180°) cost a detour through θ0."""
-    def cost(a, b):
-        t = _move_time(robot, a, b, opt)
-        return t if abs(b[-1] - a[-1]) <= 180 else t + 1e3
+def _tour(robot: Robot, model, theta0, pts, vias, opt: PlanOptions) -> np.ndarray:
+    """The visiting order from θ0 and back (nearest neighbour, improved by 2-opt) over
+    moves that keep the wire clear (``move_ok``); a point reached through a via point can
+    only come first. Returns the order, or None when no order keeps every move clear."""
     n = len(pts)
-    left, path, here = list(range(n)), [], theta0
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    a, b = np.repeat(pts, n, axis=0), np.tile(pts, (n, 1))
+    clear = move_ok(robot, model, p0, a, b, opt).reshape(n, n)
+    has_via = ~np.isnan(vias[:, 0])
+    leg = np.array([[_move_time(robot, x, y, opt) for y in pts] for x in pts])
+    start = np.array([_move_time(robot, theta0, p, opt) if not v else
+                      _move_time(robot, theta0, w, opt) + _move_time(robot, w, p, opt)
+                      for p, w, v in zip(pts, vias, has_via, strict=True)])
+    back = np.array([_move_time(robot, p, theta0, opt) for p in pts])
+    bad = 1e4
+
+    def total(path):
+        t = start[path[0]] + back[path[-1]] + bad * (has_via[path[-1]] and n > 1)
+        for x, y in itertools.pairwise(path):
+            t += leg[x, y] + bad * (not clear[x, y] or has_via[y])
+        return t
+    left, path = list(range(n)), []
     while left:
-        i = min(left, key=lambda k: cost(here, pts[k]))
+        i = min(left, key=lambda k: total([*path, k]) - (total(path) if path else 0))
         path.append(i)
         left.remove(i)
-        here = pts[i]
-
-    def total(p):
-        seq = [theta0, *pts[p], theta0]
-        return sum(cost(a, b) for a, b in itertools.pairwise(seq))
     improved = True
     while improved:
         improved = False
-        for a, b in itertools.combinations(range(n), 2):
-            cand = path[:a] + path[a:b + 1][::-1] + path[b + 1:]
+        for i, j in itertools.combinations(range(n), 2):
+            cand = path[:i] + path[i:j + 1][::-1] + path[j + 1:]
             if total(cand) < total(path) - 1e-9:
                 path, improved = cand, True
-    return pts[path]
+    return np.array(path) if total(path) < bad else None
 
 
 def robot_time(robot: Robot, plan: Plan, opt: PlanOptions = PlanOptions()) -> float:
     """Estimated run time (s): every step from θ0 (zero reading) through its via points
-    and points and back, moves at the program speed, a settle and the readings per stop."""
+    and points and back to θ0, moves at the program speed, a settle and the readings per stop."""
     stop = opt.settle_s + 0.02 * opt.readings
     total = 0.0
     for s in plan.steps:
-        seq = [plan.theta0_deg, *s.via_deg, *s.points_deg]
+        seq = [plan.theta0_deg, *s.via_deg, *s.points_deg, plan.theta0_deg]
         total += stop * (1 + len(s.points_deg))
         total += sum(_move_time(robot, a, b, opt) for a, b in itertools.pairwise(seq))
-    total += _move_time(robot, plan.steps[-1].points_deg[-1], plan.theta0_deg, opt)
     return total
 
 

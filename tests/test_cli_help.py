@@ -11,7 +11,7 @@ COMMANDS = sorted(main.commands)
 
 
 def test_the_commands_are_all_there():
-    assert COMMANDS == ["demo", "gen", "observe", "psi", "report", "simulate", "solve",
+    assert COMMANDS == ["demo", "gen", "observe", "plan", "psi", "report", "simulate", "solve",
                         "validate"]
 
 
