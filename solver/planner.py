@@ -84,11 +84,16 @@ class Design:
                  f"Estimated robot time {self.robot_time_s / 60:.1f} min "
                  f"({self.plan.n_points} points, "
                  f"{sum(len(s.via_deg) for s in self.plan.steps)} via points)."]
+        lines.append("Per step: RMS |Psi| of its points (mm/deg or mm/mm), the noise gain "
+                     "(sigma of the estimate per mm of reading noise) and the leak-aware "
+                     "choice against the paper's.")
         for j, s in enumerate(self.steps, 1):
             cut = 100 * (1 - s.leak_ours / s.leak_paper) if s.leak_paper > 0 else 0.0
-            lines.append(f"step {j} {s.parameter}: |Psi| {s.strength:.2f}; expected squared "
-                         f"error with noise and leaks {s.leak_ours:.3g} (largest-|Psi| "
-                         f"choice {s.leak_paper:.3g}: {cut:.0f} % less)")
+            gain = 1 / (s.strength * np.sqrt(len(s.points_deg)))
+            lines.append(f"step {j} {s.parameter}: RMS |Psi| {s.strength:.2f}, noise gain "
+                         f"{gain:.2f}; expected squared error with noise and leaks "
+                         f"{s.leak_ours:.3g} ({cut:.0f} % below the largest-|Psi| choice's "
+                         f"{s.leak_paper:.3g})")
         for name, why in self.excluded.items():
             lines.append(f"not planned: {name}: {why}")
         return "\n".join(lines)

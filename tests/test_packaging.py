@@ -24,6 +24,7 @@ def test_wheel_contains_templates_under_the_namespace(tmp_path):
     assert "wirecal/solver/kinematics.py" in names and "wirecal/cli/main.py" in names
     assert "wirecal/gen/vplus.lark" in names
     assert "wirecal/examples/viper_s650/robot.toml" in names
+    assert "wirecal/examples/ur5/robot.toml" in names
     assert "wirecal/templates/vplus/wirecal.v2.j2" in names
     top = {n.split("/")[0] for n in names}
     assert top <= {"wirecal", next(t for t in top if t.endswith(".dist-info"))}, top
