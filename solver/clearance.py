@@ -29,6 +29,12 @@ def segment_distance(p1, q1, p2, q2) -> np.ndarray:
     return np.linalg.norm(gap, axis=-1)
 
 
+def wire_trim_mm(robot) -> float:
+    """The wire's end at the attachment point left out of the clearance check: the fixture
+    sits there (tool point offset, last link radius and 15 mm)."""
+    return float(np.linalg.norm(robot.tool_point)) + float(robot.link_radius_mm[-1]) + 15.0
+
+
 def wire_clearance(model: Model, q: np.ndarray, encoder: np.ndarray, radii: np.ndarray,
                    trim_mm: float) -> np.ndarray:
     """The smallest gap (mm) between the wire and the link capsules for configurations q

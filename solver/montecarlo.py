@@ -43,6 +43,7 @@ class MonteCarlo:
     trials: int
     methods: dict[str, MethodFigures]
     crb: MethodFigures
+    before_mm: float         # mean tool-point error of the uncalibrated (nominal) model
 
 
 def tool_errors(robot: Robot, names, est: np.ndarray, truth: np.ndarray,
@@ -110,4 +111,5 @@ def run(robot: Robot, plan: Plan, truths: np.ndarray, *, noise_mm: float = 0.01,
     draws = rng.multivariate_normal(np.zeros(len(names)), cov, size=max(T, 200))
     _, Jp = tool_jacobian(base, q_ws, names)
     tool_crb = np.linalg.norm(np.einsum("qim,tm->tqi", Jp, draws), axis=2)
-    return MonteCarlo(T, out, _figures(draws, tool_crb, angular, 0.0, scale))
+    before = tool_errors(robot, names, np.zeros_like(truth), truth, q_ws).mean()
+    return MonteCarlo(T, out, _figures(draws, tool_crb, angular, 0.0, scale), float(before))

@@ -29,7 +29,7 @@ import numpy as np
 
 from . import ik
 from .accuracy import noise_covariance, stepwise_map, tool_error, workspace
-from .clearance import wire_clearance
+from .clearance import wire_clearance, wire_trim_mm
 from .errors import WirecalError
 from .identifiability import analyse
 from .kinematics import perturbed, tool_position
@@ -128,13 +128,12 @@ def move_clearance(robot: Robot, model, p0: np.ndarray, a: np.ndarray, b: np.nda
     """The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
     (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion."""
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
-    trim = float(np.linalg.norm(robot.tool_point)) + robot.link_radius_mm[-1] + 15.0
     count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg)).astype(int)
     move = np.repeat(np.arange(len(a)), count)
     first = np.cumsum(count) - count
     t = (np.arange(len(move)) - first[move] + 1) / count[move]
     q = np.radians(a[move] + t[:, None] * (b[move] - a[move]))
-    gap = wire_clearance(model, q, p0, robot.link_radius_mm, trim)
+    gap = wire_clearance(model, q, p0, robot.link_radius_mm, wire_trim_mm(robot))
     return np.minimum.reduceat(gap, first) if len(a) else gap
 
 
@@ -160,15 +159,13 @@ def reach_ok(robot: Robot, model, p0, theta0, q, via, opt: PlanOptions,
     return ok
 
 
-def screen(robot: Robot, theta0: np.ndarray, q: np.ndarray,
+def screen(robot: Robot, model, p0: np.ndarray, theta0: np.ndarray, q: np.ndarray,
            opt: PlanOptions) -> tuple[np.ndarray, np.ndarray]:
     """Which candidates are usable (wire length, wrist singularity, a clear move from θ0)
     and, for those whose direct move is not clear, a via point that makes it clear (the
     arm joints first, or the wrist first); NaN rows where the direct move is clear. The
     moves are sampled coarsely here; ``reach_ok`` checks the points chosen from finely."""
     coarse = 10.0
-    model = perturbed(robot)
-    p0 = tool_position(model, np.radians(theta0)[None])[0]
 
     def length_ok(x):
         d = np.linalg.norm(tool_position(model, np.radians(x)) - p0, axis=1)
@@ -213,16 +210,15 @@ def _choose(psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, opt: PlanOp
     ``spread_deg`` apart, each pair joined by a clear move (``linked(i, among)``: which
     of the candidates ``among`` (mask) are reachable from i), at most one needing a via
     point (it will be visited first)."""
-    top = np.zeros(len(q), bool)
-    top[np.argsort(-np.abs(psi_j))[:600]] = True
+    pool = np.ones(len(q), bool)
     for _ in range(20):          # a dead end (no k linked points): start elsewhere
-        chosen = _greedy(psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, top, opt,
+        chosen = _greedy(psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, pool, opt,
                          criterion)
         if len(chosen) == opt.points_per_step:
             return chosen
         if not chosen:
             break
-        top[chosen[0]] = False
+        pool[chosen[0]] = False
     return None
 
 
@@ -282,9 +278,9 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
         raise WirecalError(f"theta0: joint {j + 1} = {theta0[j]:g} deg is within "
                            f"{opt.margin_deg:g} deg of its limits")
     q_all = candidates(robot, theta0, opt, rng)
-    usable, via_all = screen(robot, theta0, q_all, opt)
-    q_all, via_all = q_all[usable], via_all[usable]
     p0 = tool_position(model, np.radians(theta0)[None])[0]
+    usable, via_all = screen(robot, model, p0, theta0, q_all, opt)
+    q_all, via_all = q_all[usable], via_all[usable]
     has_via = ~np.isnan(via_all[:, 0])
     if len(q_all) < opt.points_per_step:
         raise WirecalError(f"{robot.source}: almost no usable configuration around θ0 "
@@ -349,7 +345,7 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
             remaining.remove(j)
             continue
         pts, vias = q_all[iso][ours], via_all[iso][ours]
-        path = _tour(robot, model, theta0, pts, vias, opt)
+        path = _tour(robot, model, p0, theta0, pts, vias, opt)
         if path is None:
             raise WirecalError(f"{robot.source}: step {len(order) + 1} ({j}): no visiting "
                                "order keeps the wire clear of the links; try another "
@@ -391,12 +387,11 @@ def _move_time(robot: Robot, a: np.ndarray, b: np.ndarray, opt: PlanOptions) -> 
     return float(np.max(np.abs(b - a) / rate)) + 0.5
 
 
-def _tour(robot: Robot, model, theta0, pts, vias, opt: PlanOptions) -> np.ndarray:
+def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.ndarray:
     """The visiting order from θ0 and back (nearest neighbour, improved by 2-opt) over
     moves that keep the wire clear (``move_ok``); a point reached through a via point can
     only come first. Returns the order, or None when no order keeps every move clear."""
     n = len(pts)
-    p0 = tool_position(model, np.radians(theta0)[None])[0]
     a, b = np.repeat(pts, n, axis=0), np.tile(pts, (n, 1))
     clear = move_ok(robot, model, p0, a, b, opt).reshape(n, n)
     has_via = ~np.isnan(vias[:, 0])
@@ -448,13 +443,12 @@ def predicted_accuracy(robot: Robot, plan: Plan, sigma_mm: float = 0.01,
     model = perturbed(robot)
     q, step, _ = plan.all_points()
     names = plan.order
-    J = sensitivity(model, q, plan.theta0_deg, names).psi / boundary_scale(names,
-                                                                           robot.n_joints)
+    scale = boundary_scale(names, robot.n_joints)         # prior deg → rad
+    J = sensitivity(model, q, plan.theta0_deg, names).psi / scale
     s2 = sigma_mm ** 2 + robot.encoder.mm_per_count ** 2 / 12
     C = noise_covariance(len(q), np.sqrt(s2), np.sqrt(s2 / len(plan.steps)))
     cov_joint = np.linalg.pinv(J.T @ np.linalg.solve(C, J))
     A = stepwise_map(J, step)
-    scale = boundary_scale(names, robot.n_joints)         # prior deg → rad
     E = A @ J - np.eye(len(names))
     P = np.diag((prior * scale) ** 2)
     ws = workspace(robot, 500)
