@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from wirecal.gen.demo import run_demo
-from wirecal.gen.report import histogram_figure
+from wirecal.app.demo import run_demo
+from wirecal.app.report import histogram_figure
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 
@@ -30,24 +30,32 @@ def main() -> None:
             r = run_demo(Path(tmp), seed=seed)
         cfg, pln = r.validations
         rows.append((seed, cfg, pln, r.tool_error_mm, sum(r.seconds.values())))
-        print(f"seed {seed}: configuration {cfg.before.mean:.3f} → {cfg.after.mean:.4f} mm "
-              f"({100 * cfg.reduction['mean']:.0f} %), plane {pln.before.mean:.4f} → "
-              f"{pln.after.mean:.4f} mm ({100 * pln.reduction['mean']:.0f} %), tool point "
-              f"{r.tool_error_mm['before']:.3f} → {r.tool_error_mm['after']:.4f} mm; "
-              f"{sum(r.seconds.values()):.0f} s ("
-              + ", ".join(f"{k} {v:.1f}" for k, v in r.seconds.items()) + ")")
+        print(
+            f"seed {seed}: configuration {cfg.before.mean:.3f} → {cfg.after.mean:.4f} mm "
+            f"({100 * cfg.reduction['mean']:.0f} %), plane {pln.before.mean:.4f} → "
+            f"{pln.after.mean:.4f} mm ({100 * pln.reduction['mean']:.0f} %), tool point "
+            f"{r.tool_error_mm['before']:.3f} → {r.tool_error_mm['after']:.4f} mm; "
+            f"{sum(r.seconds.values()):.0f} s ("
+            + ", ".join(f"{k} {v:.1f}" for k, v in r.seconds.items())
+            + ")"
+        )
         if seed == 1:
             DOCS.mkdir(exist_ok=True)
             for v in r.validations:
                 uri = histogram_figure(v)
                 (DOCS / f"validation_{v.kind}.png").write_bytes(
-                    base64.b64decode(uri.split(",", 1)[1]))
+                    base64.b64decode(uri.split(",", 1)[1])
+                )
     red_c = [100 * c.reduction["mean"] for _, c, _, _, _ in rows]
     red_p = [100 * p.reduction["mean"] for _, _, p, _, _ in rows]
-    print(f"reduction of the mean, configuration change: min {min(red_c):.0f} %, "
-          f"mean {np.mean(red_c):.0f} % (target 80 %, paper 84 %)")
-    print(f"reduction of the mean, plane fit: min {min(red_p):.0f} %, "
-          f"mean {np.mean(red_p):.0f} % (target 70 %, paper 77 %)")
+    print(
+        f"reduction of the mean, configuration change: min {min(red_c):.0f} %, "
+        f"mean {np.mean(red_c):.0f} % (target 80 %, paper 84 %)"
+    )
+    print(
+        f"reduction of the mean, plane fit: min {min(red_p):.0f} %, "
+        f"mean {np.mean(red_p):.0f} % (target 70 %, paper 77 %)"
+    )
     print(f"demo time: max {max(r[4] for r in rows):.0f} s (target 120 s)")
 
 

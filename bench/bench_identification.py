@@ -23,26 +23,41 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wirecal.solver import montecarlo  # noqa: E402
-from wirecal.solver.logfile import check_log, parse_log  # noqa: E402
-from wirecal.solver.plan import load_plan  # noqa: E402
-from wirecal.solver.robot import load_robot  # noqa: E402
+from wirecal.solver.formats.log import parse_log  # noqa: E402
+from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
+from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
+from wirecal.solver.measurements import check_log  # noqa: E402
 from wirecal.solver.simulate import simulate_log  # noqa: E402
 from wirecal.solver.solve import solve  # noqa: E402
 
 VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"
-TABLE5 = {"th2": 0.675, "th3": -0.485, "th4": 0.245, "th5": -0.575, "th6": -1.215,
-          "a1": -0.005, "a2": 0.105, "a3": 0.025, "d4": -0.105, "d6": 0.115}
+TABLE5 = {
+    "th2": 0.675,
+    "th3": -0.485,
+    "th4": 0.245,
+    "th5": -0.575,
+    "th6": -1.215,
+    "a1": -0.005,
+    "a2": 0.105,
+    "a3": 0.025,
+    "d4": -0.105,
+    "d6": 0.115,
+}
 
 
 def table(title, mc):
     print(f"\n{title}  ({mc.trials} calibrations, σ = 0.01 mm)")
-    print(f"  {'method':<10}{'param RMS deg':>15}{'param RMS mm':>14}"
-          f"{'tool mean mm':>14}{'tool max mm':>13}{'× CRB':>8}")
+    print(
+        f"  {'method':<10}{'param RMS deg':>15}{'param RMS mm':>14}"
+        f"{'tool mean mm':>14}{'tool max mm':>13}{'× CRB':>8}"
+    )
     rows = [*mc.methods.items(), ("CRB", mc.crb)]
     for name, f in rows:
         ratio = f.tool_mean_mm / mc.crb.tool_mean_mm
-        print(f"  {name:<10}{f.param_rms_deg:15.4f}{f.param_rms_mm:14.4f}"
-              f"{f.tool_mean_mm:14.4f}{f.tool_max_mm:13.4f}{ratio:8.2f}")
+        print(
+            f"  {name:<10}{f.param_rms_deg:15.4f}{f.param_rms_mm:14.4f}"
+            f"{f.tool_mean_mm:14.4f}{f.tool_max_mm:13.4f}{ratio:8.2f}"
+        )
 
 
 def main() -> None:
@@ -58,15 +73,21 @@ def main() -> None:
 
     mc = montecarlo.run(robot, plan, t5, seed=2)
     table("Corrected paper plan, errors of the paper's Table 5", mc)
-    table("Corrected paper plan, errors uniform within ±1 deg / ±1 mm",
-          montecarlo.run(robot, plan, uniform, seed=3))
-    table("Paper plan AS PRINTED (step 7 misprint), Table 5 errors",
-          montecarlo.run(robot, printed, t5, seed=4))
+    table(
+        "Corrected paper plan, errors uniform within ±1 deg / ±1 mm",
+        montecarlo.run(robot, plan, uniform, seed=3),
+    )
+    table(
+        "Paper plan AS PRINTED (step 7 misprint), Table 5 errors",
+        montecarlo.run(robot, printed, t5, seed=4),
+    )
 
     print("\nSpeed (one core)")
     for name, f in mc.methods.items():
-        print(f"  Monte Carlo, {name:<8}: {f.rate(T):7.0f} calibrations/s"
-              + ("  (includes its stepwise start)" if name == "joint" else "  (batched)"))
+        print(
+            f"  Monte Carlo, {name:<8}: {f.rate(T):7.0f} calibrations/s"
+            + ("  (includes its stepwise start)" if name == "joint" else "  (batched)")
+        )
     text = simulate_log(robot, plan, TABLE5, seed=7)
     m = check_log(parse_log(text, "bench.csv"), plan, robot)
     solve(robot, plan, m)  # warm-up
@@ -75,8 +96,10 @@ def main() -> None:
         t0 = time.perf_counter()
         solve(robot, plan, m)
         times.append(time.perf_counter() - t0)
-    print(f"  one solve, both methods + predicted accuracy, 69 points: "
-          f"{1e3 * np.median(times):.1f} ms (median of 30)")
+    print(
+        f"  one solve, both methods + predicted accuracy, 69 points: "
+        f"{1e3 * np.median(times):.1f} ms (median of 30)"
+    )
 
 
 if __name__ == "__main__":

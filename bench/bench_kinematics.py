@@ -20,21 +20,28 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wirecal.solver.distance import wire_jacobian  # noqa: E402
+from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 from wirecal.solver.kinematics import perturbed  # noqa: E402
-from wirecal.solver.robot import load_robot  # noqa: E402
 
 ROBOT = Path(__file__).resolve().parents[1] / "examples" / "viper_s650" / "robot.toml"
 
 
 def naive(model, q, q0, names):
     """One configuration at a time, 4×4 homogeneous matrices, Python loops."""
+
     def chain(qi):
         T = np.eye(4)
         frames = [T]
         for (alpha, a, off, d), qj in zip(model.dh, qi, strict=True):
             ca, sa, ct, st = np.cos(alpha), np.sin(alpha), np.cos(qj + off), np.sin(qj + off)
-            T = T @ np.array([[ct, -st, 0, a], [ca * st, ca * ct, -sa, -sa * d],
-                              [sa * st, sa * ct, ca, ca * d], [0, 0, 0, 1]])
+            T = T @ np.array(
+                [
+                    [ct, -st, 0, a],
+                    [ca * st, ca * ct, -sa, -sa * d],
+                    [sa * st, sa * ct, ca, ca * d],
+                    [0, 0, 0, 1],
+                ]
+            )
             frames.append(T)
         p = (T @ np.append(model.tool_point, 1))[:3]
         cols = []
@@ -80,15 +87,20 @@ def main() -> None:
     t_vec, (d, dd) = best_of(lambda: wire_jacobian(model, q, q0, names), 5)
     n_naive = 2_000
     t_naive, (d_n, dd_n) = best_of(lambda: naive(model, q[:n_naive], q0, names), 2)
-    assert np.allclose(d[:n_naive], d_n) and np.allclose(dd[:n_naive], dd_n, atol=1e-9)
+    assert np.allclose(d[:n_naive], d_n)
+    assert np.allclose(dd[:n_naive], dd_n, atol=1e-9)
     per_point_naive = t_naive / n_naive
     per_point_vec = t_vec / len(q)
     print(f"FK + wire-length Jacobian ({len(names)} parameters), one core")
-    print(f"  vectorised : {len(q):,} configurations in {t_vec:.3f} s "
-          f"({per_point_vec * 1e6:.2f} us/config)")
-    print(f"  naive loop : {n_naive:,} configurations in {t_naive:.3f} s "
-          f"({per_point_naive * 1e6:.1f} us/config; 100,000 would take "
-          f"{per_point_naive * 1e5:.1f} s)")
+    print(
+        f"  vectorised : {len(q):,} configurations in {t_vec:.3f} s "
+        f"({per_point_vec * 1e6:.2f} us/config)"
+    )
+    print(
+        f"  naive loop : {n_naive:,} configurations in {t_naive:.3f} s "
+        f"({per_point_naive * 1e6:.1f} us/config; 100,000 would take "
+        f"{per_point_naive * 1e5:.1f} s)"
+    )
     print(f"  speed-up   : {per_point_naive / per_point_vec:.0f}x (same numbers to 1e-9)")
 
 

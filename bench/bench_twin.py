@@ -10,17 +10,28 @@ import tempfile
 import time
 from pathlib import Path
 
-from wirecal.gen.program import module_text
-from wirecal.gen.twin import controller_solve, run_measurement
-from wirecal.gen.vparse import parse_module
-from wirecal.solver.logfile import load_measurements, read_log
-from wirecal.solver.plan import load_plan
-from wirecal.solver.robot import load_robot
+from wirecal.gen.vplus.program import module_text
+from wirecal.solver.formats.log import read_log
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.measurements import load_measurements
 from wirecal.solver.solve import solve
+from wirecal.twin.cell import controller_solve, run_measurement
+from wirecal.twin.vplus.parser import parse_module
 
 VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"
-TRUTH = {"th2": 0.675, "th3": -0.485, "th4": 0.245, "th5": -0.575, "th6": -1.215,
-         "a1": -0.005, "a2": 0.105, "a3": 0.025, "d4": -0.105, "d6": 0.115}
+TRUTH = {
+    "th2": 0.675,
+    "th3": -0.485,
+    "th4": 0.245,
+    "th5": -0.575,
+    "th6": -1.215,
+    "a1": -0.005,
+    "a2": 0.105,
+    "a3": 0.025,
+    "d4": -0.105,
+    "d6": 0.115,
+}
 
 
 def main() -> None:
@@ -38,20 +49,29 @@ def main() -> None:
         log = read_log(result.log)
         ref = solve(robot, plan, load_measurements(result.log, plan, robot))
         rows = []
-        for polish, name, method in ((False, "wc.solve", "stepwise"),
-                                     (True, "wc.solve2", "joint")):
+        for polish, name, method in ((False, "wc.solve", "stepwise"), (True, "wc.solve2", "joint")):
             t0 = time.perf_counter()
-            values, _, ops = controller_solve(robot, plan, log, Path(tmp) / name,
-                                              polish=polish, text=text)
-            rows.append((name, time.perf_counter() - t0, ops, max(
-                abs(values[n] - v) for n, v in ref.estimates[method].as_dict().items())))
-    print(f"V+ module: {len(text.splitlines()):,} lines, parsed and checked in "
-          f"{t_parse:.2f} s")
-    print(f"wc.mount + wc.run in the twin: {t_run:.2f} s (target 5 s); simulated robot time "
-          f"{result.cell.clock / 60:.1f} min")
+            values, _, ops = controller_solve(
+                robot, plan, log, Path(tmp) / name, polish=polish, text=text
+            )
+            rows.append(
+                (
+                    name,
+                    time.perf_counter() - t0,
+                    ops,
+                    max(abs(values[n] - v) for n, v in ref.estimates[method].as_dict().items()),
+                )
+            )
+    print(f"V+ module: {len(text.splitlines()):,} lines, parsed and checked in {t_parse:.2f} s")
+    print(
+        f"wc.mount + wc.run in the twin: {t_run:.2f} s (target 5 s); simulated robot time "
+        f"{result.cell.clock / 60:.1f} min"
+    )
     for name, t, ops, diff in rows:
-        print(f"{name}: {t:.2f} s (target 2 s), {ops:,} arithmetic operations executed, "
-              f"largest difference from the Python reference {diff:.1e} deg/mm")
+        print(
+            f"{name}: {t:.2f} s (target 2 s), {ops:,} arithmetic operations executed, "
+            f"largest difference from the Python reference {diff:.1e} deg/mm"
+        )
 
 
 if __name__ == "__main__":

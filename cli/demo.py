@@ -4,17 +4,34 @@ from __future__ import annotations
 
 import click
 
+from wirecal.app.demo import OUTPUTS, run_demo
 from wirecal.cli.main import main, user_errors
-from wirecal.gen.demo import OUTPUTS, run_demo
 
 
 @main.command()
-@click.option("-o", "--output", "folder", default="wirecal-demo", show_default=True,
-              type=click.Path(file_okay=False), help="Folder for every output.")
-@click.option("--seed", type=int, default=1, show_default=True,
-              help="Seed of the true errors and of the simulated readings.")
-@click.option("--scale", type=float, default=1.0, show_default=True,
-              help="True errors are drawn within ±SCALE deg/mm.")
+@click.option(
+    "-o",
+    "--output",
+    "folder",
+    default="wirecal-demo",
+    show_default=True,
+    type=click.Path(file_okay=False),
+    help="Folder for every output.",
+)
+@click.option(
+    "--seed",
+    type=int,
+    default=1,
+    show_default=True,
+    help="Seed of the true errors and of the simulated readings.",
+)
+@click.option(
+    "--scale",
+    type=float,
+    default=1.0,
+    show_default=True,
+    help="True errors are drawn within ±SCALE deg/mm.",
+)
 @click.option("--force", is_flag=True, help="Replace the outputs of an earlier demo.")
 @user_errors
 def demo(folder, seed, scale, force):
@@ -29,13 +46,21 @@ def demo(folder, seed, scale, force):
     click.echo("")
     click.echo(f"{'':<38}{'before':>10}{'after':>10}{'reduction':>11}")
     for v in r.validations:
-        name = ("configuration discrepancy, mean (mm)" if v.kind == "configuration"
-                else "plane-fit residual, mean (mm)")
-        click.echo(f"{name:<38}{v.before.mean:10.4f}{v.after.mean:10.4f}"
-                   f"{100 * v.reduction['mean']:10.0f}%")
+        name = (
+            "configuration discrepancy, mean (mm)"
+            if v.kind == "configuration"
+            else "plane-fit residual, mean (mm)"
+        )
+        click.echo(
+            f"{name:<38}{v.before.mean:10.4f}{v.after.mean:10.4f}{100 * v.reduction['mean']:10.0f}%"
+        )
     tb, ta = r.tool_error_mm["before"], r.tool_error_mm["after"]
-    click.echo(f"{'tool-point error vs truth, mean (mm)':<38}{tb:10.4f}{ta:10.4f}"
-               f"{100 * (1 - ta / tb):10.0f}%")
-    click.echo(f"controller solver vs PC: {r.controller_difference:.1e} deg/mm; "
-               f"total {sum(r.seconds.values()):.0f} s")
+    click.echo(
+        f"{'tool-point error vs truth, mean (mm)':<38}{tb:10.4f}{ta:10.4f}"
+        f"{100 * (1 - ta / tb):10.0f}%"
+    )
+    click.echo(
+        f"controller solver vs PC: {r.controller_difference:.1e} deg/mm; "
+        f"total {sum(r.seconds.values()):.0f} s"
+    )
     click.echo(f"files in {r.folder}/: " + ", ".join(OUTPUTS))

@@ -12,19 +12,20 @@ import click
 import numpy as np
 
 from wirecal.cli.main import _version, main, print_json, user_errors
-from wirecal.gen.program import GenOptions
-from wirecal.gen.twin import Faults as TwinFaults
-from wirecal.gen.twin import controller_comparison, move_of_step, run_measurement
+from wirecal.gen.vplus.program import GenOptions
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.fileio import check_writable, write_atomic
+from wirecal.solver.formats.fileio import check_writable, write_atomic
+from wirecal.solver.formats.log import read_log
+from wirecal.solver.formats.patch import write_patch
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
 from wirecal.solver.identify import DEFAULT_OMEGA
-from wirecal.solver.logfile import Tolerances, load_measurements, read_log
-from wirecal.solver.patch import write_patch
-from wirecal.solver.plan import load_plan
-from wirecal.solver.robot import load_robot
+from wirecal.solver.measurements import Tolerances, load_measurements
 from wirecal.solver.simulate import Faults, simulate_log
 from wirecal.solver.solve import solve as solve_api
-from wirecal.solver.truth import load_errors, random_errors, truth_text
+from wirecal.twin.cell import Faults as TwinFaults
+from wirecal.twin.cell import controller_comparison, move_of_step, run_measurement
 
 ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
 PLAN = click.argument("plan", type=click.Path(dir_okay=False))
@@ -42,39 +43,109 @@ def _slip(ctx, param, value):
 @main.command()
 @ROBOT
 @PLAN
-@click.option("-o", "--output", "log_path", required=True, type=click.Path(dir_okay=False),
-              help="Log file to write (the format the controller program writes).")
-@click.option("--errors", "errors_file", type=click.Path(dir_okay=False),
-              help="Truth file with an [errors] table of true offsets (deg, mm).")
-@click.option("--random", "scale", type=click.FloatRange(min=0.0),
-              help="Draw true offsets uniform within ±SCALE deg/mm for the robot file's "
-                   "parameters (default 1.0 when --errors is not given).")
-@click.option("--seed", type=int, default=0, show_default=True,
-              help="Random seed: the same seed gives the same truth and readings.")
-@click.option("--noise-mm", type=click.FloatRange(min=0.0), default=0.01, show_default=True,
-              help="Gaussian error of each reading (σ, mm), before quantisation.")
-@click.option("--samples", type=click.IntRange(min=1), default=10, show_default=True,
-              help="Counter readings averaged per point.")
-@click.option("--truth-out", type=click.Path(dir_okay=False),
-              help="Where to write the truth [default: LOG with .truth.toml].")
-@click.option("--slip", callback=_slip, metavar="STEP:MM",
-              help="Fault: the wire slips by MM during STEP (the next zero check sees it).")
-@click.option("--outliers", type=click.IntRange(min=0), default=0,
-              help="Fault: this many points get a gross error of ±--outlier-mm.")
-@click.option("--outlier-mm", type=float, default=1.0, show_default=True,
-              help="Size of each outlier's error (mm, random sign).")
-@click.option("--stop-after", type=click.IntRange(min=0),
-              help="Fault: the run stops after this many readings (a partial log).")
-@click.option("--counter-start", type=float,
-              help="Counter value at the first reading [default: random]; near 8388607 "
-                   "the 24-bit counter wraps during the run.")
-@click.option("--controller", is_flag=True,
-              help="Run the generated V+ programs (wc.mount, wc.run) in the digital twin: "
-                   "the log is written by the very program a user would load.")
+@click.option(
+    "-o",
+    "--output",
+    "log_path",
+    required=True,
+    type=click.Path(dir_okay=False),
+    help="Log file to write (the format the controller program writes).",
+)
+@click.option(
+    "--errors",
+    "errors_file",
+    type=click.Path(dir_okay=False),
+    help="Truth file with an [errors] table of true offsets (deg, mm).",
+)
+@click.option(
+    "--random",
+    "scale",
+    type=click.FloatRange(min=0.0),
+    help="Draw true offsets uniform within ±SCALE deg/mm for the robot file's "
+    "parameters (default 1.0 when --errors is not given).",
+)
+@click.option(
+    "--seed",
+    type=int,
+    default=0,
+    show_default=True,
+    help="Random seed: the same seed gives the same truth and readings.",
+)
+@click.option(
+    "--noise-mm",
+    type=click.FloatRange(min=0.0),
+    default=0.01,
+    show_default=True,
+    help="Gaussian error of each reading (σ, mm), before quantisation.",
+)
+@click.option(
+    "--samples",
+    type=click.IntRange(min=1),
+    default=10,
+    show_default=True,
+    help="Counter readings averaged per point.",
+)
+@click.option(
+    "--truth-out",
+    type=click.Path(dir_okay=False),
+    help="Where to write the truth [default: LOG with .truth.toml].",
+)
+@click.option(
+    "--slip",
+    callback=_slip,
+    metavar="STEP:MM",
+    help="Fault: the wire slips by MM during STEP (the next zero check sees it).",
+)
+@click.option(
+    "--outliers",
+    type=click.IntRange(min=0),
+    default=0,
+    help="Fault: this many points get a gross error of ±--outlier-mm.",
+)
+@click.option(
+    "--outlier-mm",
+    type=float,
+    default=1.0,
+    show_default=True,
+    help="Size of each outlier's error (mm, random sign).",
+)
+@click.option(
+    "--stop-after",
+    type=click.IntRange(min=0),
+    help="Fault: the run stops after this many readings (a partial log).",
+)
+@click.option(
+    "--counter-start",
+    type=float,
+    help="Counter value at the first reading [default: random]; near 8388607 "
+    "the 24-bit counter wraps during the run.",
+)
+@click.option(
+    "--controller",
+    is_flag=True,
+    help="Run the generated V+ programs (wc.mount, wc.run) in the digital twin: "
+    "the log is written by the very program a user would load.",
+)
 @click.option("--force", is_flag=True, help="Replace existing output files.")
 @user_errors
-def simulate(robot, plan, log_path, errors_file, scale, seed, noise_mm, samples, truth_out,
-             slip, outliers, outlier_mm, stop_after, counter_start, controller, force):
+def simulate(
+    robot,
+    plan,
+    log_path,
+    errors_file,
+    scale,
+    seed,
+    noise_mm,
+    samples,
+    truth_out,
+    slip,
+    outliers,
+    outlier_mm,
+    stop_after,
+    counter_start,
+    controller,
+    force,
+):
     """Simulate a measurement run of PLAN on a robot with known errors.
 
     The true robot is the nominal one plus error offsets (from --errors, or drawn with
@@ -89,22 +160,32 @@ def simulate(robot, plan, log_path, errors_file, scale, seed, noise_mm, samples,
     if errors_file:
         errors = load_errors(errors_file, rb)
     else:
-        errors = random_errors(rb, 1.0 if scale is None else scale,
-                               np.random.default_rng([seed, 1]))
+        errors = random_errors(
+            rb, 1.0 if scale is None else scale, np.random.default_rng([seed, 1])
+        )
     truth_path = Path(truth_out) if truth_out else Path(log_path).with_suffix(".truth.toml")
     check_writable([Path(log_path), truth_path], force)
     stopped = None
     if controller:
         if outliers or stop_after is not None:
-            raise WirecalError("--outliers and --stop-after apply to the direct simulation; "
-                               "the twin injects its own faults (see the README)")
-        text, stopped = _twin_run(rb, pl, errors, seed, noise_mm, samples, slip,
-                                  counter_start)
+            raise WirecalError(
+                "--outliers and --stop-after apply to the direct simulation; "
+                "the twin injects its own faults (see the README)"
+            )
+        text, stopped = _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start)
     else:
-        text = simulate_log(rb, pl, errors, seed=seed, noise_mm=noise_mm, samples=samples,
-                            faults=Faults(slip=slip, outliers=outliers,
-                                          outlier_mm=outlier_mm, stop_after=stop_after),
-                            counter_start=counter_start)
+        text = simulate_log(
+            rb,
+            pl,
+            errors,
+            seed=seed,
+            noise_mm=noise_mm,
+            samples=samples,
+            faults=Faults(
+                slip=slip, outliers=outliers, outlier_mm=outlier_mm, stop_after=stop_after
+            ),
+            counter_start=counter_start,
+        )
     write_atomic(truth_path, truth_text(rb, errors, None if errors_file else seed), force=force)
     write_atomic(log_path, text, force=force)
     click.echo(f"wrote {log_path} ({pl.n_points} points) and the truth to {truth_path}")
@@ -119,15 +200,24 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
     if slip is not None:
         faults = TwinFaults(slip_at_move=move_of_step(pl, slip[0]), slip_mm=slip[1])
     with tempfile.TemporaryDirectory() as tmp:
-        result = run_measurement(rb, pl, errors, Path(tmp), seed=seed, noise_mm=noise_mm,
-                                 counter_start=counter_start, faults=faults,
-                                 options=GenOptions(samples=samples))
+        result = run_measurement(
+            rb,
+            pl,
+            errors,
+            Path(tmp),
+            seed=seed,
+            noise_mm=noise_mm,
+            counter_start=counter_start,
+            faults=faults,
+            options=GenOptions(samples=samples),
+        )
         text = result.log.read_text(encoding="ascii") if result.log.exists() else ""
     outcome = result.run or result.mount
     stopped = None
     if outcome.status != "completed":
-        stopped = f"{outcome.status} in {outcome.program} line {outcome.line}: " + \
-            " / ".join(result.cell.console[-4:])
+        stopped = f"{outcome.status} in {outcome.program} line {outcome.line}: " + " / ".join(
+            result.cell.console[-4:]
+        )
     return text, stopped
 
 
@@ -135,31 +225,77 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
 @ROBOT
 @PLAN
 @click.argument("log", type=click.Path(dir_okay=False))
-@click.option("-o", "--output", "patch_path", type=click.Path(dir_okay=False),
-              help="Write the patch (TOML) here, and the SPEC table beside it.")
-@click.option("--method", type=click.Choice(["stepwise", "joint", "all", "controller"]),
-              default="all", show_default=True,
-              help="Which identification to run and show; 'controller' adds the generated "
-                   "V+ solver run in the digital twin beside the Python reference.")
+@click.option(
+    "-o",
+    "--output",
+    "patch_path",
+    type=click.Path(dir_okay=False),
+    help="Write the patch (TOML) here, and the SPEC table beside it.",
+)
+@click.option(
+    "--method",
+    type=click.Choice(["stepwise", "joint", "all", "controller"]),
+    default="all",
+    show_default=True,
+    help="Which identification to run and show; 'controller' adds the generated "
+    "V+ solver run in the digital twin beside the Python reference.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-@click.option("--omega", type=click.FloatRange(min=0.0, min_open=True), default=DEFAULT_OMEGA,
-              show_default=True, help="Bound Ω of each step (deg or mm) where the plan "
-                                      "gives none.")
-@click.option("--robust", is_flag=True, help="Joint method with a robust loss (soft L1) "
-                                             "against outliers.")
-@click.option("--partial", is_flag=True, help="Solve an incomplete log from the points "
-                                              "that are there.")
-@click.option("--joint-tol", type=float, default=Tolerances.joint_deg, show_default=True,
-              help="Largest difference of logged joints from the plan (deg).")
-@click.option("--spread-tol", type=float, default=Tolerances.spread_mm, show_default=True,
-              help="Largest spread of a point's samples (mm).")
-@click.option("--zero-tol", type=float, default=Tolerances.zero_mm, show_default=True,
-              help="Largest drift of a zero reading from the first (mm).")
-@click.option("--force", is_flag=True, help="Accept a log taken with another plan or robot "
-                                            "file; replace an existing patch.")
+@click.option(
+    "--omega",
+    type=click.FloatRange(min=0.0, min_open=True),
+    default=DEFAULT_OMEGA,
+    show_default=True,
+    help="Bound Ω of each step (deg or mm) where the plan gives none.",
+)
+@click.option(
+    "--robust", is_flag=True, help="Joint method with a robust loss (soft L1) against outliers."
+)
+@click.option(
+    "--partial", is_flag=True, help="Solve an incomplete log from the points that are there."
+)
+@click.option(
+    "--joint-tol",
+    type=float,
+    default=Tolerances.joint_deg,
+    show_default=True,
+    help="Largest difference of logged joints from the plan (deg).",
+)
+@click.option(
+    "--spread-tol",
+    type=float,
+    default=Tolerances.spread_mm,
+    show_default=True,
+    help="Largest spread of a point's samples (mm).",
+)
+@click.option(
+    "--zero-tol",
+    type=float,
+    default=Tolerances.zero_mm,
+    show_default=True,
+    help="Largest drift of a zero reading from the first (mm).",
+)
+@click.option(
+    "--force",
+    is_flag=True,
+    help="Accept a log taken with another plan or robot file; replace an existing patch.",
+)
 @user_errors
-def solve(robot, plan, log, patch_path, method, as_json, omega, robust, partial, joint_tol,
-          spread_tol, zero_tol, force):
+def solve(
+    robot,
+    plan,
+    log,
+    patch_path,
+    method,
+    as_json,
+    omega,
+    robust,
+    partial,
+    joint_tol,
+    spread_tol,
+    zero_tol,
+    force,
+):
     """Identify the kinematic errors from a measurement LOG.
 
     By default runs the paper's step-by-step method and the joint refinement and shows
@@ -171,14 +307,22 @@ def solve(robot, plan, log, patch_path, method, as_json, omega, robust, partial,
     pl = load_plan(plan, rb)
     m = load_measurements(log, pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), force)
     methods = ("stepwise", "joint") if method in ("all", "controller") else (method,)
-    result = solve_api(rb, pl, m, methods=methods, omega_default=omega, robust=robust,
-                       partial=partial)
+    result = solve_api(
+        rb, pl, m, methods=methods, omega_default=omega, robust=robust, partial=partial
+    )
     chosen = result.recommended if method in ("all", "controller") else method
     ctl = _controller(rb, pl, log, result) if method == "controller" else None
     if patch_path:
-        write_patch(patch_path, rb, result.estimates[chosen], force=force,
-                    plan_fingerprint=pl.fingerprint(), log_path=str(log),
-                    log_sha256=m.sha256, version=_version())
+        write_patch(
+            patch_path,
+            rb,
+            result.estimates[chosen],
+            force=force,
+            plan_fingerprint=pl.fingerprint(),
+            log_path=str(log),
+            log_sha256=m.sha256,
+            version=_version(),
+        )
     if as_json:
         data = result.as_json()
         if ctl:
@@ -196,22 +340,29 @@ def solve(robot, plan, log, patch_path, method, as_json, omega, robust, partial,
 def _controller(rb, pl, log, result) -> dict:
     """The generated controller solver (wc.solve, wc.solve2) run in the twin on the log."""
     if result.left_nominal or result.measurements.missing:
-        raise WirecalError("--method controller needs a complete log (the controller solver "
-                           "refuses missing points too)")
+        raise WirecalError(
+            "--method controller needs a complete log (the controller solver "
+            "refuses missing points too)"
+        )
     with tempfile.TemporaryDirectory() as tmp:
         return controller_comparison(rb, pl, read_log(log), result, Path(tmp))
 
 
 def _controller_text(ctl: dict) -> str:
-    lines = ["", "Controller solver (the generated V+ run in the digital twin):",
-             f"{'parameter':<10}{'wc.solve':>12}{'wc.solve2':>12}"]
+    lines = [
+        "",
+        "Controller solver (the generated V+ run in the digital twin):",
+        f"{'parameter':<10}{'wc.solve':>12}{'wc.solve2':>12}",
+    ]
     for name, value in ctl["parameters"].items():
         lines.append(f"{name:<10}{value:12.4f}{ctl['polished'][name]:12.4f}")
-    lines.append(f"largest difference from the Python reference: "
-                 f"{ctl['parameters_max_difference']:.2g} (stepwise), "
-                 f"{ctl['polished_max_difference']:.2g} (joint) deg/mm; "
-                 f"{ctl['parameters_operations']:,} and {ctl['polished_operations']:,} "
-                 "arithmetic operations")
+    lines.append(
+        f"largest difference from the Python reference: "
+        f"{ctl['parameters_max_difference']:.2g} (stepwise), "
+        f"{ctl['polished_max_difference']:.2g} (joint) deg/mm; "
+        f"{ctl['parameters_operations']:,} and {ctl['polished_operations']:,} "
+        "arithmetic operations"
+    )
     return "\n".join(lines)
 
 
@@ -219,8 +370,10 @@ def _solve_text(result) -> str:
     est = result.estimates
     names = result.plan.order
     methods = list(est)
-    lines = [f"Robot {result.robot.name}; log {result.measurements.source}; "
-             f"{int(result.measurements.present.sum())} points"]
+    lines = [
+        f"Robot {result.robot.name}; log {result.measurements.source}; "
+        f"{int(result.measurements.present.sum())} points"
+    ]
     for note in result.measurements.notes:
         lines.append(f"note: {note}")
     if result.measurements.missing:
@@ -235,29 +388,34 @@ def _solve_text(result) -> str:
         if name in result.left_nominal:
             continue
         unit = "deg" if name.startswith(("th", "al")) else "mm"
-        row = f"{name:<10}{unit:<5}" + "".join(
-            f"{est[m].as_dict()[name]:12.4f}" for m in methods)
+        row = f"{name:<10}{unit:<5}" + "".join(f"{est[m].as_dict()[name]:12.4f}" for m in methods)
         if "joint" in est:
             row += f"{est['joint'].std[list(est['joint'].names).index(name)]:14.4f}"
         lines.append(row)
-    lines.append(f"{'residual RMS (mm)':<15}" + "".join(
-        f"{est[m].residual_rms_mm:12.4f}" for m in methods))
-    lines.append(f"{'tool error (mm)':<15}" + "".join(
-        f"{result.predicted[m]['mean']:12.4f}" for m in methods)
-        + "   predicted mean over 1000 configurations")
-    lines.append(f"{'  worst':<15}" + "".join(
-        f"{result.predicted[m]['max']:12.4f}" for m in methods))
-    lines.append(f"noise σ from the joint residual: {result.sigma_mm:.4f} mm; "
-                 f"recommended: {result.recommended}")
+    lines.append(
+        f"{'residual RMS (mm)':<15}" + "".join(f"{est[m].residual_rms_mm:12.4f}" for m in methods)
+    )
+    lines.append(
+        f"{'tool error (mm)':<15}"
+        + "".join(f"{result.predicted[m]['mean']:12.4f}" for m in methods)
+        + "   predicted mean over 1000 configurations"
+    )
+    lines.append(
+        f"{'  worst':<15}" + "".join(f"{result.predicted[m]['max']:12.4f}" for m in methods)
+    )
+    lines.append(
+        f"noise σ from the joint residual: {result.sigma_mm:.4f} mm; "
+        f"recommended: {result.recommended}"
+    )
     if "stepwise" in est:
-        lines += ["", "Step-by-step (paper): rms before → after, |Ψ_j|, leak of later "
-                  "parameters"]
+        lines += ["", "Step-by-step (paper): rms before → after, |Ψ_j|, leak of later parameters"]
         for j, s in enumerate(est["stepwise"].steps, 1):
             worst = s.worst_leak
-            leak = (f"{worst[0]} {worst[1]:+.3f}/unit" if worst and abs(worst[1]) >= 5e-4
-                    else "none")
+            leak = f"{worst[0]} {worst[1]:+.3f}/unit" if worst and abs(worst[1]) >= 5e-4 else "none"
             bound = "  ON BOUND Ω" if s.on_bound else ""
-            lines.append(f"{j:3d} {s.parameter:<5}{s.n_points:3d} pts  {s.rms_before_mm:8.4f} → "
-                         f"{s.rms_after_mm:7.4f} mm  |Ψ| {s.psi_strength:5.2f}  leak {leak}"
-                         f"{bound}")
+            lines.append(
+                f"{j:3d} {s.parameter:<5}{s.n_points:3d} pts  {s.rms_before_mm:8.4f} → "
+                f"{s.rms_after_mm:7.4f} mm  |Ψ| {s.psi_strength:5.2f}  leak {leak}"
+                f"{bound}"
+            )
     return "\n".join(lines)

@@ -27,6 +27,7 @@ def _version() -> str:
 
 def user_errors(func):
     """Turn :class:`WirecalError` into a clear message and exit status 2."""
+
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         try:
@@ -35,6 +36,7 @@ def user_errors(func):
             for line in exc.problems:
                 click.echo(f"error: {line}", err=True)
             sys.exit(2)
+
     return wrapper
 
 

@@ -7,10 +7,10 @@ import numpy as np
 
 from wirecal.cli.main import main, print_json, user_errors
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.fileio import write_atomic
-from wirecal.solver.plan import plan_to_toml
+from wirecal.solver.formats.fileio import write_atomic
+from wirecal.solver.formats.plan_file import plan_to_toml
+from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.planner import PlanOptions, design
-from wirecal.solver.robot import load_robot
 
 _D = PlanOptions()
 
@@ -21,8 +21,9 @@ def _joints(value: str | None, n: int) -> np.ndarray | None:
     try:
         q = np.array([float(x) for x in value.replace(" ", "").split(",")])
     except ValueError:
-        raise WirecalError(f"--theta0 {value!r}: give {n} joint angles in degrees, "
-                           "e.g. \"0,-90,210,-90,0,-90\"") from None
+        raise WirecalError(
+            f'--theta0 {value!r}: give {n} joint angles in degrees, e.g. "0,-90,210,-90,0,-90"'
+        ) from None
     if q.shape != (n,):
         raise WirecalError(f"--theta0 has {q.size} values; the robot has {n} joints")
     return q
@@ -30,16 +31,37 @@ def _joints(value: str | None, n: int) -> np.ndarray | None:
 
 @main.command()
 @click.argument("robot", type=click.Path(dir_okay=False))
-@click.option("-o", "--output", type=click.Path(dir_okay=False),
-              help="Write the plan (TOML) here; without it, only the summary is shown.")
-@click.option("--theta0", help="The encoder location as joint angles, e.g. "
-                               "\"0,-90,210,-90,0,-90\" [default: chosen].")
-@click.option("--points-per-step", type=click.IntRange(2, 30), default=_D.points_per_step,
-              show_default=True, help="Calibration points of each step.")
-@click.option("--tol", type=click.FloatRange(0.0, 1.0), default=_D.tol, show_default=True,
-              help="Isolation while designing: later parameters' |Ψ| at most TOL·|Ψ_j|.")
-@click.option("--seed", type=int, default=_D.seed, show_default=True,
-              help="Seed of the candidate search (the same seed, the same plan).")
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False),
+    help="Write the plan (TOML) here; without it, only the summary is shown.",
+)
+@click.option(
+    "--theta0",
+    help='The encoder location as joint angles, e.g. "0,-90,210,-90,0,-90" [default: chosen].',
+)
+@click.option(
+    "--points-per-step",
+    type=click.IntRange(2, 30),
+    default=_D.points_per_step,
+    show_default=True,
+    help="Calibration points of each step.",
+)
+@click.option(
+    "--tol",
+    type=click.FloatRange(0.0, 1.0),
+    default=_D.tol,
+    show_default=True,
+    help="Isolation while designing: later parameters' |Ψ| at most TOL·|Ψ_j|.",
+)
+@click.option(
+    "--seed",
+    type=int,
+    default=_D.seed,
+    show_default=True,
+    help="Seed of the candidate search (the same seed, the same plan).",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--force", is_flag=True, help="Replace an existing plan file.")
 @user_errors
@@ -60,10 +82,17 @@ def plan(robot, output, theta0, points_per_step, tol, seed, as_json, force):
     if output:
         write_atomic(output, plan_to_toml(d.plan, d.header()), force=force)
     if as_json:
-        print_json({"theta0_deg": d.plan.theta0_deg.tolist(), "order": list(d.plan.order),
-                    "points": d.plan.n_points, "robot_time_s": d.robot_time_s,
-                    "predicted_tool_error_mm": d.predicted, "excluded": d.excluded,
-                    "fingerprint": d.plan.fingerprint()})
+        print_json(
+            {
+                "theta0_deg": d.plan.theta0_deg.tolist(),
+                "order": list(d.plan.order),
+                "points": d.plan.n_points,
+                "robot_time_s": d.robot_time_s,
+                "predicted_tool_error_mm": d.predicted,
+                "excluded": d.excluded,
+                "fingerprint": d.plan.fingerprint(),
+            }
+        )
         return
     click.echo(d.header())
     if output:

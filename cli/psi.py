@@ -7,14 +7,14 @@ import sys
 import click
 import numpy as np
 
+from wirecal.app.psi_view import psi_table
 from wirecal.cli.main import main, print_json, user_errors
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.identifiability import analyse
 from wirecal.solver.kinematics import perturbed
-from wirecal.solver.plan import load_plan
-from wirecal.solver.psi_view import psi_table
-from wirecal.solver.robot import load_robot
 from wirecal.solver.sensitivity import DEFAULT_TOL
 
 ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
@@ -29,9 +29,14 @@ def _fmt(x: float) -> str:
 @ROBOT
 @PLAN
 @click.option("--json", "as_json", is_flag=True, help="Print the table as JSON.")
-@click.option("--tol", type=click.FloatRange(min=0.0), default=DEFAULT_TOL, show_default=True,
-              help="Largest |Ψ| of a later parameter, relative to the step's own |Ψ_j|, "
-                   "for a point to be ok.")
+@click.option(
+    "--tol",
+    type=click.FloatRange(min=0.0),
+    default=DEFAULT_TOL,
+    show_default=True,
+    help="Largest |Ψ| of a later parameter, relative to the step's own |Ψ_j|, "
+    "for a point to be ok.",
+)
 @click.option("--strict", is_flag=True, help="Exit with status 1 if any point is not ok.")
 @user_errors
 def psi(robot: str, plan: str, as_json: bool, tol: float, strict: bool) -> None:
@@ -56,8 +61,13 @@ def psi(robot: str, plan: str, as_json: bool, tol: float, strict: bool) -> None:
 def _psi_text(table: dict, robot_file: str, plan_file: str) -> str:
     order = table["order"]
     width = max(6, *(len(n) + 1 for n in order))
-    header = ("  #" + "".join(f"{f'j{k}':>8}" for k in range(1, 7)) + " |"
-              + "".join(f"{n:>{width}}" for n in order) + " | verdict")
+    header = (
+        "  #"
+        + "".join(f"{f'j{k}':>8}" for k in range(1, 7))
+        + " |"
+        + "".join(f"{n:>{width}}" for n in order)
+        + " | verdict"
+    )
     steps = []
     for j, name in enumerate(order, 1):
         rows = [r for r in table["rows"] if r["step"] == j]
@@ -67,24 +77,38 @@ def _psi_text(table: dict, robot_file: str, plan_file: str) -> str:
             psis = "".join(f"{_fmt(r['psi'][n]):>{width}}" for n in order)
             mark = "ok" if r["ok"] else "leaks " + ",".join(r["violations"])
             lines.append(f"{r['index']:3d}{joints} |{psis} | {mark}")
-        steps.append({"number": j, "parameter": name, "rows": lines,
-                      "n_ok": sum(r["ok"] for r in rows)})
+        steps.append(
+            {"number": j, "parameter": name, "rows": lines, "n_ok": sum(r["ok"] for r in rows)}
+        )
     ident = table["identifiability"]
     return render(
-        "text/psi.txt.j2", robot=table["robot"], robot_file=robot_file, plan_file=plan_file,
-        fingerprint=table["fingerprint"], theta0=", ".join(f"{x:g}" for x in table["theta0_deg"]),
-        tol=table["tolerance"], floor=table["floor"], steps=steps, header=header,
-        n_ok=sum(r["ok"] for r in table["rows"]), n_rows=len(table["rows"]),
-        ident=ident["summary"], ident_names=", ".join(ident["parameters"]),
+        "text/psi.txt.j2",
+        robot=table["robot"],
+        robot_file=robot_file,
+        plan_file=plan_file,
+        fingerprint=table["fingerprint"],
+        theta0=", ".join(f"{x:g}" for x in table["theta0_deg"]),
+        tol=table["tolerance"],
+        floor=table["floor"],
+        steps=steps,
+        header=header,
+        n_ok=sum(r["ok"] for r in table["rows"]),
+        n_rows=len(table["rows"]),
+        ident=ident["summary"],
+        ident_names=", ".join(ident["parameters"]),
     )
 
 
 @main.command()
 @ROBOT
 @PLAN
-@click.option("--all", "all_params", is_flag=True,
-              help="Analyse every DH error parameter and the tool point, not only the "
-                   "robot file's [calibration] parameters.")
+@click.option(
+    "--all",
+    "all_params",
+    is_flag=True,
+    help="Analyse every DH error parameter and the tool point, not only the "
+    "robot file's [calibration] parameters.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the analysis as JSON.")
 @user_errors
 def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
@@ -100,16 +124,21 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
     q, _, _ = pl.all_points()
     result = analyse(perturbed(rb), q, pl.theta0_deg, names)
     if as_json:
-        print_json({
-            "parameters": list(result.names), "rank": result.rank,
-            "singular_values": [float(s) for s in result.singular_values],
-            "unobservable": list(result.unobservable),
-            "combinations": [dict(c) for c in result.combinations],
-            "indices": result.indices, "summary": result.describe(),
-        })
+        print_json(
+            {
+                "parameters": list(result.names),
+                "rank": result.rank,
+                "singular_values": [float(s) for s in result.singular_values],
+                "unobservable": list(result.unobservable),
+                "combinations": [dict(c) for c in result.combinations],
+                "indices": result.indices,
+                "summary": result.describe(),
+            }
+        )
         return
     click.echo(f"Robot {rb.name}; plan {plan} ({pl.n_points} points)")
-    click.echo("Singular values: " + " ".join(f"{s:.4g}" for s in
-                                              np.asarray(result.singular_values)))
+    click.echo(
+        "Singular values: " + " ".join(f"{s:.4g}" for s in np.asarray(result.singular_values))
+    )
     for line in result.describe():
         click.echo(line)

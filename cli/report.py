@@ -7,33 +7,53 @@ from pathlib import Path
 
 import click
 
+from wirecal.app.report import Validation, render_report
 from wirecal.cli.main import main, user_errors
-from wirecal.gen.report import Validation, render_report
-from wirecal.gen.twin import controller_comparison
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.fileio import write_atomic
-from wirecal.solver.logfile import load_measurements, read_log
-from wirecal.solver.plan import load_plan
-from wirecal.solver.robot import load_robot
+from wirecal.solver.formats.fileio import write_atomic
+from wirecal.solver.formats.log import read_log
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.truth import load_errors
+from wirecal.solver.formats.validation_files import read_validation_log
+from wirecal.solver.measurements import load_measurements
 from wirecal.solver.solve import solve
-from wirecal.solver.truth import load_errors
-from wirecal.solver.validation import config_discrepancy, plane_residuals, read_validation_log
+from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
+from wirecal.twin.cell import controller_comparison
 
 
 @main.command()
 @click.argument("robot", type=click.Path(dir_okay=False))
 @click.argument("plan", type=click.Path(dir_okay=False))
 @click.argument("log", type=click.Path(dir_okay=False))
-@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
-              help="The HTML file to write.")
-@click.option("--config", "config_logs", nargs=2, type=click.Path(dir_okay=False),
-              help="Configuration-change logs BEFORE AFTER (wc.vcfg).")
-@click.option("--plane", "plane_logs", nargs=2, type=click.Path(dir_okay=False),
-              help="Plane-fit logs BEFORE AFTER (wc.vpln).")
-@click.option("--controller", is_flag=True,
-              help="Also run the generated controller solver in the digital twin.")
-@click.option("--truth", "truth_file", type=click.Path(dir_okay=False),
-              help="A truth file (simulations): show the true offsets beside the estimates.")
+@click.option(
+    "-o", "--output", required=True, type=click.Path(dir_okay=False), help="The HTML file to write."
+)
+@click.option(
+    "--config",
+    "config_logs",
+    nargs=2,
+    type=click.Path(dir_okay=False),
+    help="Configuration-change logs BEFORE AFTER (wc.vcfg).",
+)
+@click.option(
+    "--plane",
+    "plane_logs",
+    nargs=2,
+    type=click.Path(dir_okay=False),
+    help="Plane-fit logs BEFORE AFTER (wc.vpln).",
+)
+@click.option(
+    "--controller",
+    is_flag=True,
+    help="Also run the generated controller solver in the digital twin.",
+)
+@click.option(
+    "--truth",
+    "truth_file",
+    type=click.Path(dir_okay=False),
+    help="A truth file (simulations): show the true offsets beside the estimates.",
+)
 @click.option("--force", is_flag=True, help="Replace an existing report.")
 @user_errors
 def report(robot, plan, log, output, config_logs, plane_logs, controller, truth_file, force):
@@ -45,11 +65,18 @@ def report(robot, plan, log, output, config_logs, plane_logs, controller, truth_
     result = solve(rb, pl, load_measurements(log, pl, rb))
     validations = []
     if config_logs:
-        validations.append(Validation("configuration", *(config_discrepancy(
-            read_validation_log(p, "configuration")) for p in config_logs)))
+        validations.append(
+            Validation(
+                "configuration",
+                *(config_discrepancy(read_validation_log(p, "configuration")) for p in config_logs),
+            )
+        )
     if plane_logs:
-        validations.append(Validation("plane", *(plane_residuals(
-            read_validation_log(p, "plane"))[0] for p in plane_logs)))
+        validations.append(
+            Validation(
+                "plane", *(plane_residuals(read_validation_log(p, "plane"))[0] for p in plane_logs)
+            )
+        )
     ctl = None
     if controller:
         with tempfile.TemporaryDirectory() as tmp:

@@ -5,12 +5,8 @@ from __future__ import annotations
 import click
 
 from wirecal.cli.main import main, print_json, user_errors
-from wirecal.solver.validation import (
-    Stats,
-    config_discrepancy,
-    plane_residuals,
-    read_validation_log,
-)
+from wirecal.solver.formats.validation_files import read_validation_log
+from wirecal.solver.validation_analysis import Stats, config_discrepancy, plane_residuals
 
 
 def analyse(kind: str, path: str) -> Stats:
@@ -34,21 +30,29 @@ def validate(kind, before, after, as_json):
     runs = {"before": analyse(kind, before)}
     if after:
         runs["after"] = analyse(kind, after)
-    figures = {name: {"mean_mm": s.mean, "std_mm": s.std, "max_mm": s.max,
-                      "n": int(s.values.size)} for name, s in runs.items()}
+    figures = {
+        name: {"mean_mm": s.mean, "std_mm": s.std, "max_mm": s.max, "n": int(s.values.size)}
+        for name, s in runs.items()
+    }
     if after:
-        figures["reduction"] = {k: 1 - runs["after"].__dict__[k] / runs["before"].__dict__[k]
-                                for k in ("mean", "std", "max")}
+        figures["reduction"] = {
+            k: 1 - runs["after"].__dict__[k] / runs["before"].__dict__[k]
+            for k in ("mean", "std", "max")
+        }
     if as_json:
         print_json({"kind": kind, **figures})
         return
-    what = ("maximum discrepancy among configurations" if kind == "configuration"
-            else "plane-fit residual")
+    what = (
+        "maximum discrepancy among configurations"
+        if kind == "configuration"
+        else "plane-fit residual"
+    )
     click.echo(f"{what} (mm)")
     click.echo(f"{'':<10}{'n':>5}{'mean':>10}{'std':>10}{'max':>10}")
     for name, s in runs.items():
         click.echo(f"{name:<10}{s.values.size:5d}{s.mean:10.4f}{s.std:10.4f}{s.max:10.4f}")
     if after:
         r = figures["reduction"]
-        click.echo(f"{'reduction':<15}{100 * r['mean']:9.0f}%{100 * r['std']:9.0f}%"
-                   f"{100 * r['max']:9.0f}%")
+        click.echo(
+            f"{'reduction':<15}{100 * r['mean']:9.0f}%{100 * r['std']:9.0f}%{100 * r['max']:9.0f}%"
+        )

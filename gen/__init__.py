@@ -1,2 +1,2 @@
-"""wirecal.gen — rendering of wirecal's text outputs from the Jinja2 templates in
-``wirecal.templates`` (controller programs, reports)."""
+"""wirecal.gen — code generation only: one backend per controller language (``vplus``),
+the controller solver's constant tables, literal formatting and template rendering."""

@@ -13,10 +13,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from wirecal.solver.logfile import Log
+from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, sin_cosm1_small
+from wirecal.solver.formats.log import Log
 from wirecal.solver.plan import Plan
-
-from .tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, sin_cosm1_small
 
 
 class Counted(float):
@@ -28,15 +27,32 @@ class Counted(float):
         Counted.ops[kind] += 1
         return Counted(value)
 
-    def __add__(self, o): return self._op("add", float(self) + float(o))
-    def __radd__(self, o): return self._op("add", float(o) + float(self))
-    def __sub__(self, o): return self._op("add", float(self) - float(o))
-    def __rsub__(self, o): return self._op("add", float(o) - float(self))
-    def __mul__(self, o): return self._op("mul", float(self) * float(o))
-    def __rmul__(self, o): return self._op("mul", float(o) * float(self))
-    def __truediv__(self, o): return self._op("div", float(self) / float(o))
-    def __rtruediv__(self, o): return self._op("div", float(o) / float(self))
-    def __neg__(self): return Counted(-float(self))
+    def __add__(self, o):
+        return self._op("add", float(self) + float(o))
+
+    def __radd__(self, o):
+        return self._op("add", float(o) + float(self))
+
+    def __sub__(self, o):
+        return self._op("add", float(self) - float(o))
+
+    def __rsub__(self, o):
+        return self._op("add", float(o) - float(self))
+
+    def __mul__(self, o):
+        return self._op("mul", float(self) * float(o))
+
+    def __rmul__(self, o):
+        return self._op("mul", float(o) * float(self))
+
+    def __truediv__(self, o):
+        return self._op("div", float(self) / float(o))
+
+    def __rtruediv__(self, o):
+        return self._op("div", float(o) / float(self))
+
+    def __neg__(self):
+        return Counted(-float(self))
 
 
 FLAVOURS = {"float64": np.float64, "float32": np.float32, "count": Counted}
@@ -58,11 +74,11 @@ class Readings:
     step's zero reading.
     """
 
-    q: np.ndarray          # (N+1, n) logged joints (deg); row 0: the first zero reading
-    cb: np.ndarray         # (N+1,) count base of each point (row 0 unused)
-    co: np.ndarray         # (N+1,) count offset of each point
-    zb: np.ndarray         # (S,) count base of each step's zero
-    zo: np.ndarray         # (S,) count offset of each step's zero
+    q: np.ndarray  # (N+1, n) logged joints (deg); row 0: the first zero reading
+    cb: np.ndarray  # (N+1,) count base of each point (row 0 unused)
+    co: np.ndarray  # (N+1,) count offset of each point
+    zb: np.ndarray  # (S,) count base of each step's zero
+    zo: np.ndarray  # (S,) count offset of each step's zero
     mm_per_count: float
     bits: int
 
@@ -70,8 +86,7 @@ class Readings:
 def readings_from_log(log: Log, plan: Plan) -> Readings:
     """The arrays the measurement program would have filled, rebuilt from its log."""
     q_plan, step_no, index_no = plan.all_points()
-    pos = {(int(s), int(i)): k + 1 for k, (s, i) in enumerate(zip(step_no, index_no,
-                                                                  strict=True))}
+    pos = {(int(s), int(i)): k + 1 for k, (s, i) in enumerate(zip(step_no, index_no, strict=True))}
     n = q_plan.shape[1]
     q = np.vstack([plan.theta0_deg, q_plan])
     cb = np.zeros(len(q))
@@ -109,21 +124,37 @@ class Controller:
         self.num = num
         self.one = num(1.0)
         conv = np.vectorize(lambda v: num(float(v)), otypes=[object])
-        self.t = {k: conv(getattr(t, k)) for k in ("ca", "sa", "la", "ld", "tool", "ct", "st",
-                                                   "qp", "vn", "dn", "dni", "dnf", "omega",
-                                                   "to_boundary")}
+        self.t = {
+            k: conv(getattr(t, k))
+            for k in (
+                "ca",
+                "sa",
+                "la",
+                "ld",
+                "tool",
+                "ct",
+                "st",
+                "qp",
+                "vn",
+                "dn",
+                "dni",
+                "dnf",
+                "omega",
+                "to_boundary",
+            )
+        }
         self.tab = t
         self.q = conv(r.q)
         self.d2r = num(np.pi / 180)
         self.n, self.m = t.n, len(t.names)
-        self.e = [num(0.0)] * (self.m + 1)             # estimates, 1-based
-        self.wd = self._distances(r)        # m_i = d̃_i − d_n,i
+        self.e = [num(0.0)] * (self.m + 1)  # estimates, 1-based
+        self.wd = self._distances(r)  # m_i = d̃_i − d_n,i
 
     # wc.dist: m_i = d̃_i − d_n,i from the stored counts, small numbers only. The
     # reference is the mean of the zeros; counts are relative to the first zero (zb[0]).
     def _distances(self, r: Readings):
         num = self.num
-        half, full = num(2.0 ** (r.bits - 1)), num(2.0 ** r.bits)
+        half, full = num(2.0 ** (r.bits - 1)), num(2.0**r.bits)
         S = len(r.zb)
         zsum = num(0.0)
         for s in range(S):
@@ -163,16 +194,18 @@ class Controller:
             self.fx[k] = [Xn[i] + dX[i] for i in range(3)]
             self.fo0[k] = [On[i] + dO[i] for i in range(3)]
             # twist α_{k-1} + estimate turns (Y, Z); then lengths; then θ_k turns (X, Y)
-            Yn2, Zn2, dY2, dZ2 = _turn(t["ca"][k - 1], t["sa"][k - 1], self.eal[k],
-                                       Yn, Zn, dY, dZ, one)
+            Yn2, Zn2, dY2, dZ2 = _turn(
+                t["ca"][k - 1], t["sa"][k - 1], self.eal[k], Yn, Zn, dY, dZ, one
+            )
             an, dn = t["la"][k - 1], t["ld"][k - 1]
             a, d = an + self.ea[k], dn + self.ed[k]
             On = [On[i] + an * Xn[i] + dn * Zn2[i] for i in range(3)]
-            dO = [dO[i] + self.ea[k] * Xn[i] + a * dX[i] + self.ed[k] * Zn2[i] + d * dZ2[i]
-                  for i in range(3)]
+            dO = [
+                dO[i] + self.ea[k] * Xn[i] + a * dX[i] + self.ed[k] * Zn2[i] + d * dZ2[i]
+                for i in range(3)
+            ]
             eps = (self.q[c, k - 1] - t["qp"][c, k - 1]) * self.d2r + self.eth[k]
-            Xn, Yn, dX, dY = _turn(t["ct"][c, k - 1], t["st"][c, k - 1], eps,
-                                   Xn, Yn2, dX, dY2, one)
+            Xn, Yn, dX, dY = _turn(t["ct"][c, k - 1], t["st"][c, k - 1], eps, Xn, Yn2, dX, dY2, one)
             Zn, dZ = Zn2, dZ2
             self.fz[k] = [Zn[i] + dZ[i] for i in range(3)]
             self.fo[k] = [On[i] + dO[i] for i in range(3)]
@@ -182,8 +215,16 @@ class Controller:
         Y = [Yn[i] + dY[i] for i in range(3)]
         Z = [Zn[i] + dZ[i] for i in range(3)]
         self.R = (X, Y, Z)
-        dp = [dO[i] + dX[i] * tn[0] + dY[i] * tn[1] + dZ[i] * tn[2]
-              + X[i] * et[1] + Y[i] * et[2] + Z[i] * et[3] for i in range(3)]
+        dp = [
+            dO[i]
+            + dX[i] * tn[0]
+            + dY[i] * tn[1]
+            + dZ[i] * tn[2]
+            + X[i] * et[1]
+            + Y[i] * et[2]
+            + Z[i] * et[3]
+            for i in range(3)
+        ]
         p = [On[i] + Xn[i] * tn[0] + Yn[i] * tn[1] + Zn[i] * tn[2] + dp[i] for i in range(3)]
         return dp, p
 
@@ -206,8 +247,9 @@ class Controller:
     def _residual(self, i, dp, dp0):
         t = self.t
         dv = [dp[a] - dp0[a] for a in range(3)]
-        u = 2 * (t["vn"][i, 0] * dv[0] + t["vn"][i, 1] * dv[1] + t["vn"][i, 2] * dv[2]) \
-            + (dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2])
+        u = 2 * (t["vn"][i, 0] * dv[0] + t["vn"][i, 1] * dv[1] + t["vn"][i, 2] * dv[2]) + (
+            dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2]
+        )
         dn = t["dn"][i]
         dd = u / (dn + _sqrt(dn * dn + u))
         r = dd - self.wd[i]
@@ -229,8 +271,7 @@ class Controller:
                 dp, p = self._fk(i)
                 g = self._dp(j, p)
                 r, nu, d = self._residual(i, dp, dp0)
-                gr = (nu[0] * (g[0] - g0[0]) + nu[1] * (g[1] - g0[1])
-                      + nu[2] * (g[2] - g0[2])) / d
+                gr = (nu[0] * (g[0] - g0[0]) + nu[1] * (g[1] - g0[1]) + nu[2] * (g[2] - g0[2])) / d
                 srg = srg + r * gr
                 sgg = sgg + gr * gr
             x = self.e[j] - srg / sgg
@@ -251,8 +292,11 @@ class Controller:
                 gr = [zero] * (m + 1)
                 for j in range(1, m + 1):
                     g = self._dp(j, p)
-                    gr[j] = (nu[0] * (g[0] - g0[j][0]) + nu[1] * (g[1] - g0[j][1])
-                             + nu[2] * (g[2] - g0[j][2])) / d
+                    gr[j] = (
+                        nu[0] * (g[0] - g0[j][0])
+                        + nu[1] * (g[1] - g0[j][1])
+                        + nu[2] * (g[2] - g0[j][2])
+                    ) / d
                 for a in range(1, m + 1):
                     b[a] = b[a] + gr[a] * r
                     for c in range(a, m + 1):
@@ -263,8 +307,9 @@ class Controller:
 
     def estimates(self) -> np.ndarray:
         """Estimates in boundary units (deg, mm), identification order."""
-        return np.array([float(self.e[j] * self.t["to_boundary"][j - 1])
-                         for j in range(1, self.m + 1)])
+        return np.array(
+            [float(self.e[j] * self.t["to_boundary"][j - 1]) for j in range(1, self.m + 1)]
+        )
 
 
 def _turn(cn, sn, eps, U, V, dU, dV, one):
@@ -315,8 +360,9 @@ def _ldlt_solve(H, b, m, zero):
     return x
 
 
-def run_controller(tables: Tables, readings: Readings, flavour: str = "float64",
-                   polish: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
+def run_controller(
+    tables: Tables, readings: Readings, flavour: str = "float64", polish: bool = False
+) -> tuple[np.ndarray, np.ndarray | None]:
     """The whole controller solve: stepwise estimates, and the polished ones if asked."""
     ctl = Controller(tables, readings, flavour)
     for s in range(1, len(tables.first) + 1):

@@ -36,29 +36,29 @@ JOINT_ITERATIONS = 3
 class Tables:
     """Everything the controller solver reads besides the measurements (internal units)."""
 
-    n: int                       # joints
-    ca: np.ndarray               # (n,) cos α_{k-1}
-    sa: np.ndarray               # (n,) sin α_{k-1}
-    la: np.ndarray               # (n,) a_{k-1} (mm)
-    ld: np.ndarray               # (n,) d_k (mm)
-    tool: np.ndarray             # (3,)
-    ct: np.ndarray               # (N+1, n) cos of nominal angle, c = 0 is θ0
-    st: np.ndarray               # (N+1, n)
-    qp: np.ndarray               # (N+1, n) plan angles (deg)
-    vn: np.ndarray               # (N+1, 3) nominal ν (row 0 unused, zeros)
-    dn: np.ndarray               # (N+1,)   nominal length (row 0 unused)
-    dni: np.ndarray              # (N+1,)   nominal length in counts: integer part
-    dnf: np.ndarray              # (N+1,)   and fraction, so d̃ − d_n needs no big numbers
-    mpc: float                   # mm per count (the robot file's, with its sign)
-    first: np.ndarray            # (S,) first point (1-based) of each step
-    count: np.ndarray            # (S,) points of each step
-    spar: np.ndarray             # (S,) parameter index (1-based) of each step
-    omega: np.ndarray            # (S,) bound Ω (rad or mm)
-    pk: np.ndarray               # (m,) kind code
-    pr: np.ndarray               # (m,) row k (1-based) or tool axis
-    names: tuple[str, ...]       # parameters, identification order
-    to_boundary: np.ndarray      # (m,) rad→deg or 1
-    nominal: np.ndarray          # (m,) nominal values in boundary units (deg, mm)
+    n: int  # joints
+    ca: np.ndarray  # (n,) cos α_{k-1}
+    sa: np.ndarray  # (n,) sin α_{k-1}
+    la: np.ndarray  # (n,) a_{k-1} (mm)
+    ld: np.ndarray  # (n,) d_k (mm)
+    tool: np.ndarray  # (3,)
+    ct: np.ndarray  # (N+1, n) cos of nominal angle, c = 0 is θ0
+    st: np.ndarray  # (N+1, n)
+    qp: np.ndarray  # (N+1, n) plan angles (deg)
+    vn: np.ndarray  # (N+1, 3) nominal ν (row 0 unused, zeros)
+    dn: np.ndarray  # (N+1,)   nominal length (row 0 unused)
+    dni: np.ndarray  # (N+1,)   nominal length in counts: integer part
+    dnf: np.ndarray  # (N+1,)   and fraction, so d̃ − d_n needs no big numbers
+    mpc: float  # mm per count (the robot file's, with its sign)
+    first: np.ndarray  # (S,) first point (1-based) of each step
+    count: np.ndarray  # (S,) points of each step
+    spar: np.ndarray  # (S,) parameter index (1-based) of each step
+    omega: np.ndarray  # (S,) bound Ω (rad or mm)
+    pk: np.ndarray  # (m,) kind code
+    pr: np.ndarray  # (m,) row k (1-based) or tool axis
+    names: tuple[str, ...]  # parameters, identification order
+    to_boundary: np.ndarray  # (m,) rad→deg or 1
+    nominal: np.ndarray  # (m,) nominal values in boundary units (deg, mm)
 
     @property
     def n_points(self) -> int:
@@ -67,10 +67,30 @@ class Tables:
     @property
     def entries(self) -> int:
         """Number of table values the data program assigns."""
-        return sum(np.size(getattr(self, f)) for f in (
-            "ca", "sa", "la", "ld", "tool", "ct", "st", "qp", "vn", "dn", "dni", "dnf", "first",
-        "count",
-            "spar", "omega", "pk", "pr", "to_boundary"))
+        return sum(
+            np.size(getattr(self, f))
+            for f in (
+                "ca",
+                "sa",
+                "la",
+                "ld",
+                "tool",
+                "ct",
+                "st",
+                "qp",
+                "vn",
+                "dn",
+                "dni",
+                "dnf",
+                "first",
+                "count",
+                "spar",
+                "omega",
+                "pk",
+                "pr",
+                "to_boundary",
+            )
+        )
 
 
 def build_tables(robot: Robot, plan: Plan) -> Tables:
@@ -91,15 +111,27 @@ def build_tables(robot: Robot, plan: Plan) -> Tables:
         par = P.parse(name, robot.n_joints)
         rows.append(par.row + 1)
     return Tables(
-        n=robot.n_joints, ca=np.cos(robot.dh[:, 0]), sa=np.sin(robot.dh[:, 0]),
-        la=robot.dh[:, 1].copy(), ld=robot.dh[:, 3].copy(), tool=robot.tool_point.copy(),
-        ct=np.cos(angle), st=np.sin(angle), qp=conf, vn=nu, dn=dn, dni=dni,
-        dnf=dn / mpc - dni, mpc=mpc,
-        first=first, count=np.array([len(s.points_deg) for s in plan.steps]),
+        n=robot.n_joints,
+        ca=np.cos(robot.dh[:, 0]),
+        sa=np.sin(robot.dh[:, 0]),
+        la=robot.dh[:, 1].copy(),
+        ld=robot.dh[:, 3].copy(),
+        tool=robot.tool_point.copy(),
+        ct=np.cos(angle),
+        st=np.sin(angle),
+        qp=conf,
+        vn=nu,
+        dn=dn,
+        dni=dni,
+        dnf=dn / mpc - dni,
+        mpc=mpc,
+        first=first,
+        count=np.array([len(s.points_deg) for s in plan.steps]),
         spar=np.arange(1, len(names) + 1),
         omega=omega_vector(names, robot.n_joints, plan),
         pk=np.array([KIND_CODE[P.parse(n, robot.n_joints).kind] for n in names]),
-        pr=np.array(rows), names=names,
+        pr=np.array(rows),
+        names=names,
         to_boundary=1.0 / boundary_scale(names, robot.n_joints),
         nominal=np.array([robot.nominal_value(n) for n in names]),
     )

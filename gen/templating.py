@@ -26,8 +26,11 @@ class _ResourceLoader(jinja2.BaseLoader):
 @cache
 def environment() -> jinja2.Environment:
     return jinja2.Environment(
-        loader=_ResourceLoader(), undefined=jinja2.StrictUndefined,
-        keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True,
+        loader=_ResourceLoader(),
+        undefined=jinja2.StrictUndefined,
+        keep_trailing_newline=True,
+        trim_blocks=True,
+        lstrip_blocks=True,
         autoescape=False,
     )
 

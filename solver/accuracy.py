@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kinematics import Model, tool_jacobian
-from .robot import Robot
+from wirecal.solver.kinematics import Model, tool_jacobian
+from wirecal.solver.robot import Robot
 
 WORKSPACE_SAMPLES = 1000
 WORKSPACE_SEED = 20261121
@@ -27,14 +27,13 @@ WORKSPACE_SEED = 20261121
 def workspace(robot: Robot, n: int = WORKSPACE_SAMPLES, seed: int = WORKSPACE_SEED) -> np.ndarray:
     """n configurations uniform within the joint limits (radians), the same every call."""
     rng = np.random.default_rng(seed)
-    return np.radians(rng.uniform(robot.joint_min_deg, robot.joint_max_deg,
-                                  (n, robot.n_joints)))
+    return np.radians(rng.uniform(robot.joint_min_deg, robot.joint_max_deg, (n, robot.n_joints)))
 
 
 def noise_covariance(n: int, sigma_mm: float, sigma_zero_mm: float = 0.0) -> np.ndarray:
     """Covariance of n wire lengths: independent σ per point, plus the error of the zero
     reading that every length is measured from (common to all)."""
-    return sigma_mm ** 2 * np.eye(n) + sigma_zero_mm ** 2 * np.ones((n, n))
+    return sigma_mm**2 * np.eye(n) + sigma_zero_mm**2 * np.ones((n, n))
 
 
 def crb(J: np.ndarray, C: np.ndarray) -> np.ndarray:
@@ -62,15 +61,14 @@ def stepwise_map(psi: np.ndarray, step: np.ndarray) -> np.ndarray:
 class ToolError:
     """Tool-point error over workspace configurations (mm)."""
 
-    mean_mm: float   # mean over configurations of the RMS error
-    max_mm: float    # worst configuration's RMS error
+    mean_mm: float  # mean over configurations of the RMS error
+    max_mm: float  # worst configuration's RMS error
 
     def as_dict(self) -> dict[str, float]:
         return {"mean": self.mean_mm, "max": self.max_mm}
 
 
-def tool_error(model: Model, names: Sequence[str], cov: np.ndarray,
-               q: np.ndarray) -> ToolError:
+def tool_error(model: Model, names: Sequence[str], cov: np.ndarray, q: np.ndarray) -> ToolError:
     """RMS tool-point error sqrt(trace(J_p Σ J_pᵀ)) at each configuration q (radians);
     ``cov`` in internal units (rad, mm)."""
     _, Jp = tool_jacobian(model, q, names)

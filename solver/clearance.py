@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kinematics import Model, frames
+from wirecal.solver.kinematics import Model, frames
 
 
 def segment_distance(p1, q1, p2, q2) -> np.ndarray:
@@ -35,8 +35,9 @@ def wire_trim_mm(robot) -> float:
     return float(np.linalg.norm(robot.tool_point)) + float(robot.link_radius_mm[-1]) + 15.0
 
 
-def wire_clearance(model: Model, q: np.ndarray, encoder: np.ndarray, radii: np.ndarray,
-                   trim_mm: float) -> np.ndarray:
+def wire_clearance(
+    model: Model, q: np.ndarray, encoder: np.ndarray, radii: np.ndarray, trim_mm: float
+) -> np.ndarray:
     """The smallest gap (mm) between the wire and the link capsules for configurations q
     (N, n) in radians; the wire's last ``trim_mm`` at the attachment point are not checked
     (the fixture is there)."""
@@ -45,7 +46,7 @@ def wire_clearance(model: Model, q: np.ndarray, encoder: np.ndarray, radii: np.n
     length = np.linalg.norm(p - encoder, axis=1, keepdims=True)
     keep = np.clip(1 - trim_mm / np.maximum(length, 1e-9), 0, 1)
     wire_end = encoder + keep * (p - encoder)
-    starts = f.o[:, 1:-1]                       # capsule k: frame k origin → frame k+1
+    starts = f.o[:, 1:-1]  # capsule k: frame k origin → frame k+1
     ends = f.o[:, 2:]
     n_caps = starts.shape[1]
     enc = np.broadcast_to(encoder, (len(q), n_caps, 3))

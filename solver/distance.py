@@ -15,7 +15,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .kinematics import Model, repeat, tool_jacobian, tool_position
+from wirecal.solver.kinematics import Model, repeat, tool_jacobian, tool_position
 
 
 def _stack(model: Model, q: np.ndarray, q0: np.ndarray) -> tuple[Model, np.ndarray, int]:
@@ -40,8 +40,9 @@ def wire_lengths(model: Model, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
     return _shape(model, np.linalg.norm(p[:, 1:] - p[:, :1], axis=2))
 
 
-def wire_jacobian(model: Model, q: np.ndarray, q0: np.ndarray,
-                  names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+def wire_jacobian(
+    model: Model, q: np.ndarray, q0: np.ndarray, names: Sequence[str]
+) -> tuple[np.ndarray, np.ndarray]:
     """d and ∂d/∂e = ν̂ᵀ (Φ_i − Φ_0) in mm/rad and mm/mm (paper eq. 14–16).
 
     Evaluated at the model given, so the same function serves the Ψ analysis at

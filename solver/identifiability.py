@@ -10,8 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kinematics import Model
-from .sensitivity import sensitivity
+from wirecal.solver.kinematics import Model
+from wirecal.solver.sensitivity import sensitivity
 
 BASE_PARAMETERS = frozenset({"al0", "a0", "th1", "d1"})
 """Row 1 of the table: a rigid motion of everything, invisible to any wire length."""
@@ -26,34 +26,41 @@ class Identifiability:
     n_points: int
     singular_values: np.ndarray
     rank: int
-    unobservable: tuple[str, ...]                        # single parameters
+    unobservable: tuple[str, ...]  # single parameters
     combinations: tuple[tuple[tuple[str, float], ...], ...]  # null-space combinations
-    indices: dict[str, float]                            # O1..O5
+    indices: dict[str, float]  # O1..O5
 
     def describe(self) -> list[str]:
         """The analysis in words, one sentence per line."""
         m = len(self.names)
-        lines = [f"{self.n_points} points, {m} parameters: the distance Jacobian has rank "
-                 f"{self.rank} of {m}."]
+        lines = [
+            f"{self.n_points} points, {m} parameters: the distance Jacobian has rank "
+            f"{self.rank} of {m}."
+        ]
         for name in self.unobservable:
             if name in BASE_PARAMETERS:
-                why = ("it moves every calibration point and the encoder location alike "
-                       "(a rigid motion of the whole arm), so no wire length changes")
+                why = (
+                    "it moves every calibration point and the encoder location alike "
+                    "(a rigid motion of the whole arm), so no wire length changes"
+                )
             else:
                 why = "no wire length of these points depends on it; add points that move it"
             lines.append(f"{name} is unobservable: {why}.")
         for combo in self.combinations:
             terms = " ".join(f"{c:+.4g}·{n}" for n, c in combo)
-            lines.append(f"{terms} is unobservable: changing these parameters together in "
-                         "this ratio leaves every wire length unchanged (they are redundant; "
-                         "fix all but one).")
+            lines.append(
+                f"{terms} is unobservable: changing these parameters together in "
+                "this ratio leaves every wire length unchanged (they are redundant; "
+                "fix all but one)."
+            )
         if self.rank == m:
             lines.append("Every parameter is identifiable from these points.")
         o = self.indices
         lines.append(
             "Observability: O1 = {O1:.4g}, O2 = {O2:.4g} (inverse condition number), "
             "O3 = {O3:.4g} (smallest singular value), O4 = {O4:.4g} (noise amplification), "
-            "O5 = {O5:.4g}.".format(**o))
+            "O5 = {O5:.4g}.".format(**o)
+        )
         return lines
 
 
@@ -75,8 +82,9 @@ def observability_indices(s: np.ndarray, n_rows: int) -> dict[str, float]:
     }
 
 
-def analyse(model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray,
-            names: Sequence[str]) -> Identifiability:
+def analyse(
+    model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray, names: Sequence[str]
+) -> Identifiability:
     """Rank, null space and observability of ∂d/∂e over the points ``q_deg``."""
     names = tuple(names)
     J = sensitivity(model, q_deg, theta0_deg, names).psi
@@ -95,12 +103,15 @@ def analyse(model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray,
         sr = np.concatenate([sr, np.zeros(len(rest) - sr.size)])
         null = vt[sr <= tol]
         for row in _rref(null):
-            combo = tuple((names[rest[k]], float(c)) for k, c in enumerate(row)
-                          if abs(c) > 1e-6)
+            combo = tuple((names[rest[k]], float(c)) for k, c in enumerate(row) if abs(c) > 1e-6)
             combos.append(combo)
     return Identifiability(
-        names=names, n_points=int(J.shape[0]), singular_values=s, rank=rank,
-        unobservable=tuple(names[k] for k in alone), combinations=tuple(combos),
+        names=names,
+        n_points=int(J.shape[0]),
+        singular_values=s,
+        rank=rank,
+        unobservable=tuple(names[k] for k in alone),
+        combinations=tuple(combos),
         indices=observability_indices(np.where(s > tol, s, 0.0), J.shape[0]),
     )
 

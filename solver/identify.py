@@ -19,9 +19,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from .distance import wire_jacobian, wire_lengths
-from .kinematics import Model, with_errors
-from .sensitivity import boundary_scale
+from wirecal.solver.distance import wire_jacobian, wire_lengths
+from wirecal.solver.kinematics import Model, with_errors
+from wirecal.solver.sensitivity import boundary_scale
 
 DEFAULT_OMEGA = 5.0
 """Default bound Ω_j: ±5 deg for angles, ±5 mm for lengths."""
@@ -35,11 +35,11 @@ class Problem:
     """
 
     base: Model
-    names: tuple[str, ...]      # identification order (the plan's order)
-    q: np.ndarray               # (N, n) radians
-    q0: np.ndarray              # (n,) radians
-    d: np.ndarray               # (N,) or (T, N) mm
-    step: np.ndarray            # (N,) 1-based step of each point
+    names: tuple[str, ...]  # identification order (the plan's order)
+    q: np.ndarray  # (N, n) radians
+    q0: np.ndarray  # (n,) radians
+    d: np.ndarray  # (N,) or (T, N) mm
+    step: np.ndarray  # (N,) 1-based step of each point
 
     @property
     def scale(self) -> np.ndarray:
@@ -57,12 +57,12 @@ class StepResult:
     parameter: str
     estimate: float
     n_points: int
-    rms_before_mm: float        # with δe_j = 0, earlier estimates in place
+    rms_before_mm: float  # with δe_j = 0, earlier estimates in place
     rms_after_mm: float
-    psi_strength: float         # RMS of |Ψ_j| over the step's points
+    psi_strength: float  # RMS of |Ψ_j| over the step's points
     omega: float
     on_bound: bool
-    leak: dict[str, float]      # later t: bias of this estimate per unit error of t
+    leak: dict[str, float]  # later t: bias of this estimate per unit error of t
     iterations: int
 
     @property
@@ -94,8 +94,9 @@ STEP_TOL = 1e-10
 physical effect, and above the round-off of the Gauss–Newton step itself."""
 
 
-def stepwise(problem: Problem, omega: np.ndarray, *, max_iter: int = 50
-             ) -> tuple[np.ndarray, list[dict]]:
+def stepwise(
+    problem: Problem, omega: np.ndarray, *, max_iter: int = 50
+) -> tuple[np.ndarray, list[dict]]:
     """The paper's step-by-step identification for T data sets at once.
 
     ``omega`` (m,) bounds each parameter in internal units. Returns the estimates
@@ -111,19 +112,31 @@ def stepwise(problem: Problem, omega: np.ndarray, *, max_iter: int = 50
     return (x if np.ndim(problem.d) == 2 else x[0]), info
 
 
-def _solve_step(problem: Problem, x: np.ndarray, j: int, sel: np.ndarray, dj: np.ndarray,
-                omega_j: float, max_iter: int) -> dict:
+def _solve_step(
+    problem: Problem,
+    x: np.ndarray,
+    j: int,
+    sel: np.ndarray,
+    dj: np.ndarray,
+    omega_j: float,
+    max_iter: int,
+) -> dict:
     """Minimise step j's cost over x[:, j] ∈ [−Ω_j, Ω_j] in place (eq. 20)."""
     T, k = dj.shape
     if k == 0:
-        return {"n": 0, "iterations": 0, "rms_before": np.full(T, np.nan),
-                "rms_after": np.full(T, np.nan)}
+        return {
+            "n": 0,
+            "iterations": 0,
+            "rms_before": np.full(T, np.nan),
+            "rms_after": np.full(T, np.nan),
+        }
     qj, name = problem.q[sel], problem.names[j]
 
     def evaluate(xj):
         x[:, j] = xj
-        dist, dd = wire_jacobian(with_errors(problem.base, problem.names, x), qj, problem.q0,
-                                 [name])
+        dist, dd = wire_jacobian(
+            with_errors(problem.base, problem.names, x), qj, problem.q0, [name]
+        )
         r = dist.reshape(T, k) - dj
         return (r * r).sum(axis=1), r, dd.reshape(T, k)
 
@@ -148,8 +161,12 @@ def _solve_step(problem: Problem, x: np.ndarray, j: int, sel: np.ndarray, dj: np
         if not np.any(active):
             break
     x[:, j] = xj
-    return {"n": k, "iterations": it, "rms_before": np.sqrt(before / k),
-            "rms_after": np.sqrt(cost / k)}
+    return {
+        "n": k,
+        "iterations": it,
+        "rms_before": np.sqrt(before / k),
+        "rms_after": np.sqrt(cost / k),
+    }
 
 
 def leak_coefficients(psi: np.ndarray, step: np.ndarray, names: tuple[str, ...]) -> list[dict]:
@@ -160,8 +177,12 @@ def leak_coefficients(psi: np.ndarray, step: np.ndarray, names: tuple[str, ...])
         sel = step == j + 1
         pj = psi[sel, j]
         denom = float(pj @ pj)
-        out.append({names[t]: (float(pj @ psi[sel, t]) / denom if denom > 0 else np.nan)
-                    for t in range(j + 1, len(names))})
+        out.append(
+            {
+                names[t]: (float(pj @ psi[sel, t]) / denom if denom > 0 else np.nan)
+                for t in range(j + 1, len(names))
+            }
+        )
     return out
 
 
@@ -173,21 +194,29 @@ def run_stepwise(problem: Problem, omega: np.ndarray, psi: np.ndarray) -> Estima
     steps = []
     for j, name in enumerate(problem.names):
         sel = problem.step == j + 1
-        steps.append(StepResult(
-            parameter=name, estimate=float(x[j] * scale[j]), n_points=info[j]["n"],
-            rms_before_mm=float(info[j]["rms_before"][0]),
-            rms_after_mm=float(info[j]["rms_after"][0]),
-            psi_strength=float(np.sqrt(np.mean(psi[sel, j] ** 2))) if np.any(sel) else 0.0,
-            omega=float(omega[j] * scale[j]),
-            on_bound=bool(abs(x[j]) >= omega[j] * (1 - 1e-9)),
-            leak=leaks[j], iterations=info[j]["iterations"]))
+        steps.append(
+            StepResult(
+                parameter=name,
+                estimate=float(x[j] * scale[j]),
+                n_points=info[j]["n"],
+                rms_before_mm=float(info[j]["rms_before"][0]),
+                rms_after_mm=float(info[j]["rms_after"][0]),
+                psi_strength=float(np.sqrt(np.mean(psi[sel, j] ** 2))) if np.any(sel) else 0.0,
+                omega=float(omega[j] * scale[j]),
+                on_bound=bool(abs(x[j]) >= omega[j] * (1 - 1e-9)),
+                leak=leaks[j],
+                iterations=info[j]["iterations"],
+            )
+        )
     r = problem.residuals(x)
-    return Estimate("stepwise", problem.names, x * scale, float(np.sqrt(np.mean(r ** 2))),
-                    steps=tuple(steps))
+    return Estimate(
+        "stepwise", problem.names, x * scale, float(np.sqrt(np.mean(r**2))), steps=tuple(steps)
+    )
 
 
-def joint(problem: Problem, x0: np.ndarray, *, loss: str = "linear",
-          f_scale_mm: float = 0.05) -> Estimate:
+def joint(
+    problem: Problem, x0: np.ndarray, *, loss: str = "linear", f_scale_mm: float = 0.05
+) -> Estimate:
     """All parameters together, nonlinear least squares from ``x0`` (internal units).
 
     σ of the residual, (JᵀJ)⁻¹ and the correlations come from the solution; a robust
@@ -199,17 +228,28 @@ def joint(problem: Problem, x0: np.ndarray, *, loss: str = "linear",
         """Residuals and Jacobian from one pass over the chain, reused for the same x."""
         key = x.tobytes()
         if key not in last:
-            d, J = wire_jacobian(with_errors(problem.base, problem.names, x), problem.q,
-                                 problem.q0, problem.names)
+            d, J = wire_jacobian(
+                with_errors(problem.base, problem.names, x), problem.q, problem.q0, problem.names
+            )
             last.clear()
             last[key] = (d - problem.d, J)
         return last[key]
 
     # MINPACK's Levenberg–Marquardt for plain least squares; a robust loss needs "trf".
     method = "lm" if loss == "linear" else "trf"
-    res = least_squares(lambda x: evaluate(x)[0], x0, jac=lambda x: evaluate(x)[1],
-                        method=method, loss=loss, f_scale=f_scale_mm, x_scale="jac",
-                        xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
+    res = least_squares(
+        lambda x: evaluate(x)[0],
+        x0,
+        jac=lambda x: evaluate(x)[1],
+        method=method,
+        loss=loss,
+        f_scale=f_scale_mm,
+        x_scale="jac",
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
+        max_nfev=200,
+    )
     r, J = evaluate(res.x)
     n, m = r.size, len(problem.names)
     scale = problem.scale
@@ -221,5 +261,11 @@ def joint(problem: Problem, x0: np.ndarray, *, loss: str = "linear",
         with np.errstate(invalid="ignore", divide="ignore"):
             corr = cov / np.outer(sd, sd)
         std = sd * scale
-    return Estimate("joint", problem.names, res.x * scale, float(np.sqrt(np.mean(r ** 2))),
-                    std=std, correlation=corr)
+    return Estimate(
+        "joint",
+        problem.names,
+        res.x * scale,
+        float(np.sqrt(np.mean(r**2))),
+        std=std,
+        correlation=corr,
+    )

@@ -29,14 +29,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kinematics import Model, frames, joint_jacobian
+from wirecal.solver.kinematics import Model, frames, joint_jacobian
 
 HALF_PI = np.pi / 2
 
 
 @dataclass(frozen=True)
 class Solution:
-    q: np.ndarray               # joint angles (rad)
+    q: np.ndarray  # joint angles (rad)
     config: tuple[str, str, str]  # ("righty"|"lefty", "above"|"below", "noflip"|"flip")
     within_limits: bool
 
@@ -54,9 +54,15 @@ def analytic_structure(model: Model) -> bool:
         return False
     alpha = dh[:, 0]
     right = [np.isclose(abs(np.sin(alpha[k])), 1, atol=1e-12) for k in (1, 3, 4, 5)]
-    return (all(right) and np.isclose(np.sin(alpha[2]), 0, atol=1e-12)
-            and np.cos(alpha[2]) > 0 and abs(dh[4, 1]) < 1e-12 and abs(dh[5, 1]) < 1e-12
-            and abs(dh[4, 3]) < 1e-12 and abs(dh[2, 1]) > 1e-9)
+    return (
+        all(right)
+        and np.isclose(np.sin(alpha[2]), 0, atol=1e-12)
+        and np.cos(alpha[2]) > 0
+        and abs(dh[4, 1]) < 1e-12
+        and abs(dh[5, 1]) < 1e-12
+        and abs(dh[4, 3]) < 1e-12
+        and abs(dh[2, 1]) > 1e-9
+    )
 
 
 def _rot_x(a):
@@ -80,13 +86,13 @@ def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
     y1 = -s1 * (d[1] + d[2])
     r2 = c[0] ** 2 + c[1] ** 2
     out = []
-    if r2 < y1 ** 2:
+    if r2 < y1**2:
         return out
     for shoulder in (1, -1):
-        x1 = shoulder * np.sqrt(r2 - y1 ** 2)
+        x1 = shoulder * np.sqrt(r2 - y1**2)
         phi1 = np.arctan2(c[1], c[0]) - np.arctan2(y1, x1)
         ux, uy = x1 - a[1], s1 * (c[2] - d[0])
-        k = (ux ** 2 + uy ** 2 - a[2] ** 2 - a[3] ** 2 - d[3] ** 2) / (2 * a[2])
+        k = (ux**2 + uy**2 - a[2] ** 2 - a[3] ** 2 - d[3] ** 2) / (2 * a[2])
         rr = np.hypot(a[3], d[3])
         if abs(k) > rr * (1 + 1e-12):
             continue
@@ -123,7 +129,7 @@ def _pose_error(model, q, R, o):
     Rq, oq = flange_pose(model, q)
     E = R @ Rq.T
     rotvec = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
-    return np.r_[o - oq, rotvec * 1000.0]   # 1 rad of orientation weighs as 1 m
+    return np.r_[o - oq, rotvec * 1000.0]  # 1 rad of orientation weighs as 1 m
 
 
 def _geometric_jacobian(model, q):
@@ -143,15 +149,20 @@ def _polish(model, q, R, o, iterations=30):
     return q, np.max(np.abs(_pose_error(model, q, R, o))) < 1e-7
 
 
-def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray
-           ) -> tuple[np.ndarray, bool]:
+def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, bool]:
     """The solution nearest ``q`` by Newton from it: a small Cartesian step in the same
     configuration (much cheaper than :func:`solve`)."""
     return _polish(model, np.asarray(q, dtype=float), R, o, iterations=8)
 
 
-def solve(model: Model, R: np.ndarray, o: np.ndarray, lo_deg: np.ndarray | None = None,
-          hi_deg: np.ndarray | None = None, seed: int = 0) -> list[Solution]:
+def solve(
+    model: Model,
+    R: np.ndarray,
+    o: np.ndarray,
+    lo_deg: np.ndarray | None = None,
+    hi_deg: np.ndarray | None = None,
+    seed: int = 0,
+) -> list[Solution]:
     """Every distinct solution for the flange pose (R, o), each put into the joint limits
     where a turn of ±360° allows it."""
     dh = np.asarray(model.dh)
@@ -209,6 +220,8 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     line = centre - o2
     t = np.dot(o3 - o2, line) / max(np.dot(line, line), 1e-300)
     offset = (o3 - o2) - t * line
-    return ("righty" if ahead >= 0 else "lefty",
-            "above" if offset[2] >= 0 else "below",
-            "flip" if _wrapped(q[4] + model.dh[4, 2]) < 0 else "noflip")
+    return (
+        "righty" if ahead >= 0 else "lefty",
+        "above" if offset[2] >= 0 else "below",
+        "flip" if _wrapped(q[4] + model.dh[4, 2]) < 0 else "noflip",
+    )

@@ -23,8 +23,8 @@ from functools import cache
 
 import numpy as np
 
-from . import params as P
-from .robot import Robot
+from wirecal.solver import params as P
+from wirecal.solver.robot import Robot
 
 
 @dataclass(frozen=True)
@@ -35,7 +35,7 @@ class Model:
     per configuration of a batch (Monte Carlo trials evaluated in one call).
     """
 
-    dh: np.ndarray          # (n, 4) or (N, n, 4): α_{i-1}, a_{i-1}, θ offset, d_i
+    dh: np.ndarray  # (n, 4) or (N, n, 4): α_{i-1}, a_{i-1}, θ offset, d_i
     tool_point: np.ndarray  # (3,) or (N, 3)
 
     @property
@@ -68,8 +68,9 @@ def with_errors(base: Robot | Model, names: Sequence[str], values: np.ndarray) -
     return Model(dh=dh, tool_point=tool)
 
 
-def perturbed(robot: Robot | Model, errors: Mapping[str, float] | None = None,
-              *, units: str = "deg") -> Model:
+def perturbed(
+    robot: Robot | Model, errors: Mapping[str, float] | None = None, *, units: str = "deg"
+) -> Model:
     """The model with error offsets added to the nominal parameters.
 
     ``errors`` maps parameter names to offsets in boundary units (deg, mm) when
@@ -165,27 +166,33 @@ def _layout(names: tuple[str, ...], n: int) -> dict[str, tuple[np.ndarray, np.nd
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a × b over the last axis (faster than np.cross for stacks of 3-vectors)."""
-    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
+    return np.stack(
+        [
+            a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+            a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+            a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0],
+        ],
+        axis=-1,
+    )
 
 
-def tool_jacobian(model: Model, q: np.ndarray,
-                  names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+def tool_jacobian(
+    model: Model, q: np.ndarray, names: Sequence[str]
+) -> tuple[np.ndarray, np.ndarray]:
     """Tool point p (N, 3) and ∂p/∂e (N, 3, m) for the named parameters (mm/rad, mm/mm)."""
     f = frames(model, q)
     p = f.o[:, -1] + _rotate(f.R_last, model.tool_point)
     J = np.empty((*p.shape, len(names)))
     for kind, (cols, fr) in _layout(tuple(names), model.n_joints).items():
-        if kind == "th":      # rotation about z_i through o_i
+        if kind == "th":  # rotation about z_i through o_i
             J[:, :, cols] = _cross(f.z[:, fr], p[:, None] - f.o[:, fr]).transpose(0, 2, 1)
-        elif kind == "al":    # rotation about x_{i-1} through o_{i-1}
+        elif kind == "al":  # rotation about x_{i-1} through o_{i-1}
             J[:, :, cols] = _cross(f.x[:, fr], p[:, None] - f.o[:, fr]).transpose(0, 2, 1)
-        elif kind == "d":     # translation along z_i
+        elif kind == "d":  # translation along z_i
             J[:, :, cols] = f.z[:, fr].transpose(0, 2, 1)
-        elif kind == "a":     # translation along x_{i-1}
+        elif kind == "a":  # translation along x_{i-1}
             J[:, :, cols] = f.x[:, fr].transpose(0, 2, 1)
-        else:                 # tool point component: a column of the last frame
+        else:  # tool point component: a column of the last frame
             J[:, :, cols] = f.R_last[:, :, fr]
     return p, J
 

@@ -15,24 +15,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .accuracy import crb, noise_covariance, workspace
-from .distance import wire_jacobian
-from .identify import Problem, joint, stepwise
-from .kinematics import perturbed, repeat, tool_jacobian, tool_position, with_errors
-from .plan import Plan
-from .robot import Robot
-from .sensitivity import boundary_scale
-from .simulate import measured_lengths
-from .solve import omega_vector
+from wirecal.solver.accuracy import crb, noise_covariance, workspace
+from wirecal.solver.distance import wire_jacobian
+from wirecal.solver.identify import Problem, joint, stepwise
+from wirecal.solver.kinematics import perturbed, repeat, tool_jacobian, tool_position, with_errors
+from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
+from wirecal.solver.sensitivity import boundary_scale
+from wirecal.solver.simulate import measured_lengths
+from wirecal.solver.solve import omega_vector
 
 
 @dataclass(frozen=True)
 class MethodFigures:
-    param_rms_deg: float     # RMS error of angular parameters over trials
-    param_rms_mm: float      # RMS error of length parameters
-    tool_mean_mm: float      # mean over trials of the mean error over configurations
-    tool_max_mm: float       # mean over trials of the worst configuration's error
-    seconds: float           # identification time for all trials
+    param_rms_deg: float  # RMS error of angular parameters over trials
+    param_rms_mm: float  # RMS error of length parameters
+    tool_mean_mm: float  # mean over trials of the mean error over configurations
+    tool_max_mm: float  # mean over trials of the worst configuration's error
+    seconds: float  # identification time for all trials
 
     def rate(self, trials: int) -> float:
         return trials / self.seconds if self.seconds > 0 else float("inf")
@@ -43,11 +43,12 @@ class MonteCarlo:
     trials: int
     methods: dict[str, MethodFigures]
     crb: MethodFigures
-    before_mm: float         # mean tool-point error of the uncalibrated (nominal) model
+    before_mm: float  # mean tool-point error of the uncalibrated (nominal) model
 
 
-def tool_errors(robot: Robot, names, est: np.ndarray, truth: np.ndarray,
-                q_ws: np.ndarray) -> np.ndarray:
+def tool_errors(
+    robot: Robot, names, est: np.ndarray, truth: np.ndarray, q_ws: np.ndarray
+) -> np.ndarray:
     """‖p_true − p_est‖ (T, Q) for T estimated and true parameter vectors (internal units)."""
     T, Q = est.shape[0], len(q_ws)
     q = np.tile(q_ws, (T, 1))
@@ -57,19 +58,29 @@ def tool_errors(robot: Robot, names, est: np.ndarray, truth: np.ndarray,
     return np.linalg.norm(p_est - p_true, axis=1).reshape(T, Q)
 
 
-def _figures(err: np.ndarray, tool: np.ndarray, angular: np.ndarray, seconds: float,
-             scale: np.ndarray) -> MethodFigures:
+def _figures(
+    err: np.ndarray, tool: np.ndarray, angular: np.ndarray, seconds: float, scale: np.ndarray
+) -> MethodFigures:
     e = err * scale
     return MethodFigures(
         param_rms_deg=float(np.sqrt(np.mean(e[:, angular] ** 2))) if angular.any() else 0.0,
         param_rms_mm=float(np.sqrt(np.mean(e[:, ~angular] ** 2))) if (~angular).any() else 0.0,
-        tool_mean_mm=float(tool.mean(axis=1).mean()), tool_max_mm=float(tool.max(axis=1).mean()),
-        seconds=seconds)
+        tool_mean_mm=float(tool.mean(axis=1).mean()),
+        tool_max_mm=float(tool.max(axis=1).mean()),
+        seconds=seconds,
+    )
 
 
-def run(robot: Robot, plan: Plan, truths: np.ndarray, *, noise_mm: float = 0.01,
-        seed: int = 0, n_workspace: int = 1000,
-        methods: tuple[str, ...] = ("stepwise", "joint")) -> MonteCarlo:
+def run(
+    robot: Robot,
+    plan: Plan,
+    truths: np.ndarray,
+    *,
+    noise_mm: float = 0.01,
+    seed: int = 0,
+    n_workspace: int = 1000,
+    methods: tuple[str, ...] = ("stepwise", "joint"),
+) -> MonteCarlo:
     """Calibrate T simulated robots; ``truths`` (T, m) in deg/mm, the plan's order."""
     rng = np.random.default_rng(seed)
     names = plan.order
@@ -78,8 +89,9 @@ def run(robot: Robot, plan: Plan, truths: np.ndarray, *, noise_mm: float = 0.01,
     truth = np.atleast_2d(truths) * to_internal
     T = truth.shape[0]
     base = perturbed(robot)
-    d = measured_lengths(with_errors(base, names, truth), plan, robot.encoder.mm_per_count,
-                         noise_mm, rng)
+    d = measured_lengths(
+        with_errors(base, names, truth), plan, robot.encoder.mm_per_count, noise_mm, rng
+    )
     q, step, _ = plan.all_points()
     problem = Problem(base, names, np.radians(q), np.radians(plan.theta0_deg), d, step)
     omega = omega_vector(names, n, plan)
@@ -92,21 +104,27 @@ def run(robot: Robot, plan: Plan, truths: np.ndarray, *, noise_mm: float = 0.01,
     t_sw = time.perf_counter() - t0
     out: dict[str, MethodFigures] = {}
     if "stepwise" in methods:
-        out["stepwise"] = _figures(est_sw - truth, tool_errors(robot, names, est_sw, truth, q_ws),
-                                   angular, t_sw, scale)
+        out["stepwise"] = _figures(
+            est_sw - truth, tool_errors(robot, names, est_sw, truth, q_ws), angular, t_sw, scale
+        )
     if "joint" in methods:
         t0 = time.perf_counter()
-        est_j = np.array([joint(Problem(base, names, problem.q, problem.q0, d[t], step),
-                                est_sw[t]).values / scale for t in range(T)])
-        t_j = time.perf_counter() - t0 + t_sw   # the joint method starts from stepwise
-        out["joint"] = _figures(est_j - truth, tool_errors(robot, names, est_j, truth, q_ws),
-                                angular, t_j, scale)
+        est_j = np.array(
+            [
+                joint(Problem(base, names, problem.q, problem.q0, d[t], step), est_sw[t]).values
+                / scale
+                for t in range(T)
+            ]
+        )
+        t_j = time.perf_counter() - t0 + t_sw  # the joint method starts from stepwise
+        out["joint"] = _figures(
+            est_j - truth, tool_errors(robot, names, est_j, truth, q_ws), angular, t_j, scale
+        )
 
     # The bound at the mean truth, for the noise model of the readings: per-point σ and
     # quantisation, plus the mean zero reading's error common to every length.
-    sigma2 = noise_mm ** 2 + robot.encoder.mm_per_count ** 2 / 12
-    J = wire_jacobian(with_errors(base, names, truth.mean(axis=0)), problem.q, problem.q0,
-                      names)[1]
+    sigma2 = noise_mm**2 + robot.encoder.mm_per_count**2 / 12
+    J = wire_jacobian(with_errors(base, names, truth.mean(axis=0)), problem.q, problem.q0, names)[1]
     cov = crb(J, noise_covariance(len(q), np.sqrt(sigma2), np.sqrt(sigma2 / len(plan.steps))))
     draws = rng.multivariate_normal(np.zeros(len(names)), cov, size=max(T, 200))
     _, Jp = tool_jacobian(base, q_ws, names)

@@ -27,73 +27,80 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import ik
-from .accuracy import noise_covariance, stepwise_map, tool_error, workspace
-from .clearance import wire_clearance, wire_trim_mm
-from .errors import WirecalError
-from .identifiability import analyse
-from .kinematics import perturbed, tool_position
-from .plan import Plan, Step
-from .robot import Robot
-from .sensitivity import PSI_FLOOR, boundary_scale, sensitivity
+from wirecal.solver import ik
+from wirecal.solver.accuracy import noise_covariance, stepwise_map, tool_error, workspace
+from wirecal.solver.clearance import wire_clearance, wire_trim_mm
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.identifiability import analyse
+from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.plan import Plan, Step
+from wirecal.solver.robot import Robot
+from wirecal.solver.sensitivity import PSI_FLOOR, boundary_scale, sensitivity
 
 
 @dataclass(frozen=True)
 class PlanOptions:
     points_per_step: int = 5
-    tol: float = 0.05                # isolation while designing (stricter than psi's verdict)
-    margin_deg: float = 5.0          # from every joint limit
+    tol: float = 0.05  # isolation while designing (stricter than psi's verdict)
+    margin_deg: float = 5.0  # from every joint limit
     min_wire_mm: float = 40.0
     range_margin_mm: float = 50.0
-    clearance_mm: float = 10.0       # wire to link capsules
-    spread_deg: float = 4.0          # between the points of one step
-    samples: int = 400               # candidates per joint subset
-    speed_pct: float = 20.0          # for the robot-time estimate (as wirecal gen)
+    clearance_mm: float = 10.0  # wire to link capsules
+    spread_deg: float = 4.0  # between the points of one step
+    samples: int = 400  # candidates per joint subset
+    speed_pct: float = 20.0  # for the robot-time estimate (as wirecal gen)
     settle_s: float = 3.0
     readings: int = 10
     seed: int = 0
-    prior: float = 0.5               # typical |offset| (deg, mm) of a still-unknown parameter
-    sigma_mm: float = 0.011          # reading noise, quantisation included
+    prior: float = 0.5  # typical |offset| (deg, mm) of a still-unknown parameter
+    sigma_mm: float = 0.011  # reading noise, quantisation included
 
 
 @dataclass
 class StepDesign:
     parameter: str
     points_deg: np.ndarray
-    strength: float                  # RMS |Ψ_j| of the points
-    leak_ours: float                 # variance factor with our choice
-    leak_paper: float                # … with the paper's criterion (largest |Ψ_j|)
-    via_deg: np.ndarray              # (0 or 1, n): passed on the way to the first point
+    strength: float  # RMS |Ψ_j| of the points
+    leak_ours: float  # variance factor with our choice
+    leak_paper: float  # … with the paper's criterion (largest |Ψ_j|)
+    via_deg: np.ndarray  # (0 or 1, n): passed on the way to the first point
 
 
 @dataclass
 class Design:
     plan: Plan
     steps: list[StepDesign]
-    excluded: dict[str, str] = field(default_factory=dict)   # parameter → reason
+    excluded: dict[str, str] = field(default_factory=dict)  # parameter → reason
     predicted: dict[str, float] = field(default_factory=dict)
     robot_time_s: float = 0.0
 
     def header(self) -> str:
-        lines = ["Designed by 'wirecal plan' (Boschetti & Sinico's method, see the README).",
-                 f"theta0 {np.round(self.plan.theta0_deg, 2).tolist()} deg; order "
-                 + " ".join(self.plan.order) + ".",
-                 f"Predicted tool-point error (sigma 0.01 mm, mean over the workspace): "
-                 f"joint {self.predicted['joint']:.4f} mm, step-by-step "
-                 f"{self.predicted['stepwise']:.4f} mm.",
-                 f"Estimated robot time {self.robot_time_s / 60:.1f} min "
-                 f"({self.plan.n_points} points, "
-                 f"{sum(len(s.via_deg) for s in self.plan.steps)} via points)."]
-        lines.append("Per step: RMS |Psi| of its points (mm/deg or mm/mm), the noise gain "
-                     "(sigma of the estimate per mm of reading noise) and the leak-aware "
-                     "choice against the paper's.")
+        lines = [
+            "Designed by 'wirecal plan' (Boschetti & Sinico's method, see the README).",
+            f"theta0 {np.round(self.plan.theta0_deg, 2).tolist()} deg; order "
+            + " ".join(self.plan.order)
+            + ".",
+            f"Predicted tool-point error (sigma 0.01 mm, mean over the workspace): "
+            f"joint {self.predicted['joint']:.4f} mm, step-by-step "
+            f"{self.predicted['stepwise']:.4f} mm.",
+            f"Estimated robot time {self.robot_time_s / 60:.1f} min "
+            f"({self.plan.n_points} points, "
+            f"{sum(len(s.via_deg) for s in self.plan.steps)} via points).",
+        ]
+        lines.append(
+            "Per step: RMS |Psi| of its points (mm/deg or mm/mm), the noise gain "
+            "(sigma of the estimate per mm of reading noise) and the leak-aware "
+            "choice against the paper's."
+        )
         for j, s in enumerate(self.steps, 1):
             cut = 100 * (1 - s.leak_ours / s.leak_paper) if s.leak_paper > 0 else 0.0
             gain = 1 / (s.strength * np.sqrt(len(s.points_deg)))
-            lines.append(f"step {j} {s.parameter}: RMS |Psi| {s.strength:.2f}, noise gain "
-                         f"{gain:.2f}; expected squared error with noise and leaks "
-                         f"{s.leak_ours:.3g} ({cut:.0f} % below the largest-|Psi| choice's "
-                         f"{s.leak_paper:.3g})")
+            lines.append(
+                f"step {j} {s.parameter}: RMS |Psi| {s.strength:.2f}, noise gain "
+                f"{gain:.2f}; expected squared error with noise and leaks "
+                f"{s.leak_ours:.3g} ({cut:.0f} % below the largest-|Psi| choice's "
+                f"{s.leak_paper:.3g})"
+            )
         for name, why in self.excluded.items():
             lines.append(f"not planned: {name}: {why}")
         return "\n".join(lines)
@@ -123,8 +130,9 @@ def candidates(robot: Robot, theta0: np.ndarray, opt: PlanOptions, rng) -> np.nd
     return np.round(np.concatenate(out), 2)
 
 
-def move_clearance(robot: Robot, model, p0: np.ndarray, a: np.ndarray, b: np.ndarray,
-                   step_deg: float = 2.0) -> np.ndarray:
+def move_clearance(
+    robot: Robot, model, p0: np.ndarray, a: np.ndarray, b: np.ndarray, step_deg: float = 2.0
+) -> np.ndarray:
     """The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
     (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion."""
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
@@ -137,30 +145,33 @@ def move_clearance(robot: Robot, model, p0: np.ndarray, a: np.ndarray, b: np.nda
     return np.minimum.reduceat(gap, first) if len(a) else gap
 
 
-def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions,
-            step_deg: float = 2.0) -> np.ndarray:
+def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2.0) -> np.ndarray:
     """Moves a → b that keep the wire clear of the links and do not turn joint 6 by more
     than 180° (which would wrap the wire around the flange)."""
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
-    return ((np.abs(b[:, -1] - a[:, -1]) <= 180)
-            & (move_clearance(robot, model, p0, a, b, step_deg) >= opt.clearance_mm))
+    return (np.abs(b[:, -1] - a[:, -1]) <= 180) & (
+        move_clearance(robot, model, p0, a, b, step_deg) >= opt.clearance_mm
+    )
 
 
-def reach_ok(robot: Robot, model, p0, theta0, q, via, opt: PlanOptions,
-             step_deg: float = 2.0) -> np.ndarray:
+def reach_ok(
+    robot: Robot, model, p0, theta0, q, via, opt: PlanOptions, step_deg: float = 2.0
+) -> np.ndarray:
     """Whether each point q is reached from θ0 with the wire clear: directly, or through
     its via point (NaN row: none)."""
     direct = np.isnan(via[:, 0])
     ok = np.zeros(len(q), bool)
     ok[direct] = move_ok(robot, model, p0, theta0, q[direct], opt, step_deg)
     v = via[~direct]
-    ok[~direct] = (move_ok(robot, model, p0, theta0, v, opt, step_deg)
-                   & move_ok(robot, model, p0, v, q[~direct], opt, step_deg))
+    ok[~direct] = move_ok(robot, model, p0, theta0, v, opt, step_deg) & move_ok(
+        robot, model, p0, v, q[~direct], opt, step_deg
+    )
     return ok
 
 
-def screen(robot: Robot, model, p0: np.ndarray, theta0: np.ndarray, q: np.ndarray,
-           opt: PlanOptions) -> tuple[np.ndarray, np.ndarray]:
+def screen(
+    robot: Robot, model, p0: np.ndarray, theta0: np.ndarray, q: np.ndarray, opt: PlanOptions
+) -> tuple[np.ndarray, np.ndarray]:
     """Which candidates are usable (wire length, wrist singularity, a clear move from θ0)
     and, for those whose direct move is not clear, a via point that makes it clear (the
     arm joints first, or the wrist first); NaN rows where the direct move is clear. The
@@ -170,6 +181,7 @@ def screen(robot: Robot, model, p0: np.ndarray, theta0: np.ndarray, q: np.ndarra
     def length_ok(x):
         d = np.linalg.norm(tool_position(model, np.radians(x)) - p0, axis=1)
         return (d >= opt.min_wire_mm) & (d <= robot.encoder.range_mm - opt.range_margin_mm)
+
     ok = length_ok(q)
     if ik.analytic_structure(model):
         ok &= np.abs(np.sin(np.radians(q[:, 4]) + model.dh[4, 2])) >= np.sin(np.radians(8))
@@ -201,19 +213,21 @@ def _error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
     c = (psi_j @ psi_prev) / s if psi_prev.size else np.zeros(0)
     earlier = float(c @ cov_prev @ c) if c.size else 0.0
     later = (psi_j @ psi_next) / s if psi_next.size else np.zeros(0)
-    return opt.sigma_mm ** 2 / s + earlier + opt.prior ** 2 * float(later @ later)
+    return opt.sigma_mm**2 / s + earlier + opt.prior**2 * float(later @ later)
 
 
-def _choose(psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, opt: PlanOptions,
-            criterion: str):
+def _choose(
+    psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, opt: PlanOptions, criterion: str
+):
     """k points by greedy minimum error ("ours") or by largest |Ψ_j| ("paper"), at least
     ``spread_deg`` apart, each pair joined by a clear move (``linked(i, among)``: which
     of the candidates ``among`` (mask) are reachable from i), at most one needing a via
     point (it will be visited first)."""
     pool = np.ones(len(q), bool)
-    for _ in range(20):          # a dead end (no k linked points): start elsewhere
-        chosen = _greedy(psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, pool, opt,
-                         criterion)
+    for _ in range(20):  # a dead end (no k linked points): start elsewhere
+        chosen = _greedy(
+            psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, pool, opt, criterion
+        )
         if len(chosen) == opt.points_per_step:
             return chosen
         if not chosen:
@@ -222,8 +236,9 @@ def _choose(psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, opt: PlanOp
     return None
 
 
-def _greedy(psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, allowed, opt,
-            criterion) -> list[int]:
+def _greedy(
+    psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, allowed, opt, criterion
+) -> list[int]:
     allowed = allowed.copy()
     chosen: list[int] = []
     for _ in range(opt.points_per_step):
@@ -246,8 +261,9 @@ def _greedy(psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, allowed, op
     return chosen
 
 
-def design(robot: Robot, theta0: np.ndarray | None = None,
-           opt: PlanOptions = PlanOptions()) -> Design:
+def design(
+    robot: Robot, theta0: np.ndarray | None = None, opt: PlanOptions = PlanOptions()
+) -> Design:
     """A plan for the robot file's parameters (θ0 chosen when not given)."""
     if theta0 is not None:
         return _design_at(robot, np.asarray(theta0, dtype=float), opt)
@@ -265,38 +281,50 @@ def design(robot: Robot, theta0: np.ndarray | None = None,
         if best is None or score < best[0]:
             best = (score, d)
     if best is None:
-        raise WirecalError([f"{robot.source}: no θ0 tried gives a plan; give --theta0",
-                            *problems[:3]])
+        raise WirecalError(
+            [f"{robot.source}: no θ0 tried gives a plan; give --theta0", *problems[:3]]
+        )
     return best[1]
 
 
 def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
     rng = np.random.default_rng(opt.seed)
     model = perturbed(robot)
-    for j in np.flatnonzero((theta0 < robot.joint_min_deg + opt.margin_deg)
-                            | (theta0 > robot.joint_max_deg - opt.margin_deg)):
-        raise WirecalError(f"theta0: joint {j + 1} = {theta0[j]:g} deg is within "
-                           f"{opt.margin_deg:g} deg of its limits")
+    for j in np.flatnonzero(
+        (theta0 < robot.joint_min_deg + opt.margin_deg)
+        | (theta0 > robot.joint_max_deg - opt.margin_deg)
+    ):
+        raise WirecalError(
+            f"theta0: joint {j + 1} = {theta0[j]:g} deg is within "
+            f"{opt.margin_deg:g} deg of its limits"
+        )
     q_all = candidates(robot, theta0, opt, rng)
     p0 = tool_position(model, np.radians(theta0)[None])[0]
     usable, via_all = screen(robot, model, p0, theta0, q_all, opt)
     q_all, via_all = q_all[usable], via_all[usable]
     has_via = ~np.isnan(via_all[:, 0])
     if len(q_all) < opt.points_per_step:
-        raise WirecalError(f"{robot.source}: almost no usable configuration around θ0 "
-                           f"{theta0.tolist()}: check the encoder range, the link radii and "
-                           "the joint limits")
+        raise WirecalError(
+            f"{robot.source}: almost no usable configuration around θ0 "
+            f"{theta0.tolist()}: check the encoder range, the link radii and "
+            "the joint limits"
+        )
     names = list(robot.parameters)
     excluded: dict[str, str] = {}
     ident = analyse(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
     for name in ident.unobservable:
-        excluded[name] = ("unobservable: it moves every point and the encoder alike"
-                          if name in ("th1", "d1", "a0", "al0") else
-                          "unobservable from any candidate configuration")
+        excluded[name] = (
+            "unobservable: it moves every point and the encoder alike"
+            if name in ("th1", "d1", "a0", "al0")
+            else "unobservable from any candidate configuration"
+        )
     for combo in ident.combinations:
         last = combo[-1][0]
-        excluded[last] = ("redundant with " + ", ".join(n for n, _ in combo[:-1])
-                          + ": no wire length separates them; keep one")
+        excluded[last] = (
+            "redundant with "
+            + ", ".join(n for n, _ in combo[:-1])
+            + ": no wire length separates them; keep one"
+        )
     remaining = [n for n in names if n not in excluded]
     psi = sensitivity(model, q_all, theta0, remaining).psi
     col = {n: k for k, n in enumerate(remaining)}
@@ -308,8 +336,11 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
             pj = psi[:, col[j]]
             others = [col[t] for t in remaining if t != j]
             limit = np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
-            iso = np.all(np.abs(psi[:, others]) <= limit[:, None], axis=1) if others \
+            iso = (
+                np.all(np.abs(psi[:, others]) <= limit[:, None], axis=1)
+                if others
                 else np.ones(len(pj), bool)
+            )
             iso &= np.abs(pj) >= 0.05
             if iso.sum() < k:
                 continue
@@ -318,8 +349,10 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
                 best = (info, j, np.flatnonzero(iso))
         if best is None:
             for j in remaining:
-                excluded[j] = (f"cannot be isolated: no {k} points leave it alone "
-                               f"among {', '.join(t for t in remaining if t != j)}")
+                excluded[j] = (
+                    f"cannot be isolated: no {k} points leave it alone "
+                    f"among {', '.join(t for t in remaining if t != j)}"
+                )
             break
         _, j, iso = best
         # the most sensitive isolating points, their moves from θ0 checked finely
@@ -328,8 +361,7 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
         # error covariance of the earlier estimates (linearised stepwise map)
         prev = [col[t] for t in order]
         nxt = [col[t] for t in remaining if t != j]
-        cov_prev = (_stepwise_cov(model, theta0, order, chosen_q, opt) if order
-                    else np.zeros((0, 0)))
+        cov_prev = _stepwise_cov(model, theta0, order, chosen_q, opt) if order else np.zeros((0, 0))
         pj = psi[iso, col[j]]
         pprev = psi[np.ix_(iso, prev)] if prev else np.zeros((len(iso), 0))
         pnext = psi[np.ix_(iso, nxt)] if nxt else np.zeros((len(iso), 0))
@@ -337,9 +369,9 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
 
         def linked(i, among, q_iso=q_iso):
             return move_ok(robot, model, p0, q_iso[i], q_iso[among], opt)
+
         ours = _choose(pj, pprev, cov_prev, pnext, q_iso, has_via[iso], linked, opt, "ours")
-        paper = _choose(pj, pprev, cov_prev, pnext, q_iso, has_via[iso], linked, opt,
-                        "paper")
+        paper = _choose(pj, pprev, cov_prev, pnext, q_iso, has_via[iso], linked, opt, "paper")
         if ours is None:
             excluded[j] = f"too few isolating points {opt.spread_deg:g} deg apart"
             remaining.remove(j)
@@ -347,24 +379,38 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
         pts, vias = q_all[iso][ours], via_all[iso][ours]
         path = _tour(robot, model, p0, theta0, pts, vias, opt)
         if path is None:
-            raise WirecalError(f"{robot.source}: step {len(order) + 1} ({j}): no visiting "
-                               "order keeps the wire clear of the links; try another "
-                               "--seed or --theta0, or check the link radii")
+            raise WirecalError(
+                f"{robot.source}: step {len(order) + 1} ({j}): no visiting "
+                "order keeps the wire clear of the links; try another "
+                "--seed or --theta0, or check the link radii"
+            )
         pts, first_via = pts[path], vias[path[0]]
-        steps.append(StepDesign(
-            j, pts, float(np.sqrt(np.mean(pj[ours] ** 2))),
-            _error(pj[ours], pprev[ours], cov_prev, pnext[ours], opt),
-            _error(pj[paper], pprev[paper], cov_prev, pnext[paper], opt)
-            if paper is not None else np.inf,
-            first_via[None] if not np.isnan(first_via[0]) else np.zeros((0, len(theta0)))))
+        steps.append(
+            StepDesign(
+                j,
+                pts,
+                float(np.sqrt(np.mean(pj[ours] ** 2))),
+                _error(pj[ours], pprev[ours], cov_prev, pnext[ours], opt),
+                _error(pj[paper], pprev[paper], cov_prev, pnext[paper], opt)
+                if paper is not None
+                else np.inf,
+                first_via[None] if not np.isnan(first_via[0]) else np.zeros((0, len(theta0))),
+            )
+        )
         order.append(j)
         chosen_q.append(pts)
         remaining.remove(j)
     if not order:
-        raise WirecalError(f"{robot.source}: no parameter can be isolated around θ0 "
-                           f"{theta0.tolist()}; try another --theta0")
-    plan = Plan(theta0, tuple(order), tuple(Step(s.parameter, s.points_deg, s.via_deg)
-                                            for s in steps), robot=robot.name)
+        raise WirecalError(
+            f"{robot.source}: no parameter can be isolated around θ0 "
+            f"{theta0.tolist()}; try another --theta0"
+        )
+    plan = Plan(
+        theta0,
+        tuple(order),
+        tuple(Step(s.parameter, s.points_deg, s.via_deg) for s in steps),
+        robot=robot.name,
+    )
     d = Design(plan, steps, excluded)
     d.predicted = predicted_accuracy(robot, plan)
     d.robot_time_s = robot_time(robot, plan, opt)
@@ -379,7 +425,7 @@ def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarra
     J = sensitivity(model, q, theta0, order).psi
     A = stepwise_map(J, step)
     E = A @ J - np.eye(len(order))
-    return opt.sigma_mm ** 2 * A @ A.T + opt.prior ** 2 * E @ E.T
+    return opt.sigma_mm**2 * A @ A.T + opt.prior**2 * E @ E.T
 
 
 def _move_time(robot: Robot, a: np.ndarray, b: np.ndarray, opt: PlanOptions) -> float:
@@ -396,9 +442,14 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
     clear = move_ok(robot, model, p0, a, b, opt).reshape(n, n)
     has_via = ~np.isnan(vias[:, 0])
     leg = np.array([[_move_time(robot, x, y, opt) for y in pts] for x in pts])
-    start = np.array([_move_time(robot, theta0, p, opt) if not v else
-                      _move_time(robot, theta0, w, opt) + _move_time(robot, w, p, opt)
-                      for p, w, v in zip(pts, vias, has_via, strict=True)])
+    start = np.array(
+        [
+            _move_time(robot, theta0, p, opt)
+            if not v
+            else _move_time(robot, theta0, w, opt) + _move_time(robot, w, p, opt)
+            for p, w, v in zip(pts, vias, has_via, strict=True)
+        ]
+    )
     back = np.array([_move_time(robot, p, theta0, opt) for p in pts])
     bad = 1e4
 
@@ -407,6 +458,7 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
         for x, y in itertools.pairwise(path):
             t += leg[x, y] + bad * (not clear[x, y] or has_via[y])
         return t
+
     left, path = list(range(n)), []
     while left:
         i = min(left, key=lambda k: total([*path, k]) - (total(path) if path else 0))
@@ -416,7 +468,7 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
     while improved:
         improved = False
         for i, j in itertools.combinations(range(n), 2):
-            cand = path[:i] + path[i:j + 1][::-1] + path[j + 1:]
+            cand = path[:i] + path[i : j + 1][::-1] + path[j + 1 :]
             if total(cand) < total(path) - 1e-9:
                 path, improved = cand, True
     return np.array(path) if total(path) < bad else None
@@ -434,8 +486,9 @@ def robot_time(robot: Robot, plan: Plan, opt: PlanOptions = PlanOptions()) -> fl
     return total
 
 
-def predicted_accuracy(robot: Robot, plan: Plan, sigma_mm: float = 0.01,
-                       prior: float = PlanOptions.prior) -> dict[str, float]:
+def predicted_accuracy(
+    robot: Robot, plan: Plan, sigma_mm: float = 0.01, prior: float = PlanOptions.prior
+) -> dict[str, float]:
     """Mean tool-point error over the workspace: for the joint estimate the Cramér–Rao bound
     (σ per reading plus the count's quantisation); for the stepwise estimate its linearised
     map A, noise A·C·Aᵀ plus the bias of parameters leaking into steps before their own,
@@ -443,14 +496,16 @@ def predicted_accuracy(robot: Robot, plan: Plan, sigma_mm: float = 0.01,
     model = perturbed(robot)
     q, step, _ = plan.all_points()
     names = plan.order
-    scale = boundary_scale(names, robot.n_joints)         # prior deg → rad
+    scale = boundary_scale(names, robot.n_joints)  # prior deg → rad
     J = sensitivity(model, q, plan.theta0_deg, names).psi / scale
-    s2 = sigma_mm ** 2 + robot.encoder.mm_per_count ** 2 / 12
+    s2 = sigma_mm**2 + robot.encoder.mm_per_count**2 / 12
     C = noise_covariance(len(q), np.sqrt(s2), np.sqrt(s2 / len(plan.steps)))
     cov_joint = np.linalg.pinv(J.T @ np.linalg.solve(C, J))
     A = stepwise_map(J, step)
     E = A @ J - np.eye(len(names))
     P = np.diag((prior * scale) ** 2)
     ws = workspace(robot, 500)
-    return {"joint": tool_error(model, names, cov_joint, ws).mean_mm,
-            "stepwise": tool_error(model, names, A @ C @ A.T + E @ P @ E.T, ws).mean_mm}
+    return {
+        "joint": tool_error(model, names, cov_joint, ws).mean_mm,
+        "stepwise": tool_error(model, names, A @ C @ A.T + E @ P @ E.T, ws).mean_mm,
+    }

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import params as P
-from .kinematics import Model, tool_jacobian
+from wirecal.solver import params as P
+from wirecal.solver.kinematics import Model, tool_jacobian
 
 
 def boundary_scale(names: Sequence[str], n_joints: int) -> np.ndarray:
@@ -27,11 +27,11 @@ class Sensitivity:
     """Φ and Ψ for a batch of points, in boundary units (mm/deg, mm/mm)."""
 
     names: tuple[str, ...]
-    phi_i: np.ndarray     # (N, 3, m)  ∂p/∂e at θ_i
-    phi_0: np.ndarray     # (3, m)     ∂p/∂e at θ_0
-    nu: np.ndarray        # (N, 3)     p(θ_i) − p(θ_0), nominal
-    nu_hat: np.ndarray    # (N, 3)     wire direction
-    psi: np.ndarray       # (N, m)
+    phi_i: np.ndarray  # (N, 3, m)  ∂p/∂e at θ_i
+    phi_0: np.ndarray  # (3, m)     ∂p/∂e at θ_0
+    nu: np.ndarray  # (N, 3)     p(θ_i) − p(θ_0), nominal
+    nu_hat: np.ndarray  # (N, 3)     wire direction
+    psi: np.ndarray  # (N, m)
 
     @property
     def phi_diff(self) -> np.ndarray:
@@ -39,8 +39,9 @@ class Sensitivity:
         return self.phi_i - self.phi_0
 
 
-def sensitivity(model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray,
-                names: Sequence[str]) -> Sensitivity:
+def sensitivity(
+    model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray, names: Sequence[str]
+) -> Sensitivity:
     """Φ_i, Φ_0, ν̂_i and Ψ_i at the given model for points ``q_deg`` (N, n) in degrees."""
     names = tuple(names)
     scale = boundary_scale(names, model.n_joints)
@@ -70,8 +71,9 @@ PSI_FLOOR = 0.005
 """|Ψ| below this (half the paper's printed precision) counts as zero."""
 
 
-def verdict(psi_row: dict[str, float], parameter: str, later: Sequence[str],
-            tol: float = DEFAULT_TOL) -> Verdict:
+def verdict(
+    psi_row: dict[str, float], parameter: str, later: Sequence[str], tol: float = DEFAULT_TOL
+) -> Verdict:
     """A point of step j is ``ok`` when |Ψ_t| ≤ max(tol·|Ψ_j|, PSI_FLOOR) for every t > j.
 
     The set S_j of eq. 19 asks Ψ_t = 0 for every parameter identified after step j

@@ -13,22 +13,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .distance import wire_lengths
-from .kinematics import Model, perturbed
-from .logfile import format_header, format_row
-from .plan import Plan
-from .robot import Robot
+from wirecal.solver.distance import wire_lengths
+from wirecal.solver.formats.log import format_header, format_row
+from wirecal.solver.kinematics import Model, perturbed
+from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
 
 
 @dataclass(frozen=True)
 class Faults:
     """Injectable faults of a run."""
 
-    slip: tuple[int, float] | None = None   # (step, mm): the wire slips by mm during step
-    outliers: int = 0                        # points with a gross error
-    outlier_mm: float = 1.0                  # size of that error (random sign)
-    stop_after: int | None = None            # readings written before the run stops
-    truncate_last: bool = False              # the last line is cut mid-write
+    slip: tuple[int, float] | None = None  # (step, mm): the wire slips by mm during step
+    outliers: int = 0  # points with a gross error
+    outlier_mm: float = 1.0  # size of that error (random sign)
+    stop_after: int | None = None  # readings written before the run stops
+    truncate_last: bool = False  # the last line is cut mid-write
 
 
 def wrap(counts: np.ndarray, bits: int) -> np.ndarray:
@@ -37,8 +37,14 @@ def wrap(counts: np.ndarray, bits: int) -> np.ndarray:
     return (np.asarray(counts) + half) % (2 * half) - half
 
 
-def sample_counts(length_mm: np.ndarray, mm_per_count: float, start: float, bits: int,
-                  samples: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+def sample_counts(
+    length_mm: np.ndarray,
+    mm_per_count: float,
+    start: float,
+    bits: int,
+    samples: int,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray]:
     """What the controller logs for wire lengths ``length_mm``: the mean of ``samples``
     counter readings, unwrapped relative to the first, and their spread (counts)."""
     exact = start + np.asarray(length_mm, dtype=float) / mm_per_count
@@ -54,8 +60,9 @@ def true_lengths(model: Model, plan: Plan) -> np.ndarray:
     return wire_lengths(model, np.radians(q), np.radians(plan.theta0_deg))
 
 
-def measured_lengths(model: Model, plan: Plan, mm_per_count: float, noise_mm: float,
-                     rng: np.random.Generator) -> np.ndarray:
+def measured_lengths(
+    model: Model, plan: Plan, mm_per_count: float, noise_mm: float, rng: np.random.Generator
+) -> np.ndarray:
     """Wire lengths as a checked log gives them: per-point noise, counts quantised, each
     measured from the mean of the steps' zero readings. Vectorised over a batched model
     (Monte Carlo); the same reading model as :func:`simulate_log` without the counter."""
@@ -64,25 +71,39 @@ def measured_lengths(model: Model, plan: Plan, mm_per_count: float, noise_mm: fl
     noisy = np.concatenate([np.zeros((*d.shape[:-1], n_zero)), d], axis=-1)
     noisy = noisy + rng.normal(0.0, noise_mm, noisy.shape)
     counts = np.floor(noisy / mm_per_count + 0.5)
-    return (counts[..., n_zero:] - counts[..., :n_zero].mean(axis=-1, keepdims=True)) \
-        * mm_per_count
+    return (counts[..., n_zero:] - counts[..., :n_zero].mean(axis=-1, keepdims=True)) * mm_per_count
 
 
-def simulate_log(robot: Robot, plan: Plan, errors: dict[str, float], *, seed: int,
-                 noise_mm: float = 0.01, samples: int = 10, faults: Faults = Faults(),
-                 counter_start: float | None = None, mm_per_count: float | None = None) -> str:
+def simulate_log(
+    robot: Robot,
+    plan: Plan,
+    errors: dict[str, float],
+    *,
+    seed: int,
+    noise_mm: float = 0.01,
+    samples: int = 10,
+    faults: Faults = Faults(),
+    counter_start: float | None = None,
+    mm_per_count: float | None = None,
+) -> str:
     """The text of the log a run of ``plan`` on the true robot would write."""
     rng = np.random.default_rng(seed)
     enc = robot.encoder
     mpc = enc.mm_per_count if mm_per_count is None else mm_per_count
-    start = (rng.integers(-(2 ** (enc.counter_bits - 1)), 2 ** (enc.counter_bits - 1))
-             if counter_start is None else counter_start)
+    start = (
+        rng.integers(-(2 ** (enc.counter_bits - 1)), 2 ** (enc.counter_bits - 1))
+        if counter_start is None
+        else counter_start
+    )
     d_points = true_lengths(perturbed(robot, errors), plan)
     q, step_no, index_no = plan.all_points()
 
     # One entry per reading in run order: each step's zero at θ0, then its points.
-    order = [(j, k) for j in range(1, len(plan.steps) + 1)
-             for k in (None, *(int(i) for i in np.flatnonzero(step_no == j)))]
+    order = [
+        (j, k)
+        for j in range(1, len(plan.steps) + 1)
+        for k in (None, *(int(i) for i in np.flatnonzero(step_no == j)))
+    ]
     kinds = ["zero" if k is None else "point" for _, k in order]
     steps = [j for j, _ in order]
     indices = [0 if k is None else int(index_no[k]) for _, k in order]
@@ -92,8 +113,9 @@ def simulate_log(robot: Robot, plan: Plan, errors: dict[str, float], *, seed: in
     steps_arr = np.asarray(steps)
     if faults.slip is not None:
         slip_step, slip_mm = faults.slip
-        after = (steps_arr > slip_step) | ((steps_arr == slip_step) &
-                                           (np.asarray(kinds) == "point"))
+        after = (steps_arr > slip_step) | (
+            (steps_arr == slip_step) & (np.asarray(kinds) == "point")
+        )
         lengths[after] += slip_mm
     if faults.outliers:
         pts = np.flatnonzero(np.asarray(kinds) == "point")
@@ -101,12 +123,20 @@ def simulate_log(robot: Robot, plan: Plan, errors: dict[str, float], *, seed: in
         lengths[chosen] += faults.outlier_mm * rng.choice((-1.0, 1.0), size=len(chosen))
 
     mean, spread = sample_counts(lengths, mpc, start, enc.counter_bits, samples, rng)
-    rows = [format_row(*args, samples, sp) for args, sp in zip(
-        zip(kinds, steps, indices, joints, mean, strict=True), spread, strict=True)]
+    rows = [
+        format_row(*args, samples, sp)
+        for args, sp in zip(
+            zip(kinds, steps, indices, joints, mean, strict=True), spread, strict=True
+        )
+    ]
     if faults.stop_after is not None:
-        rows = rows[:faults.stop_after]
-    text = format_header(robot.name, plan.fingerprint(), mpc,
-                         ("simulated by wirecal; the truth is kept in a separate file",))
+        rows = rows[: faults.stop_after]
+    text = format_header(
+        robot.name,
+        plan.fingerprint(),
+        mpc,
+        ("simulated by wirecal; the truth is kept in a separate file",),
+    )
     text += "\n".join(rows) + ("\n" if rows else "")
     if faults.truncate_last and rows:
         text = text[: -(len(rows[-1]) // 2) - 1]

@@ -8,14 +8,14 @@ from typing import Any
 
 import numpy as np
 
-from .accuracy import stepwise_map, tool_error, workspace
-from .errors import WirecalError
-from .identify import DEFAULT_OMEGA, Estimate, Problem, joint, run_stepwise
-from .kinematics import perturbed
-from .logfile import Measurements
-from .plan import Plan
-from .robot import Robot
-from .sensitivity import boundary_scale, sensitivity
+from wirecal.solver.accuracy import stepwise_map, tool_error, workspace
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.identify import DEFAULT_OMEGA, Estimate, Problem, joint, run_stepwise
+from wirecal.solver.kinematics import perturbed
+from wirecal.solver.measurements import Measurements
+from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
+from wirecal.solver.sensitivity import boundary_scale, sensitivity
 
 METHODS = ("stepwise", "joint")
 
@@ -26,9 +26,9 @@ class SolveResult:
     plan: Plan
     measurements: Measurements
     estimates: dict[str, Estimate]
-    predicted: dict[str, dict[str, float]]   # method -> tool-point error mean/max (mm)
-    sigma_mm: float                          # noise σ estimated from the joint residual
-    left_nominal: tuple[str, ...]            # parameters whose step has no points
+    predicted: dict[str, dict[str, float]]  # method -> tool-point error mean/max (mm)
+    sigma_mm: float  # noise σ estimated from the joint residual
+    left_nominal: tuple[str, ...]  # parameters whose step has no points
 
     @property
     def recommended(self) -> str:
@@ -38,54 +38,82 @@ class SolveResult:
     def as_json(self) -> dict[str, Any]:
         methods: dict[str, Any] = {}
         for name, est in self.estimates.items():
-            entry: dict[str, Any] = {"parameters": est.as_dict(),
-                                     "residual_rms_mm": est.residual_rms_mm,
-                                     "predicted_tool_error_mm": self.predicted[name]}
+            entry: dict[str, Any] = {
+                "parameters": est.as_dict(),
+                "residual_rms_mm": est.residual_rms_mm,
+                "predicted_tool_error_mm": self.predicted[name],
+            }
             if est.std is not None:
                 entry["std"] = {n: float(s) for n, s in zip(est.names, est.std, strict=True)}
                 entry["correlation"] = {
                     a: {b: float(est.correlation[i, k]) for k, b in enumerate(est.names)}
-                    for i, a in enumerate(est.names)}
+                    for i, a in enumerate(est.names)
+                }
             if est.steps:
-                entry["steps"] = [{
-                    "step": j + 1, "parameter": s.parameter, "estimate": s.estimate,
-                    "points": s.n_points, "rms_before_mm": s.rms_before_mm,
-                    "rms_after_mm": s.rms_after_mm, "psi_strength": s.psi_strength,
-                    "omega": s.omega, "on_bound": s.on_bound, "leak": s.leak,
-                    "iterations": s.iterations} for j, s in enumerate(est.steps)]
+                entry["steps"] = [
+                    {
+                        "step": j + 1,
+                        "parameter": s.parameter,
+                        "estimate": s.estimate,
+                        "points": s.n_points,
+                        "rms_before_mm": s.rms_before_mm,
+                        "rms_after_mm": s.rms_after_mm,
+                        "psi_strength": s.psi_strength,
+                        "omega": s.omega,
+                        "on_bound": s.on_bound,
+                        "leak": s.leak,
+                        "iterations": s.iterations,
+                    }
+                    for j, s in enumerate(est.steps)
+                ]
             methods[name] = entry
         m = self.measurements
         return {
-            "robot": self.robot.name, "plan": self.plan.fingerprint(), "log": m.source,
-            "log_sha256": m.sha256, "order": list(self.plan.order), "methods": methods,
+            "robot": self.robot.name,
+            "plan": self.plan.fingerprint(),
+            "log": m.source,
+            "log_sha256": m.sha256,
+            "order": list(self.plan.order),
+            "methods": methods,
             "recommended": self.recommended,
             "residual_rms_mm": {n: e.residual_rms_mm for n, e in self.estimates.items()},
             "sigma_mm": self.sigma_mm,
             "missing": [{"step": s, "index": i} for s, i in m.missing],
-            "left_nominal": list(self.left_nominal), "notes": list(m.notes),
+            "left_nominal": list(self.left_nominal),
+            "notes": list(m.notes),
         }
 
 
-def omega_vector(names: tuple[str, ...], n_joints: int, plan: Plan,
-                 default: float = DEFAULT_OMEGA) -> np.ndarray:
+def omega_vector(
+    names: tuple[str, ...], n_joints: int, plan: Plan, default: float = DEFAULT_OMEGA
+) -> np.ndarray:
     """Ω_j per parameter in internal units: the plan's per-step ``omega`` or the default."""
     by_step = {s.parameter: s.omega for s in plan.steps}
     bound = np.array([by_step.get(n) or default for n in names], dtype=float)
     return bound * boundary_scale(names, n_joints)
 
 
-def solve(robot: Robot, plan: Plan, m: Measurements, *, methods: tuple[str, ...] = METHODS,
-          omega_default: float = DEFAULT_OMEGA, robust: bool = False,
-          partial: bool = False) -> SolveResult:
+def solve(
+    robot: Robot,
+    plan: Plan,
+    m: Measurements,
+    *,
+    methods: tuple[str, ...] = METHODS,
+    omega_default: float = DEFAULT_OMEGA,
+    robust: bool = False,
+    partial: bool = False,
+) -> SolveResult:
     """Identify the plan's parameters from checked measurements.
 
     Refuses an incomplete log unless ``partial``; then parameters whose step has no
     points stay at nominal and are listed in ``left_nominal``.
     """
     if m.missing and not partial:
-        raise WirecalError(f"{m.source}: the log is incomplete: missing {m.missing_text()}. "
-                           "Finish the run (repeat from the first missing step), or pass "
-                           "--partial to solve from the points that are there")
+        raise WirecalError(
+            f"{m.source}: the log is incomplete: missing {m.missing_text()}. "
+            "Finish the run (repeat from the first missing step), or pass "
+            "--partial to solve from the points that are there"
+        )
     present = m.present
     step = m.step[present]
     left = tuple(n for j, n in enumerate(plan.order) if not np.any(step == j + 1))
@@ -97,8 +125,9 @@ def solve(robot: Robot, plan: Plan, m: Measurements, *, methods: tuple[str, ...]
 
     base = perturbed(robot)
     q_deg = m.joints_deg[present]
-    problem = Problem(base, names, np.radians(q_deg), np.radians(m.theta0_deg),
-                      m.distance_mm[present], step)
+    problem = Problem(
+        base, names, np.radians(q_deg), np.radians(m.theta0_deg), m.distance_mm[present], step
+    )
     psi = sensitivity(base, q_deg, m.theta0_deg, names).psi
     omega = omega_vector(names, robot.n_joints, plan, omega_default)
 
@@ -116,11 +145,11 @@ def solve(robot: Robot, plan: Plan, m: Measurements, *, methods: tuple[str, ...]
     sigma = float(np.sqrt(r @ r / (n - k))) if n > k else float("nan")
     ws = workspace(robot)
     predicted = {}
-    J = psi / boundary_scale(names, robot.n_joints)   # internal units
+    J = psi / boundary_scale(names, robot.n_joints)  # internal units
     if "joint" in estimates:
-        cov = sigma ** 2 * np.linalg.pinv(J.T @ J)
+        cov = sigma**2 * np.linalg.pinv(J.T @ J)
         predicted["joint"] = tool_error(base, names, cov, ws).as_dict()
     if "stepwise" in estimates:
         A = stepwise_map(J, step)
-        predicted["stepwise"] = tool_error(base, names, sigma ** 2 * A @ A.T, ws).as_dict()
+        predicted["stepwise"] = tool_error(base, names, sigma**2 * A @ A.T, ws).as_dict()
     return SolveResult(robot, plan, m, estimates, predicted, sigma, left)

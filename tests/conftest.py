@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from wirecal.solver.plan import load_plan
-from wirecal.solver.robot import load_robot
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]
 VIPER = ROOT / "examples" / "viper_s650"

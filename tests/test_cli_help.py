@@ -11,8 +11,17 @@ COMMANDS = sorted(main.commands)
 
 
 def test_the_commands_are_all_there():
-    assert COMMANDS == ["demo", "gen", "observe", "plan", "psi", "report", "simulate", "solve",
-                        "validate"]
+    assert COMMANDS == [
+        "demo",
+        "gen",
+        "observe",
+        "plan",
+        "psi",
+        "report",
+        "simulate",
+        "solve",
+        "validate",
+    ]
 
 
 @pytest.mark.parametrize("command", COMMANDS)
@@ -29,4 +38,5 @@ def test_help(command):
 
 def test_version():
     r = CliRunner().invoke(main, ["--version"])
-    assert r.exit_code == 0 and r.output.startswith("wirecal, version ")
+    assert r.exit_code == 0
+    assert r.output.startswith("wirecal, version ")

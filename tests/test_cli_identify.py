@@ -32,12 +32,13 @@ def sim(tmp_path):
 
 def test_simulate_writes_log_and_separate_truth(sim):
     truth = tomllib.loads(sim.with_suffix(".truth.toml").read_text())
-    assert set(truth["errors"]) == {"th2", "th3", "th4", "th5", "th6", "a1", "a2", "a3", "d4",
-                                    "d6"}
-    assert all(abs(v) <= 0.8 for v in truth["errors"].values()) and truth["seed"] == 4
+    assert set(truth["errors"]) == {"th2", "th3", "th4", "th5", "th6", "a1", "a2", "a3", "d4", "d6"}
+    assert all(abs(v) <= 0.8 for v in truth["errors"].values())
+    assert truth["seed"] == 4
     text = sim.read_text()
     assert text.startswith("# wirecal-log 1\n# robot: Adept Viper s650\n# plan: ")
-    assert "errors" not in text and str(truth["errors"]["th2"])[:8] not in text
+    assert "errors" not in text
+    assert str(truth["errors"]["th2"])[:8] not in text
 
 
 def test_simulate_is_reproducible(tmp_path):
@@ -54,7 +55,8 @@ def test_solve_json_recovers_truth(sim):
     joint = data["methods"]["joint"]
     for name, value in truth.items():
         assert abs(joint["parameters"][name] - value) <= 5 * joint["std"][name] + 1e-3, name
-    assert set(data["methods"]) == {"stepwise", "joint"} and data["recommended"] == "joint"
+    assert set(data["methods"]) == {"stepwise", "joint"}
+    assert data["recommended"] == "joint"
     assert set(data["residual_rms_mm"]) == {"stepwise", "joint"}
     assert data["residual_rms_mm"]["joint"] < 0.025
     assert len(data["methods"]["stepwise"]["steps"]) == 10
@@ -65,7 +67,8 @@ def test_solve_json_recovers_truth(sim):
 def test_solve_text_side_by_side(sim):
     out = run("solve", ROBOT, PLAN, sim).output
     assert "parameter unit     stepwise       joint   ± σ (joint)" in out
-    assert "recommended: joint" in out and "Step-by-step (paper)" in out
+    assert "recommended: joint" in out
+    assert "Step-by-step (paper)" in out
     assert "  1 th6    6 pts" in out
 
 
@@ -74,11 +77,15 @@ def test_patch_written_never_overwritten(sim, tmp_path):
     out = run("solve", ROBOT, PLAN, sim, "-o", patch).output
     assert f"wrote {patch} (joint)" in out
     data = tomllib.loads(patch.read_text())
-    assert data["method"] == "joint" and data["robot"] == "Adept Viper s650"
-    assert len(data["log_sha256"]) == 64 and len(data["plan"]) == 64
+    assert data["method"] == "joint"
+    assert data["robot"] == "Adept Viper s650"
+    assert len(data["log_sha256"]) == 64
+    assert len(data["plan"]) == 64
     a1 = data["parameters"]["a1"]
-    assert a1["nominal"] == 75.0 and a1["value"] == pytest.approx(75.0 + a1["offset"])
-    assert a1["unit"] == "mm" and a1["std"] > 0
+    assert a1["nominal"] == 75.0
+    assert a1["value"] == pytest.approx(75.0 + a1["offset"])
+    assert a1["unit"] == "mm"
+    assert a1["std"] > 0
     spec = (tmp_path / "patch.spec.txt").read_text()
     assert "a1              2  a             mm         75.0000" in spec
     before = patch.read_bytes()
@@ -95,8 +102,7 @@ def test_partial_log_names_missing_points(tmp_path):
     run("simulate", ROBOT, PLAN, "-o", log, "--stop-after", 40)
     r = run("solve", ROBOT, PLAN, log, ok=False)
     assert r.exit_code == 2
-    assert "the log is incomplete: missing step 5 points 2–6; steps 6–10 (all points)" \
-        in r.output
+    assert "the log is incomplete: missing step 5 points 2–6; steps 6–10 (all points)" in r.output
     data = json.loads(run("solve", ROBOT, PLAN, log, "--partial", "--json").output)
     assert data["left_nominal"] == ["d4", "a2", "th3", "th2", "a1"]
     assert set(data["methods"]["joint"]["parameters"]) == {"th6", "d6", "th5", "th4", "a3"}
@@ -106,13 +112,28 @@ def test_slipped_wire_is_refused(tmp_path):
     log = tmp_path / "slip.csv"
     run("simulate", ROBOT, PLAN, "-o", log, "--slip", "6:0.5")
     r = run("solve", ROBOT, PLAN, log, ok=False)
-    assert r.exit_code == 2 and "repeat from step 6" in r.output and "Traceback" not in r.output
+    assert r.exit_code == 2
+    assert "repeat from step 6" in r.output
+    assert "Traceback" not in r.output
 
 
 def test_robust_loss_resists_outliers(tmp_path):
     log = tmp_path / "outliers.csv"
-    run("simulate", ROBOT, PLAN, "-o", log, "--seed", 2, "--outliers", 3, "--outlier-mm", 1.5,
-        "--random", 0.5)
+    run(
+        "simulate",
+        ROBOT,
+        PLAN,
+        "-o",
+        log,
+        "--seed",
+        2,
+        "--outliers",
+        3,
+        "--outlier-mm",
+        1.5,
+        "--random",
+        0.5,
+    )
     truth = tomllib.loads(log.with_suffix(".truth.toml").read_text())["errors"]
     plain = json.loads(run("solve", ROBOT, PLAN, log, "--json").output)
     robust = json.loads(run("solve", ROBOT, PLAN, log, "--json", "--robust").output)
@@ -126,27 +147,30 @@ def test_robust_loss_resists_outliers(tmp_path):
 
 def test_bad_options(tmp_path):
     r = run("simulate", ROBOT, PLAN, "-o", tmp_path / "x.csv", "--slip", "four", ok=False)
-    assert r.exit_code == 2 and "give STEP:MM" in r.output
+    assert r.exit_code == 2
+    assert "give STEP:MM" in r.output
     errors = tmp_path / "e.toml"
     errors.write_text("[errors]\nth9 = 1.0\n")
     r = run("simulate", ROBOT, PLAN, "-o", tmp_path / "x.csv", "--errors", errors, ok=False)
     assert "errors.th9: unknown parameter 'th9'" in r.output
     r = run("solve", ROBOT, PLAN, tmp_path / "nope.csv", ok=False)
-    assert r.exit_code == 2 and "cannot read log" in r.output
+    assert r.exit_code == 2
+    assert "cannot read log" in r.output
 
 
 @pytest.mark.parametrize("command", ["simulate", "solve"])
 def test_help(command):
     r = run(command, "--help")
-    assert "Usage:" in r.output and len(r.output) > 400
+    assert "Usage:" in r.output
+    assert len(r.output) > 400
 
 
 def test_simulate_with_the_controller_program_then_solve_on_the_controller(tmp_path):
     log = tmp_path / "twin.csv"
     out = run("simulate", ROBOT, PLAN, "-o", log, "--controller", "--seed", 6).output
-    assert "wrote" in out and "written on the controller by wc.run" in log.read_text()
-    data = json.loads(run("solve", ROBOT, PLAN, log, "--method", "controller", "--json")
-                      .output)
+    assert "wrote" in out
+    assert "written on the controller by wc.run" in log.read_text()
+    data = json.loads(run("solve", ROBOT, PLAN, log, "--method", "controller", "--json").output)
     ctl = data["methods"]["controller"]
     assert set(ctl["parameters"]) == set(data["methods"]["stepwise"]["parameters"])
     assert ctl["parameters_max_difference"] <= 1e-4
@@ -157,7 +181,9 @@ def test_simulate_with_the_controller_program_then_solve_on_the_controller(tmp_p
 def test_simulate_controller_stop_is_reported(tmp_path):
     log = tmp_path / "slip.csv"
     r = run("simulate", ROBOT, PLAN, "-o", log, "--controller", "--slip", "2:0.7", ok=False)
-    assert r.exit_code == 1 and "the controller program stopped: paused in wc.meas" in r.output
-    text = log.read_text()   # the slip during step 2 shows at the zero of step 3
-    assert "point,2,6," in text and text.rstrip().split("\n")[-1].startswith("zero,3,0,")
+    assert r.exit_code == 1
+    assert "the controller program stopped: paused in wc.meas" in r.output
+    text = log.read_text()  # the slip during step 2 shows at the zero of step 3
+    assert "point,2,6," in text
+    assert text.rstrip().split("\n")[-1].startswith("zero,3,0,")
     assert "moved during step 2" in r.output

@@ -29,9 +29,12 @@ def test_psi_json_structure():
     assert data["order"] == ["th6", "d6", "th5", "th4", "a3", "d4", "a2", "th3", "th2", "a1"]
     assert len(data["rows"]) == 69
     first = data["rows"][0]
-    assert first["step"] == 1 and first["index"] == 1 and first["parameter"] == "th6"
+    assert first["step"] == 1
+    assert first["index"] == 1
+    assert first["parameter"] == "th6"
     assert first["joints_deg"] == [0, -90, 210, -90, -26, -180]
-    assert round(first["psi"]["th6"], 2) == -1.07 and first["ok"] is True
+    assert round(first["psi"]["th6"], 2) == -1.07
+    assert first["ok"] is True
     assert first["violations"] == []
     assert all(r["ok"] for r in data["rows"])
     assert data["identifiability"]["rank"] == 10
@@ -46,17 +49,22 @@ def test_psi_text_table_grouped_by_step():
     assert "rank 10 of 10" in r.output
     lines = r.output.splitlines()
     row = next(line for line in lines if line.startswith("  4    0.00  -90.00  239.93"))
-    assert row.split("|")[1].split()[3] == "-3.04" and row.endswith("| ok")
+    assert row.split("|")[1].split()[3] == "-3.04"
+    assert row.endswith("| ok")
 
 
 def test_printed_plan_violations_and_strict():
     r = run("psi", ROBOT, PRINTED, "--json")
-    bad = [(x["step"], x["index"], x["violations"]) for x in json.loads(r.output)["rows"]
-           if not x["ok"]]
+    bad = [
+        (x["step"], x["index"], x["violations"])
+        for x in json.loads(r.output)["rows"]
+        if not x["ok"]
+    ]
     assert bad == [(7, i, ["th3"]) for i in range(2, 7)]
     assert run("psi", ROBOT, PRINTED).exit_code == 0
     strict = run("psi", ROBOT, PRINTED, "--strict")
-    assert strict.exit_code == 1 and "64 of 69 points ok" in strict.output
+    assert strict.exit_code == 1
+    assert "64 of 69 points ok" in strict.output
     assert run("psi", ROBOT, PLAN, "--strict").exit_code == 0
 
 
@@ -64,7 +72,7 @@ def test_tolerance_option():
     data = json.loads(run("psi", ROBOT, PLAN, "--json", "--tol", "0.05").output)
     assert data["tolerance"] == 0.05
     leaking = {(x["step"], x["index"]) for x in data["rows"] if not x["ok"]}
-    assert (4, 5) in leaking          # Ψ_a3 = 0.36 against Ψ_th4 = −2.62: 14 %
+    assert (4, 5) in leaking  # Ψ_a3 = 0.36 against Ψ_th4 = −2.62: 14 %
 
 
 def test_observe_all():
@@ -73,7 +81,8 @@ def test_observe_all():
     assert set(data["unobservable"]) == {"al0", "a0", "th1", "d1"}
     assert {"th6", "tool_y"} in [set(c) for c in data["combinations"]]
     text = run("observe", ROBOT, PLAN).output
-    assert "rank 10 of 10" in text and "O3 =" in text
+    assert "rank 10 of 10" in text
+    assert "O3 =" in text
 
 
 def test_bad_input_is_a_message_not_a_traceback(tmp_path):
@@ -88,7 +97,9 @@ def test_bad_input_is_a_message_not_a_traceback(tmp_path):
 @pytest.mark.parametrize("command", [[], ["psi"], ["observe"]])
 def test_help(command):
     r = run(*command, "--help")
-    assert r.exit_code == 0 and "Usage:" in r.output and len(r.output) > 200
+    assert r.exit_code == 0
+    assert "Usage:" in r.output
+    assert len(r.output) > 200
 
 
 def test_installed_console_script():
@@ -96,6 +107,6 @@ def test_installed_console_script():
     assert exe, "the wirecal console script is not on PATH; install with pip install -e ."
     out = subprocess.run([exe, "--version"], capture_output=True, text=True, check=True)
     assert out.stdout.startswith("wirecal, version ")
-    out = subprocess.run([exe, "psi", ROBOT, PLAN, "--strict"], capture_output=True,
-                         text=True)
-    assert out.returncode == 0 and "69 of 69 points ok" in out.stdout
+    out = subprocess.run([exe, "psi", ROBOT, PLAN, "--strict"], capture_output=True, text=True)
+    assert out.returncode == 0
+    assert "69 of 69 points ok" in out.stdout

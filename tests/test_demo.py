@@ -16,8 +16,7 @@ from wirecal.cli.main import main
 @pytest.fixture(scope="module")
 def demo(tmp_path_factory):
     folder = tmp_path_factory.mktemp("demo")
-    r = CliRunner().invoke(main, ["demo", "-o", str(folder), "--seed", "3"],
-                           catch_exceptions=False)
+    r = CliRunner().invoke(main, ["demo", "-o", str(folder), "--seed", "3"], catch_exceptions=False)
     assert r.exit_code == 0, r.output
     return folder, r.output
 
@@ -27,70 +26,133 @@ def test_calibration_reduces_the_validation_errors(demo):
     (plane fit) lower means after calibration (the paper: 84 % and 77 %)."""
     folder, _ = demo
     runner = CliRunner()
-    for kind, a, b, least in (("configuration", "WCVCFG1.CSV", "WCVCFG2.CSV", 0.80),
-                              ("plane", "WCVPLN1.CSV", "WCVPLN2.CSV", 0.70)):
-        r = runner.invoke(main, ["validate", kind, str(folder / a), str(folder / b),
-                                 "--json"])
+    for kind, a, b, least in (
+        ("configuration", "WCVCFG1.CSV", "WCVCFG2.CSV", 0.80),
+        ("plane", "WCVPLN1.CSV", "WCVPLN2.CSV", 0.70),
+    ):
+        r = runner.invoke(main, ["validate", kind, str(folder / a), str(folder / b), "--json"])
         data = json.loads(r.output)
         assert data["reduction"]["mean"] >= least, data
-        assert data["after"]["mean_mm"] > 0.002   # unmodelled errors stay visible
+        assert data["after"]["mean_mm"] > 0.002  # unmodelled errors stay visible
 
 
 def test_demo_prints_the_table_and_writes_every_file(demo):
     folder, output = demo
-    assert "[7/7] report" in output and "configuration discrepancy, mean (mm)" in output
-    for name in ("truth.toml", "WIRECAL.V2", "WCLOG.CSV", "patch.toml", "patch.spec.txt",
-                 "WCVCFG1.CSV", "WCVPLN1.CSV", "WCVCFG2.CSV", "WCVPLN2.CSV", "report.html"):
+    assert "[7/7] report" in output
+    assert "configuration discrepancy, mean (mm)" in output
+    for name in (
+        "truth.toml",
+        "WIRECAL.V2",
+        "WCLOG.CSV",
+        "patch.toml",
+        "patch.spec.txt",
+        "WCVCFG1.CSV",
+        "WCVPLN1.CSV",
+        "WCVCFG2.CSV",
+        "WCVPLN2.CSV",
+        "report.html",
+    ):
         assert (folder / name).stat().st_size > 100, name
 
 
 def test_demo_refuses_to_overwrite(demo):
     folder, _ = demo
     r = CliRunner().invoke(main, ["demo", "-o", str(folder)])
-    assert r.exit_code == 2 and "exists; choose another name or pass --force" in r.output
+    assert r.exit_code == 2
+    assert "exists; choose another name or pass --force" in r.output
 
 
 def test_report_content(demo):
     folder, _ = demo
     html = (folder / "report.html").read_text()
-    for text in ("Kinematic calibration of Adept Viper s650", "Validation: before and after",
-                 "configuration change (§3.6.1)", "plane fit (§3.6.2)",
-                 "Identified parameters", "controller (wc.solve2)", "truth (simulation)",
-                 "The plan: Ψ per step", "Step by step", "The robot"):
+    for text in (
+        "Kinematic calibration of Adept Viper s650",
+        "Validation: before and after",
+        "configuration change (§3.6.1)",
+        "plane fit (§3.6.2)",
+        "Identified parameters",
+        "controller (wc.solve2)",
+        "truth (simulation)",
+        "The plan: Ψ per step",
+        "Step by step",
+        "The robot",
+    ):
         assert text in html, text
     assert html.count('src="data:image/png;base64,') == 5
-    assert "http://" not in html and "https://" not in html     # self-contained
+    assert "http://" not in html
+    assert "https://" not in html
 
 
 @pytest.mark.skipif(shutil.which("chromium") is None, reason="Debian's chromium not installed")
 def test_report_opens_in_a_browser(demo, tmp_path):
     folder, _ = demo
     shot = tmp_path / "report.png"
-    subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu",
-                    "--disable-quic", "--no-first-run", "--disable-background-networking",
-                    "--disable-component-update", "--disable-sync",
-                    f"--user-data-dir={tmp_path / 'profile'}", "--window-size=1200,2000",
-                    f"--screenshot={shot}", (folder / "report.html").as_uri()],
-                   check=True, timeout=120, capture_output=True)
+    subprocess.run(
+        [
+            "chromium",
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            f"--user-data-dir={tmp_path / 'profile'}",
+            "--window-size=1200,2000",
+            f"--screenshot={shot}",
+            (folder / "report.html").as_uri(),
+        ],
+        check=True,
+        timeout=120,
+        capture_output=True,
+    )
     assert shot.stat().st_size > 50_000
 
 
 def test_report_command(demo, tmp_path):
     folder, _ = demo
     from .conftest import VIPER
+
     out = tmp_path / "r.html"
-    r = CliRunner().invoke(main, [
-        "report", str(VIPER / "robot.toml"), str(VIPER / "paper_plan.toml"),
-        str(folder / "WCLOG.CSV"), "-o", str(out),
-        "--config", str(folder / "WCVCFG1.CSV"), str(folder / "WCVCFG2.CSV"),
-        "--plane", str(folder / "WCVPLN1.CSV"), str(folder / "WCVPLN2.CSV"),
-        "--truth", str(folder / "truth.toml")], catch_exceptions=False)
+    r = CliRunner().invoke(
+        main,
+        [
+            "report",
+            str(VIPER / "robot.toml"),
+            str(VIPER / "paper_plan.toml"),
+            str(folder / "WCLOG.CSV"),
+            "-o",
+            str(out),
+            "--config",
+            str(folder / "WCVCFG1.CSV"),
+            str(folder / "WCVCFG2.CSV"),
+            "--plane",
+            str(folder / "WCVPLN1.CSV"),
+            str(folder / "WCVPLN2.CSV"),
+            "--truth",
+            str(folder / "truth.toml"),
+        ],
+        catch_exceptions=False,
+    )
     assert r.exit_code == 0, r.output
     html = out.read_text()
-    assert html.count("data:image/png") == 5 and "truth (simulation)" in html
-    bad = CliRunner().invoke(main, ["report", str(VIPER / "robot.toml"),
-                                    str(VIPER / "paper_plan.toml"), str(folder / "WCLOG.CSV"),
-                                    "-o", str(out), "--plane", str(folder / "WCVCFG1.CSV"),
-                                    str(folder / "WCVCFG2.CSV"), "--force"])
-    assert bad.exit_code == 2 and "a 'configuration' log where a 'plane' log is needed" in \
-        bad.output
+    assert html.count("data:image/png") == 5
+    assert "truth (simulation)" in html
+    bad = CliRunner().invoke(
+        main,
+        [
+            "report",
+            str(VIPER / "robot.toml"),
+            str(VIPER / "paper_plan.toml"),
+            str(folder / "WCLOG.CSV"),
+            "-o",
+            str(out),
+            "--plane",
+            str(folder / "WCVCFG1.CSV"),
+            str(folder / "WCVCFG2.CSV"),
+            "--force",
+        ],
+    )
+    assert bad.exit_code == 2
+    assert "a 'configuration' log where a 'plane' log is needed" in bad.output

@@ -8,7 +8,8 @@ import pytest
 
 from wirecal.gen.emulate import operation_counts, readings_from_log, run_controller
 from wirecal.gen.tables import build_tables, sin_cosm1_small
-from wirecal.solver.logfile import check_log, parse_log
+from wirecal.solver.formats.log import parse_log
+from wirecal.solver.measurements import check_log
 from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 
@@ -23,9 +24,10 @@ def tables(viper, paper_plan):
 def _case(viper, plan, seed):
     rng = np.random.default_rng([seed, 77])
     truth = dict(zip(viper.parameters, rng.uniform(-4.5, 4.5, 10), strict=True))
-    start = 2 ** 23 - 15_000 if seed % 3 == 0 else None     # a counter that wraps
-    log = parse_log(simulate_log(viper, plan, truth, seed=seed, counter_start=start),
-                    f"seed{seed}.csv")
+    start = 2**23 - 15_000 if seed % 3 == 0 else None  # a counter that wraps
+    log = parse_log(
+        simulate_log(viper, plan, truth, seed=seed, counter_start=start), f"seed{seed}.csv"
+    )
     ref = solve(viper, plan, check_log(log, plan, viper))
     return readings_from_log(log, plan), ref
 
@@ -44,8 +46,8 @@ def test_emulation_matches_reference(viper, paper_plan, tables, seed):
 def test_small_angle_polynomials_within_their_stated_bound():
     e = np.linspace(-0.0881, 0.0881, 2001)
     s, cm1 = sin_cosm1_small(e, 1.0)
-    assert np.abs(s - np.sin(e)).max() <= 0.0881 ** 7 / 5040 * 1.01
-    assert np.abs(cm1 - (np.cos(e) - 1)).max() <= 0.0881 ** 8 / 40320 * 1.01 + 1e-17
+    assert np.abs(s - np.sin(e)).max() <= 0.0881**7 / 5040 * 1.01
+    assert np.abs(cm1 - (np.cos(e) - 1)).max() <= 0.0881**8 / 40320 * 1.01 + 1e-17
 
 
 def test_operation_counts(viper, paper_plan, tables):

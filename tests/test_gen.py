@@ -13,12 +13,12 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
-from wirecal.gen.program import GenOptions, module_text
 from wirecal.gen.tables import build_tables
-from wirecal.gen.vparse import parse_module
-from wirecal.gen.vplus import double_literal
+from wirecal.gen.vplus.literals import double_literal
+from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.robot import robot_from_dict
+from wirecal.solver.formats.robot_file import robot_from_dict
+from wirecal.twin.vplus.parser import parse_module
 
 from .conftest import VIPER
 
@@ -54,17 +54,20 @@ def test_every_generated_module_follows_the_rules(viper, paper_plan, printed_pla
     elif variant == "patch":
         opt = GenOptions(patch={n: 0.1 for n in plan.order})
     elif variant == "options":
-        opt = GenOptions(speed=5, accel=10, settle_s=4.5, samples=50, zero_tol_mm=0.05,
-                         log_file="RUN2.CSV")
+        opt = GenOptions(
+            speed=5, accel=10, settle_s=4.5, samples=50, zero_tol_mm=0.05, log_file="RUN2.CSV"
+        )
     text = module_text(robot, plan, opt)
     assert len(parse_module(text, "WIRECAL.V2").programs) == text.count(".PROGRAM ") >= 27
     assert all(len(line) <= 80 for line in text.split("\n"))
     assert text.count(".PROGRAM ") == text.count("\n.END") + (text.startswith(".END"))
     if variant == "device":
-        assert "DEVICE(0, 0, err, 1)" in text and "DEFBELT" not in text.replace(
-            "; DEFBELT", "")
+        assert "DEVICE(0, 0, err, 1)" in text
+        assert "DEFBELT" not in text.replace("; DEFBELT", "")
     if variant == "options":
-        assert "SPEED 5 ALWAYS" in text and "wc.nsamp = 50" in text and "RUN2.CSV" in text
+        assert "SPEED 5 ALWAYS" in text
+        assert "wc.nsamp = 50" in text
+        assert "RUN2.CSV" in text
 
 
 def test_deterministic(viper, paper_plan, module):
@@ -72,10 +75,12 @@ def test_deterministic(viper, paper_plan, module):
 
 
 def test_run_moves_exactly_through_the_plan(module, paper_plan):
-    run = module[module.index(".PROGRAM wc.run()"):]
-    run = run[:run.index(".END")]
-    targets = [[float(v) for v in m.split(",")] for m in
-               re.findall(r"SET #wc\.p = #PPOINT\(([^)]*)\)", run)]
+    run = module[module.index(".PROGRAM wc.run()") :]
+    run = run[: run.index(".END")]
+    targets = [
+        [float(v) for v in m.split(",")]
+        for m in re.findall(r"SET #wc\.p = #PPOINT\(([^)]*)\)", run)
+    ]
     expected = []
     for s in paper_plan.steps:
         expected.append(paper_plan.theta0_deg)
@@ -86,8 +91,7 @@ def test_run_moves_exactly_through_the_plan(module, paper_plan):
     calls = re.findall(r"CALL wc\.meas\((\d+), (\d+)\)", run)
     _, step, index = paper_plan.all_points()
     assert [int(s) for s, i in calls if i == "0"] == list(range(1, 11))
-    assert [(int(a), int(b)) for a, b in calls if b != "0"] == list(zip(step, index,
-                                                                          strict=True))
+    assert [(int(a), int(b)) for a, b in calls if b != "0"] == list(zip(step, index, strict=True))
     assert run.count("BREAK") == 69 + 10 + 1
 
 
@@ -112,8 +116,9 @@ def test_data_constants_read_back_exactly(module, viper, paper_plan):
     assert _value(values["wc.tp[1]"]) == -60
 
 
-@pytest.mark.parametrize("x", [0.8660254037844387, -1e-3, 295.0, 547.71234567891,
-                               -0.025488, 1e-17, 3.0e8])
+@pytest.mark.parametrize(
+    "x", [0.8660254037844387, -1e-3, 295.0, 547.71234567891, -0.025488, 1e-17, 3.0e8]
+)
 def test_double_literal(x):
     assert abs(_value(double_literal(x)) - x) <= 2e-16 * abs(x)
 
@@ -121,10 +126,12 @@ def test_double_literal(x):
 def test_log_header_and_columns_as_the_reader_expects(module, paper_plan):
     assert 'CALL wc.write("# wirecal-log 1")' in module
     fp = paper_plan.fingerprint()
-    assert f'$wc.fpa = "{fp[:32]}"' in module and f'$wc.fpb = "{fp[32:]}"' in module
+    assert f'$wc.fpa = "{fp[:32]}"' in module
+    assert f'$wc.fpb = "{fp[32:]}"' in module
     assert 'CALL wc.write("# mm_per_count: 0.025488")' in module
-    assert 'kind,step,index,j1,j2,j3,j4,j5,j6,counts,samples,spread' in module
-    assert "FOPENW (wc.lun)" in module and module.count("IOSTAT(") >= 6
+    assert "kind,step,index,j1,j2,j3,j4,j5,j6,counts,samples,spread" in module
+    assert "FOPENW (wc.lun)" in module
+    assert module.count("IOSTAT(") >= 6
 
 
 def test_point_too_close_to_a_limit_is_refused(viper, paper_plan):
@@ -132,7 +139,8 @@ def test_point_too_close_to_a_limit_is_refused(viper, paper_plan):
         module_text(viper, paper_plan, GenOptions(margin_deg=2.0))
     assert info.value.problems == [
         f"{paper_plan.source}: step 7 (a2) point 6: joint 3 = 255 deg is within 2 deg of its "
-        "limits [-29, 256]; move the point or lower --margin"]
+        "limits [-29, 256]; move the point or lower --margin"
+    ]
 
 
 def test_bad_options_refused(viper, paper_plan):
@@ -140,7 +148,8 @@ def test_bad_options_refused(viper, paper_plan):
         module_text(viper, paper_plan, GenOptions(speed=150, log_file="TOOLONGNAME.CSV"))
     assert info.value.problems == [
         "--speed 150: give a percentage in (0, 100]",
-        "controller file name 'TOOLONGNAME.CSV': use 8.3 letters and digits"]
+        "controller file name 'TOOLONGNAME.CSV': use 8.3 letters and digits",
+    ]
     quoted = replace(viper, name='Viper "A"')
     with pytest.raises(WirecalError, match="a V\\+ string holds printable ASCII"):
         module_text(quoted, paper_plan)
@@ -153,11 +162,11 @@ def test_cli_gen(tmp_path):
     assert r.exit_code == 0, r.output
     assert (tmp_path / "ctl" / "WIRECAL.V2").read_text() == GOLDEN.read_text()
     again = runner.invoke(main, ["gen", robot, plan, "-o", str(tmp_path / "ctl")])
-    assert again.exit_code == 2 and "exists; choose another name or pass --force" in \
-        again.output
+    assert again.exit_code == 2
+    assert "exists; choose another name or pass --force" in again.output
     bad = tmp_path / "patch.toml"
     bad.write_text('plan = "0000"\n[parameters.th6]\noffset = 1.0\n')
-    r = runner.invoke(main, ["gen", robot, plan, "-o", str(tmp_path / "p"), "--patch",
-                             str(bad)])
-    assert r.exit_code == 2 and "the patch was solved from another plan" in r.output
+    r = runner.invoke(main, ["gen", robot, plan, "-o", str(tmp_path / "p"), "--patch", str(bad)])
+    assert r.exit_code == 2
+    assert "the patch was solved from another plan" in r.output
     assert "Usage:" in runner.invoke(main, ["gen", "--help"]).output

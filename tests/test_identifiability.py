@@ -14,7 +14,8 @@ def test_th1_unobservable_from_any_points(viper):
     rng = np.random.default_rng(7)
     q = rng.uniform(viper.joint_min_deg, viper.joint_max_deg, (40, 6))
     result = analyse(perturbed(viper), q, q[0] + 5.0, ["th1", "th2", "a2"])
-    assert result.unobservable == ("th1",) and result.rank == 2
+    assert result.unobservable == ("th1",)
+    assert result.rank == 2
 
 
 def test_full_analysis_names_every_redundancy(viper, paper_plan):
@@ -23,7 +24,7 @@ def test_full_analysis_names_every_redundancy(viper, paper_plan):
     result = analyse(perturbed(viper), q, paper_plan.theta0_deg, names)
     assert set(result.unobservable) == {"al0", "a0", "th1", "d1"}
     combos = {frozenset(n for n, _ in c): dict(c) for c in result.combinations}
-    assert frozenset({"d2", "d3"}) in combos            # joints 2 and 3 are parallel
+    assert frozenset({"d2", "d3"}) in combos  # joints 2 and 3 are parallel
     assert frozenset({"d6", "tool_z"}) in combos
     th6_ty = combos[frozenset({"th6", "tool_y"})]
     # ∂p/∂th6 = z6 × R6·t = R6·(−t_y, t_x, 0) = −60·R6·e_y per rad: 1 deg ≡ −1.047 mm of t_y
@@ -36,24 +37,28 @@ def test_full_analysis_names_every_redundancy(viper, paper_plan):
 def test_paper_parameters_identifiable(viper, paper_plan):
     q, _, _ = paper_plan.all_points()
     result = analyse(perturbed(viper), q, paper_plan.theta0_deg, viper.parameters)
-    assert result.rank == 10 and not result.unobservable and not result.combinations
+    assert result.rank == 10
+    assert not result.unobservable
+    assert not result.combinations
     assert result.indices["O3"] > 0.5
     assert "Every parameter is identifiable" in "\n".join(result.describe())
 
 
 def test_point_set_that_cannot_see_a_parameter(viper):
     q = np.array([[0, -90, 210, -90, 26, a] for a in (-10, 0, 10, 20)], dtype=float)
-    result = analyse(perturbed(viper), q, np.array([0, -90, 210, -90, 0, -90.0]),
-                     ["th6", "a2"])
+    result = analyse(perturbed(viper), q, np.array([0, -90, 210, -90, 0, -90.0]), ["th6", "a2"])
     assert result.unobservable == ("a2",)
-    assert "a2 is unobservable: no wire length of these points depends on it" in \
-        "\n".join(result.describe())
+    assert "a2 is unobservable: no wire length of these points depends on it" in "\n".join(
+        result.describe()
+    )
 
 
 def test_observability_indices_formulas():
     s = np.array([4.0, 2.0, 1.0])
     o = observability_indices(s, 9)
-    assert np.isclose(o["O1"], 2.0 / 3.0)       # (4·2·1)^(1/3) / √9
-    assert np.isclose(o["O2"], 0.25) and np.isclose(o["O3"], 1.0)
-    assert np.isclose(o["O4"], 0.25) and np.isclose(o["O5"], 1 / 1.75)
+    assert np.isclose(o["O1"], 2.0 / 3.0)  # (4·2·1)^(1/3) / √9
+    assert np.isclose(o["O2"], 0.25)
+    assert np.isclose(o["O3"], 1.0)
+    assert np.isclose(o["O4"], 0.25)
+    assert np.isclose(o["O5"], 1 / 1.75)
     assert observability_indices(np.array([3.0, 0.0]), 5)["O1"] == 0.0

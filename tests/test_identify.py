@@ -16,14 +16,25 @@ from wirecal.solver.sensitivity import boundary_scale, sensitivity
 from wirecal.solver.simulate import measured_lengths
 from wirecal.solver.solve import omega_vector
 
-TABLE5 = {"th2": 0.675, "th3": -0.485, "th4": 0.245, "th5": -0.575, "th6": -1.215,
-          "a1": -0.005, "a2": 0.105, "a3": 0.025, "d4": -0.105, "d6": 0.115}
+TABLE5 = {
+    "th2": 0.675,
+    "th3": -0.485,
+    "th4": 0.245,
+    "th5": -0.575,
+    "th6": -1.215,
+    "a1": -0.005,
+    "a2": 0.105,
+    "a3": 0.025,
+    "d4": -0.105,
+    "d6": 0.115,
+}
 
 
 def make_problem(robot, plan, d):
     q, step, _ = plan.all_points()
-    return Problem(perturbed(robot), plan.order, np.radians(q), np.radians(plan.theta0_deg),
-                   d, step)
+    return Problem(
+        perturbed(robot), plan.order, np.radians(q), np.radians(plan.theta0_deg), d, step
+    )
 
 
 def exact_lengths(robot, plan, truth_internal):
@@ -51,13 +62,18 @@ def test_quantisation_only_within_its_own_bound(viper, paper_plan):
     truth = np.array([TABLE5[n] for n in paper_plan.order]) * scale
     rng = np.random.default_rng(3)
     mpc = viper.encoder.mm_per_count
-    d = measured_lengths(with_errors(perturbed(viper), paper_plan.order, truth), paper_plan,
-                         mpc, 0.0, rng)
+    d = measured_lengths(
+        with_errors(perturbed(viper), paper_plan.order, truth), paper_plan, mpc, 0.0, rng
+    )
     problem = make_problem(viper, paper_plan, d)
     x0, _ = stepwise(problem, omega_vector(paper_plan.order, 6, paper_plan))
     est = joint(problem, x0)
-    J = wire_jacobian(with_errors(perturbed(viper), paper_plan.order, truth), problem.q,
-                      problem.q0, paper_plan.order)[1]
+    J = wire_jacobian(
+        with_errors(perturbed(viper), paper_plan.order, truth),
+        problem.q,
+        problem.q0,
+        paper_plan.order,
+    )[1]
     sq = mpc / np.sqrt(12)
     sd = np.sqrt(np.diag(crb(J, noise_covariance(69, sq, sq / np.sqrt(10))))) / scale
     err = est.values - truth / scale
@@ -71,8 +87,13 @@ def test_each_step_is_the_papers_bounded_scalar_minimisation(viper, paper_plan):
     scale = boundary_scale(paper_plan.order, 6)
     truth = np.array([TABLE5[n] for n in paper_plan.order]) * scale
     rng = np.random.default_rng(8)
-    d = measured_lengths(with_errors(perturbed(viper), paper_plan.order, truth), paper_plan,
-                         viper.encoder.mm_per_count, 0.01, rng)
+    d = measured_lengths(
+        with_errors(perturbed(viper), paper_plan.order, truth),
+        paper_plan,
+        viper.encoder.mm_per_count,
+        0.01,
+        rng,
+    )
     problem = make_problem(viper, paper_plan, d)
     omega = omega_vector(paper_plan.order, 6, paper_plan)
     x, _ = stepwise(problem, omega)
@@ -80,13 +101,15 @@ def test_each_step_is_the_papers_bounded_scalar_minimisation(viper, paper_plan):
         sel = problem.step == j + 1
 
         def cost(v, j=j, sel=sel):
-            e = np.concatenate([x[:j], [v], np.zeros(9 - j)])   # later ones at nominal
-            dist = wire_lengths(with_errors(problem.base, problem.names, e),
-                                problem.q[sel], problem.q0)
+            e = np.concatenate([x[:j], [v], np.zeros(9 - j)])  # later ones at nominal
+            dist = wire_lengths(
+                with_errors(problem.base, problem.names, e), problem.q[sel], problem.q0
+            )
             return float(np.sum((dist - d[sel]) ** 2))
 
-        ref = minimize_scalar(cost, bounds=(-omega[j], omega[j]), method="bounded",
-                              options={"xatol": 1e-12})
+        ref = minimize_scalar(
+            cost, bounds=(-omega[j], omega[j]), method="bounded", options={"xatol": 1e-12}
+        )
         assert abs(x[j] - ref.x) < 1e-7, paper_plan.order[j]
         assert cost(x[j]) <= ref.fun * (1 + 1e-9) + 1e-15
 
@@ -121,25 +144,34 @@ def test_each_steps_cost_depends_on_its_parameter_only_at_isolating_points(viper
 
 def test_bound_hit_is_reported(viper, paper_plan):
     scale = boundary_scale(paper_plan.order, 6)
-    truth = np.array([TABLE5[n] for n in paper_plan.order]) * scale   # th6 = −1.215 deg
+    truth = np.array([TABLE5[n] for n in paper_plan.order]) * scale  # th6 = −1.215 deg
     problem = make_problem(viper, paper_plan, exact_lengths(viper, paper_plan, truth))
     omega = omega_vector(paper_plan.order, 6, paper_plan, default=0.5)
-    psi = sensitivity(perturbed(viper), np.degrees(problem.q), paper_plan.theta0_deg,
-                      paper_plan.order).psi
+    psi = sensitivity(
+        perturbed(viper), np.degrees(problem.q), paper_plan.theta0_deg, paper_plan.order
+    ).psi
     est = run_stepwise(problem, omega, psi)
     th6 = est.steps[0]
-    assert th6.parameter == "th6" and th6.on_bound and th6.estimate == pytest.approx(-0.5)
+    assert th6.parameter == "th6"
+    assert th6.on_bound
+    assert th6.estimate == pytest.approx(-0.5)
     assert th6.omega == pytest.approx(0.5)
-    assert est.steps[2].on_bound and est.steps[2].estimate == pytest.approx(-0.5)  # −0.575
-    assert not est.steps[3].on_bound      # th4 = 0.245 lies inside Ω
+    assert est.steps[2].on_bound
+    assert est.steps[2].estimate == pytest.approx(-0.5)
+    assert not est.steps[3].on_bound  # th4 = 0.245 lies inside Ω
 
 
 def test_batched_equals_one_at_a_time(viper, paper_plan):
     scale = boundary_scale(paper_plan.order, 6)
     rng = np.random.default_rng(4)
     truths = rng.uniform(-1, 1, (5, 10)) * scale
-    d = measured_lengths(with_errors(perturbed(viper), paper_plan.order, truths), paper_plan,
-                         viper.encoder.mm_per_count, 0.01, rng)
+    d = measured_lengths(
+        with_errors(perturbed(viper), paper_plan.order, truths),
+        paper_plan,
+        viper.encoder.mm_per_count,
+        0.01,
+        rng,
+    )
     omega = omega_vector(paper_plan.order, 6, paper_plan)
     batch, _ = stepwise(make_problem(viper, paper_plan, d), omega)
     for t in range(5):

@@ -10,8 +10,18 @@ from hypothesis import strategies as st
 from wirecal.solver.ik import analytic_structure, configuration, flange_pose, solve
 from wirecal.solver.kinematics import perturbed
 
-TRUTH = {"th2": 0.675, "th3": -0.485, "th4": 0.245, "th5": -0.575, "th6": -1.215,
-         "a1": -0.005, "a2": 0.105, "a3": 0.025, "d4": -0.105, "d6": 0.115}
+TRUTH = {
+    "th2": 0.675,
+    "th3": -0.485,
+    "th4": 0.245,
+    "th5": -0.575,
+    "th6": -1.215,
+    "a1": -0.005,
+    "a2": 0.105,
+    "a3": 0.025,
+    "d4": -0.105,
+    "d6": 0.115,
+}
 unit = st.floats(0.02, 0.98)
 
 
@@ -32,7 +42,7 @@ def test_round_trip_analytic(viper, u, calibrated):
     q = _q(viper, u)
     R, o = flange_pose(model, q)
     solutions = solve(model, R, o, viper.joint_min_deg, viper.joint_max_deg)
-    singular = abs(np.sin(q[4] + model.dh[4, 2])) < 1e-6   # φ4, φ6 then form a continuum
+    singular = abs(np.sin(q[4] + model.dh[4, 2])) < 1e-6  # φ4, φ6 then form a continuum
     assert singular or any(_same(s.q, q) for s in solutions)
     assert 1 <= len(solutions) <= 8
     for s in solutions:
@@ -40,7 +50,7 @@ def test_round_trip_analytic(viper, u, calibrated):
         np.testing.assert_allclose(o2, o, atol=1e-8)
         np.testing.assert_allclose(R2, R, atol=1e-10)
     configs = [s.config for s in solutions]
-    assert len(set(configs)) == len(configs)       # each solution a different configuration
+    assert len(set(configs)) == len(configs)  # each solution a different configuration
 
 
 @settings(max_examples=15, deadline=None)
@@ -51,7 +61,7 @@ def test_numeric_fallback_for_a_non_spherical_wrist(viper, u):
     q = _q(viper, u)
     R, o = flange_pose(model, q)
     solutions = solve(model, R, o)
-    near_singular = abs(np.sin(q[4] + model.dh[4, 2])) < 0.05   # wrist nearly straight
+    near_singular = abs(np.sin(q[4] + model.dh[4, 2])) < 0.05  # wrist nearly straight
     assert near_singular or any(_same(s.q, q) for s in solutions)
     for s in solutions:
         np.testing.assert_allclose(flange_pose(model, s.q)[1], o, atol=1e-7)
@@ -61,10 +71,17 @@ def test_eight_configurations_of_a_generic_pose(viper):
     model = perturbed(viper)
     R, o = flange_pose(model, np.radians([10, -60, 150, 20, 40, 30.0]))
     configs = {s.config for s in solve(model, R, o)}
-    assert {c[1:] for c in configs} == {("above", "noflip"), ("above", "flip"),
-                                        ("below", "noflip"), ("below", "flip")}
-    assert configuration(model, np.radians([10, -60, 150, 20, 40, 30.0])) == \
-        ("righty", "above", "noflip")
+    assert {c[1:] for c in configs} == {
+        ("above", "noflip"),
+        ("above", "flip"),
+        ("below", "noflip"),
+        ("below", "flip"),
+    }
+    assert configuration(model, np.radians([10, -60, 150, 20, 40, 30.0])) == (
+        "righty",
+        "above",
+        "noflip",
+    )
 
 
 def test_unreachable_pose_has_no_solution(viper):

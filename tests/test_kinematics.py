@@ -15,8 +15,9 @@ from wirecal.solver.kinematics import joint_jacobian, perturbed, tool_jacobian, 
 
 ALL = P.all_names(6, with_tool=True)
 joints = arrays(np.float64, (6,), elements=st.floats(-np.pi, np.pi))
-batches = arrays(np.float64, st.tuples(st.integers(1, 8), st.just(6)),
-                 elements=st.floats(-np.pi, np.pi))
+batches = arrays(
+    np.float64, st.tuples(st.integers(1, 8), st.just(6)), elements=st.floats(-np.pi, np.pi)
+)
 errors = st.dictionaries(st.sampled_from(ALL), st.floats(-2.0, 2.0), max_size=8)
 
 
@@ -52,8 +53,7 @@ def test_viper_home_position_by_hand(viper):
     # o4 = (a1 + a2 + a3, 0, d4) = (75 + 270 − 90, 0, 295); o6 = o4 + d6·z;
     # the tool point (−60, 0, 50) is then added in base axes.
     p = np.array([75 + 270 - 90, 0, 295 + 80]) + np.array([-60.0, 0, 50])
-    np.testing.assert_allclose(tool_position(perturbed(viper), np.zeros((1, 6)))[0], p,
-                               atol=1e-9)
+    np.testing.assert_allclose(tool_position(perturbed(viper), np.zeros((1, 6)))[0], p, atol=1e-9)
     np.testing.assert_allclose(p, [195, 0, 425])
 
 
@@ -66,8 +66,7 @@ def test_tool_jacobian_matches_finite_differences(viper, q, err):
     for k, name in enumerate(ALL):
         plus = tool_position(perturbed(model, {name: h}, units="rad"), q)
         minus = tool_position(perturbed(model, {name: -h}, units="rad"), q)
-        np.testing.assert_allclose(J[:, :, k], (plus - minus) / (2 * h), atol=2e-5,
-                                   err_msg=name)
+        np.testing.assert_allclose(J[:, :, k], (plus - minus) / (2 * h), atol=2e-5, err_msg=name)
 
 
 @settings(max_examples=60, deadline=None)
@@ -81,8 +80,9 @@ def test_wire_jacobian_matches_finite_differences(viper, q, q0, err):
     for k, name in enumerate(ALL):
         plus = wire_lengths(perturbed(model, {name: h}, units="rad"), q, q0)
         minus = wire_lengths(perturbed(model, {name: -h}, units="rad"), q, q0)
-        np.testing.assert_allclose(dd[far, k], ((plus - minus) / (2 * h))[far], atol=1e-4,
-                                   err_msg=name)
+        np.testing.assert_allclose(
+            dd[far, k], ((plus - minus) / (2 * h))[far], atol=1e-4, err_msg=name
+        )
 
 
 @settings(max_examples=30, deadline=None)
@@ -111,12 +111,14 @@ def test_perturbed_units(viper):
     deg = perturbed(viper, {"th2": 1.0, "d4": 0.5})
     rad = perturbed(viper, {"th2": np.radians(1.0), "d4": 0.5}, units="rad")
     np.testing.assert_allclose(deg.dh, rad.dh)
-    assert deg.dh[1, 2] == np.radians(1.0) and deg.dh[3, 3] == 295.5
+    assert deg.dh[1, 2] == np.radians(1.0)
+    assert deg.dh[3, 3] == 295.5
 
 
 def test_parameter_names():
     assert P.parse("a1", 6) == P.Param("a1", "a", 1)  # the paper's a1 = row 2's 75 mm
-    assert P.parse("th6", 6).row == 5 and P.parse("al0", 6).row == 0
+    assert P.parse("th6", 6).row == 5
+    assert P.parse("al0", 6).row == 0
     for bad in ("a6", "th0", "d7", "x1", "al6"):
         try:
             P.parse(bad, 6)

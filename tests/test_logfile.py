@@ -7,11 +7,22 @@ import numpy as np
 import pytest
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.logfile import Tolerances, check_log, parse_log
+from wirecal.solver.formats.log import parse_log
+from wirecal.solver.measurements import Tolerances, check_log
 from wirecal.solver.simulate import Faults, simulate_log
 
-TRUTH = {"th2": 0.675, "th3": -0.485, "th4": 0.245, "th5": -0.575, "th6": -1.215,
-         "a1": -0.005, "a2": 0.105, "a3": 0.025, "d4": -0.105, "d6": 0.115}
+TRUTH = {
+    "th2": 0.675,
+    "th3": -0.485,
+    "th4": 0.245,
+    "th5": -0.575,
+    "th6": -1.215,
+    "a1": -0.005,
+    "a2": 0.105,
+    "a3": 0.025,
+    "d4": -0.105,
+    "d6": 0.115,
+}
 
 
 @pytest.fixture(scope="module")
@@ -43,31 +54,43 @@ def replace_line(text, prefix, new):
 
 def test_clean_log(viper, paper_plan, log_text):
     m = measure(log_text, viper, paper_plan)
-    assert m.missing == () and m.present.all() and len(m.distance_mm) == 69
+    assert m.missing == ()
+    assert m.present.all()
+    assert len(m.distance_mm) == 69
     assert m.missing_text() == "none"
-    assert np.all(m.distance_mm > 20) and np.all(m.distance_mm < 650)
+    assert np.all(m.distance_mm > 20)
+    assert np.all(m.distance_mm < 650)
     assert set(m.zero_drift_mm) == set(range(1, 11))
 
 
 def test_counter_wrap_gives_the_same_lengths(viper, paper_plan):
-    near_wrap = simulate_log(viper, paper_plan, TRUTH, seed=5, counter_start=2 ** 23 - 5000)
+    near_wrap = simulate_log(viper, paper_plan, TRUTH, seed=5, counter_start=2**23 - 5000)
     far = simulate_log(viper, paper_plan, TRUTH, seed=5, counter_start=1000.0)
     counts = [float(line.split(",")[9]) for line in lines(near_wrap) if line[:1] in "zp"]
-    assert min(counts) < 0 < max(counts)                # the counter did wrap
-    np.testing.assert_allclose(measure(near_wrap, viper, paper_plan).distance_mm,
-                               measure(far, viper, paper_plan).distance_mm, atol=1e-9)
+    assert min(counts) < 0 < max(counts)  # the counter did wrap
+    np.testing.assert_allclose(
+        measure(near_wrap, viper, paper_plan).distance_mm,
+        measure(far, viper, paper_plan).distance_mm,
+        atol=1e-9,
+    )
 
 
 def test_wrong_version(viper, paper_plan, log_text):
     text = log_text.replace("# wirecal-log 1", "# wirecal-log 2", 1)
-    with pytest.raises(WirecalError, match=r"run\.csv:1: log version '2'; this wirecal reads "
-                                           "version 1"):
+    with pytest.raises(
+        WirecalError,
+        match=r"run\.csv:1: log version '2'; this wirecal reads "
+        "version 1",
+    ):
         parse_log(text, "run.csv")
 
 
 def test_foreign_file(viper, paper_plan):
-    with pytest.raises(WirecalError, match=r"run\.csv:1: not a wirecal log: the first line "
-                                           "must be '# wirecal-log 1'"):
+    with pytest.raises(
+        WirecalError,
+        match=r"run\.csv:1: not a wirecal log: the first line "
+        "must be '# wirecal-log 1'",
+    ):
         parse_log("time,value\n1,2\n", "run.csv")
 
 
@@ -79,29 +102,35 @@ def test_wrong_columns(log_text):
 
 def test_fingerprint_mismatch_refused_unless_forced(viper, paper_plan, printed_plan, log_text):
     got = problems(log_text, viper, printed_plan)
-    assert len(got) == 1 and "the log was taken with another plan; use that plan, or " \
-        "--force" in got[0]
+    assert len(got) == 1
+    assert "the log was taken with another plan; use that plan, or --force" in got[0]
     # --force reads it anyway (against the printed plan the step-7 joints then differ)
     forced = problems(log_text, viper, printed_plan, force=True)
     assert [p.split(": ", 1)[1] for p in forced] == [
         f"joint 2 is -{a}.0000 deg; the plan says -110 (tolerance 0.05): the robot was not "
-        "where the plan puts it" for a in (115, 120, 125, 130, 135)]
+        "where the plan puts it"
+        for a in (115, 120, 125, 130, 135)
+    ]
 
 
 def test_missing_points_partial_log_readable(viper, paper_plan):
     text = simulate_log(viper, paper_plan, TRUTH, seed=5, faults=Faults(stop_after=40))
     m = measure(text, viper, paper_plan)
-    assert m.present.sum() == 40 - 5      # 40 readings, 5 of them zeros
+    assert m.present.sum() == 40 - 5  # 40 readings, 5 of them zeros
     assert m.missing_text() == "step 5 points 2–6; steps 6–10 (all points)"
 
 
 def test_truncated_last_line_is_a_note(viper, paper_plan):
-    text = simulate_log(viper, paper_plan, TRUTH, seed=5,
-                        faults=Faults(stop_after=20, truncate_last=True))
+    text = simulate_log(
+        viper, paper_plan, TRUTH, seed=5, faults=Faults(stop_after=20, truncate_last=True)
+    )
     m = measure(text, viper, paper_plan)
-    assert m.notes == (f"run.csv:{len(lines(text)) }: incomplete last line ignored (the run "
-                       "stopped while writing it)",)
-    assert (3, 5) in m.missing and (3, 4) not in m.missing
+    assert m.notes == (
+        f"run.csv:{len(lines(text))}: incomplete last line ignored (the run "
+        "stopped while writing it)",
+    )
+    assert (3, 5) in m.missing
+    assert (3, 4) not in m.missing
 
 
 def test_truncated_line_in_the_middle_is_an_error(viper, paper_plan, log_text):
@@ -117,20 +146,23 @@ def test_duplicate_point(viper, paper_plan, log_text):
     first = line_no(log_text, "point,3,2,")
     assert problems(text, viper, paper_plan) == [
         f"run.csv:{len(lines(text))}: duplicate point reading of step 3 point 2 (first on "
-        f"line {first}); keep one run per log"]
+        f"line {first}); keep one run per log"
+    ]
 
 
 def test_extra_point(viper, paper_plan, log_text):
     row = next(line for line in lines(log_text) if line.startswith("point,1,6,"))
     text = log_text + row.replace("point,1,6,", "point,1,7,") + "\n"
     assert problems(text, viper, paper_plan) == [
-        f"run.csv:{len(lines(text))}: step 1 has 6 points; point 7 is not in the plan"]
+        f"run.csv:{len(lines(text))}: step 1 has 6 points; point 7 is not in the plan"
+    ]
 
 
 def test_step_beyond_plan(viper, paper_plan, log_text):
     text = log_text + "zero,11,0,0,-90,210,-90,0,-90,1000,10,0\n"
     assert problems(text, viper, paper_plan) == [
-        f"run.csv:{len(lines(text))}: step 11 is not in the plan (it has 10 steps)"]
+        f"run.csv:{len(lines(text))}: step 11 is not in the plan (it has 10 steps)"
+    ]
 
 
 def test_joints_differ_from_plan(viper, paper_plan, log_text):
@@ -141,7 +173,8 @@ def test_joints_differ_from_plan(viper, paper_plan, log_text):
     text = replace_line(log_text, "point,4,2,", ",".join(cells))
     assert problems(text, viper, paper_plan) == [
         f"run.csv:{n}: joint 4 is 10.2000 deg; the plan says 10 (tolerance 0.05): the robot "
-        "was not where the plan puts it"]
+        "was not where the plan puts it"
+    ]
     assert measure(text, viper, paper_plan, tol=Tolerances(joint_deg=0.5)).present.all()
 
 
@@ -158,9 +191,10 @@ def test_distance_beyond_range(viper, paper_plan, log_text):
     n = line_no(log_text, "point,6,5,")
     old = next(line for line in lines(log_text) if line.startswith("point,6,5,"))
     cells = old.split(",")
-    cells[9] = f"{float(cells[9]) + 30000:.4f}"   # +765 mm: beyond 1250 mm
+    cells[9] = f"{float(cells[9]) + 30000:.4f}"  # +765 mm: beyond 1250 mm
     got = problems(replace_line(log_text, "point,6,5,", ",".join(cells)), viper, paper_plan)
-    assert len(got) == 1 and got[0].startswith(f"run.csv:{n}: wire length ")
+    assert len(got) == 1
+    assert got[0].startswith(f"run.csv:{n}: wire length ")
     assert got[0].endswith("mm is beyond the encoder's range 1250 mm")
 
 
@@ -169,10 +203,10 @@ def test_large_spread(viper, paper_plan, log_text):
     old = next(line for line in lines(log_text) if line.startswith("point,8,3,"))
     cells = old.split(",")
     cells[11] = "12"
-    assert problems(replace_line(log_text, "point,8,3,", ",".join(cells)), viper,
-                    paper_plan) == [
+    assert problems(replace_line(log_text, "point,8,3,", ",".join(cells)), viper, paper_plan) == [
         f"run.csv:{n}: spread of 10 samples is 12 counts (0.306 mm > 0.1 mm): the robot was "
-        "still moving; lengthen the settle time and repeat step 8"]
+        "still moving; lengthen the settle time and repeat step 8"
+    ]
 
 
 def test_wire_slip_names_the_step_to_repeat(viper, paper_plan):
@@ -180,14 +214,17 @@ def test_wire_slip_names_the_step_to_repeat(viper, paper_plan):
     got = problems(text, viper, paper_plan)
     n = line_no(text, "zero,5,")
     assert got[0].startswith(f"run.csv:{n}: zero reading at step 5 is +0.")
-    assert got[0].endswith("the wire slipped or the encoder moved after the zero of step 4; "
-                           "remount at θ0 and repeat from step 4")
+    assert got[0].endswith(
+        "the wire slipped or the encoder moved after the zero of step 4; "
+        "remount at θ0 and repeat from step 4"
+    )
 
 
 def test_negative_distance_points_at_the_sign(viper, paper_plan, log_text):
     text = log_text.replace("# mm_per_count: 0.025488", "# mm_per_count: -0.025488")
     got = problems(text, viper, paper_plan)
-    assert got and all("is negative: is the sign of mm_per_count right?" in p for p in got)
+    assert got
+    assert all("is negative: is the sign of mm_per_count right?" in p for p in got)
 
 
 def test_missing_header_and_zero(viper, paper_plan, log_text):

@@ -13,16 +13,36 @@ from .conftest import ROOT
 def test_wheel_contains_templates_under_the_namespace(tmp_path):
     # Build from a clean copy: a stale build/ folder could hide missing package data.
     src = tmp_path / "src"
-    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
-        ".git", "build", "dist", "*.egg-info", "__pycache__", ".venv", ".*_cache"))
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
-                    "-q", "-w", str(tmp_path / "dist"), str(src)], check=True)
+    shutil.copytree(
+        ROOT,
+        src,
+        ignore=shutil.ignore_patterns(
+            ".git", "build", "dist", "*.egg-info", "__pycache__", ".venv", ".*_cache"
+        ),
+    )
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--no-deps",
+            "--no-build-isolation",
+            "-q",
+            "-w",
+            str(tmp_path / "dist"),
+            str(src),
+        ],
+        check=True,
+    )
     wheel = next((tmp_path / "dist").glob("wirecal-*.whl"))
     names = zipfile.ZipFile(wheel).namelist()
     assert "wirecal/templates/text/psi.txt.j2" in names
     assert "wirecal/templates/__init__.py" in names
-    assert "wirecal/solver/kinematics.py" in names and "wirecal/cli/main.py" in names
-    assert "wirecal/gen/vplus.lark" in names
+    assert "wirecal/solver/kinematics.py" in names
+    assert "wirecal/cli/main.py" in names
+    assert "wirecal/twin/vplus/vplus.lark" in names
+    assert "wirecal/__init__.py" in names
     assert "wirecal/examples/viper_s650/robot.toml" in names
     assert "wirecal/examples/ur5/robot.toml" in names
     assert "wirecal/templates/vplus/wirecal.v2.j2" in names

@@ -9,23 +9,25 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from wirecal.app.psi_view import psi_table
 from wirecal.cli.main import main
 from wirecal.solver import montecarlo
 from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.plan_file import load_plan, plan_from_dict
+from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.kinematics import perturbed, tool_position
-from wirecal.solver.plan import load_plan, plan_from_dict
 from wirecal.solver.planner import PlanOptions, design, predicted_accuracy, robot_time
-from wirecal.solver.psi_view import psi_table
-from wirecal.solver.robot import load_robot
 
 from .conftest import ROOT, VIPER
 
 # θ0 as 'wirecal plan' chooses them (seed 0); fixed here to keep the tests quick
-THETA0 = {"viper_s650": [-72, -156, 235, 3, 64, 41],
-          "puma560": [-106, -172, 151, 19, 38, 20],
-          "abb_irb120": [21, 5, -36, -43, -43, -184],
-          "ur5": [-254, 142, 31, 66, 256, -173]}
+THETA0 = {
+    "viper_s650": [-72, -156, 235, 3, 64, 41],
+    "puma560": [-106, -172, 151, 19, 38, 20],
+    "abb_irb120": [21, 5, -36, -43, -43, -184],
+    "ur5": [-254, 142, 31, 66, 256, -173],
+}
 OPT = PlanOptions()
 
 
@@ -73,8 +75,9 @@ def test_the_wire_stays_clear_of_the_links_along_every_move(designed):
     for seq in _sequences(d.plan):
         for a, b in itertools.pairwise(seq):
             t = np.linspace(0, 1, 1 + int(np.ceil(np.max(np.abs(b - a)) / 0.5)))[:, None]
-            gap = wire_clearance(model, np.radians(a + t * (b - a)), p0,
-                                 robot.link_radius_mm, wire_trim_mm(robot))
+            gap = wire_clearance(
+                model, np.radians(a + t * (b - a)), p0, robot.link_radius_mm, wire_trim_mm(robot)
+            )
             assert gap.min() >= OPT.clearance_mm - 2.0, (a, b, gap.min())
             assert abs(b[-1] - a[-1]) <= 180
 
@@ -89,7 +92,8 @@ def test_points_are_spread_out(designed):
 def test_psi_reports_every_row_ok(designed):
     robot, d = designed
     table = psi_table(robot, d.plan)
-    assert table["rows"] and all(r["ok"] for r in table["rows"])
+    assert table["rows"]
+    assert all(r["ok"] for r in table["rows"])
     assert table["identifiability"]["rank"] == len(d.plan.order)
 
 
@@ -125,9 +129,14 @@ def test_viper_plan_beats_the_corrected_paper_plan(viper, paper_plan):
 def test_robot_time_counts_moves_settles_and_returns(viper):
     """One step, one point 30° away on joint 1 (328 °/s at 20 %): out and back 2 × (30 /
     65.6 + 0.5 s), two stops of 3 s settle + 10 readings."""
-    plan = plan_from_dict({"theta0_deg": [0, -90, 180, 0, 45, 0], "order": ["th6"],
-                           "step": [{"parameter": "th6",
-                                     "points_deg": [[30, -90, 180, 0, 45, 0]]}]}, viper)
+    plan = plan_from_dict(
+        {
+            "theta0_deg": [0, -90, 180, 0, 45, 0],
+            "order": ["th6"],
+            "step": [{"parameter": "th6", "points_deg": [[30, -90, 180, 0, 45, 0]]}],
+        },
+        viper,
+    )
     expected = 2 * (30 / (328 * 0.2) + 0.5) + 2 * (3 + 0.2)
     assert robot_time(viper, plan) == pytest.approx(expected, rel=1e-12)
 
@@ -145,7 +154,8 @@ def test_unreachable_encoder_range_is_a_clear_error(tmp_path):
     r = CliRunner().invoke(main, ["plan", str(robot), "--theta0", "-72,-156,235,3,64,41"])
     assert r.exit_code == 2
     assert "almost no usable configuration" in r.output
-    assert "encoder range" in r.output and "Traceback" not in r.output
+    assert "encoder range" in r.output
+    assert "Traceback" not in r.output
 
 
 def test_unobservable_parameters_are_reported_not_dropped(tmp_path):
@@ -163,11 +173,11 @@ def test_theta0_near_a_limit_is_refused(viper):
 
 def test_cli_writes_a_plan_that_psi_accepts_and_refuses_to_overwrite(tmp_path):
     out = tmp_path / "plan.toml"
-    args = ["plan", str(VIPER / "robot.toml"), "-o", str(out),
-            "--theta0", "-72,-156,235,3,64,41"]
+    args = ["plan", str(VIPER / "robot.toml"), "-o", str(out), "--theta0", "-72,-156,235,3,64,41"]
     r = CliRunner().invoke(main, args)
     assert r.exit_code == 0, r.output
-    assert "Estimated robot time" in r.output and f"wrote {out}" in r.output
+    assert "Estimated robot time" in r.output
+    assert f"wrote {out}" in r.output
     text = out.read_text()
     assert text.startswith("# Designed by 'wirecal plan'")
     plan = load_plan(out, load_robot(VIPER / "robot.toml"))
@@ -175,12 +185,15 @@ def test_cli_writes_a_plan_that_psi_accepts_and_refuses_to_overwrite(tmp_path):
     psi = CliRunner().invoke(main, ["psi", str(VIPER / "robot.toml"), str(out), "--strict"])
     assert psi.exit_code == 0, psi.output
     again = CliRunner().invoke(main, args)
-    assert again.exit_code == 2 and "--force" in again.output
+    assert again.exit_code == 2
+    assert "--force" in again.output
     assert out.read_text() == text
 
 
-@pytest.mark.parametrize("bad, message", [("1,2,3", "has 3 values; the robot has 6"),
-                                          ("a,b", "give 6 joint angles")])
+@pytest.mark.parametrize(
+    "bad, message", [("1,2,3", "has 3 values; the robot has 6"), ("a,b", "give 6 joint angles")]
+)
 def test_cli_bad_theta0(bad, message):
     r = CliRunner().invoke(main, ["plan", str(VIPER / "robot.toml"), "--theta0", bad])
-    assert r.exit_code == 2 and message in r.output
+    assert r.exit_code == 2
+    assert message in r.output

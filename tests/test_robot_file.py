@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.robot import load_robot, robot_from_dict
+from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
 
 from .conftest import VIPER
 
@@ -17,18 +17,21 @@ BASE = tomllib.loads((VIPER / "robot.toml").read_text())
 
 
 def test_viper_example(viper):
-    assert viper.name == "Adept Viper s650" and viper.n_joints == 6
+    assert viper.name == "Adept Viper s650"
+    assert viper.n_joints == 6
     np.testing.assert_allclose(viper.dh_deg()[:, 1], [0, 75, 270, -90, 0, 0])
     np.testing.assert_allclose(viper.dh_deg()[:, 3], [0, 0, 0, 295, 0, 80])
     np.testing.assert_allclose(viper.dh_deg()[:, 0], [0, -90, 0, 90, -90, 90])
     assert viper.parameters == ("th2", "th3", "th4", "th5", "th6", "a1", "a2", "a3", "d4", "d6")
     np.testing.assert_allclose(viper.tool_point, [-60, 0, 50])
-    assert viper.encoder.mm_per_count == 0.025488 and viper.encoder.range_mm == 1250
+    assert viper.encoder.mm_per_count == 0.025488
+    assert viper.encoder.range_mm == 1250
     assert viper.encoder.counter_bits == 24
     np.testing.assert_allclose(viper.joint_min_deg, [-170, -190, -29, -190, -120, -360])
     np.testing.assert_allclose(viper.joint_max_deg, [170, 45, 256, 190, 120, 360])
     np.testing.assert_allclose(viper.joint_speed_deg_s, [328, 300, 375, 375, 375, 600])
-    assert viper.nominal_value("a1") == 75 and viper.nominal_value("d6") == 80
+    assert viper.nominal_value("a1") == 75
+    assert viper.nominal_value("d6") == 80
 
 
 def _mutate(edit):
@@ -40,41 +43,74 @@ def _mutate(edit):
 CASES = {
     "missing name": (lambda d: d.pop("name"), "r.toml: name: is missing"),
     "missing dh": (lambda d: d["kinematics"].pop("dh"), "r.toml: kinematics.dh: is missing"),
-    "short dh row": (lambda d: d["kinematics"]["dh"][2].pop(),
-                     "r.toml: kinematics.dh: row 3 must be 4 numbers"),
-    "nan in dh": (lambda d: d["kinematics"]["dh"][1].__setitem__(1, float("nan")),
-                  "r.toml: kinematics.dh: row 2 has a value that is not finite"),
-    "limits wrong length": (lambda d: d["kinematics"]["joint_min_deg"].pop(),
-                            "r.toml: kinematics.joint_min_deg: has 5 values; expected 6"),
-    "min above max": (lambda d: d["kinematics"]["joint_min_deg"].__setitem__(2, 300.0),
-                      "r.toml: kinematics.joint_min_deg: joint 3: min 300 is not below max 256"),
-    "nan limit": (lambda d: d["kinematics"]["joint_max_deg"].__setitem__(0, float("nan")),
-                  "r.toml: kinematics.joint_max_deg: value 1 is not finite"),
-    "unknown parameter": (lambda d: d["calibration"]["parameters"].append("th7"),
-                          "r.toml: calibration.parameters: unknown parameter 'th7'"),
-    "duplicate parameter": (lambda d: d["calibration"]["parameters"].append("th2"),
-                            "r.toml: calibration.parameters: 'th2' is listed twice"),
-    "radian twists": (lambda d: [row.__setitem__(0, np.radians(row[0]))
-                                 for row in d["kinematics"]["dh"]],
-                      "looks like radians; give degrees"),
-    "radian limits": (lambda d: (d["kinematics"].__setitem__(
-        "joint_min_deg", [-3.0] * 6), d["kinematics"].__setitem__("joint_max_deg", [3.0] * 6)),
+    "short dh row": (
+        lambda d: d["kinematics"]["dh"][2].pop(),
+        "r.toml: kinematics.dh: row 3 must be 4 numbers",
+    ),
+    "nan in dh": (
+        lambda d: d["kinematics"]["dh"][1].__setitem__(1, float("nan")),
+        "r.toml: kinematics.dh: row 2 has a value that is not finite",
+    ),
+    "limits wrong length": (
+        lambda d: d["kinematics"]["joint_min_deg"].pop(),
+        "r.toml: kinematics.joint_min_deg: has 5 values; expected 6",
+    ),
+    "min above max": (
+        lambda d: d["kinematics"]["joint_min_deg"].__setitem__(2, 300.0),
+        "r.toml: kinematics.joint_min_deg: joint 3: min 300 is not below max 256",
+    ),
+    "nan limit": (
+        lambda d: d["kinematics"]["joint_max_deg"].__setitem__(0, float("nan")),
+        "r.toml: kinematics.joint_max_deg: value 1 is not finite",
+    ),
+    "unknown parameter": (
+        lambda d: d["calibration"]["parameters"].append("th7"),
+        "r.toml: calibration.parameters: unknown parameter 'th7'",
+    ),
+    "duplicate parameter": (
+        lambda d: d["calibration"]["parameters"].append("th2"),
+        "r.toml: calibration.parameters: 'th2' is listed twice",
+    ),
+    "radian twists": (
+        lambda d: [row.__setitem__(0, np.radians(row[0])) for row in d["kinematics"]["dh"]],
+        "looks like radians; give degrees",
+    ),
+    "radian limits": (
+        lambda d: (
+            d["kinematics"].__setitem__("joint_min_deg", [-3.0] * 6),
+            d["kinematics"].__setitem__("joint_max_deg", [3.0] * 6),
+        ),
         "r.toml: kinematics.joint_max_deg: every joint range is within ±2π: the limits look "
-        "like radians"),
-    "convention": (lambda d: d["kinematics"].__setitem__("convention", "standard"),
-                   "only \"craig\" (modified DH) is supported"),
-    "typo key": (lambda d: d["encoder"].__setitem__("rnage_mm", 1.0),
-                 "r.toml: encoder.rnage_mm: unknown key (did you mean 'range_mm'?)"),
-    "zero scale": (lambda d: d["encoder"].__setitem__("mm_per_count", 0.0),
-                   "r.toml: encoder.mm_per_count: must not be zero"),
-    "bits": (lambda d: d["encoder"].__setitem__("counter_bits", 24.5),
-             "r.toml: encoder.counter_bits: is 24.5; give an integer between 8 and 64"),
-    "tool length": (lambda d: d["tool"].__setitem__("point_mm", [1.0, 2.0]),
-                    "r.toml: tool.point_mm: has 2 values; expected 3 (x, y, z)"),
-    "negative speed": (lambda d: d["kinematics"]["joint_speed_deg_s"].__setitem__(4, -1.0),
-                       "r.toml: kinematics.joint_speed_deg_s: joint 5: speed must be > 0"),
-    "empty parameters": (lambda d: d["calibration"].__setitem__("parameters", []),
-                         "r.toml: calibration.parameters: is empty"),
+        "like radians",
+    ),
+    "convention": (
+        lambda d: d["kinematics"].__setitem__("convention", "standard"),
+        'only "craig" (modified DH) is supported',
+    ),
+    "typo key": (
+        lambda d: d["encoder"].__setitem__("rnage_mm", 1.0),
+        "r.toml: encoder.rnage_mm: unknown key (did you mean 'range_mm'?)",
+    ),
+    "zero scale": (
+        lambda d: d["encoder"].__setitem__("mm_per_count", 0.0),
+        "r.toml: encoder.mm_per_count: must not be zero",
+    ),
+    "bits": (
+        lambda d: d["encoder"].__setitem__("counter_bits", 24.5),
+        "r.toml: encoder.counter_bits: is 24.5; give an integer between 8 and 64",
+    ),
+    "tool length": (
+        lambda d: d["tool"].__setitem__("point_mm", [1.0, 2.0]),
+        "r.toml: tool.point_mm: has 2 values; expected 3 (x, y, z)",
+    ),
+    "negative speed": (
+        lambda d: d["kinematics"]["joint_speed_deg_s"].__setitem__(4, -1.0),
+        "r.toml: kinematics.joint_speed_deg_s: joint 5: speed must be > 0",
+    ),
+    "empty parameters": (
+        lambda d: d["calibration"].__setitem__("parameters", []),
+        "r.toml: calibration.parameters: is empty",
+    ),
 }
 
 
@@ -91,6 +127,7 @@ def test_all_problems_reported_at_once():
         d.pop("name")
         d["encoder"]["range_mm"] = -1.0
         d["calibration"]["parameters"] = ["bogus"]
+
     with pytest.raises(WirecalError) as info:
         robot_from_dict(_mutate(edit), "r.toml")
     assert len(info.value.problems) == 3
@@ -104,7 +141,10 @@ def test_unreadable_and_malformed_files(tmp_path):
     with pytest.raises(WirecalError, match=r"bad\.toml: not valid TOML"):
         load_robot(bad)
     binary = tmp_path / "robot.bin"
-    binary.write_bytes(b"name = \"x\"\n\xff\xfe")
-    with pytest.raises(WirecalError, match=r"robot\.bin: not UTF-8 text \(byte 11\); is this a "
-                                           r"robot file\?"):
+    binary.write_bytes(b'name = "x"\n\xff\xfe')
+    with pytest.raises(
+        WirecalError,
+        match=r"robot\.bin: not UTF-8 text \(byte 11\); is this a "
+        r"robot file\?",
+    ):
         load_robot(binary)

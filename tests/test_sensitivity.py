@@ -18,7 +18,8 @@ def test_psi_is_phi_diff_projected_and_the_wire_length_derivative(viper, paper_p
     np.testing.assert_allclose(np.linalg.norm(s.nu_hat, axis=1), 1.0)
     base = wire_lengths(perturbed(viper), np.radians(q), np.radians(paper_plan.theta0_deg))
     for k, name in enumerate(names):
-        h = 1e-4   # deg or mm: Ψ is per degree / per mm
-        moved = wire_lengths(perturbed(viper, {name: h}), np.radians(q),
-                             np.radians(paper_plan.theta0_deg))
+        h = 1e-4  # deg or mm: Ψ is per degree / per mm
+        moved = wire_lengths(
+            perturbed(viper, {name: h}), np.radians(q), np.radians(paper_plan.theta0_deg)
+        )
         np.testing.assert_allclose((moved - base) / h, s.psi[:, k], atol=2e-4, err_msg=name)

@@ -19,15 +19,17 @@ ORDER = ("th6", "d6", "th5", "th4", "a3", "d4", "a2", "th3", "th2", "a1")
 PRINTED_TOL = 0.0055
 
 # (step, index, column) -> why the printed value cannot be right
-_IDEAL_ZERO = ("printed 0, the ideal of eq. 18; the exact value at this point is 0.006–0.008 "
-               "(it would print 0.01), the same in its mirror row")
+_IDEAL_ZERO = (
+    "printed 0, the ideal of eq. 18; the exact value at this point is 0.006–0.008 "
+    "(it would print 0.01), the same in its mirror row"
+)
 EXCLUDED = {
     (1, 2, "d6"): _IDEAL_ZERO,
     (1, 3, "d6"): _IDEAL_ZERO,
     (1, 5, "d6"): _IDEAL_ZERO,
     (1, 6, "d6"): _IDEAL_ZERO,
     (3, 1, "th6"): "sign misprint: printed +0.09; its mirror row 3.10 (θ4 = 135) is +0.09 and "
-                   "every other mirror pair in step 3 has opposite signs (3.2/3.9: ±0.10)",
+    "every other mirror pair in step 3 has opposite signs (3.2/3.9: ±0.10)",
     (4, 9, "th4"): "digits transposed: printed 2.26; its mirror row 4.5 is printed −2.62",
     (4, 10, "th6"): "printed 0.13; its mirror row 4.1 is printed −1.3 (leading digit lost)",
     (4, 11, "th6"): "printed 0.29; its mirror row 4.3 is printed −1.29 (leading digit lost)",
@@ -44,8 +46,9 @@ def _table():
 
 
 def _psi(robot, plan_joints):
-    return sensitivity(perturbed(robot), plan_joints, np.array([0, -90, 210, -90, 0, -90.0]),
-                       ORDER).psi
+    return sensitivity(
+        perturbed(robot), plan_joints, np.array([0, -90, 210, -90, 0, -90.0]), ORDER
+    ).psi
 
 
 def test_printed_plan_holds_the_printed_joints(printed_plan):
@@ -69,8 +72,8 @@ def test_every_self_consistent_cell_reproduced(viper, plan_name, request):
             if (step, index, name) in EXCLUDED:
                 continue
             assert abs(psi[r, c] - printed[r, c]) <= PRINTED_TOL, (
-                f"row {step}.{index} Ψ_{name}: computed {psi[r, c]:.4f}, "
-                f"printed {printed[r, c]}")
+                f"row {step}.{index} Ψ_{name}: computed {psi[r, c]:.4f}, printed {printed[r, c]}"
+            )
             checked += 1
     expected = 69 * 10 - len(EXCLUDED) - (50 if plan_name == "printed_plan" else 0)
     assert checked == expected
@@ -82,9 +85,17 @@ def test_excluded_cells_are_really_misprints(viper, printed_plan):
     q, _, _ = printed_plan.all_points()
     psi = _psi(viper, q)
     row = {(s, i): r for r, (s, i) in enumerate(ids)}
-    expected = {(1, 2, "d6"): 0.008, (1, 3, "d6"): 0.006, (1, 5, "d6"): 0.006,
-                (1, 6, "d6"): 0.008, (3, 1, "th6"): -0.09, (4, 9, "th4"): 2.62,
-                (4, 10, "th6"): 1.30, (4, 11, "th6"): 1.29, (4, 12, "th6"): 1.29}
+    expected = {
+        (1, 2, "d6"): 0.008,
+        (1, 3, "d6"): 0.006,
+        (1, 5, "d6"): 0.006,
+        (1, 6, "d6"): 0.008,
+        (3, 1, "th6"): -0.09,
+        (4, 9, "th4"): 2.62,
+        (4, 10, "th6"): 1.30,
+        (4, 11, "th6"): 1.29,
+        (4, 12, "th6"): 1.29,
+    }
     for (s, i, name), value in expected.items():
         r, c = row[(s, i)], ORDER.index(name)
         assert abs(psi[r, c] - printed[r, c]) > PRINTED_TOL

@@ -6,7 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wirecal.gen.twin import (
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.log import parse_log, read_log
+from wirecal.solver.identify import Problem
+from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.measurements import load_measurements
+from wirecal.solver.solve import solve
+from wirecal.twin.cell import (
     Cell,
     Faults,
     Plate,
@@ -14,16 +20,21 @@ from wirecal.gen.twin import (
     move_of_step,
     run_measurement,
 )
-from wirecal.gen.vinterp import Interpreter, f32
-from wirecal.gen.vparse import parse_module
-from wirecal.solver.errors import WirecalError
-from wirecal.solver.identify import Problem
-from wirecal.solver.kinematics import perturbed, tool_position
-from wirecal.solver.logfile import load_measurements, parse_log, read_log
-from wirecal.solver.solve import solve
+from wirecal.twin.vplus.interp import Interpreter, f32
+from wirecal.twin.vplus.parser import parse_module
 
-TRUTH = {"th2": 0.675, "th3": -0.485, "th4": 0.245, "th5": -0.575, "th6": -1.215,
-         "a1": -0.005, "a2": 0.105, "a3": 0.025, "d4": -0.105, "d6": 0.115}
+TRUTH = {
+    "th2": 0.675,
+    "th3": -0.485,
+    "th4": 0.245,
+    "th5": -0.575,
+    "th6": -1.215,
+    "a1": -0.005,
+    "a2": 0.105,
+    "a3": 0.025,
+    "d4": -0.105,
+    "d6": 0.115,
+}
 
 
 def run_program(viper, paper_plan, tmp_path, source, name="t.main", answers=()):
@@ -76,87 +87,108 @@ def test_semantics(viper, paper_plan, tmp_path):
     # DOUBLE (only ^D marks a double constant, p. 102), so it differs from ^D1/^D10;
     # TRUE and NOT 0 are −1, a false comparison 0.
     assert out.console[0].split() == ["-1", "0", "-1", "-1", "0"]
-    assert out.console[1] == "1.1 7 AB -2 2 3"        # by reference changed e; by value not
+    assert out.console[1] == "1.1 7 AB -2 2 3"  # by reference changed e; by value not
     assert out.console[2:6] == ["two or three", "3", "2", "1"]
     assert "skipped" not in out.console
-    assert out.console[6] == "-10"                     # DEFINED: −1 then 0
-    assert out.console[7] == "0"   # a GLOBAL DOUBLE read where not declared DOUBLE is single
-    assert interp.get_global("d") == 1 / 3 and f32(1 / 3) != 1 / 3
+    assert out.console[6] == "-10"  # DEFINED: −1 then 0
+    assert out.console[7] == "0"  # a GLOBAL DOUBLE read where not declared DOUBLE is single
+    assert interp.get_global("d") == 1 / 3
+    assert f32(1 / 3) != 1 / 3
 
 
 def test_undefined_value_is_an_error(viper, paper_plan, tmp_path):
-    _, out = run_program(viper, paper_plan, tmp_path,
-                         ".PROGRAM t.main()\n    x = y+1\n.END\n")
-    assert out.status == "error" and out.message == "*Undefined value* y (-406)"
+    _, out = run_program(viper, paper_plan, tmp_path, ".PROGRAM t.main()\n    x = y+1\n.END\n")
+    assert out.status == "error"
+    assert out.message == "*Undefined value* y (-406)"
     assert (out.program, out.line) == ("t.main", 2)
 
 
 def test_halt_pause_and_prompt(viper, paper_plan, tmp_path):
-    src = '.PROGRAM t.main()\n    PROMPT "Go? ", a\n    IF a == 2 THEN\n        PAUSE\n' \
-          '    END\n    HALT\n.END\n'
+    src = (
+        '.PROGRAM t.main()\n    PROMPT "Go? ", a\n    IF a == 2 THEN\n        PAUSE\n'
+        "    END\n    HALT\n.END\n"
+    )
     _, out = run_program(viper, paper_plan, tmp_path, src, answers=["2"])
-    assert out.status == "paused" and out.console == ["Go? ", "> 2"]
+    assert out.status == "paused"
+    assert out.console == ["Go? ", "> 2"]
     _, out = run_program(viper, paper_plan, tmp_path, src, answers=["1"])
     assert out.status == "halted"
     _, out = run_program(viper, paper_plan, tmp_path, src)
-    assert out.status == "error" and "no scripted answer" in out.message
+    assert out.status == "error"
+    assert "no scripted answer" in out.message
 
 
 @pytest.fixture(scope="module")
 def twin_run(viper, paper_plan, tmp_path_factory):
     disk = tmp_path_factory.mktemp("cell")
-    return run_measurement(viper, paper_plan, TRUTH, disk, seed=3,
-                           counter_start=2 ** 23 - 12_000)
+    return run_measurement(viper, paper_plan, TRUTH, disk, seed=3, counter_start=2**23 - 12_000)
 
 
 def test_end_to_end(viper, paper_plan, twin_run, tmp_path):
     """plan → gen → twin run → log → Python and controller solve agree → patch → the
     re-run with the patched model fits the robot far better."""
-    assert twin_run.mount.status == "completed" and twin_run.run.status == "completed"
+    assert twin_run.mount.status == "completed"
+    assert twin_run.run.status == "completed"
     text = twin_run.log.read_text()
     counts = [float(line.split(",")[9]) for line in text.splitlines() if line[:1] in "zp"]
-    assert min(counts) < 0 < max(counts)                        # the counter wrapped
+    assert min(counts) < 0 < max(counts)  # the counter wrapped
     m = load_measurements(twin_run.log, paper_plan, viper)
     assert m.missing == ()
     ref = solve(viper, paper_plan, m)
     log = read_log(twin_run.log)
     for polish, method in ((False, "stepwise"), (True, "joint")):
-        values, outcome, ops = controller_solve(viper, paper_plan, log, tmp_path / method,
-                                                polish=polish)
+        values, outcome, ops = controller_solve(
+            viper, paper_plan, log, tmp_path / method, polish=polish
+        )
         reference = ref.estimates[method].as_dict()
         assert max(abs(values[n] - reference[n]) for n in reference) <= 1e-4
-        assert ops > 5e5 and "Result written to WCSOLVE.CSV." in outcome.console
+        assert ops > 5e5
+        assert "Result written to WCSOLVE.CSV." in outcome.console
     # the patch: the joint estimate; re-run on the same robot, new noise
     rerun = run_measurement(viper, paper_plan, TRUTH, tmp_path / "rerun", seed=11)
     m2 = load_measurements(rerun.log, paper_plan, viper)
-    problem = Problem(perturbed(viper), paper_plan.order, np.radians(m2.joints_deg),
-                      np.radians(m2.theta0_deg), m2.distance_mm, m2.step)
+    problem = Problem(
+        perturbed(viper),
+        paper_plan.order,
+        np.radians(m2.joints_deg),
+        np.radians(m2.theta0_deg),
+        m2.distance_mm,
+        m2.step,
+    )
     est = ref.estimates["joint"]
-    rms = {name: float(np.sqrt(np.mean(problem.residuals(x) ** 2)))
-           for name, x in (("nominal", np.zeros(10)), ("patched", est.values / problem.scale))}
-    assert rms["patched"] < 0.03 and rms["nominal"] > 20 * rms["patched"]
+    rms = {
+        name: float(np.sqrt(np.mean(problem.residuals(x) ** 2)))
+        for name, x in (("nominal", np.zeros(10)), ("patched", est.values / problem.scale))
+    }
+    assert rms["patched"] < 0.03
+    assert rms["nominal"] > 20 * rms["patched"]
 
 
 def test_run_log_is_the_simulators_format(twin_run, paper_plan):
     log = parse_log(twin_run.log.read_text(), "twin.csv")
-    assert log.plan == paper_plan.fingerprint() and log.mm_per_count == 0.025488
+    assert log.plan == paper_plan.fingerprint()
+    assert log.mm_per_count == 0.025488
     assert len(log.readings) == 69 + 10
-    assert twin_run.cell.clock > 60 * 4      # settling alone is 79 × 3 s
+    assert twin_run.cell.clock > 60 * 4  # settling alone is 79 × 3 s
 
 
 def _fault(viper, plan, tmp_path, faults, **kw):
     r = run_measurement(viper, plan, TRUTH, tmp_path, seed=4, faults=faults, **kw)
     lines = r.log.read_text().splitlines()
-    assert len(lines) == r.cell.lines_written      # nothing logged is lost
+    assert len(lines) == r.cell.lines_written  # nothing logged is lost
     return r, r.run
 
 
 def test_fault_wire_slip(viper, paper_plan, tmp_path):
-    r, out = _fault(viper, paper_plan, tmp_path,
-                    Faults(slip_at_move=move_of_step(paper_plan, 4, 2), slip_mm=0.6))
+    r, out = _fault(
+        viper,
+        paper_plan,
+        tmp_path,
+        Faults(slip_at_move=move_of_step(paper_plan, 4, 2), slip_mm=0.6),
+    )
     assert out.status == "paused"
-    assert any("the wire" in c for c in out.console) and \
-        "    slipped or the encoder moved during step 4." in out.console
+    assert any("the wire" in c for c in out.console)
+    assert "    slipped or the encoder moved during step 4." in out.console
     with pytest.raises(WirecalError) as info:
         load_measurements(r.log, paper_plan, viper)
     assert "remount at θ0 and repeat from step 4" in info.value.problems[0]
@@ -174,34 +206,41 @@ def test_fault_disk_full(viper, paper_plan, tmp_path):
 def test_fault_point_beyond_a_limit(viper, paper_plan, tmp_path):
     limits = tuple(np.where(np.arange(6) == 2, 238.0, viper.joint_max_deg))
     r, out = _fault(viper, paper_plan, tmp_path, Faults(joint_max_deg=limits))
-    assert out.status == "error" and out.message.startswith("*Joint 3 out of range*")
+    assert out.status == "error"
+    assert out.message.startswith("*Joint 3 out of range*")
     m = load_measurements(r.log, paper_plan, viper)
     assert m.missing_text() == "step 4 points 4–12; steps 5–10 (all points)"  # j3 239.93
 
 
 def test_fault_spread_too_large(viper, paper_plan, tmp_path):
-    r, out = _fault(viper, paper_plan, tmp_path,
-                    Faults(vibration_at_move=move_of_step(paper_plan, 3, 2)))
+    r, out = _fault(
+        viper, paper_plan, tmp_path, Faults(vibration_at_move=move_of_step(paper_plan, 3, 2))
+    )
     assert out.status == "paused"
     assert "    time (wirecal gen --settle-s) and repeat step 3." in out.console
     with pytest.raises(WirecalError) as info:
         load_measurements(r.log, paper_plan, viper)
-    assert "the robot was still moving; lengthen the settle time and repeat step 3" in \
-        info.value.problems[0]
+    assert (
+        "the robot was still moving; lengthen the settle time and repeat step 3"
+        in info.value.problems[0]
+    )
 
 
 def test_fault_encoder_fails(viper, paper_plan, tmp_path):
     r, out = _fault(viper, paper_plan, tmp_path, Faults(encoder_fails_at_read=200))
-    assert out.status == "error" and out.message == "*Encoder quadrature error* (-1013)"
+    assert out.status == "error"
+    assert out.message == "*Encoder quadrature error* (-1013)"
     m = load_measurements(r.log, paper_plan, viper)
-    assert m.missing and m.present.sum() > 10
+    assert m.missing
+    assert m.present.sum() > 10
 
 
 def test_wrapped_counter_is_no_fault(twin_run, viper, paper_plan):
     # (the end-to-end run starts 12,000 counts below the wrap)
     assert twin_run.run.status == "completed"
     m = load_measurements(twin_run.log, paper_plan, viper)
-    assert np.all(m.distance_mm > 20) and np.all(m.distance_mm < 650)
+    assert np.all(m.distance_mm > 20)
+    assert np.all(m.distance_mm < 650)
 
 
 CONFIG_PROGRAM = """.PROGRAM t.main()
@@ -216,7 +255,8 @@ CONFIGS = (("ABOVE", "NOFLIP"), ("ABOVE", "FLIP"), ("BELOW", "NOFLIP"), ("BELOW"
 def _config_run(viper, paper_plan, tmp_path, controller):
     moves = "\n".join(
         f"    {a}\n    {b}\n    MOVE t\n    BREAK\n    HERE #p{k}\n    DECOMPOSE q[{6 * k}] = #p{k}"
-        for k, (a, b) in enumerate(CONFIGS))
+        for k, (a, b) in enumerate(CONFIGS)
+    )
     cell = Cell(viper, TRUTH, paper_plan.theta0_deg, tmp_path, controller=controller)
     interp = Interpreter(parse_module(CONFIG_PROGRAM.format(moves=moves), "t.v2"), cell)
     out = interp.execute("t.main")
@@ -228,9 +268,9 @@ def _config_run(viper, paper_plan, tmp_path, controller):
 
 def test_configuration_changes_reach_one_pose_four_ways(viper, paper_plan, tmp_path):
     q, tips = _config_run(viper, paper_plan, tmp_path, controller={})
-    assert len({tuple(np.round(row, 3)) for row in q}) == 4           # four joint solutions
+    assert len({tuple(np.round(row, 3)) for row in q}) == 4  # four joint solutions
     spread = max(np.linalg.norm(a - b) for a in tips for b in tips)
-    assert spread > 0.5   # a nominal controller on the true robot: the paper's discrepancy
+    assert spread > 0.5  # a nominal controller on the true robot: the paper's discrepancy
     _, tips = _config_run(viper, paper_plan, tmp_path, controller=TRUTH)
     # calibrated: equal up to the joints' single precision (1e-5 deg at 0.5 m ≈ 1e-4 mm)
     assert max(np.linalg.norm(a - b) for a in tips for b in tips) < 1e-3
@@ -239,7 +279,8 @@ def test_configuration_changes_reach_one_pose_four_ways(viper, paper_plan, tmp_p
 def test_unreachable_configuration_is_the_controllers_error(viper, paper_plan, tmp_path):
     src = ".PROGRAM t.main()\n    SET t = TRANS(900, 0, 200, 0, 180, 0)\n    MOVE t\n.END\n"
     _, out = run_program(viper, paper_plan, tmp_path, src)
-    assert out.status == "error" and out.message.startswith("*Location out of range*")
+    assert out.status == "error"
+    assert out.message.startswith("*Location out of range*")
 
 
 def test_touch_probe_on_a_plate(viper, paper_plan, tmp_path):
@@ -259,5 +300,5 @@ def test_touch_probe_on_a_plate(viper, paper_plan, tmp_path):
     cell = Cell(viper, {}, paper_plan.theta0_deg, tmp_path, plate=Plate((0.0, 0.0, 150.0)))
     interp = Interpreter(parse_module(src, "t.v2"), cell)
     assert interp.execute("t.main").status == "completed"
-    z = interp.get_global("x", 3)      # flange z; the probe reaches 100 mm below it
+    z = interp.get_global("x", 3)  # flange z; the probe reaches 100 mm below it
     assert 249.5 < z <= 250.0 + 1e-6

@@ -10,17 +10,11 @@ import pytest
 
 from wirecal.solver import pose
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.validation_files import load_setup, read_validation_log
 from wirecal.solver.ik import solve
 from wirecal.solver.kinematics import perturbed, tool_position
-from wirecal.solver.validation import (
-    CONFIGS,
-    config_discrepancy,
-    config_poses,
-    load_setup,
-    plane_residuals,
-    plate_grid,
-    read_validation_log,
-)
+from wirecal.solver.validation import CONFIGS, config_poses, plate_grid
+from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
 
 from .conftest import VIPER
 
@@ -39,36 +33,47 @@ def test_config_poses_reachable_four_ways_and_deterministic(viper, setup):
     np.testing.assert_array_equal(poses, config_poses(viper, small))
     model = perturbed(viper)
     for p in poses:
-        sols = [s for s in solve(model, *pose.matrix(*p), viper.joint_min_deg + 1,
-                                 viper.joint_max_deg - 1)
-                if s.within_limits and s.config[0] == "righty"]
+        sols = [
+            s
+            for s in solve(
+                model, *pose.matrix(*p), viper.joint_min_deg + 1, viper.joint_max_deg - 1
+            )
+            if s.within_limits and s.config[0] == "righty"
+        ]
         assert {s.config[1:] for s in sols} == set(CONFIGS)
-        d = np.linalg.norm(tool_position(model, np.array([s.q for s in sols]))
-                           - setup.encoder_mm, axis=1)
+        d = np.linalg.norm(
+            tool_position(model, np.array([s.q for s in sols])) - setup.encoder_mm, axis=1
+        )
         assert np.all(d < viper.encoder.range_mm - 50)
 
 
 def test_plate_grid(viper, setup):
     index, points, targets = plate_grid(viper, setup)
-    assert len(index) == 209 and index[0] == (1, 1) and index[-1] == (19, 11)
+    assert len(index) == 209
+    assert index[0] == (1, 1)
+    assert index[-1] == (19, 11)
     np.testing.assert_allclose(points[-1], setup.plate_origin_mm + np.array([400, 250, 0]))
     np.testing.assert_allclose(targets[:, 2], setup.plate_origin_mm[2] + 100 + 20)
-    assert np.all(targets[:, 4] == 180)          # tool pointing down
+    assert np.all(targets[:, 4] == 180)  # tool pointing down
 
 
 def test_unreachable_plate_is_a_clear_error(viper, setup):
     far = dataclasses.replace(setup, plate_origin_mm=np.array([900.0, -125, -300]))
     with pytest.raises(WirecalError) as info:
         plate_grid(viper, far)
-    assert "plate: grid point (1, 1) at [900.0, -125.0, -300.0] is out of reach" in \
-        info.value.problems[0]
+    assert (
+        "plate: grid point (1, 1) at [900.0, -125.0, -300.0] is out of reach"
+        in info.value.problems[0]
+    )
     assert info.value.problems[-1].startswith("… and ")
 
 
 def test_setup_file_errors(tmp_path):
     bad = tmp_path / "v.toml"
-    bad.write_text("[configuration]\nencoder_mm = [1, 2]\nposes = 0\n[plate]\n"
-                   "grid = [1, 11]\norigin_mm = [0, 0, 0]\n")
+    bad.write_text(
+        "[configuration]\nencoder_mm = [1, 2]\nposes = 0\n[plate]\n"
+        "grid = [1, 11]\norigin_mm = [0, 0, 0]\n"
+    )
     with pytest.raises(WirecalError) as info:
         load_setup(bad)
     text = "\n".join(info.value.problems)
@@ -77,43 +82,68 @@ def test_setup_file_errors(tmp_path):
     assert "plate.grid: needs at least 2 × 2 points" in text
 
 
-HEADER = ("# wirecal-validation 1\n# kind: {kind}\n# robot: Adept Viper s650\n# setup: x\n"
-          "# mm_per_count: 0.025488\n")
+HEADER = (
+    "# wirecal-validation 1\n# kind: {kind}\n# robot: Adept Viper s650\n# setup: x\n"
+    "# mm_per_count: 0.025488\n"
+)
 
 
 def _config_log(tmp_path, rows, name="c.csv"):
     p = tmp_path / name
-    p.write_text(HEADER.format(kind="configuration") +
-                 "pose,config,j1,j2,j3,j4,j5,j6,counts,samples,spread\n" +
-                 "".join(f"{k},{c},0,0,0,0,0,0,{n},10,1\n" for k, c, n in rows))
+    p.write_text(
+        HEADER.format(kind="configuration")
+        + "pose,config,j1,j2,j3,j4,j5,j6,counts,samples,spread\n"
+        + "".join(f"{k},{c},0,0,0,0,0,0,{n},10,1\n" for k, c, n in rows)
+    )
     return p
 
 
 def test_config_discrepancy_with_a_wrapping_counter(tmp_path):
-    rows = [(1, 1, 8388600), (1, 2, -8388606), (1, 3, 8388605), (1, 4, 8388607),
-            (2, 1, 100), (2, 2, 110), (2, 3, 90), (2, 4, 100)]
+    rows = [
+        (1, 1, 8388600),
+        (1, 2, -8388606),
+        (1, 3, 8388605),
+        (1, 4, 8388607),
+        (2, 1, 100),
+        (2, 2, 110),
+        (2, 3, 90),
+        (2, 4, 100),
+    ]
     s = config_discrepancy(read_validation_log(_config_log(tmp_path, rows), "configuration"))
     np.testing.assert_allclose(s.values, [10 * 0.025488, 20 * 0.025488])
 
 
 def test_config_log_missing_a_configuration(tmp_path):
-    log = read_validation_log(_config_log(tmp_path, [(1, 1, 5), (1, 2, 5), (1, 3, 5)]),
-                              "configuration")
+    log = read_validation_log(
+        _config_log(tmp_path, [(1, 1, 5), (1, 2, 5), (1, 3, 5)]), "configuration"
+    )
     with pytest.raises(WirecalError, match=r"poses \[1\] lack one of the four"):
         config_discrepancy(log)
 
 
-@pytest.mark.parametrize("body, message", [
-    ("time,value\n", "the column line must be"),
-    ("pose,config,j1,j2,j3,j4,j5,j6,counts,samples,spread\n1,1,0,0,0,0,0,0,x,10,1\n",
-     "c.csv:7: a field is not a number"),
-    ("pose,config,j1,j2,j3,j4,j5,j6,counts,samples,spread\n1,9,0,0,0,0,0,0,1,10,1\n",
-     "c.csv:7: config 9 is not 1–4"),
-    ("pose,config,j1,j2,j3,j4,j5,j6,counts,samples,spread\n1,1,0,0,0,0,0,0,1,10,1\n"
-     "1,1,0,0,0,0,0,0,1,10,1\n", "c.csv:8: duplicate reading of pose 1, config 1"),
-    ("pose,config,j1,j2,j3,j4,j5,j6,counts,samples,spread\n1,1,0,0,0\n",
-     "c.csv:7: has 5 fields; expected 11"),
-])
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        ("time,value\n", "the column line must be"),
+        (
+            "pose,config,j1,j2,j3,j4,j5,j6,counts,samples,spread\n1,1,0,0,0,0,0,0,x,10,1\n",
+            "c.csv:7: a field is not a number",
+        ),
+        (
+            "pose,config,j1,j2,j3,j4,j5,j6,counts,samples,spread\n1,9,0,0,0,0,0,0,1,10,1\n",
+            "c.csv:7: config 9 is not 1–4",
+        ),
+        (
+            "pose,config,j1,j2,j3,j4,j5,j6,counts,samples,spread\n1,1,0,0,0,0,0,0,1,10,1\n"
+            "1,1,0,0,0,0,0,0,1,10,1\n",
+            "c.csv:8: duplicate reading of pose 1, config 1",
+        ),
+        (
+            "pose,config,j1,j2,j3,j4,j5,j6,counts,samples,spread\n1,1,0,0,0\n",
+            "c.csv:7: has 5 fields; expected 11",
+        ),
+    ],
+)
 def test_malformed_validation_logs(tmp_path, body, message):
     p = tmp_path / "c.csv"
     p.write_text(HEADER.format(kind="configuration") + body)
@@ -137,9 +167,14 @@ def test_plane_fit_residuals(tmp_path):
     xy = rng.uniform(0, 400, (60, 2))
     z = 0.01 * xy[:, 0] - 0.002 * xy[:, 1] - 300 + np.r_[np.zeros(59), 0.05]
     p = tmp_path / "p.csv"
-    p.write_text(HEADER.format(kind="plane") + "row,col,x,y,z\n" +
-                 "".join(f"{k},1,{x},{y},{zz}\n" for k, ((x, y), zz) in enumerate(
-                     zip(xy, z, strict=True), 1)))
+    p.write_text(
+        HEADER.format(kind="plane")
+        + "row,col,x,y,z\n"
+        + "".join(
+            f"{k},1,{x},{y},{zz}\n" for k, ((x, y), zz) in enumerate(zip(xy, z, strict=True), 1)
+        )
+    )
     stats, coef = plane_residuals(read_validation_log(p, "plane"))
-    np.testing.assert_allclose(coef, [0.01, -0.002, -300], atol=0.01)   # one 0.05 outlier
-    assert stats.max == pytest.approx(stats.values[-1]) and stats.max > 0.04
+    np.testing.assert_allclose(coef, [0.01, -0.002, -300], atol=0.01)  # one 0.05 outlier
+    assert stats.max == pytest.approx(stats.values[-1])
+    assert stats.max > 0.04

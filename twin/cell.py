@@ -19,17 +19,16 @@ from pathlib import Path
 
 import numpy as np
 
+from wirecal.gen.emulate import readings_from_log
+from wirecal.gen.vplus.program import STRIDE, GenOptions, module_text
 from wirecal.solver import ik
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.log import Log
 from wirecal.solver.kinematics import frames, perturbed, tool_position
-from wirecal.solver.logfile import Log
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-
-from .emulate import readings_from_log
-from .program import STRIDE, GenOptions, module_text
-from .vinterp import Interpreter, Outcome, Trans, VError, f32
-from .vparse import parse_module
+from wirecal.twin.vplus.interp import Interpreter, Outcome, Trans, VError, f32
+from wirecal.twin.vplus.parser import parse_module
 
 ERRORS = {
     1: "Success",
@@ -48,13 +47,13 @@ ERRORS = {
 class Faults:
     """Faults to inject into a run (positions are 1-based counts of events)."""
 
-    slip_at_move: int | None = None       # the wire slips when this move starts
+    slip_at_move: int | None = None  # the wire slips when this move starts
     slip_mm: float = 0.5
     encoder_fails_at_read: int | None = None
     disk_full_after_lines: int | None = None
     vibration_at_move: int | None = None  # readings after this move jitter ±vibration
     vibration_counts: int = 20
-    joint_max_deg: tuple[float, ...] | None = None   # the controller's own limits
+    joint_max_deg: tuple[float, ...] | None = None  # the controller's own limits
 
 
 @dataclass(frozen=True)
@@ -102,10 +101,10 @@ class Cell:
     faults: Faults = Faults()
     proceed_on_pause: bool = False
     controller: dict[str, float] = field(default_factory=dict)  # the model the controller
-    plate: Plate | None = None                                   # believes: nominal + these
-    probe_mm: tuple[float, float, float] = (0.0, 0.0, 100.0)    # probe tip, flange frame
+    plate: Plate | None = None  # believes: nominal + these
+    probe_mm: tuple[float, float, float] = (0.0, 0.0, 100.0)  # probe tip, flange frame
     probe_signal: int = 1001
-    encoder_point_mm: tuple[float, float, float] | None = None   # fixed encoder (validation)
+    encoder_point_mm: tuple[float, float, float] | None = None  # fixed encoder (validation)
     unmodelled: Unmodelled | None = None
 
     def __post_init__(self):
@@ -116,8 +115,11 @@ class Cell:
         self.p0 = tool_position(self.model, np.radians(self.mount_deg)[None])[0]
         self.joints = tuple(f32(x) for x in self.mount_deg)
         self.lo = self.robot.joint_min_deg
-        self.hi = (np.asarray(self.faults.joint_max_deg) if self.faults.joint_max_deg
-                   else self.robot.joint_max_deg)
+        self.hi = (
+            np.asarray(self.faults.joint_max_deg)
+            if self.faults.joint_max_deg
+            else self.robot.joint_max_deg
+        )
         self.console: list[str] = []
         self.clock = 0.0
         self.moves = 0
@@ -169,7 +171,7 @@ class Cell:
         here = np.radians(self.joints)
         current = ik.configuration(self.believed, here)
         want = tuple(self.requested.get(k, current[k]) for k in range(3))
-        if not self.requested:   # a step in the same configuration: follow it by Newton
+        if not self.requested:  # a step in the same configuration: follow it by Newton
             q, ok = ik.follow(self.believed, here, R, p)
             if ok and ik.configuration(self.believed, q) == current:
                 return np.degrees(q)
@@ -204,7 +206,7 @@ class Cell:
         dq = self.rng.normal(0.0, sigma, q_deg.shape)
         f = frames_of(self.model, q_deg)
         centre = f.o[0, 4]
-        for j in (1, 2):   # joints 2 and 3: lever arm in the horizontal plane
+        for j in (1, 2):  # joints 2 and 3: lever arm in the horizontal plane
             lever = np.hypot(*(centre - f.o[0, j + 1])[:2]) / 1000.0
             dq[j] -= u.compliance_deg_per_m * lever
         return dq
@@ -302,7 +304,7 @@ class Cell:
             self.status[lun] = -522
             return
         with open(unit["file"], "a", encoding="ascii", newline="\n") as fh:
-            fh.write(text + "\n")   # written through: a stopped run leaves its lines
+            fh.write(text + "\n")  # written through: a stopped run leaves its lines
         self.lines_written += 1
         self.status[lun] = 1
 
@@ -327,22 +329,38 @@ class RunResult:
     cell: Cell
 
 
-def run_measurement(robot: Robot, plan: Plan, truth: dict[str, float], disk: Path, *,
-                    seed: int = 0, noise_mm: float = 0.01, counter_start: float | None = None,
-                    faults: Faults = Faults(), options: GenOptions | None = None,
-                    text: str | None = None) -> RunResult:
+def run_measurement(
+    robot: Robot,
+    plan: Plan,
+    truth: dict[str, float],
+    disk: Path,
+    *,
+    seed: int = 0,
+    noise_mm: float = 0.01,
+    counter_start: float | None = None,
+    faults: Faults = Faults(),
+    options: GenOptions | None = None,
+    text: str | None = None,
+) -> RunResult:
     """Generate the module (unless given), run wc.mount (answered 1) and wc.run in the twin."""
     options = options or GenOptions()
     disk.mkdir(parents=True, exist_ok=True)
     text = text if text is not None else module_text(robot, plan, options)
     rng = np.random.default_rng([seed, 2])
-    start = (float(rng.integers(-2 ** 23, 2 ** 23)) if counter_start is None
-             else counter_start)
-    cell = Cell(robot, truth, plan.theta0_deg, disk, seed=seed, noise_mm=noise_mm,
-                counter_start=start, faults=faults)
+    start = float(rng.integers(-(2**23), 2**23)) if counter_start is None else counter_start
+    cell = Cell(
+        robot,
+        truth,
+        plan.theta0_deg,
+        disk,
+        seed=seed,
+        noise_mm=noise_mm,
+        counter_start=start,
+        faults=faults,
+    )
     interp = Interpreter(parse_module(text, "WIRECAL.V2"), cell)
     mount = interp.execute("wc.mount")
-    cell.moves = 0      # fault positions count the moves of wc.run (see move_of_step)
+    cell.moves = 0  # fault positions count the moves of wc.run (see move_of_step)
     run = interp.execute("wc.run") if mount.status == "completed" else None
     return RunResult(mount, run, disk / options.log_file, cell)
 
@@ -358,8 +376,9 @@ def move_of_step(plan: Plan, step: int, point: int = 1) -> int:
     raise ValueError(step)
 
 
-def controller_solve(robot: Robot, plan: Plan, log: Log, disk: Path, *, polish: bool,
-                     text: str | None = None) -> tuple[dict[str, float], Outcome, int]:
+def controller_solve(
+    robot: Robot, plan: Plan, log: Log, disk: Path, *, polish: bool, text: str | None = None
+) -> tuple[dict[str, float], Outcome, int]:
     """Run the generated controller solver in the twin on a log's readings.
 
     The readings are loaded into the globals exactly as wc.run leaves them; the result is
@@ -386,8 +405,10 @@ def controller_solve(robot: Robot, plan: Plan, log: Log, disk: Path, *, polish: 
     interp.ops = 0
     outcome = interp.execute("wc.solve2" if polish else "wc.solve")
     if outcome.status != "completed":
-        raise WirecalError(f"the controller solver stopped: {outcome.message} "
-                           f"({outcome.program}, line {outcome.line})")
+        raise WirecalError(
+            f"the controller solver stopped: {outcome.message} "
+            f"({outcome.program}, line {outcome.line})"
+        )
     return read_result(result_file), outcome, interp.ops
 
 
@@ -408,7 +429,6 @@ def read_result(path: Path) -> dict[str, float]:
     return out
 
 
-
 @dataclass
 class ValidationRun:
     configuration: Outcome
@@ -418,33 +438,53 @@ class ValidationRun:
     cell: Cell
 
 
-def run_validation(robot: Robot, plan: Plan, truth: dict[str, float], setup, disk: Path,
-                   text: str, *, controller: dict[str, float], run: int, seed: int = 0,
-                   unmodelled: Unmodelled | None = Unmodelled(),
-                   noise_mm: float = 0.01) -> ValidationRun:
+def run_validation(
+    robot: Robot,
+    plan: Plan,
+    truth: dict[str, float],
+    setup,
+    disk: Path,
+    text: str,
+    *,
+    controller: dict[str, float],
+    run: int,
+    seed: int = 0,
+    unmodelled: Unmodelled | None = Unmodelled(),
+    noise_mm: float = 0.01,
+) -> ValidationRun:
     """Both validation programs (wc.vcfg, wc.vpln) in the twin. ``controller`` is the model
     the controller believes: {} before calibration, the identified offsets after."""
     disk.mkdir(parents=True, exist_ok=True)
-    cell = Cell(robot, truth, plan.theta0_deg, disk, seed=seed, noise_mm=noise_mm,
-                counter_start=float(np.random.default_rng([seed, 5]).integers(-2 ** 22, 2 ** 22)),
-                answers=["1", str(run), "1", str(run)], controller=controller,
-                plate=Plate(tuple(setup.plate_origin_mm)), probe_mm=tuple(setup.probe_mm),
-                probe_signal=setup.signal, encoder_point_mm=tuple(setup.encoder_mm),
-                unmodelled=unmodelled)
+    cell = Cell(
+        robot,
+        truth,
+        plan.theta0_deg,
+        disk,
+        seed=seed,
+        noise_mm=noise_mm,
+        counter_start=float(np.random.default_rng([seed, 5]).integers(-(2**22), 2**22)),
+        answers=["1", str(run), "1", str(run)],
+        controller=controller,
+        plate=Plate(tuple(setup.plate_origin_mm)),
+        probe_mm=tuple(setup.probe_mm),
+        probe_signal=setup.signal,
+        encoder_point_mm=tuple(setup.encoder_mm),
+        unmodelled=unmodelled,
+    )
     interp = Interpreter(parse_module(text, "WIRECAL.V2"), cell)
     cfg = interp.execute("wc.vcfg")
     pln = interp.execute("wc.vpln")
     return ValidationRun(cfg, pln, disk / f"WCVCFG{run}.CSV", disk / f"WCVPLN{run}.CSV", cell)
 
 
-def controller_comparison(robot: Robot, plan: Plan, log: Log, reference, disk: Path, *,
-                          text: str | None = None) -> dict:
+def controller_comparison(
+    robot: Robot, plan: Plan, log: Log, reference, disk: Path, *, text: str | None = None
+) -> dict:
     """wc.solve and wc.solve2 in the twin beside the Python reference (a SolveResult):
     their offsets, the operations each executed and its largest difference (deg, mm)."""
     out: dict = {}
     for key, polish, ref in (("parameters", False, "stepwise"), ("polished", True, "joint")):
-        values, _, ops = controller_solve(robot, plan, log, disk / key, polish=polish,
-                                          text=text)
+        values, _, ops = controller_solve(robot, plan, log, disk / key, polish=polish, text=text)
         expected = reference.estimates[ref].as_dict()
         out[key] = values
         out[f"{key}_operations"] = ops

@@ -14,35 +14,40 @@ from pathlib import Path
 
 import numpy as np
 
+from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
+from wirecal.gen.templating import render
+from wirecal.gen.vplus.literals import (
+    check_limits,
+    double_literal,
+    joint_literal,
+    long_lines,
+    ppoint,
+)
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.fileio import check_writable, write_atomic
+from wirecal.solver.formats.fileio import check_writable, write_atomic
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.validation import CONFIGS, Setup, config_poses, plate_grid
-
-from .tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
-from .templating import render
-from .vparse import parse_module
-from .vplus import check_limits, double_literal, joint_literal, long_lines, ppoint
+from wirecal.twin.vplus.parser import parse_module
 
 MODULE_NAME = "WIRECAL.V2"
-STRIDE = 8   # flattened index c*STRIDE + k (k ≤ 7): tables by configuration and joint
-AXES = 4     # flattened index i*AXES + a (a = 1..3)
+STRIDE = 8  # flattened index c*STRIDE + k (k ≤ 7): tables by configuration and joint
+AXES = 4  # flattened index i*AXES + a (a = 1..3)
 
 
 @dataclass(frozen=True)
 class GenOptions:
-    speed: float = 20.0          # % of full speed (SPEED … ALWAYS)
-    accel: float = 20.0          # % of full acceleration (ACCEL)
-    settle_s: float = 3.0        # wait after BREAK before reading (paper: 3 s)
-    samples: int = 10            # counter readings averaged per point
-    zero_tol_mm: float = 0.1     # a zero reading further from the first: the wire slipped
-    spread_tol_mm: float = 0.1   # a point's samples spread wider: the robot still moved
-    margin_deg: float = 1.0      # every generated target at least this far inside a limit
+    speed: float = 20.0  # % of full speed (SPEED … ALWAYS)
+    accel: float = 20.0  # % of full acceleration (ACCEL)
+    settle_s: float = 3.0  # wait after BREAK before reading (paper: 3 s)
+    samples: int = 10  # counter readings averaged per point
+    zero_tol_mm: float = 0.1  # a zero reading further from the first: the wire slipped
+    spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
+    margin_deg: float = 1.0  # every generated target at least this far inside a limit
     log_file: str = "WCLOG.CSV"
     result_file: str = "WCSOLVE.CSV"
-    patch: dict[str, float] | None = None   # identified offsets (deg, mm) for wc.patch
-    validation: Setup | None = None           # adds wc.vcfg and wc.vpln (paper §3.6)
+    patch: dict[str, float] | None = None  # identified offsets (deg, mm) for wc.patch
+    validation: Setup | None = None  # adds wc.vcfg and wc.vpln (paper §3.6)
 
 
 def _version() -> str:
@@ -64,19 +69,26 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
         problems.append(f"--samples {opt.samples}: give 1–1000")
     for name in (opt.log_file, opt.result_file):
         stem, _, ext = name.partition(".")
-        if not (1 <= len(stem) <= 8 and len(ext) <= 3 and stem.isalnum() and
-                (ext.isalnum() or not ext)):
+        if not (
+            1 <= len(stem) <= 8 and len(ext) <= 3 and stem.isalnum() and (ext.isalnum() or not ext)
+        ):
             problems.append(f"controller file name {name!r}: use 8.3 letters and digits")
     if robot.n_joints != 6:
-        problems.append(f"{robot.source}: {robot.n_joints} joints; the controller programs "
-                        "and the log format are for 6-joint arms")
+        problems.append(
+            f"{robot.source}: {robot.n_joints} joints; the controller programs "
+            "and the log format are for 6-joint arms"
+        )
     if any(not 32 <= ord(ch) <= 126 or ch == '"' for ch in robot.name):
-        problems.append(f"{robot.source}: name {robot.name!r}: a V+ string holds printable "
-                        "ASCII without '\"'; rename the robot")
+        problems.append(
+            f"{robot.source}: name {robot.name!r}: a V+ string holds printable "
+            "ASCII without '\"'; rename the robot"
+        )
     bound = tables.omega * tables.to_boundary
     if np.any(bound > 16):
-        problems.append("a step's Ω exceeds 16 deg/mm: the controller prints offsets with 6 "
-                        "decimals in a REAL; lower omega")
+        problems.append(
+            "a step's Ω exceeds 16 deg/mm: the controller prints offsets with 6 "
+            "decimals in a REAL; lower omega"
+        )
     if problems:
         raise WirecalError(problems)
 
@@ -84,9 +96,14 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
 def data_lines(t: Tables, robot: Robot) -> list[str]:
     """The assignments of ``wc.data``: every table value as an exact literal."""
     # powers of ten first: every DOUBLE literal below divides by one of them
-    lines = ["wc.p10[0] = ^D1", "FOR k = 1 TO 22", "    wc.p10[k] = wc.p10[k-1]*10", "END",
-             f"wc.d2r = {double_literal(np.pi / 180)}",
-             f"wc.mpc = {double_literal(robot.encoder.mm_per_count)}"]
+    lines = [
+        "wc.p10[0] = ^D1",
+        "FOR k = 1 TO 22",
+        "    wc.p10[k] = wc.p10[k-1]*10",
+        "END",
+        f"wc.d2r = {double_literal(np.pi / 180)}",
+        f"wc.mpc = {double_literal(robot.encoder.mm_per_count)}",
+    ]
 
     def put(name, idx, value):
         lines.append(f"{name}[{idx}] = {double_literal(value)}")
@@ -110,15 +127,21 @@ def data_lines(t: Tables, robot: Robot) -> list[str]:
             put("wc.dni", c, t.dni[c])
             put("wc.dnf", c, t.dnf[c])
     for s in range(len(t.first)):
-        lines += [f"wc.first[{s + 1}] = {int(t.first[s])}",
-                  f"wc.count[{s + 1}] = {int(t.count[s])}",
-                  f"wc.spar[{s + 1}] = {int(t.spar[s])}"]
+        lines += [
+            f"wc.first[{s + 1}] = {int(t.first[s])}",
+            f"wc.count[{s + 1}] = {int(t.count[s])}",
+            f"wc.spar[{s + 1}] = {int(t.spar[s])}",
+        ]
         put("wc.om", s + 1, t.omega[s])
     for j, name in enumerate(t.names):
         unit = "deg" if t.to_boundary[j] != 1 else "mm"
-        lines += [f"wc.pk[{j + 1}] = {int(t.pk[j])}", f"wc.pr[{j + 1}] = {int(t.pr[j])}",
-                  f'$wc.pn[{j + 1}] = "{name}"', f'$wc.pu[{j + 1}] = "{unit}"',
-                  f"wc.nom4[{j + 1}] = {round(t.nominal[j] * 10000)}"]
+        lines += [
+            f"wc.pk[{j + 1}] = {int(t.pk[j])}",
+            f"wc.pr[{j + 1}] = {int(t.pr[j])}",
+            f'$wc.pn[{j + 1}] = "{name}"',
+            f'$wc.pu[{j + 1}] = "{unit}"',
+            f"wc.nom4[{j + 1}] = {round(t.nominal[j] * 10000)}",
+        ]
         put("wc.tb", j + 1, t.to_boundary[j])
     return lines
 
@@ -128,42 +151,72 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
     check_limits(robot, plan, opt.margin_deg)
     tables = build_tables(robot, plan)
     _check_options(robot, opt, tables)
-    if np.any(np.abs(tables.nominal) * 10000 >= 2 ** 24):
-        raise WirecalError(f"{robot.source}: a nominal value of {tables.names} is beyond "
-                           "±1677 mm/deg; the controller's SPEC table cannot print it")
+    if np.any(np.abs(tables.nominal) * 10000 >= 2**24):
+        raise WirecalError(
+            f"{robot.source}: a nominal value of {tables.names} is beyond "
+            "±1677 mm/deg; the controller's SPEC table cannot print it"
+        )
     steps = []
     for j, s in enumerate(plan.steps, 1):
         first = int(tables.first[j - 1])
-        steps.append({
-            "number": j, "parameter": s.parameter, "count": len(s.points_deg),
-            "vias": [ppoint(v) for v in s.via_deg],
-            "points": [{"index": i, "global": first + i - 1, "ppoint": ppoint(p)}
-                       for i, p in enumerate(s.points_deg, 1)],
-        })
+        steps.append(
+            {
+                "number": j,
+                "parameter": s.parameter,
+                "count": len(s.points_deg),
+                "vias": [ppoint(v) for v in s.via_deg],
+                "points": [
+                    {"index": i, "global": first + i - 1, "ppoint": ppoint(p)}
+                    for i, p in enumerate(s.points_deg, 1)
+                ],
+            }
+        )
     patch = None
     if opt.patch is not None:
         missing = [n for n in plan.order if n not in opt.patch]
         if missing:
             raise WirecalError(f"patch: no value for {', '.join(missing)}")
-        patch = [double_literal(opt.patch[n] / tables.to_boundary[j])
-                 for j, n in enumerate(plan.order)]
+        patch = [
+            double_literal(opt.patch[n] / tables.to_boundary[j]) for j, n in enumerate(plan.order)
+        ]
     fp = plan.fingerprint()
     mpc = robot.encoder.mm_per_count
     text = render(
         "vplus/wirecal.v2.j2",
-        version=_version(), robot=robot.name, fingerprint=fp, fp_a=fp[:32], fp_b=fp[32:],
-        n=robot.n_joints, nsteps=len(plan.steps), npoints=plan.n_points,
-        m=len(plan.order), stride=STRIDE, axes=AXES,
-        speed=_num(opt.speed), accel=_num(opt.accel), settle=_num(opt.settle_s),
-        samples=opt.samples, zero_tol=_num(opt.zero_tol_mm), margin=_num(opt.margin_deg),
+        version=_version(),
+        robot=robot.name,
+        fingerprint=fp,
+        fp_a=fp[:32],
+        fp_b=fp[32:],
+        n=robot.n_joints,
+        nsteps=len(plan.steps),
+        npoints=plan.n_points,
+        m=len(plan.order),
+        stride=STRIDE,
+        axes=AXES,
+        speed=_num(opt.speed),
+        accel=_num(opt.accel),
+        settle=_num(opt.settle_s),
+        samples=opt.samples,
+        zero_tol=_num(opt.zero_tol_mm),
+        margin=_num(opt.margin_deg),
         spread_counts=_num(np.floor(opt.spread_tol_mm / abs(robot.encoder.mm_per_count))),
         spread_tol=_num(opt.spread_tol_mm),
-        mpc=repr(mpc), bits=robot.encoder.counter_bits,
-        half=2 ** (robot.encoder.counter_bits - 1), full=2 ** robot.encoder.counter_bits,
-        encoder=robot.encoder, log_file=opt.log_file, result_file=opt.result_file,
-        theta0=ppoint(plan.theta0_deg), steps=steps, data=data_lines(tables, robot),
-        nit=STEP_ITERATIONS, njit=JOINT_ITERATIONS, patch=patch,
-        names=list(plan.order), v=_validation_context(robot, opt),
+        mpc=repr(mpc),
+        bits=robot.encoder.counter_bits,
+        half=2 ** (robot.encoder.counter_bits - 1),
+        full=2**robot.encoder.counter_bits,
+        encoder=robot.encoder,
+        log_file=opt.log_file,
+        result_file=opt.result_file,
+        theta0=ppoint(plan.theta0_deg),
+        steps=steps,
+        data=data_lines(tables, robot),
+        nit=STEP_ITERATIONS,
+        njit=JOINT_ITERATIONS,
+        patch=patch,
+        names=list(plan.order),
+        v=_validation_context(robot, opt),
     )
     problems = long_lines(text, MODULE_NAME)
     try:
@@ -171,8 +224,12 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
     except WirecalError as exc:
         problems += exc.problems
     if problems:  # a generator defect, never the user's: say so plainly
-        raise WirecalError(["internal error: the generated module breaks a V+ rule "
-                            "(please report):", *problems[:20]])
+        raise WirecalError(
+            [
+                "internal error: the generated module breaks a V+ rule (please report):",
+                *problems[:20],
+            ]
+        )
     return text
 
 
@@ -186,14 +243,19 @@ def _validation_context(robot: Robot, opt: GenOptions) -> dict | None:
 
     def args(values):
         return ", ".join(joint_literal(x) for x in values)
+
     return {
-        "poses": [args(p) for p in poses], "configs": [(a.upper(), f.upper())
-                                                       for a, f in CONFIGS],
+        "poses": [args(p) for p in poses],
+        "configs": [(a.upper(), f.upper()) for a, f in CONFIGS],
         "grid_points": [(i, j, args(t)) for (i, j), t in zip(index, targets, strict=True)],
-        "grid": setup.grid, "encoder": args(setup.encoder_mm), "probe": args(setup.probe_mm),
-        "signal": setup.signal, "approach": _num(setup.approach_mm),
+        "grid": setup.grid,
+        "encoder": args(setup.encoder_mm),
+        "probe": args(setup.probe_mm),
+        "signal": setup.signal,
+        "approach": _num(setup.approach_mm),
         "coarse_steps": int(np.ceil(2 * setup.approach_mm)),
-        "fp_a": fp[:32], "fp_b": fp[32:],
+        "fp_a": fp[:32],
+        "fp_b": fp[32:],
     }
 
 

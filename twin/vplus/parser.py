@@ -30,12 +30,21 @@ _PARAM = re.compile(r"^([$#%]?)([A-Za-z][A-Za-z0-9._]*)(\[\])?$")
 # name → (argument kinds, result kind); kinds: n number, s string, l location,
 # b belt, v a variable of any kind (DEFINED), nv a numeric variable (written to).
 FUNCTIONS: dict[str, tuple[tuple[str, ...], str]] = {
-    "int": (("n",), "n"), "abs": (("n",), "n"), "sqrt": (("n",), "n"),
-    "sin": (("n",), "n"), "cos": (("n",), "n"), "atan2": (("n", "n"), "n"),
-    "min": (("n", "n"), "n"), "max": (("n", "n"), "n"),
-    "iostat": (("n",), "n"), "$error": (("n",), "s"), "$chr": (("n",), "s"),
-    "len": (("s",), "n"), "defined": (("v",), "n"),
-    "belt": (("b", "n"), "n"), "device": (("n", "n", "nv", "n"), "n"),
+    "int": (("n",), "n"),
+    "abs": (("n",), "n"),
+    "sqrt": (("n",), "n"),
+    "sin": (("n",), "n"),
+    "cos": (("n",), "n"),
+    "atan2": (("n", "n"), "n"),
+    "min": (("n", "n"), "n"),
+    "max": (("n", "n"), "n"),
+    "iostat": (("n",), "n"),
+    "$error": (("n",), "s"),
+    "$chr": (("n",), "s"),
+    "len": (("s",), "n"),
+    "defined": (("v",), "n"),
+    "belt": (("b", "n"), "n"),
+    "device": (("n", "n", "nv", "n"), "n"),
     "#ppoint": (("n",) * 6, "l"),
     "trans": (("n",) * 6, "t"),
     "sig": (("n",), "n"),
@@ -45,7 +54,7 @@ FUNCTIONS: dict[str, tuple[tuple[str, ...], str]] = {
 @dataclass
 class Program:
     name: str
-    params: list[tuple[str, str, bool]]   # (kind, name, is_array)
+    params: list[tuple[str, str, bool]]  # (kind, name, is_array)
     body: list
     line: int
     declared: dict[str, tuple[str, str]] = field(default_factory=dict)  # name→(class,type)
@@ -59,7 +68,7 @@ class Module:
 
 @cache
 def _parser() -> Lark:
-    grammar = resources.files("wirecal.gen").joinpath("vplus.lark").read_text(encoding="utf-8")
+    grammar = resources.files(__package__).joinpath("vplus.lark").read_text(encoding="utf-8")
     return Lark(grammar, parser="lalr", maybe_placeholders=True)
 
 
@@ -270,8 +279,9 @@ def parse_module(text: str, source: str = "<module>") -> Module:
                 problems.append(f"{source}:{n}: malformed .PROGRAM line")
                 continue
             if current:
-                problems.append(f"{source}:{n}: {current[0]}: missing .END before the next "
-                                ".PROGRAM")
+                problems.append(
+                    f"{source}:{n}: {current[0]}: missing .END before the next .PROGRAM"
+                )
                 _finish(current, programs, source, problems)
             params = _params(m.group(2), source, n, m.group(1).lower(), problems)
             current = (m.group(1).lower(), n, params, [])
@@ -289,7 +299,7 @@ def parse_module(text: str, source: str = "<module>") -> Module:
         label = None
         m = _LABEL.match(line)
         if m:
-            label, line = int(m.group(1)), line[m.end():].strip()
+            label, line = int(m.group(1)), line[m.end() :].strip()
             current[3].append((n, ("label", label)))
             if not line:
                 continue
@@ -303,8 +313,9 @@ def parse_module(text: str, source: str = "<module>") -> Module:
             continue
         current[3].append((n, step))
     if current:
-        problems.append(f"{source}: {current[0]}: missing .END (program starts on line "
-                        f"{current[1]})")
+        problems.append(
+            f"{source}: {current[0]}: missing .END (program starts on line {current[1]})"
+        )
         _finish(current, programs, source, problems)
     _check_module(programs, source, problems)
     if problems:
@@ -330,8 +341,9 @@ def _params(text: str, source: str, n: int, prog: str, problems: list[str]):
         if not m:
             problems.append(f"{source}:{n}: {prog}: bad parameter {p!r}")
             continue
-        params.append((_kind(m.group(1) or "n"), (m.group(1) + m.group(2)).lower(),
-                       bool(m.group(3))))
+        params.append(
+            (_kind(m.group(1) or "n"), (m.group(1) + m.group(2)).lower(), bool(m.group(3)))
+        )
     return params
 
 
@@ -340,7 +352,8 @@ def _explain(line: str, exc) -> str:
     if isinstance(exc, UnexpectedToken) and exc.token.type == "$END":
         return f"incomplete step: {line}"
     if re.fullmatch(r"[A-Za-z][A-Za-z0-9._]*", word) and not re.match(
-            r"^[A-Za-z][A-Za-z0-9._]*(\[.*\])?\s*=", line):
+        r"^[A-Za-z][A-Za-z0-9._]*(\[.*\])?\s*=", line
+    ):
         return f"unknown keyword or bad syntax: {word.upper()} ({line})"
     return f"bad syntax: {line}"
 
@@ -357,7 +370,7 @@ def _blocks(prog: str, steps, source: str, problems: list[str]):
     """Nest the line statements into blocks; check declarations come first."""
     declared: dict[str, tuple[str, str]] = {}
     root: list = []
-    stack: list[tuple[tuple, list, int]] = []   # (opening step, its list, line)
+    stack: list[tuple[tuple, list, int]] = []  # (opening step, its list, line)
     target = root
     executable = False
     for n, step in steps:
@@ -372,8 +385,9 @@ def _blocks(prog: str, steps, source: str, problems: list[str]):
         if kind != "label":
             executable = True
         if kind == "label" and stack:
-            problems.append(f"{where}: label {step[1]} inside a block; put labels at the "
-                            "program's top level")
+            problems.append(
+                f"{where}: label {step[1]} inside a block; put labels at the program's top level"
+            )
             continue
         if kind in _BLOCK_OPEN:
             node = [kind, n, step, [], []] if kind != "case" else [kind, n, step, []]
@@ -418,15 +432,15 @@ def _check_module(programs: dict[str, Program], source: str, problems: list[str]
         key = bare[:SIGNIFICANT]
         other = names.setdefault(key, bare)
         if other != bare:
-            problems.append(f"{where}: {bare!r} and {other!r} share their first "
-                            f"{SIGNIFICANT} characters")
+            problems.append(
+                f"{where}: {bare!r} and {other!r} share their first {SIGNIFICANT} characters"
+            )
 
     transforms = transformation_names(programs)
     for prog in programs.values():
         register(prog.name, f"{source}:{prog.line}: {prog.name}")
         labels = {s[2] for s in prog.body if s[0] == "label"}
-        _Checker(prog, programs, source, problems, register, labels,
-                 transforms).block(prog.body)
+        _Checker(prog, programs, source, problems, register, labels, transforms).block(prog.body)
 
 
 def transformation_names(programs: dict[str, Program]) -> set[str]:
@@ -445,6 +459,7 @@ def transformation_names(programs: dict[str, Program]) -> set[str]:
                 walk(s[3])
                 if len(s) > 4:
                     walk(s[4])
+
     for prog in programs.values():
         walk(prog.body)
     return names
@@ -467,7 +482,7 @@ class _Checker:
 
     def step(self, s):
         kind, line = s[0], s[1]
-        if isinstance(s, list):          # a block node
+        if isinstance(s, list):  # a block node
             if kind == "if":
                 self.need(line, s[2][1], "n")
                 self.block(s[3])
@@ -501,19 +516,22 @@ class _Checker:
                 self.err(line, f"CALL {name}: no such program in the module")
                 return
             if len(actual) > len(prog.params):
-                self.err(line, f"CALL {name}: {len(actual)} arguments; {name} takes "
-                               f"{len(prog.params)}")
+                self.err(
+                    line, f"CALL {name}: {len(actual)} arguments; {name} takes {len(prog.params)}"
+                )
             for a, (pkind, _pname, is_array) in zip(actual, prog.params, strict=False):
                 if a[0] == "array":
                     if not is_array or a[1] != pkind:
-                        self.err(line, f"CALL {name}: argument {a[2]}[] does not match "
-                                       "the parameter")
+                        self.err(
+                            line, f"CALL {name}: argument {a[2]}[] does not match the parameter"
+                        )
                     self.register(a[2], f"{self.source}:{line}: {self.prog.name}")
                 else:
                     got = self.kind(line, a)
                     if got is not None and got != pkind:
-                        self.err(line, f"CALL {name}: a {_word(got)} where {name} takes a "
-                                       f"{_word(pkind)}")
+                        self.err(
+                            line, f"CALL {name}: a {_word(got)} where {name} takes a {_word(pkind)}"
+                        )
         elif kind == "goto":
             if args[0] not in self.labels:
                 self.err(line, f"GOTO {args[0]}: no such label in {self.prog.name}")
@@ -562,8 +580,7 @@ class _Checker:
     def need(self, line, expr, want):
         got = self.kind(line, expr)
         if got is not None and got != want:
-            self.err(line, f"type-prefix misuse: a {_word(got)} where a {_word(want)} is "
-                           "needed")
+            self.err(line, f"type-prefix misuse: a {_word(got)} where a {_word(want)} is needed")
 
     def kind(self, line, e):
         """The kind of an expression (n, s, l, b), or None after reporting a problem."""
@@ -590,8 +607,11 @@ class _Checker:
                 return None
             kinds, result = spec
             if len(args) != len(kinds):
-                self.err(line, f"{name.upper()} takes {len(kinds)} argument"
-                               f"{'s' if len(kinds) != 1 else ''}, not {len(args)}")
+                self.err(
+                    line,
+                    f"{name.upper()} takes {len(kinds)} argument"
+                    f"{'s' if len(kinds) != 1 else ''}, not {len(args)}",
+                )
                 return result
             for a, k in zip(args, kinds, strict=True):
                 if k == "v":
@@ -622,8 +642,7 @@ class _Checker:
         if tag == "cmp":
             a, b = self.kind(line, e[2]), self.kind(line, e[3])
             if None not in (a, b) and (a != b or a not in ("n", "s")):
-                self.err(line, f"type-prefix misuse: comparing a {_word(a)} with a "
-                               f"{_word(b)}")
+                self.err(line, f"type-prefix misuse: comparing a {_word(a)} with a {_word(b)}")
             return "n"
         if tag in ("and", "or"):
             self.need(line, e[1], "n")
@@ -633,5 +652,11 @@ class _Checker:
 
 
 def _word(kind: str) -> str:
-    return {"n": "number", "s": "string ($)", "l": "location (#)", "b": "belt (%)",
-            "t": "transformation", "v": "variable"}.get(kind, kind)
+    return {
+        "n": "number",
+        "s": "string ($)",
+        "l": "location (#)",
+        "b": "belt (%)",
+        "t": "transformation",
+        "v": "variable",
+    }.get(kind, kind)

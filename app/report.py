@@ -15,12 +15,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from wirecal.gen.templating import render
 from wirecal.solver.kinematics import perturbed
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult
-from wirecal.solver.validation import Stats
-
-from .templating import render
+from wirecal.solver.validation_analysis import Stats
 
 BEFORE, AFTER = "#d1495b", "#2e86ab"
 
@@ -29,14 +28,15 @@ BEFORE, AFTER = "#d1495b", "#2e86ab"
 class Validation:
     """Before/after statistics of one validation procedure."""
 
-    kind: str           # "configuration" or "plane"
+    kind: str  # "configuration" or "plane"
     before: Stats
     after: Stats
 
     @property
     def reduction(self) -> dict[str, float]:
-        return {k: 1 - getattr(self.after, k) / getattr(self.before, k)
-                for k in ("mean", "std", "max")}
+        return {
+            k: 1 - getattr(self.after, k) / getattr(self.before, k) for k in ("mean", "std", "max")
+        }
 
 
 def _png(fig) -> str:
@@ -66,8 +66,13 @@ def residual_figure(result: SolveResult) -> str:
     steps = result.estimates["stepwise"].steps
     fig, ax = plt.subplots(figsize=(7, 3))
     x = np.arange(len(steps))
-    ax.bar(x - 0.2, [s.rms_before_mm for s in steps], 0.4, color=BEFORE,
-           label="before the step's estimate")
+    ax.bar(
+        x - 0.2,
+        [s.rms_before_mm for s in steps],
+        0.4,
+        color=BEFORE,
+        label="before the step's estimate",
+    )
     ax.bar(x + 0.2, [s.rms_after_mm for s in steps], 0.4, color=AFTER, label="after")
     ax.set_yscale("log")
     ax.set_xticks(x, [f"{j + 1}: {s.parameter}" for j, s in enumerate(steps)], rotation=30)
@@ -93,41 +98,64 @@ def histogram_figure(v: Validation) -> str:
     hi = max(v.before.max, v.after.max)
     bins = np.linspace(0, hi * 1.02, 34)
     for s, colour, name in ((v.before, BEFORE, "Before"), (v.after, AFTER, "After")):
-        ax.hist(s.values, bins=bins, color=colour, alpha=0.75,
-                label=f"{name} calibration: mean = {s.mean:.3f} mm, std = {s.std:.3f} mm")
-    ax.set_xlabel("Maximum discrepancy among configurations (mm)" if v.kind == "configuration"
-                  else "Residuals of the plane fit (mm)")
+        ax.hist(
+            s.values,
+            bins=bins,
+            color=colour,
+            alpha=0.75,
+            label=f"{name} calibration: mean = {s.mean:.3f} mm, std = {s.std:.3f} mm",
+        )
+    ax.set_xlabel(
+        "Maximum discrepancy among configurations (mm)"
+        if v.kind == "configuration"
+        else "Residuals of the plane fit (mm)"
+    )
     ax.set_ylabel("Number of measurements")
     ax.legend()
     ax.grid(alpha=0.3)
     return _png(fig)
 
 
-def render_report(result: SolveResult, validations: list[Validation] = (),
-                  controller: dict | None = None, truth: dict[str, float] | None = None
-                  ) -> str:
+def render_report(
+    result: SolveResult,
+    validations: list[Validation] = (),
+    controller: dict | None = None,
+    truth: dict[str, float] | None = None,
+) -> str:
     """The HTML text of the report."""
     robot, plan = result.robot, result.plan
     sw, jt = result.estimates.get("stepwise"), result.estimates.get("joint")
     params = []
     for k, name in enumerate(plan.order):
-        params.append({
-            "name": name, "unit": "deg" if name.startswith(("th", "al")) else "mm",
-            "nominal": robot.nominal_value(name),
-            "stepwise": sw.values[k] if sw else None, "joint": jt.values[k] if jt else None,
-            "std": jt.std[k] if jt is not None and jt.std is not None else None,
-            "controller": (controller or {}).get("parameters", {}).get(name),
-            "polished": (controller or {}).get("polished", {}).get(name),
-            "truth": (truth or {}).get(name),
-        })
+        params.append(
+            {
+                "name": name,
+                "unit": "deg" if name.startswith(("th", "al")) else "mm",
+                "nominal": robot.nominal_value(name),
+                "stepwise": sw.values[k] if sw else None,
+                "joint": jt.values[k] if jt else None,
+                "std": jt.std[k] if jt is not None and jt.std is not None else None,
+                "controller": (controller or {}).get("parameters", {}).get(name),
+                "polished": (controller or {}).get("polished", {}).get(name),
+                "truth": (truth or {}).get(name),
+            }
+        )
     return render(
-        "report/report.html.j2", robot=robot, plan=plan, result=result, params=params,
-        dh=robot.dh_deg(), steps=sw.steps if sw else [], controller=controller,
-        truth=truth is not None, figures={
+        "report/report.html.j2",
+        robot=robot,
+        plan=plan,
+        result=result,
+        params=params,
+        dh=robot.dh_deg(),
+        steps=sw.steps if sw else [],
+        controller=controller,
+        truth=truth is not None,
+        figures={
             "psi": psi_figure(result),
             "residuals": residual_figure(result) if sw else None,
-            "correlation": correlation_figure(result) if jt is not None
-            and jt.correlation is not None else None,
+            "correlation": correlation_figure(result)
+            if jt is not None and jt.correlation is not None
+            else None,
         },
         validations=[{"v": v, "figure": histogram_figure(v)} for v in validations],
     )

@@ -18,36 +18,43 @@ from pathlib import Path
 
 import numpy as np
 
+from wirecal import __version__
+from wirecal.app.report import Validation, render_report
+from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.accuracy import workspace
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.fileio import check_writable, write_atomic
+from wirecal.solver.formats.fileio import check_writable, write_atomic
+from wirecal.solver.formats.log import read_log
+from wirecal.solver.formats.patch import write_patch
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.truth import random_errors, truth_text
+from wirecal.solver.formats.validation_files import load_setup, read_validation_log
 from wirecal.solver.kinematics import perturbed, tool_position
-from wirecal.solver.logfile import load_measurements, read_log
-from wirecal.solver.patch import write_patch
-from wirecal.solver.plan import load_plan
-from wirecal.solver.robot import load_robot
+from wirecal.solver.measurements import load_measurements
 from wirecal.solver.solve import solve
-from wirecal.solver.truth import random_errors, truth_text
-from wirecal.solver.validation import (
-    config_discrepancy,
-    load_setup,
-    plane_residuals,
-    read_validation_log,
+from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
+from wirecal.twin.cell import controller_comparison, run_measurement, run_validation
+
+OUTPUTS = (
+    "truth.toml",
+    "WIRECAL.V2",
+    "WCLOG.CSV",
+    "patch.toml",
+    "patch.spec.txt",
+    "WCVCFG1.CSV",
+    "WCVPLN1.CSV",
+    "WCVCFG2.CSV",
+    "WCVPLN2.CSV",
+    "report.html",
 )
-
-from .program import GenOptions, module_text
-from .report import Validation, render_report
-from .twin import controller_comparison, run_measurement, run_validation
-
-OUTPUTS = ("truth.toml", "WIRECAL.V2", "WCLOG.CSV", "patch.toml", "patch.spec.txt",
-           "WCVCFG1.CSV", "WCVPLN1.CSV", "WCVCFG2.CSV", "WCVPLN2.CSV", "report.html")
 
 
 @dataclass
 class DemoResult:
     folder: Path
     validations: list[Validation]
-    tool_error_mm: dict[str, float]          # mean over the workspace: before, after
+    tool_error_mm: dict[str, float]  # mean over the workspace: before, after
     controller_difference: float
     seconds: dict[str, float]
 
@@ -55,14 +62,23 @@ class DemoResult:
 def example_files(robot: str = "viper_s650") -> dict[str, Path]:
     """The shipped example: robot, corrected paper plan, validation setup."""
     here = Path(__file__).resolve().parents[1] / "examples" / robot
-    if not here.is_dir():   # an installed wheel: the examples travel as package data
+    if not here.is_dir():  # an installed wheel: the examples travel as package data
         here = Path(str(resources.files("wirecal.examples").joinpath(robot)))
-    return {"robot": here / "robot.toml", "plan": here / "paper_plan.toml",
-            "validation": here / "validation.toml"}
+    return {
+        "robot": here / "robot.toml",
+        "plan": here / "paper_plan.toml",
+        "validation": here / "validation.toml",
+    }
 
 
-def run_demo(folder: str | Path, *, seed: int = 1, scale: float = 1.0, force: bool = False,
-             progress: Callable[[str], None] = lambda s: None) -> DemoResult:
+def run_demo(
+    folder: str | Path,
+    *,
+    seed: int = 1,
+    scale: float = 1.0,
+    force: bool = False,
+    progress: Callable[[str], None] = lambda s: None,
+) -> DemoResult:
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise WirecalError(f"{folder}: is a file; give a folder for the demo's outputs")
@@ -89,57 +105,85 @@ def run_demo(folder: str | Path, *, seed: int = 1, scale: float = 1.0, force: bo
         if run.run is None or run.run.status != "completed":
             raise WirecalError(f"the twin's measurement run stopped: {run.run or run.mount}")
         seconds["measure"] = time.perf_counter() - t
-        log_path = write_atomic(folder / "WCLOG.CSV", run.log.read_text(encoding="ascii"),
-                                force=force)
+        log_path = write_atomic(
+            folder / "WCLOG.CSV", run.log.read_text(encoding="ascii"), force=force
+        )
         t = step(3, "identification on the PC (step-by-step and joint)")
         m = load_measurements(log_path, plan, robot)
         result = solve(robot, plan, m)
         seconds["solve"] = time.perf_counter() - t
         t = step(4, "identification on the controller (wc.solve, wc.solve2 in the twin)")
-        controller = controller_comparison(robot, plan, read_log(log_path), result,
-                                           disk / "ctl", text=text)
+        controller = controller_comparison(
+            robot, plan, read_log(log_path), result, disk / "ctl", text=text
+        )
         seconds["controller"] = time.perf_counter() - t
         identified = result.estimates[result.recommended].as_dict()
         runs = {}
         for n, (name, believed) in enumerate((("before", {}), ("after", identified)), 5):
             t = step(n, f"validation {name} calibration (wc.vcfg, wc.vpln)")
-            v = run_validation(robot, plan, truth, setup, disk / name, text,
-                               controller=believed, run=1 if name == "before" else 2,
-                               seed=seed + 7)
+            v = run_validation(
+                robot,
+                plan,
+                truth,
+                setup,
+                disk / name,
+                text,
+                controller=believed,
+                run=1 if name == "before" else 2,
+                seed=seed + 7,
+            )
             for outcome in (v.configuration, v.plane):
                 if outcome.status != "completed":
                     raise WirecalError(f"the twin's validation run stopped: {outcome}")
             runs[name] = v
             seconds[f"validate {name}"] = time.perf_counter() - t
         validations = [
-            Validation("configuration", *(config_discrepancy(read_validation_log(
-                runs[k].configuration_log, "configuration")) for k in ("before", "after"))),
-            Validation("plane", *(plane_residuals(read_validation_log(
-                runs[k].plane_log, "plane"))[0] for k in ("before", "after"))),
+            Validation(
+                "configuration",
+                *(
+                    config_discrepancy(
+                        read_validation_log(runs[k].configuration_log, "configuration")
+                    )
+                    for k in ("before", "after")
+                ),
+            ),
+            Validation(
+                "plane",
+                *(
+                    plane_residuals(read_validation_log(runs[k].plane_log, "plane"))[0]
+                    for k in ("before", "after")
+                ),
+            ),
         ]
         t = step(7, "report")
         html = render_report(result, validations, controller, truth)
         seconds["report"] = time.perf_counter() - t
-        for name, path in (("WCVCFG1.CSV", runs["before"].configuration_log),
-                           ("WCVPLN1.CSV", runs["before"].plane_log),
-                           ("WCVCFG2.CSV", runs["after"].configuration_log),
-                           ("WCVPLN2.CSV", runs["after"].plane_log)):
+        for name, path in (
+            ("WCVCFG1.CSV", runs["before"].configuration_log),
+            ("WCVPLN1.CSV", runs["before"].plane_log),
+            ("WCVCFG2.CSV", runs["after"].configuration_log),
+            ("WCVPLN2.CSV", runs["after"].plane_log),
+        ):
             write_atomic(folder / name, path.read_text(encoding="ascii"), force=force)
     write_atomic(folder / "truth.toml", truth_text(robot, truth, seed), force=force)
     write_atomic(folder / "WIRECAL.V2", text, force=force)
-    write_patch(folder / "patch.toml", robot, result.estimates[result.recommended],
-                force=force, plan_fingerprint=plan.fingerprint(), log_path="WCLOG.CSV",
-                log_sha256=m.sha256, version=_version())
+    write_patch(
+        folder / "patch.toml",
+        robot,
+        result.estimates[result.recommended],
+        force=force,
+        plan_fingerprint=plan.fingerprint(),
+        log_path="WCLOG.CSV",
+        log_sha256=m.sha256,
+        version=__version__,
+    )
     write_atomic(folder / "report.html", html, force=force)
     q = workspace(robot)
     true_p = tool_position(perturbed(robot, truth), q)
-    errors = {name: float(np.linalg.norm(tool_position(perturbed(robot, believed), q) - true_p,
-                                         axis=1).mean())
-              for name, believed in (("before", {}), ("after", identified))}
-    return DemoResult(folder, validations, errors, controller["polished_max_difference"],
-                      seconds)
-
-
-def _version() -> str:
-    from .program import _version as v
-    return v()
+    errors = {
+        name: float(
+            np.linalg.norm(tool_position(perturbed(robot, believed), q) - true_p, axis=1).mean()
+        )
+        for name, believed in (("before", {}), ("after", identified))
+    }
+    return DemoResult(folder, validations, errors, controller["polished_max_difference"], seconds)

@@ -2,7 +2,7 @@
 
 The language rules a controller checks on load (program format, declarations first,
 15-character names, keywords, labels, type prefixes) are checked by the parser of the
-digital twin (:mod:`wirecal.gen.vparse`), which the generator runs on its own output.
+digital twin (:mod:`wirecal.twin.vplus.parser`), which the generator runs on its own output.
 wirecal also keeps lines within 80 characters (the terminal line limit, User's Guide
 p. 202).
 """
@@ -38,16 +38,16 @@ def double_literal(x: float) -> str:
         return "0"
     k = 15 - int(np.floor(np.log10(abs(x))))
     k = max(0, min(k, 22))
-    m = round(x * 10.0 ** k)
-    while abs(m) >= 10 ** 16 and k > 0:  # keep the mantissa within 16 digits
+    m = round(x * 10.0**k)
+    while abs(m) >= 10**16 and k > 0:  # keep the mantissa within 16 digits
         k -= 1
-        m = round(x * 10.0 ** k)
+        m = round(x * 10.0**k)
     while m % 10 == 0 and k > 0:
         m //= 10
         k -= 1
     sign = "-" if m < 0 else ""
-    if k == 0 and abs(m) < 2 ** 24:
-        return str(m)                  # a whole number a REAL holds exactly
+    if k == 0 and abs(m) < 2**24:
+        return str(m)  # a whole number a REAL holds exactly
     return f"{sign}^D{abs(m)}/wc.p10[{k}]" if k else f"{sign}^D{abs(m)}"
 
 
@@ -62,7 +62,8 @@ def check_limits(robot: Robot, plan: Plan, margin_deg: float) -> None:
             problems.append(
                 f"{plan.source}: {where}: joint {j + 1} = {joint_literal(q[j])} deg is within "
                 f"{margin_deg:g} deg of its limits [{robot.joint_min_deg[j]:g}, "
-                f"{robot.joint_max_deg[j]:g}]; move the point or lower --margin")
+                f"{robot.joint_max_deg[j]:g}]; move the point or lower --margin"
+            )
 
     check(plan.theta0_deg, "theta0_deg")
     for j, s in enumerate(plan.steps, 1):
@@ -76,5 +77,8 @@ def check_limits(robot: Robot, plan: Plan, margin_deg: float) -> None:
 
 def long_lines(text: str, source: str) -> list[str]:
     """Lines over :data:`MAX_LINE` characters."""
-    return [f"{source}:{n}: line has {len(line)} characters (> {MAX_LINE})"
-            for n, line in enumerate(text.split("\n"), 1) if len(line) > MAX_LINE]
+    return [
+        f"{source}:{n}: line has {len(line)} characters (> {MAX_LINE})"
+        for n, line in enumerate(text.split("\n"), 1)
+        if len(line) > MAX_LINE
+    ]

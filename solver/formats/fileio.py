@@ -8,7 +8,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from .errors import WirecalError
+from wirecal.solver.errors import WirecalError
 
 
 def check_writable(paths: list[Path], force: bool = False) -> None:
@@ -17,8 +17,7 @@ def check_writable(paths: list[Path], force: bool = False) -> None:
     problems = []
     for path in map(Path, paths):
         if path.exists() and not force:
-            problems.append(f"{path}: exists; choose another name or pass --force to "
-                            "replace it")
+            problems.append(f"{path}: exists; choose another name or pass --force to replace it")
         elif not path.parent.is_dir():
             problems.append(f"{path}: folder {path.parent} does not exist")
     if problems:
@@ -51,7 +50,8 @@ def read_toml(path: str | Path, what: str) -> dict[str, Any]:
     except OSError as exc:
         raise WirecalError(f"{path}: cannot read {what}: {exc.strerror or exc}") from None
     except UnicodeDecodeError as exc:
-        raise WirecalError(f"{path}: not UTF-8 text (byte {exc.start}); is this a {what}?"
-                           ) from None
+        raise WirecalError(
+            f"{path}: not UTF-8 text (byte {exc.start}); is this a {what}?"
+        ) from None
     except tomllib.TOMLDecodeError as exc:
         raise WirecalError(f"{path}: not valid TOML: {exc}") from None

@@ -17,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
-from . import params as P
-from .errors import Problems, WirecalError
-from .fileio import read_toml
-from .robot import Robot
+from wirecal.solver import params as P
+from wirecal.solver.errors import Problems, WirecalError
+from wirecal.solver.formats.fileio import read_toml
+from wirecal.solver.robot import Robot
 
 
 def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
@@ -29,8 +29,7 @@ def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
     pr = Problems(str(path))
     table = data.get("errors")
     if not isinstance(table, dict):
-        raise WirecalError(f"{path}: errors: missing table [errors] of name = offset "
-                           "(deg or mm)")
+        raise WirecalError(f"{path}: errors: missing table [errors] of name = offset (deg or mm)")
     out: dict[str, float] = {}
     for name, value in table.items():
         try:
@@ -38,8 +37,11 @@ def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
         except ValueError as exc:
             pr.add(f"errors.{name}", str(exc))
             continue
-        if not isinstance(value, int | float) or isinstance(value, bool) \
-                or not math.isfinite(value):
+        if (
+            not isinstance(value, int | float)
+            or isinstance(value, bool)
+            or not math.isfinite(value)
+        ):
             pr.add(f"errors.{name}", f"is {value!r}; give a finite offset (deg or mm)")
             continue
         out[name] = float(value)
@@ -55,9 +57,11 @@ def random_errors(robot: Robot, scale: float, rng: np.random.Generator) -> dict[
 
 
 def truth_text(robot: Robot, errors: dict[str, float], seed: int | None) -> str:
-    lines = ["# wirecal truth: the simulated robot's true error offsets (deg, mm).",
-             "# Kept apart from the log; compare a solve's result against it.",
-             f"robot = {json.dumps(robot.name, ensure_ascii=False)}"]
+    lines = [
+        "# wirecal truth: the simulated robot's true error offsets (deg, mm).",
+        "# Kept apart from the log; compare a solve's result against it.",
+        f"robot = {json.dumps(robot.name, ensure_ascii=False)}",
+    ]
     if seed is not None:
         lines.append(f"seed = {seed}")
     lines += ["", "[errors]"]

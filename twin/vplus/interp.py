@@ -8,7 +8,7 @@ single (p. 107); TRUE is −1 (p. 103); arrays grow on demand (p. 105); AUTO var
 belong to one call, LOCAL to the program, GLOBAL to all (p. 107); a CALL passes a variable
 by reference and an expression by value (p. 42–45); reading an undefined variable is an
 error (p. 110). Everything the program does to the outside world — motion, the encoder,
-the disk, the terminal — goes through a :class:`Cell` (see :mod:`wirecal.gen.twin`).
+the disk, the terminal — goes through a :class:`Cell` (see :mod:`wirecal.twin.cell`).
 """
 
 from __future__ import annotations
@@ -19,8 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from wirecal.solver import pose
-
-from .vparse import Module, Program, transformation_names
+from wirecal.twin.vplus.parser import Module, Program, transformation_names
 
 _S = struct.Struct("f")
 
@@ -200,6 +199,7 @@ class _Compiler:
                     pc = labels[g.label]
                 except _Return:
                     return
+
         return run
 
     def top(self, steps):
@@ -219,6 +219,7 @@ class _Compiler:
         def run(frame):
             for f in fns:
                 f(frame)
+
         return run
 
     # ---------- variables ----------
@@ -240,6 +241,7 @@ class _Compiler:
         if name in self.params:
             slot = self.params[name]
             if index_fns is None:
+
                 def get(frame):
                     ref = frame[slot]
                     if ref is None:
@@ -251,6 +253,7 @@ class _Compiler:
                     if ref is None:
                         ref = frame[slot] = _Ref(*interp._value_cell(None))
                     ref.set(v if ref.double or kind != "n" else f32(v))
+
                 return get, put
             ix = self._indexer(index_fns)
 
@@ -263,21 +266,27 @@ class _Compiler:
 
             def aput(frame, v):
                 frame[slot].get()[ix(frame)] = v if kind != "n" else f32(v)
+
             return aget, aput
         if name in self.autos:
             slot = self.autos[name]
             if index_fns is None:
+
                 def get(frame):
                     v = frame[slot]
                     if v is None:
                         undefined()
                     return v
+
                 if rounding:
+
                     def put(frame, v):
                         frame[slot] = f32(v)
                 else:
+
                     def put(frame, v):
                         frame[slot] = v
+
                 return get, put
             ix = self._indexer(index_fns)
 
@@ -292,10 +301,15 @@ class _Compiler:
                 if frame[slot] is None:
                     frame[slot] = {}
                 frame[slot][ix(frame)] = f32(v) if rounding else v
+
             return aget, aput
-        vals, arrs = ((self.local_vals, self.local_arr) if name in self.locals
-                      else (interp.gvals, interp.garr))
+        vals, arrs = (
+            (self.local_vals, self.local_arr)
+            if name in self.locals
+            else (interp.gvals, interp.garr)
+        )
         if index_fns is None:
+
             def get(frame):
                 try:
                     v = vals[name]
@@ -305,6 +319,7 @@ class _Compiler:
 
             def put(frame, v):
                 vals[name] = f32(v) if rounding else v
+
             return get, put
         ix = self._indexer(index_fns)
         arr = arrs.setdefault(name, {})
@@ -318,6 +333,7 @@ class _Compiler:
 
         def aput(frame, v):
             arr[ix(frame)] = f32(v) if rounding else v
+
         return aget, aput
 
     def _indexer(self, index_fns):
@@ -329,10 +345,12 @@ class _Compiler:
                 if k < 0:
                     raise VError(-407, f"*Illegal array index* {k}")
                 return k
+
             return ix
 
         def ixs(frame):
             return tuple(math.floor(g(frame) + 0.5) for g in index_fns)
+
         return ixs
 
     def ref_of(self, e) -> Callable:
@@ -351,13 +369,13 @@ class _Compiler:
                         frame[slot] = {}
                     arr = frame[slot]
                     return _Ref(lambda: arr, None, name in self.double)
+
                 return auto_arr
             arrs = self.local_arr if name in self.locals else interp.garr
             double = name in self.double
             return lambda frame: _Ref(lambda: arrs.setdefault(name, {}), None, double)
         if e[0] == "var":
-            get, put = self.storage(e[1], e[2], [self.expr(x)[0] for x in e[3]]
-                                    if e[3] else None)
+            get, put = self.storage(e[1], e[2], [self.expr(x)[0] for x in e[3]] if e[3] else None)
             if e[2] in self.params and not e[3]:
                 slot = self.params[e[2]]
                 return lambda frame: frame[slot]
@@ -378,8 +396,7 @@ class _Compiler:
             s = e[1]
             return (lambda frame: s), True
         if tag == "var":
-            get, _ = self.storage(e[1], e[2], [self.expr(x)[0] for x in e[3]]
-                                  if e[3] else None)
+            get, _ = self.storage(e[1], e[2], [self.expr(x)[0] for x in e[3]] if e[3] else None)
             return get, self.is_double(e[2]) or e[2] in self.params
         if tag == "neg":
             f, d = self.expr(e[1])
@@ -398,9 +415,14 @@ class _Compiler:
         if tag == "cmp":
             a, _ = self.expr(e[2])
             b, _ = self.expr(e[3])
-            op = {"==": lambda x, y: x == y, "<>": lambda x, y: x != y,
-                  "<": lambda x, y: x < y, ">": lambda x, y: x > y,
-                  "<=": lambda x, y: x <= y, ">=": lambda x, y: x >= y}[e[1]]
+            op = {
+                "==": lambda x, y: x == y,
+                "<>": lambda x, y: x != y,
+                "<": lambda x, y: x < y,
+                ">": lambda x, y: x > y,
+                "<=": lambda x, y: x <= y,
+                ">=": lambda x, y: x >= y,
+            }[e[1]]
             return (lambda frame: -1.0 if op(a(frame), b(frame)) else 0.0), False
         if tag == "bin":
             return self.binop(e)
@@ -415,18 +437,22 @@ class _Compiler:
         double = da or db
         interp = self.i
         if op == "+":
+
             def f(frame):
                 interp.ops += 1
                 return a(frame) + b(frame)
         elif op == "-":
+
             def f(frame):
                 interp.ops += 1
                 return a(frame) - b(frame)
         elif op == "*":
+
             def f(frame):
                 interp.ops += 1
                 return a(frame) * b(frame)
         elif op == "/":
+
             def f(frame):
                 interp.ops += 1
                 d = b(frame)
@@ -434,11 +460,13 @@ class _Compiler:
                     raise VError(-409, "*Division by zero*")
                 return a(frame) / d
         else:  # MOD
+
             def f(frame):
                 d = b(frame)
                 if d == 0:
                     raise VError(-409, "*Division by zero*")
                 return math.fmod(a(frame), d)
+
         return (f, True) if double else (self._single(f), False)
 
     @staticmethod
@@ -446,6 +474,7 @@ class _Compiler:
         def g(frame):
             v = f(frame)
             return v if isinstance(v, str) else f32(v)
+
         return g
 
     def function(self, e):
@@ -455,8 +484,7 @@ class _Compiler:
         double = any(d for _, d in fns)
         if name == "defined":
             v = args[0]
-            get, _ = self.storage(v[1], v[2], [self.expr(x)[0] for x in v[3]]
-                                  if v[3] else None)
+            get, _ = self.storage(v[1], v[2], [self.expr(x)[0] for x in v[3]] if v[3] else None)
 
             def defined(frame):
                 try:
@@ -464,6 +492,7 @@ class _Compiler:
                     return -1.0
                 except VError:
                     return 0.0
+
             return defined, False
         if name == "device":
             unit = self.expr(args[1])[0]
@@ -474,6 +503,7 @@ class _Compiler:
                 value, err = cell.device(int(unit(frame)), int(sel(frame)))
                 put_err(frame, err)
                 return value
+
             return device, False
         f = [x for x, _ in fns]
         interp = self.i
@@ -482,12 +512,14 @@ class _Compiler:
         if name == "abs":
             return (lambda frame: abs(f[0](frame))), double
         if name == "sqrt":
+
             def sqrt(frame):
                 v = f[0](frame)
                 if v < 0:
                     raise VError(-413, "*Negative square root*")
                 interp.ops += 1
                 return math.sqrt(v)
+
             return (sqrt if double else self._single(sqrt)), double
         if name == "min":
             return (lambda frame: min(f[0](frame), f[1](frame))), double
@@ -503,11 +535,13 @@ class _Compiler:
         if name == "$error":
             return (lambda frame: cell.error_text(int(f[0](frame)))), True
         if name == "$chr":
+
             def chr_(frame):
                 c = int(f[0](frame))
                 if not 0 <= c <= 255:
                     raise VError(-410, f"*Illegal value* $CHR({c})")
                 return chr(c)
+
             return chr_, True
         if name == "len":
             return (lambda frame: float(len(f[0](frame)))), False
@@ -519,8 +553,7 @@ class _Compiler:
         if name == "trans":
             return (lambda frame: Trans(*(f32(g(frame)) for g in f))), True
         if name == "shift":
-            return (lambda frame: f[0](frame).shifted(f[1](frame), f[2](frame),
-                                                      f[3](frame))), True
+            return (lambda frame: f[0](frame).shifted(f[1](frame), f[2](frame), f[3](frame))), True
         if name == "sig":
             return (lambda frame: cell.sig(int(f[0](frame)))), False
         raise AssertionError(name)  # pragma: no cover - rejected on load
@@ -535,6 +568,7 @@ class _Compiler:
         def run(frame):
             interp.where = (prog, line)
             inner(frame)
+
         return run
 
     def _stmt(self, s):
@@ -546,8 +580,9 @@ class _Compiler:
         a = s[2:]
         if kind == "assign":
             target, expr = a
-            _, put = self.storage(target[1], target[2], [self.expr(x)[0] for x in target[3]]
-                                  if target[3] else None)
+            _, put = self.storage(
+                target[1], target[2], [self.expr(x)[0] for x in target[3]] if target[3] else None
+            )
             f, _ = self.expr(expr)
             return lambda frame: put(frame, f(frame))
         if kind == "call":
@@ -556,25 +591,33 @@ class _Compiler:
 
             def call(frame):
                 interp._program(callee)([r(frame) for r in refs])
+
             return call
         if kind == "goto":
             label = a[0]
 
             def goto(frame):
                 raise _Goto(label)
+
             return goto
         if kind == "return":
+
             def ret(frame):
                 raise _Return()
+
             return ret
         if kind == "halt":
+
             def halt(frame):
                 raise Halt("HALT")
+
             return halt
         if kind == "pause":
+
             def pause(frame):
                 if not cell.on_pause():
                     raise Pause("PAUSE")
+
             return pause
         if kind == "set":
             _, put = self.storage(a[0], a[1], None)
@@ -601,6 +644,7 @@ class _Compiler:
             def getloc(frame):
                 v = get_loc(frame)
                 return v.values() if isinstance(v, Trans) else v
+
             at = [0]
             _, put = self.storage("n", name, [lambda frame: at[0]])
 
@@ -609,6 +653,7 @@ class _Compiler:
                 for k, v in enumerate(getloc(frame)):
                     at[0] = first + k
                     put(frame, v)
+
             return decompose
         if kind == "speed":
             f = self.expr(a[0])[0]
@@ -627,6 +672,7 @@ class _Compiler:
             def prompt(frame):
                 answer = cell.prompt(text(frame))
                 put(frame, answer if target[1] == "s" else float(answer))
+
             return prompt
         if kind == "wait":
             f = self.expr(a[0])[0]
@@ -670,6 +716,7 @@ class _Compiler:
                     then(frame)
                 elif other is not None:
                     other(frame)
+
             return if_
         if kind == "for":
             _, var, a, b, st = s[2]
@@ -686,6 +733,7 @@ class _Compiler:
                 while (get(frame) <= end) if step > 0 else (get(frame) >= end):
                     body(frame)
                     put(frame, get(frame) + step)
+
             return for_
         if kind == "while":
             cond = self.expr(s[2][1])[0]
@@ -694,11 +742,17 @@ class _Compiler:
             def while_(frame):
                 while cond(frame) != 0:
                     body(frame)
+
             return while_
         if kind == "case":
             sel = self.expr(s[2][1])[0]
-            branches = [([self.expr(v)[0] for v in values] if values is not None else None,
-                         self.block(body)) for values, body in s[3]]
+            branches = [
+                (
+                    [self.expr(v)[0] for v in values] if values is not None else None,
+                    self.block(body),
+                )
+                for values, body in s[3]
+            ]
 
             def case(frame):
                 x = sel(frame)
@@ -706,6 +760,7 @@ class _Compiler:
                     if values is None or any(x == v(frame) for v in values):
                         body(frame)
                         return
+
             return case
         raise AssertionError(kind)  # pragma: no cover
 

@@ -12,10 +12,10 @@ import json
 from datetime import UTC, datetime
 from pathlib import Path
 
-from . import params as P
-from .fileio import check_writable, write_atomic
-from .identify import Estimate
-from .robot import Robot
+from wirecal.solver import params as P
+from wirecal.solver.formats.fileio import check_writable, write_atomic
+from wirecal.solver.identify import Estimate
+from wirecal.solver.robot import Robot
 
 _FIELD = {"th": "theta offset", "d": "d", "a": "a", "al": "alpha", "tool": "tool point"}
 
@@ -29,8 +29,16 @@ def _rows(robot: Robot, estimate: Estimate):
         yield name, p, nominal, offset, nominal + offset, std
 
 
-def patch_text(robot: Robot, estimate: Estimate, *, plan_fingerprint: str, log_path: str,
-               log_sha256: str, version: str, date: datetime | None = None) -> str:
+def patch_text(
+    robot: Robot,
+    estimate: Estimate,
+    *,
+    plan_fingerprint: str,
+    log_path: str,
+    log_sha256: str,
+    version: str,
+    date: datetime | None = None,
+) -> str:
     date = date or datetime.now(UTC)
     lines = [
         "# wirecal patch: identified kinematic error offsets (deg, mm).",
@@ -45,8 +53,14 @@ def patch_text(robot: Robot, estimate: Estimate, *, plan_fingerprint: str, log_p
         f"residual_rms_mm = {estimate.residual_rms_mm!r}",
     ]
     for name, p, nominal, offset, value, std in _rows(robot, estimate):
-        lines += ["", f"[parameters.{name}]", f'unit = "{p.unit}"', f"nominal = {nominal!r}",
-                  f"offset = {offset!r}", f"value = {value!r}"]
+        lines += [
+            "",
+            f"[parameters.{name}]",
+            f'unit = "{p.unit}"',
+            f"nominal = {nominal!r}",
+            f"offset = {offset!r}",
+            f"value = {value!r}",
+        ]
         if std is not None:
             lines.append(f"std = {std!r}")
     return "\n".join(lines) + "\n"
@@ -67,13 +81,16 @@ def spec_table(robot: Robot, estimate: Estimate) -> str:
     for name, p, nominal, offset, value, std in _rows(robot, estimate):
         row = "-" if p.kind == "tool" else p.row + 1
         sigma = f"{std:9.4f}" if std is not None else f"{'-':>9}"
-        lines.append(f"{name:<10}{row!s:>7}  {_FIELD[p.kind]:<14}{p.unit:<6}{nominal:12.4f}"
-                     f"{value:12.4f}{offset:+11.4f}{sigma}")
+        lines.append(
+            f"{name:<10}{row!s:>7}  {_FIELD[p.kind]:<14}{p.unit:<6}{nominal:12.4f}"
+            f"{value:12.4f}{offset:+11.4f}{sigma}"
+        )
     return "\n".join(lines) + "\n"
 
 
-def write_patch(path: str | Path, robot: Robot, estimate: Estimate, *, force: bool = False,
-                **meta) -> tuple[Path, Path]:
+def write_patch(
+    path: str | Path, robot: Robot, estimate: Estimate, *, force: bool = False, **meta
+) -> tuple[Path, Path]:
     """Write the patch and its SPEC table beside it, atomically; refuse to overwrite
     either unless ``force``."""
     path = Path(path)

@@ -1,0 +1,2 @@
+"""The V+/eV+ backend of the generator: the module's context for the templates in
+``templates/vplus`` and V+ literals written exactly."""

@@ -1,0 +1,254 @@
+"""A measurement log checked against its plan and robot: one wire length per plan point.
+
+The reference of every length is the mean of the steps' zero readings at θ0, each checked
+against the first (a drift means the wire slipped); counts are compared modulo the
+counter width.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.log import Log, Reading, read_log
+from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """What the reader accepts; each is a CLI option of ``wirecal solve``."""
+
+    joint_deg: float = 0.05  # logged joints vs the plan
+    spread_mm: float = 0.1  # max − min of a point's samples: the robot was still moving
+    zero_mm: float = 0.1  # a step's zero reading vs the first: the wire slipped
+
+
+@dataclass(frozen=True)
+class Measurements:
+    """A log checked against its plan: one wire length per plan point (NaN where missing)."""
+
+    source: str
+    sha256: str
+    mm_per_count: float
+    theta0_deg: np.ndarray  # joints of the reference zero reading
+    step: np.ndarray  # (N,) 1-based, plan order
+    index: np.ndarray  # (N,)
+    joints_deg: np.ndarray  # (N, n) as logged (plan values where missing)
+    distance_mm: np.ndarray  # (N,) NaN where missing
+    zero_drift_mm: dict[int, float]  # per step with a zero reading
+    notes: tuple[str, ...] = ()
+    missing: tuple[tuple[int, int], ...] = field(default=())
+
+    @property
+    def present(self) -> np.ndarray:
+        return ~np.isnan(self.distance_mm)
+
+    def missing_text(self) -> str:
+        """Missing points in words, e.g. 'step 5 points 3–6; steps 6–10 (all points)'."""
+        return describe_missing(self.missing, self.step, self.index)
+
+
+def describe_missing(missing, step: np.ndarray, index: np.ndarray) -> str:
+    if not missing:
+        return "none"
+    parts: list[str] = []
+    by_step: dict[int, list[int]] = {}
+    for s, i in missing:
+        by_step.setdefault(s, []).append(i)
+    whole = [s for s, idx in by_step.items() if len(idx) == int(np.sum(step == s))]
+    for s, idx in sorted(by_step.items()):
+        if s in whole:
+            continue
+        parts.append(f"step {s} point{'s' if len(idx) > 1 else ''} {_ranges(idx)}")
+    if whole:
+        parts.append(f"step{'s' if len(whole) > 1 else ''} {_ranges(whole)} (all points)")
+    return "; ".join(parts)
+
+
+def _ranges(values: list[int]) -> str:
+    values = sorted(values)
+    out, start = [], values[0]
+    for a, b in zip(values, [*values[1:], None], strict=True):
+        if b != a + 1:
+            out.append(str(start) if start == a else f"{start}–{a}")
+            start = b
+    return ", ".join(out)
+
+
+def check_log(
+    log: Log, plan: Plan, robot: Robot, tol: Tolerances = Tolerances(), force: bool = False
+) -> Measurements:
+    """Validate a log against the plan and robot; wire lengths for every plan point.
+
+    Raises :class:`WirecalError` listing every ``file:line: problem``. A fingerprint or
+    robot-name mismatch is refused unless ``force``. Missing points are not an error here:
+    they are listed in the result (a run that stopped is still readable).
+    """
+    src = log.source
+    problems: list[str] = []
+    if log.plan != plan.fingerprint() and not force:
+        problems.append(
+            f"{src}: plan fingerprint {log.plan[:16]}… differs from {plan.source} "
+            f"({plan.fingerprint()[:16]}…): the log was taken with another plan; "
+            "use that plan, or --force if you are sure"
+        )
+    if log.robot != robot.name and not force:
+        problems.append(
+            f"{src}: robot {log.robot!r} differs from {robot.source} "
+            f"({robot.name!r}); use the matching robot file, or --force"
+        )
+    if (
+        not math.isclose(abs(log.mm_per_count), abs(robot.encoder.mm_per_count), rel_tol=1e-6)
+        and not force
+    ):
+        problems.append(
+            f"{src}: mm_per_count {log.mm_per_count!r} differs from the robot "
+            f"file's encoder.mm_per_count {robot.encoder.mm_per_count!r}"
+        )
+    if problems:  # a log of another plan or robot: row-by-row complaints would be noise
+        raise WirecalError(problems)
+
+    q_plan, step_no, index_no = plan.all_points()
+    position = {(int(s), int(i)): k for k, (s, i) in enumerate(zip(step_no, index_no, strict=True))}
+    counts = np.full(len(q_plan), np.nan)
+    joints = q_plan.copy()
+    zeros: dict[int, Reading] = {}
+    seen: dict[tuple[str, int, int], int] = {}
+    mpc = log.mm_per_count
+    modulus = 2.0**robot.encoder.counter_bits
+    spread_counts = tol.spread_mm / abs(mpc)
+    n_steps = len(plan.steps)
+
+    def bad(r: Reading, message: str) -> None:
+        problems.append(f"{src}:{r.line}: {message}")
+
+    for r in log.readings:
+        key = (r.kind, r.step, r.index)
+        if key in seen:
+            bad(
+                r,
+                f"duplicate {r.kind} reading of step {r.step}"
+                + (f" point {r.index}" if r.kind == "point" else "")
+                + f" (first on line {seen[key]}); keep one run per log",
+            )
+            continue
+        seen[key] = r.line
+        if not 1 <= r.step <= n_steps:
+            bad(r, f"step {r.step} is not in the plan (it has {n_steps} steps)")
+            continue
+        if r.kind == "zero":
+            if r.index != 0:
+                bad(r, f"a zero reading has index 0, not {r.index}")
+                continue
+            expected = plan.theta0_deg
+        else:
+            k = position.get((r.step, r.index))
+            if k is None:
+                bad(
+                    r,
+                    f"step {r.step} has {len(plan.steps[r.step - 1].points_deg)} points; "
+                    f"point {r.index} is not in the plan",
+                )
+                continue
+            expected = q_plan[k]
+        if r.joints_deg.shape != expected.shape:
+            bad(r, "joint count differs from the robot's")
+            continue
+        off = np.abs(r.joints_deg - expected)
+        if np.any(off > tol.joint_deg):
+            j = int(np.argmax(off))
+            bad(
+                r,
+                f"joint {j + 1} is {r.joints_deg[j]:.4f} deg; the plan says "
+                f"{expected[j]:g} (tolerance {tol.joint_deg:g}): the robot was not where the "
+                "plan puts it",
+            )
+            continue
+        if r.spread > spread_counts:
+            bad(
+                r,
+                f"spread of {r.samples} samples is {r.spread:g} counts "
+                f"({r.spread * abs(mpc):.3f} mm > {tol.spread_mm:g} mm): the robot was "
+                f"still moving; lengthen the settle time and repeat step {r.step}",
+            )
+            continue
+        if r.kind == "zero":
+            zeros[r.step] = r
+        else:
+            counts[k] = r.counts
+            joints[k] = r.joints_deg
+
+    first_zero = zeros[min(zeros)] if zeros else None
+    if first_zero is None and log.readings:
+        problems.append(f"{src}: no zero reading: the log must start with the zero reading at θ0")
+    drift: dict[int, float] = {}
+    if first_zero is not None:
+        first = first_zero.counts
+
+        def wrapped(c, ref):
+            return (np.asarray(c) - ref + modulus / 2) % modulus - modulus / 2
+
+        for s, r in sorted(zeros.items()):
+            drift[s] = float(wrapped(r.counts, first) * mpc)
+            if abs(drift[s]) > tol.zero_mm:
+                prev = max(s - 1, 1)
+                bad(
+                    r,
+                    f"zero reading at step {s} is {drift[s]:+.3f} mm from the first "
+                    f"(tolerance {tol.zero_mm:g} mm): the wire slipped or the encoder "
+                    f"moved after the zero of step {prev}; remount at θ0 and repeat from "
+                    f"step {prev}",
+                )
+        for s in sorted({int(x) for x in step_no[~np.isnan(counts)]}):
+            if s not in zeros:
+                problems.append(
+                    f"{src}: step {s} has points but no zero reading; the zero "
+                    "check at θ0 guards against a slipped wire"
+                )
+        # The reference is the mean of all zero readings: every length is measured from
+        # it, so its error is common to all points; averaging the steps' zeros shrinks it.
+        ref = first + np.mean([wrapped(r.counts, first) for r in zeros.values()])
+        distance = wrapped(counts, ref) * mpc
+        for k in np.flatnonzero(~np.isnan(distance)):
+            line = seen[("point", int(step_no[k]), int(index_no[k]))]
+            if distance[k] > robot.encoder.range_mm:
+                problems.append(
+                    f"{src}:{line}: wire length {distance[k]:.1f} mm is beyond "
+                    f"the encoder's range {robot.encoder.range_mm:g} mm"
+                )
+            elif distance[k] < -tol.zero_mm:
+                problems.append(
+                    f"{src}:{line}: wire length {distance[k]:.3f} mm is "
+                    "negative: is the sign of mm_per_count right?"
+                )
+    else:
+        distance = counts
+    if problems:
+        raise WirecalError(problems)
+    missing = tuple((int(step_no[k]), int(index_no[k])) for k in np.flatnonzero(np.isnan(distance)))
+    theta0 = first_zero.joints_deg if first_zero is not None else plan.theta0_deg
+    return Measurements(
+        source=src,
+        sha256=log.sha256,
+        mm_per_count=mpc,
+        theta0_deg=theta0,
+        step=step_no,
+        index=index_no,
+        joints_deg=joints,
+        distance_mm=distance,
+        zero_drift_mm=drift,
+        notes=log.notes,
+        missing=missing,
+    )
+
+
+def load_measurements(
+    path: str | Path, plan: Plan, robot: Robot, tol: Tolerances = Tolerances(), force: bool = False
+) -> Measurements:
+    """Read a log file and check it against the plan (:func:`read_log` + :func:`check_log`)."""
+    return check_log(read_log(path), plan, robot, tol, force)

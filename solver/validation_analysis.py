@@ -1,0 +1,57 @@
+"""The analyses of the paper's two validation procedures (§3.6): per pose the largest
+wire-length discrepancy among the four configurations (§3.6.1), and the residuals of the
+least-squares plane through the probed points (§3.6.2, eq. 21–25)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.validation_files import ValidationLog
+
+
+@dataclass(frozen=True)
+class Stats:
+    values: np.ndarray
+    mean: float
+    std: float
+    max: float
+
+    @classmethod
+    def of(cls, values) -> Stats:
+        v = np.asarray(values, dtype=float)
+        return cls(v, float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else 0.0, float(v.max()))
+
+
+def config_discrepancy(log: ValidationLog, bits: int = 24) -> Stats:
+    """Per pose, the largest difference among the wire lengths of its four configurations
+    (mm); the counts are compared modulo the counter width."""
+    rows = log.rows
+    out = []
+    half = 2.0 ** (bits - 1)
+    incomplete = []
+    for number in np.unique(rows[:, 0]):
+        r = rows[rows[:, 0] == number]
+        if len(r) != 4:
+            incomplete.append(int(number))
+            continue
+        c = r[:, 8]
+        rel = (c - c[0] + half) % (2 * half) - half
+        out.append(float((rel.max() - rel.min()) * abs(log.mm_per_count)))
+    if incomplete:
+        raise WirecalError(
+            f"{log.source}: poses {incomplete[:10]} lack one of the four "
+            "configurations; finish the run"
+        )
+    return Stats.of(out)
+
+
+def plane_residuals(log: ValidationLog) -> tuple[Stats, np.ndarray]:
+    """|Δ_i| of the least-squares plane z = a·x + b·y + c through the probed points, and
+    (a, b, c) (paper eq. 21–25)."""
+    x, y, z = log.rows[:, 2], log.rows[:, 3], log.rows[:, 4]
+    U = np.column_stack([x, y, np.ones_like(x)])
+    coef, *_ = np.linalg.lstsq(U, z, rcond=None)
+    return Stats.of(np.abs(U @ coef - z)), coef
