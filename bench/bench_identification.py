@@ -26,23 +26,13 @@ from wirecal.solver import montecarlo  # noqa: E402
 from wirecal.solver.formats.log import parse_log  # noqa: E402
 from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
+from wirecal.solver.formats.truth import load_errors  # noqa: E402
 from wirecal.solver.measurements import check_log  # noqa: E402
 from wirecal.solver.simulate import simulate_log  # noqa: E402
 from wirecal.solver.solve import solve  # noqa: E402
 
 VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"
-TABLE5 = {
-    "th2": 0.675,
-    "th3": -0.485,
-    "th4": 0.245,
-    "th5": -0.575,
-    "th6": -1.215,
-    "a1": -0.005,
-    "a2": 0.105,
-    "a3": 0.025,
-    "d4": -0.105,
-    "d6": 0.115,
-}
+TABLE5 = load_errors(VIPER / "paper_table5_errors.toml", load_robot(VIPER / "robot.toml"))
 
 
 def table(title, mc):

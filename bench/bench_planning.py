@@ -25,22 +25,15 @@ import numpy as np  # noqa: E402
 from wirecal.solver import montecarlo  # noqa: E402
 from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
+from wirecal.solver.formats.truth import load_errors  # noqa: E402
 from wirecal.solver.planner import design, predicted_accuracy, robot_time  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 ARMS = ("viper_s650", "puma560", "abb_irb120", "ur5")
-TABLE5 = {
-    "th2": 0.675,
-    "th3": -0.485,
-    "th4": 0.245,
-    "th5": -0.575,
-    "th6": -1.215,
-    "a1": -0.005,
-    "a2": 0.105,
-    "a3": 0.025,
-    "d4": -0.105,
-    "d6": 0.115,
-}
+TABLE5 = load_errors(
+    EXAMPLES / "viper_s650" / "paper_table5_errors.toml",
+    load_robot(EXAMPLES / "viper_s650" / "robot.toml"),
+)
 
 
 def main() -> None:

@@ -14,24 +14,14 @@ from wirecal.gen.vplus.program import module_text
 from wirecal.solver.formats.log import read_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.truth import load_errors
 from wirecal.solver.measurements import load_measurements
 from wirecal.solver.solve import solve
 from wirecal.twin.cell import controller_solve, run_measurement
 from wirecal.twin.vplus.parser import parse_module
 
 VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"
-TRUTH = {
-    "th2": 0.675,
-    "th3": -0.485,
-    "th4": 0.245,
-    "th5": -0.575,
-    "th6": -1.215,
-    "a1": -0.005,
-    "a2": 0.105,
-    "a3": 0.025,
-    "d4": -0.105,
-    "d6": 0.115,
-}
+TRUTH = load_errors(VIPER / "paper_table5_errors.toml", load_robot(VIPER / "robot.toml"))
 
 
 def main() -> None:

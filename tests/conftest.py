@@ -27,3 +27,18 @@ def paper_plan(viper):
 @pytest.fixture(scope="session")
 def printed_plan(viper):
     return load_plan(VIPER / "paper_plan_as_printed.toml", viper)
+
+
+def _table5() -> dict[str, float]:
+    from wirecal.solver.formats.truth import load_errors
+
+    return load_errors(VIPER / "paper_table5_errors.toml", load_robot(VIPER / "robot.toml"))
+
+
+TABLE5 = _table5()
+"""The paper's Table 5 offsets (deg, mm): the true errors of most simulated Viper tests."""
+
+
+@pytest.fixture(scope="session")
+def table5() -> dict[str, float]:
+    return dict(TABLE5)

@@ -16,18 +16,7 @@ from wirecal.solver.sensitivity import boundary_scale, sensitivity
 from wirecal.solver.simulate import measured_lengths
 from wirecal.solver.solve import omega_vector
 
-TABLE5 = {
-    "th2": 0.675,
-    "th3": -0.485,
-    "th4": 0.245,
-    "th5": -0.575,
-    "th6": -1.215,
-    "a1": -0.005,
-    "a2": 0.105,
-    "a3": 0.025,
-    "d4": -0.105,
-    "d6": 0.115,
-}
+from .conftest import TABLE5
 
 
 def make_problem(robot, plan, d):

@@ -10,18 +10,8 @@ from hypothesis import strategies as st
 from wirecal.solver.ik import analytic_structure, configuration, flange_pose, solve
 from wirecal.solver.kinematics import perturbed
 
-TRUTH = {
-    "th2": 0.675,
-    "th3": -0.485,
-    "th4": 0.245,
-    "th5": -0.575,
-    "th6": -1.215,
-    "a1": -0.005,
-    "a2": 0.105,
-    "a3": 0.025,
-    "d4": -0.105,
-    "d6": 0.115,
-}
+from .conftest import TABLE5 as TRUTH
+
 unit = st.floats(0.02, 0.98)
 
 

@@ -11,18 +11,7 @@ from wirecal.solver.formats.log import parse_log
 from wirecal.solver.measurements import Tolerances, check_log
 from wirecal.solver.simulate import Faults, simulate_log
 
-TRUTH = {
-    "th2": 0.675,
-    "th3": -0.485,
-    "th4": 0.245,
-    "th5": -0.575,
-    "th6": -1.215,
-    "a1": -0.005,
-    "a2": 0.105,
-    "a3": 0.025,
-    "d4": -0.105,
-    "d6": 0.115,
-}
+from .conftest import TABLE5 as TRUTH
 
 
 @pytest.fixture(scope="module")

@@ -23,18 +23,7 @@ from wirecal.twin.cell import (
 from wirecal.twin.vplus.interp import Interpreter, f32
 from wirecal.twin.vplus.parser import parse_module
 
-TRUTH = {
-    "th2": 0.675,
-    "th3": -0.485,
-    "th4": 0.245,
-    "th5": -0.575,
-    "th6": -1.215,
-    "a1": -0.005,
-    "a2": 0.105,
-    "a3": 0.025,
-    "d4": -0.105,
-    "d6": 0.115,
-}
+from .conftest import TABLE5 as TRUTH
 
 
 def run_program(viper, paper_plan, tmp_path, source, name="t.main", answers=()):
