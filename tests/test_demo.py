@@ -12,6 +12,8 @@ from click.testing import CliRunner
 
 from wirecal.cli.main import main
 
+pytestmark = pytest.mark.slow  # designs plans / runs the demo: tens of seconds
+
 
 @pytest.fixture(scope="module")
 def demo(tmp_path_factory):

@@ -21,6 +21,8 @@ from wirecal.solver.planner import PlanOptions, design, predicted_accuracy, robo
 
 from .conftest import ROOT, VIPER
 
+pytestmark = pytest.mark.slow  # designs plans / runs the demo: tens of seconds
+
 # θ0 as 'wirecal plan' chooses them (seed 0); fixed here to keep the tests quick
 THETA0 = {
     "viper_s650": [-72, -156, 235, 3, 64, 41],
