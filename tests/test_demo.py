@@ -12,7 +12,7 @@ from click.testing import CliRunner
 
 from wirecal.cli.main import main
 
-pytestmark = pytest.mark.slow  # designs plans / runs the demo: tens of seconds
+pytestmark = pytest.mark.slow  # the whole demo in the twin: about a minute
 
 
 @pytest.fixture(scope="module")

@@ -21,7 +21,7 @@ from wirecal.solver.planner import PlanOptions, design, predicted_accuracy, robo
 
 from .conftest import ROOT, VIPER
 
-pytestmark = pytest.mark.slow  # designs plans / runs the demo: tens of seconds
+pytestmark = pytest.mark.slow  # designs plans for four arms: tens of seconds
 
 # θ0 as 'wirecal plan' chooses them (seed 0); fixed here to keep the tests quick
 THETA0 = {
