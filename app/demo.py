@@ -12,7 +12,7 @@ from __future__ import annotations
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
 
@@ -23,15 +23,15 @@ from wirecal.app.report import Validation, render_report
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.accuracy import workspace
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import check_writable, write_atomic
+from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
-from wirecal.solver.formats.patch import write_patch
+from wirecal.solver.formats.patch import put_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors, truth_text
 from wirecal.solver.formats.validation_files import load_setup, read_validation_log
 from wirecal.solver.kinematics import perturbed, tool_position
-from wirecal.solver.measurements import load_measurements
+from wirecal.solver.measurements import check_log
 from wirecal.solver.solve import solve
 from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
 from wirecal.twin.cell import controller_comparison, run_measurement, run_validation
@@ -80,16 +80,24 @@ def run_demo(
     progress: Callable[[str], None] = lambda s: None,
 ) -> DemoResult:
     folder = Path(folder)
-    if folder.exists() and not folder.is_dir():
-        raise WirecalError(f"{folder}: is a file; give a folder for the demo's outputs")
-    folder.mkdir(parents=True, exist_ok=True)
-    check_writable([folder / n for n in OUTPUTS], force)
+    with Outputs([folder / n for n in OUTPUTS], force=force, folder=folder) as out:
+        return _run(out, folder, seed, scale, progress)
+
+
+def _run(
+    out: Outputs,
+    folder: Path,
+    seed: int,
+    scale: float,
+    progress: Callable[[str], None],
+) -> DemoResult:
+    """The demo's work; every output goes into ``out``, published when all are there."""
     files = example_files()
     robot = load_robot(files["robot"])
     plan = load_plan(files["plan"], robot)
     setup = load_setup(files["validation"])
-    truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
     seconds: dict[str, float] = {}
+    truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
 
     def step(n, text):
         progress(f"[{n}/7] {text} …")
@@ -105,17 +113,15 @@ def run_demo(
         if run.run is None or run.run.status != "completed":
             raise WirecalError(f"the twin's measurement run stopped: {run.run or run.mount}")
         seconds["measure"] = time.perf_counter() - t
-        log_path = write_atomic(
-            folder / "WCLOG.CSV", run.log.read_text(encoding="ascii"), force=force
-        )
+        log_text = run.log.read_text(encoding="ascii")
+        out.put(folder / "WCLOG.CSV", log_text)
+        log = replace(read_log(run.log), source=str(folder / "WCLOG.CSV"))
         t = step(3, "identification on the PC (step-by-step and joint)")
-        m = load_measurements(log_path, plan, robot)
+        m = check_log(log, plan, robot)
         result = solve(robot, plan, m)
         seconds["solve"] = time.perf_counter() - t
         t = step(4, "identification on the controller (wc.solve, wc.solve2 in the twin)")
-        controller = controller_comparison(
-            robot, plan, read_log(log_path), result, disk / "ctl", text=text
-        )
+        controller = controller_comparison(robot, plan, log, result, disk / "ctl", text=text)
         seconds["controller"] = time.perf_counter() - t
         identified = result.estimates[result.recommended].as_dict()
         runs = {}
@@ -164,20 +170,20 @@ def run_demo(
             ("WCVCFG2.CSV", runs["after"].configuration_log),
             ("WCVPLN2.CSV", runs["after"].plane_log),
         ):
-            write_atomic(folder / name, path.read_text(encoding="ascii"), force=force)
-    write_atomic(folder / "truth.toml", truth_text(robot, truth, seed), force=force)
-    write_atomic(folder / "WIRECAL.V2", text, force=force)
-    write_patch(
+            out.put(folder / name, path.read_text(encoding="ascii"))
+    out.put(folder / "truth.toml", truth_text(robot, truth, seed))
+    out.put(folder / "WIRECAL.V2", text)
+    put_patch(
+        out,
         folder / "patch.toml",
         robot,
         result.estimates[result.recommended],
-        force=force,
         plan_fingerprint=plan.fingerprint(),
         log_path="WCLOG.CSV",
         log_sha256=m.sha256,
         version=__version__,
     )
-    write_atomic(folder / "report.html", html, force=force)
+    out.put(folder / "report.html", html)
     q = workspace(robot)
     true_p = tool_position(perturbed(robot, truth), q)
     errors = {

@@ -6,6 +6,7 @@ import click
 
 from wirecal.app.demo import OUTPUTS, run_demo
 from wirecal.cli.main import main, user_errors
+from wirecal.cli.options import NON_NEGATIVE, SEED
 
 
 @main.command()
@@ -20,14 +21,14 @@ from wirecal.cli.main import main, user_errors
 )
 @click.option(
     "--seed",
-    type=int,
+    type=SEED,
     default=1,
     show_default=True,
     help="Seed of the true errors and of the simulated readings.",
 )
 @click.option(
     "--scale",
-    type=float,
+    type=NON_NEGATIVE,
     default=1.0,
     show_default=True,
     help="True errors are drawn within ±SCALE deg/mm.",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from wirecal.cli.main import main, user_errors
+from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import read_toml
@@ -28,21 +29,21 @@ _D = GenOptions()
 )
 @click.option(
     "--speed",
-    type=float,
+    type=number(),
     default=_D.speed,
     show_default=True,
     help="Program speed, % of full (SPEED … ALWAYS).",
 )
 @click.option(
     "--accel",
-    type=float,
+    type=number(),
     default=_D.accel,
     show_default=True,
     help="Acceleration and deceleration, % of full (ACCEL).",
 )
 @click.option(
     "--settle-s",
-    type=float,
+    type=number(),
     default=_D.settle_s,
     show_default=True,
     help="Wait after each stop before reading (s).",
@@ -56,21 +57,21 @@ _D = GenOptions()
 )
 @click.option(
     "--zero-tol",
-    type=float,
+    type=POSITIVE,
     default=_D.zero_tol_mm,
     show_default=True,
     help="Largest drift of a zero reading from the first before the run pauses (mm).",
 )
 @click.option(
     "--spread-tol",
-    type=float,
+    type=POSITIVE,
     default=_D.spread_tol_mm,
     show_default=True,
     help="Largest spread of a point's samples before the run pauses (mm).",
 )
 @click.option(
     "--margin",
-    type=float,
+    type=NON_NEGATIVE,
     default=_D.margin_deg,
     show_default=True,
     help="Refuse any target closer than this to a joint limit (deg).",
@@ -149,5 +150,6 @@ def gen(
         patch=patch,
         validation=load_setup(setup_file) if setup_file else None,
     )
-    path = write_module(out_dir, module_text(rb, pl, opt), force=force)
+    inputs = [robot, plan, *(f for f in (patch_file, setup_file) if f)]
+    path = write_module(out_dir, module_text(rb, pl, opt), force=force, inputs=inputs)
     click.echo(f"wrote {path}: load it on the controller, then run wc.mount, wc.check, wc.run")

@@ -12,11 +12,12 @@ import click
 import numpy as np
 
 from wirecal.cli.main import _version, main, print_json, user_errors
+from wirecal.cli.options import NON_NEGATIVE, POSITIVE, SEED, number
 from wirecal.gen.vplus.program import GenOptions
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import check_writable, write_atomic
+from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
-from wirecal.solver.formats.patch import write_patch
+from wirecal.solver.formats.patch import put_patch, spec_path
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
@@ -60,20 +61,20 @@ def _slip(ctx, param, value):
 @click.option(
     "--random",
     "scale",
-    type=click.FloatRange(min=0.0),
+    type=NON_NEGATIVE,
     help="Draw true offsets uniform within ±SCALE deg/mm for the robot file's "
     "parameters (default 1.0 when --errors is not given).",
 )
 @click.option(
     "--seed",
-    type=int,
+    type=SEED,
     default=0,
     show_default=True,
     help="Random seed: the same seed gives the same truth and readings.",
 )
 @click.option(
     "--noise-mm",
-    type=click.FloatRange(min=0.0),
+    type=NON_NEGATIVE,
     default=0.01,
     show_default=True,
     help="Gaussian error of each reading (σ, mm), before quantisation.",
@@ -104,7 +105,7 @@ def _slip(ctx, param, value):
 )
 @click.option(
     "--outlier-mm",
-    type=float,
+    type=NON_NEGATIVE,
     default=1.0,
     show_default=True,
     help="Size of each outlier's error (mm, random sign).",
@@ -116,7 +117,7 @@ def _slip(ctx, param, value):
 )
 @click.option(
     "--counter-start",
-    type=float,
+    type=number(),
     help="Counter value at the first reading [default: random]; near 8388607 "
     "the 24-bit counter wraps during the run.",
 )
@@ -154,40 +155,47 @@ def simulate(
     goes to its own file, never into the log.
     """
     rb = load_robot(robot)
+    if rb.controller_problem():
+        raise WirecalError(f"{rb.controller_problem()}; 'wirecal simulate' writes that log")
     pl = load_plan(plan, rb)
     if errors_file and scale is not None:
         raise WirecalError("give either --errors FILE or --random SCALE, not both")
-    if errors_file:
-        errors = load_errors(errors_file, rb)
-    else:
-        errors = random_errors(
-            rb, 1.0 if scale is None else scale, np.random.default_rng([seed, 1])
+    if slip is not None and not 1 <= slip[0] <= len(pl.steps):
+        raise WirecalError(
+            f"--slip {slip[0]}:{slip[1]:g}: {plan} has steps 1–{len(pl.steps)}; give one of them"
         )
     truth_path = Path(truth_out) if truth_out else Path(log_path).with_suffix(".truth.toml")
-    check_writable([Path(log_path), truth_path], force)
-    stopped = None
-    if controller:
-        if outliers or stop_after is not None:
-            raise WirecalError(
-                "--outliers and --stop-after apply to the direct simulation; "
-                "the twin injects its own faults (see the README)"
+    inputs = [robot, plan, *([errors_file] if errors_file else [])]
+    with Outputs([log_path, truth_path], force=force, inputs=inputs) as out:
+        if errors_file:
+            errors = load_errors(errors_file, rb)
+        else:
+            errors = random_errors(
+                rb, 1.0 if scale is None else scale, np.random.default_rng([seed, 1])
             )
-        text, stopped = _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start)
-    else:
-        text = simulate_log(
-            rb,
-            pl,
-            errors,
-            seed=seed,
-            noise_mm=noise_mm,
-            samples=samples,
-            faults=Faults(
-                slip=slip, outliers=outliers, outlier_mm=outlier_mm, stop_after=stop_after
-            ),
-            counter_start=counter_start,
-        )
-    write_atomic(truth_path, truth_text(rb, errors, None if errors_file else seed), force=force)
-    write_atomic(log_path, text, force=force)
+        stopped = None
+        if controller:
+            if outliers or stop_after is not None:
+                raise WirecalError(
+                    "--outliers and --stop-after apply to the direct simulation; "
+                    "the twin injects its own faults (see the README)"
+                )
+            text, stopped = _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start)
+        else:
+            text = simulate_log(
+                rb,
+                pl,
+                errors,
+                seed=seed,
+                noise_mm=noise_mm,
+                samples=samples,
+                faults=Faults(
+                    slip=slip, outliers=outliers, outlier_mm=outlier_mm, stop_after=stop_after
+                ),
+                counter_start=counter_start,
+            )
+        out.put(log_path, text)
+        out.put(truth_path, truth_text(rb, errors, None if errors_file else seed))
     click.echo(f"wrote {log_path} ({pl.n_points} points) and the truth to {truth_path}")
     if stopped:
         click.echo(f"the controller program stopped: {stopped}", err=True)
@@ -243,7 +251,7 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option(
     "--omega",
-    type=click.FloatRange(min=0.0, min_open=True),
+    type=POSITIVE,
     default=DEFAULT_OMEGA,
     show_default=True,
     help="Bound Ω of each step (deg or mm) where the plan gives none.",
@@ -256,29 +264,30 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
 )
 @click.option(
     "--joint-tol",
-    type=float,
+    type=POSITIVE,
     default=Tolerances.joint_deg,
     show_default=True,
     help="Largest difference of logged joints from the plan (deg).",
 )
 @click.option(
     "--spread-tol",
-    type=float,
+    type=POSITIVE,
     default=Tolerances.spread_mm,
     show_default=True,
     help="Largest spread of a point's samples (mm).",
 )
 @click.option(
     "--zero-tol",
-    type=float,
+    type=POSITIVE,
     default=Tolerances.zero_mm,
     show_default=True,
     help="Largest drift of a zero reading from the first (mm).",
 )
+@click.option("--force", is_flag=True, help="Replace an existing patch and SPEC table.")
 @click.option(
-    "--force",
+    "--accept-foreign",
     is_flag=True,
-    help="Accept a log taken with another plan or robot file; replace an existing patch.",
+    help="Accept a log taken with another plan, robot file or encoder scale.",
 )
 @user_errors
 def solve(
@@ -295,6 +304,7 @@ def solve(
     spread_tol,
     zero_tol,
     force,
+    accept_foreign,
 ):
     """Identify the kinematic errors from a measurement LOG.
 
@@ -304,25 +314,31 @@ def solve(
     names) and a table of values for the controller.
     """
     rb = load_robot(robot)
+    if rb.controller_problem():
+        raise WirecalError(f"{rb.controller_problem()}; 'wirecal solve' reads that log")
     pl = load_plan(plan, rb)
-    m = load_measurements(log, pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), force)
-    methods = ("stepwise", "joint") if method in ("all", "controller") else (method,)
-    result = solve_api(
-        rb, pl, m, methods=methods, omega_default=omega, robust=robust, partial=partial
-    )
-    chosen = result.recommended if method in ("all", "controller") else method
-    ctl = _controller(rb, pl, log, result) if method == "controller" else None
-    if patch_path:
-        write_patch(
-            patch_path,
-            rb,
-            result.estimates[chosen],
-            force=force,
-            plan_fingerprint=pl.fingerprint(),
-            log_path=str(log),
-            log_sha256=m.sha256,
-            version=_version(),
+    paths = [patch_path, spec_path(patch_path)] if patch_path else []
+    with Outputs(paths, force=force, inputs=[robot, plan, log]) as out:
+        m = load_measurements(
+            log, pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), accept_foreign
         )
+        methods = ("stepwise", "joint") if method in ("all", "controller") else (method,)
+        result = solve_api(
+            rb, pl, m, methods=methods, omega_default=omega, robust=robust, partial=partial
+        )
+        chosen = result.recommended if method in ("all", "controller") else method
+        ctl = _controller(rb, pl, log, result) if method == "controller" else None
+        if patch_path:
+            put_patch(
+                out,
+                patch_path,
+                rb,
+                result.estimates[chosen],
+                plan_fingerprint=pl.fingerprint(),
+                log_path=str(log),
+                log_sha256=m.sha256,
+                version=_version(),
+            )
     if as_json:
         data = result.as_json()
         if ctl:
@@ -333,8 +349,7 @@ def solve(
         if ctl:
             click.echo(_controller_text(ctl))
     if patch_path:
-        spec = Path(patch_path).with_name(Path(patch_path).stem + ".spec.txt")
-        click.echo(f"wrote {patch_path} ({chosen}) and {spec}", err=as_json)
+        click.echo(f"wrote {patch_path} ({chosen}) and {spec_path(patch_path)}", err=as_json)
 
 
 def _controller(rb, pl, log, result) -> dict:

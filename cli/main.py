@@ -2,7 +2,9 @@
 
 Every command has a Python API twin in :mod:`wirecal.solver` or :mod:`wirecal.gen`;
 the commands only parse options, call it, and print. A :class:`WirecalError` is printed
-as ``error: …`` lines on stderr with exit status 2, never as a traceback.
+as ``error: …`` lines on stderr, never as a traceback. Exit statuses: 0 done; 1 a run or
+program stopped, or a check asked for failed (``psi --strict``); 2 bad input — a file,
+option or log to fix (click's own usage errors too); 3 is kept for the plausibility gate.
 """
 
 from __future__ import annotations
@@ -26,16 +28,20 @@ def _version() -> str:
 
 
 def user_errors(func):
-    """Turn :class:`WirecalError` into a clear message and exit status 2."""
+    """Turn :class:`WirecalError` (and any stray ``OSError``) into ``error: …`` lines and
+    exit status 2."""
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         try:
             return func(*args, **kwargs)
         except WirecalError as exc:
-            for line in exc.problems:
-                click.echo(f"error: {line}", err=True)
-            sys.exit(2)
+            problems = exc.problems
+        except OSError as exc:
+            problems = [f"{exc.filename or 'file'}: {exc.strerror or exc}"]
+        for line in problems:
+            click.echo(f"error: {line}", err=True)
+        sys.exit(2)
 
     return wrapper
 

@@ -6,8 +6,9 @@ import click
 import numpy as np
 
 from wirecal.cli.main import main, print_json, user_errors
+from wirecal.cli.options import SEED, number
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import write_atomic
+from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.plan_file import plan_to_toml
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.planner import PlanOptions, design
@@ -50,14 +51,14 @@ def _joints(value: str | None, n: int) -> np.ndarray | None:
 )
 @click.option(
     "--tol",
-    type=click.FloatRange(0.0, 1.0),
+    type=number(0.0, 1.0),
     default=_D.tol,
     show_default=True,
     help="Isolation while designing: later parameters' |Ψ| at most TOL·|Ψ_j|.",
 )
 @click.option(
     "--seed",
-    type=int,
+    type=SEED,
     default=_D.seed,
     show_default=True,
     help="Seed of the candidate search (the same seed, the same plan).",
@@ -77,10 +78,18 @@ def plan(robot, output, theta0, points_per_step, tol, seed, as_json, force):
     plan file explains itself in its header and passes 'wirecal psi'.
     """
     rb = load_robot(robot)
+    theta0_deg = _joints(theta0, rb.n_joints)
+    if rb.controller_problem():
+        click.echo(
+            f"note: {rb.controller_problem()}: 'psi' and 'observe' take this plan; "
+            "'gen', 'simulate' and 'solve' do not",
+            err=True,
+        )
     opt = PlanOptions(points_per_step=points_per_step, tol=tol, seed=seed)
-    d = design(rb, _joints(theta0, rb.n_joints), opt)
-    if output:
-        write_atomic(output, plan_to_toml(d.plan, d.header()), force=force)
+    with Outputs([output] if output else [], force=force, inputs=[robot]) as out:
+        d = design(rb, theta0_deg, opt)
+        if output:
+            out.put(output, plan_to_toml(d.plan, d.header()))
     if as_json:
         print_json(
             {

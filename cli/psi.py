@@ -9,6 +9,7 @@ import numpy as np
 
 from wirecal.app.psi_view import psi_table
 from wirecal.cli.main import main, print_json, user_errors
+from wirecal.cli.options import NON_NEGATIVE
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
 from wirecal.solver.formats.plan_file import load_plan
@@ -31,7 +32,7 @@ def _fmt(x: float) -> str:
 @click.option("--json", "as_json", is_flag=True, help="Print the table as JSON.")
 @click.option(
     "--tol",
-    type=click.FloatRange(min=0.0),
+    type=NON_NEGATIVE,
     default=DEFAULT_TOL,
     show_default=True,
     help="Largest |Ψ| of a later parameter, relative to the step's own |Ψ_j|, "

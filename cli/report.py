@@ -10,7 +10,7 @@ import click
 from wirecal.app.report import Validation, render_report
 from wirecal.cli.main import main, user_errors
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import write_atomic
+from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
@@ -60,6 +60,18 @@ def report(robot, plan, log, output, config_logs, plane_logs, controller, truth_
     """Write a self-contained HTML report of a calibration: the validation histograms
     before and after (paper Fig. 6 and 7), the parameters with σ and correlations,
     step-by-step against joint, the plan's Ψ per step and the robot."""
+    if not str(output).endswith((".html", ".htm")):
+        raise WirecalError(f"{output}: give the report an .html name")
+    inputs = [robot, plan, log, *(config_logs or ()), *(plane_logs or ())]
+    inputs += [truth_file] if truth_file else []
+    with Outputs([output], force=force, inputs=inputs) as out:
+        out.put(
+            output, _report_html(robot, plan, log, config_logs, plane_logs, controller, truth_file)
+        )
+    click.echo(f"wrote {output}")
+
+
+def _report_html(robot, plan, log, config_logs, plane_logs, controller, truth_file) -> str:
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
     result = solve(rb, pl, load_measurements(log, pl, rb))
@@ -82,7 +94,4 @@ def report(robot, plan, log, output, config_logs, plane_logs, controller, truth_
         with tempfile.TemporaryDirectory() as tmp:
             ctl = controller_comparison(rb, pl, read_log(log), result, Path(tmp))
     truth = load_errors(truth_file, rb) if truth_file else None
-    if not str(output).endswith((".html", ".htm")):
-        raise WirecalError(f"{output}: give the report an .html name")
-    write_atomic(output, render_report(result, validations, ctl, truth), force=force)
-    click.echo(f"wrote {output}")
+    return render_report(result, validations, ctl, truth)

@@ -81,34 +81,40 @@ def _ranges(values: list[int]) -> str:
 
 
 def check_log(
-    log: Log, plan: Plan, robot: Robot, tol: Tolerances = Tolerances(), force: bool = False
+    log: Log,
+    plan: Plan,
+    robot: Robot,
+    tol: Tolerances = Tolerances(),
+    accept_foreign: bool = False,
 ) -> Measurements:
     """Validate a log against the plan and robot; wire lengths for every plan point.
 
-    Raises :class:`WirecalError` listing every ``file:line: problem``. A fingerprint or
-    robot-name mismatch is refused unless ``force``. Missing points are not an error here:
-    they are listed in the result (a run that stopped is still readable).
+    Raises :class:`WirecalError` listing every ``file:line: problem``. A fingerprint,
+    robot-name or encoder-scale mismatch is refused unless ``accept_foreign``. Missing
+    points are not an error here: they are listed in the result (a run that stopped is
+    still readable).
     """
     src = log.source
     problems: list[str] = []
-    if log.plan != plan.fingerprint() and not force:
+    if log.plan != plan.fingerprint() and not accept_foreign:
         problems.append(
             f"{src}: plan fingerprint {log.plan[:16]}… differs from {plan.source} "
             f"({plan.fingerprint()[:16]}…): the log was taken with another plan; "
-            "use that plan, or --force if you are sure"
+            "use that plan, or --accept-foreign if you are sure"
         )
-    if log.robot != robot.name and not force:
+    if log.robot != robot.name and not accept_foreign:
         problems.append(
             f"{src}: robot {log.robot!r} differs from {robot.source} "
-            f"({robot.name!r}); use the matching robot file, or --force"
+            f"({robot.name!r}); use the matching robot file, or --accept-foreign"
         )
     if (
         not math.isclose(abs(log.mm_per_count), abs(robot.encoder.mm_per_count), rel_tol=1e-6)
-        and not force
+        and not accept_foreign
     ):
         problems.append(
             f"{src}: mm_per_count {log.mm_per_count!r} differs from the robot "
-            f"file's encoder.mm_per_count {robot.encoder.mm_per_count!r}"
+            f"file's encoder.mm_per_count {robot.encoder.mm_per_count!r}; use the matching "
+            "robot file, or --accept-foreign"
         )
     if problems:  # a log of another plan or robot: row-by-row complaints would be noise
         raise WirecalError(problems)
@@ -193,9 +199,13 @@ def check_log(
         def wrapped(c, ref):
             return (np.asarray(c) - ref + modulus / 2) % modulus - modulus / 2
 
+        # A slip moves every later zero too: blame the step where the drift first leaves
+        # the tolerance, and any later step where it jumps again, not each step after it.
+        before = 0.0
         for s, r in sorted(zeros.items()):
             drift[s] = float(wrapped(r.counts, first) * mpc)
-            if abs(drift[s]) > tol.zero_mm:
+            jumped = abs(drift[s] - before) > tol.zero_mm
+            if jumped or (abs(drift[s]) > tol.zero_mm >= abs(before)):
                 prev = max(s - 1, 1)
                 bad(
                     r,
@@ -204,6 +214,7 @@ def check_log(
                     f"moved after the zero of step {prev}; remount at θ0 and repeat from "
                     f"step {prev}",
                 )
+            before = drift[s]
         for s in sorted({int(x) for x in step_no[~np.isnan(counts)]}):
             if s not in zeros:
                 problems.append(
@@ -248,7 +259,11 @@ def check_log(
 
 
 def load_measurements(
-    path: str | Path, plan: Plan, robot: Robot, tol: Tolerances = Tolerances(), force: bool = False
+    path: str | Path,
+    plan: Plan,
+    robot: Robot,
+    tol: Tolerances = Tolerances(),
+    accept_foreign: bool = False,
 ) -> Measurements:
     """Read a log file and check it against the plan (:func:`read_log` + :func:`check_log`)."""
-    return check_log(read_log(path), plan, robot, tol, force)
+    return check_log(read_log(path), plan, robot, tol, accept_foreign)

@@ -11,6 +11,9 @@ import numpy as np
 
 from wirecal.solver import params as P
 
+CONTROLLER_JOINTS = 6
+"""Joints of the arms the controller programs and the log format are written for."""
+
 DEFAULT_LINK_RADIUS_MM = 50.0
 """Capsule radius of a link when the robot file gives none (for the wire clearance)."""
 
@@ -65,3 +68,14 @@ class Robot:
         col = {"al": 0, "a": 1, "th": 2, "d": 3}[p.kind]
         value = float(self.dh[p.row, col])
         return math.degrees(value) if p.angular else value
+
+    def controller_problem(self) -> str | None:
+        """Why the controller programs and the log cannot serve this arm, or None.
+
+        Both are written for 6-joint arms (the log has the columns j1..j6)."""
+        if self.n_joints == CONTROLLER_JOINTS:
+            return None
+        return (
+            f"{self.source}: {self.n_joints} joints; the controller programs and the log "
+            f"format are for {CONTROLLER_JOINTS}-joint arms"
+        )

@@ -89,12 +89,12 @@ def test_wrong_columns(log_text):
         parse_log(text, "run.csv")
 
 
-def test_fingerprint_mismatch_refused_unless_forced(viper, paper_plan, printed_plan, log_text):
+def test_fingerprint_mismatch_refused_unless_accepted(viper, paper_plan, printed_plan, log_text):
     got = problems(log_text, viper, printed_plan)
     assert len(got) == 1
-    assert "the log was taken with another plan; use that plan, or --force" in got[0]
-    # --force reads it anyway (against the printed plan the step-7 joints then differ)
-    forced = problems(log_text, viper, printed_plan, force=True)
+    assert "the log was taken with another plan; use that plan, or --accept-foreign" in got[0]
+    # --accept-foreign reads it anyway (against the printed plan the step-7 joints then differ)
+    forced = problems(log_text, viper, printed_plan, accept_foreign=True)
     assert [p.split(": ", 1)[1] for p in forced] == [
         f"joint 2 is -{a}.0000 deg; the plan says -110 (tolerance 0.05): the robot was not "
         "where the plan puts it"

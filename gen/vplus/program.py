@@ -8,6 +8,7 @@ robot, plan, options and wirecal version give the same bytes.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -24,7 +25,7 @@ from wirecal.gen.vplus.literals import (
     ppoint,
 )
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import check_writable, write_atomic
+from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.validation import CONFIGS, Setup, config_poses, plate_grid
@@ -73,11 +74,8 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
             1 <= len(stem) <= 8 and len(ext) <= 3 and stem.isalnum() and (ext.isalnum() or not ext)
         ):
             problems.append(f"controller file name {name!r}: use 8.3 letters and digits")
-    if robot.n_joints != 6:
-        problems.append(
-            f"{robot.source}: {robot.n_joints} joints; the controller programs "
-            "and the log format are for 6-joint arms"
-        )
+    if robot.controller_problem():
+        problems.append(robot.controller_problem())
     if any(not 32 <= ord(ch) <= 126 or ch == '"' for ch in robot.name):
         problems.append(
             f"{robot.source}: name {robot.name!r}: a V+ string holds printable "
@@ -263,12 +261,12 @@ def _num(x: float) -> str:
     return f"{x:g}"
 
 
-def write_module(out_dir: str | Path, text: str, force: bool = False) -> Path:
-    """Write the module into ``out_dir`` (created if missing), atomically."""
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise WirecalError(f"{out}: is a file; give a folder for the controller programs")
-    out.mkdir(parents=True, exist_ok=True)
-    path = out / MODULE_NAME
-    check_writable([path], force)
-    return write_atomic(path, text, force=force)
+def write_module(
+    out_dir: str | Path, text: str, force: bool = False, inputs: Iterable[str | Path] = ()
+) -> Path:
+    """Write the module into ``out_dir`` (created if missing, and removed again if the
+    write fails); never over one of ``inputs``."""
+    path = Path(out_dir) / MODULE_NAME
+    with Outputs([path], force=force, inputs=inputs, folder=out_dir) as out:
+        out.put(path, text)
+    return path

@@ -1,45 +1,261 @@
-"""Writing output files safely: atomically, and never over an existing file unless asked."""
+"""Output files that never lose data, and reading TOML inputs.
+
+A command's outputs are one :class:`Outputs` set: checked and reserved before any work,
+written to temporary files beside their final names, then published together — all of
+them or none. Publishing a new file is a hard link of its temporary file, which fails if
+the name exists: of two runs writing the same name at once exactly one wins, and it never
+overwrites a file that appeared meanwhile. Only ``force`` replaces a file (by rename, the
+old file's mode kept); an input is never replaced. New files get mode ``0666 & ~umask``,
+like any file a shell command creates.
+"""
 
 from __future__ import annotations
 
+import errno
 import os
 import tempfile
 import tomllib
+from collections.abc import Iterable
 from pathlib import Path
+from types import TracebackType
 from typing import Any
 
 from wirecal.solver.errors import WirecalError
 
-
-def check_writable(paths: list[Path], force: bool = False) -> None:
-    """Refuse, before anything is written, if an output exists (unless ``force``) or its
-    folder is missing; all problems at once."""
-    problems = []
-    for path in map(Path, paths):
-        if path.exists() and not force:
-            problems.append(f"{path}: exists; choose another name or pass --force to replace it")
-        elif not path.parent.is_dir():
-            problems.append(f"{path}: folder {path.parent} does not exist")
-    if problems:
-        raise WirecalError(problems)
+# Filesystems without hard links (FAT on a USB stick, some network shares) answer these.
+_NO_LINKS = {errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EXDEV, errno.ENOSYS}
 
 
-def write_atomic(path: str | Path, text: str, *, force: bool = False) -> Path:
-    """Write ``text`` to ``path`` via a temporary file and rename, so a reader never sees
-    half a file. Refuse to replace an existing file unless ``force``."""
-    path = Path(path)
-    check_writable([path], force)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+def os_problem(path: str | Path, exc: OSError) -> WirecalError:
+    """``path: reason`` for an operating-system failure (full disk, no permission, …)."""
+    return WirecalError(f"{path}: {exc.strerror or exc}")
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _same_file(a: Path, b: Path) -> bool:
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist yet
+        return a.resolve() == b.resolve()
+
+
+class Outputs:
+    """A command's output files, published all or none (see the module docstring).
+
+    Use as a context manager around the work that produces the texts::
+
+        with Outputs([log, truth], force=force, inputs=[robot, plan]) as out:
+            ...
+            out.put(log, log_text)
+            out.put(truth, truth_text)
+
+    Entering refuses, all problems at once, an existing output (unless ``force``), a
+    missing folder (unless it is ``folder``, which is created and removed again if the
+    command fails), a folder given as a file, an output named twice and an output that is
+    also an input; then it reserves a temporary file beside each output, so an unwritable
+    folder is found before the work. Leaving normally publishes every output that was
+    ``put`` (each one must be); leaving by an exception, or a failure while publishing,
+    withdraws whatever was published, restores replaced files and removes the temporaries.
+    Every ``OSError`` becomes a :class:`WirecalError` naming the output.
+    """
+
+    def __init__(
+        self,
+        paths: Iterable[str | Path],
+        *,
+        force: bool = False,
+        inputs: Iterable[str | Path] = (),
+        folder: str | Path | None = None,
+    ):
+        self.paths = [Path(p) for p in paths]
+        self.force = force
+        self.inputs = [Path(p) for p in inputs]
+        self.folder = Path(folder) if folder is not None else None
+        self._created_folder = False
+        self._tmp: dict[Path, Path] = {}
+        self._text: dict[Path, bytes] = {}
+
+    # -- reserve ---------------------------------------------------------------------
+    def __enter__(self) -> Outputs:
+        self._check()
+        try:
+            if self.folder is not None and not self.folder.exists():
+                try:
+                    self.folder.mkdir(parents=True)
+                except OSError as exc:
+                    raise os_problem(self.folder, exc) from None
+                self._created_folder = True
+            for path in self.paths:
+                try:
+                    fd, tmp = tempfile.mkstemp(
+                        dir=path.parent, prefix=f".{path.name}.", suffix=".tmp"
+                    )
+                except OSError as exc:
+                    raise os_problem(path, exc) from None
+                os.close(fd)
+                self._tmp[path] = Path(tmp)
+        except BaseException:
+            self._discard()
+            raise
+        return self
+
+    def _check(self) -> None:
+        problems = []
+        for k, path in enumerate(self.paths):
+            if path in self.paths[:k]:
+                problems.append(f"{path}: named for two outputs; give each its own name")
+                continue
+            clash = next((p for p in self.inputs if _same_file(path, p)), None)
+            if clash is not None:
+                problems.append(
+                    f"{path}: is also an input ({clash}); write the output to another name"
+                )
+            elif path.is_dir():
+                problems.append(f"{path}: is a folder; give a file name")
+            elif (path.exists() or path.is_symlink()) and not self.force:
+                problems.append(
+                    f"{path}: exists; choose another name or pass --force to replace it"
+                )
+            elif not path.parent.is_dir() and path.parent != self.folder:
+                problems.append(f"{path}: folder {path.parent} does not exist")
+        if self.folder is not None and self.folder.exists() and not self.folder.is_dir():
+            problems.append(f"{self.folder}: is a file; give a folder for the outputs")
+        if problems:
+            raise WirecalError(problems)
+
+    # -- fill ------------------------------------------------------------------------
+    def put(self, path: str | Path, text: str) -> Path:
+        """Write the text of output ``path`` (UTF-8, LF line ends) to its temporary file."""
+        path = Path(path)
+        data = text.encode("utf-8")
+        try:
+            with open(self._tmp[path], "wb") as f:
+                f.write(data)
+                f.flush()
+                os.fsync(f.fileno())
+        except OSError as exc:
+            raise os_problem(path, exc) from None
+        self._text[path] = data
+        return path
+
+    # -- publish ---------------------------------------------------------------------
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        try:
+            if kind is None:
+                missing = [p for p in self.paths if p not in self._text]
+                if missing:  # a programming error, not the user's
+                    raise RuntimeError(f"outputs never written: {missing}")
+                self._publish()
+                self._created_folder = False  # it holds the outputs now
+        finally:
+            self._discard()
+
+    def _publish(self) -> None:
+        mode = 0o666 & ~_umask()
+        done: list[tuple[Path, Path | None]] = []  # (published path, backup of the old one)
+        try:
+            for path in self.paths:
+                tmp = self._tmp[path]
+                try:
+                    done.append((path, self._publish_one(path, tmp, mode)))
+                except FileExistsError:
+                    raise WirecalError(
+                        f"{path}: appeared while this command ran (another run writing "
+                        "the same name?); nothing written"
+                    ) from None
+                except OSError as exc:
+                    raise os_problem(path, exc) from None
+        except BaseException:
+            for path, backup in reversed(done):
+                self._withdraw(path, backup)
+            raise
+        for _, backup in done:
+            if backup is not None:
+                backup.unlink(missing_ok=True)
+
+    def _publish_one(self, path: Path, tmp: Path, mode: int) -> Path | None:
+        """Publish one output; the backup of a replaced file, if one was replaced."""
+        try:
+            os.chmod(tmp, mode)
+            os.link(tmp, path)
+            return None
+        except FileExistsError:
+            if not self.force:
+                raise
+        except OSError as exc:
+            if exc.errno not in _NO_LINKS:
+                raise
+            if not path.exists():
+                self._create_exclusive(path, mode)
+                return None
+            if not self.force:
+                raise FileExistsError(errno.EEXIST, "exists", str(path)) from None
+        # --force over an existing file: keep its mode, keep it aside until all are done.
+        os.chmod(tmp, os.stat(path).st_mode & 0o7777)
+        backup = tmp.with_name(tmp.name + ".old")
+        try:
+            os.link(path, backup)
+        except OSError as exc:
+            if exc.errno not in _NO_LINKS:
+                raise
+            backup.write_bytes(path.read_bytes())
+        try:
+            os.replace(tmp, path)
+        except BaseException:
+            backup.unlink(missing_ok=True)
+            raise
+        return backup
+
+    def _create_exclusive(self, path: Path, mode: int) -> None:
+        """No hard links here: create the name exclusively and copy the text in."""
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, mode)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                f.write(self._text[path])
+                f.flush()
+                os.fsync(f.fileno())
+        except BaseException:
+            path.unlink(missing_ok=True)
+            raise
+
+    def _withdraw(self, path: Path, backup: Path | None) -> None:
+        try:
+            if backup is not None:
+                os.replace(backup, path)
+            else:
+                path.unlink(missing_ok=True)
+        except OSError:  # pragma: no cover - nothing better to do while failing already
+            pass
+
+    def _discard(self) -> None:
+        for tmp in self._tmp.values():
+            tmp.unlink(missing_ok=True)
+        self._tmp.clear()
+        if self._created_folder and self.folder is not None:
+            try:
+                self.folder.rmdir()  # only if still empty, i.e. the command failed
+            except OSError:
+                pass
+            self._created_folder = False
+
+
+def write_atomic(
+    path: str | Path, text: str, *, force: bool = False, inputs: Iterable[str | Path] = ()
+) -> Path:
+    """Write one output file (an :class:`Outputs` set of one)."""
+    with Outputs([path], force=force, inputs=inputs) as out:
+        out.put(path, text)
+    return Path(path)
 
 
 def read_toml(path: str | Path, what: str) -> dict[str, Any]:

@@ -13,7 +13,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from wirecal.solver import params as P
-from wirecal.solver.formats.fileio import check_writable, write_atomic
+from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.identify import Estimate
 from wirecal.solver.robot import Robot
 
@@ -88,14 +88,14 @@ def spec_table(robot: Robot, estimate: Estimate) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_patch(
-    path: str | Path, robot: Robot, estimate: Estimate, *, force: bool = False, **meta
-) -> tuple[Path, Path]:
-    """Write the patch and its SPEC table beside it, atomically; refuse to overwrite
-    either unless ``force``."""
+def spec_path(path: str | Path) -> Path:
+    """Where the SPEC table of the patch ``path`` goes: ``<name>.spec.txt`` beside it."""
     path = Path(path)
-    spec = path.with_name(path.stem + ".spec.txt")
-    check_writable([path, spec], force)
-    write_atomic(path, patch_text(robot, estimate, **meta), force=force)
-    write_atomic(spec, spec_table(robot, estimate), force=force)
-    return path, spec
+    return path.with_name(path.stem + ".spec.txt")
+
+
+def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, **meta) -> None:
+    """Put the patch and its SPEC table (:func:`spec_path`) into the output set ``out``,
+    which must hold both names: they are published together or not at all."""
+    out.put(path, patch_text(robot, estimate, **meta))
+    out.put(spec_path(path), spec_table(robot, estimate))

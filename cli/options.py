@@ -1,0 +1,40 @@
+"""Parameter types shared by every command, so each numeric option is checked the same way."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import click
+
+
+class Number(click.FloatRange):
+    """A finite number within optional bounds.
+
+    click's ``FloatRange`` lets NaN through (every comparison with NaN is false), so
+    ``--zero-tol nan`` would switch a check off; this type refuses NaN and ±inf first.
+    """
+
+    name = "number"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        rv = click.FLOAT.convert(value, param, ctx)
+        if not math.isfinite(rv):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return super().convert(rv, param, ctx)
+
+
+def number(
+    min: float | None = None,
+    max: float | None = None,
+    *,
+    min_open: bool = False,
+    max_open: bool = False,
+) -> Number:
+    """A finite number in [min, max] (open ends as asked); no bound where None."""
+    return Number(min, max, min_open=min_open, max_open=max_open)
+
+
+POSITIVE = number(0.0, min_open=True)  # tolerances, bounds, sizes: > 0
+NON_NEGATIVE = number(0.0)  # noises, margins, scales: ≥ 0
+SEED = click.IntRange(0, 2**63 - 1)  # numpy's generators take non-negative seeds
