@@ -19,7 +19,7 @@ from wirecal.gen.templating import render
 from wirecal.solver.kinematics import perturbed
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult
-from wirecal.solver.validation_analysis import Stats
+from wirecal.solver.validation_analysis import Stats, reduction
 
 BEFORE, AFTER = "#d1495b", "#2e86ab"
 
@@ -33,10 +33,8 @@ class Validation:
     after: Stats
 
     @property
-    def reduction(self) -> dict[str, float]:
-        return {
-            k: 1 - getattr(self.after, k) / getattr(self.before, k) for k in ("mean", "std", "max")
-        }
+    def reduction(self) -> dict[str, float | None]:
+        return reduction(self.before, self.after)
 
 
 def _png(fig) -> str:

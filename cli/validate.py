@@ -6,7 +6,12 @@ import click
 
 from wirecal.cli.main import main, print_json, user_errors
 from wirecal.solver.formats.validation_files import read_validation_log
-from wirecal.solver.validation_analysis import Stats, config_discrepancy, plane_residuals
+from wirecal.solver.validation_analysis import (
+    Stats,
+    config_discrepancy,
+    plane_residuals,
+    reduction,
+)
 
 
 def analyse(kind: str, path: str) -> Stats:
@@ -35,10 +40,7 @@ def validate(kind, before, after, as_json):
         for name, s in runs.items()
     }
     if after:
-        figures["reduction"] = {
-            k: 1 - runs["after"].__dict__[k] / runs["before"].__dict__[k]
-            for k in ("mean", "std", "max")
-        }
+        figures["reduction"] = reduction(runs["before"], runs["after"])
     if as_json:
         print_json({"kind": kind, **figures})
         return
@@ -52,7 +54,10 @@ def validate(kind, before, after, as_json):
     for name, s in runs.items():
         click.echo(f"{name:<10}{s.values.size:5d}{s.mean:10.4f}{s.std:10.4f}{s.max:10.4f}")
     if after:
-        r = figures["reduction"]
         click.echo(
-            f"{'reduction':<15}{100 * r['mean']:9.0f}%{100 * r['std']:9.0f}%{100 * r['max']:9.0f}%"
+            f"{'reduction':<15}"
+            + "".join(
+                f"{'–':>10}" if r is None else f"{100 * r:9.0f}%"
+                for r in figures["reduction"].values()
+            )
         )

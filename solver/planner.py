@@ -265,10 +265,23 @@ def design(
     robot: Robot, theta0: np.ndarray | None = None, opt: PlanOptions = PlanOptions()
 ) -> Design:
     """A plan for the robot file's parameters (θ0 chosen when not given)."""
+    span = robot.joint_max_deg - robot.joint_min_deg
+    narrow = np.flatnonzero(span <= 2 * opt.margin_deg)
+    if narrow.size:
+        raise WirecalError(
+            [
+                f"{robot.source}: joint {j + 1}: range {span[j]:g} deg leaves no room for "
+                f"points {opt.margin_deg:g} deg inside both limits; check joint_min_deg and "
+                "joint_max_deg (degrees)"
+                for j in narrow
+            ]
+        )
     if theta0 is not None:
         return _design_at(robot, np.asarray(theta0, dtype=float), opt)
     rng = np.random.default_rng([opt.seed, 99])
-    lo, hi = robot.joint_min_deg + 20, robot.joint_max_deg - 20
+    # θ0 is drawn 20 deg inside the limits, less on a joint with a narrow range
+    inset = np.clip(span / 4, opt.margin_deg, 20.0)
+    lo, hi = robot.joint_min_deg + inset, robot.joint_max_deg - inset
     best, problems = None, []
     for _ in range(6):
         t0 = np.round(rng.uniform(lo, hi), 0)

@@ -25,6 +25,16 @@ class Stats:
         return cls(v, float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else 0.0, float(v.max()))
 
 
+def reduction(before: Stats, after: Stats) -> dict[str, float | None]:
+    """1 − after/before of the mean, std and max; None where the before figure is 0
+    (nothing to reduce)."""
+    out: dict[str, float | None] = {}
+    for k in ("mean", "std", "max"):
+        b = getattr(before, k)
+        out[k] = 1 - getattr(after, k) / b if b > 0 else None
+    return out
+
+
 def config_discrepancy(log: ValidationLog, bits: int = 24) -> Stats:
     """Per pose, the largest difference among the wire lengths of its four configurations
     (mm); the counts are compared modulo the counter width."""
@@ -53,5 +63,14 @@ def plane_residuals(log: ValidationLog) -> tuple[Stats, np.ndarray]:
     (a, b, c) (paper eq. 21–25)."""
     x, y, z = log.rows[:, 2], log.rows[:, 3], log.rows[:, 4]
     U = np.column_stack([x, y, np.ones_like(x)])
+    xy = np.column_stack([x, y])
+    sv = np.linalg.svd(xy - xy.mean(axis=0), compute_uv=False) if len(xy) >= 3 else [0.0, 0.0]
+    if not sv[1] > 1e-9 * max(1.0, float(np.abs(xy).max())):
+        raise WirecalError(
+            f"{log.source}: the plane fit needs at least three probed points not on one "
+            f"line; the log has {len(xy)} ({len(np.unique(xy, axis=0))} distinct)"
+            + ("" if len(np.unique(xy, axis=0)) < 3 else ", all on one line")
+            + "; probe the whole grid"
+        )
     coef, *_ = np.linalg.lstsq(U, z, rcond=None)
     return Stats.of(np.abs(U @ coef - z)), coef

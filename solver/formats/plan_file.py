@@ -23,8 +23,10 @@ from typing import Any
 import numpy as np
 
 from wirecal.solver import params as P
+from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import Problems
 from wirecal.solver.formats.fileio import read_toml
+from wirecal.solver.kinematics import perturbed
 from wirecal.solver.plan import Plan, Step
 from wirecal.solver.robot import Robot
 
@@ -109,6 +111,8 @@ def plan_from_dict(data: dict[str, Any], robot: Robot, source: str = "<plan>") -
         via = _rows(raw.get("via_deg", []), f"{where}.via_deg", n, pr, required=False)
         if points is not None:
             _check_limits(points, robot, f"{where}.points_deg", pr)
+            if theta0 is not None:
+                _check_wire(points, theta0, robot, f"{where}.points_deg", pr)
         if via is not None:
             _check_limits(via, robot, f"{where}.via_deg", pr)
         omega = raw.get("omega")
@@ -177,6 +181,21 @@ def _check_limits(q: np.ndarray, robot: Robot, where: str, pr: Problems) -> None
             pr.add(
                 label, f"joint {j + 1} = {row[j]:g} deg is beyond its limits [{lo[j]:g}, {hi[j]:g}]"
             )
+
+
+MIN_WIRE_MM = 1.0
+"""Shortest wire length a plan point may have: at θ0 itself the wire has no direction, so
+its derivatives (Ψ, the Jacobian) are undefined."""
+
+
+def _check_wire(q: np.ndarray, theta0: np.ndarray, robot: Robot, where: str, pr: Problems) -> None:
+    d = wire_lengths(perturbed(robot), np.radians(q), np.radians(theta0))
+    for i in np.flatnonzero(~(d >= MIN_WIRE_MM)):
+        pr.add(
+            f"{where}[{i + 1}]",
+            f"the wire length there is {d[i]:.3g} mm (below {MIN_WIRE_MM:g} mm): the point "
+            "(nearly) coincides with θ0, where the wire has no direction; move or remove it",
+        )
 
 
 def plan_to_toml(plan: Plan, header: str = "") -> str:
