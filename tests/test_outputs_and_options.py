@@ -407,7 +407,7 @@ def test_validate_configuration_zero_before(tmp_path):
     ("rows", "what"),
     [
         (["1,1,0,0,5", "1,2,10,0,5"], "the log has 2 (2 distinct)"),
-        (["1,1,0,0,5", "1,2,10,0,5", "1,3,20,0,5", "1,4,30,0,6"], "the log has 4 (4 distinct), all on"),
+        (["1,1,0,0,5", "1,2,10,0,5", "1,3,20,0,5", "1,4,30,0,6"], "log has 4 (4 distinct), all"),
         ([f"1,{c},7,8,5" for c in range(1, 6)], "the log has 5 (1 distinct)"),
     ],
 )
