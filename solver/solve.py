@@ -133,6 +133,13 @@ def solve(
 
     estimates: dict[str, Estimate] = {}
     sw = run_stepwise(problem, omega, psi)
+    if not np.all(np.isfinite(sw.values)):
+        bad = [n for n, v in zip(names, sw.values, strict=True) if not np.isfinite(v)]
+        raise WirecalError(
+            f"{robot.source}: the step-by-step identification gave no finite value for "
+            f"{', '.join(bad)}: the model's wire lengths are not finite numbers; check the "
+            "robot file's sizes and units (mm, deg)"
+        )
     if "stepwise" in methods:
         estimates["stepwise"] = sw
     jt = joint(problem, sw.values / problem.scale, loss="soft_l1" if robust else "linear")

@@ -1,0 +1,194 @@
+"""Every command over hostile inputs: a clear ``error:`` line and exit status 1–3, or a
+normal result, never a traceback.
+
+Fixed cases (empty, binary, a folder, a missing file) for every input of every command,
+then hypothesis-mutated robot files, plans and logs through the fast commands.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+
+import pytest
+from click.testing import CliRunner
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from wirecal.cli.main import main
+
+from .conftest import VIPER
+
+ROBOT = VIPER / "robot.toml"
+PLAN = VIPER / "paper_plan.toml"
+NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
+HOSTILE = ["nan", "inf", "-inf", "-1", "0", "1e300", "-1e300", "1e-300", '"x"', "[]", "true"]
+
+
+def outcome_is_clean(r) -> None:
+    """Exit 0, or 1–3 with an ``error:`` line; never an exception (a traceback)."""
+    if r.exception is not None and not isinstance(r.exception, SystemExit):
+        raise AssertionError(f"traceback: {r.exception!r}\n{r.output}") from r.exception
+    assert "Traceback" not in r.output
+    if r.exit_code != 0:
+        assert r.exit_code in (1, 2, 3), r.output
+        assert re.search(r"^(error|Error): ", r.output, re.M), r.output
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+@pytest.fixture(scope="module")
+def log(tmp_path_factory):
+    path = tmp_path_factory.mktemp("hostile") / "run.csv"
+    r = invoke("simulate", ROBOT, PLAN, "-o", path, "--seed", 5)
+    assert r.exit_code == 0, r.output
+    return path
+
+
+def _hostile_file(tmp_path, kind):
+    path = tmp_path / f"{kind}.in"
+    if kind == "empty":
+        path.write_bytes(b"")
+    elif kind == "binary":
+        path.write_bytes(bytes(range(256)) * 8)
+    elif kind == "folder":
+        path.mkdir()
+    elif kind == "bom-garbage":
+        path.write_bytes(b"\xef\xbb\xbf= = =\n[[[\n")
+    return path  # "missing": never created
+
+
+COMMANDS = {
+    # name: (argument list with ROBOT/PLAN/LOG/VLOG/OUT slots, slots hostile inputs go into)
+    "psi": (["psi", "ROBOT", "PLAN"], ["ROBOT", "PLAN"]),
+    "observe": (["observe", "ROBOT", "PLAN"], ["ROBOT", "PLAN"]),
+    "plan": (["plan", "ROBOT", "-o", "OUT"], ["ROBOT"]),
+    "gen": (["gen", "ROBOT", "PLAN", "-o", "OUT"], ["ROBOT", "PLAN"]),
+    "simulate": (["simulate", "ROBOT", "PLAN", "-o", "OUT"], ["ROBOT", "PLAN"]),
+    "solve": (["solve", "ROBOT", "PLAN", "LOG", "-o", "OUT"], ["ROBOT", "PLAN", "LOG"]),
+    "report": (["report", "ROBOT", "PLAN", "LOG", "-o", "OUT.html"], ["ROBOT", "PLAN", "LOG"]),
+    "validate configuration": (["validate", "configuration", "VLOG"], ["VLOG"]),
+    "validate plane": (["validate", "plane", "VLOG"], ["VLOG"]),
+}
+CASES = [
+    (name, slot, kind)
+    for name, (_, slots) in COMMANDS.items()
+    for slot in slots
+    for kind in ("empty", "binary", "folder", "missing", "bom-garbage")
+]
+
+
+@pytest.mark.parametrize(("name", "slot", "kind"), CASES)
+def test_fixed_hostile_inputs(tmp_path, log, name, slot, kind):
+    args, _ = COMMANDS[name]
+    out = tmp_path / "out"
+    values = {"ROBOT": ROBOT, "PLAN": PLAN, "LOG": log, "VLOG": log, "OUT": out}
+    values["OUT.html"] = tmp_path / "out.html"
+    values[slot] = _hostile_file(tmp_path, kind)
+    r = invoke(*(values.get(a, a) for a in args))
+    outcome_is_clean(r)
+    assert r.exit_code != 0
+    assert not out.exists() and not (tmp_path / "out.html").exists()
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["demo", "-o", "FILE"],
+        ["gen", ROBOT, PLAN, "-o", "FILE"],
+        ["simulate", ROBOT, PLAN, "-o", "DIR"],
+        ["solve", ROBOT, PLAN, "LOG", "-o", "DIR"],
+        ["simulate", ROBOT, PLAN, "-o", "NOFOLDER/x.csv"],
+        ["gen", ROBOT, PLAN, "-o", "OUT", "--patch", "LOG"],
+        ["gen", ROBOT, PLAN, "-o", "OUT", "--validation", "FILE"],
+        ["simulate", ROBOT, PLAN, "-o", "OUT", "--errors", "LOG"],
+        ["report", ROBOT, PLAN, "LOG", "-o", "OUT.html", "--truth", "DIR"],
+        ["report", ROBOT, PLAN, "LOG", "-o", "OUT.html", "--plane", "LOG", "LOG"],
+    ],
+    ids=lambda a: " ".join(str(x) for x in a),
+)
+def test_hostile_output_and_option_files(tmp_path, log, args):
+    (tmp_path / "DIR").mkdir()
+    (tmp_path / "FILE").write_text("a file\n")
+    values = {"LOG": log}
+    args = [values.get(a, tmp_path / a if str(a).isupper() or "/" in str(a) else a) for a in args]
+    r = invoke(*args)
+    outcome_is_clean(r)
+    assert r.exit_code != 0
+    assert not (tmp_path / "OUT").exists() and not (tmp_path / "OUT.html").exists()
+    assert (tmp_path / "FILE").read_text() == "a file\n"
+
+
+@st.composite
+def mutated(draw, text: str) -> str:
+    """The text with one hostile edit: a number replaced, a line dropped or doubled, the
+    text cut short, or a stray character inserted."""
+    lines = text.splitlines(keepends=True)
+    k = draw(st.integers(0, len(lines) - 1))
+    how = draw(st.sampled_from(["number", "number", "number", "drop", "double", "cut", "insert"]))
+    if how == "number":
+        numbers = [m.span() for m in NUMBER.finditer(lines[k])]
+        if numbers:
+            a, b = draw(st.sampled_from(numbers))
+            lines[k] = lines[k][:a] + draw(st.sampled_from(HOSTILE)) + lines[k][b:]
+    elif how == "drop":
+        del lines[k]
+    elif how == "double":
+        lines.insert(k, lines[k])
+    elif how == "insert":
+        pos = draw(st.integers(0, len(lines[k])))
+        ch = draw(st.sampled_from([",", '"', "\t", "#", "=", "\x00", "é", "]"]))
+        lines[k] = lines[k][:pos] + ch + lines[k][pos:]
+    out = "".join(lines)
+    if how == "cut":
+        out = out[: draw(st.integers(0, len(out)))]
+    return out
+
+
+FUZZ = settings(
+    max_examples=int(os.environ.get("WIRECAL_FUZZ_EXAMPLES", "40")),
+    deadline=None,
+    derandomize="WIRECAL_FUZZ_EXAMPLES" not in os.environ,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+
+
+@FUZZ
+@given(data=st.data())
+def test_mutated_robot_file(tmp_path, log, data):
+    robot = tmp_path / "robot.toml"
+    robot.write_text(data.draw(mutated(ROBOT.read_text())), encoding="utf-8")
+    for args in (["psi", robot, PLAN], ["solve", robot, PLAN, log, "--method", "stepwise"]):
+        outcome_is_clean(invoke(*args))
+
+
+@FUZZ
+@given(data=st.data())
+def test_mutated_plan(tmp_path, log, data):
+    plan = tmp_path / "plan.toml"
+    plan.write_text(data.draw(mutated(PLAN.read_text())), encoding="utf-8")
+    for args in (["observe", ROBOT, plan], ["solve", ROBOT, plan, log, "--method", "stepwise"]):
+        outcome_is_clean(invoke(*args))
+
+
+@FUZZ
+@given(data=st.data())
+def test_mutated_log(tmp_path, log, data):
+    bad = tmp_path / "run.csv"
+    bad.write_text(data.draw(mutated(log.read_text())), encoding="utf-8")
+    outcome_is_clean(invoke("solve", ROBOT, PLAN, bad, "--method", "stepwise"))
+
+
+def test_every_command_is_covered():
+    """A new command gets hostile inputs too."""
+    covered = {name.split()[0] for name in COMMANDS} | {"demo"}
+    assert set(main.commands) <= covered, set(main.commands) - covered
+
+
+def test_copy_of_example_is_clean(tmp_path):
+    """The corpus is hostile because of the edits, not because of the examples."""
+    shutil.copy(ROBOT, tmp_path / "robot.toml")
+    assert invoke("psi", tmp_path / "robot.toml", PLAN).exit_code == 0
