@@ -81,7 +81,7 @@ def _slip(ctx, param, value):
 )
 @click.option(
     "--samples",
-    type=click.IntRange(min=1),
+    type=click.IntRange(1, 1000),
     default=10,
     show_default=True,
     help="Counter readings averaged per point.",
@@ -163,6 +163,12 @@ def simulate(
     if slip is not None and not 1 <= slip[0] <= len(pl.steps):
         raise WirecalError(
             f"--slip {slip[0]}:{slip[1]:g}: {plan} has steps 1–{len(pl.steps)}; give one of them"
+        )
+    half = 2 ** (rb.encoder.counter_bits - 1)
+    if counter_start is not None and not -half <= counter_start < half:
+        raise WirecalError(
+            f"--counter-start {counter_start:g}: the robot file's "
+            f"{rb.encoder.counter_bits}-bit counter holds {-half}…{half - 1}"
         )
     truth_path = Path(truth_out) if truth_out else Path(log_path).with_suffix(".truth.toml")
     inputs = [robot, plan, *([errors_file] if errors_file else [])]

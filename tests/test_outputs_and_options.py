@@ -296,6 +296,8 @@ def test_gen_failure_removes_the_folder_it_made(tmp_path, monkeypatch):
         (["simulate", ROBOT, PLAN, "-o", "OUT", "--outlier-mm", "nan"], "not a finite number"),
         (["simulate", ROBOT, PLAN, "-o", "OUT", "--seed", "-5"], "is not in the range"),
         (["simulate", ROBOT, PLAN, "-o", "OUT", "--slip", "11:0.5"], "has steps 1–10"),
+        (["simulate", ROBOT, PLAN, "-o", "OUT", "--counter-start", "1e300"], "holds -8388608…"),
+        (["simulate", ROBOT, PLAN, "-o", "OUT", "--samples", "1000000000"], "1<=x<=1000"),
         (["gen", ROBOT, PLAN, "-o", "OUT", "--zero-tol", "nan"], "not a finite number"),
         (["gen", ROBOT, PLAN, "-o", "OUT", "--margin", "-1"], "is not in the range x>=0"),
         (["plan", ROBOT, "-o", "OUT", "--tol", "nan"], "not a finite number"),
