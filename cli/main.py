@@ -61,6 +61,9 @@ def main() -> None:
     Angles are in degrees, lengths in mm. Start with:
 
         wirecal psi examples/viper_s650/robot.toml examples/viper_s650/paper_plan.toml
+
+    Exit status: 0 done; 1 a run or program stopped, or a check asked for failed;
+    2 bad input (a file, option or log to fix: the error lines say which).
     """
 
 

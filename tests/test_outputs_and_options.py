@@ -426,3 +426,31 @@ def test_slip_blames_one_step(tmp_path):
     r = run("solve", ROBOT, PLAN, out)
     refused(r, "zero reading at step 5 is +0.5")
     assert r.output.count("error:") == 1, r.output
+
+
+def test_interrupt_leaves_nothing_and_folder_it_made_goes(tmp_path):
+    folder = tmp_path / "new"
+    with pytest.raises(KeyboardInterrupt), Outputs([folder / "a.txt"], folder=folder) as out:
+        out.put(folder / "a.txt", "a\n")
+        raise KeyboardInterrupt
+    assert files(tmp_path) == set()
+
+
+def test_force_replaces_all_or_restores_all(tmp_path, monkeypatch):
+    a, b = tmp_path / "a.txt", tmp_path / "b.txt"
+    a.write_text("old a\n")
+    b.write_text("old b\n")
+    real_replace = os.replace
+
+    def fail_on_b(src, dst):
+        if str(dst) == str(b):
+            raise OSError(errno.EIO, os.strerror(errno.EIO))
+        return real_replace(src, dst)
+
+    monkeypatch.setattr(fileio.os, "replace", fail_on_b)
+    with pytest.raises(WirecalError, match=r"b\.txt: Input/output error"):
+        with Outputs([a, b], force=True) as out:
+            out.put(a, "new a\n")
+            out.put(b, "new b\n")
+    assert (a.read_text(), b.read_text()) == ("old a\n", "old b\n")
+    assert files(tmp_path) == {"a.txt", "b.txt"}
