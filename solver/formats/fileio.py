@@ -249,15 +249,6 @@ class Outputs:
             self._created_folder = False
 
 
-def write_atomic(
-    path: str | Path, text: str, *, force: bool = False, inputs: Iterable[str | Path] = ()
-) -> Path:
-    """Write one output file (an :class:`Outputs` set of one)."""
-    with Outputs([path], force=force, inputs=inputs) as out:
-        out.put(path, text)
-    return Path(path)
-
-
 def read_toml(path: str | Path, what: str) -> dict[str, Any]:
     """Parse a TOML input file; any problem is a :class:`WirecalError` naming the file."""
     path = Path(path)
