@@ -454,3 +454,20 @@ def test_force_replaces_all_or_restores_all(tmp_path, monkeypatch):
             out.put(b, "new b\n")
     assert (a.read_text(), b.read_text()) == ("old a\n", "old b\n")
     assert files(tmp_path) == {"a.txt", "b.txt"}
+
+
+def test_filesystem_without_hard_links(tmp_path, monkeypatch):
+    """FAT on a USB stick: publish by exclusive create; still never over another file."""
+
+    def no_links(src, dst):
+        raise OSError(errno.EPERM, os.strerror(errno.EPERM))
+
+    monkeypatch.setattr(fileio.os, "link", no_links)
+    out = tmp_path / "run.csv"
+    assert run("simulate", ROBOT, PLAN, "-o", out).exit_code == 0
+    assert out.read_text().startswith("# wirecal-log 1")
+    refused(run("simulate", ROBOT, PLAN, "-o", out), "exists")
+    out.chmod(0o600)
+    assert run("simulate", ROBOT, PLAN, "-o", out, "--force", "--seed", 2).exit_code == 0
+    assert out.stat().st_mode & 0o777 == 0o600
+    assert files(tmp_path) == {"run.csv", "run.truth.toml"}

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import errno
 import os
+import shutil
 import tempfile
 import tomllib
 from collections.abc import Iterable
@@ -208,7 +209,7 @@ class Outputs:
         except OSError as exc:
             if exc.errno not in _NO_LINKS:
                 raise
-            backup.write_bytes(path.read_bytes())
+            shutil.copy2(path, backup)
         try:
             os.replace(tmp, path)
         except BaseException:
