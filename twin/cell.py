@@ -23,6 +23,7 @@ from wirecal.gen.emulate import readings_from_log
 from wirecal.gen.vplus.program import STRIDE, GenOptions, module_text
 from wirecal.solver import ik
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.csv_table import parse_table, read_source
 from wirecal.solver.formats.log import Log
 from wirecal.solver.kinematics import frames, perturbed, tool_position
 from wirecal.solver.plan import Plan
@@ -414,18 +415,25 @@ def controller_solve(
 
 def read_result(path: Path) -> dict[str, float]:
     """Offsets from the controller solver's result file (``# wirecal-controller-result 1``)."""
-    lines = path.read_text(encoding="ascii").splitlines()
-    if not lines or lines[0] != "# wirecal-controller-result 1":
-        raise WirecalError(f"{path}:1: not a wirecal controller result")
+    text, source, _ = read_source(path, "controller result")
+    table = parse_table(
+        text,
+        source,
+        magic="# wirecal-controller-result",
+        version=1,
+        what="controller result",
+        columns=("parameter", "unit", "offset"),
+        keys=(),
+    )
+    problems = list(table.problems)
     out = {}
-    for n, line in enumerate(lines[1:], 2):
-        if line.startswith("#") or line == "parameter,unit,offset":
-            continue
+    for row in table.rows:
         try:
-            name, _unit, value = line.split(",")
-            out[name] = float(value)
+            out[row.cells[0]] = float(row.cells[2])
         except ValueError:
-            raise WirecalError(f"{path}:{n}: expected 'parameter,unit,offset'") from None
+            problems.append(f"{source}:{row.line}: offset {row.cells[2]!r} is not a number")
+    if problems:
+        raise WirecalError(problems)
     return out
 
 

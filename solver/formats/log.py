@@ -21,19 +21,21 @@ the zero readings (each checked against the first: a drift means the wire slippe
 
 from __future__ import annotations
 
-import hashlib
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.csv_table import Row, parse_table, read_source
 
 MAGIC = "# wirecal-log"
 VERSION = 1
 JOINT_COLUMNS = tuple(f"j{i}" for i in range(1, 7))
 COLUMNS = ("kind", "step", "index", *JOINT_COLUMNS, "counts", "samples", "spread")
+HEADER_KEYS = ("robot", "plan", "mm_per_count")
 
 
 @dataclass(frozen=True)
@@ -85,108 +87,92 @@ def format_header(
 
 
 def read_log(path: str | Path) -> Log:
-    """Parse a log; every format problem is reported as ``file:line: problem``."""
-    path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise WirecalError(f"{path}: cannot read log: {exc.strerror or exc}") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise WirecalError(
-            f"{path}: not UTF-8 text (byte {exc.start}); is this a wirecal log?"
-        ) from None
-    return parse_log(text, str(path), hashlib.sha256(raw).hexdigest())
+    """Parse a log (``-``: standard input); every format problem as ``file:line: problem``."""
+    text, source, sha256 = read_source(path, "log")
+    return parse_log(text, source, sha256)
 
 
 def parse_log(text: str, source: str, sha256: str = "") -> Log:
-    problems: list[str] = []
-    notes: list[str] = []
-    lines = text.split("\n")
-    ends_with_newline = text.endswith("\n")
-    if ends_with_newline:
-        lines = lines[:-1]
+    table = parse_table(
+        text, source, magic=MAGIC, version=VERSION, what="log", columns=COLUMNS, keys=HEADER_KEYS
+    )
+    problems = [*table.problems, *table.missing(HEADER_KEYS)]
 
     def bad(line: int, message: str) -> None:
         problems.append(f"{source}:{line}: {message}")
 
-    first = lines[0].strip() if lines else ""
-    if not first.startswith(MAGIC):
-        raise WirecalError(
-            f"{source}:1: not a wirecal log: the first line must be '{MAGIC} {VERSION}'"
-        )
-    version = first[len(MAGIC) :].strip()
-    if version != str(VERSION):
-        raise WirecalError(
-            f"{source}:1: log version {version!r}; this wirecal reads version {VERSION}"
-        )
-
-    header: dict[str, tuple[str, int]] = {}
-    comments: list[str] = []
-    n = 1
-    while n < len(lines) and lines[n].startswith("#"):
-        body = lines[n][1:].strip()
-        key, sep, value = body.partition(":")
-        if sep and key.strip() in ("robot", "plan", "mm_per_count"):
-            if key.strip() in header:
-                bad(n + 1, f"'{key.strip()}' is given twice")
-            header[key.strip()] = (value.strip(), n + 1)
-        else:
-            comments.append(body)
-        n += 1
-    for key in ("robot", "plan", "mm_per_count"):
-        if key not in header:
-            bad(n, f"header '# {key}: …' is missing")
     mpc = math.nan
-    if "mm_per_count" in header:
-        value, line = header["mm_per_count"]
+    if "mm_per_count" in table.header:
+        value, line = table.header["mm_per_count"]
         try:
             mpc = float(value)
             if not math.isfinite(mpc) or mpc == 0:
                 raise ValueError
         except ValueError:
             bad(line, f"mm_per_count {value!r} is not a non-zero number")
-
-    if n >= len(lines):
-        bad(n, f"the column line is missing: expected '{','.join(COLUMNS)}'")
-        raise WirecalError(problems)
-    if lines[n].strip() != ",".join(COLUMNS):
-        bad(n + 1, f"columns are {lines[n].strip()!r}; expected '{','.join(COLUMNS)}'")
-        raise WirecalError(problems)
-
-    readings: list[Reading] = []
-    for k in range(n + 1, len(lines)):
-        line_no = k + 1
-        line = lines[k].strip()
-        if not line or line.startswith("#"):
-            continue
-        cells = line.split(",")
-        last = k == len(lines) - 1
-        if len(cells) != len(COLUMNS):
-            if last and not ends_with_newline and len(cells) < len(COLUMNS):
-                notes.append(
-                    f"{source}:{line_no}: incomplete last line ignored (the run "
-                    "stopped while writing it)"
-                )
-                continue
-            bad(line_no, f"has {len(cells)} fields; expected {len(COLUMNS)}")
-            continue
-        reading = _parse_row(cells, line_no, bad)
-        if reading is not None:
-            readings.append(reading)
+    parsed = (_parse_row(row.cells, row.line, bad) for row in table.rows)
+    readings = [r for r in parsed if r is not None]
+    problems += lossy_counts(table.rows, source)
     if problems:
         raise WirecalError(problems)
     return Log(
         source=source,
-        robot=header["robot"][0],
-        plan=header["plan"][0],
+        robot=table.header["robot"][0],
+        plan=table.header["plan"][0],
         mm_per_count=mpc,
-        comments=tuple(comments),
+        comments=table.comments,
         readings=tuple(readings),
         sha256=sha256,
-        notes=tuple(notes),
+        notes=table.notes,
     )
+
+
+COUNTS = COLUMNS.index("counts")
+ROUNDED_MIN_ROWS = 5
+"""Integer counts that all end in zeros are taken as rounded only from this many rows on
+(a true count ends in 0 one time in ten: five in a row by chance is 1 in 100 000)."""
+
+_NUMBER = re.compile(r"[-+]?(\d*)(?:\.(\d*))?(?:[eE]([-+]?\d+))?")
+
+
+def lossy_counts(rows: tuple[Row, ...], source: str) -> list[str]:
+    """One problem when the counts carry fewer significant digits than a count needs.
+
+    A spreadsheet that re-saves a log may write ``-4.4982E+05`` for -449823 (five
+    significant digits) or round to tens or hundreds: the wire lengths are then off by
+    up to half that many counts, silently. Detected from the text of the field: a
+    mantissa shorter than the count's integer digits, or integers that all end in zeros.
+    """
+    short: list[tuple[int, str, int, int]] = []
+    integers, rounded = 0, 0
+    for row in rows:
+        text = row.cells[COUNTS] if len(row.cells) > COUNTS else ""
+        m = _NUMBER.fullmatch(text)
+        if m is None:
+            continue
+        whole, frac, exp = m.group(1), m.group(2), m.group(3)
+        digits = (whole + (frac or "")).lstrip("0")
+        if exp is not None and digits:
+            needed = len(whole.lstrip("0")) + int(exp)
+            if len(digits) < needed:
+                short.append((row.line, text, len(digits), needed))
+        elif frac is None and whole.strip("0"):
+            integers += 1
+            rounded += whole.endswith("0")
+    if short:
+        line, text, have, needed = short[0]
+        return [
+            f"{source}:{line}: counts {text!r} keeps {have} significant digits of the {needed} the "
+            f"count needs ({len(short)} such line(s)): the log was re-saved by a "
+            "spreadsheet; use the file the controller wrote"
+        ]
+    if integers == len(rows) and rounded == integers and integers >= ROUNDED_MIN_ROWS:
+        return [
+            f"{source}:{rows[0].line}: every count ends in 0: the counts were rounded (a "
+            "spreadsheet re-save with fewer significant digits?); use the file the "
+            "controller wrote"
+        ]
+    return []
 
 
 def _parse_row(cells: list[str], line: int, bad) -> Reading | None:

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.solver.errors import Problems, WirecalError
+from wirecal.solver.formats.csv_table import parse_table, read_source
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.validation import Setup
 
@@ -115,74 +116,61 @@ COLUMNS = {
 
 def read_validation_log(path: str | Path, kind: str) -> ValidationLog:
     """Read a validation log; every problem as ``file:line: problem``."""
-    path = Path(path)
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise WirecalError(f"{path}: cannot read the validation log: {exc}") from None
-    if not lines or lines[0].strip() != "# wirecal-validation 1":
-        raise WirecalError(
-            f"{path}:1: not a wirecal validation log: the first line must "
-            "be '# wirecal-validation 1'"
-        )
-    header, n = {}, 1
-    while n < len(lines) and lines[n].startswith("#"):
-        key, _, value = lines[n][1:].partition(":")
-        header[key.strip()] = value.strip()
-        n += 1
-    problems = []
-    if header.get("kind") != kind:
-        raise WirecalError(f"{path}:2: a {header.get('kind')!r} log where a {kind!r} log is needed")
-    for key in ("robot", "setup") + (("mm_per_count",) if kind == "configuration" else ()):
-        if key not in header:
-            problems.append(f"{path}:{n}: header '# {key}: …' is missing")
-    columns = ",".join(COLUMNS[kind])
-    if n >= len(lines) or lines[n].strip() != columns:
-        problems.append(f"{path}:{n + 1}: the column line must be '{columns}'")
-        raise WirecalError(problems)
+    text, source, _ = read_source(path, "validation log")
+
+    def columns(header: dict[str, tuple[str, int]]) -> tuple[str, ...]:
+        found, line = header.get("kind", (None, 2))
+        if found != kind:
+            raise WirecalError(f"{source}:{line}: a {found!r} log where a {kind!r} log is needed")
+        return COLUMNS[kind]
+
+    table = parse_table(
+        text,
+        source,
+        magic="# wirecal-validation",
+        version=1,
+        what="validation log",
+        columns=columns,
+        keys=("kind", "robot", "setup", "mm_per_count"),
+    )
+    problems = [
+        *table.problems,
+        *table.missing(("robot", "setup") + (("mm_per_count",) if kind == "configuration" else ())),
+    ]
     rows, seen = [], {}
-    for k in range(n + 1, len(lines)):
-        text = lines[k].strip()
-        if not text or text.startswith("#"):
-            continue
-        cells = text.split(",")
-        if len(cells) != len(COLUMNS[kind]):
-            problems.append(
-                f"{path}:{k + 1}: has {len(cells)} fields; expected {len(COLUMNS[kind])}"
-            )
-            continue
+    for r in table.rows:
         try:
-            row = [float(c) for c in cells]
+            row = [float(c) for c in r.cells]
         except ValueError:
-            problems.append(f"{path}:{k + 1}: a field is not a number: {text}")
+            problems.append(f"{source}:{r.line}: a field is not a number: {','.join(r.cells)}")
             continue
         if not all(math.isfinite(x) for x in row):
-            problems.append(f"{path}:{k + 1}: a field is not finite")
+            problems.append(f"{source}:{r.line}: a field is not finite")
             continue
         key = (row[0], row[1])
         if key in seen:
             problems.append(
-                f"{path}:{k + 1}: duplicate reading of {COLUMNS[kind][0]} "
+                f"{source}:{r.line}: duplicate reading of {COLUMNS[kind][0]} "
                 f"{row[0]:g}, {COLUMNS[kind][1]} {row[1]:g} (first on line "
                 f"{seen[key]})"
             )
             continue
         if kind == "configuration" and row[1] not in (1, 2, 3, 4):
-            problems.append(f"{path}:{k + 1}: config {row[1]:g} is not 1–4")
+            problems.append(f"{source}:{r.line}: config {row[1]:g} is not 1–4")
             continue
-        seen[key] = k + 1
+        seen[key] = r.line
         rows.append(row)
-    mpc = header.get("mm_per_count", "nan")
+    mpc_text, mpc_line = table.header.get("mm_per_count", ("nan", 0))
     try:
-        mpc = float(mpc)
+        mpc = float(mpc_text)
     except ValueError:
-        problems.append(f"{path}: mm_per_count {mpc!r} is not a number")
+        problems.append(f"{source}:{mpc_line}: mm_per_count {mpc_text!r} is not a number")
     if problems:
         raise WirecalError(_first(problems))
     if not rows:
-        raise WirecalError(f"{path}: no readings")
+        raise WirecalError(f"{source}: no readings")
     return ValidationLog(
-        kind, str(path), header["robot"], header["setup"], float(mpc), np.array(rows)
+        kind, source, table.header["robot"][0], table.header["setup"][0], mpc, np.array(rows)
     )
 
 

@@ -1,0 +1,163 @@
+"""The one reader of wirecal's CSV-with-header files: measurement logs, validation logs and
+the controller solver's result file share its layout and its tolerance.
+
+Layout::
+
+    # wirecal-<kind> <version>       magic and version (first line)
+    # key: value                     header fields the format knows
+    # free text                      comments
+    col1,col2,...                    the column line
+    v1,v2,...                        one row per line; blank and '#' lines are skipped
+
+What the reader forgives, because a log copied from a terminal, an editor or another
+operating system carries it: a UTF-8 byte-order mark, indentation and trailing whitespace on
+every line, CRLF or CR line ends, spaces around fields. A last row cut short by a run that
+stopped while writing is a note, not an error. What it refuses with one message: fields in
+double quotes (a spreadsheet's export), rows with the wrong number of fields (each as
+``file:line: problem``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from wirecal.solver.errors import WirecalError
+
+STDIN = "-"
+"""The file name that means standard input (a log pasted from the controller's terminal)."""
+
+
+@dataclass(frozen=True)
+class Row:
+    line: int  # 1-based line number in the file
+    cells: tuple[str, ...]  # stripped fields
+
+
+@dataclass(frozen=True)
+class Table:
+    """A CSV-with-header file, checked for layout only."""
+
+    source: str
+    header: dict[str, tuple[str, int]]  # known key → (value, line)
+    comments: tuple[str, ...]
+    column_line: int  # 1-based line of the column line
+    rows: tuple[Row, ...]
+    problems: tuple[str, ...]  # file:line: problem, for the caller to report with its own
+    notes: tuple[str, ...]
+
+    def missing(self, keys: tuple[str, ...]) -> list[str]:
+        """A problem for each header key that is absent."""
+        return [
+            f"{self.source}:{self.column_line - 1}: header '# {key}: …' is missing"
+            for key in keys
+            if key not in self.header
+        ]
+
+
+def read_source(path: str | Path, what: str) -> tuple[str, str, str]:
+    """The text, its source name and the sha256 of its bytes; ``-`` reads standard input."""
+    if str(path) == STDIN:
+        raw, source = sys.stdin.buffer.read(), "<stdin>"
+    else:
+        source = str(path)
+        try:
+            raw = Path(path).read_bytes()
+        except OSError as exc:
+            raise WirecalError(f"{source}: cannot read {what}: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise WirecalError(
+            f"{source}: not UTF-8 text (byte {exc.start}); is this a wirecal {what}?"
+        ) from None
+    return text, source, hashlib.sha256(raw).hexdigest()
+
+
+def parse_table(
+    text: str,
+    source: str,
+    *,
+    magic: str,
+    version: int,
+    what: str,
+    columns: tuple[str, ...] | Callable[[dict[str, tuple[str, int]]], tuple[str, ...]],
+    keys: tuple[str, ...],
+) -> Table:
+    """Split a file into header, column line and rows; raise on a wrong magic, version,
+    column line or quoted fields, and collect row-length problems in ``Table.problems``.
+
+    ``what`` names the format in messages ("log", "validation log", …); ``keys`` are the
+    header fields it knows (any other ``#`` line is a comment). ``columns`` may depend on
+    the header: a function of it that returns them (or raises).
+    """
+    text = text.removeprefix("\ufeff")
+    ends_with_newline = text.endswith(("\n", "\r"))
+    lines = [line.strip() for line in text.splitlines()]
+    problems: list[str] = []
+    first = lines[0] if lines else ""
+    if not first.startswith(magic):
+        raise WirecalError(
+            f"{source}:1: not a wirecal {what}: the first line must be '{magic} {version}'"
+        )
+    found = first[len(magic) :].strip()
+    if found != str(version):
+        raise WirecalError(
+            f"{source}:1: {what} version {found!r}; this wirecal reads version {version}"
+        )
+    header: dict[str, tuple[str, int]] = {}
+    comments: list[str] = []
+    n = 1
+    while n < len(lines) and lines[n].startswith("#"):
+        body = lines[n][1:].strip()
+        key, sep, value = body.partition(":")
+        key = key.strip()
+        if sep and key in keys:
+            if key in header:
+                problems.append(f"{source}:{n + 1}: '{key}' is given twice")
+            header[key] = (value.strip(), n + 1)
+        else:
+            comments.append(body)
+        n += 1
+    if callable(columns):
+        columns = columns(header)
+    expected = ",".join(columns)
+    if n >= len(lines):
+        raise WirecalError(
+            [*problems, f"{source}:{n}: the column line is missing: it must be '{expected}'"]
+        )
+    got = ",".join(c.strip() for c in lines[n].split(","))
+    if got != expected:
+        raise WirecalError(
+            [
+                *problems,
+                f"{source}:{n + 1}: columns are {got!r}; the column line must be '{expected}'",
+            ]
+        )
+    quoted = [k + 1 for k in range(n + 1, len(lines)) if '"' in lines[k]]
+    if quoted:
+        raise WirecalError(
+            f"{source}:{quoted[0]}: fields are in double quotes on {len(quoted)} "
+            "line(s): a spreadsheet re-saved the file; use the file as written, or save "
+            "it as plain CSV without quotes"
+        )
+    rows: list[Row] = []
+    notes: list[str] = []
+    for k in range(n + 1, len(lines)):
+        if not lines[k] or lines[k].startswith("#"):
+            continue
+        cells = tuple(c.strip() for c in lines[k].split(","))
+        if len(cells) != len(columns):
+            if k == len(lines) - 1 and not ends_with_newline and len(cells) < len(columns):
+                notes.append(
+                    f"{source}:{k + 1}: incomplete last line ignored (the run "
+                    "stopped while writing it)"
+                )
+                continue
+            problems.append(f"{source}:{k + 1}: has {len(cells)} fields; expected {len(columns)}")
+            continue
+        rows.append(Row(k + 1, cells))
+    return Table(source, header, tuple(comments), n + 1, tuple(rows), tuple(problems), tuple(notes))
