@@ -16,13 +16,14 @@ from wirecal.cli.options import NON_NEGATIVE, POSITIVE, SEED, number
 from wirecal.gen.vplus.program import GenOptions
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.log import read_log
+from wirecal.solver.formats.log import Log, read_log
 from wirecal.solver.formats.patch import put_patch, spec_path
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
 from wirecal.solver.identify import DEFAULT_OMEGA
-from wirecal.solver.measurements import Tolerances, load_measurements
+from wirecal.solver.measurements import Tolerances, check_log
+from wirecal.solver.plausibility import READING_NOISE_MM, gate
 from wirecal.solver.simulate import Faults, simulate_log
 from wirecal.solver.solve import solve as solve_api
 from wirecal.twin.cell import Faults as TwinFaults
@@ -289,6 +290,18 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
     show_default=True,
     help="Largest drift of a zero reading from the first (mm).",
 )
+@click.option(
+    "--noise-mm",
+    type=NON_NEGATIVE,
+    default=READING_NOISE_MM,
+    show_default=True,
+    help="Reading noise σ (mm) the plausibility gate expects, before quantisation.",
+)
+@click.option(
+    "--accept-implausible",
+    is_flag=True,
+    help="Show and write a result the plausibility gate refuses; the patch records it.",
+)
 @click.option("--force", is_flag=True, help="Replace an existing patch and SPEC table.")
 @click.option(
     "--accept-foreign",
@@ -309,15 +322,19 @@ def solve(
     joint_tol,
     spread_tol,
     zero_tol,
+    noise_mm,
+    accept_implausible,
     force,
     accept_foreign,
 ):
-    """Identify the kinematic errors from a measurement LOG.
+    """Identify the kinematic errors from a measurement LOG ('-': standard input, e.g.
+    lines pasted from the controller's terminal).
 
     By default runs the paper's step-by-step method and the joint refinement and shows
     them side by side, with residuals and the predicted tool-point accuracy after
     calibration. With -o, writes the recommended method's patch (or the one --method
-    names) and a table of values for the controller.
+    names) and a table of values for the controller. A result that fails the plausibility
+    gate (see the README) is refused with exit status 3 and nothing written.
     """
     rb = load_robot(robot)
     if rb.controller_problem():
@@ -325,15 +342,19 @@ def solve(
     pl = load_plan(plan, rb)
     paths = [patch_path, spec_path(patch_path)] if patch_path else []
     with Outputs(paths, force=force, inputs=[robot, plan, log]) as out:
-        m = load_measurements(
-            log, pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), accept_foreign
-        )
+        parsed = read_log(log)
+        m = check_log(parsed, pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), accept_foreign)
         methods = ("stepwise", "joint") if method in ("all", "controller") else (method,)
         result = solve_api(
             rb, pl, m, methods=methods, omega_default=omega, robust=robust, partial=partial
         )
         chosen = result.recommended if method in ("all", "controller") else method
-        ctl = _controller(rb, pl, log, result) if method == "controller" else None
+        verdict = gate(
+            result, chosen, accept=accept_implausible, noise_mm=noise_mm, omega_default=omega
+        )
+        for finding in verdict.findings:
+            click.echo(f"warning: implausible result accepted: {finding.message}", err=True)
+        ctl = _controller(rb, pl, parsed, result) if method == "controller" else None
         if patch_path:
             put_patch(
                 out,
@@ -341,24 +362,27 @@ def solve(
                 rb,
                 result.estimates[chosen],
                 plan_fingerprint=pl.fingerprint(),
-                log_path=str(log),
+                log_path=m.source,
                 log_sha256=m.sha256,
                 version=_version(),
+                plausibility=verdict.patch_field(),
             )
     if as_json:
         data = result.as_json()
+        data["plausibility"] = verdict.as_json()
         if ctl:
             data["methods"]["controller"] = ctl
         print_json(data)
     else:
         click.echo(_solve_text(result))
+        click.echo(f"plausibility ({chosen}): {verdict.summary()}")
         if ctl:
             click.echo(_controller_text(ctl))
     if patch_path:
         click.echo(f"wrote {patch_path} ({chosen}) and {spec_path(patch_path)}", err=as_json)
 
 
-def _controller(rb, pl, log, result) -> dict:
+def _controller(rb, pl, log: Log, result) -> dict:
     """The generated controller solver (wc.solve, wc.solve2) run in the twin on the log."""
     if result.left_nominal or result.measurements.missing:
         raise WirecalError(
@@ -366,7 +390,7 @@ def _controller(rb, pl, log, result) -> dict:
             "refuses missing points too)"
         )
     with tempfile.TemporaryDirectory() as tmp:
-        return controller_comparison(rb, pl, read_log(log), result, Path(tmp))
+        return controller_comparison(rb, pl, log, result, Path(tmp))
 
 
 def _controller_text(ctl: dict) -> str:
@@ -385,6 +409,15 @@ def _controller_text(ctl: dict) -> str:
         "arithmetic operations"
     )
     return "\n".join(lines)
+
+
+def _sigma(std: float) -> str:
+    """σ of the joint estimate, or that the points do not identify the parameter."""
+    return f"{std:14.4f}" if np.isfinite(std) else f"{'unidentifiable':>16}"
+
+
+def _mm(value: float) -> str:
+    return f"{value:12.4f}" if np.isfinite(value) else f"{'unbounded':>12}"
 
 
 def _solve_text(result) -> str:
@@ -411,19 +444,17 @@ def _solve_text(result) -> str:
         unit = "deg" if name.startswith(("th", "al")) else "mm"
         row = f"{name:<10}{unit:<5}" + "".join(f"{est[m].as_dict()[name]:12.4f}" for m in methods)
         if "joint" in est:
-            row += f"{est['joint'].std[list(est['joint'].names).index(name)]:14.4f}"
+            row += _sigma(est["joint"].std[list(est["joint"].names).index(name)])
         lines.append(row)
     lines.append(
         f"{'residual RMS (mm)':<15}" + "".join(f"{est[m].residual_rms_mm:12.4f}" for m in methods)
     )
     lines.append(
         f"{'tool error (mm)':<15}"
-        + "".join(f"{result.predicted[m]['mean']:12.4f}" for m in methods)
+        + "".join(_mm(result.predicted[m]["mean"]) for m in methods)
         + "   predicted mean over 1000 configurations"
     )
-    lines.append(
-        f"{'  worst':<15}" + "".join(f"{result.predicted[m]['max']:12.4f}" for m in methods)
-    )
+    lines.append(f"{'  worst':<15}" + "".join(_mm(result.predicted[m]["max"]) for m in methods))
     lines.append(
         f"noise σ from the joint residual: {result.sigma_mm:.4f} mm; "
         f"recommended: {result.recommended}"

@@ -4,7 +4,8 @@ Every command has a Python API twin in :mod:`wirecal.solver` or :mod:`wirecal.ge
 the commands only parse options, call it, and print. A :class:`WirecalError` is printed
 as ``error: …`` lines on stderr, never as a traceback. Exit statuses: 0 done; 1 a run or
 program stopped, or a check asked for failed (``psi --strict``); 2 bad input — a file,
-option or log to fix (click's own usage errors too); 3 is kept for the plausibility gate.
+option or log to fix (click's own usage errors too); 3 the plausibility gate refused
+an identification (:class:`~wirecal.solver.errors.Implausible`).
 """
 
 from __future__ import annotations
@@ -29,19 +30,19 @@ def _version() -> str:
 
 def user_errors(func):
     """Turn :class:`WirecalError` (and any stray ``OSError``) into ``error: …`` lines and
-    exit status 2."""
+    its exit status (2, or 3 for :class:`~wirecal.solver.errors.Implausible`)."""
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         try:
             return func(*args, **kwargs)
         except WirecalError as exc:
-            problems = exc.problems
+            problems, status = exc.problems, exc.exit_status
         except OSError as exc:
-            problems = [f"{exc.filename or 'file'}: {exc.strerror or exc}"]
+            problems, status = [f"{exc.filename or 'file'}: {exc.strerror or exc}"], 2
         for line in problems:
             click.echo(f"error: {line}", err=True)
-        sys.exit(2)
+        sys.exit(status)
 
     return wrapper
 

@@ -10,9 +10,18 @@ class WirecalError(Exception):
     ``file:line: problem``) and, where possible, what to do about it.
     """
 
+    exit_status = 2
+
     def __init__(self, problems: str | list[str]):
         self.problems = [problems] if isinstance(problems, str) else list(problems)
         super().__init__("\n".join(self.problems))
+
+
+class Implausible(WirecalError):
+    """An identification that passed every format check but that the plausibility gate
+    (:mod:`wirecal.solver.plausibility`) refuses: nothing is written; exit status 3."""
+
+    exit_status = 3
 
 
 class Problems:

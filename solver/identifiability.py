@@ -64,6 +64,27 @@ class Identifiability:
         return lines
 
 
+def covariance(J: np.ndarray, sigma2: float) -> tuple[np.ndarray, np.ndarray]:
+    """σ²·(JᵀJ)⁺ over the directions the data sees, and which parameters it identifies.
+
+    Singular values of ``J`` (N, m) below RANK_RTOL·σ_max are structural zeros. A parameter
+    with a component along such a direction is not identified: its variance is infinite,
+    where the plain pseudo-inverse would call it 0. Returns the covariance (m, m; finite,
+    restricted to the seen directions) and the (m,) mask of identified parameters.
+    """
+    m = J.shape[1]
+    _, s, vt = np.linalg.svd(J, full_matrices=True)
+    s = np.concatenate([s, np.zeros(m - s.size)])
+    seen = s > RANK_RTOL * (s[0] if s[0] > 0 else 1.0)
+    cov = sigma2 * (vt[seen].T / s[seen] ** 2) @ vt[seen]
+    identified = ~np.any(np.abs(vt[~seen]) > NULL_COMPONENT, axis=0)
+    return cov, identified
+
+
+NULL_COMPONENT = 1e-6
+"""A parameter whose share of a unit null-space vector exceeds this is not identified."""
+
+
 def observability_indices(s: np.ndarray, n_rows: int) -> dict[str, float]:
     """O1–O5 from the singular values σ1 ≥ … ≥ σm of an n_rows × m Jacobian.
 
@@ -87,7 +108,11 @@ def analyse(
 ) -> Identifiability:
     """Rank, null space and observability of ∂d/∂e over the points ``q_deg``."""
     names = tuple(names)
-    J = sensitivity(model, q_deg, theta0_deg, names).psi
+    return analyse_jacobian(sensitivity(model, q_deg, theta0_deg, names).psi, names)
+
+
+def analyse_jacobian(J: np.ndarray, names: tuple[str, ...]) -> Identifiability:
+    """:func:`analyse` of a distance Jacobian (N, m) already computed, boundary units."""
     s = np.linalg.svd(J, compute_uv=False) if J.size else np.zeros(0)
     # Pad to m values: a Jacobian with fewer rows than columns has m − N zero values.
     s = np.concatenate([s, np.zeros(len(names) - s.size)])

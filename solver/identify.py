@@ -20,6 +20,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from wirecal.solver.distance import wire_jacobian, wire_lengths
+from wirecal.solver.identifiability import covariance
 from wirecal.solver.kinematics import Model, with_errors
 from wirecal.solver.sensitivity import boundary_scale
 
@@ -219,7 +220,8 @@ def joint(
 ) -> Estimate:
     """All parameters together, nonlinear least squares from ``x0`` (internal units).
 
-    σ of the residual, (JᵀJ)⁻¹ and the correlations come from the solution; a robust
+    σ of the residual, (JᵀJ)⁻¹ and the correlations come from the solution, rank-aware:
+    a parameter the points do not identify gets σ = inf and NaN correlations; a robust
     ``loss`` (e.g. "soft_l1", with ``f_scale_mm`` the inlier scale) resists outliers.
     """
     last: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
@@ -256,11 +258,14 @@ def joint(
     std = corr = None
     if n > m:
         sigma2 = float(r @ r) / (n - m)
-        cov = sigma2 * np.linalg.pinv(J.T @ J)
+        # Boundary units, so that the rank tolerance compares deg with mm, not rad with mm.
+        cov, identified = covariance(J / scale, sigma2)
         sd = np.sqrt(np.clip(np.diag(cov), 0, None))
         with np.errstate(invalid="ignore", divide="ignore"):
             corr = cov / np.outer(sd, sd)
-        std = sd * scale
+        corr[~identified] = np.nan
+        corr[:, ~identified] = np.nan
+        std = np.where(identified, sd, np.inf)
     return Estimate(
         "joint",
         problem.names,

@@ -3,6 +3,7 @@ with residuals and the predicted post-calibration accuracy."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -10,6 +11,7 @@ import numpy as np
 
 from wirecal.solver.accuracy import stepwise_map, tool_error, workspace
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.identifiability import covariance
 from wirecal.solver.identify import DEFAULT_OMEGA, Estimate, Problem, joint, run_stepwise
 from wirecal.solver.kinematics import perturbed
 from wirecal.solver.measurements import Measurements
@@ -18,6 +20,8 @@ from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import boundary_scale, sensitivity
 
 METHODS = ("stepwise", "joint")
+UNIDENTIFIED = {"mean": math.inf, "max": math.inf}
+"""The predicted tool error when the points leave a direction of the parameters unseen."""
 
 
 @dataclass(frozen=True)
@@ -41,12 +45,12 @@ class SolveResult:
             entry: dict[str, Any] = {
                 "parameters": est.as_dict(),
                 "residual_rms_mm": est.residual_rms_mm,
-                "predicted_tool_error_mm": self.predicted[name],
+                "predicted_tool_error_mm": {k: _finite(v) for k, v in self.predicted[name].items()},
             }
             if est.std is not None:
-                entry["std"] = {n: float(s) for n, s in zip(est.names, est.std, strict=True)}
+                entry["std"] = {n: _finite(s) for n, s in zip(est.names, est.std, strict=True)}
                 entry["correlation"] = {
-                    a: {b: float(est.correlation[i, k]) for k, b in enumerate(est.names)}
+                    a: {b: _finite(est.correlation[i, k]) for k, b in enumerate(est.names)}
                     for i, a in enumerate(est.names)
                 }
             if est.steps:
@@ -77,11 +81,16 @@ class SolveResult:
             "methods": methods,
             "recommended": self.recommended,
             "residual_rms_mm": {n: e.residual_rms_mm for n, e in self.estimates.items()},
-            "sigma_mm": self.sigma_mm,
+            "sigma_mm": _finite(self.sigma_mm),
             "missing": [{"step": s, "index": i} for s, i in m.missing],
             "left_nominal": list(self.left_nominal),
             "notes": list(m.notes),
         }
+
+
+def _finite(x: float) -> float | None:
+    """A number for JSON: None where it is not finite (σ of an unidentified parameter)."""
+    return float(x) if math.isfinite(x) else None
 
 
 def omega_vector(
@@ -146,17 +155,24 @@ def solve(
     if "joint" in methods:
         estimates["joint"] = jt
 
-    # Noise σ from the joint fit (the best model of the data), dof-corrected.
+    # Noise σ from the joint fit (the best model of the data), dof-corrected; with the
+    # robust loss from the median absolute residual (1.4826·MAD), so outliers do not count.
     n, k = len(problem.d), len(names)
     r = problem.residuals(jt.values / problem.scale)
-    sigma = float(np.sqrt(r @ r / (n - k))) if n > k else float("nan")
-    ws = workspace(robot)
-    predicted = {}
+    if n <= k:
+        sigma = float("nan")
+    elif robust:
+        sigma = float(1.4826 * np.median(np.abs(r)) * np.sqrt(n / (n - k)))
+    else:
+        sigma = float(np.sqrt(r @ r / (n - k)))
     J = psi / boundary_scale(names, robot.n_joints)  # internal units
-    if "joint" in estimates:
-        cov = sigma**2 * np.linalg.pinv(J.T @ J)
-        predicted["joint"] = tool_error(base, names, cov, ws).as_dict()
-    if "stepwise" in estimates:
-        A = stepwise_map(J, step)
-        predicted["stepwise"] = tool_error(base, names, sigma**2 * A @ A.T, ws).as_dict()
+    cov, identified = covariance(J, sigma**2)
+    predicted = dict.fromkeys(estimates, UNIDENTIFIED)
+    if identified.all():  # otherwise the tool error is unbounded along the unseen directions
+        ws = workspace(robot)
+        if "joint" in estimates:
+            predicted["joint"] = tool_error(base, names, cov, ws).as_dict()
+        if "stepwise" in estimates:
+            A = stepwise_map(J, step)
+            predicted["stepwise"] = tool_error(base, names, sigma**2 * A @ A.T, ws).as_dict()
     return SolveResult(robot, plan, m, estimates, predicted, sigma, left)

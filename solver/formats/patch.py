@@ -9,12 +9,14 @@ settings (Adept's SPEC utility).
 from __future__ import annotations
 
 import json
+import math
 from datetime import UTC, datetime
 from pathlib import Path
 
 from wirecal.solver import params as P
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.identify import Estimate
+from wirecal.solver.plausibility import OVERRIDDEN
 from wirecal.solver.robot import Robot
 
 _FIELD = {"th": "theta offset", "d": "d", "a": "a", "al": "alpha", "tool": "tool point"}
@@ -37,8 +39,11 @@ def patch_text(
     log_path: str,
     log_sha256: str,
     version: str,
+    plausibility: str = "",
     date: datetime | None = None,
 ) -> str:
+    """The patch TOML; ``plausibility`` is the gate's verdict ("passed …" or
+    "overridden: …" when the user accepted an implausible result)."""
     date = date or datetime.now(UTC)
     lines = [
         "# wirecal patch: identified kinematic error offsets (deg, mm).",
@@ -52,6 +57,8 @@ def patch_text(
         f"wirecal = {json.dumps(version)}",
         f"residual_rms_mm = {estimate.residual_rms_mm!r}",
     ]
+    if plausibility:
+        lines.append(f"plausibility = {json.dumps(plausibility, ensure_ascii=False)}")
     for name, p, nominal, offset, value, std in _rows(robot, estimate):
         lines += [
             "",
@@ -61,14 +68,21 @@ def patch_text(
             f"offset = {offset!r}",
             f"value = {value!r}",
         ]
-        if std is not None:
+        if std is not None:  # inf (valid TOML) where the points do not identify it
             lines.append(f"std = {std!r}")
     return "\n".join(lines) + "\n"
 
 
-def spec_table(robot: Robot, estimate: Estimate) -> str:
+def spec_table(robot: Robot, estimate: Estimate, plausibility: str = "") -> str:
     """The plain table of new values for the controller's kinematic settings."""
-    lines = [
+    lines = []
+    if plausibility.startswith(OVERRIDDEN):
+        lines += [
+            "WARNING: wirecal's plausibility gate refused this result and the refusal was",
+            f"overridden (--accept-implausible): {plausibility[len(OVERRIDDEN) :]}",
+            "",
+        ]
+    lines += [
         f"Kinematic parameters for {robot.name} identified by wirecal ({estimate.method}).",
         "Enter the 'new value' column in the controller's kinematic settings (Adept SPEC",
         "utility: link dimensions and joint calibration offsets). Save a copy of SPEC first.",
@@ -80,7 +94,7 @@ def spec_table(robot: Robot, estimate: Estimate) -> str:
     ]
     for name, p, nominal, offset, value, std in _rows(robot, estimate):
         row = "-" if p.kind == "tool" else p.row + 1
-        sigma = f"{std:9.4f}" if std is not None else f"{'-':>9}"
+        sigma = f"{'-':>9}" if std is None else f"{std:9.4f}" if math.isfinite(std) else " unident."
         lines.append(
             f"{name:<10}{row!s:>7}  {_FIELD[p.kind]:<14}{p.unit:<6}{nominal:12.4f}"
             f"{value:12.4f}{offset:+11.4f}{sigma}"
@@ -98,4 +112,4 @@ def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, 
     """Put the patch and its SPEC table (:func:`spec_path`) into the output set ``out``,
     which must hold both names: they are published together or not at all."""
     out.put(path, patch_text(robot, estimate, **meta))
-    out.put(spec_path(path), spec_table(robot, estimate))
+    out.put(spec_path(path), spec_table(robot, estimate, meta.get("plausibility", "")))
