@@ -32,6 +32,7 @@ from wirecal.solver.formats.truth import random_errors, truth_text
 from wirecal.solver.formats.validation_files import load_setup, read_validation_log
 from wirecal.solver.kinematics import perturbed, tool_position
 from wirecal.solver.measurements import check_log
+from wirecal.solver.plausibility import gate
 from wirecal.solver.solve import solve
 from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
 from wirecal.twin.cell import controller_comparison, run_measurement, run_validation
@@ -119,6 +120,7 @@ def _run(
         t = step(3, "identification on the PC (step-by-step and joint)")
         m = check_log(log, plan, robot)
         result = solve(robot, plan, m)
+        verdict = gate(result, result.recommended)  # before anything acts on the result
         seconds["solve"] = time.perf_counter() - t
         t = step(4, "identification on the controller (wc.solve, wc.solve2 in the twin)")
         controller = controller_comparison(robot, plan, log, result, disk / "ctl", text=text)
@@ -162,7 +164,9 @@ def _run(
             ),
         ]
         t = step(7, "report")
-        html = render_report(result, validations, controller, truth)
+        html = render_report(
+            result, validations, controller, truth, plausibility=verdict.patch_field()
+        )
         seconds["report"] = time.perf_counter() - t
         for name, path in (
             ("WCVCFG1.CSV", runs["before"].configuration_log),
@@ -182,6 +186,7 @@ def _run(
         log_path="WCLOG.CSV",
         log_sha256=m.sha256,
         version=__version__,
+        plausibility=verdict.patch_field(),
     )
     out.put(folder / "report.html", html)
     q = workspace(robot)

@@ -17,6 +17,7 @@ import numpy as np
 
 from wirecal.gen.templating import render
 from wirecal.solver.kinematics import perturbed
+from wirecal.solver.plausibility import OVERRIDDEN
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult
 from wirecal.solver.validation_analysis import Stats, reduction
@@ -119,8 +120,9 @@ def render_report(
     validations: list[Validation] = (),
     controller: dict | None = None,
     truth: dict[str, float] | None = None,
+    plausibility: str = "",
 ) -> str:
-    """The HTML text of the report."""
+    """The HTML text of the report; ``plausibility`` the gate's verdict (a patch's field)."""
     robot, plan = result.robot, result.plan
     sw, jt = result.estimates.get("stepwise"), result.estimates.get("joint")
     params = []
@@ -133,6 +135,7 @@ def render_report(
                 "stepwise": sw.values[k] if sw else None,
                 "joint": jt.values[k] if jt else None,
                 "std": jt.std[k] if jt is not None and jt.std is not None else None,
+                "identified": jt is None or jt.std is None or bool(np.isfinite(jt.std[k])),
                 "controller": (controller or {}).get("parameters", {}).get(name),
                 "polished": (controller or {}).get("polished", {}).get(name),
                 "truth": (truth or {}).get(name),
@@ -148,6 +151,8 @@ def render_report(
         steps=sw.steps if sw else [],
         controller=controller,
         truth=truth is not None,
+        plausibility=plausibility.removeprefix(OVERRIDDEN),
+        overridden=plausibility.startswith(OVERRIDDEN),
         figures={
             "psi": psi_figure(result),
             "residuals": residual_figure(result) if sw else None,

@@ -16,7 +16,8 @@ from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import load_errors
 from wirecal.solver.formats.validation_files import read_validation_log
-from wirecal.solver.measurements import load_measurements
+from wirecal.solver.measurements import check_log
+from wirecal.solver.plausibility import gate
 from wirecal.solver.solve import solve
 from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
 from wirecal.twin.cell import controller_comparison
@@ -54,27 +55,51 @@ from wirecal.twin.cell import controller_comparison
     type=click.Path(dir_okay=False),
     help="A truth file (simulations): show the true offsets beside the estimates.",
 )
+@click.option(
+    "--accept-implausible",
+    is_flag=True,
+    help="Report a result the plausibility gate refuses; the report says so.",
+)
 @click.option("--force", is_flag=True, help="Replace an existing report.")
 @user_errors
-def report(robot, plan, log, output, config_logs, plane_logs, controller, truth_file, force):
+def report(
+    robot,
+    plan,
+    log,
+    output,
+    config_logs,
+    plane_logs,
+    controller,
+    truth_file,
+    accept_implausible,
+    force,
+):
     """Write a self-contained HTML report of a calibration: the validation histograms
     before and after (paper Fig. 6 and 7), the parameters with σ and correlations,
-    step-by-step against joint, the plan's Ψ per step and the robot."""
+    step-by-step against joint, the plan's Ψ per step and the robot. A result that fails
+    the plausibility gate is refused with exit status 3."""
     if not str(output).endswith((".html", ".htm")):
         raise WirecalError(f"{output}: give the report an .html name")
     inputs = [robot, plan, log, *(config_logs or ()), *(plane_logs or ())]
     inputs += [truth_file] if truth_file else []
     with Outputs([output], force=force, inputs=inputs) as out:
-        out.put(
-            output, _report_html(robot, plan, log, config_logs, plane_logs, controller, truth_file)
+        html = _report_html(
+            robot, plan, log, config_logs, plane_logs, controller, truth_file, accept_implausible
         )
+        out.put(output, html)
     click.echo(f"wrote {output}")
 
 
-def _report_html(robot, plan, log, config_logs, plane_logs, controller, truth_file) -> str:
+def _report_html(
+    robot, plan, log, config_logs, plane_logs, controller, truth_file, accept_implausible
+) -> str:
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
-    result = solve(rb, pl, load_measurements(log, pl, rb))
+    parsed = read_log(log)
+    result = solve(rb, pl, check_log(parsed, pl, rb))
+    verdict = gate(result, result.recommended, accept=accept_implausible)
+    for finding in verdict.findings:
+        click.echo(f"warning: implausible result accepted: {finding.message}", err=True)
     validations = []
     if config_logs:
         validations.append(
@@ -92,6 +117,6 @@ def _report_html(robot, plan, log, config_logs, plane_logs, controller, truth_fi
     ctl = None
     if controller:
         with tempfile.TemporaryDirectory() as tmp:
-            ctl = controller_comparison(rb, pl, read_log(log), result, Path(tmp))
+            ctl = controller_comparison(rb, pl, parsed, result, Path(tmp))
     truth = load_errors(truth_file, rb) if truth_file else None
-    return render_report(result, validations, ctl, truth)
+    return render_report(result, validations, ctl, truth, plausibility=verdict.patch_field())
