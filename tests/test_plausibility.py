@@ -1,0 +1,205 @@
+"""The plausibility gate: the faults that used to end in a confident wrong patch (a stuck
+encoder, a robot file in metres, points that identify nothing, gross outliers) end with
+exit status 3, a message saying what to check, and no file; sound logs pass."""
+
+from __future__ import annotations
+
+import json
+import re
+import tomllib
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from wirecal.cli.main import main
+from wirecal.solver.formats.log import parse_log
+from wirecal.solver.formats.truth import random_errors
+from wirecal.solver.identifiability import covariance
+from wirecal.solver.measurements import check_log
+from wirecal.solver.plausibility import assess
+from wirecal.solver.simulate import simulate_log
+from wirecal.solver.solve import solve
+
+from .conftest import VIPER
+
+ROBOT = str(VIPER / "robot.toml")
+PLAN = str(VIPER / "paper_plan.toml")
+
+
+def run(*args, input=None):
+    return CliRunner().invoke(main, [str(a) for a in args], input=input, catch_exceptions=False)
+
+
+@pytest.fixture(scope="module")
+def log_text(viper, paper_plan):
+    truth = random_errors(viper, 1.0, np.random.default_rng(3))
+    return simulate_log(viper, paper_plan, truth, seed=3)
+
+
+def counts_set(text: str, value) -> str:
+    """The log with every reading's counts replaced by ``value(old)``."""
+    out = []
+    for line in text.splitlines():
+        if line.startswith(("zero,", "point,")):
+            cells = line.split(",")
+            cells[9] = value(cells[9])
+            line = ",".join(cells)
+        out.append(line)
+    return "\n".join(out) + "\n"
+
+
+def refused(result, patch):
+    assert result.exit_code == 3, result.output
+    assert "Traceback" not in result.output
+    assert "nothing was written: this identification is not plausible" in result.output
+    assert not patch.exists()
+    assert not patch.with_name(patch.stem + ".spec.txt").exists()
+
+
+def test_stuck_encoder_is_refused(tmp_path, log_text):
+    log = tmp_path / "stuck.csv"
+    log.write_text(counts_set(log_text, lambda c: "1234.0000"))
+    patch = tmp_path / "patch.toml"
+    r = run("solve", ROBOT, PLAN, log, "-o", patch)
+    refused(r, patch)
+    assert "every count is the same: the encoder did not count" in r.output
+    assert "wrong channel, interface or belt_mode" in r.output
+    assert re.search(r"span 0\.000 mm where the robot file's geometry gives \d{3}\.\d mm", r.output)
+
+
+def test_robot_file_in_metres_is_refused(tmp_path, log_text):
+    text = (VIPER / "robot.toml").read_text()
+    for mm, m in (
+        ("[ -90.0,   75.0,  0.0,   0.0]", "[ -90.0, 0.075, 0.0, 0.0]"),
+        ("[   0.0,  270.0,  0.0,   0.0]", "[   0.0, 0.270, 0.0, 0.0]"),
+        ("[  90.0,  -90.0,  0.0, 295.0]", "[  90.0, -0.090, 0.0, 0.295]"),
+        ("[  90.0,    0.0,  0.0,  80.0]", "[  90.0, 0.0, 0.0, 0.080]"),
+        ("point_mm = [-60.0, 0.0, 50.0]", "point_mm = [-0.060, 0.0, 0.050]"),
+    ):
+        assert mm in text
+        text = text.replace(mm, m)
+    robot = tmp_path / "robot_m.toml"
+    robot.write_text(text)
+    log = tmp_path / "run.csv"
+    log.write_text(log_text)
+    patch = tmp_path / "patch.toml"
+    r = run("solve", robot, PLAN, log, "-o", patch)
+    refused(r, patch)
+    assert "are the robot file's lengths in mm (not m)?" in r.output
+    assert "the residual is far above the noise" in r.output
+
+
+@pytest.fixture(scope="module")
+def j1_plan(tmp_path_factory):
+    """Every point of every step turns joint 1 only: one distance per point, one direction."""
+    order = ["th6", "d6", "th5", "th4", "a3", "d4", "a2", "th3", "th2", "a1"]
+    lines = [
+        'robot = "Adept Viper s650"',
+        "theta0_deg = [0, -90, 210, -90, 0, -90]",
+        "order = [" + ", ".join(f'"{n}"' for n in order) + "]",
+    ]
+    for k, name in enumerate(order):
+        rows = ", ".join(f"[{j1 + k}, -90, 210, -90, 0, -90]" for j1 in (10, 20, 30, 40, 50, 60))
+        lines += ["[[step]]", f'parameter = "{name}"', f"points_deg = [{rows}]"]
+    path = tmp_path_factory.mktemp("plan") / "j1_plan.toml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_points_that_identify_nothing_are_refused(tmp_path, j1_plan):
+    log = tmp_path / "j1.csv"
+    assert run("simulate", ROBOT, j1_plan, "-o", log, "--seed", 2).exit_code == 0
+    patch = tmp_path / "patch.toml"
+    r = run("solve", ROBOT, j1_plan, log, "-o", patch)
+    refused(r, patch)
+    assert "the distance Jacobian has rank 1 of 10" in r.output
+    assert "th4 is unobservable: no wire length of these points depends on it" in r.output
+    assert "wirecal observe ROBOT PLAN" in r.output
+    # Overridden, every σ says so instead of 0, and no tool error is promised.
+    shown = run("solve", ROBOT, j1_plan, log, "--accept-implausible")
+    assert shown.exit_code == 0
+    assert shown.output.count("unidentifiable") == 10
+    assert "0.0000        0.0000" not in shown.output
+    assert "tool error (mm)   unbounded   unbounded" in shown.output
+    data = json.loads(run("solve", ROBOT, j1_plan, log, "--accept-implausible", "--json").stdout)
+    assert set(data["methods"]["joint"]["std"].values()) == {None}
+    assert data["methods"]["joint"]["predicted_tool_error_mm"] == {"mean": None, "max": None}
+    assert data["plausibility"]["passed"] is False
+    assert data["plausibility"]["rank"] == 1
+
+
+def test_override_is_recorded_in_the_patch_and_spec_table(tmp_path, log_text):
+    log = tmp_path / "stuck.csv"
+    log.write_text(counts_set(log_text, lambda c: "1234.0000"))
+    patch = tmp_path / "patch.toml"
+    r = run("solve", ROBOT, PLAN, log, "-o", patch, "--accept-implausible")
+    assert r.exit_code == 0
+    assert "warning: implausible result accepted: implausible wire lengths" in r.output
+    field = tomllib.loads(patch.read_text())["plausibility"]
+    assert field.startswith("overridden: implausible wire lengths; the residual is far above")
+    spec = patch.with_name("patch.spec.txt").read_text()
+    assert spec.startswith("WARNING: wirecal's plausibility gate refused this result")
+
+
+def test_sound_log_passes_and_the_patch_says_so(tmp_path, log_text):
+    log = tmp_path / "run.csv"
+    log.write_text(log_text)
+    patch = tmp_path / "patch.toml"
+    r = run("solve", ROBOT, PLAN, log, "-o", patch)
+    assert r.exit_code == 0, r.output
+    assert "plausibility (joint): passed (residual σ 0.01" in r.output
+    assert tomllib.loads(patch.read_text())["plausibility"].startswith("passed (residual σ")
+
+
+def test_report_is_gated_too(tmp_path, log_text):
+    log = tmp_path / "stuck.csv"
+    log.write_text(counts_set(log_text, lambda c: "1234.0000"))
+    out = tmp_path / "report.html"
+    r = run("report", ROBOT, PLAN, log, "-o", out)
+    assert r.exit_code == 3
+    assert "the encoder did not count" in r.output
+    assert not out.exists()
+
+
+def test_gross_outliers_are_refused_unless_robust(tmp_path):
+    log = tmp_path / "outliers.csv"
+    args = ("--seed", 2, "--outliers", 3, "--outlier-mm", 1.5, "--random", 0.5)
+    assert run("simulate", ROBOT, PLAN, "-o", log, *args).exit_code == 0
+    plain = run("solve", ROBOT, PLAN, log)
+    assert plain.exit_code == 3
+    assert "gross outliers: --robust" in plain.output
+    assert run("solve", ROBOT, PLAN, log, "--robust").exit_code == 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("noise_mm", [0.01, 0.02])
+def test_no_false_alarm_over_20_seeds(viper, paper_plan, noise_mm):
+    """Sound simulated logs, noise up to the gate's default: none refused, by any check."""
+    for seed in range(20):
+        truth = random_errors(viper, 1.0, np.random.default_rng([seed, 1]))
+        text = simulate_log(viper, paper_plan, truth, seed=seed, noise_mm=noise_mm)
+        result = solve(viper, paper_plan, check_log(parse_log(text, "s.csv"), paper_plan, viper))
+        for method in result.estimates:
+            verdict = assess(result, method)
+            assert verdict.passed, (seed, method, verdict.findings)
+            assert verdict.residual_sigma_mm < 0.8 * verdict.residual_limit_mm
+
+
+def test_residual_limit_is_the_documented_chi_square_bound(viper, paper_plan, log_text):
+    result = solve(viper, paper_plan, check_log(parse_log(log_text, "s.csv"), paper_plan, viper))
+    verdict = assess(result, "joint")
+    # χ²(59 dof) upper 1e-6 quantile = 125.665 (tables); σ_model² = 0.02² + 0.025488²/12.
+    expected = np.sqrt(0.02**2 + 0.025488**2 / 12) * np.sqrt(125.665 / 59)
+    assert verdict.residual_limit_mm == pytest.approx(expected, rel=1e-4)
+    assert verdict.noise_model_mm == pytest.approx(0.021310, abs=1e-6)
+
+
+def test_covariance_is_rank_aware():
+    cov, ok = covariance(np.array([[1.0, 0.0], [0.0, 2.0], [0.0, 0.0]]), 1.0)
+    np.testing.assert_allclose(cov, np.diag([1.0, 0.25]), atol=1e-12)
+    assert ok.tolist() == [True, True]
+    _, ok = covariance(np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 1.0], [0.0, 2.0, 2.0]]), 1.0)
+    assert ok.tolist() == [True, False, False]  # a2 + a3 seen, a2 − a3 not
+    _, ok = covariance(np.array([[1.0, 2.0, 0.5]]), 1.0)  # fewer rows than parameters
+    assert ok.tolist() == [False, False, False]
