@@ -172,7 +172,6 @@ def test_gross_outliers_are_refused_unless_robust(tmp_path):
     assert run("solve", ROBOT, PLAN, log, "--robust").exit_code == 0
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("noise_mm", [0.01, 0.02])
 def test_no_false_alarm_over_20_seeds(viper, paper_plan, noise_mm):
     """Sound simulated logs, noise up to the gate's default: none refused, by any check."""
