@@ -137,7 +137,8 @@ def read_validation_log(path: str | Path, kind: str) -> ValidationLog:
         *table.problems,
         *table.missing(("robot", "setup") + (("mm_per_count",) if kind == "configuration" else ())),
     ]
-    rows, seen = [], {}
+    rows: list[list[float]] = []
+    seen: dict[tuple[float, float], int] = {}
     for r in table.rows:
         try:
             row = [float(c) for c in r.cells]
