@@ -15,6 +15,7 @@ from wirecal.cli.main import _version, main, print_json, user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, SEED, number
 from wirecal.gen.vplus.program import GenOptions
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.csv_table import STDIN
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import Log, read_log
 from wirecal.solver.formats.patch import put_patch, spec_path
@@ -341,6 +342,8 @@ def solve(
         raise WirecalError(f"{rb.controller_problem()}; 'wirecal solve' reads that log")
     pl = load_plan(plan, rb)
     paths = [patch_path, spec_path(patch_path)] if patch_path else []
+    if log == STDIN and sys.stdin.isatty():
+        click.echo("paste the log, then Ctrl-D (Windows: Ctrl-Z, Enter)", err=True)
     with Outputs(paths, force=force, inputs=[robot, plan, log]) as out:
         parsed = read_log(log)
         m = check_log(parsed, pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), accept_foreign)

@@ -53,22 +53,23 @@ def problems_of(text):
 @settings(max_examples=40, deadline=None)
 @given(
     bom=st.booleans(),
+    blank=st.integers(0, 2),
     newline=st.sampled_from(["\n", "\r\n", "\r"]),
     pads=st.lists(
         st.tuples(st.sampled_from(["", " ", "  ", "\t", "    "]), st.sampled_from(["", " ", "\t"])),
         min_size=1,
     ),
 )
-def test_pasted_text_reads_like_the_file(log_text, bom, newline, pads):
+def test_pasted_text_reads_like_the_file(log_text, bom, blank, newline, pads):
     clean = parse_log(log_text, "run.csv")
     lines = log_text.splitlines()
     pasted = newline.join(
         f"{pads[k % len(pads)][0]}{line}{pads[k % len(pads)][1]}" for k, line in enumerate(lines)
     )
-    pasted = ("\ufeff" if bom else "") + pasted + newline
+    pasted = ("\ufeff" if bom else "") + newline * blank + pasted + newline
     got = parse_log(pasted, "run.csv")
     assert (got.robot, got.plan, got.mm_per_count) == (clean.robot, clean.plan, clean.mm_per_count)
-    assert [r.line for r in got.readings] == [r.line for r in clean.readings]
+    assert [r.line - blank for r in got.readings] == [r.line for r in clean.readings]
     np.testing.assert_array_equal(
         [r.counts for r in got.readings], [r.counts for r in clean.readings]
     )

@@ -10,8 +10,9 @@ Layout::
     v1,v2,...                        one row per line; blank and '#' lines are skipped
 
 What the reader forgives, because a log copied from a terminal, an editor or another
-operating system carries it: a UTF-8 byte-order mark, indentation and trailing whitespace on
-every line, CRLF or CR line ends, spaces around fields. A last row cut short by a run that
+operating system carries it: a UTF-8 byte-order mark, blank lines before the first line,
+indentation and trailing whitespace on every line, CRLF or CR line ends, spaces around
+fields. A last row cut short by a run that
 stopped while writing is a note, not an error. What it refuses with one message: fields in
 double quotes (a spreadsheet's export), rows with the wrong number of fields (each as
 ``file:line: problem``).
@@ -98,19 +99,21 @@ def parse_table(
     ends_with_newline = text.endswith(("\n", "\r"))
     lines = [line.strip() for line in text.splitlines()]
     problems: list[str] = []
-    first = lines[0] if lines else ""
+    start = next((k for k, line in enumerate(lines) if line), 0)  # blank lines of a paste
+    first = lines[start] if lines else ""
     if not first.startswith(magic):
         raise WirecalError(
-            f"{source}:1: not a wirecal {what}: the first line must be '{magic} {version}'"
+            f"{source}:{start + 1}: not a wirecal {what}: the first line must be "
+            f"'{magic} {version}'"
         )
     found = first[len(magic) :].strip()
     if found != str(version):
         raise WirecalError(
-            f"{source}:1: {what} version {found!r}; this wirecal reads version {version}"
+            f"{source}:{start + 1}: {what} version {found!r}; this wirecal reads version {version}"
         )
     header: dict[str, tuple[str, int]] = {}
     comments: list[str] = []
-    n = 1
+    n = start + 1
     while n < len(lines) and lines[n].startswith("#"):
         body = lines[n][1:].strip()
         key, sep, value = body.partition(":")
