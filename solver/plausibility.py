@@ -65,6 +65,14 @@ CHECK_HINT = (
 )
 
 
+HEADLINE = {
+    "lengths": "implausible wire lengths",
+    "residual": "residual far above the noise model",
+    "identifiability": "the points do not identify every parameter",
+    "bound": "estimates on their bound or beyond a plausible size",
+}
+
+
 @dataclass(frozen=True)
 class Finding:
     check: str  # "lengths", "residual", "identifiability" or "bound"
@@ -88,14 +96,14 @@ class Plausibility:
         return not self.findings
 
     def summary(self) -> str:
-        """One line for a patch: 'passed', or the checks that failed."""
+        """One line for a patch: 'passed (…)', or 'failed: ' and the checks that failed."""
         if self.passed:
             return (
                 f"passed (residual σ {self.residual_sigma_mm:.4f} mm ≤ "
                 f"{self.residual_limit_mm:.4f} mm, rank {self.identifiability.rank} of "
                 f"{len(self.identifiability.names)}, no estimate on its bound)"
             )
-        return "; ".join(f.message.split(":")[0] for f in self.findings)
+        return "failed: " + "; ".join(dict.fromkeys(HEADLINE[f.check] for f in self.findings))
 
     def patch_field(self) -> str:
         """The patch's ``plausibility`` value: the verdict, or that it was overridden."""

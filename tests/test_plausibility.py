@@ -137,7 +137,10 @@ def test_override_is_recorded_in_the_patch_and_spec_table(tmp_path, log_text):
     assert r.exit_code == 0
     assert "warning: implausible result accepted: implausible wire lengths" in r.output
     field = tomllib.loads(patch.read_text())["plausibility"]
-    assert field.startswith("overridden: implausible wire lengths; the residual is far above")
+    assert field == (
+        "overridden: failed: implausible wire lengths; residual far above the noise model; "
+        "estimates on their bound or beyond a plausible size"
+    )
     spec = patch.with_name("patch.spec.txt").read_text()
     assert spec.startswith("WARNING: wirecal's plausibility gate refused this result")
 
