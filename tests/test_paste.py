@@ -165,3 +165,30 @@ def test_validation_log_and_controller_result_share_the_tolerance(tmp_path):
     r.write_text('# wirecal-controller-result 1\nparameter,unit,offset\n"th2","deg","0.1"\n')
     with pytest.raises(WirecalError, match=r"r\.csv:3: fields are in double quotes on 1 line"):
         read_result(r)
+
+
+@settings(max_examples=150, deadline=None)
+@given(data=st.data())
+def test_mangled_logs_give_messages_never_a_traceback(log_text, data):
+    """Cut, splice and garble a log: the reader either reads it or says where it is wrong."""
+    text = log_text
+    for _ in range(data.draw(st.integers(1, 4))):
+        at = data.draw(st.integers(0, len(text)))
+        cut = data.draw(st.integers(0, 40))
+        junk = data.draw(st.text(alphabet=st.sampled_from(',"#\r\n\ufeff \t-+.eE09x:'), max_size=6))
+        text = text[:at] + junk + text[at + cut :]
+    try:
+        parse_log(text, "run.csv")
+    except WirecalError as exc:
+        assert exc.problems
+        assert all(p.startswith("run.csv") for p in exc.problems)
+
+
+@pytest.mark.slow  # the controller solver runs in the twin (about 20 s)
+def test_controller_comparison_from_standard_input(log_text):
+    """The log is read once: the controller comparison needs no second read of a pipe."""
+    r = CliRunner().invoke(
+        main, ["solve", ROBOT, PLAN, "-", "--method", "controller"], input=log_text
+    )
+    assert r.exit_code == 0, r.output
+    assert "largest difference from the Python reference" in r.output
