@@ -17,6 +17,10 @@ mean of ``samples`` raw counter readings, unwrapped relative to the first of the
 ``spread`` their max − min (counts). A point's wire length is (counts − reference) ×
 mm_per_count, the difference taken modulo the counter width; the reference is the mean of
 the zero readings (each checked against the first: a drift means the wire slipped).
+
+The layout is read by :mod:`wirecal.solver.formats.csv_table` (what it forgives: a BOM,
+indentation, CRLF — a log pasted from a terminal). Counts that a spreadsheet re-saved with
+too few significant digits are refused here, from the text of the field.
 """
 
 from __future__ import annotations
