@@ -74,5 +74,6 @@ from wirecal.cli import gen as _gen  # noqa: E402,F401
 from wirecal.cli import identify as _identify  # noqa: E402,F401
 from wirecal.cli import plan as _plan  # noqa: E402,F401
 from wirecal.cli import psi as _psi  # noqa: E402,F401
+from wirecal.cli import receive as _receive  # noqa: E402,F401
 from wirecal.cli import report as _report  # noqa: E402,F401
 from wirecal.cli import validate as _validate  # noqa: E402,F401
