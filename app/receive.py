@@ -213,9 +213,7 @@ def _refuse(other: socket.socket) -> None:
     other.close()
 
 
-def summary(
-    result: Received, robot: Robot | None = None, plan: Plan | None = None
-) -> list[str]:
+def summary(result: Received, robot: Robot | None = None, plan: Plan | None = None) -> list[str]:
     """What was received, in words; with the robot and plan, the missing points named."""
     rows = _readable(result)
     lines = []
