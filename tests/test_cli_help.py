@@ -17,6 +17,7 @@ def test_the_commands_are_all_there():
         "observe",
         "plan",
         "psi",
+        "receive",
         "report",
         "simulate",
         "solve",

@@ -32,7 +32,8 @@ int / float width                         int 32 bit; float 32 bit              
 script sent to port 30002                 starts with def/sec in column 1, ends    yes (SW10.6)
                                           with end in column 1, lines by \\n
 calibration.conf delta_theta, delta_a,    deltas to the nominal standard DH        no (ROS
-delta_d, delta_alpha (m, rad)             table, one per joint                     driver docs)
+delta_d, delta_alpha (m, rad)             table, one per joint; the controller     driver docs)
+                                          reports full dh_theta/a/d/alpha
 ========================================  =======================================  =========
 
 Consequence for the programs: a float holds 24 significant bits, so the filtered count
@@ -132,10 +133,13 @@ FACTS: tuple[Fact, ...] = (
     ),
     Fact(
         "calibration.conf",
-        "delta_theta, delta_a, delta_d, delta_alpha: per-joint deltas to the nominal "
-        "standard-DH table (m, rad); the file layout is not published by UR",
+        "the controller holds its factory calibration as full standard-DH values per joint "
+        "(dh_theta, dh_a, dh_d, dh_alpha; m, rad), with d of joints 2 and 3 up to hundreds "
+        "of metres (true common normals of nearly parallel axes); the delta_* key names "
+        "and the file layout are not published by UR",
         False,
-        "ROS driver docs only (https://docs.ros.org/en/iron/p/ur_calibration/)",
+        "ROS driver docs only "
+        "(https://docs.ros.org/en/humble/p/ur_calibration/_sources/doc/algorithm.rst.txt)",
     ),
 )
 

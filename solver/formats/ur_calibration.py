@@ -11,8 +11,9 @@ deltas, so they are refused rather than dropped.
 
 UNCONFIRMED: the names delta_theta/delta_a/delta_d/delta_alpha and their units come from
 the ROS driver's documentation, not from a Universal Robots manual; the ``[mounting]``
-section name is an assumption. The file is for reading and for ROS users' URDF tools; do
-not copy it onto a controller.
+section name is an assumption. (UR's controller reports its own factory calibration as
+full dh_theta/dh_a/dh_d/dh_alpha values, per the ROS driver's ur_calibration docs.) The
+file is for reading and for ROS users' URDF tools; do not copy it onto a controller.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ import numpy as np
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.kinematics import perturbed
+from wirecal.solver.kinematics import Model, perturbed
 from wirecal.solver.robot import Robot
 from wirecal.solver.standard_dh import from_modified
 
@@ -54,10 +55,11 @@ def ur_deltas(robot: Robot, offsets: Mapping[str, float]) -> dict[str, np.ndarra
             )
     if problems:
         raise WirecalError(problems)
-    nominal = from_modified(robot).table
-    calibrated = from_modified(perturbed(robot, offsets, units="deg")).table
-    diff = calibrated - nominal
-    return {key: diff[:, _COLUMN[key]] * _SI[key] for key in KEYS}
+    # The conversion moves entries without arithmetic, so the standard table of the offsets
+    # alone is the difference of the calibrated and nominal tables, free of rounding.
+    zero = Model(dh=np.zeros_like(robot.dh), tool_point=np.zeros(3))
+    delta = from_modified(perturbed(zero, offsets, units="deg")).table
+    return {key: delta[:, _COLUMN[key]] * _SI[key] for key in KEYS}
 
 
 def _vector(values: np.ndarray) -> str:
@@ -68,14 +70,19 @@ def calibration_text(robot: Robot, offsets: Mapping[str, float]) -> str:
     """The deltas as text in calibration.conf's layout, with the tables they come from."""
     deltas = ur_deltas(robot, offsets)
     nominal = from_modified(robot).table
+    calibrated = from_modified(perturbed(robot, offsets, units="deg")).table
     lines = [
         f"# wirecal: standard-DH deltas of the calibrated {robot.name} (metres, radians).",
         "# UNCONFIRMED layout: key names from the ROS driver docs, not a Universal Robots",
         "# manual. For reading and ROS/URDF tools; do not copy onto a controller.",
-        "# Nominal standard DH per joint: theta_offset [rad], d [m], a [m], alpha [rad]",
     ]
-    for i, (th, d, a, al) in enumerate(nominal, start=1):
-        lines.append(f"#   joint {i}: {th!r}, {d * 1e-3!r}, {a * 1e-3!r}, {al!r}")
+    for title, table in (("Nominal", nominal), ("Calibrated", calibrated)):
+        lines.append(
+            f"# {title} standard DH per joint: theta_offset [rad], d [m], a [m], alpha [rad]"
+        )
+        for i, (th, d, a, al) in enumerate(table, start=1):
+            cells = (float(th), float(d) * 1e-3, float(a) * 1e-3, float(al))
+            lines.append(f"#   joint {i}: " + ", ".join(repr(c) for c in cells))
     lines += ["", "[mounting]"]
     lines += [f"{key} = {_vector(deltas[key])}" for key in KEYS]
     return "\n".join(lines) + "\n"
