@@ -54,6 +54,7 @@ class Received:
     complete: bool = False
     stopped: str = ""  # why an incomplete run stopped
     refused: int = 0  # other senders turned away
+    journal_created: bool = False
 
     @property
     def text(self) -> str:
@@ -94,6 +95,10 @@ def receive(
             out.put(log, result.text)
     except _Incomplete:
         pass  # the reservation of LOG is withdrawn; the journal keeps the rows
+    except BaseException:
+        if result.journal_created and not result.lines:
+            journal.unlink(missing_ok=True)  # an empty journal of ours, never an older one
+        raise
     if result.complete or not result.lines:
         journal.unlink(missing_ok=True)
     return result
@@ -130,6 +135,7 @@ def _take(srv: socket.socket, timeout_s: float, journal: Path, result: Received)
         ) from None
     except OSError as exc:
         raise os_problem(journal, exc) from None
+    result.journal_created = True
     sel = selectors.DefaultSelector()
     sel.register(srv, selectors.EVENT_READ)
     sender: socket.socket | None = None
@@ -148,7 +154,13 @@ def _take(srv: socket.socket, timeout_s: float, journal: Path, result: Received)
                     waited = "no sender connected" if sender is None else "no line arrived"
                     result.stopped = f"{waited} within {timeout_s:g} s (--timeout)"
                     return
-                for key, _ in sel.select(remaining):
+                try:
+                    events = sel.select(remaining)
+                except KeyboardInterrupt:  # Ctrl-C while waiting: keep what came, say so
+                    _sync(jf)
+                    result.stopped = "interrupted (Ctrl-C)"
+                    return
+                for key, _ in events:
                     if key.fileobj is srv:
                         other, _ = srv.accept()
                         if sender is None:

@@ -71,6 +71,10 @@ COMMANDS = {
     "simulate": (["simulate", "ROBOT", "PLAN", "-o", "OUT"], ["ROBOT", "PLAN"]),
     "solve": (["solve", "ROBOT", "PLAN", "LOG", "-o", "OUT"], ["ROBOT", "PLAN", "LOG"]),
     "report": (["report", "ROBOT", "PLAN", "LOG", "-o", "OUT.html"], ["ROBOT", "PLAN", "LOG"]),
+    "receive": (
+        ["receive", "--port", "1", "-o", "OUT", "--robot", "ROBOT", "--plan", "PLAN"],
+        ["ROBOT", "PLAN"],
+    ),
     "validate configuration": (["validate", "configuration", "VLOG"], ["VLOG"]),
     "validate plane": (["validate", "plane", "VLOG"], ["VLOG"]),
 }
@@ -103,6 +107,8 @@ def test_fixed_hostile_inputs(tmp_path, log, name, slot, kind):
         ["simulate", ROBOT, PLAN, "-o", "DIR"],
         ["solve", ROBOT, PLAN, "LOG", "-o", "DIR"],
         ["simulate", ROBOT, PLAN, "-o", "NOFOLDER/x.csv"],
+        ["receive", "--port", "1", "-o", "DIR", "--timeout", "0.1"],
+        ["receive", "--port", "1", "-o", "NOFOLDER/x.csv", "--timeout", "0.1"],
         ["gen", ROBOT, PLAN, "-o", "OUT", "--patch", "LOG"],
         ["gen", ROBOT, PLAN, "-o", "OUT", "--validation", "FILE"],
         ["simulate", ROBOT, PLAN, "-o", "OUT", "--errors", "LOG"],

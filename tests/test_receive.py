@@ -9,6 +9,8 @@ import time
 
 import pytest
 from click.testing import CliRunner
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from wirecal.app.receive import BUSY_LINE, END_MARKER, journal_path, receive, summary
 from wirecal.cli.main import main
@@ -190,3 +192,46 @@ def test_cli_robot_without_plan_refused(tmp_path):
         main, ["receive", "--port", "9", "-o", str(tmp_path / "x.csv"), "--robot", "r.toml"]
     )
     assert res.exit_code == 2 and "--robot and --plan go together" in res.output
+
+
+def test_ctrl_c_while_waiting_keeps_the_rows_and_says_so(tmp_path, log_text, monkeypatch):
+    import selectors
+
+    head = "".join(log_text.splitlines(keepends=True)[:6])
+    out = tmp_path / "run.csv"
+
+    class InterruptedSelector(selectors.DefaultSelector):  # type: ignore[misc,valid-type]
+        def select(self, timeout=None):
+            journal = journal_path(out)
+            if journal.exists() and journal.stat().st_size == len(head):
+                raise KeyboardInterrupt  # Ctrl-C once every sent line is in the journal
+            return super().select(min(timeout or 0.05, 0.05))
+
+    monkeypatch.setattr("wirecal.app.receive.selectors.DefaultSelector", InterruptedSelector)
+    server = Server(out, timeout_s=5)
+    with server.connect() as s:
+        s.sendall(head.encode())
+        result = server.finish()
+    assert result.stopped == "interrupted (Ctrl-C)"
+    assert journal_path(out).read_text() == head and not out.exists()
+
+
+@settings(
+    max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(cuts=st.lists(st.integers(1, 400), min_size=1, max_size=12), crlf=st.booleans())
+def test_any_chunking_gives_the_same_log(tmp_path_factory, log_text, cuts, crlf):
+    out = tmp_path_factory.mktemp("chunks") / "run.csv"
+    data = (log_text + END_MARKER + "\n").encode()
+    wire = data.replace(b"\n", b"\r\n") if crlf else data
+    server = Server(out, timeout_s=5)
+    with server.connect() as s:
+        k = 0
+        for size in cuts * (len(wire) // sum(cuts) + 1):
+            if k >= len(wire):
+                break
+            s.sendall(wire[k : k + size])
+            k += size
+    result = server.finish()
+    assert result.complete
+    assert out.read_bytes() == data
