@@ -121,8 +121,8 @@ def _slip(ctx, param, value):
 @click.option(
     "--counter-start",
     type=number(),
-    help="Counter value at the first reading [default: random]; near 8388607 "
-    "the 24-bit counter wraps during the run.",
+    help="Counter value at the first reading [default: random]; just below "
+    "2^(counter_bits-1) (8388607 at 24 bits) the counter wraps during the run.",
 )
 @click.option(
     "--controller",

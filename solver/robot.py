@@ -65,8 +65,11 @@ class Robot:
 
     @cached_property
     def nominal(self) -> Model:
-        """The nominal kinematic model (no error offsets)."""
-        return Model(dh=self.dh.copy(), tool_point=np.asarray(self.tool_point, dtype=float).copy())
+        """The nominal kinematic model (no error offsets); computed once, read-only."""
+        dh = np.array(self.dh, dtype=float)
+        tool = np.array(self.tool_point, dtype=float)
+        dh.flags.writeable = tool.flags.writeable = False
+        return Model(dh=dh, tool_point=tool)
 
     def errors(self, names: Sequence[str] | None = None) -> P.ErrorSet:
         """The error parameters ``names`` (default: the robot file's ``parameters``)."""
