@@ -71,7 +71,10 @@ COMMANDS = {
     "simulate": (["simulate", "ROBOT", "PLAN", "-o", "OUT"], ["ROBOT", "PLAN"]),
     "solve": (["solve", "ROBOT", "PLAN", "LOG", "-o", "OUT"], ["ROBOT", "PLAN", "LOG"]),
     "report": (["report", "ROBOT", "PLAN", "LOG", "-o", "OUT.html"], ["ROBOT", "PLAN", "LOG"]),
-    "validate configuration": (["validate", "configuration", "VLOG"], ["VLOG"]),
+    "validate configuration": (
+        ["validate", "configuration", "VLOG", "--robot", "ROBOT"],
+        ["VLOG", "ROBOT"],
+    ),
     "validate plane": (["validate", "plane", "VLOG"], ["VLOG"]),
 }
 CASES = [

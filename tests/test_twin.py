@@ -168,7 +168,8 @@ def test_run_log_is_the_simulators_format(twin_run, paper_plan):
 def test_twin_clock_agrees_with_the_planners_robot_time(viper, paper_plan, twin_run):
     """One time model (run_parameters): the twin's clock over the generated programs and
     the planner's estimate of the paper plan agree within 1 % (measured: 343.8 s against
-    344.4 s; with the twin's former 0.2 s per move instead of 0.5 s, 24 s apart)."""
+    344.4 s; with the twin's former 0.2 s per move against the planner's 0.5 s, 319.5 s:
+    25 s apart)."""
     assert twin_run.cell.clock == pytest.approx(robot_time(viper, paper_plan), rel=0.01)
 
 
