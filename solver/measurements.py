@@ -145,11 +145,11 @@ def check_log(
             continue
         seen[key] = r.line
         # The mean of samples unwrapped from the first lies within a spread of the range.
-        if abs(r.counts) > modulus / 2 + r.spread:
+        if abs(r.counts) > counter.half + r.spread:
             bad(
                 r,
                 f"counts {r.counts:.4f} exceed the {robot.encoder.counter_bits}-bit counter "
-                f"(±{modulus / 2:.0f}): not a count of this encoder; check counter_bits in "
+                f"(±{counter.half}): not a count of this encoder; check counter_bits in "
                 f"{robot.source} and that the log column holds the raw counter value",
             )
             continue
