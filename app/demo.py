@@ -30,7 +30,7 @@ from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors, truth_text
 from wirecal.solver.formats.validation_files import load_setup, read_validation_log
-from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plausibility import gate
 from wirecal.solver.solve import solve
@@ -150,7 +150,8 @@ def _run(
                 "configuration",
                 *(
                     config_discrepancy(
-                        read_validation_log(runs[k].configuration_log, "configuration")
+                        read_validation_log(runs[k].configuration_log, "configuration"),
+                        robot.encoder.counter,
                     )
                     for k in ("before", "after")
                 ),
@@ -190,11 +191,9 @@ def _run(
     )
     out.put(folder / "report.html", html)
     q = workspace(robot)
-    true_p = tool_position(perturbed(robot, truth), q)
+    true_p = tool_position(robot.model(truth), q)
     errors = {
-        name: float(
-            np.linalg.norm(tool_position(perturbed(robot, believed), q) - true_p, axis=1).mean()
-        )
+        name: float(np.linalg.norm(tool_position(robot.model(believed), q) - true_p, axis=1).mean())
         for name, believed in (("before", {}), ("after", identified))
     }
     return DemoResult(folder, validations, errors, controller["polished_max_difference"], seconds)

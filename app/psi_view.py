@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import Any
 
 from wirecal.solver.identifiability import analyse
-from wirecal.solver.kinematics import perturbed
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import DEFAULT_TOL, PSI_FLOOR, sensitivity, verdict
@@ -16,7 +15,7 @@ def psi_table(robot: Robot, plan: Plan, tol: float = DEFAULT_TOL) -> dict[str, A
 
     The dictionary is what ``wirecal psi --json`` prints.
     """
-    model = perturbed(robot)
+    model = robot.nominal
     q, step_no, index = plan.all_points()
     psi = sensitivity(model, q, plan.theta0_deg, plan.order).psi
     rows = []

@@ -16,7 +16,6 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from wirecal.gen.templating import render
-from wirecal.solver.kinematics import perturbed
 from wirecal.solver.plausibility import OVERRIDDEN
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult
@@ -48,7 +47,7 @@ def _png(fig) -> str:
 def psi_figure(result: SolveResult) -> str:
     plan, robot = result.plan, result.robot
     q, step, _ = plan.all_points()
-    psi = np.abs(sensitivity(perturbed(robot), q, plan.theta0_deg, plan.order).psi)
+    psi = np.abs(sensitivity(robot.nominal, q, plan.theta0_deg, plan.order).psi)
     fig, ax = plt.subplots(figsize=(7, 6.5))
     im = ax.imshow(psi, aspect="auto", cmap="magma_r", vmin=0)
     for b in np.flatnonzero(np.diff(step)) + 0.5:

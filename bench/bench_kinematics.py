@@ -21,7 +21,6 @@ import numpy as np  # noqa: E402
 
 from wirecal.solver.distance import wire_jacobian  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.kinematics import perturbed  # noqa: E402
 
 ROBOT = Path(__file__).resolve().parents[1] / "examples" / "viper_s650" / "robot.toml"
 
@@ -78,7 +77,7 @@ def best_of(fn, repeats):
 
 def main() -> None:
     robot = load_robot(ROBOT)
-    model = perturbed(robot, {"th2": 0.3, "a2": 0.2})
+    model = robot.model({"th2": 0.3, "a2": 0.2})
     names = robot.parameters
     rng = np.random.default_rng(0)
     q = np.radians(rng.uniform(robot.joint_min_deg, robot.joint_max_deg, (100_000, 6)))

@@ -12,8 +12,10 @@ from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.validation_files import load_setup
+from wirecal.solver.run_parameters import RunParameters
 
-_D = GenOptions()
+_D = RunParameters()
+_G = GenOptions()
 
 
 @main.command()
@@ -30,14 +32,14 @@ _D = GenOptions()
 @click.option(
     "--speed",
     type=number(),
-    default=_D.speed,
+    default=_D.speed_pct,
     show_default=True,
     help="Program speed, % of full (SPEED … ALWAYS).",
 )
 @click.option(
     "--accel",
     type=number(),
-    default=_D.accel,
+    default=_D.accel_pct,
     show_default=True,
     help="Acceleration and deceleration, % of full (ACCEL).",
 )
@@ -51,34 +53,34 @@ _D = GenOptions()
 @click.option(
     "--samples",
     type=int,
-    default=_D.samples,
+    default=_D.readings,
     show_default=True,
     help="Counter readings averaged per point.",
 )
 @click.option(
     "--zero-tol",
     type=POSITIVE,
-    default=_D.zero_tol_mm,
+    default=_G.zero_tol_mm,
     show_default=True,
     help="Largest drift of a zero reading from the first before the run pauses (mm).",
 )
 @click.option(
     "--spread-tol",
     type=POSITIVE,
-    default=_D.spread_tol_mm,
+    default=_G.spread_tol_mm,
     show_default=True,
     help="Largest spread of a point's samples before the run pauses (mm).",
 )
 @click.option(
     "--margin",
     type=NON_NEGATIVE,
-    default=_D.margin_deg,
+    default=_G.margin_deg,
     show_default=True,
     help="Refuse any target closer than this to a joint limit (deg).",
 )
 @click.option(
     "--log-name",
-    default=_D.log_file,
+    default=_G.log_file,
     show_default=True,
     help="8.3 name of the log the run writes on the controller's disk.",
 )
@@ -139,10 +141,7 @@ def gen(
                 "[parameters.<name>] tables with an offset)"
             ) from None
     opt = GenOptions(
-        speed=speed,
-        accel=accel,
-        settle_s=settle_s,
-        samples=samples,
+        run=RunParameters(speed_pct=speed, accel_pct=accel, settle_s=settle_s, readings=samples),
         zero_tol_mm=zero_tol,
         spread_tol_mm=spread_tol,
         margin_deg=margin,

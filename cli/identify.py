@@ -25,6 +25,7 @@ from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
 from wirecal.solver.identify import DEFAULT_OMEGA
 from wirecal.solver.measurements import Tolerances, check_log
 from wirecal.solver.plausibility import READING_NOISE_MM, gate
+from wirecal.solver.run_parameters import RunParameters
 from wirecal.solver.simulate import Faults, simulate_log
 from wirecal.solver.solve import solve as solve_api
 from wirecal.twin.cell import Faults as TwinFaults
@@ -120,8 +121,8 @@ def _slip(ctx, param, value):
 @click.option(
     "--counter-start",
     type=number(),
-    help="Counter value at the first reading [default: random]; near 8388607 "
-    "the 24-bit counter wraps during the run.",
+    help="Counter value at the first reading [default: random]; just below "
+    "2^(counter_bits-1) (8388607 at 24 bits) the counter wraps during the run.",
 )
 @click.option(
     "--controller",
@@ -166,11 +167,11 @@ def simulate(
         raise WirecalError(
             f"--slip {slip[0]}:{slip[1]:g}: {plan} has steps 1–{len(pl.steps)}; give one of them"
         )
-    half = 2 ** (rb.encoder.counter_bits - 1)
-    if counter_start is not None and not -half <= counter_start < half:
+    counter = rb.encoder.counter
+    if counter_start is not None and not -counter.half <= counter_start < counter.half:
         raise WirecalError(
             f"--counter-start {counter_start:g}: the robot file's "
-            f"{rb.encoder.counter_bits}-bit counter holds {-half}…{half - 1}"
+            f"{counter.bits}-bit counter holds {-counter.half}…{counter.half - 1}"
         )
     truth_path = Path(truth_out) if truth_out else Path(log_path).with_suffix(".truth.toml")
     inputs = [robot, plan, *([errors_file] if errors_file else [])]
@@ -225,7 +226,7 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
             noise_mm=noise_mm,
             counter_start=counter_start,
             faults=faults,
-            options=GenOptions(samples=samples),
+            options=GenOptions(run=RunParameters(readings=samples)),
         )
         text = result.log.read_text(encoding="ascii") if result.log.exists() else ""
     outcome = result.run or result.mount

@@ -15,7 +15,6 @@ from wirecal.solver import params as P
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.identifiability import analyse
-from wirecal.solver.kinematics import perturbed
 from wirecal.solver.sensitivity import DEFAULT_TOL
 
 ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
@@ -123,7 +122,7 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
     pl = load_plan(plan, rb)
     names = P.all_names(rb.n_joints, with_tool=True) if all_params else rb.parameters
     q, _, _ = pl.all_points()
-    result = analyse(perturbed(rb), q, pl.theta0_deg, names)
+    result = analyse(rb.nominal, q, pl.theta0_deg, names)
     if as_json:
         print_json(
             {

@@ -105,7 +105,10 @@ def _report_html(
         validations.append(
             Validation(
                 "configuration",
-                *(config_discrepancy(read_validation_log(p, "configuration")) for p in config_logs),
+                *(
+                    config_discrepancy(read_validation_log(p, "configuration"), rb.encoder.counter)
+                    for p in config_logs
+                ),
             )
         )
     if plane_logs:

@@ -5,6 +5,9 @@ from __future__ import annotations
 import click
 
 from wirecal.cli.main import main, print_json, user_errors
+from wirecal.solver.counter import Counter
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.validation_files import read_validation_log
 from wirecal.solver.validation_analysis import (
     Stats,
@@ -14,27 +17,41 @@ from wirecal.solver.validation_analysis import (
 )
 
 
-def analyse(kind: str, path: str) -> Stats:
+def analyse(kind: str, path: str, counter: Counter | None) -> Stats:
     log = read_validation_log(path, kind)
-    return config_discrepancy(log) if kind == "configuration" else plane_residuals(log)[0]
+    if kind == "plane":
+        return plane_residuals(log)[0]
+    if counter is None:
+        raise WirecalError(
+            f"{path}: a configuration log's counts wrap at the robot's counter width: "
+            "give --robot ROBOT.toml"
+        )
+    return config_discrepancy(log, counter)
 
 
 @main.command()
 @click.argument("kind", type=click.Choice(["configuration", "plane"]))
 @click.argument("before", type=click.Path(dir_okay=False))
 @click.argument("after", type=click.Path(dir_okay=False), required=False)
+@click.option(
+    "--robot",
+    "robot_file",
+    type=click.Path(dir_okay=False),
+    help="The robot file (configuration logs: the encoder's counter width).",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the figures as JSON.")
 @user_errors
-def validate(kind, before, after, as_json):
+def validate(kind, before, after, robot_file, as_json):
     """The validation metric of a log from wc.vcfg or wc.vpln (paper §3.6).
 
     configuration: per pose, the largest difference among the wire lengths of its four
     configurations. plane: the absolute residuals of the least-squares plane through the
     probed points. With a second log (after calibration), also the reduction.
     """
-    runs = {"before": analyse(kind, before)}
+    counter = load_robot(robot_file).encoder.counter if robot_file else None
+    runs = {"before": analyse(kind, before, counter)}
     if after:
-        runs["after"] = analyse(kind, after)
+        runs["after"] = analyse(kind, after, counter)
     figures = {
         name: {"mean_mm": s.mean, "std_mm": s.std, "max_mm": s.max, "n": int(s.values.size)}
         for name, s in runs.items()

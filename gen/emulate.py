@@ -140,9 +140,9 @@ class Controller:
                 "dni",
                 "dnf",
                 "omega",
-                "to_boundary",
             )
         }
+        self.t["to_boundary"] = conv(t.errors.boundary_per_internal)
         self.tab = t
         self.q = conv(r.q)
         self.d2r = num(np.pi / 180)

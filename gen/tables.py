@@ -15,10 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver import params as P
-from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.kinematics import tool_position
+from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.sensitivity import boundary_scale
 from wirecal.solver.solve import omega_vector
 
 KIND_CODE = {"th": 1, "d": 2, "a": 3, "al": 4, "tool": 5}
@@ -56,8 +56,7 @@ class Tables:
     omega: np.ndarray  # (S,) bound Ω (rad or mm)
     pk: np.ndarray  # (m,) kind code
     pr: np.ndarray  # (m,) row k (1-based) or tool axis
-    names: tuple[str, ...]  # parameters, identification order
-    to_boundary: np.ndarray  # (m,) rad→deg or 1
+    errors: ErrorSet  # parameters, identification order, and their units
     nominal: np.ndarray  # (m,) nominal values in boundary units (deg, mm)
 
     @property
@@ -65,32 +64,8 @@ class Tables:
         return len(self.dn) - 1
 
     @property
-    def entries(self) -> int:
-        """Number of table values the data program assigns."""
-        return sum(
-            np.size(getattr(self, f))
-            for f in (
-                "ca",
-                "sa",
-                "la",
-                "ld",
-                "tool",
-                "ct",
-                "st",
-                "qp",
-                "vn",
-                "dn",
-                "dni",
-                "dnf",
-                "first",
-                "count",
-                "spar",
-                "omega",
-                "pk",
-                "pr",
-                "to_boundary",
-            )
-        )
+    def names(self) -> tuple[str, ...]:
+        return self.errors.names
 
 
 def build_tables(robot: Robot, plan: Plan) -> Tables:
@@ -98,7 +73,7 @@ def build_tables(robot: Robot, plan: Plan) -> Tables:
     q, _, _ = plan.all_points()
     conf = np.vstack([plan.theta0_deg, q])
     angle = np.radians(conf) + robot.dh[:, 2]
-    model = perturbed(robot)
+    model = robot.nominal
     p = tool_position(model, np.radians(conf))
     nu = p - p[0]
     nu[0] = 0.0
@@ -131,8 +106,7 @@ def build_tables(robot: Robot, plan: Plan) -> Tables:
         omega=omega_vector(names, robot.n_joints, plan),
         pk=np.array([KIND_CODE[P.parse(n, robot.n_joints).kind] for n in names]),
         pr=np.array(rows),
-        names=names,
-        to_boundary=1.0 / boundary_scale(names, robot.n_joints),
+        errors=robot.errors(names),
         nominal=np.array([robot.nominal_value(n) for n in names]),
     )
 

@@ -22,7 +22,7 @@ from scipy.optimize import least_squares
 from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.kinematics import Model, with_errors
-from wirecal.solver.sensitivity import boundary_scale
+from wirecal.solver.params import ErrorSet
 
 DEFAULT_OMEGA = 5.0
 """Default bound Ω_j: ±5 deg for angles, ±5 mm for lengths."""
@@ -43,9 +43,9 @@ class Problem:
     step: np.ndarray  # (N,) 1-based step of each point
 
     @property
-    def scale(self) -> np.ndarray:
-        """Internal → boundary units per parameter (180/π for angles)."""
-        return 1.0 / boundary_scale(self.names, self.base.n_joints)
+    def errors(self) -> ErrorSet:
+        """The parameters, in identification order, with their units."""
+        return ErrorSet(self.names, self.base.n_joints)
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
         return wire_lengths(with_errors(self.base, self.names, x), self.q, self.q0) - self.d
@@ -190,7 +190,7 @@ def leak_coefficients(psi: np.ndarray, step: np.ndarray, names: tuple[str, ...])
 def run_stepwise(problem: Problem, omega: np.ndarray, psi: np.ndarray) -> Estimate:
     """The stepwise method on one data set, with its per-step diagnostics."""
     x, info = stepwise(problem, omega)
-    scale = problem.scale
+    x_b, omega_b = problem.errors.to_boundary(x), problem.errors.to_boundary(omega)
     leaks = leak_coefficients(psi, problem.step, problem.names)
     steps = []
     for j, name in enumerate(problem.names):
@@ -198,12 +198,12 @@ def run_stepwise(problem: Problem, omega: np.ndarray, psi: np.ndarray) -> Estima
         steps.append(
             StepResult(
                 parameter=name,
-                estimate=float(x[j] * scale[j]),
+                estimate=float(x_b[j]),
                 n_points=info[j]["n"],
                 rms_before_mm=float(info[j]["rms_before"][0]),
                 rms_after_mm=float(info[j]["rms_after"][0]),
                 psi_strength=float(np.sqrt(np.mean(psi[sel, j] ** 2))) if np.any(sel) else 0.0,
-                omega=float(omega[j] * scale[j]),
+                omega=float(omega_b[j]),
                 on_bound=bool(abs(x[j]) >= omega[j] * (1 - 1e-9)),
                 leak=leaks[j],
                 iterations=info[j]["iterations"],
@@ -211,7 +211,7 @@ def run_stepwise(problem: Problem, omega: np.ndarray, psi: np.ndarray) -> Estima
         )
     r = problem.residuals(x)
     return Estimate(
-        "stepwise", problem.names, x * scale, float(np.sqrt(np.mean(r**2))), steps=tuple(steps)
+        "stepwise", problem.names, x_b, float(np.sqrt(np.mean(r**2))), steps=tuple(steps)
     )
 
 
@@ -254,12 +254,11 @@ def joint(
     )
     r, J = evaluate(res.x)
     n, m = r.size, len(problem.names)
-    scale = problem.scale
     std = corr = None
     if n > m:
         sigma2 = float(r @ r) / (n - m)
         # Boundary units, so that the rank tolerance compares deg with mm, not rad with mm.
-        cov, identified = covariance(J / scale, sigma2)
+        cov, identified = covariance(problem.errors.per_boundary(J), sigma2)
         sd = np.sqrt(np.clip(np.diag(cov), 0, None))
         with np.errstate(invalid="ignore", divide="ignore"):
             corr = cov / np.outer(sd, sd)
@@ -269,7 +268,7 @@ def joint(
     return Estimate(
         "joint",
         problem.names,
-        res.x * scale,
+        problem.errors.to_boundary(res.x),
         float(np.sqrt(np.mean(r**2))),
         std=std,
         correlation=corr,

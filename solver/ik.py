@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver.kinematics import Model, frames, joint_jacobian
+from wirecal.solver.robot import Robot
 
 HALF_PI = np.pi / 2
 
@@ -156,15 +157,23 @@ def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray) -> tuple[n
 
 
 def solve(
-    model: Model,
+    robot: Robot,
     R: np.ndarray,
     o: np.ndarray,
-    lo_deg: np.ndarray | None = None,
-    hi_deg: np.ndarray | None = None,
+    *,
+    model: Model | None = None,
+    margin_deg: float = 0.0,
     seed: int = 0,
 ) -> list[Solution]:
-    """Every distinct solution for the flange pose (R, o), each put into the joint limits
-    where a turn of ±360° allows it."""
+    """Every distinct solution for the flange pose (R, o), each put into the robot's joint
+    limits less ``margin_deg`` where a turn of ±360° allows it.
+
+    ``model`` is the kinematic model the controller believes (default: the robot's
+    nominal model; a calibrated controller's is patched).
+    """
+    model = robot.nominal if model is None else model
+    lo_deg = robot.joint_min_deg + margin_deg
+    hi_deg = robot.joint_max_deg - margin_deg
     dh = np.asarray(model.dh)
     candidates = []
     if analytic_structure(model):
@@ -196,8 +205,6 @@ def _wrapped(x):
 
 
 def _into_limits(q, lo_deg, hi_deg):
-    if lo_deg is None or hi_deg is None:
-        return q, True
     lo, hi = np.radians(lo_deg), np.radians(hi_deg)
     q = q.copy()
     for j in range(len(q)):

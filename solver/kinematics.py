@@ -17,14 +17,13 @@ Angular derivatives are in mm/rad here; callers convert at the boundary.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
 
 import numpy as np
 
 from wirecal.solver import params as P
-from wirecal.solver.robot import Robot
 
 
 @dataclass(frozen=True)
@@ -47,13 +46,11 @@ class Model:
         return self.dh.ndim == 3
 
 
-_COL = {"al": 0, "a": 1, "th": 2, "d": 3}
-
-
-def with_errors(base: Robot | Model, names: Sequence[str], values: np.ndarray) -> Model:
+def with_errors(base: Model, names: Sequence[str], values: np.ndarray) -> Model:
     """The model with offsets ``values`` (m,) or (T, m), internal units, added to ``base``.
 
-    With a (T, m) array the result holds T models (dh (T, n, 4)).
+    With a (T, m) array the result holds T models (dh (T, n, 4)). A robot's offsets in
+    boundary units (deg, mm) give a model through :meth:`~wirecal.solver.robot.Robot.model`.
     """
     values = np.asarray(values, dtype=float)
     lead = values.shape[:-1]
@@ -64,24 +61,8 @@ def with_errors(base: Robot | Model, names: Sequence[str], values: np.ndarray) -
         if p.kind == "tool":
             tool[..., p.row] += values[..., k]
         else:
-            dh[..., p.row, _COL[p.kind]] += values[..., k]
+            dh[..., p.row, P.DH_COLUMN[p.kind]] += values[..., k]
     return Model(dh=dh, tool_point=tool)
-
-
-def perturbed(
-    robot: Robot | Model, errors: Mapping[str, float] | None = None, *, units: str = "deg"
-) -> Model:
-    """The model with error offsets added to the nominal parameters.
-
-    ``errors`` maps parameter names to offsets in boundary units (deg, mm) when
-    ``units == "deg"``, or in internal units (rad, mm) when ``units == "rad"``.
-    """
-    errors = dict(errors or {})
-    names = list(errors)
-    values = np.array([float(errors[n]) for n in names])
-    if units == "deg" and names:
-        values = values * np.where(P.angular_mask(names, robot.dh.shape[-2]), np.pi / 180, 1.0)
-    return with_errors(robot, names, values)
 
 
 def repeat(model: Model, counts: int) -> Model:

@@ -126,7 +126,7 @@ def check_log(
     zeros: dict[int, Reading] = {}
     seen: dict[tuple[str, int, int], int] = {}
     mpc = log.mm_per_count
-    modulus = 2.0**robot.encoder.counter_bits
+    counter = robot.encoder.counter
     spread_counts = tol.spread_mm / abs(mpc)
     n_steps = len(plan.steps)
 
@@ -145,11 +145,11 @@ def check_log(
             continue
         seen[key] = r.line
         # The mean of samples unwrapped from the first lies within a spread of the range.
-        if abs(r.counts) > modulus / 2 + r.spread:
+        if abs(r.counts) > counter.half + r.spread:
             bad(
                 r,
                 f"counts {r.counts:.4f} exceed the {robot.encoder.counter_bits}-bit counter "
-                f"(±{modulus / 2:.0f}): not a count of this encoder; check counter_bits in "
+                f"(±{counter.half}): not a count of this encoder; check counter_bits in "
                 f"{robot.source} and that the log column holds the raw counter value",
             )
             continue
@@ -204,15 +204,11 @@ def check_log(
     drift: dict[int, float] = {}
     if first_zero is not None:
         first = first_zero.counts
-
-        def wrapped(c, ref):
-            return (np.asarray(c) - ref + modulus / 2) % modulus - modulus / 2
-
         # A slip moves every later zero too: blame the step where the drift first leaves
         # the tolerance, and any later step where it jumps again, not each step after it.
         before = 0.0
         for s, r in sorted(zeros.items()):
-            drift[s] = float(wrapped(r.counts, first) * mpc)
+            drift[s] = float(counter.difference(r.counts, first) * mpc)
             jumped = abs(drift[s] - before) > tol.zero_mm
             if jumped or (abs(drift[s]) > tol.zero_mm >= abs(before)):
                 prev = max(s - 1, 1)
@@ -232,8 +228,8 @@ def check_log(
                 )
         # The reference is the mean of all zero readings: every length is measured from
         # it, so its error is common to all points; averaging the steps' zeros shrinks it.
-        ref = first + np.mean([wrapped(r.counts, first) for r in zeros.values()])
-        distance = wrapped(counts, ref) * mpc
+        ref = first + np.mean([counter.difference(r.counts, first) for r in zeros.values()])
+        distance = counter.difference(counts, ref) * mpc
         for k in np.flatnonzero(~np.isnan(distance)):
             line = seen[("point", int(step_no[k]), int(index_no[k]))]
             if distance[k] > robot.encoder.range_mm:

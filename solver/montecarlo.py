@@ -18,10 +18,10 @@ import numpy as np
 from wirecal.solver.accuracy import crb, noise_covariance, workspace
 from wirecal.solver.distance import wire_jacobian
 from wirecal.solver.identify import Problem, joint, stepwise
-from wirecal.solver.kinematics import perturbed, repeat, tool_jacobian, tool_position, with_errors
+from wirecal.solver.kinematics import repeat, tool_jacobian, tool_position, with_errors
+from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.sensitivity import boundary_scale
 from wirecal.solver.simulate import measured_lengths
 from wirecal.solver.solve import omega_vector
 
@@ -52,16 +52,15 @@ def tool_errors(
     """‖p_true − p_est‖ (T, Q) for T estimated and true parameter vectors (internal units)."""
     T, Q = est.shape[0], len(q_ws)
     q = np.tile(q_ws, (T, 1))
-    base = perturbed(robot)
+    base = robot.nominal
     p_est = tool_position(repeat(with_errors(base, names, est), Q), q)
     p_true = tool_position(repeat(with_errors(base, names, truth), Q), q)
     return np.linalg.norm(p_est - p_true, axis=1).reshape(T, Q)
 
 
-def _figures(
-    err: np.ndarray, tool: np.ndarray, angular: np.ndarray, seconds: float, scale: np.ndarray
-) -> MethodFigures:
-    e = err * scale
+def _figures(err: np.ndarray, tool: np.ndarray, errors: ErrorSet, seconds: float) -> MethodFigures:
+    """Figures of parameter errors ``err`` (T, m) in internal units and tool errors (T, Q)."""
+    e, angular = errors.to_boundary(err), errors.angular
     return MethodFigures(
         param_rms_deg=float(np.sqrt(np.mean(e[:, angular] ** 2))) if angular.any() else 0.0,
         param_rms_mm=float(np.sqrt(np.mean(e[:, ~angular] ** 2))) if (~angular).any() else 0.0,
@@ -85,10 +84,10 @@ def run(
     rng = np.random.default_rng(seed)
     names = plan.order
     n = robot.n_joints
-    to_internal = boundary_scale(names, n)
-    truth = np.atleast_2d(truths) * to_internal
+    errors = ErrorSet(names, n)
+    truth = errors.to_internal(np.atleast_2d(truths))
     T = truth.shape[0]
-    base = perturbed(robot)
+    base = robot.nominal
     d = measured_lengths(
         with_errors(base, names, truth), plan, robot.encoder.mm_per_count, noise_mm, rng
     )
@@ -96,8 +95,6 @@ def run(
     problem = Problem(base, names, np.radians(q), np.radians(plan.theta0_deg), d, step)
     omega = omega_vector(names, n, plan)
     q_ws = workspace(robot, n_workspace)
-    angular = to_internal != 1.0
-    scale = 1.0 / to_internal
 
     t0 = time.perf_counter()
     est_sw, _ = stepwise(problem, omega)
@@ -105,20 +102,21 @@ def run(
     out: dict[str, MethodFigures] = {}
     if "stepwise" in methods:
         out["stepwise"] = _figures(
-            est_sw - truth, tool_errors(robot, names, est_sw, truth, q_ws), angular, t_sw, scale
+            est_sw - truth, tool_errors(robot, names, est_sw, truth, q_ws), errors, t_sw
         )
     if "joint" in methods:
         t0 = time.perf_counter()
         est_j = np.array(
             [
-                joint(Problem(base, names, problem.q, problem.q0, d[t], step), est_sw[t]).values
-                / scale
+                errors.to_internal(
+                    joint(Problem(base, names, problem.q, problem.q0, d[t], step), est_sw[t]).values
+                )
                 for t in range(T)
             ]
         )
         t_j = time.perf_counter() - t0 + t_sw  # the joint method starts from stepwise
         out["joint"] = _figures(
-            est_j - truth, tool_errors(robot, names, est_j, truth, q_ws), angular, t_j, scale
+            est_j - truth, tool_errors(robot, names, est_j, truth, q_ws), errors, t_j
         )
 
     # The bound at the mean truth, for the noise model of the readings: per-point σ and
@@ -130,4 +128,4 @@ def run(
     _, Jp = tool_jacobian(base, q_ws, names)
     tool_crb = np.linalg.norm(np.einsum("qim,tm->tqi", Jp, draws), axis=2)
     before = tool_errors(robot, names, np.zeros_like(truth), truth, q_ws).mean()
-    return MonteCarlo(T, out, _figures(draws, tool_crb, angular, 0.0, scale), float(before))
+    return MonteCarlo(T, out, _figures(draws, tool_crb, errors, 0.0), float(before))

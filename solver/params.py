@@ -13,11 +13,16 @@ Angular parameters are degrees at the boundary, radians inside.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from functools import cache
+
+import numpy as np
 
 _PATTERN = re.compile(r"^(th|d|al|a)(\d+)$")
 TOOL_NAMES = ("tool_x", "tool_y", "tool_z")
+DH_COLUMN = {"al": 0, "a": 1, "th": 2, "d": 3}
+"""Column of the DH table (α_{i-1}, a_{i-1}, θ offset, d_i) each kind of parameter offsets."""
 
 
 @dataclass(frozen=True)
@@ -63,6 +68,70 @@ def all_names(n_joints: int, with_tool: bool = False) -> tuple[str, ...]:
     return tuple(names) + (TOOL_NAMES if with_tool else ())
 
 
-def angular_mask(names: tuple[str, ...] | list[str], n_joints: int):
-    """Boolean list: True where the parameter is an angle (th*, al*)."""
-    return [parse(n, n_joints).angular for n in names]
+@dataclass(frozen=True)
+class ErrorSet:
+    """An ordered set of error parameters of an n-joint arm and their units.
+
+    Offsets are degrees (angles) and mm (lengths) at every boundary, radians and mm inside
+    the mathematics: :meth:`to_internal` and :meth:`to_boundary` convert values,
+    :meth:`per_boundary` and :meth:`per_internal` convert derivatives (Jacobian or Ψ
+    columns, the last axis). ``rows`` and ``columns`` place each parameter in the DH table
+    (column −1: a tool-point axis, ``rows`` then the axis).
+    """
+
+    names: tuple[str, ...]
+    n_joints: int
+    params: tuple[Param, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "names", tuple(self.names))
+        object.__setattr__(self, "params", tuple(parse(n, self.n_joints) for n in self.names))
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    @property
+    def angular(self) -> np.ndarray:
+        """(m,) True where the parameter is an angle (th*, al*)."""
+        return np.array([p.angular for p in self.params], dtype=bool)
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        """Boundary unit of each parameter: "deg" or "mm"."""
+        return tuple(p.unit for p in self.params)
+
+    @property
+    def rows(self) -> np.ndarray:
+        """(m,) 0-based DH row of each parameter (the axis for a tool-point component)."""
+        return np.array([p.row for p in self.params], dtype=int)
+
+    @property
+    def columns(self) -> np.ndarray:
+        """(m,) DH column each parameter offsets; −1 for a tool-point component."""
+        return np.array([DH_COLUMN.get(p.kind, -1) for p in self.params], dtype=int)
+
+    @property
+    def internal_per_boundary(self) -> np.ndarray:
+        """(m,) internal units per boundary unit: π/180 rad/deg for angles, 1 for lengths."""
+        return np.where(self.angular, np.pi / 180.0, 1.0)
+
+    @property
+    def boundary_per_internal(self) -> np.ndarray:
+        """(m,) boundary units per internal unit: 180/π deg/rad for angles, 1 for lengths."""
+        return 1.0 / self.internal_per_boundary
+
+    def to_internal(self, values_boundary: np.ndarray | Sequence[float]) -> np.ndarray:
+        """Offsets (…, m) in deg/mm → rad/mm."""
+        return np.asarray(values_boundary, dtype=float) * self.internal_per_boundary
+
+    def to_boundary(self, values_internal: np.ndarray | Sequence[float]) -> np.ndarray:
+        """Offsets (…, m) in rad/mm → deg/mm."""
+        return np.asarray(values_internal, dtype=float) * self.boundary_per_internal
+
+    def per_boundary(self, columns_internal: np.ndarray) -> np.ndarray:
+        """Derivatives (…, m) per rad/mm → per deg/mm (e.g. ∂p/∂e in mm/rad → mm/deg)."""
+        return np.asarray(columns_internal, dtype=float) * self.internal_per_boundary
+
+    def per_internal(self, columns_boundary: np.ndarray) -> np.ndarray:
+        """Derivatives (…, m) per deg/mm → per rad/mm (e.g. Ψ in mm/deg → mm/rad)."""
+        return np.asarray(columns_boundary, dtype=float) / self.internal_per_boundary

@@ -32,10 +32,12 @@ from wirecal.solver.accuracy import noise_covariance, stepwise_map, tool_error, 
 from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.identifiability import analyse
-from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.kinematics import tool_position
+from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan, Step
 from wirecal.solver.robot import Robot
-from wirecal.solver.sensitivity import PSI_FLOOR, boundary_scale, sensitivity
+from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters
+from wirecal.solver.sensitivity import PSI_FLOOR, sensitivity
 
 
 @dataclass(frozen=True)
@@ -48,9 +50,7 @@ class PlanOptions:
     clearance_mm: float = 10.0  # wire to link capsules
     spread_deg: float = 4.0  # between the points of one step
     samples: int = 400  # candidates per joint subset
-    speed_pct: float = 20.0  # for the robot-time estimate (as wirecal gen)
-    settle_s: float = 3.0
-    readings: int = 10
+    run: RunParameters = DEFAULT_RUN  # for the robot-time estimate (as wirecal gen)
     seed: int = 0
     prior: float = 0.5  # typical |offset| (deg, mm) of a still-unknown parameter
     sigma_mm: float = 0.011  # reading noise, quantisation included
@@ -302,7 +302,7 @@ def design(
 
 def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
     rng = np.random.default_rng(opt.seed)
-    model = perturbed(robot)
+    model = robot.nominal
     for j in np.flatnonzero(
         (theta0 < robot.joint_min_deg + opt.margin_deg)
         | (theta0 > robot.joint_max_deg - opt.margin_deg)
@@ -426,7 +426,7 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
     )
     d = Design(plan, steps, excluded)
     d.predicted = predicted_accuracy(robot, plan)
-    d.robot_time_s = robot_time(robot, plan, opt)
+    d.robot_time_s = robot_time(robot, plan, opt.run)
     return d
 
 
@@ -441,11 +441,6 @@ def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarra
     return opt.sigma_mm**2 * A @ A.T + opt.prior**2 * E @ E.T
 
 
-def _move_time(robot: Robot, a: np.ndarray, b: np.ndarray, opt: PlanOptions) -> float:
-    rate = robot.joint_speed_deg_s * opt.speed_pct / 100
-    return float(np.max(np.abs(b - a) / rate)) + 0.5
-
-
 def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.ndarray:
     """The visiting order from θ0 and back (nearest neighbour, improved by 2-opt) over
     moves that keep the wire clear (``move_ok``); a point reached through a via point can
@@ -454,16 +449,17 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
     a, b = np.repeat(pts, n, axis=0), np.tile(pts, (n, 1))
     clear = move_ok(robot, model, p0, a, b, opt).reshape(n, n)
     has_via = ~np.isnan(vias[:, 0])
-    leg = np.array([[_move_time(robot, x, y, opt) for y in pts] for x in pts])
+    speed = robot.joint_speed_deg_s
+    leg = np.array([[opt.run.move_s(speed, x, y) for y in pts] for x in pts])
     start = np.array(
         [
-            _move_time(robot, theta0, p, opt)
+            opt.run.move_s(speed, theta0, p)
             if not v
-            else _move_time(robot, theta0, w, opt) + _move_time(robot, w, p, opt)
+            else opt.run.move_s(speed, theta0, w) + opt.run.move_s(speed, w, p)
             for p, w, v in zip(pts, vias, has_via, strict=True)
         ]
     )
-    back = np.array([_move_time(robot, p, theta0, opt) for p in pts])
+    back = np.array([opt.run.move_s(speed, p, theta0) for p in pts])
     bad = 1e4
 
     def total(path):
@@ -487,15 +483,15 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
     return np.array(path) if total(path) < bad else None
 
 
-def robot_time(robot: Robot, plan: Plan, opt: PlanOptions = PlanOptions()) -> float:
+def robot_time(robot: Robot, plan: Plan, run: RunParameters = DEFAULT_RUN) -> float:
     """Estimated run time (s): every step from θ0 (zero reading) through its via points
-    and points and back to θ0, moves at the program speed, a settle and the readings per stop."""
-    stop = opt.settle_s + 0.02 * opt.readings
+    and points and back to θ0, moves at the program speed, a settle and the readings per
+    stop (the time model of :mod:`~wirecal.solver.run_parameters`, as the twin's clock)."""
     total = 0.0
     for s in plan.steps:
         seq = [plan.theta0_deg, *s.via_deg, *s.points_deg, plan.theta0_deg]
-        total += stop * (1 + len(s.points_deg))
-        total += sum(_move_time(robot, a, b, opt) for a, b in itertools.pairwise(seq))
+        total += run.stop_s * (1 + len(s.points_deg))
+        total += sum(run.move_s(robot.joint_speed_deg_s, a, b) for a, b in itertools.pairwise(seq))
     return total
 
 
@@ -506,17 +502,17 @@ def predicted_accuracy(
     (σ per reading plus the count's quantisation); for the stepwise estimate its linearised
     map A, noise A·C·Aᵀ plus the bias of parameters leaking into steps before their own,
     (A·J − I)·P·(A·J − I)ᵀ with true offsets of size ``prior`` (deg, mm)."""
-    model = perturbed(robot)
+    model = robot.nominal
     q, step, _ = plan.all_points()
     names = plan.order
-    scale = boundary_scale(names, robot.n_joints)  # prior deg → rad
-    J = sensitivity(model, q, plan.theta0_deg, names).psi / scale
+    errors = ErrorSet(names, robot.n_joints)
+    J = errors.per_internal(sensitivity(model, q, plan.theta0_deg, names).psi)
     s2 = sigma_mm**2 + robot.encoder.mm_per_count**2 / 12
     C = noise_covariance(len(q), np.sqrt(s2), np.sqrt(s2 / len(plan.steps)))
     cov_joint = np.linalg.pinv(J.T @ np.linalg.solve(C, J))
     A = stepwise_map(J, step)
     E = A @ J - np.eye(len(names))
-    P = np.diag((prior * scale) ** 2)
+    P = np.diag(errors.to_internal(np.full(len(names), prior)) ** 2)
     ws = workspace(robot, 500)
     return {
         "joint": tool_error(model, names, cov_joint, ws).mean_mm,

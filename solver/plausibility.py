@@ -35,8 +35,7 @@ from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import Implausible
 from wirecal.solver.identifiability import Identifiability, analyse_jacobian, covariance
 from wirecal.solver.identify import DEFAULT_OMEGA
-from wirecal.solver.kinematics import perturbed
-from wirecal.solver.sensitivity import boundary_scale, sensitivity
+from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult, omega_vector
 
 FALSE_ALARM = 1e-6
@@ -138,7 +137,7 @@ def assess(
     names = est.names
     present = m.present
     q_deg = m.joints_deg[present]
-    base = perturbed(robot)
+    base = robot.nominal
     J = sensitivity(base, q_deg, m.theta0_deg, names).psi  # boundary units
     ident = analyse_jacobian(J, names)
     findings: list[Finding] = []
@@ -251,7 +250,7 @@ def _bounds(result: SolveResult, method: str, omega_default: float) -> list[Find
     names = est.names
     robot = result.robot
     omega = omega_vector(names, robot.n_joints, result.plan, omega_default)
-    omega = omega / boundary_scale(names, robot.n_joints)
+    omega = robot.errors(names).to_boundary(omega)
     on_bound = [
         f"{n} {v:+.4g}"
         for n, v, w in zip(names, est.values, omega, strict=True)

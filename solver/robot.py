@@ -5,11 +5,15 @@ and speeds, the wire attachment point and the draw-wire encoder. Files are read 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
 from wirecal.solver import params as P
+from wirecal.solver.counter import Counter
+from wirecal.solver.kinematics import Model, with_errors
 
 CONTROLLER_JOINTS = 6
 """Joints of the arms the controller programs and the log format are written for."""
@@ -30,6 +34,11 @@ class Encoder:
     interface: str = "belt"
     channel: int = 1
     belt_mode: int = 0
+
+    @property
+    def counter(self) -> Counter:
+        """The controller's counter of this encoder (``counter_bits`` wide)."""
+        return Counter(self.counter_bits)
 
 
 @dataclass(frozen=True)
@@ -54,6 +63,25 @@ class Robot:
     def n_joints(self) -> int:
         return int(self.dh.shape[0])
 
+    @cached_property
+    def nominal(self) -> Model:
+        """The nominal kinematic model (no error offsets); computed once, read-only."""
+        dh = np.array(self.dh, dtype=float)
+        tool = np.array(self.tool_point, dtype=float)
+        dh.flags.writeable = tool.flags.writeable = False
+        return Model(dh=dh, tool_point=tool)
+
+    def errors(self, names: Sequence[str] | None = None) -> P.ErrorSet:
+        """The error parameters ``names`` (default: the robot file's ``parameters``)."""
+        return P.ErrorSet(tuple(self.parameters if names is None else names), self.n_joints)
+
+    def model(self, offsets: Mapping[str, float]) -> Model:
+        """The nominal model with error offsets in boundary units (deg for angles, mm)."""
+        if not offsets:
+            return self.nominal
+        es = self.errors(list(offsets))
+        return with_errors(self.nominal, es.names, es.to_internal([offsets[n] for n in es.names]))
+
     def dh_deg(self) -> np.ndarray:
         """DH table in file units: degrees for α and θ offset, mm for a and d."""
         out = self.dh.copy()
@@ -65,8 +93,7 @@ class Robot:
         p = P.parse(name, self.n_joints)
         if p.kind == "tool":
             return float(self.tool_point[p.row])
-        col = {"al": 0, "a": 1, "th": 2, "d": 3}[p.kind]
-        value = float(self.dh[p.row, col])
+        value = float(self.dh[p.row, P.DH_COLUMN[p.kind]])
         return math.degrees(value) if p.angular else value
 
     def controller_problem(self) -> str | None:

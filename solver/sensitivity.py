@@ -13,13 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wirecal.solver import params as P
 from wirecal.solver.kinematics import Model, tool_jacobian
-
-
-def boundary_scale(names: Sequence[str], n_joints: int) -> np.ndarray:
-    """Factor turning per-radian columns into per-degree ones (1 for lengths)."""
-    return np.where(P.angular_mask(names, n_joints), np.pi / 180.0, 1.0)
+from wirecal.solver.params import ErrorSet
 
 
 @dataclass(frozen=True)
@@ -44,14 +39,14 @@ def sensitivity(
 ) -> Sensitivity:
     """Φ_i, Φ_0, ν̂_i and Ψ_i at the given model for points ``q_deg`` (N, n) in degrees."""
     names = tuple(names)
-    scale = boundary_scale(names, model.n_joints)
+    errors = ErrorSet(names, model.n_joints)
     p, J = tool_jacobian(model, np.radians(np.atleast_2d(q_deg)), names)
     p0, J0 = tool_jacobian(model, np.radians(np.atleast_2d(theta0_deg)), names)
     nu = p - p0[0]
     norm = np.linalg.norm(nu, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         nu_hat = nu / norm[:, None]
-    phi_i, phi_0 = J * scale, J0[0] * scale
+    phi_i, phi_0 = errors.per_boundary(J), errors.per_boundary(J0[0])
     psi = np.einsum("nk,nkm->nm", nu_hat, phi_i - phi_0)
     return Sensitivity(names, phi_i, phi_0, nu, nu_hat, psi)
 

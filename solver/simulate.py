@@ -13,9 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wirecal.solver.counter import Counter
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.formats.log import format_header, format_row
-from wirecal.solver.kinematics import Model, perturbed
+from wirecal.solver.kinematics import Model
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 
@@ -31,17 +32,11 @@ class Faults:
     truncate_last: bool = False  # the last line is cut mid-write
 
 
-def wrap(counts: np.ndarray, bits: int) -> np.ndarray:
-    """A signed ``bits``-wide counter's value for an unbounded count."""
-    half = 2.0 ** (bits - 1)
-    return (np.asarray(counts) + half) % (2 * half) - half
-
-
 def sample_counts(
     length_mm: np.ndarray,
     mm_per_count: float,
     start: float,
-    bits: int,
+    counter: Counter,
     samples: int,
     rng: np.random.Generator,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -49,8 +44,8 @@ def sample_counts(
     counter readings, unwrapped relative to the first, and their spread (counts)."""
     exact = start + np.asarray(length_mm, dtype=float) / mm_per_count
     jitter = rng.choice((-1.0, 0.0, 0.0, 0.0, 1.0), size=(*exact.shape, samples))
-    raw = wrap(np.floor(exact[..., None] + 0.5) + jitter, bits)
-    unwrapped = raw[..., :1] + wrap(raw - raw[..., :1], bits)
+    raw = counter.wrap(np.floor(exact[..., None] + 0.5) + jitter)
+    unwrapped = raw[..., :1] + counter.difference(raw, raw[..., :1])
     return unwrapped.mean(axis=-1), unwrapped.max(axis=-1) - unwrapped.min(axis=-1)
 
 
@@ -90,12 +85,8 @@ def simulate_log(
     rng = np.random.default_rng(seed)
     enc = robot.encoder
     mpc = enc.mm_per_count if mm_per_count is None else mm_per_count
-    start = (
-        rng.integers(-(2 ** (enc.counter_bits - 1)), 2 ** (enc.counter_bits - 1))
-        if counter_start is None
-        else counter_start
-    )
-    d_points = true_lengths(perturbed(robot, errors), plan)
+    start = enc.counter.random_start(rng) if counter_start is None else counter_start
+    d_points = true_lengths(robot.model(errors), plan)
     q, step_no, index_no = plan.all_points()
 
     # One entry per reading in run order: each step's zero at θ0, then its points.
@@ -122,7 +113,7 @@ def simulate_log(
         chosen = rng.choice(pts, size=min(faults.outliers, len(pts)), replace=False)
         lengths[chosen] += faults.outlier_mm * rng.choice((-1.0, 1.0), size=len(chosen))
 
-    mean, spread = sample_counts(lengths, mpc, start, enc.counter_bits, samples, rng)
+    mean, spread = sample_counts(lengths, mpc, start, enc.counter, samples, rng)
     rows = [
         format_row(*args, samples, sp)
         for args, sp in zip(

@@ -13,11 +13,11 @@ from wirecal.solver.accuracy import stepwise_map, tool_error, workspace
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.identify import DEFAULT_OMEGA, Estimate, Problem, joint, run_stepwise
-from wirecal.solver.kinematics import perturbed
 from wirecal.solver.measurements import Measurements
+from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.sensitivity import boundary_scale, sensitivity
+from wirecal.solver.sensitivity import sensitivity
 
 METHODS = ("stepwise", "joint")
 UNIDENTIFIED = {"mean": math.inf, "max": math.inf}
@@ -99,7 +99,7 @@ def omega_vector(
     """Ω_j per parameter in internal units: the plan's per-step ``omega`` or the default."""
     by_step = {s.parameter: s.omega for s in plan.steps}
     bound = np.array([by_step.get(n) or default for n in names], dtype=float)
-    return bound * boundary_scale(names, n_joints)
+    return ErrorSet(names, n_joints).to_internal(bound)
 
 
 def solve(
@@ -132,7 +132,7 @@ def solve(
     if not names:
         raise WirecalError(f"{m.source}: no calibration point was measured; nothing to solve")
 
-    base = perturbed(robot)
+    base = robot.nominal
     q_deg = m.joints_deg[present]
     problem = Problem(
         base, names, np.radians(q_deg), np.radians(m.theta0_deg), m.distance_mm[present], step
@@ -151,21 +151,23 @@ def solve(
         )
     if "stepwise" in methods:
         estimates["stepwise"] = sw
-    jt = joint(problem, sw.values / problem.scale, loss="soft_l1" if robust else "linear")
+    jt = joint(
+        problem, problem.errors.to_internal(sw.values), loss="soft_l1" if robust else "linear"
+    )
     if "joint" in methods:
         estimates["joint"] = jt
 
     # Noise σ from the joint fit (the best model of the data), dof-corrected; with the
     # robust loss from the median absolute residual (1.4826·MAD), so outliers do not count.
     n, k = len(problem.d), len(names)
-    r = problem.residuals(jt.values / problem.scale)
+    r = problem.residuals(problem.errors.to_internal(jt.values))
     if n <= k:
         sigma = float("nan")
     elif robust:
         sigma = float(1.4826 * np.median(np.abs(r)) * np.sqrt(n / (n - k)))
     else:
         sigma = float(np.sqrt(r @ r / (n - k)))
-    J = psi / boundary_scale(names, robot.n_joints)  # internal units
+    J = problem.errors.per_internal(psi)  # internal units
     cov, identified = covariance(J, sigma**2)
     predicted = dict.fromkeys(estimates, UNIDENTIFIED)
     if identified.all():  # otherwise the tool error is unbounded along the unseen directions

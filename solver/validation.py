@@ -23,7 +23,7 @@ import numpy as np
 
 from wirecal.solver import ik, pose
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.kinematics import Model, perturbed, tool_position
+from wirecal.solver.kinematics import tool_position
 from wirecal.solver.robot import Robot
 
 CONFIGS = (("above", "noflip"), ("above", "flip"), ("below", "noflip"), ("below", "flip"))
@@ -57,10 +57,9 @@ class Setup:
         return hashlib.sha256(json.dumps(canon, sort_keys=True).encode()).hexdigest()
 
 
-def _pose_reachable(model: Model, robot: Robot, R, p, margin_deg: float):
-    lo, hi = robot.joint_min_deg + margin_deg, robot.joint_max_deg - margin_deg
+def _pose_reachable(robot: Robot, R, p, margin_deg: float):
     found = {}
-    for s in ik.solve(model, R, p, lo, hi):
+    for s in ik.solve(robot, R, p, margin_deg=margin_deg):
         if s.within_limits and s.config[0] == "righty":
             found[s.config[1:]] = s.q
     return [found.get(c) for c in CONFIGS]
@@ -70,7 +69,7 @@ def config_poses(robot: Robot, setup: Setup, margin_deg: float = 1.0) -> np.ndar
     """``setup.poses`` transformations (x, y, z, yaw, pitch, roll) spread over the
     workspace, each reachable righty in all four configurations within the limits with a
     margin, with wire lengths within the encoder's range in every one."""
-    model = perturbed(robot)
+    model = robot.nominal
     rng = np.random.default_rng(setup.seed)
     reach = np.abs(robot.dh[:, 1]).sum() + np.abs(robot.dh[:, 3]).sum()
     out = []
@@ -80,7 +79,7 @@ def config_poses(robot: Robot, setup: Setup, margin_deg: float = 1.0) -> np.ndar
         x, y, z = r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az), r * np.sin(el)
         yaw, pitch, roll = rng.uniform(-90, 90), rng.uniform(100, 170), rng.uniform(-90, 90)
         t = tuple(float(v) for v in np.round([x, y, z, yaw, pitch, roll], 1))
-        qs = _pose_reachable(model, robot, *pose.matrix(*t), margin_deg)
+        qs = _pose_reachable(robot, *pose.matrix(*t), margin_deg)
         if any(q is None for q in qs):
             continue
         d = np.linalg.norm(tool_position(model, np.array(qs)) - setup.encoder_mm, axis=1)
@@ -106,9 +105,7 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
     ex, ey = np.array([np.cos(yaw), np.sin(yaw), 0]), np.array([-np.sin(yaw), np.cos(yaw), 0])
     points = np.array([setup.plate_origin_mm + a * ex + b * ey for b in v for a in u])
     index = [(i + 1, j + 1) for j in range(ny) for i in range(nx)]
-    model = perturbed(robot)
     targets, problems = [], []
-    lo, hi = robot.joint_min_deg + margin_deg, robot.joint_max_deg - margin_deg
     for (i, j), p in zip(index, points, strict=True):
         flange = p + np.array([0, 0, setup.probe_mm[2] + setup.approach_mm])
         t = (*flange, setup.plate_yaw_deg, 180.0, 0.0)
@@ -117,7 +114,7 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
             o = o - np.array([0, 0, depth])
             ok = any(
                 s.within_limits and s.config == ("righty", "above", "noflip")
-                for s in ik.solve(model, R, o, lo, hi)
+                for s in ik.solve(robot, R, o, margin_deg=margin_deg)
             )
             if not ok:
                 problems.append(

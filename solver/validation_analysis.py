@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wirecal.solver.counter import Counter
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.validation_files import ValidationLog
 
@@ -35,12 +36,11 @@ def reduction(before: Stats, after: Stats) -> dict[str, float | None]:
     return out
 
 
-def config_discrepancy(log: ValidationLog, bits: int = 24) -> Stats:
+def config_discrepancy(log: ValidationLog, counter: Counter) -> Stats:
     """Per pose, the largest difference among the wire lengths of its four configurations
-    (mm); the counts are compared modulo the counter width."""
+    (mm); the counts are compared modulo the width of the robot's ``counter``."""
     rows = log.rows
     out = []
-    half = 2.0 ** (bits - 1)
     incomplete = []
     for number in np.unique(rows[:, 0]):
         r = rows[rows[:, 0] == number]
@@ -48,7 +48,7 @@ def config_discrepancy(log: ValidationLog, bits: int = 24) -> Stats:
             incomplete.append(int(number))
             continue
         c = r[:, 8]
-        rel = (c - c[0] + half) % (2 * half) - half
+        rel = counter.difference(c, c[0])
         out.append(float((rel.max() - rel.min()) * abs(log.mm_per_count)))
     if incomplete:
         raise WirecalError(

@@ -12,6 +12,8 @@ from click.testing import CliRunner
 
 from wirecal.cli.main import main
 
+from .conftest import VIPER
+
 pytestmark = pytest.mark.slow  # the whole demo in the twin: about a minute
 
 
@@ -28,11 +30,14 @@ def test_calibration_reduces_the_validation_errors(demo):
     (plane fit) lower means after calibration (the paper: 84 % and 77 %)."""
     folder, _ = demo
     runner = CliRunner()
+    robot = ["--robot", str(VIPER / "robot.toml")]
     for kind, a, b, least in (
         ("configuration", "WCVCFG1.CSV", "WCVCFG2.CSV", 0.80),
         ("plane", "WCVPLN1.CSV", "WCVPLN2.CSV", 0.70),
     ):
-        r = runner.invoke(main, ["validate", kind, str(folder / a), str(folder / b), "--json"])
+        r = runner.invoke(
+            main, ["validate", kind, str(folder / a), str(folder / b), *robot, "--json"]
+        )
         data = json.loads(r.output)
         assert data["reduction"]["mean"] >= least, data
         assert data["after"]["mean_mm"] > 0.002  # unmodelled errors stay visible

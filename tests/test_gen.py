@@ -18,6 +18,7 @@ from wirecal.gen.vplus.literals import double_literal
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import robot_from_dict
+from wirecal.solver.run_parameters import RunParameters
 from wirecal.twin.vplus.parser import parse_module
 
 from .conftest import VIPER
@@ -55,7 +56,9 @@ def test_every_generated_module_follows_the_rules(viper, paper_plan, printed_pla
         opt = GenOptions(patch={n: 0.1 for n in plan.order})
     elif variant == "options":
         opt = GenOptions(
-            speed=5, accel=10, settle_s=4.5, samples=50, zero_tol_mm=0.05, log_file="RUN2.CSV"
+            run=RunParameters(speed_pct=5, accel_pct=10, settle_s=4.5, readings=50),
+            zero_tol_mm=0.05,
+            log_file="RUN2.CSV",
         )
     text = module_text(robot, plan, opt)
     assert len(parse_module(text, "WIRECAL.V2").programs) == text.count(".PROGRAM ") >= 27
@@ -145,7 +148,11 @@ def test_point_too_close_to_a_limit_is_refused(viper, paper_plan):
 
 def test_bad_options_refused(viper, paper_plan):
     with pytest.raises(WirecalError) as info:
-        module_text(viper, paper_plan, GenOptions(speed=150, log_file="TOOLONGNAME.CSV"))
+        module_text(
+            viper,
+            paper_plan,
+            GenOptions(run=RunParameters(speed_pct=150), log_file="TOOLONGNAME.CSV"),
+        )
     assert info.value.problems == [
         "--speed 150: give a percentage in (0, 100]",
         "controller file name 'TOOLONGNAME.CSV': use 8.3 letters and digits",

@@ -75,7 +75,10 @@ COMMANDS = {
         ["receive", "--port", "1", "-o", "OUT", "--robot", "ROBOT", "--plan", "PLAN"],
         ["ROBOT", "PLAN"],
     ),
-    "validate configuration": (["validate", "configuration", "VLOG"], ["VLOG"]),
+    "validate configuration": (
+        ["validate", "configuration", "VLOG", "--robot", "ROBOT"],
+        ["VLOG", "ROBOT"],
+    ),
     "validate plane": (["validate", "plane", "VLOG"], ["VLOG"]),
 }
 CASES = [

@@ -7,13 +7,12 @@ import numpy as np
 
 from wirecal.solver import params as P
 from wirecal.solver.identifiability import analyse, observability_indices
-from wirecal.solver.kinematics import perturbed
 
 
 def test_th1_unobservable_from_any_points(viper):
     rng = np.random.default_rng(7)
     q = rng.uniform(viper.joint_min_deg, viper.joint_max_deg, (40, 6))
-    result = analyse(perturbed(viper), q, q[0] + 5.0, ["th1", "th2", "a2"])
+    result = analyse(viper.nominal, q, q[0] + 5.0, ["th1", "th2", "a2"])
     assert result.unobservable == ("th1",)
     assert result.rank == 2
 
@@ -21,7 +20,7 @@ def test_th1_unobservable_from_any_points(viper):
 def test_full_analysis_names_every_redundancy(viper, paper_plan):
     q, _, _ = paper_plan.all_points()
     names = P.all_names(6, with_tool=True)
-    result = analyse(perturbed(viper), q, paper_plan.theta0_deg, names)
+    result = analyse(viper.nominal, q, paper_plan.theta0_deg, names)
     assert set(result.unobservable) == {"al0", "a0", "th1", "d1"}
     combos = {frozenset(n for n, _ in c): dict(c) for c in result.combinations}
     assert frozenset({"d2", "d3"}) in combos  # joints 2 and 3 are parallel
@@ -36,7 +35,7 @@ def test_full_analysis_names_every_redundancy(viper, paper_plan):
 
 def test_paper_parameters_identifiable(viper, paper_plan):
     q, _, _ = paper_plan.all_points()
-    result = analyse(perturbed(viper), q, paper_plan.theta0_deg, viper.parameters)
+    result = analyse(viper.nominal, q, paper_plan.theta0_deg, viper.parameters)
     assert result.rank == 10
     assert not result.unobservable
     assert not result.combinations
@@ -46,7 +45,7 @@ def test_paper_parameters_identifiable(viper, paper_plan):
 
 def test_point_set_that_cannot_see_a_parameter(viper):
     q = np.array([[0, -90, 210, -90, 26, a] for a in (-10, 0, 10, 20)], dtype=float)
-    result = analyse(perturbed(viper), q, np.array([0, -90, 210, -90, 0, -90.0]), ["th6", "a2"])
+    result = analyse(viper.nominal, q, np.array([0, -90, 210, -90, 0, -90.0]), ["th6", "a2"])
     assert result.unobservable == ("a2",)
     assert "a2 is unobservable: no wire length of these points depends on it" in "\n".join(
         result.describe()

@@ -11,8 +11,9 @@ from wirecal.solver import montecarlo
 from wirecal.solver.accuracy import crb, noise_covariance
 from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.identify import Problem, joint, run_stepwise, stepwise
-from wirecal.solver.kinematics import perturbed, with_errors
-from wirecal.solver.sensitivity import boundary_scale, sensitivity
+from wirecal.solver.kinematics import with_errors
+from wirecal.solver.params import ErrorSet
+from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.simulate import measured_lengths
 from wirecal.solver.solve import omega_vector
 
@@ -21,25 +22,23 @@ from .conftest import TABLE5
 
 def make_problem(robot, plan, d):
     q, step, _ = plan.all_points()
-    return Problem(
-        perturbed(robot), plan.order, np.radians(q), np.radians(plan.theta0_deg), d, step
-    )
+    return Problem(robot.nominal, plan.order, np.radians(q), np.radians(plan.theta0_deg), d, step)
 
 
 def exact_lengths(robot, plan, truth_internal):
     q, _, _ = plan.all_points()
-    model = with_errors(perturbed(robot), plan.order, truth_internal)
+    model = with_errors(robot.nominal, plan.order, truth_internal)
     return wire_lengths(model, np.radians(q), np.radians(plan.theta0_deg))
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_joint_recovers_truth_from_exact_lengths(viper, paper_plan, seed):
-    scale = boundary_scale(paper_plan.order, 6)
-    truth = np.random.default_rng(seed).uniform(-1, 1, 10) * scale
+    errors = ErrorSet(paper_plan.order, 6)
+    truth = errors.to_internal(np.random.default_rng(seed).uniform(-1, 1, 10))
     problem = make_problem(viper, paper_plan, exact_lengths(viper, paper_plan, truth))
     x0, _ = stepwise(problem, omega_vector(paper_plan.order, 6, paper_plan))
     est = joint(problem, x0)
-    np.testing.assert_allclose(est.values, truth / scale, atol=1e-9)
+    np.testing.assert_allclose(est.values, errors.to_boundary(truth), atol=1e-9)
     assert est.residual_rms_mm < 1e-9
 
 
@@ -47,25 +46,25 @@ def test_quantisation_only_within_its_own_bound(viper, paper_plan):
     """Counts quantised at 0.025488 mm, no other noise: the joint errors stay within
     4σ of the bound that quantisation alone implies (≈1e-2 for a1/a3: the count is
     coarse, so 1e-3 is out of reach on 69 points)."""
-    scale = boundary_scale(paper_plan.order, 6)
-    truth = np.array([TABLE5[n] for n in paper_plan.order]) * scale
+    errors = ErrorSet(paper_plan.order, 6)
+    truth = errors.to_internal([TABLE5[n] for n in paper_plan.order])
     rng = np.random.default_rng(3)
     mpc = viper.encoder.mm_per_count
     d = measured_lengths(
-        with_errors(perturbed(viper), paper_plan.order, truth), paper_plan, mpc, 0.0, rng
+        with_errors(viper.nominal, paper_plan.order, truth), paper_plan, mpc, 0.0, rng
     )
     problem = make_problem(viper, paper_plan, d)
     x0, _ = stepwise(problem, omega_vector(paper_plan.order, 6, paper_plan))
     est = joint(problem, x0)
     J = wire_jacobian(
-        with_errors(perturbed(viper), paper_plan.order, truth),
+        with_errors(viper.nominal, paper_plan.order, truth),
         problem.q,
         problem.q0,
         paper_plan.order,
     )[1]
     sq = mpc / np.sqrt(12)
-    sd = np.sqrt(np.diag(crb(J, noise_covariance(69, sq, sq / np.sqrt(10))))) / scale
-    err = est.values - truth / scale
+    sd = errors.to_boundary(np.sqrt(np.diag(crb(J, noise_covariance(69, sq, sq / np.sqrt(10))))))
+    err = est.values - errors.to_boundary(truth)
     assert np.all(np.abs(err) <= 4 * sd), (err, sd)
     assert np.all(sd < 0.012)
 
@@ -73,11 +72,11 @@ def test_quantisation_only_within_its_own_bound(viper, paper_plan):
 def test_each_step_is_the_papers_bounded_scalar_minimisation(viper, paper_plan):
     """Step j minimises Σ_{S_j}(d_i − d̃_i)² over δe_j ∈ Ω_j with earlier parameters at
     their estimates and later ones at nominal: checked against scipy's bounded Brent."""
-    scale = boundary_scale(paper_plan.order, 6)
-    truth = np.array([TABLE5[n] for n in paper_plan.order]) * scale
+    errors = ErrorSet(paper_plan.order, 6)
+    truth = errors.to_internal([TABLE5[n] for n in paper_plan.order])
     rng = np.random.default_rng(8)
     d = measured_lengths(
-        with_errors(perturbed(viper), paper_plan.order, truth),
+        with_errors(viper.nominal, paper_plan.order, truth),
         paper_plan,
         viper.encoder.mm_per_count,
         0.01,
@@ -104,8 +103,8 @@ def test_each_step_is_the_papers_bounded_scalar_minimisation(viper, paper_plan):
 
 
 def test_order_respected_later_data_cannot_change_earlier_steps(viper, paper_plan):
-    scale = boundary_scale(paper_plan.order, 6)
-    truth = np.array([TABLE5[n] for n in paper_plan.order]) * scale
+    errors = ErrorSet(paper_plan.order, 6)
+    truth = errors.to_internal([TABLE5[n] for n in paper_plan.order])
     d = exact_lengths(viper, paper_plan, truth)
     problem = make_problem(viper, paper_plan, d)
     omega = omega_vector(paper_plan.order, 6, paper_plan)
@@ -123,7 +122,7 @@ def test_each_steps_cost_depends_on_its_parameter_only_at_isolating_points(viper
     the step's own: perturbing a later parameter barely moves the step's cost minimum,
     exactly as the leak coefficient predicts."""
     q, step, _ = paper_plan.all_points()
-    psi = sensitivity(perturbed(viper), q, paper_plan.theta0_deg, paper_plan.order).psi
+    psi = sensitivity(viper.nominal, q, paper_plan.theta0_deg, paper_plan.order).psi
     for j in range(9):
         sel = step == j + 1
         own = np.sum(psi[sel, j] ** 2)
@@ -132,12 +131,12 @@ def test_each_steps_cost_depends_on_its_parameter_only_at_isolating_points(viper
 
 
 def test_bound_hit_is_reported(viper, paper_plan):
-    scale = boundary_scale(paper_plan.order, 6)
-    truth = np.array([TABLE5[n] for n in paper_plan.order]) * scale  # th6 = −1.215 deg
+    errors = ErrorSet(paper_plan.order, 6)
+    truth = errors.to_internal([TABLE5[n] for n in paper_plan.order])  # th6 = −1.215 deg
     problem = make_problem(viper, paper_plan, exact_lengths(viper, paper_plan, truth))
     omega = omega_vector(paper_plan.order, 6, paper_plan, default=0.5)
     psi = sensitivity(
-        perturbed(viper), np.degrees(problem.q), paper_plan.theta0_deg, paper_plan.order
+        viper.nominal, np.degrees(problem.q), paper_plan.theta0_deg, paper_plan.order
     ).psi
     est = run_stepwise(problem, omega, psi)
     th6 = est.steps[0]
@@ -151,11 +150,11 @@ def test_bound_hit_is_reported(viper, paper_plan):
 
 
 def test_batched_equals_one_at_a_time(viper, paper_plan):
-    scale = boundary_scale(paper_plan.order, 6)
+    errors = ErrorSet(paper_plan.order, 6)
     rng = np.random.default_rng(4)
-    truths = rng.uniform(-1, 1, (5, 10)) * scale
+    truths = errors.to_internal(rng.uniform(-1, 1, (5, 10)))
     d = measured_lengths(
-        with_errors(perturbed(viper), paper_plan.order, truths),
+        with_errors(viper.nominal, paper_plan.order, truths),
         paper_plan,
         viper.encoder.mm_per_count,
         0.01,

@@ -8,7 +8,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.solver.ik import analytic_structure, configuration, flange_pose, solve
-from wirecal.solver.kinematics import perturbed
 
 from .conftest import TABLE5 as TRUTH
 
@@ -27,11 +26,11 @@ def _same(a, b):
 @settings(max_examples=40, deadline=None)
 @given(u=st.lists(unit, min_size=6, max_size=6), calibrated=st.booleans())
 def test_round_trip_analytic(viper, u, calibrated):
-    model = perturbed(viper, TRUTH if calibrated else None)
+    model = viper.model(TRUTH if calibrated else {})
     assert analytic_structure(model)
     q = _q(viper, u)
     R, o = flange_pose(model, q)
-    solutions = solve(model, R, o, viper.joint_min_deg, viper.joint_max_deg)
+    solutions = solve(viper, R, o, model=model)
     singular = abs(np.sin(q[4] + model.dh[4, 2])) < 1e-6  # φ4, φ6 then form a continuum
     assert singular or any(_same(s.q, q) for s in solutions)
     assert 1 <= len(solutions) <= 8
@@ -46,11 +45,11 @@ def test_round_trip_analytic(viper, u, calibrated):
 @settings(max_examples=15, deadline=None)
 @given(u=st.lists(unit, min_size=6, max_size=6))
 def test_numeric_fallback_for_a_non_spherical_wrist(viper, u):
-    model = perturbed(viper, {"al4": 0.4, "a4": 0.8, "d5": 0.3})
+    model = viper.model({"al4": 0.4, "a4": 0.8, "d5": 0.3})
     assert not analytic_structure(model)
     q = _q(viper, u)
     R, o = flange_pose(model, q)
-    solutions = solve(model, R, o)
+    solutions = solve(viper, R, o, model=model)
     near_singular = abs(np.sin(q[4] + model.dh[4, 2])) < 0.05  # wrist nearly straight
     assert near_singular or any(_same(s.q, q) for s in solutions)
     for s in solutions:
@@ -58,9 +57,9 @@ def test_numeric_fallback_for_a_non_spherical_wrist(viper, u):
 
 
 def test_eight_configurations_of_a_generic_pose(viper):
-    model = perturbed(viper)
+    model = viper.nominal
     R, o = flange_pose(model, np.radians([10, -60, 150, 20, 40, 30.0]))
-    configs = {s.config for s in solve(model, R, o)}
+    configs = {s.config for s in solve(viper, R, o)}
     assert {c[1:] for c in configs} == {
         ("above", "noflip"),
         ("above", "flip"),
@@ -75,6 +74,6 @@ def test_eight_configurations_of_a_generic_pose(viper):
 
 
 def test_unreachable_pose_has_no_solution(viper):
-    model = perturbed(viper)
+    model = viper.nominal
     R, _ = flange_pose(model, np.zeros(6))
-    assert solve(model, R, np.array([2000.0, 0, 0])) == []
+    assert solve(viper, R, np.array([2000.0, 0, 0])) == []

@@ -11,9 +11,16 @@ from scipy.spatial.transform import Rotation
 
 from wirecal.solver import params as P
 from wirecal.solver.distance import wire_jacobian, wire_lengths
-from wirecal.solver.kinematics import joint_jacobian, perturbed, tool_jacobian, tool_position
+from wirecal.solver.kinematics import joint_jacobian, tool_jacobian, tool_position, with_errors
 
 ALL = P.all_names(6, with_tool=True)
+
+
+def _rad(model, err: dict[str, float]):
+    """``model`` with offsets in internal units (rad, mm)."""
+    return with_errors(model, list(err), np.array(list(err.values()), dtype=float))
+
+
 joints = arrays(np.float64, (6,), elements=st.floats(-np.pi, np.pi))
 batches = arrays(
     np.float64, st.tuples(st.integers(1, 8), st.just(6)), elements=st.floats(-np.pi, np.pi)
@@ -41,7 +48,7 @@ def reference_position(model, q: np.ndarray) -> np.ndarray:
 @settings(max_examples=60, deadline=None)
 @given(q=batches, err=errors)
 def test_forward_kinematics_matches_independent_construction(viper, q, err):
-    model = perturbed(viper, err)
+    model = viper.model(err)
     got = tool_position(model, q)
     want = np.array([reference_position(model, row) for row in q])
     np.testing.assert_allclose(got, want, atol=1e-9)
@@ -53,33 +60,33 @@ def test_viper_home_position_by_hand(viper):
     # o4 = (a1 + a2 + a3, 0, d4) = (75 + 270 − 90, 0, 295); o6 = o4 + d6·z;
     # the tool point (−60, 0, 50) is then added in base axes.
     p = np.array([75 + 270 - 90, 0, 295 + 80]) + np.array([-60.0, 0, 50])
-    np.testing.assert_allclose(tool_position(perturbed(viper), np.zeros((1, 6)))[0], p, atol=1e-9)
+    np.testing.assert_allclose(tool_position(viper.nominal, np.zeros((1, 6)))[0], p, atol=1e-9)
     np.testing.assert_allclose(p, [195, 0, 425])
 
 
 @settings(max_examples=60, deadline=None)
 @given(q=batches, err=errors)
 def test_tool_jacobian_matches_finite_differences(viper, q, err):
-    model = perturbed(viper, err, units="rad")
+    model = _rad(viper.nominal, err)
     _, J = tool_jacobian(model, q, ALL)
     h = 1e-6
     for k, name in enumerate(ALL):
-        plus = tool_position(perturbed(model, {name: h}, units="rad"), q)
-        minus = tool_position(perturbed(model, {name: -h}, units="rad"), q)
+        plus = tool_position(_rad(model, {name: h}), q)
+        minus = tool_position(_rad(model, {name: -h}), q)
         np.testing.assert_allclose(J[:, :, k], (plus - minus) / (2 * h), atol=2e-5, err_msg=name)
 
 
 @settings(max_examples=60, deadline=None)
 @given(q=batches, q0=joints, err=errors)
 def test_wire_jacobian_matches_finite_differences(viper, q, q0, err):
-    model = perturbed(viper, err, units="rad")
+    model = _rad(viper.nominal, err)
     d, dd = wire_jacobian(model, q, q0, ALL)
     far = d > 1.0  # the derivative of a length is undefined where the wire length is zero
     np.testing.assert_allclose(d, wire_lengths(model, q, q0), atol=1e-9)
     h = 1e-6
     for k, name in enumerate(ALL):
-        plus = wire_lengths(perturbed(model, {name: h}, units="rad"), q, q0)
-        minus = wire_lengths(perturbed(model, {name: -h}, units="rad"), q, q0)
+        plus = wire_lengths(_rad(model, {name: h}), q, q0)
+        minus = wire_lengths(_rad(model, {name: -h}), q, q0)
         np.testing.assert_allclose(
             dd[far, k], ((plus - minus) / (2 * h))[far], atol=1e-4, err_msg=name
         )
@@ -88,7 +95,7 @@ def test_wire_jacobian_matches_finite_differences(viper, q, q0, err):
 @settings(max_examples=30, deadline=None)
 @given(q=batches)
 def test_joint_jacobian_matches_finite_differences(viper, q):
-    model = perturbed(viper)
+    model = viper.nominal
     _, J = joint_jacobian(model, q)
     h = 1e-6
     for i in range(6):
@@ -101,15 +108,15 @@ def test_joint_jacobian_matches_finite_differences(viper, q):
 def test_batch_equals_one_at_a_time(viper):
     rng = np.random.default_rng(1)
     q = rng.uniform(-3, 3, (50, 6))
-    model = perturbed(viper, {"th3": 0.4, "a2": 0.7})
+    model = viper.model({"th3": 0.4, "a2": 0.7})
     batch = tool_position(model, q)
     single = np.array([tool_position(model, row[None])[0] for row in q])
     np.testing.assert_array_equal(batch, single)
 
 
-def test_perturbed_units(viper):
-    deg = perturbed(viper, {"th2": 1.0, "d4": 0.5})
-    rad = perturbed(viper, {"th2": np.radians(1.0), "d4": 0.5}, units="rad")
+def test_robot_model_takes_degrees_and_mm(viper):
+    deg = viper.model({"th2": 1.0, "d4": 0.5})
+    rad = _rad(viper.nominal, {"th2": np.radians(1.0), "d4": 0.5})
     np.testing.assert_allclose(deg.dh, rad.dh)
     assert deg.dh[1, 2] == np.radians(1.0)
     assert deg.dh[3, 3] == 295.5

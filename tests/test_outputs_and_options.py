@@ -398,10 +398,10 @@ def test_validate_configuration_zero_before(tmp_path):
     before = _validation_log(tmp_path / "b.csv", "configuration", rows)
     rows2 = [f"1,{c},0,0,0,0,0,0,{100 + c},10,0" for c in (1, 2, 3, 4)]
     after = _validation_log(tmp_path / "a.csv", "configuration", rows2)
-    r = run("validate", "configuration", before, after)
+    r = run("validate", "configuration", before, after, "--robot", ROBOT)
     assert r.exit_code == 0, r.output
     assert re.search(r"^reduction\s+–\s+–\s+–$", r.output, re.M), r.output
-    r = run("validate", "configuration", before, after, "--json")
+    r = run("validate", "configuration", before, after, "--json", "--robot", ROBOT)
     assert '"mean": null' in r.output
 
 

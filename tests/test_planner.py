@@ -16,7 +16,7 @@ from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan, plan_from_dict
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.kinematics import tool_position
 from wirecal.solver.planner import PlanOptions, design, predicted_accuracy, robot_time
 
 from .conftest import ROOT, VIPER
@@ -60,7 +60,7 @@ def test_points_keep_the_joint_limits_with_the_margin(designed):
 
 def test_wire_length_within_the_encoder_range(designed):
     robot, d = designed
-    model = perturbed(robot)
+    model = robot.nominal
     p0 = tool_position(model, np.radians(d.plan.theta0_deg)[None])[0]
     q, _, _ = d.plan.all_points()
     length = np.linalg.norm(tool_position(model, np.radians(q)) - p0, axis=1)
@@ -72,7 +72,7 @@ def test_the_wire_stays_clear_of_the_links_along_every_move(designed):
     """Sampled every 0.5° (the planner: every 2°), so a gap the planner's sampling
     missed shows up here; 2 mm slack for the sampling."""
     robot, d = designed
-    model = perturbed(robot)
+    model = robot.nominal
     p0 = tool_position(model, np.radians(d.plan.theta0_deg)[None])[0]
     for seq in _sequences(d.plan):
         for a, b in itertools.pairwise(seq):

@@ -99,6 +99,12 @@ CASES = {
         lambda d: d["encoder"].__setitem__("counter_bits", 24.5),
         "r.toml: encoder.counter_bits: is 24.5; give an integer between 8 and 64",
     ),
+    "narrow counter": (
+        lambda d: d["encoder"].__setitem__("counter_bits", 16),
+        "r.toml: encoder.counter_bits: a 16-bit counter tells lengths apart up to 32768 "
+        "counts (835.191 mm); the range of 1250 mm is 49043 counts: give more bits or a "
+        "smaller range_mm",
+    ),
     "tool length": (
         lambda d: d["tool"].__setitem__("point_mm", [1.0, 2.0]),
         "r.toml: tool.point_mm: has 2 values; expected 3 (x, y, z)",

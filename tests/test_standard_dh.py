@@ -16,7 +16,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.ur_calibration import calibration_text, put_ur_calibration, ur_deltas
-from wirecal.solver.kinematics import frames, perturbed, tool_position
+from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.standard_dh import flange_pose, from_modified, to_modified
 from wirecal.solver.standard_dh import tool_position as std_tool_position
 
@@ -64,7 +64,7 @@ q_st = st.lists(st.floats(-math.pi, math.pi), min_size=6, max_size=6)
 @settings(max_examples=60, deadline=None)
 @given(offsets=offsets_st, qs=st.lists(q_st, min_size=1, max_size=8))
 def test_standard_matches_modified_to_1e_9_mm(offsets, qs):
-    model = perturbed(UR5, offsets, units="deg")
+    model = UR5.model(offsets)
     q = np.array(qs)
     std = from_modified(model)
     np.testing.assert_allclose(std_tool_position(std, q), tool_position(model, q), atol=1e-9)
@@ -94,7 +94,7 @@ def test_deltas_reproduce_the_calibrated_model():
     q = np.random.default_rng(3).uniform(-3, 3, (50, 6))
     np.testing.assert_allclose(
         std_tool_position(rebuilt, q),
-        tool_position(perturbed(UR5, offsets, units="deg"), q),
+        tool_position(UR5.model(offsets), q),
         atol=1e-9,
     )
 

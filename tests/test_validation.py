@@ -4,15 +4,19 @@ readers) and their analyses."""
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
+from wirecal.cli.main import main
 from wirecal.solver import pose
+from wirecal.solver.counter import Counter
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.validation_files import load_setup, read_validation_log
 from wirecal.solver.ik import solve
-from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.kinematics import tool_position
 from wirecal.solver.validation import CONFIGS, config_poses, plate_grid
 from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
 
@@ -31,13 +35,11 @@ def test_config_poses_reachable_four_ways_and_deterministic(viper, setup):
     poses = config_poses(viper, small)
     assert poses.shape == (8, 6)
     np.testing.assert_array_equal(poses, config_poses(viper, small))
-    model = perturbed(viper)
+    model = viper.nominal
     for p in poses:
         sols = [
             s
-            for s in solve(
-                model, *pose.matrix(*p), viper.joint_min_deg + 1, viper.joint_max_deg - 1
-            )
+            for s in solve(viper, *pose.matrix(*p), margin_deg=1.0)
             if s.within_limits and s.config[0] == "righty"
         ]
         assert {s.config[1:] for s in sols} == set(CONFIGS)
@@ -109,8 +111,31 @@ def test_config_discrepancy_with_a_wrapping_counter(tmp_path):
         (2, 3, 90),
         (2, 4, 100),
     ]
-    s = config_discrepancy(read_validation_log(_config_log(tmp_path, rows), "configuration"))
+    log = read_validation_log(_config_log(tmp_path, rows), "configuration")
+    s = config_discrepancy(log, Counter(24))
     np.testing.assert_allclose(s.values, [10 * 0.025488, 20 * 0.025488])
+
+
+def test_config_discrepancy_wraps_at_the_robots_counter_width(tmp_path):
+    """A 16-bit counter wraps at ±32768: read with 16 bits the pose spans 10 counts; a
+    24-bit reading would see 7 − (−65 526) = 65 533."""
+    rows = [(1, 1, 32760), (1, 2, -32766), (1, 3, 32765), (1, 4, 32767)]
+    log = read_validation_log(_config_log(tmp_path, rows), "configuration")
+    np.testing.assert_allclose(config_discrepancy(log, Counter(16)).values, [10 * 0.025488])
+    np.testing.assert_allclose(config_discrepancy(log, Counter(24)).values, [65533 * 0.025488])
+
+
+def test_validate_command_needs_the_robot_for_a_configuration_log(tmp_path):
+    rows = [(1, 1, 100), (1, 2, 110), (1, 3, 90), (1, 4, 100)]
+    path = str(_config_log(tmp_path, rows))
+    r = CliRunner().invoke(main, ["validate", "configuration", path, "--json"])
+    assert r.exit_code != 0
+    assert "give --robot ROBOT.toml" in r.output
+    r = CliRunner().invoke(
+        main, ["validate", "configuration", path, "--robot", str(VIPER / "robot.toml"), "--json"]
+    )
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.output)["before"]["max_mm"] == pytest.approx(20 * 0.025488)
 
 
 def test_config_log_missing_a_configuration(tmp_path):
@@ -118,7 +143,7 @@ def test_config_log_missing_a_configuration(tmp_path):
         _config_log(tmp_path, [(1, 1, 5), (1, 2, 5), (1, 3, 5)]), "configuration"
     )
     with pytest.raises(WirecalError, match=r"poses \[1\] lack one of the four"):
-        config_discrepancy(log)
+        config_discrepancy(log, Counter(24))
 
 
 @pytest.mark.parametrize(

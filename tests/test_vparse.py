@@ -7,13 +7,14 @@ import pytest
 
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.run_parameters import RunParameters
 from wirecal.twin.vplus.parser import parse_module
 
 
 def test_generated_module_parses(viper, paper_plan, printed_plan):
     for plan, opt in (
         (paper_plan, GenOptions()),
-        (printed_plan, GenOptions(samples=3)),
+        (printed_plan, GenOptions(run=RunParameters(readings=3))),
         (paper_plan, GenOptions(patch={n: 0.2 for n in paper_plan.order})),
     ):
         module = parse_module(module_text(viper, plan, opt), "WIRECAL.V2")

@@ -14,7 +14,7 @@ Error codes of the twin's own making (the V+ manual's codes are used where known
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -25,9 +25,10 @@ from wirecal.solver import ik
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.csv_table import parse_table, read_source
 from wirecal.solver.formats.log import Log
-from wirecal.solver.kinematics import frames, perturbed, tool_position
+from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
+from wirecal.solver.run_parameters import move_time_s
 from wirecal.twin.vplus.interp import Interpreter, Outcome, Trans, VError, f32
 from wirecal.twin.vplus.parser import parse_module
 
@@ -110,16 +111,17 @@ class Cell:
 
     def __post_init__(self):
         self.rng = np.random.default_rng(self.seed)
-        self.model = perturbed(self.robot, self.truth)
-        self.believed = perturbed(self.robot, self.controller)
+        self.model = self.robot.model(self.truth)
+        self.believed = self.robot.model(self.controller)
         self.requested: dict[int, str] = {}
         self.p0 = tool_position(self.model, np.radians(self.mount_deg)[None])[0]
         self.joints = tuple(f32(x) for x in self.mount_deg)
-        self.lo = self.robot.joint_min_deg
-        self.hi = (
-            np.asarray(self.faults.joint_max_deg)
+        # the arm as the controller knows it: its own joint limits (a fault may make them
+        # tighter than the plan assumed)
+        self.limits = (
+            replace(self.robot, joint_max_deg=np.asarray(self.faults.joint_max_deg, dtype=float))
             if self.faults.joint_max_deg
-            else self.robot.joint_max_deg
+            else self.robot
         )
         self.console: list[str] = []
         self.clock = 0.0
@@ -177,7 +179,7 @@ class Cell:
             if ok and ik.configuration(self.believed, q) == current:
                 return np.degrees(q)
         self.requested = {}
-        for s in ik.solve(self.believed, R, p, self.lo, self.hi):
+        for s in ik.solve(self.limits, R, p, model=self.believed):
             if s.config == want and s.within_limits:
                 return np.degrees(s.q)
         raise VError(-931, f"*Location out of range* ({'/'.join(want)})")
@@ -186,10 +188,10 @@ class Cell:
         if isinstance(target, Trans):
             target = self._joints_for(target)
         q = np.asarray(target, dtype=float)
-        for j in np.flatnonzero((q < self.lo) | (q > self.hi)):
+        lo, hi = self.limits.joint_min_deg, self.limits.joint_max_deg
+        for j in np.flatnonzero((q < lo) | (q > hi)):
             raise VError(-1004, f"*Joint {j + 1} out of range* ({q[j]:g} deg)")
-        rate = self.robot.joint_speed_deg_s * self.speed_pct / 100
-        self.clock += float(np.max(np.abs(q - np.asarray(self.joints)) / rate)) + 0.2
+        self.clock += move_time_s(self.robot.joint_speed_deg_s, self.joints, q, self.speed_pct)
         self.joints = tuple(f32(x) for x in q)
         self.actual = q + self._unmodelled(q)
         self.moves += 1
@@ -253,8 +255,7 @@ class Cell:
         if f.vibration_at_move is not None and self.moves >= f.vibration_at_move:
             jitter += float(self.rng.integers(-f.vibration_counts, f.vibration_counts + 1))
         raw = math.floor(self.counter_start + d / self.robot.encoder.mm_per_count + 0.5)
-        half = 2.0 ** (self.robot.encoder.counter_bits - 1)
-        return (raw + jitter + half) % (2 * half) - half
+        return float(self.robot.encoder.counter.wrap(raw + jitter))
 
     def belt(self, name: str, mode: int) -> float:
         if name not in self.belts:
@@ -348,7 +349,7 @@ def run_measurement(
     disk.mkdir(parents=True, exist_ok=True)
     text = text if text is not None else module_text(robot, plan, options)
     rng = np.random.default_rng([seed, 2])
-    start = float(rng.integers(-(2**23), 2**23)) if counter_start is None else counter_start
+    start = robot.encoder.counter.random_start(rng) if counter_start is None else counter_start
     cell = Cell(
         robot,
         truth,
@@ -470,7 +471,9 @@ def run_validation(
         disk,
         seed=seed,
         noise_mm=noise_mm,
-        counter_start=float(np.random.default_rng([seed, 5]).integers(-(2**22), 2**22)),
+        counter_start=robot.encoder.counter.random_start(
+            np.random.default_rng([seed, 5]), within=0.5
+        ),
         answers=["1", str(run), "1", str(run)],
         controller=controller,
         plate=Plate(tuple(setup.plate_origin_mm)),

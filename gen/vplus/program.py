@@ -28,6 +28,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
+from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters
 from wirecal.solver.validation import CONFIGS, Setup, config_poses, plate_grid
 from wirecal.twin.vplus.parser import parse_module
 
@@ -38,10 +39,7 @@ AXES = 4  # flattened index i*AXES + a (a = 1..3)
 
 @dataclass(frozen=True)
 class GenOptions:
-    speed: float = 20.0  # % of full speed (SPEED … ALWAYS)
-    accel: float = 20.0  # % of full acceleration (ACCEL)
-    settle_s: float = 3.0  # wait after BREAK before reading (paper: 3 s)
-    samples: int = 10  # counter readings averaged per point
+    run: RunParameters = DEFAULT_RUN  # speed, acceleration, settle, readings
     zero_tol_mm: float = 0.1  # a zero reading further from the first: the wire slipped
     spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
     margin_deg: float = 1.0  # every generated target at least this far inside a limit
@@ -59,15 +57,7 @@ def _version() -> str:
 
 
 def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
-    problems = []
-    if not 0 < opt.speed <= 100:
-        problems.append(f"--speed {opt.speed:g}: give a percentage in (0, 100]")
-    if not 0 < opt.accel <= 100:
-        problems.append(f"--accel {opt.accel:g}: give a percentage in (0, 100]")
-    if not 0 <= opt.settle_s <= 60:
-        problems.append(f"--settle-s {opt.settle_s:g}: give 0–60 s")
-    if not 1 <= opt.samples <= 1000:
-        problems.append(f"--samples {opt.samples}: give 1–1000")
+    problems = opt.run.problems()
     for name in (opt.log_file, opt.result_file):
         stem, _, ext = name.partition(".")
         if not (
@@ -81,7 +71,7 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
             f"{robot.source}: name {robot.name!r}: a V+ string holds printable "
             "ASCII without '\"'; rename the robot"
         )
-    bound = tables.omega * tables.to_boundary
+    bound = tables.errors.to_boundary(tables.omega)
     if np.any(bound > 16):
         problems.append(
             "a step's Ω exceeds 16 deg/mm: the controller prints offsets with 6 "
@@ -131,8 +121,7 @@ def data_lines(t: Tables, robot: Robot) -> list[str]:
             f"wc.spar[{s + 1}] = {int(t.spar[s])}",
         ]
         put("wc.om", s + 1, t.omega[s])
-    for j, name in enumerate(t.names):
-        unit = "deg" if t.to_boundary[j] != 1 else "mm"
+    for j, (name, unit) in enumerate(zip(t.names, t.errors.units, strict=True)):
         lines += [
             f"wc.pk[{j + 1}] = {int(t.pk[j])}",
             f"wc.pr[{j + 1}] = {int(t.pr[j])}",
@@ -140,7 +129,7 @@ def data_lines(t: Tables, robot: Robot) -> list[str]:
             f'$wc.pu[{j + 1}] = "{unit}"',
             f"wc.nom4[{j + 1}] = {round(t.nominal[j] * 10000)}",
         ]
-        put("wc.tb", j + 1, t.to_boundary[j])
+        put("wc.tb", j + 1, t.errors.boundary_per_internal[j])
     return lines
 
 
@@ -175,7 +164,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         if missing:
             raise WirecalError(f"patch: no value for {', '.join(missing)}")
         patch = [
-            double_literal(opt.patch[n] / tables.to_boundary[j]) for j, n in enumerate(plan.order)
+            double_literal(x) for x in tables.errors.to_internal([opt.patch[n] for n in plan.order])
         ]
     fp = plan.fingerprint()
     mpc = robot.encoder.mm_per_count
@@ -192,18 +181,18 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         m=len(plan.order),
         stride=STRIDE,
         axes=AXES,
-        speed=_num(opt.speed),
-        accel=_num(opt.accel),
-        settle=_num(opt.settle_s),
-        samples=opt.samples,
+        speed=_num(opt.run.speed_pct),
+        accel=_num(opt.run.accel_pct),
+        settle=_num(opt.run.settle_s),
+        samples=opt.run.readings,
         zero_tol=_num(opt.zero_tol_mm),
         margin=_num(opt.margin_deg),
         spread_counts=_num(np.floor(opt.spread_tol_mm / abs(robot.encoder.mm_per_count))),
         spread_tol=_num(opt.spread_tol_mm),
         mpc=repr(mpc),
-        bits=robot.encoder.counter_bits,
-        half=2 ** (robot.encoder.counter_bits - 1),
-        full=2**robot.encoder.counter_bits,
+        bits=robot.encoder.counter.bits,
+        half=robot.encoder.counter.half,
+        full=robot.encoder.counter.full,
         encoder=robot.encoder,
         log_file=opt.log_file,
         result_file=opt.result_file,

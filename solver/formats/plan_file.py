@@ -26,7 +26,6 @@ from wirecal.solver import params as P
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import Problems
 from wirecal.solver.formats.fileio import read_toml
-from wirecal.solver.kinematics import perturbed
 from wirecal.solver.plan import Plan, Step
 from wirecal.solver.robot import Robot
 
@@ -189,7 +188,7 @@ its derivatives (Ψ, the Jacobian) are undefined."""
 
 
 def _check_wire(q: np.ndarray, theta0: np.ndarray, robot: Robot, where: str, pr: Problems) -> None:
-    d = wire_lengths(perturbed(robot), np.radians(q), np.radians(theta0))
+    d = wire_lengths(robot.nominal, np.radians(q), np.radians(theta0))
     for i in np.flatnonzero(~(d >= MIN_WIRE_MM)):
         pr.add(
             f"{where}[{i + 1}]",

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from wirecal.solver import params as P
+from wirecal.solver.counter import Counter
 from wirecal.solver.errors import Problems
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.robot import DEFAULT_LINK_RADIUS_MM, Encoder, Robot
@@ -124,6 +125,15 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         not isinstance(bits, int) or isinstance(bits, bool) or not 8 <= bits <= 64
     ):
         pr.add("encoder.counter_bits", f"is {bits!r}; give an integer between 8 and 64")
+    elif bits is not None and mpc and rng is not None and rng > 0:
+        span = Counter(bits).half
+        if rng / abs(mpc) >= span:
+            pr.add(
+                "encoder.counter_bits",
+                f"a {bits}-bit counter tells lengths apart up to {span} counts "
+                f"({span * abs(mpc):g} mm); the range of {rng:g} mm is "
+                f"{rng / abs(mpc):.0f} counts: give more bits or a smaller range_mm",
+            )
 
     interface = enc.get("interface", "belt")
     if interface not in ("belt", "device"):

@@ -26,7 +26,7 @@ import numpy as np
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.kinematics import Model, perturbed
+from wirecal.solver.kinematics import Model, with_errors
 from wirecal.solver.robot import Robot
 from wirecal.solver.standard_dh import from_modified
 
@@ -58,7 +58,10 @@ def ur_deltas(robot: Robot, offsets: Mapping[str, float]) -> dict[str, np.ndarra
     # The conversion moves entries without arithmetic, so the standard table of the offsets
     # alone is the difference of the calibrated and nominal tables, free of rounding.
     zero = Model(dh=np.zeros_like(robot.dh), tool_point=np.zeros(3))
-    delta = from_modified(perturbed(zero, offsets, units="deg")).table
+    es = robot.errors(list(offsets))
+    delta = from_modified(
+        with_errors(zero, es.names, es.to_internal([offsets[n] for n in es.names]))
+    ).table
     return {key: delta[:, _COLUMN[key]] * _SI[key] for key in KEYS}
 
 
@@ -70,7 +73,7 @@ def calibration_text(robot: Robot, offsets: Mapping[str, float]) -> str:
     """The deltas as text in calibration.conf's layout, with the tables they come from."""
     deltas = ur_deltas(robot, offsets)
     nominal = from_modified(robot).table
-    calibrated = from_modified(perturbed(robot, offsets, units="deg")).table
+    calibrated = from_modified(robot.model(offsets)).table
     lines = [
         f"# wirecal: standard-DH deltas of the calibrated {robot.name} (metres, radians).",
         "# UNCONFIRMED layout: key names from the ROS driver docs, not a Universal Robots",
