@@ -97,6 +97,26 @@ _G = GenOptions()
     help="A validation setup: adds wc.vcfg and wc.vpln, the paper's two "
     "validation runs (configuration change, plane fit).",
 )
+@click.option(
+    "--range-margin",
+    type=click.FloatRange(min=0.0),
+    default=_D.range_margin_mm,
+    show_default=True,
+    help="Refuse a plan whose nominal wire length, at a point or along a move, comes "
+    "closer than this to the encoder's range_mm (mm).",
+)
+@click.option(
+    "--echo-log",
+    is_flag=True,
+    help="wc.run also types every log line on the controller's terminal, and goes on "
+    "without a usable disk: copy the lines into 'wirecal solve ROBOT PLAN -'.",
+)
+@click.option(
+    "--lf",
+    is_flag=True,
+    help="LF line ends instead of CRLF (ACE writes V+ files with CRLF; whether LOAD "
+    "accepts LF-only files is not confirmed).",
+)
 @click.option("--force", is_flag=True, help="Replace an existing WIRECAL.V2.")
 @user_errors
 def gen(
@@ -113,6 +133,9 @@ def gen(
     log_name,
     patch_file,
     setup_file,
+    range_margin,
+    echo_log,
+    lf,
     force,
 ):
     """Write the V+/eV+ module that runs PLAN on the controller.
@@ -121,7 +144,9 @@ def gen(
     wc.run (the measurement; writes the log), wc.solve and wc.solve2 (identification on
     the controller: the paper's step-by-step method, then optionally a joint polish) and
     wc.patch (the table to enter in SPEC). Every target is a literal #PPOINT inside the
-    joint limits with --margin; the same inputs give the same bytes.
+    joint limits with --margin, and the nominal wire stays within the encoder's range
+    less --range-margin at every point and along every move; the same inputs give the
+    same bytes.
     """
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
@@ -148,7 +173,12 @@ def gen(
         log_file=log_name.upper(),
         patch=patch,
         validation=load_setup(setup_file) if setup_file else None,
+        range_margin_mm=range_margin,
+        echo_log=echo_log,
+        crlf=not lf,
     )
     inputs = [robot, plan, *(f for f in (patch_file, setup_file) if f)]
-    path = write_module(out_dir, module_text(rb, pl, opt), force=force, inputs=inputs)
+    path = write_module(
+        out_dir, module_text(rb, pl, opt), force=force, inputs=inputs, crlf=opt.crlf
+    )
     click.echo(f"wrote {path}: load it on the controller, then run wc.mount, wc.check, wc.run")

@@ -96,6 +96,8 @@ def readings_from_log(log: Log, plan: Plan) -> Readings:
     first_zero = True
     for r in log.readings:
         base = float(np.round(r.counts))
+        if r.kind == "zero" and r.step > len(plan.steps):
+            continue  # the closing zero checks the last step; it is not a reference
         if r.kind == "zero":
             zb[r.step - 1], zo[r.step - 1] = base, r.counts - base
             if first_zero:

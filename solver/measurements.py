@@ -2,7 +2,10 @@
 
 The reference of every length is the mean of the steps' zero readings at θ0, each checked
 against the first (a drift means the wire slipped); counts are compared modulo the
-counter width.
+counter width. A run ends with a closing zero reading at θ0 after the last step, logged
+as the zero of step N+1: it checks the last step for a slip like every later zero checks
+the step before it, and is not part of the reference (the controller solver uses the same
+readings).
 """
 
 from __future__ import annotations
@@ -40,17 +43,31 @@ class Measurements:
     index: np.ndarray  # (N,)
     joints_deg: np.ndarray  # (N, n) as logged (plan values where missing)
     distance_mm: np.ndarray  # (N,) NaN where missing
-    zero_drift_mm: dict[int, float]  # per step with a zero reading
+    zero_drift_mm: dict[int, float]  # per step with a zero reading (N+1: the closing zero)
     notes: tuple[str, ...] = ()
     missing: tuple[tuple[int, int], ...] = field(default=())
+    closed: bool = True  # the closing zero reading after the last step is there
 
     @property
     def present(self) -> np.ndarray:
         return ~np.isnan(self.distance_mm)
 
+    @property
+    def complete(self) -> bool:
+        """Every point and the closing zero reading are in the log."""
+        return not self.missing and self.closed
+
     def missing_text(self) -> str:
-        """Missing points in words, e.g. 'step 5 points 3–6; steps 6–10 (all points)'."""
-        return describe_missing(self.missing, self.step, self.index)
+        """What is missing in words, e.g. 'step 5 points 3–6; steps 6–10 (all points)',
+        including the closing zero reading."""
+        parts = [describe_missing(self.missing, self.step, self.index)] if self.missing else []
+        if not self.closed and not self.missing:  # a stopped run: its points say more
+            last = int(self.step.max())
+            parts.append(
+                f"the closing zero reading at θ0 after step {last} (without it a wire "
+                f"slip during step {last} goes unseen: repeat step {last})"
+            )
+        return "; ".join(parts) or "none"
 
 
 def describe_missing(missing, step: np.ndarray, index: np.ndarray) -> str:
@@ -153,8 +170,12 @@ def check_log(
                 f"{robot.source} and that the log column holds the raw counter value",
             )
             continue
-        if not 1 <= r.step <= n_steps:
-            bad(r, f"step {r.step} is not in the plan (it has {n_steps} steps)")
+        if not 1 <= r.step <= n_steps + (r.kind == "zero"):
+            bad(
+                r,
+                f"step {r.step} is not in the plan (it has {n_steps} steps; the closing "
+                f"zero reading is logged as step {n_steps + 1})",
+            )
             continue
         if r.kind == "zero":
             if r.index != 0:
@@ -212,9 +233,10 @@ def check_log(
             jumped = abs(drift[s] - before) > tol.zero_mm
             if jumped or (abs(drift[s]) > tol.zero_mm >= abs(before)):
                 prev = max(s - 1, 1)
+                which = "the closing zero reading" if s > n_steps else f"zero reading at step {s}"
                 bad(
                     r,
-                    f"zero reading at step {s} is {drift[s]:+.3f} mm from the first "
+                    f"{which} is {drift[s]:+.3f} mm from the first "
                     f"(tolerance {tol.zero_mm:g} mm): the wire slipped or the encoder "
                     f"moved after the zero of step {prev}; remount at θ0 and repeat from "
                     f"step {prev}",
@@ -228,7 +250,10 @@ def check_log(
                 )
         # The reference is the mean of all zero readings: every length is measured from
         # it, so its error is common to all points; averaging the steps' zeros shrinks it.
-        ref = first + np.mean([counter.difference(r.counts, first) for r in zeros.values()])
+        ref = first + np.mean(
+            [counter.difference(r.counts, first) for s, r in zeros.items() if s <= n_steps]
+            or [0.0]
+        )
         distance = counter.difference(counts, ref) * mpc
         for k in np.flatnonzero(~np.isnan(distance)):
             line = seen[("point", int(step_no[k]), int(index_no[k]))]
@@ -260,6 +285,7 @@ def check_log(
         zero_drift_mm=drift,
         notes=log.notes,
         missing=missing,
+        closed=n_steps + 1 in zeros,
     )
 
 

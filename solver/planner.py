@@ -130,19 +130,28 @@ def candidates(robot: Robot, theta0: np.ndarray, opt: PlanOptions, rng) -> np.nd
     return np.round(np.concatenate(out), 2)
 
 
-def move_clearance(
-    robot: Robot, model, p0: np.ndarray, a: np.ndarray, b: np.ndarray, step_deg: float = 2.0
-) -> np.ndarray:
-    """The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
-    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion."""
+def move_samples(
+    a: np.ndarray, b: np.ndarray, step_deg: float = 2.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Configurations (deg) along the joint-interpolated moves a → b (rows broadcast),
+    every ``step_deg`` of the largest joint motion, b included and a not; and the index of
+    each move's first sample (for ``np.minimum.reduceat`` and the like)."""
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
     count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg)).astype(int)
     move = np.repeat(np.arange(len(a)), count)
     first = np.cumsum(count) - count
     t = (np.arange(len(move)) - first[move] + 1) / count[move]
-    q = np.radians(a[move] + t[:, None] * (b[move] - a[move]))
-    gap = wire_clearance(model, q, p0, robot.link_radius_mm, wire_trim_mm(robot))
-    return np.minimum.reduceat(gap, first) if len(a) else gap
+    return a[move] + t[:, None] * (b[move] - a[move]), first
+
+
+def move_clearance(
+    robot: Robot, model, p0: np.ndarray, a: np.ndarray, b: np.ndarray, step_deg: float = 2.0
+) -> np.ndarray:
+    """The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
+    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion."""
+    q, first = move_samples(a, b, step_deg)
+    gap = wire_clearance(model, np.radians(q), p0, robot.link_radius_mm, wire_trim_mm(robot))
+    return np.minimum.reduceat(gap, first) if len(first) else gap
 
 
 def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2.0) -> np.ndarray:

@@ -15,10 +15,13 @@ import numpy as np
 
 from wirecal.solver.counter import Counter
 from wirecal.solver.distance import wire_lengths
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import format_header, format_row
 from wirecal.solver.kinematics import Model
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
+
+RANGE_EXCEEDED = "*Draw-wire range exceeded*"  # the twin's error text for the same cause
 
 
 @dataclass(frozen=True)
@@ -89,12 +92,14 @@ def simulate_log(
     d_points = true_lengths(robot.model(errors), plan)
     q, step_no, index_no = plan.all_points()
 
-    # One entry per reading in run order: each step's zero at θ0, then its points.
+    # One entry per reading in run order: each step's zero at θ0, then its points; last
+    # the closing zero at θ0 (logged as the zero of step N+1), which sees a slip in step N.
+    n_steps = len(plan.steps)
     order = [
         (j, k)
-        for j in range(1, len(plan.steps) + 1)
+        for j in range(1, n_steps + 1)
         for k in (None, *(int(i) for i in np.flatnonzero(step_no == j)))
-    ]
+    ] + [(n_steps + 1, None)]
     kinds = ["zero" if k is None else "point" for _, k in order]
     steps = [j for j, _ in order]
     indices = [0 if k is None else int(index_no[k]) for _, k in order]
@@ -113,6 +118,13 @@ def simulate_log(
         chosen = rng.choice(pts, size=min(faults.outliers, len(pts)), replace=False)
         lengths[chosen] += faults.outlier_mm * rng.choice((-1.0, 1.0), size=len(chosen))
 
+    beyond = np.flatnonzero(lengths > enc.range_mm)
+    if len(beyond):  # the encoder stops counting there: the twin's error, with its cause
+        i = int(beyond[0])
+        raise WirecalError(
+            f"{RANGE_EXCEEDED}: step {steps[i]} point {indices[i]}: the wire would be "
+            f"{lengths[i]:.1f} mm long, beyond the encoder's range_mm {enc.range_mm:g}"
+        )
     mean, spread = sample_counts(lengths, mpc, start, enc.counter, samples, rng)
     rows = [
         format_row(*args, samples, sp)

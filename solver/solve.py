@@ -117,7 +117,7 @@ def solve(
     Refuses an incomplete log unless ``partial``; then parameters whose step has no
     points stay at nominal and are listed in ``left_nominal``.
     """
-    if m.missing and not partial:
+    if not m.complete and not partial:
         raise WirecalError(
             f"{m.source}: the log is incomplete: missing {m.missing_text()}. "
             "Finish the run (repeat from the first missing step), or pass "

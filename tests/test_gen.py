@@ -15,7 +15,7 @@ from click.testing import CliRunner
 from wirecal.cli.main import main
 from wirecal.gen.tables import build_tables
 from wirecal.gen.vplus.literals import double_literal
-from wirecal.gen.vplus.program import GenOptions, module_text
+from wirecal.gen.vplus.program import GenOptions, line_ends, module_text
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import robot_from_dict
 from wirecal.solver.run_parameters import RunParameters
@@ -32,11 +32,14 @@ def module(viper, paper_plan):
 
 
 def test_golden_file(module):
-    """The Viper module is byte-for-byte the reviewed one (WIRECAL_UPDATE_GOLDEN=1 rewrites
-    it after an intended change; review the diff)."""
+    """The Viper module is byte-for-byte the reviewed one, CRLF line ends included (ACE
+    writes V+ files so); WIRECAL_UPDATE_GOLDEN=1 rewrites it after an intended change
+    (review the diff)."""
     if os.environ.get("WIRECAL_UPDATE_GOLDEN"):
-        GOLDEN.write_text(module, encoding="utf-8", newline="\n")
-    assert module == GOLDEN.read_text(encoding="utf-8")
+        GOLDEN.write_bytes(line_ends(module).encode("ascii"))
+    golden = GOLDEN.read_bytes()
+    assert golden.count(b"\r\n") == golden.count(b"\n") > 3000  # every line, no bare LF
+    assert line_ends(module).encode("ascii") == golden
 
 
 def _device_robot(viper):
@@ -45,13 +48,23 @@ def _device_robot(viper):
     return robot_from_dict(data, "device.toml")
 
 
-@pytest.mark.parametrize("variant", ["paper", "printed", "device", "patch", "options"])
+def test_device_interface_is_refused_with_its_reason(viper, paper_plan):
+    """DEVICE(0, unit, err, 1) is scale*(count-offset) clamped to SETDEVICE's limits (User's
+    Guide p. 354) and SETDEVICE's syntax is unconfirmed: no program is generated for it."""
+    with pytest.raises(WirecalError) as e:
+        module_text(_device_robot(viper), paper_plan)
+    text = str(e.value)
+    assert 'device.toml: encoder.interface = "device"' in text
+    assert "p. 354" in text and "SETDEVICE" in text and 'interface = "belt"' in text
+
+
+@pytest.mark.parametrize("variant", ["paper", "printed", "patch", "options", "echo"])
 def test_every_generated_module_follows_the_rules(viper, paper_plan, printed_plan, variant):
     robot, plan, opt = viper, paper_plan, GenOptions()
     if variant == "printed":
         plan = printed_plan
-    elif variant == "device":
-        robot = _device_robot(viper)
+    elif variant == "echo":
+        opt = GenOptions(echo_log=True)
     elif variant == "patch":
         opt = GenOptions(patch={n: 0.1 for n in plan.order})
     elif variant == "options":
@@ -64,9 +77,11 @@ def test_every_generated_module_follows_the_rules(viper, paper_plan, printed_pla
     assert len(parse_module(text, "WIRECAL.V2").programs) == text.count(".PROGRAM ") >= 27
     assert all(len(line) <= 80 for line in text.split("\n"))
     assert text.count(".PROGRAM ") == text.count("\n.END") + (text.startswith(".END"))
-    if variant == "device":
-        assert "DEVICE(0, 0, err, 1)" in text
-        assert "DEFBELT" not in text.replace("; DEFBELT", "")
+    if variant == "echo":
+        write = text[text.index(".PROGRAM wc.write(") :]
+        assert write.index("TYPE $line") < write.index("WRITE (wc.lun) $line")
+    else:
+        assert "TYPE $line" not in text
     if variant == "options":
         assert "SPEED 5 ALWAYS" in text
         assert "wc.nsamp = 50" in text
@@ -93,7 +108,8 @@ def test_run_moves_exactly_through_the_plan(module, paper_plan):
     # each point is followed by BREAK and its measurement, with its plan position
     calls = re.findall(r"CALL wc\.meas\((\d+), (\d+)\)", run)
     _, step, index = paper_plan.all_points()
-    assert [int(s) for s, i in calls if i == "0"] == list(range(1, 11))
+    # the zero of every step, then the closing zero (logged as step 11) after the last
+    assert [int(s) for s, i in calls if i == "0"] == list(range(1, 12))
     assert [(int(a), int(b)) for a, b in calls if b != "0"] == list(zip(step, index, strict=True))
     assert run.count("BREAK") == 69 + 10 + 1
 
@@ -167,7 +183,12 @@ def test_cli_gen(tmp_path):
     robot, plan = str(VIPER / "robot.toml"), str(VIPER / "paper_plan.toml")
     r = runner.invoke(main, ["gen", robot, plan, "-o", str(tmp_path / "ctl")])
     assert r.exit_code == 0, r.output
-    assert (tmp_path / "ctl" / "WIRECAL.V2").read_text() == GOLDEN.read_text()
+    assert (tmp_path / "ctl" / "WIRECAL.V2").read_bytes() == GOLDEN.read_bytes()
+    r = runner.invoke(main, ["gen", robot, plan, "-o", str(tmp_path / "lf"), "--lf"])
+    assert r.exit_code == 0, r.output
+    lf = (tmp_path / "lf" / "WIRECAL.V2").read_bytes()
+    assert b"\r" not in lf
+    assert lf.replace(b"\n", b"\r\n") == GOLDEN.read_bytes()
     again = runner.invoke(main, ["gen", robot, plan, "-o", str(tmp_path / "ctl")])
     assert again.exit_code == 2
     assert "exists; choose another name or pass --force" in again.output

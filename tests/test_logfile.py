@@ -10,6 +10,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.measurements import Tolerances, check_log
 from wirecal.solver.simulate import Faults, simulate_log
+from wirecal.solver.solve import solve
 
 from .conftest import TABLE5 as TRUTH
 
@@ -49,7 +50,7 @@ def test_clean_log(viper, paper_plan, log_text):
     assert m.missing_text() == "none"
     assert np.all(m.distance_mm > 20)
     assert np.all(m.distance_mm < 650)
-    assert set(m.zero_drift_mm) == set(range(1, 11))
+    assert set(m.zero_drift_mm) == set(range(1, 12))  # 11: the closing zero
 
 
 def test_counter_wrap_gives_the_same_lengths(viper, paper_plan):
@@ -148,10 +149,39 @@ def test_extra_point(viper, paper_plan, log_text):
 
 
 def test_step_beyond_plan(viper, paper_plan, log_text):
-    text = log_text + "zero,11,0,0,-90,210,-90,0,-90,1000,10,0\n"
-    assert problems(text, viper, paper_plan) == [
-        f"run.csv:{len(lines(text))}: step 11 is not in the plan (it has 10 steps)"
-    ]
+    """Step 11 is the closing zero's; a zero of step 12 or a point of step 11 is not."""
+    for row, step in (("zero,12,0", 12), ("point,11,1", 11)):
+        text = log_text + row + ",0,-90,210,-90,0,-90,1000,10,0\n"
+        assert problems(text, viper, paper_plan) == [
+            f"run.csv:{len(lines(text))}: step {step} is not in the plan (it has 10 steps; "
+            "the closing zero reading is logged as step 11)"
+        ]
+
+
+def test_closing_zero_required_unless_partial(viper, paper_plan, log_text):
+    """Without the closing zero the last step is unchecked: solve refuses the log, naming
+    the step to repeat, and --partial accepts it."""
+    text = "".join(line + "\n" for line in lines(log_text) if not line.startswith("zero,11,"))
+    m = measure(text, viper, paper_plan)
+    assert not m.closed and not m.complete and not m.missing
+    assert m.missing_text() == (
+        "the closing zero reading at θ0 after step 10 (without it a wire slip during "
+        "step 10 goes unseen: repeat step 10)"
+    )
+    with pytest.raises(WirecalError, match="the log is incomplete: missing the closing zero"):
+        solve(viper, paper_plan, m, methods=("stepwise",))
+    assert solve(viper, paper_plan, m, methods=("stepwise",), partial=True).estimates
+
+
+def test_slip_in_the_last_step_is_caught_by_the_closing_zero(viper, paper_plan):
+    """A 3 mm slip during step 10 used to move a1 by 1.6 mm with a normal residual; now
+    the closing zero is 3 mm from the first and the log is refused, naming step 10."""
+    text = simulate_log(viper, paper_plan, TRUTH, seed=5, faults=Faults(slip=(10, 3.0)))
+    with pytest.raises(WirecalError) as e:
+        measure(text, viper, paper_plan)
+    (problem,) = e.value.problems
+    assert "the closing zero reading is +3.0" in problem
+    assert "remount at θ0 and repeat from step 10" in problem
 
 
 def test_joints_differ_from_plan(viper, paper_plan, log_text):

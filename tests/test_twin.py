@@ -161,7 +161,7 @@ def test_run_log_is_the_simulators_format(twin_run, paper_plan):
     log = parse_log(twin_run.log.read_text(), "twin.csv")
     assert log.plan == paper_plan.fingerprint()
     assert log.mm_per_count == 0.025488
-    assert len(log.readings) == 69 + 10
+    assert len(log.readings) == 69 + 10 + 1  # points, the steps' zeros, the closing zero
     assert twin_run.cell.clock > 60 * 4  # settling alone is 79 × 3 s
 
 
@@ -198,7 +198,7 @@ def test_fault_wire_slip(viper, paper_plan, tmp_path):
 def test_fault_disk_full(viper, paper_plan, tmp_path):
     r, out = _fault(viper, paper_plan, tmp_path, Faults(disk_full_after_lines=30))
     assert out.status == "halted"
-    assert "*** disk error writing WCLOG.CSV: *Device full*" in out.console
+    assert "*** disk error writing the log: *Device full*" in out.console
     m = load_measurements(r.log, paper_plan, viper)
     # 6 header lines + 7 + 7 + 10 rows = 30: the 11th reading of step 3 is the first lost
     assert m.missing_text() == "step 3 point 10; steps 4–10 (all points)"

@@ -29,6 +29,7 @@ from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import move_time_s
+from wirecal.solver.simulate import RANGE_EXCEEDED
 from wirecal.twin.vplus.interp import Interpreter, Outcome, Trans, VError, f32
 from wirecal.twin.vplus.parser import parse_module
 
@@ -41,7 +42,7 @@ ERRORS = {
     -526: "*No data received*",
     -1004: "*Joint out of range*",
     -1013: "*Encoder quadrature error*",
-    -1100: "*Draw-wire range exceeded*",
+    -1100: RANGE_EXCEEDED,
 }
 
 
@@ -114,6 +115,8 @@ class Cell:
         self.model = self.robot.model(self.truth)
         self.believed = self.robot.model(self.controller)
         self.requested: dict[int, str] = {}
+        self.tool = "unknown"  # whatever a previous program left: TOOL sets it
+        self.tools_at_cartesian: set[str] = set()  # the tool in force at each TRANS move
         self.p0 = tool_position(self.model, np.radians(self.mount_deg)[None])[0]
         self.joints = tuple(f32(x) for x in self.mount_deg)
         # the arm as the controller knows it: its own joint limits (a fault may make them
@@ -184,8 +187,13 @@ class Cell:
                 return np.degrees(s.q)
         raise VError(-931, f"*Location out of range* ({'/'.join(want)})")
 
+    def tool_null(self) -> None:
+        """TOOL NULL: the flange is the tool point (the cell models no other tool)."""
+        self.tool = "null"
+
     def move(self, target, straight: bool = False) -> None:
         if isinstance(target, Trans):
+            self.tools_at_cartesian.add(self.tool)
             target = self._joints_for(target)
         q = np.asarray(target, dtype=float)
         lo, hi = self.limits.joint_min_deg, self.limits.joint_max_deg
@@ -250,7 +258,11 @@ class Cell:
         p = tool_position(self.model, np.radians(self.actual)[None])[0]
         d = float(np.linalg.norm(p - self.p0)) + self.pose_error + self.slip
         if d > self.robot.encoder.range_mm:
-            raise VError(-1100, ERRORS[-1100])
+            raise VError(
+                -1100,
+                f"{ERRORS[-1100]}: the wire would be {d:.1f} mm long, beyond the "
+                f"encoder's range_mm {self.robot.encoder.range_mm:g}",
+            )
         jitter = float(self.rng.choice((-1, 0, 0, 0, 1)))
         if f.vibration_at_move is not None and self.moves >= f.vibration_at_move:
             jitter += float(self.rng.integers(-f.vibration_counts, f.vibration_counts + 1))
@@ -402,6 +414,8 @@ def controller_solve(
     for s in range(len(r.zb)):
         interp.set_global("wc.zb", float(r.zb[s]), s + 1)
         interp.set_global("wc.zo", float(r.zo[s]), s + 1)
+    closed = any(x.kind == "zero" and x.step > len(plan.steps) for x in log.readings)
+    interp.set_global("wc.closed", -1.0 if closed else 0.0)
     result_file = disk / GenOptions().result_file
     result_file.unlink(missing_ok=True)
     interp.ops = 0

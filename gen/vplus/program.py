@@ -30,6 +30,7 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters
 from wirecal.solver.validation import CONFIGS, Setup, config_poses, plate_grid
+from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 from wirecal.twin.vplus.parser import parse_module
 
 MODULE_NAME = "WIRECAL.V2"
@@ -47,6 +48,9 @@ class GenOptions:
     result_file: str = "WCSOLVE.CSV"
     patch: dict[str, float] | None = None  # identified offsets (deg, mm) for wc.patch
     validation: Setup | None = None  # adds wc.vcfg and wc.vpln (paper §3.6)
+    range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
+    echo_log: bool = False  # wc.run also TYPEs each log line (a controller without a disk)
+    crlf: bool = True  # CRLF line ends, as ACE writes V+ files (LF with gen --lf)
 
 
 def _version() -> str:
@@ -64,6 +68,14 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
             1 <= len(stem) <= 8 and len(ext) <= 3 and stem.isalnum() and (ext.isalnum() or not ext)
         ):
             problems.append(f"controller file name {name!r}: use 8.3 letters and digits")
+    if robot.encoder.interface == "device":
+        problems.append(
+            f'{robot.source}: encoder.interface = "device": DEVICE(0, unit, err, 1) returns '
+            "scale*(count-offset) clamped to the limits SETDEVICE set (V+ User's Guide "
+            "p. 354), not the raw count the log needs, and the SETDEVICE syntax that would "
+            "set scale 1, offset 0 and wide limits is not confirmed from the manual; wire "
+            'the encoder to a belt-encoder input and use interface = "belt"'
+        )
     if robot.controller_problem():
         problems.append(robot.controller_problem())
     if any(not 32 <= ord(ch) <= 126 or ch == '"' for ch in robot.name):
@@ -136,6 +148,7 @@ def data_lines(t: Tables, robot: Robot) -> list[str]:
 def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str:
     """The whole V+ module; raises :class:`WirecalError` if a rule would be broken."""
     check_limits(robot, plan, opt.margin_deg)
+    check_wire_range(robot, plan, opt.range_margin_mm)
     tables = build_tables(robot, plan)
     _check_options(robot, opt, tables)
     if np.any(np.abs(tables.nominal) * 10000 >= 2**24):
@@ -204,6 +217,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         patch=patch,
         names=list(plan.order),
         v=_validation_context(robot, opt),
+        echo=opt.echo_log,
     )
     problems = long_lines(text, MODULE_NAME)
     try:
@@ -250,12 +264,23 @@ def _num(x: float) -> str:
     return f"{x:g}"
 
 
+def line_ends(text: str, crlf: bool = True) -> str:
+    """The module as it goes to the controller: CRLF line ends (ACE writes V+ files so;
+    whether LOAD accepts LF-only is not confirmed), or LF."""
+    return text.replace("\n", "\r\n") if crlf else text
+
+
 def write_module(
-    out_dir: str | Path, text: str, force: bool = False, inputs: Iterable[str | Path] = ()
+    out_dir: str | Path,
+    text: str,
+    force: bool = False,
+    inputs: Iterable[str | Path] = (),
+    crlf: bool = True,
 ) -> Path:
-    """Write the module into ``out_dir`` (created if missing, and removed again if the
-    write fails); never over one of ``inputs``."""
+    """Write the module (LF text, as :func:`module_text` returns it) into ``out_dir`` with
+    :func:`line_ends` (the folder created if missing, and removed again if the write
+    fails); never over one of ``inputs``."""
     path = Path(out_dir) / MODULE_NAME
     with Outputs([path], force=force, inputs=inputs, folder=out_dir) as out:
-        out.put(path, text)
+        out.put(path, line_ends(text, crlf))
     return path

@@ -629,6 +629,8 @@ class _Compiler:
             return lambda frame: cell.move(get(frame), straight)
         if kind == "break":
             return lambda frame: cell.break_()
+        if kind == "tool_null":
+            return lambda frame: cell.tool_null()
         if kind == "here":
             _, put = self.storage(a[0], a[1], None)
             transform = a[0] == "t"

@@ -252,6 +252,9 @@ class _Build(Transformer):
     def write_(self, lun, e):
         return ("write", lun, e)
 
+    def tool_null(self):
+        return ("tool_null",)
+
     def enable(self, name):
         return ("enable", str(name).upper())
 

@@ -1,0 +1,81 @@
+"""Range before motion: the nominal wire length along everything ``wc.run`` does.
+
+The draw-wire encoder counts only within its measuring range, and a wire pulled to the
+end of its drum, or wound back to zero, can break the encoder or lose its zero. So the
+plan is checked before any program is generated or any Ψ table is trusted: at θ0, every
+point and via point, and along every joint-interpolated move between them (sampled as the
+planner samples moves, :func:`~wirecal.solver.planner.move_samples`), the nominal wire
+length must stay within ``range_mm`` less a margin and above a few millimetres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.plan import Plan
+from wirecal.solver.planner import move_samples
+from wirecal.solver.robot import Robot
+
+RANGE_MARGIN_MM = 20.0  # default: the wire stays this far inside the encoder's range
+MIN_WIRE_MM = 5.0  # and at least this long away from θ0 (the wire tip must not touch)
+
+
+def run_moves(plan: Plan) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """The moves of ``wc.run`` in order, each (where, from, to) in deg: per step θ0 → via
+    points → points in the plan's order → the next step's θ0 (the last: the closing
+    zero at θ0)."""
+    moves = []
+    here = plan.theta0_deg
+    for j, s in enumerate(plan.steps, 1):
+        targets = [
+            (f"step {j} ({s.parameter}) via point {i}", v) for i, v in enumerate(s.via_deg, 1)
+        ]
+        targets += [
+            (f"step {j} ({s.parameter}) point {i}", p) for i, p in enumerate(s.points_deg, 1)
+        ]
+        targets.append((f"the move back to theta0 after step {j}", plan.theta0_deg))
+        for where, q in targets:
+            moves.append((where, np.asarray(here, float), np.asarray(q, float)))
+            here = q
+    return moves
+
+
+def check_wire_range(
+    robot: Robot, plan: Plan, margin_mm: float = RANGE_MARGIN_MM, min_mm: float = MIN_WIRE_MM
+) -> None:
+    """Raise :class:`WirecalError` naming every target (and the move to it) where the
+    nominal wire length exceeds ``range_mm − margin_mm`` or comes within ``min_mm`` of
+    zero (θ0 itself, where the wire is zero by construction, excepted)."""
+    if not margin_mm >= 0:
+        raise WirecalError(f"--range-margin {margin_mm:g}: give a margin of 0 mm or more")
+    model = perturbed(robot)
+    p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
+    moves = run_moves(plan)
+    q, first = move_samples(np.array([a for _, a, _ in moves]), np.array([b for _, _, b in moves]))
+    d = np.linalg.norm(tool_position(model, np.radians(q)) - p0, axis=1)
+    longest = np.maximum.reduceat(d, first)
+    # the wire is short near θ0 by construction: only the targets must stay above min_mm
+    last = np.r_[first[1:], len(d)] - 1
+    at_target = d[last]
+    limit = robot.encoder.range_mm - margin_mm
+    problems = []
+    for k, (where, _, b) in enumerate(moves):
+        home = np.allclose(b, plan.theta0_deg)
+        if longest[k] > limit:
+            on_move = longest[k] > at_target[k] + 1e-9
+            problems.append(
+                f"{plan.source}: {where}: the nominal wire is {longest[k]:.1f} mm long"
+                + (" on the move there" if on_move else "")
+                + f", beyond the encoder's range_mm {robot.encoder.range_mm:g} less the "
+                f"{margin_mm:g} mm margin; move the point, or use an encoder with a longer "
+                "range"
+            )
+        if not home and at_target[k] < min_mm:
+            problems.append(
+                f"{plan.source}: {where}: the nominal wire is {at_target[k]:.1f} mm long, "
+                f"within {min_mm:g} mm of zero; move the point away from theta0"
+            )
+    if problems:
+        raise WirecalError(problems)
