@@ -29,7 +29,12 @@ from wirecal.solver.run_parameters import RunParameters
 from wirecal.solver.simulate import Faults, simulate_log
 from wirecal.solver.solve import solve as solve_api
 from wirecal.twin.cell import Faults as TwinFaults
-from wirecal.twin.cell import controller_comparison, move_of_step, run_measurement
+from wirecal.twin.cell import (
+    controller_comparison,
+    move_of_step,
+    run_measurement,
+    where_in_run,
+)
 
 ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
 PLAN = click.argument("plan", type=click.Path(dir_okay=False))
@@ -232,8 +237,10 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
     outcome = result.run or result.mount
     stopped = None
     if outcome.status != "completed":
-        stopped = f"{outcome.status} in {outcome.program} line {outcome.line}: " + " / ".join(
-            result.cell.console[-4:]
+        where = where_in_run(pl, result.cell.moves) if result.run else "wc.mount"
+        stopped = (
+            f"{outcome.message} at {where} ({outcome.status} in {outcome.program} line "
+            f"{outcome.line}): " + " / ".join(result.cell.console[-4:])
         )
     return text, stopped
 

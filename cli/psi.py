@@ -12,10 +12,12 @@ from wirecal.cli.main import main, print_json, user_errors
 from wirecal.cli.options import NON_NEGATIVE
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.identifiability import analyse
 from wirecal.solver.sensitivity import DEFAULT_TOL
+from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 
 ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
 PLAN = click.argument("plan", type=click.Path(dir_okay=False))
@@ -37,15 +39,31 @@ def _fmt(x: float) -> str:
     help="Largest |Ψ| of a later parameter, relative to the step's own |Ψ_j|, "
     "for a point to be ok.",
 )
-@click.option("--strict", is_flag=True, help="Exit with status 1 if any point is not ok.")
+@click.option(
+    "--strict",
+    is_flag=True,
+    help="Exit with status 1 if any point is not ok or the wire leaves the encoder's range.",
+)
+@click.option(
+    "--range-margin",
+    type=click.FloatRange(min=0.0),
+    default=RANGE_MARGIN_MM,
+    show_default=True,
+    help="The nominal wire must stay this far inside the encoder's range_mm, at every "
+    "point and along every move (mm).",
+)
 @user_errors
-def psi(robot: str, plan: str, as_json: bool, tol: float, strict: bool) -> None:
+def psi(
+    robot: str, plan: str, as_json: bool, tol: float, strict: bool, range_margin: float
+) -> None:
     """Ψ of every calibration point, step by step (the paper's Table 4).
 
     For each step and point: the joints, Ψ (change of wire length per unit error, in
     the plan's order: mm/deg for th*/al*, dimensionless for a*/d*) and a verdict. A
     point is ok when every parameter identified after its step has
-    |Ψ| ≤ TOL·|Ψ_j|, so the step's cost depends on its own parameter only.
+    |Ψ| ≤ TOL·|Ψ_j|, so the step's cost depends on its own parameter only. The nominal
+    wire length is checked against the encoder's range at every point and along every
+    move of the run (a warning; an error with --strict).
     """
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
@@ -54,7 +72,14 @@ def psi(robot: str, plan: str, as_json: bool, tol: float, strict: bool) -> None:
         print_json(table)
     else:
         click.echo(_psi_text(table, robot, plan), nl=False)
-    if strict and not all(r["ok"] for r in table["rows"]):
+    try:
+        check_wire_range(rb, pl, range_margin)
+        in_range = True
+    except WirecalError as exc:
+        in_range = False
+        for line in exc.problems:
+            click.echo(f"{'error' if strict else 'warning'}: {line}", err=True)
+    if strict and not (in_range and all(r["ok"] for r in table["rows"])):
         sys.exit(1)
 
 

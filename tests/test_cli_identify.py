@@ -183,8 +183,24 @@ def test_simulate_controller_stop_is_reported(tmp_path):
     log = tmp_path / "slip.csv"
     r = run("simulate", ROBOT, PLAN, "-o", log, "--controller", "--slip", "2:0.7", ok=False)
     assert r.exit_code == 1
-    assert "the controller program stopped: paused in wc.meas" in r.output
+    assert (
+        "the controller program stopped: PAUSE at step 3 zero reading at theta0 "
+        "(paused in wc.meas line" in r.output
+    )
     text = log.read_text()  # the slip during step 2 shows at the zero of step 3
     assert "point,2,6," in text
     assert text.rstrip().split("\n")[-1].startswith("zero,3,0,")
     assert "moved during step 2" in r.output
+
+
+def test_simulate_refuses_a_wire_beyond_the_encoders_range(tmp_path):
+    """The direct simulator stops where the twin would, with the twin's error and cause."""
+    robot = tmp_path / "short.toml"
+    robot.write_text(
+        (VIPER / "robot.toml").read_text().replace("range_mm = 1250.0", "range_mm = 500.0")
+    )
+    assert "range_mm = 500.0" in robot.read_text()
+    r = run("simulate", str(robot), PLAN, "-o", tmp_path / "run.csv", ok=False)
+    assert r.exit_code == 2
+    assert "error: *Draw-wire range exceeded*: step 6 point 1: the wire would be 54" in r.output
+    assert not (tmp_path / "run.csv").exists()

@@ -110,3 +110,24 @@ def test_installed_console_script():
     out = subprocess.run([exe, "psi", ROBOT, PLAN, "--strict"], capture_output=True, text=True)
     assert out.returncode == 0
     assert "69 of 69 points ok" in out.stdout
+
+
+def test_psi_strict_refuses_a_wire_beyond_the_encoders_range(tmp_path):
+    """With a 500 mm encoder the paper plan's wire reaches 602.5 mm (step 6 point 5) and
+    643.5 mm on the move to step 10's first point: a warning, an error with --strict."""
+    robot = tmp_path / "short.toml"
+    robot.write_text(
+        (VIPER / "robot.toml").read_text().replace("range_mm = 1250.0", "range_mm = 500.0")
+    )
+    plain = CliRunner().invoke(main, ["psi", str(robot), PLAN])
+    assert plain.exit_code == 0
+    assert "warning: " in plain.output
+    r = CliRunner().invoke(main, ["psi", str(robot), PLAN, "--strict"])
+    assert r.exit_code == 1
+    assert (
+        "error: " + PLAN + ": step 6 (d4) point 5: the nominal wire is 602.5 mm long, "
+        "beyond the encoder's range_mm 500 less the 20 mm margin" in r.output
+    )
+    assert "step 10 (a1) point 1: the nominal wire is 643.5 mm long on the move there" in (r.output)
+    ok = CliRunner().invoke(main, ["psi", ROBOT, PLAN, "--strict"])
+    assert ok.exit_code == 0 and "warning" not in ok.output

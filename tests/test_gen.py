@@ -79,7 +79,7 @@ def test_every_generated_module_follows_the_rules(viper, paper_plan, printed_pla
     assert text.count(".PROGRAM ") == text.count("\n.END") + (text.startswith(".END"))
     if variant == "echo":
         write = text[text.index(".PROGRAM wc.write(") :]
-        assert write.index("TYPE $line") < write.index("WRITE (wc.lun) $line")
+        assert write.index("TYPE $line") < write.index("CALL wc.put(wc.lun, $line)")
     else:
         assert "TYPE $line" not in text
     if variant == "options":

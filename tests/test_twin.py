@@ -3,15 +3,21 @@ fault matrix."""
 
 from __future__ import annotations
 
+import re
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
+from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log, read_log
+from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.identify import Problem
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.measurements import load_measurements
+from wirecal.solver.measurements import check_log, load_measurements
 from wirecal.solver.planner import robot_time
+from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 from wirecal.twin.cell import (
     Cell,
@@ -20,11 +26,14 @@ from wirecal.twin.cell import (
     controller_solve,
     move_of_step,
     run_measurement,
+    run_validation,
+    where_in_run,
 )
 from wirecal.twin.vplus.interp import Interpreter, f32
 from wirecal.twin.vplus.parser import parse_module
 
 from .conftest import TABLE5 as TRUTH
+from .conftest import VIPER
 
 
 def run_program(viper, paper_plan, tmp_path, source, name="t.main", answers=()):
@@ -198,7 +207,7 @@ def test_fault_wire_slip(viper, paper_plan, tmp_path):
 def test_fault_disk_full(viper, paper_plan, tmp_path):
     r, out = _fault(viper, paper_plan, tmp_path, Faults(disk_full_after_lines=30))
     assert out.status == "halted"
-    assert "*** disk error writing the log: *Device full*" in out.console
+    assert "*** disk error writing: *Device full*" in out.console
     m = load_measurements(r.log, paper_plan, viper)
     # 6 header lines + 7 + 7 + 10 rows = 30: the 11th reading of step 3 is the first lost
     assert m.missing_text() == "step 3 point 10; steps 4–10 (all points)"
@@ -303,3 +312,74 @@ def test_touch_probe_on_a_plate(viper, paper_plan, tmp_path):
     assert interp.execute("t.main").status == "completed"
     z = interp.get_global("x", 3)  # flange z; the probe reaches 100 mm below it
     assert 249.5 < z <= 250.0 + 1e-6
+
+
+def test_fault_slip_during_the_last_step(viper, paper_plan, tmp_path):
+    """A 3 mm slip in the last step moved a1 by 1.6 mm unseen; the closing zero reading at
+    θ0 now stops the run and the log checker names step 10."""
+    r, out = _fault(
+        viper,
+        paper_plan,
+        tmp_path,
+        Faults(slip_at_move=move_of_step(paper_plan, 10, 1), slip_mm=3.0),
+    )
+    assert out.status == "paused"
+    assert "    slipped or the encoder moved during step 10." in out.console
+    assert r.log.read_text().splitlines()[-1].startswith("zero,11,0,")
+    with pytest.raises(WirecalError) as info:
+        load_measurements(r.log, paper_plan, viper)
+    (problem,) = info.value.problems
+    drift = float(re.search(r"the closing zero reading is ([-+.\d]+) mm", problem).group(1))
+    assert drift == pytest.approx(3.0, abs=0.05)  # the slip, up to the reading noise
+    assert "repeat from step 10" in problem
+
+
+def test_fault_wire_beyond_the_encoders_range(viper, paper_plan, tmp_path):
+    """A 500 mm encoder on the paper plan (it needs 603 mm): gen refuses before any motion;
+    a program run anyway stops with the twin's error and its cause, and the direct
+    simulator stops the same way, naming step and point."""
+    short = replace(viper, encoder=replace(viper.encoder, range_mm=500.0))
+    with pytest.raises(WirecalError) as info:
+        module_text(short, paper_plan)
+    assert any(
+        "step 6 (d4) point 5: the nominal wire is 602.5 mm" in p for p in info.value.problems
+    )
+    r, out = _fault(short, paper_plan, tmp_path, Faults(), text=module_text(viper, paper_plan))
+    assert out.status == "error"
+    assert out.message.startswith("*Draw-wire range exceeded*: the wire would be 5")
+    assert "mm long, beyond the encoder's range_mm 500" in out.message
+    assert where_in_run(paper_plan, r.cell.moves) == "step 6 point 1"
+    with pytest.raises(WirecalError, match=r"^\*Draw-wire range exceeded\*: step 6 point 1: "):
+        simulate_log(short, paper_plan, TRUTH, seed=4)
+
+
+def test_echo_log_without_a_disk(viper, paper_plan, tmp_path):
+    """gen --echo-log: the log file cannot be created (it exists), so wc.run types every
+    log line and goes on; the lines copied from the terminal are a complete log."""
+    (tmp_path / "WCLOG.CSV").write_text("an older log\n")
+    opt = GenOptions(echo_log=True)
+    r = run_measurement(viper, paper_plan, TRUTH, tmp_path, seed=4, options=opt)
+    assert r.run.status == "completed"
+    assert (tmp_path / "WCLOG.CSV").read_text() == "an older log\n"
+    console = r.cell.console
+    assert "    the log goes to the terminal only: copy its lines." in console
+    start = console.index("# wirecal-log 1")
+    rows = [c for c in console[start:] if c.startswith(("#", "kind,", "zero,", "point,"))]
+    m = check_log(parse_log("\n".join(rows) + "\n", "terminal"), paper_plan, viper)
+    assert m.complete
+    assert m.present.sum() == 69
+
+
+def test_validation_sets_the_null_tool_and_takes_any_run_number(viper, paper_plan, tmp_path):
+    """TOOL NULL before every Cartesian move, recorded in the header; run 12 (which the
+    old $CHR(48+run) turned into 'WCVCFG<.CSV') names its files WCVCFG12/WCVPLN12."""
+    setup = load_setup(VIPER / "validation.toml")
+    text = module_text(viper, paper_plan, GenOptions(validation=setup))
+    v = run_validation(
+        viper, paper_plan, TRUTH, setup, tmp_path, text, controller={}, run=12, unmodelled=None
+    )
+    assert v.configuration.status == v.plane.status == "completed"
+    assert v.cell.tools_at_cartesian == {"null"}
+    assert v.configuration_log.name == "WCVCFG12.CSV"
+    for log in (v.configuration_log, v.plane_log):
+        assert "# tool: null (TOOL NULL before the moves: flange poses)" in log.read_text()

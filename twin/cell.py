@@ -379,15 +379,27 @@ def run_measurement(
     return RunResult(mount, run, disk / options.log_file, cell)
 
 
+def run_targets(plan: Plan) -> list[str]:
+    """What each move of wc.run reaches, in order (move k is entry k-1): per step θ0 (its
+    zero reading), the via points, the points; last θ0 for the closing zero reading."""
+    out = []
+    for j, s in enumerate(plan.steps, 1):
+        out.append(f"step {j} zero reading at theta0")
+        out += [f"step {j} via point {i}" for i in range(1, len(s.via_deg) + 1)]
+        out += [f"step {j} point {i}" for i in range(1, len(s.points_deg) + 1)]
+    out.append("the closing zero reading at theta0")
+    return out
+
+
 def move_of_step(plan: Plan, step: int, point: int = 1) -> int:
     """The 1-based number of the move of wc.run that reaches a step's point."""
-    moves = 0
-    for j, s in enumerate(plan.steps, 1):
-        moves += 1 + len(s.via_deg)
-        if j == step:
-            return moves + point
-        moves += len(s.points_deg)
-    raise ValueError(step)
+    return run_targets(plan).index(f"step {step} point {point}") + 1
+
+
+def where_in_run(plan: Plan, moves: int) -> str:
+    """Where wc.run was after ``moves`` moves (the twin's cell counts them)."""
+    targets = run_targets(plan)
+    return targets[moves - 1] if 1 <= moves <= len(targets) else "the start of wc.run"
 
 
 def controller_solve(
