@@ -22,22 +22,23 @@ RANGE_MARGIN_MM = 20.0  # default: the wire stays this far inside the encoder's 
 MIN_WIRE_MM = 5.0  # and at least this long away from θ0 (the wire tip must not touch)
 
 
-def run_moves(plan: Plan) -> list[tuple[str, np.ndarray, np.ndarray]]:
-    """The moves of ``wc.run`` in order, each (where, from, to) in deg: per step θ0 → via
-    points → points in the plan's order → the next step's θ0 (the last: the closing
-    zero at θ0)."""
+def run_moves(plan: Plan) -> list[tuple[str, np.ndarray, np.ndarray, bool]]:
+    """The moves of ``wc.run`` in order, each (where, from, to, back to θ0) in deg: per
+    step θ0 → via points → points in the plan's order → the next step's θ0 (the last:
+    the closing zero at θ0)."""
     moves = []
     here = plan.theta0_deg
     for j, s in enumerate(plan.steps, 1):
         targets = [
-            (f"step {j} ({s.parameter}) via point {i}", v) for i, v in enumerate(s.via_deg, 1)
+            (f"step {j} ({s.parameter}) via point {i}", v, False)
+            for i, v in enumerate(s.via_deg, 1)
         ]
         targets += [
-            (f"step {j} ({s.parameter}) point {i}", p) for i, p in enumerate(s.points_deg, 1)
+            (f"step {j} ({s.parameter}) point {i}", p, False) for i, p in enumerate(s.points_deg, 1)
         ]
-        targets.append((f"the move back to theta0 after step {j}", plan.theta0_deg))
-        for where, q in targets:
-            moves.append((where, np.asarray(here, float), np.asarray(q, float)))
+        targets.append((f"step {j} ({s.parameter}): back to theta0", plan.theta0_deg, True))
+        for where, q, home in targets:
+            moves.append((where, np.asarray(here, float), np.asarray(q, float), home))
             here = q
     return moves
 
@@ -47,13 +48,13 @@ def check_wire_range(
 ) -> None:
     """Raise :class:`WirecalError` naming every target (and the move to it) where the
     nominal wire length exceeds ``range_mm − margin_mm`` or comes within ``min_mm`` of
-    zero (θ0 itself, where the wire is zero by construction, excepted)."""
+    zero (the moves back to θ0, where the wire is zero by construction, excepted)."""
     if not margin_mm >= 0:
         raise WirecalError(f"--range-margin {margin_mm:g}: give a margin of 0 mm or more")
     model = perturbed(robot)
     p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
     moves = run_moves(plan)
-    q, first = move_samples(np.array([a for _, a, _ in moves]), np.array([b for _, _, b in moves]))
+    q, first = move_samples(np.array([m[1] for m in moves]), np.array([m[2] for m in moves]))
     d = np.linalg.norm(tool_position(model, np.radians(q)) - p0, axis=1)
     longest = np.maximum.reduceat(d, first)
     # the wire is short near θ0 by construction: only the targets must stay above min_mm
@@ -61,8 +62,7 @@ def check_wire_range(
     at_target = d[last]
     limit = robot.encoder.range_mm - margin_mm
     problems = []
-    for k, (where, _, b) in enumerate(moves):
-        home = np.allclose(b, plan.theta0_deg)
+    for k, (where, _, _, home) in enumerate(moves):
         if longest[k] > limit:
             on_move = longest[k] > at_target[k] + 1e-9
             problems.append(
