@@ -251,8 +251,7 @@ def check_log(
         # The reference is the mean of all zero readings: every length is measured from
         # it, so its error is common to all points; averaging the steps' zeros shrinks it.
         ref = first + np.mean(
-            [counter.difference(r.counts, first) for s, r in zeros.items() if s <= n_steps]
-            or [0.0]
+            [counter.difference(r.counts, first) for s, r in zeros.items() if s <= n_steps] or [0.0]
         )
         distance = counter.difference(counts, ref) * mpc
         for k in np.flatnonzero(~np.isnan(distance)):

@@ -105,7 +105,10 @@ def simulate_log(
     indices = [0 if k is None else int(index_no[k]) for _, k in order]
     joints = [plan.theta0_deg if k is None else q[k] for _, k in order]
     lengths = np.array([0.0 if k is None else d_points[k] for _, k in order])
-    lengths += rng.normal(0.0, noise_mm, len(lengths))
+    # The closing zero draws from its own generator, so a seed gives the same readings as
+    # before the closing zero existed, with one row added.
+    closing_rng = np.random.default_rng([seed, 3])
+    lengths[:-1] += rng.normal(0.0, noise_mm, len(lengths) - 1)
     steps_arr = np.asarray(steps)
     if faults.slip is not None:
         slip_step, slip_mm = faults.slip
@@ -117,6 +120,7 @@ def simulate_log(
         pts = np.flatnonzero(np.asarray(kinds) == "point")
         chosen = rng.choice(pts, size=min(faults.outliers, len(pts)), replace=False)
         lengths[chosen] += faults.outlier_mm * rng.choice((-1.0, 1.0), size=len(chosen))
+    lengths[-1] += closing_rng.normal(0.0, noise_mm)
 
     beyond = np.flatnonzero(lengths > enc.range_mm)
     if len(beyond):  # the encoder stops counting there: the twin's error, with its cause
@@ -125,7 +129,9 @@ def simulate_log(
             f"{RANGE_EXCEEDED}: step {steps[i]} point {indices[i]}: the wire would be "
             f"{lengths[i]:.1f} mm long, beyond the encoder's range_mm {enc.range_mm:g}"
         )
-    mean, spread = sample_counts(lengths, mpc, start, enc.counter, samples, rng)
+    head = sample_counts(lengths[:-1], mpc, start, enc.counter, samples, rng)
+    tail = sample_counts(lengths[-1:], mpc, start, enc.counter, samples, closing_rng)
+    mean, spread = np.concatenate([head[0], tail[0]]), np.concatenate([head[1], tail[1]])
     rows = [
         format_row(*args, samples, sp)
         for args, sp in zip(

@@ -129,7 +129,7 @@ def test_counts_rounded_to_hundreds_are_refused(log_text):
 def test_whole_counts_that_are_exact_are_accepted(log_text):
     """Integer counts are fine (a controller may log them so) unless all end in 0."""
     log = parse_log(with_counts(log_text, lambda c: f"{c:.0f}"), "run.csv")
-    assert len(log.readings) == 79
+    assert len(log.readings) == 69 + 10 + 1  # points, the steps' zeros, the closing zero
 
 
 def test_counts_beyond_the_counter_are_refused(viper, paper_plan, log_text):
