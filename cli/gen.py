@@ -100,7 +100,7 @@ _G = GenOptions()
 @click.option(
     "--range-margin",
     type=click.FloatRange(min=0.0),
-    default=_D.range_margin_mm,
+    default=_G.range_margin_mm,
     show_default=True,
     help="Refuse a plan whose nominal wire length, at a point or along a move, comes "
     "closer than this to the encoder's range_mm (mm).",

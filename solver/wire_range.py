@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.planner import move_samples
 from wirecal.solver.robot import Robot
@@ -51,7 +51,7 @@ def check_wire_range(
     zero (the moves back to θ0, where the wire is zero by construction, excepted)."""
     if not margin_mm >= 0:
         raise WirecalError(f"--range-margin {margin_mm:g}: give a margin of 0 mm or more")
-    model = perturbed(robot)
+    model = robot.nominal
     p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
     moves = run_moves(plan)
     q, first = move_samples(np.array([m[1] for m in moves]), np.array([m[2] for m in moves]))

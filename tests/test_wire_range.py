@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.kinematics import perturbed, tool_position
+from wirecal.solver.kinematics import tool_position
 from wirecal.solver.wire_range import check_wire_range, run_moves
 
 
@@ -37,7 +37,7 @@ def test_run_moves_follow_wc_run(paper_plan):
 def test_longest_point_and_the_move_beyond_it(viper, paper_plan):
     """The farthest point is 602.5 mm away (computed here from the forward kinematics);
     a move between points reaches farther than either end, and the check sees it."""
-    model = perturbed(viper)
+    model = viper.nominal
     q, _, _ = paper_plan.all_points()
     p0 = tool_position(model, np.radians(paper_plan.theta0_deg)[None])[0]
     longest = np.linalg.norm(tool_position(model, np.radians(q)) - p0, axis=1).max()
