@@ -45,11 +45,12 @@ CASES = {
     "missing dh": (lambda d: d["kinematics"].pop("dh"), "r.toml: kinematics.dh: is missing"),
     "short dh row": (
         lambda d: d["kinematics"]["dh"][2].pop(),
-        "r.toml: kinematics.dh: row 3 must be 4 numbers",
+        "r.toml: kinematics.dh[3]: has 3 values; expected 4 "
+        "[alpha_deg, a_mm, theta_offset_deg, d_mm]",
     ),
     "nan in dh": (
         lambda d: d["kinematics"]["dh"][1].__setitem__(1, float("nan")),
-        "r.toml: kinematics.dh: row 2 has a value that is not finite",
+        "r.toml: kinematics.dh[2]: value 2 is nan; give a number within ±10000 mm",
     ),
     "limits wrong length": (
         lambda d: d["kinematics"]["joint_min_deg"].pop(),
@@ -61,7 +62,7 @@ CASES = {
     ),
     "nan limit": (
         lambda d: d["kinematics"]["joint_max_deg"].__setitem__(0, float("nan")),
-        "r.toml: kinematics.joint_max_deg: value 1 is not finite",
+        "r.toml: kinematics.joint_max_deg: value 1 is nan; give a number within ±3600 deg",
     ),
     "unknown parameter": (
         lambda d: d["calibration"]["parameters"].append("th7"),
@@ -80,12 +81,12 @@ CASES = {
             d["kinematics"].__setitem__("joint_min_deg", [-3.0] * 6),
             d["kinematics"].__setitem__("joint_max_deg", [3.0] * 6),
         ),
-        "r.toml: kinematics.joint_max_deg: every joint range is within ±2π: the limits look "
-        "like radians",
+        "r.toml: kinematics.joint_max_deg: joint 6: limits [-3, 3] are within ±2π: they look "
+        "like radians (that would be [-171.9, 171.9] deg); give degrees",
     ),
     "convention": (
         lambda d: d["kinematics"].__setitem__("convention", "standard"),
-        'only "craig" (modified DH) is supported',
+        'is "standard"; give "craig" (modified DH, the one supported)',
     ),
     "typo key": (
         lambda d: d["encoder"].__setitem__("rnage_mm", 1.0),
@@ -97,7 +98,7 @@ CASES = {
     ),
     "bits": (
         lambda d: d["encoder"].__setitem__("counter_bits", 24.5),
-        "r.toml: encoder.counter_bits: is 24.5; give an integer between 8 and 64",
+        "r.toml: encoder.counter_bits: is 24.5; give a whole number between 8 and 64",
     ),
     "narrow counter": (
         lambda d: d["encoder"].__setitem__("counter_bits", 16),
@@ -111,7 +112,8 @@ CASES = {
     ),
     "negative speed": (
         lambda d: d["kinematics"]["joint_speed_deg_s"].__setitem__(4, -1.0),
-        "r.toml: kinematics.joint_speed_deg_s: joint 5: speed must be > 0",
+        "r.toml: kinematics.joint_speed_deg_s: value 5 is -1.0; give a number > 0 and "
+        "≤ 10000 deg/s",
     ),
     "empty parameters": (
         lambda d: d["calibration"].__setitem__("parameters", []),
