@@ -36,7 +36,7 @@ KINDS: dict[str, tuple[str, tuple[str, ...]]] = {
     "robot file": ("a robot file (DH table, limits, encoder)", ("kinematics", "encoder")),
     "plan file": ("a plan file (θ0 and point sets)", ("theta0_deg", "step")),
     "truth file": ("a truth file (true offsets of a simulated robot)", ("errors",)),
-    "patch": ("a patch written by wirecal solve", ("parameters", "log_sha256")),
+    "patch file": ("a patch written by wirecal solve", ("parameters", "log_sha256")),
     "validation setup": ("a validation setup", ("configuration", "plate")),
 }
 """Each wirecal TOML document: what it is, and the top-level keys that identify it."""
@@ -333,7 +333,10 @@ class Table:
     # -- nested tables --------------------------------------------------------------------
     def table(self, key: str, keys: Sequence[str] | None, *, required: bool = True) -> Table:
         """The sub-table ``[key]`` (absent when missing or not a table)."""
-        found, x = self._value(key, MISSING if required else None)
+        if required and self.present and key not in self.data:
+            self.add(key, f"is missing; add the table [{self.name(key)}]")
+            return Table(None, self.problems, self.name(key))
+        found, x = self._value(key, None)
         if not found:
             return Table(None, self.problems, self.name(key))
         if not isinstance(x, dict):
