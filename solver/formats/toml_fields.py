@@ -231,14 +231,13 @@ class Table:
         found, x = self._value(key, default)
         if not found:
             return x
-        if choices is not None and x not in choices:
-            options = " or ".join(
-                show(c) + (f" ({note})" if note else "") for c, note in choices.items()
-            )
-            self.add(key, f"is {show(x)}; give {options}")
-            return None
-        if not isinstance(x, str) or not x.strip():
-            self.add(key, f"is {show(x)}; give a non-empty string")
+        if not isinstance(x, str) or not x.strip() or (choices is not None and x not in choices):
+            expected = "a non-empty string"
+            if choices is not None:
+                expected = " or ".join(
+                    show(c) + (f" ({note})" if note else "") for c, note in choices.items()
+                )
+            self.add(key, f"is {show(x)}; give {expected}")
             return None
         return x
 
