@@ -7,7 +7,9 @@ import tomllib
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
+from wirecal.cli.main import main
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
 
@@ -115,6 +117,93 @@ CASES = {
         "r.toml: kinematics.joint_speed_deg_s: value 5 is -1.0; give a number > 0 and "
         "≤ 10000 deg/s",
     ),
+    "radian theta offsets": (
+        lambda d: d["kinematics"]["dh"][1].__setitem__(2, -1.5708),
+        "r.toml: kinematics.dh: θ offsets (column 3) holds values like 1.5708: that looks like "
+        "radians; give degrees (1.5708 rad = 90°)",
+    ),
+    "one joint in radians": (
+        lambda d: (
+            d["kinematics"]["joint_min_deg"].__setitem__(2, -0.5),
+            d["kinematics"]["joint_max_deg"].__setitem__(2, 4.47),
+        ),
+        "r.toml: kinematics.joint_max_deg: joint 3: limits [-0.5, 4.47] are within ±2π: they "
+        "look like radians (that would be [-28.65, 256.1] deg); give degrees",
+    ),
+    "narrow joint range": (
+        lambda d: (
+            d["kinematics"]["joint_min_deg"].__setitem__(4, -15.0),
+            d["kinematics"]["joint_max_deg"].__setitem__(4, 15.0),
+        ),
+        "r.toml: kinematics.joint_max_deg: joint 5: range [-15, 15] spans 30 deg, narrower than "
+        "the 40 deg a calibration plan needs (θ0 at least 20 deg inside each limit); check the "
+        "limits",
+    ),
+    "lengths in metres": (
+        lambda d: [
+            row.__setitem__(k, row[k] / 1000) for row in d["kinematics"]["dh"] for k in (1, 3)
+        ],
+        "r.toml: kinematics.dh: the links add up to 0.81 mm (Σ|a| + Σ|d|), less than the widest "
+        "link radius (70 mm): the lengths look like metres; give a and d in mm",
+    ),
+    "everything in metres": (
+        lambda d: (
+            [row.__setitem__(k, row[k] / 1000) for row in d["kinematics"]["dh"] for k in (1, 3)],
+            d["geometry"].__setitem__("link_radius_mm", [0.07, 0.055, 0.045, 0.04, 0.035]),
+        ),
+        "r.toml: kinematics.dh: the links add up to 0.81 mm (Σ|a| + Σ|d|), less than 1 % of "
+        "the encoder's range_mm (1250): the lengths look like metres",
+    ),
+    "8-bit counter": (
+        lambda d: d["encoder"].__setitem__("counter_bits", 8),
+        "r.toml: encoder.counter_bits: a signed 8-bit counter at 0.025488 mm/count holds only "
+        "±3.262 mm, less than range_mm 1250: wire lengths a counter turn apart would read the "
+        "same; give the width of the controller's counter (24 for a V+ belt encoder)",
+    ),
+    "16-bit counter": (
+        lambda d: d["encoder"].__setitem__("counter_bits", 16),
+        "holds only ±835.2 mm, less than range_mm 1250",
+    ),
+    "huge dh value": (
+        lambda d: d["kinematics"]["dh"][2].__setitem__(1, 1e300),
+        "r.toml: kinematics.dh[3]: value 2 is 1e+300; give a number within ±10000 mm",
+    ),
+    "huge twist": (
+        lambda d: d["kinematics"]["dh"][3].__setitem__(0, 900.0),
+        "r.toml: kinematics.dh[4]: value 1 is 900.0; give a number within ±360 deg",
+    ),
+    "huge range": (
+        lambda d: d["encoder"].__setitem__("range_mm", 1e300),
+        "r.toml: encoder.range_mm: is 1e+300; give a number > 0 and ≤ 100000 mm",
+    ),
+    "tiny scale": (
+        lambda d: d["encoder"].__setitem__("mm_per_count", 1e-300),
+        "r.toml: encoder.counter_bits: a signed 24-bit counter at 1e-300 mm/count holds only",
+    ),
+    "boolean is not a number": (
+        lambda d: d["tool"].__setitem__("point_mm", [-60.0, True, 50.0]),
+        "r.toml: tool.point_mm: value 2 is true; give a number within ±10000 mm",
+    ),
+    "boolean is not an integer": (
+        lambda d: d["encoder"].__setitem__("counter_bits", True),
+        "r.toml: encoder.counter_bits: is true; give a whole number between 8 and 64",
+    ),
+    "float is not an integer": (
+        lambda d: d["encoder"].__setitem__("channel", 1.0),
+        "r.toml: encoder.channel: is 1.0; give a whole number between 0 and 16 (no decimal point)",
+    ),
+    "interface": (
+        lambda d: d["encoder"].__setitem__("interface", "usb"),
+        'r.toml: encoder.interface: is "usb"; give "belt" (DEFBELT/BELT) or "device" (DEVICE)',
+    ),
+    "missing table": (
+        lambda d: d.pop("encoder"),
+        "r.toml: encoder: is missing; add the table [encoder]",
+    ),
+    "negative radius": (
+        lambda d: d["geometry"]["link_radius_mm"].__setitem__(0, -1.0),
+        "r.toml: geometry.link_radius_mm: value 1 is -1.0; give a number between 0 and 10000 mm",
+    ),
     "empty parameters": (
         lambda d: d["calibration"].__setitem__("parameters", []),
         "r.toml: calibration.parameters: is empty",
@@ -156,3 +245,84 @@ def test_unreadable_and_malformed_files(tmp_path):
         r"robot file\?",
     ):
         load_robot(binary)
+
+
+@pytest.mark.parametrize(
+    "path", sorted(VIPER.parent.glob("*/robot.toml")), ids=lambda p: p.parent.name
+)
+def test_shipped_arms_load_unchanged(path):
+    robot = load_robot(path)
+    assert robot.n_joints == 6
+    assert robot.encoder.counter_bits == 24
+
+
+ACCEPTED = {
+    "17-bit counter covers 1250 mm": lambda d: d["encoder"].__setitem__("counter_bits", 17),
+    "a 40 deg joint range": lambda d: (
+        d["kinematics"]["joint_min_deg"].__setitem__(4, -20.0),
+        d["kinematics"]["joint_max_deg"].__setitem__(4, 20.0),
+    ),
+    "a 7 deg theta offset": lambda d: d["kinematics"]["dh"][1].__setitem__(2, 7.0),
+    "a 90 deg theta offset": lambda d: d["kinematics"]["dh"][1].__setitem__(2, -90.0),
+    "a small arm in mm": lambda d: [
+        row.__setitem__(k, row[k] / 10) for row in d["kinematics"]["dh"] for k in (1, 3)
+    ],
+    "no geometry": lambda d: d.pop("geometry"),
+    "a 10 m link": lambda d: d["kinematics"]["dh"][2].__setitem__(1, 10_000.0),
+}
+
+
+@pytest.mark.parametrize("case", sorted(ACCEPTED))
+def test_plausible_values_accepted(case):
+    robot_from_dict(_mutate(ACCEPTED[case]), "r.toml")
+
+
+def test_other_wirecal_file_named(tmp_path):
+    with pytest.raises(WirecalError) as info:
+        load_robot(VIPER / "paper_plan.toml")
+    assert info.value.problems == [
+        f"{VIPER / 'paper_plan.toml'}: is a plan file (θ0 and point sets), not a robot file "
+        "(DH table, limits, encoder)"
+    ]
+
+
+def _robot_file(tmp_path, edit):
+    data = (VIPER / "robot.toml").read_text()
+    path = tmp_path / "robot.toml"
+    path.write_text(edit(data))
+    return str(path)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda t: t.replace("-120.0, -360.0]", "-15.0, -360.0]").replace(
+                "120.0,  360.0]", "15.0,  360.0]"
+            ),
+            "joint 5: range [-15, 15] spans 30 deg, narrower than the 40 deg",
+        ),
+        (lambda t: t.replace("270.0,  0.0,   0.0]", "1e300,  0.0,   0.0]"), "value 2 is 1e+300"),
+        (lambda t: t.replace("counter_bits = 24", "counter_bits = 8"), "8-bit counter"),
+    ],
+)
+@pytest.mark.parametrize("command", ["plan", "simulate"])
+def test_cli_refuses_implausible_robot(tmp_path, edit, message, command):
+    """Each case once ended in a traceback or a result blamed on something else."""
+    robot = _robot_file(tmp_path, edit)
+    args = {
+        "plan": ["plan", robot, "-o", str(tmp_path / "p.toml")],
+        "simulate": [
+            "simulate",
+            robot,
+            str(VIPER / "paper_plan.toml"),
+            "-o",
+            str(tmp_path / "s.csv"),
+        ],
+    }[command]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 2, r.output
+    assert f"error: {robot}: " in r.output
+    assert message in r.output
+    assert "Traceback" not in r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["robot.toml"]
