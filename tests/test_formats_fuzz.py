@@ -3,7 +3,7 @@ patches are either read or refused with a :class:`WirecalError` — never a trac
 
 Each example starts from a real document (the shipped Viper files, a simulated truth, a
 written patch) and applies a few mutations anywhere in its tree: a value replaced by one of
-another type (booleans, huge, NaN, infinite, strings, lists, tables), a key deleted or added.
+another type (booleans, huge, NaN, infinite, strings, dates, lists, tables), a key deleted or added.
 A second family mutates the text itself (characters cut, doubled or replaced).
 """
 
@@ -36,6 +36,8 @@ SCALARS = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True),
     st.sampled_from([0, 1, -1, 8, 24, 1e300, -1e300, 1e-300, 0.5, 360.0, 1250.0]),
     st.text(max_size=8),
+    st.dates(),
+    st.times(),
     st.sampled_from(["craig", "belt", "device", "th2", "a1", "deg", "mm", ""]),
 )
 VALUES = st.recursive(

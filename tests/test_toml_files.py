@@ -249,6 +249,24 @@ def test_patch_round_trip(viper, paper_plan, tmp_path):
     assert read_patch(path).parameters["a2"].std is None
 
 
+def test_patch_unidentified_std_and_verdict(viper, paper_plan, tmp_path):
+    """A patch accepted despite the plausibility gate says so, and σ = inf marks a parameter
+    the points do not identify: both read back."""
+    path = tmp_path / "patch.toml"
+    text = _patch(viper, paper_plan).replace("std = 0.02", "std = inf")
+    path.write_text(
+        text.replace("[parameters.th2]", 'plausibility = "overridden: x"\n\n[parameters.th2]')
+    )
+    patch = read_patch(path)
+    assert patch.meta.plausibility == "overridden: x"
+    assert patch.parameters["a2"].std == float("inf")
+    path.write_text(text.replace("std = inf", "std = -inf"))
+    with pytest.raises(
+        WirecalError, match=r"parameters\.a2\.std: is -inf; give a number between 0"
+    ):
+        read_patch(path)
+
+
 @pytest.mark.parametrize(
     ("edit", "message"),
     [

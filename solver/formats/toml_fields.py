@@ -20,6 +20,7 @@ needed, a plan given as a robot file) is refused by :func:`document` in one line
 
 from __future__ import annotations
 
+import datetime
 import difflib
 import math
 from collections.abc import Iterable, Sequence
@@ -63,13 +64,15 @@ def show(value: Any) -> str:
         return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
     if isinstance(value, dict):
         return "a table"
+    if isinstance(value, datetime.date | datetime.time):
+        return value.isoformat()
     if isinstance(value, list):
         text = "[" + ", ".join(show(v) for v in value[:4]) + (", …]" if len(value) > 4 else "]")
         return text if len(text) <= 60 else "a list"
     return repr(value)
 
 
-def expectation(
+def _expectation(
     lo: float | None = None,
     hi: float | None = None,
     *,
@@ -96,7 +99,7 @@ def _is_number(x: Any) -> bool:
     return isinstance(x, int | float) and not isinstance(x, bool)
 
 
-def number_problem(
+def _number_problem(
     x: Any,
     lo: float | None = None,
     hi: float | None = None,
@@ -118,7 +121,7 @@ def number_problem(
         return None
     hint = " (no decimal point)" if integer and isinstance(x, float) and x.is_integer() else ""
     return (
-        f"is {show(x)}; give {expectation(lo, hi, integer=integer, above=above, unit=unit)}{hint}"
+        f"is {show(x)}; give {_expectation(lo, hi, integer=integer, above=above, unit=unit)}{hint}"
     )
 
 
@@ -176,9 +179,6 @@ class Table:
     def keys(self) -> list[str]:
         return list(self.data) if self.data is not None else []
 
-    def has(self, key: str) -> bool:
-        return self.data is not None and key in self.data
-
     def _value(self, key: str, default: Any) -> tuple[bool, Any]:
         """(found, value); a required key that is absent is reported here."""
         if self.data is None:
@@ -205,7 +205,7 @@ class Table:
         found, x = self._value(key, default)
         if not found:
             return x
-        problem = number_problem(x, lo, hi, above=above, unit=unit)
+        problem = _number_problem(x, lo, hi, above=above, unit=unit)
         if problem:
             self.add(key, problem)
             return None
@@ -218,7 +218,7 @@ class Table:
         found, x = self._value(key, default)
         if not found:
             return x
-        problem = number_problem(x, lo, hi, integer=True)
+        problem = _number_problem(x, lo, hi, integer=True)
         if problem:
             self.add(key, problem)
             return None
@@ -293,7 +293,7 @@ class Table:
             return None
         ok = True
         for k, v in enumerate(x):
-            problem = number_problem(
+            problem = _number_problem(
                 v, _bound(lo, k), _bound(hi, k), integer=integer, above=above, unit=_unit(unit, k)
             )
             if problem:
@@ -332,7 +332,7 @@ class Table:
     # -- nested tables --------------------------------------------------------------------
     def table(self, key: str, keys: Sequence[str] | None, *, required: bool = True) -> Table:
         """The sub-table ``[key]`` (absent when missing or not a table)."""
-        if required and self.present and key not in self.data:
+        if required and self.data is not None and key not in self.data:
             self.add(key, f"is missing; add the table [{self.name(key)}]")
             return Table(None, self.problems, self.name(key))
         found, x = self._value(key, None)
