@@ -24,7 +24,7 @@ import datetime
 import difflib
 import math
 from collections.abc import Iterable, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -32,6 +32,8 @@ from wirecal.solver.errors import Problems, WirecalError
 
 MISSING: Any = object()
 """Default of a required key."""
+
+T = TypeVar("T")
 
 KINDS: dict[str, tuple[str, tuple[str, ...]]] = {
     "robot file": ("a robot file (DH table, limits, encoder)", ("kinematics", "encoder")),
@@ -54,6 +56,13 @@ def document(data: dict[str, Any], source: str, kind: str, keys: Sequence[str]) 
         if other != kind and set(signature) <= data.keys() and not own <= data.keys():
             raise WirecalError(f"{source}: is {what}, not {KINDS[kind][0]}")
     return Table(data, Problems(source), "", keys)
+
+
+def valid(value: T | None) -> T:
+    """A field that passed: call after :meth:`Table.raise_if_any`, which raised otherwise."""
+    if value is None:
+        raise AssertionError("a field with a problem was used after raise_if_any()")
+    return value
 
 
 def show(value: Any) -> str:

@@ -29,7 +29,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.csv_table import parse_table, read_source
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.robot_file import MAX_LENGTH_MM
-from wirecal.solver.formats.toml_fields import document
+from wirecal.solver.formats.toml_fields import document, valid
 from wirecal.solver.validation import Setup
 
 _SETUP_KEYS = {
@@ -49,42 +49,37 @@ def load_setup(path: str | Path) -> Setup:
     )
     cfg = doc.table("configuration", _SETUP_KEYS["configuration"])
     plate = doc.table("plate", _SETUP_KEYS["plate"])
-    mm = {"lo": -MAX_LENGTH_MM, "hi": MAX_LENGTH_MM, "unit": "mm"}
     xyz = "(x, y, z)"
-    encoder_mm = cfg.vector("encoder_mm", length=3, labels=xyz, **mm)
+    far = MAX_LENGTH_MM
+    encoder_mm = cfg.vector("encoder_mm", length=3, labels=xyz, lo=-far, hi=far, unit="mm")
     poses = cfg.integer("poses", 50, lo=1, hi=100_000)
     seed = cfg.integer("seed", 1, lo=0)
-    origin = plate.vector("origin_mm", length=3, labels=xyz, **mm)
+    origin = plate.vector("origin_mm", length=3, labels=xyz, lo=-far, hi=far, unit="mm")
     yaw = plate.number("yaw_deg", 0.0, lo=-360, hi=360, unit="deg")
     size = plate.vector(
-        "size_mm",
-        [400, 250],
-        length=2,
-        labels="(along the grid's two axes)",
-        above=0,
-        hi=MAX_LENGTH_MM,
-        unit="mm",
+        "size_mm", [400, 250], length=2, labels="(along the grid's two axes)", above=0, hi=far
     )
     grid = plate.vector(
         "grid", [19, 11], length=2, labels="(points along each axis)", integer=True, lo=1, hi=1000
     )
     if grid is not None and min(grid) < 2:
         plate.add("grid", "needs at least 2 × 2 points to fit a plane")
-    approach = plate.number("approach_mm", 5.0, lo=0.5, hi=MAX_LENGTH_MM, unit="mm")
-    probe = plate.vector("probe_mm", [0, 0, 100], length=3, labels=xyz, **mm)
+    approach = plate.number("approach_mm", 5.0, lo=0.5, hi=far, unit="mm")
+    probe = plate.vector("probe_mm", [0, 0, 100], length=3, labels=xyz, lo=-far, hi=far, unit="mm")
     signal = plate.integer("signal", 1001, lo=1)
     doc.raise_if_any()
+    size, grid = valid(size), valid(grid)
     return Setup(
-        encoder_mm=encoder_mm,
-        poses=poses,
-        seed=seed,
-        plate_origin_mm=origin,
-        plate_yaw_deg=yaw,
+        encoder_mm=valid(encoder_mm),
+        poses=valid(poses),
+        seed=valid(seed),
+        plate_origin_mm=valid(origin),
+        plate_yaw_deg=valid(yaw),
         plate_size_mm=(float(size[0]), float(size[1])),
         grid=(int(grid[0]), int(grid[1])),
-        approach_mm=approach,
-        probe_mm=probe,
-        signal=signal,
+        approach_mm=valid(approach),
+        probe_mm=valid(probe),
+        signal=valid(signal),
         source=str(path),
     )
 
