@@ -183,9 +183,11 @@ class Table:
 
     @property
     def present(self) -> bool:
+        """Whether the table exists (an absent table's problem is reported already)."""
         return self.data is not None
 
     def keys(self) -> list[str]:
+        """The table's keys, in file order (none when absent)."""
         return list(self.data) if self.data is not None else []
 
     def _value(self, key: str, default: Any) -> tuple[bool, Any]:
@@ -274,8 +276,11 @@ class Table:
         integer: bool = False,
         unit: str = "",
     ) -> np.ndarray | None:
-        """A list of ``length`` numbers (``labels`` names them in a message, e.g.
-        "(x, y, z)"); per-element bounds may be sequences."""
+        """Return a list of ``length`` numbers as an array.
+
+        ``labels`` names them in a message, e.g. "(x, y, z)"; per-element bounds may be
+        sequences.
+        """
         found, x = self._value(key, default)
         if not found:
             return None if x is None else np.asarray(x, dtype=float)
