@@ -132,12 +132,11 @@ CASES = {
     ),
     "narrow joint range": (
         lambda d: (
-            d["kinematics"]["joint_min_deg"].__setitem__(4, -15.0),
-            d["kinematics"]["joint_max_deg"].__setitem__(4, 15.0),
+            d["kinematics"]["joint_min_deg"].__setitem__(4, 100.0),
+            d["kinematics"]["joint_max_deg"].__setitem__(4, 108.0),
         ),
-        "r.toml: kinematics.joint_max_deg: joint 5: range [-15, 15] spans 30 deg, narrower than "
-        "the 40 deg a calibration plan needs (θ0 at least 20 deg inside each limit); check the "
-        "limits",
+        "r.toml: kinematics.joint_max_deg: joint 5: range [100, 108] spans 8 deg, no more than "
+        "10 deg: no room for plan points 5 deg inside both limits; check the limits",
     ),
     "lengths in metres": (
         lambda d: [
@@ -258,9 +257,9 @@ def test_shipped_arms_load_unchanged(path):
 
 ACCEPTED = {
     "17-bit counter covers 1250 mm": lambda d: d["encoder"].__setitem__("counter_bits", 17),
-    "a 40 deg joint range": lambda d: (
-        d["kinematics"]["joint_min_deg"].__setitem__(4, -20.0),
-        d["kinematics"]["joint_max_deg"].__setitem__(4, 20.0),
+    "an 11 deg joint range": lambda d: (
+        d["kinematics"]["joint_min_deg"].__setitem__(4, 100.0),
+        d["kinematics"]["joint_max_deg"].__setitem__(4, 111.0),
     ),
     "a 7 deg theta offset": lambda d: d["kinematics"]["dh"][1].__setitem__(2, 7.0),
     "a 90 deg theta offset": lambda d: d["kinematics"]["dh"][1].__setitem__(2, -90.0),
@@ -297,10 +296,10 @@ def _robot_file(tmp_path, edit):
     ("edit", "message"),
     [
         (
-            lambda t: t.replace("-120.0, -360.0]", "-15.0, -360.0]").replace(
-                "120.0,  360.0]", "15.0,  360.0]"
+            lambda t: t.replace("-120.0, -360.0]", "100.0, -360.0]").replace(
+                "120.0,  360.0]", "108.0,  360.0]"
             ),
-            "joint 5: range [-15, 15] spans 30 deg, narrower than the 40 deg",
+            "joint 5: range [100, 108] spans 8 deg, no more than 10 deg",
         ),
         (lambda t: t.replace("270.0,  0.0,   0.0]", "1e300,  0.0,   0.0]"), "value 2 is 1e+300"),
         (lambda t: t.replace("counter_bits = 24", "counter_bits = 8"), "8-bit counter"),
