@@ -104,9 +104,9 @@ CASES = {
     ),
     "narrow counter": (
         lambda d: d["encoder"].__setitem__("counter_bits", 16),
-        "r.toml: encoder.counter_bits: a 16-bit counter tells lengths apart up to 32768 "
-        "counts (835.191 mm); the range of 1250 mm is 49043 counts: give more bits or a "
-        "smaller range_mm",
+        "r.toml: encoder.counter_bits: a signed 16-bit counter tells lengths apart up to 32768 "
+        "counts (835.191 mm at 0.025488 mm/count); range_mm 1250 is 49043 counts: wire "
+        "lengths a counter turn apart would read the same",
     ),
     "tool length": (
         lambda d: d["tool"].__setitem__("point_mm", [1.0, 2.0]),
@@ -155,13 +155,10 @@ CASES = {
     ),
     "8-bit counter": (
         lambda d: d["encoder"].__setitem__("counter_bits", 8),
-        "r.toml: encoder.counter_bits: a signed 8-bit counter at 0.025488 mm/count holds only "
-        "±3.262 mm, less than range_mm 1250: wire lengths a counter turn apart would read the "
-        "same; give the width of the controller's counter (24 for a V+ belt encoder)",
-    ),
-    "16-bit counter": (
-        lambda d: d["encoder"].__setitem__("counter_bits", 16),
-        "holds only ±835.2 mm, less than range_mm 1250",
+        "r.toml: encoder.counter_bits: a signed 8-bit counter tells lengths apart up to 128 "
+        "counts (3.26246 mm at 0.025488 mm/count); range_mm 1250 is 49043 counts: wire lengths "
+        "a counter turn apart would read the same; give the width of the controller's counter "
+        "(24 for a V+ belt encoder) or a smaller range_mm, and check mm_per_count",
     ),
     "huge dh value": (
         lambda d: d["kinematics"]["dh"][2].__setitem__(1, 1e300),
@@ -177,7 +174,8 @@ CASES = {
     ),
     "tiny scale": (
         lambda d: d["encoder"].__setitem__("mm_per_count", 1e-300),
-        "r.toml: encoder.counter_bits: a signed 24-bit counter at 1e-300 mm/count holds only",
+        "r.toml: encoder.counter_bits: a signed 24-bit counter tells lengths apart up to "
+        "8388608 counts (8.38861e-294 mm at 1e-300 mm/count)",
     ),
     "boolean is not a number": (
         lambda d: d["tool"].__setitem__("point_mm", [-60.0, True, 50.0]),
@@ -302,7 +300,7 @@ def _robot_file(tmp_path, edit):
             "joint 5: range [100, 108] spans 8 deg, no more than 10 deg",
         ),
         (lambda t: t.replace("270.0,  0.0,   0.0]", "1e300,  0.0,   0.0]"), "value 2 is 1e+300"),
-        (lambda t: t.replace("counter_bits = 24", "counter_bits = 8"), "8-bit counter"),
+        (lambda t: t.replace("counter_bits = 24", "counter_bits = 8"), "signed 8-bit counter"),
     ],
 )
 @pytest.mark.parametrize("command", ["plan", "simulate"])
