@@ -7,8 +7,7 @@ import click
 from wirecal.cli.main import main, user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
-from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import read_toml
+from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.validation_files import load_setup
@@ -150,21 +149,7 @@ def gen(
     """
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
-    patch = None
-    if patch_file:
-        data = read_toml(patch_file, "patch file")
-        try:
-            if data.get("plan") != pl.fingerprint():
-                raise WirecalError(
-                    f"{patch_file}: plan: the patch was solved from another "
-                    "plan; generate with the plan it came from"
-                )
-            patch = {n: float(v["offset"]) for n, v in data["parameters"].items()}
-        except (KeyError, TypeError, ValueError, AttributeError):
-            raise WirecalError(
-                f"{patch_file}: parameters: not a wirecal patch (need "
-                "[parameters.<name>] tables with an offset)"
-            ) from None
+    patch = read_patch(patch_file).offsets_for(rb, pl) if patch_file else None
     opt = GenOptions(
         run=RunParameters(speed_pct=speed, accel_pct=accel, settle_s=settle_s, readings=samples),
         zero_tol_mm=zero_tol,

@@ -192,9 +192,4 @@ def test_cli_gen(tmp_path):
     again = runner.invoke(main, ["gen", robot, plan, "-o", str(tmp_path / "ctl")])
     assert again.exit_code == 2
     assert "exists; choose another name or pass --force" in again.output
-    bad = tmp_path / "patch.toml"
-    bad.write_text('plan = "0000"\n[parameters.th6]\noffset = 1.0\n')
-    r = runner.invoke(main, ["gen", robot, plan, "-o", str(tmp_path / "p"), "--patch", str(bad)])
-    assert r.exit_code == 2
-    assert "the patch was solved from another plan" in r.output
     assert "Usage:" in runner.invoke(main, ["gen", "--help"]).output

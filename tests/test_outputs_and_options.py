@@ -358,12 +358,17 @@ def test_plan_narrow_joint_range(tmp_path):
     robot.write_text(
         (VIPER / "robot.toml")
         .read_text()
-        .replace("-190.0, -120.0, -360.0]", "-190.0, -4.0, -360.0]")
-        .replace("190.0,  120.0,  360.0]", "190.0,  4.0,  360.0]")
+        .replace("-190.0, -120.0, -360.0]", "-190.0, 100.0, -360.0]")
+        .replace("190.0,  120.0,  360.0]", "190.0,  108.0,  360.0]")
     )
     t = time.perf_counter()
     r = run("plan", robot, "-o", tmp_path / "plan.toml")
-    refused(r, "joint 5: range 8 deg leaves no room for points 5 deg inside both limits")
+    # the robot file states the planner's rule, so the file itself is refused
+    refused(
+        r,
+        "kinematics.joint_max_deg: joint 5: range [100, 108] spans 8 deg, no more than 10 deg: "
+        "no room for plan points 5 deg inside both limits",
+    )
     assert time.perf_counter() - t < 10
     assert files(tmp_path) == {"narrow.toml"}
 

@@ -78,7 +78,9 @@ def test_wrong_vector_length_and_unknown_key(viper):
             "theta0_deg", "theta_0_deg", 1
         ),
     )
-    assert "p.toml: step[1].points_deg[2]: must be 6 finite joint angles in degrees" in problems
+    assert (
+        "p.toml: step[1].points_deg[2]: has 5 values; expected 6 (one per joint, deg)" in problems
+    )
     assert "p.toml: theta_0_deg: unknown key (did you mean 'theta0_deg'?)" in problems
     assert "p.toml: theta0_deg: is missing" in problems
 

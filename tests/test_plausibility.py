@@ -4,6 +4,7 @@ exit status 3, a message saying what to check, and no file; sound logs pass."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 import tomllib
@@ -14,7 +15,6 @@ from click.testing import CliRunner
 
 from wirecal.cli.main import main
 from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.measurements import check_log
@@ -86,11 +86,14 @@ def test_robot_file_in_metres_is_refused(tmp_path, viper, paper_plan, log_text):
     log.write_text(log_text)
     patch = tmp_path / "patch.toml"
     r = run("solve", robot, PLAN, log, "-o", patch)
-    # The plan reader already refuses the plan against this robot (its points lie within
-    # 1 mm of θ0); the gate behind it names the units, should a plan get through.
-    assert r.exit_code in (2, 3)
+    # The robot file reader refuses it first; the gate behind it names the units, should a
+    # robot in metres get through (built in memory here, past the reader).
+    assert r.exit_code == 2
+    assert "the lengths look like metres; give a and d in mm" in r.output
     assert not patch.exists()
-    metres = load_robot(robot)
+    dh_m = viper.dh.copy()
+    dh_m[:, [1, 3]] /= 1000
+    metres = dataclasses.replace(viper, dh=dh_m, tool_point=viper.tool_point / 1000)
     m = check_log(parse_log(log_text, "run.csv"), paper_plan, metres)
     verdict = assess(solve(metres, paper_plan, m), "joint")
     checks = {f.check: f.message for f in verdict.findings}

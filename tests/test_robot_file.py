@@ -7,7 +7,9 @@ import tomllib
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
+from wirecal.cli.main import main
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
 
@@ -45,11 +47,12 @@ CASES = {
     "missing dh": (lambda d: d["kinematics"].pop("dh"), "r.toml: kinematics.dh: is missing"),
     "short dh row": (
         lambda d: d["kinematics"]["dh"][2].pop(),
-        "r.toml: kinematics.dh: row 3 must be 4 numbers",
+        "r.toml: kinematics.dh[3]: has 3 values; expected 4 "
+        "[alpha_deg, a_mm, theta_offset_deg, d_mm]",
     ),
     "nan in dh": (
         lambda d: d["kinematics"]["dh"][1].__setitem__(1, float("nan")),
-        "r.toml: kinematics.dh: row 2 has a value that is not finite",
+        "r.toml: kinematics.dh[2]: value 2 is nan; give a number within ±10000 mm",
     ),
     "limits wrong length": (
         lambda d: d["kinematics"]["joint_min_deg"].pop(),
@@ -61,7 +64,7 @@ CASES = {
     ),
     "nan limit": (
         lambda d: d["kinematics"]["joint_max_deg"].__setitem__(0, float("nan")),
-        "r.toml: kinematics.joint_max_deg: value 1 is not finite",
+        "r.toml: kinematics.joint_max_deg: value 1 is nan; give a number within ±3600 deg",
     ),
     "unknown parameter": (
         lambda d: d["calibration"]["parameters"].append("th7"),
@@ -80,12 +83,12 @@ CASES = {
             d["kinematics"].__setitem__("joint_min_deg", [-3.0] * 6),
             d["kinematics"].__setitem__("joint_max_deg", [3.0] * 6),
         ),
-        "r.toml: kinematics.joint_max_deg: every joint range is within ±2π: the limits look "
-        "like radians",
+        "r.toml: kinematics.joint_max_deg: joint 6: limits [-3, 3] are within ±2π: they look "
+        "like radians (that would be [-171.9, 171.9] deg); give degrees",
     ),
     "convention": (
         lambda d: d["kinematics"].__setitem__("convention", "standard"),
-        'only "craig" (modified DH) is supported',
+        'is "standard"; give "craig" (modified DH, the one supported)',
     ),
     "typo key": (
         lambda d: d["encoder"].__setitem__("rnage_mm", 1.0),
@@ -97,13 +100,13 @@ CASES = {
     ),
     "bits": (
         lambda d: d["encoder"].__setitem__("counter_bits", 24.5),
-        "r.toml: encoder.counter_bits: is 24.5; give an integer between 8 and 64",
+        "r.toml: encoder.counter_bits: is 24.5; give a whole number between 8 and 64",
     ),
     "narrow counter": (
         lambda d: d["encoder"].__setitem__("counter_bits", 16),
-        "r.toml: encoder.counter_bits: a 16-bit counter tells lengths apart up to 32768 "
-        "counts (835.191 mm); the range of 1250 mm is 49043 counts: give more bits or a "
-        "smaller range_mm",
+        "r.toml: encoder.counter_bits: a signed 16-bit counter tells lengths apart up to 32768 "
+        "counts (835.191 mm at 0.025488 mm/count); range_mm 1250 is 49043 counts: wire "
+        "lengths a counter turn apart would read the same",
     ),
     "tool length": (
         lambda d: d["tool"].__setitem__("point_mm", [1.0, 2.0]),
@@ -111,7 +114,92 @@ CASES = {
     ),
     "negative speed": (
         lambda d: d["kinematics"]["joint_speed_deg_s"].__setitem__(4, -1.0),
-        "r.toml: kinematics.joint_speed_deg_s: joint 5: speed must be > 0",
+        "r.toml: kinematics.joint_speed_deg_s: value 5 is -1.0; give a number > 0 and "
+        "≤ 10000 deg/s",
+    ),
+    "radian theta offsets": (
+        lambda d: d["kinematics"]["dh"][1].__setitem__(2, -1.5708),
+        "r.toml: kinematics.dh: θ offsets (column 3) holds values like 1.5708: that looks like "
+        "radians; give degrees (1.5708 rad = 90°)",
+    ),
+    "one joint in radians": (
+        lambda d: (
+            d["kinematics"]["joint_min_deg"].__setitem__(2, -0.5),
+            d["kinematics"]["joint_max_deg"].__setitem__(2, 4.47),
+        ),
+        "r.toml: kinematics.joint_max_deg: joint 3: limits [-0.5, 4.47] are within ±2π: they "
+        "look like radians (that would be [-28.65, 256.1] deg); give degrees",
+    ),
+    "narrow joint range": (
+        lambda d: (
+            d["kinematics"]["joint_min_deg"].__setitem__(4, 100.0),
+            d["kinematics"]["joint_max_deg"].__setitem__(4, 108.0),
+        ),
+        "r.toml: kinematics.joint_max_deg: joint 5: range [100, 108] spans 8 deg, no more than "
+        "10 deg: no room for plan points 5 deg inside both limits; check the limits",
+    ),
+    "lengths in metres": (
+        lambda d: [
+            row.__setitem__(k, row[k] / 1000) for row in d["kinematics"]["dh"] for k in (1, 3)
+        ],
+        "r.toml: kinematics.dh: the links add up to 0.81 mm (Σ|a| + Σ|d|), less than the widest "
+        "link radius (70 mm): the lengths look like metres; give a and d in mm",
+    ),
+    "everything in metres": (
+        lambda d: (
+            [row.__setitem__(k, row[k] / 1000) for row in d["kinematics"]["dh"] for k in (1, 3)],
+            d["geometry"].__setitem__("link_radius_mm", [0.07, 0.055, 0.045, 0.04, 0.035]),
+        ),
+        "r.toml: kinematics.dh: the links add up to 0.81 mm (Σ|a| + Σ|d|), less than 1 % of "
+        "the encoder's range_mm (1250): the lengths look like metres",
+    ),
+    "8-bit counter": (
+        lambda d: d["encoder"].__setitem__("counter_bits", 8),
+        "r.toml: encoder.counter_bits: a signed 8-bit counter tells lengths apart up to 128 "
+        "counts (3.26246 mm at 0.025488 mm/count); range_mm 1250 is 49043 counts: wire lengths "
+        "a counter turn apart would read the same; give the width of the controller's counter "
+        "(24 for a V+ belt encoder) or a smaller range_mm, and check mm_per_count",
+    ),
+    "huge dh value": (
+        lambda d: d["kinematics"]["dh"][2].__setitem__(1, 1e300),
+        "r.toml: kinematics.dh[3]: value 2 is 1e+300; give a number within ±10000 mm",
+    ),
+    "huge twist": (
+        lambda d: d["kinematics"]["dh"][3].__setitem__(0, 900.0),
+        "r.toml: kinematics.dh[4]: value 1 is 900.0; give a number within ±360 deg",
+    ),
+    "huge range": (
+        lambda d: d["encoder"].__setitem__("range_mm", 1e300),
+        "r.toml: encoder.range_mm: is 1e+300; give a number > 0 and ≤ 100000 mm",
+    ),
+    "tiny scale": (
+        lambda d: d["encoder"].__setitem__("mm_per_count", 1e-300),
+        "r.toml: encoder.counter_bits: a signed 24-bit counter tells lengths apart up to "
+        "8388608 counts (8.38861e-294 mm at 1e-300 mm/count)",
+    ),
+    "boolean is not a number": (
+        lambda d: d["tool"].__setitem__("point_mm", [-60.0, True, 50.0]),
+        "r.toml: tool.point_mm: value 2 is true; give a number within ±10000 mm",
+    ),
+    "boolean is not an integer": (
+        lambda d: d["encoder"].__setitem__("counter_bits", True),
+        "r.toml: encoder.counter_bits: is true; give a whole number between 8 and 64",
+    ),
+    "float is not an integer": (
+        lambda d: d["encoder"].__setitem__("channel", 1.0),
+        "r.toml: encoder.channel: is 1.0; give a whole number between 0 and 16 (no decimal point)",
+    ),
+    "interface": (
+        lambda d: d["encoder"].__setitem__("interface", "usb"),
+        'r.toml: encoder.interface: is "usb"; give "belt" (DEFBELT/BELT) or "device" (DEVICE)',
+    ),
+    "missing table": (
+        lambda d: d.pop("encoder"),
+        "r.toml: encoder: is missing; add the table [encoder]",
+    ),
+    "negative radius": (
+        lambda d: d["geometry"]["link_radius_mm"].__setitem__(0, -1.0),
+        "r.toml: geometry.link_radius_mm: value 1 is -1.0; give a number between 0 and 10000 mm",
     ),
     "empty parameters": (
         lambda d: d["calibration"].__setitem__("parameters", []),
@@ -154,3 +242,84 @@ def test_unreadable_and_malformed_files(tmp_path):
         r"robot file\?",
     ):
         load_robot(binary)
+
+
+@pytest.mark.parametrize(
+    "path", sorted(VIPER.parent.glob("*/robot.toml")), ids=lambda p: p.parent.name
+)
+def test_shipped_arms_load_unchanged(path):
+    robot = load_robot(path)
+    assert robot.n_joints == 6
+    assert robot.encoder.counter_bits == 24
+
+
+ACCEPTED = {
+    "17-bit counter covers 1250 mm": lambda d: d["encoder"].__setitem__("counter_bits", 17),
+    "an 11 deg joint range": lambda d: (
+        d["kinematics"]["joint_min_deg"].__setitem__(4, 100.0),
+        d["kinematics"]["joint_max_deg"].__setitem__(4, 111.0),
+    ),
+    "a 7 deg theta offset": lambda d: d["kinematics"]["dh"][1].__setitem__(2, 7.0),
+    "a 90 deg theta offset": lambda d: d["kinematics"]["dh"][1].__setitem__(2, -90.0),
+    "a small arm in mm": lambda d: [
+        row.__setitem__(k, row[k] / 10) for row in d["kinematics"]["dh"] for k in (1, 3)
+    ],
+    "no geometry": lambda d: d.pop("geometry"),
+    "a 10 m link": lambda d: d["kinematics"]["dh"][2].__setitem__(1, 10_000.0),
+}
+
+
+@pytest.mark.parametrize("case", sorted(ACCEPTED))
+def test_plausible_values_accepted(case):
+    robot_from_dict(_mutate(ACCEPTED[case]), "r.toml")
+
+
+def test_other_wirecal_file_named(tmp_path):
+    with pytest.raises(WirecalError) as info:
+        load_robot(VIPER / "paper_plan.toml")
+    assert info.value.problems == [
+        f"{VIPER / 'paper_plan.toml'}: is a plan file (θ0 and point sets), not a robot file "
+        "(DH table, limits, encoder)"
+    ]
+
+
+def _robot_file(tmp_path, edit):
+    data = (VIPER / "robot.toml").read_text()
+    path = tmp_path / "robot.toml"
+    path.write_text(edit(data))
+    return str(path)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda t: t.replace("-120.0, -360.0]", "100.0, -360.0]").replace(
+                "120.0,  360.0]", "108.0,  360.0]"
+            ),
+            "joint 5: range [100, 108] spans 8 deg, no more than 10 deg",
+        ),
+        (lambda t: t.replace("270.0,  0.0,   0.0]", "1e300,  0.0,   0.0]"), "value 2 is 1e+300"),
+        (lambda t: t.replace("counter_bits = 24", "counter_bits = 8"), "signed 8-bit counter"),
+    ],
+)
+@pytest.mark.parametrize("command", ["plan", "simulate"])
+def test_cli_refuses_implausible_robot(tmp_path, edit, message, command):
+    """Each case once ended in a traceback or a result blamed on something else."""
+    robot = _robot_file(tmp_path, edit)
+    args = {
+        "plan": ["plan", robot, "-o", str(tmp_path / "p.toml")],
+        "simulate": [
+            "simulate",
+            robot,
+            str(VIPER / "paper_plan.toml"),
+            "-o",
+            str(tmp_path / "s.csv"),
+        ],
+    }[command]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 2, r.output
+    assert f"error: {robot}: " in r.output
+    assert message in r.output
+    assert "Traceback" not in r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["robot.toml"]

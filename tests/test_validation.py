@@ -79,8 +79,8 @@ def test_setup_file_errors(tmp_path):
     with pytest.raises(WirecalError) as info:
         load_setup(bad)
     text = "\n".join(info.value.problems)
-    assert "configuration.encoder_mm: must be 3 finite numbers" in text
-    assert "configuration.poses: is 0; give a whole number ≥ 1" in text
+    assert "configuration.encoder_mm: has 2 values; expected 3 (x, y, z)" in text
+    assert "configuration.poses: is 0; give a whole number between 1 and 100000" in text
     assert "plate.grid: needs at least 2 × 2 points" in text
 
 

@@ -3,19 +3,27 @@
 The patch (TOML) records, per parameter, the nominal value, the identified offset, the new
 value and its σ, with the plan fingerprint, the log's sha256, the method and the date.
 Beside it, ``<name>.spec.txt`` lists the values to enter in the controller's kinematic
-settings (Adept's SPEC utility).
+settings (Adept's SPEC utility). :func:`read_patch` reads a patch back (``wirecal gen
+--patch``) with the field rules of :mod:`wirecal.solver.formats.toml_fields`, and refuses
+a file that is not a patch (a truth file, a plan) or a patch of another robot or plan.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import re
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
 from wirecal.solver import params as P
-from wirecal.solver.formats.fileio import Outputs
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.fileio import Outputs, read_toml
+from wirecal.solver.formats.robot_file import MAX_DH_ANGLE_DEG, MAX_LENGTH_MM
+from wirecal.solver.formats.toml_fields import Table, document, valid
 from wirecal.solver.identify import Estimate
+from wirecal.solver.plan import Plan
 from wirecal.solver.plausibility import OVERRIDDEN
 from wirecal.solver.robot import Robot
 
@@ -113,3 +121,138 @@ def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, 
     which must hold both names: they are published together or not at all."""
     out.put(path, patch_text(robot, estimate, **meta))
     out.put(spec_path(path), spec_table(robot, estimate, meta.get("plausibility", "")))
+
+
+_KEYS = (
+    "robot",
+    "plan",
+    "log",
+    "log_sha256",
+    "method",
+    "date",
+    "wirecal",
+    "residual_rms_mm",
+    "plausibility",
+    "parameters",
+)
+_VALUE_KEYS = ("unit", "nominal", "offset", "value", "std")
+_SHA256 = re.compile(r"^[0-9a-f]{64}$")
+
+
+@dataclass(frozen=True)
+class PatchMeta:
+    """Where a patch came from.
+
+    Robot, plan fingerprint, log and its sha256, method, date, the wirecal version, the
+    fit's residual RMS (mm), and the plausibility verdict ("" in patches written before
+    the gate).
+    """
+
+    robot: str
+    plan: str
+    log: str
+    log_sha256: str
+    method: str
+    date: str
+    wirecal: str
+    residual_rms_mm: float
+    plausibility: str = ""
+
+
+@dataclass(frozen=True)
+class PatchValue:
+    """One parameter of a patch (deg or mm).
+
+    value = nominal + offset; std when known (``inf`` where the measured points do not
+    identify the parameter).
+    """
+
+    unit: str
+    nominal: float
+    offset: float
+    value: float
+    std: float | None = None
+
+
+@dataclass(frozen=True)
+class Patch:
+    """A patch file read back: its metadata and its parameters, in file order."""
+
+    meta: PatchMeta
+    parameters: dict[str, PatchValue]
+    source: str
+
+    def offsets_for(self, robot: Robot, plan: Plan) -> dict[str, float]:
+        """Return the identified offsets, once the patch is shown to belong here.
+
+        Same robot name, same plan fingerprint, every parameter one of the robot's, in its
+        unit; otherwise a :class:`WirecalError` listing each mismatch.
+        """
+        problems = []
+        if self.meta.robot != robot.name:
+            problems.append(
+                f"{self.source}: robot: the patch is for {self.meta.robot!r} but the robot "
+                f"file describes {robot.name!r}; use the matching robot file"
+            )
+        if self.meta.plan != plan.fingerprint():
+            problems.append(
+                f"{self.source}: plan: the patch was solved from another plan; generate with "
+                "the plan it came from"
+            )
+        for name, v in self.parameters.items():
+            try:
+                unit = P.parse(name, robot.n_joints).unit
+            except ValueError as exc:
+                problems.append(f"{self.source}: parameters.{name}: {exc}")
+                continue
+            if v.unit != unit:
+                problems.append(
+                    f"{self.source}: parameters.{name}.unit: is {v.unit!r} but {name} is in "
+                    f"{unit}; the patch was edited or is for another arm"
+                )
+        if problems:
+            raise WirecalError(problems)
+        return {name: v.offset for name, v in self.parameters.items()}
+
+
+def read_patch(path: str | Path) -> Patch:
+    """Read and validate a patch written by :func:`put_patch` (module docstring)."""
+    doc = document(read_toml(path, "patch file"), str(path), "patch file", _KEYS)
+    text = {key: doc.string(key) for key in ("robot", "log", "method", "date", "wirecal")}
+    digests = {key: doc.string(key) for key in ("plan", "log_sha256")}
+    for key, digest in digests.items():
+        if digest is not None and not _SHA256.match(digest):
+            doc.add(key, f"is {digest!r}; give a sha256 (64 lowercase hex digits)")
+    rms = doc.number("residual_rms_mm", lo=0, hi=MAX_LENGTH_MM, unit="mm")
+    plausibility = doc.string("plausibility", "")
+    table = doc.table("parameters", None)
+    values = {name: _value(table.table(name, _VALUE_KEYS)) for name in table.keys()}
+    if table.present and not values:
+        table.add("", "is empty; a patch holds at least one parameter")
+    doc.raise_if_any()
+    meta = PatchMeta(
+        **{k: valid(v) for k, v in (text | digests).items()},
+        residual_rms_mm=valid(rms),
+        plausibility=valid(plausibility),
+    )
+    return Patch(meta, {n: v for n, v in values.items() if v is not None}, str(path))
+
+
+def _value(t: Table) -> PatchValue | None:
+    unit = t.string("unit", choices={"deg": "θ, α", "mm": "a, d, tool"})
+    bound = MAX_DH_ANGLE_DEG if unit == "deg" else MAX_LENGTH_MM
+    nominal, offset, value = (
+        t.number(key, lo=-bound, hi=bound, unit=unit or "")
+        for key in ("nominal", "offset", "value")
+    )
+    unidentified = t.present and t.data.get("std") == math.inf  # type: ignore[union-attr]
+    std = math.inf if unidentified else t.number("std", None, lo=0, hi=bound, unit=unit or "")
+    if unit is None or nominal is None or offset is None or value is None:
+        return None
+    if not math.isclose(value, nominal + offset, rel_tol=1e-9, abs_tol=1e-9):
+        t.add(
+            "value",
+            f"is {value!r} but nominal + offset is {nominal + offset!r}: the patch was edited; "
+            "write it again with wirecal solve",
+        )
+    return PatchValue(unit, nominal, offset, value, std)

@@ -13,13 +13,28 @@ Format (angles in degrees, lengths in mm)::
     mm_per_count = 0.025488; range_mm = 1250; counter_bits = 24
     [calibration]
     parameters = ["th2", "th3", ...]      # names from wirecal.solver.params
+    [geometry]                            # optional
+    link_radius_mm = [70, 55, 45, 40, 35] # capsule radius of each link (wire clearance)
 
-Every problem is reported as ``file: key: problem``, all at once.
+Every problem is reported as ``file: key: problem``, all at once, with the field rules of
+:mod:`wirecal.solver.formats.toml_fields`. Beyond types, the file must describe an arm a draw
+wire can calibrate (each rule says what to do when it fails):
+
+* plausible sizes: |α|, |θ offset| ≤ 360°; |a|, |d|, tool point, link radii ≤ 10 m; joint
+  limits within ±3600° (ten turns); speeds in (0, 10 000] °/s; |mm_per_count| ≤ 10 mm;
+  range_mm in (0, 100 m]. Larger values are typing slips, and would only fail later;
+* degrees, not radians: twists α and θ offsets whose non-zero values are all within ±π with
+  one at ±π/2 or ±π; a joint whose limits both lie within ±2π;
+* millimetres, not metres: the arm's links (Σ|a| + Σ|d|) add up to less than 1 % of the
+  encoder's range or less than its widest link radius;
+* each joint's range wider than 10° (:data:`MIN_JOINT_RANGE_DEG`): plan design and the
+  generated programs keep every point 5° inside each limit;
+* a counter wide enough for the wire: 2^(bits−1)·|mm_per_count| must exceed range_mm, or two
+  wire lengths a counter turn apart give the same count.
 """
 
 from __future__ import annotations
 
-import difflib
 import math
 from pathlib import Path
 from typing import Any
@@ -27,12 +42,29 @@ from typing import Any
 import numpy as np
 
 from wirecal.solver import params as P
-from wirecal.solver.counter import Counter
-from wirecal.solver.errors import Problems
 from wirecal.solver.formats.fileio import read_toml
+from wirecal.solver.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver.robot import DEFAULT_LINK_RADIUS_MM, Encoder, Robot
 
-_SCHEMA: dict[str, tuple[str, ...]] = {
+MAX_LENGTH_MM = 10_000.0
+"""Largest |a|, |d|, tool coordinate or link radius (mm): no arm a draw wire spans is 10 m."""
+MAX_DH_ANGLE_DEG = 360.0
+"""Largest |α| or |θ offset| in the DH table (deg)."""
+MAX_JOINT_DEG = 3600.0
+"""Largest |joint limit| (deg): ten turns."""
+MAX_SPEED_DEG_S = 10_000.0
+MAX_MM_PER_COUNT = 10.0
+MAX_RANGE_MM = 100_000.0
+MIN_JOINT_RANGE_DEG = 10.0
+"""A joint's range (deg) must exceed this: plan points stay 5° (the planner's and the
+generator's default margin) inside each limit."""
+METRES_RATIO = 0.01
+"""Links adding up to less than this fraction of the encoder's range are in metres."""
+
+_DH_COLUMNS = "[alpha_deg, a_mm, theta_offset_deg, d_mm]"
+_DH_BOUND = (MAX_DH_ANGLE_DEG, MAX_LENGTH_MM, MAX_DH_ANGLE_DEG, MAX_LENGTH_MM)
+
+_KEYS = {
     "": (
         "name",
         "description",
@@ -51,16 +83,6 @@ _SCHEMA: dict[str, tuple[str, ...]] = {
 }
 
 
-_REQUIRED = {
-    "": ("name", "kinematics", "tool", "encoder", "calibration"),
-    "kinematics": ("convention", "dh", "joint_min_deg", "joint_max_deg", "joint_speed_deg_s"),
-    "tool": ("point_mm",),
-    "encoder": ("mm_per_count", "range_mm", "counter_bits"),
-    "calibration": ("parameters",),
-    "geometry": (),
-}
-
-
 def load_robot(path: str | Path) -> Robot:
     """Read and validate a robot file; raise :class:`WirecalError` listing every problem."""
     data = read_toml(path, "robot file")
@@ -69,214 +91,221 @@ def load_robot(path: str | Path) -> Robot:
 
 def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     """Validate a parsed robot description (see module docstring)."""
-    pr = Problems(source)
-    _check_keys(data, pr)
-
-    name = data.get("name")
-    if "name" in data and (not isinstance(name, str) or not name.strip()):
-        pr.add("name", "must be a non-empty string")
-
-    kin = _table(data, "kinematics", pr)
-    if "convention" in kin and kin["convention"] != "craig":
-        pr.add(
-            "kinematics.convention",
-            f'is {kin["convention"]!r}; only "craig" (modified DH) is supported',
-        )
-
-    dh = _matrix(kin, "dh", "kinematics.dh", 4, pr)
-    n = dh.shape[0] if dh is not None else None
-    if dh is not None:
-        if n < 2:
-            pr.add("kinematics.dh", f"has {n} row(s); a serial arm needs at least 2")
-        _check_not_radians(dh[:, 0], "kinematics.dh", "α (column 1)", pr)
-
-    vec = {}
-    for key in ("joint_min_deg", "joint_max_deg", "joint_speed_deg_s"):
-        vec[key] = _vector(kin, key, f"kinematics.{key}", n, pr)
-    lo, hi, speed = vec["joint_min_deg"], vec["joint_max_deg"], vec["joint_speed_deg_s"]
-    if lo is not None and hi is not None and lo.shape == hi.shape:
-        for j in np.flatnonzero(lo >= hi):
-            pr.add(
-                "kinematics.joint_min_deg",
-                f"joint {j + 1}: min {lo[j]:g} is not below max {hi[j]:g}",
-            )
-        spans = hi - lo
-        if np.all(spans <= 2 * math.pi + 1e-9):
-            pr.add(
-                "kinematics.joint_max_deg",
-                "every joint range is within ±2π: the limits look like radians; give degrees",
-            )
-    if speed is not None:
-        for j in np.flatnonzero(speed <= 0):
-            pr.add("kinematics.joint_speed_deg_s", f"joint {j + 1}: speed must be > 0")
-
-    tool = _table(data, "tool", pr)
-    point = _vector(tool, "point_mm", "tool.point_mm", 3, pr)
-
-    enc = _table(data, "encoder", pr)
-    mpc = _number(enc, "mm_per_count", "encoder.mm_per_count", pr)
-    if mpc is not None and mpc == 0:
-        pr.add("encoder.mm_per_count", "must not be zero")
-    rng = _number(enc, "range_mm", "encoder.range_mm", pr)
-    if rng is not None and rng <= 0:
-        pr.add("encoder.range_mm", "must be > 0")
-    bits = enc.get("counter_bits")
-    if "counter_bits" in enc and (
-        not isinstance(bits, int) or isinstance(bits, bool) or not 8 <= bits <= 64
-    ):
-        pr.add("encoder.counter_bits", f"is {bits!r}; give an integer between 8 and 64")
-    elif bits is not None and mpc and rng is not None and rng > 0:
-        span = Counter(bits).half
-        if rng / abs(mpc) >= span:
-            pr.add(
-                "encoder.counter_bits",
-                f"a {bits}-bit counter tells lengths apart up to {span} counts "
-                f"({span * abs(mpc):g} mm); the range of {rng:g} mm is "
-                f"{rng / abs(mpc):.0f} counts: give more bits or a smaller range_mm",
-            )
-
-    interface = enc.get("interface", "belt")
-    if interface not in ("belt", "device"):
-        pr.add(
-            "encoder.interface",
-            f'is {interface!r}; give "belt" (DEFBELT/BELT) or "device" (DEVICE)',
-        )
-    channel = enc.get("channel", 1 if interface == "belt" else 0)
-    mode = enc.get("belt_mode", 0)
-    for key, value in (("channel", channel), ("belt_mode", mode)):
-        if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value <= 16:
-            pr.add(f"encoder.{key}", f"is {value!r}; give a whole number 0–16")
-
-    cal = _table(data, "calibration", pr)
-    names = cal.get("parameters")
-    if "parameters" in cal:
-        if not isinstance(names, list) or not all(isinstance(x, str) for x in names):
-            pr.add("calibration.parameters", "must be a list of parameter names")
-        elif not names:
-            pr.add("calibration.parameters", "is empty; name at least one parameter")
-        else:
-            seen = set()
-            for x in names:
-                if x in seen:
-                    pr.add("calibration.parameters", f"{x!r} is listed twice")
-                seen.add(x)
-                if n is not None:
-                    try:
-                        P.parse(x, n)
-                    except ValueError as exc:
-                        pr.add("calibration.parameters", str(exc))
-
-    geometry = _table(data, "geometry", pr)
-    radii = _vector(
-        geometry, "link_radius_mm", "geometry.link_radius_mm", None if n is None else n - 1, pr
+    doc = document(data, source, "robot file", _KEYS[""])
+    name = doc.string("name")
+    doc.string("description", None)
+    doc.string("source", None)
+    kin = doc.table("kinematics", _KEYS["kinematics"])
+    dh = _dh(kin)
+    n = None if dh is None else dh.shape[0]
+    lo, hi = _limits(kin, n)
+    speed = kin.vector(
+        "joint_speed_deg_s",
+        length=n,
+        labels="(one per joint)",
+        above=0,
+        hi=MAX_SPEED_DEG_S,
+        unit="deg/s",
     )
-    if radii is not None and np.any(radii < 0):
-        pr.add("geometry.link_radius_mm", "radii cannot be negative")
-
-    pr.raise_if_any()
-    dh_rad = dh.copy()
+    tool = doc.table("tool", _KEYS["tool"])
+    point = tool.vector(
+        "point_mm", length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm"
+    )
+    encoder = _encoder(doc.table("encoder", _KEYS["encoder"]))
+    parameters = _parameters(doc.table("calibration", _KEYS["calibration"]), n)
+    radii = doc.table("geometry", _KEYS["geometry"], required=False).vector(
+        "link_radius_mm",
+        None,
+        length=None if n is None else n - 1,
+        labels="(one per link)",
+        lo=0,
+        hi=MAX_LENGTH_MM,
+        unit="mm",
+    )
+    if dh is not None and radii is None:
+        radii = np.full(dh.shape[0] - 1, DEFAULT_LINK_RADIUS_MM)
+    _sanity(doc, dh, lo, hi, encoder, radii)
+    doc.raise_if_any()
+    dh_rad = valid(dh).copy()
     dh_rad[:, [0, 2]] = np.radians(dh_rad[:, [0, 2]])
     return Robot(
-        name=name.strip(),
+        name=valid(name).strip(),
         dh=dh_rad,
-        joint_min_deg=lo,
-        joint_max_deg=hi,
-        joint_speed_deg_s=speed,
-        tool_point=point,
-        encoder=Encoder(float(mpc), float(rng), int(bits), interface, channel, mode),
-        parameters=tuple(names),
+        joint_min_deg=valid(lo),
+        joint_max_deg=valid(hi),
+        joint_speed_deg_s=valid(speed),
+        tool_point=valid(point),
+        encoder=valid(encoder),
+        parameters=tuple(valid(parameters)),
         source=source,
-        link_radius_mm=radii if radii is not None else np.full(n - 1, DEFAULT_LINK_RADIUS_MM),
+        link_radius_mm=radii,
     )
 
 
-def _check_keys(data: dict[str, Any], pr: Problems) -> None:
-    for section, allowed in _SCHEMA.items():
-        table = data if section == "" else data.get(section)
-        if not isinstance(table, dict):
-            continue
-        prefix = f"{section}." if section else ""
-        for key in _REQUIRED[section]:
-            if key not in table:
-                pr.add(f"{prefix}{key}", "is missing")
-        for key in table:
-            if key not in allowed:
-                hint = difflib.get_close_matches(key, allowed, n=1)
-                extra = f" (did you mean {hint[0]!r}?)" if hint else ""
-                pr.add(f"{prefix}{key}", f"unknown key{extra}")
-
-
-def _table(data: dict[str, Any], key: str, pr: Problems) -> dict[str, Any]:
-    value = data.get(key, {})
-    if not isinstance(value, dict):
-        pr.add(key, f"must be a table [{key}]")
-        return {}
-    return value
-
-
-def _is_number(x: Any) -> bool:
-    return isinstance(x, int | float) and not isinstance(x, bool)
-
-
-def _number(table: dict[str, Any], key: str, where: str, pr: Problems) -> float | None:
-    if key not in table:
+def _dh(kin: Table) -> np.ndarray | None:
+    kin.string("convention", choices={"craig": "modified DH, the one supported"})
+    dh = kin.matrix(
+        "dh",
+        cols=4,
+        labels=_DH_COLUMNS,
+        lo=[-b for b in _DH_BOUND],
+        hi=_DH_BOUND,
+        unit=("deg", "mm", "deg", "mm"),
+    )
+    if dh is not None and dh.shape[0] < 2:
+        kin.add("dh", f"has {dh.shape[0]} row(s); a serial arm needs at least 2")
         return None
-    x = table[key]
-    if not _is_number(x) or not math.isfinite(x):
-        pr.add(where, f"is {x!r}; give a finite number")
-        return None
-    return float(x)
+    return dh
 
 
-def _vector(
-    table: dict[str, Any], key: str, where: str, length: int | None, pr: Problems
-) -> np.ndarray | None:
-    if key not in table:
-        return None
-    x = table[key]
-    if not isinstance(x, list) or not all(_is_number(v) for v in x):
-        pr.add(where, "must be a list of numbers")
-        return None
-    arr = np.asarray(x, dtype=float)
-    if length is not None and arr.shape != (length,):
-        pr.add(
-            where,
-            f"has {arr.size} values; expected {length} (one per joint)"
-            if length != 3
-            else f"has {arr.size} values; expected 3 (x, y, z)",
+def _limits(kin: Table, n: int | None) -> tuple[np.ndarray | None, np.ndarray | None]:
+    lo, hi = (
+        kin.vector(
+            key,
+            length=n,
+            labels="(one per joint)",
+            lo=-MAX_JOINT_DEG,
+            hi=MAX_JOINT_DEG,
+            unit="deg",
         )
-        return None
-    bad = np.flatnonzero(~np.isfinite(arr))
-    if bad.size:
-        pr.add(where, f"value {bad[0] + 1} is not finite")
-        return None
-    return arr
+        for key in ("joint_min_deg", "joint_max_deg")
+    )
+    if lo is None or hi is None or lo.shape != hi.shape:
+        return lo, hi
+    for j in np.flatnonzero(lo >= hi):
+        kin.add("joint_min_deg", f"joint {j + 1}: min {lo[j]:g} is not below max {hi[j]:g}")
+    return lo, hi
 
 
-def _matrix(
-    table: dict[str, Any], key: str, where: str, cols: int, pr: Problems
-) -> np.ndarray | None:
-    if key not in table:
+def _encoder(enc: Table) -> Encoder | None:
+    mpc = enc.number("mm_per_count", lo=-MAX_MM_PER_COUNT, hi=MAX_MM_PER_COUNT, unit="mm")
+    if mpc == 0:
+        enc.add("mm_per_count", "must not be zero")
+        mpc = None
+    rng = enc.number("range_mm", above=0, hi=MAX_RANGE_MM, unit="mm")
+    bits = enc.integer("counter_bits", lo=8, hi=64)
+    interface = enc.string(
+        "interface", "belt", choices={"belt": "DEFBELT/BELT", "device": "DEVICE"}
+    )
+    channel = enc.integer("channel", 1 if interface == "belt" else 0, lo=0, hi=16)
+    mode = enc.integer("belt_mode", 0, lo=0, hi=16)
+    if mpc is None or rng is None or bits is None or interface is None:
         return None
-    rows = table[key]
-    if not isinstance(rows, list) or not rows:
-        pr.add(where, "must be a list of rows [alpha_deg, a_mm, theta_offset_deg, d_mm]")
+    if channel is None or mode is None:
         return None
-    ok = True
-    for i, row in enumerate(rows, 1):
-        if not isinstance(row, list) or len(row) != cols or not all(_is_number(v) for v in row):
-            pr.add(
-                where, f"row {i} must be {cols} numbers [alpha_deg, a_mm, theta_offset_deg, d_mm]"
+    return Encoder(mpc, rng, bits, interface, channel, mode)
+
+
+def _parameters(cal: Table, n: int | None) -> list[str] | None:
+    names = cal.strings("parameters", what="parameter names")
+    if names is None:
+        return None
+    if not names:
+        cal.add("parameters", "is empty; name at least one parameter")
+    for x in duplicates(names):
+        cal.add("parameters", f"{x!r} is listed twice")
+    for x in names if n is not None else ():
+        try:
+            P.parse(x, n)
+        except ValueError as exc:
+            cal.add("parameters", str(exc))
+    return names
+
+
+def _sanity(
+    doc: Table,
+    dh: np.ndarray | None,
+    lo: np.ndarray | None,
+    hi: np.ndarray | None,
+    encoder: Encoder | None,
+    radii: np.ndarray | None,
+) -> None:
+    """The unit and size rules of the module docstring, on values that passed their types."""
+    if dh is not None:
+        _check_not_radians(dh[:, 0], "α (column 1)", doc)
+        _check_not_radians(dh[:, 2], "θ offsets (column 3)", doc)
+    if lo is not None and hi is not None and lo.shape == hi.shape:
+        _check_joint_ranges(lo, hi, doc)
+    if encoder is not None:
+        _check_counter(encoder, doc)
+    if dh is not None and encoder is not None and radii is not None:
+        _check_not_metres(dh, encoder.range_mm, radii, doc)
+
+
+def _check_not_radians(column_deg: np.ndarray, what: str, doc: Table) -> None:
+    """Report a column of angles that holds radians.
+
+    Twists and θ offsets of real arms are 0 or multiples of 90°: non-zero values all within
+    ±π, one of them ±π/2 or ±π, are radians.
+    """
+    nz = np.abs(column_deg[np.abs(column_deg) > 1e-9])
+    if (
+        nz.size
+        and np.all(nz <= math.pi + 1e-6)
+        and np.any(np.minimum(np.abs(nz - math.pi / 2), np.abs(nz - math.pi)) < 1e-3)
+    ):
+        doc.add(
+            "kinematics.dh",
+            f"{what} holds values like {nz[0]:g}: that looks like radians; give degrees "
+            f"({nz[0]:g} rad = {math.degrees(nz[0]):.4g}°)",
+        )
+
+
+def _check_joint_ranges(lo: np.ndarray, hi: np.ndarray, doc: Table) -> None:
+    """Per joint: limits in radians, or a range too narrow to plan."""
+    for j in np.flatnonzero(hi > lo):
+        span = hi[j] - lo[j]
+        if max(abs(lo[j]), abs(hi[j])) <= 2 * math.pi + 1e-9:
+            doc.add(
+                "kinematics.joint_max_deg",
+                f"joint {j + 1}: limits [{lo[j]:g}, {hi[j]:g}] are within ±2π: they look like "
+                f"radians (that would be [{math.degrees(lo[j]):.4g}, "
+                f"{math.degrees(hi[j]):.4g}] deg); give degrees",
             )
-            ok = False
-        elif not all(math.isfinite(v) for v in row):
-            pr.add(where, f"row {i} has a value that is not finite")
-            ok = False
-    return np.asarray(rows, dtype=float) if ok else None
+        elif span <= MIN_JOINT_RANGE_DEG:
+            doc.add(
+                "kinematics.joint_max_deg",
+                f"joint {j + 1}: range [{lo[j]:g}, {hi[j]:g}] spans {span:g} deg, no more than "
+                f"{MIN_JOINT_RANGE_DEG:g} deg: no room for plan points "
+                f"{MIN_JOINT_RANGE_DEG / 2:g} deg inside both limits; check the limits",
+            )
 
 
-def _check_not_radians(alpha_deg: np.ndarray, where: str, what: str, pr: Problems) -> None:
-    """Twist angles of real arms are multiples of 90° or 0; values like 1.5708 are radians."""
-    nz = np.abs(alpha_deg[np.abs(alpha_deg) > 1e-9])
-    if nz.size and np.all(nz <= math.pi + 1e-6) and np.any(np.abs(nz - math.pi / 2) < 1e-3):
-        pr.add(where, f"{what} holds values like {nz[0]:g}: that looks like radians; give degrees")
+def _check_counter(enc: Encoder, doc: Table) -> None:
+    """Report a counter too narrow for the encoder's range.
+
+    2^(bits−1)·|mm_per_count| must exceed the range: the signed counter then holds every
+    wire length the encoder can give, so no reading is a counter turn away from another.
+    """
+    half, mpc = enc.counter.half, abs(enc.mm_per_count)
+    if enc.range_mm / mpc >= half:
+        doc.add(
+            "encoder.counter_bits",
+            f"a signed {enc.counter_bits}-bit counter tells lengths apart up to {half} counts "
+            f"({half * mpc:g} mm at {mpc:g} mm/count); range_mm {enc.range_mm:g} is "
+            f"{enc.range_mm / mpc:.0f} counts: wire lengths a counter turn apart would read "
+            "the same; give the width of the controller's counter (24 for a V+ belt encoder) "
+            "or a smaller range_mm, and check mm_per_count",
+        )
+
+
+def _check_not_metres(dh: np.ndarray, range_mm: float, radii: np.ndarray, doc: Table) -> None:
+    """Report lengths in metres.
+
+    Links adding up to under 1 % of the encoder range, or under the widest link radius,
+    are metres.
+    """
+    reach = float(np.abs(dh[:, [1, 3]]).sum())
+    widest = float(radii.max(initial=0.0))
+    if reach < max(METRES_RATIO * range_mm, widest):
+        against = (
+            f"the widest link radius ({widest:g} mm)"
+            if widest > METRES_RATIO * range_mm
+            else f"1 % of the encoder's range_mm ({range_mm:g})"
+        )
+        doc.add(
+            "kinematics.dh",
+            f"the links add up to {reach:g} mm (Σ|a| + Σ|d|), less than {against}: the "
+            "lengths look like metres; give a and d in mm (the tool point, range_mm and "
+            "link_radius_mm too)",
+        )

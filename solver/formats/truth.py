@@ -2,8 +2,8 @@
 
 Format::
 
-    robot = "Adept Viper s650"      # optional
-    seed = 3                        # optional, how they were drawn
+    robot = "Adept Viper s650"      # optional; must match the robot file
+    seed = 3                        # optional, how they were drawn (a whole number ≥ 0)
     [errors]
     th2 = 0.675
     a2 = 0.105
@@ -12,40 +12,47 @@ Format::
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 
 from wirecal.solver import params as P
-from wirecal.solver.errors import Problems, WirecalError
 from wirecal.solver.formats.fileio import read_toml
+from wirecal.solver.formats.robot_file import MAX_DH_ANGLE_DEG, MAX_LENGTH_MM
+from wirecal.solver.formats.toml_fields import document
 from wirecal.solver.robot import Robot
+
+_KEYS = ("robot", "seed", "errors")
 
 
 def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
-    """The ``[errors]`` table of a truth file, validated against the robot."""
-    data = read_toml(path, "errors file")
-    pr = Problems(str(path))
-    table = data.get("errors")
-    if not isinstance(table, dict):
-        raise WirecalError(f"{path}: errors: missing table [errors] of name = offset (deg or mm)")
+    """The ``[errors]`` table of a truth file, validated against the robot.
+
+    Offsets are bounded like the robot file's values (±360 deg, ±10 000 mm); a truth file
+    for another robot is refused.
+    """
+    doc = document(read_toml(path, "truth file"), str(path), "truth file", _KEYS)
+    name = doc.string("robot", None)
+    if name is not None and name != robot.name:
+        doc.add(
+            "robot",
+            f"the truth is for {name!r} but the robot file describes {robot.name!r}; "
+            "use the matching robot file",
+        )
+    doc.integer("seed", None, lo=0)
+    table = doc.table("errors", None)
     out: dict[str, float] = {}
-    for name, value in table.items():
+    for name in table.keys():
         try:
-            P.parse(name, robot.n_joints)
+            p = P.parse(name, robot.n_joints)
         except ValueError as exc:
-            pr.add(f"errors.{name}", str(exc))
+            table.add(name, str(exc))
             continue
-        if (
-            not isinstance(value, int | float)
-            or isinstance(value, bool)
-            or not math.isfinite(value)
-        ):
-            pr.add(f"errors.{name}", f"is {value!r}; give a finite offset (deg or mm)")
-            continue
-        out[name] = float(value)
-    pr.raise_if_any()
+        bound = MAX_DH_ANGLE_DEG if p.angular else MAX_LENGTH_MM
+        value = table.number(name, lo=-bound, hi=bound, unit=p.unit)
+        if value is not None:
+            out[name] = value
+    doc.raise_if_any()
     return out
 
 

@@ -25,65 +25,63 @@ from pathlib import Path
 
 import numpy as np
 
-from wirecal.solver.errors import Problems, WirecalError
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.csv_table import parse_table, read_source
 from wirecal.solver.formats.fileio import read_toml
+from wirecal.solver.formats.robot_file import MAX_LENGTH_MM
+from wirecal.solver.formats.toml_fields import document, valid
 from wirecal.solver.validation import Setup
+
+_SETUP_KEYS = {
+    "": ("configuration", "plate"),
+    "configuration": ("encoder_mm", "poses", "seed"),
+    "plate": ("origin_mm", "yaw_deg", "size_mm", "grid", "approach_mm", "probe_mm", "signal"),
+}
 
 
 def load_setup(path: str | Path) -> Setup:
-    data = read_toml(path, "validation setup")
-    pr = Problems(str(path))
-    cfg, plate = data.get("configuration", {}), data.get("plate", {})
-    for name, table in (("configuration", cfg), ("plate", plate)):
-        if not isinstance(table, dict) or not table:
-            pr.add(name, f"the table [{name}] is missing")
-    pr.raise_if_any()
+    """Read a validation setup (module docstring); every problem as ``file: key: problem``.
 
-    def vec(table, key, n, where, default=None):
-        v = table.get(key, default)
-        if (
-            not isinstance(v, list)
-            or len(v) != n
-            or not all(isinstance(x, int | float) and math.isfinite(x) for x in v)
-        ):
-            pr.add(f"{where}.{key}", f"must be {n} finite numbers")
-            return np.zeros(n)
-        return np.asarray(v, dtype=float)
-
-    def num(table, key, where, default, kind=float, lo=None):
-        v = table.get(key, default)
-        if (
-            not isinstance(v, int | float)
-            or isinstance(v, bool)
-            or (kind is int and not isinstance(v, int))
-            or (lo is not None and v < lo)
-        ):
-            pr.add(
-                f"{where}.{key}",
-                f"is {v!r}; give a {'whole ' if kind is int else ''}"
-                f"number{'' if lo is None else f' ≥ {lo}'}",
-            )
-            return kind(default)
-        return kind(v)
-
-    setup = Setup(
-        encoder_mm=vec(cfg, "encoder_mm", 3, "configuration"),
-        poses=num(cfg, "poses", "configuration", 50, int, 1),
-        seed=num(cfg, "seed", "configuration", 1, int, 0),
-        plate_origin_mm=vec(plate, "origin_mm", 3, "plate"),
-        plate_yaw_deg=num(plate, "yaw_deg", "plate", 0.0),
-        plate_size_mm=tuple(vec(plate, "size_mm", 2, "plate", [400, 250])),
-        grid=tuple(int(x) for x in vec(plate, "grid", 2, "plate", [19, 11])),
-        approach_mm=num(plate, "approach_mm", "plate", 5.0, float, 0.5),
-        probe_mm=vec(plate, "probe_mm", 3, "plate", [0, 0, 100]),
-        signal=num(plate, "signal", "plate", 1001, int, 1),
+    Lengths within ±10 000 mm, as in the robot file; the grid at least 2 × 2 points.
+    """
+    doc = document(
+        read_toml(path, "validation setup"), str(path), "validation setup", _SETUP_KEYS[""]
+    )
+    cfg = doc.table("configuration", _SETUP_KEYS["configuration"])
+    plate = doc.table("plate", _SETUP_KEYS["plate"])
+    xyz = "(x, y, z)"
+    far = MAX_LENGTH_MM
+    encoder_mm = cfg.vector("encoder_mm", length=3, labels=xyz, lo=-far, hi=far, unit="mm")
+    poses = cfg.integer("poses", 50, lo=1, hi=100_000)
+    seed = cfg.integer("seed", 1, lo=0)
+    origin = plate.vector("origin_mm", length=3, labels=xyz, lo=-far, hi=far, unit="mm")
+    yaw = plate.number("yaw_deg", 0.0, lo=-360, hi=360, unit="deg")
+    size = plate.vector(
+        "size_mm", [400, 250], length=2, labels="(along the grid's two axes)", above=0, hi=far
+    )
+    grid = plate.vector(
+        "grid", [19, 11], length=2, labels="(points along each axis)", integer=True, lo=1, hi=1000
+    )
+    if grid is not None and min(grid) < 2:
+        plate.add("grid", "needs at least 2 × 2 points to fit a plane")
+    approach = plate.number("approach_mm", 5.0, lo=0.5, hi=far, unit="mm")
+    probe = plate.vector("probe_mm", [0, 0, 100], length=3, labels=xyz, lo=-far, hi=far, unit="mm")
+    signal = plate.integer("signal", 1001, lo=1)
+    doc.raise_if_any()
+    size, grid = valid(size), valid(grid)
+    return Setup(
+        encoder_mm=valid(encoder_mm),
+        poses=valid(poses),
+        seed=valid(seed),
+        plate_origin_mm=valid(origin),
+        plate_yaw_deg=valid(yaw),
+        plate_size_mm=(float(size[0]), float(size[1])),
+        grid=(int(grid[0]), int(grid[1])),
+        approach_mm=valid(approach),
+        probe_mm=valid(probe),
+        signal=valid(signal),
         source=str(path),
     )
-    if min(setup.grid) < 2:
-        pr.add("plate.grid", "needs at least 2 × 2 points to fit a plane")
-    pr.raise_if_any()
-    return setup
 
 
 @dataclass(frozen=True)
