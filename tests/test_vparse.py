@@ -48,7 +48,7 @@ INVALID = {
     ),
     "unknown keyword": (
         prog("    JMOVE #p"),
-        "bad.v2:2: t.main: unknown keyword or bad syntax: JMOVE",
+        "bad.v2:2: t.main: unknown instruction JMOVE (not in the V+ keyword table)",
     ),
     "unknown function": (prog("    x = ROUND(2.5)"), "bad.v2:2: t.main: unknown function ROUND"),
     "function arity": (prog("    x = MIN(1)"), "bad.v2:2: t.main: MIN takes 2 arguments, not 1"),
