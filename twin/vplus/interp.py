@@ -461,6 +461,11 @@ class _Compiler:
         return (lambda frame: -1.0 if f(frame) == 0 else 0.0), False
 
     @expr.register
+    def _(self, e: N.Com):
+        f, _ = self.expr(e.expr)
+        return (lambda frame: float(~round(f(frame)))), False
+
+    @expr.register
     def _(self, e: N.Logic):
         a, _ = self.expr(e.left)
         b, _ = self.expr(e.right)
@@ -471,7 +476,8 @@ class _Compiler:
             return (lambda frame: -1.0 if a(frame) != 0 or b(frame) != 0 else 0.0), False
         if op == "XOR":
             return (lambda frame: -1.0 if (a(frame) != 0) != (b(frame) != 0) else 0.0), False
-        return _refuse(op), False
+        bitwise = {"BAND": int.__and__, "BOR": int.__or__, "BXOR": int.__xor__}[op]
+        return (lambda frame: float(bitwise(round(a(frame)), round(b(frame))))), False
 
     @expr.register
     def _(self, e: N.Compare):

@@ -5,7 +5,15 @@ A keyword cannot be used as a program, variable or parameter name (V+ Language U
 Guide v17 p. 99). The kinds are those of the manuals: instruction, function, operator,
 system constant, switch, system parameter, monitor command, and "word" for the words
 that only appear inside other statements (THEN, TO, ALWAYS, ...). One name may have
-several kinds (HERE is an instruction and a function).
+several kinds (HERE is an instruction and a function). Each row cites the manual page
+(or, marked so, the third-party program or "unconfirmed") it rests on.
+
+Monitor commands (typed at the terminal, not program steps) are listed but not treated
+as reserved names: whether p. 99's rule covers them is unconfirmed, and rejecting a valid
+name is as wrong as accepting an invalid one. Nor are the names of string functions
+reserved for string variables: Adept's own ROS driver (ros.v2, 2012, ACE 3.1.3.10;
+ros-industrial-attic/swri-ros-pkg adept/adept_common/V+/ros.v2 line 153) declares
+``AUTO … $chr`` and uses it beside ``$CHR(…)``.
 """
 
 from __future__ import annotations
@@ -42,8 +50,18 @@ def keywords() -> dict[str, Keyword]:
     return {n: Keyword(n, tuple(kinds[n]), tuple(sources[n])) for n in kinds}
 
 
+#: kinds of keyword that are not reserved as names
+NOT_RESERVED = ("monitor command",)
+
+
 def keyword(name: str) -> Keyword | None:
-    return keywords().get(name.lower())
+    """The keyword a name collides with, if it is reserved."""
+    k = keywords().get(name.lower())
+    if k is None or all(kind in NOT_RESERVED for kind in k.kinds):
+        return None
+    if name.startswith("$") and k.kinds == ("function",):
+        return None  # $chr is a string variable in Adept's ros.v2
+    return k
 
 
 def is_kind(name: str, *kinds: str) -> bool:

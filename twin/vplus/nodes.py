@@ -86,6 +86,13 @@ class Not(Expr):
 
 
 @dataclass(slots=True)
+class Com(Expr):
+    """COM: the bitwise complement of one number (User's Guide p. 114)."""
+
+    expr: Expr
+
+
+@dataclass(slots=True)
 class BinOp(Expr):
     op: str  # + - * / MOD
     left: Expr

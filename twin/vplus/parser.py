@@ -128,7 +128,11 @@ class _Terminals(Transformer):
         return N.Num(float(int(t[2:])), True)
 
     def RADIXNUMBER(self, t):
-        return N.Num(float(int(t[2:], 16 if t[1] in "Hh" else 2)), False)
+        base = {"h": 16, "b": 2}.get(t[1].lower())
+        return N.Num(float(int(t[2:], base) if base else int(t[1:], 8)), False)
+
+    def ASCII(self, t):
+        return N.Num(float(ord(t[1])), False)
 
     def STRING(self, t):
         return N.Str(str(t)[1:-1])
@@ -144,6 +148,9 @@ class _Terminals(Transformer):
 
     def index(self, children):
         return list(children)
+
+    def complement(self, children):
+        return N.Com(children[1])
 
     def signed(self, children):
         op, e = children
@@ -494,6 +501,7 @@ class _Checker:
         self.labels = {s.number for s in walk(prog.body) if isinstance(s, N.Label)}
         self.external_calls = False
         self.line = prog.line
+        self.named: set[str] = set()  # keywords already reported as names
 
     def err(self, message: str, line: int | None = None) -> None:
         self.problems.append(f"{self.source}:{line or self.line}: {self.prog.name}: {message}")
@@ -501,9 +509,7 @@ class _Checker:
     def define(self, line: int, name: str, what: str) -> None:
         """A name the program defines (program, parameter, variable, target)."""
         self.line = line
-        k = keyword(name)
-        if k is not None:
-            self.err(f"{name!r} is a V+ keyword ({k.describe()}) and cannot be a name")
+        self.no_keyword(name)
         self.register(name, f"{self.source}:{line}: {self.prog.name}")
 
     def block(self, steps: list[N.Stmt]) -> None:
@@ -523,7 +529,12 @@ class _Checker:
     @stmt.register
     def _(self, s: N.Assign) -> None:
         self.target(s.target)
-        self.need(s.value, self.var_kind(s.target))
+        kind = self.var_kind(s.target)
+        if kind in ("l", "t"):
+            self.err(
+                f"type-prefix misuse: a location is assigned with SET (p. 111): {s.target.name}"
+            )
+        self.need(s.value, kind)
 
     @stmt.register
     def _(self, s: N.Call) -> None:
@@ -674,8 +685,10 @@ class _Checker:
 
     # ---------- names ----------
     def no_keyword(self, name: str) -> None:
+        """A V+ keyword used as a name (User's Guide p. 99): reported once per program."""
         k = keyword(name)
-        if k is not None:
+        if k is not None and name not in self.named:
+            self.named.add(name)
             self.err(f"{name!r} is a V+ keyword ({k.describe()}) and cannot be a name")
 
     def target(self, v: N.Var) -> None:
@@ -724,7 +737,7 @@ class _Checker:
         k = keyword(e.name)
         if k is not None and e.index is None:
             if not any(kind in k.kinds for kind in VALUE_KINDS):
-                self.err(f"{e.name!r} is a V+ keyword ({k.describe()}) and cannot be a name")
+                self.no_keyword(e.name)
                 return "?"
             return _VALUE_WORD_KIND.get(e.name, "?")
         self.target(e)
@@ -780,7 +793,7 @@ class _Checker:
         return "n"
 
     @kind.register
-    def _(self, e: N.Not) -> str:
+    def _(self, e: N.Not | N.Com) -> str:
         self.need(e.expr, "n")
         return "n"
 
@@ -793,7 +806,7 @@ class _Checker:
     @kind.register
     def _(self, e: N.BinOp) -> str:
         a, b = self.kind(e.left), self.kind(e.right)
-        if e.op == "+" and a == "s" and b == "s":
+        if e.op == "+" and "s" in (a, b) and {a, b} <= {"s", "?"}:
             return "s"
         for k in (a, b):
             if k not in ("?", "n"):
