@@ -404,11 +404,11 @@ def _blocks(prog: str, steps: list[N.Stmt], source: str, problems: list[str]):
             problems.append(f"{where}: a step between CASE and its first VALUE")
             continue
         target.append(step)
+    opener = {N.If: "IF", N.For: "FOR", N.While: "WHILE", N.DoUntil: "DO", N.Case: "CASE"}
     for node, _ in stack:
-        word = {N.If: "IF", N.For: "FOR", N.While: "WHILE", N.DoUntil: "DO", N.Case: "CASE"}
         closer = "UNTIL" if isinstance(node, N.DoUntil) else "END"
         problems.append(
-            f"{source}:{node.line}: {prog}: {word[type(node)]} is never closed with {closer}"
+            f"{source}:{node.line}: {prog}: {opener[type(node)]} is never closed with {closer}"
         )
     return root, declared
 
