@@ -15,6 +15,7 @@ from wirecal.cli.main import main
 from .conftest import VIPER
 
 pytestmark = pytest.mark.slow  # the whole demo in the twin: about a minute
+
 # the generated module still uses base, off and dz as names, which the checker now
 # rejects (User's Guide p. 99); the templates are renamed on another branch
 RESERVED_NAMES = pytest.mark.xfail(reason="h3c renames reserved names", strict=False)
