@@ -26,7 +26,6 @@ from wirecal.twin.vplus.parser import parse_module
 
 from .conftest import TABLE5 as TRUTH
 
-
 # the generated module still uses base, off and dz as names, which the checker now
 # rejects (User's Guide p. 99); the templates are renamed on another branch
 RESERVED_NAMES = pytest.mark.xfail(reason="h3c renames reserved names", strict=False)
