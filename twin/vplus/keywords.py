@@ -32,7 +32,7 @@ class Keyword:
 
     def describe(self) -> str:
         """``instruction; User's Guide p. 99`` — kinds and the first source."""
-        return f"{', '.join(self.kinds)}; {self.sources[0]}"
+        return f"{', '.join(self.kinds)}; {self.sources[0].split(' | ')[0]}"
 
 
 @cache
