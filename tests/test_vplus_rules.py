@@ -316,3 +316,36 @@ def test_lint_generated_module_with_validation(tmp_path):
     r = runner.invoke(main, ["lint", str(tmp_path / "WIRECAL.V2")])
     assert r.exit_code == 0, r.output
     assert r.stdout == ""
+
+
+def test_more_valid_forms():
+    # CALL without an argument list (EV3 p. 16); a compound transformation (UG p. 314;
+    # KE trans_t `MOVE frame:TRANS(...)`); a whole array as a function argument
+    # (EVREF p. 311 `LAST (array_name[])`)
+    body = "CALL t.none\nMOVES %belt:loc_1\nMOVE frame:TRANS(1, 2)\nx = LAST(a[])\nCASE x OF\n"
+    body += "  VALUE 1:\n    TYPE 1\n  ANY\nEND"
+    assert problems(prog(body, ".PROGRAM t.none()\n.END\n")) == []
+    assert any("MOVE needs a location" in p for p in problems(prog("MOVE 3")))
+
+
+def test_every_instruction_of_the_table_parses_as_an_instruction():
+    structured = {"auto", "local", "global", "call", "if", "for", "while", "do", "case", "goto"}
+    names = [k.name for k in keywords().values() if "instruction" in k.kinds]
+    assert len(names) > 50
+    for name in names:
+        if name in structured:
+            continue
+        for line in (name, f"{name} x, 1", f"{name} (lun) $s, /S"):
+            step = parse_step(line)
+            assert isinstance(step, N.Instruction), line
+            assert step.name == name
+
+
+def test_the_twin_knows_only_keywords():
+    from wirecal.twin.vplus.forms import FORMS
+    from wirecal.twin.vplus.parser import FUNCTIONS
+
+    for name in FORMS:
+        assert "instruction" in keywords()[name].kinds, name
+    for name in FUNCTIONS:
+        assert "function" in keywords()[name].kinds, name

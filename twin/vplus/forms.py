@@ -7,8 +7,8 @@ self-check (``parse_module(..., twin=True)``) requires every instruction of a ge
 module to match its form, so that the twin runs all of it; ``wirecal lint`` does not.
 
 A form lists the comma-separated clauses; in a clause, the operands written next to each
-other. Codes: ``n`` number, ``s`` string, ``e`` a value of the target's kind, ``L`` a
-location variable (``#p`` precision point or a transformation), ``V`` a variable,
+other. Codes: ``n`` number, ``s`` string, ``e`` a value of the target's kind, ``l`` a
+location (precision point or transformation), ``L`` a location variable, ``V`` a variable,
 ``B`` a belt variable (``%b``), ``W`` a bare word; an upper-case word stands for itself;
 ``(…)`` a parenthesised group; a trailing ``?`` an operand that may be left out.
 """
@@ -20,8 +20,8 @@ import re
 from wirecal.twin.vplus.nodes import Clause, Expr, Group, Instruction, Paren, Var
 
 FORMS: dict[str, str] = {
-    "move": "L",
-    "moves": "L",
+    "move": "l",
+    "moves": "l",
     "here": "L",
     "set": "L = e",
     "decompose": "V = L",

@@ -764,7 +764,7 @@ class _Compiler:
 
     # ---------- the instructions of forms.FORMS (operands in the order of the form) ----------
     def ins_move(self, s, ops):
-        get, _ = self.var(ops[0])
+        get = self.expr(ops[0])[0]
         straight = s.name == "moves"
         cell = self.i.cell
         return lambda frame: cell.move(get(frame), straight)

@@ -69,6 +69,14 @@ class Shift(Expr):
 
 
 @dataclass(slots=True)
+class Compound(Expr):
+    """``a:b``: the transformation b relative to a (User's Guide p. 314)."""
+
+    left: Expr
+    right: Expr
+
+
+@dataclass(slots=True)
 class Paren(Expr):
     """``(e)``: kept, because ``(x)`` passes x by value in a CALL (p. 42–45)."""
 

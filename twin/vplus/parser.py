@@ -149,6 +149,9 @@ class _Terminals(Transformer):
     def index(self, children):
         return list(children)
 
+    def compound_op(self, children):
+        return N.Compound(children[0], children[2])
+
     def complement(self, children):
         return N.Com(children[1])
 
@@ -184,7 +187,7 @@ class _Terminals(Transformer):
 
     def call_step(self, children):
         name, *args = children
-        return N.Call(name, [] if args == [None] else args)
+        return N.Call(name, [] if args in ([None], [None, None]) else args)
 
     def value_step(self, children):
         return N.ValueLine(list(children))
@@ -656,6 +659,10 @@ class _Checker:
                     self.err(f"{s.name.upper()} needs a word there")
             elif code == "e":
                 self.need(e, target_kind)
+            elif code == "l":
+                got = self.kind(e)
+                if got not in ("?", "l", "t"):
+                    self.err(f"type-prefix misuse: {s.name.upper()} needs a location")
             elif code == "*":
                 got = self.kind(e)
                 if got not in ("?", "n", "s"):
@@ -742,6 +749,19 @@ class _Checker:
             return _VALUE_WORD_KIND.get(e.name, "?")
         self.target(e)
         return self.var_kind(e)
+
+    @kind.register
+    def _(self, e: N.Compound) -> str:
+        for side in (e.left, e.right):
+            # a name without prefix may hold a transformation defined elsewhere (p. 310)
+            if self.kind(side) not in ("?", "t", "b", "n"):
+                self.err("type-prefix misuse: ':' joins transformations")
+        return "t"
+
+    @kind.register
+    def _(self, e: N.ArrayArg) -> str:
+        self.argument(e)
+        return e.kind
 
     @kind.register
     def _(self, e: N.Shift) -> str:
