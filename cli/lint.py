@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from wirecal.cli.main import main
+from wirecal.cli.main import main, user_errors
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.vplus.parser import parse_module
 
@@ -18,23 +18,26 @@ from wirecal.twin.vplus.parser import parse_module
     is_flag=True,
     help="Allow CALLs to programs that are not in the file (loaded from another file).",
 )
+@user_errors
 def lint(files, external_calls):
     """Check V+ program files (ours or anyone's) against the V+ rules a controller's
     LOAD applies: program format, keywords as names (User's Guide p. 99), declarations
     first, 15-character names, type prefixes, labels, CALL arguments.
 
-    Prints one ``file:line: program: problem`` line per problem and exits with status 1
-    if there is any, 0 when every file is clean. CRLF and LF line endings are both read.
+    Prints one ``file:line: program: problem`` line per problem. CRLF and LF line endings
+    are both read.
+
+    Exit status: 0 every file clean; 1 problems found; 2 a file cannot be read.
     """
-    problems = 0
+    texts = {}
     for path in files:
         try:
             with open(path, "rb") as f:
-                text = f.read().decode("latin-1")
+                texts[path] = f.read().decode("latin-1")
         except OSError as exc:
-            click.echo(f"{path}: cannot read: {exc.strerror}")
-            problems += 1
-            continue
+            raise WirecalError([f"{path}: cannot read: {exc.strerror}"]) from None
+    problems = 0
+    for path, text in texts.items():
         try:
             module = parse_module(text, path, external_calls=external_calls)
         except WirecalError as exc:

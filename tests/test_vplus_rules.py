@@ -286,9 +286,10 @@ def test_lint_cli(tmp_path):
     assert len(lines) == 2, lines
     assert lines[0].startswith(f"{bad}:2: t.main: 'off' is a V+ keyword")
     assert lines[1].startswith(f"{bad}:3: t.main: 'pi' is a V+ keyword")
-    r = runner.invoke(main, ["lint", str(tmp_path / "MISSING.V2")])
-    assert r.exit_code == 1
-    assert "cannot read" in r.output
+    r = runner.invoke(main, ["lint", str(good), str(tmp_path / "MISSING.V2")])
+    assert r.exit_code == 2
+    assert "error: " in r.stderr
+    assert "MISSING.V2: cannot read" in r.stderr
 
 
 # ---------- the generator runs the same checker on its own output ----------
