@@ -47,4 +47,5 @@ def lint(files, external_calls):
             continue
         click.echo(f"{path}: {len(module.programs)} programs, no problems", err=True)
     if problems:
+        click.echo(f"error: {problems} problem{'s' if problems != 1 else ''} found", err=True)
         sys.exit(1)

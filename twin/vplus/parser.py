@@ -295,6 +295,8 @@ def parse_module(text: str, source: str = "<module>", *, external_calls: bool = 
     if section is not None:
         problems.append(f"{source}: data section {section} is never closed with .END")
     _check_module(programs, source, problems, external_calls)
+    if not programs and not problems:
+        problems.append(f"{source}: no .PROGRAM in the file")
     if problems:
         raise WirecalError(problems)
     return Module(source, programs)
