@@ -24,7 +24,7 @@ def lint(files, external_calls):
     LOAD applies: program format, keywords as names (User's Guide p. 99), declarations
     first, 15-character names, type prefixes, labels, CALL arguments.
 
-    Prints one ``file:line: program: problem`` line per problem. CRLF and LF line endings
+    Prints one "file:line: program: problem" line per problem. CRLF and LF line endings
     are both read.
 
     Exit status: 0 every file clean; 1 problems found; 2 a file cannot be read.
