@@ -244,9 +244,8 @@ def test_any_valid_name_is_accepted_unless_a_keyword(name):
     found = problems(prog(f"AUTO {name}\n{name} = 1\nTYPE {name}"))
     if keyword(name) is None:
         assert found == []
-    else:
-        assert len(found) == 1
-        assert f"'{name}' is a V+ keyword" in found[0]
+    else:  # a statement keyword (DO, END) also breaks the syntax of its lines
+        assert any(f"t.v2:2: t.main: '{name}' is a V+ keyword" in p for p in found), found
 
 
 @settings(max_examples=300, deadline=None)
