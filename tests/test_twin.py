@@ -171,6 +171,7 @@ def test_run_log_is_the_simulators_format(twin_run, paper_plan):
     assert twin_run.cell.clock > 60 * 4  # settling alone is 79 × 3 s
 
 
+@RESERVED_NAMES
 def test_twin_clock_agrees_with_the_planners_robot_time(viper, paper_plan, twin_run):
     """One time model (run_parameters): the twin's clock over the generated programs and
     the planner's estimate of the paper plan agree within 1 % (measured: 343.8 s against
