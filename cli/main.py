@@ -72,6 +72,7 @@ def main() -> None:
 from wirecal.cli import demo as _demo  # noqa: E402,F401
 from wirecal.cli import gen as _gen  # noqa: E402,F401
 from wirecal.cli import identify as _identify  # noqa: E402,F401
+from wirecal.cli import lint as _lint  # noqa: E402,F401
 from wirecal.cli import plan as _plan  # noqa: E402,F401
 from wirecal.cli import psi as _psi  # noqa: E402,F401
 from wirecal.cli import receive as _receive  # noqa: E402,F401

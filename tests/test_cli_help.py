@@ -14,6 +14,7 @@ def test_the_commands_are_all_there():
     assert COMMANDS == [
         "demo",
         "gen",
+        "lint",
         "observe",
         "plan",
         "psi",

@@ -17,6 +17,8 @@ from .conftest import VIPER
 pytestmark = pytest.mark.slow  # the whole demo in the twin: about a minute
 
 
+# the generated module still uses base, off and dz as names, which the checker now
+# rejects (User's Guide p. 99); the templates are renamed on another branch
 @pytest.fixture(scope="module")
 def demo(tmp_path_factory):
     folder = tmp_path_factory.mktemp("demo")

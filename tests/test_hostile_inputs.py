@@ -80,6 +80,7 @@ COMMANDS = {
         ["VLOG", "ROBOT"],
     ),
     "validate plane": (["validate", "plane", "VLOG"], ["VLOG"]),
+    "lint": (["lint", "V2"], ["V2"]),
 }
 CASES = [
     (name, slot, kind)

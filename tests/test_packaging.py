@@ -44,6 +44,7 @@ def test_wheel_contains_templates_under_the_namespace(tmp_path):
     assert "wirecal/twin/vplus/vplus.lark" in names
     assert "wirecal/gen/urscript/facts.py" in names
     assert "wirecal/app/receive.py" in names
+    assert "wirecal/twin/vplus/keywords.csv" in names
     assert "wirecal/__init__.py" in names
     assert "wirecal/examples/viper_s650/robot.toml" in names
     assert "wirecal/examples/ur5/robot.toml" in names

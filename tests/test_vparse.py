@@ -11,6 +11,8 @@ from wirecal.solver.run_parameters import RunParameters
 from wirecal.twin.vplus.parser import parse_module
 
 
+# the generated module still uses base, off and dz as names, which the checker now
+# rejects (User's Guide p. 99); the templates are renamed on another branch
 def test_generated_module_parses(viper, paper_plan, printed_plan):
     for plan, opt in (
         (paper_plan, GenOptions()),
@@ -48,7 +50,7 @@ INVALID = {
     ),
     "unknown keyword": (
         prog("    JMOVE #p"),
-        "bad.v2:2: t.main: unknown keyword or bad syntax: JMOVE",
+        "bad.v2:2: t.main: unknown instruction JMOVE (not in the V+ keyword table)",
     ),
     "unknown function": (prog("    x = ROUND(2.5)"), "bad.v2:2: t.main: unknown function ROUND"),
     "function arity": (prog("    x = MIN(1)"), "bad.v2:2: t.main: MIN takes 2 arguments, not 1"),

@@ -1,6 +1,9 @@
-"""An interpreter of the V+ subset wirecal emits, with V+ semantics.
+"""An interpreter of V+ programs, with V+ semantics, for the instructions and functions
+the digital twin models (see :mod:`wirecal.twin.vplus.forms`); any other instruction or
+function, valid V+ as it may be, stops the program with a run-time error naming it.
 
-Programs are compiled into Python closures once. Semantics (V+ Language User's Guide
+Programs are compiled into Python closures once, dispatching on the node types of
+:mod:`wirecal.twin.vplus.nodes`. Semantics (V+ Language User's Guide
 v17): REAL is IEEE single precision and DOUBLE double (p. 102) — an operation whose
 operands are all single is rounded to single, a store into a REAL rounds to single, and a
 GLOBAL DOUBLE read or written by a program that does not declare it DOUBLE is treated as
@@ -17,9 +20,13 @@ import math
 import struct
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import singledispatchmethod
 
 from wirecal.solver import pose
-from wirecal.twin.vplus.parser import Module, Program, transformation_names
+from wirecal.twin.vplus import nodes as N
+from wirecal.twin.vplus.forms import FormError, operands
+from wirecal.twin.vplus.keywords import keyword
+from wirecal.twin.vplus.parser import CONSTANTS, FUNCTIONS, Module, Program, transformation_names
 
 _S = struct.Struct("f")
 
@@ -159,61 +166,83 @@ class Interpreter:
         return self.garr[name.lower()][index]
 
 
+#: error code of a valid V+ instruction or function the twin does not model
+UNMODELLED = -800
+
+
+def _refuse(what: str) -> Callable:
+    def refuse(frame):
+        raise VError(UNMODELLED, f"*Not executed by the digital twin* {what}")
+
+    return refuse
+
+
 class _Compiler:
     """Compiles one program into a closure taking the list of argument refs."""
 
     def __init__(self, interp: Interpreter, prog: Program):
         self.i, self.prog = interp, prog
-        self.params = {p[1]: k for k, p in enumerate(prog.params)}
+        self.params = {p.name: k for k, p in enumerate(prog.params)}
         self.autos: dict[str, int] = {}
         self.double: set[str] = set()
         self.local_vals, self.local_arr = interp._locals[prog.name]
         self.locals: set[str] = set()
-        for name, (cls, dtype) in prog.declared.items():
-            if dtype == "DOUBLE":
+        for name, decl in prog.declared.items():
+            if decl.dtype == "DOUBLE":
                 self.double.add(name)
-            if cls == "AUTO":
+            if decl.scope == "AUTO":
                 self.autos[name] = len(self.params) + len(self.autos)
-            elif cls == "LOCAL":
+            elif decl.scope == "LOCAL":
                 self.locals.add(name)
         self.nslots = len(self.params) + len(self.autos)
 
     def compile(self) -> Callable:
-        body, labels = self.top(self.prog.body)
+        body = self.body(self.prog.body)
         nparams, nslots, name = len(self.params), self.nslots, self.prog.name
 
         def run(args):
             frame = [None] * nslots
             for k in range(nparams):
                 frame[k] = args[k] if k < len(args) else None
-            pc = 0
-            n = len(body)
-            while pc < n:
-                try:
-                    while pc < n:
-                        body[pc](frame)
-                        pc += 1
-                except _Goto as g:
-                    if g.label not in labels:  # pragma: no cover - checked on load
-                        raise VError(-403, f"*Undefined label* {g.label} in {name}") from None
-                    pc = labels[g.label]
-                except _Return:
-                    return
+            try:
+                body(frame)
+            except _Goto as g:
+                raise VError(
+                    -403,
+                    f"*Undefined label* {g.label} in {name} (not in this or an enclosing block)",
+                ) from None
+            except _Return:
+                return
 
         return run
 
-    def top(self, steps):
-        body, labels = [], {}
+    def body(self, steps: list[N.Stmt]) -> Callable:
+        """A statement list; a GOTO to one of its labels continues there, a GOTO to any
+        other label leaves it (to an enclosing list that has the label)."""
+        fns: list[Callable] = []
+        labels: dict[int, int] = {}
         for s in steps:
-            if s[0] == "label":
-                labels[s[2]] = len(body)
-                continue
-            body.append(self.stmt(s))
-        return body, labels
+            if isinstance(s, N.Label):
+                labels[s.number] = len(fns)
+            else:
+                fns.append(self.stmt(s))
+        n = len(fns)
+        if labels:
 
-    def block(self, steps) -> Callable:
-        fns = [self.stmt(s) for s in steps if s[0] != "label"]
-        if len(fns) == 1:
+            def run_labelled(frame):
+                pc = 0
+                while pc < n:
+                    try:
+                        while pc < n:
+                            fns[pc](frame)
+                            pc += 1
+                    except _Goto as g:
+                        if g.label not in labels:
+                            raise
+                        pc = labels[g.label]
+
+            return run_labelled
+        if n == 1:
             return fns[0]
 
         def run(frame):
@@ -353,87 +382,115 @@ class _Compiler:
 
         return ixs
 
-    def ref_of(self, e) -> Callable:
-        """A CALL argument: a reference for a variable, a copy for an expression."""
+    def var(self, v: N.Var):
+        """(getter, setter) of a variable node."""
+        return self.storage(v.kind, v.name, [self.expr(x)[0] for x in v.index] if v.index else None)
+
+    def ref_of(self, e: N.Expr | None) -> Callable:
+        """A CALL argument: a reference for a variable or array element, a copy for an
+        expression (User's Guide p. 42–45); ``None`` for an omitted argument."""
         interp = self.i
-        if e[0] == "array":
-            name = e[2]
+        if e is None:
+            return lambda frame: None
+        if isinstance(e, N.ArrayArg):
+            name = e.name
             if name in self.params:
                 slot = self.params[name]
                 return lambda frame: frame[slot]
             if name in self.autos:
                 slot = self.autos[name]
+                double = name in self.double
 
                 def auto_arr(frame):
                     if frame[slot] is None:
                         frame[slot] = {}
                     arr = frame[slot]
-                    return _Ref(lambda: arr, None, name in self.double)
+                    return _Ref(lambda: arr, None, double)
 
                 return auto_arr
             arrs = self.local_arr if name in self.locals else interp.garr
             double = name in self.double
             return lambda frame: _Ref(lambda: arrs.setdefault(name, {}), None, double)
-        if e[0] == "var":
-            get, put = self.storage(e[1], e[2], [self.expr(x)[0] for x in e[3]] if e[3] else None)
-            if e[2] in self.params and not e[3]:
-                slot = self.params[e[2]]
+        if isinstance(e, N.Var) and e.name not in CONSTANTS and not _is_keyword_value(e):
+            get, put = self.var(e)
+            if e.name in self.params and not e.index:
+                slot = self.params[e.name]
                 return lambda frame: frame[slot]
-            double = self.is_double(e[2]) or e[1] != "n"
+            double = self.is_double(e.name) or e.kind != "n"
             return lambda frame: _Ref(lambda: get(frame), lambda v: put(frame, v), double)
         f, _ = self.expr(e)
         return lambda frame: _Ref(*interp._value_cell(f(frame)))
 
     # ---------- expressions: (function, is_double) ----------
-    def expr(self, e):
-        tag = e[0]
-        if tag == "paren":
-            return self.expr(e[1])
-        if tag == "num":
-            v = e[1] if e[2] else f32(e[1])
-            return (lambda frame: v), e[2]
-        if tag == "str":
-            s = e[1]
-            return (lambda frame: s), True
-        if tag == "var":
-            get, _ = self.storage(e[1], e[2], [self.expr(x)[0] for x in e[3]] if e[3] else None)
-            return get, self.is_double(e[2]) or e[2] in self.params
-        if tag == "neg":
-            f, d = self.expr(e[1])
-            return (lambda frame: -f(frame)), d
-        if tag == "not":
-            f, _ = self.expr(e[1])
-            return (lambda frame: -1.0 if f(frame) == 0 else 0.0), False
-        if tag == "and":
-            a, _ = self.expr(e[1])
-            b, _ = self.expr(e[2])
-            return (lambda frame: -1.0 if a(frame) != 0 and b(frame) != 0 else 0.0), False
-        if tag == "or":
-            a, _ = self.expr(e[1])
-            b, _ = self.expr(e[2])
-            return (lambda frame: -1.0 if a(frame) != 0 or b(frame) != 0 else 0.0), False
-        if tag == "cmp":
-            a, _ = self.expr(e[2])
-            b, _ = self.expr(e[3])
-            op = {
-                "==": lambda x, y: x == y,
-                "<>": lambda x, y: x != y,
-                "<": lambda x, y: x < y,
-                ">": lambda x, y: x > y,
-                "<=": lambda x, y: x <= y,
-                ">=": lambda x, y: x >= y,
-            }[e[1]]
-            return (lambda frame: -1.0 if op(a(frame), b(frame)) else 0.0), False
-        if tag == "bin":
-            return self.binop(e)
-        if tag == "fn":
-            return self.function(e)
-        raise AssertionError(tag)  # pragma: no cover
+    @singledispatchmethod
+    def expr(self, e: N.Expr):
+        return _refuse(f"{type(e).__name__} as a value"), False
 
-    def binop(self, e):
-        op = e[1]
-        a, da = self.expr(e[2])
-        b, db = self.expr(e[3])
+    @expr.register
+    def _(self, e: N.Paren):
+        return self.expr(e.expr)
+
+    @expr.register
+    def _(self, e: N.Num):
+        v = e.value if e.double else f32(e.value)
+        return (lambda frame: v), e.double
+
+    @expr.register
+    def _(self, e: N.Str):
+        s = e.text
+        return (lambda frame: s), True
+
+    @expr.register
+    def _(self, e: N.Var):
+        if e.index is None and e.name in CONSTANTS:
+            c = CONSTANTS[e.name]
+            return (lambda frame: c), False
+        if _is_keyword_value(e):
+            return _refuse(e.name.upper()), False
+        get, _ = self.var(e)
+        return get, self.is_double(e.name) or e.name in self.params
+
+    @expr.register
+    def _(self, e: N.Neg):
+        f, d = self.expr(e.expr)
+        return (lambda frame: -f(frame)), d
+
+    @expr.register
+    def _(self, e: N.Not):
+        f, _ = self.expr(e.expr)
+        return (lambda frame: -1.0 if f(frame) == 0 else 0.0), False
+
+    @expr.register
+    def _(self, e: N.Com):
+        f, _ = self.expr(e.expr)
+        return (lambda frame: float(~round(f(frame)))), False
+
+    @expr.register
+    def _(self, e: N.Logic):
+        a, _ = self.expr(e.left)
+        b, _ = self.expr(e.right)
+        op = e.op
+        if op == "AND":
+            return (lambda frame: -1.0 if a(frame) != 0 and b(frame) != 0 else 0.0), False
+        if op == "OR":
+            return (lambda frame: -1.0 if a(frame) != 0 or b(frame) != 0 else 0.0), False
+        if op == "XOR":
+            return (lambda frame: -1.0 if (a(frame) != 0) != (b(frame) != 0) else 0.0), False
+        bitwise = {"BAND": int.__and__, "BOR": int.__or__, "BXOR": int.__xor__}[op]
+        return (lambda frame: float(bitwise(round(a(frame)), round(b(frame))))), False
+
+    @expr.register
+    def _(self, e: N.Compare):
+        a, _ = self.expr(e.left)
+        b, _ = self.expr(e.right)
+        op = _COMPARE[e.op]
+        return (lambda frame: -1.0 if op(a(frame), b(frame)) else 0.0), False
+
+    @expr.register
+    def _(self, e: N.BinOp):
+        op = e.op
+        a, da = self.expr(e.left)
+        b, db = self.expr(e.right)
         double = da or db
         interp = self.i
         if op == "+":
@@ -477,14 +534,20 @@ class _Compiler:
 
         return g
 
-    def function(self, e):
-        name, args = e[1], e[2]
+    @expr.register
+    def _(self, e: N.Shift):
+        base = self.expr(e.base)[0]
+        dx, dy, dz = (self.expr(x)[0] for x in (e.dx, e.dy, e.dz))
+        return (lambda frame: base(frame).shifted(dx(frame), dy(frame), dz(frame))), True
+
+    @expr.register
+    def _(self, e: N.Func):
+        name, args = e.name, e.args
         cell = self.i.cell
-        fns = [self.expr(a) for a in args if a[0] != "var" or name not in ("defined",)]
-        double = any(d for _, d in fns)
+        if name not in FUNCTIONS:
+            return _refuse(f"function {name.upper()}"), False
         if name == "defined":
-            v = args[0]
-            get, _ = self.storage(v[1], v[2], [self.expr(x)[0] for x in v[3]] if v[3] else None)
+            get, _ = self.var(args[0])
 
             def defined(frame):
                 try:
@@ -497,7 +560,7 @@ class _Compiler:
         if name == "device":
             unit = self.expr(args[1])[0]
             sel = self.expr(args[3])[0]
-            _, put_err = self.storage("n", args[2][2], None)
+            _, put_err = self.var(args[2])
 
             def device(frame):
                 value, err = cell.device(int(unit(frame)), int(sel(frame)))
@@ -505,6 +568,9 @@ class _Compiler:
                 return value
 
             return device, False
+        zero = lambda frame: 0.0  # noqa: E731 - an omitted TRANS argument
+        fns = [self.expr(a) if a is not None else (zero, False) for a in args]
+        double = any(d for _, d in fns)
         f = [x for x, _ in fns]
         interp = self.i
         if name == "int":
@@ -546,23 +612,22 @@ class _Compiler:
         if name == "len":
             return (lambda frame: float(len(f[0](frame)))), False
         if name == "belt":
-            belt = args[0][2]
+            belt = args[0].name
             return (lambda frame: cell.belt(belt, int(f[1](frame)))), False
         if name == "#ppoint":
             return (lambda frame: tuple(f32(g(frame)) for g in f)), True
         if name == "trans":
+            f += [zero] * (6 - len(f))
             return (lambda frame: Trans(*(f32(g(frame)) for g in f))), True
-        if name == "shift":
-            return (lambda frame: f[0](frame).shifted(f[1](frame), f[2](frame), f[3](frame))), True
         if name == "sig":
             return (lambda frame: cell.sig(int(f[0](frame)))), False
-        raise AssertionError(name)  # pragma: no cover - rejected on load
+        raise AssertionError(name)  # pragma: no cover - FUNCTIONS and this list agree
 
     # ---------- statements ----------
-    def stmt(self, s):
+    def stmt(self, s: N.Stmt) -> Callable:
         prog = self.prog.name
         interp = self.i
-        line = s[1]
+        line = s.line
         inner = self._stmt(s)
 
         def run(frame):
@@ -571,200 +636,300 @@ class _Compiler:
 
         return run
 
-    def _stmt(self, s):
-        kind = s[0]
-        cell = self.i.cell
+    @singledispatchmethod
+    def _stmt(self, s: N.Stmt) -> Callable:  # pragma: no cover - every step type is registered
+        raise AssertionError(type(s).__name__)
+
+    @_stmt.register
+    def _(self, s: N.Assign):
+        _, put = self.var(s.target)
+        f, _ = self.expr(s.value)
+        return lambda frame: put(frame, f(frame))
+
+    @_stmt.register
+    def _(self, s: N.Call):
         interp = self.i
-        if isinstance(s, list):
-            return self._block_stmt(s)
-        a = s[2:]
-        if kind == "assign":
-            target, expr = a
-            _, put = self.storage(
-                target[1], target[2], [self.expr(x)[0] for x in target[3]] if target[3] else None
-            )
-            f, _ = self.expr(expr)
-            return lambda frame: put(frame, f(frame))
-        if kind == "call":
-            callee = a[0]
-            refs = [self.ref_of(x) for x in a[1]]
+        callee = s.program
+        if callee not in interp.module.programs:
+            return _refuse(f"CALL {callee} (not in the module)")
+        refs = [self.ref_of(x) for x in s.args]
 
-            def call(frame):
-                interp._program(callee)([r(frame) for r in refs])
+        def call(frame):
+            interp._program(callee)([r(frame) for r in refs])
 
-            return call
-        if kind == "goto":
-            label = a[0]
+        return call
 
-            def goto(frame):
+    @_stmt.register
+    def _(self, s: N.Goto):
+        label = s.label
+
+        def goto(frame):
+            raise _Goto(label)
+
+        return goto
+
+    @_stmt.register
+    def _(self, s: N.IfGoto):
+        label = s.label
+        cond = self.expr(s.cond)[0]
+
+        def if_goto(frame):
+            if cond(frame) != 0:
                 raise _Goto(label)
 
-            return goto
-        if kind == "return":
+        return if_goto
 
-            def ret(frame):
-                raise _Return()
+    @_stmt.register
+    def _(self, s: N.If):
+        cond = self.expr(s.cond)[0]
+        then = self.body(s.then)
+        other = self.body(s.orelse) if s.orelse else None
 
-            return ret
-        if kind == "halt":
+        def if_(frame):
+            if cond(frame) != 0:
+                then(frame)
+            elif other is not None:
+                other(frame)
 
-            def halt(frame):
-                raise Halt("HALT")
+        return if_
 
-            return halt
-        if kind == "pause":
+    @_stmt.register
+    def _(self, s: N.For):
+        get, put = self.var(s.var)
+        fa, fb = self.expr(s.start)[0], self.expr(s.stop)[0]
+        fs = self.expr(s.step)[0] if s.step is not None else (lambda frame: 1.0)
+        body = self.body(s.body)
 
-            def pause(frame):
-                if not cell.on_pause():
-                    raise Pause("PAUSE")
+        def for_(frame):
+            step = fs(frame)
+            end = fb(frame)
+            put(frame, fa(frame))
+            while (get(frame) <= end) if step > 0 else (get(frame) >= end):
+                body(frame)
+                put(frame, get(frame) + step)
 
-            return pause
-        if kind == "set":
-            _, put = self.storage(a[0], a[1], None)
-            f, _ = self.expr(a[2])
-            return lambda frame: put(frame, f(frame))
-        if kind == "move":
-            get, _ = self.storage(a[0], a[1], None)
-            straight = a[2] == "MOVES"
-            return lambda frame: cell.move(get(frame), straight)
-        if kind == "break":
-            return lambda frame: cell.break_()
-        if kind == "tool_null":
-            return lambda frame: cell.tool_null()
-        if kind == "here":
-            _, put = self.storage(a[0], a[1], None)
-            transform = a[0] == "t"
-            return lambda frame: put(frame, cell.here(transform))
-        if kind == "config":
-            word = a[0]
-            return lambda frame: cell.configure(word)
-        if kind == "decompose":
-            name, index, lkind, loc = a
-            start = self.expr(index[0])[0]
-            get_loc, _ = self.storage(lkind, loc, None)
+        return for_
 
-            def getloc(frame):
-                v = get_loc(frame)
-                return v.values() if isinstance(v, Trans) else v
+    @_stmt.register
+    def _(self, s: N.While):
+        cond = self.expr(s.cond)[0]
+        body = self.body(s.body)
 
-            at = [0]
-            _, put = self.storage("n", name, [lambda frame: at[0]])
+        def while_(frame):
+            while cond(frame) != 0:
+                body(frame)
 
-            def decompose(frame):
-                first = round(start(frame))
-                for k, v in enumerate(getloc(frame)):
-                    at[0] = first + k
-                    put(frame, v)
+        return while_
 
-            return decompose
-        if kind == "speed":
-            f = self.expr(a[0])[0]
-            return lambda frame: cell.speed(f(frame))
-        if kind == "accel":
-            fs = [self.expr(x)[0] for x in a]
-            return lambda frame: cell.accel(*(g(frame) for g in fs))
-        if kind == "type":
-            fs = [self.expr(x)[0] for x in a[0]]
-            return lambda frame: cell.type_("".join(_text(g(frame)) for g in fs))
-        if kind == "prompt":
-            text = self.expr(a[0])[0]
-            target = a[1]
-            _, put = self.storage(target[1], target[2], None)
+    @_stmt.register
+    def _(self, s: N.DoUntil):
+        cond = self.expr(s.cond)[0]
+        body = self.body(s.body)
 
-            def prompt(frame):
-                answer = cell.prompt(text(frame))
-                put(frame, answer if target[1] == "s" else float(answer))
+        def do_until(frame):
+            body(frame)
+            while cond(frame) == 0:
+                body(frame)
 
-            return prompt
-        if kind == "wait":
-            f = self.expr(a[0])[0]
-            return lambda frame: cell.wait(f(frame))
-        if kind == "attach":
-            _, put = self.storage("n", a[0], None)
-            device = self.expr(a[2])[0]
-            return lambda frame: put(frame, cell.attach(device(frame)))
-        if kind == "detach":
-            f = self.expr(a[0])[0]
-            return lambda frame: cell.detach(int(f(frame)))
-        if kind == "fopen":
-            mode = a[0]
-            lun = self.expr(a[1])[0]
-            name = self.expr(a[2])[0]
-            return lambda frame: cell.fopen(mode, int(lun(frame)), name(frame))
-        if kind == "fclose":
-            f = self.expr(a[0])[0]
-            return lambda frame: cell.fclose(int(f(frame)))
-        if kind == "write":
-            lun = self.expr(a[0])[0]
-            f = self.expr(a[1])[0]
-            return lambda frame: cell.write(int(lun(frame)), f(frame))
-        if kind == "enable":
-            switch = a[0]
-            return lambda frame: cell.enable(switch)
-        if kind == "defbelt":
-            name = a[0]
-            enc, scale = self.expr(a[1])[0], self.expr(a[2])[0]
-            return lambda frame: cell.defbelt(name, int(enc(frame)), scale(frame))
-        raise AssertionError(kind)  # pragma: no cover
+        return do_until
 
-    def _block_stmt(self, s):
-        kind = s[0]
-        if kind == "if":
-            cond = self.expr(s[2][1])[0]
-            then, other = self.block(s[3]), self.block(s[4]) if s[4] else None
+    @_stmt.register
+    def _(self, s: N.Case):
+        sel = self.expr(s.selector)[0]
+        branches = [
+            (
+                [self.expr(v)[0] for v in b.values] if b.values is not None else None,
+                self.body(b.body),
+            )
+            for b in s.branches
+        ]
 
-            def if_(frame):
-                if cond(frame) != 0:
-                    then(frame)
-                elif other is not None:
-                    other(frame)
-
-            return if_
-        if kind == "for":
-            _, var, a, b, st = s[2]
-            _, put = self.storage("n", var, None)
-            get, _ = self.storage("n", var, None)
-            fa, fb = self.expr(a)[0], self.expr(b)[0]
-            fs = self.expr(st)[0] if st is not None else (lambda frame: 1.0)
-            body = self.block(s[3])
-
-            def for_(frame):
-                step = fs(frame)
-                end = fb(frame)
-                put(frame, fa(frame))
-                while (get(frame) <= end) if step > 0 else (get(frame) >= end):
+        def case(frame):
+            x = sel(frame)
+            for values, body in branches:
+                if values is None or any(x == v(frame) for v in values):
                     body(frame)
-                    put(frame, get(frame) + step)
+                    return
 
-            return for_
-        if kind == "while":
-            cond = self.expr(s[2][1])[0]
-            body = self.block(s[3])
+        return case
 
-            def while_(frame):
-                while cond(frame) != 0:
-                    body(frame)
+    @_stmt.register
+    def _(self, s: N.Instruction):
+        try:
+            ops = [e for _, e in operands(s)]
+        except FormError as exc:
+            return _refuse(str(exc))
+        handler = getattr(self, "ins_" + s.name.replace(".", "_"))
+        return handler(s, ops)
 
-            return while_
-        if kind == "case":
-            sel = self.expr(s[2][1])[0]
-            branches = [
-                (
-                    [self.expr(v)[0] for v in values] if values is not None else None,
-                    self.block(body),
-                )
-                for values, body in s[3]
-            ]
+    # ---------- the instructions of forms.FORMS (operands in the order of the form) ----------
+    def ins_move(self, s, ops):
+        get = self.expr(ops[0])[0]
+        straight = s.name == "moves"
+        cell = self.i.cell
+        return lambda frame: cell.move(get(frame), straight)
 
-            def case(frame):
-                x = sel(frame)
-                for values, body in branches:
-                    if values is None or any(x == v(frame) for v in values):
-                        body(frame)
-                        return
+    ins_moves = ins_move
 
-            return case
-        raise AssertionError(kind)  # pragma: no cover
+    def ins_break(self, s, ops):
+        cell = self.i.cell
+        return lambda frame: cell.break_()
+
+    def ins_here(self, s, ops):
+        _, put = self.var(ops[0])
+        transform = ops[0].kind != "l"
+        cell = self.i.cell
+        return lambda frame: put(frame, cell.here(transform))
+
+    def ins_set(self, s, ops):
+        _, put = self.var(ops[0])
+        f, _ = self.expr(ops[1])
+        return lambda frame: put(frame, f(frame))
+
+    def ins_decompose(self, s, ops):
+        target, loc = ops
+        if not target.index:
+            return _refuse("DECOMPOSE into a whole array name (give its first element)")
+        start = self.expr(target.index[0])[0]
+        get_loc, _ = self.var(loc)
+
+        def getloc(frame):
+            v = get_loc(frame)
+            return v.values() if isinstance(v, Trans) else v
+
+        at = [0]
+        _, put = self.storage("n", target.name, [lambda frame: at[0]])
+
+        def decompose(frame):
+            first = round(start(frame))
+            for k, v in enumerate(getloc(frame)):
+                at[0] = first + k
+                put(frame, v)
+
+        return decompose
+
+    def _configure(self, s, ops):
+        word = s.name.upper()
+        cell = self.i.cell
+        return lambda frame: cell.configure(word)
+
+    ins_above = ins_below = ins_flip = ins_noflip = ins_lefty = ins_righty = _configure
+
+    def ins_speed(self, s, ops):
+        f = self.expr(ops[0])[0]
+        cell = self.i.cell
+        return lambda frame: cell.speed(f(frame))
+
+    def ins_accel(self, s, ops):
+        fs = [self.expr(x)[0] for x in ops]
+        cell = self.i.cell
+        return lambda frame: cell.accel(*(g(frame) for g in fs))
+
+    def ins_type(self, s, ops):
+        if any(c is not None and c.formats for c in s.clauses):
+            return _refuse("TYPE with format specifiers")
+        fs = [self.expr(x)[0] for x in ops]
+        cell = self.i.cell
+        return lambda frame: cell.type_("".join(_text(g(frame)) for g in fs))
+
+    def ins_prompt(self, s, ops):
+        text = self.expr(ops[0])[0]
+        target = ops[1]
+        _, put = self.var(target)
+        string = target.kind == "s"
+        cell = self.i.cell
+
+        def prompt(frame):
+            answer = cell.prompt(text(frame))
+            put(frame, answer if string else float(answer))
+
+        return prompt
+
+    def ins_wait_event(self, s, ops):
+        f = self.expr(ops[0])[0]
+        cell = self.i.cell
+        return lambda frame: cell.wait(f(frame))
+
+    def ins_attach(self, s, ops):
+        _, put = self.var(ops[0])
+        device = self.expr(ops[2])[0]
+        cell = self.i.cell
+        return lambda frame: put(frame, cell.attach(device(frame)))
+
+    def ins_detach(self, s, ops):
+        f = self.expr(ops[0])[0]
+        cell = self.i.cell
+        return lambda frame: cell.detach(int(f(frame)))
+
+    def ins_fopenw(self, s, ops):
+        mode = s.name.upper()
+        lun, name = self.expr(ops[0])[0], self.expr(ops[1])[0]
+        cell = self.i.cell
+        return lambda frame: cell.fopen(mode, int(lun(frame)), name(frame))
+
+    ins_fopena = ins_fopenr = ins_fopenw
+
+    def ins_fclose(self, s, ops):
+        f = self.expr(ops[0])[0]
+        cell = self.i.cell
+        return lambda frame: cell.fclose(int(f(frame)))
+
+    def ins_write(self, s, ops):
+        lun, f = self.expr(ops[0])[0], self.expr(ops[1])[0]
+        cell = self.i.cell
+        return lambda frame: cell.write(int(lun(frame)), f(frame))
+
+    def ins_enable(self, s, ops):
+        switch = ops[0].name.upper()
+        cell = self.i.cell
+        return lambda frame: cell.enable(switch)
+
+    def ins_defbelt(self, s, ops):
+        name = ops[0].name
+        enc, scale = self.expr(ops[1])[0], self.expr(ops[2])[0]
+        cell = self.i.cell
+        return lambda frame: cell.defbelt(name, int(enc(frame)), scale(frame))
+
+    def ins_tool(self, s, ops):
+        cell = self.i.cell
+        return lambda frame: cell.tool_null()
+
+    def ins_halt(self, s, ops):
+        def halt(frame):
+            raise Halt("HALT")
+
+        return halt
+
+    def ins_pause(self, s, ops):
+        cell = self.i.cell
+
+        def pause(frame):
+            if not cell.on_pause():
+                raise Pause("PAUSE")
+
+        return pause
+
+    def ins_return(self, s, ops):
+        def ret(frame):
+            raise _Return()
+
+        return ret
+
+
+_COMPARE = {
+    "==": lambda x, y: x == y,
+    "<>": lambda x, y: x != y,
+    "<": lambda x, y: x < y,
+    ">": lambda x, y: x > y,
+    "<=": lambda x, y: x <= y,
+    ">=": lambda x, y: x >= y,
+}
+
+
+def _is_keyword_value(v: N.Var) -> bool:
+    """A name without index that is a V+ keyword is the keyword (the checker allows
+    only value keywords there), never a variable."""
+    return v.index is None and keyword(v.name) is not None
 
 
 def _text(v) -> str:

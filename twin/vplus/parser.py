@@ -1,63 +1,100 @@
-"""A parser of the V+ subset wirecal emits, with the checks a controller makes on load.
+"""The V+ front end: a module's text → typed syntax trees, checked as a controller's LOAD
+checks them.
 
-The module text is split into ``.PROGRAM … .END`` blocks; each step (line) is parsed by
-the lark grammar ``vplus.lark`` into compact tuples, and IF/FOR/WHILE/CASE blocks are
-assembled from them. :func:`parse_module` rejects, with ``file:line: program: problem``:
-a missing ``.END``, declarations after executable steps, names that share their first
-15 characters, unknown keywords or functions, wrong argument counts, CALLs to programs
-not in the module, GOTO to a missing label, and type-prefix misuse ($ string, # location,
-% belt). Rules: V+ Language User's Guide v17 p. 35–36 (program format), 99–111 (names,
-types, classes).
+The text (CRLF or LF) is split into ``.PROGRAM … .END`` blocks (data sections such as
+``.LOCATIONS … .END`` are skipped); each step is parsed by the lark grammar
+``vplus.lark`` and turned into the dataclass nodes of :mod:`wirecal.twin.vplus.nodes`;
+IF/FOR/WHILE/DO/CASE blocks are assembled from the lines. :func:`parse_module` rejects,
+as ``file:line: program: problem``: a V+ keyword (``keywords.csv``) used as a program,
+variable or parameter name (User's Guide p. 99), a missing ``.END``, declarations after
+executable steps, names that share their first 15 characters, unknown instructions or
+functions, wrong argument counts of the functions the twin knows, CALLs to programs not
+in the module (unless ``external_calls``), argument kinds that do not match a program's
+parameters, GOTO to a missing label, and type-prefix misuse ($ string, # precision point,
+% belt). Rules: User's Guide v17 p. 35–36 (program format), 99–111 (names, types,
+classes), 42–45 (CALL).
 """
 
 from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from functools import cache
+from functools import cache, singledispatchmethod
 from importlib import resources
 
-from lark import Lark, Token, Transformer, v_args
+from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedToken
 
 from wirecal.solver.errors import WirecalError
+from wirecal.twin.vplus import nodes as N
+from wirecal.twin.vplus.forms import FormError, operands
+from wirecal.twin.vplus.keywords import VALUE_KINDS, is_kind, keyword
 
 SIGNIFICANT = 15
-_HEADER = re.compile(r"^\.PROGRAM\s+([A-Za-z][A-Za-z0-9._]*)\s*\((.*)\)\s*(;.*)?$", re.I)
+_HEADER = re.compile(r"^\.PROGRAM\s+([$#%]?[A-Za-z][A-Za-z0-9._]*)\s*(?:\((.*)\))?\s*$", re.I)
 _LABEL = re.compile(r"^(\d+)(?:\s+|$)")
-_PARAM = re.compile(r"^([$#%]?)([A-Za-z][A-Za-z0-9._]*)(\[\])?$")
+_PARAM = re.compile(r"^([$#%]?[A-Za-z][A-Za-z0-9._]*)\s*(\[[\s,]*\])?$")
+_LINES = re.compile(r"\r\n|\n|\r")
 
-# name → (argument kinds, result kind); kinds: n number, s string, l location,
-# b belt, v a variable of any kind (DEFINED), nv a numeric variable (written to).
-FUNCTIONS: dict[str, tuple[tuple[str, ...], str]] = {
-    "int": (("n",), "n"),
-    "abs": (("n",), "n"),
-    "sqrt": (("n",), "n"),
-    "sin": (("n",), "n"),
-    "cos": (("n",), "n"),
-    "atan2": (("n", "n"), "n"),
-    "min": (("n", "n"), "n"),
-    "max": (("n", "n"), "n"),
-    "iostat": (("n",), "n"),
-    "$error": (("n",), "s"),
-    "$chr": (("n",), "s"),
-    "len": (("s",), "n"),
-    "defined": (("v",), "n"),
-    "belt": (("b", "n"), "n"),
-    "device": (("n", "n", "nv", "n"), "n"),
-    "#ppoint": (("n",) * 6, "l"),
-    "trans": (("n",) * 6, "t"),
-    "sig": (("n",), "n"),
+# The functions the twin evaluates: name → (argument kinds, required count, result).
+# Kinds: n number, s string, l precision point, b belt, t transformation, v any
+# variable (DEFINED), nv a numeric variable (written to). TRANS: "if any parameter is
+# omitted, its value is taken to be zero"; #PPOINT takes one value per joint (a SCARA
+# has four). Any other function of the keyword table is accepted with any arguments and
+# refused by the interpreter when run.
+FUNCTIONS: dict[str, tuple[tuple[str, ...], int, str]] = {
+    "int": (("n",), 1, "n"),
+    "abs": (("n",), 1, "n"),
+    "sqrt": (("n",), 1, "n"),
+    "sin": (("n",), 1, "n"),
+    "cos": (("n",), 1, "n"),
+    "atan2": (("n", "n"), 2, "n"),
+    "min": (("n", "n"), 2, "n"),
+    "max": (("n", "n"), 2, "n"),
+    "iostat": (("n",), 1, "n"),
+    "$error": (("n",), 1, "s"),
+    "$chr": (("n",), 1, "s"),
+    "len": (("s",), 1, "n"),
+    "defined": (("v",), 1, "n"),
+    "belt": (("b", "n"), 2, "n"),
+    "device": (("n", "n", "nv", "n"), 4, "n"),
+    "#ppoint": (("n",) * 12, 1, "l"),
+    "trans": (("n",) * 6, 0, "t"),
+    "sig": (("n",), 1, "n"),
 }
+#: functions whose omitted arguments mean zero
+OMITTABLE = {"trans"}
+#: the value of the V+ constants (User's Guide p. 103, p. 128) and their kinds
+CONSTANTS: dict[str, float] = {"true": -1.0, "on": -1.0, "false": 0.0, "off": 0.0}
+_VALUE_WORD_KIND = {
+    "true": "n",
+    "on": "n",
+    "false": "n",
+    "off": "n",
+    "pi": "n",
+    "null": "t",
+    "here": "t",
+    "dest": "t",
+}
+
+
+@dataclass
+class Param:
+    name: str
+    is_array: bool
+
+    @property
+    def kind(self) -> str:
+        return {"$": "s", "#": "l", "%": "b"}.get(self.name[:1], "n")
 
 
 @dataclass
 class Program:
     name: str
-    params: list[tuple[str, str, bool]]  # (kind, name, is_array)
-    body: list
+    params: list[Param]
+    body: list[N.Stmt]
     line: int
-    declared: dict[str, tuple[str, str]] = field(default_factory=dict)  # name→(class,type)
+    declared: dict[str, N.Decl] = field(default_factory=dict)
 
 
 @dataclass
@@ -72,212 +109,143 @@ def _parser() -> Lark:
     return Lark(grammar, parser="lalr", maybe_placeholders=True)
 
 
-def _kind(token: str) -> str:
-    return {"$": "s", "#": "l", "%": "b"}.get(token[:1], "n")
+class _Terminals(Transformer):
+    """Terminals and the rules whose children need shaping; the rules named after a
+    node class are added by :func:`lark.ast_utils.create_transformer`."""
 
+    def NAME(self, t):
+        return str(t).lower()
 
-def _loc(token) -> tuple[str, str]:
-    """A location operand: a precision point (#name, kind l) or a transformation (t)."""
-    name = str(token).lower()
-    return ("l" if name.startswith("#") else "t"), name
+    SNAME = LNAME = BNAME = NAME
 
+    def INT(self, t):
+        return int(t)
 
-@v_args(inline=True)
-class _Build(Transformer):
-    """Parse tree of one step → tuples (see the interpreter for their meaning)."""
+    def NUMBER(self, t):
+        return N.Num(float(t), False)
 
-    def number(self, t):
-        return ("num", float(t), False)
+    def DNUMBER(self, t):
+        return N.Num(float(int(t[2:])), True)
 
-    def dnumber(self, t):
-        return ("num", float(int(str(t)[2:])), True)
+    def RADIXNUMBER(self, t):
+        base = {"h": 16, "b": 2}.get(t[1].lower())
+        return N.Num(float(int(t[2:], base) if base else int(t[1:], 8)), False)
 
-    def string(self, t):
-        return ("str", str(t)[1:-1])
+    def ASCII(self, t):
+        return N.Num(float(ord(t[1])), False)
 
-    def true(self):
-        return ("num", -1.0, False)
+    def STRING(self, t):
+        return N.Str(str(t)[1:-1])
 
-    def false(self):
-        return ("num", 0.0, False)
+    def FORMAT(self, t):
+        return N.Format(str(t).upper())
 
-    def paren(self, e):
-        # kept: "(x)" passes x by value in a CALL (User's Guide p. 42–45)
-        return ("paren", e)
+    def anyname(self, children):
+        return children[0]
 
-    def anyname(self, t):
-        return str(t)
+    def target(self, children):
+        return N.Var(*children)
 
-    def index(self, *exprs):
-        return list(exprs)
+    def index(self, children):
+        return list(children)
 
-    def varref(self, name, index=None):
-        return ("var", _kind(name), name.lower(), index)
+    def compound_op(self, children):
+        return N.Compound(children[0], children[2])
 
-    def funcall(self, name, *args):
-        return ("fn", name.lower(), [a for a in args if a is not None])
+    def complement(self, children):
+        return N.Com(children[1])
 
-    def neg(self, e):
-        return ("neg", e)
+    def signed(self, children):
+        op, e = children
+        return N.Neg(e) if op == "-" else e
 
-    def not_(self, e):
-        return ("not", e)
+    def binop(self, children):
+        a, op, b = children
+        return N.BinOp(str(op).upper(), a, b)
 
-    def binop(self, a, op, b):
-        return ("bin", str(op).upper(), a, b)
+    def logic_op(self, children):
+        a, op, b = children
+        return N.Logic(str(op).upper(), a, b)
 
-    def compare(self, a, op, b):
-        return ("cmp", str(op), a, b)
+    def compare_op(self, children):
+        a, op, b = children
+        return N.Compare({"=<": "<=", "=>": ">="}.get(str(op), str(op)), a, b)
 
-    def and_(self, a, b):
-        return ("and", a, b)
+    def funcall(self, children):
+        name, *args = children
+        return N.Func(name, [] if args == [None] else args)
 
-    def or_(self, a, b):
-        return ("or", a, b)
+    def operand_group(self, children):
+        return N.Group(list(children))
 
-    def num_target(self, name, index=None):
-        return ("var", "n", str(name).lower(), index)
+    def declaration(self, children):
+        scope, dtype, *items = children
+        return N.Decl(str(scope).upper(), str(dtype).upper() if dtype else "", items)
 
-    def str_target(self, name, index=None):
-        return ("var", "s", str(name).lower(), index)
+    def dims(self, children):
+        return [c for c in children if c is not None]
 
-    def arg_array(self, name):
-        return ("array", _kind(str(name)), str(name).lower())
+    def call_step(self, children):
+        name, *args = children
+        return N.Call(name, [] if args in ([None], [None, None]) else args)
 
-    def arg(self, e):
-        return e
+    def value_step(self, children):
+        return N.ValueLine(list(children))
 
-    def dims(self, *ints):
-        return [int(i) for i in ints]
+    def any_step(self, children):
+        return N.AnyLine()
 
-    def declitem(self, name, dims=None):
-        return (name.lower(), dims)
+    def instr(self, children):
+        name, ops = children
+        return N.Instruction(name, ops or [])
 
-    def decl(self, cls, *rest):
-        dtype = "REAL"
-        if rest and isinstance(rest[0], Token) and rest[0].type == "DECLTYPE":
-            dtype, rest = str(rest[0]).upper(), rest[1:]
-        return ("decl", str(cls).upper(), dtype, list(rest))
+    def operands(self, children):
+        return list(children)
 
-    def assign(self, target, expr):
-        return ("assign", target, expr)
+    def operands_lead(self, children):
+        return [None, *children]
 
-    def call(self, name, *args):
-        return ("call", str(name).lower(), [a for a in args if a is not None])
+    def formats(self, children):
+        return [f.spec for f in children]
 
-    def if_start(self, c):
-        return ("if", c)
+    def clause_formats(self, children):
+        return N.Clause(children[0], [], None)
 
-    def else_(self):
-        return ("else",)
+    def operand_clause(self, children):
+        formats = children[0] if isinstance(children[0], list) else []
+        items = children[1 if formats else 0 : -1]
+        return N.Clause(formats, items, children[-1])
 
-    def end_(self):
-        return ("end",)
 
-    def for_start(self, var, a, b, step=None):
-        return ("for", str(var).lower(), a, b, step)
+_build = ast_utils.create_transformer(N, _Terminals())
 
-    def while_start(self, c):
-        return ("while", c)
 
-    def case_start(self, e):
-        return ("case", e)
+def parse_step(line: str) -> N.Stmt:
+    """One step (no label, no comment) → its node; lark's exception when it is not V+."""
+    return _build.transform(_parser().parse(line))
 
-    def value_(self, *vals):
-        return ("value", list(vals))
 
-    def any_(self):
-        return ("any",)
+def parse_module(text: str, source: str = "<module>", *, external_calls: bool = False) -> Module:
+    """Parse and check a module; raise :class:`WirecalError` listing every problem.
 
-    def goto(self, label):
-        return ("goto", int(label))
-
-    def return_(self):
-        return ("return",)
-
-    def halt(self):
-        return ("halt",)
-
-    def pause(self):
-        return ("pause",)
-
-    def set_loc(self, name, e):
-        return ("set", *_loc(name), e)
-
-    def move(self, kind, name):
-        return ("move", *_loc(name), str(kind).upper())
-
-    def break_(self):
-        return ("break",)
-
-    def here(self, name):
-        return ("here", *_loc(name))
-
-    def decompose(self, name, index, loc):
-        return ("decompose", str(name).lower(), index, *_loc(loc))
-
-    def config(self, word):
-        return ("config", str(word).upper())
-
-    def shift(self, loc, dx, dy, dz):
-        return ("fn", "shift", [loc, dx, dy, dz])
-
-    def speed(self, e):
-        return ("speed", e)
-
-    def accel(self, prof, a, d):
-        return ("accel", prof, a, d)
-
-    def type_(self, *items):
-        return ("type", list(items))
-
-    def prompt(self, e, target):
-        return ("prompt", e, ("var", _kind(target), target.lower(), None))
-
-    def wait_event(self, e):
-        return ("wait", e)
-
-    def attach(self, lun, mode, device):
-        return ("attach", str(lun).lower(), mode, device)
-
-    def detach(self, lun):
-        return ("detach", lun)
-
-    def fopen(self, kind, lun, name):
-        return ("fopen", str(kind).upper(), lun, name)
-
-    def fclose(self, lun):
-        return ("fclose", lun)
-
-    def write_(self, lun, e):
-        return ("write", lun, e)
-
-    def tool_null(self):
-        return ("tool_null",)
-
-    def enable(self, name):
-        return ("enable", str(name).upper())
-
-    def defbelt(self, name, enc, scale):
-        return ("defbelt", str(name).lower(), enc, scale)
-
-
-_BLOCK_OPEN = {"if", "for", "while", "case"}
-_DECL = "decl"
-
-
-def parse_module(text: str, source: str = "<module>") -> Module:
-    """Parse and check a module; raise :class:`WirecalError` listing every problem."""
+    ``external_calls``: CALLs to programs that are not in this module are allowed (they
+    may be loaded from another file), as LOAD allows them.
+    """
     problems: list[str] = []
     programs: dict[str, Program] = {}
-    lines = text.split("\n")
-    current: tuple[str, int, list, list] | None = None  # name, line, params, steps
-    for n, raw in enumerate(lines, 1):
+    current: tuple[str, int, list[Param], list[N.Stmt]] | None = None
+    section: str | None = None  # inside a data section (.LOCATIONS, .REALS, ...)
+    for n, raw in enumerate(_LINES.split(text), 1):
         line = _strip_comment(raw).strip()
         if not line:
             continue
-        if line.upper().startswith(".PROGRAM"):
-            m = _HEADER.match(raw.strip())
+        word = line.split()[0].upper()
+        if section is not None:
+            if word == ".END":
+                section = None
+            continue
+        if word == ".PROGRAM":
+            m = _HEADER.match(line)
             if not m:
                 problems.append(f"{source}:{n}: malformed .PROGRAM line")
                 continue
@@ -286,41 +254,49 @@ def parse_module(text: str, source: str = "<module>") -> Module:
                     f"{source}:{n}: {current[0]}: missing .END before the next .PROGRAM"
                 )
                 _finish(current, programs, source, problems)
-            params = _params(m.group(2), source, n, m.group(1).lower(), problems)
-            current = (m.group(1).lower(), n, params, [])
+            name = m.group(1).lower()
+            params = _params(m.group(2) or "", source, n, name, problems)
+            current = (name, n, params, [])
             continue
-        if line.upper() == ".END":
+        if word == ".END":
             if not current:
                 problems.append(f"{source}:{n}: .END without .PROGRAM")
                 continue
             _finish(current, programs, source, problems)
             current = None
             continue
+        if word.startswith(".") and not current:
+            section = word  # a data section: its values are not program steps
+            continue
         if not current:
             problems.append(f"{source}:{n}: code outside a program: {line}")
             continue
-        label = None
         m = _LABEL.match(line)
         if m:
-            label, line = int(m.group(1)), line[m.end() :].strip()
-            current[3].append((n, ("label", label)))
+            line = line[m.end() :].strip()
+            current[3].append(N.Label(int(m.group(1)), line=n))
             if not line:
                 continue
         try:
-            step = _Build().transform(_parser().parse(line))
+            step = parse_step(line)
         except (UnexpectedToken, UnexpectedCharacters) as exc:
             problems.append(f"{source}:{n}: {current[0]}: {_explain(line, exc)}")
             continue
         except LarkError as exc:  # pragma: no cover - grammar-level failure
             problems.append(f"{source}:{n}: {current[0]}: cannot parse: {exc}")
             continue
-        current[3].append((n, step))
+        step.line = n
+        current[3].append(step)
     if current:
         problems.append(
             f"{source}: {current[0]}: missing .END (program starts on line {current[1]})"
         )
         _finish(current, programs, source, problems)
-    _check_module(programs, source, problems)
+    if section is not None:
+        problems.append(f"{source}: data section {section} is never closed with .END")
+    _check_module(programs, source, problems, external_calls)
+    if not programs and not problems:
+        problems.append(f"{source}: no .PROGRAM in the file")
     if problems:
         raise WirecalError(problems)
     return Module(source, programs)
@@ -337,16 +313,14 @@ def _strip_comment(line: str) -> str:
     return "".join(out)
 
 
-def _params(text: str, source: str, n: int, prog: str, problems: list[str]):
+def _params(text: str, source: str, n: int, prog: str, problems: list[str]) -> list[Param]:
     params = []
-    for p in [x.strip() for x in text.split(",") if x.strip()]:
+    for p in [x.strip() for x in text.split(",")] if text.strip() else []:
         m = _PARAM.match(p)
         if not m:
             problems.append(f"{source}:{n}: {prog}: bad parameter {p!r}")
             continue
-        params.append(
-            (_kind(m.group(1) or "n"), (m.group(1) + m.group(2)).lower(), bool(m.group(3)))
-        )
+        params.append(Param(m.group(1).lower(), bool(m.group(2))))
     return params
 
 
@@ -369,65 +343,136 @@ def _finish(current, programs, source, problems):
     programs[name] = Program(name, params, body, start, declared)
 
 
-def _blocks(prog: str, steps, source: str, problems: list[str]):
+_OPENERS = (N.IfStart, N.ForStart, N.WhileStart, N.DoStart, N.CaseStart)
+
+
+def _blocks(prog: str, steps: list[N.Stmt], source: str, problems: list[str]):
     """Nest the line statements into blocks; check declarations come first."""
-    declared: dict[str, tuple[str, str]] = {}
-    root: list = []
-    stack: list[tuple[tuple, list, int]] = []  # (opening step, its list, line)
-    target = root
+    declared: dict[str, N.Decl] = {}
+    root: list[N.Stmt] = []
+    # (block node, the list it was appended to, the list now filled)
+    stack: list[tuple[N.Stmt, list[N.Stmt]]] = []
+    target: list[N.Stmt] | None = root
     executable = False
-    for n, step in steps:
-        kind = step[0]
-        where = f"{source}:{n}: {prog}"
-        if kind == _DECL:
+    for step in steps:
+        where = f"{source}:{step.line}: {prog}"
+        if isinstance(step, N.Decl):
             if executable:
                 problems.append(f"{where}: declaration after executable steps")
-            for name, _dims in step[3]:
-                declared[name] = (step[1], step[2])
+            for item in step.items:
+                declared[item.name] = step
             continue
-        if kind != "label":
+        if not isinstance(step, N.Label):
             executable = True
-        if kind == "label" and stack:
-            problems.append(
-                f"{where}: label {step[1]} inside a block; put labels at the program's top level"
-            )
+        if isinstance(step, _OPENERS):
+            node = _open(step)
+            if target is None:
+                problems.append(f"{where}: a step between CASE and its first VALUE")
+            else:
+                target.append(node)
+            stack.append((node, target if target is not None else []))
+            target = _first_list(node)
             continue
-        if kind in _BLOCK_OPEN:
-            node = [kind, n, step, [], []] if kind != "case" else [kind, n, step, []]
-            target.append(node)
-            stack.append((node, target, n))
-            target = node[3] if kind != "case" else None
-            continue
-        if kind == "else":
-            if not stack or stack[-1][0][0] != "if":
+        if isinstance(step, N.ElseLine):
+            if not stack or not isinstance(stack[-1][0], N.If):
                 problems.append(f"{where}: ELSE without IF")
                 continue
-            target = stack[-1][0][4]
+            target = stack[-1][0].orelse
             continue
-        if kind in ("value", "any"):
-            if not stack or stack[-1][0][0] != "case":
-                problems.append(f"{where}: {kind.upper()} outside CASE")
+        if isinstance(step, (N.ValueLine, N.AnyLine)):
+            word = "VALUE" if isinstance(step, N.ValueLine) else "ANY"
+            if not stack or not isinstance(stack[-1][0], N.Case):
+                problems.append(f"{where}: {word} outside CASE")
                 continue
-            branch = (None if kind == "any" else step[1], [])
-            stack[-1][0][3].append(branch)
-            target = branch[1]
+            branch = N.Branch(step.values if isinstance(step, N.ValueLine) else None, [])
+            stack[-1][0].branches.append(branch)
+            target = branch.body
             continue
-        if kind == "end":
-            if not stack:
-                problems.append(f"{where}: END without IF, FOR, WHILE or CASE")
+        if isinstance(step, (N.EndLine, N.UntilLine)):
+            until = isinstance(step, N.UntilLine)
+            top = stack[-1][0] if stack else None
+            if until and not isinstance(top, N.DoUntil):
+                problems.append(f"{where}: UNTIL without DO")
                 continue
-            node, target, _ = stack.pop()
+            if not until and (top is None or isinstance(top, N.DoUntil)):
+                problems.append(
+                    f"{where}: END inside a DO block (DO closes with UNTIL)"
+                    if top is not None
+                    else f"{where}: END without IF, FOR, WHILE or CASE"
+                )
+                continue
+            node, target = stack.pop()
+            if isinstance(node, N.DoUntil) and isinstance(step, N.UntilLine):
+                node.cond = step.cond
             continue
         if target is None:
             problems.append(f"{where}: a step between CASE and its first VALUE")
             continue
-        target.append((kind, n, *step[1:]))
-    for node, _, n in stack:
-        problems.append(f"{source}:{n}: {prog}: {node[0].upper()} is never closed with END")
+        target.append(step)
+    opener = {N.If: "IF", N.For: "FOR", N.While: "WHILE", N.DoUntil: "DO", N.Case: "CASE"}
+    for node, _ in stack:
+        closer = "UNTIL" if isinstance(node, N.DoUntil) else "END"
+        problems.append(
+            f"{source}:{node.line}: {prog}: {opener[type(node)]} is never closed with {closer}"
+        )
     return root, declared
 
 
-def _check_module(programs: dict[str, Program], source: str, problems: list[str]) -> None:
+def _open(step: N.Stmt) -> N.Stmt:
+    line = step.line
+    if isinstance(step, N.IfStart):
+        return N.If(step.cond, [], [], line=line)
+    if isinstance(step, N.ForStart):
+        return N.For(step.var, step.start, step.stop, step.step, [], line=line)
+    if isinstance(step, N.WhileStart):
+        return N.While(step.cond, [], line=line)
+    if isinstance(step, N.DoStart):
+        return N.DoUntil([], None, line=line)
+    assert isinstance(step, N.CaseStart)
+    return N.Case(step.selector, [], line=line)
+
+
+def _first_list(node: N.Stmt) -> list[N.Stmt] | None:
+    if isinstance(node, N.If):
+        return node.then
+    if isinstance(node, N.Case):
+        return None  # steps go in its VALUE branches
+    return node.body  # type: ignore[attr-defined]
+
+
+def children(stmt: N.Stmt) -> list[list[N.Stmt]]:
+    """The statement lists nested in a block statement."""
+    if isinstance(stmt, N.If):
+        return [stmt.then, stmt.orelse]
+    if isinstance(stmt, (N.For, N.While, N.DoUntil)):
+        return [stmt.body]
+    if isinstance(stmt, N.Case):
+        return [b.body for b in stmt.branches]
+    return []
+
+
+def walk(steps: list[N.Stmt]):
+    """Every statement, depth first."""
+    for s in steps:
+        yield s
+        for body in children(s):
+            yield from walk(body)
+
+
+def transformation_names(programs: dict[str, Program]) -> set[str]:
+    """Names without a prefix that hold transformations (targets of SET or HERE)."""
+    names: set[str] = set()
+    for prog in programs.values():
+        for s in walk(prog.body):
+            if isinstance(s, N.Instruction) and s.name in ("set", "here") and s.clauses:
+                first = s.clauses[0]
+                if first is not None and first.items and isinstance(first.items[0], N.Var):
+                    if first.items[0].kind == "n":
+                        names.add(first.items[0].name)
+    return names
+
+
+def _check_module(programs, source, problems, external_calls) -> None:
     names: dict[str, str] = {}
 
     def register(name: str, where: str) -> None:
@@ -441,217 +486,362 @@ def _check_module(programs: dict[str, Program], source: str, problems: list[str]
 
     transforms = transformation_names(programs)
     for prog in programs.values():
-        register(prog.name, f"{source}:{prog.line}: {prog.name}")
-        labels = {s[2] for s in prog.body if s[0] == "label"}
-        _Checker(prog, programs, source, problems, register, labels, transforms).block(prog.body)
-
-
-def transformation_names(programs: dict[str, Program]) -> set[str]:
-    """Names without a prefix that hold transformations (targets of SET or HERE)."""
-    names: set[str] = set()
-
-    def walk(steps):
-        for s in steps:
-            if not isinstance(s, list):
-                if s[0] in ("set", "here") and s[2] == "t":
-                    names.add(s[3])
-            elif s[0] == "case":
-                for _values, body in s[3]:
-                    walk(body)
-            else:
-                walk(s[3])
-                if len(s) > 4:
-                    walk(s[4])
-
-    for prog in programs.values():
-        walk(prog.body)
-    return names
+        checker = _Checker(prog, programs, source, problems, register, transforms)
+        checker.define(prog.line, prog.name, "program")
+        for p in prog.params:
+            checker.define(prog.line, p.name, "parameter")
+        for name, decl in prog.declared.items():
+            checker.define(decl.line, name, "variable")
+        checker.external_calls = external_calls
+        checker.block(prog.body)
 
 
 class _Checker:
     """Walks one program: names, functions, argument counts, GOTOs and kinds."""
 
-    def __init__(self, prog, programs, source, problems, register, labels, transforms):
+    def __init__(self, prog, programs, source, problems, register, transforms):
         self.prog, self.programs, self.source = prog, programs, source
-        self.problems, self.register, self.labels = problems, register, labels
+        self.problems, self.register = problems, register
         self.transforms = transforms
+        self.labels = {s.number for s in walk(prog.body) if isinstance(s, N.Label)}
+        self.external_calls = False
+        self.line = prog.line
+        self.named: set[str] = set()  # keywords already reported as names
 
-    def err(self, line, message):
-        self.problems.append(f"{self.source}:{line}: {self.prog.name}: {message}")
+    def err(self, message: str, line: int | None = None) -> None:
+        self.problems.append(f"{self.source}:{line or self.line}: {self.prog.name}: {message}")
 
-    def block(self, steps):
+    def define(self, line: int, name: str, what: str) -> None:
+        """A name the program defines (program, parameter, variable, target)."""
+        self.line = line
+        self.no_keyword(name)
+        self.register(name, f"{self.source}:{line}: {self.prog.name}")
+
+    def block(self, steps: list[N.Stmt]) -> None:
         for s in steps:
-            self.step(s)
+            self.line = s.line
+            self.stmt(s)
 
-    def step(self, s):
-        kind, line = s[0], s[1]
-        if isinstance(s, list):  # a block node
-            if kind == "if":
-                self.need(line, s[2][1], "n")
-                self.block(s[3])
-                self.block(s[4])
-            elif kind == "for":
-                _, var, a, b, st = s[2]
-                self.register(var, f"{self.source}:{line}: {self.prog.name}")
-                for e in (a, b, st):
-                    if e is not None:
-                        self.need(line, e, "n")
-                self.block(s[3])
-            elif kind == "while":
-                self.need(line, s[2][1], "n")
-                self.block(s[3])
-            elif kind == "case":
-                self.need(line, s[2][1], "n")
-                for values, body in s[3]:
-                    for v in values or []:
-                        self.need(line, v, "n")
-                    self.block(body)
+    # ---------- statements ----------
+    @singledispatchmethod
+    def stmt(self, s: N.Stmt) -> None:  # pragma: no cover - every node type is registered
+        raise AssertionError(type(s).__name__)
+
+    @stmt.register
+    def _(self, s: N.Label) -> None:
+        pass
+
+    @stmt.register
+    def _(self, s: N.Assign) -> None:
+        self.target(s.target)
+        kind = self.var_kind(s.target)
+        if kind in ("l", "t"):
+            self.err(
+                f"type-prefix misuse: a location is assigned with SET (p. 111): {s.target.name}"
+            )
+        self.need(s.value, kind)
+
+    @stmt.register
+    def _(self, s: N.Call) -> None:
+        prog = self.programs.get(s.program)
+        if prog is None:
+            if not self.external_calls:
+                self.err(f"CALL {s.program}: no such program in the module")
+            for a in s.args:
+                if a is not None:
+                    self.argument(a)
             return
-        args = s[2:]
-        if kind == "assign":
-            target, expr = args
-            self.var(line, target)
-            self.need(line, expr, target[1])
-        elif kind == "call":
-            name, actual = args
-            prog = self.programs.get(name)
-            if prog is None:
-                self.err(line, f"CALL {name}: no such program in the module")
-                return
-            if len(actual) > len(prog.params):
+        if len(s.args) > len(prog.params):
+            self.err(
+                f"CALL {s.program}: {len(s.args)} arguments; {s.program} takes {len(prog.params)}"
+            )
+        for a, p in zip(s.args, prog.params, strict=False):
+            if a is None:
+                continue  # omitted: undefined in the callee (p. 42–45)
+            got = self.argument(a)
+            if isinstance(a, N.ArrayArg):
+                if not p.is_array or a.kind != p.kind:
+                    self.err(f"CALL {s.program}: argument {a.name}[] does not match the parameter")
+            elif p.is_array:
+                self.err(f"CALL {s.program}: {p.name} is an array; pass {p.name}[]")
+            elif got not in ("?", p.kind) and not (got == "t" and p.kind == "n"):
                 self.err(
-                    line, f"CALL {name}: {len(actual)} arguments; {name} takes {len(prog.params)}"
+                    f"CALL {s.program}: a {_word(got)} where {s.program} takes a {_word(p.kind)}"
                 )
-            for a, (pkind, _pname, is_array) in zip(actual, prog.params, strict=False):
-                if a[0] == "array":
-                    if not is_array or a[1] != pkind:
-                        self.err(
-                            line, f"CALL {name}: argument {a[2]}[] does not match the parameter"
-                        )
-                    self.register(a[2], f"{self.source}:{line}: {self.prog.name}")
-                else:
-                    got = self.kind(line, a)
-                    if got is not None and got != pkind:
-                        self.err(
-                            line, f"CALL {name}: a {_word(got)} where {name} takes a {_word(pkind)}"
-                        )
-        elif kind == "goto":
-            if args[0] not in self.labels:
-                self.err(line, f"GOTO {args[0]}: no such label in {self.prog.name}")
-        elif kind in ("set",):
-            self.register(args[1], f"{self.source}:{line}: {self.prog.name}")
-            self.need(line, args[2], args[0])
-        elif kind in ("move", "here"):
-            self.register(args[1], f"{self.source}:{line}: {self.prog.name}")
-        elif kind == "decompose":
-            self.register(args[0], f"{self.source}:{line}: {self.prog.name}")
-            for e in args[1]:
-                self.need(line, e, "n")
-        elif kind in ("speed", "wait", "detach", "fclose"):
-            self.need(line, args[0], "n")
-        elif kind == "accel":
-            for e in args:
-                self.need(line, e, "n")
-        elif kind == "type":
-            for e in args[0]:
-                got = self.kind(line, e)
-                if got not in (None, "n", "s"):
-                    self.err(line, f"TYPE cannot print a {_word(got)}")
-        elif kind == "prompt":
-            self.need(line, args[0], "s")
-            self.var(line, args[1])
-        elif kind == "attach":
-            self.register(args[0], f"{self.source}:{line}: {self.prog.name}")
-            self.need(line, args[1], "n")
-            self.need(line, args[2], "s")
-        elif kind == "fopen":
-            self.need(line, args[1], "n")
-            self.need(line, args[2], "s")
-        elif kind == "write":
-            self.need(line, args[0], "n")
-            self.need(line, args[1], "s")
-        elif kind == "defbelt":
-            self.register(args[0], f"{self.source}:{line}: {self.prog.name}")
-            self.need(line, args[1], "n")
-            self.need(line, args[2], "n")
 
-    def var(self, line, v):
-        self.register(v[2], f"{self.source}:{line}: {self.prog.name}")
-        for e in v[3] or []:
-            self.need(line, e, "n")
+    def argument(self, a: N.Expr) -> str:
+        if isinstance(a, N.ArrayArg):
+            self.register(a.name, f"{self.source}:{self.line}: {self.prog.name}")
+            self.no_keyword(a.name)
+            return a.kind
+        return self.kind(a)
 
-    def need(self, line, expr, want):
-        got = self.kind(line, expr)
-        if got is not None and got != want:
-            self.err(line, f"type-prefix misuse: a {_word(got)} where a {_word(want)} is needed")
+    @stmt.register
+    def _(self, s: N.Goto) -> None:
+        self.goto(s.label)
 
-    def kind(self, line, e):
-        """The kind of an expression (n, s, l, b), or None after reporting a problem."""
-        tag = e[0]
-        if tag == "paren":
-            return self.kind(line, e[1])
-        if tag == "num":
-            return "n"
-        if tag == "str":
-            return "s"
-        if tag == "var":
-            self.var(line, e)
-            return "t" if e[1] == "n" and e[2] in self.transforms else e[1]
-        if tag == "fn":
-            name, args = e[1], e[2]
-            if name == "shift":
-                self.need(line, args[0], "t")
-                for a in args[1:]:
-                    self.need(line, a, "n")
-                return "t"
-            spec = FUNCTIONS.get(name)
-            if spec is None:
-                self.err(line, f"unknown function {name.upper()}")
-                return None
-            kinds, result = spec
-            if len(args) != len(kinds):
-                self.err(
-                    line,
-                    f"{name.upper()} takes {len(kinds)} argument"
-                    f"{'s' if len(kinds) != 1 else ''}, not {len(args)}",
-                )
-                return result
-            for a, k in zip(args, kinds, strict=True):
-                if k == "v":
-                    if a[0] != "var":
-                        self.err(line, f"{name.upper()} needs a variable")
-                    else:
-                        self.var(line, a)
-                elif k == "nv":
-                    if a[0] != "var" or a[1] != "n":
-                        self.err(line, f"{name.upper()} needs a numeric variable there")
-                    else:
-                        self.var(line, a)
-                else:
-                    self.need(line, a, k)
+    @stmt.register
+    def _(self, s: N.IfGoto) -> None:
+        self.need(s.cond, "n")
+        self.goto(s.label)
+
+    def goto(self, label: int) -> None:
+        if label not in self.labels:
+            self.err(f"GOTO {label}: no such label in {self.prog.name}")
+
+    @stmt.register
+    def _(self, s: N.If) -> None:
+        self.need(s.cond, "n")
+        self.block(s.then)
+        self.block(s.orelse)
+
+    @stmt.register
+    def _(self, s: N.For) -> None:
+        self.target(s.var)
+        for e in (s.start, s.stop, s.step):
+            if e is not None:
+                self.need(e, "n")
+        self.block(s.body)
+
+    @stmt.register
+    def _(self, s: N.While) -> None:
+        self.need(s.cond, "n")
+        self.block(s.body)
+
+    @stmt.register
+    def _(self, s: N.DoUntil) -> None:
+        self.block(s.body)
+        if s.cond is not None:
+            self.line = s.line
+            self.need(s.cond, "n")
+
+    @stmt.register
+    def _(self, s: N.Case) -> None:
+        self.need(s.selector, "n")
+        for b in s.branches:
+            for v in b.values or []:
+                self.need(v, "n")
+            self.block(b.body)
+
+    @stmt.register
+    def _(self, s: N.Instruction) -> None:
+        if not is_kind(s.name, "instruction"):
+            self.err(f"unknown instruction {s.name.upper()} (not in the V+ keyword table)")
+        try:
+            ops = operands(s)
+        except FormError:
+            ops = None
+        if ops is None:  # a form the twin does not execute: check names and functions
+            for c in s.clauses:
+                if c is None:
+                    continue
+                for e in c.items:
+                    self.operand(e)
+                if c.value is not None:
+                    self.kind(c.value)
+            return
+        target_kind = "?"
+        for code, e in ops:
+            if e is None:
+                continue
+            if code in ("L", "V", "B"):
+                if not isinstance(e, N.Var):
+                    self.err(f"{s.name.upper()} needs a variable there")
+                    continue
+                self.target(e)
+                target_kind = self.var_kind(e)
+                want = {"L": ("l", "t"), "B": ("b",), "V": (target_kind,)}[code]
+                if target_kind not in want:
+                    self.err(
+                        f"type-prefix misuse: {s.name.upper()} needs a "
+                        f"{'location' if code == 'L' else 'belt (%)'} variable"
+                    )
+            elif code == "W":
+                if not isinstance(e, N.Var) or e.index is not None:
+                    self.err(f"{s.name.upper()} needs a word there")
+            elif code == "e":
+                self.need(e, target_kind)
+            elif code == "l":
+                got = self.kind(e)
+                if got not in ("?", "l", "t"):
+                    self.err(f"type-prefix misuse: {s.name.upper()} needs a location")
+            elif code == "*":
+                got = self.kind(e)
+                if got not in ("?", "n", "s"):
+                    self.err(f"{s.name.upper()} cannot print a {_word(got)}")
+            else:
+                self.need(e, code)
+
+    def operand(self, e: N.Expr) -> None:
+        """An operand of an instruction in a form the twin does not execute: a bare
+        keyword is a word of the instruction (ALWAYS, POWER, ROBOT); a function call
+        whose name is no function names a program (EXECUTE 1 a.main())."""
+        if isinstance(e, N.Var) and e.index is None and keyword(e.name) is not None:
+            return
+        if isinstance(e, N.Func) and not is_kind(e.name, "function") and e.name not in FUNCTIONS:
+            if e.name not in self.programs and not self.external_calls:
+                self.err(f"{e.name}: no such program in the module, and no V+ function")
+            for a in e.args:
+                if a is not None:
+                    self.argument(a)
+            return
+        if isinstance(e, N.Group):
+            for x in e.items:
+                if x is not None:
+                    self.kind(x)
+            return
+        self.kind(e)
+
+    # ---------- names ----------
+    def no_keyword(self, name: str) -> None:
+        """A V+ keyword used as a name (User's Guide p. 99): reported once per program."""
+        k = keyword(name)
+        if k is not None and name not in self.named:
+            self.named.add(name)
+            self.err(f"{name!r} is a V+ keyword ({k.describe()}) and cannot be a name")
+
+    def target(self, v: N.Var) -> None:
+        """A variable written to: no keyword; its indices are numbers."""
+        self.no_keyword(v.name)
+        self.register(v.name, f"{self.source}:{self.line}: {self.prog.name}")
+        for e in v.index or []:
+            self.need(e, "n")
+
+    def var_kind(self, v: N.Var) -> str:
+        if v.kind == "n" and v.name in self.transforms:
+            return "t"
+        return v.kind
+
+    # ---------- expressions ----------
+    def need(self, e: N.Expr, want: str) -> None:
+        got = self.kind(e)
+        if "?" not in (got, want) and got != want:
+            self.err(f"type-prefix misuse: a {_word(got)} where a {_word(want)} is needed")
+
+    @singledispatchmethod
+    def kind(self, e: N.Expr) -> str:
+        """The kind of an expression: n, s, l, b, t, or ? (not known, or a problem
+        already reported)."""
+        self.err(f"{type(e).__name__.lower()} is not a value here")
+        return "?"
+
+    @kind.register
+    def _(self, e: N.Num) -> str:
+        return "n"
+
+    @kind.register
+    def _(self, e: N.Str) -> str:
+        return "s"
+
+    @kind.register
+    def _(self, e: N.Paren) -> str:
+        return self.kind(e.expr)
+
+    @kind.register
+    def _(self, e: N.Format) -> str:
+        return "?"
+
+    @kind.register
+    def _(self, e: N.Var) -> str:
+        k = keyword(e.name)
+        if k is not None and e.index is None:
+            if not any(kind in k.kinds for kind in VALUE_KINDS):
+                self.no_keyword(e.name)
+                return "?"
+            return _VALUE_WORD_KIND.get(e.name, "?")
+        self.target(e)
+        return self.var_kind(e)
+
+    @kind.register
+    def _(self, e: N.Compound) -> str:
+        for side in (e.left, e.right):
+            # a name without prefix may hold a transformation defined elsewhere (p. 310)
+            if self.kind(side) not in ("?", "t", "b", "n"):
+                self.err("type-prefix misuse: ':' joins transformations")
+        return "t"
+
+    @kind.register
+    def _(self, e: N.ArrayArg) -> str:
+        self.argument(e)
+        return e.kind
+
+    @kind.register
+    def _(self, e: N.Shift) -> str:
+        self.need(e.base, "t")
+        for a in (e.dx, e.dy, e.dz):
+            self.need(a, "n")
+        return "t"
+
+    @kind.register
+    def _(self, e: N.Func) -> str:
+        spec = FUNCTIONS.get(e.name)
+        if spec is None:
+            if not is_kind(e.name, "function"):
+                self.err(f"unknown function {e.name.upper()}")
+            for a in e.args:
+                if a is not None:
+                    self.kind(a)
+            return {"$": "s", "#": "l"}.get(e.name[:1], "?")
+        kinds, required, result = spec
+        given = len(e.args)
+        if not required <= given <= len(kinds):
+            count = f"{required}" if required == len(kinds) else f"{required} to {len(kinds)}"
+            self.err(
+                f"{e.name.upper()} takes {count} argument{'s' if len(kinds) != 1 else ''}, "
+                f"not {given}"
+            )
             return result
-        if tag in ("neg", "not"):
-            self.need(line, e[1], "n")
-            return "n"
-        if tag == "bin":
-            a, b = self.kind(line, e[2]), self.kind(line, e[3])
-            if e[1] == "+" and a == "s" and b == "s":
-                return "s"
-            for k in (a, b):
-                if k not in (None, "n"):
-                    self.err(line, f"type-prefix misuse: '{e[1]}' on a {_word(k)}")
-                    return None
-            return "n"
-        if tag == "cmp":
-            a, b = self.kind(line, e[2]), self.kind(line, e[3])
-            if None not in (a, b) and (a != b or a not in ("n", "s")):
-                self.err(line, f"type-prefix misuse: comparing a {_word(a)} with a {_word(b)}")
-            return "n"
-        if tag in ("and", "or"):
-            self.need(line, e[1], "n")
-            self.need(line, e[2], "n")
-            return "n"
-        raise AssertionError(tag)  # pragma: no cover
+        for k, (a, want) in enumerate(zip(e.args, kinds, strict=False), 1):
+            if a is None:
+                if e.name not in OMITTABLE:
+                    self.err(f"{e.name.upper()}: argument {k} is missing")
+            elif want == "v":
+                if not isinstance(a, N.Var):
+                    self.err(f"{e.name.upper()} needs a variable")
+                else:
+                    self.target(a)
+            elif want == "nv":
+                if not isinstance(a, N.Var) or a.kind != "n":
+                    self.err(f"{e.name.upper()} needs a numeric variable there")
+                else:
+                    self.target(a)
+            else:
+                self.need(a, want)
+        return result
+
+    @kind.register
+    def _(self, e: N.Neg) -> str:
+        self.need(e.expr, "n")
+        return "n"
+
+    @kind.register
+    def _(self, e: N.Not | N.Com) -> str:
+        self.need(e.expr, "n")
+        return "n"
+
+    @kind.register
+    def _(self, e: N.Logic) -> str:
+        self.need(e.left, "n")
+        self.need(e.right, "n")
+        return "n"
+
+    @kind.register
+    def _(self, e: N.BinOp) -> str:
+        a, b = self.kind(e.left), self.kind(e.right)
+        if e.op == "+" and "s" in (a, b) and {a, b} <= {"s", "?"}:
+            return "s"
+        for k in (a, b):
+            if k not in ("?", "n"):
+                self.err(f"type-prefix misuse: '{e.op}' on a {_word(k)}")
+                return "?"
+        return "n"
+
+    @kind.register
+    def _(self, e: N.Compare) -> str:
+        a, b = self.kind(e.left), self.kind(e.right)
+        if "?" not in (a, b) and (a != b or a not in ("n", "s")):
+            self.err(f"type-prefix misuse: comparing a {_word(a)} with a {_word(b)}")
+        return "n"
 
 
 def _word(kind: str) -> str:
