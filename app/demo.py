@@ -19,12 +19,13 @@ from pathlib import Path
 import numpy as np
 
 from wirecal import __version__
+from wirecal.app.compare import compare_controller
 from wirecal.app.report import Validation, render_report
+from wirecal.app.twin_runs import measure_in_twin
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.accuracy import workspace
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import check_writable, write_atomic
-from wirecal.solver.formats.log import read_log
 from wirecal.solver.formats.patch import write_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
@@ -34,7 +35,7 @@ from wirecal.solver.kinematics import perturbed, tool_position
 from wirecal.solver.measurements import load_measurements
 from wirecal.solver.solve import solve
 from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
-from wirecal.twin.cell import controller_comparison, run_measurement, run_validation
+from wirecal.twin.cell import run_validation
 
 OUTPUTS = (
     "truth.toml",
@@ -96,12 +97,15 @@ def run_demo(
         return time.perf_counter()
 
     t = step(1, "generating the V+ module (calibration and validation programs)")
-    text = module_text(robot, plan, GenOptions(validation=setup))
+    options = GenOptions(validation=setup)
+    text = module_text(robot, plan, options)
     seconds["generate"] = time.perf_counter() - t
     with tempfile.TemporaryDirectory() as tmp:
         disk = Path(tmp)
         t = step(2, "measurement run in the digital twin (wc.mount, wc.run)")
-        run = run_measurement(robot, plan, truth, disk / "cal", seed=seed, text=text)
+        run = measure_in_twin(
+            robot, plan, truth, disk / "cal", options=options, text=text, seed=seed
+        )
         if run.run is None or run.run.status != "completed":
             raise WirecalError(f"the twin's measurement run stopped: {run.run or run.mount}")
         seconds["measure"] = time.perf_counter() - t
@@ -113,9 +117,7 @@ def run_demo(
         result = solve(robot, plan, m)
         seconds["solve"] = time.perf_counter() - t
         t = step(4, "identification on the controller (wc.solve, wc.solve2 in the twin)")
-        controller = controller_comparison(
-            robot, plan, read_log(log_path), result, disk / "ctl", text=text
-        )
+        controller = compare_controller(result, disk / "ctl", text=text)
         seconds["controller"] = time.perf_counter() - t
         identified = result.estimates[result.recommended].as_dict()
         runs = {}
@@ -186,4 +188,4 @@ def run_demo(
         )
         for name, believed in (("before", {}), ("after", identified))
     }
-    return DemoResult(folder, validations, errors, controller["polished_max_difference"], seconds)
+    return DemoResult(folder, validations, errors, controller.polished_max_difference, seconds)

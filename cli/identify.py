@@ -11,11 +11,12 @@ from pathlib import Path
 import click
 import numpy as np
 
+from wirecal.app.compare import ControllerComparison, compare_controller
+from wirecal.app.twin_runs import measure_in_twin
 from wirecal.cli.main import _version, main, print_json, user_errors
 from wirecal.gen.vplus.program import GenOptions
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import check_writable, write_atomic
-from wirecal.solver.formats.log import read_log
 from wirecal.solver.formats.patch import write_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
@@ -25,7 +26,7 @@ from wirecal.solver.measurements import Tolerances, load_measurements
 from wirecal.solver.simulate import Faults, simulate_log
 from wirecal.solver.solve import solve as solve_api
 from wirecal.twin.cell import Faults as TwinFaults
-from wirecal.twin.cell import controller_comparison, move_of_step, run_measurement
+from wirecal.twin.cell import move_of_step
 
 ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
 PLAN = click.argument("plan", type=click.Path(dir_okay=False))
@@ -200,7 +201,7 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
     if slip is not None:
         faults = TwinFaults(slip_at_move=move_of_step(pl, slip[0]), slip_mm=slip[1])
     with tempfile.TemporaryDirectory() as tmp:
-        result = run_measurement(
+        result = measure_in_twin(
             rb,
             pl,
             errors,
@@ -311,7 +312,7 @@ def solve(
         rb, pl, m, methods=methods, omega_default=omega, robust=robust, partial=partial
     )
     chosen = result.recommended if method in ("all", "controller") else method
-    ctl = _controller(rb, pl, log, result) if method == "controller" else None
+    ctl = _controller(result) if method == "controller" else None
     if patch_path:
         write_patch(
             patch_path,
@@ -326,7 +327,7 @@ def solve(
     if as_json:
         data = result.as_json()
         if ctl:
-            data["methods"]["controller"] = ctl
+            data["methods"]["controller"] = ctl.as_json()
         print_json(data)
     else:
         click.echo(_solve_text(result))
@@ -337,30 +338,25 @@ def solve(
         click.echo(f"wrote {patch_path} ({chosen}) and {spec}", err=as_json)
 
 
-def _controller(rb, pl, log, result) -> dict:
+def _controller(result) -> ControllerComparison:
     """The generated controller solver (wc.solve, wc.solve2) run in the twin on the log."""
-    if result.left_nominal or result.measurements.missing:
-        raise WirecalError(
-            "--method controller needs a complete log (the controller solver "
-            "refuses missing points too)"
-        )
     with tempfile.TemporaryDirectory() as tmp:
-        return controller_comparison(rb, pl, read_log(log), result, Path(tmp))
+        return compare_controller(result, Path(tmp))
 
 
-def _controller_text(ctl: dict) -> str:
+def _controller_text(ctl: ControllerComparison) -> str:
     lines = [
         "",
         "Controller solver (the generated V+ run in the digital twin):",
         f"{'parameter':<10}{'wc.solve':>12}{'wc.solve2':>12}",
     ]
-    for name, value in ctl["parameters"].items():
-        lines.append(f"{name:<10}{value:12.4f}{ctl['polished'][name]:12.4f}")
+    for name, value in ctl.stepwise.offsets.items():
+        lines.append(f"{name:<10}{value:12.4f}{ctl.polished.offsets[name]:12.4f}")
     lines.append(
         f"largest difference from the Python reference: "
-        f"{ctl['parameters_max_difference']:.2g} (stepwise), "
-        f"{ctl['polished_max_difference']:.2g} (joint) deg/mm; "
-        f"{ctl['parameters_operations']:,} and {ctl['polished_operations']:,} "
+        f"{ctl.stepwise_max_difference:.2g} (stepwise), "
+        f"{ctl.polished_max_difference:.2g} (joint) deg/mm; "
+        f"{ctl.stepwise.total_operations:,} and {ctl.polished.total_operations:,} "
         "arithmetic operations"
     )
     return "\n".join(lines)

@@ -7,13 +7,13 @@ import sys
 import click
 import numpy as np
 
-from wirecal.app.psi_view import psi_table
+from wirecal.app.psi_view import PsiTable, psi_table
 from wirecal.cli.main import main, print_json, user_errors
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.identifiability import analyse
+from wirecal.solver.identifiability import Identifiability, analyse
 from wirecal.solver.kinematics import perturbed
 from wirecal.solver.sensitivity import DEFAULT_TOL
 
@@ -51,15 +51,52 @@ def psi(robot: str, plan: str, as_json: bool, tol: float, strict: bool) -> None:
     pl = load_plan(plan, rb)
     table = psi_table(rb, pl, tol)
     if as_json:
-        print_json(table)
+        print_json(_psi_json(table))
     else:
         click.echo(_psi_text(table, robot, plan), nl=False)
-    if strict and not all(r["ok"] for r in table["rows"]):
+    if strict and table.n_ok < len(table.rows):
         sys.exit(1)
 
 
-def _psi_text(table: dict, robot_file: str, plan_file: str) -> str:
-    order = table["order"]
+def _identifiability_json(ident: Identifiability) -> dict:
+    return {
+        "parameters": list(ident.names),
+        "rank": ident.rank,
+        "singular_values": [float(s) for s in ident.singular_values],
+        "unobservable": list(ident.unobservable),
+        "combinations": [dict(combo) for combo in ident.combinations],
+        "indices": ident.indices,
+        "summary": ident.describe(),
+    }
+
+
+def _psi_json(table: PsiTable) -> dict:
+    """What ``wirecal psi --json`` prints."""
+    return {
+        "robot": table.robot,
+        "fingerprint": table.fingerprint,
+        "theta0_deg": [float(x) for x in table.theta0_deg],
+        "tolerance": table.tolerance,
+        "floor": table.floor,
+        "order": list(table.order),
+        "rows": [
+            {
+                "step": r.step,
+                "index": r.index,
+                "parameter": r.parameter,
+                "joints_deg": [float(x) for x in r.joints_deg],
+                "psi": r.psi,
+                "ok": r.ok,
+                "violations": list(r.violations),
+            }
+            for r in table.rows
+        ],
+        "identifiability": _identifiability_json(table.identifiability),
+    }
+
+
+def _psi_text(table: PsiTable, robot_file: str, plan_file: str) -> str:
+    order = table.order
     width = max(6, *(len(n) + 1 for n in order))
     header = (
         "  #"
@@ -70,32 +107,32 @@ def _psi_text(table: dict, robot_file: str, plan_file: str) -> str:
     )
     steps = []
     for j, name in enumerate(order, 1):
-        rows = [r for r in table["rows"] if r["step"] == j]
+        rows = [r for r in table.rows if r.step == j]
         lines = []
         for r in rows:
-            joints = "".join(f"{x:8.2f}" for x in r["joints_deg"])
-            psis = "".join(f"{_fmt(r['psi'][n]):>{width}}" for n in order)
-            mark = "ok" if r["ok"] else "leaks " + ",".join(r["violations"])
-            lines.append(f"{r['index']:3d}{joints} |{psis} | {mark}")
+            joints = "".join(f"{x:8.2f}" for x in r.joints_deg)
+            psis = "".join(f"{_fmt(r.psi[n]):>{width}}" for n in order)
+            mark = "ok" if r.ok else "leaks " + ",".join(r.violations)
+            lines.append(f"{r.index:3d}{joints} |{psis} | {mark}")
         steps.append(
-            {"number": j, "parameter": name, "rows": lines, "n_ok": sum(r["ok"] for r in rows)}
+            {"number": j, "parameter": name, "rows": lines, "n_ok": sum(r.ok for r in rows)}
         )
-    ident = table["identifiability"]
+    ident = table.identifiability
     return render(
         "text/psi.txt.j2",
-        robot=table["robot"],
+        robot=table.robot,
         robot_file=robot_file,
         plan_file=plan_file,
-        fingerprint=table["fingerprint"],
-        theta0=", ".join(f"{x:g}" for x in table["theta0_deg"]),
-        tol=table["tolerance"],
-        floor=table["floor"],
+        fingerprint=table.fingerprint,
+        theta0=", ".join(f"{x:g}" for x in table.theta0_deg),
+        tol=table.tolerance,
+        floor=table.floor,
         steps=steps,
         header=header,
-        n_ok=sum(r["ok"] for r in table["rows"]),
-        n_rows=len(table["rows"]),
-        ident=ident["summary"],
-        ident_names=", ".join(ident["parameters"]),
+        n_ok=table.n_ok,
+        n_rows=len(table.rows),
+        ident=ident.describe(),
+        ident_names=", ".join(ident.names),
     )
 
 
@@ -124,17 +161,7 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
     q, _, _ = pl.all_points()
     result = analyse(perturbed(rb), q, pl.theta0_deg, names)
     if as_json:
-        print_json(
-            {
-                "parameters": list(result.names),
-                "rank": result.rank,
-                "singular_values": [float(s) for s in result.singular_values],
-                "unobservable": list(result.unobservable),
-                "combinations": [dict(c) for c in result.combinations],
-                "indices": result.indices,
-                "summary": result.describe(),
-            }
-        )
+        print_json(_identifiability_json(result))
         return
     click.echo(f"Robot {rb.name}; plan {plan} ({pl.n_points} points)")
     click.echo(

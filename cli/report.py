@@ -7,11 +7,11 @@ from pathlib import Path
 
 import click
 
+from wirecal.app.compare import compare_controller
 from wirecal.app.report import Validation, render_report
 from wirecal.cli.main import main, user_errors
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import write_atomic
-from wirecal.solver.formats.log import read_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import load_errors
@@ -19,7 +19,6 @@ from wirecal.solver.formats.validation_files import read_validation_log
 from wirecal.solver.measurements import load_measurements
 from wirecal.solver.solve import solve
 from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
-from wirecal.twin.cell import controller_comparison
 
 
 @main.command()
@@ -80,7 +79,7 @@ def report(robot, plan, log, output, config_logs, plane_logs, controller, truth_
     ctl = None
     if controller:
         with tempfile.TemporaryDirectory() as tmp:
-            ctl = controller_comparison(rb, pl, read_log(log), result, Path(tmp))
+            ctl = compare_controller(result, Path(tmp))
     truth = load_errors(truth_file, rb) if truth_file else None
     if not str(output).endswith((".html", ".htm")):
         raise WirecalError(f"{output}: give the report an .html name")

@@ -41,6 +41,7 @@ class Measurements:
     joints_deg: np.ndarray  # (N, n) as logged (plan values where missing)
     distance_mm: np.ndarray  # (N,) NaN where missing
     zero_drift_mm: dict[int, float]  # per step with a zero reading
+    log: Log  # the parsed log these were checked from, so nothing reads it twice
     notes: tuple[str, ...] = ()
     missing: tuple[tuple[int, int], ...] = field(default=())
 
@@ -244,6 +245,7 @@ def check_log(
         zero_drift_mm=drift,
         notes=log.notes,
         missing=missing,
+        log=log,
     )
 
 

@@ -10,7 +10,14 @@ import numpy as np
 
 from wirecal.solver.accuracy import stepwise_map, tool_error, workspace
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.identify import DEFAULT_OMEGA, Estimate, Problem, joint, run_stepwise
+from wirecal.solver.identify import (
+    DEFAULT_OMEGA,
+    Estimate,
+    Problem,
+    joint,
+    omega_vector,
+    run_stepwise,
+)
 from wirecal.solver.kinematics import perturbed
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
@@ -29,6 +36,13 @@ class SolveResult:
     predicted: dict[str, dict[str, float]]  # method -> tool-point error mean/max (mm)
     sigma_mm: float  # noise σ estimated from the joint residual
     left_nominal: tuple[str, ...]  # parameters whose step has no points
+    psi: np.ndarray  # (N, k) Ψ at the measured points, columns the estimates' names (paper §2.2)
+    step: np.ndarray  # (N,) 1-based step in the plan's order of each measured point
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The identified parameters (the plan's order, less ``left_nominal``)."""
+        return tuple(n for n in self.plan.order if n not in self.left_nominal)
 
     @property
     def recommended(self) -> str:
@@ -82,15 +96,6 @@ class SolveResult:
             "left_nominal": list(self.left_nominal),
             "notes": list(m.notes),
         }
-
-
-def omega_vector(
-    names: tuple[str, ...], n_joints: int, plan: Plan, default: float = DEFAULT_OMEGA
-) -> np.ndarray:
-    """Ω_j per parameter in internal units: the plan's per-step ``omega`` or the default."""
-    by_step = {s.parameter: s.omega for s in plan.steps}
-    bound = np.array([by_step.get(n) or default for n in names], dtype=float)
-    return bound * boundary_scale(names, n_joints)
 
 
 def solve(
@@ -152,4 +157,4 @@ def solve(
     if "stepwise" in estimates:
         A = stepwise_map(J, step)
         predicted["stepwise"] = tool_error(base, names, sigma**2 * A @ A.T, ws).as_dict()
-    return SolveResult(robot, plan, m, estimates, predicted, sigma, left)
+    return SolveResult(robot, plan, m, estimates, predicted, sigma, left, psi, m.step[present])

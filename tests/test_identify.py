@@ -10,11 +10,10 @@ from scipy.optimize import minimize_scalar
 from wirecal.solver import montecarlo
 from wirecal.solver.accuracy import crb, noise_covariance
 from wirecal.solver.distance import wire_jacobian, wire_lengths
-from wirecal.solver.identify import Problem, joint, run_stepwise, stepwise
+from wirecal.solver.identify import Problem, joint, omega_vector, run_stepwise, stepwise
 from wirecal.solver.kinematics import perturbed, with_errors
 from wirecal.solver.sensitivity import boundary_scale, sensitivity
 from wirecal.solver.simulate import measured_lengths
-from wirecal.solver.solve import omega_vector
 
 from .conftest import TABLE5
 

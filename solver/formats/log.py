@@ -56,7 +56,6 @@ class Log:
     robot: str
     plan: str
     mm_per_count: float
-    comments: tuple[str, ...]
     readings: tuple[Reading, ...]
     sha256: str
     notes: tuple[str, ...] = ()
@@ -123,7 +122,6 @@ def parse_log(text: str, source: str, sha256: str = "") -> Log:
         )
 
     header: dict[str, tuple[str, int]] = {}
-    comments: list[str] = []
     n = 1
     while n < len(lines) and lines[n].startswith("#"):
         body = lines[n][1:].strip()
@@ -132,8 +130,6 @@ def parse_log(text: str, source: str, sha256: str = "") -> Log:
             if key.strip() in header:
                 bad(n + 1, f"'{key.strip()}' is given twice")
             header[key.strip()] = (value.strip(), n + 1)
-        else:
-            comments.append(body)
         n += 1
     for key in ("robot", "plan", "mm_per_count"):
         if key not in header:
@@ -182,7 +178,6 @@ def parse_log(text: str, source: str, sha256: str = "") -> Log:
         robot=header["robot"][0],
         plan=header["plan"][0],
         mm_per_count=mpc,
-        comments=tuple(comments),
         readings=tuple(readings),
         sha256=sha256,
         notes=tuple(notes),
