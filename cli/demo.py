@@ -5,10 +5,10 @@ from __future__ import annotations
 import click
 
 from wirecal.app.demo import OUTPUTS, run_demo
-from wirecal.cli.main import main, user_errors
+from wirecal.cli.main import user_errors
 
 
-@main.command()
+@click.command()
 @click.option(
     "-o",
     "--output",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from wirecal.cli.main import main, user_errors
+from wirecal.cli.main import user_errors
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import read_toml
@@ -15,7 +15,7 @@ from wirecal.solver.formats.validation_files import load_setup
 _D = GenOptions()
 
 
-@main.command()
+@click.command()
 @click.argument("robot", type=click.Path(dir_okay=False))
 @click.argument("plan", type=click.Path(dir_okay=False))
 @click.option(

@@ -7,14 +7,13 @@ import re
 import sys
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 import numpy as np
 
-from wirecal.app.compare import ControllerComparison, compare_controller
-from wirecal.app.twin_runs import measure_in_twin
-from wirecal.cli.main import _version, main, print_json, user_errors
-from wirecal.gen.vplus.program import GenOptions
+from wirecal import __version__
+from wirecal.cli.main import print_json, user_errors
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import check_writable, write_atomic
 from wirecal.solver.formats.patch import write_patch
@@ -25,8 +24,9 @@ from wirecal.solver.identify import DEFAULT_OMEGA
 from wirecal.solver.measurements import Tolerances, load_measurements
 from wirecal.solver.simulate import Faults, simulate_log
 from wirecal.solver.solve import solve as solve_api
-from wirecal.twin.cell import Faults as TwinFaults
-from wirecal.twin.cell import move_of_step
+
+if TYPE_CHECKING:
+    from wirecal.app.compare import ControllerComparison
 
 ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
 PLAN = click.argument("plan", type=click.Path(dir_okay=False))
@@ -41,7 +41,7 @@ def _slip(ctx, param, value):
     return int(m.group(1)), float(m.group(2))
 
 
-@main.command()
+@click.command()
 @ROBOT
 @PLAN
 @click.option(
@@ -197,6 +197,11 @@ def simulate(
 
 def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
     """wc.mount and wc.run in the digital twin; the log text and why it stopped, if so."""
+    from wirecal.app.twin_runs import measure_in_twin  # the twin only when asked for
+    from wirecal.gen.vplus.program import GenOptions
+    from wirecal.twin.cell import Faults as TwinFaults
+    from wirecal.twin.cell import move_of_step
+
     faults = TwinFaults()
     if slip is not None:
         faults = TwinFaults(slip_at_move=move_of_step(pl, slip[0]), slip_mm=slip[1])
@@ -222,7 +227,7 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
     return text, stopped
 
 
-@main.command()
+@click.command()
 @ROBOT
 @PLAN
 @click.argument("log", type=click.Path(dir_okay=False))
@@ -322,7 +327,7 @@ def solve(
             plan_fingerprint=pl.fingerprint(),
             log_path=str(log),
             log_sha256=m.sha256,
-            version=_version(),
+            version=__version__,
         )
     if as_json:
         data = result.as_json()
@@ -340,6 +345,8 @@ def solve(
 
 def _controller(result) -> ControllerComparison:
     """The generated controller solver (wc.solve, wc.solve2) run in the twin on the log."""
+    from wirecal.app.compare import compare_controller  # the twin only when asked for
+
     with tempfile.TemporaryDirectory() as tmp:
         return compare_controller(result, Path(tmp))
 

@@ -8,7 +8,7 @@ import click
 import numpy as np
 
 from wirecal.app.psi_view import PsiTable, psi_table
-from wirecal.cli.main import main, print_json, user_errors
+from wirecal.cli.main import print_json, user_errors
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
 from wirecal.solver.formats.plan_file import load_plan
@@ -25,7 +25,7 @@ def _fmt(x: float) -> str:
     return f"{x:.2f}".replace("-0.00", "0.00")
 
 
-@main.command()
+@click.command()
 @ROBOT
 @PLAN
 @click.option("--json", "as_json", is_flag=True, help="Print the table as JSON.")
@@ -136,7 +136,7 @@ def _psi_text(table: PsiTable, robot_file: str, plan_file: str) -> str:
     )
 
 
-@main.command()
+@click.command()
 @ROBOT
 @PLAN
 @click.option(

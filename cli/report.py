@@ -7,9 +7,8 @@ from pathlib import Path
 
 import click
 
-from wirecal.app.compare import compare_controller
 from wirecal.app.report import Validation, render_report
-from wirecal.cli.main import main, user_errors
+from wirecal.cli.main import user_errors
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import write_atomic
 from wirecal.solver.formats.plan_file import load_plan
@@ -21,7 +20,7 @@ from wirecal.solver.solve import solve
 from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
 
 
-@main.command()
+@click.command()
 @click.argument("robot", type=click.Path(dir_okay=False))
 @click.argument("plan", type=click.Path(dir_okay=False))
 @click.argument("log", type=click.Path(dir_okay=False))
@@ -56,9 +55,11 @@ from wirecal.solver.validation_analysis import config_discrepancy, plane_residua
 @click.option("--force", is_flag=True, help="Replace an existing report.")
 @user_errors
 def report(robot, plan, log, output, config_logs, plane_logs, controller, truth_file, force):
-    """Write a self-contained HTML report of a calibration: the validation histograms
-    before and after (paper Fig. 6 and 7), the parameters with σ and correlations,
-    step-by-step against joint, the plan's Ψ per step and the robot."""
+    """Write a self-contained HTML report of a calibration.
+
+    It shows the validation histograms before and after (paper Fig. 6 and 7), the
+    parameters with σ and correlations, step-by-step against joint, the plan's Ψ per
+    step and the robot."""
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
     result = solve(rb, pl, load_measurements(log, pl, rb))
@@ -79,6 +80,8 @@ def report(robot, plan, log, output, config_logs, plane_logs, controller, truth_
     ctl = None
     if controller:
         with tempfile.TemporaryDirectory() as tmp:
+            from wirecal.app.compare import compare_controller  # the twin only when asked
+
             ctl = compare_controller(result, Path(tmp))
     truth = load_errors(truth_file, rb) if truth_file else None
     if not str(output).endswith((".html", ".htm")):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from wirecal.cli.main import main, print_json, user_errors
+from wirecal.cli.main import print_json, user_errors
 from wirecal.solver.formats.validation_files import read_validation_log
 from wirecal.solver.validation_analysis import Stats, config_discrepancy, plane_residuals
 
@@ -14,7 +14,7 @@ def analyse(kind: str, path: str) -> Stats:
     return config_discrepancy(log) if kind == "configuration" else plane_residuals(log)[0]
 
 
-@main.command()
+@click.command()
 @click.argument("kind", type=click.Choice(["configuration", "plane"]))
 @click.argument("before", type=click.Path(dir_okay=False))
 @click.argument("after", type=click.Path(dir_okay=False), required=False)

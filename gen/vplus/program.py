@@ -9,11 +9,11 @@ robot, plan, options and wirecal version give the same bytes.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 import numpy as np
 
+from wirecal import __version__
 from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.templating import render
 from wirecal.gen.vplus.literals import (
@@ -48,13 +48,6 @@ class GenOptions:
     result_file: str = "WCSOLVE.CSV"
     patch: dict[str, float] | None = None  # identified offsets (deg, mm) for wc.patch
     validation: Setup | None = None  # adds wc.vcfg and wc.vpln (paper §3.6)
-
-
-def _version() -> str:
-    try:
-        return version("wirecal")
-    except PackageNotFoundError:  # pragma: no cover
-        return "unknown"
 
 
 def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
@@ -183,7 +176,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
     mpc = robot.encoder.mm_per_count
     text = render(
         "vplus/wirecal.v2.j2",
-        version=_version(),
+        version=__version__,
         robot=robot.name,
         fingerprint=fp,
         fp_a=fp[:32],
