@@ -19,7 +19,9 @@ from pathlib import Path
 import numpy as np
 
 from wirecal import __version__
+from wirecal.app.compare import compare_controller
 from wirecal.app.report import Validation, render_report
+from wirecal.app.twin_runs import measure_in_twin
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.accuracy import workspace
 from wirecal.solver.errors import WirecalError
@@ -35,7 +37,7 @@ from wirecal.solver.measurements import check_log
 from wirecal.solver.plausibility import gate
 from wirecal.solver.solve import solve
 from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
-from wirecal.twin.cell import controller_comparison, run_measurement, run_validation
+from wirecal.twin.cell import run_validation
 
 OUTPUTS = (
     "truth.toml",
@@ -105,12 +107,15 @@ def _run(
         return time.perf_counter()
 
     t = step(1, "generating the V+ module (calibration and validation programs)")
-    text = module_text(robot, plan, GenOptions(validation=setup))
+    options = GenOptions(validation=setup)
+    text = module_text(robot, plan, options)
     seconds["generate"] = time.perf_counter() - t
     with tempfile.TemporaryDirectory() as tmp:
         disk = Path(tmp)
         t = step(2, "measurement run in the digital twin (wc.mount, wc.run)")
-        run = run_measurement(robot, plan, truth, disk / "cal", seed=seed, text=text)
+        run = measure_in_twin(
+            robot, plan, truth, disk / "cal", options=options, text=text, seed=seed
+        )
         if run.run is None or run.run.status != "completed":
             raise WirecalError(f"the twin's measurement run stopped: {run.run or run.mount}")
         seconds["measure"] = time.perf_counter() - t
@@ -123,7 +128,7 @@ def _run(
         verdict = gate(result, result.recommended)  # before anything acts on the result
         seconds["solve"] = time.perf_counter() - t
         t = step(4, "identification on the controller (wc.solve, wc.solve2 in the twin)")
-        controller = controller_comparison(robot, plan, log, result, disk / "ctl", text=text)
+        controller = compare_controller(result, disk / "ctl", text=text)
         seconds["controller"] = time.perf_counter() - t
         identified = result.estimates[result.recommended].as_dict()
         runs = {}
@@ -196,4 +201,4 @@ def _run(
         name: float(np.linalg.norm(tool_position(robot.model(believed), q) - true_p, axis=1).mean())
         for name, believed in (("before", {}), ("after", identified))
     }
-    return DemoResult(folder, validations, errors, controller["polished_max_difference"], seconds)
+    return DemoResult(folder, validations, errors, controller.polished_max_difference, seconds)

@@ -2,19 +2,49 @@
 
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import dataclass
 
-from wirecal.solver.identifiability import analyse
+import numpy as np
+
+from wirecal.solver.identifiability import Identifiability, analyse
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import DEFAULT_TOL, PSI_FLOOR, sensitivity, verdict
 
 
-def psi_table(robot: Robot, plan: Plan, tol: float = DEFAULT_TOL) -> dict[str, Any]:
-    """Ψ rows and verdicts for every step and point (1-based step and index), nominal model.
+@dataclass(frozen=True)
+class PsiRow:
+    """One calibration point: Ψ of every parameter (paper Table 4) and its verdict."""
 
-    The dictionary is what ``wirecal psi --json`` prints.
-    """
+    step: int  # 1-based
+    index: int  # 1-based within the step
+    parameter: str  # the step's parameter
+    joints_deg: np.ndarray  # (n,)
+    psi: dict[str, float]  # per parameter, the plan's order (mm/deg or mm/mm)
+    ok: bool
+    violations: tuple[str, ...]  # later parameters whose |Ψ| exceeds the tolerance
+
+
+@dataclass(frozen=True)
+class PsiTable:
+    """Ψ rows and verdicts for every step and point of a plan, nominal model."""
+
+    robot: str
+    fingerprint: str
+    theta0_deg: np.ndarray
+    tolerance: float
+    floor: float
+    order: tuple[str, ...]
+    rows: tuple[PsiRow, ...]
+    identifiability: Identifiability
+
+    @property
+    def n_ok(self) -> int:
+        return sum(r.ok for r in self.rows)
+
+
+def psi_table(robot: Robot, plan: Plan, tol: float = DEFAULT_TOL) -> PsiTable:
+    """Ψ rows and verdicts for every step and point (1-based step and index), nominal model."""
     model = robot.nominal
     q, step_no, index = plan.all_points()
     psi = sensitivity(model, q, plan.theta0_deg, plan.order).psi
@@ -23,33 +53,14 @@ def psi_table(robot: Robot, plan: Plan, tol: float = DEFAULT_TOL) -> dict[str, A
         j = int(step_no[k]) - 1
         row = {name: float(psi[k, c]) for c, name in enumerate(plan.order)}
         v = verdict(row, plan.order[j], plan.order[j + 1 :], tol)
-        rows.append(
-            {
-                "step": j + 1,
-                "index": int(index[k]),
-                "parameter": plan.order[j],
-                "joints_deg": [float(x) for x in q[k]],
-                "psi": row,
-                "ok": v.ok,
-                "violations": list(v.violations),
-            }
-        )
-    ident = analyse(model, q, plan.theta0_deg, plan.order)
-    return {
-        "robot": robot.name,
-        "fingerprint": plan.fingerprint(),
-        "theta0_deg": [float(x) for x in plan.theta0_deg],
-        "tolerance": tol,
-        "floor": PSI_FLOOR,
-        "order": list(plan.order),
-        "rows": rows,
-        "identifiability": {
-            "parameters": list(ident.names),
-            "rank": ident.rank,
-            "singular_values": [float(s) for s in ident.singular_values],
-            "unobservable": list(ident.unobservable),
-            "combinations": [{n: c for n, c in combo} for combo in ident.combinations],
-            "indices": ident.indices,
-            "summary": ident.describe(),
-        },
-    }
+        rows.append(PsiRow(j + 1, int(index[k]), plan.order[j], q[k], row, v.ok, v.violations))
+    return PsiTable(
+        robot=robot.name,
+        fingerprint=plan.fingerprint(),
+        theta0_deg=plan.theta0_deg,
+        tolerance=tol,
+        floor=PSI_FLOOR,
+        order=plan.order,
+        rows=tuple(rows),
+        identifiability=analyse(model, q, plan.theta0_deg, plan.order),
+    )

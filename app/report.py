@@ -8,6 +8,7 @@ from __future__ import annotations
 import base64
 import io
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -17,9 +18,11 @@ import numpy as np
 
 from wirecal.gen.templating import render
 from wirecal.solver.plausibility import OVERRIDDEN
-from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult
 from wirecal.solver.validation_analysis import Stats, reduction
+
+if TYPE_CHECKING:
+    from wirecal.app.compare import ControllerComparison
 
 BEFORE, AFTER = "#d1495b", "#2e86ab"
 
@@ -45,16 +48,17 @@ def _png(fig) -> str:
 
 
 def psi_figure(result: SolveResult) -> str:
-    plan, robot = result.plan, result.robot
-    q, step, _ = plan.all_points()
-    psi = np.abs(sensitivity(robot.nominal, q, plan.theta0_deg, plan.order).psi)
+    """|Ψ| of every measured point (the Ψ ``solve`` computed), steps separated."""
+    plan, step, names = result.plan, result.step, result.names
+    psi = np.abs(result.psi)
     fig, ax = plt.subplots(figsize=(7, 6.5))
     im = ax.imshow(psi, aspect="auto", cmap="magma_r", vmin=0)
     for b in np.flatnonzero(np.diff(step)) + 0.5:
         ax.axhline(b, color="white", lw=1.5)
-    ax.set_xticks(range(len(plan.order)), plan.order)
-    centres = [np.mean(np.flatnonzero(step == j)) for j in range(1, len(plan.order) + 1)]
-    ax.set_yticks(centres, [f"step {j}: {n}" for j, n in enumerate(plan.order, 1)])
+    ax.set_xticks(range(len(names)), names)
+    steps = [j for j in range(1, len(plan.order) + 1) if np.any(step == j)]
+    centres = [np.mean(np.flatnonzero(step == j)) for j in steps]
+    ax.set_yticks(centres, [f"step {j}: {plan.order[j - 1]}" for j in steps])
     ax.set_title("|Ψ| of every calibration point (mm/deg, mm/mm)")
     fig.colorbar(im, ax=ax, shrink=0.8)
     return _png(fig)
@@ -117,7 +121,7 @@ def histogram_figure(v: Validation) -> str:
 def render_report(
     result: SolveResult,
     validations: list[Validation] = (),
-    controller: dict | None = None,
+    controller: ControllerComparison | None = None,
     truth: dict[str, float] | None = None,
     plausibility: str = "",
 ) -> str:
@@ -135,8 +139,8 @@ def render_report(
                 "joint": jt.values[k] if jt else None,
                 "std": jt.std[k] if jt is not None and jt.std is not None else None,
                 "identified": jt is None or jt.std is None or bool(np.isfinite(jt.std[k])),
-                "controller": (controller or {}).get("parameters", {}).get(name),
-                "polished": (controller or {}).get("polished", {}).get(name),
+                "controller": controller.stepwise.offsets.get(name) if controller else None,
+                "polished": controller.polished.offsets.get(name) if controller else None,
                 "truth": (truth or {}).get(name),
             }
         )

@@ -5,11 +5,11 @@ from __future__ import annotations
 import click
 
 from wirecal.app.demo import OUTPUTS, run_demo
-from wirecal.cli.main import main, user_errors
+from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, SEED
 
 
-@main.command()
+@click.command()
 @click.option(
     "-o",
     "--output",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from wirecal.cli.main import main, user_errors
+from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
 from wirecal.solver.formats.patch import read_patch
@@ -17,7 +17,7 @@ _D = RunParameters()
 _G = GenOptions()
 
 
-@main.command()
+@click.command()
 @click.argument("robot", type=click.Path(dir_okay=False))
 @click.argument("plan", type=click.Path(dir_okay=False))
 @click.option(

@@ -7,17 +7,18 @@ import re
 import sys
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 import numpy as np
 
-from wirecal.cli.main import _version, main, print_json, user_errors
+from wirecal import __version__
+from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, SEED, number
-from wirecal.gen.vplus.program import GenOptions
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.csv_table import STDIN
 from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.log import Log, read_log
+from wirecal.solver.formats.log import read_log
 from wirecal.solver.formats.patch import put_patch, spec_path
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
@@ -28,13 +29,9 @@ from wirecal.solver.plausibility import READING_NOISE_MM, gate
 from wirecal.solver.run_parameters import RunParameters
 from wirecal.solver.simulate import Faults, simulate_log
 from wirecal.solver.solve import solve as solve_api
-from wirecal.twin.cell import Faults as TwinFaults
-from wirecal.twin.cell import (
-    controller_comparison,
-    move_of_step,
-    run_measurement,
-    where_in_run,
-)
+
+if TYPE_CHECKING:
+    from wirecal.app.compare import ControllerComparison
 
 ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
 PLAN = click.argument("plan", type=click.Path(dir_okay=False))
@@ -49,7 +46,7 @@ def _slip(ctx, param, value):
     return int(m.group(1)), float(m.group(2))
 
 
-@main.command()
+@click.command()
 @ROBOT
 @PLAN
 @click.option(
@@ -218,11 +215,16 @@ def simulate(
 
 def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
     """wc.mount and wc.run in the digital twin; the log text and why it stopped, if so."""
+    from wirecal.app.twin_runs import measure_in_twin  # the twin only when asked for
+    from wirecal.gen.vplus.program import GenOptions
+    from wirecal.twin.cell import Faults as TwinFaults
+    from wirecal.twin.cell import move_of_step, where_in_run
+
     faults = TwinFaults()
     if slip is not None:
         faults = TwinFaults(slip_at_move=move_of_step(pl, slip[0]), slip_mm=slip[1])
     with tempfile.TemporaryDirectory() as tmp:
-        result = run_measurement(
+        result = measure_in_twin(
             rb,
             pl,
             errors,
@@ -245,7 +247,7 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
     return text, stopped
 
 
-@main.command()
+@click.command()
 @ROBOT
 @PLAN
 @click.argument("log", type=click.Path(dir_okay=False))
@@ -365,7 +367,7 @@ def solve(
         )
         for finding in verdict.findings:
             click.echo(f"warning: implausible result accepted: {finding.message}", err=True)
-        ctl = _controller(rb, pl, parsed, result) if method == "controller" else None
+        ctl = _controller(result) if method == "controller" else None
         if patch_path:
             put_patch(
                 out,
@@ -375,14 +377,14 @@ def solve(
                 plan_fingerprint=pl.fingerprint(),
                 log_path=m.source,
                 log_sha256=m.sha256,
-                version=_version(),
+                version=__version__,
                 plausibility=verdict.patch_field(),
             )
     if as_json:
         data = result.as_json()
         data["plausibility"] = verdict.as_json()
         if ctl:
-            data["methods"]["controller"] = ctl
+            data["methods"]["controller"] = ctl.as_json()
         print_json(data)
     else:
         click.echo(_solve_text(result))
@@ -393,30 +395,27 @@ def solve(
         click.echo(f"wrote {patch_path} ({chosen}) and {spec_path(patch_path)}", err=as_json)
 
 
-def _controller(rb, pl, log: Log, result) -> dict:
+def _controller(result) -> ControllerComparison:
     """The generated controller solver (wc.solve, wc.solve2) run in the twin on the log."""
-    if result.left_nominal or result.measurements.missing:
-        raise WirecalError(
-            "--method controller needs a complete log (the controller solver "
-            "refuses missing points too)"
-        )
+    from wirecal.app.compare import compare_controller  # the twin only when asked for
+
     with tempfile.TemporaryDirectory() as tmp:
-        return controller_comparison(rb, pl, log, result, Path(tmp))
+        return compare_controller(result, Path(tmp))
 
 
-def _controller_text(ctl: dict) -> str:
+def _controller_text(ctl: ControllerComparison) -> str:
     lines = [
         "",
         "Controller solver (the generated V+ run in the digital twin):",
         f"{'parameter':<10}{'wc.solve':>12}{'wc.solve2':>12}",
     ]
-    for name, value in ctl["parameters"].items():
-        lines.append(f"{name:<10}{value:12.4f}{ctl['polished'][name]:12.4f}")
+    for name, value in ctl.stepwise.offsets.items():
+        lines.append(f"{name:<10}{value:12.4f}{ctl.polished.offsets[name]:12.4f}")
     lines.append(
         f"largest difference from the Python reference: "
-        f"{ctl['parameters_max_difference']:.2g} (stepwise), "
-        f"{ctl['polished_max_difference']:.2g} (joint) deg/mm; "
-        f"{ctl['parameters_operations']:,} and {ctl['polished_operations']:,} "
+        f"{ctl.stepwise_max_difference:.2g} (stepwise), "
+        f"{ctl.polished_max_difference:.2g} (joint) deg/mm; "
+        f"{ctl.stepwise.total_operations:,} and {ctl.polished.total_operations:,} "
         "arithmetic operations"
     )
     return "\n".join(lines)

@@ -6,12 +6,12 @@ import sys
 
 import click
 
-from wirecal.cli.main import main, user_errors
+from wirecal.cli.main import user_errors
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.vplus.parser import parse_module
 
 
-@main.command()
+@click.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @click.option(
     "--external-calls",
@@ -20,9 +20,11 @@ from wirecal.twin.vplus.parser import parse_module
 )
 @user_errors
 def lint(files, external_calls):
-    """Check V+ program files (ours or anyone's) against the V+ rules a controller's
-    LOAD applies: program format, keywords as names (User's Guide p. 99), declarations
-    first, 15-character names, type prefixes, labels, CALL arguments.
+    """Check V+ program files as a controller's LOAD would.
+
+    Ours or anyone's, against the V+ rules LOAD applies: program format, keywords as names
+    (User's Guide p. 99), declarations first, 15-character names, type prefixes, labels,
+    CALL arguments.
 
     Prints one "file:line: program: problem" line per problem. CRLF and LF line endings
     are both read.

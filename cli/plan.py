@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 import numpy as np
 
-from wirecal.cli.main import main, print_json, user_errors
+from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import SEED, number
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
@@ -30,7 +30,7 @@ def _joints(value: str | None, n: int) -> np.ndarray | None:
     return q
 
 
-@main.command()
+@click.command()
 @click.argument("robot", type=click.Path(dir_okay=False))
 @click.option(
     "-o",

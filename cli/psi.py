@@ -7,15 +7,15 @@ import sys
 import click
 import numpy as np
 
-from wirecal.app.psi_view import psi_table
-from wirecal.cli.main import main, print_json, user_errors
+from wirecal.app.psi_view import PsiTable, psi_table
+from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import NON_NEGATIVE
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.identifiability import analyse
+from wirecal.solver.identifiability import Identifiability, analyse
 from wirecal.solver.sensitivity import DEFAULT_TOL
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 
@@ -27,7 +27,7 @@ def _fmt(x: float) -> str:
     return f"{x:.2f}".replace("-0.00", "0.00")
 
 
-@main.command()
+@click.command()
 @ROBOT
 @PLAN
 @click.option("--json", "as_json", is_flag=True, help="Print the table as JSON.")
@@ -69,7 +69,7 @@ def psi(
     pl = load_plan(plan, rb)
     table = psi_table(rb, pl, tol)
     if as_json:
-        print_json(table)
+        print_json(_psi_json(table))
     else:
         click.echo(_psi_text(table, robot, plan), nl=False)
     try:
@@ -79,12 +79,49 @@ def psi(
         in_range = False
         for line in exc.problems:
             click.echo(f"{'error' if strict else 'warning'}: {line}", err=True)
-    if strict and not (in_range and all(r["ok"] for r in table["rows"])):
+    if strict and not (in_range and table.n_ok == len(table.rows)):
         sys.exit(1)
 
 
-def _psi_text(table: dict, robot_file: str, plan_file: str) -> str:
-    order = table["order"]
+def _identifiability_json(ident: Identifiability) -> dict:
+    return {
+        "parameters": list(ident.names),
+        "rank": ident.rank,
+        "singular_values": [float(s) for s in ident.singular_values],
+        "unobservable": list(ident.unobservable),
+        "combinations": [dict(combo) for combo in ident.combinations],
+        "indices": ident.indices,
+        "summary": ident.describe(),
+    }
+
+
+def _psi_json(table: PsiTable) -> dict:
+    """What ``wirecal psi --json`` prints."""
+    return {
+        "robot": table.robot,
+        "fingerprint": table.fingerprint,
+        "theta0_deg": [float(x) for x in table.theta0_deg],
+        "tolerance": table.tolerance,
+        "floor": table.floor,
+        "order": list(table.order),
+        "rows": [
+            {
+                "step": r.step,
+                "index": r.index,
+                "parameter": r.parameter,
+                "joints_deg": [float(x) for x in r.joints_deg],
+                "psi": r.psi,
+                "ok": r.ok,
+                "violations": list(r.violations),
+            }
+            for r in table.rows
+        ],
+        "identifiability": _identifiability_json(table.identifiability),
+    }
+
+
+def _psi_text(table: PsiTable, robot_file: str, plan_file: str) -> str:
+    order = table.order
     width = max(6, *(len(n) + 1 for n in order))
     header = (
         "  #"
@@ -95,36 +132,36 @@ def _psi_text(table: dict, robot_file: str, plan_file: str) -> str:
     )
     steps = []
     for j, name in enumerate(order, 1):
-        rows = [r for r in table["rows"] if r["step"] == j]
+        rows = [r for r in table.rows if r.step == j]
         lines = []
         for r in rows:
-            joints = "".join(f"{x:8.2f}" for x in r["joints_deg"])
-            psis = "".join(f"{_fmt(r['psi'][n]):>{width}}" for n in order)
-            mark = "ok" if r["ok"] else "leaks " + ",".join(r["violations"])
-            lines.append(f"{r['index']:3d}{joints} |{psis} | {mark}")
+            joints = "".join(f"{x:8.2f}" for x in r.joints_deg)
+            psis = "".join(f"{_fmt(r.psi[n]):>{width}}" for n in order)
+            mark = "ok" if r.ok else "leaks " + ",".join(r.violations)
+            lines.append(f"{r.index:3d}{joints} |{psis} | {mark}")
         steps.append(
-            {"number": j, "parameter": name, "rows": lines, "n_ok": sum(r["ok"] for r in rows)}
+            {"number": j, "parameter": name, "rows": lines, "n_ok": sum(r.ok for r in rows)}
         )
-    ident = table["identifiability"]
+    ident = table.identifiability
     return render(
         "text/psi.txt.j2",
-        robot=table["robot"],
+        robot=table.robot,
         robot_file=robot_file,
         plan_file=plan_file,
-        fingerprint=table["fingerprint"],
-        theta0=", ".join(f"{x:g}" for x in table["theta0_deg"]),
-        tol=table["tolerance"],
-        floor=table["floor"],
+        fingerprint=table.fingerprint,
+        theta0=", ".join(f"{x:g}" for x in table.theta0_deg),
+        tol=table.tolerance,
+        floor=table.floor,
         steps=steps,
         header=header,
-        n_ok=sum(r["ok"] for r in table["rows"]),
-        n_rows=len(table["rows"]),
-        ident=ident["summary"],
-        ident_names=", ".join(ident["parameters"]),
+        n_ok=table.n_ok,
+        n_rows=len(table.rows),
+        ident=ident.describe(),
+        ident_names=", ".join(ident.names),
     )
 
 
-@main.command()
+@click.command()
 @ROBOT
 @PLAN
 @click.option(
@@ -149,17 +186,7 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
     q, _, _ = pl.all_points()
     result = analyse(rb.nominal, q, pl.theta0_deg, names)
     if as_json:
-        print_json(
-            {
-                "parameters": list(result.names),
-                "rank": result.rank,
-                "singular_values": [float(s) for s in result.singular_values],
-                "unobservable": list(result.unobservable),
-                "combinations": [dict(c) for c in result.combinations],
-                "indices": result.indices,
-                "summary": result.describe(),
-            }
-        )
+        print_json(_identifiability_json(result))
         return
     click.echo(f"Robot {rb.name}; plan {plan} ({pl.n_points} points)")
     click.echo(

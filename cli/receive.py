@@ -7,14 +7,14 @@ import sys
 import click
 
 from wirecal.app.receive import receive, summary
-from wirecal.cli.main import main, user_errors
+from wirecal.cli.main import user_errors
 from wirecal.cli.options import POSITIVE
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 
 
-@main.command("receive")
+@click.command("receive")
 @click.option("--port", required=True, type=click.IntRange(1, 65535), help="TCP port to listen on.")
 @click.option(
     "-o", "--output", required=True, type=click.Path(dir_okay=False), help="The log to write."

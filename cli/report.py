@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from wirecal.app.report import Validation, render_report
-from wirecal.cli.main import main, user_errors
+from wirecal.cli.main import user_errors
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
@@ -20,10 +20,9 @@ from wirecal.solver.measurements import check_log
 from wirecal.solver.plausibility import gate
 from wirecal.solver.solve import solve
 from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
-from wirecal.twin.cell import controller_comparison
 
 
-@main.command()
+@click.command()
 @click.argument("robot", type=click.Path(dir_okay=False))
 @click.argument("plan", type=click.Path(dir_okay=False))
 @click.argument("log", type=click.Path(dir_okay=False))
@@ -74,10 +73,12 @@ def report(
     accept_implausible,
     force,
 ):
-    """Write a self-contained HTML report of a calibration: the validation histograms
-    before and after (paper Fig. 6 and 7), the parameters with σ and correlations,
-    step-by-step against joint, the plan's Ψ per step and the robot. A result that fails
-    the plausibility gate is refused with exit status 3."""
+    """Write a self-contained HTML report of a calibration.
+
+    It shows the validation histograms before and after (paper Fig. 6 and 7), the
+    parameters with σ and correlations, step-by-step against joint, the plan's Ψ per
+    step and the robot. A result that fails the plausibility gate is refused with exit
+    status 3."""
     if not str(output).endswith((".html", ".htm")):
         raise WirecalError(f"{output}: give the report an .html name")
     inputs = [robot, plan, log, *(config_logs or ()), *(plane_logs or ())]
@@ -120,6 +121,8 @@ def _report_html(
     ctl = None
     if controller:
         with tempfile.TemporaryDirectory() as tmp:
-            ctl = controller_comparison(rb, pl, parsed, result, Path(tmp))
+            from wirecal.app.compare import compare_controller  # the twin only when asked
+
+            ctl = compare_controller(result, Path(tmp))
     truth = load_errors(truth_file, rb) if truth_file else None
     return render_report(result, validations, ctl, truth, plausibility=verdict.patch_field())

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from wirecal.cli.main import main, print_json, user_errors
+from wirecal.cli.main import print_json, user_errors
 from wirecal.solver.counter import Counter
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import load_robot
@@ -29,7 +29,7 @@ def analyse(kind: str, path: str, counter: Counter | None) -> Stats:
     return config_discrepancy(log, counter)
 
 
-@main.command()
+@click.command()
 @click.argument("kind", type=click.Choice(["configuration", "plane"]))
 @click.argument("before", type=click.Path(dir_okay=False))
 @click.argument("after", type=click.Path(dir_okay=False), required=False)

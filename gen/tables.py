@@ -4,8 +4,9 @@ Configuration c = 0 is θ0, c = 1..N the plan's calibration points in plan order
 every configuration and joint the tables hold cos and sin of the nominal joint angle
 (plan angle + DH θ offset), so the controller never evaluates a trigonometric function:
 a perturbed angle θ + ε uses the angle-addition formula with short polynomials for ε
-(:func:`sin_cos_small`). For every point they also hold the nominal wire vector ν_n and
-length d_n, so the controller works with small differences from nominal only.
+(the ``sincos`` macro of ``templates/vplus/macros.j2``). For every point they also hold
+the nominal wire vector ν_n and length d_n, so the controller works with small
+differences from nominal only.
 """
 
 from __future__ import annotations
@@ -15,11 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver import params as P
+from wirecal.solver.identify import omega_vector
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.solve import omega_vector
 
 KIND_CODE = {"th": 1, "d": 2, "a": 3, "al": 4, "tool": 5}
 """Parameter kinds as the controller numbers them (array ``pk``)."""
@@ -109,17 +110,3 @@ def build_tables(robot: Robot, plan: Plan) -> Tables:
         errors=robot.errors(names),
         nominal=np.array([robot.nominal_value(n) for n in names]),
     )
-
-
-def sin_cosm1_small(e, one):
-    """sin ε and cos ε − 1 of a small angle by Horner polynomials, as on the controller.
-
-    sin ε ≈ ε(1 − ε²/6(1 − ε²/20)) and cos ε − 1 ≈ −ε²/2(1 − ε²/12(1 − ε²/30)): the
-    second is computed directly, never as a difference of numbers near 1. For
-    |ε| ≤ 0.0881 rad (Ω = 5° plus 0.05° joint deviation) the truncation errors are below
-    |ε|⁷/5040 = 9e-12 and ε⁸/40320 = 1e-13, i.e. < 1e-8 mm at a 1 m lever arm.
-    """
-    e2 = e * e
-    s = e * (one - e2 / 6 * (one - e2 / 20))
-    cm1 = -(e2 / 2) * (one - e2 / 12 * (one - e2 / 30))
-    return s, cm1

@@ -17,15 +17,24 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.kinematics import Model, with_errors
 from wirecal.solver.params import ErrorSet
+from wirecal.solver.plan import Plan
 
 DEFAULT_OMEGA = 5.0
 """Default bound Ω_j: ±5 deg for angles, ±5 mm for lengths."""
+
+
+def omega_vector(
+    names: tuple[str, ...], n_joints: int, plan: Plan, default: float = DEFAULT_OMEGA
+) -> np.ndarray:
+    """Ω_j per parameter in internal units: the plan's per-step ``omega`` or the default."""
+    by_step = {s.parameter: s.omega for s in plan.steps}
+    bound = np.array([by_step.get(n) or default for n in names], dtype=float)
+    return ErrorSet(names, n_joints).to_internal(bound)
 
 
 @dataclass(frozen=True)
@@ -90,6 +99,16 @@ class Estimate:
         return {n: float(v) for n, v in zip(self.names, self.values, strict=True)}
 
 
+@dataclass(frozen=True)
+class StepDiagnostics:
+    """What one step of :func:`stepwise` did, per data set (arrays of length T)."""
+
+    n_points: int
+    iterations: int
+    rms_before_mm: np.ndarray  # (T,) with δe_j = 0, earlier estimates in place; NaN if no points
+    rms_after_mm: np.ndarray  # (T,)
+
+
 STEP_TOL = 1e-10
 """A step's iteration stops when δe_j moves less than this (rad or mm): far below any
 physical effect, and above the round-off of the Gauss–Newton step itself."""
@@ -97,12 +116,11 @@ physical effect, and above the round-off of the Gauss–Newton step itself."""
 
 def stepwise(
     problem: Problem, omega: np.ndarray, *, max_iter: int = 50
-) -> tuple[np.ndarray, list[dict]]:
+) -> tuple[np.ndarray, list[StepDiagnostics]]:
     """The paper's step-by-step identification for T data sets at once.
 
     ``omega`` (m,) bounds each parameter in internal units. Returns the estimates
-    (T, m) or (m,) and, per step, the diagnostics over T (point count, iterations,
-    residual RMS before and after).
+    (T, m) or (m,) and, per step, its :class:`StepDiagnostics` over T.
     """
     d = np.atleast_2d(problem.d)
     x = np.zeros((d.shape[0], len(problem.names)))
@@ -121,16 +139,11 @@ def _solve_step(
     dj: np.ndarray,
     omega_j: float,
     max_iter: int,
-) -> dict:
+) -> StepDiagnostics:
     """Minimise step j's cost over x[:, j] ∈ [−Ω_j, Ω_j] in place (eq. 20)."""
     T, k = dj.shape
     if k == 0:
-        return {
-            "n": 0,
-            "iterations": 0,
-            "rms_before": np.full(T, np.nan),
-            "rms_after": np.full(T, np.nan),
-        }
+        return StepDiagnostics(0, 0, np.full(T, np.nan), np.full(T, np.nan))
     qj, name = problem.q[sel], problem.names[j]
 
     def evaluate(xj):
@@ -162,12 +175,7 @@ def _solve_step(
         if not np.any(active):
             break
     x[:, j] = xj
-    return {
-        "n": k,
-        "iterations": it,
-        "rms_before": np.sqrt(before / k),
-        "rms_after": np.sqrt(cost / k),
-    }
+    return StepDiagnostics(k, it, np.sqrt(before / k), np.sqrt(cost / k))
 
 
 def leak_coefficients(psi: np.ndarray, step: np.ndarray, names: tuple[str, ...]) -> list[dict]:
@@ -199,14 +207,14 @@ def run_stepwise(problem: Problem, omega: np.ndarray, psi: np.ndarray) -> Estima
             StepResult(
                 parameter=name,
                 estimate=float(x_b[j]),
-                n_points=info[j]["n"],
-                rms_before_mm=float(info[j]["rms_before"][0]),
-                rms_after_mm=float(info[j]["rms_after"][0]),
+                n_points=info[j].n_points,
+                rms_before_mm=float(info[j].rms_before_mm[0]),
+                rms_after_mm=float(info[j].rms_after_mm[0]),
                 psi_strength=float(np.sqrt(np.mean(psi[sel, j] ** 2))) if np.any(sel) else 0.0,
                 omega=float(omega_b[j]),
                 on_bound=bool(abs(x[j]) >= omega[j] * (1 - 1e-9)),
                 leak=leaks[j],
-                iterations=info[j]["iterations"],
+                iterations=info[j].iterations,
             )
         )
     r = problem.residuals(x)
@@ -238,6 +246,8 @@ def joint(
         return last[key]
 
     # MINPACK's Levenberg–Marquardt for plain least squares; a robust loss needs "trf".
+    from scipy.optimize import least_squares  # imported here: code generation needs Ω only
+
     method = "lm" if loss == "linear" else "trf"
     res = least_squares(
         lambda x: evaluate(x)[0],

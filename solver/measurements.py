@@ -44,6 +44,7 @@ class Measurements:
     joints_deg: np.ndarray  # (N, n) as logged (plan values where missing)
     distance_mm: np.ndarray  # (N,) NaN where missing
     zero_drift_mm: dict[int, float]  # per step with a zero reading (N+1: the closing zero)
+    log: Log  # the parsed log these were checked from, so nothing reads it twice
     notes: tuple[str, ...] = ()
     missing: tuple[tuple[int, int], ...] = field(default=())
     closed: bool = True  # the closing zero reading after the last step is there
@@ -285,6 +286,7 @@ def check_log(
         notes=log.notes,
         missing=missing,
         closed=n_steps + 1 in zeros,
+        log=log,
     )
 
 

@@ -17,13 +17,12 @@ import numpy as np
 
 from wirecal.solver.accuracy import crb, noise_covariance, workspace
 from wirecal.solver.distance import wire_jacobian
-from wirecal.solver.identify import Problem, joint, stepwise
+from wirecal.solver.identify import Problem, joint, omega_vector, stepwise
 from wirecal.solver.kinematics import repeat, tool_jacobian, tool_position, with_errors
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import measured_lengths
-from wirecal.solver.solve import omega_vector
 
 
 @dataclass(frozen=True)

@@ -12,9 +12,15 @@ import numpy as np
 from wirecal.solver.accuracy import stepwise_map, tool_error, workspace
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.identifiability import covariance
-from wirecal.solver.identify import DEFAULT_OMEGA, Estimate, Problem, joint, run_stepwise
+from wirecal.solver.identify import (
+    DEFAULT_OMEGA,
+    Estimate,
+    Problem,
+    joint,
+    omega_vector,
+    run_stepwise,
+)
 from wirecal.solver.measurements import Measurements
-from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import sensitivity
@@ -33,6 +39,13 @@ class SolveResult:
     predicted: dict[str, dict[str, float]]  # method -> tool-point error mean/max (mm)
     sigma_mm: float  # noise σ estimated from the joint residual
     left_nominal: tuple[str, ...]  # parameters whose step has no points
+    psi: np.ndarray  # (N, k) Ψ at the measured points, columns the estimates' names (paper §2.2)
+    step: np.ndarray  # (N,) 1-based step in the plan's order of each measured point
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The identified parameters (the plan's order, less ``left_nominal``)."""
+        return tuple(n for n in self.plan.order if n not in self.left_nominal)
 
     @property
     def recommended(self) -> str:
@@ -91,15 +104,6 @@ class SolveResult:
 def _finite(x: float) -> float | None:
     """A number for JSON: None where it is not finite (σ of an unidentified parameter)."""
     return float(x) if math.isfinite(x) else None
-
-
-def omega_vector(
-    names: tuple[str, ...], n_joints: int, plan: Plan, default: float = DEFAULT_OMEGA
-) -> np.ndarray:
-    """Ω_j per parameter in internal units: the plan's per-step ``omega`` or the default."""
-    by_step = {s.parameter: s.omega for s in plan.steps}
-    bound = np.array([by_step.get(n) or default for n in names], dtype=float)
-    return ErrorSet(names, n_joints).to_internal(bound)
 
 
 def solve(
@@ -177,4 +181,4 @@ def solve(
         if "stepwise" in estimates:
             A = stepwise_map(J, step)
             predicted["stepwise"] = tool_error(base, names, sigma**2 * A @ A.T, ws).as_dict()
-    return SolveResult(robot, plan, m, estimates, predicted, sigma, left)
+    return SolveResult(robot, plan, m, estimates, predicted, sigma, left, psi, m.step[present])

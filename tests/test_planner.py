@@ -94,9 +94,9 @@ def test_points_are_spread_out(designed):
 def test_psi_reports_every_row_ok(designed):
     robot, d = designed
     table = psi_table(robot, d.plan)
-    assert table["rows"]
-    assert all(r["ok"] for r in table["rows"])
-    assert table["identifiability"]["rank"] == len(d.plan.order)
+    assert table.rows
+    assert all(r.ok for r in table.rows)
+    assert table.identifiability.rank == len(d.plan.order)
 
 
 def test_the_same_inputs_give_the_same_plan(designed):

@@ -9,6 +9,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from wirecal.app.compare import controller_solve
+from wirecal.app.twin_runs import measure_in_twin
+from wirecal.gen.templating import environment
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log, read_log
@@ -23,9 +26,7 @@ from wirecal.twin.cell import (
     Cell,
     Faults,
     Plate,
-    controller_solve,
     move_of_step,
-    run_measurement,
     run_validation,
     where_in_run,
 )
@@ -122,7 +123,7 @@ def test_halt_pause_and_prompt(viper, paper_plan, tmp_path):
 @pytest.fixture(scope="module")
 def twin_run(viper, paper_plan, tmp_path_factory):
     disk = tmp_path_factory.mktemp("cell")
-    return run_measurement(viper, paper_plan, TRUTH, disk, seed=3, counter_start=2**23 - 12_000)
+    return measure_in_twin(viper, paper_plan, TRUTH, disk, seed=3, counter_start=2**23 - 12_000)
 
 
 def test_end_to_end(viper, paper_plan, twin_run, tmp_path):
@@ -138,15 +139,12 @@ def test_end_to_end(viper, paper_plan, twin_run, tmp_path):
     ref = solve(viper, paper_plan, m)
     log = read_log(twin_run.log)
     for polish, method in ((False, "stepwise"), (True, "joint")):
-        values, outcome, ops = controller_solve(
-            viper, paper_plan, log, tmp_path / method, polish=polish
-        )
+        run = controller_solve(viper, paper_plan, log, tmp_path / method, polish=polish)
         reference = ref.estimates[method].as_dict()
-        assert max(abs(values[n] - reference[n]) for n in reference) <= 1e-4
-        assert ops > 5e5
-        assert "Result written to WCSOLVE.CSV." in outcome.console
+        assert max(abs(run.offsets[n] - reference[n]) for n in reference) <= 1e-4
+        assert "Result written to WCSOLVE.CSV." in run.console
     # the patch: the joint estimate; re-run on the same robot, new noise
-    rerun = run_measurement(viper, paper_plan, TRUTH, tmp_path / "rerun", seed=11)
+    rerun = measure_in_twin(viper, paper_plan, TRUTH, tmp_path / "rerun", seed=11)
     m2 = load_measurements(rerun.log, paper_plan, viper)
     problem = Problem(
         viper.nominal,
@@ -185,7 +183,7 @@ def test_twin_clock_agrees_with_the_planners_robot_time(viper, paper_plan, twin_
 
 
 def _fault(viper, plan, tmp_path, faults, **kw):
-    r = run_measurement(viper, plan, TRUTH, tmp_path, seed=4, faults=faults, **kw)
+    r = measure_in_twin(viper, plan, TRUTH, tmp_path, seed=4, faults=faults, **kw)
     lines = r.log.read_text().splitlines()
     assert len(lines) == r.cell.lines_written  # nothing logged is lost
     return r, r.run
@@ -360,7 +358,7 @@ def test_echo_log_without_a_disk(viper, paper_plan, tmp_path):
     log line and goes on; the lines copied from the terminal are a complete log."""
     (tmp_path / "WCLOG.CSV").write_text("an older log\n")
     opt = GenOptions(echo_log=True)
-    r = run_measurement(viper, paper_plan, TRUTH, tmp_path, seed=4, options=opt)
+    r = measure_in_twin(viper, paper_plan, TRUTH, tmp_path, seed=4, options=opt)
     assert r.run.status == "completed"
     assert (tmp_path / "WCLOG.CSV").read_text() == "an older log\n"
     console = r.cell.console
@@ -385,3 +383,84 @@ def test_validation_sets_the_null_tool_and_takes_any_run_number(viper, paper_pla
     assert v.configuration_log.name == "WCVCFG12.CSV"
     for log in (v.configuration_log, v.plane_log):
         assert "# tool: null (TOOL NULL before the moves: flange poses)" in log.read_text()
+
+
+@pytest.fixture(scope="module")
+def module(viper, paper_plan):
+    return module_text(viper, paper_plan)
+
+
+def _controller_case(viper, plan, module, tmp_path, seed):
+    """A random truth within ±4.5 deg/mm (every third seed with a counter that wraps): the
+    Python reference and the generated controller solver, interpreted, on the same log."""
+    rng = np.random.default_rng([seed, 77])
+    truth = dict(zip(viper.parameters, rng.uniform(-4.5, 4.5, 10), strict=True))
+    start = 2**23 - 15_000 if seed % 3 == 0 else None
+    text = simulate_log(viper, plan, truth, seed=seed, counter_start=start)
+    if start is not None:
+        counts = [float(line.split(",")[9]) for line in text.splitlines() if line[:1] in "zp"]
+        assert min(counts) < 0 < max(counts)  # the counter wrapped
+    m = check_log(parse_log(text, f"seed{seed}.csv"), plan, viper)
+    ref = solve(viper, plan, m)
+    runs = {
+        method: controller_solve(viper, plan, m.log, tmp_path / method, polish=polish, text=module)
+        for method, polish in (("stepwise", False), ("joint", True))
+    }
+    diff = {
+        method: max(
+            abs(runs[method].offsets[n] - v) for n, v in ref.estimates[method].as_dict().items()
+        )
+        for method in runs
+    }
+    return runs, diff
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_interpreted_controller_solver_matches_the_reference(
+    viper, paper_plan, module, tmp_path, seed
+):
+    """REAL joints in single precision, DOUBLE elsewhere, as the twin executes them:
+    wc.solve within 1e-5 and wc.solve2 within 1e-4 deg/mm of the Python reference."""
+    _, diff = _controller_case(viper, paper_plan, module, tmp_path, seed)
+    assert diff["stepwise"] <= 1e-5
+    assert diff["joint"] <= 1e-4
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(2, 12))
+def test_interpreted_controller_solver_matches_the_reference_more_truths(
+    viper, paper_plan, module, tmp_path, seed
+):
+    _, diff = _controller_case(viper, paper_plan, module, tmp_path, seed)
+    assert diff["stepwise"] <= 1e-5
+    assert diff["joint"] <= 1e-4
+
+
+def test_operation_counts_from_the_interpreter(viper, paper_plan, module, tmp_path):
+    """One SQRT per point and Gauss–Newton iteration: 69 points × 5 iterations per step,
+    then 69 × 3 for the joint polish; only + − × ÷ and SQRT are executed."""
+    runs, _ = _controller_case(viper, paper_plan, module, tmp_path, 1)
+    stepwise, both = runs["stepwise"].operations, runs["joint"].operations
+    assert set(stepwise) == {"add", "mul", "div", "sqrt"}
+    assert stepwise["sqrt"] == 69 * 5
+    assert both["sqrt"] == 69 * 5 + 69 * 3
+    assert 2e5 < stepwise["mul"] < 5e5
+    assert both["mul"] > stepwise["mul"]
+
+
+def test_small_angle_polynomials_within_their_stated_bound(viper, paper_plan, tmp_path):
+    """The generated sin ε and cos ε − 1 (the ``sincos`` macro, run in DOUBLE by the twin)
+    stay within the truncation bounds the README states for |ε| ≤ 0.0881 rad."""
+    macro = environment().get_template("vplus/macros.j2").module.sincos("e", 4)
+    src = f".PROGRAM t.main()\n    GLOBAL DOUBLE e, s, cm\n    AUTO DOUBLE e2\n{macro}\n.END\n"
+    cell = Cell(viper, {}, paper_plan.theta0_deg, tmp_path)
+    interp = Interpreter(parse_module(src, "t.v2"), cell)
+    eps = np.linspace(-0.0881, 0.0881, 201)
+    s, cm1 = [], []
+    for e in eps:
+        interp.set_global("e", float(e))
+        assert interp.execute("t.main").status == "completed"
+        s.append(interp.get_global("s"))
+        cm1.append(interp.get_global("cm"))
+    assert np.abs(np.array(s) - np.sin(eps)).max() <= 0.0881**7 / 5040 * 1.01
+    assert np.abs(np.array(cm1) - (np.cos(eps) - 1)).max() <= 0.0881**8 / 40320 * 1.01 + 1e-17

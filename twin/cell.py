@@ -1,6 +1,6 @@
 """The digital twin: a simulated cell that runs the generated V+ programs as written.
 
-:class:`Cell` is the controller's outside world for :class:`~wirecal.gen.vinterp.Interpreter`:
+:class:`Cell` is the controller's outside world for :class:`~wirecal.twin.vplus.interp.Interpreter`:
 a true robot (nominal model + error offsets) whose moves respect the joint limits, a
 draw-wire encoder mounted at θ0 of the true robot (noise per pose, quantisation, ±1-count
 jitter, a wrapping counter, a range limit), a disk in a sandbox folder, a terminal with
@@ -19,12 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from wirecal.gen.emulate import readings_from_log
-from wirecal.gen.vplus.program import STRIDE, GenOptions, module_text
 from wirecal.solver import ik
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.csv_table import parse_table, read_source
-from wirecal.solver.formats.log import Log
 from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
@@ -137,7 +134,6 @@ class Cell:
         self.belts: dict[str, int] = {}
         self.luns: dict[int, dict] = {}
         self.status: dict[int, float] = {}
-        self.pauses: list[str] = []
         if self.encoder_point_mm is not None:
             self.p0 = np.asarray(self.encoder_point_mm, dtype=float)
         self.actual = np.asarray(self.joints, dtype=float)
@@ -155,7 +151,6 @@ class Cell:
         return answer
 
     def on_pause(self) -> bool:
-        self.pauses.append(self.console[-1] if self.console else "")
         return self.proceed_on_pause
 
     # ---- motion ----
@@ -348,18 +343,17 @@ def run_measurement(
     plan: Plan,
     truth: dict[str, float],
     disk: Path,
+    text: str,
     *,
+    log_file: str,
     seed: int = 0,
     noise_mm: float = 0.01,
     counter_start: float | None = None,
     faults: Faults = Faults(),
-    options: GenOptions | None = None,
-    text: str | None = None,
 ) -> RunResult:
-    """Generate the module (unless given), run wc.mount (answered 1) and wc.run in the twin."""
-    options = options or GenOptions()
+    """Run a module's wc.mount (answered 1) and wc.run in the twin; the log is ``log_file``
+    on the cell's disk (the name the module was generated with)."""
     disk.mkdir(parents=True, exist_ok=True)
-    text = text if text is not None else module_text(robot, plan, options)
     rng = np.random.default_rng([seed, 2])
     start = robot.encoder.counter.random_start(rng) if counter_start is None else counter_start
     cell = Cell(
@@ -376,7 +370,7 @@ def run_measurement(
     mount = interp.execute("wc.mount")
     cell.moves = 0  # fault positions count the moves of wc.run (see move_of_step)
     run = interp.execute("wc.run") if mount.status == "completed" else None
-    return RunResult(mount, run, disk / options.log_file, cell)
+    return RunResult(mount, run, disk / log_file, cell)
 
 
 def run_targets(plan: Plan) -> list[str]:
@@ -400,44 +394,6 @@ def where_in_run(plan: Plan, moves: int) -> str:
     """Where wc.run was after ``moves`` moves (the twin's cell counts them)."""
     targets = run_targets(plan)
     return targets[moves - 1] if 1 <= moves <= len(targets) else "the start of wc.run"
-
-
-def controller_solve(
-    robot: Robot, plan: Plan, log: Log, disk: Path, *, polish: bool, text: str | None = None
-) -> tuple[dict[str, float], Outcome, int]:
-    """Run the generated controller solver in the twin on a log's readings.
-
-    The readings are loaded into the globals exactly as wc.run leaves them; the result is
-    read back from the file the solver writes. Returns the offsets (deg, mm), the outcome
-    and the number of arithmetic operations executed.
-    """
-    disk.mkdir(parents=True, exist_ok=True)
-    text = text if text is not None else module_text(robot, plan)
-    cell = Cell(robot, {}, plan.theta0_deg, disk)
-    interp = Interpreter(parse_module(text, "WIRECAL.V2"), cell)
-    r = readings_from_log(log, plan)
-    for c in range(len(r.cb)):
-        for k in range(r.q.shape[1]):
-            interp.set_global("wc.q", f32(r.q[c, k]), c * STRIDE + k + 1)
-        if c:
-            interp.set_global("wc.cb", float(r.cb[c]), c)
-            interp.set_global("wc.co", float(r.co[c]), c)
-            interp.set_global("wc.got", -1.0, c)
-    for s in range(len(r.zb)):
-        interp.set_global("wc.zb", float(r.zb[s]), s + 1)
-        interp.set_global("wc.zo", float(r.zo[s]), s + 1)
-    closed = any(x.kind == "zero" and x.step > len(plan.steps) for x in log.readings)
-    interp.set_global("wc.closed", -1.0 if closed else 0.0)
-    result_file = disk / GenOptions().result_file
-    result_file.unlink(missing_ok=True)
-    interp.ops = 0
-    outcome = interp.execute("wc.solve2" if polish else "wc.solve")
-    if outcome.status != "completed":
-        raise WirecalError(
-            f"the controller solver stopped: {outcome.message} "
-            f"({outcome.program}, line {outcome.line})"
-        )
-    return read_result(result_file), outcome, interp.ops
 
 
 def read_result(path: Path) -> dict[str, float]:
@@ -512,18 +468,3 @@ def run_validation(
     cfg = interp.execute("wc.vcfg")
     pln = interp.execute("wc.vpln")
     return ValidationRun(cfg, pln, disk / f"WCVCFG{run}.CSV", disk / f"WCVPLN{run}.CSV", cell)
-
-
-def controller_comparison(
-    robot: Robot, plan: Plan, log: Log, reference, disk: Path, *, text: str | None = None
-) -> dict:
-    """wc.solve and wc.solve2 in the twin beside the Python reference (a SolveResult):
-    their offsets, the operations each executed and its largest difference (deg, mm)."""
-    out: dict = {}
-    for key, polish, ref in (("parameters", False, "stepwise"), ("polished", True, "joint")):
-        values, _, ops = controller_solve(robot, plan, log, disk / key, polish=polish, text=text)
-        expected = reference.estimates[ref].as_dict()
-        out[key] = values
-        out[f"{key}_operations"] = ops
-        out[f"{key}_max_difference"] = max(abs(values[n] - expected[n]) for n in expected)
-    return out

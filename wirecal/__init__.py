@@ -1,6 +1,81 @@
 """wirecal — kinematic calibration of robot arms with a single draw-wire encoder.
 
-The public API (see the README's "Python API" section).
+The public API (see the README's "Python API" section). Names are imported on first use
+(PEP 562), so ``import wirecal`` stays cheap; ``from wirecal import solve`` imports the
+solver, and only the twin or the report import the interpreter or matplotlib.
+
+Example::
+
+    import wirecal
+
+    robot = wirecal.load_robot("examples/viper_s650/robot.toml")
+    plan = wirecal.load_plan("examples/viper_s650/paper_plan.toml", robot)
+    truth = {name: 0.5 for name in robot.parameters}  # deg or mm
+    log = wirecal.simulate_log(robot, plan, truth, seed=1)
+    m = wirecal.check_log(wirecal.parse_log(log, "sim.csv"), plan, robot)
+    result = wirecal.solve(robot, plan, m)
+    print(result.estimates[result.recommended].as_dict())
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
 __version__ = "0.1.0"
+
+_API = {
+    # robot and plan files
+    "load_robot": "wirecal.solver.formats.robot_file",
+    "load_plan": "wirecal.solver.formats.plan_file",
+    "Robot": "wirecal.solver.robot",
+    "Plan": "wirecal.solver.plan",
+    # design a plan, and its Ψ table (paper Table 4)
+    "design": "wirecal.solver.planner",
+    "PlanOptions": "wirecal.solver.planner",
+    "Design": "wirecal.solver.planner",
+    "psi_table": "wirecal.app.psi_view",
+    # simulate a measurement run
+    "simulate_log": "wirecal.solver.simulate",
+    "random_errors": "wirecal.solver.formats.truth",
+    # read and check a log
+    "read_log": "wirecal.solver.formats.log",
+    "parse_log": "wirecal.solver.formats.log",
+    "check_log": "wirecal.solver.measurements",
+    "load_measurements": "wirecal.solver.measurements",
+    "Measurements": "wirecal.solver.measurements",
+    "Tolerances": "wirecal.solver.measurements",
+    # solve and write the patch
+    "solve": "wirecal.solver.solve",
+    "SolveResult": "wirecal.solver.solve",
+    "write_patch": "wirecal.solver.formats.patch",
+    # generate the controller programs
+    "module_text": "wirecal.gen.vplus.program",
+    "write_module": "wirecal.gen.vplus.program",
+    "GenOptions": "wirecal.gen.vplus.program",
+    # the digital twin
+    "measure_in_twin": "wirecal.app.twin_runs",
+    "compare_controller": "wirecal.app.compare",
+    "ControllerComparison": "wirecal.app.compare",
+    # the demo and the report
+    "run_demo": "wirecal.app.demo",
+    "render_report": "wirecal.app.report",
+    # errors a user can act on
+    "WirecalError": "wirecal.solver.errors",
+}
+
+__all__ = ["__version__", *_API]
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name's module on first use (PEP 562)."""
+    module = _API.get(name)
+    if module is None:
+        raise AttributeError(f"module 'wirecal' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

@@ -10,11 +10,11 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 import numpy as np
 
+from wirecal import __version__
 from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.templating import render
 from wirecal.gen.vplus.literals import (
@@ -51,13 +51,6 @@ class GenOptions:
     range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
     echo_log: bool = False  # wc.run also TYPEs each log line (a controller without a disk)
     crlf: bool = True  # CRLF line ends, as ACE writes V+ files (LF with gen --lf)
-
-
-def _version() -> str:
-    try:
-        return version("wirecal")
-    except PackageNotFoundError:  # pragma: no cover
-        return "unknown"
 
 
 def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
@@ -183,7 +176,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
     mpc = robot.encoder.mm_per_count
     text = render(
         "vplus/wirecal.v2.j2",
-        version=_version(),
+        version=__version__,
         robot=robot.name,
         fingerprint=fp,
         fp_a=fp[:32],

@@ -62,7 +62,6 @@ class Log:
     robot: str
     plan: str
     mm_per_count: float
-    comments: tuple[str, ...]
     readings: tuple[Reading, ...]
     sha256: str
     notes: tuple[str, ...] = ()
@@ -124,7 +123,6 @@ def parse_log(text: str, source: str, sha256: str = "") -> Log:
         robot=table.header["robot"][0],
         plan=table.header["plan"][0],
         mm_per_count=mpc,
-        comments=table.comments,
         readings=tuple(readings),
         sha256=sha256,
         notes=table.notes,

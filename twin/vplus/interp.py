@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import struct
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import singledispatchmethod
@@ -118,7 +119,7 @@ class Interpreter:
         self._compiled: dict[str, Callable] = {}
         self._locals: dict[str, tuple[dict, dict]] = {}
         self.where = ("", 0)
-        self.ops = 0
+        self.ops: Counter[str] = Counter()  # arithmetic executed: add (+ −), mul, div, sqrt
         self.transforms = transformation_names(module.programs)
         for name in module.programs:
             self._locals[name] = ({}, {})
@@ -496,22 +497,22 @@ class _Compiler:
         if op == "+":
 
             def f(frame):
-                interp.ops += 1
+                interp.ops["add"] += 1
                 return a(frame) + b(frame)
         elif op == "-":
 
             def f(frame):
-                interp.ops += 1
+                interp.ops["add"] += 1
                 return a(frame) - b(frame)
         elif op == "*":
 
             def f(frame):
-                interp.ops += 1
+                interp.ops["mul"] += 1
                 return a(frame) * b(frame)
         elif op == "/":
 
             def f(frame):
-                interp.ops += 1
+                interp.ops["div"] += 1
                 d = b(frame)
                 if d == 0:
                     raise VError(-409, "*Division by zero*")
@@ -583,7 +584,7 @@ class _Compiler:
                 v = f[0](frame)
                 if v < 0:
                     raise VError(-413, "*Negative square root*")
-                interp.ops += 1
+                interp.ops["sqrt"] += 1
                 return math.sqrt(v)
 
             return (sqrt if double else self._single(sqrt)), double
