@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
+import pytest
 
 import wirecal
 
@@ -33,37 +33,37 @@ def test_import_wirecal_is_cheap(tmp_path):
 
 
 def test_readme_example(tmp_path, monkeypatch):
-    """The README's Python example, as written there: load, simulate, check, solve."""
+    """The README's Python example, as written there: design, simulate, check, solve, gate."""
     monkeypatch.chdir(tmp_path)
-    robot_file, plan_file = VIPER / "robot.toml", VIPER / "paper_plan.toml"
+    (tmp_path / "examples").symlink_to(VIPER.parent)
     # --- README example (keep in step with the README's "Python API" section) ---
     import wirecal
 
-    robot = wirecal.load_robot(robot_file)
-    plan = wirecal.load_plan(plan_file, robot)
-    truth = {"th2": 0.3, "th3": -0.2, "a2": 0.1, "d4": -0.1}  # deg, mm; others 0
-    text = wirecal.simulate_log(robot, plan, truth, seed=1, noise_mm=0.01)
+    robot = wirecal.load_robot("examples/viper_s650/robot.toml")
+    plan = wirecal.design(robot, [0, -90, 210, -90, 0, -90]).plan  # at the paper's θ0
+    truth = {"th2": 0.3, "th3": -0.2, "a2": 0.1, "d4": -0.1}  # true offsets, deg and mm
+    text = wirecal.simulate_log(robot, plan, truth, seed=1)  # the log wc.run would write
     m = wirecal.check_log(wirecal.parse_log(text, "sim.csv"), plan, robot)
     result = wirecal.solve(robot, plan, m)
+    verdict = wirecal.gate(result, result.recommended)  # WirecalError (exit 3) if implausible
     best = result.estimates[result.recommended]
-    print(result.recommended, best.as_dict(), result.predicted[result.recommended]["mean"])
+    print(result.recommended, best.as_dict(), verdict.summary())
     # --- end of the example ---
     expected = {n: truth.get(n, 0.0) for n in plan.order}
     got = result.estimates["joint"].as_dict()
     assert max(abs(got[n] - expected[n]) for n in expected) < 0.02
-    assert result.predicted["joint"]["mean"] < 0.05
+    assert verdict.passed
     assert best.method == result.recommended
-
-
-def test_designed_plan_through_the_public_api():
-    """Design a plan for the Viper at the paper's θ0, then simulate and solve with it."""
-    robot = wirecal.load_robot(VIPER / "robot.toml")
-    paper = wirecal.load_plan(VIPER / "paper_plan.toml", robot)
-    plan = wirecal.design(robot, paper.theta0_deg).plan
-    truth = {n: 0.5 for n in plan.order}
-    text = wirecal.simulate_log(robot, plan, truth, seed=2)
-    result = wirecal.solve(
-        robot, plan, wirecal.check_log(wirecal.parse_log(text, "d.csv"), plan, robot)
+    path, spec = wirecal.write_patch(
+        "patch.toml",
+        robot,
+        best,
+        plan_fingerprint=plan.fingerprint(),
+        log_path="sim.csv",
+        log_sha256=m.sha256,
+        version=wirecal.__version__,
+        plausibility=verdict.patch_field(),
     )
-    got = result.estimates["joint"].as_dict()
-    assert np.allclose([got[n] for n in plan.order], 0.5, atol=0.02)
+    patch = wirecal.read_patch(path)
+    assert spec.exists()
+    assert patch.offsets_for(robot, plan) == pytest.approx(best.as_dict(), abs=1e-12)

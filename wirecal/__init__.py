@@ -49,6 +49,10 @@ _API = {
     "solve": "wirecal.solver.solve",
     "SolveResult": "wirecal.solver.solve",
     "write_patch": "wirecal.solver.formats.patch",
+    "read_patch": "wirecal.solver.formats.patch",
+    # the plausibility gate between identification and any output
+    "gate": "wirecal.solver.plausibility",
+    "assess": "wirecal.solver.plausibility",
     # generate the controller programs
     "module_text": "wirecal.gen.vplus.program",
     "write_module": "wirecal.gen.vplus.program",

@@ -25,6 +25,7 @@ too few significant digits are refused here, from the text of the field.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import re
 from dataclasses import dataclass
@@ -95,7 +96,11 @@ def read_log(path: str | Path) -> Log:
     return parse_log(text, source, sha256)
 
 
-def parse_log(text: str, source: str, sha256: str = "") -> Log:
+def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
+    """Parse a log's text; ``sha256`` of the bytes it was read from (default: of the text,
+    UTF-8), so a patch always records which log it was solved from."""
+    if sha256 is None:
+        sha256 = hashlib.sha256(text.encode("utf-8")).hexdigest()
     table = parse_table(
         text, source, magic=MAGIC, version=VERSION, what="log", columns=COLUMNS, keys=HEADER_KEYS
     )

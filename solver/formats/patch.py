@@ -123,6 +123,17 @@ def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, 
     out.put(spec_path(path), spec_table(robot, estimate, meta.get("plausibility", "")))
 
 
+def write_patch(
+    path: str | Path, robot: Robot, estimate: Estimate, *, force: bool = False, **meta
+) -> tuple[Path, Path]:
+    """Write the patch and its SPEC table beside it, both or neither (the Python API's
+    one-call form of :func:`put_patch`); refuse to replace either unless ``force``."""
+    path = Path(path)
+    with Outputs([path, spec_path(path)], force=force) as out:
+        put_patch(out, path, robot, estimate, **meta)
+    return path, spec_path(path)
+
+
 _KEYS = (
     "robot",
     "plan",
