@@ -338,9 +338,9 @@ def solve(
     force,
     accept_foreign,
 ):
-    """Identify the kinematic errors from a measurement LOG ('-': standard input, e.g.
-    lines pasted from the controller's terminal).
+    """Identify the kinematic errors from a measurement LOG.
 
+    LOG '-' reads standard input, e.g. the lines pasted from the controller's terminal.
     By default runs the paper's step-by-step method and the joint refinement and shows
     them side by side, with residuals and the predicted tool-point accuracy after
     calibration. With -o, writes the recommended method's patch (or the one --method
