@@ -76,4 +76,5 @@ from wirecal.cli import plan as _plan  # noqa: E402,F401
 from wirecal.cli import psi as _psi  # noqa: E402,F401
 from wirecal.cli import receive as _receive  # noqa: E402,F401
 from wirecal.cli import report as _report  # noqa: E402,F401
+from wirecal.cli import urdf as _urdf  # noqa: E402,F401
 from wirecal.cli import validate as _validate  # noqa: E402,F401

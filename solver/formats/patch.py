@@ -14,7 +14,8 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from wirecal.solver import params as P
-from wirecal.solver.formats.fileio import Outputs
+from wirecal.solver.errors import Problems, WirecalError
+from wirecal.solver.formats.fileio import Outputs, read_toml
 from wirecal.solver.identify import Estimate
 from wirecal.solver.plausibility import OVERRIDDEN
 from wirecal.solver.robot import Robot
@@ -113,3 +114,41 @@ def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, 
     which must hold both names: they are published together or not at all."""
     out.put(path, patch_text(robot, estimate, **meta))
     out.put(spec_path(path), spec_table(robot, estimate, meta.get("plausibility", "")))
+
+
+def load_patch(path: str | Path, robot: Robot) -> dict[str, float]:
+    """The identified offsets (deg, mm) of a patch written by :func:`put_patch`, checked
+    against the robot: its name, each parameter's name and nominal value."""
+    data = read_toml(path, "patch file")
+    pr = Problems(str(path))
+    if data.get("robot") != robot.name:
+        pr.add("robot", f"is {data.get('robot')!r}; the robot file is {robot.name!r}")
+    table = data.get("parameters")
+    if not isinstance(table, dict) or not table:
+        raise WirecalError(f"{path}: parameters: missing [parameters.<name>] tables")
+    out: dict[str, float] = {}
+    for name, entry in table.items():
+        where = f"parameters.{name}"
+        try:
+            P.parse(name, robot.n_joints)
+        except ValueError as exc:
+            pr.add(where, str(exc))
+            continue
+        offset = entry.get("offset") if isinstance(entry, dict) else None
+        nominal = entry.get("nominal") if isinstance(entry, dict) else None
+        if not all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+            for v in (offset, nominal)
+        ):
+            pr.add(where, "needs finite numbers nominal and offset")
+            continue
+        if abs(float(nominal) - robot.nominal_value(name)) > 1e-9 * max(1.0, abs(nominal)):
+            pr.add(
+                f"{where}.nominal",
+                f"is {nominal!r}; the robot file's is {robot.nominal_value(name)!r}: "
+                "this patch was solved for another robot file",
+            )
+            continue
+        out[name] = float(offset)
+    pr.raise_if_any()
+    return out

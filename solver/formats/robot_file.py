@@ -20,6 +20,7 @@ Every problem is reported as ``file: key: problem``, all at once.
 from __future__ import annotations
 
 import difflib
+import json
 import math
 from pathlib import Path
 from typing import Any
@@ -29,7 +30,7 @@ import numpy as np
 from wirecal.solver import params as P
 from wirecal.solver.errors import Problems
 from wirecal.solver.formats.fileio import read_toml
-from wirecal.solver.robot import DEFAULT_LINK_RADIUS_MM, Encoder, Robot
+from wirecal.solver.robot import DEFAULT_LINK_RADIUS_MM, Encoder, Robot, UrdfSource
 
 _SCHEMA: dict[str, tuple[str, ...]] = {
     "": (
@@ -41,12 +42,14 @@ _SCHEMA: dict[str, tuple[str, ...]] = {
         "encoder",
         "calibration",
         "geometry",
+        "urdf",
     ),
     "kinematics": ("convention", "dh", "joint_min_deg", "joint_max_deg", "joint_speed_deg_s"),
     "tool": ("point_mm",),
     "encoder": ("mm_per_count", "range_mm", "counter_bits", "interface", "channel", "belt_mode"),
     "calibration": ("parameters",),
     "geometry": ("link_radius_mm",),
+    "urdf": ("source", "base_link", "tip_link"),
 }
 
 
@@ -57,6 +60,7 @@ _REQUIRED = {
     "encoder": ("mm_per_count", "range_mm", "counter_bits"),
     "calibration": ("parameters",),
     "geometry": (),
+    "urdf": ("source", "base_link", "tip_link"),
 }
 
 
@@ -163,6 +167,17 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     if radii is not None and np.any(radii < 0):
         pr.add("geometry.link_radius_mm", "radii cannot be negative")
 
+    urdf = None
+    if "urdf" in data:
+        table = _table(data, "urdf", pr)
+        values = [table.get(k) for k in ("source", "base_link", "tip_link")]
+        for key, value in zip(("source", "base_link", "tip_link"), values, strict=True):
+            if key in table and (not isinstance(value, str) or not value):
+                pr.add(f"urdf.{key}", "must be a non-empty string")
+        if all(isinstance(v, str) and v for v in values):
+            here = Path() if source.startswith("<") else Path(source).parent
+            urdf = UrdfSource(str(here / values[0]), values[1], values[2])
+
     pr.raise_if_any()
     dh_rad = dh.copy()
     dh_rad[:, [0, 2]] = np.radians(dh_rad[:, [0, 2]])
@@ -177,6 +192,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         parameters=tuple(names),
         source=source,
         link_radius_mm=radii if radii is not None else np.full(n - 1, DEFAULT_LINK_RADIUS_MM),
+        urdf=urdf,
     )
 
 
@@ -270,3 +286,77 @@ def _check_not_radians(alpha_deg: np.ndarray, where: str, what: str, pr: Problem
     nz = np.abs(alpha_deg[np.abs(alpha_deg) > 1e-9])
     if nz.size and np.all(nz <= math.pi + 1e-6) and np.any(np.abs(nz - math.pi / 2) < 1e-3):
         pr.add(where, f"{what} holds values like {nz[0]:g}: that looks like radians; give degrees")
+
+
+TIDY = 1e-11
+"""Numbers written to a robot file are the shortest decimals within TIDY (mm or deg) of the
+value: 425.0 rather than 425.0000000000001 (a change of the tip far below 1e-9 mm)."""
+
+
+def _num(x: float) -> str:
+    """The shortest decimal within :data:`TIDY` of ``x`` (−0 written as 0)."""
+    x = float(x)
+    for digits in range(13):
+        r = round(x, digits)
+        if abs(r - x) <= TIDY:
+            return repr(r + 0.0)
+    return repr(x)
+
+
+def robot_file_text(
+    robot: Robot,
+    *,
+    header: list[str],
+    row_notes: list[str],
+    encoder_note: str,
+    urdf_source: str | None = None,
+) -> str:
+    """A robot file for ``robot`` that :func:`load_robot` reads back to the same numbers
+    (to :data:`TIDY`). ``header`` lines become comments at the top; ``row_notes``
+    (one per joint) comment the DH rows and limits; ``urdf_source`` is written as given
+    (relative to the robot file's folder)."""
+    dh = robot.dh_deg()
+
+    def vec(values) -> str:
+        return "[" + ", ".join(_num(v) for v in values) + "]"
+
+    lines = [f"# {h}" if h else "#" for h in header]
+    lines += [
+        f"name = {json.dumps(robot.name, ensure_ascii=False)}",
+        "",
+        "[kinematics]",
+        'convention = "craig"',
+        "# rows: [alpha_deg, a_mm, theta_offset_deg, d_mm]",
+        "dh = [",
+        *(f"    {vec(row)},  # {note}" for row, note in zip(dh, row_notes, strict=True)),
+        "]",
+        f"joint_min_deg = {vec(robot.joint_min_deg)}",
+        f"joint_max_deg = {vec(robot.joint_max_deg)}",
+        f"joint_speed_deg_s = {vec(robot.joint_speed_deg_s)}",
+        "",
+        "[tool]",
+        "# wire attachment point in the last joint's frame",
+        f"point_mm = {vec(robot.tool_point)}",
+        "",
+        "[encoder]",
+        f"# {encoder_note}",
+        f"mm_per_count = {_num(robot.encoder.mm_per_count)}",
+        f"range_mm = {_num(robot.encoder.range_mm)}",
+        f"counter_bits = {robot.encoder.counter_bits}",
+        f"interface = {json.dumps(robot.encoder.interface)}",
+        f"channel = {robot.encoder.channel}",
+        f"belt_mode = {robot.encoder.belt_mode}",
+        "",
+        "[calibration]",
+        "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
+    ]
+    if urdf_source is not None and robot.urdf is not None:
+        lines += [
+            "",
+            "[urdf]",
+            "# the URDF this file was imported from; export-urdf changes only its joint origins",
+            f"source = {json.dumps(urdf_source, ensure_ascii=False)}",
+            f"base_link = {json.dumps(robot.urdf.base_link, ensure_ascii=False)}",
+            f"tip_link = {json.dumps(robot.urdf.tip_link, ensure_ascii=False)}",
+        ]
+    return "\n".join(lines) + "\n"
