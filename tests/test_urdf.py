@@ -328,3 +328,23 @@ def test_reader_errors_name_the_file(tmp_path):
     bad.write_text("<robot")
     with pytest.raises(WirecalError, match="not valid XML"):
         read_urdf(bad)
+
+
+def test_axes_a_rounding_error_from_parallel_are_made_parallel(tmp_path):
+    # j3's axis is 3e-10 rad off j2's (a π/2 written with 9 digits does this)
+    joints = [*TWISTED[1:3], ("j3", "revolute", "l2", "l3", "0.4 0 0.02", "3e-10 0 0", "0 0 -1")]
+    joints += [("j4", "continuous", "l3", "l4", "0.3 0 0", "1.2 0 0", "0 0 1")]
+    src = tmp_path / "s.urdf"
+    src.write_text(make_urdf(joints), encoding="utf-8")
+    r = CliRunner().invoke(
+        main, ["import-urdf", str(src), "-o", str(tmp_path / "r.toml"), "--tip", "l4"]
+    )
+    assert r.exit_code == 0, r.output
+    assert "'j2' and 'j3' are 3e-10 rad from parallel" in r.output
+    assert "joint 'j4' is continuous" in r.output
+    robot = load_robot(tmp_path / "r.toml")
+    assert robot.dh[2, 0] == 0.0  # exactly parallel in the file
+    np.testing.assert_array_equal(robot.joint_max_deg[3], 360.0)
+    q = np.array([0.3, -0.4, 1.0, 0.7])
+    got = tool_position(perturbed(robot), q[None])[0]
+    np.testing.assert_allclose(got, urdf_fk(src, "base", "l4", q)[:3, 3], atol=1e-6)
