@@ -70,13 +70,25 @@ def _pose_text(T: np.ndarray) -> str:
 @click.argument("urdf", type=click.Path(dir_okay=False))
 @click.option("--tip", required=True, help="Link at the wire attachment point (chain's end).")
 @click.option("--base", default=None, help="The chain's first link (default: the root link).")
-@click.option("-o", "--out", "out", required=True, type=click.Path(dir_okay=False))
-@click.option("--name", default=None, help="Robot name (default: the URDF's robot name).")
-@click.option("--mm-per-count", default=0.025488, show_default=True, type=float)
-@click.option("--range-mm", default=1250.0, show_default=True, type=float)
-@click.option("--counter-bits", default=24, show_default=True, type=int)
 @click.option(
-    "--interface", default="belt", show_default=True, type=click.Choice(["belt", "device"])
+    "-o", "--out", "out", required=True, type=click.Path(dir_okay=False), help="Robot file."
+)
+@click.option("--name", default=None, help="Robot name (default: the URDF's robot name).")
+@click.option(
+    "--mm-per-count", default=0.025488, show_default=True, type=float, help="Encoder scale."
+)
+@click.option(
+    "--range-mm", default=1250.0, show_default=True, type=float, help="Encoder wire range."
+)
+@click.option(
+    "--counter-bits", default=24, show_default=True, type=int, help="Controller counter width."
+)
+@click.option(
+    "--interface",
+    default="belt",
+    show_default=True,
+    type=click.Choice(["belt", "device"]),
+    help="How the controller program reads the encoder (see the robot file format).",
 )
 @click.option("--force", is_flag=True, help="Replace OUT if it exists.")
 @user_errors
@@ -175,7 +187,9 @@ def _import_text(urdf, tip, base, out_path: Path, name, encoder: Encoder):
 @main.command("export-urdf")
 @click.argument("robot", type=click.Path(dir_okay=False))
 @click.argument("patch", type=click.Path(dir_okay=False), required=False)
-@click.option("-o", "--out", "out", required=True, type=click.Path(dir_okay=False))
+@click.option(
+    "-o", "--out", "out", required=True, type=click.Path(dir_okay=False), help="URDF to write."
+)
 @click.option(
     "--from",
     "source",

@@ -13,7 +13,9 @@ COMMANDS = sorted(main.commands)
 def test_the_commands_are_all_there():
     assert COMMANDS == [
         "demo",
+        "export-urdf",
         "gen",
+        "import-urdf",
         "observe",
         "plan",
         "psi",
