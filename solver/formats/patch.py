@@ -134,21 +134,21 @@ def load_patch(path: str | Path, robot: Robot) -> dict[str, float]:
         except ValueError as exc:
             pr.add(where, str(exc))
             continue
-        offset = entry.get("offset") if isinstance(entry, dict) else None
-        nominal = entry.get("nominal") if isinstance(entry, dict) else None
+        values = [entry.get(k) if isinstance(entry, dict) else None for k in ("offset", "nominal")]
         if not all(
             isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-            for v in (offset, nominal)
+            for v in values
         ):
             pr.add(where, "needs finite numbers nominal and offset")
             continue
-        if abs(float(nominal) - robot.nominal_value(name)) > 1e-9 * max(1.0, abs(nominal)):
+        offset, nominal = (float(v) for v in values)  # type: ignore[arg-type]
+        if abs(nominal - robot.nominal_value(name)) > 1e-9 * max(1.0, abs(nominal)):
             pr.add(
                 f"{where}.nominal",
                 f"is {nominal!r}; the robot file's is {robot.nominal_value(name)!r}: "
                 "this patch was solved for another robot file",
             )
             continue
-        out[name] = float(offset)
+        out[name] = offset
     pr.raise_if_any()
     return out

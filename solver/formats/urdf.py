@@ -44,7 +44,7 @@ class Joint:
 class Urdf:
     path: Path
     name: str
-    tree: ET.ElementTree
+    root: ET.Element  # the parsed document, comments kept
     links: tuple[str, ...]
     joints: dict[str, Joint]
 
@@ -123,7 +123,7 @@ def read_urdf(path: str | Path) -> Urdf:
             velocity_rad_s=_limit(limit, "velocity", where),
             mimic=el.find("mimic") is not None,
         )
-    return Urdf(path, root.get("name", ""), tree, links, joints)
+    return Urdf(path, root.get("name", ""), root, links, joints)
 
 
 def chain(urdf: Urdf, base: str | None, tip: str) -> list[Joint]:
