@@ -11,6 +11,7 @@ import click
 import numpy as np
 
 from wirecal.cli.main import main, user_errors
+from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.patch import load_patch
@@ -24,12 +25,13 @@ from wirecal.solver.formats.urdf import (
 from wirecal.solver.identifiability import propose_parameters
 from wirecal.solver.kinematics import Model, perturbed
 from wirecal.solver.robot import Encoder, Robot, UrdfSource
-from wirecal.solver.urdf_model import calibrated_origins, fk_difference_bound_mm, read_chain
+from wirecal.solver.urdf_model import calibrated_origins, fk_difference_mm, read_chain
 
 CONTINUOUS_DEG = 360.0
 """Range written for a URDF ``continuous`` joint (no limits in the file): one turn each way."""
 
 PROPOSAL_POINTS = 300
+EXACT_MM = 1e-9
 
 
 def _limits(ch) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
@@ -90,9 +92,28 @@ def _pose_text(T: np.ndarray) -> str:
     type=click.Choice(["belt", "device"]),
     help="How the controller program reads the encoder (see the robot file format).",
 )
+@click.option(
+    "--parallel-tol-deg",
+    type=click.FloatRange(0, 0.05, min_open=True),
+    default=None,
+    help="Take axes this close to parallel as parallel (a URDF with rounded angles); the "
+    "import reports how far the tip then moves.",
+)
 @click.option("--force", is_flag=True, help="Replace OUT if it exists.")
 @user_errors
-def import_urdf(urdf, tip, base, out, name, mm_per_count, range_mm, counter_bits, interface, force):
+def import_urdf(
+    urdf,
+    tip,
+    base,
+    out,
+    name,
+    mm_per_count,
+    range_mm,
+    counter_bits,
+    interface,
+    parallel_tol_deg,
+    force,
+):
     """A robot file in Craig's modified DH from the serial chain BASE → TIP of a URDF.
 
     The DH model's forward kinematics equals the URDF's: each joint turns the same way
@@ -111,6 +132,7 @@ def import_urdf(urdf, tip, base, out, name, mm_per_count, range_mm, counter_bits
             out_path,
             name,
             Encoder(mm_per_count, range_mm, counter_bits, interface),
+            parallel_tol_deg,
         )
         outs.put(out_path, text)
     n = len(ch.moving)
@@ -120,10 +142,14 @@ def import_urdf(urdf, tip, base, out, name, mm_per_count, range_mm, counter_bits
         click.echo(f"note: {note}")
 
 
-def _import_text(urdf, tip, base, out_path: Path, name, encoder: Encoder):
+def _tol(parallel_tol_deg: float | None) -> float:
+    return PARALLEL_TOL if parallel_tol_deg is None else math.radians(parallel_tol_deg)
+
+
+def _import_text(urdf, tip, base, out_path: Path, name, encoder: Encoder, parallel_tol_deg):
     """The robot file's text for import-urdf, checked to read back."""
     doc = read_urdf(urdf)
-    ch = read_chain(doc, base, tip)
+    ch = read_chain(doc, base, tip, _tol(parallel_tol_deg))
     lo, hi, speed, notes = _limits(ch)
     n = len(ch.moving)
     robot_name = name or doc.name or Path(urdf).stem
@@ -136,14 +162,22 @@ def _import_text(urdf, tip, base, out_path: Path, name, encoder: Encoder):
             f"th{n} is not proposed: the tip lies on the last joint's axis, so no wire length "
             "depends on it; import with a tip link at the wire attachment point"
         )
-    bound = fk_difference_bound_mm(ch)
     for i, angle in ch.dh.snapped:
         notes.append(
             f"the axes of {ch.moving[i].name!r} and {ch.moving[i + 1].name!r} are "
             f"{angle:.2g} rad from parallel (a rounded π/2 in the URDF): taken as parallel"
         )
-    if bound:
-        notes.append(f"so the tip may differ from the URDF's by up to {bound:.2g} mm")
+    diff = fk_difference_mm(ch, np.radians(q))
+    if ch.dh.snapped:
+        notes.append(
+            f"so the DH tip differs from the URDF's by up to {diff:.2g} mm "
+            f"({PROPOSAL_POINTS} configurations within the limits)"
+        )
+    elif diff > EXACT_MM:  # a guard: the construction is exact
+        raise WirecalError(
+            f"{urdf}: the DH model's tip differs from the URDF's by {diff:.3g} mm; "
+            "please report this URDF"
+        )
     robot = Robot(
         name=robot_name,
         dh=ch.dh.dh,
@@ -153,7 +187,7 @@ def _import_text(urdf, tip, base, out_path: Path, name, encoder: Encoder):
         tool_point=ch.dh.tool_point,
         encoder=encoder,
         parameters=params,
-        urdf=UrdfSource(str(urdf), ch.base_link, ch.tip_link),
+        urdf=UrdfSource(str(urdf), ch.base_link, ch.tip_link, parallel_tol_deg),
     )
     source = os.path.relpath(Path(urdf).resolve(), out_path.resolve().parent)
     frame0 = (
@@ -232,7 +266,7 @@ def _export_text(robot, patch, source) -> str:
         doc = read_urdf(path_in)
         if tip is None:
             raise WirecalError(f"{robot}: no [urdf] table naming the tip link; import it first")
-        ch = read_chain(doc, base, tip)
+        ch = read_chain(doc, base, tip, _tol(rob.urdf.parallel_tol_deg if rob.urdf else None))
         same = ch.dh.dh.shape == rob.dh.shape and np.allclose(ch.dh.dh, rob.dh, atol=1e-9)
         if not same or not np.allclose(ch.dh.tool_point, rob.tool_point, atol=1e-9):
             raise WirecalError(

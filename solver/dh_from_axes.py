@@ -21,8 +21,9 @@ Choices where Craig's construction leaves freedom (deterministic, documented her
   the last axis of the parallel group. The d's of a parallel group change every wire length
   in the same way (∂p/∂d_i = z_i = z_{i+1}): only one of them is identifiable, and the rule
   puts the whole nominal length in that one, which :func:`propose_parameters` then keeps.
-* Axes within ``PARALLEL_TOL`` of parallel (a URDF's π/2 written with 9 digits) are made
-  exactly parallel; the caller reports the forward-kinematics difference this makes.
+* Axes within ``parallel_tol`` (default ``PARALLEL_TOL``: a URDF's π/2 written with 9
+  digits) of parallel are made exactly parallel; the caller measures and reports the
+  forward-kinematics difference this makes.
 * Frame 0 is the base frame itself when row 1 can express axis 1 in it (axis 1 ⊥ x_base and
   meeting the x_base axis: α0, a0 and d1 then place it); otherwise frame 0 has z along axis
   1 through the point of axis 1 nearest the base origin, x along the base x (or y) projected,
@@ -59,6 +60,12 @@ class DhChain:
     joint_offsets: np.ndarray  # (n, 4, 4) DH frame i → the joint's own frame
     tip_offset: np.ndarray  # (4, 4) DH frame n → tip
     snapped: tuple[tuple[int, float], ...]  # (i, angle rad): axes i, i+1 made parallel
+
+
+def _up2(x: float) -> float:
+    """x rounded up to two significant digits."""
+    step = 10.0 ** (np.floor(np.log10(x)) - 1)
+    return float(np.ceil(x / step) * step)
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -120,6 +127,7 @@ def dh_from_axes(
     tip: np.ndarray,
     joint_frames: np.ndarray,
     names: list[str],
+    parallel_tol: float = PARALLEL_TOL,
 ) -> DhChain:
     """The modified-DH description of axes ``points[i] + t·axes[i]`` (base frame, q = 0) with
     tip pose ``tip`` (4, 4) and the joints' own frames ``joint_frames`` (n, 4, 4); ``names``
@@ -131,14 +139,16 @@ def dh_from_axes(
     snapped = []
     for i in range(n - 1):
         s = np.linalg.norm(np.cross(z[i], z[i + 1]))
-        if 0 < s < PARALLEL_TOL:
+        if 0 < s < parallel_tol:
             z[i + 1] = z[i] if z[i] @ z[i + 1] > 0 else -z[i]
             snapped.append((i, float(s)))
-        elif PARALLEL_TOL <= s < NEAR_PARALLEL:
+        elif parallel_tol <= s < NEAR_PARALLEL:
             raise ChainError(
                 f"the axes of joints {names[i]!r} and {names[i + 1]!r} are {np.degrees(s):.3g}° "
                 "from parallel: their common normal lies far away. The URDF's angles look "
-                "rounded (e.g. 1.5708 for π/2): write them with full precision"
+                "rounded (e.g. 1.5708 for π/2): write them with full precision, or accept "
+                f"them as parallel with --parallel-tol-deg {_up2(np.degrees(s) * 1.01):.2g} (the "
+                "import then reports how far the tip moves)"
             )
 
     # Frame 0 and the foot of x0 on axis 1.

@@ -41,6 +41,7 @@ class UrdfSource:
     path: str
     base_link: str
     tip_link: str
+    parallel_tol_deg: float | None = None  # import-urdf --parallel-tol-deg, if given
 
 
 @dataclass(frozen=True)

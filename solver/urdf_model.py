@@ -18,7 +18,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wirecal.solver.dh_from_axes import ChainError, DhChain, dh_frames, dh_from_axes
+from wirecal.solver.dh_from_axes import (
+    PARALLEL_TOL,
+    ChainError,
+    DhChain,
+    dh_frames,
+    dh_from_axes,
+)
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.urdf import MOVING, Joint, Urdf, chain, origin_mm
 from wirecal.solver.kinematics import Model
@@ -48,7 +54,9 @@ def _inv(T: np.ndarray) -> np.ndarray:
     return out
 
 
-def read_chain(urdf: Urdf, base: str | None, tip: str) -> UrdfChain:
+def read_chain(
+    urdf: Urdf, base: str | None, tip: str, parallel_tol: float = PARALLEL_TOL
+) -> UrdfChain:
     """The serial chain from ``base`` to ``tip`` in modified DH (see the module doc)."""
     path = chain(urdf, base, tip)
     if not path:
@@ -71,7 +79,9 @@ def read_chain(urdf: Urdf, base: str | None, tip: str) -> UrdfChain:
         )
     names = [j.name for j in moving]
     try:
-        dh = dh_from_axes(np.array(points), np.array(axes), T, np.array(joint_frames), names)
+        dh = dh_from_axes(
+            np.array(points), np.array(axes), T, np.array(joint_frames), names, parallel_tol
+        )
     except ChainError as exc:
         raise WirecalError(f"{urdf.path}: {exc}") from None
     F = dh.frame0 @ dh_frames(dh.dh, np.zeros((1, len(moving))))[0]
@@ -100,8 +110,31 @@ def calibrated_origins(ch: UrdfChain, model: Model) -> dict[str, np.ndarray]:
     return {j.name: _inv(frames_[j.parent]) @ frames_[j.child] for j in ch.joints}
 
 
-def fk_difference_bound_mm(ch: UrdfChain) -> float:
-    """How far the DH model's tip can be from the URDF's because nearly parallel axes were
-    made parallel: Σ angle × reach (0 when nothing was snapped)."""
-    reach = float(np.sum(np.abs(ch.dh.dh[:, [1, 3]]))) + float(np.linalg.norm(ch.dh.tool_point))
-    return sum(angle for _, angle in ch.dh.snapped) * reach
+def _axis_angle(k: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Rotations (N, 3, 3) by angles q (N,) about the unit axis k (Rodrigues)."""
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    s, c = np.sin(q)[:, None, None], np.cos(q)[:, None, None]
+    return np.eye(3) + s * K + (1 - c) * (K @ K)
+
+
+def urdf_tip_mm(ch: UrdfChain, q: np.ndarray) -> np.ndarray:
+    """The tip's origin in the base link (N, 3) straight from the URDF's joints, q (N, n)."""
+    q = np.atleast_2d(q)
+    T = np.broadcast_to(np.eye(4), (len(q), 4, 4)).copy()
+    k = 0
+    for j in ch.joints:
+        T = T @ origin_mm(j)
+        if j.type in MOVING:
+            M = np.broadcast_to(np.eye(4), (len(q), 4, 4)).copy()
+            M[:, :3, :3] = _axis_angle(j.axis, q[:, k])
+            T = T @ M
+            k += 1
+    return T[:, :3, 3]
+
+
+def fk_difference_mm(ch: UrdfChain, q: np.ndarray) -> float:
+    """The largest distance between the URDF's tip and the DH model's over configurations
+    q (N, n) in radians: the import's check of itself."""
+    F = ch.dh.frame0 @ dh_frames(ch.dh.dh, q)
+    tip = F[:, -1, :3, :3] @ ch.dh.tool_point + F[:, -1, :3, 3]
+    return float(np.max(np.linalg.norm(tip - urdf_tip_mm(ch, q), axis=1)))

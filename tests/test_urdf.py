@@ -308,6 +308,27 @@ def test_refuses_rounded_right_angles(tmp_path):
     joints.append(("j4", "revolute", "l3", "l4", "0.3 0 0", "0 0 0", "0 0 1"))
     out = _refusal(tmp_path, joints, "--tip", "l4")
     assert "from parallel" in out and "'j2' and 'j3'" in out
+    assert "--parallel-tol-deg 0.00022" in out  # 3.7e-6 rad, and a margin
+    robot_toml = tmp_path / "r.toml"
+    r = CliRunner().invoke(
+        main,
+        [
+            "import-urdf",
+            str(tmp_path / "bad.urdf"),
+            "-o",
+            str(robot_toml),
+            "--tip",
+            "l4",
+            "--parallel-tol-deg",
+            "0.00022",
+        ],
+    )
+    assert r.exit_code == 0, r.output
+    assert "so the DH tip differs from the URDF's by up to" in r.output
+    robot = load_robot(robot_toml)
+    assert robot.urdf is not None and robot.urdf.parallel_tol_deg == 0.00022
+    r = CliRunner().invoke(main, ["export-urdf", str(robot_toml), "-o", str(tmp_path / "o.urdf")])
+    assert r.exit_code == 0, r.output  # export re-derives the chain with the same tolerance
 
 
 def test_missing_velocity_named(tmp_path):

@@ -49,7 +49,7 @@ _SCHEMA: dict[str, tuple[str, ...]] = {
     "encoder": ("mm_per_count", "range_mm", "counter_bits", "interface", "channel", "belt_mode"),
     "calibration": ("parameters",),
     "geometry": ("link_radius_mm",),
-    "urdf": ("source", "base_link", "tip_link"),
+    "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg"),
 }
 
 
@@ -174,9 +174,12 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         for key, value in zip(("source", "base_link", "tip_link"), values, strict=True):
             if key in table and (not isinstance(value, str) or not value):
                 pr.add(f"urdf.{key}", "must be a non-empty string")
+        tol = _number(table, "parallel_tol_deg", "urdf.parallel_tol_deg", pr)
+        if tol is not None and not 0 < tol < 0.05:
+            pr.add("urdf.parallel_tol_deg", f"is {tol!r}; give an angle between 0 and 0.05 deg")
         if all(isinstance(v, str) and v for v in values):
             here = Path() if source.startswith("<") else Path(source).parent
-            urdf = UrdfSource(str(here / values[0]), values[1], values[2])
+            urdf = UrdfSource(str(here / values[0]), values[1], values[2], tol)
 
     pr.raise_if_any()
     dh_rad = dh.copy()
@@ -359,4 +362,6 @@ def robot_file_text(
             f"base_link = {json.dumps(robot.urdf.base_link, ensure_ascii=False)}",
             f"tip_link = {json.dumps(robot.urdf.tip_link, ensure_ascii=False)}",
         ]
+        if robot.urdf.parallel_tol_deg is not None:
+            lines.append(f"parallel_tol_deg = {_num(robot.urdf.parallel_tol_deg)}")
     return "\n".join(lines) + "\n"

@@ -103,7 +103,7 @@ def read_urdf(path: str | Path) -> Urdf:
             None if axis_el is None else axis_el.get("xyz"), "1 0 0", f"{where}: <axis xyz>"
         )
         norm = float(np.linalg.norm(axis))
-        if norm == 0:
+        if norm == 0 and el.get("type") in MOVING:  # a fixed joint's axis is ignored
             raise WirecalError(f"{where}: <axis xyz> is the zero vector")
         limit = el.find("limit")
         joints[name] = Joint(
@@ -117,7 +117,7 @@ def read_urdf(path: str | Path) -> Urdf:
             rpy_rad=_floats(
                 None if origin is None else origin.get("rpy"), "0 0 0", f"{where}: origin rpy"
             ),
-            axis=axis / norm,
+            axis=axis / norm if norm else axis,
             lower_rad=_limit(limit, "lower", where),
             upper_rad=_limit(limit, "upper", where),
             velocity_rad_s=_limit(limit, "velocity", where),
