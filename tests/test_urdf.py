@@ -17,7 +17,7 @@ from wirecal.cli.main import main
 from wirecal.solver.dh_from_axes import dh_frames
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.urdf import read_urdf
+from wirecal.solver.formats.urdf import matrix_rpy, read_urdf
 from wirecal.solver.kinematics import perturbed, tool_position
 from wirecal.solver.urdf_model import read_chain
 
@@ -369,3 +369,16 @@ def test_axes_a_rounding_error_from_parallel_are_made_parallel(tmp_path):
     q = np.array([0.3, -0.4, 1.0, 0.7])
     got = tool_position(perturbed(robot), q[None])[0]
     np.testing.assert_allclose(got, urdf_fk(src, "base", "l4", q)[:3, 3], atol=1e-6)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    roll=st.floats(-3.1, 3.1),
+    yaw=st.floats(-3.1, 3.1),
+    sign=st.sampled_from([1.0, -1.0]),
+    off=st.sampled_from([0.0, 1e-12, 1e-9, 1e-7, 1e-5, 0.3]),
+)
+def test_rpy_of_a_rotation_near_gimbal_lock(roll, yaw, sign, off):
+    # a calibrated tool frame at pitch ≈ ±90° (KUKA's tool0) once lost 7.6e-6 mm here
+    R = _rpy(roll, sign * (np.pi / 2 - off), yaw)
+    np.testing.assert_allclose(_rpy(*matrix_rpy(R)), R, atol=1e-15)

@@ -190,7 +190,10 @@ def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
 
 
 def matrix_rpy(R: np.ndarray) -> np.ndarray:
-    """The inverse of :func:`rpy_matrix` (pitch in [−π/2, π/2])."""
+    """The inverse of :func:`rpy_matrix` (pitch in [−π/2, π/2]). Near pitch ±90° roll and
+    yaw are ill-conditioned one by one (only their sum or difference is not), so the first
+    guess is refined by least squares on the rotation itself: rpy_matrix of the result
+    equals R to round-off at any pitch."""
     pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
     if math.hypot(R[0, 0], R[1, 0]) > 1e-12:
         roll = math.atan2(R[2, 1], R[2, 2])
@@ -198,7 +201,15 @@ def matrix_rpy(R: np.ndarray) -> np.ndarray:
     else:  # gimbal lock: yaw absorbs the rotation about z
         roll = 0.0
         yaw = math.atan2(-R[0, 1], R[1, 1])
-    return np.array([roll, pitch, yaw])
+    rpy = np.array([roll, pitch, yaw])
+    for _ in range(3):
+        E = R @ rpy_matrix(rpy).T
+        w = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
+        cy, sy, cp, sp = math.cos(rpy[2]), math.sin(rpy[2]), math.cos(rpy[1]), math.sin(rpy[1])
+        # angular velocity in the parent frame per unit roll, pitch, yaw rate
+        J = np.array([[cy * cp, -sy, 0.0], [sy * cp, cy, 0.0], [-sp, 0.0, 1.0]])
+        rpy = rpy + np.linalg.lstsq(J, w, rcond=1e-12)[0]
+    return rpy
 
 
 def origin_mm(j: Joint) -> np.ndarray:
