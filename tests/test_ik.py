@@ -124,6 +124,7 @@ def test_ur_generic_pose_has_eight_named_solutions():
     )
 
 
+@pytest.mark.slow  # the numeric search takes about a second per pose
 @pytest.mark.parametrize("arm", ["ur5", "viper"])
 def test_numeric_search_finds_only_closed_form_solutions(arm, viper):
     robot = UR5 if arm == "ur5" else viper

@@ -4,6 +4,7 @@ export of a calibrated model, round trips, and the refusals."""
 
 from __future__ import annotations
 
+import tomllib
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -382,3 +383,27 @@ def test_rpy_of_a_rotation_near_gimbal_lock(roll, yaw, sign, off):
     # a calibrated tool frame at pitch ≈ ±90° (KUKA's tool0) once lost 7.6e-6 mm here
     R = _rpy(roll, sign * (np.pi / 2 - off), yaw)
     np.testing.assert_allclose(_rpy(*matrix_rpy(R)), R, atol=1e-15)
+
+
+def test_a_solved_patch_exported_as_urdf(tmp_path):
+    """simulate → solve → export-urdf on the Viper: the URDF is the patched model."""
+    robot_path = ROOT / "examples" / "viper_s650" / "robot.toml"
+    plan = ROOT / "examples" / "viper_s650" / "paper_plan.toml"
+    log, patch, out = tmp_path / "run.csv", tmp_path / "patch.toml", tmp_path / "cal.urdf"
+    for args in (
+        ["simulate", robot_path, plan, "-o", log, "--random", "1", "--seed", "2"],
+        ["solve", robot_path, plan, log, "-o", patch, "--method", "joint"],
+        ["export-urdf", robot_path, patch, "-o", out],
+    ):
+        r = CliRunner().invoke(main, [str(a) for a in args])
+        assert r.exit_code == 0, r.output
+    robot = load_robot(robot_path)
+    errors = {
+        name: entry["offset"]
+        for name, entry in tomllib.loads(patch.read_text())["parameters"].items()
+    }
+    assert set(errors) == set(robot.parameters)
+    model = perturbed(robot, errors)
+    q = np.random.default_rng(4).uniform(-2, 2, (30, 6))
+    got = np.array([urdf_fk(out, "link0", "wire_point", x)[:3, 3] for x in q])
+    np.testing.assert_allclose(got, tool_position(model, q), atol=TOL_MM)
