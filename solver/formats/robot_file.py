@@ -296,12 +296,17 @@ TIDY = 1e-11
 value: 425.0 rather than 425.0000000000001 (a change of the tip far below 1e-9 mm)."""
 
 
-def _num(x: float) -> str:
-    """The shortest decimal within :data:`TIDY` of ``x`` (−0 written as 0)."""
+LIMIT_TIDY = 1e-7
+"""Joint limits and speeds are written to within LIMIT_TIDY (deg, deg/s): a URDF's limits in
+radians with 11 digits give 185.00000000003°; 185.0 is what the vendor meant."""
+
+
+def _num(x: float, tidy: float = TIDY) -> str:
+    """The shortest decimal within ``tidy`` of ``x`` (−0 written as 0)."""
     x = float(x)
     for digits in range(13):
         r = round(x, digits)
-        if abs(r - x) <= TIDY:
+        if abs(r - x) <= tidy:
             return repr(r + 0.0)
     return repr(x)
 
@@ -320,8 +325,8 @@ def robot_file_text(
     (relative to the robot file's folder)."""
     dh = robot.dh_deg()
 
-    def vec(values) -> str:
-        return "[" + ", ".join(_num(v) for v in values) + "]"
+    def vec(values, tidy: float = TIDY) -> str:
+        return "[" + ", ".join(_num(v, tidy) for v in values) + "]"
 
     lines = [f"# {h}" if h else "#" for h in header]
     lines += [
@@ -333,9 +338,9 @@ def robot_file_text(
         "dh = [",
         *(f"    {vec(row)},  # {note}" for row, note in zip(dh, row_notes, strict=True)),
         "]",
-        f"joint_min_deg = {vec(robot.joint_min_deg)}",
-        f"joint_max_deg = {vec(robot.joint_max_deg)}",
-        f"joint_speed_deg_s = {vec(robot.joint_speed_deg_s)}",
+        f"joint_min_deg = {vec(robot.joint_min_deg, LIMIT_TIDY)}",
+        f"joint_max_deg = {vec(robot.joint_max_deg, LIMIT_TIDY)}",
+        f"joint_speed_deg_s = {vec(robot.joint_speed_deg_s, LIMIT_TIDY)}",
         "",
         "[tool]",
         "# wire attachment point in the last joint's frame",
