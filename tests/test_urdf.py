@@ -407,3 +407,15 @@ def test_a_solved_patch_exported_as_urdf(tmp_path):
     q = np.random.default_rng(4).uniform(-2, 2, (30, 6))
     got = np.array([urdf_fk(out, "link0", "wire_point", x)[:3, 3] for x in q])
     np.testing.assert_allclose(got, tool_position(model, q), atol=TOL_MM)
+
+
+def test_the_robot_files_urdf_table_is_checked(tmp_path):
+    text = (ROOT / "examples" / "viper_s650" / "robot.toml").read_text()
+    bad = tmp_path / "r.toml"
+    bad.write_text(text + '\n[urdf]\nsource = 3\nbase_link = "b"\nparallel_tol_deg = 1.0\n')
+    with pytest.raises(WirecalError) as err:
+        load_robot(bad)
+    problems = "\n".join(err.value.problems)
+    assert "urdf.source: must be a non-empty string" in problems
+    assert "urdf.tip_link: is missing" in problems
+    assert "urdf.parallel_tol_deg: is 1.0; give an angle between 0 and 0.05 deg" in problems
