@@ -30,6 +30,10 @@ HALF_PI = np.pi / 2
 STRUCTURE_TOL_RAD = np.radians(5.0)
 """A model counts as UR-type if rounding its twists moves none by more than this."""
 
+SEED_SLACK = 1e-3
+"""A cosine this far beyond ±1 is clipped, not dropped: a calibrated arm stretched straight
+has a structural model just out of reach, and Newton from the clipped seed finds it."""
+
 
 def _rot_x(a: float) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
@@ -84,7 +88,7 @@ def closed_form(dh: np.ndarray, R: np.ndarray, o: np.ndarray) -> list[np.ndarray
         R1 = _rot_z(phi1)
         z2 = -s1 * R1[:, 1]
         c5 = -(Rb[:, 2] @ z2) / (s4 * s5)
-        if abs(c5) > 1 + 1e-12:
+        if abs(c5) > 1 + SEED_SLACK:
             continue
         v = Rb.T @ z2
         for wrist in (1.0, -1.0):
@@ -102,7 +106,7 @@ def closed_form(dh: np.ndarray, R: np.ndarray, o: np.ndarray) -> list[np.ndarray
             RP = R1 @ _rot_x(alpha[1])
             p = RP.T @ (o4 - a[1] * R1[:, 0])
             c3 = (p[0] ** 2 + p[1] ** 2 - a[2] ** 2 - a[3] ** 2) / (2 * a[2] * a[3])
-            if abs(c3) > 1 + 1e-12:
+            if abs(c3) > 1 + SEED_SLACK:
                 continue
             for elbow in (1.0, -1.0):
                 phi3 = elbow * np.arccos(np.clip(c3, -1.0, 1.0))
