@@ -116,6 +116,16 @@ for _name, _target, _summary in (
         "Calibrate a simulated Viper s650 end to end, before and after, in about a minute.",
     ),
     ("gen", "wirecal.cli.gen:gen", "Write the V+/eV+ module that runs PLAN on the controller."),
+    (
+        "export-urdf",
+        "wirecal.cli.urdf:export_urdf",
+        "Write the robot, calibrated by PATCH if given, as a URDF.",
+    ),
+    (
+        "import-urdf",
+        "wirecal.cli.urdf:import_urdf",
+        "Write a robot file in Craig's modified DH from a URDF's chain BASE → TIP.",
+    ),
     ("lint", "wirecal.cli.lint:lint", "Check V+ program files as a controller's LOAD would."),
     (
         "observe",

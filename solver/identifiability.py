@@ -159,3 +159,30 @@ def _rref(a: np.ndarray) -> np.ndarray:
                 a[k] -= a[k, c] * a[r]
         r += 1
     return a[:r]
+
+
+def propose_parameters(
+    model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray, nominal_dh: np.ndarray
+) -> tuple[str, ...]:
+    """Error parameters to calibrate, in the style of the paper's eq. 20: the θ offsets of
+    joints 2…n and every non-zero length a_{i-1}, d_i of rows 2…n (row 1 is a rigid motion
+    of the whole arm, :data:`BASE_PARAMETERS`), each kept only when it raises the rank of the
+    distance Jacobian over the points ``q_deg`` — so of redundant ones (the d's of parallel
+    axes, θ_n with a tool point on axis n) the first is kept."""
+    n = model.n_joints
+    lengths = [
+        name
+        for i in range(1, n)
+        for name, value in ((f"a{i}", nominal_dh[i, 1]), (f"d{i + 1}", nominal_dh[i, 3]))
+        if abs(value) > 1e-9
+    ]
+    kept: list[str] = []
+    rank = 0
+    for name in [f"th{i + 1}" for i in range(1, n)] + sorted(lengths, key=lambda s: s[0]):
+        J = sensitivity(model, q_deg, theta0_deg, [*kept, name]).psi
+        s = np.linalg.svd(J, compute_uv=False)
+        r = int(np.sum(s > RANK_RTOL * s[0])) if s.size and s[0] > 0 else 0
+        if r > rank:
+            kept.append(name)
+            rank = r
+    return tuple(kept)

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wirecal.solver import ik_ur
 from wirecal.solver.kinematics import Model, frames, joint_jacobian
 from wirecal.solver.robot import Robot
 
@@ -178,6 +179,8 @@ def solve(
     candidates = []
     if analytic_structure(model):
         candidates = [phi - dh[:, 2] for phi in _analytic(model, R, o)]
+    elif ik_ur.ur_structure(model):  # three parallel axes, offset wrist: solver/ik_ur.py
+        candidates = ik_ur.candidates(model, R, o)
     else:
         rng = np.random.default_rng(seed)
         structural = dh.copy()
@@ -217,6 +220,8 @@ def _into_limits(q, lo_deg, hi_deg):
 
 def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     """wirecal's names of a solution's configuration (see the module doc)."""
+    if ik_ur.ur_structure(model):
+        return ik_ur.configuration(model, q)
     f = frames(model, np.atleast_2d(q))
     o2, o3 = f.o[0, 2], f.o[0, 3]
     centre = f.o[0, 4]

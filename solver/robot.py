@@ -42,6 +42,18 @@ class Encoder:
 
 
 @dataclass(frozen=True)
+class UrdfSource:
+    """The URDF a robot file was imported from (``[urdf]`` table): its path (resolved against
+    the robot file's folder) and the chain's end links. Export re-derives the DH frames from
+    it and changes only the chain's joint origins."""
+
+    path: str
+    base_link: str
+    tip_link: str
+    parallel_tol_deg: float | None = None  # import-urdf --parallel-tol-deg, if given
+
+
+@dataclass(frozen=True)
 class Robot:
     """Nominal model of a serial arm in Craig's modified DH convention.
 
@@ -58,6 +70,7 @@ class Robot:
     parameters: tuple[str, ...]
     source: str = field(default="<memory>", compare=False)
     link_radius_mm: np.ndarray | None = None  # capsules between joint frames; see clearance
+    urdf: UrdfSource | None = None
 
     @property
     def n_joints(self) -> int:

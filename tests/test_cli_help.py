@@ -20,7 +20,9 @@ COMMANDS = main.list_commands(CTX)
 def test_the_commands_are_all_there():
     assert COMMANDS == [
         "demo",
+        "export-urdf",
         "gen",
+        "import-urdf",
         "lint",
         "observe",
         "plan",

@@ -19,10 +19,11 @@ from hypothesis import strategies as st
 
 from wirecal.cli.main import main
 
-from .conftest import VIPER
+from .conftest import DATA, VIPER
 
 ROBOT = VIPER / "robot.toml"
 PLAN = VIPER / "paper_plan.toml"
+URDF = DATA / "twisted_arm.urdf"
 NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
 HOSTILE = ["nan", "inf", "-inf", "-1", "0", "1e300", "-1e300", "1e-300", '"x"', "[]", "true"]
 
@@ -81,6 +82,8 @@ COMMANDS = {
     ),
     "validate plane": (["validate", "plane", "VLOG"], ["VLOG"]),
     "lint": (["lint", "V2"], ["V2"]),
+    "import-urdf": (["import-urdf", "URDF", "--tip", "wire", "-o", "OUT"], ["URDF"]),
+    "export-urdf": (["export-urdf", "ROBOT", "-o", "OUT"], ["ROBOT"]),
 }
 CASES = [
     (name, slot, kind)
@@ -94,7 +97,7 @@ CASES = [
 def test_fixed_hostile_inputs(tmp_path, log, name, slot, kind):
     args, _ = COMMANDS[name]
     out = tmp_path / "out"
-    values = {"ROBOT": ROBOT, "PLAN": PLAN, "LOG": log, "VLOG": log, "OUT": out}
+    values = {"ROBOT": ROBOT, "PLAN": PLAN, "LOG": log, "VLOG": log, "OUT": out, "URDF": URDF}
     values["OUT.html"] = tmp_path / "out.html"
     values[slot] = _hostile_file(tmp_path, kind)
     r = invoke(*(values.get(a, a) for a in args))
@@ -174,6 +177,20 @@ def test_mutated_robot_file(tmp_path, log, data):
     robot.write_text(data.draw(mutated(ROBOT.read_text())), encoding="utf-8")
     for args in (["psi", robot, PLAN], ["solve", robot, PLAN, log, "--method", "stepwise"]):
         outcome_is_clean(invoke(*args))
+
+
+@FUZZ
+@given(data=st.data())
+def test_mutated_urdf(tmp_path, data):
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(data.draw(mutated(URDF.read_text())), encoding="utf-8")
+    out = tmp_path / "robot.toml"
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", out)
+    outcome_is_clean(r)
+    if r.exit_code == 0:  # what was written reads back and exports
+        outcome_is_clean(invoke("export-urdf", out, "-o", tmp_path / "out.urdf"))
+    out.unlink(missing_ok=True)
+    (tmp_path / "out.urdf").unlink(missing_ok=True)
 
 
 @FUZZ

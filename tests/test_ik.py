@@ -3,11 +3,19 @@ their configuration names, and the numeric fallback."""
 
 from __future__ import annotations
 
+import itertools
+from pathlib import Path
+from unittest import mock
+
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.solver import ik, ik_ur
+from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.ik import analytic_structure, configuration, flange_pose, solve
+from wirecal.solver.ik_ur import ur_structure
 
 from .conftest import TABLE5 as TRUTH
 
@@ -77,3 +85,64 @@ def test_unreachable_pose_has_no_solution(viper):
     model = viper.nominal
     R, _ = flange_pose(model, np.zeros(6))
     assert solve(viper, R, np.array([2000.0, 0, 0])) == []
+
+
+# --- UR-type arms: the closed form of solver/ik_ur.py ----------------------------------------
+
+UR5_FILE = Path(__file__).resolve().parents[1] / "examples" / "ur5" / "robot.toml"
+UR5 = load_robot(UR5_FILE)
+UR5_ERRORS = {"th2": 0.3, "th4": -0.2, "a2": 0.8, "a3": -0.5, "d4": 0.4, "d5": 0.3, "al3": 0.1}
+
+
+@settings(max_examples=40, deadline=None)
+@given(u=st.lists(unit, min_size=6, max_size=6), calibrated=st.booleans())
+def test_ur_round_trip_closed_form(u, calibrated):
+    model = UR5.model(UR5_ERRORS if calibrated else {})
+    assert ur_structure(model) and not analytic_structure(model)
+    q = _q(UR5, u)
+    R, o = flange_pose(model, q)
+    solutions = solve(UR5, R, o, model=model)
+    # wrist (φ5 = 0) or elbow (arm stretched, φ3 = 0) singular: Newton's Jacobian is singular
+    singular = min(abs(np.sin(q[4] + model.dh[4, 2])), abs(np.sin(q[2] + model.dh[2, 2]))) < 1e-6
+    assert singular or any(_same(s.q, q) for s in solutions)
+    assert 1 <= len(solutions) <= 8
+    for s in solutions:
+        R2, o2 = flange_pose(model, s.q)
+        assert np.linalg.norm(o2 - o) <= 1e-9
+        np.testing.assert_allclose(R2, R, atol=1e-12)
+    configs = [s.config for s in solutions]
+    assert len(set(configs)) == len(configs)
+
+
+def test_ur_generic_pose_has_eight_named_solutions():
+    model = UR5.nominal
+    q = np.radians([20, -70, 100, -40, 60, 30.0])
+    solutions = solve(UR5, *flange_pose(model, q), model=model)
+    assert len(solutions) == 8
+    assert {s.config for s in solutions} == set(
+        itertools.product(("righty", "lefty"), ("above", "below"), ("noflip", "flip"))
+    )
+
+
+@pytest.mark.slow  # the numeric search takes about a second per pose
+@pytest.mark.parametrize("arm", ["ur5", "viper"])
+def test_numeric_search_finds_only_closed_form_solutions(arm, viper):
+    robot = UR5 if arm == "ur5" else viper
+    model = robot.nominal
+    rng = np.random.default_rng(5)
+    lo, hi = robot.joint_min_deg, robot.joint_max_deg
+    found = total = 0
+    for x in np.radians(lo + rng.uniform(0.05, 0.95, (6, 6)) * (hi - lo)):
+        R, o = flange_pose(model, x)
+        closed = solve(robot, R, o, model=model)
+        with (
+            mock.patch.object(ik_ur, "ur_structure", lambda m: False),
+            mock.patch.object(ik, "analytic_structure", lambda m: False),
+        ):
+            numeric = solve(robot, R, o, model=model)
+        assert numeric, "the search found nothing"
+        for s in numeric:  # nothing the closed form does not know
+            assert any(_same(s.q, c.q) for c in closed)
+        found += len(numeric)
+        total += len(closed)
+    assert found >= 0.75 * total  # it may miss a few; it finds most

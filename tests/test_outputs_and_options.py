@@ -314,9 +314,9 @@ def test_bad_numbers_refused(tmp_path, log, args, message):
 
 def _seven_joint_robot(tmp_path):
     text = (VIPER / "robot.toml").read_text()
-    text = text.replace(
-        "    [  90.0,    0.0,  0.0,  80.0],\n",
-        "    [  90.0,    0.0,  0.0,  80.0],\n    [   0.0,   50.0,  0.0,   0.0],\n",
+    text = text.replace(  # a seventh row after the sixth (its comment stays on the line)
+        "    [  90.0,    0.0,  0.0,  80.0],",
+        "    [  90.0,    0.0,  0.0,  80.0], [0.0, 50.0, 0.0, 0.0],",
     )
     text = text.replace("-120.0, -360.0]", "-120.0, -360.0, -90.0]")
     text = text.replace("120.0,  360.0]", "120.0,  360.0, 90.0]")

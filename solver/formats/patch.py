@@ -193,11 +193,12 @@ class Patch:
     parameters: dict[str, PatchValue]
     source: str
 
-    def offsets_for(self, robot: Robot, plan: Plan) -> dict[str, float]:
+    def offsets_for(self, robot: Robot, plan: Plan | None = None) -> dict[str, float]:
         """Return the identified offsets, once the patch is shown to belong here.
 
-        Same robot name, same plan fingerprint, every parameter one of the robot's, in its
-        unit; otherwise a :class:`WirecalError` listing each mismatch.
+        Same robot name, every parameter one of the robot's, in its unit, with the robot
+        file's nominal value, and (when ``plan`` is given) the same plan fingerprint;
+        otherwise a :class:`WirecalError` listing each mismatch.
         """
         problems = []
         if self.meta.robot != robot.name:
@@ -205,7 +206,7 @@ class Patch:
                 f"{self.source}: robot: the patch is for {self.meta.robot!r} but the robot "
                 f"file describes {robot.name!r}; use the matching robot file"
             )
-        if self.meta.plan != plan.fingerprint():
+        if plan is not None and self.meta.plan != plan.fingerprint():
             problems.append(
                 f"{self.source}: plan: the patch was solved from another plan; generate with "
                 "the plan it came from"
@@ -220,6 +221,12 @@ class Patch:
                 problems.append(
                     f"{self.source}: parameters.{name}.unit: is {v.unit!r} but {name} is in "
                     f"{unit}; the patch was edited or is for another arm"
+                )
+            elif abs(v.nominal - robot.nominal_value(name)) > 1e-9 * max(1.0, abs(v.nominal)):
+                problems.append(
+                    f"{self.source}: parameters.{name}.nominal: is {v.nominal!r}; the robot "
+                    f"file's is {robot.nominal_value(name)!r}: this patch was solved for "
+                    "another robot file"
                 )
         if problems:
             raise WirecalError(problems)

@@ -35,6 +35,7 @@ wire can calibrate (each rule says what to do when it fails):
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 from typing import Any
@@ -44,7 +45,7 @@ import numpy as np
 from wirecal.solver import params as P
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.toml_fields import Table, document, duplicates, valid
-from wirecal.solver.robot import DEFAULT_LINK_RADIUS_MM, Encoder, Robot
+from wirecal.solver.robot import DEFAULT_LINK_RADIUS_MM, Encoder, Robot, UrdfSource
 
 MAX_LENGTH_MM = 10_000.0
 """Largest |a|, |d|, tool coordinate or link radius (mm): no arm a draw wire spans is 10 m."""
@@ -74,12 +75,14 @@ _KEYS = {
         "encoder",
         "calibration",
         "geometry",
+        "urdf",
     ),
     "kinematics": ("convention", "dh", "joint_min_deg", "joint_max_deg", "joint_speed_deg_s"),
     "tool": ("point_mm",),
     "encoder": ("mm_per_count", "range_mm", "counter_bits", "interface", "channel", "belt_mode"),
     "calibration": ("parameters",),
     "geometry": ("link_radius_mm",),
+    "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg"),
 }
 
 
@@ -124,6 +127,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     )
     if dh is not None and radii is None:
         radii = np.full(dh.shape[0] - 1, DEFAULT_LINK_RADIUS_MM)
+    urdf = _urdf(doc.table("urdf", _KEYS["urdf"], required=False), source)
     _sanity(doc, dh, lo, hi, encoder, radii)
     doc.raise_if_any()
     dh_rad = valid(dh).copy()
@@ -139,6 +143,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         parameters=tuple(valid(parameters)),
         source=source,
         link_radius_mm=radii,
+        urdf=urdf,
     )
 
 
@@ -309,3 +314,100 @@ def _check_not_metres(dh: np.ndarray, range_mm: float, radii: np.ndarray, doc: T
             "lengths look like metres; give a and d in mm (the tool point, range_mm and "
             "link_radius_mm too)",
         )
+
+
+def _urdf(table: Table, source: str) -> UrdfSource | None:
+    """The optional ``[urdf]`` table: the URDF a robot file was imported from (``wirecal
+    import-urdf``), its base and tip links, and the parallel-axis tolerance used; the
+    source path is relative to the robot file."""
+    if not table.present:
+        return None
+    path = table.string("source")
+    base = table.string("base_link")
+    tip = table.string("tip_link")
+    tol = table.number("parallel_tol_deg", None, above=0, hi=0.05, unit="deg")
+    if path is None or base is None or tip is None:
+        return None
+    here = Path() if source.startswith("<") else Path(source).parent
+    return UrdfSource(str(here / path), base, tip, tol)
+
+
+TIDY = 1e-11
+"""Numbers written to a robot file are the shortest decimals within TIDY (mm or deg) of the
+value: 425.0 rather than 425.0000000000001 (a change of the tip far below 1e-9 mm)."""
+
+
+LIMIT_TIDY = 1e-7
+"""Joint limits and speeds are written to within LIMIT_TIDY (deg, deg/s): a URDF's limits in
+radians with 11 digits give 185.00000000003°; 185.0 is what the vendor meant."""
+
+
+def _num(x: float, tidy: float = TIDY) -> str:
+    """The shortest decimal within ``tidy`` of ``x`` (−0 written as 0)."""
+    x = float(x)
+    for digits in range(13):
+        r = round(x, digits)
+        if abs(r - x) <= tidy:
+            return repr(r + 0.0)
+    return repr(x)
+
+
+def robot_file_text(
+    robot: Robot,
+    *,
+    header: list[str],
+    row_notes: list[str],
+    encoder_note: str,
+    urdf_source: str | None = None,
+) -> str:
+    """A robot file for ``robot`` that :func:`load_robot` reads back to the same numbers
+    (to :data:`TIDY`). ``header`` lines become comments at the top; ``row_notes``
+    (one per joint) comment the DH rows and limits; ``urdf_source`` is written as given
+    (relative to the robot file's folder)."""
+    dh = robot.dh_deg()
+
+    def vec(values, tidy: float = TIDY) -> str:
+        return "[" + ", ".join(_num(v, tidy) for v in values) + "]"
+
+    lines = [f"# {h}" if h else "#" for h in header]
+    lines += [
+        f"name = {json.dumps(robot.name, ensure_ascii=False)}",
+        "",
+        "[kinematics]",
+        'convention = "craig"',
+        "# rows: [alpha_deg, a_mm, theta_offset_deg, d_mm]",
+        "dh = [",
+        *(f"    {vec(row)},  # {note}" for row, note in zip(dh, row_notes, strict=True)),
+        "]",
+        f"joint_min_deg = {vec(robot.joint_min_deg, LIMIT_TIDY)}",
+        f"joint_max_deg = {vec(robot.joint_max_deg, LIMIT_TIDY)}",
+        f"joint_speed_deg_s = {vec(robot.joint_speed_deg_s, LIMIT_TIDY)}",
+        "",
+        "[tool]",
+        "# wire attachment point in the last joint's frame",
+        f"point_mm = {vec(robot.tool_point)}",
+        "",
+        "[encoder]",
+        f"# {encoder_note}",
+        f"mm_per_count = {_num(robot.encoder.mm_per_count)}",
+        f"range_mm = {_num(robot.encoder.range_mm)}",
+        f"counter_bits = {robot.encoder.counter_bits}",
+        f"interface = {json.dumps(robot.encoder.interface)}",
+        f"channel = {robot.encoder.channel}",
+        f"belt_mode = {robot.encoder.belt_mode}",
+        "",
+        "[calibration]",
+        "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
+    ]
+    if urdf_source is not None and robot.urdf is not None:
+        lines += [
+            "",
+            "[urdf]",
+            "# the URDF this file was imported from; export-urdf changes only its joint origins",
+            f"source = {json.dumps(urdf_source, ensure_ascii=False)}",
+            f"base_link = {json.dumps(robot.urdf.base_link, ensure_ascii=False)}",
+            f"tip_link = {json.dumps(robot.urdf.tip_link, ensure_ascii=False)}",
+        ]
+        if robot.urdf.parallel_tol_deg is not None:
+            lines.append(f"parallel_tol_deg = {_num(robot.urdf.parallel_tol_deg)}")
+    return "\n".join(lines) + "\n"

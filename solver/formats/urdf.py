@@ -1,0 +1,287 @@
+"""URDF files: read the kinematic tree, find the serial chain from a base link to a tip link,
+and write a copy with new joint origins (everything else — links, visuals, collisions,
+inertias, comments — kept as it is).
+
+A small reader on the standard library (``xml.etree``) rather than a URDF package: wirecal
+needs only joints' origins, axes, types and limits, and the packages that parse URDF fully
+(yourdfpy, urdfpy) pull in mesh libraries (trimesh, networkx, lxml) to load geometry that is
+never used here. Units are the URDF's (m, rad) in :class:`Joint`; mm at :func:`origin_mm`.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wirecal.solver.dh_from_axes import dh_frames
+from wirecal.solver.errors import WirecalError
+
+MOVING = ("revolute", "continuous")
+SUPPORTED = (*MOVING, "fixed")
+
+
+@dataclass(frozen=True)
+class Joint:
+    name: str
+    type: str
+    parent: str
+    child: str
+    xyz_m: np.ndarray  # origin translation
+    rpy_rad: np.ndarray  # origin rotation: fixed-axis roll, pitch, yaw
+    axis: np.ndarray  # unit vector in the joint frame
+    lower_rad: float | None
+    upper_rad: float | None
+    velocity_rad_s: float | None
+    mimic: bool = False
+
+
+@dataclass(frozen=True)
+class Urdf:
+    path: Path
+    name: str
+    root: ET.Element  # the parsed document, comments kept
+    links: tuple[str, ...]
+    joints: dict[str, Joint]
+
+
+def _floats(text: str | None, default: str, where: str, count: int = 3) -> np.ndarray:
+    parts = (text if text is not None else default).split()
+    try:
+        values = np.array([float(v) for v in parts])
+    except ValueError:
+        raise WirecalError(f"{where}: {text!r} is not {count} numbers") from None
+    if values.shape != (count,) or not np.all(np.isfinite(values)):
+        raise WirecalError(f"{where}: {text!r} is not {count} finite numbers")
+    return values
+
+
+def _limit(el: ET.Element | None, key: str, where: str) -> float | None:
+    if el is None or el.get(key) is None:
+        return None
+    try:
+        value = float(el.get(key, ""))
+    except ValueError:
+        raise WirecalError(f"{where}: limit {key}={el.get(key)!r} is not a number") from None
+    if not math.isfinite(value):
+        raise WirecalError(f"{where}: limit {key}={el.get(key)!r} is not finite")
+    return value
+
+
+def read_urdf(path: str | Path) -> Urdf:
+    """Parse a URDF; any problem is a :class:`WirecalError` naming the file and joint."""
+    path = Path(path)
+    parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True))
+    try:
+        tree = ET.parse(path, parser)
+    except OSError as exc:
+        raise WirecalError(f"{path}: cannot read URDF: {exc.strerror or exc}") from None
+    except ET.ParseError as exc:
+        raise WirecalError(f"{path}: not valid XML: {exc}") from None
+    root = tree.getroot()
+    if root.tag != "robot":
+        raise WirecalError(f"{path}: the root element is <{root.tag}>, not <robot>: not a URDF")
+    links = tuple(el.get("name", "") for el in root.findall("link"))
+    joints: dict[str, Joint] = {}
+    for el in root.findall("joint"):
+        name = el.get("name") or ""
+        where = f"{path}: joint {name!r}"
+        if not name:
+            raise WirecalError(f"{path}: a <joint> has no name")
+        if name in joints:
+            raise WirecalError(f"{where}: defined twice")
+        parent, child = el.find("parent"), el.find("child")
+        if parent is None or child is None or not parent.get("link") or not child.get("link"):
+            raise WirecalError(f"{where}: needs <parent link=…/> and <child link=…/>")
+        origin = el.find("origin")
+        axis_el = el.find("axis")
+        axis = _floats(
+            None if axis_el is None else axis_el.get("xyz"), "1 0 0", f"{where}: <axis xyz>"
+        )
+        norm = float(np.linalg.norm(axis))
+        if norm == 0 and el.get("type") in MOVING:  # a fixed joint's axis is ignored
+            raise WirecalError(f"{where}: <axis xyz> is the zero vector")
+        limit = el.find("limit")
+        joints[name] = Joint(
+            name=name,
+            type=el.get("type", ""),
+            parent=parent.get("link", ""),
+            child=child.get("link", ""),
+            xyz_m=_floats(
+                None if origin is None else origin.get("xyz"), "0 0 0", f"{where}: origin xyz"
+            ),
+            rpy_rad=_floats(
+                None if origin is None else origin.get("rpy"), "0 0 0", f"{where}: origin rpy"
+            ),
+            axis=axis / norm if norm else axis,
+            lower_rad=_limit(limit, "lower", where),
+            upper_rad=_limit(limit, "upper", where),
+            velocity_rad_s=_limit(limit, "velocity", where),
+            mimic=el.find("mimic") is not None,
+        )
+    return Urdf(path, root.get("name", ""), root, links, joints)
+
+
+def chain(urdf: Urdf, base: str | None, tip: str) -> list[Joint]:
+    """The joints from ``base`` (default: the tree's root link) to ``tip``, in order."""
+    by_child: dict[str, Joint] = {}
+    for j in urdf.joints.values():
+        if j.child in by_child:
+            raise WirecalError(
+                f"{urdf.path}: link {j.child!r} is the child of joints {by_child[j.child].name!r} "
+                f"and {j.name!r}: a URDF must be a tree"
+            )
+        by_child[j.child] = j
+    known = set(urdf.links) | {j.parent for j in urdf.joints.values()}
+    for link, what in ((tip, "--tip"), (base, "--base")):
+        if link is not None and link not in known:
+            raise WirecalError(
+                f"{urdf.path}: {what} {link!r} is not a link of this URDF "
+                f"(links: {', '.join(urdf.links)})"
+            )
+    if base is None:
+        roots = [x for x in urdf.links if x not in by_child]
+        if len(roots) != 1:
+            raise WirecalError(
+                f"{urdf.path}: {len(roots)} root links ({', '.join(roots)}); name one with --base"
+            )
+        base = roots[0]
+    path: list[Joint] = []
+    link = tip
+    while link != base:
+        if link not in by_child:
+            raise WirecalError(
+                f"{urdf.path}: there is no serial path from {base!r} to {tip!r} "
+                f"({tip!r} does not descend from {base!r}); choose --base and --tip on one branch"
+            )
+        j = by_child[link]
+        path.append(j)
+        link = j.parent
+    path.reverse()
+    for j in path:
+        if j.type not in SUPPORTED:
+            kind = "a prismatic joint" if j.type == "prismatic" else f"type {j.type!r}"
+            raise WirecalError(
+                f"{urdf.path}: joint {j.name!r} is {kind}: wirecal models arms of revolute "
+                "joints only (fixed joints are folded in)"
+            )
+        if j.mimic:
+            raise WirecalError(
+                f"{urdf.path}: joint {j.name!r} mimics another joint: not an independent axis"
+            )
+    return path
+
+
+def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
+    """URDF's rotation: R = Rz(yaw)·Ry(pitch)·Rx(roll)."""
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def matrix_rpy(R: np.ndarray) -> np.ndarray:
+    """The inverse of :func:`rpy_matrix` (pitch in [−π/2, π/2]). Near pitch ±90° roll and
+    yaw are ill-conditioned one by one (only their sum or difference is not), so the first
+    guess is refined by least squares on the rotation itself: rpy_matrix of the result
+    equals R to round-off at any pitch."""
+    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
+    if math.hypot(R[0, 0], R[1, 0]) > 1e-12:
+        roll = math.atan2(R[2, 1], R[2, 2])
+        yaw = math.atan2(R[1, 0], R[0, 0])
+    else:  # gimbal lock: yaw absorbs the rotation about z
+        roll = 0.0
+        yaw = math.atan2(-R[0, 1], R[1, 1])
+    rpy = np.array([roll, pitch, yaw])
+    for _ in range(3):
+        E = R @ rpy_matrix(rpy).T
+        w = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
+        cy, sy, cp, sp = math.cos(rpy[2]), math.sin(rpy[2]), math.cos(rpy[1]), math.sin(rpy[1])
+        # angular velocity in the parent frame per unit roll, pitch, yaw rate
+        J = np.array([[cy * cp, -sy, 0.0], [sy * cp, cy, 0.0], [-sp, 0.0, 1.0]])
+        rpy = rpy + np.linalg.lstsq(J, w, rcond=1e-12)[0]
+    return rpy
+
+
+def origin_mm(j: Joint) -> np.ndarray:
+    """The joint's origin as a 4×4 transform, translation in mm."""
+    T = np.eye(4)
+    T[:3, :3] = rpy_matrix(j.rpy_rad)
+    T[:3, 3] = 1000.0 * j.xyz_m
+    return T
+
+
+def urdf_with_origins(urdf: Urdf, origins_mm: dict[str, np.ndarray]) -> str:
+    """The URDF's text with the named joints' origins replaced (4×4, mm), full precision;
+    everything else as it was (re-indented)."""
+    root = copy.deepcopy(urdf.root)
+    by_name = {el.get("name"): el for el in root.findall("joint")}
+    for name, T in origins_mm.items():
+        el = by_name[name]
+        origin = el.find("origin")
+        if origin is None:
+            origin = ET.Element("origin")
+            el.insert(0, origin)
+        xyz = T[:3, 3] / 1000.0
+        origin.set("xyz", " ".join(repr(float(v)) for v in xyz))
+        origin.set("rpy", " ".join(repr(float(v)) for v in matrix_rpy(T[:3, :3])))
+    ET.indent(root)
+    return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def dh_urdf_text(
+    name: str,
+    dh: np.ndarray,
+    tool_point_mm: np.ndarray,
+    lo_deg: np.ndarray,
+    hi_deg: np.ndarray,
+    speed_deg_s: np.ndarray,
+) -> str:
+    """A URDF of a modified-DH chain with no geometry: links ``link0`` (the base, DH frame 0)
+    … ``link<n>`` (DH frames), joints ``joint<i>`` turning about their link's z, and a fixed
+    joint to ``wire_point`` at the tool point. Lengths in m, angles in rad, full precision."""
+    n = len(dh)
+    F = dh_frames(dh, np.zeros((1, n)))[0]
+    lines = ['<?xml version="1.0"?>', f'<robot name="{_xml(name)}">']
+    lines += [f'  <link name="link{i}"/>' for i in range(n + 1)]
+    lines.append('  <link name="wire_point"/>')
+
+    def origin(T: np.ndarray) -> str:
+        xyz = " ".join(repr(float(v) / 1000.0) for v in T[:3, 3])
+        rpy = " ".join(repr(float(v)) for v in matrix_rpy(T[:3, :3]))
+        return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
+
+    for i in range(n):
+        T = np.linalg.solve(F[i], F[i + 1])
+        lines += [
+            f'  <joint name="joint{i + 1}" type="revolute">',
+            f'    <parent link="link{i}"/><child link="link{i + 1}"/>',
+            f"    {origin(T)}",
+            '    <axis xyz="0 0 1"/>',
+            f'    <limit lower="{math.radians(lo_deg[i])!r}" upper="{math.radians(hi_deg[i])!r}" '
+            f'effort="0" velocity="{math.radians(speed_deg_s[i])!r}"/>',
+            "  </joint>",
+        ]
+    tool = np.eye(4)
+    tool[:3, 3] = tool_point_mm
+    lines += [
+        '  <joint name="wire_point_joint" type="fixed">',
+        f'    <parent link="link{n}"/><child link="wire_point"/>',
+        f"    {origin(tool)}",
+        "  </joint>",
+        "</robot>",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _xml(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace('"', "&quot;")

@@ -1,0 +1,149 @@
+"""Closed-form inverse kinematics of UR-type arms: axes 2, 3, 4 parallel and perpendicular to
+axis 1, an offset wrist (axes 5 and 6 each perpendicular to the one before, a4 = a5 = 0,
+any d5, d6). In Craig's convention: α1, α4, α5 = ±90°, α2 = α3 = 0, a4 = a5 = 0; row 1's
+α0, a0, d1 act as a fixed base transform. Up to eight solutions: shoulder × wrist × elbow.
+
+With φ_i = q_i + θ_i offset, s_k = sin α_k, D = d2 + d3 + d4 and (in the frame of axis 1)
+the flange pose (R, o):
+
+* o5 = o − d6·z6 (a5 = 0). Every link from 2 to 5 moves in planes normal to z2 = −s1·y1,
+  so o5·y1 = −s1·D: with r = |o5 in the xy plane|, o5 = ±√(r² − D²)·x1 − s1·D·y1 gives
+  two φ1 (shoulder).
+* z2 seen from the flange: R6ᵀ z2 = (s4 sφ5 cφ6, −s4 sφ5 sφ6, −s4 s5 cφ5), so
+  cφ5 = −z6·z2 / (s4 s5) gives ±φ5 (wrist) and then φ6 (free when sφ5 = 0: φ6 = 0).
+* R4 = R · (RotX(α4) RotZ(φ5) RotX(α5) RotZ(φ6))ᵀ and o4 = o5 − d5·z5. In the plane of
+  the parallel axes (frame 1 · RotX(α1) · TransX(a1)), o4 = RotZ(φ2)·(a2 + a3 cφ3, a3 sφ3):
+  ±φ3 (elbow) from the law of cosines, then φ2, and φ2 + φ3 + φ4 from R4.
+
+Arms near this structure (a calibrated UR) are solved from the closed form of their
+structural model (α rounded to multiples of 90°, a4 = a5 = 0) polished by Newton in
+:func:`wirecal.solver.ik.solve`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wirecal.solver.kinematics import Model, frames
+
+HALF_PI = np.pi / 2
+STRUCTURE_TOL_RAD = np.radians(5.0)
+"""A model counts as UR-type if rounding its twists moves none by more than this."""
+
+SEED_SLACK = 1e-3
+"""A cosine this far beyond ±1 is clipped, not dropped: a calibrated arm stretched straight
+has a structural model just out of reach, and Newton from the clipped seed finds it."""
+
+
+def _rot_x(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def _rot_z(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+def structural(dh: np.ndarray) -> np.ndarray:
+    """The nearest exact UR-type table: twists rounded to multiples of 90°, a4 = a5 = 0."""
+    out = np.array(dh, dtype=float)
+    out[:, 0] = np.round(out[:, 0] / HALF_PI) * HALF_PI
+    out[4:, 1] = 0.0
+    return out
+
+
+def ur_structure(model: Model) -> bool:
+    """Whether the model is UR-type, exactly or near enough for the closed form to seed."""
+    dh = np.asarray(model.dh)
+    if dh.ndim != 2 or dh.shape[0] != 6:
+        return False
+    s = structural(dh)
+    alpha = s[:, 0]
+    return (
+        bool(np.all(np.abs(dh[:, 0] - alpha) < STRUCTURE_TOL_RAD))
+        and all(abs(abs(np.sin(alpha[k])) - 1) < 1e-12 for k in (1, 4, 5))
+        and all(np.cos(alpha[k]) > 0.5 for k in (2, 3))
+        and abs(s[2, 1]) > 1e-9
+        and abs(s[3, 1]) > 1e-9
+    )
+
+
+def closed_form(dh: np.ndarray, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
+    """The DH angles φ (up to 8) of an exact UR-type table for the flange pose (R, o)."""
+    alpha, a, _, d = np.asarray(dh, dtype=float).T
+    base = _rot_x(alpha[0])
+    Rb = base.T @ R
+    ob = base.T @ o - np.array([a[0], 0.0, d[0]])
+    s1, s4, s5 = (float(np.sign(np.sin(alpha[k]))) for k in (1, 4, 5))
+    o5 = ob - d[5] * Rb[:, 2]
+    y1v = -s1 * (d[1] + d[2] + d[3])
+    r2 = o5[0] ** 2 + o5[1] ** 2
+    out: list[np.ndarray] = []
+    if r2 < y1v**2:
+        return out
+    for shoulder in (1.0, -1.0):
+        x1v = shoulder * np.sqrt(r2 - y1v**2)
+        phi1 = np.arctan2(o5[1], o5[0]) - np.arctan2(y1v, x1v)
+        R1 = _rot_z(phi1)
+        z2 = -s1 * R1[:, 1]
+        c5 = -(Rb[:, 2] @ z2) / (s4 * s5)
+        if abs(c5) > 1 + SEED_SLACK:
+            continue
+        v = Rb.T @ z2
+        for wrist in (1.0, -1.0):
+            phi5 = wrist * np.arccos(np.clip(c5, -1.0, 1.0))
+            sin5 = np.sin(phi5)
+            if abs(sin5) > 1e-9:
+                sg = s4 * np.sign(sin5)
+                phi6 = np.arctan2(-v[1] * sg, v[0] * sg)
+            else:  # wrist singular: φ6 is free (it turns about the same line as φ4 + φ2 + φ3)
+                phi6 = 0.0
+            W = _rot_x(alpha[4]) @ _rot_z(phi5) @ _rot_x(alpha[5]) @ _rot_z(phi6)
+            R4 = Rb @ W.T
+            z5 = R4 @ np.array([0.0, -np.sin(alpha[4]), np.cos(alpha[4])])
+            o4 = o5 - d[4] * z5
+            RP = R1 @ _rot_x(alpha[1])
+            p = RP.T @ (o4 - a[1] * R1[:, 0])
+            c3 = (p[0] ** 2 + p[1] ** 2 - a[2] ** 2 - a[3] ** 2) / (2 * a[2] * a[3])
+            if abs(c3) > 1 + SEED_SLACK:
+                continue
+            for elbow in (1.0, -1.0):
+                phi3 = elbow * np.arccos(np.clip(c3, -1.0, 1.0))
+                phi2 = np.arctan2(p[1], p[0]) - np.arctan2(
+                    a[3] * np.sin(phi3), a[2] + a[3] * np.cos(phi3)
+                )
+                M = RP.T @ R4
+                phi4 = np.arctan2(M[1, 0], M[0, 0]) - phi2 - phi3
+                out.append(np.array([phi1, phi2, phi3, phi4, phi5, phi6]))
+            if abs(sin5) <= 1e-9:
+                break
+    return out
+
+
+def candidates(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
+    """Joint angles q (rad) to polish: the closed form of the model's structural table."""
+    dh = np.asarray(model.dh)
+    return [phi - dh[:, 2] for phi in closed_form(structural(dh), R, o)]
+
+
+def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
+    """wirecal's names of a UR-type solution's branches: righty when o5 lies ahead of the
+    joint-1 axis along x1 (the shoulder root's sign), above when the elbow o3 is above the
+    line from o2 to o4 in the plane of the parallel axes, flip when φ5 < 0."""
+    f = frames(model, np.atleast_2d(q))
+    z1, x1 = f.z[0, 1], f.x[0, 1]
+    o5 = f.o[0, 5] - f.o[0, 1]
+    ahead = np.dot(o5 - np.dot(o5, z1) * z1, x1)
+    n = f.z[0, 2]  # normal of the arm's plane
+    o2, o3, o4 = f.o[0, 2], f.o[0, 3], f.o[0, 4]
+    line = (o4 - o2) - np.dot(o4 - o2, n) * n
+    rel = (o3 - o2) - np.dot(o3 - o2, n) * n
+    t = np.dot(rel, line) / max(np.dot(line, line), 1e-300)
+    offset = rel - t * line
+    phi5 = (q[4] + model.dh[4, 2] + np.pi) % (2 * np.pi) - np.pi
+    return (
+        "righty" if ahead >= 0 else "lefty",
+        "above" if offset[2] >= 0 else "below",
+        "flip" if phi5 < 0 else "noflip",
+    )
