@@ -111,7 +111,8 @@ def test_ur_round_trip_closed_form(u, calibrated):
         assert np.linalg.norm(o2 - o) <= 1e-9
         np.testing.assert_allclose(R2, R, atol=1e-12)
     configs = [s.config for s in solutions]
-    assert len(set(configs)) == len(configs)
+    # at a singularity (the elbow stretched, φ3 = 0) two branches meet and may share a name
+    assert singular or len(set(configs)) == len(configs)
 
 
 def test_ur_generic_pose_has_eight_named_solutions():
