@@ -17,8 +17,10 @@ from hypothesis import strategies as st
 from wirecal.cli.main import main
 from wirecal.solver.dh_from_axes import dh_frames
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.patch import write_patch
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.urdf import matrix_rpy, read_urdf
+from wirecal.solver.identify import Estimate
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.urdf_model import read_chain
 
@@ -205,29 +207,22 @@ def test_shipped_arm_exported_then_imported(arm, tmp_path):
     assert set(again.parameters) >= {"th2", "th3", "th4", "th5", "th6"}
 
 
-PATCH = """robot = "test arm"
-[parameters.th2]
-nominal = {th2}
-offset = 0.05
-[parameters.a2]
-nominal = {a2}
-offset = 0.3
-[parameters.d4]
-nominal = {d4}
-offset = -0.2
-[parameters.al3]
-nominal = {al3}
-offset = 0.02
-"""
-
-
 def test_calibrated_urdf_reproduces_the_patched_model(twisted, tmp_path):
     robot_toml = tmp_path / "r.toml"
     _import(twisted, robot_toml, "--tip", "wire", "--base", "base")
     robot = load_robot(robot_toml)
-    nominal = {k: robot.nominal_value(k) for k in ("th2", "a2", "d4", "al3")}
+    offsets = {"th2": 0.05, "a2": 0.3, "d4": -0.2, "al3": 0.02}
     patch = tmp_path / "p.toml"
-    patch.write_text(PATCH.format(**{k: repr(v) for k, v in nominal.items()}), encoding="utf-8")
+    estimate = Estimate("joint", tuple(offsets), np.array(list(offsets.values())), 0.01)
+    write_patch(
+        patch,
+        robot,
+        estimate,
+        plan_fingerprint="0" * 64,
+        log_path="run.csv",
+        log_sha256="0" * 64,
+        version="test",
+    )
     out = tmp_path / "cal.urdf"
     r = CliRunner().invoke(main, ["export-urdf", str(robot_toml), str(patch), "-o", str(out)])
     assert r.exit_code == 0, r.output
@@ -416,6 +411,6 @@ def test_the_robot_files_urdf_table_is_checked(tmp_path):
     with pytest.raises(WirecalError) as err:
         load_robot(bad)
     problems = "\n".join(err.value.problems)
-    assert "urdf.source: must be a non-empty string" in problems
+    assert "urdf.source: is 3; give a non-empty string" in problems
     assert "urdf.tip_link: is missing" in problems
-    assert "urdf.parallel_tol_deg: is 1.0; give an angle between 0 and 0.05 deg" in problems
+    assert "urdf.parallel_tol_deg: is 1.0; give a number > 0 and ≤ 0.05 deg" in problems
