@@ -1,2 +1,3 @@
 """wirecal.app — application workflows built from the solver, the generator and the twin:
-the one-command demo, the HTML report, the Ψ table view and the controller comparison."""
+the one-command demo, the HTML report, the Ψ table view and the controller comparison.
+"""

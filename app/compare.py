@@ -148,7 +148,8 @@ def compare_controller(
     result: SolveResult, disk: Path, *, text: str | None = None
 ) -> ControllerComparison:
     """Run wc.solve and wc.solve2 in the twin on the log ``result`` was solved from, and
-    compare each with the Python reference's estimate (stepwise and joint)."""
+    compare each with the Python reference's estimate (stepwise and joint).
+    """
     m = result.measurements
     if result.left_nominal or m.missing:
         raise WirecalError(

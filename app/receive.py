@@ -80,7 +80,8 @@ def receive(
 
     ``on_listening`` is called with the bound port (useful with ``port=0``). Raises
     :class:`WirecalError` when the log or its journal cannot be reserved or the port cannot
-    be bound; a run that stops early is a result with ``complete`` False, not an error."""
+    be bound; a run that stops early is a result with ``complete`` False, not an error.
+    """
     log = Path(log)
     journal = journal_path(log)
     result = Received(log=log, journal=journal)
@@ -125,7 +126,8 @@ def _listen(host: str, port: int) -> socket.socket:
 
 def _take(srv: socket.socket, timeout_s: float, journal: Path, result: Received) -> None:
     """Create the journal and fill it from one sender (refusing others) until the end
-    marker, a drop, bad data or ``timeout_s`` of silence."""
+    marker, a drop, bad data or ``timeout_s`` of silence.
+    """
     try:
         fd = os.open(journal, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
     except FileExistsError:

@@ -1,7 +1,8 @@
 """``wirecal report``: one self-contained HTML page (Jinja2 template, matplotlib figures
 embedded as PNG) with the robot, the plan's Ψ per step, the per-step residuals, the
 parameters with σ and correlations, step-by-step against joint (and the controller), and
-the validation histograms before and after calibration."""
+the validation histograms before and after calibration.
+"""
 
 from __future__ import annotations
 

@@ -1,5 +1,6 @@
 """``wirecal simulate`` and ``wirecal solve``: measurement runs on a simulated robot, and
-identification from a measurement log."""
+identification from a measurement log.
+"""
 
 from __future__ import annotations
 

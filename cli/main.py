@@ -28,7 +28,8 @@ from wirecal.solver.errors import WirecalError
 
 def user_errors(func):
     """Turn :class:`WirecalError` (and any stray ``OSError``) into ``error: …`` lines and
-    its exit status (2, or 3 for :class:`~wirecal.solver.errors.Implausible`)."""
+    its exit status (2, or 3 for :class:`~wirecal.solver.errors.Implausible`).
+    """
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):

@@ -78,7 +78,8 @@ def report(
     It shows the validation histograms before and after (paper Fig. 6 and 7), the
     parameters with σ and correlations, step-by-step against joint, the plan's Ψ per
     step and the robot. A result that fails the plausibility gate is refused with exit
-    status 3."""
+    status 3.
+    """
     if not str(output).endswith((".html", ".htm")):
         raise WirecalError(f"{output}: give the report an .html name")
     inputs = [robot, plan, log, *(config_logs or ()), *(plane_logs or ())]

@@ -180,7 +180,8 @@ def _solve_step(
 
 def leak_coefficients(psi: np.ndarray, step: np.ndarray, names: tuple[str, ...]) -> list[dict]:
     """For each step j: bias of δê_j per unit error of each later parameter t, from the
-    linearised step (Ψ_j·Ψ_t / Ψ_j·Ψ_j over the step's points, boundary units)."""
+    linearised step (Ψ_j·Ψ_t / Ψ_j·Ψ_j over the step's points, boundary units).
+    """
     out = []
     for j in range(len(names)):
         sel = step == j + 1

@@ -60,7 +60,8 @@ class Measurements:
 
     def missing_text(self) -> str:
         """What is missing in words, e.g. 'step 5 points 3–6; steps 6–10 (all points)',
-        including the closing zero reading."""
+        including the closing zero reading.
+        """
         parts = [describe_missing(self.missing, self.step, self.index)] if self.missing else []
         if not self.closed and not self.missing:  # a stopped run: its points say more
             last = int(self.step.max())

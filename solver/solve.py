@@ -1,5 +1,6 @@
 """``wirecal solve`` as a Python function: measurements in, both methods' estimates out,
-with residuals and the predicted post-calibration accuracy."""
+with residuals and the predicted post-calibration accuracy.
+"""
 
 from __future__ import annotations
 

@@ -76,7 +76,8 @@ class Unmodelled:
 @dataclass(frozen=True)
 class Plate:
     """A flat plate (granite) for the touch probe: a point on its top face and the face's
-    outward normal, in the robot's base frame (mm)."""
+    outward normal, in the robot's base frame (mm).
+    """
 
     point: tuple[float, float, float]
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
@@ -167,7 +168,8 @@ class Cell:
 
     def _joints_for(self, t: Trans) -> np.ndarray:
         """The controller's inverse kinematics: its own model, the requested configuration
-        where given, else the current one."""
+        where given, else the current one.
+        """
         R, p = t.matrix()
         here = np.radians(self.joints)
         current = ik.configuration(self.believed, here)
@@ -352,7 +354,8 @@ def run_measurement(
     faults: Faults = Faults(),
 ) -> RunResult:
     """Run a module's wc.mount (answered 1) and wc.run in the twin; the log is ``log_file``
-    on the cell's disk (the name the module was generated with)."""
+    on the cell's disk (the name the module was generated with).
+    """
     disk.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng([seed, 2])
     start = robot.encoder.counter.random_start(rng) if counter_start is None else counter_start
@@ -375,7 +378,8 @@ def run_measurement(
 
 def run_targets(plan: Plan) -> list[str]:
     """What each move of wc.run reaches, in order (move k is entry k-1): per step θ0 (its
-    zero reading), the via points, the points; last θ0 for the closing zero reading."""
+    zero reading), the via points, the points; last θ0 for the closing zero reading.
+    """
     out = []
     for j, s in enumerate(plan.steps, 1):
         out.append(f"step {j} zero reading at theta0")
@@ -444,7 +448,8 @@ def run_validation(
     noise_mm: float = 0.01,
 ) -> ValidationRun:
     """Both validation programs (wc.vcfg, wc.vpln) in the twin. ``controller`` is the model
-    the controller believes: {} before calibration, the identified offsets after."""
+    the controller believes: {} before calibration, the identified offsets after.
+    """
     disk.mkdir(parents=True, exist_ok=True)
     cell = Cell(
         robot,

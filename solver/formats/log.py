@@ -98,7 +98,8 @@ def read_log(path: str | Path) -> Log:
 
 def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
     """Parse a log's text; ``sha256`` of the bytes it was read from (default: of the text,
-    UTF-8), so a patch always records which log it was solved from."""
+    UTF-8), so a patch always records which log it was solved from.
+    """
     if sha256 is None:
         sha256 = hashlib.sha256(text.encode("utf-8")).hexdigest()
     table = parse_table(
