@@ -51,6 +51,7 @@ class Measurements:
 
     @property
     def present(self) -> np.ndarray:
+        """Return a mask of the plan points that have a wire length."""
         return ~np.isnan(self.distance_mm)
 
     @property
@@ -59,8 +60,9 @@ class Measurements:
         return not self.missing and self.closed
 
     def missing_text(self) -> str:
-        """What is missing in words, e.g. 'step 5 points 3–6; steps 6–10 (all points)',
-        including the closing zero reading.
+        """Describe what is missing in words, including the closing zero reading.
+
+        E.g. 'step 5 points 3–6; steps 6–10 (all points)'.
         """
         parts = [describe_missing(self.missing, self.step, self.index)] if self.missing else []
         if not self.closed and not self.missing:  # a stopped run: its points say more
@@ -73,6 +75,7 @@ class Measurements:
 
 
 def describe_missing(missing, step: np.ndarray, index: np.ndarray) -> str:
+    """Name missing ``(step, index)`` points in words, whole steps as step ranges."""
     if not missing:
         return "none"
     parts: list[str] = []
@@ -113,23 +116,66 @@ def check_log(
     points are not an error here: they are listed in the result (a run that stopped is
     still readable).
     """
+    if not accept_foreign:
+        _check_origin(log, plan, robot)
     src = log.source
     problems: list[str] = []
-    if log.plan != plan.fingerprint() and not accept_foreign:
+    rows = _read_rows(log, plan, robot, tol, problems)
+    zeros, n_steps, mpc = rows.zeros, len(plan.steps), log.mm_per_count
+    first_zero = zeros[min(zeros)] if zeros else None
+    if first_zero is None and log.readings:
+        problems.append(f"{src}: no zero reading: the log must start with the zero reading at θ0")
+    drift: dict[int, float] = {}
+    if first_zero is not None:
+        drift = _zero_drift(zeros, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
+        for s in sorted({int(x) for x in rows.step_no[~np.isnan(rows.counts)]}):
+            if s not in zeros:
+                problems.append(
+                    f"{src}: step {s} has points but no zero reading; the zero "
+                    "check at θ0 guards against a slipped wire"
+                )
+        distance = _lengths(rows, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
+    else:
+        distance = rows.counts
+    if problems:
+        raise WirecalError(problems)
+    missing = tuple(
+        (int(rows.step_no[k]), int(rows.index_no[k])) for k in np.flatnonzero(np.isnan(distance))
+    )
+    theta0 = first_zero.joints_deg if first_zero is not None else plan.theta0_deg
+    return Measurements(
+        source=src,
+        sha256=log.sha256,
+        mm_per_count=mpc,
+        theta0_deg=theta0,
+        step=rows.step_no,
+        index=rows.index_no,
+        joints_deg=rows.joints_deg,
+        distance_mm=distance,
+        zero_drift_mm=drift,
+        notes=log.notes,
+        missing=missing,
+        closed=n_steps + 1 in zeros,
+        log=log,
+    )
+
+
+def _check_origin(log: Log, plan: Plan, robot: Robot) -> None:
+    """Refuse a log of another plan, robot or encoder scale, before any row is read."""
+    src = log.source
+    problems: list[str] = []
+    if log.plan != plan.fingerprint():
         problems.append(
             f"{src}: plan fingerprint {log.plan[:16]}… differs from {plan.source} "
             f"({plan.fingerprint()[:16]}…): the log was taken with another plan; "
             "use that plan, or --accept-foreign if you are sure"
         )
-    if log.robot != robot.name and not accept_foreign:
+    if log.robot != robot.name:
         problems.append(
             f"{src}: robot {log.robot!r} differs from {robot.source} "
             f"({robot.name!r}); use the matching robot file, or --accept-foreign"
         )
-    if (
-        not math.isclose(abs(log.mm_per_count), abs(robot.encoder.mm_per_count), rel_tol=1e-6)
-        and not accept_foreign
-    ):
+    if not math.isclose(abs(log.mm_per_count), abs(robot.encoder.mm_per_count), rel_tol=1e-6):
         problems.append(
             f"{src}: mm_per_count {log.mm_per_count!r} differs from the robot "
             f"file's encoder.mm_per_count {robot.encoder.mm_per_count!r}; use the matching "
@@ -138,157 +184,175 @@ def check_log(
     if problems:  # a log of another plan or robot: row-by-row complaints would be noise
         raise WirecalError(problems)
 
+
+@dataclass
+class _Rows:
+    """The accepted readings of a log, in plan order (NaN counts where a point is missing)."""
+
+    step_no: np.ndarray  # (N,) 1-based, plan order
+    index_no: np.ndarray  # (N,)
+    counts: np.ndarray  # (N,) NaN where missing
+    joints_deg: np.ndarray  # (N, n) as logged (plan values where missing)
+    zeros: dict[int, Reading]  # per step with a zero reading
+    seen: dict[tuple[str, int, int], int]  # (kind, step, index) → line
+
+
+class _BadRow(Exception):
+    """One reading refused; its message is reported at the reading's line."""
+
+
+def _read_rows(log: Log, plan: Plan, robot: Robot, tol: Tolerances, problems: list[str]) -> _Rows:
+    """Check each reading against the plan; keep the good ones, report the others."""
     q_plan, step_no, index_no = plan.all_points()
     position = {(int(s), int(i)): k for k, (s, i) in enumerate(zip(step_no, index_no, strict=True))}
-    counts = np.full(len(q_plan), np.nan)
-    joints = q_plan.copy()
-    zeros: dict[int, Reading] = {}
-    seen: dict[tuple[str, int, int], int] = {}
-    mpc = log.mm_per_count
-    counter = robot.encoder.counter
-    spread_counts = tol.spread_mm / abs(mpc)
-    n_steps = len(plan.steps)
-
-    def bad(r: Reading, message: str) -> None:
-        problems.append(f"{src}:{r.line}: {message}")
-
+    rows = _Rows(step_no, index_no, np.full(len(q_plan), np.nan), q_plan.copy(), {}, {})
     for r in log.readings:
         key = (r.kind, r.step, r.index)
-        if key in seen:
-            bad(
-                r,
-                f"duplicate {r.kind} reading of step {r.step}"
-                + (f" point {r.index}" if r.kind == "point" else "")
-                + f" (first on line {seen[key]}); keep one run per log",
-            )
-            continue
-        seen[key] = r.line
-        # The mean of samples unwrapped from the first lies within a spread of the range.
-        if abs(r.counts) > counter.half + r.spread:
-            bad(
-                r,
-                f"counts {r.counts:.4f} exceed the {robot.encoder.counter_bits}-bit counter "
-                f"(±{counter.half}): not a count of this encoder; check counter_bits in "
-                f"{robot.source} and that the log column holds the raw counter value",
-            )
-            continue
-        if not 1 <= r.step <= n_steps + (r.kind == "zero"):
-            bad(
-                r,
-                f"step {r.step} is not in the plan (it has {n_steps} steps; the closing "
-                f"zero reading is logged as step {n_steps + 1})",
-            )
-            continue
-        if r.kind == "zero":
-            if r.index != 0:
-                bad(r, f"a zero reading has index 0, not {r.index}")
-                continue
-            expected = plan.theta0_deg
-        else:
-            k = position.get((r.step, r.index))
-            if k is None:
-                bad(
-                    r,
-                    f"step {r.step} has {len(plan.steps[r.step - 1].points_deg)} points; "
-                    f"point {r.index} is not in the plan",
+        try:
+            if key in rows.seen:
+                raise _BadRow(
+                    f"duplicate {r.kind} reading of step {r.step}"
+                    + (f" point {r.index}" if r.kind == "point" else "")
+                    + f" (first on line {rows.seen[key]}); keep one run per log"
                 )
-                continue
-            expected = q_plan[k]
-        if r.joints_deg.shape != expected.shape:
-            bad(r, "joint count differs from the robot's")
+            rows.seen[key] = r.line
+            k = _check_reading(r, plan, robot, tol, q_plan, position, abs(log.mm_per_count))
+        except _BadRow as e:
+            problems.append(f"{log.source}:{r.line}: {e}")
             continue
-        off = np.abs(r.joints_deg - expected)
-        if np.any(off > tol.joint_deg):
-            j = int(np.argmax(off))
-            bad(
-                r,
-                f"joint {j + 1} is {r.joints_deg[j]:.4f} deg; the plan says "
-                f"{expected[j]:g} (tolerance {tol.joint_deg:g}): the robot was not where the "
-                "plan puts it",
-            )
-            continue
-        if r.spread > spread_counts:
-            bad(
-                r,
-                f"spread of {r.samples} samples is {r.spread:g} counts "
-                f"({r.spread * abs(mpc):.3f} mm > {tol.spread_mm:g} mm): the robot was "
-                f"still moving; lengthen the settle time and repeat step {r.step}",
-            )
-            continue
-        if r.kind == "zero":
-            zeros[r.step] = r
+        if k is None:
+            rows.zeros[r.step] = r
         else:
-            counts[k] = r.counts
-            joints[k] = r.joints_deg
+            rows.counts[k] = r.counts
+            rows.joints_deg[k] = r.joints_deg
+    return rows
 
-    first_zero = zeros[min(zeros)] if zeros else None
-    if first_zero is None and log.readings:
-        problems.append(f"{src}: no zero reading: the log must start with the zero reading at θ0")
-    drift: dict[int, float] = {}
-    if first_zero is not None:
-        first = first_zero.counts
-        # A slip moves every later zero too: blame the step where the drift first leaves
-        # the tolerance, and any later step where it jumps again, not each step after it.
-        before = 0.0
-        for s, r in sorted(zeros.items()):
-            drift[s] = float(counter.difference(r.counts, first) * mpc)
-            jumped = abs(drift[s] - before) > tol.zero_mm
-            if jumped or (abs(drift[s]) > tol.zero_mm >= abs(before)):
-                prev = max(s - 1, 1)
-                which = "the closing zero reading" if s > n_steps else f"zero reading at step {s}"
-                bad(
-                    r,
-                    f"{which} is {drift[s]:+.3f} mm from the first "
-                    f"(tolerance {tol.zero_mm:g} mm): the wire slipped or the encoder "
-                    f"moved after the zero of step {prev}; remount at θ0 and repeat from "
-                    f"step {prev}",
-                )
-            before = drift[s]
-        for s in sorted({int(x) for x in step_no[~np.isnan(counts)]}):
-            if s not in zeros:
-                problems.append(
-                    f"{src}: step {s} has points but no zero reading; the zero "
-                    "check at θ0 guards against a slipped wire"
-                )
-        # The reference is the mean of all zero readings: every length is measured from
-        # it, so its error is common to all points; averaging the steps' zeros shrinks it.
-        ref = first + np.mean(
-            [counter.difference(r.counts, first) for s, r in zeros.items() if s <= n_steps] or [0.0]
+
+def _check_reading(
+    r: Reading,
+    plan: Plan,
+    robot: Robot,
+    tol: Tolerances,
+    q_plan: np.ndarray,
+    position: dict[tuple[int, int], int],
+    mm_per_count: float,
+) -> int | None:
+    """Raise :class:`_BadRow` for a reading the plan refuses; its plan row (None: a zero)."""
+    counter = robot.encoder.counter
+    n_steps = len(plan.steps)
+    # The mean of samples unwrapped from the first lies within a spread of the range.
+    if abs(r.counts) > counter.half + r.spread:
+        raise _BadRow(
+            f"counts {r.counts:.4f} exceed the {robot.encoder.counter_bits}-bit counter "
+            f"(±{counter.half}): not a count of this encoder; check counter_bits in "
+            f"{robot.source} and that the log column holds the raw counter value"
         )
-        distance = counter.difference(counts, ref) * mpc
-        for k in np.flatnonzero(~np.isnan(distance)):
-            line = seen[("point", int(step_no[k]), int(index_no[k]))]
-            if distance[k] > robot.encoder.range_mm:
-                problems.append(
-                    f"{src}:{line}: wire length {distance[k]:.1f} mm is beyond "
-                    f"the encoder's range {robot.encoder.range_mm:g} mm"
-                )
-            elif distance[k] < -tol.zero_mm:
-                problems.append(
-                    f"{src}:{line}: wire length {distance[k]:.3f} mm is "
-                    "negative: is the sign of mm_per_count right?"
-                )
-    else:
-        distance = counts
-    if problems:
-        raise WirecalError(problems)
-    missing = tuple((int(step_no[k]), int(index_no[k])) for k in np.flatnonzero(np.isnan(distance)))
-    theta0 = first_zero.joints_deg if first_zero is not None else plan.theta0_deg
-    return Measurements(
-        source=src,
-        sha256=log.sha256,
-        mm_per_count=mpc,
-        theta0_deg=theta0,
-        step=step_no,
-        index=index_no,
-        joints_deg=joints,
-        distance_mm=distance,
-        zero_drift_mm=drift,
-        notes=log.notes,
-        missing=missing,
-        closed=n_steps + 1 in zeros,
-        log=log,
+    if not 1 <= r.step <= n_steps + (r.kind == "zero"):
+        raise _BadRow(
+            f"step {r.step} is not in the plan (it has {n_steps} steps; the closing "
+            f"zero reading is logged as step {n_steps + 1})"
+        )
+    k, expected = _planned_joints(r, plan, q_plan, position)
+    if r.joints_deg.shape != expected.shape:
+        raise _BadRow("joint count differs from the robot's")
+    off = np.abs(r.joints_deg - expected)
+    if np.any(off > tol.joint_deg):
+        j = int(np.argmax(off))
+        raise _BadRow(
+            f"joint {j + 1} is {r.joints_deg[j]:.4f} deg; the plan says "
+            f"{expected[j]:g} (tolerance {tol.joint_deg:g}): the robot was not where the "
+            "plan puts it"
+        )
+    if r.spread > tol.spread_mm / mm_per_count:
+        raise _BadRow(
+            f"spread of {r.samples} samples is {r.spread:g} counts "
+            f"({r.spread * mm_per_count:.3f} mm > {tol.spread_mm:g} mm): the robot was "
+            f"still moving; lengthen the settle time and repeat step {r.step}"
+        )
+    return k
+
+
+def _planned_joints(
+    r: Reading, plan: Plan, q_plan: np.ndarray, position: dict[tuple[int, int], int]
+) -> tuple[int | None, np.ndarray]:
+    """Return a reading's plan row (None for a zero reading) and the joints planned there."""
+    if r.kind == "zero":
+        if r.index != 0:
+            raise _BadRow(f"a zero reading has index 0, not {r.index}")
+        return None, plan.theta0_deg
+    k = position.get((r.step, r.index))
+    if k is None:
+        raise _BadRow(
+            f"step {r.step} has {len(plan.steps[r.step - 1].points_deg)} points; "
+            f"point {r.index} is not in the plan"
+        )
+    return k, q_plan[k]
+
+
+def _zero_drift(
+    zeros: dict[int, Reading],
+    first: float,
+    n_steps: int,
+    robot: Robot,
+    tol: Tolerances,
+    mpc: float,
+    src: str,
+    problems: list[str],
+) -> dict[int, float]:
+    """Each zero reading's drift from the first in mm; a slip blamed on the step it hit."""
+    counter = robot.encoder.counter
+    drift: dict[int, float] = {}
+    # A slip moves every later zero too: blame the step where the drift first leaves
+    # the tolerance, and any later step where it jumps again, not each step after it.
+    before = 0.0
+    for s, r in sorted(zeros.items()):
+        drift[s] = float(counter.difference(r.counts, first) * mpc)
+        jumped = abs(drift[s] - before) > tol.zero_mm
+        if jumped or (abs(drift[s]) > tol.zero_mm >= abs(before)):
+            prev = max(s - 1, 1)
+            which = "the closing zero reading" if s > n_steps else f"zero reading at step {s}"
+            problems.append(
+                f"{src}:{r.line}: {which} is {drift[s]:+.3f} mm from the first "
+                f"(tolerance {tol.zero_mm:g} mm): the wire slipped or the encoder "
+                f"moved after the zero of step {prev}; remount at θ0 and repeat from "
+                f"step {prev}"
+            )
+        before = drift[s]
+    return drift
+
+
+def _lengths(
+    rows: _Rows,
+    first: float,
+    n_steps: int,
+    robot: Robot,
+    tol: Tolerances,
+    mpc: float,
+    src: str,
+    problems: list[str],
+) -> np.ndarray:
+    """Wire lengths from the mean zero reading in mm; beyond the range or negative reported."""
+    counter = robot.encoder.counter
+    # The reference is the mean of all zero readings: every length is measured from
+    # it, so its error is common to all points; averaging the steps' zeros shrinks it.
+    ref = first + np.mean(
+        [counter.difference(r.counts, first) for s, r in rows.zeros.items() if s <= n_steps]
+        or [0.0]
     )
+    distance = counter.difference(rows.counts, ref) * mpc
+    for k in np.flatnonzero(~np.isnan(distance)):
+        line = rows.seen[("point", int(rows.step_no[k]), int(rows.index_no[k]))]
+        if distance[k] > robot.encoder.range_mm:
+            problems.append(
+                f"{src}:{line}: wire length {distance[k]:.1f} mm is beyond "
+                f"the encoder's range {robot.encoder.range_mm:g} mm"
+            )
+        elif distance[k] < -tol.zero_mm:
+            problems.append(
+                f"{src}:{line}: wire length {distance[k]:.3f} mm is "
+                "negative: is the sign of mm_per_count right?"
+            )
+    return distance
 
 
 def load_measurements(
