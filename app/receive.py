@@ -125,29 +125,17 @@ def _listen(host: str, port: int) -> socket.socket:
 
 
 def _take(srv: socket.socket, timeout_s: float, journal: Path, result: Received) -> None:
-    """Create the journal and fill it from one sender (refusing others) until the end
-    marker, a drop, bad data or ``timeout_s`` of silence.
+    """Create the journal and fill it from one sender (refusing others).
+
+    Stops at the end marker, a drop, bad data or ``timeout_s`` of silence.
     """
-    try:
-        fd = os.open(journal, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    except FileExistsError:
-        raise WirecalError(
-            f"{journal}: exists and holds the rows of an earlier run; keep it under another "
-            "name (it is a wirecal log) or delete it, then start again"
-        ) from None
-    except OSError as exc:
-        raise os_problem(journal, exc) from None
+    fd = _create_journal(journal)
     result.journal_created = True
     sel = selectors.DefaultSelector()
     sel.register(srv, selectors.EVENT_READ)
     sender: socket.socket | None = None
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="") as jf:
-
-            def keep(line: str) -> None:
-                jf.write(line)
-                result.lines.append(line)
-
             pending = b""
             deadline = time.monotonic() + timeout_s
             while True:
@@ -164,54 +152,90 @@ def _take(srv: socket.socket, timeout_s: float, journal: Path, result: Received)
                     return
                 for key, _ in events:
                     if key.fileobj is srv:
-                        other, _ = srv.accept()
                         if sender is None:
-                            sender = other
-                            sender.setblocking(False)
-                            sel.register(sender, selectors.EVENT_READ)
+                            sender = _accept(srv, sel)
                             deadline = time.monotonic() + timeout_s
                         else:
-                            _refuse(other)
+                            _refuse(srv.accept()[0])
                             result.refused += 1
                         continue
-                    try:
-                        data = sender.recv(65536) if sender is not None else b""
-                    except ConnectionError:
-                        data = b""
+                    data = _recv(sender)
                     if not data:
-                        if pending:  # a line cut short: kept as it came, without newline
-                            keep(pending.decode("utf-8", errors="replace"))
-                        _sync(jf)
-                        result.stopped = "the sender closed the connection before the end marker"
+                        _dropped(jf, result, pending)
                         return
                     deadline = time.monotonic() + timeout_s
-                    *whole, pending = (pending + data).split(b"\n")
-                    for raw in whole:
-                        try:
-                            line = raw.rstrip(b"\r").decode("utf-8")
-                        except UnicodeDecodeError:
-                            _sync(jf)
-                            result.stopped = (
-                                f"line {len(result.lines) + 1} is not UTF-8 text: "
-                                "is the sender a wirecal program?"
-                            )
-                            return
-                        keep(line + "\n")
-                        if line.strip() == END_MARKER:
-                            _sync(jf)
-                            result.complete = True
-                            return
-                    _sync(jf)
-                    if len(pending) > MAX_LINE_BYTES:
-                        result.stopped = (
-                            f"more than {MAX_LINE_BYTES} bytes without a line end after line "
-                            f"{len(result.lines)}: is the sender a wirecal program?"
-                        )
+                    pending = _feed(jf, result, pending + data)
+                    if pending is None:
                         return
     finally:
         if sender is not None:
             sender.close()
         sel.close()
+
+
+def _create_journal(journal: Path) -> int:
+    try:
+        return os.open(journal, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    except FileExistsError:
+        raise WirecalError(
+            f"{journal}: exists and holds the rows of an earlier run; keep it under another "
+            "name (it is a wirecal log) or delete it, then start again"
+        ) from None
+    except OSError as exc:
+        raise os_problem(journal, exc) from None
+
+
+def _accept(srv: socket.socket, sel: selectors.BaseSelector) -> socket.socket:
+    sender, _ = srv.accept()
+    sender.setblocking(False)
+    sel.register(sender, selectors.EVENT_READ)
+    return sender
+
+
+def _recv(sender: socket.socket | None) -> bytes:
+    try:
+        return sender.recv(65536) if sender is not None else b""
+    except ConnectionError:
+        return b""
+
+
+def _keep(jf, result: Received, line: str) -> None:
+    jf.write(line)
+    result.lines.append(line)
+
+
+def _dropped(jf, result: Received, pending: bytes) -> None:
+    if pending:  # a line cut short: kept as it came, without newline
+        _keep(jf, result, pending.decode("utf-8", errors="replace"))
+    _sync(jf)
+    result.stopped = "the sender closed the connection before the end marker"
+
+
+def _feed(jf, result: Received, buffered: bytes) -> bytes | None:
+    """Journal the whole lines of ``buffered``; the unfinished rest, or None when done."""
+    *whole, pending = buffered.split(b"\n")
+    for raw in whole:
+        try:
+            line = raw.rstrip(b"\r").decode("utf-8")
+        except UnicodeDecodeError:
+            _sync(jf)
+            result.stopped = (
+                f"line {len(result.lines) + 1} is not UTF-8 text: is the sender a wirecal program?"
+            )
+            return None
+        _keep(jf, result, line + "\n")
+        if line.strip() == END_MARKER:
+            _sync(jf)
+            result.complete = True
+            return None
+    _sync(jf)
+    if len(pending) > MAX_LINE_BYTES:
+        result.stopped = (
+            f"more than {MAX_LINE_BYTES} bytes without a line end after line "
+            f"{len(result.lines)}: is the sender a wirecal program?"
+        )
+        return None
+    return pending
 
 
 def _sync(f) -> None:
