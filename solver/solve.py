@@ -107,6 +107,21 @@ def _finite(x: float) -> float | None:
     return float(x) if math.isfinite(x) else None
 
 
+def _noise_sigma(r: np.ndarray, k: int, robust: bool) -> float:
+    """Return the noise σ in mm from the residuals ``r`` of a fit of ``k`` parameters.
+
+    Taken from the joint fit (the best model of the data), dof-corrected; with the
+    robust loss from the median absolute residual (1.4826·MAD), so outliers do not count.
+    NaN when there are no more points than parameters.
+    """
+    n = len(r)
+    if n <= k:
+        return float("nan")
+    if robust:
+        return float(1.4826 * np.median(np.abs(r)) * np.sqrt(n / (n - k)))
+    return float(np.sqrt(r @ r / (n - k)))
+
+
 def solve(
     robot: Robot,
     plan: Plan,
@@ -162,16 +177,8 @@ def solve(
     if "joint" in methods:
         estimates["joint"] = jt
 
-    # Noise σ from the joint fit (the best model of the data), dof-corrected; with the
-    # robust loss from the median absolute residual (1.4826·MAD), so outliers do not count.
-    n, k = len(problem.d), len(names)
     r = problem.residuals(problem.errors.to_internal(jt.values))
-    if n <= k:
-        sigma = float("nan")
-    elif robust:
-        sigma = float(1.4826 * np.median(np.abs(r)) * np.sqrt(n / (n - k)))
-    else:
-        sigma = float(np.sqrt(r @ r / (n - k)))
+    sigma = _noise_sigma(r, len(names), robust)
     J = problem.errors.per_internal(psi)  # internal units
     cov, identified = covariance(J, sigma**2)
     predicted = dict.fromkeys(estimates, UNIDENTIFIED)
