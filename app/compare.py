@@ -1,4 +1,6 @@
-"""The controller solver, as generated, run in the digital twin on a log's readings, and its
+"""Run the generated controller solver in the digital twin and compare it with Python's.
+
+The controller solver, as generated, run in the digital twin on a log's readings, and its
 comparison with the Python reference solver.
 
 The generated programs are the oracle for the controller side: the twin executes them as
@@ -42,7 +44,7 @@ class Readings:
 
 
 def readings_from_log(log: Log, plan: Plan) -> Readings:
-    """The arrays the measurement program would have filled, rebuilt from its log."""
+    """Rebuild from a log the arrays the measurement program would have filled."""
     q_plan, step_no, index_no = plan.all_points()
     pos = {(int(s), int(i)): k + 1 for k, (s, i) in enumerate(zip(step_no, index_no, strict=True))}
     n = q_plan.shape[1]
@@ -78,14 +80,16 @@ class ControllerRun:
 
     @property
     def total_operations(self) -> int:
+        """Return the number of operations counted, all kinds together."""
         return sum(self.operations.values())
 
 
 def controller_solve(
     robot: Robot, plan: Plan, log: Log, disk: Path, *, polish: bool, text: str | None = None
 ) -> ControllerRun:
-    """Run the generated controller solver (``wc.solve``, or ``wc.solve2`` with ``polish``)
-    in the twin on a log's readings.
+    """Run the generated controller solver in the twin on a log's readings.
+
+    ``wc.solve``, or ``wc.solve2`` with ``polish``.
 
     The readings are loaded into the globals exactly as wc.run leaves them; the result is
     read back from the file the solver writes. ``text`` is the module (generated with the
@@ -133,7 +137,7 @@ class ControllerComparison:
     polished_max_difference: float
 
     def as_json(self) -> dict:
-        """The ``methods.controller`` entry of ``wirecal solve --json``."""
+        """Return the ``methods.controller`` entry of ``wirecal solve --json``."""
         return {
             "parameters": self.stepwise.offsets,
             "parameters_operations": self.stepwise.total_operations,
@@ -147,7 +151,9 @@ class ControllerComparison:
 def compare_controller(
     result: SolveResult, disk: Path, *, text: str | None = None
 ) -> ControllerComparison:
-    """Run wc.solve and wc.solve2 in the twin on the log ``result`` was solved from, and
+    """Run wc.solve and wc.solve2 in the twin on ``result``'s log; compare with Python's.
+
+    Run wc.solve and wc.solve2 in the twin on the log ``result`` was solved from, and
     compare each with the Python reference's estimate (stepwise and joint).
     """
     m = result.measurements

@@ -55,6 +55,8 @@ OUTPUTS = (
 
 @dataclass
 class DemoResult:
+    """What the demo wrote and measured: its folder and the validations."""
+
     folder: Path
     validations: list[Validation]
     tool_error_mm: dict[str, float]  # mean over the workspace: before, after
@@ -63,7 +65,7 @@ class DemoResult:
 
 
 def example_files(robot: str = "viper_s650") -> dict[str, Path]:
-    """The shipped example: robot, corrected paper plan, validation setup."""
+    """Return the shipped example: robot, corrected paper plan, validation setup."""
     here = Path(__file__).resolve().parents[1] / "examples" / robot
     if not here.is_dir():  # an installed wheel: the examples travel as package data
         here = Path(str(resources.files("wirecal.examples").joinpath(robot)))
@@ -94,7 +96,7 @@ def _run(
     scale: float,
     progress: Callable[[str], None],
 ) -> DemoResult:
-    """The demo's work; every output goes into ``out``, published when all are there."""
+    """Do the demo's work; every output goes into ``out``, published when all are there."""
     files = example_files()
     robot = load_robot(files["robot"])
     plan = load_plan(files["plan"], robot)

@@ -40,6 +40,7 @@ class PsiTable:
 
     @property
     def n_ok(self) -> int:
+        """Return the number of rows that pass."""
         return sum(r.ok for r in self.rows)
 
 

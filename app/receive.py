@@ -58,11 +58,12 @@ class Received:
 
     @property
     def text(self) -> str:
+        """Return the received lines as one text."""
         return "".join(self.lines)
 
 
 def journal_path(log: str | Path) -> Path:
-    """The journal beside ``log``: ``<log>.partial``."""
+    """Return the journal beside ``log``: ``<log>.partial``."""
     log = Path(log)
     return log.with_name(log.name + ".partial")
 
@@ -252,7 +253,7 @@ def _refuse(other: socket.socket) -> None:
 
 
 def summary(result: Received, robot: Robot | None = None, plan: Plan | None = None) -> list[str]:
-    """What was received, in words; with the robot and plan, the missing points named."""
+    """Say what was received in words; with the robot and plan, name the missing points."""
     rows = _readable(result)
     lines = []
     if result.complete:

@@ -1,4 +1,6 @@
-"""``wirecal report``: one self-contained HTML page (Jinja2 template, matplotlib figures
+"""Write ``wirecal report``'s self-contained HTML page.
+
+``wirecal report``: one self-contained HTML page (Jinja2 template, matplotlib figures
 embedded as PNG) with the robot, the plan's Ψ per step, the per-step residuals, the
 parameters with σ and correlations, step-by-step against joint (and the controller), and
 the validation histograms before and after calibration.
@@ -38,6 +40,7 @@ class Validation:
 
     @property
     def reduction(self) -> dict[str, float | None]:
+        """Return the reduction of each statistic from before to after calibration."""
         return reduction(self.before, self.after)
 
 
@@ -66,6 +69,7 @@ def psi_figure(result: SolveResult) -> str:
 
 
 def residual_figure(result: SolveResult) -> str:
+    """Plot the stepwise method's residuals per step; the figure as embeddable PNG."""
     steps = result.estimates["stepwise"].steps
     fig, ax = plt.subplots(figsize=(7, 3))
     x = np.arange(len(steps))
@@ -86,6 +90,7 @@ def residual_figure(result: SolveResult) -> str:
 
 
 def correlation_figure(result: SolveResult) -> str:
+    """Plot the joint estimate's parameter correlations; the figure as embeddable PNG."""
     est = result.estimates["joint"]
     fig, ax = plt.subplots(figsize=(5, 4.3))
     im = ax.imshow(est.correlation, cmap="coolwarm", vmin=-1, vmax=1)
@@ -97,6 +102,7 @@ def correlation_figure(result: SolveResult) -> str:
 
 
 def histogram_figure(v: Validation) -> str:
+    """Plot a validation's before/after histogram; the figure as embeddable PNG."""
     fig, ax = plt.subplots(figsize=(7, 3.2))
     hi = max(v.before.max, v.after.max)
     bins = np.linspace(0, hi * 1.02, 34)
@@ -126,7 +132,7 @@ def render_report(
     truth: dict[str, float] | None = None,
     plausibility: str = "",
 ) -> str:
-    """The HTML text of the report; ``plausibility`` the gate's verdict (a patch's field)."""
+    """Render the report's HTML; ``plausibility`` the gate's verdict (a patch's field)."""
     robot, plan = result.robot, result.plan
     sw, jt = result.estimates.get("stepwise"), result.estimates.get("joint")
     params = []

@@ -1,5 +1,6 @@
-"""Generate the V+ module, then run it in the digital twin: the composition of ``gen`` and
-``twin`` (the twin itself only runs the programs it is given).
+"""Generate the V+ module, then run it in the digital twin.
+
+The composition of ``gen`` and ``twin`` (the twin itself only runs the programs it is given).
 """
 
 from __future__ import annotations
@@ -25,7 +26,9 @@ def measure_in_twin(
     counter_start: float | None = None,
     faults: Faults | None = None,
 ) -> RunResult:
-    """wc.mount (answered 1) and wc.run of the module generated with ``options`` (or of
+    """Run wc.mount and wc.run of a generated module on a twin robot.
+
+    wc.mount (answered 1) and wc.run of the module generated with ``options`` (or of
     ``text``, generated with those options) on a twin robot with true offsets ``truth``.
     """
     options = options or GenOptions()

@@ -1,5 +1,6 @@
-"""``wirecal simulate`` and ``wirecal solve``: measurement runs on a simulated robot, and
-identification from a measurement log.
+"""Provide ``wirecal simulate`` and ``wirecal solve``.
+
+Measurement runs on a simulated robot, and identification from a measurement log.
 """
 
 from __future__ import annotations
@@ -397,7 +398,7 @@ def solve(
 
 
 def _controller(result) -> ControllerComparison:
-    """The generated controller solver (wc.solve, wc.solve2) run in the twin on the log."""
+    """Run the generated controller solver (wc.solve, wc.solve2) in the twin on the log."""
     from wirecal.app.compare import compare_controller  # the twin only when asked for
 
     with tempfile.TemporaryDirectory() as tmp:

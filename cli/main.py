@@ -27,8 +27,9 @@ from wirecal.solver.errors import WirecalError
 
 
 def user_errors(func):
-    """Turn :class:`WirecalError` (and any stray ``OSError``) into ``error: …`` lines and
-    its exit status (2, or 3 for :class:`~wirecal.solver.errors.Implausible`).
+    """Turn :class:`WirecalError` (and any stray ``OSError``) into ``error: …`` lines.
+
+    And its exit status (2, or 3 for :class:`~wirecal.solver.errors.Implausible`).
     """
 
     @functools.wraps(func)
@@ -47,6 +48,7 @@ def user_errors(func):
 
 
 def print_json(data: Any) -> None:
+    """Print ``data`` as indented JSON (UTF-8 kept) on standard output."""
     click.echo(json.dumps(data, indent=2, ensure_ascii=False))
 
 
@@ -64,19 +66,22 @@ class LazyGroup(click.Group):
         self.lazy: dict[str, tuple[str, str]] = {}
 
     def add_lazy_command(self, name: str, target: str, summary: str) -> None:
+        """Register ``name`` as ``module:attribute`` to import when run, with its summary."""
         self.lazy[name] = (target, summary)
 
     def list_commands(self, ctx: click.Context) -> list[str]:
+        """Return every command name, loaded or lazy, sorted."""
         return sorted({*self.commands, *self.lazy})
 
     def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        """Return the command, importing a lazy one on first use."""
         if cmd_name not in self.commands and cmd_name in self.lazy:
             module, _, attribute = self.lazy[cmd_name][0].partition(":")
             self.add_command(getattr(importlib.import_module(module), attribute), cmd_name)
         return self.commands.get(cmd_name)
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
-        """The command list from the summaries, without importing any command."""
+        """Write the command list from the summaries, without importing any command."""
         names = self.list_commands(ctx)
         if not names:
             return
@@ -162,7 +167,7 @@ for _name, _target, _summary in (
     (
         "validate",
         "wirecal.cli.validate:validate",
-        "The validation metric of a log from wc.vcfg or wc.vpln (paper §3.6).",
+        "Compute the validation metric of a log from wc.vcfg or wc.vpln (paper §3.6).",
     ),
 ):
     main.add_lazy_command(_name, _target, _summary)

@@ -18,6 +18,7 @@ class Number(click.FloatRange):
     name = "number"
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        """Return ``value`` as a float, failing unless finite and within the bounds."""
         rv = click.FLOAT.convert(value, param, ctx)
         if not math.isfinite(rv):
             self.fail(f"{value!r} is not a finite number", param, ctx)
@@ -31,7 +32,7 @@ def number(
     min_open: bool = False,
     max_open: bool = False,
 ) -> Number:
-    """A finite number in [min, max] (open ends as asked); no bound where None."""
+    """Return a type for a finite number in [min, max] (open ends as asked); None: no bound."""
     return Number(min, max, min_open=min_open, max_open=max_open)
 
 

@@ -96,7 +96,7 @@ def _identifiability_json(ident: Identifiability) -> dict:
 
 
 def _psi_json(table: PsiTable) -> dict:
-    """What ``wirecal psi --json`` prints."""
+    """Return what ``wirecal psi --json`` prints."""
     return {
         "robot": table.robot,
         "fingerprint": table.fingerprint,

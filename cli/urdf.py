@@ -147,7 +147,7 @@ def _tol(parallel_tol_deg: float | None) -> float:
 
 
 def _import_text(urdf, tip, base, out_path: Path, name, encoder: Encoder, parallel_tol_deg):
-    """The robot file's text for import-urdf, checked to read back."""
+    """Return the robot file's text for import-urdf, checked to read back."""
     doc = read_urdf(urdf)
     ch = read_chain(doc, base, tip, _tol(parallel_tol_deg))
     lo, hi, speed, notes = _limits(ch)

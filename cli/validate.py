@@ -18,6 +18,7 @@ from wirecal.solver.validation_analysis import (
 
 
 def analyse(kind: str, path: str, counter: Counter | None) -> Stats:
+    """Read a validation log of ``kind`` (configuration or plane) and return its statistics."""
     log = read_validation_log(path, kind)
     if kind == "plane":
         return plane_residuals(log)[0]
@@ -42,7 +43,7 @@ def analyse(kind: str, path: str, counter: Counter | None) -> Stats:
 @click.option("--json", "as_json", is_flag=True, help="Print the figures as JSON.")
 @user_errors
 def validate(kind, before, after, robot_file, as_json):
-    """The validation metric of a log from wc.vcfg or wc.vpln (paper §3.6).
+    """Compute the validation metric of a log from wc.vcfg or wc.vpln (paper §3.6).
 
     configuration: per pose, the largest difference among the wire lengths of its four
     configurations. plane: the absolute residuals of the least-squares plane through the
