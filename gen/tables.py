@@ -62,14 +62,17 @@ class Tables:
 
     @property
     def n_points(self) -> int:
+        """Return the number of plan points (θ0's row not counted)."""
         return len(self.dn) - 1
 
     @property
     def names(self) -> tuple[str, ...]:
+        """Return the parameters in identification order."""
         return self.errors.names
 
 
 def build_tables(robot: Robot, plan: Plan) -> Tables:
+    """Compute the controller solver's tables for the robot's nominal model and the plan."""
     names = plan.order
     q, _, _ = plan.all_points()
     conf = np.vstack([plan.theta0_deg, q])

@@ -57,6 +57,7 @@ class Problem:
         return ErrorSet(self.names, self.base.n_joints)
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
+        """Return the model's wire lengths minus the measured ones (mm) at offsets ``x``."""
         return wire_lengths(with_errors(self.base, self.names, x), self.q, self.q0) - self.d
 
 
@@ -77,6 +78,7 @@ class StepResult:
 
     @property
     def worst_leak(self) -> tuple[str, float] | None:
+        """Return the later parameter with the largest leak and its coefficient (None: none)."""
         if not self.leak:
             return None
         name = max(self.leak, key=lambda t: abs(self.leak[t]))
@@ -96,6 +98,7 @@ class Estimate:
     steps: tuple[StepResult, ...] = ()
 
     def as_dict(self) -> dict[str, float]:
+        """Return the offsets by parameter name (boundary units)."""
         return {n: float(v) for n, v in zip(self.names, self.values, strict=True)}
 
 
@@ -117,7 +120,7 @@ physical effect, and above the round-off of the Gauss–Newton step itself."""
 def stepwise(
     problem: Problem, omega: np.ndarray, *, max_iter: int = 50
 ) -> tuple[np.ndarray, list[StepDiagnostics]]:
-    """The paper's step-by-step identification for T data sets at once.
+    """Run the paper's step-by-step identification for T data sets at once.
 
     ``omega`` (m,) bounds each parameter in internal units. Returns the estimates
     (T, m) or (m,) and, per step, its :class:`StepDiagnostics` over T.
@@ -179,8 +182,9 @@ def _solve_step(
 
 
 def leak_coefficients(psi: np.ndarray, step: np.ndarray, names: tuple[str, ...]) -> list[dict]:
-    """For each step j: bias of δê_j per unit error of each later parameter t, from the
-    linearised step (Ψ_j·Ψ_t / Ψ_j·Ψ_j over the step's points, boundary units).
+    """Return, per step j, the bias of δê_j per unit error of each later parameter t.
+
+    From the linearised step (Ψ_j·Ψ_t / Ψ_j·Ψ_j over the step's points, boundary units).
     """
     out = []
     for j in range(len(names)):
@@ -197,7 +201,7 @@ def leak_coefficients(psi: np.ndarray, step: np.ndarray, names: tuple[str, ...])
 
 
 def run_stepwise(problem: Problem, omega: np.ndarray, psi: np.ndarray) -> Estimate:
-    """The stepwise method on one data set, with its per-step diagnostics."""
+    """Run the stepwise method on one data set, with its per-step diagnostics."""
     x, info = stepwise(problem, omega)
     x_b, omega_b = problem.errors.to_boundary(x), problem.errors.to_boundary(omega)
     leaks = leak_coefficients(psi, problem.step, problem.names)

@@ -1,5 +1,7 @@
-"""Monte Carlo against known truth: many simulated calibrations, their errors, and the
-Cramér–Rao bound of the plan measured by the same statistic.
+"""Run Monte Carlo calibrations against known truth.
+
+Many simulated calibrations, their errors, and the Cramér–Rao bound of the plan measured
+by the same statistic.
 
 Each trial draws readings (noise, quantisation, zero readings, as :mod:`simulate`) on a
 true robot, identifies the parameters, and compares the identified model with the true
@@ -27,6 +29,8 @@ from wirecal.solver.simulate import measured_lengths
 
 @dataclass(frozen=True)
 class MethodFigures:
+    """One method's Monte Carlo figures: parameter and tool-point errors, time."""
+
     param_rms_deg: float  # RMS error of angular parameters over trials
     param_rms_mm: float  # RMS error of length parameters
     tool_mean_mm: float  # mean over trials of the mean error over configurations
@@ -34,11 +38,14 @@ class MethodFigures:
     seconds: float  # identification time for all trials
 
     def rate(self, trials: int) -> float:
+        """Return identifications per second for ``trials`` trials."""
         return trials / self.seconds if self.seconds > 0 else float("inf")
 
 
 @dataclass(frozen=True)
 class MonteCarlo:
+    """A Monte Carlo run: each method's figures, the CRB's, and the uncalibrated error."""
+
     trials: int
     methods: dict[str, MethodFigures]
     crb: MethodFigures

@@ -1,5 +1,7 @@
-"""``wirecal solve`` as a Python function: measurements in, both methods' estimates out,
-with residuals and the predicted post-calibration accuracy.
+"""Provide ``wirecal solve`` as a Python function.
+
+Measurements in, both methods' estimates out, with residuals and the predicted
+post-calibration accuracy.
 """
 
 from __future__ import annotations
@@ -33,6 +35,8 @@ UNIDENTIFIED = {"mean": math.inf, "max": math.inf}
 
 @dataclass(frozen=True)
 class SolveResult:
+    """The estimates of a solve, their predicted accuracy, and what they were solved from."""
+
     robot: Robot
     plan: Plan
     measurements: Measurements
@@ -54,6 +58,7 @@ class SolveResult:
         return min(self.estimates, key=lambda m: (self.predicted[m]["mean"], m != "joint"))
 
     def as_json(self) -> dict[str, Any]:
+        """Return what ``wirecal solve --json`` prints."""
         methods: dict[str, Any] = {}
         for name, est in self.estimates.items():
             entry: dict[str, Any] = {
@@ -103,7 +108,7 @@ class SolveResult:
 
 
 def _finite(x: float) -> float | None:
-    """A number for JSON: None where it is not finite (σ of an unidentified parameter)."""
+    """Return a number for JSON: None where not finite (σ of an unidentified parameter)."""
     return float(x) if math.isfinite(x) else None
 
 

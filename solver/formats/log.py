@@ -45,6 +45,8 @@ HEADER_KEYS = ("robot", "plan", "mm_per_count")
 
 @dataclass(frozen=True)
 class Reading:
+    """One data line of a log: a zero reading or a plan point's reading."""
+
     kind: str
     step: int
     index: int
@@ -79,6 +81,7 @@ def format_row(
 def format_header(
     robot: str, fingerprint: str, mm_per_count: float, comments: tuple[str, ...] = ()
 ) -> str:
+    """Return a log's header: magic and version, header fields, comments, column names."""
     lines = [
         f"{MAGIC} {VERSION}",
         f"# robot: {robot}",
@@ -97,8 +100,10 @@ def read_log(path: str | Path) -> Log:
 
 
 def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
-    """Parse a log's text; ``sha256`` of the bytes it was read from (default: of the text,
-    UTF-8), so a patch always records which log it was solved from.
+    """Parse a log's text.
+
+    ``sha256`` of the bytes it was read from (default: of the text, UTF-8), so a patch
+    always records which log it was solved from.
     """
     if sha256 is None:
         sha256 = hashlib.sha256(text.encode("utf-8")).hexdigest()
