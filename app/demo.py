@@ -84,6 +84,7 @@ def run_demo(
     force: bool = False,
     progress: Callable[[str], None] = lambda s: None,
 ) -> DemoResult:
+    """Run the demo into ``folder``: every output written, or none (``force`` to replace)."""
     folder = Path(folder)
     with Outputs([folder / n for n in OUTPUTS], force=force, folder=folder) as out:
         return _run(out, folder, seed, scale, progress)

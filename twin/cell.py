@@ -58,9 +58,11 @@ class Faults:
 
 @dataclass(frozen=True)
 class Unmodelled:
-    """Physical effects no kinematic parameter can absorb, so that validation figures are
-    not trivially perfect. Joint encoders do not see them: HERE reports the commanded
-    joints, while the encoder wire and the probe see where the arm really is.
+    """Physical effects no kinematic parameter can absorb.
+
+    So that validation figures are not trivially perfect. Joint encoders do not see them:
+    HERE reports the commanded joints, while the encoder wire and the probe see where the arm
+    really is.
 
     * repeatability: each move lands with independent joint errors of σ chosen so that the
       tool point scatters by about ``repeatability_mm``/2 (1σ) at 600 mm;
@@ -75,8 +77,9 @@ class Unmodelled:
 
 @dataclass(frozen=True)
 class Plate:
-    """A flat plate (granite) for the touch probe: a point on its top face and the face's
-    outward normal, in the robot's base frame (mm).
+    """A flat plate (granite) for the touch probe.
+
+    A point on its top face and the face's outward normal, in the robot's base frame (mm).
     """
 
     point: tuple[float, float, float]
@@ -84,6 +87,7 @@ class Plate:
 
 
 def frames_of(model, q_deg):
+    """Return the joint frames of ``model`` at joints ``q_deg`` (deg)."""
     return frames(model, np.radians(np.atleast_2d(q_deg)))
 
 
@@ -109,6 +113,7 @@ class Cell:
     unmodelled: Unmodelled | None = None
 
     def __post_init__(self):
+        """Derive the true and believed models and start the cell's state."""
         self.rng = np.random.default_rng(self.seed)
         self.model = self.robot.model(self.truth)
         self.believed = self.robot.model(self.controller)
@@ -141,9 +146,11 @@ class Cell:
 
     # ---- terminal ----
     def type_(self, text: str) -> None:
+        """TYPE: append ``text`` to the console."""
         self.console.append(text)
 
     def prompt(self, text: str) -> str:
+        """PROMPT: show ``text``; return the next scripted answer."""
         self.console.append(text)
         if not self.answers:
             raise VError(-526, "*No data received* (no scripted answer to the PROMPT)")
@@ -152,13 +159,16 @@ class Cell:
         return answer
 
     def on_pause(self) -> bool:
+        """Return whether a PAUSE proceeds (as the operator would)."""
         return self.proceed_on_pause
 
     # ---- motion ----
     def speed(self, pct: float) -> None:
+        """SPEED: set the motion speed in percent."""
         self.speed_pct = pct
 
     def accel(self, *_args) -> None:
+        """ACCEL: accepted; the twin's timing ignores it."""
         pass
 
     def configure(self, word: str) -> None:
@@ -167,8 +177,9 @@ class Cell:
         self.requested[part] = word.lower()
 
     def _joints_for(self, t: Trans) -> np.ndarray:
-        """The controller's inverse kinematics: its own model, the requested configuration
-        where given, else the current one.
+        """Solve the controller's inverse kinematics with its own model.
+
+        The requested configuration where given, else the current one.
         """
         R, p = t.matrix()
         here = np.radians(self.joints)
@@ -189,6 +200,7 @@ class Cell:
         self.tool = "null"
 
     def move(self, target, straight: bool = False) -> None:
+        """MOVE/MOVES: go to joints, or to a pose through the controller's IK."""
         if isinstance(target, Trans):
             self.tools_at_cartesian.add(self.tool)
             target = self._joints_for(target)
@@ -220,10 +232,11 @@ class Cell:
         return dq
 
     def break_(self) -> None:
+        """BREAK: nothing to wait for; the twin's motions end at once."""
         pass
 
     def here(self, transform: bool = False):
-        """HERE: the joints, or the pose the controller computes from them (its model)."""
+        """Return HERE: the joints, or the pose the controller computes from them (its model)."""
         if not transform:
             return self.joints
         return Trans.from_matrix(*ik.flange_pose(self.believed, np.radians(self.joints)))
@@ -238,13 +251,16 @@ class Cell:
         return -1.0 if depth <= 0 else 0.0
 
     def wait(self, seconds: float) -> None:
+        """WAIT.EVENT , seconds: advance the clock."""
         self.clock += seconds
 
     # ---- encoder ----
     def enable(self, switch: str) -> None:
+        """ENABLE a switch: accepted, no effect in the twin."""
         pass
 
     def defbelt(self, name: str, encoder: int, scale: float) -> None:
+        """DEFBELT: name a belt on an encoder channel."""
         self.belts[name] = encoder
 
     def _counts(self) -> float:
@@ -267,11 +283,13 @@ class Cell:
         return float(self.robot.encoder.counter.wrap(raw + jitter))
 
     def belt(self, name: str, mode: int) -> float:
+        """BELT: the counts of a defined belt (the draw-wire encoder)."""
         if name not in self.belts:
             raise VError(-406, f"*Undefined value* {name}")
         return self._counts()
 
     def device(self, unit: int, select: int) -> tuple[float, float]:
+        """DEVICE: the encoder counts and a status (a read error as its code)."""
         try:
             return self._counts(), 0.0
         except VError as e:
@@ -281,15 +299,18 @@ class Cell:
 
     # ---- disk ----
     def attach(self, device: str) -> float:
+        """ATTACH: a new logical unit for ``device``; its number."""
         lun = 1 + max(self.luns, default=0)
         self.luns[lun] = {"device": device, "file": None}
         self.status[lun] = 1
         return float(lun)
 
     def detach(self, lun: int) -> None:
+        """DETACH a logical unit."""
         self.luns.pop(lun, None)
 
     def fopen(self, mode: str, lun: int, name: str) -> None:
+        """FOPENR/FOPENW/FOPENA: open a file on the cell's disk; the status in IOSTAT."""
         path = self.disk / name.split(":")[-1].upper()
         if lun not in self.luns:
             self.status[lun] = -514
@@ -306,6 +327,7 @@ class Cell:
         self.status[lun] = 1
 
     def write(self, lun: int, text: str) -> None:
+        """WRITE a line to an open file, written through; the status in IOSTAT."""
         unit = self.luns.get(lun)
         if unit is None or unit["file"] is None:
             self.status[lun] = -514
@@ -320,20 +342,25 @@ class Cell:
         self.status[lun] = 1
 
     def fclose(self, lun: int) -> None:
+        """FCLOSE a unit's file; the status in IOSTAT."""
         unit = self.luns.get(lun)
         self.status[lun] = 1 if unit and unit["file"] is not None else -514
         if unit:
             unit["file"] = None
 
     def iostat(self, lun: int) -> float:
+        """IOSTAT: the status of the last operation on ``lun``."""
         return float(self.status.get(lun, -514))
 
     def error_text(self, code: int) -> str:
+        """$ERROR: the message of an error code."""
         return ERRORS.get(code, f"*Error {code}*")
 
 
 @dataclass
 class RunResult:
+    """A measurement run in the twin: wc.mount's and wc.run's outcomes, the log, the cell."""
+
     mount: Outcome
     run: Outcome | None
     log: Path
@@ -353,8 +380,9 @@ def run_measurement(
     counter_start: float | None = None,
     faults: Faults = Faults(),
 ) -> RunResult:
-    """Run a module's wc.mount (answered 1) and wc.run in the twin; the log is ``log_file``
-    on the cell's disk (the name the module was generated with).
+    """Run a module's wc.mount (answered 1) and wc.run in the twin.
+
+    The log is ``log_file`` on the cell's disk (the name the module was generated with).
     """
     disk.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng([seed, 2])
@@ -377,8 +405,10 @@ def run_measurement(
 
 
 def run_targets(plan: Plan) -> list[str]:
-    """What each move of wc.run reaches, in order (move k is entry k-1): per step θ0 (its
-    zero reading), the via points, the points; last θ0 for the closing zero reading.
+    """List what each move of wc.run reaches, in order (move k is entry k-1).
+
+    Per step θ0 (its zero reading), the via points, the points; last θ0 for the closing
+    zero reading.
     """
     out = []
     for j, s in enumerate(plan.steps, 1):
@@ -390,7 +420,7 @@ def run_targets(plan: Plan) -> list[str]:
 
 
 def move_of_step(plan: Plan, step: int, point: int = 1) -> int:
-    """The 1-based number of the move of wc.run that reaches a step's point."""
+    """Return the 1-based number of the move of wc.run that reaches a step's point."""
     return run_targets(plan).index(f"step {step} point {point}") + 1
 
 
@@ -426,6 +456,8 @@ def read_result(path: Path) -> dict[str, float]:
 
 @dataclass
 class ValidationRun:
+    """Both validation programs' outcomes in the twin, their logs and the cell."""
+
     configuration: Outcome
     plane: Outcome
     configuration_log: Path
@@ -447,8 +479,10 @@ def run_validation(
     unmodelled: Unmodelled | None = Unmodelled(),
     noise_mm: float = 0.01,
 ) -> ValidationRun:
-    """Both validation programs (wc.vcfg, wc.vpln) in the twin. ``controller`` is the model
-    the controller believes: {} before calibration, the identified offsets after.
+    """Run both validation programs (wc.vcfg, wc.vpln) in the twin.
+
+    ``controller`` is the model the controller believes: {} before calibration, the
+    identified offsets after.
     """
     disk.mkdir(parents=True, exist_ok=True)
     cell = Cell(
