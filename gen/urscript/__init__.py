@@ -1,2 +1,3 @@
 """The URScript backend (Universal Robots controllers): the language facts it relies on,
-each with the manual page it was confirmed on (:mod:`wirecal.gen.urscript.facts`)."""
+each with the manual page it was confirmed on (:mod:`wirecal.gen.urscript.facts`).
+"""

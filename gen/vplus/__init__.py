@@ -1,2 +1,3 @@
 """The V+/eV+ backend of the generator: the module's context for the templates in
-``templates/vplus`` and V+ literals written exactly."""
+``templates/vplus`` and V+ literals written exactly.
+"""

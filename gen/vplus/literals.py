@@ -32,7 +32,8 @@ def ppoint(q: Iterable[float]) -> str:
 
 def double_literal(x: float) -> str:
     """An exact-to-1e-15 DOUBLE constant from confirmed syntax only: a ``^D`` integer
-    (UG p. 102) divided by a power of ten held in ``wc.p10[]``."""
+    (UG p. 102) divided by a power of ten held in ``wc.p10[]``.
+    """
     x = float(x)
     if x == 0:
         return "0"

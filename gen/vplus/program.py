@@ -87,7 +87,7 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
 
 
 def data_lines(t: Tables, robot: Robot) -> list[str]:
-    """The assignments of ``wc.data``: every table value as an exact literal."""
+    """Return the assignments of ``wc.data``: every table value as an exact literal."""
     # powers of ten first: every DOUBLE literal below divides by one of them
     lines = [
         "wc.p10[0] = ^D1",
@@ -97,35 +97,19 @@ def data_lines(t: Tables, robot: Robot) -> list[str]:
         f"wc.d2r = {double_literal(np.pi / 180)}",
         f"wc.mpc = {double_literal(robot.encoder.mm_per_count)}",
     ]
-
-    def put(name, idx, value):
-        lines.append(f"{name}[{idx}] = {double_literal(value)}")
-
     for k in range(t.n):
         for name, arr in (("wc.ca", t.ca), ("wc.sa", t.sa), ("wc.la", t.la), ("wc.ld", t.ld)):
-            put(name, k + 1, arr[k])
-    for a in range(3):
-        put("wc.tp", a + 1, t.tool[a])
+            lines.append(_put(name, k + 1, arr[k]))
+    lines += [_put("wc.tp", a + 1, t.tool[a]) for a in range(3)]
     for c in range(len(t.ct)):
-        lines.append(f"; configuration {c}" + (" (theta0)" if c == 0 else ""))
-        for k in range(t.n):
-            idx = c * STRIDE + k + 1
-            put("wc.ct", idx, t.ct[c, k])
-            put("wc.st", idx, t.st[c, k])
-            put("wc.qp", idx, t.qp[c, k])
-        if c:
-            for a in range(3):
-                put("wc.vn", c * AXES + a + 1, t.vn[c, a])
-            put("wc.dn", c, t.dn[c])
-            put("wc.dni", c, t.dni[c])
-            put("wc.dnf", c, t.dnf[c])
+        lines += _configuration_lines(t, c)
     for s in range(len(t.first)):
         lines += [
             f"wc.first[{s + 1}] = {int(t.first[s])}",
             f"wc.count[{s + 1}] = {int(t.count[s])}",
             f"wc.spar[{s + 1}] = {int(t.spar[s])}",
+            _put("wc.om", s + 1, t.omega[s]),
         ]
-        put("wc.om", s + 1, t.omega[s])
     for j, (name, unit) in enumerate(zip(t.names, t.errors.units, strict=True)):
         lines += [
             f"wc.pk[{j + 1}] = {int(t.pk[j])}",
@@ -133,8 +117,32 @@ def data_lines(t: Tables, robot: Robot) -> list[str]:
             f'$wc.pn[{j + 1}] = "{name}"',
             f'$wc.pu[{j + 1}] = "{unit}"',
             f"wc.nom4[{j + 1}] = {round(t.nominal[j] * 10000)}",
+            _put("wc.tb", j + 1, t.errors.boundary_per_internal[j]),
         ]
-        put("wc.tb", j + 1, t.errors.boundary_per_internal[j])
+    return lines
+
+
+def _put(name: str, idx: int, value: float) -> str:
+    return f"{name}[{idx}] = {double_literal(value)}"
+
+
+def _configuration_lines(t: Tables, c: int) -> list[str]:
+    """Return the table values of configuration ``c`` (0 is theta0, which has no wire data)."""
+    lines = [f"; configuration {c}" + (" (theta0)" if c == 0 else "")]
+    for k in range(t.n):
+        idx = c * STRIDE + k + 1
+        lines += [
+            _put("wc.ct", idx, t.ct[c, k]),
+            _put("wc.st", idx, t.st[c, k]),
+            _put("wc.qp", idx, t.qp[c, k]),
+        ]
+    if c:
+        lines += [_put("wc.vn", c * AXES + a + 1, t.vn[c, a]) for a in range(3)]
+        lines += [
+            _put("wc.dn", c, t.dn[c]),
+            _put("wc.dni", c, t.dni[c]),
+            _put("wc.dnf", c, t.dnf[c]),
+        ]
     return lines
 
 
@@ -259,7 +267,8 @@ def _num(x: float) -> str:
 
 def line_ends(text: str, crlf: bool = True) -> str:
     """The module as it goes to the controller: CRLF line ends (ACE writes V+ files so;
-    whether LOAD accepts LF-only is not confirmed), or LF."""
+    whether LOAD accepts LF-only is not confirmed), or LF.
+    """
     return text.replace("\n", "\r\n") if crlf else text
 
 
@@ -272,7 +281,8 @@ def write_module(
 ) -> Path:
     """Write the module (LF text, as :func:`module_text` returns it) into ``out_dir`` with
     :func:`line_ends` (the folder created if missing, and removed again if the write
-    fails); never over one of ``inputs``."""
+    fails); never over one of ``inputs``.
+    """
     path = Path(out_dir) / MODULE_NAME
     with Outputs([path], force=force, inputs=inputs, folder=out_dir) as out:
         out.put(path, line_ends(text, crlf))

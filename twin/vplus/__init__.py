@@ -1,2 +1,3 @@
 """V+/eV+ front end of the twin: the lark grammar, the parser and checker (the same one the
-generator runs on its own output), and the interpreter with V+ semantics."""
+generator runs on its own output), and the interpreter with V+ semantics.
+"""

@@ -61,7 +61,8 @@ class FormError(Exception):
 
 def operands(ins: Instruction) -> list[tuple[str, Expr | None]]:
     """The operands of an executed instruction with their codes, in the order of its
-    form (``None`` for a left-out optional operand); :class:`FormError` otherwise."""
+    form (``None`` for a left-out optional operand); :class:`FormError` otherwise.
+    """
     spec = FORMS.get(ins.name)
     if spec is None:
         raise FormError(f"{ins.name.upper()} is not executed by the twin")

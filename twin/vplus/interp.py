@@ -101,7 +101,8 @@ class Outcome:
 
 class _Ref:
     """A variable passed by reference (or a by-value copy): get/set and whether it is
-    double precision."""
+    double precision.
+    """
 
     __slots__ = ("double", "get", "set")
 
@@ -219,7 +220,8 @@ class _Compiler:
 
     def body(self, steps: list[N.Stmt]) -> Callable:
         """A statement list; a GOTO to one of its labels continues there, a GOTO to any
-        other label leaves it (to an enclosing list that has the label)."""
+        other label leaves it (to an enclosing list that has the label).
+        """
         fns: list[Callable] = []
         labels: dict[int, int] = {}
         for s in steps:
@@ -227,23 +229,9 @@ class _Compiler:
                 labels[s.number] = len(fns)
             else:
                 fns.append(self.stmt(s))
-        n = len(fns)
         if labels:
-
-            def run_labelled(frame):
-                pc = 0
-                while pc < n:
-                    try:
-                        while pc < n:
-                            fns[pc](frame)
-                            pc += 1
-                    except _Goto as g:
-                        if g.label not in labels:
-                            raise
-                        pc = labels[g.label]
-
-            return run_labelled
-        if n == 1:
+            return _labelled(fns, labels)
+        if len(fns) == 1:
             return fns[0]
 
         def run(frame):
@@ -259,80 +247,96 @@ class _Compiler:
         return name in self.double
 
     def storage(self, kind: str, name: str, index_fns):
-        """(getter, setter, double?) for a variable, compiled."""
-        interp = self.i
-        if kind == "n" and name in interp.transforms:
+        """Compile the (getter, setter) of a variable."""
+        if kind == "n" and name in self.i.transforms:
             kind = "t"
-        rounding = kind == "n" and not self.is_double(name)
 
         def undefined():
             raise VError(-406, f"*Undefined value* {name}")
 
         if name in self.params:
-            slot = self.params[name]
-            if index_fns is None:
-
-                def get(frame):
-                    ref = frame[slot]
-                    if ref is None:
-                        undefined()
-                    return ref.get()
-
-                def put(frame, v):
-                    ref = frame[slot]
-                    if ref is None:
-                        ref = frame[slot] = _Ref(*interp._value_cell(None))
-                    ref.set(v if ref.double or kind != "n" else f32(v))
-
-                return get, put
-            ix = self._indexer(index_fns)
-
-            def aget(frame):
-                arr = frame[slot].get()
-                try:
-                    return arr[ix(frame)]
-                except KeyError:
-                    undefined()
-
-            def aput(frame, v):
-                frame[slot].get()[ix(frame)] = v if kind != "n" else f32(v)
-
-            return aget, aput
+            return self._param_storage(kind, self.params[name], index_fns, undefined)
+        rounding = kind == "n" and not self.is_double(name)
         if name in self.autos:
-            slot = self.autos[name]
-            if index_fns is None:
+            return self._auto_storage(rounding, self.autos[name], index_fns, undefined)
+        return self._shared_storage(rounding, name, index_fns, undefined)
 
-                def get(frame):
-                    v = frame[slot]
-                    if v is None:
-                        undefined()
-                    return v
+    def _param_storage(self, kind: str, slot: int, index_fns, undefined):
+        """Compile the access to a parameter: a reference in the frame."""
+        interp = self.i
+        if index_fns is None:
 
-                if rounding:
-
-                    def put(frame, v):
-                        frame[slot] = f32(v)
-                else:
-
-                    def put(frame, v):
-                        frame[slot] = v
-
-                return get, put
-            ix = self._indexer(index_fns)
-
-            def aget(frame):
-                arr = frame[slot]
-                try:
-                    return arr[ix(frame)]
-                except (KeyError, TypeError):
+            def get(frame):
+                ref = frame[slot]
+                if ref is None:
                     undefined()
+                return ref.get()
 
-            def aput(frame, v):
-                if frame[slot] is None:
-                    frame[slot] = {}
-                frame[slot][ix(frame)] = f32(v) if rounding else v
+            def put(frame, v):
+                ref = frame[slot]
+                if ref is None:
+                    ref = frame[slot] = _Ref(*interp._value_cell(None))
+                ref.set(v if ref.double or kind != "n" else f32(v))
 
-            return aget, aput
+            return get, put
+        ix = self._indexer(index_fns)
+
+        def aget(frame):
+            arr = frame[slot].get()
+            try:
+                return arr[ix(frame)]
+            except KeyError:
+                undefined()
+
+        def aput(frame, v):
+            frame[slot].get()[ix(frame)] = v if kind != "n" else f32(v)
+
+        return aget, aput
+
+    def _auto_storage(self, rounding: bool, slot: int, index_fns, undefined):
+        """Compile the access to an AUTO variable: a value in the frame."""
+        if index_fns is None:
+            return self._auto_scalar(rounding, slot, undefined)
+        ix = self._indexer(index_fns)
+
+        def aget(frame):
+            arr = frame[slot]
+            try:
+                return arr[ix(frame)]
+            except (KeyError, TypeError):
+                undefined()
+
+        def aput(frame, v):
+            if frame[slot] is None:
+                frame[slot] = {}
+            frame[slot][ix(frame)] = f32(v) if rounding else v
+
+        return aget, aput
+
+    @staticmethod
+    def _auto_scalar(rounding: bool, slot: int, undefined):
+        """Compile the access to an AUTO variable without index."""
+
+        def get(frame):
+            v = frame[slot]
+            if v is None:
+                undefined()
+            return v
+
+        if rounding:
+
+            def put(frame, v):
+                frame[slot] = f32(v)
+        else:
+
+            def put(frame, v):
+                frame[slot] = v
+
+        return get, put
+
+    def _shared_storage(self, rounding: bool, name: str, index_fns, undefined):
+        """Compile the access to a LOCAL or global variable: a value in a dictionary."""
+        interp = self.i
         vals, arrs = (
             (self.local_vals, self.local_arr)
             if name in self.locals
@@ -389,7 +393,8 @@ class _Compiler:
 
     def ref_of(self, e: N.Expr | None) -> Callable:
         """A CALL argument: a reference for a variable or array element, a copy for an
-        expression (User's Guide p. 42–45); ``None`` for an omitted argument."""
+        expression (User's Guide p. 42–45); ``None`` for an omitted argument.
+        """
         interp = self.i
         if e is None:
             return lambda frame: None
@@ -493,38 +498,7 @@ class _Compiler:
         a, da = self.expr(e.left)
         b, db = self.expr(e.right)
         double = da or db
-        interp = self.i
-        if op == "+":
-
-            def f(frame):
-                interp.ops["add"] += 1
-                return a(frame) + b(frame)
-        elif op == "-":
-
-            def f(frame):
-                interp.ops["add"] += 1
-                return a(frame) - b(frame)
-        elif op == "*":
-
-            def f(frame):
-                interp.ops["mul"] += 1
-                return a(frame) * b(frame)
-        elif op == "/":
-
-            def f(frame):
-                interp.ops["div"] += 1
-                d = b(frame)
-                if d == 0:
-                    raise VError(-409, "*Division by zero*")
-                return a(frame) / d
-        else:  # MOD
-
-            def f(frame):
-                d = b(frame)
-                if d == 0:
-                    raise VError(-409, "*Division by zero*")
-                return math.fmod(a(frame), d)
-
+        f = _arithmetic(self.i, op, a, b)
         return (f, True) if double else (self._single(f), False)
 
     @staticmethod
@@ -542,7 +516,8 @@ class _Compiler:
         return (lambda frame: base(frame).shifted(dx(frame), dy(frame), dz(frame))), True
 
     @expr.register
-    def _(self, e: N.Func):
+    def _(self, e: N.Func):  # noqa: C901 - one independent branch per V+ function, a flat table
+        """Compile a V+ function call."""
         name, args = e.name, e.args
         cell = self.i.cell
         if name not in FUNCTIONS:
@@ -927,9 +902,72 @@ _COMPARE = {
 }
 
 
+def _labelled(fns: list[Callable], labels: dict[int, int]) -> Callable:
+    """Compile a statement list with labels: a GOTO to one of them continues there."""
+    n = len(fns)
+
+    def run_labelled(frame):
+        pc = 0
+        while pc < n:
+            try:
+                while pc < n:
+                    fns[pc](frame)
+                    pc += 1
+            except _Goto as g:
+                if g.label not in labels:
+                    raise
+                pc = labels[g.label]
+
+    return run_labelled
+
+
+def _arithmetic(interp, op: str, a: Callable, b: Callable) -> Callable:
+    """Compile ``a op b`` for +, -, *, / and MOD, counting the operations as executed."""
+    if op == "+":
+
+        def f(frame):
+            interp.ops["add"] += 1
+            return a(frame) + b(frame)
+    elif op == "-":
+
+        def f(frame):
+            interp.ops["add"] += 1
+            return a(frame) - b(frame)
+    elif op == "*":
+
+        def f(frame):
+            interp.ops["mul"] += 1
+            return a(frame) * b(frame)
+    else:
+        f = _division(interp, op, a, b)
+    return f
+
+
+def _division(interp, op: str, a: Callable, b: Callable) -> Callable:
+    """Compile ``a / b`` or ``a MOD b``; a zero divisor is V+ error -409."""
+    if op == "/":
+
+        def f(frame):
+            interp.ops["div"] += 1
+            d = b(frame)
+            if d == 0:
+                raise VError(-409, "*Division by zero*")
+            return a(frame) / d
+    else:  # MOD
+
+        def f(frame):
+            d = b(frame)
+            if d == 0:
+                raise VError(-409, "*Division by zero*")
+            return math.fmod(a(frame), d)
+
+    return f
+
+
 def _is_keyword_value(v: N.Var) -> bool:
     """A name without index that is a V+ keyword is the keyword (the checker allows
-    only value keywords there), never a variable."""
+    only value keywords there), never a variable.
+    """
     return v.index is None and keyword(v.name) is not None
 
 

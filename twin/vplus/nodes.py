@@ -41,14 +41,15 @@ class Str(Expr):
 @dataclass(slots=True)
 class Var(Expr):
     """A variable (or, when its name is a V+ constant such as TRUE, PI or NULL, that
-    constant), with its index expressions when it is an array element."""
+    constant), with its index expressions when it is an array element.
+    """
 
     name: str
     index: list[Expr] | None = None
 
     @property
     def kind(self) -> str:
-        """n (real or transformation), s ($), l (#), b (%)."""
+        """N (real or transformation), s ($), l (#), b (%)."""
         return _PREFIX_KIND.get(self.name[:1], "n")
 
 
@@ -131,7 +132,8 @@ class Format(Expr):
 @dataclass(slots=True)
 class Group(Expr):
     """A parenthesised list of instruction operands, e.g. ``(lun, 4)`` in ATTACH;
-    ``None`` marks an omitted operand."""
+    ``None`` marks an omitted operand.
+    """
 
     items: list[Expr | None]
 
@@ -184,7 +186,8 @@ class Call(Stmt):
 @dataclass(slots=True)
 class Clause(_Node):
     """One comma-separated operand of a generic instruction: leading format
-    specifiers, the operands written next to each other, and ``= value``."""
+    specifiers, the operands written next to each other, and ``= value``.
+    """
 
     formats: list[str]
     items: list[Expr]
@@ -194,7 +197,8 @@ class Clause(_Node):
 @dataclass(slots=True)
 class Instruction(Stmt):
     """Any V+ instruction without a structure of its own (MOVE, TYPE, SIGNAL, ...):
-    its name and its operands; ``None`` marks an empty operand (``WAIT.EVENT , 3``)."""
+    its name and its operands; ``None`` marks an empty operand (``WAIT.EVENT , 3``).
+    """
 
     name: str
     clauses: list[Clause | None]

@@ -111,7 +111,8 @@ def _parser() -> Lark:
 
 class _Terminals(Transformer):
     """Terminals and the rules whose children need shaping; the rules named after a
-    node class are added by :func:`lark.ast_utils.create_transformer`."""
+    node class are added by :func:`lark.ast_utils.create_transformer`.
+    """
 
     def NAME(self, t):
         return str(t).lower()
@@ -675,7 +676,8 @@ class _Checker:
     def operand(self, e: N.Expr) -> None:
         """An operand of an instruction in a form the twin does not execute: a bare
         keyword is a word of the instruction (ALWAYS, POWER, ROBOT); a function call
-        whose name is no function names a program (EXECUTE 1 a.main())."""
+        whose name is no function names a program (EXECUTE 1 a.main()).
+        """
         if isinstance(e, N.Var) and e.index is None and keyword(e.name) is not None:
             return
         if isinstance(e, N.Func) and not is_kind(e.name, "function") and e.name not in FUNCTIONS:
@@ -721,7 +723,8 @@ class _Checker:
     @singledispatchmethod
     def kind(self, e: N.Expr) -> str:
         """The kind of an expression: n, s, l, b, t, or ? (not known, or a problem
-        already reported)."""
+        already reported).
+        """
         self.err(f"{type(e).__name__.lower()} is not a value here")
         return "?"
 
