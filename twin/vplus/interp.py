@@ -516,75 +516,77 @@ class _Compiler:
         return (lambda frame: base(frame).shifted(dx(frame), dy(frame), dz(frame))), True
 
     @expr.register
-    def _(self, e: N.Func):  # noqa: C901 - one independent branch per V+ function, a flat table
+    def _(self, e: N.Func):
         """Compile a V+ function call."""
         name, args = e.name, e.args
-        cell = self.i.cell
         if name not in FUNCTIONS:
             return _refuse(f"function {name.upper()}"), False
         if name == "defined":
-            get, _ = self.var(args[0])
-
-            def defined(frame):
-                try:
-                    get(frame)
-                    return -1.0
-                except VError:
-                    return 0.0
-
-            return defined, False
+            return self._defined(args[0]), False
         if name == "device":
-            unit = self.expr(args[1])[0]
-            sel = self.expr(args[3])[0]
-            _, put_err = self.var(args[2])
-
-            def device(frame):
-                value, err = cell.device(int(unit(frame)), int(sel(frame)))
-                put_err(frame, err)
-                return value
-
-            return device, False
-        zero = lambda frame: 0.0  # noqa: E731 - an omitted TRANS argument
-        fns = [self.expr(a) if a is not None else (zero, False) for a in args]
+            return self._device(args), False
+        fns = [self.expr(a) if a is not None else (_zero, False) for a in args]
         double = any(d for _, d in fns)
         f = [x for x, _ in fns]
-        interp = self.i
+        if name in _MATH_FUNCTIONS:
+            return self._math_function(name, f, double), double
+        return self._controller_function(name, args, f)
+
+    def _defined(self, var: N.Var) -> Callable:
+        """Compile DEFINED(var): -1 if the variable has a value, else 0."""
+        get, _ = self.var(var)
+
+        def defined(frame):
+            try:
+                get(frame)
+                return -1.0
+            except VError:
+                return 0.0
+
+        return defined
+
+    def _device(self, args: list) -> Callable:
+        """Compile DEVICE(type, unit, error, select): the value, the error into its variable."""
+        cell = self.i.cell
+        unit = self.expr(args[1])[0]
+        sel = self.expr(args[3])[0]
+        _, put_err = self.var(args[2])
+
+        def device(frame):
+            value, err = cell.device(int(unit(frame)), int(sel(frame)))
+            put_err(frame, err)
+            return value
+
+        return device
+
+    def _math_function(self, name: str, f: list[Callable], double: bool) -> Callable:
+        """Compile INT, ABS, SQRT, MIN, MAX, SIN, COS or ATAN2 (angles in degrees)."""
         if name == "int":
-            return (lambda frame: float(math.trunc(f[0](frame)))), double
+            return lambda frame: float(math.trunc(f[0](frame)))
         if name == "abs":
-            return (lambda frame: abs(f[0](frame))), double
+            return lambda frame: abs(f[0](frame))
         if name == "sqrt":
-
-            def sqrt(frame):
-                v = f[0](frame)
-                if v < 0:
-                    raise VError(-413, "*Negative square root*")
-                interp.ops["sqrt"] += 1
-                return math.sqrt(v)
-
-            return (sqrt if double else self._single(sqrt)), double
+            sqrt = _sqrt(self.i, f[0])
+            return sqrt if double else self._single(sqrt)
         if name == "min":
-            return (lambda frame: min(f[0](frame), f[1](frame))), double
+            return lambda frame: min(f[0](frame), f[1](frame))
         if name == "max":
-            return (lambda frame: max(f[0](frame), f[1](frame))), double
+            return lambda frame: max(f[0](frame), f[1](frame))
         if name in ("sin", "cos"):
             trig = math.sin if name == "sin" else math.cos
-            return (lambda frame: trig(math.radians(f[0](frame)))), double
-        if name == "atan2":
-            return (lambda frame: math.degrees(math.atan2(f[0](frame), f[1](frame)))), double
+            return lambda frame: trig(math.radians(f[0](frame)))
+        assert name == "atan2"
+        return lambda frame: math.degrees(math.atan2(f[0](frame), f[1](frame)))
+
+    def _controller_function(self, name: str, args: list, f: list[Callable]):
+        """Compile a string, location or cell function: (function, is_double)."""
+        cell = self.i.cell
         if name == "iostat":
             return (lambda frame: cell.iostat(int(f[0](frame)))), False
         if name == "$error":
             return (lambda frame: cell.error_text(int(f[0](frame)))), True
         if name == "$chr":
-
-            def chr_(frame):
-                c = int(f[0](frame))
-                if not 0 <= c <= 255:
-                    raise VError(-410, f"*Illegal value* $CHR({c})")
-                return chr(c)
-
-            return chr_, True
+            return _chr(f[0]), True
         if name == "len":
             return (lambda frame: float(len(f[0](frame)))), False
         if name == "belt":
@@ -593,7 +595,7 @@ class _Compiler:
         if name == "#ppoint":
             return (lambda frame: tuple(f32(g(frame)) for g in f)), True
         if name == "trans":
-            f += [zero] * (6 - len(f))
+            f += [_zero] * (6 - len(f))
             return (lambda frame: Trans(*(f32(g(frame)) for g in f))), True
         if name == "sig":
             return (lambda frame: cell.sig(int(f[0](frame)))), False
@@ -962,6 +964,39 @@ def _division(interp, op: str, a: Callable, b: Callable) -> Callable:
             return math.fmod(a(frame), d)
 
     return f
+
+
+_MATH_FUNCTIONS = frozenset({"int", "abs", "sqrt", "min", "max", "sin", "cos", "atan2"})
+
+
+def _zero(frame) -> float:
+    """Return 0: an omitted TRANS argument."""
+    return 0.0
+
+
+def _sqrt(interp, x: Callable) -> Callable:
+    """Compile SQRT; a negative argument is V+ error -413."""
+
+    def sqrt(frame):
+        v = x(frame)
+        if v < 0:
+            raise VError(-413, "*Negative square root*")
+        interp.ops["sqrt"] += 1
+        return math.sqrt(v)
+
+    return sqrt
+
+
+def _chr(x: Callable) -> Callable:
+    """Compile $CHR; a code outside 0..255 is V+ error -410."""
+
+    def chr_(frame):
+        c = int(x(frame))
+        if not 0 <= c <= 255:
+            raise VError(-410, f"*Illegal value* $CHR({c})")
+        return chr(c)
+
+    return chr_
 
 
 def _is_keyword_value(v: N.Var) -> bool:
