@@ -232,75 +232,104 @@ def parse_module(text: str, source: str = "<module>", *, external_calls: bool = 
     ``external_calls``: CALLs to programs that are not in this module are allowed (they
     may be loaded from another file), as LOAD allows them.
     """
-    problems: list[str] = []
-    programs: dict[str, Program] = {}
-    current: tuple[str, int, list[Param], list[N.Stmt]] | None = None
-    section: str | None = None  # inside a data section (.LOCATIONS, .REALS, ...)
+    reader = _ModuleReader(source)
     for n, raw in enumerate(_LINES.split(text), 1):
-        line = _strip_comment(raw).strip()
-        if not line:
-            continue
-        word = line.split()[0].upper()
-        if section is not None:
-            if word == ".END":
-                section = None
-            continue
-        if word == ".PROGRAM":
-            m = _HEADER.match(line)
-            if not m:
-                problems.append(f"{source}:{n}: malformed .PROGRAM line")
-                continue
-            if current:
-                problems.append(
-                    f"{source}:{n}: {current[0]}: missing .END before the next .PROGRAM"
-                )
-                _finish(current, programs, source, problems)
-            name = m.group(1).lower()
-            params = _params(m.group(2) or "", source, n, name, problems)
-            current = (name, n, params, [])
-            continue
-        if word == ".END":
-            if not current:
-                problems.append(f"{source}:{n}: .END without .PROGRAM")
-                continue
-            _finish(current, programs, source, problems)
-            current = None
-            continue
-        if word.startswith(".") and not current:
-            section = word  # a data section: its values are not program steps
-            continue
-        if not current:
-            problems.append(f"{source}:{n}: code outside a program: {line}")
-            continue
-        m = _LABEL.match(line)
-        if m:
-            line = line[m.end() :].strip()
-            current[3].append(N.Label(int(m.group(1)), line=n))
-            if not line:
-                continue
-        try:
-            step = parse_step(line)
-        except (UnexpectedToken, UnexpectedCharacters) as exc:
-            problems.append(f"{source}:{n}: {current[0]}: {_explain(line, exc)}")
-            continue
-        except LarkError as exc:  # pragma: no cover - grammar-level failure
-            problems.append(f"{source}:{n}: {current[0]}: cannot parse: {exc}")
-            continue
-        step.line = n
-        current[3].append(step)
-    if current:
-        problems.append(
-            f"{source}: {current[0]}: missing .END (program starts on line {current[1]})"
-        )
-        _finish(current, programs, source, problems)
-    if section is not None:
-        problems.append(f"{source}: data section {section} is never closed with .END")
+        reader.line(n, _strip_comment(raw).strip())
+    problems, programs = reader.close()
     _check_module(programs, source, problems, external_calls)
     if not programs and not problems:
         problems.append(f"{source}: no .PROGRAM in the file")
     if problems:
         raise WirecalError(problems)
     return Module(source, programs)
+
+
+class _ModuleReader:
+    """The line-by-line state of :func:`parse_module`: the program or data section being read."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+        self.problems: list[str] = []
+        self.programs: dict[str, Program] = {}
+        self.current: tuple[str, int, list[Param], list[N.Stmt]] | None = None
+        self.section: str | None = None  # inside a data section (.LOCATIONS, .REALS, ...)
+
+    def line(self, n: int, line: str) -> None:
+        """Read line ``n`` (comment stripped)."""
+        if not line:
+            return
+        word = line.split()[0].upper()
+        if self.section is not None:
+            if word == ".END":
+                self.section = None
+        elif word == ".PROGRAM":
+            self.start(n, line)
+        elif word == ".END":
+            self.end(n)
+        elif self.current:
+            self.step(n, line)
+        elif word.startswith("."):
+            self.section = word  # a data section: its values are not program steps
+        else:
+            self.problems.append(f"{self.source}:{n}: code outside a program: {line}")
+
+    def start(self, n: int, line: str) -> None:
+        """Read a .PROGRAM line."""
+        m = _HEADER.match(line)
+        if not m:
+            self.problems.append(f"{self.source}:{n}: malformed .PROGRAM line")
+            return
+        if self.current:
+            self.problems.append(
+                f"{self.source}:{n}: {self.current[0]}: missing .END before the next .PROGRAM"
+            )
+            _finish(self.current, self.programs, self.source, self.problems)
+        name = m.group(1).lower()
+        params = _params(m.group(2) or "", self.source, n, name, self.problems)
+        self.current = (name, n, params, [])
+
+    def end(self, n: int) -> None:
+        """Read the .END of a program."""
+        if not self.current:
+            self.problems.append(f"{self.source}:{n}: .END without .PROGRAM")
+            return
+        _finish(self.current, self.programs, self.source, self.problems)
+        self.current = None
+
+    def step(self, n: int, line: str) -> None:
+        """Read a program step, with its label if it has one."""
+        assert self.current is not None
+        name, steps = self.current[0], self.current[3]
+        m = _LABEL.match(line)
+        if m:
+            line = line[m.end() :].strip()
+            steps.append(N.Label(int(m.group(1)), line=n))
+            if not line:
+                return
+        try:
+            step = parse_step(line)
+        except (UnexpectedToken, UnexpectedCharacters) as exc:
+            self.problems.append(f"{self.source}:{n}: {name}: {_explain(line, exc)}")
+            return
+        except LarkError as exc:  # pragma: no cover - grammar-level failure
+            self.problems.append(f"{self.source}:{n}: {name}: cannot parse: {exc}")
+            return
+        step.line = n
+        steps.append(step)
+
+    def close(self) -> tuple[list[str], dict[str, Program]]:
+        """Finish the file: return the problems and the programs read."""
+        if self.current:
+            self.problems.append(
+                f"{self.source}: {self.current[0]}: missing .END "
+                f"(program starts on line {self.current[1]})"
+            )
+            _finish(self.current, self.programs, self.source, self.problems)
+        if self.section is not None:
+            self.problems.append(
+                f"{self.source}: data section {self.section} is never closed with .END"
+            )
+        return self.problems, self.programs
 
 
 def _strip_comment(line: str) -> str:
@@ -349,74 +378,107 @@ _OPENERS = (N.IfStart, N.ForStart, N.WhileStart, N.DoStart, N.CaseStart)
 
 def _blocks(prog: str, steps: list[N.Stmt], source: str, problems: list[str]):
     """Nest the line statements into blocks; check declarations come first."""
-    declared: dict[str, N.Decl] = {}
-    root: list[N.Stmt] = []
-    # (block node, the list it was appended to, the list now filled)
-    stack: list[tuple[N.Stmt, list[N.Stmt]]] = []
-    target: list[N.Stmt] | None = root
-    executable = False
+    nester = _Nester(prog, source, problems)
     for step in steps:
-        where = f"{source}:{step.line}: {prog}"
+        nester.add(step)
+    nester.unclosed()
+    return nester.root, nester.declared
+
+
+class _Nester:
+    """The state of :func:`_blocks`: the open blocks and the statement list being filled."""
+
+    def __init__(self, prog: str, source: str, problems: list[str]) -> None:
+        self.prog, self.source, self.problems = prog, source, problems
+        self.declared: dict[str, N.Decl] = {}
+        self.root: list[N.Stmt] = []
+        # (block node, the list it was appended to)
+        self.stack: list[tuple[N.Stmt, list[N.Stmt]]] = []
+        self.target: list[N.Stmt] | None = self.root  # the list now filled
+        self.executable = False
+
+    def add(self, step: N.Stmt) -> None:
+        """Put one line statement in its place."""
+        where = f"{self.source}:{step.line}: {self.prog}"
         if isinstance(step, N.Decl):
-            if executable:
-                problems.append(f"{where}: declaration after executable steps")
-            for item in step.items:
-                declared[item.name] = step
-            continue
+            self.declare(step, where)
+            return
         if not isinstance(step, N.Label):
-            executable = True
+            self.executable = True
         if isinstance(step, _OPENERS):
-            node = _open(step)
-            if target is None:
-                problems.append(f"{where}: a step between CASE and its first VALUE")
-            else:
-                target.append(node)
-            stack.append((node, target if target is not None else []))
-            target = _first_list(node)
-            continue
-        if isinstance(step, N.ElseLine):
-            if not stack or not isinstance(stack[-1][0], N.If):
-                problems.append(f"{where}: ELSE without IF")
-                continue
-            target = stack[-1][0].orelse
-            continue
-        if isinstance(step, (N.ValueLine, N.AnyLine)):
-            word = "VALUE" if isinstance(step, N.ValueLine) else "ANY"
-            if not stack or not isinstance(stack[-1][0], N.Case):
-                problems.append(f"{where}: {word} outside CASE")
-                continue
-            branch = N.Branch(step.values if isinstance(step, N.ValueLine) else None, [])
-            stack[-1][0].branches.append(branch)
-            target = branch.body
-            continue
-        if isinstance(step, (N.EndLine, N.UntilLine)):
-            until = isinstance(step, N.UntilLine)
-            top = stack[-1][0] if stack else None
-            if until and not isinstance(top, N.DoUntil):
-                problems.append(f"{where}: UNTIL without DO")
-                continue
-            if not until and (top is None or isinstance(top, N.DoUntil)):
-                problems.append(
-                    f"{where}: END inside a DO block (DO closes with UNTIL)"
-                    if top is not None
-                    else f"{where}: END without IF, FOR, WHILE or CASE"
-                )
-                continue
-            node, target = stack.pop()
-            if isinstance(node, N.DoUntil) and isinstance(step, N.UntilLine):
-                node.cond = step.cond
-            continue
-        if target is None:
-            problems.append(f"{where}: a step between CASE and its first VALUE")
-            continue
-        target.append(step)
-    opener = {N.If: "IF", N.For: "FOR", N.While: "WHILE", N.DoUntil: "DO", N.Case: "CASE"}
-    for node, _ in stack:
-        closer = "UNTIL" if isinstance(node, N.DoUntil) else "END"
-        problems.append(
-            f"{source}:{node.line}: {prog}: {opener[type(node)]} is never closed with {closer}"
-        )
-    return root, declared
+            self.open(step, where)
+        elif isinstance(step, N.ElseLine):
+            self.orelse(where)
+        elif isinstance(step, (N.ValueLine, N.AnyLine)):
+            self.branch(step, where)
+        elif isinstance(step, (N.EndLine, N.UntilLine)):
+            self.close(step, where)
+        elif self.target is None:
+            self.problems.append(f"{where}: a step between CASE and its first VALUE")
+        else:
+            self.target.append(step)
+
+    def declare(self, step: N.Decl, where: str) -> None:
+        """Record a declaration; it must come before the executable steps."""
+        if self.executable:
+            self.problems.append(f"{where}: declaration after executable steps")
+        for item in step.items:
+            self.declared[item.name] = step
+
+    def open(self, step: N.Stmt, where: str) -> None:
+        """Open a block (IF, FOR, WHILE, DO, CASE)."""
+        node = _open(step)
+        if self.target is None:
+            self.problems.append(f"{where}: a step between CASE and its first VALUE")
+        else:
+            self.target.append(node)
+        self.stack.append((node, self.target if self.target is not None else []))
+        self.target = _first_list(node)
+
+    def orelse(self, where: str) -> None:
+        """Continue an IF block with its ELSE list."""
+        if not self.stack or not isinstance(self.stack[-1][0], N.If):
+            self.problems.append(f"{where}: ELSE without IF")
+            return
+        self.target = self.stack[-1][0].orelse
+
+    def branch(self, step: N.ValueLine | N.AnyLine, where: str) -> None:
+        """Start a VALUE or ANY branch of a CASE block."""
+        word = "VALUE" if isinstance(step, N.ValueLine) else "ANY"
+        if not self.stack or not isinstance(self.stack[-1][0], N.Case):
+            self.problems.append(f"{where}: {word} outside CASE")
+            return
+        branch = N.Branch(step.values if isinstance(step, N.ValueLine) else None, [])
+        self.stack[-1][0].branches.append(branch)
+        self.target = branch.body
+
+    def close(self, step: N.EndLine | N.UntilLine, where: str) -> None:
+        """Close the innermost block with END, or a DO block with UNTIL."""
+        until = isinstance(step, N.UntilLine)
+        top = self.stack[-1][0] if self.stack else None
+        if until and not isinstance(top, N.DoUntil):
+            self.problems.append(f"{where}: UNTIL without DO")
+            return
+        if not until and (top is None or isinstance(top, N.DoUntil)):
+            self.problems.append(
+                f"{where}: END inside a DO block (DO closes with UNTIL)"
+                if top is not None
+                else f"{where}: END without IF, FOR, WHILE or CASE"
+            )
+            return
+        node, self.target = self.stack.pop()
+        if isinstance(node, N.DoUntil) and isinstance(step, N.UntilLine):
+            node.cond = step.cond
+
+    def unclosed(self) -> None:
+        """Report the blocks still open at the end of the program."""
+        opener = {N.If: "IF", N.For: "FOR", N.While: "WHILE", N.DoUntil: "DO", N.Case: "CASE"}
+        for node, _ in self.stack:
+            closer = "UNTIL" if isinstance(node, N.DoUntil) else "END"
+            self.problems.append(
+                f"{self.source}:{node.line}: {self.prog}: "
+                f"{opener[type(node)]} is never closed with {closer}"
+            )
 
 
 def _open(step: N.Stmt) -> N.Stmt:
