@@ -619,18 +619,19 @@ class _Checker:
                 f"CALL {s.program}: {len(s.args)} arguments; {s.program} takes {len(prog.params)}"
             )
         for a, p in zip(s.args, prog.params, strict=False):
-            if a is None:
-                continue  # omitted: undefined in the callee (p. 42–45)
-            got = self.argument(a)
-            if isinstance(a, N.ArrayArg):
-                if not p.is_array or a.kind != p.kind:
-                    self.err(f"CALL {s.program}: argument {a.name}[] does not match the parameter")
-            elif p.is_array:
-                self.err(f"CALL {s.program}: {p.name} is an array; pass {p.name}[]")
-            elif got not in ("?", p.kind) and not (got == "t" and p.kind == "n"):
-                self.err(
-                    f"CALL {s.program}: a {_word(got)} where {s.program} takes a {_word(p.kind)}"
-                )
+            if a is not None:  # omitted: undefined in the callee (p. 42–45)
+                self.call_argument(s, a, p)
+
+    def call_argument(self, s: N.Call, a: N.Expr, p: Param) -> None:
+        """Check a CALL argument against the parameter it is passed to."""
+        got = self.argument(a)
+        if isinstance(a, N.ArrayArg):
+            if not p.is_array or a.kind != p.kind:
+                self.err(f"CALL {s.program}: argument {a.name}[] does not match the parameter")
+        elif p.is_array:
+            self.err(f"CALL {s.program}: {p.name} is an array; pass {p.name}[]")
+        elif got not in ("?", p.kind) and not (got == "t" and p.kind == "n"):
+            self.err(f"CALL {s.program}: a {_word(got)} where {s.program} takes a {_word(p.kind)}")
 
     def argument(self, a: N.Expr) -> str:
         if isinstance(a, N.ArrayArg):
@@ -695,45 +696,59 @@ class _Checker:
         except FormError:
             ops = None
         if ops is None:  # a form the twin does not execute: check names and functions
-            for c in s.clauses:
-                if c is None:
-                    continue
-                for e in c.items:
-                    self.operand(e)
-                if c.value is not None:
-                    self.kind(c.value)
+            self.unexecuted(s)
             return
         target_kind = "?"
         for code, e in ops:
             if e is None:
                 continue
             if code in ("L", "V", "B"):
-                if not isinstance(e, N.Var):
-                    self.err(f"{s.name.upper()} needs a variable there")
-                    continue
-                self.target(e)
-                target_kind = self.var_kind(e)
-                want = {"L": ("l", "t"), "B": ("b",), "V": (target_kind,)}[code]
-                if target_kind not in want:
-                    self.err(
-                        f"type-prefix misuse: {s.name.upper()} needs a "
-                        f"{'location' if code == 'L' else 'belt (%)'} variable"
-                    )
-            elif code == "W":
-                if not isinstance(e, N.Var) or e.index is not None:
-                    self.err(f"{s.name.upper()} needs a word there")
-            elif code == "e":
-                self.need(e, target_kind)
-            elif code == "l":
-                got = self.kind(e)
-                if got not in ("?", "l", "t"):
-                    self.err(f"type-prefix misuse: {s.name.upper()} needs a location")
-            elif code == "*":
-                got = self.kind(e)
-                if got not in ("?", "n", "s"):
-                    self.err(f"{s.name.upper()} cannot print a {_word(got)}")
+                target_kind = self.written_operand(s, code, e, target_kind)
             else:
-                self.need(e, code)
+                self.read_operand(s, code, e, target_kind)
+
+    def unexecuted(self, s: N.Instruction) -> None:
+        """Check the names and functions of an instruction the twin does not execute."""
+        for c in s.clauses:
+            if c is None:
+                continue
+            for e in c.items:
+                self.operand(e)
+            if c.value is not None:
+                self.kind(c.value)
+
+    def written_operand(self, s: N.Instruction, code: str, e: N.Expr, target_kind: str) -> str:
+        """Check an operand the instruction writes (code L, V or B); return its kind."""
+        if not isinstance(e, N.Var):
+            self.err(f"{s.name.upper()} needs a variable there")
+            return target_kind
+        self.target(e)
+        target_kind = self.var_kind(e)
+        want = {"L": ("l", "t"), "B": ("b",), "V": (target_kind,)}[code]
+        if target_kind not in want:
+            self.err(
+                f"type-prefix misuse: {s.name.upper()} needs a "
+                f"{'location' if code == 'L' else 'belt (%)'} variable"
+            )
+        return target_kind
+
+    def read_operand(self, s: N.Instruction, code: str, e: N.Expr, target_kind: str) -> None:
+        """Check an operand the instruction reads (code W, e, l, * or a kind)."""
+        if code == "W":
+            if not isinstance(e, N.Var) or e.index is not None:
+                self.err(f"{s.name.upper()} needs a word there")
+        elif code == "e":
+            self.need(e, target_kind)
+        elif code == "l":
+            got = self.kind(e)
+            if got not in ("?", "l", "t"):
+                self.err(f"type-prefix misuse: {s.name.upper()} needs a location")
+        elif code == "*":
+            got = self.kind(e)
+            if got not in ("?", "n", "s"):
+                self.err(f"{s.name.upper()} cannot print a {_word(got)}")
+        else:
+            self.need(e, code)
 
     def operand(self, e: N.Expr) -> None:
         """An operand of an instruction in a form the twin does not execute: a bare
@@ -841,12 +856,7 @@ class _Checker:
     def _(self, e: N.Func) -> str:
         spec = FUNCTIONS.get(e.name)
         if spec is None:
-            if not is_kind(e.name, "function"):
-                self.err(f"unknown function {e.name.upper()}")
-            for a in e.args:
-                if a is not None:
-                    self.kind(a)
-            return {"$": "s", "#": "l"}.get(e.name[:1], "?")
+            return self.unknown_function(e)
         kinds, required, result = spec
         given = len(e.args)
         if not required <= given <= len(kinds):
@@ -857,22 +867,35 @@ class _Checker:
             )
             return result
         for k, (a, want) in enumerate(zip(e.args, kinds, strict=False), 1):
-            if a is None:
-                if e.name not in OMITTABLE:
-                    self.err(f"{e.name.upper()}: argument {k} is missing")
-            elif want == "v":
-                if not isinstance(a, N.Var):
-                    self.err(f"{e.name.upper()} needs a variable")
-                else:
-                    self.target(a)
-            elif want == "nv":
-                if not isinstance(a, N.Var) or a.kind != "n":
-                    self.err(f"{e.name.upper()} needs a numeric variable there")
-                else:
-                    self.target(a)
-            else:
-                self.need(a, want)
+            self.function_argument(e, k, a, want)
         return result
+
+    def unknown_function(self, e: N.Func) -> str:
+        """Check a function the twin does not know; return the kind its name prefix says."""
+        if not is_kind(e.name, "function"):
+            self.err(f"unknown function {e.name.upper()}")
+        for a in e.args:
+            if a is not None:
+                self.kind(a)
+        return {"$": "s", "#": "l"}.get(e.name[:1], "?")
+
+    def function_argument(self, e: N.Func, k: int, a: N.Expr | None, want: str) -> None:
+        """Check argument ``k`` of a known function against the kind it wants."""
+        if a is None:
+            if e.name not in OMITTABLE:
+                self.err(f"{e.name.upper()}: argument {k} is missing")
+        elif want == "v":
+            if not isinstance(a, N.Var):
+                self.err(f"{e.name.upper()} needs a variable")
+            else:
+                self.target(a)
+        elif want == "nv":
+            if not isinstance(a, N.Var) or a.kind != "n":
+                self.err(f"{e.name.upper()} needs a numeric variable there")
+            else:
+                self.target(a)
+        else:
+            self.need(a, want)
 
     @kind.register
     def _(self, e: N.Neg) -> str:
