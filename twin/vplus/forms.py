@@ -84,41 +84,9 @@ def operands(ins: Instruction) -> list[tuple[str, Expr | None]]:
 
 
 def _clause(ins: Instruction, spec: str, want: str, clause: Clause):
+    """Match one clause against its part of the form: the operands with their codes."""
     left, eq, right = want.partition("=")
-    items = list(clause.items)
-    out: list[tuple[str, Expr | None]] = []
-    for token in _TOKEN.findall(left):
-        optional = token.endswith("?")
-        token = token.rstrip("?")
-        if not items:
-            if not optional:
-                raise _mismatch(ins, spec)
-            if not _is_word(token):
-                out.append((token, None))
-            continue
-        item = items[0]
-        if token.startswith("("):
-            codes = token[1:-1].split()
-            group = (
-                item.items
-                if isinstance(item, Group)
-                else [item.expr]
-                if isinstance(item, Paren)
-                else None
-            )
-            if group is None or len(group) != len(codes) or None in group:
-                raise _mismatch(ins, spec)
-            out += list(zip(codes, group, strict=True))
-        elif _is_word(token):
-            if not _word_is(item, token):
-                if optional:
-                    continue
-                raise _mismatch(ins, spec)
-        else:
-            out.append((token, item))
-        items.pop(0)
-    if items:
-        raise _mismatch(ins, spec)
+    out = _left_operands(ins, spec, left, list(clause.items))
     right = right.strip()
     if eq:
         if clause.value is None:
@@ -131,6 +99,45 @@ def _clause(ins: Instruction, spec: str, want: str, clause: Clause):
     elif clause.value is not None:
         raise _mismatch(ins, spec)
     return out
+
+
+def _left_operands(ins: Instruction, spec: str, left: str, items: list[Expr | None]):
+    """Match the items before ``=`` of a clause against the tokens of the form."""
+    out: list[tuple[str, Expr | None]] = []
+    for token in _TOKEN.findall(left):
+        optional = token.endswith("?")
+        token = token.rstrip("?")
+        if not items:
+            if not optional:
+                raise _mismatch(ins, spec)
+            if not _is_word(token):
+                out.append((token, None))
+            continue
+        item = items[0]
+        if token.startswith("("):
+            out += _group(ins, spec, token, item)
+        elif _is_word(token):
+            if not _word_is(item, token):
+                if optional:
+                    continue
+                raise _mismatch(ins, spec)
+        else:
+            out.append((token, item))
+        items.pop(0)
+    if items:
+        raise _mismatch(ins, spec)
+    return out
+
+
+def _group(ins: Instruction, spec: str, token: str, item: Expr | None):
+    """Match a parenthesised group of the form, e.g. ``(n n)``, against an item."""
+    codes = token[1:-1].split()
+    group = (
+        item.items if isinstance(item, Group) else [item.expr] if isinstance(item, Paren) else None
+    )
+    if group is None or len(group) != len(codes) or None in group:
+        raise _mismatch(ins, spec)
+    return list(zip(codes, group, strict=True))
 
 
 def _is_word(token: str) -> bool:
