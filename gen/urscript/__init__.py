@@ -1,3 +1,5 @@
-"""The URScript backend (Universal Robots controllers): the language facts it relies on,
-each with the manual page it was confirmed on (:mod:`wirecal.gen.urscript.facts`).
+"""The URScript backend (Universal Robots controllers).
+
+The language facts it relies on, each with the manual page it was confirmed on
+(:mod:`wirecal.gen.urscript.facts`).
 """

@@ -145,7 +145,7 @@ FACTS: tuple[Fact, ...] = (
 
 
 def fact(name: str) -> Fact:
-    """The fact called ``name``; ``KeyError`` names the known ones."""
+    """Return the fact called ``name``; ``KeyError`` names the known ones."""
     for f in FACTS:
         if f.name == name:
             return f

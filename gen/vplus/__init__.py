@@ -1,3 +1,5 @@
-"""The V+/eV+ backend of the generator: the module's context for the templates in
-``templates/vplus`` and V+ literals written exactly.
+"""The V+/eV+ backend of the generator.
+
+The module's context for the templates in ``templates/vplus`` and V+ literals written
+exactly.
 """

@@ -21,7 +21,7 @@ MAX_LINE = 80
 
 
 def joint_literal(x: float) -> str:
-    """A joint angle as the operator reads it: up to 4 decimals, no trailing zeros."""
+    """Write a joint angle as the operator reads it: up to 4 decimals, no trailing zeros."""
     s = f"{x:.4f}".rstrip("0").rstrip(".")
     return "0" if s in ("-0", "") else s
 
@@ -31,8 +31,9 @@ def ppoint(q: Iterable[float]) -> str:
 
 
 def double_literal(x: float) -> str:
-    """An exact-to-1e-15 DOUBLE constant from confirmed syntax only: a ``^D`` integer
-    (UG p. 102) divided by a power of ten held in ``wc.p10[]``.
+    """Write an exact-to-1e-15 DOUBLE constant from confirmed syntax only.
+
+    A ``^D`` integer (UG p. 102) divided by a power of ten held in ``wc.p10[]``.
     """
     x = float(x)
     if x == 0:

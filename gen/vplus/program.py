@@ -147,7 +147,7 @@ def _configuration_lines(t: Tables, c: int) -> list[str]:
 
 
 def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str:
-    """The whole V+ module; raises :class:`WirecalError` if a rule would be broken."""
+    """Return the whole V+ module; raise :class:`WirecalError` if a rule would be broken."""
     check_limits(robot, plan, opt.margin_deg)
     check_wire_range(robot, plan, opt.range_margin_mm)
     tables = build_tables(robot, plan)
@@ -266,8 +266,10 @@ def _num(x: float) -> str:
 
 
 def line_ends(text: str, crlf: bool = True) -> str:
-    """The module as it goes to the controller: CRLF line ends (ACE writes V+ files so;
-    whether LOAD accepts LF-only is not confirmed), or LF.
+    """Return the module as it goes to the controller.
+
+    CRLF line ends (ACE writes V+ files so; whether LOAD accepts LF-only is not confirmed),
+    or LF.
     """
     return text.replace("\n", "\r\n") if crlf else text
 
@@ -279,9 +281,11 @@ def write_module(
     inputs: Iterable[str | Path] = (),
     crlf: bool = True,
 ) -> Path:
-    """Write the module (LF text, as :func:`module_text` returns it) into ``out_dir`` with
+    """Write the module into ``out_dir``; never over one of ``inputs``.
+
+    The module is LF text, as :func:`module_text` returns it, written with
     :func:`line_ends` (the folder created if missing, and removed again if the write
-    fails); never over one of ``inputs``.
+    fails).
     """
     path = Path(out_dir) / MODULE_NAME
     with Outputs([path], force=force, inputs=inputs, folder=out_dir) as out:

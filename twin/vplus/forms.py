@@ -60,8 +60,10 @@ class FormError(Exception):
 
 
 def operands(ins: Instruction) -> list[tuple[str, Expr | None]]:
-    """The operands of an executed instruction with their codes, in the order of its
-    form (``None`` for a left-out optional operand); :class:`FormError` otherwise.
+    """Return the operands of an executed instruction with their codes.
+
+    In the order of its form (``None`` for a left-out optional operand);
+    :class:`FormError` if the instruction is not in a form the twin executes.
     """
     spec = FORMS.get(ins.name)
     if spec is None:

@@ -1,5 +1,6 @@
-"""An interpreter of V+ programs, with V+ semantics, for the instructions and functions
-the digital twin models (see :mod:`wirecal.twin.vplus.forms`); any other instruction or
+"""An interpreter of V+ programs, with V+ semantics.
+
+It covers the instructions and functions the digital twin models (see :mod:`wirecal.twin.vplus.forms`); any other instruction or
 function, valid V+ as it may be, stops the program with a run-time error naming it.
 
 Programs are compiled into Python closures once, dispatching on the node types of
@@ -100,8 +101,9 @@ class Outcome:
 
 
 class _Ref:
-    """A variable passed by reference (or a by-value copy): get/set and whether it is
-    double precision.
+    """A variable passed by reference (or a by-value copy).
+
+    Get/set and whether it is double precision.
     """
 
     __slots__ = ("double", "get", "set")
@@ -219,8 +221,10 @@ class _Compiler:
         return run
 
     def body(self, steps: list[N.Stmt]) -> Callable:
-        """A statement list; a GOTO to one of its labels continues there, a GOTO to any
-        other label leaves it (to an enclosing list that has the label).
+        """Compile a statement list.
+
+        A GOTO to one of its labels continues there, a GOTO to any other label leaves it
+        (to an enclosing list that has the label).
         """
         fns: list[Callable] = []
         labels: dict[int, int] = {}
@@ -392,8 +396,10 @@ class _Compiler:
         return self.storage(v.kind, v.name, [self.expr(x)[0] for x in v.index] if v.index else None)
 
     def ref_of(self, e: N.Expr | None) -> Callable:
-        """A CALL argument: a reference for a variable or array element, a copy for an
-        expression (User's Guide p. 42–45); ``None`` for an omitted argument.
+        """Compile a CALL argument.
+
+        A reference for a variable or array element, a copy for an expression (User's
+        Guide p. 42–45); ``None`` for an omitted argument.
         """
         interp = self.i
         if e is None:
@@ -1000,8 +1006,10 @@ def _chr(x: Callable) -> Callable:
 
 
 def _is_keyword_value(v: N.Var) -> bool:
-    """A name without index that is a V+ keyword is the keyword (the checker allows
-    only value keywords there), never a variable.
+    """Tell whether a name is a V+ keyword used as a value.
+
+    A name without index that is a V+ keyword is the keyword (the checker allows only
+    value keywords there), never a variable.
     """
     return v.index is None and keyword(v.name) is not None
 

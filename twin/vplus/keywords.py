@@ -1,5 +1,6 @@
-"""The V+ keyword table (``keywords.csv``): every keyword the V+ manuals name, with its
-kind and the page it was read on.
+"""The V+ keyword table (``keywords.csv``).
+
+Every keyword the V+ manuals name, with its kind and the page it was read on.
 
 A keyword cannot be used as a program, variable or parameter name (V+ Language User's
 Guide v17 p. 99). The kinds are those of the manuals: instruction, function, operator,
@@ -37,7 +38,7 @@ class Keyword:
 
 @cache
 def keywords() -> dict[str, Keyword]:
-    """The table, keyed by lower-case name."""
+    """Return the table, keyed by lower-case name."""
     text = resources.files(__package__).joinpath("keywords.csv").read_text(encoding="utf-8")
     kinds: dict[str, list[str]] = {}
     sources: dict[str, list[str]] = {}
@@ -55,7 +56,7 @@ NOT_RESERVED = ("monitor command",)
 
 
 def keyword(name: str) -> Keyword | None:
-    """The keyword a name collides with, if it is reserved."""
+    """Return the keyword a name collides with, if it is reserved."""
     k = keywords().get(name.lower())
     if k is None or all(kind in NOT_RESERVED for kind in k.kinds):
         return None

@@ -40,8 +40,9 @@ class Str(Expr):
 
 @dataclass(slots=True)
 class Var(Expr):
-    """A variable (or, when its name is a V+ constant such as TRUE, PI or NULL, that
-    constant), with its index expressions when it is an array element.
+    """A variable, with its index expressions when it is an array element.
+
+    When its name is a V+ constant such as TRUE, PI or NULL, that constant.
     """
 
     name: str
@@ -131,7 +132,8 @@ class Format(Expr):
 
 @dataclass(slots=True)
 class Group(Expr):
-    """A parenthesised list of instruction operands, e.g. ``(lun, 4)`` in ATTACH;
+    """A parenthesised list of instruction operands, e.g. ``(lun, 4)`` in ATTACH.
+
     ``None`` marks an omitted operand.
     """
 
@@ -185,8 +187,9 @@ class Call(Stmt):
 
 @dataclass(slots=True)
 class Clause(_Node):
-    """One comma-separated operand of a generic instruction: leading format
-    specifiers, the operands written next to each other, and ``= value``.
+    """One comma-separated operand of a generic instruction.
+
+    Leading format specifiers, the operands written next to each other, and ``= value``.
     """
 
     formats: list[str]
@@ -196,8 +199,9 @@ class Clause(_Node):
 
 @dataclass(slots=True)
 class Instruction(Stmt):
-    """Any V+ instruction without a structure of its own (MOVE, TYPE, SIGNAL, ...):
-    its name and its operands; ``None`` marks an empty operand (``WAIT.EVENT , 3``).
+    """Any V+ instruction without a structure of its own (MOVE, TYPE, SIGNAL, ...).
+
+    Its name and its operands; ``None`` marks an empty operand (``WAIT.EVENT , 3``).
     """
 
     name: str

@@ -1,5 +1,6 @@
-"""The V+ front end: a module's text → typed syntax trees, checked as a controller's LOAD
-checks them.
+"""The V+ front end: a module's text → typed syntax trees.
+
+The trees are checked as a controller's LOAD checks them.
 
 The text (CRLF or LF) is split into ``.PROGRAM … .END`` blocks (data sections such as
 ``.LOCATIONS … .END`` are skipped); each step is parsed by the lark grammar
@@ -110,8 +111,10 @@ def _parser() -> Lark:
 
 
 class _Terminals(Transformer):
-    """Terminals and the rules whose children need shaping; the rules named after a
-    node class are added by :func:`lark.ast_utils.create_transformer`.
+    """Terminals and the rules whose children need shaping.
+
+    The rules named after a node class are added by
+    :func:`lark.ast_utils.create_transformer`.
     """
 
     def NAME(self, t):
@@ -504,7 +507,7 @@ def _first_list(node: N.Stmt) -> list[N.Stmt] | None:
 
 
 def children(stmt: N.Stmt) -> list[list[N.Stmt]]:
-    """The statement lists nested in a block statement."""
+    """Return the statement lists nested in a block statement."""
     if isinstance(stmt, N.If):
         return [stmt.then, stmt.orelse]
     if isinstance(stmt, (N.For, N.While, N.DoUntil)):
@@ -575,7 +578,7 @@ class _Checker:
         self.problems.append(f"{self.source}:{line or self.line}: {self.prog.name}: {message}")
 
     def define(self, line: int, name: str, what: str) -> None:
-        """A name the program defines (program, parameter, variable, target)."""
+        """Check a name the program defines (program, parameter, variable, target)."""
         self.line = line
         self.no_keyword(name)
         self.register(name, f"{self.source}:{line}: {self.prog.name}")
@@ -751,9 +754,10 @@ class _Checker:
             self.need(e, code)
 
     def operand(self, e: N.Expr) -> None:
-        """An operand of an instruction in a form the twin does not execute: a bare
-        keyword is a word of the instruction (ALWAYS, POWER, ROBOT); a function call
-        whose name is no function names a program (EXECUTE 1 a.main()).
+        """Check an operand of an instruction in a form the twin does not execute.
+
+        A bare keyword is a word of the instruction (ALWAYS, POWER, ROBOT); a function
+        call whose name is no function names a program (EXECUTE 1 a.main()).
         """
         if isinstance(e, N.Var) and e.index is None and keyword(e.name) is not None:
             return
@@ -773,14 +777,14 @@ class _Checker:
 
     # ---------- names ----------
     def no_keyword(self, name: str) -> None:
-        """A V+ keyword used as a name (User's Guide p. 99): reported once per program."""
+        """Report a V+ keyword used as a name (User's Guide p. 99), once per program."""
         k = keyword(name)
         if k is not None and name not in self.named:
             self.named.add(name)
             self.err(f"{name!r} is a V+ keyword ({k.describe()}) and cannot be a name")
 
     def target(self, v: N.Var) -> None:
-        """A variable written to: no keyword; its indices are numbers."""
+        """Check a variable written to: no keyword; its indices are numbers."""
         self.no_keyword(v.name)
         self.register(v.name, f"{self.source}:{self.line}: {self.prog.name}")
         for e in v.index or []:
@@ -799,8 +803,9 @@ class _Checker:
 
     @singledispatchmethod
     def kind(self, e: N.Expr) -> str:
-        """The kind of an expression: n, s, l, b, t, or ? (not known, or a problem
-        already reported).
+        """Return the kind of an expression: n, s, l, b, t, or ?.
+
+        ``?`` means not known, or a problem already reported.
         """
         self.err(f"{type(e).__name__.lower()} is not a value here")
         return "?"
