@@ -1,4 +1,4 @@
-"""URScript facts the URScript backend relies on, each with the page it was read on.
+r"""URScript facts the URScript backend relies on, each with the page it was read on.
 
 A fact is *confirmed* only when a Universal Robots manual page (Script Manual / Script
 Directory, or a UR user manual) states it; the ``source`` is that page. Anything else is
@@ -30,7 +30,7 @@ sleep(t)                                  t in s                                
 int / float width                         int 32 bit; float 32 bit                 yes (UR16e
                                                                                    user manual)
 script sent to port 30002                 starts with def/sec in column 1, ends    yes (SW10.6)
-                                          with end in column 1, lines by \\n
+                                          with end in column 1, lines by \n
 calibration.conf delta_theta, delta_a,    deltas to the nominal standard DH        no (ROS
 delta_d, delta_alpha (m, rad)             table, one per joint; the controller     driver docs)
                                           reports full dh_theta/a/d/alpha

@@ -1,7 +1,8 @@
 """An interpreter of V+ programs, with V+ semantics.
 
-It covers the instructions and functions the digital twin models (see :mod:`wirecal.twin.vplus.forms`); any other instruction or
-function, valid V+ as it may be, stops the program with a run-time error naming it.
+It covers the instructions and functions the digital twin models (see
+:mod:`wirecal.twin.vplus.forms`); any other instruction or function, valid V+ as it may
+be, stops the program with a run-time error naming it.
 
 Programs are compiled into Python closures once, dispatching on the node types of
 :mod:`wirecal.twin.vplus.nodes`. Semantics (V+ Language User's Guide
