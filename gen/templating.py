@@ -25,6 +25,7 @@ class _ResourceLoader(jinja2.BaseLoader):
 
 @cache
 def environment() -> jinja2.Environment:
+    """Return the Jinja2 environment of the packaged templates (strict, no autoescape)."""
     return jinja2.Environment(
         loader=_ResourceLoader(),
         undefined=jinja2.StrictUndefined,

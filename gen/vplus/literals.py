@@ -27,6 +27,7 @@ def joint_literal(x: float) -> str:
 
 
 def ppoint(q: Iterable[float]) -> str:
+    """Write a #PPOINT(...) literal of joint angles."""
     return "#PPOINT(" + ", ".join(joint_literal(x) for x in q) + ")"
 
 

@@ -40,6 +40,8 @@ AXES = 4  # flattened index i*AXES + a (a = 1..3)
 
 @dataclass(frozen=True)
 class GenOptions:
+    """Options of the generated module."""
+
     run: RunParameters = DEFAULT_RUN  # speed, acceleration, settle, readings
     zero_tol_mm: float = 0.1  # a zero reading further from the first: the wire slipped
     spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved

@@ -52,16 +52,20 @@ class Trans:
         self.yaw, self.pitch, self.roll = float(yaw), float(pitch), float(roll)
 
     def matrix(self):
+        """Return the rotation matrix and position (see :mod:`pose`)."""
         return pose.matrix(*self.values())
 
     @classmethod
     def from_matrix(cls, R, p):
+        """Build a transformation from a rotation matrix and a position."""
         return cls(*pose.values(R, p))
 
     def values(self):
+        """Return x, y, z, yaw, pitch, roll."""
         return (self.x, self.y, self.z, self.yaw, self.pitch, self.roll)
 
     def shifted(self, dx, dy, dz):
+        """Return SHIFT(t BY dx, dy, dz): the position moved, the orientation kept."""
         return Trans(self.x + dx, self.y + dy, self.z + dz, self.yaw, self.pitch, self.roll)
 
 
@@ -78,11 +82,11 @@ class _Return(Exception):
 
 
 class Halt(Exception):
-    pass
+    """HALT: the program stops."""
 
 
 class Pause(Exception):
-    pass
+    """PAUSE: the program stops and may be resumed."""
 
 
 class _Goto(Exception):
@@ -166,6 +170,7 @@ class Interpreter:
             self.garr.setdefault(name.lower(), {})[index] = value
 
     def get_global(self, name: str, index=None):
+        """Return a global (an element if ``index`` is given)."""
         if index is None:
             return self.gvals[name.lower()]
         return self.garr[name.lower()][index]

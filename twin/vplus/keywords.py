@@ -27,6 +27,8 @@ from importlib import resources
 
 @dataclass(frozen=True)
 class Keyword:
+    """A V+ keyword: its name, kinds and the pages they were read on."""
+
     name: str  # lower case, with its $ or # prefix
     kinds: tuple[str, ...]
     sources: tuple[str, ...]
@@ -66,6 +68,7 @@ def keyword(name: str) -> Keyword | None:
 
 
 def is_kind(name: str, *kinds: str) -> bool:
+    """Tell whether ``name`` is a keyword of one of ``kinds``."""
     k = keywords().get(name.lower())
     return k is not None and any(kind in k.kinds for kind in kinds)
 

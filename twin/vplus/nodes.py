@@ -29,12 +29,16 @@ class Expr(_Node):
 
 @dataclass(slots=True)
 class Num(Expr):
+    """A number literal."""
+
     value: float
     double: bool  # a ^D literal is DOUBLE (User's Guide p. 102)
 
 
 @dataclass(slots=True)
 class Str(Expr):
+    """A string literal."""
+
     text: str
 
 
@@ -50,12 +54,14 @@ class Var(Expr):
 
     @property
     def kind(self) -> str:
-        """N (real or transformation), s ($), l (#), b (%)."""
+        """Return the kind: n (real or transformation), s ($), l (#), b (%)."""
         return _PREFIX_KIND.get(self.name[:1], "n")
 
 
 @dataclass(slots=True)
 class Func(Expr):
+    """A function call, e.g. SQRT(x)."""
+
     name: str
     args: list[Expr | None]
 
@@ -87,11 +93,15 @@ class Paren(Expr):
 
 @dataclass(slots=True)
 class Neg(Expr):
+    """Unary minus."""
+
     expr: Expr
 
 
 @dataclass(slots=True)
 class Not(Expr):
+    """NOT: the logical negation."""
+
     expr: Expr
 
 
@@ -104,6 +114,8 @@ class Com(Expr):
 
 @dataclass(slots=True)
 class BinOp(Expr):
+    """An arithmetic operation: +, -, *, / or MOD."""
+
     op: str  # + - * / MOD
     left: Expr
     right: Expr
@@ -111,6 +123,8 @@ class BinOp(Expr):
 
 @dataclass(slots=True)
 class Compare(Expr):
+    """A comparison: ==, <>, <, >, <= or >=."""
+
     op: str  # == <> < > <= >=
     left: Expr
     right: Expr
@@ -118,6 +132,8 @@ class Compare(Expr):
 
 @dataclass(slots=True)
 class Logic(Expr):
+    """A logical or bitwise operation: AND, OR, XOR, BAND, BOR or BXOR."""
+
     op: str  # AND OR XOR BAND BOR BXOR
     left: Expr
     right: Expr
@@ -148,6 +164,7 @@ class ArrayArg(Expr):
 
     @property
     def kind(self) -> str:
+        """Return the kind of its elements: n, s ($), l (#) or b (%)."""
         return _PREFIX_KIND.get(self.name[:1], "n")
 
 
@@ -157,17 +174,23 @@ _PREFIX_KIND = {"$": "s", "#": "l", "%": "b"}
 # ---------- statements (one line) ----------
 @dataclass(slots=True)
 class Stmt(_Node):
+    """Base of statement nodes."""
+
     line: int = field(default=0, kw_only=True)
 
 
 @dataclass(slots=True)
 class DeclItem(_Node):
+    """One name of an AUTO, LOCAL or GLOBAL declaration, with its dimensions."""
+
     name: str
     dims: list[int] | None = None
 
 
 @dataclass(slots=True)
 class Decl(Stmt):
+    """An AUTO, LOCAL or GLOBAL declaration."""
+
     scope: str  # AUTO, LOCAL, GLOBAL
     dtype: str  # REAL, DOUBLE, LOC (or "" when not given)
     items: list[DeclItem]
@@ -175,12 +198,16 @@ class Decl(Stmt):
 
 @dataclass(slots=True)
 class Assign(Stmt):
+    """An assignment: ``var = value``."""
+
     target: Var
     value: Expr
 
 
 @dataclass(slots=True)
 class Call(Stmt):
+    """CALL program(arguments)."""
+
     program: str
     args: list[Expr | None]  # None: an omitted argument
 
@@ -210,38 +237,48 @@ class Instruction(Stmt):
 
 @dataclass(slots=True)
 class Goto(Stmt):
+    """GOTO label."""
+
     label: int
 
 
 @dataclass(slots=True)
 class IfGoto(Stmt):
+    """IF cond GOTO label."""
+
     cond: Expr
     label: int
 
 
 @dataclass(slots=True)
 class Label(Stmt):
+    """A step label."""
+
     number: int
 
 
 # block openers and closers (one line each); assembled into the block nodes below
 @dataclass(slots=True)
 class IfStart(Stmt):
+    """The IF ... THEN line."""
+
     cond: Expr
 
 
 @dataclass(slots=True)
 class ElseLine(Stmt):
-    pass
+    """The ELSE line."""
 
 
 @dataclass(slots=True)
 class EndLine(Stmt):
-    pass
+    """The END line."""
 
 
 @dataclass(slots=True)
 class ForStart(Stmt):
+    """The FOR ... TO ... STEP line."""
+
     var: Var
     start: Expr
     stop: Expr
@@ -250,37 +287,47 @@ class ForStart(Stmt):
 
 @dataclass(slots=True)
 class WhileStart(Stmt):
+    """The WHILE ... DO line."""
+
     cond: Expr
 
 
 @dataclass(slots=True)
 class DoStart(Stmt):
-    pass
+    """The DO line."""
 
 
 @dataclass(slots=True)
 class UntilLine(Stmt):
+    """The UNTIL line."""
+
     cond: Expr
 
 
 @dataclass(slots=True)
 class CaseStart(Stmt):
+    """The CASE ... OF line."""
+
     selector: Expr
 
 
 @dataclass(slots=True)
 class ValueLine(Stmt):
+    """The VALUE line of a CASE."""
+
     values: list[Expr]
 
 
 @dataclass(slots=True)
 class AnyLine(Stmt):
-    pass
+    """The ANY line of a CASE."""
 
 
 # ---------- blocks ----------
 @dataclass(slots=True)
 class If(Stmt):
+    """The IF ... ELSE ... END block."""
+
     cond: Expr
     then: list[Stmt]
     orelse: list[Stmt]
@@ -288,6 +335,8 @@ class If(Stmt):
 
 @dataclass(slots=True)
 class For(Stmt):
+    """The FOR ... END block."""
+
     var: Var
     start: Expr
     stop: Expr
@@ -297,23 +346,31 @@ class For(Stmt):
 
 @dataclass(slots=True)
 class While(Stmt):
+    """The WHILE ... END block."""
+
     cond: Expr
     body: list[Stmt]
 
 
 @dataclass(slots=True)
 class DoUntil(Stmt):
+    """The DO ... UNTIL block."""
+
     body: list[Stmt]
     cond: Expr | None
 
 
 @dataclass(slots=True)
 class Branch(_Node):
+    """A VALUE or ANY branch of a CASE block."""
+
     values: list[Expr] | None  # None: ANY
     body: list[Stmt]
 
 
 @dataclass(slots=True)
 class Case(Stmt):
+    """The CASE ... END block."""
+
     selector: Expr
     branches: list[Branch]

@@ -81,16 +81,21 @@ _VALUE_WORD_KIND = {
 
 @dataclass
 class Param:
+    """A program parameter: its name and whether it is an array."""
+
     name: str
     is_array: bool
 
     @property
     def kind(self) -> str:
+        """Return the kind its prefix says: n, s ($), l (#) or b (%)."""
         return {"$": "s", "#": "l", "%": "b"}.get(self.name[:1], "n")
 
 
 @dataclass
 class Program:
+    """A parsed program: header, nested statements and declarations."""
+
     name: str
     params: list[Param]
     body: list[N.Stmt]
@@ -100,6 +105,8 @@ class Program:
 
 @dataclass
 class Module:
+    """The parsed programs of a module file."""
+
     source: str
     programs: dict[str, Program]
 
