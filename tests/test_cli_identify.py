@@ -25,7 +25,7 @@ def run(*args, ok=True):
     return r
 
 
-@pytest.fixture()
+@pytest.fixture
 def sim(tmp_path):
     log = tmp_path / "run.csv"
     run("simulate", ROBOT, PLAN, "-o", log, "--seed", 4, "--random", 0.8)

@@ -55,7 +55,9 @@ def test_device_interface_is_refused_with_its_reason(viper, paper_plan):
         module_text(_device_robot(viper), paper_plan)
     text = str(e.value)
     assert 'device.toml: encoder.interface = "device"' in text
-    assert "p. 354" in text and "SETDEVICE" in text and 'interface = "belt"' in text
+    assert "p. 354" in text
+    assert "SETDEVICE" in text
+    assert 'interface = "belt"' in text
 
 
 @pytest.mark.parametrize("variant", ["paper", "printed", "patch", "options", "echo"])

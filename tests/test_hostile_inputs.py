@@ -103,7 +103,8 @@ def test_fixed_hostile_inputs(tmp_path, log, name, slot, kind):
     r = invoke(*(values.get(a, a) for a in args))
     outcome_is_clean(r)
     assert r.exit_code != 0
-    assert not out.exists() and not (tmp_path / "out.html").exists()
+    assert not out.exists()
+    assert not (tmp_path / "out.html").exists()
 
 
 @pytest.mark.parametrize(
@@ -132,7 +133,8 @@ def test_hostile_output_and_option_files(tmp_path, log, args):
     r = invoke(*args)
     outcome_is_clean(r)
     assert r.exit_code != 0
-    assert not (tmp_path / "OUT").exists() and not (tmp_path / "OUT.html").exists()
+    assert not (tmp_path / "OUT").exists()
+    assert not (tmp_path / "OUT.html").exists()
     assert (tmp_path / "FILE").read_text() == "a file\n"
 
 

@@ -98,7 +98,8 @@ UR5_ERRORS = {"th2": 0.3, "th4": -0.2, "a2": 0.8, "a3": -0.5, "d4": 0.4, "d5": 0
 @given(u=st.lists(unit, min_size=6, max_size=6), calibrated=st.booleans())
 def test_ur_round_trip_closed_form(u, calibrated):
     model = UR5.model(UR5_ERRORS if calibrated else {})
-    assert ur_structure(model) and not analytic_structure(model)
+    assert ur_structure(model)
+    assert not analytic_structure(model)
     q = _q(UR5, u)
     R, o = flange_pose(model, q)
     solutions = solve(UR5, R, o, model=model)

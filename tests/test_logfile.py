@@ -165,7 +165,9 @@ def test_closing_zero_required_unless_partial(viper, paper_plan, log_text):
     the step to repeat, and --partial accepts it."""
     text = "".join(line + "\n" for line in lines(log_text) if not line.startswith("zero,11,"))
     m = measure(text, viper, paper_plan)
-    assert not m.closed and not m.complete and not m.missing
+    assert not m.closed
+    assert not m.complete
+    assert not m.missing
     assert m.missing_text() == (
         "the closing zero reading at θ0 after step 10 (without it a wire slip during "
         "step 10 goes unseen: repeat step 10)"

@@ -191,7 +191,8 @@ def test_concurrent_simulate_exactly_one_wins(tmp_path):
     assert len(winners) == 1, results
     for rc, err in results:
         if rc:
-            assert rc == 2 and "Traceback" not in err
+            assert rc == 2
+            assert "Traceback" not in err
             assert "exists" in err or "appeared while this command ran" in err, err
     assert files(tmp_path) == {"same.csv", "same.truth.toml"}
     # the surviving truth belongs to the surviving log: same seed, same bytes
@@ -346,7 +347,8 @@ def test_plan_notes_other_than_six_joints(tmp_path, monkeypatch):
     monkeypatch.setattr("wirecal.cli.plan.design", design)
     r = run("plan", robot)
     refused(r, "stop here")
-    assert "note: " in r.output and "for 6-joint arms" in r.output
+    assert "note: " in r.output
+    assert "for 6-joint arms" in r.output
     assert r.output.index("note: ") < r.output.index("error: ")
 
 

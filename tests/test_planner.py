@@ -193,7 +193,7 @@ def test_cli_writes_a_plan_that_psi_accepts_and_refuses_to_overwrite(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "bad, message", [("1,2,3", "has 3 values; the robot has 6"), ("a,b", "give 6 joint angles")]
+    ("bad", "message"), [("1,2,3", "has 3 values; the robot has 6"), ("a,b", "give 6 joint angles")]
 )
 def test_cli_bad_theta0(bad, message):
     r = CliRunner().invoke(main, ["plan", str(VIPER / "robot.toml"), "--theta0", bad])

@@ -73,7 +73,8 @@ def test_complete_run_published_at_the_end_marker(tmp_path, log_text):
         # CRLF line ends from the controller become LF in the log
         _send_in_chunks(s, (log_text + END_MARKER + "\n").replace("\n", "\r\n").encode())
     result = server.finish()
-    assert result.complete and result.refused == 0
+    assert result.complete
+    assert result.refused == 0
     assert out.read_text() == log_text + END_MARKER + "\n"
     assert not journal_path(out).exists()
     assert len(parse_log(out.read_text(), str(out)).readings) == log_text.count("\npoint,") + (
@@ -112,7 +113,8 @@ def test_second_sender_refused_while_one_is_connected(tmp_path, log_text):
             assert second.recv(100) == b""  # closed by the server
         first.sendall((log_text[200:] + END_MARKER + "\n").encode())
     result = server.finish()
-    assert result.complete and result.refused == 1
+    assert result.complete
+    assert result.refused == 1
     assert out.read_text() == log_text + END_MARKER + "\n"
 
 
@@ -121,8 +123,10 @@ def test_timeout_without_a_sender_writes_nothing(tmp_path):
     t0 = time.monotonic()
     result = receive(0, out, timeout_s=0.3)
     assert 0.3 <= time.monotonic() - t0 < 5
-    assert not result.complete and "no sender connected within 0.3 s" in result.stopped
-    assert not out.exists() and not journal_path(out).exists()
+    assert not result.complete
+    assert "no sender connected within 0.3 s" in result.stopped
+    assert not out.exists()
+    assert not journal_path(out).exists()
     assert "nothing received" in summary(result)[0]
 
 
@@ -134,7 +138,8 @@ def test_timeout_after_silence_keeps_the_rows(tmp_path, log_text):
         s.sendall(head.encode())
         result = server.finish()  # the sender stays silent and connected
     assert "no line arrived within 0.5 s" in result.stopped
-    assert journal_path(out).read_text() == head and not out.exists()
+    assert journal_path(out).read_text() == head
+    assert not out.exists()
     assert "rows, the last" in summary(result)[0]
 
 
@@ -183,7 +188,8 @@ def test_cli_drop_exits_1_and_names_the_journal(tmp_path, log_text):
     )
     thread.join(5)
     assert res.exit_code == 1, res.output
-    assert f"{out}.partial" in res.output and "closed the connection" in res.output
+    assert f"{out}.partial" in res.output
+    assert "closed the connection" in res.output
     assert journal_path(out).read_text() == log_text[:300]
 
 
@@ -191,7 +197,8 @@ def test_cli_robot_without_plan_refused(tmp_path):
     res = CliRunner().invoke(
         main, ["receive", "--port", "9", "-o", str(tmp_path / "x.csv"), "--robot", "r.toml"]
     )
-    assert res.exit_code == 2 and "--robot and --plan go together" in res.output
+    assert res.exit_code == 2
+    assert "--robot and --plan go together" in res.output
 
 
 def test_ctrl_c_while_waiting_keeps_the_rows_and_says_so(tmp_path, log_text, monkeypatch):
@@ -213,7 +220,8 @@ def test_ctrl_c_while_waiting_keeps_the_rows_and_says_so(tmp_path, log_text, mon
         s.sendall(head.encode())
         result = server.finish()
     assert result.stopped == "interrupted (Ctrl-C)"
-    assert journal_path(out).read_text() == head and not out.exists()
+    assert journal_path(out).read_text() == head
+    assert not out.exists()
 
 
 @settings(

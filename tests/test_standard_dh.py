@@ -44,7 +44,8 @@ def test_ur5_nominal_is_urs_published_table():
     np.testing.assert_allclose(std.table[:, 1], UR5_PUBLISHED["d"], atol=1e-12)
     np.testing.assert_allclose(std.table[:, 2], UR5_PUBLISHED["a"], atol=1e-12)
     np.testing.assert_allclose(np.degrees(std.table[:, 3]), UR5_PUBLISHED["alpha_deg"], atol=1e-12)
-    assert std.base_alpha == 0.0 and std.base_a_mm == 0.0
+    assert std.base_alpha == 0.0
+    assert std.base_a_mm == 0.0
 
 
 def test_home_pose_by_hand():

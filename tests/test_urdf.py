@@ -184,7 +184,8 @@ def test_joint_zero_and_direction_are_the_urdfs(twisted, tmp_path):
     q = np.full(6, 1e-3)
     got = tool_position(robot.nominal, q[None])[0]
     np.testing.assert_allclose(got, urdf_fk(twisted, "base", "wire", q)[:3, 3], atol=TOL_MM)
-    assert robot.urdf is not None and robot.urdf.tip_link == "wire"
+    assert robot.urdf is not None
+    assert robot.urdf.tip_link == "wire"
     assert Path(robot.urdf.path).resolve() == twisted.resolve()
 
 
@@ -303,7 +304,8 @@ def test_refuses_rounded_right_angles(tmp_path):
     joints.append(("j3", "revolute", "l2", "l3", "0.4 0 0", "-1.5708 0 0", "0 1 0"))
     joints.append(("j4", "revolute", "l3", "l4", "0.3 0 0", "0 0 0", "0 0 1"))
     out = _refusal(tmp_path, joints, "--tip", "l4")
-    assert "from parallel" in out and "'j2' and 'j3'" in out
+    assert "from parallel" in out
+    assert "'j2' and 'j3'" in out
     assert "--parallel-tol-deg 0.00022" in out  # 3.7e-6 rad, and a margin
     robot_toml = tmp_path / "r.toml"
     r = CliRunner().invoke(
@@ -322,7 +324,8 @@ def test_refuses_rounded_right_angles(tmp_path):
     assert r.exit_code == 0, r.output
     assert "so the DH tip differs from the URDF's by up to" in r.output
     robot = load_robot(robot_toml)
-    assert robot.urdf is not None and robot.urdf.parallel_tol_deg == 0.00022
+    assert robot.urdf is not None
+    assert robot.urdf.parallel_tol_deg == 0.00022
     r = CliRunner().invoke(main, ["export-urdf", str(robot_toml), "-o", str(tmp_path / "o.urdf")])
     assert r.exit_code == 0, r.output  # export re-derives the chain with the same tolerance
 

@@ -147,7 +147,7 @@ def test_config_log_missing_a_configuration(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "body, message",
+    ("body", "message"),
     [
         ("time,value\n", "the column line must be"),
         (

@@ -148,13 +148,15 @@ def test_typed_tree():
     s = parse_step("CALL f(x[i], (y), a[], , 3)")
     assert isinstance(s, N.Call)
     assert s.program == "f"
-    assert isinstance(s.args[0], N.Var) and s.args[0].index == [N.Var("i")]
+    assert isinstance(s.args[0], N.Var)
+    assert s.args[0].index == [N.Var("i")]
     assert isinstance(s.args[1], N.Paren)
     assert s.args[2] == N.ArrayArg("a")
     assert s.args[3] is None
     assert s.args[4] == N.Num(3.0, False)
     s = parse_step("WRITE (lun) $a, /S")
-    assert isinstance(s, N.Instruction) and s.name == "write"
+    assert isinstance(s, N.Instruction)
+    assert s.name == "write"
     assert s.clauses[0] == N.Clause([], [N.Paren(N.Var("lun")), N.Var("$a")], None)
     assert s.clauses[1] == N.Clause(["/S"], [], None)
     s = parse_step("WAIT.EVENT , 3")
