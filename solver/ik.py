@@ -87,7 +87,7 @@ def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
     c = ob - d[5] * Rb[:, 2]
     y1 = -s1 * (d[1] + d[2])
     r2 = c[0] ** 2 + c[1] ** 2
-    out = []
+    out: list[np.ndarray] = []
     if r2 < y1**2:
         return out
     for shoulder in (1, -1):

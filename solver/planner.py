@@ -149,6 +149,8 @@ def move_clearance(
 ) -> np.ndarray:
     """The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
     (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion."""
+    if robot.link_radius_mm is None:
+        raise WirecalError(f"{robot.source}: the wire clearance needs the link radii")
     q, first = move_samples(a, b, step_deg)
     gap = wire_clearance(model, np.radians(q), p0, robot.link_radius_mm, wire_trim_mm(robot))
     return np.minimum.reduceat(gap, first) if len(first) else gap
@@ -309,9 +311,8 @@ def design(
     return best[1]
 
 
-def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
-    rng = np.random.default_rng(opt.seed)
-    model = robot.nominal
+def _check_theta0(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> None:
+    """Raise when a joint of θ0 is within the margin of its limits."""
     for j in np.flatnonzero(
         (theta0 < robot.joint_min_deg + opt.margin_deg)
         | (theta0 > robot.joint_max_deg - opt.margin_deg)
@@ -320,20 +321,12 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
             f"theta0: joint {j + 1} = {theta0[j]:g} deg is within "
             f"{opt.margin_deg:g} deg of its limits"
         )
-    q_all = candidates(robot, theta0, opt, rng)
-    p0 = tool_position(model, np.radians(theta0)[None])[0]
-    usable, via_all = screen(robot, model, p0, theta0, q_all, opt)
-    q_all, via_all = q_all[usable], via_all[usable]
-    has_via = ~np.isnan(via_all[:, 0])
-    if len(q_all) < opt.points_per_step:
-        raise WirecalError(
-            f"{robot.source}: almost no usable configuration around θ0 "
-            f"{theta0.tolist()}: check the encoder range, the link radii and "
-            "the joint limits"
-        )
-    names = list(robot.parameters)
+
+
+def _unidentifiable(model, q: np.ndarray, theta0: np.ndarray, names: list[str]) -> dict[str, str]:
+    """Return the parameters no plan can identify (unobservable, or redundant), with why."""
     excluded: dict[str, str] = {}
-    ident = analyse(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
+    ident = analyse(model, q, theta0, names)
     for name in ident.unobservable:
         excluded[name] = (
             "unobservable: it moves every point and the encoder alike"
@@ -347,36 +340,71 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
             + ", ".join(n for n, _ in combo[:-1])
             + ": no wire length separates them; keep one"
         )
+    return excluded
+
+
+def _most_informative(
+    psi: np.ndarray, col: dict[str, int], remaining: list[str], opt: PlanOptions
+) -> tuple[str, np.ndarray] | None:
+    """Choose the next parameter to isolate and its isolating candidates.
+
+    The parameter whose ``points_per_step`` most sensitive isolating candidates carry the
+    most information (Σψ²); None when no parameter has that many isolating candidates.
+    """
+    k = opt.points_per_step
+    best: tuple[float, str, np.ndarray] | None = None
+    for j in remaining:
+        pj = psi[:, col[j]]
+        others = [col[t] for t in remaining if t != j]
+        limit = np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
+        iso = (
+            np.all(np.abs(psi[:, others]) <= limit[:, None], axis=1)
+            if others
+            else np.ones(len(pj), bool)
+        )
+        iso &= np.abs(pj) >= 0.05
+        if iso.sum() < k:
+            continue
+        info = float(np.sort(pj[iso] ** 2)[-k:].sum())
+        if best is None or info > best[0]:
+            best = (info, j, np.flatnonzero(iso))
+    return None if best is None else (best[1], best[2])
+
+
+def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
+    """Design a plan around a given θ0 (see :func:`design`)."""
+    rng = np.random.default_rng(opt.seed)
+    model = robot.nominal
+    _check_theta0(robot, theta0, opt)
+    q_all = candidates(robot, theta0, opt, rng)
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    usable, via_all = screen(robot, model, p0, theta0, q_all, opt)
+    q_all, via_all = q_all[usable], via_all[usable]
+    has_via = ~np.isnan(via_all[:, 0])
+    if len(q_all) < opt.points_per_step:
+        raise WirecalError(
+            f"{robot.source}: almost no usable configuration around θ0 "
+            f"{theta0.tolist()}: check the encoder range, the link radii and "
+            "the joint limits"
+        )
+    names = list(robot.parameters)
+    excluded = _unidentifiable(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
     remaining = [n for n in names if n not in excluded]
     psi = sensitivity(model, q_all, theta0, remaining).psi
     col = {n: k for k, n in enumerate(remaining)}
-    order, steps, chosen_q = [], [], []
-    k = opt.points_per_step
+    order: list[str] = []
+    steps: list[StepDesign] = []
+    chosen_q: list[np.ndarray] = []
     while remaining:
-        best = None
-        for j in remaining:
-            pj = psi[:, col[j]]
-            others = [col[t] for t in remaining if t != j]
-            limit = np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
-            iso = (
-                np.all(np.abs(psi[:, others]) <= limit[:, None], axis=1)
-                if others
-                else np.ones(len(pj), bool)
-            )
-            iso &= np.abs(pj) >= 0.05
-            if iso.sum() < k:
-                continue
-            info = float(np.sort(pj[iso] ** 2)[-k:].sum())
-            if best is None or info > best[0]:
-                best = (info, j, np.flatnonzero(iso))
+        best = _most_informative(psi, col, remaining, opt)
         if best is None:
             for j in remaining:
                 excluded[j] = (
-                    f"cannot be isolated: no {k} points leave it alone "
+                    f"cannot be isolated: no {opt.points_per_step} points leave it alone "
                     f"among {', '.join(t for t in remaining if t != j)}"
                 )
             break
-        _, j, iso = best
+        j, iso = best
         # the most sensitive isolating points, their moves from θ0 checked finely
         iso = iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")[:600]]
         iso = iso[reach_ok(robot, model, p0, theta0, q_all[iso], via_all[iso], opt)]
@@ -450,7 +478,7 @@ def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarra
     return opt.sigma_mm**2 * A @ A.T + opt.prior**2 * E @ E.T
 
 
-def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.ndarray:
+def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.ndarray | None:
     """The visiting order from θ0 and back (nearest neighbour, improved by 2-opt) over
     moves that keep the wire clear (``move_ok``); a point reached through a via point can
     only come first. Returns the order, or None when no order keeps every move clear."""
@@ -477,7 +505,8 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
             t += leg[x, y] + bad * (not clear[x, y] or has_via[y])
         return t
 
-    left, path = list(range(n)), []
+    left = list(range(n))
+    path: list[int] = []
     while left:
         i = min(left, key=lambda k: total([*path, k]) - (total(path) if path else 0))
         path.append(i)
