@@ -98,7 +98,17 @@ def parse_table(
     text = text.removeprefix("\ufeff")
     ends_with_newline = text.endswith(("\n", "\r"))
     lines = [line.strip() for line in text.splitlines()]
-    problems: list[str] = []
+    start = _check_first_line(lines, source, magic, version, what)
+    header, comments, problems, n = _read_header(lines, start + 1, source, keys)
+    if callable(columns):
+        columns = columns(header)
+    _check_column_line(lines, n, source, columns, problems)
+    rows, notes = _read_rows(lines, n + 1, source, len(columns), ends_with_newline, problems)
+    return Table(source, header, tuple(comments), n + 1, tuple(rows), tuple(problems), tuple(notes))
+
+
+def _check_first_line(lines: list[str], source: str, magic: str, version: int, what: str) -> int:
+    """Return the index of the first non-blank line; raise unless it is the magic and version."""
     start = next((k for k, line in enumerate(lines) if line), 0)  # blank lines of a paste
     first = lines[start] if lines else ""
     if not first.startswith(magic):
@@ -111,9 +121,19 @@ def parse_table(
         raise WirecalError(
             f"{source}:{start + 1}: {what} version {found!r}; this wirecal reads version {version}"
         )
+    return start
+
+
+def _read_header(
+    lines: list[str], n: int, source: str, keys: tuple[str, ...]
+) -> tuple[dict[str, tuple[str, int]], list[str], list[str], int]:
+    """Read the ``#`` lines from index n: the known keys, the comments, the problems.
+
+    Returns them and the index of the first line after them.
+    """
     header: dict[str, tuple[str, int]] = {}
     comments: list[str] = []
-    n = start + 1
+    problems: list[str] = []
     while n < len(lines) and lines[n].startswith("#"):
         body = lines[n][1:].strip()
         key, sep, value = body.partition(":")
@@ -125,8 +145,13 @@ def parse_table(
         else:
             comments.append(body)
         n += 1
-    if callable(columns):
-        columns = columns(header)
+    return header, comments, problems, n
+
+
+def _check_column_line(
+    lines: list[str], n: int, source: str, columns: tuple[str, ...], problems: list[str]
+) -> None:
+    """Raise unless line n is the column line and no later line has double quotes."""
     expected = ",".join(columns)
     if n >= len(lines):
         raise WirecalError(
@@ -147,20 +172,31 @@ def parse_table(
             "line(s): a spreadsheet re-saved the file; use the file as written, or save "
             "it as plain CSV without quotes"
         )
+
+
+def _read_rows(
+    lines: list[str],
+    first: int,
+    source: str,
+    width: int,
+    ends_with_newline: bool,
+    problems: list[str],
+) -> tuple[list[Row], list[str]]:
+    """Return the rows from index ``first`` on and the notes; add row-length problems."""
     rows: list[Row] = []
     notes: list[str] = []
-    for k in range(n + 1, len(lines)):
+    for k in range(first, len(lines)):
         if not lines[k] or lines[k].startswith("#"):
             continue
         cells = tuple(c.strip() for c in lines[k].split(","))
-        if len(cells) != len(columns):
-            if k == len(lines) - 1 and not ends_with_newline and len(cells) < len(columns):
+        if len(cells) != width:
+            if k == len(lines) - 1 and not ends_with_newline and len(cells) < width:
                 notes.append(
                     f"{source}:{k + 1}: incomplete last line ignored (the run "
                     "stopped while writing it)"
                 )
                 continue
-            problems.append(f"{source}:{k + 1}: has {len(cells)} fields; expected {len(columns)}")
+            problems.append(f"{source}:{k + 1}: has {len(cells)} fields; expected {width}")
             continue
         rows.append(Row(k + 1, cells))
-    return Table(source, header, tuple(comments), n + 1, tuple(rows), tuple(problems), tuple(notes))
+    return rows, notes

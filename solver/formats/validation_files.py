@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.csv_table import parse_table, read_source
+from wirecal.solver.formats.csv_table import Row, parse_table, read_source
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.robot_file import MAX_LENGTH_MM
 from wirecal.solver.formats.toml_fields import document, valid
@@ -135,9 +135,28 @@ def read_validation_log(path: str | Path, kind: str) -> ValidationLog:
         *table.problems,
         *table.missing(("robot", "setup") + (("mm_per_count",) if kind == "configuration" else ())),
     ]
+    rows = _readings(table.rows, source, kind, problems)
+    mpc_text, mpc_line = table.header.get("mm_per_count", ("nan", 0))
+    try:
+        mpc = float(mpc_text)
+    except ValueError:
+        problems.append(f"{source}:{mpc_line}: mm_per_count {mpc_text!r} is not a number")
+    if problems:
+        raise WirecalError(_first(problems))
+    if not rows:
+        raise WirecalError(f"{source}: no readings")
+    return ValidationLog(
+        kind, source, table.header["robot"][0], table.header["setup"][0], mpc, np.array(rows)
+    )
+
+
+def _readings(
+    table_rows: tuple[Row, ...], source: str, kind: str, problems: list[str]
+) -> list[list[float]]:
+    """Return the rows as numbers; add a problem for each bad or duplicate row, and skip it."""
     rows: list[list[float]] = []
     seen: dict[tuple[float, float], int] = {}
-    for r in table.rows:
+    for r in table_rows:
         try:
             row = [float(c) for c in r.cells]
         except ValueError:
@@ -159,18 +178,7 @@ def read_validation_log(path: str | Path, kind: str) -> ValidationLog:
             continue
         seen[key] = r.line
         rows.append(row)
-    mpc_text, mpc_line = table.header.get("mm_per_count", ("nan", 0))
-    try:
-        mpc = float(mpc_text)
-    except ValueError:
-        problems.append(f"{source}:{mpc_line}: mm_per_count {mpc_text!r} is not a number")
-    if problems:
-        raise WirecalError(_first(problems))
-    if not rows:
-        raise WirecalError(f"{source}: no readings")
-    return ValidationLog(
-        kind, source, table.header["robot"][0], table.header["setup"][0], mpc, np.array(rows)
-    )
+    return rows
 
 
 def _first(problems: list[str], n: int = 12) -> list[str]:
