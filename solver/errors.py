@@ -18,8 +18,11 @@ class WirecalError(Exception):
 
 
 class Implausible(WirecalError):
-    """An identification that passed every format check but that the plausibility gate
-    (:mod:`wirecal.solver.plausibility`) refuses: nothing is written; exit status 3."""
+    """Refuse an implausible identification.
+
+    An identification that passed every format check but that the plausibility gate
+    (:mod:`wirecal.solver.plausibility`) refuses: nothing is written; exit status 3.
+    """
 
     exit_status = 3
 

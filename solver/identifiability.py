@@ -1,4 +1,6 @@
-"""Identifiability of error parameters from wire lengths: rank, singular values,
+"""Identifiability of error parameters from wire lengths.
+
+Identifiability of error parameters from wire lengths: rank, singular values,
 unobservable parameters or combinations, and the observability indices O1–O5
 (Sun & Hollerbach's list) of the distance Jacobian in boundary units.
 """
@@ -31,7 +33,7 @@ class Identifiability:
     indices: dict[str, float]  # O1..O5
 
     def describe(self) -> list[str]:
-        """The analysis in words, one sentence per line."""
+        """Return the analysis in words, one sentence per line."""
         m = len(self.names)
         lines = [
             f"{self.n_points} points, {m} parameters: the distance Jacobian has rank "

@@ -152,8 +152,11 @@ def _polish(model, q, R, o, iterations=30):
 
 
 def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, bool]:
-    """The solution nearest ``q`` by Newton from it: a small Cartesian step in the same
-    configuration (much cheaper than :func:`solve`)."""
+    """Return the solution nearest ``q`` by Newton from it.
+
+    The solution nearest ``q`` by Newton from it: a small Cartesian step in the same
+    configuration (much cheaper than :func:`solve`).
+    """
     return _polish(model, np.asarray(q, dtype=float), R, o, iterations=8)
 
 
@@ -166,7 +169,9 @@ def solve(
     margin_deg: float = 0.0,
     seed: int = 0,
 ) -> list[Solution]:
-    """Every distinct solution for the flange pose (R, o), each put into the robot's joint
+    """Return every distinct solution for the flange pose (R, o).
+
+    Every distinct solution for the flange pose (R, o), each put into the robot's joint
     limits less ``margin_deg`` where a turn of ±360° allows it.
 
     ``model`` is the kinematic model the controller believes (default: the robot's
@@ -219,7 +224,7 @@ def _into_limits(q, lo_deg, hi_deg):
 
 
 def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
-    """wirecal's names of a solution's configuration (see the module doc)."""
+    """Return wirecal's names of a solution's configuration (see the module doc)."""
     if ik_ur.ur_structure(model):
         return ik_ur.configuration(model, q)
     f = frames(model, np.atleast_2d(q))

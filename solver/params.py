@@ -129,9 +129,9 @@ class ErrorSet:
         return np.asarray(values_internal, dtype=float) * self.boundary_per_internal
 
     def per_boundary(self, columns_internal: np.ndarray) -> np.ndarray:
-        """Derivatives (…, m) per rad/mm → per deg/mm (e.g. ∂p/∂e in mm/rad → mm/deg)."""
+        """Return derivatives (…, m) per rad/mm → per deg/mm (e.g. ∂p/∂e in mm/rad → mm/deg)."""
         return np.asarray(columns_internal, dtype=float) * self.internal_per_boundary
 
     def per_internal(self, columns_boundary: np.ndarray) -> np.ndarray:
-        """Derivatives (…, m) per deg/mm → per rad/mm (e.g. Ψ in mm/deg → mm/rad)."""
+        """Return derivatives (…, m) per deg/mm → per rad/mm (e.g. Ψ in mm/deg → mm/rad)."""
         return np.asarray(columns_boundary, dtype=float) / self.internal_per_boundary

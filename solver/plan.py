@@ -1,4 +1,6 @@
-"""A calibration plan: θ0, the identification order and one point set per step (paper
+"""A calibration plan: θ0, the identification order and the point sets.
+
+A calibration plan: θ0, the identification order and one point set per step (paper
 §2.3), with the fingerprint that ties a measurement log to it. Files are read and written
 by :mod:`wirecal.solver.formats.plan_file`.
 

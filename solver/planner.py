@@ -1,4 +1,6 @@
-"""Design of experiments (paper §2.2–2.3, §3.4): θ0, the identification order and one point
+"""Design of experiments (paper §2.2–2.3, §3.4).
+
+Design of experiments (paper §2.2–2.3, §3.4): θ0, the identification order and one point
 set per parameter, for any 6R arm.
 
 Candidates are configurations that move one to three joints away from θ0 (as the paper's
@@ -113,7 +115,7 @@ def _subsets(n: int):
 
 
 def candidates(robot: Robot, theta0: np.ndarray, opt: PlanOptions, rng) -> np.ndarray:
-    """Configurations (deg) moving a few joints away from θ0, within the limits' margin."""
+    """Return configurations (deg) moving a few joints away from θ0, within the limits' margin."""
     lo = robot.joint_min_deg + opt.margin_deg
     hi = robot.joint_max_deg - opt.margin_deg
     out = []
@@ -133,9 +135,12 @@ def candidates(robot: Robot, theta0: np.ndarray, opt: PlanOptions, rng) -> np.nd
 def move_samples(
     a: np.ndarray, b: np.ndarray, step_deg: float = 2.0
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Configurations (deg) along the joint-interpolated moves a → b (rows broadcast),
+    """Return the configurations along moves a → b and each move's first sample.
+
+    Configurations (deg) along the joint-interpolated moves a → b (rows broadcast),
     every ``step_deg`` of the largest joint motion, b included and a not; and the index of
-    each move's first sample (for ``np.minimum.reduceat`` and the like)."""
+    each move's first sample (for ``np.minimum.reduceat`` and the like).
+    """
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
     count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg)).astype(int)
     move = np.repeat(np.arange(len(a)), count)
@@ -147,8 +152,11 @@ def move_samples(
 def move_clearance(
     robot: Robot, model, p0: np.ndarray, a: np.ndarray, b: np.ndarray, step_deg: float = 2.0
 ) -> np.ndarray:
-    """The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
-    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion."""
+    """Return the smallest wire gap (mm) to the links along moves a → b.
+
+    The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
+    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion.
+    """
     if robot.link_radius_mm is None:
         raise WirecalError(f"{robot.source}: the wire clearance needs the link radii")
     q, first = move_samples(a, b, step_deg)
@@ -157,8 +165,11 @@ def move_clearance(
 
 
 def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2.0) -> np.ndarray:
-    """Moves a → b that keep the wire clear of the links and do not turn joint 6 by more
-    than 180° (which would wrap the wire around the flange)."""
+    """Return which moves a → b are safe for the wire.
+
+    Moves a → b that keep the wire clear of the links and do not turn joint 6 by more
+    than 180° (which would wrap the wire around the flange).
+    """
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
     return (np.abs(b[:, -1] - a[:, -1]) <= 180) & (
         move_clearance(robot, model, p0, a, b, step_deg) >= opt.clearance_mm
@@ -168,8 +179,11 @@ def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2
 def reach_ok(
     robot: Robot, model, p0, theta0, q, via, opt: PlanOptions, step_deg: float = 2.0
 ) -> np.ndarray:
-    """Whether each point q is reached from θ0 with the wire clear: directly, or through
-    its via point (NaN row: none)."""
+    """Return whether each point q is reached from θ0 with the wire clear.
+
+    Whether each point q is reached from θ0 with the wire clear: directly, or through
+    its via point (NaN row: none).
+    """
     direct = np.isnan(via[:, 0])
     ok = np.zeros(len(q), bool)
     ok[direct] = move_ok(robot, model, p0, theta0, q[direct], opt, step_deg)
@@ -183,10 +197,13 @@ def reach_ok(
 def screen(
     robot: Robot, model, p0: np.ndarray, theta0: np.ndarray, q: np.ndarray, opt: PlanOptions
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Which candidates are usable (wire length, wrist singularity, a clear move from θ0)
+    """Return which candidates are usable, and their via points.
+
+    Which candidates are usable (wire length, wrist singularity, a clear move from θ0)
     and, for those whose direct move is not clear, a via point that makes it clear (the
     arm joints first, or the wrist first); NaN rows where the direct move is clear. The
-    moves are sampled coarsely here; ``reach_ok`` checks the points chosen from finely."""
+    moves are sampled coarsely here; ``reach_ok`` checks the points chosen from finely.
+    """
     coarse = 10.0
 
     def length_ok(x):
@@ -215,9 +232,12 @@ def screen(
 
 
 def _error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
-    """Mean squared error of a step's estimate (linearised): the reading noise, the error
+    """Return the mean squared error of a step's estimate (linearised).
+
+    Mean squared error of a step's estimate (linearised): the reading noise, the error
     of the earlier estimates leaking in through Ψ_{i,<j} (covariance ``cov_prev``), and the
-    still-unknown later parameters leaking in through Ψ_{i,>j} (each of size ``prior``)."""
+    still-unknown later parameters leaking in through Ψ_{i,>j} (each of size ``prior``).
+    """
     s = float(psi_j @ psi_j)
     if s <= 0:
         return np.inf
@@ -230,10 +250,13 @@ def _error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
 def _choose(
     psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, opt: PlanOptions, criterion: str
 ):
-    """k points by greedy minimum error ("ours") or by largest |Ψ_j| ("paper"), at least
+    """Choose a step's K points by the ``rule`` given.
+
+    K points by greedy minimum error ("ours") or by largest |Ψ_j| ("paper"), at least
     ``spread_deg`` apart, each pair joined by a clear move (``linked(i, among)``: which
     of the candidates ``among`` (mask) are reachable from i), at most one needing a via
-    point (it will be visited first)."""
+    point (it will be visited first).
+    """
     pool = np.ones(len(q), bool)
     for _ in range(20):  # a dead end (no k linked points): start elsewhere
         chosen = _greedy(
@@ -275,7 +298,7 @@ def _greedy(
 def design(
     robot: Robot, theta0: np.ndarray | None = None, opt: PlanOptions = PlanOptions()
 ) -> Design:
-    """A plan for the robot file's parameters (θ0 chosen when not given)."""
+    """Return a plan for the robot file's parameters (θ0 chosen when not given)."""
     span = robot.joint_max_deg - robot.joint_min_deg
     narrow = np.flatnonzero(span <= 2 * opt.margin_deg)
     if narrow.size:
@@ -468,8 +491,11 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
 
 
 def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarray:
-    """Error covariance (boundary units) of the estimates of the steps planned so far,
-    with the parameters not planned yet left out (their leak is added step by step)."""
+    """Return the error covariance of the estimates of the steps planned so far.
+
+    Error covariance (boundary units) of the estimates of the steps planned so far,
+    with the parameters not planned yet left out (their leak is added step by step).
+    """
     q = np.concatenate(chosen_q)
     step = np.concatenate([np.full(len(c), s + 1) for s, c in enumerate(chosen_q)])
     J = sensitivity(model, q, theta0, order).psi
@@ -479,9 +505,12 @@ def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarra
 
 
 def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.ndarray | None:
-    """The visiting order from θ0 and back (nearest neighbour, improved by 2-opt) over
+    """Return the visiting order from θ0 and back, or None.
+
+    The visiting order from θ0 and back (nearest neighbour, improved by 2-opt) over
     moves that keep the wire clear (``move_ok``); a point reached through a via point can
-    only come first. Returns the order, or None when no order keeps every move clear."""
+    only come first. Returns the order, or None when no order keeps every move clear.
+    """
     n = len(pts)
     a, b = np.repeat(pts, n, axis=0), np.tile(pts, (n, 1))
     clear = move_ok(robot, model, p0, a, b, opt).reshape(n, n)
@@ -522,9 +551,12 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
 
 
 def robot_time(robot: Robot, plan: Plan, run: RunParameters = DEFAULT_RUN) -> float:
-    """Estimated run time (s): every step from θ0 (zero reading) through its via points
+    """Estimate the run time (s) of a plan.
+
+    Estimated run time (s): every step from θ0 (zero reading) through its via points
     and points and back to θ0, moves at the program speed, a settle and the readings per
-    stop (the time model of :mod:`~wirecal.solver.run_parameters`, as the twin's clock)."""
+    stop (the time model of :mod:`~wirecal.solver.run_parameters`, as the twin's clock).
+    """
     total = 0.0
     for s in plan.steps:
         seq = [plan.theta0_deg, *s.via_deg, *s.points_deg, plan.theta0_deg]
@@ -536,10 +568,13 @@ def robot_time(robot: Robot, plan: Plan, run: RunParameters = DEFAULT_RUN) -> fl
 def predicted_accuracy(
     robot: Robot, plan: Plan, sigma_mm: float = 0.01, prior: float = PlanOptions.prior
 ) -> dict[str, float]:
-    """Mean tool-point error over the workspace: for the joint estimate the Cramér–Rao bound
+    """Return the mean tool-point error over the workspace (mm) of both estimators.
+
+    Mean tool-point error over the workspace: for the joint estimate the Cramér–Rao bound
     (σ per reading plus the count's quantisation); for the stepwise estimate its linearised
     map A, noise A·C·Aᵀ plus the bias of parameters leaking into steps before their own,
-    (A·J − I)·P·(A·J − I)ᵀ with true offsets of size ``prior`` (deg, mm)."""
+    (A·J − I)·P·(A·J − I)ᵀ with true offsets of size ``prior`` (deg, mm).
+    """
     model = robot.nominal
     q, step, _ = plan.all_points()
     names = plan.order

@@ -1,4 +1,6 @@
-"""The one reader of wirecal's CSV-with-header files: measurement logs, validation logs and
+"""Read wirecal's CSV-with-header files.
+
+The one reader of wirecal's CSV-with-header files: measurement logs, validation logs and
 the controller solver's result file share its layout and its tolerance.
 
 Layout::
@@ -51,7 +53,7 @@ class Table:
     notes: tuple[str, ...]
 
     def missing(self, keys: tuple[str, ...]) -> list[str]:
-        """A problem for each header key that is absent."""
+        """Return a problem for each header key that is absent."""
         return [
             f"{self.source}:{self.column_line - 1}: header '# {key}: …' is missing"
             for key in keys
@@ -60,7 +62,7 @@ class Table:
 
 
 def read_source(path: str | Path, what: str) -> tuple[str, str, str]:
-    """The text, its source name and the sha256 of its bytes; ``-`` reads standard input."""
+    """Return the text, its source name and the sha256 of its bytes; ``-`` reads standard input."""
     if str(path) == STDIN:
         raw, source = sys.stdin.buffer.read(), "<stdin>"
     else:
@@ -88,7 +90,9 @@ def parse_table(
     columns: tuple[str, ...] | Callable[[dict[str, tuple[str, int]]], tuple[str, ...]],
     keys: tuple[str, ...],
 ) -> Table:
-    """Split a file into header, column line and rows; raise on a wrong magic, version,
+    """Split a file into header, column line and rows.
+
+    Split a file into header, column line and rows; raise on a wrong magic, version,
     column line or quoted fields, and collect row-length problems in ``Table.problems``.
 
     ``what`` names the format in messages ("log", "validation log", …); ``keys`` are the

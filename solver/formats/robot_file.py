@@ -225,7 +225,7 @@ def _sanity(
     encoder: Encoder | None,
     radii: np.ndarray | None,
 ) -> None:
-    """The unit and size rules of the module docstring, on values that passed their types."""
+    """Return the unit and size rules of the module docstring, on values that passed their types."""
     if dh is not None:
         _check_not_radians(dh[:, 0], "α (column 1)", doc)
         _check_not_radians(dh[:, 2], "θ offsets (column 3)", doc)

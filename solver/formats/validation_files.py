@@ -1,4 +1,6 @@
-"""Validation files: the setup of the paper's two validation procedures (TOML) and the
+"""Validation files: the procedures' setup (TOML) and their logs (CSV).
+
+Validation files: the setup of the paper's two validation procedures (TOML) and the
 logs their controller programs write (CSV).
 
 Setup file (TOML)::
@@ -182,7 +184,7 @@ def _readings(
 
 
 def _first(problems: list[str], n: int = 12) -> list[str]:
-    """The first problems and a count of the rest: a wrong file should not bury its cause."""
+    """Return the first problems and a count of the rest: a wrong file should not bury its cause."""
     if len(problems) <= n:
         return problems
     return [*problems[:n], f"… and {len(problems) - n} more problems of the same kinds"]
