@@ -70,6 +70,7 @@ class ToolError:
     max_mm: float  # worst configuration's RMS error
 
     def as_dict(self) -> dict[str, float]:
+        """Return the mean and max (mm) by name."""
         return {"mean": self.mean_mm, "max": self.max_mm}
 
 

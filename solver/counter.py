@@ -27,6 +27,7 @@ class Counter:
     bits: int
 
     def __post_init__(self) -> None:
+        """Refuse a width outside 8–64 bits."""
         if not 8 <= self.bits <= 64:
             raise ValueError(f"counter of {self.bits} bits: give 8 to 64")
 

@@ -24,6 +24,8 @@ RANK_RTOL = 1e-9
 
 @dataclass(frozen=True)
 class Identifiability:
+    """Rank, singular values, unobservable parameters and observability indices."""
+
     names: tuple[str, ...]
     n_points: int
     singular_values: np.ndarray

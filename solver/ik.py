@@ -38,6 +38,8 @@ HALF_PI = np.pi / 2
 
 @dataclass(frozen=True)
 class Solution:
+    """One inverse-kinematics solution, its configuration and whether it is within limits."""
+
     q: np.ndarray  # joint angles (rad)
     config: tuple[str, str, str]  # ("righty"|"lefty", "above"|"below", "noflip"|"flip")
     within_limits: bool

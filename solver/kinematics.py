@@ -39,10 +39,12 @@ class Model:
 
     @property
     def n_joints(self) -> int:
+        """Return the number of joints."""
         return int(self.dh.shape[-2])
 
     @property
     def batched(self) -> bool:
+        """Return whether the model holds a batch of DH tables."""
         return self.dh.ndim == 3
 
 

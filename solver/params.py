@@ -35,10 +35,12 @@ class Param:
 
     @property
     def angular(self) -> bool:
+        """Return whether the parameter is an angle (θ or α)."""
         return self.kind in ("th", "al")
 
     @property
     def unit(self) -> str:
+        """Return the parameter's boundary unit, ``deg`` or ``mm``."""
         return "deg" if self.angular else "mm"
 
 
@@ -84,10 +86,12 @@ class ErrorSet:
     params: tuple[Param, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        """Store the names as a tuple."""
         object.__setattr__(self, "names", tuple(self.names))
         object.__setattr__(self, "params", tuple(parse(n, self.n_joints) for n in self.names))
 
     def __len__(self) -> int:
+        """Return the number of parameters."""
         return len(self.names)
 
     @property

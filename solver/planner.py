@@ -44,6 +44,8 @@ from wirecal.solver.sensitivity import PSI_FLOOR, sensitivity
 
 @dataclass(frozen=True)
 class PlanOptions:
+    """The planner's settings."""
+
     points_per_step: int = 5
     tol: float = 0.05  # isolation while designing (stricter than psi's verdict)
     margin_deg: float = 5.0  # from every joint limit
@@ -60,6 +62,8 @@ class PlanOptions:
 
 @dataclass
 class StepDesign:
+    """One designed step and its figures of merit."""
+
     parameter: str
     points_deg: np.ndarray
     strength: float  # RMS |Ψ_j| of the points
@@ -70,6 +74,8 @@ class StepDesign:
 
 @dataclass
 class Design:
+    """A designed plan with its per-step figures, exclusions and predictions."""
+
     plan: Plan
     steps: list[StepDesign]
     excluded: dict[str, str] = field(default_factory=dict)  # parameter → reason
@@ -77,6 +83,7 @@ class Design:
     robot_time_s: float = 0.0
 
     def header(self) -> str:
+        """Return the plan file's header comment: the design's figures in words."""
         lines = [
             "Designed by 'wirecal plan' (Boschetti & Sinico's method, see the README).",
             f"theta0 {np.round(self.plan.theta0_deg, 2).tolist()} deg; order "

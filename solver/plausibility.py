@@ -74,6 +74,8 @@ HEADLINE = {
 
 @dataclass(frozen=True)
 class Finding:
+    """One failed plausibility check."""
+
     check: str  # "lengths", "residual", "identifiability" or "bound"
     message: str
 
@@ -92,6 +94,7 @@ class Plausibility:
 
     @property
     def passed(self) -> bool:
+        """Return whether no check failed."""
         return not self.findings
 
     def summary(self) -> str:
@@ -109,6 +112,7 @@ class Plausibility:
         return self.summary() if self.passed else OVERRIDDEN + self.summary()
 
     def as_json(self) -> dict:
+        """Return the verdict as a JSON-ready dict."""
         return {
             "passed": self.passed,
             "findings": [{"check": f.check, "message": f.message} for f in self.findings],

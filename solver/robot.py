@@ -80,6 +80,7 @@ class Robot:
 
     @property
     def n_joints(self) -> int:
+        """Return the number of joints."""
         return int(self.dh.shape[0])
 
     @cached_property

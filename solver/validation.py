@@ -34,6 +34,8 @@ CONFIGS = (("above", "noflip"), ("above", "flip"), ("below", "noflip"), ("below"
 
 @dataclass(frozen=True)
 class Setup:
+    """The setup of the two validation procedures (see the setup file's format)."""
+
     encoder_mm: np.ndarray
     poses: int
     seed: int
@@ -47,6 +49,7 @@ class Setup:
     source: str = "<setup>"
 
     def fingerprint(self) -> str:
+        """Return the sha256 fingerprint of the setup (its source left out)."""
         canon = {
             k: (
                 np.round(np.asarray(v, dtype=float), 6).tolist()

@@ -18,6 +18,8 @@ from wirecal.solver.formats.validation_files import ValidationLog
 
 @dataclass(frozen=True)
 class Stats:
+    """Mean, sample standard deviation and maximum of some values."""
+
     values: np.ndarray
     mean: float
     std: float
@@ -25,6 +27,7 @@ class Stats:
 
     @classmethod
     def of(cls, values) -> Stats:
+        """Return the statistics of ``values``."""
         v = np.asarray(values, dtype=float)
         return cls(v, float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else 0.0, float(v.max()))
 

@@ -36,6 +36,8 @@ STDIN = "-"
 
 @dataclass(frozen=True)
 class Row:
+    """One data row of a table, with its line number."""
+
     line: int  # 1-based line number in the file
     cells: tuple[str, ...]  # stripped fields
 

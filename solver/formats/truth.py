@@ -67,6 +67,7 @@ def random_errors(robot: Robot, scale: float, rng: np.random.Generator) -> dict[
 
 
 def truth_text(robot: Robot, errors: dict[str, float], seed: int | None) -> str:
+    """Return the text of a truth file holding ``errors`` (deg, mm)."""
     lines = [
         "# wirecal truth: the simulated robot's true error offsets (deg, mm).",
         "# Kept apart from the log; compare a solve's result against it.",

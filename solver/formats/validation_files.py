@@ -88,6 +88,8 @@ def load_setup(path: str | Path) -> Setup:
 
 @dataclass(frozen=True)
 class ValidationLog:
+    """A validation log's header and its readings."""
+
     kind: str  # "configuration" or "plane"
     source: str
     robot: str
