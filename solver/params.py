@@ -86,7 +86,7 @@ class ErrorSet:
     params: tuple[Param, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        """Store the names as a tuple."""
+        """Store the names as a tuple and parse each into its parameter."""
         object.__setattr__(self, "names", tuple(self.names))
         object.__setattr__(self, "params", tuple(parse(n, self.n_joints) for n in self.names))
 
