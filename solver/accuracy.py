@@ -35,8 +35,8 @@ def workspace(robot: Robot, n: int = WORKSPACE_SAMPLES, seed: int = WORKSPACE_SE
 def noise_covariance(n: int, sigma_mm: float, sigma_zero_mm: float = 0.0) -> np.ndarray:
     """Return the covariance of n wire lengths.
 
-    Covariance of n wire lengths: independent σ per point, plus the error of the zero
-    reading that every length is measured from (common to all).
+    Independent σ per point, plus the error of the zero reading that every length is
+    measured from (common to all).
     """
     return sigma_mm**2 * np.eye(n) + sigma_zero_mm**2 * np.ones((n, n))
 

@@ -15,8 +15,7 @@ from wirecal.solver.kinematics import Model, frames
 def segment_distance(p1, q1, p2, q2) -> np.ndarray:
     """Return the shortest distance between segments p1–q1 and p2–q2.
 
-    Shortest distance between segments p1–q1 and p2–q2, broadcast over leading axes
-    (the clamped closest-point construction).
+    Broadcast over leading axes (the clamped closest-point construction).
     """
     d1, d2, r = q1 - p1, q2 - p2, p1 - p2
     a = np.einsum("...i,...i", d1, d1)

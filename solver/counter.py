@@ -44,8 +44,7 @@ class Counter:
     def wrap(self, counts: np.ndarray | float) -> np.ndarray:
         """Return the counter's value for an unbounded count.
 
-        The counter's value for an unbounded count: ``counts`` brought into [−half, half)
-        modulo 2^bits.
+        ``counts`` brought into [−half, half) modulo 2^bits.
         """
         # x − k·2^bits rather than (x + half) mod 2^bits − half: adding half first would
         # round small counts away once half exceeds 2^53 (a counter wider than 53 bits)

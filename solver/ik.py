@@ -156,8 +156,7 @@ def _polish(model, q, R, o, iterations=30):
 def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, bool]:
     """Return the solution nearest ``q`` by Newton from it.
 
-    The solution nearest ``q`` by Newton from it: a small Cartesian step in the same
-    configuration (much cheaper than :func:`solve`).
+    A small Cartesian step in the same configuration (much cheaper than :func:`solve`).
     """
     return _polish(model, np.asarray(q, dtype=float), R, o, iterations=8)
 

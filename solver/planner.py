@@ -188,8 +188,7 @@ def reach_ok(
 ) -> np.ndarray:
     """Return whether each point q is reached from θ0 with the wire clear.
 
-    Whether each point q is reached from θ0 with the wire clear: directly, or through
-    its via point (NaN row: none).
+    Directly, or through its via point (NaN row: none).
     """
     direct = np.isnan(via[:, 0])
     ok = np.zeros(len(q), bool)

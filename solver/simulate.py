@@ -45,8 +45,8 @@ def sample_counts(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Return what the controller logs for wire lengths ``length_mm``.
 
-    What the controller logs for wire lengths ``length_mm``: the mean of ``samples``
-    counter readings, unwrapped relative to the first, and their spread (counts).
+    The mean of ``samples`` counter readings, unwrapped relative to the first, and their
+    spread (counts).
     """
     exact = start + np.asarray(length_mm, dtype=float) / mm_per_count
     jitter = rng.choice((-1.0, 0.0, 0.0, 0.0, 1.0), size=(*exact.shape, samples))

@@ -35,8 +35,7 @@ class Stats:
 def reduction(before: Stats, after: Stats) -> dict[str, float | None]:
     """Return 1 − after/before of the mean, std and max.
 
-    1 − after/before of the mean, std and max; None where the before figure is 0
-    (nothing to reduce).
+    None where the before figure is 0 (nothing to reduce).
     """
     out: dict[str, float | None] = {}
     for k in ("mean", "std", "max"):

@@ -94,8 +94,8 @@ def parse_table(
 ) -> Table:
     """Split a file into header, column line and rows.
 
-    Split a file into header, column line and rows; raise on a wrong magic, version,
-    column line or quoted fields, and collect row-length problems in ``Table.problems``.
+    Raise on a wrong magic, version, column line or quoted fields, and collect row-length
+    problems in ``Table.problems``.
 
     ``what`` names the format in messages ("log", "validation log", …); ``keys`` are the
     header fields it knows (any other ``#`` line is a comment). ``columns`` may depend on

@@ -52,8 +52,8 @@ def patch_text(
 ) -> str:
     """Return the patch TOML.
 
-    The patch TOML; ``plausibility`` is the gate's verdict ("passed …" or
-    "overridden: …" when the user accepted an implausible result).
+    ``plausibility`` is the gate's verdict ("passed …" or "overridden: …" when the user
+    accepted an implausible result).
     """
     date = date or datetime.now(UTC)
     lines = [
