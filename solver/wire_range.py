@@ -25,8 +25,8 @@ MIN_WIRE_MM = 5.0  # and at least this long away from θ0 (the wire tip must not
 def run_moves(plan: Plan) -> list[tuple[str, np.ndarray, np.ndarray, bool]]:
     """Return the moves of ``wc.run`` in order.
 
-    Each (where, from, to, back to θ0) in deg: per step θ0 → via points → points in the plan's order → the next step's θ0 (the last:
-    the closing zero at θ0).
+    Each (where, from, to, back to θ0) in deg: per step θ0 → via points → points in the
+    plan's order → the next step's θ0 (the last: the closing zero at θ0).
     """
     moves = []
     here = plan.theta0_deg
