@@ -49,9 +49,12 @@ class Encoder:
 
 @dataclass(frozen=True)
 class UrdfSource:
-    """The URDF a robot file was imported from (``[urdf]`` table): its path (resolved against
+    """The URDF a robot file was imported from.
+
+    The URDF a robot file was imported from (``[urdf]`` table): its path (resolved against
     the robot file's folder) and the chain's end links. Export re-derives the DH frames from
-    it and changes only the chain's joint origins."""
+    it and changes only the chain's joint origins.
+    """
 
     path: str
     base_link: str

@@ -132,8 +132,11 @@ def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, 
 def write_patch(
     path: str | Path, robot: Robot, estimate: Estimate, *, force: bool = False, **meta
 ) -> tuple[Path, Path]:
-    """Write the patch and its SPEC table beside it, both or neither (the Python API's
-    one-call form of :func:`put_patch`); refuse to replace either unless ``force``."""
+    """Write the patch and its SPEC table beside it, both or neither.
+
+    Write the patch and its SPEC table beside it, both or neither (the Python API's
+    one-call form of :func:`put_patch`); refuse to replace either unless ``force``.
+    """
     path = Path(path)
     with Outputs([path, spec_path(path)], force=force) as out:
         put_patch(out, path, robot, estimate, **meta)
