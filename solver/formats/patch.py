@@ -134,8 +134,8 @@ def write_patch(
 ) -> tuple[Path, Path]:
     """Write the patch and its SPEC table beside it, both or neither.
 
-    Write the patch and its SPEC table beside it, both or neither (the Python API's
-    one-call form of :func:`put_patch`); refuse to replace either unless ``force``.
+    The Python API's one-call form of :func:`put_patch`; refuse to replace either unless
+    ``force``.
     """
     path = Path(path)
     with Outputs([path, spec_path(path)], force=force) as out:
