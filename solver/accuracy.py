@@ -1,4 +1,6 @@
-"""How accurate a calibration is: covariances of the estimators and their effect on the
+"""Accuracy of a calibration: estimator covariances, tool-point errors.
+
+How accurate a calibration is: covariances of the estimators and their effect on the
 tool point over the workspace.
 
 * Cramér–Rao bound: for wire lengths with noise covariance C, no unbiased estimator does
@@ -25,14 +27,17 @@ WORKSPACE_SEED = 20261121
 
 
 def workspace(robot: Robot, n: int = WORKSPACE_SAMPLES, seed: int = WORKSPACE_SEED) -> np.ndarray:
-    """n configurations uniform within the joint limits (radians), the same every call."""
+    """N configurations uniform within the joint limits (radians), the same every call."""
     rng = np.random.default_rng(seed)
     return np.radians(rng.uniform(robot.joint_min_deg, robot.joint_max_deg, (n, robot.n_joints)))
 
 
 def noise_covariance(n: int, sigma_mm: float, sigma_zero_mm: float = 0.0) -> np.ndarray:
-    """Covariance of n wire lengths: independent σ per point, plus the error of the zero
-    reading that every length is measured from (common to all)."""
+    """Return the covariance of n wire lengths.
+
+    Independent σ per point, plus the error of the zero reading that every length is
+    measured from (common to all).
+    """
     return sigma_mm**2 * np.eye(n) + sigma_zero_mm**2 * np.ones((n, n))
 
 
@@ -42,7 +47,7 @@ def crb(J: np.ndarray, C: np.ndarray) -> np.ndarray:
 
 
 def stepwise_map(psi: np.ndarray, step: np.ndarray) -> np.ndarray:
-    """The linearised stepwise estimator as a matrix A (m, N): ê = A·ỹ (see module doc)."""
+    """Return the linearised stepwise estimator as a matrix A (m, N): ê = A·ỹ (see module doc)."""
     N, m = psi.shape
     A = np.zeros((m, N))
     for j in range(m):
@@ -65,12 +70,16 @@ class ToolError:
     max_mm: float  # worst configuration's RMS error
 
     def as_dict(self) -> dict[str, float]:
+        """Return the mean and max (mm) by name."""
         return {"mean": self.mean_mm, "max": self.max_mm}
 
 
 def tool_error(model: Model, names: Sequence[str], cov: np.ndarray, q: np.ndarray) -> ToolError:
-    """RMS tool-point error sqrt(trace(J_p Σ J_pᵀ)) at each configuration q (radians);
-    ``cov`` in internal units (rad, mm)."""
+    """Return the RMS tool-point error at each configuration.
+
+    RMS tool-point error sqrt(trace(J_p Σ J_pᵀ)) at each configuration q (radians);
+    ``cov`` in internal units (rad, mm).
+    """
     _, Jp = tool_jacobian(model, q, names)
     rms = np.sqrt(np.einsum("nim,mk,nik->n", Jp, cov, Jp))
     return ToolError(float(rms.mean()), float(rms.max()))

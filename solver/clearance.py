@@ -1,6 +1,9 @@
-"""Wire clearance: the straight wire from the encoder's exit point to the attachment point
+"""Wire clearance: the wire against the links, modelled as capsules.
+
+Wire clearance: the straight wire from the encoder's exit point to the attachment point
 must stay clear of the robot's links, each modelled as a capsule (a segment between
-consecutive joint-frame origins, with a radius from the robot file)."""
+consecutive joint-frame origins, with a radius from the robot file).
+"""
 
 from __future__ import annotations
 
@@ -10,8 +13,10 @@ from wirecal.solver.kinematics import Model, frames
 
 
 def segment_distance(p1, q1, p2, q2) -> np.ndarray:
-    """Shortest distance between segments p1–q1 and p2–q2, broadcast over leading axes
-    (the clamped closest-point construction)."""
+    """Return the shortest distance between segments p1–q1 and p2–q2.
+
+    Broadcast over leading axes (the clamped closest-point construction).
+    """
     d1, d2, r = q1 - p1, q2 - p2, p1 - p2
     a = np.einsum("...i,...i", d1, d1)
     e = np.einsum("...i,...i", d2, d2)
@@ -30,17 +35,23 @@ def segment_distance(p1, q1, p2, q2) -> np.ndarray:
 
 
 def wire_trim_mm(robot) -> float:
-    """The wire's end at the attachment point left out of the clearance check: the fixture
-    sits there (tool point offset, last link radius and 15 mm)."""
+    """Return the wire's end left out of the clearance check (mm).
+
+    The wire's end at the attachment point left out of the clearance check: the fixture
+    sits there (tool point offset, last link radius and 15 mm).
+    """
     return float(np.linalg.norm(robot.tool_point)) + float(robot.link_radius_mm[-1]) + 15.0
 
 
 def wire_clearance(
     model: Model, q: np.ndarray, encoder: np.ndarray, radii: np.ndarray, trim_mm: float
 ) -> np.ndarray:
-    """The smallest gap (mm) between the wire and the link capsules for configurations q
+    """Return the smallest gap (mm) between the wire and the link capsules.
+
+    The smallest gap (mm) between the wire and the link capsules for configurations q
     (N, n) in radians; the wire's last ``trim_mm`` at the attachment point are not checked
-    (the fixture is there)."""
+    (the fixture is there).
+    """
     f = frames(model, q)
     p = f.o[:, -1] + np.einsum("nij,j->ni", f.R_last, model.tool_point)
     length = np.linalg.norm(p - encoder, axis=1, keepdims=True)

@@ -27,6 +27,7 @@ class Counter:
     bits: int
 
     def __post_init__(self) -> None:
+        """Refuse a width outside 8–64 bits."""
         if not 8 <= self.bits <= 64:
             raise ValueError(f"counter of {self.bits} bits: give 8 to 64")
 
@@ -41,19 +42,24 @@ class Counter:
         return 2**self.bits
 
     def wrap(self, counts: np.ndarray | float) -> np.ndarray:
-        """The counter's value for an unbounded count: ``counts`` brought into [−half, half)
-        modulo 2^bits."""
+        """Return the counter's value for an unbounded count.
+
+        ``counts`` brought into [−half, half) modulo 2^bits.
+        """
         # x − k·2^bits rather than (x + half) mod 2^bits − half: adding half first would
         # round small counts away once half exceeds 2^53 (a counter wider than 53 bits)
         x, full = np.asarray(counts, dtype=float), float(self.full)
         return x - full * np.floor((x + float(self.half)) / full)
 
     def difference(self, a: np.ndarray | float, b: np.ndarray | float) -> np.ndarray:
-        """The signed count a − b of two readings, modulo the counter's width."""
+        """Return the signed count a − b of two readings, modulo the counter's width."""
         return self.wrap(np.asarray(a, dtype=float) - b)
 
     def random_start(self, rng: np.random.Generator, within: float = 1.0) -> float:
-        """A start value drawn uniformly among the integers of ``within`` × the counter's
-        range (at most ±2^52, see the module doc): where a real counter happens to be."""
+        """Draw a start value where a real counter happens to be.
+
+        A start value drawn uniformly among the integers of ``within`` × the counter's
+        range (at most ±2^52, see the module doc): where a real counter happens to be.
+        """
         span = int(2 ** (min(self.bits, EXACT_BITS) - 1) * within)
         return float(rng.integers(-span, span))

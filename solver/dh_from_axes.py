@@ -54,6 +54,8 @@ class ChainError(ValueError):
 
 @dataclass(frozen=True)
 class DhChain:
+    """A modified-DH description of a chain of axes, with the frames it maps to."""
+
     dh: np.ndarray  # (n, 4): α_{i-1} [rad], a_{i-1} [mm], θ_i offset [rad], d_i [mm]
     frame0: np.ndarray  # (4, 4) base → DH frame 0
     tool_point: np.ndarray  # (3,) tip origin in DH frame n (mm)
@@ -63,7 +65,7 @@ class DhChain:
 
 
 def _up2(x: float) -> float:
-    """x rounded up to two significant digits."""
+    """Round x up to two significant digits."""
     step = 10.0 ** (np.floor(np.log10(x)) - 1)
     return float(np.ceil(x / step) * step)
 
@@ -114,7 +116,7 @@ def _closest(p1, z1, p2, z2):
 
 
 def _toward(x: np.ndarray, ref: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """x or −x, whichever is nearer ref (ties: the one at +90° about z)."""
+    """Return x or −x, whichever is nearer ref (ties: the one at +90° about z)."""
     c = x @ ref
     if abs(c) > 1e-12:
         return x if c > 0 else -x
@@ -129,9 +131,12 @@ def dh_from_axes(
     names: list[str],
     parallel_tol: float = PARALLEL_TOL,
 ) -> DhChain:
-    """The modified-DH description of axes ``points[i] + t·axes[i]`` (base frame, q = 0) with
+    """Return the modified-DH description of joint axes given as lines.
+
+    The modified-DH description of axes ``points[i] + t·axes[i]`` (base frame, q = 0) with
     tip pose ``tip`` (4, 4) and the joints' own frames ``joint_frames`` (n, 4, 4); ``names``
-    are used in messages. See the module doc for the conventions."""
+    are used in messages. See the module doc for the conventions.
+    """
     points = np.asarray(points, dtype=float)
     z = np.array([_unit(a) for a in np.asarray(axes, dtype=float)])
     n = len(z)

@@ -43,7 +43,7 @@ def wire_lengths(model: Model, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
 def wire_jacobian(
     model: Model, q: np.ndarray, q0: np.ndarray, names: Sequence[str]
 ) -> tuple[np.ndarray, np.ndarray]:
-    """d and ∂d/∂e = ν̂ᵀ (Φ_i − Φ_0) in mm/rad and mm/mm (paper eq. 14–16).
+    """D and ∂d/∂e = ν̂ᵀ (Φ_i − Φ_0) in mm/rad and mm/mm (paper eq. 14–16).
 
     Evaluated at the model given, so the same function serves the Ψ analysis at
     nominal and Gauss–Newton steps at any estimate.

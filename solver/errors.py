@@ -18,8 +18,11 @@ class WirecalError(Exception):
 
 
 class Implausible(WirecalError):
-    """An identification that passed every format check but that the plausibility gate
-    (:mod:`wirecal.solver.plausibility`) refuses: nothing is written; exit status 3."""
+    """Refuse an implausible identification.
+
+    An identification that passed every format check but that the plausibility gate
+    (:mod:`wirecal.solver.plausibility`) refuses: nothing is written; exit status 3.
+    """
 
     exit_status = 3
 
@@ -32,9 +35,11 @@ class Problems:
         self.items: list[str] = []
 
     def add(self, key: str, message: str) -> None:
+        """Add a problem about ``key`` (the file itself when empty)."""
         where = f"{self.source}: {key}" if key else self.source
         self.items.append(f"{where}: {message}")
 
     def raise_if_any(self) -> None:
+        """Raise every problem collected, if any."""
         if self.items:
             raise WirecalError(self.items)

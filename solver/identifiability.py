@@ -1,4 +1,6 @@
-"""Identifiability of error parameters from wire lengths: rank, singular values,
+"""Identifiability of error parameters from wire lengths.
+
+Identifiability of error parameters from wire lengths: rank, singular values,
 unobservable parameters or combinations, and the observability indices O1–O5
 (Sun & Hollerbach's list) of the distance Jacobian in boundary units.
 """
@@ -22,6 +24,8 @@ RANK_RTOL = 1e-9
 
 @dataclass(frozen=True)
 class Identifiability:
+    """Rank, singular values, unobservable parameters and observability indices."""
+
     names: tuple[str, ...]
     n_points: int
     singular_values: np.ndarray
@@ -31,7 +35,7 @@ class Identifiability:
     indices: dict[str, float]  # O1..O5
 
     def describe(self) -> list[str]:
-        """The analysis in words, one sentence per line."""
+        """Return the analysis in words, one sentence per line."""
         m = len(self.names)
         lines = [
             f"{self.n_points} points, {m} parameters: the distance Jacobian has rank "
@@ -164,11 +168,14 @@ def _rref(a: np.ndarray) -> np.ndarray:
 def propose_parameters(
     model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray, nominal_dh: np.ndarray
 ) -> tuple[str, ...]:
-    """Error parameters to calibrate, in the style of the paper's eq. 20: the θ offsets of
+    """Return the error parameters to calibrate (in the style of the paper's eq. 20).
+
+    Error parameters to calibrate, in the style of the paper's eq. 20: the θ offsets of
     joints 2…n and every non-zero length a_{i-1}, d_i of rows 2…n (row 1 is a rigid motion
     of the whole arm, :data:`BASE_PARAMETERS`), each kept only when it raises the rank of the
     distance Jacobian over the points ``q_deg`` — so of redundant ones (the d's of parallel
-    axes, θ_n with a tool point on axis n) the first is kept."""
+    axes, θ_n with a tool point on axis n) the first is kept.
+    """
     n = model.n_joints
     lengths = [
         name

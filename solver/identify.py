@@ -15,6 +15,7 @@ Values are internal units (rad, mm) inside; :class:`Estimate` reports deg and mm
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -26,6 +27,9 @@ from wirecal.solver.plan import Plan
 
 DEFAULT_OMEGA = 5.0
 """Default bound Ω_j: ±5 deg for angles, ±5 mm for lengths."""
+
+Loss = Literal["linear", "soft_l1", "huber", "cauchy", "arctan"]
+"""The losses of ``scipy.optimize.least_squares`` that :func:`joint` accepts."""
 
 
 def omega_vector(
@@ -229,7 +233,7 @@ def run_stepwise(problem: Problem, omega: np.ndarray, psi: np.ndarray) -> Estima
 
 
 def joint(
-    problem: Problem, x0: np.ndarray, *, loss: str = "linear", f_scale_mm: float = 0.05
+    problem: Problem, x0: np.ndarray, *, loss: Loss = "linear", f_scale_mm: float = 0.05
 ) -> Estimate:
     """All parameters together, nonlinear least squares from ``x0`` (internal units).
 
@@ -253,11 +257,17 @@ def joint(
     # MINPACK's Levenberg–Marquardt for plain least squares; a robust loss needs "trf".
     from scipy.optimize import least_squares  # imported here: code generation needs Ω only
 
-    method = "lm" if loss == "linear" else "trf"
+    def residuals(x: np.ndarray) -> np.ndarray:
+        return evaluate(x)[0]
+
+    def jacobian(x: np.ndarray) -> np.ndarray:
+        return evaluate(x)[1]
+
+    method: Literal["lm", "trf"] = "lm" if loss == "linear" else "trf"
     res = least_squares(
-        lambda x: evaluate(x)[0],
+        residuals,
         x0,
-        jac=lambda x: evaluate(x)[1],
+        jac=jacobian,
         method=method,
         loss=loss,
         f_scale=f_scale_mm,

@@ -38,6 +38,8 @@ HALF_PI = np.pi / 2
 
 @dataclass(frozen=True)
 class Solution:
+    """One inverse-kinematics solution, its configuration and whether it is within limits."""
+
     q: np.ndarray  # joint angles (rad)
     config: tuple[str, str, str]  # ("righty"|"lefty", "above"|"below", "noflip"|"flip")
     within_limits: bool
@@ -87,7 +89,7 @@ def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
     c = ob - d[5] * Rb[:, 2]
     y1 = -s1 * (d[1] + d[2])
     r2 = c[0] ** 2 + c[1] ** 2
-    out = []
+    out: list[np.ndarray] = []
     if r2 < y1**2:
         return out
     for shoulder in (1, -1):
@@ -152,8 +154,10 @@ def _polish(model, q, R, o, iterations=30):
 
 
 def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, bool]:
-    """The solution nearest ``q`` by Newton from it: a small Cartesian step in the same
-    configuration (much cheaper than :func:`solve`)."""
+    """Return the solution nearest ``q`` by Newton from it.
+
+    A small Cartesian step in the same configuration (much cheaper than :func:`solve`).
+    """
     return _polish(model, np.asarray(q, dtype=float), R, o, iterations=8)
 
 
@@ -166,7 +170,9 @@ def solve(
     margin_deg: float = 0.0,
     seed: int = 0,
 ) -> list[Solution]:
-    """Every distinct solution for the flange pose (R, o), each put into the robot's joint
+    """Return every distinct solution for the flange pose (R, o).
+
+    Every distinct solution for the flange pose (R, o), each put into the robot's joint
     limits less ``margin_deg`` where a turn of ±360° allows it.
 
     ``model`` is the kinematic model the controller believes (default: the robot's
@@ -219,7 +225,7 @@ def _into_limits(q, lo_deg, hi_deg):
 
 
 def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
-    """wirecal's names of a solution's configuration (see the module doc)."""
+    """Return wirecal's names of a solution's configuration (see the module doc)."""
     if ik_ur.ur_structure(model):
         return ik_ur.configuration(model, q)
     f = frames(model, np.atleast_2d(q))

@@ -1,4 +1,6 @@
-"""Closed-form inverse kinematics of UR-type arms: axes 2, 3, 4 parallel and perpendicular to
+"""Closed-form inverse kinematics of UR-type arms.
+
+Closed-form inverse kinematics of UR-type arms: axes 2, 3, 4 parallel and perpendicular to
 axis 1, an offset wrist (axes 5 and 6 each perpendicular to the one before, a4 = a5 = 0,
 any d5, d6). In Craig's convention: α1, α4, α5 = ±90°, α2 = α3 = 0, a4 = a5 = 0; row 1's
 α0, a0, d1 act as a fixed base transform. Up to eight solutions: shoulder × wrist × elbow.
@@ -46,7 +48,7 @@ def _rot_z(a: float) -> np.ndarray:
 
 
 def structural(dh: np.ndarray) -> np.ndarray:
-    """The nearest exact UR-type table: twists rounded to multiples of 90°, a4 = a5 = 0."""
+    """Return the nearest exact UR-type table: twists rounded to multiples of 90°, a4 = a5 = 0."""
     out = np.array(dh, dtype=float)
     out[:, 0] = np.round(out[:, 0] / HALF_PI) * HALF_PI
     out[4:, 1] = 0.0
@@ -70,7 +72,7 @@ def ur_structure(model: Model) -> bool:
 
 
 def closed_form(dh: np.ndarray, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
-    """The DH angles φ (up to 8) of an exact UR-type table for the flange pose (R, o)."""
+    """Return the DH angles φ (up to 8) of an exact UR-type table for the flange pose (R, o)."""
     alpha, a, _, d = np.asarray(dh, dtype=float).T
     base = _rot_x(alpha[0])
     Rb = base.T @ R
@@ -128,9 +130,12 @@ def candidates(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
 
 
 def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
-    """wirecal's names of a UR-type solution's branches: righty when o5 lies ahead of the
-    joint-1 axis along x1 (the shoulder root's sign), above when the elbow o3 is above the
-    line from o2 to o4 in the plane of the parallel axes, flip when φ5 < 0."""
+    """Return wirecal's names of a UR-type solution's branches.
+
+    Righty when o5 lies ahead of the joint-1 axis along x1 (the shoulder root's sign), above
+    when the elbow o3 is above the line from o2 to o4 in the plane of the parallel axes, flip
+    when φ5 < 0.
+    """
     f = frames(model, np.atleast_2d(q))
     z1, x1 = f.z[0, 1], f.x[0, 1]
     o5 = f.o[0, 5] - f.o[0, 1]

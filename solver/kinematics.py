@@ -39,15 +39,17 @@ class Model:
 
     @property
     def n_joints(self) -> int:
+        """Return the number of joints."""
         return int(self.dh.shape[-2])
 
     @property
     def batched(self) -> bool:
+        """Return whether the model holds a batch of DH tables."""
         return self.dh.ndim == 3
 
 
 def with_errors(base: Model, names: Sequence[str], values: np.ndarray) -> Model:
-    """The model with offsets ``values`` (m,) or (T, m), internal units, added to ``base``.
+    """Return the model with offsets ``values`` (m,) or (T, m), internal units, added to ``base``.
 
     With a (T, m) array the result holds T models (dh (T, n, 4)). A robot's offsets in
     boundary units (deg, mm) give a model through :meth:`~wirecal.solver.robot.Robot.model`.
@@ -146,7 +148,7 @@ def _layout(names: tuple[str, ...], n: int) -> dict[str, tuple[np.ndarray, np.nd
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a × b over the last axis (faster than np.cross for stacks of 3-vectors)."""
+    """Return a × b over the last axis (faster than np.cross for stacks of 3-vectors)."""
     return np.stack(
         [
             a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],

@@ -94,11 +94,13 @@ def describe_missing(missing, step: np.ndarray, index: np.ndarray) -> str:
 
 def _ranges(values: list[int]) -> str:
     values = sorted(values)
-    out, start = [], values[0]
+    out: list[str] = []
+    start = values[0]
     for a, b in zip(values, [*values[1:], None], strict=True):
         if b != a + 1:
             out.append(str(start) if start == a else f"{start}–{a}")
-            start = b
+            if b is not None:
+                start = b
     return ", ".join(out)
 
 
@@ -335,10 +337,10 @@ def _lengths(
     counter = robot.encoder.counter
     # The reference is the mean of all zero readings: every length is measured from
     # it, so its error is common to all points; averaging the steps' zeros shrinks it.
-    ref = first + np.mean(
-        [counter.difference(r.counts, first) for s, r in rows.zeros.items() if s <= n_steps]
-        or [0.0]
-    )
+    zero_diffs = [
+        float(counter.difference(r.counts, first)) for s, r in rows.zeros.items() if s <= n_steps
+    ]
+    ref = first + float(np.mean(zero_diffs or [0.0]))
     distance = counter.difference(rows.counts, ref) * mpc
     for k in np.flatnonzero(~np.isnan(distance)):
         line = rows.seen[("point", int(rows.step_no[k]), int(rows.index_no[k]))]

@@ -35,10 +35,12 @@ class Param:
 
     @property
     def angular(self) -> bool:
+        """Return whether the parameter is an angle (θ or α)."""
         return self.kind in ("th", "al")
 
     @property
     def unit(self) -> str:
+        """Return the parameter's boundary unit, ``deg`` or ``mm``."""
         return "deg" if self.angular else "mm"
 
 
@@ -84,10 +86,12 @@ class ErrorSet:
     params: tuple[Param, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        """Store the names as a tuple and parse each into its parameter."""
         object.__setattr__(self, "names", tuple(self.names))
         object.__setattr__(self, "params", tuple(parse(n, self.n_joints) for n in self.names))
 
     def __len__(self) -> int:
+        """Return the number of parameters."""
         return len(self.names)
 
     @property
@@ -129,9 +133,9 @@ class ErrorSet:
         return np.asarray(values_internal, dtype=float) * self.boundary_per_internal
 
     def per_boundary(self, columns_internal: np.ndarray) -> np.ndarray:
-        """Derivatives (…, m) per rad/mm → per deg/mm (e.g. ∂p/∂e in mm/rad → mm/deg)."""
+        """Return derivatives (…, m) per rad/mm → per deg/mm (e.g. ∂p/∂e in mm/rad → mm/deg)."""
         return np.asarray(columns_internal, dtype=float) * self.internal_per_boundary
 
     def per_internal(self, columns_boundary: np.ndarray) -> np.ndarray:
-        """Derivatives (…, m) per deg/mm → per rad/mm (e.g. Ψ in mm/deg → mm/rad)."""
+        """Return derivatives (…, m) per deg/mm → per rad/mm (e.g. Ψ in mm/deg → mm/rad)."""
         return np.asarray(columns_boundary, dtype=float) / self.internal_per_boundary

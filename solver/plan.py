@@ -1,4 +1,6 @@
-"""A calibration plan: θ0, the identification order and one point set per step (paper
+"""A calibration plan: θ0, the identification order and the point sets.
+
+A calibration plan: θ0, the identification order and one point set per step (paper
 §2.3), with the fingerprint that ties a measurement log to it. Files are read and written
 by :mod:`wirecal.solver.formats.plan_file`.
 
@@ -17,6 +19,8 @@ import numpy as np
 
 @dataclass(frozen=True)
 class Step:
+    """One identification step: its parameter, points and via points (deg)."""
+
     parameter: str
     points_deg: np.ndarray  # (k, n)
     via_deg: np.ndarray  # (v, n), possibly empty
@@ -25,6 +29,8 @@ class Step:
 
 @dataclass(frozen=True)
 class Plan:
+    """A calibration plan: θ0, the identification order and one step per parameter."""
+
     theta0_deg: np.ndarray
     order: tuple[str, ...]
     steps: tuple[Step, ...]
@@ -34,6 +40,7 @@ class Plan:
 
     @property
     def n_points(self) -> int:
+        """Return the number of calibration points over all steps."""
         return sum(len(s.points_deg) for s in self.steps)
 
     def all_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -44,6 +51,7 @@ class Plan:
         return q, step, index
 
     def fingerprint(self) -> str:
+        """Return the plan's sha256 fingerprint (see :func:`fingerprint`)."""
         return fingerprint(self)
 
 

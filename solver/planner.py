@@ -1,4 +1,6 @@
-"""Design of experiments (paper §2.2–2.3, §3.4): θ0, the identification order and one point
+"""Design of experiments (paper §2.2–2.3, §3.4).
+
+Design of experiments (paper §2.2–2.3, §3.4): θ0, the identification order and one point
 set per parameter, for any 6R arm.
 
 Candidates are configurations that move one to three joints away from θ0 (as the paper's
@@ -42,6 +44,8 @@ from wirecal.solver.sensitivity import PSI_FLOOR, sensitivity
 
 @dataclass(frozen=True)
 class PlanOptions:
+    """The planner's settings."""
+
     points_per_step: int = 5
     tol: float = 0.05  # isolation while designing (stricter than psi's verdict)
     margin_deg: float = 5.0  # from every joint limit
@@ -58,6 +62,8 @@ class PlanOptions:
 
 @dataclass
 class StepDesign:
+    """One designed step and its figures of merit."""
+
     parameter: str
     points_deg: np.ndarray
     strength: float  # RMS |Ψ_j| of the points
@@ -68,6 +74,8 @@ class StepDesign:
 
 @dataclass
 class Design:
+    """A designed plan with its per-step figures, exclusions and predictions."""
+
     plan: Plan
     steps: list[StepDesign]
     excluded: dict[str, str] = field(default_factory=dict)  # parameter → reason
@@ -75,6 +83,7 @@ class Design:
     robot_time_s: float = 0.0
 
     def header(self) -> str:
+        """Return the plan file's header comment: the design's figures in words."""
         lines = [
             "Designed by 'wirecal plan' (Boschetti & Sinico's method, see the README).",
             f"theta0 {np.round(self.plan.theta0_deg, 2).tolist()} deg; order "
@@ -113,7 +122,7 @@ def _subsets(n: int):
 
 
 def candidates(robot: Robot, theta0: np.ndarray, opt: PlanOptions, rng) -> np.ndarray:
-    """Configurations (deg) moving a few joints away from θ0, within the limits' margin."""
+    """Return configurations (deg) moving a few joints away from θ0, within the limits' margin."""
     lo = robot.joint_min_deg + opt.margin_deg
     hi = robot.joint_max_deg - opt.margin_deg
     out = []
@@ -133,9 +142,12 @@ def candidates(robot: Robot, theta0: np.ndarray, opt: PlanOptions, rng) -> np.nd
 def move_samples(
     a: np.ndarray, b: np.ndarray, step_deg: float = 2.0
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Configurations (deg) along the joint-interpolated moves a → b (rows broadcast),
+    """Return the configurations along moves a → b and each move's first sample.
+
+    Configurations (deg) along the joint-interpolated moves a → b (rows broadcast),
     every ``step_deg`` of the largest joint motion, b included and a not; and the index of
-    each move's first sample (for ``np.minimum.reduceat`` and the like)."""
+    each move's first sample (for ``np.minimum.reduceat`` and the like).
+    """
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
     count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg)).astype(int)
     move = np.repeat(np.arange(len(a)), count)
@@ -147,16 +159,24 @@ def move_samples(
 def move_clearance(
     robot: Robot, model, p0: np.ndarray, a: np.ndarray, b: np.ndarray, step_deg: float = 2.0
 ) -> np.ndarray:
-    """The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
-    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion."""
+    """Return the smallest wire gap (mm) to the links along moves a → b.
+
+    The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
+    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion.
+    """
+    if robot.link_radius_mm is None:
+        raise WirecalError(f"{robot.source}: the wire clearance needs the link radii")
     q, first = move_samples(a, b, step_deg)
     gap = wire_clearance(model, np.radians(q), p0, robot.link_radius_mm, wire_trim_mm(robot))
     return np.minimum.reduceat(gap, first) if len(first) else gap
 
 
 def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2.0) -> np.ndarray:
-    """Moves a → b that keep the wire clear of the links and do not turn joint 6 by more
-    than 180° (which would wrap the wire around the flange)."""
+    """Return which moves a → b are safe for the wire.
+
+    Moves a → b that keep the wire clear of the links and do not turn joint 6 by more
+    than 180° (which would wrap the wire around the flange).
+    """
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
     return (np.abs(b[:, -1] - a[:, -1]) <= 180) & (
         move_clearance(robot, model, p0, a, b, step_deg) >= opt.clearance_mm
@@ -166,8 +186,10 @@ def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2
 def reach_ok(
     robot: Robot, model, p0, theta0, q, via, opt: PlanOptions, step_deg: float = 2.0
 ) -> np.ndarray:
-    """Whether each point q is reached from θ0 with the wire clear: directly, or through
-    its via point (NaN row: none)."""
+    """Return whether each point q is reached from θ0 with the wire clear.
+
+    Directly, or through its via point (NaN row: none).
+    """
     direct = np.isnan(via[:, 0])
     ok = np.zeros(len(q), bool)
     ok[direct] = move_ok(robot, model, p0, theta0, q[direct], opt, step_deg)
@@ -181,10 +203,13 @@ def reach_ok(
 def screen(
     robot: Robot, model, p0: np.ndarray, theta0: np.ndarray, q: np.ndarray, opt: PlanOptions
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Which candidates are usable (wire length, wrist singularity, a clear move from θ0)
+    """Return which candidates are usable, and their via points.
+
+    Which candidates are usable (wire length, wrist singularity, a clear move from θ0)
     and, for those whose direct move is not clear, a via point that makes it clear (the
     arm joints first, or the wrist first); NaN rows where the direct move is clear. The
-    moves are sampled coarsely here; ``reach_ok`` checks the points chosen from finely."""
+    moves are sampled coarsely here; ``reach_ok`` checks the points chosen from finely.
+    """
     coarse = 10.0
 
     def length_ok(x):
@@ -213,9 +238,12 @@ def screen(
 
 
 def _error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
-    """Mean squared error of a step's estimate (linearised): the reading noise, the error
+    """Return the mean squared error of a step's estimate (linearised).
+
+    Mean squared error of a step's estimate (linearised): the reading noise, the error
     of the earlier estimates leaking in through Ψ_{i,<j} (covariance ``cov_prev``), and the
-    still-unknown later parameters leaking in through Ψ_{i,>j} (each of size ``prior``)."""
+    still-unknown later parameters leaking in through Ψ_{i,>j} (each of size ``prior``).
+    """
     s = float(psi_j @ psi_j)
     if s <= 0:
         return np.inf
@@ -228,10 +256,13 @@ def _error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
 def _choose(
     psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, opt: PlanOptions, criterion: str
 ):
-    """k points by greedy minimum error ("ours") or by largest |Ψ_j| ("paper"), at least
+    """Choose a step's K points by the ``rule`` given.
+
+    K points by greedy minimum error ("ours") or by largest |Ψ_j| ("paper"), at least
     ``spread_deg`` apart, each pair joined by a clear move (``linked(i, among)``: which
     of the candidates ``among`` (mask) are reachable from i), at most one needing a via
-    point (it will be visited first)."""
+    point (it will be visited first).
+    """
     pool = np.ones(len(q), bool)
     for _ in range(20):  # a dead end (no k linked points): start elsewhere
         chosen = _greedy(
@@ -273,7 +304,7 @@ def _greedy(
 def design(
     robot: Robot, theta0: np.ndarray | None = None, opt: PlanOptions = PlanOptions()
 ) -> Design:
-    """A plan for the robot file's parameters (θ0 chosen when not given)."""
+    """Return a plan for the robot file's parameters (θ0 chosen when not given)."""
     span = robot.joint_max_deg - robot.joint_min_deg
     narrow = np.flatnonzero(span <= 2 * opt.margin_deg)
     if narrow.size:
@@ -309,9 +340,8 @@ def design(
     return best[1]
 
 
-def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
-    rng = np.random.default_rng(opt.seed)
-    model = robot.nominal
+def _check_theta0(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> None:
+    """Raise when a joint of θ0 is within the margin of its limits."""
     for j in np.flatnonzero(
         (theta0 < robot.joint_min_deg + opt.margin_deg)
         | (theta0 > robot.joint_max_deg - opt.margin_deg)
@@ -320,20 +350,12 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
             f"theta0: joint {j + 1} = {theta0[j]:g} deg is within "
             f"{opt.margin_deg:g} deg of its limits"
         )
-    q_all = candidates(robot, theta0, opt, rng)
-    p0 = tool_position(model, np.radians(theta0)[None])[0]
-    usable, via_all = screen(robot, model, p0, theta0, q_all, opt)
-    q_all, via_all = q_all[usable], via_all[usable]
-    has_via = ~np.isnan(via_all[:, 0])
-    if len(q_all) < opt.points_per_step:
-        raise WirecalError(
-            f"{robot.source}: almost no usable configuration around θ0 "
-            f"{theta0.tolist()}: check the encoder range, the link radii and "
-            "the joint limits"
-        )
-    names = list(robot.parameters)
+
+
+def _unidentifiable(model, q: np.ndarray, theta0: np.ndarray, names: list[str]) -> dict[str, str]:
+    """Return the parameters no plan can identify (unobservable, or redundant), with why."""
     excluded: dict[str, str] = {}
-    ident = analyse(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
+    ident = analyse(model, q, theta0, names)
     for name in ident.unobservable:
         excluded[name] = (
             "unobservable: it moves every point and the encoder alike"
@@ -347,36 +369,71 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
             + ", ".join(n for n, _ in combo[:-1])
             + ": no wire length separates them; keep one"
         )
+    return excluded
+
+
+def _most_informative(
+    psi: np.ndarray, col: dict[str, int], remaining: list[str], opt: PlanOptions
+) -> tuple[str, np.ndarray] | None:
+    """Choose the next parameter to isolate and its isolating candidates.
+
+    The parameter whose ``points_per_step`` most sensitive isolating candidates carry the
+    most information (Σψ²); None when no parameter has that many isolating candidates.
+    """
+    k = opt.points_per_step
+    best: tuple[float, str, np.ndarray] | None = None
+    for j in remaining:
+        pj = psi[:, col[j]]
+        others = [col[t] for t in remaining if t != j]
+        limit = np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
+        iso = (
+            np.all(np.abs(psi[:, others]) <= limit[:, None], axis=1)
+            if others
+            else np.ones(len(pj), bool)
+        )
+        iso &= np.abs(pj) >= 0.05
+        if iso.sum() < k:
+            continue
+        info = float(np.sort(pj[iso] ** 2)[-k:].sum())
+        if best is None or info > best[0]:
+            best = (info, j, np.flatnonzero(iso))
+    return None if best is None else (best[1], best[2])
+
+
+def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
+    """Design a plan around a given θ0 (see :func:`design`)."""
+    rng = np.random.default_rng(opt.seed)
+    model = robot.nominal
+    _check_theta0(robot, theta0, opt)
+    q_all = candidates(robot, theta0, opt, rng)
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    usable, via_all = screen(robot, model, p0, theta0, q_all, opt)
+    q_all, via_all = q_all[usable], via_all[usable]
+    has_via = ~np.isnan(via_all[:, 0])
+    if len(q_all) < opt.points_per_step:
+        raise WirecalError(
+            f"{robot.source}: almost no usable configuration around θ0 "
+            f"{theta0.tolist()}: check the encoder range, the link radii and "
+            "the joint limits"
+        )
+    names = list(robot.parameters)
+    excluded = _unidentifiable(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
     remaining = [n for n in names if n not in excluded]
     psi = sensitivity(model, q_all, theta0, remaining).psi
     col = {n: k for k, n in enumerate(remaining)}
-    order, steps, chosen_q = [], [], []
-    k = opt.points_per_step
+    order: list[str] = []
+    steps: list[StepDesign] = []
+    chosen_q: list[np.ndarray] = []
     while remaining:
-        best = None
-        for j in remaining:
-            pj = psi[:, col[j]]
-            others = [col[t] for t in remaining if t != j]
-            limit = np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
-            iso = (
-                np.all(np.abs(psi[:, others]) <= limit[:, None], axis=1)
-                if others
-                else np.ones(len(pj), bool)
-            )
-            iso &= np.abs(pj) >= 0.05
-            if iso.sum() < k:
-                continue
-            info = float(np.sort(pj[iso] ** 2)[-k:].sum())
-            if best is None or info > best[0]:
-                best = (info, j, np.flatnonzero(iso))
+        best = _most_informative(psi, col, remaining, opt)
         if best is None:
             for j in remaining:
                 excluded[j] = (
-                    f"cannot be isolated: no {k} points leave it alone "
+                    f"cannot be isolated: no {opt.points_per_step} points leave it alone "
                     f"among {', '.join(t for t in remaining if t != j)}"
                 )
             break
-        _, j, iso = best
+        j, iso = best
         # the most sensitive isolating points, their moves from θ0 checked finely
         iso = iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")[:600]]
         iso = iso[reach_ok(robot, model, p0, theta0, q_all[iso], via_all[iso], opt)]
@@ -440,8 +497,11 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
 
 
 def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarray:
-    """Error covariance (boundary units) of the estimates of the steps planned so far,
-    with the parameters not planned yet left out (their leak is added step by step)."""
+    """Return the error covariance of the estimates of the steps planned so far.
+
+    Error covariance (boundary units) of the estimates of the steps planned so far,
+    with the parameters not planned yet left out (their leak is added step by step).
+    """
     q = np.concatenate(chosen_q)
     step = np.concatenate([np.full(len(c), s + 1) for s, c in enumerate(chosen_q)])
     J = sensitivity(model, q, theta0, order).psi
@@ -450,10 +510,13 @@ def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarra
     return opt.sigma_mm**2 * A @ A.T + opt.prior**2 * E @ E.T
 
 
-def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.ndarray:
-    """The visiting order from θ0 and back (nearest neighbour, improved by 2-opt) over
+def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.ndarray | None:
+    """Return the visiting order from θ0 and back, or None.
+
+    The visiting order from θ0 and back (nearest neighbour, improved by 2-opt) over
     moves that keep the wire clear (``move_ok``); a point reached through a via point can
-    only come first. Returns the order, or None when no order keeps every move clear."""
+    only come first. Returns the order, or None when no order keeps every move clear.
+    """
     n = len(pts)
     a, b = np.repeat(pts, n, axis=0), np.tile(pts, (n, 1))
     clear = move_ok(robot, model, p0, a, b, opt).reshape(n, n)
@@ -477,7 +540,8 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
             t += leg[x, y] + bad * (not clear[x, y] or has_via[y])
         return t
 
-    left, path = list(range(n)), []
+    left = list(range(n))
+    path: list[int] = []
     while left:
         i = min(left, key=lambda k: total([*path, k]) - (total(path) if path else 0))
         path.append(i)
@@ -493,9 +557,12 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
 
 
 def robot_time(robot: Robot, plan: Plan, run: RunParameters = DEFAULT_RUN) -> float:
-    """Estimated run time (s): every step from θ0 (zero reading) through its via points
+    """Estimate the run time (s) of a plan.
+
+    Estimated run time (s): every step from θ0 (zero reading) through its via points
     and points and back to θ0, moves at the program speed, a settle and the readings per
-    stop (the time model of :mod:`~wirecal.solver.run_parameters`, as the twin's clock)."""
+    stop (the time model of :mod:`~wirecal.solver.run_parameters`, as the twin's clock).
+    """
     total = 0.0
     for s in plan.steps:
         seq = [plan.theta0_deg, *s.via_deg, *s.points_deg, plan.theta0_deg]
@@ -507,10 +574,13 @@ def robot_time(robot: Robot, plan: Plan, run: RunParameters = DEFAULT_RUN) -> fl
 def predicted_accuracy(
     robot: Robot, plan: Plan, sigma_mm: float = 0.01, prior: float = PlanOptions.prior
 ) -> dict[str, float]:
-    """Mean tool-point error over the workspace: for the joint estimate the Cramér–Rao bound
+    """Return the mean tool-point error over the workspace (mm) of both estimators.
+
+    Mean tool-point error over the workspace: for the joint estimate the Cramér–Rao bound
     (σ per reading plus the count's quantisation); for the stepwise estimate its linearised
     map A, noise A·C·Aᵀ plus the bias of parameters leaking into steps before their own,
-    (A·J − I)·P·(A·J − I)ᵀ with true offsets of size ``prior`` (deg, mm)."""
+    (A·J − I)·P·(A·J − I)ᵀ with true offsets of size ``prior`` (deg, mm).
+    """
     model = robot.nominal
     q, step, _ = plan.all_points()
     names = plan.order

@@ -74,6 +74,8 @@ HEADLINE = {
 
 @dataclass(frozen=True)
 class Finding:
+    """One failed plausibility check."""
+
     check: str  # "lengths", "residual", "identifiability" or "bound"
     message: str
 
@@ -92,6 +94,7 @@ class Plausibility:
 
     @property
     def passed(self) -> bool:
+        """Return whether no check failed."""
         return not self.findings
 
     def summary(self) -> str:
@@ -105,10 +108,11 @@ class Plausibility:
         return "failed: " + "; ".join(dict.fromkeys(HEADLINE[f.check] for f in self.findings))
 
     def patch_field(self) -> str:
-        """The patch's ``plausibility`` value: the verdict, or that it was overridden."""
+        """Return the patch's ``plausibility`` value: the verdict, or that it was overridden."""
         return self.summary() if self.passed else OVERRIDDEN + self.summary()
 
     def as_json(self) -> dict:
+        """Return the verdict as a JSON-ready dict."""
         return {
             "passed": self.passed,
             "findings": [{"check": f.check, "message": f.message} for f in self.findings],
@@ -178,7 +182,7 @@ def assess(
 
 
 def _lengths(measured: np.ndarray, model: np.ndarray, source: str) -> list[Finding]:
-    """The span of the measured lengths against the robot model's at the same points."""
+    """Return the span of the measured lengths against the robot model's at the same points."""
     span_measured = float(np.ptp(measured)) if measured.size else 0.0
     span_model = float(np.ptp(model)) if model.size else 0.0
     if span_model <= 0:
@@ -292,8 +296,11 @@ def gate(
     noise_mm: float = READING_NOISE_MM,
     omega_default: float = DEFAULT_OMEGA,
 ) -> Plausibility:
-    """:func:`assess`, raising :class:`Implausible` (exit status 3) unless it passed or
-    ``accept`` (the user's explicit override, which the patch then records)."""
+    """Assess an identification and refuse it unless it passed or is accepted.
+
+    :func:`assess`, raising :class:`Implausible` (exit status 3) unless it passed or
+    ``accept`` (the user's explicit override, which the patch then records).
+    """
     verdict = assess(result, method, noise_mm=noise_mm, omega_default=omega_default)
     if verdict.passed or accept:
         return verdict

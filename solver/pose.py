@@ -1,6 +1,9 @@
-"""Poses as a robot controller writes them: x, y, z (mm) and Z-Y-Z Euler angles yaw,
+"""Poses as a robot controller writes them (Z-Y-Z Euler angles).
+
+Poses as a robot controller writes them: x, y, z (mm) and Z-Y-Z Euler angles yaw,
 pitch, roll (deg), R = RotZ(yaw)·RotY(pitch)·RotZ(roll) — the convention of Adept's V+
-transformations (from third-party sources; unconfirmed against the manual)."""
+transformations (from third-party sources; unconfirmed against the manual).
+"""
 
 from __future__ import annotations
 

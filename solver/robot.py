@@ -1,6 +1,9 @@
-"""The robot model: a serial arm's nominal kinematics (Craig's modified DH), joint limits
+"""The robot model: a serial arm's kinematics, limits, wire attachment and encoder.
+
+The robot model: a serial arm's nominal kinematics (Craig's modified DH), joint limits
 and speeds, the wire attachment point and the draw-wire encoder. Files are read by
-:mod:`wirecal.solver.formats.robot_file`."""
+:mod:`wirecal.solver.formats.robot_file`.
+"""
 
 from __future__ import annotations
 
@@ -24,9 +27,12 @@ DEFAULT_LINK_RADIUS_MM = 50.0
 
 @dataclass(frozen=True)
 class Encoder:
-    """The draw-wire encoder: scale, measuring range, the width of the controller's counter,
+    """The draw-wire encoder and how the controller program reads it.
+
+    The draw-wire encoder: scale, measuring range, the width of the controller's counter,
     and how the controller program reads it: ``interface`` "belt" (DEFBELT/BELT, belt
-    encoder ``channel``, BELT mode ``belt_mode``) or "device" (DEVICE unit ``channel``)."""
+    encoder ``channel``, BELT mode ``belt_mode``) or "device" (DEVICE unit ``channel``).
+    """
 
     mm_per_count: float
     range_mm: float
@@ -43,9 +49,12 @@ class Encoder:
 
 @dataclass(frozen=True)
 class UrdfSource:
-    """The URDF a robot file was imported from (``[urdf]`` table): its path (resolved against
+    """The URDF a robot file was imported from.
+
+    The URDF a robot file was imported from (``[urdf]`` table): its path (resolved against
     the robot file's folder) and the chain's end links. Export re-derives the DH frames from
-    it and changes only the chain's joint origins."""
+    it and changes only the chain's joint origins.
+    """
 
     path: str
     base_link: str
@@ -74,6 +83,7 @@ class Robot:
 
     @property
     def n_joints(self) -> int:
+        """Return the number of joints."""
         return int(self.dh.shape[0])
 
     @cached_property
@@ -85,11 +95,11 @@ class Robot:
         return Model(dh=dh, tool_point=tool)
 
     def errors(self, names: Sequence[str] | None = None) -> P.ErrorSet:
-        """The error parameters ``names`` (default: the robot file's ``parameters``)."""
+        """Return the error parameters ``names`` (default: the robot file's ``parameters``)."""
         return P.ErrorSet(tuple(self.parameters if names is None else names), self.n_joints)
 
     def model(self, offsets: Mapping[str, float]) -> Model:
-        """The nominal model with error offsets in boundary units (deg for angles, mm)."""
+        """Return the nominal model with error offsets in boundary units (deg for angles, mm)."""
         if not offsets:
             return self.nominal
         es = self.errors(list(offsets))
@@ -112,7 +122,8 @@ class Robot:
     def controller_problem(self) -> str | None:
         """Why the controller programs and the log cannot serve this arm, or None.
 
-        Both are written for 6-joint arms (the log has the columns j1..j6)."""
+        Both are written for 6-joint arms (the log has the columns j1..j6).
+        """
         if self.n_joints == CONTROLLER_JOINTS:
             return None
         return (

@@ -1,4 +1,6 @@
-"""How a calibration run moves and reads, in one place: the program's speed and
+"""How a calibration run moves and reads, in one place.
+
+How a calibration run moves and reads, in one place: the program's speed and
 acceleration, the settle time and the counter readings per stop (written into the
 generated programs), and the time model of a run that the planner's robot-time estimate
 and the digital twin's clock share.
@@ -28,8 +30,11 @@ READING_INTERVAL_S = 0.02
 def move_time_s(
     joint_speed_deg_s: np.ndarray, a_deg: np.ndarray, b_deg: np.ndarray, speed_pct: float
 ) -> float:
-    """Duration (s) of a joint-interpolated move from ``a_deg`` to ``b_deg`` at
-    ``speed_pct`` % of the joints' maximum speeds, overhead included."""
+    """Return the duration (s) of a joint-interpolated move.
+
+    Duration (s) of a joint-interpolated move from ``a_deg`` to ``b_deg`` at
+    ``speed_pct`` % of the joints' maximum speeds, overhead included.
+    """
     rate = joint_speed_deg_s * speed_pct / 100
     return float(np.max(np.abs(np.asarray(b_deg) - np.asarray(a_deg)) / rate)) + MOVE_OVERHEAD_S
 
@@ -53,7 +58,7 @@ class RunParameters:
         return self.settle_s + READING_INTERVAL_S * self.readings
 
     def problems(self) -> list[str]:
-        """What is out of range, as ``wirecal gen``'s options name it."""
+        """Return what is out of range, as ``wirecal gen``'s options name it."""
         out = []
         if not 0 < self.speed_pct <= 100:
             out.append(f"--speed {self.speed_pct:g}: give a percentage in (0, 100]")

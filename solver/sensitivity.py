@@ -69,7 +69,7 @@ PSI_FLOOR = 0.005
 def verdict(
     psi_row: dict[str, float], parameter: str, later: Sequence[str], tol: float = DEFAULT_TOL
 ) -> Verdict:
-    """A point of step j is ``ok`` when |Ψ_t| ≤ max(tol·|Ψ_j|, PSI_FLOOR) for every t > j.
+    """Judge a point of step j: ``ok`` when |Ψ_t| ≤ max(tol·|Ψ_j|, PSI_FLOOR) for every t > j.
 
     The set S_j of eq. 19 asks Ψ_t = 0 for every parameter identified after step j
     (the flowchart's ``t < j`` is the reversed typo listed in DESIGN.md).

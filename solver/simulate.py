@@ -43,8 +43,11 @@ def sample_counts(
     samples: int,
     rng: np.random.Generator,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """What the controller logs for wire lengths ``length_mm``: the mean of ``samples``
-    counter readings, unwrapped relative to the first, and their spread (counts)."""
+    """Return what the controller logs for wire lengths ``length_mm``.
+
+    The mean of ``samples`` counter readings, unwrapped relative to the first, and their
+    spread (counts).
+    """
     exact = start + np.asarray(length_mm, dtype=float) / mm_per_count
     jitter = rng.choice((-1.0, 0.0, 0.0, 0.0, 1.0), size=(*exact.shape, samples))
     raw = counter.wrap(np.floor(exact[..., None] + 0.5) + jitter)
@@ -53,7 +56,7 @@ def sample_counts(
 
 
 def true_lengths(model: Model, plan: Plan) -> np.ndarray:
-    """True wire length of every plan point, plan order; a batched model gives (T, N)."""
+    """Return the true wire length of every plan point, plan order; a batched model gives (T, N)."""
     q, _, _ = plan.all_points()
     return wire_lengths(model, np.radians(q), np.radians(plan.theta0_deg))
 
@@ -61,9 +64,12 @@ def true_lengths(model: Model, plan: Plan) -> np.ndarray:
 def measured_lengths(
     model: Model, plan: Plan, mm_per_count: float, noise_mm: float, rng: np.random.Generator
 ) -> np.ndarray:
-    """Wire lengths as a checked log gives them: per-point noise, counts quantised, each
+    """Return the wire lengths as a checked log gives them.
+
+    Wire lengths as a checked log gives them: per-point noise, counts quantised, each
     measured from the mean of the steps' zero readings. Vectorised over a batched model
-    (Monte Carlo); the same reading model as :func:`simulate_log` without the counter."""
+    (Monte Carlo); the same reading model as :func:`simulate_log` without the counter.
+    """
     d = true_lengths(model, plan)
     n_zero = len(plan.steps)
     noisy = np.concatenate([np.zeros((*d.shape[:-1], n_zero)), d], axis=-1)
@@ -84,7 +90,7 @@ def simulate_log(
     counter_start: float | None = None,
     mm_per_count: float | None = None,
 ) -> str:
-    """The text of the log a run of ``plan`` on the true robot would write."""
+    """Return the text of the log a run of ``plan`` on the true robot would write."""
     rng = np.random.default_rng(seed)
     enc = robot.encoder
     mpc = enc.mm_per_count if mm_per_count is None else mm_per_count

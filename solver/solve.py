@@ -66,7 +66,7 @@ class SolveResult:
                 "residual_rms_mm": est.residual_rms_mm,
                 "predicted_tool_error_mm": {k: _finite(v) for k, v in self.predicted[name].items()},
             }
-            if est.std is not None:
+            if est.std is not None and est.correlation is not None:  # set together
                 entry["std"] = {n: _finite(s) for n, s in zip(est.names, est.std, strict=True)}
                 entry["correlation"] = {
                     a: {b: _finite(est.correlation[i, k]) for k, b in enumerate(est.names)}

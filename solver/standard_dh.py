@@ -36,9 +36,12 @@ from wirecal.solver.robot import Robot
 
 @dataclass(frozen=True)
 class StandardDH:
-    """A standard-DH model: ``table`` rows (θ offset [rad], d [mm], a [mm], α [rad]) per
+    """A standard-DH model.
+
+    A standard-DH model: ``table`` rows (θ offset [rad], d [mm], a [mm], α [rad]) per
     joint, the base transform RotX(``base_alpha``)·TransX(``base_a_mm``), and the tool
-    point in the flange frame (mm)."""
+    point in the flange frame (mm).
+    """
 
     table: np.ndarray  # (n, 4)
     base_alpha: float
@@ -47,7 +50,7 @@ class StandardDH:
 
 
 def from_modified(model: Robot | Model) -> StandardDH:
-    """The exact standard-DH form of a (single, unbatched) modified-DH model."""
+    """Return the exact standard-DH form of a (single, unbatched) modified-DH model."""
     dh = np.asarray(model.dh, dtype=float)
     if dh.ndim != 2:
         raise ValueError("from_modified takes one model, not a batch")
@@ -61,7 +64,7 @@ def from_modified(model: Robot | Model) -> StandardDH:
 
 
 def to_modified(std: StandardDH) -> Model:
-    """The inverse regrouping; refuses a last row with a or α (no modified row holds it)."""
+    """Return the inverse regrouping; refuses a last row with a or α (no modified row holds it)."""
     t = std.table
     if t[-1, 2] != 0.0 or t[-1, 3] != 0.0:
         raise ValueError("the last standard row has a or alpha: a modified table cannot hold it")
@@ -79,8 +82,11 @@ def _rot_x(alpha: float) -> np.ndarray:
 
 
 def flange_pose(std: StandardDH, q: np.ndarray) -> np.ndarray:
-    """Homogeneous flange poses (N, 4, 4) for joint angles ``q`` (N, n) in radians,
-    composed in the standard convention (vectorised over N)."""
+    """Return the homogeneous flange poses (N, 4, 4) for joint angles ``q``.
+
+    Homogeneous flange poses (N, 4, 4) for joint angles ``q`` (N, n) in radians,
+    composed in the standard convention (vectorised over N).
+    """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     N, n = q.shape
     if n != std.table.shape[0]:

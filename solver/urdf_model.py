@@ -32,6 +32,8 @@ from wirecal.solver.kinematics import Model
 
 @dataclass(frozen=True)
 class UrdfChain:
+    """A URDF's serial chain from base to tip and its modified-DH model."""
+
     urdf: Urdf
     joints: tuple[Joint, ...]  # the path from base to tip, fixed joints included
     moving: tuple[Joint, ...]  # its revolute joints, in order
@@ -40,10 +42,12 @@ class UrdfChain:
 
     @property
     def base_link(self) -> str:
+        """Return the chain's base link."""
         return self.joints[0].parent
 
     @property
     def tip_link(self) -> str:
+        """Return the chain's tip link."""
         return self.joints[-1].child
 
 
@@ -57,7 +61,7 @@ def _inv(T: np.ndarray) -> np.ndarray:
 def read_chain(
     urdf: Urdf, base: str | None, tip: str, parallel_tol: float = PARALLEL_TOL
 ) -> UrdfChain:
-    """The serial chain from ``base`` to ``tip`` in modified DH (see the module doc)."""
+    """Return the serial chain from ``base`` to ``tip`` in modified DH (see the module doc)."""
     path = chain(urdf, base, tip)
     if not path:
         raise WirecalError(f"{urdf.path}: --base and --tip are the same link {tip!r}")
@@ -90,7 +94,7 @@ def read_chain(
 
 
 def calibrated_origins(ch: UrdfChain, model: Model) -> dict[str, np.ndarray]:
-    """New origins (4×4, mm) of the chain's joints for the model ``model`` (same joints)."""
+    """Return new origins (4×4, mm) of the chain's joints for the model ``model`` (same joints)."""
     n = len(ch.moving)
     F = ch.dh.frame0 @ dh_frames(model.dh, np.zeros((1, n)))[0]
     tool_moved = not np.allclose(model.tool_point, ch.dh.tool_point, rtol=0, atol=1e-12)
@@ -118,7 +122,7 @@ def _axis_angle(k: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 
 def urdf_tip_mm(ch: UrdfChain, q: np.ndarray) -> np.ndarray:
-    """The tip's origin in the base link (N, 3) straight from the URDF's joints, q (N, n)."""
+    """Return the tip's origin in the base link (N, 3) straight from the URDF's joints, q (N, n)."""
     q = np.atleast_2d(q)
     T = np.broadcast_to(np.eye(4), (len(q), 4, 4)).copy()
     k = 0
@@ -133,8 +137,11 @@ def urdf_tip_mm(ch: UrdfChain, q: np.ndarray) -> np.ndarray:
 
 
 def fk_difference_mm(ch: UrdfChain, q: np.ndarray) -> float:
-    """The largest distance between the URDF's tip and the DH model's over configurations
-    q (N, n) in radians: the import's check of itself."""
+    """Return the largest tip distance between the URDF and the DH model.
+
+    The largest distance between the URDF's tip and the DH model's over configurations
+    q (N, n) in radians: the import's check of itself.
+    """
     F = ch.dh.frame0 @ dh_frames(ch.dh.dh, q)
     tip = F[:, -1, :3, :3] @ ch.dh.tool_point + F[:, -1, :3, 3]
     return float(np.max(np.linalg.norm(tip - urdf_tip_mm(ch, q), axis=1)))

@@ -1,4 +1,6 @@
-"""The paper's two validation procedures (§3.6): the design of their runs, and their
+"""The paper's two validation procedures (§3.6): the design of their runs.
+
+The paper's two validation procedures (§3.6): the design of their runs, and their
 analyses.
 
 * Configuration change (§3.6.1): poses across the workspace, each reached in the four
@@ -32,6 +34,8 @@ CONFIGS = (("above", "noflip"), ("above", "flip"), ("below", "noflip"), ("below"
 
 @dataclass(frozen=True)
 class Setup:
+    """The setup of the two validation procedures (see the setup file's format)."""
+
     encoder_mm: np.ndarray
     poses: int
     seed: int
@@ -45,6 +49,7 @@ class Setup:
     source: str = "<setup>"
 
     def fingerprint(self) -> str:
+        """Return the sha256 fingerprint of the setup (its source left out)."""
         canon = {
             k: (
                 np.round(np.asarray(v, dtype=float), 6).tolist()
@@ -66,9 +71,12 @@ def _pose_reachable(robot: Robot, R, p, margin_deg: float):
 
 
 def config_poses(robot: Robot, setup: Setup, margin_deg: float = 1.0) -> np.ndarray:
-    """``setup.poses`` transformations (x, y, z, yaw, pitch, roll) spread over the
+    """Return ``setup.poses`` poses for the configuration validation.
+
+    ``setup.poses`` transformations (x, y, z, yaw, pitch, roll) spread over the
     workspace, each reachable righty in all four configurations within the limits with a
-    margin, with wire lengths within the encoder's range in every one."""
+    margin, with wire lengths within the encoder's range in every one.
+    """
     model = robot.nominal
     rng = np.random.default_rng(setup.seed)
     reach = np.abs(robot.dh[:, 1]).sum() + np.abs(robot.dh[:, 3]).sum()
@@ -95,9 +103,12 @@ def config_poses(robot: Robot, setup: Setup, margin_deg: float = 1.0) -> np.ndar
 
 
 def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
-    """The grid points on the plate and the flange targets above them (tool pointing down),
+    """Return the plate's grid points and the flange targets above them.
+
+    The grid points on the plate and the flange targets above them (tool pointing down),
     each checked reachable (righty, above, noflip) at the approach height and 5 mm below
-    the plate's nominal top."""
+    the plate's nominal top.
+    """
     nx, ny = setup.grid
     u = np.linspace(0, setup.plate_size_mm[0], nx)
     v = np.linspace(0, setup.plate_size_mm[1], ny)

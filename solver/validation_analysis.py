@@ -1,6 +1,9 @@
-"""The analyses of the paper's two validation procedures (§3.6): per pose the largest
+"""The analyses of the paper's two validation procedures (§3.6).
+
+The analyses of the paper's two validation procedures (§3.6): per pose the largest
 wire-length discrepancy among the four configurations (§3.6.1), and the residuals of the
-least-squares plane through the probed points (§3.6.2, eq. 21–25)."""
+least-squares plane through the probed points (§3.6.2, eq. 21–25).
+"""
 
 from __future__ import annotations
 
@@ -15,6 +18,8 @@ from wirecal.solver.formats.validation_files import ValidationLog
 
 @dataclass(frozen=True)
 class Stats:
+    """Mean, sample standard deviation and maximum of some values."""
+
     values: np.ndarray
     mean: float
     std: float
@@ -22,13 +27,16 @@ class Stats:
 
     @classmethod
     def of(cls, values) -> Stats:
+        """Return the statistics of ``values``."""
         v = np.asarray(values, dtype=float)
         return cls(v, float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else 0.0, float(v.max()))
 
 
 def reduction(before: Stats, after: Stats) -> dict[str, float | None]:
-    """1 − after/before of the mean, std and max; None where the before figure is 0
-    (nothing to reduce)."""
+    """Return 1 − after/before of the mean, std and max.
+
+    None where the before figure is 0 (nothing to reduce).
+    """
     out: dict[str, float | None] = {}
     for k in ("mean", "std", "max"):
         b = getattr(before, k)
@@ -37,8 +45,11 @@ def reduction(before: Stats, after: Stats) -> dict[str, float | None]:
 
 
 def config_discrepancy(log: ValidationLog, counter: Counter) -> Stats:
-    """Per pose, the largest difference among the wire lengths of its four configurations
-    (mm); the counts are compared modulo the width of the robot's ``counter``."""
+    """Return, per pose, the largest wire-length difference among its configurations.
+
+    Per pose, the largest difference among the wire lengths of its four configurations
+    (mm); the counts are compared modulo the width of the robot's ``counter``.
+    """
     rows = log.rows
     out = []
     incomplete = []
@@ -59,8 +70,11 @@ def config_discrepancy(log: ValidationLog, counter: Counter) -> Stats:
 
 
 def plane_residuals(log: ValidationLog) -> tuple[Stats, np.ndarray]:
-    """|Δ_i| of the least-squares plane z = a·x + b·y + c through the probed points, and
-    (a, b, c) (paper eq. 21–25)."""
+    """Fit the least-squares plane through the probed points (paper eq. 21–25).
+
+    |Δ_i| of the least-squares plane z = a·x + b·y + c through the probed points, and
+    (a, b, c) (paper eq. 21–25).
+    """
     x, y, z = log.rows[:, 2], log.rows[:, 3], log.rows[:, 4]
     U = np.column_stack([x, y, np.ones_like(x)])
     xy = np.column_stack([x, y])

@@ -23,9 +23,11 @@ MIN_WIRE_MM = 5.0  # and at least this long away from θ0 (the wire tip must not
 
 
 def run_moves(plan: Plan) -> list[tuple[str, np.ndarray, np.ndarray, bool]]:
-    """The moves of ``wc.run`` in order, each (where, from, to, back to θ0) in deg: per
-    step θ0 → via points → points in the plan's order → the next step's θ0 (the last:
-    the closing zero at θ0)."""
+    """Return the moves of ``wc.run`` in order.
+
+    Each (where, from, to, back to θ0) in deg: per step θ0 → via points → points in the
+    plan's order → the next step's θ0 (the last: the closing zero at θ0).
+    """
     moves = []
     here = plan.theta0_deg
     for j, s in enumerate(plan.steps, 1):
@@ -46,9 +48,12 @@ def run_moves(plan: Plan) -> list[tuple[str, np.ndarray, np.ndarray, bool]]:
 def check_wire_range(
     robot: Robot, plan: Plan, margin_mm: float = RANGE_MARGIN_MM, min_mm: float = MIN_WIRE_MM
 ) -> None:
-    """Raise :class:`WirecalError` naming every target (and the move to it) where the
+    """Raise when a target's nominal wire length is out of the encoder's range.
+
+    Raise :class:`WirecalError` naming every target (and the move to it) where the
     nominal wire length exceeds ``range_mm − margin_mm`` or comes within ``min_mm`` of
-    zero (the moves back to θ0, where the wire is zero by construction, excepted)."""
+    zero (the moves back to θ0, where the wire is zero by construction, excepted).
+    """
     if not margin_mm >= 0:
         raise WirecalError(f"--range-margin {margin_mm:g}: give a margin of 0 mm or more")
     model = robot.nominal

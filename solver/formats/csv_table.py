@@ -1,4 +1,6 @@
-"""The one reader of wirecal's CSV-with-header files: measurement logs, validation logs and
+"""Read wirecal's CSV-with-header files.
+
+The one reader of wirecal's CSV-with-header files: measurement logs, validation logs and
 the controller solver's result file share its layout and its tolerance.
 
 Layout::
@@ -34,6 +36,8 @@ STDIN = "-"
 
 @dataclass(frozen=True)
 class Row:
+    """One data row of a table, with its line number."""
+
     line: int  # 1-based line number in the file
     cells: tuple[str, ...]  # stripped fields
 
@@ -51,7 +55,7 @@ class Table:
     notes: tuple[str, ...]
 
     def missing(self, keys: tuple[str, ...]) -> list[str]:
-        """A problem for each header key that is absent."""
+        """Return a problem for each header key that is absent."""
         return [
             f"{self.source}:{self.column_line - 1}: header '# {key}: …' is missing"
             for key in keys
@@ -60,7 +64,7 @@ class Table:
 
 
 def read_source(path: str | Path, what: str) -> tuple[str, str, str]:
-    """The text, its source name and the sha256 of its bytes; ``-`` reads standard input."""
+    """Return the text, its source name and the sha256 of its bytes; ``-`` reads standard input."""
     if str(path) == STDIN:
         raw, source = sys.stdin.buffer.read(), "<stdin>"
     else:
@@ -88,8 +92,10 @@ def parse_table(
     columns: tuple[str, ...] | Callable[[dict[str, tuple[str, int]]], tuple[str, ...]],
     keys: tuple[str, ...],
 ) -> Table:
-    """Split a file into header, column line and rows; raise on a wrong magic, version,
-    column line or quoted fields, and collect row-length problems in ``Table.problems``.
+    """Split a file into header, column line and rows.
+
+    Raise on a wrong magic, version, column line or quoted fields, and collect row-length
+    problems in ``Table.problems``.
 
     ``what`` names the format in messages ("log", "validation log", …); ``keys`` are the
     header fields it knows (any other ``#`` line is a comment). ``columns`` may depend on
@@ -98,7 +104,17 @@ def parse_table(
     text = text.removeprefix("\ufeff")
     ends_with_newline = text.endswith(("\n", "\r"))
     lines = [line.strip() for line in text.splitlines()]
-    problems: list[str] = []
+    start = _check_first_line(lines, source, magic, version, what)
+    header, comments, problems, n = _read_header(lines, start + 1, source, keys)
+    if callable(columns):
+        columns = columns(header)
+    _check_column_line(lines, n, source, columns, problems)
+    rows, notes = _read_rows(lines, n + 1, source, len(columns), ends_with_newline, problems)
+    return Table(source, header, tuple(comments), n + 1, tuple(rows), tuple(problems), tuple(notes))
+
+
+def _check_first_line(lines: list[str], source: str, magic: str, version: int, what: str) -> int:
+    """Return the index of the first non-blank line; raise unless it is the magic and version."""
     start = next((k for k, line in enumerate(lines) if line), 0)  # blank lines of a paste
     first = lines[start] if lines else ""
     if not first.startswith(magic):
@@ -111,9 +127,19 @@ def parse_table(
         raise WirecalError(
             f"{source}:{start + 1}: {what} version {found!r}; this wirecal reads version {version}"
         )
+    return start
+
+
+def _read_header(
+    lines: list[str], n: int, source: str, keys: tuple[str, ...]
+) -> tuple[dict[str, tuple[str, int]], list[str], list[str], int]:
+    """Read the ``#`` lines from index n: the known keys, the comments, the problems.
+
+    Returns them and the index of the first line after them.
+    """
     header: dict[str, tuple[str, int]] = {}
     comments: list[str] = []
-    n = start + 1
+    problems: list[str] = []
     while n < len(lines) and lines[n].startswith("#"):
         body = lines[n][1:].strip()
         key, sep, value = body.partition(":")
@@ -125,8 +151,13 @@ def parse_table(
         else:
             comments.append(body)
         n += 1
-    if callable(columns):
-        columns = columns(header)
+    return header, comments, problems, n
+
+
+def _check_column_line(
+    lines: list[str], n: int, source: str, columns: tuple[str, ...], problems: list[str]
+) -> None:
+    """Raise unless line n is the column line and no later line has double quotes."""
     expected = ",".join(columns)
     if n >= len(lines):
         raise WirecalError(
@@ -147,20 +178,31 @@ def parse_table(
             "line(s): a spreadsheet re-saved the file; use the file as written, or save "
             "it as plain CSV without quotes"
         )
+
+
+def _read_rows(
+    lines: list[str],
+    first: int,
+    source: str,
+    width: int,
+    ends_with_newline: bool,
+    problems: list[str],
+) -> tuple[list[Row], list[str]]:
+    """Return the rows from index ``first`` on and the notes; add row-length problems."""
     rows: list[Row] = []
     notes: list[str] = []
-    for k in range(n + 1, len(lines)):
+    for k in range(first, len(lines)):
         if not lines[k] or lines[k].startswith("#"):
             continue
         cells = tuple(c.strip() for c in lines[k].split(","))
-        if len(cells) != len(columns):
-            if k == len(lines) - 1 and not ends_with_newline and len(cells) < len(columns):
+        if len(cells) != width:
+            if k == len(lines) - 1 and not ends_with_newline and len(cells) < width:
                 notes.append(
                     f"{source}:{k + 1}: incomplete last line ignored (the run "
                     "stopped while writing it)"
                 )
                 continue
-            problems.append(f"{source}:{k + 1}: has {len(cells)} fields; expected {len(columns)}")
+            problems.append(f"{source}:{k + 1}: has {len(cells)} fields; expected {width}")
             continue
         rows.append(Row(k + 1, cells))
-    return Table(source, header, tuple(comments), n + 1, tuple(rows), tuple(problems), tuple(notes))
+    return rows, notes

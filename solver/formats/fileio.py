@@ -83,6 +83,7 @@ class Outputs:
 
     # -- reserve ---------------------------------------------------------------------
     def __enter__(self) -> Outputs:
+        """Check the outputs can be written and reserve them."""
         self._check()
         try:
             if self.folder is not None and not self.folder.exists():
@@ -151,6 +152,7 @@ class Outputs:
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
+        """Publish every output when the block succeeded; otherwise leave nothing behind."""
         try:
             if kind is None:
                 missing = [p for p in self.paths if p not in self._text]

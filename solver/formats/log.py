@@ -188,7 +188,7 @@ def lossy_counts(rows: tuple[Row, ...], source: str) -> list[str]:
     return []
 
 
-def _parse_row(cells: list[str], line: int, bad) -> Reading | None:
+def _parse_row(cells: tuple[str, ...], line: int, bad) -> Reading | None:
     kind = cells[0].strip()
     ok = True
     if kind not in ("zero", "point"):

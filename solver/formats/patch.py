@@ -50,8 +50,11 @@ def patch_text(
     plausibility: str = "",
     date: datetime | None = None,
 ) -> str:
-    """The patch TOML; ``plausibility`` is the gate's verdict ("passed …" or
-    "overridden: …" when the user accepted an implausible result)."""
+    """Return the patch TOML.
+
+    ``plausibility`` is the gate's verdict ("passed …" or "overridden: …" when the user
+    accepted an implausible result).
+    """
     date = date or datetime.now(UTC)
     lines = [
         "# wirecal patch: identified kinematic error offsets (deg, mm).",
@@ -82,7 +85,7 @@ def patch_text(
 
 
 def spec_table(robot: Robot, estimate: Estimate, plausibility: str = "") -> str:
-    """The plain table of new values for the controller's kinematic settings."""
+    """Return the plain table of new values for the controller's kinematic settings."""
     lines = []
     if plausibility.startswith(OVERRIDDEN):
         lines += [
@@ -117,8 +120,11 @@ def spec_path(path: str | Path) -> Path:
 
 
 def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, **meta) -> None:
-    """Put the patch and its SPEC table (:func:`spec_path`) into the output set ``out``,
-    which must hold both names: they are published together or not at all."""
+    """Put the patch and its SPEC table into an output set.
+
+    Put the patch and its SPEC table (:func:`spec_path`) into the output set ``out``,
+    which must hold both names: they are published together or not at all.
+    """
     out.put(path, patch_text(robot, estimate, **meta))
     out.put(spec_path(path), spec_table(robot, estimate, meta.get("plausibility", "")))
 
@@ -126,8 +132,11 @@ def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, 
 def write_patch(
     path: str | Path, robot: Robot, estimate: Estimate, *, force: bool = False, **meta
 ) -> tuple[Path, Path]:
-    """Write the patch and its SPEC table beside it, both or neither (the Python API's
-    one-call form of :func:`put_patch`); refuse to replace either unless ``force``."""
+    """Write the patch and its SPEC table beside it, both or neither.
+
+    The Python API's one-call form of :func:`put_patch`; refuse to replace either unless
+    ``force``.
+    """
     path = Path(path)
     with Outputs([path, spec_path(path)], force=force) as out:
         put_patch(out, path, robot, estimate, **meta)

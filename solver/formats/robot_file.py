@@ -225,7 +225,7 @@ def _sanity(
     encoder: Encoder | None,
     radii: np.ndarray | None,
 ) -> None:
-    """The unit and size rules of the module docstring, on values that passed their types."""
+    """Return the unit and size rules of the module docstring, on values that passed their types."""
     if dh is not None:
         _check_not_radians(dh[:, 0], "α (column 1)", doc)
         _check_not_radians(dh[:, 2], "θ offsets (column 3)", doc)
@@ -317,9 +317,12 @@ def _check_not_metres(dh: np.ndarray, range_mm: float, radii: np.ndarray, doc: T
 
 
 def _urdf(table: Table, source: str) -> UrdfSource | None:
-    """The optional ``[urdf]`` table: the URDF a robot file was imported from (``wirecal
+    """Read the optional ``[urdf]`` table.
+
+    The optional ``[urdf]`` table: the URDF a robot file was imported from (``wirecal
     import-urdf``), its base and tip links, and the parallel-axis tolerance used; the
-    source path is relative to the robot file."""
+    source path is relative to the robot file.
+    """
     if not table.present:
         return None
     path = table.string("source")
@@ -343,7 +346,7 @@ radians with 11 digits give 185.00000000003°; 185.0 is what the vendor meant.""
 
 
 def _num(x: float, tidy: float = TIDY) -> str:
-    """The shortest decimal within ``tidy`` of ``x`` (−0 written as 0)."""
+    """Return the shortest decimal within ``tidy`` of ``x`` (−0 written as 0)."""
     x = float(x)
     for digits in range(13):
         r = round(x, digits)
@@ -360,10 +363,13 @@ def robot_file_text(
     encoder_note: str,
     urdf_source: str | None = None,
 ) -> str:
-    """A robot file for ``robot`` that :func:`load_robot` reads back to the same numbers
+    """Return a robot file for ``robot`` that reads back to the same numbers.
+
+    A robot file for ``robot`` that :func:`load_robot` reads back to the same numbers
     (to :data:`TIDY`). ``header`` lines become comments at the top; ``row_notes``
     (one per joint) comment the DH rows and limits; ``urdf_source`` is written as given
-    (relative to the robot file's folder)."""
+    (relative to the robot file's folder).
+    """
     dh = robot.dh_deg()
 
     def vec(values, tidy: float = TIDY) -> str:

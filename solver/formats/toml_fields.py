@@ -46,7 +46,7 @@ KINDS: dict[str, tuple[str, tuple[str, ...]]] = {
 
 
 def document(data: dict[str, Any], source: str, kind: str, keys: Sequence[str]) -> Table:
-    """The root table of a parsed document of ``kind`` (a key of :data:`KINDS`).
+    """Return the root table of a parsed document of ``kind`` (a key of :data:`KINDS`).
 
     Raise at once when the document is recognisably another kind: its other problems would
     only hide that.
@@ -59,14 +59,14 @@ def document(data: dict[str, Any], source: str, kind: str, keys: Sequence[str]) 
 
 
 def valid(value: T | None) -> T:
-    """A field that passed: call after :meth:`Table.raise_if_any`, which raised otherwise."""
+    """Return a field that passed: call after :meth:`Table.raise_if_any`, which raised otherwise."""
     if value is None:
         raise AssertionError("a field with a problem was used after raise_if_any()")
     return value
 
 
 def show(value: Any) -> str:
-    """A value as TOML spells it, for messages (``true``, ``"text"``, ``1e+300``)."""
+    """Return a value as TOML spells it, for messages (``true``, ``"text"``, ``1e+300``)."""
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, str):
@@ -89,7 +89,7 @@ def _expectation(
     above: float | None = None,
     unit: str = "",
 ) -> str:
-    """What a number must be, in words: ``a whole number between 8 and 64``."""
+    """Return what a number must be, in words: ``a whole number between 8 and 64``."""
     kind = "a whole number" if integer else "a number"
     if lo is not None and hi is not None:
         text = f"{kind} within ±{hi:g}" if lo == -hi else f"{kind} between {lo:g} and {hi:g}"
@@ -170,7 +170,7 @@ class Table:
 
     # -- bookkeeping ----------------------------------------------------------------------
     def name(self, key: str) -> str:
-        """The dotted name of ``key`` in messages."""
+        """Return the dotted name of ``key`` in messages."""
         return f"{self.where}.{key}" if self.where and key else self.where or key
 
     def add(self, key: str, message: str) -> None:
@@ -187,7 +187,7 @@ class Table:
         return self.data is not None
 
     def keys(self) -> list[str]:
-        """The table's keys, in file order (none when absent)."""
+        """Return the table's keys, in file order (none when absent)."""
         return list(self.data) if self.data is not None else []
 
     def _value(self, key: str, default: Any) -> tuple[bool, Any]:
@@ -212,7 +212,7 @@ class Table:
         above: float | None = None,
         unit: str = "",
     ) -> float | None:
-        """A finite number within the bounds (``above``: strictly greater)."""
+        """Return a finite number within the bounds (``above``: strictly greater)."""
         found, x = self._value(key, default)
         if not found:
             return x
@@ -225,7 +225,7 @@ class Table:
     def integer(
         self, key: str, default: Any = MISSING, *, lo: int | None = None, hi: int | None = None
     ) -> int | None:
-        """A TOML integer within the bounds."""
+        """Return a TOML integer within the bounds."""
         found, x = self._value(key, default)
         if not found:
             return x
@@ -238,7 +238,7 @@ class Table:
     def string(
         self, key: str, default: Any = MISSING, *, choices: dict[str, str] | None = None
     ) -> str | None:
-        """A non-blank string; with ``choices`` (value → what it means), one of them."""
+        """Return a non-blank string; with ``choices`` (value → what it means), one of them."""
         found, x = self._value(key, default)
         if not found:
             return x
@@ -253,7 +253,7 @@ class Table:
         return x
 
     def strings(self, key: str, default: Any = MISSING, *, what: str = "names") -> list[str] | None:
-        """A list of non-blank strings (``what`` they are, for the message)."""
+        """Return a list of non-blank strings (``what`` they are, for the message)."""
         found, x = self._value(key, default)
         if not found:
             return x
@@ -327,7 +327,10 @@ class Table:
         nonempty: bool = True,
         unit: str | Sequence[str] = "",
     ) -> np.ndarray | None:
-        """A list of rows of ``cols`` numbers; a bad row is reported as ``key[i]`` (1-based)."""
+        """Return a list of rows of ``cols`` numbers.
+
+        A bad row is reported as ``key[i]`` (1-based).
+        """
         found, x = self._value(key, default)
         if not found:
             return None if x is None else np.asarray(x, dtype=float).reshape(-1, cols)
@@ -345,7 +348,7 @@ class Table:
 
     # -- nested tables --------------------------------------------------------------------
     def table(self, key: str, keys: Sequence[str] | None, *, required: bool = True) -> Table:
-        """The sub-table ``[key]`` (absent when missing or not a table)."""
+        """Return the sub-table ``[key]`` (absent when missing or not a table)."""
         if required and self.data is not None and key not in self.data:
             self.add(key, f"is missing; add the table [{self.name(key)}]")
             return Table(None, self.problems, self.name(key))
@@ -358,7 +361,7 @@ class Table:
         return Table(x, self.problems, self.name(key), keys)
 
     def tables(self, key: str, keys: Sequence[str], *, required: bool = True) -> list[Table]:
-        """The array of tables ``[[key]]``; a bad element is an absent table."""
+        """Return the array of tables ``[[key]]``; a bad element is an absent table."""
         found, x = self._value(key, MISSING if required else [])
         if not found:
             return []

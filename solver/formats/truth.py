@@ -26,7 +26,7 @@ _KEYS = ("robot", "seed", "errors")
 
 
 def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
-    """The ``[errors]`` table of a truth file, validated against the robot.
+    """Return the ``[errors]`` table of a truth file, validated against the robot.
 
     Offsets are bounded like the robot file's values (±360 deg, ±10 000 mm); a truth file
     for another robot is refused.
@@ -57,13 +57,17 @@ def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
 
 
 def random_errors(robot: Robot, scale: float, rng: np.random.Generator) -> dict[str, float]:
-    """Offsets uniform within ±scale (deg for angles, mm for lengths) for the robot's
-    calibration parameters."""
+    """Draw uniform offsets for the robot's calibration parameters.
+
+    Offsets uniform within ±scale (deg for angles, mm for lengths) for the robot's
+    calibration parameters.
+    """
     values = rng.uniform(-scale, scale, len(robot.parameters))
     return {n: float(v) for n, v in zip(robot.parameters, values, strict=True)}
 
 
 def truth_text(robot: Robot, errors: dict[str, float], seed: int | None) -> str:
+    """Return the text of a truth file holding ``errors`` (deg, mm)."""
     lines = [
         "# wirecal truth: the simulated robot's true error offsets (deg, mm).",
         "# Kept apart from the log; compare a solve's result against it.",

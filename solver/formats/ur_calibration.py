@@ -1,4 +1,6 @@
-"""Kinematic corrections in Universal Robots' terms: the standard-DH deltas of a
+"""Kinematic corrections in Universal Robots' terms.
+
+Kinematic corrections in Universal Robots' terms: the standard-DH deltas of a
 calibrated model, in the layout of the controller's ``calibration.conf``.
 
 The deltas are ``delta_theta``, ``delta_a``, ``delta_d``, ``delta_alpha`` per joint, in
@@ -39,7 +41,8 @@ def ur_deltas(robot: Robot, offsets: Mapping[str, float]) -> dict[str, np.ndarra
     """Standard-DH deltas (m, rad) of ``robot`` with ``offsets`` (name → deg or mm).
 
     Raises :class:`WirecalError` for a parameter outside UR's deltas (a0, al0, tool point)
-    or an unknown name."""
+    or an unknown name.
+    """
     problems = []
     for name in offsets:
         try:
@@ -70,7 +73,7 @@ def _vector(values: np.ndarray) -> str:
 
 
 def calibration_text(robot: Robot, offsets: Mapping[str, float]) -> str:
-    """The deltas as text in calibration.conf's layout, with the tables they come from."""
+    """Return the deltas as text in calibration.conf's layout, with the tables they come from."""
     deltas = ur_deltas(robot, offsets)
     nominal = from_modified(robot).table
     calibrated = from_modified(robot.model(offsets)).table

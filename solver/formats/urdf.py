@@ -1,4 +1,6 @@
-"""URDF files: read the kinematic tree, find the serial chain from a base link to a tip link,
+"""URDF files: read the kinematic tree, find a serial chain, write new joint origins.
+
+URDF files: read the kinematic tree, find the serial chain from a base link to a tip link,
 and write a copy with new joint origins (everything else — links, visuals, collisions,
 inertias, comments — kept as it is).
 
@@ -27,6 +29,8 @@ SUPPORTED = (*MOVING, "fixed")
 
 @dataclass(frozen=True)
 class Joint:
+    """One URDF joint: its type, links, origin, axis and limits."""
+
     name: str
     type: str
     parent: str
@@ -42,6 +46,8 @@ class Joint:
 
 @dataclass(frozen=True)
 class Urdf:
+    """A parsed URDF: its links and joints, and the document to write back."""
+
     path: Path
     name: str
     root: ET.Element  # the parsed document, comments kept
@@ -127,15 +133,8 @@ def read_urdf(path: str | Path) -> Urdf:
 
 
 def chain(urdf: Urdf, base: str | None, tip: str) -> list[Joint]:
-    """The joints from ``base`` (default: the tree's root link) to ``tip``, in order."""
-    by_child: dict[str, Joint] = {}
-    for j in urdf.joints.values():
-        if j.child in by_child:
-            raise WirecalError(
-                f"{urdf.path}: link {j.child!r} is the child of joints {by_child[j.child].name!r} "
-                f"and {j.name!r}: a URDF must be a tree"
-            )
-        by_child[j.child] = j
+    """Return the joints from ``base`` (default: the tree's root link) to ``tip``, in order."""
+    by_child = _parent_joints(urdf)
     known = set(urdf.links) | {j.parent for j in urdf.joints.values()}
     for link, what in ((tip, "--tip"), (base, "--base")):
         if link is not None and link not in known:
@@ -162,6 +161,25 @@ def chain(urdf: Urdf, base: str | None, tip: str) -> list[Joint]:
         path.append(j)
         link = j.parent
     path.reverse()
+    _check_supported(urdf, path)
+    return path
+
+
+def _parent_joints(urdf: Urdf) -> dict[str, Joint]:
+    """Return each child link's joint; raise unless the URDF is a tree."""
+    by_child: dict[str, Joint] = {}
+    for j in urdf.joints.values():
+        if j.child in by_child:
+            raise WirecalError(
+                f"{urdf.path}: link {j.child!r} is the child of joints {by_child[j.child].name!r} "
+                f"and {j.name!r}: a URDF must be a tree"
+            )
+        by_child[j.child] = j
+    return by_child
+
+
+def _check_supported(urdf: Urdf, path: list[Joint]) -> None:
+    """Raise on a joint of the chain that is not an independent revolute (or fixed) joint."""
     for j in path:
         if j.type not in SUPPORTED:
             kind = "a prismatic joint" if j.type == "prismatic" else f"type {j.type!r}"
@@ -173,7 +191,6 @@ def chain(urdf: Urdf, base: str | None, tip: str) -> list[Joint]:
             raise WirecalError(
                 f"{urdf.path}: joint {j.name!r} mimics another joint: not an independent axis"
             )
-    return path
 
 
 def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
@@ -190,10 +207,13 @@ def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
 
 
 def matrix_rpy(R: np.ndarray) -> np.ndarray:
-    """The inverse of :func:`rpy_matrix` (pitch in [−π/2, π/2]). Near pitch ±90° roll and
+    """Return the roll, pitch and yaw of a rotation (the inverse of :func:`rpy_matrix`).
+
+    The inverse of :func:`rpy_matrix` (pitch in [−π/2, π/2]). Near pitch ±90° roll and
     yaw are ill-conditioned one by one (only their sum or difference is not), so the first
     guess is refined by least squares on the rotation itself: rpy_matrix of the result
-    equals R to round-off at any pitch."""
+    equals R to round-off at any pitch.
+    """
     pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
     if math.hypot(R[0, 0], R[1, 0]) > 1e-12:
         roll = math.atan2(R[2, 1], R[2, 2])
@@ -213,7 +233,7 @@ def matrix_rpy(R: np.ndarray) -> np.ndarray:
 
 
 def origin_mm(j: Joint) -> np.ndarray:
-    """The joint's origin as a 4×4 transform, translation in mm."""
+    """Return the joint's origin as a 4×4 transform, translation in mm."""
     T = np.eye(4)
     T[:3, :3] = rpy_matrix(j.rpy_rad)
     T[:3, 3] = 1000.0 * j.xyz_m
@@ -221,8 +241,11 @@ def origin_mm(j: Joint) -> np.ndarray:
 
 
 def urdf_with_origins(urdf: Urdf, origins_mm: dict[str, np.ndarray]) -> str:
-    """The URDF's text with the named joints' origins replaced (4×4, mm), full precision;
-    everything else as it was (re-indented)."""
+    """Return the URDF's text with the named joints' origins replaced.
+
+    The URDF's text with the named joints' origins replaced (4×4, mm), full precision;
+    everything else as it was (re-indented).
+    """
     root = copy.deepcopy(urdf.root)
     by_name = {el.get("name"): el for el in root.findall("joint")}
     for name, T in origins_mm.items():
@@ -246,9 +269,12 @@ def dh_urdf_text(
     hi_deg: np.ndarray,
     speed_deg_s: np.ndarray,
 ) -> str:
-    """A URDF of a modified-DH chain with no geometry: links ``link0`` (the base, DH frame 0)
+    """Return a URDF of a modified-DH chain with no geometry.
+
+    A URDF of a modified-DH chain with no geometry: links ``link0`` (the base, DH frame 0)
     … ``link<n>`` (DH frames), joints ``joint<i>`` turning about their link's z, and a fixed
-    joint to ``wire_point`` at the tool point. Lengths in m, angles in rad, full precision."""
+    joint to ``wire_point`` at the tool point. Lengths in m, angles in rad, full precision.
+    """
     n = len(dh)
     F = dh_frames(dh, np.zeros((1, n)))[0]
     lines = ['<?xml version="1.0"?>', f'<robot name="{_xml(name)}">']

@@ -1,4 +1,6 @@
-"""Validation files: the setup of the paper's two validation procedures (TOML) and the
+"""Validation files: the procedures' setup (TOML) and their logs (CSV).
+
+Validation files: the setup of the paper's two validation procedures (TOML) and the
 logs their controller programs write (CSV).
 
 Setup file (TOML)::
@@ -26,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.csv_table import parse_table, read_source
+from wirecal.solver.formats.csv_table import Row, parse_table, read_source
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.robot_file import MAX_LENGTH_MM
 from wirecal.solver.formats.toml_fields import document, valid
@@ -86,6 +88,8 @@ def load_setup(path: str | Path) -> Setup:
 
 @dataclass(frozen=True)
 class ValidationLog:
+    """A validation log's header and its readings."""
+
     kind: str  # "configuration" or "plane"
     source: str
     robot: str
@@ -135,9 +139,28 @@ def read_validation_log(path: str | Path, kind: str) -> ValidationLog:
         *table.problems,
         *table.missing(("robot", "setup") + (("mm_per_count",) if kind == "configuration" else ())),
     ]
+    rows = _readings(table.rows, source, kind, problems)
+    mpc_text, mpc_line = table.header.get("mm_per_count", ("nan", 0))
+    try:
+        mpc = float(mpc_text)
+    except ValueError:
+        problems.append(f"{source}:{mpc_line}: mm_per_count {mpc_text!r} is not a number")
+    if problems:
+        raise WirecalError(_first(problems))
+    if not rows:
+        raise WirecalError(f"{source}: no readings")
+    return ValidationLog(
+        kind, source, table.header["robot"][0], table.header["setup"][0], mpc, np.array(rows)
+    )
+
+
+def _readings(
+    table_rows: tuple[Row, ...], source: str, kind: str, problems: list[str]
+) -> list[list[float]]:
+    """Return the rows as numbers; add a problem for each bad or duplicate row, and skip it."""
     rows: list[list[float]] = []
     seen: dict[tuple[float, float], int] = {}
-    for r in table.rows:
+    for r in table_rows:
         try:
             row = [float(c) for c in r.cells]
         except ValueError:
@@ -159,22 +182,11 @@ def read_validation_log(path: str | Path, kind: str) -> ValidationLog:
             continue
         seen[key] = r.line
         rows.append(row)
-    mpc_text, mpc_line = table.header.get("mm_per_count", ("nan", 0))
-    try:
-        mpc = float(mpc_text)
-    except ValueError:
-        problems.append(f"{source}:{mpc_line}: mm_per_count {mpc_text!r} is not a number")
-    if problems:
-        raise WirecalError(_first(problems))
-    if not rows:
-        raise WirecalError(f"{source}: no readings")
-    return ValidationLog(
-        kind, source, table.header["robot"][0], table.header["setup"][0], mpc, np.array(rows)
-    )
+    return rows
 
 
 def _first(problems: list[str], n: int = 12) -> list[str]:
-    """The first problems and a count of the rest: a wrong file should not bury its cause."""
+    """Return the first problems and a count of the rest: a wrong file should not bury its cause."""
     if len(problems) <= n:
         return problems
     return [*problems[:n], f"… and {len(problems) - n} more problems of the same kinds"]
