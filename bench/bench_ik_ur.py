@@ -61,7 +61,7 @@ def main() -> None:
         q = np.radians(lo + rng.uniform(0, 1, (args.poses, 6)) * (hi - lo))
         poses = [ik.flange_pose(model, x) for x in q]
         closed, res_c, t_c = _run(robot, model, poses)
-        with mock.patch.object(ik_ur, "ur_structure", lambda m: False):
+        with mock.patch.object(ik_ur, "ur_structure", return_value=False):
             numeric, res_n, t_n = _run(robot, model, poses)
         missed = [
             sum(not any(_same(c.q, s.q) for s in n) for c in cl)

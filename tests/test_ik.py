@@ -138,8 +138,8 @@ def test_numeric_search_finds_only_closed_form_solutions(arm, viper):
         R, o = flange_pose(model, x)
         closed = solve(robot, R, o, model=model)
         with (
-            mock.patch.object(ik_ur, "ur_structure", lambda m: False),
-            mock.patch.object(ik, "analytic_structure", lambda m: False),
+            mock.patch.object(ik_ur, "ur_structure", return_value=False),
+            mock.patch.object(ik, "analytic_structure", return_value=False),
         ):
             numeric = solve(robot, R, o, model=model)
         assert numeric, "the search found nothing"

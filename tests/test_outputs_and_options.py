@@ -154,11 +154,15 @@ def test_publish_is_atomic_between_concurrent_writers(tmp_path):
 
 def test_second_output_taken_meanwhile_withdraws_the_first(tmp_path):
     log, truth = tmp_path / "x.csv", tmp_path / "x.truth.toml"
-    with pytest.raises(WirecalError, match=r"x\.truth\.toml: appeared while"):
+
+    def publish_while_another_writes_the_truth():
         with Outputs([log, truth]) as out:
             out.put(log, "log\n")
             out.put(truth, "truth\n")
             truth.write_text("someone else's\n")
+
+    with pytest.raises(WirecalError, match=r"x\.truth\.toml: appeared while"):
+        publish_while_another_writes_the_truth()
     assert files(tmp_path) == {"x.truth.toml"}
     assert truth.read_text() == "someone else's\n"
 
@@ -437,9 +441,14 @@ def test_slip_blames_one_step(tmp_path):
 
 def test_interrupt_leaves_nothing_and_folder_it_made_goes(tmp_path):
     folder = tmp_path / "new"
-    with pytest.raises(KeyboardInterrupt), Outputs([folder / "a.txt"], folder=folder) as out:
-        out.put(folder / "a.txt", "a\n")
-        raise KeyboardInterrupt
+
+    def interrupted():
+        with Outputs([folder / "a.txt"], folder=folder) as out:
+            out.put(folder / "a.txt", "a\n")
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        interrupted()
     assert files(tmp_path) == set()
 
 
@@ -455,10 +464,14 @@ def test_force_replaces_all_or_restores_all(tmp_path, monkeypatch):
         return real_replace(src, dst)
 
     monkeypatch.setattr(fileio.os, "replace", fail_on_b)
-    with pytest.raises(WirecalError, match=r"b\.txt: Input/output error"):
+
+    def replace_both():
         with Outputs([a, b], force=True) as out:
             out.put(a, "new a\n")
             out.put(b, "new b\n")
+
+    with pytest.raises(WirecalError, match=r"b\.txt: Input/output error"):
+        replace_both()
     assert (a.read_text(), b.read_text()) == ("old a\n", "old b\n")
     assert files(tmp_path) == {"a.txt", "b.txt"}
 
