@@ -19,6 +19,7 @@ import numpy as np
 from wirecal.gen.vplus.program import STRIDE, GenOptions, module_text
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import Log
+from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.solve import SolveResult
@@ -85,9 +86,15 @@ class ControllerRun:
 
 
 def controller_solve(
-    robot: Robot, plan: Plan, log: Log, disk: Path, *, polish: bool, text: str | None = None
+    robot: Robot,
+    plan: Plan,
+    m: Measurements,
+    disk: Path,
+    *,
+    polish: bool,
+    text: str | None = None,
 ) -> ControllerRun:
-    """Run the generated controller solver in the twin on a log's readings.
+    """Run the generated controller solver in the twin on a checked log's readings.
 
     ``wc.solve``, or ``wc.solve2`` with ``polish``.
 
@@ -99,7 +106,7 @@ def controller_solve(
     disk.mkdir(parents=True, exist_ok=True)
     text = text if text is not None else module_text(robot, plan, options)
     interp = Interpreter(parse_module(text, "WIRECAL.V2"), Cell(robot, {}, plan.theta0_deg, disk))
-    r = readings_from_log(log, plan)
+    r = readings_from_log(m.log, plan)
     for c in range(len(r.cb)):
         for k in range(r.q.shape[1]):
             interp.set_global("wc.q", f32(r.q[c, k]), c * STRIDE + k + 1)
@@ -110,8 +117,7 @@ def controller_solve(
     for s in range(len(r.zb)):
         interp.set_global("wc.zb", float(r.zb[s]), s + 1)
         interp.set_global("wc.zo", float(r.zo[s]), s + 1)
-    closed = any(x.kind == "zero" and x.step > len(plan.steps) for x in log.readings)
-    interp.set_global("wc.closed", -1.0 if closed else 0.0)
+    interp.set_global("wc.closed", -1.0 if m.closed else 0.0)
     result_file = disk / options.result_file
     result_file.unlink(missing_ok=True)
     interp.ops.clear()
@@ -164,9 +170,7 @@ def compare_controller(
         )
     runs, diffs = [], []
     for key, polish, method in (("stepwise", False, "stepwise"), ("polished", True, "joint")):
-        run = controller_solve(
-            result.robot, result.plan, m.log, disk / key, polish=polish, text=text
-        )
+        run = controller_solve(result.robot, result.plan, m, disk / key, polish=polish, text=text)
         expected = result.estimates[method].as_dict()
         runs.append(run)
         diffs.append(max(abs(run.offsets[n] - v) for n, v in expected.items()))

@@ -47,7 +47,7 @@ def random_truths(robot, plan, text: str, disk: Path, seeds=range(12)) -> dict[s
         m = check_log(parse_log(log, f"seed{seed}.csv"), plan, robot)
         ref = solve(robot, plan, m)
         for _, method, polish in METHODS:
-            run = controller_solve(robot, plan, m.log, disk / method, polish=polish, text=text)
+            run = controller_solve(robot, plan, m, disk / method, polish=polish, text=text)
             worst[method] = max(worst[method], largest_difference(run, ref, method))
     return worst
 
@@ -69,7 +69,7 @@ def main() -> None:
         rows = []
         for name, method, polish in METHODS:
             t0 = time.perf_counter()
-            run = controller_solve(robot, plan, m.log, Path(tmp) / name, polish=polish, text=text)
+            run = controller_solve(robot, plan, m, Path(tmp) / name, polish=polish, text=text)
             rows.append((name, time.perf_counter() - t0, run, largest_difference(run, ref, method)))
         worst = random_truths(robot, plan, text, Path(tmp) / "truths")
     print(f"V+ module: {len(text.splitlines()):,} lines, parsed and checked in {t_parse:.2f} s")

@@ -14,7 +14,7 @@ from wirecal.app.twin_runs import measure_in_twin
 from wirecal.gen.templating import environment
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log, read_log
+from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.identify import Problem
 from wirecal.solver.kinematics import tool_position
@@ -137,9 +137,8 @@ def test_end_to_end(viper, paper_plan, twin_run, tmp_path):
     m = load_measurements(twin_run.log, paper_plan, viper)
     assert m.missing == ()
     ref = solve(viper, paper_plan, m)
-    log = read_log(twin_run.log)
     for polish, method in ((False, "stepwise"), (True, "joint")):
-        run = controller_solve(viper, paper_plan, log, tmp_path / method, polish=polish)
+        run = controller_solve(viper, paper_plan, m, tmp_path / method, polish=polish)
         reference = ref.estimates[method].as_dict()
         assert max(abs(run.offsets[n] - reference[n]) for n in reference) <= 1e-4
         assert "Result written to WCSOLVE.CSV." in run.console
@@ -403,7 +402,7 @@ def _controller_case(viper, plan, module, tmp_path, seed):
     m = check_log(parse_log(text, f"seed{seed}.csv"), plan, viper)
     ref = solve(viper, plan, m)
     runs = {
-        method: controller_solve(viper, plan, m.log, tmp_path / method, polish=polish, text=module)
+        method: controller_solve(viper, plan, m, tmp_path / method, polish=polish, text=module)
         for method, polish in (("stepwise", False), ("joint", True))
     }
     diff = {
