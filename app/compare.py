@@ -18,12 +18,13 @@ import numpy as np
 
 from wirecal.gen.vplus.program import STRIDE, GenOptions, module_text
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.controller_result import read_result
 from wirecal.solver.formats.log import Log
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.solve import SolveResult
-from wirecal.twin.cell import Cell, read_result
+from wirecal.twin.cell import Cell
 from wirecal.twin.vplus.interp import Interpreter, f32
 from wirecal.twin.vplus.parser import parse_module
 

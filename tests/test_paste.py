@@ -15,11 +15,11 @@ from hypothesis import strategies as st
 
 from wirecal.cli.main import main
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.controller_result import read_result
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.validation_files import read_validation_log
 from wirecal.solver.measurements import check_log
 from wirecal.solver.simulate import simulate_log
-from wirecal.twin.cell import read_result
 
 from .conftest import VIPER
 

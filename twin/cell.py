@@ -20,8 +20,6 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.solver import ik
-from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.csv_table import parse_table, read_source
 from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
@@ -428,30 +426,6 @@ def where_in_run(plan: Plan, moves: int) -> str:
     """Where wc.run was after ``moves`` moves (the twin's cell counts them)."""
     targets = run_targets(plan)
     return targets[moves - 1] if 1 <= moves <= len(targets) else "the start of wc.run"
-
-
-def read_result(path: Path) -> dict[str, float]:
-    """Offsets from the controller solver's result file (``# wirecal-controller-result 1``)."""
-    text, source, _ = read_source(path, "controller result")
-    table = parse_table(
-        text,
-        source,
-        magic="# wirecal-controller-result",
-        version=1,
-        what="controller result",
-        columns=("parameter", "unit", "offset"),
-        keys=(),
-    )
-    problems = list(table.problems)
-    out = {}
-    for row in table.rows:
-        try:
-            out[row.cells[0]] = float(row.cells[2])
-        except ValueError:
-            problems.append(f"{source}:{row.line}: offset {row.cells[2]!r} is not a number")
-    if problems:
-        raise WirecalError(problems)
-    return out
 
 
 @dataclass
