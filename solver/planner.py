@@ -38,7 +38,7 @@ from wirecal.solver.kinematics import tool_position
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan, Step
 from wirecal.solver.robot import Robot
-from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters
+from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters, run_timeline
 from wirecal.solver.sensitivity import PSI_FLOOR, sensitivity
 
 
@@ -557,18 +557,12 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
 
 
 def robot_time(robot: Robot, plan: Plan, run: RunParameters = DEFAULT_RUN) -> float:
-    """Estimate the run time (s) of a plan.
+    """Estimate the run time (s) of a plan: :func:`~wirecal.solver.run_parameters.run_timeline`.
 
-    Estimated run time (s): every step from θ0 (zero reading) through its via points
-    and points and back to θ0, moves at the program speed, a settle and the readings per
-    stop (the time model of :mod:`~wirecal.solver.run_parameters`, as the twin's clock).
+    Moves at the program speed, a settle and the readings per stop, the closing zero
+    included: the time model the twin's clock and the simulated log's ``t_s`` share.
     """
-    total = 0.0
-    for s in plan.steps:
-        seq = [plan.theta0_deg, *s.via_deg, *s.points_deg, plan.theta0_deg]
-        total += run.stop_s * (1 + len(s.points_deg))
-        total += sum(run.move_s(robot.joint_speed_deg_s, a, b) for a, b in itertools.pairwise(seq))
-    return total
+    return run_timeline(robot.joint_speed_deg_s, plan, run).total_s
 
 
 def predicted_accuracy(

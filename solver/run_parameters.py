@@ -8,7 +8,8 @@ and the digital twin's clock share.
 A move takes the slowest joint's travel at the program speed (each joint's maximum speed
 from the robot file × ``speed_pct`` %) plus ``MOVE_OVERHEAD_S`` for accelerating,
 decelerating and the controller's motion start; a stop takes ``settle_s`` plus one
-``READING_INTERVAL_S`` per counter reading.
+``READING_INTERVAL_S`` per counter reading. :func:`run_timeline` lays a plan's run out
+in time: the ``t_s`` of each reading of the log.
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from wirecal.solver.plan import Plan
 
 MOVE_OVERHEAD_S = 0.5
 """Time added to every move for its acceleration and deceleration ramps and the start of
@@ -73,3 +76,41 @@ class RunParameters:
 
 DEFAULT_RUN = RunParameters()
 """The defaults of ``wirecal gen`` and of the planner's robot-time estimate."""
+
+
+@dataclass(frozen=True)
+class Timeline:
+    """When a run of a plan reads: its time model, as the log's ``t_s`` column."""
+
+    reading_s: np.ndarray  # s from the start of the run to the sampling of each reading
+    total_s: float  # the whole run, to the end of the closing zero reading
+
+
+def run_timeline(joint_speed_deg_s: np.ndarray, plan: Plan, run: RunParameters) -> Timeline:
+    """Lay out a run of ``plan`` in time, in the generated program's order.
+
+    Each step moves to θ0 (zero reading), through its via points (blended, no stop) and to
+    each point (settle, read); last a move to θ0 for the closing zero reading. The run
+    starts at θ0 with the timer at zero; a reading's time is when its sampling begins.
+    """
+    here = np.asarray(plan.theta0_deg, dtype=float)
+    t = 0.0
+    times: list[float] = []
+
+    def visit(target: np.ndarray, reads: bool) -> None:
+        nonlocal here, t
+        t += run.move_s(joint_speed_deg_s, here, target)
+        here = np.asarray(target, dtype=float)
+        if reads:
+            t += run.settle_s
+            times.append(t)
+            t += READING_INTERVAL_S * run.readings
+
+    for step in plan.steps:
+        visit(plan.theta0_deg, True)
+        for via in step.via_deg:
+            visit(via, False)
+        for point in step.points_deg:
+            visit(point, True)
+    visit(plan.theta0_deg, True)
+    return Timeline(np.array(times), t)

@@ -5,11 +5,13 @@ true tool point is at θ0, so the true wire length at θ_i is ‖p_true(θ_i) �
 Each reading adds one Gaussian error per point (σ, default 0.01 mm: it does not average
 out over samples, like repeatability), is quantised at mm_per_count, sampled N times with
 ±1-count electrical jitter, and counted by a signed counter of ``counter_bits`` that wraps.
+Each reading's ``t_s`` is its time in the run's time model (:func:`run_timeline`, the
+program's default speed and settle time).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -20,6 +22,7 @@ from wirecal.solver.formats.log import format_header, format_row
 from wirecal.solver.kinematics import Model
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
+from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
 
 RANGE_EXCEEDED = "*Draw-wire range exceeded*"  # the twin's error text for the same cause
 
@@ -138,10 +141,12 @@ def simulate_log(
     head = sample_counts(lengths[:-1], mpc, start, enc.counter, samples, rng)
     tail = sample_counts(lengths[-1:], mpc, start, enc.counter, samples, closing_rng)
     mean, spread = np.concatenate([head[0], tail[0]]), np.concatenate([head[1], tail[1]])
+    run = replace(DEFAULT_RUN, readings=samples)
+    times = run_timeline(robot.joint_speed_deg_s, plan, run).reading_s
     rows = [
-        format_row(*args, samples, sp)
-        for args, sp in zip(
-            zip(kinds, steps, indices, joints, mean, strict=True), spread, strict=True
+        format_row(*args, samples, sp, t, run.settle_s)
+        for args, sp, t in zip(
+            zip(kinds, steps, indices, joints, mean, strict=True), spread, times, strict=True
         )
     ]
     if faults.stop_after is not None:

@@ -38,7 +38,7 @@ def test_simulate_writes_log_and_separate_truth(sim):
     assert all(abs(v) <= 0.8 for v in truth["errors"].values())
     assert truth["seed"] == 4
     text = sim.read_text()
-    assert text.startswith("# wirecal-log 1\n# robot: Adept Viper s650\n# plan: ")
+    assert text.startswith("# wirecal-log 2\n# robot: Adept Viper s650\n# plan: ")
     assert "errors" not in text
     assert str(truth["errors"]["th2"])[:8] not in text
 

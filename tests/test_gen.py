@@ -145,12 +145,14 @@ def test_double_literal(x):
 
 
 def test_log_header_and_columns_as_the_reader_expects(module, paper_plan):
-    assert 'CALL wc.write("# wirecal-log 1")' in module
+    assert 'CALL wc.write("# wirecal-log 2")' in module
     fp = paper_plan.fingerprint()
     assert f'$wc.fpa = "{fp[:32]}"' in module
     assert f'$wc.fpb = "{fp[32:]}"' in module
     assert 'CALL wc.write("# mm_per_count: 0.025488")' in module
-    assert "kind,step,index,j1,j2,j3,j4,j5,j6,counts,samples,spread" in module
+    assert '$cols = "kind,step,index,j1,j2,j3,j4,j5,j6,"' in module
+    assert 'CALL wc.write($cols+"counts,samples,spread,t_s,settle_s")' in module
+    assert "TIMER wc.tmr = 0" in module
     assert "FOPENW (wc.lun)" in module
     assert module.count("IOSTAT(") >= 6
 

@@ -68,12 +68,60 @@ def test_counter_wrap_gives_the_same_lengths(viper, paper_plan):
 
 
 def test_wrong_version(viper, paper_plan, log_text):
-    text = log_text.replace("# wirecal-log 1", "# wirecal-log 2", 1)
+    text = log_text.replace("# wirecal-log 2", "# wirecal-log 3", 1)
     with pytest.raises(
         WirecalError,
-        match=r"run\.csv:1: log version '2'; this wirecal reads "
-        "version 1",
+        match=r"run\.csv:1: log version '3'; this wirecal reads version 1 or 2",
     ):
+        parse_log(text, "run.csv")
+
+
+def as_version_1(text: str) -> str:
+    """The log as wirecal 0.1 wrote it: version 1, without the t_s and settle_s columns."""
+    out = []
+    for line in lines(text):
+        if line.startswith("# wirecal-log"):
+            line = "# wirecal-log 1"
+        elif not line.startswith("#"):
+            line = ",".join(line.split(",")[:12])
+        out.append(line)
+    return "\n".join(out) + "\n"
+
+
+def test_version_1_log_still_solves(viper, paper_plan, log_text):
+    old = parse_log(as_version_1(log_text), "run.csv")
+    assert old.version == 1
+    assert all(r.t_s is None and r.settle_s is None for r in old.readings)
+    new = measure(log_text, viper, paper_plan)
+    m = check_log(old, paper_plan, viper)
+    np.testing.assert_array_equal(m.distance_mm, new.distance_mm)
+    for method in ("joint", "stepwise"):
+        np.testing.assert_array_equal(
+            solve(viper, paper_plan, m).estimates[method].values,
+            solve(viper, paper_plan, new).estimates[method].values,
+        )
+
+
+def test_version_2_times_follow_the_run(viper, paper_plan, log_text):
+    log = parse_log(log_text, "run.csv")
+    t = np.array([r.t_s for r in log.readings])
+    assert log.version == 2
+    assert np.all(np.diff(t) > 3.0)  # each reading settles 3 s after the previous one
+    assert {r.settle_s for r in log.readings} == {3.0}
+    # first zero: the move to θ0 from θ0 (0.5 s overhead) and the 3 s settle
+    assert t[0] == pytest.approx(3.5, abs=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "message"),
+    [(12, "-0.5", "t_s -0.5 cannot be negative"), (13, "abc", "settle_s 'abc' is not a number")],
+)
+def test_bad_time_fields(log_text, column, value, message):
+    n = line_no(log_text, "point,1,2,")
+    cells = lines(log_text)[n - 1].split(",")
+    cells[column] = value
+    text = replace_line(log_text, "point,1,2,", ",".join(cells))
+    with pytest.raises(WirecalError, match=rf"run\.csv:{n}: {message}"):
         parse_log(text, "run.csv")
 
 
@@ -81,7 +129,7 @@ def test_foreign_file(viper, paper_plan):
     with pytest.raises(
         WirecalError,
         match=r"run\.csv:1: not a wirecal log: the first line "
-        "must be '# wirecal-log 1'",
+        "must be '# wirecal-log 2'",
     ):
         parse_log("time,value\n1,2\n", "run.csv")
 
@@ -128,7 +176,7 @@ def test_truncated_last_line_is_a_note(viper, paper_plan):
 def test_truncated_line_in_the_middle_is_an_error(viper, paper_plan, log_text):
     n = line_no(log_text, "point,2,3,")
     text = replace_line(log_text, "point,2,3,", "point,2,3,0.0000,-90.0000")
-    with pytest.raises(WirecalError, match=rf"run\.csv:{n}: has 5 fields; expected 12"):
+    with pytest.raises(WirecalError, match=rf"run\.csv:{n}: has 5 fields; expected 14"):
         parse_log(text, "run.csv")
 
 
@@ -153,7 +201,7 @@ def test_extra_point(viper, paper_plan, log_text):
 def test_step_beyond_plan(viper, paper_plan, log_text):
     """Step 11 is the closing zero's; a zero of step 12 or a point of step 11 is not."""
     for row, step in (("zero,12,0", 12), ("point,11,1", 11)):
-        text = log_text + row + ",0,-90,210,-90,0,-90,1000,10,0\n"
+        text = log_text + row + ",0,-90,210,-90,0,-90,1000,10,0,400.000,3.000\n"
         assert problems(text, viper, paper_plan) == [
             f"run.csv:{len(lines(text))}: step {step} is not in the plan (it has 10 steps; "
             "the closing zero reading is logged as step 11)"

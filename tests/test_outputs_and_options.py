@@ -239,7 +239,7 @@ def test_replaced_file_keeps_its_mode(tmp_path):
     out.write_text("old\n")
     out.chmod(0o640)
     assert run("simulate", ROBOT, PLAN, "-o", out, "--force").exit_code == 0
-    assert out.read_text().startswith("# wirecal-log 1")
+    assert out.read_text().startswith("# wirecal-log 2")
     assert out.stat().st_mode & 0o777 == 0o640
     assert files(tmp_path) == {"run.csv", "run.truth.toml"}
 
@@ -485,7 +485,7 @@ def test_filesystem_without_hard_links(tmp_path, monkeypatch):
     monkeypatch.setattr(fileio.os, "link", no_links)
     out = tmp_path / "run.csv"
     assert run("simulate", ROBOT, PLAN, "-o", out).exit_code == 0
-    assert out.read_text().startswith("# wirecal-log 1")
+    assert out.read_text().startswith("# wirecal-log 2")
     refused(run("simulate", ROBOT, PLAN, "-o", out), "exists")
     out.chmod(0o600)
     assert run("simulate", ROBOT, PLAN, "-o", out, "--force", "--seed", 2).exit_code == 0

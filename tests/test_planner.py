@@ -18,6 +18,7 @@ from wirecal.solver.formats.plan_file import load_plan, plan_from_dict
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.planner import PlanOptions, design, predicted_accuracy, robot_time
+from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
 
 from .conftest import ROOT, VIPER
 
@@ -129,8 +130,9 @@ def test_viper_plan_beats_the_corrected_paper_plan(viper, paper_plan):
 
 
 def test_robot_time_counts_moves_settles_and_returns(viper):
-    """One step, one point 30° away on joint 1 (328 °/s at 20 %): out and back 2 × (30 /
-    65.6 + 0.5 s), two stops of 3 s settle + 10 readings."""
+    """One step, one point 30° away on joint 1 (328 °/s at 20 %): the move to θ0 from θ0
+    (0.5 s overhead), out and back 2 × (30 / 65.6 + 0.5 s), three stops (zero, point,
+    closing zero) of 3 s settle + 10 readings."""
     plan = plan_from_dict(
         {
             "theta0_deg": [0, -90, 180, 0, 45, 0],
@@ -139,8 +141,12 @@ def test_robot_time_counts_moves_settles_and_returns(viper):
         },
         viper,
     )
-    expected = 2 * (30 / (328 * 0.2) + 0.5) + 2 * (3 + 0.2)
+    expected = 0.5 + 2 * (30 / (328 * 0.2) + 0.5) + 3 * (3 + 0.2)
     assert robot_time(viper, plan) == pytest.approx(expected, rel=1e-12)
+    times = run_timeline(viper.joint_speed_deg_s, plan, DEFAULT_RUN).reading_s
+    np.testing.assert_allclose(
+        times, [3.5, 3.5 + 0.2 + 30 / 65.6 + 0.5 + 3, expected - 0.2], rtol=1e-12
+    )
 
 
 def _edited(tmp_path: Path, old: str, new: str) -> Path:

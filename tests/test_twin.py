@@ -14,12 +14,13 @@ from wirecal.app.twin_runs import measure_in_twin
 from wirecal.gen.templating import environment
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log
+from wirecal.solver.formats.log import parse_log, read_log
 from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.identify import Problem
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import check_log, load_measurements
 from wirecal.solver.planner import robot_time
+from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
 from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 from wirecal.twin.cell import (
@@ -179,6 +180,18 @@ def test_twin_clock_agrees_with_the_planners_robot_time(viper, paper_plan, twin_
     344.4 s; with the twin's former 0.2 s per move against the planner's 0.5 s, 319.5 s:
     25 s apart)."""
     assert twin_run.cell.clock == pytest.approx(robot_time(viper, paper_plan), rel=0.01)
+
+
+def test_twin_log_times_are_the_controllers_timer(viper, paper_plan, twin_run):
+    """The t_s column is TIMER(1) from zero at the start of wc.run (1 ms resolution), when
+    the sampling begins; it follows the run's time model within 1 % at every reading."""
+    log = read_log(twin_run.log)
+    t = np.array([r.t_s for r in log.readings])
+    np.testing.assert_allclose(np.round(t * 1000), t * 1000, atol=1e-6)  # whole milliseconds
+    assert {r.settle_s for r in log.readings} == {3.0}
+    model = run_timeline(viper.joint_speed_deg_s, paper_plan, DEFAULT_RUN).reading_s
+    np.testing.assert_allclose(t, model, rtol=0.01)
+    assert t[-1] < twin_run.cell.clock
 
 
 def _fault(viper, plan, tmp_path, faults, **kw):
@@ -362,7 +375,7 @@ def test_echo_log_without_a_disk(viper, paper_plan, tmp_path):
     assert (tmp_path / "WCLOG.CSV").read_text() == "an older log\n"
     console = r.cell.console
     assert "    the log goes to the terminal only: copy its lines." in console
-    start = console.index("# wirecal-log 1")
+    start = console.index("# wirecal-log 2")
     rows = [c for c in console[start:] if c.startswith(("#", "kind,", "zero,", "point,"))]
     m = check_log(parse_log("\n".join(rows) + "\n", "terminal"), paper_plan, viper)
     assert m.complete

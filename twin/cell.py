@@ -25,7 +25,7 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import move_time_s
 from wirecal.solver.simulate import RANGE_EXCEEDED
-from wirecal.twin.vplus.interp import Interpreter, Outcome, Trans, VError, f32
+from wirecal.twin.vplus.interp import UNMODELLED, Interpreter, Outcome, Trans, VError, f32
 from wirecal.twin.vplus.parser import parse_module
 
 ERRORS = {
@@ -136,6 +136,7 @@ class Cell:
         self.pose_error = self.rng.normal(0, self.noise_mm)
         self.slip = 0.0
         self.belts: dict[str, int] = {}
+        self.timers: dict[int, float] = {}  # timer number → the clock when it read zero
         self.luns: dict[int, dict] = {}
         self.status: dict[int, float] = {}
         if self.encoder_point_mm is not None:
@@ -251,6 +252,23 @@ class Cell:
     def wait(self, seconds: float) -> None:
         """WAIT.EVENT , seconds: advance the clock."""
         self.clock += seconds
+
+    def set_timer(self, number: int, value: float) -> None:
+        """TIMER n = value: timers 1 to 15 (V+ 12.4 Release Notes, TIMER instruction)."""
+        if not 1 <= number <= 15:
+            raise VError(-410, f"*Illegal value* TIMER {number}: timers 1 to 15 can be set")
+        self.timers[number] = self.clock - value
+
+    def timer(self, number: int) -> float:
+        """TIMER(n): seconds, 1 ms resolution; timer 0 the time since the system started.
+
+        Timers -3 to -1 (V+ 12.4 Release Notes, TIMER function) are not modelled.
+        """
+        if -3 <= number < 0:
+            raise VError(UNMODELLED, f"*Not executed by the digital twin* TIMER({number})")
+        if not 0 <= number <= 15:
+            raise VError(-410, f"*Illegal value* TIMER({number}): timers are -3 to 15")
+        return round((self.clock - self.timers.get(number, 0.0)) * 1000) / 1000
 
     # ---- encoder ----
     def enable(self, switch: str) -> None:

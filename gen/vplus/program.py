@@ -26,6 +26,9 @@ from wirecal.gen.vplus.literals import (
 )
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
+from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
+from wirecal.solver.formats.log import MAGIC as LOG_MAGIC
+from wirecal.solver.formats.log import VERSION as LOG_VERSION
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters
@@ -211,6 +214,8 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         full=robot.encoder.counter.full,
         encoder=robot.encoder,
         log_file=opt.log_file,
+        log_magic=f"{LOG_MAGIC} {LOG_VERSION}",
+        log_columns=",".join(LOG_COLUMNS),
         result_file=opt.result_file,
         theta0=ppoint(plan.theta0_deg),
         steps=steps,

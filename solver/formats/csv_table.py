@@ -53,6 +53,7 @@ class Table:
     rows: tuple[Row, ...]
     problems: tuple[str, ...]  # file:line: problem, for the caller to report with its own
     notes: tuple[str, ...]
+    version: int  # the version on the first line
 
     def missing(self, keys: tuple[str, ...]) -> list[str]:
         """Return a problem for each header key that is absent."""
@@ -89,8 +90,9 @@ def parse_table(
     magic: str,
     version: int,
     what: str,
-    columns: tuple[str, ...] | Callable[[dict[str, tuple[str, int]]], tuple[str, ...]],
+    columns: tuple[str, ...] | Callable[[dict[str, tuple[str, int]], int], tuple[str, ...]],
     keys: tuple[str, ...],
+    older: tuple[int, ...] = (),
 ) -> Table:
     """Split a file into header, column line and rows.
 
@@ -99,35 +101,45 @@ def parse_table(
 
     ``what`` names the format in messages ("log", "validation log", …); ``keys`` are the
     header fields it knows (any other ``#`` line is a comment). ``columns`` may depend on
-    the header: a function of it that returns them (or raises).
+    the header and the version: a function of both that returns them (or raises).
+    ``older`` lists the earlier versions the caller still reads.
     """
     text = text.removeprefix("\ufeff")
     ends_with_newline = text.endswith(("\n", "\r"))
     lines = [line.strip() for line in text.splitlines()]
-    start = _check_first_line(lines, source, magic, version, what)
+    start, found = _check_first_line(lines, source, magic, (version, *older), what)
     header, comments, problems, n = _read_header(lines, start + 1, source, keys)
     if callable(columns):
-        columns = columns(header)
+        columns = columns(header, found)
     _check_column_line(lines, n, source, columns, problems)
     rows, notes = _read_rows(lines, n + 1, source, len(columns), ends_with_newline, problems)
-    return Table(source, header, tuple(comments), n + 1, tuple(rows), tuple(problems), tuple(notes))
+    return Table(
+        source, header, tuple(comments), n + 1, tuple(rows), tuple(problems), tuple(notes), found
+    )
 
 
-def _check_first_line(lines: list[str], source: str, magic: str, version: int, what: str) -> int:
-    """Return the index of the first non-blank line; raise unless it is the magic and version."""
+def _check_first_line(
+    lines: list[str], source: str, magic: str, versions: tuple[int, ...], what: str
+) -> tuple[int, int]:
+    """Return the index of the first non-blank line and its version.
+
+    Raise unless it is the magic and one of ``versions`` (the first is the current one).
+    """
     start = next((k for k, line in enumerate(lines) if line), 0)  # blank lines of a paste
     first = lines[start] if lines else ""
     if not first.startswith(magic):
         raise WirecalError(
             f"{source}:{start + 1}: not a wirecal {what}: the first line must be "
-            f"'{magic} {version}'"
+            f"'{magic} {versions[0]}'"
         )
     found = first[len(magic) :].strip()
-    if found != str(version):
+    readable = {str(v): v for v in versions}
+    if found not in readable:
+        known = " or ".join(str(v) for v in sorted(versions))
         raise WirecalError(
-            f"{source}:{start + 1}: {what} version {found!r}; this wirecal reads version {version}"
+            f"{source}:{start + 1}: {what} version {found!r}; this wirecal reads version {known}"
         )
-    return start
+    return start, readable[found]
 
 
 def _read_header(

@@ -2,19 +2,22 @@
 
 Format (UTF-8)::
 
-    # wirecal-log 1
+    # wirecal-log 2
     # robot: Adept Viper s650
     # plan: <sha256 fingerprint of the plan>
     # mm_per_count: 0.025488          (negative when counts fall as the wire extends)
     # <free comments>
-    kind,step,index,j1,j2,j3,j4,j5,j6,counts,samples,spread
-    zero,1,0,0.0000,-90.0000,...,8388000.5000,10,1
+    kind,step,index,j1,j2,j3,j4,j5,j6,counts,samples,spread,t_s,settle_s
+    zero,1,0,0.0000,-90.0000,...,8388000.5000,10,1,3.500,3.000
     point,1,1,...
 
 ``kind`` is ``zero`` (θ0 at the start of a step, index 0) or ``point``; step and index are
 1-based plan positions; j1..j6 the joints the controller reports (deg); ``counts`` the
 mean of ``samples`` raw counter readings, unwrapped relative to the first of them;
-``spread`` their max − min (counts). A point's wire length is (counts − reference) ×
+``spread`` their max − min (counts); ``t_s`` the controller's timer when the sampling
+began (s since the start of the run, 1 ms resolution); ``settle_s`` how long the program
+waited after the move before sampling (s). Version 1 logs (no ``t_s``, ``settle_s``)
+are still read: their readings carry no time. A point's wire length is (counts − reference) ×
 mm_per_count, the difference taken modulo the counter width; the reference is the mean of
 the zero readings (each checked against the first: a drift means the wire slipped).
 
@@ -37,9 +40,12 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.csv_table import Row, parse_table, read_source
 
 MAGIC = "# wirecal-log"
-VERSION = 1
+VERSION = 2
+OLDER_VERSIONS = (1,)
 JOINT_COLUMNS = tuple(f"j{i}" for i in range(1, 7))
-COLUMNS = ("kind", "step", "index", *JOINT_COLUMNS, "counts", "samples", "spread")
+TIME_COLUMNS = ("t_s", "settle_s")
+COLUMNS_V1 = ("kind", "step", "index", *JOINT_COLUMNS, "counts", "samples", "spread")
+COLUMNS = (*COLUMNS_V1, *TIME_COLUMNS)
 HEADER_KEYS = ("robot", "plan", "mm_per_count")
 
 
@@ -55,6 +61,8 @@ class Reading:
     samples: int
     spread: float
     line: int
+    t_s: float | None = None  # the controller's timer at the sampling (version 2 on)
+    settle_s: float | None = None  # the wait before the sampling (version 2 on)
 
 
 @dataclass(frozen=True)
@@ -68,14 +76,26 @@ class Log:
     readings: tuple[Reading, ...]
     sha256: str
     notes: tuple[str, ...] = ()
+    version: int = VERSION
 
 
 def format_row(
-    kind: str, step: int, index: int, joints_deg, counts: float, samples: int, spread: float
+    kind: str,
+    step: int,
+    index: int,
+    joints_deg,
+    counts: float,
+    samples: int,
+    spread: float,
+    t_s: float,
+    settle_s: float,
 ) -> str:
     """One data line, numbers written without loss at the log's resolution."""
     joints = ",".join(f"{x:.4f}" for x in joints_deg)
-    return f"{kind},{step},{index},{joints},{counts:.4f},{samples:d},{spread:g}"
+    return (
+        f"{kind},{step},{index},{joints},{counts:.4f},{samples:d},{spread:g},"
+        f"{t_s:.3f},{settle_s:.3f}"
+    )
 
 
 def format_header(
@@ -108,7 +128,14 @@ def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
     if sha256 is None:
         sha256 = hashlib.sha256(text.encode("utf-8")).hexdigest()
     table = parse_table(
-        text, source, magic=MAGIC, version=VERSION, what="log", columns=COLUMNS, keys=HEADER_KEYS
+        text,
+        source,
+        magic=MAGIC,
+        version=VERSION,
+        older=OLDER_VERSIONS,
+        what="log",
+        columns=lambda _header, version: COLUMNS if version == VERSION else COLUMNS_V1,
+        keys=HEADER_KEYS,
     )
     problems = [*table.problems, *table.missing(HEADER_KEYS)]
 
@@ -137,6 +164,7 @@ def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
         readings=tuple(readings),
         sha256=sha256,
         notes=table.notes,
+        version=table.version,
     )
 
 
@@ -190,35 +218,18 @@ def lossy_counts(rows: tuple[Row, ...], source: str) -> list[str]:
 
 def _parse_row(cells: tuple[str, ...], line: int, bad) -> Reading | None:
     kind = cells[0].strip()
-    ok = True
-    if kind not in ("zero", "point"):
-        bad(line, f"kind {kind!r} is neither 'zero' nor 'point'")
-        ok = False
-    ints = {}
-    for name, cell in (("step", cells[1]), ("index", cells[2]), ("samples", cells[10])):
-        try:
-            ints[name] = int(cell)
-        except ValueError:
-            bad(line, f"{name} {cell.strip()!r} is not a whole number")
-            ok = False
-    floats = {}
-    for name, cell in zip(
-        (*JOINT_COLUMNS, "counts", "spread"), [*cells[3:10], cells[11]], strict=True
-    ):
-        try:
-            floats[name] = float(cell)
-            if not math.isfinite(floats[name]):
-                raise ValueError
-        except ValueError:
-            bad(line, f"{name} {cell.strip()!r} is not a number")
-            ok = False
+    ok = kind in ("zero", "point")
     if not ok:
+        bad(line, f"kind {kind!r} is neither 'zero' nor 'point'")
+    ints, floats, numbers_ok = _numbers(cells, line, bad)
+    if not (ok and numbers_ok):
         return None
     if ints["samples"] < 1:
         bad(line, f"samples {ints['samples']} must be at least 1")
         return None
-    if floats["spread"] < 0:
-        bad(line, f"spread {floats['spread']:g} cannot be negative")
+    negative = [name for name in ("spread", *TIME_COLUMNS) if floats.get(name, 0.0) < 0]
+    if negative:
+        bad(line, f"{negative[0]} {floats[negative[0]]:g} cannot be negative")
         return None
     return Reading(
         kind,
@@ -229,4 +240,29 @@ def _parse_row(cells: tuple[str, ...], line: int, bad) -> Reading | None:
         ints["samples"],
         floats["spread"],
         line,
+        floats.get("t_s"),
+        floats.get("settle_s"),
     )
+
+
+def _numbers(cells: tuple[str, ...], line: int, bad) -> tuple[dict, dict, bool]:
+    """Return the row's whole and finite numbers by column name, and whether all parse."""
+    ok = True
+    ints = {}
+    for name, cell in (("step", cells[1]), ("index", cells[2]), ("samples", cells[10])):
+        try:
+            ints[name] = int(cell)
+        except ValueError:
+            bad(line, f"{name} {cell.strip()!r} is not a whole number")
+            ok = False
+    floats = {}
+    names = (*JOINT_COLUMNS, "counts", "spread", *TIME_COLUMNS[: len(cells) - len(COLUMNS_V1)])
+    for name, cell in zip(names, [*cells[3:10], *cells[11:]], strict=True):
+        try:
+            floats[name] = float(cell)
+            if not math.isfinite(floats[name]):
+                raise ValueError
+        except ValueError:
+            bad(line, f"{name} {cell.strip()!r} is not a number")
+            ok = False
+    return ints, floats, ok

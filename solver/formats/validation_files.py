@@ -120,7 +120,7 @@ def read_validation_log(path: str | Path, kind: str) -> ValidationLog:
     """Read a validation log; every problem as ``file:line: problem``."""
     text, source, _ = read_source(path, "validation log")
 
-    def columns(header: dict[str, tuple[str, int]]) -> tuple[str, ...]:
+    def columns(header: dict[str, tuple[str, int]], _version: int) -> tuple[str, ...]:
         found, line = header.get("kind", (None, 2))
         if found != kind:
             raise WirecalError(f"{source}:{line}: a {found!r} log where a {kind!r} log is needed")

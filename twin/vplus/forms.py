@@ -37,6 +37,7 @@ FORMS: dict[str, str] = {
     "type": "*",
     "prompt": "s, V",
     "wait.event": ", n",
+    "timer": "n = n",
     "attach": "(V n) s",
     "detach": "(n)",
     "fopenw": "(n) s",

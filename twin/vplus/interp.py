@@ -611,6 +611,8 @@ class _Compiler:
             return (lambda frame: Trans(*(f32(g(frame)) for g in f))), True
         if name == "sig":
             return (lambda frame: cell.sig(int(f[0](frame)))), False
+        if name == "timer":
+            return (lambda frame: cell.timer(int(f[0](frame)))), True
         raise AssertionError(name)  # pragma: no cover - FUNCTIONS and this list agree
 
     # ---------- statements ----------
@@ -839,6 +841,11 @@ class _Compiler:
         f = self.expr(ops[0])[0]
         cell = self.i.cell
         return lambda frame: cell.wait(f(frame))
+
+    def ins_timer(self, s, ops):
+        number, value = (self.expr(x)[0] for x in ops)
+        cell = self.i.cell
+        return lambda frame: cell.set_timer(int(number(frame)), value(frame))
 
     def ins_attach(self, s, ops):
         _, put = self.var(ops[0])

@@ -62,6 +62,7 @@ FUNCTIONS: dict[str, tuple[tuple[str, ...], int, str]] = {
     "#ppoint": (("n",) * 12, 1, "l"),
     "trans": (("n",) * 6, 0, "t"),
     "sig": (("n",), 1, "n"),
+    "timer": (("n",), 1, "n"),
 }
 #: functions whose omitted arguments mean zero
 OMITTABLE = {"trans"}
