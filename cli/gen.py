@@ -1,4 +1,4 @@
-"""``wirecal gen``: the V+ module for the controller."""
+"""``wirecal gen``: the controller programs (V+ module or URScript programs)."""
 
 from __future__ import annotations
 
@@ -6,11 +6,14 @@ import click
 
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
+from wirecal.gen.urscript.program import UrOptions, scripts, write_scripts
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.validation_files import load_setup
+from wirecal.solver.robot import LANGUAGES
 from wirecal.solver.run_parameters import RunParameters
 
 _D = RunParameters()
@@ -26,7 +29,22 @@ _G = GenOptions()
     "out_dir",
     required=True,
     type=click.Path(file_okay=False),
-    help="Folder for the module WIRECAL.V2 (created if missing).",
+    help="Folder for the programs (created if missing): WIRECAL.V2 (V+) or "
+    "wc_mount/wc_check/wc_run.script (URScript).",
+)
+@click.option(
+    "--language",
+    type=click.Choice(sorted(LANGUAGES)),
+    help="Controller language; default: the robot file's [controller] language (V+ if none).",
+)
+@click.option(
+    "--host",
+    help="URScript: the PC address the run sends its log to (default: [controller] host).",
+)
+@click.option(
+    "--port",
+    type=click.IntRange(1, 65535),
+    help="URScript: the port 'wirecal receive' listens on (default: [controller] port).",
 )
 @click.option(
     "--speed",
@@ -122,6 +140,9 @@ def gen(
     robot,
     plan,
     out_dir,
+    language,
+    host,
+    port,
     speed,
     accel,
     settle_s,
@@ -137,7 +158,11 @@ def gen(
     lf,
     force,
 ):
-    """Write the V+/eV+ module that runs PLAN on the controller.
+    """Write the controller programs that run PLAN: a V+/eV+ module or URScript programs.
+
+    URScript (--language urscript, or [controller] language in the robot file): wc_mount,
+    wc_check and wc_run (the measurement; sends the log to 'wirecal receive' on --host,
+    --port and mirrors it in the log tab), each a .script file; the rest below is V+.
 
     WIRECAL.V2 holds wc.mount (move to θ0, mount the encoder), wc.check (live counts),
     wc.run (the measurement; writes the log), wc.solve and wc.solve2 (identification on
@@ -149,6 +174,31 @@ def gen(
     """
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
+    if (language or rb.controller.language) == "urscript":
+        if patch_file or setup_file or echo_log or lf:
+            raise WirecalError(
+                "--patch, --validation, --echo-log and --lf are V+ options; the URScript "
+                "programs always mirror the log with textmsg and use LF line ends"
+            )
+        ur = UrOptions(
+            run=RunParameters(
+                speed_pct=speed, accel_pct=accel, settle_s=settle_s, readings=samples
+            ),
+            host=host,
+            port=port,
+            zero_tol_mm=zero_tol,
+            spread_tol_mm=spread_tol,
+            margin_deg=margin,
+            range_margin_mm=range_margin,
+        )
+        paths = write_scripts(out_dir, scripts(rb, pl, ur), force=force, inputs=[robot, plan])
+        click.echo(
+            f"wrote {', '.join(str(p) for p in paths)}: run wc_mount, wc_check, then "
+            "'wirecal receive' on the PC and wc_run"
+        )
+        return
+    if host or port:
+        raise WirecalError("--host and --port are for URScript (--language urscript)")
     patch = read_patch(patch_file).offsets_for(rb, pl) if patch_file else None
     opt = GenOptions(
         run=RunParameters(speed_pct=speed, accel_pct=accel, settle_s=settle_s, readings=samples),

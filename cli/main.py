@@ -121,7 +121,11 @@ for _name, _target, _summary in (
         "wirecal.cli.demo:demo",
         "Calibrate a simulated Viper s650 end to end, before and after, in about a minute.",
     ),
-    ("gen", "wirecal.cli.gen:gen", "Write the V+/eV+ module that runs PLAN on the controller."),
+    (
+        "gen",
+        "wirecal.cli.gen:gen",
+        "Write the controller programs that run PLAN: a V+/eV+ module or URScript programs.",
+    ),
     (
         "export-urdf",
         "wirecal.cli.urdf:export_urdf",

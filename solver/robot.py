@@ -30,8 +30,10 @@ class Encoder:
     """The draw-wire encoder and how the controller program reads it.
 
     The draw-wire encoder: scale, measuring range, the width of the controller's counter,
-    and how the controller program reads it: ``interface`` "belt" (DEFBELT/BELT, belt
-    encoder ``channel``, BELT mode ``belt_mode``) or "device" (DEVICE unit ``channel``).
+    and how the controller program reads it: ``interface`` "belt" (V+: DEFBELT/BELT, belt
+    encoder ``channel``, BELT mode ``belt_mode``), "device" (V+: DEVICE unit ``channel``)
+    or "pulse" (URScript: the controller's quadrature pulse decoder, encoder index
+    ``channel`` 0 or 1, signals A and B on the digital inputs ``pulse_inputs``).
     """
 
     mm_per_count: float
@@ -40,11 +42,32 @@ class Encoder:
     interface: str = "belt"
     channel: int = 1
     belt_mode: int = 0
+    pulse_inputs: tuple[int, int] = (8, 9)
 
     @property
     def counter(self) -> Counter:
         """The controller's counter of this encoder (``counter_bits`` wide)."""
         return Counter(self.counter_bits)
+
+
+LANGUAGES = {"vplus": "Adept/Omron V+ and eV+", "urscript": "Universal Robots URScript"}
+"""The controller languages ``wirecal gen`` writes, by their robot-file name."""
+
+INTERFACES = {"vplus": ("belt", "device"), "urscript": ("pulse",)}
+"""The encoder interfaces each language's programs read (``[encoder] interface``)."""
+
+
+@dataclass(frozen=True)
+class Controller:
+    """The robot's controller: its language and, for URScript, where the PC listens.
+
+    A URScript program has no file output: it sends the log over a TCP socket to
+    ``wirecal receive`` on ``host``:``port`` (the robot is the client).
+    """
+
+    language: str = "vplus"
+    host: str | None = None
+    port: int | None = None
 
 
 @dataclass(frozen=True)
@@ -80,6 +103,7 @@ class Robot:
     source: str = field(default="<memory>", compare=False)
     link_radius_mm: np.ndarray | None = None  # capsules between joint frames; see clearance
     urdf: UrdfSource | None = None
+    controller: Controller = Controller()
 
     @property
     def n_joints(self) -> int:

@@ -191,7 +191,8 @@ CASES = {
     ),
     "interface": (
         lambda d: d["encoder"].__setitem__("interface", "usb"),
-        'r.toml: encoder.interface: is "usb"; give "belt" (DEFBELT/BELT) or "device" (DEVICE)',
+        'r.toml: encoder.interface: is "usb"; give "belt" (V+: DEFBELT/BELT) or "device" '
+        '(V+: DEVICE) or "pulse" (URScript: the controller\'s pulse decoder)',
     ),
     "missing table": (
         lambda d: d.pop("encoder"),
@@ -250,7 +251,9 @@ def test_unreadable_and_malformed_files(tmp_path):
 def test_shipped_arms_load_unchanged(path):
     robot = load_robot(path)
     assert robot.n_joints == 6
-    assert robot.encoder.counter_bits == 24
+    # a V+ belt counter is 24 bits; the URScript programs log the raw int32 count
+    bits = {"vplus": 24, "urscript": 32}[robot.controller.language]
+    assert robot.encoder.counter_bits == bits
 
 
 ACCEPTED = {

@@ -13,17 +13,9 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from wirecal.solver.errors import WirecalError
-from wirecal.solver.plan import Plan
-from wirecal.solver.robot import Robot
+from wirecal.gen.targets import joint_literal
 
 MAX_LINE = 80
-
-
-def joint_literal(x: float) -> str:
-    """Write a joint angle as the operator reads it: up to 4 decimals, no trailing zeros."""
-    s = f"{x:.4f}".rstrip("0").rstrip(".")
-    return "0" if s in ("-0", "") else s
 
 
 def ppoint(q: Iterable[float]) -> str:
@@ -52,30 +44,6 @@ def double_literal(x: float) -> str:
     if k == 0 and abs(m) < 2**24:
         return str(m)  # a whole number a REAL holds exactly
     return f"{sign}^D{abs(m)}/wc.p10[{k}]" if k else f"{sign}^D{abs(m)}"
-
-
-def check_limits(robot: Robot, plan: Plan, margin_deg: float) -> None:
-    """Refuse to generate motion to any configuration within ``margin_deg`` of a limit."""
-    lo = robot.joint_min_deg + margin_deg
-    hi = robot.joint_max_deg - margin_deg
-    problems = []
-
-    def check(q, where):
-        for j in np.flatnonzero((q < lo) | (q > hi)):
-            problems.append(
-                f"{plan.source}: {where}: joint {j + 1} = {joint_literal(q[j])} deg is within "
-                f"{margin_deg:g} deg of its limits [{robot.joint_min_deg[j]:g}, "
-                f"{robot.joint_max_deg[j]:g}]; move the point or lower --margin"
-            )
-
-    check(plan.theta0_deg, "theta0_deg")
-    for j, s in enumerate(plan.steps, 1):
-        for i, q in enumerate(s.via_deg, 1):
-            check(q, f"step {j} ({s.parameter}) via point {i}")
-        for i, q in enumerate(s.points_deg, 1):
-            check(q, f"step {j} ({s.parameter}) point {i}")
-    if problems:
-        raise WirecalError(problems)
 
 
 def long_lines(text: str, source: str) -> list[str]:

@@ -16,14 +16,9 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
+from wirecal.gen.targets import check_limits, joint_literal, run_steps
 from wirecal.gen.templating import render
-from wirecal.gen.vplus.literals import (
-    check_limits,
-    double_literal,
-    joint_literal,
-    long_lines,
-    ppoint,
-)
+from wirecal.gen.vplus.literals import double_literal, long_lines, ppoint
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
@@ -73,6 +68,12 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
             "p. 354), not the raw count the log needs, and the SETDEVICE syntax that would "
             "set scale 1, offset 0 and wide limits is not confirmed from the manual; wire "
             'the encoder to a belt-encoder input and use interface = "belt"'
+        )
+    elif robot.encoder.interface != "belt":
+        problems.append(
+            f'{robot.source}: encoder.interface = "{robot.encoder.interface}" is read by the '
+            "URScript programs (gen --language urscript); the V+ module reads a belt-encoder "
+            'input: interface = "belt"'
         )
     if robot.controller_problem():
         problems.append(robot.controller_problem())
@@ -162,21 +163,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
             f"{robot.source}: a nominal value of {tables.names} is beyond "
             "±1677 mm/deg; the controller's SPEC table cannot print it"
         )
-    steps = []
-    for j, s in enumerate(plan.steps, 1):
-        first = int(tables.first[j - 1])
-        steps.append(
-            {
-                "number": j,
-                "parameter": s.parameter,
-                "count": len(s.points_deg),
-                "vias": [ppoint(v) for v in s.via_deg],
-                "points": [
-                    {"index": i, "global": first + i - 1, "ppoint": ppoint(p)}
-                    for i, p in enumerate(s.points_deg, 1)
-                ],
-            }
-        )
+    steps = run_steps(plan, tables.first, ppoint)
     patch = None
     if opt.patch is not None:
         missing = [n for n in plan.order if n not in opt.patch]

@@ -13,6 +13,9 @@ Format (angles in degrees, lengths in mm)::
     mm_per_count = 0.025488; range_mm = 1250; counter_bits = 24
     [calibration]
     parameters = ["th2", "th3", ...]      # names from wirecal.solver.params
+    [controller]                          # optional
+    language = "vplus"                    # or "urscript" (Universal Robots)
+    host = "192.168.1.10"; port = 50000   # URScript: where 'wirecal receive' listens
     [geometry]                            # optional
     link_radius_mm = [70, 55, 45, 40, 35] # capsule radius of each link (wire clearance)
 
@@ -30,7 +33,9 @@ wire can calibrate (each rule says what to do when it fails):
 * each joint's range wider than 10° (:data:`MIN_JOINT_RANGE_DEG`): plan design and the
   generated programs keep every point 5° inside each limit;
 * a counter wide enough for the wire: 2^(bits−1)·|mm_per_count| must exceed range_mm, or two
-  wire lengths a counter turn apart give the same count.
+  wire lengths a counter turn apart give the same count;
+* an encoder interface the controller language reads: "belt" or "device" for V+, "pulse"
+  (the URScript pulse decoder, ``pulse_inputs`` two digital inputs 8–11) for URScript.
 """
 
 from __future__ import annotations
@@ -45,7 +50,15 @@ import numpy as np
 from wirecal.solver import params as P
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.toml_fields import Table, document, duplicates, valid
-from wirecal.solver.robot import DEFAULT_LINK_RADIUS_MM, Encoder, Robot, UrdfSource
+from wirecal.solver.robot import (
+    DEFAULT_LINK_RADIUS_MM,
+    INTERFACES,
+    LANGUAGES,
+    Controller,
+    Encoder,
+    Robot,
+    UrdfSource,
+)
 
 MAX_LENGTH_MM = 10_000.0
 """Largest |a|, |d|, tool coordinate or link radius (mm): no arm a draw wire spans is 10 m."""
@@ -76,14 +89,28 @@ _KEYS = {
         "calibration",
         "geometry",
         "urdf",
+        "controller",
     ),
     "kinematics": ("convention", "dh", "joint_min_deg", "joint_max_deg", "joint_speed_deg_s"),
     "tool": ("point_mm",),
-    "encoder": ("mm_per_count", "range_mm", "counter_bits", "interface", "channel", "belt_mode"),
+    "encoder": (
+        "mm_per_count",
+        "range_mm",
+        "counter_bits",
+        "interface",
+        "channel",
+        "belt_mode",
+        "pulse_inputs",
+    ),
     "calibration": ("parameters",),
     "geometry": ("link_radius_mm",),
     "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg"),
+    "controller": ("language", "host", "port"),
 }
+
+PULSE_INPUTS = (8, 11)
+"""Digital inputs the URScript pulse decoder takes for signals A and B ("Must be 8-11":
+UR e-Series Script Directory §14.2, encoder_enable_pulse_decode, p. 26)."""
 
 
 def load_robot(path: str | Path) -> Robot:
@@ -114,7 +141,8 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     point = tool.vector(
         "point_mm", length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm"
     )
-    encoder = _encoder(doc.table("encoder", _KEYS["encoder"]))
+    controller = _controller(doc.table("controller", _KEYS["controller"], required=False))
+    encoder = _encoder(doc.table("encoder", _KEYS["encoder"]), controller)
     parameters = _parameters(doc.table("calibration", _KEYS["calibration"]), n)
     radii = doc.table("geometry", _KEYS["geometry"], required=False).vector(
         "link_radius_mm",
@@ -144,7 +172,22 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         source=source,
         link_radius_mm=radii,
         urdf=urdf,
+        controller=valid(controller),
     )
+
+
+def _controller(table: Table) -> Controller | None:
+    """Read the optional ``[controller]`` table (V+ when absent)."""
+    language = table.string("language", "vplus", choices=LANGUAGES)
+    host = table.string("host", None)
+    if host is not None and not all(33 <= ord(c) <= 126 and c != '"' for c in host):
+        table.add("host", f"is {host!r}; give an address or host name (printable, no spaces)")
+        host = None
+    port = table.integer("port", None, lo=1, hi=65535)
+    keys = table.keys()
+    if language is None or ("host" in keys and host is None) or ("port" in keys and port is None):
+        return None
+    return Controller(language, host, port)
 
 
 def _dh(kin: Table) -> np.ndarray | None:
@@ -182,23 +225,54 @@ def _limits(kin: Table, n: int | None) -> tuple[np.ndarray | None, np.ndarray | 
     return lo, hi
 
 
-def _encoder(enc: Table) -> Encoder | None:
+def _encoder(enc: Table, controller: Controller | None) -> Encoder | None:
     mpc = enc.number("mm_per_count", lo=-MAX_MM_PER_COUNT, hi=MAX_MM_PER_COUNT, unit="mm")
     if mpc == 0:
         enc.add("mm_per_count", "must not be zero")
         mpc = None
     rng = enc.number("range_mm", above=0, hi=MAX_RANGE_MM, unit="mm")
     bits = enc.integer("counter_bits", lo=8, hi=64)
+    language = "vplus" if controller is None else controller.language
     interface = enc.string(
-        "interface", "belt", choices={"belt": "DEFBELT/BELT", "device": "DEVICE"}
+        "interface",
+        INTERFACES[language][0],
+        choices={
+            "belt": "V+: DEFBELT/BELT",
+            "device": "V+: DEVICE",
+            "pulse": "URScript: the controller's pulse decoder",
+        },
     )
-    channel = enc.integer("channel", 1 if interface == "belt" else 0, lo=0, hi=16)
+    if controller is not None and interface is not None and interface not in INTERFACES[language]:
+        enc.add(
+            "interface",
+            f"is {interface!r}, which the {LANGUAGES[language]} programs cannot read; give "
+            + " or ".join(repr(i) for i in INTERFACES[language])
+            + " (or change [controller] language)",
+        )
+        interface = None
+    pulse = interface == "pulse"
+    default_channel = 1 if interface == "belt" else 0
+    channel = enc.integer("channel", default_channel, lo=0, hi=1 if pulse else 16)
     mode = enc.integer("belt_mode", 0, lo=0, hi=16)
+    inputs = enc.vector(
+        "pulse_inputs",
+        [8, 9],
+        length=2,
+        labels="(A, B)",
+        lo=PULSE_INPUTS[0],
+        hi=PULSE_INPUTS[1],
+        integer=True,
+    )
+    if inputs is not None and inputs[0] == inputs[1]:
+        enc.add("pulse_inputs", f"A and B are both input {inputs[0]:g}; give two inputs")
+        inputs = None
+    if "pulse_inputs" in enc.keys() and not pulse:
+        enc.add("pulse_inputs", 'is for interface = "pulse" (URScript) only; remove it')
     if mpc is None or rng is None or bits is None or interface is None:
         return None
-    if channel is None or mode is None:
+    if channel is None or mode is None or inputs is None:
         return None
-    return Encoder(mpc, rng, bits, interface, channel, mode)
+    return Encoder(mpc, rng, bits, interface, channel, mode, (int(inputs[0]), int(inputs[1])))
 
 
 def _parameters(cal: Table, n: int | None) -> list[str] | None:

@@ -1,0 +1,167 @@
+"""``wirecal gen --language urscript``: the URScript programs, from ``templates/urscript``.
+
+One ``.script`` file per role, each a single ``def … end`` program as the controller takes
+it (:mod:`wirecal.gen.urscript.facts`, "script over port 30002"): ``wc_mount`` (move to θ0,
+mount the encoder), ``wc_check`` (live counts in the log tab) and ``wc_run`` (the
+measurement; sends the log to ``wirecal receive`` over TCP and mirrors every line with
+``textmsg``). The output is deterministic: the same robot, plan, options and wirecal
+version give the same bytes.
+
+Units at the controller: ``movej`` takes radians, rad/s and rad/s² (UR e-Series Script
+Directory §14.22); the joints read back with ``get_actual_joint_positions()`` are radians
+and are written to the log in degrees, as every wirecal file holds them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wirecal import __version__
+from wirecal.gen.tables import build_tables
+from wirecal.gen.targets import check_limits, joint_target, run_steps
+from wirecal.gen.templating import render
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.fileio import Outputs
+from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
+from wirecal.solver.run_parameters import DEFAULT_RUN, READING_INTERVAL_S, RunParameters
+from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
+
+ROLES = ("mount", "check", "run")
+"""The programs, one ``wc_<role>.script`` each."""
+
+RAW_COUNTER_BITS = 32
+"""The programs read the raw count, an int32 (SD §14.4): the robot file's counter_bits."""
+
+FILTERED_RANGE = 2**16
+"""The filtered count's range [0; 65536[ (SD §14.4), which the programs do not use."""
+
+MOVEJ_DEFAULT_ACCEL_RAD_S2 = 1.4
+"""movej's default joint acceleration (SD §14.22): what ``--accel`` at its default gives."""
+
+
+@dataclass(frozen=True)
+class UrOptions:
+    """Options of the generated URScript programs."""
+
+    run: RunParameters = DEFAULT_RUN  # speed, acceleration, settle, readings
+    host: str | None = None  # the PC running 'wirecal receive' (default: the robot file's)
+    port: int | None = None  # its port (default: the robot file's)
+    zero_tol_mm: float = 0.1  # a zero reading further from the first: the wire slipped
+    spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
+    margin_deg: float = 1.0  # every generated target at least this far inside a limit
+    range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
+
+
+def rad_literal(q_deg: Iterable[float]) -> str:
+    """Write a joint target (deg) as URScript's list of radians, 9 decimals (< 1e-6 deg)."""
+    return "[" + ", ".join(_fixed(math.radians(x), 9) for x in q_deg) + "]"
+
+
+def _fixed(x: float, digits: int) -> str:
+    """Return ``x`` with at most ``digits`` decimals, no trailing zeros, never ``-0``."""
+    s = f"{x:.{digits}f}".rstrip("0").rstrip(".")
+    return "0" if s in ("-0", "") else s
+
+
+def _check(robot: Robot, opt: UrOptions) -> tuple[str, int]:
+    """Return the PC's host and port; raise naming every rule the inputs break."""
+    problems = opt.run.problems()
+    enc = robot.encoder
+    if enc.interface != "pulse":
+        problems.append(
+            f'{robot.source}: encoder.interface = "{enc.interface}": the URScript programs read '
+            'the controller\'s pulse decoder; give interface = "pulse", channel (encoder '
+            "index 0 or 1) and pulse_inputs (two digital inputs 8-11)"
+        )
+    if enc.counter_bits != RAW_COUNTER_BITS:
+        problems.append(
+            f"{robot.source}: encoder.counter_bits = {enc.counter_bits}: the URScript programs "
+            f"log the raw count, an int32; give counter_bits = {RAW_COUNTER_BITS}"
+        )
+    if robot.controller_problem():
+        problems.append(str(robot.controller_problem()))
+    if any(not 32 <= ord(ch) <= 126 or ch in '"\\' for ch in robot.name):
+        problems.append(
+            f"{robot.source}: name {robot.name!r}: the programs write it in a URScript "
+            "string: printable ASCII without '\"' or '\\'; rename the robot"
+        )
+    host = opt.host or robot.controller.host
+    port = opt.port or robot.controller.port
+    if host is None:
+        problems.append(
+            f"{robot.source}: no PC address for the log: give [controller] host (the PC "
+            "running 'wirecal receive', as the robot reaches it) or gen --host"
+        )
+    elif not all(33 <= ord(c) <= 126 and c not in '"\\' for c in host):
+        problems.append(f"--host {host!r}: give an address or host name (printable, no spaces)")
+    if port is None:
+        problems.append(f"{robot.source}: no port for the log: give [controller] port or --port")
+    elif not 1 <= port <= 65535:
+        problems.append(f"--port {port}: give 1-65535")
+    if problems:
+        raise WirecalError(problems)
+    return str(host), int(port)  # type: ignore[arg-type]
+
+
+def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str, str]:
+    """Return the programs by file name; raise :class:`WirecalError` if a rule would be broken.
+
+    A target within ``margin_deg`` of a joint limit, or a wire length beyond the encoder's
+    range, is refused before anything is written, naming the step and point.
+    """
+    check_limits(robot, plan, opt.margin_deg)
+    check_wire_range(robot, plan, opt.range_margin_mm)
+    host, port = _check(robot, opt)
+    tables = build_tables(robot, plan)
+    mpc = robot.encoder.mm_per_count
+    speed_rad_s = math.radians(float(np.min(robot.joint_speed_deg_s))) * opt.run.speed_pct / 100
+    accel = MOVEJ_DEFAULT_ACCEL_RAD_S2 * opt.run.accel_pct / DEFAULT_RUN.accel_pct
+    context = {
+        "version": __version__,
+        "robot": robot.name,
+        "fingerprint": plan.fingerprint(),
+        "host": host,
+        "port": port,
+        "encoder": robot.encoder,
+        "filtered_mm": _fixed(FILTERED_RANGE * abs(mpc), 1),
+        "speed": f"{opt.run.speed_pct:g}",
+        "speed_rad": _fixed(speed_rad_s, 6),
+        "accel_rad": _fixed(accel, 6),
+        "settle": f"{opt.run.settle_s:g}",
+        "interval": f"{READING_INTERVAL_S:g}",
+        "samples": opt.run.readings,
+        "deg_per_rad_1e4": _fixed(10000 * 180 / math.pi, 9),
+        "mpc": repr(mpc),
+        "mpc_1e4": _fixed(mpc * 10000, 9),
+        "zero_tol": f"{opt.zero_tol_mm:g}",
+        "spread_tol": f"{opt.spread_tol_mm:g}",
+        "spread_counts": f"{np.floor(opt.spread_tol_mm / abs(mpc)):g}",
+        "theta0": joint_target(plan.theta0_deg, rad_literal),
+        "steps": run_steps(plan, tables.first, rad_literal),
+        "nsteps": len(plan.steps),
+        "npoints": plan.n_points,
+    }
+    return {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
+
+
+def write_scripts(
+    out_dir: str | Path,
+    programs: dict[str, str],
+    force: bool = False,
+    inputs: Iterable[str | Path] = (),
+) -> list[Path]:
+    """Write the programs into ``out_dir`` (LF line ends, SD "script over port 30002").
+
+    All together or none; never over one of ``inputs``.
+    """
+    paths = [Path(out_dir) / name for name in programs]
+    with Outputs(paths, force=force, inputs=inputs, folder=out_dir) as out:
+        for path, text in zip(paths, programs.values(), strict=True):
+            out.put(path, text)
+    return paths
