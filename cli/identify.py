@@ -21,7 +21,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.csv_table import STDIN
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
-from wirecal.solver.formats.patch import put_patch, spec_path
+from wirecal.solver.formats.patch import companion_paths, put_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
@@ -353,7 +353,7 @@ def solve(
     if rb.controller_problem():
         raise WirecalError(f"{rb.controller_problem()}; 'wirecal solve' reads that log")
     pl = load_plan(plan, rb)
-    paths = [patch_path, spec_path(patch_path)] if patch_path else []
+    paths = [patch_path, *companion_paths(rb, patch_path)] if patch_path else []
     if log == STDIN and sys.stdin.isatty():
         click.echo("paste the log, then Ctrl-D (Windows: Ctrl-Z, Enter)", err=True)
     with Outputs(paths, force=force, inputs=[robot, plan, log]) as out:
@@ -394,7 +394,8 @@ def solve(
         if ctl:
             click.echo(_controller_text(ctl))
     if patch_path:
-        click.echo(f"wrote {patch_path} ({chosen}) and {spec_path(patch_path)}", err=as_json)
+        others = " and ".join(str(p) for p in companion_paths(rb, patch_path))
+        click.echo(f"wrote {patch_path} ({chosen}) and {others}", err=as_json)
 
 
 def _controller(result) -> ControllerComparison:

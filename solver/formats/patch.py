@@ -22,6 +22,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs, read_toml
 from wirecal.solver.formats.robot_file import MAX_DH_ANGLE_DEG, MAX_LENGTH_MM
 from wirecal.solver.formats.toml_fields import Table, document, valid
+from wirecal.solver.formats.ur_calibration import put_ur_calibration, ur_calibration_path
 from wirecal.solver.identify import Estimate
 from wirecal.solver.plan import Plan
 from wirecal.solver.plausibility import OVERRIDDEN
@@ -119,14 +120,29 @@ def spec_path(path: str | Path) -> Path:
     return path.with_name(path.stem + ".spec.txt")
 
 
-def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, **meta) -> None:
-    """Put the patch and its SPEC table into an output set.
+def companion_paths(robot: Robot, path: str | Path) -> list[Path]:
+    """Return the files written beside the patch ``path`` for ``robot``'s controller.
 
-    Put the patch and its SPEC table (:func:`spec_path`) into the output set ``out``,
-    which must hold both names: they are published together or not at all.
+    The SPEC table always; for a URScript robot also UR's standard-DH deltas
+    (:func:`~wirecal.solver.formats.ur_calibration.ur_calibration_path`).
+    """
+    paths = [spec_path(path)]
+    if robot.controller.language == "urscript":
+        paths.append(ur_calibration_path(path))
+    return paths
+
+
+def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, **meta) -> None:
+    """Put the patch and its companions into an output set.
+
+    Put the patch, its SPEC table (:func:`spec_path`) and, for a URScript robot, UR's
+    standard-DH deltas into the output set ``out``, which must hold every name of
+    :func:`companion_paths`: they are published together or not at all.
     """
     out.put(path, patch_text(robot, estimate, **meta))
     out.put(spec_path(path), spec_table(robot, estimate, meta.get("plausibility", "")))
+    if robot.controller.language == "urscript":
+        put_ur_calibration(out, ur_calibration_path(path), robot, estimate.as_dict())
 
 
 def write_patch(
@@ -138,7 +154,7 @@ def write_patch(
     ``force``.
     """
     path = Path(path)
-    with Outputs([path, spec_path(path)], force=force) as out:
+    with Outputs([path, *companion_paths(robot, path)], force=force) as out:
         put_patch(out, path, robot, estimate, **meta)
     return path, spec_path(path)
 

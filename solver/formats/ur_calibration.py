@@ -27,7 +27,8 @@ import numpy as np
 
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import Outputs
+from wirecal.solver.formats.fileio import Outputs, read_toml
+from wirecal.solver.formats.toml_fields import document
 from wirecal.solver.kinematics import Model, with_errors
 from wirecal.solver.robot import Robot
 from wirecal.solver.standard_dh import from_modified
@@ -92,6 +93,26 @@ def calibration_text(robot: Robot, offsets: Mapping[str, float]) -> str:
     lines += ["", "[mounting]"]
     lines += [f"{key} = {_vector(deltas[key])}" for key in KEYS]
     return "\n".join(lines) + "\n"
+
+
+def ur_calibration_path(path: str | Path) -> Path:
+    """Where the deltas of the patch ``path`` go: ``<name>.ur_calibration.conf`` beside it."""
+    path = Path(path)
+    return path.with_name(path.stem + ".ur_calibration.conf")
+
+
+def read_ur_calibration(path: str | Path, n_joints: int = 6) -> dict[str, np.ndarray]:
+    """Read the deltas back (m, rad): the ``[mounting]`` table of :func:`calibration_text`.
+
+    Each key a list of ``n_joints`` finite numbers; any other key or table is refused.
+    """
+    doc = document(
+        read_toml(path, "UR calibration file"), str(path), "UR calibration file", ("mounting",)
+    )
+    table = doc.table("mounting", KEYS)
+    values = {key: table.vector(key, length=n_joints, labels="(one per joint)") for key in KEYS}
+    doc.raise_if_any()
+    return {key: np.asarray(v) for key, v in values.items()}
 
 
 def put_ur_calibration(

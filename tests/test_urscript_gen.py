@@ -1,0 +1,234 @@
+"""The URScript programs: golden bytes, determinism, limits, the rows they send, the CLI.
+
+The row-formatting path is checked by running the generated ``wc_run`` itself: the script
+subset the generator emits (``def``/``while``/``if``/``elif``/``else``/``end``, ``local``,
+lists) is close enough to Python that a line-by-line rewrite (``end`` dropped, ``local``
+dropped) runs it, with the controller's functions replaced by stubs that play a
+recorded encoder and joint readings. The lines it sends must parse with the project's
+log reader and carry the stubbed numbers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from wirecal.cli.main import main
+from wirecal.gen.urscript.program import UrOptions, scripts
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.log import parse_log
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import load_robot
+
+ROOT = Path(__file__).resolve().parent.parent
+UR5 = ROOT / "examples" / "ur5"
+VIPER = ROOT / "examples" / "viper_s650"
+GOLDEN = Path(__file__).parent / "golden" / "ur5"
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    robot = load_robot(UR5 / "robot.toml")
+    return robot, load_plan(UR5 / "plan.toml", robot)
+
+
+def test_golden_scripts(ur5):
+    """The shipped example's programs, byte for byte (regenerate on purpose only)."""
+    out = scripts(*ur5)
+    assert sorted(out) == sorted(p.name for p in GOLDEN.glob("*.script"))
+    for name, text in out.items():
+        assert text == (GOLDEN / name).read_text(encoding="ascii"), name
+
+
+def test_deterministic_and_ascii(ur5):
+    a, b = scripts(*ur5), scripts(*ur5)
+    assert a == b
+    for name, text in a.items():
+        text.encode("ascii")
+        lines = text.split("\n")
+        assert lines[0].startswith("def wc_")  # def in column 1, the body indented, end last
+        assert lines[-2] == "end"
+        assert lines[-1] == ""
+        assert all(line.startswith("  ") for line in lines[1:-2] if line), name
+
+
+def test_targets_are_the_plan_in_radians(ur5):
+    robot, plan = ur5
+    run = scripts(robot, plan)["wc_run.script"]
+    targets = [
+        [float(x) for x in line.split("movej([")[1].split("]")[0].split(",")]
+        for line in run.split("\n")
+        if "movej([" in line
+    ]
+    expected = []
+    for step in plan.steps:
+        expected.append(plan.theta0_deg)
+        expected += list(step.via_deg) + list(step.points_deg)
+    expected.append(plan.theta0_deg)
+    assert np.allclose(np.degrees(targets), expected, atol=1e-6)
+
+
+def test_point_beyond_a_limit_refused(ur5):
+    robot, plan = ur5
+    q = plan.steps[3].points_deg[1]
+    lo = robot.joint_min_deg.copy()
+    lo[0] = q[0] + 0.5  # joint 1 of step 4 point 2 now lies below its limit
+    narrow = dataclasses.replace(robot, joint_min_deg=lo)
+    with pytest.raises(WirecalError, match=r"step 4 \(\w+\) point 2: joint 1 = .* limits"):
+        scripts(narrow, plan)
+
+
+def test_needs_pc_address(ur5):
+    robot, plan = ur5
+    bare = dataclasses.replace(robot, controller=dataclasses.replace(robot.controller, host=None))
+    with pytest.raises(WirecalError, match=r"no PC address .* gen --host"):
+        scripts(bare, plan)
+    assert '"10.0.0.7", 50000' in scripts(bare, plan, UrOptions(host="10.0.0.7"))["wc_run.script"]
+
+
+# -- running wc_run's own text ------------------------------------------------------------
+
+
+def _python(script: str) -> str:
+    """Rewrite the emitted URScript subset as Python (``end`` and ``local`` dropped)."""
+    out = []
+    for line in script.split("\n"):
+        body = line.strip()
+        if body == "end":
+            continue
+        indent = line[: len(line) - len(line.lstrip())]
+        if body.startswith("local "):
+            body = body[len("local ") :]
+        if body == "halt":
+            body = "raise SystemExit('halt')"
+        out.append(indent + body)
+    return "\n".join(out) + "\nwc_run()\n"
+
+
+def _str_cat(a, b) -> str:
+    def text(x):
+        assert isinstance(x, (str, int)), f"str_cat of a {type(x).__name__}: {x!r}"
+        return str(x)
+
+    return text(a) + text(b)
+
+
+class _Controller:
+    """Stubs of the controller functions wc_run calls: a recorded encoder and joints."""
+
+    def __init__(self, counts, joints_rad):
+        self.counts = iter(counts)
+        self.joints = iter(joints_rad)
+        self.sent: list[str] = []
+        self.log: list[str] = []
+        self.popups: list[str] = []
+
+    def names(self) -> dict:
+        return {
+            "floor": math.floor,
+            "str_cat": _str_cat,
+            "str_len": len,
+            "sleep": lambda t: None,
+            "movej": lambda q, a, v: None,
+            "encoder_enable_pulse_decode": lambda i, kind, a, b: None,
+            "encoder_get_tick_count": lambda i, opt="": next(self.counts),
+            "get_actual_joint_positions": lambda: next(self.joints),
+            "socket_open": lambda host, port, name: True,
+            "socket_close": lambda name: None,
+            "socket_send_line": lambda line, name: self.sent.append(line) or True,
+            "textmsg": lambda a, b="": self.log.append(f"{a}{b}"),
+            "popup": lambda s, **kw: self.popups.append(s),
+        }
+
+
+def test_rows_sent_parse_with_the_log_reader(ur5):
+    robot, plan = ur5
+    run = scripts(robot, plan)["wc_run.script"]
+    rows = plan.n_points + len(plan.steps) + 1
+    samples = 10
+    rng = np.random.default_rng(3)
+    base = 2**31 - 40_000 + rng.integers(-2000, 2000, rows)  # near the int32 top
+    zeros = np.cumsum([0] + [1 + len(s.points_deg) for s in plan.steps])
+    base[zeros] = base[0]  # the zero readings agree: no slip
+    noise = rng.integers(0, 3, (rows, samples))  # a spread of up to 2 counts
+    counts = (base[:, None] + noise).ravel().tolist()
+    joints = rng.uniform(-6.2, 6.2, (rows, 6))
+    ctl = _Controller(counts, joints.tolist())
+    exec(compile(_python(run), "wc_run.script", "exec"), ctl.names())
+    assert ctl.sent[-1] == "# end"
+    assert set(ctl.sent) <= set(ctl.log)  # every sent line is in the log tab too
+    log = parse_log("\n".join(ctl.sent[:-1]) + "\n", "sent")
+    assert log.plan == plan.fingerprint()
+    assert log.robot == robot.name
+    assert len(log.readings) == rows
+    for k, r in enumerate(log.readings):
+        expected = base[k] + noise[k, 0] + (noise[k] - noise[k, 0]).mean()
+        assert r.counts == pytest.approx(expected, abs=5e-5)
+        assert r.spread == noise[k].max() - noise[k].min()
+        assert r.samples == samples
+        assert np.allclose(r.joints_deg, np.degrees(joints[k]), atol=6e-5)
+    kinds = [(r.kind, r.step, r.index) for r in log.readings]
+    assert kinds[0] == ("zero", 1, 0)
+    assert kinds[-1] == ("zero", len(plan.steps) + 1, 0)
+    assert ctl.popups == []  # no spread above 0.1 mm, no slip
+
+
+def test_slip_raises_a_popup(ur5):
+    robot, plan = ur5
+    run = scripts(robot, plan)["wc_run.script"]
+    rows = plan.n_points + len(plan.steps) + 1
+    counts = [1000] * (rows * 10)
+    second_zero = (1 + len(plan.steps[0].points_deg)) * 10
+    counts[second_zero : second_zero + 10] = [1010] * 10  # 0.25 mm: the wire slipped
+    ctl = _Controller(counts, [[0.0] * 6] * rows)
+    exec(compile(_python(run), "wc_run.script", "exec"), ctl.names())
+    assert len(ctl.popups) == 1
+    assert "slipped" in ctl.popups[0]
+    assert "during step 1" in ctl.popups[0]
+
+
+# -- the command line ---------------------------------------------------------------------
+
+
+def _gen(*args):
+    return CliRunner().invoke(main, ["gen", *map(str, args)])
+
+
+def test_gen_writes_the_scripts_of_the_robot_files_language(tmp_path):
+    r = _gen(UR5 / "robot.toml", UR5 / "plan.toml", "-o", tmp_path / "out", "--port", 50123)
+    assert r.exit_code == 0, r.output
+    names = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert names == ["wc_check.script", "wc_mount.script", "wc_run.script"]
+    assert '192.168.1.10", 50123' in (tmp_path / "out" / "wc_run.script").read_text()
+
+
+def test_gen_language_overrides_the_robot_file(tmp_path):
+    r = _gen(UR5 / "robot.toml", UR5 / "plan.toml", "-o", tmp_path / "v", "--language", "vplus")
+    assert r.exit_code == 2
+    assert 'interface = "pulse" is read by the URScript programs' in r.output
+    r = _gen(
+        VIPER / "robot.toml",
+        VIPER / "paper_plan.toml",
+        "-o",
+        tmp_path / "u",
+        "--language",
+        "urscript",
+    )
+    assert r.exit_code == 2
+    assert "the URScript programs read the controller's pulse decoder" in r.output
+    assert "no PC address" in r.output
+    assert not (tmp_path / "u").exists()
+
+
+def test_gen_refuses_v_plus_options_for_urscript(tmp_path):
+    r = _gen(UR5 / "robot.toml", UR5 / "plan.toml", "-o", tmp_path / "o", "--lf")
+    assert r.exit_code == 2
+    assert "V+ options" in r.output
+    r = _gen(VIPER / "robot.toml", VIPER / "paper_plan.toml", "-o", tmp_path / "p", "--port", 5)
+    assert r.exit_code == 2
+    assert "--host and --port are for URScript" in r.output
