@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -121,9 +122,10 @@ def _str_cat(a, b) -> str:
 class _Controller:
     """Stubs of the controller functions wc_run calls: a recorded encoder and joints."""
 
-    def __init__(self, counts, joints_rad):
+    def __init__(self, counts, joints_rad, times_ns=None):
         self.counts = iter(counts)
         self.joints = iter(joints_rad)
+        self.times = iter(times_ns if times_ns is not None else [0] * (len(joints_rad) + 1))
         self.sent: list[str] = []
         self.log: list[str] = []
         self.popups: list[str] = []
@@ -143,7 +145,13 @@ class _Controller:
             "socket_send_line": lambda line, name: self.sent.append(line) or True,
             "textmsg": lambda a, b="": self.log.append(f"{a}{b}"),
             "popup": lambda s, **kw: self.popups.append(s),
+            "time": self.time,
         }
+
+    def time(self, mode):
+        assert mode == 0
+        ns = next(self.times)
+        return SimpleNamespace(sec=ns // 10**9, nanosec=ns % 10**9)
 
 
 def test_rows_sent_parse_with_the_log_reader(ur5):
@@ -158,7 +166,10 @@ def test_rows_sent_parse_with_the_log_reader(ur5):
     noise = rng.integers(0, 3, (rows, samples))  # a spread of up to 2 counts
     counts = (base[:, None] + noise).ravel().tolist()
     joints = rng.uniform(-6.2, 6.2, (rows, 6))
-    ctl = _Controller(counts, joints.tolist())
+    start_ns = 123_456 * 10**9 + 999_999_000  # the controller has run for 34 h
+    times = start_ns + np.cumsum(rng.integers(10**8, 2 * 10**10, rows + 1))
+    times[0] = start_ns
+    ctl = _Controller(counts, joints.tolist(), times.tolist())
     exec(compile(_python(run), "wc_run.script", "exec"), ctl.names())
     assert ctl.sent[-1] == "# end"
     assert set(ctl.sent) <= set(ctl.log)  # every sent line is in the log tab too
@@ -172,6 +183,8 @@ def test_rows_sent_parse_with_the_log_reader(ur5):
         assert r.spread == noise[k].max() - noise[k].min()
         assert r.samples == samples
         assert np.allclose(r.joints_deg, np.degrees(joints[k]), atol=6e-5)
+        assert r.t_s == math.floor((times[k + 1] - start_ns) / 10**6) / 1000
+        assert r.settle_s == 3.0
     kinds = [(r.kind, r.step, r.index) for r in log.readings]
     assert kinds[0] == ("zero", 1, 0)
     assert kinds[-1] == ("zero", len(plan.steps) + 1, 0)

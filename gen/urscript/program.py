@@ -27,6 +27,8 @@ from wirecal.gen.targets import check_limits, joint_target, run_steps
 from wirecal.gen.templating import render
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
+from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
+from wirecal.solver.formats.log import VERSION as LOG_VERSION
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, READING_INTERVAL_S, RunParameters
@@ -134,6 +136,9 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
         "speed_rad": _fixed(speed_rad_s, 6),
         "accel_rad": _fixed(accel, 6),
         "settle": f"{opt.run.settle_s:g}",
+        "settle_3": f"{opt.run.settle_s:.3f}",
+        "log_version": LOG_VERSION,
+        "columns": ",".join(LOG_COLUMNS),
         "interval": f"{READING_INTERVAL_S:g}",
         "samples": opt.run.readings,
         "deg_per_rad_1e4": _fixed(10000 * 180 / math.pi, 9),
