@@ -475,6 +475,16 @@ def robot_file_text(
         f"interface = {json.dumps(robot.encoder.interface)}",
         f"channel = {robot.encoder.channel}",
         f"belt_mode = {robot.encoder.belt_mode}",
+        *(
+            [f"pulse_inputs = [{robot.encoder.pulse_inputs[0]}, {robot.encoder.pulse_inputs[1]}]"]
+            if robot.encoder.interface == "pulse"
+            else []
+        ),
+        "",
+        "[controller]",
+        f"language = {json.dumps(robot.controller.language)}",
+        *([f"host = {json.dumps(robot.controller.host)}"] if robot.controller.host else []),
+        *([f"port = {robot.controller.port}"] if robot.controller.port else []),
         "",
         "[calibration]",
         "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
