@@ -5,32 +5,47 @@ Directory, or a UR user manual) states it; the ``source`` is that page. Anything
 marked unconfirmed and names where the claim came from, so generated comments and the
 README can say so.
 
+SD = Universal Robots e-Series Script Directory (PolyScope 5), section and page, read in a
+text copy of the manual; SW5.20 etc. = the Script Manual's HTML pages on universal-robots.com.
+
 ========================================  =======================================  =========
 function / fact                           arguments, units, limits                 confirmed
 ========================================  =======================================  =========
-encoder_get_tick_count(encoder_index,     index 0 or 1; filtered count is a float  yes (SW5.20)
-opt="")                                   in [0; 65536[ (wraps at 2^16); opt="raw"
+encoder_get_tick_count(encoder_index,     index 0 or 1; filtered count is a float  yes (SW5.20,
+opt="")                                   in [0; 65536[ (wraps at 2^16); opt="raw"  SD 14.4)
                                           gives int32 in [-2^31; 2^31[
 encoder_unwind_delta_tick_count(          unwinds a delta larger than half the     yes (SW5.24)
 encoder_index, delta_tick_count)          encoder range (heuristic); needs the
                                           range known (UINT16 example)
-encoder_enable_pulse_decode(...)          quadrature decoding on digital inputs;   no
-                                          argument list and the ~40 kHz limit are
-                                          from the issue text only
+encoder_enable_pulse_decode(encoder_      index 0 or 1; type 1 quadrature; A, B    yes (SD 14.2,
+index, decoder_type, A, B)                input pins 8-11; decodes up to 40 kHz     p. 26)
 get_actual_joint_positions()              6 joint angles in rad, [Base, Shoulder,  yes (SW10.10,
                                           Elbow, Wrist1, Wrist2, Wrist3]           via _history)
 joint positions q                         lists of 6 floats, one per joint; the    yes (SW10.13,
                                           controller runs at 500 Hz                SW5.25)
-movej(q, a=1.4, v=1.05, t=0, r=0)         q rad, a rad/s^2, v rad/s, t s, r m      no (3rd-party)
-socket_open(address, port,                returns True/False; times out after 2 s  no (3rd-party)
-socket_name="socket_0")                   the robot is the client
-socket_send_line(str, socket_name)        sends the string and a newline           no
-textmsg(s1, s2="")                        writes to the controller log             no
-sleep(t)                                  t in s                                   no
+movej(q, a=1.4, v=1.05, t=0, r=0)         q rad, a rad/s^2, v rad/s (leading       yes (SD 14.22,
+                                          axis), t s, r m                          p. 34)
+socket_open(address, port,                True on success, False on failure;       yes (SD 17.55,
+socket_name="socket_0")                   times out after 2 s; the robot is the     p. 118)
+                                          client
+socket_send_line(str, socket_name)        sends str and a newline, ASCII; returns  yes (SD 17.63,
+                                          whether it was sent                      p. 123)
+socket_close(socket_name)                 closes the connection                    yes (SD 17.53)
+textmsg(s1, s2="")                        s1 and s2 concatenated in the log tab    yes (SD 15.57)
+popup(s, title, warning, error,           blocking=True suspends the program until yes (SD 15.35)
+blocking)                                 Continue is pressed
+sleep(t)                                  t in s                                   yes (SD 15.48)
+str_cat(op1, op2), str_len(str)           ints as digits, floats with 6 decimals;  yes (SD 15.51,
+                                          at most 1023 characters                  15.54)
+floor(f)                                  the largest integer not greater than f   yes (SD 16.9)
+time(mode=0)                              struct(sec, nanosec): controller time,   yes (SD 15.49;
+                                          monotonic since the controller started   CB3: no)
 int / float width                         int 32 bit; float 32 bit                 yes (UR16e
                                                                                    user manual)
 script sent to port 30002                 starts with def/sec in column 1, ends    yes (SW10.6)
                                           with end in column 1, lines by \n
+halt; int32 overflow in a subtraction                                              no
+the same functions on CB3 (SW 3.x)        e.g. pulse-decoder input numbers         no
 calibration.conf delta_theta, delta_a,    deltas to the nominal standard DH        no (ROS
 delta_d, delta_alpha (m, rad)             table, one per joint; the controller     driver docs)
                                           reports full dh_theta/a/d/alpha
@@ -38,7 +53,8 @@ delta_d, delta_alpha (m, rad)             table, one per joint; the controller  
 
 Consequence for the programs: a float holds 24 significant bits, so the filtered count
 (< 2^16) is exact, but a sum of many counts or an unwrapped position beyond 2^24 counts is
-not; the raw int32 count avoids both (2^31 counts × 0.025488 mm ≫ any wire range).
+not; the raw int32 count avoids both (2^31 counts × 0.025488 mm ≫ any wire range), and the
+programs turn numbers into text through integers only (``floor``, ``str_cat`` of an int).
 """
 
 from __future__ import annotations
@@ -57,6 +73,8 @@ class Fact:
 
 
 _UR = "https://www.universal-robots.com/manuals/EN/HTML"
+SD = "Universal Robots e-Series Script Directory (PolyScope 5), "
+"""The manual most facts were read in (a text copy of it), cited by section and page."""
 
 FACTS: tuple[Fact, ...] = (
     Fact(
@@ -76,10 +94,11 @@ FACTS: tuple[Fact, ...] = (
     ),
     Fact(
         "encoder_enable_pulse_decode",
-        "enables quadrature decoding of an encoder on the controller's digital inputs; "
-        "argument list and the ~40 kHz limit not read on a UR page",
-        False,
-        "issue text only (no manual page found)",
+        "encoder_enable_pulse_decode(encoder_index, decoder_type, A, B): encoder_index 0 or "
+        "1; decoder_type 1 = quadrature (A and B square waves 90 degrees apart); A, B the "
+        "input pins, 8-11; the controller decodes inputs at up to 40 kHz",
+        True,
+        SD + "§14.2, p. 26 (text copy); CB3 software not confirmed",
     ),
     Fact(
         "get_actual_joint_positions",
@@ -98,25 +117,80 @@ FACTS: tuple[Fact, ...] = (
     Fact(
         "movej",
         "movej(q, a=1.4, v=1.05, t=0, r=0): q joint positions in rad, a joint acceleration "
-        "rad/s^2, v joint speed rad/s, t time s, r blend radius m",
-        False,
-        "third-party pages only (e.g. https://vnrobo.com/en/blog/trad-manip-3-movej-movel)",
+        "of the leading axis rad/s^2, v its speed rad/s, t time s, r blend radius m; the "
+        "robot must be at a standstill or come from a blended movej/movel",
+        True,
+        SD + "§14.22, p. 34 (text copy)",
     ),
     Fact(
         "socket_open",
-        'socket_open(address, port, socket_name="socket_0"): the robot is the client; '
-        "returns True on success, False on failure; gives up after 2 s",
-        False,
-        "third-party page only (https://blog.csdn.net/weixin_52531852/article/details/124178707)",
+        'socket_open(address, port, socket_name="socket_0"): opens a TCP connection (the '
+        "robot is the client); False if failed, True if established; times out after 2 s",
+        True,
+        SD + "§17.55, p. 118 (text copy)",
     ),
     Fact(
         "socket_send_line",
-        'socket_send_line(str, socket_name="socket_0"): sends the string and a newline',
-        False,
-        "no manual page found",
+        'socket_send_line(str, socket_name="socket_0"): sends str and a newline in ASCII; '
+        "returns whether the send operation was successful",
+        True,
+        SD + "§17.63, p. 123 (text copy)",
     ),
-    Fact("textmsg", 'textmsg(s1, s2=""): writes to the controller log', False, "no page found"),
-    Fact("sleep", "sleep(t): waits t seconds", False, "no manual page found"),
+    Fact(
+        "socket_close",
+        'socket_close(socket_name="socket_0"): closes the connection',
+        True,
+        SD + "§17.53, p. 117 (text copy)",
+    ),
+    Fact(
+        "textmsg",
+        'textmsg(s1, s2=""): s1 and s2 concatenated, shown in the PolyScope log tab; other '
+        "types can be sent; not meant for many messages at a high rate",
+        True,
+        SD + "§15.57, p. 73 (text copy)",
+    ),
+    Fact(
+        "popup",
+        'popup(s, title="Popup", warning=False, error=False, blocking=False): a message '
+        "window; blocking=True suspends the program until Continue is pressed",
+        True,
+        SD + "§15.35, p. 62 (text copy)",
+    ),
+    Fact("sleep", "sleep(t): waits t seconds", True, SD + "§15.48, p. 67 (text copy)"),
+    Fact(
+        "str_cat",
+        "str_cat(op1, op2): the concatenation; an int as its digits, a float with 6 "
+        "decimals and trailing zeros removed; at most 1023 characters; str_len(str) the "
+        "number of bytes",
+        True,
+        SD + "§15.51 and §15.54, pp. 69-71 (text copy)",
+    ),
+    Fact(
+        "floor",
+        "floor(f): the largest integer not greater than f (returns an integer)",
+        True,
+        SD + "§16.9, p. 79 (text copy)",
+    ),
+    Fact(
+        "time",
+        "time(mode=0): struct(sec, nanosec); mode 0 the controller execution time since the "
+        "low-level controller started, guaranteed monotonic",
+        True,
+        SD + "§15.49, p. 67 (text copy); whether CB3 software has it is not confirmed",
+    ),
+    Fact(
+        "halt",
+        "halt ends the program (used after a failed socket_open, behind a blocking popup)",
+        False,
+        "not read on a manual page",
+    ),
+    Fact(
+        "int32 overflow",
+        "how an int subtraction that overflows 32 bits behaves (the raw count is unwrapped "
+        "by subtracting the first reading of a point)",
+        False,
+        "not stated on the pages read",
+    ),
     Fact(
         "number widths",
         "int: 32-bit whole number (-2147483648..2147483647); float: 32-bit floating point",
