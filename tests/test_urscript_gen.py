@@ -18,6 +18,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from wirecal.cli.main import main
 from wirecal.gen.urscript.program import UrOptions, scripts
@@ -245,3 +247,39 @@ def test_gen_refuses_v_plus_options_for_urscript(tmp_path):
     r = _gen(VIPER / "robot.toml", VIPER / "paper_plan.toml", "-o", tmp_path / "p", "--port", 5)
     assert r.exit_code == 2
     assert "--host and --port are for URScript" in r.output
+
+
+@pytest.fixture(scope="module")
+def helpers(ur5) -> dict:
+    """The number helpers of wc_check, defined by running the script's own text."""
+    check = scripts(*ur5)["wc_check.script"]
+    head = check.split("  wc_enable()\n")[0] + "  return [wc_split, wc_fix]\n"
+    names = {"floor": math.floor, "str_cat": _str_cat, "str_len": len}
+    exec(compile(_python(head).replace("wc_run()", "found = wc_check()"), "h", "exec"), names)
+    return dict(zip(("split", "fix"), names["found"], strict=True))
+
+
+@settings(max_examples=200, deadline=None)
+@given(n=st.integers(-(2**31), 2**31 - 1), nd=st.sampled_from([3, 4]))
+def test_number_text_is_exact(helpers, n, nd):
+    h = helpers
+    p = 10**nd
+    ip, fr = h["split"](n, p)
+    assert ip * p + fr == n
+    assert 0 <= fr < p
+    sign = "-" if n < 0 else ""
+    expected = f"{sign}{abs(n) // p}.{abs(n) % p:0{nd}d}"  # written from the integer itself
+    assert h["fix"](ip, fr, nd, p) == expected
+
+
+def test_check_shows_counts_and_mm(ur5):
+    check = scripts(*ur5)["wc_check.script"]
+    counts = [7, 7, 7 + 3923, 7 - 1] + [7] * 57
+    ctl = _Controller(counts, [])
+    exec(compile(_python(check).replace("wc_run()", "wc_check()"), "c", "exec"), ctl.names())
+    assert ctl.log[:3] == [
+        "counts 0   mm 0.0000",
+        "counts 3923   mm 99.9894",
+        "counts -1   mm -0.0255",
+    ]
+    assert len(ctl.log) == 60
