@@ -283,3 +283,35 @@ def test_check_shows_counts_and_mm(ur5):
         "counts -1   mm -0.0255",
     ]
     assert len(ctl.log) == 60
+
+
+def test_socket_refused_stops_before_any_motion(ur5):
+    run = scripts(*ur5)["wc_run.script"]
+    ctl = _Controller([], [])
+    names = ctl.names()
+    moves = []
+    names["socket_open"] = lambda host, port, name: False
+    names["movej"] = lambda q, a, v: moves.append(q)
+    with pytest.raises(SystemExit, match="halt"):
+        exec(compile(_python(run), "wc_run.script", "exec"), names)
+    assert moves == []
+    assert ctl.sent == []
+    assert "Start 'wirecal receive --port 50000 -o LOG'" in ctl.popups[0]
+
+
+def test_connection_lost_mid_run_keeps_the_rows_in_the_log_tab(ur5):
+    robot, plan = ur5
+    run = scripts(robot, plan)["wc_run.script"]
+    rows = plan.n_points + len(plan.steps) + 1
+    ctl = _Controller([500] * (rows * 10), [[0.1] * 6] * rows)
+    names = ctl.names()
+    names["socket_send_line"] = lambda line, name: (
+        len(ctl.sent) < 20 and (ctl.sent.append(line) or True)
+    )
+    exec(compile(_python(run), "wc_run.script", "exec"), names)
+    assert len(ctl.sent) == 20
+    lost = [line for line in ctl.log if line.startswith("*** not sent to the PC")]
+    assert len(lost) == 6 + rows + 1 - 20  # 6 header lines, the rows and "# end", less 20 sent
+    pasted = [line for line in ctl.log if not line.startswith(("***", "Step", "Closing", "Run"))]
+    log = parse_log("\n".join(pasted[:-1]) + "\n", "pasted")
+    assert len(log.readings) == rows
