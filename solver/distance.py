@@ -2,7 +2,9 @@
 
 The encoder is mounted so that the wire length is zero at θ0 (paper §2.1), so the
 measured quantity at configuration θ_i is d_i = ‖p(θ_i) − p(θ_0)‖, both points
-computed by the same (possibly perturbed) model.
+computed by the same (possibly perturbed) model. With a swivel guide pulley
+(``model.pulley``) it is the arc on the pulley plus the free span
+(:func:`~wirecal.solver.exit_geometry.wire_path`), the pulley at the exit p(θ_0).
 
 Both functions accept one model with points q (k, n), or T models (a batched model,
 dh (T, n, 4)) with shared points q (k, n) or per-model points q (T, k, n); θ0 is (n,)
@@ -15,6 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from wirecal.solver.exit_geometry import wire_path
 from wirecal.solver.kinematics import Model, repeat, tool_jacobian, tool_position
 
 
@@ -34,10 +37,10 @@ def _shape(model: Model, arr: np.ndarray) -> np.ndarray:
 
 
 def wire_lengths(model: Model, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
-    """d_i = ‖p(θ_i) − p(θ_0)‖ for points q and one θ0, radians."""
+    """d_i = ‖p(θ_i) − p(θ_0)‖ (or the pulley's path) for points q and one θ0, radians."""
     big, Q, k1 = _stack(model, q, q0)
     p = tool_position(big, Q).reshape(-1, k1, 3)
-    return _shape(model, np.linalg.norm(p[:, 1:] - p[:, :1], axis=2))
+    return _shape(model, wire_path(model.pulley, p[:, 1:] - p[:, :1])[0])
 
 
 def wire_jacobian(
@@ -46,15 +49,13 @@ def wire_jacobian(
     """D and ∂d/∂e = ν̂ᵀ (Φ_i − Φ_0) in mm/rad and mm/mm (paper eq. 14–16).
 
     Evaluated at the model given, so the same function serves the Ψ analysis at
-    nominal and Gauss–Newton steps at any estimate.
+    nominal and Gauss–Newton steps at any estimate. With a pulley ν̂ is the direction of
+    the free span, the gradient of arc plus span (the pulley moves with p(θ_0)).
     """
     big, Q, k1 = _stack(model, q, q0)
     p, J = tool_jacobian(big, Q, names)
     p = p.reshape(-1, k1, 3)
     J = J.reshape(-1, k1, 3, len(names))
-    diff = p[:, 1:] - p[:, :1]
-    d = np.linalg.norm(diff, axis=2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        nu_hat = diff / d[..., None]
+    d, nu_hat = wire_path(model.pulley, p[:, 1:] - p[:, :1])
     dd = np.einsum("tkc,tkcm->tkm", nu_hat, J[:, 1:] - J[:, :1])
     return _shape(model, d), _shape(model, dd)

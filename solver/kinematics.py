@@ -24,6 +24,7 @@ from functools import cache
 import numpy as np
 
 from wirecal.solver import params as P
+from wirecal.solver.exit_geometry import Pulley
 
 
 @dataclass(frozen=True)
@@ -31,11 +32,14 @@ class Model:
     """A concrete kinematic model: the nominal DH table plus error offsets (radians, mm).
 
     ``dh`` is (n, 4) for one model, or (N, n, 4) with ``tool_point`` (N, 3) for one model
-    per configuration of a batch (Monte Carlo trials evaluated in one call).
+    per configuration of a batch (Monte Carlo trials evaluated in one call). ``pulley`` is
+    the encoder's guide pulley when the wire's path over it is modelled (None: the wire
+    leaves from a point, paper eq. 7); see :mod:`~wirecal.solver.exit_geometry`.
     """
 
     dh: np.ndarray  # (n, 4) or (N, n, 4): α_{i-1}, a_{i-1}, θ offset, d_i
     tool_point: np.ndarray  # (3,) or (N, 3)
+    pulley: Pulley | None = None
 
     @property
     def n_joints(self) -> int:
@@ -64,12 +68,16 @@ def with_errors(base: Model, names: Sequence[str], values: np.ndarray) -> Model:
             tool[..., p.row] += values[..., k]
         else:
             dh[..., p.row, P.DH_COLUMN[p.kind]] += values[..., k]
-    return Model(dh=dh, tool_point=tool)
+    return Model(dh=dh, tool_point=tool, pulley=base.pulley)
 
 
 def repeat(model: Model, counts: int) -> Model:
     """Each model of a batch repeated ``counts`` times in a row (for T trials × k points)."""
-    return Model(np.repeat(model.dh, counts, axis=0), np.repeat(model.tool_point, counts, axis=0))
+    return Model(
+        np.repeat(model.dh, counts, axis=0),
+        np.repeat(model.tool_point, counts, axis=0),
+        model.pulley,
+    )
 
 
 @dataclass(frozen=True)

@@ -5,8 +5,9 @@ set per parameter, for any 6R arm.
 
 Candidates are configurations that move one to three joints away from θ0 (as the paper's
 points do) or all of them; each is screened at once (vectorised) for the joint limits with a
-margin, the wire length (above a minimum, within the encoder's range), the wrist singularity
-and the wire's clearance from the links along the joint-interpolated move from θ0.
+margin, the wire length (above a minimum, within the encoder's range), the exit angle (a
+wire leaving an eyelet stays within its cone, :mod:`~wirecal.solver.exit_geometry`), the
+wrist singularity and the wire's clearance from the links along the joint-interpolated move from θ0.
 
 * **Order** (§3.4): among the parameters not yet identified, the next is the one that the
   most informative isolating points single out: points where |Ψ_t| ≤ tol·|Ψ_j| for every
@@ -33,6 +34,7 @@ from wirecal.solver import ik
 from wirecal.solver.accuracy import noise_covariance, stepwise_map, tool_error, workspace
 from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import describe, largest_exit_deg, wire_path, within_cone
 from wirecal.solver.identifiability import analyse
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.params import ErrorSet
@@ -81,6 +83,7 @@ class Design:
     excluded: dict[str, str] = field(default_factory=dict)  # parameter → reason
     predicted: dict[str, float] = field(default_factory=dict)
     robot_time_s: float = 0.0
+    exit_line: str = ""  # the wire exit and the plan's largest exit angle, in words
 
     def header(self) -> str:
         """Return the plan file's header comment: the design's figures in words."""
@@ -95,6 +98,7 @@ class Design:
             f"Estimated robot time {self.robot_time_s / 60:.1f} min "
             f"({self.plan.n_points} points, "
             f"{sum(len(s.via_deg) for s in self.plan.steps)} via points).",
+            self.exit_line,
         ]
         lines.append(
             "Per step: RMS |Psi| of its points (mm/deg or mm/mm), the noise gain "
@@ -205,7 +209,8 @@ def screen(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Return which candidates are usable, and their via points.
 
-    Which candidates are usable (wire length, wrist singularity, a clear move from θ0)
+    Which candidates are usable (wire length, an eyelet's exit cone, wrist singularity, a
+    clear move from θ0)
     and, for those whose direct move is not clear, a via point that makes it clear (the
     arm joints first, or the wrist first); NaN rows where the direct move is clear. The
     moves are sampled coarsely here; ``reach_ok`` checks the points chosen from finely.
@@ -213,10 +218,11 @@ def screen(
     coarse = 10.0
 
     def length_ok(x):
-        d = np.linalg.norm(tool_position(model, np.radians(x)) - p0, axis=1)
+        d = wire_path(model.pulley, tool_position(model, np.radians(x)) - p0)[0]
         return (d >= opt.min_wire_mm) & (d <= robot.encoder.range_mm - opt.range_margin_mm)
 
-    ok = length_ok(q)
+    # the points read the encoder: their wire leaves an eyelet within its cone
+    ok = length_ok(q) & within_cone(robot.encoder.exit, tool_position(model, np.radians(q)) - p0)
     if ik.analytic_structure(model):
         ok &= np.abs(np.sin(np.radians(q[:, 4]) + model.dh[4, 2])) >= np.sin(np.radians(8))
     via = np.full(q.shape, np.nan)
@@ -493,7 +499,15 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
     d = Design(plan, steps, excluded)
     d.predicted = predicted_accuracy(robot, plan)
     d.robot_time_s = robot_time(robot, plan, opt.run)
+    d.exit_line = exit_line(robot, plan)
     return d
+
+
+def exit_line(robot: Robot, plan: Plan) -> str:
+    """Return the wire exit in words with the plan's largest exit angle (plan header)."""
+    largest = largest_exit_deg(robot, plan)
+    text = f"Wire exit: {describe(robot.encoder.exit)}"
+    return text + ("." if largest is None else f"; largest exit angle {largest:.1f} deg.")
 
 
 def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarray:

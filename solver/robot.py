@@ -16,6 +16,7 @@ import numpy as np
 
 from wirecal.solver import params as P
 from wirecal.solver.counter import Counter
+from wirecal.solver.exit_geometry import Exit, Pulley
 from wirecal.solver.kinematics import Model, with_errors
 
 CONTROLLER_JOINTS = 6
@@ -34,6 +35,8 @@ class Encoder:
     encoder ``channel``, BELT mode ``belt_mode``), "device" (V+: DEVICE unit ``channel``)
     or "pulse" (URScript: the controller's quadrature pulse decoder, encoder index
     ``channel`` 0 or 1, signals A and B on the digital inputs ``pulse_inputs``).
+    ``exit`` is where the wire leaves the housing (:mod:`~wirecal.solver.exit_geometry`):
+    an eyelet, a swivel guide pulley, or ``None`` for the ideal point exit.
     """
 
     mm_per_count: float
@@ -43,6 +46,7 @@ class Encoder:
     channel: int = 1
     belt_mode: int = 0
     pulse_inputs: tuple[int, int] = (8, 9)
+    exit: Exit | None = None
 
     @property
     def counter(self) -> Counter:
@@ -116,7 +120,8 @@ class Robot:
         dh = np.array(self.dh, dtype=float)
         tool = np.array(self.tool_point, dtype=float)
         dh.flags.writeable = tool.flags.writeable = False
-        return Model(dh=dh, tool_point=tool)
+        pulley = self.encoder.exit if isinstance(self.encoder.exit, Pulley) else None
+        return Model(dh=dh, tool_point=tool, pulley=pulley)
 
     def errors(self, names: Sequence[str] | None = None) -> P.ErrorSet:
         """Return the error parameters ``names`` (default: the robot file's ``parameters``)."""

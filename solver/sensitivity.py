@@ -3,7 +3,9 @@
 Ψ_{i_j} = ⟨Φ_{i−0, j}, ν̂_i⟩ (paper eq. 16–17) is the first-order change of the wire
 length at point i per unit error of parameter j: mm/deg for angular parameters and
 dimensionless for lengths (paper §2.2). ν̂_i uses Δz = f_z(θ_i) − f_z(θ_0); the paper's
-eq. 12 writes f_y there by typo.
+eq. 12 writes f_y there by typo. With a swivel guide pulley ν̂_i is the direction of the
+free span from the pulley to the tool point, the gradient of the wire length
+(:mod:`~wirecal.solver.exit_geometry`).
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wirecal.solver.exit_geometry import wire_path
 from wirecal.solver.kinematics import Model, tool_jacobian
 from wirecal.solver.params import ErrorSet
 
@@ -25,7 +28,7 @@ class Sensitivity:
     phi_i: np.ndarray  # (N, 3, m)  ∂p/∂e at θ_i
     phi_0: np.ndarray  # (3, m)     ∂p/∂e at θ_0
     nu: np.ndarray  # (N, 3)     p(θ_i) − p(θ_0), nominal
-    nu_hat: np.ndarray  # (N, 3)     wire direction
+    nu_hat: np.ndarray  # (N, 3)     wire direction (at the tool point)
     psi: np.ndarray  # (N, m)
 
     @property
@@ -43,9 +46,7 @@ def sensitivity(
     p, J = tool_jacobian(model, np.radians(np.atleast_2d(q_deg)), names)
     p0, J0 = tool_jacobian(model, np.radians(np.atleast_2d(theta0_deg)), names)
     nu = p - p0[0]
-    norm = np.linalg.norm(nu, axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        nu_hat = nu / norm[:, None]
+    nu_hat = wire_path(model.pulley, nu)[1]
     phi_i, phi_0 = errors.per_boundary(J), errors.per_boundary(J0[0])
     psi = np.einsum("nk,nkm->nm", nu_hat, phi_i - phi_0)
     return Sensitivity(names, phi_i, phi_0, nu, nu_hat, psi)

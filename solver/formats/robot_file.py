@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from wirecal.solver import params as P
+from wirecal.solver.exit_geometry import Exit, Eyelet, Pulley
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver.robot import (
@@ -75,6 +76,19 @@ generator's default margin) inside each limit."""
 METRES_RATIO = 0.01
 """Links adding up to less than this fraction of the encoder's range are in metres."""
 
+MAX_EXIT_DEG = 90.0
+"""Largest eyelet cone half-angle (deg): beyond 90° the wire would leave backwards."""
+MAX_EXIT_RADIUS_MM = 100.0
+"""Largest eyelet edge or guide pulley radius (mm): draw-wire sensors' are a few mm."""
+AXIS_TOLERANCE = 0.01
+"""An exit axis must be a unit vector to within this (it is then normalised exactly)."""
+EXIT_KEYS = ("exit", "axis", "max_exit_deg", "exit_edge_radius_mm", "pulley_radius_mm")
+"""The ``[encoder]`` keys of the wire exit (:mod:`wirecal.solver.exit_geometry`)."""
+_EXIT_OWN = {
+    "eyelet": ("axis", "max_exit_deg", "exit_edge_radius_mm"),
+    "pulley": ("axis", "pulley_radius_mm"),
+}
+
 _DH_COLUMNS = "[alpha_deg, a_mm, theta_offset_deg, d_mm]"
 _DH_BOUND = (MAX_DH_ANGLE_DEG, MAX_LENGTH_MM, MAX_DH_ANGLE_DEG, MAX_LENGTH_MM)
 
@@ -101,6 +115,7 @@ _KEYS = {
         "channel",
         "belt_mode",
         "pulse_inputs",
+        *EXIT_KEYS,
     ),
     "calibration": ("parameters",),
     "geometry": ("link_radius_mm",),
@@ -268,11 +283,74 @@ def _encoder(enc: Table, controller: Controller | None) -> Encoder | None:
         inputs = None
     if "pulse_inputs" in enc.keys() and not pulse:
         enc.add("pulse_inputs", 'is for interface = "pulse" (URScript) only; remove it')
+    exit_ok, exit_ = _exit(enc)
     if mpc is None or rng is None or bits is None or interface is None:
         return None
-    if channel is None or mode is None or inputs is None:
+    if channel is None or mode is None or inputs is None or not exit_ok:
         return None
-    return Encoder(mpc, rng, bits, interface, channel, mode, (int(inputs[0]), int(inputs[1])))
+    return Encoder(
+        mpc, rng, bits, interface, channel, mode, (int(inputs[0]), int(inputs[1])), exit_
+    )
+
+
+def _exit(enc: Table) -> tuple[bool, Exit | None]:
+    """Read the wire exit keys: (whether they passed, the exit or None for a point exit).
+
+    ``exit = "eyelet"`` needs ``axis``, ``max_exit_deg`` and ``exit_edge_radius_mm``;
+    ``exit = "pulley"`` needs ``axis`` and ``pulley_radius_mm``; without ``exit`` the
+    wire leaves from an ideal point and none of the other keys belongs.
+    """
+    kind = enc.string(
+        "exit",
+        None,
+        choices={
+            "eyelet": "point exit within a cone about axis",
+            "pulley": "swivel guide pulley about axis",
+        },
+    )
+    if kind is None and "exit" in enc.keys():  # reported: the other keys cannot be judged
+        return False, None
+    own = _EXIT_OWN.get(kind or "", ())
+    for key in EXIT_KEYS[1:]:
+        if key in enc.keys() and key not in own:
+            enc.add(
+                key,
+                'belongs to an exit: add exit = "eyelet" or "pulley", or remove it'
+                if kind is None
+                else f'belongs to exit = "{"pulley" if kind == "eyelet" else "eyelet"}", '
+                f'not "{kind}"; remove it',
+            )
+    if kind is None:
+        return True, None
+    axis = _axis(enc)
+    if kind == "pulley":
+        radius = enc.number("pulley_radius_mm", above=0, hi=MAX_EXIT_RADIUS_MM, unit="mm")
+        if axis is None or radius is None:
+            return False, None
+        return True, Pulley(axis, radius)
+    cone = enc.number("max_exit_deg", above=0, hi=MAX_EXIT_DEG, unit="deg")
+    edge = enc.number("exit_edge_radius_mm", lo=0, hi=MAX_EXIT_RADIUS_MM, unit="mm")
+    if axis is None or cone is None or edge is None:
+        return False, None
+    return True, Eyelet(axis, cone, edge)
+
+
+def _axis(enc: Table) -> tuple[float, float, float] | None:
+    """Return the exit's ``axis``, a unit vector (normalised exactly), or None."""
+    axis = enc.vector("axis", length=3, labels="(x, y, z)", lo=-1, hi=1)
+    if axis is None:
+        return None
+    norm = float(np.linalg.norm(axis))
+    if abs(norm - 1) > AXIS_TOLERANCE:
+        enc.add(
+            "axis",
+            f"has length {norm:.4g}; give the unit vector of the encoder's axis in the base "
+            f"frame (length 1 within {AXIS_TOLERANCE:g}), e.g. [0.0, 0.0, 1.0] for a wire "
+            "leaving upwards",
+        )
+        return None
+    x, y, z = (float(c) for c in axis / norm)
+    return (x, y, z)
 
 
 def _parameters(cal: Table, n: int | None) -> list[str] | None:
@@ -429,6 +507,23 @@ def _num(x: float, tidy: float = TIDY) -> str:
     return repr(x)
 
 
+def _exit_lines(exit_: Exit | None) -> list[str]:
+    """Return the robot file lines of an exit (none for the ideal point exit)."""
+    if exit_ is None:
+        return []
+    lines = [
+        f"exit = {json.dumps(exit_.kind)}",
+        "axis = [" + ", ".join(_num(c) for c in exit_.axis) + "]",
+    ]
+    if isinstance(exit_, Pulley):
+        return [*lines, f"pulley_radius_mm = {_num(exit_.radius_mm)}"]
+    return [
+        *lines,
+        f"max_exit_deg = {_num(exit_.max_exit_deg)}",
+        f"exit_edge_radius_mm = {_num(exit_.edge_radius_mm)}",
+    ]
+
+
 def robot_file_text(
     robot: Robot,
     *,
@@ -480,6 +575,7 @@ def robot_file_text(
             if robot.encoder.interface == "pulse"
             else []
         ),
+        *_exit_lines(robot.encoder.exit),
         "",
         "[controller]",
         f"language = {json.dumps(robot.controller.language)}",
