@@ -9,6 +9,7 @@ from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
 from wirecal.gen.urscript.program import UrOptions, scripts, write_scripts
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import cone_problems
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
@@ -174,6 +175,8 @@ def gen(
     """
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
+    for line in cone_problems(rb, pl):  # a plan made for a wider exit (the paper's) still runs
+        click.echo(f"warning: {line}", err=True)
     if (language or rb.controller.language) == "urscript":
         if patch_file or setup_file or echo_log or lf:
             raise WirecalError(

@@ -18,6 +18,7 @@ from wirecal import __version__
 from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, SEED, number
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import describe
 from wirecal.solver.formats.csv_table import STDIN
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
@@ -439,7 +440,8 @@ def _solve_text(result) -> str:
     methods = list(est)
     lines = [
         f"Robot {result.robot.name}; log {result.measurements.source}; "
-        f"{int(result.measurements.present.sum())} points"
+        f"{int(result.measurements.present.sum())} points",
+        f"wire exit: {describe(result.robot.encoder.exit)}",
     ]
     for note in result.measurements.notes:
         lines.append(f"note: {note}")

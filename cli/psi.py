@@ -13,6 +13,7 @@ from wirecal.cli.options import NON_NEGATIVE
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import cone_problems
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.identifiability import Identifiability, analyse
@@ -63,7 +64,8 @@ def psi(
     point is ok when every parameter identified after its step has
     |Ψ| ≤ TOL·|Ψ_j|, so the step's cost depends on its own parameter only. The nominal
     wire length is checked against the encoder's range at every point and along every
-    move of the run (a warning; an error with --strict).
+    move of the run, and a wire leaving an eyelet within its cone at every point (a
+    warning; an error with --strict).
     """
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
@@ -79,6 +81,10 @@ def psi(
         in_range = False
         for line in exc.problems:
             click.echo(f"{'error' if strict else 'warning'}: {line}", err=True)
+    beyond = cone_problems(rb, pl)
+    for line in beyond:
+        click.echo(f"{'error' if strict else 'warning'}: {line}", err=True)
+    in_range = in_range and not beyond
     if strict and not (in_range and table.n_ok == len(table.rows)):
         sys.exit(1)
 

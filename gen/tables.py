@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver import params as P
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.identify import omega_vector
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.params import ErrorSet
@@ -72,7 +73,18 @@ class Tables:
 
 
 def build_tables(robot: Robot, plan: Plan) -> Tables:
-    """Compute the controller solver's tables for the robot's nominal model and the plan."""
+    """Compute the controller solver's tables for the robot's nominal model and the plan.
+
+    The controller solver models a point exit (‖p_i − p_0‖ in small differences); a robot
+    whose wire runs over a guide pulley is refused rather than given a wrong solver.
+    """
+    if robot.nominal.pulley is not None:
+        raise WirecalError(
+            f'{robot.source}: encoder.exit = "pulley": the controller solver models the wire '
+            "as leaving from a point and does not carry the pulley's arc, so no controller "
+            "programs are generated for this robot; calibrate it with 'wirecal simulate' "
+            "and 'wirecal solve', which model the pulley"
+        )
     names = plan.order
     q, _, _ = plan.all_points()
     conf = np.vstack([plan.theta0_deg, q])

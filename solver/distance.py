@@ -36,11 +36,16 @@ def _shape(model: Model, arr: np.ndarray) -> np.ndarray:
     return arr if model.batched else arr[0]
 
 
-def wire_lengths(model: Model, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
-    """d_i = ‖p(θ_i) − p(θ_0)‖ (or the pulley's path) for points q and one θ0, radians."""
+def wire_vectors(model: Model, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
+    """p(θ_i) − p(θ_0), the tool points from the exit, for points q and one θ0, radians."""
     big, Q, k1 = _stack(model, q, q0)
     p = tool_position(big, Q).reshape(-1, k1, 3)
-    return _shape(model, wire_path(model.pulley, p[:, 1:] - p[:, :1])[0])
+    return _shape(model, p[:, 1:] - p[:, :1])
+
+
+def wire_lengths(model: Model, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
+    """d_i = ‖p(θ_i) − p(θ_0)‖ (or the pulley's path) for points q and one θ0, radians."""
+    return wire_path(model.pulley, wire_vectors(model, q, q0))[0]
 
 
 def wire_jacobian(

@@ -117,6 +117,20 @@ def wire_path(pulley: Pulley | None, v: np.ndarray) -> tuple[np.ndarray, np.ndar
     return wrap(v, pulley.axis, pulley.radius_mm)
 
 
+def physical_wire_mm(exit_: Exit | None, v: np.ndarray) -> np.ndarray:
+    """Return the wire's true length (mm) to tool points v (…, 3) relative to the exit.
+
+    Over the pulley, or over the eyelet's rounded edge (which the model leaves out), or
+    straight from an ideal point exit (``None``): what a simulated encoder reads.
+    """
+    if exit_ is None:
+        return np.linalg.norm(v, axis=-1)
+    radius = exit_.radius_mm if isinstance(exit_, Pulley) else exit_.edge_radius_mm
+    if radius == 0:  # a sharp edge adds nothing: the point exit, computed as one
+        return np.linalg.norm(v, axis=-1)
+    return wrap(v, exit_.axis, radius)[0]
+
+
 def exit_angle_deg(v: np.ndarray, axis: np.ndarray | tuple[float, ...]) -> np.ndarray:
     """Return the angle (deg) between the wire from the exit to v (…, 3) and the axis."""
     a = np.asarray(axis, dtype=float)
@@ -131,8 +145,7 @@ def edge_wrap_mm(v: np.ndarray, eyelet: Eyelet) -> np.ndarray:
     Exact (module docstring); far from the exit it tends to ρ(φ − sin φ), φ the exit
     angle: 0.024 mm at ρ = 1 mm and 30°, 0.078 mm at 45°.
     """
-    length, _ = wrap(v, eyelet.axis, eyelet.edge_radius_mm)
-    return length - np.linalg.norm(v, axis=-1)
+    return physical_wire_mm(eyelet, v) - np.linalg.norm(v, axis=-1)
 
 
 def far_field_edge_wrap_mm(exit_deg: np.ndarray, edge_radius_mm: float) -> np.ndarray:
@@ -153,12 +166,11 @@ def within_cone(exit_: Exit | None, v: np.ndarray) -> np.ndarray:
 
 def plan_wires(robot: Robot, plan: Plan, model: Model | None = None) -> np.ndarray:
     """Return p_i − p_0 (mm) of every plan point, plan order, on ``model`` (default nominal)."""
-    from wirecal.solver.kinematics import tool_position
+    from wirecal.solver.distance import wire_vectors
 
-    model = robot.nominal if model is None else model
     q, _, _ = plan.all_points()
-    p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
-    return tool_position(model, np.radians(q)) - p0
+    model = robot.nominal if model is None else model
+    return wire_vectors(model, np.radians(q), np.radians(plan.theta0_deg))
 
 
 def unmodelled_exit_mm(robot: Robot, plan: Plan, model: Model | None = None) -> np.ndarray:

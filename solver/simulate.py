@@ -1,7 +1,9 @@
 """Simulated measurement runs: a true robot, a draw-wire encoder, the controller's counter.
 
 The true robot is the nominal model plus error offsets. The encoder is mounted where the
-true tool point is at θ0, so the true wire length at θ_i is ‖p_true(θ_i) − p_true(θ0)‖.
+true tool point is at θ0, so the true wire length at θ_i is ‖p_true(θ_i) − p_true(θ0)‖,
+or the path over the encoder's exit as built: a pulley's arc, or an eyelet's edge wrap
+that the model leaves out (:func:`~wirecal.solver.exit_geometry.physical_wire_mm`).
 Each reading adds one Gaussian error per point (σ, default 0.01 mm: it does not average
 out over samples, like repeatability), is quantised at mm_per_count, sampled N times with
 ±1-count electrical jitter, and counted by a signed counter of ``counter_bits`` that wraps.
@@ -16,8 +18,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from wirecal.solver.counter import Counter
-from wirecal.solver.distance import wire_lengths
+from wirecal.solver.distance import wire_vectors
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import Exit, physical_wire_mm
 from wirecal.solver.formats.log import format_header, format_row
 from wirecal.solver.kinematics import Model
 from wirecal.solver.plan import Plan
@@ -58,10 +61,15 @@ def sample_counts(
     return unwrapped.mean(axis=-1), unwrapped.max(axis=-1) - unwrapped.min(axis=-1)
 
 
-def true_lengths(model: Model, plan: Plan) -> np.ndarray:
-    """Return the true wire length of every plan point, plan order; a batched model gives (T, N)."""
+def true_lengths(model: Model, plan: Plan, exit_: Exit | None = None) -> np.ndarray:
+    """Return the true wire length of every plan point, plan order; a batched model gives (T, N).
+
+    ``exit_`` is the encoder's exit as built (an eyelet adds its edge wrap); by default
+    the model's own (its pulley, or a point).
+    """
     q, _, _ = plan.all_points()
-    return wire_lengths(model, np.radians(q), np.radians(plan.theta0_deg))
+    v = wire_vectors(model, np.radians(q), np.radians(plan.theta0_deg))
+    return physical_wire_mm(model.pulley if exit_ is None else exit_, v)
 
 
 def measured_lengths(
@@ -98,7 +106,7 @@ def simulate_log(
     enc = robot.encoder
     mpc = enc.mm_per_count if mm_per_count is None else mm_per_count
     start = enc.counter.random_start(rng) if counter_start is None else counter_start
-    d_points = true_lengths(robot.model(errors), plan)
+    d_points = true_lengths(robot.model(errors), plan, enc.exit)
     q, step_no, index_no = plan.all_points()
 
     # One entry per reading in run order: each step's zero at θ0, then its points; last

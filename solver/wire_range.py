@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import wire_path
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.planner import move_samples
@@ -60,7 +61,8 @@ def check_wire_range(
     p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
     moves = run_moves(plan)
     q, first = move_samples(np.array([m[1] for m in moves]), np.array([m[2] for m in moves]))
-    d = np.linalg.norm(tool_position(model, np.radians(q)) - p0, axis=1)
+    # the modelled wire (over a pulley: arc plus span; a tip inside the pulley counts as 0)
+    d = np.nan_to_num(wire_path(model.pulley, tool_position(model, np.radians(q)) - p0)[0])
     longest = np.maximum.reduceat(d, first)
     # the wire is short near θ0 by construction: only the targets must stay above min_mm
     last = np.r_[first[1:], len(d)] - 1

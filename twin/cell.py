@@ -2,7 +2,8 @@
 
 :class:`Cell` is the controller's outside world for :class:`~wirecal.twin.vplus.interp.Interpreter`:
 a true robot (nominal model + error offsets) whose moves respect the joint limits, a
-draw-wire encoder mounted at θ0 of the true robot (noise per pose, quantisation, ±1-count
+draw-wire encoder mounted at θ0 of the true robot (its wire over the exit as built, noise
+per pose, quantisation, ±1-count
 jitter, a wrapping counter, a range limit), a disk in a sandbox folder, a terminal with
 scripted answers, and a clock. Faults can be injected: a wire slip, an encoder failure,
 a full disk, vibration (a large spread), tighter joint limits than the plan assumed.
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.solver import ik
+from wirecal.solver.exit_geometry import physical_wire_mm
 from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
@@ -285,7 +287,8 @@ class Cell:
         if f.encoder_fails_at_read is not None and self.reads >= f.encoder_fails_at_read:
             raise VError(-1013, ERRORS[-1013])
         p = tool_position(self.model, np.radians(self.actual)[None])[0]
-        d = float(np.linalg.norm(p - self.p0)) + self.pose_error + self.slip
+        d = float(physical_wire_mm(self.robot.encoder.exit, p - self.p0))
+        d += self.pose_error + self.slip
         if d > self.robot.encoder.range_mm:
             raise VError(
                 -1100,
