@@ -63,7 +63,8 @@ class Pulley:
 
 
 Exit = Eyelet | Pulley
-"""The encoder's exit as the robot file declares it; ``None`` is the ideal point exit."""
+"""The encoder's exit as the robot file declares it; ``None`` is the ideal point exit
+(``exit = "point"``, the default)."""
 
 
 def _plane(v: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -221,7 +222,7 @@ def largest_exit_deg(robot: Robot, plan: Plan) -> float | None:
 def describe(exit_: Exit | None) -> str:
     """Return the exit in words, for the outputs of plan and solve."""
     if exit_ is None:
-        return "ideal point exit (the robot file's [encoder] declares no exit)"
+        return "ideal point exit (the paper's model: any direction, no cone, no pulley)"
     axis = ", ".join(f"{x:.3g}" for x in exit_.axis)
     if isinstance(exit_, Pulley):
         return f"swivel guide pulley, radius {exit_.radius_mm:g} mm, axis ({axis}) (modelled)"

@@ -245,7 +245,7 @@ def test_the_paper_plan_beyond_a_narrow_cone_loads_with_a_warning(tmp_path, pape
 # -- the robot file keys -----------------------------------------------------------------
 
 KEY_CASES = {
-    "exit kind": ({"exit": "ring"}, 'encoder.exit: is "ring"; give "eyelet"'),
+    "exit kind": ({"exit": "ring"}, 'encoder.exit: is "ring"; give "point"'),
     "eyelet needs axis": (
         {"exit": "eyelet", "max_exit_deg": 3.0, "exit_edge_radius_mm": 1.0},
         "encoder.axis: is missing",
@@ -276,11 +276,15 @@ KEY_CASES = {
     ),
     "eyelet key on a pulley": (
         {"exit": "pulley", "axis": [0, 0, 1], "pulley_radius_mm": 5.0, "max_exit_deg": 3.0},
-        'encoder.max_exit_deg: belongs to exit = "eyelet", not "pulley"; remove it',
+        'encoder.max_exit_deg: belongs to exit = "eyelet", not "pulley"; remove it or change exit',
     ),
     "key without exit": (
         {"axis": [0, 0, 1]},
-        'encoder.axis: belongs to an exit: add exit = "eyelet" or "pulley", or remove it',
+        'encoder.axis: belongs to exit = "eyelet" or "pulley", not "point"; remove it or change',
+    ),
+    "pulley key on the point exit": (
+        {"exit": "point", "pulley_radius_mm": 5.0},
+        'encoder.pulley_radius_mm: belongs to exit = "pulley", not "point"',
     ),
     "misspelt key": (
         {"exit": "pulley", "axis": [0, 0, 1], "pulley_radius": 5.0},
@@ -317,7 +321,7 @@ def test_exit_keys_written_back(tmp_path, keys):
     path = tmp_path / "robot.toml"
     path.write_text(text)
     assert load_robot(path).encoder.exit == robot.encoder.exit
-    assert ("exit =" in text) == bool(keys)
+    assert ("exit =" in text) == bool(keys)  # the point exit is the default, not written
 
 
 def test_exit_types():

@@ -135,7 +135,14 @@ its derivatives (Ψ, the Jacobian) are undefined."""
 
 def _check_wire(q: np.ndarray, theta0: np.ndarray, robot: Robot, where: str, table: Table) -> None:
     d = wire_lengths(robot.nominal, np.radians(q), np.radians(theta0))
-    for i in np.flatnonzero(~(d >= MIN_WIRE_MM)):
+    pulley = robot.nominal.pulley
+    for i in np.flatnonzero(np.isnan(d)) if pulley else ():  # within the pulley: no length
+        table.problems.add(
+            f"{where}[{i + 1}]",
+            "the tool point there is within the guide pulley's circle (encoder.pulley_radius_mm"
+            f" {pulley.radius_mm:g}), where no wire reaches it; move or remove the point",
+        )
+    for i in np.flatnonzero(d < MIN_WIRE_MM):
         table.problems.add(
             f"{where}[{i + 1}]",
             f"the wire length there is {d[i]:.3g} mm (below {MIN_WIRE_MM:g} mm): the point "

@@ -84,7 +84,7 @@ AXIS_TOLERANCE = 0.01
 """An exit axis must be a unit vector to within this (it is then normalised exactly)."""
 EXIT_KEYS = ("exit", "axis", "max_exit_deg", "exit_edge_radius_mm", "pulley_radius_mm")
 """The ``[encoder]`` keys of the wire exit (:mod:`wirecal.solver.exit_geometry`)."""
-_EXIT_OWN = {
+_EXIT_OWN: dict[str, tuple[str, ...]] = {
     "eyelet": ("axis", "max_exit_deg", "exit_edge_radius_mm"),
     "pulley": ("axis", "pulley_radius_mm"),
 }
@@ -296,31 +296,31 @@ def _encoder(enc: Table, controller: Controller | None) -> Encoder | None:
 def _exit(enc: Table) -> tuple[bool, Exit | None]:
     """Read the wire exit keys: (whether they passed, the exit or None for a point exit).
 
+    ``exit = "point"`` (the default: the paper's model) takes no other key;
     ``exit = "eyelet"`` needs ``axis``, ``max_exit_deg`` and ``exit_edge_radius_mm``;
-    ``exit = "pulley"`` needs ``axis`` and ``pulley_radius_mm``; without ``exit`` the
-    wire leaves from an ideal point and none of the other keys belongs.
+    ``exit = "pulley"`` needs ``axis`` and ``pulley_radius_mm``.
     """
     kind = enc.string(
         "exit",
-        None,
+        "point",
         choices={
+            "point": "the paper's ideal point exit, any direction",
             "eyelet": "point exit within a cone about axis",
             "pulley": "swivel guide pulley about axis",
         },
     )
-    if kind is None and "exit" in enc.keys():  # reported: the other keys cannot be judged
+    if kind is None:  # reported: the other keys cannot be judged
         return False, None
-    own = _EXIT_OWN.get(kind or "", ())
+    own = _EXIT_OWN.get(kind, ())
     for key in EXIT_KEYS[1:]:
         if key in enc.keys() and key not in own:
             enc.add(
                 key,
-                'belongs to an exit: add exit = "eyelet" or "pulley", or remove it'
-                if kind is None
-                else f'belongs to exit = "{"pulley" if kind == "eyelet" else "eyelet"}", '
-                f'not "{kind}"; remove it',
+                f'belongs to exit = "{"pulley" if key == "pulley_radius_mm" else "eyelet"}"'
+                + ("" if key != "axis" else ' or "pulley"')
+                + f', not "{kind}"; remove it or change exit',
             )
-    if kind is None:
+    if kind == "point":
         return True, None
     axis = _axis(enc)
     if kind == "pulley":
