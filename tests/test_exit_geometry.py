@@ -328,3 +328,33 @@ def test_exit_types():
     robot = _robot(exit="pulley", axis=[0, 0, 1], pulley_radius_mm=5.0)
     assert robot.encoder.exit == Pulley((0.0, 0.0, 1.0), 5.0)
     assert robot.nominal.pulley == robot.encoder.exit
+
+
+# -- the planner keeps an eyelet's points within its cone ---------------------------------
+
+# per arm: θ0 of tests/test_planner.py and an axis near the mean wire direction there
+CONE_ARMS = {
+    "viper_s650": ([-72, -156, 235, 3, 64, 41], [0.069, 0.871, 0.487]),
+    "puma560": ([112, -123, -32, 8, -53, -288], [0.032, 0.751, -0.66]),
+    "abb_irb120": ([21, 5, -36, -43, -43, -184], [0.092, -0.351, -0.932]),
+    "ur5": ([-254, 142, 31, 66, 256, -173], [0.649, -0.275, 0.71]),
+}
+
+
+@pytest.mark.slow  # designs a plan per arm
+@pytest.mark.parametrize("arm", sorted(CONE_ARMS))
+def test_planner_keeps_the_eyelet_cone(arm):
+    theta0, axis = CONE_ARMS[arm]
+    axis = list(np.asarray(axis) / np.linalg.norm(axis))
+    data = read_toml(VIPER.parent / arm / "robot.toml", "robot file")
+    data["encoder"].update(exit="eyelet", axis=axis, max_exit_deg=60.0, exit_edge_radius_mm=1.0)
+    robot = robot_from_dict(data, arm)
+    d = wirecal.design(robot, np.array(theta0, float))
+    q, _, _ = d.plan.all_points()
+    p = tool_position(robot.nominal, np.radians(q))
+    p0 = tool_position(robot.nominal, np.radians(d.plan.theta0_deg)[None])[0]
+    cosine = (p - p0) @ np.asarray(axis) / np.linalg.norm(p - p0, axis=1)
+    angle = np.degrees(np.arccos(np.clip(cosine, -1, 1)))
+    assert angle.max() <= 60.0 + 1e-9
+    assert f"largest exit angle {angle.max():.1f} deg." in d.header()
+    assert len(d.plan.order) >= 2  # the cone leaves something to calibrate
