@@ -202,6 +202,18 @@ def test_pulley_robot_simulated_and_solved_recovers_the_truth(paper_plan):
     assert max(abs(wrong[n] - TABLE5.get(n, 0.0)) for n in plan.order) > 0.1
 
 
+def test_a_plan_point_within_the_pulley_is_named():
+    robot = _robot(exit="pulley", axis=list(AXIS), pulley_radius_mm=15.0)
+    with pytest.raises(WirecalError) as info:
+        load_plan(VIPER / "paper_plan.toml", robot)
+    assert info.value.problems == [
+        f"{VIPER / 'paper_plan.toml'}: step[3].points_deg[{k}]: the tool point there is within "
+        "the guide pulley's circle (encoder.pulley_radius_mm), where no wire reaches it; move "
+        "or remove the point"
+        for k in (4, 7)
+    ]
+
+
 def test_gen_refuses_a_pulley_robot(paper_plan):
     from wirecal.gen.vplus.program import module_text
 

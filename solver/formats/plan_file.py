@@ -135,12 +135,11 @@ its derivatives (Ψ, the Jacobian) are undefined."""
 
 def _check_wire(q: np.ndarray, theta0: np.ndarray, robot: Robot, where: str, table: Table) -> None:
     d = wire_lengths(robot.nominal, np.radians(q), np.radians(theta0))
-    pulley = robot.nominal.pulley
-    for i in np.flatnonzero(np.isnan(d)) if pulley else ():  # within the pulley: no length
+    for i in np.flatnonzero(np.isnan(d)):  # only within a pulley's circle
         table.problems.add(
             f"{where}[{i + 1}]",
-            "the tool point there is within the guide pulley's circle (encoder.pulley_radius_mm"
-            f" {pulley.radius_mm:g}), where no wire reaches it; move or remove the point",
+            "the tool point there is within the guide pulley's circle (encoder."
+            "pulley_radius_mm), where no wire reaches it; move or remove the point",
         )
     for i in np.flatnonzero(d < MIN_WIRE_MM):
         table.problems.add(
