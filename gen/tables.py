@@ -6,7 +6,9 @@ every configuration and joint the tables hold cos and sin of the nominal joint a
 a perturbed angle θ + ε uses the angle-addition formula with short polynomials for ε
 (the ``sincos`` macro of ``templates/vplus/macros.j2``). For every point they also hold
 the nominal wire vector ν_n and length d_n, so the controller works with small
-differences from nominal only.
+differences from nominal only; with a guide pulley, d_n is arc plus span, and the tables
+add each point's nominal coordinates w (along the swivel axis), s (across it) and t (the
+free span) of :mod:`~wirecal.solver.exit_geometry`.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver import params as P
-from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import Pulley, bend_coordinates, wire_path
 from wirecal.solver.identify import omega_vector
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.params import ErrorSet
@@ -60,6 +62,8 @@ class Tables:
     pr: np.ndarray  # (m,) row k (1-based) or tool axis
     errors: ErrorSet  # parameters, identification order, and their units
     nominal: np.ndarray  # (m,) nominal values in boundary units (deg, mm)
+    pulley: Pulley | None = None  # the guide pulley the wire runs over, if any
+    bend: np.ndarray | None = None  # (N+1, 3) with a pulley: nominal w, s, t of each point
 
     @property
     def n_points(self) -> int:
@@ -73,18 +77,7 @@ class Tables:
 
 
 def build_tables(robot: Robot, plan: Plan) -> Tables:
-    """Compute the controller solver's tables for the robot's nominal model and the plan.
-
-    The controller solver models a point exit (‖p_i − p_0‖ in small differences); a robot
-    whose wire runs over a guide pulley is refused rather than given a wrong solver.
-    """
-    if robot.nominal.pulley is not None:
-        raise WirecalError(
-            f'{robot.source}: encoder.exit = "pulley": the controller solver models the wire '
-            "as leaving from a point and does not carry the pulley's arc, so no controller "
-            "programs are generated for this robot; calibrate it with 'wirecal simulate' "
-            "and 'wirecal solve', which model the pulley"
-        )
+    """Compute the controller solver's tables for the robot's nominal model and the plan."""
     names = plan.order
     q, _, _ = plan.all_points()
     conf = np.vstack([plan.theta0_deg, q])
@@ -94,7 +87,11 @@ def build_tables(robot: Robot, plan: Plan) -> Tables:
     nu = p - p[0]
     nu[0] = 0.0
     first = np.cumsum([1] + [len(s.points_deg) for s in plan.steps[:-1]])
-    dn = np.linalg.norm(nu, axis=1)
+    dn = wire_path(model.pulley, nu)[0]
+    bend = None
+    if model.pulley is not None:
+        w, s, _, t = bend_coordinates(nu, model.pulley.axis, model.pulley.radius_mm)
+        bend = np.stack([w, s, t], axis=1)
     mpc = robot.encoder.mm_per_count
     dni = np.round(dn / mpc)
     rows = []
@@ -124,4 +121,6 @@ def build_tables(robot: Robot, plan: Plan) -> Tables:
         pr=np.array(rows),
         errors=robot.errors(names),
         nominal=np.array([robot.nominal_value(n) for n in names]),
+        pulley=model.pulley,
+        bend=bend,
     )

@@ -80,6 +80,22 @@ def _plane(v: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.
     return w, s, u
 
 
+def bend_coordinates(
+    v: np.ndarray, axis: np.ndarray | tuple[float, ...], radius_mm: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Return (w, s, u, t) of tool points v (…, 3) relative to the exit (module docstring).
+
+    w along the axis, s across it, u the unit vector across it towards v, t the free span
+    (NaN within the circle, where no wire reaches).
+    """
+    a = np.asarray(axis, dtype=float)
+    v = np.asarray(v, dtype=float)
+    w, s, u = _plane(v, a)
+    with np.errstate(invalid="ignore"):
+        t = np.sqrt(np.einsum("...k,...k->...", v, v) - 2 * radius_mm * s)
+    return w, s, u, t
+
+
 def wrap(
     v: np.ndarray, axis: np.ndarray | tuple[float, ...], radius_mm: float
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -90,11 +106,8 @@ def wrap(
     docstring). A point inside that circle, where no wire can reach, gives NaN.
     """
     a = np.asarray(axis, dtype=float)
-    v = np.asarray(v, dtype=float)
     r = float(radius_mm)
-    w, s, u = _plane(v, a)
-    with np.errstate(invalid="ignore"):
-        t = np.sqrt(np.einsum("...k,...k->...", v, v) - 2 * r * s)
+    w, s, u, t = bend_coordinates(v, a, r)
     psi = np.mod(np.arctan2(t, -r) - np.arctan2(w, s - r), 2 * np.pi)
     c2 = (s - r) ** 2 + w**2
     with np.errstate(invalid="ignore", divide="ignore"):

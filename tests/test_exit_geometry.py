@@ -214,12 +214,23 @@ def test_a_plan_point_within_the_pulley_is_named():
     ]
 
 
-def test_gen_refuses_a_pulley_robot(paper_plan):
-    from wirecal.gen.vplus.program import module_text
+@pytest.mark.slow  # a measurement run and two controller solves in the twin
+def test_pulley_robot_through_the_twin_and_the_controller_solver(tmp_path):
+    """wc.run in the twin over a 5 mm pulley; wc.solve and wc.solve2 agree with the PC."""
+    from wirecal.app.compare import controller_solve
+    from wirecal.app.twin_runs import measure_in_twin
 
     robot = _robot(exit="pulley", axis=list(AXIS), pulley_radius_mm=5.0)
-    with pytest.raises(WirecalError, match=r'exit = "pulley": the controller solver models'):
-        module_text(robot, load_plan(VIPER / "paper_plan.toml", robot))
+    plan = load_plan(VIPER / "paper_plan.toml", robot)
+    run = measure_in_twin(robot, plan, TABLE5, tmp_path / "run", seed=4)
+    m = wirecal.load_measurements(run.log, plan, robot)
+    ref = wirecal.solve(robot, plan, m)
+    joint = ref.estimates["joint"].as_dict()
+    assert max(abs(joint[n] - TABLE5.get(n, 0.0)) for n in plan.order) < 0.01
+    for polish, method in ((False, "stepwise"), (True, "joint")):
+        ctl = controller_solve(robot, plan, m, tmp_path / method, polish=polish)
+        reference = ref.estimates[method].as_dict()
+        assert max(abs(ctl.offsets[n] - reference[n]) for n in reference) <= 1e-4
 
 
 # -- the eyelet --------------------------------------------------------------------------

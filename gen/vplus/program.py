@@ -92,6 +92,10 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
         raise WirecalError(problems)
 
 
+PULLEY_TABLES = ("wc.wn", "wc.sn", "wc.tn")
+"""With a guide pulley: each point's nominal w, s and t (:mod:`wirecal.solver.exit_geometry`)."""
+
+
 def data_lines(t: Tables, robot: Robot) -> list[str]:
     """Return the assignments of ``wc.data``: every table value as an exact literal."""
     # powers of ten first: every DOUBLE literal below divides by one of them
@@ -103,6 +107,9 @@ def data_lines(t: Tables, robot: Robot) -> list[str]:
         f"wc.d2r = {double_literal(np.pi / 180)}",
         f"wc.mpc = {double_literal(robot.encoder.mm_per_count)}",
     ]
+    if t.pulley is not None:  # the guide pulley: radius and swivel axis
+        lines.append(f"wc.pur = {double_literal(t.pulley.radius_mm)}")
+        lines += [_put("wc.pax", a + 1, t.pulley.axis[a]) for a in range(3)]
     for k in range(t.n):
         for name, arr in (("wc.ca", t.ca), ("wc.sa", t.sa), ("wc.la", t.la), ("wc.ld", t.ld)):
             lines.append(_put(name, k + 1, arr[k]))
@@ -149,6 +156,8 @@ def _configuration_lines(t: Tables, c: int) -> list[str]:
             _put("wc.dni", c, t.dni[c]),
             _put("wc.dnf", c, t.dnf[c]),
         ]
+        if t.bend is not None:
+            lines += [_put(name, c, t.bend[c, k]) for k, name in enumerate(PULLEY_TABLES)]
     return lines
 
 
@@ -213,6 +222,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         names=list(plan.order),
         v=_validation_context(robot, opt),
         echo=opt.echo_log,
+        pulley=tables.pulley is not None,
     )
     problems = long_lines(text, MODULE_NAME)
     try:
