@@ -8,7 +8,7 @@ Prints (Viper s650 example, the paper's θ0; about three minutes on one core):
 3. the paper plan (historical, its wire up to 85° off that axis) simulated with the eyelet
    edge the model leaves out: mean tool-point error after calibration against the truth;
 4. a robot with a 5 mm swivel guide pulley, simulated and solved with the pulley model,
-   and with the point model (the pulley ignored).
+   and with the point model (the pulley ignored); then a plan designed for the pulley.
 
 Run: python bench/bench_exit_geometry.py
 """
@@ -96,6 +96,11 @@ def main() -> None:
     plan = load_plan(VIPER / "paper_plan.toml", rb)
     print(f"   solved with the pulley model: {tool_error_mm(rb, plan)}")
     print(f"   solved with the point model:  {tool_error_mm(rb, plan, solve_with=point)}")
+    d = wirecal.design(rb, THETA0)
+    print(
+        f"   plan designed for the pulley ({len(d.plan.order)} planned, predicted joint "
+        f"{d.predicted['joint']:.4f} mm): {tool_error_mm(rb, d.plan)}"
+    )
 
 
 if __name__ == "__main__":

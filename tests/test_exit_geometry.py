@@ -381,3 +381,46 @@ def test_planner_keeps_the_eyelet_cone(arm):
     assert angle.max() <= 60.0 + 1e-9
     assert f"largest exit angle {angle.max():.1f} deg." in d.header()
     assert len(d.plan.order) >= 2  # the cone leaves something to calibrate
+
+
+# -- through the command line ------------------------------------------------------------
+
+
+def _robot_file(tmp_path, **encoder) -> str:
+    text = (VIPER / "robot.toml").read_text().replace('exit = "point"\n', "")
+    extra = "".join(
+        f"{k} = {v!r}\n" if not isinstance(v, str) else f'{k} = "{v}"\n' for k, v in encoder.items()
+    )
+    text = text.replace("belt_mode = 0\n", "belt_mode = 0\n" + extra)
+    path = tmp_path / "robot.toml"
+    path.write_text(text)
+    return str(path)
+
+
+def _cli(*args):
+    from click.testing import CliRunner
+
+    from wirecal.cli.main import main
+
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def test_cli_psi_warns_about_points_beyond_the_cone(tmp_path):
+    robot = _robot_file(
+        tmp_path, exit="eyelet", axis=list(AXIS), max_exit_deg=3.0, exit_edge_radius_mm=1.0
+    )
+    plan = VIPER / "paper_plan.toml"
+    r = _cli("psi", robot, plan)
+    assert r.exit_code == 0
+    warnings = [line for line in r.stderr.splitlines() if "beyond max_exit_deg 3" in line]
+    assert len(warnings) == 69 and warnings[0].startswith("warning: ")  # all its points
+    assert _cli("psi", robot, plan, "--strict").exit_code == 1
+
+
+def test_cli_simulate_and_solve_a_pulley_robot(tmp_path):
+    robot = _robot_file(tmp_path, exit="pulley", axis=list(AXIS), pulley_radius_mm=5.0)
+    plan, log = VIPER / "paper_plan.toml", tmp_path / "run.csv"
+    assert _cli("simulate", robot, plan, "-o", log, "--seed", 4, "--random", 0.5).exit_code == 0
+    r = _cli("solve", robot, plan, log)
+    assert r.exit_code == 0, r.output
+    assert "wire exit: swivel guide pulley, radius 5 mm, axis (" in r.stdout
