@@ -26,6 +26,12 @@ respect to P is the unit direction of the free span, û = (P − T)/t (the swive
 only to second order), which without trigonometry is
 û = [(t(s − r) + r·w)·u + (t·w − r(s − r))·a] / c². With r = 0 all of it reduces to the
 point model: L = ‖v‖, û = v/‖v‖.
+
+As in the paper, the exit is where the tool point is at θ0 (so no encoder position is
+identified): for a pulley, the point where the wire meets it, A = p(θ0), the wire's tip
+resting there when the encoder is mounted (paper §2.1); for an eyelet, the start of its
+rounded edge, the hole taken as wide as the wire, so the wire bears on the edge as soon as
+it leaves the axis.
 """
 
 from __future__ import annotations
