@@ -25,7 +25,8 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.solve import SolveResult
 from wirecal.twin.cell import Cell
-from wirecal.twin.vplus.interp import Interpreter, f32
+from wirecal.twin.machine import f32
+from wirecal.twin.vplus.interp import Interpreter
 from wirecal.twin.vplus.parser import parse_module
 
 

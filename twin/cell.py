@@ -25,7 +25,8 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import move_time_s
 from wirecal.solver.simulate import RANGE_EXCEEDED
-from wirecal.twin.vplus.interp import UNMODELLED, Interpreter, Outcome, Trans, VError, f32
+from wirecal.twin.machine import Outcome, f32
+from wirecal.twin.vplus.interp import UNMODELLED, Interpreter, Trans, VError
 from wirecal.twin.vplus.parser import parse_module
 
 ERRORS = {
