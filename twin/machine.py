@@ -32,9 +32,13 @@ class Halt(Exception):
     """HALT (V+) or halt (URScript): the program stops."""
 
 
+class Stopped(Exception):
+    """The operator stopped the program (URScript: at a blocking warning popup)."""
+
+
 @dataclass
 class Outcome:
-    """How a program ended: "completed", "halted", "paused" or "error"."""
+    """How a program ended: "completed", "halted", "paused", "stopped" or "error"."""
 
     status: str
     program: str = ""

@@ -6,17 +6,20 @@ holds to, and how sure we are of it (see :mod:`wirecal.gen.urscript.facts`):
 
 * ints are 32-bit and floats 32-bit (UR16e User Manual p. 181, *confirmed*): every float
   literal, result and stored value is rounded to IEEE single precision (:func:`f32`); an
-  int result outside [-2^31, 2^31[ stops the program (*unconfirmed*: the controller's
-  behaviour on overflow was not read);
+  int result outside [-2^31, 2^31[ wraps, two's complement (*unconfirmed*: the
+  controller's behaviour on overflow was not read; the generated programs rely on it to
+  unwrap the raw count by subtraction);
 * int op int is an int for ``+ - * %``, ``/`` gives a float, and any float operand makes
   the result a float (*unconfirmed*);
 * lists are indexed from 0 and copied on assignment; an index out of range stops the
   program (*unconfirmed*);
-* conditions and ``and``/``or``/``xor``/``not`` take booleans only; ``+`` joins two
-  strings; ``str``/``to_str`` write an int in decimal, a float as the shortest decimal that
-  reads back to the same single-precision value, a boolean as True/False (*unconfirmed*:
-  the controller's own float format was not read — the generated programs send counts as
-  ints so that no reading depends on it);
+* conditions and ``and``/``or``/``xor``/``not`` take booleans only; strings are joined
+  with ``str_cat`` (``+`` of strings stops the program); ``str_cat`` writes an int in
+  decimal (Script Directory §15.51, as the generator cites it), a float as the shortest
+  decimal that reads back to the same single-precision value and a boolean as True/False
+  (*unconfirmed*: the controller's float format — the generated programs write every
+  number through ints so that no log value depends on it); ``floor`` returns an int
+  (§16.9);
 * scope: a variable assigned in the program's own body is global, as is one qualified
   ``global``; inside a function a parameter or a ``local`` variable is local, and a free
   variable is the global of that name if there is one, else local (*unconfirmed*: the
@@ -36,11 +39,11 @@ from functools import singledispatchmethod
 
 import numpy as np
 
-from wirecal.twin.machine import Halt, Outcome, RunError, f32
+from wirecal.twin.machine import Halt, Outcome, RunError, Stopped, f32
 from wirecal.twin.urscript import nodes as N
 from wirecal.twin.urscript.parser import Program, walk
 
-INT_MIN, INT_MAX = -(2**31), 2**31 - 1
+INT_MIN = -(2**31)
 
 
 class URError(RunError):
@@ -56,10 +59,8 @@ class _Return(Exception):
 
 
 def i32(v: int) -> int:
-    """Check an int result is a 32-bit int."""
-    if not INT_MIN <= v <= INT_MAX:
-        raise URError(f"integer overflow: {v} is outside the 32-bit range")
-    return v
+    """Wrap an int result to 32 bits, two's complement (module docstring: unconfirmed)."""
+    return (v - INT_MIN) % 2**32 + INT_MIN
 
 
 def number(v, what: str = "a number") -> float | int:
@@ -82,7 +83,7 @@ def truth(v) -> bool:
 
 
 def to_str(v) -> str:
-    """Write a value as ``to_str``/``str`` does in the twin (module docstring)."""
+    """Write a value as ``str_cat`` does in the twin (module docstring)."""
     if isinstance(v, bool):
         return "True" if v else "False"
     if isinstance(v, int):
@@ -119,6 +120,8 @@ class Interpreter:
             status, message = "completed", ""
         except Halt:
             status, message = "halted", "halt"
+        except Stopped as s:
+            status, message = "stopped", str(s)
         except RunError as e:
             status, message = "error", e.message
         except RecursionError:
@@ -396,8 +399,6 @@ def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Calla
 
     def f(frame):
         x, y = a(frame), b(frame)
-        if op == "+" and isinstance(x, str) and isinstance(y, str):
-            return x + y
         x, y = number(x, op), number(y, op)
         interp.ops[kind] += 1
         if op in "/%" and y == 0:
@@ -462,6 +463,10 @@ def _to_num(s) -> int | float:
         raise URError(f"to_num: {text!r} is not a number") from None
 
 
+def _not_a_string(v) -> int:
+    raise URError(f"str_len of {to_str(v)!r}, which is not a string")
+
+
 def _length(v) -> int:
     if not isinstance(v, list):
         raise URError(f"get_list_length of {to_str(v)!r}, which is not a list")
@@ -469,9 +474,8 @@ def _length(v) -> int:
 
 
 _PURE: dict[str, Callable] = {
-    "str": to_str,
-    "to_str": to_str,
     "str_cat": lambda a, b: to_str(a) + to_str(b),
+    "str_len": lambda s: len(s) if isinstance(s, str) else _not_a_string(s),
     "floor": _floor,
     "round": _round,
     "to_num": _to_num,

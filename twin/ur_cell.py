@@ -1,0 +1,194 @@
+"""The simulated Universal Robots cell: the twin's cell behind the URScript API.
+
+:class:`URCell` is the same cell as V+'s (:class:`wirecal.twin.cell.Cell`: the true
+robot within its limits, the draw-wire encoder's physics, unmodelled errors, faults, the
+clock), reached through the URScript functions the generated programs call:
+
+* ``movej(q, a, v, t, r)``: q in rad; the move takes the time of a trapezoidal profile of
+  the leading joint (speed v rad/s, acceleration a rad/s²; ``t`` > 0 sets it), plus no
+  settling (the programs sleep for that). A target beyond a joint limit stops the program
+  (the controller's own message was not read: *unconfirmed*);
+* ``get_actual_joint_positions()``: the commanded joints in rad (joint encoders do not see
+  the unmodelled errors; the wire does);
+* the encoder: ``encoder_enable_pulse_decode(i, 1, A, B)`` starts quadrature decoding when
+  A, B are the inputs the wire's encoder is wired to (``pulse_inputs``); without it the
+  count never changes (it reads 0: *unconfirmed*). ``encoder_get_tick_count(i)`` is the
+  filtered count, a float in [0; 65536[ that wraps, ``opt="raw"`` the int32 count
+  (Script Manual SW5.20, confirmed); the filter's dynamics are not modelled.
+  ``encoder_unwind_delta_tick_count`` unwinds a delta over half of 2^16 (SW5.24) and is
+  nil for an encoder not enabled (third-party copy of the manual text: *unconfirmed*);
+* sockets: ``socket_open`` opens a real TCP connection (2 s timeout) — the program's PC
+  address is routed to ``receiver`` on loopback, where ``wirecal receive`` listens — and
+  returns True or False; ``socket_send_line`` sends the line and a newline and returns
+  True, or False once the connection is gone; the controller closes a program's sockets
+  when it ends (*unconfirmed*). A fault can drop the connection after N lines;
+* ``textmsg`` and ``popup`` write to the log tab (the console); the operator answers a
+  blocking popup with Continue, except a warning or error popup, at which they stop the
+  program (``proceed_on_pause`` to continue instead); ``sleep`` advances the clock.
+"""
+
+from __future__ import annotations
+
+import math
+import socket
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from wirecal.solver.counter import Counter
+from wirecal.twin.cell import Cell
+from wirecal.twin.machine import Stopped, f32
+from wirecal.twin.urscript.interp import URError, number, to_float, to_str
+
+FILTERED_RANGE = 2**16
+"""The filtered count's range [0; 65536[ (Script Manual SW5.20)."""
+RAW = Counter(32)
+"""The raw count: an int32 (SW5.20)."""
+SOCKET_TIMEOUT_S = 2.0
+
+
+@dataclass
+class URCell(Cell):
+    """The twin's cell as a UR controller's URScript sees it (module docstring)."""
+
+    pulse_inputs: tuple[int, int] = (8, 9)  # the digital inputs the encoder is wired to
+    encoder_index: int = 0
+    pc: tuple[str, int] | None = None  # the PC's address as the program names it
+    receiver: tuple[str, int] | None = None  # where the twin routes it (loopback)
+    sockets: dict[str, socket.socket] = field(default_factory=dict)
+    lines_sent: int = 0
+
+    def __post_init__(self):
+        """Start the cell; no encoder is decoded until a program enables it."""
+        super().__post_init__()
+        self.decoding: dict[int, tuple[int, int, int]] = {}
+
+    # ---- motion ----
+    def movej(self, q, a=1.4, v=1.05, t=0, r=0) -> None:
+        """movej: go to joint positions q (rad) in joint space (module docstring)."""
+        if not isinstance(q, list) or len(q) != len(self.joints):
+            raise URError(f"movej: q must be a list of {len(self.joints)} joint positions")
+        q_deg = np.degrees([to_float(x) for x in q])
+        j = self.beyond_limits(q_deg)
+        if j is not None:
+            raise URError(
+                f"movej: joint {j + 1} target {q_deg[j]:.3f} deg is beyond its limit "
+                f"[{self.limits.joint_min_deg[j]:g}, {self.limits.joint_max_deg[j]:g}] deg"
+            )
+        dist = float(np.max(np.abs(np.radians(q_deg - np.asarray(self.joints)))))
+        self.arrive(q_deg, _trapezoid_s(dist, number(a, "movej a"), number(v, "movej v"), t))
+
+    def get_actual_joint_positions(self) -> list[float]:
+        """Return the joints in rad, base to wrist 3."""
+        return [f32(math.radians(x)) for x in self.joints]
+
+    def sleep(self, t) -> None:
+        """sleep: advance the clock by t s."""
+        self.clock += float(number(t, "sleep"))
+
+    # ---- encoder ----
+    def encoder_enable_pulse_decode(self, encoder_index, decoder_type, A, B) -> None:
+        """Decode the pulses on inputs A, B as encoder ``encoder_index``."""
+        self._index(encoder_index)
+        self.decoding[encoder_index] = (decoder_type, A, B)
+
+    def _decoded(self, encoder_index) -> bool:
+        """Tell whether the wire's encoder is decoded (quadrature, its inputs) as this index."""
+        self._index(encoder_index)
+        setup = self.decoding.get(encoder_index)
+        return (
+            encoder_index == self.encoder_index
+            and setup is not None
+            and setup[0] == 1
+            and {setup[1], setup[2]} == set(self.pulse_inputs)
+        )
+
+    def encoder_get_tick_count(self, encoder_index, opt=""):
+        """Return the filtered count (float, wraps at 2^16) or with opt="raw" the int32 count."""
+        self.reads += 1
+        count = self.wire_counts() if self._decoded(encoder_index) else 0
+        if opt == "raw":
+            return int(RAW.wrap(count))
+        return f32(float(count % FILTERED_RANGE))
+
+    def encoder_unwind_delta_tick_count(self, encoder_index, delta_tick_count):
+        """Unwind a delta of filtered counts over half their range; nil if not enabled."""
+        if not self._decoded(encoder_index):
+            return None
+        d = number(delta_tick_count, "encoder_unwind_delta_tick_count")
+        half = FILTERED_RANGE // 2
+        if d > half:
+            d -= FILTERED_RANGE
+        elif d < -half:
+            d += FILTERED_RANGE
+        return f32(float(d)) if isinstance(d, float) else d
+
+    @staticmethod
+    def _index(encoder_index) -> None:
+        if encoder_index not in (0, 1) or isinstance(encoder_index, bool):
+            raise URError(f"encoder index {to_str(encoder_index)}: must be 0 or 1")
+
+    # ---- log tab ----
+    def textmsg(self, s1, s2="") -> None:
+        """textmsg: a line in the log tab."""
+        self.console.append(to_str(s1) + to_str(s2))
+
+    def popup(self, s, title="Popup", warning=False, error=False, blocking=False) -> None:
+        """popup: shown in the log tab; the operator stops at a blocking warning or error."""
+        self.console.append(f"[popup {to_str(title)}] {to_str(s)}")
+        if blocking and (warning or error) and not self.proceed_on_pause:
+            raise Stopped(to_str(s))
+
+    # ---- sockets ----
+    def socket_open(self, address, port, socket_name="socket_0") -> bool:
+        """Open a TCP connection to the PC (routed to the receiver); True when connected."""
+        where = (to_str(address), int(number(port, "socket_open port")))
+        if where != self.pc or self.receiver is None:
+            return False  # nobody listens there in the twin's network
+        self.socket_close(socket_name)
+        try:
+            self.sockets[socket_name] = socket.create_connection(
+                self.receiver, timeout=SOCKET_TIMEOUT_S
+            )
+        except OSError:
+            return False
+        return True
+
+    def socket_send_line(self, str, socket_name="socket_0") -> bool:
+        """Send a line and a newline; False when the connection is gone."""
+        sock = self.sockets.get(socket_name)
+        if sock is None:
+            return False
+        drop = self.faults.socket_drops_after_lines
+        if drop is not None and self.lines_sent >= drop:
+            self.socket_close(socket_name)
+            return False
+        try:
+            sock.sendall((to_str(str) + "\n").encode("utf-8"))
+        except OSError:
+            self.socket_close(socket_name)
+            return False
+        self.lines_sent += 1
+        return True
+
+    def socket_close(self, socket_name="socket_0") -> None:
+        """Close a connection (nothing happens if it is not open)."""
+        sock = self.sockets.pop(socket_name, None)
+        if sock is not None:
+            sock.close()
+
+    def close_all(self) -> None:
+        """Close every socket, as the controller does when a program ends."""
+        for name in list(self.sockets):
+            self.socket_close(name)
+
+
+def _trapezoid_s(distance_rad: float, a_rad_s2: float, v_rad_s: float, t_s) -> float:
+    """Return a movej's duration: the leading joint's trapezoidal profile (or t if > 0)."""
+    if number(t_s, "movej t") > 0:
+        return float(t_s)
+    if a_rad_s2 <= 0 or v_rad_s <= 0:
+        raise URError("movej: a and v must be positive")
+    if distance_rad >= v_rad_s**2 / a_rad_s2:
+        return distance_rad / v_rad_s + v_rad_s / a_rad_s2
+    return 2.0 * math.sqrt(distance_rad / a_rad_s2)
