@@ -37,8 +37,9 @@ import numpy as np
 
 from wirecal.solver.counter import Counter
 from wirecal.twin.cell import Cell
-from wirecal.twin.machine import Stopped, f32
-from wirecal.twin.urscript.interp import URError, number, to_float, to_str
+from wirecal.twin.machine import Outcome, Stopped, f32
+from wirecal.twin.urscript.interp import Interpreter, URError, number, to_float, to_str
+from wirecal.twin.urscript.parser import parse_program
 
 FILTERED_RANGE = 2**16
 """The filtered count's range [0; 65536[ (Script Manual SW5.20)."""
@@ -192,3 +193,26 @@ def _trapezoid_s(distance_rad: float, a_rad_s2: float, v_rad_s: float, t_s) -> f
     if distance_rad >= v_rad_s**2 / a_rad_s2:
         return distance_rad / v_rad_s + v_rad_s / a_rad_s2
     return 2.0 * math.sqrt(distance_rad / a_rad_s2)
+
+
+@dataclass
+class URPrograms:
+    """Outcomes of the URScript programs run in the twin, in order, and the cell."""
+
+    mount: Outcome
+    run: Outcome | None
+    cell: URCell
+
+
+def run_ur_programs(cell: URCell, mount_text: str, run_text: str) -> URPrograms:
+    """Run ``wc_mount`` (the operator mounts the encoder and continues), then ``wc_run``.
+
+    The controller closes the program's sockets when it ends, however it ends.
+    """
+    mount = Interpreter(parse_program(mount_text, "wc_mount.script"), cell).execute()
+    cell.moves = 0  # fault positions count the moves of wc_run
+    run = None
+    if mount.status == "completed":
+        run = Interpreter(parse_program(run_text, "wc_run.script"), cell).execute()
+    cell.close_all()
+    return URPrograms(mount, run, cell)
