@@ -290,8 +290,7 @@ def _nest(steps: list[N.Stmt], source: str, problems: list[str]):
         problems.append(f"{source}:{block.line}: '{_word(block)}' is not closed by 'end'")
     tops = [s for s in root if isinstance(s, N.Def)]
     if len(root) != 1 or len(tops) != 1:
-        if not problems:
-            problems.append(f"{source}: one program per file: a single top-level def … end")
+        problems.append(f"{source}: one program per file: a single top-level def … end")
         return None
     main = tops[0]
     return Program(source, main.name, main.body, _functions(main, source, problems))
