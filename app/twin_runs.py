@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.app.receive import Received, journal_path, receive
+from wirecal.gen.urscript.program import UrOptions, pc_address, scripts
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
@@ -71,11 +72,10 @@ def measure_ur_in_twin(
     robot: Robot,
     plan: Plan,
     truth: dict[str, float],
-    log: Path,
+    folder: Path,
     *,
-    mount_text: str,
-    run_text: str,
-    pc: tuple[str, int],
+    options: UrOptions | None = None,
+    texts: dict[str, str] | None = None,
     seed: int = 0,
     noise_mm: float = 0.01,
     counter_start: float | None = None,
@@ -86,32 +86,38 @@ def measure_ur_in_twin(
 ) -> URRun:
     """Run wc_mount and wc_run on a twin UR with ``wirecal receive`` taking the log.
 
-    The receiver (:func:`wirecal.app.receive.receive`, the very function behind
-    ``wirecal receive``) listens on a free loopback port in a thread; the cell routes the
-    program's PC address ``pc`` there, so the rows travel over a real TCP socket. With
+    The programs are ``texts`` (by file name), or generated with ``options``. The receiver
+    (:func:`wirecal.app.receive.receive`, the very function behind ``wirecal receive``)
+    listens on a free loopback port in a thread and writes ``folder/run.csv``; the cell
+    routes the program's PC address there, so the rows travel over a real TCP socket. With
     ``pc_listening`` False nobody listens (the connection is refused). ``pulse_inputs``:
-    where the encoder is really wired (default: as the robot file says).
+    where the encoder is really wired (default: as the robot file says). ``counter_start``:
+    the raw count at zero wire length (default: drawn over the whole int32 range).
     """
+    options = options or UrOptions()
+    texts = texts if texts is not None else scripts(robot, plan, options)
+    folder.mkdir(parents=True, exist_ok=True)
+    log = folder / "run.csv"
     rng = np.random.default_rng([seed, 2])
-    start = RAW.wrap(RAW.random_start(rng)) if counter_start is None else counter_start
+    start = RAW.random_start(rng) if counter_start is None else counter_start
     enc = robot.encoder
     cell = URCell(
         robot,
         truth,
         plan.theta0_deg,
-        log.parent,
+        folder,
         seed=seed,
         noise_mm=noise_mm,
         counter_start=float(start),
         faults=faults or Faults(),
         pulse_inputs=tuple(pulse_inputs or enc.pulse_inputs),
         encoder_index=enc.channel,
-        pc=pc,
+        pc=pc_address(robot, options),
     )
+    mount, run = texts["wc_mount.script"], texts["wc_run.script"]
     if not pc_listening:
         cell.receiver = ("127.0.0.1", _closed_port())
-        programs = run_ur_programs(cell, mount_text, run_text)
-        return URRun(programs, Received(log=log, journal=journal_path(log)))
+        return URRun(run_ur_programs(cell, mount, run), Received(log, journal_path(log)))
     listening = threading.Event()
     box: dict[str, object] = {}
 
@@ -129,12 +135,11 @@ def measure_ur_in_twin(
     thread = threading.Thread(target=serve, daemon=True)
     thread.start()
     listening.wait(timeout_s)
-    if "error" in box:
-        raise box["error"]  # type: ignore[misc]
-    programs = run_ur_programs(cell, mount_text, run_text)
-    if cell.lines_sent == 0 and cell.receiver is not None:
-        _end_wait(cell.receiver)  # the program never connected: end the receiver's wait
-    thread.join(timeout_s)
+    if "error" not in box:
+        programs = run_ur_programs(cell, mount, run)
+        if cell.lines_sent == 0:
+            _end_wait(cell.receiver)  # the program never connected: end the receiver's wait
+        thread.join(timeout_s)
     if "error" in box:
         raise box["error"]  # type: ignore[misc]
     return URRun(programs, box["received"])  # type: ignore[arg-type]
