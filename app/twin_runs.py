@@ -17,7 +17,7 @@ from wirecal.gen.urscript.program import UrOptions, pc_address, scripts
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.twin.cell import Faults, RunResult, run_measurement
+from wirecal.twin.cell import Faults, RunResult, Unmodelled, run_measurement
 from wirecal.twin.ur_cell import RAW, URCell, URPrograms, run_ur_programs
 
 
@@ -83,6 +83,7 @@ def measure_ur_in_twin(
     pulse_inputs: tuple[int, int] | None = None,
     pc_listening: bool = True,
     timeout_s: float = 30.0,
+    unmodelled: Unmodelled | None = None,
 ) -> URRun:
     """Run wc_mount and wc_run on a twin UR with ``wirecal receive`` taking the log.
 
@@ -113,6 +114,7 @@ def measure_ur_in_twin(
         pulse_inputs=tuple(pulse_inputs or enc.pulse_inputs),
         encoder_index=enc.channel,
         pc=pc_address(robot, options),
+        unmodelled=unmodelled,
     )
     mount, run = texts["wc_mount.script"], texts["wc_run.script"]
     if not pc_listening:

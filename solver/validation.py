@@ -1,7 +1,8 @@
-"""The paper's two validation procedures (§3.6): the design of their runs.
+"""The paper's two validation procedures (§3.6), and a third of wire lengths: their design.
 
 The paper's two validation procedures (§3.6): the design of their runs, and their
-analyses.
+analyses; and wire lengths at new points (:func:`distance_plan`), for controllers whose
+programs move in joint space only.
 
 * Configuration change (§3.6.1): poses across the workspace, each reached in the four
   configurations above/below × noflip/flip (the shoulder kept); the draw-wire encoder sits
@@ -24,9 +25,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver import ik, pose
+from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import tool_position
+from wirecal.solver.measurements import Measurements
+from wirecal.solver.plan import Plan, Step
 from wirecal.solver.robot import Robot
+from wirecal.solver.wire_range import MIN_WIRE_MM, RANGE_MARGIN_MM
 
 CONFIGS = (("above", "noflip"), ("above", "flip"), ("below", "noflip"), ("below", "flip"))
 """The four configurations of the configuration-change test, numbered 1–4 in its log."""
@@ -143,3 +148,69 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
 
 
 # ---------- logs ----------
+
+
+def distance_plan(
+    robot: Robot,
+    plan: Plan,
+    per_step: int = 5,
+    spread_deg: float = 40.0,
+    seed: int = 0,
+    margin_deg: float = 5.0,
+) -> Plan:
+    """Design a run of new points for validating wire lengths, shaped like ``plan``.
+
+    Same θ0, order and number of steps as ``plan``, each step ``per_step`` points drawn
+    around θ0 (every joint within ±``spread_deg``, ``margin_deg`` inside its limits), kept
+    only where the nominal wire stays clear of the links and between
+    :data:`~wirecal.solver.wire_range.MIN_WIRE_MM` and the encoder's range less
+    :data:`~wirecal.solver.wire_range.RANGE_MARGIN_MM` — also along the move from the
+    previous target. A second run of the measurement program over these points measures
+    wire lengths the calibration never used; the nominal and the calibrated model then
+    predict them (:func:`distance_residuals`). For a controller without Cartesian
+    validation programs (URScript's programs move in joint space only).
+    """
+    rng = np.random.default_rng([seed, 11])
+    lo = robot.joint_min_deg + margin_deg
+    hi = robot.joint_max_deg - margin_deg
+    model = robot.nominal
+    theta0 = np.asarray(plan.theta0_deg, dtype=float)
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    lowest, highest = MIN_WIRE_MM, robot.encoder.range_mm - RANGE_MARGIN_MM
+    steps, previous = [], theta0
+    for step in plan.steps:
+        points: list[np.ndarray] = []
+        for _ in range(10_000):
+            if len(points) == per_step:
+                break
+            draw = theta0 + rng.uniform(-spread_deg, spread_deg, theta0.shape)
+            q = np.round(np.clip(draw, lo, hi), 2)
+            path = previous + np.linspace(0, 1, 21)[:, None] * (q - previous)
+            d = np.linalg.norm(tool_position(model, np.radians(path)) - p0, axis=1)
+            clear = wire_clearance(
+                model, np.radians(q)[None], p0, robot.link_radius_mm, wire_trim_mm(robot)
+            )
+            if d[-1] > lowest and d.max() < highest and clear[0] > 0:
+                points.append(q)
+                previous = q
+        if len(points) < per_step:
+            raise WirecalError(
+                f"no {per_step} validation points for step {step.parameter} within "
+                f"±{spread_deg:g}° of θ0: lower the spread"
+            )
+        steps.append(Step(step.parameter, np.array(points), np.zeros((0, len(theta0)))))
+        previous = theta0
+    return Plan(theta0, plan.order, tuple(steps), robot=plan.robot, description="validation")
+
+
+def distance_residuals(robot: Robot, m: Measurements, offsets: dict[str, float]) -> np.ndarray:
+    """Return |measured − predicted| wire lengths (mm) of a run, for a model of the robot.
+
+    Predicted by the model ``offsets`` give (nominal: {}) from the logged joints: the
+    distance between the tool point at each point and at θ0 (the first zero reading's
+    joints), as the encoder sits there.
+    """
+    model = robot.model(offsets)
+    p = tool_position(model, np.radians(m.joints_deg))
+    p0 = tool_position(model, np.radians(m.theta0_deg)[None])[0]
+    return np.abs(m.distance_mm - np.linalg.norm(p - p0, axis=1))
