@@ -279,3 +279,17 @@ def test_socket_to_nobody_is_false(ur5, tmp_path):
         'textmsg(str_cat("", socket_send_line("x", "wc")))',
     )
     assert out.console == ["False", "False"]
+
+
+def test_time_is_a_struct_of_the_cells_clock(ur5, tmp_path):
+    cell = cell_for(ur5, tmp_path)
+    out = run_on(
+        cell,
+        "sleep(2.25)",
+        "now = time(0)",
+        'textmsg(str_cat(now.sec, ","), now.nanosec)',
+        "x = now.msec",
+    )
+    assert out.console == ["2,250000000"]
+    assert out.status == "error"
+    assert "has no member msec" in out.message

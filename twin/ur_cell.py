@@ -24,7 +24,8 @@ clock), reached through the URScript functions the generated programs call:
   when it ends (*unconfirmed*). A fault can drop the connection after N lines;
 * ``textmsg`` and ``popup`` write to the log tab (the console); the operator answers a
   blocking popup with Continue, except a warning or error popup, at which they stop the
-  program (``proceed_on_pause`` to continue instead); ``sleep`` advances the clock.
+  program (``proceed_on_pause`` to continue instead); ``sleep`` advances the clock and
+  ``time(0)`` reads it.
 """
 
 from __future__ import annotations
@@ -86,6 +87,16 @@ class URCell(Cell):
     def sleep(self, t) -> None:
         """sleep: advance the clock by t s."""
         self.clock += float(number(t, "sleep"))
+
+    def time(self, mode=0) -> dict[str, int]:
+        """time(0): the controller's clock as struct(sec, nanosec), ints (SD 15.49, as cited).
+
+        The twin's clock starts at 0 when the cell is made; other modes are not modelled.
+        """
+        if mode != 0:
+            raise URError(f"time({to_str(mode)}): the twin models time(0) only")
+        sec = math.floor(self.clock)
+        return {"sec": sec, "nanosec": math.floor((self.clock - sec) * 1e9)}
 
     # ---- encoder ----
     def encoder_enable_pulse_decode(self, encoder_index, decoder_type, A, B) -> None:

@@ -12,7 +12,7 @@ holds to, and how sure we are of it (see :mod:`wirecal.gen.urscript.facts`):
 * int op int is an int for ``+ - * %``, ``/`` gives a float, and any float operand makes
   the result a float (*unconfirmed*);
 * lists are indexed from 0 and copied on assignment; an index out of range stops the
-  program (*unconfirmed*);
+  program (*unconfirmed*); a struct (what ``time(0)`` returns) is read by member name;
 * conditions and ``and``/``or``/``xor``/``not`` take booleans only; strings are joined
   with ``str_cat`` (``+`` of strings stops the program); ``str_cat`` writes an int in
   decimal (Script Directory §15.51, as the generator cites it), a float as the shortest
@@ -92,13 +92,17 @@ def to_str(v) -> str:
         return np.format_float_positional(np.float32(v), unique=True, trim="-")
     if isinstance(v, list):
         return "[" + ", ".join(to_str(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "struct(" + ", ".join(f"{k}={to_str(x)}" for k, x in v.items()) + ")"
     if v is None:
         return "nil"
     return str(v)
 
 
 def _copy(v):
-    return [_copy(x) for x in v] if isinstance(v, list) else v
+    if isinstance(v, list):
+        return [_copy(x) for x in v]
+    return dict(v) if isinstance(v, dict) else v
 
 
 class Interpreter:
@@ -310,6 +314,18 @@ class _Compiler:
     def _(self, e: N.Index):
         base, ix = self.expr(e.base), self.expr(e.index)
         return lambda frame: _element(base(frame), ix(frame))
+
+    @expr.register
+    def _(self, e: N.Field):
+        base, name = self.expr(e.base), e.name
+
+        def member(frame):
+            value = base(frame)
+            if not isinstance(value, dict) or name not in value:
+                raise URError(f"{to_str(value)!r} has no member {name}")
+            return value[name]
+
+        return member
 
     @expr.register
     def _(self, e: N.Neg):

@@ -67,6 +67,14 @@ class Index(Expr):
 
 
 @dataclass(slots=True)
+class Field(Expr):
+    """``base.name``: a member of a struct (e.g. ``time(0).sec``)."""
+
+    base: Expr
+    name: str
+
+
+@dataclass(slots=True)
 class Call(Expr):
     """A function call with positional and keyword arguments."""
 

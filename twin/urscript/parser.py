@@ -62,6 +62,7 @@ BUILTINS: dict[str, Builtin] = {
     "textmsg": Builtin(("s1", "s2"), 1),
     "popup": Builtin(("s", "title", "warning", "error", "blocking"), 1),
     "sleep": Builtin(("t",), 1),
+    "time": Builtin(("mode",), 0),
     "str_cat": Builtin(("op1", "op2"), 2),
     "str_len": Builtin(("str",), 1),
     "floor": Builtin(("f",), 1),
@@ -458,6 +459,8 @@ def _operands(e: N.Expr) -> list[N.Expr]:
         return list(e.items)
     if isinstance(e, N.Index):
         return [e.base, e.index]
+    if isinstance(e, N.Field):
+        return [e.base]
     if isinstance(e, N.Call):
         return [*e.args, *e.kwargs.values()]
     if isinstance(e, (N.Neg, N.Not)):
