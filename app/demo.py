@@ -41,7 +41,6 @@ from wirecal.solver.formats.patch import put_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors, truth_text
-from wirecal.solver.formats.ur_calibration import put_ur_calibration
 from wirecal.solver.formats.validation_files import load_setup, read_validation_log
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import check_log
@@ -61,7 +60,7 @@ UR_OUTPUTS = (
     "run.csv",
     "patch.toml",
     "patch.spec.txt",
-    "calibration.conf",
+    "patch.ur_calibration.conf",
     "validation.csv",
     "report.html",
 )
@@ -324,7 +323,6 @@ def _run_ur(
         version=__version__,
         plausibility=verdict.patch_field(),
     )
-    put_ur_calibration(out, folder / "calibration.conf", robot, identified)
     seconds["patch"] = time.perf_counter() - t
     t = step(6, "report")
     out.put(

@@ -52,7 +52,7 @@ def demo(folder, seed, scale, robot, force):
 
     With --robot examples/ur5/robot.toml: the URScript programs for the UR5's plan, run in
     the twin with the log sent over a loopback socket to wirecal receive, identified on
-    the PC, the patch and UR's deltas (calibration.conf), and the wire lengths of a second
+    the PC, the patch and UR's deltas (patch.ur_calibration.conf), and the wire lengths of a second
     run over new points against the nominal and the calibrated model.
     """
     r = run_demo(folder, robot=robot, seed=seed, scale=scale, force=force, progress=click.echo)

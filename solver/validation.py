@@ -25,13 +25,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver import ik, pose
-from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan, Step
+from wirecal.solver.planner import PlanOptions, move_ok, move_samples
 from wirecal.solver.robot import Robot
-from wirecal.solver.wire_range import MIN_WIRE_MM, RANGE_MARGIN_MM
 
 CONFIGS = (("above", "noflip"), ("above", "flip"), ("below", "noflip"), ("below", "flip"))
 """The four configurations of the configuration-change test, numbered 1–4 in its log."""
@@ -156,41 +155,45 @@ def distance_plan(
     per_step: int = 5,
     spread_deg: float = 40.0,
     seed: int = 0,
-    margin_deg: float = 5.0,
+    options: PlanOptions | None = None,
 ) -> Plan:
     """Design a run of new points for validating wire lengths, shaped like ``plan``.
 
     Same θ0, order and number of steps as ``plan``, each step ``per_step`` points drawn
-    around θ0 (every joint within ±``spread_deg``, ``margin_deg`` inside its limits), kept
-    only where the nominal wire stays clear of the links and between
-    :data:`~wirecal.solver.wire_range.MIN_WIRE_MM` and the encoder's range less
-    :data:`~wirecal.solver.wire_range.RANGE_MARGIN_MM` — also along the move from the
-    previous target. A second run of the measurement program over these points measures
-    wire lengths the calibration never used; the nominal and the calibrated model then
-    predict them (:func:`distance_residuals`). For a controller without Cartesian
-    validation programs (URScript's programs move in joint space only).
+    around θ0 (every joint within ±``spread_deg``, ``options.margin_deg`` inside its
+    limits). A point is kept when the planner's rules hold for the move to it from the
+    previous target (:func:`~wirecal.solver.planner.move_ok`: the wire clear of the links,
+    joint 6 turning at most 180°) and its nominal wire length is within the encoder's
+    range (``options.min_wire_mm`` … range_mm − ``options.range_margin_mm``) along that
+    move. A second run of the measurement program over these points measures wire lengths
+    the calibration never used; the nominal and the calibrated model then predict them
+    (:func:`distance_residuals`). For a controller without Cartesian validation programs
+    (URScript's programs move in joint space only).
     """
+    options = options or PlanOptions()
     rng = np.random.default_rng([seed, 11])
-    lo = robot.joint_min_deg + margin_deg
-    hi = robot.joint_max_deg - margin_deg
+    lo = robot.joint_min_deg + options.margin_deg
+    hi = robot.joint_max_deg - options.margin_deg
     model = robot.nominal
     theta0 = np.asarray(plan.theta0_deg, dtype=float)
     p0 = tool_position(model, np.radians(theta0)[None])[0]
-    lowest, highest = MIN_WIRE_MM, robot.encoder.range_mm - RANGE_MARGIN_MM
-    steps, previous = [], theta0
+    highest = robot.encoder.range_mm - options.range_margin_mm
+    steps = []
     for step in plan.steps:
         points: list[np.ndarray] = []
+        previous = theta0
         for _ in range(10_000):
             if len(points) == per_step:
                 break
             draw = theta0 + rng.uniform(-spread_deg, spread_deg, theta0.shape)
             q = np.round(np.clip(draw, lo, hi), 2)
-            path = previous + np.linspace(0, 1, 21)[:, None] * (q - previous)
+            path, _ = move_samples(previous, q)
             d = np.linalg.norm(tool_position(model, np.radians(path)) - p0, axis=1)
-            clear = wire_clearance(
-                model, np.radians(q)[None], p0, robot.link_radius_mm, wire_trim_mm(robot)
-            )
-            if d[-1] > lowest and d.max() < highest and clear[0] > 0:
+            if (
+                d[-1] > options.min_wire_mm
+                and d.max() < highest
+                and move_ok(robot, model, p0, previous, q, options)[0]
+            ):
                 points.append(q)
                 previous = q
         if len(points) < per_step:
@@ -199,7 +202,6 @@ def distance_plan(
                 f"±{spread_deg:g}° of θ0: lower the spread"
             )
         steps.append(Step(step.parameter, np.array(points), np.zeros((0, len(theta0)))))
-        previous = theta0
     return Plan(theta0, plan.order, tuple(steps), robot=plan.robot, description="validation")
 
 
