@@ -165,6 +165,12 @@ def compare_controller(
     compare each with the Python reference's estimate (stepwise and joint).
     """
     m = result.measurements
+    if result.robot.controller.language != "vplus":
+        raise WirecalError(
+            f"--method controller runs the generated controller solver in the twin; the "
+            f"{result.robot.controller.language} programs have none (only the V+ module has "
+            "wc.solve): use --method stepwise, joint or all"
+        )
     if result.left_nominal or m.missing:
         raise WirecalError(
             "--method controller needs a complete log (the controller solver "

@@ -154,3 +154,13 @@ def test_fault_wire_slip(ur5, ur5_plan, texts, truth, tmp_path):
     with pytest.raises(WirecalError) as info:
         load_measurements(r.received.journal, ur5_plan, ur5)
     assert "remount at θ0 and repeat from step 4" in info.value.problems[0]
+
+
+def test_no_controller_solver_for_urscript_is_said_plainly(ur5, ur5_plan, texts, truth, tmp_path):
+    from wirecal.app.compare import compare_controller
+
+    r = run(ur5, ur5_plan, texts, truth, tmp_path)
+    result = solve(ur5, ur5_plan, load_measurements(r.log, ur5_plan, ur5))
+    with pytest.raises(WirecalError) as info:
+        compare_controller(result, tmp_path / "ctl")
+    assert "the urscript programs have none" in info.value.problems[0]
