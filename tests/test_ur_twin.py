@@ -164,3 +164,25 @@ def test_no_controller_solver_for_urscript_is_said_plainly(ur5, ur5_plan, texts,
     with pytest.raises(WirecalError) as info:
         compare_controller(result, tmp_path / "ctl")
     assert "the urscript programs have none" in info.value.problems[0]
+
+
+@pytest.mark.parametrize(("inputs", "moves"), [((8, 9), True), ((10, 11), False)])
+def test_wc_check_shows_the_pulled_wire_only_when_decoded(
+    ur5, ur5_plan, texts, tmp_path, inputs, moves
+):
+    from wirecal.twin.ur_cell import URCell
+    from wirecal.twin.urscript.interp import Interpreter
+    from wirecal.twin.urscript.parser import parse_program
+
+    cell = URCell(
+        ur5, {}, ur5_plan.theta0_deg, tmp_path, noise_mm=0.0, pulse_inputs=inputs,
+        pull_mm=lambda t: min(100.0, 10.0 * t),  # 100 mm out over 10 s, then held
+    )  # fmt: skip
+    out = Interpreter(parse_program(texts["wc_check.script"], "wc_check.script"), cell).execute()
+    assert out.status == "completed"
+    last = out.console[-1]  # e.g. "counts 3923   mm 99.9880"
+    mm = float(last.split("mm")[-1])
+    if moves:
+        assert mm == pytest.approx(100.0, abs=0.06)  # ±1 count of jitter, the quantisation
+    else:
+        assert {line.split("mm")[-1].strip() for line in out.console[1:]} == {"0.0000"}

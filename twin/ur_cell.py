@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 import socket
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -59,6 +60,7 @@ class URCell(Cell):
     receiver: tuple[str, int] | None = None  # where the twin routes it (loopback)
     sockets: dict[str, socket.socket] = field(default_factory=dict)
     lines_sent: int = 0
+    pull_mm: Callable[[float], float] | None = None  # the operator pulls the wire (clock, s)
 
     def __post_init__(self):
         """Start the cell; no encoder is decoded until a program enables it."""
@@ -114,6 +116,11 @@ class URCell(Cell):
             and setup[0] == 1
             and {setup[1], setup[2]} == set(self.pulse_inputs)
         )
+
+    def wire_counts(self) -> int:
+        """Return the wire's count (the cell's), plus the wire the operator pulls out now."""
+        pulled = self.pull_mm(self.clock) if self.pull_mm is not None else 0.0
+        return super().wire_counts() + round(pulled / self.robot.encoder.mm_per_count)
 
     def encoder_get_tick_count(self, encoder_index, opt=""):
         """Return the filtered count (float, wraps at 2^16) or with opt="raw" the int32 count."""

@@ -35,27 +35,23 @@ from wirecal.twin.urscript import nodes as N
 
 @dataclass(frozen=True)
 class Builtin:
-    """A URScript function the twin knows: its parameters, how many are required, its source.
+    """A URScript function the twin knows: its parameters and how many are required.
 
-    ``confirmed`` names the Universal Robots page the signature was read on, or is empty
-    (see :mod:`wirecal.gen.urscript.facts`).
+    Where each signature was read, and which are confirmed on a Universal Robots page, is
+    :mod:`wirecal.gen.urscript.facts`' table.
     """
 
     params: tuple[str, ...]
     required: int
-    confirmed: str = ""
 
 
-_SM = "Script Manual"
-#: the URScript functions the twin runs (signatures as in the Script Manual where read)
+#: the URScript functions the twin runs
 BUILTINS: dict[str, Builtin] = {
     "movej": Builtin(("q", "a", "v", "t", "r"), 1),
-    "get_actual_joint_positions": Builtin((), 0, f"{_SM} SW10.10"),
+    "get_actual_joint_positions": Builtin((), 0),
     "encoder_enable_pulse_decode": Builtin(("encoder_index", "decoder_type", "A", "B"), 4),
-    "encoder_get_tick_count": Builtin(("encoder_index", "opt"), 1, f"{_SM} SW5.20"),
-    "encoder_unwind_delta_tick_count": Builtin(
-        ("encoder_index", "delta_tick_count"), 2, f"{_SM} SW5.24"
-    ),
+    "encoder_get_tick_count": Builtin(("encoder_index", "opt"), 1),
+    "encoder_unwind_delta_tick_count": Builtin(("encoder_index", "delta_tick_count"), 2),
     "socket_open": Builtin(("address", "port", "socket_name"), 2),
     "socket_send_line": Builtin(("str", "socket_name"), 1),
     "socket_close": Builtin(("socket_name",), 0),
