@@ -293,3 +293,19 @@ def test_time_is_a_struct_of_the_cells_clock(ur5, tmp_path):
     assert out.console == ["2,250000000"]
     assert out.status == "error"
     assert "has no member msec" in out.message
+
+
+def test_lint_dispatches_on_the_script_extension(tmp_path):
+    from click.testing import CliRunner
+
+    from wirecal.cli.main import main
+
+    good, bad = tmp_path / "good.script", tmp_path / "bad.script"
+    good.write_text(program("textmsg('hi')  # single quotes too"))
+    bad.write_text(program("textmsg(hi)"))
+    ok = CliRunner().invoke(main, ["lint", str(good)])
+    assert ok.exit_code == 0
+    assert "URScript, 1 function, no problems" in ok.output
+    nok = CliRunner().invoke(main, ["lint", str(good), str(bad)])
+    assert nok.exit_code == 1
+    assert f"{bad}:2: variable hi is read but never assigned" in nok.output
