@@ -14,12 +14,10 @@ holds to, and how sure we are of it (see :mod:`wirecal.gen.urscript.facts`):
 * lists are indexed from 0 and copied on assignment; an index out of range stops the
   program (*unconfirmed*); a struct (what ``time(0)`` returns) is read by member name;
 * conditions and ``and``/``or``/``xor``/``not`` take booleans only; strings are joined
-  with ``str_cat`` (``+`` of strings stops the program); ``str_cat`` writes an int in
-  decimal (Script Directory §15.51, as the generator cites it), a float as the shortest
-  decimal that reads back to the same single-precision value and a boolean as True/False
-  (*unconfirmed*: the controller's float format — the generated programs write every
-  number through ints so that no log value depends on it); ``floor`` returns an int
-  (§16.9);
+  with ``str_cat``, which writes an int as its digits and a float with 6 decimals (SD
+  15.51, *confirmed* — see :mod:`wirecal.gen.urscript.facts` for the sources); ``+`` of
+  strings stops the program and a boolean is written True/False (*unconfirmed*);
+  ``floor`` returns an int (SD 16.9, *confirmed*);
 * scope: a variable assigned in the program's own body is global, as is one qualified
   ``global``; inside a function a parameter or a ``local`` variable is local, and a free
   variable is the global of that name if there is one, else local (*unconfirmed*: the
@@ -36,8 +34,6 @@ import math
 from collections import Counter
 from collections.abc import Callable
 from functools import singledispatchmethod
-
-import numpy as np
 
 from wirecal.twin.machine import Halt, Outcome, RunError, Stopped, f32
 from wirecal.twin.urscript import nodes as N
@@ -89,7 +85,7 @@ def to_str(v) -> str:
     if isinstance(v, int):
         return str(v)
     if isinstance(v, float):
-        return np.format_float_positional(np.float32(v), unique=True, trim="-")
+        return f"{v:.6f}"
     if isinstance(v, list):
         return "[" + ", ".join(to_str(x) for x in v) + "]"
     if isinstance(v, dict):
