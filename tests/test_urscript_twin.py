@@ -309,3 +309,17 @@ def test_lint_dispatches_on_the_script_extension(tmp_path):
     nok = CliRunner().invoke(main, ["lint", str(good), str(bad)])
     assert nok.exit_code == 1
     assert f"{bad}:2: variable hi is read but never assigned" in nok.output
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        ("encoder_enable_pulse_decode(2, 1, 8, 9)", "encoder index 2: must be 0 or 1"),
+        ("encoder_enable_pulse_decode(0, 5, 8, 9)", "decoder_type 5: must be 0 to 4"),
+        ("encoder_enable_pulse_decode(0, 1, 0, 1)", "encoder input A = 0: must be 8 to 11"),
+    ],
+)
+def test_pulse_decoder_arguments_are_checked(ur5, tmp_path, call, message):
+    out = run_on(cell_for(ur5, tmp_path), call)
+    assert out.status == "error"
+    assert out.message == message

@@ -4,28 +4,34 @@
 robot within its limits, the draw-wire encoder's physics, unmodelled errors, faults, the
 clock), reached through the URScript functions the generated programs call:
 
-* ``movej(q, a, v, t, r)``: q in rad; the move takes the time of a trapezoidal profile of
-  the leading joint (speed v rad/s, acceleration a rad/s²; ``t`` > 0 sets it), plus no
-  settling (the programs sleep for that). A target beyond a joint limit stops the program
-  (the controller's own message was not read: *unconfirmed*);
+* ``movej(q, a, v, t, r)``: q in rad, a rad/s², v rad/s of the leading axis (SD 14.22);
+  the move takes the time of the leading joint's trapezoidal profile (``t`` > 0 sets it)
+  and no settling (the programs sleep for that). A target beyond a joint limit stops the
+  program (the controller's own message was not read: *unconfirmed*);
 * ``get_actual_joint_positions()``: the commanded joints in rad (joint encoders do not see
   the unmodelled errors; the wire does);
-* the encoder: ``encoder_enable_pulse_decode(i, 1, A, B)`` starts quadrature decoding when
-  A, B are the inputs the wire's encoder is wired to (``pulse_inputs``); without it the
-  count never changes (it reads 0: *unconfirmed*). ``encoder_get_tick_count(i)`` is the
-  filtered count, a float in [0; 65536[ that wraps, ``opt="raw"`` the int32 count
-  (Script Manual SW5.20, confirmed); the filter's dynamics are not modelled.
-  ``encoder_unwind_delta_tick_count`` unwinds a delta over half of 2^16 (SW5.24) and is
-  nil for an encoder not enabled (third-party copy of the manual text: *unconfirmed*);
+* the encoder: ``encoder_enable_pulse_decode(i, 1, A, B)`` (SD 14.2: index 0 or 1,
+  decoder types 0–4, inputs 8–11) starts quadrature decoding when A, B are the inputs the
+  wire's encoder is wired to (``pulse_inputs``); otherwise the count never changes (it
+  reads 0: *unconfirmed*). ``encoder_get_tick_count(i)`` is the filtered count, a float in
+  [0; 65536[ that wraps, ``opt="raw"`` the int32 count (SW5.20); the filter's dynamics
+  are not modelled. ``encoder_unwind_delta_tick_count`` unwinds a delta over half of 2^16
+  (SW5.24) and is nil for an encoder not enabled (a third-party copy of the manual's
+  text: *unconfirmed*). ``pull_mm`` lets an operator pull the wire out by hand
+  (``wc_check``);
 * sockets: ``socket_open`` opens a real TCP connection (2 s timeout) — the program's PC
   address is routed to ``receiver`` on loopback, where ``wirecal receive`` listens — and
-  returns True or False; ``socket_send_line`` sends the line and a newline and returns
-  True, or False once the connection is gone; the controller closes a program's sockets
-  when it ends (*unconfirmed*). A fault can drop the connection after N lines;
-* ``textmsg`` and ``popup`` write to the log tab (the console); the operator answers a
-  blocking popup with Continue, except a warning or error popup, at which they stop the
-  program (``proceed_on_pause`` to continue instead); ``sleep`` advances the clock and
-  ``time(0)`` reads it.
+  returns True or False (SD 17.55); ``socket_send_line`` sends the line and a newline and
+  returns whether it was sent (SD 17.63); the controller closes a program's sockets when
+  it ends (*unconfirmed*). A fault drops the connection after N lines;
+* ``textmsg`` and ``popup`` write to the log tab (the console). A blocking popup suspends
+  the program until Continue is pressed (SD 15.35); the twin's operator presses it, except
+  at a warning or error popup, where they stop the program (``proceed_on_pause`` to
+  continue instead). ``sleep`` advances the clock and ``time(0)`` reads it (SD 15.48,
+  15.49).
+
+Sections of the e-Series Script Directory (SD) and Script Manual pages (SW…): see
+:mod:`wirecal.gen.urscript.facts`.
 """
 
 from __future__ import annotations
@@ -102,8 +108,13 @@ class URCell(Cell):
 
     # ---- encoder ----
     def encoder_enable_pulse_decode(self, encoder_index, decoder_type, A, B) -> None:
-        """Decode the pulses on inputs A, B as encoder ``encoder_index``."""
+        """Decode the pulses on inputs A, B as encoder ``encoder_index`` (SD 14.2)."""
         self._index(encoder_index)
+        if decoder_type not in range(5) or isinstance(decoder_type, bool):
+            raise URError(f"decoder_type {to_str(decoder_type)}: must be 0 to 4")
+        for name, pin in (("A", A), ("B", B)):
+            if pin not in range(8, 12) or isinstance(pin, bool):
+                raise URError(f"encoder input {name} = {to_str(pin)}: must be 8 to 11")
         self.decoding[encoder_index] = (decoder_type, A, B)
 
     def _decoded(self, encoder_index) -> bool:
