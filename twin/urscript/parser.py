@@ -262,6 +262,7 @@ def _nest(steps: list[N.Stmt], source: str, problems: list[str]):
     """Assemble the line statements into blocks; the one top-level def is the program."""
     root: list[N.Stmt] = []
     stack: list[tuple[N.Stmt, list[N.Stmt]]] = []  # open block and the list it fills
+    with_else: set[int] = set()  # ids of the If blocks whose else line has come
     target = root
     for s in steps:
         where = f"{source}:{s.line}"
@@ -271,11 +272,16 @@ def _nest(steps: list[N.Stmt], source: str, problems: list[str]):
             stack.append((block, target))
             target = _first_body(block)
         elif isinstance(s, (N.ElifLine, N.ElseLine)):
-            if not stack or not isinstance(stack[-1][0], N.If) or stack[-1][0].orelse_started:
+            block = stack[-1][0] if stack else None
+            if not isinstance(block, N.If) or id(block) in with_else:
                 problems.append(f"{where}: '{_word(s)}' without an open 'if'")
                 continue
-            block = stack[-1][0]
-            target = block.add_branch(s)
+            if isinstance(s, N.ElseLine):
+                with_else.add(id(block))
+                target = block.orelse
+            else:
+                target = []
+                block.branches.append((s.cond, target))
         elif isinstance(s, N.EndLine):
             if not stack:
                 problems.append(f"{where}: 'end' without an open block")
@@ -293,28 +299,13 @@ def _nest(steps: list[N.Stmt], source: str, problems: list[str]):
     return Program(source, main.name, main.body, _functions(main, source, problems))
 
 
-class _IfBuilder(N.If):
-    """An If block being assembled: its branches grow as elif/else lines arrive."""
-
-    __slots__ = ("orelse_started",)
-
-    def add_branch(self, s: N.ElifLine | N.ElseLine) -> list[N.Stmt]:
-        if isinstance(s, N.ElseLine):
-            self.orelse_started = True
-            return self.orelse
-        body: list[N.Stmt] = []
-        self.branches.append((s.cond, body))
-        return body
-
-
 def _open(s: N.Stmt) -> N.Stmt:
     if isinstance(s, N.DefStart):
         return N.Def(s.name, s.params, [], line=s.line)
     if isinstance(s, N.WhileStart):
         return N.While(s.cond, [], line=s.line)
-    block = _IfBuilder([(s.cond, [])], [], line=s.line)
-    block.orelse_started = False
-    return block
+    assert isinstance(s, N.IfStart)
+    return N.If([(s.cond, [])], [], line=s.line)
 
 
 def _first_body(block: N.Stmt) -> list[N.Stmt]:
