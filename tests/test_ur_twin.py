@@ -198,3 +198,21 @@ def test_the_whole_log_tab_pasted_is_a_log(ur5, ur5_plan, texts, truth, tmp_path
     r = run(ur5, ur5_plan, texts, truth, tmp_path)
     m = check_log(parse_log("\n".join(r.programs.run.console), "<log tab>"), ur5_plan, ur5)
     assert m.complete
+
+
+def test_cli_simulate_controller_runs_the_urscript_programs(tmp_path):
+    from click.testing import CliRunner
+
+    from wirecal.cli.main import main
+
+    log = tmp_path / "run.csv"
+    args = ["simulate", "examples/ur5/robot.toml", "examples/ur5/plan.toml", "-o", str(log)]
+    r = CliRunner().invoke(
+        main, [*args, "--random", "1", "--seed", "4", "--controller", "--slip", "4:0.5"]
+    )
+    assert r.exit_code == 1, r.output
+    assert "the controller program stopped: The zero reading at theta0 moved" in r.output
+    assert "at step 5 zero reading at theta0 (stopped in wc_run line" in r.output
+    text = log.read_text()
+    assert text.startswith("# wirecal-log 2\n# robot: Universal Robots UR5\n")
+    assert text.splitlines()[-1].startswith("zero,5,0,")  # the rows up to the stop
