@@ -25,7 +25,8 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.solve import SolveResult
 from wirecal.twin.cell import Cell
-from wirecal.twin.vplus.interp import Interpreter, f32
+from wirecal.twin.machine import f32
+from wirecal.twin.vplus.interp import Interpreter
 from wirecal.twin.vplus.parser import parse_module
 
 
@@ -164,6 +165,12 @@ def compare_controller(
     compare each with the Python reference's estimate (stepwise and joint).
     """
     m = result.measurements
+    if result.robot.controller.language != "vplus":
+        raise WirecalError(
+            f"--method controller runs the generated controller solver in the twin; the "
+            f"{result.robot.controller.language} programs have none (only the V+ module has "
+            "wc.solve): use --method stepwise, joint or all"
+        )
     if result.left_nominal or m.missing:
         raise WirecalError(
             "--method controller needs a complete log (the controller solver "

@@ -1,10 +1,19 @@
-"""``wirecal demo``: the whole chain on the built-in Viper s650, in the digital twin.
+"""``wirecal demo``: the whole chain on a shipped robot, in the digital twin.
 
-Generate the V+ module (calibration and validation programs) for the paper's corrected
-plan; run it on a twin robot with random true errors; identify the parameters on the PC
-and with the controller solver; write the patch; run both validation procedures before
-and after calibration (the controller believing the patch), with unmodelled errors on;
-write the report. Every output goes to one folder and none is overwritten unless asked.
+The Viper s650 (V+, the default): generate the V+ module (calibration and validation
+programs) for the paper's corrected plan; run it on a twin robot with random true errors;
+identify the parameters on the PC and with the controller solver; write the patch; run
+both validation procedures before and after calibration (the controller believing the
+patch), with unmodelled errors on; write the report.
+
+The UR5 (URScript, ``robot=examples/ur5/robot.toml``): generate the ``.script`` programs for
+the shipped plan; run wc_mount and wc_run on a twin UR whose log travels over a loopback
+socket to ``wirecal receive``; identify on the PC; write the patch and UR's deltas; run
+the measurement program again over new points (unmodelled errors on) and compare the wire
+lengths with those the nominal and the calibrated model predict; write the report. (The
+URScript backend generates no controller solver and no Cartesian validation programs.)
+
+Every output goes to one folder and none is overwritten unless asked.
 """
 
 from __future__ import annotations
@@ -21,7 +30,8 @@ import numpy as np
 from wirecal import __version__
 from wirecal.app.compare import compare_controller
 from wirecal.app.report import Validation, render_report
-from wirecal.app.twin_runs import measure_in_twin
+from wirecal.app.twin_runs import measure_in_twin, measure_ur_in_twin
+from wirecal.gen.urscript.program import scripts
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.accuracy import workspace
 from wirecal.solver.errors import WirecalError
@@ -34,11 +44,26 @@ from wirecal.solver.formats.truth import random_errors, truth_text
 from wirecal.solver.formats.validation_files import load_setup, read_validation_log
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import check_log
+from wirecal.solver.plan import Plan
 from wirecal.solver.plausibility import gate
+from wirecal.solver.robot import Robot
 from wirecal.solver.solve import solve
-from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
-from wirecal.twin.cell import run_validation
+from wirecal.solver.validation import distance_plan, distance_residuals
+from wirecal.solver.validation_analysis import Stats, config_discrepancy, plane_residuals
+from wirecal.twin.cell import Unmodelled, run_validation
 
+UR_OUTPUTS = (
+    "truth.toml",
+    "wc_mount.script",
+    "wc_check.script",
+    "wc_run.script",
+    "run.csv",
+    "patch.toml",
+    "patch.spec.txt",
+    "patch.ur_calibration.conf",
+    "validation.csv",
+    "report.html",
+)
 OUTPUTS = (
     "truth.toml",
     "WIRECAL.V2",
@@ -60,8 +85,9 @@ class DemoResult:
     folder: Path
     validations: list[Validation]
     tool_error_mm: dict[str, float]  # mean over the workspace: before, after
-    controller_difference: float
+    controller_difference: float | None  # None: the language has no controller solver
     seconds: dict[str, float]
+    outputs: tuple[str, ...] = OUTPUTS
 
 
 def example_files(robot: str = "viper_s650") -> dict[str, Path]:
@@ -79,13 +105,29 @@ def example_files(robot: str = "viper_s650") -> dict[str, Path]:
 def run_demo(
     folder: str | Path,
     *,
+    robot: str | Path | None = None,
     seed: int = 1,
     scale: float = 1.0,
     force: bool = False,
     progress: Callable[[str], None] = lambda s: None,
 ) -> DemoResult:
-    """Run the demo into ``folder``: every output written, or none (``force`` to replace)."""
+    """Run the demo into ``folder``: every output written, or none (``force`` to replace).
+
+    ``robot``: the Viper s650 when not given; a URScript robot file (the UR5's) runs the
+    URScript chain with the plan beside it (``plan.toml``).
+    """
     folder = Path(folder)
+    if robot is not None:
+        rb = load_robot(robot)
+        if rb.controller.language != "urscript":
+            raise WirecalError(
+                f"{robot}: the demo runs the Viper s650 (give no --robot) or a URScript robot"
+            )
+        plan = Path(robot).with_name("plan.toml")
+        if not plan.is_file():
+            raise WirecalError(f"{robot}: no plan.toml beside it; design one with wirecal plan")
+        with Outputs([folder / n for n in UR_OUTPUTS], force=force, folder=folder) as out:
+            return _run_ur(out, folder, rb, load_plan(plan, rb), seed, scale, progress)
     with Outputs([folder / n for n in OUTPUTS], force=force, folder=folder) as out:
         return _run(out, folder, seed, scale, progress)
 
@@ -198,10 +240,106 @@ def _run(
         plausibility=verdict.patch_field(),
     )
     out.put(folder / "report.html", html)
+    return DemoResult(
+        folder,
+        validations,
+        _tool_errors(robot, truth, identified),
+        controller.polished_max_difference,
+        seconds,
+    )
+
+
+def _run_ur(
+    out: Outputs,
+    folder: Path,
+    robot: Robot,
+    plan: Plan,
+    seed: int,
+    scale: float,
+    progress: Callable[[str], None],
+) -> DemoResult:
+    """Do the URScript demo's work (module docstring); every output goes into ``out``."""
+    seconds: dict[str, float] = {}
+    truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
+
+    def step(n, text):
+        progress(f"[{n}/6] {text} …")
+        return time.perf_counter()
+
+    t = step(1, "generating the URScript programs (wc_mount, wc_check, wc_run)")
+    texts = scripts(robot, plan)
+    seconds["generate"] = time.perf_counter() - t
+    with tempfile.TemporaryDirectory() as tmp:
+        disk = Path(tmp)
+        t = step(2, "measurement run in the digital twin (wc_mount, wc_run → wirecal receive)")
+        run = measure_ur_in_twin(robot, plan, truth, disk / "cal", texts=texts, seed=seed)
+        if run.programs.run is None or run.programs.run.status != "completed":
+            raise WirecalError(f"the twin's measurement run stopped: {run.programs.run}")
+        if not run.received.complete:
+            raise WirecalError(f"wirecal receive got no complete log: {run.received.stopped}")
+        seconds["measure"] = time.perf_counter() - t
+        log_text = run.log.read_text(encoding="ascii")
+        out.put(folder / "run.csv", log_text)
+        log = replace(read_log(run.log), source=str(folder / "run.csv"))
+        t = step(3, "identification on the PC (step-by-step and joint)")
+        m = check_log(log, plan, robot)
+        result = solve(robot, plan, m)
+        verdict = gate(result, result.recommended)
+        identified = result.estimates[result.recommended].as_dict()
+        seconds["solve"] = time.perf_counter() - t
+        t = step(4, "validation: the run again over new points, with unmodelled errors")
+        vplan = distance_plan(robot, plan, seed=seed)
+        check = measure_ur_in_twin(
+            robot,
+            vplan,
+            truth,
+            disk / "val",
+            texts=scripts(robot, vplan),
+            seed=seed + 7,
+            unmodelled=Unmodelled(),
+        )
+        if not check.received.complete:
+            raise WirecalError(f"the twin's validation run stopped: {check.programs.run}")
+        vm = check_log(read_log(check.log), vplan, robot)
+        validation = Validation(
+            "distance",
+            Stats.of(distance_residuals(robot, vm, {})),
+            Stats.of(distance_residuals(robot, vm, identified)),
+        )
+        out.put(folder / "validation.csv", check.log.read_text(encoding="ascii"))
+        seconds["validate"] = time.perf_counter() - t
+    t = step(5, "patch and Universal Robots' deltas")
+    out.put(folder / "truth.toml", truth_text(robot, truth, seed))
+    for name, text in texts.items():
+        out.put(folder / name, text)
+    put_patch(
+        out,
+        folder / "patch.toml",
+        robot,
+        result.estimates[result.recommended],
+        plan_fingerprint=plan.fingerprint(),
+        log_path="run.csv",
+        log_sha256=m.sha256,
+        version=__version__,
+        plausibility=verdict.patch_field(),
+    )
+    seconds["patch"] = time.perf_counter() - t
+    t = step(6, "report")
+    out.put(
+        folder / "report.html",
+        render_report(result, [validation], None, truth, plausibility=verdict.patch_field()),
+    )
+    seconds["report"] = time.perf_counter() - t
+    return DemoResult(
+        folder, [validation], _tool_errors(robot, truth, identified), None, seconds, UR_OUTPUTS
+    )
+
+
+def _tool_errors(robot: Robot, truth: dict[str, float], identified: dict[str, float]):
+    """Return the mean tool-point error against the truth over the workspace, before/after."""
     q = workspace(robot)
     true_p = tool_position(robot.model(truth), q)
-    errors = {
+    return {
         name: float(np.linalg.norm(tool_position(robot.model(believed), q) - true_p, axis=1).mean())
         for name, believed in (("before", {}), ("after", identified))
     }
-    return DemoResult(folder, validations, errors, controller.polished_max_difference, seconds)

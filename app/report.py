@@ -30,13 +30,50 @@ if TYPE_CHECKING:
 BEFORE, AFTER = "#d1495b", "#2e86ab"
 
 
+KINDS = {
+    "configuration": (
+        "configuration change (§3.6.1)",
+        "Maximum discrepancy among configurations (mm)",
+        "Maximum discrepancy among the wire lengths at one pose in four configurations "
+        "(paper Fig. 6).",
+    ),
+    "plane": (
+        "plane fit (§3.6.2)",
+        "Residuals of the plane fit (mm)",
+        "Residuals of the plane fitted to the probed points (paper Fig. 7).",
+    ),
+    "distance": (
+        "wire lengths at new points",
+        "|measured − predicted wire length| (mm)",
+        "Wire lengths measured in a second run at points not used for calibration, against "
+        "those the nominal (before) and the calibrated (after) model predict.",
+    ),
+}
+"""Validation procedures: their name, histogram axis and caption in the report."""
+
+
 @dataclass(frozen=True)
 class Validation:
     """Before/after statistics of one validation procedure."""
 
-    kind: str  # "configuration" or "plane"
+    kind: str  # a key of KINDS
     before: Stats
     after: Stats
+
+    @property
+    def title(self) -> str:
+        """Return the procedure's name in the report's table."""
+        return KINDS[self.kind][0]
+
+    @property
+    def axis(self) -> str:
+        """Return the histogram's x label."""
+        return KINDS[self.kind][1]
+
+    @property
+    def caption(self) -> str:
+        """Return the histogram's caption."""
+        return KINDS[self.kind][2]
 
     @property
     def reduction(self) -> dict[str, float | None]:
@@ -114,11 +151,7 @@ def histogram_figure(v: Validation) -> str:
             alpha=0.75,
             label=f"{name} calibration: mean = {s.mean:.3f} mm, std = {s.std:.3f} mm",
         )
-    ax.set_xlabel(
-        "Maximum discrepancy among configurations (mm)"
-        if v.kind == "configuration"
-        else "Residuals of the plane fit (mm)"
-    )
+    ax.set_xlabel(v.axis)
     ax.set_ylabel("Number of measurements")
     ax.legend()
     ax.grid(alpha=0.3)

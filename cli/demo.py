@@ -1,10 +1,10 @@
-"""``wirecal demo``: the whole chain on the built-in Viper s650 in the digital twin."""
+"""``wirecal demo``: the whole chain on the built-in Viper s650 (or the UR5) in the twin."""
 
 from __future__ import annotations
 
 import click
 
-from wirecal.app.demo import OUTPUTS, run_demo
+from wirecal.app.demo import run_demo
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, SEED
 
@@ -33,25 +33,33 @@ from wirecal.cli.options import NON_NEGATIVE, SEED
     show_default=True,
     help="True errors are drawn within ±SCALE deg/mm.",
 )
+@click.option(
+    "--robot",
+    type=click.Path(dir_okay=False, exists=True),
+    default=None,
+    help="A URScript robot file with its plan.toml beside it (examples/ur5/robot.toml): "
+    "the URScript chain. Default: the Viper s650 (V+).",
+)
 @click.option("--force", is_flag=True, help="Replace the outputs of an earlier demo.")
 @user_errors
-def demo(folder, seed, scale, force):
+def demo(folder, seed, scale, robot, force):
     """Calibrate a simulated Viper s650 end to end, before and after, in about a minute.
 
     Generates the V+ module for the paper's (corrected) plan, runs it in the digital twin
     on a robot with random true errors, identifies the parameters on the PC and with the
     controller solver, writes the patch, runs both of the paper's validation procedures
     before and after calibration (with unmodelled errors on), and writes report.html.
+
+    With --robot examples/ur5/robot.toml: the URScript programs for the UR5's plan, run in
+    the twin with the log sent over a loopback socket to wirecal receive, identified on
+    the PC, the patch and UR's deltas (patch.ur_calibration.conf), and the wire lengths of a second
+    run over new points against the nominal and the calibrated model.
     """
-    r = run_demo(folder, seed=seed, scale=scale, force=force, progress=click.echo)
+    r = run_demo(folder, robot=robot, seed=seed, scale=scale, force=force, progress=click.echo)
     click.echo("")
     click.echo(f"{'':<38}{'before':>10}{'after':>10}{'reduction':>11}")
     for v in r.validations:
-        name = (
-            "configuration discrepancy, mean (mm)"
-            if v.kind == "configuration"
-            else "plane-fit residual, mean (mm)"
-        )
+        name = _NAMES[v.kind]
         click.echo(
             f"{name:<38}{v.before.mean:10.4f}{v.after.mean:10.4f}{100 * v.reduction['mean']:10.0f}%"
         )
@@ -60,8 +68,17 @@ def demo(folder, seed, scale, force):
         f"{'tool-point error vs truth, mean (mm)':<38}{tb:10.4f}{ta:10.4f}"
         f"{100 * (1 - ta / tb):10.0f}%"
     )
-    click.echo(
-        f"controller solver vs PC: {r.controller_difference:.1e} deg/mm; "
-        f"total {sum(r.seconds.values()):.0f} s"
+    ctl = (
+        "no controller solver for this language"
+        if r.controller_difference is None
+        else f"controller solver vs PC: {r.controller_difference:.1e} deg/mm"
     )
-    click.echo(f"files in {r.folder}/: " + ", ".join(OUTPUTS))
+    click.echo(f"{ctl}; total {sum(r.seconds.values()):.0f} s")
+    click.echo(f"files in {r.folder}/: " + ", ".join(r.outputs))
+
+
+_NAMES = {
+    "configuration": "configuration discrepancy, mean (mm)",
+    "plane": "plane-fit residual, mean (mm)",
+    "distance": "wire length at new points, mean (mm)",
+}

@@ -217,35 +217,42 @@ def simulate(
 
 
 def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
-    """wc.mount and wc.run in the digital twin; the log text and why it stopped, if so."""
-    from wirecal.app.twin_runs import measure_in_twin  # the twin only when asked for
-    from wirecal.gen.vplus.program import GenOptions
-    from wirecal.twin.cell import Faults as TwinFaults
+    """Run the measurement programs in the twin; return the log text and why they stopped.
+
+    V+: wc.mount and wc.run write the log on the cell's disk. URScript: wc_mount and wc_run
+    send it over a loopback socket to wirecal receive (the journal of an incomplete run).
+    """
+    from wirecal.twin.cell import Faults as TwinFaults  # the twin only when asked for
     from wirecal.twin.cell import move_of_step, where_in_run
 
     faults = TwinFaults()
     if slip is not None:
         faults = TwinFaults(slip_at_move=move_of_step(pl, slip[0]), slip_mm=slip[1])
+    run = RunParameters(readings=samples)
+    kw = dict(seed=seed, noise_mm=noise_mm, counter_start=counter_start, faults=faults)
     with tempfile.TemporaryDirectory() as tmp:
-        result = measure_in_twin(
-            rb,
-            pl,
-            errors,
-            Path(tmp),
-            seed=seed,
-            noise_mm=noise_mm,
-            counter_start=counter_start,
-            faults=faults,
-            options=GenOptions(run=RunParameters(readings=samples)),
-        )
-        text = result.log.read_text(encoding="ascii") if result.log.exists() else ""
-    outcome = result.run or result.mount
+        if rb.controller.language == "urscript":
+            from wirecal.app.twin_runs import measure_ur_in_twin
+            from wirecal.gen.urscript.program import UrOptions
+
+            ur = measure_ur_in_twin(rb, pl, errors, Path(tmp), options=UrOptions(run=run), **kw)
+            mount, outcome, cell = ur.programs.mount, ur.programs.run, ur.programs.cell
+            log, first = ur.log, "wc_mount"
+        else:
+            from wirecal.app.twin_runs import measure_in_twin
+            from wirecal.gen.vplus.program import GenOptions
+
+            vp = measure_in_twin(rb, pl, errors, Path(tmp), options=GenOptions(run=run), **kw)
+            mount, outcome, cell = vp.mount, vp.run, vp.cell
+            log, first = vp.log, "wc.mount"
+        text = log.read_text(encoding="ascii") if log.exists() else ""
+    outcome = outcome or mount
     stopped = None
     if outcome.status != "completed":
-        where = where_in_run(pl, result.cell.moves) if result.run else "wc.mount"
+        where = where_in_run(pl, cell.moves) if outcome is not mount else first
         stopped = (
             f"{outcome.message} at {where} ({outcome.status} in {outcome.program} line "
-            f"{outcome.line}): " + " / ".join(result.cell.console[-4:])
+            f"{outcome.line}): " + " / ".join(cell.console[-4:])
         )
     return text, stopped
 

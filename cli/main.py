@@ -136,7 +136,11 @@ for _name, _target, _summary in (
         "wirecal.cli.urdf:import_urdf",
         "Write a robot file in Craig's modified DH from a URDF's chain BASE → TIP.",
     ),
-    ("lint", "wirecal.cli.lint:lint", "Check V+ program files as a controller's LOAD would."),
+    (
+        "lint",
+        "wirecal.cli.lint:lint",
+        "Check V+ program files as a controller's LOAD would, and URScript (.script) files.",
+    ),
     (
         "observe",
         "wirecal.cli.psi:observe",

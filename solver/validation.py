@@ -1,7 +1,8 @@
-"""The paper's two validation procedures (§3.6): the design of their runs.
+"""The paper's two validation procedures (§3.6), and a third of wire lengths: their design.
 
 The paper's two validation procedures (§3.6): the design of their runs, and their
-analyses.
+analyses; and wire lengths at new points (:func:`distance_plan`), for controllers whose
+programs move in joint space only.
 
 * Configuration change (§3.6.1): poses across the workspace, each reached in the four
   configurations above/below × noflip/flip (the shoulder kept); the draw-wire encoder sits
@@ -26,6 +27,9 @@ import numpy as np
 from wirecal.solver import ik, pose
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import tool_position
+from wirecal.solver.measurements import Measurements
+from wirecal.solver.plan import Plan, Step
+from wirecal.solver.planner import PlanOptions, move_ok, move_samples
 from wirecal.solver.robot import Robot
 
 CONFIGS = (("above", "noflip"), ("above", "flip"), ("below", "noflip"), ("below", "flip"))
@@ -143,3 +147,72 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
 
 
 # ---------- logs ----------
+
+
+def distance_plan(
+    robot: Robot,
+    plan: Plan,
+    per_step: int = 5,
+    spread_deg: float = 40.0,
+    seed: int = 0,
+    options: PlanOptions | None = None,
+) -> Plan:
+    """Design a run of new points for validating wire lengths, shaped like ``plan``.
+
+    Same θ0, order and number of steps as ``plan``, each step ``per_step`` points drawn
+    around θ0 (every joint within ±``spread_deg``, ``options.margin_deg`` inside its
+    limits). A point is kept when the planner's rules hold for the move to it from the
+    previous target (:func:`~wirecal.solver.planner.move_ok`: the wire clear of the links,
+    joint 6 turning at most 180°) and its nominal wire length is within the encoder's
+    range (``options.min_wire_mm`` … range_mm − ``options.range_margin_mm``) along that
+    move. A second run of the measurement program over these points measures wire lengths
+    the calibration never used; the nominal and the calibrated model then predict them
+    (:func:`distance_residuals`). For a controller without Cartesian validation programs
+    (URScript's programs move in joint space only).
+    """
+    options = options or PlanOptions()
+    rng = np.random.default_rng([seed, 11])
+    lo = robot.joint_min_deg + options.margin_deg
+    hi = robot.joint_max_deg - options.margin_deg
+    model = robot.nominal
+    theta0 = np.asarray(plan.theta0_deg, dtype=float)
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    highest = robot.encoder.range_mm - options.range_margin_mm
+    steps = []
+    for step in plan.steps:
+        points: list[np.ndarray] = []
+        previous = theta0
+        for _ in range(10_000):
+            if len(points) == per_step:
+                break
+            draw = theta0 + rng.uniform(-spread_deg, spread_deg, theta0.shape)
+            q = np.round(np.clip(draw, lo, hi), 2)
+            path, _ = move_samples(previous, q)
+            d = np.linalg.norm(tool_position(model, np.radians(path)) - p0, axis=1)
+            if (
+                d[-1] > options.min_wire_mm
+                and d.max() < highest
+                and move_ok(robot, model, p0, previous, q, options)[0]
+            ):
+                points.append(q)
+                previous = q
+        if len(points) < per_step:
+            raise WirecalError(
+                f"no {per_step} validation points for step {step.parameter} within "
+                f"±{spread_deg:g}° of θ0: lower the spread"
+            )
+        steps.append(Step(step.parameter, np.array(points), np.zeros((0, len(theta0)))))
+    return Plan(theta0, plan.order, tuple(steps), robot=plan.robot, description="validation")
+
+
+def distance_residuals(robot: Robot, m: Measurements, offsets: dict[str, float]) -> np.ndarray:
+    """Return |measured − predicted| wire lengths (mm) of a run, for a model of the robot.
+
+    Predicted by the model ``offsets`` give (nominal: {}) from the logged joints: the
+    distance between the tool point at each point and at θ0 (the first zero reading's
+    joints), as the encoder sits there.
+    """
+    model = robot.model(offsets)
+    p = tool_position(model, np.radians(m.joints_deg))
+    p0 = tool_position(model, np.radians(m.theta0_deg)[None])[0]
+    return np.abs(m.distance_mm - np.linalg.norm(p - p0, axis=1))

@@ -27,7 +27,8 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import move_time_s
 from wirecal.solver.simulate import RANGE_EXCEEDED
-from wirecal.twin.vplus.interp import UNMODELLED, Interpreter, Outcome, Trans, VError, f32
+from wirecal.twin.machine import Outcome, RunError, f32
+from wirecal.twin.vplus.interp import UNMODELLED, Interpreter, Trans, VError
 from wirecal.twin.vplus.parser import parse_module
 
 ERRORS = {
@@ -54,6 +55,7 @@ class Faults:
     vibration_at_move: int | None = None  # readings after this move jitter ±vibration
     vibration_counts: int = 20
     joint_max_deg: tuple[float, ...] | None = None  # the controller's own limits
+    socket_drops_after_lines: int | None = None  # URScript: the connection to the PC drops
 
 
 @dataclass(frozen=True)
@@ -206,12 +208,22 @@ class Cell:
             self.tools_at_cartesian.add(self.tool)
             target = self._joints_for(target)
         q = np.asarray(target, dtype=float)
-        lo, hi = self.limits.joint_min_deg, self.limits.joint_max_deg
-        for j in np.flatnonzero((q < lo) | (q > hi)):
+        j = self.beyond_limits(q)
+        if j is not None:
             raise VError(-1004, f"*Joint {j + 1} out of range* ({q[j]:g} deg)")
-        self.clock += move_time_s(self.robot.joint_speed_deg_s, self.joints, q, self.speed_pct)
-        self.joints = tuple(f32(x) for x in q)
-        self.actual = q + self._unmodelled(q)
+        self.arrive(q, move_time_s(self.robot.joint_speed_deg_s, self.joints, q, self.speed_pct))
+
+    def beyond_limits(self, q_deg: np.ndarray) -> int | None:
+        """Return the index of the first joint beyond the controller's limits, if any."""
+        lo, hi = self.limits.joint_min_deg, self.limits.joint_max_deg
+        out = np.flatnonzero((q_deg < lo) | (q_deg > hi))
+        return int(out[0]) if out.size else None
+
+    def arrive(self, q_deg: np.ndarray, seconds: float) -> None:
+        """End a move at ``q_deg`` after ``seconds``: the clock, the true arm, the faults."""
+        self.clock += seconds
+        self.joints = tuple(f32(x) for x in q_deg)
+        self.actual = q_deg + self._unmodelled(q_deg)
         self.moves += 1
         f = self.faults
         if f.slip_at_move is not None and self.moves == f.slip_at_move:
@@ -281,25 +293,34 @@ class Cell:
         """DEFBELT: name a belt on an encoder channel."""
         self.belts[name] = encoder
 
-    def _counts(self) -> float:
-        self.reads += 1
+    def wire_counts(self) -> int:
+        """Return the encoder's count for the true wire length now, before any wrap.
+
+        Gaussian noise per pose, quantisation, ±1-count jitter (wider while the arm
+        vibrates), a slip; a wire pulled beyond the encoder's range is an error.
+        """
         f = self.faults
-        if f.encoder_fails_at_read is not None and self.reads >= f.encoder_fails_at_read:
-            raise VError(-1013, ERRORS[-1013])
         p = tool_position(self.model, np.radians(self.actual)[None])[0]
         d = float(physical_wire_mm(self.robot.encoder.exit, p - self.p0))
         d += self.pose_error + self.slip
         if d > self.robot.encoder.range_mm:
-            raise VError(
+            raise RunError(
                 -1100,
                 f"{ERRORS[-1100]}: the wire would be {d:.1f} mm long, beyond the "
                 f"encoder's range_mm {self.robot.encoder.range_mm:g}",
             )
-        jitter = float(self.rng.choice((-1, 0, 0, 0, 1)))
+        jitter = int(self.rng.choice((-1, 0, 0, 0, 1)))
         if f.vibration_at_move is not None and self.moves >= f.vibration_at_move:
-            jitter += float(self.rng.integers(-f.vibration_counts, f.vibration_counts + 1))
-        raw = math.floor(self.counter_start + d / self.robot.encoder.mm_per_count + 0.5)
-        return float(self.robot.encoder.counter.wrap(raw + jitter))
+            jitter += int(self.rng.integers(-f.vibration_counts, f.vibration_counts + 1))
+        return math.floor(self.counter_start + d / self.robot.encoder.mm_per_count + 0.5) + jitter
+
+    def _counts(self) -> float:
+        """Return the belt counter: the wire's count on the robot file's wrapping counter."""
+        self.reads += 1
+        f = self.faults
+        if f.encoder_fails_at_read is not None and self.reads >= f.encoder_fails_at_read:
+            raise VError(-1013, ERRORS[-1013])
+        return float(self.robot.encoder.counter.wrap(self.wire_counts()))
 
     def belt(self, name: str, mode: int) -> float:
         """BELT: the counts of a defined belt (the draw-wire encoder)."""

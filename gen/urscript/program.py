@@ -170,3 +170,8 @@ def write_scripts(
         for path, text in zip(paths, programs.values(), strict=True):
             out.put(path, text)
     return paths
+
+
+def pc_address(robot: Robot, opt: UrOptions = UrOptions()) -> tuple[str, int]:
+    """Return where the programs send the log: the PC's (host, port), checked."""
+    return _check(robot, opt)

@@ -19,27 +19,16 @@ the disk, the terminal — goes through a :class:`Cell` (see :mod:`wirecal.twin.
 from __future__ import annotations
 
 import math
-import struct
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from functools import singledispatchmethod
 
 from wirecal.solver import pose
+from wirecal.twin.machine import Halt, Outcome, RunError, f32
 from wirecal.twin.vplus import nodes as N
 from wirecal.twin.vplus.forms import FormError, operands
 from wirecal.twin.vplus.keywords import keyword
 from wirecal.twin.vplus.parser import CONSTANTS, FUNCTIONS, Module, Program, transformation_names
-
-_S = struct.Struct("f")
-
-
-def f32(x: float) -> float:
-    """Round to IEEE single precision (a V+ REAL)."""
-    try:
-        return _S.unpack(_S.pack(x))[0]
-    except OverflowError:
-        raise VError(-405, "*Floating-point overflow*") from None
 
 
 class Trans:
@@ -69,20 +58,12 @@ class Trans:
         return Trans(self.x + dx, self.y + dy, self.z + dz, self.yaw, self.pitch, self.roll)
 
 
-class VError(Exception):
+class VError(RunError):
     """A V+ run-time error: the program stops with this code and message."""
-
-    def __init__(self, code: int, message: str):
-        super().__init__(message)
-        self.code, self.message = code, message
 
 
 class _Return(Exception):
     pass
-
-
-class Halt(Exception):
-    """HALT: the program stops."""
 
 
 class Pause(Exception):
@@ -92,17 +73,6 @@ class Pause(Exception):
 class _Goto(Exception):
     def __init__(self, label: int):
         self.label = label
-
-
-@dataclass
-class Outcome:
-    """How a program ended: "completed", "halted", "paused" or "error"."""
-
-    status: str
-    program: str = ""
-    line: int = 0
-    message: str = ""
-    console: list[str] = field(default_factory=list)
 
 
 class _Ref:
@@ -143,7 +113,7 @@ class Interpreter:
             status, message = "halted", str(h)
         except Pause as p:
             status, message = "paused", str(p)
-        except VError as e:
+        except RunError as e:
             status, message = "error", f"{e.message} ({e.code})"
         except RecursionError:
             status, message = "error", "*Stack overflow*"

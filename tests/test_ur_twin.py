@@ -1,0 +1,218 @@
+"""The UR5's generated URScript programs in the twin: the run, the wraps, the fault matrix.
+
+Every run goes over a real loopback socket to :func:`wirecal.app.receive.receive` (the
+function behind ``wirecal receive``), which keeps the rows of an incomplete run in its
+journal and names the missing points.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wirecal.app.receive import summary
+from wirecal.app.twin_runs import measure_ur_in_twin
+from wirecal.gen.urscript.program import scripts
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.log import parse_log, read_log
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.truth import random_errors
+from wirecal.solver.measurements import check_log, load_measurements
+from wirecal.solver.solve import solve
+from wirecal.twin.cell import Faults, move_of_step
+
+HEADER_LINES = 6  # the wirecal-log header and the column line
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    return load_robot("examples/ur5/robot.toml")
+
+
+@pytest.fixture(scope="module")
+def ur5_plan(ur5):
+    return load_plan("examples/ur5/plan.toml", ur5)
+
+
+@pytest.fixture(scope="module")
+def texts(ur5, ur5_plan):
+    return scripts(ur5, ur5_plan)
+
+
+@pytest.fixture(scope="module")
+def truth(ur5):
+    return random_errors(ur5, 1.0, np.random.default_rng([5, 1]))
+
+
+def run(ur5, ur5_plan, texts, truth, tmp_path, **kw):
+    return measure_ur_in_twin(ur5, ur5_plan, truth, tmp_path, texts=texts, seed=5, **kw)
+
+
+def test_run_completes_and_the_log_identifies_the_truth(ur5, ur5_plan, texts, truth, tmp_path):
+    r = run(ur5, ur5_plan, texts, truth, tmp_path)
+    assert r.programs.mount.status == "completed"
+    assert r.programs.run.status == "completed"
+    assert r.received.complete
+    assert r.log == tmp_path / "run.csv"
+    assert not r.received.journal.exists()
+    m = load_measurements(r.log, ur5_plan, ur5)
+    assert m.complete
+    est = solve(ur5, ur5_plan, m).estimates["joint"].as_dict()
+    assert max(abs(v - truth.get(k, 0.0)) for k, v in est.items()) < 0.05  # deg, mm
+    # the twin's clock: 51 moves at 36 deg/s plus the settle and the readings
+    assert 400 < r.programs.cell.clock < 900
+
+
+def test_every_line_sent_is_mirrored_in_the_log_tab(ur5, ur5_plan, texts, truth, tmp_path):
+    r = run(ur5, ur5_plan, texts, truth, tmp_path)
+    sent = r.received.text.splitlines()
+    tab = r.programs.run.console
+    mirrored = [line for line in tab if line in set(sent)]
+    assert mirrored == sent
+    m = check_log(parse_log("\n".join(mirrored), "<log tab>"), ur5_plan, ur5)
+    assert m.complete
+
+
+@pytest.mark.parametrize(
+    "start",
+    [
+        1000.0,  # neither count wraps
+        float(65536 * 7 - 20000),  # the filtered count (2^16) wraps during the run
+        float(2**31 - 20000),  # the raw int32 count wraps during the run
+    ],
+)
+def test_wrapping_counters_change_nothing(ur5, ur5_plan, texts, truth, tmp_path, start):
+    r = run(ur5, ur5_plan, texts, truth, tmp_path, counter_start=start)
+    assert r.programs.run.status == "completed"
+    m = load_measurements(r.log, ur5_plan, ur5)
+    reference = run(ur5, ur5_plan, texts, truth, tmp_path / "ref", counter_start=123.0)
+    m0 = load_measurements(reference.log, ur5_plan, ur5)
+    # the same readings: only the doubles' rounding of the large counts differs
+    np.testing.assert_allclose(m.distance_mm, m0.distance_mm, rtol=0, atol=1e-6)
+
+
+def test_fault_socket_refused(ur5, ur5_plan, texts, truth, tmp_path):
+    r = run(ur5, ur5_plan, texts, truth, tmp_path, pc_listening=False)
+    out = r.programs.run
+    assert out.status == "stopped"
+    assert "*** cannot connect to wirecal receive at 192.168.1.10:50000" in out.console
+    assert out.message.startswith("Cannot connect to the PC at 192.168.1.10:50000")
+    assert r.programs.cell.moves == 0  # stopped before the first move
+    assert not r.received.log.exists()
+
+
+def test_fault_socket_dropped_mid_run(ur5, ur5_plan, texts, truth, tmp_path):
+    r = run(ur5, ur5_plan, texts, truth, tmp_path, faults=Faults(socket_drops_after_lines=30))
+    out = r.programs.run
+    assert out.status == "completed"  # the robot finishes; every row is in the log tab
+    lost = "*** not sent to the PC (connection lost): copy the lines from this log"
+    assert out.console.count(lost) == 68 - 30
+    assert not r.received.complete
+    assert r.received.stopped == "the sender closed the connection before the end marker"
+    assert not r.received.log.exists()
+    m = load_measurements(r.received.journal, ur5_plan, ur5)
+    # 30 lines: 6 header lines, then steps 1-4 (6 rows each)
+    assert m.missing_text() == "steps 5–10 (all points)"
+    assert summary(r.received, ur5, ur5_plan)[-1] == "missing points: steps 5–10 (all points)"
+
+
+def test_fault_encoder_not_enabled_counts_never_change(ur5, ur5_plan, texts, truth, tmp_path):
+    # wired to inputs 10 and 11, the program decodes 8 and 9: the count never changes
+    r = run(ur5, ur5_plan, texts, truth, tmp_path, pulse_inputs=(10, 11))
+    assert r.programs.run.status == "completed"  # the program does not notice
+    log = read_log(r.log)
+    assert {row.counts for row in log.readings} == {0.0}
+    result = solve(ur5, ur5_plan, check_log(log, ur5_plan, ur5))
+    from wirecal.solver.plausibility import gate
+
+    with pytest.raises(WirecalError) as info:
+        gate(result, result.recommended)
+    assert "every count is the same: the encoder did not count" in info.value.problems[0]
+
+
+def test_fault_point_beyond_a_joint_limit(ur5, ur5_plan, texts, truth, tmp_path):
+    limits = (355.0, 355.0, 355.0, 355.0, 355.0, 110.0)  # the controller's own j6 limit
+    r = run(ur5, ur5_plan, texts, truth, tmp_path, faults=Faults(joint_max_deg=limits))
+    out = r.programs.run
+    assert out.status == "error"
+    assert out.message == "movej: joint 6 target 120.310 deg is beyond its limit [-355, 110] deg"
+    m = load_measurements(r.received.journal, ur5_plan, ur5)
+    assert m.missing_text() == "step 3 points 3–5; steps 4–10 (all points)"  # j6 120.31
+    assert summary(r.received, ur5, ur5_plan)[-1].endswith(
+        "step 3 points 3–5; steps 4–10 (all points)"
+    )
+
+
+def test_fault_wire_slip(ur5, ur5_plan, texts, truth, tmp_path):
+    slip = Faults(slip_at_move=move_of_step(ur5_plan, 4, 2), slip_mm=0.5)
+    r = run(ur5, ur5_plan, texts, truth, tmp_path, faults=slip)
+    out = r.programs.run
+    assert out.status == "stopped"  # the operator stops at the warning
+    assert "*** the zero reading at theta0 moved by more than 0.1 mm: slip in step 4" in out.console
+    assert "the wire slipped or the encoder moved during step 4" in out.message
+    with pytest.raises(WirecalError) as info:
+        load_measurements(r.received.journal, ur5_plan, ur5)
+    assert "remount at θ0 and repeat from step 4" in info.value.problems[0]
+
+
+def test_no_controller_solver_for_urscript_is_said_plainly(ur5, ur5_plan, texts, truth, tmp_path):
+    from wirecal.app.compare import compare_controller
+
+    r = run(ur5, ur5_plan, texts, truth, tmp_path)
+    result = solve(ur5, ur5_plan, load_measurements(r.log, ur5_plan, ur5))
+    with pytest.raises(WirecalError) as info:
+        compare_controller(result, tmp_path / "ctl")
+    assert "the urscript programs have none" in info.value.problems[0]
+
+
+@pytest.mark.parametrize(("inputs", "moves"), [((8, 9), True), ((10, 11), False)])
+def test_wc_check_shows_the_pulled_wire_only_when_decoded(
+    ur5, ur5_plan, texts, tmp_path, inputs, moves
+):
+    from wirecal.twin.ur_cell import URCell
+    from wirecal.twin.urscript.interp import Interpreter
+    from wirecal.twin.urscript.parser import parse_program
+
+    cell = URCell(
+        ur5, {}, ur5_plan.theta0_deg, tmp_path, noise_mm=0.0, pulse_inputs=inputs,
+        pull_mm=lambda t: min(100.0, 10.0 * t),  # 100 mm out over 10 s, then held
+    )  # fmt: skip
+    out = Interpreter(parse_program(texts["wc_check.script"], "wc_check.script"), cell).execute()
+    assert out.status == "completed"
+    last = out.console[-1]  # e.g. "counts 3923   mm 99.9880"
+    mm = float(last.split("mm")[-1])
+    if moves:
+        assert mm == pytest.approx(100.0, abs=0.06)  # ±1 count of jitter, the quantisation
+    else:
+        assert {line.split("mm")[-1].strip() for line in out.console[1:]} == {"0.0000"}
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="wc_run's progress lines ('Step 1 of 10: …', 'Run complete …') are not '#' "
+    "comments, so the log tab pasted whole is not a wirecal log; remove this mark when "
+    "the generator writes them as comments",
+)
+def test_the_whole_log_tab_pasted_is_a_log(ur5, ur5_plan, texts, truth, tmp_path):
+    r = run(ur5, ur5_plan, texts, truth, tmp_path)
+    m = check_log(parse_log("\n".join(r.programs.run.console), "<log tab>"), ur5_plan, ur5)
+    assert m.complete
+
+
+def test_cli_simulate_controller_runs_the_urscript_programs(tmp_path):
+    from click.testing import CliRunner
+
+    from wirecal.cli.main import main
+
+    log = tmp_path / "run.csv"
+    args = ["simulate", "examples/ur5/robot.toml", "examples/ur5/plan.toml", "-o", str(log)]
+    r = CliRunner().invoke(
+        main, [*args, "--random", "1", "--seed", "4", "--controller", "--slip", "4:0.5"]
+    )
+    assert r.exit_code == 1, r.output
+    assert "the controller program stopped: The zero reading at theta0 moved" in r.output
+    assert "at step 5 zero reading at theta0 (stopped in wc_run line" in r.output
+    text = log.read_text()
+    assert text.startswith("# wirecal-log 2\n# robot: Universal Robots UR5\n")
+    assert text.splitlines()[-1].startswith("zero,5,0,")  # the rows up to the stop

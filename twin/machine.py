@@ -1,0 +1,47 @@
+"""What the twin's interpreters share, whatever the controller language.
+
+The single-precision rounding both controllers apply to their 32-bit floats (V+ REAL,
+URScript float), the run-time error a program stops with, and how a run ended.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass, field
+
+_S = struct.Struct("f")
+
+
+class RunError(Exception):
+    """A run-time error of a controller program: it stops with this code and message."""
+
+    def __init__(self, code: int, message: str):
+        super().__init__(message)
+        self.code, self.message = code, message
+
+
+def f32(x: float) -> float:
+    """Round to IEEE single precision (a V+ REAL, a URScript float)."""
+    try:
+        return _S.unpack(_S.pack(x))[0]
+    except OverflowError:
+        raise RunError(-405, "*Floating-point overflow*") from None
+
+
+class Halt(Exception):
+    """HALT (V+) or halt (URScript): the program stops."""
+
+
+class Stopped(Exception):
+    """The operator stopped the program (URScript: at a blocking warning popup)."""
+
+
+@dataclass
+class Outcome:
+    """How a program ended: "completed", "halted", "paused", "stopped" or "error"."""
+
+    status: str
+    program: str = ""
+    line: int = 0
+    message: str = ""
+    console: list[str] = field(default_factory=list)

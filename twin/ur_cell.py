@@ -1,0 +1,247 @@
+"""The simulated Universal Robots cell: the twin's cell behind the URScript API.
+
+:class:`URCell` is the same cell as V+'s (:class:`wirecal.twin.cell.Cell`: the true
+robot within its limits, the draw-wire encoder's physics, unmodelled errors, faults, the
+clock), reached through the URScript functions the generated programs call:
+
+* ``movej(q, a, v, t, r)``: q in rad, a rad/s², v rad/s of the leading axis (SD 14.22);
+  the move takes the time of the leading joint's trapezoidal profile (``t`` > 0 sets it)
+  and no settling (the programs sleep for that). A target beyond a joint limit stops the
+  program (the controller's own message was not read: *unconfirmed*);
+* ``get_actual_joint_positions()``: the commanded joints in rad (joint encoders do not see
+  the unmodelled errors; the wire does);
+* the encoder: ``encoder_enable_pulse_decode(i, 1, A, B)`` (SD 14.2: index 0 or 1,
+  decoder types 0–4, inputs 8–11) starts quadrature decoding when A, B are the inputs the
+  wire's encoder is wired to (``pulse_inputs``); otherwise the count never changes (it
+  reads 0: *unconfirmed*). ``encoder_get_tick_count(i)`` is the filtered count, a float in
+  [0; 65536[ that wraps, ``opt="raw"`` the int32 count (SW5.20); the filter's dynamics
+  are not modelled. ``encoder_unwind_delta_tick_count`` unwinds a delta over half of 2^16
+  (SW5.24) and is nil for an encoder not enabled (a third-party copy of the manual's
+  text: *unconfirmed*). ``pull_mm`` lets an operator pull the wire out by hand
+  (``wc_check``);
+* sockets: ``socket_open`` opens a real TCP connection (2 s timeout) — the program's PC
+  address is routed to ``receiver`` on loopback, where ``wirecal receive`` listens — and
+  returns True or False (SD 17.55); ``socket_send_line`` sends the line and a newline and
+  returns whether it was sent (SD 17.63); the controller closes a program's sockets when
+  it ends (*unconfirmed*). A fault drops the connection after N lines;
+* ``textmsg`` and ``popup`` write to the log tab (the console). A blocking popup suspends
+  the program until Continue is pressed (SD 15.35); the twin's operator presses it, except
+  at a warning or error popup, where they stop the program (``proceed_on_pause`` to
+  continue instead). ``sleep`` advances the clock and ``time(0)`` reads it (SD 15.48,
+  15.49).
+
+Sections of the e-Series Script Directory (SD) and Script Manual pages (SW…): see
+:mod:`wirecal.gen.urscript.facts`.
+"""
+
+from __future__ import annotations
+
+import math
+import socket
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from wirecal.solver.counter import Counter
+from wirecal.twin.cell import Cell
+from wirecal.twin.machine import Outcome, Stopped, f32
+from wirecal.twin.urscript.interp import Interpreter, URError, number, to_float, to_str
+from wirecal.twin.urscript.parser import parse_program
+
+FILTERED_RANGE = 2**16
+"""The filtered count's range [0; 65536[ (Script Manual SW5.20)."""
+RAW = Counter(32)
+"""The raw count: an int32 (SW5.20)."""
+SOCKET_TIMEOUT_S = 2.0
+
+
+@dataclass
+class URCell(Cell):
+    """The twin's cell as a UR controller's URScript sees it (module docstring)."""
+
+    pulse_inputs: tuple[int, int] = (8, 9)  # the digital inputs the encoder is wired to
+    encoder_index: int = 0
+    pc: tuple[str, int] | None = None  # the PC's address as the program names it
+    receiver: tuple[str, int] | None = None  # where the twin routes it (loopback)
+    sockets: dict[str, socket.socket] = field(default_factory=dict)
+    lines_sent: int = 0
+    pull_mm: Callable[[float], float] | None = None  # the operator pulls the wire (clock, s)
+
+    def __post_init__(self):
+        """Start the cell; no encoder is decoded until a program enables it."""
+        super().__post_init__()
+        self.decoding: dict[int, tuple[int, int, int]] = {}
+
+    # ---- motion ----
+    def movej(self, q, a=1.4, v=1.05, t=0, r=0) -> None:
+        """movej: go to joint positions q (rad) in joint space (module docstring)."""
+        if not isinstance(q, list) or len(q) != len(self.joints):
+            raise URError(f"movej: q must be a list of {len(self.joints)} joint positions")
+        q_deg = np.degrees([to_float(x) for x in q])
+        j = self.beyond_limits(q_deg)
+        if j is not None:
+            raise URError(
+                f"movej: joint {j + 1} target {q_deg[j]:.3f} deg is beyond its limit "
+                f"[{self.limits.joint_min_deg[j]:g}, {self.limits.joint_max_deg[j]:g}] deg"
+            )
+        dist = float(np.max(np.abs(np.radians(q_deg - np.asarray(self.joints)))))
+        self.arrive(q_deg, _trapezoid_s(dist, number(a, "movej a"), number(v, "movej v"), t))
+
+    def get_actual_joint_positions(self) -> list[float]:
+        """Return the joints in rad, base to wrist 3."""
+        return [f32(math.radians(x)) for x in self.joints]
+
+    def sleep(self, t) -> None:
+        """sleep: advance the clock by t s."""
+        self.clock += float(number(t, "sleep"))
+
+    def time(self, mode=0) -> dict[str, int]:
+        """time(0): the controller's clock as struct(sec, nanosec), ints (SD 15.49, as cited).
+
+        The twin's clock starts at 0 when the cell is made; other modes are not modelled.
+        """
+        if mode != 0:
+            raise URError(f"time({to_str(mode)}): the twin models time(0) only")
+        sec = math.floor(self.clock)
+        return {"sec": sec, "nanosec": math.floor((self.clock - sec) * 1e9)}
+
+    # ---- encoder ----
+    def encoder_enable_pulse_decode(self, encoder_index, decoder_type, A, B) -> None:
+        """Decode the pulses on inputs A, B as encoder ``encoder_index`` (SD 14.2)."""
+        self._index(encoder_index)
+        if decoder_type not in range(5) or isinstance(decoder_type, bool):
+            raise URError(f"decoder_type {to_str(decoder_type)}: must be 0 to 4")
+        for name, pin in (("A", A), ("B", B)):
+            if pin not in range(8, 12) or isinstance(pin, bool):
+                raise URError(f"encoder input {name} = {to_str(pin)}: must be 8 to 11")
+        self.decoding[encoder_index] = (decoder_type, A, B)
+
+    def _decoded(self, encoder_index) -> bool:
+        """Tell whether the wire's encoder is decoded (quadrature, its inputs) as this index."""
+        self._index(encoder_index)
+        setup = self.decoding.get(encoder_index)
+        return (
+            encoder_index == self.encoder_index
+            and setup is not None
+            and setup[0] == 1
+            and {setup[1], setup[2]} == set(self.pulse_inputs)
+        )
+
+    def wire_counts(self) -> int:
+        """Return the wire's count (the cell's), plus the wire the operator pulls out now."""
+        pulled = self.pull_mm(self.clock) if self.pull_mm is not None else 0.0
+        return super().wire_counts() + round(pulled / self.robot.encoder.mm_per_count)
+
+    def encoder_get_tick_count(self, encoder_index, opt=""):
+        """Return the filtered count (float, wraps at 2^16) or with opt="raw" the int32 count."""
+        self.reads += 1
+        count = self.wire_counts() if self._decoded(encoder_index) else 0
+        if opt == "raw":
+            return int(RAW.wrap(count))
+        return f32(float(count % FILTERED_RANGE))
+
+    def encoder_unwind_delta_tick_count(self, encoder_index, delta_tick_count):
+        """Unwind a delta of filtered counts over half their range; nil if not enabled."""
+        if not self._decoded(encoder_index):
+            return None
+        d = number(delta_tick_count, "encoder_unwind_delta_tick_count")
+        half = FILTERED_RANGE // 2
+        if d > half:
+            d -= FILTERED_RANGE
+        elif d < -half:
+            d += FILTERED_RANGE
+        return f32(float(d)) if isinstance(d, float) else d
+
+    @staticmethod
+    def _index(encoder_index) -> None:
+        if encoder_index not in (0, 1) or isinstance(encoder_index, bool):
+            raise URError(f"encoder index {to_str(encoder_index)}: must be 0 or 1")
+
+    # ---- log tab ----
+    def textmsg(self, s1, s2="") -> None:
+        """textmsg: a line in the log tab."""
+        self.console.append(to_str(s1) + to_str(s2))
+
+    def popup(self, s, title="Popup", warning=False, error=False, blocking=False) -> None:
+        """popup: shown in the log tab; the operator stops at a blocking warning or error."""
+        self.console.append(f"[popup {to_str(title)}] {to_str(s)}")
+        if blocking and (warning or error) and not self.proceed_on_pause:
+            raise Stopped(to_str(s))
+
+    # ---- sockets ----
+    def socket_open(self, address, port, socket_name="socket_0") -> bool:
+        """Open a TCP connection to the PC (routed to the receiver); True when connected."""
+        where = (to_str(address), int(number(port, "socket_open port")))
+        if where != self.pc or self.receiver is None:
+            return False  # nobody listens there in the twin's network
+        self.socket_close(socket_name)
+        try:
+            self.sockets[socket_name] = socket.create_connection(
+                self.receiver, timeout=SOCKET_TIMEOUT_S
+            )
+        except OSError:
+            return False
+        return True
+
+    def socket_send_line(self, str, socket_name="socket_0") -> bool:
+        """Send a line and a newline; False when the connection is gone."""
+        sock = self.sockets.get(socket_name)
+        if sock is None:
+            return False
+        drop = self.faults.socket_drops_after_lines
+        if drop is not None and self.lines_sent >= drop:
+            self.socket_close(socket_name)
+            return False
+        try:
+            sock.sendall((to_str(str) + "\n").encode("utf-8"))
+        except OSError:
+            self.socket_close(socket_name)
+            return False
+        self.lines_sent += 1
+        return True
+
+    def socket_close(self, socket_name="socket_0") -> None:
+        """Close a connection (nothing happens if it is not open)."""
+        sock = self.sockets.pop(socket_name, None)
+        if sock is not None:
+            sock.close()
+
+    def close_all(self) -> None:
+        """Close every socket, as the controller does when a program ends."""
+        for name in list(self.sockets):
+            self.socket_close(name)
+
+
+def _trapezoid_s(distance_rad: float, a_rad_s2: float, v_rad_s: float, t_s) -> float:
+    """Return a movej's duration: the leading joint's trapezoidal profile (or t if > 0)."""
+    if number(t_s, "movej t") > 0:
+        return float(t_s)
+    if a_rad_s2 <= 0 or v_rad_s <= 0:
+        raise URError("movej: a and v must be positive")
+    if distance_rad >= v_rad_s**2 / a_rad_s2:
+        return distance_rad / v_rad_s + v_rad_s / a_rad_s2
+    return 2.0 * math.sqrt(distance_rad / a_rad_s2)
+
+
+@dataclass
+class URPrograms:
+    """Outcomes of the URScript programs run in the twin, in order, and the cell."""
+
+    mount: Outcome
+    run: Outcome | None
+    cell: URCell
+
+
+def run_ur_programs(cell: URCell, mount_text: str, run_text: str) -> URPrograms:
+    """Run ``wc_mount`` (the operator mounts the encoder and continues), then ``wc_run``.
+
+    The controller closes the program's sockets when it ends, however it ends.
+    """
+    mount = Interpreter(parse_program(mount_text, "wc_mount.script"), cell).execute()
+    cell.moves = 0  # fault positions count the moves of wc_run
+    run = None
+    if mount.status == "completed":
+        run = Interpreter(parse_program(run_text, "wc_run.script"), cell).execute()
+    cell.close_all()
+    return URPrograms(mount, run, cell)

@@ -1,0 +1,506 @@
+"""An interpreter of the URScript wirecal generates, with the UR controller's numbers.
+
+Programs are compiled into Python closures once, dispatching on the node types of
+:mod:`wirecal.twin.urscript.nodes`, as the V+ interpreter does. What the interpreter
+holds to, and how sure we are of it (see :mod:`wirecal.gen.urscript.facts`):
+
+* ints are 32-bit and floats 32-bit (UR16e User Manual p. 181, *confirmed*): every float
+  literal, result and stored value is rounded to IEEE single precision (:func:`f32`); an
+  int result outside [-2^31, 2^31[ wraps, two's complement (*unconfirmed*: the
+  controller's behaviour on overflow was not read; the generated programs rely on it to
+  unwrap the raw count by subtraction);
+* int op int is an int for ``+ - * %``, ``/`` gives a float, and any float operand makes
+  the result a float (*unconfirmed*);
+* lists are indexed from 0 and copied on assignment; an index out of range stops the
+  program (*unconfirmed*); a struct (what ``time(0)`` returns) is read by member name;
+* conditions and ``and``/``or``/``xor``/``not`` take booleans only; strings are joined
+  with ``str_cat``, which writes an int as its digits and a float with 6 decimals (SD
+  15.51, *confirmed* — see :mod:`wirecal.gen.urscript.facts` for the sources); ``+`` of
+  strings stops the program and a boolean is written True/False (*unconfirmed*);
+  ``floor`` returns an int (SD 16.9, *confirmed*);
+* scope: a variable assigned in the program's own body is global, as is one qualified
+  ``global``; inside a function a parameter or a ``local`` variable is local, and a free
+  variable is the global of that name if there is one, else local (*unconfirmed*: the
+  Script Manual's "Scoping rules" page was not read);
+* reading a variable before it has a value stops the program.
+
+Everything the program does to the outside world — motion, the encoder, sockets, the
+log and popups, time — goes through the cell (:class:`wirecal.twin.ur_cell.URCell`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Callable
+from functools import singledispatchmethod
+
+from wirecal.twin.machine import Halt, Outcome, RunError, Stopped, f32
+from wirecal.twin.urscript import nodes as N
+from wirecal.twin.urscript.parser import Program, walk
+
+INT_MIN = -(2**31)
+
+
+class URError(RunError):
+    """A URScript run-time error: the program stops with this message."""
+
+    def __init__(self, message: str, code: int = -1):
+        super().__init__(code, message)
+
+
+class _Return(Exception):
+    def __init__(self, value):
+        self.value = value
+
+
+def i32(v: int) -> int:
+    """Wrap an int result to 32 bits, two's complement (module docstring: unconfirmed)."""
+    return (v - INT_MIN) % 2**32 + INT_MIN
+
+
+def number(v, what: str = "a number") -> float | int:
+    """Return ``v`` if it is an int or a float (not a boolean), else stop."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise URError(f"{what}: expected a number, got {to_str(v)!r}")
+    return v
+
+
+def to_float(v) -> float:
+    """Return a number as a URScript float (single precision)."""
+    return f32(float(number(v)))
+
+
+def truth(v) -> bool:
+    """Return a condition's value; only booleans are conditions."""
+    if not isinstance(v, bool):
+        raise URError(f"a condition must be True or False, got {to_str(v)!r}")
+    return v
+
+
+def to_str(v) -> str:
+    """Write a value as ``str_cat`` does in the twin (module docstring)."""
+    if isinstance(v, bool):
+        return "True" if v else "False"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return f"{v:.6f}"
+    if isinstance(v, list):
+        return "[" + ", ".join(to_str(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "struct(" + ", ".join(f"{k}={to_str(x)}" for k, x in v.items()) + ")"
+    if v is None:
+        return "nil"
+    return str(v)
+
+
+def _copy(v):
+    if isinstance(v, list):
+        return [_copy(x) for x in v]
+    return dict(v) if isinstance(v, dict) else v
+
+
+class Interpreter:
+    """Runs a parsed program against a cell."""
+
+    def __init__(self, program: Program, cell):
+        self.program, self.cell = program, cell
+        self.globals: dict[str, object] = {}
+        self.ops: Counter[str] = Counter()  # arithmetic executed: add (+ −), mul, div, sqrt
+        self.where = 0
+        self._functions: dict[str, Callable] = {}
+        self.global_names = _global_names(program)
+
+    def execute(self) -> Outcome:
+        """Run the program; its outcome and the lines it wrote to the log (textmsg, popup)."""
+        start = len(self.cell.console)
+        try:
+            self.function(self.program.name)([])
+            status, message = "completed", ""
+        except Halt:
+            status, message = "halted", "halt"
+        except Stopped as s:
+            status, message = "stopped", str(s)
+        except RunError as e:
+            status, message = "error", e.message
+        except RecursionError:
+            status, message = "error", "stack overflow"
+        return Outcome(status, self.program.name, self.where, message, self.cell.console[start:])
+
+    def function(self, name: str) -> Callable:
+        """Return the compiled function ``name`` (compiled on first use)."""
+        fn = self._functions.get(name)
+        if fn is None:
+            d = self.program.functions[name]
+            fn = self._functions[name] = _Compiler(self, d).compile()
+        return fn
+
+
+def _global_names(program: Program) -> set[str]:
+    """Names that are global: assigned in the program's own body, or qualified ``global``."""
+    names = {s.target.name for s in program.body if isinstance(s, N.Assign) and s.scope != "local"}
+    names |= {
+        s.target.name for s in walk(program.body) if isinstance(s, N.Assign) and s.scope == "global"
+    }
+    return names
+
+
+class _Compiler:
+    """Compiles one function into a closure taking its argument values."""
+
+    def __init__(self, interp: Interpreter, d: N.Def):
+        self.i, self.d = interp, d
+        self.main = d.name == interp.program.name
+        own = [s for s in walk(d.body) if not isinstance(s, N.Def)]
+        self.locals = set(d.params) | {
+            s.target.name for s in own if isinstance(s, N.Assign) and s.scope == "local"
+        }
+
+    def is_global(self, name: str) -> bool:
+        if name in self.locals:
+            return False
+        return self.main or name in self.i.global_names
+
+    def compile(self) -> Callable:
+        body = self.body(self.d.body)
+        params = self.d.params
+
+        def run(args):
+            frame = dict(zip(params, args, strict=True))
+            try:
+                body(frame)
+            except _Return as r:
+                return r.value
+            return None
+
+        return run
+
+    def body(self, steps: list[N.Stmt]) -> Callable:
+        fns = [self.stmt(s) for s in steps if not isinstance(s, N.Def)]
+
+        def run(frame):
+            for f in fns:
+                f(frame)
+
+        return run
+
+    # ---------- statements ----------
+    def stmt(self, s: N.Stmt) -> Callable:
+        interp, line, inner = self.i, s.line, self._stmt(s)
+
+        def run(frame):
+            interp.where = line
+            inner(frame)
+
+        return run
+
+    @singledispatchmethod
+    def _stmt(self, s: N.Stmt) -> Callable:  # pragma: no cover - every statement is registered
+        raise AssertionError(type(s).__name__)
+
+    @_stmt.register
+    def _(self, s: N.Assign):
+        value = self.expr(s.value)
+        name = s.target.name
+        store = self.i.globals if self.is_global(name) else None
+        if not s.target.indices:
+            if store is not None:
+                return lambda frame: store.__setitem__(name, _copy(value(frame)))
+            return lambda frame: frame.__setitem__(name, _copy(value(frame)))
+        get = self.read(name)
+        indices = [self.expr(e) for e in s.target.indices]
+
+        def assign_element(frame):
+            container = get(frame)
+            for ix in indices[:-1]:
+                container = _element(container, ix(frame))
+            k = _position(container, indices[-1](frame))
+            container[k] = _copy(value(frame))
+
+        return assign_element
+
+    @_stmt.register
+    def _(self, s: N.CallStmt):
+        f = self.expr(s.call)
+        return lambda frame: f(frame)
+
+    @_stmt.register
+    def _(self, s: N.Return):
+        value = self.expr(s.value) if s.value is not None else (lambda frame: None)
+
+        def ret(frame):
+            raise _Return(value(frame))
+
+        return ret
+
+    @_stmt.register
+    def _(self, s: N.HaltStmt):
+        def halt(frame):
+            raise Halt("halt")
+
+        return halt
+
+    @_stmt.register
+    def _(self, s: N.While):
+        cond, body = self.expr(s.cond), self.body(s.body)
+
+        def while_(frame):
+            while truth(cond(frame)):
+                body(frame)
+
+        return while_
+
+    @_stmt.register
+    def _(self, s: N.If):
+        branches = [(self.expr(c), self.body(b)) for c, b in s.branches]
+        other = self.body(s.orelse)
+
+        def if_(frame):
+            for cond, body in branches:
+                if truth(cond(frame)):
+                    body(frame)
+                    return
+            other(frame)
+
+        return if_
+
+    # ---------- expressions ----------
+    def read(self, name: str) -> Callable:
+        """Compile the read of a variable; reading one without a value stops the program."""
+        store = self.i.globals if self.is_global(name) else None
+
+        def get(frame):
+            try:
+                return (store if store is not None else frame)[name]
+            except KeyError:
+                raise URError(f"variable {name} has no value") from None
+
+        return get
+
+    @singledispatchmethod
+    def expr(self, e: N.Expr) -> Callable:  # pragma: no cover - every expression is registered
+        raise AssertionError(type(e).__name__)
+
+    @expr.register
+    def _(self, e: N.Num):
+        v = e.value if e.is_int else f32(e.value)
+        return lambda frame: v
+
+    @expr.register
+    def _(self, e: N.Bool):
+        v = e.value
+        return lambda frame: v
+
+    @expr.register
+    def _(self, e: N.Str):
+        v = e.text
+        return lambda frame: v
+
+    @expr.register
+    def _(self, e: N.Var):
+        return self.read(e.name)
+
+    @expr.register
+    def _(self, e: N.ListLit):
+        items = [self.expr(x) for x in e.items]
+        return lambda frame: [f(frame) for f in items]
+
+    @expr.register
+    def _(self, e: N.Index):
+        base, ix = self.expr(e.base), self.expr(e.index)
+        return lambda frame: _element(base(frame), ix(frame))
+
+    @expr.register
+    def _(self, e: N.Field):
+        base, name = self.expr(e.base), e.name
+
+        def member(frame):
+            value = base(frame)
+            if not isinstance(value, dict) or name not in value:
+                raise URError(f"{to_str(value)!r} has no member {name}")
+            return value[name]
+
+        return member
+
+    @expr.register
+    def _(self, e: N.Neg):
+        f = self.expr(e.expr)
+
+        def neg(frame):
+            v = number(f(frame), "unary minus")
+            return i32(-v) if isinstance(v, int) else -v
+
+        return neg
+
+    @expr.register
+    def _(self, e: N.Not):
+        f = self.expr(e.expr)
+        return lambda frame: not truth(f(frame))
+
+    @expr.register
+    def _(self, e: N.Logic):
+        a, b = self.expr(e.left), self.expr(e.right)
+        if e.op == "and":
+            return lambda frame: truth(a(frame)) and truth(b(frame))
+        if e.op == "or":
+            return lambda frame: truth(a(frame)) or truth(b(frame))
+        return lambda frame: truth(a(frame)) != truth(b(frame))
+
+    @expr.register
+    def _(self, e: N.Compare):
+        a, b, op = self.expr(e.left), self.expr(e.right), _COMPARE[e.op]
+        ordered = e.op not in ("==", "!=")
+
+        def compare(frame):
+            x, y = a(frame), b(frame)
+            if ordered:
+                number(x, e.op), number(y, e.op)
+            return op(x, y)
+
+        return compare
+
+    @expr.register
+    def _(self, e: N.BinOp):
+        return _arithmetic(self.i, e.op, self.expr(e.left), self.expr(e.right))
+
+    @expr.register
+    def _(self, e: N.Call):
+        args = [self.expr(a) for a in e.args]
+        kwargs = {k: self.expr(v) for k, v in e.kwargs.items()}
+        interp = self.i
+        if e.name in interp.program.functions:
+            name = e.name
+            return lambda frame: interp.function(name)([_copy(a(frame)) for a in args])
+        builtin = _builtin(interp, e.name)
+
+        def call(frame):
+            return builtin(*(a(frame) for a in args), **{k: v(frame) for k, v in kwargs.items()})
+
+        return call
+
+
+def _element(container, index):
+    return container[_position(container, index)]
+
+
+def _position(container, index) -> int:
+    if not isinstance(container, list):
+        raise URError(f"only a list can be indexed, not {to_str(container)!r}")
+    if isinstance(index, bool) or not isinstance(index, int):
+        raise URError(f"a list index must be an int, got {to_str(index)!r}")
+    if not 0 <= index < len(container):
+        raise URError(f"index {index} out of bounds (the list has {len(container)} elements)")
+    return index
+
+
+_COMPARE: dict[str, Callable] = {
+    "==": lambda x, y: x == y,
+    "!=": lambda x, y: x != y,
+    "<": lambda x, y: x < y,
+    ">": lambda x, y: x > y,
+    "<=": lambda x, y: x <= y,
+    ">=": lambda x, y: x >= y,
+}
+_COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "%": "div"}
+
+
+def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Callable:
+    """Compile ``a op b``, counting the operations as executed (module docstring)."""
+    kind = _COUNTED[op]
+
+    def f(frame):
+        x, y = a(frame), b(frame)
+        x, y = number(x, op), number(y, op)
+        interp.ops[kind] += 1
+        if op in "/%" and y == 0:
+            raise URError("division by zero")
+        if isinstance(x, int) and isinstance(y, int) and op != "/":
+            return i32(_INT_OPS[op](x, y))
+        return f32(_FLOAT_OPS[op](float(x), float(y)))
+
+    return f
+
+
+_INT_OPS: dict[str, Callable[[int, int], int]] = {
+    "+": lambda x, y: x + y,
+    "-": lambda x, y: x - y,
+    "*": lambda x, y: x * y,
+    "%": lambda x, y: int(math.fmod(x, y)),
+}
+_FLOAT_OPS: dict[str, Callable[[float, float], float]] = {
+    "+": lambda x, y: x + y,
+    "-": lambda x, y: x - y,
+    "*": lambda x, y: x * y,
+    "/": lambda x, y: x / y,
+    "%": math.fmod,
+}
+
+
+def _builtin(interp: Interpreter, name: str) -> Callable:
+    """Return the Python function behind a URScript function (pure ones here, else the cell's)."""
+    if name == "sqrt":
+        return _sqrt(interp)
+    return _PURE.get(name) or getattr(interp.cell, name)
+
+
+def _sqrt(interp: Interpreter) -> Callable:
+    def sqrt(f):
+        v = to_float(f)
+        if v < 0:
+            raise URError(f"sqrt of a negative number ({to_str(v)})")
+        interp.ops["sqrt"] += 1
+        return f32(math.sqrt(v))
+
+    return sqrt
+
+
+def _floor(f) -> int:
+    return i32(math.floor(number(f, "floor")))
+
+
+def _round(f) -> int:
+    return i32(math.floor(number(f, "round") + 0.5))
+
+
+def _to_num(s) -> int | float:
+    text = str(s).strip()
+    try:
+        return i32(int(text))
+    except ValueError:
+        pass
+    try:
+        return f32(float(text))
+    except ValueError:
+        raise URError(f"to_num: {text!r} is not a number") from None
+
+
+def _not_a_string(v) -> int:
+    raise URError(f"str_len of {to_str(v)!r}, which is not a string")
+
+
+def _length(v) -> int:
+    if not isinstance(v, list):
+        raise URError(f"get_list_length of {to_str(v)!r}, which is not a list")
+    return len(v)
+
+
+_PURE: dict[str, Callable] = {
+    "str_cat": lambda a, b: to_str(a) + to_str(b),
+    "str_len": lambda s: len(s) if isinstance(s, str) else _not_a_string(s),
+    "floor": _floor,
+    "round": _round,
+    "to_num": _to_num,
+    "fabs": lambda f: abs(number(f, "fabs")),
+    "sin": lambda f: f32(math.sin(to_float(f))),
+    "cos": lambda f: f32(math.cos(to_float(f))),
+    "atan2": lambda y, x: f32(math.atan2(to_float(y), to_float(x))),
+    "r2d": lambda r: f32(math.degrees(to_float(r))),
+    "d2r": lambda d: f32(math.radians(to_float(d))),
+    "norm": lambda a: (
+        f32(math.sqrt(sum(to_float(x) ** 2 for x in a)))
+        if isinstance(a, list)
+        else abs(number(a, "norm"))
+    ),
+    "get_list_length": _length,
+}
