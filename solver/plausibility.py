@@ -35,6 +35,7 @@ from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import Implausible
 from wirecal.solver.identifiability import Identifiability, analyse_jacobian, covariance
 from wirecal.solver.identify import DEFAULT_OMEGA
+from wirecal.solver.robot import LIVE_CHECK
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult, omega_vector
 
@@ -148,7 +149,7 @@ def assess(
 
     measured = m.distance_mm[present]
     model = wire_lengths(base, np.radians(q_deg), np.radians(m.theta0_deg))
-    findings += _lengths(measured, model, m.source)
+    findings += _lengths(measured, model, m.source, LIVE_CHECK[robot.controller.language])
 
     sigma_model = float(np.hypot(noise_mm, abs(m.mm_per_count) / np.sqrt(12)))
     dof = len(measured) - len(names)
@@ -181,7 +182,7 @@ def assess(
     )
 
 
-def _lengths(measured: np.ndarray, model: np.ndarray, source: str) -> list[Finding]:
+def _lengths(measured: np.ndarray, model: np.ndarray, source: str, check: str) -> list[Finding]:
     """Return the span of the measured lengths against the robot model's at the same points."""
     span_measured = float(np.ptp(measured)) if measured.size else 0.0
     span_model = float(np.ptp(model)) if model.size else 0.0
@@ -199,8 +200,8 @@ def _lengths(measured: np.ndarray, model: np.ndarray, source: str) -> list[Findi
                 "lengths",
                 f"implausible wire lengths: {source}'s span {span_measured:.3f} mm where the "
                 f"robot file's geometry gives {span_model:.1f} mm at the same points; {why} "
-                "(wrong channel, interface or belt_mode, or the wire is not attached); "
-                "check it with wc.check before measuring again",
+                "(wrong channel, interface, belt_mode or pulse_inputs, or the wire is not "
+                f"attached); check it with {check} before measuring again",
             )
         ]
     if ratio > LENGTH_SPAN_RATIO:

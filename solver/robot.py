@@ -60,6 +60,9 @@ LANGUAGES = {"vplus": "Adept/Omron V+ and eV+", "urscript": "Universal Robots UR
 INTERFACES = {"vplus": ("belt", "device"), "urscript": ("pulse",)}
 """The encoder interfaces each language's programs read (``[encoder] interface``)."""
 
+LIVE_CHECK = {"vplus": "wc.check", "urscript": "wc_check"}
+"""The generated program that shows the live counts, by language (messages name it)."""
+
 
 @dataclass(frozen=True)
 class Controller:

@@ -65,7 +65,8 @@ def test_stuck_encoder_is_refused(tmp_path, log_text):
     r = run("solve", ROBOT, PLAN, log, "-o", patch)
     refused(r, patch)
     assert "every count is the same: the encoder did not count" in r.output
-    assert "wrong channel, interface or belt_mode" in r.output
+    assert "wrong channel, interface, belt_mode or pulse_inputs" in r.output
+    assert "check it with wc.check before measuring again" in r.output
     assert re.search(r"span 0\.000 mm where the robot file's geometry gives \d{3}\.\d mm", r.output)
 
 

@@ -11,7 +11,6 @@ import socket
 import subprocess
 import sys
 import time
-import tomllib
 
 import numpy as np
 import pytest
@@ -21,6 +20,7 @@ from wirecal.cli.main import main
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors
+from wirecal.solver.formats.ur_calibration import read_ur_calibration
 from wirecal.twin.ur_cell import URCell, run_ur_programs
 
 pytestmark = pytest.mark.slow  # about 5 s each on a loaded machine
@@ -101,8 +101,7 @@ def test_gen_twin_receive_solve(tmp_path):
     data = json.loads(solved.stdout)
     joint = data["methods"]["joint"]["parameters"]
     assert max(abs(v - truth.get(k, 0.0)) for k, v in joint.items()) < 0.05
-    conf = tomllib.loads((tmp_path / "patch.ur_calibration.conf").read_text())
-    deltas = conf["mounting"]
+    deltas = read_ur_calibration(tmp_path / "patch.ur_calibration.conf")
     assert set(deltas) == {"delta_theta", "delta_a", "delta_d", "delta_alpha"}
     # th2 (deg) is the second joint's delta_theta (rad)
     assert deltas["delta_theta"][1] == pytest.approx(np.radians(joint["th2"]), abs=1e-9)

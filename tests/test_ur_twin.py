@@ -106,7 +106,7 @@ def test_fault_socket_dropped_mid_run(ur5, ur5_plan, texts, truth, tmp_path):
     r = run(ur5, ur5_plan, texts, truth, tmp_path, faults=Faults(socket_drops_after_lines=30))
     out = r.programs.run
     assert out.status == "completed"  # the robot finishes; every row is in the log tab
-    lost = "*** not sent to the PC (connection lost): copy the lines from this log"
+    lost = "# *** not sent to the PC (connection lost): copy the lines from this log"
     assert out.console.count(lost) == 68 - 30
     assert not r.received.complete
     assert r.received.stopped == "the sender closed the connection before the end marker"
@@ -129,6 +129,7 @@ def test_fault_encoder_not_enabled_counts_never_change(ur5, ur5_plan, texts, tru
     with pytest.raises(WirecalError) as info:
         gate(result, result.recommended)
     assert "every count is the same: the encoder did not count" in info.value.problems[0]
+    assert "check it with wc_check before measuring again" in info.value.problems[0]
 
 
 def test_fault_point_beyond_a_joint_limit(ur5, ur5_plan, texts, truth, tmp_path):
@@ -149,7 +150,7 @@ def test_fault_wire_slip(ur5, ur5_plan, texts, truth, tmp_path):
     r = run(ur5, ur5_plan, texts, truth, tmp_path, faults=slip)
     out = r.programs.run
     assert out.status == "stopped"  # the operator stops at the warning
-    assert "*** the zero reading at theta0 moved by more than 0.1 mm: slip in step 4" in out.console
+    assert "# *** the zero reading at theta0 moved by more than 0.1 mm: slip in step 4" in out.console
     assert "the wire slipped or the encoder moved during step 4" in out.message
     with pytest.raises(WirecalError) as info:
         load_measurements(r.received.journal, ur5_plan, ur5)
@@ -188,15 +189,13 @@ def test_wc_check_shows_the_pulled_wire_only_when_decoded(
         assert {line.split("mm")[-1].strip() for line in out.console[1:]} == {"0.0000"}
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="wc_run's progress lines ('Step 1 of 10: …', 'Run complete …') are not '#' "
-    "comments, so the log tab pasted whole is not a wirecal log; remove this mark when "
-    "the generator writes them as comments",
-)
 def test_the_whole_log_tab_pasted_is_a_log(ur5, ur5_plan, texts, truth, tmp_path):
+    """wc_run's own progress lines in the log tab are '#' comments: the tab copied whole
+    is a wirecal log (the paste path when the socket is lost)."""
     r = run(ur5, ur5_plan, texts, truth, tmp_path)
-    m = check_log(parse_log("\n".join(r.programs.run.console), "<log tab>"), ur5_plan, ur5)
+    console = r.programs.run.console
+    assert any(line.startswith("# Step 1 of ") for line in console)
+    m = check_log(parse_log("\n".join(console), "<log tab>"), ur5_plan, ur5)
     assert m.complete
 
 

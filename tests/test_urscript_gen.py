@@ -310,7 +310,7 @@ def test_connection_lost_mid_run_keeps_the_rows_in_the_log_tab(ur5):
     )
     exec(compile(_python(run), "wc_run.script", "exec"), names)
     assert len(ctl.sent) == 20
-    lost = [line for line in ctl.log if line.startswith("*** not sent to the PC")]
+    lost = [line for line in ctl.log if line.startswith("# *** not sent to the PC")]
     assert len(lost) == 6 + rows + 1 - 20  # 6 header lines, the rows and "# end", less 20 sent
     pasted = [line for line in ctl.log if not line.startswith(("***", "Step", "Closing", "Run"))]
     log = parse_log("\n".join(pasted[:-1]) + "\n", "pasted")
