@@ -33,6 +33,7 @@ def measure_in_twin(
     noise_mm: float = 0.01,
     counter_start: float | None = None,
     faults: Faults | None = None,
+    proceed_on_pause: bool = False,
 ) -> RunResult:
     """Run wc.mount and wc.run of a generated module on a twin robot.
 
@@ -52,6 +53,7 @@ def measure_in_twin(
         noise_mm=noise_mm,
         counter_start=counter_start,
         faults=faults or Faults(),
+        proceed_on_pause=proceed_on_pause,
     )
 
 

@@ -15,7 +15,7 @@ from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.robot import LANGUAGES
-from wirecal.solver.run_parameters import RunParameters
+from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
 
 _D = RunParameters()
 _G = GenOptions()
@@ -50,9 +50,9 @@ _G = GenOptions()
 @click.option(
     "--speed",
     type=number(),
-    default=_D.speed_pct,
-    show_default=True,
-    help="Program speed, % of full (SPEED … ALWAYS).",
+    help=f"V+: the highest program speed, % of full (default {_D.speed_pct:g}); each move's "
+    "SPEED is lower where the wire's limits (robot file, [encoder]) ask for it. URScript: "
+    f"the one speed of every move (default {PAPER_RUN.speed_pct:g}).",
 )
 @click.option(
     "--accel",
@@ -64,9 +64,17 @@ _G = GenOptions()
 @click.option(
     "--settle-s",
     type=number(),
-    default=_D.settle_s,
+    help=f"V+: a fixed wait after each stop before the settle rule (s, default {_D.settle_s:g}; "
+    "the paper waited 3 s). URScript: the wait before reading (default "
+    f"{PAPER_RUN.settle_s:g}).",
+)
+@click.option(
+    "--settle-max-s",
+    type=number(),
+    default=_D.settle_max_s,
     show_default=True,
-    help="Wait after each stop before reading (s).",
+    help="Longest wait for the counter to be still (5 readings within 2 counts); a point "
+    "not still by then is logged as unsettled and measured again (s).",
 )
 @click.option(
     "--samples",
@@ -147,6 +155,7 @@ def gen(
     speed,
     accel,
     settle_s,
+    settle_max_s,
     samples,
     zero_tol,
     spread_tol,
@@ -185,7 +194,10 @@ def gen(
             )
         ur = UrOptions(
             run=RunParameters(
-                speed_pct=speed, accel_pct=accel, settle_s=settle_s, readings=samples
+                speed_pct=PAPER_RUN.speed_pct if speed is None else speed,
+                accel_pct=accel,
+                settle_s=PAPER_RUN.settle_s if settle_s is None else settle_s,
+                readings=samples,
             ),
             host=host,
             port=port,
@@ -204,7 +216,13 @@ def gen(
         raise WirecalError("--host and --port are for URScript (--language urscript)")
     patch = read_patch(patch_file).offsets_for(rb, pl) if patch_file else None
     opt = GenOptions(
-        run=RunParameters(speed_pct=speed, accel_pct=accel, settle_s=settle_s, readings=samples),
+        run=RunParameters(
+            speed_pct=_D.speed_pct if speed is None else speed,
+            accel_pct=accel,
+            settle_s=_D.settle_s if settle_s is None else settle_s,
+            settle_max_s=settle_max_s,
+            readings=samples,
+        ),
         zero_tol_mm=zero_tol,
         spread_tol_mm=spread_tol,
         margin_deg=margin,

@@ -47,6 +47,7 @@ class Measurements:
     log: Log  # the parsed log these were checked from, so nothing reads it twice
     notes: tuple[str, ...] = ()
     missing: tuple[tuple[int, int], ...] = field(default=())
+    unsettled: tuple[tuple[int, int], ...] = field(default=())  # (step, index) not settled
     closed: bool = True  # the closing zero reading after the last step is there
 
     @property
@@ -157,6 +158,7 @@ def check_log(
         zero_drift_mm=drift,
         notes=log.notes,
         missing=missing,
+        unsettled=tuple(rows.unsettled),
         closed=n_steps + 1 in zeros,
         log=log,
     )
@@ -197,6 +199,7 @@ class _Rows:
     joints_deg: np.ndarray  # (N, n) as logged (plan values where missing)
     zeros: dict[int, Reading]  # per step with a zero reading
     seen: dict[tuple[str, int, int], int]  # (kind, step, index) → line
+    unsettled: list[tuple[int, int]]  # (step, index) of the unsettled readings
 
 
 class _BadRow(Exception):
@@ -207,8 +210,11 @@ def _read_rows(log: Log, plan: Plan, robot: Robot, tol: Tolerances, problems: li
     """Check each reading against the plan; keep the good ones, report the others."""
     q_plan, step_no, index_no = plan.all_points()
     position = {(int(s), int(i)): k for k, (s, i) in enumerate(zip(step_no, index_no, strict=True))}
-    rows = _Rows(step_no, index_no, np.full(len(q_plan), np.nan), q_plan.copy(), {}, {})
+    rows = _Rows(step_no, index_no, np.full(len(q_plan), np.nan), q_plan.copy(), {}, {}, [])
     for r in log.readings:
+        if r.kind == "unsettled":  # for the record only: the program measured it again
+            rows.unsettled.append((r.step, r.index))
+            continue
         key = (r.kind, r.step, r.index)
         try:
             if key in rows.seen:

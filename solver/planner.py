@@ -40,7 +40,12 @@ from wirecal.solver.kinematics import tool_position
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan, Step
 from wirecal.solver.robot import Robot
-from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters, run_timeline
+from wirecal.solver.run_parameters import (
+    DEFAULT_RUN,
+    RunParameters,
+    move_durations_s,
+    run_timeline,
+)
 from wirecal.solver.sensitivity import PSI_FLOOR, sensitivity
 
 
@@ -535,17 +540,15 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
     a, b = np.repeat(pts, n, axis=0), np.tile(pts, (n, 1))
     clear = move_ok(robot, model, p0, a, b, opt).reshape(n, n)
     has_via = ~np.isnan(vias[:, 0])
-    speed = robot.joint_speed_deg_s
-    leg = np.array([[opt.run.move_s(speed, x, y) for y in pts] for x in pts])
-    start = np.array(
-        [
-            opt.run.move_s(speed, theta0, p)
-            if not v
-            else opt.run.move_s(speed, theta0, w) + opt.run.move_s(speed, w, p)
-            for p, w, v in zip(pts, vias, has_via, strict=True)
-        ]
-    )
-    back = np.array([opt.run.move_s(speed, p, theta0) for p in pts])
+
+    def move_s(starts, ends):
+        return move_durations_s(robot, opt.run, starts, ends, model, p0)
+
+    leg = move_s(a, b).reshape(n, n)
+    t0 = np.broadcast_to(theta0, pts.shape)
+    first = np.where(has_via[:, None], vias, pts)  # through its via point, if it has one
+    start = move_s(t0, first) + np.where(has_via, move_s(first, pts), 0.0)
+    back = move_s(pts, t0)
     bad = 1e4
 
     def total(path):
@@ -573,10 +576,10 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
 def robot_time(robot: Robot, plan: Plan, run: RunParameters = DEFAULT_RUN) -> float:
     """Estimate the run time (s) of a plan: :func:`~wirecal.solver.run_parameters.run_timeline`.
 
-    Moves at the program speed, a settle and the readings per stop, the closing zero
-    included: the time model the twin's clock and the simulated log's ``t_s`` share.
+    Moves at the SPEED the wire allows, the settle rule and the readings per stop, the
+    closing zero included: the time model the twin's clock and the simulated log's ``t_s`` share.
     """
-    return run_timeline(robot.joint_speed_deg_s, plan, run).total_s
+    return run_timeline(robot, plan, run).total_s
 
 
 def predicted_accuracy(

@@ -47,6 +47,8 @@ class Encoder:
     belt_mode: int = 0
     pulse_inputs: tuple[int, int] = (8, 9)
     exit: Exit | None = None
+    max_wire_speed_mm_s: float | None = None  # the wire's speed limit (None: not given)
+    max_wire_accel_mm_s2: float | None = None  # the wire's acceleration limit
 
     @property
     def counter(self) -> Counter:

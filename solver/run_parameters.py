@@ -1,64 +1,123 @@
 """How a calibration run moves and reads, in one place.
 
-How a calibration run moves and reads, in one place: the program's speed and
-acceleration, the settle time and the counter readings per stop (written into the
-generated programs), and the time model of a run that the planner's robot-time estimate
-and the digital twin's clock share.
+The program's speed and acceleration, the settle rule and the counter readings per stop
+(written into the generated programs), and the time model of a run that the planner's
+robot-time estimate, the simulated log's ``t_s`` and the digital twin's clock share.
 
-A move takes the slowest joint's travel at the program speed (each joint's maximum speed
-from the robot file × ``speed_pct`` %) plus ``MOVE_OVERHEAD_S`` for accelerating,
-decelerating and the controller's motion start; a stop takes ``settle_s`` plus one
-``READING_INTERVAL_S`` per counter reading. :func:`run_timeline` lays a plan's run out
-in time: the ``t_s`` of each reading of the log.
+**Moves.** A joint-interpolated move q(s) = a + s·(b − a), s from 0 to 1, cruises at
+ṡ = speed % × min_j(v_max,j / |b_j − a_j|) (the slowest joint at the program speed) with
+an acceleration and a deceleration ramp of ``MOVE_OVERHEAD_S`` each, linear in ṡ (a
+trapezoid): it lasts 1/ṡ + ``MOVE_OVERHEAD_S``. The wire runs at dℓ/dt = (dℓ/ds)·ṡ with
+dℓ/ds = ûᵀ J(q(s)) (b − a) (û the wire's direction from the mount at θ0, J the tool
+point's Jacobian: the Ψ of the θ offsets) and accelerates at d²ℓ/dt² = (d²ℓ/ds²)·ṡ² +
+(dℓ/ds)·s̈, s̈ = ṡ/``MOVE_OVERHEAD_S`` on a ramp. :func:`move_speeds_pct` chooses each
+move's SPEED: the program's ``speed_pct`` unless the encoder's ``max_wire_speed_mm_s`` or
+``max_wire_accel_mm_s2`` (robot file, ``[encoder]``) asks for less; the twin raises an
+error on a move whose wire exceeds them.
+
+**Settling.** After a move the tool point vibrates along the wire: x(t) = A e^(−t/τ)
+cos(2π f t + φ) with A growing with the move's peak tool-point speed and length
+(:func:`vibration_amplitude_mm`; the twin's model, an estimate: τ ``VIBRATION_TAU_S``,
+f ``VIBRATION_HZ``). The program waits ``settle_s``, then reads the counter every
+``READING_INTERVAL_S`` until the last ``SETTLE_WINDOW`` readings lie within
+``SETTLE_SPREAD_COUNTS`` counts (the settle rule), at most ``settle_max_s``; then it takes
+``readings`` readings. :func:`settle_time_s` predicts when the rule passes.
+:func:`run_timeline` lays a plan's run out in time: the ``t_s`` of each reading of the log.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from wirecal.solver.kinematics import joint_jacobian, tool_position
 from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
 
 MOVE_OVERHEAD_S = 0.5
-"""Time added to every move for its acceleration and deceleration ramps and the start of
-the motion (an estimate, not measured on a controller: at ACCEL 20 % the ramps of a joint
-move take a few tenths of a second)."""
+"""Duration of a move's acceleration ramp (and of its deceleration ramp): a move lasts
+its travel at cruise speed plus this (an estimate, not measured on a controller: at ACCEL
+20 % the ramps of a joint move take a few tenths of a second)."""
 
 READING_INTERVAL_S = 0.02
-"""Wait between two counter readings of one stop (the generated program's
-``WAIT.EVENT , 0.02`` in templates/vplus/measure.v2.j2)."""
+"""Wait between two counter readings (the generated program's ``WAIT.EVENT , 0.02`` in
+templates/vplus/measure.v2.j2), while settling and while sampling."""
+
+SETTLE_WINDOW = 5
+"""Readings the settle rule looks at: 5 readings span 80 ms, one period of a 12.5 Hz
+vibration (a small arm's first mode is 10–20 Hz), so a vibration cannot hide between
+them."""
+
+SETTLE_SPREAD_COUNTS = 2
+"""The settle rule: the window's readings spread over at most this many counts. A still
+encoder reads its count ±1 (the counter's jitter), a spread of up to 2: a still
+encoder passes the first full window, and a vibration passes only once its peak-to-peak
+is within the jitter band, about a count (0.025 mm), still decaying while sampling."""
+
+SETTLE_QUIET_COUNTS = 0.55
+"""The vibration's envelope (counts) at the last reading of the window that passes the
+settle rule, as the twin's runs show it (80 readings × 4 seeds of the paper plan: the rule
+passes when the envelope was about 1.5 counts at the window's first reading, e^-1 of that
+at its last, τ being the window's length): :func:`settle_time_s` predicts with it."""
+
+WIRE_LIMIT_MARGIN = 0.9
+"""The program's moves keep the wire at this fraction of the encoder's limits: the path
+is sampled at ``PATH_SAMPLES`` points and the true robot differs a little from nominal."""
+
+PATH_SAMPLES = 33
+"""Points along each move at which the wire speed is evaluated."""
+
+VIBRATION_TAU_S = 0.08
+"""Decay time constant of the vibration after a stop (the twin's model; an estimate)."""
+
+VIBRATION_HZ = 12.0
+"""Frequency of the vibration after a stop (the twin's model; an estimate)."""
+
+VIBRATION_GAIN_S = 2e-4
+"""Vibration amplitude per tool-point speed (mm per mm/s): 0.1 mm after a long move at
+500 mm/s (the twin's model; an estimate)."""
+
+VIBRATION_LENGTH_MM = 50.0
+"""Moves much shorter than this excite proportionally less vibration."""
+
+JITTER_COUNTS_RMS = math.sqrt(0.4)
+"""RMS of one reading's jitter (counts): the twin's ±1 count, −1, 0, 0, 0, +1 equally
+likely. It averages over the readings of a stop; the pose noise does not."""
+
+POINT_SIGMA_MM = 0.01
+"""Per-point reading noise that does not average over a stop's readings (σ of the CRB)."""
 
 
-def move_time_s(
-    joint_speed_deg_s: np.ndarray, a_deg: np.ndarray, b_deg: np.ndarray, speed_pct: float
-) -> float:
-    """Return the duration (s) of a joint-interpolated move.
+def optimal_readings(mm_per_count: float, stop_s: float = 1.2) -> int:
+    """Return the readings per stop that minimise error² × time per point.
 
-    Duration (s) of a joint-interpolated move from ``a_deg`` to ``b_deg`` at
-    ``speed_pct`` % of the joints' maximum speeds, overhead included.
+    A point's variance is σ_p² + σ_j²/N (σ_p: :data:`POINT_SIGMA_MM` and the quantisation
+    mpc²/12, which do not average; σ_j: :data:`JITTER_COUNTS_RMS`) and its time
+    T + N·δ (T: the move and the settle, ``stop_s``; δ: :data:`READING_INTERVAL_S`). Their
+    product is least at N = (σ_j/σ_p)·√(T/δ): fewer readings leave jitter, more cost time
+    that more points would use better.
     """
-    rate = joint_speed_deg_s * speed_pct / 100
-    return float(np.max(np.abs(np.asarray(b_deg) - np.asarray(a_deg)) / rate)) + MOVE_OVERHEAD_S
+    sigma_p2 = POINT_SIGMA_MM**2 + mm_per_count**2 / 12
+    sigma_j2 = (JITTER_COUNTS_RMS * mm_per_count) ** 2
+    return max(1, round(math.sqrt(sigma_j2 * stop_s / (sigma_p2 * READING_INTERVAL_S))))
+
+
+def vibration_amplitude_mm(peak_speed_mm_s: float, length_mm: float) -> float:
+    """Vibration amplitude (mm) after a move: grows with its peak tool-point speed and length."""
+    return VIBRATION_GAIN_S * peak_speed_mm_s * (1 - math.exp(-length_mm / VIBRATION_LENGTH_MM))
 
 
 @dataclass(frozen=True)
 class RunParameters:
     """The run's motion and reading parameters (``wirecal gen`` options)."""
 
-    speed_pct: float = 20.0  # % of full speed (SPEED … ALWAYS)
+    speed_pct: float = 100.0  # highest program speed, % of full; the wire may ask for less
     accel_pct: float = 20.0  # % of full acceleration and deceleration (ACCEL)
-    settle_s: float = 3.0  # wait after each stop before reading (paper: 3 s)
-    readings: int = 10  # counter readings averaged per point
-
-    def move_s(self, joint_speed_deg_s: np.ndarray, a_deg: np.ndarray, b_deg: np.ndarray) -> float:
-        """Duration (s) of a move at the program speed (:func:`move_time_s`)."""
-        return move_time_s(joint_speed_deg_s, a_deg, b_deg, self.speed_pct)
-
-    @property
-    def stop_s(self) -> float:
-        """Duration (s) of a stop: the settle time and the readings."""
-        return self.settle_s + READING_INTERVAL_S * self.readings
+    settle_s: float = 0.0  # fixed wait after each stop before the settle rule (paper: 3 s)
+    settle_max_s: float = 2.0  # the settle rule's longest wait: then the point is unsettled
+    readings: int = 10  # counter readings per point: optimal_readings for a 0.025 mm count
 
     def problems(self) -> list[str]:
         """Return what is out of range, as ``wirecal gen``'s options name it."""
@@ -69,6 +128,11 @@ class RunParameters:
             out.append(f"--accel {self.accel_pct:g}: give a percentage in (0, 100]")
         if not 0 <= self.settle_s <= 60:
             out.append(f"--settle-s {self.settle_s:g}: give 0–60 s")
+        if not SETTLE_WINDOW * READING_INTERVAL_S <= self.settle_max_s <= 60:
+            out.append(
+                f"--settle-max-s {self.settle_max_s:g}: give "
+                f"{SETTLE_WINDOW * READING_INTERVAL_S:g}–60 s (the settle rule's window)"
+            )
         if not 1 <= self.readings <= 1000:
             out.append(f"--samples {self.readings}: give 1–1000")
         return out
@@ -77,40 +141,207 @@ class RunParameters:
 DEFAULT_RUN = RunParameters()
 """The defaults of ``wirecal gen`` and of the planner's robot-time estimate."""
 
+SAFE_SPEED_PCT = 20.0
+"""SPEED (%) of the moves that no wire plan covers (wc.mount to θ0, the validation
+programs): the paper's program speed."""
+
+PAPER_RUN = RunParameters(speed_pct=20.0, settle_s=3.0)
+"""The paper's run: 20 % speed and a fixed 3 s settle before reading."""
+
+
+@dataclass(frozen=True)
+class Moves:
+    """Per move of a run: what the program speed does to it (all arrays (M,))."""
+
+    wire_rate_mm: np.ndarray  # max |dℓ/ds| along the move
+    wire_curve_mm: np.ndarray  # max |d²ℓ/ds²| along the move
+    tool_rate_mm: np.ndarray  # max |dp/ds| along the move
+    tool_length_mm: np.ndarray  # the tool point's path length
+    cruise_per_pct: np.ndarray  # ṡ (1/s) at 1 % program speed (inf: no travel)
+
+    def cruise(self, speed_pct: np.ndarray) -> np.ndarray:
+        """ṡ (1/s) of each move at ``speed_pct``."""
+        return self.cruise_per_pct * np.asarray(speed_pct, dtype=float)
+
+    def duration_s(self, speed_pct: np.ndarray) -> np.ndarray:
+        """Duration (s) of each move at ``speed_pct``: travel at cruise plus one ramp."""
+        with np.errstate(divide="ignore"):
+            return 1.0 / self.cruise(speed_pct) + MOVE_OVERHEAD_S
+
+    def wire_speed_mm_s(self, speed_pct: np.ndarray) -> np.ndarray:
+        """Peak wire speed (mm/s) of each move at ``speed_pct``."""
+        with np.errstate(invalid="ignore"):
+            return _finite(self.wire_rate_mm * self.cruise(speed_pct))
+
+    def wire_accel_mm_s2(self, speed_pct: np.ndarray) -> np.ndarray:
+        """Bound on the peak wire acceleration (mm/s²) of each move at ``speed_pct``."""
+        c = _finite(self.cruise(speed_pct))
+        return self.wire_curve_mm * c**2 + self.wire_rate_mm * c / MOVE_OVERHEAD_S
+
+    def vibration_mm(self, speed_pct: np.ndarray) -> np.ndarray:
+        """Vibration amplitude (mm) after each move at ``speed_pct``."""
+        with np.errstate(invalid="ignore"):
+            peak = _finite(self.tool_rate_mm * self.cruise(speed_pct))
+        return np.array(
+            [vibration_amplitude_mm(v, s) for v, s in zip(peak, self.tool_length_mm, strict=True)]
+        )
+
+
+def _finite(x: np.ndarray) -> np.ndarray:
+    """``x`` with the values of moves without travel (∞·0) as 0."""
+    return np.where(np.isfinite(x), x, 0.0)
+
+
+def move_profiles(
+    robot: Robot, model, p0_mm: np.ndarray, starts_deg: np.ndarray, ends_deg: np.ndarray
+) -> Moves:
+    """Evaluate moves from ``starts_deg`` to ``ends_deg`` (M, n) along their joint paths.
+
+    ``model`` is the kinematic model (nominal for the program, the true one in the twin);
+    ``p0_mm`` the wire's mount point (the tool point at θ0). dℓ/ds is analytic (the
+    Jacobian); d²ℓ/ds² its difference along the ``PATH_SAMPLES`` samples.
+    """
+    a = np.atleast_2d(np.asarray(starts_deg, dtype=float))
+    b = np.atleast_2d(np.asarray(ends_deg, dtype=float))
+    s = np.linspace(0.0, 1.0, PATH_SAMPLES)
+    dq = b - a  # (M, n) deg
+    q = a[:, None, :] + s[None, :, None] * dq[:, None, :]  # (M, S, n)
+    p, J = joint_jacobian(model, np.radians(q.reshape(-1, q.shape[-1])))
+    dp = np.einsum("kcj,kj->kc", J, np.radians(np.repeat(dq, len(s), axis=0)))  # dp/ds
+    p, dp = p.reshape(*q.shape[:2], 3), dp.reshape(*q.shape[:2], 3)
+    wire = p - np.asarray(p0_mm, dtype=float)
+    length = np.linalg.norm(wire, axis=2)
+    tool_rate = np.linalg.norm(dp, axis=2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rate = np.einsum("msc,msc->ms", wire, dp) / length
+    rate = np.where(length > 1e-6, rate, tool_rate)  # leaving the mount: at the tool's speed
+    curve = np.gradient(rate, s, axis=1)
+    travel = np.abs(dq) / robot.joint_speed_deg_s
+    slowest = travel.max(axis=1)
+    with np.errstate(divide="ignore"):
+        cruise_per_pct = np.where(slowest > 0, 0.01 / slowest, np.inf)
+    seg = np.linalg.norm(np.diff(p, axis=1), axis=2).sum(axis=1)
+    return Moves(
+        np.abs(rate).max(axis=1),
+        np.abs(curve).max(axis=1),
+        tool_rate.max(axis=1),
+        seg,
+        cruise_per_pct,
+    )
+
+
+def move_speeds_pct(robot: Robot, moves: Moves, speed_pct: float) -> np.ndarray:
+    """Each move's SPEED (%): ``speed_pct`` unless the wire limits ask for less.
+
+    The largest speed, in steps of 0.1 %, at which the move's peak wire speed and wire
+    acceleration stay within :data:`WIRE_LIMIT_MARGIN` of the encoder's
+    ``max_wire_speed_mm_s`` and ``max_wire_accel_mm_s2`` (each unlimited if not given).
+    """
+    enc = robot.encoder
+    c_max = np.full(len(moves.cruise_per_pct), np.inf)  # the largest ṡ the wire allows
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if enc.max_wire_speed_mm_s is not None:
+            c_max = np.minimum(
+                c_max, WIRE_LIMIT_MARGIN * enc.max_wire_speed_mm_s / moves.wire_rate_mm
+            )
+        if enc.max_wire_accel_mm_s2 is not None:
+            # curve·c² + rate·c/T ≤ margin·a_max: the positive root of the quadratic
+            A, B = moves.wire_curve_mm, moves.wire_rate_mm / MOVE_OVERHEAD_S
+            C = WIRE_LIMIT_MARGIN * enc.max_wire_accel_mm_s2
+            root = np.where(A > 0, 2 * C / (B + np.sqrt(B**2 + 4 * A * C)), C / B)
+            c_max = np.minimum(c_max, root)
+        pct = np.floor(10 * c_max / moves.cruise_per_pct) / 10
+    pct = np.where(np.isfinite(pct), pct, speed_pct)
+    return np.clip(pct, 0.1, speed_pct)
+
+
+def move_durations_s(
+    robot: Robot,
+    run: RunParameters,
+    starts_deg: np.ndarray,
+    ends_deg: np.ndarray,
+    model=None,
+    p0_mm: np.ndarray | None = None,
+) -> np.ndarray:
+    """Duration (s) of each move, at the SPEED the wire allows (as the program moves).
+
+    ``model`` defaults to the nominal one; ``p0_mm`` (the mount, the tool point at θ0) is
+    needed when the encoder has wire limits.
+    """
+    model = robot.nominal if model is None else model
+    p0 = np.zeros(3) if p0_mm is None else p0_mm
+    moves = move_profiles(robot, model, p0, starts_deg, ends_deg)
+    return moves.duration_s(move_speeds_pct(robot, moves, run.speed_pct))
+
+
+def settle_time_s(amplitude_mm: np.ndarray, mm_per_count: float, run: RunParameters) -> np.ndarray:
+    """Predicted wait (s) from the end of a move to the end of the settle rule.
+
+    ``settle_s``, then readings every :data:`READING_INTERVAL_S` until the last reading of
+    a full window of :data:`SETTLE_WINDOW` comes after the vibration's envelope fell to
+    :data:`SETTLE_QUIET_COUNTS`, at most ``settle_max_s``.
+    """
+    a = np.asarray(amplitude_mm, dtype=float) / abs(mm_per_count)
+    quiet_s = VIBRATION_TAU_S * np.log(np.maximum(a, 1e-12) / SETTLE_QUIET_COUNTS)
+    last = np.ceil(np.maximum(0.0, quiet_s - run.settle_s) / READING_INTERVAL_S - 1e-9)
+    waited = np.maximum(last, SETTLE_WINDOW - 1) * READING_INTERVAL_S
+    return run.settle_s + np.minimum(waited, run.settle_max_s)
+
 
 @dataclass(frozen=True)
 class Timeline:
     """When a run of a plan reads: its time model, as the log's ``t_s`` column."""
 
     reading_s: np.ndarray  # s from the start of the run to the sampling of each reading
+    settle_s: np.ndarray  # each reading's wait after its move (the log's settle_s)
+    speed_pct: np.ndarray  # each move's SPEED, in the generated program's order
     total_s: float  # the whole run, to the end of the closing zero reading
 
 
-def run_timeline(joint_speed_deg_s: np.ndarray, plan: Plan, run: RunParameters) -> Timeline:
+def run_targets_deg(plan: Plan) -> tuple[np.ndarray, np.ndarray]:
+    """Every move's target of a run of ``plan`` in order, and whether it reads there.
+
+    Per step θ0 (its zero reading), the via points (no stop), the points; last θ0 for the
+    closing zero reading.
+    """
+    targets: list[np.ndarray] = []
+    reads: list[bool] = []
+    for step in plan.steps:
+        targets.append(plan.theta0_deg)
+        reads.append(True)
+        targets += list(step.via_deg)
+        reads += [False] * len(step.via_deg)
+        targets += list(step.points_deg)
+        reads += [True] * len(step.points_deg)
+    targets.append(plan.theta0_deg)
+    reads.append(True)
+    return np.asarray(targets, dtype=float), np.asarray(reads)
+
+
+def plan_moves(robot: Robot, plan: Plan, model=None) -> Moves:
+    """Return the moves of a run of ``plan`` (from θ0, where the run starts), nominal model."""
+    model = robot.nominal if model is None else model
+    targets, _ = run_targets_deg(plan)
+    starts = np.vstack([plan.theta0_deg, targets[:-1]])
+    p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
+    return move_profiles(robot, model, p0, starts, targets)
+
+
+def run_timeline(robot: Robot, plan: Plan, run: RunParameters) -> Timeline:
     """Lay out a run of ``plan`` in time, in the generated program's order.
 
     Each step moves to θ0 (zero reading), through its via points (blended, no stop) and to
-    each point (settle, read); last a move to θ0 for the closing zero reading. The run
-    starts at θ0 with the timer at zero; a reading's time is when its sampling begins.
+    each point (settle, read); last a move to θ0 for the closing zero reading. Each move at
+    its SPEED (:func:`move_speeds_pct`); each stop waits as :func:`settle_time_s` predicts
+    and reads ``readings`` times, one :data:`READING_INTERVAL_S` apart. The run starts at
+    θ0 with the timer at zero; a reading's time is when its sampling begins.
     """
-    here = np.asarray(plan.theta0_deg, dtype=float)
-    t = 0.0
-    times: list[float] = []
-
-    def visit(target: np.ndarray, reads: bool) -> None:
-        nonlocal here, t
-        t += run.move_s(joint_speed_deg_s, here, target)
-        here = np.asarray(target, dtype=float)
-        if reads:
-            t += run.settle_s
-            times.append(t)
-            t += READING_INTERVAL_S * run.readings
-
-    for step in plan.steps:
-        visit(plan.theta0_deg, True)
-        for via in step.via_deg:
-            visit(via, False)
-        for point in step.points_deg:
-            visit(point, True)
-    visit(plan.theta0_deg, True)
-    return Timeline(np.array(times), t)
+    _, reads = run_targets_deg(plan)
+    moves = plan_moves(robot, plan)
+    speed = move_speeds_pct(robot, moves, run.speed_pct)
+    duration = moves.duration_s(speed)
+    settle = settle_time_s(moves.vibration_mm(speed), robot.encoder.mm_per_count, run)
+    stop = np.where(reads, settle + READING_INTERVAL_S * (run.readings - 1), 0.0)
+    end = np.cumsum(duration + stop)
+    reading_s = (end - stop + settle)[reads]
+    return Timeline(reading_s, settle[reads], speed, float(end[-1]))

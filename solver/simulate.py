@@ -150,11 +150,15 @@ def simulate_log(
     tail = sample_counts(lengths[-1:], mpc, start, enc.counter, samples, closing_rng)
     mean, spread = np.concatenate([head[0], tail[0]]), np.concatenate([head[1], tail[1]])
     run = replace(DEFAULT_RUN, readings=samples)
-    times = run_timeline(robot.joint_speed_deg_s, plan, run).reading_s
+    timeline = run_timeline(robot, plan, run)
     rows = [
-        format_row(*args, samples, sp, t, run.settle_s)
-        for args, sp, t in zip(
-            zip(kinds, steps, indices, joints, mean, strict=True), spread, times, strict=True
+        format_row(*args, samples, sp, t, settle)
+        for args, sp, t, settle in zip(
+            zip(kinds, steps, indices, joints, mean, strict=True),
+            spread,
+            timeline.reading_s,
+            timeline.settle_s,
+            strict=True,
         )
     ]
     if faults.stop_after is not None:

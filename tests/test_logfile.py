@@ -106,10 +106,11 @@ def test_version_2_times_follow_the_run(viper, paper_plan, log_text):
     log = parse_log(log_text, "run.csv")
     t = np.array([r.t_s for r in log.readings])
     assert log.version == 2
-    assert np.all(np.diff(t) > 3.0)  # each reading settles 3 s after the previous one
-    assert {r.settle_s for r in log.readings} == {3.0}
-    # first zero: the move to θ0 from θ0 (0.5 s overhead) and the 3 s settle
-    assert t[0] == pytest.approx(3.5, abs=1e-9)
+    assert np.all(np.diff(t) > 0.5)  # a move's ramp at least between two readings
+    settle = np.array([r.settle_s for r in log.readings])
+    assert np.all((settle >= 0.08) & (settle < 0.5))  # the settle rule's window at least
+    # first zero: the move to θ0 from θ0 (0.5 s ramp), nothing to settle: the window
+    assert t[0] == pytest.approx(0.58, abs=1e-9)
 
 
 @pytest.mark.parametrize(

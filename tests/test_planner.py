@@ -18,7 +18,7 @@ from wirecal.solver.formats.plan_file import load_plan, plan_from_dict
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.planner import PlanOptions, design, predicted_accuracy, robot_time
-from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
+from wirecal.solver.run_parameters import PAPER_RUN, run_timeline
 
 from .conftest import ROOT, VIPER
 
@@ -130,9 +130,11 @@ def test_viper_plan_beats_the_corrected_paper_plan(viper, paper_plan):
 
 
 def test_robot_time_counts_moves_settles_and_returns(viper):
-    """One step, one point 30° away on joint 1 (328 °/s at 20 %): the move to θ0 from θ0
-    (0.5 s overhead), out and back 2 × (30 / 65.6 + 0.5 s), three stops (zero, point,
-    closing zero) of 3 s settle + 10 readings."""
+    """One step, one point 30° away on joint 1 (328 °/s at the paper's 20 %, a wire speed
+    well below the limit): the move to θ0 from θ0 (0.5 s ramp), out and back
+    2 × (30 / 65.6 + 0.5 s), three stops (zero, point, closing zero) of 3 s settle, the
+    settle rule's window 4 × 0.02 s on a vibration long decayed, and 10 readings 0.02 s
+    apart."""
     plan = plan_from_dict(
         {
             "theta0_deg": [0, -90, 180, 0, 45, 0],
@@ -141,11 +143,15 @@ def test_robot_time_counts_moves_settles_and_returns(viper):
         },
         viper,
     )
-    expected = 0.5 + 2 * (30 / (328 * 0.2) + 0.5) + 3 * (3 + 0.2)
-    assert robot_time(viper, plan) == pytest.approx(expected, rel=1e-12)
-    times = run_timeline(viper.joint_speed_deg_s, plan, DEFAULT_RUN).reading_s
+    stop = 3 + 0.08 + 0.18
+    expected = 0.5 + 2 * (30 / (328 * 0.2) + 0.5) + 3 * stop
+    assert robot_time(viper, plan, PAPER_RUN) == pytest.approx(expected, rel=1e-12)
+    timeline = run_timeline(viper, plan, PAPER_RUN)
+    np.testing.assert_allclose(timeline.speed_pct, [20, 20, 20])
     np.testing.assert_allclose(
-        times, [3.5, 3.5 + 0.2 + 30 / 65.6 + 0.5 + 3, expected - 0.2], rtol=1e-12
+        timeline.reading_s,
+        [3.58, 0.5 + stop + 30 / 65.6 + 0.5 + 3.08, expected - 0.18],
+        rtol=1e-12,
     )
 
 

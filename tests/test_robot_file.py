@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from wirecal.cli.main import main
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
+from wirecal.solver.formats.robot_file import load_robot, robot_file_text, robot_from_dict
 
 from .conftest import VIPER
 
@@ -29,6 +29,8 @@ def test_viper_example(viper):
     assert viper.encoder.mm_per_count == 0.025488
     assert viper.encoder.range_mm == 1250
     assert viper.encoder.counter_bits == 24
+    assert viper.encoder.max_wire_speed_mm_s == 1000
+    assert viper.encoder.max_wire_accel_mm_s2 == 49000
     np.testing.assert_allclose(viper.joint_min_deg, [-170, -190, -29, -190, -120, -360])
     np.testing.assert_allclose(viper.joint_max_deg, [170, 45, 256, 190, 120, 360])
     np.testing.assert_allclose(viper.joint_speed_deg_s, [328, 300, 375, 375, 375, 600])
@@ -202,6 +204,18 @@ CASES = {
         lambda d: d["geometry"]["link_radius_mm"].__setitem__(0, -1.0),
         "r.toml: geometry.link_radius_mm: value 1 is -1.0; give a number between 0 and 10000 mm",
     ),
+    "negative wire speed": (
+        lambda d: d["encoder"].__setitem__("max_wire_speed_mm_s", -1.0),
+        "r.toml: encoder.max_wire_speed_mm_s: is -1.0; give a number > 0 and ≤ 20000 mm/s",
+    ),
+    "boolean wire acceleration": (
+        lambda d: d["encoder"].__setitem__("max_wire_accel_mm_s2", True),
+        "r.toml: encoder.max_wire_accel_mm_s2: is true; give a number > 0 and ≤ 1e+06 mm/s²",
+    ),
+    "wire acceleration beyond 100 g": (
+        lambda d: d["encoder"].__setitem__("max_wire_accel_mm_s2", 2e6),
+        "r.toml: encoder.max_wire_accel_mm_s2: is 2000000.0; give a number > 0 and ≤ 1e+06 mm/s²",
+    ),
     "empty parameters": (
         lambda d: d["calibration"].__setitem__("parameters", []),
         "r.toml: calibration.parameters: is empty",
@@ -326,3 +340,18 @@ def test_cli_refuses_implausible_robot(tmp_path, edit, message, command):
     assert message in r.output
     assert "Traceback" not in r.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["robot.toml"]
+
+
+@pytest.mark.parametrize("limits", [True, False])
+def test_wire_limits_are_optional_and_written_back(viper, limits):
+    """The encoder's wire limits read back from robot_file_text; without them the file
+    has no such keys and the robot has no limits."""
+    data = copy.deepcopy(BASE)
+    if not limits:
+        del data["encoder"]["max_wire_speed_mm_s"], data["encoder"]["max_wire_accel_mm_s2"]
+    robot = robot_from_dict(data, "r.toml")
+    text = robot_file_text(robot, header=[], row_notes=[""] * 6, encoder_note="")
+    again = robot_from_dict(tomllib.loads(text), "again.toml")
+    assert again.encoder == robot.encoder
+    assert ("max_wire_speed_mm_s = 1000.0" in text) is limits
+    assert (again.encoder.max_wire_accel_mm_s2 == 49000.0) is limits

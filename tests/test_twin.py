@@ -171,14 +171,14 @@ def test_run_log_is_the_simulators_format(twin_run, paper_plan):
     assert log.plan == paper_plan.fingerprint()
     assert log.mm_per_count == 0.025488
     assert len(log.readings) == 69 + 10 + 1  # points, the steps' zeros, the closing zero
-    assert twin_run.cell.clock > 60 * 4  # settling alone is 79 × 3 s
+    assert {r.kind for r in log.readings} == {"zero", "point"}  # nothing unsettled
 
 
 def test_twin_clock_agrees_with_the_planners_robot_time(viper, paper_plan, twin_run):
-    """One time model (run_parameters): the twin's clock over the generated programs and
-    the planner's estimate of the paper plan agree within 1 % (measured: 343.8 s against
-    344.4 s; with the twin's former 0.2 s per move against the planner's 0.5 s, 319.5 s:
-    25 s apart)."""
+    """One time model (run_parameters): the twin's clock over the generated programs (each
+    move at its SPEED, each settle measured by the rule on the vibrating twin) and the
+    planner's estimate of the paper plan agree within 1 % (measured: 86.3 s against
+    85.9 s; with the 3 s settle the paper waited, 353.6 s against 353.1 s)."""
     assert twin_run.cell.clock == pytest.approx(robot_time(viper, paper_plan), rel=0.01)
 
 
@@ -188,10 +188,18 @@ def test_twin_log_times_are_the_controllers_timer(viper, paper_plan, twin_run):
     log = read_log(twin_run.log)
     t = np.array([r.t_s for r in log.readings])
     np.testing.assert_allclose(np.round(t * 1000), t * 1000, atol=1e-6)  # whole milliseconds
-    assert {r.settle_s for r in log.readings} == {3.0}
-    model = run_timeline(viper.joint_speed_deg_s, paper_plan, DEFAULT_RUN).reading_s
-    np.testing.assert_allclose(t, model, rtol=0.01)
+    model = run_timeline(viper, paper_plan, DEFAULT_RUN).reading_s
+    np.testing.assert_allclose(t, model, rtol=0.01, atol=0.3)
     assert t[-1] < twin_run.cell.clock
+
+
+def test_a_still_twin_does_not_wait_the_maximum(twin_run):
+    """The settle rule on a twin whose vibration decays (τ 0.08 s): every reading waits at
+    least the 5-reading window (4 × 0.02 s) and far less than the 2 s maximum."""
+    settle = np.array([r.settle_s for r in read_log(twin_run.log).readings])
+    assert settle.min() == pytest.approx(0.08)
+    assert settle.max() < 0.5 < DEFAULT_RUN.settle_max_s
+    assert settle.mean() < 0.25
 
 
 def _fault(viper, plan, tmp_path, faults, **kw):
@@ -234,22 +242,8 @@ def test_fault_point_beyond_a_limit(viper, paper_plan, tmp_path):
     assert m.missing_text() == "step 4 points 4–12; steps 5–10 (all points)"  # j3 239.93
 
 
-def test_fault_spread_too_large(viper, paper_plan, tmp_path):
-    r, out = _fault(
-        viper, paper_plan, tmp_path, Faults(vibration_at_move=move_of_step(paper_plan, 3, 2))
-    )
-    assert out.status == "paused"
-    assert "    time (wirecal gen --settle-s) and repeat step 3." in out.console
-    with pytest.raises(WirecalError) as info:
-        load_measurements(r.log, paper_plan, viper)
-    assert (
-        "the robot was still moving; lengthen the settle time and repeat step 3"
-        in info.value.problems[0]
-    )
-
-
 def test_fault_encoder_fails(viper, paper_plan, tmp_path):
-    r, out = _fault(viper, paper_plan, tmp_path, Faults(encoder_fails_at_read=200))
+    r, out = _fault(viper, paper_plan, tmp_path, Faults(encoder_fails_at_read=300))
     assert out.status == "error"
     assert out.message == "*Encoder quadrature error* (-1013)"
     m = load_measurements(r.log, paper_plan, viper)

@@ -150,7 +150,9 @@ def test_fault_wire_slip(ur5, ur5_plan, texts, truth, tmp_path):
     r = run(ur5, ur5_plan, texts, truth, tmp_path, faults=slip)
     out = r.programs.run
     assert out.status == "stopped"  # the operator stops at the warning
-    assert "# *** the zero reading at theta0 moved by more than 0.1 mm: slip in step 4" in out.console
+    assert (
+        "# *** the zero reading at theta0 moved by more than 0.1 mm: slip in step 4" in out.console
+    )
     assert "the wire slipped or the encoder moved during step 4" in out.message
     with pytest.raises(WirecalError) as info:
         load_measurements(r.received.journal, ur5_plan, ur5)

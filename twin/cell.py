@@ -3,10 +3,14 @@
 :class:`Cell` is the controller's outside world for :class:`~wirecal.twin.vplus.interp.Interpreter`:
 a true robot (nominal model + error offsets) whose moves respect the joint limits, a
 draw-wire encoder mounted at θ0 of the true robot (its wire over the exit as built, noise
-per pose, quantisation, ±1-count
-jitter, a wrapping counter, a range limit), a disk in a sandbox folder, a terminal with
-scripted answers, and a clock. Faults can be injected: a wire slip, an encoder failure,
-a full disk, vibration (a large spread), tighter joint limits than the plan assumed.
+per pose, quantisation, ±1-count jitter, a wrapping counter, a range limit, the wire's
+speed and acceleration limits), a vibration of the tool point along the wire after each
+move that decays (the settling model of :mod:`wirecal.solver.run_parameters`; the wire
+limits are enforced in :func:`run_measurement`, where the wire is mounted at θ0 and every
+move is planned for it; the validation programs move at 20 % without a wire plan), a disk
+in a sandbox folder, a terminal with scripted answers, and a clock. Faults can be
+injected: a wire slip, an encoder failure, a full disk, a vibration that does not decay
+("still vibrating"), tighter joint limits than the plan assumed.
 
 Error codes of the twin's own making (the V+ manual's codes are used where known:
 −1013 encoder quadrature error, User's Guide p. 354) are listed in ``ERRORS``.
@@ -25,7 +29,11 @@ from wirecal.solver.exit_geometry import physical_wire_mm
 from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.run_parameters import move_time_s
+from wirecal.solver.run_parameters import (
+    VIBRATION_HZ,
+    VIBRATION_TAU_S,
+    move_profiles,
+)
 from wirecal.solver.simulate import RANGE_EXCEEDED
 from wirecal.twin.machine import Outcome, RunError, f32
 from wirecal.twin.vplus.interp import UNMODELLED, Interpreter, Trans, VError
@@ -41,6 +49,7 @@ ERRORS = {
     -1004: "*Joint out of range*",
     -1013: "*Encoder quadrature error*",
     -1100: RANGE_EXCEEDED,
+    -1101: "*Wire overspeed*",
 }
 
 
@@ -52,8 +61,8 @@ class Faults:
     slip_mm: float = 0.5
     encoder_fails_at_read: int | None = None
     disk_full_after_lines: int | None = None
-    vibration_at_move: int | None = None  # readings after this move jitter ±vibration
-    vibration_counts: int = 20
+    vibration_at_move: int | None = None  # still vibrating: the stop after this move
+    vibration_counts: int = 20  # vibrates ±this, undamped, until the operator steadies it
     joint_max_deg: tuple[float, ...] | None = None  # the controller's own limits
     socket_drops_after_lines: int | None = None  # URScript: the connection to the PC drops
 
@@ -113,6 +122,7 @@ class Cell:
     probe_signal: int = 1001
     encoder_point_mm: tuple[float, float, float] | None = None  # fixed encoder (validation)
     unmodelled: Unmodelled | None = None
+    wire_limits: bool = False  # the wire's speed and acceleration limits are enforced
 
     def __post_init__(self):
         """Derive the true and believed models and start the cell's state."""
@@ -146,6 +156,7 @@ class Cell:
         if self.encoder_point_mm is not None:
             self.p0 = np.asarray(self.encoder_point_mm, dtype=float)
         self.actual = np.asarray(self.joints, dtype=float)
+        self.vibration = (0.0, VIBRATION_TAU_S, 0.0, 0.0)  # amplitude mm, τ, phase, since
 
     # ---- terminal ----
     def type_(self, text: str) -> None:
@@ -162,7 +173,9 @@ class Cell:
         return answer
 
     def on_pause(self) -> bool:
-        """Return whether a PAUSE proceeds (as the operator would)."""
+        """Return whether a PAUSE proceeds (as the operator would, who then steadies the arm)."""
+        if self.proceed_on_pause:
+            self.vibration = (0.0, VIBRATION_TAU_S, 0.0, self.clock)
         return self.proceed_on_pause
 
     # ---- motion ----
@@ -211,7 +224,11 @@ class Cell:
         j = self.beyond_limits(q)
         if j is not None:
             raise VError(-1004, f"*Joint {j + 1} out of range* ({q[j]:g} deg)")
-        self.arrive(q, move_time_s(self.robot.joint_speed_deg_s, self.joints, q, self.speed_pct))
+        move = move_profiles(self.robot, self.model, self.p0, self.joints, q)
+        if self.wire_limits:
+            self._check_wire(move, q)
+        self.arrive(q, float(move.duration_s(self.speed_pct)[0]))
+        self._vibrate(float(move.vibration_mm(self.speed_pct)[0]))
 
     def beyond_limits(self, q_deg: np.ndarray) -> int | None:
         """Return the index of the first joint beyond the controller's limits, if any."""
@@ -229,6 +246,42 @@ class Cell:
         if f.slip_at_move is not None and self.moves == f.slip_at_move:
             self.slip += f.slip_mm
         self.pose_error = self.rng.normal(0, self.noise_mm)
+
+    def _vibrate(self, amplitude_mm: float) -> None:
+        """Start the vibration along the wire after a move.
+
+        It decays, or with the fault "still vibrating" it does not, until the operator
+        steadies the arm at a PAUSE.
+        """
+        f = self.faults
+        phase = float(self.rng.uniform(0, 2 * math.pi))
+        if f.vibration_at_move is not None and self.moves == f.vibration_at_move:
+            amplitude = f.vibration_counts * abs(self.robot.encoder.mm_per_count)
+            self.vibration = (amplitude, math.inf, phase, self.clock)
+        else:
+            self.vibration = (amplitude_mm, VIBRATION_TAU_S, phase, self.clock)
+
+    def _check_wire(self, move, q: np.ndarray) -> None:
+        """Refuse a move that would run the wire beyond the encoder's limits."""
+        enc = self.robot.encoder
+        speed = float(move.wire_speed_mm_s(self.speed_pct)[0])
+        accel = float(move.wire_accel_mm_s2(self.speed_pct)[0])
+        where = (
+            f"move {self.moves + 1} to ({', '.join(f'{x:g}' for x in q)}) at SPEED "
+            f"{self.speed_pct:g}"
+        )
+        if enc.max_wire_speed_mm_s is not None and speed > enc.max_wire_speed_mm_s:
+            raise VError(
+                -1101,
+                f"{ERRORS[-1101]} {where}: the wire would run at {speed:.0f} mm/s, beyond "
+                f"the encoder's max_wire_speed_mm_s {enc.max_wire_speed_mm_s:g}",
+            )
+        if enc.max_wire_accel_mm_s2 is not None and accel > enc.max_wire_accel_mm_s2:
+            raise VError(
+                -1101,
+                f"{ERRORS[-1101]} {where}: the wire would accelerate at {accel:.0f} mm/s², "
+                f"beyond the encoder's max_wire_accel_mm_s2 {enc.max_wire_accel_mm_s2:g}",
+            )
 
     def _unmodelled(self, q_deg: np.ndarray) -> np.ndarray:
         """Where the arm really is, relative to the commanded joints (deg)."""
@@ -296,10 +349,9 @@ class Cell:
     def wire_counts(self) -> int:
         """Return the encoder's count for the true wire length now, before any wrap.
 
-        Gaussian noise per pose, quantisation, ±1-count jitter (wider while the arm
-        vibrates), a slip; a wire pulled beyond the encoder's range is an error.
+        Gaussian noise per pose, quantisation, ±1-count jitter, the vibration after the
+        last move, a slip; a wire pulled beyond the encoder's range is an error.
         """
-        f = self.faults
         p = tool_position(self.model, np.radians(self.actual)[None])[0]
         d = float(physical_wire_mm(self.robot.encoder.exit, p - self.p0))
         d += self.pose_error + self.slip
@@ -309,9 +361,10 @@ class Cell:
                 f"{ERRORS[-1100]}: the wire would be {d:.1f} mm long, beyond the "
                 f"encoder's range_mm {self.robot.encoder.range_mm:g}",
             )
+        amplitude, tau, phase, since = self.vibration
+        t = self.clock - since
+        d += amplitude * math.exp(-t / tau) * math.cos(2 * math.pi * VIBRATION_HZ * t + phase)
         jitter = int(self.rng.choice((-1, 0, 0, 0, 1)))
-        if f.vibration_at_move is not None and self.moves >= f.vibration_at_move:
-            jitter += int(self.rng.integers(-f.vibration_counts, f.vibration_counts + 1))
         return math.floor(self.counter_start + d / self.robot.encoder.mm_per_count + 0.5) + jitter
 
     def _counts(self) -> float:
@@ -419,10 +472,13 @@ def run_measurement(
     noise_mm: float = 0.01,
     counter_start: float | None = None,
     faults: Faults = Faults(),
+    proceed_on_pause: bool = False,
 ) -> RunResult:
     """Run a module's wc.mount (answered 1) and wc.run in the twin.
 
     The log is ``log_file`` on the cell's disk (the name the module was generated with).
+    ``proceed_on_pause``: the operator continues after each PAUSE (having steadied the
+    arm: a vibration stops), else the run ends there.
     """
     disk.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng([seed, 2])
@@ -436,6 +492,8 @@ def run_measurement(
         noise_mm=noise_mm,
         counter_start=start,
         faults=faults,
+        proceed_on_pause=proceed_on_pause,
+        wire_limits=True,
     )
     interp = Interpreter(parse_module(text, "WIRECAL.V2"), cell)
     mount = interp.execute("wc.mount")

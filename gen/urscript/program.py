@@ -31,7 +31,12 @@ from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
 from wirecal.solver.formats.log import VERSION as LOG_VERSION
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.run_parameters import DEFAULT_RUN, READING_INTERVAL_S, RunParameters
+from wirecal.solver.run_parameters import (
+    DEFAULT_RUN,
+    PAPER_RUN,
+    READING_INTERVAL_S,
+    RunParameters,
+)
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 
 ROLES = ("mount", "check", "run")
@@ -51,7 +56,9 @@ MOVEJ_DEFAULT_ACCEL_RAD_S2 = 1.4
 class UrOptions:
     """Options of the generated URScript programs."""
 
-    run: RunParameters = DEFAULT_RUN  # speed, acceleration, settle, readings
+    # the paper's one speed and fixed settle: the URScript programs do not yet read the
+    # wire's limits or the settle rule of the V+ module (wirecal.solver.run_parameters)
+    run: RunParameters = PAPER_RUN
     host: str | None = None  # the PC running 'wirecal receive' (default: the robot file's)
     port: int | None = None  # its port (default: the robot file's)
     zero_tol_mm: float = 0.1  # a zero reading further from the first: the wire slipped

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -26,7 +27,14 @@ from wirecal.solver.formats.log import MAGIC as LOG_MAGIC
 from wirecal.solver.formats.log import VERSION as LOG_VERSION
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters
+from wirecal.solver.run_parameters import (
+    DEFAULT_RUN,
+    SAFE_SPEED_PCT,
+    SETTLE_SPREAD_COUNTS,
+    SETTLE_WINDOW,
+    RunParameters,
+    run_timeline,
+)
 from wirecal.solver.validation import CONFIGS, Setup, config_poses, plate_grid
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 from wirecal.twin.vplus.parser import parse_module
@@ -173,6 +181,12 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
             "±1677 mm/deg; the controller's SPEC table cannot print it"
         )
     steps = run_steps(plan, tables.first, ppoint)
+    speeds = iter(_num(x) for x in run_timeline(robot, plan, opt.run).speed_pct)
+    for step in steps:  # each move's SPEED, in the run's order (θ0, vias, points)
+        step["zero_speed"] = next(speeds)
+        for move in [*cast(list, step["vias"]), *cast(list, step["points"])]:
+            move["speed"] = next(speeds)
+    closing_speed = next(speeds)
     patch = None
     if opt.patch is not None:
         missing = [n for n in plan.order if n not in opt.patch]
@@ -196,9 +210,15 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         m=len(plan.order),
         stride=STRIDE,
         axes=AXES,
-        speed=_num(opt.run.speed_pct),
+        speed=_num(min(SAFE_SPEED_PCT, opt.run.speed_pct)),
+        speed_cap=_num(opt.run.speed_pct),
+        closing_speed=closing_speed,
+        wire_limits=_wire_limits(robot),
         accel=_num(opt.run.accel_pct),
         settle=_num(opt.run.settle_s),
+        settle_max=_num(opt.run.settle_max_s),
+        settle_window=SETTLE_WINDOW,
+        settle_counts=SETTLE_SPREAD_COUNTS,
         samples=opt.run.readings,
         zero_tol=_num(opt.zero_tol_mm),
         margin=_num(opt.margin_deg),
@@ -263,6 +283,20 @@ def _validation_context(robot: Robot, opt: GenOptions) -> dict | None:
         "fp_a": fp[:32],
         "fp_b": fp[32:],
     }
+
+
+def _wire_limits(robot: Robot) -> str:
+    """Return the encoder's wire limits in words, for the generated comment."""
+    enc = robot.encoder
+    parts = [
+        f"{value:g} {unit}"
+        for value, unit in (
+            (enc.max_wire_speed_mm_s, "mm/s"),
+            (enc.max_wire_accel_mm_s2, "mm/s2"),
+        )
+        if value is not None
+    ]
+    return " and ".join(parts) if parts else "no limit (the robot file gives none)"
 
 
 def _num(x: float) -> str:

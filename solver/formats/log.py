@@ -11,12 +11,15 @@ Format (UTF-8)::
     zero,1,0,0.0000,-90.0000,...,8388000.5000,10,1,3.500,3.000
     point,1,1,...
 
-``kind`` is ``zero`` (θ0 at the start of a step, index 0) or ``point``; step and index are
-1-based plan positions; j1..j6 the joints the controller reports (deg); ``counts`` the
-mean of ``samples`` raw counter readings, unwrapped relative to the first of them;
-``spread`` their max − min (counts); ``t_s`` the controller's timer when the sampling
-began (s since the start of the run, 1 ms resolution); ``settle_s`` how long the program
-waited after the move before sampling (s). Version 1 logs (no ``t_s``, ``settle_s``)
+``kind`` is ``zero`` (θ0 at the start of a step, index 0), ``point``, or ``unsettled``: a
+reading of that zero or point that did not pass the settle rule within its maximum wait
+(or whose samples spread too wide), logged for the record and not used; the program then
+measured the same zero or point again. Step and index are 1-based plan positions; j1..j6
+the joints the controller reports (deg); ``counts`` the mean of ``samples`` raw counter
+readings, unwrapped relative to the first of them; ``spread`` their max − min (counts);
+``t_s`` the controller's timer when the sampling began (s since the start of the run,
+1 ms resolution); ``settle_s`` how long the program waited after the move before
+sampling (s): the settle rule's wait. Version 1 logs (no ``t_s``, ``settle_s``)
 are still read: their readings carry no time. A point's wire length is (counts − reference) ×
 mm_per_count, the difference taken modulo the counter width; the reference is the mean of
 the zero readings (each checked against the first: a drift means the wire slipped).
@@ -47,6 +50,7 @@ TIME_COLUMNS = ("t_s", "settle_s")
 COLUMNS_V1 = ("kind", "step", "index", *JOINT_COLUMNS, "counts", "samples", "spread")
 COLUMNS = (*COLUMNS_V1, *TIME_COLUMNS)
 HEADER_KEYS = ("robot", "plan", "mm_per_count")
+KINDS = ("zero", "point", "unsettled")
 
 
 @dataclass(frozen=True)
@@ -218,9 +222,9 @@ def lossy_counts(rows: tuple[Row, ...], source: str) -> list[str]:
 
 def _parse_row(cells: tuple[str, ...], line: int, bad) -> Reading | None:
     kind = cells[0].strip()
-    ok = kind in ("zero", "point")
+    ok = kind in KINDS
     if not ok:
-        bad(line, f"kind {kind!r} is neither 'zero' nor 'point'")
+        bad(line, f"kind {kind!r} is none of {', '.join(repr(k) for k in KINDS)}")
     ints, floats, numbers_ok = _numbers(cells, line, bad)
     if not (ok and numbers_ok):
         return None

@@ -11,6 +11,7 @@ Format (angles in degrees, lengths in mm)::
     point_mm = [-60, 0, 50]               # wire attachment point in the last joint's frame
     [encoder]
     mm_per_count = 0.025488; range_mm = 1250; counter_bits = 24
+    max_wire_speed_mm_s = 1000; max_wire_accel_mm_s2 = 49000   # optional: the wire's limits
     [calibration]
     parameters = ["th2", "th3", ...]      # names from wirecal.solver.params
     [controller]                          # optional
@@ -70,6 +71,10 @@ MAX_JOINT_DEG = 3600.0
 MAX_SPEED_DEG_S = 10_000.0
 MAX_MM_PER_COUNT = 10.0
 MAX_RANGE_MM = 100_000.0
+MAX_WIRE_SPEED_MM_S = 20_000.0
+"""Largest wire speed limit (mm/s): catalogue draw-wire sensors allow 1–10 m/s."""
+MAX_WIRE_ACCEL_MM_S2 = 1_000_000.0
+"""Largest wire acceleration limit (mm/s²): about 100 g; catalogues give 5–20 g."""
 MIN_JOINT_RANGE_DEG = 10.0
 """A joint's range (deg) must exceed this: plan points stay 5° (the planner's and the
 generator's default margin) inside each limit."""
@@ -116,6 +121,8 @@ _KEYS = {
         "belt_mode",
         "pulse_inputs",
         *EXIT_KEYS,
+        "max_wire_speed_mm_s",
+        "max_wire_accel_mm_s2",
     ),
     "calibration": ("parameters",),
     "geometry": ("link_radius_mm",),
@@ -284,12 +291,27 @@ def _encoder(enc: Table, controller: Controller | None) -> Encoder | None:
     if "pulse_inputs" in enc.keys() and not pulse:
         enc.add("pulse_inputs", 'is for interface = "pulse" (URScript) only; remove it')
     exit_ok, exit_ = _exit(enc)
+    wire_speed = enc.number(
+        "max_wire_speed_mm_s", None, above=0, hi=MAX_WIRE_SPEED_MM_S, unit="mm/s"
+    )
+    wire_accel = enc.number(
+        "max_wire_accel_mm_s2", None, above=0, hi=MAX_WIRE_ACCEL_MM_S2, unit="mm/s²"
+    )
     if mpc is None or rng is None or bits is None or interface is None:
         return None
     if channel is None or mode is None or inputs is None or not exit_ok:
         return None
     return Encoder(
-        mpc, rng, bits, interface, channel, mode, (int(inputs[0]), int(inputs[1])), exit_
+        mpc,
+        rng,
+        bits,
+        interface,
+        channel,
+        mode,
+        (int(inputs[0]), int(inputs[1])),
+        exit_,
+        wire_speed,
+        wire_accel,
     )
 
 
@@ -576,6 +598,14 @@ def robot_file_text(
             else []
         ),
         *_exit_lines(robot.encoder.exit),
+        *(
+            f"{key} = {_num(value)}"
+            for key, value in (
+                ("max_wire_speed_mm_s", robot.encoder.max_wire_speed_mm_s),
+                ("max_wire_accel_mm_s2", robot.encoder.max_wire_accel_mm_s2),
+            )
+            if value is not None
+        ),
         "",
         "[controller]",
         f"language = {json.dumps(robot.controller.language)}",
