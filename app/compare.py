@@ -16,16 +16,21 @@ from pathlib import Path
 
 import numpy as np
 
+from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import STRIDE, GenOptions, module_text
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.controller_result import read_result
+from wirecal.solver.formats.controller_result import parse_result, read_result, result_in_log
 from wirecal.solver.formats.log import Log
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.solve import SolveResult
 from wirecal.twin.cell import Cell
-from wirecal.twin.machine import f32
+from wirecal.twin.machine import Halt, RunError, Stopped, f32
+from wirecal.twin.ur_cell import URCell
+from wirecal.twin.urscript.interp import Interpreter as URInterpreter
+from wirecal.twin.urscript.interp import i32
+from wirecal.twin.urscript.parser import parse_program
 from wirecal.twin.vplus.interp import Interpreter
 from wirecal.twin.vplus.parser import parse_module
 
@@ -76,10 +81,12 @@ def readings_from_log(log: Log, plan: Plan) -> Readings:
 class ControllerRun:
     """One run of the generated controller solver in the twin."""
 
-    program: str  # "wc.solve" or "wc.solve2"
-    offsets: dict[str, float]  # identified offsets (deg, mm), read from its result file
+    program: str  # "wc.solve", "wc.solve2" or "wc_solve"
+    offsets: dict[str, float]  # identified offsets (deg, mm), read from its result
     operations: Counter[str]  # arithmetic executed: add (+ −), mul, div, sqrt
     console: tuple[str, ...]
+    syncs: int = 0  # URScript: sync() calls (one 2 ms frame each)
+    most_between_syncs: int = 0  # URScript: most operations between two sync() calls
 
     @property
     def total_operations(self) -> int:
@@ -135,47 +142,131 @@ def controller_solve(
     )
 
 
+READING_INTS = 8
+"""wc_solve's readings: 8 ints each (count, offset × 10⁴, 6 joints × 10⁴ deg)."""
+
+
+def ur_readings(log: Log, plan: Plan) -> list[int]:
+    """Rebuild from a log the readings list wc_run keeps for wc_solve (``rd``).
+
+    The zero readings of the steps first, then the points in plan order; each reading as
+    wc_meas returns it: the count as an int32 base and its offset × 10⁴, the joints in
+    1e-4 deg, all ints (the log's own decimals).
+    """
+    q_plan, step_no, index_no = plan.all_points()
+    pos = {(int(s), int(i)): k + 1 for k, (s, i) in enumerate(zip(step_no, index_no, strict=True))}
+    n_steps = len(plan.steps)
+    rd = [0] * READING_INTS * (n_steps + len(q_plan))
+    for r in log.readings:
+        if r.kind == "zero" and r.step > n_steps:
+            continue  # the closing zero: not kept for the solver
+        slot = r.step - 1 if r.kind == "zero" else n_steps - 1 + pos[(r.step, r.index)]
+        base = int(np.floor(r.counts))
+        joints = [int(np.floor(x * 10000 + 0.5)) for x in r.joints_deg[:6]]
+        offset = int(np.floor((r.counts - base) * 10000 + 0.5))
+        rd[slot * READING_INTS : (slot + 1) * READING_INTS] = [i32(base), offset, *joints]
+    return rd
+
+
+def ur_controller_solve(
+    robot: Robot, plan: Plan, m: Measurements, disk: Path, *, text: str | None = None
+) -> ControllerRun:
+    """Run wc_solve of the generated wc_run in the twin on a checked log's readings.
+
+    ``text`` is wc_run's text (generated with the default options when not given; a robot
+    file without [controller] host/port gets loopback ones, which the solver never uses).
+    The lines wc_solve sends are taken as the socket would carry them, and its result read
+    from them (:func:`result_in_log`).
+    """
+    if text is None:
+        opt = UrOptions(
+            host=robot.controller.host or "127.0.0.1", port=robot.controller.port or 50000
+        )
+        text = scripts(robot, plan, opt)["wc_run.script"]
+    disk.mkdir(parents=True, exist_ok=True)
+    cell = URCell(robot, {}, plan.theta0_deg, disk)
+    interp = URInterpreter(parse_program(text, "wc_run.script"), cell)
+    sent: list[str] = []
+    marks: list[int] = [0]
+
+    def send(line, socket_name="socket_0"):
+        sent.append(line)
+        return True
+
+    def sync():
+        marks.append(sum(interp.ops.values()))
+        cell.syncs += 1
+
+    cell.socket_send_line = send  # type: ignore[method-assign]
+    cell.sync = sync  # type: ignore[method-assign]
+    try:
+        interp.function("wc_solve")([ur_readings(m.log, plan)])
+    except (RunError, Halt, Stopped) as exc:
+        raise WirecalError(
+            f"the controller solver stopped: {exc} (wc_run.script, line {interp.where})"
+        ) from None
+    result = result_in_log("\n".join(sent))
+    if result is None:
+        raise WirecalError("wc_solve sent no result lines")
+    marks.append(sum(interp.ops.values()))
+    return ControllerRun(
+        "wc_solve",
+        parse_result(result, "wc_solve"),
+        Counter(interp.ops),
+        tuple(cell.console),
+        cell.syncs,
+        int(np.max(np.diff(marks))),
+    )
+
+
 @dataclass(frozen=True)
 class ControllerComparison:
-    """wc.solve and wc.solve2 run in the twin beside the Python reference solver."""
+    """The controller solver run in the twin beside the Python reference solver.
 
-    stepwise: ControllerRun  # wc.solve, against the reference's stepwise estimate
-    polished: ControllerRun  # wc.solve2, against the reference's joint estimate
+    V+: wc.solve and wc.solve2; URScript: wc_solve (step by step only: no polish).
+    """
+
+    stepwise: ControllerRun  # wc.solve / wc_solve, against the reference's stepwise estimate
+    polished: ControllerRun | None  # wc.solve2, against the reference's joint estimate
     stepwise_max_difference: float  # largest |controller − reference| (deg, mm)
-    polished_max_difference: float
+    polished_max_difference: float | None
 
     def as_json(self) -> dict:
         """Return the ``methods.controller`` entry of ``wirecal solve --json``."""
-        return {
+        out: dict[str, object] = {
             "parameters": self.stepwise.offsets,
             "parameters_operations": self.stepwise.total_operations,
             "parameters_max_difference": self.stepwise_max_difference,
-            "polished": self.polished.offsets,
-            "polished_operations": self.polished.total_operations,
-            "polished_max_difference": self.polished_max_difference,
         }
+        if self.polished is not None:
+            out["polished"] = self.polished.offsets
+            out["polished_operations"] = self.polished.total_operations
+            out["polished_max_difference"] = self.polished_max_difference
+        else:
+            out["syncs"] = self.stepwise.syncs
+            out["most_operations_between_syncs"] = self.stepwise.most_between_syncs
+        return out
 
 
 def compare_controller(
     result: SolveResult, disk: Path, *, text: str | None = None
 ) -> ControllerComparison:
-    """Run wc.solve and wc.solve2 in the twin on ``result``'s log; compare with Python's.
+    """Run the controller solver in the twin on ``result``'s log; compare with Python's.
 
-    Run wc.solve and wc.solve2 in the twin on the log ``result`` was solved from, and
-    compare each with the Python reference's estimate (stepwise and joint).
+    V+: wc.solve and wc.solve2 against the reference's stepwise and joint estimates;
+    URScript: wc_solve (``text``: wc_run's) against the stepwise estimate.
     """
     m = result.measurements
-    if result.robot.controller.language != "vplus":
-        raise WirecalError(
-            f"--method controller runs the generated controller solver in the twin; the "
-            f"{result.robot.controller.language} programs have none (only the V+ module has "
-            "wc.solve): use --method stepwise, joint or all"
-        )
     if result.left_nominal or m.missing:
         raise WirecalError(
             "--method controller needs a complete log (the controller solver "
             "refuses missing points too)"
         )
+    if result.robot.controller.language == "urscript":
+        run = ur_controller_solve(result.robot, result.plan, m, disk / "stepwise", text=text)
+        expected = result.estimates["stepwise"].as_dict()
+        diff = max(abs(run.offsets[n] - v) for n, v in expected.items())
+        return ControllerComparison(run, None, diff, None)
     runs, diffs = [], []
     for key, polish, method in (("stepwise", False, "stepwise"), ("polished", True, "joint")):
         run = controller_solve(result.robot, result.plan, m, disk / key, polish=polish, text=text)

@@ -28,7 +28,9 @@ clock), reached through the URScript functions the generated programs call:
   the program until Continue is pressed (SD 15.35); the twin's operator presses it, except
   at a warning or error popup, where they stop the program (``proceed_on_pause`` to
   continue instead). ``sleep`` advances the clock and ``time(0)`` reads it (SD 15.48,
-  15.49).
+  15.49); ``sync()`` advances it by one 2 ms frame (SW5.25.1, "Thread scheduling": sync
+  and sleep use "physical" time and are recommended next to computationally heavy
+  instructions, else "Lost communication with Controller" and a protective stop).
 
 Sections of the e-Series Script Directory (SD) and Script Manual pages (SW…): see
 :mod:`wirecal.gen.urscript.facts`.
@@ -54,6 +56,8 @@ FILTERED_RANGE = 2**16
 RAW = Counter(32)
 """The raw count: an int32 (SW5.20)."""
 SOCKET_TIMEOUT_S = 2.0
+FRAME_S = 0.002
+"""The controller's frame: every thread gets 2 ms of "physical" time per frame (SW5.25.1)."""
 
 
 @dataclass
@@ -66,6 +70,7 @@ class URCell(Cell):
     receiver: tuple[str, int] | None = None  # where the twin routes it (loopback)
     sockets: dict[str, socket.socket] = field(default_factory=dict)
     lines_sent: int = 0
+    syncs: int = 0  # sync() calls (each a 2 ms frame)
     pull_mm: Callable[[float], float] | None = None  # the operator pulls the wire (clock, s)
 
     def __post_init__(self):
@@ -95,6 +100,14 @@ class URCell(Cell):
     def sleep(self, t) -> None:
         """sleep: advance the clock by t s."""
         self.clock += float(number(t, "sleep"))
+
+    def sync(self) -> None:
+        """sync: the rest of the 2 ms frame (Script Manual SW5.25.1, "Thread scheduling").
+
+        The twin advances the clock by a whole frame (an upper bound) and counts the calls.
+        """
+        self.clock += FRAME_S
+        self.syncs += 1
 
     def time(self, mode=0) -> dict[str, int]:
         """time(0): the controller's clock as struct(sec, nanosec), ints (SD 15.49, as cited).

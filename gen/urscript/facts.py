@@ -35,6 +35,8 @@ textmsg(s1, s2="")                        s1 and s2 concatenated in the log tab 
 popup(s, title, warning, error,           blocking=True suspends the program until yes (SD 15.35)
 blocking)                                 Continue is pressed
 sleep(t)                                  t in s                                   yes (SD 15.48)
+sync()                                    the rest of the 2 ms frame; recommended  yes (SW5.25.1,
+                                          beside heavy computation                 Thread sched.)
 str_cat(op1, op2), str_len(str)           ints as digits, floats with 6 decimals;  yes (SD 15.51,
                                           at most 1023 characters                  15.54)
 floor(f)                                  the largest integer not greater than f   yes (SD 16.9)
@@ -157,6 +159,15 @@ FACTS: tuple[Fact, ...] = (
         SD + "§15.35, p. 62 (text copy)",
     ),
     Fact("sleep", "sleep(t): waits t seconds", True, SD + "§15.48, p. 67 (text copy)"),
+    Fact(
+        "sync",
+        "sync() and sleep use 'physical' time: each thread has a 2 ms slice per frame "
+        "(500 Hz); inserting sync or sleep next to computationally heavy instructions is "
+        "recommended, else 'Lost communication with Controller' and a protective stop. How "
+        "many operations fit in one frame is not stated",
+        True,
+        f"{_UR}/SW5_25_1/Content/prod-scriptmanual/all_scripts/ThreadScheduling.htm",
+    ),
     Fact(
         "str_cat",
         "str_cat(op1, op2): the concatenation; an int as its digits, a float with 6 "

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal import __version__
-from wirecal.gen.tables import build_tables
+from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import check_limits, joint_target, run_steps
 from wirecal.gen.templating import render
 from wirecal.solver.errors import WirecalError
@@ -65,11 +65,80 @@ class UrOptions:
     spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
     margin_deg: float = 1.0  # every generated target at least this far inside a limit
     range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
+    solver: bool = True  # wc_run ends with wc_solve, the controller's step-by-step solver
 
 
 def rad_literal(q_deg: Iterable[float]) -> str:
     """Write a joint target (deg) as URScript's list of radians, 9 decimals (< 1e-6 deg)."""
     return "[" + ", ".join(_fixed(math.radians(x), 9) for x in q_deg) + "]"
+
+
+def float_literal(x: float) -> str:
+    """Write ``x`` as the nearest 32-bit float, with the fewest digits that give it back.
+
+    The controller holds every float in 32 bits (UR16e manual p. 181), so more digits
+    would not be read; always with a decimal point (a float literal, not an int).
+    """
+    return str(np.format_float_positional(np.float32(x), unique=True, trim="0"))
+
+
+def _list(values: Iterable, literal=float_literal) -> str:
+    """Write a URScript list literal."""
+    return "[" + ", ".join(literal(v) for v in values) + "]"
+
+
+SOLVER_DECIMALS = 6
+"""The offsets wc_solve writes: 6 decimals through an int32, so |offset| < 2147 deg/mm."""
+
+
+def solver_tables(robot: Robot, plan: Plan, tables: Tables) -> dict[str, str]:
+    """Return wc_solve's tables as URScript list literals (0-based, :mod:`gen.tables`).
+
+    Joint angles enter as integers in 1e-4 deg (as the log writes them): the plan angle
+    rounded (``qi``) and its remainder (``qf``), so the solver subtracts integers only.
+    Raises :class:`WirecalError` if an offset's bound Ω could not be written through an
+    int32 at :data:`SOLVER_DECIMALS` decimals.
+    """
+    bound = tables.errors.to_boundary(tables.omega)
+    big = [n for n, b in zip(tables.names, bound, strict=True) if abs(b) * 10**6 >= 2**31]
+    if big:
+        raise WirecalError(
+            f"{plan.source}: the bound of {', '.join(big)} is 2147 deg/mm or more: wc_solve "
+            "writes offsets to 6 decimals through 32-bit integers; generate with --no-solver"
+        )
+    q4 = tables.qp * 10000
+    qi = np.round(q4)
+    n = tables.n
+    return {
+        "ca": _list(tables.ca),
+        "sa": _list(tables.sa),
+        "la": _list(tables.la),
+        "ld": _list(tables.ld),
+        "tp": _list(tables.tool),
+        "ct": _list(tables.ct.ravel()),
+        "st": _list(tables.st.ravel()),
+        "qi": _list(qi.ravel(), lambda v: str(int(v))),
+        "qf": _list((q4 - qi).ravel()),
+        "vn": _list(tables.vn.ravel()),
+        "dn": _list(tables.dn),
+        "dni": _list(tables.dni, lambda v: str(int(v))),
+        "dnf": _list(tables.dnf),
+        "first": _list(tables.first, lambda v: str(int(v))),
+        "count": _list(tables.count, lambda v: str(int(v))),
+        "spar": _list(tables.spar - 1, lambda v: str(int(v))),
+        "om": _list(tables.omega),
+        "pk": _list(tables.pk, lambda v: str(int(v))),
+        "pr": _list(tables.pr - 1, lambda v: str(int(v))),
+        "tb": _list(tables.errors.boundary_per_internal),
+        "nom4": _list(np.round(tables.nominal * 10000), lambda v: str(int(v))),
+        "pn": _list(tables.names, lambda v: f'"{v}"'),
+        "pu": _list(tables.errors.units, lambda v: f'"{v}"'),
+        "d2r4": float_literal(math.pi / 180 / 10000),
+        "mpc": float_literal(tables.mpc),
+        "zeros3n": _list([0.0] * 3 * n),
+        "zerosn": _list([0.0] * n),
+        "zerosm": _list([0.0] * len(tables.names)),
+    }
 
 
 def _fixed(x: float, digits: int) -> str:
@@ -158,7 +227,14 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
         "steps": run_steps(plan, tables.first, rad_literal),
         "nsteps": len(plan.steps),
         "npoints": plan.n_points,
+        "solver": opt.solver,
+        "rd_zeros": _list([0] * 8 * (len(plan.steps) + plan.n_points), str),
+        "nit": STEP_ITERATIONS,
+        "n": tables.n,
+        "m": len(tables.names),
     }
+    if opt.solver:
+        context["t"] = solver_tables(robot, plan, tables)
     return {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
 
 

@@ -58,6 +58,7 @@ BUILTINS: dict[str, Builtin] = {
     "textmsg": Builtin(("s1", "s2"), 1),
     "popup": Builtin(("s", "title", "warning", "error", "blocking"), 1),
     "sleep": Builtin(("t",), 1),
+    "sync": Builtin((), 0),
     "time": Builtin(("mode",), 0),
     "str_cat": Builtin(("op1", "op2"), 2),
     "str_len": Builtin(("str",), 1),
