@@ -48,6 +48,11 @@ _G = GenOptions()
     help="URScript: the port 'wirecal receive' listens on (default: [controller] port).",
 )
 @click.option(
+    "--no-solver",
+    is_flag=True,
+    help="URScript: wc_run without wc_solve (the controller's step-by-step solver at its end).",
+)
+@click.option(
     "--speed",
     type=number(),
     help=f"V+: the highest program speed, % of full (default {_D.speed_pct:g}); each move's "
@@ -164,6 +169,7 @@ def gen(
     patch_file,
     setup_file,
     range_margin,
+    no_solver,
     echo_log,
     lf,
     force,
@@ -172,7 +178,8 @@ def gen(
 
     URScript (--language urscript, or [controller] language in the robot file): wc_mount,
     wc_check and wc_run (the measurement; sends the log to 'wirecal receive' on --host,
-    --port and mirrors it in the log tab), each a .script file; the rest below is V+.
+    --port and mirrors it in the log tab; at its end wc_solve, the step-by-step solver on
+    the controller, unless --no-solver), each a .script file; the rest below is V+.
 
     WIRECAL.V2 holds wc.mount (move to θ0, mount the encoder), wc.check (live counts),
     wc.run (the measurement; writes the log), wc.solve and wc.solve2 (identification on
@@ -205,6 +212,7 @@ def gen(
             spread_tol_mm=spread_tol,
             margin_deg=margin,
             range_margin_mm=range_margin,
+            solver=not no_solver,
         )
         paths = write_scripts(out_dir, scripts(rb, pl, ur), force=force, inputs=[robot, plan])
         click.echo(
@@ -212,8 +220,8 @@ def gen(
             "'wirecal receive' on the PC and wc_run"
         )
         return
-    if host or port:
-        raise WirecalError("--host and --port are for URScript (--language urscript)")
+    if host or port or no_solver:
+        raise WirecalError("--host, --port and --no-solver are for URScript (--language urscript)")
     patch = read_patch(patch_file).offsets_for(rb, pl) if patch_file else None
     opt = GenOptions(
         run=RunParameters(

@@ -415,6 +415,8 @@ def _controller(result) -> ControllerComparison:
 
 
 def _controller_text(ctl: ControllerComparison) -> str:
+    if ctl.polished is None:
+        return _ur_controller_text(ctl)
     lines = [
         "",
         "Controller solver (the generated V+ run in the digital twin):",
@@ -428,6 +430,24 @@ def _controller_text(ctl: ControllerComparison) -> str:
         f"{ctl.polished_max_difference:.2g} (joint) deg/mm; "
         f"{ctl.stepwise.total_operations:,} and {ctl.polished.total_operations:,} "
         "arithmetic operations"
+    )
+    return "\n".join(lines)
+
+
+def _ur_controller_text(ctl: ControllerComparison) -> str:
+    run = ctl.stepwise
+    lines = [
+        "",
+        "Controller solver (the generated URScript wc_solve run in the digital twin, "
+        "32-bit floats):",
+        f"{'parameter':<10}{'wc_solve':>12}",
+    ]
+    lines += [f"{name:<10}{value:12.6f}" for name, value in run.offsets.items()]
+    lines.append(
+        f"largest difference from the Python reference (stepwise): "
+        f"{ctl.stepwise_max_difference:.2g} deg/mm; {run.total_operations:,} arithmetic "
+        f"operations, {run.syncs:,} sync() (at most {run.most_between_syncs} operations "
+        "between two)"
     )
     return "\n".join(lines)
 

@@ -159,14 +159,26 @@ def test_fault_wire_slip(ur5, ur5_plan, texts, truth, tmp_path):
     assert "remount at θ0 and repeat from step 4" in info.value.problems[0]
 
 
-def test_no_controller_solver_for_urscript_is_said_plainly(ur5, ur5_plan, texts, truth, tmp_path):
+def test_the_log_carries_the_controller_solvers_result(ur5, ur5_plan, texts, truth, tmp_path):
+    """wc_solve runs at the end of wc_run; its result arrives in the log as comment lines
+    and agrees with the PC's stepwise estimate; solve --method controller reruns it."""
     from wirecal.app.compare import compare_controller
+    from wirecal.solver.formats.controller_result import parse_result, result_in_log
 
     r = run(ur5, ur5_plan, texts, truth, tmp_path)
-    result = solve(ur5, ur5_plan, load_measurements(r.log, ur5_plan, ur5))
-    with pytest.raises(WirecalError) as info:
-        compare_controller(result, tmp_path / "ctl")
-    assert "the urscript programs have none" in info.value.problems[0]
+    text = r.log.read_text(encoding="ascii")
+    assert text.splitlines()[-1] == "# end"
+    result = parse_result(result_in_log(text), "log")
+    m = load_measurements(r.log, ur5_plan, ur5)
+    ref = solve(ur5, ur5_plan, m).estimates["stepwise"].as_dict()
+    assert list(result) == list(ref)
+    assert max(abs(result[n] - v) for n, v in ref.items()) <= 1e-5
+    assert "# solver: step 10 of 10: d4 identified" in r.programs.run.console
+    ctl = compare_controller(solve(ur5, ur5_plan, m), tmp_path / "ctl")
+    # the same program on the log's readings: the count split between base and offset
+    # differs (floor of the logged count), hence 32-bit roundings in the last decimal
+    assert ctl.stepwise.offsets == pytest.approx(result, abs=5e-6)
+    assert ctl.polished is None
 
 
 @pytest.mark.parametrize(("inputs", "moves"), [((8, 9), True), ((10, 11), False)])

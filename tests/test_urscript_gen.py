@@ -246,7 +246,7 @@ def test_gen_refuses_v_plus_options_for_urscript(tmp_path):
     assert "V+ options" in r.output
     r = _gen(VIPER / "robot.toml", VIPER / "paper_plan.toml", "-o", tmp_path / "p", "--port", 5)
     assert r.exit_code == 2
-    assert "--host and --port are for URScript" in r.output
+    assert "--host, --port and --no-solver are for URScript" in r.output
 
 
 @pytest.fixture(scope="module")
