@@ -56,7 +56,8 @@ def test_golden_solver_part(ur5, run_text):
 
 def test_no_solver_option(ur5, run_text):
     bare = scripts(*ur5, UrOptions(solver=False))["wc_run.script"]
-    assert "wc_solve" not in bare and "wc_keep" not in bare and "sync()" not in bare
+    for word in ("wc_solve", "wc_keep", "sync()"):
+        assert word not in bare
     assert run_text.count("wc_solve(wc_rd)") == 1
     # the call is after the closing zero and before the end marker
     assert run_text.index("wc_meas(11, 0, z, t0)") < run_text.index("wc_solve(wc_rd)")
@@ -99,7 +100,7 @@ def _case(robot, plan, text, seed, tmp_path):
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_agrees_with_the_reference(ur5, run_text, tmp_path, seed):
-    run, diff = _case(*ur5, run_text, seed, tmp_path)
+    _, diff = _case(*ur5, run_text, seed, tmp_path)
     assert max(diff.values()) <= AGREEMENT
 
 
@@ -158,7 +159,7 @@ def test_readings_from_a_log_by_hand(ur5):
     assert rd[:2] == [-2147483001, 7500]  # floor of the count, offset x 10^4
     slot = len(plan.steps) + 2  # point 3 in plan order
     assert rd[slot * 8 : slot * 8 + 2] == [102, 700]
-    assert rd[slot * 8 + 2 : slot * 8 + 8] == [int(round(x * 10000)) for x in q[2]]
+    assert rd[slot * 8 + 2 : slot * 8 + 8] == [round(x * 10000) for x in q[2]]
 
 
 def test_result_in_log_reads_only_the_prefixed_lines():
