@@ -10,8 +10,10 @@ The UR5 (URScript, ``robot=examples/ur5/robot.toml``): generate the ``.script`` 
 the shipped plan; run wc_mount and wc_run on a twin UR whose log travels over a loopback
 socket to ``wirecal receive``; identify on the PC; write the patch and UR's deltas; run
 the measurement program again over new points (unmodelled errors on) and compare the wire
-lengths with those the nominal and the calibrated model predict; write the report. (The
-URScript backend generates no controller solver and no Cartesian validation programs.)
+lengths with those the nominal and the calibrated model predict; write the report. wc_run
+ends with wc_solve, the step-by-step solver on the controller, whose result arrives in the
+log; it is compared with the PC's stepwise estimate. (The URScript backend generates no
+joint polish and no Cartesian validation programs.)
 
 Every output goes to one folder and none is overwritten unless asked.
 """
@@ -29,9 +31,10 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.app.compare import compare_controller
+from wirecal.solver.formats.controller_result import parse_result, result_in_log
 from wirecal.app.report import Validation, render_report
 from wirecal.app.twin_runs import measure_in_twin, measure_ur_in_twin
-from wirecal.gen.urscript.program import scripts
+from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.accuracy import workspace
 from wirecal.solver.errors import WirecalError
@@ -85,7 +88,7 @@ class DemoResult:
     folder: Path
     validations: list[Validation]
     tool_error_mm: dict[str, float]  # mean over the workspace: before, after
-    controller_difference: float | None  # None: the language has no controller solver
+    controller_difference: float  # controller solver vs the PC's estimate (deg, mm)
     seconds: dict[str, float]
     outputs: tuple[str, ...] = OUTPUTS
 
@@ -286,6 +289,10 @@ def _run_ur(
         result = solve(robot, plan, m)
         verdict = gate(result, result.recommended)
         identified = result.estimates[result.recommended].as_dict()
+        on_controller = parse_result(result_in_log(log_text) or "", "run.csv (wc_solve)")
+        controller = max(
+            abs(on_controller[n] - v) for n, v in result.estimates["stepwise"].as_dict().items()
+        )
         seconds["solve"] = time.perf_counter() - t
         t = step(4, "validation: the run again over new points, with unmodelled errors")
         vplan = distance_plan(robot, plan, seed=seed)
@@ -294,7 +301,7 @@ def _run_ur(
             vplan,
             truth,
             disk / "val",
-            texts=scripts(robot, vplan),
+            texts=scripts(robot, vplan, UrOptions(solver=False)),
             seed=seed + 7,
             unmodelled=Unmodelled(),
         )
@@ -331,7 +338,12 @@ def _run_ur(
     )
     seconds["report"] = time.perf_counter() - t
     return DemoResult(
-        folder, [validation], _tool_errors(robot, truth, identified), None, seconds, UR_OUTPUTS
+        folder,
+        [validation],
+        _tool_errors(robot, truth, identified),
+        controller,
+        seconds,
+        UR_OUTPUTS,
     )
 
 

@@ -68,11 +68,7 @@ def demo(folder, seed, scale, robot, force):
         f"{'tool-point error vs truth, mean (mm)':<38}{tb:10.4f}{ta:10.4f}"
         f"{100 * (1 - ta / tb):10.0f}%"
     )
-    ctl = (
-        "no controller solver for this language"
-        if r.controller_difference is None
-        else f"controller solver vs PC: {r.controller_difference:.1e} deg/mm"
-    )
+    ctl = f"controller solver vs PC: {r.controller_difference:.1e} deg/mm"
     click.echo(f"{ctl}; total {sum(r.seconds.values()):.0f} s")
     click.echo(f"files in {r.folder}/: " + ", ".join(r.outputs))
 
