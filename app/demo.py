@@ -31,13 +31,13 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.app.compare import compare_controller
-from wirecal.solver.formats.controller_result import parse_result, result_in_log
 from wirecal.app.report import Validation, render_report
 from wirecal.app.twin_runs import measure_in_twin, measure_ur_in_twin
 from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.accuracy import workspace
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.controller_result import parse_result, result_in_log
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
 from wirecal.solver.formats.patch import put_patch
