@@ -172,3 +172,26 @@ def test_result_in_log_reads_only_the_prefixed_lines():
     assert result_in_log("# wirecal-log 2\n# end\n") is None
     with pytest.raises(WirecalError, match="not a number"):
         parse_result(result_in_log(text.replace("-0.001234", "x")), "log")
+
+
+@pytest.mark.slow
+def test_cli_simulate_controller_then_solve_method_controller(tmp_path):
+    """simulate --controller runs wc_run (wc_solve at its end) in the twin; the log carries
+    its result; solve --method controller reruns wc_solve on the log and compares."""
+    import json
+
+    robot, plan, log = str(UR5 / "robot.toml"), str(UR5 / "plan.toml"), tmp_path / "run.csv"
+    r = CliRunner().invoke(main, ["simulate", robot, plan, "-o", str(log), "--controller"])
+    assert r.exit_code == 0, r.output
+    in_log = parse_result(result_in_log(log.read_text(encoding="ascii")), "log")
+    r = CliRunner().invoke(main, ["solve", robot, plan, str(log), "--method", "controller"])
+    assert r.exit_code == 0, r.output
+    assert "URScript wc_solve run in the digital twin" in r.output
+    r = CliRunner().invoke(
+        main, ["solve", robot, plan, str(log), "--method", "controller", "--json"]
+    )
+    ctl = json.loads(r.stdout)["methods"]["controller"]
+    assert ctl["parameters_max_difference"] <= AGREEMENT
+    assert ctl["parameters"] == pytest.approx(in_log, abs=5e-6)
+    assert ctl["most_operations_between_syncs"] < 400
+    assert "polished" not in ctl
