@@ -1,6 +1,7 @@
 """The URScript programs: golden bytes, determinism, limits, the rows they send, the CLI.
 
-The row-formatting path is checked by running the generated ``wc_run`` itself: the script
+The row-formatting path (wc_run generated without wc_solve) is checked by running the
+generated ``wc_run`` itself: the script
 subset the generator emits (``def``/``while``/``if``/``elif``/``else``/``end``, ``local``,
 lists) is close enough to Python that a line-by-line rewrite (``end`` dropped, ``local``
 dropped) runs it, with the controller's functions replaced by stubs that play a
@@ -32,6 +33,8 @@ ROOT = Path(__file__).resolve().parent.parent
 UR5 = ROOT / "examples" / "ur5"
 VIPER = ROOT / "examples" / "viper_s650"
 GOLDEN = Path(__file__).parent / "golden" / "ur5"
+NO_SOLVER = UrOptions(solver=False)  # the rewrite into Python runs the rows' path only; wc_solve
+# runs in the URScript twin with 32-bit floats (tests/test_urscript_solver.py)
 
 
 @pytest.fixture(scope="module")
@@ -158,7 +161,7 @@ class _Controller:
 
 def test_rows_sent_parse_with_the_log_reader(ur5):
     robot, plan = ur5
-    run = scripts(robot, plan)["wc_run.script"]
+    run = scripts(robot, plan, NO_SOLVER)["wc_run.script"]
     rows = plan.n_points + len(plan.steps) + 1
     samples = 10
     rng = np.random.default_rng(3)
@@ -195,7 +198,7 @@ def test_rows_sent_parse_with_the_log_reader(ur5):
 
 def test_slip_raises_a_popup(ur5):
     robot, plan = ur5
-    run = scripts(robot, plan)["wc_run.script"]
+    run = scripts(robot, plan, NO_SOLVER)["wc_run.script"]
     rows = plan.n_points + len(plan.steps) + 1
     counts = [1000] * (rows * 10)
     second_zero = (1 + len(plan.steps[0].points_deg)) * 10
@@ -301,7 +304,7 @@ def test_socket_refused_stops_before_any_motion(ur5):
 
 def test_connection_lost_mid_run_keeps_the_rows_in_the_log_tab(ur5):
     robot, plan = ur5
-    run = scripts(robot, plan)["wc_run.script"]
+    run = scripts(robot, plan, NO_SOLVER)["wc_run.script"]
     rows = plan.n_points + len(plan.steps) + 1
     ctl = _Controller([500] * (rows * 10), [[0.1] * 6] * rows)
     names = ctl.names()
