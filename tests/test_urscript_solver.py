@@ -15,7 +15,7 @@ from click.testing import CliRunner
 
 from wirecal.app.compare import READING_INTS, ur_controller_solve, ur_readings
 from wirecal.cli.main import main
-from wirecal.gen.urscript.program import UrOptions, float_literal, scripts
+from wirecal.gen.urscript.program import OPS_PER_SYNC, UrOptions, float_literal, scripts
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.controller_result import parse_result, result_in_log
 from wirecal.solver.formats.log import parse_log
@@ -122,7 +122,7 @@ def test_operations_and_pacing(ur5, run_text, tmp_path):
     assert 3e5 < run.total_operations < 6e5
     fks = len(plan.steps) * 5 + plan.n_points * 5  # theta0 + each point, per iteration
     assert run.syncs == fks * 6 + (plan.n_points + 1) + plan.n_points + 10
-    assert run.most_between_syncs < 400
+    assert run.most_between_syncs < OPS_PER_SYNC
     assert run.console[-1].startswith("# Controller solver done")
     assert any(line.startswith("# a3  mm  ") for line in run.console)  # the table of values
 
@@ -193,5 +193,5 @@ def test_cli_simulate_controller_then_solve_method_controller(tmp_path):
     ctl = json.loads(r.stdout)["methods"]["controller"]
     assert ctl["parameters_max_difference"] <= AGREEMENT
     assert ctl["parameters"] == pytest.approx(in_log, abs=5e-6)
-    assert ctl["most_operations_between_syncs"] < 400
+    assert ctl["most_operations_between_syncs"] < OPS_PER_SYNC
     assert "polished" not in ctl

@@ -87,6 +87,9 @@ def _list(values: Iterable, literal=float_literal) -> str:
     return "[" + ", ".join(literal(v) for v in values) + "]"
 
 
+OPS_PER_SYNC = 400
+"""wc_solve calls sync() after fewer operations than this (pinned by the tests)."""
+
 SOLVER_DECIMALS = 6
 """The offsets wc_solve writes: 6 decimals through an int32, so |offset| < 2147 deg/mm."""
 
@@ -109,7 +112,7 @@ def solver_tables(robot: Robot, plan: Plan, tables: Tables) -> dict[str, str]:
     q4 = tables.qp * 10000
     qi = np.round(q4)
     n = tables.n
-    return {
+    out = {
         "ca": _list(tables.ca),
         "sa": _list(tables.sa),
         "la": _list(tables.la),
@@ -139,6 +142,9 @@ def solver_tables(robot: Robot, plan: Plan, tables: Tables) -> dict[str, str]:
         "zerosn": _list([0.0] * n),
         "zerosm": _list([0.0] * len(tables.names)),
     }
+    out["longest"] = str(max(len(f"    local {k} = {v}") for k, v in out.items()))
+    out["most_ops"] = str(OPS_PER_SYNC)
+    return out
 
 
 def _fixed(x: float, digits: int) -> str:
