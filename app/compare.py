@@ -23,7 +23,7 @@ from wirecal.solver.formats.log import Log
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.solve import SolveResult
+from wirecal.solver.solve import SolveResult, solve
 from wirecal.twin.cell import Cell
 from wirecal.twin.machine import f32
 from wirecal.twin.vplus.interp import Interpreter
@@ -61,6 +61,8 @@ def readings_from_log(log: Log, plan: Plan) -> Readings:
         base = float(np.round(r.counts))
         if r.kind == "zero" and r.step > len(plan.steps):
             continue  # the closing zero checks the last step; it is not a reference
+        if r.kind == "reference":
+            continue  # the gauge's readings: the controller solver keeps the file's scale
         if r.kind == "zero":
             zb[r.step - 1], zo[r.step - 1] = base, r.counts - base
             if first_zero:
@@ -162,7 +164,8 @@ def compare_controller(
     """Run wc.solve and wc.solve2 in the twin on ``result``'s log; compare with Python's.
 
     Run wc.solve and wc.solve2 in the twin on the log ``result`` was solved from, and
-    compare each with the Python reference's estimate (stepwise and joint).
+    compare each with the Python reference's estimate (stepwise and joint) from the same
+    lengths: the file's scale, no drift removed (the controller solver applies neither).
     """
     m = result.measurements
     if result.robot.controller.language != "vplus":
@@ -176,10 +179,13 @@ def compare_controller(
             "--method controller needs a complete log (the controller solver "
             "refuses missing points too)"
         )
+    # The controller solver reads the lengths at the file's scale with no drift removed:
+    # its reference is the Python solve of those same lengths.
+    plain = solve(result.robot, result.plan, m, corrections=False)
     runs, diffs = [], []
     for key, polish, method in (("stepwise", False, "stepwise"), ("polished", True, "joint")):
         run = controller_solve(result.robot, result.plan, m, disk / key, polish=polish, text=text)
-        expected = result.estimates[method].as_dict()
+        expected = plain.estimates[method].as_dict()
         runs.append(run)
         diffs.append(max(abs(run.offsets[n] - v) for n, v in expected.items()))
     return ControllerComparison(runs[0], runs[1], diffs[0], diffs[1])

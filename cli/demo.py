@@ -68,6 +68,15 @@ def demo(folder, seed, scale, robot, force):
         f"{'tool-point error vs truth, mean (mm)':<38}{tb:10.4f}{ta:10.4f}"
         f"{100 * (1 - ta / tb):10.0f}%"
     )
+    if r.predicted_mm is not None:
+        scale = (
+            ""
+            if r.encoder_scale_ppm is None
+            else f"   (encoder scale {r.encoder_scale_ppm:+.0f} ppm, no reference measured)"
+        )
+        click.echo(
+            f"{'  predicted by the error budget (mm)':<38}{'':>10}{r.predicted_mm:10.4f}{scale}"
+        )
     ctl = (
         "no controller solver for this language"
         if r.controller_difference is None

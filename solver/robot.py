@@ -26,6 +26,14 @@ DEFAULT_LINK_RADIUS_MM = 50.0
 """Capsule radius of a link when the robot file gives none (for the wire clearance)."""
 
 
+DEFAULT_SCALE_TOLERANCE_PPM = 500.0
+"""The scale tolerance (ppm) when the robot file gives none: a mm_per_count typed from a
+datasheet is good to about 0.02–0.1 % (issue 13's survey of catalogue draw-wire sensors)."""
+
+DEFAULT_DRUM_PPM_PER_K = 23.0
+"""The drum's linear expansion (ppm/K) when the robot file gives none: aluminium."""
+
+
 @dataclass(frozen=True)
 class Encoder:
     """The draw-wire encoder and how the controller program reads it.
@@ -47,6 +55,11 @@ class Encoder:
     belt_mode: int = 0
     pulse_inputs: tuple[int, int] = (8, 9)
     exit: Exit | None = None
+    scale_tolerance_ppm: float = DEFAULT_SCALE_TOLERANCE_PPM  # the datasheet's scale figure
+    reference_length_mm: float | None = None  # a gauge's certified nest distance, if any
+    reference_uncertainty_mm: float = 0.0  # its certificate's standard uncertainty
+    reference_repeats: int = 3  # nest A/B seatings the program asks for
+    temperature_coefficient_ppm_per_k: float = DEFAULT_DRUM_PPM_PER_K  # the drum's expansion
 
     @property
     def counter(self) -> Counter:
