@@ -24,7 +24,7 @@ from wirecal.solver.formats.log import Log
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.solve import SolveResult
+from wirecal.solver.solve import SolveResult, solve
 from wirecal.twin.cell import Cell
 from wirecal.twin.machine import Halt, RunError, Stopped, f32
 from wirecal.twin.ur_cell import URCell
@@ -66,6 +66,8 @@ def readings_from_log(log: Log, plan: Plan) -> Readings:
         base = float(np.round(r.counts))
         if r.kind == "zero" and r.step > len(plan.steps):
             continue  # the closing zero checks the last step; it is not a reference
+        if r.kind == "reference":
+            continue  # the gauge's readings: the controller solver keeps the file's scale
         if r.kind == "zero":
             zb[r.step - 1], zo[r.step - 1] = base, r.counts - base
             if first_zero:
@@ -254,7 +256,9 @@ def compare_controller(
     """Run the controller solver in the twin on ``result``'s log; compare with Python's.
 
     V+: wc.solve and wc.solve2 against the reference's stepwise and joint estimates;
-    URScript: wc_solve (``text``: wc_run's) against the stepwise estimate.
+    URScript: wc_solve (``text``: wc_run's) against the stepwise estimate. The reference is
+    the Python solve of the same lengths: the file's scale, no drift removed (the
+    controller solvers apply neither).
     """
     m = result.measurements
     if result.left_nominal or m.missing:
@@ -262,15 +266,18 @@ def compare_controller(
             "--method controller needs a complete log (the controller solver "
             "refuses missing points too)"
         )
+    # The controller solver reads the lengths at the file's scale with no drift removed:
+    # its reference is the Python solve of those same lengths.
+    plain = solve(result.robot, result.plan, m, corrections=False)
     if result.robot.controller.language == "urscript":
         run = ur_controller_solve(result.robot, result.plan, m, disk / "stepwise", text=text)
-        expected = result.estimates["stepwise"].as_dict()
+        expected = plain.estimates["stepwise"].as_dict()
         diff = max(abs(run.offsets[n] - v) for n, v in expected.items())
         return ControllerComparison(run, None, diff, None)
     runs, diffs = [], []
     for key, polish, method in (("stepwise", False, "stepwise"), ("polished", True, "joint")):
         run = controller_solve(result.robot, result.plan, m, disk / key, polish=polish, text=text)
-        expected = result.estimates[method].as_dict()
+        expected = plain.estimates[method].as_dict()
         runs.append(run)
         diffs.append(max(abs(run.offsets[n] - v) for n, v in expected.items()))
     return ControllerComparison(runs[0], runs[1], diffs[0], diffs[1])

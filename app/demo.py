@@ -50,6 +50,7 @@ from wirecal.solver.measurements import check_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.plausibility import gate
 from wirecal.solver.robot import Robot
+from wirecal.solver.simulate import realistic_encoder
 from wirecal.solver.solve import solve
 from wirecal.solver.validation import distance_plan, distance_residuals
 from wirecal.solver.validation_analysis import Stats, config_discrepancy, plane_residuals
@@ -91,6 +92,8 @@ class DemoResult:
     controller_difference: float  # controller solver vs the PC's estimate (deg, mm)
     seconds: dict[str, float]
     outputs: tuple[str, ...] = OUTPUTS
+    predicted_mm: float | None = None  # the error budget's total for the recommended method
+    encoder_scale_ppm: float | None = None  # the twin encoder's true scale error (V+ twin)
 
 
 def example_files(robot: str = "viper_s650") -> dict[str, Path]:
@@ -161,8 +164,17 @@ def _run(
     with tempfile.TemporaryDirectory() as tmp:
         disk = Path(tmp)
         t = step(2, "measurement run in the digital twin (wc.mount, wc.run)")
+        # a realistic encoder: its scale off within the robot file's tolerance, 0.5 K
+        encoder = realistic_encoder(robot.encoder, np.random.default_rng([seed, 4]))
         run = measure_in_twin(
-            robot, plan, truth, disk / "cal", options=options, text=text, seed=seed
+            robot,
+            plan,
+            truth,
+            disk / "cal",
+            options=options,
+            text=text,
+            seed=seed,
+            encoder_truth=encoder,
         )
         if run.run is None or run.run.status != "completed":
             raise WirecalError(f"the twin's measurement run stopped: {run.run or run.mount}")
@@ -249,6 +261,8 @@ def _run(
         _tool_errors(robot, truth, identified),
         controller.polished_max_difference,
         seconds,
+        predicted_mm=result.predicted[result.recommended]["mean"],
+        encoder_scale_ppm=encoder.scale_ppm,
     )
 
 

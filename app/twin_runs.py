@@ -17,6 +17,7 @@ from wirecal.gen.urscript.program import UrOptions, pc_address, scripts
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
+from wirecal.solver.simulate import IDEAL_ENCODER, EncoderTruth
 from wirecal.twin.cell import Faults, RunResult, Unmodelled, run_measurement
 from wirecal.twin.ur_cell import RAW, URCell, URPrograms, run_ur_programs
 
@@ -34,6 +35,7 @@ def measure_in_twin(
     counter_start: float | None = None,
     faults: Faults | None = None,
     proceed_on_pause: bool = False,
+    encoder_truth: EncoderTruth = IDEAL_ENCODER,
 ) -> RunResult:
     """Run wc.mount and wc.run of a generated module on a twin robot.
 
@@ -54,6 +56,7 @@ def measure_in_twin(
         counter_start=counter_start,
         faults=faults or Faults(),
         proceed_on_pause=proceed_on_pause,
+        encoder_truth=encoder_truth,
     )
 
 

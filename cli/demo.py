@@ -68,6 +68,15 @@ def demo(folder, seed, scale, robot, force):
         f"{'tool-point error vs truth, mean (mm)':<38}{tb:10.4f}{ta:10.4f}"
         f"{100 * (1 - ta / tb):10.0f}%"
     )
+    if r.predicted_mm is not None:
+        scale = (
+            ""
+            if r.encoder_scale_ppm is None
+            else f"   (encoder scale {r.encoder_scale_ppm:+.0f} ppm, no reference measured)"
+        )
+        click.echo(
+            f"{'  predicted by the error budget (mm)':<38}{'':>10}{r.predicted_mm:10.4f}{scale}"
+        )
     ctl = f"controller solver vs PC: {r.controller_difference:.1e} deg/mm"
     click.echo(f"{ctl}; total {sum(r.seconds.values()):.0f} s")
     click.echo(f"files in {r.folder}/: " + ", ".join(r.outputs))

@@ -30,7 +30,13 @@ from wirecal.solver.identify import DEFAULT_OMEGA
 from wirecal.solver.measurements import Tolerances, check_log
 from wirecal.solver.plausibility import READING_NOISE_MM, gate
 from wirecal.solver.run_parameters import RunParameters
-from wirecal.solver.simulate import Faults, simulate_log
+from wirecal.solver.simulate import (
+    IDEAL_ENCODER,
+    EncoderTruth,
+    Faults,
+    realistic_encoder,
+    simulate_log,
+)
 from wirecal.solver.solve import solve as solve_api
 
 if TYPE_CHECKING:
@@ -135,6 +141,24 @@ def _slip(ctx, param, value):
     help="Run the generated V+ programs (wc.mount, wc.run) in the digital twin: "
     "the log is written by the very program a user would load.",
 )
+@click.option(
+    "--ideal-encoder",
+    is_flag=True,
+    help="A perfect encoder: the robot file's scale exactly, no temperature change.",
+)
+@click.option(
+    "--encoder-scale-ppm",
+    type=number(),
+    help="The true encoder scale's error (ppm) [default: drawn within the robot file's "
+    "scale_tolerance_ppm].",
+)
+@click.option(
+    "--drift-mm-per-h",
+    type=number(),
+    default=0.0,
+    show_default=True,
+    help="Fault: every reading drifts by this much per hour from the start of the run.",
+)
 @click.option("--force", is_flag=True, help="Replace existing output files.")
 @user_errors
 def simulate(
@@ -153,14 +177,21 @@ def simulate(
     stop_after,
     counter_start,
     controller,
+    ideal_encoder,
+    encoder_scale_ppm,
+    drift_mm_per_h,
     force,
 ):
     """Simulate a measurement run of PLAN on a robot with known errors.
 
     The true robot is the nominal one plus error offsets (from --errors, or drawn with
     --random). Its wire lengths are read like the controller would: noise, quantisation at
-    mm_per_count, averaged samples, and a wrapping counter. The log goes to -o; the truth
-    goes to its own file, never into the log.
+    mm_per_count, averaged samples, and a wrapping counter. The encoder is realistic: its
+    true scale is off within the robot file's scale_tolerance_ppm (--encoder-scale-ppm
+    sets it), the temperature rises 0.5 K over the run (the drum and the arm expand), and
+    the run starts with the reference step when the robot file gives a reference gauge;
+    --ideal-encoder turns all of that off. The log goes to -o; the truth (and the true
+    encoder) goes to its own file, never into the log.
     """
     rb = load_robot(robot)
     if rb.controller_problem():
@@ -187,6 +218,15 @@ def simulate(
             errors = random_errors(
                 rb, 1.0 if scale is None else scale, np.random.default_rng([seed, 1])
             )
+        if ideal_encoder and (encoder_scale_ppm is not None or drift_mm_per_h):
+            raise WirecalError("--ideal-encoder excludes --encoder-scale-ppm and --drift-mm-per-h")
+        true_encoder = (
+            IDEAL_ENCODER
+            if ideal_encoder
+            else realistic_encoder(
+                rb.encoder, np.random.default_rng([seed, 4]), encoder_scale_ppm, drift_mm_per_h
+            )
+        )
         stopped = None
         if controller:
             if outliers or stop_after is not None:
@@ -194,7 +234,9 @@ def simulate(
                     "--outliers and --stop-after apply to the direct simulation; "
                     "the twin injects its own faults (see the README)"
                 )
-            text, stopped = _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start)
+            text, stopped = _twin_run(
+                rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true_encoder
+            )
         else:
             text = simulate_log(
                 rb,
@@ -207,16 +249,30 @@ def simulate(
                     slip=slip, outliers=outliers, outlier_mm=outlier_mm, stop_after=stop_after
                 ),
                 counter_start=counter_start,
+                encoder=true_encoder,
             )
         out.put(log_path, text)
-        out.put(truth_path, truth_text(rb, errors, None if errors_file else seed))
+        out.put(
+            truth_path,
+            truth_text(rb, errors, None if errors_file else seed) + _encoder_note(true_encoder),
+        )
     click.echo(f"wrote {log_path} ({pl.n_points} points) and the truth to {truth_path}")
     if stopped:
         click.echo(f"the controller program stopped: {stopped}", err=True)
         sys.exit(1)
 
 
-def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
+def _encoder_note(truth: EncoderTruth) -> str:
+    """Return the truth file's comment on the true encoder (what solve should find)."""
+    return (
+        f"# true encoder: scale {truth.scale_ppm:+.1f} ppm, temperature rise "
+        f"{truth.temperature_change_k:g} K over the run (drum {truth.drum_ppm_per_k:g} "
+        f"ppm/K, arm {truth.arm_ppm_per_k:g} ppm/K), zero drift "
+        f"{truth.zero_drift_mm_per_h:g} mm/h, gauge error {truth.gauge_error_mm:+.4f} mm\n"
+    )
+
+
+def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true_encoder):
     """Run the measurement programs in the twin; return the log text and why they stopped.
 
     V+: wc.mount and wc.run write the log on the cell's disk. URScript: wc_mount and wc_run
@@ -242,7 +298,15 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
             from wirecal.app.twin_runs import measure_in_twin
             from wirecal.gen.vplus.program import GenOptions
 
-            vp = measure_in_twin(rb, pl, errors, Path(tmp), options=GenOptions(run=run), **kw)
+            vp = measure_in_twin(
+                rb,
+                pl,
+                errors,
+                Path(tmp),
+                options=GenOptions(run=run),
+                encoder_truth=true_encoder,
+                **kw,
+            )
             mount, outcome, cell = vp.mount, vp.run, vp.cell
             log, first = vp.log, "wc.mount"
         text = log.read_text(encoding="ascii") if log.exists() else ""
@@ -289,6 +353,13 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start):
 )
 @click.option(
     "--partial", is_flag=True, help="Solve an incomplete log from the points that are there."
+)
+@click.option(
+    "--refine-scale",
+    is_flag=True,
+    help="Refine the reference's encoder scale jointly with the parameters (the lengths "
+    "tell it only through the lengths held at nominal, e.g. the tool point: use it when "
+    "those are exact).",
 )
 @click.option(
     "--joint-tol",
@@ -340,6 +411,7 @@ def solve(
     omega,
     robust,
     partial,
+    refine_scale,
     joint_tol,
     spread_tol,
     zero_tol,
@@ -369,7 +441,14 @@ def solve(
         m = check_log(parsed, pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), accept_foreign)
         methods = ("stepwise", "joint") if method in ("all", "controller") else (method,)
         result = solve_api(
-            rb, pl, m, methods=methods, omega_default=omega, robust=robust, partial=partial
+            rb,
+            pl,
+            m,
+            methods=methods,
+            omega_default=omega,
+            robust=robust,
+            partial=partial,
+            refine_scale=refine_scale,
         )
         chosen = result.recommended if method in ("all", "controller") else method
         verdict = gate(
@@ -461,6 +540,49 @@ def _mm(value: float) -> str:
     return f"{value:12.4f}" if np.isfinite(value) else f"{'unbounded':>12}"
 
 
+def _encoder_text(result) -> list[str]:
+    """Return the scale, the drift and each method's error budget as text lines."""
+    enc = result.robot.encoder
+    lines = [""]
+    sc = result.scale
+    if sc is not None:
+        lines.append(
+            f"encoder scale from the reference ({sc.pairs} pair(s) of nests "
+            f"{sc.reference_length_mm:g} mm apart): {sc.ppm:+.1f} ± {sc.std_ppm:.1f} ppm, "
+            "applied to every length"
+        )
+        jt = result.estimates.get("joint")
+        if jt is not None and jt.scale_ppm is not None and jt.scale_std_ppm is not None:
+            lines.append(
+                f"  refined with the joint method: {jt.scale_ppm:+.1f} ± "
+                f"{jt.scale_std_ppm:.1f} ppm more"
+            )
+    lines += [f"note: {n}" for n in result.encoder_notes]
+    if not result.budgets:
+        return lines
+    methods = list(result.budgets)
+    lines += ["", "Error budget: mean tool-point error over 1000 configurations (mm)"]
+    lines.append(f"{'source':<15}" + "".join(f"{m:>12}" for m in methods))
+    for term, label in (
+        ("noise", "reading noise"),
+        ("scale", "encoder scale"),
+        ("drift", "drift"),
+        ("exit", "wire exit"),
+    ):
+        lines.append(
+            f"{label:<15}" + "".join(f"{result.budgets[m].terms[term]:12.4f}" for m in methods)
+        )
+    lines.append(f"{'total':<15}" + "".join(f"{result.budgets[m].total:12.4f}" for m in methods))
+    lines += [f"  {n}" for n in result.budgets[methods[0]].notes]
+    if sc is None:
+        best = min(result.budgets[m].terms["scale"] for m in methods)
+        lines.append(
+            f"± {best:.3f} mm from the encoder scale alone (tolerance "
+            f"{enc.scale_tolerance_ppm:g} ppm): measure the reference"
+        )
+    return lines
+
+
 def _solve_text(result) -> str:
     est = result.estimates
     names = result.plan.order
@@ -501,6 +623,7 @@ def _solve_text(result) -> str:
         f"noise σ from the joint residual: {result.sigma_mm:.4f} mm; "
         f"recommended: {result.recommended}"
     )
+    lines += _encoder_text(result)
     if "stepwise" in est:
         lines += ["", "Step-by-step (paper): rms before → after, |Ψ_j|, leak of later parameters"]
         for j, s in enumerate(est["stepwise"].steps, 1):

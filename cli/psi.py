@@ -12,12 +12,15 @@ from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import NON_NEGATIVE
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
+from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import cone_problems
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.identifiability import Identifiability, analyse
-from wirecal.solver.sensitivity import DEFAULT_TOL
+from wirecal.solver.plausibility import READING_NOISE_MM
+from wirecal.solver.scale import ScaleObservability, scale_observability
+from wirecal.solver.sensitivity import DEFAULT_TOL, sensitivity
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 
 ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
@@ -191,8 +194,16 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
     names = P.all_names(rb.n_joints, with_tool=True) if all_params else rb.parameters
     q, _, _ = pl.all_points()
     result = analyse(rb.nominal, q, pl.theta0_deg, names)
+    scale = _scale(rb, q, pl.theta0_deg, tuple(names))
     if as_json:
-        print_json(_identifiability_json(result))
+        data = _identifiability_json(result)
+        data["scale"] = {
+            "std_ppm": None if not np.isfinite(scale.std_ppm) else scale.std_ppm,
+            "noise_mm": READING_NOISE_MM,
+            "fixed_lengths": list(scale.fixed_lengths),
+            "resolved_by": "reference_length_mm",
+        }
+        print_json(data)
         return
     click.echo(f"Robot {rb.name}; plan {plan} ({pl.n_points} points)")
     click.echo(
@@ -200,3 +211,17 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
     )
     for line in result.describe():
         click.echo(line)
+    for line in scale.describe(READING_NOISE_MM, rb.encoder.scale_tolerance_ppm):
+        click.echo(line)
+
+
+def _scale(rb, q_deg, theta0_deg, names: tuple[str, ...]) -> ScaleObservability:
+    """How well the plan's wire lengths alone tell the encoder's scale."""
+    lengths = {
+        n: rb.nominal_value(n)
+        for n in P.all_names(rb.n_joints, with_tool=True)
+        if not n.startswith(("th", "al")) and abs(rb.nominal_value(n)) > 1e-9
+    }
+    psi = sensitivity(rb.nominal, q_deg, theta0_deg, names).psi
+    d = wire_lengths(rb.nominal, np.radians(q_deg), np.radians(theta0_deg))
+    return scale_observability(psi, d, names, lengths, READING_NOISE_MM)

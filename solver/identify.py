@@ -24,6 +24,7 @@ from wirecal.solver.identifiability import covariance
 from wirecal.solver.kinematics import Model, with_errors
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan
+from wirecal.solver.scale import PPM
 
 DEFAULT_OMEGA = 5.0
 """Default bound Ω_j: ±5 deg for angles, ±5 mm for lengths."""
@@ -100,6 +101,8 @@ class Estimate:
     std: np.ndarray | None = None
     correlation: np.ndarray | None = None
     steps: tuple[StepResult, ...] = ()
+    scale_ppm: float | None = None  # the joint method's refinement of the encoder scale
+    scale_std_ppm: float | None = None
 
     def as_dict(self) -> dict[str, float]:
         """Return the offsets by parameter name (boundary units)."""
@@ -232,26 +235,58 @@ def run_stepwise(problem: Problem, omega: np.ndarray, psi: np.ndarray) -> Estima
     )
 
 
+@dataclass(frozen=True)
+class ScalePrior:
+    """The encoder scale as an extra unknown of the joint method.
+
+    The lengths are read as (1 + s)·d̃; the reference gauge says s = 0 ± ``std`` (the
+    lengths already carry its estimate). ``weight`` = σ_reading/σ_s turns the prior into
+    one more residual row, w·s, of the same units as the others.
+    """
+
+    std: float
+    weight: float
+
+
 def joint(
-    problem: Problem, x0: np.ndarray, *, loss: Loss = "linear", f_scale_mm: float = 0.05
+    problem: Problem,
+    x0: np.ndarray,
+    *,
+    loss: Loss = "linear",
+    f_scale_mm: float = 0.05,
+    scale: ScalePrior | None = None,
 ) -> Estimate:
     """All parameters together, nonlinear least squares from ``x0`` (internal units).
 
     σ of the residual, (JᵀJ)⁻¹ and the correlations come from the solution, rank-aware:
     a parameter the points do not identify gets σ = inf and NaN correlations; a robust
     ``loss`` (e.g. "soft_l1", with ``f_scale_mm`` the inlier scale) resists outliers.
+    With ``scale`` the encoder's scale s is refined too: residuals d(e) − (1 + s)·d̃ and the
+    prior row w·s, Jacobian column ∂/∂s = −d̃ (and w on the prior row); its estimate and σ
+    are ``scale_ppm``/``scale_std_ppm``, and the parameters' σ then carry the scale's
+    uncertainty.
     """
     last: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+    m = len(problem.names)
 
     def evaluate(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Residuals and Jacobian from one pass over the chain, reused for the same x."""
         key = x.tobytes()
         if key not in last:
             d, J = wire_jacobian(
-                with_errors(problem.base, problem.names, x), problem.q, problem.q0, problem.names
+                with_errors(problem.base, problem.names, x[:m]),
+                problem.q,
+                problem.q0,
+                problem.names,
             )
             last.clear()
-            last[key] = (d - problem.d, J)
+            if scale is None:
+                last[key] = (d - problem.d, J)
+            else:
+                s = x[m]
+                r = np.append(d - (1 + s) * problem.d, scale.weight * s)
+                col = np.append(-problem.d, scale.weight)
+                last[key] = (r, np.column_stack([np.vstack([J, np.zeros(m)]), col]))
         return last[key]
 
     # MINPACK's Levenberg–Marquardt for plain least squares; a robust loss needs "trf".
@@ -266,7 +301,7 @@ def joint(
     method: Literal["lm", "trf"] = "lm" if loss == "linear" else "trf"
     res = least_squares(
         residuals,
-        x0,
+        x0 if scale is None else np.append(x0, 0.0),
         jac=jacobian,
         method=method,
         loss=loss,
@@ -278,23 +313,34 @@ def joint(
         max_nfev=200,
     )
     r, J = evaluate(res.x)
-    n, m = r.size, len(problem.names)
+    n, k = r.size, J.shape[1]
     std = corr = None
-    if n > m:
-        sigma2 = float(r @ r) / (n - m)
-        # Boundary units, so that the rank tolerance compares deg with mm, not rad with mm.
-        cov, identified = covariance(problem.errors.per_boundary(J), sigma2)
+    # Boundary units, so that the rank tolerance compares deg with mm, not rad with mm.
+    Jb = problem.errors.per_boundary(J[:, :m])
+    if scale is not None:
+        Jb = np.column_stack([Jb, J[:, m]])
+    if n > k:
+        sigma2 = float(r[: problem.d.size] @ r[: problem.d.size]) / (problem.d.size - m)
+        cov, identified = covariance(Jb, sigma2)
         sd = np.sqrt(np.clip(np.diag(cov), 0, None))
         with np.errstate(invalid="ignore", divide="ignore"):
             corr = cov / np.outer(sd, sd)
         corr[~identified] = np.nan
         corr[:, ~identified] = np.nan
         std = np.where(identified, sd, np.inf)
+    scale_ppm = scale_std_ppm = None
+    if scale is not None:
+        scale_ppm = float(res.x[m]) / PPM
+        scale_std_ppm = None if std is None else float(std[m]) / PPM
+        std = None if std is None else std[:m]
+        corr = None if corr is None else corr[:m, :m]
     return Estimate(
         "joint",
         problem.names,
-        problem.errors.to_boundary(res.x),
-        float(np.sqrt(np.mean(r**2))),
+        problem.errors.to_boundary(res.x[:m]),
+        float(np.sqrt(np.mean(r[: problem.d.size] ** 2))),
         std=std,
         correlation=corr,
+        scale_ppm=scale_ppm,
+        scale_std_ppm=scale_std_ppm,
     )

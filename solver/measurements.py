@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import Log, Reading, read_log
+from wirecal.solver.formats.log import REFERENCE_STEP, Log, Reading, read_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 
@@ -49,6 +49,16 @@ class Measurements:
     missing: tuple[tuple[int, int], ...] = field(default=())
     unsettled: tuple[tuple[int, int], ...] = field(default=())  # (step, index) not settled
     closed: bool = True  # the closing zero reading after the last step is there
+    t_s: np.ndarray | None = None  # (N,) each point's time (version 2; NaN where missing)
+    zero_t_s: np.ndarray | None = None  # every zero reading's time, closing one included
+    zero_mm: np.ndarray | None = None  # every zero reading's drift from the first (mm)
+    reference_t_s: float | None = None  # mean time of the zeros the lengths are read from
+    reference_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))  # gauge pairs B − A
+
+    @property
+    def timed(self) -> bool:
+        """Every reading carries the controller's time (log format version 2)."""
+        return self.zero_t_s is not None
 
     @property
     def present(self) -> np.ndarray:
@@ -140,6 +150,7 @@ def check_log(
         distance = _lengths(rows, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
     else:
         distance = rows.counts
+    reference_mm = _reference_pairs(rows, robot.encoder.counter, mpc, src, problems)
     if problems:
         raise WirecalError(problems)
     missing = tuple(
@@ -161,7 +172,24 @@ def check_log(
         unsettled=tuple(rows.unsettled),
         closed=n_steps + 1 in zeros,
         log=log,
+        reference_mm=reference_mm,
+        **_times(rows, drift, n_steps),
     )
+
+
+def _times(rows: _Rows, drift: dict[int, float], n_steps: int) -> dict:
+    """Return the readings' times for the drift fit; none without ``t_s`` (version 1)."""
+    zeros = [rows.zeros[s] for s in sorted(drift)]
+    if not zeros or any(r.t_s is None for r in zeros):
+        return {}
+    t_zero = np.array([r.t_s for r in zeros], dtype=float)
+    in_ref = np.array([s <= n_steps for s in sorted(drift)])
+    return {
+        "t_s": rows.t_s,
+        "zero_t_s": t_zero,
+        "zero_mm": np.array([drift[s] for s in sorted(drift)]),
+        "reference_t_s": float(t_zero[in_ref].mean()) if in_ref.any() else None,
+    }
 
 
 def _check_origin(log: Log, plan: Plan, robot: Robot) -> None:
@@ -200,6 +228,8 @@ class _Rows:
     zeros: dict[int, Reading]  # per step with a zero reading
     seen: dict[tuple[str, int, int], int]  # (kind, step, index) → line
     unsettled: list[tuple[int, int]]  # (step, index) of the unsettled readings
+    t_s: np.ndarray  # (N,) NaN where missing or untimed
+    references: dict[int, Reading] = field(default_factory=dict)  # index → reference row
 
 
 class _BadRow(Exception):
@@ -210,7 +240,16 @@ def _read_rows(log: Log, plan: Plan, robot: Robot, tol: Tolerances, problems: li
     """Check each reading against the plan; keep the good ones, report the others."""
     q_plan, step_no, index_no = plan.all_points()
     position = {(int(s), int(i)): k for k, (s, i) in enumerate(zip(step_no, index_no, strict=True))}
-    rows = _Rows(step_no, index_no, np.full(len(q_plan), np.nan), q_plan.copy(), {}, {}, [])
+    rows = _Rows(
+        step_no,
+        index_no,
+        np.full(len(q_plan), np.nan),
+        q_plan.copy(),
+        {},
+        {},
+        [],
+        np.full(len(q_plan), np.nan),
+    )
     for r in log.readings:
         if r.kind == "unsettled":  # for the record only: the program measured it again
             rows.unsettled.append((r.step, r.index))
@@ -224,6 +263,10 @@ def _read_rows(log: Log, plan: Plan, robot: Robot, tol: Tolerances, problems: li
                     + f" (first on line {rows.seen[key]}); keep one run per log"
                 )
             rows.seen[key] = r.line
+            if r.kind == "reference":
+                _check_reference(r)
+                rows.references[r.index] = r
+                continue
             k = _check_reading(r, plan, robot, tol, q_plan, position, abs(log.mm_per_count))
         except _BadRow as e:
             problems.append(f"{log.source}:{r.line}: {e}")
@@ -233,7 +276,40 @@ def _read_rows(log: Log, plan: Plan, robot: Robot, tol: Tolerances, problems: li
         else:
             rows.counts[k] = r.counts
             rows.joints_deg[k] = r.joints_deg
+            rows.t_s[k] = np.nan if r.t_s is None else r.t_s
     return rows
+
+
+def _check_reference(r: Reading) -> None:
+    """Raise :class:`_BadRow` for a reference row off its step (0) or index (≥ 1)."""
+    if r.step != REFERENCE_STEP or r.index < 1:
+        raise _BadRow(
+            f"a reference row has step {REFERENCE_STEP} and index 1, 2, … (nest A odd, "
+            f"nest B even), not step {r.step} index {r.index}"
+        )
+
+
+def _reference_pairs(rows: _Rows, counter, mpc: float, src: str, problems: list[str]) -> np.ndarray:
+    """Return each reference pair's nest B − nest A length (mm, nominal scale)."""
+    refs = rows.references
+    out = []
+    for i in sorted(refs):
+        if i % 2 == 0:
+            continue
+        if i + 1 not in refs:
+            problems.append(
+                f"{src}:{refs[i].line}: the reference reading in nest A (index {i}) has no "
+                f"nest B reading (index {i + 1}); repeat the reference step"
+            )
+            continue
+        out.append(float(counter.difference(refs[i + 1].counts, refs[i].counts)) * mpc)
+    for i in sorted(refs):
+        if i % 2 == 0 and i - 1 not in refs:
+            problems.append(
+                f"{src}:{refs[i].line}: the reference reading in nest B (index {i}) has no "
+                f"nest A reading (index {i - 1}); repeat the reference step"
+            )
+    return np.array(out)
 
 
 def _check_reading(

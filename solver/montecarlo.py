@@ -8,23 +8,41 @@ true robot, identifies the parameters, and compares the identified model with th
 one: parameter errors, and the tool-point error ‖p_true(q) − p_est(q)‖ over workspace
 configurations q (per trial: mean and max over q; reported: averages over trials). The
 bound's figure is the same statistic for Gaussian parameter errors with the CRB covariance.
+
+With a true ``encoder`` (:class:`~wirecal.solver.simulate.EncoderTruth`) the readings carry
+its scale and temperature; when the robot file gives a reference gauge, each trial reads
+it first (pairs of nests, as :func:`~wirecal.solver.simulate.simulate_log`) and its
+lengths are scaled by the measured k̂ (:func:`~wirecal.solver.scale.estimate_scale`), and
+the joint method refines the scale as ``wirecal solve`` does. ``budget`` holds each
+method's error budget (:mod:`wirecal.solver.budget`) for the same set-up: its prediction.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from wirecal.solver.accuracy import crb, noise_covariance, workspace
+from wirecal.solver.budget import Budget, budget, sources
 from wirecal.solver.distance import wire_jacobian
+from wirecal.solver.exit_geometry import unmodelled_exit_mm
 from wirecal.solver.identify import Problem, joint, omega_vector, stepwise
 from wirecal.solver.kinematics import repeat, tool_jacobian, tool_position, with_errors
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.simulate import measured_lengths
+from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
+from wirecal.solver.scale import PPM
+from wirecal.solver.simulate import (
+    IDEAL_ENCODER,
+    NEST_A_MM,
+    OPERATOR_SEAT_S,
+    EncoderTruth,
+    measured_lengths,
+    reference_duration_s,
+)
 
 
 @dataclass(frozen=True)
@@ -50,6 +68,8 @@ class MonteCarlo:
     methods: dict[str, MethodFigures]
     crb: MethodFigures
     before_mm: float  # mean tool-point error of the uncalibrated (nominal) model
+    budget: dict[str, Budget] = field(default_factory=dict)  # each method's prediction
+    scale_error_ppm: float = 0.0  # RMS over trials of the scale left after the reference
 
 
 def tool_errors(
@@ -85,6 +105,7 @@ def run(
     seed: int = 0,
     n_workspace: int = 1000,
     methods: tuple[str, ...] = ("stepwise", "joint"),
+    encoder: EncoderTruth = IDEAL_ENCODER,
 ) -> MonteCarlo:
     """Calibrate T simulated robots; ``truths`` (T, m) in deg/mm, the plan's order."""
     rng = np.random.default_rng(seed)
@@ -94,9 +115,12 @@ def run(
     truth = errors.to_internal(np.atleast_2d(truths))
     T = truth.shape[0]
     base = robot.nominal
-    d = measured_lengths(
-        with_errors(base, names, truth), plan, robot.encoder.mm_per_count, noise_mm, rng
-    )
+    mpc = robot.encoder.mm_per_count
+    times = _times(robot, plan)
+    d = measured_lengths(with_errors(base, names, truth), plan, mpc, noise_mm, rng, encoder, times)
+    sigma_model = float(np.sqrt(noise_mm**2 + mpc**2 / 12))
+    factor, scale_std = _reference(robot, encoder, T, noise_mm, times[2], rng)
+    d = d * factor[:, None]
     q, step, _ = plan.all_points()
     problem = Problem(base, names, np.radians(q), np.radians(plan.theta0_deg), d, step)
     omega = omega_vector(names, n, plan)
@@ -115,7 +139,10 @@ def run(
         est_j = np.array(
             [
                 errors.to_internal(
-                    joint(Problem(base, names, problem.q, problem.q0, d[t], step), est_sw[t]).values
+                    joint(
+                        Problem(base, names, problem.q, problem.q0, d[t], step),
+                        est_sw[t],
+                    ).values
                 )
                 for t in range(T)
             ]
@@ -127,11 +154,75 @@ def run(
 
     # The bound at the mean truth, for the noise model of the readings: per-point σ and
     # quantisation, plus the mean zero reading's error common to every length.
-    sigma2 = noise_mm**2 + robot.encoder.mm_per_count**2 / 12
-    J = wire_jacobian(with_errors(base, names, truth.mean(axis=0)), problem.q, problem.q0, names)[1]
+    sigma2 = sigma_model**2
+    mean_model = with_errors(base, names, truth.mean(axis=0))
+    d_mean, J = wire_jacobian(mean_model, problem.q, problem.q0, names)
     cov = crb(J, noise_covariance(len(q), np.sqrt(sigma2), np.sqrt(sigma2 / len(plan.steps))))
     draws = rng.multivariate_normal(np.zeros(len(names)), cov, size=max(T, 200))
     _, Jp = tool_jacobian(base, q_ws, names)
     tool_crb = np.linalg.norm(np.einsum("qim,tm->tqi", Jp, draws), axis=2)
     before = tool_errors(robot, names, np.zeros_like(truth), truth, q_ws).mean()
-    return MonteCarlo(T, out, _figures(draws, tool_crb, errors, 0.0), float(before))
+    true_factor = 1 + encoder.scale_ppm * PPM
+    src = sources(
+        sigma_model,
+        d_mean,
+        robot.encoder.scale_tolerance_ppm * PPM if scale_std is None else scale_std,
+        scale_std is not None,
+        robot.encoder.temperature_coefficient_ppm_per_k,
+        times[1],
+        None,
+        float(times[0].mean()),
+        unmodelled_exit_mm(robot, plan),
+    )
+    budgets = {
+        mth: budget(base, names, J, step if mth == "stepwise" else None, src, q_ws) for mth in out
+    }
+    return MonteCarlo(
+        T,
+        out,
+        _figures(draws, tool_crb, errors, 0.0),
+        float(before),
+        budgets,
+        float(np.sqrt(np.mean((factor - true_factor) ** 2))) / PPM,
+    )
+
+
+def _times(robot: Robot, plan: Plan) -> tuple[np.ndarray, np.ndarray, float]:
+    """Return the steps' zero times, the points' times (plan order) and the run's total."""
+    timeline = run_timeline(robot, plan, DEFAULT_RUN)
+    offset = reference_duration_s(robot.encoder)
+    t = timeline.reading_s + offset
+    _, step_no, _ = plan.all_points()
+    n_steps = len(plan.steps)
+    # the run order: each step's zero then its points (plan order); last the closing zero
+    is_zero = np.concatenate(
+        [np.r_[True, np.zeros(int(np.sum(step_no == j)), bool)] for j in range(1, n_steps + 1)]
+    )
+    return t[:-1][is_zero], t[:-1][~is_zero], timeline.total_s + offset
+
+
+def _reference(
+    robot: Robot,
+    encoder: EncoderTruth,
+    T: int,
+    noise_mm: float,
+    total_s: float,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, float | None]:
+    """Return each trial's scale factor k̂ from the reference step (1 without) and its σ."""
+    enc = robot.encoder
+    if enc.reference_length_mm is None:
+        return np.ones(T), None
+    r = enc.reference_repeats
+    gauge = rng.normal(0.0, enc.reference_uncertainty_mm, (T, 1))  # true − certified
+    nest_b = np.tile([0.0, 1.0], r)
+    physical = NEST_A_MM + (enc.reference_length_mm + gauge) * nest_b
+    t = OPERATOR_SEAT_S * np.arange(2 * r)
+    reading = physical * encoder.read_factor(t, total_s) + encoder.drift_mm(t)
+    counts = np.floor((reading + rng.normal(0.0, noise_mm, reading.shape)) / enc.mm_per_count + 0.5)
+    pairs = (counts[:, 1::2] - counts[:, 0::2]) * enc.mm_per_count
+    sigma = float(np.sqrt(noise_mm**2 + enc.mm_per_count**2 / 12))
+    std = float(np.sqrt(2 * sigma**2 / r + enc.reference_uncertainty_mm**2)) / (
+        enc.reference_length_mm
+    )
+    return enc.reference_length_mm / pairs.mean(axis=1), std

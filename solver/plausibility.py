@@ -18,6 +18,11 @@ controller comparison) and refuses, with what to check, when:
   deficient (the unobservable parameters and combinations are named), or the noise model
   leaves a parameter's σ at :data:`POORLY_IDENTIFIED` deg or mm or more (the typical size
   of the errors being calibrated, paper §2.2: the data cannot tell its sign);
+* **drift** — the zero readings drift faster than
+  :data:`~wirecal.solver.scale.DRIFT_TOLERANCE_MM_PER_H` even less three of the fit's σ
+  (|b| − 3σ_b > tolerance: a sound log is not refused for its noise) — a wire creeping,
+  the stand moving, a temperature far from steady: lengths read at different times no
+  longer compare;
 * **bound** — an estimate lies on or beyond its bound Ω (the stepwise estimate pinned at
   Ω, the joint estimate beyond it) or beyond :data:`PLAUSIBLE_DEG` / :data:`PLAUSIBLE_MM`
   (a manufactured arm is not that far from its data sheet: the robot file, the mastering or
@@ -36,6 +41,7 @@ from wirecal.solver.errors import Implausible
 from wirecal.solver.identifiability import Identifiability, analyse_jacobian, covariance
 from wirecal.solver.identify import DEFAULT_OMEGA
 from wirecal.solver.robot import LIVE_CHECK
+from wirecal.solver.scale import DRIFT_TOLERANCE_MM_PER_H
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult, omega_vector
 
@@ -70,6 +76,7 @@ HEADLINE = {
     "residual": "residual far above the noise model",
     "identifiability": "the points do not identify every parameter",
     "bound": "estimates on their bound or beyond a plausible size",
+    "drift": "the zero readings drift beyond the tolerance",
 }
 
 
@@ -77,7 +84,7 @@ HEADLINE = {
 class Finding:
     """One failed plausibility check."""
 
-    check: str  # "lengths", "residual", "identifiability" or "bound"
+    check: str  # "lengths", "residual", "identifiability", "bound" or "drift"
     message: str
 
 
@@ -171,6 +178,7 @@ def assess(
     unidentified = tuple(n for n, ok in zip(names, identified, strict=True) if not ok)
     findings += _identifiability(ident, J, sigma_model)
     findings += _bounds(result, method, omega_default)
+    findings += _drift(result)
     return Plausibility(
         method=method,
         findings=tuple(findings),
@@ -287,6 +295,22 @@ def _bounds(result: SolveResult, method: str, omega_default: float) -> list[Find
             )
         )
     return findings
+
+
+def _drift(result: SolveResult) -> list[Finding]:
+    """Return a drift of the zero readings beyond :data:`DRIFT_TOLERANCE_MM_PER_H` by 3σ."""
+    dr = result.drift
+    if dr is None or abs(dr.rate_mm_per_h) - 3 * dr.std_mm_per_h <= DRIFT_TOLERANCE_MM_PER_H:
+        return []
+    return [
+        Finding(
+            "drift",
+            f"the zero readings at θ0 drift by {dr.rate_mm_per_h:+.3f} mm/h (± "
+            f"{dr.std_mm_per_h:.3f}, {dr.zeros} readings), beyond the tolerance "
+            f"{DRIFT_TOLERANCE_MM_PER_H:g} mm/h by more than 3σ: fix the encoder's stand and "
+            "the wire's attachment, let the cell reach a steady temperature, and measure again",
+        )
+    ]
 
 
 def gate(

@@ -26,6 +26,14 @@ DEFAULT_LINK_RADIUS_MM = 50.0
 """Capsule radius of a link when the robot file gives none (for the wire clearance)."""
 
 
+DEFAULT_SCALE_TOLERANCE_PPM = 500.0
+"""The scale tolerance (ppm) when the robot file gives none: a mm_per_count typed from a
+datasheet is good to about 0.02–0.1 % (issue 13's survey of catalogue draw-wire sensors)."""
+
+DEFAULT_DRUM_PPM_PER_K = 23.0
+"""The drum's linear expansion (ppm/K) when the robot file gives none: aluminium."""
+
+
 @dataclass(frozen=True)
 class Encoder:
     """The draw-wire encoder and how the controller program reads it.
@@ -49,6 +57,11 @@ class Encoder:
     exit: Exit | None = None
     max_wire_speed_mm_s: float | None = None  # the wire's speed limit (None: not given)
     max_wire_accel_mm_s2: float | None = None  # the wire's acceleration limit
+    scale_tolerance_ppm: float = DEFAULT_SCALE_TOLERANCE_PPM  # the datasheet's scale figure
+    reference_length_mm: float | None = None  # a gauge's certified nest distance, if any
+    reference_uncertainty_mm: float = 0.0  # its certificate's standard uncertainty
+    reference_repeats: int = 3  # nest A/B seatings the program asks for
+    temperature_coefficient_ppm_per_k: float = DEFAULT_DRUM_PPM_PER_K  # the drum's expansion
 
     @property
     def counter(self) -> Counter:

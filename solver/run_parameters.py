@@ -62,9 +62,11 @@ settle rule, as the twin's runs show it (80 readings × 4 seeds of the paper pla
 passes when the envelope was about 1.5 counts at the window's first reading, e^-1 of that
 at its last, τ being the window's length): :func:`settle_time_s` predicts with it."""
 
-WIRE_LIMIT_MARGIN = 0.9
+WIRE_LIMIT_MARGIN = 0.8
 """The program's moves keep the wire at this fraction of the encoder's limits: the path
-is sampled at ``PATH_SAMPLES`` points and the true robot differs a little from nominal."""
+is sampled at ``PATH_SAMPLES`` points and the true robot differs from nominal (with random
+offsets within ±1 deg/mm the twin's wire ran 15 % faster than the nominal plan on one
+move of the paper plan, seed 2: 0.9 was not enough; 0.8 held on seeds 1–8)."""
 
 PATH_SAMPLES = 33
 """Points along each move at which the wire speed is evaluated."""

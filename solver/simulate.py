@@ -9,6 +9,20 @@ out over samples, like repeatability), is quantised at mm_per_count, sampled N t
 ±1-count electrical jitter, and counted by a signed counter of ``counter_bits`` that wraps.
 Each reading's ``t_s`` is its time in the run's time model (:func:`run_timeline`, the
 program's default speed and settle time).
+
+The encoder itself is :class:`EncoderTruth`: ideal by default in the Python API (the
+figures of the tests and the Monte Carlo of the noise alone), realistic in ``wirecal
+simulate``, the twin and the demo (:func:`realistic_encoder`). A realistic encoder's true
+mm per count is the robot file's × (1 + scale), the scale drawn uniform within
+``scale_tolerance_ppm``; the temperature rises by :data:`TEMPERATURE_CHANGE_K` linearly over
+the run, so the drum's mm per count grows by ``temperature_coefficient_ppm_per_k`` per kelvin
+and the arm (every length of it: the wire length is homogeneous in them) by
+:data:`ARM_PPM_PER_K`, both about the run's mean temperature (the truth file's arm is the
+arm at that temperature). A zero drift (mm/h) can be added to every reading. When the robot
+file gives ``reference_length_mm``, the run starts with the reference step: the wire tip
+seated in nest A (a wire length of :data:`NEST_A_MM`) and nest B, ``reference_repeats``
+pairs, one every :data:`OPERATOR_SEAT_S`; the gauge's true length is its certified length
+plus an error of its certified uncertainty.
 """
 
 from __future__ import annotations
@@ -21,11 +35,12 @@ from wirecal.solver.counter import Counter
 from wirecal.solver.distance import wire_vectors
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import Exit, physical_wire_mm
-from wirecal.solver.formats.log import format_header, format_row
+from wirecal.solver.formats.log import REFERENCE_STEP, format_header, format_row
 from wirecal.solver.kinematics import Model
 from wirecal.solver.plan import Plan
-from wirecal.solver.robot import Robot
-from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
+from wirecal.solver.robot import Encoder, Robot
+from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters, run_timeline
+from wirecal.solver.scale import ARM_PPM_PER_K, PPM
 
 RANGE_EXCEEDED = "*Draw-wire range exceeded*"  # the twin's error text for the same cause
 
@@ -39,6 +54,83 @@ class Faults:
     outlier_mm: float = 1.0  # size of that error (random sign)
     stop_after: int | None = None  # readings written before the run stops
     truncate_last: bool = False  # the last line is cut mid-write
+
+
+TEMPERATURE_CHANGE_K = 0.5
+"""Temperature rise over a realistic simulated run (K): a workshop warming in the morning."""
+
+NEST_A_MM = 50.0
+"""Wire length (mm) with the tip in the reference gauge's nest A, close to the exit."""
+
+OPERATOR_SEAT_S = 20.0
+"""Time (s) the operator takes per seating of the wire tip in a nest, and to reattach it."""
+
+
+@dataclass(frozen=True)
+class EncoderTruth:
+    """The true encoder of a simulated run (the robot file only approximates it)."""
+
+    scale_ppm: float = 0.0  # true mm per count = the robot file's × (1 + scale_ppm·10⁻⁶)
+    temperature_change_k: float = 0.0  # rise over the run, linear in time
+    drum_ppm_per_k: float = 0.0
+    arm_ppm_per_k: float = 0.0
+    zero_drift_mm_per_h: float = 0.0  # added to every reading, from the start of the run
+    gauge_error_mm: float = 0.0  # true gauge length − certified
+
+    def read_factor(self, t_s: np.ndarray, total_s: float) -> np.ndarray:
+        """Return the reading of a wire length over its length at the mean temperature.
+
+        (1 + α_arm·ΔT) / ((1 + scale)(1 + α_drum·ΔT)), ΔT = rise × (t/total − ½).
+        """
+        t = np.asarray(t_s, dtype=float)
+        dT = self.temperature_change_k * (t / total_s - 0.5) if total_s > 0 else 0.0 * t
+        return (1 + self.arm_ppm_per_k * PPM * dT) / (
+            (1 + self.scale_ppm * PPM) * (1 + self.drum_ppm_per_k * PPM * dT)
+        )
+
+    def drift_mm(self, t_s: np.ndarray) -> np.ndarray:
+        """Return the zero drift added to readings at ``t_s``."""
+        return self.zero_drift_mm_per_h * np.asarray(t_s, dtype=float) / 3600
+
+
+IDEAL_ENCODER = EncoderTruth()
+
+
+def realistic_encoder(
+    encoder: Encoder,
+    rng: np.random.Generator,
+    scale_ppm: float | None = None,
+    zero_drift_mm_per_h: float = 0.0,
+) -> EncoderTruth:
+    """Return a realistic true encoder for the robot file's ``encoder`` (module docstring).
+
+    ``scale_ppm`` sets the scale exactly; by default it is drawn within the tolerance.
+    """
+    tol = encoder.scale_tolerance_ppm
+    scale = float(rng.uniform(-tol, tol)) if scale_ppm is None else scale_ppm
+    return EncoderTruth(
+        scale_ppm=scale,
+        temperature_change_k=TEMPERATURE_CHANGE_K,
+        drum_ppm_per_k=encoder.temperature_coefficient_ppm_per_k,
+        arm_ppm_per_k=ARM_PPM_PER_K,
+        zero_drift_mm_per_h=zero_drift_mm_per_h,
+        gauge_error_mm=float(rng.normal(0.0, encoder.reference_uncertainty_mm)),
+    )
+
+
+def reference_lengths(encoder: Encoder, truth: EncoderTruth) -> np.ndarray:
+    """Return the true wire lengths of the reference step: nest A, nest B, … (mm)."""
+    if encoder.reference_length_mm is None:
+        return np.zeros(0)
+    pair = [NEST_A_MM, NEST_A_MM + encoder.reference_length_mm + truth.gauge_error_mm]
+    return np.tile(pair, encoder.reference_repeats)
+
+
+def reference_duration_s(encoder: Encoder) -> float:
+    """Return how long the reference step takes: each seating and the reattachment."""
+    if encoder.reference_length_mm is None:
+        return 0.0
+    return OPERATOR_SEAT_S * (2 * encoder.reference_repeats + 1)
 
 
 def sample_counts(
@@ -73,17 +165,30 @@ def true_lengths(model: Model, plan: Plan, exit_: Exit | None = None) -> np.ndar
 
 
 def measured_lengths(
-    model: Model, plan: Plan, mm_per_count: float, noise_mm: float, rng: np.random.Generator
+    model: Model,
+    plan: Plan,
+    mm_per_count: float,
+    noise_mm: float,
+    rng: np.random.Generator,
+    encoder: EncoderTruth = IDEAL_ENCODER,
+    times: tuple[np.ndarray, np.ndarray, float] | None = None,
 ) -> np.ndarray:
     """Return the wire lengths as a checked log gives them.
 
     Wire lengths as a checked log gives them: per-point noise, counts quantised, each
     measured from the mean of the steps' zero readings. Vectorised over a batched model
     (Monte Carlo); the same reading model as :func:`simulate_log` without the counter.
+    ``times`` (the steps' zero times, the points' times, the run's total, s) is needed for
+    an encoder with temperature or drift.
     """
     d = true_lengths(model, plan)
     n_zero = len(plan.steps)
     noisy = np.concatenate([np.zeros((*d.shape[:-1], n_zero)), d], axis=-1)
+    if times is not None:
+        t = np.concatenate([times[0], times[1]])
+        noisy = noisy * encoder.read_factor(t, times[2]) + encoder.drift_mm(t)
+    elif encoder != IDEAL_ENCODER:
+        noisy = noisy * encoder.read_factor(np.zeros(1), 0.0)
     noisy = noisy + rng.normal(0.0, noise_mm, noisy.shape)
     counts = np.floor(noisy / mm_per_count + 0.5)
     return (counts[..., n_zero:] - counts[..., :n_zero].mean(axis=-1, keepdims=True)) * mm_per_count
@@ -100,8 +205,17 @@ def simulate_log(
     faults: Faults = Faults(),
     counter_start: float | None = None,
     mm_per_count: float | None = None,
+    encoder: EncoderTruth = IDEAL_ENCODER,
+    run: RunParameters = DEFAULT_RUN,
 ) -> str:
-    """Return the text of the log a run of ``plan`` on the true robot would write."""
+    """Return the text of the log a run of ``plan`` on the true robot would write.
+
+    ``run``: the program's speed and settle settings, which set each reading's ``t_s``
+    (``samples`` is its readings per point).
+
+    ``encoder`` is the true encoder (ideal by default; :func:`realistic_encoder`); the
+    reference step comes first when the robot file asks for one.
+    """
     rng = np.random.default_rng(seed)
     enc = robot.encoder
     mpc = enc.mm_per_count if mm_per_count is None else mm_per_count
@@ -146,17 +260,23 @@ def simulate_log(
             f"{RANGE_EXCEEDED}: step {steps[i]} point {indices[i]}: the wire would be "
             f"{lengths[i]:.1f} mm long, beyond the encoder's range_mm {enc.range_mm:g}"
         )
-    head = sample_counts(lengths[:-1], mpc, start, enc.counter, samples, rng)
-    tail = sample_counts(lengths[-1:], mpc, start, enc.counter, samples, closing_rng)
-    mean, spread = np.concatenate([head[0], tail[0]]), np.concatenate([head[1], tail[1]])
-    run = replace(DEFAULT_RUN, readings=samples)
+    run = replace(run, readings=samples)
     timeline = run_timeline(robot, plan, run)
-    rows = [
+    offset = reference_duration_s(enc)
+    times = timeline.reading_s + offset
+    total = timeline.total_s + offset
+    # What the encoder reads of those wire lengths (scale, temperature, drift).
+    reading = lengths * encoder.read_factor(times, total) + encoder.drift_mm(times)
+    head = sample_counts(reading[:-1], mpc, start, enc.counter, samples, rng)
+    tail = sample_counts(reading[-1:], mpc, start, enc.counter, samples, closing_rng)
+    mean, spread = np.concatenate([head[0], tail[0]]), np.concatenate([head[1], tail[1]])
+    rows = _reference_rows(enc, encoder, plan, noise_mm, samples, start, seed, total)
+    rows += [
         format_row(*args, samples, sp, t, settle)
         for args, sp, t, settle in zip(
             zip(kinds, steps, indices, joints, mean, strict=True),
             spread,
-            timeline.reading_s,
+            times,
             timeline.settle_s,
             strict=True,
         )
@@ -173,3 +293,31 @@ def simulate_log(
     if faults.truncate_last and rows:
         text = text[: -(len(rows[-1]) // 2) - 1]
     return text
+
+
+def _reference_rows(
+    enc: Encoder,
+    truth: EncoderTruth,
+    plan: Plan,
+    noise_mm: float,
+    samples: int,
+    start: float,
+    seed: int,
+    total_s: float,
+) -> list[str]:
+    """Return the log rows of the reference step (none when the robot file asks for none).
+
+    Drawn from a generator of their own, so the plan's readings of a seed stay the same.
+    """
+    lengths = reference_lengths(enc, truth)
+    if not len(lengths):
+        return []
+    rng = np.random.default_rng([seed, 5])
+    times = OPERATOR_SEAT_S * np.arange(len(lengths))
+    physical = lengths + rng.normal(0.0, noise_mm, len(lengths))
+    reading = physical * truth.read_factor(times, total_s) + truth.drift_mm(times)
+    mean, spread = sample_counts(reading, enc.mm_per_count, start, enc.counter, samples, rng)
+    return [
+        format_row("reference", REFERENCE_STEP, i + 1, plan.theta0_deg, c, samples, sp, t, 0.0)
+        for i, (c, sp, t) in enumerate(zip(mean, spread, times, strict=True))
+    ]

@@ -7,25 +7,32 @@ post-calibration accuracy.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
-from wirecal.solver.accuracy import stepwise_map, tool_error, workspace
+from wirecal.solver.accuracy import workspace
+from wirecal.solver.budget import Budget, budget, least_squares_map, sources
+from wirecal.solver.distance import wire_jacobian
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import unmodelled_exit_mm
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.identify import (
     DEFAULT_OMEGA,
     Estimate,
+    Loss,
     Problem,
+    ScalePrior,
     joint,
     omega_vector,
     run_stepwise,
 )
+from wirecal.solver.kinematics import with_errors
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
+from wirecal.solver.scale import PPM, Drift, ScaleEstimate, estimate_scale, fit_drift
 from wirecal.solver.sensitivity import sensitivity
 
 METHODS = ("stepwise", "joint")
@@ -46,6 +53,10 @@ class SolveResult:
     left_nominal: tuple[str, ...]  # parameters whose step has no points
     psi: np.ndarray  # (N, k) Ψ at the measured points, columns the estimates' names (paper §2.2)
     step: np.ndarray  # (N,) 1-based step in the plan's order of each measured point
+    budgets: dict[str, Budget] = field(default_factory=dict)  # method -> error budget
+    scale: ScaleEstimate | None = None  # from the log's reference rows
+    drift: Drift | None = None  # the zero readings' drift (timed logs)
+    encoder_notes: tuple[str, ...] = ()  # what was done about the scale and the drift
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -104,6 +115,33 @@ class SolveResult:
             "missing": [{"step": s, "index": i} for s, i in m.missing],
             "left_nominal": list(self.left_nominal),
             "notes": list(m.notes),
+            "encoder": self._encoder_json(),
+        }
+
+    def _encoder_json(self) -> dict[str, Any]:
+        """Return the scale, the drift and each method's error budget for ``--json``."""
+        sc, dr = self.scale, self.drift
+        return {
+            "scale": None
+            if sc is None
+            else {
+                "ppm": sc.ppm,
+                "std_ppm": sc.std_ppm,
+                "pairs": sc.pairs,
+                "reference_length_mm": sc.reference_length_mm,
+                "measured_mm": sc.measured_mm.tolist(),
+            },
+            "scale_tolerance_ppm": self.robot.encoder.scale_tolerance_ppm,
+            "drift": None
+            if dr is None
+            else {
+                "mm_per_h": dr.rate_mm_per_h,
+                "std_mm_per_h": dr.std_mm_per_h,
+                "zeros": dr.zeros,
+                "removed": dr.removed,
+            },
+            "budget": {k: b.as_json() for k, b in self.budgets.items()},
+            "notes": list(self.encoder_notes),
         }
 
 
@@ -136,11 +174,21 @@ def solve(
     omega_default: float = DEFAULT_OMEGA,
     robust: bool = False,
     partial: bool = False,
+    corrections: bool = True,
+    refine_scale: bool = False,
 ) -> SolveResult:
     """Identify the plan's parameters from checked measurements.
 
     Refuses an incomplete log unless ``partial``; then parameters whose step has no
-    points stay at nominal and are listed in ``left_nominal``.
+    points stay at nominal and are listed in ``left_nominal``. The lengths are scaled by
+    the reference rows' scale and a significant zero drift is removed
+    (:mod:`wirecal.solver.scale`) unless ``corrections`` is False (the controller solver's
+    view of the log: the file's scale, no drift removed); both are estimated either way.
+    The joint estimate's σ and correlations include the scale's uncertainty (the
+    reference's σ, or the tolerance without one). ``refine_scale`` refines the scale
+    jointly with the parameters instead (:func:`~wirecal.solver.identify.joint` with a
+    :class:`~wirecal.solver.identify.ScalePrior`): the wire lengths tell the scale only
+    through the lengths held at nominal (the tool point), so it leans on those being exact.
     """
     if not m.complete and not partial:
         raise WirecalError(
@@ -159,39 +207,153 @@ def solve(
 
     base = robot.nominal
     q_deg = m.joints_deg[present]
-    problem = Problem(
-        base, names, np.radians(q_deg), np.radians(m.theta0_deg), m.distance_mm[present], step
-    )
+    factor, notes = _reference_scale(robot, m)
+    raw = m.distance_mm[present]
+    k = factor if factor is not None and corrections else 1.0
+    d = raw * k
+    problem = Problem(base, names, np.radians(q_deg), np.radians(m.theta0_deg), d, step)
     psi = sensitivity(base, q_deg, m.theta0_deg, names).psi
     omega = omega_vector(names, robot.n_joints, plan, omega_default)
-
+    sw, jt, sigma = _identify(robot, problem, omega, psi, robust)
+    drift = _fit_drift(m, sigma, notes)
+    if corrections and drift is not None and drift.removed:
+        assert m.t_s is not None
+        assert m.reference_t_s is not None
+        d = (raw - drift.correction_mm(m.t_s[present], m.reference_t_s)) * k
+        problem = replace(problem, d=d)
+        sw, jt, sigma = _identify(robot, problem, omega, psi, robust)
     estimates: dict[str, Estimate] = {}
+    if "stepwise" in methods:
+        estimates["stepwise"] = sw
+    scale = None
+    if factor is not None:
+        enc = robot.encoder
+        scale = estimate_scale(
+            m.reference_mm, valid_length(enc), enc.reference_uncertainty_mm, sigma
+        )
+    scale_std = scale.std if scale is not None else robot.encoder.scale_tolerance_ppm * PPM
+    if refine_scale and scale is not None and corrections and np.isfinite(sigma) and sigma > 0:
+        prior = ScalePrior(scale.std, sigma / scale.std)
+        x = problem.errors.to_internal(jt.values)
+        jt = joint(problem, x, loss="soft_l1" if robust else "linear", scale=prior)
+    else:
+        jt = _with_scale_sigma(jt, problem, scale_std)
+    if "joint" in methods:
+        estimates["joint"] = jt
+
+    J = problem.errors.per_internal(psi)  # internal units
+    _, identified = covariance(J, sigma**2)
+    predicted = dict.fromkeys(estimates, UNIDENTIFIED)
+    budgets: dict[str, Budget] = {}
+    if identified.all():  # otherwise the tool error is unbounded along the unseen directions
+        ws = workspace(robot)
+        src = sources(
+            sigma,
+            d,
+            scale_std,
+            scale is not None,
+            robot.encoder.temperature_coefficient_ppm_per_k,
+            None if m.t_s is None else m.t_s[present],
+            drift,
+            m.reference_t_s,
+            unmodelled_exit_mm(robot, plan)[present],
+        )
+        for method in estimates:
+            budgets[method] = budget(
+                base, names, J, step if method == "stepwise" else None, src, ws
+            )
+            predicted[method] = {"mean": budgets[method].total, "max": budgets[method].worst}
+    return SolveResult(
+        robot,
+        plan,
+        m,
+        estimates,
+        predicted,
+        sigma,
+        left,
+        psi,
+        m.step[present],
+        budgets=budgets,
+        scale=scale,
+        drift=drift,
+        encoder_notes=tuple(notes),
+    )
+
+
+def _with_scale_sigma(est: Estimate, problem: Problem, scale_std: float) -> Estimate:
+    """Return the joint estimate with the scale's σ added to its covariance.
+
+    A scale error ε moves the estimate by ε·J⁺·d (:mod:`wirecal.solver.budget`): the
+    covariance gains scale_std²·(J⁺d)(J⁺d)ᵀ, in boundary units.
+    """
+    if est.std is None or est.correlation is None or scale_std == 0:
+        return est
+    _, J = wire_jacobian(
+        with_errors(problem.base, problem.names, problem.errors.to_internal(est.values)),
+        problem.q,
+        problem.q0,
+        problem.names,
+    )
+    b = problem.errors.to_boundary(least_squares_map(J) @ problem.d)
+    finite = np.isfinite(est.std)
+    sd = np.where(finite, est.std, 0.0)
+    cov = np.nan_to_num(est.correlation) * np.outer(sd, sd) + scale_std**2 * np.outer(b, b)
+    std = np.sqrt(np.diag(cov))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(std, std)
+    corr[~finite] = np.nan
+    corr[:, ~finite] = np.nan
+    return replace(est, std=np.where(finite, std, np.inf), correlation=corr)
+
+
+def valid_length(enc) -> float:
+    """Return the reference gauge's length (the caller checked that there is one)."""
+    assert enc.reference_length_mm is not None
+    return float(enc.reference_length_mm)
+
+
+def _identify(
+    robot: Robot, problem: Problem, omega: np.ndarray, psi: np.ndarray, robust: bool
+) -> tuple[Estimate, Estimate, float]:
+    """Run the stepwise and joint methods; their estimates and the noise σ (mm)."""
     sw = run_stepwise(problem, omega, psi)
     if not np.all(np.isfinite(sw.values)):
-        bad = [n for n, v in zip(names, sw.values, strict=True) if not np.isfinite(v)]
+        bad = [n for n, v in zip(problem.names, sw.values, strict=True) if not np.isfinite(v)]
         raise WirecalError(
             f"{robot.source}: the step-by-step identification gave no finite value for "
             f"{', '.join(bad)}: the model's wire lengths are not finite numbers; check the "
             "robot file's sizes and units (mm, deg)"
         )
-    if "stepwise" in methods:
-        estimates["stepwise"] = sw
-    jt = joint(
-        problem, problem.errors.to_internal(sw.values), loss="soft_l1" if robust else "linear"
-    )
-    if "joint" in methods:
-        estimates["joint"] = jt
-
+    loss: Loss = "soft_l1" if robust else "linear"
+    jt = joint(problem, problem.errors.to_internal(sw.values), loss=loss)
     r = problem.residuals(problem.errors.to_internal(jt.values))
-    sigma = _noise_sigma(r, len(names), robust)
-    J = problem.errors.per_internal(psi)  # internal units
-    cov, identified = covariance(J, sigma**2)
-    predicted = dict.fromkeys(estimates, UNIDENTIFIED)
-    if identified.all():  # otherwise the tool error is unbounded along the unseen directions
-        ws = workspace(robot)
-        if "joint" in estimates:
-            predicted["joint"] = tool_error(base, names, cov, ws).as_dict()
-        if "stepwise" in estimates:
-            A = stepwise_map(J, step)
-            predicted["stepwise"] = tool_error(base, names, sigma**2 * A @ A.T, ws).as_dict()
-    return SolveResult(robot, plan, m, estimates, predicted, sigma, left, psi, m.step[present])
+    return sw, jt, _noise_sigma(r, len(problem.names), robust)
+
+
+def _fit_drift(m: Measurements, sigma_mm: float, notes: list[str]) -> Drift | None:
+    """Fit the zero readings' drift; σ of a reading from the points' fit ``sigma_mm``."""
+    if not m.timed or m.zero_t_s is None or m.zero_mm is None:
+        notes.append("the log has no times (version 1): no drift fit")
+        return None
+    floor = abs(m.mm_per_count) / math.sqrt(12)  # quantisation: the least noise there is
+    drift = fit_drift(m.zero_t_s, m.zero_mm, max(sigma_mm, floor) if sigma_mm > 0 else floor)
+    notes.append(drift.text() if drift is not None else "too few zero readings to fit a drift")
+    return drift
+
+
+def _reference_scale(robot: Robot, m: Measurements) -> tuple[float | None, list[str]]:
+    """Return the scale factor k̂ of the log's reference rows (None without) and notes."""
+    enc = robot.encoder
+    if len(m.reference_mm):
+        if enc.reference_length_mm is None:
+            raise WirecalError(
+                f"{m.source}: the log has reference rows but {robot.source} gives no "
+                "[encoder] reference_length_mm: give the gauge's certified length"
+            )
+        return enc.reference_length_mm / float(np.mean(m.reference_mm)), []
+    if enc.reference_length_mm is not None:
+        return None, [
+            f"{robot.source} gives a reference gauge but the log has no reference rows: "
+            "the scale is known only to its tolerance"
+        ]
+    return None, []

@@ -60,9 +60,13 @@ def test_device_interface_is_refused_with_its_reason(viper, paper_plan):
     assert 'interface = "belt"' in text
 
 
-@pytest.mark.parametrize("variant", ["paper", "printed", "patch", "options", "echo"])
+@pytest.mark.parametrize("variant", ["paper", "printed", "patch", "options", "echo", "reference"])
 def test_every_generated_module_follows_the_rules(viper, paper_plan, printed_plan, variant):
     robot, plan, opt = viper, paper_plan, GenOptions()
+    if variant == "reference":
+        data = tomllib.loads((VIPER / "robot.toml").read_text())
+        data["encoder"].update(reference_length_mm=500.0, reference_repeats=2)
+        robot = robot_from_dict(data, "reference.toml")
     if variant == "printed":
         plan = printed_plan
     elif variant == "echo":
@@ -84,6 +88,13 @@ def test_every_generated_module_follows_the_rules(viper, paper_plan, printed_pla
         assert write.index("TYPE $line") < write.index("CALL wc.put(wc.lun, $line)")
     else:
         assert "TYPE $line" not in text
+    if variant == "reference":  # the reference step before step 1, rows of step 0
+        run = text[text.index(".PROGRAM wc.run()") :]
+        assert run.index("CALL wc.ref()") < run.index("CALL wc.meas(1, 0)")
+        assert "FOR k = 1 TO 2" in text[text.index(".PROGRAM wc.ref()") :]
+        assert 'CALL wc.row("reference,", s, idx, cfirst, spread, tsam, tsam-t0)' in text
+    else:
+        assert "wc.ref" not in text
     if variant == "options":
         assert "SPEED 5 ALWAYS" in text
         assert "wc.nsamp = 50" in text

@@ -30,11 +30,20 @@ from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import (
+    DEFAULT_RUN,
     VIBRATION_HZ,
     VIBRATION_TAU_S,
     move_profiles,
+    run_timeline,
 )
-from wirecal.solver.simulate import RANGE_EXCEEDED
+from wirecal.solver.simulate import (
+    IDEAL_ENCODER,
+    OPERATOR_SEAT_S,
+    RANGE_EXCEEDED,
+    EncoderTruth,
+    reference_duration_s,
+    reference_lengths,
+)
 from wirecal.twin.machine import Outcome, RunError, f32
 from wirecal.twin.vplus.interp import UNMODELLED, Interpreter, Trans, VError
 from wirecal.twin.vplus.parser import parse_module
@@ -123,6 +132,8 @@ class Cell:
     encoder_point_mm: tuple[float, float, float] | None = None  # fixed encoder (validation)
     unmodelled: Unmodelled | None = None
     wire_limits: bool = False  # the wire's speed and acceleration limits are enforced
+    encoder_truth: EncoderTruth = IDEAL_ENCODER  # the true scale, temperature, drift
+    run_s: float = 0.0  # the run's duration, for the temperature's time course
 
     def __post_init__(self):
         """Derive the true and believed models and start the cell's state."""
@@ -157,6 +168,8 @@ class Cell:
             self.p0 = np.asarray(self.encoder_point_mm, dtype=float)
         self.actual = np.asarray(self.joints, dtype=float)
         self.vibration = (0.0, VIBRATION_TAU_S, 0.0, 0.0)  # amplitude mm, τ, phase, since
+        self.nest: int | None = None  # the gauge nest the wire tip is seated in (0 A, 1 B)
+        self.gauge_mm = reference_lengths(self.robot.encoder, self.encoder_truth)[:2]
 
     # ---- terminal ----
     def type_(self, text: str) -> None:
@@ -170,7 +183,25 @@ class Cell:
             raise VError(-526, "*No data received* (no scripted answer to the PROMPT)")
         answer = self.answers.pop(0)
         self.console.append(f"> {answer}")
+        self._operator_seats(text, answer)
         return answer
+
+    def _operator_seats(self, text: str, answer: str) -> None:
+        """Do what the prompt asked the operator to do with the wire tip, if confirmed.
+
+        "Seat the tip in nest A/B": the tip sits in that nest of the reference gauge; the
+        prompt after "Reattach": back on the flange fixture.
+        """
+        if answer.strip() != "1" or not len(self.gauge_mm):
+            return
+        self.clock += OPERATOR_SEAT_S  # the operator's time
+        self.pose_error = self.rng.normal(0, self.noise_mm)  # each seating anew
+        if "nest A" in text:
+            self.nest = 0
+        elif "nest B" in text:
+            self.nest = 1
+        elif "reattached" in text:
+            self.nest = None
 
     def on_pause(self) -> bool:
         """Return whether a PAUSE proceeds (as the operator would, who then steadies the arm)."""
@@ -352,9 +383,12 @@ class Cell:
         Gaussian noise per pose, quantisation, ±1-count jitter, the vibration after the
         last move, a slip; a wire pulled beyond the encoder's range is an error.
         """
-        p = tool_position(self.model, np.radians(self.actual)[None])[0]
-        d = float(physical_wire_mm(self.robot.encoder.exit, p - self.p0))
-        d += self.pose_error + self.slip
+        if self.nest is not None:  # the tip in a nest of the reference gauge
+            d = float(self.gauge_mm[self.nest]) + self.pose_error
+        else:
+            p = tool_position(self.model, np.radians(self.actual)[None])[0]
+            d = float(physical_wire_mm(self.robot.encoder.exit, p - self.p0))
+            d += self.pose_error + self.slip
         if d > self.robot.encoder.range_mm:
             raise RunError(
                 -1100,
@@ -365,6 +399,8 @@ class Cell:
         t = self.clock - since
         d += amplitude * math.exp(-t / tau) * math.cos(2 * math.pi * VIBRATION_HZ * t + phase)
         jitter = int(self.rng.choice((-1, 0, 0, 0, 1)))
+        truth = self.encoder_truth  # what the encoder reads of it: scale, temperature, drift
+        d = float(truth.read_factor(self.clock, self.run_s)) * d + float(truth.drift_mm(self.clock))
         return math.floor(self.counter_start + d / self.robot.encoder.mm_per_count + 0.5) + jitter
 
     def _counts(self) -> float:
@@ -473,12 +509,15 @@ def run_measurement(
     counter_start: float | None = None,
     faults: Faults = Faults(),
     proceed_on_pause: bool = False,
+    encoder_truth: EncoderTruth = IDEAL_ENCODER,
 ) -> RunResult:
     """Run a module's wc.mount (answered 1) and wc.run in the twin.
 
     The log is ``log_file`` on the cell's disk (the name the module was generated with).
     ``proceed_on_pause``: the operator continues after each PAUSE (having steadied the
     arm: a vibration stops), else the run ends there.
+    The operator confirms every prompt of the reference step (1), seating the wire tip as
+    asked; the encoder is ``encoder_truth``.
     """
     disk.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng([seed, 2])
@@ -494,12 +533,21 @@ def run_measurement(
         faults=faults,
         proceed_on_pause=proceed_on_pause,
         wire_limits=True,
+        answers=["1"] * (1 + _reference_prompts(robot)),
+        encoder_truth=encoder_truth,
+        run_s=run_timeline(robot, plan, DEFAULT_RUN).total_s + reference_duration_s(robot.encoder),
     )
     interp = Interpreter(parse_module(text, "WIRECAL.V2"), cell)
     mount = interp.execute("wc.mount")
     cell.moves = 0  # fault positions count the moves of wc.run (see move_of_step)
     run = interp.execute("wc.run") if mount.status == "completed" else None
     return RunResult(mount, run, disk / log_file, cell)
+
+
+def _reference_prompts(robot: Robot) -> int:
+    """Return the prompts of wc.ref: each seating and the reattachment (none without)."""
+    enc = robot.encoder
+    return 0 if enc.reference_length_mm is None else 2 * enc.reference_repeats + 1
 
 
 def run_targets(plan: Plan) -> list[str]:

@@ -37,6 +37,8 @@ _API = {
     "psi_table": "wirecal.app.psi_view",
     # simulate a measurement run
     "simulate_log": "wirecal.solver.simulate",
+    "EncoderTruth": "wirecal.solver.simulate",
+    "realistic_encoder": "wirecal.solver.simulate",
     "random_errors": "wirecal.solver.formats.truth",
     # read and check a log
     "read_log": "wirecal.solver.formats.log",
@@ -48,6 +50,7 @@ _API = {
     # solve and write the patch
     "solve": "wirecal.solver.solve",
     "SolveResult": "wirecal.solver.solve",
+    "Budget": "wirecal.solver.budget",
     "write_patch": "wirecal.solver.formats.patch",
     "read_patch": "wirecal.solver.formats.patch",
     # the plausibility gate between identification and any output

@@ -11,18 +11,28 @@ Format (UTF-8)::
     zero,1,0,0.0000,-90.0000,...,8388000.5000,10,1,3.500,3.000
     point,1,1,...
 
-``kind`` is ``zero`` (θ0 at the start of a step, index 0), ``point``, or ``unsettled``: a
-reading of that zero or point that did not pass the settle rule within its maximum wait
-(or whose samples spread too wide), logged for the record and not used; the program then
-measured the same zero or point again. Step and index are 1-based plan positions; j1..j6
-the joints the controller reports (deg); ``counts`` the mean of ``samples`` raw counter
-readings, unwrapped relative to the first of them; ``spread`` their max − min (counts);
-``t_s`` the controller's timer when the sampling began (s since the start of the run,
-1 ms resolution); ``settle_s`` how long the program waited after the move before
-sampling (s): the settle rule's wait. Version 1 logs (no ``t_s``, ``settle_s``)
-are still read: their readings carry no time. A point's wire length is (counts − reference) ×
-mm_per_count, the difference taken modulo the counter width; the reference is the mean of
-the zero readings (each checked against the first: a drift means the wire slipped).
+``kind`` is ``zero`` (θ0 at the start of a step, index 0), ``point``, ``unsettled`` or
+``reference``. An ``unsettled`` row is a reading of that zero or point that did not pass
+the settle rule within its maximum wait (or whose samples spread too wide), logged for the
+record and not used; the program then measured the same zero or point again. Step and
+index are 1-based plan positions; j1..j6 the joints the controller reports (deg);
+``counts`` the mean of ``samples`` raw counter readings, unwrapped relative to the first of
+them; ``spread`` their max − min (counts); ``t_s`` the controller's timer when the sampling
+began (s since the start of the run, 1 ms resolution); ``settle_s`` how long the program
+waited after the move before sampling (s): the settle rule's wait. Version 1 logs (no
+``t_s``, ``settle_s``) are still read: their readings carry no time.
+
+``reference`` rows (version 2, optional: when the robot file's ``[encoder]`` gives
+``reference_length_mm``) come first: the wire tip seated by the operator in the nests of
+a reference gauge, step 0, index 1, 2, 3, … alternating nest A (odd) and nest B (even),
+one pair per seating (``reference_repeats``); the joints are where the robot stood. Each
+pair's difference B − A, in counts, is the gauge's certified length read by the encoder:
+it fixes the encoder's scale (:mod:`wirecal.solver.scale`). A log without them stays
+valid.
+
+A point's wire length is (counts − reference) × mm_per_count, the difference taken
+modulo the counter width; the reference is the mean of the zero readings (each checked
+against the first: a drift means the wire slipped).
 
 The layout is read by :mod:`wirecal.solver.formats.csv_table` (what it forgives: a BOM,
 indentation, CRLF — a log pasted from a terminal). Counts that a spreadsheet re-saved with
@@ -50,7 +60,9 @@ TIME_COLUMNS = ("t_s", "settle_s")
 COLUMNS_V1 = ("kind", "step", "index", *JOINT_COLUMNS, "counts", "samples", "spread")
 COLUMNS = (*COLUMNS_V1, *TIME_COLUMNS)
 HEADER_KEYS = ("robot", "plan", "mm_per_count")
-KINDS = ("zero", "point", "unsettled")
+KINDS = ("zero", "point", "unsettled", "reference")
+REFERENCE_STEP = 0
+"""The step number of the reference rows (before the plan's step 1)."""
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,11 @@ Format (angles in degrees, lengths in mm)::
     [encoder]
     mm_per_count = 0.025488; range_mm = 1250; counter_bits = 24
     max_wire_speed_mm_s = 1000; max_wire_accel_mm_s2 = 49000   # optional: the wire's limits
+    scale_tolerance_ppm = 500             # the datasheet's scale figure (default 500)
+    reference_length_mm = 500.0           # optional: a gauge's certified nest distance,
+    reference_uncertainty_mm = 0.002      #   its standard uncertainty (default 0),
+    reference_repeats = 3                 #   nest A/B seatings asked for (default 3)
+    temperature_coefficient_ppm_per_k = 23  # the drum's expansion (default 23, aluminium)
     [calibration]
     parameters = ["th2", "th3", ...]      # names from wirecal.solver.params
     [controller]                          # optional
@@ -53,7 +58,9 @@ from wirecal.solver.exit_geometry import Exit, Eyelet, Pulley
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver.robot import (
+    DEFAULT_DRUM_PPM_PER_K,
     DEFAULT_LINK_RADIUS_MM,
+    DEFAULT_SCALE_TOLERANCE_PPM,
     INTERFACES,
     LANGUAGES,
     Controller,
@@ -78,6 +85,12 @@ MAX_WIRE_ACCEL_MM_S2 = 1_000_000.0
 MIN_JOINT_RANGE_DEG = 10.0
 """A joint's range (deg) must exceed this: plan points stay 5° (the planner's and the
 generator's default margin) inside each limit."""
+MAX_SCALE_PPM = 100_000.0
+"""Largest scale tolerance (ppm): 10 %; a draw-wire sensor is far better than that."""
+MAX_REFERENCE_U_MM = 1.0
+"""Largest certified uncertainty of a reference gauge (mm)."""
+MAX_TEMPCO_PPM_PER_K = 1000.0
+"""Largest |temperature coefficient| (ppm/K): metals and plastics are below 200."""
 METRES_RATIO = 0.01
 """Links adding up to less than this fraction of the encoder's range are in metres."""
 
@@ -123,6 +136,11 @@ _KEYS = {
         *EXIT_KEYS,
         "max_wire_speed_mm_s",
         "max_wire_accel_mm_s2",
+        "scale_tolerance_ppm",
+        "reference_length_mm",
+        "reference_uncertainty_mm",
+        "reference_repeats",
+        "temperature_coefficient_ppm_per_k",
     ),
     "calibration": ("parameters",),
     "geometry": ("link_radius_mm",),
@@ -290,6 +308,27 @@ def _encoder(enc: Table, controller: Controller | None) -> Encoder | None:
         inputs = None
     if "pulse_inputs" in enc.keys() and not pulse:
         enc.add("pulse_inputs", 'is for interface = "pulse" (URScript) only; remove it')
+    tol = enc.number(
+        "scale_tolerance_ppm", DEFAULT_SCALE_TOLERANCE_PPM, lo=0, hi=MAX_SCALE_PPM, unit="ppm"
+    )
+    ref = enc.number("reference_length_mm", None, above=0, hi=MAX_RANGE_MM, unit="mm")
+    ref_u = enc.number("reference_uncertainty_mm", 0.0, lo=0, hi=MAX_REFERENCE_U_MM, unit="mm")
+    repeats = enc.integer("reference_repeats", 3, lo=1, hi=20)
+    tempco = enc.number(
+        "temperature_coefficient_ppm_per_k",
+        DEFAULT_DRUM_PPM_PER_K,
+        lo=-MAX_TEMPCO_PPM_PER_K,
+        hi=MAX_TEMPCO_PPM_PER_K,
+        unit="ppm/K",
+    )
+    if ref is not None and rng is not None and ref > rng:
+        enc.add(
+            "reference_length_mm",
+            f"is {ref:g} mm, beyond range_mm {rng:g}: the wire cannot reach nest B; "
+            "use a shorter gauge",
+        )
+        ref = None
+    scale = (tol, ref_u, repeats, tempco)
     exit_ok, exit_ = _exit(enc)
     wire_speed = enc.number(
         "max_wire_speed_mm_s", None, above=0, hi=MAX_WIRE_SPEED_MM_S, unit="mm/s"
@@ -300,6 +339,8 @@ def _encoder(enc: Table, controller: Controller | None) -> Encoder | None:
     if mpc is None or rng is None or bits is None or interface is None:
         return None
     if channel is None or mode is None or inputs is None or not exit_ok:
+        return None
+    if any(x is None for x in scale):
         return None
     return Encoder(
         mpc,
@@ -312,6 +353,11 @@ def _encoder(enc: Table, controller: Controller | None) -> Encoder | None:
         exit_,
         wire_speed,
         wire_accel,
+        scale_tolerance_ppm=valid(tol),
+        reference_length_mm=ref,
+        reference_uncertainty_mm=valid(ref_u),
+        reference_repeats=valid(repeats),
+        temperature_coefficient_ppm_per_k=valid(tempco),
     )
 
 
@@ -546,6 +592,21 @@ def _exit_lines(exit_: Exit | None) -> list[str]:
     ]
 
 
+def _scale_lines(enc: Encoder) -> list[str]:
+    """Return the ``[encoder]`` lines of the scale, the reference gauge and the drum."""
+    lines = [f"scale_tolerance_ppm = {_num(enc.scale_tolerance_ppm)}"]
+    if enc.reference_length_mm is not None:
+        lines += [
+            f"reference_length_mm = {_num(enc.reference_length_mm)}",
+            f"reference_uncertainty_mm = {_num(enc.reference_uncertainty_mm)}",
+            f"reference_repeats = {enc.reference_repeats}",
+        ]
+    lines.append(
+        f"temperature_coefficient_ppm_per_k = {_num(enc.temperature_coefficient_ppm_per_k)}"
+    )
+    return lines
+
+
 def robot_file_text(
     robot: Robot,
     *,
@@ -606,6 +667,7 @@ def robot_file_text(
             )
             if value is not None
         ),
+        *_scale_lines(robot.encoder),
         "",
         "[controller]",
         f"language = {json.dumps(robot.controller.language)}",

@@ -1,0 +1,182 @@
+"""The error budget of a calibration: what the tool point's error is made of.
+
+Each identification method is, linearised, a linear map M of the measured wire lengths to
+the parameters (the joint method: M = J⁺, the least-squares pseudo-inverse; the stepwise
+method: the map A of :func:`~wirecal.solver.accuracy.stepwise_map`). An error δd of the
+lengths becomes δe = M·δd and the tool-point error J_p(q)·δe at a configuration q. The
+budget's terms are parameter covariances, each turned into the mean over the workspace of
+the RMS tool-point error (:func:`~wirecal.solver.accuracy.tool_error`):
+
+* **noise** — the reading noise σ (from the joint residual): σ²·(JᵀJ)⁺, the Cramér–Rao
+  bound, for the joint method; σ²·A·Aᵀ for the stepwise one;
+* **scale** — every length is off by the same factor: δd = ε·d, so δe = ε·M·d. ε is the
+  reference's σ when the log has reference rows, else the datasheet's
+  ``scale_tolerance_ppm`` taken as the size of the error (a tolerance is a bound, not a
+  standard deviation: the budget reports the error at its edge);
+* **drift** — the zero drift's uncertainty σ_b (and the fitted drift itself when it was
+  left in): δd_i = b·(t_i − t_ref); and the temperature: the drum's expansion relative to
+  the arm's, (α_drum − α_arm)·ΔT over an assumed rise of :data:`ASSUMED_TEMPERATURE_RISE_K`
+  across the run, a scale that changes from the reference's time (the start; without a
+  reference, the run's middle): δd_i = α·ΔT·d_i·(t_i − t_ref)/T. Untimed (version 1) logs:
+  no drift term, said so;
+* **exit** — the wire's wrap on an eyelet's exit edge, which the model leaves out
+  (:func:`~wirecal.solver.exit_geometry.unmodelled_exit_mm`, per point at the nominal
+  model): a deterministic δd_i, so δe = M·δd; zero for a point exit and for a guide
+  pulley (the model carries its arc).
+
+The total adds the covariances (independent sources), the number a user should believe.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from wirecal.solver.accuracy import stepwise_map, tool_error
+from wirecal.solver.identifiability import RANK_RTOL, covariance
+from wirecal.solver.kinematics import Model
+from wirecal.solver.scale import ARM_PPM_PER_K, PPM, Drift
+
+ASSUMED_TEMPERATURE_RISE_K = 0.5
+"""Temperature rise over a run the budget assumes (K): the simulated realistic run's."""
+
+TERMS = ("noise", "scale", "drift", "exit")
+
+
+@dataclass(frozen=True)
+class Budget:
+    """One method's expected mean tool-point error (mm) per source and in total."""
+
+    terms: dict[str, float]  # mean over the workspace of each source's RMS error
+    total: float
+    worst: float  # the total's worst configuration
+    notes: tuple[str, ...]
+
+    def as_json(self) -> dict:
+        """Return the budget as a JSON-ready dict."""
+        return {
+            "terms_mm": dict(self.terms),
+            "total_mm": self.total,
+            "worst_mm": self.worst,
+            "notes": list(self.notes),
+        }
+
+
+@dataclass(frozen=True)
+class Sources:
+    """What the budget is computed from, shared by the methods."""
+
+    sigma_mm: float  # reading noise σ
+    lengths_mm: np.ndarray  # (N,) the lengths solved from
+    scale_std: float  # ε: σ of the scale (reference) or the tolerance (dimensionless)
+    measured_scale: bool  # ε is the reference's σ
+    t_s: np.ndarray | None  # (N,) the points' times, None for an untimed log
+    t_scale_ref_s: float  # when the scale was right (the reference's time or mid-run)
+    run_s: float  # the run's duration
+    drift: Drift | None
+    t_zero_ref_s: float  # mean time of the zeros the lengths are read from
+    thermal_ppm_per_k: float  # α_drum − α_arm
+    exit_mm: np.ndarray  # (N,) the wire length the model leaves out at each point
+
+
+def sources(
+    sigma_mm: float,
+    lengths_mm: np.ndarray,
+    scale_std: float,
+    measured_scale: bool,
+    drum_ppm_per_k: float,
+    t_s: np.ndarray | None,
+    drift: Drift | None,
+    t_zero_ref_s: float | None,
+    exit_mm: np.ndarray,
+) -> Sources:
+    """Gather the budget's inputs (see :class:`Sources`).
+
+    ``scale_std`` is the reference's σ of the scale when ``measured_scale``, else the
+    tolerance (dimensionless); the times are None for an untimed log.
+    """
+    timed = t_s is not None and t_zero_ref_s is not None and np.all(np.isfinite(t_s))
+    t = np.asarray(t_s, dtype=float) if timed else None
+    run_s = float(np.max(t)) if t is not None and t.size else 0.0
+    return Sources(
+        sigma_mm=sigma_mm,
+        lengths_mm=np.asarray(lengths_mm, dtype=float),
+        scale_std=scale_std,
+        measured_scale=measured_scale,
+        t_s=t,
+        t_scale_ref_s=0.0 if measured_scale else run_s / 2,
+        run_s=run_s,
+        drift=drift,
+        t_zero_ref_s=float(t_zero_ref_s) if timed and t_zero_ref_s is not None else 0.0,
+        thermal_ppm_per_k=drum_ppm_per_k - ARM_PPM_PER_K,
+        exit_mm=np.asarray(exit_mm, dtype=float),
+    )
+
+
+def least_squares_map(J: np.ndarray) -> np.ndarray:
+    """Return J⁺ over the directions the data sees (the rank rule of ``covariance``)."""
+    return np.linalg.pinv(J, rcond=RANK_RTOL)
+
+
+def budget(
+    model: Model,
+    names: tuple[str, ...],
+    J: np.ndarray,
+    step: np.ndarray | None,
+    src: Sources,
+    q_ws: np.ndarray,
+) -> Budget:
+    """Return the error budget of a method (module docstring).
+
+    ``J`` (N, m) is the wire-length Jacobian at the measured points in internal units;
+    ``step`` the points' steps for the stepwise method, None for the joint method.
+    """
+    if step is None:
+        M = least_squares_map(J)
+        noise = covariance(J, src.sigma_mm**2)[0]
+    else:
+        M = stepwise_map(J, step)
+        noise = src.sigma_mm**2 * M @ M.T
+    b_scale = M @ src.lengths_mm
+    b_exit = M @ src.exit_mm
+    covs = {
+        "noise": noise,
+        "scale": src.scale_std**2 * np.outer(b_scale, b_scale),
+        "drift": np.zeros_like(noise),
+        "exit": np.outer(b_exit, b_exit),
+    }
+    notes = [
+        "scale: measured with the reference gauge"
+        if src.measured_scale
+        else f"scale: the datasheet tolerance ±{src.scale_std / PPM:g} ppm, no reference "
+        "measured: measure the reference (reference_length_mm) to remove most of it",
+        f"exit: the eyelet's edge wrap the model leaves out, up to "
+        f"{float(np.max(src.exit_mm)):.3f} mm at a point"
+        if np.any(src.exit_mm)
+        else "exit: none unmodelled (a point exit, or a guide pulley the model carries)",
+    ]
+    if src.t_s is None:
+        notes.append("drift: the log has no times (version 1): no drift term")
+    else:
+        covs["drift"] = _drift_cov(M, src)
+    errs = {k: tool_error(model, names, c, q_ws) for k, c in covs.items()}
+    total = tool_error(model, names, np.sum(list(covs.values()), axis=0), q_ws)
+    return Budget(
+        {k: e.mean_mm for k, e in errs.items()}, total.mean_mm, total.max_mm, tuple(notes)
+    )
+
+
+def _drift_cov(M: np.ndarray, src: Sources) -> np.ndarray:
+    """Covariance of the parameters from the zero drift and the temperature's scale change."""
+    assert src.t_s is not None
+    cov = np.zeros((M.shape[0], M.shape[0]))
+    if src.drift is not None:
+        g = M @ (src.t_s - src.t_zero_ref_s)
+        left = 0.0 if src.drift.removed else src.drift.rate_mm_per_s**2
+        cov += (src.drift.std_mm_per_s**2 + left) * np.outer(g, g)
+    if src.run_s > 0:
+        rate = src.thermal_ppm_per_k * PPM * ASSUMED_TEMPERATURE_RISE_K / src.run_s
+        h = M @ (src.lengths_mm * (src.t_s - src.t_scale_ref_s))
+        cov += rate**2 * np.outer(h, h)
+    return cov

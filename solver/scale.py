@@ -1,0 +1,203 @@
+"""The draw-wire encoder's scale and drift, from the log's reference and zero readings.
+
+**Scale.** The counts become millimetres through ``mm_per_count``, known only to the
+datasheet's ``scale_tolerance_ppm``. Wire lengths alone cannot tell the scale: scaling every
+length of the robot and ``mm_per_count`` together leaves every reading unchanged (the null
+direction of the wire-length Jacobian with the scale as a column, whose column is the
+measured lengths themselves, ∂d̃/∂s = −d̃). A reference gauge fixes it: the operator seats
+the wire tip in nest A, then nest B, ``reference_repeats`` times; each pair's difference
+ℓ̃_i (mm at the nominal scale) reads the certified length L. With true mm per count
+= nominal × k, ℓ̃_i = L/k + noise, so
+
+    k̂ = L / mean(ℓ̃),   σ_k² = (σ_ℓ²/n + u_L²) / L²
+
+with σ_ℓ the scatter of the pairs (the reading noise model when there is one pair) and
+u_L the gauge's certified uncertainty. Every wire length is then k̂·d̃.
+
+**Drift.** The zero readings at θ0 (one per step and the closing one) all read the same
+wire length; a linear fit of them against the controller's time ``t_s`` measures a drift of
+the readings (the encoder's stand, the wire creeping, temperature). A drift beyond its 3σ is
+removed from every length (the length at time t less the fitted drift since the zeros'
+mean time); a smaller one is reported and left (removing it would add only its fit's noise).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from wirecal.solver.identifiability import covariance
+
+PPM = 1e-6
+
+ARM_PPM_PER_K = 12.0
+"""The arm's linear expansion (ppm/K) the simulation and the budget assume: steel's, and
+between steel and the aluminium of cast arms; the true arm's is unknown to wirecal."""
+
+DRIFT_SIGNIFICANCE = 3.0
+"""A fitted drift is removed from the lengths when beyond this many of its σ."""
+
+DRIFT_TOLERANCE_MM_PER_H = 0.5
+"""Largest drift of the zero readings accepted (mm/h): a draw-wire encoder's reading at one
+pose does not move that much in an hour unless the wire slipped, the stand moved or the
+temperature is far from steady (0.5 mm/h is 20 K/h on a 1 m aluminium stand)."""
+
+MIN_DRIFT_ZEROS = 4
+"""Zero readings needed for a drift fit (two parameters and a scatter)."""
+
+
+@dataclass(frozen=True)
+class ScaleEstimate:
+    """The encoder's scale from the reference rows: true mm per count = nominal × factor."""
+
+    factor: float  # k̂
+    std: float  # σ of k̂ (dimensionless)
+    pairs: int
+    reference_length_mm: float
+    measured_mm: np.ndarray  # each pair's B − A at the nominal scale
+
+    @property
+    def ppm(self) -> float:
+        """Return (k̂ − 1) in ppm."""
+        return (self.factor - 1) / PPM
+
+    @property
+    def std_ppm(self) -> float:
+        """Return σ of k̂ in ppm."""
+        return self.std / PPM
+
+
+def estimate_scale(
+    measured_mm: np.ndarray, length_mm: float, uncertainty_mm: float, sigma_reading_mm: float
+) -> ScaleEstimate:
+    """Return the scale from each pair's nest B − nest A length (module docstring).
+
+    ``sigma_reading_mm`` is the noise of one reading (σ of a difference is √2 times it),
+    used when there is a single pair; from two pairs on, their own scatter is used, but
+    never less than the noise model allows.
+    """
+    ell = np.asarray(measured_mm, dtype=float)
+    n = len(ell)
+    model = math.sqrt(2) * sigma_reading_mm
+    scatter = float(np.std(ell, ddof=1)) if n > 1 else model
+    sigma_ell = max(scatter, model)
+    factor = length_mm / float(ell.mean())
+    std = math.sqrt(sigma_ell**2 / n + uncertainty_mm**2) / length_mm
+    return ScaleEstimate(factor, std, n, length_mm, ell)
+
+
+@dataclass(frozen=True)
+class Drift:
+    """A linear drift of the zero readings over the run's time."""
+
+    rate_mm_per_s: float
+    std_mm_per_s: float
+    t_mean_s: float  # the zeros' mean time
+    zeros: int
+    removed: bool  # beyond DRIFT_SIGNIFICANCE σ: removed from the lengths
+
+    @property
+    def rate_mm_per_h(self) -> float:
+        """Return the drift in mm/h."""
+        return self.rate_mm_per_s * 3600
+
+    @property
+    def std_mm_per_h(self) -> float:
+        """Return σ of the drift in mm/h."""
+        return self.std_mm_per_s * 3600
+
+    def correction_mm(self, t_s: np.ndarray, t_ref_s: float) -> np.ndarray:
+        """Return what to subtract from lengths read at ``t_s`` (zero when not removed).
+
+        The lengths are measured from a zero reference taken at (mean) time ``t_ref_s``.
+        """
+        if not self.removed:
+            return np.zeros_like(np.asarray(t_s, dtype=float))
+        return self.rate_mm_per_s * (np.asarray(t_s, dtype=float) - t_ref_s)
+
+    def text(self) -> str:
+        """Describe the drift in words for ``wirecal solve``."""
+        verdict = (
+            "removed from the lengths"
+            if self.removed
+            else f"within {DRIFT_SIGNIFICANCE:g}σ of none: left in"
+        )
+        return (
+            f"zero drift {self.rate_mm_per_h * 1000:+.1f} ± {self.std_mm_per_h * 1000:.1f} "
+            f"µm/h over {self.zeros} zero readings ({verdict})"
+        )
+
+
+def fit_drift(t_s: np.ndarray, zero_mm: np.ndarray, sigma_reading_mm: float) -> Drift | None:
+    """Fit zero_mm = c + b·(t − t̄) by least squares; None with too few zero readings.
+
+    σ_b from the fit's own scatter (n − 2 degrees of freedom), never below what the noise
+    model ``sigma_reading_mm`` allows.
+    """
+    t = np.asarray(t_s, dtype=float)
+    z = np.asarray(zero_mm, dtype=float)
+    n = len(t)
+    if n < MIN_DRIFT_ZEROS or np.ptp(t) <= 0:
+        return None
+    t_mean = float(t.mean())
+    dt = t - t_mean
+    sxx = float(dt @ dt)
+    b = float(dt @ (z - z.mean())) / sxx
+    r = z - z.mean() - b * dt
+    sigma = max(math.sqrt(float(r @ r) / (n - 2)), sigma_reading_mm)
+    std = sigma / math.sqrt(sxx)
+    return Drift(b, std, t_mean, n, abs(b) > DRIFT_SIGNIFICANCE * std)
+
+
+@dataclass(frozen=True)
+class ScaleObservability:
+    """How well the wire lengths alone tell the encoder's scale, for ``wirecal observe``."""
+
+    std_ppm: float  # σ of the scale from the lengths alone (inf: not at all)
+    fixed_lengths: tuple[str, ...]  # the non-zero lengths not among the parameters
+
+    def describe(self, sigma_mm: float, tolerance_ppm: float) -> list[str]:
+        """Name the scale–length combination in words."""
+        lines = [
+            "Encoder scale: scaling every length of the robot (a, d, the tool point) and "
+            "mm_per_count together leaves every wire length unchanged (the null direction "
+            "s·(all lengths, mm_per_count))."
+        ]
+        if not math.isfinite(self.std_ppm):
+            lines.append(
+                "  Every non-zero length is a parameter here: the scale is not observable "
+                "at all; it goes into the lengths."
+            )
+        else:
+            lines.append(
+                f"  Only the lengths held at nominal ({', '.join(self.fixed_lengths)}) tell it,"
+                f" and only as well as they are exact: ±{self.std_ppm:.0f} ppm if they were "
+                f"(1σ at {sigma_mm:g} mm reading noise), against a tolerance of "
+                f"±{tolerance_ppm:g} ppm; a scale error goes into the lengths."
+            )
+        lines.append(
+            "  The reference step resolves it: give reference_length_mm in [encoder] "
+            "(a gauge with two nests a certified distance apart)."
+        )
+        return lines
+
+
+def scale_observability(
+    psi: np.ndarray,
+    lengths_mm: np.ndarray,
+    names: tuple[str, ...],
+    nominal_lengths: dict[str, float],
+    sigma_mm: float,
+) -> ScaleObservability:
+    """Return σ of the scale from the lengths alone: Ψ (boundary units) with a column −d.
+
+    ``nominal_lengths`` are the robot's non-zero lengths by parameter name (a*, d*, tool
+    coordinates); those not in ``names`` break the null direction.
+    """
+    fixed = tuple(n for n in nominal_lengths if n not in names)
+    J = np.column_stack([psi, -np.asarray(lengths_mm) * PPM])  # scale column per ppm
+    cov, identified = covariance(J, sigma_mm**2)
+    std = float(np.sqrt(cov[-1, -1])) if identified[-1] and fixed else math.inf
+    return ScaleObservability(std, fixed)
