@@ -143,14 +143,28 @@ def _geometric_jacobian(model, q):
     return np.vstack([Jp[0], Jw * 1000.0])
 
 
-def _polish(model, q, R, o, iterations=30):
+CONVERGED = 1e-10
+"""Newton stops when no component of the pose error (mm, and mrad as mm per metre) exceeds this."""
+
+ACCEPTED = 1e-7
+"""A short :func:`follow` accepts an error up to this; :func:`solve` accepts only
+:data:`CONVERGED`."""
+
+MAX_STEP_RAD = 0.2
+"""Largest joint step of one Newton iteration. Near a singularity the least-squares step is
+long and wrong (the first model error the seed does not know is divided by a small singular
+value); capping it keeps Newton in the basin it started in."""
+
+
+def _polish(model, q, R, o, iterations=60, accept=CONVERGED):
     for _ in range(iterations):
         e = _pose_error(model, q, R, o)
-        if np.max(np.abs(e)) < 1e-10:
+        if np.max(np.abs(e)) < CONVERGED:
             return q, True
         J = _geometric_jacobian(model, q)
-        q = q + np.linalg.lstsq(J, e, rcond=None)[0]
-    return q, np.max(np.abs(_pose_error(model, q, R, o))) < 1e-7
+        step = np.linalg.lstsq(J, e, rcond=None)[0]
+        q = q + step * min(1.0, MAX_STEP_RAD / max(np.max(np.abs(step)), 1e-300))
+    return q, np.max(np.abs(_pose_error(model, q, R, o))) < accept
 
 
 def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -158,7 +172,7 @@ def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray) -> tuple[n
 
     A small Cartesian step in the same configuration (much cheaper than :func:`solve`).
     """
-    return _polish(model, np.asarray(q, dtype=float), R, o, iterations=8)
+    return _polish(model, np.asarray(q, dtype=float), R, o, iterations=8, accept=ACCEPTED)
 
 
 def solve(
