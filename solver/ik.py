@@ -150,6 +150,9 @@ ACCEPTED = 1e-7
 """A short :func:`follow` accepts an error up to this; :func:`solve` accepts only
 :data:`CONVERGED`."""
 
+PRE_ITERATIONS = 12
+"""Newton steps before candidates that have met are merged (:func:`_distinct_starts`)."""
+
 MAX_STEP_RAD = 0.2
 """Largest joint step of one Newton iteration. Near a singularity the least-squares step is
 long and wrong (the first model error the seed does not know is divided by a small singular
@@ -211,8 +214,8 @@ def solve(
         seeds += list(rng.uniform(-np.pi, np.pi, (24, 6)))
         candidates = seeds
     solutions: list[Solution] = []
-    for q0 in candidates:
-        q, ok = _polish(model, np.asarray(q0, dtype=float), R, o)
+    for q0 in _distinct_starts(model, candidates, R, o):
+        q, ok = _polish(model, q0, R, o)
         if not ok:
             continue
         q = (q + np.pi) % (2 * np.pi) - np.pi
@@ -221,6 +224,20 @@ def solve(
             continue
         solutions.append(Solution(q, configuration(model, q), inside))
     return solutions
+
+
+def _distinct_starts(model, candidates, R, o, iterations=PRE_ITERATIONS):
+    """Return the candidates after a few Newton steps, those that met another dropped.
+
+    Near a UR wrist singularity many samples run to the same solution; polishing each to
+    the end would cost several times as much.
+    """
+    starts: list[np.ndarray] = []
+    for q0 in candidates:
+        q = _polish(model, np.asarray(q0, dtype=float), R, o, iterations, accept=np.inf)[0]
+        if not any(np.allclose(_wrapped(q - s), 0, atol=1e-2) for s in starts):
+            starts.append(q)
+    return starts
 
 
 def _wrapped(x):

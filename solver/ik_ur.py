@@ -40,8 +40,8 @@ NEAR_SINGULAR_DEG = 15.0
 """Within this of the wrist singularity (φ5 = 0 or 180°) a calibrated model's solutions are
 sought from φ6 sampled round the turn, not from the structural table's one φ6 per branch."""
 
-WRIST_SAMPLES = 24
-"""φ6 samples per wrist branch near the wrist singularity (every 15°)."""
+WRIST_SAMPLES = 12
+"""φ6 samples per wrist branch near the wrist singularity (every 30°)."""
 
 
 def _rot_x(a: float) -> np.ndarray:
@@ -137,7 +137,8 @@ def closed_form(
     Up to 8 solutions; within ``near_deg`` of the wrist singularity, φ6 sampled round the turn
     (see :func:`_wrist`). A pose whose wrist point lies just inside the cylinder of radius
     D about axis 1 (shoulder singular; a calibrated arm's pose can, the structural table's
-    cannot reach it) gives the one shoulder seed on the cylinder.
+    cannot reach it; 0.25 % of D inside at a pose found in testing) gives the one shoulder
+    seed on the cylinder, and Newton on the true model decides whether it is reachable.
     """
     dh = np.asarray(dh, dtype=float)
     alpha, a, _, d = dh.T
@@ -148,9 +149,7 @@ def closed_form(
     o5 = ob - d[5] * Rb[:, 2]
     y1v = -s1 * (d[1] + d[2] + d[3])
     r2 = o5[0] ** 2 + o5[1] ** 2
-    if r2 < y1v**2 * (1 - SEED_SLACK) ** 2:
-        return []
-    x1 = np.sqrt(max(r2 - y1v**2, 0.0))
+    x1 = np.sqrt(max(r2 - y1v**2, 0.0))  # inside the cylinder: Newton decides reachability
     out: list[np.ndarray] = []
     for x1v in (x1, -x1) if x1 > 0 else (0.0,):
         phi1 = float(np.arctan2(o5[1], o5[0]) - np.arctan2(y1v, x1v))
