@@ -108,24 +108,25 @@ def _wrist(
 ) -> list[tuple[float, list[float]]]:
     """Return (φ5, [φ6, ...]) for both wrist branches.
 
-    Away from the wrist singularity one φ6 per branch. Within ``near_deg`` of it the two
-    branches nearly meet and φ4 + φ6 (or φ4 − φ6) nearly forms a continuum; a calibrated
-    arm's solutions along it may differ in number and place from the structural table's, so
-    φ6 is sampled round the whole turn (:data:`WRIST_SAMPLES`) for Newton to start from.
+    Away from the wrist singularity one φ6 per branch (φ6 = 0 exactly at it). Within
+    ``near_deg`` of it the two branches nearly meet and φ4 + φ6 (or φ4 − φ6) nearly forms a
+    continuum; a calibrated arm's solutions along it may differ in number and place from the
+    structural table's, so φ6 is also sampled round the whole turn (:data:`WRIST_SAMPLES`)
+    for Newton to start from.
     """
-    c5 = -(Rb[:, 2] @ z2) / (s4 * s5)
-    if abs(c5) > 1 + SEED_SLACK:
-        return []
+    c5 = -(Rb[:, 2] @ z2) / (s4 * s5)  # |c5| ≤ 1 but for rounding: unit vectors, |s4 s5| = 1
     v = Rb.T @ z2
     out = []
     for wrist in (1.0, -1.0):
         phi5 = wrist * float(np.arccos(np.clip(c5, -1.0, 1.0)))
         sin5 = np.sin(phi5)
-        if abs(sin5) < np.sin(np.radians(near_deg)):
-            out.append((phi5, list(np.linspace(-np.pi, np.pi, WRIST_SAMPLES, endpoint=False))))
-        else:
+        phi6s = [0.0]  # wrist singular: φ6 is free (it turns about the line of φ2 + φ3 + φ4)
+        if abs(sin5) > 1e-9:
             sg = s4 * np.sign(sin5)
-            out.append((phi5, [float(np.arctan2(-v[1] * sg, v[0] * sg))]))
+            phi6s = [float(np.arctan2(-v[1] * sg, v[0] * sg))]
+        if abs(sin5) < np.sin(np.radians(near_deg)):
+            phi6s += list(np.linspace(-np.pi, np.pi, WRIST_SAMPLES, endpoint=False))
+        out.append((phi5, phi6s))
     return out
 
 

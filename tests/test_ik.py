@@ -102,6 +102,8 @@ UR5_ERRORS = {"th2": 0.3, "th4": -0.2, "a2": 0.8, "a3": -0.5, "d4": 0.4, "d5": 0
 @example(u=[0.5, 0.978515625, 0.2890625, 0.978515625, 0.5, 0.5], calibrated=True)
 # elbow folded (φ3 = −177.5°) and φ5 = 0: Newton from the seed first wanders (σ_min 0.002)
 @example(u=[0.5, 0.5, 0.25, 0.5, 0.5, 0.5], calibrated=True)
+# arm stretched (φ3 = 0) and φ5 = 0 exactly: only the φ6 = 0 seed reaches
+@example(u=[0.5, 0.75, 0.5, 0.5, 0.5, 0.5], calibrated=False)
 def test_ur_round_trip_closed_form(u, calibrated):
     """Every returned solution reproduces the pose; the sampled one is among them.
 
