@@ -143,14 +143,31 @@ def _geometric_jacobian(model, q):
     return np.vstack([Jp[0], Jw * 1000.0])
 
 
-def _polish(model, q, R, o, iterations=30):
+CONVERGED = 1e-10
+"""Newton stops when no component of the pose error (mm, and mrad as mm per metre) exceeds this."""
+
+ACCEPTED = 1e-7
+"""A short :func:`follow` accepts an error up to this; :func:`solve` accepts only
+:data:`CONVERGED`."""
+
+PRE_ITERATIONS = 12
+"""Newton steps before candidates that have met are merged (:func:`_distinct_starts`)."""
+
+MAX_STEP_RAD = 0.2
+"""Largest joint step of one Newton iteration. Near a singularity the least-squares step is
+long and wrong (the first model error the seed does not know is divided by a small singular
+value); capping it keeps Newton in the basin it started in."""
+
+
+def _polish(model, q, R, o, iterations=60, accept=CONVERGED):
     for _ in range(iterations):
         e = _pose_error(model, q, R, o)
-        if np.max(np.abs(e)) < 1e-10:
+        if np.max(np.abs(e)) < CONVERGED:
             return q, True
         J = _geometric_jacobian(model, q)
-        q = q + np.linalg.lstsq(J, e, rcond=None)[0]
-    return q, np.max(np.abs(_pose_error(model, q, R, o))) < 1e-7
+        step = np.linalg.lstsq(J, e, rcond=None)[0]
+        q = q + step * min(1.0, MAX_STEP_RAD / max(np.max(np.abs(step)), 1e-300))
+    return q, np.max(np.abs(_pose_error(model, q, R, o))) < accept
 
 
 def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -158,7 +175,7 @@ def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray) -> tuple[n
 
     A small Cartesian step in the same configuration (much cheaper than :func:`solve`).
     """
-    return _polish(model, np.asarray(q, dtype=float), R, o, iterations=8)
+    return _polish(model, np.asarray(q, dtype=float), R, o, iterations=8, accept=ACCEPTED)
 
 
 def solve(
@@ -197,8 +214,8 @@ def solve(
         seeds += list(rng.uniform(-np.pi, np.pi, (24, 6)))
         candidates = seeds
     solutions: list[Solution] = []
-    for q0 in candidates:
-        q, ok = _polish(model, np.asarray(q0, dtype=float), R, o)
+    for q0 in _distinct_starts(model, candidates, R, o):
+        q, ok = _polish(model, q0, R, o)
         if not ok:
             continue
         q = (q + np.pi) % (2 * np.pi) - np.pi
@@ -207,6 +224,20 @@ def solve(
             continue
         solutions.append(Solution(q, configuration(model, q), inside))
     return solutions
+
+
+def _distinct_starts(model, candidates, R, o, iterations=PRE_ITERATIONS):
+    """Return the candidates after a few Newton steps, those that met another dropped.
+
+    Near a UR wrist singularity many samples run to the same solution; polishing each to
+    the end would cost several times as much.
+    """
+    starts: list[np.ndarray] = []
+    for q0 in candidates:
+        q = _polish(model, np.asarray(q0, dtype=float), R, o, iterations, accept=np.inf)[0]
+        if not any(np.allclose(_wrapped(q - s), 0, atol=1e-2) for s in starts):
+            starts.append(q)
+    return starts
 
 
 def _wrapped(x):

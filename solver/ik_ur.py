@@ -36,6 +36,13 @@ SEED_SLACK = 1e-3
 """A cosine this far beyond ±1 is clipped, not dropped: a calibrated arm stretched straight
 has a structural model just out of reach, and Newton from the clipped seed finds it."""
 
+NEAR_SINGULAR_DEG = 15.0
+"""Within this of the wrist singularity (φ5 = 0 or 180°) a calibrated model's solutions are
+sought from φ6 sampled round the turn, not from the structural table's one φ6 per branch."""
+
+WRIST_SAMPLES = 12
+"""φ6 samples per wrist branch near the wrist singularity (every 30°)."""
+
 
 def _rot_x(a: float) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
@@ -71,9 +78,71 @@ def ur_structure(model: Model) -> bool:
     )
 
 
-def closed_form(dh: np.ndarray, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
-    """Return the DH angles φ (up to 8) of an exact UR-type table for the flange pose (R, o)."""
-    alpha, a, _, d = np.asarray(dh, dtype=float).T
+def _arm(
+    dh: np.ndarray, Rb: np.ndarray, o5: np.ndarray, phi1: float, phi5: float, phi6: float
+) -> list[np.ndarray]:
+    """Return the elbow solutions (φ2, φ3, φ4) completing φ1, φ5, φ6; see the module doc."""
+    alpha, a, _, d = dh.T
+    R1 = _rot_z(phi1)
+    W = _rot_x(alpha[4]) @ _rot_z(phi5) @ _rot_x(alpha[5]) @ _rot_z(phi6)
+    R4 = Rb @ W.T
+    z5 = R4 @ np.array([0.0, -np.sin(alpha[4]), np.cos(alpha[4])])
+    o4 = o5 - d[4] * z5
+    RP = R1 @ _rot_x(alpha[1])
+    p = RP.T @ (o4 - a[1] * R1[:, 0])
+    c3 = (p[0] ** 2 + p[1] ** 2 - a[2] ** 2 - a[3] ** 2) / (2 * a[2] * a[3])
+    if abs(c3) > 1 + SEED_SLACK:
+        return []
+    M = RP.T @ R4
+    out = []
+    for elbow in (1.0, -1.0):
+        phi3 = elbow * np.arccos(np.clip(c3, -1.0, 1.0))
+        phi2 = np.arctan2(p[1], p[0]) - np.arctan2(a[3] * np.sin(phi3), a[2] + a[3] * np.cos(phi3))
+        phi4 = np.arctan2(M[1, 0], M[0, 0]) - phi2 - phi3
+        out.append(np.array([phi1, phi2, phi3, phi4, phi5, phi6]))
+    return out
+
+
+def _wrist(
+    Rb: np.ndarray, z2: np.ndarray, s4: float, s5: float, near_deg: float
+) -> list[tuple[float, list[float]]]:
+    """Return (φ5, [φ6, ...]) for both wrist branches.
+
+    Away from the wrist singularity one φ6 per branch (φ6 = 0 exactly at it). Within
+    ``near_deg`` of it the two branches nearly meet and φ4 + φ6 (or φ4 − φ6) nearly forms a
+    continuum; a calibrated arm's solutions along it may differ in number and place from the
+    structural table's, so φ6 is also sampled round the whole turn (:data:`WRIST_SAMPLES`)
+    for Newton to start from.
+    """
+    c5 = -(Rb[:, 2] @ z2) / (s4 * s5)  # |c5| ≤ 1 but for rounding: unit vectors, |s4 s5| = 1
+    v = Rb.T @ z2
+    out = []
+    for wrist in (1.0, -1.0):
+        phi5 = wrist * float(np.arccos(np.clip(c5, -1.0, 1.0)))
+        sin5 = np.sin(phi5)
+        phi6s = [0.0]  # wrist singular: φ6 is free (it turns about the line of φ2 + φ3 + φ4)
+        if abs(sin5) > 1e-9:
+            sg = s4 * np.sign(sin5)
+            phi6s = [float(np.arctan2(-v[1] * sg, v[0] * sg))]
+        if abs(sin5) < np.sin(np.radians(near_deg)):
+            phi6s += list(np.linspace(-np.pi, np.pi, WRIST_SAMPLES, endpoint=False))
+        out.append((phi5, phi6s))
+    return out
+
+
+def closed_form(
+    dh: np.ndarray, R: np.ndarray, o: np.ndarray, near_deg: float = 0.0
+) -> list[np.ndarray]:
+    """Return the DH angles φ of an exact UR-type table for the flange pose (R, o).
+
+    Up to 8 solutions; within ``near_deg`` of the wrist singularity, φ6 sampled round the turn
+    (see :func:`_wrist`). A pose whose wrist point lies just inside the cylinder of radius
+    D about axis 1 (shoulder singular; a calibrated arm's pose can, the structural table's
+    cannot reach it; 0.25 % of D inside at a pose found in testing) gives the one shoulder
+    seed on the cylinder, and Newton on the true model decides whether it is reachable.
+    """
+    dh = np.asarray(dh, dtype=float)
+    alpha, a, _, d = dh.T
     base = _rot_x(alpha[0])
     Rb = base.T @ R
     ob = base.T @ o - np.array([a[0], 0.0, d[0]])
@@ -81,52 +150,23 @@ def closed_form(dh: np.ndarray, R: np.ndarray, o: np.ndarray) -> list[np.ndarray
     o5 = ob - d[5] * Rb[:, 2]
     y1v = -s1 * (d[1] + d[2] + d[3])
     r2 = o5[0] ** 2 + o5[1] ** 2
+    x1 = np.sqrt(max(r2 - y1v**2, 0.0))  # inside the cylinder: Newton decides reachability
     out: list[np.ndarray] = []
-    if r2 < y1v**2:
-        return out
-    for shoulder in (1.0, -1.0):
-        x1v = shoulder * np.sqrt(r2 - y1v**2)
-        phi1 = np.arctan2(o5[1], o5[0]) - np.arctan2(y1v, x1v)
-        R1 = _rot_z(phi1)
-        z2 = -s1 * R1[:, 1]
-        c5 = -(Rb[:, 2] @ z2) / (s4 * s5)
-        if abs(c5) > 1 + SEED_SLACK:
-            continue
-        v = Rb.T @ z2
-        for wrist in (1.0, -1.0):
-            phi5 = wrist * np.arccos(np.clip(c5, -1.0, 1.0))
-            sin5 = np.sin(phi5)
-            if abs(sin5) > 1e-9:
-                sg = s4 * np.sign(sin5)
-                phi6 = np.arctan2(-v[1] * sg, v[0] * sg)
-            else:  # wrist singular: φ6 is free (it turns about the same line as φ4 + φ2 + φ3)
-                phi6 = 0.0
-            W = _rot_x(alpha[4]) @ _rot_z(phi5) @ _rot_x(alpha[5]) @ _rot_z(phi6)
-            R4 = Rb @ W.T
-            z5 = R4 @ np.array([0.0, -np.sin(alpha[4]), np.cos(alpha[4])])
-            o4 = o5 - d[4] * z5
-            RP = R1 @ _rot_x(alpha[1])
-            p = RP.T @ (o4 - a[1] * R1[:, 0])
-            c3 = (p[0] ** 2 + p[1] ** 2 - a[2] ** 2 - a[3] ** 2) / (2 * a[2] * a[3])
-            if abs(c3) > 1 + SEED_SLACK:
-                continue
-            for elbow in (1.0, -1.0):
-                phi3 = elbow * np.arccos(np.clip(c3, -1.0, 1.0))
-                phi2 = np.arctan2(p[1], p[0]) - np.arctan2(
-                    a[3] * np.sin(phi3), a[2] + a[3] * np.cos(phi3)
-                )
-                M = RP.T @ R4
-                phi4 = np.arctan2(M[1, 0], M[0, 0]) - phi2 - phi3
-                out.append(np.array([phi1, phi2, phi3, phi4, phi5, phi6]))
-            if abs(sin5) <= 1e-9:
-                break
+    for x1v in (x1, -x1) if x1 > 0 else (0.0,):
+        phi1 = float(np.arctan2(o5[1], o5[0]) - np.arctan2(y1v, x1v))
+        z2 = -s1 * _rot_z(phi1)[:, 1]
+        for phi5, phi6s in _wrist(Rb, z2, s4, s5, near_deg):
+            for phi6 in phi6s:
+                out += _arm(dh, Rb, o5, phi1, phi5, phi6)
     return out
 
 
 def candidates(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
     """Joint angles q (rad) to polish: the closed form of the model's structural table."""
     dh = np.asarray(model.dh)
-    return [phi - dh[:, 2] for phi in closed_form(structural(dh), R, o)]
+    s = structural(dh)
+    near_deg = 0.0 if np.allclose(s, dh, rtol=0, atol=1e-12) else NEAR_SINGULAR_DEG
+    return [phi - dh[:, 2] for phi in closed_form(s, R, o, near_deg)]
 
 
 def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
