@@ -160,19 +160,50 @@ def move_samples(
     return a[move] + t[:, None] * (b[move] - a[move]), first
 
 
+CHUNK_SAMPLES = 16384
+"""Configurations evaluated per batch along moves: memory stays bounded (a few MiB per
+batch) and the batch's arrays stay in the processor's cache, which is faster than one
+batch of millions."""
+
+
 def move_clearance(
-    robot: Robot, model, p0: np.ndarray, a: np.ndarray, b: np.ndarray, step_deg: float = 2.0
+    robot: Robot,
+    model,
+    p0: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    step_deg: float = 2.0,
+    every: int = 1,
 ) -> np.ndarray:
     """Return the smallest wire gap (mm) to the links along moves a → b.
 
     The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
-    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion.
+    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion
+    (:func:`move_samples`), in batches of about ``CHUNK_SAMPLES`` configurations. With
+    ``every`` > 1 only every ``every``-th of those samples and each move's end are
+    evaluated: a subset, so a gap found there is a gap of the full sampling too.
     """
     if robot.link_radius_mm is None:
         raise WirecalError(f"{robot.source}: the wire clearance needs the link radii")
-    q, first = move_samples(a, b, step_deg)
-    gap = wire_clearance(model, np.radians(q), p0, robot.link_radius_mm, wire_trim_mm(robot))
-    return np.minimum.reduceat(gap, first) if len(first) else gap
+    a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
+    count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg))
+    # batch k holds the moves whose samples start in [k·CHUNK, (k+1)·CHUNK)
+    batch = ((np.cumsum(count) - count) // CHUNK_SAMPLES).astype(int)
+    edges = np.searchsorted(batch, np.arange(batch[-1] + 2)) if len(a) else [0]
+    trim = wire_trim_mm(robot)
+    out = np.empty(len(a))
+    for lo, hi in itertools.pairwise(edges):
+        q, first = move_samples(a[lo:hi], b[lo:hi], step_deg)
+        if every > 1:
+            k = np.arange(len(q)) - np.repeat(first, np.diff(np.r_[first, len(q)]))
+            last = np.zeros(len(q), bool)
+            last[np.r_[first[1:], len(q)] - 1] = True
+            keep = (k % every == every - 1) | last
+            first = np.cumsum(keep)[first] - keep[first]  # each move keeps its end
+            q = q[keep]
+        gap = wire_clearance(model, np.radians(q), p0, robot.link_radius_mm, trim)
+        out[lo:hi] = np.minimum.reduceat(gap, first)
+    return out
 
 
 def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2.0) -> np.ndarray:
@@ -182,9 +213,15 @@ def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2
     than 180° (which would wrap the wire around the flange).
     """
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
-    return (np.abs(b[:, -1] - a[:, -1]) <= 180) & (
-        move_clearance(robot, model, p0, a, b, step_deg) >= opt.clearance_mm
-    )
+    ok = np.abs(b[:, -1] - a[:, -1]) <= 180
+    # a quick pass over every fourth sample rejects most blocked moves (a gap there is a
+    # gap of the full sampling); the moves it passes then get every sample
+    for every in (4, 1):
+        idx = np.flatnonzero(ok)
+        ok[idx] = move_clearance(robot, model, p0, a[idx], b[idx], step_deg, every) >= (
+            opt.clearance_mm
+        )
+    return ok
 
 
 def reach_ok(
@@ -197,10 +234,10 @@ def reach_ok(
     direct = np.isnan(via[:, 0])
     ok = np.zeros(len(q), bool)
     ok[direct] = move_ok(robot, model, p0, theta0, q[direct], opt, step_deg)
-    v = via[~direct]
-    ok[~direct] = move_ok(robot, model, p0, theta0, v, opt, step_deg) & move_ok(
-        robot, model, p0, v, q[~direct], opt, step_deg
-    )
+    viaed = np.flatnonzero(~direct)
+    ok[viaed] = move_ok(robot, model, p0, theta0, via[viaed], opt, step_deg)
+    viaed = viaed[ok[viaed]]  # the second leg only where the first is clear
+    ok[viaed] = move_ok(robot, model, p0, via[viaed], q[viaed], opt, step_deg)
     return ok
 
 
@@ -238,7 +275,8 @@ def screen(
             v[:, arm] = q[need, arm]
         else:
             v[:, 3:] = q[need, 3:]
-        good = length_ok(v) & reach_ok(robot, model, p0, theta0, q[need], v, opt, coarse)
+        good = length_ok(v)
+        good[good] = reach_ok(robot, model, p0, theta0, q[need[good]], v[good], opt, coarse)
         via[need[good]] = v[good]
     return ok & (direct | ~np.isnan(via[:, 0])), via
 
@@ -259,20 +297,44 @@ def _error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
     return opt.sigma_mm**2 / s + earlier + opt.prior**2 * float(later @ later)
 
 
+class _Links:
+    """Which moves between a step's candidates keep the wire clear, worked out on demand.
+
+    ``ok(sources, js)``: whether the moves from each of the candidates ``sources`` to
+    each of the candidates ``js`` are safe (:func:`move_ok`); every move is checked once,
+    however often the greedy choices of a step ask about it.
+    """
+
+    def __init__(self, robot: Robot, model, p0: np.ndarray, q: np.ndarray, opt: PlanOptions):
+        self.robot, self.model, self.p0, self.q, self.opt = robot, model, p0, q, opt
+        self.known = np.zeros((len(q), len(q)), np.int8)  # 0 unknown, 1 clear, 2 not
+
+    def ok(self, sources: list[int], js: np.ndarray) -> np.ndarray:
+        """Return whether the moves from every one of ``sources`` to each of ``js`` are safe."""
+        i = np.repeat(np.asarray(sources, int), len(js))
+        j = np.tile(js, len(sources))
+        todo = self.known[i, j] == 0
+        if todo.any():
+            clear = move_ok(
+                self.robot, self.model, self.p0, self.q[i[todo]], self.q[j[todo]], self.opt
+            )
+            self.known[i[todo], j[todo]] = np.where(clear, 1, 2)
+        return np.all((self.known[i, j] == 1).reshape(len(sources), len(js)), axis=0)
+
+
 def _choose(
-    psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, opt: PlanOptions, criterion: str
+    psi_j, psi_prev, cov_prev, psi_next, q, has_via, links: _Links, opt: PlanOptions, criterion
 ):
-    """Choose a step's K points by the ``rule`` given.
+    """Choose a step's K points by the ``criterion`` given.
 
     K points by greedy minimum error ("ours") or by largest |Ψ_j| ("paper"), at least
-    ``spread_deg`` apart, each pair joined by a clear move (``linked(i, among)``: which
-    of the candidates ``among`` (mask) are reachable from i), at most one needing a via
-    point (it will be visited first).
+    ``spread_deg`` apart, each joined by a clear move from every point chosen before it
+    (``links``), at most one needing a via point (it will be visited first).
     """
     pool = np.ones(len(q), bool)
     for _ in range(20):  # a dead end (no k linked points): start elsewhere
         chosen = _greedy(
-            psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, pool, opt, criterion
+            psi_j, psi_prev, cov_prev, psi_next, q, has_via, links, pool, opt, criterion
         )
         if len(chosen) == opt.points_per_step:
             return chosen
@@ -283,25 +345,40 @@ def _choose(
 
 
 def _greedy(
-    psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, allowed, opt, criterion
+    psi_j, psi_prev, cov_prev, psi_next, q, has_via, links: _Links, allowed, opt, criterion
 ) -> list[int]:
+    """Pick up to K points one at a time (see :func:`_choose`).
+
+    Each pick ranks the allowed candidates (spread apart, via rule) by the criterion,
+    ties in order of decreasing |Ψ_j|, and takes the first whose moves from every point
+    chosen so far are clear; the moves are checked in blocks, best-ranked first, so only
+    the head of the ranking costs clearance sweeps.
+    """
     allowed = allowed.copy()
     chosen: list[int] = []
     for _ in range(opt.points_per_step):
-        best, best_val = None, np.inf
-        for i in np.flatnonzero(allowed)[np.argsort(-np.abs(psi_j[allowed]))]:
-            if criterion == "paper":
-                best = i
+        cand = np.flatnonzero(allowed)
+        cand = cand[np.argsort(-np.abs(psi_j[cand]), kind="stable")]
+        if criterion != "paper":
+            val = np.array(
+                [
+                    _error(psi_j[t], psi_prev[t], cov_prev, psi_next[t], opt)
+                    for t in ([*chosen, i] for i in cand)
+                ]
+            )
+            finite = val < np.inf
+            cand = cand[finite][np.argsort(val[finite], kind="stable")]
+        best = None
+        for start in range(0, len(cand), 8):
+            block = cand[start : start + 8]
+            linked = links.ok(chosen, block)
+            if linked.any():
+                best = int(block[np.argmax(linked)])
                 break
-            trial = [*chosen, i]
-            val = _error(psi_j[trial], psi_prev[trial], cov_prev, psi_next[trial], opt)
-            if val < best_val:
-                best, best_val = i, val
         if best is None:
             return chosen
         chosen.append(best)
         allowed &= np.max(np.abs(q - q[best]), axis=1) >= opt.spread_deg
-        allowed[allowed] = linked(best, allowed)
         if has_via[best]:
             allowed &= ~has_via
     return chosen
@@ -452,11 +529,9 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
         pnext = psi[np.ix_(iso, nxt)] if nxt else np.zeros((len(iso), 0))
         q_iso = q_all[iso]
 
-        def linked(i, among, q_iso=q_iso):
-            return move_ok(robot, model, p0, q_iso[i], q_iso[among], opt)
-
-        ours = _choose(pj, pprev, cov_prev, pnext, q_iso, has_via[iso], linked, opt, "ours")
-        paper = _choose(pj, pprev, cov_prev, pnext, q_iso, has_via[iso], linked, opt, "paper")
+        links = _Links(robot, model, p0, q_iso, opt)
+        ours = _choose(pj, pprev, cov_prev, pnext, q_iso, has_via[iso], links, opt, "ours")
+        paper = _choose(pj, pprev, cov_prev, pnext, q_iso, has_via[iso], links, opt, "paper")
         if ours is None:
             excluded[j] = f"too few isolating points {opt.spread_deg:g} deg apart"
             remaining.remove(j)
