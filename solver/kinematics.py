@@ -119,7 +119,9 @@ def frames(model: Model, q: np.ndarray) -> Frames:
     x = np.empty((n + 1, 3, N))
     z = np.empty((n + 1, 3, N))
     o = np.empty((n + 1, 3, N))
-    X, Y, Z = (np.repeat(np.eye(3)[:, k, None], N, axis=1) for k in range(3))
+    basis = np.zeros((3, 3, N))
+    basis[0, 0] = basis[1, 1] = basis[2, 2] = 1.0
+    X, Y, Z = basis[:, 0], basis[:, 1], basis[:, 2]
     pos = np.zeros((3, N))
     x[0], z[0], o[0] = X, Z, pos
     for i in range(n):
@@ -173,10 +175,14 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def tool_jacobian(
-    model: Model, q: np.ndarray, names: Sequence[str]
+    model: Model, q: np.ndarray, names: Sequence[str], f: Frames | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Tool point p (N, 3) and ∂p/∂e (N, 3, m) for the named parameters (mm/rad, mm/mm)."""
-    f = frames(model, q)
+    """Tool point p (N, 3) and ∂p/∂e (N, 3, m) for the named parameters (mm/rad, mm/mm).
+
+    ``f``: the frames of ``q`` when the caller has them already (they do not depend on
+    the tool point).
+    """
+    f = frames(model, q) if f is None else f
     p = f.o[:, -1] + _rotate(f.R_last, model.tool_point)
     J = np.empty((*p.shape, len(names)))
     for kind, (cols, fr) in _layout(tuple(names), model.n_joints).items():
@@ -193,6 +199,8 @@ def tool_jacobian(
     return p, J
 
 
-def joint_jacobian(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def joint_jacobian(
+    model: Model, q: np.ndarray, f: Frames | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Tool point p (N, 3) and ∂p/∂q (N, 3, n): the positional geometric Jacobian."""
-    return tool_jacobian(model, q, [f"th{i + 1}" for i in range(model.n_joints)])
+    return tool_jacobian(model, q, [f"th{i + 1}" for i in range(model.n_joints)], f)
