@@ -11,9 +11,12 @@ the output of a command is the same with or without it.
 
 from __future__ import annotations
 
+import re
 import sys
+from collections.abc import Callable
 from typing import TextIO
 
+_STAGE = re.compile(r"\[(\d+)/(\d+)\]")
 WIDTH = 30  # characters of the bar itself
 LABEL = 44  # characters of the label (cut, or padded)
 
@@ -70,3 +73,20 @@ class ProgressBar:
         self.clear()
         print(line, file=sys.stdout if out is None else out, flush=True)
         self.update(self.fraction)
+
+    def stages(self, echo: bool = False) -> Callable[[str], None]:
+        """Return a callback for a workflow's stage lines, "[n/N] text …" (``run_demo``'s).
+
+        A line starts stage n of N: the bar shows (n − 1)/N under the line's text; with
+        ``echo`` the line is printed too (a line without the prefix only printed).
+        """
+
+        def stage(line: str) -> None:
+            if echo:
+                self.echo(line)
+            m = _STAGE.match(line)
+            if m:
+                n, total = int(m.group(1)), int(m.group(2))
+                self.update((n - 1) / total, line.split(" …")[0])
+
+        return stage

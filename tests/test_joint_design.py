@@ -112,3 +112,15 @@ def test_plan_command_output_has_no_progress_bar():
     assert "\r" not in r.output
     assert "%" not in r.output.replace("% below", "")
     assert r.output.startswith("Designed by 'wirecal plan'")
+
+
+def test_stage_lines_are_printed_and_counted():
+    out, term = io.StringIO(), _Terminal()
+    bar = ProgressBar("demo", term)
+    stage = bar.stages(echo=False)
+    stage("[1/4] first …")
+    stage("[2/4] second …")
+    assert bar.fraction == 0.25
+    assert "[2/4] second" in term.getvalue()
+    bar.echo("a line", out)
+    assert out.getvalue() == "a line\n"
