@@ -124,3 +124,27 @@ def test_stage_lines_are_printed_and_counted():
     assert "[2/4] second" in term.getvalue()
     bar.echo("a line", out)
     assert out.getvalue() == "a line\n"
+
+
+@pytest.mark.slow
+def test_probe_search_starts_near_the_last_contact(viper, paper_plan, tmp_path):
+    """A robot as nominal: every one of the 19 × 11 grid points is found to 1/128 mm
+    (flange 100 mm above the plate at -300 mm) in under half the moves of a search from
+    the approach height in 1, 0.1 and 0.01 mm steps (44 per point here)."""
+    from wirecal.app.demo import example_files
+    from wirecal.gen.vplus.program import GenOptions, module_text
+    from wirecal.solver.formats.validation_files import load_setup, read_validation_log
+    from wirecal.twin.cell import run_validation
+
+    setup = load_setup(example_files()["validation"])
+    text = module_text(viper, paper_plan, GenOptions(validation=setup))
+    v = run_validation(
+        viper, paper_plan, {}, setup, tmp_path, text, controller={}, run=1, unmodelled=None
+    )
+    assert v.plane.status == "completed"
+    log = read_validation_log(v.plane_log, "plane")
+    z = log.rows[:, -1]
+    assert len(z) == 19 * 11
+    assert np.all((z >= -200.0 - 1 / 128) & (z <= -200.0 + 1e-3))
+    plane_moves = v.cell.moves - 4 * setup.poses  # the configuration run's moves first
+    assert plane_moves < 20 * len(z)
