@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.app.demo import run_demo
+from wirecal.app.progress import ProgressBar
 from wirecal.app.report import histogram_figure
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
@@ -26,8 +27,8 @@ def main() -> None:
     args = ap.parse_args()
     rows = []
     for seed in range(1, args.seeds + 1):
-        with tempfile.TemporaryDirectory() as tmp:
-            r = run_demo(Path(tmp), seed=seed)
+        with tempfile.TemporaryDirectory() as tmp, ProgressBar(f"demo, seed {seed}") as bar:
+            r = run_demo(Path(tmp), seed=seed, progress=bar.stages())
         cfg, pln = r.validations
         rows.append((seed, cfg, pln, r.tool_error_mm, sum(r.seconds.values())))
         print(

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from wirecal.app.demo import run_demo
+from wirecal.app.progress import ProgressBar
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, SEED
 
@@ -55,7 +56,15 @@ def demo(folder, seed, scale, robot, force):
     the PC, the patch and UR's deltas (patch.ur_calibration.conf), and the wire lengths of a second
     run over new points against the nominal and the calibrated model.
     """
-    r = run_demo(folder, robot=robot, seed=seed, scale=scale, force=force, progress=click.echo)
+    with ProgressBar("demo") as bar:
+        r = run_demo(
+            folder,
+            robot=robot,
+            seed=seed,
+            scale=scale,
+            force=force,
+            progress=bar.stages(echo=True),
+        )
     click.echo("")
     click.echo(f"{'':<38}{'before':>10}{'after':>10}{'reduction':>11}")
     for v in r.validations:

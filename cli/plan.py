@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 import numpy as np
 
+from wirecal.app.progress import ProgressBar
 from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import SEED, number
 from wirecal.solver.errors import WirecalError
@@ -63,19 +64,36 @@ def _joints(value: str | None, n: int) -> np.ndarray | None:
     show_default=True,
     help="Seed of the candidate search (the same seed, the same plan).",
 )
+@click.option(
+    "--for",
+    "method",
+    type=click.Choice(["joint", "stepwise"]),
+    default=_D.method,
+    show_default=True,
+    help="The method the points are chosen for: the joint method's least tool-point error "
+    "per minute of robot time (still usable step by step), or the step-by-step method's "
+    "POINTS-PER-STEP points per step.",
+)
+@click.option(
+    "--points",
+    type=click.IntRange(1, 1000),
+    help="Joint design: calibration points in all [default: POINTS-PER-STEP per step].",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--force", is_flag=True, help="Replace an existing plan file.")
 @user_errors
-def plan(robot, output, theta0, points_per_step, tol, seed, as_json, force):
+def plan(robot, output, theta0, points_per_step, tol, seed, method, points, as_json, force):
     """Design a calibration plan for ROBOT's [calibration] parameters.
 
     Chooses θ0 (unless given), the order in which the parameters can be isolated one at
     a time (paper §3.4) and, for each, points where the wire-length error depends on it
     only, preferring points where neither earlier estimates nor still-unknown parameters
-    leak into the step. Every point is within the joint limits with a margin, has a wire
-    length within the encoder's range and a wire clear of the links along the move from
-    θ0. Prints the predicted accuracy (Cramér–Rao and step-by-step) and robot time; the
-    plan file explains itself in its header and passes 'wirecal psi'.
+    leak into the step. With --for joint (the default) points are then added where they
+    lower the joint method's tool-point error most per second of robot time. Every point
+    is within the joint limits with a margin, has a wire length within the encoder's
+    range and a wire clear of the links along the move from θ0. Prints the predicted
+    accuracy (Cramér–Rao and step-by-step) and robot time; the plan file explains itself
+    in its header and passes 'wirecal psi'.
     """
     rb = load_robot(robot)
     theta0_deg = _joints(theta0, rb.n_joints)
@@ -85,9 +103,14 @@ def plan(robot, output, theta0, points_per_step, tol, seed, as_json, force):
             "'gen', 'simulate' and 'solve' do not",
             err=True,
         )
-    opt = PlanOptions(points_per_step=points_per_step, tol=tol, seed=seed)
+    if points is not None and method != "joint":
+        raise WirecalError("--points applies to --for joint; give --points-per-step instead")
+    opt = PlanOptions(
+        points_per_step=points_per_step, tol=tol, seed=seed, method=method, points=points
+    )
     with Outputs([output] if output else [], force=force, inputs=[robot]) as out:
-        d = design(rb, theta0_deg, opt)
+        with ProgressBar(f"planning {rb.name}") as bar:
+            d = design(rb, theta0_deg, opt, bar.update)
         if output:
             out.put(output, plan_to_toml(d.plan, d.header()))
     if as_json:
@@ -96,6 +119,7 @@ def plan(robot, output, theta0, points_per_step, tol, seed, as_json, force):
                 "theta0_deg": d.plan.theta0_deg.tolist(),
                 "order": list(d.plan.order),
                 "points": d.plan.n_points,
+                "method": d.method,
                 "robot_time_s": d.robot_time_s,
                 "predicted_tool_error_mm": d.predicted,
                 "excluded": d.excluded,

@@ -12,17 +12,23 @@ import numpy as np
 from wirecal.solver.kinematics import Model, frames
 
 
+def _dot(u, v) -> np.ndarray:
+    """Return u · v for vectors held component-first (3, ...)."""
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
 def segment_distance(p1, q1, p2, q2) -> np.ndarray:
     """Return the shortest distance between segments p1–q1 and p2–q2.
 
-    Broadcast over leading axes (the clamped closest-point construction).
+    The points are held component-first, (3, ...), and broadcast over the other axes
+    (the clamped closest-point construction).
     """
     d1, d2, r = q1 - p1, q2 - p2, p1 - p2
-    a = np.einsum("...i,...i", d1, d1)
-    e = np.einsum("...i,...i", d2, d2)
-    f = np.einsum("...i,...i", d2, r)
-    c = np.einsum("...i,...i", d1, r)
-    b = np.einsum("...i,...i", d1, d2)
+    a = _dot(d1, d1)
+    e = _dot(d2, d2)
+    f = _dot(d2, r)
+    c = _dot(d1, r)
+    b = _dot(d1, d2)
     denom = a * e - b * b
     with np.errstate(invalid="ignore", divide="ignore"):
         s = np.where(denom > 1e-12, np.clip((b * f - c * e) / denom, 0, 1), 0.0)
@@ -30,8 +36,8 @@ def segment_distance(p1, q1, p2, q2) -> np.ndarray:
         s = np.where(t < 0, np.clip(-c / np.where(a > 1e-12, a, 1), 0, 1), s)
         s = np.where(t > 1, np.clip((b - c) / np.where(a > 1e-12, a, 1), 0, 1), s)
     t = np.clip(t, 0, 1)
-    gap = (p1 + s[..., None] * d1) - (p2 + t[..., None] * d2)
-    return np.linalg.norm(gap, axis=-1)
+    gap = (p1 + s * d1) - (p2 + t * d2)
+    return np.sqrt(_dot(gap, gap))
 
 
 def wire_trim_mm(robot) -> float:
@@ -53,13 +59,16 @@ def wire_clearance(
     (the fixture is there).
     """
     f = frames(model, q)
-    p = f.o[:, -1] + np.einsum("nij,j->ni", f.R_last, model.tool_point)
-    length = np.linalg.norm(p - encoder, axis=1, keepdims=True)
+    o = f.o.transpose(1, 2, 0)  # (n+1, 3, N): component-first, contiguous per row
+    R = f.R_last.transpose(1, 2, 0)  # (3, 3, N)
+    t = model.tool_point
+    p = o[-1] + R[:, 0] * t[0] + R[:, 1] * t[1] + R[:, 2] * t[2]
+    enc = np.asarray(encoder, dtype=float)[:, None]
+    length = np.sqrt(_dot(p - enc, p - enc))
     keep = np.clip(1 - trim_mm / np.maximum(length, 1e-9), 0, 1)
-    wire_end = encoder + keep * (p - encoder)
-    starts = f.o[:, 1:-1]  # capsule k: frame k origin → frame k+1
-    ends = f.o[:, 2:]
+    wire_end = enc + keep * (p - enc)
+    starts = o[1:-1].transpose(1, 0, 2)  # (3, caps, N); capsule k: frame k origin → k+1
+    ends = o[2:].transpose(1, 0, 2)
     n_caps = starts.shape[1]
-    enc = np.broadcast_to(encoder, (len(q), n_caps, 3))
-    dist = segment_distance(enc, np.repeat(wire_end[:, None], n_caps, axis=1), starts, ends)
-    return np.min(dist - radii[:n_caps], axis=1)
+    dist = segment_distance(enc[:, :, None], wire_end[:, None], starts, ends)
+    return np.min(dist - np.asarray(radii)[:n_caps, None], axis=0)

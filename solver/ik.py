@@ -129,16 +129,18 @@ def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
     return out
 
 
-def _pose_error(model, q, R, o):
-    Rq, oq = flange_pose(model, q)
+def _pose_error(model, q, R, o, f=None):
+    """Return the pose error (mm, and mrad-weighted rotation) of q; ``f``: q's frames."""
+    f = frames(model, np.atleast_2d(q)) if f is None else f
+    Rq, oq = f.R_last[0], f.o[0, -1]
     E = R @ Rq.T
     rotvec = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
     return np.r_[o - oq, rotvec * 1000.0]  # 1 rad of orientation weighs as 1 m
 
 
-def _geometric_jacobian(model, q):
-    f = frames(model, q[None])
-    _, Jp = joint_jacobian(Model(model.dh, np.zeros(3)), q[None])
+def _geometric_jacobian(model, q, f):
+    """Return the geometric Jacobian (position; orientation × 1000) at q from its frames."""
+    _, Jp = joint_jacobian(Model(model.dh, np.zeros(3)), q[None], f)
     Jw = f.z[0, 1:].T
     return np.vstack([Jp[0], Jw * 1000.0])
 
@@ -161,11 +163,11 @@ value); capping it keeps Newton in the basin it started in."""
 
 def _polish(model, q, R, o, iterations=60, accept=CONVERGED):
     for _ in range(iterations):
-        e = _pose_error(model, q, R, o)
+        f = frames(model, q[None])  # one evaluation of the chain per Newton step
+        e = _pose_error(model, q, R, o, f)
         if np.max(np.abs(e)) < CONVERGED:
             return q, True
-        J = _geometric_jacobian(model, q)
-        step = np.linalg.lstsq(J, e, rcond=None)[0]
+        step = np.linalg.lstsq(_geometric_jacobian(model, q, f), e, rcond=None)[0]
         q = q + step * min(1.0, MAX_STEP_RAD / max(np.max(np.abs(step)), 1e-300))
     return q, np.max(np.abs(_pose_error(model, q, R, o))) < accept
 

@@ -103,7 +103,9 @@ def frames(model: Model, q: np.ndarray) -> Frames:
     A batched model (dh (N, n, 4)) gives configuration k its own model k. The rotation
     is carried as its three columns X, Y, Z; per joint, RotX(α) gives
     Y' = cα·Y + sα·Z, Z' = −sα·Y + cα·Z, the origin moves by a·X + d·Z', and RotZ(θ)
-    gives X'' = cθ·X + sθ·Y', Y'' = −sθ·X + cθ·Y'.
+    gives X'' = cθ·X + sθ·Y', Y'' = −sθ·X + cθ·Y'. The vectors are held component-major
+    (3, N), so every product runs over contiguous memory; the arrays returned are
+    (N, …, 3) views of that storage.
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     N, n = q.shape
@@ -111,29 +113,34 @@ def frames(model: Model, q: np.ndarray) -> Frames:
         raise ValueError(f"configurations have {n} joints; the model has {model.n_joints}")
     dh = model.dh
     batched = dh.ndim == 3
-    th = q + dh[..., 2]
+    th = (q + dh[..., 2]).T
     ct, st = np.cos(th), np.sin(th)
     ca_all, sa_all = np.cos(dh[..., 0]), np.sin(dh[..., 0])
-    x = np.empty((N, n + 1, 3))
-    z = np.empty((N, n + 1, 3))
-    o = np.empty((N, n + 1, 3))
-    X = np.broadcast_to([1.0, 0.0, 0.0], (N, 3))
-    Y = np.broadcast_to([0.0, 1.0, 0.0], (N, 3))
-    Z = np.broadcast_to([0.0, 0.0, 1.0], (N, 3))
-    pos = np.zeros((N, 3))
-    x[:, 0], z[:, 0], o[:, 0] = X, Z, pos
+    x = np.empty((n + 1, 3, N))
+    z = np.empty((n + 1, 3, N))
+    o = np.empty((n + 1, 3, N))
+    basis = np.zeros((3, 3, N))
+    basis[0, 0] = basis[1, 1] = basis[2, 2] = 1.0
+    X, Y, Z = basis[:, 0], basis[:, 1], basis[:, 2]
+    pos = np.zeros((3, N))
+    x[0], z[0], o[0] = X, Z, pos
     for i in range(n):
         if batched:
-            ca, sa = ca_all[:, i, None], sa_all[:, i, None]
-            a, d = dh[:, i, 1, None], dh[:, i, 3, None]
+            ca, sa = ca_all[:, i], sa_all[:, i]
+            a, d = dh[:, i, 1], dh[:, i, 3]
         else:
             ca, sa, a, d = ca_all[i], sa_all[i], dh[i, 1], dh[i, 3]
         Y, Z = ca * Y + sa * Z, ca * Z - sa * Y
         pos = pos + a * X + d * Z
-        c, s = ct[:, i, None], st[:, i, None]
+        c, s = ct[i], st[i]
         X, Y = c * X + s * Y, c * Y - s * X
-        x[:, i + 1], z[:, i + 1], o[:, i + 1] = X, Z, pos
-    return Frames(x=x, z=z, o=o, R_last=np.stack([X, Y, Z], axis=2))
+        x[i + 1], z[i + 1], o[i + 1] = X, Z, pos
+    return Frames(
+        x=x.transpose(2, 0, 1),
+        z=z.transpose(2, 0, 1),
+        o=o.transpose(2, 0, 1),
+        R_last=np.ascontiguousarray(np.stack([X, Y, Z], axis=1).transpose(2, 0, 1)),
+    )
 
 
 def tool_position(model: Model, q: np.ndarray) -> np.ndarray:
@@ -168,10 +175,14 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def tool_jacobian(
-    model: Model, q: np.ndarray, names: Sequence[str]
+    model: Model, q: np.ndarray, names: Sequence[str], f: Frames | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Tool point p (N, 3) and ∂p/∂e (N, 3, m) for the named parameters (mm/rad, mm/mm)."""
-    f = frames(model, q)
+    """Tool point p (N, 3) and ∂p/∂e (N, 3, m) for the named parameters (mm/rad, mm/mm).
+
+    ``f``: the frames of ``q`` when the caller has them already (they do not depend on
+    the tool point).
+    """
+    f = frames(model, q) if f is None else f
     p = f.o[:, -1] + _rotate(f.R_last, model.tool_point)
     J = np.empty((*p.shape, len(names)))
     for kind, (cols, fr) in _layout(tuple(names), model.n_joints).items():
@@ -188,6 +199,8 @@ def tool_jacobian(
     return p, J
 
 
-def joint_jacobian(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def joint_jacobian(
+    model: Model, q: np.ndarray, f: Frames | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Tool point p (N, 3) and ∂p/∂q (N, 3, n): the positional geometric Jacobian."""
-    return tool_jacobian(model, q, [f"th{i + 1}" for i in range(model.n_joints)])
+    return tool_jacobian(model, q, [f"th{i + 1}" for i in range(model.n_joints)], f)

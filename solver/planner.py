@@ -26,7 +26,9 @@ wrist singularity and the wire's clearance from the links along the joint-interp
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Literal
 
 import numpy as np
 
@@ -36,17 +38,24 @@ from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import describe, largest_exit_deg, wire_path, within_cone
 from wirecal.solver.identifiability import analyse
-from wirecal.solver.kinematics import tool_position
+from wirecal.solver.kinematics import tool_jacobian, tool_position
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan, Step
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import (
     DEFAULT_RUN,
+    READING_INTERVAL_S,
     RunParameters,
     move_durations_s,
+    move_profiles,
+    move_speeds_pct,
     run_timeline,
+    settle_time_s,
 )
 from wirecal.solver.sensitivity import PSI_FLOOR, sensitivity
+
+Method = Literal["joint", "stepwise"]
+Progress = Callable[[float], None]
 
 
 @dataclass(frozen=True)
@@ -65,6 +74,9 @@ class PlanOptions:
     seed: int = 0
     prior: float = 0.5  # typical |offset| (deg, mm) of a still-unknown parameter
     sigma_mm: float = 0.011  # reading noise, quantisation included
+    method: Method = "joint"  # the estimator the points are chosen for
+    points: int | None = None  # joint design: points in all (None: points_per_step each)
+    min_points: int = 2  # joint design: points of every step, at least
 
 
 @dataclass
@@ -75,7 +87,7 @@ class StepDesign:
     points_deg: np.ndarray
     strength: float  # RMS |Ψ_j| of the points
     leak_ours: float  # variance factor with our choice
-    leak_paper: float  # … with the paper's criterion (largest |Ψ_j|)
+    leak_paper: float | None  # … with the paper's criterion (largest |Ψ_j|); None: joint
     via_deg: np.ndarray  # (0 or 1, n): passed on the way to the first point
 
 
@@ -89,6 +101,7 @@ class Design:
     predicted: dict[str, float] = field(default_factory=dict)
     robot_time_s: float = 0.0
     exit_line: str = ""  # the wire exit and the plan's largest exit angle, in words
+    method: Method = "stepwise"  # the estimator the points were chosen for
 
     def header(self) -> str:
         """Return the plan file's header comment: the design's figures in words."""
@@ -105,16 +118,33 @@ class Design:
             f"{sum(len(s.via_deg) for s in self.plan.steps)} via points).",
             self.exit_line,
         ]
-        lines.append(
-            "Per step: RMS |Psi| of its points (mm/deg or mm/mm), the noise gain "
-            "(sigma of the estimate per mm of reading noise) and the leak-aware "
-            "choice against the paper's."
-        )
-        for j, s in enumerate(self.steps, 1):
-            cut = 100 * (1 - s.leak_ours / s.leak_paper) if s.leak_paper > 0 else 0.0
-            gain = 1 / (s.strength * np.sqrt(len(s.points_deg)))
+        if self.method == "joint":
             lines.append(
-                f"step {j} {s.parameter}: RMS |Psi| {s.strength:.2f}, noise gain "
+                "Points chosen for the joint method (least tool-point variance over the "
+                "workspace per second of robot time), each step's points isolating its "
+                "parameter so the step-by-step method runs too. Per step: its points, "
+                "RMS |Psi| (mm/deg or mm/mm), the noise gain (sigma of the estimate per "
+                "mm of reading noise) and the step-by-step expected squared error."
+            )
+        else:
+            lines.append(
+                "Per step: RMS |Psi| of its points (mm/deg or mm/mm), the noise gain "
+                "(sigma of the estimate per mm of reading noise) and the leak-aware "
+                "choice against the paper's."
+            )
+        for j, s in enumerate(self.steps, 1):
+            gain = 1 / (s.strength * np.sqrt(len(s.points_deg)))
+            head = f"step {j} {s.parameter}: "
+            if s.leak_paper is None:
+                lines.append(
+                    f"{head}{len(s.points_deg)} points, RMS |Psi| {s.strength:.2f}, noise "
+                    f"gain {gain:.2f}; expected squared error with noise and leaks "
+                    f"{s.leak_ours:.3g}"
+                )
+                continue
+            cut = 100 * (1 - s.leak_ours / s.leak_paper) if s.leak_paper > 0 else 0.0
+            lines.append(
+                f"{head}RMS |Psi| {s.strength:.2f}, noise gain "
                 f"{gain:.2f}; expected squared error with noise and leaks "
                 f"{s.leak_ours:.3g} ({cut:.0f} % below the largest-|Psi| choice's "
                 f"{s.leak_paper:.3g})"
@@ -165,19 +195,50 @@ def move_samples(
     return a[move] + t[:, None] * (b[move] - a[move]), first
 
 
+CHUNK_SAMPLES = 16384
+"""Configurations evaluated per batch along moves: memory stays bounded (a few MiB per
+batch) and the batch's arrays stay in the processor's cache, which is faster than one
+batch of millions."""
+
+
 def move_clearance(
-    robot: Robot, model, p0: np.ndarray, a: np.ndarray, b: np.ndarray, step_deg: float = 2.0
+    robot: Robot,
+    model,
+    p0: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    step_deg: float = 2.0,
+    every: int = 1,
 ) -> np.ndarray:
     """Return the smallest wire gap (mm) to the links along moves a → b.
 
     The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
-    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion.
+    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion
+    (:func:`move_samples`), in batches of about ``CHUNK_SAMPLES`` configurations. With
+    ``every`` > 1 only every ``every``-th of those samples and each move's end are
+    evaluated: a subset, so a gap found there is a gap of the full sampling too.
     """
     if robot.link_radius_mm is None:
         raise WirecalError(f"{robot.source}: the wire clearance needs the link radii")
-    q, first = move_samples(a, b, step_deg)
-    gap = wire_clearance(model, np.radians(q), p0, robot.link_radius_mm, wire_trim_mm(robot))
-    return np.minimum.reduceat(gap, first) if len(first) else gap
+    a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
+    count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg))
+    # batch k holds the moves whose samples start in [k·CHUNK, (k+1)·CHUNK)
+    batch = ((np.cumsum(count) - count) // CHUNK_SAMPLES).astype(int)
+    edges = np.searchsorted(batch, np.arange(batch[-1] + 2)) if len(a) else [0]
+    trim = wire_trim_mm(robot)
+    out = np.empty(len(a))
+    for lo, hi in itertools.pairwise(edges):
+        q, first = move_samples(a[lo:hi], b[lo:hi], step_deg)
+        if every > 1:
+            k = np.arange(len(q)) - np.repeat(first, np.diff(np.r_[first, len(q)]))
+            last = np.zeros(len(q), bool)
+            last[np.r_[first[1:], len(q)] - 1] = True
+            keep = (k % every == every - 1) | last
+            first = np.cumsum(keep)[first] - keep[first]  # each move keeps its end
+            q = q[keep]
+        gap = wire_clearance(model, np.radians(q), p0, robot.link_radius_mm, trim)
+        out[lo:hi] = np.minimum.reduceat(gap, first)
+    return out
 
 
 def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2.0) -> np.ndarray:
@@ -187,9 +248,15 @@ def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2
     than 180° (which would wrap the wire around the flange).
     """
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
-    return (np.abs(b[:, -1] - a[:, -1]) <= 180) & (
-        move_clearance(robot, model, p0, a, b, step_deg) >= opt.clearance_mm
-    )
+    ok = np.abs(b[:, -1] - a[:, -1]) <= 180
+    # a quick pass over every fourth sample rejects most blocked moves (a gap there is a
+    # gap of the full sampling); the moves it passes then get every sample
+    for every in (4, 1):
+        idx = np.flatnonzero(ok)
+        ok[idx] = move_clearance(robot, model, p0, a[idx], b[idx], step_deg, every) >= (
+            opt.clearance_mm
+        )
+    return ok
 
 
 def reach_ok(
@@ -202,10 +269,10 @@ def reach_ok(
     direct = np.isnan(via[:, 0])
     ok = np.zeros(len(q), bool)
     ok[direct] = move_ok(robot, model, p0, theta0, q[direct], opt, step_deg)
-    v = via[~direct]
-    ok[~direct] = move_ok(robot, model, p0, theta0, v, opt, step_deg) & move_ok(
-        robot, model, p0, v, q[~direct], opt, step_deg
-    )
+    viaed = np.flatnonzero(~direct)
+    ok[viaed] = move_ok(robot, model, p0, theta0, via[viaed], opt, step_deg)
+    viaed = viaed[ok[viaed]]  # the second leg only where the first is clear
+    ok[viaed] = move_ok(robot, model, p0, via[viaed], q[viaed], opt, step_deg)
     return ok
 
 
@@ -243,41 +310,77 @@ def screen(
             v[:, arm] = q[need, arm]
         else:
             v[:, 3:] = q[need, 3:]
-        good = length_ok(v) & reach_ok(robot, model, p0, theta0, q[need], v, opt, coarse)
+        good = length_ok(v)
+        good[good] = reach_ok(robot, model, p0, theta0, q[need[good]], v[good], opt, coarse)
         via[need[good]] = v[good]
     return ok & (direct | ~np.isnan(via[:, 0])), via
 
 
-def _error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
-    """Return the mean squared error of a step's estimate (linearised).
+def _errors(psi_j, psi_prev, cov_prev, psi_next, base, cand, opt: PlanOptions) -> np.ndarray:
+    """Return the mean squared error of a step's estimate with points base + [i], per i.
 
-    Mean squared error of a step's estimate (linearised): the reading noise, the error
-    of the earlier estimates leaking in through Ψ_{i,<j} (covariance ``cov_prev``), and the
-    still-unknown later parameters leaking in through Ψ_{i,>j} (each of size ``prior``).
+    Mean squared error of a step's estimate (linearised) for each set of points ``base``
+    and one candidate i of ``cand`` (indices into the rows of the Ψ arrays): the reading
+    noise, the error of the earlier estimates leaking in through Ψ_{i,<j} (covariance
+    ``cov_prev``), and the still-unknown later parameters leaking in through Ψ_{i,>j}
+    (each of size ``prior``). Infinite where the points do not see the parameter.
     """
-    s = float(psi_j @ psi_j)
-    if s <= 0:
-        return np.inf
-    c = (psi_j @ psi_prev) / s if psi_prev.size else np.zeros(0)
-    earlier = float(c @ cov_prev @ c) if c.size else 0.0
-    later = (psi_j @ psi_next) / s if psi_next.size else np.zeros(0)
-    return opt.sigma_mm**2 / s + earlier + opt.prior**2 * float(later @ later)
+    b, c = list(base), np.asarray(cand, int)
+    pb, pc = psi_j[b], psi_j[c]
+    s = pb @ pb + pc * pc
+    with np.errstate(invalid="ignore", divide="ignore"):
+        inv = np.where(s > 0, 1 / np.where(s > 0, s, 1), np.inf)
+    lead = (pb @ psi_prev[b] + pc[:, None] * psi_prev[c]) * inv[:, None]
+    lag = (pb @ psi_next[b] + pc[:, None] * psi_next[c]) * inv[:, None]
+    earlier = np.einsum("ni,ik,nk->n", lead, cov_prev, lead) if lead.shape[1] else 0.0
+    out = opt.sigma_mm**2 * inv + earlier + opt.prior**2 * np.einsum("ni,ni->n", lag, lag)
+    return np.where(s > 0, out, np.inf)
+
+
+def _error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
+    """Return the mean squared error of a step's estimate with all its points (:func:`_errors`)."""
+    n = len(psi_j)
+    return float(_errors(psi_j, psi_prev, cov_prev, psi_next, range(n - 1), [n - 1], opt)[0])
+
+
+class _Links:
+    """Which moves between a step's candidates keep the wire clear, worked out on demand.
+
+    ``ok(sources, js)``: whether the moves from each of the candidates ``sources`` to
+    each of the candidates ``js`` are safe (:func:`move_ok`); every move is checked once,
+    however often the greedy choices of a step ask about it.
+    """
+
+    def __init__(self, robot: Robot, model, p0: np.ndarray, q: np.ndarray, opt: PlanOptions):
+        self.robot, self.model, self.p0, self.q, self.opt = robot, model, p0, q, opt
+        self.known = np.zeros((len(q), len(q)), np.int8)  # 0 unknown, 1 clear, 2 not
+
+    def ok(self, sources: list[int], js: np.ndarray) -> np.ndarray:
+        """Return whether the moves from every one of ``sources`` to each of ``js`` are safe."""
+        i = np.repeat(np.asarray(sources, int), len(js))
+        j = np.tile(js, len(sources))
+        todo = self.known[i, j] == 0
+        if todo.any():
+            clear = move_ok(
+                self.robot, self.model, self.p0, self.q[i[todo]], self.q[j[todo]], self.opt
+            )
+            self.known[i[todo], j[todo]] = np.where(clear, 1, 2)
+        return np.all((self.known[i, j] == 1).reshape(len(sources), len(js)), axis=0)
 
 
 def _choose(
-    psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, opt: PlanOptions, criterion: str
+    psi_j, psi_prev, cov_prev, psi_next, q, has_via, links: _Links, opt: PlanOptions, criterion
 ):
-    """Choose a step's K points by the ``rule`` given.
+    """Choose a step's K points by the ``criterion`` given.
 
     K points by greedy minimum error ("ours") or by largest |Ψ_j| ("paper"), at least
-    ``spread_deg`` apart, each pair joined by a clear move (``linked(i, among)``: which
-    of the candidates ``among`` (mask) are reachable from i), at most one needing a via
-    point (it will be visited first).
+    ``spread_deg`` apart, each joined by a clear move from every point chosen before it
+    (``links``), at most one needing a via point (it will be visited first).
     """
     pool = np.ones(len(q), bool)
     for _ in range(20):  # a dead end (no k linked points): start elsewhere
         chosen = _greedy(
-            psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, pool, opt, criterion
+            psi_j, psi_prev, cov_prev, psi_next, q, has_via, links, pool, opt, criterion
         )
         if len(chosen) == opt.points_per_step:
             return chosen
@@ -288,34 +391,50 @@ def _choose(
 
 
 def _greedy(
-    psi_j, psi_prev, cov_prev, psi_next, q, has_via, linked, allowed, opt, criterion
+    psi_j, psi_prev, cov_prev, psi_next, q, has_via, links: _Links, allowed, opt, criterion
 ) -> list[int]:
+    """Pick up to K points one at a time (see :func:`_choose`).
+
+    Each pick ranks the allowed candidates (spread apart, via rule) by the criterion,
+    ties in order of decreasing |Ψ_j|, and takes the first whose moves from every point
+    chosen so far are clear; the moves are checked in blocks, best-ranked first, so only
+    the head of the ranking costs clearance sweeps.
+    """
     allowed = allowed.copy()
     chosen: list[int] = []
     for _ in range(opt.points_per_step):
-        best, best_val = None, np.inf
-        for i in np.flatnonzero(allowed)[np.argsort(-np.abs(psi_j[allowed]))]:
-            if criterion == "paper":
-                best = i
+        cand = np.flatnonzero(allowed)
+        cand = cand[np.argsort(-np.abs(psi_j[cand]), kind="stable")]
+        if criterion != "paper":
+            val = _errors(psi_j, psi_prev, cov_prev, psi_next, chosen, cand, opt)
+            finite = val < np.inf
+            cand = cand[finite][np.argsort(val[finite], kind="stable")]
+        best = None
+        for start in range(0, len(cand), 8):
+            block = cand[start : start + 8]
+            linked = links.ok(chosen, block)
+            if linked.any():
+                best = int(block[np.argmax(linked)])
                 break
-            trial = [*chosen, i]
-            val = _error(psi_j[trial], psi_prev[trial], cov_prev, psi_next[trial], opt)
-            if val < best_val:
-                best, best_val = i, val
         if best is None:
             return chosen
         chosen.append(best)
         allowed &= np.max(np.abs(q - q[best]), axis=1) >= opt.spread_deg
-        allowed[allowed] = linked(best, allowed)
         if has_via[best]:
             allowed &= ~has_via
     return chosen
 
 
 def design(
-    robot: Robot, theta0: np.ndarray | None = None, opt: PlanOptions = PlanOptions()
+    robot: Robot,
+    theta0: np.ndarray | None = None,
+    opt: PlanOptions = PlanOptions(),
+    progress: Progress | None = None,
 ) -> Design:
-    """Return a plan for the robot file's parameters (θ0 chosen when not given)."""
+    """Return a plan for the robot file's parameters (θ0 chosen when not given).
+
+    ``progress`` is called with the fraction of the work done (0…1) as it advances.
+    """
     span = robot.joint_max_deg - robot.joint_min_deg
     narrow = np.flatnonzero(span <= 2 * opt.margin_deg)
     if narrow.size:
@@ -328,16 +447,17 @@ def design(
             ]
         )
     if theta0 is not None:
-        return _design_at(robot, np.asarray(theta0, dtype=float), opt)
+        return _design_at(robot, np.asarray(theta0, dtype=float), opt, progress)
     rng = np.random.default_rng([opt.seed, 99])
     # θ0 is drawn 20 deg inside the limits, less on a joint with a narrow range
     inset = np.clip(span / 4, opt.margin_deg, 20.0)
     lo, hi = robot.joint_min_deg + inset, robot.joint_max_deg - inset
     best, problems = None, []
-    for _ in range(6):
+    tries = 6
+    for k in range(tries):
         t0 = np.round(rng.uniform(lo, hi), 0)
         try:
-            d = _design_at(robot, t0, opt)
+            d = _design_at(robot, t0, opt, _part(progress, k, tries))
         except WirecalError as exc:
             problems.append(exc.problems[0])
             continue
@@ -411,16 +531,43 @@ def _most_informative(
     return None if best is None else (best[1], best[2])
 
 
-def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
-    """Design a plan around a given θ0 (see :func:`design`)."""
-    rng = np.random.default_rng(opt.seed)
+@dataclass
+class _Pool:
+    """One step: its isolating candidates and the points chosen among them.
+
+    ``iso`` indexes the screened candidates; ``pj``, ``pprev``, ``pnext`` are their Ψ
+    columns (the step's parameter, the earlier ones, the later ones); ``cov_prev`` the
+    earlier estimates' error covariance; ``picks`` index ``iso``.
+    """
+
+    parameter: str
+    iso: np.ndarray
+    links: _Links
+    pj: np.ndarray
+    pprev: np.ndarray
+    pnext: np.ndarray
+    cov_prev: np.ndarray
+    picks: list[int]
+    leak_paper: float | None = None
+
+
+def _design_at(
+    robot: Robot, theta0: np.ndarray, opt: PlanOptions, progress: Progress | None = None
+) -> Design:
+    """Design a plan around a given θ0 (see :func:`design`).
+
+    Step by step (paper §3.4), each step's points chosen by the leak-aware greedy: all
+    ``points_per_step`` of them for the stepwise method, the first ``min_points`` for the
+    joint method, whose remaining points :func:`_joint_choice` then adds over all steps.
+    """
+    tick = progress or (lambda f: None)
     model = robot.nominal
     _check_theta0(robot, theta0, opt)
-    q_all = candidates(robot, theta0, opt, rng)
+    q_all = candidates(robot, theta0, opt, np.random.default_rng(opt.seed))
     p0 = tool_position(model, np.radians(theta0)[None])[0]
     usable, via_all = screen(robot, model, p0, theta0, q_all, opt)
+    tick(0.5)
     q_all, via_all = q_all[usable], via_all[usable]
-    has_via = ~np.isnan(via_all[:, 0])
     if len(q_all) < opt.points_per_step:
         raise WirecalError(
             f"{robot.source}: almost no usable configuration around θ0 "
@@ -431,10 +578,78 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
     excluded = _unidentifiable(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
     remaining = [n for n in names if n not in excluded]
     psi = sensitivity(model, q_all, theta0, remaining).psi
+    pools = _step_by_step(robot, theta0, q_all, via_all, psi, remaining, excluded, opt, tick)
+    if opt.method == "joint":
+        _joint_choice(robot, theta0, q_all, via_all, psi, remaining, pools, opt)
+    steps = []
+    for k, pool in enumerate(pools):
+        pts = pool.iso[pool.picks]
+        path = _tour(robot, model, p0, theta0, q_all[pts], via_all[pts], opt)
+        if path is None:
+            raise WirecalError(
+                f"{robot.source}: step {k + 1} ({pool.parameter}): no visiting "
+                "order keeps the wire clear of the links; try another "
+                "--seed or --theta0, or check the link radii"
+            )
+        pool.picks = [pool.picks[i] for i in path]
+        first_via = via_all[pool.iso[pool.picks[0]]]
+        steps.append(
+            StepDesign(
+                pool.parameter,
+                q_all[pts[path]],
+                float(np.sqrt(np.mean(pool.pj[pool.picks] ** 2))),
+                _error(
+                    pool.pj[pool.picks],
+                    pool.pprev[pool.picks],
+                    pool.cov_prev,
+                    pool.pnext[pool.picks],
+                    opt,
+                ),
+                pool.leak_paper,
+                first_via[None] if not np.isnan(first_via[0]) else np.zeros((0, len(theta0))),
+            )
+        )
+    plan = Plan(
+        theta0,
+        tuple(p.parameter for p in pools),
+        tuple(Step(s.parameter, s.points_deg, s.via_deg) for s in steps),
+        robot=robot.name,
+    )
+    d = Design(plan, steps, excluded, method=opt.method)
+    d.predicted = predicted_accuracy(robot, plan)
+    d.robot_time_s = robot_time(robot, plan, opt.run)
+    d.exit_line = exit_line(robot, plan)
+    tick(1.0)
+    return d
+
+
+def _step_by_step(
+    robot: Robot,
+    theta0: np.ndarray,
+    q_all: np.ndarray,
+    via_all: np.ndarray,
+    psi: np.ndarray,
+    remaining: list[str],
+    excluded: dict[str, str],
+    opt: PlanOptions,
+    tick: Progress,
+) -> list[_Pool]:
+    """Return the steps in the order they isolate their parameters, with their points.
+
+    The order of §3.4 (:func:`_most_informative`); per step the leak-aware greedy
+    choice (:func:`_choose`) of ``points_per_step`` points (``min_points`` for the joint
+    design), its error covariance taking the earlier steps' choices into account, and
+    for the stepwise design the paper's choice for comparison. Parameters that cannot be
+    isolated go into ``excluded``.
+    """
+    model = robot.nominal
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    has_via = ~np.isnan(via_all[:, 0])
     col = {n: k for k, n in enumerate(remaining)}
-    order: list[str] = []
-    steps: list[StepDesign] = []
-    chosen_q: list[np.ndarray] = []
+    n_params = len(remaining)
+    remaining = list(remaining)
+    pools: list[_Pool] = []
+    k_first = opt.points_per_step if opt.method == "stepwise" else opt.min_points
     while remaining:
         best = _most_informative(psi, col, remaining, opt)
         if best is None:
@@ -448,64 +663,149 @@ def _design_at(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Design:
         # the most sensitive isolating points, their moves from θ0 checked finely
         iso = iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")[:600]]
         iso = iso[reach_ok(robot, model, p0, theta0, q_all[iso], via_all[iso], opt)]
-        # error covariance of the earlier estimates (linearised stepwise map)
+        order = [p.parameter for p in pools]
         prev = [col[t] for t in order]
         nxt = [col[t] for t in remaining if t != j]
-        cov_prev = _stepwise_cov(model, theta0, order, chosen_q, opt) if order else np.zeros((0, 0))
-        pj = psi[iso, col[j]]
-        pprev = psi[np.ix_(iso, prev)] if prev else np.zeros((len(iso), 0))
-        pnext = psi[np.ix_(iso, nxt)] if nxt else np.zeros((len(iso), 0))
-        q_iso = q_all[iso]
-
-        def linked(i, among, q_iso=q_iso):
-            return move_ok(robot, model, p0, q_iso[i], q_iso[among], opt)
-
-        ours = _choose(pj, pprev, cov_prev, pnext, q_iso, has_via[iso], linked, opt, "ours")
-        paper = _choose(pj, pprev, cov_prev, pnext, q_iso, has_via[iso], linked, opt, "paper")
+        # error covariance of the earlier estimates (linearised stepwise map)
+        cov_prev = (
+            _stepwise_cov(model, theta0, order, [q_all[p.iso[p.picks]] for p in pools], opt)
+            if order
+            else np.zeros((0, 0))
+        )
+        pool = _Pool(
+            j,
+            iso,
+            _Links(robot, model, p0, q_all[iso], opt),
+            psi[iso, col[j]],
+            psi[np.ix_(iso, prev)] if prev else np.zeros((len(iso), 0)),
+            psi[np.ix_(iso, nxt)] if nxt else np.zeros((len(iso), 0)),
+            cov_prev,
+            [],
+        )
+        args = (pool.pj, pool.pprev, cov_prev, pool.pnext, q_all[iso], has_via[iso], pool.links)
+        ours = _choose(*args, replace(opt, points_per_step=k_first), "ours")
         if ours is None:
             excluded[j] = f"too few isolating points {opt.spread_deg:g} deg apart"
             remaining.remove(j)
             continue
-        pts, vias = q_all[iso][ours], via_all[iso][ours]
-        path = _tour(robot, model, p0, theta0, pts, vias, opt)
-        if path is None:
-            raise WirecalError(
-                f"{robot.source}: step {len(order) + 1} ({j}): no visiting "
-                "order keeps the wire clear of the links; try another "
-                "--seed or --theta0, or check the link radii"
-            )
-        pts, first_via = pts[path], vias[path[0]]
-        steps.append(
-            StepDesign(
-                j,
-                pts,
-                float(np.sqrt(np.mean(pj[ours] ** 2))),
-                _error(pj[ours], pprev[ours], cov_prev, pnext[ours], opt),
-                _error(pj[paper], pprev[paper], cov_prev, pnext[paper], opt)
+        if opt.method == "stepwise":
+            paper = _choose(*args, opt, "paper")
+            pool.leak_paper = (
+                _error(pool.pj[paper], pool.pprev[paper], cov_prev, pool.pnext[paper], opt)
                 if paper is not None
-                else np.inf,
-                first_via[None] if not np.isnan(first_via[0]) else np.zeros((0, len(theta0))),
+                else np.inf
             )
-        )
-        order.append(j)
-        chosen_q.append(pts)
+        pts = iso[ours]
+        path = _tour(robot, model, p0, theta0, q_all[pts], via_all[pts], opt)
+        pool.picks = [ours[i] for i in path] if path is not None else ours
+        pools.append(pool)
         remaining.remove(j)
-    if not order:
+        tick(0.5 + 0.4 * len(pools) / n_params)
+    if not pools:
         raise WirecalError(
             f"{robot.source}: no parameter can be isolated around θ0 "
             f"{theta0.tolist()}; try another --theta0"
         )
-    plan = Plan(
-        theta0,
-        tuple(order),
-        tuple(Step(s.parameter, s.points_deg, s.via_deg) for s in steps),
-        robot=robot.name,
-    )
-    d = Design(plan, steps, excluded)
-    d.predicted = predicted_accuracy(robot, plan)
-    d.robot_time_s = robot_time(robot, plan, opt.run)
-    d.exit_line = exit_line(robot, plan)
-    return d
+    return pools
+
+
+def _joint_choice(
+    robot: Robot,
+    theta0: np.ndarray,
+    q_all: np.ndarray,
+    via_all: np.ndarray,
+    psi: np.ndarray,
+    names: list[str],
+    pools: list[_Pool],
+    opt: PlanOptions,
+) -> None:
+    """Add points to the steps for the joint method, up to ``points`` in all.
+
+    Greedy I-optimal design: the criterion is the joint estimate's tool-point variance
+    integrated over the workspace, φ = tr(W·Σ), W the mean over the workspace of J_pᵀJ_p
+    and Σ = (P⁻¹ + JᵀJ/σ²)⁻¹ (P: the prior of size ``prior``; it hardly matters once
+    every step has its first points). A point with sensitivity row x lowers φ by
+    xᵀΣWΣx / (σ² + xᵀΣx) (Sherman–Morrison); each pick takes the candidate with the
+    largest decrease per second of robot time it adds (its stop, and the move to it from
+    θ0 or from the nearest point already in its step: :class:`RunParameters`' time model).
+    A point joins only the step whose parameter it isolates, under the stepwise design's
+    rules (``spread_deg`` from the step's points, a clear move from each, at most one via
+    point per step) and only if it does not raise the step's stepwise error
+    (:func:`_error`): the stepwise method stays as good as with the first points alone.
+    """
+    order = [p.parameter for p in pools]
+    col = [names.index(t) for t in order]
+    errors = ErrorSet(tuple(order), robot.n_joints)
+    x_all = errors.per_internal(psi[:, col])  # (N, m) mm per rad, mm per mm
+    _, jp = tool_jacobian(robot.nominal, workspace(robot, 500), order)
+    w = np.einsum("nim,nik->mk", jp, jp) / len(jp)
+    s2 = opt.sigma_mm**2
+    info = np.diag(1 / errors.to_internal(np.full(len(order), opt.prior)) ** 2)
+    for p in pools:
+        rows = x_all[p.iso[p.picks]]
+        info = info + rows.T @ rows / s2
+    sigma = np.linalg.inv(info)
+    cand = np.concatenate([p.iso for p in pools])
+    step = np.concatenate([np.full(len(p.iso), k) for k, p in enumerate(pools)])
+    local = np.concatenate([np.arange(len(p.iso)) for p in pools])
+    x = x_all[cand]
+    p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
+    has_via = ~np.isnan(via_all[cand, 0])
+    cost = np.full(len(cand), np.inf)
+    allowed = np.ones(len(cand), bool)
+
+    def update(k: int, added: int) -> None:
+        """Recompute step k's admissible candidates and their costs.
+
+        The costs from all of the step's points, or only from the ``added`` last ones
+        (the others already counted).
+        """
+        mine = np.flatnonzero(step == k)
+        pool, q = pools[k], q_all[cand[mine]]
+        here = q_all[pool.iso[pool.picks]]
+        spread = np.min(np.max(np.abs(q[:, None] - here[None]), axis=2), axis=1)
+        ok = spread >= opt.spread_deg
+        if has_via[mine][pool.picks].any():
+            ok &= ~has_via[mine]
+        args = (pool.pj, pool.pprev, pool.cov_prev, pool.pnext)
+        now = _errors(*args, pool.picks[:-1], pool.picks[-1:], opt)[0]
+        ok[ok] = _errors(*args, pool.picks, np.flatnonzero(ok), opt) <= now
+        allowed[mine] = ok
+        for a in here[len(here) - added :] if added else (theta0, *here):
+            cost[mine[ok]] = np.minimum(cost[mine[ok]], _visit_s(robot, opt.run, p0, a, q[ok]))
+
+    for k in range(len(pools)):
+        update(k, 0)
+    budget = opt.points if opt.points is not None else opt.points_per_step * len(pools)
+    while sum(len(p.picks) for p in pools) < budget:
+        a = x @ sigma
+        gain = np.einsum("nm,mk,nk->n", a, w, a) / (s2 + np.einsum("nm,nm->n", a, x))
+        ranked = np.flatnonzero(allowed)
+        ranked = ranked[np.argsort(-gain[ranked] / cost[ranked], kind="stable")]
+        best = _first_linked(ranked, step, local, pools)
+        if best is None:
+            break
+        k = int(step[best])
+        pools[k].picks.append(int(local[best]))
+        sx = sigma @ x[best]
+        sigma = sigma - np.outer(sx, sx) / (s2 + x[best] @ sx)
+        update(k, 1)
+
+
+def _first_linked(ranked: np.ndarray, step: np.ndarray, local: np.ndarray, pools) -> int | None:
+    """Return the first ranked candidate with clear moves from its step's points, or None.
+
+    Checked in blocks of eight, one sweep per step and block.
+    """
+    for start in range(0, len(ranked), 8):
+        block = ranked[start : start + 8]
+        linked = np.zeros(len(block), bool)
+        for k in np.unique(step[block]):
+            mine = step[block] == k
+            linked[mine] = pools[k].links.ok(pools[k].picks, local[block[mine]])
+        if linked.any():
+            return int(block[np.argmax(linked)])
+    return None
 
 
 def exit_line(robot: Robot, plan: Plan) -> str:
@@ -527,6 +827,33 @@ def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarra
     A = stepwise_map(J, step)
     E = A @ J - np.eye(len(order))
     return opt.sigma_mm**2 * A @ A.T + opt.prior**2 * E @ E.T
+
+
+def _part(
+    progress: Callable[[float], None] | None, k: int, parts: int
+) -> Callable[[float], None] | None:
+    """Return the progress callback of part ``k`` of ``parts`` (its fraction → the whole)."""
+    if progress is None:
+        return None
+    whole = progress
+    return lambda fraction: whole((k + fraction) / parts)
+
+
+def _visit_s(
+    robot: Robot, run: RunParameters, p0: np.ndarray, start_deg: np.ndarray, ends_deg: np.ndarray
+) -> np.ndarray:
+    """Return the robot time (s) a point adds when visited from ``start_deg``.
+
+    The move at the SPEED the wire allows, the predicted settle and the readings (the
+    run's time model).
+    """
+    if not len(ends_deg):
+        return np.zeros(0)
+    starts = np.repeat(np.asarray(start_deg, dtype=float)[None], len(ends_deg), axis=0)
+    moves = move_profiles(robot, robot.nominal, p0, starts, ends_deg)
+    pct = move_speeds_pct(robot, moves, run.speed_pct)
+    settle = settle_time_s(moves.vibration_mm(pct), robot.encoder.mm_per_count, run)
+    return moves.duration_s(pct) + settle + READING_INTERVAL_S * (run.readings - 1)
 
 
 def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.ndarray | None:

@@ -32,12 +32,16 @@ THETA0 = {
     "ur5": [-254, 142, 31, 66, 256, -173],
 }
 OPT = PlanOptions()
+STEPWISE = PlanOptions(method="stepwise")
 
 
-@pytest.fixture(scope="module", params=sorted(THETA0))
+@pytest.fixture(
+    scope="module", params=[(arm, m) for arm in sorted(THETA0) for m in ("joint", "stepwise")]
+)
 def designed(request):
-    robot = load_robot(ROOT / "examples" / request.param / "robot.toml")
-    return robot, design(robot, np.array(THETA0[request.param], float))
+    arm, method = request.param
+    robot = load_robot(ROOT / "examples" / arm / "robot.toml")
+    return robot, design(robot, np.array(THETA0[arm], float), PlanOptions(method=method))
 
 
 def _sequences(plan):
@@ -49,7 +53,12 @@ def test_every_parameter_is_planned(designed):
     robot, d = designed
     assert d.excluded == {}
     assert sorted(d.plan.order) == sorted(robot.parameters)
-    assert all(len(s.points_deg) == OPT.points_per_step for s in d.plan.steps)
+    counts = [len(s.points_deg) for s in d.plan.steps]
+    if d.method == "stepwise":
+        assert counts == [OPT.points_per_step] * len(counts)
+    else:  # the same number of points in all, each step with its fewest
+        assert sum(counts) == OPT.points_per_step * len(counts)
+        assert min(counts) >= OPT.min_points
 
 
 def test_points_keep_the_joint_limits_with_the_margin(designed):
@@ -102,7 +111,7 @@ def test_psi_reports_every_row_ok(designed):
 
 def test_the_same_inputs_give_the_same_plan(designed):
     robot, d = designed
-    again = design(robot, d.plan.theta0_deg)
+    again = design(robot, d.plan.theta0_deg, PlanOptions(method=d.method))
     assert again.plan.fingerprint() == d.plan.fingerprint()
 
 
@@ -119,7 +128,7 @@ def test_monte_carlo_recovers_the_errors(designed):
 
 
 def test_viper_plan_beats_the_corrected_paper_plan(viper, paper_plan):
-    d = design(viper, np.array(THETA0["viper_s650"], float))
+    d = design(viper, np.array(THETA0["viper_s650"], float), STEPWISE)
     paper = predicted_accuracy(viper, paper_plan)
     assert d.plan.n_points <= paper_plan.n_points
     assert d.robot_time_s <= robot_time(viper, paper_plan)

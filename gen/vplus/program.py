@@ -42,6 +42,14 @@ from wirecal.twin.vplus.parser import parse_module
 MODULE_NAME = "WIRECAL.V2"
 STRIDE = 8  # flattened index c*STRIDE + k (k ≤ 7): tables by configuration and joint
 AXES = 4  # flattened index i*AXES + a (a = 1..3)
+PROBE_MARGIN_MM = 5.0
+"""After a contact, the touch probe's next 1 mm search starts this far above the depth
+found (the plate is flat and the controller's error changes little from one grid point
+to the next; a probe already touching there goes back up to the approach height)."""
+PROBE_HALVINGS = 7
+"""Halvings of the touch probe's last 1 mm step: contact found to 1/128 mm (0.0078 mm,
+finer than the 0.01 mm of a search in 0.1 then 0.01 mm steps, in 8 moves instead of
+about 20)."""
 
 
 @dataclass(frozen=True)
@@ -280,6 +288,9 @@ def _validation_context(robot: Robot, opt: GenOptions) -> dict | None:
         "signal": setup.signal,
         "approach": _num(setup.approach_mm),
         "coarse_steps": int(np.ceil(2 * setup.approach_mm)),
+        # after a contact, the next search starts this far above the depth found
+        "margin": _num(min(PROBE_MARGIN_MM, setup.approach_mm)),
+        "halvings": PROBE_HALVINGS,
         "fp_a": fp[:32],
         "fp_b": fp[32:],
     }

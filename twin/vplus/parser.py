@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from functools import cache, singledispatchmethod
+from functools import cache, lru_cache, singledispatchmethod
 from importlib import resources
 
 from lark import Lark, Transformer, ast_utils
@@ -241,8 +241,16 @@ def parse_module(text: str, source: str = "<module>", *, external_calls: bool = 
     """Parse and check a module; raise :class:`WirecalError` listing every problem.
 
     ``external_calls``: CALLs to programs that are not in this module are allowed (they
-    may be loaded from another file), as LOAD allows them.
+    may be loaded from another file), as LOAD allows them. The last few modules parsed
+    are kept: the demo and the benches run one module in several cells, and nothing
+    changes a parsed module.
     """
+    return _parse_module(text, source, external_calls)
+
+
+@lru_cache(maxsize=4)
+def _parse_module(text: str, source: str, external_calls: bool) -> Module:
+    """Parse and check a module (see :func:`parse_module`)."""
     reader = _ModuleReader(source)
     for n, raw in enumerate(_LINES.split(text), 1):
         reader.line(n, _strip_comment(raw).strip())
