@@ -226,7 +226,10 @@ def test_pulley_robot_through_the_twin_and_the_controller_solver(tmp_path):
     m = wirecal.load_measurements(run.log, plan, robot)
     ref = wirecal.solve(robot, plan, m)
     joint = ref.estimates["joint"].as_dict()
-    assert max(abs(joint[n] - TABLE5.get(n, 0.0)) for n in plan.order) < 0.01
+    # the paper plan's reading-noise σ per parameter is at most about 0.012 deg/mm (the
+    # Cramér–Rao bound; the twin now also vibrates and settles): the largest of the ten
+    # errors stays within 0.03 (measured 0.017)
+    assert max(abs(joint[n] - TABLE5.get(n, 0.0)) for n in plan.order) < 0.03
     for polish, method in ((False, "stepwise"), (True, "joint")):
         ctl = controller_solve(robot, plan, m, tmp_path / method, polish=polish)
         reference = ref.estimates[method].as_dict()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -139,8 +140,10 @@ def test_viper_plan_beats_the_corrected_paper_plan(viper, paper_plan):
 
 
 def test_robot_time_counts_moves_settles_and_returns(viper):
-    """One step, one point 30° away on joint 1 (328 °/s at the paper's 20 %, a wire speed
-    well below the limit): the move to θ0 from θ0 (0.5 s ramp), out and back
+    """One step, one point 30° away on joint 1 (328 °/s at the paper's 20 %; the encoder's
+    wire limits left out: the return move, which winds the wire back to zero at θ0, would
+    be slowed by the acceleration limit — tests/test_settle.py pins that): the move to θ0
+    from θ0 (0.5 s ramp), out and back
     2 × (30 / 65.6 + 0.5 s), three stops (zero, point, closing zero) of 3 s settle, the
     settle rule's window 4 × 0.02 s on a vibration long decayed, and 10 readings 0.02 s
     apart."""
@@ -151,6 +154,10 @@ def test_robot_time_counts_moves_settles_and_returns(viper):
             "step": [{"parameter": "th6", "points_deg": [[30, -90, 180, 0, 45, 0]]}],
         },
         viper,
+    )
+    viper = replace(
+        viper,
+        encoder=replace(viper.encoder, max_wire_speed_mm_s=None, max_wire_accel_mm_s2=None),
     )
     stop = 3 + 0.08 + 0.18
     expected = 0.5 + 2 * (30 / (328 * 0.2) + 0.5) + 3 * stop
