@@ -209,6 +209,7 @@ def move_clearance(
     b: np.ndarray,
     step_deg: float = 2.0,
     every: int = 1,
+    longest_mm: float = np.inf,
 ) -> np.ndarray:
     """Return the smallest wire gap (mm) to the links along moves a → b.
 
@@ -216,7 +217,9 @@ def move_clearance(
     (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion
     (:func:`move_samples`), in batches of about ``CHUNK_SAMPLES`` configurations. With
     ``every`` > 1 only every ``every``-th of those samples and each move's end are
-    evaluated: a subset, so a gap found there is a gap of the full sampling too.
+    evaluated: a subset, so a gap found there is a gap of the full sampling too. A sample
+    where the modelled wire is longer than ``longest_mm`` counts as no gap at all (−inf):
+    the encoder's range, checked along the move as ``wirecal gen`` checks it.
     """
     if robot.link_radius_mm is None:
         raise WirecalError(f"{robot.source}: the wire clearance needs the link radii")
@@ -237,6 +240,9 @@ def move_clearance(
             first = np.cumsum(keep)[first] - keep[first]  # each move keeps its end
             q = q[keep]
         gap = wire_clearance(model, np.radians(q), p0, robot.link_radius_mm, trim)
+        if np.isfinite(longest_mm):
+            d = wire_path(model.pulley, tool_position(model, np.radians(q)) - p0)[0]
+            gap = np.where(np.nan_to_num(d) > longest_mm, -np.inf, gap)
         out[lo:hi] = np.minimum.reduceat(gap, first)
     return out
 
@@ -244,8 +250,9 @@ def move_clearance(
 def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2.0) -> np.ndarray:
     """Return which moves a → b are safe for the wire.
 
-    Moves a → b that keep the wire clear of the links and do not turn joint 6 by more
-    than 180° (which would wrap the wire around the flange).
+    Moves a → b that keep the wire clear of the links, within the encoder's range less
+    ``range_margin_mm`` all along, and do not turn joint 6 by more than 180° (which would
+    wrap the wire around the flange).
     """
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
     ok = np.abs(b[:, -1] - a[:, -1]) <= 180
@@ -253,9 +260,9 @@ def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2
     # gap of the full sampling); the moves it passes then get every sample
     for every in (4, 1):
         idx = np.flatnonzero(ok)
-        ok[idx] = move_clearance(robot, model, p0, a[idx], b[idx], step_deg, every) >= (
-            opt.clearance_mm
-        )
+        longest = robot.encoder.range_mm - opt.range_margin_mm
+        gap = move_clearance(robot, model, p0, a[idx], b[idx], step_deg, every, longest)
+        ok[idx] = gap >= opt.clearance_mm
     return ok
 
 

@@ -18,8 +18,15 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan, plan_from_dict
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.planner import PlanOptions, design, predicted_accuracy, robot_time
+from wirecal.solver.planner import (
+    PlanOptions,
+    design,
+    move_samples,
+    predicted_accuracy,
+    robot_time,
+)
 from wirecal.solver.run_parameters import PAPER_RUN, run_timeline
+from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range, run_moves
 
 from .conftest import ROOT, VIPER
 
@@ -77,6 +84,21 @@ def test_wire_length_within_the_encoder_range(designed):
     length = np.linalg.norm(tool_position(model, np.radians(q)) - p0, axis=1)
     assert length.min() >= OPT.min_wire_mm
     assert length.max() <= robot.encoder.range_mm - OPT.range_margin_mm
+
+
+def test_wirecal_gen_accepts_the_wire_range_along_every_move(designed):
+    """The range check of 'wirecal gen' (every move of wc.run, sampled every 2°) passes on
+    every designed plan: the planner checks the wire's length along its moves too (before,
+    the UR5's default plan reached 1253.6 mm on the move to a step-7 point and gen refused
+    it)."""
+    robot, d = designed
+    q, _ = move_samples(
+        np.array([m[1] for m in run_moves(d.plan)]), np.array([m[2] for m in run_moves(d.plan)])
+    )
+    p0 = tool_position(robot.nominal, np.radians(d.plan.theta0_deg)[None])[0]
+    length = np.linalg.norm(tool_position(robot.nominal, np.radians(q)) - p0, axis=1)
+    assert length.max() <= robot.encoder.range_mm - RANGE_MARGIN_MM
+    check_wire_range(robot, d.plan)  # raises otherwise
 
 
 def test_the_wire_stays_clear_of_the_links_along_every_move(designed):
