@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wirecal.solver.kinematics import Model, frames
+from wirecal.solver.kinematics import Frames, Model, frames
 
 
 def _dot(u, v) -> np.ndarray:
@@ -50,15 +50,20 @@ def wire_trim_mm(robot) -> float:
 
 
 def wire_clearance(
-    model: Model, q: np.ndarray, encoder: np.ndarray, radii: np.ndarray, trim_mm: float
+    model: Model,
+    q: np.ndarray,
+    encoder: np.ndarray,
+    radii: np.ndarray,
+    trim_mm: float,
+    f: Frames | None = None,
 ) -> np.ndarray:
     """Return the smallest gap (mm) between the wire and the link capsules.
 
     The smallest gap (mm) between the wire and the link capsules for configurations q
     (N, n) in radians; the wire's last ``trim_mm`` at the attachment point are not checked
-    (the fixture is there).
+    (the fixture is there). ``f``: q's frames, when the caller has them.
     """
-    f = frames(model, q)
+    f = frames(model, q) if f is None else f
     o = f.o.transpose(1, 2, 0)  # (n+1, 3, N): component-first, contiguous per row
     R = f.R_last.transpose(1, 2, 0)  # (3, 3, N)
     t = model.tool_point

@@ -143,9 +143,9 @@ def frames(model: Model, q: np.ndarray) -> Frames:
     )
 
 
-def tool_position(model: Model, q: np.ndarray) -> np.ndarray:
-    """Tool point (wire attachment) in the base frame, shape (N, 3)."""
-    f = frames(model, q)
+def tool_position(model: Model, q: np.ndarray, f: Frames | None = None) -> np.ndarray:
+    """Tool point (wire attachment) in the base frame, shape (N, 3); ``f``: q's frames."""
+    f = frames(model, q) if f is None else f
     return f.o[:, -1] + _rotate(f.R_last, model.tool_point)
 
 

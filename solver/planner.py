@@ -38,7 +38,7 @@ from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import describe, largest_exit_deg, wire_path, within_cone
 from wirecal.solver.identifiability import analyse
-from wirecal.solver.kinematics import tool_jacobian, tool_position
+from wirecal.solver.kinematics import frames, tool_jacobian, tool_position
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan, Step
 from wirecal.solver.robot import Robot
@@ -239,9 +239,11 @@ def move_clearance(
             keep = (k % every == every - 1) | last
             first = np.cumsum(keep)[first] - keep[first]  # each move keeps its end
             q = q[keep]
-        gap = wire_clearance(model, np.radians(q), p0, robot.link_radius_mm, trim)
+        q_rad = np.radians(q)
+        f = frames(model, q_rad)  # one evaluation of the chain for both checks
+        gap = wire_clearance(model, q_rad, p0, robot.link_radius_mm, trim, f)
         if np.isfinite(longest_mm):
-            d = wire_path(model.pulley, tool_position(model, np.radians(q)) - p0)[0]
+            d = wire_path(model.pulley, tool_position(model, q_rad, f) - p0)[0]
             gap = np.where(np.nan_to_num(d) > longest_mm, -np.inf, gap)
         out[lo:hi] = np.minimum.reduceat(gap, first)
     return out
