@@ -48,10 +48,10 @@ from wirecal.solver.formats.validation_files import load_setup, read_validation_
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plan import Plan
-from wirecal.solver.plausibility import gate
+from wirecal.solver.plausibility import Plausibility, gate
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import realistic_encoder
-from wirecal.solver.solve import solve
+from wirecal.solver.solve import SolveResult, solve
 from wirecal.solver.validation import distance_plan, distance_residuals
 from wirecal.solver.validation_analysis import Stats, config_discrepancy, plane_residuals
 from wirecal.twin.cell import Unmodelled, run_validation
@@ -241,19 +241,8 @@ def _run(
             ("WCVPLN2.CSV", runs["after"].plane_log),
         ):
             out.put(folder / name, path.read_text(encoding="ascii"))
-    out.put(folder / "truth.toml", truth_text(robot, truth, seed))
     out.put(folder / "WIRECAL.V2", text)
-    put_patch(
-        out,
-        folder / "patch.toml",
-        robot,
-        result.estimates[result.recommended],
-        plan_fingerprint=plan.fingerprint(),
-        log_path="WCLOG.CSV",
-        log_sha256=m.sha256,
-        version=__version__,
-        plausibility=verdict.patch_field(),
-    )
+    _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, "WCLOG.CSV")
     out.put(folder / "report.html", html)
     return DemoResult(
         folder,
@@ -330,20 +319,9 @@ def _run_ur(
         out.put(folder / "validation.csv", check.log.read_text(encoding="ascii"))
         seconds["validate"] = time.perf_counter() - t
     t = step(5, "patch and Universal Robots' deltas")
-    out.put(folder / "truth.toml", truth_text(robot, truth, seed))
     for name, text in texts.items():
         out.put(folder / name, text)
-    put_patch(
-        out,
-        folder / "patch.toml",
-        robot,
-        result.estimates[result.recommended],
-        plan_fingerprint=plan.fingerprint(),
-        log_path="run.csv",
-        log_sha256=m.sha256,
-        version=__version__,
-        plausibility=verdict.patch_field(),
-    )
+    _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, "run.csv")
     seconds["patch"] = time.perf_counter() - t
     t = step(6, "report")
     out.put(
@@ -358,6 +336,32 @@ def _run_ur(
         controller,
         seconds,
         UR_OUTPUTS,
+    )
+
+
+def _put_truth_and_patch(
+    out: Outputs,
+    folder: Path,
+    robot: Robot,
+    plan: Plan,
+    truth: dict[str, float],
+    seed: int,
+    result: SolveResult,
+    verdict: Plausibility,
+    log_name: str,
+) -> None:
+    """Queue the truth file and the recommended estimate's patch (solved from ``log_name``)."""
+    out.put(folder / "truth.toml", truth_text(robot, truth, seed))
+    put_patch(
+        out,
+        folder / "patch.toml",
+        robot,
+        result.estimates[result.recommended],
+        plan_fingerprint=plan.fingerprint(),
+        log_path=log_name,
+        log_sha256=result.measurements.sha256,
+        version=__version__,
+        plausibility=verdict.patch_field(),
     )
 
 

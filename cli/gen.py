@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import click
 
 from wirecal.cli.main import user_errors
@@ -200,12 +202,7 @@ def gen(
                 "programs always mirror the log with textmsg and use LF line ends"
             )
         ur = UrOptions(
-            run=RunParameters(
-                speed_pct=PAPER_RUN.speed_pct if speed is None else speed,
-                accel_pct=accel,
-                settle_s=PAPER_RUN.settle_s if settle_s is None else settle_s,
-                readings=samples,
-            ),
+            run=_run(PAPER_RUN, speed, accel, settle_s, samples),
             host=host,
             port=port,
             zero_tol_mm=zero_tol,
@@ -224,13 +221,7 @@ def gen(
         raise WirecalError("--host, --port and --no-solver are for URScript (--language urscript)")
     patch = read_patch(patch_file).offsets_for(rb, pl) if patch_file else None
     opt = GenOptions(
-        run=RunParameters(
-            speed_pct=_D.speed_pct if speed is None else speed,
-            accel_pct=accel,
-            settle_s=_D.settle_s if settle_s is None else settle_s,
-            settle_max_s=settle_max_s,
-            readings=samples,
-        ),
+        run=_run(_D, speed, accel, settle_s, samples, settle_max_s=settle_max_s),
         zero_tol_mm=zero_tol,
         spread_tol_mm=spread_tol,
         margin_deg=margin,
@@ -246,3 +237,22 @@ def gen(
         out_dir, module_text(rb, pl, opt), force=force, inputs=inputs, crlf=opt.crlf
     )
     click.echo(f"wrote {path}: load it on the controller, then run wc.mount, wc.check, wc.run")
+
+
+def _run(
+    language_default: RunParameters,
+    speed: float | None,
+    accel: float,
+    settle_s: float | None,
+    samples: int,
+    **more: float,
+) -> RunParameters:
+    """Return the run's settings: the options given, the language's defaults for the others."""
+    return replace(
+        language_default,
+        speed_pct=language_default.speed_pct if speed is None else speed,
+        accel_pct=accel,
+        settle_s=language_default.settle_s if settle_s is None else settle_s,
+        readings=samples,
+        **more,
+    )

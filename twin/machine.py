@@ -7,7 +7,9 @@ URScript float), the run-time error a program stops with, and how a run ended.
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 _S = struct.Struct("f")
 
@@ -45,3 +47,14 @@ class Outcome:
     line: int = 0
     message: str = ""
     console: list[str] = field(default_factory=list)
+
+
+S = TypeVar("S")
+
+
+def walk_tree(steps: list[S], children: Callable[[S], list[list[S]]]) -> Iterator[S]:
+    """Every statement of ``steps`` and of the blocks inside them (``children``), depth first."""
+    for s in steps:
+        yield s
+        for body in children(s):
+            yield from walk_tree(body, children)

@@ -22,6 +22,7 @@ nothing wirecal writes.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import cache, singledispatchmethod
 from importlib import resources
@@ -30,6 +31,7 @@ from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError
 
 from wirecal.solver.errors import WirecalError
+from wirecal.twin.machine import walk_tree
 from wirecal.twin.urscript import nodes as N
 
 
@@ -347,12 +349,9 @@ def children(s: N.Stmt) -> list[list[N.Stmt]]:
     return []
 
 
-def walk(steps: list[N.Stmt]):
-    """Every statement of ``steps`` and of the blocks inside them, in order."""
-    for s in steps:
-        yield s
-        for body in children(s):
-            yield from walk(body)
+def walk(steps: list[N.Stmt]) -> Iterator[N.Stmt]:
+    """Every statement of ``steps`` and of the blocks inside them, depth first."""
+    return walk_tree(steps, children)
 
 
 class _Checker:

@@ -19,6 +19,7 @@ classes), 42–45 (CALL).
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import cache, lru_cache, singledispatchmethod
 from importlib import resources
@@ -27,6 +28,7 @@ from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedToken
 
 from wirecal.solver.errors import WirecalError
+from wirecal.twin.machine import walk_tree
 from wirecal.twin.vplus import nodes as N
 from wirecal.twin.vplus.forms import FormError, operands
 from wirecal.twin.vplus.keywords import VALUE_KINDS, is_kind, keyword
@@ -533,12 +535,9 @@ def children(stmt: N.Stmt) -> list[list[N.Stmt]]:
     return []
 
 
-def walk(steps: list[N.Stmt]):
-    """Every statement, depth first."""
-    for s in steps:
-        yield s
-        for body in children(s):
-            yield from walk(body)
+def walk(steps: list[N.Stmt]) -> Iterator[N.Stmt]:
+    """Every statement of ``steps`` and of the blocks inside them, depth first."""
+    return walk_tree(steps, children)
 
 
 def transformation_names(programs: dict[str, Program]) -> set[str]:
