@@ -97,49 +97,81 @@ def _rotate(R: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.einsum("nij,nj->ni", R, v)
 
 
+def _joint_terms(model: Model, q: np.ndarray):
+    """Per joint (cos α, sin α, a, d, cos θ, sin θ), and the scalars 1 and 0 of that kind.
+
+    Python floats for one configuration of one model (array arithmetic on single numbers
+    costs more in overhead than in work: the twin and the inverse kinematics evaluate one
+    configuration at a time, tens of thousands of times per run); otherwise each term is
+    one value per configuration, an (N,) array, or one float shared by all.
+    """
+    dh = model.dh
+    N = q.shape[0]
+    th = q + dh[..., 2]  # (N, n)
+    ca, sa, ct, st = np.cos(dh[..., 0]), np.sin(dh[..., 0]), np.cos(th), np.sin(th)
+    a, d = dh[..., 1], dh[..., 3]
+    if dh.ndim == 2 and N == 1:
+        terms = zip(
+            ca.tolist(),
+            sa.tolist(),
+            a.tolist(),
+            d.tolist(),
+            *ct.tolist(),
+            *st.tolist(),
+            strict=True,
+        )
+        return terms, 1.0, 0.0
+    if dh.ndim == 2:
+        terms = zip(ca.tolist(), sa.tolist(), a.tolist(), d.tolist(), ct.T, st.T, strict=True)
+    else:
+        terms = zip(ca.T, sa.T, a.T, d.T, ct.T, st.T, strict=True)
+    return terms, np.ones(N), np.zeros(N)
+
+
 def frames(model: Model, q: np.ndarray) -> Frames:
     """All frames of the chain for joint angles ``q`` (N, n) in radians.
 
     A batched model (dh (N, n, 4)) gives configuration k its own model k. The rotation
-    is carried as its three columns X, Y, Z; per joint, RotX(α) gives
-    Y' = cα·Y + sα·Z, Z' = −sα·Y + cα·Z, the origin moves by a·X + d·Z', and RotZ(θ)
-    gives X'' = cθ·X + sθ·Y', Y'' = −sθ·X + cθ·Y'. The vectors are held component-major
-    (3, N), so every product runs over contiguous memory; the arrays returned are
-    (N, …, 3) views of that storage.
+    is carried as its three columns X, Y, Z, component by component; per joint, RotX(α)
+    gives Y' = cα·Y + sα·Z, Z' = −sα·Y + cα·Z, the origin moves by a·X + d·Z', and RotZ(θ)
+    gives X'' = cθ·X + sθ·Y', Y'' = −sθ·X + cθ·Y'. Each component is a contiguous (N,)
+    array (or a float for one configuration: :func:`_joint_terms`); the arrays returned
+    are (N, …, 3) views of one (n+1, 3, 3, N) storage.
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    N, n = q.shape
+    n = q.shape[1]
     if n != model.n_joints:
         raise ValueError(f"configurations have {n} joints; the model has {model.n_joints}")
-    dh = model.dh
-    batched = dh.ndim == 3
-    th = (q + dh[..., 2]).T
-    ct, st = np.cos(th), np.sin(th)
-    ca_all, sa_all = np.cos(dh[..., 0]), np.sin(dh[..., 0])
-    x = np.empty((n + 1, 3, N))
-    z = np.empty((n + 1, 3, N))
-    o = np.empty((n + 1, 3, N))
-    basis = np.zeros((3, 3, N))
-    basis[0, 0] = basis[1, 1] = basis[2, 2] = 1.0
-    X, Y, Z = basis[:, 0], basis[:, 1], basis[:, 2]
-    pos = np.zeros((3, N))
-    x[0], z[0], o[0] = X, Z, pos
-    for i in range(n):
-        if batched:
-            ca, sa = ca_all[:, i], sa_all[:, i]
-            a, d = dh[:, i, 1], dh[:, i, 3]
-        else:
-            ca, sa, a, d = ca_all[i], sa_all[i], dh[i, 1], dh[i, 3]
-        Y, Z = ca * Y + sa * Z, ca * Z - sa * Y
-        pos = pos + a * X + d * Z
-        c, s = ct[i], st[i]
-        X, Y = c * X + s * Y, c * Y - s * X
-        x[i + 1], z[i + 1], o[i + 1] = X, Z, pos
+    terms, one, zero = _joint_terms(model, q)
+    x0, x1, x2, y0, y1, y2, z0, z1, z2 = one, zero, zero, zero, one, zero, zero, zero, one
+    p0 = p1 = p2 = zero
+    stored = [x0, x1, x2, z0, z1, z2, p0, p1, p2]
+    for ca, sa, a, d, c, s in terms:
+        y0, y1, y2, z0, z1, z2 = (
+            ca * y0 + sa * z0,
+            ca * y1 + sa * z1,
+            ca * y2 + sa * z2,
+            ca * z0 - sa * y0,
+            ca * z1 - sa * y1,
+            ca * z2 - sa * y2,
+        )
+        p0, p1, p2 = p0 + a * x0 + d * z0, p1 + a * x1 + d * z1, p2 + a * x2 + d * z2
+        x0, x1, x2, y0, y1, y2 = (
+            c * x0 + s * y0,
+            c * x1 + s * y1,
+            c * x2 + s * y2,
+            c * y0 - s * x0,
+            c * y1 - s * x1,
+            c * y2 - s * x2,
+        )
+        stored += (x0, x1, x2, z0, z1, z2, p0, p1, p2)
+    chain = np.array(stored).reshape(n + 1, 3, 3, -1).transpose(3, 0, 1, 2)
+    last = np.array([x0, y0, z0, x1, y1, z1, x2, y2, z2]).reshape(3, 3, -1)
     return Frames(
-        x=x.transpose(2, 0, 1),
-        z=z.transpose(2, 0, 1),
-        o=o.transpose(2, 0, 1),
-        R_last=np.ascontiguousarray(np.stack([X, Y, Z], axis=1).transpose(2, 0, 1)),
+        x=chain[:, :, 0],
+        z=chain[:, :, 1],
+        o=chain[:, :, 2],
+        R_last=np.ascontiguousarray(last.transpose(2, 0, 1)),
     )
 
 

@@ -12,7 +12,13 @@ from scipy.spatial.transform import Rotation
 
 from wirecal.solver import params as P
 from wirecal.solver.distance import wire_jacobian, wire_lengths
-from wirecal.solver.kinematics import joint_jacobian, tool_jacobian, tool_position, with_errors
+from wirecal.solver.kinematics import (
+    frames,
+    joint_jacobian,
+    tool_jacobian,
+    tool_position,
+    with_errors,
+)
 
 ALL = P.all_names(6, with_tool=True)
 
@@ -106,13 +112,20 @@ def test_joint_jacobian_matches_finite_differences(viper, q):
         np.testing.assert_allclose(J[:, :, i], fd, atol=2e-5)
 
 
-def test_batch_equals_one_at_a_time(viper):
-    rng = np.random.default_rng(1)
-    q = rng.uniform(-3, 3, (50, 6))
-    model = viper.model({"th3": 0.4, "a2": 0.7})
-    batch = tool_position(model, q)
-    single = np.array([tool_position(model, row[None])[0] for row in q])
-    np.testing.assert_array_equal(batch, single)
+@settings(max_examples=40, deadline=None)
+@given(q=batches, err=errors)
+def test_batch_equals_one_at_a_time(viper, q, err):
+    """One configuration runs on floats, a batch on arrays: the same frames, bit for bit."""
+    model = viper.model(err)
+    batch = frames(model, q)
+    per_row = with_errors(model, ["d1"], np.zeros((len(q), 1)))  # one model per row
+    for f in (batch, frames(per_row, q)):
+        for k, row in enumerate(q):
+            single = frames(model, row[None])
+            for name in ("x", "z", "o", "R_last"):
+                np.testing.assert_array_equal(getattr(f, name)[k], getattr(single, name)[0])
+    assert batch.x.shape == (len(q), 7, 3)
+    assert batch.R_last.shape == (len(q), 3, 3)
 
 
 def test_robot_model_takes_degrees_and_mm(viper):
