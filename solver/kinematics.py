@@ -17,9 +17,9 @@ Angular derivatives are in mm/rad here; callers convert at the boundary.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, lru_cache
 
 import numpy as np
 
@@ -50,6 +50,25 @@ class Model:
     def batched(self) -> bool:
         """Return whether the model holds a batch of DH tables."""
         return self.dh.ndim == 3
+
+
+def table_property(check: Callable[[np.ndarray], bool]) -> Callable[[Model], bool]:
+    """Make ``check`` of a single (n, 4) DH table a cached question about a model.
+
+    A batched model answers False. The inverse kinematics asks at every move of the twin
+    which closed form a model's table allows; the answer is kept per table (its bytes).
+    """
+
+    @lru_cache(maxsize=16)
+    def on_table(raw: bytes, n: int) -> bool:
+        return check(np.frombuffer(raw).reshape(n, 4))
+
+    def of_model(model: Model) -> bool:
+        dh = np.asarray(model.dh, dtype=float)
+        return dh.ndim == 2 and on_table(dh.tobytes(), dh.shape[0])
+
+    of_model.__doc__ = check.__doc__
+    return of_model
 
 
 def with_errors(base: Model, names: Sequence[str], values: np.ndarray) -> Model:
@@ -97,81 +116,88 @@ def _rotate(R: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.einsum("nij,nj->ni", R, v)
 
 
-def _joint_terms(model: Model, q: np.ndarray):
-    """Per joint (cos α, sin α, a, d, cos θ, sin θ), and the scalars 1 and 0 of that kind.
+_BASE_AXES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
-    Python floats for one configuration of one model (array arithmetic on single numbers
-    costs more in overhead than in work: the twin and the inverse kinematics evaluate one
-    configuration at a time, tens of thousands of times per run); otherwise each term is
-    one value per configuration, an (N,) array, or one float shared by all.
+
+def _joint_terms(model: Model, q: np.ndarray):
+    """Per joint (cos α, sin α, a, d, cos θ, sin θ), and the base frame's axes and origin.
+
+    Python floats and 3-tuples for one configuration of one model (array arithmetic on
+    single numbers costs more in overhead than in work: the twin and the inverse
+    kinematics evaluate one configuration at a time, tens of thousands of times per run);
+    otherwise vectors are (3, N) arrays and each term an (N,) array or one shared float.
     """
     dh = model.dh
     N = q.shape[0]
-    th = q + dh[..., 2]  # (N, n)
+    th = np.ascontiguousarray((q + dh[..., 2]).T)  # (n, N): a row per joint
     ca, sa, ct, st = np.cos(dh[..., 0]), np.sin(dh[..., 0]), np.cos(th), np.sin(th)
     a, d = dh[..., 1], dh[..., 3]
     if dh.ndim == 2 and N == 1:
-        terms = zip(
+        cols = (
             ca.tolist(),
             sa.tolist(),
             a.tolist(),
             d.tolist(),
-            *ct.tolist(),
-            *st.tolist(),
-            strict=True,
+            ct[:, 0].tolist(),
+            st[:, 0].tolist(),
         )
-        return terms, 1.0, 0.0
+        return zip(*cols, strict=True), _BASE_AXES, (0.0, 0.0, 0.0)
     if dh.ndim == 2:
-        terms = zip(ca.tolist(), sa.tolist(), a.tolist(), d.tolist(), ct.T, st.T, strict=True)
+        cols = (ca.tolist(), sa.tolist(), a.tolist(), d.tolist(), ct, st)
     else:
-        terms = zip(ca.T, sa.T, a.T, d.T, ct.T, st.T, strict=True)
-    return terms, np.ones(N), np.zeros(N)
+        cols = (ca.T, sa.T, a.T, d.T, ct, st)
+    axes = np.zeros((3, 3, N))
+    axes[0, 0] = axes[1, 1] = axes[2, 2] = 1.0
+    return zip(*cols, strict=True), tuple(axes), np.zeros((3, N))
+
+
+def _turn(c, s, U, V):
+    """Rotate the pair of axes (U, V) by the angle of cosine c, sine s: (cU + sV, cV − sU)."""
+    if isinstance(U, tuple):
+        (u0, u1, u2), (v0, v1, v2) = U, V
+        return (
+            (c * u0 + s * v0, c * u1 + s * v1, c * u2 + s * v2),
+            (c * v0 - s * u0, c * v1 - s * u1, c * v2 - s * u2),
+        )
+    return c * U + s * V, c * V - s * U
+
+
+def _advance(P, a, X, d, Z):
+    """Move the origin P by a along X and d along Z: P + aX + dZ."""
+    if isinstance(P, tuple):
+        (p0, p1, p2), (x0, x1, x2), (z0, z1, z2) = P, X, Z
+        return (p0 + a * x0 + d * z0, p1 + a * x1 + d * z1, p2 + a * x2 + d * z2)
+    return P + a * X + d * Z
 
 
 def frames(model: Model, q: np.ndarray) -> Frames:
     """All frames of the chain for joint angles ``q`` (N, n) in radians.
 
     A batched model (dh (N, n, 4)) gives configuration k its own model k. The rotation
-    is carried as its three columns X, Y, Z, component by component; per joint, RotX(α)
-    gives Y' = cα·Y + sα·Z, Z' = −sα·Y + cα·Z, the origin moves by a·X + d·Z', and RotZ(θ)
-    gives X'' = cθ·X + sθ·Y', Y'' = −sθ·X + cθ·Y'. Each component is a contiguous (N,)
-    array (or a float for one configuration: :func:`_joint_terms`); the arrays returned
-    are (N, …, 3) views of one (n+1, 3, 3, N) storage.
+    is carried as its three columns X, Y, Z; per joint, RotX(α) turns (Y, Z) by α, the
+    origin moves by a·X + d·Z, and RotZ(θ) turns (X, Y) by θ. Vectors are floats for one
+    configuration, (3, N) arrays otherwise (:func:`_joint_terms`), so every product of a
+    batch runs over contiguous memory; the arrays returned are (N, …, 3) views of one
+    (n+1, 3, 3, N) storage.
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     n = q.shape[1]
     if n != model.n_joints:
         raise ValueError(f"configurations have {n} joints; the model has {model.n_joints}")
-    terms, one, zero = _joint_terms(model, q)
-    x0, x1, x2, y0, y1, y2, z0, z1, z2 = one, zero, zero, zero, one, zero, zero, zero, one
-    p0 = p1 = p2 = zero
-    stored = [x0, x1, x2, z0, z1, z2, p0, p1, p2]
+    terms, (X, Y, Z), P = _joint_terms(model, q)
+    stored = [(X, Z, P)]
     for ca, sa, a, d, c, s in terms:
-        y0, y1, y2, z0, z1, z2 = (
-            ca * y0 + sa * z0,
-            ca * y1 + sa * z1,
-            ca * y2 + sa * z2,
-            ca * z0 - sa * y0,
-            ca * z1 - sa * y1,
-            ca * z2 - sa * y2,
-        )
-        p0, p1, p2 = p0 + a * x0 + d * z0, p1 + a * x1 + d * z1, p2 + a * x2 + d * z2
-        x0, x1, x2, y0, y1, y2 = (
-            c * x0 + s * y0,
-            c * x1 + s * y1,
-            c * x2 + s * y2,
-            c * y0 - s * x0,
-            c * y1 - s * x1,
-            c * y2 - s * x2,
-        )
-        stored += (x0, x1, x2, z0, z1, z2, p0, p1, p2)
+        Y, Z = _turn(ca, sa, Y, Z)  # RotX(α_{i-1})
+        P = _advance(P, a, X, d, Z)  # TransX(a_{i-1}), then TransZ(d_i) along the new z
+        X, Y = _turn(c, s, X, Y)  # RotZ(θ_i + offset_i)
+        stored.append((X, Z, P))
     chain = np.array(stored).reshape(n + 1, 3, 3, -1).transpose(3, 0, 1, 2)
-    last = np.array([x0, y0, z0, x1, y1, z1, x2, y2, z2]).reshape(3, 3, -1)
+    last = np.array([X, Y, Z]).reshape(3, 3, -1).transpose(2, 1, 0)  # columns X, Y, Z
     return Frames(
         x=chain[:, :, 0],
         z=chain[:, :, 1],
         o=chain[:, :, 2],
-        R_last=np.ascontiguousarray(last.transpose(2, 0, 1)),
+        R_last=np.ascontiguousarray(last),
     )
 
 
