@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver import ik_ur
-from wirecal.solver.kinematics import Model, frames, joint_jacobian
+from wirecal.solver.kinematics import Model, frames, joint_jacobian, table_property
 from wirecal.solver.robot import Robot
 
 HALF_PI = np.pi / 2
@@ -51,14 +51,14 @@ def flange_pose(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return f.R_last[0], f.o[0, -1]
 
 
-def analytic_structure(model: Model) -> bool:
+@table_property
+def analytic_structure(dh: np.ndarray) -> bool:
     """Whether :func:`solve` can use the closed form for this model."""
-    dh = np.asarray(model.dh)
-    if dh.ndim != 2 or dh.shape[0] != 6:
+    if dh.shape[0] != 6:
         return False
     alpha = dh[:, 0]
     right = [np.isclose(abs(np.sin(alpha[k])), 1, atol=1e-12) for k in (1, 3, 4, 5)]
-    return (
+    return bool(
         all(right)
         and np.isclose(np.sin(alpha[2]), 0, atol=1e-12)
         and np.cos(alpha[2]) > 0
@@ -161,11 +161,12 @@ long and wrong (the first model error the seed does not know is divided by a sma
 value); capping it keeps Newton in the basin it started in."""
 
 
-def _polish(model, q, R, o, iterations=60, accept=CONVERGED):
+def _polish(model, q, R, o, iterations=60, accept=CONVERGED, done=CONVERGED):
+    """Newton from ``q``: stop once no pose error exceeds ``done``; ok if within ``accept``."""
     for _ in range(iterations):
         f = frames(model, q[None])  # one evaluation of the chain per Newton step
         e = _pose_error(model, q, R, o, f)
-        if np.max(np.abs(e)) < CONVERGED:
+        if np.max(np.abs(e)) < done:
             return q, True
         step = np.linalg.lstsq(_geometric_jacobian(model, q, f), e, rcond=None)[0]
         q = q + step * min(1.0, MAX_STEP_RAD / max(np.max(np.abs(step)), 1e-300))
@@ -176,8 +177,11 @@ def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray) -> tuple[n
     """Return the solution nearest ``q`` by Newton from it.
 
     A small Cartesian step in the same configuration (much cheaper than :func:`solve`).
+    Newton stops within :data:`ACCEPTED`: its next step, to :data:`CONVERGED`, would move
+    the joints by less than a controller's single-precision joint angle resolves.
     """
-    return _polish(model, np.asarray(q, dtype=float), R, o, iterations=8, accept=ACCEPTED)
+    q = np.asarray(q, dtype=float)
+    return _polish(model, q, R, o, iterations=8, accept=ACCEPTED, done=ACCEPTED)
 
 
 def solve(
@@ -201,11 +205,10 @@ def solve(
     lo_deg = robot.joint_min_deg + margin_deg
     hi_deg = robot.joint_max_deg - margin_deg
     dh = np.asarray(model.dh)
-    candidates = []
-    if analytic_structure(model):
-        candidates = [phi - dh[:, 2] for phi in _analytic(model, R, o)]
+    if analytic_structure(model):  # exact already: nothing to merge before polishing
+        starts = [phi - dh[:, 2] for phi in _analytic(model, R, o)]
     elif ik_ur.ur_structure(model):  # three parallel axes, offset wrist: solver/ik_ur.py
-        candidates = ik_ur.candidates(model, R, o)
+        starts = _distinct_starts(model, ik_ur.candidates(model, R, o), R, o)
     else:
         rng = np.random.default_rng(seed)
         structural = dh.copy()
@@ -214,15 +217,15 @@ def solve(
         structural[4, 3] = 0.0
         seeds = [phi - dh[:, 2] for phi in _analytic(Model(structural, model.tool_point), R, o)]
         seeds += list(rng.uniform(-np.pi, np.pi, (24, 6)))
-        candidates = seeds
+        starts = _distinct_starts(model, seeds, R, o)
     solutions: list[Solution] = []
-    for q0 in _distinct_starts(model, candidates, R, o):
+    for q0 in starts:
         q, ok = _polish(model, q0, R, o)
         if not ok:
             continue
         q = (q + np.pi) % (2 * np.pi) - np.pi
         q, inside = _into_limits(q, lo_deg, hi_deg)
-        if any(np.allclose(_wrapped(q - s.q), 0, atol=1e-6) for s in solutions):
+        if any(_same(q, s.q, 1e-6) for s in solutions):
             continue
         solutions.append(Solution(q, configuration(model, q), inside))
     return solutions
@@ -237,9 +240,14 @@ def _distinct_starts(model, candidates, R, o, iterations=PRE_ITERATIONS):
     starts: list[np.ndarray] = []
     for q0 in candidates:
         q = _polish(model, np.asarray(q0, dtype=float), R, o, iterations, accept=np.inf)[0]
-        if not any(np.allclose(_wrapped(q - s), 0, atol=1e-2) for s in starts):
+        if not any(_same(q, s, 1e-2) for s in starts):
             starts.append(q)
     return starts
+
+
+def _same(q1, q2, atol_rad):
+    """Whether two joint vectors are the same solution: every joint within ``atol_rad`` mod 2π."""
+    return bool(np.all(np.abs(_wrapped(q1 - q2)) <= atol_rad))
 
 
 def _wrapped(x):
