@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wirecal.solver.kinematics import Model, frames
+from wirecal.solver.kinematics import Model, frames, table_property
 
 HALF_PI = np.pi / 2
 STRUCTURE_TOL_RAD = np.radians(5.0)
@@ -43,6 +43,10 @@ sought from φ6 sampled round the turn, not from the structural table's one φ6 
 WRIST_SAMPLES = 12
 """φ6 samples per wrist branch near the wrist singularity (every 30°)."""
 
+ELBOW_PULL_DEG = 2.0
+"""Near the elbow stretched or folded, a calibrated model's φ3 is also seeded this far from
+the fold on each side (:func:`_arm`)."""
+
 
 def _rot_x(a: float) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
@@ -54,6 +58,11 @@ def _rot_z(a: float) -> np.ndarray:
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
 
+VERTICAL_LINE_DEG = 1.0
+"""A UR arm's shoulder–wrist line this near vertical names the elbow branch by its side of
+the line, not its height (:func:`configuration`)."""
+
+
 def structural(dh: np.ndarray) -> np.ndarray:
     """Return the nearest exact UR-type table: twists rounded to multiples of 90°, a4 = a5 = 0."""
     out = np.array(dh, dtype=float)
@@ -62,10 +71,10 @@ def structural(dh: np.ndarray) -> np.ndarray:
     return out
 
 
-def ur_structure(model: Model) -> bool:
+@table_property
+def ur_structure(dh: np.ndarray) -> bool:
     """Whether the model is UR-type, exactly or near enough for the closed form to seed."""
-    dh = np.asarray(model.dh)
-    if dh.ndim != 2 or dh.shape[0] != 6:
+    if dh.shape[0] != 6:
         return False
     s = structural(dh)
     alpha = s[:, 0]
@@ -79,9 +88,21 @@ def ur_structure(model: Model) -> bool:
 
 
 def _arm(
-    dh: np.ndarray, Rb: np.ndarray, o5: np.ndarray, phi1: float, phi5: float, phi6: float
+    dh: np.ndarray,
+    Rb: np.ndarray,
+    o5: np.ndarray,
+    phi1: float,
+    phi5: float,
+    phi6: float,
+    near_deg: float = 0.0,
 ) -> list[np.ndarray]:
-    """Return the elbow solutions (φ2, φ3, φ4) completing φ1, φ5, φ6; see the module doc."""
+    """Return the elbow solutions (φ2, φ3, φ4) completing φ1, φ5, φ6; see the module doc.
+
+    Within ``near_deg`` of the elbow stretched (φ3 = 0) or folded (φ3 = ±180°) the two
+    elbow branches nearly meet, and a calibrated arm's may lie where the structural table
+    has none (hypothesis found a calibrated UR5 folded to 179.6°, the structural seeds both
+    at 180°): φ3 is then also seeded :data:`ELBOW_PULL_DEG` away from the fold on each side.
+    """
     alpha, a, _, d = dh.T
     R1 = _rot_z(phi1)
     W = _rot_x(alpha[4]) @ _rot_z(phi5) @ _rot_x(alpha[5]) @ _rot_z(phi6)
@@ -93,41 +114,59 @@ def _arm(
     c3 = (p[0] ** 2 + p[1] ** 2 - a[2] ** 2 - a[3] ** 2) / (2 * a[2] * a[3])
     if abs(c3) > 1 + SEED_SLACK:
         return []
+    bend = float(np.arccos(np.clip(c3, -1.0, 1.0)))  # 0 stretched … π folded
+    bends = [bend]
+    if min(bend, np.pi - bend) < np.radians(near_deg):
+        pull = np.radians(ELBOW_PULL_DEG)
+        bends.append(pull if bend < np.pi / 2 else np.pi - pull)
     M = RP.T @ R4
     out = []
     for elbow in (1.0, -1.0):
-        phi3 = elbow * np.arccos(np.clip(c3, -1.0, 1.0))
-        phi2 = np.arctan2(p[1], p[0]) - np.arctan2(a[3] * np.sin(phi3), a[2] + a[3] * np.cos(phi3))
-        phi4 = np.arctan2(M[1, 0], M[0, 0]) - phi2 - phi3
-        out.append(np.array([phi1, phi2, phi3, phi4, phi5, phi6]))
+        for b in bends:
+            phi3 = elbow * b
+            phi2 = np.arctan2(p[1], p[0]) - np.arctan2(
+                a[3] * np.sin(phi3), a[2] + a[3] * np.cos(phi3)
+            )
+            phi4 = np.arctan2(M[1, 0], M[0, 0]) - phi2 - phi3
+            out.append(np.array([phi1, phi2, phi3, phi4, phi5, phi6]))
     return out
 
 
 def _wrist(
     Rb: np.ndarray, z2: np.ndarray, s4: float, s5: float, near_deg: float
-) -> list[tuple[float, list[float]]]:
-    """Return (φ5, [φ6, ...]) for both wrist branches.
+) -> list[tuple[float, list[float], bool]]:
+    """Return (φ5, [φ6, ...], whether the first φ6 the arm reaches is enough) per branch.
 
-    Away from the wrist singularity one φ6 per branch (φ6 = 0 exactly at it). Within
-    ``near_deg`` of it the two branches nearly meet and φ4 + φ6 (or φ4 − φ6) nearly forms a
-    continuum; a calibrated arm's solutions along it may differ in number and place from the
-    structural table's, so φ6 is also sampled round the whole turn (:data:`WRIST_SAMPLES`)
-    for Newton to start from.
+    Away from the wrist singularity one φ6 per branch. At it, axes 2, 3, 4 and 6 are
+    parallel and φ4 + φ6 forms a continuum, but the offset wrist's φ6 moves the wrist
+    point, so only some φ6 let the arm reach it (hypothesis found a stretched arm that
+    φ6 = 0 could not): φ6 = 0, else the first of φ6 sampled round the turn
+    (:data:`WRIST_SAMPLES`) that the arm reaches. Within ``near_deg`` of it the two branches
+    nearly meet; a calibrated arm's solutions there may differ in number and place from the
+    structural table's, so every sample is a seed for Newton.
     """
     c5 = -(Rb[:, 2] @ z2) / (s4 * s5)  # |c5| ≤ 1 but for rounding: unit vectors, |s4 s5| = 1
     v = Rb.T @ z2
+    turn = list(np.linspace(-np.pi, np.pi, WRIST_SAMPLES, endpoint=False))
     out = []
     for wrist in (1.0, -1.0):
         phi5 = wrist * float(np.arccos(np.clip(c5, -1.0, 1.0)))
         sin5 = np.sin(phi5)
-        phi6s = [0.0]  # wrist singular: φ6 is free (it turns about the line of φ2 + φ3 + φ4)
-        if abs(sin5) > 1e-9:
-            sg = s4 * np.sign(sin5)
-            phi6s = [float(np.arctan2(-v[1] * sg, v[0] * sg))]
         if abs(sin5) < np.sin(np.radians(near_deg)):
-            phi6s += list(np.linspace(-np.pi, np.pi, WRIST_SAMPLES, endpoint=False))
-        out.append((phi5, phi6s))
+            out.append((phi5, [_phi6(v, s4, sin5), *turn], False))
+        elif abs(sin5) <= 1e-9:
+            out.append((phi5, [0.0, *turn], True))
+        else:
+            out.append((phi5, [_phi6(v, s4, sin5)], False))
     return out
+
+
+def _phi6(v: np.ndarray, s4: float, sin5: float) -> float:
+    """φ6 from z2 seen in the flange frame, v = R6ᵀ z2 (module doc); 0 at the singularity."""
+    if abs(sin5) <= 1e-9:
+        return 0.0
+    sg = s4 * np.sign(sin5)
+    return float(np.arctan2(-v[1] * sg, v[0] * sg))
 
 
 def closed_form(
@@ -155,9 +194,12 @@ def closed_form(
     for x1v in (x1, -x1) if x1 > 0 else (0.0,):
         phi1 = float(np.arctan2(o5[1], o5[0]) - np.arctan2(y1v, x1v))
         z2 = -s1 * _rot_z(phi1)[:, 1]
-        for phi5, phi6s in _wrist(Rb, z2, s4, s5, near_deg):
+        for phi5, phi6s, first_only in _wrist(Rb, z2, s4, s5, near_deg):
             for phi6 in phi6s:
-                out += _arm(dh, Rb, o5, phi1, phi5, phi6)
+                arm = _arm(dh, Rb, o5, phi1, phi5, phi6, near_deg)
+                out += arm
+                if arm and first_only:
+                    break
     return out
 
 
@@ -174,7 +216,10 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
 
     Righty when o5 lies ahead of the joint-1 axis along x1 (the shoulder root's sign), above
     when the elbow o3 is above the line from o2 to o4 in the plane of the parallel axes, flip
-    when φ5 < 0.
+    when φ5 < 0. When that line is within :data:`VERTICAL_LINE_DEG` of vertical, the elbow's
+    height says nothing (both elbow branches lie level with the line: hypothesis found a
+    calibrated UR5 pose whose two branches were 0.2 and 0.005 mm below it); then above is
+    the elbow's side of the line seen along the joint-2 axis, z2 · ((o4 − o2) × (o3 − o2)) < 0.
     """
     f = frames(model, np.atleast_2d(q))
     z1, x1 = f.z[0, 1], f.x[0, 1]
@@ -186,9 +231,11 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     rel = (o3 - o2) - np.dot(o3 - o2, n) * n
     t = np.dot(rel, line) / max(np.dot(line, line), 1e-300)
     offset = rel - t * line
+    level = abs(offset[2]) <= np.sin(np.radians(VERTICAL_LINE_DEG)) * np.linalg.norm(offset)
+    above = np.dot(n, np.cross(line, rel)) < 0 if level else offset[2] >= 0
     phi5 = (q[4] + model.dh[4, 2] + np.pi) % (2 * np.pi) - np.pi
     return (
         "righty" if ahead >= 0 else "lefty",
-        "above" if offset[2] >= 0 else "below",
+        "above" if above else "below",
         "flip" if phi5 < 0 else "noflip",
     )

@@ -104,6 +104,12 @@ UR5_ERRORS = {"th2": 0.3, "th4": -0.2, "a2": 0.8, "a3": -0.5, "d4": 0.4, "d5": 0
 @example(u=[0.5, 0.5, 0.25, 0.5, 0.5, 0.5], calibrated=True)
 # arm stretched (φ3 = 0) and φ5 = 0 exactly: only the φ6 = 0 seed reaches
 @example(u=[0.5, 0.75, 0.5, 0.5, 0.5, 0.5], calibrated=False)
+# the shoulder–wrist line vertical: both elbow branches level with it (named by their side)
+@example(u=[0.5, 0.5, 0.78125, 0.5, 0.125, 0.5], calibrated=True)
+# elbow folded to 179.6° on the calibrated arm: the structural table's seeds both at 180°
+@example(u=[0.5, 0.5, 0.7529418094771448, 0.5, 0.125, 0.5], calibrated=True)
+# arm stretched and wrist singular on the exact table: φ6 = 0 puts the wrist point beyond reach
+@example(u=[0.5, 0.5, 0.5, 0.875, 0.5, 0.25], calibrated=False)
 def test_ur_round_trip_closed_form(u, calibrated):
     """Every returned solution reproduces the pose; the sampled one is among them.
 
