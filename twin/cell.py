@@ -167,6 +167,7 @@ class Cell:
         if self.encoder_point_mm is not None:
             self.p0 = np.asarray(self.encoder_point_mm, dtype=float)
         self.actual = np.asarray(self.joints, dtype=float)
+        self._wire_at: tuple[np.ndarray, float] | None = None  # (actual, its wire mm)
         self.vibration = (0.0, VIBRATION_TAU_S, 0.0, 0.0)  # amplitude mm, τ, phase, since
         self.nest: int | None = None  # the gauge nest the wire tip is seated in (0 A, 1 B)
         self.gauge_mm = reference_lengths(self.robot.encoder, self.encoder_truth)[:2]
@@ -386,9 +387,7 @@ class Cell:
         if self.nest is not None:  # the tip in a nest of the reference gauge
             d = float(self.gauge_mm[self.nest]) + self.pose_error
         else:
-            p = tool_position(self.model, np.radians(self.actual)[None])[0]
-            d = float(physical_wire_mm(self.robot.encoder.exit, p - self.p0))
-            d += self.pose_error + self.slip
+            d = self._wire_mm() + self.pose_error + self.slip
         if d > self.robot.encoder.range_mm:
             raise RunError(
                 -1100,
@@ -402,6 +401,17 @@ class Cell:
         truth = self.encoder_truth  # what the encoder reads of it: scale, temperature, drift
         d = float(truth.read_factor(self.clock, self.run_s)) * d + float(truth.drift_mm(self.clock))
         return math.floor(self.counter_start + d / self.robot.encoder.mm_per_count + 0.5) + jitter
+
+    def _wire_mm(self) -> float:
+        """Return the true wire length where the arm stands.
+
+        Kept while the arm stands: the settle rule reads the counter several times per point.
+        """
+        if self._wire_at is None or self._wire_at[0] is not self.actual:
+            p = tool_position(self.model, np.radians(self.actual)[None])[0]
+            wire = float(physical_wire_mm(self.robot.encoder.exit, p - self.p0))
+            self._wire_at = (self.actual, wire)
+        return self._wire_at[1]
 
     def _counts(self) -> float:
         """Return the belt counter: the wire's count on the robot file's wrapping counter."""
