@@ -111,15 +111,17 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
 
     The grid points on the plate and the flange targets above them (tool pointing down),
     each checked reachable (righty, above, noflip) at the approach height and 5 mm below
-    the plate's nominal top.
+    the plate's nominal top. In the order the probe visits them: row by row, every other
+    row reversed, so that each point neighbours the one before it (the probe's search
+    starts from the depth found there).
     """
     nx, ny = setup.grid
     u = np.linspace(0, setup.plate_size_mm[0], nx)
     v = np.linspace(0, setup.plate_size_mm[1], ny)
     yaw = np.radians(setup.plate_yaw_deg)
     ex, ey = np.array([np.cos(yaw), np.sin(yaw), 0]), np.array([-np.sin(yaw), np.cos(yaw), 0])
-    points = np.array([setup.plate_origin_mm + a * ex + b * ey for b in v for a in u])
-    index = [(i + 1, j + 1) for j in range(ny) for i in range(nx)]
+    index = [(i + 1, j + 1) for j in range(ny) for i in range(nx)[:: 1 if j % 2 == 0 else -1]]
+    points = np.array([setup.plate_origin_mm + u[i - 1] * ex + v[j - 1] * ey for i, j in index])
     targets, problems = [], []
     for (i, j), p in zip(index, points, strict=True):
         flange = p + np.array([0, 0, setup.probe_mm[2] + setup.approach_mm])

@@ -52,8 +52,12 @@ def test_config_poses_reachable_four_ways_and_deterministic(viper, setup):
 def test_plate_grid(viper, setup):
     index, points, targets = plate_grid(viper, setup)
     assert len(index) == 209
-    assert index[0] == (1, 1)
+    assert sorted(index) == [(i, j) for i in range(1, 20) for j in range(1, 12)]
+    assert index[:2] == [(1, 1), (2, 1)]
+    assert index[18:21] == [(19, 1), (19, 2), (18, 2)]  # every other row reversed
     assert index[-1] == (19, 11)
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    np.testing.assert_allclose(steps.max(), 25.0)  # every point neighbours the one before
     np.testing.assert_allclose(points[-1], setup.plate_origin_mm + np.array([400, 250, 0]))
     np.testing.assert_allclose(targets[:, 2], setup.plate_origin_mm[2] + 100 + 20)
     assert np.all(targets[:, 4] == 180)  # tool pointing down

@@ -42,10 +42,13 @@ from wirecal.twin.vplus.parser import parse_module
 MODULE_NAME = "WIRECAL.V2"
 STRIDE = 8  # flattened index c*STRIDE + k (k ≤ 7): tables by configuration and joint
 AXES = 4  # flattened index i*AXES + a (a = 1..3)
-PROBE_MARGIN_MM = 5.0
-"""After a contact, the touch probe's next 1 mm search starts this far above the depth
-found (the plate is flat and the controller's error changes little from one grid point
-to the next; a probe already touching there goes back up to the approach height)."""
+PROBE_MARGIN_MM = 2.0
+"""After a contact, the touch probe's 1 mm search at the next grid point, a neighbour
+(:func:`~wirecal.solver.validation.plate_grid`), starts this far above the depth found.
+The plate is flat and the controller's error changes little over a grid step: in the
+twin, before calibration with true errors of up to 1 deg/mm, neighbouring depths differ
+by at most 0.3 mm. A probe already touching there goes back up to the approach height
+and searches from it."""
 PROBE_HALVINGS = 7
 """Halvings of the touch probe's last 1 mm step: contact found to 1/128 mm (0.0078 mm,
 finer than the 0.01 mm of a search in 0.1 then 0.01 mm steps, in 8 moves instead of
