@@ -30,15 +30,13 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as tmp, ProgressBar(f"demo, seed {seed}") as bar:
             r = run_demo(Path(tmp), seed=seed, progress=bar.stages())
         cfg, pln = r.validations
-        rows.append((seed, cfg, pln, r.tool_error_mm, sum(r.seconds.values())))
+        rows.append((seed, cfg, pln, r.tool_error_mm, r.total_s))
         print(
             f"seed {seed}: configuration {cfg.before.mean:.3f} → {cfg.after.mean:.4f} mm "
             f"({100 * cfg.reduction['mean']:.0f} %), plane {pln.before.mean:.4f} → "
             f"{pln.after.mean:.4f} mm ({100 * pln.reduction['mean']:.0f} %), tool point "
             f"{r.tool_error_mm['before']:.3f} → {r.tool_error_mm['after']:.4f} mm; "
-            f"{sum(r.seconds.values()):.0f} s ("
-            + ", ".join(f"{k} {v:.1f}" for k, v in r.seconds.items())
-            + ")"
+            f"{r.total_s:.0f} s (" + ", ".join(f"{k} {v:.1f}" for k, v in r.seconds.items()) + ")"
         )
         if seed == 1:
             DOCS.mkdir(exist_ok=True)

@@ -87,7 +87,7 @@ def demo(folder, seed, scale, robot, force):
             f"{'  predicted by the error budget (mm)':<38}{'':>10}{r.predicted_mm:10.4f}{scale}"
         )
     ctl = f"controller solver vs PC: {r.controller_difference:.1e} deg/mm"
-    click.echo(f"{ctl}; total {sum(r.seconds.values()):.0f} s")
+    click.echo(f"{ctl}; total {r.total_s:.0f} s")
     click.echo(f"files in {r.folder}/: " + ", ".join(r.outputs))
 
 
