@@ -4,7 +4,8 @@ The Viper s650 (V+, the default): generate the V+ module (calibration and valida
 programs) for the paper's corrected plan; run it on a twin robot with random true errors;
 identify the parameters on the PC and with the controller solver; write the patch; run
 both validation procedures before and after calibration (the controller believing the
-patch), with unmodelled errors on; write the report.
+patch), with unmodelled errors on; write the report. The validation before calibration runs
+in a second process beside the rest.
 
 The UR5 (URScript, ``robot=examples/ur5/robot.toml``): generate the ``.script`` programs for
 the shipped plan; run wc_mount and wc_run on a twin UR whose log travels over a loopback
