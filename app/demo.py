@@ -60,7 +60,6 @@ from wirecal.solver.solve import SolveResult, solve
 from wirecal.solver.validation import Setup, distance_plan, distance_residuals
 from wirecal.solver.validation_analysis import Stats, config_discrepancy, plane_residuals
 from wirecal.twin.cell import Unmodelled, run_validation
-from wirecal.twin.vplus.parser import parse_module
 
 UR_OUTPUTS = (
     "truth.toml",
@@ -99,14 +98,13 @@ class DemoResult:
     seconds: dict[str, float]  # each stage's own time (two of them ran side by side)
     outputs: tuple[str, ...] = OUTPUTS
     wall_s: float | None = None  # the whole demo, start to end (None: the sum of seconds)
+    predicted_mm: float | None = None  # the error budget's total for the recommended method
+    encoder_scale_ppm: float | None = None  # the twin encoder's true scale error (V+ twin)
 
     @property
     def total_s(self) -> float:
         """The demo's time, start to end."""
         return sum(self.seconds.values()) if self.wall_s is None else self.wall_s
-
-    predicted_mm: float | None = None  # the error budget's total for the recommended method
-    encoder_scale_ppm: float | None = None  # the twin encoder's true scale error (V+ twin)
 
 
 def example_files(robot: str = "viper_s650") -> dict[str, Path]:
@@ -179,7 +177,6 @@ def _run(
     t = step(1, "generating the V+ module (calibration and validation programs)")
     options = GenOptions(validation=setup)
     text = module_text(robot, plan, options)
-    parse_module(text, "WIRECAL.V2")  # once, before the second process starts: both use it
     seconds["generate"] = time.perf_counter() - t
     with tempfile.TemporaryDirectory() as tmp, _second_process() as pool:
         disk = Path(tmp)
@@ -268,7 +265,8 @@ def _run(
 def _second_process() -> ProcessPoolExecutor:
     """One worker process, forked where the platform forks safely.
 
-    A forked worker inherits the parsed module and every import; elsewhere it starts afresh.
+    A forked worker inherits every import and the module that ``module_text`` parsed and
+    checked (the parser keeps the last few); elsewhere it starts afresh.
     """
     fork = sys.platform.startswith("linux") and "fork" in mp.get_all_start_methods()
     return ProcessPoolExecutor(max_workers=1, mp_context=mp.get_context("fork" if fork else None))

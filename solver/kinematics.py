@@ -17,7 +17,7 @@ Angular derivatives are in mm/rad here; callers convert at the boundary.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from functools import cache, lru_cache
 
@@ -116,10 +116,13 @@ def _rotate(R: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.einsum("nij,nj->ni", R, v)
 
 
+Vector = tuple[float, float, float] | np.ndarray
+"""An axis or origin along the chain: three floats for one configuration, (3, N) for a batch."""
+
 _BASE_AXES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
-def _joint_terms(model: Model, q: np.ndarray):
+def _joint_terms(model: Model, q: np.ndarray) -> tuple[Iterator[tuple], tuple, Vector]:
     """Per joint (cos α, sin α, a, d, cos θ, sin θ), and the base frame's axes and origin.
 
     Python floats and 3-tuples for one configuration of one model (array arithmetic on
@@ -151,7 +154,7 @@ def _joint_terms(model: Model, q: np.ndarray):
     return zip(*cols, strict=True), tuple(axes), np.zeros((3, N))
 
 
-def _turn(c, s, U, V):
+def _turn(c, s, U: Vector, V: Vector) -> tuple[Vector, Vector]:
     """Rotate the pair of axes (U, V) by the angle of cosine c, sine s: (cU + sV, cV − sU)."""
     if isinstance(U, tuple):
         (u0, u1, u2), (v0, v1, v2) = U, V
@@ -162,7 +165,7 @@ def _turn(c, s, U, V):
     return c * U + s * V, c * V - s * U
 
 
-def _advance(P, a, X, d, Z):
+def _advance(P: Vector, a, X: Vector, d, Z: Vector) -> Vector:
     """Move the origin P by a along X and d along Z: P + aX + dZ."""
     if isinstance(P, tuple):
         (p0, p1, p2), (x0, x1, x2), (z0, z1, z2) = P, X, Z
