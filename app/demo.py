@@ -31,6 +31,7 @@ from dataclasses import dataclass, replace
 from functools import partial
 from importlib import resources
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -199,13 +200,8 @@ def _run(
         if run.run is None or run.run.status != "completed":
             raise WirecalError(f"the twin's measurement run stopped: {run.run or run.mount}")
         seconds["measure"] = time.perf_counter() - t
-        log_text = run.log.read_text(encoding="ascii")
-        out.put(folder / "WCLOG.CSV", log_text)
-        log = replace(read_log(run.log), source=str(folder / "WCLOG.CSV"))
         t = step(4, "identification on the PC (step-by-step and joint)")
-        m = check_log(log, plan, robot)
-        result = solve(robot, plan, m)
-        verdict = gate(result, result.recommended)  # before anything acts on the result
+        _, result, verdict = _identify(out, folder, "WCLOG.CSV", run.log, robot, plan)
         seconds["solve"] = time.perf_counter() - t
         t = step(5, "identification on the controller (wc.solve, wc.solve2 in the twin)")
         controller = compare_controller(result, disk / "ctl", text=text)
@@ -215,13 +211,13 @@ def _run(
         logs = {"after": validate(disk / "after", controller=identified, run=2)}
         logs["before"] = before.result()
         for name in ("before", "after"):
-            seconds[f"validate {name}"] = logs[name][2]
+            seconds[f"validate {name}"] = logs[name].seconds
         validations = [
             Validation(
                 "configuration",
                 *(
                     config_discrepancy(
-                        read_validation_log(logs[k][0], "configuration"),
+                        read_validation_log(logs[k].configuration, "configuration"),
                         robot.encoder.counter,
                     )
                     for k in ("before", "after")
@@ -230,7 +226,7 @@ def _run(
             Validation(
                 "plane",
                 *(
-                    plane_residuals(read_validation_log(logs[k][1], "plane"))[0]
+                    plane_residuals(read_validation_log(logs[k].plane, "plane"))[0]
                     for k in ("before", "after")
                 ),
             ),
@@ -241,10 +237,10 @@ def _run(
         )
         seconds["report"] = time.perf_counter() - t
         for name, path in (
-            ("WCVCFG1.CSV", logs["before"][0]),
-            ("WCVPLN1.CSV", logs["before"][1]),
-            ("WCVCFG2.CSV", logs["after"][0]),
-            ("WCVPLN2.CSV", logs["after"][1]),
+            ("WCVCFG1.CSV", logs["before"].configuration),
+            ("WCVPLN1.CSV", logs["before"].plane),
+            ("WCVCFG2.CSV", logs["after"].configuration),
+            ("WCVPLN2.CSV", logs["after"].plane),
         ):
             out.put(folder / name, path.read_text(encoding="ascii"))
     out.put(folder / "WIRECAL.V2", text)
@@ -260,6 +256,14 @@ def _run(
         predicted_mm=result.predicted[result.recommended]["mean"],
         encoder_scale_ppm=encoder.scale_ppm,
     )
+
+
+class ValidationLogs(NamedTuple):
+    """A validation run's two logs (wc.vcfg, wc.vpln) and its own duration."""
+
+    configuration: Path
+    plane: Path
+    seconds: float
 
 
 def _second_process() -> ProcessPoolExecutor:
@@ -283,7 +287,7 @@ def _validation_logs(
     controller: dict[str, float],
     run: int,
     seed: int,
-) -> tuple[Path, Path, float]:
+) -> ValidationLogs:
     """Run both validation programs in the twin: their logs and the seconds it took.
 
     ``controller``: the offsets the controller believes ({} before calibration).
@@ -295,7 +299,21 @@ def _validation_logs(
     for outcome in (v.configuration, v.plane):
         if outcome.status != "completed":
             raise WirecalError(f"the twin's validation run stopped: {outcome}")
-    return v.configuration_log, v.plane_log, time.perf_counter() - t
+    return ValidationLogs(v.configuration_log, v.plane_log, time.perf_counter() - t)
+
+
+def _identify(
+    out: Outputs, folder: Path, name: str, path: Path, robot: Robot, plan: Plan
+) -> tuple[str, SolveResult, Plausibility]:
+    """Publish the twin's log as ``name``, read it back and identify; the gate's verdict.
+
+    The verdict comes before anything acts on the result.
+    """
+    log_text = path.read_text(encoding="ascii")
+    out.put(folder / name, log_text)
+    log = replace(read_log(path), source=str(folder / name))
+    result = solve(robot, plan, check_log(log, plan, robot))
+    return log_text, result, gate(result, result.recommended)
 
 
 def _run_ur(
@@ -327,13 +345,8 @@ def _run_ur(
         if not run.received.complete:
             raise WirecalError(f"wirecal receive got no complete log: {run.received.stopped}")
         seconds["measure"] = time.perf_counter() - t
-        log_text = run.log.read_text(encoding="ascii")
-        out.put(folder / "run.csv", log_text)
-        log = replace(read_log(run.log), source=str(folder / "run.csv"))
         t = step(3, "identification on the PC (step-by-step and joint)")
-        m = check_log(log, plan, robot)
-        result = solve(robot, plan, m)
-        verdict = gate(result, result.recommended)
+        log_text, result, verdict = _identify(out, folder, "run.csv", run.log, robot, plan)
         identified = result.estimates[result.recommended].as_dict()
         on_controller = parse_result(result_in_log(log_text) or "", "run.csv (wc_solve)")
         controller = max(

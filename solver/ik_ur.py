@@ -152,12 +152,13 @@ def _wrist(
     for wrist in (1.0, -1.0):
         phi5 = wrist * float(np.arccos(np.clip(c5, -1.0, 1.0)))
         sin5 = np.sin(phi5)
+        phi6 = _phi6(v, s4, sin5)
         if abs(sin5) < np.sin(np.radians(near_deg)):
-            out.append((phi5, [_phi6(v, s4, sin5), *turn], False))
+            out.append((phi5, [phi6, *turn], False))
         elif abs(sin5) <= 1e-9:
-            out.append((phi5, [0.0, *turn], True))
+            out.append((phi5, [phi6, *turn], True))
         else:
-            out.append((phi5, [_phi6(v, s4, sin5)], False))
+            out.append((phi5, [phi6], False))
     return out
 
 
