@@ -35,8 +35,10 @@ from wirecal.solver.robot import INTERFACES, LANGUAGES, Controller, Encoder, Rob
 from wirecal.solver.urdf_geometry import (
     RADIUS_PER_LENGTH,
     RADIUS_PER_REACH,
+    WIDE_RATIO,
     LinkRadii,
     link_radii,
+    wide_links,
 )
 from wirecal.solver.urdf_model import UrdfChain, fk_difference_mm, read_chain
 
@@ -124,7 +126,7 @@ def urdf_robot_file(urdf: str | Path, out_path: Path, opt: ImportOptions) -> Imp
         tables=cell,
     )
     robot_from_dict(tomllib.loads(text), str(out_path))  # what is written reads back
-    warnings = [] if confirmed else speed_notes
+    warnings = ([] if confirmed else speed_notes) + _wide_warning(radii)
     return Imported(text, ch, params, notes, warnings)
 
 
@@ -274,20 +276,37 @@ def _geometry_notes(radii: LinkRadii) -> list[str]:
             "of the arm's"
             for note in radii.notes
         ),
+        *([radii.uncovered] if radii.uncovered else []),
+    ]
+
+
+def _wide_warning(radii: LinkRadii) -> list[str]:
+    """Return a warning when radii from geometry are far wider than the length rule's."""
+    wide = wide_links(radii)
+    if not wide:
+        return []
+    which = ", ".join(f"{k} ({radii.radius_mm[k - 1]:g} mm)" for k in wide)
+    return [
+        f"link(s) {which}: the capsules containing the URDF's geometry are over "
+        f"{WIDE_RATIO:g}× the length rule's (bodies off the DH lines, wide housings); plan may "
+        "find no wire path: measure the links' radii and write them in [geometry]"
     ]
 
 
 def _radii_note(radii: LinkRadii) -> str:
     """Return the printed summary of the link radii and where they came from."""
-    by_length = [k for k, links in enumerate(radii.measured, 1) if not links]
+    by_length = [str(k) for k, links in enumerate(radii.measured, 1) if not links]
     values = ", ".join(f"{r:g}" for r in radii.radius_mm)
     if not by_length:
-        return f"link radii {values} mm: from the URDF's collision geometry"
-    which = ", ".join(map(str, by_length))
-    return (
-        f"link radii {values} mm: link(s) {which} from link lengths (no readable geometry; "
-        "see [geometry]), the others from the URDF's geometry; measure them if you can"
-    )
+        source = "all from the URDF's collision geometry"
+    elif len(by_length) == len(radii.measured):
+        source = "all from link lengths (no readable geometry; see [geometry])"
+    else:
+        source = (
+            f"link(s) {', '.join(by_length)} from link lengths (no readable geometry; see "
+            "[geometry]), the others from the URDF's collision geometry"
+        )
+    return f"link radii {values} mm: {source}; measure them if you can"
 
 
 def _cell_lines(ch: UrdfChain) -> tuple[list[str], str | None]:

@@ -3,8 +3,11 @@
 The clearance (:mod:`wirecal.solver.clearance`) models link k as a capsule from DH frame k's
 origin to frame k+1's (k = 1 … n−1) with a radius from ``[geometry] link_radius_mm``. Every
 URDF link on the chain is rigid with one DH frame (:class:`~wirecal.solver.urdf_model.UrdfChain`
-``link_offsets``); the radius of capsule k is the largest distance from its segment to the
-geometry of the links rigid with frame k — so the capsule contains that geometry:
+``link_offsets``). With the arm at q = 0, each point of the moving links' geometry is taken
+by the nearest capsule segment; the radius of capsule k is the largest distance of the points
+beside segment k (their foot between its ends), so the capsule contains them. Points beyond
+every segment's ends (the base column under frame 1, joint housings) are counted and reported,
+not covered. The geometry read:
 
 * ``<collision>`` elements (``<visual>`` when a link has none): cylinders (their end discs),
   boxes (their corners), spheres (centre plus radius) and STL meshes (their vertices, with the
@@ -16,7 +19,10 @@ geometry of the links rigid with frame k — so the capsule contains that geomet
   shipped example estimates 35–70 mm).
 
 Either way an estimate: the import says which links it came from, and a measured value
-belongs in the robot file.
+belongs in the robot file. Containing capsules about DH lines can be wide: the Viper s650's
+public meshes give 217, 203 and 158 mm for links 1–3 (a wide shoulder housing, an upper arm off
+the DH line), and ``plan`` then finds no wire path; the import warns when a radius from
+geometry exceeds :data:`WIDE_RATIO` times the length rule's.
 """
 
 from __future__ import annotations
@@ -37,6 +43,8 @@ RADIUS_PER_LENGTH = 0.15
 """A link's radius from its length: 15 % (the UR5's upper arm: 425 mm long, 54–60 mm radius)."""
 RADIUS_PER_REACH = 0.05
 """The smallest radius from the arm's size: 5 % of its reach (the UR5's wrist: 45 mm of 1010)."""
+WIDE_RATIO = 2.0
+"""A radius from geometry this many times the length rule's is reported as wide."""
 DISC_POINTS = 16
 """Points on each end disc of a cylinder (the capsule's radius is then within 2 % of exact)."""
 ANCESTORS = 4
@@ -50,6 +58,8 @@ class LinkRadii:
     radius_mm: np.ndarray  # (n-1,), whole mm rounded up
     measured: tuple[tuple[str, ...], ...]  # links whose geometry gave the radius; () by length
     notes: tuple[str, ...]  # why some radii come from lengths
+    uncovered: str | None = None  # how much geometry lies beyond the capsules' ends
+    by_length_mm: np.ndarray | None = None  # the length rule's radii, for comparison
 
 
 def _origin(el: ET.Element) -> np.ndarray:
@@ -136,48 +146,89 @@ def _link_points(link: ET.Element, urdf_path: Path) -> list[tuple[np.ndarray, fl
     return out
 
 
-def _segment_distance(points: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Return the distance of points (k, 3) from the segment 0 → b."""
-    bb = float(b @ b)
-    t = np.clip(points @ b / bb, 0.0, 1.0) if bb > 0 else np.zeros(len(points))
-    return np.linalg.norm(points - t[:, None] * b, axis=1)
+def _nearest_segment(
+    points: np.ndarray, starts: np.ndarray, ends: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return, per point (k, 3), its nearest segment, the distance and whether it is beside it.
+
+    "Beside": the point's foot on that segment lies between its ends (a zero-length
+    segment counts as beside every point), not beyond one end.
+    """
+    d = ends - starts  # (m, 3)
+    dd = np.einsum("mc,mc->m", d, d)
+    rel = points[:, None, :] - starts[None]  # (k, m, 3)
+    safe = np.where(dd > 0, dd, 1.0)
+    t = np.where(dd > 0, np.einsum("kmc,mc->km", rel, d) / safe, 0.0)
+    inside = (t >= -1e-9) & (t <= 1 + 1e-9)
+    dist = np.linalg.norm(rel - np.clip(t, 0, 1)[..., None] * d[None], axis=2)
+    nearest = np.argmin(dist, axis=1)
+    rows = np.arange(len(points))
+    return nearest, dist[rows, nearest], inside[rows, nearest]
 
 
 def link_radii(ch: UrdfChain) -> LinkRadii:
     """Return the capsule radii of the chain ``ch`` (see the module doc)."""
     n = len(ch.moving)
-    F = dh_frames(ch.dh.dh, np.zeros((1, n)))[0]
-    seg = [(np.linalg.inv(F[k]) @ F[k + 1])[:3, 3] for k in range(1, n)]
-    lengths = np.array([float(np.linalg.norm(b)) for b in seg])
+    F = dh_frames(ch.dh.dh, np.zeros((1, n)))[0]  # frames at q = 0, in frame 0
+    starts, ends = F[1:n, :3, 3], F[2 : n + 1, :3, 3]
+    lengths = np.linalg.norm(ends - starts, axis=1)
     by_length = np.maximum(RADIUS_PER_LENGTH * lengths, RADIUS_PER_REACH * lengths.sum())
-    elements = {el.get("name"): el for el in ch.urdf.root.findall("link")}
+    points, pads, unreadable = _chain_points(ch, F)
+    found = np.full(n - 1, -np.inf)
+    beyond = 0
+    if len(points):
+        nearest, dist, beside = _nearest_segment(points, starts, ends)
+        np.maximum.at(found, nearest[beside], dist[beside] + pads[beside])
+        beyond = int(np.count_nonzero(~beside))
     radii, measured, notes = by_length.copy(), [], []
     for k in range(1, n):
-        links = [x for x, (frame, _) in ch.link_offsets.items() if frame == k]
-        radius, why = _capsule(ch, links, elements, seg[k - 1])
-        if radius is not None:
-            radii[k - 1] = radius
-            measured.append(tuple(links))
-        else:
+        if k in unreadable or not np.isfinite(found[k - 1]):
+            why = unreadable.get(k, "no collision or visual geometry beside it")
             measured.append(())
             notes.append(f"link {k}: {why}")
-    return LinkRadii(np.ceil(radii), tuple(measured), tuple(notes))
+            continue
+        radii[k - 1] = found[k - 1]
+        measured.append(tuple(x for x, (frame, _) in ch.link_offsets.items() if frame == k))
+    uncovered = (
+        f"{beyond} of {len(points)} geometry points lie beyond the links' ends (the base "
+        "column, joint housings): the capsules do not cover them"
+        if beyond
+        else None
+    )
+    return LinkRadii(np.ceil(radii), tuple(measured), tuple(notes), uncovered, by_length)
 
 
-def _capsule(
-    ch: UrdfChain, links: list[str], elements: dict, b: np.ndarray
-) -> tuple[float | None, str]:
-    """Return the radius containing the links' geometry, or None and why not."""
-    distances = []
-    for link in links:
-        D = ch.link_offsets[link][1]
+def wide_links(radii: LinkRadii) -> list[int]:
+    """Return the links (1-based) whose radius from geometry is :data:`WIDE_RATIO` × wide."""
+    if radii.by_length_mm is None:
+        return []
+    return [
+        k
+        for k, (r, rule, links) in enumerate(
+            zip(radii.radius_mm, radii.by_length_mm, radii.measured, strict=True), 1
+        )
+        if links and r > WIDE_RATIO * rule
+    ]
+
+
+def _chain_points(ch: UrdfChain, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
+    """Return the geometry points (k, 3) of the moving links in frame 0 at q = 0, their pads.
+
+    And, per DH frame whose links' geometry cannot be read, why. The base's own links
+    (frame 0) are left out: no capsule models them.
+    """
+    elements = {el.get("name"): el for el in ch.urdf.root.findall("link")}
+    points, pads, unreadable = [np.zeros((0, 3))], [np.zeros(0)], {}
+    for link, (k, D) in ch.link_offsets.items():
+        if k == 0 or k in unreadable:
+            continue
         try:
             shapes = _link_points(elements[link], ch.urdf.path)
         except WirecalError as exc:
-            return None, f"{link}'s {exc}"
-        for points, pad in shapes:
-            in_frame = points @ D[:3, :3].T + D[:3, 3]
-            distances.append(float(_segment_distance(in_frame, b).max()) + pad)
-    if not distances:
-        return None, f"no collision or visual geometry on {', '.join(links)}"
-    return max(distances), ""
+            unreadable[k] = f"{link}'s {exc}"
+            continue
+        T = F[k] @ D
+        for p, pad in shapes:
+            points.append(p @ T[:3, :3].T + T[:3, 3])
+            pads.append(np.full(len(p), pad))
+    return np.concatenate(points), np.concatenate(pads), unreadable

@@ -76,7 +76,7 @@ def test_ur5_import_writes_what_plan_and_gen_need(ur5):
     # no meshes beside the fixture: every radius from the capsule lengths, and said so
     lengths = [0.0, 425.0, math.hypot(392.25, 109.15), 94.65, 82.3]
     assert doc["geometry"]["link_radius_mm"] == radii_by_length(lengths)
-    assert "link(s) 1, 2, 3, 4, 5 from link lengths" in out
+    assert "link radii 51, 64, 62, 51, 51 mm: all from link lengths" in out
     for link in ("shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link"):
         assert f"{link}'s mesh package://ur_description/meshes/ur5/collision/" in (
             d / "robot.toml"
@@ -241,7 +241,7 @@ def test_radii_contain_boxes_cylinders_and_spheres(tmp_path):
     )
     radii, out = _radii(tmp_path, text)
     assert radii == [50.0, 45.0]
-    assert "from the URDF's collision geometry" in out
+    assert "link radii 50, 45 mm: all from the URDF's collision geometry" in out
 
 
 def test_a_mesh_is_read_from_its_stl_and_an_absent_one_falls_back_to_lengths(tmp_path):
@@ -352,3 +352,12 @@ def test_cell_keys_in_the_agreed_schema_are_accepted():
     robot = robot_from_dict(doc, "r.toml")
     assert not robot.joint_speed_confirmed
     assert "joint_speed_confirmed = false" in str(robot.speed_problem())
+
+
+def test_geometry_off_the_dh_line_gives_a_wide_capsule_and_a_warning(tmp_path):
+    # link 1's body 200 mm beside its DH line (a box 400 × 60 × 80 mm centred at y = 200 mm)
+    text = make_urdf(PLANAR)
+    text = _with_geometry(text, "l1", _collision('<box size="0.4 0.06 0.08"/>', "0.2 0.2 0"))
+    radii, out = _radii(tmp_path, text)
+    assert radii[0] == math.ceil(math.hypot(230, 40))  # the far corners: contained
+    assert "warning: link(s) 1 (234 mm): the capsules containing the URDF's geometry" in out
