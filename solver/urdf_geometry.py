@@ -180,7 +180,9 @@ def link_radii(ch: UrdfChain) -> LinkRadii:
         nearest, dist, beside = _nearest_segment(points, starts, ends)
         np.maximum.at(found, nearest[beside], dist[beside] + pads[beside])
         beyond = int(np.count_nonzero(~beside))
-    radii, measured, notes = by_length.copy(), [], []
+    radii = by_length.copy()
+    measured: list[tuple[str, ...]] = []
+    notes: list[str] = []
     for k in range(1, n):
         if k in unreadable or not np.isfinite(found[k - 1]):
             why = unreadable.get(k, "no collision or visual geometry beside it")
