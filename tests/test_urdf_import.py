@@ -15,8 +15,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.solver.formats.patch import write_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
+from wirecal.solver.identify import Estimate
 from wirecal.solver.kinematics import tool_position
 
 from .conftest import DATA
@@ -361,3 +363,33 @@ def test_geometry_off_the_dh_line_gives_a_wide_capsule_and_a_warning(tmp_path):
     radii, out = _radii(tmp_path, text)
     assert radii[0] == math.ceil(math.hypot(230, 40))  # the far corners: contained
     assert "warning: link(s) 1 (234 mm): the capsules containing the URDF's geometry" in out
+
+
+def test_calibrated_ur5_urdf_with_the_wire_point_reproduces_the_patched_model(ur5, tmp_path):
+    """export-urdf keeps --wire-point-mm: the calibrated URDF's tool0 carries the wire point
+    where the patched model has it, d6 and th6 (the wire point's parameters) included."""
+    d, _ = ur5
+    robot = load_robot(d / "robot.toml")
+    offsets = {"th2": 0.05, "a2": 0.3, "d4": -0.2, "th6": 0.1, "d6": 0.25}
+    patch = tmp_path / "p.toml"
+    estimate = Estimate("joint", tuple(offsets), np.array(list(offsets.values())), 0.01)
+    write_patch(patch, robot, estimate, plan_fingerprint="0" * 64, log_path="run.csv",
+                log_sha256="0" * 64, version="test")  # fmt: skip
+    out = tmp_path / "cal.urdf"
+    run("export-urdf", d / "robot.toml", patch, "-o", out)
+    model = robot.model(offsets)
+    q = np.random.default_rng(3).uniform(-3, 3, (40, 6))
+    wire = np.array([-50.0, 0.0, 40.0])
+    got = []
+    for x in q:
+        T = urdf_fk(out, "base_link", "tool0", x)
+        got.append(T[:3, :3] @ wire + T[:3, 3])
+    np.testing.assert_allclose(np.array(got), tool_position(model, q), atol=TOL_MM)
+    # and without a patch the export leaves the arm as it was
+    same = tmp_path / "same.urdf"
+    run("export-urdf", d / "robot.toml", "-o", same)
+    for x in q[:10]:
+        np.testing.assert_allclose(
+            urdf_fk(same, "base_link", "tool0", x), urdf_fk(UR5_URDF, "base_link", "tool0", x),
+            atol=TOL_MM,
+        )  # fmt: skip
