@@ -31,7 +31,15 @@ from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
 from wirecal.solver.formats.urdf import MOVING, chain, matrix_rpy, origin_mm, read_urdf
 from wirecal.solver.identifiability import propose_parameters
 from wirecal.solver.kinematics import Model
-from wirecal.solver.robot import INTERFACES, LANGUAGES, Controller, Encoder, Robot, UrdfSource
+from wirecal.solver.robot import (
+    DEFAULT_CHANNEL,
+    INTERFACES,
+    LANGUAGES,
+    Controller,
+    Encoder,
+    Robot,
+    UrdfSource,
+)
 from wirecal.solver.urdf_geometry import (
     RADIUS_PER_LENGTH,
     RADIUS_PER_REACH,
@@ -92,8 +100,9 @@ def urdf_robot_file(urdf: str | Path, out_path: Path, opt: ImportOptions) -> Imp
     ch = read_chain(doc, opt.base, opt.tip, tol, wire)
     lo, hi, urdf_speed, notes = _limits(ch)
     speed, confirmed, speed_notes = _speeds(ch, urdf_speed, opt.joint_speed_deg_s)
-    params = _parameters(ch, lo, hi, notes)
-    notes += _fk_check(ch, lo, hi, opt.parallel_tol_deg, urdf)
+    q_deg = lo + np.random.default_rng(0).uniform(0, 1, (PROPOSAL_POINTS, len(lo))) * (hi - lo)
+    params = _parameters(ch, q_deg, (lo + hi) / 2, notes)
+    notes += _fk_check(ch, q_deg, urdf)
     radii = link_radii(ch)
     cell, cell_note = _cell_lines(ch)
     robot = Robot(
@@ -138,12 +147,13 @@ def _encoder(opt: ImportOptions) -> Encoder:
             f"--interface {opt.interface} is not read by the {LANGUAGES[opt.language]} "
             f"programs (--language {opt.language}); give " + " or ".join(INTERFACES[opt.language])
         )
+    interface = opt.interface or interface
     return Encoder(
         opt.mm_per_count,
         opt.range_mm,
         bits if opt.counter_bits is None else opt.counter_bits,
-        opt.interface or interface,
-        channel=1 if (opt.interface or interface) == "belt" else 0,
+        interface,
+        channel=DEFAULT_CHANNEL[interface],
     )
 
 
@@ -221,12 +231,13 @@ def _speeds(
     )
 
 
-def _parameters(ch: UrdfChain, lo: np.ndarray, hi: np.ndarray, notes: list[str]) -> tuple:
-    """Return the proposed calibration parameters; note an unobservable last joint."""
+def _parameters(
+    ch: UrdfChain, q_deg: np.ndarray, middle_deg: np.ndarray, notes: list[str]
+) -> tuple[str, ...]:
+    """Return the calibration parameters proposed over ``q_deg``; note an unobservable θn."""
     n = len(ch.moving)
     model = Model(ch.dh.dh, ch.tool_point)
-    q = lo + np.random.default_rng(0).uniform(0, 1, (PROPOSAL_POINTS, n)) * (hi - lo)
-    params = tuple(propose_parameters(model, q, (lo + hi) / 2, ch.dh.dh))
+    params = tuple(propose_parameters(model, q_deg, middle_deg, ch.dh.dh))
     if f"th{n}" not in params:
         notes.append(
             f"th{n} is not proposed: the wire point lies on the last joint's axis, so no wire "
@@ -235,22 +246,18 @@ def _parameters(ch: UrdfChain, lo: np.ndarray, hi: np.ndarray, notes: list[str])
     return params
 
 
-def _fk_check(
-    ch: UrdfChain, lo: np.ndarray, hi: np.ndarray, tol_deg: float | None, urdf: str | Path
-) -> list[str]:
-    """Compare the DH model's wire point with the URDF's; notes on snapped axes."""
-    n = len(ch.moving)
-    q = lo + np.random.default_rng(0).uniform(0, 1, (PROPOSAL_POINTS, n)) * (hi - lo)
+def _fk_check(ch: UrdfChain, q_deg: np.ndarray, urdf: str | Path) -> list[str]:
+    """Compare the DH model's wire point with the URDF's over ``q_deg``; notes on snapped axes."""
     notes = [
         f"the axes of {ch.moving[i].name!r} and {ch.moving[i + 1].name!r} are {angle:.2g} rad "
         "from parallel (a rounded π/2 in the URDF): taken as parallel"
         for i, angle in ch.dh.snapped
     ]
-    diff = fk_difference_mm(ch, np.radians(q))
+    diff = fk_difference_mm(ch, np.radians(q_deg))
     if ch.dh.snapped:
         notes.append(
             f"so the DH tip differs from the URDF's by up to {diff:.2g} mm "
-            f"({PROPOSAL_POINTS} configurations within the limits)"
+            f"({len(q_deg)} configurations within the limits)"
         )
     elif diff > EXACT_MM:  # a guard: the construction is exact
         raise WirecalError(

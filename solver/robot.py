@@ -75,6 +75,10 @@ LANGUAGES = {"vplus": "Adept/Omron V+ and eV+", "urscript": "Universal Robots UR
 INTERFACES = {"vplus": ("belt", "device"), "urscript": ("pulse",)}
 """The encoder interfaces each language's programs read (``[encoder] interface``)."""
 
+DEFAULT_CHANNEL = {"belt": 1, "device": 0, "pulse": 0}
+"""The ``[encoder] channel`` when the robot file gives none, by interface (V+ belt encoders
+count from 1; DEVICE units and the URScript pulse decoder's encoder index from 0)."""
+
 LIVE_CHECK = {"vplus": "wc.check", "urscript": "wc_check"}
 """The generated program that shows the live counts, by language (messages name it)."""
 

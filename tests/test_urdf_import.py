@@ -5,6 +5,7 @@ URDFs with no edit."""
 from __future__ import annotations
 
 import math
+import tempfile
 import tomllib
 from pathlib import Path
 
@@ -14,10 +15,13 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.app.urdf_import import placeholder_speeds
 from wirecal.cli.main import main
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.patch import write_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
+from wirecal.solver.formats.stl import stl_vertices
 from wirecal.solver.identify import Estimate
 from wirecal.solver.kinematics import tool_position
 
@@ -393,3 +397,58 @@ def test_calibrated_ur5_urdf_with_the_wire_point_reproduces_the_patched_model(ur
             urdf_fk(same, "base_link", "tool0", x), urdf_fk(UR5_URDF, "base_link", "tool0", x),
             atol=TOL_MM,
         )  # fmt: skip
+
+
+coordinate = st.floats(-10.0, 10.0, allow_nan=False, width=32)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(coordinate, coordinate, coordinate), min_size=3, max_size=30))
+def test_stl_vertices_read_back_from_binary_and_ascii(vertices):
+    """Both STL encodings of the same triangles give the same vertices (float32 exact)."""
+    v = np.array(vertices[: len(vertices) // 3 * 3], dtype="<f4")
+    facets = np.zeros(len(v) // 3, dtype=[("f", "<f4", (12,)), ("a", "<u2")])
+    facets["f"][:, 3:] = v.reshape(-1, 9)
+    binary = b"solid but binary".ljust(80) + len(facets).to_bytes(4, "little") + facets.tobytes()
+    ascii_ = "solid t\n" + "".join(
+        "facet normal 0 0 0\nouter loop\n"
+        + "".join(f"vertex {x!r} {y!r} {z!r}\n" for x, y, z in v[i : i + 3].tolist())
+        + "endloop\nendfacet\n"
+        for i in range(0, len(v), 3)
+    )
+    with tempfile.TemporaryDirectory() as d:
+        for name, data in (("b.stl", binary), ("a.stl", ascii_.encode())):
+            path = Path(d) / name
+            path.write_bytes(data)
+            np.testing.assert_array_equal(stl_vertices(path), v.astype(float))
+
+
+def test_a_broken_stl_is_an_error_naming_it(tmp_path):
+    bad = tmp_path / "bad.stl"
+    bad.write_bytes(b"solid x\nvertex 1 2\nendsolid\n")
+    with pytest.raises(WirecalError, match=r"bad\.stl: an ASCII STL vertex is not three numbers"):
+        stl_vertices(bad)
+    bad.write_bytes(b"solid x\nendsolid\n")
+    with pytest.raises(WirecalError, match=r"bad\.stl: no vertices"):
+        stl_vertices(bad)
+    bad.write_bytes(b"solid x\nvertex 1 2 nan\nendsolid\n")
+    with pytest.raises(WirecalError, match=r"bad\.stl: a vertex is not finite"):
+        stl_vertices(bad)
+
+
+@given(st.integers(1, 20), st.integers(2, 8))
+def test_equal_whole_rad_s_speeds_are_placeholders(rad_s, n):
+    assert placeholder_speeds(np.full(n, math.degrees(rad_s))) is not None
+
+
+@given(st.lists(st.floats(60.0, 1000.0), min_size=2, max_size=8))
+def test_plausible_speeds_are_not_flagged(speeds):
+    speeds = np.array(speeds)
+    whole = np.isclose(np.radians(speeds), np.round(np.radians(speeds)), rtol=0, atol=1e-9)
+    if np.all(speeds == speeds[0]) and whole[0]:
+        assert placeholder_speeds(speeds) is not None
+    else:
+        assert placeholder_speeds(speeds) is None
+    slow = speeds.copy()
+    slow[-1] = 59.0
+    assert "slower than 60 °/s" in str(placeholder_speeds(slow))

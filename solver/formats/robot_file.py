@@ -59,6 +59,7 @@ from wirecal.solver.exit_geometry import Exit, Eyelet, Pulley
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver.robot import (
+    DEFAULT_CHANNEL,
     DEFAULT_DRUM_PPM_PER_K,
     DEFAULT_LINK_RADIUS_MM,
     DEFAULT_SCALE_TOLERANCE_PPM,
@@ -325,8 +326,9 @@ def _encoder(enc: Table, controller: Controller | None) -> Encoder | None:
         )
         interface = None
     pulse = interface == "pulse"
-    default_channel = 1 if interface == "belt" else 0
-    channel = enc.integer("channel", default_channel, lo=0, hi=1 if pulse else 16)
+    channel = enc.integer(
+        "channel", DEFAULT_CHANNEL.get(interface or "", 0), lo=0, hi=1 if pulse else 16
+    )
     mode = enc.integer("belt_mode", 0, lo=0, hi=16)
     inputs = enc.vector(
         "pulse_inputs",

@@ -14,7 +14,7 @@ MAX_STL_BYTES = 64 * 1024 * 1024
 
 _HEADER = 80
 _FACET = 50  # normal, three vertices (12 float32) and a 2-byte attribute
-_VERTEX = re.compile(rb"^\s*vertex\s+(\S+)\s+(\S+)\s+(\S+)", re.M)
+_VERTEX = re.compile(rb"^[ \t]*vertex\b([^\r\n]*)", re.M)
 
 
 def stl_vertices(path: Path) -> np.ndarray:
@@ -38,9 +38,11 @@ def stl_vertices(path: Path) -> np.ndarray:
         )
         points = facets["f"][:, 3:].reshape(-1, 3).astype(float)
     else:
-        found = _VERTEX.findall(data)
+        rows = [line.split() for line in _VERTEX.findall(data)]
         try:
-            points = np.array([[float(x) for x in v] for v in found]).reshape(-1, 3)
+            if any(len(r) != 3 for r in rows):
+                raise ValueError
+            points = np.array([[float(x) for x in r] for r in rows]).reshape(-1, 3)
         except ValueError:
             raise WirecalError(f"{path}: an ASCII STL vertex is not three numbers") from None
     if not len(points):
