@@ -10,13 +10,14 @@ import numpy as np
 
 from wirecal.app.urdf_import import ImportOptions, urdf_robot_file
 from wirecal.cli.main import user_errors
+from wirecal.gen.languages import COUNTER_BITS
 from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.urdf import dh_urdf_text, read_urdf, urdf_with_origins
-from wirecal.solver.robot import LANGUAGES
+from wirecal.solver.robot import INTERFACES, LANGUAGES
 from wirecal.solver.urdf_model import calibrated_origins, read_chain
 
 
@@ -48,6 +49,7 @@ def _numbers(count: int | None, what: str):
 @click.option(
     "--wire-point-mm",
     callback=_numbers(3, "three numbers X,Y,Z (mm)"),
+    metavar="X,Y,Z",
     help="The wire's attachment point in the tip link's frame, X,Y,Z in mm (default: the "
     "tip link's origin; write --wire-point-mm=-50,0,40 when X is negative).",
 )
@@ -61,6 +63,7 @@ def _numbers(count: int | None, what: str):
 @click.option(
     "--joint-speed-deg-s",
     callback=_numbers(None, "one speed per joint (deg/s)"),
+    metavar="S1,…,Sn",
     help="The data sheet's maximum joint speeds, S1,…,Sn in deg/s, instead of the URDF's.",
 )
 @click.option(
@@ -73,14 +76,17 @@ def _numbers(count: int | None, what: str):
     "--counter-bits",
     type=int,
     default=None,
-    help="Controller counter width (default: the language's: 24 for V+, 32 for URScript).",
+    help="Controller counter width (default: the language's: "
+    + ", ".join(f"{bits} for {lang}" for lang, bits in sorted(COUNTER_BITS.items()))
+    + ").",
 )
 @click.option(
     "--interface",
     default=None,
     type=click.Choice(["belt", "device", "pulse"]),
-    help="How the controller program reads the encoder (default: the language's: belt for "
-    "V+, pulse for URScript).",
+    help="How the controller program reads the encoder (default: the language's: "
+    + ", ".join(f"{ways[0]} for {lang}" for lang, ways in sorted(INTERFACES.items()))
+    + ").",
 )
 @click.option("--host", default=None, help="URScript: the PC address the run sends its log to.")
 @click.option(
