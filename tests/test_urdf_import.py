@@ -9,6 +9,7 @@ import tempfile
 import tomllib
 from pathlib import Path
 
+import click
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -17,6 +18,7 @@ from hypothesis import strategies as st
 
 from wirecal.app.urdf_import import placeholder_speeds
 from wirecal.cli.main import main
+from wirecal.cli.urdf import _numbers
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.patch import write_patch
 from wirecal.solver.formats.plan_file import load_plan
@@ -452,3 +454,16 @@ def test_plausible_speeds_are_not_flagged(speeds):
     slow = speeds.copy()
     slow[-1] = 59.0
     assert "slower than 60 °/s" in str(placeholder_speeds(slow))
+
+
+@given(st.lists(st.floats(allow_nan=False, allow_infinity=False), min_size=1, max_size=7))
+def test_the_comma_separated_numbers_read_back(values):
+    """--wire-point-mm and --joint-speed-deg-s: repr'd floats come back exactly; a count
+    other than the one asked for, or a word, is a usage error."""
+    text = ",".join(repr(v) for v in values)
+    assert _numbers(None, "numbers")(None, None, text) == tuple(values)
+    if len(values) != 3:
+        with pytest.raises(click.BadParameter, match="give X"):
+            _numbers(3, "X")(None, None, text)
+    with pytest.raises(click.BadParameter):
+        _numbers(None, "numbers")(None, None, text + ",x")
