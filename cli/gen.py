@@ -16,7 +16,7 @@ from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.validation_files import load_setup
-from wirecal.solver.robot import LANGUAGES
+from wirecal.solver.robot import LANGUAGES, language_mismatch
 from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
 
 _D = RunParameters()
@@ -38,7 +38,8 @@ _G = GenOptions()
 @click.option(
     "--language",
     type=click.Choice(sorted(LANGUAGES)),
-    help="Controller language; default: the robot file's [controller] language (V+ if none).",
+    help="Controller language: must be the robot file's [controller] language (V+ if none), "
+    "whose encoder interface and counter width the file holds; a check, not a switch.",
 )
 @click.option(
     "--host",
@@ -192,10 +193,12 @@ def gen(
     same bytes.
     """
     rb = load_robot(robot)
+    if language is not None and language != rb.controller.language:
+        raise WirecalError(language_mismatch(rb, language))
     pl = load_plan(plan, rb)
     for line in cone_problems(rb, pl):  # a plan made for a wider exit (the paper's) still runs
         click.echo(f"warning: {line}", err=True)
-    if (language or rb.controller.language) == "urscript":
+    if rb.controller.language == "urscript":
         if patch_file or setup_file or echo_log or lf:
             raise WirecalError(
                 "--patch, --validation, --echo-log and --lf are V+ options; the URScript "

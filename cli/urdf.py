@@ -3,79 +3,69 @@
 from __future__ import annotations
 
 import math
-import os
-import tomllib
 from pathlib import Path
 
 import click
 import numpy as np
 
+from wirecal.app.urdf_import import ImportOptions, urdf_robot_file
 from wirecal.cli.main import user_errors
+from wirecal.gen.languages import COUNTER_BITS
 from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.patch import read_patch
-from wirecal.solver.formats.robot_file import load_robot, robot_file_text, robot_from_dict
-from wirecal.solver.formats.urdf import (
-    dh_urdf_text,
-    matrix_rpy,
-    read_urdf,
-    urdf_with_origins,
-)
-from wirecal.solver.identifiability import propose_parameters
-from wirecal.solver.kinematics import Model
-from wirecal.solver.robot import Encoder, Robot, UrdfSource
-from wirecal.solver.urdf_model import calibrated_origins, fk_difference_mm, read_chain
-
-CONTINUOUS_DEG = 360.0
-"""Range written for a URDF ``continuous`` joint (no limits in the file): one turn each way."""
-
-PROPOSAL_POINTS = 300
-EXACT_MM = 1e-9
+from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.urdf import dh_urdf_text, read_urdf, urdf_with_origins
+from wirecal.solver.robot import INTERFACES, LANGUAGES
+from wirecal.solver.urdf_model import calibrated_origins, read_chain
 
 
-def _limits(ch) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
-    lo, hi, speed, notes, problems = [], [], [], [], []
-    for j in ch.moving:
-        where = f"{ch.urdf.path}: joint {j.name!r}"
-        if j.type == "continuous":
-            lo.append(-CONTINUOUS_DEG)
-            hi.append(CONTINUOUS_DEG)
-            notes.append(
-                f"joint {j.name!r} is continuous (no limits in the URDF): written as "
-                f"±{CONTINUOUS_DEG:g}°; narrow it to what the cabling allows"
-            )
-        elif j.lower_rad is None or j.upper_rad is None or j.lower_rad >= j.upper_rad:
-            problems.append(f"{where}: needs <limit lower=… upper=…> with lower < upper")
-            lo.append(0.0)
-            hi.append(0.0)
-        else:
-            lo.append(math.degrees(j.lower_rad))
-            hi.append(math.degrees(j.upper_rad))
-        if j.velocity_rad_s is None or j.velocity_rad_s <= 0:
-            problems.append(f"{where}: needs <limit velocity=…> > 0 (rad/s)")
-            speed.append(0.0)
-        else:
-            speed.append(math.degrees(j.velocity_rad_s))
-    if problems:
-        raise WirecalError(problems)
-    return np.array(lo), np.array(hi), np.array(speed), notes
+def _numbers(count: int | None, what: str):
+    """Return a click callback reading "x,y,z" as ``count`` floats (any count when None)."""
 
+    def parse(_ctx, _param, value: str | None):
+        if value is None:
+            return None
+        try:
+            out = tuple(float(v) for v in value.split(","))
+        except ValueError:
+            raise click.BadParameter(f"{value!r}: give {what}, comma-separated") from None
+        if (count is not None and len(out) != count) or not all(map(math.isfinite, out)):
+            raise click.BadParameter(f"{value!r}: give {what}, comma-separated")
+        return out
 
-def _pose_text(T: np.ndarray) -> str:
-    xyz = ", ".join(f"{v:.6g}" for v in T[:3, 3])
-    rpy = ", ".join(f"{v:.6g}" for v in np.degrees(matrix_rpy(T[:3, :3])))
-    return f"xyz ({xyz}) mm, rpy ({rpy}) deg"
+    return parse
 
 
 @click.command("import-urdf")
 @click.argument("urdf", type=click.Path(dir_okay=False))
-@click.option("--tip", required=True, help="Link at the wire attachment point (chain's end).")
+@click.option("--tip", required=True, help="Link the wire is attached to (the chain's end).")
 @click.option("--base", default=None, help="The chain's first link (default: the root link).")
 @click.option(
     "-o", "--out", "out", required=True, type=click.Path(dir_okay=False), help="Robot file."
 )
 @click.option("--name", default=None, help="Robot name (default: the URDF's robot name).")
+@click.option(
+    "--wire-point-mm",
+    callback=_numbers(3, "three numbers X,Y,Z (mm)"),
+    metavar="X,Y,Z",
+    help="The wire's attachment point in the tip link's frame, X,Y,Z in mm (default: the "
+    "tip link's origin; write --wire-point-mm=-50,0,40 when X is negative).",
+)
+@click.option(
+    "--language",
+    type=click.Choice(sorted(LANGUAGES)),
+    default="vplus",
+    show_default=True,
+    help="Controller language; sets the encoder interface and counter width its programs read.",
+)
+@click.option(
+    "--joint-speed-deg-s",
+    callback=_numbers(None, "one speed per joint (deg/s)"),
+    metavar="S1,…,Sn",
+    help="The data sheet's maximum joint speeds, S1,…,Sn in deg/s, instead of the URDF's.",
+)
 @click.option(
     "--mm-per-count", default=0.025488, show_default=True, type=float, help="Encoder scale."
 )
@@ -83,14 +73,24 @@ def _pose_text(T: np.ndarray) -> str:
     "--range-mm", default=1250.0, show_default=True, type=float, help="Encoder wire range."
 )
 @click.option(
-    "--counter-bits", default=24, show_default=True, type=int, help="Controller counter width."
+    "--counter-bits",
+    type=int,
+    default=None,
+    help="Controller counter width (default: the language's: "
+    + ", ".join(f"{bits} for {lang}" for lang, bits in sorted(COUNTER_BITS.items()))
+    + ").",
 )
 @click.option(
     "--interface",
-    default="belt",
-    show_default=True,
-    type=click.Choice(["belt", "device"]),
-    help="How the controller program reads the encoder (see the robot file format).",
+    default=None,
+    type=click.Choice(["belt", "device", "pulse"]),
+    help="How the controller program reads the encoder (default: the language's: "
+    + ", ".join(f"{ways[0]} for {lang}" for lang, ways in sorted(INTERFACES.items()))
+    + ").",
+)
+@click.option("--host", default=None, help="URScript: the PC address the run sends its log to.")
+@click.option(
+    "--port", default=None, type=click.IntRange(1, 65535), help="URScript: the PC's port."
 )
 @click.option(
     "--parallel-tol-deg",
@@ -101,121 +101,32 @@ def _pose_text(T: np.ndarray) -> str:
 )
 @click.option("--force", is_flag=True, help="Replace OUT if it exists.")
 @user_errors
-def import_urdf(
-    urdf,
-    tip,
-    base,
-    out,
-    name,
-    mm_per_count,
-    range_mm,
-    counter_bits,
-    interface,
-    parallel_tol_deg,
-    force,
-):
+def import_urdf(urdf, out, force, **options):
     """Write a robot file in Craig's modified DH from a URDF's chain BASE → TIP.
 
     The DH model's forward kinematics equals the URDF's: each joint turns the same way
     and is zero where the URDF's is (θ offsets absorb the difference); fixed joints are
-    folded in; the tip link's origin becomes the tool point (the wire attachment point:
-    choose a tip link there). Limits and speeds are converted to degrees; the calibration
-    parameters are proposed from the identifiability analysis. Prismatic and mimic joints
-    are refused.
+    folded in; the wire point (--wire-point-mm in the tip link's frame) becomes the tool
+    point. Limits and speeds are converted to degrees (placeholder speeds are flagged and
+    left for you to confirm); link radii come from the URDF's collision geometry or link
+    lengths; [cell] holds the mounting plane; the calibration parameters are proposed from
+    the identifiability analysis. Prismatic and mimic joints are refused.
     """
     out_path = Path(out)
     with Outputs([out_path], force=force, inputs=[urdf]) as outs:
-        text, ch, params, notes = _import_text(
-            urdf,
-            tip,
-            base,
-            out_path,
-            name,
-            Encoder(mm_per_count, range_mm, counter_bits, interface),
-            parallel_tol_deg,
-        )
-        outs.put(out_path, text)
-    n = len(ch.moving)
-    click.echo(f"wrote {out_path}: {n} joints ({', '.join(j.name for j in ch.moving)})")
-    click.echo(f"calibration parameters: {' '.join(params)}")
-    for note in notes:
+        result = urdf_robot_file(urdf, out_path, ImportOptions(**options))
+        outs.put(out_path, result.text)
+    moving = result.chain.moving
+    click.echo(f"wrote {out_path}: {len(moving)} joints ({', '.join(j.name for j in moving)})")
+    click.echo(f"calibration parameters: {' '.join(result.parameters)}")
+    for note in result.notes:
         click.echo(f"note: {note}")
+    for warning in result.warnings:
+        click.echo(f"warning: {warning}", err=True)
 
 
 def _tol(parallel_tol_deg: float | None) -> float:
     return PARALLEL_TOL if parallel_tol_deg is None else math.radians(parallel_tol_deg)
-
-
-def _import_text(urdf, tip, base, out_path: Path, name, encoder: Encoder, parallel_tol_deg):
-    """Return the robot file's text for import-urdf, checked to read back."""
-    doc = read_urdf(urdf)
-    ch = read_chain(doc, base, tip, _tol(parallel_tol_deg))
-    lo, hi, speed, notes = _limits(ch)
-    n = len(ch.moving)
-    robot_name = name or doc.name or Path(urdf).stem
-    model = Model(ch.dh.dh, ch.dh.tool_point)
-    rng = np.random.default_rng(0)
-    q = lo + rng.uniform(0, 1, (PROPOSAL_POINTS, n)) * (hi - lo)
-    params = propose_parameters(model, q, (lo + hi) / 2, ch.dh.dh)
-    if f"th{n}" not in params:
-        notes.append(
-            f"th{n} is not proposed: the tip lies on the last joint's axis, so no wire length "
-            "depends on it; import with a tip link at the wire attachment point"
-        )
-    for i, angle in ch.dh.snapped:
-        notes.append(
-            f"the axes of {ch.moving[i].name!r} and {ch.moving[i + 1].name!r} are "
-            f"{angle:.2g} rad from parallel (a rounded π/2 in the URDF): taken as parallel"
-        )
-    diff = fk_difference_mm(ch, np.radians(q))
-    if ch.dh.snapped:
-        notes.append(
-            f"so the DH tip differs from the URDF's by up to {diff:.2g} mm "
-            f"({PROPOSAL_POINTS} configurations within the limits)"
-        )
-    elif diff > EXACT_MM:  # a guard: the construction is exact
-        raise WirecalError(
-            f"{urdf}: the DH model's tip differs from the URDF's by {diff:.3g} mm; "
-            "please report this URDF"
-        )
-    robot = Robot(
-        name=robot_name,
-        dh=ch.dh.dh,
-        joint_min_deg=lo,
-        joint_max_deg=hi,
-        joint_speed_deg_s=speed,
-        tool_point=ch.dh.tool_point,
-        encoder=encoder,
-        parameters=params,
-        urdf=UrdfSource(str(urdf), ch.base_link, ch.tip_link, parallel_tol_deg),
-    )
-    source = os.path.relpath(Path(urdf).resolve(), out_path.resolve().parent)
-    frame0 = (
-        ["frame 0 is the base link's frame"]
-        if np.allclose(ch.dh.frame0, np.eye(4), atol=0)
-        else [
-            "frame 0 is not the base link's frame (row 1 cannot place joint 1's axis in it;",
-            f"wire lengths do not depend on it): base link → frame 0 is {_pose_text(ch.dh.frame0)}",
-        ]
-    )
-    header = [
-        f"{robot_name}: imported from {source} (chain {ch.base_link} → {ch.tip_link}) by",
-        "wirecal import-urdf. Each number below is derived from that URDF: the DH rows from its",
-        "joint origins and axes, the limits and speeds from its <limit> tags (rad → deg).",
-        *frame0,
-        *notes,
-        "",
-    ]
-    row_notes = [f"{j.name}" for j in ch.moving]
-    text = robot_file_text(
-        robot,
-        header=header,
-        row_notes=row_notes,
-        encoder_note="not in a URDF: from the import's options (defaults: a Unimeasure EP-50)",
-        urdf_source=source,
-    )
-    robot_from_dict(tomllib.loads(text), str(out_path))  # what is written reads back
-    return text, ch, params, notes
 
 
 @click.command("export-urdf")
@@ -265,9 +176,16 @@ def _export_text(robot, patch, source) -> str:
         doc = read_urdf(path_in)
         if tip is None:
             raise WirecalError(f"{robot}: no [urdf] table naming the tip link; import it first")
-        ch = read_chain(doc, base, tip, _tol(rob.urdf.parallel_tol_deg if rob.urdf else None))
+        wire = rob.urdf.wire_point_mm if rob.urdf else None
+        ch = read_chain(
+            doc,
+            base,
+            tip,
+            _tol(rob.urdf.parallel_tol_deg if rob.urdf else None),
+            None if wire is None else np.array(wire),
+        )
         same = ch.dh.dh.shape == rob.dh.shape and np.allclose(ch.dh.dh, rob.dh, atol=1e-9)
-        if not same or not np.allclose(ch.dh.tool_point, rob.tool_point, atol=1e-9):
+        if not same or not np.allclose(ch.tool_point, rob.tool_point, atol=1e-9):
             raise WirecalError(
                 f"{robot}: its DH table or tool point differs from what {path_in} gives for "
                 f"{ch.base_link} → {ch.tip_link}: re-import the URDF (wirecal import-urdf)"

@@ -75,8 +75,29 @@ LANGUAGES = {"vplus": "Adept/Omron V+ and eV+", "urscript": "Universal Robots UR
 INTERFACES = {"vplus": ("belt", "device"), "urscript": ("pulse",)}
 """The encoder interfaces each language's programs read (``[encoder] interface``)."""
 
+DEFAULT_CHANNEL = {"belt": 1, "device": 0, "pulse": 0}
+"""The ``[encoder] channel`` when the robot file gives none, by interface (V+ belt encoders
+count from 1; DEVICE units and the URScript pulse decoder's encoder index from 0)."""
+
 LIVE_CHECK = {"vplus": "wc.check", "urscript": "wc_check"}
 """The generated program that shows the live counts, by language (messages name it)."""
+
+
+def language_mismatch(robot: Robot, language: str) -> str:
+    """Return the one message for a language other than the robot file's (gen refuses it).
+
+    The file's ``[encoder]`` interface and counter width belong to its language's programs
+    (:data:`INTERFACES`), so another language cannot read the same encoder set-up.
+    """
+    enc = robot.encoder
+    return (
+        f"{robot.source}: [controller] language is {robot.controller.language!r} "
+        f'(encoder interface "{enc.interface}", a {enc.counter_bits}-bit counter), not '
+        f"{language!r}: the encoder set-up belongs to the language, so --language cannot "
+        f"switch it. For {LANGUAGES[language]}, write a robot file with language = "
+        f'"{language}" and its encoder keys (import-urdf --language {language} does), or '
+        "drop --language"
+    )
 
 
 @dataclass(frozen=True)
@@ -105,6 +126,7 @@ class UrdfSource:
     base_link: str
     tip_link: str
     parallel_tol_deg: float | None = None  # import-urdf --parallel-tol-deg, if given
+    wire_point_mm: tuple[float, float, float] | None = None  # in the tip link's frame
 
 
 @dataclass(frozen=True)
@@ -126,6 +148,7 @@ class Robot:
     link_radius_mm: np.ndarray | None = None  # capsules between joint frames; see clearance
     urdf: UrdfSource | None = None
     controller: Controller = Controller()
+    joint_speed_confirmed: bool = True  # false: speeds a URDF gave as placeholders (gen refuses)
 
     @property
     def n_joints(self) -> int:
@@ -165,6 +188,26 @@ class Robot:
             return float(self.tool_point[p.row])
         value = float(self.dh[p.row, P.DH_COLUMN[p.kind]])
         return math.degrees(value) if p.angular else value
+
+    def program_problems(self) -> list[str]:
+        """Return why no controller program may be written for this robot (none: it may)."""
+        return [p for p in (self.controller_problem(), self.speed_problem()) if p]
+
+    def speed_problem(self) -> str | None:
+        """Why the joint speeds cannot be trusted to time motion, or None.
+
+        ``wirecal gen`` derives each move's speed (V+ SPEED from the wire's limits, URScript
+        joint speed) from ``joint_speed_deg_s``: speeds below the real ones would let the real
+        wire run faster than the encoder allows.
+        """
+        if self.joint_speed_confirmed:
+            return None
+        return (
+            f"{self.source}: kinematics.joint_speed_confirmed = false: the joint speeds came "
+            "from a URDF that gave placeholders; enter the data sheet's maximum joint speeds "
+            "in joint_speed_deg_s and set joint_speed_confirmed = true (or re-import with "
+            "import-urdf --joint-speed-deg-s)"
+        )
 
     def controller_problem(self) -> str | None:
         """Why the controller programs and the log cannot serve this arm, or None.

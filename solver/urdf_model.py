@@ -39,6 +39,13 @@ class UrdfChain:
     moving: tuple[Joint, ...]  # its revolute joints, in order
     dh: DhChain
     link_offsets: dict[str, tuple[int, np.ndarray]]  # link → (k, D): frame k → link
+    wire_point_mm: np.ndarray  # the wire attachment point in the tip link's frame
+
+    @property
+    def tool_point(self) -> np.ndarray:
+        """Return the wire attachment point in DH frame n (the robot file's tool point)."""
+        D = self.dh.tip_offset
+        return D[:3, :3] @ self.wire_point_mm + D[:3, 3]
 
     @property
     def base_link(self) -> str:
@@ -59,9 +66,17 @@ def _inv(T: np.ndarray) -> np.ndarray:
 
 
 def read_chain(
-    urdf: Urdf, base: str | None, tip: str, parallel_tol: float = PARALLEL_TOL
+    urdf: Urdf,
+    base: str | None,
+    tip: str,
+    parallel_tol: float = PARALLEL_TOL,
+    wire_point_mm: np.ndarray | None = None,
 ) -> UrdfChain:
-    """Return the serial chain from ``base`` to ``tip`` in modified DH (see the module doc)."""
+    """Return the serial chain from ``base`` to ``tip`` in modified DH (see the module doc).
+
+    ``wire_point_mm``: the wire's attachment in the tip link's frame (default its origin).
+    The last DH frame is placed from the tip link's origin either way.
+    """
     path = chain(urdf, base, tip)
     if not path:
         raise WirecalError(f"{urdf.path}: --base and --tip are the same link {tip!r}")
@@ -90,14 +105,15 @@ def read_chain(
         raise WirecalError(f"{urdf.path}: {exc}") from None
     F = dh.frame0 @ dh_frames(dh.dh, np.zeros((1, len(moving))))[0]
     offsets = {link: (k, _inv(F[k]) @ L) for link, (k, L) in link_frames.items()}
-    return UrdfChain(urdf, tuple(path), tuple(moving), dh, offsets)
+    wire = np.zeros(3) if wire_point_mm is None else np.asarray(wire_point_mm, dtype=float)
+    return UrdfChain(urdf, tuple(path), tuple(moving), dh, offsets, wire)
 
 
 def calibrated_origins(ch: UrdfChain, model: Model) -> dict[str, np.ndarray]:
     """Return new origins (4×4, mm) of the chain's joints for the model ``model`` (same joints)."""
     n = len(ch.moving)
     F = ch.dh.frame0 @ dh_frames(model.dh, np.zeros((1, n)))[0]
-    tool_moved = not np.allclose(model.tool_point, ch.dh.tool_point, rtol=0, atol=1e-12)
+    tool_moved = not np.allclose(model.tool_point, ch.tool_point, rtol=0, atol=1e-12)
     frames_ = {}
     for link, (k, D) in ch.link_offsets.items():
         D = D.copy()
@@ -109,7 +125,7 @@ def calibrated_origins(ch: UrdfChain, model: Model) -> dict[str, np.ndarray]:
                     f"child of revolute joint {last.name!r}: its origin must stay on the axis. "
                     "Add a fixed joint to a tool link and import with that tip"
                 )
-            D[:3, 3] = model.tool_point
+            D[:3, 3] = model.tool_point - D[:3, :3] @ ch.wire_point_mm
         frames_[link] = F[k] @ D
     return {j.name: _inv(frames_[j.parent]) @ frames_[j.child] for j in ch.joints}
 
@@ -122,7 +138,7 @@ def _axis_angle(k: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 
 def urdf_tip_mm(ch: UrdfChain, q: np.ndarray) -> np.ndarray:
-    """Return the tip's origin in the base link (N, 3) straight from the URDF's joints, q (N, n)."""
+    """Return the wire point in the base link (N, 3) straight from the URDF's joints, q (N, n)."""
     q = np.atleast_2d(q)
     T = np.broadcast_to(np.eye(4), (len(q), 4, 4)).copy()
     k = 0
@@ -133,7 +149,7 @@ def urdf_tip_mm(ch: UrdfChain, q: np.ndarray) -> np.ndarray:
             M[:, :3, :3] = _axis_angle(j.axis, q[:, k])
             T = T @ M
             k += 1
-    return T[:, :3, 3]
+    return T[:, :3, :3] @ ch.wire_point_mm + T[:, :3, 3]
 
 
 def fk_difference_mm(ch: UrdfChain, q: np.ndarray) -> float:
@@ -143,5 +159,5 @@ def fk_difference_mm(ch: UrdfChain, q: np.ndarray) -> float:
     q (N, n) in radians: the import's check of itself.
     """
     F = ch.dh.frame0 @ dh_frames(ch.dh.dh, q)
-    tip = F[:, -1, :3, :3] @ ch.dh.tool_point + F[:, -1, :3, 3]
+    tip = F[:, -1, :3, :3] @ ch.tool_point + F[:, -1, :3, 3]
     return float(np.max(np.linalg.norm(tip - urdf_tip_mm(ch, q), axis=1)))

@@ -225,10 +225,18 @@ def test_gen_writes_the_scripts_of_the_robot_files_language(tmp_path):
     assert '192.168.1.10", 50123' in (tmp_path / "out" / "wc_run.script").read_text()
 
 
-def test_gen_language_overrides_the_robot_file(tmp_path):
+def test_gen_language_other_than_the_robot_files_is_refused_with_one_message(tmp_path):
+    """--language is a check: both directions give the same one message and write nothing."""
     r = _gen(UR5 / "robot.toml", UR5 / "plan.toml", "-o", tmp_path / "v", "--language", "vplus")
     assert r.exit_code == 2
-    assert 'interface = "pulse" is read by the URScript programs' in r.output
+    lines = [x for x in r.output.splitlines() if x.startswith("error:")]
+    assert lines == [
+        f"error: {UR5 / 'robot.toml'}: [controller] language is 'urscript' (encoder interface "
+        "\"pulse\", a 32-bit counter), not 'vplus': the encoder set-up belongs to the language, "
+        "so --language cannot switch it. For Adept/Omron V+ and eV+, write a robot file with "
+        'language = "vplus" and its encoder keys (import-urdf --language vplus does), or drop '
+        "--language"
+    ]
     r = _gen(
         VIPER / "robot.toml",
         VIPER / "paper_plan.toml",
@@ -238,9 +246,15 @@ def test_gen_language_overrides_the_robot_file(tmp_path):
         "urscript",
     )
     assert r.exit_code == 2
-    assert "the URScript programs read the controller's pulse decoder" in r.output
-    assert "no PC address" in r.output
+    assert r.output.count("error:") == 1
+    assert (
+        "language is 'vplus' (encoder interface \"belt\", a 24-bit counter), not 'urscript'"
+        in r.output
+    )
     assert not (tmp_path / "u").exists()
+    assert not (tmp_path / "v").exists()
+    r = _gen(UR5 / "robot.toml", UR5 / "plan.toml", "-o", tmp_path / "w", "--language", "urscript")
+    assert r.exit_code == 0, r.output  # the file's own language: a check that passes
 
 
 def test_gen_refuses_v_plus_options_for_urscript(tmp_path):

@@ -168,8 +168,7 @@ def _check(robot: Robot, opt: UrOptions) -> tuple[str, int]:
             f"{robot.source}: encoder.counter_bits = {enc.counter_bits}: the URScript programs "
             f"log the raw count, an int32; give counter_bits = {RAW_COUNTER_BITS}"
         )
-    if robot.controller_problem():
-        problems.append(str(robot.controller_problem()))
+    problems += robot.program_problems()
     if any(not 32 <= ord(ch) <= 126 or ch in '"\\' for ch in robot.name):
         problems.append(
             f"{robot.source}: name {robot.name!r}: the programs write it in a URScript "

@@ -55,6 +55,11 @@ finer than the 0.01 mm of a search in 0.1 then 0.01 mm steps, in 8 moves instead
 about 20)."""
 
 
+BELT_COUNTER_BITS = 24
+"""The V+ belt encoder counter's width: a signed 24-bit number that rolls over (V+ User's
+Guide p. 312, as summarised in DESIGN.md): the robot file's counter_bits for interface "belt"."""
+
+
 @dataclass(frozen=True)
 class GenOptions:
     """Options of the generated module."""
@@ -94,8 +99,7 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
             "URScript programs (gen --language urscript); the V+ module reads a belt-encoder "
             'input: interface = "belt"'
         )
-    if robot.controller_problem():
-        problems.append(robot.controller_problem())
+    problems += robot.program_problems()
     if any(not 32 <= ord(ch) <= 126 or ch == '"' for ch in robot.name):
         problems.append(
             f"{robot.source}: name {robot.name!r}: a V+ string holds printable "

@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -58,6 +59,7 @@ from wirecal.solver.exit_geometry import Exit, Eyelet, Pulley
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver.robot import (
+    DEFAULT_CHANNEL,
     DEFAULT_DRUM_PPM_PER_K,
     DEFAULT_LINK_RADIUS_MM,
     DEFAULT_SCALE_TOLERANCE_PPM,
@@ -122,8 +124,16 @@ _KEYS = {
         "geometry",
         "urdf",
         "controller",
+        "cell",
     ),
-    "kinematics": ("convention", "dh", "joint_min_deg", "joint_max_deg", "joint_speed_deg_s"),
+    "kinematics": (
+        "convention",
+        "dh",
+        "joint_min_deg",
+        "joint_max_deg",
+        "joint_speed_deg_s",
+        "joint_speed_confirmed",
+    ),
     "tool": ("point_mm",),
     "encoder": (
         "mm_per_count",
@@ -144,8 +154,9 @@ _KEYS = {
     ),
     "calibration": ("parameters",),
     "geometry": ("link_radius_mm",),
-    "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg"),
+    "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg", "wire_point_mm"),
     "controller": ("language", "host", "port"),
+    "cell": ("floor_z_mm", "margin_mm", "body_min_deg", "body_max_deg"),
 }
 
 PULSE_INPUTS = (8, 11)
@@ -177,6 +188,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         hi=MAX_SPEED_DEG_S,
         unit="deg/s",
     )
+    speed_confirmed = kin.boolean("joint_speed_confirmed", True)
     tool = doc.table("tool", _KEYS["tool"])
     point = tool.vector(
         "point_mm", length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm"
@@ -196,6 +208,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     if dh is not None and radii is None:
         radii = np.full(dh.shape[0] - 1, DEFAULT_LINK_RADIUS_MM)
     urdf = _urdf(doc.table("urdf", _KEYS["urdf"], required=False), source)
+    _cell(doc.table("cell", _KEYS["cell"], required=False), n)
     _sanity(doc, dh, lo, hi, encoder, radii)
     doc.raise_if_any()
     dh_rad = valid(dh).copy()
@@ -213,7 +226,29 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         link_radius_mm=radii,
         urdf=urdf,
         controller=valid(controller),
+        joint_speed_confirmed=valid(speed_confirmed),
     )
+
+
+def _cell(table: Table, n: int | None) -> None:
+    """Check the optional ``[cell]`` table's keys (the cell model reads them).
+
+    ``floor_z_mm``: the mounting plane's height in frame 0; ``margin_mm`` (≥ 0); the
+    optional ``body_min_deg``/``body_max_deg``, one per joint, min below max.
+    """
+    table.number("floor_z_mm", None, lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm")
+    table.number("margin_mm", None, lo=0, hi=MAX_LENGTH_MM, unit="mm")
+    lo, hi = (
+        table.vector(
+            key, None, length=n, labels="(one per joint)", lo=-MAX_JOINT_DEG, hi=MAX_JOINT_DEG
+        )
+        for key in ("body_min_deg", "body_max_deg")
+    )
+    if (lo is None) != (hi is None):
+        table.add("body_min_deg", "give body_min_deg and body_max_deg together")
+    elif lo is not None and hi is not None and lo.shape == hi.shape:
+        for j in np.flatnonzero(lo >= hi):
+            table.add("body_min_deg", f"joint {j + 1}: min {lo[j]:g} is not below max {hi[j]:g}")
 
 
 def _controller(table: Table) -> Controller | None:
@@ -291,8 +326,9 @@ def _encoder(enc: Table, controller: Controller | None) -> Encoder | None:
         )
         interface = None
     pulse = interface == "pulse"
-    default_channel = 1 if interface == "belt" else 0
-    channel = enc.integer("channel", default_channel, lo=0, hi=1 if pulse else 16)
+    channel = enc.integer(
+        "channel", DEFAULT_CHANNEL.get(interface or "", 0), lo=0, hi=1 if pulse else 16
+    )
     mode = enc.integer("belt_mode", 0, lo=0, hi=16)
     inputs = enc.vector(
         "pulse_inputs",
@@ -549,10 +585,20 @@ def _urdf(table: Table, source: str) -> UrdfSource | None:
     base = table.string("base_link")
     tip = table.string("tip_link")
     tol = table.number("parallel_tol_deg", None, above=0, hi=0.05, unit="deg")
+    wire = table.vector(
+        "wire_point_mm",
+        None,
+        length=3,
+        labels="(x, y, z)",
+        lo=-MAX_LENGTH_MM,
+        hi=MAX_LENGTH_MM,
+        unit="mm",
+    )
     if path is None or base is None or tip is None:
         return None
     here = Path() if source.startswith("<") else Path(source).parent
-    return UrdfSource(str(here / path), base, tip, tol)
+    point = None if wire is None else (float(wire[0]), float(wire[1]), float(wire[2]))
+    return UrdfSource(str(here / path), base, tip, tol, point)
 
 
 TIDY = 1e-11
@@ -614,13 +660,18 @@ def robot_file_text(
     row_notes: list[str],
     encoder_note: str,
     urdf_source: str | None = None,
+    speed_notes: Sequence[str] = (),
+    geometry_notes: Sequence[str] | None = None,
+    tables: Sequence[str] = (),
 ) -> str:
     """Return a robot file for ``robot`` that reads back to the same numbers.
 
     A robot file for ``robot`` that :func:`load_robot` reads back to the same numbers
     (to :data:`TIDY`). ``header`` lines become comments at the top; ``row_notes``
     (one per joint) comment the DH rows and limits; ``urdf_source`` is written as given
-    (relative to the robot file's folder).
+    (relative to the robot file's folder). ``speed_notes`` comment the joint speeds;
+    with ``geometry_notes`` (comments, possibly none) the link radii are written as a
+    ``[geometry]`` table; ``tables`` are lines of further tables, appended as given.
     """
     dh = robot.dh_deg()
 
@@ -639,7 +690,9 @@ def robot_file_text(
         "]",
         f"joint_min_deg = {vec(robot.joint_min_deg, LIMIT_TIDY)}",
         f"joint_max_deg = {vec(robot.joint_max_deg, LIMIT_TIDY)}",
+        *(f"# {line}" for line in speed_notes),
         f"joint_speed_deg_s = {vec(robot.joint_speed_deg_s, LIMIT_TIDY)}",
+        *([] if robot.joint_speed_confirmed else ["joint_speed_confirmed = false"]),
         "",
         "[tool]",
         "# wire attachment point in the last joint's frame",
@@ -677,15 +730,31 @@ def robot_file_text(
         "[calibration]",
         "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
     ]
+    if geometry_notes is not None and robot.link_radius_mm is not None:
+        lines += ["", "[geometry]", *(f"# {line}" for line in geometry_notes)]
+        lines.append(f"link_radius_mm = {vec(robot.link_radius_mm)}")
     if urdf_source is not None and robot.urdf is not None:
-        lines += [
-            "",
-            "[urdf]",
-            "# the URDF this file was imported from; export-urdf changes only its joint origins",
-            f"source = {json.dumps(urdf_source, ensure_ascii=False)}",
-            f"base_link = {json.dumps(robot.urdf.base_link, ensure_ascii=False)}",
-            f"tip_link = {json.dumps(robot.urdf.tip_link, ensure_ascii=False)}",
-        ]
-        if robot.urdf.parallel_tol_deg is not None:
-            lines.append(f"parallel_tol_deg = {_num(robot.urdf.parallel_tol_deg)}")
+        lines += ["", *_urdf_lines(robot.urdf, urdf_source)]
+    for line in tables:
+        lines.append(line)
     return "\n".join(lines) + "\n"
+
+
+def _urdf_lines(urdf: UrdfSource, source: str) -> list[str]:
+    """Return the ``[urdf]`` table's lines (``source`` as the file should hold it)."""
+    lines = [
+        "[urdf]",
+        "# the URDF this file was imported from; export-urdf changes only its joint origins",
+        f"source = {json.dumps(source, ensure_ascii=False)}",
+        f"base_link = {json.dumps(urdf.base_link, ensure_ascii=False)}",
+        f"tip_link = {json.dumps(urdf.tip_link, ensure_ascii=False)}",
+    ]
+    if urdf.parallel_tol_deg is not None:
+        lines.append(f"parallel_tol_deg = {_num(urdf.parallel_tol_deg)}")
+    if urdf.wire_point_mm is not None:
+        point = ", ".join(_num(v) for v in urdf.wire_point_mm)
+        lines += [
+            "# the wire attachment point in the tip link's frame (import-urdf --wire-point-mm)",
+            f"wire_point_mm = [{point}]",
+        ]
+    return lines

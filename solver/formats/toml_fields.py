@@ -253,6 +253,16 @@ class Table:
             return None
         return x
 
+    def boolean(self, key: str, default: Any = MISSING) -> bool | None:
+        """Return a TOML boolean (``true`` or ``false``)."""
+        found, x = self._value(key, default)
+        if not found:
+            return x
+        if not isinstance(x, bool):
+            self.add(key, f"is {show(x)}; give true or false")
+            return None
+        return x
+
     def strings(self, key: str, default: Any = MISSING, *, what: str = "names") -> list[str] | None:
         """Return a list of non-blank strings (``what`` they are, for the message)."""
         found, x = self._value(key, default)

@@ -8,6 +8,13 @@ A small reader on the standard library (``xml.etree``) rather than a URDF packag
 needs only joints' origins, axes, types and limits, and the packages that parse URDF fully
 (yourdfpy, urdfpy) pull in mesh libraries (trimesh, networkx, lxml) to load geometry that is
 never used here. Units are the URDF's (m, rad) in :class:`Joint`; mm at :func:`origin_mm`.
+
+Hostile files are refused before they cost memory or time: a file larger than
+:data:`MAX_URDF_BYTES`, elements nested deeper than :data:`MAX_DEPTH` or more than
+:data:`MAX_ELEMENTS` of them, and any entity declaration (a URDF needs none; entities are how
+"billion laughs" files expand) — all found by a streaming pass of expat before the tree is
+built. The joints must form a tree: a link with two parent joints, a joint naming an
+undeclared link, or a loop of joints is an error naming them.
 """
 
 from __future__ import annotations
@@ -15,6 +22,8 @@ from __future__ import annotations
 import copy
 import math
 import xml.etree.ElementTree as ET
+import xml.parsers.expat
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,6 +34,17 @@ from wirecal.solver.errors import WirecalError
 
 MOVING = ("revolute", "continuous")
 SUPPORTED = (*MOVING, "fixed")
+
+MAX_URDF_BYTES = 32 * 1024 * 1024
+"""Largest URDF read (bytes): vendor URDFs are 10–500 kB; a humanoid's with inline
+collision boxes a few MB."""
+MAX_DEPTH = 64
+"""Deepest element nesting accepted: a URDF's is 5 (robot/link/visual/geometry/mesh), with
+Gazebo plugin blocks about 10."""
+MAX_ELEMENTS = 500_000
+"""Most elements accepted: a 100-link URDF has a few thousand."""
+LINKS_SHOWN = 20
+"""Links a message lists before "and N more"."""
 
 
 @dataclass(frozen=True)
@@ -78,69 +98,143 @@ def _limit(el: ET.Element | None, key: str, where: str) -> float | None:
     return value
 
 
+def _screen(data: bytes, path: Path) -> None:
+    """Refuse entity declarations, deep nesting and too many elements (one streaming pass)."""
+    parser = xml.parsers.expat.ParserCreate()
+    depth = count = 0
+
+    def where() -> str:
+        return f"{path}: line {parser.CurrentLineNumber}"
+
+    def start(name: str, _attrs: dict) -> None:
+        nonlocal depth, count
+        depth += 1
+        count += 1
+        if depth > MAX_DEPTH:
+            raise WirecalError(
+                f"{where()}: <{name}> is nested {depth} elements deep (at most {MAX_DEPTH} "
+                "accepted): not a URDF"
+            )
+        if count > MAX_ELEMENTS:
+            raise WirecalError(
+                f"{where()}: more than {MAX_ELEMENTS} elements: not a URDF wirecal reads"
+            )
+
+    def end(_name: str) -> None:
+        nonlocal depth
+        depth -= 1
+
+    def entity(name: str, *_args: object) -> None:
+        raise WirecalError(
+            f"{where()}: declares the entity {name!r}; a URDF needs none and wirecal expands "
+            "none (remove the <!DOCTYPE …> block)"
+        )
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    parser.EntityDeclHandler = entity
+    try:
+        parser.Parse(data, True)
+    except xml.parsers.expat.ExpatError as exc:
+        raise WirecalError(f"{path}: not valid XML: {exc}") from None
+
+
+def _read_bytes(path: Path) -> bytes:
+    """Return the file's bytes, refusing one larger than :data:`MAX_URDF_BYTES`."""
+    try:
+        with path.open("rb") as f:
+            data = f.read(MAX_URDF_BYTES + 1)
+    except OSError as exc:
+        raise WirecalError(f"{path}: cannot read URDF: {exc.strerror or exc}") from None
+    if len(data) > MAX_URDF_BYTES:
+        raise WirecalError(
+            f"{path}: larger than {MAX_URDF_BYTES // (1024 * 1024)} MB: not a URDF wirecal reads"
+        )
+    return data
+
+
+def _joint(el: ET.Element, path: Path, links: set[str]) -> Joint:
+    """Return one <joint> element as a :class:`Joint`; raise naming the joint."""
+    name = el.get("name") or ""
+    where = f"{path}: joint {name!r}"
+    if not name:
+        raise WirecalError(f"{path}: a <joint> has no name")
+    parent, child = el.find("parent"), el.find("child")
+    if parent is None or child is None or not parent.get("link") or not child.get("link"):
+        raise WirecalError(f"{where}: needs <parent link=…/> and <child link=…/>")
+    for role, link in (("parent", parent.get("link", "")), ("child", child.get("link", ""))):
+        if link not in links:
+            raise WirecalError(
+                f"{where}: its {role} link {link!r} is not a <link> of this URDF; declare it "
+                "or correct the name"
+            )
+    origin = el.find("origin")
+    axis_el = el.find("axis")
+    axis = _floats(None if axis_el is None else axis_el.get("xyz"), "1 0 0", f"{where}: <axis xyz>")
+    norm = float(np.linalg.norm(axis))
+    if norm == 0 and el.get("type") in MOVING:  # a fixed joint's axis is ignored
+        raise WirecalError(f"{where}: <axis xyz> is the zero vector")
+    limit = el.find("limit")
+    return Joint(
+        name=name,
+        type=el.get("type", ""),
+        parent=parent.get("link", ""),
+        child=child.get("link", ""),
+        xyz_m=_floats(
+            None if origin is None else origin.get("xyz"), "0 0 0", f"{where}: origin xyz"
+        ),
+        rpy_rad=_floats(
+            None if origin is None else origin.get("rpy"), "0 0 0", f"{where}: origin rpy"
+        ),
+        axis=axis / norm if norm else axis,
+        lower_rad=_limit(limit, "lower", where),
+        upper_rad=_limit(limit, "upper", where),
+        velocity_rad_s=_limit(limit, "velocity", where),
+        mimic=el.find("mimic") is not None,
+    )
+
+
 def read_urdf(path: str | Path) -> Urdf:
     """Parse a URDF; any problem is a :class:`WirecalError` naming the file and joint."""
     path = Path(path)
+    data = _read_bytes(path)
+    _screen(data, path)
     parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True))
     try:
-        tree = ET.parse(path, parser)
-    except OSError as exc:
-        raise WirecalError(f"{path}: cannot read URDF: {exc.strerror or exc}") from None
+        parser.feed(data)
+        root = parser.close()
     except ET.ParseError as exc:
         raise WirecalError(f"{path}: not valid XML: {exc}") from None
-    root = tree.getroot()
     if root.tag != "robot":
         raise WirecalError(f"{path}: the root element is <{root.tag}>, not <robot>: not a URDF")
     links = tuple(el.get("name", "") for el in root.findall("link"))
+    for x, count in Counter(links).items():
+        if count > 1:
+            raise WirecalError(f"{path}: link {x!r} is defined {count} times")
     joints: dict[str, Joint] = {}
     for el in root.findall("joint"):
-        name = el.get("name") or ""
-        where = f"{path}: joint {name!r}"
-        if not name:
-            raise WirecalError(f"{path}: a <joint> has no name")
-        if name in joints:
-            raise WirecalError(f"{where}: defined twice")
-        parent, child = el.find("parent"), el.find("child")
-        if parent is None or child is None or not parent.get("link") or not child.get("link"):
-            raise WirecalError(f"{where}: needs <parent link=…/> and <child link=…/>")
-        origin = el.find("origin")
-        axis_el = el.find("axis")
-        axis = _floats(
-            None if axis_el is None else axis_el.get("xyz"), "1 0 0", f"{where}: <axis xyz>"
-        )
-        norm = float(np.linalg.norm(axis))
-        if norm == 0 and el.get("type") in MOVING:  # a fixed joint's axis is ignored
-            raise WirecalError(f"{where}: <axis xyz> is the zero vector")
-        limit = el.find("limit")
-        joints[name] = Joint(
-            name=name,
-            type=el.get("type", ""),
-            parent=parent.get("link", ""),
-            child=child.get("link", ""),
-            xyz_m=_floats(
-                None if origin is None else origin.get("xyz"), "0 0 0", f"{where}: origin xyz"
-            ),
-            rpy_rad=_floats(
-                None if origin is None else origin.get("rpy"), "0 0 0", f"{where}: origin rpy"
-            ),
-            axis=axis / norm if norm else axis,
-            lower_rad=_limit(limit, "lower", where),
-            upper_rad=_limit(limit, "upper", where),
-            velocity_rad_s=_limit(limit, "velocity", where),
-            mimic=el.find("mimic") is not None,
-        )
-    return Urdf(path, root.get("name", ""), root, links, joints)
+        j = _joint(el, path, set(links))
+        if j.name in joints:
+            raise WirecalError(f"{path}: joint {j.name!r}: defined twice")
+        joints[j.name] = j
+    urdf = Urdf(path, root.get("name", ""), root, links, joints)
+    _check_tree(urdf)
+    return urdf
 
 
 def chain(urdf: Urdf, base: str | None, tip: str) -> list[Joint]:
     """Return the joints from ``base`` (default: the tree's root link) to ``tip``, in order."""
     by_child = _parent_joints(urdf)
-    known = set(urdf.links) | {j.parent for j in urdf.joints.values()}
     for link, what in ((tip, "--tip"), (base, "--base")):
-        if link is not None and link not in known:
+        if link is not None and link not in urdf.links:
+            shown = ", ".join(urdf.links[:LINKS_SHOWN])
+            more = (
+                f" and {len(urdf.links) - LINKS_SHOWN} more"
+                if len(urdf.links) > LINKS_SHOWN
+                else ""
+            )
             raise WirecalError(
-                f"{urdf.path}: {what} {link!r} is not a link of this URDF "
-                f"(links: {', '.join(urdf.links)})"
+                f"{urdf.path}: {what} {link!r} is not a link of this URDF (links: {shown}{more})"
             )
     if base is None:
         roots = [x for x in urdf.links if x not in by_child]
@@ -166,7 +260,7 @@ def chain(urdf: Urdf, base: str | None, tip: str) -> list[Joint]:
 
 
 def _parent_joints(urdf: Urdf) -> dict[str, Joint]:
-    """Return each child link's joint; raise unless the URDF is a tree."""
+    """Return each child link's joint; raise on a link with two parent joints."""
     by_child: dict[str, Joint] = {}
     for j in urdf.joints.values():
         if j.child in by_child:
@@ -176,6 +270,32 @@ def _parent_joints(urdf: Urdf) -> dict[str, Joint]:
             )
         by_child[j.child] = j
     return by_child
+
+
+def _check_tree(urdf: Urdf) -> None:
+    """Raise on two parents of a link or a loop of joints, naming the joints.
+
+    Each link is walked up towards its root once (links already known to reach a root
+    end the walk), so the check is linear in the number of joints.
+    """
+    by_child = _parent_joints(urdf)
+    rooted: set[str] = set()
+    for start in by_child:
+        walk: list[str] = []
+        on_walk: set[str] = set()
+        link = start
+        while link in by_child and link not in rooted:
+            if link in on_walk:
+                loop = walk[walk.index(link) :]
+                names = " → ".join(by_child[x].name for x in reversed(loop))
+                raise WirecalError(
+                    f"{urdf.path}: the joints {names} form a loop (link {link!r} is its own "
+                    "ancestor): a URDF must be a tree; remove one of them"
+                )
+            walk.append(link)
+            on_walk.add(link)
+            link = by_child[link].parent
+        rooted.update(walk)
 
 
 def _check_supported(urdf: Urdf, path: list[Joint]) -> None:
