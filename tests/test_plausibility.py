@@ -18,11 +18,31 @@ from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.measurements import check_log
-from wirecal.solver.plausibility import assess
+from wirecal.solver.plausibility import assess, chi2_quantile
 from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 
 from .conftest import VIPER
+
+
+@pytest.mark.parametrize(
+    ("alpha", "dof", "table"),
+    [
+        (0.05, 1, 3.841459),  # the printed tables' χ²_ν(1 − α) to 6 decimals
+        (0.01, 10, 23.209251),
+        (0.05, 30, 43.772972),
+        (0.001, 4, 18.466827),
+    ],
+)
+def test_chi2_quantile_matches_the_tables(alpha, dof, table):
+    assert chi2_quantile(alpha, dof) == pytest.approx(table, abs=1e-6)
+
+
+@pytest.mark.parametrize("alpha", [1e-6, 1e-3, 0.5])
+def test_chi2_quantile_two_dof_is_closed_form(alpha):
+    """For ν = 2 the χ² law is exponential: χ²_2(1 − α) = −2·ln α exactly."""
+    assert chi2_quantile(alpha, 2) == pytest.approx(-2.0 * np.log(alpha), rel=1e-12)
+
 
 ROBOT = str(VIPER / "robot.toml")
 PLAN = str(VIPER / "paper_plan.toml")
