@@ -94,8 +94,8 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
             "URScript programs (gen --language urscript); the V+ module reads a belt-encoder "
             'input: interface = "belt"'
         )
-    if robot.controller_problem():
-        problems.append(robot.controller_problem())
+    if (joints_problem := robot.controller_problem()) is not None:
+        problems.append(joints_problem)
     if any(not 32 <= ord(ch) <= 126 or ch == '"' for ch in robot.name):
         problems.append(
             f"{robot.source}: name {robot.name!r}: a V+ string holds printable "
