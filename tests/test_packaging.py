@@ -7,9 +7,12 @@ import subprocess
 import sys
 import zipfile
 
+import pytest
+
 from .conftest import ROOT
 
 
+@pytest.mark.slow
 def test_wheel_contains_templates_under_the_namespace(tmp_path):
     # Build from a clean copy: a stale build/ folder could hide missing package data.
     src = tmp_path / "src"

@@ -140,6 +140,7 @@ def j1_plan(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_points_that_identify_nothing_are_refused(tmp_path, j1_plan):
     log = tmp_path / "j1.csv"
     assert run("simulate", ROBOT, j1_plan, "-o", log, "--seed", 2).exit_code == 0
@@ -208,6 +209,7 @@ def test_gross_outliers_are_refused_unless_robust(tmp_path):
     assert run("solve", ROBOT, PLAN, log, "--robust").exit_code == 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("noise_mm", [0.01, 0.02])
 def test_no_false_alarm_over_20_seeds(viper, paper_plan, noise_mm):
     """Sound simulated logs, noise up to the gate's default: none refused, by any check."""
