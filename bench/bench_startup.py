@@ -2,7 +2,8 @@
 and ``wirecal solve`` (the Viper example log), median of several runs, as ratios to a bare
 Python importing what they cannot avoid, measured in the same run: click for the help texts
 (target ≤ 3×), numpy + scipy.optimize for ``solve`` (target ≤ 1.4×). The runs of all
-commands are interleaved, so a change of the machine's load touches each alike.
+commands are interleaved, so a change of the machine's load touches each alike; wall and CPU
+time (user + system of the child) are both reported.
 
     python bench/bench_startup.py [--runs N]
 """
@@ -10,6 +11,8 @@ commands are interleaved, so a change of the machine's load touches each alike.
 from __future__ import annotations
 
 import argparse
+import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -20,15 +23,26 @@ from pathlib import Path
 VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"
 
 
-def medians_s(commands: dict[str, list[str]], runs: int) -> dict[str, float]:
-    """Median wall time of each command, the commands run in turn ``runs`` times."""
-    times: dict[str, list[float]] = {name: [] for name in commands}
+def medians_s(commands: dict[str, list[str]], runs: int) -> dict[str, tuple[float, float]]:
+    """Median wall and CPU time (user + system) of each command, run in turn ``runs`` times.
+
+    The CPU time of a child process hardly depends on what else the machine runs; the wall
+    time does, two- to threefold on a shared machine.
+    """
+    times: dict[str, list[tuple[float, float]]] = {name: [] for name in commands}
     for _ in range(runs):
         for name, cmd in commands.items():
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
             t0 = time.perf_counter()
             subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-            times[name].append(time.perf_counter() - t0)
-    return {name: statistics.median(t) for name, t in times.items()}
+            wall = time.perf_counter() - t0
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu = after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+            times[name].append((wall, cpu))
+    return {
+        name: (statistics.median(w for w, _ in t), statistics.median(c for _, c in t))
+        for name, t in times.items()
+    }
 
 
 def main() -> None:
@@ -58,13 +72,19 @@ def main() -> None:
             },
             runs,
         )
-    click_s = figures["python -c 'import click'"]
-    numpy_s = figures["python -c 'import numpy, scipy.optimize'"]
-    print(f"median of {runs} runs each, interleaved")
-    for name, t in figures.items():
+    click = figures["python -c 'import click'"]
+    numpy = figures["python -c 'import numpy, scipy.optimize'"]
+    print(f"median of {runs} runs each, interleaved; load average {os.getloadavg()[0]:.1f}")
+    print(f"{'':<42}{'wall':>8}    {'CPU':>6}    wall (CPU) ratio")
+    for name, (wall, cpu) in figures.items():
+        base, label = (
+            (numpy, "numpy+scipy") if name.startswith("wirecal solve (") else (click, "click")
+        )
+        if name.startswith("python"):
+            base, label = (wall, cpu), "itself"
         print(
-            f"{name:<42}{t * 1000:8.0f} ms  {t / click_s:6.1f}× click  "
-            f"{t / numpy_s:5.2f}× numpy+scipy"
+            f"{name:<42}{wall * 1000:6.0f} ms {cpu * 1000:6.0f} ms  "
+            f"{wall / base[0]:5.2f}× ({cpu / base[1]:4.2f}×) {label}"
         )
 
 
