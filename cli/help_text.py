@@ -9,8 +9,7 @@ HELP_TEXT: dict[str, str] = {
     "demo": (
         "Usage: wirecal demo [OPTIONS]\n"
         "\n"
-        "  Calibrate a simulated Viper s650 end to end, before and after, in about 11\n"
-        "  seconds.\n"
+        "  Calibrate a simulated Viper s650 end to end, before and after.\n"
         "\n"
         "  Generates the V+ module for the paper's (corrected) plan, runs it in the\n"
         "  digital twin on a robot with random true errors, identifies the parameters on\n"

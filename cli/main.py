@@ -137,7 +137,7 @@ for _name, _target, _summary in (
     (
         "demo",
         "wirecal.cli.demo:demo",
-        "Calibrate a simulated Viper s650 end to end, before and after, in about 11 seconds.",
+        "Calibrate a simulated Viper s650 end to end, before and after.",
     ),
     (
         "gen",
