@@ -39,13 +39,31 @@ def test_every_page_is_linked_from_the_index():
     assert pages <= linked, f"docs pages missing from docs/README.md: {sorted(pages - linked)}"
 
 
+def anchors(text: str) -> set[str]:
+    """Return the anchors GitHub gives a Markdown text's headings (outside code blocks)."""
+    text = FENCE.sub("", text)
+    titles = re.findall(r"^#{1,6} (.+)$", text, re.M)
+    return {re.sub(r"[^\w\- ]", "", t.strip().lower()).replace(" ", "-") for t in titles}
+
+
+def test_anchors_follow_githubs_rule():
+    assert anchors("## `wirecal psi ROBOT PLAN [--json]`\n### Can I trust it? Yes\n") == {
+        "wirecal-psi-robot-plan---json",
+        "can-i-trust-it-yes",
+    }
+
+
 def test_relative_links_resolve():
-    """Every relative link of the README and docs/ names a file that exists."""
+    """Every relative link of the README and docs/ names a file, and a heading, that exist."""
     broken = []
     for page in PAGES:
-        for target in re.findall(r"\]\(([^)#:\s]+)(?:#[^)]*)?\)", page.read_text("utf-8")):
-            if not (page.parent / target).exists():
+        links = re.findall(r"\]\(([^)#:\s]*)(?:#([^)]*))?\)", page.read_text("utf-8"))
+        for target, anchor in links:
+            path = page.parent / target if target else page
+            if not path.exists():
                 broken.append(f"{page.relative_to(ROOT)}: {target}")
+            elif anchor and anchor not in anchors(path.read_text("utf-8")):
+                broken.append(f"{page.relative_to(ROOT)}: {target}#{anchor}")
     assert not broken
 
 
