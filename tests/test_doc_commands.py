@@ -12,6 +12,7 @@ import re
 import shutil
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import pytest
@@ -89,3 +90,13 @@ def test_bash_blocks_run(page, tmp_path):
             text=True,
         )
         assert r.returncode == 0, f"{page.name} block {n}:\n{block}\n{r.stdout}\n{r.stderr}"
+
+
+def test_api_page_example_is_the_tested_one():
+    """docs/api.md's Python example is, line for line, what tests/test_api.py runs."""
+    page = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")
+    shown = [body for lang, body in FENCE.findall(page) if lang == "python"]
+    source = (ROOT / "tests" / "test_api.py").read_text(encoding="utf-8")
+    tested = source.split("keep in step with docs/api.md) ---\n")[1]
+    tested = tested.split("    # --- end of the example ---")[0]
+    assert shown == [textwrap.dedent(tested)]
