@@ -206,6 +206,8 @@ def _run(
         t = step(5, "identification on the controller (wc.solve, wc.solve2 in the twin)")
         controller = compare_controller(result, disk / "ctl", text=text)
         seconds["controller"] = time.perf_counter() - t
+        polished_difference = controller.polished_max_difference
+        assert polished_difference is not None, "a V+ comparison always runs wc.solve2"
         identified = result.estimates[result.recommended].as_dict()
         step(6, "validation after calibration (wc.vcfg, wc.vpln)")
         logs = {"after": validate(disk / "after", controller=identified, run=2)}
@@ -250,7 +252,7 @@ def _run(
         folder,
         validations,
         _tool_errors(robot, truth, identified),
-        controller.polished_max_difference,
+        polished_difference,
         seconds,
         wall_s=time.perf_counter() - wall,
         predicted_mm=result.predicted[result.recommended]["mean"],

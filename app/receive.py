@@ -165,9 +165,10 @@ def _take(srv: socket.socket, timeout_s: float, journal: Path, result: Received)
                         _dropped(jf, result, pending)
                         return
                     deadline = time.monotonic() + timeout_s
-                    pending = _feed(jf, result, pending + data)
-                    if pending is None:
+                    rest = _feed(jf, result, pending + data)
+                    if rest is None:
                         return
+                    pending = rest
     finally:
         if sender is not None:
             sender.close()

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import base64
 import io
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -126,13 +127,12 @@ def residual_figure(result: SolveResult) -> str:
     return _png(fig)
 
 
-def correlation_figure(result: SolveResult) -> str:
+def correlation_figure(names: Sequence[str], correlation: np.ndarray) -> str:
     """Plot the joint estimate's parameter correlations; the figure as embeddable PNG."""
-    est = result.estimates["joint"]
     fig, ax = plt.subplots(figsize=(5, 4.3))
-    im = ax.imshow(est.correlation, cmap="coolwarm", vmin=-1, vmax=1)
-    ax.set_xticks(range(len(est.names)), est.names, rotation=45)
-    ax.set_yticks(range(len(est.names)), est.names)
+    im = ax.imshow(correlation, cmap="coolwarm", vmin=-1, vmax=1)
+    ax.set_xticks(range(len(names)), names, rotation=45)
+    ax.set_yticks(range(len(names)), names)
     ax.set_title("Joint estimate: correlations")
     fig.colorbar(im, ax=ax, shrink=0.8)
     return _png(fig)
@@ -142,7 +142,7 @@ def histogram_figure(v: Validation) -> str:
     """Plot a validation's before/after histogram; the figure as embeddable PNG."""
     fig, ax = plt.subplots(figsize=(7, 3.2))
     hi = max(v.before.max, v.after.max)
-    bins = np.linspace(0, hi * 1.02, 34)
+    bins = np.linspace(0, hi * 1.02, 34).tolist()
     for s, colour, name in ((v.before, BEFORE, "Before"), (v.after, AFTER, "After")):
         ax.hist(
             s.values,
@@ -160,7 +160,7 @@ def histogram_figure(v: Validation) -> str:
 
 def render_report(
     result: SolveResult,
-    validations: list[Validation] = (),
+    validations: Sequence[Validation] = (),
     controller: ControllerComparison | None = None,
     truth: dict[str, float] | None = None,
     plausibility: str = "",
@@ -180,7 +180,9 @@ def render_report(
                 "std": jt.std[k] if jt is not None and jt.std is not None else None,
                 "identified": jt is None or jt.std is None or bool(np.isfinite(jt.std[k])),
                 "controller": controller.stepwise.offsets.get(name) if controller else None,
-                "polished": controller.polished.offsets.get(name) if controller else None,
+                "polished": controller.polished.offsets.get(name)
+                if controller and controller.polished
+                else None,
                 "truth": (truth or {}).get(name),
             }
         )
@@ -199,7 +201,7 @@ def render_report(
         figures={
             "psi": psi_figure(result),
             "residuals": residual_figure(result) if sw else None,
-            "correlation": correlation_figure(result)
+            "correlation": correlation_figure(jt.names, jt.correlation)
             if jt is not None and jt.correlation is not None
             else None,
         },

@@ -116,7 +116,7 @@ def measure_ur_in_twin(
         noise_mm=noise_mm,
         counter_start=float(start),
         faults=faults or Faults(),
-        pulse_inputs=tuple(pulse_inputs or enc.pulse_inputs),
+        pulse_inputs=pulse_inputs or enc.pulse_inputs,
         encoder_index=enc.channel,
         pc=pc_address(robot, options),
         unmodelled=unmodelled,
@@ -144,7 +144,7 @@ def measure_ur_in_twin(
     listening.wait(timeout_s)
     if "error" not in box:
         programs = run_ur_programs(cell, mount, run)
-        if cell.lines_sent == 0:
+        if cell.lines_sent == 0 and cell.receiver is not None:
             _end_wait(cell.receiver)  # the program never connected: end the receiver's wait
         thread.join(timeout_s)
     if "error" in box:

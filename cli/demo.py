@@ -44,7 +44,7 @@ from wirecal.cli.options import NON_NEGATIVE, SEED
 @click.option("--force", is_flag=True, help="Replace the outputs of an earlier demo.")
 @user_errors
 def demo(folder, seed, scale, robot, force):
-    """Calibrate a simulated Viper s650 end to end, before and after, in about 11 seconds.
+    """Calibrate a simulated Viper s650 end to end, before and after.
 
     Generates the V+ module for the paper's (corrected) plan, runs it in the digital twin
     on a robot with random true errors, identifies the parameters on the PC and with the

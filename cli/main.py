@@ -10,6 +10,9 @@ usage errors too); 3 the plausibility gate refused an identification
 The commands are registered below, each by the module that defines it, and imported only
 when that command runs or its help is shown: ``wirecal --help`` imports click alone, and a
 command imports only what it uses (matplotlib for the report and the demo only).
+``wirecal CMD --help`` prints the command's help from :data:`~wirecal.cli.help_text.HELP_TEXT`
+(rendered from the commands themselves, kept current by ``tests/test_cli_help.py``), so it
+imports nothing beyond click either.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from typing import Any
 import click
 
 from wirecal import __version__
+from wirecal.cli.help_text import HELP_TEXT
 from wirecal.solver.errors import WirecalError
 
 
@@ -73,6 +77,20 @@ class LazyGroup(click.Group):
         """Return every command name, loaded or lazy, sorted."""
         return sorted({*self.commands, *self.lazy})
 
+    def resolve_command(
+        self, ctx: click.Context, args: list[str]
+    ) -> tuple[str | None, click.Command | None, list[str]]:
+        """Answer ``wirecal CMD --help`` from :data:`HELP_TEXT`, without importing CMD.
+
+        Only the exact form ``CMD --help`` (or ``-h``) of a command not yet loaded is
+        answered from the table; anything else (or a command the table lacks) loads it.
+        """
+        name, rest = args[0], args[1:]
+        if rest in (["--help"], ["-h"]) and name not in self.commands and name in HELP_TEXT:
+            text = HELP_TEXT[name]
+            return name, click.Command(name, callback=lambda: click.echo(text, nl=False)), []
+        return super().resolve_command(ctx, args)
+
     def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
         """Return the command, importing a lazy one on first use."""
         if cmd_name not in self.commands and cmd_name in self.lazy:
@@ -119,7 +137,7 @@ for _name, _target, _summary in (
     (
         "demo",
         "wirecal.cli.demo:demo",
-        "Calibrate a simulated Viper s650 end to end, before and after, in about 11 seconds.",
+        "Calibrate a simulated Viper s650 end to end, before and after.",
     ),
     (
         "gen",

@@ -172,7 +172,10 @@ def _export_text(robot, patch, source) -> str:
     else:
         base = rob.urdf.base_link if rob.urdf else None
         tip = rob.urdf.tip_link if rob.urdf else None
-        path_in = source or rob.urdf.path
+        if source is None:
+            assert rob.urdf is not None, "the branch above took source = urdf = None"
+            source = rob.urdf.path
+        path_in = source
         doc = read_urdf(path_in)
         if tip is None:
             raise WirecalError(f"{robot}: no [urdf] table naming the tip link; import it first")

@@ -1,5 +1,6 @@
 """wirecal.gen — code generation only.
 
-One backend per controller language (``vplus``), the controller solver's constant tables,
-literal formatting and template rendering.
+One backend per controller language (``vplus``, ``urscript``), what they share
+(``targets``: limits, joint literals, the run's steps), the controller solver's constant
+tables and template rendering.
 """

@@ -53,7 +53,7 @@ def joint_target(q_deg: np.ndarray, target: Callable[[np.ndarray], str]) -> dict
 
 
 def run_steps(
-    plan: Plan, first: Sequence[int], target: Callable[[np.ndarray], str]
+    plan: Plan, first: Sequence[int] | np.ndarray, target: Callable[[np.ndarray], str]
 ) -> list[dict[str, object]]:
     """Return the run's steps for a template: number, parameter, vias and points.
 

@@ -1,5 +1,8 @@
 """wirecal.solver — the robot model and the mathematics of draw-wire calibration.
 
-Pure functions over numpy arrays; file formats live in :mod:`robot` and :mod:`plan`.
-Angles are degrees at every boundary (files, CLI) and radians inside the maths.
+Functions over numpy arrays, vectorised over configurations: the robot model
+(:mod:`~wirecal.solver.robot`, :mod:`~wirecal.solver.kinematics`), Ψ, identifiability,
+planning, simulation, identification, accuracy and validation analysis. Reading and writing
+files is :mod:`wirecal.solver.formats`, the layer above (docs/architecture.md). Angles are
+degrees at every boundary (files, CLI) and radians inside the maths.
 """

@@ -1,4 +1,8 @@
-"""Shared fixtures: the shipped Viper s650 example and small helpers."""
+"""Shared fixtures: the shipped Viper s650 example and small helpers.
+
+Importing :mod:`tests.hypothesis_profiles` selects the Hypothesis profile (``ci`` under
+``CI=true``, or the one ``HYPOTHESIS_PROFILE`` names).
+"""
 
 from __future__ import annotations
 
@@ -8,6 +12,8 @@ import pytest
 
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
+
+from . import hypothesis_profiles  # noqa: F401  (selects the profile on import)
 
 ROOT = Path(__file__).resolve().parents[1]
 VIPER = ROOT / "examples" / "viper_s650"

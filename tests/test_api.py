@@ -36,7 +36,7 @@ def test_readme_example(tmp_path, monkeypatch):
     """The README's Python example, as written there: design, simulate, check, solve, gate."""
     monkeypatch.chdir(tmp_path)
     (tmp_path / "examples").symlink_to(VIPER.parent)
-    # --- README example (keep in step with the README's "Python API" section) ---
+    # --- README example (keep in step with docs/api.md) ---
     import wirecal
 
     robot = wirecal.load_robot("examples/viper_s650/robot.toml")

@@ -3,14 +3,18 @@ command line starts without importing what no command needs yet."""
 
 from __future__ import annotations
 
+import json
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 import click
 import pytest
 from click.testing import CliRunner
 
 from wirecal import __version__
+from wirecal.cli.help_text import HELP_TEXT
 from wirecal.cli.main import main
 
 CTX = click.Context(main)
@@ -78,15 +82,91 @@ def test_importing_the_cli_imports_no_heavy_package(tmp_path):
 
 
 def test_solve_imports_neither_the_twin_nor_matplotlib(tmp_path):
+    """Nor scipy.stats, which doubled its start-up for one χ² quantile."""
     code = (
         "import sys\n"
         "from wirecal.cli.main import main\n"
         "import click\n"
         "main.get_command(click.Context(main), 'solve')\n"
-        "heavy = ('matplotlib', 'lark', 'jinja2')\n"
+        "import wirecal.solver.plausibility\n"
+        "heavy = ('matplotlib', 'lark', 'jinja2', 'scipy.stats')\n"
         "print(' '.join(m for m in heavy if m in sys.modules))\n"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path
     )
     assert out.stdout.strip() == ""
+
+
+HELP_MODULE = Path(__file__).resolve().parents[1] / "cli" / "help_text.py"
+
+
+def rendered_help(name: str) -> str:
+    """What ``wirecal NAME --help`` prints from the command itself, at click's default width."""
+    parent = click.Context(
+        main, info_name="wirecal", help_option_names=["-h", "--help"], terminal_width=80
+    )
+    command = main.get_command(CTX, name)
+    return command.get_help(click.Context(command, info_name=name, parent=parent)) + "\n"
+
+
+def string_literal(text: str) -> str:
+    """``text`` as a Python literal in ruff format's quotes (double unless that escapes)."""
+    if '"' in text and "'" not in text:
+        return repr(text)
+    return json.dumps(text, ensure_ascii=False)
+
+
+def help_module_source() -> str:
+    lines = [
+        '"""The help text of every command, as ``wirecal CMD --help`` prints it.',
+        "",
+        "Rendered from the commands themselves, so that ``--help`` imports nothing beyond",
+        "click. Generated, do not edit: after changing a command's help or options run",
+        "``WIRECAL_UPDATE_GOLDEN=1 pytest tests/test_cli_help.py``.",
+        '"""',
+        "",
+        "HELP_TEXT: dict[str, str] = {",
+    ]
+    for name in COMMANDS:
+        lines.append(f'    "{name}": (')
+        text = rendered_help(name).splitlines(keepends=True)
+        lines += [f"        {string_literal(line)}" for line in text]
+        lines.append("    ),")
+    lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
+def test_help_table_is_current():
+    """``wirecal CMD --help`` prints from the table: it must be what the command says."""
+    if os.environ.get("WIRECAL_UPDATE_GOLDEN"):
+        HELP_MODULE.write_text(help_module_source(), encoding="utf-8")
+        pytest.skip("cli/help_text.py regenerated")
+    stale = [name for name in COMMANDS if HELP_TEXT.get(name) != rendered_help(name)]
+    assert not stale, (
+        f"cli/help_text.py is stale for {stale}: "
+        "run WIRECAL_UPDATE_GOLDEN=1 pytest tests/test_cli_help.py"
+    )
+
+
+@pytest.mark.parametrize("command", ["demo", "solve", "report"])
+def test_command_help_imports_only_click(command, tmp_path):
+    """``wirecal CMD --help`` answers from the table: the same text, nothing heavy imported."""
+    code = (
+        "import sys\n"
+        "from wirecal.cli.main import main\n"
+        f"main([{command!r}, '--help'], standalone_mode=False)\n"
+        "heavy = ('matplotlib', 'lark', 'jinja2', 'numpy', 'scipy', 'wirecal.app')\n"
+        "print('imported:', ' '.join(m for m in heavy if m in sys.modules))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path
+    )
+    assert out.stdout == rendered_help(command) + "imported: \n"
+
+
+def test_help_with_other_arguments_loads_the_command():
+    """Only the exact form ``CMD --help`` uses the table; other arguments reach the command."""
+    r = CliRunner().invoke(main, ["solve", "--help", "--json"])
+    assert r.exit_code == 0
+    assert "--json" in r.output

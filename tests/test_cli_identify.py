@@ -174,6 +174,7 @@ def test_help(command):
     assert len(r.output) > 400
 
 
+@pytest.mark.slow
 def test_simulate_with_the_controller_program_then_solve_on_the_controller(tmp_path):
     log = tmp_path / "twin.csv"
     out = run("simulate", ROBOT, PLAN, "-o", log, "--controller", "--seed", 6).output

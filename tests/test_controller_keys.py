@@ -115,6 +115,7 @@ def test_pulse_inputs_only_for_the_pulse_decoder():
     assert any('is for interface = "pulse" (URScript) only' in p for p in problems), problems
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(
     port=st.one_of(st.integers(-10, 70_000), st.floats(allow_nan=True), st.text(max_size=5)),

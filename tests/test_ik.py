@@ -50,6 +50,7 @@ def test_round_trip_analytic(viper, u, calibrated):
     assert len(set(configs)) == len(configs)  # each solution a different configuration
 
 
+@pytest.mark.slow
 @settings(max_examples=15, deadline=None)
 @given(u=st.lists(unit, min_size=6, max_size=6))
 def test_numeric_fallback_for_a_non_spherical_wrist(viper, u):
@@ -109,6 +110,7 @@ UR5_ERRORS = {"th2": 0.3, "th4": -0.2, "a2": 0.8, "a3": -0.5, "d4": 0.4, "d5": 0
 # elbow folded to 179.6° on the calibrated arm: the structural table's seeds both at 180°
 @example(u=[0.5, 0.5, 0.7529418094771448, 0.5, 0.125, 0.5], calibrated=True)
 # arm stretched and wrist singular on the exact table: φ6 = 0 puts the wrist point beyond reach
+@pytest.mark.slow
 @example(u=[0.5, 0.5, 0.5, 0.875, 0.5, 0.25], calibrated=False)
 def test_ur_round_trip_closed_form(u, calibrated):
     """Every returned solution reproduces the pose; the sampled one is among them.

@@ -102,6 +102,7 @@ def test_progress_bar_draws_on_a_terminal_and_clears():
     assert text.endswith("\r")  # the line is cleared at the end
 
 
+@pytest.mark.slow
 def test_plan_command_output_has_no_progress_bar():
     """In a captured run (not a terminal) stderr carries no bar, stdout only the header."""
     r = CliRunner().invoke(

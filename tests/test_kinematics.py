@@ -71,6 +71,7 @@ def test_viper_home_position_by_hand(viper):
     np.testing.assert_allclose(p, [195, 0, 425])
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(q=batches, err=errors)
 def test_tool_jacobian_matches_finite_differences(viper, q, err):
@@ -83,6 +84,7 @@ def test_tool_jacobian_matches_finite_differences(viper, q, err):
         np.testing.assert_allclose(J[:, :, k], (plus - minus) / (2 * h), atol=2e-5, err_msg=name)
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(q=batches, q0=joints, err=errors)
 def test_wire_jacobian_matches_finite_differences(viper, q, q0, err):

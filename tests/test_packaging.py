@@ -7,9 +7,12 @@ import subprocess
 import sys
 import zipfile
 
+import pytest
+
 from .conftest import ROOT
 
 
+@pytest.mark.slow
 def test_wheel_contains_templates_under_the_namespace(tmp_path):
     # Build from a clean copy: a stale build/ folder could hide missing package data.
     src = tmp_path / "src"
@@ -45,6 +48,9 @@ def test_wheel_contains_templates_under_the_namespace(tmp_path):
     assert "wirecal/gen/urscript/facts.py" in names
     assert "wirecal/app/receive.py" in names
     assert "wirecal/twin/vplus/keywords.csv" in names
+    assert "wirecal/twin/urscript/parser.py" in names
+    assert "wirecal/twin/urscript/urscript.lark" in names
+    assert "wirecal/py.typed" in names  # PEP 561: the package's type hints are for users too
     assert "wirecal/__init__.py" in names
     assert "wirecal/examples/viper_s650/robot.toml" in names
     assert "wirecal/examples/ur5/robot.toml" in names

@@ -18,11 +18,31 @@ from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.measurements import check_log
-from wirecal.solver.plausibility import assess
+from wirecal.solver.plausibility import assess, chi2_quantile
 from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 
 from .conftest import VIPER
+
+
+@pytest.mark.parametrize(
+    ("alpha", "dof", "table"),
+    [
+        (0.05, 1, 3.841459),  # the printed tables' χ²_ν(1 − α) to 6 decimals
+        (0.01, 10, 23.209251),
+        (0.05, 30, 43.772972),
+        (0.001, 4, 18.466827),
+    ],
+)
+def test_chi2_quantile_matches_the_tables(alpha, dof, table):
+    assert chi2_quantile(alpha, dof) == pytest.approx(table, abs=1e-6)
+
+
+@pytest.mark.parametrize("alpha", [1e-6, 1e-3, 0.5])
+def test_chi2_quantile_two_dof_is_closed_form(alpha):
+    """For ν = 2 the χ² law is exponential: χ²_2(1 − α) = −2·ln α exactly."""
+    assert chi2_quantile(alpha, 2) == pytest.approx(-2.0 * np.log(alpha), rel=1e-12)
+
 
 ROBOT = str(VIPER / "robot.toml")
 PLAN = str(VIPER / "paper_plan.toml")
@@ -120,6 +140,7 @@ def j1_plan(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_points_that_identify_nothing_are_refused(tmp_path, j1_plan):
     log = tmp_path / "j1.csv"
     assert run("simulate", ROBOT, j1_plan, "-o", log, "--seed", 2).exit_code == 0
@@ -188,6 +209,7 @@ def test_gross_outliers_are_refused_unless_robust(tmp_path):
     assert run("solve", ROBOT, PLAN, log, "--robust").exit_code == 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("noise_mm", [0.01, 0.02])
 def test_no_false_alarm_over_20_seeds(viper, paper_plan, noise_mm):
     """Sound simulated logs, noise up to the gate's default: none refused, by any check."""

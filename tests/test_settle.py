@@ -60,6 +60,7 @@ def test_a_vibrating_twin_logs_unsettled_and_measures_the_point_again(viper, pap
     assert m.unsettled == ((3, 2),)
 
 
+@pytest.mark.slow
 def test_samples_that_spread_too_wide_are_logged_unsettled_and_taken_again(
     viper, paper_plan, tmp_path
 ):
@@ -155,6 +156,7 @@ def test_generated_speeds_keep_the_designed_plans_wire_within_its_limit(viper):
     _check_wire_speeds(viper, plan, module_text(viper, plan))
 
 
+@pytest.mark.slow
 def test_the_twin_refuses_a_hand_edited_speed_beyond_the_wire_limit(viper, paper_plan, tmp_path):
     text = module_text(viper, paper_plan)
     moves = _program_moves(text)
@@ -170,6 +172,7 @@ def test_the_twin_refuses_a_hand_edited_speed_beyond_the_wire_limit(viper, paper
     assert r.cell.moves == k  # stopped before it moved
 
 
+@pytest.mark.slow
 def test_the_paper_run_waits_its_fixed_settle_first(viper, paper_plan, tmp_path):
     """--settle-s 3 (the paper's wait) then the rule: every reading waited 3 s plus the
     window, and the run takes the paper's time."""

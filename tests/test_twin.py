@@ -127,6 +127,7 @@ def twin_run(viper, paper_plan, tmp_path_factory):
     return measure_in_twin(viper, paper_plan, TRUTH, disk, seed=3, counter_start=2**23 - 12_000)
 
 
+@pytest.mark.slow
 def test_end_to_end(viper, paper_plan, twin_run, tmp_path):
     """plan → gen → twin run → log → Python and controller solve agree → patch → the
     re-run with the patched model fits the robot far better."""
@@ -359,6 +360,7 @@ def test_fault_wire_beyond_the_encoders_range(viper, paper_plan, tmp_path):
         simulate_log(short, paper_plan, TRUTH, seed=4)
 
 
+@pytest.mark.slow
 def test_echo_log_without_a_disk(viper, paper_plan, tmp_path):
     """gen --echo-log: the log file cannot be created (it exists), so wc.run types every
     log line and goes on; the lines copied from the terminal are a complete log."""
@@ -376,6 +378,7 @@ def test_echo_log_without_a_disk(viper, paper_plan, tmp_path):
     assert m.present.sum() == 69
 
 
+@pytest.mark.slow
 def test_validation_sets_the_null_tool_and_takes_any_run_number(viper, paper_plan, tmp_path):
     """TOOL NULL before every Cartesian move, recorded in the header; run 12 (which the
     old $CHR(48+run) turned into 'WCVCFG<.CSV') names its files WCVCFG12/WCVPLN12."""
@@ -421,6 +424,7 @@ def _controller_case(viper, plan, module, tmp_path, seed):
     return runs, diff
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1])
 def test_interpreted_controller_solver_matches_the_reference(
     viper, paper_plan, module, tmp_path, seed
@@ -442,6 +446,7 @@ def test_interpreted_controller_solver_matches_the_reference_more_truths(
     assert diff["joint"] <= 1e-4
 
 
+@pytest.mark.slow
 def test_operation_counts_from_the_interpreter(viper, paper_plan, module, tmp_path):
     """One SQRT per point and Gauss–Newton iteration: 69 points × 5 iterations per step,
     then 69 × 3 for the joint polish; only + − × ÷ and SQRT are executed."""

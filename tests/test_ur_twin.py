@@ -74,6 +74,7 @@ def test_every_line_sent_is_mirrored_in_the_log_tab(ur5, ur5_plan, texts, truth,
     assert m.complete
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "start",
     [
@@ -160,6 +161,7 @@ def test_fault_wire_slip(ur5, ur5_plan, texts, truth, tmp_path):
     assert "remount at θ0 and repeat from step 4" in info.value.problems[0]
 
 
+@pytest.mark.slow
 def test_the_log_carries_the_controller_solvers_result(ur5, ur5_plan, texts, truth, tmp_path):
     """wc_solve runs at the end of wc_run; its result arrives in the log as comment lines
     and agrees with the PC's stepwise estimate; solve --method controller reruns it."""

@@ -314,6 +314,7 @@ def test_generator_checks_its_own_output(viper, paper_plan, monkeypatch):
     assert info.value.problems[1].startswith("WIRECAL.V2:2: wc.x: 'base' is a V+ keyword")
 
 
+@pytest.mark.slow
 def test_lint_generated_module_with_validation(tmp_path):
     from .conftest import VIPER
 

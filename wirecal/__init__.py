@@ -1,6 +1,6 @@
 """wirecal — kinematic calibration of robot arms with a single draw-wire encoder.
 
-The public API (see the README's "Python API" section). Names are imported on first use
+The public API (see docs/api.md). Names are imported on first use
 (PEP 562), so ``import wirecal`` stays cheap; ``from wirecal import solve`` imports the
 solver, and only the twin or the report import the interpreter or matplotlib.
 

@@ -82,6 +82,9 @@ _UNMODELLED_WORDS = ("sec", "thread", "run", "join", "kill", "for", "break", "co
 
 _LINES = re.compile(r"\r\n|\n|\r")
 
+_Block = N.Def | N.While | N.If
+"""A statement that holds a body, opened by its first line and closed by ``end``."""
+
 
 @dataclass
 class Program:
@@ -261,10 +264,10 @@ def _step(source: str, n: int, line: str, problems: list[str]) -> N.Stmt | None:
     return None
 
 
-def _nest(steps: list[N.Stmt], source: str, problems: list[str]):
+def _nest(steps: list[N.Stmt], source: str, problems: list[str]) -> Program | None:
     """Assemble the line statements into blocks; the one top-level def is the program."""
     root: list[N.Stmt] = []
-    stack: list[tuple[N.Stmt, list[N.Stmt]]] = []  # open block and the list it fills
+    stack: list[tuple[_Block, list[N.Stmt]]] = []  # open block and the list it fills
     with_else: set[int] = set()  # ids of the If blocks whose else line has come
     target = root
     for s in steps:
@@ -275,16 +278,16 @@ def _nest(steps: list[N.Stmt], source: str, problems: list[str]):
             stack.append((block, target))
             target = _first_body(block)
         elif isinstance(s, (N.ElifLine, N.ElseLine)):
-            block = stack[-1][0] if stack else None
-            if not isinstance(block, N.If) or id(block) in with_else:
+            open_if = stack[-1][0] if stack else None
+            if not isinstance(open_if, N.If) or id(open_if) in with_else:
                 problems.append(f"{where}: '{_word(s)}' without an open 'if'")
                 continue
             if isinstance(s, N.ElseLine):
-                with_else.add(id(block))
-                target = block.orelse
+                with_else.add(id(open_if))
+                target = open_if.orelse
             else:
                 target = []
-                block.branches.append((s.cond, target))
+                open_if.branches.append((s.cond, target))
         elif isinstance(s, N.EndLine):
             if not stack:
                 problems.append(f"{where}: 'end' without an open block")
@@ -302,7 +305,7 @@ def _nest(steps: list[N.Stmt], source: str, problems: list[str]):
     return Program(source, main.name, main.body, _functions(main, source, problems))
 
 
-def _open(s: N.Stmt) -> N.Stmt:
+def _open(s: N.Stmt) -> _Block:
     if isinstance(s, N.DefStart):
         return N.Def(s.name, s.params, [], line=s.line)
     if isinstance(s, N.WhileStart):
@@ -311,7 +314,7 @@ def _open(s: N.Stmt) -> N.Stmt:
     return N.If([(s.cond, [])], [], line=s.line)
 
 
-def _first_body(block: N.Stmt) -> list[N.Stmt]:
+def _first_body(block: _Block) -> list[N.Stmt]:
     if isinstance(block, N.If):
         return block.branches[0][1]
     return block.body

@@ -504,6 +504,8 @@ class _Compiler:
         if name not in FUNCTIONS:
             return _refuse(f"function {name.upper()}"), False
         if name == "defined":
+            if not isinstance(args[0], N.Var):
+                return _refuse("DEFINED of anything but a variable"), False
             return self._defined(args[0]), False
         if name == "device":
             return self._device(args), False

@@ -1,0 +1,163 @@
+"""The layer rule of docs/architecture.md: each layer imports only the layers below it.
+
+    solver  ←  solver/formats  ←  gen, twin  ←  app  ←  wirecal (the API)  ←  cli
+
+``gen`` and ``twin`` are peers: neither imports the other. Every import counts, at the top
+of a module or inside a function (a lazy import is still a dependency), and so do imports
+for type checking only. ``from wirecal import __version__`` is allowed everywhere: the
+package root is imported before any of its parts anyway.
+
+Today's violations are listed in :data:`KNOWN`, each with the issue that removes it. The
+test fails on a new violation and on a listed one that is gone, so the list only shrinks.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+from .conftest import ROOT
+
+FOLDERS = {
+    "solver": "wirecal.solver",
+    "gen": "wirecal.gen",
+    "twin": "wirecal.twin",
+    "app": "wirecal.app",
+    "cli": "wirecal.cli",
+    "wirecal": "wirecal",
+}
+"""Source folder → the package it installs as (pyproject's package-dir)."""
+
+LAYERS = {
+    "wirecal.solver": 0,
+    "wirecal.solver.formats": 1,
+    "wirecal.gen": 2,
+    "wirecal.twin": 2,
+    "wirecal.app": 3,
+    "wirecal": 4,
+    "wirecal.cli": 5,
+}
+"""Each layer's package and its height: a module imports only strictly lower layers."""
+
+KNOWN = {
+    ("wirecal.gen.vplus.program", "wirecal.twin.vplus.parser"): (
+        "issue 25 item 3: generation checks its module with the twin's V+ parser; the "
+        "parser moves to a language layer both use"
+    ),
+    ("wirecal.solver.measurements", "wirecal.solver.formats.log"): (
+        "issue 25 item 3: the solver import circle (the log's records are the solver's input)"
+    ),
+    ("wirecal.solver.simulate", "wirecal.solver.formats.log"): (
+        "issue 25 item 3: the solver import circle (simulate writes the log's text)"
+    ),
+    ("wirecal.solver.urdf_model", "wirecal.solver.formats.urdf"): (
+        "issue 25 item 3: the solver import circle (the URDF chain read into DH)"
+    ),
+    ("wirecal.solver.validation_analysis", "wirecal.solver.formats.validation_files"): (
+        "issue 25 item 3: the solver import circle (validation logs read into records)"
+    ),
+}
+"""Violations of today, (importer, imported) → the issue that removes it."""
+
+
+def layer(module: str) -> str | None:
+    """Return the layer package of ``module`` (its longest listed prefix), None if foreign."""
+    parts = module.split(".")
+    for n in range(len(parts), 0, -1):
+        if ".".join(parts[:n]) in LAYERS:
+            return ".".join(parts[:n])
+    return None
+
+
+def module_name(root: Path, path: Path) -> str:
+    """Return the installed name of the source file ``path`` under ``root``."""
+    rel = path.relative_to(root).with_suffix("")
+    parts = [FOLDERS[rel.parts[0]], *rel.parts[1:]]
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def imported(tree: ast.AST) -> set[str]:
+    """Return every ``wirecal`` module a parsed file imports, anywhere in it."""
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            if node.module == "wirecal" and [a.name for a in node.names] == ["__version__"]:
+                continue
+            names.add(node.module)
+    return {n for n in names if n == "wirecal" or n.startswith("wirecal.")}
+
+
+def violations(root: Path) -> set[tuple[str, str]]:
+    """Return every (importer, imported) pair of ``root``'s sources that breaks the rule."""
+    found = set()
+    for folder in FOLDERS:
+        for path in sorted((root / folder).rglob("*.py")):
+            importer = module_name(root, path)
+            own = layer(importer)
+            assert own is not None, path
+            for target in imported(ast.parse(path.read_text(encoding="utf-8"))):
+                other = layer(target)
+                if other is not None and other != own and LAYERS[other] >= LAYERS[own]:
+                    found.add((importer, target))
+    return found
+
+
+def test_layers_import_only_downwards():
+    found = violations(ROOT)
+    new = sorted(found - KNOWN.keys())
+    gone = sorted(KNOWN.keys() - found)
+    assert not new, f"imports against the layer order (docs/architecture.md): {new}"
+    assert not gone, f"fixed, so remove them from KNOWN in tests/test_layers.py: {gone}"
+
+
+def test_every_source_folder_is_checked():
+    """A new top-level package folder must be placed in a layer, not escape the rule."""
+    packages = {
+        p.parent.name
+        for p in ROOT.glob("*/__init__.py")
+        if p.parent.name not in ("tests", "templates", "examples")
+    }
+    assert packages == set(FOLDERS)
+
+
+@pytest.mark.parametrize(
+    ("folder", "source", "expected"),
+    [
+        (
+            "solver",
+            "from wirecal.cli.main import main\n",
+            {("wirecal.solver.x", "wirecal.cli.main")},
+        ),
+        (
+            "solver",
+            "def f():\n    import wirecal.app.demo\n",
+            {("wirecal.solver.x", "wirecal.app.demo")},
+        ),
+        (
+            "gen",
+            "from wirecal.twin.machine import Cell\n",
+            {("wirecal.gen.x", "wirecal.twin.machine")},
+        ),
+        (
+            "twin",
+            "from wirecal.gen.tables import build_tables\n",
+            {("wirecal.twin.x", "wirecal.gen.tables")},
+        ),
+        ("app", "import wirecal\n", {("wirecal.app.x", "wirecal")}),
+        ("gen", "from wirecal import __version__\n", set()),
+        ("cli", "from wirecal.app.demo import run_demo\nimport numpy\n", set()),
+        ("twin", "from wirecal.solver.formats.log import parse_log\n", set()),
+    ],
+)
+def test_the_rule_catches_upward_imports(tmp_path, folder, source, expected):
+    """The checker on a planted file: upward, sideways (gen ↔ twin) and lazy imports."""
+    for name in FOLDERS:
+        (tmp_path / name).mkdir()
+    (tmp_path / folder / "x.py").write_text(source, encoding="utf-8")
+    assert violations(tmp_path) == expected
