@@ -5,7 +5,7 @@ file says which: the DH rows, limits and speeds from the URDF's joints
 (:mod:`wirecal.solver.urdf_model`); the wire attachment point from ``--wire-point-mm`` in
 the tip link's frame; the encoder interface and counter width from the controller language's
 programs (:mod:`wirecal.gen.languages`); the link radii from the URDF's geometry or lengths
-(:mod:`wirecal.solver.urdf_geometry`); the mounting plane from the URDF's root link.
+(:mod:`wirecal.solver.formats.urdf_geometry`); the mounting plane from the URDF's root link.
 
 Joint speeds a URDF gives as placeholders — every joint the same whole number of rad/s, or
 any joint below :data:`MIN_PLAUSIBLE_SPEED_DEG_S` — are written with
@@ -29,6 +29,14 @@ from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
 from wirecal.solver.formats.urdf import MOVING, chain, matrix_rpy, origin_mm, read_urdf
+from wirecal.solver.formats.urdf_geometry import (
+    RADIUS_PER_LENGTH,
+    RADIUS_PER_REACH,
+    WIDE_RATIO,
+    LinkRadii,
+    link_radii,
+    wide_links,
+)
 from wirecal.solver.identifiability import propose_parameters
 from wirecal.solver.kinematics import Model
 from wirecal.solver.robot import (
@@ -39,14 +47,6 @@ from wirecal.solver.robot import (
     Encoder,
     Robot,
     UrdfSource,
-)
-from wirecal.solver.urdf_geometry import (
-    RADIUS_PER_LENGTH,
-    RADIUS_PER_REACH,
-    WIDE_RATIO,
-    LinkRadii,
-    link_radii,
-    wide_links,
 )
 from wirecal.solver.urdf_model import UrdfChain, fk_difference_mm, read_chain
 
