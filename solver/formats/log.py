@@ -35,8 +35,11 @@ modulo the counter width; the reference is the mean of the zero readings (each c
 against the first: a drift means the wire slipped).
 
 The layout is read by :mod:`wirecal.solver.formats.csv_table` (what it forgives: a BOM,
-indentation, CRLF — a log pasted from a terminal). Counts that a spreadsheet re-saved with
-too few significant digits are refused here, from the text of the field.
+indentation, CRLF — a log pasted from a terminal), which takes a whole terminal capture:
+the lines before ``# wirecal-log`` and the lines that are no row are set aside and counted,
+rows the terminal broke are joined (:mod:`wirecal.solver.formats.capture`). Counts that a
+spreadsheet re-saved with too few significant digits are refused here, from the text of
+the field.
 """
 
 from __future__ import annotations
@@ -50,6 +53,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.capture import RowTest
 from wirecal.solver.formats.csv_table import Row, parse_table, read_source
 
 MAGIC = "# wirecal-log"
@@ -152,6 +156,7 @@ def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
         what="log",
         columns=lambda _header, version: COLUMNS if version == VERSION else COLUMNS_V1,
         keys=HEADER_KEYS,
+        capture=ROW_TEST,
     )
     problems = [*table.problems, *table.missing(HEADER_KEYS)]
 
@@ -183,6 +188,14 @@ def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
         version=table.version,
     )
 
+
+def _readable(cells: tuple[str, ...]) -> bool:
+    """Whether ``cells`` (of a version's field count) are a row whose values all parse."""
+    return _parse_row(cells, 0, lambda _line, _message: None) is not None
+
+
+ROW_TEST = RowTest(KINDS, _readable)
+"""How a log's rows are told from the other text of a terminal capture."""
 
 COUNTS = COLUMNS.index("counts")
 ROUNDED_MIN_ROWS = 5
