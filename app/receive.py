@@ -269,6 +269,8 @@ class _Session:
     def _from_candidate(self, conn: socket.socket) -> None:
         cand = self.candidates[conn]
         data = _recv(conn)
+        if data is None:
+            return
         if not data:
             self._drop(conn)
             self.result.probes += 1
@@ -291,6 +293,8 @@ class _Session:
 
     def _from_sender(self) -> None:
         data = _recv(self.sender)
+        if data is None:
+            return
         if not data:
             _dropped(self.jf, self.result, self.pending or b"")
             self.done = True
@@ -332,10 +336,13 @@ def _create_journal(journal: Path) -> int:
         raise os_problem(journal, exc) from None
 
 
-def _recv(conn: socket.socket | None) -> bytes:
+def _recv(conn: socket.socket | None) -> bytes | None:
+    """Return what arrived: b"" when the peer closed, None when nothing was there after all."""
     try:
         return conn.recv(65536) if conn is not None else b""
-    except (ConnectionError, BlockingIOError):
+    except BlockingIOError:
+        return None
+    except ConnectionError:
         return b""
 
 

@@ -174,3 +174,12 @@ def test_a_capture_of_two_runs_is_refused():
     text = HEADER + ROW + "\n" + HEADER + ROW + "\n"
     with pytest.raises(WirecalError, match="p:7: a second log begins here"):
         parse_log(text, "p")
+
+
+def test_quotes_in_terminal_text_are_fine_in_quoted_rows_not():
+    """Operator text may quote ('LOAD "WIRECAL.V2"'); a quoted row is still refused."""
+    text = HEADER + ROW + '\nLOAD "WIRECAL.V2"\n'
+    assert len(parse_log(text, "p").readings) == 1
+    quoted = ",".join(f'"{c}"' for c in ROW.split(","))
+    with pytest.raises(WirecalError, match=r"p:7: fields are in double quotes on 1 line"):
+        parse_log(HEADER + ROW + "\n" + quoted + "\n", "p")

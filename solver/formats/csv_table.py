@@ -17,7 +17,9 @@ indentation and trailing whitespace on every line, CRLF or CR line ends, spaces 
 fields. A last row cut short by a run that
 stopped while writing is a note, not an error. What it refuses with one message: fields in
 double quotes (a spreadsheet's export), rows with the wrong number of fields (each as
-``file:line: problem``).
+``file:line: problem``). A reader that says how to tell its rows (the measurement log's
+:data:`~wirecal.solver.formats.log.ROW_TEST`) also takes a whole terminal capture
+(:mod:`wirecal.solver.formats.capture`).
 """
 
 from __future__ import annotations
@@ -29,7 +31,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.capture import RowTest, aside_note, joined_note, take_rows
+from wirecal.solver.formats.capture import (
+    RowTest,
+    aside_note,
+    cells_of,
+    joined_note,
+    take_rows,
+)
 
 STDIN = "-"
 """The file name that means standard input (a log pasted from the controller's terminal)."""
@@ -118,15 +126,16 @@ def parse_table(
     header, comments, problems, n = _read_header(lines, start + 1, source, keys)
     if callable(columns):
         columns = columns(header, found)
-    _check_column_line(lines, n, source, columns, problems)
+    kinds = capture.kinds if capture is not None else None
+    _check_column_line(lines, n, source, columns, problems, kinds)
     if capture is None:
-        rows, notes = _read_rows(lines, n + 1, source, len(columns), ends_with_newline, problems)
+        rows, notes = _read_rows(lines, n + 1), []
     else:
         rows, notes = _capture_rows(
             lines, (start, n + 1), source, magic, len(columns), capture, problems
         )
-        last_cut = len(lines) if not ends_with_newline else None
-        rows = _check_widths(rows, source, len(columns), last_cut, problems, notes)
+    last_cut = len(lines) if not ends_with_newline else None
+    rows = _check_widths(rows, source, len(columns), last_cut, problems, notes)
     return Table(
         source, header, tuple(comments), n + 1, tuple(rows), tuple(problems), tuple(notes), found
     )
@@ -189,9 +198,18 @@ def _read_header(
 
 
 def _check_column_line(
-    lines: list[str], n: int, source: str, columns: tuple[str, ...], problems: list[str]
+    lines: list[str],
+    n: int,
+    source: str,
+    columns: tuple[str, ...],
+    problems: list[str],
+    kinds: tuple[str, ...] | None = None,
 ) -> None:
-    """Raise unless line n is the column line and no later line has double quotes."""
+    """Raise unless line n is the column line and no later line has double quotes.
+
+    ``kinds`` (a terminal capture): only the lines that start with a row kind, quoted
+    or not, count; other terminal text may quote.
+    """
     expected = ",".join(columns)
     if n >= len(lines):
         raise WirecalError(
@@ -205,7 +223,11 @@ def _check_column_line(
                 f"{source}:{n + 1}: columns are {got!r}; the column line must be '{expected}'",
             ]
         )
-    quoted = [k + 1 for k in range(n + 1, len(lines)) if '"' in lines[k]]
+    quoted = [
+        k + 1
+        for k in range(n + 1, len(lines))
+        if '"' in lines[k] and (kinds is None or lines[k].split(",")[0].strip('" ') in kinds)
+    ]
     if quoted:
         raise WirecalError(
             f"{source}:{quoted[0]}: fields are in double quotes on {len(quoted)} "
@@ -214,29 +236,13 @@ def _check_column_line(
         )
 
 
-def _read_rows(
-    lines: list[str],
-    first: int,
-    source: str,
-    width: int,
-    ends_with_newline: bool,
-    problems: list[str],
-) -> tuple[list[Row], list[str]]:
-    """Return the rows from index ``first`` on and the notes; add row-length problems."""
-    rows: list[Row] = []
-    notes: list[str] = []
-    for k in range(first, len(lines)):
-        if not lines[k] or lines[k].startswith("#"):
-            continue
-        cells = tuple(c.strip() for c in lines[k].split(","))
-        if len(cells) != width:
-            if k == len(lines) - 1 and not ends_with_newline and len(cells) < width:
-                notes.append(_cut_short(source, k + 1))
-                continue
-            problems.append(f"{source}:{k + 1}: has {len(cells)} fields; expected {width}")
-            continue
-        rows.append(Row(k + 1, cells))
-    return rows, notes
+def _read_rows(lines: list[str], first: int) -> list[Row]:
+    """Return every line from index ``first`` on that is neither blank nor ``#``, as a row."""
+    return [
+        Row(k + 1, cells_of(lines[k]))
+        for k in range(first, len(lines))
+        if lines[k] and not lines[k].startswith("#")
+    ]
 
 
 def _capture_rows(
@@ -282,11 +288,10 @@ def _check_widths(
         if len(row.cells) == width:
             kept.append(row)
         elif row.line == last_cut and len(row.cells) < width:
-            notes.append(_cut_short(source, row.line))
+            notes.append(
+                f"{source}:{row.line}: incomplete last line ignored (the run stopped while "
+                "writing it)"
+            )
         else:
             problems.append(f"{source}:{row.line}: has {len(row.cells)} fields; expected {width}")
     return kept
-
-
-def _cut_short(source: str, line: int) -> str:
-    return f"{source}:{line}: incomplete last line ignored (the run stopped while writing it)"
