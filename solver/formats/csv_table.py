@@ -128,8 +128,9 @@ def parse_table(
         columns = columns(header, found)
     kinds = capture.kinds if capture is not None else None
     _check_column_line(lines, n, source, columns, problems, kinds)
+    notes: list[str] = []
     if capture is None:
-        rows, notes = _read_rows(lines, n + 1), []
+        rows = _read_rows(lines, n + 1)
     else:
         rows, notes = _capture_rows(
             lines, (start, n + 1), source, magic, len(columns), capture, problems
