@@ -42,7 +42,7 @@ from pathlib import Path
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs, os_problem
 from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.run_token import presents, run_token
+from wirecal.solver.formats.run_token import PREFIX, presents, run_token
 from wirecal.solver.measurements import check_log, describe_missing
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
@@ -101,10 +101,12 @@ def receive(
     force: bool = False,
     host: str = "127.0.0.1",
     on_listening: Callable[[int], None] | None = None,
+    on_refused: Callable[[str], None] | None = None,
 ) -> Received:
     """Listen on ``host:port`` and take one run of ``plan`` into ``log`` (module docstring).
 
-    ``on_listening`` is called with the bound port (useful with ``port=0``). Raises
+    ``on_listening`` is called with the bound port (useful with ``port=0``), ``on_refused``
+    with a sentence for each connection refused for its token, as it happens. Raises
     :class:`WirecalError` when the log or its journal cannot be reserved or the port cannot
     be bound; a run that stops early or fails its checks is a result with ``complete``
     False, not an error.
@@ -119,7 +121,7 @@ def receive(
             with _listen(host, port) as srv:
                 if on_listening is not None:
                     on_listening(srv.getsockname()[1])
-                _take(srv, timeout_s, journal, result, token)
+                _take(srv, timeout_s, journal, result, (token, on_refused))
             if result.ended:
                 result.problems = log_problems(result.text, str(journal), robot, plan)
                 result.complete = not result.problems
@@ -169,9 +171,16 @@ def _listen(host: str, port: int) -> socket.socket:
 
 
 def _take(
-    srv: socket.socket, timeout_s: float, journal: Path, result: Received, token: str
+    srv: socket.socket,
+    timeout_s: float,
+    journal: Path,
+    result: Received,
+    token: tuple[str, Callable[[str], None] | None],
 ) -> None:
-    """Create the journal and fill it from the one sender that presents the token."""
+    """Create the journal and fill it from the one sender that presents the token.
+
+    ``token``: the run token, and who to tell about a connection refused for it.
+    """
     fd = _create_journal(journal)
     result.journal_created = True
     with os.fdopen(fd, "w", encoding="utf-8", newline="") as jf:
@@ -196,14 +205,16 @@ class _Candidate:
 class _Session:
     """One run's connections: candidates, the sender, the deadlines (module docstring)."""
 
-    def __init__(self, srv: socket.socket, timeout_s: float, token: str, jf, result: Received):
-        self.srv, self.timeout_s, self.token, self.jf, self.result = (
-            srv,
-            timeout_s,
-            token,
-            jf,
-            result,
-        )
+    def __init__(
+        self,
+        srv: socket.socket,
+        timeout_s: float,
+        token: tuple[str, Callable[[str], None] | None],
+        jf,
+        result: Received,
+    ):
+        self.srv, self.timeout_s, self.jf, self.result = srv, timeout_s, jf, result
+        self.token, self.tell = token
         self.sel = selectors.DefaultSelector()
         self.sel.register(srv, selectors.EVENT_READ)
         self.candidates: dict[socket.socket, _Candidate] = {}
@@ -278,18 +289,30 @@ class _Session:
         cand.buffered += data
         if b"\n" not in cand.buffered:
             if len(cand.buffered) > MAX_LINE_BYTES:
-                self._drop(conn, REFUSED_LINE)
-                self.result.forged += 1
+                self._forged(conn, "a line too long to be a token")
             return
         first, rest = cand.buffered.split(b"\n", 1)
-        if not presents(first.decode("utf-8", errors="replace").rstrip("\r"), self.token):
-            self._drop(conn, REFUSED_LINE)
-            self.result.forged += 1
+        line = first.decode("utf-8", errors="replace").rstrip("\r")
+        if not presents(line, self.token):
+            self._forged(conn, "a wrong token" if line.startswith(PREFIX) else "no token")
             return
         del self.candidates[conn]
         self.sender = conn
         self.deadline = time.monotonic() + self.timeout_s
         self._lines(rest)
+
+    def _forged(self, conn: socket.socket, what: str) -> None:
+        try:
+            peer = "{}:{}".format(*conn.getpeername()[:2])
+        except OSError:
+            peer = "a client"
+        self._drop(conn, REFUSED_LINE)
+        self.result.forged += 1
+        if self.tell is not None:
+            self.tell(
+                f"refused {peer}: {what} (a program generated with another robot file key "
+                "or plan? stop it: its rows would reach the log tab only)"
+            )
 
     def _from_sender(self) -> None:
         data = _recv(self.sender)

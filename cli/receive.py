@@ -81,7 +81,16 @@ def receive_cmd(robot, plan, output, port, host, timeout_s, force):
         "Ctrl-C to stop",
         err=True,
     )
-    result = receive(port, output, rob, pl, timeout_s=timeout_s, force=force, host=host)
+    result = receive(
+        port,
+        output,
+        rob,
+        pl,
+        timeout_s=timeout_s,
+        force=force,
+        host=host,
+        on_refused=lambda message: click.echo(f"warning: {message}", err=True),
+    )
     for line in summary(result, rob, pl):
         click.echo(line, err=not result.complete)
     if not result.complete:

@@ -339,10 +339,16 @@ def _free_port() -> int:
         return probe.getsockname()[1]
 
 
-def _sender(port: int, data: bytes) -> threading.Thread:
+def _sender(port: int, data: bytes, forged: bytes | None = None) -> threading.Thread:
+    """Send ``data`` once the command listens; first ``forged`` on a connection of its own."""
+
     def send() -> None:
         for _ in range(100):  # until the command listens (bounded: 5 s)
             try:
+                if forged is not None:
+                    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+                        s.sendall(forged)
+                        s.recv(100)  # the refusal, before the real sender connects
                 with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
                     s.sendall(data)
                 return
@@ -365,12 +371,17 @@ def _cli_receive(port: int, out, *extra: str):
 
 
 def test_cli_complete_run(tmp_path, log_text, hello):
+    """A program with another token first (told at once on stderr), then the run."""
     port, out = _free_port(), tmp_path / "run.csv"
-    thread = _sender(port, hello + (log_text + END_MARKER + "\n").encode())
+    wrong = b"# wirecal-token " + b"f" * 32 + b"\n"
+    thread = _sender(port, hello + (log_text + END_MARKER + "\n").encode(), forged=wrong)
     res = _cli_receive(port, out)
     thread.join(5)
     assert res.exit_code == 0, res.output
     assert "[controller] key is not set" in res.stderr  # the example has no key
+    assert "warning: refused 127.0.0.1:" in res.stderr
+    assert ": a wrong token (a program generated with another robot file key" in res.stderr
+    assert "1 connection(s) refused: no valid run token" in res.stdout
     assert f"{out}: written, " in res.stdout
     assert "(run complete; the log checks passed)" in res.stdout
     assert out.read_text() == log_text + END_MARKER + "\n"
