@@ -478,3 +478,19 @@ def test_the_token_follows_the_key_and_the_plan(tmp_path, ur5, plan):
     good = tmp_path / "good.toml"
     good.write_text(text.replace("port = 50000", 'port = 50000\nkey = "' + "k" * 16 + '"'))
     assert load_robot(good).controller.key == "k" * 16
+
+
+def test_gen_writes_and_names_the_token_receive_expects(tmp_path, ur5, plan):
+    """The program generated twice holds the same token line, the one receive checks;
+    gen names its first digits and the receive command to run."""
+    token = run_token(ur5, plan.fingerprint())
+    texts = []
+    for folder in ("a", "b"):
+        r = CliRunner().invoke(main, ["gen", ROBOT, PLAN, "-o", str(tmp_path / folder)])
+        assert r.exit_code == 0, r.output
+        texts.append((tmp_path / folder / "wc_run.script").read_text())
+    assert texts[0] == texts[1]
+    assert f'  socket_send_line("{token_line(token)}", "wc")\n' in texts[0]
+    assert f"'wirecal receive --robot {ROBOT} --plan {PLAN} -o LOG'" in r.stdout
+    assert f"(it listens on 192.168.1.10:50000, run token {token[:6]}…)" in r.stdout
+    assert "[controller] key is not set" in r.stderr
