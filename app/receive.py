@@ -296,6 +296,10 @@ class _Session:
         if not presents(line, self.token):
             self._forged(conn, "a wrong token" if line.startswith(PREFIX) else "no token")
             return
+        if self.sender is not None:  # two presented it while waiting: the first one sends
+            self._drop(conn, BUSY_LINE)
+            self.result.refused += 1
+            return
         del self.candidates[conn]
         self.sender = conn
         self.deadline = time.monotonic() + self.timeout_s

@@ -494,3 +494,21 @@ def test_gen_writes_and_names_the_token_receive_expects(tmp_path, ur5, plan):
     assert f"'wirecal receive --robot {ROBOT} --plan {PLAN} -o LOG'" in r.stdout
     assert f"(it listens on 192.168.1.10:50000, run token {token[:6]}…)" in r.stdout
     assert "[controller] key is not set" in r.stderr
+
+
+def test_two_connections_with_the_token_the_first_sends(serve, tmp_path, log_text, hello):
+    """Both connect before either presents the token: the first to present it is the
+    sender, the second is told busy (it cannot take over the run)."""
+    out = tmp_path / "run.csv"
+    server = serve()
+    first, second = server.connect(), server.connect()
+    with first, second:
+        first.sendall(hello)
+        time.sleep(0.2)
+        second.sendall(hello + b"zero,1,0,forged\n")
+        assert second.recv(100) == BUSY_LINE
+        first.sendall((log_text + END_MARKER + "\n").encode())
+        result = server.finish()
+    assert result.complete
+    assert result.refused == 1
+    assert out.read_text() == log_text + END_MARKER + "\n"
