@@ -140,9 +140,13 @@ def receive(
 
 
 def log_problems(text: str, source: str, robot: Robot, plan: Plan) -> list[str]:
-    """Return why ``text`` is not a complete log of ``plan`` (empty when it is one)."""
+    """Return why ``text`` is not a complete log of ``plan`` (empty when it is one).
+
+    Read as the program's own log, not a terminal capture: a line that is no row is an
+    error here, so the published file holds only what a log holds.
+    """
     try:
-        m = check_log(parse_log(text, source), plan, robot)
+        m = check_log(parse_log(text, source, terminal=False), plan, robot)
     except WirecalError as exc:
         return exc.problems
     return [] if m.complete else [f"{source}: missing {m.missing_text()}"]

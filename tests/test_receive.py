@@ -512,3 +512,18 @@ def test_two_connections_with_the_token_the_first_sends(serve, tmp_path, log_tex
     assert result.complete
     assert result.refused == 1
     assert out.read_text() == log_text + END_MARKER + "\n"
+
+
+def test_a_sent_log_with_text_that_is_no_row_is_not_published(serve, tmp_path, log_text, hello):
+    """A program's own log holds only rows and '#' lines: terminal text in it (which a
+    paste would set aside) keeps it from being published."""
+    out = tmp_path / "run.csv"
+    lines = log_text.splitlines(keepends=True)
+    sent = "".join([*lines[:8], "Step 1 of 10\n", *lines[8:]]) + END_MARKER + "\n"
+    server = serve()
+    with server.connect() as s:
+        s.sendall(hello + sent.encode())
+    result = server.finish()
+    assert not result.complete
+    assert result.problems == [f"{journal_path(out)}:9: has 1 fields; expected 14"]
+    assert not out.exists()

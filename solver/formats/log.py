@@ -139,11 +139,13 @@ def read_log(path: str | Path) -> Log:
     return parse_log(text, source, sha256)
 
 
-def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
+def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bool = True) -> Log:
     """Parse a log's text.
 
     ``sha256`` of the bytes it was read from (default: of the text, UTF-8), so a patch
-    always records which log it was solved from.
+    always records which log it was solved from. ``terminal``: the text may be a terminal
+    capture (module docstring); False for a log that a program sent itself
+    (``wirecal receive``), where a line that is no row is an error.
     """
     if sha256 is None:
         sha256 = hashlib.sha256(text.encode("utf-8")).hexdigest()
@@ -156,7 +158,7 @@ def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
         what="log",
         columns=lambda _header, version: COLUMNS if version == VERSION else COLUMNS_V1,
         keys=HEADER_KEYS,
-        capture=ROW_TEST,
+        capture=ROW_TEST if terminal else None,
     )
     problems = [*table.problems, *table.missing(HEADER_KEYS)]
 
