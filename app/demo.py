@@ -420,6 +420,7 @@ def _put_truth_and_patch(
         log_sha256=result.measurements.sha256,
         version=__version__,
         plausibility=verdict.patch_field(),
+        unchecked=result.unchecked,
     )
 
 

@@ -169,16 +169,17 @@ def render_report(
     robot, plan = result.robot, result.plan
     sw, jt = result.estimates.get("stepwise"), result.estimates.get("joint")
     params = []
-    for k, name in enumerate(plan.order):
+    std = dict(zip(jt.names, jt.std, strict=True)) if jt is not None and jt.std is not None else {}
+    for name in plan.order:  # a partial log's parameters left at nominal have no estimate
         params.append(
             {
                 "name": name,
                 "unit": "deg" if name.startswith(("th", "al")) else "mm",
                 "nominal": robot.nominal_value(name),
-                "stepwise": sw.values[k] if sw else None,
-                "joint": jt.values[k] if jt else None,
-                "std": jt.std[k] if jt is not None and jt.std is not None else None,
-                "identified": jt is None or jt.std is None or bool(np.isfinite(jt.std[k])),
+                "stepwise": sw.as_dict().get(name) if sw else None,
+                "joint": jt.as_dict().get(name) if jt else None,
+                "std": std.get(name),
+                "identified": name not in std or bool(np.isfinite(std[name])),
                 "controller": controller.stepwise.offsets.get(name) if controller else None,
                 "polished": controller.polished.offsets.get(name)
                 if controller and controller.polished

@@ -134,7 +134,9 @@ def measure_ur_in_twin(
 
     def serve() -> None:
         try:
-            box["received"] = receive(0, log, timeout_s=timeout_s, on_listening=on_listening)
+            box["received"] = receive(
+                0, log, robot, plan, timeout_s=timeout_s, on_listening=on_listening
+            )
         except BaseException as exc:  # handed to the caller below
             box["error"] = exc
             listening.set()

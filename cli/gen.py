@@ -8,13 +8,14 @@ import click
 
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
-from wirecal.gen.urscript.program import UrOptions, scripts, write_scripts
+from wirecal.gen.urscript.program import UrOptions, pc_address, scripts, write_scripts
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import cone_problems
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.run_token import NO_KEY, run_token
 from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.robot import LANGUAGES, language_mismatch
 from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
@@ -215,9 +216,14 @@ def gen(
             solver=not no_solver,
         )
         paths = write_scripts(out_dir, scripts(rb, pl, ur), force=force, inputs=[robot, plan])
+        if rb.controller.key is None:
+            click.echo(f"warning: {robot}: {NO_KEY}", err=True)
+        pc_host, pc_port = pc_address(rb, ur)
+        where = f" --host {pc_host} --port {pc_port}" if host or port else ""
         click.echo(
-            f"wrote {', '.join(str(p) for p in paths)}: run wc_mount, wc_check, then "
-            "'wirecal receive' on the PC and wc_run"
+            f"wrote {', '.join(str(p) for p in paths)}: run wc_mount, wc_check, then on the "
+            f"PC 'wirecal receive --robot {robot} --plan {plan}{where} -o LOG' (it listens on "
+            f"{pc_host}:{pc_port}, run token {run_token(rb, pl.fingerprint())[:6]}…) and wc_run"
         )
         return
     if host or port or no_solver:

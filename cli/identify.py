@@ -456,6 +456,8 @@ def solve(
         )
         for finding in verdict.findings:
             click.echo(f"warning: implausible result accepted: {finding.message}", err=True)
+        for warning in result.unchecked:
+            click.echo(f"warning: {warning}", err=True)
         ctl = _controller(result) if method == "controller" else None
         if patch_path:
             put_patch(
@@ -468,6 +470,7 @@ def solve(
                 log_sha256=m.sha256,
                 version=__version__,
                 plausibility=verdict.patch_field(),
+                unchecked=result.unchecked,
             )
     if as_json:
         data = result.as_json()

@@ -6,18 +6,37 @@ import sys
 
 import click
 
-from wirecal.app.receive import receive, summary
+from wirecal.app.receive import HANDSHAKE_S, receive, summary
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import POSITIVE
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.run_token import NO_KEY, run_token
 
 
 @click.command("receive")
-@click.option("--port", required=True, type=click.IntRange(1, 65535), help="TCP port to listen on.")
+@click.option(
+    "--robot",
+    required=True,
+    type=click.Path(dir_okay=False),
+    help="The robot file the programs were generated from (its key, host and port).",
+)
+@click.option(
+    "--plan", required=True, type=click.Path(dir_okay=False), help="The plan being measured."
+)
 @click.option(
     "-o", "--output", required=True, type=click.Path(dir_okay=False), help="The log to write."
+)
+@click.option(
+    "--port",
+    type=click.IntRange(1, 65535),
+    help="TCP port to listen on  [default: the robot file's [controller] port].",
+)
+@click.option(
+    "--host",
+    help="Address to listen on: one this PC has on the robot's network, 0.0.0.0 for all  "
+    "[default: the robot file's [controller] host, else 127.0.0.1].",
 )
 @click.option(
     "--timeout",
@@ -25,30 +44,53 @@ from wirecal.solver.formats.robot_file import load_robot
     type=POSITIVE,
     default=600.0,
     show_default=True,
-    help="Seconds to wait for the robot program, and for each next line.",
+    help="Seconds to wait for the robot program, and between two of its lines.",
 )
-@click.option("--robot", type=click.Path(dir_okay=False), help="With --plan: name missing points.")
-@click.option("--plan", type=click.Path(dir_okay=False), help="With --robot: name missing points.")
-@click.option("--host", default="127.0.0.1", show_default=True, help="Address to listen on.")
-@click.option("--force", is_flag=True, help="Replace an existing log.")
+@click.option("--force", is_flag=True, help="Replace an existing log (never the robot or plan).")
 @user_errors
-def receive_cmd(port, output, timeout_s, robot, plan, host, force):
+def receive_cmd(robot, plan, output, port, host, timeout_s, force):
     """Receive a measurement log from a robot program over TCP.
 
-    Listens on HOST:PORT for one robot program, writes each line it sends to
-    OUTPUT.partial at once (flushed to disk), and when the line '# end' arrives
-    publishes OUTPUT and removes the .partial file. A second sender is turned away while
-    one is connected. If the connection drops or --timeout passes first, OUTPUT is not
-    written and OUTPUT.partial keeps every line received (it is a wirecal log: solve can
-    read it); with --robot and --plan the missing points are named. Exit status 0 for a
-    complete run, 1 for a run that stopped early.
+    Listens on HOST:PORT for the robot program of PLAN, which must first present the
+    run's token (derived from the robot file's [controller] key and the plan, as in the
+    generated program); other connections are refused or closed without ending the run.
+    Each line the program sends is written to OUTPUT.partial at once (flushed to disk).
+    When the line '# end' arrives and the log is complete and passes its checks, OUTPUT
+    is published and OUTPUT.partial removed (exit status 0). Otherwise — the connection
+    drops, --timeout passes, or the log is incomplete — OUTPUT is not written,
+    OUTPUT.partial keeps every line received (a wirecal log: solve can read it) and what
+    is missing is named (exit status 1).
     """
-    if (robot is None) != (plan is None):
-        raise WirecalError("--robot and --plan go together (to name the missing points)")
-    rob = load_robot(robot) if robot else None
-    pl = load_plan(plan, rob) if plan and rob else None
-    click.echo(f"listening on {host}:{port} (Ctrl-C to stop) …", err=True)
-    result = receive(port, output, timeout_s=timeout_s, force=force, host=host)
+    rob = load_robot(robot)
+    pl = load_plan(plan, rob)
+    if rob.controller.language != "urscript":
+        raise WirecalError(
+            f"{robot}: [controller] language is {rob.controller.language!r}: only URScript "
+            "programs send their log over TCP (a V+ run writes it to the controller's disk)"
+        )
+    port = port or rob.controller.port
+    if port is None:
+        raise WirecalError(f"{robot}: no [controller] port: give --port (the one the program uses)")
+    host = host or rob.controller.host or "127.0.0.1"
+    if rob.controller.key is None:
+        click.echo(f"warning: {robot}: {NO_KEY}", err=True)
+    token = run_token(rob, pl.fingerprint())
+    click.echo(
+        f"listening on {host}:{port} for the run of plan {pl.fingerprint()[:12]}… (token "
+        f"{token[:6]}…; a sender has {min(HANDSHAKE_S, timeout_s):g} s to present it); "
+        "Ctrl-C to stop",
+        err=True,
+    )
+    result = receive(
+        port,
+        output,
+        rob,
+        pl,
+        timeout_s=timeout_s,
+        force=force,
+        host=host,
+        on_refused=lambda message: click.echo(f"warning: {message}", err=True),
+    )
     for line in summary(result, rob, pl):
         click.echo(line, err=not result.complete)
     if not result.complete:

@@ -67,8 +67,18 @@ class Measurements:
 
     @property
     def complete(self) -> bool:
-        """Every point and the closing zero reading are in the log."""
-        return not self.missing and self.closed
+        """Every point and the closing zero reading are in the log.
+
+        A version 1 log is complete without the closing zero reading (wirecal 0.1 took
+        none); its last step is then :attr:`unchecked`.
+        """
+        return not self.missing and (self.closed or self.log.version < 2)
+
+    @property
+    def unchecked(self) -> tuple[int, ...]:
+        """Steps with points but no zero reading after them: a wire slip there is unseen."""
+        steps = sorted({int(s) for s in self.step[self.present]})
+        return tuple(s for s in steps if s + 1 not in self.zero_drift_mm)
 
     def missing_text(self) -> str:
         """Describe what is missing in words, including the closing zero reading.

@@ -105,12 +105,14 @@ class Controller:
     """The robot's controller: its language and, for URScript, where the PC listens.
 
     A URScript program has no file output: it sends the log over a TCP socket to
-    ``wirecal receive`` on ``host``:``port`` (the robot is the client).
+    ``wirecal receive`` on ``host``:``port`` (the robot is the client), first presenting
+    the run token derived from ``key`` (:mod:`wirecal.solver.formats.run_token`).
     """
 
     language: str = "vplus"
     host: str | None = None
     port: int | None = None
+    key: str | None = None
 
 
 @dataclass(frozen=True)

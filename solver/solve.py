@@ -64,6 +64,26 @@ class SolveResult:
         return tuple(n for n in self.plan.order if n not in self.left_nominal)
 
     @property
+    def unchecked(self) -> tuple[str, ...]:
+        """Name each step whose closing zero check is missing, and what that hides.
+
+        E.g. 'step 10 (a1) unchecked: the closing zero reading at θ0 is missing, so a wire
+        slip during step 10 is invisible'.
+        """
+        m, n_steps = self.measurements, len(self.plan.steps)
+        out = []
+        for s in m.unchecked:
+            after = (
+                "the closing zero reading" if s == n_steps else f"the zero reading of step {s + 1}"
+            )
+            old = " (a version 1 log has none)" if s == n_steps and m.log.version < 2 else ""
+            out.append(
+                f"step {s} ({self.plan.order[s - 1]}) unchecked: {after} at θ0 is missing{old}, "
+                f"so a wire slip during step {s} is invisible"
+            )
+        return tuple(out)
+
+    @property
     def recommended(self) -> str:
         """The method with the smaller predicted tool-point error (joint when tied)."""
         return min(self.estimates, key=lambda m: (self.predicted[m]["mean"], m != "joint"))
@@ -114,6 +134,10 @@ class SolveResult:
             "sigma_mm": _finite(self.sigma_mm),
             "missing": [{"step": s, "index": i} for s, i in m.missing],
             "left_nominal": list(self.left_nominal),
+            "unchecked": [
+                {"step": s, "parameter": self.plan.order[s - 1], "warning": w}
+                for s, w in zip(m.unchecked, self.unchecked, strict=True)
+            ],
             "notes": list(m.notes),
             "encoder": self._encoder_json(),
         }

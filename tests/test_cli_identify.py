@@ -111,7 +111,7 @@ def test_partial_log_names_missing_points(tmp_path):
     r = run("solve", ROBOT, PLAN, log, ok=False)
     assert r.exit_code == 2
     assert "the log is incomplete: missing step 5 points 2–6; steps 6–10 (all points)" in r.output
-    data = json.loads(run("solve", ROBOT, PLAN, log, "--partial", "--json").output)
+    data = json.loads(run("solve", ROBOT, PLAN, log, "--partial", "--json").stdout)
     assert data["left_nominal"] == ["d4", "a2", "th3", "th2", "a1"]
     assert set(data["methods"]["joint"]["parameters"]) == {"th6", "d6", "th5", "th4", "a3"}
 

@@ -47,7 +47,7 @@ def test_a_vibrating_twin_logs_unsettled_and_measures_the_point_again(viper, pap
         proceed_on_pause=True,
     )
     assert r.run.status == "completed"
-    assert any(line.startswith("*** Still vibrating") for line in r.run.console)
+    assert any(line.startswith("# *** Still vibrating") for line in r.run.console)
     log = read_log(r.log)
     unsettled = [x for x in log.readings if x.kind == "unsettled"]
     assert [(x.step, x.index) for x in unsettled] == [(3, 2)]

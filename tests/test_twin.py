@@ -219,7 +219,7 @@ def test_fault_wire_slip(viper, paper_plan, tmp_path):
     )
     assert out.status == "paused"
     assert any("the wire" in c for c in out.console)
-    assert "    slipped or the encoder moved during step 4." in out.console
+    assert "#   slipped or the encoder moved during step 4." in out.console
     with pytest.raises(WirecalError) as info:
         load_measurements(r.log, paper_plan, viper)
     assert "remount at θ0 and repeat from step 4" in info.value.problems[0]
@@ -228,7 +228,7 @@ def test_fault_wire_slip(viper, paper_plan, tmp_path):
 def test_fault_disk_full(viper, paper_plan, tmp_path):
     r, out = _fault(viper, paper_plan, tmp_path, Faults(disk_full_after_lines=30))
     assert out.status == "halted"
-    assert "*** disk error writing: *Device full*" in out.console
+    assert "# *** disk error writing: *Device full*" in out.console
     m = load_measurements(r.log, paper_plan, viper)
     # 6 header lines + 7 + 7 + 10 rows = 30: the 11th reading of step 3 is the first lost
     assert m.missing_text() == "step 3 point 10; steps 4–10 (all points)"
@@ -331,7 +331,7 @@ def test_fault_slip_during_the_last_step(viper, paper_plan, tmp_path):
         Faults(slip_at_move=move_of_step(paper_plan, 10, 1), slip_mm=3.0),
     )
     assert out.status == "paused"
-    assert "    slipped or the encoder moved during step 10." in out.console
+    assert "#   slipped or the encoder moved during step 10." in out.console
     assert r.log.read_text().splitlines()[-1].startswith("zero,11,0,")
     with pytest.raises(WirecalError) as info:
         load_measurements(r.log, paper_plan, viper)
@@ -363,17 +363,22 @@ def test_fault_wire_beyond_the_encoders_range(viper, paper_plan, tmp_path):
 @pytest.mark.slow
 def test_echo_log_without_a_disk(viper, paper_plan, tmp_path):
     """gen --echo-log: the log file cannot be created (it exists), so wc.run types every
-    log line and goes on; the lines copied from the terminal are a complete log."""
+    log line and goes on; the whole terminal, copied, is a complete log (its own lines
+    are '#' comments; the eight lines before the log, wc.mount's and wc.open's "cannot
+    create", are set aside and counted)."""
     (tmp_path / "WCLOG.CSV").write_text("an older log\n")
     opt = GenOptions(echo_log=True)
     r = measure_in_twin(viper, paper_plan, TRUTH, tmp_path, seed=4, options=opt)
     assert r.run.status == "completed"
     assert (tmp_path / "WCLOG.CSV").read_text() == "an older log\n"
     console = r.cell.console
-    assert "    the log goes to the terminal only: copy its lines." in console
-    start = console.index("# wirecal-log 2")
-    rows = [c for c in console[start:] if c.startswith(("#", "kind,", "zero,", "point,"))]
-    m = check_log(parse_log("\n".join(rows) + "\n", "terminal"), paper_plan, viper)
+    assert "#   the log goes to the terminal only: copy its lines." in console
+    log = parse_log("\n".join(console) + "\n", "terminal")
+    assert log.notes[0].startswith(
+        "terminal: set aside 8 line(s) that are not log rows (terminal text): line 1 "
+        "'wirecal: moving to theta0 at 20 % speed', "
+    )
+    m = check_log(log, paper_plan, viper)
     assert m.complete
     assert m.present.sum() == 69
 

@@ -66,7 +66,7 @@ def test_gen_twin_receive_solve(tmp_path):
     port, log = free_port(), tmp_path / "run.csv"
     receiver = subprocess.Popen(
         [sys.executable, "-m", "wirecal.cli.main", "receive", "--port", str(port), "-o", str(log),
-         "--timeout", "60", "--robot", ROBOT, "--plan", PLAN],
+         "--timeout", "60", "--robot", ROBOT, "--plan", PLAN, "--host", "127.0.0.1"],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
@@ -93,7 +93,7 @@ def test_gen_twin_receive_solve(tmp_path):
         receiver.kill()
     assert runs.run.status == "completed"
     assert receiver.returncode == 0, output
-    assert "(run complete)" in output
+    assert "(run complete; the log checks passed)" in output
 
     patch = tmp_path / "patch.toml"
     solved = cli("solve", ROBOT, PLAN, str(log), "-o", str(patch), "--method", "all", "--json")

@@ -104,7 +104,8 @@ def test_fault_socket_refused(ur5, ur5_plan, texts, truth, tmp_path):
 
 
 def test_fault_socket_dropped_mid_run(ur5, ur5_plan, texts, truth, tmp_path):
-    r = run(ur5, ur5_plan, texts, truth, tmp_path, faults=Faults(socket_drops_after_lines=30))
+    # the run token's line, then 30 log lines reach the PC
+    r = run(ur5, ur5_plan, texts, truth, tmp_path, faults=Faults(socket_drops_after_lines=31))
     out = r.programs.run
     assert out.status == "completed"  # the robot finishes; every row is in the log tab
     lost = "# *** not sent to the PC (connection lost): copy the lines from this log"

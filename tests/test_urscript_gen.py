@@ -28,6 +28,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.run_token import run_token, token_line
 
 ROOT = Path(__file__).resolve().parent.parent
 UR5 = ROOT / "examples" / "ur5"
@@ -177,8 +178,11 @@ def test_rows_sent_parse_with_the_log_reader(ur5):
     ctl = _Controller(counts, joints.tolist(), times.tolist())
     exec(compile(_python(run), "wc_run.script", "exec"), ctl.names())
     assert ctl.sent[-1] == "# end"
-    assert set(ctl.sent) <= set(ctl.log)  # every sent line is in the log tab too
-    log = parse_log("\n".join(ctl.sent[:-1]) + "\n", "sent")
+    # first the run token, which 'wirecal receive' checks and the log tab never shows
+    assert ctl.sent[0] == token_line(run_token(robot, plan.fingerprint()))
+    assert not any(run_token(robot, plan.fingerprint()) in line for line in ctl.log)
+    assert set(ctl.sent[1:]) <= set(ctl.log)  # every log line sent is in the log tab too
+    log = parse_log("\n".join(ctl.sent[1:-1]) + "\n", "sent")
     assert log.plan == plan.fingerprint()
     assert log.robot == robot.name
     assert len(log.readings) == rows
@@ -313,7 +317,7 @@ def test_socket_refused_stops_before_any_motion(ur5):
         exec(compile(_python(run), "wc_run.script", "exec"), names)
     assert moves == []
     assert ctl.sent == []
-    assert "Start 'wirecal receive --port 50000 -o LOG'" in ctl.popups[0]
+    assert "Start 'wirecal receive --robot ROBOT --plan PLAN -o LOG'" in ctl.popups[0]
 
 
 def test_connection_lost_mid_run_keeps_the_rows_in_the_log_tab(ur5):
@@ -328,7 +332,7 @@ def test_connection_lost_mid_run_keeps_the_rows_in_the_log_tab(ur5):
     exec(compile(_python(run), "wc_run.script", "exec"), names)
     assert len(ctl.sent) == 20
     lost = [line for line in ctl.log if line.startswith("# *** not sent to the PC")]
-    assert len(lost) == 6 + rows + 1 - 20  # 6 header lines, the rows and "# end", less 20 sent
-    pasted = [line for line in ctl.log if not line.startswith(("***", "Step", "Closing", "Run"))]
-    log = parse_log("\n".join(pasted[:-1]) + "\n", "pasted")
+    # 6 header lines, the rows and "# end", less the 19 sent after the token
+    assert len(lost) == 6 + rows + 1 - 19
+    log = parse_log("\n".join(ctl.log) + "\n", "pasted")  # the whole log tab
     assert len(log.readings) == rows

@@ -29,6 +29,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
 from wirecal.solver.formats.log import VERSION as LOG_VERSION
+from wirecal.solver.formats.run_token import run_token, token_line
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import (
@@ -209,6 +210,7 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
         "version": __version__,
         "robot": robot.name,
         "fingerprint": plan.fingerprint(),
+        "token_line": token_line(run_token(robot, plan.fingerprint())),
         "host": host,
         "port": port,
         "encoder": robot.encoder,

@@ -17,7 +17,9 @@ indentation and trailing whitespace on every line, CRLF or CR line ends, spaces 
 fields. A last row cut short by a run that
 stopped while writing is a note, not an error. What it refuses with one message: fields in
 double quotes (a spreadsheet's export), rows with the wrong number of fields (each as
-``file:line: problem``).
+``file:line: problem``). A reader that says how to tell its rows (the measurement log's
+:data:`~wirecal.solver.formats.log.ROW_TEST`) also takes a whole terminal capture
+(:mod:`wirecal.solver.formats.capture`).
 """
 
 from __future__ import annotations
@@ -29,6 +31,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.capture import (
+    RowTest,
+    aside_note,
+    cells_of,
+    joined_note,
+    take_rows,
+)
 
 STDIN = "-"
 """The file name that means standard input (a log pasted from the controller's terminal)."""
@@ -93,6 +102,7 @@ def parse_table(
     columns: tuple[str, ...] | Callable[[dict[str, tuple[str, int]], int], tuple[str, ...]],
     keys: tuple[str, ...],
     older: tuple[int, ...] = (),
+    capture: RowTest | None = None,
 ) -> Table:
     """Split a file into header, column line and rows.
 
@@ -102,30 +112,52 @@ def parse_table(
     ``what`` names the format in messages ("log", "validation log", …); ``keys`` are the
     header fields it knows (any other ``#`` line is a comment). ``columns`` may depend on
     the header and the version: a function of both that returns them (or raises).
-    ``older`` lists the earlier versions the caller still reads.
+    ``older`` lists the earlier versions the caller still reads. With ``capture`` (how
+    to tell a row), the text may be a whole terminal capture: the lines before the magic
+    line and every line that is no row are set aside, rows the terminal broke are joined
+    (:mod:`wirecal.solver.formats.capture`), and the notes say so.
     """
     text = text.removeprefix("\ufeff")
     ends_with_newline = text.endswith(("\n", "\r"))
     lines = [line.strip() for line in text.splitlines()]
-    start, found = _check_first_line(lines, source, magic, (version, *older), what)
+    start, found = _check_first_line(
+        lines, source, magic, (version, *older), what, anywhere=capture is not None
+    )
     header, comments, problems, n = _read_header(lines, start + 1, source, keys)
     if callable(columns):
         columns = columns(header, found)
-    _check_column_line(lines, n, source, columns, problems)
-    rows, notes = _read_rows(lines, n + 1, source, len(columns), ends_with_newline, problems)
+    kinds = capture.kinds if capture is not None else None
+    _check_column_line(lines, n, source, columns, problems, kinds)
+    notes: list[str] = []
+    if capture is None:
+        rows = _read_rows(lines, n + 1)
+    else:
+        rows, notes = _capture_rows(
+            lines, (start, n + 1), source, magic, len(columns), capture, problems
+        )
+    last_cut = len(lines) if not ends_with_newline else None
+    rows = _check_widths(rows, source, len(columns), last_cut, problems, notes)
     return Table(
         source, header, tuple(comments), n + 1, tuple(rows), tuple(problems), tuple(notes), found
     )
 
 
 def _check_first_line(
-    lines: list[str], source: str, magic: str, versions: tuple[int, ...], what: str
+    lines: list[str],
+    source: str,
+    magic: str,
+    versions: tuple[int, ...],
+    what: str,
+    anywhere: bool = False,
 ) -> tuple[int, int]:
     """Return the index of the first non-blank line and its version.
 
     Raise unless it is the magic and one of ``versions`` (the first is the current one).
+    ``anywhere``: the first line that starts with the magic (a terminal capture), when one does.
     """
     start = next((k for k, line in enumerate(lines) if line), 0)  # blank lines of a paste
+    if anywhere:
+        start = next((k for k, line in enumerate(lines) if line.startswith(magic)), start)
     first = lines[start] if lines else ""
     if not first.startswith(magic):
         raise WirecalError(
@@ -167,9 +199,18 @@ def _read_header(
 
 
 def _check_column_line(
-    lines: list[str], n: int, source: str, columns: tuple[str, ...], problems: list[str]
+    lines: list[str],
+    n: int,
+    source: str,
+    columns: tuple[str, ...],
+    problems: list[str],
+    kinds: tuple[str, ...] | None = None,
 ) -> None:
-    """Raise unless line n is the column line and no later line has double quotes."""
+    """Raise unless line n is the column line and no later line has double quotes.
+
+    ``kinds`` (a terminal capture): only the lines that start with a row kind, quoted
+    or not, count; other terminal text may quote.
+    """
     expected = ",".join(columns)
     if n >= len(lines):
         raise WirecalError(
@@ -183,7 +224,11 @@ def _check_column_line(
                 f"{source}:{n + 1}: columns are {got!r}; the column line must be '{expected}'",
             ]
         )
-    quoted = [k + 1 for k in range(n + 1, len(lines)) if '"' in lines[k]]
+    quoted = [
+        k + 1
+        for k in range(n + 1, len(lines))
+        if '"' in lines[k] and (kinds is None or lines[k].split(",")[0].strip('" ') in kinds)
+    ]
     if quoted:
         raise WirecalError(
             f"{source}:{quoted[0]}: fields are in double quotes on {len(quoted)} "
@@ -192,29 +237,62 @@ def _check_column_line(
         )
 
 
-def _read_rows(
+def _read_rows(lines: list[str], first: int) -> list[Row]:
+    """Return every line from index ``first`` on that is neither blank nor ``#``, as a row."""
+    return [
+        Row(k + 1, cells_of(lines[k]))
+        for k in range(first, len(lines))
+        if lines[k] and not lines[k].startswith("#")
+    ]
+
+
+def _capture_rows(
     lines: list[str],
-    first: int,
+    span: tuple[int, int],
     source: str,
+    magic: str,
     width: int,
-    ends_with_newline: bool,
+    test: RowTest,
     problems: list[str],
 ) -> tuple[list[Row], list[str]]:
-    """Return the rows from index ``first`` on and the notes; add row-length problems."""
-    rows: list[Row] = []
-    notes: list[str] = []
-    for k in range(first, len(lines)):
-        if not lines[k] or lines[k].startswith("#"):
-            continue
-        cells = tuple(c.strip() for c in lines[k].split(","))
-        if len(cells) != width:
-            if k == len(lines) - 1 and not ends_with_newline and len(cells) < width:
-                notes.append(
-                    f"{source}:{k + 1}: incomplete last line ignored (the run "
-                    "stopped while writing it)"
-                )
-                continue
-            problems.append(f"{source}:{k + 1}: has {len(cells)} fields; expected {width}")
-            continue
-        rows.append(Row(k + 1, cells))
-    return rows, notes
+    """Return the rows of a terminal capture and its notes (set aside, joined).
+
+    ``span``: the indices of the magic line and of the first line after the column line.
+    """
+    start, first = span
+    taken = take_rows(lines, first, width, test, source)
+    aside = [k for k in range(start) if lines[k]] + taken.aside
+    problems += [
+        f"{source}:{k + 1}: a second log begins here (the capture holds two runs): paste "
+        "one run only"
+        for k in range(first, len(lines))
+        if lines[k].startswith(magic)
+    ]
+    notes = [aside_note(lines, aside, source)] if aside else []
+    if taken.joined:
+        notes.append(joined_note(taken.joined, source))
+    problems += taken.problems
+    return [Row(line, cells) for line, cells in taken.rows], notes
+
+
+def _check_widths(
+    rows: list[Row],
+    source: str,
+    width: int,
+    last_cut: int | None,
+    problems: list[str],
+    notes: list[str],
+) -> list[Row]:
+    """Keep the rows of ``width`` fields; one short on line ``last_cut`` is a note."""
+    kept = []
+    for row in rows:
+        if len(row.cells) == width:
+            kept.append(row)
+        elif row.line == last_cut and len(row.cells) < width:
+            notes.append(
+                f"{source}:{row.line}: incomplete last line ignored (the run stopped while "
+                "writing it)"
+            )
+        else:
+            problems.append(f"{source}:{row.line}: has {len(row.cells)} fields; expected {width}")
+    return kept

@@ -35,8 +35,11 @@ modulo the counter width; the reference is the mean of the zero readings (each c
 against the first: a drift means the wire slipped).
 
 The layout is read by :mod:`wirecal.solver.formats.csv_table` (what it forgives: a BOM,
-indentation, CRLF — a log pasted from a terminal). Counts that a spreadsheet re-saved with
-too few significant digits are refused here, from the text of the field.
+indentation, CRLF — a log pasted from a terminal), which takes a whole terminal capture:
+the lines before ``# wirecal-log`` and the lines that are no row are set aside and counted,
+rows the terminal broke are joined (:mod:`wirecal.solver.formats.capture`). Counts that a
+spreadsheet re-saved with too few significant digits are refused here, from the text of
+the field.
 """
 
 from __future__ import annotations
@@ -50,6 +53,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.capture import RowTest
 from wirecal.solver.formats.csv_table import Row, parse_table, read_source
 
 MAGIC = "# wirecal-log"
@@ -135,11 +139,13 @@ def read_log(path: str | Path) -> Log:
     return parse_log(text, source, sha256)
 
 
-def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
+def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bool = True) -> Log:
     """Parse a log's text.
 
     ``sha256`` of the bytes it was read from (default: of the text, UTF-8), so a patch
-    always records which log it was solved from.
+    always records which log it was solved from. ``terminal``: the text may be a terminal
+    capture (module docstring); False for a log that a program sent itself
+    (``wirecal receive``), where a line that is no row is an error.
     """
     if sha256 is None:
         sha256 = hashlib.sha256(text.encode("utf-8")).hexdigest()
@@ -152,6 +158,7 @@ def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
         what="log",
         columns=lambda _header, version: COLUMNS if version == VERSION else COLUMNS_V1,
         keys=HEADER_KEYS,
+        capture=ROW_TEST if terminal else None,
     )
     problems = [*table.problems, *table.missing(HEADER_KEYS)]
 
@@ -183,6 +190,14 @@ def parse_log(text: str, source: str, sha256: str | None = None) -> Log:
         version=table.version,
     )
 
+
+def _readable(cells: tuple[str, ...]) -> bool:
+    """Whether ``cells`` (of a version's field count) are a row whose values all parse."""
+    return _parse_row(cells, 0, lambda _line, _message: None) is not None
+
+
+ROW_TEST = RowTest(KINDS, _readable)
+"""How a log's rows are told from the other text of a terminal capture."""
 
 COUNTS = COLUMNS.index("counts")
 ROUNDED_MIN_ROWS = 5

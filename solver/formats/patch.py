@@ -49,12 +49,14 @@ def patch_text(
     log_sha256: str,
     version: str,
     plausibility: str = "",
+    unchecked: tuple[str, ...] = (),
     date: datetime | None = None,
 ) -> str:
     """Return the patch TOML.
 
     ``plausibility`` is the gate's verdict ("passed …" or "overridden: …" when the user
-    accepted an implausible result).
+    accepted an implausible result); ``unchecked`` names the steps solved without their
+    closing zero check (:attr:`~wirecal.solver.solve.SolveResult.unchecked`).
     """
     date = date or datetime.now(UTC)
     lines = [
@@ -71,6 +73,8 @@ def patch_text(
     ]
     if plausibility:
         lines.append(f"plausibility = {json.dumps(plausibility, ensure_ascii=False)}")
+    if unchecked:
+        lines.append(f"unchecked = {json.dumps(list(unchecked), ensure_ascii=False)}")
     for name, p, nominal, offset, value, std in _rows(robot, estimate):
         lines += [
             "",
@@ -85,7 +89,9 @@ def patch_text(
     return "\n".join(lines) + "\n"
 
 
-def spec_table(robot: Robot, estimate: Estimate, plausibility: str = "") -> str:
+def spec_table(
+    robot: Robot, estimate: Estimate, plausibility: str = "", unchecked: tuple[str, ...] = ()
+) -> str:
     """Return the plain table of new values for the controller's kinematic settings."""
     lines = []
     if plausibility.startswith(OVERRIDDEN):
@@ -94,6 +100,9 @@ def spec_table(robot: Robot, estimate: Estimate, plausibility: str = "") -> str:
             f"overridden (--accept-implausible): {plausibility[len(OVERRIDDEN) :]}",
             "",
         ]
+    if unchecked:
+        lines += [f"WARNING: {w}." for w in unchecked]
+        lines += ["Measure the step(s) again before entering these values.", ""]
     lines += [
         f"Kinematic parameters for {robot.name} identified by wirecal ({estimate.method}).",
         "Enter the 'new value' column in the controller's kinematic settings (Adept SPEC",
@@ -140,7 +149,10 @@ def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, 
     :func:`companion_paths`: they are published together or not at all.
     """
     out.put(path, patch_text(robot, estimate, **meta))
-    out.put(spec_path(path), spec_table(robot, estimate, meta.get("plausibility", "")))
+    out.put(
+        spec_path(path),
+        spec_table(robot, estimate, meta.get("plausibility", ""), meta.get("unchecked", ())),
+    )
     if robot.controller.language == "urscript":
         put_ur_calibration(out, ur_calibration_path(path), robot, estimate.as_dict())
 
@@ -169,6 +181,7 @@ _KEYS = (
     "wirecal",
     "residual_rms_mm",
     "plausibility",
+    "unchecked",
     "parameters",
 )
 _VALUE_KEYS = ("unit", "nominal", "offset", "value", "std")
@@ -180,8 +193,8 @@ class PatchMeta:
     """Where a patch came from.
 
     Robot, plan fingerprint, log and its sha256, method, date, the wirecal version, the
-    fit's residual RMS (mm), and the plausibility verdict ("" in patches written before
-    the gate).
+    fit's residual RMS (mm), the plausibility verdict ("" in patches written before
+    the gate), and the steps solved without their closing zero check.
     """
 
     robot: str
@@ -193,6 +206,7 @@ class PatchMeta:
     wirecal: str
     residual_rms_mm: float
     plausibility: str = ""
+    unchecked: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -268,6 +282,7 @@ def read_patch(path: str | Path) -> Patch:
             doc.add(key, f"is {digest!r}; give a sha256 (64 lowercase hex digits)")
     rms = doc.number("residual_rms_mm", lo=0, hi=MAX_LENGTH_MM, unit="mm")
     plausibility = doc.string("plausibility", "")
+    unchecked = doc.strings("unchecked", [], what="warnings")
     table = doc.table("parameters", None)
     values = {name: _value(table.table(name, _VALUE_KEYS)) for name in table.keys()}
     if table.present and not values:
@@ -277,6 +292,7 @@ def read_patch(path: str | Path) -> Patch:
         **{k: valid(v) for k, v in (text | digests).items()},
         residual_rms_mm=valid(rms),
         plausibility=valid(plausibility),
+        unchecked=tuple(valid(unchecked)),
     )
     return Patch(meta, {n: v for n, v in values.items() if v is not None}, str(path))
 

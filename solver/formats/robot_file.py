@@ -22,6 +22,7 @@ Format (angles in degrees, lengths in mm)::
     [controller]                          # optional
     language = "vplus"                    # or "urscript" (Universal Robots)
     host = "192.168.1.10"; port = 50000   # URScript: where 'wirecal receive' listens
+    key = "…"                             # URScript: the run token's secret (16+ characters)
     [geometry]                            # optional
     link_radius_mm = [70, 55, 45, 40, 35] # capsule radius of each link (wire clearance)
 
@@ -57,6 +58,7 @@ import numpy as np
 from wirecal.solver import params as P
 from wirecal.solver.exit_geometry import Exit, Eyelet, Pulley
 from wirecal.solver.formats.fileio import read_toml
+from wirecal.solver.formats.run_token import MIN_KEY_CHARS
 from wirecal.solver.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver.robot import (
     DEFAULT_CHANNEL,
@@ -155,7 +157,7 @@ _KEYS = {
     "calibration": ("parameters",),
     "geometry": ("link_radius_mm",),
     "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg", "wire_point_mm"),
-    "controller": ("language", "host", "port"),
+    "controller": ("language", "host", "port", "key"),
     "cell": ("floor_z_mm", "margin_mm", "body_min_deg", "body_max_deg"),
 }
 
@@ -259,10 +261,19 @@ def _controller(table: Table) -> Controller | None:
         table.add("host", f"is {host!r}; give an address or host name (printable, no spaces)")
         host = None
     port = table.integer("port", None, lo=1, hi=65535)
+    key = table.string("key", None)
+    if key is not None and (len(key) < MIN_KEY_CHARS or not all(33 <= ord(c) <= 126 for c in key)):
+        table.add(
+            "key",
+            f"has {len(key)} characters; give {MIN_KEY_CHARS} or more printable ones, no "
+            "spaces (the secret the run token is derived from)",
+        )
+        key = None
     keys = table.keys()
-    if language is None or ("host" in keys and host is None) or ("port" in keys and port is None):
+    bad = [k for k, v in (("host", host), ("port", port), ("key", key)) if k in keys and v is None]
+    if language is None or bad:
         return None
-    return Controller(language, host, port)
+    return Controller(language, host, port, key)
 
 
 def _dh(kin: Table) -> np.ndarray | None:
