@@ -8,6 +8,7 @@ import click
 
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
+from wirecal.gen.urscript.facts import NEEDED
 from wirecal.gen.urscript.program import UrOptions, scripts, write_scripts
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
 from wirecal.solver.errors import WirecalError
@@ -212,6 +213,13 @@ def gen(
             solver=not no_solver,
         )
         paths = write_scripts(out_dir, scripts(rb, pl, ur), force=force, inputs=[robot, plan])
+        if rb.controller.software is None:
+            click.echo(
+                f"warning: {robot}: [controller] software not declared; the programs need "
+                f"e-Series software {'.'.join(map(str, NEEDED))} or later (docs/languages.md); "
+                "declare it and a CB3 or older version is refused",
+                err=True,
+            )
         click.echo(
             f"wrote {', '.join(str(p) for p in paths)}: run wc_mount, wc_check, then "
             "'wirecal receive' on the PC and wc_run"

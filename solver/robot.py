@@ -79,17 +79,31 @@ LIVE_CHECK = {"vplus": "wc.check", "urscript": "wc_check"}
 """The generated program that shows the live counts, by language (messages name it)."""
 
 
+SOFTWARE_LINES = {"urscript": {3: "CB3", 5: "e-Series (PolyScope 5)"}}
+"""The controller software lines wirecal knows, by language and major version."""
+
+
 @dataclass(frozen=True)
 class Controller:
-    """The robot's controller: its language and, for URScript, where the PC listens.
+    """The robot's controller: its language, software version and where the PC listens.
 
     A URScript program has no file output: it sends the log over a TCP socket to
-    ``wirecal receive`` on ``host``:``port`` (the robot is the client).
+    ``wirecal receive`` on ``host``:``port`` (the robot is the client). ``software`` is
+    the controller's software version as written ("5.20", "3.15.8"), or None if not
+    declared; generation uses only calls that version has (docs/languages.md).
     """
 
     language: str = "vplus"
     host: str | None = None
     port: int | None = None
+    software: str | None = None
+
+    @property
+    def software_version(self) -> tuple[int, ...] | None:
+        """The software version as numbers, (5, 20) for "5.20"; None if not declared."""
+        if self.software is None:
+            return None
+        return tuple(int(x) for x in self.software.split("."))
 
 
 @dataclass(frozen=True)

@@ -175,3 +175,86 @@ def test_the_twin_refuses_what_it_does_not_run():
 def test_int_literals_pass_exactly_inside_int32(n):
     found = problems(program(f"x = {n}"))
     assert (found == []) == (-(2**31) <= n <= 2**31 - 1)
+
+
+# ---------- [controller] software: generation uses only what that version has ----------
+def _ur5_with(software: str | None):
+    """The UR5 example's robot (dict) and plan, with ``software`` declared (or not)."""
+    import copy
+    import tomllib
+    from pathlib import Path
+
+    from wirecal.solver.formats.plan_file import load_plan
+    from wirecal.solver.formats.robot_file import robot_from_dict
+
+    ur5 = Path(__file__).resolve().parents[1] / "examples" / "ur5"
+    data = copy.deepcopy(tomllib.loads((ur5 / "robot.toml").read_text()))
+    if software is not None:
+        data["controller"]["software"] = software
+    robot = robot_from_dict(data, "r.toml")
+    return robot, load_plan(ur5 / "plan.toml", robot)
+
+
+@pytest.mark.parametrize(
+    ("software", "refused"),
+    [
+        ("3.15", ["time(0)", 'opt="raw"', "inputs 8-11"]),  # CB3: none confirmed
+        ("5.11", ["time(0)", 'opt="raw"']),
+        ("5.19.2", ['opt="raw"']),
+        ("5.20", []),
+        ("5.25.1", []),
+    ],
+)
+def test_generation_refuses_calls_older_software_lacks(software, refused):
+    from wirecal.gen.urscript.program import scripts
+
+    robot, plan = _ur5_with(software)
+    if not refused:
+        out = scripts(robot, plan)
+        assert f"# Controller software: {software}." in out["wc_run.script"]
+        return
+    with pytest.raises(WirecalError) as info:
+        scripts(robot, plan)
+    lines = info.value.problems
+    assert len(lines) == len(refused), lines
+    for what, line in zip(refused, lines, strict=True):
+        assert what in line
+        assert f'controller.software = "{software}"' in line
+        assert "universal-robots.com" in line or "Script Directory" in line  # the page
+
+
+@pytest.mark.parametrize(
+    ("software", "message"),
+    [
+        ("5.x", 'give the version as numbers, e.g. "5.20"'),
+        ("", "give a non-empty string"),
+        ("10.7", "wirecal knows CB3 3.x, e-Series (PolyScope 5) 5.x"),
+        ("6.0", "wirecal knows CB3 3.x"),
+    ],
+)
+def test_software_key_is_checked(software, message):
+    with pytest.raises(WirecalError) as info:
+        _ur5_with(software)
+    assert any(
+        p.startswith("r.toml: controller.software") and message in p for p in info.value.problems
+    ), info.value.problems
+
+
+def test_software_is_written_back():
+    import tomllib
+
+    from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
+
+    robot, _ = _ur5_with("5.23.1")
+    text = robot_file_text(robot, header=[], row_notes=[""] * 6, encoder_note="")
+    assert robot_from_dict(tomllib.loads(text), "again.toml").controller.software == "5.23.1"
+
+
+def test_gen_warns_when_the_software_is_not_declared(tmp_path):
+    out = CliRunner().invoke(
+        main,
+        ["gen", "examples/ur5/robot.toml", "examples/ur5/plan.toml", "-o", str(tmp_path)],
+    )
+    assert out.exit_code == 0, out.output
+    assert "[controller] software not declared" in out.output
+    assert "5.20 or later" in out.output

@@ -25,6 +25,7 @@ from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import check_limits, joint_target, run_steps
 from wirecal.gen.templating import render
+from wirecal.gen.urscript.facts import NEEDED, software_problems
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
@@ -170,6 +171,8 @@ def _check(robot: Robot, opt: UrOptions) -> tuple[str, int]:
         )
     if robot.controller_problem():
         problems.append(str(robot.controller_problem()))
+    ctl = robot.controller
+    problems += software_problems(robot.source, ctl.software, ctl.software_version)
     if any(not 32 <= ord(ch) <= 126 or ch in '"\\' for ch in robot.name):
         problems.append(
             f"{robot.source}: name {robot.name!r}: the programs write it in a URScript "
@@ -209,6 +212,8 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
     context = {
         "version": __version__,
         "robot": robot.name,
+        "software": robot.controller.software,
+        "needed": ".".join(map(str, NEEDED)),
         "fingerprint": plan.fingerprint(),
         "host": host,
         "port": port,

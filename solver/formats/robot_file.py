@@ -21,6 +21,7 @@ Format (angles in degrees, lengths in mm)::
     parameters = ["th2", "th3", ...]      # names from wirecal.solver.params
     [controller]                          # optional
     language = "vplus"                    # or "urscript" (Universal Robots)
+    software = "5.20"                     # the controller's software version (optional)
     host = "192.168.1.10"; port = 50000   # URScript: where 'wirecal receive' listens
     [geometry]                            # optional
     link_radius_mm = [70, 55, 45, 40, 35] # capsule radius of each link (wire clearance)
@@ -48,6 +49,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -63,6 +65,7 @@ from wirecal.solver.robot import (
     DEFAULT_SCALE_TOLERANCE_PPM,
     INTERFACES,
     LANGUAGES,
+    SOFTWARE_LINES,
     Controller,
     Encoder,
     Robot,
@@ -145,7 +148,7 @@ _KEYS = {
     "calibration": ("parameters",),
     "geometry": ("link_radius_mm",),
     "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg"),
-    "controller": ("language", "host", "port"),
+    "controller": ("language", "software", "host", "port"),
 }
 
 PULSE_INPUTS = (8, 11)
@@ -224,10 +227,29 @@ def _controller(table: Table) -> Controller | None:
         table.add("host", f"is {host!r}; give an address or host name (printable, no spaces)")
         host = None
     port = table.integer("port", None, lo=1, hi=65535)
+    software = _software(table, language)
     keys = table.keys()
-    if language is None or ("host" in keys and host is None) or ("port" in keys and port is None):
+    read = {"host": host, "port": port, "software": software}
+    if language is None or any(k in keys and read[k] is None for k in read):
         return None
-    return Controller(language, host, port)
+    return Controller(language, host, port, software)
+
+
+def _software(table: Table, language: str | None) -> str | None:
+    """Read ``software``: "major.minor[.patch]", of a line wirecal knows for the language."""
+    software = table.string("software", None)
+    if software is None:
+        return None
+    if not re.fullmatch(r"\d{1,3}(\.\d{1,4}){1,3}", software):
+        table.add("software", f'is {software!r}; give the version as numbers, e.g. "5.20"')
+        return None
+    lines = SOFTWARE_LINES.get(language or "", {})
+    major = int(software.split(".")[0])
+    if lines and major not in lines:
+        known = ", ".join(f"{name} {m}.x" for m, name in lines.items())
+        table.add("software", f"is {software!r}; wirecal knows {known}")
+        return None
+    return software
 
 
 def _dh(kin: Table) -> np.ndarray | None:
@@ -671,6 +693,11 @@ def robot_file_text(
         "",
         "[controller]",
         f"language = {json.dumps(robot.controller.language)}",
+        *(
+            [f"software = {json.dumps(robot.controller.software)}"]
+            if robot.controller.software
+            else []
+        ),
         *([f"host = {json.dumps(robot.controller.host)}"] if robot.controller.host else []),
         *([f"port = {robot.controller.port}"] if robot.controller.port else []),
         "",
