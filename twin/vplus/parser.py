@@ -325,8 +325,14 @@ class _ModuleReader:
         if m:
             line = line[m.end() :].strip()
             steps.append(N.Label(int(m.group(1)), line=n))
+            if int(m.group(1)) > MAX_LABEL:
+                self.problems.append(
+                    f"{self.source}:{n}: {name}: label {m.group(1)}: a step label is an "
+                    f"integer 0 to {MAX_LABEL} (User's Guide p. 35)"
+                )
             if not line:
                 return
+        self.problems += [f"{self.source}:{n}: {name}: {p}" for p in literal_problems(line)]
         try:
             step = parse_step(line)
         except (UnexpectedToken, UnexpectedCharacters) as exc:
@@ -351,6 +357,80 @@ class _ModuleReader:
                 f"{self.source}: data section {self.section} is never closed with .END"
             )
         return self.problems, self.programs
+
+
+MAX_LABEL = 65535
+"""A step label is "an integer (0 to 65535)" (User's Guide p. 35)."""
+MAX_INTEGER = 16_777_215
+"""Integers range from -16,777,216 to 16,777,215 (User's Guide p. 102)."""
+MAX_DOUBLE = 1e307
+"""Double-precision reals: approximately -1E+307 to 1E+307 (User's Guide p. 102)."""
+MAX_EXACT_DOUBLE = 2**53
+"""The largest whole number a 64-bit IEEE double (User's Guide p. 102) holds exactly."""
+MAX_STRING = 128
+"""A string holds 0 to 128 characters (User's Guide p. 100)."""
+
+_LITERAL = re.compile(
+    r'(?P<str>"[^"]*"?)|(?P<d>\^[Dd]\d+)|(?P<h>\^[Hh][0-9A-Fa-f]+)|(?P<b>\^[Bb][01]+)'
+    r"|(?P<o>\^[0-7]+)|'.|[A-Za-z$#%][\w.]*"
+    r"|(?P<num>(?P<whole>\d+)(?P<frac>\.\d*)?(?P<exp>[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
+)
+
+
+def literal_problems(line: str) -> list[str]:
+    """Constants of a step outside the ranges of User's Guide pp. 100 and 102."""
+    out = []
+    for m in _LITERAL.finditer(line):
+        minus = line[: m.start()].rstrip().endswith("-")
+        out += _literal_problem(m, minus)
+    return out
+
+
+def _literal_problem(m: re.Match, minus: bool) -> list[str]:
+    text = m.group()
+    if m.group("str") is not None:
+        inner = text[1:-1] if len(text) > 1 and text.endswith('"') else text[1:]
+        if len(inner) > MAX_STRING:
+            return [
+                f"a string constant of {len(inner)} characters (at most {MAX_STRING}, "
+                "User's Guide p. 100)"
+            ]
+        return []
+    if m.group("d"):
+        if int(text[2:]) > MAX_EXACT_DOUBLE:
+            return [
+                f"{text}: beyond 2^53, which a 64-bit double holds exactly (User's Guide p. 102)"
+            ]
+        return []
+    if m.group("b") and len(text) - 2 > 8:
+        return [f"{text}: a ^B constant has at most 8 bits (User's Guide p. 102)"]
+    value = _radix_value(m)
+    if value is not None:
+        return _integer_problem(text, value, minus)
+    if m.group("num") is None:
+        return []
+    if m.group("whole") and not m.group("frac") and not m.group("exp"):
+        return _integer_problem(text, int(text), minus)
+    if float(text) > MAX_DOUBLE:
+        return [f"{text}: beyond the double-precision range, about 1E+307 (User's Guide p. 102)"]
+    return []
+
+
+def _radix_value(m: re.Match) -> int | None:
+    for group, base, skip in (("h", 16, 2), ("b", 2, 2), ("o", 8, 1)):
+        if m.group(group):
+            return int(m.group()[skip:], base)
+    return None
+
+
+def _integer_problem(text: str, value: int, minus: bool) -> list[str]:
+    limit = MAX_INTEGER + 1 if minus else MAX_INTEGER
+    if value <= limit:
+        return []
+    return [
+        f"{text}: beyond the integer range -16,777,216 to 16,777,215 (User's Guide "
+        "p. 102); write a real (16777216.0) or a ^D constant"
+    ]
 
 
 def _strip_comment(line: str) -> str:
