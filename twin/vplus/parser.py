@@ -41,10 +41,10 @@ _LINES = re.compile(r"\r\n|\n|\r")
 
 # The functions the twin evaluates: name → (argument kinds, required count, result).
 # Kinds: n number, s string, l precision point, b belt, t transformation, v any
-# variable (DEFINED), nv a numeric variable (written to). TRANS: "if any parameter is
-# omitted, its value is taken to be zero"; #PPOINT takes one value per joint (a SCARA
-# has four). Any other function of the keyword table is accepted with any arguments and
-# refused by the interpreter when run.
+# variable (DEFINED), nv a numeric variable (written to), w a system switch (SWITCH).
+# TRANS: "if any parameter is omitted, its value is taken to be zero"; #PPOINT takes
+# one value per joint (a SCARA has four). Any other function of the keyword table is
+# accepted with any arguments and refused by the interpreter when run.
 FUNCTIONS: dict[str, tuple[tuple[str, ...], int, str]] = {
     "int": (("n",), 1, "n"),
     "abs": (("n",), 1, "n"),
@@ -65,6 +65,7 @@ FUNCTIONS: dict[str, tuple[tuple[str, ...], int, str]] = {
     "trans": (("n",) * 6, 0, "t"),
     "sig": (("n",), 1, "n"),
     "timer": (("n",), 1, "n"),
+    "switch": (("w",), 1, "n"),
 }
 #: functions whose omitted arguments mean zero
 OMITTABLE = {"trans"}
@@ -989,6 +990,9 @@ class _Checker:
                 self.err(f"{e.name.upper()} needs a variable")
             else:
                 self.target(a)
+        elif want == "w":
+            if not (isinstance(a, N.Var) and is_kind(a.name, "switch")):
+                self.err(f"{e.name.upper()} needs a system switch name (e.g. BELT)")
         elif want == "nv":
             if not isinstance(a, N.Var) or a.kind != "n":
                 self.err(f"{e.name.upper()} needs a numeric variable there")
@@ -1040,4 +1044,5 @@ def _word(kind: str) -> str:
         "b": "belt (%)",
         "t": "transformation",
         "v": "variable",
+        "w": "system switch",
     }.get(kind, kind)
