@@ -25,9 +25,12 @@ def lint(files, external_calls):
 
     V+ files, ours or anyone's, against the V+ rules LOAD applies: program format, keywords
     as names (User's Guide p. 99), declarations first, 15-character names, type prefixes,
-    labels, CALL arguments. A file named *.script is URScript, checked against the rules of
-    a script sent to a UR controller (def/end in the first column, other lines indented),
-    its syntax, the functions it calls and their arguments, and variables never assigned.
+    labels (0-65535), CALL arguments, constants within the ranges of pp. 100 and 102. A file
+    named *.script is URScript, checked against the rules of a script sent to a UR
+    controller (def/sec and end in the first column, other lines indented), the language
+    of the Script Manual (poses, threads, critical sections, default arguments), the
+    functions it calls and their arguments, int32/float32 constants, encoder indices, and
+    variables never assigned. What each rule rests on: docs/languages.md.
 
     Prints one "file:line: problem" line per problem. CRLF and LF line endings are both
     read.
