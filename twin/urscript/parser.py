@@ -1,22 +1,30 @@
 """The URScript front end: a ``.script`` file's text → a checked, typed syntax tree.
 
-Each line (its ``#`` comment removed) is parsed by the lark grammar ``urscript.lark``
-into the dataclass nodes of :mod:`wirecal.twin.urscript.nodes`; ``def``/``while``/``if``
-blocks are assembled from the lines. :func:`parse_program` rejects, as
+Each statement (its ``#`` comment removed; lines joined while a bracket is open or after a
+trailing operator) is parsed by the lark grammar ``urscript.lark`` into the dataclass
+nodes of :mod:`wirecal.twin.urscript.nodes`; ``def``/``thread``/``sec``/``while``/``if``
+blocks are assembled from the lines. The language is the Script Manual's: poses
+``p[…]``, threads with ``run``/``join``/``kill`` and critical sections (SW5.20,
+"Threads"), default and named arguments, ``break``/``continue`` (unconfirmed: used by
+Universal Robots' client library, no page read). :func:`parse_program` rejects, as
 ``file:line: problem``:
 
 * the layout of a script sent to the controller (Script Manual SW10.6, "Connecting to
-  URControl", confirmed): the first line is ``def`` in the first column, every other line
-  is indented, the last line is ``end`` in the first column — one program per file;
-* syntax errors, unclosed blocks, ``elif``/``else``/``end`` without their block;
-* calls to functions that are neither defined in the program nor URScript functions the
-  twin knows (:data:`BUILTINS`), wrong argument counts and unknown keyword arguments;
+  URControl", confirmed): the first line is ``def`` or ``sec`` in the first column, every
+  other line is indented, the last line is ``end`` in the first column — one program per
+  file;
+* syntax errors, unclosed blocks, ``elif``/``else``/``end`` without their block,
+  ``break``/``continue`` outside a ``while``, ``run`` of what is not a thread;
+* calls to functions that are neither defined in the program nor in the function table
+  (:data:`BUILTINS`, ``functions.csv``), wrong argument counts, unknown keyword arguments;
+* constants the controller cannot hold: ints beyond 32 bits (and int results of constants
+  that overflow), floats beyond float32 (UR16e User Manual p. 181); an encoder index
+  other than 0 or 1 and ``opt`` other than "" or "raw" (SW5.20 encoder_get_tick_count); a
+  constant index beyond a list whose every assignment is a literal;
 * a function defined twice; a variable read but never assigned, nor a parameter.
 
-What the checker cannot know about a real controller (a URScript function outside
-:data:`BUILTINS`, ``thread``/``sec`` and the other constructs wirecal does not emit) is
-reported as "not in the URScript subset the twin runs" — valid URScript, perhaps, but
-nothing wirecal writes.
+The twin runs a subset of this language (:mod:`wirecal.twin.urscript.interp` refuses the
+rest before running).
 """
 
 from __future__ import annotations
