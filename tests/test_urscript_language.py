@@ -258,3 +258,26 @@ def test_gen_warns_when_the_software_is_not_declared(tmp_path):
     assert out.exit_code == 0, out.output
     assert "[controller] software not declared" in out.output
     assert "5.20 or later" in out.output
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    st.lists(st.integers(-1000, 1000), min_size=1, max_size=8),
+    st.lists(st.booleans(), min_size=8, max_size=8),
+)
+def test_a_list_split_over_lines_is_the_same_program(values, breaks):
+    one = program(f"x = [{', '.join(map(str, values))}]", "y = x[0]")
+    parts = [str(v) + ("," if k < len(values) - 1 else "") for k, v in enumerate(values)]
+    lines, current = [], "x = ["
+    for part, cut in zip(parts, breaks, strict=False):
+        current += part
+        if cut:
+            lines.append(current)
+            current = "  "
+        else:
+            current += " "
+    lines.append(current + "]")
+    split = program(*lines, "y = x[0]")
+    a, b = parse_program(one, "a.script"), parse_program(split, "b.script")
+    assert a.body[0].value == b.body[0].value  # the same list literal node
+    assert b.body[1].line == 2 + len(lines)  # after "def p():" and the list's lines
