@@ -8,7 +8,6 @@ import click
 
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
-from wirecal.gen.urscript.facts import NEEDED
 from wirecal.gen.urscript.program import UrOptions, scripts, write_scripts
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
 from wirecal.solver.errors import WirecalError
@@ -19,6 +18,7 @@ from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.robot import LANGUAGES
 from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
+from wirecal.twin.urscript.versions import NEEDED
 
 _D = RunParameters()
 _G = GenOptions()

@@ -8,6 +8,7 @@ and speeds, the wire attachment point and the draw-wire encoder. Files are read 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -78,6 +79,9 @@ INTERFACES = {"vplus": ("belt", "device"), "urscript": ("pulse",)}
 LIVE_CHECK = {"vplus": "wc.check", "urscript": "wc_check"}
 """The generated program that shows the live counts, by language (messages name it)."""
 
+
+SOFTWARE_PATTERN = re.compile(r"\d{1,3}(\.\d{1,4}){1,3}")
+"""A controller software version as numbers, as PolyScope shows it: "3.15.8", "5.20"."""
 
 SOFTWARE_LINES = {"urscript": {3: "CB3", 5: "e-Series (PolyScope 5)"}}
 """The controller software lines wirecal knows, by language and major version."""

@@ -7,6 +7,8 @@ public scripts use it (docs/languages.md), not because a manual page was read.
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from click.testing import CliRunner
 from hypothesis import given, settings
@@ -198,8 +200,8 @@ def _ur5_with(software: str | None):
 @pytest.mark.parametrize(
     ("software", "refused"),
     [
-        ("3.15", ["time(0)", 'opt="raw"', "inputs 8-11"]),  # CB3: none confirmed
-        ("5.11", ["time(0)", 'opt="raw"']),
+        ("3.15", ["time()", 'opt="raw"', "inputs 8-11"]),  # CB3: none confirmed
+        ("5.11", ["time()", 'opt="raw"']),
         ("5.19.2", ['opt="raw"']),
         ("5.20", []),
         ("5.25.1", []),
@@ -216,10 +218,11 @@ def test_generation_refuses_calls_older_software_lacks(software, refused):
     with pytest.raises(WirecalError) as info:
         scripts(robot, plan)
     lines = info.value.problems
-    assert len(lines) == len(refused), lines
-    for what, line in zip(refused, lines, strict=True):
-        assert what in line
-        assert f'controller.software = "{software}"' in line
+    assert len(lines) == len(refused), lines  # each rule once
+    for what in refused:
+        line = next(x for x in lines if what in x)
+        assert line.startswith(f'r.toml: controller.software = "{software}": wc_')  # program
+        assert re.search(r"\.script:\d+: ", line)  # and line of the call
         assert "universal-robots.com" in line or "Script Directory" in line  # the page
 
 
@@ -281,3 +284,29 @@ def test_a_list_split_over_lines_is_the_same_program(values, breaks):
     a, b = parse_program(one, "a.script"), parse_program(split, "b.script")
     assert a.body[0].value == b.body[0].value  # the same list literal node
     assert b.body[1].line == 2 + len(lines)  # after "def p():" and the list's lines
+
+
+def test_lint_software_names_each_call_and_page(tmp_path):
+    script = tmp_path / "t.script"
+    script.write_text(
+        program(
+            "now = time(0)",
+            'c = encoder_get_tick_count(0, opt="raw")',
+            "f = encoder_get_tick_count(0)",  # no opt: not the 5.20 form
+        )
+    )
+    old = CliRunner().invoke(main, ["lint", "--software", "5.19", str(script)])
+    assert old.exit_code == 1
+    assert f'{script}:3: encoder_get_tick_count(i, opt="raw") is documented from software 5.20' in (
+        old.output
+    )
+    assert "not confirmed on 5.19" in old.output
+    assert ":2: " not in old.output  # time() is documented on 5.19
+    assert ":4: " not in old.output
+    cb3 = CliRunner().invoke(main, ["lint", "--software", "3.15", str(script)])
+    assert f"{script}:2: time() returning struct(sec, nanosec)" in cb3.output
+    new = CliRunner().invoke(main, ["lint", "--software", "5.20", str(script)])
+    assert new.exit_code == 0, new.output
+    bad = CliRunner().invoke(main, ["lint", "--software", "5.x", str(script)])
+    assert bad.exit_code == 2
+    assert "give the version as numbers" in bad.output

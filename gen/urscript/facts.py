@@ -229,57 +229,6 @@ FACTS: tuple[Fact, ...] = (
 )
 
 
-@dataclass(frozen=True)
-class Since:
-    """A call of the programs that a manual documents from a software version on."""
-
-    call: str
-    version: tuple[int, int]
-    source: str
-
-
-SINCE: tuple[Since, ...] = (
-    Since(
-        "time(0) returning struct(sec, nanosec)",
-        (5, 19),
-        f"{_UR}/SW5_19/Content/prod-scriptmanual/G5/time2.htm",
-    ),
-    Since(
-        'encoder_get_tick_count(i, opt="raw")',
-        (5, 20),
-        f"{_UR}/SW5_20/Content/prod-scriptmanual/G5/encoder_get_tick_count_encoder_index.htm "
-        "(the 2021 G5 Script Manual lists encoder_get_tick_count(encoder_index) without opt)",
-    ),
-    Since(
-        "encoder_enable_pulse_decode(i, 1, A, B) on digital inputs 8-11",
-        (5, 0),
-        SD + "§14.2, p. 26 (text copy; its minor version is not stated)",
-    ),
-)
-"""Each call's oldest software version on whose manual page it was read. A declared older
-version is refused: no page read confirms the call there (on CB3, 3.x, none of the three),
-and a program that stops on an unknown call mid-run leaves the robot where it stopped."""
-
-NEEDED = max(s.version for s in SINCE)
-"""The oldest software the programs run on, as far as the pages read say: 5.20."""
-
-
-def software_problems(
-    source: str, software: str | None, version: tuple[int, ...] | None
-) -> list[str]:
-    """Return why the programs cannot run on the declared software, naming call and page."""
-    if version is None:
-        return []
-    return [
-        f'{source}: controller.software = "{software}": the programs call {s.call}, which the '
-        f"manual documents from software {s.version[0]}.{s.version[1]} on ({s.source}); "
-        f"it is not confirmed on {software}, and wirecal knows no alternative call that is: "
-        "not generated"
-        for s in SINCE
-        if version[:2] < s.version
-    ]
-
-
 def fact(name: str) -> Fact:
     """Return the fact called ``name``; ``KeyError`` names the known ones."""
     for f in FACTS:

@@ -25,7 +25,6 @@ from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import check_limits, joint_target, run_steps
 from wirecal.gen.templating import render
-from wirecal.gen.urscript.facts import NEEDED, software_problems
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
@@ -39,6 +38,8 @@ from wirecal.solver.run_parameters import (
     RunParameters,
 )
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
+from wirecal.twin.urscript.parser import parse_program
+from wirecal.twin.urscript.versions import NEEDED
 
 ROLES = ("mount", "check", "run")
 """The programs, one ``wc_<role>.script`` each."""
@@ -171,8 +172,6 @@ def _check(robot: Robot, opt: UrOptions) -> tuple[str, int]:
         )
     if robot.controller_problem():
         problems.append(str(robot.controller_problem()))
-    ctl = robot.controller
-    problems += software_problems(robot.source, ctl.software, ctl.software_version)
     if any(not 32 <= ord(ch) <= 126 or ch in '"\\' for ch in robot.name):
         problems.append(
             f"{robot.source}: name {robot.name!r}: the programs write it in a URScript "
@@ -246,7 +245,37 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
     }
     if opt.solver:
         context["t"] = solver_tables(robot, plan, tables)
-    return {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
+    out = {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
+    problems = software_problems(robot, out)
+    if problems:
+        raise WirecalError(problems)
+    return out
+
+
+def software_problems(robot: Robot, programs: dict[str, str]) -> list[str]:
+    """Return the programs' calls the declared software is not documented to have.
+
+    Each rule once, at its first call (:mod:`wirecal.twin.urscript.versions`); none when
+    ``[controller] software`` is not declared.
+    """
+    software = robot.controller.software
+    if software is None:
+        return []
+    seen: set[str] = set()
+    out = []
+    for name, text in programs.items():
+        try:
+            parse_program(text, name, software)
+        except WirecalError as exc:
+            for problem in exc.problems:
+                where, _, why = problem.partition(": ")
+                if why not in seen:
+                    seen.add(why)
+                    out.append(
+                        f'{robot.source}: controller.software = "{software}": {where}: {why}; '
+                        "wirecal knows no confirmed alternative: not generated"
+                    )
+    return out
 
 
 def write_scripts(

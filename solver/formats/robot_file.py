@@ -49,7 +49,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +65,7 @@ from wirecal.solver.robot import (
     INTERFACES,
     LANGUAGES,
     SOFTWARE_LINES,
+    SOFTWARE_PATTERN,
     Controller,
     Encoder,
     Robot,
@@ -240,7 +240,7 @@ def _software(table: Table, language: str | None) -> str | None:
     software = table.string("software", None)
     if software is None:
         return None
-    if not re.fullmatch(r"\d{1,3}(\.\d{1,4}){1,3}", software):
+    if not SOFTWARE_PATTERN.fullmatch(software):
         table.add("software", f'is {software!r}; give the version as numbers, e.g. "5.20"')
         return None
     lines = SOFTWARE_LINES.get(language or "", {})

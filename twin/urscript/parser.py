@@ -41,6 +41,7 @@ from lark.exceptions import LarkError
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.machine import walk_tree
 from wirecal.twin.urscript import nodes as N
+from wirecal.twin.urscript.versions import refusal, too_new, version_of
 
 
 @dataclass(frozen=True)
@@ -264,8 +265,12 @@ def strip_comment(line: str) -> str:
     return line
 
 
-def parse_program(text: str, source: str = "<script>") -> Program:
-    """Parse and check one ``.script`` program; raise :class:`WirecalError` listing problems."""
+def parse_program(text: str, source: str = "<script>", software: str | None = None) -> Program:
+    """Parse and check one ``.script`` program; raise :class:`WirecalError` listing problems.
+
+    With ``software`` ("5.20"), a call that version's manual pages do not document is a
+    problem too (:mod:`wirecal.twin.urscript.versions`).
+    """
     problems: list[str] = []
     steps: list[N.Stmt] = []
     lines = [(n, strip_comment(raw).rstrip()) for n, raw in enumerate(_LINES.split(text), 1)]
@@ -280,7 +285,7 @@ def parse_program(text: str, source: str = "<script>") -> Program:
             steps.append(step)
     program = _nest(steps, source, problems)
     if program is not None:
-        _Checker(program, source, problems).check()
+        _Checker(program, source, problems, software).check()
     if problems:
         raise WirecalError(problems)
     assert program is not None
@@ -442,8 +447,12 @@ def walk(steps: list[N.Stmt]) -> Iterator[N.Stmt]:
 class _Checker:
     """Checks calls, literals and variables of one program (module docstring)."""
 
-    def __init__(self, program: Program, source: str, problems: list[str]):
+    def __init__(
+        self, program: Program, source: str, problems: list[str], software: str | None = None
+    ):
         self.p, self.source, self.problems = program, source, problems
+        self.software = software
+        self.version = None if software is None else version_of(software)
         assigns = [s for s in walk(program.body) if isinstance(s, N.Assign)]
         params = {name for d in program.functions.values() for name in d.params}
         self.assigned = {s.target.name for s in assigns} | params
@@ -565,6 +574,7 @@ class _Checker:
                 return
             b = found
             self.arguments(e, line)
+            self.documented(e, line)
         if not b.any_keywords:
             self.signature(e, b, line)
 
@@ -582,6 +592,14 @@ class _Checker:
         missing = [p for p in b.params[: b.required] if p not in given]
         if missing:
             self.err(line, f"{e.name} needs {', '.join(missing)}")
+
+    def documented(self, e: N.Call, line: int) -> None:
+        """Report a call the declared software's manual pages do not document."""
+        if self.version is None or self.software is None:
+            return
+        rule = too_new(e.name, set(e.kwargs), self.version)
+        if rule is not None:
+            self.err(line, refusal(rule, self.software))
 
     def arguments(self, e: N.Call, line: int) -> None:
         """Constant arguments outside a documented range (encoder index, opt)."""
