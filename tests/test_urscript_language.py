@@ -170,6 +170,13 @@ def test_the_twin_refuses_what_it_does_not_run():
     text = program("thread t():", "end", "h = run t()")
     with pytest.raises(WirecalError, match="not in the URScript subset the twin runs"):
         Interpreter(parse_program(text, "t.script"), object())
+    text = program("x = floor(2.5)", "movel(p[0, 0, 0, 0, 0, 0])")
+    with pytest.raises(WirecalError) as info:
+        Interpreter(parse_program(text, "t.script"), object())
+    assert info.value.problems == [
+        "t.script:3: movel is not a function the twin runs",
+        "t.script:3: not in the URScript subset the twin runs",  # the pose literal
+    ]
 
 
 @settings(max_examples=200, deadline=None)

@@ -154,24 +154,20 @@ def _check_subset(program: Program, cell) -> None:
                 f"{where}: {s.kind} {s.name}: threads, sec programs and default "
                 "values are not in the URScript subset the twin runs"
             )
-        for e in _expressions(s):
-            if isinstance(e, _UNRUN) or isinstance(s, _UNRUN):
-                problems.append(f"{where}: not in the URScript subset the twin runs")
-                break
-            if (
-                isinstance(e, N.Call)
-                and e.name not in program.functions
-                and e.name not in _PURE
-                and not hasattr(cell, e.name)
-                and e.name != "sqrt"
-            ):
-                problems.append(f"{where}: {e.name} is not a function the twin runs")
+        exprs = _expressions(s)
+        if isinstance(s, _UNRUN) or any(isinstance(e, _UNRUN) for e in exprs):
+            problems.append(f"{where}: not in the URScript subset the twin runs")
+        problems += [
+            f"{where}: {e.name} is not a function the twin runs"
+            for e in exprs
+            if isinstance(e, N.Call) and e.name not in program.functions and not _runs(e.name, cell)
+        ]
     if problems:
         raise WirecalError(sorted(set(problems)))
 
 
 def _expressions(s: N.Stmt) -> list[N.Expr]:
-    """Every expression on a statement's line, nested ones included (a placeholder if none)."""
+    """Every expression on a statement's line, nested ones included."""
     todo = [getattr(s, f.name) for f in fields(s)]
     todo = [e for e in todo if isinstance(e, N.Expr)]
     if isinstance(s, N.Assign):
@@ -183,7 +179,7 @@ def _expressions(s: N.Stmt) -> list[N.Expr]:
         e = todo.pop()
         out.append(e)
         todo += operands(e)
-    return out or [N.Bool(True)]
+    return out
 
 
 def _global_names(program: Program) -> set[str]:
@@ -484,6 +480,11 @@ _FLOAT_OPS: dict[str, Callable[[float, float], float]] = {
     "/": lambda x, y: x / y,
     "%": math.fmod,
 }
+
+
+def _runs(name: str, cell) -> bool:
+    """Tell whether :func:`_builtin` has a Python function for ``name``."""
+    return name == "sqrt" or name in _PURE or callable(getattr(cell, name, None))
 
 
 def _builtin(interp: Interpreter, name: str) -> Callable:
