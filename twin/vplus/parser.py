@@ -11,9 +11,11 @@ variable or parameter name (User's Guide p. 99), a missing ``.END``, declaration
 executable steps, names that share their first 15 characters, unknown instructions or
 functions, wrong argument counts of the functions the twin knows, CALLs to programs not
 in the module (unless ``external_calls``), argument kinds that do not match a program's
-parameters, GOTO to a missing label, and type-prefix misuse ($ string, # precision point,
-% belt). Rules: User's Guide v17 p. 35–36 (program format), 99–111 (names, types,
-classes), 42–45 (CALL).
+parameters, GOTO to a missing label, type-prefix misuse ($ string, # precision point,
+% belt), step labels beyond 65535 (p. 35), and constants beyond their ranges: strings over
+128 characters (p. 100), integers beyond -16,777,216..16,777,215, ^B over 8 bits, ^D
+beyond 2^53, reals beyond about 1E+307 (p. 102). Rules: User's Guide v17 p. 35–36
+(program format), 99–111 (names, types, classes), 42–45 (CALL).
 """
 
 from __future__ import annotations
@@ -388,6 +390,7 @@ def literal_problems(line: str) -> list[str]:
 
 
 def _literal_problem(m: re.Match, minus: bool) -> list[str]:
+    """Check one token of :data:`_LITERAL` (``minus``: a ``-`` stands before it)."""
     text = m.group()
     if m.group("str") is not None:
         inner = text[1:-1] if len(text) > 1 and text.endswith('"') else text[1:]
@@ -418,6 +421,7 @@ def _literal_problem(m: re.Match, minus: bool) -> list[str]:
 
 
 def _radix_value(m: re.Match) -> int | None:
+    """Return the value of a ^H, ^B or ^ (octal) constant, or None for another token."""
     for group, base, skip in (("h", 16, 2), ("b", 2, 2), ("o", 8, 1)):
         if m.group(group):
             return int(m.group()[skip:], base)
@@ -425,12 +429,13 @@ def _radix_value(m: re.Match) -> int | None:
 
 
 def _integer_problem(text: str, value: int, minus: bool) -> list[str]:
+    """Check a whole-number constant against the integer range (a ``-`` before it: -2^24)."""
     limit = MAX_INTEGER + 1 if minus else MAX_INTEGER
     if value <= limit:
         return []
     return [
         f"{text}: beyond the integer range -16,777,216 to 16,777,215 (User's Guide "
-        "p. 102); write a real (16777216.0) or a ^D constant"
+        f"p. 102); write it as a real ({value}.0) or a ^D constant"
     ]
 
 
