@@ -317,3 +317,16 @@ def test_lint_software_names_each_call_and_page(tmp_path):
     bad = CliRunner().invoke(main, ["lint", "--software", "5.x", str(script)])
     assert bad.exit_code == 2
     assert "give the version as numbers" in bad.output
+
+
+def test_a_generated_program_breaking_a_rule_is_an_internal_error():
+    from wirecal.gen.urscript.program import software_problems
+
+    robot, _ = _ur5_with("5.20")
+    with pytest.raises(WirecalError) as info:
+        software_problems(robot, {"wc_x.script": program("y = z")})
+    assert info.value.problems == [
+        "internal error: a generated program breaks a URScript rule (please report):",
+        "wc_x.script:2: variable z is read but never assigned",
+    ]
+    assert software_problems(robot, {"wc_x.script": program("y = 1")}) == []

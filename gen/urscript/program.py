@@ -39,7 +39,7 @@ from wirecal.solver.run_parameters import (
 )
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 from wirecal.twin.urscript.parser import parse_program
-from wirecal.twin.urscript.versions import NEEDED
+from wirecal.twin.urscript.versions import NEEDED, is_refusal
 
 ROLES = ("mount", "check", "run")
 """The programs, one ``wc_<role>.script`` each."""
@@ -253,29 +253,34 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
 
 
 def software_problems(robot: Robot, programs: dict[str, str]) -> list[str]:
-    """Return the programs' calls the declared software is not documented to have.
+    """Check the programs as ``wirecal lint --software`` would; return the refused calls.
 
-    Each rule once, at its first call (:mod:`wirecal.twin.urscript.versions`); none when
-    ``[controller] software`` is not declared.
+    A call the declared software is not documented to have is the user's problem: each rule
+    once, at its first call (:mod:`wirecal.twin.urscript.versions`; none when ``[controller]
+    software`` is not declared). Any other problem is a generator defect: raise
+    :class:`WirecalError` saying so.
     """
     software = robot.controller.software
-    if software is None:
-        return []
     seen: set[str] = set()
-    out = []
+    refused, defects = [], []
     for name, text in programs.items():
         try:
             parse_program(text, name, software)
         except WirecalError as exc:
             for problem in exc.problems:
                 where, _, why = problem.partition(": ")
-                if why not in seen:
+                if not is_refusal(why):
+                    defects.append(problem)
+                elif why not in seen:
                     seen.add(why)
-                    out.append(
+                    refused.append(
                         f'{robot.source}: controller.software = "{software}": {where}: {why}; '
                         "wirecal knows no confirmed alternative: not generated"
                     )
-    return out
+    if defects:
+        head = "internal error: a generated program breaks a URScript rule (please report):"
+        raise WirecalError([head, *defects[:20]])
+    return refused
 
 
 def write_scripts(

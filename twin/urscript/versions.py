@@ -76,9 +76,17 @@ def too_new(function: str, keywords: set[str], version: tuple[int, ...]) -> Sinc
     return None
 
 
+_REFUSAL = " is documented from software "
+
+
 def refusal(s: Since, software: str) -> str:
     """Say why a call is refused on ``software``, naming the call, the version and the page."""
     return (
-        f"{s.what} is documented from software {s.version[0]}.{s.version[1]} on "
-        f"({s.source}); not confirmed on {software}"
+        f"{s.what}{_REFUSAL}{s.version[0]}.{s.version[1]} on ({s.source}); "
+        f"not confirmed on {software}"
     )
+
+
+def is_refusal(problem: str) -> bool:
+    """Tell whether a checker's problem is a :func:`refusal` (not a language error)."""
+    return _REFUSAL in problem
