@@ -19,6 +19,7 @@ from wirecal.solver.formats.run_token import NO_KEY, run_token
 from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.robot import LANGUAGES, language_mismatch
 from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
+from wirecal.twin.urscript.versions import NEEDED
 
 _D = RunParameters()
 _G = GenOptions()
@@ -216,6 +217,13 @@ def gen(
             solver=not no_solver,
         )
         paths = write_scripts(out_dir, scripts(rb, pl, ur), force=force, inputs=[robot, plan])
+        if rb.controller.software is None:
+            click.echo(
+                f"warning: {robot}: [controller] software not declared; the programs need "
+                f"e-Series software {'.'.join(map(str, NEEDED))} or later (docs/languages.md); "
+                "declare it and a CB3 or older version is refused",
+                err=True,
+            )
         if rb.controller.key is None:
             click.echo(f"warning: {robot}: {NO_KEY}", err=True)
         pc_host, pc_port = pc_address(rb, ur)

@@ -8,6 +8,7 @@ import click
 
 from wirecal.cli.main import user_errors
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.robot import SOFTWARE_PATTERN
 from wirecal.twin.urscript.parser import parse_program
 from wirecal.twin.vplus.parser import parse_module
 
@@ -19,21 +20,32 @@ from wirecal.twin.vplus.parser import parse_module
     is_flag=True,
     help="Allow CALLs to programs that are not in the file (loaded from another file).",
 )
+@click.option(
+    "--software",
+    metavar="VERSION",
+    help='URScript: the controller software ("5.20", "3.15"); a call its manual pages do not '
+    "document is a problem too.",
+)
 @user_errors
-def lint(files, external_calls):
+def lint(files, external_calls, software):
     """Check V+ program files as a controller's LOAD would, and URScript (.script) files.
 
     V+ files, ours or anyone's, against the V+ rules LOAD applies: program format, keywords
     as names (User's Guide p. 99), declarations first, 15-character names, type prefixes,
-    labels, CALL arguments. A file named *.script is URScript, checked against the rules of
-    a script sent to a UR controller (def/end in the first column, other lines indented),
-    its syntax, the functions it calls and their arguments, and variables never assigned.
+    labels (0-65535), CALL arguments, constants within the ranges of pp. 100 and 102. A file
+    named *.script is URScript, checked against the rules of a script sent to a UR
+    controller (def/sec and end in the first column, other lines indented), the language
+    of the Script Manual (poses, threads, critical sections, default arguments), the
+    functions it calls and their arguments, int32/float32 constants, encoder indices, and
+    variables never assigned. What each rule rests on: docs/languages.md.
 
     Prints one "file:line: problem" line per problem. CRLF and LF line endings are both
     read.
 
     Exit status: 0 every file clean; 1 problems found; 2 a file cannot be read.
     """
+    if software is not None and not SOFTWARE_PATTERN.fullmatch(software):
+        raise WirecalError([f'--software {software!r}: give the version as numbers, e.g. "5.20"'])
     texts = {}
     for path in files:
         try:
@@ -45,7 +57,7 @@ def lint(files, external_calls):
     for path, text in texts.items():
         try:
             if path.lower().endswith(".script"):
-                functions = len(parse_program(text, path).functions)
+                functions = len(parse_program(text, path, software).functions)
                 what = f"URScript, {functions} function{'s' if functions != 1 else ''}"
             else:
                 module = parse_module(text, path, external_calls=external_calls)

@@ -8,6 +8,7 @@ and speeds, the wire attachment point and the draw-wire encoder. Files are read 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -100,19 +101,36 @@ def language_mismatch(robot: Robot, language: str) -> str:
     )
 
 
+SOFTWARE_PATTERN = re.compile(r"\d{1,3}(\.\d{1,4}){1,3}")
+"""A controller software version as numbers, as PolyScope shows it: "3.15.8", "5.20"."""
+
+SOFTWARE_LINES = {"urscript": {3: "CB3", 5: "e-Series (PolyScope 5)"}}
+"""The controller software lines wirecal knows, by language and major version."""
+
+
 @dataclass(frozen=True)
 class Controller:
-    """The robot's controller: its language and, for URScript, where the PC listens.
+    """The robot's controller: its language, software version and where the PC listens.
 
     A URScript program has no file output: it sends the log over a TCP socket to
     ``wirecal receive`` on ``host``:``port`` (the robot is the client), first presenting
-    the run token derived from ``key`` (:mod:`wirecal.solver.formats.run_token`).
+    the run token derived from ``key`` (:mod:`wirecal.solver.formats.run_token`). ``software`` is
+    the controller's software version as written ("5.20", "3.15.8"), or None if not
+    declared; generation uses only calls that version has (docs/languages.md).
     """
 
     language: str = "vplus"
     host: str | None = None
     port: int | None = None
     key: str | None = None
+    software: str | None = None
+
+    @property
+    def software_version(self) -> tuple[int, ...] | None:
+        """The software version as numbers, (5, 20) for "5.20"; None if not declared."""
+        if self.software is None:
+            return None
+        return tuple(int(x) for x in self.software.split("."))
 
 
 @dataclass(frozen=True)

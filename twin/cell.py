@@ -74,6 +74,7 @@ class Faults:
     vibration_counts: int = 20  # vibrates ±this, undamped, until the operator steadies it
     joint_max_deg: tuple[float, ...] | None = None  # the controller's own limits
     socket_drops_after_lines: int | None = None  # URScript: the connection to the PC drops
+    no_conveyor_option: bool = False  # V+: ENABLE BELT leaves the BELT switch off
 
 
 @dataclass(frozen=True)
@@ -161,6 +162,7 @@ class Cell:
         self.pose_error = self.rng.normal(0, self.noise_mm)
         self.slip = 0.0
         self.belts: dict[str, int] = {}
+        self.switches: set[str] = set()
         self.timers: dict[int, float] = {}  # timer number → the clock when it read zero
         self.luns: dict[int, dict] = {}
         self.status: dict[int, float] = {}
@@ -371,8 +373,13 @@ class Cell:
 
     # ---- encoder ----
     def enable(self, switch: str) -> None:
-        """ENABLE a switch: accepted, no effect in the twin."""
-        pass
+        """ENABLE a switch; BELT stays off on a controller without conveyor tracking."""
+        if not (switch == "BELT" and self.faults.no_conveyor_option):
+            self.switches.add(switch)
+
+    def switch(self, name: str) -> float:
+        """SWITCH(name): -1 (on) if the switch was enabled, else 0."""
+        return -1.0 if name in self.switches else 0.0
 
     def defbelt(self, name: str, encoder: int, scale: float) -> None:
         """DEFBELT: name a belt on an encoder channel."""

@@ -40,8 +40,8 @@ sync()                                    the rest of the 2 ms frame; recommende
 str_cat(op1, op2), str_len(str)           ints as digits, floats with 6 decimals;  yes (SD 15.51,
                                           at most 1023 characters                  15.54)
 floor(f)                                  the largest integer not greater than f   yes (SD 16.9)
-time(mode=0)                              struct(sec, nanosec): controller time,   yes (SD 15.49;
-                                          monotonic since the controller started   CB3: no)
+time(mode=0)                              struct(sec, nanosec): controller time,   yes (SD 15.49,
+                                          monotonic since the controller started   SW5.19)
 int / float width                         int 32 bit; float 32 bit                 yes (UR16e
                                                                                    user manual)
 script sent to port 30002                 starts with def/sec in column 1, ends    yes (SW10.6)

@@ -39,6 +39,8 @@ from wirecal.solver.run_parameters import (
     RunParameters,
 )
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
+from wirecal.twin.urscript.parser import parse_program
+from wirecal.twin.urscript.versions import NEEDED, is_refusal
 
 ROLES = ("mount", "check", "run")
 """The programs, one ``wc_<role>.script`` each."""
@@ -209,6 +211,8 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
     context = {
         "version": __version__,
         "robot": robot.name,
+        "software": robot.controller.software,
+        "needed": ".".join(map(str, NEEDED)),
         "fingerprint": plan.fingerprint(),
         "token_line": token_line(run_token(robot, plan.fingerprint())),
         "host": host,
@@ -242,7 +246,42 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
     }
     if opt.solver:
         context["t"] = solver_tables(robot, plan, tables)
-    return {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
+    out = {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
+    problems = software_problems(robot, out)
+    if problems:
+        raise WirecalError(problems)
+    return out
+
+
+def software_problems(robot: Robot, programs: dict[str, str]) -> list[str]:
+    """Check the programs as ``wirecal lint --software`` would; return the refused calls.
+
+    A call the declared software is not documented to have is the user's problem: each rule
+    once, at its first call (:mod:`wirecal.twin.urscript.versions`; none when ``[controller]
+    software`` is not declared). Any other problem is a generator defect: raise
+    :class:`WirecalError` saying so.
+    """
+    software = robot.controller.software
+    seen: set[str] = set()
+    refused, defects = [], []
+    for name, text in programs.items():
+        try:
+            parse_program(text, name, software)
+        except WirecalError as exc:
+            for problem in exc.problems:
+                where, _, why = problem.partition(": ")
+                if not is_refusal(why):
+                    defects.append(problem)
+                elif why not in seen:
+                    seen.add(why)
+                    refused.append(
+                        f'{robot.source}: controller.software = "{software}": {where}: {why}; '
+                        "wirecal knows no confirmed alternative: not generated"
+                    )
+    if defects:
+        head = "internal error: a generated program breaks a URScript rule (please report):"
+        raise WirecalError([head, *defects[:20]])
+    return refused
 
 
 def write_scripts(

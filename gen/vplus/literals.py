@@ -23,10 +23,15 @@ def ppoint(q: Iterable[float]) -> str:
     return "#PPOINT(" + ", ".join(joint_literal(x) for x in q) + ")"
 
 
-def double_literal(x: float) -> str:
-    """Write an exact-to-1e-15 DOUBLE constant from confirmed syntax only.
+MAX_MANTISSA = 2**53
+"""The largest ``^D`` integer written: a 64-bit IEEE double holds it exactly (UG p. 102)."""
 
-    A ``^D`` integer (UG p. 102) divided by a power of ten held in ``wc.p10[]``.
+
+def double_literal(x: float) -> str:
+    """Write a DOUBLE constant to 16 significant digits (relative error < 1.2e-15).
+
+    A ``^D`` integer (UG p. 102) of at most 2^53 (:data:`MAX_MANTISSA`) divided by a power
+    of ten held in ``wc.p10[]``.
     """
     x = float(x)
     if x == 0:
@@ -34,7 +39,7 @@ def double_literal(x: float) -> str:
     k = 15 - int(np.floor(np.log10(abs(x))))
     k = max(0, min(k, 22))
     m = round(x * 10.0**k)
-    while abs(m) >= 10**16 and k > 0:  # keep the mantissa within 16 digits
+    while abs(m) > MAX_MANTISSA and k > 0:  # keep the mantissa a whole double
         k -= 1
         m = round(x * 10.0**k)
     while m % 10 == 0 and k > 0:

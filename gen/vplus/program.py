@@ -242,7 +242,8 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         mpc=repr(mpc),
         bits=robot.encoder.counter.bits,
         half=robot.encoder.counter.half,
-        full=robot.encoder.counter.full,
+        # 2^24 is beyond the integer range (UG p. 102): written as a real, which holds it
+        full=f"{robot.encoder.counter.full}.0",
         encoder=robot.encoder,
         log_file=opt.log_file,
         log_magic=f"{LOG_MAGIC} {LOG_VERSION}",

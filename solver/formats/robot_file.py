@@ -21,6 +21,7 @@ Format (angles in degrees, lengths in mm)::
     parameters = ["th2", "th3", ...]      # names from wirecal.solver.params
     [controller]                          # optional
     language = "vplus"                    # or "urscript" (Universal Robots)
+    software = "5.20"                     # the controller's software version (optional)
     host = "192.168.1.10"; port = 50000   # URScript: where 'wirecal receive' listens
     key = "…"                             # URScript: the run token's secret (16+ characters)
     [geometry]                            # optional
@@ -67,6 +68,8 @@ from wirecal.solver.robot import (
     DEFAULT_SCALE_TOLERANCE_PPM,
     INTERFACES,
     LANGUAGES,
+    SOFTWARE_LINES,
+    SOFTWARE_PATTERN,
     Controller,
     Encoder,
     Robot,
@@ -157,7 +160,7 @@ _KEYS = {
     "calibration": ("parameters",),
     "geometry": ("link_radius_mm",),
     "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg", "wire_point_mm"),
-    "controller": ("language", "host", "port", "key"),
+    "controller": ("language", "software", "host", "port", "key"),
     "cell": ("floor_z_mm", "margin_mm", "body_min_deg", "body_max_deg"),
 }
 
@@ -261,6 +264,7 @@ def _controller(table: Table) -> Controller | None:
         table.add("host", f"is {host!r}; give an address or host name (printable, no spaces)")
         host = None
     port = table.integer("port", None, lo=1, hi=65535)
+    software = _software(table, language)
     key = table.string("key", None)
     if key is not None and (len(key) < MIN_KEY_CHARS or not all(33 <= ord(c) <= 126 for c in key)):
         table.add(
@@ -270,10 +274,28 @@ def _controller(table: Table) -> Controller | None:
         )
         key = None
     keys = table.keys()
-    bad = [k for k, v in (("host", host), ("port", port), ("key", key)) if k in keys and v is None]
+    read = {"host": host, "port": port, "key": key, "software": software}
+    bad = [k for k, v in read.items() if k in keys and v is None]
     if language is None or bad:
         return None
-    return Controller(language, host, port, key)
+    return Controller(language, host, port, key, software)
+
+
+def _software(table: Table, language: str | None) -> str | None:
+    """Read ``software``: "major.minor[.patch]", of a line wirecal knows for the language."""
+    software = table.string("software", None)
+    if software is None:
+        return None
+    if not SOFTWARE_PATTERN.fullmatch(software):
+        table.add("software", f'is {software!r}; give the version as numbers, e.g. "5.20"')
+        return None
+    lines = SOFTWARE_LINES.get(language or "", {})
+    major = int(software.split(".")[0])
+    if lines and major not in lines:
+        known = ", ".join(f"{name} {m}.x" for m, name in lines.items())
+        table.add("software", f"is {software!r}; wirecal knows {known}")
+        return None
+    return software
 
 
 def _dh(kin: Table) -> np.ndarray | None:
@@ -735,6 +757,11 @@ def robot_file_text(
         "",
         "[controller]",
         f"language = {json.dumps(robot.controller.language)}",
+        *(
+            [f"software = {json.dumps(robot.controller.software)}"]
+            if robot.controller.software
+            else []
+        ),
         *([f"host = {json.dumps(robot.controller.host)}"] if robot.controller.host else []),
         *([f"port = {robot.controller.port}"] if robot.controller.port else []),
         "",

@@ -33,11 +33,13 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Callable
+from dataclasses import fields
 from functools import singledispatchmethod
 
+from wirecal.solver.errors import WirecalError
 from wirecal.twin.machine import Halt, Outcome, RunError, Stopped, f32
 from wirecal.twin.urscript import nodes as N
-from wirecal.twin.urscript.parser import Program, walk
+from wirecal.twin.urscript.parser import Program, operands, walk
 
 INT_MIN = -(2**31)
 
@@ -105,6 +107,7 @@ class Interpreter:
     """Runs a parsed program against a cell."""
 
     def __init__(self, program: Program, cell):
+        _check_subset(program, cell)
         self.program, self.cell = program, cell
         self.globals: dict[str, object] = {}
         self.ops: Counter[str] = Counter()  # arithmetic executed: add (+ −), mul, div, sqrt
@@ -135,6 +138,48 @@ class Interpreter:
             d = self.program.functions[name]
             fn = self._functions[name] = _Compiler(self, d).compile()
         return fn
+
+
+_UNRUN = (N.Jump, N.Critical, N.ThreadOp, N.Pose, N.RunThread)
+"""Valid URScript (the checker accepts it) that wirecal never emits and the twin does not run."""
+
+
+def _check_subset(program: Program, cell) -> None:
+    """Refuse, before running, what the twin does not run: raise :class:`WirecalError`."""
+    problems = []
+    for s in walk([program.functions[program.name]]):
+        where = f"{program.source}:{s.line}"
+        if isinstance(s, N.Def) and (s.kind != "def" or s.defaults):
+            problems.append(
+                f"{where}: {s.kind} {s.name}: threads, sec programs and default "
+                "values are not in the URScript subset the twin runs"
+            )
+        exprs = _expressions(s)
+        if isinstance(s, _UNRUN) or any(isinstance(e, _UNRUN) for e in exprs):
+            problems.append(f"{where}: not in the URScript subset the twin runs")
+        problems += [
+            f"{where}: {e.name} is not a function the twin runs"
+            for e in exprs
+            if isinstance(e, N.Call) and e.name not in program.functions and not _runs(e.name, cell)
+        ]
+    if problems:
+        raise WirecalError(sorted(set(problems)))
+
+
+def _expressions(s: N.Stmt) -> list[N.Expr]:
+    """Every expression on a statement's line, nested ones included."""
+    todo = [getattr(s, f.name) for f in fields(s)]
+    todo = [e for e in todo if isinstance(e, N.Expr)]
+    if isinstance(s, N.Assign):
+        todo += s.target.indices
+    if isinstance(s, N.If):
+        todo += [c for c, _ in s.branches]
+    out = []
+    while todo:
+        e = todo.pop()
+        out.append(e)
+        todo += operands(e)
+    return out
 
 
 def _global_names(program: Program) -> set[str]:
@@ -435,6 +480,11 @@ _FLOAT_OPS: dict[str, Callable[[float, float], float]] = {
     "/": lambda x, y: x / y,
     "%": math.fmod,
 }
+
+
+def _runs(name: str, cell) -> bool:
+    """Tell whether :func:`_builtin` has a Python function for ``name``."""
+    return name == "sqrt" or name in _PURE or callable(getattr(cell, name, None))
 
 
 def _builtin(interp: Interpreter, name: str) -> Callable:

@@ -59,6 +59,20 @@ class ListLit(Expr):
 
 
 @dataclass(slots=True)
+class Pose(Expr):
+    """A pose literal ``p[x, y, z, rx, ry, rz]`` (m and rad, axis-angle)."""
+
+    items: list[Expr]
+
+
+@dataclass(slots=True)
+class RunThread(Expr):
+    """``run name()``: starts a thread and gives its handle."""
+
+    name: str
+
+
+@dataclass(slots=True)
 class Index(Expr):
     """``base[index]``: an element of a list (0-based)."""
 
@@ -168,13 +182,37 @@ class HaltStmt(Stmt):
     """``halt``: the program stops."""
 
 
+@dataclass(slots=True)
+class Jump(Stmt):
+    """``break`` or ``continue`` inside a ``while`` loop."""
+
+    word: str
+
+
+@dataclass(slots=True)
+class Critical(Stmt):
+    """``enter_critical`` or ``exit_critical``: a section no other thread interrupts."""
+
+    word: str
+
+
+@dataclass(slots=True)
+class ThreadOp(Stmt):
+    """``join handle`` or ``kill handle``: wait for or stop a thread started by ``run``."""
+
+    word: str
+    handle: str
+
+
 # block openers and closers (one line each); assembled into the block nodes below
 @dataclass(slots=True)
 class DefStart(Stmt):
-    """The ``def name(params):`` line."""
+    """The ``def name(params):`` line (``thread name():`` and ``sec name():`` too)."""
 
     name: str
     params: list[str]
+    defaults: dict[str, Expr] = field(default_factory=dict)
+    kind: str = "def"  # "def", "thread" or "sec"
 
 
 @dataclass(slots=True)
@@ -211,11 +249,16 @@ class EndLine(Stmt):
 # ---------- blocks ----------
 @dataclass(slots=True)
 class Def(Stmt):
-    """A function: ``def name(params):`` … ``end``."""
+    """A function ``def name(params):`` … ``end``, a ``thread`` or a ``sec`` program.
+
+    ``defaults`` holds the default values of the trailing parameters that have one.
+    """
 
     name: str
     params: list[str]
     body: list[Stmt]
+    defaults: dict[str, Expr] = field(default_factory=dict)
+    kind: str = "def"
 
 
 @dataclass(slots=True)

@@ -1,22 +1,30 @@
 """The URScript front end: a ``.script`` file's text → a checked, typed syntax tree.
 
-Each line (its ``#`` comment removed) is parsed by the lark grammar ``urscript.lark``
-into the dataclass nodes of :mod:`wirecal.twin.urscript.nodes`; ``def``/``while``/``if``
-blocks are assembled from the lines. :func:`parse_program` rejects, as
+Each statement (its ``#`` comment removed; lines joined while a bracket is open or after a
+trailing operator) is parsed by the lark grammar ``urscript.lark`` into the dataclass
+nodes of :mod:`wirecal.twin.urscript.nodes`; ``def``/``thread``/``sec``/``while``/``if``
+blocks are assembled from the lines. The language is the Script Manual's: poses
+``p[…]``, threads with ``run``/``join``/``kill`` and critical sections (SW5.20,
+"Threads"), default and named arguments, ``break``/``continue`` (unconfirmed: used by
+Universal Robots' client library, no page read). :func:`parse_program` rejects, as
 ``file:line: problem``:
 
 * the layout of a script sent to the controller (Script Manual SW10.6, "Connecting to
-  URControl", confirmed): the first line is ``def`` in the first column, every other line
-  is indented, the last line is ``end`` in the first column — one program per file;
-* syntax errors, unclosed blocks, ``elif``/``else``/``end`` without their block;
-* calls to functions that are neither defined in the program nor URScript functions the
-  twin knows (:data:`BUILTINS`), wrong argument counts and unknown keyword arguments;
+  URControl", confirmed): the first line is ``def`` or ``sec`` in the first column, every
+  other line is indented, the last line is ``end`` in the first column — one program per
+  file;
+* syntax errors, unclosed blocks, ``elif``/``else``/``end`` without their block,
+  ``break``/``continue`` outside a ``while``, ``run`` of what is not a thread;
+* calls to functions that are neither defined in the program nor in the function table
+  (:data:`BUILTINS`, ``functions.csv``), wrong argument counts, unknown keyword arguments;
+* constants the controller cannot hold: ints beyond 32 bits (and int results of constants
+  that overflow), floats beyond float32 (UR16e User Manual p. 181); an encoder index
+  other than 0 or 1 and ``opt`` other than "" or "raw" (SW5.20 encoder_get_tick_count); a
+  constant index beyond a list whose every assignment is a literal;
 * a function defined twice; a variable read but never assigned, nor a parameter.
 
-What the checker cannot know about a real controller (a URScript function outside
-:data:`BUILTINS`, ``thread``/``sec`` and the other constructs wirecal does not emit) is
-reported as "not in the URScript subset the twin runs" — valid URScript, perhaps, but
-nothing wirecal writes.
+The twin runs a subset of this language (:mod:`wirecal.twin.urscript.interp` refuses the
+rest before running).
 """
 
 from __future__ import annotations
@@ -33,52 +41,65 @@ from lark.exceptions import LarkError
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.machine import walk_tree
 from wirecal.twin.urscript import nodes as N
+from wirecal.twin.urscript.versions import refusal, too_new, version_of
 
 
 @dataclass(frozen=True)
 class Builtin:
-    """A URScript function the twin knows: its parameters and how many are required.
+    """A URScript function: its parameters, how many are required, where it was read.
 
-    Where each signature was read, and which are confirmed on a Universal Robots page, is
-    :mod:`wirecal.gen.urscript.facts`' table.
+    ``source`` is the manual page its signature was read on (``functions.csv``), or
+    "unconfirmed"; ``any_keywords`` marks ``struct(name=value, …)``.
     """
 
     params: tuple[str, ...]
     required: int
+    source: str = "unconfirmed"
+    any_keywords: bool = False
 
 
-#: the URScript functions the twin runs
-BUILTINS: dict[str, Builtin] = {
-    "movej": Builtin(("q", "a", "v", "t", "r"), 1),
-    "get_actual_joint_positions": Builtin((), 0),
-    "encoder_enable_pulse_decode": Builtin(("encoder_index", "decoder_type", "A", "B"), 4),
-    "encoder_get_tick_count": Builtin(("encoder_index", "opt"), 1),
-    "encoder_unwind_delta_tick_count": Builtin(("encoder_index", "delta_tick_count"), 2),
-    "socket_open": Builtin(("address", "port", "socket_name"), 2),
-    "socket_send_line": Builtin(("str", "socket_name"), 1),
-    "socket_close": Builtin(("socket_name",), 0),
-    "textmsg": Builtin(("s1", "s2"), 1),
-    "popup": Builtin(("s", "title", "warning", "error", "blocking"), 1),
-    "sleep": Builtin(("t",), 1),
-    "sync": Builtin((), 0),
-    "time": Builtin(("mode",), 0),
-    "str_cat": Builtin(("op1", "op2"), 2),
-    "str_len": Builtin(("str",), 1),
-    "floor": Builtin(("f",), 1),
-    "round": Builtin(("f",), 1),
-    "to_num": Builtin(("str",), 1),
-    "norm": Builtin(("a",), 1),
-    "sqrt": Builtin(("f",), 1),
-    "fabs": Builtin(("f",), 1),
-    "sin": Builtin(("f",), 1),
-    "cos": Builtin(("f",), 1),
-    "atan2": Builtin(("y", "x"), 2),
-    "r2d": Builtin(("rad",), 1),
-    "d2r": Builtin(("deg",), 1),
-    "get_list_length": Builtin(("v",), 1),
-}
-#: URScript words for constructs wirecal never emits (the twin does not run them)
-_UNMODELLED_WORDS = ("sec", "thread", "run", "join", "kill", "for", "break", "continue")
+def _load_functions() -> dict[str, Builtin]:
+    """Read ``functions.csv`` (name; parameters with defaults; source) into Builtins."""
+    text = resources.files(__package__).joinpath("functions.csv").read_text(encoding="utf-8")
+    rows = [r.split(";") for r in text.splitlines() if r.strip() and not r.startswith("#")]
+    out: dict[str, Builtin] = {}
+    for name, params, source in rows[1:]:
+        names = [p.split("=")[0].strip() for p in _split_params(params)]
+        required = sum("=" not in p for p in _split_params(params))
+        if names == ["**fields"]:
+            out[name] = Builtin((), 0, source, any_keywords=True)
+        else:
+            out[name] = Builtin(tuple(names), required, source)
+    return out
+
+
+def _split_params(params: str) -> list[str]:
+    """Split a parameter list at the commas outside brackets."""
+    parts, depth, cur = [], 0, ""
+    for ch in params:
+        depth += (ch == "[") - (ch == "]")
+        if ch == "," and depth == 0:
+            parts.append(cur)
+            cur = ""
+        else:
+            cur += ch
+    return [p.strip() for p in [*parts, cur] if p.strip()]
+
+
+#: the URScript functions the checker knows (``functions.csv``)
+BUILTINS: dict[str, Builtin] = _load_functions()
+
+INT32 = (-(2**31), 2**31 - 1)
+"""The int range: 32-bit whole numbers (UR16e User Manual p. 181; CB3 3.4.5 manual II-69)."""
+
+FLOAT32_MAX = 3.4028234663852886e38
+"""The largest 32-bit float (the controller's floats are 32-bit: UR16e User Manual p. 181)."""
+
+ENCODER_INDICES = (0, 1)
+"""encoder_index "Must be either 0 or 1" (SW5.20 encoder_get_tick_count page)."""
+
+TICK_COUNT_OPTS = ("", "raw")
+"""encoder_get_tick_count's opt: "" (filtered) or "raw" (SW5.20 encoder_get_tick_count page)."""
 
 _LINES = re.compile(r"\r\n|\n|\r")
 
@@ -130,7 +151,20 @@ class _Terminals(Transformer):
         return N.ListLit([x for x in c if x is not None])
 
     def subscript(self, c):
-        return N.Index(c[0], c[1])
+        base, *items = c
+        if len(items) == 1:
+            return N.Index(base, items[0])
+        if base == N.Var("p"):  # p[x, y, z, rx, ry, rz]: a pose literal
+            return N.Pose(items)
+        raise _LineError(
+            "a list index is one expression (a pose literal is p[x, y, z, rx, ry, rz])"
+        )
+
+    def member(self, c):
+        return str(c[0])
+
+    def run_thread(self, c):
+        return N.RunThread(c[0])
 
     def negate(self, c):
         return N.Neg(c[0])
@@ -175,8 +209,32 @@ class _Terminals(Transformer):
         scope, target, value = c
         return N.Assign(str(scope) if scope else "", target, value)
 
+    def param(self, c):
+        return (c[0], c[1])
+
     def def_line(self, c):
-        return N.DefStart(c[0], [p for p in c[1:] if p is not None])
+        params = [p for p in c[1:] if p is not None]
+        defaults = {name: d for name, d in params if d is not None}
+        names = [name for name, _ in params]
+        first = next((k for k, (_, d) in enumerate(params) if d is not None), len(params))
+        if any(d is None for _, d in params[first:]):
+            raise _LineError(f"{c[0]}: a parameter without a default follows one with a default")
+        return N.DefStart(c[0], names, defaults)
+
+    def thread_line(self, c):
+        return N.DefStart(c[0], [], kind="thread")
+
+    def sec_line(self, c):
+        return N.DefStart(c[0], [], kind="sec")
+
+    def jump_line(self, c):
+        return N.Jump(str(c[0]))
+
+    def critical_line(self, c):
+        return N.Critical(str(c[0]))
+
+    def thread_op_line(self, c):
+        return N.ThreadOp(str(c[0]), c[1])
 
     def return_line(self, c):
         return N.Return(c[0])
@@ -210,12 +268,16 @@ def strip_comment(line: str) -> str:
     return line
 
 
-def parse_program(text: str, source: str = "<script>") -> Program:
-    """Parse and check one ``.script`` program; raise :class:`WirecalError` listing problems."""
+def parse_program(text: str, source: str = "<script>", software: str | None = None) -> Program:
+    """Parse and check one ``.script`` program; raise :class:`WirecalError` listing problems.
+
+    With ``software`` ("5.20"), a call that version's manual pages do not document is a
+    problem too (:mod:`wirecal.twin.urscript.versions`).
+    """
     problems: list[str] = []
     steps: list[N.Stmt] = []
     lines = [(n, strip_comment(raw).rstrip()) for n, raw in enumerate(_LINES.split(text), 1)]
-    lines = [(n, s) for n, s in lines if s.strip()]
+    lines = _statements([(n, s) for n, s in lines if s.strip()])
     if not lines:
         raise WirecalError([f"{source}: no program in the file (a script starts with def)"])
     for k, (n, raw) in enumerate(lines):
@@ -226,18 +288,51 @@ def parse_program(text: str, source: str = "<script>") -> Program:
             steps.append(step)
     program = _nest(steps, source, problems)
     if program is not None:
-        _Checker(program, source, problems).check()
+        _Checker(program, source, problems, software).check()
     if problems:
         raise WirecalError(problems)
     assert program is not None
     return program
 
 
+_CONTINUES = re.compile(r"(\b(and|or|xor|not)|[-+*/%,=<>(\[])\s*$")
+"""A line ending in an operator, a comma or an opening bracket goes on on the next line."""
+
+
+def _statements(lines: list[tuple[int, str]]) -> list[tuple[int, str]]:
+    """Join the lines of one statement (open brackets, a trailing operator): (first line, text).
+
+    The public scripts of Universal Robots' client library split long ``str_cat`` calls
+    and ``or`` chains over lines this way.
+    """
+    out: list[tuple[int, str]] = []
+    for n, line in lines:
+        if out and _goes_on(out[-1][1]):
+            out[-1] = (out[-1][0], out[-1][1] + " " + line.strip())
+        else:
+            out.append((n, line))
+    return out
+
+
+def _goes_on(text: str) -> bool:
+    """Whether a statement's text goes on: brackets left open or a trailing operator."""
+    depth = 0
+    quote = ""
+    for ch in text:
+        if quote:
+            quote = "" if ch == quote else quote
+        elif ch in "\"'":
+            quote = ch
+        else:
+            depth += (ch in "([") - (ch in ")]")
+    return depth > 0 or (bool(_CONTINUES.search(text)) and not text.rstrip().endswith(":"))
+
+
 def _layout(source: str, n: int, raw: str, first: bool, last: bool, problems: list[str]) -> None:
     """Check the column rules of a script (Script Manual SW10.6, confirmed)."""
     column1 = not raw[:1].isspace()
-    if first and not (column1 and re.match(r"def\s", raw)):
-        problems.append(f"{source}:{n}: a script starts with 'def' in the first column")
+    if first and not (column1 and re.match(r"(def|sec)\s", raw)):
+        problems.append(f"{source}:{n}: a script starts with 'def' or 'sec' in the first column")
     elif last and not (column1 and raw.strip() == "end"):
         problems.append(f"{source}:{n}: a script ends with 'end' in the first column")
     elif not first and not last and column1:
@@ -245,12 +340,6 @@ def _layout(source: str, n: int, raw: str, first: bool, last: bool, problems: li
 
 
 def _step(source: str, n: int, line: str, problems: list[str]) -> N.Stmt | None:
-    word = re.match(r"[A-Za-z_]\w*", line)
-    if word and word.group() in _UNMODELLED_WORDS:
-        problems.append(
-            f"{source}:{n}: '{word.group()}' is not in the URScript subset the twin runs"
-        )
-        return None
     try:
         return parse_line(line)
     except _LineError as exc:
@@ -307,7 +396,7 @@ def _nest(steps: list[N.Stmt], source: str, problems: list[str]) -> Program | No
 
 def _open(s: N.Stmt) -> _Block:
     if isinstance(s, N.DefStart):
-        return N.Def(s.name, s.params, [], line=s.line)
+        return N.Def(s.name, s.params, [], s.defaults, s.kind, line=s.line)
     if isinstance(s, N.WhileStart):
         return N.While(s.cond, [], line=s.line)
     assert isinstance(s, N.IfStart)
@@ -321,8 +410,9 @@ def _first_body(block: _Block) -> list[N.Stmt]:
 
 
 def _word(s: N.Stmt) -> str:
+    if isinstance(s, N.Def):
+        return s.kind
     return {
-        N.Def: "def",
         N.While: "while",
         N.ElifLine: "elif",
         N.ElseLine: "else",
@@ -358,29 +448,48 @@ def walk(steps: list[N.Stmt]) -> Iterator[N.Stmt]:
 
 
 class _Checker:
-    """Checks calls and variables of one program (module docstring)."""
+    """Checks calls, literals and variables of one program (module docstring)."""
 
-    def __init__(self, program: Program, source: str, problems: list[str]):
+    def __init__(
+        self, program: Program, source: str, problems: list[str], software: str | None = None
+    ):
         self.p, self.source, self.problems = program, source, problems
-        self.assigned = {s.target.name for s in walk(program.body) if isinstance(s, N.Assign)} | {
-            name for d in program.functions.values() for name in d.params
-        }
+        self.software = software
+        self.version = None if software is None else version_of(software)
+        assigns = [s for s in walk(program.body) if isinstance(s, N.Assign)]
+        params = {name for d in program.functions.values() for name in d.params}
+        self.assigned = {s.target.name for s in assigns} | params
+        self.lengths = _literal_lengths(assigns, params)
 
     def check(self) -> None:
         for s in walk(self.p.body):
             self.stmt(s)
+        self.jumps(self.p.body, in_loop=False)
+        for d in self.p.functions.values():
+            for value in d.defaults.values():
+                self.expr(value, d.line)
 
     def err(self, line: int, message: str) -> None:
         self.problems.append(f"{self.source}:{line}: {message}")
 
+    def jumps(self, steps: list[N.Stmt], in_loop: bool) -> None:
+        """``break``/``continue`` only inside a ``while`` (of the same function or thread)."""
+        for s in steps:
+            if isinstance(s, N.Jump) and not in_loop:
+                self.err(s.line, f"'{s.word}' outside a while loop")
+            inner = isinstance(s, N.While) or (in_loop and not isinstance(s, N.Def))
+            for body in children(s):
+                self.jumps(body, inner)
+
     @singledispatchmethod
     def stmt(self, s: N.Stmt) -> None:
-        pass  # Def, HaltStmt: nothing to check on the line itself
+        pass  # Def, HaltStmt, Jump, Critical: nothing to check on the line itself
 
     @stmt.register
     def _(self, s: N.Assign) -> None:
         for e in s.target.indices:
             self.expr(e, s.line)
+        self.index(s.target.name, s.target.indices[:1], s.line)
         self.expr(s.value, s.line)
 
     @stmt.register
@@ -401,33 +510,78 @@ class _Checker:
         for cond, _ in s.branches:
             self.expr(cond, s.line)
 
+    @stmt.register
+    def _(self, s: N.ThreadOp) -> None:
+        if s.handle not in self.assigned:
+            self.err(s.line, f"{s.word} {s.handle}: no thread handle {s.handle} is assigned")
+
     def expr(self, e: N.Expr, line: int) -> None:
         """Check an expression and everything inside it."""
         if isinstance(e, N.Var) and e.name not in self.assigned:
             self.err(line, f"variable {e.name} is read but never assigned")
         elif isinstance(e, N.Call):
             self.call(e, line)
-        for sub in _operands(e):
-            self.expr(sub, line)
+        elif isinstance(e, N.RunThread):
+            self.run(e, line)
+        elif isinstance(e, N.Index) and isinstance(e.base, N.Var):
+            self.index(e.base.name, [e.index], line)
+        self.literal(e, line)
+        for sub in operands(e):
+            if not (isinstance(e, N.Neg) and sub == N.Num(2**31, True)):  # -2147483648
+                self.expr(sub, line)
+
+    def literal(self, e: N.Expr, line: int) -> None:
+        """Numbers the controller cannot hold: ints beyond 32 bits, floats beyond float32."""
+        if isinstance(e, N.Num) and e.is_int and not INT32[0] <= e.value <= INT32[1]:
+            self.err(line, f"{e.value} is outside the 32-bit int range [-2^31, 2^31-1]")
+        elif isinstance(e, N.Num) and not e.is_int and abs(e.value) > FLOAT32_MAX:
+            self.err(line, f"{e.value:g} is beyond the largest 32-bit float (3.4e38)")
+        elif isinstance(e, N.BinOp):
+            value = _constant(e)
+            if isinstance(value, int) and not INT32[0] <= value <= INT32[1]:
+                self.err(
+                    line,
+                    f"the int result {value} overflows 32 bits (not stated what the "
+                    "controller does then: use a float or smaller numbers)",
+                )
+
+    def index(self, name: str, indices: list[N.Expr], line: int) -> None:
+        """Check a constant index into a list whose length its literal assignments fix."""
+        size = self.lengths.get(name)
+        if size is None or not indices:
+            return
+        k = _constant(indices[0])
+        if isinstance(k, int) and not 0 <= k < size:
+            self.err(line, f"{name}[{k}]: index out of range ({name} has {size} elements)")
+
+    def run(self, e: N.RunThread, line: int) -> None:
+        d = self.p.functions.get(e.name)
+        if d is None or d.kind != "thread":
+            self.err(line, f"run {e.name}(): no thread {e.name} is defined in the program")
 
     def call(self, e: N.Call, line: int) -> None:
         user = self.p.functions.get(e.name)
         if user is not None:
-            if e.kwargs or len(e.args) != len(user.params):
+            if user.kind != "def":
+                self.err(line, f"{e.name} is a {user.kind}; start it with run {e.name}()")
+                return
+            b = Builtin(tuple(user.params), len(user.params) - len(user.defaults))
+        else:
+            found = BUILTINS.get(e.name)
+            if found is None:
                 self.err(
                     line,
-                    f"{e.name} takes {len(user.params)} argument(s), "
-                    f"given {len(e.args) + len(e.kwargs)}",
+                    f"unknown function {e.name} (not defined in the program, and not "
+                    "a function of the URScript manual)",
                 )
-            return
-        b = BUILTINS.get(e.name)
-        if b is None:
-            self.err(
-                line,
-                f"unknown function {e.name} (not defined in the program, and not a URScript "
-                "function of the subset the twin runs)",
-            )
-            return
+                return
+            b = found
+            self.arguments(e, line)
+            self.documented(e, line)
+        if not b.any_keywords:
+            self.signature(e, b, line)
+
+    def signature(self, e: N.Call, b: Builtin, line: int) -> None:
         given = list(b.params[: len(e.args)]) + list(e.kwargs)
         if len(e.args) > len(b.params):
             self.err(
@@ -442,10 +596,59 @@ class _Checker:
         if missing:
             self.err(line, f"{e.name} needs {', '.join(missing)}")
 
+    def documented(self, e: N.Call, line: int) -> None:
+        """Report a call the declared software's manual pages do not document."""
+        if self.version is None or self.software is None:
+            return
+        rule = too_new(e.name, set(e.kwargs), self.version)
+        if rule is not None:
+            self.err(line, refusal(rule, self.software))
 
-def _operands(e: N.Expr) -> list[N.Expr]:
+    def arguments(self, e: N.Call, line: int) -> None:
+        """Constant arguments outside a documented range (encoder index, opt)."""
+        params = BUILTINS[e.name].params
+        args = dict(zip(params, e.args, strict=False)) | e.kwargs
+        index = _constant(args["encoder_index"]) if "encoder_index" in args else None
+        if index is not None and index not in ENCODER_INDICES:
+            self.err(line, f"{e.name}: encoder_index must be 0 or 1, not {index!r}")
+        opt = args.get("opt") if e.name == "encoder_get_tick_count" else None
+        if isinstance(opt, N.Str) and opt.text not in TICK_COUNT_OPTS:
+            self.err(line, f'{e.name}: opt is "" or "raw", not "{opt.text}"')
+
+
+def _constant(e: N.Expr) -> int | float | None:
+    """Return the value of an expression of number literals only (exact ints), else None."""
+    if isinstance(e, N.Num):
+        return e.value
+    if isinstance(e, N.Neg):
+        v = _constant(e.expr)
+        return None if v is None else -v
+    if isinstance(e, N.BinOp) and e.op in "+-*":
+        a, b = _constant(e.left), _constant(e.right)
+        if a is None or b is None:
+            return None
+        return {"+": a + b, "-": a - b, "*": a * b}[e.op]
+    return None
+
+
+def _literal_lengths(assigns: list[N.Assign], params: set[str]) -> dict[str, int]:
+    """Variables (not parameters) whose every assignment is a list or pose literal of one length."""
+    lengths: dict[str, set[int | None]] = {}
+    for s in assigns:
+        if not s.target.indices:
+            v = s.value
+            size = len(v.items) if isinstance(v, (N.ListLit, N.Pose)) else None
+            lengths.setdefault(s.target.name, set()).add(size)
+    return {
+        k: next(iter(v))
+        for k, v in lengths.items()
+        if len(v) == 1 and None not in v and k not in params
+    }
+
+
+def operands(e: N.Expr) -> list[N.Expr]:
     """Return the expressions directly inside ``e``."""
-    if isinstance(e, N.ListLit):
+    if isinstance(e, (N.ListLit, N.Pose)):
         return list(e.items)
     if isinstance(e, N.Index):
         return [e.base, e.index]

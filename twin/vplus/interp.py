@@ -507,6 +507,9 @@ class _Compiler:
             if not isinstance(args[0], N.Var):
                 return _refuse("DEFINED of anything but a variable"), False
             return self._defined(args[0]), False
+        if name == "switch":
+            switch, cell = args[0].name.upper(), self.i.cell
+            return (lambda frame: cell.switch(switch)), False
         if name == "device":
             return self._device(args), False
         fns = [self.expr(a) if a is not None else (_zero, False) for a in args]

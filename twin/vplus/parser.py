@@ -11,9 +11,11 @@ variable or parameter name (User's Guide p. 99), a missing ``.END``, declaration
 executable steps, names that share their first 15 characters, unknown instructions or
 functions, wrong argument counts of the functions the twin knows, CALLs to programs not
 in the module (unless ``external_calls``), argument kinds that do not match a program's
-parameters, GOTO to a missing label, and type-prefix misuse ($ string, # precision point,
-% belt). Rules: User's Guide v17 p. 35–36 (program format), 99–111 (names, types,
-classes), 42–45 (CALL).
+parameters, GOTO to a missing label, type-prefix misuse ($ string, # precision point,
+% belt), step labels beyond 65535 (p. 35), and constants beyond their ranges: strings over
+128 characters (p. 100), integers beyond -16,777,216..16,777,215, ^B over 8 bits, ^D
+beyond 2^53, reals beyond about 1E+307 (p. 102). Rules: User's Guide v17 p. 35–36
+(program format), 99–111 (names, types, classes), 42–45 (CALL).
 """
 
 from __future__ import annotations
@@ -41,10 +43,10 @@ _LINES = re.compile(r"\r\n|\n|\r")
 
 # The functions the twin evaluates: name → (argument kinds, required count, result).
 # Kinds: n number, s string, l precision point, b belt, t transformation, v any
-# variable (DEFINED), nv a numeric variable (written to). TRANS: "if any parameter is
-# omitted, its value is taken to be zero"; #PPOINT takes one value per joint (a SCARA
-# has four). Any other function of the keyword table is accepted with any arguments and
-# refused by the interpreter when run.
+# variable (DEFINED), nv a numeric variable (written to), w a system switch (SWITCH).
+# TRANS: "if any parameter is omitted, its value is taken to be zero"; #PPOINT takes
+# one value per joint (a SCARA has four). Any other function of the keyword table is
+# accepted with any arguments and refused by the interpreter when run.
 FUNCTIONS: dict[str, tuple[tuple[str, ...], int, str]] = {
     "int": (("n",), 1, "n"),
     "abs": (("n",), 1, "n"),
@@ -65,6 +67,7 @@ FUNCTIONS: dict[str, tuple[tuple[str, ...], int, str]] = {
     "trans": (("n",) * 6, 0, "t"),
     "sig": (("n",), 1, "n"),
     "timer": (("n",), 1, "n"),
+    "switch": (("w",), 1, "n"),
 }
 #: functions whose omitted arguments mean zero
 OMITTABLE = {"trans"}
@@ -325,8 +328,14 @@ class _ModuleReader:
         if m:
             line = line[m.end() :].strip()
             steps.append(N.Label(int(m.group(1)), line=n))
+            if int(m.group(1)) > MAX_LABEL:
+                self.problems.append(
+                    f"{self.source}:{n}: {name}: label {m.group(1)}: a step label is an "
+                    f"integer 0 to {MAX_LABEL} (User's Guide p. 35)"
+                )
             if not line:
                 return
+        self.problems += [f"{self.source}:{n}: {name}: {p}" for p in literal_problems(line)]
         try:
             step = parse_step(line)
         except (UnexpectedToken, UnexpectedCharacters) as exc:
@@ -351,6 +360,83 @@ class _ModuleReader:
                 f"{self.source}: data section {self.section} is never closed with .END"
             )
         return self.problems, self.programs
+
+
+MAX_LABEL = 65535
+"""A step label is "an integer (0 to 65535)" (User's Guide p. 35)."""
+MAX_INTEGER = 16_777_215
+"""Integers range from -16,777,216 to 16,777,215 (User's Guide p. 102)."""
+MAX_DOUBLE = 1e307
+"""Double-precision reals: approximately -1E+307 to 1E+307 (User's Guide p. 102)."""
+MAX_EXACT_DOUBLE = 2**53
+"""The largest whole number a 64-bit IEEE double (User's Guide p. 102) holds exactly."""
+MAX_STRING = 128
+"""A string holds 0 to 128 characters (User's Guide p. 100)."""
+
+_LITERAL = re.compile(
+    r'(?P<str>"[^"]*"?)|(?P<d>\^[Dd]\d+)|(?P<h>\^[Hh][0-9A-Fa-f]+)|(?P<b>\^[Bb][01]+)'
+    r"|(?P<o>\^[0-7]+)|'.|[A-Za-z$#%][\w.]*"
+    r"|(?P<num>(?P<whole>\d+)(?P<frac>\.\d*)?(?P<exp>[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
+)
+
+
+def literal_problems(line: str) -> list[str]:
+    """Constants of a step outside the ranges of User's Guide pp. 100 and 102."""
+    out = []
+    for m in _LITERAL.finditer(line):
+        minus = line[: m.start()].rstrip().endswith("-")
+        out += _literal_problem(m, minus)
+    return out
+
+
+def _literal_problem(m: re.Match, minus: bool) -> list[str]:
+    """Check one token of :data:`_LITERAL` (``minus``: a ``-`` stands before it)."""
+    text = m.group()
+    if m.group("str") is not None:
+        inner = text[1:-1] if len(text) > 1 and text.endswith('"') else text[1:]
+        if len(inner) > MAX_STRING:
+            return [
+                f"a string constant of {len(inner)} characters (at most {MAX_STRING}, "
+                "User's Guide p. 100)"
+            ]
+        return []
+    if m.group("d"):
+        if int(text[2:]) > MAX_EXACT_DOUBLE:
+            return [
+                f"{text}: beyond 2^53, which a 64-bit double holds exactly (User's Guide p. 102)"
+            ]
+        return []
+    if m.group("b") and len(text) - 2 > 8:
+        return [f"{text}: a ^B constant has at most 8 bits (User's Guide p. 102)"]
+    value = _radix_value(m)
+    if value is not None:
+        return _integer_problem(text, value, minus)
+    if m.group("num") is None:
+        return []
+    if m.group("whole") and not m.group("frac") and not m.group("exp"):
+        return _integer_problem(text, int(text), minus)
+    if float(text) > MAX_DOUBLE:
+        return [f"{text}: beyond the double-precision range, about 1E+307 (User's Guide p. 102)"]
+    return []
+
+
+def _radix_value(m: re.Match) -> int | None:
+    """Return the value of a ^H, ^B or ^ (octal) constant, or None for another token."""
+    for group, base, skip in (("h", 16, 2), ("b", 2, 2), ("o", 8, 1)):
+        if m.group(group):
+            return int(m.group()[skip:], base)
+    return None
+
+
+def _integer_problem(text: str, value: int, minus: bool) -> list[str]:
+    """Check a whole-number constant against the integer range (a ``-`` before it: -2^24)."""
+    limit = MAX_INTEGER + 1 if minus else MAX_INTEGER
+    if value <= limit:
+        return []
+    return [
+        f"{text}: beyond the integer range -16,777,216 to 16,777,215 (User's Guide "
+        f"p. 102); write it as a real ({value}.0) or a ^D constant"
+    ]
 
 
 def _strip_comment(line: str) -> str:
@@ -909,6 +995,9 @@ class _Checker:
                 self.err(f"{e.name.upper()} needs a variable")
             else:
                 self.target(a)
+        elif want == "w":
+            if not (isinstance(a, N.Var) and is_kind(a.name, "switch")):
+                self.err(f"{e.name.upper()} needs a system switch name (e.g. BELT)")
         elif want == "nv":
             if not isinstance(a, N.Var) or a.kind != "n":
                 self.err(f"{e.name.upper()} needs a numeric variable there")
@@ -960,4 +1049,5 @@ def _word(kind: str) -> str:
         "b": "belt (%)",
         "t": "transformation",
         "v": "variable",
+        "w": "system switch",
     }.get(kind, kind)
