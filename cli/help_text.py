@@ -188,10 +188,13 @@ HELP_TEXT: dict[str, str] = {
         "\n"
         "  V+ files, ours or anyone's, against the V+ rules LOAD applies: program format,\n"
         "  keywords as names (User's Guide p. 99), declarations first, 15-character\n"
-        "  names, type prefixes, labels, CALL arguments. A file named *.script is\n"
-        "  URScript, checked against the rules of a script sent to a UR controller\n"
-        "  (def/end in the first column, other lines indented), its syntax, the functions\n"
-        "  it calls and their arguments, and variables never assigned.\n"
+        "  names, type prefixes, labels (0-65535), CALL arguments, constants within the\n"
+        "  ranges of pp. 100 and 102. A file named *.script is URScript, checked against\n"
+        "  the rules of a script sent to a UR controller (def/sec and end in the first\n"
+        "  column, other lines indented), the language of the Script Manual (poses,\n"
+        "  threads, critical sections, default arguments), the functions it calls and\n"
+        "  their arguments, int32/float32 constants, encoder indices, and variables never\n"
+        "  assigned. What each rule rests on: docs/languages.md.\n"
         "\n"
         '  Prints one "file:line: problem" line per problem. CRLF and LF line endings are\n'
         "  both read.\n"
@@ -199,9 +202,11 @@ HELP_TEXT: dict[str, str] = {
         "  Exit status: 0 every file clean; 1 problems found; 2 a file cannot be read.\n"
         "\n"
         "Options:\n"
-        "  --external-calls  Allow CALLs to programs that are not in the file (loaded\n"
-        "                    from another file).\n"
-        "  -h, --help        Show this message and exit.\n"
+        "  --external-calls    Allow CALLs to programs that are not in the file (loaded\n"
+        "                      from another file).\n"
+        '  --software VERSION  URScript: the controller software ("5.20", "3.15"); a call\n'
+        "                      its manual pages do not document is a problem too.\n"
+        "  -h, --help          Show this message and exit.\n"
     ),
     "observe": (
         "Usage: wirecal observe [OPTIONS] ROBOT PLAN\n"

@@ -46,6 +46,13 @@ KNOWN = {
         "issue 25 item 3: generation checks its module with the twin's V+ parser; the "
         "parser moves to a language layer both use"
     ),
+    ("wirecal.gen.urscript.program", "wirecal.twin.urscript.parser"): (
+        "issue 25 item 3: generation checks its scripts with the twin's URScript checker; the "
+        "front end moves to a language layer both use"
+    ),
+    ("wirecal.gen.urscript.program", "wirecal.twin.urscript.versions"): (
+        "issue 25 item 3: the software-version table of the URScript front end, the same move"
+    ),
     ("wirecal.solver.measurements", "wirecal.solver.formats.log"): (
         "issue 25 item 3: the solver import circle (the log's records are the solver's input)"
     ),

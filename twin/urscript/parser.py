@@ -639,11 +639,8 @@ def _literal_lengths(assigns: list[N.Assign], params: set[str]) -> dict[str, int
             v = s.value
             size = len(v.items) if isinstance(v, (N.ListLit, N.Pose)) else None
             lengths.setdefault(s.target.name, set()).add(size)
-    return {
-        k: next(iter(v))
-        for k, v in lengths.items()
-        if len(v) == 1 and None not in v and k not in params
-    }
+    sizes = {k: next(iter(v)) for k, v in lengths.items() if len(v) == 1 and k not in params}
+    return {k: size for k, size in sizes.items() if size is not None}
 
 
 def operands(e: N.Expr) -> list[N.Expr]:

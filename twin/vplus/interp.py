@@ -508,6 +508,8 @@ class _Compiler:
                 return _refuse("DEFINED of anything but a variable"), False
             return self._defined(args[0]), False
         if name == "switch":
+            if not isinstance(args[0], N.Var):
+                return _refuse("SWITCH of anything but a switch name"), False
             switch, cell = args[0].name.upper(), self.i.cell
             return (lambda frame: cell.switch(switch)), False
         if name == "device":
