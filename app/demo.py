@@ -41,7 +41,7 @@ from wirecal.app.report import Validation, render_report
 from wirecal.app.twin_runs import measure_in_twin, measure_ur_in_twin
 from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import GenOptions, module_text
-from wirecal.solver.accuracy import workspace
+from wirecal.solver.accuracy import error_vs_truth_mm, workspace
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.controller_result import parse_result, result_in_log
 from wirecal.solver.formats.fileio import Outputs
@@ -51,7 +51,6 @@ from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors, truth_text
 from wirecal.solver.formats.validation_files import load_setup, read_validation_log
-from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.plausibility import Plausibility, gate
@@ -424,8 +423,7 @@ def _put_truth_and_patch(
 def _tool_errors(robot: Robot, truth: dict[str, float], identified: dict[str, float]):
     """Return the mean tool-point error against the truth over the workspace, before/after."""
     q = workspace(robot)
-    true_p = tool_position(robot.model(truth), q)
     return {
-        name: float(np.linalg.norm(tool_position(robot.model(believed), q) - true_p, axis=1).mean())
+        name: error_vs_truth_mm(robot, truth, believed, q)
         for name, believed in (("before", {}), ("after", identified))
     }

@@ -34,6 +34,7 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.scale import PPM, Drift, ScaleEstimate, estimate_scale, fit_drift
 from wirecal.solver.sensitivity import sensitivity
+from wirecal.solver.simulate import sag_lengths_mm
 
 METHODS = ("stepwise", "joint")
 UNIDENTIFIED = {"mean": math.inf, "max": math.inf}
@@ -257,6 +258,7 @@ def solve(
             drift,
             m.reference_t_s,
             unmodelled_exit_mm(robot, plan)[present],
+            sag_lengths_mm(robot, plan)[present],
         )
         for method in estimates:
             budgets[method] = budget(
