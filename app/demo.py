@@ -99,6 +99,7 @@ class DemoResult:
     outputs: tuple[str, ...] = OUTPUTS
     wall_s: float | None = None  # the whole demo, start to end (None: the sum of seconds)
     predicted_mm: float | None = None  # the error budget's total for the recommended method
+    bound_mm: float | None = None  # the error budget's 95 % bound for the recommended method
     encoder_scale_ppm: float | None = None  # the twin encoder's true scale error (V+ twin)
 
     @property
@@ -253,6 +254,7 @@ def _run(
         seconds,
         wall_s=time.perf_counter() - wall,
         predicted_mm=result.predicted[result.recommended]["mean"],
+        bound_mm=_bound(result),
         encoder_scale_ppm=encoder.scale_ppm,
     )
 
@@ -391,7 +393,15 @@ def _run_ur(
         controller,
         seconds,
         UR_OUTPUTS,
+        predicted_mm=result.predicted[result.recommended]["mean"],
+        bound_mm=_bound(result),
     )
+
+
+def _bound(result: SolveResult) -> float | None:
+    """Return the recommended method's 95 % bound (None: the tool error is unbounded)."""
+    best = result.budgets.get(result.recommended)
+    return None if best is None else best.bound
 
 
 def _put_truth_and_patch(

@@ -18,7 +18,9 @@ E is convex in δe, so over the box |ε_k| ≤ 1 it is largest at a corner. The 
 95 % quantile of max over the corners of E(x + b + Σ ε_k v_k), x ~ N(0, Σ): whatever the
 bounded errors are within their limits, P(E ≤ bound) ≥ 95 % (up to the linearisation). E
 is not a generalised χ² (a mean of norms, not a quadratic form), so the quantile is taken
-from :data:`DRAWS` Gaussian draws with a fixed seed (the same inputs give the same bound).
+from :data:`DRAWS` Gaussian draws: a scrambled Sobol sequence with a fixed seed through the
+normal's inverse (quasi-random: a half-normal's 95 % point to 0.3 %, where 1,000 independent
+draws scatter by 3 %; the same inputs give the same bound).
 """
 
 from __future__ import annotations
@@ -27,12 +29,14 @@ import itertools
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import ndtri
+from scipy.stats import qmc
 
 BOUND_PROBABILITY = 0.95
 """The probability the bound holds with."""
 
-DRAWS = 1000
-"""Gaussian draws the quantile is taken from (the quantile's probability to about ±0.7 %)."""
+DRAWS = 1024
+"""Gaussian draws the quantile is taken from (a power of two: a Sobol sequence's)."""
 
 SEED = 20261124
 """The draws' seed: the bound is deterministic."""
@@ -83,7 +87,8 @@ def bound_mm(
     """Return the ``probability`` quantile of the worst corner's E (module docstring)."""
     w, U = np.linalg.eigh((model.cov + model.cov.T) / 2)
     root = U * np.sqrt(np.clip(w, 0.0, None))  # cov = root·rootᵀ, also when singular
-    x = np.random.default_rng(seed).standard_normal((draws, len(w))) @ root.T
+    u = np.clip(qmc.Sobol(len(w), scramble=True, seed=seed).random(draws), 1e-12, 1 - 1e-12)
+    x = ndtri(u) @ root.T
     A = Jp.reshape(-1, Jp.shape[2]).T  # (m, 3Q)
     shifts = model.corners() @ A  # each corner's tool-point errors, (corners, 3Q)
     worst = np.zeros(draws)
