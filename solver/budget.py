@@ -28,8 +28,9 @@ the RMS tool-point error (:func:`~wirecal.solver.accuracy.tool_error`):
   at most that (between none and it in the bound). The parameters absorb part of it, a bias
   the residual cannot show.
 
-The total adds the covariances (independent sources): the expected (RMS) error, a mean,
-which a calibration exceeds about half the time. The **bound** is the error a calibration
+The total adds the covariances (independent sources): the expected (RMS) error, the
+bounded terms at their edges; a mean, not a bound (``bench/bench_bound.py``: 7–12 % of
+realistic calibrations exceed it). The **bound** is the error a calibration
 stays below with 95 % probability (:mod:`wirecal.solver.bound`): the noise, a measured
 scale and the drift as Gaussian, the scale known only to its tolerance and the temperature
 as bounded errors of either sign at their edges, the exit wrap as a known bias.
