@@ -11,6 +11,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from hypothesis import given
+from hypothesis import strategies as st
 from scipy.stats import binom
 
 from wirecal.app.report import render_report
@@ -230,3 +232,14 @@ def test_a_near_tie_goes_to_the_joint_method(viper, paper_plan, ratio, best):
     result = solve(viper, paper_plan, check_log(parse_log(text, "s.csv"), paper_plan, viper))
     predicted = {"joint": {"mean": 0.3, "max": 0.5}, "stepwise": {"mean": 0.3 * ratio, "max": 0.5}}
     assert replace(result, predicted=predicted).recommended == best
+
+
+@given(st.floats(min_value=0.0, max_value=1.0, allow_nan=False))
+def test_gravity_sag_key_round_trips_any_valid_value(value):
+    """Read back within the writer's TIDY, 1e-11 (it writes the shortest decimal within it)."""
+    data = copy.deepcopy(BASE)
+    data["calibration"]["gravity_sag_deg_per_m"] = value
+    robot = robot_from_dict(data, "r.toml")
+    text = robot_file_text(robot, header=[], row_notes=[""] * 6, encoder_note="")
+    again = robot_from_dict(tomllib.loads(text), "again.toml").gravity_sag_deg_per_m
+    assert abs(again - value) <= 1e-11
