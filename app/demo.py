@@ -41,7 +41,7 @@ from wirecal.app.report import Validation, render_report
 from wirecal.app.twin_runs import measure_in_twin, measure_ur_in_twin
 from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import GenOptions, module_text
-from wirecal.solver.accuracy import workspace
+from wirecal.solver.accuracy import error_vs_truth_mm, workspace
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.controller_result import parse_result, result_in_log
 from wirecal.solver.formats.fileio import Outputs
@@ -51,7 +51,6 @@ from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors, truth_text
 from wirecal.solver.formats.validation_files import load_setup, read_validation_log
-from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.plausibility import Plausibility, gate
@@ -100,6 +99,7 @@ class DemoResult:
     outputs: tuple[str, ...] = OUTPUTS
     wall_s: float | None = None  # the whole demo, start to end (None: the sum of seconds)
     predicted_mm: float | None = None  # the error budget's total for the recommended method
+    bound_mm: float | None = None  # the error budget's 95 % bound for the recommended method
     encoder_scale_ppm: float | None = None  # the twin encoder's true scale error (V+ twin)
 
     @property
@@ -256,6 +256,7 @@ def _run(
         seconds,
         wall_s=time.perf_counter() - wall,
         predicted_mm=result.predicted[result.recommended]["mean"],
+        bound_mm=_bound(result),
         encoder_scale_ppm=encoder.scale_ppm,
     )
 
@@ -394,7 +395,15 @@ def _run_ur(
         controller,
         seconds,
         UR_OUTPUTS,
+        predicted_mm=result.predicted[result.recommended]["mean"],
+        bound_mm=_bound(result),
     )
+
+
+def _bound(result: SolveResult) -> float | None:
+    """Return the recommended method's 95 % bound (None: the tool error is unbounded)."""
+    best = result.budgets.get(result.recommended)
+    return None if best is None else best.bound
 
 
 def _put_truth_and_patch(
@@ -427,8 +436,7 @@ def _put_truth_and_patch(
 def _tool_errors(robot: Robot, truth: dict[str, float], identified: dict[str, float]):
     """Return the mean tool-point error against the truth over the workspace, before/after."""
     q = workspace(robot)
-    true_p = tool_position(robot.model(truth), q)
     return {
-        name: float(np.linalg.norm(tool_position(robot.model(believed), q) - true_p, axis=1).mean())
+        name: error_vs_truth_mm(robot, truth, believed, q)
         for name, believed in (("before", {}), ("after", identified))
     }

@@ -86,6 +86,8 @@ def demo(folder, seed, scale, robot, force):
         click.echo(
             f"{'  predicted by the error budget (mm)':<38}{'':>10}{r.predicted_mm:10.4f}{scale}"
         )
+    if r.bound_mm is not None:
+        click.echo(f"{'  its 95 % bound (mm)':<38}{'':>10}{r.bound_mm:10.4f}")
     ctl = f"controller solver vs PC: {r.controller_difference:.1e} deg/mm"
     click.echo(f"{ctl}; total {r.total_s:.0f} s")
     click.echo(f"files in {r.folder}/: " + ", ".join(r.outputs))

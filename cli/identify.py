@@ -571,11 +571,17 @@ def _encoder_text(result) -> list[str]:
         ("scale", "encoder scale"),
         ("drift", "drift"),
         ("exit", "wire exit"),
+        ("sag", "gravity sag"),
     ):
         lines.append(
             f"{label:<15}" + "".join(f"{result.budgets[m].terms[term]:12.4f}" for m in methods)
         )
     lines.append(f"{'total':<15}" + "".join(f"{result.budgets[m].total:12.4f}" for m in methods))
+    lines.append(
+        f"{'95 % bound':<15}"
+        + "".join(f"{result.budgets[m].bound:12.4f}" for m in methods)
+        + "   below it in 95 % of calibrations (the total is a mean)"
+    )
     lines += [f"  {n}" for n in result.budgets[methods[0]].notes]
     if sc is None:
         best = min(result.budgets[m].terms["scale"] for m in methods)
@@ -622,6 +628,13 @@ def _solve_text(result) -> str:
         + "   predicted mean over 1000 configurations"
     )
     lines.append(f"{'  worst':<15}" + "".join(_mm(result.predicted[m]["max"]) for m in methods))
+    lines.append(
+        f"{'  95 % bound':<15}"
+        + "".join(
+            _mm(result.budgets[m].bound if m in result.budgets else float("inf")) for m in methods
+        )
+        + "   the mean stays below it in 95 % of calibrations"
+    )
     lines.append(
         f"noise σ from the joint residual: {result.sigma_mm:.4f} mm; "
         f"recommended: {result.recommended}"

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wirecal.solver.kinematics import Model, tool_jacobian
+from wirecal.solver.kinematics import Model, tool_jacobian, tool_position
 from wirecal.solver.robot import Robot
 
 WORKSPACE_SAMPLES = 1000
@@ -80,6 +80,22 @@ def tool_error(model: Model, names: Sequence[str], cov: np.ndarray, q: np.ndarra
     RMS tool-point error sqrt(trace(J_p Σ J_pᵀ)) at each configuration q (radians);
     ``cov`` in internal units (rad, mm).
     """
-    _, Jp = tool_jacobian(model, q, names)
+    return rms_tool_error(tool_jacobian(model, q, names)[1], cov)
+
+
+def rms_tool_error(Jp: np.ndarray, cov: np.ndarray) -> ToolError:
+    """Return the RMS tool-point error for the tool-point Jacobian ``Jp`` (Q, 3, m) over Q."""
     rms = np.sqrt(np.einsum("nim,mk,nik->n", Jp, cov, Jp))
     return ToolError(float(rms.mean()), float(rms.max()))
+
+
+def error_vs_truth_mm(
+    robot: Robot, truth: dict[str, float], believed: dict[str, float], q: np.ndarray
+) -> float:
+    """Return the tool-point error against the truth: mean over ``q`` of ‖p_true − p_believed‖.
+
+    The quantity the error budget's bound bounds (:mod:`wirecal.solver.bound`); ``truth``
+    and ``believed`` are offsets (deg, mm) by name, ``q`` configurations (radians).
+    """
+    d = tool_position(robot.model(believed), q) - tool_position(robot.model(truth), q)
+    return float(np.linalg.norm(d, axis=1).mean())

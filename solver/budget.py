@@ -22,9 +22,18 @@ the RMS tool-point error (:func:`~wirecal.solver.accuracy.tool_error`):
 * **exit** — the wire's wrap on an eyelet's exit edge, which the model leaves out
   (:func:`~wirecal.solver.exit_geometry.unmodelled_exit_mm`, per point at the nominal
   model): a deterministic δd_i, so δe = M·δd; zero for a point exit and for a guide
-  pulley (the model carries its arc).
+  pulley (the model carries its arc);
+* **sag** — joints 2 and 3 bending under gravity, which no kinematic parameter models: the
+  robot file's ``gravity_sag_deg_per_m`` (:func:`~wirecal.solver.simulate.sag_lengths_mm`),
+  at most that (between none and it in the bound). The parameters absorb part of it, a bias
+  the residual cannot show.
 
-The total adds the covariances (independent sources), the number a user should believe.
+The total adds the covariances (independent sources): the expected (RMS) error, the
+bounded terms at their edges; a mean, not a bound (``bench/bench_bound.py``: 7–12 % of
+realistic calibrations exceed it). The **bound** is the error a calibration
+stays below with 95 % probability (:mod:`wirecal.solver.bound`): the noise, a measured
+scale and the drift as Gaussian, the scale known only to its tolerance and the temperature
+as bounded errors of either sign at their edges, the exit wrap as a known bias.
 """
 
 from __future__ import annotations
@@ -33,25 +42,27 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wirecal.solver.accuracy import stepwise_map, tool_error
+from wirecal.solver.accuracy import rms_tool_error, stepwise_map
+from wirecal.solver.bound import ErrorModel, bound_mm
 from wirecal.solver.identifiability import RANK_RTOL, covariance
-from wirecal.solver.kinematics import Model
+from wirecal.solver.kinematics import Model, tool_jacobian
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM, Drift
 
 ASSUMED_TEMPERATURE_RISE_K = 0.5
 """Temperature rise over a run the budget assumes (K): the simulated realistic run's."""
 
-TERMS = ("noise", "scale", "drift", "exit")
+TERMS = ("noise", "scale", "drift", "exit", "sag")
 
 
 @dataclass(frozen=True)
 class Budget:
-    """One method's expected mean tool-point error (mm) per source and in total."""
+    """One method's expected mean tool-point error (mm) per source, in total, its 95 % bound."""
 
     terms: dict[str, float]  # mean over the workspace of each source's RMS error
     total: float
     worst: float  # the total's worst configuration
     notes: tuple[str, ...]
+    bound: float  # 95 % bound of the mean over the workspace (:mod:`wirecal.solver.bound`)
 
     def as_json(self) -> dict:
         """Return the budget as a JSON-ready dict."""
@@ -59,6 +70,7 @@ class Budget:
             "terms_mm": dict(self.terms),
             "total_mm": self.total,
             "worst_mm": self.worst,
+            "bound95_mm": self.bound,
             "notes": list(self.notes),
         }
 
@@ -78,6 +90,7 @@ class Sources:
     t_zero_ref_s: float  # mean time of the zeros the lengths are read from
     thermal_ppm_per_k: float  # α_drum − α_arm
     exit_mm: np.ndarray  # (N,) the wire length the model leaves out at each point
+    sag_mm: np.ndarray  # (N,) the length the robot file's gravity sag adds at each point
 
 
 def sources(
@@ -90,6 +103,7 @@ def sources(
     drift: Drift | None,
     t_zero_ref_s: float | None,
     exit_mm: np.ndarray,
+    sag_mm: np.ndarray,
 ) -> Sources:
     """Gather the budget's inputs (see :class:`Sources`).
 
@@ -111,6 +125,7 @@ def sources(
         t_zero_ref_s=float(t_zero_ref_s) if timed and t_zero_ref_s is not None else 0.0,
         thermal_ppm_per_k=drum_ppm_per_k - ARM_PPM_PER_K,
         exit_mm=np.asarray(exit_mm, dtype=float),
+        sag_mm=np.asarray(sag_mm, dtype=float),
     )
 
 
@@ -140,12 +155,38 @@ def budget(
         noise = src.sigma_mm**2 * M @ M.T
     b_scale = M @ src.lengths_mm
     b_exit = M @ src.exit_mm
+    b_sag = M @ src.sag_mm
+    scale = src.scale_std**2 * np.outer(b_scale, b_scale)
+    drift, thermal = _drift(M, src)
     covs = {
         "noise": noise,
-        "scale": src.scale_std**2 * np.outer(b_scale, b_scale),
-        "drift": np.zeros_like(noise),
+        "scale": scale,
+        "drift": drift + np.outer(thermal, thermal),
         "exit": np.outer(b_exit, b_exit),
+        "sag": np.outer(b_sag, b_sag),
     }
+    edges = [v for v in (thermal, b_sag / 2) if np.any(v)]  # the sag: between 0 and b_sag
+    if not src.measured_scale:
+        edges.append(src.scale_std * b_scale)
+    errors = ErrorModel(
+        noise + drift + (scale if src.measured_scale else 0.0),
+        b_exit + b_sag / 2,
+        np.reshape(edges, (len(edges), len(b_exit))),
+    )
+    _, Jp = tool_jacobian(model, q_ws, names)
+    errs = {k: rms_tool_error(Jp, c) for k, c in covs.items()}
+    total = rms_tool_error(Jp, np.sum(list(covs.values()), axis=0))
+    return Budget(
+        {k: e.mean_mm for k, e in errs.items()},
+        total.mean_mm,
+        total.max_mm,
+        _notes(src),
+        bound_mm(Jp, errors),
+    )
+
+
+def _notes(src: Sources) -> tuple[str, ...]:
+    """Return what the budget's terms were taken from."""
     notes = [
         "scale: measured with the reference gauge"
         if src.measured_scale
@@ -155,28 +196,30 @@ def budget(
         f"{float(np.max(src.exit_mm)):.3f} mm at a point"
         if np.any(src.exit_mm)
         else "exit: none unmodelled (a point exit, or a guide pulley the model carries)",
+        f"sag: joints 2 and 3 under gravity (gravity_sag_deg_per_m; assumed, not measured), "
+        f"up to {float(np.max(np.abs(src.sag_mm), initial=0.0)):.3f} mm of wire at a point",
     ]
     if src.t_s is None:
         notes.append("drift: the log has no times (version 1): no drift term")
-    else:
-        covs["drift"] = _drift_cov(M, src)
-    errs = {k: tool_error(model, names, c, q_ws) for k, c in covs.items()}
-    total = tool_error(model, names, np.sum(list(covs.values()), axis=0), q_ws)
-    return Budget(
-        {k: e.mean_mm for k, e in errs.items()}, total.mean_mm, total.max_mm, tuple(notes)
-    )
+    return tuple(notes)
 
 
-def _drift_cov(M: np.ndarray, src: Sources) -> np.ndarray:
-    """Covariance of the parameters from the zero drift and the temperature's scale change."""
-    assert src.t_s is not None
-    cov = np.zeros((M.shape[0], M.shape[0]))
+def _drift(M: np.ndarray, src: Sources) -> tuple[np.ndarray, np.ndarray]:
+    """Return the zero drift's parameter covariance and the temperature's parameter error.
+
+    The drift is random (its fit's σ, and the fitted rate when it was left in); the
+    temperature's scale change is a bounded error of unknown sign: its edge, α·ΔT over the
+    assumed rise (zero for an untimed log).
+    """
+    m = M.shape[0]
+    cov, edge = np.zeros((m, m)), np.zeros(m)
+    if src.t_s is None:
+        return cov, edge
     if src.drift is not None:
         g = M @ (src.t_s - src.t_zero_ref_s)
         left = 0.0 if src.drift.removed else src.drift.rate_mm_per_s**2
         cov += (src.drift.std_mm_per_s**2 + left) * np.outer(g, g)
     if src.run_s > 0:
         rate = src.thermal_ppm_per_k * PPM * ASSUMED_TEMPERATURE_RISE_K / src.run_s
-        h = M @ (src.lengths_mm * (src.t_s - src.t_scale_ref_s))
-        cov += rate**2 * np.outer(h, h)
-    return cov
+        edge = rate * (M @ (src.lengths_mm * (src.t_s - src.t_scale_ref_s)))
+    return cov, edge

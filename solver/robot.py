@@ -149,6 +149,12 @@ class UrdfSource:
     wire_point_mm: tuple[float, float, float] | None = None  # in the tip link's frame
 
 
+DEFAULT_GRAVITY_SAG_DEG_PER_M = 0.01
+"""How far joints 2 and 3 sag under gravity per metre of horizontal lever arm to the wrist
+centre (deg/m), when the robot file does not say: the digital twin's value (≈ 0.05 mm at
+full reach of the Viper s650), an assumption for any real arm (unconfirmed)."""
+
+
 @dataclass(frozen=True)
 class Robot:
     """Nominal model of a serial arm in Craig's modified DH convention.
@@ -169,6 +175,7 @@ class Robot:
     urdf: UrdfSource | None = None
     controller: Controller = Controller()
     joint_speed_confirmed: bool = True  # false: speeds a URDF gave as placeholders (gen refuses)
+    gravity_sag_deg_per_m: float = DEFAULT_GRAVITY_SAG_DEG_PER_M  # joints 2, 3 (the budget's)
 
     @property
     def n_joints(self) -> int:

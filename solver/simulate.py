@@ -36,9 +36,9 @@ from wirecal.solver.distance import wire_vectors
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import Exit, physical_wire_mm
 from wirecal.solver.formats.log import REFERENCE_STEP, format_header, format_row
-from wirecal.solver.kinematics import Model
+from wirecal.solver.kinematics import Model, frames, tool_position
 from wirecal.solver.plan import Plan
-from wirecal.solver.robot import Encoder, Robot
+from wirecal.solver.robot import DEFAULT_GRAVITY_SAG_DEG_PER_M, Encoder, Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters, run_timeline
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM
 
@@ -94,6 +94,66 @@ class EncoderTruth:
 
 
 IDEAL_ENCODER = EncoderTruth()
+
+
+@dataclass(frozen=True)
+class Unmodelled:
+    """Physical effects no kinematic parameter can absorb.
+
+    So that validation figures are not trivially perfect. Joint encoders do not see them:
+    HERE reports the commanded joints, while the encoder wire and the probe see where the arm
+    really is.
+
+    * repeatability: each move lands with independent joint errors of σ chosen so that the
+      tool point scatters by about ``repeatability_mm``/2 (1σ) at 600 mm;
+    * compliance under gravity: joints 2 and 3 sag by ``compliance_deg_per_m`` per metre of
+      horizontal lever arm from their axis to the wrist centre (the weight of the forearm,
+      wrist and tool; 0.01 deg/m gives ≈ 0.05 mm at full reach).
+    """
+
+    repeatability_mm: float = 0.02
+    compliance_deg_per_m: float = DEFAULT_GRAVITY_SAG_DEG_PER_M
+
+    def joint_errors_deg(
+        self, model: Model, q_deg: np.ndarray, rng: np.random.Generator
+    ) -> np.ndarray:
+        """Return where the arm really is relative to commanded joints ``q_deg`` (deg).
+
+        One configuration (n,) or many (N, n); the repeatability's draws come first.
+        """
+        sigma = np.degrees(0.5 * self.repeatability_mm / 600.0)
+        dq = rng.normal(0.0, sigma, np.shape(q_deg))
+        return dq - self.sag_deg(model, q_deg).reshape(dq.shape)
+
+    def sag_deg(self, model: Model, q_deg: np.ndarray) -> np.ndarray:
+        """Return how far joints 2 and 3 sag under gravity at ``q_deg`` (deg, (N, n))."""
+        q = np.atleast_2d(q_deg)
+        o = frames(model, np.radians(q)).o
+        centre = o[:, 4]
+        sag = np.zeros(q.shape)
+        for j in (1, 2):  # joints 2 and 3: lever arm in the horizontal plane
+            lever = np.hypot(*(centre - o[:, j + 1])[:, :2].T) / 1000.0
+            sag[:, j] = self.compliance_deg_per_m * lever
+        return sag
+
+
+def sag_lengths_mm(robot: Robot, plan: Plan) -> np.ndarray:
+    """Return what the gravity sag adds to each plan point's measured wire length (mm).
+
+    The robot file's ``gravity_sag_deg_per_m`` (:class:`Unmodelled`'s sag) at the nominal
+    model, the wire from the tool point at θ0 (as the twin mounts it): the length to the
+    sagged tool point less the commanded one's, less the zero reading's (θ0 sagged), which
+    every length is measured from. Plan order.
+    """
+    model = robot.nominal
+    unmodelled = Unmodelled(0.0, robot.gravity_sag_deg_per_m)
+    q, _, _ = plan.all_points()
+    joints = np.vstack([plan.theta0_deg, q])
+    p = tool_position(model, np.radians(joints))
+    sagged = tool_position(model, np.radians(joints - unmodelled.sag_deg(model, joints)))
+    exit_ = robot.encoder.exit
+    extra = physical_wire_mm(exit_, sagged - p[0]) - physical_wire_mm(exit_, p - p[0])
+    return np.asarray(extra[1:] - extra[0], dtype=float)
 
 
 def realistic_encoder(
@@ -207,11 +267,14 @@ def simulate_log(
     mm_per_count: float | None = None,
     encoder: EncoderTruth = IDEAL_ENCODER,
     run: RunParameters = DEFAULT_RUN,
+    unmodelled: Unmodelled | None = None,
 ) -> str:
     """Return the text of the log a run of ``plan`` on the true robot would write.
 
     ``run``: the program's speed and settle settings, which set each reading's ``t_s``
-    (``samples`` is its readings per point).
+    (``samples`` is its readings per point). ``unmodelled``: the arm lands where the
+    twin's arm would (:class:`Unmodelled`, drawn from a generator of their own), every
+    reading's wire measured from the tool point at θ0 of the true robot, as the twin does.
 
     ``encoder`` is the true encoder (ideal by default; :func:`realistic_encoder`); the
     reference step comes first when the robot file asks for one.
@@ -235,7 +298,9 @@ def simulate_log(
     steps = [j for j, _ in order]
     indices = [0 if k is None else int(index_no[k]) for _, k in order]
     joints = [plan.theta0_deg if k is None else q[k] for _, k in order]
-    lengths = np.array([0.0 if k is None else d_points[k] for _, k in order])
+    lengths = _row_lengths(
+        robot, errors, plan, np.array(joints), [k for _, k in order], d_points, unmodelled, seed
+    )
     # The closing zero draws from its own generator, so a seed gives the same readings as
     # before the closing zero existed, with one row added.
     closing_rng = np.random.default_rng([seed, 3])
@@ -293,6 +358,30 @@ def simulate_log(
     if faults.truncate_last and rows:
         text = text[: -(len(rows[-1]) // 2) - 1]
     return text
+
+
+def _row_lengths(
+    robot: Robot,
+    errors: dict[str, float],
+    plan: Plan,
+    joints_deg: np.ndarray,
+    points: list[int | None],
+    d_points: np.ndarray,
+    unmodelled: Unmodelled | None,
+    seed: int,
+) -> np.ndarray:
+    """Return the true wire length of every row in run order (a zero row's: 0 mm).
+
+    With ``unmodelled`` errors where the arm really is, from the tool point at θ0.
+    """
+    if unmodelled is None:
+        return np.array([0.0 if k is None else d_points[k] for k in points])
+    model = robot.model(errors)
+    rng = np.random.default_rng([seed, 6])
+    actual = joints_deg + unmodelled.joint_errors_deg(model, joints_deg, rng)
+    p = tool_position(model, np.radians(actual))
+    p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
+    return np.asarray(physical_wire_mm(robot.encoder.exit, p - p0), dtype=float)
 
 
 def _reference_rows(

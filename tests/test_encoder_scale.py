@@ -78,7 +78,8 @@ def test_scale_recovered_from_reference_rows_to_its_sigma(viper, paper_plan):
 
 
 def test_solve_applies_the_reference_and_its_sigma_enters_the_budget(viper, paper_plan):
-    robot = _with_reference(viper, scale_tolerance_ppm=500.0)
+    # the simulated arm does not sag: a robot file saying so keeps the sag out of the budget
+    robot = replace(_with_reference(viper, scale_tolerance_ppm=500.0), gravity_sag_deg_per_m=0.0)
     m = _measure(robot, paper_plan, EncoderTruth(scale_ppm=500.0), seed=2)
     result = solve(robot, paper_plan, m)
     assert abs(result.scale.ppm - 500.0) < 3 * result.scale.std_ppm
@@ -177,12 +178,14 @@ def test_version_1_log_still_solves(viper, paper_plan):
 
 
 def test_budget_of_an_ideal_encoder_is_the_cramer_rao_part(viper, paper_plan):
-    """No tolerance, no temperature coefficient against the arm, no drift fit: only noise."""
+    """No tolerance, no temperature coefficient against the arm, no drift fit, an arm that
+    does not sag: only noise."""
     robot = replace(
         viper,
         encoder=replace(
             viper.encoder, scale_tolerance_ppm=0.0, temperature_coefficient_ppm_per_k=ARM_PPM_PER_K
         ),
+        gravity_sag_deg_per_m=0.0,
     )
     text = simulate_log(robot, paper_plan, TABLE5, seed=8)
     m = check_log(parse_log(_as_version_1(text), "v1.csv"), paper_plan, robot)
@@ -190,6 +193,7 @@ def test_budget_of_an_ideal_encoder_is_the_cramer_rao_part(viper, paper_plan):
     assert b.terms["scale"] == 0
     assert b.terms["drift"] == 0
     assert b.terms["exit"] == 0
+    assert b.terms["sag"] == 0
     assert b.total == pytest.approx(b.terms["noise"], rel=1e-9)
     assert 0.01 < b.total < 0.04
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from wirecal.solver import ik
 from wirecal.solver.exit_geometry import physical_wire_mm
-from wirecal.solver.kinematics import frames, tool_position
+from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import (
@@ -41,6 +41,7 @@ from wirecal.solver.simulate import (
     OPERATOR_SEAT_S,
     RANGE_EXCEEDED,
     EncoderTruth,
+    Unmodelled,
     reference_duration_s,
     reference_lengths,
 )
@@ -77,23 +78,8 @@ class Faults:
     no_conveyor_option: bool = False  # V+: ENABLE BELT leaves the BELT switch off
 
 
-@dataclass(frozen=True)
-class Unmodelled:
-    """Physical effects no kinematic parameter can absorb.
-
-    So that validation figures are not trivially perfect. Joint encoders do not see them:
-    HERE reports the commanded joints, while the encoder wire and the probe see where the arm
-    really is.
-
-    * repeatability: each move lands with independent joint errors of σ chosen so that the
-      tool point scatters by about ``repeatability_mm``/2 (1σ) at 600 mm;
-    * compliance under gravity: joints 2 and 3 sag by ``compliance_deg_per_m`` per metre of
-      horizontal lever arm from their axis to the wrist centre (the weight of the forearm,
-      wrist and tool; 0.01 deg/m gives ≈ 0.05 mm at full reach).
-    """
-
-    repeatability_mm: float = 0.02
-    compliance_deg_per_m: float = 0.01
+DEFAULT_UNMODELLED = Unmodelled()
+"""The validation runs' unmodelled errors: the twin's repeatability and gravity sag."""
 
 
 @dataclass(frozen=True)
@@ -105,11 +91,6 @@ class Plate:
 
     point: tuple[float, float, float]
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
-
-
-def frames_of(model, q_deg):
-    """Return the joint frames of ``model`` at joints ``q_deg`` (deg)."""
-    return frames(model, np.radians(np.atleast_2d(q_deg)))
 
 
 @dataclass
@@ -322,14 +303,7 @@ class Cell:
         u = self.unmodelled
         if u is None:
             return np.zeros_like(q_deg)
-        sigma = np.degrees(0.5 * u.repeatability_mm / 600.0)
-        dq = self.rng.normal(0.0, sigma, q_deg.shape)
-        f = frames_of(self.model, q_deg)
-        centre = f.o[0, 4]
-        for j in (1, 2):  # joints 2 and 3: lever arm in the horizontal plane
-            lever = np.hypot(*(centre - f.o[0, j + 1])[:2]) / 1000.0
-            dq[j] -= u.compliance_deg_per_m * lever
-        return dq
+        return u.joint_errors_deg(self.model, q_deg, self.rng)
 
     def break_(self) -> None:
         """BREAK: nothing to wait for; the twin's motions end at once."""
@@ -615,7 +589,7 @@ def run_validation(
     controller: dict[str, float],
     run: int,
     seed: int = 0,
-    unmodelled: Unmodelled | None = Unmodelled(),
+    unmodelled: Unmodelled | None = DEFAULT_UNMODELLED,
     noise_mm: float = 0.01,
 ) -> ValidationRun:
     """Run both validation programs (wc.vcfg, wc.vpln) in the twin.

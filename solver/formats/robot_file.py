@@ -19,6 +19,7 @@ Format (angles in degrees, lengths in mm)::
     temperature_coefficient_ppm_per_k = 23  # the drum's expansion (default 23, aluminium)
     [calibration]
     parameters = ["th2", "th3", ...]      # names from wirecal.solver.params
+    gravity_sag_deg_per_m = 0.01          # optional: joints 2, 3 sag per m of lever (budget)
     [controller]                          # optional
     language = "vplus"                    # or "urscript" (Universal Robots)
     software = "5.20"                     # the controller's software version (optional)
@@ -64,6 +65,7 @@ from wirecal.solver.formats.toml_fields import Table, document, duplicates, vali
 from wirecal.solver.robot import (
     DEFAULT_CHANNEL,
     DEFAULT_DRUM_PPM_PER_K,
+    DEFAULT_GRAVITY_SAG_DEG_PER_M,
     DEFAULT_LINK_RADIUS_MM,
     DEFAULT_SCALE_TOLERANCE_PPM,
     INTERFACES,
@@ -98,6 +100,8 @@ MAX_REFERENCE_U_MM = 1.0
 """Largest certified uncertainty of a reference gauge (mm)."""
 MAX_TEMPCO_PPM_PER_K = 1000.0
 """Largest |temperature coefficient| (ppm/K): metals and plastics are below 200."""
+MAX_GRAVITY_SAG_DEG_PER_M = 1.0
+"""Largest gravity sag (deg per metre of lever): 1 deg/m bends a 0.6 m arm by 10 mm."""
 METRES_RATIO = 0.01
 """Links adding up to less than this fraction of the encoder's range are in metres."""
 
@@ -157,7 +161,7 @@ _KEYS = {
         "reference_repeats",
         "temperature_coefficient_ppm_per_k",
     ),
-    "calibration": ("parameters",),
+    "calibration": ("parameters", "gravity_sag_deg_per_m"),
     "geometry": ("link_radius_mm",),
     "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg", "wire_point_mm"),
     "controller": ("language", "software", "host", "port", "key"),
@@ -200,7 +204,15 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     )
     controller = _controller(doc.table("controller", _KEYS["controller"], required=False))
     encoder = _encoder(doc.table("encoder", _KEYS["encoder"]), controller)
-    parameters = _parameters(doc.table("calibration", _KEYS["calibration"]), n)
+    calibration = doc.table("calibration", _KEYS["calibration"])
+    parameters = _parameters(calibration, n)
+    sag = calibration.number(
+        "gravity_sag_deg_per_m",
+        DEFAULT_GRAVITY_SAG_DEG_PER_M,
+        lo=0,
+        hi=MAX_GRAVITY_SAG_DEG_PER_M,
+        unit="deg/m",
+    )
     radii = doc.table("geometry", _KEYS["geometry"], required=False).vector(
         "link_radius_mm",
         None,
@@ -232,6 +244,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         urdf=urdf,
         controller=valid(controller),
         joint_speed_confirmed=valid(speed_confirmed),
+        gravity_sag_deg_per_m=valid(sag),
     )
 
 
@@ -768,6 +781,8 @@ def robot_file_text(
         "[calibration]",
         "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
     ]
+    if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M:
+        lines.append(f"gravity_sag_deg_per_m = {_num(robot.gravity_sag_deg_per_m)}")
     if geometry_notes is not None and robot.link_radius_mm is not None:
         lines += ["", "[geometry]", *(f"# {line}" for line in geometry_notes)]
         lines.append(f"link_radius_mm = {vec(robot.link_radius_mm)}")

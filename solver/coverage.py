@@ -1,0 +1,59 @@
+"""Does the error budget's 95 % bound hold? Simulated calibrations checked against the truth.
+
+One calibration here is what ``wirecal solve`` would see of a simulated run: a true robot
+with offsets uniform within ±1 deg/mm, a realistic encoder (its scale drawn within the
+robot file's tolerance, 0.5 K of warming, the gauge's error:
+:func:`~wirecal.solver.simulate.realistic_encoder`), optionally the twin's unmodelled errors
+(repeatability and gravity sag: :class:`~wirecal.solver.simulate.Unmodelled`), the log
+read and checked, and :func:`~wirecal.solver.solve.solve`. Its true tool-point error is the
+demo's: the mean over the budget's workspace of ‖p_true − p_est‖ for the recommended
+estimate (:func:`~wirecal.solver.accuracy.error_vs_truth_mm`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from wirecal.solver.accuracy import error_vs_truth_mm, workspace
+from wirecal.solver.formats.log import parse_log
+from wirecal.solver.formats.truth import random_errors
+from wirecal.solver.measurements import check_log
+from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
+from wirecal.solver.simulate import Unmodelled, realistic_encoder, simulate_log
+from wirecal.solver.solve import solve
+
+WILSON_Z = 1.959964
+"""The normal quantile of a two-sided 95 % interval."""
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One simulated calibration: its true error, the budget's mean and bound (mm)."""
+
+    error_mm: float
+    mean_mm: float  # the budget's total (an RMS: the expected error)
+    bound_mm: float  # the budget's 95 % bound
+    scale_ppm: float  # the true encoder's scale error
+
+
+def trial(robot: Robot, plan: Plan, seed: int, unmodelled: Unmodelled | None) -> Trial:
+    """Simulate, solve and judge one calibration (module docstring)."""
+    truth = random_errors(robot, 1.0, np.random.default_rng([seed, 1]))
+    encoder = realistic_encoder(robot.encoder, np.random.default_rng([seed, 4]))
+    text = simulate_log(robot, plan, truth, seed=seed, encoder=encoder, unmodelled=unmodelled)
+    result = solve(robot, plan, check_log(parse_log(text, f"simulated run {seed}"), plan, robot))
+    best = result.recommended
+    budget = result.budgets[best]
+    error = error_vs_truth_mm(robot, truth, result.estimates[best].as_dict(), workspace(robot))
+    return Trial(error, budget.total, budget.bound, encoder.scale_ppm)
+
+
+def wilson(k: int, n: int, z: float = WILSON_Z) -> tuple[float, float]:
+    """Return the Wilson score interval of a proportion k/n (95 % by default)."""
+    p = k / n
+    centre = (p + z**2 / (2 * n)) / (1 + z**2 / n)
+    half = z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / (1 + z**2 / n)
+    return float(centre - half), float(centre + half)

@@ -1,0 +1,245 @@
+"""The error budget's 95 % bound (solver/bound.py), its gravity-sag term, the robot-file key,
+and the bound where a user reads it: ``solve``'s text and JSON, the report's top."""
+
+from __future__ import annotations
+
+import copy
+import json
+import tomllib
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from hypothesis import given
+from hypothesis import strategies as st
+from scipy.stats import binom
+
+from wirecal.app.report import render_report
+from wirecal.cli.main import main
+from wirecal.solver.accuracy import error_vs_truth_mm, workspace
+from wirecal.solver.bound import ErrorModel, bound_mm, mean_tool_error
+from wirecal.solver.coverage import trial, wilson
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.log import parse_log
+from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
+from wirecal.solver.formats.truth import random_errors
+from wirecal.solver.measurements import check_log
+from wirecal.solver.scale import ARM_PPM_PER_K
+from wirecal.solver.simulate import Unmodelled, sag_lengths_mm, simulate_log
+from wirecal.solver.solve import solve
+
+from .conftest import VIPER
+
+Z95 = 1.959964  # the normal's 97.5 % point: the half-normal's 95 % point
+
+
+def _one_parameter_jacobian(size_mm: float, q: int = 5) -> np.ndarray:
+    """J_p (q, 3, 1): one parameter moving the tool point ``size_mm`` per unit along x."""
+    Jp = np.zeros((q, 3, 1))
+    Jp[:, 0, 0] = size_mm
+    return Jp
+
+
+def test_mean_tool_error_is_the_mean_of_the_norms():
+    # two configurations: the error (3, 4, 0)·δe and (0, 0, 2)·δe, δe = 2: norms 10 and 4
+    Jp = np.array([[[3.0], [4.0], [0.0]], [[0.0], [0.0], [2.0]]])
+    assert mean_tool_error(Jp, np.array([[2.0]]))[0] == pytest.approx(7.0, rel=1e-15)
+
+
+def test_gaussian_alone_gives_the_half_normal_quantile():
+    """E = 3 mm·|x|, x ~ N(0, 0.01²): the 95 % point is 1.96·0.03 mm, the median 0.6745·0.03
+    mm (the Sobol draws: within 1 %)."""
+    model = ErrorModel(np.array([[1e-4]]), np.zeros(1), np.zeros((0, 1)))
+    got = bound_mm(_one_parameter_jacobian(3.0), model)
+    assert got == pytest.approx(Z95 * 0.03, rel=0.01)
+    assert bound_mm(_one_parameter_jacobian(3.0), model) == got  # deterministic
+    assert bound_mm(_one_parameter_jacobian(3.0), model, probability=0.5) == pytest.approx(
+        0.6745 * 0.03, rel=0.01
+    )
+
+
+def test_a_singular_covariance_is_bounded_along_its_direction():
+    """Σ = v·vᵀ, v = (0.01, 0.01); J_p sees only the first parameter, 2 mm per unit."""
+    Jp = np.zeros((4, 3, 2))
+    Jp[:, 1, 0] = 2.0
+    model = ErrorModel(np.outer([0.01, 0.01], [0.01, 0.01]), np.zeros(2), np.zeros((0, 2)))
+    assert bound_mm(Jp, model) == pytest.approx(Z95 * 0.02, rel=0.01)
+
+
+def test_bounded_terms_are_taken_at_their_worst_corner():
+    """No randomness: the bound is the largest E over the box's corners (to single precision)."""
+    Jp = np.zeros((2, 3, 2))
+    Jp[:, 0, 0] = 1.0  # parameter 1 moves the tool point along x, parameter 2 along y
+    Jp[:, 1, 1] = 1.0
+    edges = np.array([[0.3, 0.0], [0.0, 0.4]])  # |ε1·0.3| ≤ 0.3 along x, 0.4 along y
+    model = ErrorModel(np.zeros((2, 2)), np.zeros(2), edges)
+    assert bound_mm(Jp, model) == pytest.approx(0.5, rel=1e-6)
+    # a one-sided term between 0 and b: bias b/2 and edge b/2 give corners 0 and b
+    b = np.array([0.0, -0.8])
+    one_sided = ErrorModel(np.zeros((2, 2)), b / 2, (b / 2)[None, :])
+    assert bound_mm(Jp, one_sided) == pytest.approx(0.8, rel=1e-6)
+
+
+@pytest.fixture(scope="module")
+def still(viper):
+    """The Viper with an ideal encoder file (no tolerance, drum as the arm), sagging as declared."""
+    return replace(
+        viper,
+        encoder=replace(
+            viper.encoder, scale_tolerance_ppm=0.0, temperature_coefficient_ppm_per_k=ARM_PPM_PER_K
+        ),
+    )
+
+
+def test_sag_lengths_vanish_without_sag_and_scale_with_it(still, paper_plan):
+    assert not np.any(sag_lengths_mm(replace(still, gravity_sag_deg_per_m=0.0), paper_plan))
+    once = sag_lengths_mm(still, paper_plan)
+    twice = sag_lengths_mm(replace(still, gravity_sag_deg_per_m=0.02), paper_plan)
+    # 0.01 deg/m at the Viper's reach (≈ 0.6 m): some hundredths of a mm of wire
+    assert 0.02 < np.max(np.abs(once)) < 0.1
+    np.testing.assert_allclose(twice, 2 * once, rtol=1e-3, atol=1e-6)
+
+
+def test_the_sag_term_predicts_what_the_sag_alone_does(still, paper_plan):
+    """No noise, an ideal encoder, the twin's sag (0.01 deg/m) alone: the joint estimate's
+    tool-point error is the budget's sag term (its bias, at the declared sag), ±25 %;
+    declaring no sag, the budget's mean misses it (only the residual's σ, which the sag
+    inflates, sees part of it)."""
+    sagging = Unmodelled(repeatability_mm=0.0, compliance_deg_per_m=0.01)
+    q = workspace(still)
+    for seed in (1, 2):
+        truth = random_errors(still, 1.0, np.random.default_rng([seed, 1]))
+        text = simulate_log(still, paper_plan, truth, seed=seed, noise_mm=0.0, unmodelled=sagging)
+        m = check_log(parse_log(text, "sag.csv"), paper_plan, still)
+        result = solve(still, paper_plan, m)
+        err = error_vs_truth_mm(still, truth, result.estimates["joint"].as_dict(), q)
+        b = result.budgets["joint"]
+        assert b.terms["sag"] > b.terms["noise"]  # σ from the residual: the sag's rest
+        assert err == pytest.approx(b.terms["sag"], rel=0.25)
+        assert err <= b.bound
+        blind = solve(replace(still, gravity_sag_deg_per_m=0.0), paper_plan, m).budgets["joint"]
+        assert blind.terms["sag"] == 0
+        assert blind.total < 0.8 * err
+
+
+BASE = tomllib.loads((VIPER / "robot.toml").read_text())
+
+
+@pytest.mark.parametrize(
+    ("value", "problem"),
+    [
+        (-0.001, "give a number between 0 and 1 deg/m"),
+        (1.5, "give a number between 0 and 1 deg/m"),
+        ("0.01", "give a number between 0 and 1 deg/m"),
+    ],
+)
+def test_gravity_sag_key_is_checked(value, problem):
+    data = copy.deepcopy(BASE)
+    data["calibration"]["gravity_sag_deg_per_m"] = value
+    with pytest.raises(WirecalError) as info:
+        robot_from_dict(data, "r.toml")
+    assert any(
+        p.startswith("r.toml: calibration.gravity_sag_deg_per_m:") and problem in p
+        for p in info.value.problems
+    ), info.value.problems
+
+
+@pytest.mark.parametrize(("value", "written"), [(0.01, False), (0.0, True), (0.05, True)])
+def test_gravity_sag_key_reads_and_writes_back(value, written):
+    """Default 0.01 deg/m (the twin's); another value is written back, the default is not."""
+    data = copy.deepcopy(BASE)
+    data["calibration"]["gravity_sag_deg_per_m"] = value
+    robot = robot_from_dict(data, "r.toml")
+    assert robot.gravity_sag_deg_per_m == value
+    text = robot_file_text(robot, header=[], row_notes=[""] * 6, encoder_note="")
+    assert ("gravity_sag_deg_per_m" in text) is written
+    assert robot_from_dict(tomllib.loads(text), "again.toml").gravity_sag_deg_per_m == value
+    assert robot_from_dict(BASE, "r.toml").gravity_sag_deg_per_m == 0.01
+
+
+def test_solve_prints_the_bound_beside_the_mean(tmp_path):
+    robot, plan = str(VIPER / "robot.toml"), str(VIPER / "paper_plan.toml")
+    runner = CliRunner()
+    log = tmp_path / "run.csv"
+    assert (
+        runner.invoke(main, ["simulate", robot, plan, "-o", str(log), "--seed", "2"]).exit_code == 0
+    )
+    text = runner.invoke(main, ["solve", robot, plan, str(log)])
+    assert text.exit_code == 0, text.output
+    rows = {line[:15].strip(): line[15:39].split() for line in text.output.splitlines()}
+    bounds = np.array(rows["95 % bound"], dtype=float)  # stepwise, joint
+    assert np.all(bounds > np.array(rows["total"], dtype=float))
+    assert float(rows["gravity sag"][1]) > 0
+    data = json.loads(runner.invoke(main, ["solve", robot, plan, str(log), "--json"]).output)
+    joint = data["encoder"]["budget"]["joint"]
+    assert joint["bound95_mm"] == pytest.approx(bounds[1], abs=5e-5)
+    assert joint["terms_mm"]["sag"] == pytest.approx(float(rows["gravity sag"][1]), abs=5e-5)
+
+
+def test_report_opens_with_the_verdict_and_the_bound(viper, paper_plan):
+    truth = random_errors(viper, 1.0, np.random.default_rng(5))
+    text = simulate_log(viper, paper_plan, truth, seed=5)
+    result = solve(viper, paper_plan, check_log(parse_log(text, "s.csv"), paper_plan, viper))
+    html = render_report(result, plausibility="passed (residual fine)")
+    best = result.budgets[result.recommended]
+    top = html[: html.index("<h2>Identified parameters</h2>")]
+    assert "<h2>Verdict</h2>" in top
+    assert "Plausibility gate: <b>passed (residual fine)</b>" in top
+    assert f"below\n{best.bound:.3f} mm with 95 % probability" in top
+    assert html.index("<h2>Verdict</h2>") < html.index("<h2>Error budget</h2>")
+
+
+def test_wilson_interval_by_hand():
+    # 285/300, z = 1.96: centre (0.95 + 1.96²/600)/(1 + 1.96²/300) = 0.94431,
+    # half-width 1.96·√(0.95·0.05/300 + 1.96²/360000)/(1 + 1.96²/300) = 0.02516
+    lo, hi = wilson(285, 300)
+    assert lo == pytest.approx(0.91915, abs=1e-4)
+    assert hi == pytest.approx(0.96947, abs=1e-4)
+    assert wilson(300, 300)[1] == pytest.approx(1.0, abs=1e-12)
+
+
+@pytest.mark.slow
+def test_the_bound_covers_simulated_calibrations_with_unmodelled_errors(viper, paper_plan):
+    """30 realistic calibrations with a gauge, the twin's repeatability and sag on (the
+    bench's hardest case, 300 of 300 covered): at least 28 covered. Were the coverage 80 %,
+    28 or more of 30 would happen with probability 4.4 %; with the sag left out of the budget
+    13 of 20 were covered. (The seeds are fixed: the test is deterministic.)"""
+    gauge = replace(
+        viper,
+        encoder=replace(
+            viper.encoder,
+            reference_length_mm=500.0,
+            reference_uncertainty_mm=0.002,
+            reference_repeats=3,
+        ),
+    )
+    runs = [trial(gauge, paper_plan, seed, Unmodelled()) for seed in range(1, 31)]
+    assert binom.sf(27, 30, 0.8) == pytest.approx(0.044, abs=0.001)
+    assert sum(r.error_mm <= r.bound_mm for r in runs) >= 28
+    assert all(r.bound_mm > r.mean_mm for r in runs)
+
+
+@pytest.mark.parametrize(
+    ("ratio", "best"), [(0.9, "joint"), (1 / 1.36 + 1e-6, "joint"), (0.7, "stepwise")]
+)
+def test_a_near_tie_goes_to_the_joint_method(viper, paper_plan, ratio, best):
+    """The stepwise budget falls short by up to 1.36× (bench_encoder): the stepwise method is
+    recommended only when its predicted mean is below the joint's / 1.36 (the UR5 demo's
+    0.2880 against 0.2891 mm, both the scale at its edge, is a tie)."""
+    truth = random_errors(viper, 1.0, np.random.default_rng(5))
+    text = simulate_log(viper, paper_plan, truth, seed=5)
+    result = solve(viper, paper_plan, check_log(parse_log(text, "s.csv"), paper_plan, viper))
+    predicted = {"joint": {"mean": 0.3, "max": 0.5}, "stepwise": {"mean": 0.3 * ratio, "max": 0.5}}
+    assert replace(result, predicted=predicted).recommended == best
+
+
+@given(st.floats(min_value=0.0, max_value=1.0, allow_nan=False))
+def test_gravity_sag_key_round_trips_any_valid_value(value):
+    """Read back within the writer's TIDY, 1e-11 (it writes the shortest decimal within it)."""
+    data = copy.deepcopy(BASE)
+    data["calibration"]["gravity_sag_deg_per_m"] = value
+    robot = robot_from_dict(data, "r.toml")
+    text = robot_file_text(robot, header=[], row_notes=[""] * 6, encoder_note="")
+    again = robot_from_dict(tomllib.loads(text), "again.toml").gravity_sag_deg_per_m
+    assert abs(again - value) <= 1e-11
