@@ -1,7 +1,7 @@
 """The error budget's 95 % bound against the truth: its coverage over simulated calibrations.
 
 The Viper s650 and the corrected paper plan; each calibration a realistic run
-(:mod:`wirecal.solver.coverage`: offsets within ±1 deg/mm, the encoder's scale drawn within
+(:mod:`wirecal.app.coverage`: offsets within ±1 deg/mm, the encoder's scale drawn within
 its 500 ppm tolerance, 0.5 K of warming, reading noise σ 0.01 mm) solved as ``wirecal
 solve`` does; with the twin's unmodelled errors (repeatability 0.02 mm, gravity sag
 0.01 deg/m) unless ``--no-unmodelled``. Without a gauge (the robot file as shipped) and with
@@ -26,8 +26,8 @@ from dataclasses import replace  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from wirecal.app.coverage import trial, wilson  # noqa: E402
 from wirecal.app.demo import example_files  # noqa: E402
-from wirecal.solver.coverage import trial, wilson  # noqa: E402
 from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 from wirecal.solver.simulate import Unmodelled  # noqa: E402

@@ -15,11 +15,11 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.stats import binom
 
+from wirecal.app.coverage import trial, wilson
 from wirecal.app.report import render_report
 from wirecal.cli.main import main
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace
 from wirecal.solver.bound import ErrorModel, bound_mm, mean_tool_error
-from wirecal.solver.coverage import trial, wilson
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
