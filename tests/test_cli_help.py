@@ -21,6 +21,7 @@ def test_the_commands_are_all_there():
     assert COMMANDS == [
         "demo",
         "export-urdf",
+        "fit",
         "gen",
         "import-urdf",
         "lint",
