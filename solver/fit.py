@@ -7,7 +7,7 @@ identifiable DH errors). The steps:
 1. **Start**: the nominal tool points and the lengths give the anchor and the offset
    linearly (:func:`~wirecal.solver.fit_model.multilaterate`).
 2. **Parameters**: the attachment, the anchor, the offsets (and the scale) always; then the
-   DH errors of rows 2…n in the order θ, a, d, α, each kept when it raises the rank of
+   DH errors of rows 2…n (:func:`candidates`), each kept when it raises the rank of
    ∂L/∂x over *these* rows and leaves every σ (from the quantisation floor) below
    :data:`~wirecal.solver.plausibility.POORLY_IDENTIFIED`
    (:func:`~wirecal.solver.identifiability.select_columns`). Row 1 is a rigid motion of the
@@ -34,7 +34,7 @@ from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit_holdout import Holdout, parse_scheme, row_floor, splits, summarise
 from wirecal.solver.fit_model import Layout, lengths_and_jacobian, multilaterate, session_of
-from wirecal.solver.fit_sessions import change_points, robust_sigma
+from wirecal.solver.fit_sessions import change_points, difference_sigma, place, robust_sigma
 from wirecal.solver.identifiability import (
     Identifiability,
     analyse_jacobian,
@@ -91,13 +91,26 @@ class Data:
     joint_cov_rad2: np.ndarray | None = None  # (N, n, n) refined joints' covariance
 
 
-def candidates(n_joints: int) -> tuple[str, ...]:
-    """Return the DH errors a fit may choose from: rows 2…n, θ first, then a, d, α."""
-    rows = range(1, n_joints)
+def candidates(base: Model) -> tuple[str, ...]:
+    """Return the DH errors a fit may choose from, in the order it tries them.
+
+    Rows 2…n: the θ offsets, the lengths a, d that are non-zero in the robot file, the zero
+    ones, then the twists α; of a degenerate set (the d's of parallel axes) the first is kept,
+    so a length the data sheet names wins over one it leaves at zero.
+    """
+    n = base.n_joints
+    rows = range(1, n)
+    lengths = [f"a{i}" for i in rows] + [f"d{i + 1}" for i in rows]
+    nonzero = {
+        name
+        for i in rows
+        for name, v in ((f"a{i}", base.dh[i, 1]), (f"d{i + 1}", base.dh[i, 3]))
+        if abs(v) > 1e-9
+    }
     return (
         *(f"th{i + 1}" for i in rows),
-        *(f"a{i}" for i in rows),
-        *(f"d{i + 1}" for i in rows),
+        *(p for p in lengths if p in nonzero),
+        *(p for p in lengths if p not in nonzero),
         *(f"al{i}" for i in rows),
     )
 
@@ -137,7 +150,7 @@ def choose(
     ``layout`` may hold any geometry; the result holds the attachment and the chosen DH
     errors, with ``x`` carried over (a newly added parameter starts at 0).
     """
-    full = replace(layout, geometry=(*P.TOOL_NAMES, *candidates(base.n_joints)))
+    full = replace(layout, geometry=(*P.TOOL_NAMES, *candidates(base)))
     xf = _carry(layout, x, full)
     _, J = lengths_and_jacobian(base, full, xf, data.q_rad[rows], data.session[rows])
     g = len(full.geometry)
@@ -224,10 +237,18 @@ def offset_sequence(layout: Layout, x: np.ndarray, r: np.ndarray, data: Data) ->
     return layout.split(x)[3][data.session] - r
 
 
-def _session_starts(ps: Pass, data: Data) -> tuple[int, ...]:
-    """Return the rows where sessions start, from the change points of the inliers' offsets."""
-    u = offset_sequence(ps.layout, ps.x, ps.residual_mm, data)
-    return (0, *change_points(u))
+def _session_starts(ps: Pass, data: Data, values: np.ndarray | None = None) -> tuple[int, ...]:
+    """Return the rows where sessions start: change points of the offsets c_s − r.
+
+    With one session the fit's outliers may be a whole session it could not follow, so
+    every row is searched (the search clips lone rows itself); with sessions, the fit's
+    outliers are left out of the search; then every boundary is placed robustly over every
+    row (:func:`~wirecal.solver.fit_sessions.place`). ``values``: search these instead.
+    """
+    u = offset_sequence(ps.layout, ps.x, ps.residual_mm, data) if values is None else values
+    rows = np.arange(len(u)) if ps.layout.n_sessions == 1 else np.flatnonzero(ps.inliers)
+    starts = (0, *(int(rows[k]) for k in change_points(u[rows])))
+    return place(u, starts, difference_sigma(u[rows]))
 
 
 def _with_sessions(
@@ -282,8 +303,9 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
     dof = max(len(rows) - len(x), 1)
     sigma = float(np.sqrt(np.sum(r[rows] ** 2) / dof))
     cov, _ = covariance(J, sigma**2)
-    if not single_session:
-        ignored = tuple(change_points(r))  # a jump the offsets do not follow
+    if not single_session:  # a jump the offsets do not follow
+        final = Pass(layout, x, r, ps.inliers, sigma)
+        ignored = _session_starts(final, data, values=r)[1:]
     return Core(
         layout=layout,
         x=x,

@@ -41,6 +41,7 @@ class Synthetic:
     offsets_mm: np.ndarray  # (S,) each session's length offset
     snags: tuple[int, ...]  # rows whose wire was caught
     typos: tuple[int, ...]  # rows with a mistyped joint or length
+    bad_mm: dict[int, float]  # each snagged or mistyped row's error of the length it implies
     q_true_deg: np.ndarray  # (N, n) the unrounded joints
 
 
@@ -114,6 +115,10 @@ def synthetic_table(
             j = rng.integers(0, robot.n_joints)
             q_log[row, j] += rng.choice([-1, 1]) * 10.0  # one digit off
     length = np.round(length / length_resolution_mm) * length_resolution_mm
+    implied = np.linalg.norm(tool_position(true, np.radians(q_log[bad])) - anchor, axis=1)
+    bad_mm = {
+        int(r): float(length[r] - implied[k] - offsets[session[r]]) for k, r in enumerate(bad)
+    }
     tcp = tool_position(Model(robot.nominal.dh, np.array(CONTROLLER_TCP_MM)), np.radians(q_true))
     table = CableTable(
         source="<synthetic>",
@@ -136,6 +141,7 @@ def synthetic_table(
         offsets_mm=offsets,
         snags=tuple(sorted(int(b) for b in bad[:snags])),
         typos=tuple(sorted(int(b) for b in bad[snags:])),
+        bad_mm=bad_mm,
         q_true_deg=q_true,
     )
 
