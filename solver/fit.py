@@ -9,7 +9,8 @@ identifiable DH errors). The steps:
 2. **Parameters**: the attachment, the anchor, the offsets (and the scale) always; then the
    DH errors of rows 2…n (:func:`candidates`), each kept when it raises the rank of
    ∂L/∂x over *these* rows and leaves every σ (from the quantisation floor) below
-   :data:`~wirecal.solver.plausibility.POORLY_IDENTIFIED`
+   :data:`~wirecal.solver.plausibility.POORLY_IDENTIFIED` deg or mm (the scale: below the
+   default datasheet tolerance, 500 ppm)
    (:func:`~wirecal.solver.identifiability.select_columns`). Row 1 is a rigid motion of the
    arm that the anchor absorbs; θ_n and d_n move the attachment, which is fitted.
 3. **Robust fit, sessions**: ``least_squares`` with the soft-L1 loss, f_scale the robust
@@ -44,7 +45,7 @@ from wirecal.solver.identifiability import (
 from wirecal.solver.identify import Loss
 from wirecal.solver.kinematics import Model, tool_position
 from wirecal.solver.plausibility import POORLY_IDENTIFIED
-from wirecal.solver.robot import Robot
+from wirecal.solver.robot import DEFAULT_SCALE_TOLERANCE_PPM, Robot
 
 REJECT_SIGMA = 5.0
 """Rows whose residual exceeds this many robust σ are outliers (snags, typos)."""
@@ -155,12 +156,16 @@ def choose(
     _, J = lengths_and_jacobian(base, full, xf, data.q_rad[rows], data.session[rows])
     g = len(full.geometry)
     order = [*range(3), *range(g, len(full.names)), *range(3, g)]  # required first
+    limit = np.full(len(full.names), np.inf)  # attachment, anchor, offsets: what they are
+    limit[3:g] = POORLY_IDENTIFIED  # DH errors: deg or mm
+    if layout.scale:
+        limit[g + 3] = DEFAULT_SCALE_TOLERANCE_PPM
     sel = select_columns(
         _boundary_jacobian(J, full)[:, order],
         [full.names[k] for k in order],
         len(full.names) - g + 3,
         sigma_mm=sigma_mm,
-        max_std=POORLY_IDENTIFIED,
+        max_std=limit[order],
     )
     kept = {order[k] for k in sel.kept}
     chosen = replace(layout, geometry=tuple(n for k, n in enumerate(full.geometry) if k in kept))
@@ -240,15 +245,12 @@ def offset_sequence(layout: Layout, x: np.ndarray, r: np.ndarray, data: Data) ->
 def _session_starts(ps: Pass, data: Data, values: np.ndarray | None = None) -> tuple[int, ...]:
     """Return the rows where sessions start: change points of the offsets c_s − r.
 
-    With one session the fit's outliers may be a whole session it could not follow, so
-    every row is searched (the search clips lone rows itself); with sessions, the fit's
-    outliers are left out of the search; then every boundary is placed robustly over every
-    row (:func:`~wirecal.solver.fit_sessions.place`). ``values``: search these instead.
+    Every row is searched, the fit's outliers too: rows a fit rejects may be a session it
+    does not yet follow (the search deals with lone outliers itself); then every boundary is
+    placed robustly (:func:`~wirecal.solver.fit_sessions.place`). ``values``: search these.
     """
     u = offset_sequence(ps.layout, ps.x, ps.residual_mm, data) if values is None else values
-    rows = np.arange(len(u)) if ps.layout.n_sessions == 1 else np.flatnonzero(ps.inliers)
-    starts = (0, *(int(rows[k]) for k in change_points(u[rows])))
-    return place(u, starts, difference_sigma(u[rows]))
+    return place(u, (0, *change_points(u)), difference_sigma(u))
 
 
 def _with_sessions(

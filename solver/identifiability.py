@@ -180,18 +180,20 @@ def select_columns(
     n_required: int,
     *,
     sigma_mm: float | None = None,
-    max_std: float = math.inf,
+    max_std: float | np.ndarray = math.inf,
 ) -> Selection:
     """Choose the identifiable parameters of a Jacobian, greedily in column order.
 
     The first ``n_required`` columns are always kept; each later one is kept when it raises
     the rank of the kept columns (:data:`RANK_RTOL`) and, with a noise ``sigma_mm``, leaves
-    every kept parameter's σ (σ²·(JᵀJ)⁻¹, boundary units of ``J``) below ``max_std``. A
+    every kept parameter's σ (σ²·(JᵀJ)⁻¹, boundary units of ``J``) below ``max_std`` (one
+    limit, or one per column). A
     candidate left out for the rank is named with the degenerate combination it completes.
     """
     names = tuple(names)
     if J.shape[0] > J.shape[1]:  # R of J = QR has J's singular values and right vectors
         J = np.asarray(np.linalg.qr(J, mode="r"))
+    limit = np.broadcast_to(np.asarray(max_std, dtype=float), (len(names),))
     kept = list(range(n_required))
     rank = _rank(J[:, kept]) if kept else 0
     dropped: list[tuple[str, str]] = []
@@ -205,10 +207,15 @@ def select_columns(
             continue
         if sigma_mm is not None:
             std = np.sqrt(np.diag(covariance(J[:, trial], sigma_mm**2)[0]))
-            if np.max(std) >= max_std:
-                worst = names[trial[int(np.argmax(std))]]
+            over = std / limit[trial]
+            if np.max(over) >= 1:
+                worst = int(np.argmax(over))
                 dropped.append(
-                    (names[k], f"poorly identified: with it {worst}'s σ is {np.max(std):.3g}")
+                    (
+                        names[k],
+                        f"poorly identified: with it {names[trial[worst]]}'s σ is "
+                        f"{std[worst]:.3g}, beyond {limit[trial[worst]]:g}",
+                    )
                 )
                 continue
         kept.append(k)
