@@ -100,7 +100,8 @@ def _refine(v: np.ndarray, points: list[int], sigma: float, min_rows: int) -> li
     cap = (CLIP_SIGMA * sigma) ** 2
     for _ in range(100 * (len(points) + 1)):
         bounds = [0, *points, v.size]
-        best, gains = [], []
+        best: list[int] = []
+        gains: list[float] = []
         for a, b in zip(bounds[:-2], bounds[2:], strict=True):
             k, _ = _best_split(v[a:b], min_rows)
             best.append(bounds[len(best) + 1] if k is None else a + k)
