@@ -180,7 +180,7 @@ def _rows(result: FitResult, rows, values=None) -> str:
     t = result.table
     if not len(rows):
         return "none"
-    parts = [f"row {r} ({t.where(r)})" for r in rows]
+    parts = [f"row {r} (line {int(t.lines[r])})" for r in rows]
     if values is not None:
         parts = [f"{p} {v:+.2f} mm" for p, v in zip(parts, values, strict=True)]
     return ", ".join(parts)
