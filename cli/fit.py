@@ -202,7 +202,7 @@ def run_text(result: FitResult, run: Run) -> list[str]:
     if core.ignored_jumps:
         lines.append(f"  jumps NOT fitted (--single-session): {_rows(result, core.ignored_jumps)}")
     lines += [
-        f"outliers beyond 5σ: {len(outliers)}: "
+        f"outliers (beyond 5σ, or x, y, z disagree): {len(outliers)}: "
         + _rows(result, outliers, core.residual_mm[outliers]),
         "",
         f"{'parameter':<10}{'unit':<5}{'value':>12}{'± σ':>10}",
@@ -242,7 +242,7 @@ def fit_text(result: FitResult) -> list[str]:
             "",
             f"x, y, z against the nominal FK: {x.agreement_rms_mm:.4f} mm RMS (controller TCP "
             f"in the flange frame {', '.join(f'{v:.2f}' for v in x.tcp_mm)} mm); rows beyond "
-            f"{x.tolerance_mm:.3f} mm (typos?): {_rows(result, x.flagged)}",
+            f"what rounding can make (typos? left out of the fit): {_rows(result, x.flagged)}",
         ]
     if result.refined is not None:
         lines += ["", "With the joints refined from x, y, z:", *run_text(result, result.refined)]

@@ -14,11 +14,13 @@ identifiable DH errors). The steps:
    (:func:`~wirecal.solver.identifiability.select_columns`). Row 1 is a rigid motion of the
    arm that the anchor absorbs; θ_n and d_n move the attachment, which is fitted.
 3. **Robust fit, sessions**: ``least_squares`` with the soft-L1 loss, f_scale the robust
-   σ of the residual; rows beyond :data:`REJECT_SIGMA` σ are outliers; the lengths less the
+   σ of the residual; rows beyond :data:`REJECT_SIGMA` σ are outliers (and rows whose x, y,
+   z disagree with their joints, ``Data.excluded``); the lengths less the
    model without offsets, ordered by row, give the offset jumps
    (:mod:`~wirecal.solver.fit_sessions`); refit per session until the sessions stand.
-4. **Final fit**: the parameters chosen again on the inliers (identifiability decides on
-   the rows actually used), plain least squares, σ's from σ²·(JᵀJ)⁻¹ with σ the residual's.
+4. **Final fit**: the parameters chosen again on the inliers with the robust σ (at least
+   the floor) — identifiability decides on the rows actually used and their actual
+   noise — then plain least squares, σ's from σ²·(JᵀJ)⁻¹ with σ the residual's.
    A jump still found in the final residual is refused (``single_session`` fits one
    offset on purpose and lists the jumps it ignores).
 5. **Held-out validation** (:mod:`~wirecal.solver.fit_holdout`).
@@ -90,6 +92,7 @@ class Data:
     session: np.ndarray  # (N,) 0-based session of each row
     floor_mm: float  # the quantisation floor's RMS at the nominal model (a least σ)
     joint_cov_rad2: np.ndarray | None = None  # (N, n, n) refined joints' covariance
+    excluded: np.ndarray | None = None  # (N,) bool: rows known bad (x, y, z disagree)
 
 
 def candidates(base: Model) -> tuple[str, ...]:
@@ -234,7 +237,10 @@ def robust_pass(base: Model, layout: Layout, x0: np.ndarray, data: Data) -> Pass
         x = solve(base, layout, x, data, rows, loss="soft_l1", f_scale=sigma)
     r = residual(base, layout, x, data)
     sigma = max(robust_sigma(r), 1e-9)
-    return Pass(layout, x, r, np.abs(r - np.median(r)) <= REJECT_SIGMA * sigma, sigma)
+    inliers = np.abs(r - np.median(r)) <= REJECT_SIGMA * sigma
+    if data.excluded is not None:
+        inliers &= ~data.excluded
+    return Pass(layout, x, r, inliers, sigma)
 
 
 def offset_sequence(layout: Layout, x: np.ndarray, r: np.ndarray, data: Data) -> np.ndarray:
@@ -298,7 +304,8 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
     layout, x, _ = choose(base, layout, x, data, np.arange(n), data.floor_mm)
     ps, data, starts, ignored = _settle_sessions(base, layout, x, data, single_session)
     rows = np.flatnonzero(ps.inliers)
-    layout, x, dropped = choose(base, ps.layout, ps.x, data, rows, data.floor_mm)
+    noise = max(data.floor_mm, ps.sigma_mm)  # a noisier table identifies less
+    layout, x, dropped = choose(base, ps.layout, ps.x, data, rows, noise)
     x = solve(base, layout, x, data, rows)
     r = residual(base, layout, x, data)
     _, J = lengths_and_jacobian(base, layout, x, data.q_rad[rows], data.session[rows])

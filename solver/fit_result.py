@@ -13,7 +13,7 @@ their projection on the nuisance columns), so the budget is the DH errors' own.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -100,10 +100,20 @@ class FitResult:
         )
 
 
-def _data(base: Model, q_deg: np.ndarray, table: CableTable, res, cov=None) -> Data:
+def _data(
+    base: Model,
+    q_deg: np.ndarray,
+    table: CableTable,
+    res: tuple[float, float],
+    xyz: XyzCheck | None,
+    cov: np.ndarray | None = None,
+) -> Data:
     n = len(table.length_mm)
-    data = Data(np.radians(q_deg), table.length_mm, np.zeros(n, dtype=int), 0.0, cov)
-    return Data(data.q_rad, data.length_mm, data.session, nominal_floor(base, data, *res), cov)
+    excluded = np.zeros(n, dtype=bool)
+    if xyz is not None:
+        excluded[list(xyz.flagged)] = True
+    data = Data(np.radians(q_deg), table.length_mm, np.zeros(n, dtype=int), 0.0, cov, excluded)
+    return replace(data, floor_mm=nominal_floor(base, data, *res))
 
 
 def _run(base: Model, data: Data, options: FitOptions, res: tuple[float, float]) -> Run:
@@ -138,9 +148,11 @@ def fit_table(robot: Robot, table: CableTable, options: FitOptions | None = None
         options.joint_resolution_deg or table.joint_resolution_deg,
         options.length_resolution_mm or table.length_resolution_mm,
     )
-    main = _run(base, _data(base, table.q_deg, table, res), options, res)
+    xyz = None
+    if table.xyz_mm is not None and table.xyz_resolution_mm is not None:
+        xyz = check_xyz(base, table.q_deg, table.xyz_mm, res[0], table.xyz_resolution_mm)
+    main = _run(base, _data(base, table.q_deg, table, res, xyz), options, res)
     _refuse_ignored_jumps(table, main.core, options)
-    xyz = None if table.xyz_mm is None else check_xyz(base, table.q_deg, table.xyz_mm)
     refined = None
     if options.refine_joints:
         if xyz is None or table.xyz_mm is None or table.xyz_resolution_mm is None:
@@ -148,7 +160,7 @@ def fit_table(robot: Robot, table: CableTable, options: FitOptions | None = None
         q, cov = refine_joints(
             base, xyz, table.q_deg, table.xyz_mm, res[0], table.xyz_resolution_mm
         )
-        refined = _run(base, _data(base, q, table, res, cov), options, res)
+        refined = _run(base, _data(base, q, table, res, xyz, cov), options, res)
     return FitResult(robot, table, options, res, main, xyz, refined)
 
 
@@ -268,7 +280,7 @@ def parameters_json(run: Run) -> dict[str, Any]:
     }
 
 
-def run_json(run: Run, table: CableTable) -> dict[str, Any]:
+def run_json(run: Run, table: CableTable, flagged: tuple[int, ...] = ()) -> dict[str, Any]:
     """Return one run's parameters, sessions, outliers and validation for ``--json``."""
     core = run.core
     outliers = np.flatnonzero(~core.inliers)
@@ -283,7 +295,12 @@ def run_json(run: Run, table: CableTable) -> dict[str, Any]:
         "offsets_mm": [float(v) for v in core.x[k0:]],
         "ignored_jumps": list(core.ignored_jumps),
         "outliers": [
-            {"row": int(r), "line": int(table.lines[r]), "residual_mm": float(core.residual_mm[r])}
+            {
+                "row": int(r),
+                "line": int(table.lines[r]),
+                "residual_mm": float(core.residual_mm[r]),
+                "xyz_disagrees": r in flagged,
+            }
             for r in outliers
         ],
         "sigma_mm": core.sigma_mm,
@@ -296,24 +313,29 @@ def run_json(run: Run, table: CableTable) -> dict[str, Any]:
 def result_json(result: FitResult) -> dict[str, Any]:
     """Return what ``wirecal fit --json`` prints (see docs/fit.md for the keys)."""
     t = result.table
+    flagged = () if result.xyz is None else result.xyz.flagged
     data: dict[str, Any] = {
         "robot": result.robot.name,
         "table": t.source,
         "table_sha256": t.sha256,
         "rows": len(t.length_mm),
         "resolution": {"joint_deg": result.resolution[0], "length_mm": result.resolution[1]},
-        **run_json(result.main, t),
+        **run_json(result.main, t, flagged),
         "xyz": None,
-        "refined": None if result.refined is None else run_json(result.refined, t),
+        "refined": None if result.refined is None else run_json(result.refined, t, flagged),
     }
     if result.xyz is not None:
         x = result.xyz
         data["xyz"] = {
             "tcp_mm": x.tcp_mm.tolist(),
             "agreement_rms_mm": x.agreement_rms_mm,
-            "tolerance_mm": x.tolerance_mm,
             "flagged": [
-                {"row": r, "line": int(t.lines[r]), "disagreement_mm": float(x.disagreement_mm[r])}
+                {
+                    "row": r,
+                    "line": int(t.lines[r]),
+                    "disagreement_mm": float(x.disagreement_mm[r]),
+                    "tolerance_mm": float(x.tolerance_mm[r]),
+                }
                 for r in x.flagged
             ],
         }

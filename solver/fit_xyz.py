@@ -5,9 +5,10 @@ nominal model. Against the robot file's forward kinematics at the logged joints:
 
 * **cross-check** — the TCP in the flange frame t (unknown to wirecal) is fitted linearly,
   x_i − o_i = R_i t over the rows (o, R: the flange frame); a row whose disagreement
-  ‖x_i − o_i − R_i t‖ exceeds :data:`XYZ_REJECT_SIGMA` robust σ (at least
-  :data:`XYZ_MIN_TOL_MM`) is flagged: a typo in its joints or its x, y, z; the fit is
-  repeated without the flagged rows;
+  ‖x_i − o_i − R_i t‖ exceeds what rounding can make — Σ_j ‖∂p/∂q_j‖·Δq/2 + √3·Δx/2, a
+  hard bound for joints rounded to Δq and coordinates to Δx — and :data:`XYZ_REJECT`
+  times the median disagreement (a controller whose model is not the robot file's) is
+  flagged: a typo in its joints or its x, y, z; the TCP is fitted again without them;
 * **refined joints** — each row's joints q, rounded to Δq, carry a uniform error of
   variance (Δq/√12)²; the three coordinates measure J_q·δq (the positional Jacobian at
   the TCP), with the coordinates' own rounding (Δx/√12)². The Gauss–Newton MAP estimate
@@ -22,12 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wirecal.solver.fit_sessions import robust_sigma
 from wirecal.solver.kinematics import Model, frames, joint_jacobian
 
-XYZ_REJECT_SIGMA = 5.0
-XYZ_MIN_TOL_MM = 0.5
-"""The least disagreement flagged (mm): several times what 0.1° joints make at arm's reach."""
+XYZ_REJECT = 5.0
+"""A row is flagged beyond this many times the median disagreement (and its rounding bound)."""
 
 
 @dataclass(frozen=True)
@@ -36,8 +35,8 @@ class XyzCheck:
 
     tcp_mm: np.ndarray  # (3,) the controller's TCP in the flange frame (fitted)
     disagreement_mm: np.ndarray  # (N,) ‖x_i − FK_i‖
-    tolerance_mm: float
-    flagged: tuple[int, ...]  # 0-based rows beyond the tolerance
+    tolerance_mm: np.ndarray  # (N,) each row's limit (module docstring)
+    flagged: tuple[int, ...]  # 0-based rows beyond their limit
 
     @property
     def agreement_rms_mm(self) -> float:
@@ -53,16 +52,24 @@ def _tcp(o: np.ndarray, R: np.ndarray, xyz: np.ndarray, rows: np.ndarray) -> np.
     return np.linalg.lstsq(A, b, rcond=None)[0]
 
 
-def check_xyz(base: Model, q_deg: np.ndarray, xyz_mm: np.ndarray) -> XyzCheck:
+def check_xyz(
+    base: Model,
+    q_deg: np.ndarray,
+    xyz_mm: np.ndarray,
+    joint_resolution_deg: float,
+    xyz_resolution_mm: float,
+) -> XyzCheck:
     """Fit the controller's TCP and flag the rows that disagree (module docstring)."""
     f = frames(base, np.radians(q_deg))
     o, R = f.o[:, -1], f.R_last
     rows = np.arange(len(q_deg))
     for _ in range(2):
         t = _tcp(o, R, xyz_mm, rows)
-        e = xyz_mm - o - np.einsum("nij,j->ni", R, t)
-        tol = max(XYZ_MIN_TOL_MM, XYZ_REJECT_SIGMA * robust_sigma(e[rows].ravel()))
-        dist = np.linalg.norm(e, axis=1)
+        dist = np.linalg.norm(xyz_mm - o - np.einsum("nij,j->ni", R, t), axis=1)
+        _, J = joint_jacobian(Model(base.dh, t), np.radians(q_deg))
+        bound = np.linalg.norm(J, axis=1).sum(axis=1) * np.radians(joint_resolution_deg) / 2
+        bound += np.sqrt(3) * xyz_resolution_mm / 2
+        tol = np.maximum(bound, XYZ_REJECT * np.median(dist[rows]))
         rows = np.flatnonzero(dist <= tol)
     return XyzCheck(t, dist, tol, tuple(int(k) for k in np.flatnonzero(dist > tol)))
 

@@ -120,6 +120,8 @@ def test_refined_joints_beat_the_rounded_ones_and_xyz_flags_only_typos():
     assert result.refined is not None
     assert result.xyz is not None
     assert set(result.xyz.flagged) <= set(syn.typos)
+    assert result.xyz.flagged  # seed 6 has a joint typo that moves the TCP
+    assert not result.main.core.inliers[list(result.xyz.flagged)].any()  # left out of the fit
     # the controller's TCP (0, 0, 100) mm in the flange frame, recovered from x, y, z
     np.testing.assert_allclose(result.xyz.tcp_mm, [0, 0, 100], atol=0.05)
     assert result.refined.holdout.rms_mm < 0.5 * result.main.holdout.rms_mm
