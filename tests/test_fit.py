@@ -86,9 +86,9 @@ def test_fit_1000_rows_recovers_truth_and_reaches_the_floor(arm, seed):
 
 def test_held_out_rms_within_1_2_floors_and_the_half_split():
     robot = _robot("viper_s650")
-    syn = synthetic_table(robot, 500, seed=5)
+    syn = synthetic_table(robot, 400, seed=5)
     for scheme in ("random:0.2", "half"):
-        ho = fit_table(robot, syn.table, FitOptions(holdout=scheme, repeats=3)).main.holdout
+        ho = fit_table(robot, syn.table, FitOptions(holdout=scheme, repeats=2)).main.holdout
         assert ho.rows > 0
         assert ho.floor_mm > 0.1  # 0.1° joints at arm's reach: tenths of a mm
         assert ho.rms_mm <= 1.2 * ho.floor_mm, scheme
