@@ -17,12 +17,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from wirecal.solver.errors import Problems
+from wirecal.solver.errors import Problems, WirecalError
 from wirecal.solver.formats.cable_table import CableTable
 from wirecal.solver.kinematics import Model, tool_position
 
 METRES_RATIO = 50.0
 SPAN_MARGIN = 1.5
+MAX_JOINT_DEG = 3600.0
+MAX_LENGTH_MM = 100_000.0
+"""Beyond these a value is no joint angle (ten turns) or cell length (100 m): a typo that
+no fit should see."""
 
 
 def _span(values: np.ndarray) -> float:
@@ -33,6 +37,7 @@ def _span(values: np.ndarray) -> float:
 def check_units(base: Model, table: CableTable) -> None:
     """Raise, naming the column and the unit it looks like, unless degrees and mm."""
     problems = Problems(table.source)
+    _check_magnitudes(table)
     q = table.q_deg
     if len(q) and np.all(np.abs(q) <= 2 * np.pi + 1e-6):
         cols = ", ".join(repr(c) for c in table.columns.joints)
@@ -67,3 +72,18 @@ def check_units(base: Model, table: CableTable) -> None:
                 "they look like metres; give mm",
             )
     problems.raise_if_any()
+
+
+def _check_magnitudes(table: CableTable) -> None:
+    """Raise, naming the lines, for joints beyond ten turns or lengths beyond 100 m."""
+    huge = np.abs(table.q_deg).max(axis=1) > MAX_JOINT_DEG
+    huge |= np.abs(table.length_mm) > MAX_LENGTH_MM
+    if table.xyz_mm is not None:
+        huge |= np.abs(table.xyz_mm).max(axis=1) > MAX_LENGTH_MM
+    rows = np.flatnonzero(huge)
+    if rows.size:
+        lines = ", ".join(str(int(table.lines[r])) for r in rows[:10])
+        raise WirecalError(
+            f"{table.source}: line(s) {lines}: a joint beyond ±{MAX_JOINT_DEG:g} deg or a "
+            f"length beyond ±{MAX_LENGTH_MM:g} mm: fix or delete the row(s)"
+        )

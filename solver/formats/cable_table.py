@@ -147,7 +147,10 @@ def _text_cells(text: str, source: str) -> tuple[tuple[str, ...], Cells]:
         raise WirecalError(f"{source}: no header line: the table is empty")
     first = body[0][1]
     delimiter = "\t" if "\t" in first else ";" if ";" in first and "," not in first else ","
-    parsed = [(n, next(csv.reader(io.StringIO(s), delimiter=delimiter))) for n, s in body]
+    try:
+        parsed = [(n, next(csv.reader(io.StringIO(s), delimiter=delimiter))) for n, s in body]
+    except csv.Error as exc:
+        raise WirecalError(f"{source}: not a readable table: {exc}") from None
     header = tuple(c.strip() for c in parsed[0][1])
     rows = [(n, tuple(c.strip() for c in cells)) for n, cells in parsed[1:]]
     return header, rows
