@@ -128,13 +128,34 @@ def test_refined_joints_beat_the_rounded_ones_and_xyz_flags_only_typos():
     assert result.refined.holdout.floor_mm < 0.5 * result.main.holdout.floor_mm
 
 
+def test_a_jump_left_in_the_residual_is_refused_naming_its_row():
+    from dataclasses import replace
+
+    from wirecal.solver.errors import WirecalError
+    from wirecal.solver.fit_result import _refuse_ignored_jumps
+
+    robot = _robot("viper_s650")
+    syn = synthetic_table(robot, 100, seed=1, sessions=1, snags=0, typos=0)
+    core = fit_table(robot, syn.table, FitOptions(holdout="none")).main.core
+    jumped = replace(core, ignored_jumps=(40,))
+    with pytest.raises(WirecalError, match=r"still jumps at row 40 \(<synthetic>:42\)"):
+        _refuse_ignored_jumps(syn.table, jumped, FitOptions())
+    _refuse_ignored_jumps(syn.table, jumped, FitOptions(single_session=True))  # asked for
+
+
 def test_too_few_rows_and_refine_without_xyz_are_refused():
+    from dataclasses import replace
+
     from wirecal.solver.errors import WirecalError
 
     robot = _robot("viper_s650")
     syn = synthetic_table(robot, 10, seed=0, sessions=1, snags=0, typos=0)
     with pytest.raises(WirecalError, match="at least"):
         fit_table(robot, syn.table)
+    syn = synthetic_table(robot, 60, seed=0, sessions=1, snags=0, typos=0)
+    table = replace(syn.table, xyz_mm=None, xyz_resolution_mm=None)
+    with pytest.raises(WirecalError, match="--refine-joints needs x, y, z"):
+        fit_table(robot, table, FitOptions(refine_joints=True, holdout="none"))
 
 
 # --- the model: derivatives against finite differences -------------------------------
