@@ -56,7 +56,12 @@ from wirecal.solver.plausibility import READING_NOISE_MM  # noqa: E402
     help="Random splits of --holdout random:F.",
 )
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of the random splits.")
-@click.option("--scale", is_flag=True, help="Fit the cable's scale (ppm) too.")
+@click.option(
+    "--scale",
+    is_flag=True,
+    help="Fit the cable's scale (ppm) too; one link length is then held at the robot file's "
+    "value and the scale absorbs its error: use it when that length is exact.",
+)
 @click.option(
     "--single-session",
     is_flag=True,

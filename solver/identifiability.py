@@ -214,7 +214,8 @@ def select_columns(
                     (
                         names[k],
                         f"poorly identified: with it {names[trial[worst]]}'s σ is "
-                        f"{std[worst]:.3g}, beyond {limit[trial[worst]]:g}",
+                        f"{std[worst]:.3g}, beyond {limit[trial[worst]]:g}; nearly: "
+                        + _null_combination(J[:, trial], names, trial),
                     )
                 )
                 continue
@@ -224,17 +225,28 @@ def select_columns(
 
 
 def _null_combination(J: np.ndarray, names: tuple[str, ...], columns: list[int]) -> str:
-    """Return the direction J leaves unseen, in words: its terms of more than 0.1 %."""
-    v = np.linalg.svd(J)[2][-1]
-    v = v / v[np.argmax(np.abs(v))]
+    """Return the direction J sees least, in words, scaled to the last column's +1.
+
+    Terms are kept by their share of the direction with the columns scaled to unit length
+    (above 0.1 %), so a scale in ppm beside lengths in mm is not lost; coefficients are in
+    the columns' own units.
+    """
+    norm = np.linalg.norm(J, axis=0)
+    norm = np.where(norm > 0, norm, 1.0)
+    v = np.linalg.svd(J / norm)[2][-1]
+    keep = np.abs(v) > 1e-3 * np.max(np.abs(v))
+    c = v / norm
+    c = c / c[-1] if keep[-1] else c / c[np.argmax(np.abs(v))]
     terms = " ".join(
-        f"{c:+.3g}·{names[k]}" for k, c in zip(columns, v, strict=True) if abs(c) > 1e-3
+        f"{x:+.3g}·{names[k]}" for k, x, ok in zip(columns, c, keep, strict=True) if ok
     )
     return f"{terms} changes no length"
 
 
 def _rank(J: np.ndarray) -> int:
-    s = np.linalg.svd(J, compute_uv=False)
+    """Return the rank of J's columns scaled to unit length (their units do not count)."""
+    norm = np.linalg.norm(J, axis=0)
+    s = np.linalg.svd(J / np.where(norm > 0, norm, 1.0), compute_uv=False)
     return int(np.sum(s > RANK_RTOL * s[0])) if s.size and s[0] > 0 else 0
 
 
