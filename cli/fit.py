@@ -99,6 +99,12 @@ from wirecal.solver.plausibility import READING_NOISE_MM  # noqa: E402
     help="Write the patch (TOML) here, and the SPEC table beside it.",
 )
 @click.option(
+    "--report",
+    "report_path",
+    type=click.Path(dir_okay=False),
+    help="Write a self-contained HTML report of the fit here.",
+)
+@click.option(
     "--accept-implausible",
     is_flag=True,
     help="Show and write a result the plausibility gate refuses; the patch records it.",
@@ -121,6 +127,7 @@ def fit(
     noise_mm,
     as_json,
     patch_path,
+    report_path,
     accept_implausible,
     force,
 ):
@@ -145,6 +152,7 @@ def fit(
         length_resolution_mm=length_resolution_mm,
     )
     paths = [patch_path, *companion_paths(rb, patch_path)] if patch_path else []
+    paths += [report_path] if report_path else []
     with Outputs(paths, force=force, inputs=[robot, table]) as out:
         tb = read_cable_table(table, column_map, sheet=sheet, n_joints=rb.n_joints)
         result = fit_table(rb, tb, options)
@@ -164,6 +172,10 @@ def fit(
                 version=__version__,
                 plausibility=verdict.patch_field(),
             )
+        if report_path:
+            from wirecal.app.fit_report import render_fit_report  # matplotlib only here
+
+            out.put(report_path, render_fit_report(result, verdict, budget))
     if as_json:
         data = result_json(result)
         data["plausibility"] = verdict.as_json()
@@ -179,6 +191,8 @@ def fit(
     if patch_path:
         others = " and ".join(str(p) for p in companion_paths(rb, patch_path))
         click.echo(f"wrote {patch_path} and {others}", err=as_json)
+    if report_path:
+        click.echo(f"wrote {report_path}", err=as_json)
 
 
 def _rows(result: FitResult, rows, values=None) -> str:

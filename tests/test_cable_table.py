@@ -220,6 +220,19 @@ def test_cli_fit_json_and_patch(simulated, tmp_path):
     assert (tmp_path / "fit.spec.txt").exists()
 
 
+def test_cli_fit_report(simulated, tmp_path):
+    syn, path = simulated
+    report = tmp_path / "fit.html"
+    r = CliRunner().invoke(
+        main, ["fit", str(VIPER_FILE), str(path), "--repeats", "2", "--report", str(report)]
+    )
+    assert r.exit_code == 0, r.output
+    html = report.read_text(encoding="utf-8")
+    assert html.count('<img src="data:image/png;base64,') == 2
+    assert "RMS / floor" in html
+    assert f"new ones at data rows\n{', '.join(str(s) for s in syn.starts[1:])}" in html
+
+
 def test_cli_fit_text(simulated):
     _, path = simulated
     r = CliRunner().invoke(main, ["fit", str(VIPER_FILE), str(path), "--holdout", "half"])
