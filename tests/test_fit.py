@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from tests.conftest import ROOT
@@ -161,24 +161,31 @@ def test_too_few_rows_and_refine_without_xyz_are_refused():
 # --- the model: derivatives against finite differences -------------------------------
 
 
-@pytest.mark.parametrize("scale", [False, True])
-def test_length_jacobian_matches_finite_differences(scale):
-    robot = _robot("abb_irb120")
+@settings(max_examples=15, deadline=None)
+@given(
+    st.sampled_from(ARMS),
+    st.booleans(),
+    st.integers(0, 2**31),
+    st.lists(st.floats(-1500, 1500), min_size=3, max_size=3),
+)
+def test_length_jacobian_matches_finite_differences(arm, scale, seed, anchor):
+    robot = _robot(arm)
     base = point_model(robot)
-    rng = np.random.default_rng(0)
-    q = np.radians(rng.uniform(-90, 90, (7, 6)))
+    rng = np.random.default_rng(seed)
+    q = np.radians(rng.uniform(-170, 170, (7, 6)))
     layout = Layout(("tool_x", "tool_y", "tool_z", "th2", "a2", "d4", "al3"), 6, 2, scale)
     x = rng.normal(0, 0.01, len(layout.names))
-    x[7:10] = [400.0, -300.0, 200.0]  # the anchor
-    session = np.array([0, 0, 1, 1, 0, 1, 1])
-    _, J = lengths_and_jacobian(base, layout, x, q, session)
+    x[7:10] = anchor
+    session = rng.integers(0, 2, 7)
+    lengths, J = lengths_and_jacobian(base, layout, x, q, session)
+    assume(np.min(lengths - x[-2:][session]) > 10.0)  # the wire's direction is defined
     h = 1e-6
     for k in range(len(x)):
         dx = np.zeros_like(x)
         dx[k] = h
         up, _ = lengths_and_jacobian(base, layout, x + dx, q, session)
         down, _ = lengths_and_jacobian(base, layout, x - dx, q, session)
-        np.testing.assert_allclose(J[:, k], (up - down) / (2 * h), rtol=1e-5, atol=1e-6)
+        np.testing.assert_allclose(J[:, k], (up - down) / (2 * h), rtol=1e-5, atol=1e-5)
 
 
 def test_quantisation_floor_matches_monte_carlo_rounding():
