@@ -46,16 +46,19 @@ class Holdout:
         return self.rms_mm / self.floor_mm if self.floor_mm > 0 else float("inf")
 
     def as_json(self) -> dict:
-        """Return the figures as a JSON-ready dict."""
-        return {
-            "scheme": self.scheme,
-            "repeats": self.repeats,
-            "rows": self.rows,
+        """Return the figures as a JSON-ready dict (null where nothing was held out)."""
+        figures = {
             "rms_mm": self.rms_mm,
             "mae_mm": self.mae_mm,
             "max_mm": self.max_mm,
             "floor_mm": self.floor_mm,
             "ratio": self.ratio,
+        }
+        return {
+            "scheme": self.scheme,
+            "repeats": self.repeats,
+            "rows": self.rows,
+            **{k: float(v) if np.isfinite(v) else None for k, v in figures.items()},
             "notes": list(self.notes),
         }
 

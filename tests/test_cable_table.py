@@ -233,6 +233,16 @@ def test_cli_fit_report(simulated, tmp_path):
     assert f"new ones at data rows\n{', '.join(str(s) for s in syn.starts[1:])}" in html
 
 
+def test_cli_fit_json_without_holdout_is_strict_json(simulated):
+    _, path = simulated
+    r = CliRunner().invoke(main, ["fit", str(VIPER_FILE), str(path), "--holdout", "none", "--json"])
+    assert r.exit_code == 0, r.output
+    data = json.loads(r.stdout, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
+    assert data["holdout"]["rms_mm"] is None
+    assert data["holdout"]["rows"] == 0
+    assert data["floor_mm"] > 0.1  # the fit's own rows then
+
+
 def test_cli_fit_text(simulated):
     _, path = simulated
     r = CliRunner().invoke(main, ["fit", str(VIPER_FILE), str(path), "--holdout", "half"])
