@@ -138,7 +138,8 @@ def fit(
     controller's nominal x, y, z. Fits the anchor, the wire attachment, a length offset per
     sensor session (jumps found automatically), optionally the cable's scale, and the DH
     errors these rows identify; rejects outliers beyond 5σ; validates on held-out rows
-    beside the quantisation floor of the joints' and the length's resolution.
+    beside the quantisation floor of the joints' and the length's resolution. A fit the
+    plausibility gate refuses exits with status 3 and writes nothing (docs/fit.md).
     """
     rb = load_robot(robot)
     options = FitOptions(
