@@ -140,6 +140,11 @@ for _name, _target, _summary in (
         "Calibrate a simulated Viper s650 end to end, before and after.",
     ),
     (
+        "fit",
+        "wirecal.cli.fit:fit",
+        "Calibrate ROBOT from a TABLE of joint angles and cable lengths taken without wirecal.",
+    ),
+    (
         "gen",
         "wirecal.cli.gen:gen",
         "Write the controller programs that run PLAN: a V+/eV+ module or URScript programs.",

@@ -7,6 +7,7 @@ unobservable parameters or combinations, and the observability indices O1–O5
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -165,6 +166,90 @@ def _rref(a: np.ndarray) -> np.ndarray:
     return a[:r]
 
 
+@dataclass(frozen=True)
+class Selection:
+    """The columns :func:`select_columns` kept, and why each other candidate was left out."""
+
+    kept: tuple[int, ...]  # indices into the Jacobian's columns, required ones first
+    dropped: tuple[tuple[str, str], ...]  # (name, reason) of each candidate left out
+
+
+def select_columns(
+    J: np.ndarray,
+    names: Sequence[str],
+    n_required: int,
+    *,
+    sigma_mm: float | None = None,
+    max_std: float | np.ndarray = math.inf,
+) -> Selection:
+    """Choose the identifiable parameters of a Jacobian, greedily in column order.
+
+    The first ``n_required`` columns are always kept; each later one is kept when it raises
+    the rank of the kept columns (:data:`RANK_RTOL`) and, with a noise ``sigma_mm``, leaves
+    every kept parameter's σ (σ²·(JᵀJ)⁻¹, boundary units of ``J``) below ``max_std`` (one
+    limit, or one per column). A
+    candidate left out for the rank is named with the degenerate combination it completes.
+    """
+    names = tuple(names)
+    if J.shape[0] > J.shape[1]:  # R of J = QR has J's singular values and right vectors
+        J = np.asarray(np.linalg.qr(J, mode="r"))
+    limit = np.broadcast_to(np.asarray(max_std, dtype=float), (len(names),))
+    kept = list(range(n_required))
+    rank = _rank(J[:, kept]) if kept else 0
+    dropped: list[tuple[str, str]] = []
+    for k in range(n_required, len(names)):
+        trial = [*kept, k]
+        r = _rank(J[:, trial])
+        if r <= rank:
+            dropped.append(
+                (names[k], "degenerate: " + _null_combination(J[:, trial], names, trial))
+            )
+            continue
+        if sigma_mm is not None:
+            std = np.sqrt(np.diag(covariance(J[:, trial], sigma_mm**2)[0]))
+            over = std / limit[trial]
+            if np.max(over) >= 1:
+                worst = int(np.argmax(over))
+                dropped.append(
+                    (
+                        names[k],
+                        f"poorly identified: with it {names[trial[worst]]}'s σ is "
+                        f"{std[worst]:.3g}, beyond {limit[trial[worst]]:g}; nearly: "
+                        + _null_combination(J[:, trial], names, trial),
+                    )
+                )
+                continue
+        kept.append(k)
+        rank = r
+    return Selection(tuple(kept), tuple(dropped))
+
+
+def _null_combination(J: np.ndarray, names: tuple[str, ...], columns: list[int]) -> str:
+    """Return the direction J sees least, in words, scaled to the last column's +1.
+
+    Terms are kept by their share of the direction with the columns scaled to unit length
+    (above 0.1 %), so a scale in ppm beside lengths in mm is not lost; coefficients are in
+    the columns' own units.
+    """
+    norm = np.linalg.norm(J, axis=0)
+    norm = np.where(norm > 0, norm, 1.0)
+    v = np.linalg.svd(J / norm)[2][-1]
+    keep = np.abs(v) > 1e-3 * np.max(np.abs(v))
+    c = v / norm
+    c = c / c[-1] if keep[-1] else c / c[np.argmax(np.abs(v))]
+    terms = " ".join(
+        f"{x:+.3g}·{names[k]}" for k, x, ok in zip(columns, c, keep, strict=True) if ok
+    )
+    return f"{terms} changes no length"
+
+
+def _rank(J: np.ndarray) -> int:
+    """Return the rank of J's columns scaled to unit length (their units do not count)."""
+    norm = np.linalg.norm(J, axis=0)
+    s = np.linalg.svd(J / np.where(norm > 0, norm, 1.0), compute_uv=False)
+    return int(np.sum(s > RANK_RTOL * s[0])) if s.size and s[0] > 0 else 0
+
+
 def propose_parameters(
     model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray, nominal_dh: np.ndarray
 ) -> tuple[str, ...]:
@@ -173,8 +258,8 @@ def propose_parameters(
     Error parameters to calibrate, in the style of the paper's eq. 20: the θ offsets of
     joints 2…n and every non-zero length a_{i-1}, d_i of rows 2…n (row 1 is a rigid motion
     of the whole arm, :data:`BASE_PARAMETERS`), each kept only when it raises the rank of the
-    distance Jacobian over the points ``q_deg`` — so of redundant ones (the d's of parallel
-    axes, θ_n with a tool point on axis n) the first is kept.
+    distance Jacobian over the points ``q_deg`` (:func:`select_columns`) — so of redundant
+    ones (the d's of parallel axes, θ_n with a tool point on axis n) the first is kept.
     """
     n = model.n_joints
     lengths = [
@@ -183,13 +268,6 @@ def propose_parameters(
         for name, value in ((f"a{i}", nominal_dh[i, 1]), (f"d{i + 1}", nominal_dh[i, 3]))
         if abs(value) > 1e-9
     ]
-    kept: list[str] = []
-    rank = 0
-    for name in [f"th{i + 1}" for i in range(1, n)] + sorted(lengths, key=lambda s: s[0]):
-        J = sensitivity(model, q_deg, theta0_deg, [*kept, name]).psi
-        s = np.linalg.svd(J, compute_uv=False)
-        r = int(np.sum(s > RANK_RTOL * s[0])) if s.size and s[0] > 0 else 0
-        if r > rank:
-            kept.append(name)
-            rank = r
-    return tuple(kept)
+    candidates = [f"th{i + 1}" for i in range(1, n)] + sorted(lengths, key=lambda s: s[0])
+    J = sensitivity(model, q_deg, theta0_deg, candidates).psi
+    return tuple(candidates[k] for k in select_columns(J, candidates, 0).kept)

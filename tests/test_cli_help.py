@@ -25,6 +25,7 @@ def test_the_commands_are_all_there():
     assert COMMANDS == [
         "demo",
         "export-urdf",
+        "fit",
         "gen",
         "import-urdf",
         "lint",

@@ -24,6 +24,7 @@ from .conftest import DATA, VIPER
 ROBOT = VIPER / "robot.toml"
 PLAN = VIPER / "paper_plan.toml"
 URDF = DATA / "twisted_arm.urdf"
+TABLE = VIPER / "simulated_cable_table.csv"
 NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?")
 HOSTILE = ["nan", "inf", "-inf", "-1", "0", "1e300", "-1e300", "1e-300", '"x"', "[]", "true"]
 
@@ -84,6 +85,7 @@ COMMANDS = {
     "lint": (["lint", "V2"], ["V2"]),
     "import-urdf": (["import-urdf", "URDF", "--tip", "wire", "-o", "OUT"], ["URDF"]),
     "export-urdf": (["export-urdf", "ROBOT", "-o", "OUT"], ["ROBOT"]),
+    "fit": (["fit", "ROBOT", "TABLE", "--holdout", "none", "-o", "OUT"], ["ROBOT", "TABLE"]),
 }
 CASES = [
     (name, slot, kind)
@@ -98,6 +100,7 @@ def test_fixed_hostile_inputs(tmp_path, log, name, slot, kind):
     args, _ = COMMANDS[name]
     out = tmp_path / "out"
     values = {"ROBOT": ROBOT, "PLAN": PLAN, "LOG": log, "VLOG": log, "OUT": out, "URDF": URDF}
+    values["TABLE"] = TABLE
     values["OUT.html"] = tmp_path / "out.html"
     values[slot] = _hostile_file(tmp_path, kind)
     r = invoke(*(values.get(a, a) for a in args))
@@ -210,6 +213,14 @@ def test_mutated_log(tmp_path, log, data):
     bad = tmp_path / "run.csv"
     bad.write_text(data.draw(mutated(log.read_text())), encoding="utf-8")
     outcome_is_clean(invoke("solve", ROBOT, PLAN, bad, "--method", "stepwise"))
+
+
+@FUZZ
+@given(data=st.data())
+def test_mutated_cable_table(tmp_path, data):
+    bad = tmp_path / "table.csv"
+    bad.write_text(data.draw(mutated(TABLE.read_text())), encoding="utf-8")
+    outcome_is_clean(invoke("fit", ROBOT, bad, "--holdout", "none"))
 
 
 def test_every_command_is_covered():

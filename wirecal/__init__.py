@@ -53,6 +53,12 @@ _API = {
     "Budget": "wirecal.solver.budget",
     "write_patch": "wirecal.solver.formats.patch",
     "read_patch": "wirecal.solver.formats.patch",
+    # fit a cable-length table taken without wirecal
+    "read_cable_table": "wirecal.solver.formats.cable_table",
+    "fit_table": "wirecal.solver.fit_result",
+    "FitOptions": "wirecal.solver.fit_result",
+    "FitResult": "wirecal.solver.fit_result",
+    "synthetic_table": "wirecal.solver.fit_synth",
     # the plausibility gate between identification and any output
     "gate": "wirecal.solver.plausibility",
     "assess": "wirecal.solver.plausibility",

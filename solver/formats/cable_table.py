@@ -1,0 +1,254 @@
+"""Read a table of joint angles and cable lengths taken without wirecal (``wirecal fit``).
+
+A CSV or TSV file with a header line, or a sheet of an ``.xlsx`` workbook (the optional
+extra ``wirecal[xlsx]``: openpyxl). Every data row holds the joint angles (degrees), the
+absolute cable length (mm) and, optionally, the controller's own nominal x, y, z (mm).
+Which column is which comes from a column map ``"j1=q1,…,j6=q6,length=L[,x=X,y=Y,z=Z]"``;
+without one the columns must be named ``j1``…``j6`` and ``length`` (and ``x``, ``y``, ``z``
+when present). Blank lines and lines starting with ``#`` are skipped; the delimiter of a
+text file is the header line's (tab, semicolon or comma).
+
+The resolution of the joints and of the length (what the quantisation floor of ``fit`` is
+propagated from) is read off the values: the number of decimals that nine rows in ten need
+at most (a mistyped row with an extra digit does not change it).
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.csv_table import read_source
+
+AXES = ("x", "y", "z")
+RESOLUTION_QUANTILE = 0.9
+"""Share of the values whose decimals fix a column's resolution (the rest may be typos)."""
+
+MAX_DECIMALS = 6
+
+
+@dataclass(frozen=True)
+class ColumnMap:
+    """Which column of the table holds each joint, the length and the nominal x, y, z."""
+
+    joints: tuple[str, ...]
+    length: str
+    xyz: tuple[str, str, str] | None = None
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """Return every column the map names, joints first."""
+        return (*self.joints, self.length, *(self.xyz or ()))
+
+
+def default_map(n_joints: int, header: tuple[str, ...] = ()) -> ColumnMap:
+    """Return the map of columns named j1…jn and length (and x, y, z if the header has them)."""
+    xyz = ("x", "y", "z") if all(a in header for a in AXES) else None
+    return ColumnMap(tuple(f"j{i + 1}" for i in range(n_joints)), "length", xyz)
+
+
+def parse_map(text: str | None, n_joints: int, header: tuple[str, ...] = ()) -> ColumnMap:
+    """Parse ``--map "j1=q1,…,j6=q6,length=L[,x=X,y=Y,z=Z]"``; raise naming what is wrong."""
+    if text is None:
+        return default_map(n_joints, header)
+    keys = [f"j{i + 1}" for i in range(n_joints)] + ["length", *AXES]
+    given: dict[str, str] = {}
+    problems = []
+    for item in filter(None, (s.strip() for s in text.split(","))):
+        key, sep, column = (s.strip() for s in item.partition("="))
+        if not sep or not column:
+            problems.append(f"--map: {item!r} is not KEY=COLUMN")
+        elif key not in keys:
+            problems.append(f"--map: unknown key {key!r}; the keys are {', '.join(keys)}")
+        elif key in given:
+            problems.append(f"--map: {key} is given twice")
+        else:
+            given[key] = column
+    missing = [k for k in keys[: n_joints + 1] if k not in given]
+    if missing:
+        problems.append(f"--map: {', '.join(missing)} missing; map every joint and the length")
+    axes = [a for a in AXES if a in given]
+    if axes and len(axes) != 3:
+        problems.append("--map: give x, y and z together, or none of them")
+    if problems:
+        raise WirecalError(problems)
+    xyz = (given["x"], given["y"], given["z"]) if axes else None
+    return ColumnMap(tuple(given[k] for k in keys[:n_joints]), given["length"], xyz)
+
+
+@dataclass(frozen=True)
+class CableTable:
+    """The rows of a cable-length table, in file order, with their file lines.
+
+    ``lines`` are 1-based lines of a text file or row numbers of a sheet.
+    """
+
+    source: str
+    sha256: str
+    columns: ColumnMap
+    lines: np.ndarray  # (N,) int
+    q_deg: np.ndarray  # (N, n)
+    length_mm: np.ndarray  # (N,)
+    xyz_mm: np.ndarray | None  # (N, 3) the controller's nominal position, if given
+    joint_resolution_deg: float
+    length_resolution_mm: float
+    xyz_resolution_mm: float | None = None
+
+    def where(self, row: int) -> str:
+        """Return ``file:line`` of data row ``row`` (0-based)."""
+        return f"{self.source}:{int(self.lines[row])}"
+
+
+def read_cable_table(
+    path: str | Path, column_map: str | None = None, *, sheet: str | None = None, n_joints: int = 6
+) -> CableTable:
+    """Read a CSV/TSV or ``.xlsx`` cable-length table (module docstring)."""
+    if str(path).lower().endswith((".xlsx", ".xlsm")):
+        header, rows, source, digest = _xlsx_cells(path, sheet)
+    else:
+        if sheet is not None:
+            raise WirecalError(f"{path}: --sheet is for .xlsx workbooks; this is a text table")
+        text, source, digest = read_source(path, "table")
+        header, rows = _text_cells(text, source)
+    cmap = parse_map(column_map, n_joints, header)
+    index = _column_index(cmap, header, source)
+    lines, values = _numbers(rows, index, cmap, source)
+    q, length = values[:, :n_joints], values[:, n_joints]
+    return CableTable(
+        source=source,
+        sha256=digest,
+        columns=cmap,
+        lines=lines,
+        q_deg=q,
+        length_mm=length,
+        xyz_mm=values[:, n_joints + 1 :] if cmap.xyz else None,
+        joint_resolution_deg=resolution(q),
+        length_resolution_mm=resolution(length),
+        xyz_resolution_mm=resolution(values[:, n_joints + 1 :]) if cmap.xyz else None,
+    )
+
+
+Cells = list[tuple[int, tuple[Any, ...]]]
+
+
+def _text_cells(text: str, source: str) -> tuple[tuple[str, ...], Cells]:
+    """Return the header and the data rows (line, cells) of a CSV/TSV text."""
+    lines = text.removeprefix("\ufeff").splitlines()
+    body = [(k + 1, s) for k, s in enumerate(lines) if s.strip() and not s.lstrip().startswith("#")]
+    if not body:
+        raise WirecalError(f"{source}: no header line: the table is empty")
+    first = body[0][1]
+    delimiter = "\t" if "\t" in first else ";" if ";" in first and "," not in first else ","
+    try:
+        parsed = [(n, next(csv.reader(io.StringIO(s), delimiter=delimiter))) for n, s in body]
+    except csv.Error as exc:
+        raise WirecalError(f"{source}: not a readable table: {exc}") from None
+    header = tuple(c.strip() for c in parsed[0][1])
+    rows = [(n, tuple(c.strip() for c in cells)) for n, cells in parsed[1:]]
+    return header, rows
+
+
+def _xlsx_cells(path: str | Path, sheet: str | None) -> tuple[tuple[str, ...], Cells, str, str]:
+    """Return the header and the data rows (row number, cells) of a workbook's sheet."""
+    try:
+        import openpyxl  # an optional extra, imported only for a workbook
+    except ImportError:
+        raise WirecalError(
+            f"{path}: reading .xlsx needs openpyxl: pip install 'wirecal[xlsx]' (or save the "
+            "sheet as CSV)"
+        ) from None
+    _, source, digest = _bytes_digest(path)
+    try:
+        book = openpyxl.load_workbook(path, read_only=True, data_only=True)
+    except Exception as exc:  # openpyxl raises many types for a damaged file
+        raise WirecalError(f"{source}: not a readable .xlsx workbook: {exc}") from None
+    names = book.sheetnames
+    if sheet is not None and sheet not in names:
+        raise WirecalError(f"{source}: no sheet {sheet!r}; the sheets are {', '.join(names)}")
+    ws = book[sheet or names[0]]
+    rows = [
+        (k + 1, tuple("" if c is None else c for c in r))
+        for k, r in enumerate(ws.iter_rows(values_only=True))
+        if any(c not in (None, "") for c in r)
+    ]
+    book.close()
+    if not rows:
+        raise WirecalError(f"{source}: sheet {ws.title!r} is empty")
+    header = tuple(str(c).strip() for c in rows[0][1])
+    return header, rows[1:], source, digest
+
+
+def _bytes_digest(path: str | Path) -> tuple[bytes, str, str]:
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as exc:
+        raise WirecalError(f"{path}: cannot read table: {exc.strerror or exc}") from None
+    return raw, str(path), hashlib.sha256(raw).hexdigest()
+
+
+def _column_index(cmap: ColumnMap, header: tuple[str, ...], source: str) -> list[int]:
+    """Return the position of each mapped column; raise naming the absent ones."""
+    absent = [c for c in cmap.columns if c not in header]
+    if absent:
+        raise WirecalError(
+            f"{source}: no column {', '.join(repr(c) for c in absent)}; the header has "
+            f"{', '.join(repr(h) for h in header)}: name the columns with --map "
+            '"j1=…,…,j6=…,length=…"'
+        )
+    return [header.index(c) for c in cmap.columns]
+
+
+def _numbers(
+    rows: Cells, index: list[int], cmap: ColumnMap, source: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return the rows' lines and their mapped cells as numbers; raise on any non-number."""
+    problems: list[str] = []
+    lines, values = [], []
+    for line, cells in rows:
+        row = []
+        for col, k in zip(cmap.columns, index, strict=True):
+            cell = cells[k] if k < len(cells) else ""
+            value = _number(cell)
+            if value is None:
+                problems.append(f"{source}:{line}: column {col!r} is {cell!r}, not a number")
+            row.append(value)
+        lines.append(line)
+        values.append(row)
+    if problems:
+        shown = problems[:10] + ([f"… and {len(problems) - 10} more"] if len(problems) > 10 else [])
+        raise WirecalError(shown)
+    if not values:
+        raise WirecalError(f"{source}: the table has a header but no data rows")
+    return np.array(lines, dtype=int), np.array(values, dtype=float)
+
+
+def _number(cell: Any) -> float | None:
+    """Return a finite number from a cell (a float, or text like '12.5'), else None."""
+    if isinstance(cell, bool):
+        return None
+    if isinstance(cell, int | float):
+        value = float(cell)
+    else:
+        try:
+            value = float(str(cell))
+        except ValueError:
+            return None
+    return value if math.isfinite(value) else None
+
+
+def resolution(values: np.ndarray) -> float:
+    """Return the step of the values: 10^−d, d the decimals most values need (docstring)."""
+    v = np.abs(np.asarray(values, dtype=float)).ravel()
+    need = np.full(v.shape, MAX_DECIMALS)
+    for d in range(MAX_DECIMALS, -1, -1):
+        exact = np.abs(v - np.round(v, d)) <= 1e-9 * np.maximum(1.0, v)
+        need[exact] = d
+    return float(10.0 ** -np.quantile(need, RESOLUTION_QUANTILE, method="higher"))

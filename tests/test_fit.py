@@ -1,0 +1,259 @@
+"""``wirecal fit``: the cable model with the anchor anywhere, sessions, outliers, held-out
+validation — on simulated tables whose truth the generator knows."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from tests.conftest import ROOT
+from wirecal.solver.fit import Data, candidates, choose, point_model
+from wirecal.solver.fit_model import (
+    Layout,
+    length_joint_gradient,
+    lengths_and_jacobian,
+    quantisation_floor,
+)
+from wirecal.solver.fit_result import FitOptions, fit_table
+from wirecal.solver.fit_sessions import change_points
+from wirecal.solver.fit_synth import synthetic_table
+from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.kinematics import tool_position
+
+ARMS = ("viper_s650", "abb_irb120", "ur5")
+
+
+def _robot(arm):
+    return load_robot(ROOT / "examples" / arm / "robot.toml")
+
+
+def _truth(syn, robot, name):
+    """The generator's value of a fitted parameter (boundary units)."""
+    axis = "xyz".index(name[-1]) if name[-2:] in ("_x", "_y", "_z") else None
+    if name.startswith("tool_"):
+        return syn.attachment_mm[axis] - robot.tool_point[axis]
+    if name.startswith("anchor_"):
+        return syn.anchor_mm[axis]
+    if name.startswith("offset_"):
+        return syn.offsets_mm[int(name.split("_")[1]) - 1]
+    return syn.errors.get(name, 0.0)
+
+
+def _check_recovery(robot, syn, result):
+    core = result.main.core
+    floor = result.main.floor_mm
+    # sessions: as many as simulated, each start within ±2 rows
+    assert len(core.starts) == len(syn.starts)
+    assert np.all(np.abs(np.array(core.starts) - np.array(syn.starts)) <= 2)
+    # outliers: every row whose snag or typo moves the length by more than 10 floors is
+    # rejected; nothing else is, but a row beside a session's start
+    rejected = set(np.flatnonzero(~core.inliers).tolist())
+    gross = {r for r, e in syn.bad_mm.items() if abs(e) > 10 * floor}
+    assert gross <= rejected
+    near_start = {s + d for s in syn.starts[1:] for d in range(-2, 3)}
+    assert rejected <= set(syn.bad_mm) | near_start
+    # every fitted parameter within 4σ of the truth (DH errors the generator left at 0: 0)
+    per = core.layout.boundary_per_internal
+    for name, value, std in zip(core.layout.names, core.x * per, core.std * per, strict=True):
+        truth = _truth(syn, robot, name)
+        assert abs(value - truth) <= 4 * std, (name, value, truth, std)
+
+
+@pytest.mark.parametrize("arm", ["viper_s650", "abb_irb120"])
+def test_fit_recovers_sessions_outliers_and_the_truth(arm):
+    robot = _robot(arm)
+    syn = synthetic_table(robot, 400, seed=3)
+    result = fit_table(robot, syn.table, FitOptions(holdout="random:0.2", repeats=3))
+    _check_recovery(robot, syn, result)
+    # every truth parameter was fitted (the generator perturbs identifiable ones only)
+    assert set(syn.errors) <= set(result.main.core.layout.geometry)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("arm", ARMS)
+@pytest.mark.parametrize("seed", [0, 1])
+def test_fit_1000_rows_recovers_truth_and_reaches_the_floor(arm, seed):
+    robot = _robot(arm)
+    syn = synthetic_table(robot, 1000, seed=seed)
+    result = fit_table(robot, syn.table, FitOptions(holdout="random:0.2", repeats=5))
+    _check_recovery(robot, syn, result)
+    assert result.main.holdout.ratio <= 1.2
+    half = fit_table(robot, syn.table, FitOptions(holdout="half"))
+    assert half.main.holdout.ratio <= 1.2
+
+
+def test_held_out_rms_within_1_2_floors_and_the_half_split():
+    robot = _robot("viper_s650")
+    syn = synthetic_table(robot, 400, seed=5)
+    for scheme in ("random:0.2", "half"):
+        ho = fit_table(robot, syn.table, FitOptions(holdout=scheme, repeats=2)).main.holdout
+        assert ho.rows > 0
+        assert ho.floor_mm > 0.1  # 0.1° joints at arm's reach: tenths of a mm
+        assert ho.rms_mm <= 1.2 * ho.floor_mm, scheme
+        assert ho.mae_mm < ho.rms_mm < ho.max_mm
+
+
+def test_single_session_fits_one_offset_and_lists_the_jumps():
+    robot = _robot("viper_s650")
+    syn = synthetic_table(robot, 300, seed=2, sessions=2)
+    result = fit_table(robot, syn.table, FitOptions(single_session=True, holdout="none"))
+    core = result.main.core
+    assert core.layout.n_sessions == 1
+    assert len(core.ignored_jumps) == 1
+    assert abs(core.ignored_jumps[0] - syn.starts[1]) <= 2
+
+
+def test_one_session_and_no_snags_gives_one_offset_and_no_outliers():
+    robot = _robot("ur5")
+    syn = synthetic_table(robot, 300, seed=4, sessions=1, snags=0, typos=0)
+    core = fit_table(robot, syn.table, FitOptions(holdout="none")).main.core
+    assert core.starts == (0,)
+    assert core.inliers.all()
+
+
+def test_refined_joints_beat_the_rounded_ones_and_xyz_flags_only_typos():
+    robot = _robot("viper_s650")
+    syn = synthetic_table(robot, 400, seed=6)
+    result = fit_table(robot, syn.table, FitOptions(refine_joints=True, repeats=2))
+    assert result.refined is not None
+    assert result.xyz is not None
+    assert set(result.xyz.flagged) <= set(syn.typos)
+    assert result.xyz.flagged  # seed 6 has a joint typo that moves the TCP
+    assert not result.main.core.inliers[list(result.xyz.flagged)].any()  # left out of the fit
+    # the controller's TCP (0, 0, 100) mm in the flange frame, recovered from x, y, z
+    np.testing.assert_allclose(result.xyz.tcp_mm, [0, 0, 100], atol=0.05)
+    assert result.refined.holdout.rms_mm < 0.5 * result.main.holdout.rms_mm
+    assert result.refined.holdout.floor_mm < 0.5 * result.main.holdout.floor_mm
+
+
+def test_a_jump_left_in_the_residual_is_refused_naming_its_row():
+    from dataclasses import replace
+
+    from wirecal.solver.errors import WirecalError
+    from wirecal.solver.fit_result import _refuse_ignored_jumps
+
+    robot = _robot("viper_s650")
+    syn = synthetic_table(robot, 100, seed=1, sessions=1, snags=0, typos=0)
+    core = fit_table(robot, syn.table, FitOptions(holdout="none")).main.core
+    jumped = replace(core, ignored_jumps=(40,))
+    with pytest.raises(WirecalError, match=r"still jumps at row 40 \(<synthetic>:42\)"):
+        _refuse_ignored_jumps(syn.table, jumped, FitOptions())
+    _refuse_ignored_jumps(syn.table, jumped, FitOptions(single_session=True))  # asked for
+
+
+def test_too_few_rows_and_refine_without_xyz_are_refused():
+    from dataclasses import replace
+
+    from wirecal.solver.errors import WirecalError
+
+    robot = _robot("viper_s650")
+    syn = synthetic_table(robot, 10, seed=0, sessions=1, snags=0, typos=0)
+    with pytest.raises(WirecalError, match="at least"):
+        fit_table(robot, syn.table)
+    syn = synthetic_table(robot, 60, seed=0, sessions=1, snags=0, typos=0)
+    table = replace(syn.table, xyz_mm=None, xyz_resolution_mm=None)
+    with pytest.raises(WirecalError, match="--refine-joints needs x, y, z"):
+        fit_table(robot, table, FitOptions(refine_joints=True, holdout="none"))
+
+
+# --- the model: derivatives against finite differences -------------------------------
+
+
+@settings(max_examples=15, deadline=None)
+@given(
+    st.sampled_from(ARMS),
+    st.booleans(),
+    st.integers(0, 2**31),
+    st.lists(st.floats(-1500, 1500), min_size=3, max_size=3),
+)
+def test_length_jacobian_matches_finite_differences(arm, scale, seed, anchor):
+    robot = _robot(arm)
+    base = point_model(robot)
+    rng = np.random.default_rng(seed)
+    q = np.radians(rng.uniform(-170, 170, (7, 6)))
+    layout = Layout(("tool_x", "tool_y", "tool_z", "th2", "a2", "d4", "al3"), 6, 2, scale)
+    x = rng.normal(0, 0.01, len(layout.names))
+    x[7:10] = anchor
+    session = rng.integers(0, 2, 7)
+    lengths, J = lengths_and_jacobian(base, layout, x, q, session)
+    assume(np.min(lengths - x[-2:][session]) > 10.0)  # the wire's direction is defined
+    h = 1e-6
+    for k in range(len(x)):
+        dx = np.zeros_like(x)
+        dx[k] = h
+        up, _ = lengths_and_jacobian(base, layout, x + dx, q, session)
+        down, _ = lengths_and_jacobian(base, layout, x - dx, q, session)
+        np.testing.assert_allclose(J[:, k], (up - down) / (2 * h), rtol=1e-5, atol=1e-5)
+
+
+def test_quantisation_floor_matches_monte_carlo_rounding():
+    """The floor's per-row σ against lengths recomputed from joints shifted by uniform
+    rounding errors (forward kinematics only, not the floor's Jacobian)."""
+    robot = _robot("ur5")
+    base = point_model(robot)
+    rng = np.random.default_rng(1)
+    q_deg = rng.uniform(-120, 120, (5, 6))
+    anchor = np.array([600.0, 200.0, 300.0])
+    layout = Layout((), 6, 1, False)
+    x = np.array([*anchor, 0.0])
+    floor = quantisation_floor(length_joint_gradient(base, layout, x, np.radians(q_deg)), 0.1, 0.0)
+    trials = 4000
+    err = rng.uniform(-0.05, 0.05, (trials, 5, 6))
+    q = np.radians(q_deg[None] + err).reshape(-1, 6)
+    lengths = np.linalg.norm(tool_position(base, q) - anchor, axis=1).reshape(trials, 5)
+    np.testing.assert_allclose(lengths.std(axis=0), floor, rtol=0.06)
+
+
+# --- identifiability on these rows ---------------------------------------------------
+
+
+def test_choice_names_the_degenerate_combinations_and_scale_against_lengths():
+    robot = _robot("viper_s650")
+    base = point_model(robot)
+    syn = synthetic_table(robot, 200, seed=0, sessions=1, snags=0, typos=0)
+    q = np.radians(syn.table.q_deg)
+    data = Data(q, syn.table.length_mm, np.zeros(200, dtype=int), 0.25)
+    layout = Layout(("tool_x", "tool_y", "tool_z"), 6, 1, True)
+    x = np.zeros(len(layout.names))
+    x[3:6] = syn.anchor_mm
+    chosen, _, dropped = choose(base, layout, x, data, np.arange(200), 0.25)
+    why = dict(dropped)
+    assert "tool_z" in why["d6"]
+    assert "tool_y" in why["th6"]
+    assert "d2" in why["d3"]  # parallel axes 2 and 3
+    # with the scale fitted, scaling every length together is unseen: one length goes,
+    # named with the scale in its combination
+    scaled = [n for n, w in dropped if "scale" in w]
+    assert len(scaled) == 1
+    assert scaled[0][0] in "ad"
+    assert set(chosen.geometry) | set(why) == {"tool_x", "tool_y", "tool_z", *candidates(base)}
+
+
+# --- change points -------------------------------------------------------------------
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.lists(st.integers(12, 80), min_size=1, max_size=4),
+    st.lists(st.floats(8, 40), min_size=4, max_size=4),
+    st.integers(0, 2**31),
+)
+def test_change_points_find_jumps_within_two_rows(lengths, jumps, seed):
+    rng = np.random.default_rng(seed)
+    level = np.cumsum([0.0] + [j * rng.choice([-1, 1]) for j in jumps[: len(lengths) - 1]])
+    values = np.concatenate([np.full(n, lv) for n, lv in zip(lengths, level, strict=True)])
+    values += rng.normal(0, 1.0, values.size)
+    lone = rng.choice(values.size, 2, replace=False)
+    values[lone] += 50.0  # snags: lone rows far off must not cut a session
+    truth = np.cumsum(lengths)[:-1]
+    found = change_points(values)
+    assert len(found) == len(truth)
+    assert np.all(np.abs(np.array(found) - truth) <= 2)
+
+
+def test_no_change_points_in_noise():
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        assert change_points(rng.normal(0, 1.0, 500)) == []
