@@ -8,7 +8,8 @@ refined from x, y, z (reported separately). :func:`assess_fit` is the plausibili
 verdict on it and :func:`fit_budget` its error budget (:mod:`~wirecal.solver.budget`): the
 nuisance parameters (anchor, offsets, scale) are projected out of the Jacobian first
 (Frisch–Waugh–Lovell: the DH block of J⁺ is the pseudo-inverse of the DH columns less
-their projection on the nuisance columns), so the budget is the DH errors' own.
+their projection on the nuisance columns), so the budget is the DH errors' own; its sag
+term is the robot file's gravity sag at the fitted model, from the fitted anchor.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from wirecal.solver.plausibility import (
 )
 from wirecal.solver.robot import Robot
 from wirecal.solver.scale import PPM
+from wirecal.solver.simulate import sagged_tool_points
 
 MIN_ROWS = 20
 """Fewer rows than this cannot carry the anchor, the attachment, offsets and DH errors."""
@@ -240,6 +242,23 @@ def gate_fit(result: FitResult, *, accept: bool = False, noise_mm: float = READI
     )
 
 
+def _sag_mm(
+    robot: Robot,
+    model: Model,
+    parts: tuple[np.ndarray, np.ndarray, float, np.ndarray],
+    q_deg: np.ndarray,
+) -> np.ndarray:
+    """Return what the robot file's gravity sag adds to each row's length at the fit (mm).
+
+    The sag of :func:`~wirecal.solver.simulate.sagged_tool_points` at the fitted model, the
+    wire from the fitted anchor, times the fitted scale (1 + κ).
+    """
+    _, anchor, kappa, _ = parts
+    p, sagged = sagged_tool_points(robot, model, q_deg)
+    extra = np.linalg.norm(sagged - anchor, axis=1) - np.linalg.norm(p - anchor, axis=1)
+    return (1 + kappa) * extra
+
+
 def fit_budget(result: FitResult) -> Budget:
     """Return the error budget of the DH errors and attachment (module docstring)."""
     run = result.best
@@ -253,6 +272,7 @@ def fit_budget(result: FitResult) -> Budget:
     nuisance = J[:, g:]
     J_geo = J[:, :g] - nuisance @ np.linalg.lstsq(nuisance, J[:, :g], rcond=None)[0]
     enc = result.robot.encoder
+    model = model_of(base, layout, core.x)
     src = sources(
         sigma_mm=core.sigma_mm,
         lengths_mm=result.table.length_mm[rows],
@@ -263,8 +283,8 @@ def fit_budget(result: FitResult) -> Budget:
         drift=None,
         t_zero_ref_s=None,
         exit_mm=np.zeros(len(rows)),
+        sag_mm=_sag_mm(result.robot, model, layout.split(core.x), run.q_deg[rows]),
     )
-    model = model_of(base, layout, core.x)
     return budget(model, layout.geometry, J_geo, None, src, workspace(result.robot))
 
 

@@ -137,20 +137,30 @@ class Unmodelled:
         return sag
 
 
+def sagged_tool_points(
+    robot: Robot, model: Model, q_deg: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return ``model``'s tool points at ``q_deg`` (N, 3) as commanded and as sagged (mm).
+
+    The sag is the robot file's ``gravity_sag_deg_per_m`` (:class:`Unmodelled`'s sag of
+    joints 2 and 3), the rule every error budget's sag term is computed by.
+    """
+    unmodelled = Unmodelled(0.0, robot.gravity_sag_deg_per_m)
+    p = tool_position(model, np.radians(q_deg))
+    sagged = tool_position(model, np.radians(q_deg - unmodelled.sag_deg(model, q_deg)))
+    return p, sagged
+
+
 def sag_lengths_mm(robot: Robot, plan: Plan) -> np.ndarray:
     """Return what the gravity sag adds to each plan point's measured wire length (mm).
 
-    The robot file's ``gravity_sag_deg_per_m`` (:class:`Unmodelled`'s sag) at the nominal
-    model, the wire from the tool point at θ0 (as the twin mounts it): the length to the
-    sagged tool point less the commanded one's, less the zero reading's (θ0 sagged), which
-    every length is measured from. Plan order.
+    The sag (:func:`sagged_tool_points`) at the nominal model, the wire from the tool point
+    at θ0 (as the twin mounts it): the length to the sagged tool point less the commanded
+    one's, less the zero reading's (θ0 sagged), which every length is measured from. Plan
+    order.
     """
-    model = robot.nominal
-    unmodelled = Unmodelled(0.0, robot.gravity_sag_deg_per_m)
     q, _, _ = plan.all_points()
-    joints = np.vstack([plan.theta0_deg, q])
-    p = tool_position(model, np.radians(joints))
-    sagged = tool_position(model, np.radians(joints - unmodelled.sag_deg(model, joints)))
+    p, sagged = sagged_tool_points(robot, robot.nominal, np.vstack([plan.theta0_deg, q]))
     exit_ = robot.encoder.exit
     extra = physical_wire_mm(exit_, sagged - p[0]) - physical_wire_mm(exit_, p - p[0])
     return np.asarray(extra[1:] - extra[0], dtype=float)

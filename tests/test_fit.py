@@ -128,6 +128,25 @@ def test_refined_joints_beat_the_rounded_ones_and_xyz_flags_only_typos():
     assert result.refined.holdout.floor_mm < 0.5 * result.main.holdout.floor_mm
 
 
+def test_budget_has_the_robot_files_gravity_sag():
+    """The fit's budget carries the sag term: none without sag, proportional to it."""
+    from dataclasses import replace
+
+    from wirecal.solver.fit_result import fit_budget
+
+    robot = _robot("viper_s650")
+    syn = synthetic_table(robot, 200, seed=1, sessions=1, snags=0, typos=0)
+    result = fit_table(robot, syn.table, FitOptions(holdout="none"))
+    sag = {
+        k: fit_budget(replace(result, robot=replace(robot, gravity_sag_deg_per_m=k)))
+        for k in (0.0, 0.01, 0.02)
+    }
+    assert sag[0.0].terms["sag"] == 0.0
+    assert sag[0.01].terms["sag"] > 1e-4  # 0.01 deg/m over a metre's lever: tens of µm
+    assert sag[0.02].terms["sag"] == pytest.approx(2 * sag[0.01].terms["sag"], rel=0.01)
+    assert sag[0.01].terms["noise"] == sag[0.0].terms["noise"]
+
+
 def test_a_jump_left_in_the_residual_is_refused_naming_its_row():
     from dataclasses import replace
 
