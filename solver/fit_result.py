@@ -22,13 +22,13 @@ from scipy.stats import chi2
 
 from wirecal.solver.accuracy import workspace
 from wirecal.solver.budget import Budget, budget, sources
+from wirecal.solver.cable_data import CableTable
 from wirecal.solver.errors import Implausible, WirecalError
 from wirecal.solver.fit import Core, Data, fit_core, holdout, nominal_floor, point_model
 from wirecal.solver.fit_holdout import Holdout, row_floor
 from wirecal.solver.fit_model import lengths_and_jacobian, model_of
 from wirecal.solver.fit_units import check_units
 from wirecal.solver.fit_xyz import XyzCheck, check_xyz, refine_joints
-from wirecal.solver.formats.cable_table import CableTable
 from wirecal.solver.identify import Estimate
 from wirecal.solver.kinematics import Model
 from wirecal.solver.plausibility import (

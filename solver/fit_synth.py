@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wirecal.solver.formats.cable_table import AXES, CableTable, ColumnMap
+from wirecal.solver.cable_data import AXES, CableTable, ColumnMap
 from wirecal.solver.kinematics import Model, tool_position
 from wirecal.solver.plausibility import READING_NOISE_MM
 from wirecal.solver.robot import Robot

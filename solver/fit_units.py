@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from wirecal.solver.cable_data import CableTable
 from wirecal.solver.errors import Problems, WirecalError
-from wirecal.solver.formats.cable_table import CableTable
 from wirecal.solver.kinematics import Model, tool_position
 
 METRES_RATIO = 50.0

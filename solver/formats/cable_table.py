@@ -11,6 +11,9 @@ text file is the header line's (tab, semicolon or comma).
 The resolution of the joints and of the length (what the quantisation floor of ``fit`` is
 propagated from) is read off the values: the number of decimals that nine rows in ten need
 at most (a mistyped row with an extra digit does not change it).
+
+The table and its column map are the solver's types (:mod:`~wirecal.solver.cable_data`);
+this module reads files into them.
 """
 
 from __future__ import annotations
@@ -19,34 +22,19 @@ import csv
 import hashlib
 import io
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from wirecal.solver.cable_data import AXES, CableTable, ColumnMap
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.csv_table import read_source
 
-AXES = ("x", "y", "z")
 RESOLUTION_QUANTILE = 0.9
 """Share of the values whose decimals fix a column's resolution (the rest may be typos)."""
 
 MAX_DECIMALS = 6
-
-
-@dataclass(frozen=True)
-class ColumnMap:
-    """Which column of the table holds each joint, the length and the nominal x, y, z."""
-
-    joints: tuple[str, ...]
-    length: str
-    xyz: tuple[str, str, str] | None = None
-
-    @property
-    def columns(self) -> tuple[str, ...]:
-        """Return every column the map names, joints first."""
-        return (*self.joints, self.length, *(self.xyz or ()))
 
 
 def default_map(n_joints: int, header: tuple[str, ...] = ()) -> ColumnMap:
@@ -82,29 +70,6 @@ def parse_map(text: str | None, n_joints: int, header: tuple[str, ...] = ()) -> 
         raise WirecalError(problems)
     xyz = (given["x"], given["y"], given["z"]) if axes else None
     return ColumnMap(tuple(given[k] for k in keys[:n_joints]), given["length"], xyz)
-
-
-@dataclass(frozen=True)
-class CableTable:
-    """The rows of a cable-length table, in file order, with their file lines.
-
-    ``lines`` are 1-based lines of a text file or row numbers of a sheet.
-    """
-
-    source: str
-    sha256: str
-    columns: ColumnMap
-    lines: np.ndarray  # (N,) int
-    q_deg: np.ndarray  # (N, n)
-    length_mm: np.ndarray  # (N,)
-    xyz_mm: np.ndarray | None  # (N, 3) the controller's nominal position, if given
-    joint_resolution_deg: float
-    length_resolution_mm: float
-    xyz_resolution_mm: float | None = None
-
-    def where(self, row: int) -> str:
-        """Return ``file:line`` of data row ``row`` (0-based)."""
-        return f"{self.source}:{int(self.lines[row])}"
 
 
 def read_cable_table(
