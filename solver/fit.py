@@ -20,7 +20,9 @@ identifiable DH errors). The steps:
    (:mod:`~wirecal.solver.fit_sessions`); refit per session until the sessions stand.
 4. **Final fit**: the parameters chosen again on the inliers with the robust σ (at least
    the floor) — identifiability decides on the rows actually used and their actual
-   noise — then plain least squares, σ's from σ²·(JᵀJ)⁻¹ with σ the residual's.
+   noise — then plain least squares, σ's from σ²·(JᵀJ)⁻¹ with σ the residual's
+   (:func:`final_solve`: a second start when a DH error ends beyond plausibility; a
+   parameter the final rows do not identify is refused).
    A jump still found in the final residual is refused (``single_session`` fits one
    offset on purpose and lists the jumps it ignores).
 5. **Held-out validation** (:mod:`~wirecal.solver.fit_holdout`).
@@ -46,7 +48,7 @@ from wirecal.solver.identifiability import (
 )
 from wirecal.solver.identify import Loss
 from wirecal.solver.kinematics import Model, tool_position
-from wirecal.solver.plausibility import POORLY_IDENTIFIED
+from wirecal.solver.plausibility import POORLY_IDENTIFIED, implausible
 from wirecal.solver.robot import DEFAULT_SCALE_TOLERANCE_PPM, Robot
 
 REJECT_SIGMA = 5.0
@@ -153,11 +155,20 @@ def choose(
 
     ``layout`` may hold any geometry; the result holds the attachment and the chosen DH
     errors, with ``x`` carried over (a newly added parameter starts at 0).
+
+    The columns are judged at the nominal DH geometry (``x``'s attachment, anchor, offsets
+    and scale): which DH errors can be told apart is the arm's structure, and a DH error
+    fitted to noise must not decide it. A twist fitted at −0.004° between the Viper's
+    parallel axes 2 and 3 made d₃ look separable from d₂; the twist, chosen after it, then
+    dropped out (0: the axes parallel again), and the final fit ran along the exact
+    degeneracy d₂ − d₃ (d₂ +2683 mm, d₃ −2683 mm).
     """
     full = replace(layout, geometry=(*P.TOOL_NAMES, *candidates(base)))
     xf = _carry(layout, x, full)
-    _, J = lengths_and_jacobian(base, full, xf, data.q_rad[rows], data.session[rows])
     g = len(full.geometry)
+    nominal = xf.copy()
+    nominal[3:g] = 0.0  # the DH errors (the attachment, fitted, stays)
+    _, J = lengths_and_jacobian(base, full, nominal, data.q_rad[rows], data.session[rows])
     order = [*range(3), *range(g, len(full.names)), *range(3, g)]  # required first
     limit = np.full(len(full.names), np.inf)  # attachment, anchor, offsets: what they are
     limit[3:g] = POORLY_IDENTIFIED  # DH errors: deg or mm
@@ -214,6 +225,38 @@ def solve(
         fun, x0[free], jac=jac, loss=loss, f_scale=f_scale, x_scale="jac", method="trf"
     )
     return full(sol.x)
+
+
+def _implausible(layout: Layout, x: np.ndarray) -> list[str]:
+    """Return the DH errors of ``x`` beyond a physically plausible size (the gate's)."""
+    g = len(layout.geometry)
+    values = x[:g] * layout.boundary_per_internal[:g]
+    dh = [k for k, n in enumerate(layout.geometry) if n not in P.TOOL_NAMES]
+    return implausible([layout.geometry[k] for k in dh], values[dh])
+
+
+def final_solve(
+    base: Model, layout: Layout, x0: np.ndarray, data: Data, rows: np.ndarray
+) -> np.ndarray:
+    """Return the plain least-squares ``x`` over ``rows``, from a second start if need be.
+
+    A first result with a DH error beyond a physically plausible size
+    (:func:`~wirecal.solver.plausibility.implausible`) is a local minimum or a run along a
+    weak direction, not an estimate: the fit starts again with the DH errors at 0 (the
+    attachment, anchor, offsets as found) and keeps the second result unless it fits
+    worse. Still beyond, it is reported as it is and the plausibility gate refuses it.
+    """
+    first = solve(base, layout, x0, data, rows)
+    if not _implausible(layout, first):
+        return first
+    restart = x0.copy()
+    restart[[k for k, n in enumerate(layout.geometry) if n not in P.TOOL_NAMES]] = 0.0
+    second = solve(base, layout, restart, data, rows)
+
+    def cost(x: np.ndarray) -> float:
+        return float(np.sum(residual(base, layout, x, data)[rows] ** 2))
+
+    return second if cost(second) <= cost(first) * (1 + 1e-9) else first
 
 
 @dataclass(frozen=True)
@@ -306,12 +349,18 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
     rows = np.flatnonzero(ps.inliers)
     noise = max(data.floor_mm, ps.sigma_mm)  # a noisier table identifies less
     layout, x, dropped = choose(base, ps.layout, ps.x, data, rows, noise)
-    x = solve(base, layout, x, data, rows)
+    x = final_solve(base, layout, x, data, rows)
     r = residual(base, layout, x, data)
     _, J = lengths_and_jacobian(base, layout, x, data.q_rad[rows], data.session[rows])
     dof = max(len(rows) - len(x), 1)
     sigma = float(np.sqrt(np.sum(r[rows] ** 2) / dof))
-    cov, _ = covariance(J, sigma**2)
+    cov, identified = covariance(J, sigma**2)
+    if not identified.all():  # choose() keeps identifiable parameters only: a defect
+        unseen = ", ".join(n for n, ok in zip(layout.names, identified, strict=True) if not ok)
+        raise WirecalError(
+            f"the fit's parameters {unseen} are not identified by these rows at the fitted "
+            "values; nothing is reported (please report this table with the robot file)"
+        )
     if not single_session:  # a jump the offsets do not follow
         final = Pass(layout, x, r, ps.inliers, sigma)
         ignored = _session_starts(final, data, values=r)[1:]

@@ -38,6 +38,7 @@ from wirecal.solver.plausibility import (
     READING_NOISE_MM,
     Finding,
     Plausibility,
+    implausible,
 )
 from wirecal.solver.robot import Robot
 from wirecal.solver.scale import PPM
@@ -202,12 +203,8 @@ def assess_fit(result: FitResult, noise_mm: float = READING_NOISE_MM) -> Plausib
             )
         )
     est = result.estimate()
-    huge = [
-        f"{n} {v:+.4g}"
-        for n, v in zip(est.names, est.values, strict=True)
-        if not n.startswith("tool_")
-        and abs(v) > (PLAUSIBLE_DEG if n.startswith(("th", "al")) else PLAUSIBLE_MM)
-    ]
+    dh = [not n.startswith("tool_") for n in est.names]  # the attachment is fitted freely
+    huge = implausible([n for n, d in zip(est.names, dh, strict=True) if d], est.values[dh])
     if huge:
         findings.append(
             Finding(

@@ -31,6 +31,7 @@ controller comparison) and refuses, with what to check, when:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -268,6 +269,15 @@ def _identifiability(ident: Identifiability, J: np.ndarray, sigma_model: float) 
     return findings
 
 
+def implausible(names: Sequence[str], values: np.ndarray) -> list[str]:
+    """Return ``"name value"`` of each estimate beyond :data:`PLAUSIBLE_DEG` / :data:`PLAUSIBLE_MM`.
+
+    Angles (θ, α) in deg, lengths in mm, boundary units.
+    """
+    plausible = np.where([n.startswith(("th", "al")) for n in names], PLAUSIBLE_DEG, PLAUSIBLE_MM)
+    return [f"{n} {v:+.4g}" for n, v, p in zip(names, values, plausible, strict=True) if abs(v) > p]
+
+
 def _bounds(result: SolveResult, method: str, omega_default: float) -> list[Finding]:
     """Estimates on or beyond their Ω, or beyond a physically plausible size."""
     est = result.estimates[method]
@@ -291,10 +301,7 @@ def _bounds(result: SolveResult, method: str, omega_default: float) -> list[Find
                 "file",
             )
         )
-    plausible = np.where([n.startswith(("th", "al")) for n in names], PLAUSIBLE_DEG, PLAUSIBLE_MM)
-    huge = [
-        f"{n} {v:+.4g}" for n, v, p in zip(names, est.values, plausible, strict=True) if abs(v) > p
-    ]
+    huge = implausible(names, est.values)
     if huge:
         findings.append(
             Finding(

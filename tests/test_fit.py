@@ -3,6 +3,8 @@ validation — on simulated tables whose truth the generator knows."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings
@@ -248,6 +250,42 @@ def test_choice_names_the_degenerate_combinations_and_scale_against_lengths():
     assert len(scaled) == 1
     assert scaled[0][0] in "ad"
     assert set(chosen.geometry) | set(why) == {"tool_x", "tool_y", "tool_z", *candidates(base)}
+
+
+def test_a_twist_fitted_to_noise_does_not_split_parallel_axes():
+    """The cause of d2 = +2683 mm, d3 = −2683 mm (seed 0, 1000 rows, Viper): at a fitted
+    α2 of −0.004° d3 looked separable from d2; the choice is made at the nominal DH."""
+    robot = _robot("viper_s650")
+    base = point_model(robot)
+    syn = synthetic_table(robot, 200, seed=0, sessions=1, snags=0, typos=0)
+    data = Data(np.radians(syn.table.q_deg), syn.table.length_mm, np.zeros(200, dtype=int), 0.25)
+    layout = Layout(("tool_x", "tool_y", "tool_z", "al2"), 6, 1, False)
+    x = np.zeros(len(layout.names))
+    x[3] = np.radians(-0.004)
+    x[4:7] = syn.anchor_mm
+    chosen, carried, dropped = choose(base, layout, x, data, np.arange(200), 0.25)
+    assert "d3" not in chosen.geometry
+    assert "d2" in dict(dropped)["d3"]
+    assert "al2" in chosen.geometry  # kept, and its fitted value carried over
+    assert carried[chosen.names.index("al2")] == x[3]
+
+
+def test_a_fit_whose_parameters_are_not_identified_is_refused(monkeypatch):
+    """Should the choice ever keep a degenerate pair (d2, d3 of parallel axes), the fit
+    runs along it (tens of metres): refused, not reported with a small σ."""
+    from wirecal.solver import fit as F
+    from wirecal.solver.errors import WirecalError
+
+    robot = _robot("viper_s650")
+    syn = synthetic_table(robot, 100, seed=1, sessions=1, snags=0, typos=0)
+
+    def degenerate(base, layout, x, data, rows, sigma_mm):
+        both = replace(layout, geometry=(*layout.geometry[:3], "d2", "d3"))
+        return both, F._carry(layout, x, both), ()
+
+    monkeypatch.setattr(F, "choose", degenerate)
+    with pytest.raises(WirecalError, match=r"parameters d2, d3 are not identified"):
+        fit_table(robot, syn.table, FitOptions(holdout="none"))
 
 
 # --- change points -------------------------------------------------------------------
