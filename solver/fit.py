@@ -39,7 +39,7 @@ from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit_holdout import Holdout, parse_scheme, row_floor, splits, summarise
 from wirecal.solver.fit_model import Layout, lengths_and_jacobian, multilaterate, session_of
-from wirecal.solver.fit_sessions import change_points, difference_sigma, place, robust_sigma
+from wirecal.solver.fit_sessions import change_points, noise_sigma, place, robust_sigma
 from wirecal.solver.identifiability import (
     Identifiability,
     analyse_jacobian,
@@ -299,7 +299,7 @@ def _session_starts(ps: Pass, data: Data, values: np.ndarray | None = None) -> t
     placed robustly (:func:`~wirecal.solver.fit_sessions.place`). ``values``: search these.
     """
     u = offset_sequence(ps.layout, ps.x, ps.residual_mm, data) if values is None else values
-    return place(u, (0, *change_points(u)), difference_sigma(u))
+    return place(u, (0, *change_points(u)), noise_sigma(u))
 
 
 def _with_sessions(
