@@ -30,7 +30,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.special import ndtri
-from scipy.stats import qmc
 
 BOUND_PROBABILITY = 0.95
 """The probability the bound holds with."""
@@ -85,6 +84,8 @@ def bound_mm(
     seed: int = SEED,
 ) -> float:
     """Return the ``probability`` quantile of the worst corner's E (module docstring)."""
+    from scipy.stats import qmc  # here: scipy.stats doubles the command line's start-up
+
     w, U = np.linalg.eigh((model.cov + model.cov.T) / 2)
     root = U * np.sqrt(np.clip(w, 0.0, None))  # cov = root·rootᵀ, also when singular
     u = np.clip(qmc.Sobol(len(w), scramble=True, seed=seed).random(draws), 1e-12, 1 - 1e-12)
