@@ -161,9 +161,12 @@ def _subsets(n: int):
 
 
 def candidates(robot: Robot, theta0: np.ndarray, opt: PlanOptions, rng) -> np.ndarray:
-    """Return configurations (deg) moving a few joints away from θ0, within the limits' margin."""
-    lo = robot.joint_min_deg + opt.margin_deg
-    hi = robot.joint_max_deg - opt.margin_deg
+    """Return configurations (deg) moving a few joints away from θ0.
+
+    Within the margin of the body limits (the joint limits narrowed by ``[cell]``).
+    """
+    lo, hi = robot.body_limits_deg
+    lo, hi = lo + opt.margin_deg, hi - opt.margin_deg
     out = []
     for subset in _subsets(robot.n_joints):
         q = np.tile(theta0, (opt.samples, 1))
@@ -219,7 +222,8 @@ def move_clearance(
     ``every`` > 1 only every ``every``-th of those samples and each move's end are
     evaluated: a subset, so a gap found there is a gap of the full sampling too. A sample
     where the modelled wire is longer than ``longest_mm`` counts as no gap at all (−inf):
-    the encoder's range, checked along the move as ``wirecal gen`` checks it.
+    the encoder's range, checked along the move as ``wirecal gen`` checks it; so does a
+    sample where the arm meets itself or the cell (:mod:`~wirecal.solver.cell`).
     """
     if robot.link_radius_mm is None:
         raise WirecalError(f"{robot.source}: the wire clearance needs the link radii")
@@ -242,6 +246,7 @@ def move_clearance(
         q_rad = np.radians(q)
         f = frames(model, q_rad)  # one evaluation of the chain for both checks
         gap = wire_clearance(model, q_rad, p0, robot.link_radius_mm, trim, f)
+        gap = np.where(robot.cell_gaps(q, p0, model, f).smallest() < 0, -np.inf, gap)
         if np.isfinite(longest_mm):
             d = wire_path(model.pulley, tool_position(model, q_rad, f) - p0)[0]
             gap = np.where(np.nan_to_num(d) > longest_mm, -np.inf, gap)
@@ -250,11 +255,11 @@ def move_clearance(
 
 
 def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2.0) -> np.ndarray:
-    """Return which moves a → b are safe for the wire.
+    """Return which moves a → b are safe for the arm and the wire.
 
-    Moves a → b that keep the wire clear of the links, within the encoder's range less
-    ``range_margin_mm`` all along, and do not turn joint 6 by more than 180° (which would
-    wrap the wire around the flange).
+    Moves a → b that keep the arm out of itself and the cell, the wire clear of the
+    links, within the encoder's range less ``range_margin_mm`` all along, and do not turn
+    joint 6 by more than 180° (which would wrap the wire around the flange).
     """
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
     ok = np.abs(b[:, -1] - a[:, -1]) <= 180
@@ -302,10 +307,7 @@ def screen(
         d = wire_path(model.pulley, tool_position(model, np.radians(x)) - p0)[0]
         return (d >= opt.min_wire_mm) & (d <= robot.encoder.range_mm - opt.range_margin_mm)
 
-    # the points read the encoder: their wire leaves an eyelet within its cone
-    ok = length_ok(q) & within_cone(robot.encoder.exit, tool_position(model, np.radians(q)) - p0)
-    if ik.analytic_structure(model):
-        ok &= np.abs(np.sin(np.radians(q[:, 4]) + model.dh[4, 2])) >= np.sin(np.radians(8))
+    ok = _point_checks(robot, model, p0, q, opt)
     via = np.full(q.shape, np.nan)
     direct = np.zeros(len(q), bool)
     direct[ok] = move_ok(robot, model, p0, theta0, q[ok], opt, coarse)
@@ -323,6 +325,59 @@ def screen(
         good[good] = reach_ok(robot, model, p0, theta0, q[need[good]], v[good], opt, coarse)
         via[need[good]] = v[good]
     return ok & (direct | ~np.isnan(via[:, 0])), via
+
+
+POINT_CHECKS = ("range", "cone", "wrist", "cell")
+"""The checks of a candidate point itself, in the order :func:`_point_checks` applies them."""
+
+
+def _point_checks(
+    robot: Robot, model, p0: np.ndarray, q: np.ndarray, opt: PlanOptions
+) -> np.ndarray:
+    """Return which candidate points pass every check of their own (:data:`POINT_CHECKS`)."""
+    return np.all(list(_point_failures(robot, model, p0, q, opt).values()), axis=0)
+
+
+def _point_failures(
+    robot: Robot, model, p0: np.ndarray, q: np.ndarray, opt: PlanOptions
+) -> dict[str, np.ndarray]:
+    """Return, per check of :data:`POINT_CHECKS`, which candidate points pass it.
+
+    The wire length (above ``min_wire_mm``, within the encoder's range less the margin),
+    an eyelet's exit cone (the points read the encoder), the wrist singularity of an
+    analytic wrist (|sin θ5| ≥ sin 8°) and the arm clear of itself and the cell.
+    """
+    p = tool_position(model, np.radians(q))
+    d = wire_path(model.pulley, p - p0)[0]
+    wrist = np.ones(len(q), bool)
+    if ik.analytic_structure(model):
+        wrist = np.abs(np.sin(np.radians(q[:, 4]) + model.dh[4, 2])) >= np.sin(np.radians(8))
+    return {
+        "range": (d >= opt.min_wire_mm) & (d <= robot.encoder.range_mm - opt.range_margin_mm),
+        "cone": within_cone(robot.encoder.exit, p - p0),
+        "wrist": wrist,
+        "cell": robot.cell_gaps(q, p0, model).smallest() >= 0,
+    }
+
+
+def _blocked(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> str:
+    """Say which constraints blocked the candidates around θ0, with counts."""
+    model = robot.nominal
+    q = candidates(robot, theta0, opt, np.random.default_rng(opt.seed))
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    fails = _point_failures(robot, model, p0, q, opt)
+    counts = [f"{int(np.sum(~v))} {k}" for k, v in fails.items() if not np.all(v)]
+    left = q[np.all(list(fails.values()), axis=0)]
+    if len(left):
+        sweep = move_clearance(robot, model, p0, theta0, left, 10.0, 1, np.inf)
+        counts.append(
+            f"{int(np.sum(sweep == -np.inf))} moves from theta0 through the arm or the cell"
+        )
+        counts.append(
+            f"{int(np.sum((sweep > -np.inf) & (sweep < opt.clearance_mm)))} moves with the "
+            "wire too close to a link (clearance)"
+        )
+    return f"of {len(q)} candidates, blocked: " + ", ".join(counts)
 
 
 def _errors(psi_j, psi_prev, cov_prev, psi_next, base, cand, opt: PlanOptions) -> np.ndarray:
@@ -444,27 +499,23 @@ def design(
 
     ``progress`` is called with the fraction of the work done (0…1) as it advances.
     """
-    span = robot.joint_max_deg - robot.joint_min_deg
+    body_lo, body_hi = robot.body_limits_deg
+    span = body_hi - body_lo
     narrow = np.flatnonzero(span <= 2 * opt.margin_deg)
     if narrow.size:
         raise WirecalError(
             [
                 f"{robot.source}: joint {j + 1}: range {span[j]:g} deg leaves no room for "
-                f"points {opt.margin_deg:g} deg inside both limits; check joint_min_deg and "
-                "joint_max_deg (degrees)"
+                f"points {opt.margin_deg:g} deg inside both limits; check joint_min_deg, "
+                "joint_max_deg and [cell] body_min_deg, body_max_deg (degrees)"
                 for j in narrow
             ]
         )
     if theta0 is not None:
         return _design_at(robot, np.asarray(theta0, dtype=float), opt, progress)
-    rng = np.random.default_rng([opt.seed, 99])
-    # θ0 is drawn 20 deg inside the limits, less on a joint with a narrow range
-    inset = np.clip(span / 4, opt.margin_deg, 20.0)
-    lo, hi = robot.joint_min_deg + inset, robot.joint_max_deg - inset
     best, problems = None, []
     tries = 6
-    for k in range(tries):
-        t0 = np.round(rng.uniform(lo, hi), 0)
+    for k, t0 in enumerate(_theta0_draws(robot, opt, tries)):
         try:
             d = _design_at(robot, t0, opt, _part(progress, k, tries))
         except WirecalError as exc:
@@ -475,21 +526,51 @@ def design(
             best = (score, d)
     if best is None:
         raise WirecalError(
-            [f"{robot.source}: no θ0 tried gives a plan; give --theta0", *problems[:3]]
+            [f"{robot.source}: no θ0 tried gives a plan (each θ0's reasons follow)", *problems]
         )
     return best[1]
 
 
+THETA0_DRAWS = 200
+"""θ0 candidates drawn at once; the first few clear of the arm and the cell are tried."""
+
+
+def _theta0_draws(robot: Robot, opt: PlanOptions, tries: int) -> np.ndarray:
+    """Return up to ``tries`` θ0 (deg, whole degrees) clear of the arm's body and the cell.
+
+    Drawn 20 deg inside the body limits (less on a joint with a narrow range); raise,
+    naming what blocked them, when none of :data:`THETA0_DRAWS` is clear.
+    """
+    rng = np.random.default_rng([opt.seed, 99])
+    lo, hi = robot.body_limits_deg
+    inset = np.clip((hi - lo) / 4, opt.margin_deg, 20.0)
+    t0 = np.round(rng.uniform(lo + inset, hi - inset, (THETA0_DRAWS, robot.n_joints)), 0)
+    p0 = tool_position(robot.nominal, np.radians(t0))
+    gaps = robot.cell_gaps(t0, p0)
+    clear = gaps.smallest() >= 0
+    if not clear.any():
+        causes = sorted({gaps.cause(k).split(" (")[0] for k in range(len(t0))})
+        raise WirecalError(
+            f"{robot.source}: all {THETA0_DRAWS} θ0 drawn collide (cell) — "
+            + "; ".join(causes[:5])
+            + ": check [cell] floor_z_mm and its boxes, or give --theta0"
+        )
+    return t0[clear][:tries]
+
+
 def _check_theta0(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> None:
-    """Raise when a joint of θ0 is within the margin of its limits."""
-    for j in np.flatnonzero(
-        (theta0 < robot.joint_min_deg + opt.margin_deg)
-        | (theta0 > robot.joint_max_deg - opt.margin_deg)
-    ):
+    """Raise when a joint of θ0 is within the margin of its body limits, or θ0 collides."""
+    lo, hi = robot.body_limits_deg
+    for j in np.flatnonzero((theta0 < lo + opt.margin_deg) | (theta0 > hi - opt.margin_deg)):
         raise WirecalError(
             f"theta0: joint {j + 1} = {theta0[j]:g} deg is within "
-            f"{opt.margin_deg:g} deg of its limits"
+            f"{opt.margin_deg:g} deg of its limits [{lo[j]:g}, {hi[j]:g}] (the joint "
+            "limits, narrowed by [cell] body limits)"
         )
+    p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
+    gaps = robot.cell_gaps(theta0, p0)
+    if gaps.smallest()[0] < 0:
+        raise WirecalError(f"theta0 {theta0.tolist()}: collides (cell): {gaps.cause(0)}")
 
 
 def _unidentifiable(model, q: np.ndarray, theta0: np.ndarray, names: list[str]) -> dict[str, str]:
@@ -580,8 +661,7 @@ def _design_at(
     if len(q_all) < opt.points_per_step:
         raise WirecalError(
             f"{robot.source}: almost no usable configuration around θ0 "
-            f"{theta0.tolist()}: check the encoder range, the link radii and "
-            "the joint limits"
+            f"{theta0.tolist()}: {_blocked(robot, theta0, opt)}"
         )
     names = list(robot.parameters)
     excluded = _unidentifiable(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
