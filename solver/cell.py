@@ -189,6 +189,7 @@ class Gaps:
 
     gap: np.ndarray  # (K, N)
     labels: list[str] = field(default_factory=list)
+    margin_mm: float = DEFAULT_MARGIN_MM
 
     def smallest(self) -> np.ndarray:
         """Return each configuration's smallest gap (mm): negative where it collides."""
@@ -197,7 +198,9 @@ class Gaps:
     def cause(self, k: int) -> str:
         """Return configuration k's worst check in words (the colliding pair)."""
         worst = int(np.argmin(self.gap[:, k]))
-        return f"{self.labels[worst]} ({self.gap[worst, k]:.0f} mm past the margin)"
+        apart = self.gap[worst, k] + self.margin_mm
+        how = f"{apart:.0f} mm apart" if apart >= 0 else f"{-apart:.0f} mm into each other"
+        return f"{self.labels[worst]}: {how}, margin {self.margin_mm:g} mm"
 
 
 def cell_gaps(
@@ -232,7 +235,7 @@ def cell_gaps(
         rows.append(_housing_gaps(cell.housing, m, caps, a, b, p0))
         labels += [f"{caps.names[i]} and the encoder's housing" for i in _housing_capsules(caps)]
     gap = np.concatenate(rows) if rows else np.zeros((0, len(q_rad)))
-    return Gaps(gap, labels)
+    return Gaps(gap, labels, m)
 
 
 def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -110,8 +110,13 @@ class Design:
             f"theta0 {np.round(self.plan.theta0_deg, 2).tolist()} deg; order "
             + " ".join(self.plan.order)
             + ".",
-            f"Predicted tool-point error (sigma 0.01 mm, mean over the workspace): "
-            f"joint {self.predicted['joint']:.4f} mm, step-by-step "
+            "Predicted tool-point error (sigma 0.01 mm, mean over the workspace"
+            + (
+                f"; the {len(self.excluded)} parameters not planned at their prior"
+                if self.excluded
+                else ""
+            )
+            + f"): joint {self.predicted['joint']:.4f} mm, step-by-step "
             f"{self.predicted['stepwise']:.4f} mm.",
             f"Estimated robot time {self.robot_time_s / 60:.1f} min "
             f"({self.plan.n_points} points, "
@@ -705,7 +710,7 @@ def _design_at(
         robot=robot.name,
     )
     d = Design(plan, steps, excluded, method=opt.method)
-    d.predicted = predicted_accuracy(robot, plan)
+    d.predicted = predicted_accuracy(robot, plan, unplanned=tuple(excluded))
     d.robot_time_s = robot_time(robot, plan, opt.run)
     d.exit_line = exit_line(robot, plan)
     tick(1.0)
@@ -999,14 +1004,19 @@ def robot_time(robot: Robot, plan: Plan, run: RunParameters = DEFAULT_RUN) -> fl
 
 
 def predicted_accuracy(
-    robot: Robot, plan: Plan, sigma_mm: float = 0.01, prior: float = PlanOptions.prior
+    robot: Robot,
+    plan: Plan,
+    sigma_mm: float = 0.01,
+    prior: float = PlanOptions.prior,
+    unplanned: tuple[str, ...] = (),
 ) -> dict[str, float]:
     """Return the mean tool-point error over the workspace (mm) of both estimators.
 
     Mean tool-point error over the workspace: for the joint estimate the Cramér–Rao bound
     (σ per reading plus the count's quantisation); for the stepwise estimate its linearised
     map A, noise A·C·Aᵀ plus the bias of parameters leaking into steps before their own,
-    (A·J − I)·P·(A·J − I)ᵀ with true offsets of size ``prior`` (deg, mm).
+    (A·J − I)·P·(A·J − I)ᵀ with true offsets of size ``prior`` (deg, mm). Parameters
+    ``unplanned`` stay at their prior: each adds its own error of size ``prior`` to both.
     """
     model = robot.nominal
     q, step, _ = plan.all_points()
@@ -1020,7 +1030,18 @@ def predicted_accuracy(
     E = A @ J - np.eye(len(names))
     P = np.diag(errors.to_internal(np.full(len(names), prior)) ** 2)
     ws = workspace(robot, 500)
+    every = (*names, *unplanned)
+    left = np.diag(
+        ErrorSet(tuple(unplanned), robot.n_joints).to_internal(np.full(len(unplanned), prior)) ** 2
+    )
+
+    def with_unplanned(cov: np.ndarray) -> np.ndarray:
+        out = np.zeros((len(every), len(every)))
+        out[: len(names), : len(names)] = cov
+        out[len(names) :, len(names) :] = left
+        return out
+
     return {
-        "joint": tool_error(model, names, cov_joint, ws).mean_mm,
-        "stepwise": tool_error(model, names, A @ C @ A.T + E @ P @ E.T, ws).mean_mm,
+        "joint": tool_error(model, every, with_unplanned(cov_joint), ws).mean_mm,
+        "stepwise": tool_error(model, every, with_unplanned(A @ C @ A.T + E @ P @ E.T), ws).mean_mm,
     }
