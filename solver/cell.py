@@ -229,7 +229,8 @@ def cell_gaps(
         rows.append(height - (r[mv] + m)[:, None])
         labels += [f"{caps.names[i]} and the {name}" for i in mv]
     for box in cell.boxes:
-        rows.append(_box_gaps(box, a[:, mv], b[:, mv]) - (r[mv] + m + BOX_STEP_MM / 2)[:, None])
+        keep = r[mv] + m + BOX_STEP_MM / 2
+        rows.append(_box_gaps(box, a[:, mv], b[:, mv], keep) - keep[:, None])
         labels += [f"{caps.names[i]} and box {box.name!r}" for i in mv]
     if cell.housing is not None:
         rows.append(_housing_gaps(cell.housing, m, caps, a, b, p0))
@@ -242,19 +243,32 @@ def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 
 
-def _box_gaps(box: Box, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Return the smallest distance (mm) of points along each capsule axis to ``box``.
+def _to_box(box: Box, p_lo: np.ndarray, p_hi: np.ndarray) -> np.ndarray:
+    """Return the distance (mm) from boxes [p_lo, p_hi] (component-first) to ``box``."""
+    shape = (3,) + (1,) * (p_lo.ndim - 1)
+    lo, hi = np.reshape(box.min_mm, shape), np.reshape(box.max_mm, shape)
+    out = np.maximum(np.maximum(lo - p_hi, p_lo - hi), 0.0)
+    return np.sqrt(_dot(out, out))
 
-    Points every :data:`BOX_STEP_MM` or closer along segments a → b, (3, S, N).
+
+def _box_gaps(box: Box, a: np.ndarray, b: np.ndarray, near_mm: np.ndarray) -> np.ndarray:
+    """Return a distance (mm) from each capsule axis a → b, (3, S, N), to ``box``.
+
+    The distance from the box to the segment's own bounding box bounds it from below;
+    where that is under ``near_mm`` (S,), the smallest distance of points every
+    :data:`BOX_STEP_MM` or closer along the segment is returned instead.
     """
-    lo, hi = np.asarray(box.min_mm)[:, None, None], np.asarray(box.max_mm)[:, None, None]
-    longest = float(np.max(np.sqrt(_dot(b - a, b - a)), initial=0.0))
-    t = np.linspace(0.0, 1.0, int(np.ceil(longest / BOX_STEP_MM)) + 1)
-    best = np.full(a.shape[1:], np.inf)
-    for u in t:
+    best = _to_box(box, np.minimum(a, b), np.maximum(a, b))
+    s, k = np.nonzero(best < near_mm[:, None])
+    if not len(s):
+        return best
+    a, b = a[:, s, k], b[:, s, k]
+    longest = float(np.max(np.sqrt(_dot(b - a, b - a))))
+    near = np.full(len(s), np.inf)
+    for u in np.linspace(0.0, 1.0, int(np.ceil(longest / BOX_STEP_MM)) + 1):
         p = a + u * (b - a)
-        out = np.maximum(np.maximum(lo - p, p - hi), 0.0)
-        best = np.minimum(best, np.sqrt(_dot(out, out)))
+        near = np.minimum(near, _to_box(box, p, p))
+    best[s, k] = near
     return best
 
 
