@@ -111,39 +111,50 @@ class Capsules:
     moving: np.ndarray  # capsules checked against floor, half-spaces and boxes
 
 
-def capsules(dh: np.ndarray, radii: np.ndarray, tool_point: np.ndarray, margin_mm: float):
+def capsules(
+    dh: np.ndarray, radii: np.ndarray, tool_point: np.ndarray, margin_mm: float
+) -> Capsules:
     """Return the arm's :class:`Capsules` for a DH table (rad, mm) and link radii (mm)."""
     n = len(dh)
-    names, rad, step, kind, fixed, length = [], [], [], [], [], []
+    # (name, radius, chain step, kind, first and last frame it is fixed in, length)
+    rows: list[tuple[str, float, int, str, tuple[int, int], float]] = []
     for i in range(1, n + 1):
         r = float(radii[max(i - 2, 0)])
-        for k, size, own in (("a", dh[i - 1, 1], (i - 1, i - 1)), ("d", dh[i - 1, 3], (i - 1, i))):
-            if abs(size) > _TINY_MM:
-                label = f"a{i - 1}" if k == "a" else f"d{i}"
-                names.append(f"link {own[1]} ({label})")
-                rad.append(r), step.append(i), kind.append(k), fixed.append(own)
-                length.append(abs(float(size)))
-    if np.linalg.norm(tool_point) > _TINY_MM:
-        names.append("tool fixture")
-        rad.append(float(radii[-1])), step.append(n + 1), kind.append("tool")
-        fixed.append((n, n)), length.append(float(np.linalg.norm(tool_point)))
-    fixed_a = np.array(fixed, int).reshape(-1, 2)
-    pairs, skipped = _self_pairs(names, np.array(rad), fixed_a, np.array(length), margin_mm)
+        a, d = float(dh[i - 1, 1]), float(dh[i - 1, 3])
+        if abs(a) > _TINY_MM:
+            rows.append((f"link {i - 1} (a{i - 1})", r, i, "a", (i - 1, i - 1), abs(a)))
+        if abs(d) > _TINY_MM:
+            rows.append((f"link {i} (d{i})", r, i, "d", (i - 1, i), abs(d)))
+    tool = float(np.linalg.norm(tool_point))
+    if tool > _TINY_MM:
+        rows.append(("tool fixture", float(radii[-1]), n + 1, "tool", (n, n), tool))
+    names = tuple(row[0] for row in rows)
+    rad = np.array([row[1] for row in rows])
+    fixed = np.array([row[4] for row in rows], int).reshape(-1, 2)
+    length = np.array([row[5] for row in rows])
+    pairs, skipped = _self_pairs(names, rad, fixed, length, margin_mm)
     return Capsules(
-        tuple(names),
-        np.array(rad),
-        np.array(step, int),
-        tuple(kind),
-        fixed_a,
+        names,
+        rad,
+        np.array([row[2] for row in rows], int),
+        tuple(row[3] for row in rows),
+        fixed,
         pairs,
         skipped,
-        fixed_a[:, 0] >= 1,
+        fixed[:, 0] >= 1,
     )
 
 
-def _self_pairs(names, rad, fixed, length, margin_mm):
+def _self_pairs(
+    names: tuple[str, ...],
+    rad: np.ndarray,
+    fixed: np.ndarray,
+    length: np.ndarray,
+    margin_mm: float,
+) -> tuple[np.ndarray, tuple[tuple[str, str, str], ...]]:
     """Return the self-collision pairs checked, and those skipped with why."""
-    pairs, skipped = [], []
+    pairs: list[tuple[int, int]] = []
+    skipped: list[tuple[str, str, str]] = []
     for s in range(len(names)):
         for t in range(s + 1, len(names)):
             joints = fixed[t, 0] - fixed[s, 1]
@@ -204,7 +215,12 @@ class Gaps:
 
 
 def cell_gaps(
-    cell: CellModel, caps: Capsules, model: Model, q_rad: np.ndarray, p0: np.ndarray, f=None
+    cell: CellModel,
+    caps: Capsules,
+    model: Model,
+    q_rad: np.ndarray,
+    p0: np.ndarray,
+    f: Frames | None = None,
 ) -> Gaps:
     """Return the gaps of configurations ``q_rad`` (N, n) to the body and the cell.
 
@@ -277,7 +293,9 @@ def _housing_capsules(caps: Capsules) -> np.ndarray:
     return np.flatnonzero(caps.moving & (np.array(caps.kind) != "tool"))
 
 
-def _housing_gaps(h: Housing, margin_mm: float, caps: Capsules, a, b, p0) -> np.ndarray:
+def _housing_gaps(
+    h: Housing, margin_mm: float, caps: Capsules, a: np.ndarray, b: np.ndarray, p0: np.ndarray
+) -> np.ndarray:
     """Return the gaps (mm) of the capsules to the encoder's housing at exit ``p0``."""
     idx = _housing_capsules(caps)
     start = np.asarray(p0, float).T.reshape(3, 1, -1)  # (3,) or one exit per configuration

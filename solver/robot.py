@@ -18,7 +18,7 @@ from wirecal.solver import params as P
 from wirecal.solver.cell import Capsules, CellModel, Gaps, body_limits, capsules, cell_gaps
 from wirecal.solver.counter import Counter
 from wirecal.solver.exit_geometry import Exit, Pulley
-from wirecal.solver.kinematics import Model, with_errors
+from wirecal.solver.kinematics import Frames, Model, with_errors
 
 CONTROLLER_JOINTS = 6
 """Joints of the arms the controller programs and the log format are written for."""
@@ -159,7 +159,11 @@ class Robot:
         return body_limits(self.joint_min_deg, self.joint_max_deg, self.cell)
 
     def cell_gaps(
-        self, q_deg: np.ndarray, p0: np.ndarray, model: Model | None = None, f=None
+        self,
+        q_deg: np.ndarray,
+        p0: np.ndarray,
+        model: Model | None = None,
+        f: Frames | None = None,
     ) -> Gaps:
         """Return the gaps (mm) of configurations ``q_deg`` to the arm's body and the cell.
 
