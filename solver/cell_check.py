@@ -25,15 +25,22 @@ def _joints(q: np.ndarray) -> str:
 
 
 def move_collision(
-    robot: Robot, model: Model, p0: np.ndarray, a: np.ndarray, b: np.ndarray
+    robot: Robot,
+    model: Model,
+    p0: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    contact: bool = False,
 ) -> str | None:
     """Return the first collision along the joint-interpolated move a → b (deg), or None.
 
     In words: what collides (the pair, or a link and the floor or a volume) and where.
+    A collision is a gap under the cell's margin, or with ``contact`` (the twin's arm as
+    built) capsules that touch: the margin is the planner's, not the robot's.
     """
     q, _ = move_samples(np.r_[a][None], np.r_[b][None])
     gaps = robot.cell_gaps(q, p0, model)
-    hit = np.flatnonzero(gaps.smallest() < 0)
+    hit = np.flatnonzero(gaps.smallest() < (-gaps.margin_mm if contact else 0.0))
     if not hit.size:
         return None
     k = int(hit[0])

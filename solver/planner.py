@@ -365,22 +365,34 @@ def _point_failures(
     }
 
 
+BLOCKED_WHY = {
+    "range": "the wire's length out of the encoder range",
+    "cone": "the wire outside the exit's cone",
+    "wrist": "at the wrist singularity",
+    "cell": "the arm in itself or the cell",
+}
+"""What each of :data:`POINT_CHECKS` blocks, in words (:func:`_blocked`)."""
+
+
 def _blocked(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> str:
-    """Say which constraints blocked the candidates around θ0, with counts."""
+    """Say which constraints blocked the candidates around θ0, with counts.
+
+    Per check of the points themselves (a candidate may fail several), then the moves
+    from θ0 of the candidates that pass them: through the arm or the cell (where the wire
+    is clear), or with the wire closer than ``clearance_mm`` to a link.
+    """
     model = robot.nominal
     q = candidates(robot, theta0, opt, np.random.default_rng(opt.seed))
     p0 = tool_position(model, np.radians(theta0)[None])[0]
     fails = _point_failures(robot, model, p0, q, opt)
-    counts = [f"{int(np.sum(~v))} {k}" for k, v in fails.items() if not np.all(v)]
+    counts = [f"{int(np.sum(~v))} {k} ({BLOCKED_WHY[k]})" for k, v in fails.items() if not v.all()]
     left = q[np.all(list(fails.values()), axis=0)]
     if len(left):
         sweep = move_clearance(robot, model, p0, theta0, left, 10.0, 1, np.inf)
+        counts.append(f"{int(np.sum(sweep == -np.inf))} cell on the move from theta0")
         counts.append(
-            f"{int(np.sum(sweep == -np.inf))} moves from theta0 through the arm or the cell"
-        )
-        counts.append(
-            f"{int(np.sum((sweep > -np.inf) & (sweep < opt.clearance_mm)))} moves with the "
-            "wire too close to a link (clearance)"
+            f"{int(np.sum((sweep > -np.inf) & (sweep < opt.clearance_mm)))} clearance (the "
+            "wire too close to a link on the move from theta0)"
         )
     return f"of {len(q)} candidates, blocked: " + ", ".join(counts)
 

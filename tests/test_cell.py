@@ -193,7 +193,9 @@ def test_vplus_twin_stops_a_colliding_move_naming_the_pair(tmp_path, monkeypatch
 
 
 def test_ur_twin_stops_a_colliding_move_naming_the_pair(tmp_path, monkeypatch):
-    robot_file, plan_file, pair = colliding_plan(tmp_path, "ur5 self")
+    """The twin stops where capsules touch (gen refuses at the margin, a3 and d6 first)."""
+    robot_file, plan_file, _ = colliding_plan(tmp_path, "ur5 self")
+    pair = "link 3 (a3) and tool fixture: 0 mm into each other"
     robot = load_robot(robot_file)
     plan = load_plan(plan_file, robot)
     monkeypatch.setattr("wirecal.gen.urscript.program.check_cell", lambda *_: None)
@@ -270,7 +272,7 @@ def test_blocked_counts_name_the_cell():
     counts = []
     for robot in (viper, raised):
         text = _blocked(robot, np.array(VIPER_THETA0, float), opt)
-        found = re.search(r"^of (\d+) candidates, blocked: .*?(\d+) cell, ", text)
+        found = re.search(r"^of (\d+) candidates, blocked: .*?(\d+) cell \(the arm in", text)
         assert found, text
         counts.append(int(found.group(2)))
     assert counts[1] > counts[0] > 0

@@ -277,11 +277,13 @@ class Cell:
 
         The joint-interpolated move from the current joints, sampled as the planner
         samples moves (a straight-line MOVES is sampled in joint space too), against the
-        arm's body and the robot file's ``[cell]``: a real arm would stop there (a
-        protective stop), so the run stops with the move and the colliding pair.
+        arm's body and the robot file's ``[cell]``: where the true arm's capsules touch
+        (the planner's margin aside), a real arm would stop (a protective stop), so the
+        run stops with the move and the colliding pair.
         """
         start = np.asarray(self.joints, dtype=float)
-        hit = move_collision(self.robot, self.model, self.p0, start, np.asarray(q_deg, float))
+        target = np.asarray(q_deg, float)
+        hit = move_collision(self.robot, self.model, self.p0, start, target, contact=True)
         if hit is None:
             return None
         return f"move {self.moves + 1} to ({', '.join(f'{x:g}' for x in q_deg)}): {hit}"
