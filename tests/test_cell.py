@@ -360,3 +360,30 @@ def test_a_half_space_normal_loads_exactly_when_it_is_a_unit_vector(v):
     else:
         with pytest.raises(WirecalError, match=r"normal: has length"):
             robot_with_cell({"half_space": [space]})
+
+
+angles = st.lists(st.floats(-180, 180, allow_nan=False), min_size=6, max_size=6)
+
+
+@settings(max_examples=30, deadline=None)
+@given(q=angles, turn=st.floats(-180, 180, allow_nan=False))
+def test_turning_joint_1_moves_no_gap_of_the_ur5(q, turn):
+    """Joint 1 turns the whole arm about the vertical axis: the distances between links
+    and to the floor (all the UR5's checks) stay the same, to 1e-6 mm."""
+    robot = load_robot(UR5 / "robot.toml")
+    a = np.array(q)
+    b = a + np.array([turn, 0, 0, 0, 0, 0])
+    ga, gb = robot.cell_gaps(a, np.zeros(3)), robot.cell_gaps(b, np.zeros(3))
+    np.testing.assert_allclose(ga.gap, gb.gap, atol=1e-6)
+
+
+@settings(max_examples=30, deadline=None)
+@given(q=angles, drop=st.floats(0, 500, allow_nan=False))
+def test_lowering_the_floor_widens_exactly_the_floor_gaps(q, drop):
+    viper = tomllib.loads((VIPER / "robot.toml").read_text(encoding="utf-8"))
+    high = robot_from_dict({**viper, "cell": {"floor_z_mm": -100.0}}, "high.toml")
+    low = robot_from_dict({**viper, "cell": {"floor_z_mm": -100.0 - drop}}, "low.toml")
+    gh, gl = high.cell_gaps(np.array(q), np.zeros(3)), low.cell_gaps(np.array(q), np.zeros(3))
+    floor = np.array([label.endswith("and the floor") for label in gh.labels])
+    np.testing.assert_allclose(gl.gap[floor], gh.gap[floor] + drop, atol=1e-9)
+    np.testing.assert_allclose(gl.gap[~floor], gh.gap[~floor], atol=1e-9)
