@@ -809,8 +809,9 @@ def _step_by_step(
         tick(0.5 + 0.4 * len(pools) / n_params)
     if not pools:
         raise WirecalError(
-            f"{robot.source}: no parameter can be isolated around θ0 "
-            f"{theta0.tolist()}; try another --theta0"
+            f"{robot.source}: no parameter can be isolated around θ0 {theta0.tolist()} "
+            f"by the {len(q_all)} usable candidates ({_blocked(robot, theta0, opt)}); try "
+            "another --theta0"
         )
     return pools
 

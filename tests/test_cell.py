@@ -25,7 +25,7 @@ from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import module_text
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
+from wirecal.solver.formats.robot_file import load_robot, robot_file_text, robot_from_dict
 from wirecal.solver.planner import PlanOptions, _blocked, design, predicted_accuracy
 from wirecal.twin.cell import run_measurement
 
@@ -387,3 +387,13 @@ def test_lowering_the_floor_widens_exactly_the_floor_gaps(q, drop):
     floor = np.array([label.endswith("and the floor") for label in gh.labels])
     np.testing.assert_allclose(gl.gap[floor], gh.gap[floor] + drop, atol=1e-9)
     np.testing.assert_allclose(gl.gap[~floor], gh.gap[~floor], atol=1e-9)
+
+
+@pytest.mark.parametrize("arm", ["viper_s650", "puma560", "abb_irb120", "ur5"])
+def test_a_written_robot_file_keeps_its_cell(arm):
+    """robot_file_text (import-urdf, the encoder-scale workflow) writes [cell] back."""
+    robot = load_robot(EXAMPLES / arm / "robot.toml")
+    text = robot_file_text(robot, header=[], row_notes=[""] * 6, encoder_note="")
+    again = robot_from_dict(tomllib.loads(text), "again.toml")
+    assert again.cell == robot.cell
+    assert again.cell.floor_z_mm == {"viper_s650": -335.0, "puma560": -671.83}.get(arm, 0.0)

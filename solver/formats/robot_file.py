@@ -717,6 +717,40 @@ def _scale_lines(enc: Encoder) -> list[str]:
     return lines
 
 
+def _cell_lines(cell: CellModel) -> list[str]:
+    """Return the robot file lines of ``[cell]`` (the floor and margin always written)."""
+
+    def vec(values) -> str:
+        return "[" + ", ".join(_num(v) for v in values) + "]"
+
+    lines = [
+        "",
+        "[cell]",
+        "# the mounting plane in frame 0, and the gap kept from it, the volumes and the arm itself",
+        f"floor_z_mm = {_num(cell.floor_z_mm)}",
+        f"margin_mm = {_num(cell.margin_mm)}",
+    ]
+    for key, limits in (("body_min_deg", cell.body_min_deg), ("body_max_deg", cell.body_max_deg)):
+        if limits is not None:
+            lines.append(f"{key} = {vec(limits)}")
+    if cell.housing is not None:
+        h = cell.housing
+        lines += [
+            "",
+            "[cell.encoder_housing]",
+            f"direction = {vec(h.direction)}",
+            f"length_mm = {_num(h.length_mm)}",
+            f"radius_mm = {_num(h.radius_mm)}",
+        ]
+    for b in cell.boxes:
+        lines += ["", "[[cell.box]]", f"name = {json.dumps(b.name, ensure_ascii=False)}"]
+        lines += [f"min_mm = {vec(b.min_mm)}", f"max_mm = {vec(b.max_mm)}"]
+    for w in cell.half_spaces:
+        lines += ["", "[[cell.half_space]]", f"name = {json.dumps(w.name, ensure_ascii=False)}"]
+        lines += [f"point_mm = {vec(w.point_mm)}", f"normal = {vec(w.normal)}"]
+    return lines
+
+
 def robot_file_text(
     robot: Robot,
     *,
@@ -786,6 +820,7 @@ def robot_file_text(
         "",
         "[calibration]",
         "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
+        *_cell_lines(robot.cell),
     ]
     if urdf_source is not None and robot.urdf is not None:
         lines += [
