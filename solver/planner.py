@@ -967,8 +967,10 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
     """Return the visiting order from θ0 and back, or None.
 
     The visiting order from θ0 and back (nearest neighbour, improved by 2-opt) over
-    moves that keep the wire clear (``move_ok``); a point reached through a via point can
-    only come first. Returns the order, or None when no order keeps every move clear.
+    moves that keep the arm and the wire clear (``move_ok``); a point reached through a
+    via point can only come first, and last only when it is the step's only point and its
+    direct move back to θ0 is clear. Returns the order, or None when no order keeps every
+    move clear.
     """
     n = len(pts)
     a, b = np.repeat(pts, n, axis=0), np.tile(pts, (n, 1))
@@ -984,9 +986,13 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
     start = move_s(t0, first) + np.where(has_via, move_s(first, pts), 0.0)
     back = move_s(pts, t0)
     bad = 1e4
+    # the way back to θ0 is the way there reversed, except from a point reached via
+    home = np.ones(n, bool)
+    home[has_via] = move_ok(robot, model, p0, pts[has_via], t0[has_via], opt)
+    last_bad = np.where(has_via & (n > 1), bad, 0.0) + np.where(home, 0.0, bad)
 
     def total(path):
-        t = start[path[0]] + back[path[-1]] + bad * (has_via[path[-1]] and n > 1)
+        t = start[path[0]] + back[path[-1]] + last_bad[path[-1]]
         for x, y in itertools.pairwise(path):
             t += leg[x, y] + bad * (not clear[x, y] or has_via[y])
         return t
