@@ -101,6 +101,7 @@ class Design:
     predicted: dict[str, float] = field(default_factory=dict)
     robot_time_s: float = 0.0
     exit_line: str = ""  # the wire exit and the plan's largest exit angle, in words
+    cell_line: str = ""  # the cell the plan keeps clear of, in words
     method: Method = "stepwise"  # the estimator the points were chosen for
 
     def header(self) -> str:
@@ -122,6 +123,7 @@ class Design:
             f"({self.plan.n_points} points, "
             f"{sum(len(s.via_deg) for s in self.plan.steps)} via points).",
             self.exit_line,
+            self.cell_line,
         ]
         if self.method == "joint":
             lines.append(
@@ -725,6 +727,7 @@ def _design_at(
     d.predicted = predicted_accuracy(robot, plan, unplanned=tuple(excluded))
     d.robot_time_s = robot_time(robot, plan, opt.run)
     d.exit_line = exit_line(robot, plan)
+    d.cell_line = cell_line(robot)
     tick(1.0)
     return d
 
@@ -920,6 +923,26 @@ def exit_line(robot: Robot, plan: Plan) -> str:
     largest = largest_exit_deg(robot, plan)
     text = f"Wire exit: {describe(robot.encoder.exit)}"
     return text + ("." if largest is None else f"; largest exit angle {largest:.1f} deg.")
+
+
+def cell_line(robot: Robot) -> str:
+    """Return the robot file's cell in words (plan header): what every move keeps clear of."""
+    c = robot.cell
+    narrowed = np.flatnonzero(
+        (robot.body_limits_deg[0] > robot.joint_min_deg)
+        | (robot.body_limits_deg[1] < robot.joint_max_deg)
+    )
+    body = (
+        "body limits on joint " + ", ".join(str(j + 1) for j in narrowed)
+        if narrowed.size
+        else "no body limits"
+    )
+    return (
+        f"Cell: floor at z = {c.floor_z_mm:g} mm of frame 0, margin {c.margin_mm:g} mm, "
+        f"{len(c.boxes)} boxes, {len(c.half_spaces)} half-spaces, "
+        f"{'an' if c.housing else 'no'} encoder housing, {body}: theta0, every point and "
+        "every move keep the arm clear of itself and the cell (docs/cell.md)."
+    )
 
 
 def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarray:
