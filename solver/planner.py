@@ -7,7 +7,9 @@ Candidates are configurations that move one to three joints away from θ0 (as th
 points do) or all of them; each is screened at once (vectorised) for the joint limits with a
 margin, the wire length (above a minimum, within the encoder's range), the exit angle (a
 wire leaving an eyelet stays within its cone, :mod:`~wirecal.solver.exit_geometry`), the
-wrist singularity and the wire's clearance from the links along the joint-interpolated move from θ0.
+wrist singularity, the arm clear of its own body and the cell (floor, keep-out volumes,
+body limits: :mod:`~wirecal.solver.cell`) and the wire's clearance from the links along the
+joint-interpolated move from θ0.
 
 * **Order** (§3.4): among the parameters not yet identified, the next is the one that the
   most informative isolating points single out: points where |Ψ_t| ≤ tol·|Ψ_j| for every
@@ -302,8 +304,8 @@ def screen(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Return which candidates are usable, and their via points.
 
-    Which candidates are usable (wire length, an eyelet's exit cone, wrist singularity, a
-    clear move from θ0)
+    Which candidates are usable (wire length, an eyelet's exit cone, wrist singularity,
+    the arm clear of itself and the cell, a clear move from θ0)
     and, for those whose direct move is not clear, a via point that makes it clear (the
     arm joints first, or the wrist first); NaN rows where the direct move is clear. The
     moves are sampled coarsely here; ``reach_ok`` checks the points chosen from finely.
@@ -334,21 +336,17 @@ def screen(
     return ok & (direct | ~np.isnan(via[:, 0])), via
 
 
-POINT_CHECKS = ("range", "cone", "wrist", "cell")
-"""The checks of a candidate point itself, in the order :func:`_point_checks` applies them."""
-
-
 def _point_checks(
     robot: Robot, model, p0: np.ndarray, q: np.ndarray, opt: PlanOptions
 ) -> np.ndarray:
-    """Return which candidate points pass every check of their own (:data:`POINT_CHECKS`)."""
+    """Return which candidate points pass every check of their own (:data:`BLOCKED_WHY`)."""
     return np.all(list(_point_failures(robot, model, p0, q, opt).values()), axis=0)
 
 
 def _point_failures(
     robot: Robot, model, p0: np.ndarray, q: np.ndarray, opt: PlanOptions
 ) -> dict[str, np.ndarray]:
-    """Return, per check of :data:`POINT_CHECKS`, which candidate points pass it.
+    """Return, per check of :data:`BLOCKED_WHY`, which candidate points pass it.
 
     The wire length (above ``min_wire_mm``, within the encoder's range less the margin),
     an eyelet's exit cone (the points read the encoder), the wrist singularity of an
@@ -373,7 +371,8 @@ BLOCKED_WHY = {
     "wrist": "at the wrist singularity",
     "cell": "the arm in itself or the cell",
 }
-"""What each of :data:`POINT_CHECKS` blocks, in words (:func:`_blocked`)."""
+"""The checks of a candidate point itself (:func:`_point_failures`) and what each
+blocks, in words (:func:`_blocked`)."""
 
 
 def _blocked(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> str:
