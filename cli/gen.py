@@ -191,8 +191,9 @@ def gen(
     the controller: the paper's step-by-step method, then optionally a joint polish) and
     wc.patch (the table to enter in SPEC). Every target is a literal #PPOINT inside the
     joint limits with --margin, and the nominal wire stays within the encoder's range
-    less --range-margin at every point and along every move; the same inputs give the
-    same bytes.
+    less --range-margin at every point and along every move, with the arm clear of
+    itself, the floor and the robot file's [cell] (a plan that is not is refused, naming
+    step, point and the colliding pair); the same inputs give the same bytes.
     """
     rb = load_robot(robot)
     if language is not None and language != rb.controller.language:

@@ -20,6 +20,7 @@ from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_
 from wirecal.gen.targets import check_limits, joint_literal, run_steps
 from wirecal.gen.templating import render
 from wirecal.gen.vplus.literals import double_literal, long_lines, ppoint
+from wirecal.solver.cell_check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
@@ -188,6 +189,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
     """Return the whole V+ module; raise :class:`WirecalError` if a rule would be broken."""
     check_limits(robot, plan, opt.margin_deg)
     check_wire_range(robot, plan, opt.range_margin_mm)
+    check_cell(robot, plan)
     tables = build_tables(robot, plan)
     _check_options(robot, opt, tables)
     if np.any(np.abs(tables.nominal) * 10000 >= 2**24):
