@@ -334,7 +334,7 @@ def _robot_doc() -> dict:
         ("kinematics", "joint_speed_confirmed", "no", "give true or false"),
         ("cell", "floor_z_mm", "x", "cell.floor_z_mm"),
         ("cell", "margin_mm", -1.0, "cell.margin_mm"),
-        ("cell", "body_min_deg", [0.0] * 6, "give body_min_deg and body_max_deg together"),
+        ("cell", "body_min_deg", [200.0] * 6, "joint 3: 175 is not above body_min_deg"),
         ("cell", "colour", 1, "colour"),
         ("urdf", "wire_point_mm", [1.0, 2.0], "urdf.wire_point_mm"),
     ],

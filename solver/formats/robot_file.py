@@ -830,6 +830,7 @@ def robot_file_text(
     speed_notes: Sequence[str] = (),
     geometry_notes: Sequence[str] | None = None,
     tables: Sequence[str] = (),
+    write_cell: bool = True,
 ) -> str:
     """Return a robot file for ``robot`` that reads back to the same numbers.
 
@@ -838,8 +839,8 @@ def robot_file_text(
     (one per joint) comment the DH rows and limits; ``urdf_source`` is written as given
     (relative to the robot file's folder). ``speed_notes`` comment the joint speeds;
     the link radii are written as a ``[geometry]`` table with ``geometry_notes`` as its
-    comments, and the cell model as ``[cell]`` unless ``tables`` (lines of further tables,
-    appended as given) hold their own.
+    comments, and the cell model as ``[cell]`` unless not ``write_cell`` (the caller writes
+    its own, or none, in ``tables``: lines of further tables, appended as given).
     """
     dh = robot.dh_deg()
 
@@ -909,7 +910,7 @@ def robot_file_text(
     if robot.link_radius_mm is not None:
         lines += ["", "[geometry]", *(f"# {line}" for line in geometry_notes or ())]
         lines.append(f"link_radius_mm = {vec(robot.link_radius_mm)}")
-    if not any(line.strip() == "[cell]" for line in tables):
+    if write_cell:
         lines += _cell_lines(robot.cell)
     if urdf_source is not None and robot.urdf is not None:
         lines += ["", *_urdf_lines(robot.urdf, urdf_source)]
