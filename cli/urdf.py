@@ -161,13 +161,15 @@ def _export_text(robot, patch, source) -> str:
     rob = load_robot(robot)
     model = rob.model(read_patch(patch).offsets_for(rob) if patch else {})
     if source is None and rob.urdf is None:
+        lo, hi = rob.body_limits_deg  # a URDF's limits: the arm's own, inside the data sheet's
         return dh_urdf_text(
             rob.name,
             model.dh,
             model.tool_point,
-            rob.joint_min_deg,
-            rob.joint_max_deg,
+            lo,
+            hi,
             rob.joint_speed_deg_s,
+            rob.cell.floor_z_mm,
         )
     else:
         base = rob.urdf.base_link if rob.urdf else None
