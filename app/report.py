@@ -180,7 +180,9 @@ def render_report(
                 "std": jt.std[k] if jt is not None and jt.std is not None else None,
                 "identified": jt is None or jt.std is None or bool(np.isfinite(jt.std[k])),
                 "controller": controller.stepwise.offsets.get(name) if controller else None,
-                "polished": controller.polished.offsets.get(name) if controller else None,
+                "polished": controller.polished.offsets.get(name)
+                if controller and controller.polished
+                else None,
                 "truth": (truth or {}).get(name),
             }
         )

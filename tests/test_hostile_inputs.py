@@ -223,3 +223,26 @@ def test_copy_of_example_is_clean(tmp_path):
     """The corpus is hostile because of the edits, not because of the examples."""
     shutil.copy(ROBOT, tmp_path / "robot.toml")
     assert invoke("psi", tmp_path / "robot.toml", PLAN).exit_code == 0
+
+
+# -- the fault matrix's defect list (issue 22 item 4) ------------------------------------
+
+UR5 = VIPER.parent / "ur5"
+
+
+def test_report_controller_for_a_ur_robot(tmp_path):
+    """URScript's controller solver has no polish: one controller column, no crash."""
+    log_path, html = tmp_path / "ur.csv", tmp_path / "ur.html"
+    r = invoke("simulate", UR5 / "robot.toml", UR5 / "plan.toml", "-o", log_path, "--seed", 1)
+    assert r.exit_code == 0, r.output
+    r = invoke(
+        "report", UR5 / "robot.toml", UR5 / "plan.toml", log_path, "-o", html, "--controller"
+    )
+    outcome_is_clean(r)
+    assert r.exit_code == 0, r.output
+    text = html.read_text()
+    assert "controller (wc_solve)" in text
+    assert "wc.solve2" not in text
+    # wc_solve agrees with the Python reference to its single-precision floats
+    m = re.search(r"differs from the\s+Python reference by ([0-9.e+-]+) \(stepwise\) deg/mm", text)
+    assert m is not None and float(m.group(1)) < 1e-3
