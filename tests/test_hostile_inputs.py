@@ -245,4 +245,5 @@ def test_report_controller_for_a_ur_robot(tmp_path):
     assert "wc.solve2" not in text
     # wc_solve agrees with the Python reference to its single-precision floats
     m = re.search(r"differs from the\s+Python reference by ([0-9.e+-]+) \(stepwise\) deg/mm", text)
-    assert m is not None and float(m.group(1)) < 1e-3
+    assert m is not None
+    assert float(m.group(1)) < 1e-3
