@@ -44,13 +44,22 @@ def reduction(before: Stats, after: Stats) -> dict[str, float | None]:
     return out
 
 
+MIN_TRAVEL_MM = 1.0
+"""Least spread of the wire lengths over a configuration log's poses (mm): the poses lie
+across the workspace, hundreds of millimetres apart, so a smaller spread means the
+encoder did not count."""
+
+
 def config_discrepancy(log: ValidationLog, counter: Counter) -> Stats:
     """Return, per pose, the largest wire-length difference among its configurations.
 
     Per pose, the largest difference among the wire lengths of its four configurations
-    (mm); the counts are compared modulo the width of the robot's ``counter``.
+    (mm); the counts are compared modulo the width of the robot's ``counter``. A log whose
+    lengths do not change from pose to pose is refused (:data:`MIN_TRAVEL_MM`): its
+    discrepancies would all be zero, a perfect score from a dead encoder.
     """
     rows = log.rows
+    _check_counted(log, counter)
     out = []
     incomplete = []
     for number in np.unique(rows[:, 0]):
@@ -67,6 +76,22 @@ def config_discrepancy(log: ValidationLog, counter: Counter) -> Stats:
             "configurations; finish the run"
         )
     return Stats.of(out)
+
+
+def _check_counted(log: ValidationLog, counter: Counter) -> None:
+    """Raise :class:`WirecalError` when the encoder did not count over the log's poses."""
+    c = log.rows[:, 8]
+    if len(np.unique(log.rows[:, 0])) < 2:
+        return
+    travel_mm = float(np.ptp(counter.difference(c, c[0]))) * abs(log.mm_per_count)
+    if travel_mm < MIN_TRAVEL_MM:
+        raise WirecalError(
+            f"{log.source}: the wire length changes by {travel_mm:.4f} mm over "
+            f"{len(c)} readings at poses across the workspace (all counts near "
+            f"{c[0]:.0f}; less than {MIN_TRAVEL_MM:g} mm): the encoder did not count. "
+            "Check its cable, the counter (encoder.channel in the robot file) and that "
+            "the wire is attached, then repeat the run"
+        )
 
 
 def plane_residuals(log: ValidationLog) -> tuple[Stats, np.ndarray]:
