@@ -19,7 +19,8 @@ import numpy as np
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import REFERENCE_STEP, Log, Reading, read_log
 from wirecal.solver.plan import Plan
-from wirecal.solver.robot import Robot
+from wirecal.solver.robot import Encoder, Robot
+from wirecal.solver.scale import reference_problems
 
 
 @dataclass(frozen=True)
@@ -150,7 +151,7 @@ def check_log(
         distance = _lengths(rows, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
     else:
         distance = rows.counts
-    reference_mm = _reference_pairs(rows, robot.encoder.counter, mpc, src, problems)
+    reference_mm = _reference_pairs(rows, robot.encoder, mpc, src, problems)
     if problems:
         raise WirecalError(problems)
     missing = tuple(
@@ -289,10 +290,17 @@ def _check_reference(r: Reading) -> None:
         )
 
 
-def _reference_pairs(rows: _Rows, counter, mpc: float, src: str, problems: list[str]) -> np.ndarray:
-    """Return each reference pair's nest B − nest A length (mm, nominal scale)."""
-    refs = rows.references
-    out = []
+def _reference_pairs(
+    rows: _Rows, enc: Encoder, mpc: float, src: str, problems: list[str]
+) -> np.ndarray:
+    """Return each reference pair's nest B − nest A length (mm, nominal scale).
+
+    The pairs are checked against the gauge (:func:`~wirecal.solver.scale.reference_problems`)
+    when the robot file gives one.
+    """
+    refs, counter = rows.references, enc.counter
+    out: list[float] = []
+    lines: list[tuple[int, int]] = []
     for i in sorted(refs):
         if i % 2 == 0:
             continue
@@ -303,12 +311,20 @@ def _reference_pairs(rows: _Rows, counter, mpc: float, src: str, problems: list[
             )
             continue
         out.append(float(counter.difference(refs[i + 1].counts, refs[i].counts)) * mpc)
+        lines.append((refs[i].line, refs[i + 1].line))
     for i in sorted(refs):
         if i % 2 == 0 and i - 1 not in refs:
             problems.append(
                 f"{src}:{refs[i].line}: the reference reading in nest B (index {i}) has no "
                 f"nest A reading (index {i - 1}); repeat the reference step"
             )
+    if out and enc.reference_length_mm is not None:
+        problems += [
+            f"{src}:{p}"
+            for p in reference_problems(
+                np.array(out), lines, enc.reference_length_mm, enc.scale_tolerance_ppm
+            )
+        ]
     return np.array(out)
 
 

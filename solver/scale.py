@@ -88,6 +88,71 @@ def estimate_scale(
     return ScaleEstimate(factor, std, n, length_mm, ell)
 
 
+SEATING_TOLERANCE_MM = 0.05
+"""How far (mm) a pair's B − A may read from the certified length beyond the scale's own
+tolerance: five times the reading noise of a difference (0.01 mm per reading); a tip
+seated on a burr or dirt, or not pushed home, reads further off."""
+
+UNMOVED_FRACTION = 0.05
+"""A pair whose |B − A| is below this fraction of the gauge's length: the tip stayed in
+one nest (or the encoder did not count)."""
+
+
+def reference_problems(
+    measured_mm: np.ndarray, lines: list[tuple[int, int]], length_mm: float, tolerance_ppm: float
+) -> list[str]:
+    """Name what went wrong in the reference step, one ``line: problem`` per cause.
+
+    ``measured_mm`` is each pair's B − A at the nominal scale, ``lines`` each pair's
+    (nest A, nest B) line. A pair near 0 is an unmoved tip, one near −L swapped nests;
+    the others must read L within the scale's tolerance plus
+    :data:`SEATING_TOLERANCE_MM`: one pair off is a bad seating, every pair off by the
+    same amount a wrong certified length (or mm_per_count).
+    """
+    ell = np.asarray(measured_mm, dtype=float)
+    allowed = length_mm * tolerance_ppm * PPM + SEATING_TOLERANCE_MM
+    out: list[str] = []
+    off: list[int] = []
+    for k, (x, (a, b)) in enumerate(zip(ell, lines, strict=True)):
+        where = f"{a}-{b}: reference pair {k + 1} reads B − A = {x:+.3f} mm"
+        if abs(x) < UNMOVED_FRACTION * length_mm:
+            out.append(
+                f"{where} of a {length_mm:g} mm gauge ([encoder] reference_length_mm): "
+                "the tip did not move from nest A to nest B (or the encoder did not "
+                "count); seat it in each nest in turn and repeat the reference step"
+            )
+        elif abs(x + length_mm) < UNMOVED_FRACTION * length_mm:
+            out.append(
+                f"{where}, minus the gauge's length: nests A and B were swapped; seat the "
+                "tip in nest A (the one nearer the encoder) first"
+            )
+        elif abs(x - length_mm) > allowed:
+            off.append(k)
+    if off:
+        out += _off_pairs(ell, lines, off, length_mm, allowed)
+    return out
+
+
+def _off_pairs(
+    ell: np.ndarray, lines: list[tuple[int, int]], off: list[int], length_mm: float, allowed: float
+) -> list[str]:
+    """Name the pairs that read the gauge beyond ``allowed``: bad seatings or a wrong length."""
+    spread = float(np.ptp(ell[off]))
+    if len(off) == len(ell) and (len(off) > 1 and spread <= 2 * SEATING_TOLERANCE_MM):
+        return [
+            f"{lines[0][0]}: every reference pair reads {float(ell.mean()):.3f} mm against "
+            f"[encoder] reference_length_mm = {length_mm:g} (± {allowed:.3f} mm): check "
+            "the gauge's certified length and mm_per_count in the robot file"
+        ]
+    return [
+        f"{lines[k][0]}-{lines[k][1]}: reference pair {k + 1} reads B − A = {ell[k]:.3f} mm, "
+        f"{ell[k] - length_mm:+.3f} mm from the gauge's {length_mm:g} mm (allowed ± "
+        f"{allowed:.3f}): a bad seating of the tip; clean the nests and repeat the "
+        "reference step"
+        for k in off
+    ]
+
+
 @dataclass(frozen=True)
 class Drift:
     """A linear drift of the zero readings over the run's time."""

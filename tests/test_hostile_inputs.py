@@ -247,3 +247,75 @@ def test_report_controller_for_a_ur_robot(tmp_path):
     m = re.search(r"differs from the\s+Python reference by ([0-9.e+-]+) \(stepwise\) deg/mm", text)
     assert m is not None
     assert float(m.group(1)) < 1e-3
+
+
+def _with_gauge(tmp_path):
+    """The Viper's robot file with a 500 mm reference gauge, and a simulated log of it."""
+    robot = tmp_path / "gauge.toml"
+    robot.write_text(
+        ROBOT.read_text().replace("[encoder]\n", "[encoder]\nreference_length_mm = 500.0\n")
+    )
+    log_path = tmp_path / "gauge.csv"
+    r = invoke("simulate", robot, PLAN, "-o", log_path, "--seed", 2)
+    assert r.exit_code == 0, r.output
+    return robot, log_path
+
+
+def _edit_references(log_path, edit) -> None:
+    """Apply ``edit(index, counts, counts of the pair's nest A) → counts`` to each reference row."""
+    lines = log_path.read_text().splitlines()
+    nest_a = 0.0
+    for k, line in enumerate(lines):
+        cells = line.split(",")
+        if cells[0] == "reference":
+            index, counts = int(cells[2]), float(cells[9])
+            nest_a = counts if index % 2 else nest_a
+            cells[9] = f"{edit(index, counts, nest_a):.4f}"
+            lines[k] = ",".join(cells)
+    log_path.write_text("\n".join(lines) + "\n")
+
+
+MM_PER_COUNT = 0.025488
+REFERENCE_FAULTS = {
+    # nest B read where nest A was: B = A
+    "unmoved tip": (
+        lambda i, c, a: a,
+        r"gauge.csv:7-8: reference pair 1 reads B − A = \+0\.000 mm of a 500 mm gauge "
+        r"\(\[encoder\] reference_length_mm\): the tip did not move",
+    ),
+    # every pair measured B first: B − A ≈ −500 mm
+    "swapped nests": (
+        lambda i, c, a: c if i % 2 else 2 * a - c,
+        r"reference pair 1 reads B − A = -(?:499|500)\.\d+ mm, minus the gauge's length: "
+        r"nests A and B were swapped",
+    ),
+    # the second pair's tip sat 0.3 mm proud of nest B
+    "one bad seating": (
+        lambda i, c, a: c - 0.3 / MM_PER_COUNT if i == 4 else c,
+        r"gauge.csv:9-10: reference pair 2 reads B − A = 499\.\d+ mm, -0\.3\d\d mm from the "
+        r"gauge's 500 mm .*a bad seating",
+    ),
+    # every pair 1 mm long: the certified length (or mm_per_count) is wrong
+    "wrong gauge length": (
+        lambda i, c, a: c if i % 2 else c + 1.0 / MM_PER_COUNT,
+        r"every reference pair reads 50[01]\.\d+ mm against \[encoder\] reference_length_mm = 500",
+    ),
+}
+
+
+@pytest.mark.parametrize("fault", REFERENCE_FAULTS)
+def test_reference_step_faults_are_named(tmp_path, fault):
+    robot, log_path = _with_gauge(tmp_path)
+    edit, message = REFERENCE_FAULTS[fault]
+    _edit_references(log_path, edit)
+    r = invoke("solve", robot, PLAN, log_path)
+    outcome_is_clean(r)
+    assert r.exit_code == 2, r.output
+    assert re.search(message, r.output), r.output
+
+
+def test_reference_step_clean_log_is_read(tmp_path):
+    robot, log_path = _with_gauge(tmp_path)
+    r = invoke("solve", robot, PLAN, log_path)
+    assert r.exit_code == 0, r.output
+    assert "encoder scale from the reference (3 pair(s)" in r.output
