@@ -434,7 +434,7 @@ def solve(
         raise WirecalError(f"{rb.controller_problem()}; 'wirecal solve' reads that log")
     pl = load_plan(plan, rb)
     paths = [patch_path, *companion_paths(rb, patch_path)] if patch_path else []
-    if log == STDIN and sys.stdin.isatty():
+    if log == STDIN and sys.stdin is not None and sys.stdin.isatty():
         click.echo("paste the log, then Ctrl-D (Windows: Ctrl-Z, Enter)", err=True)
     with Outputs(paths, force=force, inputs=[robot, plan, log]) as out:
         parsed = read_log(log)

@@ -8,6 +8,7 @@ import click
 
 from wirecal.cli.main import user_errors
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.fileio import read_input
 from wirecal.twin.urscript.parser import parse_program
 from wirecal.twin.vplus.parser import parse_module
 
@@ -34,13 +35,7 @@ def lint(files, external_calls):
 
     Exit status: 0 every file clean; 1 problems found; 2 a file cannot be read.
     """
-    texts = {}
-    for path in files:
-        try:
-            with open(path, "rb") as f:
-                texts[path] = f.read().decode("latin-1")
-        except OSError as exc:
-            raise WirecalError([f"{path}: cannot read: {exc.strerror}"]) from None
+    texts = {path: read_input(path, "program file")[0].decode("latin-1") for path in files}
     problems = 0
     for path, text in texts.items():
         try:

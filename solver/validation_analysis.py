@@ -60,22 +60,22 @@ def config_discrepancy(log: ValidationLog, counter: Counter) -> Stats:
     """
     rows = log.rows
     _check_counted(log, counter)
-    out = []
-    incomplete = []
-    for number in np.unique(rows[:, 0]):
-        r = rows[rows[:, 0] == number]
-        if len(r) != 4:
-            incomplete.append(int(number))
-            continue
-        c = r[:, 8]
-        rel = counter.difference(c, c[0])
-        out.append(float((rel.max() - rel.min()) * abs(log.mm_per_count)))
-    if incomplete:
+    poses, first, group, size = np.unique(
+        rows[:, 0], return_index=True, return_inverse=True, return_counts=True
+    )
+    if np.any(size != 4):
+        incomplete = [int(p) for p in poses[size != 4]]
         raise WirecalError(
             f"{log.source}: poses {incomplete[:10]} lack one of the four "
             "configurations; finish the run"
         )
-    return Stats.of(out)
+    c = rows[:, 8]
+    rel = counter.difference(c, c[first][group])  # each pose's counts from its first
+    hi = np.full(len(poses), -np.inf)
+    lo = np.full(len(poses), np.inf)
+    np.maximum.at(hi, group, rel)
+    np.minimum.at(lo, group, rel)
+    return Stats.of((hi - lo) * abs(log.mm_per_count))
 
 
 def _check_counted(log: ValidationLog, counter: Counter) -> None:

@@ -10,6 +10,8 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import subprocess
+import sys
 
 import click
 import pytest
@@ -319,3 +321,84 @@ def test_reference_step_clean_log_is_read(tmp_path):
     r = invoke("solve", robot, PLAN, log_path)
     assert r.exit_code == 0, r.output
     assert "encoder scale from the reference (3 pair(s)" in r.output
+
+
+def _run_closed_stdin(*args):
+    """Run wirecal in a process whose standard input is closed (a shell's ``0<&-``)."""
+    code = "from wirecal.cli.main import main; main()"
+    return subprocess.run(
+        [sys.executable, "-c", code, *map(str, args)],
+        preexec_fn=lambda: os.close(0),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["solve", ROBOT, PLAN, "-"], ["lint", "-"]],
+    ids=lambda a: " ".join(map(str, a)),
+)
+def test_closed_standard_input(args):
+    r = _run_closed_stdin(*args)
+    assert r.returncode == 2, r.stderr
+    assert "Traceback" not in r.stderr
+    assert "error: <stdin>: standard input is closed" in r.stderr
+
+
+ZERO = "/dev/zero"
+ENDLESS = [  # every reader given an endless file: refused after 16 MiB, not read forever
+    ["lint", ZERO],
+    ["psi", ZERO, PLAN],
+    ["psi", ROBOT, ZERO],
+    ["solve", ROBOT, PLAN, ZERO],
+    ["validate", "plane", ZERO],
+    ["simulate", ROBOT, PLAN, "-o", "OUT", "--errors", ZERO],
+    ["gen", ROBOT, PLAN, "-o", "OUT", "--patch", ZERO],
+    ["gen", ROBOT, PLAN, "-o", "OUT", "--validation", ZERO],
+]
+
+
+@pytest.mark.skipif(not os.path.exists(ZERO), reason="no /dev/zero")
+@pytest.mark.parametrize("args", ENDLESS, ids=lambda a: " ".join(map(str, a)))
+def test_endless_input_is_refused(tmp_path, args):
+    r = invoke(*(tmp_path / a if a == "OUT" else a for a in args))
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert "/dev/zero: more than 16 MiB: not a" in r.output
+    assert not (tmp_path / "OUT").exists()
+
+
+@pytest.mark.parametrize("slot", ["ROBOT", "PLAN"])
+@pytest.mark.parametrize("opening", ["[", "{x = "])
+def test_deeply_nested_toml_is_refused(tmp_path, slot, opening):
+    """Python's TOML reader recurses per level: 5000 levels are refused before it reads them."""
+    closing = "]" if opening == "[" else "}"
+    deep = tmp_path / "deep.toml"
+    deep.write_text(f"a = {opening * 5000}1{closing * 5000}\n")
+    values = {"ROBOT": ROBOT, "PLAN": PLAN, slot: deep}
+    r = invoke("psi", values["ROBOT"], values["PLAN"])
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert re.search(r"deep\.toml: arrays and tables nested 500\d deep \(more than 16", r.output)
+
+
+def test_oversized_plan_step_is_refused(tmp_path):
+    big = tmp_path / "big.toml"
+    rows = "".join(f"[0, -90, 210, -90, -26, {-180 + k % 300 * 0.1:.1f}],\n" for k in range(1001))
+    big.write_text(PLAN.read_text().replace("points_deg = [\n", f"points_deg = [\n{rows}", 1))
+    r = invoke("psi", ROBOT, big)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert "big.toml: step[1].points_deg: has 1007 rows; give at most 1000" in r.output
+
+
+def test_oversized_robot_is_refused(tmp_path):
+    robot = tmp_path / "robot.toml"
+    rows = ", ".join(["[0, 0, 0, 100]"] * 13)
+    text = re.sub(r"^dh = \[.*?^\]$", f"dh = [{rows}]", ROBOT.read_text(), flags=re.M | re.S)
+    robot.write_text(text)
+    r = invoke("psi", robot, PLAN)
+    outcome_is_clean(r)
+    assert "kinematics.dh: has 13 rows; give at most 12" in r.output

@@ -23,15 +23,13 @@ double quotes (a spreadsheet's export), rows with the wrong number of fields (ea
 from __future__ import annotations
 
 import hashlib
-import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from wirecal.solver.errors import WirecalError
-
-STDIN = "-"
-"""The file name that means standard input (a log pasted from the controller's terminal)."""
+from wirecal.solver.formats.fileio import STDIN as STDIN  # the name callers know
+from wirecal.solver.formats.fileio import read_input
 
 
 @dataclass(frozen=True)
@@ -66,14 +64,7 @@ class Table:
 
 def read_source(path: str | Path, what: str) -> tuple[str, str, str]:
     """Return the text, its source name and the sha256 of its bytes; ``-`` reads standard input."""
-    if str(path) == STDIN:
-        raw, source = sys.stdin.buffer.read(), "<stdin>"
-    else:
-        source = str(path)
-        try:
-            raw = Path(path).read_bytes()
-        except OSError as exc:
-            raise WirecalError(f"{source}: cannot read {what}: {exc.strerror or exc}") from None
+    raw, source = read_input(path, what)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
