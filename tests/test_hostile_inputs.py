@@ -402,3 +402,42 @@ def test_oversized_robot_is_refused(tmp_path):
     r = invoke("psi", robot, PLAN)
     outcome_is_clean(r)
     assert "kinematics.dh: has 13 rows; give at most 12" in r.output
+
+
+def _nested_program(suffix: str, blocks: int, operators: int) -> str:
+    """A V+ (.v2) or URScript (.script) program: ``blocks`` nested IFs around a line with a
+    chain of ``operators`` additions."""
+    expression = "1" + "+1" * operators
+    if suffix == ".v2":
+        body = ["    IF 1 THEN"] * blocks + [f"    x = {expression}"] + ["    END"] * blocks
+        return "\n".join([".PROGRAM t()", *body, ".END"]) + "\n"
+    opens = [" " * (k + 1) + "if True:" for k in range(blocks)]
+    ends = [" " * (blocks - k) + "end" for k in range(blocks)]
+    return "\n".join(["def t():", *opens, " " * (blocks + 1) + f"x = {expression}", *ends, "end"])
+
+
+@pytest.mark.parametrize("suffix", [".v2", ".script"])
+@pytest.mark.parametrize(
+    ("blocks", "operators", "message"),
+    [
+        (330, 1, r":6[56]: (t: )?blocks nested more than 64 deep; wirecal reads at most 64"),
+        (2, 1000, r":4: (t: )?the line nests 100\d levels deep .* wirecal reads at most 100"),
+    ],
+    ids=["330 nested IFs", "1000 chained operators"],
+)
+def test_lint_refuses_deep_nesting(tmp_path, suffix, blocks, operators, message):
+    path = tmp_path / f"deep{suffix}"
+    path.write_text(_nested_program(suffix, blocks, operators))
+    r = invoke("lint", path)
+    outcome_is_clean(r)
+    assert r.exit_code == 1, r.output
+    assert re.search(re.escape(path.name) + message, r.output), r.output
+
+
+@pytest.mark.parametrize("suffix", [".v2", ".script"])
+def test_lint_reads_nesting_up_to_its_bounds(tmp_path, suffix):
+    """63 IFs inside the program (64 blocks with URScript's def) and a 90-operator line."""
+    path = tmp_path / f"deep{suffix}"
+    path.write_text(_nested_program(suffix, 64 if suffix == ".v2" else 63, 90))
+    r = invoke("lint", path)
+    assert r.exit_code == 0, r.output
