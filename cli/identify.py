@@ -24,7 +24,7 @@ from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
 from wirecal.solver.formats.patch import companion_paths, put_patch
 from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.robot_file import MAX_DH_ANGLE_DEG, MAX_SCALE_PPM, load_robot
 from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
 from wirecal.solver.identify import DEFAULT_OMEGA
 from wirecal.solver.measurements import Tolerances, check_log
@@ -32,6 +32,7 @@ from wirecal.solver.plausibility import READING_NOISE_MM, gate
 from wirecal.solver.run_parameters import RunParameters
 from wirecal.solver.simulate import (
     IDEAL_ENCODER,
+    MAX_DRIFT_MM_PER_H,
     EncoderTruth,
     Faults,
     realistic_encoder,
@@ -75,7 +76,7 @@ def _slip(ctx, param, value):
 @click.option(
     "--random",
     "scale",
-    type=NON_NEGATIVE,
+    type=number(0.0, MAX_DH_ANGLE_DEG),
     help="Draw true offsets uniform within ±SCALE deg/mm for the robot file's "
     "parameters (default 1.0 when --errors is not given).",
 )
@@ -148,13 +149,13 @@ def _slip(ctx, param, value):
 )
 @click.option(
     "--encoder-scale-ppm",
-    type=number(),
+    type=number(-MAX_SCALE_PPM, MAX_SCALE_PPM),
     help="The true encoder scale's error (ppm) [default: drawn within the robot file's "
     "scale_tolerance_ppm].",
 )
 @click.option(
     "--drift-mm-per-h",
-    type=number(),
+    type=number(-MAX_DRIFT_MM_PER_H, MAX_DRIFT_MM_PER_H),
     default=0.0,
     show_default=True,
     help="Fault: every reading drifts by this much per hour from the start of the run.",

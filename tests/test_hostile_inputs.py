@@ -441,3 +441,36 @@ def test_lint_reads_nesting_up_to_its_bounds(tmp_path, suffix):
     path.write_text(_nested_program(suffix, 64 if suffix == ".v2" else 63, 90))
     r = invoke("lint", path)
     assert r.exit_code == 0, r.output
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        (["--encoder-scale-ppm", "-1000000"], "--encoder-scale-ppm"),  # 1 + scale = 0
+        (["--encoder-scale-ppm", "1e300"], "--encoder-scale-ppm"),
+        (["--drift-mm-per-h", "1e300"], "--drift-mm-per-h"),
+        (["--random", "1e300"], "--random"),
+        (["--noise-mm", "1e300"], "beyond the encoder's range_mm"),
+    ],
+    ids=lambda a: " ".join(a) if isinstance(a, list) else "",
+)
+def test_simulate_never_writes_nan_counts(tmp_path, option, message):
+    """Each of these wrote NaN (or 0) counts with exit status 0."""
+    out = tmp_path / "run.csv"
+    r = invoke("simulate", ROBOT, PLAN, "-o", out, *option)
+    outcome_is_clean(r)
+    assert r.exit_code == 2, r.output
+    assert message in r.output
+    assert not out.exists()
+
+
+@pytest.mark.filterwarnings("ignore:divide by zero:RuntimeWarning")
+def test_simulate_log_refuses_a_reading_that_is_not_finite(viper, paper_plan, table5):
+    """The API's own guard, below the command's option bounds: a scale of −100 % reads inf."""
+    from wirecal.solver.errors import WirecalError
+    from wirecal.solver.simulate import EncoderTruth, simulate_log
+
+    with pytest.raises(
+        WirecalError, match=r"encoder's reading of step 1 zero reading is (inf|nan)"
+    ):
+        simulate_log(viper, paper_plan, table5, seed=1, encoder=EncoderTruth(scale_ppm=-1e6))
