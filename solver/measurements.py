@@ -10,6 +10,7 @@ readings).
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,6 +21,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import REFERENCE_STEP, Log, Reading, read_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Encoder, Robot
+from wirecal.solver.run_parameters import RunParameters, run_timeline
 from wirecal.solver.scale import reference_problems
 
 
@@ -152,6 +154,8 @@ def check_log(
     else:
         distance = rows.counts
     reference_mm = _reference_pairs(rows, robot.encoder, mpc, src, problems)
+    if not problems:  # a duplicated or foreign row explains a timer going backwards
+        problems += _timer_problems(log, rows.zeros, plan, robot)
     if problems:
         raise WirecalError(problems)
     missing = tuple(
@@ -191,6 +195,50 @@ def _times(rows: _Rows, drift: dict[int, float], n_steps: int) -> dict:
         "zero_mm": np.array([drift[s] for s in sorted(drift)]),
         "reference_t_s": float(t_zero[in_ref].mean()) if in_ref.any() else None,
     }
+
+
+FASTEST_RUN = RunParameters(speed_pct=100.0, settle_s=0.0, readings=1)
+"""The quickest run a generated program makes: full speed, no fixed settle, one reading."""
+
+TIMER_RATIO_BOUNDS = (0.5, 500.0)
+"""The run's time between its zero readings over the time model's fastest run
+(:func:`~wirecal.solver.run_parameters.run_timeline`): below 0.5 the robot would have moved
+faster than it can (a timer at zero, or in minutes); above 500 slower than at 1 % speed
+with 60 s settling (about 100 times, pauses included): a timer in milliseconds."""
+
+
+def _timer_problems(log: Log, zeros: dict[int, Reading], plan: Plan, robot: Robot) -> list[str]:
+    """Check the controller's timer ``t_s``: never backwards, and in seconds.
+
+    In seconds: the time between the first and the last zero reading compared with the
+    robot time of the same moves (:data:`TIMER_RATIO_BOUNDS`).
+    """
+    src = log.source
+    timed = [(r.line, r.t_s) for r in log.readings if r.t_s is not None]
+    for (line_before, before), (line, t) in itertools.pairwise(timed):
+        if t < before:
+            return [
+                f"{src}:{line}: t_s {t:.3f} s is before the previous reading's "
+                f"{before:.3f} s (line {line_before}): the controller's timer never runs "
+                "backwards; keep one run per log, its lines in the order written"
+            ]
+    zero_t = {s: (r.line, r.t_s) for s, r in sorted(zeros.items()) if r.t_s is not None}
+    if len(zero_t) < 2:
+        return []
+    (s0, (line0, t0)), (s1, (line1, t1)) = list(zero_t.items())[:: len(zero_t) - 1]
+    model = run_timeline(robot, plan, FASTEST_RUN).reading_s
+    at_zero = np.cumsum([0] + [1 + len(st.points_deg) for st in plan.steps])
+    fastest_s = float(model[at_zero[s1 - 1]] - model[at_zero[s0 - 1]])
+    lo, hi = TIMER_RATIO_BOUNDS
+    if lo <= (t1 - t0) / fastest_s <= hi:
+        return []
+    unit = "at zero or in minutes" if (t1 - t0) / fastest_s < lo else "in milliseconds"
+    return [
+        f"{src}:{line0}-{line1}: t_s says steps {s0}–{s1} took {t1 - t0:g} s; the robot "
+        f"needs {fastest_s:.0f} s at full speed, and well under {hi * fastest_s:.0f} s even "
+        f"at 1 % speed: is the controller's timer {unit}? t_s is in seconds since the "
+        "start of the run"
+    ]
 
 
 def _check_origin(log: Log, plan: Plan, robot: Robot) -> None:

@@ -474,3 +474,37 @@ def test_simulate_log_refuses_a_reading_that_is_not_finite(viper, paper_plan, ta
         WirecalError, match=r"encoder's reading of step 1 zero reading is (inf|nan)"
     ):
         simulate_log(viper, paper_plan, table5, seed=1, encoder=EncoderTruth(scale_ppm=-1e6))
+
+
+def _with_times(source, target, times) -> None:
+    """Copy a log with each reading's t_s replaced by ``times(line number, t_s)``."""
+    lines = source.read_text().splitlines()
+    for k, line in enumerate(lines):
+        cells = line.split(",")
+        if cells[0] in ("zero", "point", "unsettled", "reference"):
+            cells[12] = f"{times(k + 1, float(cells[12])):.3f}"
+            lines[k] = ",".join(cells)
+    target.write_text("\n".join(lines) + "\n")
+
+
+TIMER_FAULTS = {
+    "all zero": (lambda n, t: 0.0, r"took 0 s; the robot needs 72 s at full speed.*at zero or in"),
+    "milliseconds": (lambda n, t: 1000 * t, r"took 86\d\d\d s; .*timer in milliseconds\?"),
+    "minutes": (lambda n, t: t / 60, r"took 1\.4\d* s; .*at zero or in minutes\?"),
+    "backwards": (
+        lambda n, t: 1.0 if n == 20 else t,
+        r"run\.csv:20: t_s 1\.000 s is before the previous reading's \d+\.\d+ s \(line 19\)",
+    ),
+}
+
+
+@pytest.mark.parametrize("fault", TIMER_FAULTS)
+def test_timer_sanity(tmp_path, log, fault):
+    """t_s all zero or in the wrong unit passed the drift check (no drift or 1000× too small)."""
+    times, message = TIMER_FAULTS[fault]
+    bad = tmp_path / "run.csv"
+    _with_times(log, bad, times)
+    r = invoke("solve", ROBOT, PLAN, bad)
+    outcome_is_clean(r)
+    assert r.exit_code == 2, r.output
+    assert re.search(message, r.output), r.output
