@@ -1,8 +1,9 @@
 """A measurement log checked against its plan and robot: one wire length per plan point.
 
 The reference of every length is the mean of the steps' zero readings at θ0, each checked
-against the first (a drift means the wire slipped); counts are compared modulo the
-counter width. A run ends with a closing zero reading at θ0 after the last step, logged
+against the first: a step change beyond the tolerance means the wire slipped, a slope in
+time is a drift, left to the solver (:func:`~wirecal.solver.scale.find_slips`); counts are
+compared modulo the counter width. A run ends with a closing zero reading at θ0 after the last step, logged
 as the zero of step N+1: it checks the last step for a slip like every later zero checks
 the step before it, and is not part of the reference (the controller solver uses the same
 readings).
@@ -22,7 +23,7 @@ from wirecal.solver.formats.log import REFERENCE_STEP, Log, Reading, read_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Encoder, Robot
 from wirecal.solver.run_parameters import RunParameters, run_timeline
-from wirecal.solver.scale import reference_problems
+from wirecal.solver.scale import find_slips, reference_problems
 
 
 @dataclass(frozen=True)
@@ -447,26 +448,46 @@ def _zero_drift(
     src: str,
     problems: list[str],
 ) -> dict[int, float]:
-    """Each zero reading's drift from the first in mm; a slip blamed on the step it hit."""
+    """Each zero reading's drift from the first in mm; a slip blamed on the step it hit.
+
+    A slip is a step change of the zero readings, a drift a slope in time: with the
+    controller's times (and enough zeros), each step change beyond the tolerance on top
+    of a fitted slope is a slip (:func:`~wirecal.solver.scale.find_slips`) and the slope is
+    left to the solver's drift fit; without times, any zero beyond the tolerance is one.
+    """
     counter = robot.encoder.counter
-    drift: dict[int, float] = {}
-    # A slip moves every later zero too: blame the step where the drift first leaves
-    # the tolerance, and any later step where it jumps again, not each step after it.
-    before = 0.0
-    for s, r in sorted(zeros.items()):
-        drift[s] = float(counter.difference(r.counts, first) * mpc)
-        jumped = abs(drift[s] - before) > tol.zero_mm
-        if jumped or (abs(drift[s]) > tol.zero_mm >= abs(before)):
-            prev = max(s - 1, 1)
-            which = "the closing zero reading" if s > n_steps else f"zero reading at step {s}"
-            problems.append(
-                f"{src}:{r.line}: {which} is {drift[s]:+.3f} mm from the first "
-                f"(tolerance {tol.zero_mm:g} mm): the wire slipped or the encoder "
-                f"moved after the zero of step {prev}; remount at θ0 and repeat from "
-                f"step {prev}"
-            )
-        before = drift[s]
+    steps = sorted(zeros)
+    drift = {s: float(counter.difference(zeros[s].counts, first) * mpc) for s in steps}
+    t = np.array([np.nan if zeros[s].t_s is None else zeros[s].t_s for s in steps])
+    z = np.array([drift[s] for s in steps])
+    slips = find_slips(t, z, tol.zero_mm)
+    if slips is None:
+        slips = _untimed_slips(z, tol.zero_mm)
+    for k, jump in slips:
+        s = steps[k]
+        prev = max(s - 1, 1)
+        which = "the closing zero reading" if s > n_steps else f"zero reading at step {s}"
+        problems.append(
+            f"{src}:{zeros[s].line}: {which} is {drift[s]:+.3f} mm from the first, a step "
+            f"of {jump:+.3f} mm (tolerance {tol.zero_mm:g} mm): the wire slipped or the "
+            f"encoder moved after the zero of step {prev}; remount at θ0 and repeat from "
+            f"step {prev}"
+        )
     return drift
+
+
+def _untimed_slips(z: np.ndarray, tol_mm: float) -> list[tuple[int, float]]:
+    """Return the slips of zero readings without times, as (index, jump).
+
+    Where the zeros first leave the tolerance, and where they jump again (a slip moves
+    every later zero too).
+    """
+    out = []
+    for k in range(1, len(z)):
+        jumped = abs(z[k] - z[k - 1]) > tol_mm
+        if jumped or abs(z[k]) > tol_mm >= abs(z[k - 1]):
+            out.append((k, float(z[k] - z[k - 1])))
+    return out
 
 
 def _lengths(
