@@ -3,10 +3,10 @@
 The reference of every length is the mean of the steps' zero readings at θ0, each checked
 against the first: a step change beyond the tolerance means the wire slipped, a slope in
 time is a drift, left to the solver (:func:`~wirecal.solver.scale.find_slips`); counts are
-compared modulo the counter width. A run ends with a closing zero reading at θ0 after the last step, logged
-as the zero of step N+1: it checks the last step for a slip like every later zero checks
-the step before it, and is not part of the reference (the controller solver uses the same
-readings).
+compared modulo the counter width. A run ends with a closing zero reading at θ0 after
+the last step, logged as the zero of step N+1: it checks the last step for a slip like
+every later zero checks the step before it, and is not part of the reference (the
+controller solver uses the same readings).
 """
 
 from __future__ import annotations
