@@ -95,7 +95,8 @@ _G = GenOptions()
     type=POSITIVE,
     default=_G.zero_tol_mm,
     show_default=True,
-    help="Largest drift of a zero reading from the first before the run pauses (mm).",
+    help="Largest jump of a zero reading from the previous one before the run pauses (mm): "
+    "a slip; a slow drift is fitted on the PC.",
 )
 @click.option(
     "--spread-tol",

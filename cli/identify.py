@@ -381,7 +381,8 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true
     type=POSITIVE,
     default=Tolerances.zero_mm,
     show_default=True,
-    help="Largest drift of a zero reading from the first (mm).",
+    help="Largest step change of the zero readings (mm): a slip. With the log's times a "
+    "slope (a drift) is fitted and removed instead; without, any drift from the first.",
 )
 @click.option(
     "--noise-mm",

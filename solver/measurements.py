@@ -32,7 +32,7 @@ class Tolerances:
 
     joint_deg: float = 0.05  # logged joints vs the plan
     spread_mm: float = 0.1  # max − min of a point's samples: the robot was still moving
-    zero_mm: float = 0.1  # a step's zero reading vs the first: the wire slipped
+    zero_mm: float = 0.1  # a step change of the zero readings: the wire slipped
 
 
 @dataclass(frozen=True)

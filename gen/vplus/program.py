@@ -61,7 +61,7 @@ class GenOptions:
     """Options of the generated module."""
 
     run: RunParameters = DEFAULT_RUN  # speed, acceleration, settle, readings
-    zero_tol_mm: float = 0.1  # a zero reading further from the first: the wire slipped
+    zero_tol_mm: float = 0.1  # a zero reading further from the previous: the wire slipped
     spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
     margin_deg: float = 1.0  # every generated target at least this far inside a limit
     log_file: str = "WCLOG.CSV"
