@@ -93,8 +93,8 @@ def estimate_scale(
 
 SEATING_TOLERANCE_MM = 0.05
 """How far (mm) a pair's B − A may read from the certified length beyond the scale's own
-tolerance: five times the reading noise of a difference (0.01 mm per reading); a tip
-seated on a burr or dirt, or not pushed home, reads further off."""
+tolerance: 3.5σ of the difference of two readings of 0.01 mm noise each; a tip seated on
+a burr or dirt, or not pushed home, reads further off."""
 
 UNMOVED_FRACTION = 0.05
 """A pair whose |B − A| is below this fraction of the gauge's length: the tip stayed in
