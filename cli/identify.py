@@ -24,7 +24,12 @@ from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
 from wirecal.solver.formats.patch import companion_paths, put_patch
 from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import MAX_DH_ANGLE_DEG, MAX_SCALE_PPM, load_robot
+from wirecal.solver.formats.robot_file import (
+    MAX_DH_ANGLE_DEG,
+    MAX_RANGE_MM,
+    MAX_SCALE_PPM,
+    load_robot,
+)
 from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
 from wirecal.solver.identify import DEFAULT_OMEGA
 from wirecal.solver.measurements import Tolerances, check_log
@@ -53,6 +58,8 @@ def _slip(ctx, param, value):
     m = re.fullmatch(r"\s*(\d+)\s*:\s*([-+]?\d*\.?\d+(?:[eE][-+]?\d+)?)\s*", value)
     if not m:
         raise click.BadParameter("give STEP:MM, e.g. 4:0.5")
+    if not abs(float(m.group(2))) <= MAX_RANGE_MM:
+        raise click.BadParameter(f"give a slip within ±{MAX_RANGE_MM:g} mm (the longest range_mm)")
     return int(m.group(1)), float(m.group(2))
 
 
@@ -120,7 +127,7 @@ def _slip(ctx, param, value):
 )
 @click.option(
     "--outlier-mm",
-    type=NON_NEGATIVE,
+    type=number(0.0, MAX_RANGE_MM),
     default=1.0,
     show_default=True,
     help="Size of each outlier's error (mm, random sign).",

@@ -259,8 +259,10 @@ def simulate_log(
     lengths[-1] += closing_rng.normal(0.0, noise_mm)
 
     _check_finite(lengths, "true wire length", steps, indices, f"the true errors on {robot.source}")
-    beyond = np.flatnonzero(lengths > enc.range_mm)
-    if len(beyond):  # the encoder stops counting there: the twin's error, with its cause
+    # Beyond the range either way (a fault shortening the wire by more than it can be
+    # long) the encoder stops counting: the twin's error, with its cause.
+    beyond = np.flatnonzero(np.abs(lengths) > enc.range_mm)
+    if len(beyond):
         i = int(beyond[0])
         raise WirecalError(
             f"{RANGE_EXCEEDED}: step {steps[i]} point {indices[i]}: the wire would be "

@@ -451,6 +451,11 @@ def test_lint_reads_nesting_up_to_its_bounds(tmp_path, suffix):
         (["--drift-mm-per-h", "1e300"], "--drift-mm-per-h"),
         (["--random", "1e300"], "--random"),
         (["--noise-mm", "1e300"], "beyond the encoder's range_mm"),
+        (["--outliers", "3", "--outlier-mm", "1e308"], "--outlier-mm"),
+        (["--outliers", "3", "--outlier-mm", "5000"], "beyond the encoder's range_mm"),
+        (["--slip", "4:-1e308"], "give a slip within ±100000 mm"),
+        (["--slip", "4:-2000"], "mm long, beyond the encoder's range_mm 1250"),
+        (["--controller", "--slip", "4:-1e308"], "give a slip within ±100000 mm"),
     ],
     ids=lambda a: " ".join(a) if isinstance(a, list) else "",
 )
