@@ -219,8 +219,8 @@ def _timer_problems(log: Log, zeros: dict[int, Reading], plan: Plan, robot: Robo
     for (line_before, before), (line, t) in itertools.pairwise(timed):
         if t < before:
             return [
-                f"{src}:{line}: t_s {t:.3f} s is before the previous reading's "
-                f"{before:.3f} s (line {line_before}): the controller's timer never runs "
+                f"{src}:{line}: t_s {t:g} s is before the previous reading's "
+                f"{before:g} s (line {line_before}): the controller's timer never runs "
                 "backwards; keep one run per log, its lines in the order written"
             ]
     zero_t = {s: (r.line, r.t_s) for s, r in sorted(zeros.items()) if r.t_s is not None}
