@@ -518,3 +518,18 @@ def test_timer_sanity(tmp_path, log, fault):
     outcome_is_clean(r)
     assert r.exit_code == 2, r.output
     assert re.search(message, r.output), r.output
+
+
+def test_a_log_pasted_many_times_gives_a_readable_error(tmp_path, log):
+    """Every duplicated row is a problem (thousands here): the command prints the first 40
+    and a count, not a screenful per row."""
+    lines = log.read_text().splitlines()
+    rows = [x for x in lines if x[:1].isalpha() and not x.startswith("kind,")]
+    bad = tmp_path / "run.csv"
+    bad.write_text("\n".join(lines + rows * 50) + "\n")
+    r = invoke("solve", ROBOT, PLAN, bad)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    errors = [x for x in r.output.splitlines() if x.startswith("error: ")]
+    assert len(errors) == 41
+    assert re.fullmatch(r"error: … and \d{4} more problems of the same kinds", errors[-1])
