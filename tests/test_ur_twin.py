@@ -155,7 +155,8 @@ def test_fault_wire_slip(ur5, ur5_plan, texts, truth, tmp_path):
     out = r.programs.run
     assert out.status == "stopped"  # the operator stops at the warning
     assert (
-        "# *** the zero reading at theta0 moved by more than 0.1 mm: slip in step 4" in out.console
+        "# *** the zero reading at theta0 jumped by more than 0.1 mm since the last: slip in step 4"
+        in out.console
     )
     assert "the wire slipped or the encoder moved during step 4" in out.message
     with pytest.raises(WirecalError) as info:
@@ -229,7 +230,7 @@ def test_cli_simulate_controller_runs_the_urscript_programs(tmp_path):
         main, [*args, "--random", "1", "--seed", "4", "--controller", "--slip", "4:0.5"]
     )
     assert r.exit_code == 1, r.output
-    assert "the controller program stopped: The zero reading at theta0 moved" in r.output
+    assert "the controller program stopped: The zero reading at theta0 jumped" in r.output
     assert "at step 5 zero reading at theta0 (stopped in wc_run line" in r.output
     text = log.read_text()
     assert text.startswith("# wirecal-log 2\n# robot: Universal Robots UR5\n")

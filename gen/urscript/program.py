@@ -65,7 +65,7 @@ class UrOptions:
     run: RunParameters = PAPER_RUN
     host: str | None = None  # the PC running 'wirecal receive' (default: the robot file's)
     port: int | None = None  # its port (default: the robot file's)
-    zero_tol_mm: float = 0.1  # a zero reading further from the first: the wire slipped
+    zero_tol_mm: float = 0.1  # a zero reading further from the previous: the wire slipped
     spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
     margin_deg: float = 1.0  # every generated target at least this far inside a limit
     range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm

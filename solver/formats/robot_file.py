@@ -398,6 +398,10 @@ def _software(table: Table, language: str | None) -> str | None:
     return software
 
 
+MAX_JOINTS = 12
+"""Most rows of ``dh``: serial arms have 6 or 7 joints; wirecal's bound, not a controller's."""
+
+
 def _dh(kin: Table) -> np.ndarray | None:
     kin.string("convention", choices={"craig": "modified DH, the one supported"})
     dh = kin.matrix(
@@ -407,6 +411,7 @@ def _dh(kin: Table) -> np.ndarray | None:
         lo=[-b for b in _DH_BOUND],
         hi=_DH_BOUND,
         unit=("deg", "mm", "deg", "mm"),
+        max_rows=MAX_JOINTS,
     )
     if dh is not None and dh.shape[0] < 2:
         kin.add("dh", f"has {dh.shape[0]} row(s); a serial arm needs at least 2")
