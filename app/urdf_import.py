@@ -133,6 +133,7 @@ def urdf_robot_file(urdf: str | Path, out_path: Path, opt: ImportOptions) -> Imp
         speed_notes=speed_notes,
         geometry_notes=_geometry_notes(radii),
         tables=cell,
+        write_cell=False,  # the mounting plane from the URDF's root link, or a note why not
     )
     robot_from_dict(tomllib.loads(text), str(out_path))  # what is written reads back
     warnings = ([] if confirmed else speed_notes) + _wide_warning(radii)

@@ -98,7 +98,8 @@ _G = GenOptions()
     type=POSITIVE,
     default=_G.zero_tol_mm,
     show_default=True,
-    help="Largest drift of a zero reading from the first before the run pauses (mm).",
+    help="Largest jump of a zero reading from the previous one before the run pauses (mm): "
+    "a slip; a slow drift is fitted on the PC.",
 )
 @click.option(
     "--spread-tol",
@@ -191,8 +192,9 @@ def gen(
     the controller: the paper's step-by-step method, then optionally a joint polish) and
     wc.patch (the table to enter in SPEC). Every target is a literal #PPOINT inside the
     joint limits with --margin, and the nominal wire stays within the encoder's range
-    less --range-margin at every point and along every move; the same inputs give the
-    same bytes.
+    less --range-margin at every point and along every move, with the arm clear of
+    itself, the floor and the robot file's [cell] (a plan that is not is refused, naming
+    step, point and the colliding pair); the same inputs give the same bytes.
     """
     rb = load_robot(robot)
     if language is not None and language != rb.controller.language:
@@ -236,14 +238,17 @@ def gen(
         return
     if host or port or no_solver:
         raise WirecalError("--host, --port and --no-solver are for URScript (--language urscript)")
-    patch = read_patch(patch_file).offsets_for(rb, pl) if patch_file else None
+    patch = read_patch(patch_file) if patch_file else None
+    if patch is not None and patch.warning:
+        click.echo(f"warning: {patch_file}: {patch.warning}", err=True)
     opt = GenOptions(
         run=_run(_D, speed, accel, settle_s, samples, settle_max_s=settle_max_s),
         zero_tol_mm=zero_tol,
         spread_tol_mm=spread_tol,
         margin_deg=margin,
         log_file=log_name.upper(),
-        patch=patch,
+        patch=patch.offsets_for(rb, pl) if patch is not None else None,
+        patch_warning=patch.warning if patch is not None else None,
         validation=load_setup(setup_file) if setup_file else None,
         range_margin_mm=range_margin,
         echo_log=echo_log,

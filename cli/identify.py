@@ -24,7 +24,12 @@ from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
 from wirecal.solver.formats.patch import companion_paths, put_patch
 from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.robot_file import (
+    MAX_DH_ANGLE_DEG,
+    MAX_RANGE_MM,
+    MAX_SCALE_PPM,
+    load_robot,
+)
 from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
 from wirecal.solver.identify import DEFAULT_OMEGA
 from wirecal.solver.measurements import Tolerances, check_log
@@ -32,6 +37,7 @@ from wirecal.solver.plausibility import READING_NOISE_MM, gate
 from wirecal.solver.run_parameters import RunParameters
 from wirecal.solver.simulate import (
     IDEAL_ENCODER,
+    MAX_DRIFT_MM_PER_H,
     EncoderTruth,
     Faults,
     realistic_encoder,
@@ -52,6 +58,8 @@ def _slip(ctx, param, value):
     m = re.fullmatch(r"\s*(\d+)\s*:\s*([-+]?\d*\.?\d+(?:[eE][-+]?\d+)?)\s*", value)
     if not m:
         raise click.BadParameter("give STEP:MM, e.g. 4:0.5")
+    if not abs(float(m.group(2))) <= MAX_RANGE_MM:
+        raise click.BadParameter(f"give a slip within ±{MAX_RANGE_MM:g} mm (the longest range_mm)")
     return int(m.group(1)), float(m.group(2))
 
 
@@ -75,7 +83,7 @@ def _slip(ctx, param, value):
 @click.option(
     "--random",
     "scale",
-    type=NON_NEGATIVE,
+    type=number(0.0, MAX_DH_ANGLE_DEG),
     help="Draw true offsets uniform within ±SCALE deg/mm for the robot file's "
     "parameters (default 1.0 when --errors is not given).",
 )
@@ -119,7 +127,7 @@ def _slip(ctx, param, value):
 )
 @click.option(
     "--outlier-mm",
-    type=NON_NEGATIVE,
+    type=number(0.0, MAX_RANGE_MM),
     default=1.0,
     show_default=True,
     help="Size of each outlier's error (mm, random sign).",
@@ -148,13 +156,13 @@ def _slip(ctx, param, value):
 )
 @click.option(
     "--encoder-scale-ppm",
-    type=number(),
+    type=number(-MAX_SCALE_PPM, MAX_SCALE_PPM),
     help="The true encoder scale's error (ppm) [default: drawn within the robot file's "
     "scale_tolerance_ppm].",
 )
 @click.option(
     "--drift-mm-per-h",
-    type=number(),
+    type=number(-MAX_DRIFT_MM_PER_H, MAX_DRIFT_MM_PER_H),
     default=0.0,
     show_default=True,
     help="Fault: every reading drifts by this much per hour from the start of the run.",
@@ -380,7 +388,8 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true
     type=POSITIVE,
     default=Tolerances.zero_mm,
     show_default=True,
-    help="Largest drift of a zero reading from the first (mm).",
+    help="Largest step change of the zero readings (mm): a slip. With the log's times a "
+    "slope (a drift) is fitted and removed instead; without, any drift from the first.",
 )
 @click.option(
     "--noise-mm",
@@ -434,7 +443,7 @@ def solve(
         raise WirecalError(f"{rb.controller_problem()}; 'wirecal solve' reads that log")
     pl = load_plan(plan, rb)
     paths = [patch_path, *companion_paths(rb, patch_path)] if patch_path else []
-    if log == STDIN and sys.stdin.isatty():
+    if log == STDIN and sys.stdin is not None and sys.stdin.isatty():
         click.echo("paste the log, then Ctrl-D (Windows: Ctrl-Z, Enter)", err=True)
     with Outputs(paths, force=force, inputs=[robot, plan, log]) as out:
         parsed = read_log(log)

@@ -8,6 +8,7 @@ import click
 
 from wirecal.cli.main import user_errors
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.fileio import read_input
 from wirecal.solver.robot import SOFTWARE_PATTERN
 from wirecal.twin.urscript.parser import parse_program
 from wirecal.twin.vplus.parser import parse_module
@@ -46,13 +47,7 @@ def lint(files, external_calls, software):
     """
     if software is not None and not SOFTWARE_PATTERN.fullmatch(software):
         raise WirecalError([f'--software {software!r}: give the version as numbers, e.g. "5.20"'])
-    texts = {}
-    for path in files:
-        try:
-            with open(path, "rb") as f:
-                texts[path] = f.read().decode("latin-1")
-        except OSError as exc:
-            raise WirecalError([f"{path}: cannot read: {exc.strerror}"]) from None
+    texts = {path: read_input(path, "program file")[0].decode("latin-1") for path in files}
     problems = 0
     for path, text in texts.items():
         try:

@@ -27,7 +27,10 @@ import click
 
 from wirecal import __version__
 from wirecal.cli.help_text import HELP_TEXT
-from wirecal.solver.errors import WirecalError
+from wirecal.solver.errors import WirecalError, first_problems
+
+MAX_ERROR_LINES = 40
+"""Most ``error:`` lines a command prints; a count stands for the rest."""
 
 
 def user_errors(func):
@@ -44,7 +47,7 @@ def user_errors(func):
             problems, status = exc.problems, exc.exit_status
         except OSError as exc:
             problems, status = [f"{exc.filename or 'file'}: {exc.strerror or exc}"], 2
-        for line in problems:
+        for line in first_problems(problems, MAX_ERROR_LINES):
             click.echo(f"error: {line}", err=True)
         sys.exit(status)
 

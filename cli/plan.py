@@ -79,10 +79,18 @@ def _joints(value: str | None, n: int) -> np.ndarray | None:
     type=click.IntRange(1, 1000),
     help="Joint design: calibration points in all [default: POINTS-PER-STEP per step].",
 )
+@click.option(
+    "--allow-partial",
+    is_flag=True,
+    help="Take a plan that leaves parameters of [calibration] unplanned (named, with why; "
+    "the predicted error counts them at their prior) instead of exiting with an error.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @click.option("--force", is_flag=True, help="Replace an existing plan file.")
 @user_errors
-def plan(robot, output, theta0, points_per_step, tol, seed, method, points, as_json, force):
+def plan(
+    robot, output, theta0, points_per_step, tol, seed, method, points, allow_partial, as_json, force
+):
     """Design a calibration plan for ROBOT's [calibration] parameters.
 
     Chooses θ0 (unless given), the order in which the parameters can be isolated one at
@@ -91,9 +99,11 @@ def plan(robot, output, theta0, points_per_step, tol, seed, method, points, as_j
     leak into the step. With --for joint (the default) points are then added where they
     lower the joint method's tool-point error most per second of robot time. Every point
     is within the joint limits with a margin, has a wire length within the encoder's
-    range and a wire clear of the links along the move from θ0. Prints the predicted
+    range and a wire clear of the links along the move from θ0, and every move keeps the
+    arm out of itself, the floor and the robot file's [cell]. Prints the predicted
     accuracy (Cramér–Rao and step-by-step) and robot time; the plan file explains itself
-    in its header and passes 'wirecal psi'.
+    in its header and passes 'wirecal psi'. A parameter that cannot be planned is an
+    error (exit 2, nothing written) unless --allow-partial.
     """
     rb = load_robot(robot)
     theta0_deg = _joints(theta0, rb.n_joints)
@@ -111,6 +121,16 @@ def plan(robot, output, theta0, points_per_step, tol, seed, method, points, as_j
     with Outputs([output] if output else [], force=force, inputs=[robot]) as out:
         with ProgressBar(f"planning {rb.name}") as bar:
             d = design(rb, theta0_deg, opt, bar.update)
+        if d.excluded and not allow_partial:
+            raise WirecalError(
+                [
+                    f"{robot}: {len(d.excluded)} of the {len(rb.parameters)} parameters of "
+                    "[calibration] cannot be planned; nothing written:",
+                    *(f"not planned: {name}: {why}" for name, why in d.excluded.items()),
+                    "remove them from [calibration] parameters, try another --theta0 or "
+                    "--seed, or give --allow-partial to take the plan without them",
+                ]
+            )
         if output:
             out.put(output, plan_to_toml(d.plan, d.header()))
     if as_json:

@@ -12,6 +12,7 @@ from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import NON_NEGATIVE
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
+from wirecal.solver.cell_check import check_cell
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import cone_problems
@@ -67,7 +68,8 @@ def psi(
     point is ok when every parameter identified after its step has
     |Ψ| ≤ TOL·|Ψ_j|, so the step's cost depends on its own parameter only. The nominal
     wire length is checked against the encoder's range at every point and along every
-    move of the run, and a wire leaving an eyelet within its cone at every point (a
+    move of the run, a wire leaving an eyelet within its cone at every point, and the
+    arm clear of itself, the floor and the robot file's [cell] along every move (a
     warning; an error with --strict).
     """
     rb = load_robot(robot)
@@ -77,18 +79,15 @@ def psi(
         print_json(_psi_json(table))
     else:
         click.echo(_psi_text(table, robot, plan), nl=False)
-    try:
-        check_wire_range(rb, pl, range_margin)
-        in_range = True
-    except WirecalError as exc:
-        in_range = False
-        for line in exc.problems:
-            click.echo(f"{'error' if strict else 'warning'}: {line}", err=True)
-    beyond = cone_problems(rb, pl)
-    for line in beyond:
+    problems = cone_problems(rb, pl)
+    for check in (lambda: check_wire_range(rb, pl, range_margin), lambda: check_cell(rb, pl)):
+        try:
+            check()
+        except WirecalError as exc:
+            problems = exc.problems + problems
+    for line in problems:
         click.echo(f"{'error' if strict else 'warning'}: {line}", err=True)
-    in_range = in_range and not beyond
-    if strict and not (in_range and table.n_ok == len(table.rows)):
+    if strict and (problems or table.n_ok != len(table.rows)):
         sys.exit(1)
 
 

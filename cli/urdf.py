@@ -152,22 +152,41 @@ def export_urdf(robot, patch, out, source, force):
     otherwise a URDF of the DH chain (links link0…linkN and wire_point at the tool point).
     """
     inputs = [p for p in (robot, patch, source) if p]
+    warning = read_patch(patch).warning if patch else None
+    if warning:
+        click.echo(f"warning: {patch}: {warning}", err=True)
     with Outputs([out], force=force, inputs=inputs) as outs:
-        outs.put(out, _export_text(robot, patch, source))
+        outs.put(out, _with_warning(_export_text(robot, patch, source), warning))
     click.echo(f"wrote {out}")
+
+
+def _with_warning(text: str, warning: str | None) -> str:
+    """Return the URDF text with the patch's overridden-gate warning as a comment.
+
+    The comment follows the XML declaration; none when the patch passed the gate.
+    """
+    if not warning:
+        return text
+    declaration, rest = text.split("\n", 1)
+    # '--' may not appear inside an XML comment
+    comment = warning.replace("--accept-implausible", "option accept-implausible")
+    comment = comment.replace("--", "- -")
+    return f"{declaration}\n<!-- WARNING: {comment} -->\n{rest}"
 
 
 def _export_text(robot, patch, source) -> str:
     rob = load_robot(robot)
     model = rob.model(read_patch(patch).offsets_for(rob) if patch else {})
     if source is None and rob.urdf is None:
+        lo, hi = rob.body_limits_deg  # a URDF's limits: the arm's own, inside the data sheet's
         return dh_urdf_text(
             rob.name,
             model.dh,
             model.tool_point,
-            rob.joint_min_deg,
-            rob.joint_max_deg,
+            lo,
+            hi,
             rob.joint_speed_deg_s,
+            rob.cell.floor_z_mm,
         )
     else:
         base = rob.urdf.base_link if rob.urdf else None

@@ -17,6 +17,17 @@ class WirecalError(Exception):
         super().__init__("\n".join(self.problems))
 
 
+def first_problems(problems: list[str], n: int = 12) -> list[str]:
+    """Return the first ``n`` problems and a count of the rest.
+
+    A wrong file (another format, a log pasted twice) should not bury its cause under
+    thousands of lines of the same kind.
+    """
+    if len(problems) <= n:
+        return problems
+    return [*problems[:n], f"… and {len(problems) - n} more problems of the same kinds"]
+
+
 class Implausible(WirecalError):
     """Refuse an implausible identification.
 

@@ -1,15 +1,17 @@
 """A measurement log checked against its plan and robot: one wire length per plan point.
 
 The reference of every length is the mean of the steps' zero readings at θ0, each checked
-against the first (a drift means the wire slipped); counts are compared modulo the
-counter width. A run ends with a closing zero reading at θ0 after the last step, logged
-as the zero of step N+1: it checks the last step for a slip like every later zero checks
-the step before it, and is not part of the reference (the controller solver uses the same
-readings).
+against the first: a step change beyond the tolerance means the wire slipped, a slope in
+time is a drift, left to the solver (:func:`~wirecal.solver.scale.find_slips`); counts are
+compared modulo the counter width. A run ends with a closing zero reading at θ0 after
+the last step, logged as the zero of step N+1: it checks the last step for a slip like
+every later zero checks the step before it, and is not part of the reference (the
+controller solver uses the same readings).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,7 +21,9 @@ import numpy as np
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import REFERENCE_STEP, Log, Reading, read_log
 from wirecal.solver.plan import Plan
-from wirecal.solver.robot import Robot
+from wirecal.solver.robot import Encoder, Robot
+from wirecal.solver.run_parameters import RunParameters, run_timeline
+from wirecal.solver.scale import find_slips, reference_problems
 
 
 @dataclass(frozen=True)
@@ -28,7 +32,7 @@ class Tolerances:
 
     joint_deg: float = 0.05  # logged joints vs the plan
     spread_mm: float = 0.1  # max − min of a point's samples: the robot was still moving
-    zero_mm: float = 0.1  # a step's zero reading vs the first: the wire slipped
+    zero_mm: float = 0.1  # a step change of the zero readings: the wire slipped
 
 
 @dataclass(frozen=True)
@@ -160,7 +164,9 @@ def check_log(
         distance = _lengths(rows, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
     else:
         distance = rows.counts
-    reference_mm = _reference_pairs(rows, robot.encoder.counter, mpc, src, problems)
+    reference_mm = _reference_pairs(rows, robot.encoder, mpc, src, problems)
+    if not problems:  # a duplicated or foreign row explains a timer going backwards
+        problems += _timer_problems(log, rows.zeros, plan, robot)
     if problems:
         raise WirecalError(problems)
     missing = tuple(
@@ -200,6 +206,50 @@ def _times(rows: _Rows, drift: dict[int, float], n_steps: int) -> dict:
         "zero_mm": np.array([drift[s] for s in sorted(drift)]),
         "reference_t_s": float(t_zero[in_ref].mean()) if in_ref.any() else None,
     }
+
+
+FASTEST_RUN = RunParameters(speed_pct=100.0, settle_s=0.0, readings=1)
+"""The quickest run a generated program makes: full speed, no fixed settle, one reading."""
+
+TIMER_RATIO_BOUNDS = (0.5, 500.0)
+"""The run's time between its zero readings over the time model's fastest run
+(:func:`~wirecal.solver.run_parameters.run_timeline`): below 0.5 the robot would have moved
+faster than it can (a timer at zero, or in minutes); above 500 slower than at 1 % speed
+with 60 s settling (about 100 times, pauses included): a timer in milliseconds."""
+
+
+def _timer_problems(log: Log, zeros: dict[int, Reading], plan: Plan, robot: Robot) -> list[str]:
+    """Check the controller's timer ``t_s``: never backwards, and in seconds.
+
+    In seconds: the time between the first and the last zero reading compared with the
+    robot time of the same moves (:data:`TIMER_RATIO_BOUNDS`).
+    """
+    src = log.source
+    timed = [(r.line, r.t_s) for r in log.readings if r.t_s is not None]
+    for (line_before, before), (line, t) in itertools.pairwise(timed):
+        if t < before:
+            return [
+                f"{src}:{line}: t_s {t:g} s is before the previous reading's "
+                f"{before:g} s (line {line_before}): the controller's timer never runs "
+                "backwards; keep one run per log, its lines in the order written"
+            ]
+    zero_t = {s: (r.line, r.t_s) for s, r in sorted(zeros.items()) if r.t_s is not None}
+    if len(zero_t) < 2:
+        return []
+    (s0, (line0, t0)), (s1, (line1, t1)) = list(zero_t.items())[:: len(zero_t) - 1]
+    model = run_timeline(robot, plan, FASTEST_RUN).reading_s
+    at_zero = np.cumsum([0] + [1 + len(st.points_deg) for st in plan.steps])
+    fastest_s = float(model[at_zero[s1 - 1]] - model[at_zero[s0 - 1]])
+    lo, hi = TIMER_RATIO_BOUNDS
+    if lo <= (t1 - t0) / fastest_s <= hi:
+        return []
+    unit = "at zero or in minutes" if (t1 - t0) / fastest_s < lo else "in milliseconds"
+    return [
+        f"{src}:{line0}-{line1}: t_s says steps {s0}–{s1} took {t1 - t0:g} s; the robot "
+        f"needs {fastest_s:.0f} s at full speed, and well under {hi * fastest_s:.0f} s even "
+        f"at 1 % speed: is the controller's timer {unit}? t_s is in seconds since the "
+        "start of the run"
+    ]
 
 
 def _check_origin(log: Log, plan: Plan, robot: Robot) -> None:
@@ -299,10 +349,17 @@ def _check_reference(r: Reading) -> None:
         )
 
 
-def _reference_pairs(rows: _Rows, counter, mpc: float, src: str, problems: list[str]) -> np.ndarray:
-    """Return each reference pair's nest B − nest A length (mm, nominal scale)."""
-    refs = rows.references
-    out = []
+def _reference_pairs(
+    rows: _Rows, enc: Encoder, mpc: float, src: str, problems: list[str]
+) -> np.ndarray:
+    """Return each reference pair's nest B − nest A length (mm, nominal scale).
+
+    The pairs are checked against the gauge (:func:`~wirecal.solver.scale.reference_problems`)
+    when the robot file gives one.
+    """
+    refs, counter = rows.references, enc.counter
+    out: list[float] = []
+    lines: list[tuple[int, int]] = []
     for i in sorted(refs):
         if i % 2 == 0:
             continue
@@ -313,12 +370,20 @@ def _reference_pairs(rows: _Rows, counter, mpc: float, src: str, problems: list[
             )
             continue
         out.append(float(counter.difference(refs[i + 1].counts, refs[i].counts)) * mpc)
+        lines.append((refs[i].line, refs[i + 1].line))
     for i in sorted(refs):
         if i % 2 == 0 and i - 1 not in refs:
             problems.append(
                 f"{src}:{refs[i].line}: the reference reading in nest B (index {i}) has no "
                 f"nest A reading (index {i - 1}); repeat the reference step"
             )
+    if out and enc.reference_length_mm is not None:
+        problems += [
+            f"{src}:{p}"
+            for p in reference_problems(
+                np.array(out), lines, enc.reference_length_mm, enc.scale_tolerance_ppm
+            )
+        ]
     return np.array(out)
 
 
@@ -393,26 +458,46 @@ def _zero_drift(
     src: str,
     problems: list[str],
 ) -> dict[int, float]:
-    """Each zero reading's drift from the first in mm; a slip blamed on the step it hit."""
+    """Each zero reading's drift from the first in mm; a slip blamed on the step it hit.
+
+    A slip is a step change of the zero readings, a drift a slope in time: with the
+    controller's times (and enough zeros), each step change beyond the tolerance on top
+    of a fitted slope is a slip (:func:`~wirecal.solver.scale.find_slips`) and the slope is
+    left to the solver's drift fit; without times, any zero beyond the tolerance is one.
+    """
     counter = robot.encoder.counter
-    drift: dict[int, float] = {}
-    # A slip moves every later zero too: blame the step where the drift first leaves
-    # the tolerance, and any later step where it jumps again, not each step after it.
-    before = 0.0
-    for s, r in sorted(zeros.items()):
-        drift[s] = float(counter.difference(r.counts, first) * mpc)
-        jumped = abs(drift[s] - before) > tol.zero_mm
-        if jumped or (abs(drift[s]) > tol.zero_mm >= abs(before)):
-            prev = max(s - 1, 1)
-            which = "the closing zero reading" if s > n_steps else f"zero reading at step {s}"
-            problems.append(
-                f"{src}:{r.line}: {which} is {drift[s]:+.3f} mm from the first "
-                f"(tolerance {tol.zero_mm:g} mm): the wire slipped or the encoder "
-                f"moved after the zero of step {prev}; remount at θ0 and repeat from "
-                f"step {prev}"
-            )
-        before = drift[s]
+    steps = sorted(zeros)
+    drift = {s: float(counter.difference(zeros[s].counts, first) * mpc) for s in steps}
+    t = np.array([np.nan if zeros[s].t_s is None else zeros[s].t_s for s in steps])
+    z = np.array([drift[s] for s in steps])
+    slips = find_slips(t, z, tol.zero_mm)
+    if slips is None:
+        slips = _untimed_slips(z, tol.zero_mm)
+    for k, jump in slips:
+        s = steps[k]
+        prev = max(s - 1, 1)
+        which = "the closing zero reading" if s > n_steps else f"zero reading at step {s}"
+        problems.append(
+            f"{src}:{zeros[s].line}: {which} is {drift[s]:+.3f} mm from the first, a step "
+            f"of {jump:+.3f} mm (tolerance {tol.zero_mm:g} mm): the wire slipped or the "
+            f"encoder moved after the zero of step {prev}; remount at θ0 and repeat from "
+            f"step {prev}"
+        )
     return drift
+
+
+def _untimed_slips(z: np.ndarray, tol_mm: float) -> list[tuple[int, float]]:
+    """Return the slips of zero readings without times, as (index, jump).
+
+    Where the zeros first leave the tolerance, and where they jump again (a slip moves
+    every later zero too).
+    """
+    out = []
+    for k in range(1, len(z)):
+        jumped = abs(z[k] - z[k - 1]) > tol_mm
+        if jumped or abs(z[k]) > tol_mm >= abs(z[k - 1]):
+            out.append((k, float(z[k] - z[k - 1])))
+    return out
 
 
 def _lengths(

@@ -7,7 +7,9 @@ Candidates are configurations that move one to three joints away from θ0 (as th
 points do) or all of them; each is screened at once (vectorised) for the joint limits with a
 margin, the wire length (above a minimum, within the encoder's range), the exit angle (a
 wire leaving an eyelet stays within its cone, :mod:`~wirecal.solver.exit_geometry`), the
-wrist singularity and the wire's clearance from the links along the joint-interpolated move from θ0.
+wrist singularity, the arm clear of its own body and the cell (floor, keep-out volumes,
+body limits: :mod:`~wirecal.solver.cell`) and the wire's clearance from the links along the
+joint-interpolated move from θ0.
 
 * **Order** (§3.4): among the parameters not yet identified, the next is the one that the
   most informative isolating points single out: points where |Ψ_t| ≤ tol·|Ψ_j| for every
@@ -101,6 +103,7 @@ class Design:
     predicted: dict[str, float] = field(default_factory=dict)
     robot_time_s: float = 0.0
     exit_line: str = ""  # the wire exit and the plan's largest exit angle, in words
+    cell_line: str = ""  # the cell the plan keeps clear of, in words
     method: Method = "stepwise"  # the estimator the points were chosen for
 
     def header(self) -> str:
@@ -110,13 +113,19 @@ class Design:
             f"theta0 {np.round(self.plan.theta0_deg, 2).tolist()} deg; order "
             + " ".join(self.plan.order)
             + ".",
-            f"Predicted tool-point error (sigma 0.01 mm, mean over the workspace): "
-            f"joint {self.predicted['joint']:.4f} mm, step-by-step "
+            "Predicted tool-point error (sigma 0.01 mm, mean over the workspace"
+            + (
+                f"; the {len(self.excluded)} parameters not planned at their prior"
+                if self.excluded
+                else ""
+            )
+            + f"): joint {self.predicted['joint']:.4f} mm, step-by-step "
             f"{self.predicted['stepwise']:.4f} mm.",
             f"Estimated robot time {self.robot_time_s / 60:.1f} min "
             f"({self.plan.n_points} points, "
             f"{sum(len(s.via_deg) for s in self.plan.steps)} via points).",
             self.exit_line,
+            self.cell_line,
         ]
         if self.method == "joint":
             lines.append(
@@ -161,9 +170,12 @@ def _subsets(n: int):
 
 
 def candidates(robot: Robot, theta0: np.ndarray, opt: PlanOptions, rng) -> np.ndarray:
-    """Return configurations (deg) moving a few joints away from θ0, within the limits' margin."""
-    lo = robot.joint_min_deg + opt.margin_deg
-    hi = robot.joint_max_deg - opt.margin_deg
+    """Return configurations (deg) moving a few joints away from θ0.
+
+    Within the margin of the body limits (the joint limits narrowed by ``[cell]``).
+    """
+    lo, hi = robot.body_limits_deg
+    lo, hi = lo + opt.margin_deg, hi - opt.margin_deg
     out = []
     for subset in _subsets(robot.n_joints):
         q = np.tile(theta0, (opt.samples, 1))
@@ -219,7 +231,8 @@ def move_clearance(
     ``every`` > 1 only every ``every``-th of those samples and each move's end are
     evaluated: a subset, so a gap found there is a gap of the full sampling too. A sample
     where the modelled wire is longer than ``longest_mm`` counts as no gap at all (−inf):
-    the encoder's range, checked along the move as ``wirecal gen`` checks it.
+    the encoder's range, checked along the move as ``wirecal gen`` checks it; so does a
+    sample where the arm meets itself or the cell (:mod:`~wirecal.solver.cell`).
     """
     if robot.link_radius_mm is None:
         raise WirecalError(f"{robot.source}: the wire clearance needs the link radii")
@@ -242,6 +255,7 @@ def move_clearance(
         q_rad = np.radians(q)
         f = frames(model, q_rad)  # one evaluation of the chain for both checks
         gap = wire_clearance(model, q_rad, p0, robot.link_radius_mm, trim, f)
+        gap = np.where(robot.cell_gaps(q, p0, model, f).smallest() < 0, -np.inf, gap)
         if np.isfinite(longest_mm):
             d = wire_path(model.pulley, tool_position(model, q_rad, f) - p0)[0]
             gap = np.where(np.nan_to_num(d) > longest_mm, -np.inf, gap)
@@ -250,11 +264,11 @@ def move_clearance(
 
 
 def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2.0) -> np.ndarray:
-    """Return which moves a → b are safe for the wire.
+    """Return which moves a → b are safe for the arm and the wire.
 
-    Moves a → b that keep the wire clear of the links, within the encoder's range less
-    ``range_margin_mm`` all along, and do not turn joint 6 by more than 180° (which would
-    wrap the wire around the flange).
+    Moves a → b that keep the arm out of itself and the cell, the wire clear of the
+    links, within the encoder's range less ``range_margin_mm`` all along, and do not turn
+    joint 6 by more than 180° (which would wrap the wire around the flange).
     """
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
     ok = np.abs(b[:, -1] - a[:, -1]) <= 180
@@ -290,8 +304,8 @@ def screen(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Return which candidates are usable, and their via points.
 
-    Which candidates are usable (wire length, an eyelet's exit cone, wrist singularity, a
-    clear move from θ0)
+    Which candidates are usable (wire length, an eyelet's exit cone, wrist singularity,
+    the arm clear of itself and the cell, a clear move from θ0)
     and, for those whose direct move is not clear, a via point that makes it clear (the
     arm joints first, or the wrist first); NaN rows where the direct move is clear. The
     moves are sampled coarsely here; ``reach_ok`` checks the points chosen from finely.
@@ -302,10 +316,7 @@ def screen(
         d = wire_path(model.pulley, tool_position(model, np.radians(x)) - p0)[0]
         return (d >= opt.min_wire_mm) & (d <= robot.encoder.range_mm - opt.range_margin_mm)
 
-    # the points read the encoder: their wire leaves an eyelet within its cone
-    ok = length_ok(q) & within_cone(robot.encoder.exit, tool_position(model, np.radians(q)) - p0)
-    if ik.analytic_structure(model):
-        ok &= np.abs(np.sin(np.radians(q[:, 4]) + model.dh[4, 2])) >= np.sin(np.radians(8))
+    ok = _point_checks(robot, model, p0, q, opt)
     via = np.full(q.shape, np.nan)
     direct = np.zeros(len(q), bool)
     direct[ok] = move_ok(robot, model, p0, theta0, q[ok], opt, coarse)
@@ -323,6 +334,68 @@ def screen(
         good[good] = reach_ok(robot, model, p0, theta0, q[need[good]], v[good], opt, coarse)
         via[need[good]] = v[good]
     return ok & (direct | ~np.isnan(via[:, 0])), via
+
+
+def _point_checks(
+    robot: Robot, model, p0: np.ndarray, q: np.ndarray, opt: PlanOptions
+) -> np.ndarray:
+    """Return which candidate points pass every check of their own (:data:`BLOCKED_WHY`)."""
+    return np.all(list(_point_failures(robot, model, p0, q, opt).values()), axis=0)
+
+
+def _point_failures(
+    robot: Robot, model, p0: np.ndarray, q: np.ndarray, opt: PlanOptions
+) -> dict[str, np.ndarray]:
+    """Return, per check of :data:`BLOCKED_WHY`, which candidate points pass it.
+
+    The wire length (above ``min_wire_mm``, within the encoder's range less the margin),
+    an eyelet's exit cone (the points read the encoder), the wrist singularity of an
+    analytic wrist (|sin θ5| ≥ sin 8°) and the arm clear of itself and the cell.
+    """
+    p = tool_position(model, np.radians(q))
+    d = wire_path(model.pulley, p - p0)[0]
+    wrist = np.ones(len(q), bool)
+    if ik.analytic_structure(model):
+        wrist = np.abs(np.sin(np.radians(q[:, 4]) + model.dh[4, 2])) >= np.sin(np.radians(8))
+    return {
+        "range": (d >= opt.min_wire_mm) & (d <= robot.encoder.range_mm - opt.range_margin_mm),
+        "cone": within_cone(robot.encoder.exit, p - p0),
+        "wrist": wrist,
+        "cell": robot.cell_gaps(q, p0, model).smallest() >= 0,
+    }
+
+
+BLOCKED_WHY = {
+    "range": "the wire's length out of the encoder range",
+    "cone": "the wire outside the exit's cone",
+    "wrist": "at the wrist singularity",
+    "cell": "the arm in itself or the cell",
+}
+"""The checks of a candidate point itself (:func:`_point_failures`) and what each
+blocks, in words (:func:`_blocked`)."""
+
+
+def _blocked(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> str:
+    """Say which constraints blocked the candidates around θ0, with counts.
+
+    Per check of the points themselves (a candidate may fail several), then the moves
+    from θ0 of the candidates that pass them: through the arm or the cell (where the wire
+    is clear), or with the wire closer than ``clearance_mm`` to a link.
+    """
+    model = robot.nominal
+    q = candidates(robot, theta0, opt, np.random.default_rng(opt.seed))
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    fails = _point_failures(robot, model, p0, q, opt)
+    counts = [f"{int(np.sum(~v))} {k} ({BLOCKED_WHY[k]})" for k, v in fails.items() if not v.all()]
+    left = q[np.all(list(fails.values()), axis=0)]
+    if len(left):
+        sweep = move_clearance(robot, model, p0, theta0, left, 10.0, 1, np.inf)
+        counts.append(f"{int(np.sum(sweep == -np.inf))} cell on the move from theta0")
+        counts.append(
+            f"{int(np.sum((sweep > -np.inf) & (sweep < opt.clearance_mm)))} clearance (the "
+            "wire too close to a link on the move from theta0)"
+        )
+    return f"of {len(q)} candidates, blocked: " + ", ".join(counts)
 
 
 def _errors(psi_j, psi_prev, cov_prev, psi_next, base, cand, opt: PlanOptions) -> np.ndarray:
@@ -444,27 +517,23 @@ def design(
 
     ``progress`` is called with the fraction of the work done (0…1) as it advances.
     """
-    span = robot.joint_max_deg - robot.joint_min_deg
+    body_lo, body_hi = robot.body_limits_deg
+    span = body_hi - body_lo
     narrow = np.flatnonzero(span <= 2 * opt.margin_deg)
     if narrow.size:
         raise WirecalError(
             [
                 f"{robot.source}: joint {j + 1}: range {span[j]:g} deg leaves no room for "
-                f"points {opt.margin_deg:g} deg inside both limits; check joint_min_deg and "
-                "joint_max_deg (degrees)"
+                f"points {opt.margin_deg:g} deg inside both limits; check joint_min_deg, "
+                "joint_max_deg and [cell] body_min_deg, body_max_deg (degrees)"
                 for j in narrow
             ]
         )
     if theta0 is not None:
         return _design_at(robot, np.asarray(theta0, dtype=float), opt, progress)
-    rng = np.random.default_rng([opt.seed, 99])
-    # θ0 is drawn 20 deg inside the limits, less on a joint with a narrow range
-    inset = np.clip(span / 4, opt.margin_deg, 20.0)
-    lo, hi = robot.joint_min_deg + inset, robot.joint_max_deg - inset
     best, problems = None, []
     tries = 6
-    for k in range(tries):
-        t0 = np.round(rng.uniform(lo, hi), 0)
+    for k, t0 in enumerate(_theta0_draws(robot, opt, tries)):
         try:
             d = _design_at(robot, t0, opt, _part(progress, k, tries))
         except WirecalError as exc:
@@ -475,21 +544,51 @@ def design(
             best = (score, d)
     if best is None:
         raise WirecalError(
-            [f"{robot.source}: no θ0 tried gives a plan; give --theta0", *problems[:3]]
+            [f"{robot.source}: no θ0 tried gives a plan (each θ0's reasons follow)", *problems]
         )
     return best[1]
 
 
+THETA0_DRAWS = 200
+"""θ0 candidates drawn at once; the first few clear of the arm and the cell are tried."""
+
+
+def _theta0_draws(robot: Robot, opt: PlanOptions, tries: int) -> np.ndarray:
+    """Return up to ``tries`` θ0 (deg, whole degrees) clear of the arm's body and the cell.
+
+    Drawn 20 deg inside the body limits (less on a joint with a narrow range); raise,
+    naming what blocked them, when none of :data:`THETA0_DRAWS` is clear.
+    """
+    rng = np.random.default_rng([opt.seed, 99])
+    lo, hi = robot.body_limits_deg
+    inset = np.clip((hi - lo) / 4, opt.margin_deg, 20.0)
+    t0 = np.round(rng.uniform(lo + inset, hi - inset, (THETA0_DRAWS, robot.n_joints)), 0)
+    p0 = tool_position(robot.nominal, np.radians(t0))
+    gaps = robot.cell_gaps(t0, p0)
+    clear = gaps.smallest() >= 0
+    if not clear.any():
+        causes = sorted({gaps.cause(k).split(" (")[0] for k in range(len(t0))})
+        raise WirecalError(
+            f"{robot.source}: all {THETA0_DRAWS} θ0 drawn collide (cell) — "
+            + "; ".join(causes[:5])
+            + ": check [cell] floor_z_mm and its boxes, or give --theta0"
+        )
+    return t0[clear][:tries]
+
+
 def _check_theta0(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> None:
-    """Raise when a joint of θ0 is within the margin of its limits."""
-    for j in np.flatnonzero(
-        (theta0 < robot.joint_min_deg + opt.margin_deg)
-        | (theta0 > robot.joint_max_deg - opt.margin_deg)
-    ):
+    """Raise when a joint of θ0 is within the margin of its body limits, or θ0 collides."""
+    lo, hi = robot.body_limits_deg
+    for j in np.flatnonzero((theta0 < lo + opt.margin_deg) | (theta0 > hi - opt.margin_deg)):
         raise WirecalError(
             f"theta0: joint {j + 1} = {theta0[j]:g} deg is within "
-            f"{opt.margin_deg:g} deg of its limits"
+            f"{opt.margin_deg:g} deg of its limits [{lo[j]:g}, {hi[j]:g}] (the joint "
+            "limits, narrowed by [cell] body limits)"
         )
+    p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
+    gaps = robot.cell_gaps(theta0, p0)
+    if gaps.smallest()[0] < 0:
+        raise WirecalError(f"theta0 {theta0.tolist()}: collides (cell): {gaps.cause(0)}")
 
 
 def _unidentifiable(model, q: np.ndarray, theta0: np.ndarray, names: list[str]) -> dict[str, str]:
@@ -580,8 +679,7 @@ def _design_at(
     if len(q_all) < opt.points_per_step:
         raise WirecalError(
             f"{robot.source}: almost no usable configuration around θ0 "
-            f"{theta0.tolist()}: check the encoder range, the link radii and "
-            "the joint limits"
+            f"{theta0.tolist()}: {_blocked(robot, theta0, opt)}"
         )
     names = list(robot.parameters)
     excluded = _unidentifiable(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
@@ -625,9 +723,10 @@ def _design_at(
         robot=robot.name,
     )
     d = Design(plan, steps, excluded, method=opt.method)
-    d.predicted = predicted_accuracy(robot, plan)
+    d.predicted = predicted_accuracy(robot, plan, unplanned=tuple(excluded))
     d.robot_time_s = robot_time(robot, plan, opt.run)
     d.exit_line = exit_line(robot, plan)
+    d.cell_line = cell_line(robot)
     tick(1.0)
     return d
 
@@ -712,8 +811,9 @@ def _step_by_step(
         tick(0.5 + 0.4 * len(pools) / n_params)
     if not pools:
         raise WirecalError(
-            f"{robot.source}: no parameter can be isolated around θ0 "
-            f"{theta0.tolist()}; try another --theta0"
+            f"{robot.source}: no parameter can be isolated around θ0 {theta0.tolist()} "
+            f"by the {len(q_all)} usable candidates ({_blocked(robot, theta0, opt)}); try "
+            "another --theta0"
         )
     return pools
 
@@ -824,6 +924,26 @@ def exit_line(robot: Robot, plan: Plan) -> str:
     return text + ("." if largest is None else f"; largest exit angle {largest:.1f} deg.")
 
 
+def cell_line(robot: Robot) -> str:
+    """Return the robot file's cell in words (plan header): what every move keeps clear of."""
+    c = robot.cell
+    narrowed = np.flatnonzero(
+        (robot.body_limits_deg[0] > robot.joint_min_deg)
+        | (robot.body_limits_deg[1] < robot.joint_max_deg)
+    )
+    body = (
+        "body limits on joint " + ", ".join(str(j + 1) for j in narrowed)
+        if narrowed.size
+        else "no body limits"
+    )
+    return (
+        f"Cell: floor at z = {c.floor_z_mm:g} mm of frame 0, margin {c.margin_mm:g} mm, "
+        f"{len(c.boxes)} boxes, {len(c.half_spaces)} half-spaces, "
+        f"{'an' if c.housing else 'no'} encoder housing, {body}: theta0, every point and "
+        "every move keep the arm clear of itself and the cell (docs/cell.md)."
+    )
+
+
 def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarray:
     """Return the error covariance of the estimates of the steps planned so far.
 
@@ -869,8 +989,10 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
     """Return the visiting order from θ0 and back, or None.
 
     The visiting order from θ0 and back (nearest neighbour, improved by 2-opt) over
-    moves that keep the wire clear (``move_ok``); a point reached through a via point can
-    only come first. Returns the order, or None when no order keeps every move clear.
+    moves that keep the arm and the wire clear (``move_ok``); a point reached through a
+    via point can only come first, and last only when it is the step's only point and its
+    direct move back to θ0 is clear. Returns the order, or None when no order keeps every
+    move clear.
     """
     n = len(pts)
     a, b = np.repeat(pts, n, axis=0), np.tile(pts, (n, 1))
@@ -886,9 +1008,13 @@ def _tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.nd
     start = move_s(t0, first) + np.where(has_via, move_s(first, pts), 0.0)
     back = move_s(pts, t0)
     bad = 1e4
+    # the way back to θ0 is the way there reversed, except from a point reached via
+    home = np.ones(n, bool)
+    home[has_via] = move_ok(robot, model, p0, pts[has_via], t0[has_via], opt)
+    last_bad = np.where(has_via & (n > 1), bad, 0.0) + np.where(home, 0.0, bad)
 
     def total(path):
-        t = start[path[0]] + back[path[-1]] + bad * (has_via[path[-1]] and n > 1)
+        t = start[path[0]] + back[path[-1]] + last_bad[path[-1]]
         for x, y in itertools.pairwise(path):
             t += leg[x, y] + bad * (not clear[x, y] or has_via[y])
         return t
@@ -919,14 +1045,19 @@ def robot_time(robot: Robot, plan: Plan, run: RunParameters = DEFAULT_RUN) -> fl
 
 
 def predicted_accuracy(
-    robot: Robot, plan: Plan, sigma_mm: float = 0.01, prior: float = PlanOptions.prior
+    robot: Robot,
+    plan: Plan,
+    sigma_mm: float = 0.01,
+    prior: float = PlanOptions.prior,
+    unplanned: tuple[str, ...] = (),
 ) -> dict[str, float]:
     """Return the mean tool-point error over the workspace (mm) of both estimators.
 
     Mean tool-point error over the workspace: for the joint estimate the Cramér–Rao bound
     (σ per reading plus the count's quantisation); for the stepwise estimate its linearised
     map A, noise A·C·Aᵀ plus the bias of parameters leaking into steps before their own,
-    (A·J − I)·P·(A·J − I)ᵀ with true offsets of size ``prior`` (deg, mm).
+    (A·J − I)·P·(A·J − I)ᵀ with true offsets of size ``prior`` (deg, mm). Parameters
+    ``unplanned`` stay at their prior: each adds its own error of size ``prior`` to both.
     """
     model = robot.nominal
     q, step, _ = plan.all_points()
@@ -940,7 +1071,18 @@ def predicted_accuracy(
     E = A @ J - np.eye(len(names))
     P = np.diag(errors.to_internal(np.full(len(names), prior)) ** 2)
     ws = workspace(robot, 500)
+    every = (*names, *unplanned)
+    left = np.diag(
+        ErrorSet(tuple(unplanned), robot.n_joints).to_internal(np.full(len(unplanned), prior)) ** 2
+    )
+
+    def with_unplanned(cov: np.ndarray) -> np.ndarray:
+        out = np.zeros((len(every), len(every)))
+        out[: len(names), : len(names)] = cov
+        out[len(names) :, len(names) :] = left
+        return out
+
     return {
-        "joint": tool_error(model, names, cov_joint, ws).mean_mm,
-        "stepwise": tool_error(model, names, A @ C @ A.T + E @ P @ E.T, ws).mean_mm,
+        "joint": tool_error(model, every, with_unplanned(cov_joint), ws).mean_mm,
+        "stepwise": tool_error(model, every, with_unplanned(A @ C @ A.T + E @ P @ E.T), ws).mean_mm,
     }

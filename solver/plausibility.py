@@ -76,6 +76,21 @@ LENGTH_SPAN_RATIO = 2.0
 OVERRIDDEN = "overridden: "
 """How a patch's ``plausibility`` field starts when the user overrode the gate."""
 
+
+def override_warning(plausibility: str) -> str | None:
+    """Return the warning every artefact made from an overridden patch carries.
+
+    From the patch's ``plausibility`` field; None when the gate passed (or the patch
+    predates it).
+    """
+    if not plausibility.startswith(OVERRIDDEN):
+        return None
+    return (
+        "wirecal's plausibility gate refused this result and the refusal was overridden "
+        f"(--accept-implausible): {plausibility[len(OVERRIDDEN) :]}"
+    )
+
+
 CHECK_HINT = (
     "check the encoder (channel, interface, belt_mode in the robot file; the counter must "
     "move when the wire is pulled), the robot file's units (mm and deg), and that the plan "

@@ -16,9 +16,10 @@ from functools import cached_property
 import numpy as np
 
 from wirecal.solver import params as P
+from wirecal.solver.cell import Capsules, CellModel, Gaps, body_limits, capsules, cell_gaps
 from wirecal.solver.counter import Counter
 from wirecal.solver.exit_geometry import Exit, Pulley
-from wirecal.solver.kinematics import Model, with_errors
+from wirecal.solver.kinematics import Frames, Model, with_errors
 
 CONTROLLER_JOINTS = 6
 """Joints of the arms the controller programs and the log format are written for."""
@@ -176,6 +177,9 @@ class Robot:
     controller: Controller = Controller()
     joint_speed_confirmed: bool = True  # false: speeds a URDF gave as placeholders (gen refuses)
     gravity_sag_deg_per_m: float = DEFAULT_GRAVITY_SAG_DEG_PER_M  # joints 2, 3 (the budget's)
+    cell: CellModel = field(
+        default_factory=CellModel
+    )  # the floor, keep-out volumes and body limits
 
     @property
     def n_joints(self) -> int:
@@ -190,6 +194,35 @@ class Robot:
         dh.flags.writeable = tool.flags.writeable = False
         pulley = self.encoder.exit if isinstance(self.encoder.exit, Pulley) else None
         return Model(dh=dh, tool_point=tool, pulley=pulley)
+
+    @cached_property
+    def capsules(self) -> Capsules:
+        """The arm's capsules and self-collision pairs (:mod:`~wirecal.solver.cell`)."""
+        radii = self.link_radius_mm
+        if radii is None:
+            radii = np.full(self.n_joints - 1, DEFAULT_LINK_RADIUS_MM)
+        return capsules(self.dh, radii, self.tool_point, self.cell.margin_mm)
+
+    @property
+    def body_limits_deg(self) -> tuple[np.ndarray, np.ndarray]:
+        """The joint limits narrowed by the cell's body limits (deg): where plans may go."""
+        return body_limits(self.joint_min_deg, self.joint_max_deg, self.cell)
+
+    def cell_gaps(
+        self,
+        q_deg: np.ndarray,
+        p0: np.ndarray,
+        model: Model | None = None,
+        f: Frames | None = None,
+    ) -> Gaps:
+        """Return the gaps (mm) of configurations ``q_deg`` to the arm's body and the cell.
+
+        ``p0``: the wire's exit (the encoder housing's start); ``model``: the arm as built
+        (default nominal); ``f``: the frames of q when the caller has them.
+        """
+        model = self.nominal if model is None else model
+        q_rad = np.radians(np.atleast_2d(q_deg))
+        return cell_gaps(self.cell, self.capsules, model, q_rad, p0, f)
 
     def errors(self, names: Sequence[str] | None = None) -> P.ErrorSet:
         """Return the error parameters ``names`` (default: the robot file's ``parameters``)."""

@@ -19,6 +19,9 @@ wire length; a linear fit of them against the controller's time ``t_s`` measures
 the readings (the encoder's stand, the wire creeping, temperature). A drift beyond its 3σ is
 removed from every length (the length at time t less the fitted drift since the zeros'
 mean time); a smaller one is reported and left (removing it would add only its fit's noise).
+Its σ is judged with the points' noise once it is removed (left in, the drift inflates
+that noise 1.2–2.1 times at the paper's speed and 1 mm/h, and hides itself). A slip is a
+step change of the zeros, not a slope: :func:`find_slips` tells them apart.
 """
 
 from __future__ import annotations
@@ -88,6 +91,71 @@ def estimate_scale(
     return ScaleEstimate(factor, std, n, length_mm, ell)
 
 
+SEATING_TOLERANCE_MM = 0.05
+"""How far (mm) a pair's B − A may read from the certified length beyond the scale's own
+tolerance: 3.5σ of the difference of two readings of 0.01 mm noise each; a tip seated on
+a burr or dirt, or not pushed home, reads further off."""
+
+UNMOVED_FRACTION = 0.05
+"""A pair whose |B − A| is below this fraction of the gauge's length: the tip stayed in
+one nest (or the encoder did not count)."""
+
+
+def reference_problems(
+    measured_mm: np.ndarray, lines: list[tuple[int, int]], length_mm: float, tolerance_ppm: float
+) -> list[str]:
+    """Name what went wrong in the reference step, one ``line: problem`` per cause.
+
+    ``measured_mm`` is each pair's B − A at the nominal scale, ``lines`` each pair's
+    (nest A, nest B) line. A pair near 0 is an unmoved tip, one near −L swapped nests;
+    the others must read L within the scale's tolerance plus
+    :data:`SEATING_TOLERANCE_MM`: one pair off is a bad seating, every pair off by the
+    same amount a wrong certified length (or mm_per_count).
+    """
+    ell = np.asarray(measured_mm, dtype=float)
+    allowed = length_mm * tolerance_ppm * PPM + SEATING_TOLERANCE_MM
+    out: list[str] = []
+    off: list[int] = []
+    for k, (x, (a, b)) in enumerate(zip(ell, lines, strict=True)):
+        where = f"{a}-{b}: reference pair {k + 1} reads B − A = {x:+.3f} mm"
+        if abs(x) < UNMOVED_FRACTION * length_mm:
+            out.append(
+                f"{where} of a {length_mm:g} mm gauge ([encoder] reference_length_mm): "
+                "the tip did not move from nest A to nest B (or the encoder did not "
+                "count); seat it in each nest in turn and repeat the reference step"
+            )
+        elif abs(x + length_mm) < UNMOVED_FRACTION * length_mm:
+            out.append(
+                f"{where}, minus the gauge's length: nests A and B were swapped; seat the "
+                "tip in nest A (the one nearer the encoder) first"
+            )
+        elif abs(x - length_mm) > allowed:
+            off.append(k)
+    if off:
+        out += _off_pairs(ell, lines, off, length_mm, allowed)
+    return out
+
+
+def _off_pairs(
+    ell: np.ndarray, lines: list[tuple[int, int]], off: list[int], length_mm: float, allowed: float
+) -> list[str]:
+    """Name the pairs that read the gauge beyond ``allowed``: bad seatings or a wrong length."""
+    spread = float(np.ptp(ell[off]))
+    if len(off) == len(ell) and (len(off) > 1 and spread <= 2 * SEATING_TOLERANCE_MM):
+        return [
+            f"{lines[0][0]}: every reference pair reads {float(ell.mean()):.3f} mm against "
+            f"[encoder] reference_length_mm = {length_mm:g} (± {allowed:.3f} mm): check "
+            "the gauge's certified length and mm_per_count in the robot file"
+        ]
+    return [
+        f"{lines[k][0]}-{lines[k][1]}: reference pair {k + 1} reads B − A = {ell[k]:.3f} mm, "
+        f"{ell[k] - length_mm:+.3f} mm from the gauge's {length_mm:g} mm (allowed ± "
+        f"{allowed:.3f}): a bad seating of the tip; clean the nests and repeat the "
+        "reference step"
+        for k in off
+    ]
+
+
 @dataclass(frozen=True)
 class Drift:
     """A linear drift of the zero readings over the run's time."""
@@ -149,6 +217,44 @@ def fit_drift(t_s: np.ndarray, zero_mm: np.ndarray, sigma_reading_mm: float) -> 
     sigma = max(math.sqrt(float(r @ r) / (n - 2)), sigma_reading_mm)
     std = sigma / math.sqrt(sxx)
     return Drift(b, std, t_mean, n, abs(b) > DRIFT_SIGNIFICANCE * std)
+
+
+def find_slips(
+    t_s: np.ndarray, zero_mm: np.ndarray, tol_mm: float
+) -> list[tuple[int, float]] | None:
+    """Tell slips from a drift in the zero readings: a slip is a step, a drift a slope.
+
+    Fits zero_mm = c + b·t + Σ J_k·[i ≥ k], adding the step k that best explains the
+    readings as long as its jump |J_k| exceeds ``tol_mm``. Returns (index of the first
+    zero after the slip, J_k) per slip; None without usable times (fewer than
+    :data:`MIN_DRIFT_ZEROS` zeros, or times missing or not increasing).
+    """
+    t = np.asarray(t_s, dtype=float)
+    z = np.asarray(zero_mm, dtype=float)
+    n = len(t)
+    if n < MIN_DRIFT_ZEROS or not np.all(np.diff(t) > 0):  # NaN compares False too
+        return None
+    columns = [np.ones(n), t - t[0]]
+    slips: list[tuple[int, float]] = []
+    while len(columns) + 1 < n:
+        k, jump = _best_step(columns, z, {k for k, _ in slips})
+        if abs(jump) <= tol_mm:
+            break
+        slips.append((k, jump))
+        columns.append((np.arange(n) >= k).astype(float))
+    return sorted(slips)
+
+
+def _best_step(columns: list[np.ndarray], z: np.ndarray, taken: set[int]) -> tuple[int, float]:
+    """Return the step (index, jump) that, added to ``columns``, leaves the least residual."""
+    n = len(z)
+    best = (math.inf, 0, 0.0)
+    for k in set(range(1, n)) - taken:
+        X = np.column_stack([*columns, np.arange(n) >= k])
+        coef, *_ = np.linalg.lstsq(X, z, rcond=None)
+        r = z - X @ coef
+        best = min(best, (float(r @ r), k, float(coef[-1])))
+    return best[1], best[2]
 
 
 @dataclass(frozen=True)

@@ -66,6 +66,11 @@ OPERATOR_SEAT_S = 20.0
 """Time (s) the operator takes per seating of the wire tip in a nest, and to reattach it."""
 
 
+MAX_DRIFT_MM_PER_H = 1000.0
+"""Largest zero drift a simulation injects (mm/h): 2000 times what the drift check accepts
+(:data:`~wirecal.solver.scale.DRIFT_TOLERANCE_MM_PER_H`), enough for any fault study."""
+
+
 @dataclass(frozen=True)
 class EncoderTruth:
     """The true encoder of a simulated run (the robot file only approximates it)."""
@@ -328,8 +333,11 @@ def simulate_log(
         lengths[chosen] += faults.outlier_mm * rng.choice((-1.0, 1.0), size=len(chosen))
     lengths[-1] += closing_rng.normal(0.0, noise_mm)
 
-    beyond = np.flatnonzero(lengths > enc.range_mm)
-    if len(beyond):  # the encoder stops counting there: the twin's error, with its cause
+    _check_finite(lengths, "true wire length", steps, indices, f"the true errors on {robot.source}")
+    # Beyond the range either way (a fault shortening the wire by more than it can be
+    # long) the encoder stops counting: the twin's error, with its cause.
+    beyond = np.flatnonzero(np.abs(lengths) > enc.range_mm)
+    if len(beyond):
         i = int(beyond[0])
         raise WirecalError(
             f"{RANGE_EXCEEDED}: step {steps[i]} point {indices[i]}: the wire would be "
@@ -342,6 +350,7 @@ def simulate_log(
     total = timeline.total_s + offset
     # What the encoder reads of those wire lengths (scale, temperature, drift).
     reading = lengths * encoder.read_factor(times, total) + encoder.drift_mm(times)
+    _check_finite(reading, "encoder's reading", steps, indices, "the true encoder")
     head = sample_counts(reading[:-1], mpc, start, enc.counter, samples, rng)
     tail = sample_counts(reading[-1:], mpc, start, enc.counter, samples, closing_rng)
     mean, spread = np.concatenate([head[0], tail[0]]), np.concatenate([head[1], tail[1]])
@@ -392,6 +401,25 @@ def _row_lengths(
     p = tool_position(model, np.radians(actual))
     p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
     return np.asarray(physical_wire_mm(robot.encoder.exit, p - p0), dtype=float)
+
+
+def _check_finite(
+    values: np.ndarray, what: str, steps: list[int], indices: list[int], cause: str
+) -> None:
+    """Refuse a run whose ``values`` (one per reading, run order) are not all finite.
+
+    A NaN or infinite length would be written as a count: a log with exit status 0 that
+    nothing can read.
+    """
+    bad = np.flatnonzero(~np.isfinite(values))
+    if len(bad):
+        i = int(bad[0])
+        raise WirecalError(
+            f"the {what} of step {steps[i]} "
+            + ("zero reading" if indices[i] == 0 else f"point {indices[i]}")
+            + f" is {values[i]} ({len(bad)} reading(s) in all): check {cause} "
+            "(sizes in mm and deg; the true errors, scale and drift within their bounds)"
+        )
 
 
 def _reference_rows(

@@ -247,20 +247,18 @@ def solve(
     base = robot.nominal
     q_deg = m.joints_deg[present]
     factor, notes = _reference_scale(robot, m)
-    raw = m.distance_mm[present]
     k = factor if factor is not None and corrections else 1.0
-    d = raw * k
+    d = m.distance_mm[present] * k
     problem = Problem(base, names, np.radians(q_deg), np.radians(m.theta0_deg), d, step)
     psi = sensitivity(base, q_deg, m.theta0_deg, names).psi
     omega = omega_vector(names, robot.n_joints, plan, omega_default)
-    sw, jt, sigma = _identify(robot, problem, omega, psi, robust)
-    drift = _fit_drift(m, sigma, notes)
-    if corrections and drift is not None and drift.removed:
-        assert m.t_s is not None
-        assert m.reference_t_s is not None
-        d = (raw - drift.correction_mm(m.t_s[present], m.reference_t_s)) * k
-        problem = replace(problem, d=d)
-        sw, jt, sigma = _identify(robot, problem, omega, psi, robust)
+    fit = _identify(robot, problem, omega, psi, robust)
+    drift, clean = _judge_drift(robot, m, fit[2], k, problem, (omega, psi, robust))
+    notes.append(_drift_note(m, drift))
+    if corrections and clean is not None:
+        problem, fit = clean
+        d = problem.d
+    sw, jt, sigma = fit
     estimates: dict[str, Estimate] = {}
     if "stepwise" in methods:
         estimates["stepwise"] = sw
@@ -354,7 +352,7 @@ def valid_length(enc) -> float:
 
 def _identify(
     robot: Robot, problem: Problem, omega: np.ndarray, psi: np.ndarray, robust: bool
-) -> tuple[Estimate, Estimate, float]:
+) -> Fit:
     """Run the stepwise and joint methods; their estimates and the noise σ (mm)."""
     sw = run_stepwise(problem, omega, psi)
     if not np.all(np.isfinite(sw.values)):
@@ -370,15 +368,55 @@ def _identify(
     return sw, jt, _noise_sigma(r, len(problem.names), robust)
 
 
-def _fit_drift(m: Measurements, sigma_mm: float, notes: list[str]) -> Drift | None:
+Fit = tuple[Estimate, Estimate, float]
+"""The stepwise and joint estimates and the noise σ (mm) of one identification."""
+
+
+def _judge_drift(
+    robot: Robot,
+    m: Measurements,
+    sigma_mm: float,
+    factor: float,
+    problem: Problem,
+    how: tuple[np.ndarray, np.ndarray, bool],
+) -> tuple[Drift | None, tuple[Problem, Fit] | None]:
+    """Fit the zero readings' drift and judge it by the σ left once it is removed.
+
+    The points' σ ``sigma_mm`` of the first identification still holds the drift (their
+    lengths drift with time): judged by it a real drift looks insignificant. So the
+    fitted drift is taken out of the lengths (then scaled by the reference's ``factor``),
+    the parameters identified again (``how``: ω, Ψ, robust, as :func:`_identify`), and
+    the drift refitted with that σ. Returns the
+    drift and, when it is significant, the problem without it and its identification.
+    """
+    drift = _fit_drift(m, sigma_mm)
+    if drift is None:
+        return None, None
+    assert m.t_s is not None
+    assert m.reference_t_s is not None
+    present = m.present
+    removed = replace(drift, removed=True).correction_mm(m.t_s[present], m.reference_t_s)
+    clean = replace(problem, d=(m.distance_mm[present] - removed) * factor)
+    fit = _identify(robot, clean, *how)
+    drift = _fit_drift(m, fit[2])
+    return drift, ((clean, fit) if drift is not None and drift.removed else None)
+
+
+def _fit_drift(m: Measurements, sigma_mm: float) -> Drift | None:
     """Fit the zero readings' drift; σ of a reading from the points' fit ``sigma_mm``."""
     if not m.timed or m.zero_t_s is None or m.zero_mm is None:
-        notes.append("the log has no times (version 1): no drift fit")
         return None
     floor = abs(m.mm_per_count) / math.sqrt(12)  # quantisation: the least noise there is
-    drift = fit_drift(m.zero_t_s, m.zero_mm, max(sigma_mm, floor) if sigma_mm > 0 else floor)
-    notes.append(drift.text() if drift is not None else "too few zero readings to fit a drift")
-    return drift
+    return fit_drift(m.zero_t_s, m.zero_mm, max(sigma_mm, floor) if sigma_mm > 0 else floor)
+
+
+def _drift_note(m: Measurements, drift: Drift | None) -> str:
+    """Describe the drift fit (or why there is none) for the result's notes."""
+    if drift is not None:
+        return drift.text()
+    if not m.timed:
+        return "the log has no times (version 1): no drift fit"
+    return "too few zero readings to fit a drift"
 
 
 def _reference_scale(robot: Robot, m: Measurements) -> tuple[float | None, list[str]]:

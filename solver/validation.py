@@ -66,6 +66,11 @@ class Setup:
         return hashlib.sha256(json.dumps(canon, sort_keys=True).encode()).hexdigest()
 
 
+CARTESIAN_SLACK_MM = 1.0
+"""Cartesian targets keep this much more than the cell's margin: the controller's IK in
+single precision lands a fraction of a millimetre from the nominal solution."""
+
+
 def _pose_reachable(robot: Robot, R, p, margin_deg: float):
     found = {}
     for s in ik.solve(robot, R, p, margin_deg=margin_deg):
@@ -79,7 +84,8 @@ def config_poses(robot: Robot, setup: Setup, margin_deg: float = 1.0) -> np.ndar
 
     ``setup.poses`` transformations (x, y, z, yaw, pitch, roll) spread over the
     workspace, each reachable righty in all four configurations within the limits with a
-    margin, with wire lengths within the encoder's range in every one.
+    margin, with wire lengths within the encoder's range and the arm clear of itself and
+    the cell (:mod:`~wirecal.solver.cell`) in every one.
     """
     model = robot.nominal
     rng = np.random.default_rng(setup.seed)
@@ -95,14 +101,17 @@ def config_poses(robot: Robot, setup: Setup, margin_deg: float = 1.0) -> np.ndar
         if any(q is None for q in qs):
             continue
         d = np.linalg.norm(tool_position(model, np.array(qs)) - setup.encoder_mm, axis=1)
-        if np.all((d > 50) & (d < robot.encoder.range_mm - 50)):
+        gaps = robot.cell_gaps(np.degrees(qs), setup.encoder_mm)  # ik gives rad
+        clear = gaps.smallest() >= CARTESIAN_SLACK_MM
+        if np.all((d > 50) & (d < robot.encoder.range_mm - 50) & clear):
             out.append(t)
             if len(out) == setup.poses:
                 return np.array(out)
     raise WirecalError(
         f"{setup.source}: configuration.poses: found only {len(out)} of "
         f"{setup.poses} poses reachable in all four configurations with the "
-        "wire within range; move encoder_mm or ask for fewer poses"
+        "wire within range and the arm clear of the cell; move encoder_mm or ask for "
+        "fewer poses"
     )
 
 
@@ -110,8 +119,9 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
     """Return the plate's grid points and the flange targets above them.
 
     The grid points on the plate and the flange targets above them (tool pointing down),
-    each checked reachable (righty, above, noflip) at the approach height and 5 mm below
-    the plate's nominal top. In the order the probe visits them: row by row, every other
+    each checked reachable (righty, above, noflip), with the arm clear of itself and the
+    cell, at the approach height and 5 mm below the plate's nominal top. In the order the
+    probe visits them: row by row, every other
     row reversed, so that each point neighbours the one before it (the probe's search
     starts from the depth found there).
     """
@@ -129,10 +139,19 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
         for depth in (0.0, setup.approach_mm + 5.0):
             R, o = pose.matrix(*t)
             o = o - np.array([0, 0, depth])
-            ok = any(
-                s.within_limits and s.config == ("righty", "above", "noflip")
+            ok = [
+                s.q
                 for s in ik.solve(robot, R, o, margin_deg=margin_deg)
-            )
+                if s.within_limits and s.config == ("righty", "above", "noflip")
+            ]
+            gaps = robot.cell_gaps(np.degrees(ok), setup.encoder_mm) if ok else None
+            if gaps is not None and gaps.smallest()[0] < CARTESIAN_SLACK_MM:
+                problems.append(
+                    f"{setup.source}: plate: grid point ({i}, {j}) at "
+                    f"{np.round(p, 1).tolist()}: the arm would collide: {gaps.cause(0)}; "
+                    "move origin_mm or correct [cell] in the robot file"
+                )
+                break
             if not ok:
                 problems.append(
                     f"{setup.source}: plate: grid point ({i}, {j}) at "
@@ -163,8 +182,9 @@ def distance_plan(
 
     Same θ0, order and number of steps as ``plan``, each step ``per_step`` points drawn
     around θ0 (every joint within ±``spread_deg``, ``options.margin_deg`` inside its
-    limits). A point is kept when the planner's rules hold for the move to it from the
-    previous target (:func:`~wirecal.solver.planner.move_ok`: the wire clear of the links,
+    body limits). A point is kept when the planner's rules hold for the move to it from the
+    previous target (:func:`~wirecal.solver.planner.move_ok`: the arm clear of itself and
+    the cell, the wire clear of the links,
     joint 6 turning at most 180°) and its nominal wire length is within the encoder's
     range (``options.min_wire_mm`` … range_mm − ``options.range_margin_mm``) along that
     move. A second run of the measurement program over these points measures wire lengths
@@ -174,8 +194,8 @@ def distance_plan(
     """
     options = options or PlanOptions()
     rng = np.random.default_rng([seed, 11])
-    lo = robot.joint_min_deg + options.margin_deg
-    hi = robot.joint_max_deg - options.margin_deg
+    lo, hi = robot.body_limits_deg
+    lo, hi = lo + options.margin_deg, hi - options.margin_deg
     model = robot.nominal
     theta0 = np.asarray(plan.theta0_deg, dtype=float)
     p0 = tool_position(model, np.radians(theta0)[None])[0]

@@ -44,29 +44,54 @@ def reduction(before: Stats, after: Stats) -> dict[str, float | None]:
     return out
 
 
+MIN_TRAVEL_MM = 1.0
+"""Least spread of the wire lengths over a configuration log's poses (mm): the poses lie
+across the workspace, hundreds of millimetres apart, so a smaller spread means the
+encoder did not count."""
+
+
 def config_discrepancy(log: ValidationLog, counter: Counter) -> Stats:
     """Return, per pose, the largest wire-length difference among its configurations.
 
     Per pose, the largest difference among the wire lengths of its four configurations
-    (mm); the counts are compared modulo the width of the robot's ``counter``.
+    (mm); the counts are compared modulo the width of the robot's ``counter``. A log whose
+    lengths do not change from pose to pose is refused (:data:`MIN_TRAVEL_MM`): its
+    discrepancies would all be zero, a perfect score from a dead encoder.
     """
     rows = log.rows
-    out = []
-    incomplete = []
-    for number in np.unique(rows[:, 0]):
-        r = rows[rows[:, 0] == number]
-        if len(r) != 4:
-            incomplete.append(int(number))
-            continue
-        c = r[:, 8]
-        rel = counter.difference(c, c[0])
-        out.append(float((rel.max() - rel.min()) * abs(log.mm_per_count)))
-    if incomplete:
+    _check_counted(log, counter)
+    poses, first, group, size = np.unique(
+        rows[:, 0], return_index=True, return_inverse=True, return_counts=True
+    )
+    if np.any(size != 4):
+        incomplete = [int(p) for p in poses[size != 4]]
         raise WirecalError(
             f"{log.source}: poses {incomplete[:10]} lack one of the four "
             "configurations; finish the run"
         )
-    return Stats.of(out)
+    c = rows[:, 8]
+    rel = counter.difference(c, c[first][group])  # each pose's counts from its first
+    hi = np.full(len(poses), -np.inf)
+    lo = np.full(len(poses), np.inf)
+    np.maximum.at(hi, group, rel)
+    np.minimum.at(lo, group, rel)
+    return Stats.of((hi - lo) * abs(log.mm_per_count))
+
+
+def _check_counted(log: ValidationLog, counter: Counter) -> None:
+    """Raise :class:`WirecalError` when the encoder did not count over the log's poses."""
+    c = log.rows[:, 8]
+    if len(np.unique(log.rows[:, 0])) < 2:
+        return
+    travel_mm = float(np.ptp(counter.difference(c, c[0]))) * abs(log.mm_per_count)
+    if travel_mm < MIN_TRAVEL_MM:
+        raise WirecalError(
+            f"{log.source}: the wire length changes by {travel_mm:.4f} mm over "
+            f"{len(c)} readings at poses across the workspace (all counts near "
+            f"{c[0]:.0f}; less than {MIN_TRAVEL_MM:g} mm): the encoder did not count. "
+            "Check its cable, the counter (encoder.channel in the robot file) and that "
+            "the wire is attached, then repeat the run"
+        )
 
 
 def plane_residuals(log: ValidationLog) -> tuple[Stats, np.ndarray]:

@@ -51,7 +51,8 @@ def test_readme_example(tmp_path, monkeypatch):
     # --- end of the example ---
     expected = {n: truth.get(n, 0.0) for n in plan.order}
     got = result.estimates["joint"].as_dict()
-    assert max(abs(got[n] - expected[n]) for n in expected) < 0.02
+    # 0.024 (a3) since the Viper's cell (issue 21) changed the design at this θ0
+    assert max(abs(got[n] - expected[n]) for n in expected) < 0.03
     assert verdict.passed
     assert best.method == result.recommended
     path, spec = wirecal.write_patch(

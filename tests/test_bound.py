@@ -49,7 +49,7 @@ def test_mean_tool_error_is_the_mean_of_the_norms():
 
 def test_gaussian_alone_gives_the_half_normal_quantile():
     """E = 3 mm·|x|, x ~ N(0, 0.01²): the 95 % point is 1.96·0.03 mm, the median 0.6745·0.03
-    mm (the Sobol draws: within 1 %)."""
+    mm (the quasi-random draws: within 1 %)."""
     model = ErrorModel(np.array([[1e-4]]), np.zeros(1), np.zeros((0, 1)))
     got = bound_mm(_one_parameter_jacobian(3.0), model)
     assert got == pytest.approx(Z95 * 0.03, rel=0.01)

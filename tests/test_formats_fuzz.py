@@ -10,6 +10,7 @@ A second family mutates the text itself (characters cut, doubled or replaced).
 from __future__ import annotations
 
 import copy
+import json
 import tomllib
 from datetime import UTC, datetime
 from pathlib import Path
@@ -22,8 +23,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats import fileio, plan_file, robot_file, truth, validation_files
 from wirecal.solver.formats import patch as patch_format
-from wirecal.solver.formats import plan_file, robot_file, truth, validation_files
 from wirecal.solver.identify import Estimate
 
 from .conftest import VIPER
@@ -182,3 +183,28 @@ def test_mutated_text(kind, viper, paper_plan, tmp_path_factory, data):
     path.write_text(text, encoding="utf-8")
     problems = _problems(read, path, viper, paper_plan)
     assert problems is None or problems
+
+
+TOML_TEXT = st.text(st.characters(blacklist_categories=("Cs", "Cc")), max_size=12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    depth=st.integers(1, 20),
+    strings=st.lists(TOML_TEXT, min_size=1, max_size=4),
+    comment=TOML_TEXT,
+)
+def test_toml_depth_counts_nesting_not_brackets_in_strings(depth, strings, comment):
+    """Brackets inside basic, literal and multi-line strings and comments nest nothing."""
+    items = ", ".join(json.dumps(s, ensure_ascii=False) for s in strings)  # TOML basic strings
+    literal = "'[{'" if "'" not in comment else "'x'"
+    text = (
+        f"a = {'[' * depth}{items}, {literal}{']' * depth}  # {comment.replace(chr(10), ' ')}\n"
+        f'b = """{"[" * 30}\n{"{" * 30}"""\n'
+    )
+    assert _count_depth(tomllib.loads(text)["a"]) == depth  # the text is valid TOML
+    assert fileio.toml_depth(text) == depth
+
+
+def _count_depth(x: Any) -> int:
+    return 1 + max(map(_count_depth, x), default=0) if isinstance(x, list) else 0

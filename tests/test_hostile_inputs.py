@@ -10,6 +10,8 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import subprocess
+import sys
 
 import click
 import pytest
@@ -234,3 +236,311 @@ def test_copy_of_example_is_clean(tmp_path):
     """The corpus is hostile because of the edits, not because of the examples."""
     shutil.copy(ROBOT, tmp_path / "robot.toml")
     assert invoke("psi", tmp_path / "robot.toml", PLAN).exit_code == 0
+
+
+# -- the fault matrix's defect list (issue 22 item 4) ------------------------------------
+
+UR5 = VIPER.parent / "ur5"
+
+
+def test_report_controller_for_a_ur_robot(tmp_path):
+    """URScript's controller solver has no polish: one controller column, no crash."""
+    log_path, html = tmp_path / "ur.csv", tmp_path / "ur.html"
+    r = invoke("simulate", UR5 / "robot.toml", UR5 / "plan.toml", "-o", log_path, "--seed", 1)
+    assert r.exit_code == 0, r.output
+    r = invoke(
+        "report", UR5 / "robot.toml", UR5 / "plan.toml", log_path, "-o", html, "--controller"
+    )
+    outcome_is_clean(r)
+    assert r.exit_code == 0, r.output
+    text = html.read_text()
+    assert "controller (wc_solve)" in text
+    assert "wc.solve2" not in text
+    # wc_solve agrees with the Python reference to its single-precision floats
+    m = re.search(r"differs from the\s+Python reference by ([0-9.e+-]+) \(stepwise\) deg/mm", text)
+    assert m is not None
+    assert float(m.group(1)) < 1e-3
+
+
+def _with_gauge(tmp_path):
+    """The Viper's robot file with a 500 mm reference gauge, and a simulated log of it."""
+    robot = tmp_path / "gauge.toml"
+    robot.write_text(
+        ROBOT.read_text().replace("[encoder]\n", "[encoder]\nreference_length_mm = 500.0\n")
+    )
+    log_path = tmp_path / "gauge.csv"
+    r = invoke("simulate", robot, PLAN, "-o", log_path, "--seed", 2)
+    assert r.exit_code == 0, r.output
+    return robot, log_path
+
+
+def _edit_references(log_path, edit) -> None:
+    """Apply ``edit(index, counts, counts of the pair's nest A) → counts`` to each reference row."""
+    lines = log_path.read_text().splitlines()
+    nest_a = 0.0
+    for k, line in enumerate(lines):
+        cells = line.split(",")
+        if cells[0] == "reference":
+            index, counts = int(cells[2]), float(cells[9])
+            nest_a = counts if index % 2 else nest_a
+            cells[9] = f"{edit(index, counts, nest_a):.4f}"
+            lines[k] = ",".join(cells)
+    log_path.write_text("\n".join(lines) + "\n")
+
+
+MM_PER_COUNT = 0.025488
+REFERENCE_FAULTS = {
+    # nest B read where nest A was: B = A
+    "unmoved tip": (
+        lambda i, c, a: a,
+        r"gauge.csv:7-8: reference pair 1 reads B − A = \+0\.000 mm of a 500 mm gauge "
+        r"\(\[encoder\] reference_length_mm\): the tip did not move",
+    ),
+    # every pair measured B first: B − A ≈ −500 mm
+    "swapped nests": (
+        lambda i, c, a: c if i % 2 else 2 * a - c,
+        r"reference pair 1 reads B − A = -(?:499|500)\.\d+ mm, minus the gauge's length: "
+        r"nests A and B were swapped",
+    ),
+    # the second pair's tip sat 0.3 mm proud of nest B
+    "one bad seating": (
+        lambda i, c, a: c - 0.3 / MM_PER_COUNT if i == 4 else c,
+        r"gauge.csv:9-10: reference pair 2 reads B − A = 499\.\d+ mm, -0\.3\d\d mm from the "
+        r"gauge's 500 mm .*a bad seating",
+    ),
+    # every pair 1 mm long: the certified length (or mm_per_count) is wrong
+    "wrong gauge length": (
+        lambda i, c, a: c if i % 2 else c + 1.0 / MM_PER_COUNT,
+        r"every reference pair reads 50[01]\.\d+ mm against \[encoder\] reference_length_mm = 500",
+    ),
+}
+
+
+@pytest.mark.parametrize("fault", REFERENCE_FAULTS)
+def test_reference_step_faults_are_named(tmp_path, fault):
+    robot, log_path = _with_gauge(tmp_path)
+    edit, message = REFERENCE_FAULTS[fault]
+    _edit_references(log_path, edit)
+    r = invoke("solve", robot, PLAN, log_path)
+    outcome_is_clean(r)
+    assert r.exit_code == 2, r.output
+    assert re.search(message, r.output), r.output
+
+
+def test_reference_step_clean_log_is_read(tmp_path):
+    robot, log_path = _with_gauge(tmp_path)
+    r = invoke("solve", robot, PLAN, log_path)
+    assert r.exit_code == 0, r.output
+    assert "encoder scale from the reference (3 pair(s)" in r.output
+
+
+def _run_closed_stdin(*args):
+    """Run wirecal in a process whose standard input is closed (a shell's ``0<&-``)."""
+    code = "from wirecal.cli.main import main; main()"
+    return subprocess.run(
+        [sys.executable, "-c", code, *map(str, args)],
+        preexec_fn=lambda: os.close(0),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["solve", ROBOT, PLAN, "-"], ["lint", "-"]],
+    ids=lambda a: " ".join(map(str, a)),
+)
+def test_closed_standard_input(args):
+    r = _run_closed_stdin(*args)
+    assert r.returncode == 2, r.stderr
+    assert "Traceback" not in r.stderr
+    assert "error: <stdin>: standard input is closed" in r.stderr
+
+
+ZERO = "/dev/zero"
+ENDLESS = [  # every reader given an endless file: refused after 16 MiB, not read forever
+    ["lint", ZERO],
+    ["psi", ZERO, PLAN],
+    ["psi", ROBOT, ZERO],
+    ["solve", ROBOT, PLAN, ZERO],
+    ["validate", "plane", ZERO],
+    ["simulate", ROBOT, PLAN, "-o", "OUT", "--errors", ZERO],
+    ["gen", ROBOT, PLAN, "-o", "OUT", "--patch", ZERO],
+    ["gen", ROBOT, PLAN, "-o", "OUT", "--validation", ZERO],
+]
+
+
+@pytest.mark.skipif(not os.path.exists(ZERO), reason="no /dev/zero")
+@pytest.mark.parametrize("args", ENDLESS, ids=lambda a: " ".join(map(str, a)))
+def test_endless_input_is_refused(tmp_path, args):
+    r = invoke(*(tmp_path / a if a == "OUT" else a for a in args))
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert "/dev/zero: more than 16 MiB: not a" in r.output
+    assert not (tmp_path / "OUT").exists()
+
+
+@pytest.mark.parametrize("slot", ["ROBOT", "PLAN"])
+@pytest.mark.parametrize("opening", ["[", "{x = "])
+def test_deeply_nested_toml_is_refused(tmp_path, slot, opening):
+    """Python's TOML reader recurses per level: 5000 levels are refused before it reads them."""
+    closing = "]" if opening == "[" else "}"
+    deep = tmp_path / "deep.toml"
+    deep.write_text(f"a = {opening * 5000}1{closing * 5000}\n")
+    values = {"ROBOT": ROBOT, "PLAN": PLAN, slot: deep}
+    r = invoke("psi", values["ROBOT"], values["PLAN"])
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert re.search(r"deep\.toml: arrays and tables nested 500\d deep \(more than 16", r.output)
+
+
+def test_oversized_plan_step_is_refused(tmp_path):
+    big = tmp_path / "big.toml"
+    rows = "".join(f"[0, -90, 210, -90, -26, {-180 + k % 300 * 0.1:.1f}],\n" for k in range(1001))
+    big.write_text(PLAN.read_text().replace("points_deg = [\n", f"points_deg = [\n{rows}", 1))
+    r = invoke("psi", ROBOT, big)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert "big.toml: step[1].points_deg: has 1007 rows; give at most 1000" in r.output
+
+
+def test_oversized_robot_is_refused(tmp_path):
+    robot = tmp_path / "robot.toml"
+    rows = ", ".join(["[0, 0, 0, 100]"] * 13)
+    text = re.sub(r"^dh = \[.*?^\]$", f"dh = [{rows}]", ROBOT.read_text(), flags=re.M | re.S)
+    robot.write_text(text)
+    r = invoke("psi", robot, PLAN)
+    outcome_is_clean(r)
+    assert "kinematics.dh: has 13 rows; give at most 12" in r.output
+
+
+def _nested_program(suffix: str, blocks: int, operators: int) -> str:
+    """A V+ (.v2) or URScript (.script) program: ``blocks`` nested IFs around a line with a
+    chain of ``operators`` additions."""
+    expression = "1" + "+1" * operators
+    if suffix == ".v2":
+        body = ["    IF 1 THEN"] * blocks + [f"    x = {expression}"] + ["    END"] * blocks
+        return "\n".join([".PROGRAM t()", *body, ".END"]) + "\n"
+    opens = [" " * (k + 1) + "if True:" for k in range(blocks)]
+    ends = [" " * (blocks - k) + "end" for k in range(blocks)]
+    return "\n".join(["def t():", *opens, " " * (blocks + 1) + f"x = {expression}", *ends, "end"])
+
+
+@pytest.mark.parametrize("suffix", [".v2", ".script"])
+@pytest.mark.parametrize(
+    ("blocks", "operators", "message"),
+    [
+        (330, 1, r":6[56]: (t: )?blocks nested more than 64 deep; wirecal reads at most 64"),
+        (2, 1000, r":4: (t: )?the line nests 100\d levels deep .* wirecal reads at most 100"),
+    ],
+    ids=["330 nested IFs", "1000 chained operators"],
+)
+def test_lint_refuses_deep_nesting(tmp_path, suffix, blocks, operators, message):
+    path = tmp_path / f"deep{suffix}"
+    path.write_text(_nested_program(suffix, blocks, operators))
+    r = invoke("lint", path)
+    outcome_is_clean(r)
+    assert r.exit_code == 1, r.output
+    assert re.search(re.escape(path.name) + message, r.output), r.output
+
+
+@pytest.mark.parametrize("suffix", [".v2", ".script"])
+def test_lint_reads_nesting_up_to_its_bounds(tmp_path, suffix):
+    """63 IFs inside the program (64 blocks with URScript's def) and a 90-operator line."""
+    path = tmp_path / f"deep{suffix}"
+    path.write_text(_nested_program(suffix, 64 if suffix == ".v2" else 63, 90))
+    r = invoke("lint", path)
+    assert r.exit_code == 0, r.output
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        (["--encoder-scale-ppm", "-1000000"], "--encoder-scale-ppm"),  # 1 + scale = 0
+        (["--encoder-scale-ppm", "1e300"], "--encoder-scale-ppm"),
+        (["--drift-mm-per-h", "1e300"], "--drift-mm-per-h"),
+        (["--random", "1e300"], "--random"),
+        (["--noise-mm", "1e300"], "beyond the encoder's range_mm"),
+        (["--outliers", "3", "--outlier-mm", "1e308"], "--outlier-mm"),
+        (["--outliers", "3", "--outlier-mm", "5000"], "beyond the encoder's range_mm"),
+        (["--slip", "4:-1e308"], "give a slip within ±100000 mm"),
+        (["--slip", "4:-2000"], "mm long, beyond the encoder's range_mm 1250"),
+        (["--controller", "--slip", "4:-1e308"], "give a slip within ±100000 mm"),
+    ],
+    ids=lambda a: " ".join(a) if isinstance(a, list) else "",
+)
+def test_simulate_never_writes_nan_counts(tmp_path, option, message):
+    """Each of these wrote NaN (or 0) counts with exit status 0."""
+    out = tmp_path / "run.csv"
+    r = invoke("simulate", ROBOT, PLAN, "-o", out, *option)
+    outcome_is_clean(r)
+    assert r.exit_code == 2, r.output
+    assert message in r.output
+    assert not out.exists()
+
+
+@pytest.mark.filterwarnings("ignore:divide by zero:RuntimeWarning")
+def test_simulate_log_refuses_a_reading_that_is_not_finite(viper, paper_plan, table5):
+    """The API's own guard, below the command's option bounds: a scale of −100 % reads inf."""
+    from wirecal.solver.errors import WirecalError
+    from wirecal.solver.simulate import EncoderTruth, simulate_log
+
+    with pytest.raises(
+        WirecalError, match=r"encoder's reading of step 1 zero reading is (inf|nan)"
+    ):
+        simulate_log(viper, paper_plan, table5, seed=1, encoder=EncoderTruth(scale_ppm=-1e6))
+
+
+def _with_times(source, target, times) -> None:
+    """Copy a log with each reading's t_s replaced by ``times(line number, t_s)``."""
+    lines = source.read_text().splitlines()
+    for k, line in enumerate(lines):
+        cells = line.split(",")
+        if cells[0] in ("zero", "point", "unsettled", "reference"):
+            cells[12] = f"{times(k + 1, float(cells[12])):.3f}"
+            lines[k] = ",".join(cells)
+    target.write_text("\n".join(lines) + "\n")
+
+
+TIMER_FAULTS = {
+    "all zero": (lambda n, t: 0.0, r"took 0 s; the robot needs 72 s at full speed.*at zero or in"),
+    "milliseconds": (lambda n, t: 1000 * t, r"took 86\d\d\d s; .*timer in milliseconds\?"),
+    "huge": (
+        lambda n, t: 1e300 if n == 20 else t,
+        r"run\.csv:21: t_s [\d.]+ s is before the "
+        r"previous reading's 1e\+300 s \(line 20\)",
+    ),
+    "minutes": (lambda n, t: t / 60, r"took 1\.4\d* s; .*at zero or in minutes\?"),
+    "backwards": (
+        lambda n, t: 1.0 if n == 20 else t,
+        r"run\.csv:20: t_s 1 s is before the previous reading's \d+\.\d+ s \(line 19\)",
+    ),
+}
+
+
+@pytest.mark.parametrize("fault", TIMER_FAULTS)
+def test_timer_sanity(tmp_path, log, fault):
+    """t_s all zero or in the wrong unit passed the drift check (no drift or 1000× too small)."""
+    times, message = TIMER_FAULTS[fault]
+    bad = tmp_path / "run.csv"
+    _with_times(log, bad, times)
+    r = invoke("solve", ROBOT, PLAN, bad)
+    outcome_is_clean(r)
+    assert r.exit_code == 2, r.output
+    assert re.search(message, r.output), r.output
+
+
+def test_a_log_pasted_many_times_gives_a_readable_error(tmp_path, log):
+    """Every duplicated row is a problem (thousands here): the command prints the first 40
+    and a count, not a screenful per row."""
+    lines = log.read_text().splitlines()
+    rows = [x for x in lines if x[:1].isalpha() and not x.startswith("kind,")]
+    bad = tmp_path / "run.csv"
+    bad.write_text("\n".join(lines + rows * 50) + "\n")
+    r = invoke("solve", ROBOT, PLAN, bad)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    errors = [x for x in r.output.splitlines() if x.startswith("error: ")]
+    assert len(errors) == 41
+    assert re.fullmatch(r"error: … and \d{4} more problems of the same kinds", errors[-1])

@@ -8,6 +8,7 @@ import dataclasses
 import json
 import re
 import tomllib
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
@@ -240,3 +241,31 @@ def test_covariance_is_rank_aware():
     assert ok.tolist() == [True, False, False]  # a2 + a3 seen, a2 − a3 not
     _, ok = covariance(np.array([[1.0, 2.0, 0.5]]), 1.0)  # fewer rows than parameters
     assert ok.tolist() == [False, False, False]
+
+
+def test_override_is_carried_into_gen_and_export_urdf(tmp_path, log_text):
+    """A patch written with --accept-implausible says so wherever it goes: gen's output and
+    wc.patch (a comment, and TYPEd when it runs), export-urdf's output and the URDF."""
+    log = tmp_path / "stuck.csv"
+    log.write_text(counts_set(log_text, lambda c: "1234.0000"))
+    patch = tmp_path / "patch.toml"
+    assert run("solve", ROBOT, PLAN, log, "-o", patch, "--accept-implausible").exit_code == 0
+    warning = "plausibility gate refused this result and the refusal was overridden"
+
+    r = run("gen", ROBOT, PLAN, "-o", tmp_path / "gen", "--patch", patch)
+    assert r.exit_code == 0, r.output
+    assert f"warning: {patch}: wirecal's {warning} (--accept-implausible): failed:" in r.output
+    module = (tmp_path / "gen" / "WIRECAL.V2").read_text()
+    wc_patch = module[module.index(".PROGRAM wc.patch()") :]
+    wc_patch = wc_patch[: wc_patch.index(".END")]
+    assert '    TYPE "*** WARNING:"' in wc_patch
+    assert "    ; WARNING:" in wc_patch
+    assert wc_patch.count("implausible wire") == 2  # in the comment and in a TYPE line
+
+    urdf = tmp_path / "calibrated.urdf"
+    r = run("export-urdf", ROBOT, patch, "-o", urdf)
+    assert r.exit_code == 0, r.output
+    assert f"warning: {patch}: wirecal's {warning}" in r.output
+    text = urdf.read_text()
+    assert text.splitlines()[1].startswith(f"<!-- WARNING: wirecal's {warning}")
+    ET.fromstring(text.split("\n", 1)[1])  # still well-formed XML after the comment

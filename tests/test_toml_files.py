@@ -261,9 +261,7 @@ def test_patch_unidentified_std_and_verdict(viper, paper_plan, tmp_path):
     assert patch.meta.plausibility == "overridden: x"
     assert patch.parameters["a2"].std == float("inf")
     path.write_text(text.replace("std = inf", "std = -inf"))
-    with pytest.raises(
-        WirecalError, match=r"parameters\.a2\.std: is -inf; give a number between 0"
-    ):
+    with pytest.raises(WirecalError, match=r"parameters\.a2\.std: is -inf; give a number ≥ 0 mm"):
         read_patch(path)
 
 
@@ -284,7 +282,7 @@ def test_patch_unidentified_std_and_verdict(viper, paper_plan, tmp_path):
         (lambda t: t.replace("method =", "methd ="), "methd: unknown key (did you mean 'method'?)"),
         (
             lambda t: t.replace("std = 0.02", "std = -0.02"),
-            "parameters.a2.std: is -0.02; give a number between 0 and 10000 mm",
+            "parameters.a2.std: is -0.02; give a number ≥ 0 mm",
         ),
     ],
 )

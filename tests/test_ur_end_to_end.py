@@ -114,7 +114,9 @@ def test_demo_on_the_ur5(tmp_path):
     rows = {line[:38].strip(): line[38:].split() for line in r.output.splitlines()}
     before, after, reduction = rows["wire length at new points, mean (mm)"]
     assert float(before) > 0.2
-    assert float(after) < 0.06  # 0.01 mm noise, 0.02 mm repeatability, compliance
+    # 0.01 mm noise, 0.02 mm repeatability, compliance: 0.092 mm around the plan re-designed
+    # inside the UR5's cell (issue 21; under 0.06 around the old θ0 with the elbow at 226°)
+    assert float(after) < 0.1
     assert int(reduction.rstrip("%")) >= 80
     _, tool_after, _ = rows["tool-point error vs truth, mean (mm)"]
     assert float(tool_after) < 0.05

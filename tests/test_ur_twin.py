@@ -60,8 +60,9 @@ def test_run_completes_and_the_log_identifies_the_truth(ur5, ur5_plan, texts, tr
     assert m.complete
     est = solve(ur5, ur5_plan, m).estimates["joint"].as_dict()
     assert max(abs(v - truth.get(k, 0.0)) for k, v in est.items()) < 0.05  # deg, mm
-    # the twin's clock: 51 moves at 36 deg/s plus the settle and the readings
-    assert 400 < r.programs.cell.clock < 900
+    # the twin's clock: 62 moves at 36 deg/s plus the settle and the readings (the plan
+    # re-designed inside the UR5's cell, issue 21: shorter moves than the old plan's 51)
+    assert 300 < r.programs.cell.clock < 600
 
 
 def test_every_line_sent_is_mirrored_in_the_log_tab(ur5, ur5_plan, texts, truth, tmp_path):
@@ -115,9 +116,9 @@ def test_fault_socket_dropped_mid_run(ur5, ur5_plan, texts, truth, tmp_path):
     assert r.received.stopped == "the sender closed the connection before the end marker"
     assert not r.received.log.exists()
     m = load_measurements(r.received.journal, ur5_plan, ur5)
-    # 30 lines: 6 header lines, then steps 1-4 (6 rows each)
-    assert m.missing_text() == "steps 5–10 (all points)"
-    assert summary(r.received, ur5, ur5_plan)[-1] == "missing points: steps 5–10 (all points)"
+    # 30 lines: 6 header lines, then steps 1-5 (a zero row and 5, 2, 2, 8, 2 points)
+    assert m.missing_text() == "steps 6–10 (all points)"
+    assert summary(r.received, ur5, ur5_plan)[-1] == "missing points: steps 6–10 (all points)"
 
 
 def test_fault_encoder_not_enabled_counts_never_change(ur5, ur5_plan, texts, truth, tmp_path):
@@ -136,15 +137,15 @@ def test_fault_encoder_not_enabled_counts_never_change(ur5, ur5_plan, texts, tru
 
 
 def test_fault_point_beyond_a_joint_limit(ur5, ur5_plan, texts, truth, tmp_path):
-    limits = (355.0, 355.0, 355.0, 355.0, 355.0, 110.0)  # the controller's own j6 limit
+    limits = (355.0, 355.0, 355.0, 0.0, 355.0, 355.0)  # the controller's own j4 limit
     r = run(ur5, ur5_plan, texts, truth, tmp_path, faults=Faults(joint_max_deg=limits))
     out = r.programs.run
     assert out.status == "error"
-    assert out.message == "movej: joint 6 target 120.310 deg is beyond its limit [-355, 110] deg"
+    assert out.message == "movej: joint 4 target 0.570 deg is beyond its limit [-355, 0] deg"
     m = load_measurements(r.received.journal, ur5_plan, ur5)
-    assert m.missing_text() == "step 3 points 3–5; steps 4–10 (all points)"  # j6 120.31
+    assert m.missing_text() == "step 4 points 3–8; steps 5–10 (all points)"  # j4 0.57
     assert summary(r.received, ur5, ur5_plan)[-1].endswith(
-        "step 3 points 3–5; steps 4–10 (all points)"
+        "step 4 points 3–8; steps 5–10 (all points)"
     )
 
 
@@ -154,7 +155,8 @@ def test_fault_wire_slip(ur5, ur5_plan, texts, truth, tmp_path):
     out = r.programs.run
     assert out.status == "stopped"  # the operator stops at the warning
     assert (
-        "# *** the zero reading at theta0 moved by more than 0.1 mm: slip in step 4" in out.console
+        "# *** the zero reading at theta0 jumped by more than 0.1 mm since the last: slip in step 4"
+        in out.console
     )
     assert "the wire slipped or the encoder moved during step 4" in out.message
     with pytest.raises(WirecalError) as info:
@@ -177,7 +179,7 @@ def test_the_log_carries_the_controller_solvers_result(ur5, ur5_plan, texts, tru
     ref = solve(ur5, ur5_plan, m).estimates["stepwise"].as_dict()
     assert list(result) == list(ref)
     assert max(abs(result[n] - v) for n, v in ref.items()) <= 1e-5
-    assert "# solver: step 10 of 10: d4 identified" in r.programs.run.console
+    assert "# solver: step 10 of 10: a2 identified" in r.programs.run.console
     ctl = compare_controller(solve(ur5, ur5_plan, m), tmp_path / "ctl")
     # the same program on the log's readings: the count split between base and offset
     # differs (floor of the logged count), hence 32-bit roundings in the last decimal
@@ -228,7 +230,7 @@ def test_cli_simulate_controller_runs_the_urscript_programs(tmp_path):
         main, [*args, "--random", "1", "--seed", "4", "--controller", "--slip", "4:0.5"]
     )
     assert r.exit_code == 1, r.output
-    assert "the controller program stopped: The zero reading at theta0 moved" in r.output
+    assert "the controller program stopped: The zero reading at theta0 jumped" in r.output
     assert "at step 5 zero reading at theta0 (stopped in wc_run line" in r.output
     text = log.read_text()
     assert text.startswith("# wirecal-log 2\n# robot: Universal Robots UR5\n")

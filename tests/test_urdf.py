@@ -195,10 +195,13 @@ def test_shipped_arm_exported_then_imported(arm, tmp_path):
     urdf, back = tmp_path / "arm.urdf", tmp_path / "arm.toml"
     r = CliRunner().invoke(main, ["export-urdf", str(arm), "-o", str(urdf)])
     assert r.exit_code == 0, r.output
-    _import(urdf, back, "--tip", "wire_point")
+    _import(urdf, back, "--tip", "wire_point", "--base", "link0")
     again = load_robot(back)
+    # the mounting plane travels as the URDF's root link (the floor below frame 0), the
+    # body limits as the URDF's joint limits (the vendor's ROS descriptions do the same)
+    assert again.cell.floor_z_mm == pytest.approx(robot.cell.floor_z_mm, abs=1e-9)
     rng = np.random.default_rng(1)
-    lo, hi = robot.joint_min_deg, robot.joint_max_deg
+    lo, hi = robot.body_limits_deg
     q = np.radians(lo + rng.uniform(0, 1, (200, 6)) * (hi - lo))
     expected = tool_position(robot.nominal, q)
     np.testing.assert_allclose(tool_position(again.nominal, q), expected, atol=TOL_MM)

@@ -4,6 +4,7 @@ URDFs with no edit."""
 
 from __future__ import annotations
 
+import itertools
 import math
 import tempfile
 import tomllib
@@ -127,6 +128,7 @@ def test_ur5_urdf_to_urscript_programs_in_two_commands(ur5, tmp_path):
     robot = load_robot(d / "robot.toml")
     plan = load_plan(tmp_path / "plan.toml", robot)
     assert sorted(s.parameter for s in plan.steps) == sorted(robot.parameters)  # all planned
+    assert_inside_the_ur5_cell(plan)
     r = run(
         "gen",
         d / "robot.toml",
@@ -142,6 +144,31 @@ def test_ur5_urdf_to_urscript_programs_in_two_commands(ur5, tmp_path):
     assert names == ["wc_check.script", "wc_mount.script", "wc_run.script"], r.output
     r = run("lint", tmp_path / "out" / "wc_run.script")
     assert "no problems" in r.output
+
+
+UR5_LINKS = ("forearm_link", "wrist_1_link", "wrist_2_link", "wrist_3_link", "tool0")
+"""The URDF links whose origins can come near the table (the shoulder's stay 89 mm up)."""
+
+
+def assert_inside_the_ur5_cell(plan) -> None:
+    """θ0, vias, points and every move between them, sampled every degree: the elbow within
+    ±175° and every link origin and the wire point at least 40 mm (the smallest capsule
+    radius) above the mounting plane, by the URDF's own joints (not wirecal's DH model)."""
+    targets = [np.asarray(plan.theta0_deg, float)]
+    for s in plan.steps:
+        targets += [*s.via_deg, *s.points_deg, np.asarray(plan.theta0_deg, float)]
+    lowest = np.inf
+    for a, b in itertools.pairwise(targets):
+        n = int(np.ceil(np.max(np.abs(b - a)))) + 1
+        for t in np.linspace(0.0, 1.0, n):
+            q = a + t * (b - a)
+            assert abs(q[2]) <= 175.0 + 1e-9, q
+            qr = np.radians(q)
+            for link in UR5_LINKS:
+                lowest = min(lowest, urdf_fk(UR5_URDF, "base_link", link, qr)[2, 3])
+            T = urdf_fk(UR5_URDF, "base_link", "tool0", qr)
+            lowest = min(lowest, (T[:3, :3] @ np.array([-50.0, 0.0, 40.0]) + T[:3, 3])[2])
+    assert lowest >= 40.0
 
 
 # --- the Viper s650 ---------------------------------------------------------------------------
@@ -334,7 +361,7 @@ def _robot_doc() -> dict:
         ("kinematics", "joint_speed_confirmed", "no", "give true or false"),
         ("cell", "floor_z_mm", "x", "cell.floor_z_mm"),
         ("cell", "margin_mm", -1.0, "cell.margin_mm"),
-        ("cell", "body_min_deg", [0.0] * 6, "give body_min_deg and body_max_deg together"),
+        ("cell", "body_min_deg", [200.0] * 6, "joint 3: 175 is not above body_min_deg"),
         ("cell", "colour", 1, "colour"),
         ("urdf", "wire_point_mm", [1.0, 2.0], "urdf.wire_point_mm"),
     ],

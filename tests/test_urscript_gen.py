@@ -206,12 +206,25 @@ def test_slip_raises_a_popup(ur5):
     rows = plan.n_points + len(plan.steps) + 1
     counts = [1000] * (rows * 10)
     second_zero = (1 + len(plan.steps[0].points_deg)) * 10
-    counts[second_zero : second_zero + 10] = [1010] * 10  # 0.25 mm: the wire slipped
+    counts[second_zero:] = [1010] * (len(counts) - second_zero)  # 0.25 mm: the wire slipped
     ctl = _Controller(counts, [[0.0] * 6] * rows)
     exec(compile(_python(run), "wc_run.script", "exec"), ctl.names())
     assert len(ctl.popups) == 1
     assert "slipped" in ctl.popups[0]
     assert "during step 1" in ctl.popups[0]
+
+
+def test_a_slow_drift_raises_no_popup(ur5):
+    """Each zero reading 2 counts (0.05 mm) above the last: 0.5 mm from the first by the
+    closing zero, but no jump between two zeros: a drift for the PC to fit, not a slip."""
+    robot, plan = ur5
+    run = scripts(robot, plan, NO_SOLVER)["wc_run.script"]
+    zero_rows = np.cumsum([0] + [1 + len(s.points_deg) for s in plan.steps])
+    rows = plan.n_points + len(plan.steps) + 1
+    level = np.cumsum(np.isin(np.arange(rows), zero_rows)) * 2  # +2 counts at each zero
+    ctl = _Controller([int(1000 + c) for c in np.repeat(level, 10)], [[0.0] * 6] * rows)
+    exec(compile(_python(run), "wc_run.script", "exec"), ctl.names())
+    assert ctl.popups == []
 
 
 # -- the command line ---------------------------------------------------------------------

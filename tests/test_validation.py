@@ -207,3 +207,29 @@ def test_plane_fit_residuals(tmp_path):
     np.testing.assert_allclose(coef, [0.01, -0.002, -300], atol=0.01)  # one 0.05 outlier
     assert stats.max == pytest.approx(stats.values[-1])
     assert stats.max > 0.04
+
+
+@pytest.mark.parametrize("base", [0, -3361716, 8388607])
+def test_an_encoder_that_did_not_count_is_refused(tmp_path, base):
+    """All counts equal (or within a few counts) over poses across the workspace: not a
+    perfect robot but a dead encoder; never "after 0.0000, reduction 100 %"."""
+    rows = [(k, c, base + (k + c) % 3) for k in range(1, 51) for c in range(1, 5)]
+    path = _config_log(tmp_path, rows)
+    with pytest.raises(WirecalError, match=r"c\.csv: .* the encoder did not count"):
+        config_discrepancy(read_validation_log(path, "configuration"), Counter(24))
+    r = CliRunner().invoke(
+        main, ["validate", "configuration", str(path), "--robot", str(VIPER / "robot.toml")]
+    )
+    assert r.exit_code == 2, r.output
+    assert "did not count" in r.output
+    assert "reduction" not in r.output
+
+
+def test_a_small_but_real_travel_is_read(tmp_path):
+    """Poses whose lengths differ by 2 mm (over the 1 mm bound) are analysed as usual."""
+    step = round(2.0 / 0.025488)
+    rows = [(k, c, k * step + c % 2) for k in (1, 2) for c in range(1, 5)]
+    s = config_discrepancy(
+        read_validation_log(_config_log(tmp_path, rows), "configuration"), Counter(24)
+    )
+    np.testing.assert_allclose(s.values, [0.025488, 0.025488])

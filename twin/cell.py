@@ -10,7 +10,9 @@ limits are enforced in :func:`run_measurement`, where the wire is mounted at θ0
 move is planned for it; the validation programs move at 20 % without a wire plan), a disk
 in a sandbox folder, a terminal with scripted answers, and a clock. Faults can be
 injected: a wire slip, an encoder failure, a full disk, a vibration that does not decay
-("still vibrating"), tighter joint limits than the plan assumed.
+("still vibrating"), tighter joint limits than the plan assumed. A move that would take
+the arm into itself, the floor or a keep-out volume of ``[cell]`` stops the run with the
+colliding pair (:meth:`Cell.collision`), as a real protective stop would.
 
 Error codes of the twin's own making (the V+ manual's codes are used where known:
 −1013 encoder quadrature error, User's Guide p. 354) are listed in ``ERRORS``.
@@ -25,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.solver import ik
+from wirecal.solver.cell_check import move_collision
 from wirecal.solver.exit_geometry import physical_wire_mm
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan import Plan
@@ -60,7 +63,11 @@ ERRORS = {
     -1013: "*Encoder quadrature error*",
     -1100: RANGE_EXCEEDED,
     -1101: "*Wire overspeed*",
+    -1102: "*Protective stop: collision*",
 }
+PROTECTIVE_STOP = -1102
+"""The twin's code for a move that would collide (its own: V+'s own message for a
+collision stop is not modelled)."""
 
 
 @dataclass(frozen=True)
@@ -239,11 +246,30 @@ class Cell:
         j = self.beyond_limits(q)
         if j is not None:
             raise VError(-1004, f"*Joint {j + 1} out of range* ({q[j]:g} deg)")
+        hit = self.collision(q)
+        if hit is not None:
+            raise VError(PROTECTIVE_STOP, f"{ERRORS[PROTECTIVE_STOP]} {hit}")
         move = move_profiles(self.robot, self.model, self.p0, self.joints, q)
         if self.wire_limits:
             self._check_wire(move, q)
         self.arrive(q, float(move.duration_s(self.speed_pct)[0]))
         self._vibrate(float(move.vibration_mm(self.speed_pct)[0]))
+
+    def collision(self, q_deg: np.ndarray) -> str | None:
+        """Return where the true arm collides on the move to ``q_deg``, or None.
+
+        The joint-interpolated move from the current joints, sampled as the planner
+        samples moves (a straight-line MOVES is sampled in joint space too), against the
+        arm's body and the robot file's ``[cell]``: where the true arm's capsules touch
+        (the planner's margin aside), a real arm would stop (a protective stop), so the
+        run stops with the move and the colliding pair.
+        """
+        start = np.asarray(self.joints, dtype=float)
+        target = np.asarray(q_deg, float)
+        hit = move_collision(self.robot, self.model, self.p0, start, target, contact=True)
+        if hit is None:
+            return None
+        return f"move {self.moves + 1} to ({', '.join(f'{x:g}' for x in q_deg)}): {hit}"
 
     def beyond_limits(self, q_deg: np.ndarray) -> int | None:
         """Return the index of the first joint beyond the controller's limits, if any."""

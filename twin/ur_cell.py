@@ -7,7 +7,9 @@ clock), reached through the URScript functions the generated programs call:
 * ``movej(q, a, v, t, r)``: q in rad, a rad/s², v rad/s of the leading axis (SD 14.22);
   the move takes the time of the leading joint's trapezoidal profile (``t`` > 0 sets it)
   and no settling (the programs sleep for that). A target beyond a joint limit stops the
-  program (the controller's own message was not read: *unconfirmed*);
+  program (the controller's own message was not read: *unconfirmed*), and so does a move
+  through the arm itself, the floor or a ``[cell]`` volume (a protective stop naming the
+  colliding pair; the controller's own message is not modelled);
 * ``get_actual_joint_positions()``: the commanded joints in rad (joint encoders do not see
   the unmodelled errors; the wire does);
 * the encoder: ``encoder_enable_pulse_decode(i, 1, A, B)`` (SD 14.2: index 0 or 1,
@@ -90,6 +92,9 @@ class URCell(Cell):
                 f"movej: joint {j + 1} target {q_deg[j]:.3f} deg is beyond its limit "
                 f"[{self.limits.joint_min_deg[j]:g}, {self.limits.joint_max_deg[j]:g}] deg"
             )
+        hit = self.collision(q_deg)
+        if hit is not None:
+            raise URError(f"protective stop: movej: {hit}")
         dist = float(np.max(np.abs(np.radians(q_deg - np.asarray(self.joints)))))
         self.arrive(q_deg, _trapezoid_s(dist, number(a, "movej a"), number(v, "movej v"), t))
 

@@ -25,6 +25,7 @@ from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import check_limits, joint_target, run_steps
 from wirecal.gen.templating import render
+from wirecal.solver.cell_check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
@@ -64,7 +65,7 @@ class UrOptions:
     run: RunParameters = PAPER_RUN
     host: str | None = None  # the PC running 'wirecal receive' (default: the robot file's)
     port: int | None = None  # its port (default: the robot file's)
-    zero_tol_mm: float = 0.1  # a zero reading further from the first: the wire slipped
+    zero_tol_mm: float = 0.1  # a zero reading further from the previous: the wire slipped
     spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
     margin_deg: float = 1.0  # every generated target at least this far inside a limit
     range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
@@ -203,6 +204,7 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
     """
     check_limits(robot, plan, opt.margin_deg)
     check_wire_range(robot, plan, opt.range_margin_mm)
+    check_cell(robot, plan)
     host, port = _check(robot, opt)
     tables = build_tables(robot, plan)
     mpc = robot.encoder.mm_per_count

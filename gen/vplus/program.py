@@ -8,6 +8,7 @@ robot, plan, options and wirecal version give the same bytes.
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,7 +20,8 @@ from wirecal import __version__
 from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import check_limits, joint_literal, run_steps
 from wirecal.gen.templating import render
-from wirecal.gen.vplus.literals import double_literal, long_lines, ppoint
+from wirecal.gen.vplus.literals import MAX_LINE, double_literal, long_lines, ppoint
+from wirecal.solver.cell_check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
@@ -65,16 +67,28 @@ class GenOptions:
     """Options of the generated module."""
 
     run: RunParameters = DEFAULT_RUN  # speed, acceleration, settle, readings
-    zero_tol_mm: float = 0.1  # a zero reading further from the first: the wire slipped
+    zero_tol_mm: float = 0.1  # a zero reading further from the previous: the wire slipped
     spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
     margin_deg: float = 1.0  # every generated target at least this far inside a limit
     log_file: str = "WCLOG.CSV"
     result_file: str = "WCSOLVE.CSV"
     patch: dict[str, float] | None = None  # identified offsets (deg, mm) for wc.patch
+    patch_warning: str | None = None  # the patch's overridden plausibility gate, if so
     validation: Setup | None = None  # adds wc.vcfg and wc.vpln (paper §3.6)
     range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
     echo_log: bool = False  # wc.run also TYPEs each log line (a controller without a disk)
     crlf: bool = True  # CRLF line ends, as ACE writes V+ files (LF with gen --lf)
+
+
+def _ascii_lines(text: str | None, width: int) -> list[str]:
+    """Return ``text`` wrapped to ``width`` for V+ comments and TYPE strings.
+
+    Printable ASCII only, without '"' (others become '?').
+    """
+    if text is None:
+        return []
+    clean = "".join(ch if 32 <= ord(ch) <= 126 and ch != '"' else "?" for ch in text)
+    return textwrap.wrap(clean, width, break_on_hyphens=False)
 
 
 def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
@@ -188,6 +202,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
     """Return the whole V+ module; raise :class:`WirecalError` if a rule would be broken."""
     check_limits(robot, plan, opt.margin_deg)
     check_wire_range(robot, plan, opt.range_margin_mm)
+    check_cell(robot, plan)
     tables = build_tables(robot, plan)
     _check_options(robot, opt, tables)
     if np.any(np.abs(tables.nominal) * 10000 >= 2**24):
@@ -255,6 +270,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         nit=STEP_ITERATIONS,
         njit=JOINT_ITERATIONS,
         patch=patch,
+        patch_warning=_ascii_lines(opt.patch_warning, MAX_LINE - 16),  # in a TYPE string
         names=list(plan.order),
         v=_validation_context(robot, opt),
         echo=opt.echo_log,

@@ -25,7 +25,6 @@ double quotes (a spreadsheet's export), rows with the wrong number of fields (ea
 from __future__ import annotations
 
 import hashlib
-import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,9 +37,8 @@ from wirecal.solver.formats.capture import (
     joined_note,
     take_rows,
 )
-
-STDIN = "-"
-"""The file name that means standard input (a log pasted from the controller's terminal)."""
+from wirecal.solver.formats.fileio import STDIN as STDIN  # the name callers know
+from wirecal.solver.formats.fileio import read_input
 
 
 @dataclass(frozen=True)
@@ -75,14 +73,7 @@ class Table:
 
 def read_source(path: str | Path, what: str) -> tuple[str, str, str]:
     """Return the text, its source name and the sha256 of its bytes; ``-`` reads standard input."""
-    if str(path) == STDIN:
-        raw, source = sys.stdin.buffer.read(), "<stdin>"
-    else:
-        source = str(path)
-        try:
-            raw = Path(path).read_bytes()
-        except OSError as exc:
-            raise WirecalError(f"{source}: cannot read {what}: {exc.strerror or exc}") from None
+    raw, source = read_input(path, what)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -13,13 +13,17 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import shutil
+import sys
 import tempfile
 import tomllib
 from collections.abc import Iterable
 from pathlib import Path
 from types import TracebackType
 from typing import Any
+
+import numpy as np
 
 from wirecal.solver.errors import WirecalError
 
@@ -252,16 +256,80 @@ class Outputs:
             self._created_folder = False
 
 
+STDIN = "-"
+"""The file name that means standard input (a log pasted from the controller's terminal)."""
+
+MAX_INPUT_BYTES = 16 * 2**20
+"""Largest input file read (bytes): a log of a 10 000-point plan is about 1 MB, a robot
+file or plan a few kB; anything larger (``/dev/zero``, a disk image given by mistake) is
+refused after reading this much, so time and memory stay bounded."""
+
+MAX_TOML_DEPTH = 16
+"""Deepest nesting of arrays and tables read in a TOML input (wirecal's files nest at most
+three deep); Python's TOML reader recurses per level and would fail near 500."""
+
+_TOML_SKIP = re.compile(
+    r'"""(?:[^"\\]|\\.|"(?!""))*"""|\'\'\'.*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*',
+    re.S,
+)
+"""Strings and comments of a TOML text: their brackets do not nest anything."""
+
+
+def read_input(path: str | Path, what: str) -> tuple[bytes, str]:
+    """Return an input's bytes (at most :data:`MAX_INPUT_BYTES`) and its name for messages.
+
+    ``-`` reads standard input. Any problem is a :class:`WirecalError` naming the input.
+    """
+    if str(path) == STDIN:
+        source = "<stdin>"
+        if sys.stdin is None or sys.stdin.closed:
+            raise WirecalError(
+                f"{source}: standard input is closed; give the {what}'s file name, or "
+                "paste it into a terminal"
+            )
+        raw = sys.stdin.buffer.read(MAX_INPUT_BYTES + 1)
+    else:
+        source = str(path)
+        try:
+            with open(path, "rb") as f:
+                raw = f.read(MAX_INPUT_BYTES + 1)
+        except OSError as exc:
+            raise WirecalError(f"{source}: cannot read {what}: {exc.strerror or exc}") from None
+    if len(raw) > MAX_INPUT_BYTES:
+        raise WirecalError(
+            f"{source}: more than {MAX_INPUT_BYTES // 2**20} MiB: not a {what} (wirecal's "
+            "largest inputs are about 1 MB); check the file name"
+        )
+    return raw, source
+
+
+def toml_depth(text: str) -> int:
+    """Return how deep the arrays and tables of a TOML text nest (strings, comments aside)."""
+    data = np.frombuffer(_TOML_SKIP.sub("", text).encode("utf-8"), dtype=np.uint8)
+    step = np.isin(data, (ord("["), ord("{"))).astype(np.int64)
+    step -= np.isin(data, (ord("]"), ord("}")))
+    return int(np.cumsum(step).max(initial=0))
+
+
 def read_toml(path: str | Path, what: str) -> dict[str, Any]:
-    """Parse a TOML input file; any problem is a :class:`WirecalError` naming the file."""
-    path = Path(path)
+    """Parse a TOML input file; any problem is a :class:`WirecalError` naming the file.
+
+    Bounded: at most :data:`MAX_INPUT_BYTES`, nested at most :data:`MAX_TOML_DEPTH` deep.
+    """
+    raw, source = read_input(path, what)
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise WirecalError(f"{path}: cannot read {what}: {exc.strerror or exc}") from None
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise WirecalError(
-            f"{path}: not UTF-8 text (byte {exc.start}); is this a {what}?"
+            f"{source}: not UTF-8 text (byte {exc.start}); is this a {what}?"
         ) from None
+    depth = toml_depth(text)
+    if depth > MAX_TOML_DEPTH:
+        raise WirecalError(
+            f"{source}: arrays and tables nested {depth} deep (more than "
+            f"{MAX_TOML_DEPTH}; a {what} nests at most 3): not a {what}"
+        )
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise WirecalError(f"{path}: not valid TOML: {exc}") from None
+        raise WirecalError(f"{source}: not valid TOML: {exc}") from None

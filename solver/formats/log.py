@@ -32,7 +32,7 @@ valid.
 
 A point's wire length is (counts − reference) × mm_per_count, the difference taken
 modulo the counter width; the reference is the mean of the zero readings (each checked
-against the first: a drift means the wire slipped).
+against the first: a step change means the wire slipped, a slope in time is a drift).
 
 The layout is read by :mod:`wirecal.solver.formats.csv_table` (what it forgives: a BOM,
 indentation, CRLF — a log pasted from a terminal), which takes a whole terminal capture:

@@ -6,6 +6,9 @@ Beside it, ``<name>.spec.txt`` lists the values to enter in the controller's kin
 settings (Adept's SPEC utility). :func:`read_patch` reads a patch back (``wirecal gen
 --patch``) with the field rules of :mod:`wirecal.solver.formats.toml_fields`, and refuses
 a file that is not a patch (a truth file, a plan) or a patch of another robot or plan.
+A σ may be of any size (an implausible result written with --accept-implausible has huge
+ones); the gate's verdict is kept in ``plausibility`` and carried, when it was
+overridden, into every artefact made from the patch (:attr:`Patch.warning`).
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ from __future__ import annotations
 import json
 import math
 import re
+import textwrap
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -25,7 +29,7 @@ from wirecal.solver.formats.toml_fields import Table, document, valid
 from wirecal.solver.formats.ur_calibration import put_ur_calibration, ur_calibration_path
 from wirecal.solver.identify import Estimate
 from wirecal.solver.plan import Plan
-from wirecal.solver.plausibility import OVERRIDDEN
+from wirecal.solver.plausibility import override_warning
 from wirecal.solver.robot import Robot
 
 _FIELD = {"th": "theta offset", "d": "d", "a": "a", "al": "alpha", "tool": "tool point"}
@@ -94,12 +98,9 @@ def spec_table(
 ) -> str:
     """Return the plain table of new values for the controller's kinematic settings."""
     lines = []
-    if plausibility.startswith(OVERRIDDEN):
-        lines += [
-            "WARNING: wirecal's plausibility gate refused this result and the refusal was",
-            f"overridden (--accept-implausible): {plausibility[len(OVERRIDDEN) :]}",
-            "",
-        ]
+    warning = override_warning(plausibility)
+    if warning is not None:
+        lines += [*textwrap.wrap(f"WARNING: {warning}", 88, break_on_hyphens=False), ""]
     if unchecked:
         lines += [f"WARNING: {w}." for w in unchecked]
         lines += ["Measure the step(s) again before entering these values.", ""]
@@ -232,6 +233,11 @@ class Patch:
     parameters: dict[str, PatchValue]
     source: str
 
+    @property
+    def warning(self) -> str | None:
+        """Return the overridden gate's warning, which every artefact made from it carries."""
+        return override_warning(self.meta.plausibility)
+
     def offsets_for(self, robot: Robot, plan: Plan | None = None) -> dict[str, float]:
         """Return the identified offsets, once the patch is shown to belong here.
 
@@ -305,7 +311,7 @@ def _value(t: Table) -> PatchValue | None:
         for key in ("nominal", "offset", "value")
     )
     unidentified = t.present and t.data.get("std") == math.inf  # type: ignore[union-attr]
-    std = math.inf if unidentified else t.number("std", None, lo=0, hi=bound, unit=unit or "")
+    std = math.inf if unidentified else t.number("std", None, lo=0, unit=unit or "")
     if unit is None or nominal is None or offset is None or value is None:
         return None
     if not math.isclose(value, nominal + offset, rel_tol=1e-9, abs_tol=1e-9):

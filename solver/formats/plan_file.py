@@ -36,6 +36,11 @@ MAX_OMEGA = 1000.0
 """Largest bound Ω_j of a step (deg or mm): offsets beyond it are not calibration errors."""
 
 
+MAX_STEP_POINTS = 1000
+"""Most points (and via points) of one step: ``wirecal plan`` designs at most 1000 in all;
+a larger list is refused before any work, which grows with the points."""
+
+
 def load_plan(path: str | Path, robot: Robot) -> Plan:
     """Read and validate a plan against a robot; raise :class:`WirecalError` listing problems."""
     return plan_from_dict(read_toml(path, "plan file"), robot, str(path))
@@ -105,8 +110,8 @@ def _step(
             f"is {param!r} but order[{j}] is {order[j - 1]!r}; steps must follow the order",
         )
     joints = "(one per joint, deg)"
-    points = st.matrix("points_deg", cols=n, labels=joints)
-    via = st.matrix("via_deg", [], cols=n, labels=joints, nonempty=False)
+    points = st.matrix("points_deg", cols=n, labels=joints, max_rows=MAX_STEP_POINTS)
+    via = st.matrix("via_deg", [], cols=n, labels=joints, nonempty=False, max_rows=MAX_STEP_POINTS)
     for key, q in (("points_deg", points), ("via_deg", via)):
         if q is not None:
             _check_limits(q, robot, st.name(key), st)

@@ -27,6 +27,17 @@ Format (angles in degrees, lengths in mm)::
     key = "…"                             # URScript: the run token's secret (16+ characters)
     [geometry]                            # optional
     link_radius_mm = [70, 55, 45, 40, 35] # capsule radius of each link (wire clearance)
+    [cell]                                # optional (wirecal.solver.cell)
+    floor_z_mm = -335.0                   # the mounting plane in frame 0 (default 0)
+    margin_mm = 10.0                      # gap kept from floor, volumes, the arm itself
+    body_min_deg = [...]; body_max_deg = [...]  # optional: limits keeping the arm out of itself
+    [[cell.box]]                          # keep-out boxes, axis-aligned in frame 0
+    name = "table"; min_mm = [x, y, z]; max_mm = [x, y, z]
+    [[cell.half_space]]                   # keep-out half-spaces
+    name = "wall"; point_mm = [x, y, z]; normal = [nx, ny, nz]  # normal into the free side
+    [cell.encoder_housing]                # optional: a capsule from the wire's exit
+    direction = [0, 0, -1]; length_mm = 120; radius_mm = 40
+
 
 Every problem is reported as ``file: key: problem``, all at once, with the field rules of
 :mod:`wirecal.solver.formats.toml_fields`. Beyond types, the file must describe an arm a draw
@@ -58,6 +69,7 @@ from typing import Any
 import numpy as np
 
 from wirecal.solver import params as P
+from wirecal.solver.cell import DEFAULT_MARGIN_MM, Box, CellModel, HalfSpace, Housing
 from wirecal.solver.exit_geometry import Exit, Eyelet, Pulley
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.run_token import MIN_KEY_CHARS
@@ -91,6 +103,8 @@ MAX_WIRE_SPEED_MM_S = 20_000.0
 """Largest wire speed limit (mm/s): catalogue draw-wire sensors allow 1–10 m/s."""
 MAX_WIRE_ACCEL_MM_S2 = 1_000_000.0
 """Largest wire acceleration limit (mm/s²): about 100 g; catalogues give 5–20 g."""
+MAX_CELL_MARGIN_MM = 500.0
+"""Largest ``[cell] margin_mm``: a gap wider than half a metre leaves no arm room to move."""
 MIN_JOINT_RANGE_DEG = 10.0
 """A joint's range (deg) must exceed this: plan points stay 5° (the planner's and the
 generator's default margin) inside each limit."""
@@ -165,7 +179,18 @@ _KEYS = {
     "geometry": ("link_radius_mm",),
     "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg", "wire_point_mm"),
     "controller": ("language", "software", "host", "port", "key"),
-    "cell": ("floor_z_mm", "margin_mm", "body_min_deg", "body_max_deg"),
+    "cell": (
+        "floor_z_mm",
+        "margin_mm",
+        "body_min_deg",
+        "body_max_deg",
+        "box",
+        "half_space",
+        "encoder_housing",
+    ),
+    "cell.box": ("name", "min_mm", "max_mm"),
+    "cell.half_space": ("name", "point_mm", "normal"),
+    "cell.encoder_housing": ("direction", "length_mm", "radius_mm"),
 }
 
 PULSE_INPUTS = (8, 11)
@@ -225,7 +250,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     if dh is not None and radii is None:
         radii = np.full(dh.shape[0] - 1, DEFAULT_LINK_RADIUS_MM)
     urdf = _urdf(doc.table("urdf", _KEYS["urdf"], required=False), source)
-    _cell(doc.table("cell", _KEYS["cell"], required=False), n)
+    cell = _cell(doc.table("cell", _KEYS["cell"], required=False), n)
     _sanity(doc, dh, lo, hi, encoder, radii)
     doc.raise_if_any()
     dh_rad = valid(dh).copy()
@@ -245,28 +270,90 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         controller=valid(controller),
         joint_speed_confirmed=valid(speed_confirmed),
         gravity_sag_deg_per_m=valid(sag),
+        cell=valid(cell),
     )
 
 
-def _cell(table: Table, n: int | None) -> None:
-    """Check the optional ``[cell]`` table's keys (the cell model reads them).
-
-    ``floor_z_mm``: the mounting plane's height in frame 0; ``margin_mm`` (≥ 0); the
-    optional ``body_min_deg``/``body_max_deg``, one per joint, min below max.
-    """
-    table.number("floor_z_mm", None, lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm")
-    table.number("margin_mm", None, lo=0, hi=MAX_LENGTH_MM, unit="mm")
-    lo, hi = (
+def _cell(table: Table, n: int | None) -> CellModel | None:
+    """Read the optional ``[cell]`` table (a floor at z = 0 of frame 0 when absent)."""
+    floor = table.number("floor_z_mm", 0.0, lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm")
+    margin = table.number("margin_mm", DEFAULT_MARGIN_MM, lo=0, hi=MAX_CELL_MARGIN_MM, unit="mm")
+    body = [
         table.vector(
             key, None, length=n, labels="(one per joint)", lo=-MAX_JOINT_DEG, hi=MAX_JOINT_DEG
         )
         for key in ("body_min_deg", "body_max_deg")
+    ]
+    if body[0] is not None and body[1] is not None:
+        for j in np.flatnonzero(body[0] >= body[1]):
+            table.add("body_max_deg", f"joint {j + 1}: {body[1][j]:g} is not above body_min_deg")
+    boxes = [_box(t) for t in table.tables("box", _KEYS["cell.box"], required=False)]
+    spaces = [
+        _half_space(t) for t in table.tables("half_space", _KEYS["cell.half_space"], required=False)
+    ]
+    housing = _housing(
+        table.table("encoder_housing", _KEYS["cell.encoder_housing"], required=False)
     )
-    if (lo is None) != (hi is None):
-        table.add("body_min_deg", "give body_min_deg and body_max_deg together")
-    elif lo is not None and hi is not None and lo.shape == hi.shape:
-        for j in np.flatnonzero(lo >= hi):
-            table.add("body_min_deg", f"joint {j + 1}: min {lo[j]:g} is not below max {hi[j]:g}")
+    if floor is None or margin is None or None in boxes or None in spaces or housing is False:
+        return None
+    return CellModel(
+        floor,
+        margin,
+        None if body[0] is None else tuple(body[0]),
+        None if body[1] is None else tuple(body[1]),
+        tuple(b for b in boxes if b is not None),
+        tuple(h for h in spaces if h is not None),
+        housing if isinstance(housing, Housing) else None,
+    )
+
+
+def _point(table: Table, key: str) -> tuple[float, float, float] | None:
+    v = table.vector(key, length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM)
+    return None if v is None else (float(v[0]), float(v[1]), float(v[2]))
+
+
+def _box(table: Table) -> Box | None:
+    """Read one ``[[cell.box]]``: its name and opposite corners (frame 0, mm)."""
+    name, lo, hi = table.string("name"), _point(table, "min_mm"), _point(table, "max_mm")
+    if name is None or lo is None or hi is None:
+        return None
+    if not all(a < b for a, b in zip(lo, hi, strict=True)):
+        table.add("max_mm", f"{list(hi)} is not above min_mm {list(lo)} in every coordinate")
+        return None
+    return Box(name, lo, hi)
+
+
+def _unit(table: Table, key: str) -> tuple[float, float, float] | None:
+    """Read a unit vector (normalised exactly; its length must be 1 within 1 %)."""
+    v = table.vector(key, length=3, labels="(x, y, z)", lo=-1, hi=1)
+    if v is None:
+        return None
+    norm = float(np.linalg.norm(v))
+    if abs(norm - 1) > AXIS_TOLERANCE:
+        table.add(key, f"has length {norm:.4g}; give a unit vector (length 1 within 1 %)")
+        return None
+    x, y, z = (float(c) for c in v / norm)
+    return (x, y, z)
+
+
+def _half_space(table: Table) -> HalfSpace | None:
+    """Read one ``[[cell.half_space]]``: a point on its plane and the free side's normal."""
+    name, point, normal = table.string("name"), _point(table, "point_mm"), _unit(table, "normal")
+    if name is None or point is None or normal is None:
+        return None
+    return HalfSpace(name, point, normal)
+
+
+def _housing(table: Table) -> Housing | bool | None:
+    """Read ``[cell.encoder_housing]``: None when absent, False when it has problems."""
+    if not table.present:
+        return None
+    direction = _unit(table, "direction")
+    length = table.number("length_mm", above=0, hi=MAX_LENGTH_MM, unit="mm")
+    radius = table.number("radius_mm", above=0, hi=MAX_LENGTH_MM, unit="mm")
+    if direction is None or length is None or radius is None:
+        return False
+    return Housing(direction, length, radius)
 
 
 def _controller(table: Table) -> Controller | None:
@@ -311,6 +398,10 @@ def _software(table: Table, language: str | None) -> str | None:
     return software
 
 
+MAX_JOINTS = 12
+"""Most rows of ``dh``: serial arms have 6 or 7 joints; wirecal's bound, not a controller's."""
+
+
 def _dh(kin: Table) -> np.ndarray | None:
     kin.string("convention", choices={"craig": "modified DH, the one supported"})
     dh = kin.matrix(
@@ -320,6 +411,7 @@ def _dh(kin: Table) -> np.ndarray | None:
         lo=[-b for b in _DH_BOUND],
         hi=_DH_BOUND,
         unit=("deg", "mm", "deg", "mm"),
+        max_rows=MAX_JOINTS,
     )
     if dh is not None and dh.shape[0] < 2:
         kin.add("dh", f"has {dh.shape[0]} row(s); a serial arm needs at least 2")
@@ -699,6 +791,40 @@ def _scale_lines(enc: Encoder) -> list[str]:
     return lines
 
 
+def _cell_lines(cell: CellModel) -> list[str]:
+    """Return the robot file lines of ``[cell]`` (the floor and margin always written)."""
+
+    def vec(values) -> str:
+        return "[" + ", ".join(_num(v) for v in values) + "]"
+
+    lines = [
+        "",
+        "[cell]",
+        "# the mounting plane in frame 0, and the gap kept from it, the volumes and the arm itself",
+        f"floor_z_mm = {_num(cell.floor_z_mm)}",
+        f"margin_mm = {_num(cell.margin_mm)}",
+    ]
+    for key, limits in (("body_min_deg", cell.body_min_deg), ("body_max_deg", cell.body_max_deg)):
+        if limits is not None:
+            lines.append(f"{key} = {vec(limits)}")
+    if cell.housing is not None:
+        h = cell.housing
+        lines += [
+            "",
+            "[cell.encoder_housing]",
+            f"direction = {vec(h.direction)}",
+            f"length_mm = {_num(h.length_mm)}",
+            f"radius_mm = {_num(h.radius_mm)}",
+        ]
+    for b in cell.boxes:
+        lines += ["", "[[cell.box]]", f"name = {json.dumps(b.name, ensure_ascii=False)}"]
+        lines += [f"min_mm = {vec(b.min_mm)}", f"max_mm = {vec(b.max_mm)}"]
+    for w in cell.half_spaces:
+        lines += ["", "[[cell.half_space]]", f"name = {json.dumps(w.name, ensure_ascii=False)}"]
+        lines += [f"point_mm = {vec(w.point_mm)}", f"normal = {vec(w.normal)}"]
+    return lines
+
+
 def robot_file_text(
     robot: Robot,
     *,
@@ -709,6 +835,7 @@ def robot_file_text(
     speed_notes: Sequence[str] = (),
     geometry_notes: Sequence[str] | None = None,
     tables: Sequence[str] = (),
+    write_cell: bool = True,
 ) -> str:
     """Return a robot file for ``robot`` that reads back to the same numbers.
 
@@ -716,8 +843,9 @@ def robot_file_text(
     (to :data:`TIDY`). ``header`` lines become comments at the top; ``row_notes``
     (one per joint) comment the DH rows and limits; ``urdf_source`` is written as given
     (relative to the robot file's folder). ``speed_notes`` comment the joint speeds;
-    with ``geometry_notes`` (comments, possibly none) the link radii are written as a
-    ``[geometry]`` table; ``tables`` are lines of further tables, appended as given.
+    the link radii are written as a ``[geometry]`` table with ``geometry_notes`` as its
+    comments, and the cell model as ``[cell]`` unless not ``write_cell`` (the caller writes
+    its own, or none, in ``tables``: lines of further tables, appended as given).
     """
     dh = robot.dh_deg()
 
@@ -777,15 +905,18 @@ def robot_file_text(
         ),
         *([f"host = {json.dumps(robot.controller.host)}"] if robot.controller.host else []),
         *([f"port = {robot.controller.port}"] if robot.controller.port else []),
+        *([f"key = {json.dumps(robot.controller.key)}"] if robot.controller.key else []),
         "",
         "[calibration]",
         "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
     ]
     if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M:
         lines.append(f"gravity_sag_deg_per_m = {_num(robot.gravity_sag_deg_per_m)}")
-    if geometry_notes is not None and robot.link_radius_mm is not None:
-        lines += ["", "[geometry]", *(f"# {line}" for line in geometry_notes)]
+    if robot.link_radius_mm is not None:
+        lines += ["", "[geometry]", *(f"# {line}" for line in geometry_notes or ())]
         lines.append(f"link_radius_mm = {vec(robot.link_radius_mm)}")
+    if write_cell:
+        lines += _cell_lines(robot.cell)
     if urdf_source is not None and robot.urdf is not None:
         lines += ["", *_urdf_lines(robot.urdf, urdf_source)]
     for line in tables:

@@ -337,8 +337,9 @@ class Table:
         hi: float | Sequence[float] | None = None,
         nonempty: bool = True,
         unit: str | Sequence[str] = "",
+        max_rows: int | None = None,
     ) -> np.ndarray | None:
-        """Return a list of rows of ``cols`` numbers.
+        """Return a list of rows of ``cols`` numbers (at most ``max_rows``).
 
         A bad row is reported as ``key[i]`` (1-based).
         """
@@ -348,6 +349,9 @@ class Table:
         rows = f"rows of {cols} numbers {labels}".rstrip()
         if not isinstance(x, list) or (nonempty and not x):
             self.add(key, f"is {show(x)}; give a {'non-empty ' if nonempty else ''}list of {rows}")
+            return None
+        if max_rows is not None and len(x) > max_rows:
+            self.add(key, f"has {len(x)} rows; give at most {max_rows}")
             return None
         out = [
             self._row(r, f"{key}[{i}]", cols, labels, lo, hi, None, False, unit)

@@ -388,16 +388,19 @@ def dh_urdf_text(
     lo_deg: np.ndarray,
     hi_deg: np.ndarray,
     speed_deg_s: np.ndarray,
+    floor_z_mm: float = 0.0,
 ) -> str:
     """Return a URDF of a modified-DH chain with no geometry.
 
-    A URDF of a modified-DH chain with no geometry: links ``link0`` (the base, DH frame 0)
-    … ``link<n>`` (DH frames), joints ``joint<i>`` turning about their link's z, and a fixed
-    joint to ``wire_point`` at the tool point. Lengths in m, angles in rad, full precision.
+    A URDF of a modified-DH chain with no geometry: the root link ``mount`` on the mounting
+    face (``floor_z_mm`` below DH frame 0: ``import-urdf`` takes its plane as the floor), a
+    fixed joint to ``link0`` (DH frame 0) … ``link<n>`` (DH frames), joints ``joint<i>``
+    turning about their link's z within ``lo_deg``..``hi_deg``, and a fixed joint to
+    ``wire_point`` at the tool point. Lengths in m, angles in rad, full precision.
     """
     n = len(dh)
     F = dh_frames(dh, np.zeros((1, n)))[0]
-    lines = ['<?xml version="1.0"?>', f'<robot name="{_xml(name)}">']
+    lines = ['<?xml version="1.0"?>', f'<robot name="{_xml(name)}">', '  <link name="mount"/>']
     lines += [f'  <link name="link{i}"/>' for i in range(n + 1)]
     lines.append('  <link name="wire_point"/>')
 
@@ -406,6 +409,14 @@ def dh_urdf_text(
         rpy = " ".join(repr(float(v)) for v in matrix_rpy(T[:3, :3]))
         return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
 
+    mount = np.eye(4)
+    mount[2, 3] = -floor_z_mm
+    lines += [
+        '  <joint name="mount_joint" type="fixed">',
+        '    <parent link="mount"/><child link="link0"/>',
+        f"    {origin(mount)}",
+        "  </joint>",
+    ]
     for i in range(n):
         T = np.linalg.solve(F[i], F[i + 1])
         lines += [

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wirecal.solver.errors import WirecalError
+from wirecal.solver.errors import WirecalError, first_problems
 from wirecal.solver.formats.csv_table import Row, parse_table, read_source
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.robot_file import MAX_LENGTH_MM
@@ -146,7 +146,7 @@ def read_validation_log(path: str | Path, kind: str) -> ValidationLog:
     except ValueError:
         problems.append(f"{source}:{mpc_line}: mm_per_count {mpc_text!r} is not a number")
     if problems:
-        raise WirecalError(_first(problems))
+        raise WirecalError(first_problems(problems))
     if not rows:
         raise WirecalError(f"{source}: no readings")
     return ValidationLog(
@@ -183,10 +183,3 @@ def _readings(
         seen[key] = r.line
         rows.append(row)
     return rows
-
-
-def _first(problems: list[str], n: int = 12) -> list[str]:
-    """Return the first problems and a count of the rest: a wrong file should not bury its cause."""
-    if len(problems) <= n:
-        return problems
-    return [*problems[:n], f"… and {len(problems) - n} more problems of the same kinds"]

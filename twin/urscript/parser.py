@@ -39,7 +39,7 @@ from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError
 
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import walk_tree
+from wirecal.twin.machine import NestingError, check_block_depth, check_line_depth, walk_tree
 from wirecal.twin.urscript import nodes as N
 from wirecal.twin.urscript.versions import refusal, too_new, version_of
 
@@ -252,7 +252,9 @@ _build = ast_utils.create_transformer(N, _Terminals())
 
 def parse_line(line: str) -> N.Stmt:
     """One line (no comment) → its node; lark's exception when it is not URScript."""
-    return _build.transform(_parser().parse(line))
+    tree = _parser().parse(line)
+    check_line_depth(tree)
+    return _build.transform(tree)
 
 
 def strip_comment(line: str) -> str:
@@ -342,7 +344,7 @@ def _layout(source: str, n: int, raw: str, first: bool, last: bool, problems: li
 def _step(source: str, n: int, line: str, problems: list[str]) -> N.Stmt | None:
     try:
         return parse_line(line)
-    except _LineError as exc:
+    except (_LineError, NestingError) as exc:
         problems.append(f"{source}:{n}: {exc}")
     except LarkError as exc:
         cause = exc.orig_exc if hasattr(exc, "orig_exc") else exc
@@ -362,6 +364,7 @@ def _nest(steps: list[N.Stmt], source: str, problems: list[str]) -> Program | No
     for s in steps:
         where = f"{source}:{s.line}"
         if isinstance(s, (N.DefStart, N.WhileStart, N.IfStart)):
+            check_block_depth(len(stack), where)
             block = _open(s)
             target.append(block)
             stack.append((block, target))

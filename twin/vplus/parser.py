@@ -30,7 +30,7 @@ from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedToken
 
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import walk_tree
+from wirecal.twin.machine import NestingError, check_block_depth, check_line_depth, walk_tree
 from wirecal.twin.vplus import nodes as N
 from wirecal.twin.vplus.forms import FormError, operands
 from wirecal.twin.vplus.keywords import VALUE_KINDS, is_kind, keyword
@@ -239,7 +239,9 @@ _build = ast_utils.create_transformer(N, _Terminals())
 
 def parse_step(line: str) -> N.Stmt:
     """One step (no label, no comment) → its node; lark's exception when it is not V+."""
-    return _build.transform(_parser().parse(line))
+    tree = _parser().parse(line)
+    check_line_depth(tree)
+    return _build.transform(tree)
 
 
 def parse_module(text: str, source: str = "<module>", *, external_calls: bool = False) -> Module:
@@ -340,6 +342,9 @@ class _ModuleReader:
             step = parse_step(line)
         except (UnexpectedToken, UnexpectedCharacters) as exc:
             self.problems.append(f"{self.source}:{n}: {name}: {_explain(line, exc)}")
+            return
+        except NestingError as exc:
+            self.problems.append(f"{self.source}:{n}: {name}: {exc}")
             return
         except LarkError as exc:  # pragma: no cover - grammar-level failure
             self.problems.append(f"{self.source}:{n}: {name}: cannot parse: {exc}")
@@ -534,6 +539,7 @@ class _Nester:
 
     def open(self, step: N.Stmt, where: str) -> None:
         """Open a block (IF, FOR, WHILE, DO, CASE)."""
+        check_block_depth(len(self.stack), where)
         node = _open(step)
         if self.target is None:
             self.problems.append(f"{where}: a step between CASE and its first VALUE")
