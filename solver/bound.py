@@ -97,12 +97,10 @@ def bound_mm(
     seed: int = SEED,
 ) -> float:
     """Return the ``probability`` quantile of the worst corner's E (module docstring)."""
-    from scipy.stats import qmc  # here: scipy.stats doubles the command line's start-up
-
     w, U = np.linalg.eigh((model.cov + model.cov.T) / 2)
     root = U * np.sqrt(np.clip(w, 0.0, None))  # cov = root·rootᵀ, also when singular
     u = np.clip(low_discrepancy(len(w), draws, seed), 1e-12, 1 - 1e-12)
-    # single precision: 1e-7 beside the draws' 0.3 %, and half the time
+    # single precision: 1e-7 beside the draws' 1 %, and half the time
     x = (ndtri(u) @ root.T).astype(np.float32)
     A = Jp.reshape(-1, Jp.shape[2]).T  # (m, 3Q)
     shifts = (model.corners() @ A).astype(np.float32)  # each corner's tool-point errors
