@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wirecal.solver.kinematics import Model, frames, table_property
+from wirecal.solver.kinematics import Model, _cross, frames, table_property
 
 HALF_PI = np.pi / 2
 STRUCTURE_TOL_RAD = np.radians(5.0)
@@ -226,7 +226,7 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     o5 = f.o[0, 5] - f.o[0, 1]
     ahead = np.dot(o5 - np.dot(o5, z1) * z1, x1) >= 0
     o2, o3, o4 = f.o[0, 2], f.o[0, 3], f.o[0, 4]
-    side = np.dot(f.z[0, 2], np.cross(o4 - o2, o3 - o2)) < 0
+    side = np.dot(f.z[0, 2], _cross(o4 - o2, o3 - o2)) < 0
     phi5 = (q[4] + model.dh[4, 2] + np.pi) % (2 * np.pi) - np.pi
     return (
         "righty" if ahead else "lefty",
