@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver import ik_ur
-from wirecal.solver.kinematics import Model, frames, joint_jacobian, table_property
+from wirecal.solver.kinematics import Model, flange_jacobian, frames, table_property
 from wirecal.solver.robot import Robot
 
 HALF_PI = np.pi / 2
@@ -138,13 +138,6 @@ def _pose_error(model, q, R, o, f=None):
     return np.r_[o - oq, rotvec * 1000.0]  # 1 rad of orientation weighs as 1 m
 
 
-def _geometric_jacobian(model, q, f):
-    """Return the geometric Jacobian (position; orientation × 1000) at q from its frames."""
-    _, Jp = joint_jacobian(Model(model.dh, np.zeros(3)), q[None], f)
-    Jw = f.z[0, 1:].T
-    return np.vstack([Jp[0], Jw * 1000.0])
-
-
 CONVERGED = 1e-10
 """Newton stops when no component of the pose error (mm, and mrad as mm per metre) exceeds this."""
 
@@ -175,7 +168,7 @@ def _polish(model, q, R, o, iterations=60, accept=CONVERGED, done=CONVERGED):
         e = _pose_error(model, q, R, o, f)
         if np.max(np.abs(e)) < done:
             return q, True
-        step = np.linalg.lstsq(_geometric_jacobian(model, q, f), e, rcond=None)[0]
+        step = np.linalg.lstsq(flange_jacobian(model, q, f), e, rcond=None)[0]
         q = q + step * min(1.0, MAX_STEP_RAD / max(np.max(np.abs(step)), 1e-300))
     return q, np.max(np.abs(_pose_error(model, q, R, o))) < accept
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wirecal.solver.kinematics import Model, _cross, frames, table_property
+from wirecal.solver.kinematics import Model, _cross, flange_jacobian, frames, table_property
 
 HALF_PI = np.pi / 2
 STRUCTURE_TOL_RAD = np.radians(5.0)
@@ -46,6 +46,11 @@ WRIST_SAMPLES = 12
 ELBOW_PULL_DEG = 2.0
 """Near the elbow stretched or folded, a calibrated model's φ3 is also seeded this far from
 the fold on each side (:func:`_arm`)."""
+
+
+ELBOW_NEAR_DEG = 2.0
+"""Within this of the elbow stretched or folded, :func:`configuration` names the elbow branch
+by the sign of the Jacobian's determinant, not the elbow's side of the shoulder–wrist line."""
 
 
 def _rot_x(a: float) -> np.ndarray:
@@ -220,14 +225,28 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     the line passes vertical, and on a calibrated arm the two elbow branches' lines pass it
     at different poses (hypothesis found a pose whose two branches' lines were 0.87° and
     1.17° from vertical, on either side of a switch between the two rules, both "below").
+
+    Within :data:`ELBOW_NEAR_DEG` of the elbow stretched or folded, the side is read from
+    the sign of the flange Jacobian's determinant, s3 · s5 · (o5 · x1) times a constant on
+    the structural table (checked against the side on both arms in the tests): it changes
+    where the arm's own elbow singularity is, which a calibrated arm moves off the fold
+    (by up to 0.3° on the test's calibrated UR5), so the two branches that meet there are
+    told apart up to it (hypothesis found two lefty solutions 0.05° short of the fold, both
+    "above" by their side of the line).
     """
-    f = frames(model, np.atleast_2d(q))
+    q = np.asarray(q, dtype=float)
+    f = frames(model, q[None])
     z1, x1 = f.z[0, 1], f.x[0, 1]
     o5 = f.o[0, 5] - f.o[0, 1]
     ahead = np.dot(o5 - np.dot(o5, z1) * z1, x1) >= 0
-    o2, o3, o4 = f.o[0, 2], f.o[0, 3], f.o[0, 4]
-    side = np.dot(f.z[0, 2], _cross(o4 - o2, o3 - o2)) < 0
-    phi5 = (q[4] + model.dh[4, 2] + np.pi) % (2 * np.pi) - np.pi
+    phi = q + model.dh[:, 2]
+    if abs(np.sin(phi[2])) < np.sin(np.radians(ELBOW_NEAR_DEG)):
+        sin5 = np.sin(phi[4])
+        side = (np.linalg.det(flange_jacobian(model, q, f)) > 0) ^ (sin5 > 0) ^ ahead
+    else:
+        o2, o3, o4 = f.o[0, 2], f.o[0, 3], f.o[0, 4]
+        side = np.dot(f.z[0, 2], _cross(o4 - o2, o3 - o2)) < 0
+    phi5 = (phi[4] + np.pi) % (2 * np.pi) - np.pi
     return (
         "righty" if ahead else "lefty",
         "above" if side != ahead else "below",

@@ -95,10 +95,6 @@ UR5 = load_robot(UR5_FILE)
 UR5_ERRORS = {"th2": 0.3, "th4": -0.2, "a2": 0.8, "a3": -0.5, "d4": 0.4, "d5": 0.3, "al3": 0.1}
 
 
-CALIBRATED_FOLD_DEG = 0.1
-"""The calibrated UR5's singular surface lies this near the structural elbow fold (its al3)."""
-
-
 @settings(max_examples=40, deadline=None)
 @given(u=st.lists(unit, min_size=6, max_size=6), calibrated=st.booleans())
 # φ5 = 177.5°: the calibrated arm has 10 solutions, two of them 7° apart on one branch
@@ -118,7 +114,8 @@ CALIBRATED_FOLD_DEG = 0.1
 # calibrated arm folded to 180.27°: the shoulder–wrist lines of the righty-flip branches
 # 0.87° and 1.17° from vertical, once both named below
 @example(u=[0.5, 0.0899, 0.7539, 0.9375, 0.625, 0.5], calibrated=True)
-# calibrated arm 0.05° short of the fold: two lefty branches merging there, both "above"
+# calibrated arm 0.05° short of the fold: two lefty branches that meet beyond it, both were
+# "above" by their side of the line
 @example(u=[0.5, 0.0899, 0.75345, 0.9375, 0.625, 0.5], calibrated=True)
 # arm stretched and wrist singular on the exact table: φ6 = 0 puts the wrist point beyond reach
 @pytest.mark.slow
@@ -130,13 +127,6 @@ def test_ur_round_trip_closed_form(u, calibrated):
     16 solutions, not 8. Near the wrist singularity (|sin φ5| < sin 15°) it can have more
     than the structural table's 8 (10 at φ5 = 177.5° in the first example, each with a flange
     error below 1e-12 mm), so there the count may exceed 8 and branch names repeat.
-
-    Above/below changes where the elbow folds (φ3 = 180°) on the structural table; on the
-    calibrated arm two elbow branches merge where its own Jacobian is singular, which the
-    tilt of axis 4 (al3 = 0.1°) moves off the fold: measured 0.03° from it (σ_min of the
-    Jacobian 0.005 mm/rad against σ_max 1,700), with both branches on one side of the fold
-    and one name within 0.08° of it. Within :data:`CALIBRATED_FOLD_DEG` of the fold on the
-    calibrated arm the names may therefore repeat (each solution must still be exact).
     """
     model = UR5.model(UR5_ERRORS if calibrated else {})
     assert ur_structure(model)
@@ -156,10 +146,33 @@ def test_ur_round_trip_closed_form(u, calibrated):
         np.testing.assert_allclose(R2, R, atol=1e-12)
     configs = [s.config for s in solutions]
     # at a singularity (the elbow stretched, φ3 = 0) two branches meet and may share a name
-    fold = calibrated and abs(np.sin(q[2] + model.dh[2, 2])) < np.sin(
-        np.radians(CALIBRATED_FOLD_DEG)
-    )
-    assert singular or more or fold or len(set(configs)) == len(configs)
+    assert singular or more or len(set(configs)) == len(configs)
+
+
+@pytest.mark.parametrize("calibrated", [False, True])
+@pytest.mark.parametrize("fold_deg", [0.0, 180.0])
+def test_ur_elbow_name_near_the_fold_continues_the_side_of_the_line(calibrated, fold_deg):
+    """Within ik_ur.ELBOW_NEAR_DEG of the fold the name comes from det J, beyond from the
+    elbow's side of the line: across that switch the name stays, across the fold it changes."""
+    model = UR5.model(UR5_ERRORS if calibrated else {})
+    rng = np.random.default_rng(7)
+    near = ik_ur.ELBOW_NEAR_DEG
+    checked = 0
+    for q in np.radians(rng.uniform(-180, 180, (200, 6))):
+        phi = np.degrees(q) + np.degrees(model.dh[:, 2])
+        if abs(np.sin(np.radians(phi[4]))) < 0.2:
+            continue  # away from the wrist singularity (φ5 also enters det J)
+        names = []
+        for bend in (near + 0.1, near - 0.1, 0.5, -0.5, -near + 0.1, -near - 0.1):
+            q[2] = np.radians(fold_deg + bend) - model.dh[2, 2]
+            names.append(configuration(model, q))
+        if len({n[0] for n in names}) > 1:
+            continue  # the shoulder changed on the way (o5 crossed the joint-1 axis)
+        assert names[0] == names[1] == names[2]
+        assert names[3] == names[4] == names[5]
+        assert names[2][1] != names[3][1]
+        checked += 1
+    assert checked >= 50
 
 
 def test_ur_generic_pose_has_eight_named_solutions():
