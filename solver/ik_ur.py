@@ -227,12 +227,14 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     1.17° from vertical, on either side of a switch between the two rules, both "below").
 
     Within :data:`ELBOW_NEAR_DEG` of the elbow stretched or folded, the side is read from
-    the sign of the flange Jacobian's determinant, s3 · s5 · (o5 · x1) times a constant on
-    the structural table (checked against the side on both arms in the tests): it changes
-    where the arm's own elbow singularity is, which a calibrated arm moves off the fold
-    (by up to 0.3° on the test's calibrated UR5), so the two branches that meet there are
-    told apart up to it (hypothesis found two lefty solutions 0.05° short of the fold, both
-    "above" by their side of the line).
+    the sign of the flange Jacobian's determinant instead: on the structural table
+    det J = c · sin φ3 · sin φ5 · (o5 · x1) with c > 0, and z2 · ((o4 − o2) × (o3 − o2)) < 0
+    exactly when sign(det J) · sign(sin φ5) · (1 if righty else −1) > 0; on any arm that
+    sign changes exactly at the arm's own elbow singularity, which a calibrated arm moves
+    off the fold (by about 0.3° on the tests' calibrated UR5): the two branches that meet
+    there get two names (a scan near the fold found two lefty solutions 0.05° short of it,
+    both "above" by their side of the line). The tests check that the name carries across
+    the switch between the two rules.
     """
     q = np.asarray(q, dtype=float)
     f = frames(model, q[None])
