@@ -109,7 +109,8 @@ UR5_ERRORS = {"th2": 0.3, "th4": -0.2, "a2": 0.8, "a3": -0.5, "d4": 0.4, "d5": 0
 @example(u=[0.5, 0.5, 0.78125, 0.5, 0.125, 0.5], calibrated=True)
 # elbow folded to 179.6° on the calibrated arm: the structural table's seeds both at 180°
 @example(u=[0.5, 0.5, 0.7529418094771448, 0.5, 0.125, 0.5], calibrated=True)
-# elbow folded to 180.02° on the exact table: the two elbow branches 0.5° apart, once merged
+# elbow folded onto itself (φ3 = 180.02°) on the exact table: its two elbow branches exact
+# and 0.5° apart, once merged as one Newton start (met within 1e-2 rad)
 @example(u=[0.5, 0.5, 0.75355, 0.5, 0.75, 0.5], calibrated=False)
 # calibrated arm folded to 180.27°: the shoulder–wrist lines of the righty-flip branches
 # 0.87° and 1.17° from vertical, once both named below
