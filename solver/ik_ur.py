@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wirecal.solver.kinematics import Model, frames, table_property
+from wirecal.solver.kinematics import Model, _cross, flange_jacobian, frames, table_property
 
 HALF_PI = np.pi / 2
 STRUCTURE_TOL_RAD = np.radians(5.0)
@@ -48,6 +48,11 @@ ELBOW_PULL_DEG = 2.0
 the fold on each side (:func:`_arm`)."""
 
 
+ELBOW_NEAR_DEG = 2.0
+"""Within this of the elbow stretched or folded, :func:`configuration` names the elbow branch
+by the sign of the Jacobian's determinant, not the elbow's side of the shoulder–wrist line."""
+
+
 def _rot_x(a: float) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
     return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
@@ -56,11 +61,6 @@ def _rot_x(a: float) -> np.ndarray:
 def _rot_z(a: float) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
-
-
-VERTICAL_LINE_DEG = 1.0
-"""A UR arm's shoulder–wrist line this near vertical names the elbow branch by its side of
-the line, not its height (:func:`configuration`)."""
 
 
 def structural(dh: np.ndarray) -> np.ndarray:
@@ -215,28 +215,42 @@ def candidates(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
 def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     """Return wirecal's names of a UR-type solution's branches.
 
-    Righty when o5 lies ahead of the joint-1 axis along x1 (the shoulder root's sign), above
-    when the elbow o3 is above the line from o2 to o4 in the plane of the parallel axes, flip
-    when φ5 < 0. When that line is within :data:`VERTICAL_LINE_DEG` of vertical, the elbow's
-    height says nothing (both elbow branches lie level with the line: hypothesis found a
-    calibrated UR5 pose whose two branches were 0.2 and 0.005 mm below it); then above is
-    the elbow's side of the line seen along the joint-2 axis, z2 · ((o4 − o2) × (o3 − o2)) < 0.
+    Righty when o5 lies ahead of the joint-1 axis along x1 (the shoulder root's sign); flip
+    when φ5 < 0. Above/below is the elbow's side of the line from o2 to o4 in the plane of
+    the parallel axes, seen along the joint-2 axis, relative to the shoulder: above when
+    z2 · ((o4 − o2) × (o3 − o2)) < 0 on a lefty arm, > 0 on a righty one (the elbow sign
+    times the arm sign of Paul's PUMA solution). It is the elbow above the line wherever o4
+    lies on the same side of the joint-1 axis as o5, and it changes only where the elbow
+    is stretched or folded or the shoulder changes: the elbow's height alone changes where
+    the line passes vertical, and on a calibrated arm the two elbow branches' lines pass it
+    at different poses (hypothesis found a pose whose two branches' lines were 0.87° and
+    1.17° from vertical, on either side of a switch between the two rules, both "below").
+
+    Within :data:`ELBOW_NEAR_DEG` of the elbow stretched or folded, the side is read from
+    the sign of the flange Jacobian's determinant instead: on the structural table
+    det J = c · sin φ3 · sin φ5 · (o5 · x1) with c > 0, and z2 · ((o4 − o2) × (o3 − o2)) < 0
+    exactly when sign(det J) · sign(sin φ5) · (1 if righty else −1) > 0; on any arm that
+    sign changes exactly at the arm's own elbow singularity, which a calibrated arm moves
+    off the fold (by about 0.3° on the tests' calibrated UR5): the two branches that meet
+    there get two names (a scan near the fold found two lefty solutions 0.05° short of it,
+    both "above" by their side of the line). The tests check that the name carries across
+    the switch between the two rules.
     """
-    f = frames(model, np.atleast_2d(q))
+    q = np.asarray(q, dtype=float)
+    f = frames(model, q[None])
     z1, x1 = f.z[0, 1], f.x[0, 1]
     o5 = f.o[0, 5] - f.o[0, 1]
-    ahead = np.dot(o5 - np.dot(o5, z1) * z1, x1)
-    n = f.z[0, 2]  # normal of the arm's plane
-    o2, o3, o4 = f.o[0, 2], f.o[0, 3], f.o[0, 4]
-    line = (o4 - o2) - np.dot(o4 - o2, n) * n
-    rel = (o3 - o2) - np.dot(o3 - o2, n) * n
-    t = np.dot(rel, line) / max(np.dot(line, line), 1e-300)
-    offset = rel - t * line
-    level = abs(offset[2]) <= np.sin(np.radians(VERTICAL_LINE_DEG)) * np.linalg.norm(offset)
-    above = np.dot(n, np.cross(line, rel)) < 0 if level else offset[2] >= 0
-    phi5 = (q[4] + model.dh[4, 2] + np.pi) % (2 * np.pi) - np.pi
+    ahead = np.dot(o5 - np.dot(o5, z1) * z1, x1) >= 0
+    phi = q + model.dh[:, 2]
+    if abs(np.sin(phi[2])) < np.sin(np.radians(ELBOW_NEAR_DEG)):
+        sin5 = np.sin(phi[4])
+        side = (np.linalg.det(flange_jacobian(model, q, f)) > 0) ^ (sin5 > 0) ^ ahead
+    else:
+        o2, o3, o4 = f.o[0, 2], f.o[0, 3], f.o[0, 4]
+        side = np.dot(f.z[0, 2], _cross(o4 - o2, o3 - o2)) < 0
+    phi5 = (phi[4] + np.pi) % (2 * np.pi) - np.pi
     return (
-        "righty" if ahead >= 0 else "lefty",
-        "above" if above else "below",
+        "righty" if ahead else "lefty",
+        "above" if side != ahead else "below",
         "flip" if phi5 < 0 else "noflip",
     )

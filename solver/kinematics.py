@@ -265,3 +265,13 @@ def joint_jacobian(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Tool point p (N, 3) and ∂p/∂q (N, 3, n): the positional geometric Jacobian."""
     return tool_jacobian(model, q, [f"th{i + 1}" for i in range(model.n_joints)], f)
+
+
+def flange_jacobian(model: Model, q: np.ndarray, f: Frames) -> np.ndarray:
+    """Geometric Jacobian (6, n) of the flange at one configuration q (rad) from its frames.
+
+    Rows: the flange origin's velocity (mm/rad), then the angular velocity × 1000 (1 rad of
+    orientation weighs as 1 m).
+    """
+    _, Jp = joint_jacobian(Model(model.dh, np.zeros(3)), q[None], f)
+    return np.vstack([Jp[0], f.z[0, 1:].T * 1000.0])

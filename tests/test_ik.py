@@ -109,6 +109,15 @@ UR5_ERRORS = {"th2": 0.3, "th4": -0.2, "a2": 0.8, "a3": -0.5, "d4": 0.4, "d5": 0
 @example(u=[0.5, 0.5, 0.78125, 0.5, 0.125, 0.5], calibrated=True)
 # elbow folded to 179.6° on the calibrated arm: the structural table's seeds both at 180°
 @example(u=[0.5, 0.5, 0.7529418094771448, 0.5, 0.125, 0.5], calibrated=True)
+# elbow folded onto itself (φ3 = 180.02°) on the exact table: its two elbow branches exact
+# and 0.5° apart, once merged as one Newton start (met within 1e-2 rad)
+@example(u=[0.5, 0.5, 0.75355, 0.5, 0.75, 0.5], calibrated=False)
+# calibrated arm folded to 180.27°: the shoulder–wrist lines of the righty-flip branches
+# 0.87° and 1.17° from vertical, once both named below
+@example(u=[0.5, 0.0899, 0.7539, 0.9375, 0.625, 0.5], calibrated=True)
+# calibrated arm 0.05° short of the fold: two lefty branches that meet beyond it, both were
+# "above" by their side of the line
+@example(u=[0.5, 0.0899, 0.75345, 0.9375, 0.625, 0.5], calibrated=True)
 # arm stretched and wrist singular on the exact table: φ6 = 0 puts the wrist point beyond reach
 @pytest.mark.slow
 @example(u=[0.5, 0.5, 0.5, 0.875, 0.5, 0.25], calibrated=False)
@@ -139,6 +148,32 @@ def test_ur_round_trip_closed_form(u, calibrated):
     configs = [s.config for s in solutions]
     # at a singularity (the elbow stretched, φ3 = 0) two branches meet and may share a name
     assert singular or more or len(set(configs)) == len(configs)
+
+
+@pytest.mark.parametrize("calibrated", [False, True])
+@pytest.mark.parametrize("fold_deg", [0.0, 180.0])
+def test_ur_elbow_name_near_the_fold_continues_the_side_of_the_line(calibrated, fold_deg):
+    """Within ik_ur.ELBOW_NEAR_DEG of the fold the name comes from det J, beyond from the
+    elbow's side of the line: across that switch the name stays, across the fold it changes."""
+    model = UR5.model(UR5_ERRORS if calibrated else {})
+    rng = np.random.default_rng(7)
+    near = ik_ur.ELBOW_NEAR_DEG
+    checked = 0
+    for q in np.radians(rng.uniform(-180, 180, (200, 6))):
+        phi = np.degrees(q) + np.degrees(model.dh[:, 2])
+        if abs(np.sin(np.radians(phi[4]))) < 0.2:
+            continue  # away from the wrist singularity (φ5 also enters det J)
+        names = []
+        for bend in (near + 0.1, near - 0.1, 0.5, -0.5, -near + 0.1, -near - 0.1):
+            q[2] = np.radians(fold_deg + bend) - model.dh[2, 2]
+            names.append(configuration(model, q))
+        if len({n[0] for n in names}) > 1:
+            continue  # the shoulder changed on the way (o5 crossed the joint-1 axis)
+        assert names[0] == names[1] == names[2]
+        assert names[3] == names[4] == names[5]
+        assert names[2][1] != names[3][1]
+        checked += 1
+    assert checked >= 50
 
 
 def test_ur_generic_pose_has_eight_named_solutions():
