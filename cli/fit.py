@@ -14,7 +14,14 @@ import click  # noqa: E402 - after the thread settings
 
 from wirecal import __version__  # noqa: E402
 from wirecal.cli.main import print_json, user_errors  # noqa: E402
-from wirecal.cli.options import NON_NEGATIVE, POSITIVE, SEED  # noqa: E402
+from wirecal.cli.options import (  # noqa: E402
+    ACCEPT_IMPLAUSIBLE,
+    NON_NEGATIVE,
+    PATCH_FORCE,
+    PATCH_OUTPUT,
+    POSITIVE,
+    SEED,
+)
 from wirecal.solver.fit_result import (  # noqa: E402
     FitOptions,
     FitResult,
@@ -91,25 +98,15 @@ from wirecal.solver.plausibility import READING_NOISE_MM  # noqa: E402
     help="Reading noise σ (mm) the plausibility gate allows beside the quantisation floor.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-@click.option(
-    "-o",
-    "--output",
-    "patch_path",
-    type=click.Path(dir_okay=False),
-    help="Write the patch (TOML) here, and the SPEC table beside it.",
-)
+@PATCH_OUTPUT
 @click.option(
     "--report",
     "report_path",
     type=click.Path(dir_okay=False),
     help="Write a self-contained HTML report of the fit here.",
 )
-@click.option(
-    "--accept-implausible",
-    is_flag=True,
-    help="Show and write a result the plausibility gate refuses; the patch records it.",
-)
-@click.option("--force", is_flag=True, help="Replace an existing patch and SPEC table.")
+@ACCEPT_IMPLAUSIBLE
+@PATCH_FORCE
 @user_errors
 def fit(
     robot,

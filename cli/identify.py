@@ -16,7 +16,15 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.cli.main import print_json, user_errors
-from wirecal.cli.options import NON_NEGATIVE, POSITIVE, SEED, number
+from wirecal.cli.options import (
+    ACCEPT_IMPLAUSIBLE,
+    NON_NEGATIVE,
+    PATCH_FORCE,
+    PATCH_OUTPUT,
+    POSITIVE,
+    SEED,
+    number,
+)
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import describe
 from wirecal.solver.formats.csv_table import STDIN
@@ -333,13 +341,7 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true
 @ROBOT
 @PLAN
 @click.argument("log", type=click.Path(dir_okay=False))
-@click.option(
-    "-o",
-    "--output",
-    "patch_path",
-    type=click.Path(dir_okay=False),
-    help="Write the patch (TOML) here, and the SPEC table beside it.",
-)
+@PATCH_OUTPUT
 @click.option(
     "--method",
     type=click.Choice(["stepwise", "joint", "all", "controller"]),
@@ -398,12 +400,8 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true
     show_default=True,
     help="Reading noise σ (mm) the plausibility gate expects, before quantisation.",
 )
-@click.option(
-    "--accept-implausible",
-    is_flag=True,
-    help="Show and write a result the plausibility gate refuses; the patch records it.",
-)
-@click.option("--force", is_flag=True, help="Replace an existing patch and SPEC table.")
+@ACCEPT_IMPLAUSIBLE
+@PATCH_FORCE
 @click.option(
     "--accept-foreign",
     is_flag=True,

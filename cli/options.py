@@ -39,3 +39,25 @@ def number(
 POSITIVE = number(0.0, min_open=True)  # tolerances, bounds, sizes: > 0
 NON_NEGATIVE = number(0.0)  # noises, margins, scales: ≥ 0
 SEED = click.IntRange(0, 2**63 - 1)  # numpy's generators take non-negative seeds
+
+
+PATCH_OUTPUT = click.option(
+    "-o",
+    "--output",
+    "patch_path",
+    type=click.Path(dir_okay=False),
+    help="Write the patch (TOML) here, and the SPEC table beside it.",
+)
+"""``-o PATCH`` of the commands that identify parameters (solve, fit)."""
+
+ACCEPT_IMPLAUSIBLE = click.option(
+    "--accept-implausible",
+    is_flag=True,
+    help="Show and write a result the plausibility gate refuses; the patch records it.",
+)
+"""The plausibility gate's override, recorded in the patch (solve, fit)."""
+
+PATCH_FORCE = click.option(
+    "--force", is_flag=True, help="Replace an existing patch and SPEC table."
+)
+"""Replace the outputs of ``-o PATCH`` (solve, fit)."""

@@ -275,8 +275,8 @@ _TOML_SKIP = re.compile(
 """Strings and comments of a TOML text: their brackets do not nest anything."""
 
 
-def read_input(path: str | Path, what: str) -> tuple[bytes, str]:
-    """Return an input's bytes (at most :data:`MAX_INPUT_BYTES`) and its name for messages.
+def read_input(path: str | Path, what: str, max_bytes: int = MAX_INPUT_BYTES) -> tuple[bytes, str]:
+    """Return an input's bytes (at most ``max_bytes``) and its name for messages.
 
     ``-`` reads standard input. Any problem is a :class:`WirecalError` naming the input.
     """
@@ -287,17 +287,17 @@ def read_input(path: str | Path, what: str) -> tuple[bytes, str]:
                 f"{source}: standard input is closed; give the {what}'s file name, or "
                 "paste it into a terminal"
             )
-        raw = sys.stdin.buffer.read(MAX_INPUT_BYTES + 1)
+        raw = sys.stdin.buffer.read(max_bytes + 1)
     else:
         source = str(path)
         try:
             with open(path, "rb") as f:
-                raw = f.read(MAX_INPUT_BYTES + 1)
+                raw = f.read(max_bytes + 1)
         except OSError as exc:
             raise WirecalError(f"{source}: cannot read {what}: {exc.strerror or exc}") from None
-    if len(raw) > MAX_INPUT_BYTES:
+    if len(raw) > max_bytes:
         raise WirecalError(
-            f"{source}: more than {MAX_INPUT_BYTES // 2**20} MiB: not a {what} (wirecal's "
+            f"{source}: more than {max_bytes // 2**20} MiB: not a {what} (wirecal's "
             "largest inputs are about 1 MB); check the file name"
         )
     return raw, source

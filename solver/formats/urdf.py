@@ -31,6 +31,7 @@ import numpy as np
 
 from wirecal.solver.dh_from_axes import dh_frames
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.fileio import read_input
 
 MOVING = ("revolute", "continuous")
 SUPPORTED = (*MOVING, "fixed")
@@ -139,20 +140,6 @@ def _screen(data: bytes, path: Path) -> None:
         raise WirecalError(f"{path}: not valid XML: {exc}") from None
 
 
-def _read_bytes(path: Path) -> bytes:
-    """Return the file's bytes, refusing one larger than :data:`MAX_URDF_BYTES`."""
-    try:
-        with path.open("rb") as f:
-            data = f.read(MAX_URDF_BYTES + 1)
-    except OSError as exc:
-        raise WirecalError(f"{path}: cannot read URDF: {exc.strerror or exc}") from None
-    if len(data) > MAX_URDF_BYTES:
-        raise WirecalError(
-            f"{path}: larger than {MAX_URDF_BYTES // (1024 * 1024)} MB: not a URDF wirecal reads"
-        )
-    return data
-
-
 def _joint(el: ET.Element, path: Path, links: set[str]) -> Joint:
     """Return one <joint> element as a :class:`Joint`; raise naming the joint."""
     name = el.get("name") or ""
@@ -197,7 +184,7 @@ def _joint(el: ET.Element, path: Path, links: set[str]) -> Joint:
 def read_urdf(path: str | Path) -> Urdf:
     """Parse a URDF; any problem is a :class:`WirecalError` naming the file and joint."""
     path = Path(path)
-    data = _read_bytes(path)
+    data = read_input(path, "URDF", MAX_URDF_BYTES)[0]
     _screen(data, path)
     parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True))
     try:
