@@ -28,6 +28,7 @@ joint-interpolated move from θ0.
 from __future__ import annotations
 
 import itertools
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Literal
@@ -715,7 +716,10 @@ def _theta0_draws(robot: Robot, opt: PlanOptions) -> np.ndarray:
     gaps = robot.cell_gaps(t0, p0)
     clear = gaps.smallest() >= 0
     if not clear.any():
-        causes = sorted({gaps.cause(k).split(" (")[0] for k in range(len(t0))})
+        # "link 2 (a2) and the floor: 2249 mm into each other, …" → "link 2 and the floor"
+        causes = sorted(
+            {re.sub(r" \(.*?\)", "", gaps.cause(k)).split(":")[0] for k in range(len(t0))}
+        )
         raise WirecalError(
             f"{robot.source}: all {THETA0_DRAWS} θ0 drawn collide (cell) — "
             + "; ".join(causes[:5])
