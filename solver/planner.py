@@ -108,6 +108,11 @@ class Design:
     method: Method = "stepwise"  # the estimator the points were chosen for
     theta0_tried: int = 1  # θ0s designed to find this plan (1: the θ0 given)
     search_line: str = ""  # the θ0 search in words, when it went past the first θ0s
+    unidentifiable: tuple[str, ...] = ()  # excluded as unobservable or redundant
+
+    def isolation_failed(self) -> list[str]:
+        """Return the parameters excluded as not isolated (another θ0 may isolate them)."""
+        return [n for n in self.excluded if n not in self.unidentifiable]
 
     def header(self) -> str:
         """Return the plan file's header comment: the design's figures in words."""
@@ -521,7 +526,8 @@ def design(
 
     θ0 chosen: the best plan (fewest parameters unplanned, then the smallest predicted
     error) of the first :data:`THETA0_TRIES` θ0 drawn clear of the cell; when it leaves
-    parameters unplanned, up to :data:`MORE_THETA0_DESIGNED` more θ0, the best of
+    parameters unplanned (but unobservable or redundant ones, which no θ0 plans), up to
+    :data:`MORE_THETA0_DESIGNED` more θ0, the best of
     :data:`MORE_THETA0_CHECKED` further draws by a quick check (:func:`_isolated_count`),
     until one gives a complete plan (:func:`_search_further`). A θ0 given is the only one
     tried. ``progress`` is called with the fraction of the work done (0…1) as it advances.
@@ -543,7 +549,7 @@ def design(
             best = d
     if best is not None:
         best.theta0_tried = len(first)
-    if best is None or best.excluded:
+    if best is None or best.isolation_failed():
         more = draws[THETA0_TRIES : THETA0_TRIES + MORE_THETA0_CHECKED]
         best = _search_further(
             robot, more, (best, problems), opt, lambda k: _part(progress, len(first) + k, parts)
@@ -585,8 +591,9 @@ def _search_further(
     """Return the first complete plan at the θ0s ``more``, else the best plan of all.
 
     Each θ0 in the order drawn gets the quick check of :func:`_isolated_count`; one
-    around which every parameter of [calibration] is isolated is designed at once, and
-    the search stops at its plan if complete. Otherwise, after all are checked, the θ0s
+    around which every parameter of [calibration] (but the unidentifiable) is isolated is
+    designed at once, and the search stops at its plan if complete (every parameter
+    planned but the unidentifiable). Otherwise, after all are checked, the θ0s
     isolating the most parameters (ties in the order drawn) are designed. At most
     :data:`MORE_THETA0_DESIGNED` designs in all. ``so_far``: the best plan of the first
     θ0s (None: none) and why the others gave none, a list this extends; ``part(k)`` is
@@ -599,7 +606,7 @@ def _search_further(
         if search.spent:
             return search.result(len(counts))
         counts.append(_isolated_count(robot, t0, opt))
-        if counts[-1] == len(robot.parameters) and search.attempt(len(counts) - 1, t0):
+        if counts[-1] >= search.target and search.attempt(len(counts) - 1, t0):
             return search.result(len(counts))
     for i in np.argsort(-np.array(counts, dtype=int), kind="stable"):
         if search.spent or (i not in search.designed and search.attempt(int(i), more[i])):
@@ -619,6 +626,8 @@ class _Search:
         self.best, self.problems = best, problems
         self.before = len(problems) if best is None else best.theta0_tried
         self.designed: list[int] = []
+        # the quick check's count that calls for a design at once
+        self.target = len(robot.parameters) - (len(best.unidentifiable) if best else 0)
 
     @property
     def spent(self) -> bool:
@@ -635,7 +644,7 @@ class _Search:
             return False
         if self.best is None or _score(d) < _score(self.best):
             self.best = d
-        return not d.excluded
+        return not d.isolation_failed()
 
     def result(self, checked: int) -> Design | None:
         """Return the best plan, saying how many θ0s were checked and designed."""
@@ -847,6 +856,7 @@ def _design_at(
         )
     names = list(robot.parameters)
     excluded = _unidentifiable(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
+    unidentifiable = tuple(excluded)
     remaining = [n for n in names if n not in excluded]
     psi = sensitivity(model, q_all, theta0, remaining).psi
     pools = _step_by_step(robot, theta0, q_all, via_all, psi, remaining, excluded, opt, tick)
@@ -886,7 +896,7 @@ def _design_at(
         tuple(Step(s.parameter, s.points_deg, s.via_deg) for s in steps),
         robot=robot.name,
     )
-    d = Design(plan, steps, excluded, method=opt.method)
+    d = Design(plan, steps, excluded, method=opt.method, unidentifiable=unidentifiable)
     d.predicted = predicted_accuracy(robot, plan, unplanned=tuple(excluded))
     d.robot_time_s = robot_time(robot, plan, opt.run)
     d.exit_line = exit_line(robot, plan)

@@ -166,3 +166,19 @@ def test_the_urdf_ur5_plans_every_parameter_at_any_seed(tmp_path, urdf_ur5, seed
     if seed in (0, 2):
         assert "theta0 tried in all" in r.output
         assert "theta0 tried in all" in out.read_text(encoding="utf-8")
+
+
+def test_unidentifiable_parameters_send_no_search_further(monkeypatch, ur5):
+    """An unobservable or redundant parameter is excluded at every θ0: no more θ0 tried."""
+    stand = Stand(monkeypatch, dict.fromkeys(range(1, 9), 1), dict.fromkeys(range(1, 9), 9))
+
+    def design_at(robot, theta0, opt, progress=None) -> Design:
+        d = stand.design_at(robot, theta0, opt, progress)
+        d.unidentifiable = ("p0",)
+        return d
+
+    monkeypatch.setattr(planner, "_design_at", design_at)
+    d = design(ur5)
+    assert stand.checked == []
+    assert stand.designed == list(range(1, 7))
+    assert list(d.excluded) == ["p0"]
