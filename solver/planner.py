@@ -621,7 +621,14 @@ class _Search:
     ``spent`` once :data:`MORE_THETA0_DESIGNED` are designed.
     """
 
-    def __init__(self, robot, opt, part, best: Design | None, problems: list[str]) -> None:
+    def __init__(
+        self,
+        robot: Robot,
+        opt: PlanOptions,
+        part: Callable[[int], Progress | None],
+        best: Design | None,
+        problems: list[str],
+    ) -> None:
         self.robot, self.opt, self.part = robot, opt, part
         self.best, self.problems = best, problems
         self.before = len(problems) if best is None else best.theta0_tried
