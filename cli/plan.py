@@ -12,7 +12,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.plan_file import plan_to_toml
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.planner import PlanOptions, design
+from wirecal.solver.planner import Design, PlanOptions, design
 
 _D = PlanOptions()
 
@@ -29,6 +29,13 @@ def _joints(value: str | None, n: int) -> np.ndarray | None:
     if q.shape != (n,):
         raise WirecalError(f"--theta0 has {q.size} values; the robot has {n} joints")
     return q
+
+
+def _tried(d: Design, theta0_deg: np.ndarray | None) -> str:
+    """Say at which θ0s the plan was sought (the refusal of an incomplete plan)."""
+    if theta0_deg is not None:
+        return "at the --theta0 given; no other theta0 tried"
+    return f"the best of {d.theta0_tried} theta0 tried"
 
 
 @click.command()
@@ -125,7 +132,8 @@ def plan(
             raise WirecalError(
                 [
                     f"{robot}: {len(d.excluded)} of the {len(rb.parameters)} parameters of "
-                    "[calibration] cannot be planned; nothing written:",
+                    f"[calibration] cannot be planned ({_tried(d, theta0_deg)}); nothing "
+                    "written:",
                     *(f"not planned: {name}: {why}" for name, why in d.excluded.items()),
                     "remove them from [calibration] parameters, try another --theta0 or "
                     "--seed, or give --allow-partial to take the plan without them",

@@ -28,6 +28,7 @@ joint-interpolated move from θ0.
 from __future__ import annotations
 
 import itertools
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Literal
@@ -105,6 +106,13 @@ class Design:
     exit_line: str = ""  # the wire exit and the plan's largest exit angle, in words
     cell_line: str = ""  # the cell the plan keeps clear of, in words
     method: Method = "stepwise"  # the estimator the points were chosen for
+    theta0_tried: int = 1  # θ0s designed to find this plan (1: the θ0 given)
+    search_line: str = ""  # the θ0 search in words, when it went past the first θ0s
+    unidentifiable: tuple[str, ...] = ()  # excluded as unobservable or redundant
+
+    def isolation_failed(self) -> list[str]:
+        """Return the parameters excluded as not isolated (another θ0 may isolate them)."""
+        return [n for n in self.excluded if n not in self.unidentifiable]
 
     def header(self) -> str:
         """Return the plan file's header comment: the design's figures in words."""
@@ -113,6 +121,7 @@ class Design:
             f"theta0 {np.round(self.plan.theta0_deg, 2).tolist()} deg; order "
             + " ".join(self.plan.order)
             + ".",
+            *([self.search_line] if self.search_line else []),
             "Predicted tool-point error (sigma 0.01 mm, mean over the workspace"
             + (
                 f"; the {len(self.excluded)} parameters not planned at their prior"
@@ -515,8 +524,181 @@ def design(
 ) -> Design:
     """Return a plan for the robot file's parameters (θ0 chosen when not given).
 
-    ``progress`` is called with the fraction of the work done (0…1) as it advances.
+    θ0 chosen: the best plan (fewest parameters unplanned, then the smallest predicted
+    error) of the first :data:`THETA0_TRIES` θ0 drawn clear of the cell; when it leaves
+    parameters unplanned (but unobservable or redundant ones, which no θ0 plans), up to
+    :data:`MORE_THETA0_DESIGNED` more θ0, the best of
+    :data:`MORE_THETA0_CHECKED` further draws by a quick check (:func:`_isolated_count`),
+    until one gives a complete plan (:func:`_search_further`). A θ0 given is the only one
+    tried. ``progress`` is called with the fraction of the work done (0…1) as it advances.
     """
+    _check_room(robot, opt)
+    if theta0 is not None:
+        return _design_at(robot, np.asarray(theta0, dtype=float), opt, progress)
+    draws = _theta0_draws(robot, opt)
+    first = draws[:THETA0_TRIES]
+    parts = len(first) + MORE_THETA0_DESIGNED
+    best, problems = None, []
+    for k, t0 in enumerate(first):
+        try:
+            d = _design_at(robot, t0, opt, _part(progress, k, parts))
+        except WirecalError as exc:
+            problems.append(exc.problems[0])
+            continue
+        if best is None or _score(d) < _score(best):
+            best = d
+    if best is not None:
+        best.theta0_tried = len(first)
+    if best is None or best.isolation_failed():
+        more = draws[THETA0_TRIES : THETA0_TRIES + MORE_THETA0_CHECKED]
+        best = _search_further(
+            robot, more, (best, problems), opt, lambda k: _part(progress, len(first) + k, parts)
+        )
+    if best is None:
+        raise WirecalError(
+            [
+                f"{robot.source}: no θ0 tried gives a plan ({len(problems)} tried; each "
+                "θ0's reasons follow)",
+                *problems,
+            ]
+        )
+    return best
+
+
+THETA0_TRIES = 6
+"""θ0 designed first, all of them; the best plan of them is kept when it is complete."""
+
+MORE_THETA0_CHECKED = 60
+"""Further θ0 drawn when the first leave parameters unplanned, each given the quick check
+of :func:`_isolated_count` (0.1–0.7 s on the UR5, a tenth of a design)."""
+
+MORE_THETA0_DESIGNED = 4
+"""Of those, designed at most, best checked first; the first complete plan is kept."""
+
+
+def _score(d: Design) -> tuple[int, float]:
+    """Return a plan's rank among θ0s: parameters unplanned, then the predicted errors."""
+    return (len(d.excluded), d.predicted["stepwise"] + d.predicted["joint"] * 5)
+
+
+def _search_further(
+    robot: Robot,
+    more: np.ndarray,
+    so_far: tuple[Design | None, list[str]],
+    opt: PlanOptions,
+    part: Callable[[int], Progress | None],
+) -> Design | None:
+    """Return the first complete plan at the θ0s ``more``, else the best plan of all.
+
+    Each θ0 in the order drawn gets the quick check of :func:`_isolated_count`; one
+    around which every parameter of [calibration] (but the unidentifiable) is isolated is
+    designed at once, and the search stops at its plan if complete (every parameter
+    planned but the unidentifiable). Otherwise, after all are checked, the θ0s
+    isolating the most parameters (ties in the order drawn) are designed. At most
+    :data:`MORE_THETA0_DESIGNED` designs in all. ``so_far``: the best plan of the first
+    θ0s (None: none) and why the others gave none, a list this extends; ``part(k)`` is
+    the progress callback of the k-th design. The plan returned says how many θ0s were
+    designed (``theta0_tried``) and, in ``search_line``, how the search went.
+    """
+    search = _Search(robot, opt, part, *so_far)
+    counts: list[int] = []
+    for t0 in more:
+        if search.spent:
+            return search.result(len(counts))
+        counts.append(_isolated_count(robot, t0, opt))
+        if counts[-1] >= search.target and search.attempt(len(counts) - 1, t0):
+            return search.result(len(counts))
+    for i in np.argsort(-np.array(counts, dtype=int), kind="stable"):
+        if search.spent or (i not in search.designed and search.attempt(int(i), more[i])):
+            break
+    return search.result(len(counts))
+
+
+class _Search:
+    """The θ0s designed after the first ones: the best plan so far and why others failed.
+
+    ``attempt`` designs one θ0 and keeps the plan if it ranks better (:func:`_score`);
+    ``spent`` once :data:`MORE_THETA0_DESIGNED` are designed.
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        opt: PlanOptions,
+        part: Callable[[int], Progress | None],
+        best: Design | None,
+        problems: list[str],
+    ) -> None:
+        self.robot, self.opt, self.part = robot, opt, part
+        self.best, self.problems = best, problems
+        self.before = len(problems) if best is None else best.theta0_tried
+        self.designed: list[int] = []
+        # the quick check's count that calls for a design at once
+        self.target = len(robot.parameters) - (len(best.unidentifiable) if best else 0)
+
+    @property
+    def spent(self) -> bool:
+        """Whether :data:`MORE_THETA0_DESIGNED` θ0s are designed (no more may be)."""
+        return len(self.designed) >= MORE_THETA0_DESIGNED
+
+    def attempt(self, i: int, theta0: np.ndarray) -> bool:
+        """Design at θ0 (draw ``i``); return whether its plan is complete."""
+        self.designed.append(i)
+        try:
+            d = _design_at(self.robot, theta0, self.opt, self.part(len(self.designed) - 1))
+        except WirecalError as exc:
+            self.problems.append(exc.problems[0])
+            return False
+        if self.best is None or _score(d) < _score(self.best):
+            self.best = d
+        return not d.isolation_failed()
+
+    def result(self, checked: int) -> Design | None:
+        """Return the best plan, saying how many θ0s were checked and designed."""
+        tried = len(self.designed)
+        if self.best is not None and tried:
+            self.best.theta0_tried = self.before + tried
+            self.best.search_line = (
+                f"theta0 search: the first {self.before} theta0 drawn left parameters "
+                f"unplanned; {checked} more checked quickly (how many parameters each "
+                f"isolates), {tried} designed: {self.before + tried} theta0 tried in all."
+            )
+        return self.best
+
+
+def _isolated_count(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> int:
+    """Return how many parameters the order of §3.4 isolates around θ0: a quick check.
+
+    The candidates of :func:`_design_at` and its screening (:func:`screen`), applied only
+    to candidates isolating a parameter still unknown (:func:`_isolating`; few do), so a
+    fraction of a design's time; no points, via points or tours are chosen. The order
+    stops where the design's does when no parameter is unidentifiable.
+    """
+    model = robot.nominal
+    q = candidates(robot, theta0, opt, np.random.default_rng(opt.seed))
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    q = q[_point_checks(robot, model, p0, q, opt)]
+    names = list(robot.parameters)
+    col = {n: k for k, n in enumerate(names)}
+    psi = sensitivity(model, q, theta0, names).psi
+    state = np.zeros(len(q), np.int8)  # 0 not screened yet, 1 usable, 2 not
+    remaining = names
+    while remaining:
+        todo = np.zeros(len(q), bool)
+        for j in remaining:
+            todo |= _isolating(psi, col, j, remaining, opt)
+        todo &= state == 0
+        if todo.any():
+            state[todo] = np.where(screen(robot, model, p0, theta0, q[todo], opt)[0], 1, 2)
+        best = _most_informative(psi[state == 1], col, remaining, opt)
+        if best is None:
+            break
+        remaining = [t for t in remaining if t != best[0]]
+    return len(names) - len(remaining)
+
+
+def _check_room(robot: Robot, opt: PlanOptions) -> None:
+    """Raise when a joint's body limits leave no room for points inside the margin."""
     body_lo, body_hi = robot.body_limits_deg
     span = body_hi - body_lo
     narrow = np.flatnonzero(span <= 2 * opt.margin_deg)
@@ -529,32 +711,15 @@ def design(
                 for j in narrow
             ]
         )
-    if theta0 is not None:
-        return _design_at(robot, np.asarray(theta0, dtype=float), opt, progress)
-    best, problems = None, []
-    tries = 6
-    for k, t0 in enumerate(_theta0_draws(robot, opt, tries)):
-        try:
-            d = _design_at(robot, t0, opt, _part(progress, k, tries))
-        except WirecalError as exc:
-            problems.append(exc.problems[0])
-            continue
-        score = (len(d.excluded), d.predicted["stepwise"] + d.predicted["joint"] * 5)
-        if best is None or score < best[0]:
-            best = (score, d)
-    if best is None:
-        raise WirecalError(
-            [f"{robot.source}: no θ0 tried gives a plan (each θ0's reasons follow)", *problems]
-        )
-    return best[1]
 
 
-THETA0_DRAWS = 200
-"""θ0 candidates drawn at once; the first few clear of the arm and the cell are tried."""
+THETA0_DRAWS = 1000
+"""θ0 candidates drawn at once; those clear of the arm and the cell are tried in order
+(the first :data:`THETA0_TRIES`, then :data:`MORE_THETA0_CHECKED` more if need be)."""
 
 
-def _theta0_draws(robot: Robot, opt: PlanOptions, tries: int) -> np.ndarray:
-    """Return up to ``tries`` θ0 (deg, whole degrees) clear of the arm's body and the cell.
+def _theta0_draws(robot: Robot, opt: PlanOptions) -> np.ndarray:
+    """Return the θ0 (deg, whole degrees) drawn clear of the arm's body and the cell.
 
     Drawn 20 deg inside the body limits (less on a joint with a narrow range); raise,
     naming what blocked them, when none of :data:`THETA0_DRAWS` is clear.
@@ -567,13 +732,16 @@ def _theta0_draws(robot: Robot, opt: PlanOptions, tries: int) -> np.ndarray:
     gaps = robot.cell_gaps(t0, p0)
     clear = gaps.smallest() >= 0
     if not clear.any():
-        causes = sorted({gaps.cause(k).split(" (")[0] for k in range(len(t0))})
+        # "link 2 (a2) and the floor: 2249 mm into each other, …" → "link 2 and the floor"
+        causes = sorted(
+            {re.sub(r" \(.*?\)", "", gaps.cause(k)).split(":")[0] for k in range(len(t0))}
+        )
         raise WirecalError(
             f"{robot.source}: all {THETA0_DRAWS} θ0 drawn collide (cell) — "
             + "; ".join(causes[:5])
             + ": check [cell] floor_z_mm and its boxes, or give --theta0"
         )
-    return t0[clear][:tries]
+    return t0[clear]
 
 
 def _check_theta0(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> None:
@@ -611,29 +779,41 @@ def _unidentifiable(model, q: np.ndarray, theta0: np.ndarray, names: list[str]) 
     return excluded
 
 
+def _isolating(
+    psi: np.ndarray, col: dict[str, int], j: str, remaining: list[str], opt
+) -> np.ndarray:
+    """Return which candidates isolate parameter j from the others still unknown (eq. 18–19).
+
+    |Ψ_t| ≤ tol·|Ψ_j| (or below :data:`PSI_FLOOR`) for every other parameter t of
+    ``remaining``, and |Ψ_j| ≥ 0.05.
+    """
+    pj = psi[:, col[j]]
+    others = [col[t] for t in remaining if t != j]
+    limit = np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
+    iso = (
+        np.all(np.abs(psi[:, others]) <= limit[:, None], axis=1)
+        if others
+        else np.ones(len(pj), bool)
+    )
+    return iso & (np.abs(pj) >= 0.05)
+
+
 def _most_informative(
     psi: np.ndarray, col: dict[str, int], remaining: list[str], opt: PlanOptions
 ) -> tuple[str, np.ndarray] | None:
     """Choose the next parameter to isolate and its isolating candidates.
 
-    The parameter whose ``points_per_step`` most sensitive isolating candidates carry the
-    most information (Σψ²); None when no parameter has that many isolating candidates.
+    The parameter whose ``points_per_step`` most sensitive isolating candidates
+    (:func:`_isolating`) carry the most information (Σψ²); None when no parameter has
+    that many isolating candidates.
     """
     k = opt.points_per_step
     best: tuple[float, str, np.ndarray] | None = None
     for j in remaining:
-        pj = psi[:, col[j]]
-        others = [col[t] for t in remaining if t != j]
-        limit = np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
-        iso = (
-            np.all(np.abs(psi[:, others]) <= limit[:, None], axis=1)
-            if others
-            else np.ones(len(pj), bool)
-        )
-        iso &= np.abs(pj) >= 0.05
+        iso = _isolating(psi, col, j, remaining, opt)
         if iso.sum() < k:
             continue
-        info = float(np.sort(pj[iso] ** 2)[-k:].sum())
+        info = float(np.sort(psi[iso, col[j]] ** 2)[-k:].sum())
         if best is None or info > best[0]:
             best = (info, j, np.flatnonzero(iso))
     return None if best is None else (best[1], best[2])
@@ -683,6 +863,7 @@ def _design_at(
         )
     names = list(robot.parameters)
     excluded = _unidentifiable(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
+    unidentifiable = tuple(excluded)
     remaining = [n for n in names if n not in excluded]
     psi = sensitivity(model, q_all, theta0, remaining).psi
     pools = _step_by_step(robot, theta0, q_all, via_all, psi, remaining, excluded, opt, tick)
@@ -722,7 +903,7 @@ def _design_at(
         tuple(Step(s.parameter, s.points_deg, s.via_deg) for s in steps),
         robot=robot.name,
     )
-    d = Design(plan, steps, excluded, method=opt.method)
+    d = Design(plan, steps, excluded, method=opt.method, unidentifiable=unidentifiable)
     d.predicted = predicted_accuracy(robot, plan, unplanned=tuple(excluded))
     d.robot_time_s = robot_time(robot, plan, opt.run)
     d.exit_line = exit_line(robot, plan)

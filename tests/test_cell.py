@@ -251,7 +251,7 @@ def test_no_theta0_says_what_blocked_it(tmp_path):
     robot = load_robot(_viper_with(tmp_path, "floor_z_mm = -335.0", "floor_z_mm = 2000.0"))
     with pytest.raises(WirecalError) as exc:
         design(robot)
-    assert "all 200 θ0 drawn collide (cell)" in exc.value.problems[0]
+    assert "all 1000 θ0 drawn collide (cell)" in exc.value.problems[0]
     assert "and the floor" in exc.value.problems[0]
     with pytest.raises(WirecalError, match=r"theta0 \[0.0, -90.0.*collides \(cell\)"):
         design(robot, np.array(VIPER_THETA0, float))

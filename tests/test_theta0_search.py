@@ -1,0 +1,184 @@
+"""θ0 search of ``wirecal plan``: when the first θ0s leave parameters unplanned.
+
+The selection rule is checked with stand-ins for the designs (fast); the quick check
+against a full screening, and the UR5 imported from its URDF through the command line
+at four seeds (slow).
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from wirecal.cli.main import main
+from wirecal.solver import planner
+from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.kinematics import tool_position
+from wirecal.solver.planner import (
+    MORE_THETA0_DESIGNED,
+    THETA0_TRIES,
+    Design,
+    PlanOptions,
+    design,
+)
+from wirecal.solver.sensitivity import sensitivity
+
+UR5 = Path(__file__).parent.parent / "examples" / "ur5" / "robot.toml"
+N_PARAMS = 10  # the UR5's [calibration] parameters
+
+
+class Stand:
+    """Stand-ins for ``_design_at`` and ``_isolated_count``, keyed by θ0's joint 1.
+
+    ``unplanned[j1]``: parameters a design at that θ0 leaves unplanned; ``isolated[j1]``:
+    the quick check's count. Records the θ0s designed and checked, in order.
+    """
+
+    def __init__(self, monkeypatch, unplanned: dict[int, int], isolated: dict[int, int]):
+        self.unplanned, self.isolated = unplanned, isolated
+        self.designed: list[int] = []
+        self.checked: list[int] = []
+        draws = np.zeros((len(unplanned), 6))
+        draws[:, 0] = list(unplanned)
+        monkeypatch.setattr(planner, "_theta0_draws", lambda robot, opt: draws)
+        monkeypatch.setattr(planner, "_design_at", self.design_at)
+        monkeypatch.setattr(planner, "_isolated_count", self.count)
+
+    def design_at(self, robot, theta0, opt, progress=None) -> Design:
+        j1 = int(theta0[0])
+        self.designed.append(j1)
+        excluded = {f"p{k}": "stand-in" for k in range(self.unplanned[j1])}
+        return Design(None, [], excluded, {"joint": 0.01 * j1, "stepwise": 0.0})  # type: ignore[arg-type]
+
+    def count(self, robot, theta0, opt) -> int:
+        self.checked.append(int(theta0[0]))
+        return self.isolated[int(theta0[0])]
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    return load_robot(UR5)
+
+
+def test_complete_at_the_first_theta0s_checks_no_more(monkeypatch, ur5):
+    # θ0 with joint 1 = 3 is complete; 1 ranks better on the error but is incomplete
+    stand = Stand(monkeypatch, {1: 2, 2: 1, 3: 0, 4: 5, 5: 0, 6: 3, 7: 0}, {7: 10})
+    d = design(ur5)
+    assert stand.designed == [1, 2, 3, 4, 5, 6]
+    assert stand.checked == []
+    assert d.predicted["joint"] == pytest.approx(0.03)  # the better complete one (3, not 5)
+    assert d.theta0_tried == THETA0_TRIES
+    assert d.search_line == ""
+
+
+def test_the_first_complete_plan_beyond_the_first_theta0s_is_kept(monkeypatch, ur5):
+    first = dict.fromkeys(range(1, 7), 8)
+    # 9 isolates every parameter but its design misses one; 11 is complete, 12 never seen
+    unplanned = {**first, **{7: 9, 8: 5, 9: 1, 10: 4, 11: 0, 12: 0}}
+    stand = Stand(monkeypatch, unplanned, {7: 2, 8: 5, 9: N_PARAMS, 10: 4, 11: N_PARAMS})
+    d = design(ur5)
+    assert stand.designed == [*range(1, 7), 9, 11]
+    assert stand.checked == [7, 8, 9, 10, 11]
+    assert not d.excluded
+    assert d.predicted["joint"] == pytest.approx(0.11)
+    assert d.theta0_tried == THETA0_TRIES + 2
+    assert "8 theta0 tried in all" in d.search_line
+
+
+def test_without_a_complete_plan_the_fewest_unplanned_is_returned(monkeypatch, ur5):
+    first = dict.fromkeys(range(1, 7), 8)
+    isolated = {7: 1, 8: 6, 9: 2, 10: 6, 11: 3, 12: 9, 13: 0}
+    unplanned = {**first, 7: 9, 8: 4, 9: 8, 10: 3, 11: 7, 12: 2, 13: 1}
+    stand = Stand(monkeypatch, unplanned, isolated)
+    d = design(ur5)
+    # every further θ0 checked, then the most isolating designed first (ties as drawn)
+    assert stand.checked == list(range(7, 14))
+    assert MORE_THETA0_DESIGNED == 4
+    assert stand.designed == [*range(1, 7), 12, 8, 10, 11]
+    assert len(d.excluded) == 2  # θ0 12's plan; 13 (1 unplanned) ranks last and is not designed
+    assert d.theta0_tried == THETA0_TRIES + MORE_THETA0_DESIGNED
+
+
+def test_a_theta0_given_is_the_only_one_tried(monkeypatch, ur5):
+    stand = Stand(monkeypatch, {1: 3, 2: 0}, {2: N_PARAMS})
+    d = design(ur5, np.array([1.0, 0, 0, 0, 0, 0]))
+    assert stand.designed == [1]
+    assert stand.checked == []
+    assert len(d.excluded) == 3
+    assert d.theta0_tried == 1
+
+
+@pytest.mark.slow
+def test_the_quick_check_counts_as_a_full_screening(ur5):
+    """_isolated_count screens only isolating candidates; screening all of them first
+    must give the same count of parameters the §3.4 order isolates."""
+    opt = PlanOptions()
+    names = list(ur5.parameters)
+    col = {n: k for k, n in enumerate(names)}
+    counts = []
+    for theta0 in ([268, -95, 78, -62, -222, -270], [243, 285, 117, -83, 295, 312]):
+        t0 = np.array(theta0, float)
+        q = planner.candidates(ur5, t0, opt, np.random.default_rng(opt.seed))
+        p0 = tool_position(ur5.nominal, np.radians(t0)[None])[0]
+        usable = planner.screen(ur5, ur5.nominal, p0, t0, q, opt)[0]
+        psi = sensitivity(ur5.nominal, q[usable], t0, names).psi
+        remaining = list(names)
+        while (best := planner._most_informative(psi, col, remaining, opt)) is not None:
+            remaining.remove(best[0])
+        counts.append(N_PARAMS - len(remaining))
+        assert planner._isolated_count(ur5, t0, opt) == counts[-1]
+    assert counts[0] == N_PARAMS  # the shipped plan's θ0 isolates all ten
+
+
+def run(*args: str):
+    return CliRunner().invoke(main, list(args), catch_exceptions=False)
+
+
+@pytest.fixture(scope="module")
+def urdf_ur5(tmp_path_factory) -> Path:
+    """The UR5 exported as a DH URDF and imported back (the docs' round trip)."""
+    folder = tmp_path_factory.mktemp("urdf_ur5")
+    urdf, robot = folder / "ur5_dh.urdf", folder / "ur5.toml"
+    assert run("export-urdf", str(UR5), "-o", str(urdf)).exit_code == 0
+    r = run(
+        "import-urdf", str(urdf), "--base", "link0", "--tip", "link6",
+        "--wire-point-mm=-50,0,40", "--language", "urscript", "--host", "192.168.1.10",
+        "--port", "50000", "-o", str(robot),
+    )  # fmt: skip
+    assert r.exit_code == 0, r.output
+    return robot
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_the_urdf_ur5_plans_every_parameter_at_any_seed(tmp_path, urdf_ur5, seed):
+    """Seeds 0 and 2 left 8 and 6 parameters unplanned at the first six θ0s."""
+    out = tmp_path / "plan.toml"
+    r = run("plan", str(urdf_ur5), "-o", str(out), "--seed", str(seed))
+    assert r.exit_code == 0, r.output
+    plan = tomllib.loads(out.read_text(encoding="utf-8"))
+    assert sorted(s["parameter"] for s in plan["step"]) == sorted(load_robot(urdf_ur5).parameters)
+    assert "not planned" not in r.output
+    if seed in (0, 2):
+        assert "theta0 tried in all" in r.output
+        assert "theta0 tried in all" in out.read_text(encoding="utf-8")
+
+
+def test_unidentifiable_parameters_send_no_search_further(monkeypatch, ur5):
+    """An unobservable or redundant parameter is excluded at every θ0: no more θ0 tried."""
+    stand = Stand(monkeypatch, dict.fromkeys(range(1, 9), 1), dict.fromkeys(range(1, 9), 9))
+
+    def design_at(robot, theta0, opt, progress=None) -> Design:
+        d = stand.design_at(robot, theta0, opt, progress)
+        d.unidentifiable = ("p0",)
+        return d
+
+    monkeypatch.setattr(planner, "_design_at", design_at)
+    d = design(ur5)
+    assert stand.checked == []
+    assert stand.designed == list(range(1, 7))
+    assert list(d.excluded) == ["p0"]
