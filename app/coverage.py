@@ -12,7 +12,7 @@ estimate (:func:`~wirecal.solver.accuracy.error_vs_truth_mm`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -24,6 +24,21 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled, realistic_encoder, simulate_log
 from wirecal.solver.solve import solve
+
+GAUGE_LENGTH_MM = 500.0
+"""The simulated reference gauge's certified nest distance (a catalogue gauge's)."""
+
+
+def with_gauge(robot: Robot, uncertainty_mm: float = 0.002, repeats: int = 3) -> Robot:
+    """Return ``robot`` with a reference gauge of :data:`GAUGE_LENGTH_MM` (the reference step)."""
+    encoder = replace(
+        robot.encoder,
+        reference_length_mm=GAUGE_LENGTH_MM,
+        reference_uncertainty_mm=uncertainty_mm,
+        reference_repeats=repeats,
+    )
+    return replace(robot, encoder=encoder)
+
 
 WILSON_Z = 1.959964
 """The normal quantile of a two-sided 95 % interval."""

@@ -26,7 +26,7 @@ from dataclasses import replace  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from wirecal.app.coverage import trial, wilson  # noqa: E402
+from wirecal.app.coverage import trial, wilson, with_gauge  # noqa: E402
 from wirecal.app.demo import example_files  # noqa: E402
 from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
@@ -40,15 +40,7 @@ def main() -> None:
     args = ap.parse_args()
     files = example_files()
     without = load_robot(files["robot"])
-    gauge = replace(
-        without,
-        encoder=replace(
-            without.encoder,
-            reference_length_mm=500.0,
-            reference_uncertainty_mm=0.002,
-            reference_repeats=3,
-        ),
-    )
+    gauge = with_gauge(without)
     plan = load_plan(files["plan"], without)
     unmodelled = None if args.no_unmodelled else Unmodelled()
     if unmodelled is None:  # the robot file then says so: the budget assumes no sag either

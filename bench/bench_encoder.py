@@ -26,6 +26,7 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from wirecal.app.coverage import with_gauge  # noqa: E402
 from wirecal.solver import montecarlo  # noqa: E402
 from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
@@ -44,15 +45,7 @@ def main() -> None:
     T = args.trials
     base = load_robot(VIPER / "robot.toml")
     without = replace(base, encoder=replace(base.encoder, scale_tolerance_ppm=SCALE_PPM))
-    with_ref = replace(
-        without,
-        encoder=replace(
-            without.encoder,
-            reference_length_mm=500.0,
-            reference_uncertainty_mm=0.002,
-            reference_repeats=3,
-        ),
-    )
+    with_ref = with_gauge(without)
     true_encoder = EncoderTruth(
         scale_ppm=SCALE_PPM,
         temperature_change_k=TEMPERATURE_CHANGE_K,
