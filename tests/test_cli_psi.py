@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -103,8 +105,9 @@ def test_help(command):
 
 
 def test_installed_console_script():
-    exe = shutil.which("wirecal")
-    assert exe, "the wirecal console script is not on PATH; install with pip install -e ."
+    # the script pip installed beside this interpreter (a venv's bin/ need not be on PATH)
+    exe = shutil.which("wirecal", path=str(Path(sys.executable).parent))
+    assert exe, "no wirecal console script beside this Python; install with pip install -e ."
     out = subprocess.run([exe, "--version"], capture_output=True, text=True, check=True)
     assert out.stdout.startswith("wirecal, version ")
     out = subprocess.run([exe, "psi", ROBOT, PLAN, "--strict"], capture_output=True, text=True)
