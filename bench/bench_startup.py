@@ -49,6 +49,10 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--runs", type=int, default=7)
     runs = parser.parse_args().runs
+    # one BLAS thread, as the command line sets it (cli/main.py): the bare imports it is
+    # compared with start under the same settings
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
     py = sys.executable
     cli = [str(Path(py).parent / "wirecal")]  # the installed console script
     robot, plan = str(VIPER / "robot.toml"), str(VIPER / "paper_plan.toml")

@@ -2,19 +2,11 @@
 
 from __future__ import annotations
 
-import os
+import click
 
-# fit's matrices are at most a few thousand rows by ~40 columns: BLAS threads cost more than
-# they give (1000 rows: 0.8 s with one thread, 10 s with the default threads on two busy
-# cores). Set before numpy is first imported (the command line imports it lazily).
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
-
-import click  # noqa: E402 - after the thread settings
-
-from wirecal import __version__  # noqa: E402
-from wirecal.cli.main import print_json, user_errors  # noqa: E402
-from wirecal.cli.options import (  # noqa: E402
+from wirecal import __version__
+from wirecal.cli.main import print_json, user_errors
+from wirecal.cli.options import (
     ACCEPT_IMPLAUSIBLE,
     NON_NEGATIVE,
     PATCH_FORCE,
@@ -22,7 +14,7 @@ from wirecal.cli.options import (  # noqa: E402
     POSITIVE,
     SEED,
 )
-from wirecal.solver.fit_result import (  # noqa: E402
+from wirecal.solver.fit_result import (
     FitOptions,
     FitResult,
     Run,
@@ -31,11 +23,11 @@ from wirecal.solver.fit_result import (  # noqa: E402
     gate_fit,
     result_json,
 )
-from wirecal.solver.formats.cable_table import read_cable_table  # noqa: E402
-from wirecal.solver.formats.fileio import Outputs  # noqa: E402
-from wirecal.solver.formats.patch import companion_paths, put_patch  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.plausibility import READING_NOISE_MM  # noqa: E402
+from wirecal.solver.formats.cable_table import read_cable_table
+from wirecal.solver.formats.fileio import Outputs
+from wirecal.solver.formats.patch import companion_paths, put_patch
+from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.plausibility import READING_NOISE_MM
 
 
 @click.command()
