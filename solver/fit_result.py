@@ -18,7 +18,6 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from scipy.stats import chi2
 
 from wirecal.solver.accuracy import workspace
 from wirecal.solver.budget import Budget, budget, sources
@@ -32,13 +31,13 @@ from wirecal.solver.fit_xyz import XyzCheck, check_xyz, refine_joints
 from wirecal.solver.identify import Estimate
 from wirecal.solver.kinematics import Model
 from wirecal.solver.plausibility import (
-    FALSE_ALARM,
     PLAUSIBLE_DEG,
     PLAUSIBLE_MM,
     READING_NOISE_MM,
     Finding,
     Plausibility,
     implausible,
+    residual_limit_mm,
 )
 from wirecal.solver.robot import Robot
 from wirecal.solver.scale import PPM
@@ -181,16 +180,15 @@ def _refuse_ignored_jumps(table: CableTable, core: Core, options: FitOptions) ->
 def assess_fit(result: FitResult, noise_mm: float = READING_NOISE_MM) -> Plausibility:
     """Return the plausibility gate's verdict on a fit: residual and plausible sizes.
 
-    Residual: σ of the final fit against σ_model = √(floor² + noise²) by the χ² bound of
-    :mod:`~wirecal.solver.plausibility` (false alarm :data:`FALSE_ALARM`); sizes: no DH
-    error beyond :data:`PLAUSIBLE_DEG` deg or :data:`PLAUSIBLE_MM` mm. Identifiability holds
+    Residual: σ of the final fit against σ_model = √(floor² + noise²) by the gate's χ² bound
+    (:func:`~wirecal.solver.plausibility.residual_limit_mm`); sizes: no DH error beyond :data:`PLAUSIBLE_DEG` deg or :data:`PLAUSIBLE_MM` mm. Identifiability holds
     by construction (every parameter chosen has its σ below the gate's limit).
     """
     run = result.best
     core = run.core
     sigma_model = float(np.hypot(run.floor_mm, noise_mm))
     dof = int(core.inliers.sum()) - len(core.x)
-    limit = sigma_model * np.sqrt(chi2.isf(FALSE_ALARM, dof) / dof) if dof > 0 else np.nan
+    limit = residual_limit_mm(sigma_model, dof)
     findings = []
     if dof > 0 and not core.sigma_mm <= limit:
         findings.append(

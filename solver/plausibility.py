@@ -60,6 +60,16 @@ def chi2_quantile(alpha: float, dof: int) -> float:
     return 2.0 * float(gammainccinv(dof / 2.0, alpha))
 
 
+def residual_limit_mm(sigma_model_mm: float, dof: int) -> float:
+    """Return the largest residual σ the gate accepts (NaN when ``dof`` ≤ 0: none to judge).
+
+    σ_model·√(χ²_ν(1 − α)/ν), α the :data:`FALSE_ALARM`, ν = ``dof``.
+    """
+    if dof <= 0:
+        return float("nan")
+    return sigma_model_mm * float(np.sqrt(chi2_quantile(FALSE_ALARM, dof) / dof))
+
+
 READING_NOISE_MM = 0.02
 """Default σ of one reading before quantisation: the paper's arm repeats to ±0.02 mm."""
 
@@ -187,7 +197,7 @@ def assess(
 
     sigma_model = float(np.hypot(noise_mm, abs(m.mm_per_count) / np.sqrt(12)))
     dof = len(measured) - len(names)
-    limit = sigma_model * np.sqrt(chi2_quantile(FALSE_ALARM, dof) / dof) if dof > 0 else np.nan
+    limit = residual_limit_mm(sigma_model, dof)
     if dof > 0 and not result.sigma_mm <= limit:
         findings.append(
             Finding(
