@@ -181,8 +181,9 @@ def assess_fit(result: FitResult, noise_mm: float = READING_NOISE_MM) -> Plausib
     """Return the plausibility gate's verdict on a fit: residual and plausible sizes.
 
     Residual: σ of the final fit against σ_model = √(floor² + noise²) by the gate's χ² bound
-    (:func:`~wirecal.solver.plausibility.residual_limit_mm`); sizes: no DH error beyond :data:`PLAUSIBLE_DEG` deg or :data:`PLAUSIBLE_MM` mm. Identifiability holds
-    by construction (every parameter chosen has its σ below the gate's limit).
+    (:func:`~wirecal.solver.plausibility.residual_limit_mm`); sizes: no DH error beyond
+    :data:`PLAUSIBLE_DEG` deg or :data:`PLAUSIBLE_MM` mm. Identifiability holds by
+    construction (every parameter chosen has its σ below the gate's limit).
     """
     run = result.best
     core = run.core
