@@ -90,7 +90,7 @@ def test_unreachable_pose_has_no_solution(viper):
 
 # --- UR-type arms: the closed form of solver/ik_ur.py ----------------------------------------
 
-UR5_FILE = Path(__file__).resolve().parents[1] / "examples" / "ur5" / "robot.toml"
+UR5_FILE = Path(__file__).resolve().parents[1] / "examples" / "ur5e" / "robot.toml"
 UR5 = load_robot(UR5_FILE)
 UR5_ERRORS = {"th2": 0.3, "th4": -0.2, "a2": 0.8, "a3": -0.5, "d4": 0.4, "d5": 0.3, "al3": 0.1}
 

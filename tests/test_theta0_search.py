@@ -27,7 +27,7 @@ from wirecal.solver.planner import (
 )
 from wirecal.solver.sensitivity import sensitivity
 
-UR5 = Path(__file__).parent.parent / "examples" / "ur5" / "robot.toml"
+UR5 = Path(__file__).parent.parent / "examples" / "ur5e" / "robot.toml"
 N_PARAMS = 10  # the UR5's [calibration] parameters
 
 

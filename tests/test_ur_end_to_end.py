@@ -25,7 +25,7 @@ from wirecal.twin.ur_cell import URCell, run_ur_programs
 
 pytestmark = pytest.mark.slow  # about 5 s each on a loaded machine
 
-ROBOT, PLAN = "examples/ur5/robot.toml", "examples/ur5/plan.toml"
+ROBOT, PLAN = "examples/ur5e/robot.toml", "examples/ur5e/plan.toml"
 
 
 def cli(*args: str):
