@@ -31,7 +31,7 @@ from wirecal.solver.fit_synth import synthetic_table  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-ARMS = ("viper_s650", "abb_irb120", "ur5")
+ARMS = ("viper_s650", "abb_irb120", "ur5e")
 SIZES = (100, 300, 1000, 2000)
 
 

@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 from wirecal.solver import ik, ik_ur  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 
-UR5 = Path(__file__).resolve().parents[1] / "examples" / "ur5" / "robot.toml"
+UR5 = Path(__file__).resolve().parents[1] / "examples" / "ur5e" / "robot.toml"
 
 
 def _run(robot, model, poses):

@@ -187,9 +187,9 @@ def test_ur_generic_pose_has_eight_named_solutions():
 
 
 @pytest.mark.slow  # the numeric search takes about a second per pose
-@pytest.mark.parametrize("arm", ["ur5", "viper"])
+@pytest.mark.parametrize("arm", ["ur5e", "viper"])
 def test_numeric_search_finds_only_closed_form_solutions(arm, viper):
-    robot = UR5 if arm == "ur5" else viper
+    robot = UR5 if arm == "ur5e" else viper
     model = robot.nominal
     rng = np.random.default_rng(5)
     lo, hi = robot.joint_min_deg, robot.joint_max_deg
