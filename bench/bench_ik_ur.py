@@ -1,6 +1,6 @@
-"""Inverse kinematics of the UR5: the closed form (solver/ik_ur.py, Newton-polished) against
+"""Inverse kinematics of the UR5e: the closed form (solver/ik_ur.py, Newton-polished) against
 the numeric search that solved it before (damped least squares from 24 random starts and the
-spherical-wrist seeds), on random reachable poses of the nominal and of a calibrated UR5.
+spherical-wrist seeds), on random reachable poses of the nominal and of a calibrated UR5e.
 
 Per model: solutions found by each, the closed form's solutions the search missed, the
 poses with a miss, the largest flange-position residual (mm) and the time per pose.

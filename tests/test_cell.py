@@ -104,7 +104,7 @@ def colliding_plan(tmp_path: Path, case: str) -> tuple[str, str, str]:
     return str(folder / "robot.toml"), str(plan), pair
 
 
-# ---------- the shipped UR5 plan, checked independently ----------
+# ---------- the shipped UR5e plan, checked independently ----------
 
 
 def test_ur5e_plan_plans_every_parameter_inside_its_cell():

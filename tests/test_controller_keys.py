@@ -130,7 +130,7 @@ def test_port_and_host_accepted_exactly_when_valid(port, host):
     valid_host = bool(host) and all(33 <= ord(c) <= 126 and c != '"' for c in host)
     if valid_port and valid_host:
         robot = robot_from_dict(_ur(edit), "r.toml")
-        assert robot.controller == Controller("urscript", host, port)
+        assert robot.controller == Controller("urscript", host, port, software="5.20")
     else:
         problems = _problems(_ur(edit))
         assert all(p.startswith("r.toml: controller.") for p in problems), problems

@@ -1,4 +1,4 @@
-"""The UR5's generated URScript programs in the twin: the run, the wraps, the fault matrix.
+"""The UR5e's generated URScript programs in the twin: the run, the wraps, the fault matrix.
 
 Every run goes over a real loopback socket to :func:`wirecal.app.receive.receive` (the
 function behind ``wirecal receive``), which keeps the rows of an incomplete run in its
@@ -60,8 +60,8 @@ def test_run_completes_and_the_log_identifies_the_truth(ur5, ur5_plan, texts, tr
     assert m.complete
     est = solve(ur5, ur5_plan, m).estimates["joint"].as_dict()
     assert max(abs(v - truth.get(k, 0.0)) for k, v in est.items()) < 0.05  # deg, mm
-    # the twin's clock: 62 moves at 36 deg/s plus the settle and the readings (the plan
-    # re-designed inside the UR5's cell, issue 21: shorter moves than the old plan's 51)
+    # the twin's clock: 62 moves at 36 deg/s plus the settle and the readings (the UR5e's
+    # plan, designed inside its cell: 384 s, bench/bench_ur5e.py)
     assert 300 < r.programs.cell.clock < 600
 
 
@@ -180,7 +180,7 @@ def test_the_log_carries_the_controller_solvers_result(ur5, ur5_plan, texts, tru
     ref = solve(ur5, ur5_plan, m).estimates["stepwise"].as_dict()
     assert list(result) == list(ref)
     assert max(abs(result[n] - v) for n, v in ref.items()) <= 1e-5
-    assert "# solver: step 10 of 10: a2 identified" in r.programs.run.console
+    assert "# solver: step 10 of 10: d4 identified" in r.programs.run.console  # the last
     ctl = compare_controller(solve(ur5, ur5_plan, m), tmp_path / "ctl")
     # the same program on the log's readings: the count split between base and offset
     # differs (floor of the logged count), hence 32-bit roundings in the last decimal
