@@ -7,7 +7,7 @@ both validation procedures before and after calibration (the controller believin
 patch), with unmodelled errors on; write the report. The validation before calibration runs
 in a second process beside the rest.
 
-The UR5 (URScript, ``robot=examples/ur5/robot.toml``): generate the ``.script`` programs for
+The UR5e (URScript, ``robot=examples/ur5e/robot.toml``): generate the ``.script`` programs for
 the shipped plan; run wc_mount and wc_run on a twin UR whose log travels over a loopback
 socket to ``wirecal receive``; identify on the PC; write the patch and UR's deltas; run
 the measurement program again over new points (unmodelled errors on) and compare the wire
@@ -131,7 +131,7 @@ def run_demo(
 ) -> DemoResult:
     """Run the demo into ``folder``: every output written, or none (``force`` to replace).
 
-    ``robot``: the Viper s650 when not given; a URScript robot file (the UR5's) runs the
+    ``robot``: the Viper s650 when not given; a URScript robot file (the UR5e's) runs the
     URScript chain with the plan beside it (``plan.toml``).
     """
     folder = Path(folder)

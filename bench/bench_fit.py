@@ -1,6 +1,6 @@
 """``wirecal fit`` on simulated tables: held-out RMS of the cable length beside the floor.
 
-Three arms (Viper s650, ABB IRB 120, UR5), data sets of 100 to 2000 rows from
+Three arms (Viper s650, ABB IRB 120, UR5e), data sets of 100 to 2000 rows from
 :func:`~wirecal.solver.fit_synth.synthetic_table`: random configurations in the middle 80 %
 of the joint ranges, joints logged to 0.1°, lengths to 0.01 mm with 0.02 mm reading noise,
 an anchor anywhere in the cell, three sessions with offset jumps of 3–30 mm, three snagged
@@ -31,7 +31,7 @@ from wirecal.solver.fit_synth import synthetic_table  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-ARMS = ("viper_s650", "abb_irb120", "ur5")
+ARMS = ("viper_s650", "abb_irb120", "ur5e")
 SIZES = (100, 300, 1000, 2000)
 
 

@@ -1,6 +1,6 @@
-"""Inverse kinematics of the UR5: the closed form (solver/ik_ur.py, Newton-polished) against
+"""Inverse kinematics of the UR5e: the closed form (solver/ik_ur.py, Newton-polished) against
 the numeric search that solved it before (damped least squares from 24 random starts and the
-spherical-wrist seeds), on random reachable poses of the nominal and of a calibrated UR5.
+spherical-wrist seeds), on random reachable poses of the nominal and of a calibrated UR5e.
 
 Per model: solutions found by each, the closed form's solutions the search missed, the
 poses with a miss, the largest flange-position residual (mm) and the time per pose.
@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 from wirecal.solver import ik, ik_ur  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 
-UR5 = Path(__file__).resolve().parents[1] / "examples" / "ur5" / "robot.toml"
+UR5 = Path(__file__).resolve().parents[1] / "examples" / "ur5e" / "robot.toml"
 
 
 def _run(robot, model, poses):

@@ -39,7 +39,7 @@ from wirecal.solver.planner import (  # noqa: E402
 )
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-ARMS = ("viper_s650", "puma560", "abb_irb120", "ur5")
+ARMS = ("viper_s650", "puma560", "abb_irb120", "ur5e")
 TABLE5 = load_errors(
     EXAMPLES / "viper_s650" / "paper_table5_errors.toml",
     load_robot(EXAMPLES / "viper_s650" / "robot.toml"),

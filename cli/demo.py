@@ -1,4 +1,4 @@
-"""``wirecal demo``: the whole chain on the built-in Viper s650 (or the UR5) in the twin."""
+"""``wirecal demo``: the whole chain on the built-in Viper s650 (or the UR5e) in the twin."""
 
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ from wirecal.cli.options import NON_NEGATIVE, SEED
     "--robot",
     type=click.Path(dir_okay=False, exists=True),
     default=None,
-    help="A URScript robot file with its plan.toml beside it (examples/ur5/robot.toml): "
+    help="A URScript robot file with its plan.toml beside it (examples/ur5e/robot.toml): "
     "the URScript chain. Default: the Viper s650 (V+).",
 )
 @click.option("--force", is_flag=True, help="Replace the outputs of an earlier demo.")
@@ -51,7 +51,7 @@ def demo(folder, seed, scale, robot, force):
     controller solver, writes the patch, runs both of the paper's validation procedures
     before and after calibration (with unmodelled errors on), and writes report.html.
 
-    With --robot examples/ur5/robot.toml: the URScript programs for the UR5's plan, run in
+    With --robot examples/ur5e/robot.toml: the URScript programs for the UR5e's plan, run in
     the twin with the log sent over a loopback socket to wirecal receive, identified on
     the PC, the patch and UR's deltas (patch.ur_calibration.conf), and the wire lengths of a second
     run over new points against the nominal and the calibrated model.

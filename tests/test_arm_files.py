@@ -17,8 +17,8 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 # limits. Frames whose origins coincide at every configuration (a spherical wrist's, a
 # shoulder's) count once; frame 0 (the mounting point) is left out. The bounds sit below
 # each arm's sampled minimum: PUMA 346 mm (shoulder to wrist centre at full elbow bend),
-# Viper 59.6 and UR5 27.9 mm (flange beside the shoulder), IRB 120 100 mm.
-FOLD_BOUND_MM = {"puma560": 300.0, "viper_s650": 50.0, "ur5": 20.0, "abb_irb120": 90.0}
+# Viper 59.6 and UR5e 43.5 mm (flange beside the shoulder), IRB 120 100 mm.
+FOLD_BOUND_MM = {"puma560": 300.0, "viper_s650": 50.0, "ur5e": 35.0, "abb_irb120": 90.0}
 
 
 def closest_non_neighbours_mm(robot, lo_deg, hi_deg, samples=20000) -> float:

@@ -23,7 +23,7 @@ from wirecal.solver.simulate import simulate_log
 
 from .conftest import ROOT, VIPER
 
-UR5 = ROOT / "examples" / "ur5"
+UR5 = ROOT / "examples" / "ur5e"
 
 TRUTH = {"th2": 0.3, "th3": -0.2, "d4": 0.4, "a2": -0.3, "th6": 0.1}
 

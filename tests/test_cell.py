@@ -1,6 +1,6 @@
 """The cell (issue 21): the arm's body, the floor and keep-out volumes, checked everywhere.
 
-The shipped UR5 plan is checked with this file's own forward kinematics (Universal Robots'
+The shipped UR5e plan is checked with this file's own forward kinematics (Universal Robots'
 published standard DH parameters, not solver/kinematics); gen, psi --strict and both
 twins are shown refusing or stopping plans that move through the arm, the floor or a box.
 """
@@ -32,17 +32,17 @@ from wirecal.twin.cell import run_measurement
 from .conftest import VIPER
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
-UR5 = EXAMPLES / "ur5"
+UR5 = EXAMPLES / "ur5e"
 
-# Universal Robots' published DH parameters of the UR5 (standard convention), mm and rad
-UR_D = (89.159, 0.0, 0.0, 109.15, 94.65, 82.3)
-UR_A = (0.0, -425.0, -392.25, 0.0, 0.0, 0.0)
+# Universal Robots' published DH parameters of the UR5e (standard convention), mm and rad
+UR_D = (162.5, 0.0, 0.0, 133.3, 99.7, 99.6)
+UR_A = (0.0, -425.0, -392.2, 0.0, 0.0, 0.0)
 UR_ALPHA = (math.pi / 2, 0.0, 0.0, math.pi / 2, -math.pi / 2, 0.0)
 UR_TOOL_MM = (-50.0, 0.0, 40.0)  # the example's wire fixture in the flange frame
 
 
 def ur_points_mm(q_deg: np.ndarray) -> np.ndarray:
-    """Return the UR5's joint origins 1..6 and the tool point (7, 3) at joints q (deg)."""
+    """Return the UR5e's joint origins 1..6 and the tool point (7, 3) at joints q (deg)."""
     T = np.eye(4)
     out = []
     for i, q in enumerate(np.radians(q_deg)):
@@ -73,12 +73,17 @@ def plan_text(robot: str, theta0: list[float], *points: list[float]) -> str:
     )
 
 
-UR_THETA0 = [268, -95, 78, -62, -222, -270]
+UR_THETA0 = [-195, 236, -54, -181, -127, 56]
 VIPER_THETA0 = [0, -90, 210, -90, 0, -90]
 # (robot, theta0, the colliding point, the pair named at the first colliding sample)
 COLLIDING = {
-    "ur5 self": (UR5, UR_THETA0, [268, -95, -168, -348, -222, -270], "link 3 (a3) and link 6 (d6)"),
-    "ur5 floor": (UR5, UR_THETA0, [268, 8, 78, -62, -222, -211], "link 5 (d5) and the floor"),
+    # the elbow folded to 172°: 14° short of straight back, the forearm's end is
+    # √(425² + 392.2² − 2·425·392.2·cos 14°) = 104.7 mm from the shoulder, within the base
+    # column's radius 60 + the forearm's 45
+    "ur5e self": (UR5, UR_THETA0, [-195, 236, 172, -181, -127, 56], "link 1 (d1) and link 3 (a3)"),
+    # the shoulder lowered to 200°: at 210° the tool point is 32 mm high (this file's FK),
+    # inside the fixture's radius 40
+    "ur5e floor": (UR5, UR_THETA0, [-195, 200, -54, -181, -127, 56], "tool fixture and the floor"),
     "viper floor": (VIPER, VIPER_THETA0, [0, 7, 210, -90, 0, -90], "tool fixture and the floor"),
     "viper self": (VIPER, VIPER_THETA0, [0, -159, 21, -90, 0, -90], "link 1 (a1) and link 3 (a3)"),
     "viper box": (
@@ -99,10 +104,10 @@ def colliding_plan(tmp_path: Path, case: str) -> tuple[str, str, str]:
     return str(folder / "robot.toml"), str(plan), pair
 
 
-# ---------- the shipped UR5 plan, checked independently ----------
+# ---------- the shipped UR5e plan, checked independently ----------
 
 
-def test_ur5_plan_plans_every_parameter_inside_its_cell():
+def test_ur5e_plan_plans_every_parameter_inside_its_cell():
     """Every parameter planned; θ0, points, vias and every move: elbow within ±175° and
     every joint origin and the tool point above the table, by this file's own FK."""
     robot = load_robot(UR5 / "robot.toml")
@@ -122,14 +127,15 @@ def test_ur5_plan_plans_every_parameter_inside_its_cell():
     assert lowest >= 40.0
 
 
-def test_ur5_zero_pose_puts_the_wrist_into_the_table():
-    """At all joints 0 the UR5's wrist 2 points down: its origin is d1 − d5 = −5.49 mm,
-    so link 5's capsule (radius 45) reaches 50.49 mm into it, 60.49 mm with the margin."""
+def test_ur5e_zero_pose_keeps_the_wrist_just_above_the_table():
+    """At all joints 0 the UR5e's wrist 2 points down: its origin is d1 − d5 = 62.8 mm high,
+    so link 5's capsule (radius 45) keeps 17.8 mm, 7.8 mm beyond the margin: the closest
+    gap (the UR5's d1 − d5 = −5.49 mm put that capsule 50 mm into the table)."""
     robot = load_robot(UR5 / "robot.toml")
     gaps = robot.cell_gaps(np.zeros(6), np.zeros(3))
-    assert ur_points_mm(np.zeros(6))[4, 2] == pytest.approx(89.159 - 94.65, abs=1e-9)
-    assert gaps.smallest()[0] == pytest.approx(89.159 - 94.65 - 45.0 - 10.0, abs=1e-6)
-    assert gaps.cause(0).startswith("link 5 (d5) and the floor: 50 mm into each other")
+    assert ur_points_mm(np.zeros(6))[4, 2] == pytest.approx(162.5 - 99.7, abs=1e-9)
+    assert gaps.smallest()[0] == pytest.approx(162.5 - 99.7 - 45.0 - 10.0, abs=1e-6)
+    assert gaps.cause(0).startswith("link 5 (d5) and the floor: 18 mm apart, margin 10 mm")
 
 
 def test_capsules_skip_adjacent_and_short_chained_pairs():
@@ -158,10 +164,10 @@ def test_gen_refuses_a_plan_moving_through_a_collision(tmp_path, case):
     assert not out.exists()
 
 
-def test_gen_refuses_a_ur5_point_beyond_the_elbows_body_limit(tmp_path):
+def test_gen_refuses_a_ur5e_point_beyond_the_elbows_body_limit(tmp_path):
     plan = tmp_path / "plan.toml"
-    folded = [268, -95, 190, -62, -222, -270]
-    plan.write_text(plan_text("Universal Robots UR5", UR_THETA0, folded), encoding="utf-8")
+    folded = [-195, 236, 190, -181, -127, 56]
+    plan.write_text(plan_text("Universal Robots UR5e", UR_THETA0, folded), encoding="utf-8")
     r = run_cli("gen", str(UR5 / "robot.toml"), str(plan), "-o", str(tmp_path / "out"))
     assert r.exit_code == 2
     assert "step 1 (th2) point 1: joint 3 = 190 deg is beyond its body limits [-175, 175]" in (
@@ -193,9 +199,12 @@ def test_vplus_twin_stops_a_colliding_move_naming_the_pair(tmp_path, monkeypatch
 
 
 def test_ur_twin_stops_a_colliding_move_naming_the_pair(tmp_path, monkeypatch):
-    """The twin stops where capsules touch (gen refuses at the margin, a3 and d6 first)."""
-    robot_file, plan_file, _ = colliding_plan(tmp_path, "ur5 self")
-    pair = "link 3 (a3) and tool fixture: 0 mm into each other"
+    """The twin stops where capsules touch: the elbow at 166°, the forearm's end 105 mm
+    (60 + 45) from the shoulder (gen refuses within the margin). That end is where link 4
+    (d4, along the joint axes) starts, square to the line to the shoulder: a3 and d4 touch
+    at the same sample, either may be named."""
+    robot_file, plan_file, _ = colliding_plan(tmp_path, "ur5e self")
+    pair = r"link 1 \(d1\) and link (3 \(a3\)|4 \(d4\)): 0 mm into each other"
     robot = load_robot(robot_file)
     plan = load_plan(plan_file, robot)
     monkeypatch.setattr("wirecal.gen.urscript.program.check_cell", lambda *_: None)
@@ -204,8 +213,8 @@ def test_ur_twin_stops_a_colliding_move_naming_the_pair(tmp_path, monkeypatch):
     assert r.programs.mount.status == "completed"
     out = r.programs.run
     assert out.status == "error"
-    assert out.message.startswith("protective stop: movej: move 3 to (268, -95, -168, -348")
-    assert pair in out.message
+    assert out.message.startswith("protective stop: movej: move 3 to (-195, 236, 172, -181")
+    assert re.search(pair, out.message)
 
 
 # ---------- plan: incomplete plans and blocked candidates ----------
@@ -367,9 +376,9 @@ angles = st.lists(st.floats(-180, 180, allow_nan=False), min_size=6, max_size=6)
 
 @settings(max_examples=30, deadline=None)
 @given(q=angles, turn=st.floats(-180, 180, allow_nan=False))
-def test_turning_joint_1_moves_no_gap_of_the_ur5(q, turn):
+def test_turning_joint_1_moves_no_gap_of_the_ur5e(q, turn):
     """Joint 1 turns the whole arm about the vertical axis: the distances between links
-    and to the floor (all the UR5's checks) stay the same, to 1e-6 mm."""
+    and to the floor (all the UR5e's checks) stay the same, to 1e-6 mm."""
     robot = load_robot(UR5 / "robot.toml")
     a = np.array(q)
     b = a + np.array([turn, 0, 0, 0, 0, 0])
@@ -389,7 +398,7 @@ def test_lowering_the_floor_widens_exactly_the_floor_gaps(q, drop):
     np.testing.assert_allclose(gl.gap[~floor], gh.gap[~floor], atol=1e-9)
 
 
-@pytest.mark.parametrize("arm", ["viper_s650", "puma560", "abb_irb120", "ur5"])
+@pytest.mark.parametrize("arm", ["viper_s650", "puma560", "abb_irb120", "ur5e"])
 def test_a_written_robot_file_keeps_its_cell(arm):
     """robot_file_text (import-urdf, the encoder-scale workflow) writes [cell] back."""
     robot = load_robot(EXAMPLES / arm / "robot.toml")

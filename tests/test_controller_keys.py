@@ -17,7 +17,7 @@ from wirecal.solver.robot import Controller
 
 from .conftest import ROOT
 
-UR5 = tomllib.loads((ROOT / "examples" / "ur5" / "robot.toml").read_text())
+UR5 = tomllib.loads((ROOT / "examples" / "ur5e" / "robot.toml").read_text())
 VIPER = tomllib.loads((ROOT / "examples" / "viper_s650" / "robot.toml").read_text())
 
 
@@ -40,9 +40,9 @@ def test_v_plus_when_absent():
     assert robot.encoder.interface == "belt"
 
 
-def test_ur5_example():
+def test_ur5e_example():
     robot = robot_from_dict(_ur(), "r.toml")
-    assert robot.controller == Controller("urscript", "192.168.1.10", 50000)
+    assert robot.controller == Controller("urscript", "192.168.1.10", 50000, software="5.20")
     assert robot.encoder.interface == "pulse"
     assert robot.encoder.channel == 0
     assert robot.encoder.pulse_inputs == (8, 9)
@@ -130,7 +130,7 @@ def test_port_and_host_accepted_exactly_when_valid(port, host):
     valid_host = bool(host) and all(33 <= ord(c) <= 126 and c != '"' for c in host)
     if valid_port and valid_host:
         robot = robot_from_dict(_ur(edit), "r.toml")
-        assert robot.controller == Controller("urscript", host, port)
+        assert robot.controller == Controller("urscript", host, port, software="5.20")
     else:
         problems = _problems(_ur(edit))
         assert all(p.startswith("r.toml: controller.") for p in problems), problems
@@ -169,7 +169,7 @@ def test_solve_writes_ur_deltas_that_read_back(tmp_path):
     from wirecal.solver.formats.patch import read_patch
     from wirecal.solver.formats.robot_file import load_robot
 
-    ur5 = ROOT / "examples" / "ur5"
+    ur5 = ROOT / "examples" / "ur5e"
     runner = CliRunner()
     log, patch = tmp_path / "run.csv", tmp_path / "patch.toml"
     robot_file, plan_file = ur5 / "robot.toml", ur5 / "plan.toml"

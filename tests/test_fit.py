@@ -24,7 +24,7 @@ from wirecal.solver.fit_synth import synthetic_table
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.kinematics import tool_position
 
-ARMS = ("viper_s650", "abb_irb120", "ur5")
+ARMS = ("viper_s650", "abb_irb120", "ur5e")
 
 
 def _robot(arm):
@@ -108,7 +108,7 @@ def test_single_session_fits_one_offset_and_lists_the_jumps():
 
 
 def test_one_session_and_no_snags_gives_one_offset_and_no_outliers():
-    robot = _robot("ur5")
+    robot = _robot("ur5e")
     syn = synthetic_table(robot, 300, seed=4, sessions=1, snags=0, typos=0)
     core = fit_table(robot, syn.table, FitOptions(holdout="none")).main.core
     assert core.starts == (0,)
@@ -212,7 +212,7 @@ def test_length_jacobian_matches_finite_differences(arm, scale, seed, anchor):
 def test_quantisation_floor_matches_monte_carlo_rounding():
     """The floor's per-row σ against lengths recomputed from joints shifted by uniform
     rounding errors (forward kinematics only, not the floor's Jacobian)."""
-    robot = _robot("ur5")
+    robot = _robot("ur5e")
     base = point_model(robot)
     rng = np.random.default_rng(1)
     q_deg = rng.uniform(-120, 120, (5, 6))

@@ -240,7 +240,7 @@ def test_copy_of_example_is_clean(tmp_path):
 
 # -- the fault matrix's defect list (issue 22 item 4) ------------------------------------
 
-UR5 = VIPER.parent / "ur5"
+UR5 = VIPER.parent / "ur5e"
 
 
 def test_report_controller_for_a_ur_robot(tmp_path):

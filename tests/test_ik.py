@@ -90,7 +90,7 @@ def test_unreachable_pose_has_no_solution(viper):
 
 # --- UR-type arms: the closed form of solver/ik_ur.py ----------------------------------------
 
-UR5_FILE = Path(__file__).resolve().parents[1] / "examples" / "ur5" / "robot.toml"
+UR5_FILE = Path(__file__).resolve().parents[1] / "examples" / "ur5e" / "robot.toml"
 UR5 = load_robot(UR5_FILE)
 UR5_ERRORS = {"th2": 0.3, "th4": -0.2, "a2": 0.8, "a3": -0.5, "d4": 0.4, "d5": 0.3, "al3": 0.1}
 
@@ -187,9 +187,9 @@ def test_ur_generic_pose_has_eight_named_solutions():
 
 
 @pytest.mark.slow  # the numeric search takes about a second per pose
-@pytest.mark.parametrize("arm", ["ur5", "viper"])
+@pytest.mark.parametrize("arm", ["ur5e", "viper"])
 def test_numeric_search_finds_only_closed_form_solutions(arm, viper):
-    robot = UR5 if arm == "ur5" else viper
+    robot = UR5 if arm == "ur5e" else viper
     model = robot.nominal
     rng = np.random.default_rng(5)
     lo, hi = robot.joint_min_deg, robot.joint_max_deg

@@ -53,7 +53,7 @@ def test_wheel_contains_templates_under_the_namespace(tmp_path):
     assert "wirecal/py.typed" in names  # PEP 561: the package's type hints are for users too
     assert "wirecal/__init__.py" in names
     assert "wirecal/examples/viper_s650/robot.toml" in names
-    assert "wirecal/examples/ur5/robot.toml" in names
+    assert "wirecal/examples/ur5e/robot.toml" in names
     assert "wirecal/templates/vplus/wirecal.v2.j2" in names
     top = {n.split("/")[0] for n in names}
     assert top <= {"wirecal", next(t for t in top if t.endswith(".dist-info"))}, top

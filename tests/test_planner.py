@@ -37,7 +37,7 @@ THETA0 = {
     "viper_s650": [-72, -156, 235, 3, 64, 41],
     "puma560": [112, -123, -32, 8, -53, -288],
     "abb_irb120": [21, 5, -36, -43, -43, -184],
-    "ur5": [268, -95, 78, -62, -222, -270],  # inside its [cell] (issue 21)
+    "ur5e": [-195, 236, -54, -181, -127, 56],  # inside its [cell] (issue 21)
 }
 OPT = PlanOptions()
 STEPWISE = PlanOptions(method="stepwise")

@@ -35,7 +35,7 @@ from wirecal.solver.simulate import simulate_log
 
 from .conftest import ROOT
 
-UR5 = ROOT / "examples" / "ur5"
+UR5 = ROOT / "examples" / "ur5e"
 ROBOT, PLAN = str(UR5 / "robot.toml"), str(UR5 / "plan.toml")
 
 

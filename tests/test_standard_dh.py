@@ -21,13 +21,13 @@ from wirecal.solver.standard_dh import flange_pose, from_modified, to_modified
 from wirecal.solver.standard_dh import tool_position as std_tool_position
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-UR5 = load_robot(EXAMPLES / "ur5" / "robot.toml")
+UR5 = load_robot(EXAMPLES / "ur5e" / "robot.toml")
 
-# Universal Robots' published UR5 DH (standard convention), mm and degrees, typed here
-# from the data sheet values quoted in examples/ur5/robot.toml — not computed by the code.
+# Universal Robots' published UR5e DH (standard convention), mm and degrees, typed here
+# from the data sheet values quoted in examples/ur5e/robot.toml — not computed by the code.
 UR5_PUBLISHED = {
-    "d": [89.159, 0, 0, 109.15, 94.65, 82.3],
-    "a": [0, -425.0, -392.25, 0, 0, 0],
+    "d": [162.5, 0, 0, 133.3, 99.7, 99.6],
+    "a": [0, -425.0, -392.2, 0, 0, 0],
     "alpha_deg": [90, 0, 0, 90, -90, 0],
 }
 
@@ -49,10 +49,10 @@ def test_ur5_nominal_is_urs_published_table():
 
 
 def test_home_pose_by_hand():
-    # UR5 at q = 0 in standard DH: x = a2 + a3 = -817.25, y = -(d4 + d6) = -191.45,
-    # z = d1 - d5 = -5.491 (flange), worked out on paper from the published table.
+    # UR5e at q = 0 in standard DH: x = a2 + a3 = -817.2, y = -(d4 + d6) = -232.9,
+    # z = d1 - d5 = 62.8 (flange), worked out on paper from the published table.
     T = flange_pose(from_modified(UR5), np.zeros((1, 6)))
-    np.testing.assert_allclose(T[0, :3, 3], [-817.25, -191.45, 89.159 - 94.65], atol=1e-9)
+    np.testing.assert_allclose(T[0, :3, 3], [-817.2, -232.9, 162.5 - 99.7], atol=1e-9)
 
 
 names = list(P.all_names(6, with_tool=True))

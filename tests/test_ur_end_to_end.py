@@ -1,4 +1,4 @@
-"""The UR5 end to end through the command line: gen → twin → wirecal receive → solve → demo.
+"""The UR5e end to end through the command line: gen → twin → wirecal receive → solve → demo.
 
 The twin runs the very .script files ``wirecal gen`` wrote; their log goes over a real
 loopback socket to a ``wirecal receive`` process.
@@ -25,7 +25,7 @@ from wirecal.twin.ur_cell import URCell, run_ur_programs
 
 pytestmark = pytest.mark.slow  # about 5 s each on a loaded machine
 
-ROBOT, PLAN = "examples/ur5/robot.toml", "examples/ur5/plan.toml"
+ROBOT, PLAN = "examples/ur5e/robot.toml", "examples/ur5e/plan.toml"
 
 
 def cli(*args: str):
@@ -107,16 +107,17 @@ def test_gen_twin_receive_solve(tmp_path):
     assert deltas["delta_theta"][1] == pytest.approx(np.radians(joint["th2"]), abs=1e-9)
 
 
-def test_demo_on_the_ur5(tmp_path):
+def test_demo_on_the_ur5e(tmp_path):
     folder = tmp_path / "demo"
     r = cli("demo", "--robot", ROBOT, "-o", str(folder), "--seed", "2")
     assert r.exit_code == 0, r.output
     rows = {line[:38].strip(): line[38:].split() for line in r.output.splitlines()}
     before, after, reduction = rows["wire length at new points, mean (mm)"]
     assert float(before) > 0.2
-    # 0.01 mm noise, 0.02 mm repeatability, compliance: 0.092 mm around the plan re-designed
-    # inside the UR5's cell (issue 21; under 0.06 around the old θ0 with the elbow at 226°)
-    assert float(after) < 0.1
+    # 0.01 mm noise, 0.02 mm repeatability, compliance: 0.131 mm at the UR5e's new points,
+    # where the true model itself leaves 0.133 mm (0.021 without the gravity sag): the floor
+    # no kinematic parameter absorbs (the UR5 (CB3) example's was 0.094)
+    assert float(after) < 0.15
     assert int(reduction.rstrip("%")) >= 80
     _, tool_after, _ = rows["tool-point error vs truth, mean (mm)"]
     assert float(tool_after) < 0.05

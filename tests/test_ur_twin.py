@@ -1,4 +1,4 @@
-"""The UR5's generated URScript programs in the twin: the run, the wraps, the fault matrix.
+"""The UR5e's generated URScript programs in the twin: the run, the wraps, the fault matrix.
 
 Every run goes over a real loopback socket to :func:`wirecal.app.receive.receive` (the
 function behind ``wirecal receive``), which keeps the rows of an incomplete run in its
@@ -27,12 +27,12 @@ HEADER_LINES = 6  # the wirecal-log header and the column line
 
 @pytest.fixture(scope="module")
 def ur5():
-    return load_robot("examples/ur5/robot.toml")
+    return load_robot("examples/ur5e/robot.toml")
 
 
 @pytest.fixture(scope="module")
 def ur5_plan(ur5):
-    return load_plan("examples/ur5/plan.toml", ur5)
+    return load_plan("examples/ur5e/plan.toml", ur5)
 
 
 @pytest.fixture(scope="module")
@@ -60,8 +60,8 @@ def test_run_completes_and_the_log_identifies_the_truth(ur5, ur5_plan, texts, tr
     assert m.complete
     est = solve(ur5, ur5_plan, m).estimates["joint"].as_dict()
     assert max(abs(v - truth.get(k, 0.0)) for k, v in est.items()) < 0.05  # deg, mm
-    # the twin's clock: 62 moves at 36 deg/s plus the settle and the readings (the plan
-    # re-designed inside the UR5's cell, issue 21: shorter moves than the old plan's 51)
+    # the twin's clock: 62 moves at 36 deg/s plus the settle and the readings (the UR5e's
+    # plan, designed inside its cell: 384 s, bench/bench_ur5e.py)
     assert 300 < r.programs.cell.clock < 600
 
 
@@ -116,9 +116,12 @@ def test_fault_socket_dropped_mid_run(ur5, ur5_plan, texts, truth, tmp_path):
     assert r.received.stopped == "the sender closed the connection before the end marker"
     assert not r.received.log.exists()
     m = load_measurements(r.received.journal, ur5_plan, ur5)
-    # 30 lines: 6 header lines, then steps 1-5 (a zero row and 5, 2, 2, 8, 2 points)
-    assert m.missing_text() == "steps 6–10 (all points)"
-    assert summary(r.received, ur5, ur5_plan)[-1] == "missing points: steps 6–10 (all points)"
+    # 30 lines: 6 header lines, steps 1-5 (a zero row and 2, 4, 2, 5, 2 points: 20 rows),
+    # then step 6's zero row and its first 3 of 7 points
+    assert m.missing_text() == "step 6 points 4–7; steps 7–10 (all points)"
+    assert summary(r.received, ur5, ur5_plan)[-1] == (
+        "missing points: step 6 points 4–7; steps 7–10 (all points)"
+    )
 
 
 def test_fault_encoder_not_enabled_counts_never_change(ur5, ur5_plan, texts, truth, tmp_path):
@@ -141,12 +144,10 @@ def test_fault_point_beyond_a_joint_limit(ur5, ur5_plan, texts, truth, tmp_path)
     r = run(ur5, ur5_plan, texts, truth, tmp_path, faults=Faults(joint_max_deg=limits))
     out = r.programs.run
     assert out.status == "error"
-    assert out.message == "movej: joint 4 target 0.570 deg is beyond its limit [-355, 0] deg"
+    assert out.message == "movej: joint 4 target 0.870 deg is beyond its limit [-355, 0] deg"
     m = load_measurements(r.received.journal, ur5_plan, ur5)
-    assert m.missing_text() == "step 4 points 3–8; steps 5–10 (all points)"  # j4 0.57
-    assert summary(r.received, ur5, ur5_plan)[-1].endswith(
-        "step 4 points 3–8; steps 5–10 (all points)"
-    )
+    assert m.missing_text() == "steps 4–10 (all points)"  # j4 0.87 at step 4's first point
+    assert summary(r.received, ur5, ur5_plan)[-1].endswith("steps 4–10 (all points)")
 
 
 def test_fault_wire_slip(ur5, ur5_plan, texts, truth, tmp_path):
@@ -179,7 +180,7 @@ def test_the_log_carries_the_controller_solvers_result(ur5, ur5_plan, texts, tru
     ref = solve(ur5, ur5_plan, m).estimates["stepwise"].as_dict()
     assert list(result) == list(ref)
     assert max(abs(result[n] - v) for n, v in ref.items()) <= 1e-5
-    assert "# solver: step 10 of 10: a2 identified" in r.programs.run.console
+    assert "# solver: step 10 of 10: d4 identified" in r.programs.run.console  # the last
     ctl = compare_controller(solve(ur5, ur5_plan, m), tmp_path / "ctl")
     # the same program on the log's readings: the count split between base and offset
     # differs (floor of the logged count), hence 32-bit roundings in the last decimal
@@ -225,7 +226,7 @@ def test_cli_simulate_controller_runs_the_urscript_programs(tmp_path):
     from wirecal.cli.main import main
 
     log = tmp_path / "run.csv"
-    args = ["simulate", "examples/ur5/robot.toml", "examples/ur5/plan.toml", "-o", str(log)]
+    args = ["simulate", "examples/ur5e/robot.toml", "examples/ur5e/plan.toml", "-o", str(log)]
     r = CliRunner().invoke(
         main, [*args, "--random", "1", "--seed", "4", "--controller", "--slip", "4:0.5"]
     )
@@ -233,5 +234,5 @@ def test_cli_simulate_controller_runs_the_urscript_programs(tmp_path):
     assert "the controller program stopped: The zero reading at theta0 jumped" in r.output
     assert "at step 5 zero reading at theta0 (stopped in wc_run line" in r.output
     text = log.read_text()
-    assert text.startswith("# wirecal-log 2\n# robot: Universal Robots UR5\n")
+    assert text.startswith("# wirecal-log 2\n# robot: Universal Robots UR5e\n")
     assert text.splitlines()[-1].startswith("zero,5,0,")  # the rows up to the stop

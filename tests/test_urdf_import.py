@@ -352,7 +352,7 @@ def test_bad_options_are_refused_writing_nothing(tmp_path, args, message):
 
 
 def _robot_doc() -> dict:
-    return tomllib.loads((Path(__file__).parents[1] / "examples/ur5/robot.toml").read_text())
+    return tomllib.loads((Path(__file__).parents[1] / "examples/ur5e/robot.toml").read_text())
 
 
 @pytest.mark.parametrize(

@@ -31,9 +31,9 @@ from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.run_token import run_token, token_line
 
 ROOT = Path(__file__).resolve().parent.parent
-UR5 = ROOT / "examples" / "ur5"
+UR5 = ROOT / "examples" / "ur5e"
 VIPER = ROOT / "examples" / "viper_s650"
-GOLDEN = Path(__file__).parent / "golden" / "ur5"
+GOLDEN = Path(__file__).parent / "golden" / "ur5e"
 NO_SOLVER = UrOptions(solver=False)  # the rewrite into Python runs the rows' path only; wc_solve
 # runs in the URScript twin with 32-bit floats (tests/test_urscript_solver.py)
 

@@ -188,7 +188,7 @@ def test_int_literals_pass_exactly_inside_int32(n):
 
 # ---------- [controller] software: generation uses only what that version has ----------
 def _ur5_with(software: str | None):
-    """The UR5 example's robot (dict) and plan, with ``software`` declared (or not)."""
+    """The UR5e example's robot (dict) and plan, with ``software`` declared instead."""
     import copy
     import tomllib
     from pathlib import Path
@@ -196,7 +196,7 @@ def _ur5_with(software: str | None):
     from wirecal.solver.formats.plan_file import load_plan
     from wirecal.solver.formats.robot_file import robot_from_dict
 
-    ur5 = Path(__file__).resolve().parents[1] / "examples" / "ur5"
+    ur5 = Path(__file__).resolve().parents[1] / "examples" / "ur5e"
     data = copy.deepcopy(tomllib.loads((ur5 / "robot.toml").read_text()))
     if software is not None:
         data["controller"]["software"] = software
@@ -261,9 +261,14 @@ def test_software_is_written_back():
 
 
 def test_gen_warns_when_the_software_is_not_declared(tmp_path):
+    from pathlib import Path
+
+    example = Path("examples/ur5e/robot.toml").read_text(encoding="utf-8")
+    assert example.count('\nsoftware = "5.20"\n') == 1
+    robot = tmp_path / "robot.toml"
+    robot.write_text(example.replace('\nsoftware = "5.20"\n', "\n"), encoding="utf-8")
     out = CliRunner().invoke(
-        main,
-        ["gen", "examples/ur5/robot.toml", "examples/ur5/plan.toml", "-o", str(tmp_path)],
+        main, ["gen", str(robot), "examples/ur5e/plan.toml", "-o", str(tmp_path / "out")]
     )
     assert out.exit_code == 0, out.output
     assert "[controller] software not declared" in out.output

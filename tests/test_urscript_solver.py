@@ -26,8 +26,8 @@ from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 
 ROOT = Path(__file__).resolve().parent.parent
-UR5 = ROOT / "examples" / "ur5"
-GOLDEN = Path(__file__).parent / "golden" / "ur5" / "wc_run.script"
+UR5 = ROOT / "examples" / "ur5e"
+GOLDEN = Path(__file__).parent / "golden" / "ur5e" / "wc_run.script"
 AGREEMENT = 1e-5  # deg/mm: the pinned bound (measured: 2e-6 over 12 truths)
 
 

@@ -191,7 +191,7 @@ def test_halt_and_line_of_the_stop():
 # ---------- the UR cell ----------
 @pytest.fixture(scope="module")
 def ur5():
-    return load_robot("examples/ur5/robot.toml")
+    return load_robot("examples/ur5e/robot.toml")
 
 
 def cell_for(robot, tmp_path, **kw) -> URCell:

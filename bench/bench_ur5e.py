@@ -1,13 +1,13 @@
-"""The UR5: Monte Carlo on its shipped plan, and the URScript chain's speed in the twin.
+"""The UR5e: Monte Carlo on its shipped plan, and the URScript chain's speed in the twin.
 
-Many simulated calibrations of the UR5 with its plan (examples/ur5/plan.toml), σ = 0.01 mm
+Many simulated calibrations of the UR5e with its plan (examples/ur5e/plan.toml), σ = 0.01 mm
 per reading, the encoder's quantisation and the zero readings: per method the parameter
 RMS error and the tool-point error over 1,000 random configurations within the joint
 limits, beside the Cramér–Rao bound of the plan by the same statistic. Then the time of
 one measurement run of the generated wc_run in the twin (the log through wirecal receive
-over loopback) and of the whole ``wirecal demo --robot examples/ur5/robot.toml``.
+over loopback) and of the whole ``wirecal demo --robot examples/ur5e/robot.toml``.
 
-    python bench/bench_ur5.py [--trials N]
+    python bench/bench_ur5e.py [--trials N]
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 from wirecal.solver.formats.truth import random_errors  # noqa: E402
 
-UR5 = Path(__file__).resolve().parents[1] / "examples" / "ur5"
+UR5E = Path(__file__).resolve().parents[1] / "examples" / "ur5e"
 
 
 def table(title: str, mc) -> None:
@@ -54,11 +54,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials", type=int, default=500)
     args = ap.parse_args()
-    robot = load_robot(UR5 / "robot.toml")
-    plan = load_plan(UR5 / "plan.toml", robot)
+    robot = load_robot(UR5E / "robot.toml")
+    plan = load_plan(UR5E / "plan.toml", robot)
     uniform = np.random.default_rng(1).uniform(-1, 1, (args.trials, len(plan.order)))
     table(
-        f"UR5, its plan ({plan.n_points} points), errors uniform within ±1 deg / ±1 mm",
+        f"UR5e, its plan ({plan.n_points} points), errors uniform within ±1 deg / ±1 mm",
         montecarlo.run(robot, plan, uniform, seed=3),
     )
 
@@ -78,8 +78,8 @@ def main() -> None:
             f"{1e3 * np.median(times):.0f} ms (median of 5) for {clock:.0f} s of robot time"
         )
         t0 = time.perf_counter()
-        run_demo(Path(tmp) / "demo", robot=UR5 / "robot.toml")
-        print(f"  wirecal demo --robot examples/ur5/robot.toml: {time.perf_counter() - t0:.1f} s")
+        run_demo(Path(tmp) / "demo", robot=UR5E / "robot.toml")
+        print(f"  wirecal demo --robot examples/ur5e/robot.toml: {time.perf_counter() - t0:.1f} s")
 
 
 if __name__ == "__main__":
