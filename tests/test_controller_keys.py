@@ -115,6 +115,16 @@ def test_pulse_inputs_only_for_the_pulse_decoder():
     assert any('is for interface = "pulse" (URScript) only' in p for p in problems), problems
 
 
+def test_interface_checked_against_the_language_when_another_controller_key_is_wrong():
+    def edit(d):
+        d["controller"]["host"] = "my pc"
+        d["encoder"]["interface"] = "belt"
+
+    problems = _problems(_ur(edit))
+    assert any("controller.host: is 'my pc'" in p for p in problems), problems
+    assert any("encoder.interface: is 'belt', which the Universal Robots" in p for p in problems)
+
+
 @pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(

@@ -28,7 +28,7 @@ FOLDERS = {
     "cli": "wirecal.cli",
     "wirecal": "wirecal",
 }
-"""Source folder → the package it installs as (pyproject's package-dir)."""
+"""Source folder → the package it installs as (the links in wirecal/)."""
 
 LAYERS = {
     "wirecal.solver": 0,

@@ -1,0 +1,219 @@
+"""Write a robot file: the text :mod:`wirecal.solver.formats.robot_file` reads back.
+
+``wirecal import-urdf`` writes its robot file with :func:`robot_file_text`; numbers are the
+shortest decimals that read back to the value.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+
+from wirecal.solver.cell import CellModel
+from wirecal.solver.exit_geometry import Exit, Pulley
+from wirecal.solver.robot import DEFAULT_GRAVITY_SAG_DEG_PER_M, Encoder, Robot, UrdfSource
+
+TIDY = 1e-11
+"""Numbers written to a robot file are the shortest decimals within TIDY (mm or deg) of the
+value: 425.0 rather than 425.0000000000001 (a change of the tip far below 1e-9 mm)."""
+
+
+LIMIT_TIDY = 1e-7
+"""Joint limits and speeds are written to within LIMIT_TIDY (deg, deg/s): a URDF's limits in
+radians with 11 digits give 185.00000000003°; 185.0 is what the vendor meant."""
+
+
+def _num(x: float, tidy: float = TIDY) -> str:
+    """Return the shortest decimal within ``tidy`` of ``x`` (−0 written as 0)."""
+    x = float(x)
+    for digits in range(13):
+        r = round(x, digits)
+        if abs(r - x) <= tidy:
+            return repr(r + 0.0)
+    return repr(x)
+
+
+def _exit_lines(exit_: Exit | None) -> list[str]:
+    """Return the robot file lines of an exit (none for the ideal point exit)."""
+    if exit_ is None:
+        return []
+    lines = [
+        f"exit = {json.dumps(exit_.kind)}",
+        "axis = [" + ", ".join(_num(c) for c in exit_.axis) + "]",
+    ]
+    if isinstance(exit_, Pulley):
+        return [*lines, f"pulley_radius_mm = {_num(exit_.radius_mm)}"]
+    return [
+        *lines,
+        f"max_exit_deg = {_num(exit_.max_exit_deg)}",
+        f"exit_edge_radius_mm = {_num(exit_.edge_radius_mm)}",
+    ]
+
+
+def _scale_lines(enc: Encoder) -> list[str]:
+    """Return the ``[encoder]`` lines of the scale, the reference gauge and the drum."""
+    lines = [f"scale_tolerance_ppm = {_num(enc.scale_tolerance_ppm)}"]
+    if enc.reference_length_mm is not None:
+        lines += [
+            f"reference_length_mm = {_num(enc.reference_length_mm)}",
+            f"reference_uncertainty_mm = {_num(enc.reference_uncertainty_mm)}",
+            f"reference_repeats = {enc.reference_repeats}",
+        ]
+    lines.append(
+        f"temperature_coefficient_ppm_per_k = {_num(enc.temperature_coefficient_ppm_per_k)}"
+    )
+    return lines
+
+
+def _cell_lines(cell: CellModel) -> list[str]:
+    """Return the robot file lines of ``[cell]`` (the floor and margin always written)."""
+
+    def vec(values) -> str:
+        return "[" + ", ".join(_num(v) for v in values) + "]"
+
+    lines = [
+        "",
+        "[cell]",
+        "# the mounting plane in frame 0, and the gap kept from it, the volumes and the arm itself",
+        f"floor_z_mm = {_num(cell.floor_z_mm)}",
+        f"margin_mm = {_num(cell.margin_mm)}",
+    ]
+    for key, limits in (("body_min_deg", cell.body_min_deg), ("body_max_deg", cell.body_max_deg)):
+        if limits is not None:
+            lines.append(f"{key} = {vec(limits)}")
+    if cell.housing is not None:
+        h = cell.housing
+        lines += [
+            "",
+            "[cell.encoder_housing]",
+            f"direction = {vec(h.direction)}",
+            f"length_mm = {_num(h.length_mm)}",
+            f"radius_mm = {_num(h.radius_mm)}",
+        ]
+    for b in cell.boxes:
+        lines += ["", "[[cell.box]]", f"name = {json.dumps(b.name, ensure_ascii=False)}"]
+        lines += [f"min_mm = {vec(b.min_mm)}", f"max_mm = {vec(b.max_mm)}"]
+    for w in cell.half_spaces:
+        lines += ["", "[[cell.half_space]]", f"name = {json.dumps(w.name, ensure_ascii=False)}"]
+        lines += [f"point_mm = {vec(w.point_mm)}", f"normal = {vec(w.normal)}"]
+    return lines
+
+
+def robot_file_text(
+    robot: Robot,
+    *,
+    header: list[str],
+    row_notes: list[str],
+    encoder_note: str,
+    urdf_source: str | None = None,
+    speed_notes: Sequence[str] = (),
+    geometry_notes: Sequence[str] | None = None,
+    tables: Sequence[str] = (),
+    write_cell: bool = True,
+) -> str:
+    """Return a robot file for ``robot`` that reads back to the same numbers.
+
+    A robot file for ``robot`` that
+    :func:`~wirecal.solver.formats.robot_file.load_robot` reads back to the same numbers
+    (to :data:`TIDY`). ``header`` lines become comments at the top; ``row_notes``
+    (one per joint) comment the DH rows and limits; ``urdf_source`` is written as given
+    (relative to the robot file's folder). ``speed_notes`` comment the joint speeds;
+    the link radii are written as a ``[geometry]`` table with ``geometry_notes`` as its
+    comments, and the cell model as ``[cell]`` unless not ``write_cell`` (the caller writes
+    its own, or none, in ``tables``: lines of further tables, appended as given).
+    """
+    dh = robot.dh_deg()
+
+    def vec(values, tidy: float = TIDY) -> str:
+        return "[" + ", ".join(_num(v, tidy) for v in values) + "]"
+
+    lines = [f"# {h}" if h else "#" for h in header]
+    lines += [
+        f"name = {json.dumps(robot.name, ensure_ascii=False)}",
+        "",
+        "[kinematics]",
+        'convention = "craig"',
+        "# rows: [alpha_deg, a_mm, theta_offset_deg, d_mm]",
+        "dh = [",
+        *(f"    {vec(row)},  # {note}" for row, note in zip(dh, row_notes, strict=True)),
+        "]",
+        f"joint_min_deg = {vec(robot.joint_min_deg, LIMIT_TIDY)}",
+        f"joint_max_deg = {vec(robot.joint_max_deg, LIMIT_TIDY)}",
+        *(f"# {line}" for line in speed_notes),
+        f"joint_speed_deg_s = {vec(robot.joint_speed_deg_s, LIMIT_TIDY)}",
+        *([] if robot.joint_speed_confirmed else ["joint_speed_confirmed = false"]),
+        "",
+        "[tool]",
+        "# wire attachment point in the last joint's frame",
+        f"point_mm = {vec(robot.tool_point)}",
+        "",
+        "[encoder]",
+        f"# {encoder_note}",
+        f"mm_per_count = {_num(robot.encoder.mm_per_count)}",
+        f"range_mm = {_num(robot.encoder.range_mm)}",
+        f"counter_bits = {robot.encoder.counter_bits}",
+        f"interface = {json.dumps(robot.encoder.interface)}",
+        f"channel = {robot.encoder.channel}",
+        f"belt_mode = {robot.encoder.belt_mode}",
+        *(
+            [f"pulse_inputs = [{robot.encoder.pulse_inputs[0]}, {robot.encoder.pulse_inputs[1]}]"]
+            if robot.encoder.interface == "pulse"
+            else []
+        ),
+        *_exit_lines(robot.encoder.exit),
+        *(
+            f"{key} = {_num(value)}"
+            for key, value in (
+                ("max_wire_speed_mm_s", robot.encoder.max_wire_speed_mm_s),
+                ("max_wire_accel_mm_s2", robot.encoder.max_wire_accel_mm_s2),
+            )
+            if value is not None
+        ),
+        *_scale_lines(robot.encoder),
+        "",
+        "[controller]",
+        f"language = {json.dumps(robot.controller.language)}",
+        *(
+            [f"software = {json.dumps(robot.controller.software)}"]
+            if robot.controller.software
+            else []
+        ),
+        *([f"host = {json.dumps(robot.controller.host)}"] if robot.controller.host else []),
+        *([f"port = {robot.controller.port}"] if robot.controller.port else []),
+        *([f"key = {json.dumps(robot.controller.key)}"] if robot.controller.key else []),
+        "",
+        "[calibration]",
+        "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
+    ]
+    if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M:
+        lines.append(f"gravity_sag_deg_per_m = {_num(robot.gravity_sag_deg_per_m)}")
+    if robot.link_radius_mm is not None:
+        lines += ["", "[geometry]", *(f"# {line}" for line in geometry_notes or ())]
+        lines.append(f"link_radius_mm = {vec(robot.link_radius_mm)}")
+    if write_cell:
+        lines += _cell_lines(robot.cell)
+    if urdf_source is not None and robot.urdf is not None:
+        lines += ["", *_urdf_lines(robot.urdf, urdf_source)]
+    for line in tables:
+        lines.append(line)
+    return "\n".join(lines) + "\n"
+
+
+def _urdf_lines(urdf: UrdfSource, source: str) -> list[str]:
+    """Return the ``[urdf]`` table's lines (``source`` as the file should hold it)."""
+    lines = [
+        "[urdf]",
+        "# the URDF this file was imported from; export-urdf changes only its joint origins",
+        f"source = {json.dumps(source, ensure_ascii=False)}",
+        f"base_link = {json.dumps(urdf.base_link, ensure_ascii=False)}",
+        f"tip_link = {json.dumps(urdf.tip_link, ensure_ascii=False)}",
+    ]
+    if urdf.parallel_tol_deg is not None:
+        lines.append(f"parallel_tol_deg = {_num(urdf.parallel_tol_deg)}")
+    if urdf.wire_point_mm is not None:
+        point = ", ".join(_num(v) for v in urdf.wire_point_mm)
+        lines += [
+            "# the wire attachment point in the tip link's frame (import-urdf --wire-point-mm)",
+            f"wire_point_mm = [{point}]",
+        ]
+    return lines
