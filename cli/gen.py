@@ -10,6 +10,7 @@ from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
 from wirecal.gen.urscript.program import UrOptions, pc_address, scripts, write_scripts
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
+from wirecal.lang.urscript.versions import NEEDED
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import cone_problems
 from wirecal.solver.formats.patch import read_patch
@@ -19,7 +20,6 @@ from wirecal.solver.formats.run_token import NO_KEY, run_token
 from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.robot import LANGUAGES, language_mismatch
 from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
-from wirecal.twin.urscript.versions import NEEDED
 
 _D = RunParameters()
 _G = GenOptions()

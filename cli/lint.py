@@ -7,11 +7,11 @@ import sys
 import click
 
 from wirecal.cli.main import user_errors
+from wirecal.lang.urscript.parser import parse_program
+from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import read_input
 from wirecal.solver.robot import SOFTWARE_PATTERN
-from wirecal.twin.urscript.parser import parse_program
-from wirecal.twin.vplus.parser import parse_module
 
 
 @click.command()

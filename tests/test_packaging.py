@@ -44,12 +44,13 @@ def test_wheel_contains_templates_under_the_namespace(tmp_path):
     assert "wirecal/templates/__init__.py" in names
     assert "wirecal/solver/kinematics.py" in names
     assert "wirecal/cli/main.py" in names
-    assert "wirecal/twin/vplus/vplus.lark" in names
+    assert "wirecal/lang/vplus/vplus.lark" in names
     assert "wirecal/gen/urscript/facts.py" in names
     assert "wirecal/app/receive.py" in names
-    assert "wirecal/twin/vplus/keywords.csv" in names
-    assert "wirecal/twin/urscript/parser.py" in names
-    assert "wirecal/twin/urscript/urscript.lark" in names
+    assert "wirecal/lang/vplus/keywords.csv" in names
+    assert "wirecal/lang/urscript/parser.py" in names
+    assert "wirecal/lang/urscript/urscript.lark" in names
+    assert "wirecal/lang/urscript/functions.csv" in names
     assert "wirecal/py.typed" in names  # PEP 561: the package's type hints are for users too
     assert "wirecal/__init__.py" in names
     assert "wirecal/examples/viper_s650/robot.toml" in names

@@ -191,9 +191,9 @@ def test_the_log_carries_the_controller_solvers_result(ur5, ur5_plan, texts, tru
 def test_wc_check_shows_the_pulled_wire_only_when_decoded(
     ur5, ur5_plan, texts, tmp_path, inputs, moves
 ):
+    from wirecal.lang.urscript.parser import parse_program
     from wirecal.twin.ur_cell import URCell
     from wirecal.twin.urscript.interp import Interpreter
-    from wirecal.twin.urscript.parser import parse_program
 
     cell = URCell(
         ur5, {}, ur5_plan.theta0_deg, tmp_path, noise_mm=0.0, pulse_inputs=inputs,

@@ -10,12 +10,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.lang.urscript.parser import parse_program
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.twin.cell import Faults
 from wirecal.twin.ur_cell import URCell
 from wirecal.twin.urscript.interp import Interpreter
-from wirecal.twin.urscript.parser import parse_program
 
 
 def program(*body: str, name: str = "p") -> str:

@@ -2,7 +2,7 @@
 
 The language rules a controller checks on load (program format, declarations first,
 15-character names, keywords, labels, type prefixes) are checked by the parser of the
-digital twin (:mod:`wirecal.twin.vplus.parser`), which the generator runs on its own output.
+digital twin (:mod:`wirecal.lang.vplus.parser`), which the generator runs on its own output.
 wirecal also keeps lines within 80 characters (the terminal line limit, User's Guide
 p. 202).
 """

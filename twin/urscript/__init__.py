@@ -1,5 +1,4 @@
-"""URScript front end of the twin.
+"""URScript controller of the twin: the interpreter with the UR controller's 32-bit numbers.
 
-The lark grammar, the parser and checker (the same one ``wirecal lint`` runs on ``.script``
-files) and the interpreter with the UR controller's 32-bit numbers.
+The grammar, parser and checker it runs are the front end in :mod:`wirecal.lang.urscript`.
 """

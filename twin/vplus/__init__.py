@@ -1,5 +1,4 @@
-"""V+/eV+ front end of the twin.
+"""V+/eV+ controller of the twin: the interpreter with V+ semantics.
 
-The lark grammar, the parser and checker (the same one the generator runs on its own
-output), and the interpreter with V+ semantics.
+The grammar, parser and checker it runs are the front end in :mod:`wirecal.lang.vplus`.
 """

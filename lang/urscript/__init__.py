@@ -1,0 +1,1 @@
+"""Universal Robots URScript: the front end (grammar, parser, checker, function table)."""

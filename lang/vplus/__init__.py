@@ -1,0 +1,1 @@
+"""Adept/Omron V+ and eV+: the front end (grammar, parser, checker, keyword table)."""
