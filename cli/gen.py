@@ -6,10 +6,12 @@ from dataclasses import replace
 
 import click
 
+from wirecal.app.languages import language_mismatch
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
 from wirecal.gen.urscript.program import UrOptions, pc_address, scripts, write_scripts
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
+from wirecal.lang.registry import languages
 from wirecal.lang.urscript.versions import NEEDED
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import cone_problems
@@ -18,7 +20,6 @@ from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.run_token import NO_KEY, run_token
 from wirecal.solver.formats.validation_files import load_setup
-from wirecal.solver.robot import LANGUAGES, language_mismatch
 from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
 
 _D = RunParameters()
@@ -39,7 +40,7 @@ _G = GenOptions()
 )
 @click.option(
     "--language",
-    type=click.Choice(sorted(LANGUAGES)),
+    type=click.Choice(sorted(languages())),
     help="Controller language: must be the robot file's [controller] language (V+ if none), "
     "whose encoder interface and counter width the file holds; a check, not a switch.",
 )

@@ -62,7 +62,7 @@ def test_urscript_defaults_to_the_pulse_decoder():
 MESSAGES = {
     "unknown language": (
         lambda d: d["controller"].__setitem__("language", "krl"),
-        'r.toml: controller.language: is "krl"; give "vplus"',
+        'r.toml: controller.language: is "krl"; give ',
     ),
     "unknown key": (
         lambda d: d["controller"].__setitem__("ip", "1.2.3.4"),

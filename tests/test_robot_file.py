@@ -193,8 +193,9 @@ CASES = {
     ),
     "interface": (
         lambda d: d["encoder"].__setitem__("interface", "usb"),
-        'r.toml: encoder.interface: is "usb"; give "belt" (V+: DEFBELT/BELT) or "device" '
-        '(V+: DEVICE) or "pulse" (URScript: the controller\'s pulse decoder)',
+        'r.toml: encoder.interface: is "usb"; give "belt" (Adept/Omron V+ and eV+: '
+        'DEFBELT/BELT) or "device" (Adept/Omron V+ and eV+: DEVICE) or "pulse" (Universal '
+        "Robots URScript: the controller's pulse decoder)",
     ),
     "missing table": (
         lambda d: d.pop("encoder"),

@@ -309,7 +309,7 @@ def test_lint_dispatches_on_the_script_extension(tmp_path):
     bad.write_text(program("textmsg(hi)"))
     ok = CliRunner().invoke(main, ["lint", str(good)])
     assert ok.exit_code == 0
-    assert "URScript, 1 function, no problems" in ok.output
+    assert "Universal Robots URScript, no problems" in ok.output
     nok = CliRunner().invoke(main, ["lint", str(good), str(bad)])
     assert nok.exit_code == 1
     assert f"{bad}:2: variable hi is read but never assigned" in nok.output

@@ -25,6 +25,7 @@ from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import check_limits, joint_target, run_steps
 from wirecal.gen.templating import render
+from wirecal.lang.urscript import URScript
 from wirecal.lang.urscript.parser import parse_program
 from wirecal.lang.urscript.versions import NEEDED, is_refusal
 from wirecal.solver.cell_check import check_cell
@@ -46,7 +47,7 @@ from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 ROLES = ("mount", "check", "run")
 """The programs, one ``wc_<role>.script`` each."""
 
-RAW_COUNTER_BITS = 32
+RAW_COUNTER_BITS = URScript.capabilities.counter_bits
 """The programs read the raw count, an int32 (SD §14.4): the robot file's counter_bits."""
 
 FILTERED_RANGE = 2**16

@@ -57,11 +57,6 @@ finer than the 0.01 mm of a search in 0.1 then 0.01 mm steps, in 8 moves instead
 about 20)."""
 
 
-BELT_COUNTER_BITS = 24
-"""The V+ belt encoder counter's width: a signed 24-bit number that rolls over (V+ User's
-Guide p. 312, as summarised in DESIGN.md): the robot file's counter_bits for interface "belt"."""
-
-
 @dataclass(frozen=True)
 class GenOptions:
     """Options of the generated module."""

@@ -68,6 +68,7 @@ from typing import Any
 
 import numpy as np
 
+from wirecal.lang.registry import default_language, languages
 from wirecal.solver import params as P
 from wirecal.solver.cell import DEFAULT_MARGIN_MM, Box, CellModel, HalfSpace, Housing
 from wirecal.solver.exit_geometry import Exit, Eyelet, Pulley
@@ -80,9 +81,6 @@ from wirecal.solver.robot import (
     DEFAULT_GRAVITY_SAG_DEG_PER_M,
     DEFAULT_LINK_RADIUS_MM,
     DEFAULT_SCALE_TOLERANCE_PPM,
-    INTERFACES,
-    LANGUAGES,
-    SOFTWARE_LINES,
     SOFTWARE_PATTERN,
     Controller,
     Encoder,
@@ -358,7 +356,8 @@ def _housing(table: Table) -> Housing | bool | None:
 
 def _controller(table: Table) -> Controller | None:
     """Read the optional ``[controller]`` table (V+ when absent)."""
-    language = table.string("language", "vplus", choices=LANGUAGES)
+    titles = {key: lang.title for key, lang in languages().items()}
+    language = table.string("language", default_language().key, choices=titles)
     host = table.string("host", None)
     if host is not None and not all(33 <= ord(c) <= 126 and c != '"' for c in host):
         table.add("host", f"is {host!r}; give an address or host name (printable, no spaces)")
@@ -389,7 +388,7 @@ def _software(table: Table, language: str | None) -> str | None:
     if not SOFTWARE_PATTERN.fullmatch(software):
         table.add("software", f'is {software!r}; give the version as numbers, e.g. "5.20"')
         return None
-    lines = SOFTWARE_LINES.get(language or "", {})
+    lines = languages()[language].capabilities.software_lines if language else {}
     major = int(software.split(".")[0])
     if lines and major not in lines:
         known = ", ".join(f"{name} {m}.x" for m, name in lines.items())
@@ -445,21 +444,24 @@ def _encoder(enc: Table, controller: Controller | None) -> Encoder | None:
         mpc = None
     rng = enc.number("range_mm", above=0, hi=MAX_RANGE_MM, unit="mm")
     bits = enc.integer("counter_bits", lo=8, hi=64)
-    language = "vplus" if controller is None else controller.language
+    lang = default_language() if controller is None else languages()[controller.language]
+    readable = lang.capabilities.encoder_interfaces
     interface = enc.string(
         "interface",
-        INTERFACES[language][0],
-        choices={
-            "belt": "V+: DEFBELT/BELT",
-            "device": "V+: DEVICE",
-            "pulse": "URScript: the controller's pulse decoder",
-        },
+        readable[0],
+        choices=dict(
+            sorted(
+                (i, f"{other.title}: {other.interface_notes.get(i, '')}")
+                for other in languages().values()
+                for i in other.capabilities.encoder_interfaces
+            )
+        ),
     )
-    if controller is not None and interface is not None and interface not in INTERFACES[language]:
+    if controller is not None and interface is not None and interface not in readable:
         enc.add(
             "interface",
-            f"is {interface!r}, which the {LANGUAGES[language]} programs cannot read; give "
-            + " or ".join(repr(i) for i in INTERFACES[language])
+            f"is {interface!r}, which the {lang.title} programs cannot read; give "
+            + " or ".join(map(repr, readable))
             + " (or change [controller] language)",
         )
         interface = None

@@ -1,0 +1,39 @@
+"""The registered controller languages as app/ and cli/ use them: one place to dispatch.
+
+Nothing above this module compares a language key with a name: it asks :func:`registered`
+for the robot's language, its generator and its twin adapter.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from wirecal.lang.registry import language
+from wirecal.solver.plausibility import Plausibility
+from wirecal.solver.plausibility import gate as _gate
+from wirecal.solver.robot import Robot
+from wirecal.solver.solve import SolveResult
+
+
+def language_mismatch(robot: Robot, key: str) -> str:
+    """Return the one message for a language other than the robot file's (gen refuses it).
+
+    The file's ``[encoder]`` interface and counter width belong to its language's programs
+    (:attr:`~wirecal.lang.base.Capabilities.encoder_interfaces`), so another language cannot
+    read the same encoder set-up.
+    """
+    enc = robot.encoder
+    return (
+        f"{robot.source}: [controller] language is {robot.controller.language!r} "
+        f'(encoder interface "{enc.interface}", a {enc.counter_bits}-bit counter), not '
+        f"{key!r}: the encoder set-up belongs to the language, so --language cannot "
+        f"switch it. For {language(key).title}, write a robot file with language = "
+        f'"{key}" and its encoder keys (import-urdf --language {key} does), or '
+        "drop --language"
+    )
+
+
+def gate(result: SolveResult, method: str, **options: Any) -> Plausibility:
+    """:func:`wirecal.solver.plausibility.gate`, its findings naming the robot's live-check."""
+    live_check = language(result.robot.controller.language).live_check
+    return _gate(result, method, live_check=live_check, **options)
