@@ -20,12 +20,12 @@ from __future__ import annotations
 import math
 import os
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from wirecal.lang.registry import language
+from wirecal.lang.registry import default_language, language
 from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
@@ -67,7 +67,7 @@ class ImportOptions:
     tip: str
     base: str | None = None
     name: str | None = None
-    language: str = "vplus"
+    language: str = field(default_factory=lambda: default_language().key)
     wire_point_mm: tuple[float, float, float] | None = None
     mm_per_count: float = 0.025488
     range_mm: float = 1250.0

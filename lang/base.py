@@ -43,6 +43,7 @@ class Language:
     live_check: ClassVar[str]  # the generated program that shows the live counts
     capabilities: ClassVar[Capabilities]
     interface_notes: ClassVar[Mapping[str, str]] = {}  # encoder interface → how it is read
+    patch_companion: ClassVar[str | None] = None  # suffix of its file beside a patch, if any
     default: ClassVar[bool] = False  # the language of a robot file without [controller]
     valid_examples: ClassVar[tuple[Example, ...]] = ()  # conformance: snippets lint accepts
     invalid_examples: ClassVar[tuple[Example, ...]] = ()  # conformance: snippets lint refuses
@@ -63,6 +64,10 @@ class Language:
         """
         raise NotImplementedError
 
-    def patch_section(self, robot: Any, offsets: Mapping[str, float]) -> dict | None:
-        """Return the language's own section of the patch file (None: it has none)."""
+    def patch_section(self, robot: Any, offsets: Mapping[str, float]) -> str | None:
+        """Return the text of the language's own patch companion (None: it has none).
+
+        The patch ``<name>.toml`` gets it beside it as ``<name>`` + :attr:`patch_companion`;
+        ``offsets`` are the identified ones by parameter name (deg, mm).
+        """
         return None

@@ -11,7 +11,9 @@ from typing import ClassVar
 
 from wirecal.lang.base import Capabilities, Example, Language
 from wirecal.lang.registry import register
+from wirecal.lang.urscript.calibration import SUFFIX, calibration_text
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.robot import Robot
 
 _TYPES = "UR16e User Manual p. 181; UR5 CB3 User Manual 3.4.5 p. II-69"
 _TICKS = "SW5.20 encoder_get_tick_count page"
@@ -52,6 +54,12 @@ class URScript(Language):
         Example(_program("q = [1, 2, 3]", "x = q[3]"), _TYPES),
         Example(_program('c = encoder_get_tick_count(0, opt="raw")'), _TICKS, "3.15"),
     )
+
+    patch_companion = SUFFIX  # Universal Robots' standard-DH deltas (calibration.py)
+
+    def patch_section(self, robot: Robot, offsets: Mapping[str, float]) -> str:
+        """Return UR's standard-DH deltas of ``offsets`` in calibration.conf's layout."""
+        return calibration_text(robot, offsets)
 
     def lint(
         self,

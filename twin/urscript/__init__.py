@@ -1,4 +1,5 @@
-"""URScript controller of the twin: the interpreter with the UR controller's 32-bit numbers.
+"""URScript front end of the twin.
 
-The grammar, parser and checker it runs are the front end in :mod:`wirecal.lang.urscript`.
+The lark grammar, the parser and checker (the same one ``wirecal lint`` runs on ``.script``
+files) and the interpreter with the UR controller's 32-bit numbers.
 """

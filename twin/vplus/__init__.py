@@ -1,4 +1,5 @@
-"""V+/eV+ controller of the twin: the interpreter with V+ semantics.
+"""V+/eV+ front end of the twin.
 
-The grammar, parser and checker it runs are the front end in :mod:`wirecal.lang.vplus`.
+The lark grammar, the parser and checker (the same one the generator runs on its own
+output), and the interpreter with V+ semantics.
 """
