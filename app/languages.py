@@ -6,13 +6,39 @@ for the robot's language, its generator and its twin adapter.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
+from wirecal.gen.backends import Generator, generator
+from wirecal.lang.base import Language
 from wirecal.lang.registry import language
 from wirecal.solver.plausibility import Plausibility
 from wirecal.solver.plausibility import gate as _gate
 from wirecal.solver.robot import Robot
 from wirecal.solver.solve import SolveResult
+from wirecal.twin.adapters import TwinAdapter, adapter
+
+
+@dataclass(frozen=True)
+class Registered:
+    """A registered language with its generator and its twin adapter."""
+
+    language: Language
+    generator: Generator
+
+    @property
+    def adapter(self) -> TwinAdapter:
+        """The language's twin adapter (:func:`wirecal.twin.adapters.adapter`)."""
+        return adapter(self.language.key)
+
+
+def registered(robot_or_key: Robot | str) -> Registered:
+    """Return the language of a robot (its ``[controller] language``) or of a key, registered.
+
+    A WirecalError names the known keys for an unknown one.
+    """
+    key = robot_or_key if isinstance(robot_or_key, str) else robot_or_key.controller.language
+    return Registered(language(key), generator(key))
 
 
 def language_mismatch(robot: Robot, key: str) -> str:

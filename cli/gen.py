@@ -6,10 +6,9 @@ from dataclasses import replace
 
 import click
 
-from wirecal.app.languages import language_mismatch
+from wirecal.app.languages import language_mismatch, registered
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
-from wirecal.gen.backends import generator
 from wirecal.gen.request import GenRequest
 from wirecal.lang.registry import languages
 from wirecal.solver.errors import WirecalError
@@ -201,7 +200,7 @@ def gen(
     pl = load_plan(plan, rb)
     for line in cone_problems(rb, pl):  # a plan made for a wider exit (the paper's) still runs
         click.echo(f"warning: {line}", err=True)
-    backend = generator(rb.controller.language)
+    backend = registered(rb).generator
     patch = read_patch(patch_file) if patch_file else None
     if patch is not None and patch.warning:
         click.echo(f"warning: {patch_file}: {patch.warning}", err=True)
