@@ -6,17 +6,23 @@ for the robot's language, its generator and its twin adapter.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from wirecal.gen.backends import Generator, generator
 from wirecal.lang.base import Language
 from wirecal.lang.registry import language
+from wirecal.solver.plan import Plan
 from wirecal.solver.plausibility import Plausibility
 from wirecal.solver.plausibility import gate as _gate
 from wirecal.solver.robot import Robot
 from wirecal.solver.solve import SolveResult
 from wirecal.twin.adapters import TwinAdapter, adapter
+
+if TYPE_CHECKING:  # the receiver only when a twin run needs it
+    from wirecal.app.receive import Received
 
 
 @dataclass(frozen=True)
@@ -30,6 +36,33 @@ class Registered:
     def adapter(self) -> TwinAdapter:
         """The language's twin adapter (:func:`wirecal.twin.adapters.adapter`)."""
         return adapter(self.language.key)
+
+    def measure(
+        self,
+        robot: Robot,
+        plan: Plan,
+        truth: dict[str, float],
+        folder: Path,
+        programs: dict[str, str],
+        *,
+        timeout_s: float = 30.0,
+        **options: Any,
+    ) -> Any:
+        """Run the programs in the twin with the PC's side: the adapter's measure.
+
+        For a language that sends its log over TCP (``capabilities.sockets``), ``wirecal
+        receive`` (:func:`wirecal.app.receive.receive`) listens on a free loopback port
+        and the adapter routes the program's PC address there; otherwise the log is the
+        file the programs write. ``options``: the adapter's (seed, faults, …).
+        """
+        if self.language.capabilities.sockets:
+            from wirecal.app.receive import receive
+
+            def listen(log: Path, on_listening: Callable[[int], None]) -> Received:
+                return receive(0, log, robot, plan, timeout_s=timeout_s, on_listening=on_listening)
+
+            options = {"listen": listen, "timeout_s": timeout_s, **options}
+        return self.adapter.measure(robot, plan, truth, folder, programs, **options)
 
 
 def registered(robot_or_key: Robot | str) -> Registered:

@@ -18,7 +18,8 @@ from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
 
 if TYPE_CHECKING:  # the cell and the readings only when an adapter runs
-    from wirecal.solver.measurements import Measurements
+    import numpy as np
+
     from wirecal.twin.cell import Faults
 
 
@@ -51,11 +52,15 @@ class TwinAdapter(Protocol):
         self,
         robot: Robot,
         plan: Plan,
-        lengths_mm: Measurements,
+        lengths_mm: np.ndarray,
         folder: Path,
         programs: dict[str, str],
     ) -> dict[str, dict[str, float]]:
-        """Run the controller solver on checked readings: method → offsets by name."""
+        """Run the controller solver on wire lengths: method → offsets by name.
+
+        ``lengths_mm``: each plan point's wire length from the zero reading at θ0 (mm,
+        plan order), the points at their plan joints.
+        """
         ...
 
 
