@@ -18,6 +18,8 @@ import numpy as np
 
 from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import STRIDE, GenOptions, module_text
+from wirecal.lang.urscript.parser import parse_program
+from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.controller_result import parse_result, read_result, result_in_log
 from wirecal.solver.formats.log import Log
@@ -30,9 +32,7 @@ from wirecal.twin.machine import Halt, RunError, Stopped, f32
 from wirecal.twin.ur_cell import URCell
 from wirecal.twin.urscript.interp import Interpreter as URInterpreter
 from wirecal.twin.urscript.interp import i32
-from wirecal.twin.urscript.parser import parse_program
 from wirecal.twin.vplus.interp import Interpreter
-from wirecal.twin.vplus.parser import parse_module
 
 
 @dataclass(frozen=True)

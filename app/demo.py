@@ -37,6 +37,7 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.app.compare import compare_controller
+from wirecal.app.languages import gate
 from wirecal.app.report import Validation, render_report
 from wirecal.app.twin_runs import measure_in_twin, measure_ur_in_twin
 from wirecal.gen.urscript.program import UrOptions, scripts
@@ -53,7 +54,7 @@ from wirecal.solver.formats.truth import random_errors, truth_text
 from wirecal.solver.formats.validation_files import load_setup, read_validation_log
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plan import Plan
-from wirecal.solver.plausibility import Plausibility, gate
+from wirecal.solver.plausibility import Plausibility
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import realistic_encoder
 from wirecal.solver.solve import SolveResult, solve

@@ -4,8 +4,9 @@ Everything the robot file needs comes from the URDF, the options or a stated rul
 file says which: the DH rows, limits and speeds from the URDF's joints
 (:mod:`wirecal.solver.urdf_model`); the wire attachment point from ``--wire-point-mm`` in
 the tip link's frame; the encoder interface and counter width from the controller language's
-programs (:mod:`wirecal.gen.languages`); the link radii from the URDF's geometry or lengths
-(:mod:`wirecal.solver.formats.urdf_geometry`); the mounting plane from the URDF's root link.
+declaration (:class:`wirecal.lang.base.Capabilities`); the link radii from the URDF's
+geometry or lengths (:mod:`wirecal.solver.formats.urdf_geometry`); the mounting plane from
+the URDF's root link.
 
 Joint speeds a URDF gives as placeholders — every joint the same whole number of rad/s, or
 any joint below :data:`MIN_PLAUSIBLE_SPEED_DEG_S` — are written with
@@ -19,12 +20,12 @@ from __future__ import annotations
 import math
 import os
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from wirecal.gen.languages import encoder_defaults
+from wirecal.lang.registry import default_language, language
 from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
@@ -41,8 +42,6 @@ from wirecal.solver.identifiability import propose_parameters
 from wirecal.solver.kinematics import Model
 from wirecal.solver.robot import (
     DEFAULT_CHANNEL,
-    INTERFACES,
-    LANGUAGES,
     Controller,
     Encoder,
     Robot,
@@ -68,7 +67,7 @@ class ImportOptions:
     tip: str
     base: str | None = None
     name: str | None = None
-    language: str = "vplus"
+    language: str = field(default_factory=lambda: default_language().key)
     wire_point_mm: tuple[float, float, float] | None = None
     mm_per_count: float = 0.025488
     range_mm: float = 1250.0
@@ -127,7 +126,7 @@ def urdf_robot_file(urdf: str | Path, out_path: Path, opt: ImportOptions) -> Imp
         robot,
         header=_header(robot, ch, source, notes),
         row_notes=[j.name for j in ch.moving],
-        encoder_note=f"not in a URDF: {LANGUAGES[opt.language]}'s interface and counter "
+        encoder_note=f"not in a URDF: {language(opt.language).title}'s interface and counter "
         "width, scale and range from the import's options (defaults: a Unimeasure EP-50)",
         urdf_source=source,
         speed_notes=speed_notes,
@@ -142,13 +141,15 @@ def urdf_robot_file(urdf: str | Path, out_path: Path, opt: ImportOptions) -> Imp
 
 def _encoder(opt: ImportOptions) -> Encoder:
     """Return the encoder of the options, the language's interface and counter by default."""
-    interface, bits = encoder_defaults(opt.language)
-    if opt.interface is not None and opt.interface not in INTERFACES[opt.language]:
+    lang = language(opt.language)
+    readable = lang.capabilities.encoder_interfaces
+    if opt.interface is not None and opt.interface not in readable:
         raise WirecalError(
-            f"--interface {opt.interface} is not read by the {LANGUAGES[opt.language]} "
-            f"programs (--language {opt.language}); give " + " or ".join(INTERFACES[opt.language])
+            f"--interface {opt.interface} is not read by the {lang.title} "
+            f"programs (--language {opt.language}); give " + " or ".join(readable)
         )
-    interface = opt.interface or interface
+    interface = opt.interface or readable[0]
+    bits = lang.capabilities.counter_bits
     return Encoder(
         opt.mm_per_count,
         opt.range_mm,

@@ -6,23 +6,21 @@ from dataclasses import replace
 
 import click
 
+from wirecal.app.languages import language_mismatch, registered
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
-from wirecal.gen.urscript.program import UrOptions, pc_address, scripts, write_scripts
-from wirecal.gen.vplus.program import GenOptions, module_text, write_module
+from wirecal.gen.request import GenRequest
+from wirecal.lang.registry import languages
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import cone_problems
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.run_token import NO_KEY, run_token
 from wirecal.solver.formats.validation_files import load_setup
-from wirecal.solver.robot import LANGUAGES, language_mismatch
 from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
-from wirecal.twin.urscript.versions import NEEDED
 
 _D = RunParameters()
-_G = GenOptions()
+_G = GenRequest()
 
 
 @click.command()
@@ -39,7 +37,7 @@ _G = GenOptions()
 )
 @click.option(
     "--language",
-    type=click.Choice(sorted(LANGUAGES)),
+    type=click.Choice(sorted(languages())),
     help="Controller language: must be the robot file's [controller] language (V+ if none), "
     "whose encoder interface and counter width the file holds; a check, not a switch.",
 )
@@ -202,63 +200,33 @@ def gen(
     pl = load_plan(plan, rb)
     for line in cone_problems(rb, pl):  # a plan made for a wider exit (the paper's) still runs
         click.echo(f"warning: {line}", err=True)
-    if rb.controller.language == "urscript":
-        if patch_file or setup_file or echo_log or lf:
-            raise WirecalError(
-                "--patch, --validation, --echo-log and --lf are V+ options; the URScript "
-                "programs always mirror the log with textmsg and use LF line ends"
-            )
-        ur = UrOptions(
-            run=_run(PAPER_RUN, speed, accel, settle_s, samples),
-            host=host,
-            port=port,
-            zero_tol_mm=zero_tol,
-            spread_tol_mm=spread_tol,
-            margin_deg=margin,
-            range_margin_mm=range_margin,
-            solver=not no_solver,
-        )
-        paths = write_scripts(out_dir, scripts(rb, pl, ur), force=force, inputs=[robot, plan])
-        if rb.controller.software is None:
-            click.echo(
-                f"warning: {robot}: [controller] software not declared; the programs need "
-                f"e-Series software {'.'.join(map(str, NEEDED))} or later (docs/languages.md); "
-                "declare it and a CB3 or older version is refused",
-                err=True,
-            )
-        if rb.controller.key is None:
-            click.echo(f"warning: {robot}: {NO_KEY}", err=True)
-        pc_host, pc_port = pc_address(rb, ur)
-        where = f" --host {pc_host} --port {pc_port}" if host or port else ""
-        click.echo(
-            f"wrote {', '.join(str(p) for p in paths)}: run wc_mount, wc_check, then on the "
-            f"PC 'wirecal receive --robot {robot} --plan {plan}{where} -o LOG' (it listens on "
-            f"{pc_host}:{pc_port}, run token {run_token(rb, pl.fingerprint())[:6]}…) and wc_run"
-        )
-        return
-    if host or port or no_solver:
-        raise WirecalError("--host, --port and --no-solver are for URScript (--language urscript)")
+    backend = registered(rb).generator
     patch = read_patch(patch_file) if patch_file else None
     if patch is not None and patch.warning:
         click.echo(f"warning: {patch_file}: {patch.warning}", err=True)
-    opt = GenOptions(
-        run=_run(_D, speed, accel, settle_s, samples, settle_max_s=settle_max_s),
+    request = GenRequest(
+        run=_run(backend.default_run, speed, accel, settle_s, samples, settle_max_s),
         zero_tol_mm=zero_tol,
         spread_tol_mm=spread_tol,
         margin_deg=margin,
-        log_file=log_name.upper(),
+        range_margin_mm=range_margin,
+        solver=not no_solver,
         patch=patch.offsets_for(rb, pl) if patch is not None else None,
         patch_warning=patch.warning if patch is not None else None,
         validation=load_setup(setup_file) if setup_file else None,
-        range_margin_mm=range_margin,
+        host=host,
+        port=port,
+        log_file=log_name,
         echo_log=echo_log,
         crlf=not lf,
     )
+    programs = backend.programs(rb, pl, request)
     inputs = [robot, plan, *(f for f in (patch_file, setup_file) if f)]
-    path = write_module(
-        out_dir, module_text(rb, pl, opt), force=force, inputs=inputs, crlf=opt.crlf
-    )
-    click.echo(f"wrote {path}: load it on the controller, then run wc.mount, wc.check, wc.run")
+    paths = backend.write(out_dir, programs, request, force=force, inputs=inputs)
+    for note in backend.notes(rb, robot):
+        click.echo(f"warning: {note}", err=True)
+    steps = backend.next_steps(rb, pl, request, robot, plan)
+    click.echo(f"wrote {', '.join(str(p) for p in paths)}: {steps}")
 
 
 def _run(
@@ -267,7 +235,7 @@ def _run(
     accel: float,
     settle_s: float | None,
     samples: int,
-    **more: float,
+    settle_max_s: float,
 ) -> RunParameters:
     """Return the run's settings: the options given, the language's defaults for the others."""
     return replace(
@@ -276,5 +244,5 @@ def _run(
         accel_pct=accel,
         settle_s=language_default.settle_s if settle_s is None else settle_s,
         readings=samples,
-        **more,
+        settle_max_s=settle_max_s,
     )

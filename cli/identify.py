@@ -15,6 +15,7 @@ import click
 import numpy as np
 
 from wirecal import __version__
+from wirecal.app.languages import gate
 from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import (
     ACCEPT_IMPLAUSIBLE,
@@ -41,7 +42,7 @@ from wirecal.solver.formats.robot_file import (
 from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
 from wirecal.solver.identify import DEFAULT_OMEGA
 from wirecal.solver.measurements import Tolerances, check_log
-from wirecal.solver.plausibility import READING_NOISE_MM, gate
+from wirecal.solver.plausibility import READING_NOISE_MM
 from wirecal.solver.run_parameters import RunParameters
 from wirecal.solver.simulate import (
     IDEAL_ENCODER,

@@ -1,4 +1,4 @@
-"""``wirecal lint``: check V+ files as the controller's LOAD would, and URScript files."""
+"""``wirecal lint``: check program files with their language's checker (by file suffix)."""
 
 from __future__ import annotations
 
@@ -7,11 +7,10 @@ import sys
 import click
 
 from wirecal.cli.main import user_errors
+from wirecal.lang.registry import language_of_file
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import read_input
 from wirecal.solver.robot import SOFTWARE_PATTERN
-from wirecal.twin.urscript.parser import parse_program
-from wirecal.twin.vplus.parser import parse_module
 
 
 @click.command()
@@ -50,19 +49,13 @@ def lint(files, external_calls, software):
     texts = {path: read_input(path, "program file")[0].decode("latin-1") for path in files}
     problems = 0
     for path, text in texts.items():
-        try:
-            if path.lower().endswith(".script"):
-                functions = len(parse_program(text, path, software).functions)
-                what = f"URScript, {functions} function{'s' if functions != 1 else ''}"
-            else:
-                module = parse_module(text, path, external_calls=external_calls)
-                what = f"{len(module.programs)} programs"
-        except WirecalError as exc:
-            for line in exc.problems:
-                click.echo(line)
-            problems += len(exc.problems)
-            continue
-        click.echo(f"{path}: {what}, no problems", err=True)
+        lang = language_of_file(path)
+        found = lang.lint(text, path, software, external_calls=external_calls)
+        for line in found:
+            click.echo(line)
+        problems += len(found)
+        if not found:
+            click.echo(f"{path}: {lang.title}, no problems", err=True)
     if problems:
         click.echo(f"error: {problems} problem{'s' if problems != 1 else ''} found", err=True)
         sys.exit(1)

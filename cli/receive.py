@@ -9,6 +9,7 @@ import click
 from wirecal.app.receive import HANDSHAKE_S, receive, summary
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import POSITIVE
+from wirecal.lang.registry import language
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
@@ -63,10 +64,12 @@ def receive_cmd(robot, plan, output, port, host, timeout_s, force):
     """
     rob = load_robot(robot)
     pl = load_plan(plan, rob)
-    if rob.controller.language != "urscript":
+    lang = language(rob.controller.language)
+    if not lang.capabilities.sockets:
         raise WirecalError(
-            f"{robot}: [controller] language is {rob.controller.language!r}: only URScript "
-            "programs send their log over TCP (a V+ run writes it to the controller's disk)"
+            f"{robot}: [controller] language is {rob.controller.language!r}: the {lang.title} "
+            "programs write their log to the controller's disk, not over TCP (only a language "
+            "with sockets sends it to wirecal receive)"
         )
     port = port or rob.controller.port
     if port is None:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from wirecal.app.languages import gate
 from wirecal.app.report import Validation, render_report
 from wirecal.cli.main import user_errors
 from wirecal.solver.errors import WirecalError
@@ -17,7 +18,6 @@ from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import load_errors
 from wirecal.solver.formats.validation_files import read_validation_log
 from wirecal.solver.measurements import check_log
-from wirecal.solver.plausibility import gate
 from wirecal.solver.solve import solve
 from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
 

@@ -10,14 +10,13 @@ import numpy as np
 
 from wirecal.app.urdf_import import ImportOptions, urdf_robot_file
 from wirecal.cli.main import user_errors
-from wirecal.gen.languages import COUNTER_BITS
+from wirecal.lang.registry import default_language, languages
 from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.urdf import dh_urdf_text, read_urdf, urdf_with_origins
-from wirecal.solver.robot import INTERFACES, LANGUAGES
 from wirecal.solver.urdf_model import calibrated_origins, read_chain
 
 
@@ -55,8 +54,8 @@ def _numbers(count: int | None, what: str):
 )
 @click.option(
     "--language",
-    type=click.Choice(sorted(LANGUAGES)),
-    default="vplus",
+    type=click.Choice(sorted(languages())),
+    default=default_language().key,
     show_default=True,
     help="Controller language; sets the encoder interface and counter width its programs read.",
 )
@@ -77,15 +76,19 @@ def _numbers(count: int | None, what: str):
     type=int,
     default=None,
     help="Controller counter width (default: the language's: "
-    + ", ".join(f"{bits} for {lang}" for lang, bits in sorted(COUNTER_BITS.items()))
+    + ", ".join(f"{lang.capabilities.counter_bits} for {key}" for key, lang in languages().items())
     + ").",
 )
 @click.option(
     "--interface",
     default=None,
-    type=click.Choice(["belt", "device", "pulse"]),
+    type=click.Choice(
+        sorted(i for lang in languages().values() for i in lang.capabilities.encoder_interfaces)
+    ),
     help="How the controller program reads the encoder (default: the language's: "
-    + ", ".join(f"{ways[0]} for {lang}" for lang, ways in sorted(INTERFACES.items()))
+    + ", ".join(
+        f"{lang.capabilities.encoder_interfaces[0]} for {key}" for key, lang in languages().items()
+    )
     + ").",
 )
 @click.option("--host", default=None, help="URScript: the PC address the run sends its log to.")

@@ -41,7 +41,6 @@ from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import Implausible
 from wirecal.solver.identifiability import Identifiability, analyse_jacobian, covariance
 from wirecal.solver.identify import DEFAULT_OMEGA
-from wirecal.solver.robot import LIVE_CHECK
 from wirecal.solver.scale import DRIFT_TOLERANCE_MM_PER_H
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult, omega_vector
@@ -100,6 +99,9 @@ def override_warning(plausibility: str) -> str | None:
         f"(--accept-implausible): {plausibility[len(OVERRIDDEN) :]}"
     )
 
+
+LIVE_CHECK = "the live-count program 'wirecal gen' writes"
+"""What the findings call the live-check program when the caller does not name it."""
 
 CHECK_HINT = (
     "check the encoder (channel, interface, belt_mode in the robot file; the counter must "
@@ -179,8 +181,13 @@ def assess(
     *,
     noise_mm: float = READING_NOISE_MM,
     omega_default: float = DEFAULT_OMEGA,
+    live_check: str = LIVE_CHECK,
 ) -> Plausibility:
-    """Run every check of the gate on ``result``'s estimate by ``method``."""
+    """Run every check of the gate on ``result``'s estimate by ``method``.
+
+    ``live_check``: the controller program that shows the live counts, which the findings
+    name (the robot's language's, :attr:`wirecal.lang.base.Language.live_check`).
+    """
     robot, m = result.robot, result.measurements
     est = result.estimates[method]
     names = est.names
@@ -193,7 +200,7 @@ def assess(
 
     measured = m.distance_mm[present]
     model = wire_lengths(base, np.radians(q_deg), np.radians(m.theta0_deg))
-    findings += _lengths(measured, model, m.source, LIVE_CHECK[robot.controller.language])
+    findings += _lengths(measured, model, m.source, live_check)
 
     sigma_model = float(np.hypot(noise_mm, abs(m.mm_per_count) / np.sqrt(12)))
     dof = len(measured) - len(names)
@@ -363,13 +370,16 @@ def gate(
     accept: bool = False,
     noise_mm: float = READING_NOISE_MM,
     omega_default: float = DEFAULT_OMEGA,
+    live_check: str = LIVE_CHECK,
 ) -> Plausibility:
     """Assess an identification and refuse it unless it passed or is accepted.
 
     :func:`assess`, raising :class:`Implausible` (exit status 3) unless it passed or
     ``accept`` (the user's explicit override, which the patch then records).
     """
-    verdict = assess(result, method, noise_mm=noise_mm, omega_default=omega_default)
+    verdict = assess(
+        result, method, noise_mm=noise_mm, omega_default=omega_default, live_check=live_check
+    )
     if verdict.passed or accept:
         return verdict
     raise Implausible(

@@ -71,42 +71,12 @@ class Encoder:
         return Counter(self.counter_bits)
 
 
-LANGUAGES = {"vplus": "Adept/Omron V+ and eV+", "urscript": "Universal Robots URScript"}
-"""The controller languages ``wirecal gen`` writes, by their robot-file name."""
-
-INTERFACES = {"vplus": ("belt", "device"), "urscript": ("pulse",)}
-"""The encoder interfaces each language's programs read (``[encoder] interface``)."""
-
 DEFAULT_CHANNEL = {"belt": 1, "device": 0, "pulse": 0}
 """The ``[encoder] channel`` when the robot file gives none, by interface (V+ belt encoders
 count from 1; DEVICE units and the URScript pulse decoder's encoder index from 0)."""
 
-LIVE_CHECK = {"vplus": "wc.check", "urscript": "wc_check"}
-"""The generated program that shows the live counts, by language (messages name it)."""
-
-
-def language_mismatch(robot: Robot, language: str) -> str:
-    """Return the one message for a language other than the robot file's (gen refuses it).
-
-    The file's ``[encoder]`` interface and counter width belong to its language's programs
-    (:data:`INTERFACES`), so another language cannot read the same encoder set-up.
-    """
-    enc = robot.encoder
-    return (
-        f"{robot.source}: [controller] language is {robot.controller.language!r} "
-        f'(encoder interface "{enc.interface}", a {enc.counter_bits}-bit counter), not '
-        f"{language!r}: the encoder set-up belongs to the language, so --language cannot "
-        f"switch it. For {LANGUAGES[language]}, write a robot file with language = "
-        f'"{language}" and its encoder keys (import-urdf --language {language} does), or '
-        "drop --language"
-    )
-
-
 SOFTWARE_PATTERN = re.compile(r"\d{1,3}(\.\d{1,4}){1,3}")
 """A controller software version as numbers, as PolyScope shows it: "3.15.8", "5.20"."""
-
-SOFTWARE_LINES = {"urscript": {3: "CB3", 5: "e-Series (PolyScope 5)"}}
-"""The controller software lines wirecal knows, by language and major version."""
 
 
 @dataclass(frozen=True)
@@ -120,7 +90,7 @@ class Controller:
     declared; generation uses only calls that version has (docs/languages.md).
     """
 
-    language: str = "vplus"
+    language: str = "vplus"  # a robot file without [controller] (the registry's default)
     host: str | None = None
     port: int | None = None
     key: str | None = None

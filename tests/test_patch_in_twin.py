@@ -12,13 +12,13 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
+from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace
 from wirecal.solver.formats.truth import truth_text
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.params import ErrorSet
 from wirecal.twin.cell import Cell
 from wirecal.twin.vplus.interp import Interpreter
-from wirecal.twin.vplus.parser import parse_module
 
 from .conftest import TABLE5, VIPER
 

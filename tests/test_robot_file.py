@@ -193,8 +193,9 @@ CASES = {
     ),
     "interface": (
         lambda d: d["encoder"].__setitem__("interface", "usb"),
-        'r.toml: encoder.interface: is "usb"; give "belt" (V+: DEFBELT/BELT) or "device" '
-        '(V+: DEVICE) or "pulse" (URScript: the controller\'s pulse decoder)',
+        'r.toml: encoder.interface: is "usb"; give "belt" (Adept/Omron V+ and eV+: '
+        'DEFBELT/BELT) or "device" (Adept/Omron V+ and eV+: DEVICE) or "pulse" (Universal '
+        "Robots URScript: the controller's pulse decoder)",
     ),
     "missing table": (
         lambda d: d.pop("encoder"),
@@ -355,3 +356,14 @@ def test_wire_limits_are_optional_and_written_back(viper, limits):
     assert again.encoder == robot.encoder
     assert ("max_wire_speed_mm_s = 1000.0" in text) is limits
     assert (again.encoder.max_wire_accel_mm_s2 == 49000.0) is limits
+
+
+def test_body_limits_of_unequal_lengths_beside_a_broken_dh_are_a_message():
+    """With the dh unreadable the joint count is unknown: body_min/max of 5 and 6 values
+    were compared element-wise (a traceback, found by the fuzz test); now the dh is named."""
+    data = tomllib.loads((VIPER / "robot.toml").read_text())
+    data["kinematics"]["dh"][0] = [0.0, 0.0, 89.159]
+    data["cell"] = {"body_min_deg": [-1.0] * 5, "body_max_deg": [1.0] * 6}
+    with pytest.raises(WirecalError) as info:
+        robot_from_dict(data, "r.toml")
+    assert any("kinematics.dh" in p for p in info.value.problems), info.value.problems

@@ -11,11 +11,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.lang.registry import language
+from wirecal.lang.urscript.calibration import calibration_text, ur_deltas
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.ur_calibration import calibration_text, put_ur_calibration, ur_deltas
 from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.standard_dh import flange_pose, from_modified, to_modified
 from wirecal.solver.standard_dh import tool_position as std_tool_position
@@ -114,5 +115,5 @@ def test_calibration_text_parses_and_says_unconfirmed(tmp_path):
     assert data["delta_theta"] == [0.0] * 6
     out_path = tmp_path / "calibration.conf"
     with Outputs([out_path]) as out:
-        put_ur_calibration(out, out_path, UR5, {"d4": 0.25})
+        out.put(out_path, language("urscript").patch_section(UR5, {"d4": 0.25}))
     assert out_path.read_text() == text

@@ -13,6 +13,7 @@ from wirecal.app.compare import controller_solve
 from wirecal.app.twin_runs import measure_in_twin
 from wirecal.gen.templating import environment
 from wirecal.gen.vplus.program import GenOptions, module_text
+from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log, read_log
 from wirecal.solver.formats.validation_files import load_setup
@@ -32,7 +33,6 @@ from wirecal.twin.cell import (
     where_in_run,
 )
 from wirecal.twin.vplus.interp import Interpreter, f32
-from wirecal.twin.vplus.parser import parse_module
 
 from .conftest import TABLE5 as TRUTH
 from .conftest import VIPER

@@ -131,7 +131,7 @@ def test_fault_encoder_not_enabled_counts_never_change(ur5, ur5_plan, texts, tru
     log = read_log(r.log)
     assert {row.counts for row in log.readings} == {0.0}
     result = solve(ur5, ur5_plan, check_log(log, ur5_plan, ur5))
-    from wirecal.solver.plausibility import gate
+    from wirecal.app.languages import gate
 
     with pytest.raises(WirecalError) as info:
         gate(result, result.recommended)
@@ -192,9 +192,9 @@ def test_the_log_carries_the_controller_solvers_result(ur5, ur5_plan, texts, tru
 def test_wc_check_shows_the_pulled_wire_only_when_decoded(
     ur5, ur5_plan, texts, tmp_path, inputs, moves
 ):
+    from wirecal.lang.urscript.parser import parse_program
     from wirecal.twin.ur_cell import URCell
     from wirecal.twin.urscript.interp import Interpreter
-    from wirecal.twin.urscript.parser import parse_program
 
     cell = URCell(
         ur5, {}, ur5_plan.theta0_deg, tmp_path, noise_mm=0.0, pulse_inputs=inputs,

@@ -277,10 +277,10 @@ def test_gen_language_other_than_the_robot_files_is_refused_with_one_message(tmp
 def test_gen_refuses_v_plus_options_for_urscript(tmp_path):
     r = _gen(UR5 / "robot.toml", UR5 / "plan.toml", "-o", tmp_path / "o", "--lf")
     assert r.exit_code == 2
-    assert "V+ options" in r.output
+    assert "--lf: not taken by the Universal Robots URScript programs" in r.output
     r = _gen(VIPER / "robot.toml", VIPER / "paper_plan.toml", "-o", tmp_path / "p", "--port", 5)
     assert r.exit_code == 2
-    assert "--host, --port and --no-solver are for URScript" in r.output
+    assert "--port: not taken by the Adept/Omron V+ and eV+ programs" in r.output
 
 
 @pytest.fixture(scope="module")

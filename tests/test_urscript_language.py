@@ -15,9 +15,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.lang.urscript.parser import BUILTINS, parse_program
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.urscript.interp import Interpreter
-from wirecal.twin.urscript.parser import BUILTINS, parse_program
 
 THREADS = "SW5.20 Threads page"
 TYPES = "UR16e User Manual p. 181; UR5 CB3 User Manual 3.4.5 p. II-69"

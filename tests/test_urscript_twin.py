@@ -10,12 +10,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.lang.urscript.parser import parse_program
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.twin.cell import Faults
 from wirecal.twin.ur_cell import URCell
 from wirecal.twin.urscript.interp import Interpreter
-from wirecal.twin.urscript.parser import parse_program
 
 
 def program(*body: str, name: str = "p") -> str:
@@ -309,7 +309,7 @@ def test_lint_dispatches_on_the_script_extension(tmp_path):
     bad.write_text(program("textmsg(hi)"))
     ok = CliRunner().invoke(main, ["lint", str(good)])
     assert ok.exit_code == 0
-    assert "URScript, 1 function, no problems" in ok.output
+    assert "Universal Robots URScript, no problems" in ok.output
     nok = CliRunner().invoke(main, ["lint", str(good), str(bad)])
     assert nok.exit_code == 1
     assert f"{bad}:2: variable hi is read but never assigned" in nok.output

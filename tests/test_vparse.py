@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 
 from wirecal.gen.vplus.program import GenOptions, module_text
+from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.run_parameters import RunParameters
-from wirecal.twin.vplus.parser import parse_module
 
 
 # the generated module still uses base, off and dz as names, which the checker now

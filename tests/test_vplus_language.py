@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.gen.vplus.literals import MAX_MANTISSA, double_literal
+from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.vplus.parser import parse_module
 
 
 def prog(body: str) -> str:

@@ -11,11 +11,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.lang.vplus import nodes as N
+from wirecal.lang.vplus.keywords import keyword, keywords
+from wirecal.lang.vplus.parser import parse_module, parse_step
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.vplus import nodes as N
 from wirecal.twin.vplus.interp import Interpreter, Trans
-from wirecal.twin.vplus.keywords import keyword, keywords
-from wirecal.twin.vplus.parser import parse_module, parse_step
 
 
 def prog(body: str, extra: str = "", header: str = ".PROGRAM t.main()") -> str:
@@ -351,8 +351,8 @@ def test_every_instruction_of_the_table_parses_as_an_instruction():
 
 
 def test_the_twin_knows_only_keywords():
-    from wirecal.twin.vplus.forms import FORMS
-    from wirecal.twin.vplus.parser import FUNCTIONS
+    from wirecal.lang.vplus.forms import FORMS
+    from wirecal.lang.vplus.parser import FUNCTIONS
 
     for name in FORMS:
         assert "instruction" in keywords()[name].kinds, name

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver import ik
 from wirecal.solver.cell_check import move_collision
 from wirecal.solver.exit_geometry import physical_wire_mm
@@ -50,7 +51,6 @@ from wirecal.solver.simulate import (
 )
 from wirecal.twin.machine import Outcome, RunError, f32
 from wirecal.twin.vplus.interp import UNMODELLED, Interpreter, Trans, VError
-from wirecal.twin.vplus.parser import parse_module
 
 ERRORS = {
     1: "Success",

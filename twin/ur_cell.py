@@ -47,11 +47,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from wirecal.lang.urscript.parser import parse_program
 from wirecal.solver.counter import Counter
 from wirecal.twin.cell import Cell
 from wirecal.twin.machine import Outcome, Stopped, f32
 from wirecal.twin.urscript.interp import Interpreter, URError, number, to_float, to_str
-from wirecal.twin.urscript.parser import parse_program
 
 FILTERED_RANGE = 2**16
 """The filtered count's range [0; 65536[ (Script Manual SW5.20)."""

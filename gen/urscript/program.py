@@ -25,6 +25,9 @@ from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import check_limits, joint_target, run_steps
 from wirecal.gen.templating import render
+from wirecal.lang.urscript import URScript
+from wirecal.lang.urscript.parser import parse_program
+from wirecal.lang.urscript.versions import NEEDED, is_refusal
 from wirecal.solver.cell_check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
@@ -40,13 +43,11 @@ from wirecal.solver.run_parameters import (
     RunParameters,
 )
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
-from wirecal.twin.urscript.parser import parse_program
-from wirecal.twin.urscript.versions import NEEDED, is_refusal
 
 ROLES = ("mount", "check", "run")
 """The programs, one ``wc_<role>.script`` each."""
 
-RAW_COUNTER_BITS = 32
+RAW_COUNTER_BITS = URScript.capabilities.counter_bits
 """The programs read the raw count, an int32 (SD §14.4): the robot file's counter_bits."""
 
 FILTERED_RANGE = 2**16
@@ -259,7 +260,7 @@ def software_problems(robot: Robot, programs: dict[str, str]) -> list[str]:
     """Check the programs as ``wirecal lint --software`` would; return the refused calls.
 
     A call the declared software is not documented to have is the user's problem: each rule
-    once, at its first call (:mod:`wirecal.twin.urscript.versions`; none when ``[controller]
+    once, at its first call (:mod:`wirecal.lang.urscript.versions`; none when ``[controller]
     software`` is not declared). Any other problem is a generator defect: raise
     :class:`WirecalError` saying so.
     """

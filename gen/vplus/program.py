@@ -21,6 +21,7 @@ from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_
 from wirecal.gen.targets import check_limits, joint_literal, run_steps
 from wirecal.gen.templating import render
 from wirecal.gen.vplus.literals import MAX_LINE, double_literal, long_lines, ppoint
+from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.cell_check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
@@ -39,7 +40,6 @@ from wirecal.solver.run_parameters import (
 )
 from wirecal.solver.validation import CONFIGS, Setup, config_poses, plate_grid
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
-from wirecal.twin.vplus.parser import parse_module
 
 MODULE_NAME = "WIRECAL.V2"
 STRIDE = 8  # flattened index c*STRIDE + k (k ≤ 7): tables by configuration and joint
@@ -55,11 +55,6 @@ PROBE_HALVINGS = 7
 """Halvings of the touch probe's last 1 mm step: contact found to 1/128 mm (0.0078 mm,
 finer than the 0.01 mm of a search in 0.1 then 0.01 mm steps, in 8 moves instead of
 about 20)."""
-
-
-BELT_COUNTER_BITS = 24
-"""The V+ belt encoder counter's width: a signed 24-bit number that rolls over (V+ User's
-Guide p. 312, as summarised in DESIGN.md): the robot file's counter_bits for interface "belt"."""
 
 
 @dataclass(frozen=True)

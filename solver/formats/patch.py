@@ -21,12 +21,13 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
+from wirecal.lang.base import Language
+from wirecal.lang.registry import language
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs, read_toml
 from wirecal.solver.formats.robot_file import MAX_DH_ANGLE_DEG, MAX_LENGTH_MM
 from wirecal.solver.formats.toml_fields import Table, document, valid
-from wirecal.solver.formats.ur_calibration import put_ur_calibration, ur_calibration_path
 from wirecal.solver.identify import Estimate
 from wirecal.solver.plan import Plan
 from wirecal.solver.plausibility import override_warning
@@ -130,32 +131,41 @@ def spec_path(path: str | Path) -> Path:
     return path.with_name(path.stem + ".spec.txt")
 
 
+def _companion(lang: Language, path: str | Path) -> Path | None:
+    """Where the language's own patch companion goes beside ``path`` (None: it has none)."""
+    path = Path(path)
+    suffix = lang.patch_companion
+    return None if suffix is None else path.with_name(path.stem + suffix)
+
+
 def companion_paths(robot: Robot, path: str | Path) -> list[Path]:
     """Return the files written beside the patch ``path`` for ``robot``'s controller.
 
-    The SPEC table always; for a URScript robot also UR's standard-DH deltas
-    (:func:`~wirecal.solver.formats.ur_calibration.ur_calibration_path`).
+    The SPEC table always, and the language's own companion if it has one
+    (:attr:`wirecal.lang.base.Language.patch_companion`: for URScript UR's standard-DH
+    deltas).
     """
-    paths = [spec_path(path)]
-    if robot.controller.language == "urscript":
-        paths.append(ur_calibration_path(path))
-    return paths
+    own = _companion(language(robot.controller.language), path)
+    return [spec_path(path), *([own] if own is not None else [])]
 
 
 def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, **meta) -> None:
     """Put the patch and its companions into an output set.
 
-    Put the patch, its SPEC table (:func:`spec_path`) and, for a URScript robot, UR's
-    standard-DH deltas into the output set ``out``, which must hold every name of
-    :func:`companion_paths`: they are published together or not at all.
+    Put the patch, its SPEC table (:func:`spec_path`) and the language's own companion
+    (:meth:`wirecal.lang.base.Language.patch_section`) into the output set ``out``, which
+    must hold every name of :func:`companion_paths`: they are published together or not
+    at all.
     """
     out.put(path, patch_text(robot, estimate, **meta))
     out.put(
         spec_path(path),
         spec_table(robot, estimate, meta.get("plausibility", ""), meta.get("unchecked", ())),
     )
-    if robot.controller.language == "urscript":
-        put_ur_calibration(out, ur_calibration_path(path), robot, estimate.as_dict())
+    lang = language(robot.controller.language)
+    own = _companion(lang, path)
+    if own is not None:
+        out.put(own, lang.patch_section(robot, estimate.as_dict()) or "")
 
 
 def write_patch(

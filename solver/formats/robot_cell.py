@@ -46,7 +46,7 @@ def read_cell(table: Table, n: int | None) -> CellModel | None:
         )
         for key in ("body_min_deg", "body_max_deg")
     ]
-    if body[0] is not None and body[1] is not None:
+    if body[0] is not None and body[1] is not None and body[0].shape == body[1].shape:
         for j in np.flatnonzero(body[0] >= body[1]):
             table.add("body_max_deg", f"joint {j + 1}: {body[1][j]:g} is not above body_min_deg")
     boxes = [_box(t) for t in table.tables("box", BOX_KEYS, required=False)]

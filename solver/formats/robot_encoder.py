@@ -8,6 +8,7 @@ exit (:mod:`wirecal.solver.exit_geometry`). The format is in
 
 from __future__ import annotations
 
+from wirecal.lang.registry import default_language, languages
 from wirecal.solver.exit_geometry import Exit, Eyelet, Pulley
 from wirecal.solver.formats.robot_values import (
     MAX_EXIT_DEG,
@@ -27,9 +28,6 @@ from wirecal.solver.robot import (
     DEFAULT_CHANNEL,
     DEFAULT_DRUM_PPM_PER_K,
     DEFAULT_SCALE_TOLERANCE_PPM,
-    INTERFACES,
-    LANGUAGES,
-    SOFTWARE_LINES,
     SOFTWARE_PATTERN,
     Controller,
     Encoder,
@@ -69,24 +67,29 @@ UR e-Series Script Directory §14.2, encoder_enable_pulse_decode, p. 26)."""
 def read_language_and_interface(controller: Table, enc: Table) -> tuple[str | None, str | None]:
     """Read ``[controller] language`` (V+ when absent) and ``[encoder] interface``.
 
-    The interface defaults to the language's first (:data:`wirecal.solver.robot.INTERFACES`)
+    The interface defaults to the language's first (its registered ``encoder_interfaces``)
     and must be one the language's programs read. None for a value with a problem (reported).
     """
-    language = controller.string("language", "vplus", choices=LANGUAGES)
+    titles = {key: lang.title for key, lang in languages().items()}
+    language = controller.string("language", default_language().key, choices=titles)
+    lang = languages()[language] if language is not None else default_language()
+    readable = lang.capabilities.encoder_interfaces
     interface = enc.string(
         "interface",
-        INTERFACES[language or "vplus"][0],
-        choices={
-            "belt": "V+: DEFBELT/BELT",
-            "device": "V+: DEVICE",
-            "pulse": "URScript: the controller's pulse decoder",
-        },
+        readable[0],
+        choices=dict(
+            sorted(
+                (i, f"{other.title}: {other.interface_notes.get(i, '')}")
+                for other in languages().values()
+                for i in other.capabilities.encoder_interfaces
+            )
+        ),
     )
-    if language is not None and interface is not None and interface not in INTERFACES[language]:
+    if language is not None and interface is not None and interface not in readable:
         enc.add(
             "interface",
-            f"is {interface!r}, which the {LANGUAGES[language]} programs cannot read; give "
-            + " or ".join(repr(i) for i in INTERFACES[language])
+            f"is {interface!r}, which the {lang.title} programs cannot read; give "
+            + " or ".join(map(repr, readable))
             + " (or change [controller] language)",
         )
         interface = None
@@ -125,7 +128,7 @@ def _software(table: Table, language: str | None) -> str | None:
     if not SOFTWARE_PATTERN.fullmatch(software):
         table.add("software", f'is {software!r}; give the version as numbers, e.g. "5.20"')
         return None
-    lines = SOFTWARE_LINES.get(language or "", {})
+    lines = languages()[language].capabilities.software_lines if language else {}
     major = int(software.split(".")[0])
     if lines and major not in lines:
         known = ", ".join(f"{name} {m}.x" for m, name in lines.items())

@@ -1,7 +1,7 @@
 """An interpreter of the URScript wirecal generates, with the UR controller's numbers.
 
 Programs are compiled into Python closures once, dispatching on the node types of
-:mod:`wirecal.twin.urscript.nodes`, as the V+ interpreter does. What the interpreter
+:mod:`wirecal.lang.urscript.nodes`, as the V+ interpreter does. What the interpreter
 holds to, and how sure we are of it (see :mod:`wirecal.gen.urscript.facts`):
 
 * ints are 32-bit and floats 32-bit (UR16e User Manual p. 181, *confirmed*): every float
@@ -36,10 +36,10 @@ from collections.abc import Callable
 from dataclasses import fields
 from functools import singledispatchmethod
 
+from wirecal.lang.urscript import nodes as N
+from wirecal.lang.urscript.parser import Program, operands, walk
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.machine import Halt, Outcome, RunError, Stopped, f32
-from wirecal.twin.urscript import nodes as N
-from wirecal.twin.urscript.parser import Program, operands, walk
 
 INT_MIN = -(2**31)
 

@@ -1,11 +1,11 @@
 """An interpreter of V+ programs, with V+ semantics.
 
 It covers the instructions and functions the digital twin models (see
-:mod:`wirecal.twin.vplus.forms`); any other instruction or function, valid V+ as it may
+:mod:`wirecal.lang.vplus.forms`); any other instruction or function, valid V+ as it may
 be, stops the program with a run-time error naming it.
 
 Programs are compiled into Python closures once, dispatching on the node types of
-:mod:`wirecal.twin.vplus.nodes`. Semantics (V+ Language User's Guide
+:mod:`wirecal.lang.vplus.nodes`. Semantics (V+ Language User's Guide
 v17): REAL is IEEE single precision and DOUBLE double (p. 102) — an operation whose
 operands are all single is rounded to single, a store into a REAL rounds to single, and a
 GLOBAL DOUBLE read or written by a program that does not declare it DOUBLE is treated as
@@ -23,12 +23,12 @@ from collections import Counter
 from collections.abc import Callable
 from functools import singledispatchmethod
 
+from wirecal.lang.vplus import nodes as N
+from wirecal.lang.vplus.forms import FormError, operands
+from wirecal.lang.vplus.keywords import keyword
+from wirecal.lang.vplus.parser import CONSTANTS, FUNCTIONS, Module, Program, transformation_names
 from wirecal.solver import pose
 from wirecal.twin.machine import Halt, Outcome, RunError, f32
-from wirecal.twin.vplus import nodes as N
-from wirecal.twin.vplus.forms import FormError, operands
-from wirecal.twin.vplus.keywords import keyword
-from wirecal.twin.vplus.parser import CONSTANTS, FUNCTIONS, Module, Program, transformation_names
 
 
 class Trans:

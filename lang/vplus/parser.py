@@ -4,7 +4,7 @@ The trees are checked as a controller's LOAD checks them.
 
 The text (CRLF or LF) is split into ``.PROGRAM … .END`` blocks (data sections such as
 ``.LOCATIONS … .END`` are skipped); each step is parsed by the lark grammar
-``vplus.lark`` and turned into the dataclass nodes of :mod:`wirecal.twin.vplus.nodes`;
+``vplus.lark`` and turned into the dataclass nodes of :mod:`wirecal.lang.vplus.nodes`;
 IF/FOR/WHILE/DO/CASE blocks are assembled from the lines. :func:`parse_module` rejects,
 as ``file:line: program: problem``: a V+ keyword (``keywords.csv``) used as a program,
 variable or parameter name (User's Guide p. 99), a missing ``.END``, declarations after
@@ -29,11 +29,11 @@ from importlib import resources
 from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedToken
 
+from wirecal.lang.syntax import NestingError, check_block_depth, check_line_depth, walk_tree
+from wirecal.lang.vplus import nodes as N
+from wirecal.lang.vplus.forms import FormError, operands
+from wirecal.lang.vplus.keywords import VALUE_KINDS, is_kind, keyword
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import NestingError, check_block_depth, check_line_depth, walk_tree
-from wirecal.twin.vplus import nodes as N
-from wirecal.twin.vplus.forms import FormError, operands
-from wirecal.twin.vplus.keywords import VALUE_KINDS, is_kind, keyword
 
 SIGNIFICANT = 15
 _HEADER = re.compile(r"^\.PROGRAM\s+([$#%]?[A-Za-z][A-Za-z0-9._]*)\s*(?:\((.*)\))?\s*$", re.I)

@@ -1,6 +1,6 @@
 """The typed syntax tree of URScript programs: one dataclass per construct.
 
-Built by the lark transformer of :mod:`wirecal.twin.urscript.parser` (classes deriving
+Built by the lark transformer of :mod:`wirecal.lang.urscript.parser` (classes deriving
 from ``lark.ast_utils.Ast`` are matched to the grammar rule of the same name, as for V+);
 the checker and the interpreter dispatch on the node type. URScript names are
 case-sensitive and kept as written. Statements carry their line number in the source.

@@ -1,6 +1,6 @@
 """The typed syntax tree of V+ programs: one dataclass per construct.
 
-The lark transformer of :mod:`wirecal.twin.vplus.parser` builds these nodes (classes
+The lark transformer of :mod:`wirecal.lang.vplus.parser` builds these nodes (classes
 that derive from ``lark.ast_utils.Ast`` are matched to the grammar rule of the same name
 in snake case, as in lark's ``create_ast`` example); the checker and the interpreter
 dispatch on the node type. Names are kept in lower case with their type prefix

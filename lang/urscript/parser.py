@@ -2,7 +2,7 @@
 
 Each statement (its ``#`` comment removed; lines joined while a bracket is open or after a
 trailing operator) is parsed by the lark grammar ``urscript.lark`` into the dataclass
-nodes of :mod:`wirecal.twin.urscript.nodes`; ``def``/``thread``/``sec``/``while``/``if``
+nodes of :mod:`wirecal.lang.urscript.nodes`; ``def``/``thread``/``sec``/``while``/``if``
 blocks are assembled from the lines. The language is the Script Manual's: poses
 ``p[…]``, threads with ``run``/``join``/``kill`` and critical sections (SW5.20,
 "Threads"), default and named arguments, ``break``/``continue`` (unconfirmed: used by
@@ -38,10 +38,10 @@ from importlib import resources
 from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError
 
+from wirecal.lang.syntax import NestingError, check_block_depth, check_line_depth, walk_tree
+from wirecal.lang.urscript import nodes as N
+from wirecal.lang.urscript.versions import refusal, too_new, version_of
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import NestingError, check_block_depth, check_line_depth, walk_tree
-from wirecal.twin.urscript import nodes as N
-from wirecal.twin.urscript.versions import refusal, too_new, version_of
 
 
 @dataclass(frozen=True)
@@ -274,7 +274,7 @@ def parse_program(text: str, source: str = "<script>", software: str | None = No
     """Parse and check one ``.script`` program; raise :class:`WirecalError` listing problems.
 
     With ``software`` ("5.20"), a call that version's manual pages do not document is a
-    problem too (:mod:`wirecal.twin.urscript.versions`).
+    problem too (:mod:`wirecal.lang.urscript.versions`).
     """
     problems: list[str] = []
     steps: list[N.Stmt] = []

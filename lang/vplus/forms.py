@@ -1,6 +1,6 @@
 """The operand forms of the instructions the digital twin executes.
 
-Every V+ instruction parses as a generic :class:`~wirecal.twin.vplus.nodes.Instruction`;
+Every V+ instruction parses as a generic :class:`~wirecal.lang.vplus.nodes.Instruction`;
 the twin executes the instructions below in the form given here, and refuses any other
 instruction, or another form of these, at run time naming it. The generator's
 self-check (``parse_module(..., twin=True)``) requires every instruction of a generated
@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import re
 
-from wirecal.twin.vplus.nodes import Clause, Expr, Group, Instruction, Paren, Var
+from wirecal.lang.vplus.nodes import Clause, Expr, Group, Instruction, Paren, Var
 
 FORMS: dict[str, str] = {
     "move": "l",

@@ -1,0 +1,84 @@
+"""The URScript generator behind ``wirecal gen``: ``wc_mount``, ``wc_check``, ``wc_run``."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+
+from wirecal.gen.request import GenRequest, refuse_unsupported
+from wirecal.gen.urscript.program import UrOptions, pc_address, scripts, write_scripts
+from wirecal.lang.urscript import URScript
+from wirecal.lang.urscript.versions import NEEDED
+from wirecal.solver.formats.run_token import NO_KEY, run_token
+from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
+from wirecal.solver.run_parameters import PAPER_RUN
+
+
+class URScriptGenerator:
+    """:func:`~wirecal.gen.urscript.program.scripts` for a :class:`GenRequest`."""
+
+    key = URScript.key
+    # no file output (the log goes over the socket, mirrored with textmsg), LF line ends
+    # (SD "script over port 30002"), no patch or validation programs yet
+    refuses = frozenset({"patch", "validation", "log_file", "echo_log", "crlf"})
+    default_run = PAPER_RUN
+
+    def options(self, request: GenRequest) -> UrOptions:
+        """Return the scripts' options for ``request`` (refusing what they do not take)."""
+        refuse_unsupported(request, self.refuses, URScript.title)
+        return UrOptions(
+            run=request.run or self.default_run,
+            host=request.host,
+            port=request.port,
+            zero_tol_mm=request.zero_tol_mm,
+            spread_tol_mm=request.spread_tol_mm,
+            margin_deg=request.margin_deg,
+            range_margin_mm=request.range_margin_mm,
+            solver=request.solver,
+        )
+
+    def programs(self, robot: Robot, plan: Plan, request: GenRequest) -> dict[str, str]:
+        """Return the three ``.script`` files by name."""
+        return scripts(robot, plan, self.options(request))
+
+    def write(
+        self,
+        out_dir: str | Path,
+        programs: dict[str, str],
+        request: GenRequest,
+        *,
+        force: bool = False,
+        inputs: Iterable[str | Path] = (),
+    ) -> list[Path]:
+        """Write the scripts, LF line ends."""
+        return write_scripts(out_dir, programs, force=force, inputs=inputs)
+
+    def notes(self, robot: Robot, robot_path: str) -> list[str]:
+        """Return the warnings for an undeclared software version or run key."""
+        out = []
+        if robot.controller.software is None:
+            out.append(
+                f"{robot_path}: [controller] software not declared; the programs need "
+                f"e-Series software {'.'.join(map(str, NEEDED))} or later "
+                "(docs/languages.md); declare it and a CB3 or older version is refused"
+            )
+        if robot.controller.key is None:
+            out.append(f"{robot_path}: {NO_KEY}")
+        return out
+
+    def next_steps(
+        self, robot: Robot, plan: Plan, request: GenRequest, robot_path: str, plan_path: str
+    ) -> str:
+        """Return the order to run the scripts in and the receive command for the PC."""
+        host, port = pc_address(robot, self.options(request))
+        where = f" --host {host} --port {port}" if request.host or request.port else ""
+        token = run_token(robot, plan.fingerprint())[:6]
+        return (
+            f"run wc_mount, wc_check, then on the PC 'wirecal receive --robot {robot_path} "
+            f"--plan {plan_path}{where} -o LOG' (it listens on {host}:{port}, run token "
+            f"{token}…) and wc_run"
+        )
+
+
+GENERATOR = URScriptGenerator()

@@ -1,0 +1,73 @@
+"""What a controller language declares: its capabilities, its checker and its conformance cases.
+
+Each ``lang/<key>/__init__.py`` subclasses :class:`Language` and registers it
+(:func:`wirecal.lang.registry.register`); everything else asks the registry instead of naming
+a language.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """What a controller language can do, as far as wirecal's programs use it."""
+
+    int_bits: int | None  # width of its integers (None: no integer type)
+    float_bits: int  # width of the reals the programs use
+    file_io: bool  # can write the log to a file on the controller
+    sockets: bool  # can send the log to the PC over TCP
+    encoder_interfaces: tuple[str, ...]  # [encoder] interface values; the first is the default
+    counter_bits: int  # the counter width the generated programs read
+    software_lines: Mapping[int, str]  # major version → product line ({} when not versioned)
+
+
+@dataclass(frozen=True)
+class Example:
+    """A snippet the checker must accept (valid) or refuse (invalid), and the page that says so."""
+
+    text: str
+    source: str  # the manual page the rule comes from ("User's Guide p. 99")
+    software: str | None = None  # the controller software to check against, if it matters
+
+
+class Language:
+    """One controller language: the robot file's ``[controller] language`` value and its facts."""
+
+    key: ClassVar[str]  # the robot file's [controller] language value
+    title: ClassVar[str]  # its name in messages
+    suffix: ClassVar[str]  # program file suffix
+    live_check: ClassVar[str]  # the generated program that shows the live counts
+    capabilities: ClassVar[Capabilities]
+    interface_notes: ClassVar[Mapping[str, str]] = {}  # encoder interface → how it is read
+    patch_companion: ClassVar[str | None] = None  # suffix of its file beside a patch, if any
+    default: ClassVar[bool] = False  # the language of a robot file without [controller]
+    valid_examples: ClassVar[tuple[Example, ...]] = ()  # conformance: snippets lint accepts
+    invalid_examples: ClassVar[tuple[Example, ...]] = ()  # conformance: snippets lint refuses
+
+    def lint(
+        self,
+        text: str,
+        source: str,
+        software: str | None = None,
+        *,
+        external_calls: bool = False,
+    ) -> list[str]:
+        """Return the checker's problems, each 'SOURCE:LINE: what' ([] = clean).
+
+        ``software``: the controller software version to check calls against (languages
+        without versions ignore it); ``external_calls``: calls to programs not in ``text``
+        are allowed (loaded from another file).
+        """
+        raise NotImplementedError
+
+    def patch_section(self, robot: Any, offsets: Mapping[str, float]) -> str | None:
+        """Return the text of the language's own patch companion (None: it has none).
+
+        The patch ``<name>.toml`` gets it beside it as ``<name>`` + :attr:`patch_companion`;
+        ``offsets`` are the identified ones by parameter name (deg, mm).
+        """
+        return None

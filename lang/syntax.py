@@ -1,0 +1,75 @@
+"""What the parsers of every controller language share: the nesting bounds they read.
+
+A program nested deeper than these bounds is refused up front (the checks and the
+interpreters recurse per level), and a helper walks a parsed program's block tree.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from typing import TypeVar
+
+from wirecal.solver.errors import WirecalError
+
+MAX_BLOCK_DEPTH = 64
+"""Deepest nesting of blocks (IF, FOR, WHILE, DO, CASE; URScript def, if, while) the
+parsers read. wirecal's bound, far beyond the programs it generates; the controllers' own
+limits are unconfirmed. The checks and the interpreters recurse per
+level, so a deeper program is refused up front."""
+
+MAX_EXPRESSION_DEPTH = 100
+"""Deepest parse tree of one line (nested parentheses, a chain of operators) the parsers
+read; wirecal's bound (its generated V+ and URScript lines reach 12), not a controller's."""
+
+
+class NestingError(Exception):
+    """A program nested deeper than the parsers read (its message says where the bound is)."""
+
+
+def tree_depth(tree: object) -> int:
+    """Return the depth of a lark parse tree, without recursion.
+
+    Any object with ``children`` is a node; the root alone has depth 0.
+    """
+    deepest, level = 0, [tree]
+    while level:
+        deepest += 1
+        level = [c for node in level for c in getattr(node, "children", ()) if c is not None]
+    return deepest - 1
+
+
+def check_line_depth(tree: object) -> None:
+    """Raise :class:`NestingError` for a line parsed deeper than :data:`MAX_EXPRESSION_DEPTH`."""
+    depth = tree_depth(tree)
+    if depth > MAX_EXPRESSION_DEPTH:
+        raise NestingError(
+            f"the line nests {depth} levels deep (parentheses or chained operators); "
+            f"wirecal reads at most {MAX_EXPRESSION_DEPTH}: split the expression"
+        )
+
+
+def check_block_depth(open_blocks: int, where: str) -> None:
+    """Raise :class:`WirecalError` at ``where`` when one more block would be too deep.
+
+    Too deep: beyond :data:`MAX_BLOCK_DEPTH`; the whole file is refused, since every
+    later line's block would be wrong.
+    """
+    if open_blocks >= MAX_BLOCK_DEPTH:
+        raise WirecalError(
+            [
+                f"{where}: blocks nested more than {MAX_BLOCK_DEPTH} deep; wirecal reads at "
+                f"most {MAX_BLOCK_DEPTH} (the controller's own limit is unconfirmed): move "
+                "the inner blocks into a program of their own"
+            ]
+        )
+
+
+S = TypeVar("S")
+
+
+def walk_tree(steps: list[S], children: Callable[[S], list[list[S]]]) -> Iterator[S]:
+    """Every statement of ``steps`` and of the blocks inside them (``children``), depth first."""
+    for s in steps:
+        yield s
+        for body in children(s):
+            yield from walk_tree(body, children)

@@ -1,0 +1,79 @@
+"""Universal Robots URScript: the front end (grammar, parser, checker, function table).
+
+The declaration below is what the rest of wirecal knows of URScript (Script Manual "SD"
+§ numbers, the SW5.20 pages, and the UR user manuals cited).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import ClassVar
+
+from wirecal.lang.base import Capabilities, Example, Language
+from wirecal.lang.registry import register
+from wirecal.lang.urscript.calibration import SUFFIX, calibration_text
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.robot import Robot
+
+_TYPES = "UR16e User Manual p. 181; UR5 CB3 User Manual 3.4.5 p. II-69"
+_TICKS = "SW5.20 encoder_get_tick_count page"
+
+
+def _program(*body: str) -> str:
+    return "\n".join(["def p():", *(f"  {line}" for line in body), "end", ""])
+
+
+@register
+class URScript(Language):
+    """URScript: one ``.script`` per program; the log goes to the PC over a socket."""
+
+    key = "urscript"
+    title = "Universal Robots URScript"
+    suffix = ".script"
+    live_check = "wc_check"
+    capabilities = Capabilities(
+        int_bits=32,  # int32 (the manuals above)
+        float_bits=32,  # float32 (the manuals above)
+        file_io=False,  # no file output: the log is sent to 'wirecal receive'
+        sockets=True,  # socket_open/socket_send_line (SD)
+        encoder_interfaces=("pulse",),  # the controller's pulse decoder (SD §14.4)
+        counter_bits=32,  # the raw count, an int32 (SD §14.4)
+        software_lines={3: "CB3", 5: "e-Series (PolyScope 5)"},
+    )
+    interface_notes: ClassVar[Mapping[str, str]] = {"pulse": "the controller's pulse decoder"}
+    valid_examples: ClassVar[tuple[Example, ...]] = (
+        Example(_program("x = p[0.4, -0.1, 0.3, 0, 3.1416, 0]", "y = x[2]"), _TYPES),
+        Example(_program("lo = -2147483648", "hi = 2147483647"), _TYPES),
+        Example(_program('c = encoder_get_tick_count(1, opt="raw")'), _TICKS, "5.20"),
+    )
+    invalid_examples: ClassVar[tuple[Example, ...]] = (
+        Example(_program("x = 2147483648"), _TYPES),
+        Example(_program("x = 2147483647 + 1"), _TYPES),
+        Example(_program("c = encoder_get_tick_count(2)"), _TICKS),
+        Example(_program('c = encoder_get_tick_count(0, opt="rawx")'), _TICKS),
+        Example(_program("q = [1, 2, 3]", "x = q[3]"), _TYPES),
+        Example(_program('c = encoder_get_tick_count(0, opt="raw")'), _TICKS, "3.15"),
+    )
+
+    patch_companion = SUFFIX  # Universal Robots' standard-DH deltas (calibration.py)
+
+    def patch_section(self, robot: Robot, offsets: Mapping[str, float]) -> str:
+        """Return UR's standard-DH deltas of ``offsets`` in calibration.conf's layout."""
+        return calibration_text(robot, offsets)
+
+    def lint(
+        self,
+        text: str,
+        source: str,
+        software: str | None = None,
+        *,
+        external_calls: bool = False,
+    ) -> list[str]:
+        """Check a script as sent to the controller (``external_calls`` does not apply)."""
+        from wirecal.lang.urscript.parser import parse_program
+
+        try:
+            parse_program(text, source, software)
+        except WirecalError as exc:
+            return list(exc.problems)
+        return []
