@@ -118,7 +118,7 @@ class World:
     run_s: float = 0.0  # the run's duration, for the temperature's time course
     pull_mm: Callable[[float], float] | None = None  # the operator pulls the wire (clock, s)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Derive the true model and start the world's state."""
         self.rng = np.random.default_rng(self.seed)
         self.model = self.robot.model(self.truth)
@@ -207,7 +207,7 @@ class World:
 
     def profile(self, q_deg: np.ndarray) -> Moves:
         """Return the move from the current joints to ``q_deg`` on the true arm."""
-        return move_profiles(self.robot, self.model, self.p0, self.joints, q_deg)
+        return move_profiles(self.robot, self.model, self.p0, np.asarray(self.joints), q_deg)
 
     def wire_overspeed(self, move: Moves, speed_pct: float) -> str | None:
         """Return why ``move`` at ``speed_pct`` would run the wire beyond the encoder's limits.
@@ -217,8 +217,8 @@ class World:
         enc = self.robot.encoder
         if not self.wire_limits:
             return None
-        speed = float(move.wire_speed_mm_s(speed_pct)[0])
-        accel = float(move.wire_accel_mm_s2(speed_pct)[0])
+        speed = float(move.wire_speed_mm_s(np.asarray(speed_pct))[0])
+        accel = float(move.wire_accel_mm_s2(np.asarray(speed_pct))[0])
         if enc.max_wire_speed_mm_s is not None and speed > enc.max_wire_speed_mm_s:
             return (
                 f"the wire would run at {speed:.0f} mm/s, beyond the encoder's "
@@ -307,7 +307,8 @@ class World:
         d += amplitude * math.exp(-t / tau) * math.cos(2 * math.pi * VIBRATION_HZ * t + phase)
         jitter = int(self.rng.choice((-1, 0, 0, 0, 1)))
         truth = self.encoder_truth  # what the encoder reads of it: scale, temperature, drift
-        d = float(truth.read_factor(self.clock, self.run_s)) * d + float(truth.drift_mm(self.clock))
+        now = np.asarray(self.clock)
+        d = float(truth.read_factor(now, self.run_s)) * d + float(truth.drift_mm(now))
         count = math.floor(self.counter_start + d / enc.mm_per_count + 0.5) + jitter
         pulled = self.pull_mm(self.clock) if self.pull_mm is not None else 0.0
         return count + round(pulled / enc.mm_per_count)

@@ -76,7 +76,7 @@ class URController:
     lines_sent: int = 0
     syncs: int = 0  # sync() calls (each a 2 ms frame)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """No encoder is decoded until a program enables it."""
         self.decoding: dict[int, tuple[int, int, int]] = {}
 

@@ -54,7 +54,7 @@ def ur_readings(log: Log, plan: Plan) -> list[int]:
 class _SolverController(URController):
     """The controller as wc_solve sees it: sent lines kept, operations counted per sync."""
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         super().__post_init__()
         self.sent: list[str] = []
         self.marks: list[int] = [0]  # operations executed at each sync()

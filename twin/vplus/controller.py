@@ -51,7 +51,7 @@ class VplusController:
     offsets: dict[str, float] = field(default_factory=dict)  # the model it believes
     probe_signal: int = 1001  # the input the touch probe is wired to
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         """Derive the believed model and start the controller's state."""
         self.believed = self.world.robot.model(self.offsets)
         self.requested: dict[int, str] = {}
@@ -140,8 +140,9 @@ class VplusController:
         if over is not None:
             where = f"move {w.moves + 1} to ({', '.join(f'{x:g}' for x in q)})"
             raise VError(-1101, f"{ERRORS[-1101]} {where} at SPEED {self.speed_pct:g}: {over}")
-        w.arrive(q, float(move.duration_s(self.speed_pct)[0]))
-        w.vibrate(float(move.vibration_mm(self.speed_pct)[0]))
+        speed = np.asarray(self.speed_pct)
+        w.arrive(q, float(move.duration_s(speed)[0]))
+        w.vibrate(float(move.vibration_mm(speed)[0]))
 
     def break_(self) -> None:
         """BREAK: nothing to wait for; the twin's motions end at once."""
