@@ -294,8 +294,8 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true
     V+: wc.mount and wc.run write the log on the cell's disk. URScript: wc_mount and wc_run
     send it over a loopback socket to wirecal receive (the journal of an incomplete run).
     """
+    from wirecal.twin.run_moves import move_of_step, where_in_run
     from wirecal.twin.world import Faults as TwinFaults  # the twin only when asked for
-    from wirecal.twin.world import move_of_step, where_in_run
 
     faults = TwinFaults()
     if slip is not None:

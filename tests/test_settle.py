@@ -27,7 +27,8 @@ from wirecal.solver.run_parameters import (
     optimal_readings,
     run_timeline,
 )
-from wirecal.twin.world import Faults, move_of_step, run_targets
+from wirecal.twin.run_moves import move_of_step, run_targets
+from wirecal.twin.world import Faults
 
 TRUTH = {"th2": 0.05, "th3": -0.04, "a2": 0.1, "d4": -0.08}
 

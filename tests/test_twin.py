@@ -23,11 +23,12 @@ from wirecal.solver.planner import robot_time
 from wirecal.solver.run_parameters import DEFAULT_RUN, PAPER_RUN, run_timeline
 from wirecal.solver.simulate import EncoderTruth, simulate_log
 from wirecal.solver.solve import solve
+from wirecal.twin.run_moves import move_of_step, where_in_run
 from wirecal.twin.vplus.controller import VplusController
 from wirecal.twin.vplus.interp import Interpreter, f32
 from wirecal.twin.vplus.parser import parse_module
 from wirecal.twin.vplus.runs import run_validation
-from wirecal.twin.world import Faults, Plate, World, move_of_step, where_in_run
+from wirecal.twin.world import Faults, Plate, World
 
 from .conftest import TABLE5 as TRUTH
 from .conftest import VIPER

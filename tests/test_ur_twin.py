@@ -20,7 +20,8 @@ from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.measurements import check_log, load_measurements
 from wirecal.solver.solve import solve
-from wirecal.twin.world import Faults, World, move_of_step
+from wirecal.twin.run_moves import move_of_step
+from wirecal.twin.world import Faults, World
 
 HEADER_LINES = 6  # the wirecal-log header and the column line
 

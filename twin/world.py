@@ -26,8 +26,7 @@ instructions onto these methods, raising its own errors with its own codes:
 * probe: :meth:`probe_touching`; disk: ``disk``, :meth:`append_line`; time: ``clock``,
   :meth:`wait`.
 
-A run's result is a :class:`TwinRun`; :func:`move_of_step` and :func:`where_in_run` name
-the moves of a measurement run (the same in every language).
+A run's result is a :class:`TwinRun`.
 """
 
 from __future__ import annotations
@@ -44,7 +43,6 @@ from wirecal.solver.cell_check import move_collision
 from wirecal.solver.exit_geometry import physical_wire_mm
 from wirecal.solver.ik import flange_pose
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import VIBRATION_HZ, VIBRATION_TAU_S, Moves, move_profiles
 from wirecal.solver.simulate import (
@@ -355,29 +353,3 @@ def stop_reason(mount: Outcome, run: Outcome | None) -> str | None:
     if run is not None and run.status == "completed":
         return None
     return f"{last.program} {last.status} at line {last.line}: {last.message}"
-
-
-def run_targets(plan: Plan) -> list[str]:
-    """List what each move of the measurement run reaches, in order (move k is entry k-1).
-
-    Per step θ0 (its zero reading), the via points, the points; last θ0 for the closing
-    zero reading.
-    """
-    out = []
-    for j, s in enumerate(plan.steps, 1):
-        out.append(f"step {j} zero reading at theta0")
-        out += [f"step {j} via point {i}" for i in range(1, len(s.via_deg) + 1)]
-        out += [f"step {j} point {i}" for i in range(1, len(s.points_deg) + 1)]
-    out.append("the closing zero reading at theta0")
-    return out
-
-
-def move_of_step(plan: Plan, step: int, point: int = 1) -> int:
-    """Return the 1-based number of the move of the run that reaches a step's point."""
-    return run_targets(plan).index(f"step {step} point {point}") + 1
-
-
-def where_in_run(plan: Plan, moves: int) -> str:
-    """Where the run was after ``moves`` moves (the world counts them)."""
-    targets = run_targets(plan)
-    return targets[moves - 1] if 1 <= moves <= len(targets) else "the start of the run"

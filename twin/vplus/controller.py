@@ -231,7 +231,7 @@ class VplusController:
         self.luns.pop(lun, None)
 
     def fopen(self, mode: str, lun: int, name: str) -> None:
-        """FOPENR/FOPENW/FOPENA: open a file on the cell's disk; the status in IOSTAT."""
+        """FOPENR/FOPENW/FOPENA: open a file on the world's disk; the status in IOSTAT."""
         path = self.world.disk / name.split(":")[-1].upper()
         if lun not in self.luns:
             self.status[lun] = -514
