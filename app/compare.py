@@ -42,7 +42,7 @@ def controller_solve(
     options = GenOptions()
     text = text if text is not None else module_text(robot, plan, options)
     (disk / options.result_file).unlink(missing_ok=True)  # a previous run's result
-    return vplus_solve(robot, plan, m, disk, polish=polish, text=text)
+    return vplus_solve(robot, plan, m.log.readings, disk, polish=polish, text=text, closed=m.closed)
 
 
 def ur_controller_solve(
@@ -58,7 +58,7 @@ def ur_controller_solve(
             host=robot.controller.host or "127.0.0.1", port=robot.controller.port or 50000
         )
         text = scripts(robot, plan, opt)["wc_run.script"]
-    return urscript_solve(robot, plan, m, disk, text)
+    return urscript_solve(robot, plan, m.log.readings, disk, text)
 
 
 @dataclass(frozen=True)

@@ -8,9 +8,11 @@ import pytest
 from wirecal.gen.urscript.program import scripts
 from wirecal.gen.vplus.program import MODULE_NAME, module_text
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.measurements import load_measurements
+from wirecal.solver.measurements import check_log, load_measurements
+from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 from wirecal.twin.adapters import adapter
 from wirecal.twin.urscript.controller import URController
@@ -78,20 +80,47 @@ def test_ur_measure_without_a_receiver_is_incomplete(ur5, ur5_plan, tmp_path):
 
 
 @pytest.mark.slow
-def test_vplus_adapter_measures_and_its_controller_solver_agrees(viper, paper_plan, tmp_path):
-    """V+'s adapter: the module's run logs the whole plan, wc.solve and wc.solve2 agree
-    with the PC reference on that log."""
+def test_vplus_adapter_measures_the_whole_plan(viper, paper_plan, tmp_path):
+    """V+'s adapter: the module's run logs the whole plan in the file wc.run opened."""
     programs = {MODULE_NAME: module_text(viper, paper_plan)}
-    vplus = adapter(viper.controller.language)
-    run = vplus.measure(viper, paper_plan, TABLE5, tmp_path / "disk", programs, seed=2)
+    run = adapter(viper.controller.language).measure(
+        viper, paper_plan, TABLE5, tmp_path / "disk", programs, seed=2
+    )
     assert (run.complete, run.stopped) == (True, None)
     assert run.log == tmp_path / "disk" / "WCLOG.CSV"
-    m = load_measurements(run.log, paper_plan, viper)
-    assert m.missing == ()
-    estimates = vplus.controller_solve(viper, paper_plan, m, tmp_path / "ctl", programs)
-    assert set(estimates) == {"stepwise", "joint"}
-    ref = solve(viper, paper_plan, m, corrections=False).estimates
-    for method, offsets in estimates.items():
-        expected = ref[method].as_dict()
-        assert max(abs(offsets[n] - v) for n, v in expected.items()) < 1e-4
-        assert max(abs(offsets[n] - TABLE5[n]) for n in TABLE5) < 0.5  # near the truth
+    assert load_measurements(run.log, paper_plan, viper).missing == ()
+
+
+def lengths_case(robot, plan, seed):
+    """A simulated log's lengths (noise-free) and the PC reference's estimates on it."""
+    rng = np.random.default_rng([seed, 78])
+    truth = dict(zip(robot.parameters, rng.uniform(-2.0, 2.0, 10), strict=True))
+    log = simulate_log(robot, plan, truth, seed=seed, noise_mm=0.0)
+    m = check_log(parse_log(log, f"seed{seed}.csv"), plan, robot)
+    return m.distance_mm, solve(robot, plan, m, corrections=False).estimates
+
+
+def worst_difference(estimates, reference) -> float:
+    return max(
+        abs(offsets[n] - v)
+        for method, offsets in estimates.items()
+        for n, v in reference[method].as_dict().items()
+    )
+
+
+def test_controller_solvers_on_lengths_agree_with_the_reference(
+    viper, paper_plan, ur5, ur5_plan, tmp_path
+):
+    """Each adapter's controller_solve on the plan points' wire lengths (the zero readings
+    on a counter about to wrap) agrees with the PC reference on the same lengths."""
+    for robot, plan, programs, methods in (
+        (viper, paper_plan, {MODULE_NAME: module_text(viper, paper_plan)}, {"stepwise", "joint"}),
+        (ur5, ur5_plan, scripts(ur5, ur5_plan), {"stepwise"}),
+    ):
+        lengths, reference = lengths_case(robot, plan, seed=1)
+        language = robot.controller.language
+        estimates = adapter(language).controller_solve(
+            robot, plan, lengths, tmp_path / language, programs
+        )
+        assert set(estimates) == methods
+        assert worst_difference(estimates, reference) < 1e-5

@@ -155,7 +155,7 @@ def test_readings_from_a_log_by_hand(ur5):
         "5.0000,10,1,0.000,3.000"
     )
     log = parse_log("\n".join(rows) + "\n", "hand.csv")
-    rd = ur_readings(log, plan)
+    rd = ur_readings(log.readings, plan)
     assert len(rd) == READING_INTS * (len(plan.steps) + plan.n_points)
     assert rd[:2] == [-2147483001, 7500]  # floor of the count, offset x 10^4
     slot = len(plan.steps) + 2  # point 3 in plan order

@@ -10,8 +10,9 @@ import importlib
 from pathlib import Path
 from typing import Protocol
 
+import numpy as np
+
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
@@ -44,11 +45,15 @@ class TwinAdapter(Protocol):
         self,
         robot: Robot,
         plan: Plan,
-        lengths_mm: Measurements,
+        lengths_mm: np.ndarray,
         folder: Path,
         programs: dict[str, str],
     ) -> dict[str, dict[str, float]]:
-        """Run the controller solver on checked readings: method → offsets by name."""
+        """Run the controller solver on wire lengths: method → offsets by name.
+
+        ``lengths_mm``: each plan point's wire length from the zero reading at θ0 (mm,
+        plan order), the points at their plan joints.
+        """
         ...
 
 

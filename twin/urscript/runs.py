@@ -16,10 +16,10 @@ from typing import Protocol
 
 import numpy as np
 
-from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
+from wirecal.twin.controller_run import readings_for_lengths
 from wirecal.twin.machine import Outcome
 from wirecal.twin.urscript.controller import RAW, URController
 from wirecal.twin.urscript.interp import Interpreter
@@ -122,12 +122,18 @@ class URScriptAdapter:
         self,
         robot: Robot,
         plan: Plan,
-        lengths_mm: Measurements,
+        lengths_mm: np.ndarray,
         folder: Path,
         programs: dict[str, str],
     ) -> dict[str, dict[str, float]]:
-        """Run wc_solve (step by step: no polish) on checked readings."""
-        run = controller_solve(robot, plan, lengths_mm, folder / "stepwise", programs[RUN])
+        """Run wc_solve (step by step: no polish) on the plan points' wire lengths.
+
+        ``lengths_mm``: mm from the zero reading at θ0, plan order; the readings as wc_run
+        would keep them on the raw int32 count
+        (:func:`~wirecal.twin.controller_run.readings_for_lengths`).
+        """
+        readings = readings_for_lengths(robot, plan, lengths_mm, RAW)
+        run = controller_solve(robot, plan, readings, folder / "stepwise", programs[RUN])
         return {"stepwise": run.offsets}
 
 

@@ -8,14 +8,14 @@ them (:func:`~wirecal.solver.formats.controller_result.result_in_log`).
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.controller_result import parse_result, result_in_log
-from wirecal.solver.formats.log import Log
-from wirecal.solver.measurements import Measurements
+from wirecal.solver.formats.log import Reading
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.twin.controller_run import ControllerRun
@@ -29,8 +29,8 @@ READING_INTS = 8
 """wc_solve's readings: 8 ints each (count, offset × 10⁴, 6 joints × 10⁴ deg)."""
 
 
-def ur_readings(log: Log, plan: Plan) -> list[int]:
-    """Rebuild from a log the readings list wc_run keeps for wc_solve (``rd``).
+def ur_readings(readings: Sequence[Reading], plan: Plan) -> list[int]:
+    """Rebuild from a log's readings the list wc_run keeps for wc_solve (``rd``).
 
     The zero readings of the steps first, then the points in plan order; each reading as
     wc_meas returns it: the count as an int32 base and its offset × 10⁴, the joints in
@@ -40,7 +40,7 @@ def ur_readings(log: Log, plan: Plan) -> list[int]:
     pos = {(int(s), int(i)): k + 1 for k, (s, i) in enumerate(zip(step_no, index_no, strict=True))}
     n_steps = len(plan.steps)
     rd = [0] * READING_INTS * (n_steps + len(q_plan))
-    for r in log.readings:
+    for r in readings:
         if r.kind == "zero" and r.step > n_steps:
             continue  # the closing zero: not kept for the solver
         slot = r.step - 1 if r.kind == "zero" else n_steps - 1 + pos[(r.step, r.index)]
@@ -72,15 +72,15 @@ class _SolverController(URController):
 
 
 def controller_solve(
-    robot: Robot, plan: Plan, m: Measurements, disk: Path, text: str
+    robot: Robot, plan: Plan, readings: Sequence[Reading], disk: Path, text: str
 ) -> ControllerRun:
-    """Run wc_solve of wc_run's ``text`` in the twin on a checked log's readings."""
+    """Run wc_solve of wc_run's ``text`` in the twin on a log's readings."""
     disk.mkdir(parents=True, exist_ok=True)
     ctl = _SolverController(World(robot, {}, plan.theta0_deg, disk))
     interp = Interpreter(parse_program(text, "wc_run.script"), ctl)
     ctl.ops = interp.ops
     try:
-        interp.function("wc_solve")([ur_readings(m.log, plan)])
+        interp.function("wc_solve")([ur_readings(readings, plan)])
     except (RunError, Halt, Stopped) as exc:
         raise WirecalError(
             f"the controller solver stopped: {exc} (wc_run.script, line {interp.where})"

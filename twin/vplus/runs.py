@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 
-from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
@@ -21,6 +20,7 @@ from wirecal.solver.simulate import (
     Unmodelled,
     reference_duration_s,
 )
+from wirecal.twin.controller_run import readings_for_lengths
 from wirecal.twin.machine import Outcome
 from wirecal.twin.vplus.controller import VplusController
 from wirecal.twin.vplus.interp import Interpreter
@@ -188,15 +188,21 @@ class VplusAdapter:
         self,
         robot: Robot,
         plan: Plan,
-        lengths_mm: Measurements,
+        lengths_mm: np.ndarray,
         folder: Path,
         programs: dict[str, str],
     ) -> dict[str, dict[str, float]]:
-        """Run wc.solve (stepwise) and wc.solve2 (joint) on checked readings."""
+        """Run wc.solve (stepwise) and wc.solve2 (joint) on the plan points' wire lengths.
+
+        ``lengths_mm``: mm from the zero reading at θ0, plan order; the readings as wc.run
+        would keep them (:func:`~wirecal.twin.controller_run.readings_for_lengths`, on the
+        robot file's counter).
+        """
         _, text = module_of(programs)
+        readings = readings_for_lengths(robot, plan, lengths_mm, robot.encoder.counter)
         return {
             method: controller_solve(
-                robot, plan, lengths_mm, folder / method, polish=polish, text=text
+                robot, plan, readings, folder / method, polish=polish, text=text
             ).offsets
             for method, polish in (("stepwise", False), ("joint", True))
         }

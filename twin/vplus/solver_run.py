@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,8 +16,7 @@ import numpy as np
 
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.controller_result import read_result
-from wirecal.solver.formats.log import Log
-from wirecal.solver.measurements import Measurements
+from wirecal.solver.formats.log import Reading
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.twin.controller_run import ControllerRun
@@ -46,8 +46,8 @@ class Readings:
     zo: np.ndarray  # (S,) count offset of each step's zero
 
 
-def readings_from_log(log: Log, plan: Plan) -> Readings:
-    """Rebuild from a log the arrays the measurement program would have filled."""
+def stored_readings(readings: Sequence[Reading], plan: Plan) -> Readings:
+    """Rebuild from a log's readings the arrays the measurement program would have filled."""
     q_plan, step_no, index_no = plan.all_points()
     pos = {(int(s), int(i)): k + 1 for k, (s, i) in enumerate(zip(step_no, index_no, strict=True))}
     n = q_plan.shape[1]
@@ -57,7 +57,7 @@ def readings_from_log(log: Log, plan: Plan) -> Readings:
     zb = np.zeros(len(plan.steps))
     zo = np.zeros(len(plan.steps))
     first_zero = True
-    for r in log.readings:
+    for r in readings:
         base = float(np.round(r.counts))
         if r.kind == "zero" and r.step > len(plan.steps):
             continue  # the closing zero checks the last step; it is not a reference
@@ -75,16 +75,26 @@ def readings_from_log(log: Log, plan: Plan) -> Readings:
 
 
 def controller_solve(
-    robot: Robot, plan: Plan, m: Measurements, disk: Path, *, polish: bool, text: str
+    robot: Robot,
+    plan: Plan,
+    readings: Sequence[Reading],
+    disk: Path,
+    *,
+    polish: bool,
+    text: str,
+    closed: bool = True,
 ) -> ControllerRun:
-    """Run ``wc.solve`` (``wc.solve2`` with ``polish``) of module ``text`` on ``m``'s readings."""
+    """Run ``wc.solve`` (``wc.solve2`` with ``polish``) of module ``text`` on a log's readings.
+
+    ``closed``: the log has the closing zero reading.
+    """
     stride = _STORE_JOINT.search(text)
     if stride is None:
         raise WirecalError("the module's wc.run does not store its joints as wc.q[c*STRIDE+k]")
     disk.mkdir(parents=True, exist_ok=True)
     controller = VplusController(World(robot, {}, plan.theta0_deg, disk))
     interp = Interpreter(parse_module(text, "WIRECAL.V2"), controller)
-    r = readings_from_log(m.log, plan)
+    r = stored_readings(readings, plan)
     for c in range(len(r.cb)):
         for k in range(r.q.shape[1]):
             interp.set_global("wc.q", f32(r.q[c, k]), c * int(stride[1]) + k + 1)
@@ -95,7 +105,7 @@ def controller_solve(
     for s in range(len(r.zb)):
         interp.set_global("wc.zb", float(r.zb[s]), s + 1)
         interp.set_global("wc.zo", float(r.zo[s]), s + 1)
-    interp.set_global("wc.closed", -1.0 if m.closed else 0.0)
+    interp.set_global("wc.closed", -1.0 if closed else 0.0)
     interp.ops.clear()
     program = "wc.solve2" if polish else "wc.solve"
     outcome = interp.execute(program)
