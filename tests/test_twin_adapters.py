@@ -124,3 +124,12 @@ def test_controller_solvers_on_lengths_agree_with_the_reference(
         )
         assert set(estimates) == methods
         assert worst_difference(estimates, reference) < 1e-5
+
+
+def test_programs_missing_or_extra_are_named(viper, paper_plan, ur5, ur5_plan, tmp_path):
+    with pytest.raises(WirecalError, match="expected the one module file"):
+        adapter(viper.controller.language).measure(
+            viper, paper_plan, {}, tmp_path, {"A.V2": "", "B.V2": ""}
+        )
+    with pytest.raises(WirecalError, match=r"wc_mount\.script is missing"):
+        adapter(ur5.controller.language).measure(ur5, ur5_plan, {}, tmp_path, {"wc_run.script": ""})

@@ -280,9 +280,9 @@ class World:
         f = self.faults
         if f.encoder_fails_at_read is not None and self.reads >= f.encoder_fails_at_read:
             raise EncoderFailure(f"the encoder failed at read {self.reads}")
-        return self.wire_counts()
+        return self._wire_counts()
 
-    def wire_counts(self) -> int:
+    def _wire_counts(self) -> int:
         """Return the encoder's count for the true wire length now, before any wrap.
 
         Gaussian noise per pose, quantisation, ±1-count jitter, the vibration after the

@@ -16,6 +16,7 @@ from typing import Protocol
 
 import numpy as np
 
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
@@ -58,6 +59,13 @@ def run_ur_programs(
         run = Interpreter(parse_program(run_text, RUN), controller).execute()
     controller.close_all()
     return mount, run
+
+
+def _script(programs: dict[str, str], name: str) -> str:
+    """Return the program file ``name`` of a URScript generation (WirecalError if absent)."""
+    if name not in programs:
+        raise WirecalError(f"URScript programs: {name} is missing (got {sorted(programs)})")
+    return programs[name]
 
 
 class URScriptAdapter:
@@ -113,7 +121,7 @@ class URScriptAdapter:
         log = folder / "run.csv"
         if listen is None:
             ctl.receiver = ("127.0.0.1", _closed_port())
-            mount, run = run_ur_programs(ctl, programs[MOUNT], programs[RUN])
+            mount, run = run_ur_programs(ctl, _script(programs, MOUNT), _script(programs, RUN))
             stopped = stop_reason(mount, run) or "nobody received the log"
             return TwinRun(log, False, stopped, world, mount, run, ctl)
         return _with_receiver(ctl, programs, log, listen, timeout_s)
@@ -133,7 +141,7 @@ class URScriptAdapter:
         (:func:`~wirecal.twin.controller_run.readings_for_lengths`).
         """
         readings = readings_for_lengths(robot, plan, lengths_mm, RAW)
-        run = controller_solve(robot, plan, readings, folder / "stepwise", programs[RUN])
+        run = controller_solve(robot, plan, readings, folder / "stepwise", _script(programs, RUN))
         return {"stepwise": run.offsets}
 
 
@@ -159,7 +167,7 @@ def _with_receiver(
     thread.start()
     listening.wait(timeout_s)
     if "error" not in box:
-        mount, run = run_ur_programs(ctl, programs[MOUNT], programs[RUN])
+        mount, run = run_ur_programs(ctl, _script(programs, MOUNT), _script(programs, RUN))
         if ctl.lines_sent == 0 and ctl.receiver is not None:
             _end_wait(ctl.receiver)  # the program never connected: end the receiver's wait
         thread.join(timeout_s)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
@@ -31,6 +32,10 @@ from wirecal.twin.world import DEFAULT_UNMODELLED, Faults, Plate, TwinRun, World
 
 def module_of(programs: dict[str, str]) -> tuple[str, str]:
     """Return the module's file name and text: the one program file of a V+ generation."""
+    if len(programs) != 1:
+        raise WirecalError(
+            f"V+ programs: expected the one module file, got {sorted(programs) or 'none'}"
+        )
     ((name, text),) = programs.items()
     return name, text
 
