@@ -16,9 +16,11 @@ reported with the colliding pair (:meth:`World.collision`), as a real protective
 A language's controller adapter (``twin/<key>/controller.py``) holds a World and maps its
 instructions onto these methods, raising its own errors with its own codes:
 
-* motion: :meth:`beyond_limits`, :meth:`collision`, :meth:`profile` (time, vibration and
-  wire speed of a joint move), :meth:`wire_overspeed`, :meth:`arrive`, :meth:`vibrate`;
-  ``joints`` (commanded, deg, single precision), ``actual`` (where the arm really is);
+* motion, in this order for a move: :meth:`beyond_limits` (against ``limits``),
+  :meth:`collision`, :meth:`profile` (time, vibration and wire speed of a joint move),
+  :meth:`wire_overspeed`, :meth:`arrive` (after the language's own move time),
+  :meth:`vibrate`; ``joints`` (commanded, deg, single precision), ``actual`` (where the
+  arm really is), ``moves`` (counted; a run sets it to 0 after mounting);
 * encoder: :meth:`read_count` (one read, the unwrapped count; wrap it with the counter the
   language reads; raises :class:`EncoderFailure`, :class:`~wirecal.twin.machine.RunError`
   −1100 beyond the wire's range);
