@@ -64,7 +64,7 @@ def twin_time_s(robot, plan, run: RunParameters, truth: dict[str, float]) -> tup
         if r.run is None or r.run.status != "completed":
             raise SystemExit(f"the twin's run did not complete: {r.run}")
         last = read_log(r.log).readings[-1]
-        return last.t_s + READING_INTERVAL_S * (last.samples - 1), r.cell.clock - 0.5
+        return last.t_s + READING_INTERVAL_S * (last.samples - 1), r.world.clock - 0.5
 
 
 def twin_accuracy(robot, plan, run: RunParameters, truth: dict[str, float], trials: int):

@@ -75,7 +75,7 @@ def main() -> None:
     print(f"V+ module: {len(text.splitlines()):,} lines, parsed and checked in {t_parse:.2f} s")
     print(
         f"wc.mount + wc.run in the twin: {t_run:.2f} s (target 5 s); simulated robot time "
-        f"{result.cell.clock / 60:.1f} min"
+        f"{result.world.clock / 60:.1f} min"
     )
     for name, t, run, diff in rows:
         ops = run.operations

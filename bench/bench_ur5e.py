@@ -72,7 +72,7 @@ def main() -> None:
             run = measure_ur_in_twin(robot, plan, truth, Path(tmp) / str(k), texts=texts, seed=k)
             times.append(time.perf_counter() - t0)
             assert run.received.complete
-        clock = run.programs.cell.clock
+        clock = run.programs.world.clock
         print(
             f"  wc_mount + wc_run, {plan.n_points} points, through wirecal receive: "
             f"{1e3 * np.median(times):.0f} ms (median of 5) for {clock:.0f} s of robot time"

@@ -295,8 +295,8 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true
     V+: wc.mount and wc.run write the log on the cell's disk. URScript: wc_mount and wc_run
     send it over a loopback socket to wirecal receive (the journal of an incomplete run).
     """
-    from wirecal.twin.cell import Faults as TwinFaults  # the twin only when asked for
-    from wirecal.twin.cell import move_of_step, where_in_run
+    from wirecal.twin.run_moves import move_of_step, where_in_run
+    from wirecal.twin.world import Faults as TwinFaults  # the twin only when asked for
 
     faults = TwinFaults()
     if slip is not None:
@@ -309,7 +309,7 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true
             from wirecal.gen.urscript.program import UrOptions
 
             ur = measure_ur_in_twin(rb, pl, errors, Path(tmp), options=UrOptions(run=run), **kw)
-            mount, outcome, cell = ur.programs.mount, ur.programs.run, ur.programs.cell
+            mount, outcome, world = ur.programs.mount, ur.programs.run, ur.programs.world
             log, first = ur.log, "wc_mount"
         else:
             from wirecal.app.twin_runs import measure_in_twin
@@ -324,16 +324,16 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true
                 encoder_truth=true_encoder,
                 **kw,
             )
-            mount, outcome, cell = vp.mount, vp.run, vp.cell
+            mount, outcome, world = vp.mount, vp.run, vp.world
             log, first = vp.log, "wc.mount"
         text = log.read_text(encoding="ascii") if log.exists() else ""
     outcome = outcome or mount
     stopped = None
     if outcome.status != "completed":
-        where = where_in_run(pl, cell.moves) if outcome is not mount else first
+        where = where_in_run(pl, world.moves) if outcome is not mount else first
         stopped = (
             f"{outcome.message} at {where} ({outcome.status} in {outcome.program} line "
-            f"{outcome.line}): " + " / ".join(cell.console[-4:])
+            f"{outcome.line}): " + " / ".join(world.console[-4:])
         )
     return text, stopped
 

@@ -48,7 +48,7 @@ def vplus_run(viper, paper_plan, tmp_path_factory):
     disk = tmp_path_factory.mktemp("disk")
     r = measure_in_twin(viper, paper_plan, TRUTH, disk, seed=4, options=GenOptions(echo_log=True))
     assert r.run.status == "completed"
-    return r.cell.console, disk / "WCLOG.CSV"
+    return r.world.console, disk / "WCLOG.CSV"
 
 
 @pytest.fixture(scope="module")

@@ -27,7 +27,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot, robot_file_text, robot_from_dict
 from wirecal.solver.planner import PlanOptions, _blocked, design, predicted_accuracy
-from wirecal.twin.cell import run_measurement
+from wirecal.twin.vplus.runs import run_measurement
 
 from .conftest import VIPER
 
@@ -190,7 +190,9 @@ def test_vplus_twin_stops_a_colliding_move_naming_the_pair(tmp_path, monkeypatch
     plan = load_plan(plan_file, robot)
     monkeypatch.setattr("wirecal.gen.vplus.program.check_cell", lambda *_: None)
     text = module_text(robot, plan)
-    r = run_measurement(robot, plan, {}, tmp_path / "disk", text, log_file="WCLOG.CSV")
+    r = run_measurement(
+        robot, plan, {}, tmp_path / "disk", {"WIRECAL.V2": text}, log_file="WCLOG.CSV"
+    )
     assert r.mount.status == "completed"
     assert r.run is not None
     assert r.run.status == "error"

@@ -137,7 +137,7 @@ def test_probe_search_starts_near_the_last_contact(viper, paper_plan, tmp_path):
     from wirecal.app.demo import example_files
     from wirecal.gen.vplus.program import GenOptions, module_text
     from wirecal.solver.formats.validation_files import load_setup, read_validation_log
-    from wirecal.twin.cell import run_validation
+    from wirecal.twin.vplus.runs import run_validation
 
     setup = load_setup(example_files()["validation"])
     text = module_text(viper, paper_plan, GenOptions(validation=setup))
@@ -149,5 +149,5 @@ def test_probe_search_starts_near_the_last_contact(viper, paper_plan, tmp_path):
     z = log.rows[:, -1]
     assert len(z) == 19 * 11
     assert np.all((z >= -200.0 - 1 / 128) & (z <= -200.0 + 1e-3))
-    plane_moves = v.cell.moves - 4 * setup.poses  # the configuration run's moves first
+    plane_moves = v.controller.world.moves - 4 * setup.poses  # the configuration run's moves first
     assert plane_moves < 20 * len(z)

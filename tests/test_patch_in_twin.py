@@ -17,8 +17,9 @@ from wirecal.solver.accuracy import error_vs_truth_mm, workspace
 from wirecal.solver.formats.truth import truth_text
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.params import ErrorSet
-from wirecal.twin.cell import Cell
+from wirecal.twin.vplus.controller import VplusController
 from wirecal.twin.vplus.interp import Interpreter
+from wirecal.twin.world import World
 
 from .conftest import TABLE5, VIPER
 
@@ -62,7 +63,7 @@ def patched(tmp_path_factory, viper, paper_plan):
         r = runner.invoke(main, args)
         assert r.exit_code == 0, r.output
     (module,) = (tmp / "ctl").glob("*.V2")
-    cell = Cell(viper, TABLE5, paper_plan.theta0_deg, tmp / "disk")
+    cell = VplusController(World(viper, TABLE5, paper_plan.theta0_deg, tmp / "disk"))
     interp = Interpreter(parse_module(module.read_text(encoding="ascii"), module.name), cell)
     outcome = interp.execute("wc.patch")
     assert outcome.status == "completed", outcome.message
@@ -100,14 +101,15 @@ def test_spec_values_entered_make_the_twin_the_true_robot(patched, viper):
     (mean over 1000 configurations), from over 1 mm with the nominal model; the opposite
     sign would make it worse than nominal."""
     believed = {n: v - viper.nominal_value(n) for n, (v, _) in patched["spec"].items()}
-    twin = patched["interp"].cell
+    twin = patched["interp"].cell.world
     q = workspace(viper)
     for controller, low, high in (
         ({}, 1.0, np.inf),
         (believed, 0.0, 0.05),
         ({n: -x for n, x in believed.items()}, 1.5, np.inf),
     ):
-        cell = Cell(viper, TABLE5, twin.mount_deg, twin.disk, controller=controller)
-        gap = np.linalg.norm(tool_position(cell.believed, q) - tool_position(cell.model, q), axis=1)
+        cell = VplusController(World(viper, TABLE5, twin.mount_deg, twin.disk), controller)
+        true = tool_position(cell.world.model, q)
+        gap = np.linalg.norm(tool_position(cell.believed, q) - true, axis=1)
         assert low < gap.mean() < high, controller
     assert error_vs_truth_mm(viper, TABLE5, believed, q) < 0.05

@@ -27,7 +27,8 @@ from wirecal.solver.run_parameters import (
     optimal_readings,
     run_timeline,
 )
-from wirecal.twin.cell import Faults, move_of_step, run_targets
+from wirecal.twin.run_moves import move_of_step, run_targets
+from wirecal.twin.world import Faults
 
 TRUTH = {"th2": 0.05, "th3": -0.04, "a2": 0.1, "d4": -0.08}
 
@@ -169,7 +170,7 @@ def test_the_twin_refuses_a_hand_edited_speed_beyond_the_wire_limit(viper, paper
     assert r.run.status == "error"
     assert r.run.message.startswith(f"*Wire overspeed* move {k + 1} to (")
     assert "beyond the encoder's max_wire" in r.run.message
-    assert r.cell.moves == k  # stopped before it moved
+    assert r.world.moves == k  # stopped before it moved
 
 
 @pytest.mark.slow
@@ -179,7 +180,7 @@ def test_the_paper_run_waits_its_fixed_settle_first(viper, paper_plan, tmp_path)
     r = measure_in_twin(viper, paper_plan, TRUTH, tmp_path, options=GenOptions(run=PAPER_RUN))
     settle = {x.settle_s for x in read_log(r.log).readings}
     assert settle == {3.08}
-    assert r.cell.clock == pytest.approx(run_timeline(viper, paper_plan, PAPER_RUN).total_s, 0.01)
+    assert r.world.clock == pytest.approx(run_timeline(viper, paper_plan, PAPER_RUN).total_s, 0.01)
 
 
 def test_readings_per_point_from_the_noise_model():

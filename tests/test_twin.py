@@ -24,15 +24,11 @@ from wirecal.solver.planner import robot_time
 from wirecal.solver.run_parameters import DEFAULT_RUN, PAPER_RUN, run_timeline
 from wirecal.solver.simulate import EncoderTruth, simulate_log
 from wirecal.solver.solve import solve
-from wirecal.twin.cell import (
-    Cell,
-    Faults,
-    Plate,
-    move_of_step,
-    run_validation,
-    where_in_run,
-)
+from wirecal.twin.run_moves import move_of_step, where_in_run
+from wirecal.twin.vplus.controller import VplusController
 from wirecal.twin.vplus.interp import Interpreter, f32
+from wirecal.twin.vplus.runs import run_validation
+from wirecal.twin.world import Faults, Plate, World
 
 from .conftest import TABLE5 as TRUTH
 from .conftest import VIPER
@@ -41,7 +37,7 @@ from .conftest import VIPER
 # the generated module still uses base, off and dz as names, which the checker now
 # rejects (User's Guide p. 99); the templates are renamed on another branch
 def run_program(viper, paper_plan, tmp_path, source, name="t.main", answers=()):
-    cell = Cell(viper, {}, paper_plan.theta0_deg, tmp_path, answers=list(answers))
+    cell = VplusController(World(viper, {}, paper_plan.theta0_deg, tmp_path, answers=list(answers)))
     interp = Interpreter(parse_module(source, "t.v2"), cell)
     return interp, interp.execute(name)
 
@@ -180,7 +176,7 @@ def test_twin_clock_agrees_with_the_planners_robot_time(viper, paper_plan, twin_
     move at its SPEED, each settle measured by the rule on the vibrating twin) and the
     planner's estimate of the paper plan agree within 1 % (measured: 86.3 s against
     85.9 s; with the 3 s settle the paper waited, 353.6 s against 353.1 s)."""
-    assert twin_run.cell.clock == pytest.approx(robot_time(viper, paper_plan), rel=0.01)
+    assert twin_run.world.clock == pytest.approx(robot_time(viper, paper_plan), rel=0.01)
 
 
 def test_twin_log_times_are_the_controllers_timer(viper, paper_plan, twin_run):
@@ -191,7 +187,7 @@ def test_twin_log_times_are_the_controllers_timer(viper, paper_plan, twin_run):
     np.testing.assert_allclose(np.round(t * 1000), t * 1000, atol=1e-6)  # whole milliseconds
     model = run_timeline(viper, paper_plan, DEFAULT_RUN).reading_s
     np.testing.assert_allclose(t, model, rtol=0.01, atol=0.3)
-    assert t[-1] < twin_run.cell.clock
+    assert t[-1] < twin_run.world.clock
 
 
 def test_a_still_twin_does_not_wait_the_maximum(twin_run):
@@ -206,7 +202,7 @@ def test_a_still_twin_does_not_wait_the_maximum(twin_run):
 def _fault(viper, plan, tmp_path, faults, **kw):
     r = measure_in_twin(viper, plan, TRUTH, tmp_path, seed=4, faults=faults, **kw)
     lines = r.log.read_text().splitlines()
-    assert len(lines) == r.cell.lines_written  # nothing logged is lost
+    assert len(lines) == r.world.lines_written  # nothing logged is lost
     return r, r.run
 
 
@@ -274,7 +270,7 @@ def _config_run(viper, paper_plan, tmp_path, controller):
         f"    {a}\n    {b}\n    MOVE t\n    BREAK\n    HERE #p{k}\n    DECOMPOSE q[{6 * k}] = #p{k}"
         for k, (a, b) in enumerate(CONFIGS)
     )
-    cell = Cell(viper, TRUTH, paper_plan.theta0_deg, tmp_path, controller=controller)
+    cell = VplusController(World(viper, TRUTH, paper_plan.theta0_deg, tmp_path), controller)
     interp = Interpreter(parse_module(CONFIG_PROGRAM.format(moves=moves), "t.v2"), cell)
     out = interp.execute("t.main")
     assert out.status == "completed", out
@@ -314,7 +310,8 @@ def test_touch_probe_on_a_plate(viper, paper_plan, tmp_path):
     DECOMPOSE x[1] = h
 .END
 """
-    cell = Cell(viper, {}, paper_plan.theta0_deg, tmp_path, plate=Plate((0.0, 0.0, 150.0)))
+    world = World(viper, {}, paper_plan.theta0_deg, tmp_path, plate=Plate((0.0, 0.0, 150.0)))
+    cell = VplusController(world)
     interp = Interpreter(parse_module(src, "t.v2"), cell)
     assert interp.execute("t.main").status == "completed"
     z = interp.get_global("x", 3)  # flange z; the probe reaches 100 mm below it
@@ -355,7 +352,7 @@ def test_fault_wire_beyond_the_encoders_range(viper, paper_plan, tmp_path):
     assert out.status == "error"
     assert out.message.startswith("*Draw-wire range exceeded*: the wire would be 5")
     assert "mm long, beyond the encoder's range_mm 500" in out.message
-    assert where_in_run(paper_plan, r.cell.moves) == "step 6 point 1"
+    assert where_in_run(paper_plan, r.world.moves) == "step 6 point 1"
     with pytest.raises(WirecalError, match=r"^\*Draw-wire range exceeded\*: step 6 point 1: "):
         simulate_log(short, paper_plan, TRUTH, seed=4)
 
@@ -371,7 +368,7 @@ def test_echo_log_without_a_disk(viper, paper_plan, tmp_path):
     r = measure_in_twin(viper, paper_plan, TRUTH, tmp_path, seed=4, options=opt)
     assert r.run.status == "completed"
     assert (tmp_path / "WCLOG.CSV").read_text() == "an older log\n"
-    console = r.cell.console
+    console = r.world.console
     assert "#   the log goes to the terminal only: copy its lines." in console
     log = parse_log("\n".join(console) + "\n", "terminal")
     assert log.notes[0].startswith(
@@ -393,7 +390,7 @@ def test_validation_sets_the_null_tool_and_takes_any_run_number(viper, paper_pla
         viper, paper_plan, TRUTH, setup, tmp_path, text, controller={}, run=12, unmodelled=None
     )
     assert v.configuration.status == v.plane.status == "completed"
-    assert v.cell.tools_at_cartesian == {"null"}
+    assert v.controller.tools_at_cartesian == {"null"}
     assert v.configuration_log.name == "WCVCFG12.CSV"
     for log in (v.configuration_log, v.plane_log):
         assert "# tool: null (TOOL NULL before the moves: flange poses)" in log.read_text()
@@ -469,7 +466,7 @@ def test_small_angle_polynomials_within_their_stated_bound(viper, paper_plan, tm
     stay within the truncation bounds the README states for |ε| ≤ 0.0881 rad."""
     macro = environment().get_template("vplus/macros.j2").module.sincos("e", 4)
     src = f".PROGRAM t.main()\n    GLOBAL DOUBLE e, s, cm\n    AUTO DOUBLE e2\n{macro}\n.END\n"
-    cell = Cell(viper, {}, paper_plan.theta0_deg, tmp_path)
+    cell = VplusController(World(viper, {}, paper_plan.theta0_deg, tmp_path))
     interp = Interpreter(parse_module(src, "t.v2"), cell)
     eps = np.linspace(-0.0881, 0.0881, 201)
     s, cm1 = [], []

@@ -21,7 +21,9 @@ from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.formats.ur_calibration import read_ur_calibration
-from wirecal.twin.ur_cell import URCell, run_ur_programs
+from wirecal.twin.urscript.controller import URController
+from wirecal.twin.urscript.runs import run_ur_programs
+from wirecal.twin.world import World
 
 pytestmark = pytest.mark.slow  # about 5 s each on a loaded machine
 
@@ -73,17 +75,20 @@ def test_gen_twin_receive_solve(tmp_path):
     )  # fmt: skip
     try:
         wait_listening(port, receiver)
-        cell = URCell(
+        world = World(
             robot,
             truth,
             plan.theta0_deg,
             tmp_path,
             seed=8,
             counter_start=float(2**31 - 5000),  # the raw count wraps during the run
+        )
+        cell = URController(
+            world,
             pc=(robot.controller.host, robot.controller.port),
             receiver=("127.0.0.1", port),
         )
-        runs = run_ur_programs(
+        _, run = run_ur_programs(
             cell,
             (out / "wc_mount.script").read_text(),
             (out / "wc_run.script").read_text(),
@@ -91,7 +96,8 @@ def test_gen_twin_receive_solve(tmp_path):
         output, _ = receiver.communicate(timeout=60)
     finally:
         receiver.kill()
-    assert runs.run.status == "completed"
+    assert run is not None
+    assert run.status == "completed"
     assert receiver.returncode == 0, output
     assert "(run complete; the log checks passed)" in output
 

@@ -20,7 +20,8 @@ from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.measurements import check_log, load_measurements
 from wirecal.solver.solve import solve
-from wirecal.twin.cell import Faults, move_of_step
+from wirecal.twin.run_moves import move_of_step
+from wirecal.twin.world import Faults, World
 
 HEADER_LINES = 6  # the wirecal-log header and the column line
 
@@ -62,7 +63,7 @@ def test_run_completes_and_the_log_identifies_the_truth(ur5, ur5_plan, texts, tr
     assert max(abs(v - truth.get(k, 0.0)) for k, v in est.items()) < 0.05  # deg, mm
     # the twin's clock: 62 moves at 36 deg/s plus the settle and the readings (the UR5e's
     # plan, designed inside its cell: 384 s, bench/bench_ur5e.py)
-    assert 300 < r.programs.cell.clock < 600
+    assert 300 < r.programs.world.clock < 600
 
 
 def test_every_line_sent_is_mirrored_in_the_log_tab(ur5, ur5_plan, texts, truth, tmp_path):
@@ -100,7 +101,7 @@ def test_fault_socket_refused(ur5, ur5_plan, texts, truth, tmp_path):
     assert out.status == "stopped"
     assert "*** cannot connect to wirecal receive at 192.168.1.10:50000" in out.console
     assert out.message.startswith("Cannot connect to the PC at 192.168.1.10:50000")
-    assert r.programs.cell.moves == 0  # stopped before the first move
+    assert r.programs.world.moves == 0  # stopped before the first move
     assert not r.received.log.exists()
 
 
@@ -193,13 +194,14 @@ def test_wc_check_shows_the_pulled_wire_only_when_decoded(
     ur5, ur5_plan, texts, tmp_path, inputs, moves
 ):
     from wirecal.lang.urscript.parser import parse_program
-    from wirecal.twin.ur_cell import URCell
+    from wirecal.twin.urscript.controller import URController
     from wirecal.twin.urscript.interp import Interpreter
 
-    cell = URCell(
-        ur5, {}, ur5_plan.theta0_deg, tmp_path, noise_mm=0.0, pulse_inputs=inputs,
+    world = World(
+        ur5, {}, ur5_plan.theta0_deg, tmp_path, noise_mm=0.0,
         pull_mm=lambda t: min(100.0, 10.0 * t),  # 100 mm out over 10 s, then held
     )  # fmt: skip
+    cell = URController(world, pulse_inputs=inputs)
     out = Interpreter(parse_program(texts["wc_check.script"], "wc_check.script"), cell).execute()
     assert out.status == "completed"
     last = out.console[-1]  # e.g. "counts 3923   mm 99.9880"

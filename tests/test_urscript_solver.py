@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from wirecal.app.compare import READING_INTS, ur_controller_solve, ur_readings
+from wirecal.app.compare import ur_controller_solve
 from wirecal.cli.main import main
 from wirecal.gen.urscript.program import OPS_PER_SYNC, UrOptions, float_literal, scripts
 from wirecal.solver.errors import WirecalError
@@ -24,6 +24,7 @@ from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.measurements import check_log
 from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
+from wirecal.twin.urscript.solver_run import READING_INTS, ur_readings
 
 ROOT = Path(__file__).resolve().parent.parent
 UR5 = ROOT / "examples" / "ur5e"
@@ -154,7 +155,7 @@ def test_readings_from_a_log_by_hand(ur5):
         "5.0000,10,1,0.000,3.000"
     )
     log = parse_log("\n".join(rows) + "\n", "hand.csv")
-    rd = ur_readings(log, plan)
+    rd = ur_readings(log.readings, plan)
     assert len(rd) == READING_INTS * (len(plan.steps) + plan.n_points)
     assert rd[:2] == [-2147483001, 7500]  # floor of the count, offset x 10^4
     slot = len(plan.steps) + 2  # point 3 in plan order

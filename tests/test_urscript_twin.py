@@ -13,9 +13,9 @@ from hypothesis import strategies as st
 from wirecal.lang.urscript.parser import parse_program
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.twin.cell import Faults
-from wirecal.twin.ur_cell import URCell
+from wirecal.twin.urscript.controller import URController
 from wirecal.twin.urscript.interp import Interpreter
+from wirecal.twin.world import Faults, World
 
 
 def program(*body: str, name: str = "p") -> str:
@@ -194,9 +194,9 @@ def ur5():
     return load_robot("examples/ur5e/robot.toml")
 
 
-def cell_for(robot, tmp_path, **kw) -> URCell:
+def cell_for(robot, tmp_path, pc=None, **kw) -> URController:
     theta0 = np.array([0.0, -90.0, 90.0, -90.0, -90.0, 0.0])
-    return URCell(robot, {}, theta0, tmp_path, noise_mm=0.0, **kw)
+    return URController(World(robot, {}, theta0, tmp_path, noise_mm=0.0, **kw), pc=pc)
 
 
 def run_on(cell, *body: str):
@@ -216,7 +216,7 @@ def test_movej_time_is_a_trapezoid_of_the_leading_joint(ur5, tmp_path):
         "movej(q, a=1.0, v=0.5)",
     )
     assert out.status == "completed"
-    assert cell.clock == pytest.approx(2.5 + 2 * math.sqrt(0.1), abs=1e-6)
+    assert cell.world.clock == pytest.approx(2.5 + 2 * math.sqrt(0.1), abs=1e-6)
 
 
 def test_movej_beyond_a_limit_stops_the_program(ur5, tmp_path):
@@ -238,10 +238,10 @@ def test_encoder_counts_only_when_enabled_on_its_inputs(ur5, tmp_path):
         "encoder_enable_pulse_decode(0, 1, 8, 9)",
         'textmsg(str_cat("", encoder_get_tick_count(0, opt="raw")))',
     )
-    p0 = cell.p0
+    p0 = cell.world.p0
     from wirecal.solver.kinematics import tool_position
 
-    d = np.linalg.norm(tool_position(cell.model, np.radians(cell.actual)[None])[0] - p0)
+    d = np.linalg.norm(tool_position(cell.world.model, np.radians(cell.world.actual)[None])[0] - p0)
     assert d == 0.0  # the encoder is mounted where the arm is
     assert out.console[:3] == ["0", "nil", "0"]
     assert abs(int(out.console[3]) - 1000) <= 1  # ±1 count of jitter
@@ -249,7 +249,7 @@ def test_encoder_counts_only_when_enabled_on_its_inputs(ur5, tmp_path):
 
 def test_filtered_count_wraps_at_2_16_and_raw_at_2_32(ur5, tmp_path):
     cell = cell_for(ur5, tmp_path, counter_start=float(2**31 - 1 + 65536 * 3 + 10))
-    cell.rng = np.random.default_rng(0)
+    cell.world.rng = np.random.default_rng(0)
     cell.encoder_enable_pulse_decode(0, 1, 8, 9)
     raw = cell.encoder_get_tick_count(0, opt="raw")
     filtered = cell.encoder_get_tick_count(0)

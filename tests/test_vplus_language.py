@@ -100,7 +100,7 @@ def test_double_literals_are_whole_doubles_and_close(x):
 # ---------- the conveyor-tracking option, checked before any motion (UG pp. 310, 317) ----------
 def test_without_the_conveyor_option_nothing_moves(viper, paper_plan, tmp_path):
     from wirecal.app.twin_runs import measure_in_twin
-    from wirecal.twin.cell import Faults
+    from wirecal.twin.world import Faults
 
     from .conftest import TABLE5
 
@@ -110,12 +110,12 @@ def test_without_the_conveyor_option_nothing_moves(viper, paper_plan, tmp_path):
     assert r.run is not None
     assert r.run.status == "halted"
     assert any("conveyor-tracking option" in line for line in r.run.console)
-    assert r.cell.moves == 0  # the moves of wc.run (run_measurement counts from wc.run on)
-    assert r.cell.lines_written == 0  # no log line
+    assert r.world.moves == 0  # the moves of wc.run (run_measurement counts from wc.run on)
+    assert r.world.lines_written == 0  # no log line
     # with the option, the same run moves: the count above is the run's own
     ok = measure_in_twin(viper, paper_plan, TABLE5, tmp_path / "ok", seed=1)
     assert ok.run is not None
-    assert ok.cell.moves > 70
+    assert ok.world.moves > 70
 
 
 def test_switch_takes_a_system_switch():

@@ -1,8 +1,8 @@
 """wirecal.twin — the digital twin.
 
-Per controller language a parser, checker and interpreter of the programs wirecal
-generates (``vplus``, ``urscript``), what the interpreters share (``machine``), and the
-simulated cell (true robot, draw-wire encoder, disk, terminal, faults, clock) they run
-against: ``cell`` for V+, ``ur_cell`` the same cell behind the URScript API (sockets to
-``wirecal receive``, the pulse decoder, movej timing).
+The physical world the programs act on (``world``: true robot, draw-wire encoder, disk,
+operator, faults, clock), and per controller language (``vplus``, ``urscript``) a parser,
+checker and interpreter of the programs wirecal generates, the controller that maps the
+language's instructions onto the world, and the language's twin adapter (``adapters``);
+what the interpreters share (``machine``).
 """

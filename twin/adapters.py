@@ -1,26 +1,22 @@
-"""The twin adapter of each controller language: run its generated programs in the twin.
+"""The twin adapter of each controller language: run its programs in the twin.
 
-Interface only on this branch: each ``wirecal.twin.<key>`` package defines ``ADAPTER`` (a
-:class:`TwinAdapter`, written with the split of the cell into the language-free world and
-per-language controllers); :func:`adapter` finds it by the robot file's ``[controller]
-language``, so adding a language adds ``twin/<key>/`` and never edits a list.
+Each ``wirecal.twin.<key>`` package defines ``ADAPTER`` (a :class:`TwinAdapter`); the key
+is the robot file's ``[controller] language``.
 """
 
 from __future__ import annotations
 
 import importlib
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Protocol
+
+import numpy as np
 
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
-
-if TYPE_CHECKING:  # the cell and the readings only when an adapter runs
-    import numpy as np
-
-    from wirecal.twin.cell import Faults
+from wirecal.twin.world import Faults, TwinRun
 
 
 class TwinAdapter(Protocol):
@@ -41,11 +37,8 @@ class TwinAdapter(Protocol):
         counter_start: float | None = None,
         faults: Faults | None = None,
         unmodelled: Unmodelled | None = None,
-    ) -> Any:
-        """Run the mounting and measurement programs on a twin robot with offsets ``truth``.
-
-        Returns the run (``TwinRun``: ``log`` the PC reads, ``complete``, ``stopped``).
-        """
+    ) -> TwinRun:
+        """Run the mounting and measurement programs on a twin robot with offsets ``truth``."""
         ...
 
     def controller_solve(
@@ -67,7 +60,7 @@ class TwinAdapter(Protocol):
 def adapter(key: str) -> TwinAdapter:
     """Return the twin adapter of language ``key`` (``ADAPTER`` in ``wirecal.twin.<key>``)."""
     try:
-        found: TwinAdapter = importlib.import_module(f"wirecal.twin.{key}").ADAPTER
+        module = importlib.import_module(f"wirecal.twin.{key}")
+        return module.ADAPTER
     except (ImportError, AttributeError):
         raise WirecalError(f"no twin adapter for controller language {key!r}") from None
-    return found

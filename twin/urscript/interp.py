@@ -25,7 +25,8 @@ holds to, and how sure we are of it (see :mod:`wirecal.gen.urscript.facts`):
 * reading a variable before it has a value stops the program.
 
 Everything the program does to the outside world — motion, the encoder, sockets, the
-log and popups, time — goes through the cell (:class:`wirecal.twin.ur_cell.URCell`).
+log and popups, time — goes through the controller
+(:class:`wirecal.twin.urscript.controller.URController`).
 """
 
 from __future__ import annotations

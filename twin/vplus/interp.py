@@ -13,7 +13,8 @@ single (p. 107); TRUE is −1 (p. 103); arrays grow on demand (p. 105); AUTO var
 belong to one call, LOCAL to the program, GLOBAL to all (p. 107); a CALL passes a variable
 by reference and an expression by value (p. 42–45); reading an undefined variable is an
 error (p. 110). Everything the program does to the outside world — motion, the encoder,
-the disk, the terminal — goes through a :class:`Cell` (see :mod:`wirecal.twin.cell`).
+the disk, the terminal — goes through a controller
+(:class:`wirecal.twin.vplus.controller.VplusController`).
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
-"""The simulated Universal Robots cell: the twin's cell behind the URScript API.
+"""The Universal Robots controller the URScript interpreter talks to, over the twin's world.
 
-:class:`URCell` is the same cell as V+'s (:class:`wirecal.twin.cell.Cell`: the true
-robot within its limits, the draw-wire encoder's physics, unmodelled errors, faults, the
-clock), reached through the URScript functions the generated programs call:
+:class:`URController` holds a :class:`~wirecal.twin.world.World` (the true robot within
+its limits, the draw-wire encoder's physics, unmodelled errors, faults, the clock) and
+offers the URScript functions the generated programs call:
 
 * ``movej(q, a, v, t, r)``: q in rad, a rad/s², v rad/s of the leading axis (SD 14.22);
   the move takes the time of the leading joint's trapezoidal profile (``t`` > 0 sets it)
@@ -19,13 +19,13 @@ clock), reached through the URScript functions the generated programs call:
   [0; 65536[ that wraps, ``opt="raw"`` the int32 count (SW5.20); the filter's dynamics
   are not modelled. ``encoder_unwind_delta_tick_count`` unwinds a delta over half of 2^16
   (SW5.24) and is nil for an encoder not enabled (a third-party copy of the manual's
-  text: *unconfirmed*). ``pull_mm`` lets an operator pull the wire out by hand
-  (``wc_check``);
+  text: *unconfirmed*). An encoder failure (a fault) stops the program (the controller's
+  own behaviour is *unconfirmed*);
 * sockets: ``socket_open`` opens a real TCP connection (2 s timeout) — the program's PC
-  address is routed to ``receiver`` on loopback, where ``wirecal receive`` listens — and
-  returns True or False (SD 17.55); ``socket_send_line`` sends the line and a newline and
-  returns whether it was sent (SD 17.63); the controller closes a program's sockets when
-  it ends (*unconfirmed*). A fault drops the connection after N lines;
+  address (``pc``; None: any) is routed to ``receiver`` on loopback, where ``wirecal
+  receive`` listens — and returns True or False (SD 17.55); ``socket_send_line`` sends the
+  line and a newline and returns whether it was sent (SD 17.63); the controller closes a
+  program's sockets when it ends (*unconfirmed*). A fault drops the connection after N lines;
 * ``textmsg`` and ``popup`` write to the log tab (the console). A blocking popup suspends
   the program until Continue is pressed (SD 15.35); the twin's operator presses it, except
   at a warning or error popup, where they stop the program (``proceed_on_pause`` to
@@ -33,6 +33,9 @@ clock), reached through the URScript functions the generated programs call:
   15.49); ``sync()`` advances it by one 2 ms frame (SW5.25.1, "Thread scheduling": sync
   and sleep use "physical" time and are recommended next to computationally heavy
   instructions, else "Lost communication with Controller" and a protective stop).
+
+Every public method is a URScript function the interpreter may call (it looks them up
+by name), apart from :meth:`URController.close_all`.
 
 Sections of the e-Series Script Directory (SD) and Script Manual pages (SW…): see
 :mod:`wirecal.gen.urscript.facts`.
@@ -42,16 +45,14 @@ from __future__ import annotations
 
 import math
 import socket
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from wirecal.lang.urscript.parser import parse_program
 from wirecal.solver.counter import Counter
-from wirecal.twin.cell import Cell
-from wirecal.twin.machine import Outcome, Stopped, f32
-from wirecal.twin.urscript.interp import Interpreter, URError, number, to_float, to_str
+from wirecal.twin.machine import Stopped, f32
+from wirecal.twin.urscript.interp import URError, number, to_float, to_str
+from wirecal.twin.world import EncoderFailure, World
 
 FILTERED_RANGE = 2**16
 """The filtered count's range [0; 65536[ (Script Manual SW5.20)."""
@@ -63,55 +64,60 @@ FRAME_S = 0.002
 
 
 @dataclass
-class URCell(Cell):
-    """The twin's cell as a UR controller's URScript sees it (module docstring)."""
+class URController:
+    """The URScript functions over a world (module docstring)."""
 
+    world: World
     pulse_inputs: tuple[int, int] = (8, 9)  # the digital inputs the encoder is wired to
     encoder_index: int = 0
-    pc: tuple[str, int] | None = None  # the PC's address as the program names it
+    pc: tuple[str, int] | None = None  # the PC's address as the program names it (None: any)
     receiver: tuple[str, int] | None = None  # where the twin routes it (loopback)
     sockets: dict[str, socket.socket] = field(default_factory=dict)
     lines_sent: int = 0
     syncs: int = 0  # sync() calls (each a 2 ms frame)
-    pull_mm: Callable[[float], float] | None = None  # the operator pulls the wire (clock, s)
 
-    def __post_init__(self):
-        """Start the cell; no encoder is decoded until a program enables it."""
-        super().__post_init__()
+    def __post_init__(self) -> None:
+        """No encoder is decoded until a program enables it."""
         self.decoding: dict[int, tuple[int, int, int]] = {}
+
+    @property
+    def console(self) -> list[str]:
+        """The log tab's lines (the world's console)."""
+        return self.world.console
 
     # ---- motion ----
     def movej(self, q, a=1.4, v=1.05, t=0, r=0) -> None:
         """movej: go to joint positions q (rad) in joint space (module docstring)."""
-        if not isinstance(q, list) or len(q) != len(self.joints):
-            raise URError(f"movej: q must be a list of {len(self.joints)} joint positions")
+        w = self.world
+        if not isinstance(q, list) or len(q) != len(w.joints):
+            raise URError(f"movej: q must be a list of {len(w.joints)} joint positions")
         q_deg = np.degrees([to_float(x) for x in q])
-        j = self.beyond_limits(q_deg)
+        j = w.beyond_limits(q_deg)
         if j is not None:
             raise URError(
                 f"movej: joint {j + 1} target {q_deg[j]:.3f} deg is beyond its limit "
-                f"[{self.limits.joint_min_deg[j]:g}, {self.limits.joint_max_deg[j]:g}] deg"
+                f"[{w.limits.joint_min_deg[j]:g}, {w.limits.joint_max_deg[j]:g}] deg"
             )
-        hit = self.collision(q_deg)
+        hit = w.collision(q_deg)
         if hit is not None:
             raise URError(f"protective stop: movej: {hit}")
-        dist = float(np.max(np.abs(np.radians(q_deg - np.asarray(self.joints)))))
-        self.arrive(q_deg, _trapezoid_s(dist, number(a, "movej a"), number(v, "movej v"), t))
+        dist = float(np.max(np.abs(np.radians(q_deg - np.asarray(w.joints)))))
+        w.arrive(q_deg, _trapezoid_s(dist, number(a, "movej a"), number(v, "movej v"), t))
 
     def get_actual_joint_positions(self) -> list[float]:
         """Return the joints in rad, base to wrist 3."""
-        return [f32(math.radians(x)) for x in self.joints]
+        return [f32(math.radians(x)) for x in self.world.joints]
 
     def sleep(self, t) -> None:
         """sleep: advance the clock by t s."""
-        self.clock += float(number(t, "sleep"))
+        self.world.wait(float(number(t, "sleep")))
 
     def sync(self) -> None:
         """sync: the rest of the 2 ms frame (Script Manual SW5.25.1, "Thread scheduling").
 
         The twin advances the clock by a whole frame (an upper bound) and counts the calls.
         """
-        self.clock += FRAME_S
+        self.world.wait(FRAME_S)
         self.syncs += 1
 
     def time(self, mode=0) -> dict[str, int]:
@@ -121,8 +127,9 @@ class URCell(Cell):
         """
         if mode != 0:
             raise URError(f"time({to_str(mode)}): the twin models time(0) only")
-        sec = math.floor(self.clock)
-        return {"sec": sec, "nanosec": math.floor((self.clock - sec) * 1e9)}
+        clock = self.world.clock
+        sec = math.floor(clock)
+        return {"sec": sec, "nanosec": math.floor((clock - sec) * 1e9)}
 
     # ---- encoder ----
     def encoder_enable_pulse_decode(self, encoder_index, decoder_type, A, B) -> None:
@@ -146,15 +153,16 @@ class URCell(Cell):
             and {setup[1], setup[2]} == set(self.pulse_inputs)
         )
 
-    def wire_counts(self) -> int:
-        """Return the wire's count (the cell's), plus the wire the operator pulls out now."""
-        pulled = self.pull_mm(self.clock) if self.pull_mm is not None else 0.0
-        return super().wire_counts() + round(pulled / self.robot.encoder.mm_per_count)
-
     def encoder_get_tick_count(self, encoder_index, opt=""):
         """Return the filtered count (float, wraps at 2^16) or with opt="raw" the int32 count."""
-        self.reads += 1
-        count = self.wire_counts() if self._decoded(encoder_index) else 0
+        if not self._decoded(encoder_index):
+            self.world.reads += 1
+            count = 0
+        else:
+            try:
+                count = self.world.read_count()
+            except EncoderFailure as e:
+                raise URError(f"encoder_get_tick_count: {e}") from None
         if opt == "raw":
             return int(RAW.wrap(count))
         return f32(float(count % FILTERED_RANGE))
@@ -179,19 +187,19 @@ class URCell(Cell):
     # ---- log tab ----
     def textmsg(self, s1, s2="") -> None:
         """textmsg: a line in the log tab."""
-        self.console.append(to_str(s1) + to_str(s2))
+        self.world.show(to_str(s1) + to_str(s2))
 
     def popup(self, s, title="Popup", warning=False, error=False, blocking=False) -> None:
         """popup: shown in the log tab; the operator stops at a blocking warning or error."""
-        self.console.append(f"[popup {to_str(title)}] {to_str(s)}")
-        if blocking and (warning or error) and not self.proceed_on_pause:
+        self.world.show(f"[popup {to_str(title)}] {to_str(s)}")
+        if blocking and (warning or error) and not self.world.proceed_on_pause:
             raise Stopped(to_str(s))
 
     # ---- sockets ----
     def socket_open(self, address, port, socket_name="socket_0") -> bool:
         """Open a TCP connection to the PC (routed to the receiver); True when connected."""
         where = (to_str(address), int(number(port, "socket_open port")))
-        if where != self.pc or self.receiver is None:
+        if (self.pc is not None and where != self.pc) or self.receiver is None:
             return False  # nobody listens there in the twin's network
         self.socket_close(socket_name)
         try:
@@ -207,7 +215,7 @@ class URCell(Cell):
         sock = self.sockets.get(socket_name)
         if sock is None:
             return False
-        drop = self.faults.socket_drops_after_lines
+        drop = self.world.faults.socket_drops_after_lines
         if drop is not None and self.lines_sent >= drop:
             self.socket_close(socket_name)
             return False
@@ -240,26 +248,3 @@ def _trapezoid_s(distance_rad: float, a_rad_s2: float, v_rad_s: float, t_s) -> f
     if distance_rad >= v_rad_s**2 / a_rad_s2:
         return distance_rad / v_rad_s + v_rad_s / a_rad_s2
     return 2.0 * math.sqrt(distance_rad / a_rad_s2)
-
-
-@dataclass
-class URPrograms:
-    """Outcomes of the URScript programs run in the twin, in order, and the cell."""
-
-    mount: Outcome
-    run: Outcome | None
-    cell: URCell
-
-
-def run_ur_programs(cell: URCell, mount_text: str, run_text: str) -> URPrograms:
-    """Run ``wc_mount`` (the operator mounts the encoder and continues), then ``wc_run``.
-
-    The controller closes the program's sockets when it ends, however it ends.
-    """
-    mount = Interpreter(parse_program(mount_text, "wc_mount.script"), cell).execute()
-    cell.moves = 0  # fault positions count the moves of wc_run
-    run = None
-    if mount.status == "completed":
-        run = Interpreter(parse_program(run_text, "wc_run.script"), cell).execute()
-    cell.close_all()
-    return URPrograms(mount, run, cell)

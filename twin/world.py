@@ -1,0 +1,357 @@
+"""The physical world of the digital twin, whatever language the controller speaks.
+
+:class:`World` is the cell a controller program acts on: a true robot (nominal model +
+error offsets) within its joint limits, a draw-wire encoder mounted at θ0 of the true
+robot (its wire over the exit as built, noise per pose, quantisation, ±1-count jitter, a
+counter that starts anywhere, a range limit, the wire's speed and acceleration limits), a
+vibration of the tool point along the wire after each move that decays (the settling
+model of :mod:`wirecal.solver.run_parameters`), unmodelled joint errors, a touch probe
+over a plate, a disk in a sandbox folder, an operator with scripted answers, the console
+they read, and a clock. :class:`Faults` (one type for every language) injects a wire
+slip, an encoder failure, a full disk, a vibration that does not decay, tighter joint
+limits than the plan assumed, a dropped connection, a missing conveyor option. A move
+that would take the arm into itself, the floor or a keep-out volume of ``[cell]`` is
+reported with the colliding pair (:meth:`World.collision`), as a real protective stop.
+
+A language's controller adapter (``twin/<key>/controller.py``) holds a World and maps its
+instructions onto these methods, raising its own errors with its own codes:
+
+* motion, in this order for a move: :meth:`beyond_limits` (against ``limits``),
+  :meth:`collision`, :meth:`profile` (time, vibration and wire speed of a joint move),
+  :meth:`wire_overspeed`, :meth:`arrive` (after the language's own move time),
+  :meth:`vibrate`; ``joints`` (commanded, deg, single precision), ``actual`` (where the
+  arm really is), ``moves`` (counted; a run sets it to 0 after mounting);
+* encoder: :meth:`read_count` (one read, the unwrapped count; wrap it with the counter the
+  language reads; raises :class:`EncoderFailure`, :class:`~wirecal.twin.machine.RunError`
+  −1100 beyond the wire's range);
+* operator and console: :meth:`show`, :meth:`answer`, :meth:`steady`;
+* probe: :meth:`probe_touching`; disk: ``disk``, :meth:`append_line`; time: ``clock``,
+  :meth:`wait`.
+
+A run's result is a :class:`TwinRun`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from wirecal.solver.cell_check import move_collision
+from wirecal.solver.exit_geometry import physical_wire_mm
+from wirecal.solver.ik import flange_pose
+from wirecal.solver.kinematics import tool_position
+from wirecal.solver.robot import Robot
+from wirecal.solver.run_parameters import VIBRATION_HZ, VIBRATION_TAU_S, Moves, move_profiles
+from wirecal.solver.simulate import (
+    IDEAL_ENCODER,
+    OPERATOR_SEAT_S,
+    RANGE_EXCEEDED,
+    EncoderTruth,
+    Unmodelled,
+    reference_lengths,
+)
+from wirecal.twin.machine import Outcome, RunError, f32
+
+RANGE_EXCEEDED_CODE = -1100
+"""The twin's own code for a wire pulled beyond the encoder's range."""
+
+
+@dataclass(frozen=True)
+class Faults:
+    """Faults to inject into a run (positions are 1-based counts of events)."""
+
+    slip_at_move: int | None = None  # the wire slips when this move starts
+    slip_mm: float = 0.5
+    encoder_fails_at_read: int | None = None
+    disk_full_after_lines: int | None = None
+    vibration_at_move: int | None = None  # still vibrating: the stop after this move
+    vibration_counts: int = 20  # vibrates ±this, undamped, until the operator steadies it
+    joint_max_deg: tuple[float, ...] | None = None  # the controller's own limits
+    socket_drops_after_lines: int | None = None  # the connection to the PC drops
+    no_conveyor_option: bool = False  # the controller lacks its encoder option
+
+
+DEFAULT_UNMODELLED = Unmodelled()
+"""The validation runs' unmodelled errors: the twin's repeatability and gravity sag."""
+
+
+class EncoderFailure(Exception):
+    """The encoder stopped counting (the fault ``encoder_fails_at_read``)."""
+
+
+@dataclass(frozen=True)
+class Plate:
+    """A flat plate (granite) for the touch probe.
+
+    A point on its top face and the face's outward normal, in the robot's base frame (mm).
+    """
+
+    point: tuple[float, float, float]
+    normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
+
+
+@dataclass
+class World:
+    """The simulated robot, encoder, disk, operator and clock (see module docstring)."""
+
+    robot: Robot
+    truth: dict[str, float]
+    mount_deg: np.ndarray
+    disk: Path
+    seed: int = 0
+    noise_mm: float = 0.01
+    counter_start: float = 0.0
+    answers: list[str] = field(default_factory=lambda: ["1"])
+    faults: Faults = Faults()
+    proceed_on_pause: bool = False  # the operator continues after a pause
+    plate: Plate | None = None
+    probe_mm: tuple[float, float, float] = (0.0, 0.0, 100.0)  # probe tip, flange frame
+    encoder_point_mm: tuple[float, float, float] | None = None  # fixed encoder (validation)
+    unmodelled: Unmodelled | None = None
+    wire_limits: bool = False  # the wire's speed and acceleration limits are enforced
+    encoder_truth: EncoderTruth = IDEAL_ENCODER  # the true scale, temperature, drift
+    run_s: float = 0.0  # the run's duration, for the temperature's time course
+    pull_mm: Callable[[float], float] | None = None  # the operator pulls the wire (clock, s)
+
+    def __post_init__(self) -> None:
+        """Derive the true model and start the world's state."""
+        self.rng = np.random.default_rng(self.seed)
+        self.model = self.robot.model(self.truth)
+        self.p0 = tool_position(self.model, np.radians(self.mount_deg)[None])[0]
+        if self.encoder_point_mm is not None:
+            self.p0 = np.asarray(self.encoder_point_mm, dtype=float)
+        self.joints = tuple(f32(x) for x in self.mount_deg)
+        self.actual = np.asarray(self.joints, dtype=float)
+        # the arm's limits as the controller enforces them (a fault may make them tighter)
+        self.limits = (
+            replace(self.robot, joint_max_deg=np.asarray(self.faults.joint_max_deg, dtype=float))
+            if self.faults.joint_max_deg
+            else self.robot
+        )
+        self.console: list[str] = []
+        self.clock = 0.0
+        self.moves = 0
+        self.reads = 0
+        self.lines_written = 0
+        self.pose_error = self.rng.normal(0, self.noise_mm)
+        self.slip = 0.0
+        self._wire_at: tuple[np.ndarray, float] | None = None  # (actual, its wire mm)
+        self.vibration = (0.0, VIBRATION_TAU_S, 0.0, 0.0)  # amplitude mm, τ, phase, since
+        self.nest: int | None = None  # the gauge nest the wire tip is seated in (0 A, 1 B)
+        self.gauge_mm = reference_lengths(self.robot.encoder, self.encoder_truth)[:2]
+
+    # ---- operator and console ----
+    def show(self, text: str) -> None:
+        """Show a line on the console the operator reads."""
+        self.console.append(text)
+
+    def answer(self, text: str) -> str | None:
+        """Ask the operator ``text``; their scripted answer (None: nobody answers).
+
+        A confirmed (1) "Seat the tip in nest A/B" seats the wire tip in that nest of the
+        reference gauge, taking the operator's time; after "reattached" it is back on the
+        flange fixture.
+        """
+        self.show(text)
+        if not self.answers:
+            return None
+        answer = self.answers.pop(0)
+        self.show(f"> {answer}")
+        if answer.strip() == "1" and len(self.gauge_mm):
+            self.clock += OPERATOR_SEAT_S
+            self.pose_error = self.rng.normal(0, self.noise_mm)  # each seating anew
+            if "nest A" in text:
+                self.nest = 0
+            elif "nest B" in text:
+                self.nest = 1
+            elif "reattached" in text:
+                self.nest = None
+        return answer
+
+    def steady(self) -> bool:
+        """At a pause: whether the operator continues (having steadied the arm)."""
+        if self.proceed_on_pause:
+            self.vibration = (0.0, VIBRATION_TAU_S, 0.0, self.clock)
+        return self.proceed_on_pause
+
+    def wait(self, seconds: float) -> None:
+        """Let ``seconds`` pass."""
+        self.clock += seconds
+
+    # ---- motion ----
+    def beyond_limits(self, q_deg: np.ndarray) -> int | None:
+        """Return the index of the first joint beyond the controller's limits, if any."""
+        lo, hi = self.limits.joint_min_deg, self.limits.joint_max_deg
+        out = np.flatnonzero((q_deg < lo) | (q_deg > hi))
+        return int(out[0]) if out.size else None
+
+    def collision(self, q_deg: np.ndarray) -> str | None:
+        """Return where the true arm collides on the move to ``q_deg``, or None.
+
+        The joint-interpolated move from the current joints, sampled as the planner
+        samples moves (a straight-line move is sampled in joint space too), against the
+        arm's body and the robot file's ``[cell]``: where the true arm's capsules touch
+        (the planner's margin aside), a real arm would stop (a protective stop).
+        """
+        start = np.asarray(self.joints, dtype=float)
+        target = np.asarray(q_deg, float)
+        hit = move_collision(self.robot, self.model, self.p0, start, target, contact=True)
+        if hit is None:
+            return None
+        return f"move {self.moves + 1} to ({', '.join(f'{x:g}' for x in q_deg)}): {hit}"
+
+    def profile(self, q_deg: np.ndarray) -> Moves:
+        """Return the move from the current joints to ``q_deg`` on the true arm."""
+        return move_profiles(self.robot, self.model, self.p0, np.asarray(self.joints), q_deg)
+
+    def wire_overspeed(self, move: Moves, speed_pct: float) -> str | None:
+        """Return why ``move`` at ``speed_pct`` would run the wire beyond the encoder's limits.
+
+        None when within them, or when the run does not enforce them (``wire_limits``).
+        """
+        enc = self.robot.encoder
+        if not self.wire_limits:
+            return None
+        speed = float(move.wire_speed_mm_s(np.asarray(speed_pct))[0])
+        accel = float(move.wire_accel_mm_s2(np.asarray(speed_pct))[0])
+        if enc.max_wire_speed_mm_s is not None and speed > enc.max_wire_speed_mm_s:
+            return (
+                f"the wire would run at {speed:.0f} mm/s, beyond the encoder's "
+                f"max_wire_speed_mm_s {enc.max_wire_speed_mm_s:g}"
+            )
+        if enc.max_wire_accel_mm_s2 is not None and accel > enc.max_wire_accel_mm_s2:
+            return (
+                f"the wire would accelerate at {accel:.0f} mm/s², beyond the encoder's "
+                f"max_wire_accel_mm_s2 {enc.max_wire_accel_mm_s2:g}"
+            )
+        return None
+
+    def arrive(self, q_deg: np.ndarray, seconds: float) -> None:
+        """End a move at ``q_deg`` after ``seconds``: the clock, the true arm, the faults."""
+        self.clock += seconds
+        self.joints = tuple(f32(x) for x in q_deg)
+        self.actual = q_deg + self._unmodelled(q_deg)
+        self.moves += 1
+        f = self.faults
+        if f.slip_at_move is not None and self.moves == f.slip_at_move:
+            self.slip += f.slip_mm
+        self.pose_error = self.rng.normal(0, self.noise_mm)
+
+    def vibrate(self, amplitude_mm: float) -> None:
+        """Start the vibration along the wire after a move.
+
+        It decays, or with the fault "still vibrating" it does not, until the operator
+        steadies the arm at a pause.
+        """
+        f = self.faults
+        phase = float(self.rng.uniform(0, 2 * math.pi))
+        if f.vibration_at_move is not None and self.moves == f.vibration_at_move:
+            amplitude = f.vibration_counts * abs(self.robot.encoder.mm_per_count)
+            self.vibration = (amplitude, math.inf, phase, self.clock)
+        else:
+            self.vibration = (amplitude_mm, VIBRATION_TAU_S, phase, self.clock)
+
+    def _unmodelled(self, q_deg: np.ndarray) -> np.ndarray:
+        """Where the arm really is, relative to the commanded joints (deg)."""
+        u = self.unmodelled
+        if u is None:
+            return np.zeros_like(q_deg)
+        return u.joint_errors_deg(self.model, q_deg, self.rng)
+
+    def probe_touching(self) -> bool:
+        """Tell whether the touch probe's true tip is on or below the plate."""
+        if self.plate is None:
+            return False
+        R, o = flange_pose(self.model, np.radians(self.actual))
+        tip = o + R @ np.asarray(self.probe_mm)
+        depth = np.dot(tip - np.asarray(self.plate.point), np.asarray(self.plate.normal))
+        return bool(depth <= 0)
+
+    # ---- encoder ----
+    def read_count(self) -> int:
+        """Read the encoder once: the count of the wire now, unwrapped.
+
+        Raises :class:`EncoderFailure` from the faulty read on.
+        """
+        self.reads += 1
+        f = self.faults
+        if f.encoder_fails_at_read is not None and self.reads >= f.encoder_fails_at_read:
+            raise EncoderFailure(f"the encoder failed at read {self.reads}")
+        return self._wire_counts()
+
+    def _wire_counts(self) -> int:
+        """Return the encoder's count for the true wire length now, before any wrap.
+
+        Gaussian noise per pose, quantisation, ±1-count jitter, the vibration after the
+        last move, a slip, the wire the operator pulls out; a wire pulled beyond the
+        encoder's range is an error.
+        """
+        enc = self.robot.encoder
+        if self.nest is not None:  # the tip in a nest of the reference gauge
+            d = float(self.gauge_mm[self.nest]) + self.pose_error
+        else:
+            d = self._wire_mm() + self.pose_error + self.slip
+        if d > enc.range_mm:
+            raise RunError(
+                RANGE_EXCEEDED_CODE,
+                f"{RANGE_EXCEEDED}: the wire would be {d:.1f} mm long, beyond the "
+                f"encoder's range_mm {enc.range_mm:g}",
+            )
+        amplitude, tau, phase, since = self.vibration
+        t = self.clock - since
+        d += amplitude * math.exp(-t / tau) * math.cos(2 * math.pi * VIBRATION_HZ * t + phase)
+        jitter = int(self.rng.choice((-1, 0, 0, 0, 1)))
+        truth = self.encoder_truth  # what the encoder reads of it: scale, temperature, drift
+        now = np.asarray(self.clock)
+        d = float(truth.read_factor(now, self.run_s)) * d + float(truth.drift_mm(now))
+        count = math.floor(self.counter_start + d / enc.mm_per_count + 0.5) + jitter
+        pulled = self.pull_mm(self.clock) if self.pull_mm is not None else 0.0
+        return count + round(pulled / enc.mm_per_count)
+
+    def _wire_mm(self) -> float:
+        """Return the true wire length where the arm stands.
+
+        Kept while the arm stands: the settle rule reads the counter several times per point.
+        """
+        if self._wire_at is None or self._wire_at[0] is not self.actual:
+            p = tool_position(self.model, np.radians(self.actual)[None])[0]
+            wire = float(physical_wire_mm(self.robot.encoder.exit, p - self.p0))
+            self._wire_at = (self.actual, wire)
+        return self._wire_at[1]
+
+    # ---- disk ----
+    def append_line(self, path: Path, text: str) -> bool:
+        """Append a line to a file on the disk, written through; False when the disk is full."""
+        f = self.faults
+        if f.disk_full_after_lines is not None and self.lines_written >= f.disk_full_after_lines:
+            return False
+        with open(path, "a", encoding="ascii", newline="\n") as fh:
+            fh.write(text + "\n")  # written through: a stopped run leaves its lines
+        self.lines_written += 1
+        return True
+
+
+@dataclass
+class TwinRun:
+    """A measurement run in the twin: the log the PC reads and how the programs ended."""
+
+    log: Path  # the log the PC reads (an incomplete run's journal where there is one)
+    complete: bool  # the log holds the whole run
+    stopped: str | None  # why not complete (None when it is)
+    world: World
+    mount: Outcome  # the mounting program's outcome
+    run: Outcome | None  # the measurement program's (None: not started)
+    controller: Any = None  # the language's controller adapter, with its own state
+
+
+def stop_reason(mount: Outcome, run: Outcome | None) -> str | None:
+    """Why a mount-then-run pair did not complete (None when the run completed)."""
+    last = run or mount
+    if run is not None and run.status == "completed":
+        return None
+    return f"{last.program} {last.status} at line {last.line}: {last.message}"
