@@ -71,17 +71,21 @@ class Encoder:
         return Counter(self.counter_bits)
 
 
-LANGUAGES = {"vplus": "Adept/Omron V+ and eV+", "urscript": "Universal Robots URScript"}
+LANGUAGES = {
+    "vplus": "Adept/Omron V+ and eV+",
+    "urscript": "Universal Robots URScript",
+    "rapid": "ABB RAPID",
+}
 """The controller languages ``wirecal gen`` writes, by their robot-file name."""
 
-INTERFACES = {"vplus": ("belt", "device"), "urscript": ("pulse",)}
+INTERFACES = {"vplus": ("belt", "device"), "urscript": ("pulse",), "rapid": ("group",)}
 """The encoder interfaces each language's programs read (``[encoder] interface``)."""
 
-DEFAULT_CHANNEL = {"belt": 1, "device": 0, "pulse": 0}
+DEFAULT_CHANNEL = {"belt": 1, "device": 0, "pulse": 0, "group": 0}
 """The ``[encoder] channel`` when the robot file gives none, by interface (V+ belt encoders
 count from 1; DEVICE units and the URScript pulse decoder's encoder index from 0)."""
 
-LIVE_CHECK = {"vplus": "wc.check", "urscript": "wc_check"}
+LIVE_CHECK = {"vplus": "wc.check", "urscript": "wc_check", "rapid": "wc_check"}
 """The generated program that shows the live counts, by language (messages name it)."""
 
 
@@ -105,7 +109,10 @@ def language_mismatch(robot: Robot, language: str) -> str:
 SOFTWARE_PATTERN = re.compile(r"\d{1,3}(\.\d{1,4}){1,3}")
 """A controller software version as numbers, as PolyScope shows it: "3.15.8", "5.20"."""
 
-SOFTWARE_LINES = {"urscript": {3: "CB3", 5: "e-Series (PolyScope 5)"}}
+SOFTWARE_LINES = {
+    "urscript": {3: "CB3", 5: "e-Series (PolyScope 5)"},
+    "rapid": {6: "RobotWare 6 (IRC5)", 7: "RobotWare 7 (OmniCore)"},
+}
 """The controller software lines wirecal knows, by language and major version."""
 
 
