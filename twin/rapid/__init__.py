@@ -1,0 +1,6 @@
+"""RAPID (ABB IRC5) in the twin: the interpreter of the subset wirecal generates.
+
+The front end (grammar, parser, checker) is :mod:`wirecal.lang.rapid`; what the program
+does to the robot, the encoder, files and the FlexPendant goes through a
+:class:`wirecal.twin.rapid.interp.RapidController`.
+"""
