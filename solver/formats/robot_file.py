@@ -453,6 +453,7 @@ def _encoder(enc: Table, controller: Controller | None) -> Encoder | None:
             "belt": "V+: DEFBELT/BELT",
             "device": "V+: DEVICE",
             "pulse": "URScript: the controller's pulse decoder",
+            "group": "RAPID: a counter's group input, GInputDnum",
         },
     )
     if controller is not None and interface is not None and interface not in INTERFACES[language]:
