@@ -1,0 +1,118 @@
+"""The RAPID module generator: golden bytes, what the module holds, what it refuses."""
+
+from __future__ import annotations
+
+import os
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from wirecal.gen.rapid import GENERATOR
+from wirecal.gen.rapid.program import RapidOptions, module_text, num_literal
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
+
+ROOT = Path(__file__).resolve().parent.parent
+IRB = ROOT / "examples" / "abb_irb120"
+GOLDEN = Path(__file__).parent / "golden" / "abb_irb120" / "WIRECAL.mod"
+
+
+@pytest.fixture(scope="module")
+def irb():
+    robot = load_robot(IRB / "robot.toml")
+    return robot, load_plan(IRB / "plan.toml", robot)
+
+
+@pytest.fixture(scope="module")
+def text(irb):
+    return module_text(*irb)
+
+
+def test_golden_file(text, irb):
+    """Byte for byte the reviewed module and deterministic; WIRECAL_UPDATE_GOLDEN=1
+    rewrites it after an intended change (review the diff)."""
+    if os.environ.get("WIRECAL_UPDATE_GOLDEN"):
+        GOLDEN.write_bytes(text.encode("ascii"))
+    assert text.encode("ascii") == GOLDEN.read_bytes()
+    assert module_text(*irb) == text
+
+
+def test_module_shape(text, irb):
+    """One module; the three routines; every plan target a MoveAbsJ (θ0 once per step
+    plus the closing one through wc_theta0); one reading per zero and point."""
+    _, plan = irb
+    assert text.startswith("MODULE WIRECAL\n")
+    assert text.endswith("ENDMODULE\n")
+    for proc in ("wc_mount", "wc_check", "wc_run", "wc_meas", "wc_solve"):
+        assert len(re.findall(rf"^  PROC {proc}\(", text, re.M)) == 1
+    vias = sum(len(s.via_deg) for s in plan.steps)
+    assert text.count("MoveAbsJ wc_theta0,") == len(plan.steps) + 2  # + wc_mount
+    assert len(re.findall(r"MoveAbsJ \[\[", text)) == plan.n_points + vias
+    assert len(re.findall(r"^    wc_meas ", text, re.M)) == plan.n_points + len(plan.steps) + 1
+    # the first point of step 1, as the plan has it (deg)
+    q = ", ".join(f"{x:g}" for x in plan.steps[0].points_deg[0])
+    assert f"MoveAbsJ [[{q}], [9E+09" in text
+
+
+def test_strings_fit_rapid(text):
+    """Every string literal holds at most 80 characters (a RAPID string's length)."""
+    pieces = [p for line in text.splitlines() for p in line.split('"')[1::2]]
+    assert pieces
+    assert max(map(len, pieces)) <= 80
+
+
+def test_log_header_and_reads(text, irb):
+    _robot, plan = irb
+    assert f'wc_out "# plan: {plan.fingerprint()}";' in text
+    assert 'wc_out "# mm_per_count: 0.025488";' in text
+    assert 'Open "HOME:" \\File:="WIRECAL.LOG", wc_log \\Write;' in text
+    assert text.count("GInputDnum(wc_giCount0)") == 4  # check (2), wc_meas (2)
+    assert "d := d - 4294967296;" in text
+    assert "d := d + 4294967296;" in text
+
+
+def test_no_solver(irb, text):
+    bare = module_text(*irb, RapidOptions(solver=False))
+    assert "wc_solve" not in bare
+    assert "wc_rc{slot}" not in bare
+    assert text.count("wc_solve;") == 1
+    assert text.index("wc_meas 10, 0, 0;") < text.index("wc_solve;") < text.index('"# end"')
+
+
+def test_log_file_option(irb):
+    out = module_text(*irb, RapidOptions(solver=False, log_file="RUN2.LOG"))
+    assert '\\File:="RUN2.LOG"' in out
+    with pytest.raises(WirecalError, match="log-file"):
+        module_text(*irb, RapidOptions(log_file="a b.log"))
+
+
+def test_refuses_other_encoder(irb):
+    data = tomllib.loads((IRB / "robot.toml").read_text())
+    data["encoder"]["counter_bits"] = 24
+    robot = robot_from_dict(data, "bits.toml")
+    with pytest.raises(WirecalError, match="counter_bits = 32"):
+        module_text(robot, irb[1])
+
+
+@dataclass
+class _Request:
+    solver: bool = False
+    host: str | None = None
+
+
+def test_generator_programs(irb):
+    out = GENERATOR.programs(*irb, _Request())
+    assert list(out) == ["WIRECAL.mod"]
+    assert "wc_solve" not in out["WIRECAL.mod"]
+    with pytest.raises(WirecalError, match="does not take host"):
+        GENERATOR.programs(*irb, _Request(host="10.0.0.1"))
+
+
+@pytest.mark.parametrize("x", [1.0, -0.0, 0.1, 6.123233995736766e-17, 302.0])
+def test_num_literal_is_the_nearest_float32(x):
+    assert np.float32(float(num_literal(x))) == np.float32(x)
