@@ -377,12 +377,12 @@ MODULE WIRECAL
 
   ! wc_solve's tables (1-based): the DH rows, then per configuration c = 1
   ! (theta0) .. 46, per step and per parameter in identification order
-  CONST num ca{6} := [1.0, 0.00000000000000006123234, 1.0, 0.00000000000000006123234, 0.00000000000000006123234, 0.00000000000000006123234];
-  CONST num sa{6} := [0.0, -1.0, 0.0, -1.0, 1.0, -1.0];
-  CONST num la{6} := [0.0, 0.0, 270.0, 70.0, 0.0, 0.0];
-  CONST num ld{6} := [290.0, 0.0, 0.0, 302.0, 0.0, 72.0];
-  CONST num tp{3} := [-50.0, 0.0, 40.0];
-  CONST num ct{46, 6} := [
+  CONST num wc_ca{6} := [1.0, 0.00000000000000006123234, 1.0, 0.00000000000000006123234, 0.00000000000000006123234, 0.00000000000000006123234];
+  CONST num wc_sa{6} := [0.0, -1.0, 0.0, -1.0, 1.0, -1.0];
+  CONST num wc_la{6} := [0.0, 0.0, 270.0, 70.0, 0.0, 0.0];
+  CONST num wc_ld{6} := [290.0, 0.0, 0.0, 302.0, 0.0, 72.0];
+  CONST num wc_tp{3} := [-50.0, 0.0, 40.0];
+  CONST num wc_ct{46, 6} := [
     [0.9335804, 0.087155744, 0.809017, 0.7313537, 0.7313537, -0.9975641],
     [0.9335804, 0.087155744, 0.809017, 0.7313537, 0.18532361, -0.58311594],
     [0.9335804, 0.087155744, 0.809017, 0.7313537, 0.15764104, -0.83829015],
@@ -429,7 +429,7 @@ MODULE WIRECAL
     [0.9335804, -0.9860542, 0.809017, -0.4535239, -0.21712114, -0.9975641],
     [0.9335804, -0.985996, 0.809017, -0.43915534, -0.32259613, -0.9975641],
     [0.9335804, -0.999159, 0.809017, -0.48862123, -0.15712397, -0.9975641]];
-  CONST num st{46, 6} := [
+  CONST num wc_st{46, 6} := [
     [0.35836795, -0.9961947, -0.58778524, -0.6819984, -0.6819984, 0.06975647],
     [0.35836795, -0.9961947, -0.58778524, -0.6819984, 0.9826775, 0.81238896],
     [0.35836795, -0.9961947, -0.58778524, -0.6819984, 0.9874965, 0.5452244],
@@ -476,7 +476,7 @@ MODULE WIRECAL
     [0.35836795, 0.16642456, -0.58778524, -0.8912441, -0.9761447, 0.06975647],
     [0.35836795, 0.16676874, -0.58778524, -0.89841115, -0.9465367, 0.06975647],
     [0.35836795, 0.041003738, -0.58778524, -0.872496, -0.98757887, 0.06975647]];
-  CONST dnum qp{46, 6} := [
+  CONST dnum wc_qp{46, 6} := [
     [21.0, 5.0, -36.0, -43.0, -43.0, -184.0],
     [21.0, 5.0, -36.0, -43.0, 79.32, -234.33],
     [21.0, 5.0, -36.0, -43.0, 80.93, -213.04],
@@ -523,7 +523,7 @@ MODULE WIRECAL
     [21.0, -99.58, -36.0, -116.97, -102.54, -184.0],
     [21.0, -99.6, -36.0, -116.05, -108.82, -184.0],
     [21.0, -92.35, -36.0, -119.25, -99.04, -184.0]];
-  CONST num vn{46, 3} := [
+  CONST num wc_vn{46, 3} := [
     [0.0, 0.0, 0.0],
     [133.30957, -78.64069, -157.28885],
     [139.74776, -86.148544, -144.0987],
@@ -570,18 +570,18 @@ MODULE WIRECAL
     [-647.9198, -241.55609, -478.42603],
     [-641.93555, -246.70299, -489.49796],
     [-633.1074, -233.98573, -414.9471]];
-  CONST num dn{46} := [0.0, 220.67076, 218.43864, 160.57787, 77.73027, 132.1638, 114.82108, 83.560905, 42.97633, 63.85546, 53.873543, 52.59392, 153.83978, 147.25807, 137.2655, 57.12113, 179.12817, 201.82271, 176.05109, 162.70166, 245.6674, 277.584, 495.65558, 175.46094, 219.11037, 301.31863, 276.76245, 507.63873, 693.74084, 669.8823, 281.6714, 331.30518, 210.89175, 204.14008, 237.4161, 242.05843, 305.2897, 487.48038, 724.91595, 956.8077, 592.1644, 578.03296, 556.8999, 840.85724, 844.12787, 792.31024];
-  CONST dnum dnc{46} := [0.0, 8657.829399081567, 8570.254300171135, 6300.136265458367, 3049.680949158761, 5185.334478082564, 4504.907632144606, 3278.4411326517115, 1686.1396707225338, 2505.314749292957, 2113.68265004148, 2063.477825307931, 6035.773154259727, 5777.545420100101, 5385.495441129293, 2241.099043334159, 7027.941463593787, 7918.342484211876, 6907.214558448565, 6383.461510051947, 9638.551579320447, 10890.773289390476, 19446.625057777917, 6884.060914117586, 8596.608636946048, 11821.979752999152, 10858.539848531742, 19916.77383540052, 27218.331675985617, 26282.263566756177, 11051.136708716582, 12998.476523802106, 8274.158631335577, 8009.262161580053, 9314.819216757971, 9496.956512657041, 11977.782192109089, 19125.878044358884, 28441.461534066573, 37539.53472306353, 23233.06670251738, 22678.631689517904, 21849.493488037693, 32990.31741352082, 33118.63927670894, 31085.617571789753];
-  CONST num first{9} := [2, 4, 6, 8, 17, 24, 29, 31, 41];
-  CONST num count{9} := [2, 2, 2, 9, 7, 5, 2, 10, 6];
-  CONST num spar{9} := [1, 2, 3, 4, 5, 6, 7, 8, 9];
-  CONST num om{9} := [5.0, 0.08726646, 0.08726646, 0.08726646, 5.0, 0.08726646, 0.08726646, 5.0, 5.0];
-  CONST num pk{9} := [2, 1, 1, 1, 2, 1, 1, 3, 3];
-  CONST num pr{9} := [6, 5, 4, 6, 4, 3, 2, 3, 4];
-  CONST num tb{9} := [1.0, 57.29578, 57.29578, 57.29578, 1.0, 57.29578, 57.29578, 1.0, 1.0];
-  CONST num nom{9} := [72.0, 0.0, 0.0, 0.0, 302.0, 0.0, -90.0, 270.0, 70.0];
-  CONST string pn{9} := ["d6", "th5", "th4", "th6", "d4", "th3", "th2", "a2", "a3"];
-  CONST string pu{9} := ["mm", "deg", "deg", "deg", "mm", "deg", "deg", "mm", "mm"];
+  CONST num wc_dn{46} := [0.0, 220.67076, 218.43864, 160.57787, 77.73027, 132.1638, 114.82108, 83.560905, 42.97633, 63.85546, 53.873543, 52.59392, 153.83978, 147.25807, 137.2655, 57.12113, 179.12817, 201.82271, 176.05109, 162.70166, 245.6674, 277.584, 495.65558, 175.46094, 219.11037, 301.31863, 276.76245, 507.63873, 693.74084, 669.8823, 281.6714, 331.30518, 210.89175, 204.14008, 237.4161, 242.05843, 305.2897, 487.48038, 724.91595, 956.8077, 592.1644, 578.03296, 556.8999, 840.85724, 844.12787, 792.31024];
+  CONST dnum wc_dnc{46} := [0.0, 8657.829399081567, 8570.254300171135, 6300.136265458367, 3049.680949158761, 5185.334478082564, 4504.907632144606, 3278.4411326517115, 1686.1396707225338, 2505.314749292957, 2113.68265004148, 2063.477825307931, 6035.773154259727, 5777.545420100101, 5385.495441129293, 2241.099043334159, 7027.941463593787, 7918.342484211876, 6907.214558448565, 6383.461510051947, 9638.551579320447, 10890.773289390476, 19446.625057777917, 6884.060914117586, 8596.608636946048, 11821.979752999152, 10858.539848531742, 19916.77383540052, 27218.331675985617, 26282.263566756177, 11051.136708716582, 12998.476523802106, 8274.158631335577, 8009.262161580053, 9314.819216757971, 9496.956512657041, 11977.782192109089, 19125.878044358884, 28441.461534066573, 37539.53472306353, 23233.06670251738, 22678.631689517904, 21849.493488037693, 32990.31741352082, 33118.63927670894, 31085.617571789753];
+  CONST num wc_first{9} := [2, 4, 6, 8, 17, 24, 29, 31, 41];
+  CONST num wc_count{9} := [2, 2, 2, 9, 7, 5, 2, 10, 6];
+  CONST num wc_spar{9} := [1, 2, 3, 4, 5, 6, 7, 8, 9];
+  CONST num wc_om{9} := [5.0, 0.08726646, 0.08726646, 0.08726646, 5.0, 0.08726646, 0.08726646, 5.0, 5.0];
+  CONST num wc_pk{9} := [2, 1, 1, 1, 2, 1, 1, 3, 3];
+  CONST num wc_pr{9} := [6, 5, 4, 6, 4, 3, 2, 3, 4];
+  CONST num wc_tb{9} := [1.0, 57.29578, 57.29578, 57.29578, 1.0, 57.29578, 57.29578, 1.0, 1.0];
+  CONST num wc_nom{9} := [72.0, 0.0, 0.0, 0.0, 302.0, 0.0, -90.0, 270.0, 70.0];
+  CONST string wc_pn{9} := ["d6", "th5", "th4", "th6", "d4", "th3", "th2", "a2", "a3"];
+  CONST string wc_pu{9} := ["mm", "deg", "deg", "deg", "mm", "deg", "deg", "mm", "mm"];
 
   PROC wc_solve()
     ! The paper's step-by-step identification (one parameter per step, earlier ones
@@ -699,7 +699,7 @@ MODULE WIRECAL
         c := 1;
       ENDIF
       FOR k FROM 1 TO 6 DO
-        dq{i, k} := DnumToNum((NumToDnum(wc_rj{c, k}) - qp{i, k}) * 0.017453292519943295);
+        dq{i, k} := DnumToNum((NumToDnum(wc_rj{c, k}) - wc_qp{i, k}) * 0.017453292519943295);
       ENDFOR
     ENDFOR
     ! md: measured minus nominal wire length (mm) of every point, from the counts
@@ -711,13 +711,13 @@ MODULE WIRECAL
     ref := ref / 9;
     md{1} := 0;
     FOR i FROM 2 TO 46 DO
-      md{i} := DnumToNum((wc_delta(wc_rc{i + 8}, wc_rc{1}) - ref - dnc{i}) * 0.025488);
+      md{i} := DnumToNum((wc_delta(wc_rc{i + 8}, wc_rc{1}) - ref - wc_dnc{i}) * 0.025488);
     ENDFOR
     FOR i FROM 1 TO 9 DO
       est{i} := 0;
     ENDFOR
     FOR s FROM 1 TO 9 DO
-      j := spar{s};
+      j := wc_spar{s};
       est{j} := 0;
       FOR it FROM 1 TO 5 DO
         ! the current estimates per DH row and tool axis
@@ -731,17 +731,17 @@ MODULE WIRECAL
         et{2} := 0;
         et{3} := 0;
         FOR k FROM 1 TO 9 DO
-          TEST pk{k}
+          TEST wc_pk{k}
           CASE 1:
-            eth{pr{k}} := est{k};
+            eth{wc_pr{k}} := est{k};
           CASE 2:
-            ed{pr{k}} := est{k};
+            ed{wc_pr{k}} := est{k};
           CASE 3:
-            ea{pr{k}} := est{k};
+            ea{wc_pr{k}} := est{k};
           CASE 4:
-            eal{pr{k}} := est{k};
+            eal{wc_pr{k}} := est{k};
           DEFAULT:
-            et{pr{k}} := est{k};
+            et{wc_pr{k}} := est{k};
           ENDTEST
         ENDFOR
         c := 1;
@@ -781,8 +781,8 @@ MODULE WIRECAL
           e2 := e * e;
           sv := e * (1 - e2 / 6 * (1 - e2 / 20));
           cm := -(e2 / 2) * (1 - e2 / 12 * (1 - e2 / 30));
-          cn := ca{k};
-          sn := sa{k};
+          cn := wc_ca{k};
+          sn := wc_sa{k};
           dc := cn * cm - sn * sv;
           ds := sn * cm + cn * sv;
           cc := cn + dc;
@@ -803,21 +803,21 @@ MODULE WIRECAL
           ! lengths a(k-1), d(k) plus their estimates
           ea1 := ea{k};
           ed1 := ed{k};
-          av := la{k} + ea1;
-          dv := ld{k} + ed1;
-          no1 := no1 + la{k} * nx1 + ld{k} * mz1;
+          av := wc_la{k} + ea1;
+          dv := wc_ld{k} + ed1;
+          no1 := no1 + wc_la{k} * nx1 + wc_ld{k} * mz1;
           po1 := po1 + ea1 * nx1 + av * px1 + ed1 * mz1 + dv * kz1;
-          no2 := no2 + la{k} * nx2 + ld{k} * mz2;
+          no2 := no2 + wc_la{k} * nx2 + wc_ld{k} * mz2;
           po2 := po2 + ea1 * nx2 + av * px2 + ed1 * mz2 + dv * kz2;
-          no3 := no3 + la{k} * nx3 + ld{k} * mz3;
+          no3 := no3 + wc_la{k} * nx3 + wc_ld{k} * mz3;
           po3 := po3 + ea1 * nx3 + av * px3 + ed1 * mz3 + dv * kz3;
           ! joint angle: read minus plan, plus the offset estimate, turns (x, y)
           e := dq{c, k} + eth{k};
           e2 := e * e;
           sv := e * (1 - e2 / 6 * (1 - e2 / 20));
           cm := -(e2 / 2) * (1 - e2 / 12 * (1 - e2 / 30));
-          cn := ct{c, k};
-          sn := st{c, k};
+          cn := wc_ct{c, k};
+          sn := wc_st{c, k};
           dc := cn * cm - sn * sv;
           ds := sn * cm + cn * sv;
           cc := cn + dc;
@@ -869,21 +869,21 @@ MODULE WIRECAL
         tx{3} := nx3 + px3;
         ty{3} := ny3 + py3;
         tz{3} := nz3 + pz3;
-        w := po1 + px1 * tp{1} + py1 * tp{2} + pz1 * tp{3};
+        w := po1 + px1 * wc_tp{1} + py1 * wc_tp{2} + pz1 * wc_tp{3};
         dpv{1} := w + tx{1} * et{1} + ty{1} * et{2} + tz{1} * et{3};
-        w := no1 + nx1 * tp{1} + ny1 * tp{2} + nz1 * tp{3};
+        w := no1 + nx1 * wc_tp{1} + ny1 * wc_tp{2} + nz1 * wc_tp{3};
         pv{1} := w + dpv{1};
-        w := po2 + px2 * tp{1} + py2 * tp{2} + pz2 * tp{3};
+        w := po2 + px2 * wc_tp{1} + py2 * wc_tp{2} + pz2 * wc_tp{3};
         dpv{2} := w + tx{2} * et{1} + ty{2} * et{2} + tz{2} * et{3};
-        w := no2 + nx2 * tp{1} + ny2 * tp{2} + nz2 * tp{3};
+        w := no2 + nx2 * wc_tp{1} + ny2 * wc_tp{2} + nz2 * wc_tp{3};
         pv{2} := w + dpv{2};
-        w := po3 + px3 * tp{1} + py3 * tp{2} + pz3 * tp{3};
+        w := po3 + px3 * wc_tp{1} + py3 * wc_tp{2} + pz3 * wc_tp{3};
         dpv{3} := w + tx{3} * et{1} + ty{3} * et{2} + tz{3} * et{3};
-        w := no3 + nx3 * tp{1} + ny3 * tp{2} + nz3 * tp{3};
+        w := no3 + nx3 * wc_tp{1} + ny3 * wc_tp{2} + nz3 * wc_tp{3};
         pv{3} := w + dpv{3};
 
-        b := pr{j};
-        TEST pk{j}
+        b := wc_pr{j};
+        TEST wc_pk{j}
         CASE 1:
           u1 := fz{b, 1};
           v1 := pv{1} - fo{b, 1};
@@ -921,7 +921,7 @@ MODULE WIRECAL
             g{3} := tz{3};
           ENDIF
         ENDTEST
-        IF pk{j} = 1 OR pk{j} = 4 THEN
+        IF wc_pk{j} = 1 OR wc_pk{j} = 4 THEN
           g{1} := u2 * v3 - u3 * v2;
           g{2} := u3 * v1 - u1 * v3;
           g{3} := u1 * v2 - u2 * v1;
@@ -934,8 +934,8 @@ MODULE WIRECAL
         g03 := g{3};
         srg := 0;
         sgg := 0;
-        c := first{s};
-        WHILE c < first{s} + count{s} DO
+        c := wc_first{s};
+        WHILE c < wc_first{s} + wc_count{s} DO
           nx1 := 1;
           ny1 := 0;
           nz1 := 0;
@@ -972,8 +972,8 @@ MODULE WIRECAL
             e2 := e * e;
             sv := e * (1 - e2 / 6 * (1 - e2 / 20));
             cm := -(e2 / 2) * (1 - e2 / 12 * (1 - e2 / 30));
-            cn := ca{k};
-            sn := sa{k};
+            cn := wc_ca{k};
+            sn := wc_sa{k};
             dc := cn * cm - sn * sv;
             ds := sn * cm + cn * sv;
             cc := cn + dc;
@@ -994,21 +994,21 @@ MODULE WIRECAL
             ! lengths a(k-1), d(k) plus their estimates
             ea1 := ea{k};
             ed1 := ed{k};
-            av := la{k} + ea1;
-            dv := ld{k} + ed1;
-            no1 := no1 + la{k} * nx1 + ld{k} * mz1;
+            av := wc_la{k} + ea1;
+            dv := wc_ld{k} + ed1;
+            no1 := no1 + wc_la{k} * nx1 + wc_ld{k} * mz1;
             po1 := po1 + ea1 * nx1 + av * px1 + ed1 * mz1 + dv * kz1;
-            no2 := no2 + la{k} * nx2 + ld{k} * mz2;
+            no2 := no2 + wc_la{k} * nx2 + wc_ld{k} * mz2;
             po2 := po2 + ea1 * nx2 + av * px2 + ed1 * mz2 + dv * kz2;
-            no3 := no3 + la{k} * nx3 + ld{k} * mz3;
+            no3 := no3 + wc_la{k} * nx3 + wc_ld{k} * mz3;
             po3 := po3 + ea1 * nx3 + av * px3 + ed1 * mz3 + dv * kz3;
             ! joint angle: read minus plan, plus the offset estimate, turns (x, y)
             e := dq{c, k} + eth{k};
             e2 := e * e;
             sv := e * (1 - e2 / 6 * (1 - e2 / 20));
             cm := -(e2 / 2) * (1 - e2 / 12 * (1 - e2 / 30));
-            cn := ct{c, k};
-            sn := st{c, k};
+            cn := wc_ct{c, k};
+            sn := wc_st{c, k};
             dc := cn * cm - sn * sv;
             ds := sn * cm + cn * sv;
             cc := cn + dc;
@@ -1060,21 +1060,21 @@ MODULE WIRECAL
           tx{3} := nx3 + px3;
           ty{3} := ny3 + py3;
           tz{3} := nz3 + pz3;
-          w := po1 + px1 * tp{1} + py1 * tp{2} + pz1 * tp{3};
+          w := po1 + px1 * wc_tp{1} + py1 * wc_tp{2} + pz1 * wc_tp{3};
           dpv{1} := w + tx{1} * et{1} + ty{1} * et{2} + tz{1} * et{3};
-          w := no1 + nx1 * tp{1} + ny1 * tp{2} + nz1 * tp{3};
+          w := no1 + nx1 * wc_tp{1} + ny1 * wc_tp{2} + nz1 * wc_tp{3};
           pv{1} := w + dpv{1};
-          w := po2 + px2 * tp{1} + py2 * tp{2} + pz2 * tp{3};
+          w := po2 + px2 * wc_tp{1} + py2 * wc_tp{2} + pz2 * wc_tp{3};
           dpv{2} := w + tx{2} * et{1} + ty{2} * et{2} + tz{2} * et{3};
-          w := no2 + nx2 * tp{1} + ny2 * tp{2} + nz2 * tp{3};
+          w := no2 + nx2 * wc_tp{1} + ny2 * wc_tp{2} + nz2 * wc_tp{3};
           pv{2} := w + dpv{2};
-          w := po3 + px3 * tp{1} + py3 * tp{2} + pz3 * tp{3};
+          w := po3 + px3 * wc_tp{1} + py3 * wc_tp{2} + pz3 * wc_tp{3};
           dpv{3} := w + tx{3} * et{1} + ty{3} * et{2} + tz{3} * et{3};
-          w := no3 + nx3 * tp{1} + ny3 * tp{2} + nz3 * tp{3};
+          w := no3 + nx3 * wc_tp{1} + ny3 * wc_tp{2} + nz3 * wc_tp{3};
           pv{3} := w + dpv{3};
 
-          b := pr{j};
-          TEST pk{j}
+          b := wc_pr{j};
+          TEST wc_pk{j}
           CASE 1:
             u1 := fz{b, 1};
             v1 := pv{1} - fo{b, 1};
@@ -1112,7 +1112,7 @@ MODULE WIRECAL
               g{3} := tz{3};
             ENDIF
           ENDTEST
-          IF pk{j} = 1 OR pk{j} = 4 THEN
+          IF wc_pk{j} = 1 OR wc_pk{j} = 4 THEN
             g{1} := u2 * v3 - u3 * v2;
             g{2} := u3 * v1 - u1 * v3;
             g{3} := u1 * v2 - u2 * v1;
@@ -1122,26 +1122,26 @@ MODULE WIRECAL
           v1 := dpv{1} - dp0{1};
           v2 := dpv{2} - dp0{2};
           v3 := dpv{3} - dp0{3};
-          u := 2 * (vn{c, 1} * v1 + vn{c, 2} * v2 + vn{c, 3} * v3) + (v1 * v1 + v2 * v2 + v3 * v3);
-          dd := u / (dn{c} + Sqrt(dn{c} * dn{c} + u));
+          u := 2 * (wc_vn{c, 1} * v1 + wc_vn{c, 2} * v2 + wc_vn{c, 3} * v3) + (v1 * v1 + v2 * v2 + v3 * v3);
+          dd := u / (wc_dn{c} + Sqrt(wc_dn{c} * wc_dn{c} + u));
           r := dd - md{c};
-          d := dn{c} + dd;
-          gr := (vn{c, 1} + v1) * (g{1} - g01) + (vn{c, 2} + v2) * (g{2} - g02);
-          gr := (gr + (vn{c, 3} + v3) * (g{3} - g03)) / d;
+          d := wc_dn{c} + dd;
+          gr := (wc_vn{c, 1} + v1) * (g{1} - g01) + (wc_vn{c, 2} + v2) * (g{2} - g02);
+          gr := (gr + (wc_vn{c, 3} + v3) * (g{3} - g03)) / d;
           srg := srg + r * gr;
           sgg := sgg + gr * gr;
           c := c + 1;
         ENDWHILE
         x := est{j} - srg / sgg;
-        IF x > om{s} THEN
-          x := om{s};
+        IF x > wc_om{s} THEN
+          x := wc_om{s};
         ENDIF
-        IF x < -om{s} THEN
-          x := -om{s};
+        IF x < -wc_om{s} THEN
+          x := -wc_om{s};
         ENDIF
         est{j} := x;
       ENDFOR
-      wc_out "# solver: step " + NumToStr(s, 0) + " of 9: " + pn{j} + " identified";
+      wc_out "# solver: step " + NumToStr(s, 0) + " of 9: " + wc_pn{j} + " identified";
     ENDFOR
     ! the result: offsets (deg, mm) to 6 decimals as rows of the controller-result
     ! format, each line prefixed "# controller: " (a comment of the log), and the
@@ -1151,9 +1151,9 @@ MODULE WIRECAL
     wc_out "# controller: parameter,unit,offset";
     TPWrite "# parameter  unit  offset  new value (nominal + offset)";
     FOR i FROM 1 TO 9 DO
-      x := est{i} * tb{i};
-      wc_out "# controller: " + pn{i} + "," + pu{i} + "," + NumToStr(x, 6);
-      TPWrite "# " + pn{i} + "  " + pu{i} + "  " + NumToStr(x, 6) + "  " + NumToStr(nom{i} + x, 4);
+      x := est{i} * wc_tb{i};
+      wc_out "# controller: " + wc_pn{i} + "," + wc_pu{i} + "," + NumToStr(x, 6);
+      TPWrite "# " + wc_pn{i} + "  " + wc_pu{i} + "  " + NumToStr(x, 6) + "  " + NumToStr(wc_nom{i} + x, 4);
     ENDFOR
     TPWrite "# Controller solver done: compare with 'wirecal solve --method stepwise'.";
   ENDPROC
