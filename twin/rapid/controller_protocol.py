@@ -23,6 +23,9 @@ class RapidController(Protocol):
         program line of the instruction.
         """
 
+    def joints_deg(self) -> tuple[float, ...]:
+        """Return the six robot axes' current angles in degrees (CJointT)."""
+
     def group_input(self, name: str) -> int:
         """Return the group input signal ``name``'s value, unsigned (GInputDnum, GInput)."""
 
@@ -33,8 +36,8 @@ class RapidController(Protocol):
         ``append`` is Open's \Append switch.
         """
 
-    def write_file(self, handle: int, text: str) -> None:
-        """Write one line ``text`` (the interpreter has formatted it; no line end in it)."""
+    def write_file(self, handle: int, text: str, newline: bool = True) -> None:
+        r"""Write ``text`` (formatted by the interpreter), then a line end unless \NoNewLine."""
 
     def close_file(self, handle: int) -> None:
         """Close the file ``handle``."""
