@@ -692,14 +692,15 @@ MODULE WIRECAL
     VAR num dd;
     VAR num r;
     VAR num d;
-    ! joints as read minus plan (rad): configuration 1 from the first zero reading
+    ! joints as read, to the log's 4 decimals, minus plan (rad): configuration 1
+    ! from the first zero reading
     FOR i FROM 1 TO 46 DO
       c := i + 8;
       IF i = 1 THEN
         c := 1;
       ENDIF
       FOR k FROM 1 TO 6 DO
-        dq{i, k} := DnumToNum((NumToDnum(wc_rj{c, k}) - wc_qp{i, k}) * 0.017453292519943295);
+        dq{i, k} := DnumToNum((RoundDnum(NumToDnum(wc_rj{c, k}) \Dec:=4) - wc_qp{i, k}) * 0.017453292519943295);
       ENDFOR
     ENDFOR
     ! md: measured minus nominal wire length (mm) of every point, from the counts
