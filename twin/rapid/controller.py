@@ -1,4 +1,4 @@
-"""The IRC5 as the RAPID twin's interpreter sees it: :class:`IrcController` over the cell.
+r"""The IRC5 as the RAPID twin's interpreter sees it: :class:`IrcController` over the cell.
 
 It implements :class:`~wirecal.twin.rapid.controller_protocol.RapidController` on the
 twin's physical world (the true robot, the draw-wire encoder, the disk, the operator, the
@@ -16,8 +16,8 @@ methods of the same names it uses):
   signal name stops the program (an unknown signal);
 * ``CJointT``: the commanded joints (the joints' own encoders do not see the errors
   the wire measures);
-* ``Open "HOME:" \\File:=…`` / ``Write`` / ``Close``: files in the cell's disk folder,
-  written through, a line at a time (``\\NoNewLine`` keeps the line open);
+* ``Open "HOME:" \File:=…`` / ``Write`` / ``Close``: files in the cell's disk folder,
+  written through, a line at a time (``\NoNewLine`` keeps the line open);
 * ``TPWrite`` / ``TPErase`` / ``TPReadNum``: the FlexPendant is the cell's console; the
   operator answers from the cell's scripted answers;
 * ``WaitTime`` and the clocks: the cell's clock.
@@ -100,7 +100,7 @@ class IrcController:
         return handle
 
     def write_file(self, handle: int, text: str, newline: bool = True) -> None:
-        """Write: append ``text``; a line ends unless ``newline`` is False (\\NoNewLine)."""
+        r"""Write: append ``text``; a line ends unless ``newline`` is False (\NoNewLine)."""
         if handle not in self.files:
             raise self._refuse("Write: the file is not open")
         text = self.open_line.pop(handle, "") + text
@@ -143,9 +143,9 @@ class IrcController:
         self.world.wait(seconds)
 
     def now_s(self) -> float:
-        """The controller's time (s)."""
+        """Return the controller's time (s)."""
         return float(self.world.clock)
 
     def stop(self, why: str) -> None:
-        """The program stops: keep why."""
+        """Stop the program: keep why."""
         self.stopped = why
