@@ -16,6 +16,7 @@ from lark import Lark, Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
 
 from wirecal.lang.rapid import nodes as N
+from wirecal.lang.rapid.tables import RESERVED
 
 _ENDS = {
     "ENDPROC": "PROC",
@@ -303,6 +304,12 @@ def _last_line(text: str) -> int:
 def _unexpected(e: UnexpectedToken, text: str) -> str:
     """Say what the parser found and, at an END keyword, which block is left open."""
     found = "the end of the file" if e.token.type == "$END" else repr(str(e.token))
+    word = str(e.token).upper()
+    if word in RESERVED and word not in _ENDS and "NAME" in e.expected:
+        return (
+            f"{e.token} is a RAPID reserved word: it cannot be a name "
+            "(RAPID kernel, reserved words: unconfirmed)"
+        )
     if e.token.type == "$END" or str(e.token).upper() in _ENDS:
         return _missing(text, e.line if e.token.type != "$END" else 0, found)
     names = ", ".join(sorted(_readable(x) for x in e.expected)[:8])
