@@ -318,6 +318,11 @@ class Typer:
         if p.type == "signalgi":
             self._signal(name, a.value)
             return
+        if p.type == "optional parameter":
+            sym = self.scope.get(a.value.name.lower()) if isinstance(a.value, N.Name) else None
+            if sym is None or sym.kind != "OPT":
+                self.problems.add(self.line, f"{name} takes an optional parameter's name")
+            return
         if p.type in ("zonedata", "tooldata", "wobjdata"):
             self._predefined(name, p, a.value)
             return
@@ -486,7 +491,7 @@ class Checker:
         """Check a routine's body in its scope."""
         scope = dict(self.globals)
         for p in r.params:
-            kind = "INOUT" if p.mode == "INOUT" else "IN"
+            kind = "OPT" if p.optional else "INOUT" if p.mode == "INOUT" else "IN"
             scope[p.name.lower()] = Symbol(p.name, Type(p.type.lower(), (None,) * p.dims), kind)
         typer = Typer(scope, self.problems, self.user, r.line)
         if r.handler is not None:

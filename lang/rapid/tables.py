@@ -196,6 +196,7 @@ _NUM1 = (P("Value", "num"),)
 _DNUM1 = (P("Value", "dnum"),)
 
 FUNCTIONS: dict[str, Routine] = {
+    "present": _f((P("OptPar", "optional parameter"),), "bool"),
     "ginputdnum": _f((P("Signal", "signalgi"),), "dnum"),
     "ginput": _f((P("Signal", "signalgi"),), "num"),
     "clkread": _f((P("Clock", "clock", var=True), P("HighRes", "switch", True)), "num"),

@@ -478,7 +478,7 @@ class _Compiler:
             ptype = Type(p.type, (None,) * decl.dims)
             a = named.get(p.name.lower()) if p.optional else next(pos)
             if a is None or a.value is None:
-                getters.append(_constant(a is not None and p.type == "switch"))
+                getters.append(_constant(True if a is not None else None))
                 continue
             getters.append(self.expr(a.value, ptype))
             if p.var:
@@ -885,7 +885,13 @@ def _cjointt(c: _Compiler, args: list[N.Arg]) -> Eval:
     return run
 
 
+def _present(c: _Compiler, args: list[N.Arg]) -> Eval:
+    read = c.name(_positional(args, 0).name)  # type: ignore[attr-defined]
+    return lambda f: read(f) is not None
+
+
 _FUNCTIONS: dict[str, Builder] = {
+    "present": _present,
     "ginputdnum": _group("ginputdnum", DNUM),
     "ginput": _group("ginput", NUM),
     "clkread": _clk_read,
