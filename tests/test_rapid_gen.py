@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from wirecal.gen.rapid import GENERATOR
-from wirecal.gen.rapid.program import RapidOptions, module_text, num_literal
+from wirecal.gen.rapid.program import RapidOptions, module_text
+from wirecal.lang.rapid.module import num_literal
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot, robot_from_dict

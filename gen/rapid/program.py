@@ -25,6 +25,15 @@ from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import check_limits, joint_target, run_steps
 from wirecal.gen.templating import render
+from wirecal.lang.rapid.module import (
+    GROUP_COUNTER_BITS,
+    LOG_DIR,
+    LOG_FILE,
+    MODULE_FILE,
+    dnum_literal,
+    num_literal,
+    signal_name,
+)
 from wirecal.solver.cell_check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
@@ -33,15 +42,6 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import PAPER_RUN, READING_INTERVAL_S, RunParameters
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
-
-MODULE_FILE = "WIRECAL.mod"
-"""The one program file: the module WIRECAL."""
-
-GROUP_COUNTER_BITS = 32
-"""The counter width the module reads: a 32-bit group input through GInputDnum."""
-
-LOG_DIR = "HOME:"
-"""The controller's directory the log is written to (Open's device)."""
 
 STRING_MAX = 80
 """A RAPID string's longest value, in characters (unconfirmed)."""
@@ -65,17 +65,7 @@ class RapidOptions:
     margin_deg: float = 1.0  # every generated target at least this far inside a limit
     range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
     solver: bool = True  # wc_run ends with wc_solve, the controller's step-by-step solver
-    log_file: str = "WIRECAL.LOG"  # the log's name in HOME:
-
-
-def num_literal(x: float) -> str:
-    """Write ``x`` as the nearest 32-bit float (num), with the fewest digits that give it."""
-    return str(np.format_float_positional(np.float32(x), unique=True, trim="0"))
-
-
-def dnum_literal(x: float) -> str:
-    """Write ``x`` as a 64-bit float (dnum), with the fewest digits that give it back."""
-    return str(np.format_float_positional(np.float64(x), unique=True, trim="0"))
+    log_file: str = LOG_FILE  # the log's name in HOME:
 
 
 def _aggregate(values: Iterable, literal=num_literal) -> str:
@@ -140,11 +130,6 @@ def solver_tables(tables: Tables) -> dict[str, str]:
         "d2r": dnum_literal(math.pi / 180),
         "mpc": dnum_literal(tables.mpc),
     }
-
-
-def signal_name(robot: Robot) -> str:
-    """Return the group input signal the module reads: ``wc_giCount<channel>``."""
-    return f"wc_giCount{robot.encoder.channel}"
 
 
 def _check(robot: Robot, opt: RapidOptions) -> None:

@@ -112,7 +112,8 @@ MODULE WIRECAL
     VAR string tail;
     WaitTime 3;
     t := ClkRead(wc_clk);
-    first := GInputDnum(wc_giCount0);
+    ! the count as the log holds it: a signed 32-bit value
+    first := wc_delta(GInputDnum(wc_giCount0), 0);
     FOR k FROM 2 TO 10 DO
       WaitTime 0.02;
       d := wc_delta(GInputDnum(wc_giCount0), first);
