@@ -164,7 +164,7 @@ INVALID = {
     ),
     f"an undeclared name ({UNCONFIRMED})": (
         module("x := 1;"),
-        "3: unknown data name x (not declared)",
+        "3: unknown data name x (not declared in this module",
     ),
     f"a reserved word as a name ({UNCONFIRMED}: RAPID kernel, reserved words)": (
         module("", data=("VAR num step;",)),

@@ -43,6 +43,8 @@ class Type:
 
 
 NUM, DNUM, BOOL, STRING = Type("num"), Type("dnum"), Type("bool"), Type("string")
+UNKNOWN = Type("?")
+"""The type of data declared outside the subset (reported once, where it is declared)."""
 LITERAL = Type("numeric literal")
 """A numeric literal (or an expression of literals only): a num or a dnum, as it is used."""
 
@@ -87,8 +89,14 @@ class Typer:
     def symbol(self, name: str) -> Symbol | None:
         """Return the data ``name`` refers to, or None (the problem reported)."""
         sym = self.scope.get(name.lower())
-        if sym is None:
-            what = "a routine, not data" if name.lower() in self.routines else "not declared"
+        if sym is None and T.other_data(name):
+            self.problems.add(self.line, f"{name}: RAPID's predefined data {SUBSET}")
+        elif sym is None:
+            what = (
+                "a routine, not data"
+                if name.lower() in self.routines
+                else "not declared in this module, nor data RAPID predefines"
+            )
             self.problems.add(self.line, f"unknown data name {name} ({what})")
         return sym
 
@@ -135,7 +143,7 @@ class Typer:
 
     def _component(self, e: N.Component) -> Type | None:
         base = self.type(e.base)
-        if base is None:
+        if base is None or base == UNKNOWN:
             return None
         parts = _components(base.name) if not base.dims else {}
         if e.field.lower() not in parts:
@@ -147,7 +155,7 @@ class Typer:
         base = self.type(e.base)
         for i in e.indices:
             self.expect(i, NUM, "an array index")
-        if base is None:
+        if base is None or base == UNKNOWN:
             return None
         if len(e.indices) != len(base.dims):
             self.problems.add(
@@ -161,6 +169,8 @@ class Typer:
         return base.element()
 
     def _aggregate(self, e: N.Aggregate, want: Type | None) -> Type | None:
+        if want == UNKNOWN:
+            return None
         if want is None:
             self.problems.add(self.line, "an aggregate [...] where its type is not known")
             return None
@@ -242,7 +252,7 @@ class Typer:
     def expect(self, e: N.Expr, want: Type, what: str) -> None:
         """Report ``e`` unless it is of type ``want`` (a literal fits a num or a dnum)."""
         got = self.type(e, want)
-        if got is None:
+        if got is None or got == UNKNOWN:
             return
         if got == LITERAL and want in (NUM, DNUM):
             self.literal_fits(e, want)
@@ -340,6 +350,9 @@ class Typer:
 
     def _predefined(self, name: str, p: T.P, e: N.Expr) -> None:
         known = [k for k, v in T.PREDEFINED.items() if v == p.type]
+        sym = self.scope.get(e.name.lower()) if isinstance(e, N.Name) else None
+        if sym is not None and sym.type == UNKNOWN:
+            return
         if not isinstance(e, N.Name) or e.name.lower() not in known:
             self.problems.add(
                 self.line,
@@ -393,6 +406,8 @@ class Checker:
         }
         self.user: dict[str, T.Routine] = {}
         self.signals: set[str] = set()
+        self.own_types = {u.name.lower() for u in module.unsupported if u.name}
+        self.sizes: dict[str, int] = {}
 
     def run(self) -> list[tuple[int, str]]:
         """Check the module; return its problems sorted by line."""
@@ -428,8 +443,12 @@ class Checker:
             return Type(key, tuple(dims))
         if key in T.OTHER_TYPES:
             self.problems.add(line, f"the data type {type_name}: {SUBSET}")
+        elif key in self.own_types:
+            self.problems.add(line, f"data of the type {type_name} (this module's): {SUBSET}")
         else:
-            self.problems.add(line, f"unknown data type {type_name}")
+            self.problems.add(
+                line, f"unknown data type {type_name} (neither RAPID's nor a RECORD of this module)"
+            )
         return None
 
     def declare(self, d: N.Data, scope: dict[str, Symbol], typer: Typer) -> None:
@@ -441,7 +460,7 @@ class Checker:
         if d.name.lower() in scope and scope[d.name.lower()].kind != "PREDEF":
             self.problems.add(d.line, f"{d.name} is declared twice")
         if dtype is None:
-            scope[d.name.lower()] = Symbol(d.name, Type("?"), d.storage)
+            scope[d.name.lower()] = Symbol(d.name, UNKNOWN, d.storage)
             return
         if d.init is not None:
             if dtype.name in T.OPAQUE:
@@ -450,15 +469,21 @@ class Checker:
                 typer.expect(d.init, dtype, f"the initial value of {d.name}")
         elif d.storage == "CONST":
             self.problems.add(d.line, f"the CONST {d.name} needs a value (:= …)")
+        if d.storage == "CONST" and dtype == NUM and isinstance(d.init, N.Num) and d.init.integer:
+            self.sizes[d.name.lower()] = int(d.init.value)
         if d.storage == "CONST" and dtype.name in T.OPAQUE:
             self.problems.add(d.line, f"a {dtype.name} cannot be a CONST")
         scope[d.name.lower()] = Symbol(d.name, dtype, d.storage)
 
     def size(self, e: N.Expr, line: int) -> int | None:
-        """Return an array size: a positive integer literal or integer CONST."""
+        """Return an array size: a positive integer literal, or a CONST num of one."""
+        if isinstance(e, N.Name) and e.name.lower() in self.sizes:
+            return self.sizes[e.name.lower()]
         if isinstance(e, N.Num) and e.integer and e.value >= 1:
             return int(e.value)
-        self.problems.add(line, "an array size must be a positive integer literal")
+        self.problems.add(
+            line, "an array size must be a positive integer, or a CONST num declared as one"
+        )
         return None
 
     def signature(self, r: N.Routine) -> None:
@@ -492,7 +517,9 @@ class Checker:
         scope = dict(self.globals)
         for p in r.params:
             kind = "OPT" if p.optional else "INOUT" if p.mode == "INOUT" else "IN"
-            scope[p.name.lower()] = Symbol(p.name, Type(p.type.lower(), (None,) * p.dims), kind)
+            known = p.type.lower() in T.SUBSET_TYPES
+            ptype = Type(p.type.lower(), (None,) * p.dims) if known else UNKNOWN
+            scope[p.name.lower()] = Symbol(p.name, ptype, kind)
         typer = Typer(scope, self.problems, self.user, r.line)
         if r.handler is not None:
             self.problems.add(r.line, f"an ERROR handler: {SUBSET}")

@@ -190,10 +190,14 @@ class Exit:
 
 @dataclass
 class Unsupported:
-    """A construct RAPID has and wirecal's subset does not (GOTO, labels, RAISE, …)."""
+    """A construct RAPID has and wirecal's subset does not (GOTO, labels, RAISE, …).
+
+    ``name``: the type a RECORD or ALIAS declares (its data is outside the subset too).
+    """
 
     what: str
     line: int
+    name: str = ""
 
 
 Stmt = Data | Assign | Call | If | For | While | Test | Return | Exit | Unsupported

@@ -204,19 +204,19 @@ class _Build(Transformer):
         return N.Unsupported(f"the label {c[0]}: (GOTO)", meta.line)
 
     def handler(self, meta, c):
-        return ("handler", str(c[0]).upper(), list(c[1:]))
+        return ("handler", str(c[0]).upper(), [x for x in c[1:] if isinstance(x, N.Stmt)])
 
     def body(self, meta, c):
-        handler = c[-1]
-        return [s for s in c[:-1]], handler
+        return [s for s in c if isinstance(s, N.Stmt)], [h for h in c if isinstance(h, tuple)]
 
     def _routine(self, kind, name, type_, params, body, line):
-        stmts, handler = body
+        stmts, handlers = body
         out = N.Routine(kind, name, type_, params or [], stmts, None, line)
-        if handler is not None:
-            out.handler = handler[2]
-            if handler[1] != "ERROR":
-                out.body.append(N.Unsupported(f"a {handler[1]} handler", line))
+        for _, which, handler in handlers:
+            if which == "ERROR":
+                out.handler = handler
+            else:
+                out.body.append(N.Unsupported(f"a {which} handler", line))
         return out
 
     def proc(self, meta, c):
@@ -249,13 +249,13 @@ class _Build(Transformer):
         return param
 
     def record(self, meta, c):
-        return N.Unsupported(f"RECORD {c[0]} (a user-defined record type)", meta.line)
+        return N.Unsupported(f"RECORD {c[0]} (a user-defined record type)", meta.line, c[0])
 
     def data_field(self, meta, c):
         return None
 
     def alias(self, meta, c):
-        return N.Unsupported(f"ALIAS {c[1]} (an alias type)", meta.line)
+        return N.Unsupported(f"ALIAS {c[1]} (an alias type)", meta.line, c[1])
 
     def attrs(self, meta, c):
         return list(c)

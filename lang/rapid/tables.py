@@ -83,10 +83,22 @@ PREDEFINED: dict[str, str] = {
     "fine": "zonedata",
     **{f"z{z}": "zonedata" for z in ZONES},
     "tool0": "tooldata",
+    "pi": "num",
     "wobj0": "wobjdata",
 }
 """Predefined data the subset reads, name → type (reference manual, speeddata and zonedata
-"Predefined data", tooldata tool0: unconfirmed)."""
+"Predefined data", tooldata tool0: unconfirmed; pi: ROS-Industrial's abb_driver modules use
+it undeclared, its value 3.1415926 is unconfirmed)."""
+
+
+OTHER_DATA_PREFIXES = ("err_", "socket_", "io_", "diskhome", "errno", "intno", "rob_id")
+"""Name prefixes of RAPID's predefined data outside the subset (ERRNO, ERR_…, SOCKET_… …;
+reference manual, errnum and socketstatus: unconfirmed)."""
+
+
+def other_data(name: str) -> bool:
+    """Return whether ``name`` is RAPID's predefined data outside the subset."""
+    return name.lower().startswith(OTHER_DATA_PREFIXES)
 
 
 def speed_values(name: str) -> tuple[float, float, float, float]:
@@ -241,7 +253,11 @@ OTHER_ROUTINES = (
     StrToVal ValToStr StrFind StrPart StrMap StrMatch StrMemb StrOrder ReadNum ReadStr ReadBin
     OpMode RunMode IsPers IsVar Present Dim GetTime CTime CDate EulerZYX OrientZYX PoseInv
     PoseMult PoseVect NOrient CalcJointT CalcRobT MaxRobSpeed GetNextMechUnit IsStopStateEvent
-    ArgName Type TestDI TestSignRead NumToStr ClkWait""".split()
+    ArgName Type TestDI TestSignRead NumToStr ClkWait SocketGetStatus GetSysInfo SkipWarn
+    TestAndSet WaitTestAndSet ErrRaise IsSysId GetTaskName RMQSendMessage RMQGetMessage
+    ReadRawBytes WriteRawBytes PackRawBytes UnpackRawBytes CopyRawBytes ClearRawBytes
+    RawBytesLen StrToByte ByteToStr BitCheck BitSet BitClear BitAnd BitOr BitXOr BitNeg
+    BitLSh BitRSh ReadCfgData WriteCfgData IPers ExitCycle IsStopMoveAct""".split()
     )
     - frozenset(FUNCTIONS)
     - frozenset(INSTRUCTIONS)

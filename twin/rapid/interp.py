@@ -191,7 +191,9 @@ class Interpreter:
         self.sources = {r.name.lower(): r for r in module.routines}
         typer = Typer(self.global_scope, Problems(), self.routines_sig)
         for k, v in T.PREDEFINED.items():
-            if v == "speeddata":
+            if k == "pi":
+                self.globals[k] = f32(3.1415926)
+            elif v == "speeddata":
                 self.globals[k] = dict(
                     zip(("v_tcp", "v_ori", "v_leax", "v_reax"), T.speed_values(k), strict=True)
                 )
