@@ -7,10 +7,13 @@ the tables of data types, instructions and functions with the page each was read
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import ClassVar
 
 from wirecal.lang.rapid._base import Capabilities, Language
 from wirecal.lang.rapid.checker import check
+from wirecal.lang.rapid.patch import patch_section
+from wirecal.solver.robot import Robot
 
 
 class Rapid(Language):
@@ -38,3 +41,7 @@ class Rapid(Language):
     def lint(self, text: str, source: str, software: str | None = None) -> list[str]:
         """Return the module's problems, each 'SOURCE:LINE: what' ([] = clean)."""
         return check(text, source, software)
+
+    def patch_section(self, robot: Robot, offsets: Mapping[str, float]) -> dict | None:
+        """Return the patch file's RAPID section: ABB fine calibration's joint offsets."""
+        return patch_section(robot, offsets)
