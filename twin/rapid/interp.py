@@ -25,8 +25,10 @@ What touches the robot, the encoder, files and the FlexPendant goes through a
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 from wirecal.lang.rapid import nodes as N
@@ -42,9 +44,8 @@ from wirecal.lang.rapid.checker import (
     Symbol,
     Type,
     Typer,
-    check,
 )
-from wirecal.lang.rapid.parser import parse_module
+from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.machine import Outcome, RunError, f32
 from wirecal.twin.rapid.controller_protocol import RapidController
@@ -166,6 +167,12 @@ def _arith(op: str, a: float, b: float) -> float:
     return float(q if op == "DIV" else x - q * y)
 
 
+_FAST: dict[str, Callable[[float, float], float]] = {
+    "+": operator.add,
+    "-": operator.sub,
+    "*": operator.mul,
+}
+
 _COMPARE: dict[str, Callable[[Any, Any], bool]] = {
     "=": lambda a, b: a == b,
     "<>": lambda a, b: a != b,
@@ -179,10 +186,8 @@ _COMPARE: dict[str, Callable[[Any, Any], bool]] = {
 class Interpreter:
     """A checked module, compiled, ready to run routines on a controller."""
 
-    def __init__(self, module: N.Module, controller: RapidController):
+    def __init__(self, module: N.Module, checker: Checker, controller: RapidController):
         self.module, self.controller = module, controller
-        checker = Checker(module)
-        checker.run()
         self.routines_sig = checker.user
         self.global_scope = checker.globals
         self.globals: Frame = {}
@@ -268,15 +273,25 @@ def _calls(stmts: list[N.Stmt]) -> list[N.Call]:
     return out
 
 
+@lru_cache(maxsize=8)
+def _parsed(text: str) -> N.Module:
+    """Parse a module once for its several runs (wc_mount, wc_run; the tree is not changed)."""
+    return parse_module(text)
+
+
 def run_module(text: str, source: str, controller: RapidController, entry: str = "main") -> Outcome:
     """Check a module, then run its PROC ``entry``; WirecalError lists the checker's problems."""
-    problems = check(text, source)
-    module = parse_module(text) if not problems else None
-    if module is not None:
+    try:
+        module = _parsed(text)
+    except SyntaxProblem as e:
+        raise WirecalError([f"{source}:{e.line}: {e.message}"]) from None
+    checker = Checker(module)
+    problems = [f"{source}:{line}: {m}" for line, m in checker.run()]
+    if not problems:
         problems = _check_subset(module, source)
-    if problems or module is None:
+    if problems:
         raise WirecalError(problems)
-    return Interpreter(module, controller).execute(entry)
+    return Interpreter(module, checker, controller).execute(entry)
 
 
 class _Compiler:
@@ -611,9 +626,10 @@ class _Compiler:
             return lambda f: compare(a(f), b(f))
         t = self.static(e, want)
         a, b = self.expr(e.a, t), self.expr(e.b, t)
+        fn = _FAST.get(op) or (lambda x, y: _arith(op, x, y))
         if t == NUM:
-            return lambda f: f32(_arith(op, a(f), b(f)))
-        return lambda f: _arith(op, a(f), b(f))
+            return lambda f: f32(fn(a(f), b(f)))
+        return lambda f: fn(a(f), b(f))
 
     def function(self, e: N.FuncCall) -> Eval:
         key = e.name.lower()
