@@ -72,7 +72,7 @@ class IrcController:
         slowest = float(np.min(world.robot.joint_speed_deg_s))
         speed_pct = min(100.0, 100.0 * float(speed[1]) / slowest)
         move = move_profiles(world.robot, world.model, world.p0, world.joints, q)
-        world.arrive(q, float(move.duration_s(speed_pct)[0]))
+        world.arrive(q, float(move.duration_s(np.array([speed_pct]))[0]))
 
     def joints_deg(self) -> tuple[float, ...]:
         """CJointT: the commanded joints (deg, single precision)."""
