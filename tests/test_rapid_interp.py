@@ -256,3 +256,10 @@ def test_the_generated_module_runs_to_its_end() -> None:
     moves = [c for c in ctl.calls if c[0] == "move"]
     assert len(moves) > 45
     assert all(c[3] == "fine" for c in moves)
+
+
+def test_recursion_without_end_stops() -> None:
+    text = "MODULE T\nPROC main()\n  main;\nENDPROC\nENDMODULE\n"
+    outcome = run_module(text, "t.mod", FakeController())
+    assert outcome.status == "error"
+    assert "nested more than 40 deep" in outcome.message

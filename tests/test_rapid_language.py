@@ -279,3 +279,40 @@ def test_declaration() -> None:
     assert caps.counter_bits == 32
     assert set(caps.software_lines) == {6, 7}
     assert lang.lint(module("Frobnicate;"), "x.mod") != []
+
+
+HOSTILE = {
+    "an empty file": ("", "1: syntax error at the end of the file"),
+    "a NUL byte": ("\x00", "1: unexpected character '\\x00'"),
+    "a string left open": (module('TPWrite "abc;'), "3: a string not closed on its line"),
+    "two modules in one file": (
+        "MODULE A\nENDMODULE\nMODULE B\nENDMODULE\n",
+        "3: a second MODULE: one module per file",
+    ),
+    "3000 nested parentheses": (
+        module("n := " + "(" * 3000 + "1" + ")" * 3000 + ";", data=("VAR num n;",)),
+        "4: brackets nested more than 100 deep",
+    ),
+    "2000 nested IFs": (
+        module(*["IF TRUE THEN"] * 2000, *["ENDIF"] * 2000),
+        "67: blocks nested more than 64 deep",
+    ),
+    "a dnum literal beyond double": (
+        module("", data=("VAR dnum d := 1E400;",)),
+        "2: a literal beyond a dnum's range",
+    ),
+    "a num literal beyond single": (
+        module("", data=("VAR num n := 1E39;",)),
+        "2: a literal beyond a num's range",
+    ),
+    "a name of 33 characters (unconfirmed: RAPID kernel, identifiers)": (
+        module("", data=("VAR num " + "a" * 33 + ";",)),
+        "2: the name " + "a" * 33 + " has 33 characters: RAPID takes 32",
+    ),
+}
+
+
+@pytest.mark.parametrize(("text", "expected"), HOSTILE.values(), ids=list(HOSTILE))
+def test_hostile_inputs_are_problems_not_tracebacks(text: str, expected: str) -> None:
+    found = check(text, "t.mod")
+    assert any(p.startswith("t.mod:" + expected) for p in found), found

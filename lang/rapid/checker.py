@@ -15,6 +15,7 @@ whether an expression is a num or a dnum.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from wirecal.lang.rapid import nodes as N
@@ -237,6 +238,9 @@ class Typer:
     def literal_fits(self, e: N.Expr, want: Type) -> None:
         """Report the integer literals of ``e`` a num does not hold exactly."""
         if want != NUM:
+            for lit in _literals(e):
+                if math.isinf(lit.value):
+                    self.problems.add(self.line, f"a literal beyond a {want}'s range")
             return
         for lit in _literals(e):
             if lit.integer and not T.NUM_EXACT[0] <= lit.value <= T.NUM_EXACT[1]:
@@ -247,7 +251,7 @@ class Typer:
                     "num); declare the data dnum",
                 )
             elif abs(lit.value) > 3.4028234663852886e38:
-                self.problems.add(self.line, f"{lit.value:g} is beyond a num's range")
+                self.problems.add(self.line, "a literal beyond a num's range (±3.4E38)")
 
     def expect(self, e: N.Expr, want: Type, what: str) -> None:
         """Report ``e`` unless it is of type ``want`` (a literal fits a num or a dnum)."""

@@ -276,8 +276,50 @@ class _Build(Transformer):
         return c[0]
 
 
+MAX_BLOCK_DEPTH = 64
+"""Deepest nesting of blocks (IF, FOR, WHILE, TEST) wirecal reads; wirecal's bound, far
+beyond its modules (the controller's own limit is unconfirmed)."""
+
+MAX_BRACKET_DEPTH = 100
+"""Deepest nesting of parentheses and brackets wirecal reads (wirecal's bound)."""
+
+
+def _too_deep(text: str) -> SyntaxProblem | None:
+    """Refuse up front what is nested deeper than the bounds (the parser recurses per level)."""
+    blocks: list[int] = []
+    brackets = 0
+    for number, source_line in enumerate(text.splitlines(), 1):
+        for m in _TOKEN.finditer(source_line):
+            word = m.group().upper()
+            if word in ("(", "[", "{"):
+                brackets += 1
+                if brackets > MAX_BRACKET_DEPTH:
+                    return SyntaxProblem(
+                        number, f"brackets nested more than {MAX_BRACKET_DEPTH} deep"
+                    )
+            elif word in (")", "]", "}"):
+                brackets -= 1
+            elif word in ("THEN", "FOR", "WHILE", "TEST"):
+                blocks.append(number)
+                if len(blocks) > MAX_BLOCK_DEPTH:
+                    return SyntaxProblem(
+                        number,
+                        f"blocks nested more than {MAX_BLOCK_DEPTH} deep: wirecal reads at most "
+                        f"{MAX_BLOCK_DEPTH}",
+                    )
+            elif word in ("ENDIF", "ENDFOR", "ENDWHILE", "ENDTEST") and blocks:
+                blocks.pop()
+    return None
+
+
+_TOKEN = re.compile(r'"(?:[^"\n]|"")*"|![^\n]*|[A-Za-z][A-Za-z0-9_]*|[()\[\]{}]')
+
+
 def parse_module(text: str) -> N.Module:
     """Parse one module's text; raise :class:`SyntaxProblem` where the grammar stops."""
+    deep = _too_deep(text)
+    if deep is not None:
+        raise deep
     try:
         tree = _parser().parse(text)
     except UnexpectedToken as e:
@@ -285,7 +327,12 @@ def parse_module(text: str) -> N.Module:
             e.line if e.line > 0 else _last_line(text), _unexpected(e, text)
         ) from None
     except UnexpectedCharacters as e:
-        raise SyntaxProblem(e.line, f"unexpected character {e.char!r}") from None
+        what = (
+            "a string not closed on its line"
+            if e.char == '"'
+            else f"unexpected character {e.char!r}"
+        )
+        raise SyntaxProblem(e.line, what) from None
     except UnexpectedEOF:
         raise SyntaxProblem(_last_line(text), _missing(text, 0, "the end of the file")) from None
     try:
@@ -305,6 +352,8 @@ def _unexpected(e: UnexpectedToken, text: str) -> str:
     """Say what the parser found and, at an END keyword, which block is left open."""
     found = "the end of the file" if e.token.type == "$END" else repr(str(e.token))
     word = str(e.token).upper()
+    if word == "MODULE" and "$END" in e.expected:
+        return "a second MODULE: one module per file"
     if word in RESERVED and word not in _ENDS and "NAME" in e.expected:
         return (
             f"{e.token} is a RAPID reserved word: it cannot be a name "

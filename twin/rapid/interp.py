@@ -52,6 +52,10 @@ from wirecal.twin.rapid.controller_protocol import RapidController
 
 __all__ = ["RapidController", "run_module"]
 
+MAX_CALL_DEPTH = 40
+"""Deepest chain of routine calls the twin runs (wirecal's bound; the controller's is
+unconfirmed): deeper, the program stops, as a recursion without end would."""
+
 Frame = dict[str, Any]
 Eval = Callable[[Frame], Any]
 
@@ -192,6 +196,7 @@ class Interpreter:
         self.global_scope = checker.globals
         self.globals: Frame = {}
         self.line = 0
+        self.depth = 0
         self.compiled: dict[str, Callable[[list[Any]], tuple[Any, Frame]]] = {}
         self.sources = {r.name.lower(): r for r in module.routines}
         typer = Typer(self.global_scope, Problems(), self.routines_sig)
@@ -234,6 +239,10 @@ class Interpreter:
         except RunError as e:
             self.controller.stop(f"line {self.line}: {e.message}")
             return Outcome("error", entry, self.line, e.message)
+        except RecursionError:
+            why = "blocks and routine calls nested deeper than the twin runs"
+            self.controller.stop(f"line {self.line}: {why}")
+            return Outcome("error", entry, self.line, why)
         return Outcome("completed", entry, self.line)
 
 
@@ -504,7 +513,13 @@ class _Compiler:
 
         def call(frame: Frame) -> Any:
             values = [copy(g(frame)) for g in getters]
-            result, inner = interp.routine(name)(values)
+            if interp.depth >= MAX_CALL_DEPTH:
+                raise RapidError(f"routine calls nested more than {MAX_CALL_DEPTH} deep")
+            interp.depth += 1
+            try:
+                result, inner = interp.routine(name)(values)
+            finally:
+                interp.depth -= 1
             for i, store in writebacks:
                 store(frame, inner[source.params[i].name.lower()])
             return result
