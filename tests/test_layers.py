@@ -1,6 +1,6 @@
 """The layer rule of docs/architecture.md: each layer imports only the layers below it.
 
-    solver  ←  solver/formats  ←  gen, twin  ←  app  ←  wirecal (the API)  ←  cli
+    solver  ←  lang  ←  solver/formats  ←  gen, twin  ←  app  ←  wirecal (the API)  ←  cli
 
 ``gen`` and ``twin`` are peers: neither imports the other. Every import counts, at the top
 of a module or inside a function (a lazy import is still a dependency), and so do imports
@@ -22,6 +22,7 @@ from .conftest import ROOT
 
 FOLDERS = {
     "solver": "wirecal.solver",
+    "lang": "wirecal.lang",
     "gen": "wirecal.gen",
     "twin": "wirecal.twin",
     "app": "wirecal.app",
@@ -32,12 +33,13 @@ FOLDERS = {
 
 LAYERS = {
     "wirecal.solver": 0,
-    "wirecal.solver.formats": 1,
-    "wirecal.gen": 2,
-    "wirecal.twin": 2,
-    "wirecal.app": 3,
-    "wirecal": 4,
-    "wirecal.cli": 5,
+    "wirecal.lang": 1,
+    "wirecal.solver.formats": 2,
+    "wirecal.gen": 3,
+    "wirecal.twin": 3,
+    "wirecal.app": 4,
+    "wirecal": 5,
+    "wirecal.cli": 6,
 }
 """Each layer's package and its height: a module imports only strictly lower layers."""
 
