@@ -7,6 +7,8 @@ lists what was read); "unconfirmed" marks a rule wirecal holds to without a page
 from __future__ import annotations
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from wirecal.lang.rapid import Rapid
 from wirecal.lang.rapid.checker import check
@@ -316,3 +318,17 @@ HOSTILE = {
 def test_hostile_inputs_are_problems_not_tracebacks(text: str, expected: str) -> None:
     found = check(text, "t.mod")
     assert any(p.startswith("t.mod:" + expected) for p in found), found
+
+
+@given(
+    st.text(
+        alphabet=st.sampled_from(
+            list('MODULEPROCENDIFTHENVARnum:=;()[]{},.\\"!+-*/<>= \n0123456789')
+        ),
+        max_size=300,
+    )
+)
+@settings(max_examples=200, deadline=None)
+def test_any_text_gives_problems_not_exceptions(text: str) -> None:
+    found = check("MODULE T\n" + text + "\nENDMODULE\n", "t.mod")
+    assert all(p.startswith("t.mod:") for p in found)
