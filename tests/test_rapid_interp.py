@@ -263,3 +263,19 @@ def test_recursion_without_end_stops() -> None:
     outcome = run_module(text, "t.mod", FakeController())
     assert outcome.status == "error"
     assert "nested more than 40 deep" in outcome.message
+
+
+def test_an_absent_optional_argument_stops_when_read() -> None:
+    outcome, ctl = run(
+        "show;",
+        "show \\x:=2;",
+        extra=(
+            "PROC show(\\num x)",
+            '  IF Present(x) TPWrite "x" \\Num:=x;',
+            '  TPWrite "y" \\Num:=x;',
+            "ENDPROC",
+        ),
+    )
+    assert outcome.status == "error"
+    assert "optional argument x is not present" in outcome.message
+    assert ctl.pendant == []

@@ -286,7 +286,12 @@ class Typer:
         key, kind = name.lower(), "function" if function else "instruction"
         if routine is not None:
             other = "a FUNC: call it in an expression" if routine.returns else "a PROC"
-            self.problems.add(self.line, f"{name} is {other}, not a {kind}")
+            self.problems.add(
+                self.line,
+                f"{name} is {other}, not an {kind}"
+                if kind == "instruction"
+                else f"{name} is {other}, not a {kind}",
+            )
         elif key in T.OTHER_ROUTINES or key in (T.FUNCTIONS if not function else T.INSTRUCTIONS):
             self.problems.add(self.line, f"{name}: a RAPID {kind} {SUBSET}")
         else:

@@ -315,7 +315,8 @@ class _Compiler:
         scope = dict(interp.global_scope)
         local: dict[str, Symbol] = {}
         for p in r.params:
-            sym = Symbol(p.name, Type(p.type.lower(), (None,) * p.dims), "IN")
+            kind = "OPT" if p.optional else "IN"
+            sym = Symbol(p.name, Type(p.type.lower(), (None,) * p.dims), kind)
             scope[p.name.lower()] = local[p.name.lower()] = sym
         c = _Compiler(interp, Typer(scope, Problems(), interp.routines_sig), local)
         names = [p.name.lower() for p in r.params]
@@ -604,6 +605,14 @@ class _Compiler:
 
     def name(self, name: str) -> Eval:
         key = name.lower()
+        if key in self.local and self.local[key].kind == "OPT":
+
+            def optional(f: Frame) -> Any:
+                if f[key] is None:
+                    raise RapidError(f"the optional argument {name} is not present")
+                return f[key]
+
+            return optional
         if key in self.local:
             return lambda f: f[key]
         globals_ = self.interp.globals
@@ -919,8 +928,8 @@ def _cjointt(c: _Compiler, args: list[N.Arg]) -> Eval:
 
 
 def _present(c: _Compiler, args: list[N.Arg]) -> Eval:
-    read = c.name(_positional(args, 0).name)  # type: ignore[attr-defined]
-    return lambda f: read(f) is not None
+    key = _positional(args, 0).name.lower()  # type: ignore[union-attr]
+    return lambda f: f.get(key) is not None
 
 
 _FUNCTIONS: dict[str, Builder] = {
