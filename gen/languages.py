@@ -8,9 +8,14 @@ from __future__ import annotations
 
 from wirecal.gen.urscript.program import RAW_COUNTER_BITS
 from wirecal.gen.vplus.program import BELT_COUNTER_BITS
+from wirecal.lang.rapid.module import GROUP_COUNTER_BITS
 from wirecal.solver.robot import INTERFACES, LANGUAGES
 
-COUNTER_BITS = {"vplus": BELT_COUNTER_BITS, "urscript": RAW_COUNTER_BITS}
+COUNTER_BITS = {
+    "vplus": BELT_COUNTER_BITS,
+    "urscript": RAW_COUNTER_BITS,
+    "rapid": GROUP_COUNTER_BITS,
+}
 """The counter width (bits) each language's programs read."""
 
 
