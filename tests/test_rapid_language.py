@@ -332,3 +332,17 @@ def test_hostile_inputs_are_problems_not_tracebacks(text: str, expected: str) ->
 def test_any_text_gives_problems_not_exceptions(text: str) -> None:
     found = check("MODULE T\n" + text + "\nENDMODULE\n", "t.mod")
     assert all(p.startswith("t.mod:") for p in found)
+
+
+def test_a_routine_newer_than_the_software_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The tables hold RobotWare 6.0 for every routine; a later one is refused by name."""
+    from wirecal.lang.rapid import tables
+
+    newer = tables.Routine(tables.INSTRUCTIONS["tperase"].params, since="6.14")
+    monkeypatch.setitem(tables.INSTRUCTIONS, "tperase", newer)
+    text = module("TPErase;")
+    assert check(text, "t.mod", "6.14") == []
+    assert check(text, "t.mod") == []
+    assert check(text, "t.mod", "6.13") == [
+        "t.mod:3: TPErase needs RobotWare 6.14 (the controller has 6.13)"
+    ]

@@ -86,6 +86,7 @@ class Typer:
     ):
         self.scope, self.problems, self.routines, self.line = scope, problems, routines, line
         self.signals: set[str] = set()
+        self.software: tuple[int, ...] | None = None
 
     def symbol(self, name: str) -> Symbol | None:
         """Return the data ``name`` refers to, or None (the problem reported)."""
@@ -280,6 +281,12 @@ class Typer:
             self._unknown(name, function, routine)
             return None
         self.arguments(name, routine, args)
+        if self.software is not None and _version(routine.since) > self.software:
+            self.problems.add(
+                self.line,
+                f"{name} needs RobotWare {routine.since} (the controller has "
+                f"{'.'.join(map(str, self.software))})",
+            )
         return Type(routine.returns) if routine.returns else None
 
     def _unknown(self, name: str, function: bool, routine: T.Routine | None) -> None:
@@ -408,8 +415,9 @@ def _literals(e: N.Expr) -> list[N.Num]:
 class Checker:
     """Check one module (see the module docstring)."""
 
-    def __init__(self, module: N.Module):
+    def __init__(self, module: N.Module, software: str | None = None):
         self.module, self.problems = module, Problems()
+        self.software = _version(software) if software else None
         self.globals: dict[str, Symbol] = {
             k: Symbol(k, Type(v), "PREDEF") for k, v in T.PREDEFINED.items()
         }
@@ -530,6 +538,7 @@ class Checker:
             ptype = Type(p.type.lower(), (None,) * p.dims) if known else UNKNOWN
             scope[p.name.lower()] = Symbol(p.name, ptype, kind)
         typer = Typer(scope, self.problems, self.user, r.line)
+        typer.software = self.software
         if r.handler is not None:
             self.problems.add(r.line, f"an ERROR handler: {SUBSET}")
         self.body(r.body, typer, r)
@@ -647,7 +656,12 @@ def _problems(text: str, software: str | None) -> list[tuple[int, str]]:
         module = parse_module(text)
     except SyntaxProblem as e:
         return [*out, (e.line, e.message)]
-    return out + Checker(module).run()
+    return out + Checker(module, None if out else software).run()
+
+
+def _version(text: str) -> tuple[int, ...]:
+    """Return a RobotWare version as numbers ("6.13.02" → (6, 13, 2)); junk parts read 0."""
+    return tuple(int(p) if p.isdigit() else 0 for p in text.strip().split("."))
 
 
 def _software(software: str) -> list[tuple[int, str]]:
