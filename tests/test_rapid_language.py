@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.lang.rapid import Rapid
-from wirecal.lang.rapid.checker import check
+from wirecal.lang.rapid.checker import check, check_task
 
 KERNEL_TYPES = "RAPID kernel, built-in data types (num, dnum, string)"
 MOVEABSJ = "RAPID reference manual, MoveAbsJ"
@@ -346,3 +346,27 @@ def test_a_routine_newer_than_the_software_is_refused(monkeypatch: pytest.Monkey
     assert check(text, "t.mod", "6.13") == [
         "t.mod:3: TPErase needs RobotWare 6.14 (the controller has 6.13)"
     ]
+
+
+def test_a_task_of_several_modules_shares_global_data_and_routines() -> None:
+    """RAPID's task scope (unconfirmed): global data and routines of every module are seen;
+    LOCAL ones only in their own module."""
+    shared = "\n".join(
+        [
+            "MODULE Shared",
+            "  PERS num count := 0;",
+            "  LOCAL VAR num hidden;",
+            "  PROC bump()",
+            "    count := count + 1;",
+            "  ENDPROC",
+            "  LOCAL PROC secret()",
+            "  ENDPROC",
+            "ENDMODULE",
+        ]
+    )
+    main = module("bump;", "count := count * 2;")
+    assert check_task({"shared.mod": shared, "main.mod": main}) == []
+    assert check(main, "main.mod") != []
+    hidden = module("hidden := 1;", "secret;")
+    found = check_task({"shared.mod": shared, "main.mod": hidden})
+    assert [p.split(":")[:2] for p in found] == [["main.mod", "3"], ["main.mod", "4"]]

@@ -16,6 +16,7 @@ whether an expression is a num or a dnum.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from wirecal.lang.rapid import nodes as N
@@ -257,7 +258,7 @@ class Typer:
     def expect(self, e: N.Expr, want: Type, what: str) -> None:
         """Report ``e`` unless it is of type ``want`` (a literal fits a num or a dnum)."""
         got = self.type(e, want)
-        if got is None or got == UNKNOWN:
+        if got is None or UNKNOWN in (got, want):
             return
         if got == LITERAL and want in (NUM, DNUM):
             self.literal_fits(e, want)
@@ -415,15 +416,17 @@ def _literals(e: N.Expr) -> list[N.Num]:
 class Checker:
     """Check one module (see the module docstring)."""
 
-    def __init__(self, module: N.Module, software: str | None = None):
-        self.module, self.problems = module, Problems()
+    def __init__(
+        self, module: N.Module, software: str | None = None, task: tuple[N.Module, ...] = ()
+    ):
+        self.module, self.problems, self.task = module, Problems(), task
         self.software = _version(software) if software else None
         self.globals: dict[str, Symbol] = {
             k: Symbol(k, Type(v), "PREDEF") for k, v in T.PREDEFINED.items()
         }
         self.user: dict[str, T.Routine] = {}
         self.signals: set[str] = set()
-        self.own_types = {u.name.lower() for u in module.unsupported if u.name}
+        self.own_types = {u.name.lower() for m in (module, *task) for u in m.unsupported if u.name}
         self.sizes: dict[str, int] = {}
 
     def run(self) -> list[tuple[int, str]]:
@@ -435,6 +438,7 @@ class Checker:
                 self.problems.add(1, f"unknown module attribute {attr}")
         for u in m.unsupported:
             self.problems.add(u.line, f"{u.what}: {SUBSET}")
+        self.declare_task()
         for r in m.routines:
             self.signature(r)
         typer = Typer(self.globals, self.problems, self.user)
@@ -443,6 +447,19 @@ class Checker:
         for r in m.routines:
             self.routine(r)
         return sorted(set(self.problems.items))
+
+    def declare_task(self) -> None:
+        """Declare the global data and routines of the task's other modules (not checked)."""
+        checked, self.problems = self.problems, Problems()
+        typer = Typer(self.globals, self.problems, self.user)
+        for other in self.task:
+            for r in other.routines:
+                if not r.local:
+                    self.signature(r)
+            for d in other.data:
+                if not d.local:
+                    self.declare(d, self.globals, typer)
+        self.problems = checked
 
     def name(self, name: str, line: int, what: str) -> None:
         """Report a reserved word or an over-long identifier used as a name."""
@@ -644,19 +661,28 @@ def _walk(stmts: list[N.Stmt]):
 
 def check(text: str, source: str, software: str | None = None) -> list[str]:
     """Return the problems of a module's text, each ``SOURCE:LINE: what`` ([] = clean)."""
-    problems = [f"{source}:{line}: {m}" for line, m in _problems(text, software)]
-    return problems
+    return check_task({source: text}, software)
 
 
-def _problems(text: str, software: str | None) -> list[tuple[int, str]]:
-    out: list[tuple[int, str]] = []
-    if software is not None:
-        out += _software(software)
-    try:
-        module = parse_module(text)
-    except SyntaxProblem as e:
-        return [*out, (e.line, e.message)]
-    return out + Checker(module, None if out else software).run()
+def check_task(texts: Mapping[str, str], software: str | None = None) -> list[str]:
+    """Check the modules of one task (file name → text) together.
+
+    Each module sees the global data and routines of the others (RAPID's task scope); the
+    problems are each module's own, ``SOURCE:LINE: what``.
+    """
+    version = _software(software) if software is not None else []
+    modules: dict[str, N.Module] = {}
+    out = [f"{source}:{line}: {m}" for source in list(texts)[:1] for line, m in version]
+    for source, text in texts.items():
+        try:
+            modules[source] = parse_module(text)
+        except SyntaxProblem as e:
+            out.append(f"{source}:{e.line}: {e.message}")
+    for source, module in modules.items():
+        task = tuple(m for s, m in modules.items() if s != source)
+        checker = Checker(module, None if version else software, task)
+        out += [f"{source}:{line}: {m}" for line, m in checker.run()]
+    return out
 
 
 def _version(text: str) -> tuple[int, ...]:

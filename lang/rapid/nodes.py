@@ -113,6 +113,7 @@ class Data:
     dims: list[Expr]
     init: Expr | None
     line: int
+    local: bool = False
 
 
 @dataclass
@@ -226,6 +227,7 @@ class Routine:
     body: list[Stmt]
     handler: list[Stmt] | None
     line: int
+    local: bool = False
 
 
 @dataclass

@@ -131,8 +131,9 @@ class _Build(Transformer):
         return list(c)
 
     def data_decl(self, meta, c):
-        __local, storage, type_, name, dims, init = c
-        return N.Data(storage, type_, name, dims or [], init, meta.line)
+        scope, storage, type_, name, dims, init = c
+        local = str(scope or "").upper() == "LOCAL"
+        return N.Data(storage, type_, name, dims or [], init, meta.line, local)
 
     def component_sel(self, meta, c):
         return ("component", c[0])
@@ -209,9 +210,9 @@ class _Build(Transformer):
     def body(self, meta, c):
         return [s for s in c if isinstance(s, N.Stmt)], [h for h in c if isinstance(h, tuple)]
 
-    def _routine(self, kind, name, type_, params, body, line):
+    def _routine(self, kind, name, type_, params, body, line, local):
         stmts, handlers = body
-        out = N.Routine(kind, name, type_, params or [], stmts, None, line)
+        out = N.Routine(kind, name, type_, params or [], stmts, None, line, local is not None)
         for _, which, handler in handlers:
             if which == "ERROR":
                 out.handler = handler
@@ -220,13 +221,13 @@ class _Build(Transformer):
         return out
 
     def proc(self, meta, c):
-        return self._routine("PROC", c[1], None, c[2], c[3], meta.line)
+        return self._routine("PROC", c[1], None, c[2], c[3], meta.line, c[0])
 
     def func(self, meta, c):
-        return self._routine("FUNC", c[2], c[1], c[3], c[4], meta.line)
+        return self._routine("FUNC", c[2], c[1], c[3], c[4], meta.line, c[0])
 
     def trap(self, meta, c):
-        return self._routine("TRAP", c[1], None, None, c[2], meta.line)
+        return self._routine("TRAP", c[1], None, None, c[2], meta.line, c[0])
 
     def params(self, meta, c):
         return list(c)

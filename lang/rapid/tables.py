@@ -91,7 +91,16 @@ PREDEFINED: dict[str, str] = {
 it undeclared, its value 3.1415926 is unconfirmed)."""
 
 
-OTHER_DATA_PREFIXES = ("err_", "socket_", "io_", "diskhome", "errno", "intno", "rob_id")
+OTHER_DATA_PREFIXES = (
+    "err_",
+    "socket_",
+    "io_",
+    "diskhome",
+    "errno",
+    "intno",
+    "rob_id",
+    "wait_max",
+)
 """Name prefixes of RAPID's predefined data outside the subset (ERRNO, ERR_…, SOCKET_… …;
 reference manual, errnum and socketstatus: unconfirmed)."""
 
