@@ -1,17 +1,19 @@
 r"""An interpreter of wirecal's RAPID subset, with the IRC5's numbers.
 
-A module is checked (:func:`wirecal.lang.rapid.checker.check`), then its routines are
+A module is checked (:class:`wirecal.lang.rapid.checker.Checker`), then its routines are
 compiled into Python closures; the checker's :class:`~wirecal.lang.rapid.checker.Typer`
 gives every expression its static type, so the arithmetic is the controller's:
 
 * num is a 32-bit IEEE float (RAPID kernel, built-in data types, read in translation): every
   num literal, result and stored value is rounded to single precision (:func:`f32`), so
-  integers beyond 8388608 lose exactness as on the controller; dnum is a 64-bit float;
+  integers beyond 2^24 = 16777216 lose exactness (the manual promises exact integers only to
+  8388608, and the checker holds num literals to that); dnum is a 64-bit float;
 * a numeric literal takes the type it is used as (a num or a dnum);
 * ``/`` by zero, DIV or MOD of non-integers or by zero, a string over 80 characters, an index
-  outside an array and reading a clock are run-time errors that stop the program (the
-  controller's error numbers are unconfirmed); DIV truncates toward zero and MOD takes the
-  dividend's sign (unconfirmed);
+  outside an array, reading an optional argument that is not present and routine calls
+  nested more than :data:`MAX_CALL_DEPTH` deep are run-time errors that stop the program
+  (the controller's error numbers are unconfirmed); DIV truncates toward zero and MOD takes
+  the dividend's sign (unconfirmed);
 * a FOR loop without STEP counts by 1, or by -1 when it starts above its end (unconfirmed);
 * ``NumToStr``/``DnumToStr`` write fixed decimals, rounding half away from zero, and a
   negative zero as 0; ``TPWrite``/``Write`` ``\Num`` write an integer when the fraction is
