@@ -5,14 +5,14 @@ from __future__ import annotations
 import os
 import re
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from wirecal.gen.rapid import GENERATOR
-from wirecal.gen.rapid.program import RapidOptions, module_text
+from wirecal.gen.rapid.program import RapidOptions, line_ends, module_text
 from wirecal.lang.rapid.module import num_literal
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
@@ -38,8 +38,10 @@ def test_golden_file(text, irb):
     """Byte for byte the reviewed module and deterministic; WIRECAL_UPDATE_GOLDEN=1
     rewrites it after an intended change (review the diff)."""
     if os.environ.get("WIRECAL_UPDATE_GOLDEN"):
-        GOLDEN.write_bytes(text.encode("ascii"))
-    assert text.encode("ascii") == GOLDEN.read_bytes()
+        GOLDEN.write_bytes(line_ends(text).encode("ascii"))
+    golden = GOLDEN.read_bytes()
+    assert golden.count(b"\r\n") == golden.count(b"\n") > 1000  # CRLF, every line
+    assert line_ends(text).encode("ascii") == golden
     assert module_text(*irb) == text
 
 
@@ -85,13 +87,6 @@ def test_no_solver(irb, text):
     assert text.index("wc_meas 10, 0, 0;") < text.index("wc_solve;") < text.index('"# end"')
 
 
-def test_log_file_option(irb):
-    out = module_text(*irb, RapidOptions(solver=False, log_file="RUN2.LOG"))
-    assert '\\File:="RUN2.LOG"' in out
-    with pytest.raises(WirecalError, match="log-file"):
-        module_text(*irb, RapidOptions(log_file="a b.log"))
-
-
 def test_refuses_other_encoder(irb):
     data = tomllib.loads((IRB / "robot.toml").read_text())
     data["encoder"]["counter_bits"] = 24
@@ -100,18 +95,36 @@ def test_refuses_other_encoder(irb):
         module_text(robot, irb[1])
 
 
-@dataclass
+@dataclass(frozen=True)
 class _Request:
-    solver: bool = False
-    host: str | None = None
+    """The GenRequest fields the generator reads (gen/request.py on the registry branch)."""
+
+    run: object = None
+    zero_tol_mm: float = 0.1
+    spread_tol_mm: float = 0.1
+    margin_deg: float = 1.0
+    range_margin_mm: float = 20.0
+    solver: bool = field(default=True, metadata={"option": "--no-solver"})
+    host: str | None = field(default=None, metadata={"option": "--host"})
+    log_file: str = field(default="WCLOG.CSV", metadata={"option": "--log-name"})
+    crlf: bool = field(default=True, metadata={"option": "--lf"})
 
 
-def test_generator_programs(irb):
-    out = GENERATOR.programs(*irb, _Request())
+def test_generator_programs_and_write(irb, tmp_path):
+    out = GENERATOR.programs(*irb, _Request(solver=False))
     assert list(out) == ["WIRECAL.mod"]
     assert "wc_solve" not in out["WIRECAL.mod"]
-    with pytest.raises(WirecalError, match="does not take host"):
-        GENERATOR.programs(*irb, _Request(host="10.0.0.1"))
+    (path,) = GENERATOR.write(tmp_path, out, _Request(crlf=False))
+    assert path.read_bytes() == out["WIRECAL.mod"].encode("ascii")  # --lf: LF only
+    assert "PP to Routine" in GENERATOR.next_steps(*irb, _Request(), "r.toml", "p.toml")
+
+
+@pytest.mark.parametrize(
+    ("given", "option"), [({"host": "10.0.0.1"}, "--host"), ({"log_file": "X.LOG"}, "--log-name")]
+)
+def test_generator_refuses_by_option(irb, given, option):
+    with pytest.raises(WirecalError, match=f"{option}: not taken by the ABB RAPID"):
+        GENERATOR.programs(*irb, _Request(**given))
 
 
 @pytest.mark.parametrize("x", [1.0, -0.0, 0.1, 6.123233995736766e-17, 302.0])

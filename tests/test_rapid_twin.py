@@ -67,7 +67,7 @@ def test_run_writes_the_log_the_pc_solves(irb, measured):
     assert min(counts) < 0 < max(counts)  # the signed 32-bit count wrapped during the run
     m = check_log(log, plan, robot)
     assert not np.isnan(m.distance_mm).any()
-    est = solve(robot, plan, m).estimates["stepwise"].as_dict()
+    est = solve(robot, plan, m, corrections=False).estimates["stepwise"].as_dict()
     for name, value in truth.items():
         assert est[name] == pytest.approx(value, abs=0.05), name
 
@@ -81,7 +81,7 @@ def test_controller_result_in_the_log_agrees(irb, measured):
     assert result is not None
     on_controller = parse_result(result, "WIRECAL.LOG")
     m = check_log(parse_log(text, "WIRECAL.LOG"), plan, robot)
-    ref = solve(robot, plan, m).estimates["stepwise"].as_dict()
+    ref = solve(robot, plan, m, corrections=False).estimates["stepwise"].as_dict()
     assert set(on_controller) == set(ref)
     for name, value in ref.items():
         assert on_controller[name] == pytest.approx(value, abs=AGREEMENT), name
@@ -115,8 +115,8 @@ def _agreement(robot, plan, programs, folder: Path, seed: int) -> float:
     truth = _truth(robot, seed, 4.5)
     log = simulate_log(robot, plan, truth, seed=seed)
     m = check_log(parse_log(log, f"seed{seed}.csv"), plan, robot)
-    ref = solve(robot, plan, m).estimates["stepwise"].as_dict()
-    got = ADAPTER.controller_solve(robot, plan, m.distance_mm, folder, programs)["stepwise"]
+    ref = solve(robot, plan, m, corrections=False).estimates["stepwise"].as_dict()
+    got = ADAPTER.controller_solve(robot, plan, m, folder, programs)["stepwise"]
     assert set(got) == set(ref)
     return max(abs(got[n] - v) for n, v in ref.items())
 

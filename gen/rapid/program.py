@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -36,6 +37,7 @@ from wirecal.lang.rapid.module import (
 )
 from wirecal.solver.cell_check import check_cell
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
 from wirecal.solver.formats.log import VERSION as LOG_VERSION
 from wirecal.solver.plan import Plan
@@ -65,7 +67,6 @@ class RapidOptions:
     margin_deg: float = 1.0  # every generated target at least this far inside a limit
     range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
     solver: bool = True  # wc_run ends with wc_solve, the controller's step-by-step solver
-    log_file: str = LOG_FILE  # the log's name in HOME:
 
 
 def _aggregate(values: Iterable, literal=num_literal) -> str:
@@ -153,11 +154,6 @@ def _check(robot: Robot, opt: RapidOptions) -> None:
             f"{robot.source}: name {robot.name!r}: the module writes it in a RAPID "
             "string: printable ASCII without '\"' or '\\'; rename the robot"
         )
-    name = opt.log_file
-    if not (0 < len(name) <= 32 and all(c.isalnum() or c in "._-" for c in name)):
-        problems.append(
-            f"--log-file {name!r}: give a file name of 1-32 letters, digits, '.', '_', '-'"
-        )
     if problems:
         raise WirecalError(problems)
 
@@ -183,8 +179,8 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
         "fingerprint": plan.fingerprint(),
         "signal": signal_name(robot),
         "log_dir": LOG_DIR,
-        "log_file": opt.log_file,
-        "log_path": f"{LOG_DIR}/{opt.log_file}",
+        "log_file": LOG_FILE,
+        "log_path": f"{LOG_DIR}/{LOG_FILE}",
         "counter_bits": bits,
         "half_range": str(2 ** (bits - 1)),
         "full_range": str(2**bits),
@@ -229,37 +225,20 @@ def _check_strings(text: str) -> None:
         raise WirecalError(["internal error: the generated module breaks a RAPID rule:", *long])
 
 
-REQUEST_FIELDS = {
-    "zero_tol_mm",
-    "spread_tol_mm",
-    "margin_deg",
-    "range_margin_mm",
-    "solver",
-    "log_file",
-}
-"""The GenRequest fields the RAPID module takes (and ``run``)."""
+def line_ends(text: str, crlf: bool = True) -> str:
+    """Return the module as it goes to the controller: CRLF line ends, or LF.
 
-REFUSED_FIELDS = ("patch", "validation", "host", "port", "echo_log", "crlf")
-"""GenRequest fields the RAPID module does not take: named when set."""
+    RobotStudio, on Windows, writes modules with CRLF; whether the controller needs them is
+    unconfirmed.
+    """
+    return text.replace("\n", "\r\n") if crlf else text
 
 
-class RapidGenerator:
-    """The RAPID generator of the language registry (registry_api: ``Generator``)."""
-
-    key = "rapid"
-
-    def programs(self, robot: Robot, plan: Plan, request: object) -> dict[str, str]:
-        """Return ``{"WIRECAL.mod": text}``; refuse request fields the module cannot take."""
-        refused = [f for f in REFUSED_FIELDS if getattr(request, f, None) not in (None, False)]
-        if refused:
-            raise WirecalError(
-                f"the RAPID module does not take {', '.join(refused)}: drop "
-                + ("it" if len(refused) == 1 else "them")
-            )
-        given = {f: getattr(request, f) for f in REQUEST_FIELDS if hasattr(request, f)}
-        if getattr(request, "run", None) is not None:
-            given["run"] = request.run  # type: ignore[attr-defined]
-        return {MODULE_FILE: module_text(robot, plan, RapidOptions(**given))}
-
-
-GENERATOR = RapidGenerator()
+def write_module(
+    out_dir: str | Path, text: str, *, crlf: bool = True, force: bool = False, inputs=()
+) -> Path:
+    """Write WIRECAL.mod into ``out_dir`` (created if missing); never over one of ``inputs``."""
+    path = Path(out_dir) / MODULE_FILE
+    with Outputs([path], force=force, inputs=inputs, folder=out_dir) as out:
+        out.put(path, line_ends(text, crlf))
+    return path

@@ -26,6 +26,7 @@ from wirecal.lang.rapid.module import (
 )
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.controller_result import parse_result, result_in_log
+from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.twin.cell import Cell, Faults
@@ -104,14 +105,21 @@ class RapidAdapter:
         self,
         robot: Robot,
         plan: Plan,
-        lengths_mm: np.ndarray,
+        measured: Measurements | np.ndarray,
         folder: Path,
         programs: dict[str, str],
     ) -> dict[str, dict[str, float]]:
-        """Run wc_solve on the wire lengths of the plan's points (mm, plan order)."""
+        """Run wc_solve on a checked log's readings, or on wire lengths (mm, plan order).
+
+        Checked readings keep their logged joints; bare lengths stand at the plan's.
+        """
+        if isinstance(measured, Measurements):
+            readings = (measured.distance_mm, measured.theta0_deg, measured.joints_deg)
+        else:
+            readings = (np.asarray(measured), plan.theta0_deg, plan.all_points()[0])
         text = programs[MODULE_FILE]
         end = text.rindex("ENDMODULE")
-        module = text[:end] + load_routine(robot, plan, lengths_mm) + text[end:]
+        module = text[:end] + load_routine(robot, plan, *readings) + text[end:]
         folder.mkdir(parents=True, exist_ok=True)
         world = Cell(robot, {}, plan.theta0_deg, folder)
         controller = IrcController(world, signal_name(robot))
@@ -127,9 +135,14 @@ class RapidAdapter:
         return {"stepwise": parse_result(result, f"{SOLVE_FILE} (wc_solve)")}
 
 
-def load_routine(robot: Robot, plan: Plan, lengths_mm: np.ndarray) -> str:
-    """Return the twin's routine wc_twin_load: the readings, then wc_solve (docstring)."""
-    q, _, _ = plan.all_points()
+def load_routine(
+    robot: Robot, plan: Plan, lengths_mm: np.ndarray, theta0_deg: np.ndarray, q: np.ndarray
+) -> str:
+    """Return the twin's routine wc_twin_load: the readings, then wc_solve (docstring).
+
+    ``lengths_mm`` and the joints ``q`` (deg) of the plan's points, ``theta0_deg`` of the
+    zero readings.
+    """
     mpc = robot.encoder.mm_per_count
     lines = ["  PROC wc_twin_load()"]
 
@@ -140,7 +153,7 @@ def load_routine(robot: Robot, plan: Plan, lengths_mm: np.ndarray) -> str:
 
     steps = len(plan.steps)
     for s in range(1, steps + 1):
-        keep(s, SOLVE_BASE_COUNTS, plan.theta0_deg)
+        keep(s, SOLVE_BASE_COUNTS, theta0_deg)
     for p, (length, joints) in enumerate(zip(lengths_mm, q, strict=True), 1):
         counts = (SOLVE_BASE_COUNTS + float(length) / mpc + HALF_RANGE) % GROUP_RANGE - HALF_RANGE
         keep(steps + p, counts, joints)
