@@ -146,3 +146,15 @@ def test_patch_section(irb):
     assert section["not_carried"] == ["a2", "d6"]
     assert "URDF" in section["not_carried_why"]
     assert patch_section(robot, {}) is None
+
+
+def test_module_lints_clean(irb, text):
+    """The RAPID checker (lang/rapid) finds nothing in the module, with or without the
+    solver, for the example's declared RobotWare."""
+    from wirecal.lang.rapid import Rapid
+
+    robot, plan = irb
+    software = robot.controller.software
+    assert Rapid().lint(text, "WIRECAL.mod", software) == []
+    bare = module_text(robot, plan, RapidOptions(solver=False))
+    assert Rapid().lint(bare, "WIRECAL.mod", software) == []

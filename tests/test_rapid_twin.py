@@ -130,3 +130,33 @@ def test_wc_solve_agrees_with_the_reference(irb, programs, tmp_path, seed):
 @pytest.mark.parametrize("seed", range(2, 12))
 def test_wc_solve_agrees_more_truths(irb, programs, tmp_path, seed):
     assert _agreement(*irb, programs, tmp_path, seed) <= AGREEMENT
+
+
+def _solve_cli(log: Path):
+    from click.testing import CliRunner
+
+    from wirecal.cli.main import main
+
+    args = ["solve", str(IRB / "robot.toml"), str(IRB / "plan.toml"), str(log)]
+    return CliRunner().invoke(main, args)
+
+
+def test_disk_full_stops_the_run_and_solve_names_the_missing_points(irb, programs, tmp_path):
+    run = ADAPTER.measure(*irb, {}, tmp_path, programs, faults=Faults(disk_full_after_lines=20))
+    assert not run.complete
+    assert "disk is full" in str(run.stopped)
+    assert len(run.log.read_text(encoding="ascii").splitlines()) == 20
+    result = _solve_cli(run.log)
+    assert result.exit_code == 2
+    assert "the log is incomplete" in result.output
+
+
+def test_a_failed_encoder_freezes_the_count_and_solve_refuses(irb, programs, tmp_path):
+    """The group input holds its last value: the run completes, the PC's gate refuses."""
+    run = ADAPTER.measure(*irb, {}, tmp_path, programs, faults=Faults(encoder_fails_at_read=200))
+    assert run.complete
+    counts = {r.counts for r in read_log(run.log).readings[-20:]}
+    assert len(counts) == 1  # frozen
+    result = _solve_cli(run.log)
+    assert result.exit_code != 0
+    assert "not plausible" in result.output

@@ -13,11 +13,14 @@ methods of the same names it uses):
   (the controller's own messages are not modelled); ``fine`` stops at the point;
 * ``GInputDnum``: the group input ``wc_giCount<channel>`` holds the encoder's count on a
   32-bit counter that wraps (the counter module's behaviour: *unconfirmed*); any other
-  signal name stops the program (an unknown signal);
+  signal name stops the program (an unknown signal). A failed encoder (the fault
+  ``encoder_fails_at_read``) leaves the input at its last value: the count freezes;
 * ``CJointT``: the commanded joints (the joints' own encoders do not see the errors
   the wire measures);
 * ``Open "HOME:" \File:=…`` / ``Write`` / ``Close``: files in the cell's disk folder,
-  written through, a line at a time (``\NoNewLine`` keeps the line open);
+  written through, a line at a time (``\NoNewLine`` keeps the line open); a full disk
+  (``disk_full_after_lines``) stops the program at the Write (the controller's error
+  number is not modelled);
 * ``TPWrite`` / ``TPErase`` / ``TPReadNum``: the FlexPendant is the cell's console; the
   operator answers from the cell's scripted answers;
 * ``WaitTime`` and the clocks: the cell's clock.
@@ -51,6 +54,7 @@ class IrcController:
     files: dict[int, Path] = field(default_factory=dict)
     open_line: dict[int, str] = field(default_factory=dict)  # text after \NoNewLine
     flexpendant: list[str] = field(default_factory=list)
+    last_count: int = 0  # the group input's value: it holds when the encoder fails
 
     def _refuse(self, why: str) -> RunError:
         self.stopped = why
@@ -83,8 +87,12 @@ class IrcController:
         """GInputDnum: the counter's value, unsigned 32 bits; another signal stops."""
         if name != self.signal:
             raise self._refuse(f"GInputDnum: no group input signal named {name}")
-        self.world.reads += 1
-        return self.world.wire_counts() % GROUP_RANGE
+        world = self.world
+        world.reads += 1
+        fails = world.faults.encoder_fails_at_read
+        if fails is None or world.reads < fails:
+            self.last_count = world.wire_counts() % GROUP_RANGE
+        return self.last_count
 
     # ---- files ----
     def open_file(self, path: str, append: bool) -> int:
@@ -107,6 +115,9 @@ class IrcController:
         if not newline:
             self.open_line[handle] = text
             return
+        limit = self.world.faults.disk_full_after_lines
+        if limit is not None and self.world.lines_written >= limit:
+            raise self._refuse(f"Write: {self.files[handle].name}: the disk is full")
         with open(self.files[handle], "a", encoding="ascii", newline="\n") as fh:
             fh.write(text + "\n")  # written through: a stopped run leaves its lines
         self.world.lines_written += 1
