@@ -132,20 +132,21 @@ def test_num_literal_is_the_nearest_float32(x):
     assert np.float32(float(num_literal(x))) == np.float32(x)
 
 
-def test_patch_section(irb):
+def test_patch_companion(irb):
     """Joint zero offsets for the controller (axis, rad, the reading to jog to); the
-    rest named as what only a URDF or rewritten targets carry."""
+    rest named as what only a URDF or rewritten targets carry; TOML that reads back."""
     from wirecal.lang.rapid.patch import patch_section
 
     robot, _ = irb
-    section = patch_section(robot, {"th5": -0.02, "a2": 0.3, "th2": 0.1, "d6": 0.1})
-    assert section is not None
-    assert section["axis"] == [2, 5]
-    assert section["offset_rad"] == pytest.approx([0.1 * 3.141592653589793 / 180, -0.000349066])
-    assert section["jog_to_deg"] == [-0.1, 0.02]
-    assert section["not_carried"] == ["a2", "d6"]
-    assert "URDF" in section["not_carried_why"]
-    assert patch_section(robot, {}) is None
+    text = patch_section(robot, {"th5": -0.02, "a2": 0.3, "th2": 0.1, "d6": 0.1})
+    data = tomllib.loads(text)
+    joints = data["joint_offsets"]
+    assert joints["axis"] == [2, 5]
+    assert joints["offset_rad"] == pytest.approx([0.1 * 3.141592653589793 / 180, -0.000349066])
+    assert joints["jog_to_deg"] == [-0.1, 0.02]
+    assert data["not_carried"]["parameters"] == ["a2", "d6"]
+    assert "URDF" in data["not_carried"]["why"]
+    assert tomllib.loads(patch_section(robot, {}))["joint_offsets"]["axis"] == []
 
 
 def test_module_lints_clean(irb, text):

@@ -1,4 +1,4 @@
-"""The patch file's RAPID section: the joint zero offsets ABB's fine calibration takes.
+"""The patch's RAPID companion: the joint zero offsets ABB's fine calibration takes.
 
 An IRC5 keeps each axis's calibration as a calibration offset of its motor (the
 ``MOTOR_CALIB`` instances ``rob1_1`` … ``rob1_6`` of the controller's MOC.cfg, attribute
@@ -8,7 +8,7 @@ calibration sets an axis's calibration from where the axis stands (*unconfirmed*
 carry joint zero offsets only: wirecal's ``th<i>`` estimates. The link lengths, twists and
 d offsets (``a<k>``, ``al<k>``, ``d<i>``) and the tool point have no place in them: only a
 model the controller does not hold (a URDF, ``wirecal export-urdf``) or targets rewritten
-with the calibrated model can carry those — the section says so, naming them.
+with the calibrated model can carry those — the companion says so, naming them.
 
 Sign: wirecal's ``th<i>`` is the true angle minus the angle the controller reports (the
 robot file's model, Craig's θ_i + offset). Fine calibration at the axis's calibration
@@ -18,16 +18,23 @@ until the FlexPendant reads −th<i> and then fine-calibrated: the true angle is
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping
 
 from wirecal.solver import params as P
 from wirecal.solver.robot import Robot
 
-ACCEPTS = (
-    "joint zero offsets (the th<i> estimates): the axes' calibration offsets of the "
-    "controller (MOC.cfg MOTOR_CALIB -cal_offset, motor side; or FlexPendant Calibration "
-    "-> Fine calibration at the calibration position); unconfirmed, see docs/rapid.md"
+SUFFIX = ".abb_calibration.toml"
+"""The file beside a patch ``<name>.toml``: ``<name>.abb_calibration.toml``."""
+
+HEADER = (
+    "# wirecal: ABB fine calibration, the joint zero offsets of a calibration (the patch's",
+    "# companion; docs/rapid.md). What the controller takes: joint zero offsets, the axes'",
+    "# calibration offsets (MOC.cfg MOTOR_CALIB -cal_offset, motor side: the unit and the",
+    "# gear ratio are unconfirmed), or by hand: jog each axis until the FlexPendant reads",
+    "# jog_to_deg, at the calibration position 0 deg, then Calibration -> Fine calibration",
+    "# of that axis (unconfirmed). offset = true angle - reported angle (wirecal's th<i>).",
 )
 NOT_CARRIED = (
     "link lengths, twists, d offsets and the tool point: the controller's kinematic model "
@@ -36,15 +43,17 @@ NOT_CARRIED = (
 )
 
 
-def patch_section(robot: Robot, offsets: Mapping[str, float]) -> dict | None:
-    """Return the patch file's ``[rapid]`` section for ``offsets`` (name → deg or mm).
+def _list(values: list) -> str:
+    return "[" + ", ".join(json.dumps(v) for v in values) + "]"
 
-    ``axis``, ``offset_rad``, ``offset_deg`` and ``jog_to_deg`` (the FlexPendant reading to
-    jog each axis to before its fine calibration) for the th<i> estimates, and the other
-    parameters named in ``not_carried``; None when there are no offsets.
+
+def patch_section(robot: Robot, offsets: Mapping[str, float]) -> str:
+    """Return the companion's TOML text for ``offsets`` (name → deg or mm).
+
+    ``[joint_offsets]``: ``axis``, ``offset_deg``, ``offset_rad`` and ``jog_to_deg`` (the
+    FlexPendant reading to jog each axis to before its fine calibration) of the th<i>
+    estimates; ``[not_carried]``: the other parameters, with why.
     """
-    if not offsets:
-        return None
     joints: list[tuple[int, float]] = []
     other: list[str] = []
     for name, value in offsets.items():
@@ -54,12 +63,18 @@ def patch_section(robot: Robot, offsets: Mapping[str, float]) -> dict | None:
         else:
             other.append(name)
     joints.sort()
-    return {
-        "accepts": ACCEPTS,
-        "axis": [a for a, _ in joints],
-        "offset_deg": [round(v, 6) for _, v in joints],
-        "offset_rad": [round(math.radians(v), 9) for _, v in joints],
-        "jog_to_deg": [round(-v, 6) + 0.0 for _, v in joints],
-        "not_carried": other,
-        "not_carried_why": NOT_CARRIED,
-    }
+    lines = [
+        *HEADER,
+        f"robot = {json.dumps(robot.name)}",
+        "",
+        "[joint_offsets]",
+        f"axis = {_list([a for a, _ in joints])}",
+        f"offset_deg = {_list([round(v, 6) + 0.0 for _, v in joints])}",
+        f"offset_rad = {_list([round(math.radians(v), 9) + 0.0 for _, v in joints])}",
+        f"jog_to_deg = {_list([round(-v, 6) + 0.0 for _, v in joints])}",
+        "",
+        "[not_carried]",
+        f"parameters = {_list(other)}",
+        f"why = {json.dumps(NOT_CARRIED)}",
+    ]
+    return "\n".join(lines) + "\n"
