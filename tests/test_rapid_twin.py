@@ -160,3 +160,21 @@ def test_a_failed_encoder_freezes_the_count_and_solve_refuses(irb, programs, tmp
     result = _solve_cli(run.log)
     assert result.exit_code != 0
     assert "not plausible" in result.output
+
+
+def test_wc_check_shows_the_live_count(irb, programs, tmp_path):
+    """wc_check prints 60 readings, 0.5 s apart, relative to the first (still wire: 0)."""
+    from wirecal.lang.rapid.module import signal_name
+    from wirecal.twin.cell import Cell
+    from wirecal.twin.rapid.controller import IrcController
+    from wirecal.twin.rapid.interp import run_module
+
+    robot, plan = irb
+    world = Cell(robot, {}, plan.theta0_deg, tmp_path, noise_mm=0.0)
+    controller = IrcController(world, signal_name(robot))
+    outcome = run_module(programs[MODULE_FILE], MODULE_FILE, controller, entry="wc_check")
+    assert outcome.status == "completed", outcome.message
+    shown = [line for line in controller.flexpendant if line.startswith("counts ")]
+    assert len(shown) == 60
+    assert world.clock == pytest.approx(30.0)
+    assert all(abs(float(line.split()[1])) <= 2 for line in shown)  # ±1-count jitter
