@@ -10,9 +10,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import ClassVar
 
-from wirecal.lang.rapid._base import Capabilities, Language
+from wirecal.lang.rapid import examples
+from wirecal.lang.rapid._base import Capabilities, Example, Language
 from wirecal.lang.rapid.checker import check
-from wirecal.lang.rapid.patch import patch_section
+from wirecal.lang.rapid.patch import SUFFIX, patch_section
 from wirecal.solver.robot import Robot
 
 
@@ -37,11 +38,31 @@ class Rapid(Language):
         counter_bits=32,
         software_lines={6: "IRC5 RobotWare 6", 7: "OmniCore RobotWare 7"},
     )
+    patch_companion: ClassVar[str | None] = SUFFIX
+    interface_notes: ClassVar[Mapping[str, str]] = {
+        "group": (
+            "the counter mapped to a group input signal, read with GInputDnum as a dnum "
+            "(up to 32 bits: unconfirmed)"
+        ),
+    }
+    valid_examples: ClassVar[tuple[Example, ...]] = tuple(
+        Example(text, name) for name, text in examples.VALID.items()
+    )
+    invalid_examples: ClassVar[tuple[Example, ...]] = tuple(
+        Example(text, name) for name, (text, _) in examples.INVALID.items()
+    )
 
-    def lint(self, text: str, source: str, software: str | None = None) -> list[str]:
+    def lint(
+        self,
+        text: str,
+        source: str,
+        software: str | None = None,
+        *,
+        external_calls: bool = False,
+    ) -> list[str]:
         """Return the module's problems, each 'SOURCE:LINE: what' ([] = clean)."""
-        return check(text, source, software)
+        return check(text, source, software, external_calls=external_calls)
 
-    def patch_section(self, robot: Robot, offsets: Mapping[str, float]) -> dict | None:
-        """Return the patch file's RAPID section: ABB fine calibration's joint offsets."""
+    def patch_section(self, robot: Robot, offsets: Mapping[str, float]) -> str:
+        """Return the patch's companion: ABB fine calibration's joint offsets (TOML)."""
         return patch_section(robot, offsets)

@@ -1,20 +1,20 @@
 """A stand-in for ``wirecal.lang.base`` until the registry's branch is merged.
 
-The same names and fields as the agreed declaration (Capabilities, Language); the
-integrator replaces ``from wirecal.lang.rapid._base import …`` with ``wirecal.lang.base``
-and deletes this file.
+The same names and fields as the registry's declaration (Capabilities, Example, Language);
+the integrator replaces ``from wirecal.lang.rapid._base import …`` with
+``wirecal.lang.base`` and deletes this file.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 
 @dataclass(frozen=True)
 class Capabilities:
-    """What a controller language can do (see the registry's declaration)."""
+    """What a controller language can do, as far as wirecal's programs use it."""
 
     int_bits: int | None
     float_bits: int
@@ -25,15 +25,40 @@ class Capabilities:
     software_lines: Mapping[int, str]
 
 
+@dataclass(frozen=True)
+class Example:
+    """A snippet the checker must accept (valid) or refuse (invalid), and the page that says so."""
+
+    text: str
+    source: str
+    software: str | None = None
+
+
 class Language:
-    """A controller language: its key, title, program suffix, live check and checker."""
+    """One controller language: its key, title, program suffix, live check and checker."""
 
     key: ClassVar[str]
     title: ClassVar[str]
     suffix: ClassVar[str]
     live_check: ClassVar[str]
     capabilities: ClassVar[Capabilities]
+    interface_notes: ClassVar[Mapping[str, str]] = {}
+    patch_companion: ClassVar[str | None] = None
+    default: ClassVar[bool] = False
+    valid_examples: ClassVar[tuple[Example, ...]] = ()
+    invalid_examples: ClassVar[tuple[Example, ...]] = ()
 
-    def lint(self, text: str, source: str, software: str | None = None) -> list[str]:
+    def lint(
+        self,
+        text: str,
+        source: str,
+        software: str | None = None,
+        *,
+        external_calls: bool = False,
+    ) -> list[str]:
         """Return the checker's problems, each 'SOURCE:LINE: what' ([] = clean)."""
         raise NotImplementedError
+
+    def patch_section(self, robot: Any, offsets: Mapping[str, float]) -> dict[str, Any] | None:
+        """Return the language's section of the patch file (None: it has none)."""
+        return None

@@ -88,6 +88,7 @@ class Typer:
         self.scope, self.problems, self.routines, self.line = scope, problems, routines, line
         self.signals: set[str] = set()
         self.software: tuple[int, ...] | None = None
+        self.external = False  # calls to routines not in the module are allowed
 
     def symbol(self, name: str) -> Symbol | None:
         """Return the data ``name`` refers to, or None (the problem reported)."""
@@ -134,7 +135,7 @@ class Typer:
             return self._aggregate(e, want)
         if isinstance(e, N.Neg):
             got = self.type(e.a)
-            if got is not None and got not in (NUM, DNUM, LITERAL):
+            if got is not None and got not in (NUM, DNUM, LITERAL, UNKNOWN):
                 self.problems.add(self.line, f"- of a {got}: a number is needed")
             return got
         if isinstance(e, N.Not):
@@ -203,6 +204,8 @@ class Typer:
         a, b = self.type(e.a), self.type(e.b)
         if a is None or b is None:
             return None
+        if UNKNOWN in (a, b):
+            return UNKNOWN
         op = e.op
         if op in ("AND", "OR", "XOR"):
             for _side, got in ((e.a, a), (e.b, b)):
@@ -278,6 +281,11 @@ class Typer:
         """Check a call of ``name`` (a function when ``function``); return its result type."""
         key = name.lower()
         routine = self.routines.get(key) or (T.FUNCTIONS if function else T.INSTRUCTIONS).get(key)
+        if routine is None and self.external and key not in T.OTHER_ROUTINES:
+            for a in args:  # a routine of another module: its arguments are still read
+                if a.value is not None and self.root(a.value) is None:
+                    self.type(a.value)
+            return UNKNOWN
         if routine is None or (routine.returns is None) == function:
             self._unknown(name, function, routine)
             return None
@@ -417,9 +425,14 @@ class Checker:
     """Check one module (see the module docstring)."""
 
     def __init__(
-        self, module: N.Module, software: str | None = None, task: tuple[N.Module, ...] = ()
+        self,
+        module: N.Module,
+        software: str | None = None,
+        task: tuple[N.Module, ...] = (),
+        external_calls: bool = False,
     ):
         self.module, self.problems, self.task = module, Problems(), task
+        self.external_calls = external_calls
         self.software = _version(software) if software else None
         self.globals: dict[str, Symbol] = {
             k: Symbol(k, Type(v), "PREDEF") for k, v in T.PREDEFINED.items()
@@ -555,7 +568,7 @@ class Checker:
             ptype = Type(p.type.lower(), (None,) * p.dims) if known else UNKNOWN
             scope[p.name.lower()] = Symbol(p.name, ptype, kind)
         typer = Typer(scope, self.problems, self.user, r.line)
-        typer.software = self.software
+        typer.software, typer.external = self.software, self.external_calls
         if r.handler is not None:
             self.problems.add(r.line, f"an ERROR handler: {SUBSET}")
         self.body(r.body, typer, r)
@@ -659,12 +672,20 @@ def _walk(stmts: list[N.Stmt]):
             yield from _walk(s.default)
 
 
-def check(text: str, source: str, software: str | None = None) -> list[str]:
-    """Return the problems of a module's text, each ``SOURCE:LINE: what`` ([] = clean)."""
-    return check_task({source: text}, software)
+def check(
+    text: str, source: str, software: str | None = None, *, external_calls: bool = False
+) -> list[str]:
+    """Return the problems of a module's text, each ``SOURCE:LINE: what`` ([] = clean).
+
+    ``external_calls``: calls of routines the module does not define (nor RAPID) are taken
+    as routines of another module of the task, their arguments unchecked.
+    """
+    return check_task({source: text}, software, external_calls=external_calls)
 
 
-def check_task(texts: Mapping[str, str], software: str | None = None) -> list[str]:
+def check_task(
+    texts: Mapping[str, str], software: str | None = None, *, external_calls: bool = False
+) -> list[str]:
     """Check the modules of one task (file name → text) together.
 
     Each module sees the global data and routines of the others (RAPID's task scope); the
@@ -680,7 +701,7 @@ def check_task(texts: Mapping[str, str], software: str | None = None) -> list[st
             out.append(f"{source}:{e.line}: {e.message}")
     for source, module in modules.items():
         task = tuple(m for s, m in modules.items() if s != source)
-        checker = Checker(module, None if version else software, task)
+        checker = Checker(module, None if version else software, task, external_calls)
         out += [f"{source}:{line}: {m}" for line, m in checker.run()]
     return out
 
