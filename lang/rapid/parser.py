@@ -4,6 +4,11 @@ The grammar (``rapid.lark``) follows the RAPID kernel's syntax as ABB's "Technic
 reference manual - RAPID kernel" (3HAC050946, RobotWare 6) and "RAPID overview" describe it;
 what was read and what is unconfirmed is in :mod:`.tables`. A syntax error becomes one
 problem ``SOURCE:LINE: what``; a block left open names the END keyword it lacks.
+
+Operators bind, tightest first: ``* / DIV MOD``, ``+ -``, comparisons, ``NOT``, ``AND``,
+``OR XOR`` (RAPID kernel, expressions: unconfirmed — where NOT falls is wirecal's reading).
+Blocks deeper than :data:`MAX_BLOCK_DEPTH` and brackets deeper than
+:data:`MAX_BRACKET_DEPTH` are refused before parsing (the tree is built recursively).
 """
 
 from __future__ import annotations
