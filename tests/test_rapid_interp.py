@@ -279,3 +279,20 @@ def test_an_absent_optional_argument_stops_when_read() -> None:
     assert outcome.status == "error"
     assert "optional argument x is not present" in outcome.message
     assert ctl.pendant == []
+
+
+def test_a_func_returns_data_of_its_type() -> None:
+    _, ctl = run(
+        'TPWrite NumToStr(tenth() * 13, 9) + " " + DnumToStr(dtenth() * 13, 12);',
+        extra=(
+            "FUNC num tenth()",
+            "  RETURN 0.1;",
+            "ENDFUNC",
+            "FUNC dnum dtenth()",
+            "  RETURN 0.1;",
+            "ENDFUNC",
+        ),
+    )
+    # the num: 0.1 rounded to single, times 13, rounded again: 1.300000072 (not 1.299999952,
+    # what 0.1 * 13 in double rounded once would give)
+    assert ctl.pendant == ["1.300000072 1.300000000000"]

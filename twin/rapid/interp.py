@@ -308,8 +308,14 @@ def run_module(text: str, source: str, controller: RapidController, entry: str =
 class _Compiler:
     """Compile one routine's statements and expressions into closures."""
 
-    def __init__(self, interp: Interpreter, typer: Typer, local: dict[str, Symbol]):
-        self.interp, self.typer, self.local = interp, typer, local
+    def __init__(
+        self,
+        interp: Interpreter,
+        typer: Typer,
+        local: dict[str, Symbol],
+        returns: Type | None = None,
+    ):
+        self.interp, self.typer, self.local, self.returns = interp, typer, local, returns
 
     @staticmethod
     def routine(interp: Interpreter, r: N.Routine) -> Callable[[list[Any]], tuple[Any, Frame]]:
@@ -320,7 +326,8 @@ class _Compiler:
             kind = "OPT" if p.optional else "IN"
             sym = Symbol(p.name, Type(p.type.lower(), (None,) * p.dims), kind)
             scope[p.name.lower()] = local[p.name.lower()] = sym
-        c = _Compiler(interp, Typer(scope, Problems(), interp.routines_sig), local)
+        returns = Type(r.type.lower()) if r.type else None
+        c = _Compiler(interp, Typer(scope, Problems(), interp.routines_sig), local, returns)
         names = [p.name.lower() for p in r.params]
         body = c.block(r.body)
         is_func = r.kind == "FUNC"
@@ -465,13 +472,14 @@ class _Compiler:
         return test
 
     def ret(self, s: N.Return) -> Callable[[Frame], None]:
-        want = self.typer.type(s.value) if s.value is not None else None
-        value = self.expr(s.value, want or NUM) if s.value is not None else None
+        """Compile RETURN: a FUNC's value becomes data of its declared type."""
+        want = self.returns
+        value = self.expr(s.value, want) if s.value is not None and want else None
         interp, line = self.interp, s.line
 
         def ret(frame: Frame) -> None:
             interp.line = line
-            raise _Return(value(frame) if value else None)
+            raise _Return(coerce(copy(value(frame)), want) if value and want else None)
 
         return ret
 
