@@ -59,6 +59,6 @@ class Language:
         """Return the checker's problems, each 'SOURCE:LINE: what' ([] = clean)."""
         raise NotImplementedError
 
-    def patch_section(self, robot: Any, offsets: Mapping[str, float]) -> dict[str, Any] | None:
-        """Return the language's section of the patch file (None: it has none)."""
+    def patch_section(self, robot: Any, offsets: Mapping[str, float]) -> str | None:
+        """Return the text of the language's own patch companion (None: it has none)."""
         return None
