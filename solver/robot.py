@@ -71,7 +71,7 @@ class Encoder:
         return Counter(self.counter_bits)
 
 
-DEFAULT_CHANNEL = {"belt": 1, "device": 0, "pulse": 0}
+DEFAULT_CHANNEL = {"belt": 1, "device": 0, "pulse": 0, "group": 0}
 """The ``[encoder] channel`` when the robot file gives none, by interface (V+ belt encoders
 count from 1; DEVICE units and the URScript pulse decoder's encoder index from 0)."""
 

@@ -266,8 +266,9 @@ def test_unreadable_and_malformed_files(tmp_path):
 def test_shipped_arms_load_unchanged(path):
     robot = load_robot(path)
     assert robot.n_joints == 6
-    # a V+ belt counter is 24 bits; the URScript programs log the raw int32 count
-    bits = {"vplus": 24, "urscript": 32}[robot.controller.language]
+    # a V+ belt counter is 24 bits; the URScript programs log the raw int32 count; the
+    # RAPID module reads a 32-bit group input
+    bits = {"vplus": 24, "urscript": 32, "rapid": 32}[robot.controller.language]
     assert robot.encoder.counter_bits == bits
 
 

@@ -1,0 +1,100 @@
+"""The RAPID generator behind ``wirecal gen`` (the registry's ``Generator``): WIRECAL.mod.
+
+Written to the language registry's Generator protocol (registry_api, branch reg:
+``key``, ``refuses``, ``default_run``, ``programs``, ``write``, ``notes``,
+``next_steps``); the request is a ``GenRequest`` (gen/request.py), read here by its
+field names.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import fields
+from pathlib import Path
+
+from wirecal.gen.rapid.program import RapidOptions, module_text, write_module
+from wirecal.lang.rapid import Rapid
+from wirecal.lang.rapid.module import LOG_DIR, LOG_FILE, MODULE_FILE, signal_name
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
+from wirecal.solver.run_parameters import PAPER_RUN
+
+
+def refuse_unsupported(request: object, refuses: frozenset[str], title: str) -> None:
+    """Raise naming the options given for fields the module does not take.
+
+    Given: the field differs from its default; named by its ``option`` metadata (the
+    ``wirecal gen`` option). The registry's gen/request.py has the same function: the
+    integrator imports that one instead.
+    """
+    given = [
+        f.metadata.get("option", f.name)
+        for f in fields(request)  # type: ignore[arg-type]
+        if f.name in refuses and getattr(request, f.name) != f.default
+    ]
+    if given:
+        raise WirecalError(
+            f"{', '.join(given)}: not taken by the {title} programs (wirecal gen --help says "
+            "which language each option is for)"
+        )
+
+
+class RapidGenerator:
+    """:func:`~wirecal.gen.rapid.program.module_text` for a ``GenRequest``."""
+
+    key = Rapid.key
+    # the log goes to HOME:/WIRECAL.LOG and is always echoed on the FlexPendant; no socket,
+    # no patch or validation programs yet
+    refuses = frozenset({"patch", "validation", "host", "port", "log_file", "echo_log"})
+    default_run = PAPER_RUN
+
+    def options(self, request) -> RapidOptions:
+        """Return the module's options for ``request`` (refusing what it does not take)."""
+        refuse_unsupported(request, self.refuses, Rapid.title)
+        return RapidOptions(
+            run=request.run or self.default_run,
+            zero_tol_mm=request.zero_tol_mm,
+            spread_tol_mm=request.spread_tol_mm,
+            margin_deg=request.margin_deg,
+            range_margin_mm=request.range_margin_mm,
+            solver=request.solver,
+        )
+
+    def programs(self, robot: Robot, plan: Plan, request) -> dict[str, str]:
+        """Return ``{"WIRECAL.mod": text}`` (LF line ends; :meth:`write` sets them)."""
+        return {MODULE_FILE: module_text(robot, plan, self.options(request))}
+
+    def write(
+        self,
+        out_dir: str | Path,
+        programs: dict[str, str],
+        request,
+        *,
+        force: bool = False,
+        inputs: Iterable[str | Path] = (),
+    ) -> list[Path]:
+        """Write WIRECAL.mod, CRLF line ends unless the request asks for LF (``--lf``)."""
+        text = programs[MODULE_FILE]
+        return [write_module(out_dir, text, crlf=request.crlf, force=force, inputs=inputs)]
+
+    def notes(self, robot: Robot, robot_path: str) -> list[str]:
+        """Return the warning for an undeclared RobotWare version."""
+        if robot.controller.software is not None:
+            return []
+        return [
+            f"{robot_path}: [controller] software not declared; the module needs RobotWare "
+            'with GInputDnum and dnum (docs/rapid.md); declare it, e.g. software = "6.13"'
+        ]
+
+    def next_steps(self, robot: Robot, plan: Plan, request, robot_path: str, plan_path: str) -> str:
+        """Return how to run the module and where the log lands."""
+        return (
+            f"load {MODULE_FILE} on the controller (group input {signal_name(robot)} "
+            "configured), run wc_mount, wc_check and wc_run (PP to Routine), then fetch "
+            f"{LOG_DIR}/{LOG_FILE} and run 'wirecal solve {robot_path} {plan_path} "
+            f"{LOG_FILE}' (docs/rapid.md)"
+        )
+
+
+GENERATOR = RapidGenerator()

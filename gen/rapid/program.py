@@ -1,0 +1,244 @@
+"""``wirecal gen`` for ABB RAPID: the module ``WIRECAL.mod`` from ``templates/rapid``.
+
+One module with the routines the operator runs by "PP to Routine" (docs/rapid.md):
+``wc_mount`` (MoveAbsJ to θ0, mount the encoder: TPReadNum), ``wc_check`` (live counts on
+the FlexPendant) and ``wc_run`` (the measurement: MoveAbsJ through the θ0 checks, vias and
+calibration points, settle, read the counter's group input with GInputDnum; the log written
+to a file on the controller with Open/Write/Close and echoed with TPWrite in the format
+``wirecal solve`` reads from a paste), ending with ``wc_solve``, the controller's
+step-by-step solver (the port of templates/urscript/solve.script.j2). Deterministic: the
+same robot, plan, options and wirecal version give the same bytes.
+
+RAPID facts used are listed, with what is unconfirmed, in the module's own header
+(templates/rapid/wirecal.mod.j2): no page of ABB's RAPID reference was read for them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wirecal import __version__
+from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
+from wirecal.gen.targets import check_limits, joint_target, run_steps
+from wirecal.gen.templating import render
+from wirecal.lang.rapid.module import (
+    GROUP_COUNTER_BITS,
+    LOG_DIR,
+    LOG_FILE,
+    MODULE_FILE,
+    dnum_literal,
+    num_literal,
+    signal_name,
+)
+from wirecal.solver.cell_check import check_cell
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.fileio import Outputs
+from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
+from wirecal.solver.formats.log import VERSION as LOG_VERSION
+from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
+from wirecal.solver.run_parameters import PAPER_RUN, READING_INTERVAL_S, RunParameters
+from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
+
+STRING_MAX = 80
+"""A RAPID string's longest value, in characters (unconfirmed)."""
+
+EXTERNAL_AXES = "[9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]"
+"""A jointtarget's extax for a robot without external axes (9E+09: not used)."""
+
+V_TCP_MM_S = 250
+"""wc_v's TCP speed (mm/s): high enough that the joints' v_ori cap leads (unconfirmed)."""
+
+
+@dataclass(frozen=True)
+class RapidOptions:
+    """Options of the generated RAPID module."""
+
+    # the paper's one speed and fixed settle, as the URScript programs (MoveAbsJ ... fine
+    # stops at the point; the settle rule of the V+ module is not ported)
+    run: RunParameters = PAPER_RUN
+    zero_tol_mm: float = 0.1  # a zero reading further from the previous: the wire slipped
+    spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
+    margin_deg: float = 1.0  # every generated target at least this far inside a limit
+    range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
+    solver: bool = True  # wc_run ends with wc_solve, the controller's step-by-step solver
+
+
+def _aggregate(values: Iterable, literal=num_literal) -> str:
+    """Write a RAPID aggregate ``[a, b, …]``."""
+    return "[" + ", ".join(literal(v) for v in values) + "]"
+
+
+def _matrix(rows: np.ndarray, literal=num_literal) -> str:
+    """Write a 2-D array's aggregate, one row a line."""
+    inner = ",\n    ".join(_aggregate(r, literal) for r in rows)
+    return "[\n    " + inner + "]"
+
+
+def _int(v: float) -> str:
+    return str(int(v))
+
+
+def _string(v: str) -> str:
+    return f'"{v}"'
+
+
+def jointtarget(q_deg: Iterable[float]) -> str:
+    """Write a jointtarget: the six robot axes (deg, 4 decimals) and no external axes."""
+    robax = ", ".join(_fixed(x, 4) for x in q_deg)
+    return f"[[{robax}], {EXTERNAL_AXES}]"
+
+
+def _fixed(x: float, digits: int) -> str:
+    """Return ``x`` with at most ``digits`` decimals, no trailing zeros, never ``-0``."""
+    s = f"{x:.{digits}f}".rstrip("0").rstrip(".")
+    return "0" if s in ("-0", "") else s
+
+
+def solver_tables(tables: Tables) -> dict[str, str]:
+    """Return wc_solve's tables as RAPID aggregates (1-based, configuration 1 = θ0).
+
+    The plan's angles and the nominal lengths in counts are dnum, so the readings'
+    differences from them are exact; everything else is num.
+    """
+    return {
+        "ca": _aggregate(tables.ca),
+        "sa": _aggregate(tables.sa),
+        "la": _aggregate(tables.la),
+        "ld": _aggregate(tables.ld),
+        "tp": _aggregate(tables.tool),
+        "ct": _matrix(tables.ct),
+        "st": _matrix(tables.st),
+        "qp": _matrix(tables.qp, dnum_literal),
+        "vn": _matrix(tables.vn),
+        "dn": _aggregate(tables.dn),
+        "dnc": _aggregate(tables.dn / tables.mpc, dnum_literal),
+        "first": _aggregate(tables.first + 1, _int),
+        "count": _aggregate(tables.count, _int),
+        "spar": _aggregate(tables.spar, _int),
+        "om": _aggregate(tables.omega),
+        "pk": _aggregate(tables.pk, _int),
+        "pr": _aggregate(tables.pr, _int),
+        "tb": _aggregate(tables.errors.boundary_per_internal),
+        "nom": _aggregate(tables.nominal),
+        "pn": _aggregate(tables.names, _string),
+        "pu": _aggregate(tables.errors.units, _string),
+        "d2r": dnum_literal(math.pi / 180),
+        "mpc": dnum_literal(tables.mpc),
+    }
+
+
+def _check(robot: Robot, opt: RapidOptions) -> None:
+    """Raise naming every rule the inputs break."""
+    problems = opt.run.problems()
+    enc = robot.encoder
+    if enc.interface != "group":
+        problems.append(
+            f'{robot.source}: encoder.interface = "{enc.interface}": the RAPID module reads '
+            'the counter through a group input; give interface = "group"'
+        )
+    if enc.counter_bits != GROUP_COUNTER_BITS:
+        problems.append(
+            f"{robot.source}: encoder.counter_bits = {enc.counter_bits}: the RAPID module "
+            f"reads a {GROUP_COUNTER_BITS}-bit group input (GInputDnum); give "
+            f"counter_bits = {GROUP_COUNTER_BITS}"
+        )
+    problems += robot.program_problems()
+    if any(not 32 <= ord(ch) <= 126 or ch in '"\\' for ch in robot.name):
+        problems.append(
+            f"{robot.source}: name {robot.name!r}: the module writes it in a RAPID "
+            "string: printable ASCII without '\"' or '\\'; rename the robot"
+        )
+    if problems:
+        raise WirecalError(problems)
+
+
+def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) -> str:
+    """Return the module WIRECAL's text; raise :class:`WirecalError` if a rule would break.
+
+    A target within ``margin_deg`` of a joint limit, a wire length beyond the encoder's
+    range or a move into the cell is refused before anything is written.
+    """
+    check_limits(robot, plan, opt.margin_deg)
+    check_wire_range(robot, plan, opt.range_margin_mm)
+    check_cell(robot, plan)
+    _check(robot, opt)
+    tables = build_tables(robot, plan)
+    mpc = robot.encoder.mm_per_count
+    bits = GROUP_COUNTER_BITS
+    v_ori = float(np.min(robot.joint_speed_deg_s)) * opt.run.speed_pct / 100
+    context = {
+        "version": __version__,
+        "robot": robot.name,
+        "software": robot.controller.software,
+        "fingerprint": plan.fingerprint(),
+        "signal": signal_name(robot),
+        "log_dir": LOG_DIR,
+        "log_file": LOG_FILE,
+        "log_path": f"{LOG_DIR}/{LOG_FILE}",
+        "counter_bits": bits,
+        "half_range": str(2 ** (bits - 1)),
+        "full_range": str(2**bits),
+        "v_tcp": V_TCP_MM_S,
+        "v_ori": _fixed(v_ori, 3),
+        "settle": f"{opt.run.settle_s:g}",
+        "settle_3": f"{opt.run.settle_s:.3f}",
+        "log_version": LOG_VERSION,
+        "columns": ",".join(LOG_COLUMNS),
+        "interval": f"{READING_INTERVAL_S:g}",
+        "samples": opt.run.readings,
+        "mpc": repr(mpc),
+        "zero_tol": f"{opt.zero_tol_mm:g}",
+        "spread_tol": f"{opt.spread_tol_mm:g}",
+        "spread_counts": f"{np.floor(opt.spread_tol_mm / abs(mpc)):g}",
+        "theta0": joint_target(plan.theta0_deg, jointtarget),
+        "steps": run_steps(plan, tables.first, jointtarget),
+        "nsteps": len(plan.steps),
+        "npoints": plan.n_points,
+        "nreadings": len(plan.steps) + plan.n_points,
+        "solver": opt.solver,
+        "nit": STEP_ITERATIONS,
+        "n": tables.n,
+        "m": len(tables.names),
+    }
+    if opt.solver:
+        context["t"] = solver_tables(tables)
+    text = render("rapid/wirecal.mod.j2", **context)
+    _check_strings(text)
+    return text
+
+
+def _check_strings(text: str) -> None:
+    """Refuse a module with a string literal longer than RAPID's 80 characters."""
+    long = [
+        f"{MODULE_FILE}:{n}: a string of more than {STRING_MAX} characters"
+        for n, line in enumerate(text.splitlines(), 1)
+        for piece in line.split('"')[1::2]
+        if len(piece) > STRING_MAX
+    ]
+    if long:
+        raise WirecalError(["internal error: the generated module breaks a RAPID rule:", *long])
+
+
+def line_ends(text: str, crlf: bool = True) -> str:
+    """Return the module as it goes to the controller: CRLF line ends, or LF.
+
+    RobotStudio, on Windows, writes modules with CRLF; whether the controller needs them is
+    unconfirmed.
+    """
+    return text.replace("\n", "\r\n") if crlf else text
+
+
+def write_module(
+    out_dir: str | Path, text: str, *, crlf: bool = True, force: bool = False, inputs=()
+) -> Path:
+    """Write WIRECAL.mod into ``out_dir`` (created if missing); never over one of ``inputs``."""
+    path = Path(out_dir) / MODULE_FILE
+    with Outputs([path], force=force, inputs=inputs, folder=out_dir) as out:
+        out.put(path, line_ends(text, crlf))
+    return path

@@ -1,0 +1,725 @@
+r"""The RAPID checker: a module's problems, each ``SOURCE:LINE: what`` ([] = clean).
+
+It reads a module with :mod:`.parser` and checks what the controller would refuse when the
+module is loaded, for the subset of :mod:`.tables`: names declared before use (data,
+routines, predefined data; a group-input argument may name an I/O signal of the
+controller's configuration), reserved words and over-long names, types of every assignment,
+argument, operand and condition (num, dnum and string do not mix: a numeric literal takes
+the type it is used as), CONST data never assigned, instruction arguments (required ones in
+order, optional ones ``\Name`` known), a FUNC that returns a value, string literals of at
+most 80 characters and integer literals a num holds exactly. Constructs RAPID has and the
+subset does not (TRAP, RECORD, ERROR handlers, GOTO, robtarget, MoveL …) get "not in
+wirecal's RAPID subset", never "invalid". The interpreter reuses :class:`Typer` to know
+whether an expression is a num or a dnum.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from wirecal.lang.rapid import nodes as N
+from wirecal.lang.rapid import tables as T
+from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
+
+SUBSET = "not in wirecal's RAPID subset"
+
+
+@dataclass(frozen=True)
+class Type:
+    """A data type and its array sizes (``None``: a ``{*}`` parameter's open size)."""
+
+    name: str
+    dims: tuple[int | None, ...] = ()
+
+    def element(self) -> Type:
+        """Return the type of one element of this array."""
+        return Type(self.name)
+
+    def __str__(self) -> str:
+        """Write the type as RAPID does: ``num{3,6}``."""
+        if not self.dims:
+            return self.name
+        return self.name + "{" + ",".join("*" if d is None else str(d) for d in self.dims) + "}"
+
+
+NUM, DNUM, BOOL, STRING = Type("num"), Type("dnum"), Type("bool"), Type("string")
+UNKNOWN = Type("?")
+"""The type of data declared outside the subset (reported once, where it is declared)."""
+LITERAL = Type("numeric literal")
+"""A numeric literal (or an expression of literals only): a num or a dnum, as it is used."""
+
+
+@dataclass
+class Symbol:
+    """A data name in scope: its type and kind (VAR, PERS, CONST, INOUT, IN, FOR, PREDEF)."""
+
+    name: str
+    type: Type
+    kind: str
+
+
+@dataclass
+class Problems:
+    """The problems found, (line, message), in the order found."""
+
+    items: list[tuple[int, str]] = field(default_factory=list)
+
+    def add(self, line: int, message: str) -> None:
+        """Record one problem."""
+        self.items.append((line, message))
+
+
+def _components(type_name: str) -> dict[str, str]:
+    return {k.lower(): v for k, v in T.RECORDS.get(type_name, ())}
+
+
+class Typer:
+    """Types of expressions in one routine's scope (problems go to ``problems``)."""
+
+    def __init__(
+        self,
+        scope: dict[str, Symbol],
+        problems: Problems,
+        routines: dict[str, T.Routine],
+        line: int = 0,
+    ):
+        self.scope, self.problems, self.routines, self.line = scope, problems, routines, line
+        self.signals: set[str] = set()
+        self.software: tuple[int, ...] | None = None
+        self.external = False  # calls to routines not in the module are allowed
+
+    def symbol(self, name: str) -> Symbol | None:
+        """Return the data ``name`` refers to, or None (the problem reported)."""
+        sym = self.scope.get(name.lower())
+        if sym is None and T.other_data(name):
+            self.problems.add(self.line, f"{name}: RAPID's predefined data {SUBSET}")
+        elif sym is None:
+            what = (
+                "a routine, not data"
+                if name.lower() in self.routines
+                else "not declared in this module, nor data RAPID predefines"
+            )
+            self.problems.add(self.line, f"unknown data name {name} ({what})")
+        return sym
+
+    def root(self, e: N.Expr) -> N.Name | None:
+        """Return the data name at the root of ``e`` (a.b{1}.c → a), None if not data."""
+        while isinstance(e, N.Component | N.Index):
+            e = e.base
+        return e if isinstance(e, N.Name) else None
+
+    def type(self, e: N.Expr, want: Type | None = None) -> Type | None:  # noqa: C901
+        """Return the type of ``e`` (``want``: the type the context needs, for aggregates)."""
+        if isinstance(e, N.Num):
+            return LITERAL
+        if isinstance(e, N.Str):
+            if len(e.value) > T.STRING_MAX:
+                self.problems.add(
+                    self.line,
+                    f"a string of {len(e.value)} characters: a RAPID string holds at most "
+                    f"{T.STRING_MAX} (RAPID kernel, built-in data types: string)",
+                )
+            return STRING
+        if isinstance(e, N.Bool):
+            return BOOL
+        if isinstance(e, N.Name):
+            sym = self.symbol(e.name)
+            return sym.type if sym else None
+        if isinstance(e, N.Component):
+            return self._component(e)
+        if isinstance(e, N.Index):
+            return self._index(e)
+        if isinstance(e, N.Aggregate):
+            return self._aggregate(e, want)
+        if isinstance(e, N.Neg):
+            got = self.type(e.a)
+            if got is not None and got not in (NUM, DNUM, LITERAL, UNKNOWN):
+                self.problems.add(self.line, f"- of a {got}: a number is needed")
+            return got
+        if isinstance(e, N.Not):
+            self.expect(e.a, BOOL, "NOT's operand")
+            return BOOL
+        if isinstance(e, N.BinOp):
+            return self._binop(e)
+        return self.call(e.name, e.args, function=True)
+
+    def _component(self, e: N.Component) -> Type | None:
+        base = self.type(e.base)
+        if base is None or base == UNKNOWN:
+            return None
+        parts = _components(base.name) if not base.dims else {}
+        if e.field.lower() not in parts:
+            self.problems.add(self.line, f"{base} has no component {e.field}")
+            return None
+        return Type(parts[e.field.lower()])
+
+    def _index(self, e: N.Index) -> Type | None:
+        base = self.type(e.base)
+        for i in e.indices:
+            self.expect(i, NUM, "an array index")
+        if base is None or base == UNKNOWN:
+            return None
+        if len(e.indices) != len(base.dims):
+            self.problems.add(
+                self.line,
+                f"{len(e.indices)} index(es) to an array of {len(base.dims)} dimension(s)",
+            )
+            return None
+        for i, size in zip(e.indices, base.dims, strict=True):
+            if isinstance(i, N.Num) and size is not None and not 1 <= i.value <= size:
+                self.problems.add(self.line, f"index {i.value:g} outside 1..{size}")
+        return base.element()
+
+    def _aggregate(self, e: N.Aggregate, want: Type | None) -> Type | None:
+        if want == UNKNOWN:
+            return None
+        if want is None:
+            self.problems.add(self.line, "an aggregate [...] where its type is not known")
+            return None
+        if want.dims:
+            if want.dims[0] is not None and len(e.items) != want.dims[0]:
+                self.problems.add(
+                    self.line, f"{len(e.items)} values for an array of {want.dims[0]}"
+                )
+            inner = Type(want.name, want.dims[1:])
+            for item in e.items:
+                self.expect(item, inner, "an array element")
+            return want
+        parts = T.RECORDS.get(want.name)
+        if parts is None:
+            self.problems.add(self.line, f"an aggregate [...] for a {want}")
+            return None
+        if len(parts) != len(e.items):
+            self.problems.add(
+                self.line, f"{len(e.items)} values for a {want}, which has {len(parts)} components"
+            )
+            return want
+        for item, (name, type_name) in zip(e.items, parts, strict=True):
+            self.expect(item, Type(type_name), f"component {name} of {want}")
+        return want
+
+    def _binop(self, e: N.BinOp) -> Type | None:
+        a, b = self.type(e.a), self.type(e.b)
+        if a is None or b is None:
+            return None
+        if UNKNOWN in (a, b):
+            return UNKNOWN
+        op = e.op
+        if op in ("AND", "OR", "XOR"):
+            for _side, got in ((e.a, a), (e.b, b)):
+                if got != BOOL:
+                    self.problems.add(self.line, f"{op} of a {got}: bool is needed")
+            return BOOL
+        if op == "+" and a == b == STRING:
+            return STRING
+        if op in ("=", "<>") and a == b and a not in (LITERAL,) and not a.dims:
+            return BOOL
+        both = self.numeric(a, b, op, e)
+        if both is None:
+            return None
+        return BOOL if op in ("=", "<>", "<", ">", "<=", ">=") else both
+
+    def numeric(self, a: Type, b: Type, op: str, e: N.BinOp) -> Type | None:
+        """Return the type two numeric operands combine to (num, dnum or a literal)."""
+        for got in (a, b):
+            if got not in (NUM, DNUM, LITERAL):
+                self.problems.add(self.line, f"{a} {op} {b}: {op} needs two numbers of one type")
+                return None
+        if LITERAL in (a, b):
+            typed = b if a == LITERAL else a
+            if typed == NUM:
+                self.literal_fits(e.a if a == LITERAL else e.b, NUM)
+            return typed
+        if a != b:
+            self.problems.add(
+                self.line,
+                f"num and dnum mixed ({a} {op} {b}): convert one with NumToDnum or DnumToNum",
+            )
+            return None
+        return a
+
+    def literal_fits(self, e: N.Expr, want: Type) -> None:
+        """Report the integer literals of ``e`` a num does not hold exactly."""
+        if want != NUM:
+            for lit in _literals(e):
+                if math.isinf(lit.value):
+                    self.problems.add(self.line, f"a literal beyond a {want}'s range")
+            return
+        for lit in _literals(e):
+            if lit.integer and not T.NUM_EXACT[0] <= lit.value <= T.NUM_EXACT[1]:
+                self.problems.add(
+                    self.line,
+                    f"the integer {int(lit.value)} is beyond what a num holds exactly "
+                    f"({T.NUM_EXACT[0]}..{T.NUM_EXACT[1]}, RAPID kernel, built-in data types: "
+                    "num); declare the data dnum",
+                )
+            elif abs(lit.value) > 3.4028234663852886e38:
+                self.problems.add(self.line, "a literal beyond a num's range (±3.4E38)")
+
+    def expect(self, e: N.Expr, want: Type, what: str) -> None:
+        """Report ``e`` unless it is of type ``want`` (a literal fits a num or a dnum)."""
+        got = self.type(e, want)
+        if got is None or UNKNOWN in (got, want):
+            return
+        if got == LITERAL and want in (NUM, DNUM):
+            self.literal_fits(e, want)
+            return
+        if got == want or (
+            got.name == want.name
+            and len(got.dims) == len(want.dims)
+            and all(w is None or g == w for g, w in zip(got.dims, want.dims, strict=True))
+        ):
+            return
+        hint = ": convert with NumToDnum or DnumToNum" if {got, want} == {NUM, DNUM} else ""
+        if got == LITERAL:
+            got = Type("number")
+        self.problems.add(self.line, f"{what} is a {want}, not a {got}{hint}")
+
+    def call(self, name: str, args: list[N.Arg], function: bool) -> Type | None:
+        """Check a call of ``name`` (a function when ``function``); return its result type."""
+        key = name.lower()
+        routine = self.routines.get(key) or (T.FUNCTIONS if function else T.INSTRUCTIONS).get(key)
+        if routine is None and self.external and key not in T.OTHER_ROUTINES:
+            for a in args:  # a routine of another module: its arguments are still read
+                if a.value is not None and self.root(a.value) is None:
+                    self.type(a.value)
+            return UNKNOWN
+        if routine is None or (routine.returns is None) == function:
+            self._unknown(name, function, routine)
+            return None
+        self.arguments(name, routine, args)
+        if self.software is not None and _version(routine.since) > self.software:
+            self.problems.add(
+                self.line,
+                f"{name} needs RobotWare {routine.since} (the controller has "
+                f"{'.'.join(map(str, self.software))})",
+            )
+        return Type(routine.returns) if routine.returns else None
+
+    def _unknown(self, name: str, function: bool, routine: T.Routine | None) -> None:
+        key, kind = name.lower(), "function" if function else "instruction"
+        if routine is not None:
+            other = "a FUNC: call it in an expression" if routine.returns else "a PROC"
+            self.problems.add(
+                self.line,
+                f"{name} is {other}, not an {kind}"
+                if kind == "instruction"
+                else f"{name} is {other}, not a {kind}",
+            )
+        elif key in T.OTHER_ROUTINES or key in (T.FUNCTIONS if not function else T.INSTRUCTIONS):
+            self.problems.add(self.line, f"{name}: a RAPID {kind} {SUBSET}")
+        else:
+            self.problems.add(
+                self.line,
+                f"unknown {kind} {name} (neither RAPID's, in wirecal's table, nor a "
+                f"{'FUNC' if function else 'PROC'} of this module)",
+            )
+
+    def arguments(self, name: str, routine: T.Routine, args: list[N.Arg]) -> None:
+        """Match ``args`` to ``routine``'s parameters: required in order, optional by name."""
+        required = [p for p in routine.params if not p.optional]
+        optional = {p.name.lower(): p for p in routine.params if p.optional}
+        positional = [a for a in args if a.name is None]
+        if len(positional) != len(required):
+            self.problems.add(
+                self.line,
+                f"{name} takes {len(required)} argument(s) "
+                f"({', '.join(p.name for p in required) or 'none'}), "
+                f"given {len(positional)}",
+            )
+        for p, a in zip(required, positional, strict=False):
+            self.argument(name, p, a)
+        seen: set[str] = set()
+        for a in args:
+            if a.name is None:
+                continue
+            opt = optional.get(a.name.lower())
+            if opt is None or a.name.lower() in seen:
+                why = "given twice" if opt else "no such optional argument"
+                self.problems.add(self.line, f"{name} \\{a.name}: {why}")
+                continue
+            seen.add(a.name.lower())
+            if (opt.type == "switch") != (a.value is None):
+                need = "takes no value" if opt.type == "switch" else f"needs := a {opt.type}"
+                self.problems.add(self.line, f"{name} \\{a.name} {need}")
+            elif a.value is not None:
+                self.argument(name, opt, a)
+
+    def argument(self, name: str, p: T.P, a: N.Arg) -> None:
+        """Check one argument against its parameter."""
+        assert a.value is not None
+        if p.type == "signalgi":
+            self._signal(name, a.value)
+            return
+        if p.type == "optional parameter":
+            sym = self.scope.get(a.value.name.lower()) if isinstance(a.value, N.Name) else None
+            if sym is None or sym.kind != "OPT":
+                self.problems.add(self.line, f"{name} takes an optional parameter's name")
+            return
+        if p.type in ("zonedata", "tooldata", "wobjdata"):
+            self._predefined(name, p, a.value)
+            return
+        if p.var:
+            self.writable(a.value, f"{name}'s {p.name}")
+        self.expect(a.value, _param_type(p), f"{name}'s {p.name}")
+
+    def _signal(self, name: str, e: N.Expr) -> None:
+        if not isinstance(e, N.Name) or e.name.lower() in self.scope:
+            self.problems.add(
+                self.line, f"{name}'s Signal is the name of a group input signal (signalgi)"
+            )
+            return
+        self.signals.add(e.name)
+
+    def _predefined(self, name: str, p: T.P, e: N.Expr) -> None:
+        known = [k for k, v in T.PREDEFINED.items() if v == p.type]
+        sym = self.scope.get(e.name.lower()) if isinstance(e, N.Name) else None
+        if sym is not None and sym.type == UNKNOWN:
+            return
+        if not isinstance(e, N.Name) or e.name.lower() not in known:
+            self.problems.add(
+                self.line,
+                f"{name}'s {p.name}: wirecal's subset takes a predefined {p.type} "
+                f"({', '.join(known[:4])}…), {SUBSET} otherwise",
+            )
+
+    def writable(self, e: N.Expr, what: str) -> bool:
+        """Report ``e`` unless it is a variable the program may write."""
+        root = self.root(e)
+        if root is None:
+            self.problems.add(self.line, f"{what} must be a variable, not an expression")
+            return False
+        sym = self.scope.get(root.name.lower())
+        if sym is None:
+            return True  # type() reports it
+        if sym.kind in ("CONST", "PREDEF", "FOR"):
+            self.problems.add(
+                self.line,
+                f"{root.name} is {_KIND_WORDS[sym.kind]}: it cannot be assigned",
+            )
+            return False
+        return True
+
+
+_KIND_WORDS = {"CONST": "a CONST", "PREDEF": "predefined data", "FOR": "a FOR loop variable"}
+
+
+def _param_type(p: T.P) -> Type:
+    return Type(p.type)
+
+
+def _literals(e: N.Expr) -> list[N.Num]:
+    """Return the numeric literals of an expression."""
+    if isinstance(e, N.Num):
+        return [e]
+    if isinstance(e, N.Neg):
+        return _literals(e.a)
+    if isinstance(e, N.BinOp):
+        return _literals(e.a) + _literals(e.b)
+    return []
+
+
+class Checker:
+    """Check one module (see the module docstring)."""
+
+    def __init__(
+        self,
+        module: N.Module,
+        software: str | None = None,
+        task: tuple[N.Module, ...] = (),
+        external_calls: bool = False,
+    ):
+        self.module, self.problems, self.task = module, Problems(), task
+        self.external_calls = external_calls
+        self.software = _version(software) if software else None
+        self.globals: dict[str, Symbol] = {
+            k: Symbol(k, Type(v), "PREDEF") for k, v in T.PREDEFINED.items()
+        }
+        self.user: dict[str, T.Routine] = {}
+        self.signals: set[str] = set()
+        self.own_types = {u.name.lower() for m in (module, *task) for u in m.unsupported if u.name}
+        self.sizes: dict[str, int] = {}
+
+    def run(self) -> list[tuple[int, str]]:
+        """Check the module; return its problems sorted by line."""
+        m = self.module
+        self.name(m.name, 1, "module")
+        for attr in m.attrs:
+            if attr.upper() not in T.MODULE_ATTRIBUTES:
+                self.problems.add(1, f"unknown module attribute {attr}")
+        for u in m.unsupported:
+            self.problems.add(u.line, f"{u.what}: {SUBSET}")
+        self.declare_task()
+        for r in m.routines:
+            self.signature(r)
+        typer = Typer(self.globals, self.problems, self.user)
+        for d in m.data:
+            self.declare(d, self.globals, typer)
+        for r in m.routines:
+            self.routine(r)
+        return sorted(set(self.problems.items))
+
+    def declare_task(self) -> None:
+        """Declare the global data and routines of the task's other modules (not checked)."""
+        checked, self.problems = self.problems, Problems()
+        typer = Typer(self.globals, self.problems, self.user)
+        for other in self.task:
+            for r in other.routines:
+                if not r.local:
+                    self.signature(r)
+            for d in other.data:
+                if not d.local:
+                    self.declare(d, self.globals, typer)
+        self.problems = checked
+
+    def name(self, name: str, line: int, what: str) -> None:
+        """Report a reserved word or an over-long identifier used as a name."""
+        if name.upper() in T.RESERVED:
+            self.problems.add(line, f"{name} is a RAPID reserved word: it cannot name a {what}")
+        if len(name) > T.NAME_MAX:
+            self.problems.add(
+                line, f"the name {name} has {len(name)} characters: RAPID takes {T.NAME_MAX}"
+            )
+
+    def data_type(self, type_name: str, dims: list[int | None], line: int) -> Type | None:
+        """Return the declared type, or None (reported) outside the subset."""
+        key = type_name.lower()
+        if key in T.SUBSET_TYPES:
+            return Type(key, tuple(dims))
+        if key in T.OTHER_TYPES:
+            self.problems.add(line, f"the data type {type_name}: {SUBSET}")
+        elif key in self.own_types:
+            self.problems.add(line, f"data of the type {type_name} (this module's): {SUBSET}")
+        else:
+            self.problems.add(
+                line, f"unknown data type {type_name} (neither RAPID's nor a RECORD of this module)"
+            )
+        return None
+
+    def declare(self, d: N.Data, scope: dict[str, Symbol], typer: Typer) -> None:
+        """Check one declaration and add it to ``scope``."""
+        typer.line = d.line
+        self.name(d.name, d.line, "data")
+        sizes = [self.size(x, d.line) for x in d.dims]
+        dtype = self.data_type(d.type, sizes, d.line)
+        if d.name.lower() in scope and scope[d.name.lower()].kind != "PREDEF":
+            self.problems.add(d.line, f"{d.name} is declared twice")
+        if dtype is None:
+            scope[d.name.lower()] = Symbol(d.name, UNKNOWN, d.storage)
+            return
+        if d.init is not None:
+            if dtype.name in T.OPAQUE:
+                self.problems.add(d.line, f"a {dtype.name} takes no initial value")
+            else:
+                typer.expect(d.init, dtype, f"the initial value of {d.name}")
+        elif d.storage == "CONST":
+            self.problems.add(d.line, f"the CONST {d.name} needs a value (:= …)")
+        if d.storage == "CONST" and dtype == NUM and isinstance(d.init, N.Num) and d.init.integer:
+            self.sizes[d.name.lower()] = int(d.init.value)
+        if d.storage == "CONST" and dtype.name in T.OPAQUE:
+            self.problems.add(d.line, f"a {dtype.name} cannot be a CONST")
+        scope[d.name.lower()] = Symbol(d.name, dtype, d.storage)
+
+    def size(self, e: N.Expr, line: int) -> int | None:
+        """Return an array size: a positive integer literal, or a CONST num of one."""
+        if isinstance(e, N.Name) and e.name.lower() in self.sizes:
+            return self.sizes[e.name.lower()]
+        if isinstance(e, N.Num) and e.integer and e.value >= 1:
+            return int(e.value)
+        self.problems.add(
+            line, "an array size must be a positive integer, or a CONST num declared as one"
+        )
+        return None
+
+    def signature(self, r: N.Routine) -> None:
+        """Check a routine's name and parameters; record its signature."""
+        self.name(r.name, r.line, "routine")
+        key = r.name.lower()
+        if key in self.user:
+            self.problems.add(r.line, f"the routine {r.name} is defined twice")
+        if key in T.INSTRUCTIONS or key in T.FUNCTIONS:
+            self.problems.add(r.line, f"{r.name} is a RAPID routine's name: rename it")
+        if r.kind == "TRAP":
+            self.problems.add(r.line, f"TRAP routines (interrupts): {SUBSET}")
+        params = []
+        for p in r.params:
+            self.name(p.name, p.line, "parameter")
+            if p.mode == "PERS" or (p.mode == "VAR" and not p.optional):
+                self.problems.add(p.line, f"a {p.mode} parameter: {SUBSET} (use INOUT)")
+            ptype = p.type.lower()
+            if ptype not in T.SUBSET_TYPES and not (ptype == "switch" and p.optional):
+                self.data_type(p.type, [], p.line)
+            params.append(T.P(p.name, ptype, p.optional, p.mode == "INOUT"))
+        rtype = None
+        if r.kind == "FUNC":
+            assert r.type is not None
+            rtype = r.type.lower()
+            self.data_type(r.type, [], r.line)
+        self.user[key] = T.Routine(tuple(params), rtype, "this module")
+
+    def routine(self, r: N.Routine) -> None:
+        """Check a routine's body in its scope."""
+        scope = dict(self.globals)
+        for p in r.params:
+            kind = "OPT" if p.optional else "INOUT" if p.mode == "INOUT" else "IN"
+            known = p.type.lower() in T.SUBSET_TYPES
+            ptype = Type(p.type.lower(), (None,) * p.dims) if known else UNKNOWN
+            scope[p.name.lower()] = Symbol(p.name, ptype, kind)
+        typer = Typer(scope, self.problems, self.user, r.line)
+        typer.software, typer.external = self.software, self.external_calls
+        if r.handler is not None:
+            self.problems.add(r.line, f"an ERROR handler: {SUBSET}")
+        self.body(r.body, typer, r)
+        self.signals |= typer.signals
+        if r.kind == "FUNC" and not any(isinstance(s, N.Return) for s in _walk(r.body)):
+            self.problems.add(r.line, f"the FUNC {r.name} has no RETURN: it must return a {r.type}")
+
+    def body(self, stmts: list[N.Stmt], typer: Typer, r: N.Routine) -> None:
+        """Check statements in order."""
+        for s in stmts:
+            typer.line = s.line
+            self.stmt(s, typer, r)
+
+    def stmt(self, s: N.Stmt, typer: Typer, r: N.Routine) -> None:  # noqa: C901
+        """Check one statement."""
+        if isinstance(s, N.Data):
+            if s.storage == "PERS":
+                self.problems.add(s.line, "PERS data cannot be declared in a routine")
+            self.declare(s, typer.scope, typer)
+        elif isinstance(s, N.Assign):
+            if typer.writable(s.target, "the left of :="):
+                want = typer.type(s.target)
+                if want is not None:
+                    typer.expect(s.value, want, f"{_text(s.target)}")
+        elif isinstance(s, N.Call):
+            typer.call(s.name, s.args, function=False)
+        elif isinstance(s, N.If):
+            for cond, body in s.branches:
+                typer.line = s.line
+                typer.expect(cond, BOOL, "an IF condition")
+                self.body(body, typer, r)
+            self.body(s.orelse, typer, r)
+        elif isinstance(s, N.For):
+            self.loop(s, typer, r)
+        elif isinstance(s, N.While):
+            typer.expect(s.cond, BOOL, "a WHILE condition")
+            self.body(s.body, typer, r)
+        elif isinstance(s, N.Test):
+            self.test(s, typer, r)
+        elif isinstance(s, N.Return):
+            self.ret(s, typer, r)
+        elif isinstance(s, N.Unsupported):
+            self.problems.add(s.line, f"{s.what}: {SUBSET}")
+
+    def loop(self, s: N.For, typer: Typer, r: N.Routine) -> None:
+        """Check a FOR loop: its variable is its own num, read-only in the body."""
+        for e in (s.start, s.stop, *([s.step] if s.step else [])):
+            typer.expect(e, NUM, "a FOR bound")
+        self.name(s.var, s.line, "loop variable")
+        saved = typer.scope.get(s.var.lower())
+        typer.scope[s.var.lower()] = Symbol(s.var, NUM, "FOR")
+        self.body(s.body, typer, r)
+        if saved is None:
+            del typer.scope[s.var.lower()]
+        else:
+            typer.scope[s.var.lower()] = saved
+
+    def test(self, s: N.Test, typer: Typer, r: N.Routine) -> None:
+        """TEST: each CASE value of the tested expression's type."""
+        got = typer.type(s.expr)
+        for values, body in s.cases:
+            typer.line = s.line
+            for v in values:
+                if got is not None:
+                    typer.expect(v, NUM if got == LITERAL else got, "a CASE value")
+            self.body(body, typer, r)
+        self.body(s.default, typer, r)
+
+    def ret(self, s: N.Return, typer: Typer, r: N.Routine) -> None:
+        """RETURN: a value in a FUNC (of its type), none in a PROC."""
+        if r.kind == "FUNC" and s.value is None:
+            self.problems.add(s.line, f"RETURN in the FUNC {r.name} needs a {r.type} value")
+        elif r.kind != "FUNC" and s.value is not None:
+            self.problems.add(s.line, f"RETURN with a value in the {r.kind} {r.name}")
+        elif s.value is not None and r.type is not None:
+            typer.expect(s.value, Type(r.type.lower()), f"the value {r.name} returns")
+
+
+def _text(e: N.Expr) -> str:
+    if isinstance(e, N.Name):
+        return e.name
+    if isinstance(e, N.Component):
+        return f"{_text(e.base)}.{e.field}"
+    if isinstance(e, N.Index):
+        return f"{_text(e.base)}{{…}}"
+    return "the value"
+
+
+def _walk(stmts: list[N.Stmt]):
+    for s in stmts:
+        yield s
+        if isinstance(s, N.If):
+            for _, body in s.branches:
+                yield from _walk(body)
+            yield from _walk(s.orelse)
+        elif isinstance(s, N.For | N.While):
+            yield from _walk(s.body)
+        elif isinstance(s, N.Test):
+            for _, body in s.cases:
+                yield from _walk(body)
+            yield from _walk(s.default)
+
+
+def check(
+    text: str, source: str, software: str | None = None, *, external_calls: bool = False
+) -> list[str]:
+    """Return the problems of a module's text, each ``SOURCE:LINE: what`` ([] = clean).
+
+    ``external_calls``: calls of routines the module does not define (nor RAPID) are taken
+    as routines of another module of the task, their arguments unchecked.
+    """
+    return check_task({source: text}, software, external_calls=external_calls)
+
+
+def check_task(
+    texts: Mapping[str, str], software: str | None = None, *, external_calls: bool = False
+) -> list[str]:
+    """Check the modules of one task (file name → text) together.
+
+    Each module sees the global data and routines of the others (RAPID's task scope); the
+    problems are each module's own, ``SOURCE:LINE: what``.
+    """
+    version = _software(software) if software is not None else []
+    modules: dict[str, N.Module] = {}
+    out = [f"{source}:{line}: {m}" for source in list(texts)[:1] for line, m in version]
+    for source, text in texts.items():
+        try:
+            modules[source] = parse_module(text)
+        except SyntaxProblem as e:
+            out.append(f"{source}:{e.line}: {e.message}")
+    for source, module in modules.items():
+        task = tuple(m for s, m in modules.items() if s != source)
+        checker = Checker(module, None if version else software, task, external_calls)
+        out += [f"{source}:{line}: {m}" for line, m in checker.run()]
+    return out
+
+
+def _version(text: str) -> tuple[int, ...]:
+    """Return a RobotWare version as numbers ("6.13.02" → (6, 13, 2)); junk parts read 0."""
+    return tuple(int(p) if p.isdigit() else 0 for p in text.strip().split("."))
+
+
+def _software(software: str) -> list[tuple[int, str]]:
+    """RobotWare 6 (IRC5) and 7 (OmniCore) run the subset; refuse anything else by name."""
+    major = software.strip().split(".")[0]
+    if major in ("6", "7"):
+        return []
+    return [
+        (
+            1,
+            f'software = "{software}": wirecal\'s RAPID is written for RobotWare 6 (IRC5) '
+            "and 7 (OmniCore)",
+        )
+    ]

@@ -1,0 +1,410 @@
+"""The RAPID front end: a ``.mod`` file's text → the syntax tree of :mod:`.nodes`.
+
+The grammar (``rapid.lark``) follows the RAPID kernel's syntax as ABB's "Technical
+reference manual - RAPID kernel" (3HAC050946, RobotWare 6) and "RAPID overview" describe it;
+what was read and what is unconfirmed is in :mod:`.tables`. A syntax error becomes one
+problem ``SOURCE:LINE: what``; a block left open names the END keyword it lacks.
+
+Operators bind, tightest first: ``* / DIV MOD``, ``+ -``, comparisons, ``NOT``, ``AND``,
+``OR XOR`` (RAPID kernel, expressions: unconfirmed — where NOT falls is wirecal's reading).
+Blocks deeper than :data:`MAX_BLOCK_DEPTH` and brackets deeper than
+:data:`MAX_BRACKET_DEPTH` are refused before parsing (the tree is built recursively).
+"""
+
+from __future__ import annotations
+
+import re
+from functools import cache
+from importlib import resources
+
+from lark import Lark, Token, Transformer, v_args
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
+
+from wirecal.lang.rapid import nodes as N
+from wirecal.lang.rapid.tables import RESERVED
+
+_ENDS = {
+    "ENDPROC": "PROC",
+    "ENDFUNC": "FUNC",
+    "ENDTRAP": "TRAP",
+    "ENDIF": "IF",
+    "ENDFOR": "FOR",
+    "ENDWHILE": "WHILE",
+    "ENDTEST": "TEST",
+    "ENDMODULE": "MODULE",
+    "ENDRECORD": "RECORD",
+}
+
+
+class SyntaxProblem(Exception):
+    """A module the grammar does not read: ``line`` and ``message``."""
+
+    def __init__(self, line: int, message: str):
+        super().__init__(message)
+        self.line, self.message = line, message
+
+
+@cache
+def _parser() -> Lark:
+    grammar = resources.files(__package__).joinpath("rapid.lark").read_text(encoding="utf-8")
+    return Lark(
+        grammar, parser="lalr", lexer="basic", propagate_positions=True, maybe_placeholders=True
+    )
+
+
+def _string(text: str) -> str:
+    r"""Resolve a RAPID string literal's escapes: ``""`` is ", ``\\`` is \, ``\hh`` a code."""
+    body, out, i = text[1:-1], [], 0
+    while i < len(body):
+        if body[i] == '"':
+            out.append('"')
+            i += 2
+        elif body[i] == "\\" and body[i + 1] == "\\":
+            out.append("\\")
+            i += 2
+        elif body[i] == "\\":
+            out.append(chr(int(body[i + 1 : i + 3], 16)))
+            i += 3
+        else:
+            out.append(body[i])
+            i += 1
+    return "".join(out)
+
+
+@v_args(meta=True)
+class _Build(Transformer):
+    """The lark tree → nodes (rules get their source line through ``meta``)."""
+
+    def NAME(self, t: Token) -> str:
+        return str(t)
+
+    def number(self, meta, c):
+        text = str(c[0])
+        return N.Num(float(text), text.isdigit())
+
+    def string(self, meta, c):
+        return N.Str(_string(str(c[0])))
+
+    def boolean(self, meta, c):
+        return N.Bool(str(c[0]).upper() == "TRUE")
+
+    def name(self, meta, c):
+        return N.Name(c[0])
+
+    def component(self, meta, c):
+        return N.Component(c[0], c[1])
+
+    def index(self, meta, c):
+        return N.Index(c[0], c[1:])
+
+    def aggregate(self, meta, c):
+        return N.Aggregate(list(c))
+
+    def binop(self, meta, c):
+        op = str(c[1])
+        return N.BinOp(op.upper() if op.isalpha() else op, c[0], c[2])
+
+    def signed(self, meta, c):
+        return N.Neg(c[1]) if str(c[0]) == "-" else c[1]
+
+    def not_op(self, meta, c):
+        return N.Not(c[1])
+
+    def funcall(self, meta, c):
+        return N.FuncCall(c[0], c[1] or [])
+
+    def args(self, meta, c):
+        return list(c)
+
+    def arg(self, meta, c):
+        return N.Arg(c[0])
+
+    def named_arg(self, meta, c):
+        raise SyntaxProblem(
+            meta.line, f"{c[0]} := …: a named required argument is not in wirecal's RAPID subset"
+        )
+
+    def opt_arg(self, meta, c):
+        return N.Arg(c[1], c[0])
+
+    def mode(self, meta, c):
+        return str(c[0]).upper()
+
+    storage = mode
+
+    def dims(self, meta, c):
+        return list(c)
+
+    def data_decl(self, meta, c):
+        scope, storage, type_, name, dims, init = c
+        local = str(scope or "").upper() == "LOCAL"
+        return N.Data(storage, type_, name, dims or [], init, meta.line, local)
+
+    def component_sel(self, meta, c):
+        return ("component", c[0])
+
+    def index_sel(self, meta, c):
+        return ("index", list(c))
+
+    def target(self, meta, c):
+        node: N.Expr = N.Name(c[0])
+        for kind, what in c[1:]:
+            node = N.Component(node, what) if kind == "component" else N.Index(node, what)
+        return node
+
+    def assign(self, meta, c):
+        return N.Assign(c[0], c[1], meta.line)
+
+    def call_stmt(self, meta, c):
+        return N.Call(c[0], c[1] or [], meta.line)
+
+    def elseif(self, meta, c):
+        return (c[0], list(c[1:]))
+
+    def else_part(self, meta, c):
+        return ("else", list(c))
+
+    def if_stmt(self, meta, c):
+        cond, *rest = [x for x in c if x is not None]
+        body = [s for s in rest if not isinstance(s, tuple)]
+        branches = [(cond, body)] + [b for b in rest if isinstance(b, tuple) and b[0] != "else"]
+        orelse = next((b[1] for b in rest if isinstance(b, tuple) and b[0] == "else"), [])
+        return N.If(branches, orelse, meta.line)
+
+    def compact_if(self, meta, c):
+        return N.If([(c[0], [c[1]])], [], meta.line)
+
+    def for_stmt(self, meta, c):
+        var, start, stop, step, *body = c
+        return N.For(var, start, stop, step, body, meta.line)
+
+    def while_stmt(self, meta, c):
+        return N.While(c[0], list(c[1:]), meta.line)
+
+    def case(self, meta, c):
+        values = [x for x in c if not isinstance(x, N.Stmt)]
+        return (values, [x for x in c if isinstance(x, N.Stmt)])
+
+    def default(self, meta, c):
+        return ("default", list(c))
+
+    def test_stmt(self, meta, c):
+        expr, *rest = [x for x in c if x is not None]
+        cases = [x for x in rest if isinstance(x, tuple) and x[0] != "default"]
+        default = next((x[1] for x in rest if isinstance(x, tuple) and x[0] == "default"), [])
+        return N.Test(expr, cases, default, meta.line)
+
+    def return_stmt(self, meta, c):
+        return N.Return(c[0], meta.line)
+
+    def exit_stmt(self, meta, c):
+        return N.Exit(meta.line)
+
+    def other_stmt(self, meta, c):
+        return N.Unsupported(str(c[0]).upper(), meta.line)
+
+    def connect_stmt(self, meta, c):
+        return N.Unsupported("CONNECT (interrupts)", meta.line)
+
+    def label(self, meta, c):
+        return N.Unsupported(f"the label {c[0]}: (GOTO)", meta.line)
+
+    def handler(self, meta, c):
+        return ("handler", str(c[0]).upper(), [x for x in c[1:] if isinstance(x, N.Stmt)])
+
+    def body(self, meta, c):
+        return [s for s in c if isinstance(s, N.Stmt)], [h for h in c if isinstance(h, tuple)]
+
+    def _routine(self, kind, name, type_, params, body, line, local):
+        stmts, handlers = body
+        out = N.Routine(kind, name, type_, params or [], stmts, None, line, local is not None)
+        for _, which, handler in handlers:
+            if which == "ERROR":
+                out.handler = handler
+            else:
+                out.body.append(N.Unsupported(f"a {which} handler", line))
+        return out
+
+    def proc(self, meta, c):
+        return self._routine("PROC", c[1], None, c[2], c[3], meta.line, c[0])
+
+    def func(self, meta, c):
+        return self._routine("FUNC", c[2], c[1], c[3], c[4], meta.line, c[0])
+
+    def trap(self, meta, c):
+        return self._routine("TRAP", c[1], None, None, c[2], meta.line, c[0])
+
+    def params(self, meta, c):
+        return list(c)
+
+    def pdims(self, meta, c):
+        return sum(str(t) == "*" for t in c)
+
+    def param(self, meta, c):
+        mode, type_, name, dims = c
+        return N.Param(name, type_, mode or "", False, int(dims or 0), meta.line)
+
+    def opt_param(self, meta, c):
+        mode, type_, name, dims, *alternatives = c
+        param = N.Param(name, type_, mode or "", True, int(dims or 0), meta.line)
+        if alternatives:
+            raise SyntaxProblem(
+                meta.line,
+                f"\\{name} | …: mutually exclusive parameters are not in wirecal's RAPID subset",
+            )
+        return param
+
+    def record(self, meta, c):
+        return N.Unsupported(f"RECORD {c[0]} (a user-defined record type)", meta.line, c[0])
+
+    def data_field(self, meta, c):
+        return None
+
+    def alias(self, meta, c):
+        return N.Unsupported(f"ALIAS {c[1]} (an alias type)", meta.line, c[1])
+
+    def attrs(self, meta, c):
+        return list(c)
+
+    def module(self, meta, c):
+        name, attrs, *items = c
+        module = N.Module(name, attrs or [], [], [])
+        for item in items:
+            if isinstance(item, N.Data):
+                module.data.append(item)
+            elif isinstance(item, N.Routine):
+                module.routines.append(item)
+            else:
+                module.unsupported.append(item)
+        return module
+
+    def start(self, meta, c):
+        return c[0]
+
+
+MAX_BLOCK_DEPTH = 64
+"""Deepest nesting of blocks (IF, FOR, WHILE, TEST) wirecal reads; wirecal's bound, far
+beyond its modules (the controller's own limit is unconfirmed)."""
+
+MAX_BRACKET_DEPTH = 100
+"""Deepest nesting of parentheses and brackets wirecal reads (wirecal's bound)."""
+
+
+def _too_deep(text: str) -> SyntaxProblem | None:
+    """Refuse up front what is nested deeper than the bounds (the parser recurses per level)."""
+    blocks: list[int] = []
+    brackets = 0
+    for number, source_line in enumerate(text.splitlines(), 1):
+        for m in _TOKEN.finditer(source_line):
+            word = m.group().upper()
+            if word in ("(", "[", "{"):
+                brackets += 1
+                if brackets > MAX_BRACKET_DEPTH:
+                    return SyntaxProblem(
+                        number, f"brackets nested more than {MAX_BRACKET_DEPTH} deep"
+                    )
+            elif word in (")", "]", "}"):
+                brackets -= 1
+            elif word in ("THEN", "FOR", "WHILE", "TEST"):
+                blocks.append(number)
+                if len(blocks) > MAX_BLOCK_DEPTH:
+                    return SyntaxProblem(
+                        number,
+                        f"blocks nested more than {MAX_BLOCK_DEPTH} deep: wirecal reads at most "
+                        f"{MAX_BLOCK_DEPTH}",
+                    )
+            elif word in ("ENDIF", "ENDFOR", "ENDWHILE", "ENDTEST") and blocks:
+                blocks.pop()
+    return None
+
+
+_TOKEN = re.compile(r'"(?:[^"\n]|"")*"|![^\n]*|[A-Za-z][A-Za-z0-9_]*|[()\[\]{}]')
+
+
+def parse_module(text: str) -> N.Module:
+    """Parse one module's text; raise :class:`SyntaxProblem` where the grammar stops."""
+    deep = _too_deep(text)
+    if deep is not None:
+        raise deep
+    try:
+        tree = _parser().parse(text)
+    except UnexpectedToken as e:
+        raise SyntaxProblem(
+            e.line if e.line > 0 else _last_line(text), _unexpected(e, text)
+        ) from None
+    except UnexpectedCharacters as e:
+        what = (
+            "a string not closed on its line"
+            if e.char == '"'
+            else f"unexpected character {e.char!r}"
+        )
+        raise SyntaxProblem(e.line, what) from None
+    except UnexpectedEOF:
+        raise SyntaxProblem(_last_line(text), _missing(text, 0, "the end of the file")) from None
+    try:
+        return _Build().transform(tree)
+    except Exception as e:  # lark wraps a SyntaxProblem raised in a callback
+        inner = getattr(e, "orig_exc", e)
+        if isinstance(inner, SyntaxProblem):
+            raise inner from None
+        raise
+
+
+def _last_line(text: str) -> int:
+    return max(1, text.rstrip().count("\n") + 1)
+
+
+def _unexpected(e: UnexpectedToken, text: str) -> str:
+    """Say what the parser found and, at an END keyword, which block is left open."""
+    found = "the end of the file" if e.token.type == "$END" else repr(str(e.token))
+    word = str(e.token).upper()
+    if word == "MODULE" and "$END" in e.expected:
+        return "a second MODULE: one module per file"
+    if word in RESERVED and word not in _ENDS and "NAME" in e.expected:
+        return (
+            f"{e.token} is a RAPID reserved word: it cannot be a name "
+            "(RAPID kernel, reserved words: unconfirmed)"
+        )
+    if e.token.type == "$END" or str(e.token).upper() in _ENDS:
+        return _missing(text, e.line if e.token.type != "$END" else 0, found)
+    names = ", ".join(sorted(_readable(x) for x in e.expected)[:8])
+    return f"syntax error at {found}; expected {names}"
+
+
+_WORD = re.compile(r'"(?:[^"\n]|"")*"|![^\n]*|[A-Za-z][A-Za-z0-9_]*|;')
+
+
+def _missing(text: str, line: int, found: str) -> str:
+    """Name the innermost block still open before ``line`` (0: the end), or a syntax error."""
+    stack: list[tuple[str, int]] = []
+    pending_if: int | None = None
+    for number, source_line in enumerate(text.splitlines(), 1):
+        if line and number >= line:
+            break
+        for m in _WORD.finditer(source_line):
+            word = m.group().upper()
+            if word == "IF":
+                pending_if = number
+            elif word == "THEN" and pending_if is not None:
+                stack.append(("IF", pending_if))
+                pending_if = None
+            elif word == ";":
+                pending_if = None
+            elif word in _OPENERS:
+                stack.append((word, number))
+            elif word in _ENDS and stack and stack[-1][0] == _ENDS[word]:
+                stack.pop()
+    if not stack:
+        return f"syntax error at {found}"
+    opener, where = stack[-1]
+    end = next(k for k, v in _ENDS.items() if v == opener)
+    return f"{opener} (line {where}) without its {end}: found {found}"
+
+
+_OPENERS = {"MODULE", "PROC", "FUNC", "TRAP", "FOR", "WHILE", "TEST", "RECORD"}
+
+
+def _readable(terminal: str) -> str:
+    return {"SEMICOLON": "';'", "NAME": "a name", "LPAR": "'('", "RPAR": "')'"}.get(
+        terminal, terminal
+    )

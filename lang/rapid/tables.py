@@ -1,0 +1,274 @@
+r"""What wirecal's RAPID checker knows: data types, predefined data, instructions, functions.
+
+Each instruction and function carries the page its signature comes from (``source``) and the
+RobotWare version it needs (``since``). Pages read (through the ``search`` tool; ABB's own
+PDFs were not reachable, so the reading was of copies and translations):
+
+* ``kernel-types``: RAPID kernel manual, "Built-in data types" (num: IEEE 754, exact integers
+  in -8388607..8388608; dnum: exact integers in ±4503599627370496; string: 0 to 80
+  characters), read in a translation, blog.csdn.net/m0_47707298/article/details/115558461;
+* ``MoveAbsJ``: RAPID reference manual, instructions, MoveAbsJ (syntax ``MoveAbsJ [\Conc]
+  ToJointPos [\ID] [\NoEOffs] Speed [\V]|[\T] Zone [\Z] [\Inpos] Tool [\WObj]`` and
+  its arguments), read in translations at 360docs.net/doc/7114964515.html and
+  abbjqr.gbsrobot.com/news/index.php?itemid=24292.
+
+Everything else below is marked "unconfirmed": written from the 3HAC050917 manual's
+structure as wirecal's authors know it, not from a page read for this table. ``since`` is
+"6.0" (wirecal's floor: RobotWare 6, IRC5) unless a page said otherwise; when each
+instruction first appeared is unconfirmed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+NUM_EXACT = (-8388607, 8388608)
+"""The integers a num holds exactly (kernel-types: "-8388607 to (+)8388608")."""
+
+DNUM_EXACT = (-4503599627370496, 4503599627370496)
+"""The integers a dnum holds exactly (kernel-types)."""
+
+STRING_MAX = 80
+"""The most characters a string holds (kernel-types: "0 to 80 characters")."""
+
+NAME_MAX = 32
+"""The longest identifier (RAPID kernel, "Identifiers": unconfirmed, no page read)."""
+
+RESERVED = frozenset(
+    """ALIAS AND BACKWARD CASE CONNECT CONST DEFAULT DIV DO ELSE ELSEIF ENDFOR ENDFUNC ENDIF
+    ENDMODULE ENDPROC ENDRECORD ENDTEST ENDTRAP ENDWHILE ERROR EXIT FALSE FOR FROM FUNC GOTO
+    IF INOUT LOCAL MOD MODULE NOSTEPIN NOT NOVIEW OR PERS PROC RAISE READONLY RECORD RETRY
+    RETURN STEP SYSMODULE TEST THEN TO TRAP TRUE TRYNEXT UNDO VAR VIEWONLY WHILE WITH
+    XOR""".split()
+)
+"""RAPID's reserved words (RAPID kernel, "Reserved words": unconfirmed — the list as
+wirecal's authors know it; a scanned copy of 3HAC16585-1 was found but not read)."""
+
+MODULE_ATTRIBUTES = frozenset({"SYSMODULE", "NOVIEW", "NOSTEPIN", "VIEWONLY", "READONLY"})
+"""Module attributes (RAPID kernel, "Module declarations": unconfirmed)."""
+
+RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
+    "robjoint": tuple((f"rax_{i}", "num") for i in range(1, 7)),
+    "extjoint": tuple((f"eax_{c}", "num") for c in "abcdef"),
+    "jointtarget": (("robax", "robjoint"), ("extax", "extjoint")),
+    "speeddata": (("v_tcp", "num"), ("v_ori", "num"), ("v_leax", "num"), ("v_reax", "num")),
+}
+"""The record types of the subset and their components (reference manual, data types
+jointtarget, robjoint, extjoint, speeddata: unconfirmed)."""
+
+ATOMIC = frozenset({"num", "dnum", "bool", "string"})
+"""The atomic types (kernel-types)."""
+
+OPAQUE = frozenset({"iodev", "clock"})
+"""Non-value types of the subset: a file (iodev) and a clock (reference manual: unconfirmed)."""
+
+SUBSET_TYPES = ATOMIC | OPAQUE | frozenset(RECORDS)
+"""The data types a wirecal module may declare."""
+
+OTHER_TYPES = frozenset(
+    """robtarget pos orient pose confdata tooldata wobjdata loaddata zonedata stoppointdata
+    intnum errnum signaldi signaldo signalgi signalgo signalai signalao byte rawbytes
+    socketdev socketstatus triggdata tpnum dir switch egmident mecunit errdomain errstr
+    identno shapedata wzstestablished syncident tasks progdisp""".split()
+)
+"""RAPID data types outside the subset (a declaration of one is "not in the subset")."""
+
+SPEEDS = (5, 10, 20, 30, 40, 50, 60, 80, 100, 150, 200, 300, 400, 500, 600, 800, 1000)
+SPEEDS_FAST = (1500, 2000, 2500, 3000, 4000, 5000, 6000, 7000)
+ZONES = (0, 1, 5, 10, 15, 20, 30, 40, 50, 60, 80, 100, 150, 200)
+
+PREDEFINED: dict[str, str] = {
+    **{f"v{v}": "speeddata" for v in SPEEDS + SPEEDS_FAST},
+    "vmax": "speeddata",
+    "fine": "zonedata",
+    **{f"z{z}": "zonedata" for z in ZONES},
+    "tool0": "tooldata",
+    "pi": "num",
+    "wobj0": "wobjdata",
+}
+"""Predefined data the subset reads, name → type (reference manual, speeddata and zonedata
+"Predefined data", tooldata tool0: unconfirmed; pi: ROS-Industrial's abb_driver modules use
+it undeclared, its value 3.1415926 is unconfirmed)."""
+
+
+OTHER_DATA_PREFIXES = (
+    "err_",
+    "socket_",
+    "io_",
+    "diskhome",
+    "errno",
+    "intno",
+    "rob_id",
+    "wait_max",
+)
+"""Name prefixes of RAPID's predefined data outside the subset (ERRNO, ERR_…, SOCKET_… …;
+reference manual, errnum and socketstatus: unconfirmed)."""
+
+
+def other_data(name: str) -> bool:
+    """Return whether ``name`` is RAPID's predefined data outside the subset."""
+    return name.lower().startswith(OTHER_DATA_PREFIXES)
+
+
+def speed_values(name: str) -> tuple[float, float, float, float]:
+    """Return a predefined speeddata's (v_tcp, v_ori, v_leax, v_reax).
+
+    v_ori 500 deg/s, v_leax 5000 mm/s, v_reax 1000 deg/s for every one (reference manual,
+    speeddata, "Predefined data": unconfirmed); vmax's v_tcp (robot dependent) is taken as
+    7000 mm/s (unconfirmed).
+    """
+    v_tcp = 7000.0 if name.lower() == "vmax" else float(name[1:])
+    return (v_tcp, 500.0, 5000.0, 1000.0)
+
+
+@dataclass(frozen=True)
+class P:
+    r"""One parameter of a routine.
+
+    Its name, type, whether it is optional (``\Name``), and ``var`` for one that must be
+    a variable the routine writes (INOUT, or a VAR parameter such as TPReadNum's Answer).
+    """
+
+    name: str
+    type: str
+    optional: bool = False
+    var: bool = False
+
+
+@dataclass(frozen=True)
+class Routine:
+    """A predefined instruction (``returns`` None) or function: parameters, where read."""
+
+    params: tuple[P, ...]
+    returns: str | None = None
+    source: str = "unconfirmed"
+    since: str = "6.0"
+
+
+_U = "unconfirmed (3HAC050917 page not read)"
+
+INSTRUCTIONS: dict[str, Routine] = {
+    "moveabsj": Routine(
+        (
+            P("Conc", "switch", True),
+            P("ToJointPos", "jointtarget"),
+            P("NoEOffs", "switch", True),
+            P("Speed", "speeddata"),
+            P("V", "num", True),
+            P("T", "num", True),
+            P("Zone", "zonedata"),
+            P("Z", "num", True),
+            P("Tool", "tooldata"),
+            P("WObj", "wobjdata", True),
+        ),
+        source="MoveAbsJ",
+    ),
+    "waittime": Routine((P("InPos", "switch", True), P("Time", "num")), source=_U),
+    "tpwrite": Routine(
+        (
+            P("String", "string"),
+            P("Num", "num", True),
+            P("Bool", "bool", True),
+            P("Dnum", "dnum", True),
+        ),
+        source=_U,
+    ),
+    "tpreadnum": Routine((P("Answer", "num", var=True), P("TPText", "string")), source=_U),
+    "tperase": Routine((), source=_U),
+    "open": Routine(
+        (
+            P("Object", "string"),
+            P("File", "string", True),
+            P("IODevice", "iodev", var=True),
+            P("Read", "switch", True),
+            P("Write", "switch", True),
+            P("Append", "switch", True),
+            P("Bin", "switch", True),
+        ),
+        source=_U,
+    ),
+    "write": Routine(
+        (
+            P("IODevice", "iodev", var=True),
+            P("String", "string"),
+            P("Num", "num", True),
+            P("Bool", "bool", True),
+            P("Dnum", "dnum", True),
+            P("NoNewLine", "switch", True),
+        ),
+        source=_U,
+    ),
+    "close": Routine((P("IODevice", "iodev", var=True),), source=_U),
+    "clkreset": Routine((P("Clock", "clock", var=True),), source=_U),
+    "clkstart": Routine((P("Clock", "clock", var=True),), source=_U),
+    "clkstop": Routine((P("Clock", "clock", var=True),), source=_U),
+    "incr": Routine((P("Name", "num", var=True),), source=_U),
+    "decr": Routine((P("Name", "num", var=True),), source=_U),
+    "stop": Routine((P("NoRegain", "switch", True),), source=_U),
+}
+"""The instructions of the subset, lower-case name → signature."""
+
+
+def _f(params: tuple[P, ...], returns: str, source: str = _U) -> Routine:
+    return Routine(params, returns, source)
+
+
+_NUM1 = (P("Value", "num"),)
+_DNUM1 = (P("Value", "dnum"),)
+
+FUNCTIONS: dict[str, Routine] = {
+    "present": _f((P("OptPar", "optional parameter"),), "bool"),
+    "ginputdnum": _f((P("Signal", "signalgi"),), "dnum"),
+    "ginput": _f((P("Signal", "signalgi"),), "num"),
+    "clkread": _f((P("Clock", "clock", var=True), P("HighRes", "switch", True)), "num"),
+    "cjointt": _f((P("TaskRef", "num", True), P("TaskName", "string", True)), "jointtarget"),
+    "sqrt": _f(_NUM1, "num"),
+    "sqrtdnum": _f(_DNUM1, "dnum"),
+    "abs": _f(_NUM1, "num"),
+    "absdnum": _f(_DNUM1, "dnum"),
+    "round": _f((P("Val", "num"), P("Dec", "num", True)), "num"),
+    "rounddnum": _f((P("Val", "dnum"), P("Dec", "num", True)), "dnum"),
+    "trunc": _f((P("Val", "num"), P("Dec", "num", True)), "num"),
+    "truncdnum": _f((P("Val", "dnum"), P("Dec", "num", True)), "dnum"),
+    "numtostr": _f((P("Val", "num"), P("Dec", "num"), P("Exp", "switch", True)), "string"),
+    "dnumtostr": _f((P("Val", "dnum"), P("Dec", "num"), P("Exp", "switch", True)), "string"),
+    "numtodnum": _f(_NUM1, "dnum"),
+    "dnumtonum": _f((P("Value", "dnum"), P("Integer", "switch", True)), "num"),
+    "strlen": _f((P("Str", "string"),), "num"),
+    "sin": _f((P("Angle", "num"),), "num"),
+    "cos": _f((P("Angle", "num"),), "num"),
+    "tan": _f((P("Angle", "num"),), "num"),
+    "asin": _f(_NUM1, "num"),
+    "acos": _f(_NUM1, "num"),
+    "atan": _f(_NUM1, "num"),
+    "atan2": _f((P("Y", "num"), P("X", "num")), "num"),
+    "exp": _f((P("Exponent", "num"),), "num"),
+    "pow": _f((P("Base", "num"), P("Exponent", "num")), "num"),
+}
+"""The functions of the subset, lower-case name → signature."""
+
+OTHER_ROUTINES = (
+    frozenset(
+        name.lower()
+        for name in """MoveJ MoveL MoveC MoveJDO MoveLDO MoveCDO MoveJSync MoveLSync MoveExtJ
+    SearchL SearchC TriggL TriggJ TriggC StopMove StartMove ConfJ ConfL SingArea AccSet VelSet
+    PathAccLim SetDO SetGO SetAO Set Reset PulseDO InvertDO WaitDI WaitDO WaitGI WaitAI
+    WaitUntil WaitRob WaitSyncTask SyncMoveOn SyncMoveOff GripLoad ErrWrite ErrLog TPReadFK
+    TPShow UIMsgBox UINumEntry SocketCreate SocketConnect SocketSend SocketReceive SocketClose
+    SocketBind SocketListen SocketAccept ISignalDI ISignalDO ITimer IDelete IEnable IDisable
+    ISleep IWatch Load UnLoad StartLoad WaitLoad EraseModule WriteStrBin WriteBin ReadAnyBin
+    Add Clear Rewind ClearPath StorePath RestoPath Break ProcCall CallByVar SetSysData
+    Offs RelTool CRobT CPos CTool CWObj DInput DOutput GOutput GOutputDnum AInput AOutput
+    StrToVal ValToStr StrFind StrPart StrMap StrMatch StrMemb StrOrder ReadNum ReadStr ReadBin
+    OpMode RunMode IsPers IsVar Present Dim GetTime CTime CDate EulerZYX OrientZYX PoseInv
+    PoseMult PoseVect NOrient CalcJointT CalcRobT MaxRobSpeed GetNextMechUnit IsStopStateEvent
+    ArgName Type TestDI TestSignRead NumToStr ClkWait SocketGetStatus GetSysInfo SkipWarn
+    TestAndSet WaitTestAndSet ErrRaise IsSysId GetTaskName RMQSendMessage RMQGetMessage
+    ReadRawBytes WriteRawBytes PackRawBytes UnpackRawBytes CopyRawBytes ClearRawBytes
+    RawBytesLen StrToByte ByteToStr BitCheck BitSet BitClear BitAnd BitOr BitXOr BitNeg
+    BitLSh BitRSh ReadCfgData WriteCfgData IPers ExitCycle IsStopMoveAct""".split()
+    )
+    - frozenset(FUNCTIONS)
+    - frozenset(INSTRUCTIONS)
+)
+"""RAPID instructions and functions outside the subset (a call is "not in the subset")."""

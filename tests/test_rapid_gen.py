@@ -1,0 +1,161 @@
+"""The RAPID module generator: golden bytes, what the module holds, what it refuses."""
+
+from __future__ import annotations
+
+import os
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from wirecal.gen.rapid import GENERATOR
+from wirecal.gen.rapid.program import RapidOptions, line_ends, module_text
+from wirecal.lang.rapid.module import num_literal
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
+
+ROOT = Path(__file__).resolve().parent.parent
+IRB = ROOT / "examples" / "abb_irb120"
+GOLDEN = Path(__file__).parent / "golden" / "abb_irb120" / "WIRECAL.mod"
+
+
+@pytest.fixture(scope="module")
+def irb():
+    robot = load_robot(IRB / "robot.toml")
+    return robot, load_plan(IRB / "plan.toml", robot)
+
+
+@pytest.fixture(scope="module")
+def text(irb):
+    return module_text(*irb)
+
+
+def test_golden_file(text, irb):
+    """Byte for byte the reviewed module and deterministic; WIRECAL_UPDATE_GOLDEN=1
+    rewrites it after an intended change (review the diff)."""
+    if os.environ.get("WIRECAL_UPDATE_GOLDEN"):
+        GOLDEN.write_bytes(line_ends(text).encode("ascii"))
+    golden = GOLDEN.read_bytes()
+    assert golden.count(b"\r\n") == golden.count(b"\n") > 1000  # CRLF, every line
+    assert line_ends(text).encode("ascii") == golden
+    assert module_text(*irb) == text
+
+
+def test_module_shape(text, irb):
+    """One module; the three routines; every plan target a MoveAbsJ (θ0 once per step
+    plus the closing one through wc_theta0); one reading per zero and point."""
+    _, plan = irb
+    assert text.startswith("MODULE WIRECAL\n")
+    assert text.endswith("ENDMODULE\n")
+    for proc in ("wc_mount", "wc_check", "wc_run", "wc_meas", "wc_solve"):
+        assert len(re.findall(rf"^  PROC {proc}\(", text, re.M)) == 1
+    vias = sum(len(s.via_deg) for s in plan.steps)
+    assert text.count("MoveAbsJ wc_theta0,") == len(plan.steps) + 2  # + wc_mount
+    assert len(re.findall(r"MoveAbsJ \[\[", text)) == plan.n_points + vias
+    assert len(re.findall(r"^    wc_meas ", text, re.M)) == plan.n_points + len(plan.steps) + 1
+    # the first point of step 1, as the plan has it (deg)
+    q = ", ".join(f"{x:g}" for x in plan.steps[0].points_deg[0])
+    assert f"MoveAbsJ [[{q}], [9E+09" in text
+
+
+def test_strings_fit_rapid(text):
+    """Every string literal holds at most 80 characters (a RAPID string's length)."""
+    pieces = [p for line in text.splitlines() for p in line.split('"')[1::2]]
+    assert pieces
+    assert max(map(len, pieces)) <= 80
+
+
+def test_log_header_and_reads(text, irb):
+    _robot, plan = irb
+    assert f'wc_out "# plan: {plan.fingerprint()}";' in text
+    assert 'wc_out "# mm_per_count: 0.025488";' in text
+    assert 'Open "HOME:" \\File:="WIRECAL.LOG", wc_log \\Write;' in text
+    assert text.count("GInputDnum(wc_giCount0)") == 4  # check (2), wc_meas (2)
+    assert "d := d - 4294967296;" in text
+    assert "d := d + 4294967296;" in text
+
+
+def test_no_solver(irb, text):
+    bare = module_text(*irb, RapidOptions(solver=False))
+    assert "wc_solve" not in bare
+    assert "wc_rc{slot}" not in bare
+    assert text.count("wc_solve;") == 1
+    assert text.index("wc_meas 10, 0, 0;") < text.index("wc_solve;") < text.index('"# end"')
+
+
+def test_refuses_other_encoder(irb):
+    data = tomllib.loads((IRB / "robot.toml").read_text())
+    data["encoder"]["counter_bits"] = 24
+    robot = robot_from_dict(data, "bits.toml")
+    with pytest.raises(WirecalError, match="counter_bits = 32"):
+        module_text(robot, irb[1])
+
+
+@dataclass(frozen=True)
+class _Request:
+    """The GenRequest fields the generator reads (gen/request.py on the registry branch)."""
+
+    run: object = None
+    zero_tol_mm: float = 0.1
+    spread_tol_mm: float = 0.1
+    margin_deg: float = 1.0
+    range_margin_mm: float = 20.0
+    solver: bool = field(default=True, metadata={"option": "--no-solver"})
+    host: str | None = field(default=None, metadata={"option": "--host"})
+    log_file: str = field(default="WCLOG.CSV", metadata={"option": "--log-name"})
+    crlf: bool = field(default=True, metadata={"option": "--lf"})
+
+
+def test_generator_programs_and_write(irb, tmp_path):
+    out = GENERATOR.programs(*irb, _Request(solver=False))
+    assert list(out) == ["WIRECAL.mod"]
+    assert "wc_solve" not in out["WIRECAL.mod"]
+    (path,) = GENERATOR.write(tmp_path, out, _Request(crlf=False))
+    assert path.read_bytes() == out["WIRECAL.mod"].encode("ascii")  # --lf: LF only
+    assert "PP to Routine" in GENERATOR.next_steps(*irb, _Request(), "r.toml", "p.toml")
+
+
+@pytest.mark.parametrize(
+    ("given", "option"), [({"host": "10.0.0.1"}, "--host"), ({"log_file": "X.LOG"}, "--log-name")]
+)
+def test_generator_refuses_by_option(irb, given, option):
+    with pytest.raises(WirecalError, match=f"{option}: not taken by the ABB RAPID"):
+        GENERATOR.programs(*irb, _Request(**given))
+
+
+@pytest.mark.parametrize("x", [1.0, -0.0, 0.1, 6.123233995736766e-17, 302.0])
+def test_num_literal_is_the_nearest_float32(x):
+    assert np.float32(float(num_literal(x))) == np.float32(x)
+
+
+def test_patch_companion(irb):
+    """Joint zero offsets for the controller (axis, rad, the reading to jog to); the
+    rest named as what only a URDF or rewritten targets carry; TOML that reads back."""
+    from wirecal.lang.rapid.patch import patch_section
+
+    robot, _ = irb
+    text = patch_section(robot, {"th5": -0.02, "a2": 0.3, "th2": 0.1, "d6": 0.1})
+    data = tomllib.loads(text)
+    joints = data["joint_offsets"]
+    assert joints["axis"] == [2, 5]
+    assert joints["offset_rad"] == pytest.approx([0.1 * 3.141592653589793 / 180, -0.000349066])
+    assert joints["jog_to_deg"] == [-0.1, 0.02]
+    assert data["not_carried"]["parameters"] == ["a2", "d6"]
+    assert "URDF" in data["not_carried"]["why"]
+    assert tomllib.loads(patch_section(robot, {}))["joint_offsets"]["axis"] == []
+
+
+def test_module_lints_clean(irb, text):
+    """The RAPID checker (lang/rapid) finds nothing in the module, with or without the
+    solver, for the example's declared RobotWare."""
+    from wirecal.lang.rapid import Rapid
+
+    robot, plan = irb
+    software = robot.controller.software
+    assert Rapid().lint(text, "WIRECAL.mod", software) == []
+    bare = module_text(robot, plan, RapidOptions(solver=False))
+    assert Rapid().lint(bare, "WIRECAL.mod", software) == []

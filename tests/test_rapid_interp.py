@@ -1,0 +1,298 @@
+"""The RAPID twin's interpreter: the controller's numbers and a fake controller's calls.
+
+The expectations are written from the rules (num 32-bit, dnum 64-bit: RAPID kernel, built-in
+data types), never computed with the interpreter.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass, field
+
+import pytest
+
+from wirecal.solver.errors import WirecalError
+from wirecal.twin.rapid.interp import fixed, number_text, run_module
+
+
+@dataclass
+class FakeController:
+    """Record what the program asks; a counter that grows by 3 per read; a scripted answer."""
+
+    now: float = 0.0
+    joints: tuple[float, ...] = (0.0,) * 6
+    calls: list[tuple] = field(default_factory=list)
+    lines: list[str] = field(default_factory=list)
+    pendant: list[str] = field(default_factory=list)
+    count: int = 4294967000
+    open_text: str = ""
+
+    def move_abs_j(self, joints_deg, speed, zone, line):
+        self.joints = joints_deg
+        self.calls.append(("move", joints_deg, speed, zone, line))
+        self.now += 2.0
+
+    def joints_deg(self):
+        return self.joints
+
+    def group_input(self, name):
+        self.calls.append(("gi", name))
+        self.count = (self.count + 3) % 2**32
+        return self.count
+
+    def open_file(self, path, append):
+        self.calls.append(("open", path, append))
+        return 7
+
+    def write_file(self, handle, text, newline=True):
+        assert handle == 7
+        self.open_text += text
+        if newline:
+            self.lines.append(self.open_text)
+            self.open_text = ""
+
+    def close_file(self, handle):
+        self.calls.append(("close", handle))
+
+    def tp_write(self, text):
+        self.pendant.append(text)
+
+    def tp_erase(self):
+        self.calls.append(("erase",))
+
+    def tp_read_num(self, prompt):
+        self.pendant.append(prompt)
+        return 1.0
+
+    def wait_time(self, seconds):
+        self.now += seconds
+
+    def now_s(self):
+        return self.now
+
+    def stop(self, why):
+        self.calls.append(("stop", why))
+
+
+def run(*body: str, data: tuple[str, ...] = (), extra: tuple[str, ...] = ()):
+    """Run PROC main() of a module with ``data``, ``body`` and ``extra`` routines."""
+    text = "\n".join(["MODULE T", *data, *extra, "PROC main()", *body, "ENDPROC", "ENDMODULE", ""])
+    ctl = FakeController()
+    return run_module(text, "t.mod", ctl), ctl
+
+
+def single(x: float) -> float:
+    return struct.unpack("f", struct.pack("f", x))[0]
+
+
+def test_num_is_single_precision_and_dnum_double() -> None:
+    _, ctl = run(
+        "n := 8388608;",
+        "n := n * 2 + 1;",
+        "d := 8388608;",
+        "d := d + 1;",
+        "x := 0.1;",
+        'TPWrite "" \\Num:=n;',
+        'TPWrite "" \\Dnum:=d;',
+        'TPWrite NumToStr(x * 3, 9) + " " + DnumToStr(NumToDnum(x), 12);',
+        data=("VAR num n;", "VAR dnum d;", "VAR num x;"),
+    )
+    # 16777217 is not a single-precision number: n rounds to 16777216 (2^24; the kernel
+    # promises exact integers to 8388608 only)
+    assert ctl.pendant[0] == "16777216"
+    assert ctl.pendant[1] == "8388609"
+    # 0.1 as a single is 0.100000001490116...; times 3 in single precision
+    x3 = single(single(0.1) * 3)
+    assert ctl.pendant[2] == f"{x3:.9f} {single(0.1):.12f}"
+    assert abs(x3 - 0.3) > 1e-9
+
+
+def test_div_mod_and_arithmetic() -> None:
+    _, ctl = run(
+        'TPWrite "" \\Num:=14 DIV 4;',
+        'TPWrite "" \\Num:=14 MOD 4;',
+        'TPWrite "" \\Num:=-14 DIV 4;',
+        'TPWrite "" \\Num:=2 + 3 * 4 - 8 / 2;',
+        'TPWrite "" \\Num:=Round(2.345 \\Dec:=2) + Trunc(-1.7);',
+    )
+    assert ctl.pendant == ["3", "2", "-3", "10", "1.35"]
+
+
+def test_division_by_zero_stops() -> None:
+    outcome, ctl = run("n := 1 / n;", data=("VAR num n;",))
+    assert outcome.status == "error"
+    assert "division by zero" in outcome.message
+    assert ctl.calls[-1][0] == "stop"
+
+
+def test_control_flow() -> None:
+    _, ctl = run(
+        "VAR num s := 0;",
+        "FOR i FROM 1 TO 10 DO",
+        "  IF i MOD 2 = 0 THEN",
+        "    s := s + i;",
+        "  ELSEIF i = 5 THEN",
+        "    s := s + 100;",
+        "  ENDIF",
+        "ENDFOR",
+        "FOR j FROM 5 TO 1 DO",
+        "  s := s + 1000;",
+        "ENDFOR",
+        "WHILE s > 2000 DO",
+        "  s := s - 1000;",
+        "ENDWHILE",
+        "TEST s",
+        "CASE 1, 2:",
+        "  s := 0;",
+        "CASE 1130:",
+        "  s := -1;",
+        "DEFAULT:",
+        "  s := -2;",
+        "ENDTEST",
+        'TPWrite "s " \\Num:=s;',
+    )
+    # 2+4+6+8+10 = 30, +100 at 5; 5 passes of the down-counting loop: 5130; WHILE → 1130
+    assert ctl.pendant == ["s -1"]
+
+
+def test_routines_inout_func_and_records() -> None:
+    _, ctl = run(
+        "VAR num k := 1;",
+        "bump k;",
+        "bump k \\Twice;",
+        "jt := CJointT();",
+        "jt.robax.rax_2 := twice(jt.robax.rax_2);",
+        "a{2, 1} := 7;",
+        "MoveAbsJ jt \\NoEOffs, v100, fine, tool0;",
+        'TPWrite "k" \\Num:=k + a{2, 1};',
+        data=("VAR jointtarget jt;", "VAR num a{2, 2};"),
+        extra=(
+            "PROC bump(INOUT num x, \\switch Twice)",
+            "  x := x + 1;",
+            "  IF Present(Twice) x := x + 10;",
+            "ENDPROC",
+            "FUNC num twice(num v)",
+            "  RETURN 2 * v - 3;",
+            "ENDFUNC",
+        ),
+    )
+    # k: 1 → 2 → 13; a{2,1} = 7
+    assert ctl.pendant == ["k20"]
+    move = next(c for c in ctl.calls if c[0] == "move")
+    assert move[1] == (0.0, -3.0, 0.0, 0.0, 0.0, 0.0)
+    assert move[2] == (100.0, 500.0, 5000.0, 1000.0)
+    assert move[3] == "fine"
+
+
+def test_file_group_input_and_clock() -> None:
+    _, ctl = run(
+        'Open "HOME:" \\File:="wc.log", log \\Write;',
+        "ClkReset clk;",
+        "ClkStart clk;",
+        "first := GInputDnum(wc_gi);",
+        "WaitTime 1.2345;",
+        "d := GInputDnum(wc_gi) - first;",
+        'Write log, "t " + NumToStr(ClkRead(clk), 3) \\NoNewLine;',
+        'Write log, " d" \\Dnum:=d;',
+        'Write log, "big " + DnumToStr(first, 0);',
+        "Close log;",
+        data=("VAR iodev log;", "VAR clock clk;", "VAR dnum first;", "VAR dnum d;"),
+    )
+    assert ("open", "HOME:/wc.log", False) in ctl.calls
+    # ClkRead: whole milliseconds of 1.2345 s
+    assert ctl.lines == ["t 1.234 d3", "big 4294967003"]
+    assert ("close", 7) in ctl.calls
+
+
+def test_stop_and_exit() -> None:
+    outcome, _ = run("Stop;", 'TPWrite "after";')
+    assert outcome.status == "paused"
+    outcome, ctl = run("EXIT;", 'TPWrite "after";')
+    assert outcome.status == "halted"
+    assert ctl.pendant == []
+
+
+def test_string_over_80_characters_stops() -> None:
+    outcome, _ = run(
+        'VAR string s := "' + "x" * 60 + '";',
+        "s := s + s;",
+    )
+    assert outcome.status == "error"
+    assert "120 characters" in outcome.message
+
+
+def test_index_out_of_range_stops() -> None:
+    outcome, _ = run("VAR num i := 4;", "a{i} := 1;", data=("VAR num a{3};",))
+    assert outcome.status == "error"
+    assert "outside 1..3" in outcome.message
+
+
+def test_checker_problems_refuse_the_run() -> None:
+    with pytest.raises(WirecalError, match="unknown instruction Frob"):
+        run("Frob;")
+    with pytest.raises(WirecalError, match=r"MoveAbsJ \\Conc: the twin does not run it"):
+        run("MoveAbsJ \\Conc, jt, v100, fine, tool0;", data=("VAR jointtarget jt;",))
+
+
+def test_number_formats() -> None:
+    assert fixed(2.5, 0) == "3"
+    assert fixed(-0.00001, 3) == "0.000"
+    assert fixed(-1.25, 1) == "-1.3"
+    assert number_text(3.0000001, 6) == "3"
+    assert number_text(0.25, 6) == "0.25"
+
+
+def test_the_generated_module_runs_to_its_end() -> None:
+    """The golden module of examples/abb_irb120 (rapid2's generator) lints clean and runs."""
+    from .conftest import ROOT
+
+    text = (ROOT / "tests" / "golden" / "abb_irb120" / "WIRECAL.mod").read_text(encoding="ascii")
+    ctl = FakeController()
+    ctl.group_input = lambda name: 1000  # type: ignore[method-assign]  # the wire does not move
+    outcome = run_module(text, "WIRECAL.mod", ctl, "wc_run")
+    assert outcome.status == "completed", outcome
+    assert ctl.lines[0].startswith("# wirecal-log")
+    assert ctl.lines[-1] == "# end"
+    moves = [c for c in ctl.calls if c[0] == "move"]
+    assert len(moves) > 45
+    assert all(c[3] == "fine" for c in moves)
+
+
+def test_recursion_without_end_stops() -> None:
+    text = "MODULE T\nPROC main()\n  main;\nENDPROC\nENDMODULE\n"
+    outcome = run_module(text, "t.mod", FakeController())
+    assert outcome.status == "error"
+    assert "nested more than 40 deep" in outcome.message
+
+
+def test_an_absent_optional_argument_stops_when_read() -> None:
+    outcome, ctl = run(
+        "show;",
+        "show \\x:=2;",
+        extra=(
+            "PROC show(\\num x)",
+            '  IF Present(x) TPWrite "x" \\Num:=x;',
+            '  TPWrite "y" \\Num:=x;',
+            "ENDPROC",
+        ),
+    )
+    assert outcome.status == "error"
+    assert "optional argument x is not present" in outcome.message
+    assert ctl.pendant == []
+
+
+def test_a_func_returns_data_of_its_type() -> None:
+    _, ctl = run(
+        'TPWrite NumToStr(tenth() * 13, 9) + " " + DnumToStr(dtenth() * 13, 12);',
+        extra=(
+            "FUNC num tenth()",
+            "  RETURN 0.1;",
+            "ENDFUNC",
+            "FUNC dnum dtenth()",
+            "  RETURN 0.1;",
+            "ENDFUNC",
+        ),
+    )
+    # the num: 0.1 rounded to single, times 13, rounded again: 1.300000072 (not 1.299999952,
+    # what 0.1 * 13 in double rounded once would give)
+    assert ctl.pendant == ["1.300000072 1.300000000000"]

@@ -1,0 +1,973 @@
+r"""An interpreter of wirecal's RAPID subset, with the IRC5's numbers.
+
+A module is checked (:class:`wirecal.lang.rapid.checker.Checker`), then its routines are
+compiled into Python closures; the checker's :class:`~wirecal.lang.rapid.checker.Typer`
+gives every expression its static type, so the arithmetic is the controller's:
+
+* num is a 32-bit IEEE float (RAPID kernel, built-in data types, read in translation): every
+  num literal, result and stored value is rounded to single precision (:func:`f32`), so
+  integers beyond 2^24 = 16777216 lose exactness (the manual promises exact integers only to
+  8388608, and the checker holds num literals to that); dnum is a 64-bit float;
+* a numeric literal takes the type it is used as (a num or a dnum);
+* ``/`` by zero, DIV or MOD of non-integers or by zero, a string over 80 characters, an index
+  outside an array, reading an optional argument that is not present and routine calls
+  nested more than :data:`MAX_CALL_DEPTH` deep are run-time errors that stop the program
+  (the controller's error numbers are unconfirmed); DIV truncates toward zero and MOD takes
+  the dividend's sign (unconfirmed);
+* a FOR loop without STEP counts by 1, or by -1 when it starts above its end (unconfirmed);
+* ``NumToStr``/``DnumToStr`` write fixed decimals, rounding half away from zero, and a
+  negative zero as 0; ``TPWrite``/``Write`` ``\Num`` write an integer when the fraction is
+  within 0.000005 of one, else up to 6 significant digits (``\Dnum``: 15) — all unconfirmed;
+* ``ClkRead`` reads whole milliseconds (``\HighRes``: the clock as it is; unconfirmed).
+
+What touches the robot, the encoder, files and the FlexPendant goes through a
+:class:`RapidController`. INOUT arguments are copied in and back out on return.
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+from wirecal.lang.rapid import nodes as N
+from wirecal.lang.rapid import tables as T
+from wirecal.lang.rapid.checker import (
+    BOOL,
+    DNUM,
+    LITERAL,
+    NUM,
+    STRING,
+    Checker,
+    Problems,
+    Symbol,
+    Type,
+    Typer,
+)
+from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
+from wirecal.solver.errors import WirecalError
+from wirecal.twin.machine import Outcome, RunError, f32
+from wirecal.twin.rapid.controller_protocol import RapidController
+
+__all__ = ["RapidController", "run_module"]
+
+MAX_CALL_DEPTH = 40
+"""Deepest chain of routine calls the twin runs (wirecal's bound; the controller's is
+unconfirmed): deeper, the program stops, as a recursion without end would."""
+
+Frame = dict[str, Any]
+Eval = Callable[[Frame], Any]
+
+
+class RapidError(RunError):
+    """A RAPID run-time error: the program stops with this message."""
+
+    def __init__(self, message: str):
+        super().__init__(-1, message)
+
+
+class _Return(Exception):
+    def __init__(self, value: Any):
+        self.value = value
+
+
+class _Exit(Exception):
+    """EXIT: the program ends."""
+
+
+class _Stop(Exception):
+    """Stop: the program halts (the operator may start it again)."""
+
+
+@dataclass
+class Clock:
+    """A RAPID clock: the time it has run, and since when it runs (None: stopped)."""
+
+    total_s: float = 0.0
+    since_s: float | None = None
+
+
+def coerce(value: Any, want: Type) -> Any:
+    """Return ``value`` as data of type ``want`` (a num rounded to single precision)."""
+    if want.dims:
+        return [coerce(v, Type(want.name, want.dims[1:])) for v in value]
+    if want == NUM:
+        return f32(float(value))
+    if want == DNUM:
+        return float(value)
+    if want.name in T.RECORDS and isinstance(value, dict):
+        return {k: coerce(value[k], Type(t)) for k, t in T.RECORDS[want.name]}
+    return value
+
+
+def default(t: Type) -> Any:
+    """Return the value data of type ``t`` starts with (0, FALSE, "", zeros)."""
+    if t.dims:
+        size = t.dims[0] or 0
+        return [default(Type(t.name, t.dims[1:])) for _ in range(size)]
+    if t in (NUM, DNUM):
+        return 0.0
+    if t == BOOL:
+        return False
+    if t == STRING:
+        return ""
+    if t.name == "clock":
+        return Clock()
+    if t.name in T.RECORDS:
+        return {k: default(Type(v)) for k, v in T.RECORDS[t.name]}
+    return None  # iodev: not open
+
+
+def copy(value: Any) -> Any:
+    """Return a copy of a value (records and arrays are values in RAPID)."""
+    if isinstance(value, list):
+        return [copy(v) for v in value]
+    if isinstance(value, dict):
+        return {k: copy(v) for k, v in value.items()}
+    return value
+
+
+def fixed(value: float, decimals: int) -> str:
+    """Write ``value`` with ``decimals`` decimals (NumToStr, DnumToStr: module docstring)."""
+    scaled = abs(value) * 10**decimals
+    rounded = math.floor(scaled + 0.5) / 10**decimals
+    text = f"{rounded:.{decimals}f}"
+    return text if value >= 0 or rounded == 0 else "-" + text
+
+
+def number_text(value: float, digits: int) -> str:
+    r"""Write a number as TPWrite and Write ``\Num``/``\Dnum`` do (module docstring)."""
+    if abs(value - round(value)) < 0.000005:
+        return str(round(value))
+    return f"{value:.{digits}g}"
+
+
+def _string(text: str) -> str:
+    if len(text) > T.STRING_MAX:
+        raise RapidError(f"a string of {len(text)} characters: RAPID holds {T.STRING_MAX}")
+    return text
+
+
+def _integer(x: float, what: str) -> int:
+    if x != int(x):
+        raise RapidError(f"{what} of {x:g}: DIV and MOD take integers")
+    return int(x)
+
+
+def _arith(op: str, a: float, b: float) -> float:
+    if op == "+":
+        return a + b
+    if op == "-":
+        return a - b
+    if op == "*":
+        return a * b
+    if b == 0:
+        raise RapidError("division by zero")
+    if op == "/":
+        return a / b
+    x, y = _integer(a, op), _integer(b, op)
+    q = abs(x) // abs(y) * (1 if (x >= 0) == (y >= 0) else -1)
+    return float(q if op == "DIV" else x - q * y)
+
+
+_FAST: dict[str, Callable[[float, float], float]] = {
+    "+": operator.add,
+    "-": operator.sub,
+    "*": operator.mul,
+}
+
+_COMPARE: dict[str, Callable[[Any, Any], bool]] = {
+    "=": lambda a, b: a == b,
+    "<>": lambda a, b: a != b,
+    "<": lambda a, b: a < b,
+    ">": lambda a, b: a > b,
+    "<=": lambda a, b: a <= b,
+    ">=": lambda a, b: a >= b,
+}
+
+
+class Interpreter:
+    """A checked module, compiled, ready to run routines on a controller."""
+
+    def __init__(self, module: N.Module, checker: Checker, controller: RapidController):
+        self.module, self.controller = module, controller
+        self.routines_sig = checker.user
+        self.global_scope = checker.globals
+        self.globals: Frame = {}
+        self.line = 0
+        self.depth = 0
+        self.compiled: dict[str, Callable[[list[Any]], tuple[Any, Frame]]] = {}
+        self.sources = {r.name.lower(): r for r in module.routines}
+        typer = Typer(self.global_scope, Problems(), self.routines_sig)
+        for k, v in T.PREDEFINED.items():
+            if k == "pi":
+                self.globals[k] = f32(3.1415926)
+            elif v == "speeddata":
+                self.globals[k] = dict(
+                    zip(("v_tcp", "v_ori", "v_leax", "v_reax"), T.speed_values(k), strict=True)
+                )
+            else:
+                self.globals[k] = k
+        for d in module.data:
+            t = self.global_scope[d.name.lower()].type
+            self.globals[d.name.lower()] = (
+                coerce(_Compiler(self, typer, {}).expr(d.init, t)({}), t)
+                if d.init is not None
+                else default(t)
+            )
+
+    def routine(self, name: str) -> Callable[[list[Any]], tuple[Any, Frame]]:
+        """Return the compiled routine ``name`` (compiled on first use)."""
+        key = name.lower()
+        if key not in self.compiled:
+            self.compiled[key] = _Compiler.routine(self, self.sources[key])
+        return self.compiled[key]
+
+    def execute(self, entry: str = "main") -> Outcome:
+        """Run the PROC ``entry`` without arguments; return how the run ended."""
+        if entry.lower() not in self.sources:
+            raise WirecalError([f"{self.module.name}: no routine {entry} to run"])
+        try:
+            self.routine(entry)([])
+        except _Exit:
+            self.controller.stop(f"EXIT at line {self.line}")
+            return Outcome("halted", entry, self.line)
+        except _Stop:
+            self.controller.stop(f"Stop at line {self.line}")
+            return Outcome("paused", entry, self.line)
+        except RunError as e:
+            self.controller.stop(f"line {self.line}: {e.message}")
+            return Outcome("error", entry, self.line, e.message)
+        except RecursionError:
+            why = "blocks and routine calls nested deeper than the twin runs"
+            self.controller.stop(f"line {self.line}: {why}")
+            return Outcome("error", entry, self.line, why)
+        return Outcome("completed", entry, self.line)
+
+
+def _check_subset(module: N.Module, source: str) -> list[str]:
+    """Refuse what the checker accepts and the twin does not run (named, before running)."""
+    refused = {
+        "moveabsj": ("Conc", "V", "T", "Z", "WObj"),
+        "open": ("Read", "Bin"),
+        "cjointt": ("TaskRef", "TaskName"),
+    }
+    out = []
+    for r in module.routines:
+        for call in _calls(r.body):
+            for a in call.args:
+                if a.name and a.name in refused.get(call.name.lower(), ()):
+                    out.append(
+                        f"{source}:{call.line}: {call.name} \\{a.name}: the twin does not run it"
+                    )
+    return out
+
+
+def _calls(stmts: list[N.Stmt]) -> list[N.Call]:
+    out: list[N.Call] = []
+    for s in stmts:
+        if isinstance(s, N.Call):
+            out.append(s)
+        elif isinstance(s, N.If):
+            for _, body in s.branches:
+                out += _calls(body)
+            out += _calls(s.orelse)
+        elif isinstance(s, N.For | N.While):
+            out += _calls(s.body)
+        elif isinstance(s, N.Test):
+            for _, body in s.cases:
+                out += _calls(body)
+            out += _calls(s.default)
+    return out
+
+
+@lru_cache(maxsize=8)
+def _parsed(text: str) -> N.Module:
+    """Parse a module once for its several runs (wc_mount, wc_run; the tree is not changed)."""
+    return parse_module(text)
+
+
+def run_module(text: str, source: str, controller: RapidController, entry: str = "main") -> Outcome:
+    """Check a module, then run its PROC ``entry``; WirecalError lists the checker's problems."""
+    try:
+        module = _parsed(text)
+    except SyntaxProblem as e:
+        raise WirecalError([f"{source}:{e.line}: {e.message}"]) from None
+    checker = Checker(module)
+    problems = [f"{source}:{line}: {m}" for line, m in checker.run()]
+    if not problems:
+        problems = _check_subset(module, source)
+    if problems:
+        raise WirecalError(problems)
+    return Interpreter(module, checker, controller).execute(entry)
+
+
+class _Compiler:
+    """Compile one routine's statements and expressions into closures."""
+
+    def __init__(
+        self,
+        interp: Interpreter,
+        typer: Typer,
+        local: dict[str, Symbol],
+        returns: Type | None = None,
+    ):
+        self.interp, self.typer, self.local, self.returns = interp, typer, local, returns
+
+    @staticmethod
+    def routine(interp: Interpreter, r: N.Routine) -> Callable[[list[Any]], tuple[Any, Frame]]:
+        """Compile a PROC or FUNC: a callable taking the argument values."""
+        scope = dict(interp.global_scope)
+        local: dict[str, Symbol] = {}
+        for p in r.params:
+            kind = "OPT" if p.optional else "IN"
+            sym = Symbol(p.name, Type(p.type.lower(), (None,) * p.dims), kind)
+            scope[p.name.lower()] = local[p.name.lower()] = sym
+        returns = Type(r.type.lower()) if r.type else None
+        c = _Compiler(interp, Typer(scope, Problems(), interp.routines_sig), local, returns)
+        names = [p.name.lower() for p in r.params]
+        body = c.block(r.body)
+        is_func = r.kind == "FUNC"
+
+        def run(args: list[Any]) -> tuple[Any, Frame]:
+            frame: Frame = dict(zip(names, args, strict=True))
+            try:
+                body(frame)
+            except _Return as ret:
+                return ret.value, frame
+            if is_func:
+                raise RapidError(f"the FUNC {r.name} ended without RETURN")
+            return None, frame
+
+        return run
+
+    # ---- statements ----
+    def block(self, stmts: list[N.Stmt]) -> Callable[[Frame], None]:
+        """Compile statements in order (declarations enter the scope as they come)."""
+        steps = [self.stmt(s) for s in stmts]
+
+        def run(frame: Frame) -> None:
+            for step in steps:
+                step(frame)
+
+        return run
+
+    def stmt(self, s: N.Stmt) -> Callable[[Frame], None]:  # noqa: C901
+        """Compile one statement; each one sets the interpreter's current line."""
+        self.typer.line = s.line
+        interp, line = self.interp, s.line
+        if isinstance(s, N.Data):
+            return self.declare(s)
+        if isinstance(s, N.Assign):
+            want = self.typer.type(s.target)
+            assert want is not None
+            value, store = self.expr(s.value, want), self.store(s.target)
+
+            def assign(frame: Frame) -> None:
+                interp.line = line
+                store(frame, coerce(copy(value(frame)), want))
+
+            return assign
+        if isinstance(s, N.Call):
+            return self.call_stmt(s)
+        if isinstance(s, N.If):
+            return self.if_(s)
+        if isinstance(s, N.For):
+            return self.for_(s)
+        if isinstance(s, N.While):
+            cond, body = self.expr(s.cond, BOOL), self.block(s.body)
+
+            def while_(frame: Frame) -> None:
+                interp.line = line
+                while cond(frame):
+                    body(frame)
+                    interp.line = line
+
+            return while_
+        if isinstance(s, N.Test):
+            return self.test(s)
+        if isinstance(s, N.Return):
+            return self.ret(s)
+        assert isinstance(s, N.Exit), s
+
+        def exit_(frame: Frame) -> None:
+            interp.line = line
+            raise _Exit
+
+        return exit_
+
+    def declare(self, d: N.Data) -> Callable[[Frame], None]:
+        """Compile a routine's data: (re)initialized each time the routine runs."""
+        t = Type(d.type.lower(), tuple(int(x.value) for x in d.dims if isinstance(x, N.Num)))
+        sym = Symbol(d.name, t, d.storage)
+        key = d.name.lower()
+        self.typer.scope[key] = self.local[key] = sym
+        init = self.expr(d.init, t) if d.init is not None else None
+
+        def declare(frame: Frame) -> None:
+            frame[key] = coerce(init(frame), t) if init else default(t)
+
+        return declare
+
+    def if_(self, s: N.If) -> Callable[[Frame], None]:
+        branches = [(self.expr(c, BOOL), self.block(b)) for c, b in s.branches]
+        orelse, interp, line = self.block(s.orelse), self.interp, s.line
+
+        def if_(frame: Frame) -> None:
+            interp.line = line
+            for cond, body in branches:
+                if cond(frame):
+                    body(frame)
+                    return
+            orelse(frame)
+
+        return if_
+
+    def for_(self, s: N.For) -> Callable[[Frame], None]:
+        start, stop = self.expr(s.start, NUM), self.expr(s.stop, NUM)
+        step = self.expr(s.step, NUM) if s.step else None
+        key = s.var.lower()
+        saved = self.typer.scope.get(key), self.local.get(key)
+        self.typer.scope[key] = self.local[key] = Symbol(s.var, NUM, "FOR")
+        body = self.block(s.body)
+        for table, old in zip((self.typer.scope, self.local), saved, strict=True):
+            if old is None:
+                table.pop(key, None)
+            else:
+                table[key] = old
+        interp, line = self.interp, s.line
+
+        def for_(frame: Frame) -> None:
+            interp.line = line
+            i, end = f32(start(frame)), f32(stop(frame))
+            by = f32(step(frame)) if step else (1.0 if i <= end else -1.0)
+            outer = frame.get(key)
+            while (i <= end) if by > 0 else (i >= end):
+                frame[key] = i
+                body(frame)
+                i = f32(frame[key] + by)
+            frame[key] = outer
+
+        return for_
+
+    def test(self, s: N.Test) -> Callable[[Frame], None]:
+        got = self.typer.type(s.expr) or NUM
+        want = NUM if got == LITERAL else got
+        value = self.expr(s.expr, want)
+        cases = [([self.expr(v, want) for v in vs], self.block(b)) for vs, b in s.cases]
+        default_, interp, line = self.block(s.default), self.interp, s.line
+
+        def test(frame: Frame) -> None:
+            interp.line = line
+            x = coerce(value(frame), want)
+            for values, body in cases:
+                if any(coerce(v(frame), want) == x for v in values):
+                    body(frame)
+                    return
+            default_(frame)
+
+        return test
+
+    def ret(self, s: N.Return) -> Callable[[Frame], None]:
+        """Compile RETURN: a FUNC's value becomes data of its declared type."""
+        want = self.returns
+        value = self.expr(s.value, want) if s.value is not None and want else None
+        interp, line = self.interp, s.line
+
+        def ret(frame: Frame) -> None:
+            interp.line = line
+            raise _Return(coerce(copy(value(frame)), want) if value and want else None)
+
+        return ret
+
+    def call_stmt(self, s: N.Call) -> Callable[[Frame], None]:
+        """Compile a call of a PROC of the module, or of an instruction of the subset."""
+        key, interp, line = s.name.lower(), self.interp, s.line
+        if key in interp.sources:
+            call = self.user_call(s.name, s.args)
+
+            def proc(frame: Frame) -> None:
+                interp.line = line
+                call(frame)
+
+            return proc
+        run = _INSTRUCTIONS[key](self, s.args)
+
+        def instruction(frame: Frame) -> None:
+            interp.line = line
+            run(frame)
+
+        return instruction
+
+    def user_call(self, name: str, args: list[N.Arg]) -> Callable[[Frame], Any]:
+        """Call a routine of the module: values in, INOUT values back out."""
+        sig = self.interp.routines_sig[name.lower()]
+        source = self.interp.sources[name.lower()]
+        positional = [a for a in args if a.name is None]
+        named = {a.name.lower(): a for a in args if a.name is not None}
+        getters: list[Eval] = []
+        writebacks: list[tuple[int, Callable[[Frame, Any], None]]] = []
+        pos = iter(positional)
+        for i, (p, decl) in enumerate(zip(sig.params, source.params, strict=True)):
+            ptype = Type(p.type, (None,) * decl.dims)
+            a = named.get(p.name.lower()) if p.optional else next(pos)
+            if a is None or a.value is None:
+                getters.append(_constant(True if a is not None else None))
+                continue
+            getters.append(self.expr(a.value, ptype))
+            if p.var:
+                writebacks.append((i, self.store(a.value)))
+        interp = self.interp
+
+        def call(frame: Frame) -> Any:
+            values = [copy(g(frame)) for g in getters]
+            if interp.depth >= MAX_CALL_DEPTH:
+                raise RapidError(f"routine calls nested more than {MAX_CALL_DEPTH} deep")
+            interp.depth += 1
+            try:
+                result, inner = interp.routine(name)(values)
+            finally:
+                interp.depth -= 1
+            for i, store in writebacks:
+                store(frame, inner[source.params[i].name.lower()])
+            return result
+
+        return call
+
+    # ---- stores: the left of := and INOUT arguments ----
+    def store(self, target: N.Expr) -> Callable[[Frame, Any], None]:
+        """Compile a data reference into a setter."""
+        if isinstance(target, N.Name):
+            key = target.name.lower()
+            if key in self.local:
+
+                def set_local(frame: Frame, v: Any) -> None:
+                    frame[key] = v
+
+                return set_local
+            globals_ = self.interp.globals
+
+            def set_global(frame: Frame, v: Any) -> None:
+                globals_[key] = v
+
+            return set_global
+        if isinstance(target, N.Component):
+            base, name = self.expr(target.base, None), target.field.lower()
+
+            def set_component(frame: Frame, v: Any) -> None:
+                base(frame)[name] = v
+
+            return set_component
+        assert isinstance(target, N.Index)
+        base = self.expr(target.base, None)
+        indices = [self.expr(i, NUM) for i in target.indices]
+
+        def set_element(frame: Frame, v: Any) -> None:
+            holder, last = _element_holder(base(frame), [i(frame) for i in indices])
+            holder[last] = v
+
+        return set_element
+
+    # ---- expressions ----
+    def expr(self, e: N.Expr, want: Type | None) -> Eval:  # noqa: C901
+        """Compile an expression; ``want`` is the type its context needs (literals, aggregates)."""
+        if isinstance(e, N.Num):
+            v = coerce(e.value, want) if want in (NUM, DNUM) else e.value
+            return _constant(v)
+        if isinstance(e, N.Str | N.Bool):
+            return _constant(e.value)
+        if isinstance(e, N.Name):
+            return self.name(e.name)
+        if isinstance(e, N.Component):
+            base, name = self.expr(e.base, None), e.field.lower()
+            return lambda f: base(f)[name]
+        if isinstance(e, N.Index):
+            base = self.expr(e.base, None)
+            indices = [self.expr(i, NUM) for i in e.indices]
+
+            def element(frame: Frame) -> Any:
+                holder, last = _element_holder(base(frame), [i(frame) for i in indices])
+                return holder[last]
+
+            return element
+        if isinstance(e, N.Aggregate):
+            return self.aggregate(e, want)
+        if isinstance(e, N.Neg):
+            t = self.static(e, want)
+            a = self.expr(e.a, t)
+            return lambda f: coerce(-a(f), t)
+        if isinstance(e, N.Not):
+            a = self.expr(e.a, BOOL)
+            return lambda f: not a(f)
+        if isinstance(e, N.BinOp):
+            return self.binop(e, want)
+        return self.function(e)
+
+    def static(self, e: N.Expr, want: Type | None) -> Type:
+        """Return the expression's type; a literal one takes the context's (else dnum)."""
+        t = self.typer.type(e, want)
+        if t == LITERAL or t is None:
+            return want if want in (NUM, DNUM) else DNUM
+        return t
+
+    def name(self, name: str) -> Eval:
+        key = name.lower()
+        if key in self.local and self.local[key].kind == "OPT":
+
+            def optional(f: Frame) -> Any:
+                if f[key] is None:
+                    raise RapidError(f"the optional argument {name} is not present")
+                return f[key]
+
+            return optional
+        if key in self.local:
+            return lambda f: f[key]
+        globals_ = self.interp.globals
+        return lambda f: globals_[key]
+
+    def aggregate(self, e: N.Aggregate, want: Type | None) -> Eval:
+        assert want is not None
+        if want.dims:
+            inner = Type(want.name, want.dims[1:])
+            items = [self.expr(x, inner) for x in e.items]
+            return lambda f: [coerce(i(f), inner) for i in items]
+        parts = T.RECORDS[want.name]
+        fields = [
+            (k, Type(t), self.expr(x, Type(t))) for (k, t), x in zip(parts, e.items, strict=True)
+        ]
+        return lambda f: {k: coerce(g(f), t) for k, t, g in fields}
+
+    def binop(self, e: N.BinOp, want: Type | None) -> Eval:
+        op = e.op
+        if op in ("AND", "OR", "XOR"):
+            a, b = self.expr(e.a, BOOL), self.expr(e.b, BOOL)
+            if op == "AND":
+                return lambda f: a(f) and b(f)
+            if op == "OR":
+                return lambda f: a(f) or b(f)
+            return lambda f: a(f) != b(f)
+        ta, tb = self.typer.type(e.a), self.typer.type(e.b)
+        if ta == tb == STRING and op == "+":
+            sa, sb = self.expr(e.a, STRING), self.expr(e.b, STRING)
+            return lambda f: _string(sa(f) + sb(f))
+        if op in _COMPARE:
+            operand = next((t for t in (ta, tb) if t not in (LITERAL, None)), DNUM)
+            a, b = self.expr(e.a, operand), self.expr(e.b, operand)
+            compare = _COMPARE[op]
+            return lambda f: compare(a(f), b(f))
+        t = self.static(e, want)
+        a, b = self.expr(e.a, t), self.expr(e.b, t)
+        fn = _FAST.get(op) or (lambda x, y: _arith(op, x, y))
+        if t == NUM:
+            return lambda f: f32(fn(a(f), b(f)))
+        return lambda f: fn(a(f), b(f))
+
+    def function(self, e: N.FuncCall) -> Eval:
+        key = e.name.lower()
+        if key in self.interp.sources:
+            call, interp, line = self.user_call(e.name, e.args), self.interp, self.typer.line
+
+            def func(frame: Frame) -> Any:
+                result = call(frame)
+                interp.line = line
+                return result
+
+            return func
+        return _FUNCTIONS[key](self, e.args)
+
+    def args(self, name: str, args: list[N.Arg]) -> tuple[list[Eval], dict[str, Eval | None]]:
+        """Compile a builtin's arguments: positional by parameter type, optional by name."""
+        routine = T.INSTRUCTIONS.get(name) or T.FUNCTIONS[name]
+        required = [p for p in routine.params if not p.optional]
+        types = {p.name.lower(): p for p in routine.params}
+        pos = [
+            self.expr(a.value, Type(p.type)) if a.value is not None else _constant(None)
+            for p, a in zip(required, [a for a in args if a.name is None], strict=True)
+        ]
+        opt: dict[str, Eval | None] = {}
+        for a in args:
+            if a.name is not None:
+                p = types[a.name.lower()]
+                opt[p.name.lower()] = None if a.value is None else self.expr(a.value, Type(p.type))
+        return pos, opt
+
+
+def _constant(v: Any) -> Eval:
+    return lambda f: v
+
+
+def _element_holder(array: list[Any], indices: list[float]) -> tuple[list[Any], int]:
+    """Return the list holding the element ``indices`` (from 1) and its position."""
+    holder = array
+    for depth, i in enumerate(indices):
+        k = int(i)
+        if k != i or not 1 <= k <= len(holder):
+            raise RapidError(f"index {i:g} outside 1..{len(holder)}")
+        if depth == len(indices) - 1:
+            return holder, k - 1
+        holder = holder[k - 1]
+    raise AssertionError("no index")
+
+
+def _positional(args: list[N.Arg], n: int) -> N.Expr:
+    """Return the ``n``-th required argument's expression."""
+    value = [a for a in args if a.name is None][n].value
+    assert value is not None
+    return value
+
+
+# ---- the instructions and functions of the subset ----
+Builder = Callable[[_Compiler, list[N.Arg]], Callable[[Frame], Any]]
+
+
+def _move_abs_j(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+    pos, _ = c.args("moveabsj", args)
+    target, speed, zone = pos[0], pos[1], pos[2]
+    ctl, interp = c.interp.controller, c.interp
+
+    def run(frame: Frame) -> None:
+        jt, v = target(frame), speed(frame)
+        joints = tuple(jt["robax"][f"rax_{i}"] for i in range(1, 7))
+        ctl.move_abs_j(
+            joints, (v["v_tcp"], v["v_ori"], v["v_leax"], v["v_reax"]), zone(frame), interp.line
+        )
+
+    return run
+
+
+def _text_with_number(opt: dict[str, Eval | None], frame: Frame) -> str:
+    num, dnum, flag = opt.get("num"), opt.get("dnum"), opt.get("bool")
+    if num is not None:
+        return number_text(num(frame), 6)
+    if dnum is not None:
+        return number_text(dnum(frame), 15)
+    if flag is not None:
+        return "TRUE" if flag(frame) else "FALSE"
+    return ""
+
+
+def _tp_write(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+    pos, opt = c.args("tpwrite", args)
+    ctl = c.interp.controller
+    return lambda f: ctl.tp_write(_string(pos[0](f) + _text_with_number(opt, f)))
+
+
+def _write(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+    pos, opt = c.args("write", args)
+    ctl, newline = c.interp.controller, "nonewline" not in opt
+
+    def run(frame: Frame) -> None:
+        handle = pos[0](frame)
+        if handle is None:
+            raise RapidError("Write: the iodev is not open")
+        ctl.write_file(handle, _string(pos[1](frame) + _text_with_number(opt, frame)), newline)
+
+    return run
+
+
+def _open(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+    pos, opt = c.args("open", args)
+    device, file, store = pos[0], opt.get("file"), c.store(_positional(args, 1))
+    ctl, append = c.interp.controller, "append" in opt
+
+    def run(frame: Frame) -> None:
+        path = device(frame) + ("/" + file(frame) if file else "")
+        store(frame, ctl.open_file(path, append))
+
+    return run
+
+
+def _close(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+    pos, _ = c.args("close", args)
+    store, ctl = c.store(_positional(args, 0)), c.interp.controller
+
+    def run(frame: Frame) -> None:
+        handle = pos[0](frame)
+        if handle is not None:
+            ctl.close_file(handle)
+        store(frame, None)
+
+    return run
+
+
+def _tp_read_num(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+    pos, _ = c.args("tpreadnum", args)
+    store, ctl = c.store(_positional(args, 0)), c.interp.controller
+    return lambda f: store(f, f32(ctl.tp_read_num(pos[1](f))))
+
+
+def _step(c: _Compiler, args: list[N.Arg], by: float) -> Callable[[Frame], None]:
+    pos, _ = c.args("incr", args)
+    store = c.store(_positional(args, 0))
+    return lambda f: store(f, f32(pos[0](f) + by))
+
+
+def _clock(action: str) -> Builder:
+    def build(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+        pos, _ = c.args("clk" + action, args)
+        ctl = c.interp.controller
+
+        def run(frame: Frame) -> None:
+            clock: Clock = pos[0](frame)
+            now = ctl.now_s()
+            if action == "reset":
+                clock.total_s, clock.since_s = 0.0, None
+            elif action == "start" and clock.since_s is None:
+                clock.since_s = now
+            elif action == "stop" and clock.since_s is not None:
+                clock.total_s, clock.since_s = clock.total_s + now - clock.since_s, None
+
+        return run
+
+    return build
+
+
+def _wait_time(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+    pos, _ = c.args("waittime", args)
+    ctl = c.interp.controller
+
+    def run(frame: Frame) -> None:
+        t = pos[0](frame)
+        if t < 0:
+            raise RapidError(f"WaitTime {t:g}: a negative time")
+        ctl.wait_time(t)
+
+    return run
+
+
+def _stop(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+    def run(frame: Frame) -> None:
+        raise _Stop
+
+    return run
+
+
+_INSTRUCTIONS: dict[str, Builder] = {
+    "moveabsj": _move_abs_j,
+    "tpwrite": _tp_write,
+    "write": _write,
+    "open": _open,
+    "close": _close,
+    "tpreadnum": _tp_read_num,
+    "tperase": lambda c, a: lambda f: c.interp.controller.tp_erase(),
+    "incr": lambda c, a: _step(c, a, 1.0),
+    "decr": lambda c, a: _step(c, a, -1.0),
+    "clkreset": _clock("reset"),
+    "clkstart": _clock("start"),
+    "clkstop": _clock("stop"),
+    "waittime": _wait_time,
+    "stop": _stop,
+}
+
+
+def _math(name: str, fn: Callable[..., float], result: Type) -> Builder:
+    def build(c: _Compiler, args: list[N.Arg]) -> Eval:
+        pos, _ = c.args(name, args)
+
+        def run(frame: Frame) -> Any:
+            try:
+                return coerce(fn(*(p(frame) for p in pos)), result)
+            except (ValueError, ZeroDivisionError):
+                raise RapidError(f"{name}: argument outside its domain") from None
+
+        return run
+
+    return build
+
+
+def _rounding(name: str, fn: Callable[[float], float], result: Type) -> Builder:
+    def build(c: _Compiler, args: list[N.Arg]) -> Eval:
+        pos, opt = c.args(name, args)
+        dec = opt.get("dec")
+
+        def run(frame: Frame) -> Any:
+            d = int(dec(frame)) if dec else 0
+            return coerce(fn(pos[0](frame) * 10**d) / 10**d, result)
+
+        return run
+
+    return build
+
+
+def _round_half_away(x: float) -> float:
+    return math.copysign(math.floor(abs(x) + 0.5), x)
+
+
+def _to_str(name: str) -> Builder:
+    def build(c: _Compiler, args: list[N.Arg]) -> Eval:
+        pos, _ = c.args(name, args)
+        return lambda f: _string(fixed(pos[0](f), int(pos[1](f))))
+
+    return build
+
+
+def _group(name: str, result: Type) -> Builder:
+    def build(c: _Compiler, args: list[N.Arg]) -> Eval:
+        signal = _positional(args, 0)
+        assert isinstance(signal, N.Name)
+        ctl = c.interp.controller
+        return lambda f: coerce(ctl.group_input(signal.name), result)
+
+    return build
+
+
+def _clk_read(c: _Compiler, args: list[N.Arg]) -> Eval:
+    pos, opt = c.args("clkread", args)
+    ctl, high_res = c.interp.controller, "highres" in opt
+
+    def run(frame: Frame) -> float:
+        clock: Clock = pos[0](frame)
+        t = clock.total_s + (ctl.now_s() - clock.since_s if clock.since_s is not None else 0.0)
+        return f32(t if high_res else math.floor(t * 1000 + 1e-9) / 1000)
+
+    return run
+
+
+def _cjointt(c: _Compiler, args: list[N.Arg]) -> Eval:
+    ctl = c.interp.controller
+
+    def run(frame: Frame) -> Any:
+        joints = ctl.joints_deg()
+        robax = {f"rax_{i + 1}": f32(q) for i, q in enumerate(joints)}
+        return {"robax": robax, "extax": {f"eax_{x}": f32(9e9) for x in "abcdef"}}
+
+    return run
+
+
+def _present(c: _Compiler, args: list[N.Arg]) -> Eval:
+    key = _positional(args, 0).name.lower()  # type: ignore[union-attr]
+    return lambda f: f.get(key) is not None
+
+
+_FUNCTIONS: dict[str, Builder] = {
+    "present": _present,
+    "ginputdnum": _group("ginputdnum", DNUM),
+    "ginput": _group("ginput", NUM),
+    "clkread": _clk_read,
+    "cjointt": _cjointt,
+    "sqrt": _math("sqrt", math.sqrt, NUM),
+    "sqrtdnum": _math("sqrtdnum", math.sqrt, DNUM),
+    "abs": _math("abs", abs, NUM),
+    "absdnum": _math("absdnum", abs, DNUM),
+    "round": _rounding("round", _round_half_away, NUM),
+    "rounddnum": _rounding("rounddnum", _round_half_away, DNUM),
+    "trunc": _rounding("trunc", math.trunc, NUM),
+    "truncdnum": _rounding("truncdnum", math.trunc, DNUM),
+    "numtostr": _to_str("numtostr"),
+    "dnumtostr": _to_str("dnumtostr"),
+    "numtodnum": _math("numtodnum", float, DNUM),
+    "dnumtonum": _math("dnumtonum", float, NUM),
+    "strlen": _math("strlen", len, NUM),
+    "sin": _math("sin", lambda d: math.sin(math.radians(d)), NUM),
+    "cos": _math("cos", lambda d: math.cos(math.radians(d)), NUM),
+    "tan": _math("tan", lambda d: math.tan(math.radians(d)), NUM),
+    "asin": _math("asin", lambda x: math.degrees(math.asin(x)), NUM),
+    "acos": _math("acos", lambda x: math.degrees(math.acos(x)), NUM),
+    "atan": _math("atan", lambda x: math.degrees(math.atan(x)), NUM),
+    "atan2": _math("atan2", lambda y, x: math.degrees(math.atan2(y, x)), NUM),
+    "exp": _math("exp", math.exp, NUM),
+    "pow": _math("pow", math.pow, NUM),
+}
