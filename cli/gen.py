@@ -11,7 +11,7 @@ from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
 from wirecal.gen.urscript.program import UrOptions, pc_address, scripts, write_scripts
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.exit_geometry import cone_problems
+from wirecal.solver.plan_exit import cone_problems
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot

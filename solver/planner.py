@@ -39,7 +39,8 @@ from wirecal.solver import ik
 from wirecal.solver.accuracy import noise_covariance, stepwise_map, tool_error, workspace
 from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.exit_geometry import describe, largest_exit_deg, wire_path, within_cone
+from wirecal.solver.exit_geometry import describe, wire_path, within_cone
+from wirecal.solver.plan_exit import largest_exit_deg
 from wirecal.solver.identifiability import analyse
 from wirecal.solver.kinematics import frames, tool_jacobian, tool_position
 from wirecal.solver.params import ErrorSet

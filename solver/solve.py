@@ -16,7 +16,7 @@ from wirecal.solver.accuracy import workspace
 from wirecal.solver.budget import Budget, budget, least_squares_map, sources
 from wirecal.solver.distance import wire_jacobian
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.exit_geometry import unmodelled_exit_mm
+from wirecal.solver.plan_exit import unmodelled_exit_mm
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.identify import (
     DEFAULT_OMEGA,
