@@ -44,7 +44,8 @@ from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 from wirecal.solver.formats.truth import load_errors  # noqa: E402
 from wirecal.solver.measurements import load_measurements  # noqa: E402
 from wirecal.solver.params import ErrorSet  # noqa: E402
-from wirecal.solver.planner import design, predicted_accuracy  # noqa: E402
+from wirecal.solver.plan_predict import predicted_accuracy  # noqa: E402
+from wirecal.solver.planner import design  # noqa: E402
 from wirecal.solver.run_parameters import (  # noqa: E402
     DEFAULT_RUN,
     PAPER_RUN,

@@ -26,7 +26,10 @@ from wirecal.gen.vplus.program import module_text
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot, robot_file_text, robot_from_dict
-from wirecal.solver.planner import PlanOptions, _blocked, design, predicted_accuracy
+from wirecal.solver.plan_candidates import blocked
+from wirecal.solver.plan_options import PlanOptions
+from wirecal.solver.plan_predict import predicted_accuracy
+from wirecal.solver.planner import design
 from wirecal.twin.cell import run_measurement
 
 from .conftest import VIPER
@@ -271,7 +274,7 @@ def test_blocked_counts_name_the_cell():
     opt = PlanOptions(samples=50)
     counts = []
     for robot in (viper, raised):
-        text = _blocked(robot, np.array(VIPER_THETA0, float), opt)
+        text = blocked(robot, np.array(VIPER_THETA0, float), opt)
         found = re.search(r"^of (\d+) candidates, blocked: .*?(\d+) cell \(the arm in", text)
         assert found, text
         counts.append(int(found.group(2)))

@@ -19,7 +19,7 @@ from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.identify import Problem
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import check_log, load_measurements
-from wirecal.solver.planner import robot_time
+from wirecal.solver.plan_predict import robot_time
 from wirecal.solver.run_parameters import DEFAULT_RUN, PAPER_RUN, run_timeline
 from wirecal.solver.simulate import EncoderTruth, simulate_log
 from wirecal.solver.solve import solve

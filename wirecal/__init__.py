@@ -32,8 +32,8 @@ _API = {
     "Plan": "wirecal.solver.plan",
     # design a plan, and its Ψ table (paper Table 4)
     "design": "wirecal.solver.planner",
-    "PlanOptions": "wirecal.solver.planner",
-    "Design": "wirecal.solver.planner",
+    "PlanOptions": "wirecal.solver.plan_options",
+    "Design": "wirecal.solver.plan_design",
     "psi_table": "wirecal.app.psi_view",
     # simulate a measurement run
     "simulate_log": "wirecal.solver.simulate",
