@@ -11,12 +11,12 @@ from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
 from wirecal.gen.urscript.program import UrOptions, pc_address, scripts, write_scripts
 from wirecal.gen.vplus.program import GenOptions, module_text, write_module
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.plan_exit import cone_problems
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.run_token import NO_KEY, run_token
 from wirecal.solver.formats.validation_files import load_setup
+from wirecal.solver.plan_exit import cone_problems
 from wirecal.solver.robot import LANGUAGES, language_mismatch
 from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
 from wirecal.twin.urscript.versions import NEEDED

@@ -15,10 +15,10 @@ from wirecal.solver import params as P
 from wirecal.solver.cell_check import check_cell
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.plan_exit import cone_problems
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.identifiability import Identifiability, analyse
+from wirecal.solver.plan_exit import cone_problems
 from wirecal.solver.plausibility import READING_NOISE_MM
 from wirecal.solver.scale import ScaleObservability, scale_observability
 from wirecal.solver.sensitivity import DEFAULT_TOL, sensitivity
