@@ -178,7 +178,7 @@ def _export_text(robot, patch, source) -> str:
     rob = load_robot(robot)
     model = rob.model(read_patch(patch).offsets_for(rob) if patch else {})
     if source is None and rob.urdf is None:
-        lo, hi = rob.body_limits_deg  # a URDF's limits: the arm's own, inside the data sheet's
+        lo, hi = rob.limits_deg()  # a URDF's limits: the arm's own, inside the data sheet's
         return dh_urdf_text(
             rob.name,
             model.dh,

@@ -49,7 +49,7 @@ def move_collision(
 
 def body_problem(robot: Robot, q_deg: np.ndarray) -> str | None:
     """Return why a target is beyond the body limits (``[cell]``), or None."""
-    lo, hi = robot.body_limits_deg
+    lo, hi = robot.limits_deg()
     for j in np.flatnonzero((q_deg < lo) | (q_deg > hi)):
         return (
             f"joint {j + 1} = {q_deg[j]:g} deg is beyond its body limits [{lo[j]:g}, "

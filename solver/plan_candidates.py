@@ -35,8 +35,7 @@ def candidates(robot: Robot, theta0: np.ndarray, opt: PlanOptions, rng) -> np.nd
 
     Within the margin of the body limits (the joint limits narrowed by ``[cell]``).
     """
-    lo, hi = robot.body_limits_deg
-    lo, hi = lo + opt.margin_deg, hi - opt.margin_deg
+    lo, hi = robot.limits_deg(opt.margin_deg)
     out = []
     for subset in _subsets(robot.n_joints):
         q = np.tile(theta0, (opt.samples, 1))

@@ -122,8 +122,9 @@ class Design:
 
 def check_theta0(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> None:
     """Raise when a joint of θ0 is within the margin of its body limits, or θ0 collides."""
-    lo, hi = robot.body_limits_deg
-    for j in np.flatnonzero((theta0 < lo + opt.margin_deg) | (theta0 > hi - opt.margin_deg)):
+    lo, hi = robot.limits_deg()
+    inner_lo, inner_hi = robot.limits_deg(opt.margin_deg)
+    for j in np.flatnonzero((theta0 < inner_lo) | (theta0 > inner_hi)):
         raise WirecalError(
             f"theta0: joint {j + 1} = {theta0[j]:g} deg is within "
             f"{opt.margin_deg:g} deg of its limits [{lo[j]:g}, {hi[j]:g}] (the joint "
@@ -239,10 +240,8 @@ def exit_line(robot: Robot, plan: Plan) -> str:
 def cell_line(robot: Robot) -> str:
     """Return the robot file's cell in words (plan header): what every move keeps clear of."""
     c = robot.cell
-    narrowed = np.flatnonzero(
-        (robot.body_limits_deg[0] > robot.joint_min_deg)
-        | (robot.body_limits_deg[1] < robot.joint_max_deg)
-    )
+    lo, hi = robot.limits_deg()
+    narrowed = np.flatnonzero((lo > robot.joint_min_deg) | (hi < robot.joint_max_deg))
     body = (
         "body limits on joint " + ", ".join(str(j + 1) for j in narrowed)
         if narrowed.size

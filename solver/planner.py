@@ -222,9 +222,10 @@ def _isolated_count(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> int:
 
 def _check_room(robot: Robot, opt: PlanOptions) -> None:
     """Raise when a joint's body limits leave no room for points inside the margin."""
-    body_lo, body_hi = robot.body_limits_deg
+    body_lo, body_hi = robot.limits_deg()
+    lo, hi = robot.limits_deg(opt.margin_deg)
     span = body_hi - body_lo
-    narrow = np.flatnonzero(span <= 2 * opt.margin_deg)
+    narrow = np.flatnonzero(lo >= hi)
     if narrow.size:
         raise WirecalError(
             [
@@ -248,9 +249,9 @@ def _theta0_draws(robot: Robot, opt: PlanOptions) -> np.ndarray:
     naming what blocked them, when none of :data:`THETA0_DRAWS` is clear.
     """
     rng = np.random.default_rng([opt.seed, 99])
-    lo, hi = robot.body_limits_deg
+    lo, hi = robot.limits_deg()
     inset = np.clip((hi - lo) / 4, opt.margin_deg, 20.0)
-    t0 = np.round(rng.uniform(lo + inset, hi - inset, (THETA0_DRAWS, robot.n_joints)), 0)
+    t0 = np.round(rng.uniform(*robot.limits_deg(inset), (THETA0_DRAWS, robot.n_joints)), 0)
     p0 = tool_position(robot.nominal, np.radians(t0))
     gaps = robot.cell_gaps(t0, p0)
     clear = gaps.smallest() >= 0

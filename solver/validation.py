@@ -195,8 +195,7 @@ def distance_plan(
     """
     options = options or PlanOptions()
     rng = np.random.default_rng([seed, 11])
-    lo, hi = robot.body_limits_deg
-    lo, hi = lo + options.margin_deg, hi - options.margin_deg
+    lo, hi = robot.limits_deg(options.margin_deg)
     model = robot.nominal
     theta0 = np.asarray(plan.theta0_deg, dtype=float)
     p0 = tool_position(model, np.radians(theta0)[None])[0]
