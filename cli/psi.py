@@ -219,7 +219,7 @@ def _scale(rb, q_deg, theta0_deg, names: tuple[str, ...]) -> ScaleObservability:
     lengths = {
         n: rb.nominal_value(n)
         for n in P.all_names(rb.n_joints, with_tool=True)
-        if not n.startswith(("th", "al")) and abs(rb.nominal_value(n)) > 1e-9
+        if P.unit_of(n) == "mm" and abs(rb.nominal_value(n)) > 1e-9
     }
     psi = sensitivity(rb.nominal, q_deg, theta0_deg, names).psi
     d = wire_lengths(rb.nominal, np.radians(q_deg), np.radians(theta0_deg))

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import gammainccinv
 
+from wirecal.solver import params as P
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import Implausible
 from wirecal.solver.identifiability import Identifiability, analyse_jacobian, covariance
@@ -299,8 +300,12 @@ def implausible(names: Sequence[str], values: np.ndarray) -> list[str]:
 
     Angles (θ, α) in deg, lengths in mm, boundary units.
     """
-    plausible = np.where([n.startswith(("th", "al")) for n in names], PLAUSIBLE_DEG, PLAUSIBLE_MM)
-    return [f"{n} {v:+.4g}" for n, v, p in zip(names, values, plausible, strict=True) if abs(v) > p]
+    plausible = {"deg": PLAUSIBLE_DEG, "mm": PLAUSIBLE_MM}
+    return [
+        f"{n} {v:+.4g}"
+        for n, v in zip(names, values, strict=True)
+        if abs(v) > plausible[P.unit_of(n)]
+    ]
 
 
 def _bounds(result: SolveResult, method: str, omega_default: float) -> list[Finding]:

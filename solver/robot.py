@@ -7,7 +7,6 @@ and speeds, the wire attachment point and the draw-wire encoder. Files are read 
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -258,7 +257,7 @@ class Robot:
         if p.kind == "tool":
             return float(self.tool_point[p.row])
         value = float(self.dh[p.row, P.DH_COLUMN[p.kind]])
-        return math.degrees(value) if p.angular else value
+        return value * P.BOUNDARY_PER_INTERNAL[p.unit]
 
     def program_problems(self) -> list[str]:
         """Return why no controller program may be written for this robot (none: it may)."""

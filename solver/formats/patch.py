@@ -304,7 +304,7 @@ def read_patch(path: str | Path) -> Patch:
 
 
 def _value(t: Table) -> PatchValue | None:
-    unit = t.string("unit", choices={"deg": "θ, α", "mm": "a, d, tool"})
+    unit = t.string("unit", choices=P.UNIT_KINDS)
     bound = MAX_DH_ANGLE_DEG if unit == "deg" else MAX_LENGTH_MM
     nominal, offset, value = (
         t.number(key, lo=-bound, hi=bound, unit=unit or "")
