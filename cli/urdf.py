@@ -17,8 +17,8 @@ from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.urdf import dh_urdf_text, read_urdf, urdf_with_origins
+from wirecal.solver.formats.urdf_model import calibrated_origins, read_chain
 from wirecal.solver.robot import INTERFACES, LANGUAGES
-from wirecal.solver.urdf_model import calibrated_origins, read_chain
 
 
 def _numbers(count: int | None, what: str):

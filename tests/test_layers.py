@@ -59,12 +59,6 @@ KNOWN = {
     ("wirecal.solver.simulate", "wirecal.solver.formats.log"): (
         "issue 25 item 3: the solver import circle (simulate writes the log's text)"
     ),
-    ("wirecal.solver.urdf_model", "wirecal.solver.formats.urdf"): (
-        "issue 25 item 3: the solver import circle (the URDF chain read into DH)"
-    ),
-    ("wirecal.solver.validation_analysis", "wirecal.solver.formats.validation_files"): (
-        "issue 25 item 3: the solver import circle (validation logs read into records)"
-    ),
 }
 """Violations of today, (importer, imported) → the issue that removes it."""
 

@@ -20,9 +20,9 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.patch import write_patch
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.urdf import matrix_rpy, read_urdf
+from wirecal.solver.formats.urdf_model import read_chain
 from wirecal.solver.identify import Estimate
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.urdf_model import read_chain
 
 ROOT = Path(__file__).resolve().parents[1]
 ARMS = sorted((ROOT / "examples").glob("*/robot.toml"))
