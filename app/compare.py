@@ -20,9 +20,9 @@ from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import STRIDE, GenOptions, module_text
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.controller_result import parse_result, read_result, result_in_log
-from wirecal.solver.formats.log import Log
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
+from wirecal.solver.readings import Log
 from wirecal.solver.robot import Robot
 from wirecal.solver.solve import SolveResult, solve
 from wirecal.twin.cell import Cell

@@ -14,13 +14,12 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import REFERENCE_STEP, Log, Reading, read_log
 from wirecal.solver.plan import Plan
+from wirecal.solver.readings import REFERENCE_STEP, Log, Reading
 from wirecal.solver.robot import Encoder, Robot
 from wirecal.solver.run_parameters import RunParameters, run_timeline
 from wirecal.solver.scale import find_slips, reference_problems
@@ -532,14 +531,3 @@ def _lengths(
                 "negative: is the sign of mm_per_count right?"
             )
     return distance
-
-
-def load_measurements(
-    path: str | Path,
-    plan: Plan,
-    robot: Robot,
-    tol: Tolerances = Tolerances(),
-    accept_foreign: bool = False,
-) -> Measurements:
-    """Read a log file and check it against the plan (:func:`read_log` + :func:`check_log`)."""
-    return check_log(read_log(path), plan, robot, tol, accept_foreign)

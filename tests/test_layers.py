@@ -53,11 +53,9 @@ KNOWN = {
     ("wirecal.gen.urscript.program", "wirecal.twin.urscript.versions"): (
         "issue 25 item 3: the software-version table of the URScript front end, the same move"
     ),
-    ("wirecal.solver.measurements", "wirecal.solver.formats.log"): (
-        "issue 25 item 3: the solver import circle (the log's records are the solver's input)"
-    ),
     ("wirecal.solver.simulate", "wirecal.solver.formats.log"): (
-        "issue 25 item 3: the solver import circle (simulate writes the log's text)"
+        "issue 25 item 3: simulate writes the log's text; it should return readings that the "
+        "log format writes"
     ),
 }
 """Violations of today, (importer, imported) → the issue that removes it."""

@@ -44,7 +44,7 @@ _API = {
     "read_log": "wirecal.solver.formats.log",
     "parse_log": "wirecal.solver.formats.log",
     "check_log": "wirecal.solver.measurements",
-    "load_measurements": "wirecal.solver.measurements",
+    "load_measurements": "wirecal.solver.formats.log",
     "Measurements": "wirecal.solver.measurements",
     "Tolerances": "wirecal.solver.measurements",
     # solve and write the patch
