@@ -54,7 +54,8 @@ import numpy as np
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.capture import RowTest
 from wirecal.solver.formats.csv_table import Row, parse_table, read_source
-from wirecal.solver.measurements import Measurements, Tolerances, check_log
+from wirecal.solver.log_rows import DEFAULT_TOLERANCES, Tolerances
+from wirecal.solver.measurements import Measurements, check_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.readings import Log, Reading
 from wirecal.solver.robot import Robot
@@ -114,15 +115,14 @@ def load_measurements(
     path: str | Path,
     plan: Plan,
     robot: Robot,
-    tol: Tolerances | None = None,
+    tol: Tolerances = DEFAULT_TOLERANCES,
     accept_foreign: bool = False,
 ) -> Measurements:
     """Read a log file and check it against the plan.
 
-    :func:`read_log`, then :func:`~wirecal.solver.measurements.check_log` (``tol``:
-    its default tolerances when None).
+    :func:`read_log`, then :func:`~wirecal.solver.measurements.check_log`.
     """
-    return check_log(read_log(path), plan, robot, tol or Tolerances(), accept_foreign)
+    return check_log(read_log(path), plan, robot, tol, accept_foreign)
 
 
 def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bool = True) -> Log:
