@@ -22,9 +22,9 @@ import numpy as np
 
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
-from wirecal.solver.plausibility import OVERRIDDEN
 from wirecal.solver.solve import SolveResult
 from wirecal.solver.validation_analysis import Stats, reduction
+from wirecal.solver.verdict import OVERRIDDEN
 
 if TYPE_CHECKING:
     from wirecal.app.compare import ControllerComparison

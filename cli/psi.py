@@ -19,9 +19,9 @@ from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.identifiability import Identifiability, analyse
 from wirecal.solver.plan_exit import cone_problems
-from wirecal.solver.plausibility import READING_NOISE_MM
 from wirecal.solver.scale import ScaleObservability, scale_observability
 from wirecal.solver.sensitivity import DEFAULT_TOL, sensitivity
+from wirecal.solver.verdict import READING_NOISE_MM
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 
 ROBOT = click.argument("robot", type=click.Path(dir_okay=False))

@@ -29,8 +29,8 @@ from wirecal.solver.formats.toml_fields import Table, document, valid
 from wirecal.solver.formats.ur_calibration import put_ur_calibration, ur_calibration_path
 from wirecal.solver.identify import Estimate
 from wirecal.solver.plan import Plan
-from wirecal.solver.plausibility import override_warning
 from wirecal.solver.robot import Robot
+from wirecal.solver.verdict import override_warning
 
 _FIELD = {"th": "theta offset", "d": "d", "a": "a", "al": "alpha", "tool": "tool point"}
 
