@@ -54,12 +54,12 @@ from wirecal.solver.formats.truth import random_errors, truth_text
 from wirecal.solver.formats.validation_files import load_setup, read_validation_log
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plan import Plan
-from wirecal.solver.plausibility import Plausibility
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled, realistic_encoder
 from wirecal.solver.solve import SolveResult, solve
 from wirecal.solver.validation import Setup, distance_plan, distance_residuals
 from wirecal.solver.validation_analysis import Stats, config_discrepancy, plane_residuals
+from wirecal.solver.verdict import Plausibility
 from wirecal.twin.vplus.runs import run_validation
 
 UR_OUTPUTS = (

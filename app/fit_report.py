@@ -19,7 +19,7 @@ from wirecal.app.report import AFTER, BEFORE, _png
 from wirecal.gen.templating import render
 from wirecal.solver.budget import Budget
 from wirecal.solver.fit_result import FitResult, Run, parameters_json
-from wirecal.solver.plausibility import Plausibility
+from wirecal.solver.verdict import Plausibility
 
 
 def residual_figure(run: Run) -> str:

@@ -21,9 +21,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from wirecal.gen.templating import render
-from wirecal.solver.plausibility import OVERRIDDEN
+from wirecal.solver import params as P
 from wirecal.solver.solve import SolveResult
 from wirecal.solver.validation_analysis import Stats, reduction
+from wirecal.solver.verdict import OVERRIDDEN
 
 if TYPE_CHECKING:
     from wirecal.app.compare import ControllerComparison
@@ -174,7 +175,7 @@ def render_report(
         params.append(
             {
                 "name": name,
-                "unit": "deg" if name.startswith(("th", "al")) else "mm",
+                "unit": P.unit_of(name),
                 "nominal": robot.nominal_value(name),
                 "stepwise": sw.as_dict().get(name) if sw else None,
                 "joint": jt.as_dict().get(name) if jt else None,

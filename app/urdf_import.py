@@ -2,7 +2,7 @@
 
 Everything the robot file needs comes from the URDF, the options or a stated rule, and the
 file says which: the DH rows, limits and speeds from the URDF's joints
-(:mod:`wirecal.solver.urdf_model`); the wire attachment point from ``--wire-point-mm`` in
+(:mod:`wirecal.solver.formats.urdf_model`); the wire attachment point from ``--wire-point-mm`` in
 the tip link's frame; the encoder interface and counter width from the controller language's
 declaration (:class:`wirecal.lang.base.Capabilities`); the link radii from the URDF's
 geometry or lengths (:mod:`wirecal.solver.formats.urdf_geometry`); the mounting plane from
@@ -38,6 +38,7 @@ from wirecal.solver.formats.urdf_geometry import (
     link_radii,
     wide_links,
 )
+from wirecal.solver.formats.urdf_model import UrdfChain, fk_difference_mm, read_chain
 from wirecal.solver.identifiability import propose_parameters
 from wirecal.solver.kinematics import Model
 from wirecal.solver.robot import (
@@ -47,7 +48,6 @@ from wirecal.solver.robot import (
     Robot,
     UrdfSource,
 )
-from wirecal.solver.urdf_model import UrdfChain, fk_difference_mm, read_chain
 
 CONTINUOUS_DEG = 360.0
 """Range written for a URDF ``continuous`` joint (no limits in the file): one turn each way."""

@@ -38,13 +38,13 @@ from wirecal.app.twin_runs import measure_in_twin  # noqa: E402
 from wirecal.gen.vplus.program import GenOptions  # noqa: E402
 from wirecal.solver import montecarlo  # noqa: E402
 from wirecal.solver.accuracy import workspace  # noqa: E402
-from wirecal.solver.formats.log import read_log  # noqa: E402
+from wirecal.solver.formats.log import load_measurements, read_log  # noqa: E402
 from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 from wirecal.solver.formats.truth import load_errors  # noqa: E402
-from wirecal.solver.measurements import load_measurements  # noqa: E402
 from wirecal.solver.params import ErrorSet  # noqa: E402
-from wirecal.solver.planner import design, predicted_accuracy  # noqa: E402
+from wirecal.solver.plan_predict import predicted_accuracy  # noqa: E402
+from wirecal.solver.planner import design  # noqa: E402
 from wirecal.solver.run_parameters import (  # noqa: E402
     DEFAULT_RUN,
     PAPER_RUN,

@@ -19,11 +19,11 @@ from wirecal.app.compare import controller_solve
 from wirecal.app.twin_runs import measure_in_twin
 from wirecal.gen.vplus.program import module_text
 from wirecal.lang.vplus.parser import parse_module
-from wirecal.solver.formats.log import parse_log
+from wirecal.solver.formats.log import load_measurements, parse_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import load_errors
-from wirecal.solver.measurements import check_log, load_measurements
+from wirecal.solver.measurements import check_log
 from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 

@@ -27,7 +27,7 @@ from wirecal.solver.formats.cable_table import read_cable_table
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.patch import companion_paths, put_patch
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.plausibility import READING_NOISE_MM
+from wirecal.solver.verdict import READING_NOISE_MM
 
 
 @click.command()

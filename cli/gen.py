@@ -12,11 +12,11 @@ from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
 from wirecal.gen.request import GenRequest
 from wirecal.lang.registry import languages
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.exit_geometry import cone_problems
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.validation_files import load_setup
+from wirecal.solver.plan_exit import cone_problems
 from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
 
 _D = RunParameters()

@@ -12,7 +12,9 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.plan_file import plan_to_toml
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.planner import Design, PlanOptions, design
+from wirecal.solver.plan_design import Design
+from wirecal.solver.plan_options import PlanOptions
+from wirecal.solver.planner import design
 
 _D = PlanOptions()
 

@@ -15,13 +15,13 @@ from wirecal.solver import params as P
 from wirecal.solver.cell_check import check_cell
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.exit_geometry import cone_problems
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.identifiability import Identifiability, analyse
-from wirecal.solver.plausibility import READING_NOISE_MM
+from wirecal.solver.plan_exit import cone_problems
 from wirecal.solver.scale import ScaleObservability, scale_observability
 from wirecal.solver.sensitivity import DEFAULT_TOL, sensitivity
+from wirecal.solver.verdict import READING_NOISE_MM
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 
 ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
@@ -219,7 +219,7 @@ def _scale(rb, q_deg, theta0_deg, names: tuple[str, ...]) -> ScaleObservability:
     lengths = {
         n: rb.nominal_value(n)
         for n in P.all_names(rb.n_joints, with_tool=True)
-        if not n.startswith(("th", "al")) and abs(rb.nominal_value(n)) > 1e-9
+        if P.unit_of(n) == "mm" and abs(rb.nominal_value(n)) > 1e-9
     }
     psi = sensitivity(rb.nominal, q_deg, theta0_deg, names).psi
     d = wire_lengths(rb.nominal, np.radians(q_deg), np.radians(theta0_deg))

@@ -17,7 +17,7 @@ from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.urdf import dh_urdf_text, read_urdf, urdf_with_origins
-from wirecal.solver.urdf_model import calibrated_origins, read_chain
+from wirecal.solver.formats.urdf_model import calibrated_origins, read_chain
 
 
 def _numbers(count: int | None, what: str):
@@ -181,7 +181,7 @@ def _export_text(robot, patch, source) -> str:
     rob = load_robot(robot)
     model = rob.model(read_patch(patch).offsets_for(rob) if patch else {})
     if source is None and rob.urdf is None:
-        lo, hi = rob.body_limits_deg  # a URDF's limits: the arm's own, inside the data sheet's
+        lo, hi = rob.limits_deg()  # a URDF's limits: the arm's own, inside the data sheet's
         return dh_urdf_text(
             rob.name,
             model.dh,

@@ -25,8 +25,7 @@ def joint_literal(x: float) -> str:
 
 def check_limits(robot: Robot, plan: Plan, margin_deg: float) -> None:
     """Refuse to generate motion to any configuration within ``margin_deg`` of a limit."""
-    lo = robot.joint_min_deg + margin_deg
-    hi = robot.joint_max_deg - margin_deg
+    lo, hi = robot.limits_deg(margin_deg, body=False)
     problems = []
 
     def check(q, where):

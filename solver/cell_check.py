@@ -3,7 +3,7 @@
 Before a program is written (``wirecal gen``) or a plan is passed (``psi --strict``), every
 target and every joint-interpolated move of the measurement run (θ0 → via points → points
 → θ0, :func:`~wirecal.solver.wire_range.run_moves`), sampled as the planner samples moves
-(:func:`~wirecal.solver.planner.move_samples`), must keep the arm out of itself, the floor
+(:func:`~wirecal.solver.plan_moves.move_samples`), must keep the arm out of itself, the floor
 and the keep-out volumes of ``[cell]`` (:mod:`~wirecal.solver.cell`), and every target
 within the body limits.
 """
@@ -15,7 +15,7 @@ import numpy as np
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import Model, tool_position
 from wirecal.solver.plan import Plan
-from wirecal.solver.planner import move_samples
+from wirecal.solver.plan_moves import move_samples
 from wirecal.solver.robot import Robot
 from wirecal.solver.wire_range import run_moves
 
@@ -49,7 +49,7 @@ def move_collision(
 
 def body_problem(robot: Robot, q_deg: np.ndarray) -> str | None:
     """Return why a target is beyond the body limits (``[cell]``), or None."""
-    lo, hi = robot.body_limits_deg
+    lo, hi = robot.limits_deg()
     for j in np.flatnonzero((q_deg < lo) | (q_deg > hi)):
         return (
             f"joint {j + 1} = {q_deg[j]:g} deg is beyond its body limits [{lo[j]:g}, "

@@ -9,7 +9,7 @@ identifiable DH errors). The steps:
 2. **Parameters**: the attachment, the anchor, the offsets (and the scale) always; then the
    DH errors of rows 2…n (:func:`candidates`), each kept when it raises the rank of
    ∂L/∂x over *these* rows and leaves every σ (from the quantisation floor) below
-   :data:`~wirecal.solver.plausibility.POORLY_IDENTIFIED` deg or mm (the scale: below the
+   :data:`~wirecal.solver.verdict.POORLY_IDENTIFIED` deg or mm (the scale: below the
    default datasheet tolerance, 500 ppm)
    (:func:`~wirecal.solver.identifiability.select_columns`). Row 1 is a rigid motion of the
    arm that the anchor absorbs; θ_n and d_n move the attachment, which is fitted.
@@ -48,8 +48,8 @@ from wirecal.solver.identifiability import (
 )
 from wirecal.solver.identify import Loss
 from wirecal.solver.kinematics import Model, tool_position
-from wirecal.solver.plausibility import POORLY_IDENTIFIED, implausible
 from wirecal.solver.robot import DEFAULT_SCALE_TOLERANCE_PPM, Robot
+from wirecal.solver.verdict import POORLY_IDENTIFIED, implausible
 
 REJECT_SIGMA = 5.0
 """Rows whose residual exceeds this many robust σ are outliers (snags, typos)."""
@@ -241,7 +241,7 @@ def final_solve(
     """Return the plain least-squares ``x`` over ``rows``, from a second start if need be.
 
     A first result with a DH error beyond a physically plausible size
-    (:func:`~wirecal.solver.plausibility.implausible`) is a local minimum or a run along a
+    (:func:`~wirecal.solver.verdict.implausible`) is a local minimum or a run along a
     weak direction, not an estimate: the fit starts again with the DH errors at 0 (the
     attachment, anchor, offsets as found) and keeps the second result unless it fits
     worse. Still beyond, it is reported as it is and the plausibility gate refuses it.

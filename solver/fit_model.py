@@ -66,7 +66,7 @@ class Layout:
     @property
     def boundary_per_internal(self) -> np.ndarray:
         """Boundary units per internal unit of each parameter (180/π for angles, 1e6 for κ)."""
-        per = {"deg": 180.0 / np.pi, "mm": 1.0, "ppm": 1.0 / PPM}
+        per = {**P.BOUNDARY_PER_INTERNAL, "ppm": 1.0 / PPM}
         return np.array([per[u] for u in self.units])
 
     def split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:

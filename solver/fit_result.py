@@ -30,7 +30,10 @@ from wirecal.solver.fit_units import check_units
 from wirecal.solver.fit_xyz import XyzCheck, check_xyz, refine_joints
 from wirecal.solver.identify import Estimate
 from wirecal.solver.kinematics import Model
-from wirecal.solver.plausibility import (
+from wirecal.solver.robot import Robot
+from wirecal.solver.scale import PPM
+from wirecal.solver.simulate import sagged_tool_points
+from wirecal.solver.verdict import (
     PLAUSIBLE_DEG,
     PLAUSIBLE_MM,
     READING_NOISE_MM,
@@ -39,9 +42,6 @@ from wirecal.solver.plausibility import (
     implausible,
     residual_limit_mm,
 )
-from wirecal.solver.robot import Robot
-from wirecal.solver.scale import PPM
-from wirecal.solver.simulate import sagged_tool_points
 
 MIN_ROWS = 20
 """Fewer rows than this cannot carry the anchor, the attachment, offsets and DH errors."""
@@ -181,7 +181,7 @@ def assess_fit(result: FitResult, noise_mm: float = READING_NOISE_MM) -> Plausib
     """Return the plausibility gate's verdict on a fit: residual and plausible sizes.
 
     Residual: σ of the final fit against σ_model = √(floor² + noise²) by the gate's χ² bound
-    (:func:`~wirecal.solver.plausibility.residual_limit_mm`); sizes: no DH error beyond
+    (:func:`~wirecal.solver.verdict.residual_limit_mm`); sizes: no DH error beyond
     :data:`PLAUSIBLE_DEG` deg or :data:`PLAUSIBLE_MM` mm. Identifiability holds by
     construction (every parameter chosen has its σ below the gate's limit).
     """

@@ -19,8 +19,8 @@ import numpy as np
 
 from wirecal.solver.cable_data import AXES, CableTable, ColumnMap
 from wirecal.solver.kinematics import Model, tool_position
-from wirecal.solver.plausibility import READING_NOISE_MM
 from wirecal.solver.robot import Robot
+from wirecal.solver.verdict import READING_NOISE_MM
 
 ERROR_SIZE = 0.5
 """Largest true DH error (deg or mm)."""

@@ -202,8 +202,7 @@ def solve(
     nominal model; a calibrated controller's is patched).
     """
     model = robot.nominal if model is None else model
-    lo_deg = robot.joint_min_deg + margin_deg
-    hi_deg = robot.joint_max_deg - margin_deg
+    lo_deg, hi_deg = robot.limits_deg(margin_deg, body=False)
     dh = np.asarray(model.dh)
     if analytic_structure(model):  # exact already: nothing to merge before polishing
         starts = [phi - dh[:, 2] for phi in _analytic(model, R, o)]

@@ -11,28 +11,23 @@ controller solver uses the same readings).
 
 from __future__ import annotations
 
-import itertools
-import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import REFERENCE_STEP, Log, Reading, read_log
+from wirecal.solver.log_checks import check_origin, timer_problems
+from wirecal.solver.log_rows import (
+    DEFAULT_TOLERANCES,
+    LogRows,
+    Tolerances,
+    read_rows,
+    reference_pairs,
+)
 from wirecal.solver.plan import Plan
-from wirecal.solver.robot import Encoder, Robot
-from wirecal.solver.run_parameters import RunParameters, run_timeline
-from wirecal.solver.scale import find_slips, reference_problems
-
-
-@dataclass(frozen=True)
-class Tolerances:
-    """What the reader accepts; each is a CLI option of ``wirecal solve``."""
-
-    joint_deg: float = 0.05  # logged joints vs the plan
-    spread_mm: float = 0.1  # max − min of a point's samples: the robot was still moving
-    zero_mm: float = 0.1  # a step change of the zero readings: the wire slipped
+from wirecal.solver.readings import Log, Reading
+from wirecal.solver.robot import Robot
+from wirecal.solver.scale import find_slips
 
 
 @dataclass(frozen=True)
@@ -133,7 +128,7 @@ def check_log(
     log: Log,
     plan: Plan,
     robot: Robot,
-    tol: Tolerances = Tolerances(),
+    tol: Tolerances = DEFAULT_TOLERANCES,
     accept_foreign: bool = False,
 ) -> Measurements:
     """Validate a log against the plan and robot; wire lengths for every plan point.
@@ -144,10 +139,10 @@ def check_log(
     still readable).
     """
     if not accept_foreign:
-        _check_origin(log, plan, robot)
+        check_origin(log, plan, robot)
     src = log.source
     problems: list[str] = []
-    rows = _read_rows(log, plan, robot, tol, problems)
+    rows = read_rows(log, plan, robot, tol, problems)
     zeros, n_steps, mpc = rows.zeros, len(plan.steps), log.mm_per_count
     first_zero = zeros[min(zeros)] if zeros else None
     if first_zero is None and log.readings:
@@ -164,9 +159,9 @@ def check_log(
         distance = _lengths(rows, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
     else:
         distance = rows.counts
-    reference_mm = _reference_pairs(rows, robot.encoder, mpc, src, problems)
+    reference_mm = reference_pairs(rows, robot.encoder, mpc, src, problems)
     if not problems:  # a duplicated or foreign row explains a timer going backwards
-        problems += _timer_problems(log, rows.zeros, plan, robot)
+        problems += timer_problems(log, rows.zeros, plan, robot)
     if problems:
         raise WirecalError(problems)
     missing = tuple(
@@ -193,7 +188,7 @@ def check_log(
     )
 
 
-def _times(rows: _Rows, drift: dict[int, float], n_steps: int) -> dict:
+def _times(rows: LogRows, drift: dict[int, float], n_steps: int) -> dict:
     """Return the readings' times for the drift fit; none without ``t_s`` (version 1)."""
     zeros = [rows.zeros[s] for s in sorted(drift)]
     if not zeros or any(r.t_s is None for r in zeros):
@@ -206,246 +201,6 @@ def _times(rows: _Rows, drift: dict[int, float], n_steps: int) -> dict:
         "zero_mm": np.array([drift[s] for s in sorted(drift)]),
         "reference_t_s": float(t_zero[in_ref].mean()) if in_ref.any() else None,
     }
-
-
-FASTEST_RUN = RunParameters(speed_pct=100.0, settle_s=0.0, readings=1)
-"""The quickest run a generated program makes: full speed, no fixed settle, one reading."""
-
-TIMER_RATIO_BOUNDS = (0.5, 500.0)
-"""The run's time between its zero readings over the time model's fastest run
-(:func:`~wirecal.solver.run_parameters.run_timeline`): below 0.5 the robot would have moved
-faster than it can (a timer at zero, or in minutes); above 500 slower than at 1 % speed
-with 60 s settling (about 100 times, pauses included): a timer in milliseconds."""
-
-
-def _timer_problems(log: Log, zeros: dict[int, Reading], plan: Plan, robot: Robot) -> list[str]:
-    """Check the controller's timer ``t_s``: never backwards, and in seconds.
-
-    In seconds: the time between the first and the last zero reading compared with the
-    robot time of the same moves (:data:`TIMER_RATIO_BOUNDS`).
-    """
-    src = log.source
-    timed = [(r.line, r.t_s) for r in log.readings if r.t_s is not None]
-    for (line_before, before), (line, t) in itertools.pairwise(timed):
-        if t < before:
-            return [
-                f"{src}:{line}: t_s {t:g} s is before the previous reading's "
-                f"{before:g} s (line {line_before}): the controller's timer never runs "
-                "backwards; keep one run per log, its lines in the order written"
-            ]
-    zero_t = {s: (r.line, r.t_s) for s, r in sorted(zeros.items()) if r.t_s is not None}
-    if len(zero_t) < 2:
-        return []
-    (s0, (line0, t0)), (s1, (line1, t1)) = list(zero_t.items())[:: len(zero_t) - 1]
-    model = run_timeline(robot, plan, FASTEST_RUN).reading_s
-    at_zero = np.cumsum([0] + [1 + len(st.points_deg) for st in plan.steps])
-    fastest_s = float(model[at_zero[s1 - 1]] - model[at_zero[s0 - 1]])
-    lo, hi = TIMER_RATIO_BOUNDS
-    if lo <= (t1 - t0) / fastest_s <= hi:
-        return []
-    unit = "at zero or in minutes" if (t1 - t0) / fastest_s < lo else "in milliseconds"
-    return [
-        f"{src}:{line0}-{line1}: t_s says steps {s0}–{s1} took {t1 - t0:g} s; the robot "
-        f"needs {fastest_s:.0f} s at full speed, and well under {hi * fastest_s:.0f} s even "
-        f"at 1 % speed: is the controller's timer {unit}? t_s is in seconds since the "
-        "start of the run"
-    ]
-
-
-def _check_origin(log: Log, plan: Plan, robot: Robot) -> None:
-    """Refuse a log of another plan, robot or encoder scale, before any row is read."""
-    src = log.source
-    problems: list[str] = []
-    if log.plan != plan.fingerprint():
-        problems.append(
-            f"{src}: plan fingerprint {log.plan[:16]}… differs from {plan.source} "
-            f"({plan.fingerprint()[:16]}…): the log was taken with another plan; "
-            "use that plan, or --accept-foreign if you are sure"
-        )
-    if log.robot != robot.name:
-        problems.append(
-            f"{src}: robot {log.robot!r} differs from {robot.source} "
-            f"({robot.name!r}); use the matching robot file, or --accept-foreign"
-        )
-    if not math.isclose(abs(log.mm_per_count), abs(robot.encoder.mm_per_count), rel_tol=1e-6):
-        problems.append(
-            f"{src}: mm_per_count {log.mm_per_count!r} differs from the robot "
-            f"file's encoder.mm_per_count {robot.encoder.mm_per_count!r}; use the matching "
-            "robot file, or --accept-foreign"
-        )
-    if problems:  # a log of another plan or robot: row-by-row complaints would be noise
-        raise WirecalError(problems)
-
-
-@dataclass
-class _Rows:
-    """The accepted readings of a log, in plan order (NaN counts where a point is missing)."""
-
-    step_no: np.ndarray  # (N,) 1-based, plan order
-    index_no: np.ndarray  # (N,)
-    counts: np.ndarray  # (N,) NaN where missing
-    joints_deg: np.ndarray  # (N, n) as logged (plan values where missing)
-    zeros: dict[int, Reading]  # per step with a zero reading
-    seen: dict[tuple[str, int, int], int]  # (kind, step, index) → line
-    unsettled: list[tuple[int, int]]  # (step, index) of the unsettled readings
-    t_s: np.ndarray  # (N,) NaN where missing or untimed
-    references: dict[int, Reading] = field(default_factory=dict)  # index → reference row
-
-
-class _BadRow(Exception):
-    """One reading refused; its message is reported at the reading's line."""
-
-
-def _read_rows(log: Log, plan: Plan, robot: Robot, tol: Tolerances, problems: list[str]) -> _Rows:
-    """Check each reading against the plan; keep the good ones, report the others."""
-    q_plan, step_no, index_no = plan.all_points()
-    position = {(int(s), int(i)): k for k, (s, i) in enumerate(zip(step_no, index_no, strict=True))}
-    rows = _Rows(
-        step_no,
-        index_no,
-        np.full(len(q_plan), np.nan),
-        q_plan.copy(),
-        {},
-        {},
-        [],
-        np.full(len(q_plan), np.nan),
-    )
-    for r in log.readings:
-        if r.kind == "unsettled":  # for the record only: the program measured it again
-            rows.unsettled.append((r.step, r.index))
-            continue
-        key = (r.kind, r.step, r.index)
-        try:
-            if key in rows.seen:
-                raise _BadRow(
-                    f"duplicate {r.kind} reading of step {r.step}"
-                    + (f" point {r.index}" if r.kind == "point" else "")
-                    + f" (first on line {rows.seen[key]}); keep one run per log"
-                )
-            rows.seen[key] = r.line
-            if r.kind == "reference":
-                _check_reference(r)
-                rows.references[r.index] = r
-                continue
-            k = _check_reading(r, plan, robot, tol, q_plan, position, abs(log.mm_per_count))
-        except _BadRow as e:
-            problems.append(f"{log.source}:{r.line}: {e}")
-            continue
-        if k is None:
-            rows.zeros[r.step] = r
-        else:
-            rows.counts[k] = r.counts
-            rows.joints_deg[k] = r.joints_deg
-            rows.t_s[k] = np.nan if r.t_s is None else r.t_s
-    return rows
-
-
-def _check_reference(r: Reading) -> None:
-    """Raise :class:`_BadRow` for a reference row off its step (0) or index (≥ 1)."""
-    if r.step != REFERENCE_STEP or r.index < 1:
-        raise _BadRow(
-            f"a reference row has step {REFERENCE_STEP} and index 1, 2, … (nest A odd, "
-            f"nest B even), not step {r.step} index {r.index}"
-        )
-
-
-def _reference_pairs(
-    rows: _Rows, enc: Encoder, mpc: float, src: str, problems: list[str]
-) -> np.ndarray:
-    """Return each reference pair's nest B − nest A length (mm, nominal scale).
-
-    The pairs are checked against the gauge (:func:`~wirecal.solver.scale.reference_problems`)
-    when the robot file gives one.
-    """
-    refs, counter = rows.references, enc.counter
-    out: list[float] = []
-    lines: list[tuple[int, int]] = []
-    for i in sorted(refs):
-        if i % 2 == 0:
-            continue
-        if i + 1 not in refs:
-            problems.append(
-                f"{src}:{refs[i].line}: the reference reading in nest A (index {i}) has no "
-                f"nest B reading (index {i + 1}); repeat the reference step"
-            )
-            continue
-        out.append(float(counter.difference(refs[i + 1].counts, refs[i].counts)) * mpc)
-        lines.append((refs[i].line, refs[i + 1].line))
-    for i in sorted(refs):
-        if i % 2 == 0 and i - 1 not in refs:
-            problems.append(
-                f"{src}:{refs[i].line}: the reference reading in nest B (index {i}) has no "
-                f"nest A reading (index {i - 1}); repeat the reference step"
-            )
-    if out and enc.reference_length_mm is not None:
-        problems += [
-            f"{src}:{p}"
-            for p in reference_problems(
-                np.array(out), lines, enc.reference_length_mm, enc.scale_tolerance_ppm
-            )
-        ]
-    return np.array(out)
-
-
-def _check_reading(
-    r: Reading,
-    plan: Plan,
-    robot: Robot,
-    tol: Tolerances,
-    q_plan: np.ndarray,
-    position: dict[tuple[int, int], int],
-    mm_per_count: float,
-) -> int | None:
-    """Raise :class:`_BadRow` for a reading the plan refuses; its plan row (None: a zero)."""
-    counter = robot.encoder.counter
-    n_steps = len(plan.steps)
-    # The mean of samples unwrapped from the first lies within a spread of the range.
-    if abs(r.counts) > counter.half + r.spread:
-        raise _BadRow(
-            f"counts {r.counts:.4f} exceed the {robot.encoder.counter_bits}-bit counter "
-            f"(±{counter.half}): not a count of this encoder; check counter_bits in "
-            f"{robot.source} and that the log column holds the raw counter value"
-        )
-    if not 1 <= r.step <= n_steps + (r.kind == "zero"):
-        raise _BadRow(
-            f"step {r.step} is not in the plan (it has {n_steps} steps; the closing "
-            f"zero reading is logged as step {n_steps + 1})"
-        )
-    k, expected = _planned_joints(r, plan, q_plan, position)
-    if r.joints_deg.shape != expected.shape:
-        raise _BadRow("joint count differs from the robot's")
-    off = np.abs(r.joints_deg - expected)
-    if np.any(off > tol.joint_deg):
-        j = int(np.argmax(off))
-        raise _BadRow(
-            f"joint {j + 1} is {r.joints_deg[j]:.4f} deg; the plan says "
-            f"{expected[j]:g} (tolerance {tol.joint_deg:g}): the robot was not where the "
-            "plan puts it"
-        )
-    if r.spread > tol.spread_mm / mm_per_count:
-        raise _BadRow(
-            f"spread of {r.samples} samples is {r.spread:g} counts "
-            f"({r.spread * mm_per_count:.3f} mm > {tol.spread_mm:g} mm): the robot was "
-            f"still moving; lengthen the settle time and repeat step {r.step}"
-        )
-    return k
-
-
-def _planned_joints(
-    r: Reading, plan: Plan, q_plan: np.ndarray, position: dict[tuple[int, int], int]
-) -> tuple[int | None, np.ndarray]:
-    """Return a reading's plan row (None for a zero reading) and the joints planned there."""
-    if r.kind == "zero":
-        if r.index != 0:
-            raise _BadRow(f"a zero reading has index 0, not {r.index}")
-        return None, plan.theta0_deg
-    k = position.get((r.step, r.index))
-    if k is None:
-        raise _BadRow(
-            f"step {r.step} has {len(plan.steps[r.step - 1].points_deg)} points; "
-            f"point {r.index} is not in the plan"
-        )
-    return k, q_plan[k]
 
 
 def _zero_drift(
@@ -501,7 +256,7 @@ def _untimed_slips(z: np.ndarray, tol_mm: float) -> list[tuple[int, float]]:
 
 
 def _lengths(
-    rows: _Rows,
+    rows: LogRows,
     first: float,
     n_steps: int,
     robot: Robot,
@@ -532,14 +287,3 @@ def _lengths(
                 "negative: is the sign of mm_per_count right?"
             )
     return distance
-
-
-def load_measurements(
-    path: str | Path,
-    plan: Plan,
-    robot: Robot,
-    tol: Tolerances = Tolerances(),
-    accept_foreign: bool = False,
-) -> Measurements:
-    """Read a log file and check it against the plan (:func:`read_log` + :func:`check_log`)."""
-    return check_log(read_log(path), plan, robot, tol, accept_foreign)

@@ -27,11 +27,11 @@ import numpy as np
 from wirecal.solver.accuracy import crb, noise_covariance, workspace
 from wirecal.solver.budget import Budget, budget, sources
 from wirecal.solver.distance import wire_jacobian
-from wirecal.solver.exit_geometry import unmodelled_exit_mm
 from wirecal.solver.identify import Problem, joint, omega_vector, stepwise
 from wirecal.solver.kinematics import repeat, tool_jacobian, tool_position, with_errors
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan
+from wirecal.solver.plan_exit import unmodelled_exit_mm
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
 from wirecal.solver.scale import PPM

@@ -7,11 +7,14 @@ Craig's modified DH row i (1-based) holds α_{i-1}, a_{i-1}, θ_i, d_i, so:
 * ``tool_x``/``tool_y``/``tool_z`` — the wire attachment point in the last frame
   (used by the identifiability analysis to show its redundancy with th6/d6).
 
-Angular parameters are degrees at the boundary, radians inside.
+Angular parameters are degrees at the boundary, radians inside: the one unit rule is
+:data:`UNIT` with :data:`INTERNAL_PER_BOUNDARY`, and every module asks it (:func:`unit_of`,
+:attr:`Param.unit`, :class:`ErrorSet`) rather than the names' letters.
 """
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -23,6 +26,19 @@ _PATTERN = re.compile(r"^(th|d|al|a)(\d+)$")
 TOOL_NAMES = ("tool_x", "tool_y", "tool_z")
 DH_COLUMN = {"al": 0, "a": 1, "th": 2, "d": 3}
 """Column of the DH table (α_{i-1}, a_{i-1}, θ offset, d_i) each kind of parameter offsets."""
+
+UNIT = {"th": "deg", "al": "deg", "a": "mm", "d": "mm", "tool": "mm"}
+"""Each kind of parameter's boundary unit (files, command line, logs, controller): angles
+(θ, α) in degrees, lengths (a, d, the tool point) in mm (DESIGN.md)."""
+
+INTERNAL_PER_BOUNDARY = {"deg": math.pi / 180.0, "mm": 1.0}
+"""Internal units (rad, mm: the mathematics) per boundary unit."""
+
+BOUNDARY_PER_INTERNAL = {u: 1.0 / f for u, f in INTERNAL_PER_BOUNDARY.items()}
+"""Boundary units per internal unit: 180/π deg per rad, 1 for mm."""
+
+UNIT_KINDS = {u: ", ".join(k for k, v in UNIT.items() if v == u) for u in INTERNAL_PER_BOUNDARY}
+"""Each boundary unit's kinds of parameter, in words: ``{"deg": "th, al", "mm": "a, d, tool"}``."""
 
 
 @dataclass(frozen=True)
@@ -36,12 +52,21 @@ class Param:
     @property
     def angular(self) -> bool:
         """Return whether the parameter is an angle (θ or α)."""
-        return self.kind in ("th", "al")
+        return self.unit == "deg"
 
     @property
     def unit(self) -> str:
-        """Return the parameter's boundary unit, ``deg`` or ``mm``."""
-        return "deg" if self.angular else "mm"
+        """Return the parameter's boundary unit, ``deg`` or ``mm`` (:data:`UNIT`)."""
+        return UNIT[self.kind]
+
+
+def unit_of(name: str) -> str:
+    """Return the boundary unit of the parameter ``name`` without parsing it against an arm.
+
+    ``deg`` for th*, al*; ``mm`` for a*, d* and any other name (tool_x, tool_y, tool_z).
+    """
+    m = _PATTERN.match(name)
+    return UNIT[m.group(1) if m else "tool"]
 
 
 @cache
@@ -117,7 +142,7 @@ class ErrorSet:
     @property
     def internal_per_boundary(self) -> np.ndarray:
         """(m,) internal units per boundary unit: π/180 rad/deg for angles, 1 for lengths."""
-        return np.where(self.angular, np.pi / 180.0, 1.0)
+        return np.array([INTERNAL_PER_BOUNDARY[u] for u in self.units], dtype=float)
 
     @property
     def boundary_per_internal(self) -> np.ndarray:

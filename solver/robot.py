@@ -7,7 +7,6 @@ and speeds, the wire attachment point and the draw-wire encoder. Files are read 
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -173,10 +172,21 @@ class Robot:
             radii = np.full(self.n_joints - 1, DEFAULT_LINK_RADIUS_MM)
         return capsules(self.dh, radii, self.tool_point, self.cell.margin_mm)
 
-    @property
-    def body_limits_deg(self) -> tuple[np.ndarray, np.ndarray]:
-        """The joint limits narrowed by the cell's body limits (deg): where plans may go."""
-        return body_limits(self.joint_min_deg, self.joint_max_deg, self.cell)
+    def limits_deg(
+        self, margin_deg: float | np.ndarray = 0.0, *, body: bool = True
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Return the lower and upper joint limits (deg), each ``margin_deg`` inside.
+
+        With ``body`` (the default) the joint limits narrowed first by the cell's body
+        limits (:func:`~wirecal.solver.cell.body_limits`): where plans may go. Without, the
+        robot file's joint limits alone: what the controller enforces (inverse kinematics,
+        the generated targets). ``margin_deg`` may differ per joint (an array).
+        """
+        if body:
+            lo, hi = body_limits(self.joint_min_deg, self.joint_max_deg, self.cell)
+        else:
+            lo, hi = self.joint_min_deg, self.joint_max_deg
+        return lo + margin_deg, hi - margin_deg
 
     def cell_gaps(
         self,
@@ -217,7 +227,7 @@ class Robot:
         if p.kind == "tool":
             return float(self.tool_point[p.row])
         value = float(self.dh[p.row, P.DH_COLUMN[p.kind]])
-        return math.degrees(value) if p.angular else value
+        return value * P.BOUNDARY_PER_INTERNAL[p.unit]
 
     def program_problems(self) -> list[str]:
         """Return why no controller program may be written for this robot (none: it may)."""

@@ -35,9 +35,10 @@ from wirecal.solver.counter import Counter
 from wirecal.solver.distance import wire_vectors
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import Exit, physical_wire_mm
-from wirecal.solver.formats.log import REFERENCE_STEP, format_header, format_row
+from wirecal.solver.formats.log import format_header, format_row
 from wirecal.solver.kinematics import Model, frames, tool_position
 from wirecal.solver.plan import Plan
+from wirecal.solver.readings import REFERENCE_STEP
 from wirecal.solver.robot import DEFAULT_GRAVITY_SAG_DEG_PER_M, Encoder, Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters, run_timeline
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM

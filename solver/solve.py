@@ -16,7 +16,6 @@ from wirecal.solver.accuracy import workspace
 from wirecal.solver.budget import Budget, budget, least_squares_map, sources
 from wirecal.solver.distance import wire_jacobian
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.exit_geometry import unmodelled_exit_mm
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.identify import (
     DEFAULT_OMEGA,
@@ -31,6 +30,7 @@ from wirecal.solver.identify import (
 from wirecal.solver.kinematics import with_errors
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
+from wirecal.solver.plan_exit import unmodelled_exit_mm
 from wirecal.solver.robot import Robot
 from wirecal.solver.scale import PPM, Drift, ScaleEstimate, estimate_scale, fit_drift
 from wirecal.solver.sensitivity import sensitivity

@@ -29,7 +29,8 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan, Step
-from wirecal.solver.planner import PlanOptions, move_ok, move_samples
+from wirecal.solver.plan_moves import move_ok, move_samples
+from wirecal.solver.plan_options import PlanOptions
 from wirecal.solver.robot import Robot
 
 CONFIGS = (("above", "noflip"), ("above", "flip"), ("below", "noflip"), ("below", "flip"))
@@ -183,7 +184,7 @@ def distance_plan(
     Same θ0, order and number of steps as ``plan``, each step ``per_step`` points drawn
     around θ0 (every joint within ±``spread_deg``, ``options.margin_deg`` inside its
     body limits). A point is kept when the planner's rules hold for the move to it from the
-    previous target (:func:`~wirecal.solver.planner.move_ok`: the arm clear of itself and
+    previous target (:func:`~wirecal.solver.plan_moves.move_ok`: the arm clear of itself and
     the cell, the wire clear of the links,
     joint 6 turning at most 180°) and its nominal wire length is within the encoder's
     range (``options.min_wire_mm`` … range_mm − ``options.range_margin_mm``) along that
@@ -194,8 +195,7 @@ def distance_plan(
     """
     options = options or PlanOptions()
     rng = np.random.default_rng([seed, 11])
-    lo, hi = robot.body_limits_deg
-    lo, hi = lo + options.margin_deg, hi - options.margin_deg
+    lo, hi = robot.limits_deg(options.margin_deg)
     model = robot.nominal
     theta0 = np.asarray(plan.theta0_deg, dtype=float)
     p0 = tool_position(model, np.radians(theta0)[None])[0]

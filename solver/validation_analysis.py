@@ -13,7 +13,21 @@ import numpy as np
 
 from wirecal.solver.counter import Counter
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.validation_files import ValidationLog
+
+
+@dataclass(frozen=True)
+class ValidationLog:
+    """A validation log's header and its readings.
+
+    Read by :mod:`~wirecal.solver.formats.validation_files`, analysed here.
+    """
+
+    kind: str  # "configuration" or "plane"
+    source: str
+    robot: str
+    setup: str
+    mm_per_count: float
+    rows: np.ndarray  # numbers, one row per reading, columns as its file format's COLUMNS[kind]
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,10 @@ from wirecal.gen.vplus.program import module_text
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot, robot_file_text, robot_from_dict
-from wirecal.solver.planner import PlanOptions, _blocked, design, predicted_accuracy
+from wirecal.solver.plan_candidates import blocked
+from wirecal.solver.plan_options import PlanOptions
+from wirecal.solver.plan_predict import predicted_accuracy
+from wirecal.solver.planner import design
 from wirecal.twin.vplus.runs import run_measurement
 
 from .conftest import VIPER
@@ -282,7 +285,7 @@ def test_blocked_counts_name_the_cell():
     opt = PlanOptions(samples=50)
     counts = []
     for robot in (viper, raised):
-        text = _blocked(robot, np.array(VIPER_THETA0, float), opt)
+        text = blocked(robot, np.array(VIPER_THETA0, float), opt)
         found = re.search(r"^of (\d+) candidates, blocked: .*?(\d+) cell \(the arm in", text)
         assert found, text
         counts.append(int(found.group(2)))
@@ -311,7 +314,7 @@ def test_cell_table_reads_every_key():
         }
     )
     assert (r.cell.floor_z_mm, r.cell.margin_mm) == (-300.0, 5.0)
-    assert r.body_limits_deg[1][2] == 200.0
+    assert r.limits_deg()[1][2] == 200.0
     assert r.cell.boxes[0].name == "table"
     assert r.cell.half_spaces[0].normal == (-1, 0, 0)
     assert r.cell.housing is not None
@@ -320,6 +323,24 @@ def test_cell_table_reads_every_key():
     gaps = r.cell_gaps(np.array(VIPER_THETA0, float), np.zeros(3))
     assert gaps.smallest()[0] < -100
     assert " and the wall: " in gaps.cause(0)
+
+
+def test_limits_inset_by_the_margin_inside_the_body_limits():
+    """Viper joint 3: −29..256 deg, the cell's body limits −20..200; joint 1 ±170."""
+    r = robot_with_cell(
+        {
+            "body_min_deg": [-170, -190, -20, -190, -120, -360],
+            "body_max_deg": [170, 45, 200, 190, 120, 360],
+        }
+    )
+    lo, hi = r.limits_deg(5.0)
+    assert (lo[2], hi[2]) == (-15.0, 195.0)  # the body limits, 5 deg inside
+    assert (lo[0], hi[0]) == (-165.0, 165.0)  # no narrower than the joint limits
+    lo, hi = r.limits_deg(5.0, body=False)  # what the controller enforces
+    assert (lo[2], hi[2]) == (-24.0, 251.0)
+    lo, hi = r.limits_deg(np.array([1, 2, 3, 4, 5, 6.0]))  # a margin per joint
+    assert (lo[2], hi[5]) == (-17.0, 354.0)
+    assert r.limits_deg()[0][2] == -20.0
 
 
 @pytest.mark.parametrize(

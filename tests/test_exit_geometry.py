@@ -18,13 +18,10 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import (
     Eyelet,
     Pulley,
-    cone_problems,
     edge_wrap_mm,
     exit_angle_deg,
     far_field_edge_wrap_mm,
-    largest_exit_deg,
     physical_wire_mm,
-    unmodelled_exit_mm,
     wire_path,
     wrap,
 )
@@ -32,6 +29,7 @@ from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot, robot_file_text, robot_from_dict
 from wirecal.solver.kinematics import tool_position, with_errors
+from wirecal.solver.plan_exit import cone_problems, largest_exit_deg, unmodelled_exit_mm
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.simulate import true_lengths
 

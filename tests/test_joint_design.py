@@ -13,7 +13,8 @@ from wirecal.app.progress import ProgressBar
 from wirecal.app.psi_view import psi_table
 from wirecal.cli.main import main
 from wirecal.solver import montecarlo
-from wirecal.solver.planner import PlanOptions, design
+from wirecal.solver.plan_options import PlanOptions
+from wirecal.solver.planner import design
 
 from .conftest import VIPER
 

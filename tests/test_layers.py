@@ -45,17 +45,9 @@ LAYERS = {
 """Each layer's package and its height: a module imports only strictly lower layers."""
 
 KNOWN = {
-    ("wirecal.solver.measurements", "wirecal.solver.formats.log"): (
-        "issue 25 item 3: the solver import circle (the log's records are the solver's input)"
-    ),
     ("wirecal.solver.simulate", "wirecal.solver.formats.log"): (
-        "issue 25 item 3: the solver import circle (simulate writes the log's text)"
-    ),
-    ("wirecal.solver.urdf_model", "wirecal.solver.formats.urdf"): (
-        "issue 25 item 3: the solver import circle (the URDF chain read into DH)"
-    ),
-    ("wirecal.solver.validation_analysis", "wirecal.solver.formats.validation_files"): (
-        "issue 25 item 3: the solver import circle (validation logs read into records)"
+        "issue 25 item 3: simulate writes the log's text; it should return readings that the "
+        "log format writes"
     ),
 }
 """Violations of today, (importer, imported) → the issue that removes it."""

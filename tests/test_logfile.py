@@ -10,7 +10,8 @@ import pytest
 
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log
-from wirecal.solver.measurements import Tolerances, check_log
+from wirecal.solver.log_rows import Tolerances
+from wirecal.solver.measurements import check_log
 from wirecal.solver.simulate import Faults, simulate_log
 from wirecal.solver.solve import solve
 

@@ -11,7 +11,8 @@ import pytest
 from wirecal.solver.accuracy import tool_error
 from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.kinematics import Model
-from wirecal.solver.planner import PlanOptions, _error
+from wirecal.solver.plan_options import PlanOptions
+from wirecal.solver.plan_steps import step_error
 from wirecal.solver.sensitivity import PSI_FLOOR, verdict
 
 
@@ -70,9 +71,9 @@ def test_the_planner_counts_the_leak_of_earlier_estimates():
     psi_j = np.array([1.0, 1.0])
     earlier = np.array([[1.0], [1.0]])
     none = np.zeros((2, 0))
-    value = _error(psi_j, earlier, np.array([[0.04]]), none, opt)
+    value = step_error(psi_j, earlier, np.array([[0.04]]), none, opt)
     assert value == pytest.approx(0.011**2 / 2 + 0.04, rel=1e-12)
     # Later parameters leak in with the prior: Ψ_t = 0.5 at both points, prior 0.5.
     later = np.array([[0.5], [0.5]])
-    value = _error(psi_j, none, np.zeros((0, 0)), later, opt)
+    value = step_error(psi_j, none, np.zeros((0, 0)), later, opt)
     assert value == pytest.approx(0.011**2 / 2 + opt.prior**2 * 0.5**2, rel=1e-12)

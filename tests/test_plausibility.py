@@ -19,9 +19,10 @@ from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.measurements import check_log
-from wirecal.solver.plausibility import assess, chi2_quantile
+from wirecal.solver.plausibility import assess
 from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
+from wirecal.solver.verdict import chi2_quantile
 
 from .conftest import VIPER
 

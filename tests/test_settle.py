@@ -18,8 +18,7 @@ import pytest
 from wirecal.app.twin_runs import measure_in_twin
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.distance import wire_lengths
-from wirecal.solver.formats.log import read_log
-from wirecal.solver.measurements import load_measurements
+from wirecal.solver.formats.log import load_measurements, read_log
 from wirecal.solver.planner import design
 from wirecal.solver.run_parameters import (
     DEFAULT_RUN,

@@ -15,16 +15,12 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
-from wirecal.solver import planner
+from wirecal.solver import plan_candidates, plan_steps, planner
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.planner import (
-    MORE_THETA0_DESIGNED,
-    THETA0_TRIES,
-    Design,
-    PlanOptions,
-    design,
-)
+from wirecal.solver.plan_design import Design
+from wirecal.solver.plan_options import PlanOptions
+from wirecal.solver.planner import MORE_THETA0_DESIGNED, THETA0_TRIES, design
 from wirecal.solver.sensitivity import sensitivity
 
 UR5 = Path(__file__).parent.parent / "examples" / "ur5e" / "robot.toml"
@@ -33,7 +29,7 @@ N_PARAMS = 10  # the UR5e's [calibration] parameters
 
 
 class Stand:
-    """Stand-ins for ``_design_at`` and ``_isolated_count``, keyed by θ0's joint 1.
+    """Stand-ins for ``design_at`` and ``_isolated_count``, keyed by θ0's joint 1.
 
     ``unplanned[j1]``: parameters a design at that θ0 leaves unplanned; ``isolated[j1]``:
     the quick check's count. Records the θ0s designed and checked, in order.
@@ -46,7 +42,7 @@ class Stand:
         draws = np.zeros((len(unplanned), 6))
         draws[:, 0] = list(unplanned)
         monkeypatch.setattr(planner, "_theta0_draws", lambda robot, opt: draws)
-        monkeypatch.setattr(planner, "_design_at", self.design_at)
+        monkeypatch.setattr(planner, "design_at", self.design_at)
         monkeypatch.setattr(planner, "_isolated_count", self.count)
 
     def design_at(self, robot, theta0, opt, progress=None) -> Design:
@@ -123,12 +119,12 @@ def test_the_quick_check_counts_as_a_full_screening(ur5):
     counts = []
     for theta0 in ([268, -95, 78, -62, -222, -270], [243, 285, 117, -83, 295, 312]):
         t0 = np.array(theta0, float)
-        q = planner.candidates(ur5, t0, opt, np.random.default_rng(opt.seed))
+        q = plan_candidates.candidates(ur5, t0, opt, np.random.default_rng(opt.seed))
         p0 = tool_position(ur5.nominal, np.radians(t0)[None])[0]
-        usable = planner.screen(ur5, ur5.nominal, p0, t0, q, opt)[0]
+        usable = plan_candidates.screen(ur5, ur5.nominal, p0, t0, q, opt)[0]
         psi = sensitivity(ur5.nominal, q[usable], t0, names).psi
         remaining = list(names)
-        while (best := planner._most_informative(psi, col, remaining, opt)) is not None:
+        while (best := plan_steps.most_informative(psi, col, remaining, opt)) is not None:
             remaining.remove(best[0])
         counts.append(N_PARAMS - len(remaining))
         assert planner._isolated_count(ur5, t0, opt) == counts[-1]
@@ -177,7 +173,7 @@ def test_unidentifiable_parameters_send_no_search_further(monkeypatch, ur5):
         d.unidentifiable = ("p0",)
         return d
 
-    monkeypatch.setattr(planner, "_design_at", design_at)
+    monkeypatch.setattr(planner, "design_at", design_at)
     d = design(ur5)
     assert stand.checked == []
     assert stand.designed == list(range(1, 7))

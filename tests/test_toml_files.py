@@ -276,7 +276,7 @@ def test_patch_unidentified_std_and_verdict(viper, paper_plan, tmp_path):
         ),
         (
             lambda t: t.replace('unit = "mm"', 'unit = "m"'),
-            'parameters.a2.unit: is "m"; give "deg" (θ, α) or "mm" (a, d, tool)',
+            'parameters.a2.unit: is "m"; give "deg" (th, al) or "mm" (a, d, tool)',
         ),
         (lambda t: t.replace('log_sha256 = "abab', 'log_sha256 = "xyab'), "log_sha256: is 'xyab"),
         (lambda t: t.replace("method =", "methd ="), "methd: unknown key (did you mean 'method'?)"),

@@ -15,12 +15,12 @@ from wirecal.gen.templating import environment
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log, read_log
+from wirecal.solver.formats.log import load_measurements, parse_log, read_log
 from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.identify import Problem
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.measurements import check_log, load_measurements
-from wirecal.solver.planner import robot_time
+from wirecal.solver.measurements import check_log
+from wirecal.solver.plan_predict import robot_time
 from wirecal.solver.run_parameters import DEFAULT_RUN, PAPER_RUN, run_timeline
 from wirecal.solver.simulate import EncoderTruth, simulate_log
 from wirecal.solver.solve import solve

@@ -57,6 +57,21 @@ def test_error_set_units_columns_and_rows():
     np.testing.assert_allclose(es.to_boundary([math.pi, 0, 0, 0, 0])[0], 180.0, rtol=1e-15)
 
 
+@pytest.mark.parametrize(
+    ("name", "unit"),
+    [("th2", "deg"), ("al0", "deg"), ("al12", "deg"), ("a0", "mm"), ("d6", "mm"), ("tool_x", "mm")],
+)
+def test_unit_of_a_name_without_an_arm(name, unit):
+    """The deg/mm rule from the name alone: al before a, tool_* a length."""
+    assert P.unit_of(name) == unit
+
+
+def test_one_unit_table_words_and_factors():
+    assert P.UNIT_KINDS == {"deg": "th, al", "mm": "a, d, tool"}
+    assert P.INTERNAL_PER_BOUNDARY["deg"] == pytest.approx(0.017453292519943295, rel=1e-15)
+    assert P.BOUNDARY_PER_INTERNAL == {"deg": pytest.approx(57.29577951308232, rel=1e-15), "mm": 1}
+
+
 def test_error_set_refuses_an_unknown_parameter():
     with pytest.raises(ValueError, match=r"use th1\.\.th6"):
         ErrorSet(("th7",), 6)

@@ -14,11 +14,11 @@ from wirecal.app.receive import summary
 from wirecal.app.twin_runs import measure_ur_in_twin
 from wirecal.gen.urscript.program import scripts
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log, read_log
+from wirecal.solver.formats.log import load_measurements, parse_log, read_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors
-from wirecal.solver.measurements import check_log, load_measurements
+from wirecal.solver.measurements import check_log
 from wirecal.solver.solve import solve
 from wirecal.twin.run_moves import move_of_step
 from wirecal.twin.world import Faults, World

@@ -20,9 +20,9 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.patch import write_patch
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.urdf import matrix_rpy, read_urdf
+from wirecal.solver.formats.urdf_model import read_chain
 from wirecal.solver.identify import Estimate
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.urdf_model import read_chain
 
 ROOT = Path(__file__).resolve().parents[1]
 ARMS = sorted((ROOT / "examples").glob("*/robot.toml"))
@@ -201,7 +201,7 @@ def test_shipped_arm_exported_then_imported(arm, tmp_path):
     # body limits as the URDF's joint limits (the vendor's ROS descriptions do the same)
     assert again.cell.floor_z_mm == pytest.approx(robot.cell.floor_z_mm, abs=1e-9)
     rng = np.random.default_rng(1)
-    lo, hi = robot.body_limits_deg
+    lo, hi = robot.limits_deg()
     q = np.radians(lo + rng.uniform(0, 1, (200, 6)) * (hi - lo))
     expected = tool_position(robot.nominal, q)
     np.testing.assert_allclose(tool_position(again.nominal, q), expected, atol=TOL_MM)

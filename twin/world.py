@@ -186,7 +186,7 @@ class World:
     # ---- motion ----
     def beyond_limits(self, q_deg: np.ndarray) -> int | None:
         """Return the index of the first joint beyond the controller's limits, if any."""
-        lo, hi = self.limits.joint_min_deg, self.limits.joint_max_deg
+        lo, hi = self.limits.limits_deg(body=False)
         out = np.flatnonzero((q_deg < lo) | (q_deg > hi))
         return int(out[0]) if out.size else None
 

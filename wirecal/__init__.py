@@ -32,8 +32,8 @@ _API = {
     "Plan": "wirecal.solver.plan",
     # design a plan, and its Ψ table (paper Table 4)
     "design": "wirecal.solver.planner",
-    "PlanOptions": "wirecal.solver.planner",
-    "Design": "wirecal.solver.planner",
+    "PlanOptions": "wirecal.solver.plan_options",
+    "Design": "wirecal.solver.plan_design",
     "psi_table": "wirecal.app.psi_view",
     # simulate a measurement run
     "simulate_log": "wirecal.solver.simulate",
@@ -44,7 +44,7 @@ _API = {
     "read_log": "wirecal.solver.formats.log",
     "parse_log": "wirecal.solver.formats.log",
     "check_log": "wirecal.solver.measurements",
-    "load_measurements": "wirecal.solver.measurements",
+    "load_measurements": "wirecal.solver.formats.log",
     "Measurements": "wirecal.solver.measurements",
     "Tolerances": "wirecal.solver.measurements",
     # solve and write the patch

@@ -47,7 +47,6 @@ from __future__ import annotations
 import hashlib
 import math
 import re
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -55,6 +54,11 @@ import numpy as np
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.capture import RowTest
 from wirecal.solver.formats.csv_table import Row, parse_table, read_source
+from wirecal.solver.log_rows import DEFAULT_TOLERANCES, Tolerances
+from wirecal.solver.measurements import Measurements, check_log
+from wirecal.solver.plan import Plan
+from wirecal.solver.readings import Log, Reading
+from wirecal.solver.robot import Robot
 
 MAGIC = "# wirecal-log"
 VERSION = 2
@@ -65,38 +69,6 @@ COLUMNS_V1 = ("kind", "step", "index", *JOINT_COLUMNS, "counts", "samples", "spr
 COLUMNS = (*COLUMNS_V1, *TIME_COLUMNS)
 HEADER_KEYS = ("robot", "plan", "mm_per_count")
 KINDS = ("zero", "point", "unsettled", "reference")
-REFERENCE_STEP = 0
-"""The step number of the reference rows (before the plan's step 1)."""
-
-
-@dataclass(frozen=True)
-class Reading:
-    """One data line of a log: a zero reading or a plan point's reading."""
-
-    kind: str
-    step: int
-    index: int
-    joints_deg: np.ndarray
-    counts: float
-    samples: int
-    spread: float
-    line: int
-    t_s: float | None = None  # the controller's timer at the sampling (version 2 on)
-    settle_s: float | None = None  # the wait before the sampling (version 2 on)
-
-
-@dataclass(frozen=True)
-class Log:
-    """A log as written: header fields and readings, checked for format only."""
-
-    source: str
-    robot: str
-    plan: str
-    mm_per_count: float
-    readings: tuple[Reading, ...]
-    sha256: str
-    notes: tuple[str, ...] = ()
-    version: int = VERSION
 
 
 def format_row(
@@ -137,6 +109,20 @@ def read_log(path: str | Path) -> Log:
     """Parse a log (``-``: standard input); every format problem as ``file:line: problem``."""
     text, source, sha256 = read_source(path, "log")
     return parse_log(text, source, sha256)
+
+
+def load_measurements(
+    path: str | Path,
+    plan: Plan,
+    robot: Robot,
+    tol: Tolerances = DEFAULT_TOLERANCES,
+    accept_foreign: bool = False,
+) -> Measurements:
+    """Read a log file and check it against the plan.
+
+    :func:`read_log`, then :func:`~wirecal.solver.measurements.check_log`.
+    """
+    return check_log(read_log(path), plan, robot, tol, accept_foreign)
 
 
 def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bool = True) -> Log:

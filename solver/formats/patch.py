@@ -30,8 +30,8 @@ from wirecal.solver.formats.robot_file import MAX_DH_ANGLE_DEG, MAX_LENGTH_MM
 from wirecal.solver.formats.toml_fields import Table, document, valid
 from wirecal.solver.identify import Estimate
 from wirecal.solver.plan import Plan
-from wirecal.solver.plausibility import override_warning
 from wirecal.solver.robot import Robot
+from wirecal.solver.verdict import override_warning
 
 _FIELD = {"th": "theta offset", "d": "d", "a": "a", "al": "alpha", "tool": "tool point"}
 
@@ -314,7 +314,7 @@ def read_patch(path: str | Path) -> Patch:
 
 
 def _value(t: Table) -> PatchValue | None:
-    unit = t.string("unit", choices={"deg": "θ, α", "mm": "a, d, tool"})
+    unit = t.string("unit", choices=P.UNIT_KINDS)
     bound = MAX_DH_ANGLE_DEG if unit == "deg" else MAX_LENGTH_MM
     nominal, offset, value = (
         t.number(key, lo=-bound, hi=bound, unit=unit or "")

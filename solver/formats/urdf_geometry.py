@@ -2,12 +2,13 @@
 
 The clearance (:mod:`wirecal.solver.clearance`) models link k as a capsule from DH frame k's
 origin to frame k+1's (k = 1 … n−1) with a radius from ``[geometry] link_radius_mm``. Every
-URDF link on the chain is rigid with one DH frame (:class:`~wirecal.solver.urdf_model.UrdfChain`
-``link_offsets``). With the arm at q = 0, each point of the moving links' geometry is taken
-by the nearest capsule segment; the radius of capsule k is the largest distance of the points
-beside segment k (their foot between its ends), so the capsule contains them. Points beyond
-every segment's ends (the base column under frame 1, joint housings) are counted and reported,
-not covered. The geometry read:
+URDF link on the chain is rigid with one DH frame
+(:class:`~wirecal.solver.formats.urdf_model.UrdfChain` ``link_offsets``). With the arm at
+q = 0, each point of the moving links' geometry is taken by the nearest capsule segment; the
+radius of capsule k is the largest distance of the points beside segment k (their foot
+between its ends), so the capsule contains them. Points beyond every segment's ends (the base
+column under frame 1, joint housings) are counted and reported, not covered. The geometry
+read:
 
 * ``<collision>`` elements (``<visual>`` when a link has none): cylinders (their end discs),
   boxes (their corners), spheres (centre plus radius) and STL meshes (their vertices, with the
@@ -37,7 +38,7 @@ from wirecal.solver.dh_from_axes import dh_frames
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.stl import stl_vertices
 from wirecal.solver.formats.urdf import rpy_matrix
-from wirecal.solver.urdf_model import UrdfChain
+from wirecal.solver.formats.urdf_model import UrdfChain
 
 RADIUS_PER_LENGTH = 0.15
 """A link's radius from its length: 15 % (the UR5's upper arm: 425 mm long, 54–60 mm radius)."""

@@ -22,7 +22,6 @@ Setup file (TOML)::
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +32,7 @@ from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.robot_file import MAX_LENGTH_MM
 from wirecal.solver.formats.toml_fields import document, valid
 from wirecal.solver.validation import Setup
+from wirecal.solver.validation_analysis import ValidationLog
 
 _SETUP_KEYS = {
     "": ("configuration", "plate"),
@@ -84,18 +84,6 @@ def load_setup(path: str | Path) -> Setup:
         signal=valid(signal),
         source=str(path),
     )
-
-
-@dataclass(frozen=True)
-class ValidationLog:
-    """A validation log's header and its readings."""
-
-    kind: str  # "configuration" or "plane"
-    source: str
-    robot: str
-    setup: str
-    mm_per_count: float
-    rows: np.ndarray  # numbers, one row per reading, columns as COLUMNS[kind]
 
 
 COLUMNS = {

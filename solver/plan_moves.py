@@ -1,0 +1,131 @@
+"""The planner's moves: whether a joint-interpolated move keeps the arm and the wire clear.
+
+A move is sampled every few degrees of its largest joint motion (:func:`move_samples`,
+which the wire-range and cell checks of ``wirecal gen`` share) and is safe when the arm
+stays out of itself and the cell, the wire keeps ``clearance_mm`` from the links and stays
+within the encoder's range, and joint 6 turns at most 180° (:func:`move_ok`). A
+candidate whose direct move from θ0 would sweep the wire through a link or wrap it around
+the flange is kept if a via point makes the move clear (:func:`reach_ok`).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from wirecal.solver.clearance import wire_clearance, wire_trim_mm
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import wire_path
+from wirecal.solver.kinematics import frames, tool_position
+from wirecal.solver.plan_options import PlanOptions
+from wirecal.solver.robot import Robot
+
+
+def move_samples(
+    a: np.ndarray, b: np.ndarray, step_deg: float = 2.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return the configurations along moves a → b and each move's first sample.
+
+    Configurations (deg) along the joint-interpolated moves a → b (rows broadcast),
+    every ``step_deg`` of the largest joint motion, b included and a not; and the index of
+    each move's first sample (for ``np.minimum.reduceat`` and the like).
+    """
+    a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
+    count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg)).astype(int)
+    move = np.repeat(np.arange(len(a)), count)
+    first = np.cumsum(count) - count
+    t = (np.arange(len(move)) - first[move] + 1) / count[move]
+    return a[move] + t[:, None] * (b[move] - a[move]), first
+
+
+CHUNK_SAMPLES = 16384
+"""Configurations evaluated per batch along moves: memory stays bounded (a few MiB per
+batch) and the batch's arrays stay in the processor's cache, which is faster than one
+batch of millions."""
+
+
+def move_clearance(
+    robot: Robot,
+    model,
+    p0: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    step_deg: float = 2.0,
+    every: int = 1,
+    longest_mm: float = np.inf,
+) -> np.ndarray:
+    """Return the smallest wire gap (mm) to the links along moves a → b.
+
+    The smallest wire gap (mm) to the links along the joint-interpolated moves a → b
+    (deg, rows broadcast), sampled every ``step_deg`` of the largest joint motion
+    (:func:`move_samples`), in batches of about ``CHUNK_SAMPLES`` configurations. With
+    ``every`` > 1 only every ``every``-th of those samples and each move's end are
+    evaluated: a subset, so a gap found there is a gap of the full sampling too. A sample
+    where the modelled wire is longer than ``longest_mm`` counts as no gap at all (−inf):
+    the encoder's range, checked along the move as ``wirecal gen`` checks it; so does a
+    sample where the arm meets itself or the cell (:mod:`~wirecal.solver.cell`).
+    """
+    if robot.link_radius_mm is None:
+        raise WirecalError(f"{robot.source}: the wire clearance needs the link radii")
+    a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
+    count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg))
+    # batch k holds the moves whose samples start in [k·CHUNK, (k+1)·CHUNK)
+    batch = ((np.cumsum(count) - count) // CHUNK_SAMPLES).astype(int)
+    edges = np.searchsorted(batch, np.arange(batch[-1] + 2)) if len(a) else [0]
+    trim = wire_trim_mm(robot)
+    out = np.empty(len(a))
+    for lo, hi in itertools.pairwise(edges):
+        q, first = move_samples(a[lo:hi], b[lo:hi], step_deg)
+        if every > 1:
+            k = np.arange(len(q)) - np.repeat(first, np.diff(np.r_[first, len(q)]))
+            last = np.zeros(len(q), bool)
+            last[np.r_[first[1:], len(q)] - 1] = True
+            keep = (k % every == every - 1) | last
+            first = np.cumsum(keep)[first] - keep[first]  # each move keeps its end
+            q = q[keep]
+        q_rad = np.radians(q)
+        f = frames(model, q_rad)  # one evaluation of the chain for both checks
+        gap = wire_clearance(model, q_rad, p0, robot.link_radius_mm, trim, f)
+        gap = np.where(robot.cell_gaps(q, p0, model, f).smallest() < 0, -np.inf, gap)
+        if np.isfinite(longest_mm):
+            d = wire_path(model.pulley, tool_position(model, q_rad, f) - p0)[0]
+            gap = np.where(np.nan_to_num(d) > longest_mm, -np.inf, gap)
+        out[lo:hi] = np.minimum.reduceat(gap, first)
+    return out
+
+
+def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2.0) -> np.ndarray:
+    """Return which moves a → b are safe for the arm and the wire.
+
+    Moves a → b that keep the arm out of itself and the cell, the wire clear of the
+    links, within the encoder's range less ``range_margin_mm`` all along, and do not turn
+    joint 6 by more than 180° (which would wrap the wire around the flange).
+    """
+    a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
+    ok = np.abs(b[:, -1] - a[:, -1]) <= 180
+    # a quick pass over every fourth sample rejects most blocked moves (a gap there is a
+    # gap of the full sampling); the moves it passes then get every sample
+    for every in (4, 1):
+        idx = np.flatnonzero(ok)
+        longest = robot.encoder.range_mm - opt.range_margin_mm
+        gap = move_clearance(robot, model, p0, a[idx], b[idx], step_deg, every, longest)
+        ok[idx] = gap >= opt.clearance_mm
+    return ok
+
+
+def reach_ok(
+    robot: Robot, model, p0, theta0, q, via, opt: PlanOptions, step_deg: float = 2.0
+) -> np.ndarray:
+    """Return whether each point q is reached from θ0 with the wire clear.
+
+    Directly, or through its via point (NaN row: none).
+    """
+    direct = np.isnan(via[:, 0])
+    ok = np.zeros(len(q), bool)
+    ok[direct] = move_ok(robot, model, p0, theta0, q[direct], opt, step_deg)
+    viaed = np.flatnonzero(~direct)
+    ok[viaed] = move_ok(robot, model, p0, theta0, via[viaed], opt, step_deg)
+    viaed = viaed[ok[viaed]]  # the second leg only where the first is clear
+    ok[viaed] = move_ok(robot, model, p0, via[viaed], q[viaed], opt, step_deg)
+    return ok
