@@ -42,7 +42,8 @@ DRAWS = 1024
 SEED = 20261124
 """The draws' seed: the bound is deterministic."""
 
-_CHUNK = 256  # draws per block: (chunk, corners, Q) floats stay a few MB
+_CHUNK = 32  # draws per block: (chunk, corners, Q) floats stay in the cache (1 MB),
+# and no large block is mapped and faulted in afresh per call
 
 
 @dataclass(frozen=True)
@@ -109,17 +110,19 @@ def bound_mm(
     q, _, m = Jp.shape
     A = np.ascontiguousarray(Jp.transpose(1, 2, 0))  # (3, m, Q): component first
     s = model.corners() @ A  # (3, C, Q): each corner's tool-point errors
-    p = x @ A  # (3, draws, Q)
-    # the terms linear in x and the constant, per corner and configuration: (m + 1, C·Q)
+    # the terms linear in x and the constant, per corner and configuration: (m + 1, C·Q);
+    # single precision: 1e-7 beside the draws' 1 %, and half the time
     W = np.concatenate([2 * np.einsum("imq,icq->mcq", A, s), np.sum(s * s, axis=0)[None]])
-    W = W.reshape(m + 1, -1).astype(np.float32)  # single precision: 1e-7 beside the draws' 1 %
+    W = W.reshape(m + 1, -1).astype(np.float32)
     X = np.hstack([x, np.ones((draws, 1))]).astype(np.float32)
-    pp = np.sum(p * p, axis=0).astype(np.float32)  # ‖p‖² (draws, Q)
+    A = A.astype(np.float32)
     worst = np.empty(draws)
     for start in range(0, draws, _CHUNK):
         block = slice(start, start + _CHUNK)
+        p = X[block, :m] @ A  # (3, chunk, Q)
+        p *= p
         sq = (X[block] @ W).reshape(-1, len(s[0]), q)
-        sq += pp[block, None, :]
+        sq += p.sum(axis=0)[:, None, :]
         np.sqrt(np.maximum(sq, 0.0, out=sq), out=sq)  # rounding may leave -1e-7 of 0
         worst[block] = sq.sum(axis=2).max(axis=1) / q
     return float(np.quantile(worst, probability))
