@@ -199,12 +199,12 @@ for _name, _target, _summary in (
     ("report", "wirecal.cli.report:report", "Write a self-contained HTML report of a calibration."),
     (
         "simulate",
-        "wirecal.cli.identify:simulate",
+        "wirecal.cli.simulate:simulate",
         "Simulate a measurement run of PLAN on a robot with known errors.",
     ),
     (
         "solve",
-        "wirecal.cli.identify:solve",
+        "wirecal.cli.solve:solve",
         "Identify the kinematic errors from a measurement LOG.",
     ),
     (
