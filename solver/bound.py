@@ -116,6 +116,7 @@ def bound_mm(
     W = W.reshape(m + 1, -1).astype(np.float32)
     X = np.hstack([x, np.ones((draws, 1))]).astype(np.float32)
     A = A.astype(np.float32)
+    ones = np.ones(q, dtype=np.float32)  # sums over the configurations as a product
     worst = np.empty(draws)
     for start in range(0, draws, _CHUNK):
         block = slice(start, start + _CHUNK)
@@ -123,6 +124,7 @@ def bound_mm(
         p *= p
         sq = (X[block] @ W).reshape(-1, len(s[0]), q)
         sq += p.sum(axis=0)[:, None, :]
-        np.sqrt(np.maximum(sq, 0.0, out=sq), out=sq)  # rounding may leave -1e-7 of 0
-        worst[block] = sq.sum(axis=2).max(axis=1) / q
+        # rounding may leave -1e-7·‖s‖² where the norm is 0: its size is as good as 0
+        np.sqrt(np.abs(sq, out=sq), out=sq)
+        worst[block] = (sq @ ones).max(axis=1) / q
     return float(np.quantile(worst, probability))
