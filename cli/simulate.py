@@ -31,7 +31,10 @@ from wirecal.solver.simulate import (
 )
 
 
-def _slip(ctx, param, value):
+def _slip(
+    ctx: click.Context, param: click.Parameter, value: str | None
+) -> tuple[int, float] | None:
+    """Return --slip STEP:MM as (step, mm), the size within the longest range."""
     if value is None:
         return None
     m = re.fullmatch(r"\s*(\d+)\s*:\s*([-+]?\d*\.?\d+(?:[eE][-+]?\d+)?)\s*", value)

@@ -39,6 +39,7 @@ from wirecal.solver.solve import solve as solve_api
 
 if TYPE_CHECKING:
     from wirecal.app.compare import ControllerComparison
+    from wirecal.solver.solve import SolveResult
 
 
 @click.command()
@@ -199,7 +200,7 @@ def solve(
         click.echo(f"wrote {patch_path} ({chosen}) and {others}", err=as_json)
 
 
-def _controller(result) -> ControllerComparison:
+def _controller(result: SolveResult) -> ControllerComparison:
     """Run the generated controller solver (wc.solve, wc.solve2) in the twin on the log."""
     from wirecal.app.compare import compare_controller  # the twin only when asked for
 
