@@ -61,3 +61,9 @@ PATCH_FORCE = click.option(
     "--force", is_flag=True, help="Replace an existing patch and SPEC table."
 )
 """Replace the outputs of ``-o PATCH`` (solve, fit)."""
+
+ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
+"""The robot file argument (simulate, solve)."""
+
+PLAN = click.argument("plan", type=click.Path(dir_okay=False))
+"""The plan file argument (simulate, solve)."""

@@ -85,7 +85,8 @@ def tool_error(model: Model, names: Sequence[str], cov: np.ndarray, q: np.ndarra
 
 def rms_tool_error(Jp: np.ndarray, cov: np.ndarray) -> ToolError:
     """Return the RMS tool-point error for the tool-point Jacobian ``Jp`` (Q, 3, m) over Q."""
-    rms = np.sqrt(np.einsum("nim,mk,nik->n", Jp, cov, Jp))
+    rows = Jp.reshape(-1, Jp.shape[2])  # one row per configuration and axis
+    rms = np.sqrt(np.sum((rows @ cov) * rows, axis=1).reshape(-1, 3).sum(axis=1))
     return ToolError(float(rms.mean()), float(rms.max()))
 
 

@@ -253,7 +253,7 @@ def solve(
     psi = sensitivity(base, q_deg, m.theta0_deg, names).psi
     omega = omega_vector(names, robot.n_joints, plan, omega_default)
     fit = _identify(robot, problem, omega, psi, robust)
-    drift, clean = _judge_drift(robot, m, fit[2], k, problem, (omega, psi, robust))
+    drift, clean = _judge_drift(robot, m, fit, k, problem, (omega, psi, robust))
     notes.append(_drift_note(m, drift))
     if corrections and clean is not None:
         problem, fit = clean
@@ -362,10 +362,15 @@ def _identify(
             f"{', '.join(bad)}: the model's wire lengths are not finite numbers; check the "
             "robot file's sizes and units (mm, deg)"
         )
+    return (sw, *_joint_fit(problem, sw.values, robust))
+
+
+def _joint_fit(problem: Problem, start: np.ndarray, robust: bool) -> tuple[Estimate, float]:
+    """Run the joint method from ``start`` (boundary units); its estimate and the noise σ."""
     loss: Loss = "soft_l1" if robust else "linear"
-    jt = joint(problem, problem.errors.to_internal(sw.values), loss=loss)
+    jt = joint(problem, problem.errors.to_internal(start), loss=loss)
     r = problem.residuals(problem.errors.to_internal(jt.values))
-    return sw, jt, _noise_sigma(r, len(problem.names), robust)
+    return jt, _noise_sigma(r, len(problem.names), robust)
 
 
 Fit = tuple[Estimate, Estimate, float]
@@ -375,21 +380,22 @@ Fit = tuple[Estimate, Estimate, float]
 def _judge_drift(
     robot: Robot,
     m: Measurements,
-    sigma_mm: float,
+    first: Fit,
     factor: float,
     problem: Problem,
     how: tuple[np.ndarray, np.ndarray, bool],
 ) -> tuple[Drift | None, tuple[Problem, Fit] | None]:
     """Fit the zero readings' drift and judge it by the σ left once it is removed.
 
-    The points' σ ``sigma_mm`` of the first identification still holds the drift (their
-    lengths drift with time): judged by it a real drift looks insignificant. So the
-    fitted drift is taken out of the lengths (then scaled by the reference's ``factor``),
-    the parameters identified again (``how``: ω, Ψ, robust, as :func:`_identify`), and
-    the drift refitted with that σ. Returns the
-    drift and, when it is significant, the problem without it and its identification.
+    The points' σ of the ``first`` identification still holds the drift (their lengths
+    drift with time): judged by it a real drift looks insignificant. So the fitted drift is
+    taken out of the lengths (then scaled by the reference's ``factor``), σ taken again from
+    the joint method (the one σ comes from, started at the first joint estimate), and the
+    drift refitted with that σ. Only a drift that is then removed has the parameters
+    identified again (``how``: ω, Ψ, robust, as :func:`_identify`). Returns the drift and,
+    when it is significant, the problem without it and its identification.
     """
-    drift = _fit_drift(m, sigma_mm)
+    drift = _fit_drift(m, first[2])
     if drift is None:
         return None, None
     assert m.t_s is not None
@@ -397,9 +403,10 @@ def _judge_drift(
     present = m.present
     removed = replace(drift, removed=True).correction_mm(m.t_s[present], m.reference_t_s)
     clean = replace(problem, d=(m.distance_mm[present] - removed) * factor)
-    fit = _identify(robot, clean, *how)
-    drift = _fit_drift(m, fit[2])
-    return drift, ((clean, fit) if drift is not None and drift.removed else None)
+    drift = _fit_drift(m, _joint_fit(clean, first[1].values, how[2])[1])
+    if drift is None or not drift.removed:
+        return drift, None
+    return drift, (clean, _identify(robot, clean, *how))
 
 
 def _fit_drift(m: Measurements, sigma_mm: float) -> Drift | None:

@@ -13,13 +13,22 @@ import pytest
 from click.testing import CliRunner
 from hypothesis import given
 from hypothesis import strategies as st
+from scipy.special import ndtri
 from scipy.stats import binom
 
 from wirecal.app.coverage import trial, wilson
 from wirecal.app.report import render_report
 from wirecal.cli.main import main
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace
-from wirecal.solver.bound import ErrorModel, bound_mm, mean_tool_error
+from wirecal.solver.bound import (
+    BOUND_PROBABILITY,
+    DRAWS,
+    SEED,
+    ErrorModel,
+    bound_mm,
+    low_discrepancy,
+    mean_tool_error,
+)
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
@@ -79,6 +88,27 @@ def test_bounded_terms_are_taken_at_their_worst_corner():
     b = np.array([0.0, -0.8])
     one_sided = ErrorModel(np.zeros((2, 2)), b / 2, (b / 2)[None, :])
     assert bound_mm(Jp, one_sided) == pytest.approx(0.8, rel=1e-6)
+
+
+def test_bound_is_the_worst_corners_quantile_by_brute_force():
+    """The blocked single-precision expansion of the norms against every norm taken one by one
+    in double precision, over the same draws: 4 corners, 60 configurations, with a corner
+    that cancels the tool-point error at one configuration (a norm of 0)."""
+    rng = np.random.default_rng(3)
+    q, m = 60, 4
+    Jp = rng.normal(size=(q, 3, m))
+    root = rng.normal(size=(m, m)) * 0.1
+    edges = rng.normal(size=(2, m)) * 0.2
+    bias = -edges.sum(axis=0)  # the corner (+1, +1) is 0: no error at all from the corners
+    model = ErrorModel(root @ root.T, bias, edges)
+    w, U = np.linalg.eigh(model.cov)
+    x = ndtri(low_discrepancy(m, DRAWS, SEED)) @ (U * np.sqrt(np.clip(w, 0, None))).T
+    corners = [bias + a * edges[0] + b * edges[1] for a in (-1, 1) for b in (-1, 1)]
+    worst = [
+        max(np.mean([np.linalg.norm(Jp[k] @ (xi + c)) for k in range(q)]) for c in corners)
+        for xi in x
+    ]
+    assert bound_mm(Jp, model) == pytest.approx(np.quantile(worst, BOUND_PROBABILITY), rel=1e-5)
 
 
 @pytest.fixture(scope="module")

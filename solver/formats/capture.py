@@ -62,13 +62,16 @@ class _Lines:
         self.lines = lines
         self.width = width
         self.test = test
+        self._readable: dict[str, bool] = {}  # each text parsed once, however often asked
 
     def readable(self, text: str) -> bool:
-        cells = cells_of(text)
-        return len(cells) == self.width and self.test.readable(cells)
+        if text not in self._readable:
+            cells = cells_of(text)
+            self._readable[text] = len(cells) == self.width and self.test.readable(cells)
+        return self._readable[text]
 
     def row_like(self, k: int) -> bool:
-        return cells_of(self.lines[k])[0].strip('"') in self.test.kinds
+        return self.lines[k].split(",", 1)[0].strip().strip('"') in self.test.kinds
 
     def piece(self, k: int) -> bool:
         """Whether line k can continue a broken row (and is no row of its own)."""

@@ -1,0 +1,264 @@
+"""Provide ``wirecal simulate``: a measurement run on a simulated robot with known errors."""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+from wirecal.cli.main import user_errors
+from wirecal.cli.options import NON_NEGATIVE, PLAN, ROBOT, SEED, number
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.fileio import Outputs
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import (
+    MAX_DH_ANGLE_DEG,
+    MAX_RANGE_MM,
+    MAX_SCALE_PPM,
+    load_robot,
+)
+from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
+from wirecal.solver.simulate import (
+    IDEAL_ENCODER,
+    MAX_DRIFT_MM_PER_H,
+    EncoderTruth,
+    Faults,
+    realistic_encoder,
+    simulate_log,
+)
+
+
+def _slip(
+    ctx: click.Context, param: click.Parameter, value: str | None
+) -> tuple[int, float] | None:
+    """Return --slip STEP:MM as (step, mm), the size within the longest range."""
+    if value is None:
+        return None
+    m = re.fullmatch(r"\s*(\d+)\s*:\s*([-+]?\d*\.?\d+(?:[eE][-+]?\d+)?)\s*", value)
+    if not m:
+        raise click.BadParameter("give STEP:MM, e.g. 4:0.5")
+    if not abs(float(m.group(2))) <= MAX_RANGE_MM:
+        raise click.BadParameter(f"give a slip within ±{MAX_RANGE_MM:g} mm (the longest range_mm)")
+    return int(m.group(1)), float(m.group(2))
+
+
+@click.command()
+@ROBOT
+@PLAN
+@click.option(
+    "-o",
+    "--output",
+    "log_path",
+    required=True,
+    type=click.Path(dir_okay=False),
+    help="Log file to write (the format the controller program writes).",
+)
+@click.option(
+    "--errors",
+    "errors_file",
+    type=click.Path(dir_okay=False),
+    help="Truth file with an [errors] table of true offsets (deg, mm).",
+)
+@click.option(
+    "--random",
+    "scale",
+    type=number(0.0, MAX_DH_ANGLE_DEG),
+    help="Draw true offsets uniform within ±SCALE deg/mm for the robot file's "
+    "parameters (default 1.0 when --errors is not given).",
+)
+@click.option(
+    "--seed",
+    type=SEED,
+    default=0,
+    show_default=True,
+    help="Random seed: the same seed gives the same truth and readings.",
+)
+@click.option(
+    "--noise-mm",
+    type=NON_NEGATIVE,
+    default=0.01,
+    show_default=True,
+    help="Gaussian error of each reading (σ, mm), before quantisation.",
+)
+@click.option(
+    "--samples",
+    type=click.IntRange(1, 1000),
+    default=10,
+    show_default=True,
+    help="Counter readings averaged per point.",
+)
+@click.option(
+    "--truth-out",
+    type=click.Path(dir_okay=False),
+    help="Where to write the truth [default: LOG with .truth.toml].",
+)
+@click.option(
+    "--slip",
+    callback=_slip,
+    metavar="STEP:MM",
+    help="Fault: the wire slips by MM during STEP (the next zero check sees it).",
+)
+@click.option(
+    "--outliers",
+    type=click.IntRange(min=0),
+    default=0,
+    help="Fault: this many points get a gross error of ±--outlier-mm.",
+)
+@click.option(
+    "--outlier-mm",
+    type=number(0.0, MAX_RANGE_MM),
+    default=1.0,
+    show_default=True,
+    help="Size of each outlier's error (mm, random sign).",
+)
+@click.option(
+    "--stop-after",
+    type=click.IntRange(min=0),
+    help="Fault: the run stops after this many readings (a partial log).",
+)
+@click.option(
+    "--counter-start",
+    type=number(),
+    help="Counter value at the first reading [default: random]; just below "
+    "2^(counter_bits-1) (8388607 at 24 bits) the counter wraps during the run.",
+)
+@click.option(
+    "--controller",
+    is_flag=True,
+    help="Run the generated V+ programs (wc.mount, wc.run) in the digital twin: "
+    "the log is written by the very program a user would load.",
+)
+@click.option(
+    "--ideal-encoder",
+    is_flag=True,
+    help="A perfect encoder: the robot file's scale exactly, no temperature change.",
+)
+@click.option(
+    "--encoder-scale-ppm",
+    type=number(-MAX_SCALE_PPM, MAX_SCALE_PPM),
+    help="The true encoder scale's error (ppm) [default: drawn within the robot file's "
+    "scale_tolerance_ppm].",
+)
+@click.option(
+    "--drift-mm-per-h",
+    type=number(-MAX_DRIFT_MM_PER_H, MAX_DRIFT_MM_PER_H),
+    default=0.0,
+    show_default=True,
+    help="Fault: every reading drifts by this much per hour from the start of the run.",
+)
+@click.option("--force", is_flag=True, help="Replace existing output files.")
+@user_errors
+def simulate(
+    robot,
+    plan,
+    log_path,
+    errors_file,
+    scale,
+    seed,
+    noise_mm,
+    samples,
+    truth_out,
+    slip,
+    outliers,
+    outlier_mm,
+    stop_after,
+    counter_start,
+    controller,
+    ideal_encoder,
+    encoder_scale_ppm,
+    drift_mm_per_h,
+    force,
+):
+    """Simulate a measurement run of PLAN on a robot with known errors.
+
+    The true robot is the nominal one plus error offsets (from --errors, or drawn with
+    --random). Its wire lengths are read like the controller would: noise, quantisation at
+    mm_per_count, averaged samples, and a wrapping counter. The encoder is realistic: its
+    true scale is off within the robot file's scale_tolerance_ppm (--encoder-scale-ppm
+    sets it), the temperature rises 0.5 K over the run (the drum and the arm expand), and
+    the run starts with the reference step when the robot file gives a reference gauge;
+    --ideal-encoder turns all of that off. The log goes to -o; the truth (and the true
+    encoder) goes to its own file, never into the log.
+    """
+    rb = load_robot(robot)
+    if rb.controller_problem():
+        raise WirecalError(f"{rb.controller_problem()}; 'wirecal simulate' writes that log")
+    pl = load_plan(plan, rb)
+    if errors_file and scale is not None:
+        raise WirecalError("give either --errors FILE or --random SCALE, not both")
+    if slip is not None and not 1 <= slip[0] <= len(pl.steps):
+        raise WirecalError(
+            f"--slip {slip[0]}:{slip[1]:g}: {plan} has steps 1–{len(pl.steps)}; give one of them"
+        )
+    counter = rb.encoder.counter
+    if counter_start is not None and not -counter.half <= counter_start < counter.half:
+        raise WirecalError(
+            f"--counter-start {counter_start:g}: the robot file's "
+            f"{counter.bits}-bit counter holds {-counter.half}…{counter.half - 1}"
+        )
+    truth_path = Path(truth_out) if truth_out else Path(log_path).with_suffix(".truth.toml")
+    inputs = [robot, plan, *([errors_file] if errors_file else [])]
+    with Outputs([log_path, truth_path], force=force, inputs=inputs) as out:
+        if errors_file:
+            errors = load_errors(errors_file, rb)
+        else:
+            errors = random_errors(
+                rb, 1.0 if scale is None else scale, np.random.default_rng([seed, 1])
+            )
+        if ideal_encoder and (encoder_scale_ppm is not None or drift_mm_per_h):
+            raise WirecalError("--ideal-encoder excludes --encoder-scale-ppm and --drift-mm-per-h")
+        true_encoder = (
+            IDEAL_ENCODER
+            if ideal_encoder
+            else realistic_encoder(
+                rb.encoder, np.random.default_rng([seed, 4]), encoder_scale_ppm, drift_mm_per_h
+            )
+        )
+        stopped = None
+        if controller:
+            if outliers or stop_after is not None:
+                raise WirecalError(
+                    "--outliers and --stop-after apply to the direct simulation; "
+                    "the twin injects its own faults (see the README)"
+                )
+            from wirecal.app.twin_simulate import simulate_in_twin  # the twin only when asked for
+
+            text, stopped = simulate_in_twin(
+                rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true_encoder
+            )
+        else:
+            text = simulate_log(
+                rb,
+                pl,
+                errors,
+                seed=seed,
+                noise_mm=noise_mm,
+                samples=samples,
+                faults=Faults(
+                    slip=slip, outliers=outliers, outlier_mm=outlier_mm, stop_after=stop_after
+                ),
+                counter_start=counter_start,
+                encoder=true_encoder,
+            )
+        out.put(log_path, text)
+        out.put(
+            truth_path,
+            truth_text(rb, errors, None if errors_file else seed) + _encoder_note(true_encoder),
+        )
+    click.echo(f"wrote {log_path} ({pl.n_points} points) and the truth to {truth_path}")
+    if stopped:
+        click.echo(f"the controller program stopped: {stopped}", err=True)
+        sys.exit(1)
+
+
+def _encoder_note(truth: EncoderTruth) -> str:
+    """Return the truth file's comment on the true encoder (what solve should find)."""
+    return (
+        f"# true encoder: scale {truth.scale_ppm:+.1f} ppm, temperature rise "
+        f"{truth.temperature_change_k:g} K over the run (drum {truth.drum_ppm_per_k:g} "
+        f"ppm/K, arm {truth.arm_ppm_per_k:g} ppm/K), zero drift "
+        f"{truth.zero_drift_mm_per_h:g} mm/h, gauge error {truth.gauge_error_mm:+.4f} mm\n"
+    )

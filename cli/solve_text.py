@@ -1,0 +1,183 @@
+"""The text ``wirecal solve`` prints.
+
+The estimates side by side, the predicted accuracy, the encoder's scale and drift, the error
+budget, the steps, and the controller solver's run in the twin.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from wirecal.solver import params as P
+from wirecal.solver.exit_geometry import describe
+
+if TYPE_CHECKING:
+    from wirecal.app.compare import ControllerComparison
+    from wirecal.solver.solve import SolveResult
+
+
+def controller_text(ctl: ControllerComparison) -> str:
+    """Return the controller solver's estimates beside the Python reference as text."""
+    if ctl.polished is None:
+        return _ur_controller_text(ctl)
+    lines = [
+        "",
+        "Controller solver (the generated V+ run in the digital twin):",
+        f"{'parameter':<10}{'wc.solve':>12}{'wc.solve2':>12}",
+    ]
+    for name, value in ctl.stepwise.offsets.items():
+        lines.append(f"{name:<10}{value:12.4f}{ctl.polished.offsets[name]:12.4f}")
+    lines.append(
+        f"largest difference from the Python reference: "
+        f"{ctl.stepwise_max_difference:.2g} (stepwise), "
+        f"{ctl.polished_max_difference:.2g} (joint) deg/mm; "
+        f"{ctl.stepwise.total_operations:,} and {ctl.polished.total_operations:,} "
+        "arithmetic operations"
+    )
+    return "\n".join(lines)
+
+
+def _ur_controller_text(ctl: ControllerComparison) -> str:
+    """Return the URScript controller solver's estimates (one method) as text."""
+    run = ctl.stepwise
+    lines = [
+        "",
+        "Controller solver (the generated URScript wc_solve run in the digital twin, "
+        "32-bit floats):",
+        f"{'parameter':<10}{'wc_solve':>12}",
+    ]
+    lines += [f"{name:<10}{value:12.6f}" for name, value in run.offsets.items()]
+    lines.append(
+        f"largest difference from the Python reference (stepwise): "
+        f"{ctl.stepwise_max_difference:.2g} deg/mm; {run.total_operations:,} arithmetic "
+        f"operations, {run.syncs:,} sync() (at most {run.most_between_syncs} operations "
+        "between two)"
+    )
+    return "\n".join(lines)
+
+
+def _sigma(std: float) -> str:
+    """σ of the joint estimate, or that the points do not identify the parameter."""
+    return f"{std:14.4f}" if np.isfinite(std) else f"{'unidentifiable':>16}"
+
+
+def _mm(value: float) -> str:
+    """Return a predicted error (mm), or that it is unbounded."""
+    return f"{value:12.4f}" if np.isfinite(value) else f"{'unbounded':>12}"
+
+
+def _encoder_text(result: SolveResult) -> list[str]:
+    """Return the scale, the drift and each method's error budget as text lines."""
+    enc = result.robot.encoder
+    lines = [""]
+    sc = result.scale
+    if sc is not None:
+        lines.append(
+            f"encoder scale from the reference ({sc.pairs} pair(s) of nests "
+            f"{sc.reference_length_mm:g} mm apart): {sc.ppm:+.1f} ± {sc.std_ppm:.1f} ppm, "
+            "applied to every length"
+        )
+        jt = result.estimates.get("joint")
+        if jt is not None and jt.scale_ppm is not None and jt.scale_std_ppm is not None:
+            lines.append(
+                f"  refined with the joint method: {jt.scale_ppm:+.1f} ± "
+                f"{jt.scale_std_ppm:.1f} ppm more"
+            )
+    lines += [f"note: {n}" for n in result.encoder_notes]
+    if not result.budgets:
+        return lines
+    methods = list(result.budgets)
+    lines += ["", "Error budget: mean tool-point error over 1000 configurations (mm)"]
+    lines.append(f"{'source':<15}" + "".join(f"{m:>12}" for m in methods))
+    for term, label in (
+        ("noise", "reading noise"),
+        ("scale", "encoder scale"),
+        ("drift", "drift"),
+        ("exit", "wire exit"),
+        ("sag", "gravity sag"),
+    ):
+        lines.append(
+            f"{label:<15}" + "".join(f"{result.budgets[m].terms[term]:12.4f}" for m in methods)
+        )
+    lines.append(f"{'total':<15}" + "".join(f"{result.budgets[m].total:12.4f}" for m in methods))
+    lines.append(
+        f"{'95 % bound':<15}"
+        + "".join(f"{result.budgets[m].bound:12.4f}" for m in methods)
+        + "   below it in 95 % of calibrations (the total is a mean)"
+    )
+    lines += [f"  {n}" for n in result.budgets[methods[0]].notes]
+    if sc is None:
+        best = min(result.budgets[m].terms["scale"] for m in methods)
+        lines.append(
+            f"± {best:.3f} mm from the encoder scale alone (tolerance "
+            f"{enc.scale_tolerance_ppm:g} ppm): measure the reference"
+        )
+    return lines
+
+
+def solve_text(result: SolveResult) -> str:
+    """Return ``wirecal solve``'s text: the estimates side by side, accuracy, budget, steps."""
+    est = result.estimates
+    names = result.plan.order
+    methods = list(est)
+    lines = [
+        f"Robot {result.robot.name}; log {result.measurements.source}; "
+        f"{int(result.measurements.present.sum())} points",
+        f"wire exit: {describe(result.robot.encoder.exit)}",
+    ]
+    for note in result.measurements.notes:
+        lines.append(f"note: {note}")
+    if result.measurements.missing:
+        lines.append(f"missing: {result.measurements.missing_text()}")
+    if result.left_nominal:
+        lines.append("left at nominal (no points): " + ", ".join(result.left_nominal))
+    head = f"{'parameter':<10}{'unit':<5}" + "".join(f"{m:>12}" for m in methods)
+    joint, sigma = est.get("joint"), None
+    if joint is not None and joint.std is not None:
+        sigma = dict(zip(joint.names, joint.std, strict=True))
+        head += f"{'± σ (joint)':>14}"
+    lines += ["", head]
+    for name in names:
+        if name in result.left_nominal:
+            continue
+        row = f"{name:<10}{P.unit_of(name):<5}" + "".join(
+            f"{est[m].as_dict()[name]:12.4f}" for m in methods
+        )
+        if sigma is not None:
+            row += _sigma(sigma[name])
+        lines.append(row)
+    lines.append(
+        f"{'residual RMS (mm)':<15}" + "".join(f"{est[m].residual_rms_mm:12.4f}" for m in methods)
+    )
+    lines.append(
+        f"{'tool error (mm)':<15}"
+        + "".join(_mm(result.predicted[m]["mean"]) for m in methods)
+        + "   predicted mean over 1000 configurations"
+    )
+    lines.append(f"{'  worst':<15}" + "".join(_mm(result.predicted[m]["max"]) for m in methods))
+    lines.append(
+        f"{'  95 % bound':<15}"
+        + "".join(
+            _mm(result.budgets[m].bound if m in result.budgets else float("inf")) for m in methods
+        )
+        + "   the mean stays below it in 95 % of calibrations"
+    )
+    lines.append(
+        f"noise σ from the joint residual: {result.sigma_mm:.4f} mm; "
+        f"recommended: {result.recommended}"
+    )
+    lines += _encoder_text(result)
+    if "stepwise" in est:
+        lines += ["", "Step-by-step (paper): rms before → after, |Ψ_j|, leak of later parameters"]
+        for j, s in enumerate(est["stepwise"].steps, 1):
+            worst = s.worst_leak
+            leak = f"{worst[0]} {worst[1]:+.3f}/unit" if worst and abs(worst[1]) >= 5e-4 else "none"
+            bound = "  ON BOUND Ω" if s.on_bound else ""
+            lines.append(
+                f"{j:3d} {s.parameter:<5}{s.n_points:3d} pts  {s.rms_before_mm:8.4f} → "
+                f"{s.rms_after_mm:7.4f} mm  |Ψ| {s.psi_strength:5.2f}  leak {leak}"
+                f"{bound}"
+            )
+    return "\n".join(lines)
