@@ -229,7 +229,7 @@ HELP_TEXT: dict[str, str] = {
         "  --counter-bits INTEGER          Controller counter width (default: the\n"
         "                                  language's: 32 for rapid, 32 for urscript, 24\n"
         "                                  for vplus).\n"
-        "  --interface [belt|device|pulse]\n"
+        "  --interface [belt|device|group|pulse]\n"
         "                                  How the controller program reads the encoder\n"
         "                                  (default: the language's: group for rapid,\n"
         "                                  pulse for urscript, belt for vplus).\n"
