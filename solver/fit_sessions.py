@@ -115,8 +115,13 @@ def _refine(v: np.ndarray, points: list[int], sigma: float, min_rows: int) -> li
 
     The point whose split pays least is dropped while it pays less than the penalty by the
     capped cost (:func:`_capped`); then each moves to its best place between its neighbours.
+    That point's penalty takes the larger of ``sigma`` and the scatter within the sessions
+    without it (:func:`_within_sigma`, σ where it is no change point), raised by at most two
+    standard errors of ``sigma`` (1 + 2/√(2(N − 1))): the difference σ of a few dozen rows
+    comes out 20 % low now and then, and a cut from pure noise then paid (52 rows, two
+    snags, 1 in 300 draws); of a thousand rows it is within 5 %, so sessions' jumps that
+    remain unfound cannot raise it further and hide the others.
     """
-    penalty = PENALTY_PER_LN_N * np.log(v.size) * sigma**2
     cap = (CLIP_SIGMA * sigma) ** 2
     for _ in range(100 * (len(points) + 1)):
         bounds = [0, *points, v.size]
@@ -130,13 +135,25 @@ def _refine(v: np.ndarray, points: list[int], sigma: float, min_rows: int) -> li
                 if k is None
                 else _capped(v[a:b], cap) - _capped(v[a : a + k], cap) - _capped(v[a + k : b], cap)
             )
-        if gains and min(gains) <= penalty:
-            del points[int(np.argmin(gains))]
-        elif best != points:
+        if gains:
+            weakest = int(np.argmin(gains))
+            within = _within_sigma(v, points[:weakest] + points[weakest + 1 :])
+            s = min(max(sigma, within), sigma * (1 + 2 / np.sqrt(2 * (v.size - 1))))
+            if gains[weakest] <= PENALTY_PER_LN_N * np.log(v.size) * s**2:
+                del points[weakest]
+                continue
+        if best != points:
             points = sorted(set(best))
         else:
             return points
     return points
+
+
+def _within_sigma(v: np.ndarray, points: list[int]) -> float:
+    """Return the pooled σ of ``v`` about each session's mean, the sessions cut at ``points``."""
+    parts = np.split(v, points)
+    dof = v.size - len(parts)
+    return float(np.sqrt(sum(float(np.sum((p - p.mean()) ** 2)) for p in parts) / dof))
 
 
 def _capped(v: np.ndarray, cap: float) -> float:
