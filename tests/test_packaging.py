@@ -67,9 +67,9 @@ def test_wheel_holds_every_package_folder_and_a_new_one_with_no_pyproject_edit(t
     # A new sub-package of a part, and a new part with its link: pyproject.toml is not touched.
     (src / "gen" / "newlang").mkdir()
     (src / "gen" / "newlang" / "__init__.py").write_text('"""A new backend."""\n')
-    (src / "lang").mkdir()
-    (src / "lang" / "__init__.py").write_text('"""A new part."""\n')
-    (src / "wirecal" / "lang").symlink_to("../lang")
+    (src / "newpart").mkdir()
+    (src / "newpart" / "__init__.py").write_text('"""A new part."""\n')
+    (src / "wirecal" / "newpart").symlink_to("../newpart")
     subprocess.run(
         [
             sys.executable,
@@ -89,7 +89,7 @@ def test_wheel_holds_every_package_folder_and_a_new_one_with_no_pyproject_edit(t
     names = zipfile.ZipFile(wheel).namelist()
     packaged = {n.removesuffix("/__init__.py").replace("/", ".") for n in names if "__init__" in n}
     assert packaged == _packages(src)
-    assert {"wirecal.gen.newlang", "wirecal.lang", "wirecal.solver.formats"} <= packaged
+    assert {"wirecal.gen.newlang", "wirecal.newpart", "wirecal.lang.rapid"} <= packaged
     assert "wirecal/templates/text/psi.txt.j2" in names
     assert "wirecal/solver/kinematics.py" in names
     assert "wirecal/cli/main.py" in names
