@@ -292,8 +292,9 @@ def _encoder_note(truth: EncoderTruth) -> str:
 def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true_encoder):
     """Run the measurement programs in the twin; return the log text and why they stopped.
 
-    V+: wc.mount and wc.run write the log on the cell's disk. URScript: wc_mount and wc_run
-    send it over a loopback socket to wirecal receive (the journal of an incomplete run).
+    The robot's language's programs in its twin adapter (:func:`wirecal.app.languages.registered`):
+    a log file on the controller's disk, or sent over a loopback socket to wirecal receive
+    (the journal of an incomplete run).
     """
     from wirecal.twin.run_moves import move_of_step, where_in_run
     from wirecal.twin.world import Faults as TwinFaults  # the twin only when asked for
@@ -304,28 +305,16 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true
     run = RunParameters(readings=samples)
     kw = dict(seed=seed, noise_mm=noise_mm, counter_start=counter_start, faults=faults)
     with tempfile.TemporaryDirectory() as tmp:
-        if rb.controller.language == "urscript":
-            from wirecal.app.twin_runs import measure_ur_in_twin
-            from wirecal.gen.urscript.program import UrOptions
+        from wirecal.app.languages import registered
+        from wirecal.gen.request import GenRequest
 
-            ur = measure_ur_in_twin(rb, pl, errors, Path(tmp), options=UrOptions(run=run), **kw)
-            mount, outcome, world = ur.programs.mount, ur.programs.run, ur.programs.world
-            log, first = ur.log, "wc_mount"
-        else:
-            from wirecal.app.twin_runs import measure_in_twin
-            from wirecal.gen.vplus.program import GenOptions
-
-            vp = measure_in_twin(
-                rb,
-                pl,
-                errors,
-                Path(tmp),
-                options=GenOptions(run=run),
-                encoder_truth=true_encoder,
-                **kw,
-            )
-            mount, outcome, world = vp.mount, vp.run, vp.world
-            log, first = vp.log, "wc.mount"
+        reg = registered(rb)
+        programs = reg.generator.programs(rb, pl, GenRequest(run=run))
+        if reg.takes("encoder_truth"):
+            kw["encoder_truth"] = true_encoder
+        twin = reg.measure(rb, pl, errors, Path(tmp), programs, **kw)
+        mount, outcome, world = twin.mount, twin.run, twin.world
+        log, first = twin.log, mount.program
         text = log.read_text(encoding="ascii") if log.exists() else ""
     outcome = outcome or mount
     stopped = None

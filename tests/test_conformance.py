@@ -238,18 +238,6 @@ ALLOWED = {
         "are V+; the solver core sits below the registry (lang.registry.default_language "
         "names the same language)"
     ),
-    ("app/demo.py", "urscript"): (
-        "the demo's --robot pipeline (_run_ur) is URScript's: one pipeline over the "
-        "registry needs the twin adapters (twincell)"
-    ),
-    ("app/compare.py", "urscript"): (
-        "controller solver per language: becomes registered(robot).adapter.controller_solve "
-        "with the twin adapters (twincell)"
-    ),
-    ("cli/identify.py", "urscript"): (
-        "the twin run per language: becomes registered(robot).adapter.measure with the twin "
-        "adapters (twincell; the file is being split by another engineer)"
-    ),
 }
 """(file, key) → why it still names the language; the list only shrinks."""
 
