@@ -43,7 +43,6 @@ from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
 from wirecal.solver.identify import DEFAULT_OMEGA
 from wirecal.solver.measurements import Tolerances, check_log
 from wirecal.solver.plausibility import READING_NOISE_MM
-from wirecal.solver.run_parameters import RunParameters
 from wirecal.solver.simulate import (
     IDEAL_ENCODER,
     MAX_DRIFT_MM_PER_H,
@@ -302,13 +301,15 @@ def _twin_run(rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true
     faults = TwinFaults()
     if slip is not None:
         faults = TwinFaults(slip_at_move=move_of_step(pl, slip[0]), slip_mm=slip[1])
-    run = RunParameters(readings=samples)
     kw = dict(seed=seed, noise_mm=noise_mm, counter_start=counter_start, faults=faults)
     with tempfile.TemporaryDirectory() as tmp:
+        from dataclasses import replace
+
         from wirecal.app.languages import registered
         from wirecal.gen.request import GenRequest
 
         reg = registered(rb)
+        run = replace(reg.generator.default_run, readings=samples)  # as wirecal gen runs
         programs = reg.generator.programs(rb, pl, GenRequest(run=run))
         if reg.takes("encoder_truth"):
             kw["encoder_truth"] = true_encoder
