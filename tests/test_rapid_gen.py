@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import re
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,7 @@ import pytest
 from wirecal.gen.rapid import GENERATOR
 from wirecal.gen.rapid.program import RapidOptions, line_ends, module_text
 from wirecal.gen.request import GenRequest
+from wirecal.lang.rapid import Rapid
 from wirecal.lang.rapid.module import num_literal
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
@@ -93,6 +95,24 @@ def test_refuses_other_encoder(irb):
     robot = robot_from_dict(data, "bits.toml")
     with pytest.raises(WirecalError, match="counter_bits = 32"):
         module_text(robot, irb[1])
+
+
+def test_moves_the_wire_limits_slow_get_their_own_speeddata(irb):
+    """With a wire that may accelerate at only 10 m/s², some moves get a slower speeddata
+    (v_ori below wc_v's); the others keep wc_v; the module stays clean."""
+    robot, plan = irb
+    tight = replace(robot, encoder=replace(robot.encoder, max_wire_accel_mm_s2=10_000.0))
+    text = module_text(tight, plan)
+    v_ori = {
+        m.group(1): float(m.group(2))
+        for m in re.finditer(r"CONST speeddata (wc_v\d*) := \[[^,]+, ([^,]+),", text)
+    }
+    assert len(v_ori) > 1
+    assert all(v < v_ori["wc_v"] for name, v in v_ori.items() if name != "wc_v")
+    used = re.findall(r"MoveAbsJ [^;]*, (wc_v\d*), fine", text)
+    assert set(used) == set(v_ori)
+    assert Rapid().lint(text, "WIRECAL.mod", robot.controller.software) == []
+    assert "wc_v1" not in module_text(*irb)  # the shipped encoder: the run's one speed
 
 
 def test_generator_programs_and_write(irb, tmp_path):

@@ -177,3 +177,20 @@ def test_wc_check_shows_the_live_count(irb, programs, tmp_path):
     assert len(shown) == 60
     assert world.clock == pytest.approx(30.0)
     assert all(abs(float(line.split()[1])) <= 2 for line in shown)  # ±1-count jitter
+
+
+def test_moves_slowed_for_the_wire_complete_where_the_run_speed_stops(irb, tmp_path):
+    """An encoder whose wire may accelerate at only 10 m/s²: the module at the run's one
+    speed is stopped by the twin's wire check; the generator's slower speeddata for the
+    moves that need it let the run complete."""
+    from dataclasses import replace
+
+    robot, plan = irb
+    tight = replace(robot, encoder=replace(robot.encoder, max_wire_accel_mm_s2=10_000.0))
+    one_speed = {MODULE_FILE: module_text(robot, plan)}
+    stopped = ADAPTER.measure(tight, plan, {}, tmp_path / "one", one_speed, seed=1)
+    assert not stopped.complete
+    assert "max_wire_accel_mm_s2 10000" in str(stopped.stopped)
+    slowed = {MODULE_FILE: module_text(tight, plan)}
+    run = ADAPTER.measure(tight, plan, {}, tmp_path / "slowed", slowed, seed=1)
+    assert (run.complete, run.stopped) == (True, None)
