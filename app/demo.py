@@ -175,7 +175,8 @@ def run_demo(
     names = ch.outputs(programs)
     with Outputs([folder / n for n in names], force=force, folder=folder) as out:
         r = _run(out, folder, ch, programs, seed, scale, step)
-    return replace(r, outputs=names, wall_s=time.perf_counter() - wall)
+    r.outputs, r.wall_s = names, time.perf_counter() - wall
+    return r
 
 
 class _Steps:
@@ -263,8 +264,8 @@ def _run(
         _tool_errors(robot, truth, identified),
         difference,
         seconds,
-        (),
-        0.0,
+        outputs=(),  # run_demo sets them and the wall time once the outputs are published
+        wall_s=0.0,
         predicted_mm=result.predicted[result.recommended]["mean"],
         bound_mm=_bound(result),
         encoder_scale_ppm=None if encoder is None else encoder.scale_ppm,
