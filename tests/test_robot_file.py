@@ -194,8 +194,10 @@ CASES = {
     "interface": (
         lambda d: d["encoder"].__setitem__("interface", "usb"),
         'r.toml: encoder.interface: is "usb"; give "belt" (Adept/Omron V+ and eV+: '
-        'DEFBELT/BELT) or "device" (Adept/Omron V+ and eV+: DEVICE) or "pulse" (Universal '
-        "Robots URScript: the controller's pulse decoder)",
+        'DEFBELT/BELT) or "device" (Adept/Omron V+ and eV+: DEVICE) or "group" (ABB RAPID '
+        "(IRC5, RobotWare 6): the counter mapped to a group input signal, read with GInputDnum "
+        'as a dnum (up to 32 bits: unconfirmed)) or "pulse" (Universal Robots URScript: the '
+        "controller's pulse decoder)",
     ),
     "missing table": (
         lambda d: d.pop("encoder"),
