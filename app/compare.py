@@ -13,52 +13,59 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from wirecal.gen.urscript.program import UrOptions, scripts
-from wirecal.gen.vplus.program import GenOptions, module_text
+from wirecal.app.languages import Registered, registered
+from wirecal.gen.request import GenRequest
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.solve import SolveResult, solve
 from wirecal.twin.controller_run import ControllerRun
-from wirecal.twin.urscript.solver_run import controller_solve as urscript_solve
-from wirecal.twin.vplus.solver_run import controller_solve as vplus_solve
+
+LOOPBACK = ("127.0.0.1", 50000)
+"""The PC address given to socket programs whose robot file names none (the solver never
+uses it)."""
 
 
-def controller_solve(
+def solver_programs(reg: Registered, robot: Robot, plan: Plan) -> dict[str, str]:
+    """Return the language's programs generated with the default request.
+
+    A language that sends its log over a socket gets a loopback PC address when the robot
+    file has none: its controller solver never connects.
+    """
+    request = GenRequest()
+    if reg.language.capabilities.sockets and robot.controller.host is None:
+        host, port = LOOPBACK
+        request = GenRequest(host=host, port=robot.controller.port or port)
+    return reg.generator.programs(robot, plan, request)
+
+
+def controller_runs(
     robot: Robot,
     plan: Plan,
     m: Measurements,
     disk: Path,
     *,
-    polish: bool,
-    text: str | None = None,
-) -> ControllerRun:
+    programs: dict[str, str] | None = None,
+) -> dict[str, ControllerRun]:
     """Run the generated controller solver in the twin on a checked log's readings.
 
-    ``wc.solve``, or ``wc.solve2`` with ``polish``, of the module ``text`` (generated
-    with the default options when not given).
+    Method ("stepwise", "joint") → its run, by the language's twin adapter's
+    ``controller_runs`` (V+: wc.solve and wc.solve2; URScript: wc_solve); ``programs``
+    are the generated ones (the default request's when not given).
     """
-    options = GenOptions()
-    text = text if text is not None else module_text(robot, plan, options)
-    (disk / options.result_file).unlink(missing_ok=True)  # a previous run's result
-    return vplus_solve(robot, plan, m.log.readings, disk, polish=polish, text=text, closed=m.closed)
-
-
-def ur_controller_solve(
-    robot: Robot, plan: Plan, m: Measurements, disk: Path, *, text: str | None = None
-) -> ControllerRun:
-    """Run wc_solve of the generated wc_run in the twin on a checked log's readings.
-
-    ``text`` is wc_run's text (generated with the default options when not given; a robot
-    file without [controller] host/port gets loopback ones, which the solver never uses).
-    """
-    if text is None:
-        opt = UrOptions(
-            host=robot.controller.host or "127.0.0.1", port=robot.controller.port or 50000
+    reg = registered(robot)
+    runs = getattr(reg.adapter, "controller_runs", None)
+    if runs is None:
+        raise WirecalError(
+            f"--method controller: the {reg.language.title} twin does not yet run its "
+            "controller solver on a log's readings apart from the measurement run (its result "
+            "is in the log wc_run writes)"
         )
-        text = scripts(robot, plan, opt)["wc_run.script"]
-    return urscript_solve(robot, plan, m.log.readings, disk, text)
+    found: dict[str, ControllerRun] = runs(
+        robot, plan, m, disk, programs or solver_programs(reg, robot, plan)
+    )
+    return found
 
 
 @dataclass(frozen=True)
@@ -91,12 +98,12 @@ class ControllerComparison:
 
 
 def compare_controller(
-    result: SolveResult, disk: Path, *, text: str | None = None
+    result: SolveResult, disk: Path, *, programs: dict[str, str] | None = None
 ) -> ControllerComparison:
     """Run the controller solver in the twin on ``result``'s log; compare with Python's.
 
-    V+: wc.solve and wc.solve2 against the reference's stepwise and joint estimates;
-    URScript: wc_solve (``text``: wc_run's) against the stepwise estimate. The reference is
+    Each controller solver (:func:`controller_runs`; V+: wc.solve and wc.solve2, URScript:
+    wc_solve) against the reference's estimate of its method. The reference is
     the Python solve of the same lengths: the file's scale, no drift removed (the
     controller solvers apply neither).
     """
@@ -109,15 +116,12 @@ def compare_controller(
     # The controller solver reads the lengths at the file's scale with no drift removed:
     # its reference is the Python solve of those same lengths.
     plain = solve(result.robot, result.plan, m, corrections=False)
-    if result.robot.controller.language == "urscript":
-        run = ur_controller_solve(result.robot, result.plan, m, disk / "stepwise", text=text)
-        expected = plain.estimates["stepwise"].as_dict()
-        diff = max(abs(run.offsets[n] - v) for n, v in expected.items())
-        return ControllerComparison(run, None, diff, None)
-    runs, diffs = [], []
-    for key, polish, method in (("stepwise", False, "stepwise"), ("polished", True, "joint")):
-        run = controller_solve(result.robot, result.plan, m, disk / key, polish=polish, text=text)
-        expected = plain.estimates[method].as_dict()
-        runs.append(run)
-        diffs.append(max(abs(run.offsets[n] - v) for n, v in expected.items()))
-    return ControllerComparison(runs[0], runs[1], diffs[0], diffs[1])
+    runs = controller_runs(result.robot, result.plan, m, disk, programs=programs)
+    diffs = {
+        method: max(abs(run.offsets[n] - v) for n, v in plain.estimates[method].as_dict().items())
+        for method, run in runs.items()
+    }
+    joint = runs.get("joint")
+    return ControllerComparison(
+        runs["stepwise"], joint, diffs["stepwise"], None if joint is None else diffs["joint"]
+    )

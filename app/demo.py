@@ -1,20 +1,20 @@
 """``wirecal demo``: the whole chain on a shipped robot, in the digital twin.
 
-The Viper s650 (V+, the default): generate the V+ module (calibration and validation
-programs) for the paper's corrected plan; run it on a twin robot with random true errors;
-identify the parameters on the PC and with the controller solver; write the patch; run
-both validation procedures before and after calibration (the controller believing the
-patch), with unmodelled errors on; write the report. The validation before calibration runs
-in a second process beside the rest.
+One pipeline for every registered language (:func:`wirecal.app.languages.registered`):
+generate the robot's programs for the plan beside its robot file; run them in the twin on a
+robot with random true errors (the log on the controller's disk, or sent over a loopback
+socket to ``wirecal receive``); identify on the PC; the controller solver's result (from
+the log when the measurement program ends with it, else the language's controller solver
+run in the twin on the log's readings); validate; write the patch with the language's
+companion; write the report.
 
-The UR5e (URScript, ``robot=examples/ur5e/robot.toml``): generate the ``.script`` programs for
-the shipped plan; run wc_mount and wc_run on a twin UR whose log travels over a loopback
-socket to ``wirecal receive``; identify on the PC; write the patch and UR's deltas; run
-the measurement program again over new points (unmodelled errors on) and compare the wire
-lengths with those the nominal and the calibrated model predict; write the report. wc_run
-ends with wc_solve, the step-by-step solver on the controller, whose result arrives in the
-log; it is compared with the PC's stepwise estimate. (The URScript backend generates no
-joint polish and no Cartesian validation programs.)
+Validation: where the language's generator takes a validation setup, a ``validation.toml``
+lies beside the robot file and its twin adapter offers ``paper_validation`` (V+: the
+Viper s650, the default), the paper's two procedures run before and after calibration
+(§3.6.1 configuration change, §3.6.2 plane fit; unmodelled errors on, the controller
+believing the patch after), the one before calibration in a second process beside the
+rest. Otherwise the measurement programs run again over new points (unmodelled errors on)
+and their wire lengths are compared with those the nominal and the calibrated model predict.
 
 Every output goes to one folder and none is overwritten unless asked.
 """
@@ -28,26 +28,24 @@ import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
-from functools import partial
 from importlib import resources
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from wirecal import __version__
-from wirecal.app.compare import compare_controller
-from wirecal.app.languages import gate
+from wirecal.app.compare import ControllerComparison, compare_controller
+from wirecal.app.languages import Registered, gate, registered
 from wirecal.app.report import Validation, render_report
-from wirecal.app.twin_runs import measure_in_twin, measure_ur_in_twin
-from wirecal.gen.urscript.program import UrOptions, scripts
-from wirecal.gen.vplus.program import GenOptions, module_text
+from wirecal.gen.request import GenRequest
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace
+from wirecal.solver.counter import Counter
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.controller_result import parse_result, result_in_log
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
-from wirecal.solver.formats.patch import put_patch
+from wirecal.solver.formats.patch import companion_paths, put_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors, truth_text
@@ -60,32 +58,16 @@ from wirecal.solver.solve import SolveResult, solve
 from wirecal.solver.validation import Setup, distance_plan, distance_residuals
 from wirecal.solver.validation_analysis import Stats, config_discrepancy, plane_residuals
 from wirecal.solver.verdict import Plausibility
-from wirecal.twin.vplus.runs import run_validation
+from wirecal.twin.adapters import adapter
 
-UR_OUTPUTS = (
-    "truth.toml",
-    "wc_mount.script",
-    "wc_check.script",
-    "wc_run.script",
-    "run.csv",
-    "patch.toml",
-    "patch.spec.txt",
-    "patch.ur_calibration.conf",
-    "validation.csv",
-    "report.html",
-)
-OUTPUTS = (
-    "truth.toml",
-    "WIRECAL.V2",
-    "WCLOG.CSV",
-    "patch.toml",
-    "patch.spec.txt",
-    "WCVCFG1.CSV",
-    "WCVPLN1.CSV",
-    "WCVCFG2.CSV",
-    "WCVPLN2.CSV",
-    "report.html",
-)
+PLANS = ("paper_plan.toml", "plan.toml")
+"""The plan the demo takes beside a robot file: the first of these that exists."""
+SOCKET_LOG = "run.csv"
+"""The log's name when the programs name no log file (it travels over a socket)."""
+PAPER_LOGS = ("WCVCFG1.CSV", "WCVPLN1.CSV", "WCVCFG2.CSV", "WCVPLN2.CSV")
+"""The paper's validation logs, before (1) and after (2) calibration."""
+DISTANCE_LOG = "validation.csv"
+"""The log of the run over new points (the validation without the paper's set-up)."""
 
 
 @dataclass
@@ -96,17 +78,17 @@ class DemoResult:
     validations: list[Validation]
     tool_error_mm: dict[str, float]  # mean over the workspace: before, after
     controller_difference: float  # controller solver vs the PC's estimate (deg, mm)
-    seconds: dict[str, float]  # each stage's own time (two of them ran side by side)
-    outputs: tuple[str, ...] = OUTPUTS
-    wall_s: float | None = None  # the whole demo, start to end (None: the sum of seconds)
+    seconds: dict[str, float]  # each stage's own time (two of them may run side by side)
+    outputs: tuple[str, ...]
+    wall_s: float  # the whole demo, start to end
     predicted_mm: float | None = None  # the error budget's total for the recommended method
     bound_mm: float | None = None  # the error budget's 95 % bound for the recommended method
-    encoder_scale_ppm: float | None = None  # the twin encoder's true scale error (V+ twin)
+    encoder_scale_ppm: float | None = None  # the twin encoder's true scale error, if modelled
 
     @property
     def total_s(self) -> float:
         """The demo's time, start to end."""
-        return sum(self.seconds.values()) if self.wall_s is None else self.wall_s
+        return self.wall_s
 
 
 def example_files(robot: str = "viper_s650") -> dict[str, Path]:
@@ -121,6 +103,54 @@ def example_files(robot: str = "viper_s650") -> dict[str, Path]:
     }
 
 
+@dataclass(frozen=True)
+class Chain:
+    """What one demo runs: the robot, its language, the plan, the programs, the file names."""
+
+    robot: Robot
+    reg: Registered
+    plan: Plan
+    setup: Setup | None  # the paper's validation set-up (None: validation over new points)
+    request: GenRequest
+    log_name: str
+
+    def outputs(self, programs: dict[str, str]) -> tuple[str, ...]:
+        """Return every output's name, in the order the demo lists them."""
+        patch = [p.name for p in companion_paths(self.robot, "patch.toml")]
+        checks = PAPER_LOGS if self.setup is not None else (DISTANCE_LOG,)
+        return (
+            "truth.toml",
+            *programs,
+            self.log_name,
+            "patch.toml",
+            *patch,
+            *checks,
+            "report.html",
+        )
+
+
+def chain(robot_path: str | Path | None) -> Chain:
+    """Read the robot file (the Viper s650's by default), its language and the plan beside it."""
+    path = Path(robot_path) if robot_path is not None else example_files()["robot"]
+    rb = load_robot(path)
+    reg = registered(rb)
+    plans = [path.with_name(n) for n in PLANS if path.with_name(n).is_file()]
+    if not plans:
+        raise WirecalError(
+            f"{path}: no {' or '.join(PLANS)} beside it; design one with wirecal plan"
+        )
+    setup_path = path.with_name("validation.toml")
+    paper = (
+        setup_path.is_file()
+        and "validation" not in reg.generator.refuses
+        and hasattr(reg.adapter, "paper_validation")
+    )
+    setup = load_setup(setup_path) if paper else None
+    request = GenRequest(validation=setup)
+    log_name = SOCKET_LOG if "log_file" in reg.generator.refuses else request.log_file
+    return Chain(rb, reg, load_plan(plans[0], rb), setup, request, log_name)
+
+
 def run_demo(
     folder: str | Path,
     *,
@@ -132,138 +162,137 @@ def run_demo(
 ) -> DemoResult:
     """Run the demo into ``folder``: every output written, or none (``force`` to replace).
 
-    ``robot``: the Viper s650 when not given; a URScript robot file (the UR5e's) runs the
-    URScript chain with the plan beside it (``plan.toml``).
+    ``robot``: a robot file with its plan beside it (``paper_plan.toml`` or ``plan.toml``);
+    the Viper s650 when not given.
     """
     folder = Path(folder)
-    if robot is not None:
-        rb = load_robot(robot)
-        if rb.controller.language != "urscript":
-            raise WirecalError(
-                f"{robot}: the demo runs the Viper s650 (give no --robot) or a URScript robot"
-            )
-        plan = Path(robot).with_name("plan.toml")
-        if not plan.is_file():
-            raise WirecalError(f"{robot}: no plan.toml beside it; design one with wirecal plan")
-        with Outputs([folder / n for n in UR_OUTPUTS], force=force, folder=folder) as out:
-            return _run_ur(out, folder, rb, load_plan(plan, rb), seed, scale, progress)
-    with Outputs([folder / n for n in OUTPUTS], force=force, folder=folder) as out:
-        return _run(out, folder, seed, scale, progress)
+    wall = time.perf_counter()
+    ch = chain(robot)
+    step = _Steps(progress)
+    t = step(f"generating the {ch.reg.language.title} programs")
+    programs = ch.reg.generator.programs(ch.robot, ch.plan, ch.request)
+    step.seconds["generate"] = time.perf_counter() - t
+    names = ch.outputs(programs)
+    with Outputs([folder / n for n in names], force=force, folder=folder) as out:
+        r = _run(out, folder, ch, programs, seed, scale, step)
+    r.outputs, r.wall_s = names, time.perf_counter() - wall
+    return r
+
+
+class _Steps:
+    """The demo's numbered progress lines and each stage's time."""
+
+    COUNT = 7
+
+    def __init__(self, progress: Callable[[str], None]):
+        self.progress = progress
+        self.n = 0
+        self.seconds: dict[str, float] = {}
+
+    def __call__(self, text: str) -> float:
+        self.n += 1
+        self.progress(f"[{self.n}/{self.COUNT}] {text} …")
+        return time.perf_counter()
 
 
 def _run(
     out: Outputs,
     folder: Path,
+    ch: Chain,
+    programs: dict[str, str],
     seed: int,
     scale: float,
-    progress: Callable[[str], None],
+    step: _Steps,
 ) -> DemoResult:
-    """Do the demo's work; every output goes into ``out``, published when all are there.
-
-    The validation before calibration needs only the generated module, so it runs in a
-    second process (:func:`_second_process`) while this one measures, identifies and
-    validates after calibration: the two twin runs are the demo's longest stages.
-    """
-    files = example_files()
-    robot = load_robot(files["robot"])
-    plan = load_plan(files["plan"], robot)
-    setup = load_setup(files["validation"])
-    seconds: dict[str, float] = {}
+    """Do the demo's work (module docstring); every output goes into ``out``."""
+    robot, plan, reg, seconds = ch.robot, ch.plan, ch.reg, step.seconds
     truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
-    wall = time.perf_counter()
-
-    def step(n, text):
-        progress(f"[{n}/7] {text} …")
-        return time.perf_counter()
-
-    t = step(1, "generating the V+ module (calibration and validation programs)")
-    options = GenOptions(validation=setup)
-    text = module_text(robot, plan, options)
-    seconds["generate"] = time.perf_counter() - t
+    options: dict[str, Any] = {"seed": seed}
+    encoder = None
+    if reg.takes("encoder_truth"):  # a realistic encoder: its scale off within tolerance
+        encoder = realistic_encoder(robot.encoder, np.random.default_rng([seed, 4]))
+        options["encoder_truth"] = encoder
     with tempfile.TemporaryDirectory() as tmp, _second_process() as pool:
         disk = Path(tmp)
-        step(2, "validation before calibration (wc.vcfg, wc.vpln), in a second process")
-        validate = partial(_validation_logs, robot, plan, truth, setup, text, seed=seed + 7)
-        before = pool.submit(validate, disk / "before", controller={}, run=1)
-        t = step(3, "measurement run in the digital twin (wc.mount, wc.run)")
-        # a realistic encoder: its scale off within the robot file's tolerance, 0.5 K
-        encoder = realistic_encoder(robot.encoder, np.random.default_rng([seed, 4]))
-        run = measure_in_twin(
-            robot,
-            plan,
-            truth,
-            disk / "cal",
-            options=options,
-            text=text,
-            seed=seed,
-            encoder_truth=encoder,
-        )
-        if run.run is None or run.run.status != "completed":
-            raise WirecalError(f"the twin's measurement run stopped: {run.run or run.mount}")
+        before = None
+        text = "measurement run in the digital twin"
+        if ch.setup is not None:  # the paper's validation before calibration, beside the rest
+            before = pool.submit(
+                _paper_logs, reg.language.key, ch, truth, programs, disk / "before", {}, 1, seed
+            )
+            text += ", the validation before calibration in a second process"
+        t = step(text)
+        run = reg.measure(robot, plan, truth, disk / "cal", programs, **options)
+        if not run.complete:
+            raise WirecalError(f"the twin's measurement run stopped: {run.stopped}")
         seconds["measure"] = time.perf_counter() - t
-        t = step(4, "identification on the PC (step-by-step and joint)")
-        _, result, verdict = _identify(out, folder, "WCLOG.CSV", run.log, robot, plan)
-        seconds["solve"] = time.perf_counter() - t
-        t = step(5, "identification on the controller (wc.solve, wc.solve2 in the twin)")
-        controller = compare_controller(result, disk / "ctl", text=text)
-        seconds["controller"] = time.perf_counter() - t
-        polished_difference = controller.polished_max_difference
-        assert polished_difference is not None, "a V+ comparison always runs wc.solve2"
+        t = step("identification on the PC (step-by-step and joint)")
+        log_text, result, verdict = _identify(out, folder, ch.log_name, run.log, robot, plan)
         identified = result.estimates[result.recommended].as_dict()
-        step(6, "validation after calibration (wc.vcfg, wc.vpln)")
-        logs = {"after": validate(disk / "after", controller=identified, run=2)}
-        logs["before"] = before.result()
-        for name in ("before", "after"):
-            seconds[f"validate {name}"] = logs[name].seconds
-        validations = [
-            Validation(
-                "configuration",
-                *(
-                    config_discrepancy(
-                        read_validation_log(logs[k].configuration, "configuration"),
-                        robot.encoder.counter,
-                    )
-                    for k in ("before", "after")
+        seconds["solve"] = time.perf_counter() - t
+        t = step("the controller solver's result")
+        comparison, difference = _controller(result, log_text, ch, programs, disk / "ctl")
+        seconds["controller"] = time.perf_counter() - t
+        t = step("validation before and after calibration, with unmodelled errors")
+        if before is not None:
+            logs = {
+                "before": before.result(),
+                "after": _paper_logs(
+                    reg.language.key, ch, truth, programs, disk / "after", identified, 2, seed
                 ),
-            ),
-            Validation(
-                "plane",
-                *(
-                    plane_residuals(read_validation_log(logs[k].plane, "plane"))[0]
-                    for k in ("before", "after")
-                ),
-            ),
-        ]
-        t = step(7, "report")
-        html = render_report(
-            result, validations, controller, truth, plausibility=verdict.patch_field()
-        )
-        seconds["report"] = time.perf_counter() - t
-        for name, path in (
-            ("WCVCFG1.CSV", logs["before"].configuration),
-            ("WCVPLN1.CSV", logs["before"].plane),
-            ("WCVCFG2.CSV", logs["after"].configuration),
-            ("WCVPLN2.CSV", logs["after"].plane),
-        ):
-            out.put(folder / name, path.read_text(encoding="ascii"))
-    out.put(folder / "WIRECAL.V2", text)
-    _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, "WCLOG.CSV")
+            }
+            for name, path in zip(PAPER_LOGS, (p for k in logs for p in logs[k][:2]), strict=True):
+                out.put(folder / name, path.read_text(encoding="ascii"))
+            validations = _paper_validations(logs, ch.robot.encoder.counter)
+            seconds["validate before"] = before.result().seconds
+        else:
+            validations = [_distance_validation(out, folder, ch, truth, disk, identified, seed)]
+        seconds["validate"] = time.perf_counter() - t
+    companion = reg.language.patch_companion
+    t = step("patch" + (f" and patch{companion}" if companion else ""))
+    for name, program in programs.items():
+        out.put(folder / name, program)
+    _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, ch.log_name)
+    seconds["patch"] = time.perf_counter() - t
+    t = step("report")
+    html = render_report(result, validations, comparison, truth, plausibility=verdict.patch_field())
     out.put(folder / "report.html", html)
+    seconds["report"] = time.perf_counter() - t
     return DemoResult(
         folder,
         validations,
         _tool_errors(robot, truth, identified),
-        polished_difference,
+        difference,
         seconds,
-        wall_s=time.perf_counter() - wall,
+        outputs=(),  # run_demo sets them and the wall time once the outputs are published
+        wall_s=0.0,
         predicted_mm=result.predicted[result.recommended]["mean"],
         bound_mm=_bound(result),
-        encoder_scale_ppm=encoder.scale_ppm,
+        encoder_scale_ppm=None if encoder is None else encoder.scale_ppm,
     )
 
 
+def _controller(
+    result: SolveResult, log_text: str, ch: Chain, programs: dict[str, str], disk: Path
+) -> tuple[ControllerComparison | None, float]:
+    """Return the controller solver's comparison (if run here) and its largest difference.
+
+    From the log when the measurement program ends with the solver (against the PC's
+    stepwise estimate); else the language's solvers in the twin on the log's readings
+    (:func:`~wirecal.app.compare.compare_controller`).
+    """
+    found = result_in_log(log_text)
+    if found is not None:
+        on_controller = parse_result(found, f"{ch.log_name} (controller solver)")
+        pc = result.estimates["stepwise"].as_dict()
+        return None, max(abs(on_controller[n] - v) for n, v in pc.items())
+    comparison = compare_controller(result, disk, programs=programs)
+    differences = (comparison.stepwise_max_difference, comparison.polished_max_difference)
+    return comparison, max(d for d in differences if d is not None)
+
+
 class ValidationLogs(NamedTuple):
-    """A validation run's two logs (wc.vcfg, wc.vpln) and its own duration."""
+    """A paper validation run's two logs (configuration, plane) and its own duration."""
 
     configuration: Path
     plane: Path
@@ -273,37 +302,96 @@ class ValidationLogs(NamedTuple):
 def _second_process() -> ProcessPoolExecutor:
     """One worker process, forked where the platform forks safely.
 
-    A forked worker inherits every import and the module that ``module_text`` parsed and
-    checked (the parser keeps the last few); elsewhere it starts afresh.
+    A forked worker inherits every import and the module the generator parsed and checked
+    (the parser keeps the last few); elsewhere it starts afresh.
     """
     fork = sys.platform.startswith("linux") and "fork" in mp.get_all_start_methods()
     return ProcessPoolExecutor(max_workers=1, mp_context=mp.get_context("fork" if fork else None))
 
 
-def _validation_logs(
-    robot: Robot,
-    plan: Plan,
+def _paper_logs(
+    key: str,
+    ch: Chain,
     truth: dict[str, float],
-    setup: Setup,
-    text: str,
+    programs: dict[str, str],
     disk: Path,
-    *,
     controller: dict[str, float],
     run: int,
     seed: int,
 ) -> ValidationLogs:
-    """Run both validation programs in the twin: their logs and the seconds it took.
+    """Run the paper's validation programs in the twin: their logs and the seconds it took.
 
-    ``controller``: the offsets the controller believes ({} before calibration).
+    ``key``: the language, whose twin adapter offers ``paper_validation``; ``controller``:
+    the offsets the controller believes ({} before calibration).
     """
     t = time.perf_counter()
-    v = run_validation(
-        robot, plan, truth, setup, disk, text, controller=controller, run=run, seed=seed
+    v = adapter(key).paper_validation(  # type: ignore[attr-defined]
+        ch.robot,
+        ch.plan,
+        truth,
+        ch.setup,
+        disk,
+        programs,
+        controller=controller,
+        run=run,
+        seed=seed + 7,
     )
     for outcome in (v.configuration, v.plane):
         if outcome.status != "completed":
             raise WirecalError(f"the twin's validation run stopped: {outcome}")
     return ValidationLogs(v.configuration_log, v.plane_log, time.perf_counter() - t)
+
+
+def _paper_validations(logs: dict[str, ValidationLogs], counter: Counter) -> list[Validation]:
+    """Return both procedures' before and after from the logs (§3.6.1, §3.6.2)."""
+    return [
+        Validation(
+            "configuration",
+            *(
+                config_discrepancy(
+                    read_validation_log(logs[k].configuration, "configuration"), counter
+                )
+                for k in ("before", "after")
+            ),
+        ),
+        Validation(
+            "plane",
+            *(
+                plane_residuals(read_validation_log(logs[k].plane, "plane"))[0]
+                for k in ("before", "after")
+            ),
+        ),
+    ]
+
+
+def _distance_validation(
+    out: Outputs,
+    folder: Path,
+    ch: Chain,
+    truth: dict[str, float],
+    disk: Path,
+    identified: dict[str, float],
+    seed: int,
+) -> Validation:
+    """Run the measurement programs again over new points; wire lengths vs both models."""
+    robot, reg = ch.robot, ch.reg
+    vplan = distance_plan(robot, ch.plan, seed=seed)
+    request = ch.request
+    if "solver" not in reg.generator.refuses:
+        request = replace(request, solver=False)  # no controller solve on the new points
+    programs = reg.generator.programs(robot, vplan, request)
+    check = reg.measure(
+        robot, vplan, truth, disk / "val", programs, seed=seed + 7, unmodelled=Unmodelled()
+    )
+    if not check.complete:
+        raise WirecalError(f"the twin's validation run stopped: {check.stopped}")
+    vm = check_log(read_log(check.log), vplan, robot)
+    out.put(folder / DISTANCE_LOG, check.log.read_text(encoding="ascii"))
+    return Validation(
+        "distance",
+        Stats.of(distance_residuals(robot, vm, {})),
+        Stats.of(distance_residuals(robot, vm, identified)),
+    )
 
 
 def _identify(
@@ -318,87 +406,6 @@ def _identify(
     log = replace(read_log(path), source=str(folder / name))
     result = solve(robot, plan, check_log(log, plan, robot))
     return log_text, result, gate(result, result.recommended)
-
-
-def _run_ur(
-    out: Outputs,
-    folder: Path,
-    robot: Robot,
-    plan: Plan,
-    seed: int,
-    scale: float,
-    progress: Callable[[str], None],
-) -> DemoResult:
-    """Do the URScript demo's work (module docstring); every output goes into ``out``."""
-    seconds: dict[str, float] = {}
-    truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
-
-    def step(n, text):
-        progress(f"[{n}/6] {text} …")
-        return time.perf_counter()
-
-    t = step(1, "generating the URScript programs (wc_mount, wc_check, wc_run)")
-    texts = scripts(robot, plan)
-    seconds["generate"] = time.perf_counter() - t
-    with tempfile.TemporaryDirectory() as tmp:
-        disk = Path(tmp)
-        t = step(2, "measurement run in the digital twin (wc_mount, wc_run → wirecal receive)")
-        run = measure_ur_in_twin(robot, plan, truth, disk / "cal", texts=texts, seed=seed)
-        if run.programs.run is None or run.programs.run.status != "completed":
-            raise WirecalError(f"the twin's measurement run stopped: {run.programs.run}")
-        if not run.received.complete:
-            raise WirecalError(f"wirecal receive got no complete log: {run.received.stopped}")
-        seconds["measure"] = time.perf_counter() - t
-        t = step(3, "identification on the PC (step-by-step and joint)")
-        log_text, result, verdict = _identify(out, folder, "run.csv", run.log, robot, plan)
-        identified = result.estimates[result.recommended].as_dict()
-        on_controller = parse_result(result_in_log(log_text) or "", "run.csv (wc_solve)")
-        controller = max(
-            abs(on_controller[n] - v) for n, v in result.estimates["stepwise"].as_dict().items()
-        )
-        seconds["solve"] = time.perf_counter() - t
-        t = step(4, "validation: the run again over new points, with unmodelled errors")
-        vplan = distance_plan(robot, plan, seed=seed)
-        check = measure_ur_in_twin(
-            robot,
-            vplan,
-            truth,
-            disk / "val",
-            texts=scripts(robot, vplan, UrOptions(solver=False)),
-            seed=seed + 7,
-            unmodelled=Unmodelled(),
-        )
-        if not check.received.complete:
-            raise WirecalError(f"the twin's validation run stopped: {check.programs.run}")
-        vm = check_log(read_log(check.log), vplan, robot)
-        validation = Validation(
-            "distance",
-            Stats.of(distance_residuals(robot, vm, {})),
-            Stats.of(distance_residuals(robot, vm, identified)),
-        )
-        out.put(folder / "validation.csv", check.log.read_text(encoding="ascii"))
-        seconds["validate"] = time.perf_counter() - t
-    t = step(5, "patch and Universal Robots' deltas")
-    for name, text in texts.items():
-        out.put(folder / name, text)
-    _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, "run.csv")
-    seconds["patch"] = time.perf_counter() - t
-    t = step(6, "report")
-    out.put(
-        folder / "report.html",
-        render_report(result, [validation], None, truth, plausibility=verdict.patch_field()),
-    )
-    seconds["report"] = time.perf_counter() - t
-    return DemoResult(
-        folder,
-        [validation],
-        _tool_errors(robot, truth, identified),
-        controller,
-        seconds,
-        UR_OUTPUTS,
-        predicted_mm=result.predicted[result.recommended]["mean"],
-        bound_mm=_bound(result),
-    )
 
 
 def _bound(result: SolveResult) -> float | None:

@@ -8,16 +8,17 @@ said in a line the command prints.
 from __future__ import annotations
 
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from wirecal.app.languages import registered
+from wirecal.gen.request import GenRequest
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.run_parameters import RunParameters
 from wirecal.solver.simulate import EncoderTruth
 from wirecal.twin.run_moves import move_of_step, where_in_run
 from wirecal.twin.world import Faults as TwinFaults
-from wirecal.twin.world import World
 
 
 def simulate_in_twin(
@@ -33,41 +34,26 @@ def simulate_in_twin(
 ) -> tuple[str, str | None]:
     """Run the measurement programs in the twin; return the log text and why they stopped.
 
-    V+: wc.mount and wc.run write the log on the cell's disk. URScript: wc_mount and wc_run
-    send it over a loopback socket to wirecal receive (the journal of an incomplete run).
+    The robot's language's programs in its twin adapter (:func:`wirecal.app.languages.registered`):
+    a log file on the controller's disk, or sent over a loopback socket to wirecal receive
+    (the journal of an incomplete run).
     ``slip``: (step, mm) of a wire slip; ``samples``: readings averaged per point.
     """
     faults = TwinFaults()
     if slip is not None:
         faults = TwinFaults(slip_at_move=move_of_step(pl, slip[0]), slip_mm=slip[1])
-    run = RunParameters(readings=samples)
     kw: dict[str, Any] = dict(
         seed=seed, noise_mm=noise_mm, counter_start=counter_start, faults=faults
     )
-    world: World  # keeps the moves and the console
+    reg = registered(rb)
+    run = replace(reg.generator.default_run, readings=samples)  # as wirecal gen runs
+    programs = reg.generator.programs(rb, pl, GenRequest(run=run))
+    if reg.takes("encoder_truth"):
+        kw["encoder_truth"] = true_encoder
     with tempfile.TemporaryDirectory() as tmp:
-        if rb.controller.language == "urscript":
-            from wirecal.app.twin_runs import measure_ur_in_twin
-            from wirecal.gen.urscript.program import UrOptions
-
-            ur = measure_ur_in_twin(rb, pl, errors, Path(tmp), options=UrOptions(run=run), **kw)
-            mount, outcome, world = ur.programs.mount, ur.programs.run, ur.programs.world
-            log, first = ur.log, "wc_mount"
-        else:
-            from wirecal.app.twin_runs import measure_in_twin
-            from wirecal.gen.vplus.program import GenOptions
-
-            vp = measure_in_twin(
-                rb,
-                pl,
-                errors,
-                Path(tmp),
-                options=GenOptions(run=run),
-                encoder_truth=true_encoder,
-                **kw,
-            )
-            mount, outcome, world = vp.mount, vp.run, vp.world
-            log, first = vp.log, "wc.mount"
+        twin = reg.measure(rb, pl, errors, Path(tmp), programs, **kw)
+        mount, outcome, world = twin.mount, twin.run, twin.world
+        log, first = twin.log, mount.program
         text = log.read_text(encoding="ascii") if log.exists() else ""
     outcome = outcome or mount
     stopped = None

@@ -1,4 +1,4 @@
-"""``wirecal demo``: the whole chain on the built-in Viper s650 (or the UR5e) in the twin."""
+"""``wirecal demo``: the whole chain on the built-in Viper s650 (or a shipped robot) in the twin."""
 
 from __future__ import annotations
 
@@ -38,23 +38,25 @@ from wirecal.cli.options import NON_NEGATIVE, SEED
     "--robot",
     type=click.Path(dir_okay=False, exists=True),
     default=None,
-    help="A URScript robot file with its plan.toml beside it (examples/ur5e/robot.toml): "
-    "the URScript chain. Default: the Viper s650 (V+).",
+    help="A robot file with its plan.toml beside it (examples/ur5e/robot.toml, "
+    "examples/abb_irb120/robot.toml): its language's chain. Default: the Viper s650 (V+).",
 )
 @click.option("--force", is_flag=True, help="Replace the outputs of an earlier demo.")
 @user_errors
 def demo(folder, seed, scale, robot, force):
-    """Calibrate a simulated Viper s650 end to end, before and after.
+    """Calibrate a simulated robot end to end, before and after.
 
-    Generates the V+ module for the paper's (corrected) plan, runs it in the digital twin
-    on a robot with random true errors, identifies the parameters on the PC and with the
-    controller solver, writes the patch, runs both of the paper's validation procedures
-    before and after calibration (with unmodelled errors on), and writes report.html.
+    One chain for every controller language: generate the robot's programs for its plan,
+    run them in the digital twin on a robot with random true errors (the log written on
+    the controller or sent over a loopback socket to wirecal receive), identify the
+    parameters on the PC, take the controller solver's result, validate with unmodelled
+    errors on, write the patch (with the language's companion file) and report.html.
 
-    With --robot examples/ur5e/robot.toml: the URScript programs for the UR5e's plan, run in
-    the twin with the log sent over a loopback socket to wirecal receive, identified on
-    the PC, the patch and UR's deltas (patch.ur_calibration.conf), and the wire lengths of a second
-    run over new points against the nominal and the calibrated model.
+    The Viper s650 (the default, V+) validates with both of the paper's procedures
+    before and after calibration (validation.toml beside the robot file); a robot
+    without them (--robot examples/ur5e/robot.toml, examples/abb_irb120/robot.toml)
+    runs the programs again over new points and compares the wire lengths with the
+    nominal and the calibrated model.
     """
     with ProgressBar("demo") as bar:
         r = run_demo(

@@ -161,7 +161,7 @@ for _name, _target, _summary in (
     (
         "demo",
         "wirecal.cli.demo:demo",
-        "Calibrate a simulated Viper s650 end to end, before and after.",
+        "Calibrate a simulated robot end to end, before and after.",
     ),
     (
         "fit",

@@ -10,8 +10,9 @@ those and edits nothing here.
 What every language must show: the golden programs, byte for byte; its generated programs
 lint clean with its own checker; the snippets its manual allows pass and the ones it
 forbids are caught; its generator refuses by name a request field it does not take; in
-the twin, the generated programs run to a complete log, the controller's own solver agrees
-with the PC reference on that log, and a wire that slips is caught. The last test keeps
+the twin, the generated programs run to a complete log the PC finds the truth in, a wire
+that slips is caught, and the controller's own solver agrees with the PC reference over
+12 truths. The last test keeps
 language names out of the shared code: nothing outside ``lang/<key>``, ``gen/<key>``,
 ``twin/<key>`` compares or indexes by a language key.
 """
@@ -29,13 +30,14 @@ from wirecal.app.languages import registered
 from wirecal.gen.request import GenRequest
 from wirecal.lang.registry import languages
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import read_log
+from wirecal.solver.formats.log import parse_log, read_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
+from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 
 from .conftest import ROOT
@@ -46,6 +48,8 @@ PLAN_NAMES = ("plan.toml", "paper_plan.toml")
 """The example's plan: the first of these beside its robot file."""
 CONTROLLER_TOL = 1e-5
 """Controller solver vs the PC reference on the same log (deg, mm): issue 23's bound."""
+TRUTH_TOL = 0.05
+"""The PC's joint estimates from a twin run vs the truth (deg, mm): 0.01 mm noise."""
 
 
 @dataclass(frozen=True)
@@ -193,25 +197,48 @@ def truth(example) -> dict[str, float]:
 
 
 @pytest.mark.slow
-def test_twin_run_completes_and_controller_solver_agrees(
-    example, programs, truth, tmp_path_factory
-):
+def test_twin_run_completes_and_the_pc_finds_the_truth(example, programs, truth, tmp_path_factory):
     reg = _registered(example)
     tmp = tmp_path_factory.mktemp(example.name)
     run = reg.measure(example.robot, example.plan, truth, tmp / "run", programs, seed=3)
     assert (run.complete, run.stopped) == (True, None)
     m = check_log(read_log(run.log), example.plan, example.robot)
     assert not m.missing
-    on_controller = reg.adapter.controller_solve(
-        example.robot, example.plan, m.distance_mm, tmp / "controller", programs
-    )
-    assert on_controller, "the controller solver gave no estimate"
-    reference = solve(example.robot, example.plan, m, corrections=False).estimates
-    for method, offsets in on_controller.items():
-        expected = reference[method].as_dict()
-        assert offsets.keys() == expected.keys(), method
-        diff = max(abs(offsets[n] - v) for n, v in expected.items())
-        assert diff <= CONTROLLER_TOL, (method, diff)
+    found = solve(example.robot, example.plan, m, corrections=False).estimates["joint"]
+    for name, value in found.as_dict().items():
+        assert value == pytest.approx(truth[name], abs=TRUTH_TOL), name
+
+
+@pytest.mark.slow
+def test_controller_solver_agrees_with_the_reference_over_12_truths(
+    example, programs, tmp_path_factory
+):
+    """Issue 23: each method of the controller's solver (V+: stepwise and the joint
+    polish; URScript and RAPID: stepwise) agrees with the PC reference to 1e-5 deg/mm.
+
+    12 truths of ±2 deg/mm, a simulated log each (0.01 mm noise); the controller solves
+    the plan points' wire lengths at the plan joints (the adapter's ``controller_solve``),
+    the reference the same log. Measured (worst of 12): V+ 5.0e-7 stepwise and 5.0e-7
+    joint polish (1.2e-5 for the polish while wc.solve2 used DECOMPOSE's REAL joints
+    instead of the log's 4 decimals), URScript 1.4e-6, RAPID 2.6e-6 (their 32-bit reals).
+    """
+    reg = _registered(example)
+    robot, plan = example.robot, example.plan
+    worst: dict[str, float] = {}
+    for seed in range(12):
+        errors = random_errors(robot, 2.0, np.random.default_rng([seed, 78]))
+        log = simulate_log(robot, plan, errors, seed=seed)
+        m = check_log(parse_log(log, f"seed{seed}.csv"), plan, robot)
+        reference = solve(robot, plan, m, corrections=False).estimates
+        folder = tmp_path_factory.mktemp(f"{example.name}_{seed}")
+        on_controller = reg.adapter.controller_solve(robot, plan, m.distance_mm, folder, programs)
+        assert on_controller, "the controller solver gave no estimate"
+        for method, offsets in on_controller.items():
+            expected = reference[method].as_dict()
+            assert offsets.keys() == expected.keys(), method
+            diff = max(abs(offsets[n] - v) for n, v in expected.items())
+            worst[method] = max(worst.get(method, 0.0), diff)
+    assert all(diff <= CONTROLLER_TOL for diff in worst.values()), worst
 
 
 @pytest.mark.slow
@@ -237,18 +264,6 @@ ALLOWED = {
         "Controller's default language: robot files written before [controller] existed "
         "are V+; the solver core sits below the registry (lang.registry.default_language "
         "names the same language)"
-    ),
-    ("app/demo.py", "urscript"): (
-        "the demo's --robot pipeline (_run_ur) is URScript's: one pipeline over the "
-        "registry needs the twin adapters (twincell)"
-    ),
-    ("app/compare.py", "urscript"): (
-        "controller solver per language: becomes registered(robot).adapter.controller_solve "
-        "with the twin adapters (twincell)"
-    ),
-    ("cli/identify.py", "urscript"): (
-        "the twin run per language: becomes registered(robot).adapter.measure with the twin "
-        "adapters (twincell; the file is being split by another engineer)"
     ),
 }
 """(file, key) → why it still names the language; the list only shrinks."""

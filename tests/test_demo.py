@@ -165,3 +165,33 @@ def test_report_command(demo, tmp_path):
     )
     assert bad.exit_code == 2
     assert "a 'configuration' log where a 'plane' log is needed" in bad.output
+
+
+def test_demo_on_the_irb120(tmp_path):
+    """RAPID through the same chain: WIRECAL.mod in the twin, its log on the controller's
+    disk with wc_solve's result at the end, the patch with ABB's companion, a second run over
+    new points with unmodelled errors on."""
+    folder = tmp_path / "demo"
+    robot = str(VIPER.parent / "abb_irb120" / "robot.toml")
+    r = CliRunner().invoke(main, ["demo", "--robot", robot, "-o", str(folder), "--seed", "2"])
+    assert r.exit_code == 0, r.output
+    assert "[7/7] report" in r.output
+    rows = {line[:38].strip(): line[38:].split() for line in r.output.splitlines()}
+    before, after, reduction = rows["wire length at new points, mean (mm)"]
+    assert float(before) > 0.2
+    assert float(after) < 0.15  # noise, repeatability and compliance the model cannot absorb
+    assert int(reduction.rstrip("%")) >= 80
+    _, tool_after, _ = rows["tool-point error vs truth, mean (mm)"]
+    assert float(tool_after) < 0.05
+    ctl = r.output.split("controller solver vs PC: ")[1].split(" deg/mm")[0]
+    assert float(ctl) <= 1e-5  # wc_solve's result in the log vs the PC's stepwise estimate
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "WIRECAL.mod",
+        "patch.abb_calibration.toml",
+        "patch.spec.txt",
+        "patch.toml",
+        "report.html",
+        "run.csv",
+        "truth.toml",
+        "validation.csv",
+    ]

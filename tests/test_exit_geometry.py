@@ -215,7 +215,7 @@ def test_a_plan_point_within_the_pulley_is_named():
 @pytest.mark.slow  # a measurement run and two controller solves in the twin
 def test_pulley_robot_through_the_twin_and_the_controller_solver(tmp_path):
     """wc.run in the twin over a 5 mm pulley; wc.solve and wc.solve2 agree with the PC."""
-    from wirecal.app.compare import controller_solve
+    from wirecal.app.compare import controller_runs
     from wirecal.app.twin_runs import measure_in_twin
 
     robot = _robot(exit="pulley", axis=list(AXIS), pulley_radius_mm=5.0)
@@ -228,8 +228,7 @@ def test_pulley_robot_through_the_twin_and_the_controller_solver(tmp_path):
     # Cramér–Rao bound; the twin now also vibrates and settles): the largest of the ten
     # errors stays within 0.03 (measured 0.017)
     assert max(abs(joint[n] - TABLE5.get(n, 0.0)) for n in plan.order) < 0.03
-    for polish, method in ((False, "stepwise"), (True, "joint")):
-        ctl = controller_solve(robot, plan, m, tmp_path / method, polish=polish)
+    for method, ctl in controller_runs(robot, plan, m, tmp_path).items():
         reference = ref.estimates[method].as_dict()
         assert max(abs(ctl.offsets[n] - reference[n]) for n in reference) <= 1e-4
 

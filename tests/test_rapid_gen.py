@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import re
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +13,8 @@ import pytest
 
 from wirecal.gen.rapid import GENERATOR
 from wirecal.gen.rapid.program import RapidOptions, line_ends, module_text
+from wirecal.gen.request import GenRequest
+from wirecal.lang.rapid import Rapid
 from wirecal.lang.rapid.module import num_literal
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
@@ -95,28 +97,31 @@ def test_refuses_other_encoder(irb):
         module_text(robot, irb[1])
 
 
-@dataclass(frozen=True)
-class _Request:
-    """The GenRequest fields the generator reads (gen/request.py on the registry branch)."""
-
-    run: object = None
-    zero_tol_mm: float = 0.1
-    spread_tol_mm: float = 0.1
-    margin_deg: float = 1.0
-    range_margin_mm: float = 20.0
-    solver: bool = field(default=True, metadata={"option": "--no-solver"})
-    host: str | None = field(default=None, metadata={"option": "--host"})
-    log_file: str = field(default="WCLOG.CSV", metadata={"option": "--log-name"})
-    crlf: bool = field(default=True, metadata={"option": "--lf"})
+def test_moves_the_wire_limits_slow_get_their_own_speeddata(irb):
+    """With a wire that may accelerate at only 10 m/s², some moves get a slower speeddata
+    (v_ori below wc_v's); the others keep wc_v; the module stays clean."""
+    robot, plan = irb
+    tight = replace(robot, encoder=replace(robot.encoder, max_wire_accel_mm_s2=10_000.0))
+    text = module_text(tight, plan)
+    v_ori = {
+        m.group(1): float(m.group(2))
+        for m in re.finditer(r"CONST speeddata (wc_v\d*) := \[[^,]+, ([^,]+),", text)
+    }
+    assert len(v_ori) > 1
+    assert all(v < v_ori["wc_v"] for name, v in v_ori.items() if name != "wc_v")
+    used = re.findall(r"MoveAbsJ [^;]*, (wc_v\d*), fine", text)
+    assert set(used) == set(v_ori)
+    assert Rapid().lint(text, "WIRECAL.mod", robot.controller.software) == []
+    assert "wc_v1" not in module_text(*irb)  # the shipped encoder: the run's one speed
 
 
 def test_generator_programs_and_write(irb, tmp_path):
-    out = GENERATOR.programs(*irb, _Request(solver=False))
+    out = GENERATOR.programs(*irb, GenRequest(solver=False))
     assert list(out) == ["WIRECAL.mod"]
     assert "wc_solve" not in out["WIRECAL.mod"]
-    (path,) = GENERATOR.write(tmp_path, out, _Request(crlf=False))
+    (path,) = GENERATOR.write(tmp_path, out, GenRequest(crlf=False))
     assert path.read_bytes() == out["WIRECAL.mod"].encode("ascii")  # --lf: LF only
-    assert "PP to Routine" in GENERATOR.next_steps(*irb, _Request(), "r.toml", "p.toml")
+    assert "PP to Routine" in GENERATOR.next_steps(*irb, GenRequest(), "r.toml", "p.toml")
 
 
 @pytest.mark.parametrize(
@@ -124,7 +129,7 @@ def test_generator_programs_and_write(irb, tmp_path):
 )
 def test_generator_refuses_by_option(irb, given, option):
     with pytest.raises(WirecalError, match=f"{option}: not taken by the ABB RAPID"):
-        GENERATOR.programs(*irb, _Request(**given))
+        GENERATOR.programs(*irb, GenRequest(**given))
 
 
 @pytest.mark.parametrize("x", [1.0, -0.0, 0.1, 6.123233995736766e-17, 302.0])

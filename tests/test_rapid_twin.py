@@ -1,7 +1,7 @@
 """The RAPID module in the twin: wc_run's log read by the PC, wc_solve against the PC.
 
 The module is run by the RAPID interpreter (num in 32 bits, dnum in 64) on the twin's
-cell; expectations come from the truth the cell was given and from the Python reference
+World; expectations come from the truth the cell was given and from the Python reference
 solver (double precision) on the same log, never from the code under test.
 """
 
@@ -20,8 +20,8 @@ from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.measurements import check_log
 from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
-from wirecal.twin.cell import Faults
 from wirecal.twin.rapid.adapter import ADAPTER
+from wirecal.twin.world import Faults, World
 
 ROOT = Path(__file__).resolve().parent.parent
 IRB = ROOT / "examples" / "abb_irb120"
@@ -116,7 +116,7 @@ def _agreement(robot, plan, programs, folder: Path, seed: int) -> float:
     log = simulate_log(robot, plan, truth, seed=seed)
     m = check_log(parse_log(log, f"seed{seed}.csv"), plan, robot)
     ref = solve(robot, plan, m, corrections=False).estimates["stepwise"].as_dict()
-    got = ADAPTER.controller_solve(robot, plan, m, folder, programs)["stepwise"]
+    got = ADAPTER.controller_solve(robot, plan, m.distance_mm, folder, programs)["stepwise"]
     assert set(got) == set(ref)
     return max(abs(got[n] - v) for n, v in ref.items())
 
@@ -165,12 +165,11 @@ def test_a_failed_encoder_freezes_the_count_and_solve_refuses(irb, programs, tmp
 def test_wc_check_shows_the_live_count(irb, programs, tmp_path):
     """wc_check prints 60 readings, 0.5 s apart, relative to the first (still wire: 0)."""
     from wirecal.lang.rapid.module import signal_name
-    from wirecal.twin.cell import Cell
     from wirecal.twin.rapid.controller import IrcController
     from wirecal.twin.rapid.interp import run_module
 
     robot, plan = irb
-    world = Cell(robot, {}, plan.theta0_deg, tmp_path, noise_mm=0.0)
+    world = World(robot, {}, plan.theta0_deg, tmp_path, noise_mm=0.0)
     controller = IrcController(world, signal_name(robot))
     outcome = run_module(programs[MODULE_FILE], MODULE_FILE, controller, entry="wc_check")
     assert outcome.status == "completed", outcome.message
@@ -178,3 +177,20 @@ def test_wc_check_shows_the_live_count(irb, programs, tmp_path):
     assert len(shown) == 60
     assert world.clock == pytest.approx(30.0)
     assert all(abs(float(line.split()[1])) <= 2 for line in shown)  # ±1-count jitter
+
+
+def test_moves_slowed_for_the_wire_complete_where_the_run_speed_stops(irb, tmp_path):
+    """An encoder whose wire may accelerate at only 10 m/s²: the module at the run's one
+    speed is stopped by the twin's wire check; the generator's slower speeddata for the
+    moves that need it let the run complete."""
+    from dataclasses import replace
+
+    robot, plan = irb
+    tight = replace(robot, encoder=replace(robot.encoder, max_wire_accel_mm_s2=10_000.0))
+    one_speed = {MODULE_FILE: module_text(robot, plan)}
+    stopped = ADAPTER.measure(tight, plan, {}, tmp_path / "one", one_speed, seed=1)
+    assert not stopped.complete
+    assert "max_wire_accel_mm_s2 10000" in str(stopped.stopped)
+    slowed = {MODULE_FILE: module_text(tight, plan)}
+    run = ADAPTER.measure(tight, plan, {}, tmp_path / "slowed", slowed, seed=1)
+    assert (run.complete, run.stopped) == (True, None)

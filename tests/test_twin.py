@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from wirecal.app.compare import controller_solve
+from wirecal.app.compare import controller_runs
 from wirecal.app.twin_runs import measure_in_twin
 from wirecal.gen.templating import environment
 from wirecal.gen.vplus.program import GenOptions, module_text
@@ -135,8 +135,7 @@ def test_end_to_end(viper, paper_plan, twin_run, tmp_path):
     m = load_measurements(twin_run.log, paper_plan, viper)
     assert m.missing == ()
     ref = solve(viper, paper_plan, m)
-    for polish, method in ((False, "stepwise"), (True, "joint")):
-        run = controller_solve(viper, paper_plan, m, tmp_path / method, polish=polish)
+    for method, run in controller_runs(viper, paper_plan, m, tmp_path).items():
         reference = ref.estimates[method].as_dict()
         assert max(abs(run.offsets[n] - reference[n]) for n in reference) <= 1e-4
         assert "Result written to WCSOLVE.CSV." in run.console
@@ -413,10 +412,7 @@ def _controller_case(viper, plan, module, tmp_path, seed):
         assert min(counts) < 0 < max(counts)  # the counter wrapped
     m = check_log(parse_log(text, f"seed{seed}.csv"), plan, viper)
     ref = solve(viper, plan, m, corrections=False)  # the lengths as the controller reads them
-    runs = {
-        method: controller_solve(viper, plan, m, tmp_path / method, polish=polish, text=module)
-        for method, polish in (("stepwise", False), ("joint", True))
-    }
+    runs = controller_runs(viper, plan, m, tmp_path, programs={"WIRECAL.V2": module})
     diff = {
         method: max(
             abs(runs[method].offsets[n] - v) for n, v in ref.estimates[method].as_dict().items()

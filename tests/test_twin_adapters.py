@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from wirecal.gen.rapid.program import MODULE_FILE
+from wirecal.gen.rapid.program import module_text as rapid_module
 from wirecal.gen.urscript.program import scripts
 from wirecal.gen.vplus.program import MODULE_NAME, module_text
 from wirecal.lang.urscript.parser import BUILTINS, parse_program
@@ -33,8 +35,18 @@ def ur5_plan(ur5):
     return load_plan("examples/ur5e/plan.toml", ur5)
 
 
-def test_each_example_finds_its_adapter_by_its_language(viper, ur5):
-    for robot in (viper, ur5):
+@pytest.fixture(scope="module")
+def irb():
+    return load_robot("examples/abb_irb120/robot.toml")
+
+
+@pytest.fixture(scope="module")
+def irb_plan(irb):
+    return load_plan("examples/abb_irb120/plan.toml", irb)
+
+
+def test_each_example_finds_its_adapter_by_its_language(viper, ur5, irb):
+    for robot in (viper, ur5, irb):
         language = robot.controller.language
         assert adapter(language).key == language
 
@@ -94,7 +106,7 @@ def test_vplus_adapter_measures_the_whole_plan(viper, paper_plan, tmp_path):
 def lengths_case(robot, plan, seed):
     """A simulated log's lengths (noise-free) and the PC reference's estimates on it."""
     rng = np.random.default_rng([seed, 78])
-    truth = dict(zip(robot.parameters, rng.uniform(-2.0, 2.0, 10), strict=True))
+    truth = dict(zip(robot.parameters, rng.uniform(-2.0, 2.0, len(robot.parameters)), strict=True))
     log = simulate_log(robot, plan, truth, seed=seed, noise_mm=0.0)
     m = check_log(parse_log(log, f"seed{seed}.csv"), plan, robot)
     return m.distance_mm, solve(robot, plan, m, corrections=False).estimates
@@ -109,13 +121,14 @@ def worst_difference(estimates, reference) -> float:
 
 
 def test_controller_solvers_on_lengths_agree_with_the_reference(
-    viper, paper_plan, ur5, ur5_plan, tmp_path
+    viper, paper_plan, ur5, ur5_plan, irb, irb_plan, tmp_path
 ):
     """Each adapter's controller_solve on the plan points' wire lengths (the zero readings
     on a counter about to wrap) agrees with the PC reference on the same lengths."""
     for robot, plan, programs, methods in (
         (viper, paper_plan, {MODULE_NAME: module_text(viper, paper_plan)}, {"stepwise", "joint"}),
         (ur5, ur5_plan, scripts(ur5, ur5_plan), {"stepwise"}),
+        (irb, irb_plan, {MODULE_FILE: rapid_module(irb, irb_plan)}, {"stepwise"}),
     ):
         lengths, reference = lengths_case(robot, plan, seed=1)
         language = robot.controller.language
@@ -126,10 +139,26 @@ def test_controller_solvers_on_lengths_agree_with_the_reference(
         assert worst_difference(estimates, reference) < 1e-5
 
 
-def test_programs_missing_or_extra_are_named(viper, paper_plan, ur5, ur5_plan, tmp_path):
+def test_programs_missing_or_extra_are_named(
+    viper, paper_plan, ur5, ur5_plan, irb, irb_plan, tmp_path
+):
     with pytest.raises(WirecalError, match="expected the one module file"):
         adapter(viper.controller.language).measure(
             viper, paper_plan, {}, tmp_path, {"A.V2": "", "B.V2": ""}
         )
     with pytest.raises(WirecalError, match=r"wc_mount\.script is missing"):
         adapter(ur5.controller.language).measure(ur5, ur5_plan, {}, tmp_path, {"wc_run.script": ""})
+    with pytest.raises(WirecalError, match=r"WIRECAL\.mod is missing"):
+        adapter(irb.controller.language).measure(irb, irb_plan, {}, tmp_path, {"X.mod": ""})
+
+
+def test_rapid_adapter_enforces_the_wire_speed(irb, irb_plan, tmp_path):
+    """The RAPID controller calls the World's wire check: a wire limit below the plan's
+    moves stops wc_run at its first move, naming the limit."""
+    from dataclasses import replace
+
+    slow_wire = replace(irb, encoder=replace(irb.encoder, max_wire_speed_mm_s=1.0))
+    programs = {MODULE_FILE: rapid_module(irb, irb_plan)}
+    run = adapter(irb.controller.language).measure(slow_wire, irb_plan, {}, tmp_path, programs)
+    assert not run.complete
+    assert "max_wire_speed_mm_s 1" in str(run.stopped)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from wirecal.app.compare import ur_controller_solve
+from wirecal.app.compare import controller_runs
 from wirecal.cli.main import main
 from wirecal.gen.urscript.program import OPS_PER_SYNC, UrOptions, float_literal, scripts
 from wirecal.solver.errors import WirecalError
@@ -95,7 +95,7 @@ def _case(robot, plan, text, seed, tmp_path):
     log = simulate_log(robot, plan, truth, seed=seed, counter_start=start)
     m = check_log(parse_log(log, f"seed{seed}.csv"), plan, robot)
     ref = solve(robot, plan, m).estimates["stepwise"].as_dict()
-    run = ur_controller_solve(robot, plan, m, tmp_path, text=text)
+    run = controller_runs(robot, plan, m, tmp_path, programs={"wc_run.script": text})["stepwise"]
     return run, {n: abs(run.offsets[n] - v) for n, v in ref.items()}
 
 

@@ -1,47 +1,21 @@
-"""The RAPID generator behind ``wirecal gen`` (the registry's ``Generator``): WIRECAL.mod.
-
-Written to the language registry's Generator protocol (registry_api, branch reg:
-``key``, ``refuses``, ``default_run``, ``programs``, ``write``, ``notes``,
-``next_steps``); the request is a ``GenRequest`` (gen/request.py), read here by its
-field names.
-"""
+"""The RAPID generator behind ``wirecal gen`` (the registry's ``Generator``): WIRECAL.mod."""
 
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import fields
 from pathlib import Path
 
 from wirecal.gen.rapid.program import RapidOptions, module_text, write_module
+from wirecal.gen.request import GenRequest, refuse_unsupported
 from wirecal.lang.rapid import Rapid
 from wirecal.lang.rapid.module import LOG_DIR, LOG_FILE, MODULE_FILE, signal_name
-from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import PAPER_RUN
 
 
-def refuse_unsupported(request: object, refuses: frozenset[str], title: str) -> None:
-    """Raise naming the options given for fields the module does not take.
-
-    Given: the field differs from its default; named by its ``option`` metadata (the
-    ``wirecal gen`` option). The registry's gen/request.py has the same function: the
-    integrator imports that one instead.
-    """
-    given = [
-        f.metadata.get("option", f.name)
-        for f in fields(request)  # type: ignore[arg-type]
-        if f.name in refuses and getattr(request, f.name) != f.default
-    ]
-    if given:
-        raise WirecalError(
-            f"{', '.join(given)}: not taken by the {title} programs (wirecal gen --help says "
-            "which language each option is for)"
-        )
-
-
 class RapidGenerator:
-    """:func:`~wirecal.gen.rapid.program.module_text` for a ``GenRequest``."""
+    """:func:`~wirecal.gen.rapid.program.module_text` for a :class:`GenRequest`."""
 
     key = Rapid.key
     # the log goes to HOME:/WIRECAL.LOG and is always echoed on the FlexPendant; no socket,
@@ -49,7 +23,7 @@ class RapidGenerator:
     refuses = frozenset({"patch", "validation", "host", "port", "log_file", "echo_log"})
     default_run = PAPER_RUN
 
-    def options(self, request) -> RapidOptions:
+    def options(self, request: GenRequest) -> RapidOptions:
         """Return the module's options for ``request`` (refusing what it does not take)."""
         refuse_unsupported(request, self.refuses, Rapid.title)
         return RapidOptions(
@@ -61,7 +35,7 @@ class RapidGenerator:
             solver=request.solver,
         )
 
-    def programs(self, robot: Robot, plan: Plan, request) -> dict[str, str]:
+    def programs(self, robot: Robot, plan: Plan, request: GenRequest) -> dict[str, str]:
         """Return ``{"WIRECAL.mod": text}`` (LF line ends; :meth:`write` sets them)."""
         return {MODULE_FILE: module_text(robot, plan, self.options(request))}
 
@@ -69,7 +43,7 @@ class RapidGenerator:
         self,
         out_dir: str | Path,
         programs: dict[str, str],
-        request,
+        request: GenRequest,
         *,
         force: bool = False,
         inputs: Iterable[str | Path] = (),
@@ -87,7 +61,9 @@ class RapidGenerator:
             'with GInputDnum and dnum (docs/rapid.md); declare it, e.g. software = "6.13"'
         ]
 
-    def next_steps(self, robot: Robot, plan: Plan, request, robot_path: str, plan_path: str) -> str:
+    def next_steps(
+        self, robot: Robot, plan: Plan, request: GenRequest, robot_path: str, plan_path: str
+    ) -> str:
         """Return how to run the module and where the log lands."""
         return (
             f"load {MODULE_FILE} on the controller (group input {signal_name(robot)} "

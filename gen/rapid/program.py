@@ -42,7 +42,12 @@ from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
 from wirecal.solver.formats.log import VERSION as LOG_VERSION
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.run_parameters import PAPER_RUN, READING_INTERVAL_S, RunParameters
+from wirecal.solver.run_parameters import (
+    PAPER_RUN,
+    READING_INTERVAL_S,
+    RunParameters,
+    run_timeline,
+)
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 
 STRING_MAX = 80
@@ -98,6 +103,34 @@ def _fixed(x: float, digits: int) -> str:
     """Return ``x`` with at most ``digits`` decimals, no trailing zeros, never ``-0``."""
     s = f"{x:.{digits}f}".rstrip("0").rstrip(".")
     return "0" if s in ("-0", "") else s
+
+
+def v_ori_deg_s(robot: Robot, speed_pct: float) -> str:
+    """Return a speeddata's v_ori for ``speed_pct``: that share of the slowest joint's speed."""
+    return _fixed(float(np.min(robot.joint_speed_deg_s)) * speed_pct / 100, 3)
+
+
+def move_speeds(
+    robot: Robot, plan: Plan, run: RunParameters, steps: list[dict]
+) -> tuple[list[dict[str, str]], str]:
+    """Give every move of ``steps`` its speeddata; return the slower ones, the closing move's.
+
+    Each move at the run's speed (``wc_v``) unless the encoder's wire speed or acceleration
+    asks for less (:func:`~wirecal.solver.run_parameters.run_timeline`'s speeds, the V+
+    module's rule): those get a speeddata of their own, ``wc_v1``, ``wc_v2``… from the
+    fastest down. The moves in the run's order: per step θ0, its vias, its points; last θ0.
+    """
+    speeds = [float(x) for x in run_timeline(robot, plan, run).speed_pct]
+    slower = sorted({x for x in speeds if x < run.speed_pct}, reverse=True)
+    names = {x: f"wc_v{k}" for k, x in enumerate(slower, 1)}
+    moves = iter(names.get(x, "wc_v") for x in speeds)
+    for step in steps:
+        step["zero_v"] = next(moves)
+        step["vias"] = [{**via, "v": next(moves)} for via in step["vias"]]
+        step["points"] = [{**point, "v": next(moves)} for point in step["points"]]
+    closing = next(moves)
+    declared = [{"name": names[x], "v_ori": v_ori_deg_s(robot, x), "pct": f"{x:g}"} for x in slower]
+    return declared, closing
 
 
 def solver_tables(tables: Tables) -> dict[str, str]:
@@ -171,7 +204,8 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
     tables = build_tables(robot, plan)
     mpc = robot.encoder.mm_per_count
     bits = GROUP_COUNTER_BITS
-    v_ori = float(np.min(robot.joint_speed_deg_s)) * opt.run.speed_pct / 100
+    steps = run_steps(plan, tables.first, jointtarget)
+    slower, closing_v = move_speeds(robot, plan, opt.run, steps)
     context = {
         "version": __version__,
         "robot": robot.name,
@@ -185,7 +219,9 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
         "half_range": str(2 ** (bits - 1)),
         "full_range": str(2**bits),
         "v_tcp": V_TCP_MM_S,
-        "v_ori": _fixed(v_ori, 3),
+        "v_ori": v_ori_deg_s(robot, opt.run.speed_pct),
+        "slower": slower,
+        "closing_v": closing_v,
         "settle": f"{opt.run.settle_s:g}",
         "settle_3": f"{opt.run.settle_s:.3f}",
         "log_version": LOG_VERSION,
@@ -197,7 +233,7 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
         "spread_tol": f"{opt.spread_tol_mm:g}",
         "spread_counts": f"{np.floor(opt.spread_tol_mm / abs(mpc)):g}",
         "theta0": joint_target(plan.theta0_deg, jointtarget),
-        "steps": run_steps(plan, tables.first, jointtarget),
+        "steps": steps,
         "nsteps": len(plan.steps),
         "npoints": plan.n_points,
         "nreadings": len(plan.steps) + plan.n_points,

@@ -34,8 +34,8 @@ class Rapid(Language):
     capabilities: ClassVar[Capabilities] = Capabilities(
         int_bits=None,
         float_bits=32,
-        file_io=True,
-        sockets=True,
+        file_io=True,  # Open/Write/Close on HOME: (the log the PC fetches)
+        sockets=False,  # the programs use none (Socket Messaging option: unconfirmed)
         encoder_interfaces=("group",),
         counter_bits=32,
         software_lines={6: "IRC5 RobotWare 6", 7: "OmniCore RobotWare 7"},

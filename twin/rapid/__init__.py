@@ -5,7 +5,7 @@ does to the robot, the encoder, files and the FlexPendant goes through a
 :class:`wirecal.twin.rapid.interp.RapidController`.
 
 ``ADAPTER`` (:mod:`wirecal.twin.rapid.adapter`) is what ``wirecal.twin.adapters.adapter("rapid")``
-finds: it runs the generated module on the twin's cell.
+finds: it runs the generated module on the twin's World.
 """
 
 from wirecal.twin.rapid.adapter import ADAPTER

@@ -1,29 +1,30 @@
-r"""The IRC5 as the RAPID twin's interpreter sees it: :class:`IrcController` over the cell.
+r"""The IRC5 as the RAPID twin's interpreter sees it: :class:`IrcController` over the World.
 
 It implements :class:`~wirecal.twin.rapid.controller_protocol.RapidController` on the
-twin's physical world (the true robot, the draw-wire encoder, the disk, the operator, the
-clock: :class:`wirecal.twin.cell.Cell` until the language-free ``World`` lands, whose
-methods of the same names it uses):
+twin's physical world, :class:`~wirecal.twin.world.World` (the true robot, the draw-wire
+encoder, the disk, the operator, the clock), calling it in the order its docstring gives:
 
 * ``MoveAbsJ``: the joints go to the target in the time of the move's trapezoidal
   profile at the speed the speeddata asks for: its v_ori (deg/s) taken as the leading
   joint's speed, as a percentage of the slowest joint's maximum (how the real controller
-  applies v_tcp and v_ori to a joint move is *unconfirmed*). A target beyond a joint
-  limit or a move into the arm itself, the floor or a ``[cell]`` volume stops the program
-  (the controller's own messages are not modelled); ``fine`` stops at the point;
+  applies v_tcp and v_ori to a joint move is *unconfirmed*); the tool then vibrates along
+  the wire and settles. A target beyond a joint limit, a move into the arm itself, the
+  floor or a ``[cell]`` volume, or one that would run the wire beyond the encoder's speed
+  or acceleration stops the program (the controller's own messages are not modelled);
+  ``fine`` stops at the point;
 * ``GInputDnum``: the group input ``wc_giCount<channel>`` holds the encoder's count on a
   32-bit counter that wraps (the counter module's behaviour: *unconfirmed*); any other
   signal name stops the program (an unknown signal). A failed encoder (the fault
   ``encoder_fails_at_read``) leaves the input at its last value: the count freezes;
 * ``CJointT``: the commanded joints (the joints' own encoders do not see the errors
   the wire measures);
-* ``Open "HOME:" \File:=…`` / ``Write`` / ``Close``: files in the cell's disk folder,
+* ``Open "HOME:" \File:=…`` / ``Write`` / ``Close``: files in the world's disk folder,
   written through, a line at a time (``\NoNewLine`` keeps the line open); a full disk
   (``disk_full_after_lines``) stops the program at the Write (the controller's error
   number is not modelled);
-* ``TPWrite`` / ``TPErase`` / ``TPReadNum``: the FlexPendant is the cell's console; the
-  operator answers from the cell's scripted answers;
-* ``WaitTime`` and the clocks: the cell's clock.
+* ``TPWrite`` / ``TPErase`` / ``TPReadNum``: the FlexPendant is the world's console; the
+  operator answers from the world's scripted answers;
+* ``WaitTime`` and the clocks: the world's clock.
 """
 
 from __future__ import annotations
@@ -33,9 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from wirecal.solver.run_parameters import move_profiles
-from wirecal.twin.cell import Cell
 from wirecal.twin.machine import RunError
+from wirecal.twin.world import EncoderFailure, World
 
 GROUP_RANGE = 2**32
 """The group input's values: 32 bits, unsigned (GInputDnum reads up to 32 signals)."""
@@ -46,9 +46,9 @@ STOP_CODE = -2000
 
 @dataclass
 class IrcController:
-    """The controller a RAPID module runs on, over the twin's cell (module docstring)."""
+    """The controller a RAPID module runs on, over the twin's world (module docstring)."""
 
-    world: Cell
+    world: World
     signal: str  # the group input the encoder's counter is mapped to
     stopped: str | None = None  # why the program was stopped (None: it was not)
     files: dict[int, Path] = field(default_factory=dict)
@@ -74,9 +74,13 @@ class IrcController:
         if hit is not None:
             raise self._refuse(f"line {line}: protective stop: {hit}")
         slowest = float(np.min(world.robot.joint_speed_deg_s))
-        speed_pct = min(100.0, 100.0 * float(speed[1]) / slowest)
-        move = move_profiles(world.robot, world.model, world.p0, world.joints, q)
-        world.arrive(q, float(move.duration_s(np.array([speed_pct]))[0]))
+        speed_pct = np.asarray(min(100.0, 100.0 * float(speed[1]) / slowest))
+        move = world.profile(q)
+        over = world.wire_overspeed(move, float(speed_pct))
+        if over is not None:
+            raise self._refuse(f"line {line}: MoveAbsJ: {over}")
+        world.arrive(q, float(move.duration_s(speed_pct)[0]))
+        world.vibrate(float(move.vibration_mm(speed_pct)[0]))
 
     def joints_deg(self) -> tuple[float, ...]:
         """CJointT: the commanded joints (deg, single precision)."""
@@ -87,16 +91,15 @@ class IrcController:
         """GInputDnum: the counter's value, unsigned 32 bits; another signal stops."""
         if name != self.signal:
             raise self._refuse(f"GInputDnum: no group input signal named {name}")
-        world = self.world
-        world.reads += 1
-        fails = world.faults.encoder_fails_at_read
-        if fails is None or world.reads < fails:
-            self.last_count = world.wire_counts() % GROUP_RANGE
+        try:
+            self.last_count = self.world.read_count() % GROUP_RANGE
+        except EncoderFailure:
+            pass  # the input holds its last value
         return self.last_count
 
     # ---- files ----
     def open_file(self, path: str, append: bool) -> int:
-        """Open ``HOME:/name``: a file in the cell's disk folder (emptied unless append)."""
+        """Open ``HOME:/name``: a file in the world's disk folder (emptied unless append)."""
         device, _, name = path.partition(":")
         if device.upper() != "HOME" or not name.strip("/"):
             raise self._refuse(f"Open: {path}: the twin's controller has HOME: only")
@@ -115,12 +118,8 @@ class IrcController:
         if not newline:
             self.open_line[handle] = text
             return
-        limit = self.world.faults.disk_full_after_lines
-        if limit is not None and self.world.lines_written >= limit:
+        if not self.world.append_line(self.files[handle], text):
             raise self._refuse(f"Write: {self.files[handle].name}: the disk is full")
-        with open(self.files[handle], "a", encoding="ascii", newline="\n") as fh:
-            fh.write(text + "\n")  # written through: a stopped run leaves its lines
-        self.world.lines_written += 1
 
     def close_file(self, handle: int) -> None:
         """Close: the file's open line is written."""
@@ -130,19 +129,17 @@ class IrcController:
 
     # ---- FlexPendant ----
     def tp_write(self, text: str) -> None:
-        """TPWrite: one line on the FlexPendant (the cell's console)."""
+        """TPWrite: one line on the FlexPendant (the world's console)."""
         self.flexpendant.append(text)
-        self.world.console.append(text)
+        self.world.show(text)
 
     def tp_erase(self) -> None:
         """TPErase: the operator window is cleared (the twin keeps the record)."""
 
     def tp_read_num(self, prompt: str) -> float:
         """TPReadNum: the operator's next scripted answer as a number (none: 0)."""
-        self.tp_write(prompt)
-        answers = self.world.answers
-        answer = answers.pop(0) if answers else "0"
-        self.tp_write(f"> {answer}")
+        answer = self.world.answer(prompt) or "0"  # the world's console shows both
+        self.flexpendant += [prompt, f"> {answer}"]
         try:
             return float(answer)
         except ValueError:

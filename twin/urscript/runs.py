@@ -18,10 +18,11 @@ import numpy as np
 
 from wirecal.lang.urscript.parser import parse_program
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
-from wirecal.twin.controller_run import readings_for_lengths
+from wirecal.twin.controller_run import ControllerRun, readings_for_lengths
 from wirecal.twin.machine import Outcome
 from wirecal.twin.urscript.controller import RAW, URController
 from wirecal.twin.urscript.interp import Interpreter
@@ -143,6 +144,22 @@ class URScriptAdapter:
         readings = readings_for_lengths(robot, plan, lengths_mm, RAW)
         run = controller_solve(robot, plan, readings, folder / "stepwise", _script(programs, RUN))
         return {"stepwise": run.offsets}
+
+    def controller_runs(
+        self,
+        robot: Robot,
+        plan: Plan,
+        measured: Measurements,
+        folder: Path,
+        programs: dict[str, str],
+    ) -> dict[str, ControllerRun]:
+        """Run wc_solve on a checked log's own readings, with its operation and sync counts."""
+        text = _script(programs, RUN)
+        return {
+            "stepwise": controller_solve(
+                robot, plan, measured.log.readings, folder / "stepwise", text
+            )
+        }
 
 
 def _with_receiver(

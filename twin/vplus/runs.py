@@ -13,6 +13,7 @@ import numpy as np
 
 from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
@@ -22,7 +23,7 @@ from wirecal.solver.simulate import (
     Unmodelled,
     reference_duration_s,
 )
-from wirecal.twin.controller_run import readings_for_lengths
+from wirecal.twin.controller_run import ControllerRun, readings_for_lengths
 from wirecal.twin.machine import Outcome
 from wirecal.twin.vplus.controller import VplusController
 from wirecal.twin.vplus.interp import Interpreter
@@ -174,8 +175,9 @@ class VplusAdapter:
         counter_start: float | None = None,
         faults: Faults | None = None,
         unmodelled: Unmodelled | None = None,
+        encoder_truth: EncoderTruth = IDEAL_ENCODER,
     ) -> TwinRun:
-        """Run wc.mount and wc.run (:func:`run_measurement`)."""
+        """Run wc.mount and wc.run (:func:`run_measurement`) on the encoder ``encoder_truth``."""
         return run_measurement(
             robot,
             plan,
@@ -187,6 +189,7 @@ class VplusAdapter:
             counter_start=counter_start,
             faults=faults,
             unmodelled=unmodelled,
+            encoder_truth=encoder_truth,
         )
 
     def controller_solve(
@@ -209,8 +212,60 @@ class VplusAdapter:
             method: controller_solve(
                 robot, plan, readings, folder / method, polish=polish, text=text
             ).offsets
-            for method, polish in (("stepwise", False), ("joint", True))
+            for method, polish in SOLVERS
         }
 
+    def controller_runs(
+        self,
+        robot: Robot,
+        plan: Plan,
+        measured: Measurements,
+        folder: Path,
+        programs: dict[str, str],
+    ) -> dict[str, ControllerRun]:
+        """Run wc.solve (stepwise) and wc.solve2 (joint) on a checked log's own readings.
+
+        Each run with its operation counts (``wirecal solve --method controller``).
+        """
+        _, text = module_of(programs)
+        return {
+            method: controller_solve(
+                robot,
+                plan,
+                measured.log.readings,
+                folder / method,
+                polish=polish,
+                text=text,
+                closed=measured.closed,
+            )
+            for method, polish in SOLVERS
+        }
+
+    def paper_validation(
+        self,
+        robot: Robot,
+        plan: Plan,
+        truth: dict[str, float],
+        setup,
+        folder: Path,
+        programs: dict[str, str],
+        *,
+        controller: dict[str, float],
+        run: int,
+        seed: int = 0,
+    ) -> ValidationRun:
+        """Run the paper's two validation procedures, wc.vcfg and wc.vpln (§3.6.1, §3.6.2).
+
+        The module generated with the validation ``setup`` (:func:`run_validation`);
+        ``controller``: the offsets the controller believes ({} before calibration).
+        """
+        _, text = module_of(programs)
+        return run_validation(
+            robot, plan, truth, setup, folder, text, controller=controller, run=run, seed=seed
+        )
+
+
+SOLVERS = (("stepwise", False), ("joint", True))
+"""The module's controller solvers: method → polish (wc.solve, wc.solve2)."""
 
 ADAPTER = VplusAdapter()
