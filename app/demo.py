@@ -36,7 +36,8 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.app.compare import ControllerComparison, compare_controller
-from wirecal.app.languages import Registered, gate, registered
+from wirecal.app.gate import gate
+from wirecal.app.languages import Registered, registered
 from wirecal.app.report import Validation, render_report
 from wirecal.gen.request import GenRequest
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace

@@ -16,10 +16,7 @@ from wirecal.gen.backends import Generator, generator
 from wirecal.lang.base import Language
 from wirecal.lang.registry import language
 from wirecal.solver.plan import Plan
-from wirecal.solver.plausibility import Plausibility
-from wirecal.solver.plausibility import gate as _gate
 from wirecal.solver.robot import Robot
-from wirecal.solver.solve import SolveResult
 from wirecal.twin.adapters import TwinAdapter, adapter
 
 if TYPE_CHECKING:  # the receiver only when a twin run needs it
@@ -99,9 +96,3 @@ def language_mismatch(robot: Robot, key: str) -> str:
         f'"{key}" and its encoder keys (import-urdf --language {key} does), or '
         "drop --language"
     )
-
-
-def gate(result: SolveResult, method: str, **options: Any) -> Plausibility:
-    """:func:`wirecal.solver.plausibility.gate`, its findings naming the robot's live-check."""
-    live_check = language(result.robot.controller.language).live_check
-    return _gate(result, method, live_check=live_check, **options)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from wirecal.app.languages import gate
+from wirecal.app.gate import gate
 from wirecal.app.report import Validation, render_report
 from wirecal.cli.main import user_errors
 from wirecal.solver.errors import WirecalError

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import click
 
 from wirecal import __version__
-from wirecal.app.languages import gate
+from wirecal.app.gate import gate
 from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import (
     ACCEPT_IMPLAUSIBLE,

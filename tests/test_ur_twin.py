@@ -132,7 +132,7 @@ def test_fault_encoder_not_enabled_counts_never_change(ur5, ur5_plan, texts, tru
     log = read_log(r.log)
     assert {row.counts for row in log.readings} == {0.0}
     result = solve(ur5, ur5_plan, check_log(log, ur5_plan, ur5))
-    from wirecal.app.languages import gate
+    from wirecal.app.gate import gate
 
     with pytest.raises(WirecalError) as info:
         gate(result, result.recommended)

@@ -12,7 +12,6 @@ from typing import ClassVar
 
 from wirecal.lang.base import Capabilities, Example, Language
 from wirecal.lang.rapid import examples
-from wirecal.lang.rapid.checker import check
 from wirecal.lang.rapid.patch import SUFFIX, patch_section
 from wirecal.lang.registry import register
 from wirecal.solver.robot import Robot
@@ -63,6 +62,8 @@ class Rapid(Language):
         external_calls: bool = False,
     ) -> list[str]:
         """Return the module's problems, each 'SOURCE:LINE: what' ([] = clean)."""
+        from wirecal.lang.rapid.checker import check  # the parser only when linting
+
         return check(text, source, software, external_calls=external_calls)
 
     def patch_section(self, robot: Robot, offsets: Mapping[str, float]) -> str:
