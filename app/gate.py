@@ -10,9 +10,9 @@ from __future__ import annotations
 from typing import Any
 
 from wirecal.lang.registry import language
-from wirecal.solver.plausibility import Plausibility
 from wirecal.solver.plausibility import gate as _gate
 from wirecal.solver.solve import SolveResult
+from wirecal.solver.verdict import Plausibility
 
 
 def gate(result: SolveResult, method: str, **options: Any) -> Plausibility:

@@ -11,10 +11,10 @@ from wirecal.gen.urscript.program import scripts
 from wirecal.gen.vplus.program import MODULE_NAME, module_text
 from wirecal.lang.urscript.parser import BUILTINS, parse_program
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log
+from wirecal.solver.formats.log import load_measurements, parse_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.measurements import check_log, load_measurements
+from wirecal.solver.measurements import check_log
 from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 from wirecal.twin.adapters import adapter
