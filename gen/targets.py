@@ -46,6 +46,21 @@ def check_limits(robot: Robot, plan: Plan, margin_deg: float) -> None:
         raise WirecalError(problems)
 
 
+def name_problems(robot: Robot, forbidden: str, strings: str) -> list[str]:
+    """Return the problem of a robot name the programs cannot write in a string literal.
+
+    ``forbidden``: the characters a string literal of the language cannot hold beside the
+    non-printable ones; ``strings``: what the message calls them ("a V+ string").
+    """
+    if all(32 <= ord(ch) <= 126 and ch not in forbidden for ch in robot.name):
+        return []
+    shown = " or ".join(repr(c) for c in forbidden)
+    return [
+        f"{robot.source}: name {robot.name!r}: the programs write it in {strings}: printable "
+        f"ASCII without {shown}; rename the robot"
+    ]
+
+
 def joint_target(q_deg: np.ndarray, target: Callable[[np.ndarray], str]) -> dict[str, str]:
     """Return a target as the language writes it and as the operator reads it (deg)."""
     return {"target": target(q_deg), "deg": ", ".join(joint_literal(x) for x in q_deg)}

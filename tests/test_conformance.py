@@ -127,6 +127,15 @@ def test_generated_programs_lint_clean(example, programs):
         assert lang.lint(text, name, example.robot.controller.software) == [], name
 
 
+def test_a_name_no_string_literal_holds_is_refused(example):
+    # every language writes the robot's name in a string literal; '"' ends one in all three
+    # (V+ UG p. 100, URScript and RAPID string literals): the generator refuses, naming it
+    quoted = replace(example.robot, name='arm "A"')
+    gen = registered(example.robot).generator
+    with pytest.raises(WirecalError, match=r"name 'arm \"A\"': the programs write it in a"):
+        gen.programs(quoted, example.plan, GenRequest())
+
+
 def _cases(kind: str) -> list:
     return [
         pytest.param(key, case, id=f"{key}-{n}")

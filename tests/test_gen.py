@@ -189,7 +189,7 @@ def test_bad_options_refused(viper, paper_plan):
         "controller file name 'TOOLONGNAME.CSV': use 8.3 letters and digits",
     ]
     quoted = replace(viper, name='Viper "A"')
-    with pytest.raises(WirecalError, match="a V\\+ string holds printable ASCII"):
+    with pytest.raises(WirecalError, match=r"in a V\+ string: printable ASCII without '\"'"):
         module_text(quoted, paper_plan)
 
 

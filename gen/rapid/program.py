@@ -24,7 +24,7 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import check_limits, joint_target, run_steps
+from wirecal.gen.targets import check_limits, joint_target, name_problems, run_steps
 from wirecal.gen.templating import render
 from wirecal.lang.rapid.module import (
     GROUP_COUNTER_BITS,
@@ -182,11 +182,7 @@ def _check(robot: Robot, opt: RapidOptions) -> None:
             f"counter_bits = {GROUP_COUNTER_BITS}"
         )
     problems += robot.program_problems()
-    if any(not 32 <= ord(ch) <= 126 or ch in '"\\' for ch in robot.name):
-        problems.append(
-            f"{robot.source}: name {robot.name!r}: the module writes it in a RAPID "
-            "string: printable ASCII without '\"' or '\\'; rename the robot"
-        )
+    problems += name_problems(robot, '"\\', "a RAPID string")
     if problems:
         raise WirecalError(problems)
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import check_limits, joint_target, run_steps
+from wirecal.gen.targets import check_limits, joint_target, name_problems, run_steps
 from wirecal.gen.templating import render
 from wirecal.lang.urscript import URScript
 from wirecal.lang.urscript.parser import parse_program
@@ -174,11 +174,7 @@ def _check(robot: Robot, opt: UrOptions) -> tuple[str, int]:
             f"log the raw count, an int32; give counter_bits = {RAW_COUNTER_BITS}"
         )
     problems += robot.program_problems()
-    if any(not 32 <= ord(ch) <= 126 or ch in '"\\' for ch in robot.name):
-        problems.append(
-            f"{robot.source}: name {robot.name!r}: the programs write it in a URScript "
-            "string: printable ASCII without '\"' or '\\'; rename the robot"
-        )
+    problems += name_problems(robot, '"\\', "a URScript string")
     host = opt.host or robot.controller.host
     port = opt.port or robot.controller.port
     if host is None:

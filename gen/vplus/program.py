@@ -18,7 +18,7 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import check_limits, joint_literal, run_steps
+from wirecal.gen.targets import check_limits, joint_literal, name_problems, run_steps
 from wirecal.gen.templating import render
 from wirecal.gen.vplus.literals import MAX_LINE, double_literal, long_lines, ppoint
 from wirecal.lang.vplus.parser import parse_module
@@ -109,11 +109,7 @@ def _check_options(robot: Robot, opt: GenOptions, tables: Tables) -> None:
             'input: interface = "belt"'
         )
     problems += robot.program_problems()
-    if any(not 32 <= ord(ch) <= 126 or ch == '"' for ch in robot.name):
-        problems.append(
-            f"{robot.source}: name {robot.name!r}: a V+ string holds printable "
-            "ASCII without '\"'; rename the robot"
-        )
+    problems += name_problems(robot, '"', "a V+ string")
     bound = tables.errors.to_boundary(tables.omega)
     if np.any(bound > 16):
         problems.append(
