@@ -60,7 +60,7 @@ _API = {
     "FitResult": "wirecal.solver.fit_result",
     "synthetic_table": "wirecal.solver.fit_synth",
     # the plausibility gate between identification and any output
-    "gate": "wirecal.app.languages",
+    "gate": "wirecal.app.gate",
     "assess": "wirecal.solver.plausibility",
     # generate the controller programs
     "module_text": "wirecal.gen.vplus.program",
