@@ -296,7 +296,7 @@ def run_module(text: str, source: str, controller: RapidController, entry: str =
         module = _parsed(text)
     except SyntaxProblem as e:
         raise WirecalError([f"{source}:{e.line}: {e.message}"]) from None
-    checker = Checker(module)
+    checker = Checker(module, subset=True)
     problems = [f"{source}:{line}: {m}" for line, m in checker.run()]
     if not problems:
         problems = _check_subset(module, source)
