@@ -193,9 +193,10 @@ class Exit:
 
 @dataclass
 class Unsupported:
-    """A construct RAPID has and wirecal's subset does not (GOTO, labels, RAISE, …).
+    """A type declaration (RECORD or ALIAS) as the twin's subset refuses it, by line.
 
-    ``name``: the type a RECORD or ALIAS declares (its data is outside the subset too).
+    ``name``: the type it declares (its components are in :attr:`Module.records` or
+    :attr:`Module.aliases`).
     """
 
     what: str
@@ -263,7 +264,6 @@ Stmt = (
     | Test
     | Return
     | Exit
-    | Unsupported
     | Goto
     | Label
     | Raise
