@@ -727,6 +727,8 @@ class Checker:
                 want = typer.type(s.target)
                 if want is not None:
                     typer.expect(s.value, want, f"{_text(s.target)}")
+        elif isinstance(s, N.Call) and s.name.lower() in self.traps:
+            self.problems.add(s.line, f"{s.name} is a TRAP: an interrupt runs it, a call cannot")
         elif isinstance(s, N.Call):
             typer.call(s.name, s.args, function=False)
         elif isinstance(s, N.If):

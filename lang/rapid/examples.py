@@ -411,4 +411,20 @@ INVALID: dict[str, tuple[str, str]] = {
         module("%n%;", data=("VAR num n;",)),
         "4: a late-bound procedure's name is a string, not a num",
     ),
+    f"a TRAP called as a procedure ({RM} p. 112: an interrupt transfers control to it)": (
+        "MODULE T\n  PROC main()\n    t;\n  ENDPROC\n  TRAP t\n  ENDTRAP\nENDMODULE\n",
+        "3: t is a TRAP: an interrupt runs it, a call cannot",
+    ),
+    f"TRYNEXT outside an ERROR handler ({UNCONFIRMED})": (
+        module("TRYNEXT;"),
+        "3: TRYNEXT outside an ERROR handler",
+    ),
+    f"WaitDI compared with a string ({UNCONFIRMED})": (
+        module('WaitDI di1, "1";'),
+        "3: WaitDI's Value is a num, not a string",
+    ),
+    f"a wobjdata literal of four parts ({UNCONFIRMED}: robhold, ufprog, ufmec, uframe, oframe)": (
+        module("", data=('PERS wobjdata w := [FALSE, TRUE, "", [[0, 0, 0], [1, 0, 0, 0]]];',)),
+        "2: 4 values for a wobjdata, which has 5 components",
+    ),
 }
