@@ -120,7 +120,7 @@ def test_hostile_inputs_are_problems_not_tracebacks(text: str, expected: str) ->
 @given(
     st.text(
         alphabet=st.sampled_from(
-            list('MODULEPROCENDIFTHENVARnum:=;()[]{},.\\"!+-*/<>= \n0123456789')
+            list('MODULEPROCENDIFTHENVARnum:=;()[]{},.\\"!+-*/<>=%| \n0123456789')
         ),
         max_size=300,
     )
