@@ -427,4 +427,8 @@ INVALID: dict[str, tuple[str, str]] = {
         module("", data=('PERS wobjdata w := [FALSE, TRUE, "", [[0, 0, 0], [1, 0, 0, 0]]];',)),
         "2: 4 values for a wobjdata, which has 5 components",
     ),
+    f"text after ENDMODULE ({UNCONFIRMED})": (
+        "MODULE T\nENDMODULE\n{0;0}\n",
+        "3: '{' after ENDMODULE: a file holds one module and nothing after it",
+    ),
 }

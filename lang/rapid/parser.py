@@ -368,6 +368,8 @@ def _unexpected(e: UnexpectedToken, text: str) -> str:
     word = str(e.token).upper()
     if word == "MODULE" and "$END" in e.expected:
         return "a second MODULE: one module per file"
+    if set(e.expected) == {"$END"}:
+        return f"{found} after ENDMODULE: a file holds one module and nothing after it"
     if word in RESERVED and word not in _ENDS and "NAME" in e.expected:
         return (
             f"{e.token} is a RAPID reserved word: it cannot be a name "

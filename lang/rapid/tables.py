@@ -445,7 +445,7 @@ WIDE_INSTRUCTIONS: dict[str, Routine] = {
     "reset": _r(P("Signal", "signaldo")),
     "pulsedo": _r(_o("High"), _o("PLength", "num"), P("Signal", "signaldo")),
     "invertdo": _r(P("Signal", "signaldo")),
-    "setao": _r(P("Signal", "signalao"), P("Value", "num")),
+    "setao": _r(P("Signal", "signalao"), P("Value", "num"), source=f"{_RM}, p. 409"),
     "setgo": _r(P("Signal", "signalgo"), P("Value", "anynum")),
     "waitdi": _r(
         P("Signal", "signaldi"),
