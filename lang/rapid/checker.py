@@ -458,7 +458,7 @@ class Typer:
             return
         self.problems.add(
             self.line,
-            f"{name}'s {p.name} is the name of a {T.SIGNAL_TYPES[p.type]} signal ({p.type})",
+            f"{name}'s {p.name} is the name of {T.SIGNAL_TYPES[p.type]} signal ({p.type})",
         )
 
     def _predefined(self, name: str, p: T.P, e: N.Expr) -> None:

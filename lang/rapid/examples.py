@@ -245,6 +245,19 @@ VALID: dict[str, str] = {
             "",
         ]
     ),
+    f"raw bytes, SetAO, IDisable/IEnable, CRobT and RelTool ({UNCONFIRMED}; SetAO: {RM} p. 409)": (
+        module(
+            "ClearRawBytes raw;",
+            "PackRawBytes 7, raw, 1 \\IntX:=DINT;",
+            "PackRawBytes 1.5, raw, RawBytesLen(raw) + 1 \\Float4;",
+            "UnpackRawBytes raw \\Network, 1, n \\IntX:=DINT;",
+            "SetAO ao_speed, n / 2;",
+            "IDisable;",
+            "here := RelTool(CRobT(\\Tool:=tool0 \\WObj:=wobj0), 0, 0, -10 \\Rz:=90);",
+            "IEnable;",
+            data=("VAR rawbytes raw;", "VAR num n;", "VAR robtarget here;"),
+        )
+    ),
     f"late binding: a procedure called by its name ({UNCONFIRMED})": module(
         '%"step" + ValToStr(n)%;',
         data=("VAR num n := 1;",),
@@ -430,5 +443,15 @@ INVALID: dict[str, tuple[str, str]] = {
     f"text after ENDMODULE ({UNCONFIRMED})": (
         "MODULE T\nENDMODULE\n{0;0}\n",
         "3: '{' after ENDMODULE: a file holds one module and nothing after it",
+    ),
+    f"UnpackRawBytes into a constant ({UNCONFIRMED}: its Value is written)": (
+        module(
+            "UnpackRawBytes raw, 1, k \\Float4;", data=("VAR rawbytes raw;", "CONST num k := 1;")
+        ),
+        "5: k is a CONST: it cannot be assigned",
+    ),
+    f"SetAO on a digital output's data ({RM} p. 409: Signal is a signalao)": (
+        module("SetAO d, 1;", data=("VAR signaldo d;",)),
+        "4: SetAO's Signal is the name of an analog output signal (signalao)",
     ),
 }

@@ -358,12 +358,12 @@ WIDE_OPAQUE = frozenset(
 (unconfirmed)."""
 
 SIGNAL_TYPES: dict[str, str] = {
-    "signaldi": "digital input",
-    "signaldo": "digital output",
-    "signalgi": "group input",
-    "signalgo": "group output",
-    "signalai": "analog input",
-    "signalao": "analog output",
+    "signaldi": "a digital input",
+    "signaldo": "a digital output",
+    "signalgi": "a group input",
+    "signalgo": "a group output",
+    "signalai": "an analog input",
+    "signalao": "an analog output",
 }
 """I/O signal types and what each is: an argument may name a signal of the controller's
 configuration, not declared in the module (unconfirmed)."""
