@@ -652,7 +652,7 @@ class Checker:
         key = r.name.lower()
         if key in self.user:
             self.problems.add(r.line, f"the routine {r.name} is defined twice")
-        if key in T.INSTRUCTIONS or key in T.FUNCTIONS:
+        if key in self.lang.instructions or key in self.lang.functions:
             self.problems.add(r.line, f"{r.name} is a RAPID routine's name: rename it")
         if r.kind == "TRAP":
             self.traps.add(key)

@@ -454,4 +454,8 @@ INVALID: dict[str, tuple[str, str]] = {
         module("SetAO d, 1;", data=("VAR signaldo d;",)),
         "4: SetAO's Signal is the name of an analog output signal (signalao)",
     ),
+    f"a PROC named like RAPID's MoveL ({UNCONFIRMED})": (
+        "MODULE T\n  PROC MoveL()\n  ENDPROC\nENDMODULE\n",
+        "2: MoveL is a RAPID routine's name: rename it",
+    ),
 }
