@@ -383,10 +383,13 @@ WIDE_PREDEFINED: dict[str, str] = {
     **{k: "symnum" for k in ("op_undef", "op_auto", "op_man_prog", "op_man_test")},
     **{k: "symnum" for k in ("run_undef", "run_cont_cycle", "run_instr_fwd", "run_instr_bwd")},
     **{k: "symnum" for k in ("run_sim", "run_step_move")},
+    **{k: "stoppointdata" for k in ("inpos20", "inpos50", "inpos100")},
+    **{k: "string" for k in ("diskhome", "diskram", "disktemp")},
+    **{k: "num" for k in ("eof_bin", "eof_num")},
 }
-"""Predefined data beyond the subset (ERRNO: RM p. 385; INTNO: RM p. 112; the others
-unconfirmed). Names starting ERR_ are errnum constants and SOCKET_ socketstatus ones
-(:func:`wide_data`)."""
+"""Predefined data beyond the subset (ERRNO: RM p. 385; INTNO: RM p. 112; inpos50: the
+MoveJ page's example ``\\Inpos:=inpos50``; the others unconfirmed). Names starting ERR_
+are errnum constants and SOCKET_ socketstatus ones (:func:`wide_data`)."""
 
 
 def wide_data(name: str) -> str | None:
