@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 
 import pytest
 
+from wirecal.lang.rapid.checker import check
+from wirecal.lang.rapid.examples import module
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.rapid.interp import fixed, number_text, run_module
 
@@ -232,6 +234,31 @@ def test_checker_problems_refuse_the_run() -> None:
         run("Frob;")
     with pytest.raises(WirecalError, match=r"MoveAbsJ \\Conc: the twin does not run it"):
         run("MoveAbsJ \\Conc, jt, v100, fine, tool0;", data=("VAR jointtarget jt;",))
+
+
+BEYOND = {
+    "MoveL": ("MoveL p, v100, fine, tool0;", ("VAR robtarget p;",), "the data type robtarget"),
+    "SetDO": ("SetDO do1, 1;", (), "SetDO: a RAPID instruction"),
+    "GOTO": ("l1:", (), "a label \\(GOTO\\)"),
+    "RAISE": ("RAISE 10;", (), "RAISE"),
+    "ERRNO": ("IF ERRNO = 1 Stop;", (), "ERRNO: RAPID's predefined data"),
+    "late binding": ('%"main"%;', (), "late binding"),
+    "a named argument": ("WaitTime Time:=1;", (), "a named required argument"),
+}
+
+
+@pytest.mark.parametrize(("body", "data", "named"), BEYOND.values(), ids=list(BEYOND))
+def test_rapid_the_checker_accepts_and_the_twin_does_not_run_is_refused_by_name(
+    body: str, data: tuple[str, ...], named: str
+) -> None:
+    """Valid RAPID (the checker passes it) beyond the subset stops before anything runs."""
+    ctl = FakeController()
+    text = module(body, data=data)
+    assert check(text, "t.mod") == []
+    with pytest.raises(WirecalError, match=named + ".*not in wirecal's RAPID subset"):
+        run_module(text, "t.mod", ctl)
+    assert ctl.calls == []
+    assert ctl.pendant == []
 
 
 def test_number_formats() -> None:

@@ -1,7 +1,8 @@
-"""The RAPID checker both ways: small modules of the subset pass, errors are caught by name.
+"""The RAPID checker both ways: valid modules pass, errors are caught by name.
 
 The modules of both ways are wirecal.lang.rapid.examples (each names its page); those here
-are the constructs outside the subset, hostile input and the task scope.
+are RAPID beyond the twin's subset (clean for the checker, refused by the twin's check),
+hostile input and the task scope.
 """
 
 from __future__ import annotations
@@ -11,8 +12,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.lang.rapid import Rapid
-from wirecal.lang.rapid.checker import check, check_task
+from wirecal.lang.rapid.checker import Checker, check, check_task
 from wirecal.lang.rapid.examples import INVALID, VALID, module
+from wirecal.lang.rapid.parser import parse_module
 
 
 @pytest.mark.parametrize("text", VALID.values(), ids=list(VALID))
@@ -35,15 +37,25 @@ OUTSIDE = {
     "a RECORD": "MODULE T\n  RECORD r\n    num x;\n  ENDRECORD\nENDMODULE\n",
     "a zonedata variable": module("", data=("VAR zonedata z := z10;",)),
     "SetDO": module("SetDO do1, 1;"),
+    "ERRNO": module("IF ERRNO = ERR_DIVZERO Stop;"),
+    "a named argument": module("WaitTime Time:=1;"),
+    "exclusive parameters": "MODULE T\n  PROC p(\\switch a | switch b)\n  ENDPROC\nENDMODULE\n",
+    "a VAR parameter": "MODULE T\n  PROC p(VAR num a)\n  ENDPROC\nENDMODULE\n",
+    "CONNECT": "MODULE T\n  VAR intnum i;\n  PROC main()\n    CONNECT i WITH t;\n  ENDPROC\n"
+    "  TRAP t\n  ENDTRAP\nENDMODULE\n",
+    "late binding": module('%"main"%;'),
 }
 
 
 @pytest.mark.parametrize("text", OUTSIDE.values(), ids=list(OUTSIDE))
-def test_constructs_outside_the_subset_say_so(text: str) -> None:
-    found = check(text, "t.mod")
-    assert found
-    assert any("not in wirecal's RAPID subset" in p for p in found), found
-    assert not any("unknown" in p or "syntax error" in p for p in found), found
+def test_rapid_beyond_the_subset_lints_clean_and_the_twin_refuses_it(text: str) -> None:
+    """Valid RAPID the twin does not run: the checker accepts it; the twin's check
+    (``subset=True``, what ``twin.rapid.interp.run_module`` runs first) names it."""
+    assert check(text, "t.mod") == []
+    refused = Checker(parse_module(text), subset=True).run()
+    assert refused
+    assert all("not in wirecal's RAPID subset" in m for _, m in refused), refused
+    assert not any("unknown" in m or "syntax error" in m for _, m in refused), refused
 
 
 def test_software_versions() -> None:
@@ -108,7 +120,7 @@ def test_hostile_inputs_are_problems_not_tracebacks(text: str, expected: str) ->
 @given(
     st.text(
         alphabet=st.sampled_from(
-            list('MODULEPROCENDIFTHENVARnum:=;()[]{},.\\"!+-*/<>= \n0123456789')
+            list('MODULEPROCENDIFTHENVARnum:=;()[]{},.\\"!+-*/<>=%| \n0123456789')
         ),
         max_size=300,
     )
@@ -164,8 +176,12 @@ def test_external_calls_take_routines_of_other_modules() -> None:
         "unknown function other_f",
     ]
     assert Rapid().lint(text, "t.mod", external_calls=True) == []
-    # RAPID's own routines outside the subset are still named
-    assert Rapid().lint(module("MoveL p, v100, fine, tool0;"), "t.mod", external_calls=True)
+    # RAPID's own routines are still checked against their signatures
+    found = Rapid().lint(module("MoveL 1;"), "t.mod", external_calls=True)
+    assert [p.split(": ", 1)[1][:25] for p in found] == [
+        "MoveL takes 4 argument(s)",
+        "MoveL's ToPoint is a robt",
+    ]
 
 
 def test_the_declared_examples_hold() -> None:

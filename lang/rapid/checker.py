@@ -7,10 +7,15 @@ controller's configuration), reserved words and over-long names, types of every 
 argument, operand and condition (num, dnum and string do not mix: a numeric literal takes
 the type it is used as), CONST data never assigned, instruction arguments (required ones in
 order, optional ones ``\Name`` known), a FUNC that returns a value, string literals of at
-most 80 characters and integer literals a num holds exactly. Constructs RAPID has and the
-subset does not (TRAP, RECORD, ERROR handlers, GOTO, robtarget, MoveL …) get "not in
-wirecal's RAPID subset", never "invalid". The interpreter reuses :class:`Typer` to know
-whether an expression is a num or a dnum.
+most 80 characters and integer literals a num holds exactly.
+
+It reads RAPID beyond what the twin runs (:class:`Dialect`): robtarget, tooldata and the
+other records and their literals, RECORD and ALIAS declarations, MoveL/MoveJ/MoveC, I/O
+signals, sockets, raw bytes, string functions, TRAP routines and CONNECT, ERROR handlers
+with RAISE, RETRY and TRYNEXT (in a handler only), GOTO to a label of the routine, named
+required arguments and ``%name%`` late binding. The twin's interpreter checks with
+``subset=True``: then each of those is "not in wirecal's RAPID subset", named, before a
+run. The interpreter reuses :class:`Typer` to know whether an expression is a num or a dnum.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 from wirecal.lang.rapid import nodes as N
 from wirecal.lang.rapid import tables as T
@@ -71,8 +77,53 @@ class Problems:
         self.items.append((line, message))
 
 
-def _components(type_name: str) -> dict[str, str]:
-    return {k.lower(): v for k, v in T.RECORDS.get(type_name, ())}
+@dataclass(frozen=True)
+class Dialect:
+    """The RAPID a check accepts: the twin's subset, or RAPID as far as the tables go."""
+
+    subset: bool
+    records: Mapping[str, tuple[tuple[str, str], ...]]
+    aliases: Mapping[str, str]
+    opaque: frozenset[str]
+    instructions: Mapping[str, T.Routine]
+    functions: Mapping[str, T.Routine]
+
+    def resolve(self, type_name: str) -> str | None:
+        """Return the type ``type_name`` means (an alias followed), None if unknown."""
+        key = type_name.lower()
+        for _ in range(8):  # an ALIAS of an ALIAS: RAPID refuses it (unconfirmed); 8 is ample
+            if key not in self.aliases:
+                break
+            key = self.aliases[key]
+        known = key in T.ATOMIC or key in self.opaque or key in self.records
+        return key if known else None
+
+    def components(self, type_name: str) -> dict[str, str]:
+        """Return a record's components, name → type (lower case)."""
+        return {k.lower(): v.lower() for k, v in self.records.get(type_name, ())}
+
+
+SUBSET_DIALECT = Dialect(True, T.RECORDS, {}, T.OPAQUE, T.INSTRUCTIONS, T.FUNCTIONS)
+"""What the twin runs (the interpreter's check)."""
+
+
+def dialect(subset: bool, modules: tuple[N.Module, ...]) -> Dialect:
+    """Return the dialect of a check: with ``subset`` False, RAPID with the modules' types."""
+    if subset:
+        return SUBSET_DIALECT
+    records = {**T.RECORDS, **T.WIDE_RECORDS}
+    aliases = dict(T.ALIASES)
+    for m in modules:
+        records.update({k.lower(): v for k, v in m.records.items()})
+        aliases.update({k.lower(): v.lower() for k, v in m.aliases.items()})
+    return Dialect(
+        False,
+        records,
+        aliases,
+        T.OPAQUE | T.WIDE_OPAQUE,
+        {**T.INSTRUCTIONS, **T.WIDE_INSTRUCTIONS},
+        {**T.FUNCTIONS, **T.WIDE_FUNCTIONS},
+    )
 
 
 class Typer:
@@ -84,8 +135,10 @@ class Typer:
         problems: Problems,
         routines: dict[str, T.Routine],
         line: int = 0,
+        lang: Dialect = SUBSET_DIALECT,
     ):
         self.scope, self.problems, self.routines, self.line = scope, problems, routines, line
+        self.lang = lang
         self.signals: set[str] = set()
         self.software: tuple[int, ...] | None = None
         self.external = False  # calls to routines not in the module are allowed
@@ -93,6 +146,9 @@ class Typer:
     def symbol(self, name: str) -> Symbol | None:
         """Return the data ``name`` refers to, or None (the problem reported)."""
         sym = self.scope.get(name.lower())
+        wide = None if self.lang.subset else T.wide_data(name)
+        if sym is None and wide is not None:
+            return Symbol(name, Type(self.lang.resolve(wide) or wide), "PREDEF")
         if sym is None and T.other_data(name):
             self.problems.add(self.line, f"{name}: RAPID's predefined data {SUBSET}")
         elif sym is None:
@@ -149,7 +205,7 @@ class Typer:
         base = self.type(e.base)
         if base is None or base == UNKNOWN:
             return None
-        parts = _components(base.name) if not base.dims else {}
+        parts = self.lang.components(base.name) if not base.dims else {}
         if e.field.lower() not in parts:
             self.problems.add(self.line, f"{base} has no component {e.field}")
             return None
@@ -187,7 +243,7 @@ class Typer:
             for item in e.items:
                 self.expect(item, inner, "an array element")
             return want
-        parts = T.RECORDS.get(want.name)
+        parts = self.lang.records.get(want.name)
         if parts is None:
             self.problems.add(self.line, f"an aggregate [...] for a {want}")
             return None
@@ -197,7 +253,7 @@ class Typer:
             )
             return want
         for item, (name, type_name) in zip(e.items, parts, strict=True):
-            self.expect(item, Type(type_name), f"component {name} of {want}")
+            self.expect(item, self.named_type(type_name), f"component {name} of {want}")
         return want
 
     def _binop(self, e: N.BinOp) -> Type | None:
@@ -280,8 +336,10 @@ class Typer:
     def call(self, name: str, args: list[N.Arg], function: bool) -> Type | None:
         """Check a call of ``name`` (a function when ``function``); return its result type."""
         key = name.lower()
-        routine = self.routines.get(key) or (T.FUNCTIONS if function else T.INSTRUCTIONS).get(key)
-        if routine is None and self.external and key not in T.OTHER_ROUTINES:
+        table = self.lang.functions if function else self.lang.instructions
+        routine = self.routines.get(key) or table.get(key)
+        unlisted = not self.lang.subset and key in T.OTHER_ROUTINES  # RAPID's, no signature
+        if routine is None and (unlisted or (self.external and key not in T.OTHER_ROUTINES)):
             for a in args:  # a routine of another module: its arguments are still read
                 if a.value is not None and self.root(a.value) is None:
                     self.type(a.value)
@@ -296,7 +354,11 @@ class Typer:
                 f"{name} needs RobotWare {routine.since} (the controller has "
                 f"{'.'.join(map(str, self.software))})",
             )
-        return Type(routine.returns) if routine.returns else None
+        return self.named_type(routine.returns) if routine.returns else None
+
+    def named_type(self, type_name: str) -> Type:
+        """Return the type a table or declaration names (an alias followed)."""
+        return Type(self.lang.resolve(type_name) or type_name.lower())
 
     def _unknown(self, name: str, function: bool, routine: T.Routine | None) -> None:
         key, kind = name.lower(), "function" if function else "instruction"
@@ -308,7 +370,12 @@ class Typer:
                 if kind == "instruction"
                 else f"{name} is {other}, not a {kind}",
             )
-        elif key in T.OTHER_ROUTINES or key in (T.FUNCTIONS if not function else T.INSTRUCTIONS):
+        elif (
+            key in T.OTHER_ROUTINES
+            or key in T.WIDE_FUNCTIONS
+            or key in T.WIDE_INSTRUCTIONS
+            or key in (self.lang.functions if not function else self.lang.instructions)
+        ):
             self.problems.add(self.line, f"{name}: a RAPID {kind} {SUBSET}")
         else:
             self.problems.add(
@@ -321,7 +388,8 @@ class Typer:
         """Match ``args`` to ``routine``'s parameters: required in order, optional by name."""
         required = [p for p in routine.params if not p.optional]
         optional = {p.name.lower(): p for p in routine.params if p.optional}
-        positional = [a for a in args if a.name is None]
+        positional = [a for a in args if a.name is None or a.named]
+        self._named(name, required, positional)
         if len(positional) != len(required):
             self.problems.add(
                 self.line,
@@ -333,7 +401,7 @@ class Typer:
             self.argument(name, p, a)
         seen: set[str] = set()
         for a in args:
-            if a.name is None:
+            if a.name is None or a.named:
                 continue
             opt = optional.get(a.name.lower())
             if opt is None or a.name.lower() in seen:
@@ -347,31 +415,51 @@ class Typer:
             elif a.value is not None:
                 self.argument(name, opt, a)
 
+    def _named(self, name: str, required: list[T.P], positional: list[N.Arg]) -> None:
+        """Check required arguments given by name (``Speed:=v100``): each in its place."""
+        for p, a in zip(required, positional, strict=False):
+            if a.named and self.lang.subset:
+                self.problems.add(self.line, f"{a.name} := …: a named required argument: {SUBSET}")
+            elif a.named and (a.name or "").lower() != p.name.lower():
+                self.problems.add(self.line, f"{name}: {a.name} := where {p.name} is due")
+
     def argument(self, name: str, p: T.P, a: N.Arg) -> None:
         """Check one argument against its parameter."""
         assert a.value is not None
-        if p.type == "signalgi":
-            self._signal(name, a.value)
+        if p.type in T.SIGNAL_TYPES:
+            self._signal(name, p, a.value)
+            return
+        if p.type in ("anytype", "anynum"):
+            if p.var:
+                self.writable(a.value, f"{name}'s {p.name}")
+            got = self.type(a.value)
+            if p.type == "anynum" and got not in (None, NUM, DNUM, LITERAL, UNKNOWN):
+                self.problems.add(self.line, f"{name}'s {p.name} is a num or a dnum, not a {got}")
             return
         if p.type == "optional parameter":
             sym = self.scope.get(a.value.name.lower()) if isinstance(a.value, N.Name) else None
             if sym is None or sym.kind != "OPT":
                 self.problems.add(self.line, f"{name} takes an optional parameter's name")
             return
-        if p.type in ("zonedata", "tooldata", "wobjdata"):
+        if p.type in ("zonedata", "tooldata", "wobjdata") and self.lang.subset:
             self._predefined(name, p, a.value)
             return
         if p.var:
             self.writable(a.value, f"{name}'s {p.name}")
-        self.expect(a.value, _param_type(p), f"{name}'s {p.name}")
+        self.expect(a.value, self.named_type(p.type), f"{name}'s {p.name}")
 
-    def _signal(self, name: str, e: N.Expr) -> None:
-        if not isinstance(e, N.Name) or e.name.lower() in self.scope:
-            self.problems.add(
-                self.line, f"{name}'s Signal is the name of a group input signal (signalgi)"
-            )
+    def _signal(self, name: str, p: T.P, e: N.Expr) -> None:
+        """Check a signal: a name of the configuration, or (beyond the subset) its data."""
+        if isinstance(e, N.Name) and e.name.lower() not in self.scope:
+            self.signals.add(e.name)
             return
-        self.signals.add(e.name)
+        sym = self.scope.get(e.name.lower()) if isinstance(e, N.Name) else None
+        if sym is not None and not self.lang.subset and sym.type in (Type(p.type), UNKNOWN):
+            return
+        self.problems.add(
+            self.line,
+            f"{name}'s {p.name} is the name of {T.SIGNAL_TYPES[p.type]} signal ({p.type})",
+        )
 
     def _predefined(self, name: str, p: T.P, e: N.Expr) -> None:
         known = [k for k, v in T.PREDEFINED.items() if v == p.type]
@@ -406,10 +494,6 @@ class Typer:
 _KIND_WORDS = {"CONST": "a CONST", "PREDEF": "predefined data", "FOR": "a FOR loop variable"}
 
 
-def _param_type(p: T.P) -> Type:
-    return Type(p.type)
-
-
 def _literals(e: N.Expr) -> list[N.Num]:
     """Return the numeric literals of an expression."""
     if isinstance(e, N.Num):
@@ -430,17 +514,27 @@ class Checker:
         software: str | None = None,
         task: tuple[N.Module, ...] = (),
         external_calls: bool = False,
+        subset: bool = False,
     ):
         self.module, self.problems, self.task = module, Problems(), task
         self.external_calls = external_calls
         self.software = _version(software) if software else None
+        self.lang = dialect(subset, (module, *task))
+        predefined = T.PREDEFINED if subset else {**T.PREDEFINED, **T.WIDE_PREDEFINED}
         self.globals: dict[str, Symbol] = {
-            k: Symbol(k, Type(v), "PREDEF") for k, v in T.PREDEFINED.items()
+            k: Symbol(k, Type(self.lang.resolve(v) or v), "PREDEF") for k, v in predefined.items()
         }
         self.user: dict[str, T.Routine] = {}
+        self.traps: set[str] = set()
         self.signals: set[str] = set()
         self.own_types = {u.name.lower() for m in (module, *task) for u in m.unsupported if u.name}
         self.sizes: dict[str, int] = {}
+        self.in_handler = False
+        self.labels: set[str] = set()
+
+    def typer(self, scope: dict[str, Symbol], line: int = 0) -> Typer:
+        """Return a :class:`Typer` of this check's dialect over ``scope``."""
+        return Typer(scope, self.problems, self.user, line, self.lang)
 
     def run(self) -> list[tuple[int, str]]:
         """Check the module; return its problems sorted by line."""
@@ -450,11 +544,14 @@ class Checker:
             if attr.upper() not in T.MODULE_ATTRIBUTES:
                 self.problems.add(1, f"unknown module attribute {attr}")
         for u in m.unsupported:
-            self.problems.add(u.line, f"{u.what}: {SUBSET}")
+            if self.lang.subset:
+                self.problems.add(u.line, f"{u.what}: {SUBSET}")
+            else:
+                self.own_type(u, m)
         self.declare_task()
         for r in m.routines:
             self.signature(r)
-        typer = Typer(self.globals, self.problems, self.user)
+        typer = self.typer(self.globals)
         for d in m.data:
             self.declare(d, self.globals, typer)
         for r in m.routines:
@@ -464,7 +561,7 @@ class Checker:
     def declare_task(self) -> None:
         """Declare the global data and routines of the task's other modules (not checked)."""
         checked, self.problems = self.problems, Problems()
-        typer = Typer(self.globals, self.problems, self.user)
+        typer = self.typer(self.globals)
         for other in self.task:
             for r in other.routines:
                 if not r.local:
@@ -473,6 +570,15 @@ class Checker:
                 if not d.local:
                     self.declare(d, self.globals, typer)
         self.problems = checked
+
+    def own_type(self, u: N.Unsupported, m: N.Module) -> None:
+        """Check a RECORD's component types or an ALIAS's type (declared types only)."""
+        self.name(u.name, u.line, "data type")
+        if u.name in m.records:
+            for _, type_name in m.records[u.name]:
+                self.data_type(type_name, [], u.line)
+        elif self.lang.resolve(u.name) is None:
+            self.problems.add(u.line, f"ALIAS {u.name} names an unknown data type")
 
     def name(self, name: str, line: int, what: str) -> None:
         """Report a reserved word or an over-long identifier used as a name."""
@@ -485,10 +591,17 @@ class Checker:
 
     def data_type(self, type_name: str, dims: list[int | None], line: int) -> Type | None:
         """Return the declared type, or None (reported) outside the subset."""
-        key = type_name.lower()
-        if key in T.SUBSET_TYPES:
+        key = self.lang.resolve(type_name)
+        if key is not None:
             return Type(key, tuple(dims))
-        if key in T.OTHER_TYPES:
+        key = type_name.lower()
+        if not self.lang.subset:
+            self.problems.add(
+                line,
+                f"unknown data type {type_name} (neither RAPID's in wirecal's table, nor a "
+                "RECORD or ALIAS of the task)",
+            )
+        elif key in T.OTHER_TYPES or key in T.WIDE_OPAQUE or key in T.WIDE_RECORDS:
             self.problems.add(line, f"the data type {type_name}: {SUBSET}")
         elif key in self.own_types:
             self.problems.add(line, f"data of the type {type_name} (this module's): {SUBSET}")
@@ -510,7 +623,7 @@ class Checker:
             scope[d.name.lower()] = Symbol(d.name, UNKNOWN, d.storage)
             return
         if d.init is not None:
-            if dtype.name in T.OPAQUE:
+            if dtype.name in self.lang.opaque:
                 self.problems.add(d.line, f"a {dtype.name} takes no initial value")
             else:
                 typer.expect(d.init, dtype, f"the initial value of {d.name}")
@@ -518,7 +631,7 @@ class Checker:
             self.problems.add(d.line, f"the CONST {d.name} needs a value (:= …)")
         if d.storage == "CONST" and dtype == NUM and isinstance(d.init, N.Num) and d.init.integer:
             self.sizes[d.name.lower()] = int(d.init.value)
-        if d.storage == "CONST" and dtype.name in T.OPAQUE:
+        if d.storage == "CONST" and dtype.name in self.lang.opaque:
             self.problems.add(d.line, f"a {dtype.name} cannot be a CONST")
         scope[d.name.lower()] = Symbol(d.name, dtype, d.storage)
 
@@ -539,41 +652,62 @@ class Checker:
         key = r.name.lower()
         if key in self.user:
             self.problems.add(r.line, f"the routine {r.name} is defined twice")
-        if key in T.INSTRUCTIONS or key in T.FUNCTIONS:
+        if key in self.lang.instructions or key in self.lang.functions:
             self.problems.add(r.line, f"{r.name} is a RAPID routine's name: rename it")
         if r.kind == "TRAP":
-            self.problems.add(r.line, f"TRAP routines (interrupts): {SUBSET}")
-        params = []
-        for p in r.params:
-            self.name(p.name, p.line, "parameter")
-            if p.mode == "PERS" or (p.mode == "VAR" and not p.optional):
-                self.problems.add(p.line, f"a {p.mode} parameter: {SUBSET} (use INOUT)")
-            ptype = p.type.lower()
-            if ptype not in T.SUBSET_TYPES and not (ptype == "switch" and p.optional):
-                self.data_type(p.type, [], p.line)
-            params.append(T.P(p.name, ptype, p.optional, p.mode == "INOUT"))
+            self.traps.add(key)
+            if self.lang.subset:
+                self.problems.add(r.line, f"TRAP routines (interrupts): {SUBSET}")
+        params = [q for p in r.params for q in self.parameter(p)]
         rtype = None
         if r.kind == "FUNC":
             assert r.type is not None
-            rtype = r.type.lower()
+            rtype = self.lang.resolve(r.type) or r.type.lower()
             self.data_type(r.type, [], r.line)
         self.user[key] = T.Routine(tuple(params), rtype, "this module")
+
+    def parameter(self, p: N.Param) -> list[T.P]:
+        """Check one parameter (and its ``|`` alternatives); return their table rows."""
+        self.name(p.name, p.line, "parameter")
+        subset = self.lang.subset
+        if subset and (p.mode == "PERS" or (p.mode == "VAR" and not p.optional)):
+            self.problems.add(p.line, f"a {p.mode} parameter: {SUBSET} (use INOUT)")
+        if subset and p.alternatives:
+            self.problems.add(p.line, f"\\{p.name} | …: exclusive parameters: {SUBSET}")
+        out = []
+        for type_name, name in [(p.type, p.name), *p.alternatives]:
+            ptype = type_name.lower()
+            if not (ptype == "switch" and p.optional):
+                resolved = self.data_type(type_name, [], p.line)
+                ptype = resolved.name if resolved else ptype
+            out.append(T.P(name, ptype, p.optional, p.mode in ("INOUT", "VAR", "PERS")))
+        return out
 
     def routine(self, r: N.Routine) -> None:
         """Check a routine's body in its scope."""
         scope = dict(self.globals)
         for p in r.params:
             kind = "OPT" if p.optional else "INOUT" if p.mode == "INOUT" else "IN"
-            known = p.type.lower() in T.SUBSET_TYPES
-            ptype = Type(p.type.lower(), (None,) * p.dims) if known else UNKNOWN
-            scope[p.name.lower()] = Symbol(p.name, ptype, kind)
-        typer = Typer(scope, self.problems, self.user, r.line)
+            for type_name, name in [(p.type, p.name), *p.alternatives]:
+                known = self.lang.resolve(type_name)
+                ptype = Type(known, (None,) * p.dims) if known else UNKNOWN
+                scope[name.lower()] = Symbol(name, ptype, kind)
+        typer = self.typer(scope, r.line)
         typer.software, typer.external = self.software, self.external_calls
-        if r.handler is not None:
-            self.problems.add(r.line, f"an ERROR handler: {SUBSET}")
+        handlers = {"ERROR": r.handler} if r.handler is not None else {}
+        handlers.update(r.other_handlers)
+        everything = r.body + [s for h in handlers.values() for s in h]
+        self.labels = {s.name.lower() for s in _walk(everything) if isinstance(s, N.Label)}
+        self.in_handler = False
         self.body(r.body, typer, r)
+        for which, handler in handlers.items():
+            if self.lang.subset:
+                self.problems.add(r.line, f"an {which} handler: {SUBSET}")
+                continue
+            self.in_handler = which == "ERROR"
+            self.body(handler, typer, r)
         self.signals |= typer.signals
-        if r.kind == "FUNC" and not any(isinstance(s, N.Return) for s in _walk(r.body)):
+        if r.kind == "FUNC" and not any(isinstance(s, N.Return) for s in _walk(everything)):
             self.problems.add(r.line, f"the FUNC {r.name} has no RETURN: it must return a {r.type}")
 
     def body(self, stmts: list[N.Stmt], typer: Typer, r: N.Routine) -> None:
@@ -593,6 +727,8 @@ class Checker:
                 want = typer.type(s.target)
                 if want is not None:
                     typer.expect(s.value, want, f"{_text(s.target)}")
+        elif isinstance(s, N.Call) and s.name.lower() in self.traps:
+            self.problems.add(s.line, f"{s.name} is a TRAP: an interrupt runs it, a call cannot")
         elif isinstance(s, N.Call):
             typer.call(s.name, s.args, function=False)
         elif isinstance(s, N.If):
@@ -610,8 +746,37 @@ class Checker:
             self.test(s, typer, r)
         elif isinstance(s, N.Return):
             self.ret(s, typer, r)
-        elif isinstance(s, N.Unsupported):
-            self.problems.add(s.line, f"{s.what}: {SUBSET}")
+        elif self.lang.subset and not isinstance(s, N.Exit):
+            self.problems.add(s.line, f"{_WHAT[type(s)]}: {SUBSET}")
+        else:
+            self.beyond(s, typer)
+
+    def beyond(self, s: N.Stmt, typer: Typer) -> None:
+        """Check a statement of RAPID beyond the subset (GOTO, RAISE, CONNECT …)."""
+        if isinstance(s, N.Goto) and s.label.lower() not in self.labels:
+            self.problems.add(s.line, f"GOTO {s.label}: no label {s.label}: in this routine")
+        elif isinstance(s, N.Raise) and s.value is not None:
+            typer.expect(s.value, NUM, "RAISE's error number (an errnum)")
+        elif isinstance(s, N.Raise) and not self.in_handler:
+            self.problems.add(
+                s.line, f"RAISE without an error number outside an ERROR handler ({T.RM_RAISE})"
+            )
+        elif isinstance(s, N.Resume) and not self.in_handler:
+            self.problems.add(s.line, f"{s.kind} outside an ERROR handler (unconfirmed)")
+        elif isinstance(s, N.Connect):
+            self.connect(s, typer)
+        elif isinstance(s, N.LateCall):
+            typer.expect(s.name, STRING, "a late-bound procedure's name")
+            for a in s.args:
+                if a.value is not None:
+                    typer.type(a.value)
+
+    def connect(self, s: N.Connect, typer: Typer) -> None:
+        """CONNECT intno WITH trap: an intnum variable and a TRAP of the task (RM p. 112)."""
+        if typer.writable(s.target, "CONNECT's interrupt"):
+            typer.expect(s.target, NUM, "CONNECT's interrupt (an intnum)")
+        if s.trap.lower() not in self.traps:
+            self.problems.add(s.line, f"CONNECT … WITH {s.trap}: no TRAP {s.trap} in the task")
 
     def loop(self, s: N.For, typer: Typer, r: N.Routine) -> None:
         """Check a FOR loop: its variable is its own num, read-only in the body."""
@@ -647,6 +812,16 @@ class Checker:
             typer.expect(s.value, Type(r.type.lower()), f"the value {r.name} returns")
 
 
+_WHAT: dict[type, str] = {
+    N.Goto: "GOTO",
+    N.Label: "a label (GOTO)",
+    N.Raise: "RAISE",
+    N.Resume: "RETRY and TRYNEXT",
+    N.Connect: "CONNECT (interrupts)",
+    N.LateCall: "late binding (%name%)",
+}
+
+
 def _text(e: N.Expr) -> str:
     if isinstance(e, N.Name):
         return e.name
@@ -657,7 +832,7 @@ def _text(e: N.Expr) -> str:
     return "the value"
 
 
-def _walk(stmts: list[N.Stmt]):
+def _walk(stmts: list[N.Stmt]) -> Any:
     for s in stmts:
         yield s
         if isinstance(s, N.If):

@@ -12,6 +12,8 @@ from __future__ import annotations
 KERNEL_TYPES = "RAPID kernel, built-in data types (num, dnum, string)"
 MOVEABSJ = "RAPID reference manual, MoveAbsJ"
 UNCONFIRMED = "unconfirmed"
+RM = "RAPID Reference Manual (yumpu.com/en/document/view/5679047)"
+MOVEJ = "RAPID reference manual, MoveJ (read in translation)"
 
 
 def module(*body: str, data: tuple[str, ...] = ()) -> str:
@@ -120,6 +122,146 @@ VALID: dict[str, str] = {
             "endmodule",
         ]
     ),
+    f"robtarget, tooldata, wobjdata and MoveJ/L/C ({RM} p. 211; {MOVEJ})": "\n".join(
+        [
+            "MODULE T",
+            "  TASK PERS tooldata gripper := [TRUE, [[0, 0, 120], [1, 0, 0, 0]],"
+            " [1.5, [0, 0, 40], [1, 0, 0, 0], 0, 0, 0]];",
+            '  PERS wobjdata table := [FALSE, TRUE, "", [[400, 0, 10], [1, 0, 0, 0]],'
+            " [[0, 0, 0], [1, 0, 0, 0]]];",
+            "  CONST robtarget p1 := [[500, 0, 300], [0, 0, 1, 0], [0, 0, 0, 0],"
+            " [9E9, 9E9, 9E9, 9E9, 9E9, 9E9]];",
+            "  VAR robtarget p2;",
+            "  PROC main()",
+            "    p2 := Offs(p1, 0, 50, 0);",
+            "    p2.trans.z := p2.trans.z - 20;",
+            "    MoveJ p1, v500, z10, gripper \\WObj:=table;",
+            "    MoveL p2, v100 \\V:=120, fine, gripper \\WObj:=table;",
+            "    MoveC \\Conc, p1, p2, v100, z5 \\Z:=4, gripper;",
+            "    MoveL Offs(p2, 0, 0, 30), v100, z0, tool0;",
+            "    ConfL \\Off;",
+            "  ENDPROC",
+            "ENDMODULE",
+            "",
+        ]
+    ),
+    f"a RECORD, its literal and components; an ALIAS ({UNCONFIRMED})": "\n".join(
+        [
+            "MODULE T(SYSMODULE, NOSTEPIN)",
+            "  RECORD sample",
+            "    num count;",
+            "    string label;",
+            "    pos where;",
+            "  ENDRECORD",
+            "  ALIAS num metres;",
+            '  LOCAL VAR sample s := [3, "first", [1, 2, 3]];',
+            "  VAR metres m := 2;",
+            "  PROC main()",
+            "    s.where.x := s.count * m;",
+            '    s.label := s.label + "!";',
+            "  ENDPROC",
+            "ENDMODULE",
+            "",
+        ]
+    ),
+    f"a TRAP, CONNECT … WITH, ITimer, ISignalDI, IDelete ({RM} p. 112)": "\n".join(
+        [
+            "MODULE T",
+            "  VAR intnum tick;",
+            "  VAR intnum door;",
+            "  VAR num ticks := 0;",
+            "  PROC main()",
+            "    CONNECT tick WITH on_tick;",
+            "    ITimer 0.5, tick;",
+            "    CONNECT door WITH on_tick;",
+            "    ISignalDI \\Single, di_door, 1, door;",
+            "    WaitTime 2;",
+            "    IDelete tick;",
+            "    IDelete door;",
+            "  ENDPROC",
+            "  TRAP on_tick",
+            "    ticks := ticks + 1;",
+            "    IF INTNO = door RETURN;",
+            "  ENDTRAP",
+            "ENDMODULE",
+            "",
+        ]
+    ),
+    f"an ERROR handler with ERRNO, RETRY, TRYNEXT, RAISE ({RM} p. 385-386)": module(
+        "tries := tries + 1;",
+        "IF tries > 3 RAISE 10;",
+        "ERROR",
+        "  IF ERRNO = ERR_SOCK_TIMEOUT AND tries < 3 RETRY;",
+        "  IF ERRNO = 10 RAISE;",
+        "  TRYNEXT;",
+        data=("VAR num tries := 0;",),
+    ),
+    f"GOTO a label of the routine ({UNCONFIRMED})": module(
+        "again:",
+        "n := n + 1;",
+        "IF n < 3 GOTO again;",
+        data=("VAR num n := 0;",),
+    ),
+    f"sockets and string functions ({UNCONFIRMED}: SocketCreate … SocketClose)": module(
+        "SocketCreate sock;",
+        'SocketConnect sock, "192.168.125.5", 1025 \\Time:=5;',
+        'SocketSend sock \\Str:="hello" + ValToStr(n);',
+        "SocketReceive sock \\Str:=reply \\Time:=10;",
+        "IF SocketGetStatus(sock) = SOCKET_CONNECTED THEN",
+        "  ok := StrToVal(StrPart(reply, 1, StrLen(reply) - 1), n);",
+        '  n := n + StrFind(reply, 1, ",");',
+        "ENDIF",
+        "SocketClose sock;",
+        data=(
+            "VAR socketdev sock;",
+            "VAR string reply;",
+            "VAR num n := 1;",
+            "VAR bool ok;",
+        ),
+    ),
+    f"digital I/O and waits ({UNCONFIRMED}: SetDO, Set, Reset, PulseDO, WaitDI, WaitUntil)": module(
+        "SetDO do_grip, 1;",
+        "Set do_lamp;",
+        "Reset do_lamp;",
+        "PulseDO \\PLength:=0.2, do_lamp;",
+        "WaitDI di_part, 1 \\MaxTime:=3 \\TimeFlag:=late;",
+        "WaitUntil DOutput(do_grip) = 1 OR late;",
+        "SetGO go_code, 5;",
+        data=("VAR bool late;",),
+    ),
+    f"a switch, exclusive optional, VAR parameters, a named argument ({UNCONFIRMED})": "\n".join(
+        [
+            "MODULE T",
+            "  PROC main()",
+            "    VAR num x := 0;",
+            "    bump x, Amount:=2 \\Twice;",
+            "    bump x, 1 \\Once;",
+            "  ENDPROC",
+            "  PROC bump(VAR num v, num Amount \\switch Once | switch Twice)",
+            "    v := v + Amount;",
+            "    IF Present(Twice) v := v + Amount;",
+            "  ENDPROC",
+            "ENDMODULE",
+            "",
+        ]
+    ),
+    f"raw bytes, SetAO, IDisable/IEnable, CRobT and RelTool ({UNCONFIRMED}; SetAO: {RM} p. 409)": (
+        module(
+            "ClearRawBytes raw;",
+            "PackRawBytes 7, raw, 1 \\IntX:=DINT;",
+            "PackRawBytes 1.5, raw, RawBytesLen(raw) + 1 \\Float4;",
+            "UnpackRawBytes raw \\Network, 1, n \\IntX:=DINT;",
+            "SetAO ao_speed, n / 2;",
+            "IDisable;",
+            "here := RelTool(CRobT(\\Tool:=tool0 \\WObj:=wobj0), 0, 0, -10 \\Rz:=90);",
+            "IEnable;",
+            data=("VAR rawbytes raw;", "VAR num n;", "VAR robtarget here;"),
+        )
+    ),
+    f"late binding: a procedure called by its name ({UNCONFIRMED})": module(
+        '%"step" + ValToStr(n)%;',
+        data=("VAR num n := 1;",),
+    ).replace("ENDMODULE", "  PROC step1()\n  ENDPROC\nENDMODULE"),
 }
 
 
@@ -224,5 +366,96 @@ INVALID: dict[str, tuple[str, str]] = {
     f"an instruction called as a function ({UNCONFIRMED})": (
         module("n := TPErase();", data=("VAR num n;",)),
         "4: TPErase: a RAPID function not in wirecal's RAPID subset",
+    ),
+    f"RETRY outside an ERROR handler ({UNCONFIRMED})": (
+        module("RETRY;"),
+        "3: RETRY outside an ERROR handler",
+    ),
+    f"RAISE without an error number outside a handler ({RM} p. 385)": (
+        module("RAISE;"),
+        "3: RAISE without an error number outside an ERROR handler",
+    ),
+    f"GOTO a label the routine has not ({UNCONFIRMED})": (
+        module("GOTO nowhere;"),
+        "3: GOTO nowhere: no label nowhere: in this routine",
+    ),
+    f"CONNECT with a PROC, not a TRAP ({RM} p. 112)": (
+        module("CONNECT i WITH main;", data=("VAR intnum i;",)),
+        "4: CONNECT … WITH main: no TRAP main in the task",
+    ),
+    f"CONNECT to an undeclared interrupt ({RM} p. 112: a variable of type intnum)": (
+        "MODULE T\n  PROC main()\n    CONNECT i WITH t;\n  ENDPROC\n"
+        "  TRAP t\n  ENDTRAP\nENDMODULE\n",
+        "3: unknown data name i",
+    ),
+    f"MoveL to a jointtarget ({MOVEJ}: ToPoint is a robtarget)": (
+        module("MoveL jt, v100, fine, tool0;", data=("VAR jointtarget jt;",)),
+        "4: MoveL's ToPoint is a robtarget, not a jointtarget",
+    ),
+    f"a robtarget literal of three parts ({RM} p. 211: trans, rot, robconf, extax)": (
+        module("", data=("CONST robtarget p := [[1, 2, 3], [1, 0, 0, 0], [0, 0, 0, 0]];",)),
+        "2: 3 values for a robtarget, which has 4 components",
+    ),
+    f"a component a robtarget has not ({RM} p. 211)": (
+        module("p.trans.w := 1;", data=("VAR robtarget p;",)),
+        "4: pos has no component w",
+    ),
+    f"a RECORD component of an unknown type ({UNCONFIRMED})": (
+        "MODULE T\n  RECORD r\n    nums a;\n  ENDRECORD\nENDMODULE\n",
+        "2: unknown data type nums",
+    ),
+    f"SetDO's signal given as a number ({UNCONFIRMED})": (
+        module("SetDO 4, 1;"),
+        "3: SetDO's Signal is the name of a digital output signal (signaldo)",
+    ),
+    f"StrPart with two arguments ({UNCONFIRMED})": (
+        module('s := StrPart("abc", 1);', data=("VAR string s;",)),
+        "4: StrPart takes 3 argument(s)",
+    ),
+    f"SocketCreate on a num ({UNCONFIRMED})": (
+        module("SocketCreate n;", data=("VAR num n;",)),
+        "4: SocketCreate's Socket is a socketdev, not a num",
+    ),
+    f"a named argument out of its place ({UNCONFIRMED})": (
+        module("MoveL Speed:=v100, p, fine, tool0;", data=("VAR robtarget p;",)),
+        "4: MoveL: Speed := where ToPoint is due",
+    ),
+    f"a late-bound name that is not a string ({UNCONFIRMED})": (
+        module("%n%;", data=("VAR num n;",)),
+        "4: a late-bound procedure's name is a string, not a num",
+    ),
+    f"a TRAP called as a procedure ({RM} p. 112: an interrupt transfers control to it)": (
+        "MODULE T\n  PROC main()\n    t;\n  ENDPROC\n  TRAP t\n  ENDTRAP\nENDMODULE\n",
+        "3: t is a TRAP: an interrupt runs it, a call cannot",
+    ),
+    f"TRYNEXT outside an ERROR handler ({UNCONFIRMED})": (
+        module("TRYNEXT;"),
+        "3: TRYNEXT outside an ERROR handler",
+    ),
+    f"WaitDI compared with a string ({UNCONFIRMED})": (
+        module('WaitDI di1, "1";'),
+        "3: WaitDI's Value is a num, not a string",
+    ),
+    f"a wobjdata literal of four parts ({UNCONFIRMED}: robhold, ufprog, ufmec, uframe, oframe)": (
+        module("", data=('PERS wobjdata w := [FALSE, TRUE, "", [[0, 0, 0], [1, 0, 0, 0]]];',)),
+        "2: 4 values for a wobjdata, which has 5 components",
+    ),
+    f"text after ENDMODULE ({UNCONFIRMED})": (
+        "MODULE T\nENDMODULE\n{0;0}\n",
+        "3: '{' after ENDMODULE: a file holds one module and nothing after it",
+    ),
+    f"UnpackRawBytes into a constant ({UNCONFIRMED}: its Value is written)": (
+        module(
+            "UnpackRawBytes raw, 1, k \\Float4;", data=("VAR rawbytes raw;", "CONST num k := 1;")
+        ),
+        "5: k is a CONST: it cannot be assigned",
+    ),
+    f"SetAO on a digital output's data ({RM} p. 409: Signal is a signalao)": (
+        module("SetAO d, 1;", data=("VAR signaldo d;",)),
+        "4: SetAO's Signal is the name of an analog output signal (signalao)",
+    ),
+    f"a PROC named like RAPID's MoveL ({UNCONFIRMED})": (
+        "MODULE T\n  PROC MoveL()\n  ENDPROC\nENDMODULE\n",
+        "2: MoveL is a RAPID routine's name: rename it",
     ),
 }

@@ -90,6 +90,8 @@ class Arg:
 
     value: Expr | None
     name: str | None = None
+    named: bool = False
+    """A required argument given by its parameter's name (``Name := value``)."""
 
 
 @dataclass
@@ -191,9 +193,10 @@ class Exit:
 
 @dataclass
 class Unsupported:
-    """A construct RAPID has and wirecal's subset does not (GOTO, labels, RAISE, …).
+    """A type declaration (RECORD or ALIAS) as the twin's subset refuses it, by line.
 
-    ``name``: the type a RECORD or ALIAS declares (its data is outside the subset too).
+    ``name``: the type it declares (its components are in :attr:`Module.records` or
+    :attr:`Module.aliases`).
     """
 
     what: str
@@ -201,7 +204,73 @@ class Unsupported:
     name: str = ""
 
 
-Stmt = Data | Assign | Call | If | For | While | Test | Return | Exit | Unsupported
+@dataclass
+class Goto:
+    """``GOTO label;``."""
+
+    label: str
+    line: int
+
+
+@dataclass
+class Label:
+    """``label:``, a GOTO's target in its routine."""
+
+    name: str
+    line: int
+
+
+@dataclass
+class Raise:
+    """``RAISE [errno];``: enter the routine's ERROR handler (or the caller's)."""
+
+    value: Expr | None
+    line: int
+
+
+@dataclass
+class Resume:
+    """``RETRY;`` or ``TRYNEXT;`` (``kind``), allowed in an ERROR handler only."""
+
+    kind: str
+    line: int
+
+
+@dataclass
+class Connect:
+    """``CONNECT intno WITH trap;``."""
+
+    target: Expr
+    trap: str
+    line: int
+
+
+@dataclass
+class LateCall:
+    """``%expr% args;``: a procedure called by a name computed at run time."""
+
+    name: Expr
+    args: list[Arg]
+    line: int
+
+
+Stmt = (
+    Data
+    | Assign
+    | Call
+    | If
+    | For
+    | While
+    | Test
+    | Return
+    | Exit
+    | Goto
+    | Label
+    | Raise
+    | Resume
+    | Connect
+    | LateCall
+)
 
 
 @dataclass
@@ -214,6 +283,8 @@ class Param:
     optional: bool
     dims: int
     line: int
+    alternatives: list[tuple[str, str]] = field(default_factory=list)
+    """Mutually exclusive optional parameters after ``|``: (type, name) each."""
 
 
 @dataclass
@@ -228,6 +299,8 @@ class Routine:
     handler: list[Stmt] | None
     line: int
     local: bool = False
+    other_handlers: dict[str, list[Stmt]] = field(default_factory=dict)
+    """BACKWARD and UNDO handlers by keyword."""
 
 
 @dataclass
@@ -239,3 +312,7 @@ class Module:
     data: list[Data]
     routines: list[Routine]
     unsupported: list[Unsupported] = field(default_factory=list)
+    records: dict[str, tuple[tuple[str, str], ...]] = field(default_factory=dict)
+    """RECORD types declared here: name → (component, type) in order."""
+    aliases: dict[str, str] = field(default_factory=dict)
+    """ALIAS types declared here: name → the type it names."""

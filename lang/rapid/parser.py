@@ -120,9 +120,7 @@ class _Build(Transformer):
         return N.Arg(c[0])
 
     def named_arg(self, meta, c):
-        raise SyntaxProblem(
-            meta.line, f"{c[0]} := …: a named required argument is not in wirecal's RAPID subset"
-        )
+        return N.Arg(c[1], c[0], named=True)
 
     def opt_arg(self, meta, c):
         return N.Arg(c[1], c[0])
@@ -200,14 +198,26 @@ class _Build(Transformer):
     def exit_stmt(self, meta, c):
         return N.Exit(meta.line)
 
-    def other_stmt(self, meta, c):
-        return N.Unsupported(str(c[0]).upper(), meta.line)
+    def goto_stmt(self, meta, c):
+        return N.Goto(c[0], meta.line)
+
+    def raise_stmt(self, meta, c):
+        return N.Raise(c[0], meta.line)
+
+    def retry_stmt(self, meta, c):
+        return N.Resume("RETRY", meta.line)
+
+    def trynext_stmt(self, meta, c):
+        return N.Resume("TRYNEXT", meta.line)
 
     def connect_stmt(self, meta, c):
-        return N.Unsupported("CONNECT (interrupts)", meta.line)
+        return N.Connect(c[0], c[1], meta.line)
+
+    def late_call(self, meta, c):
+        return N.LateCall(c[0], c[1] or [], meta.line)
 
     def label(self, meta, c):
-        return N.Unsupported(f"the label {c[0]}: (GOTO)", meta.line)
+        return N.Label(c[0], meta.line)
 
     def handler(self, meta, c):
         return ("handler", str(c[0]).upper(), [x for x in c[1:] if isinstance(x, N.Stmt)])
@@ -222,7 +232,7 @@ class _Build(Transformer):
             if which == "ERROR":
                 out.handler = handler
             else:
-                out.body.append(N.Unsupported(f"a {which} handler", line))
+                out.other_handlers[which] = handler
         return out
 
     def proc(self, meta, c):
@@ -246,22 +256,17 @@ class _Build(Transformer):
 
     def opt_param(self, meta, c):
         mode, type_, name, dims, *alternatives = c
-        param = N.Param(name, type_, mode or "", True, int(dims or 0), meta.line)
-        if alternatives:
-            raise SyntaxProblem(
-                meta.line,
-                f"\\{name} | …: mutually exclusive parameters are not in wirecal's RAPID subset",
-            )
-        return param
+        pairs = list(zip(alternatives[::2], alternatives[1::2], strict=True))
+        return N.Param(name, type_, mode or "", True, int(dims or 0), meta.line, pairs)
 
     def record(self, meta, c):
-        return N.Unsupported(f"RECORD {c[0]} (a user-defined record type)", meta.line, c[0])
+        return ("RECORD", c[0], tuple(c[1:]), meta.line)
 
     def data_field(self, meta, c):
-        return None
+        return (c[1], c[0])
 
     def alias(self, meta, c):
-        return N.Unsupported(f"ALIAS {c[1]} (an alias type)", meta.line, c[1])
+        return ("ALIAS", c[1], c[0], meta.line)
 
     def attrs(self, meta, c):
         return list(c)
@@ -275,7 +280,10 @@ class _Build(Transformer):
             elif isinstance(item, N.Routine):
                 module.routines.append(item)
             else:
-                module.unsupported.append(item)
+                kind, type_name, what, line = item
+                types = module.records if kind == "RECORD" else module.aliases
+                types[type_name] = what
+                module.unsupported.append(N.Unsupported(f"{kind} {type_name}", line, type_name))
         return module
 
     def start(self, meta, c):
@@ -360,6 +368,8 @@ def _unexpected(e: UnexpectedToken, text: str) -> str:
     word = str(e.token).upper()
     if word == "MODULE" and "$END" in e.expected:
         return "a second MODULE: one module per file"
+    if set(e.expected) == {"$END"}:
+        return f"{found} after ENDMODULE: a file holds one module and nothing after it"
     if word in RESERVED and word not in _ENDS and "NAME" in e.expected:
         return (
             f"{e.token} is a RAPID reserved word: it cannot be a name "

@@ -272,3 +272,344 @@ OTHER_ROUTINES = (
     - frozenset(INSTRUCTIONS)
 )
 """RAPID instructions and functions outside the subset (a call is "not in the subset")."""
+
+
+# --- RAPID beyond the twin's subset: what the checker reads in others' programs -----------
+#
+# Pages read for these (through the ``search`` tool):
+#
+# * ``RM``: "RAPID Reference Manual" (an S4C-era edition: "Basic Characteristics RAPID"),
+#   yumpu.com/en/document/view/5679047 — page 211-212 robtarget (trans pos, rot orient,
+#   robconf confdata, extax extjoint), 385-386 RAISE ("RAISE [Error no.]", errnum, "must be
+#   specified outside the error handler"), 51 and 112 interrupts (CONNECT … WITH, intnum,
+#   ISignalDI, IDelete, TRAP … ENDTRAP, RETURN in a trap routine);
+# * ``MoveJ``: "MoveJ [\Conc,] ToPoint, Speed [\V]|[\T], Zone [\Z] [\Inpos], Tool [\WObj]",
+#   blog.csdn.net/weixin_42126274/article/details/111886431 (a translation of the manual);
+# * ``zonedata``: ABB's PC SDK, ZoneData structure (FineP, pZoneTcp, pZoneOri, pZoneEax,
+#   ZoneOri, ZoneLeax, ZoneReax), developercenter.robotstudio.com/api/fpsdk.
+#
+# Every other row is "unconfirmed": written from the 3HAC050917 manual's structure as
+# wirecal's authors know it.
+
+_RM = "RAPID Reference Manual (yumpu.com/en/document/view/5679047)"
+RM_RAISE = f"{_RM}, p. 385: the error number must be given outside the error handler"
+_MOVEJ = "MoveJ (blog.csdn.net/weixin_42126274/article/details/111886431)"
+
+WIDE_RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
+    "pos": (("x", "num"), ("y", "num"), ("z", "num")),
+    "orient": (("q1", "num"), ("q2", "num"), ("q3", "num"), ("q4", "num")),
+    "pose": (("trans", "pos"), ("rot", "orient")),
+    "confdata": (("cf1", "num"), ("cf4", "num"), ("cf6", "num"), ("cfx", "num")),
+    "robtarget": (
+        ("trans", "pos"),
+        ("rot", "orient"),
+        ("robconf", "confdata"),
+        ("extax", "extjoint"),
+    ),
+    "loaddata": (
+        ("mass", "num"),
+        ("cog", "pos"),
+        ("aom", "orient"),
+        ("ix", "num"),
+        ("iy", "num"),
+        ("iz", "num"),
+    ),
+    "tooldata": (("robhold", "bool"), ("tframe", "pose"), ("tload", "loaddata")),
+    "wobjdata": (
+        ("robhold", "bool"),
+        ("ufprog", "bool"),
+        ("ufmec", "string"),
+        ("uframe", "pose"),
+        ("oframe", "pose"),
+    ),
+    "zonedata": (
+        ("finep", "bool"),
+        ("pzone_tcp", "num"),
+        ("pzone_ori", "num"),
+        ("pzone_eax", "num"),
+        ("zone_ori", "num"),
+        ("zone_leax", "num"),
+        ("zone_reax", "num"),
+    ),
+}
+"""Record types beyond the subset (robtarget: RM p. 211; zonedata: the PC SDK's ZoneData;
+pos, orient, pose, confdata, loaddata, tooldata, wobjdata: unconfirmed)."""
+
+ALIASES: dict[str, str] = {
+    "errnum": "num",
+    "intnum": "num",
+    "dionum": "num",
+    "socketstatus": "num",
+    "symnum": "num",
+    "byte": "num",
+    "tpnum": "num",
+    "inttypes": "num",
+    "errstr": "string",
+}
+"""Alias types and the type each names (RM: RAISE's argument is an errnum and ERRNO is
+compared with numbers; the others unconfirmed)."""
+
+WIDE_OPAQUE = frozenset(
+    """socketdev rawbytes signaldi signaldo signalgi signalgo signalai signalao triggdata
+    dir mecunit wzstationary wztemporary shapedata syncident tasks identno stoppointdata
+    errdomain egmident progdisp""".split()
+)
+"""Non-value types beyond the subset: declared, passed, not built from literals
+(unconfirmed)."""
+
+SIGNAL_TYPES: dict[str, str] = {
+    "signaldi": "a digital input",
+    "signaldo": "a digital output",
+    "signalgi": "a group input",
+    "signalgo": "a group output",
+    "signalai": "an analog input",
+    "signalao": "an analog output",
+}
+"""I/O signal types and what each is: an argument may name a signal of the controller's
+configuration, not declared in the module (unconfirmed)."""
+
+WIDE_PREDEFINED: dict[str, str] = {
+    "errno": "errnum",
+    "intno": "intnum",
+    "wait_max": "num",
+    "high": "dionum",
+    "low": "dionum",
+    "edge": "dionum",
+    "on": "dionum",
+    "off": "dionum",
+    "load0": "loaddata",
+    "z0": "zonedata",
+    **{k: "inttypes" for k in ("sint", "int", "dint", "lint", "usint", "uint", "udint", "ulint")},
+    **{k: "symnum" for k in ("op_undef", "op_auto", "op_man_prog", "op_man_test")},
+    **{k: "symnum" for k in ("run_undef", "run_cont_cycle", "run_instr_fwd", "run_instr_bwd")},
+    **{k: "symnum" for k in ("run_sim", "run_step_move")},
+    **{k: "stoppointdata" for k in ("inpos20", "inpos50", "inpos100")},
+    **{k: "string" for k in ("diskhome", "diskram", "disktemp")},
+    **{k: "num" for k in ("eof_bin", "eof_num")},
+}
+"""Predefined data beyond the subset (ERRNO: RM p. 385; INTNO: RM p. 112; inpos50: the
+MoveJ page's example ``\\Inpos:=inpos50``; the others unconfirmed). Names starting ERR_
+are errnum constants and SOCKET_ socketstatus ones (:func:`wide_data`)."""
+
+
+def wide_data(name: str) -> str | None:
+    """Return the type of RAPID's predefined data ``name`` beyond the subset, or None."""
+    key = name.lower()
+    if key in WIDE_PREDEFINED:
+        return WIDE_PREDEFINED[key]
+    if key.startswith("err_"):
+        return "errnum"
+    if key.startswith("socket_"):
+        return "socketstatus"
+    return None
+
+
+def _r(*params: P, returns: str | None = None, source: str = _U) -> Routine:
+    return Routine(params, returns, source)
+
+
+def _o(name: str, type_: str = "switch", var: bool = False) -> P:
+    return P(name, type_, True, var)
+
+
+_MOVE_TAIL = (
+    _o("ID", "identno"),
+    P("Speed", "speeddata"),
+    _o("V", "num"),
+    _o("T", "num"),
+    P("Zone", "zonedata"),
+    _o("Z", "num"),
+    _o("Inpos", "stoppointdata"),
+    P("Tool", "tooldata"),
+    _o("WObj", "wobjdata"),
+    _o("Corr"),
+    _o("TLoad", "loaddata"),
+)
+_SOCKET = P("Socket", "socketdev", var=True)
+_INTERRUPT = P("Interrupt", "intnum", var=True)
+_SINGLE = (_o("Single"), _o("SingleSafe"))
+
+WIDE_INSTRUCTIONS: dict[str, Routine] = {
+    "movej": _r(_o("Conc"), P("ToPoint", "robtarget"), *_MOVE_TAIL, source=_MOVEJ),
+    "movel": _r(_o("Conc"), P("ToPoint", "robtarget"), *_MOVE_TAIL),
+    "movec": _r(_o("Conc"), P("CirPoint", "robtarget"), P("ToPoint", "robtarget"), *_MOVE_TAIL),
+    "confj": _r(_o("On"), _o("Off")),
+    "confl": _r(_o("On"), _o("Off")),
+    "singarea": _r(_o("Wrist"), _o("LockAxis4"), _o("Off")),
+    "accset": _r(P("Acc", "num"), P("Ramp", "num"), _o("FinePointRamp", "num")),
+    "velset": _r(P("Override", "num"), P("Max", "num")),
+    "gripload": _r(P("Load", "loaddata")),
+    "stopmove": _r(_o("Quick"), _o("AllMotionTasks")),
+    "startmove": _r(_o("AllMotionTasks")),
+    "clearpath": _r(),
+    "waitrob": _r(_o("InPos"), _o("ZeroSpeed")),
+    "setdo": _r(_o("SDelay", "num"), _o("Sync"), P("Signal", "signaldo"), P("Value", "dionum")),
+    "set": _r(P("Signal", "signaldo")),
+    "reset": _r(P("Signal", "signaldo")),
+    "pulsedo": _r(_o("High"), _o("PLength", "num"), P("Signal", "signaldo")),
+    "invertdo": _r(P("Signal", "signaldo")),
+    "setao": _r(P("Signal", "signalao"), P("Value", "num"), source=f"{_RM}, p. 409"),
+    "setgo": _r(P("Signal", "signalgo"), P("Value", "anynum")),
+    "waitdi": _r(
+        P("Signal", "signaldi"),
+        P("Value", "dionum"),
+        _o("MaxTime", "num"),
+        _o("TimeFlag", "bool", True),
+    ),
+    "waitdo": _r(
+        P("Signal", "signaldo"),
+        P("Value", "dionum"),
+        _o("MaxTime", "num"),
+        _o("TimeFlag", "bool", True),
+    ),
+    "waituntil": _r(
+        _o("InPos"),
+        P("Cond", "bool"),
+        _o("MaxTime", "num"),
+        _o("TimeFlag", "bool", True),
+        _o("PollRate", "num"),
+    ),
+    "waittestandset": _r(P("Object", "bool", var=True)),
+    "socketcreate": _r(_SOCKET, _o("UDP")),
+    "socketconnect": _r(_SOCKET, P("Address", "string"), P("Port", "num"), _o("Time", "num")),
+    "socketbind": _r(_SOCKET, P("LocalAddress", "string"), P("LocalPort", "num")),
+    "socketlisten": _r(_SOCKET),
+    "socketaccept": _r(
+        _SOCKET,
+        P("ClientSocket", "socketdev", var=True),
+        _o("ClientAddress", "string", True),
+        _o("Time", "num"),
+    ),
+    "socketsend": _r(
+        _SOCKET,
+        _o("Str", "string"),
+        _o("RawData", "rawbytes"),
+        _o("Data", "anytype"),
+        _o("NoOfBytes", "num"),
+    ),
+    "socketreceive": _r(
+        _SOCKET,
+        _o("Str", "string", True),
+        _o("RawData", "rawbytes", True),
+        _o("Data", "anytype", True),
+        _o("ReadNoOfBytes", "num"),
+        _o("NoRecBytes", "num", True),
+        _o("Time", "num"),
+    ),
+    "socketclose": _r(_SOCKET),
+    "isignaldi": _r(
+        *_SINGLE, P("Signal", "signaldi"), P("TriggValue", "dionum"), _INTERRUPT, source=_RM
+    ),
+    "isignaldo": _r(*_SINGLE, P("Signal", "signaldo"), P("TriggValue", "dionum"), _INTERRUPT),
+    "itimer": _r(*_SINGLE, P("Time", "num"), _INTERRUPT),
+    "idelete": _r(P("Interrupt", "intnum"), source=_RM),
+    "isleep": _r(P("Interrupt", "intnum")),
+    "iwatch": _r(P("Interrupt", "intnum")),
+    "ienable": _r(),
+    "idisable": _r(),
+    "errwrite": _r(
+        _o("W"),
+        _o("I"),
+        P("Header", "string"),
+        P("Reason", "string"),
+        _o("RL2", "string"),
+        _o("RL3", "string"),
+        _o("RL4", "string"),
+    ),
+    "packrawbytes": _r(
+        P("Value", "anytype"),
+        P("RawData", "rawbytes", var=True),
+        _o("Network"),
+        P("StartIndex", "num"),
+        _o("Hex1"),
+        _o("IntX", "num"),
+        _o("Float4"),
+        _o("ASCII"),
+    ),
+    "unpackrawbytes": _r(
+        P("RawData", "rawbytes"),
+        _o("Network"),
+        P("StartIndex", "num"),
+        P("Value", "anytype", var=True),
+        _o("Hex1"),
+        _o("IntX", "num"),
+        _o("Float4"),
+        _o("ASCII", "num"),
+    ),
+    "copyrawbytes": _r(
+        P("FromRawData", "rawbytes"),
+        P("FromIndex", "num"),
+        P("ToRawData", "rawbytes", var=True),
+        P("ToIndex", "num"),
+        _o("NoOfBytes", "num"),
+    ),
+    "clearrawbytes": _r(P("RawData", "rawbytes", var=True), _o("FromIndex", "num")),
+    "skipwarn": _r(),
+    "exitcycle": _r(),
+}
+"""Instructions beyond the subset, lower-case name → signature (MoveJ: its page; ISignalDI,
+IDelete: RM p. 112; the rest unconfirmed)."""
+
+WIDE_FUNCTIONS: dict[str, Routine] = {
+    "strpart": _r(P("Str", "string"), P("ChPos", "num"), P("Len", "num"), returns="string"),
+    "strfind": _r(
+        P("Str", "string"), P("ChPos", "num"), P("Set", "string"), _o("NotInSet"), returns="num"
+    ),
+    "strmatch": _r(P("Str", "string"), P("ChPos", "num"), P("Pattern", "string"), returns="num"),
+    "strmemb": _r(P("Str", "string"), P("ChPos", "num"), P("Set", "string"), returns="bool"),
+    "strmap": _r(
+        P("Str", "string"), P("FromMap", "string"), P("ToMap", "string"), returns="string"
+    ),
+    "strtoval": _r(P("Str", "string"), P("Val", "anytype", var=True), returns="bool"),
+    "valtostr": _r(P("Val", "anytype"), returns="string"),
+    "dinput": _r(P("Signal", "signaldi"), returns="dionum"),
+    "doutput": _r(P("Signal", "signaldo"), returns="dionum"),
+    "testdi": _r(P("Signal", "signaldi"), returns="bool"),
+    "goutput": _r(P("Signal", "signalgo"), returns="num"),
+    "aoutput": _r(P("Signal", "signalao"), returns="num"),
+    "socketgetstatus": _r(P("Socket", "socketdev"), returns="socketstatus"),
+    "rawbyteslen": _r(P("RawData", "rawbytes"), returns="num"),
+    "testandset": _r(P("Object", "bool", var=True), returns="bool"),
+    "getsysinfo": _r(
+        *(_o(x) for x in "SerialNo SWVersion RobotType CtrlId LanIp CtrlLang SystemName".split()),
+        returns="string",
+    ),
+    "crobt": _r(
+        _o("TaskRef", "num"),
+        _o("TaskName", "string"),
+        _o("Tool", "tooldata"),
+        _o("WObj", "wobjdata"),
+        returns="robtarget",
+    ),
+    "offs": _r(
+        P("Point", "robtarget"),
+        P("XOffset", "num"),
+        P("YOffset", "num"),
+        P("ZOffset", "num"),
+        returns="robtarget",
+    ),
+    "reltool": _r(
+        P("Point", "robtarget"),
+        P("Dx", "num"),
+        P("Dy", "num"),
+        P("Dz", "num"),
+        _o("Rx", "num"),
+        _o("Ry", "num"),
+        _o("Rz", "num"),
+        returns="robtarget",
+    ),
+    "gettime": _r(_o("WDay"), _o("Hour"), _o("Min"), _o("Sec"), returns="num"),
+    "dim": _r(P("ArrPar", "anytype"), P("DimNo", "num"), returns="num"),
+    "opmode": _r(returns="symnum"),
+    "runmode": _r(_o("Main"), returns="symnum"),
+    "ispers": _r(P("DatObj", "anytype"), returns="bool"),
+    "isvar": _r(P("DatObj", "anytype"), returns="bool"),
+    "gettaskname": _r(_o("TaskNo", "num", True), _o("MecTaskNo", "num", True), returns="string"),
+    "orientzyx": _r(P("ZAngle", "num"), P("YAngle", "num"), P("XAngle", "num"), returns="orient"),
+    "eulerzyx": _r(_o("X"), _o("Y"), _o("Z"), P("Rotation", "orient"), returns="num"),
+    "norient": _r(P("Rotation", "orient"), returns="orient"),
+    "posemult": _r(P("Pose1", "pose"), P("Pose2", "pose"), returns="pose"),
+    "poseinv": _r(P("Pose", "pose"), returns="pose"),
+    "posevect": _r(P("Pose", "pose"), P("Pos", "pos"), returns="pos"),
+}
+"""Functions beyond the subset, lower-case name → signature (unconfirmed)."""

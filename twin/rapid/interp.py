@@ -1,8 +1,10 @@
 r"""An interpreter of wirecal's RAPID subset, with the IRC5's numbers.
 
-A module is checked (:class:`wirecal.lang.rapid.checker.Checker`), then its routines are
-compiled into Python closures; the checker's :class:`~wirecal.lang.rapid.checker.Typer`
-gives every expression its static type, so the arithmetic is the controller's:
+A module is checked (:class:`wirecal.lang.rapid.checker.Checker` with ``subset=True``:
+RAPID the twin does not run — TRAP, RECORD, handlers, GOTO, MoveL, sockets … — is refused
+by line and name before anything runs), then its routines are compiled into Python
+closures; the checker's :class:`~wirecal.lang.rapid.checker.Typer` gives every expression
+its static type, so the arithmetic is the controller's:
 
 * num is a 32-bit IEEE float (RAPID kernel, built-in data types, read in translation): every
   num literal, result and stored value is rounded to single precision (:func:`f32`), so
@@ -296,7 +298,7 @@ def run_module(text: str, source: str, controller: RapidController, entry: str =
         module = _parsed(text)
     except SyntaxProblem as e:
         raise WirecalError([f"{source}:{e.line}: {e.message}"]) from None
-    checker = Checker(module)
+    checker = Checker(module, subset=True)
     problems = [f"{source}:{line}: {m}" for line, m in checker.run()]
     if not problems:
         problems = _check_subset(module, source)
