@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wirecal.lang.registry import default_language, language
+from wirecal.lang.registry import default_language, first_channel, language
 from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
@@ -42,7 +42,6 @@ from wirecal.solver.formats.urdf_model import UrdfChain, fk_difference_mm, read_
 from wirecal.solver.identifiability import propose_parameters
 from wirecal.solver.kinematics import Model
 from wirecal.solver.robot import (
-    DEFAULT_CHANNEL,
     Controller,
     Encoder,
     Robot,
@@ -155,7 +154,7 @@ def _encoder(opt: ImportOptions) -> Encoder:
         opt.range_mm,
         bits if opt.counter_bits is None else opt.counter_bits,
         interface,
-        channel=DEFAULT_CHANNEL[interface],
+        channel=first_channel(interface),
     )
 
 

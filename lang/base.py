@@ -43,6 +43,7 @@ class Language:
     live_check: ClassVar[str]  # the generated program that shows the live counts
     capabilities: ClassVar[Capabilities]
     interface_notes: ClassVar[Mapping[str, str]] = {}  # encoder interface → how it is read
+    first_channel: ClassVar[Mapping[str, int]] = {}  # interface → its first channel (default 0)
     patch_companion: ClassVar[str | None] = None  # suffix of its file beside a patch, if any
     default: ClassVar[bool] = False  # the language of a robot file without [controller]
     valid_examples: ClassVar[tuple[Example, ...]] = ()  # conformance: snippets lint accepts

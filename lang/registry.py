@@ -66,3 +66,15 @@ def language_of_file(path: str) -> Language:
         if lang.suffix == suffix:
             return lang
     return default_language()
+
+
+def first_channel(interface: str | None) -> int:
+    """Return the first ``[encoder] channel`` of an encoder interface.
+
+    0 unless its language says otherwise (V+ belt encoders count from 1).
+    """
+    for lang in languages().values():
+        for name, channel in lang.first_channel.items():
+            if name == interface:
+                return channel
+    return 0

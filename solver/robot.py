@@ -70,10 +70,6 @@ class Encoder:
         return Counter(self.counter_bits)
 
 
-DEFAULT_CHANNEL = {"belt": 1, "device": 0, "pulse": 0, "group": 0}
-"""The ``[encoder] channel`` when the robot file gives none, by interface (V+ belt encoders
-count from 1; DEVICE units and the URScript pulse decoder's encoder index from 0)."""
-
 SOFTWARE_PATTERN = re.compile(r"\d{1,3}(\.\d{1,4}){1,3}")
 """A controller software version as numbers, as PolyScope shows it: "3.15.8", "5.20"."""
 

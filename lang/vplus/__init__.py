@@ -37,6 +37,7 @@ class VPlus(Language):
         software_lines={},
     )
     interface_notes: ClassVar[Mapping[str, str]] = {"belt": "DEFBELT/BELT", "device": "DEVICE"}
+    first_channel: ClassVar[Mapping[str, int]] = {"belt": 1}  # belt encoders count from 1
     valid_examples: ClassVar[tuple[Example, ...]] = (
         Example(_program("SET p = HERE\nAPPRO p, 50\nDEPARTS 30"), "unconfirmed"),
         Example(_program("65535 x = 16777215\ny = -16777216"), "UG pp. 35, 102"),

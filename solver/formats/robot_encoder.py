@@ -8,7 +8,7 @@ exit (:mod:`wirecal.solver.exit_geometry`). The format is in
 
 from __future__ import annotations
 
-from wirecal.lang.registry import default_language, languages
+from wirecal.lang.registry import default_language, first_channel, languages
 from wirecal.solver.exit_geometry import Exit, Eyelet, Pulley
 from wirecal.solver.formats.robot_values import (
     MAX_EXIT_DEG,
@@ -25,7 +25,6 @@ from wirecal.solver.formats.robot_values import (
 from wirecal.solver.formats.run_token import MIN_KEY_CHARS
 from wirecal.solver.formats.toml_fields import Table, valid
 from wirecal.solver.robot import (
-    DEFAULT_CHANNEL,
     DEFAULT_DRUM_PPM_PER_K,
     DEFAULT_SCALE_TOLERANCE_PPM,
     SOFTWARE_PATTERN,
@@ -146,9 +145,7 @@ def read_encoder(enc: Table, interface: str | None) -> Encoder | None:
     rng = enc.number("range_mm", above=0, hi=MAX_RANGE_MM, unit="mm")
     bits = enc.integer("counter_bits", lo=8, hi=64)
     pulse = interface == "pulse"
-    channel = enc.integer(
-        "channel", DEFAULT_CHANNEL.get(interface or "", 0), lo=0, hi=1 if pulse else 16
-    )
+    channel = enc.integer("channel", first_channel(interface), lo=0, hi=1 if pulse else 16)
     mode = enc.integer("belt_mode", 0, lo=0, hi=16)
     inputs = _pulse_inputs(enc, pulse)
     tol = enc.number(
