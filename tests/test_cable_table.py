@@ -233,6 +233,7 @@ def test_cli_fit_report(simulated, tmp_path):
     assert f"new ones at data rows\n{', '.join(str(s) for s in syn.starts[1:])}" in html
 
 
+@pytest.mark.slow
 def test_cli_fit_json_without_holdout_is_strict_json(simulated):
     _, path = simulated
     r = CliRunner().invoke(main, ["fit", str(VIPER_FILE), str(path), "--holdout", "none", "--json"])
@@ -243,6 +244,7 @@ def test_cli_fit_json_without_holdout_is_strict_json(simulated):
     assert data["floor_mm"] > 0.1  # the fit's own rows then
 
 
+@pytest.mark.slow
 def test_cli_fit_text(simulated):
     _, path = simulated
     r = CliRunner().invoke(main, ["fit", str(VIPER_FILE), str(path), "--holdout", "half"])

@@ -61,6 +61,7 @@ def ur_run(tmp_path_factory):
     return r.programs.mount.console + r.programs.run.console, r.log
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("which", ["vplus", "ur"])
 def test_the_whole_console_solves_like_the_log_file(which, request):
     """wc.run's console (V+ --echo-log) and the UR log tab, raw and folded at 80

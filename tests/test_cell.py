@@ -233,6 +233,7 @@ def _viper_with(tmp_path: Path, old: str, new: str) -> str:
     return str(path)
 
 
+@pytest.mark.slow
 def test_plan_exits_non_zero_when_a_parameter_cannot_be_planned(tmp_path):
     robot = _viper_with(tmp_path, 'parameters = ["th2"', 'parameters = ["th1", "th2"')
     out = tmp_path / "plan.toml"

@@ -177,6 +177,7 @@ FUZZ = settings(
 )
 
 
+@pytest.mark.slow
 @FUZZ
 @given(data=st.data())
 def test_mutated_robot_file(tmp_path, log, data):
@@ -200,6 +201,7 @@ def test_mutated_urdf(tmp_path, data):
     (tmp_path / "out.urdf").unlink(missing_ok=True)
 
 
+@pytest.mark.slow
 @FUZZ
 @given(data=st.data())
 def test_mutated_plan(tmp_path, log, data):
@@ -217,6 +219,7 @@ def test_mutated_log(tmp_path, log, data):
     outcome_is_clean(invoke("solve", ROBOT, PLAN, bad, "--method", "stepwise"))
 
 
+@pytest.mark.slow
 @FUZZ
 @given(data=st.data())
 def test_mutated_cable_table(tmp_path, data):

@@ -120,6 +120,7 @@ def worst_difference(estimates, reference) -> float:
     )
 
 
+@pytest.mark.slow
 def test_controller_solvers_on_lengths_agree_with_the_reference(
     viper, paper_plan, ur5, ur5_plan, irb, irb_plan, tmp_path
 ):

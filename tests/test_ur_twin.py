@@ -125,6 +125,7 @@ def test_fault_socket_dropped_mid_run(ur5, ur5_plan, texts, truth, tmp_path):
     )
 
 
+@pytest.mark.slow
 def test_fault_encoder_not_enabled_counts_never_change(ur5, ur5_plan, texts, truth, tmp_path):
     # wired to inputs 10 and 11, the program decodes 8 and 9: the count never changes
     r = run(ur5, ur5_plan, texts, truth, tmp_path, pulse_inputs=(10, 11))
