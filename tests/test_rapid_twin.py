@@ -194,3 +194,29 @@ def test_moves_slowed_for_the_wire_complete_where_the_run_speed_stops(irb, tmp_p
     slowed = {MODULE_FILE: module_text(tight, plan)}
     run = ADAPTER.measure(tight, plan, {}, tmp_path / "slowed", slowed, seed=1)
     assert (run.complete, run.stopped) == (True, None)
+
+
+def test_a_stop_names_its_line_once(irb, tmp_path):
+    """A move beyond a joint's range stops the program; the reason reads as the V+ and
+    URScript ones do: the program, how it ended, the line, then what stopped it."""
+    from wirecal.lang.rapid.module import signal_name
+    from wirecal.twin.rapid.controller import IrcController
+    from wirecal.twin.rapid.interp import run_module
+    from wirecal.twin.world import stop_reason
+
+    robot, plan = irb
+    text = "\n".join(
+        [
+            "MODULE T",
+            "PROC main()",
+            "  MoveAbsJ [[0, 200, 0, 0, 0, 0], [9E9, 9E9, 9E9, 9E9, 9E9, 9E9]], v100, fine, tool0;",
+            "ENDPROC",
+            "ENDMODULE",
+        ]
+    )
+    controller = IrcController(World(robot, {}, plan.theta0_deg, tmp_path), signal_name(robot))
+    outcome = run_module(text, "t.mod", controller)
+    assert stop_reason(outcome, None) == (
+        "main error at line 3: MoveAbsJ: joint 2 out of range (200 deg)"
+    )
+    assert controller.stopped == "line 3: MoveAbsJ: joint 2 out of range (200 deg)"
