@@ -7,6 +7,7 @@ solver (double precision) on the same log, never from the code under test.
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -220,3 +221,29 @@ def test_a_stop_names_its_line_once(irb, tmp_path):
         "main error at line 3: MoveAbsJ: joint 2 out of range (200 deg)"
     )
     assert controller.stopped == "line 3: MoveAbsJ: joint 2 out of range (200 deg)"
+
+
+def test_cli_solve_method_controller_runs_wc_solve(tmp_path, monkeypatch):
+    """`wirecal simulate --controller` (the module run in the twin), then `wirecal solve
+    --method controller`: wc_solve on the log's readings agrees with the Python reference
+    and reports the interpreter's operation count."""
+    import json
+
+    from click.testing import CliRunner
+
+    from wirecal.cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    files = [str(IRB / "robot.toml"), str(IRB / "plan.toml")]
+    r = CliRunner().invoke(main, ["simulate", *files, "-o", "run.csv", "--controller"])
+    assert r.exit_code == 0, r.output
+    r = CliRunner().invoke(main, ["solve", *files, "run.csv", "--method", "controller", "--json"])
+    assert r.exit_code == 0, r.output
+    ctl = json.loads(r.output)["methods"]["controller"]
+    assert set(ctl) == {"parameters", "parameters_operations", "parameters_max_difference"}
+    assert ctl["parameters_max_difference"] <= AGREEMENT
+    truth = tomllib.loads((tmp_path / "run.truth.toml").read_text())["errors"]
+    assert ctl["parameters"]["th2"] == pytest.approx(truth["th2"], abs=0.05)
+    # wc_solve: 9 steps × 5 Gauss–Newton iterations over 45 points, each a forward
+    # kinematics of some hundred operations: between 1e5 and 1e6
+    assert 100_000 < ctl["parameters_operations"] < 1_000_000
