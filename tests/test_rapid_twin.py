@@ -88,6 +88,24 @@ def test_controller_result_in_the_log_agrees(irb, measured):
         assert on_controller[name] == pytest.approx(value, abs=AGREEMENT), name
 
 
+def test_controller_runs_on_the_log_repeat_wc_run_s_own_solve(irb, programs, measured, tmp_path):
+    """wc_solve rerun on the log's readings (``solve --method controller``), the count
+    wrapped during the run, gives what wc_solve wrote at the end of wc_run."""
+    robot, plan = irb
+    _, run = measured
+    text = run.log.read_text(encoding="ascii")
+    in_log = parse_result(result_in_log(text) or "", "WIRECAL.LOG")
+    m = check_log(parse_log(text, "WIRECAL.LOG"), plan, robot)
+    runs = ADAPTER.controller_runs(robot, plan, m, tmp_path, programs)
+    assert list(runs) == ["stepwise"]
+    got = runs["stepwise"]
+    assert got.program == "wc_solve"
+    assert set(got.offsets) == set(in_log)
+    for name, value in in_log.items():
+        assert got.offsets[name] == pytest.approx(value, abs=1e-6), name
+    assert set(got.operations) == {"add", "mul", "div", "sqrt"}
+
+
 def test_flexpendant_paste_reads_as_the_file(irb, measured):
     """The FlexPendant's lines, pasted (rows in two pieces, prompts between), give the
     same readings as the file."""
