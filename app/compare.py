@@ -51,7 +51,7 @@ def controller_runs(
     """Run the generated controller solver in the twin on a checked log's readings.
 
     Method ("stepwise", "joint") → its run, by the language's twin adapter's
-    ``controller_runs`` (V+: wc.solve and wc.solve2; URScript: wc_solve); ``programs``
+    ``controller_runs`` (V+: wc.solve and wc.solve2; URScript, RAPID: wc_solve); ``programs``
     are the generated ones (the default request's when not given).
     """
     reg = registered(robot)
@@ -72,7 +72,7 @@ def controller_runs(
 class ControllerComparison:
     """The controller solver run in the twin beside the Python reference solver.
 
-    V+: wc.solve and wc.solve2; URScript: wc_solve (step by step only: no polish).
+    V+: wc.solve and wc.solve2; URScript, RAPID: wc_solve (step by step only: no polish).
     """
 
     stepwise: ControllerRun  # wc.solve / wc_solve, against the reference's stepwise estimate
@@ -91,7 +91,7 @@ class ControllerComparison:
             out["polished"] = self.polished.offsets
             out["polished_operations"] = self.polished.total_operations
             out["polished_max_difference"] = self.polished_max_difference
-        else:
+        elif self.stepwise.syncs:  # a language whose solver yields the frame (URScript)
             out["syncs"] = self.stepwise.syncs
             out["most_operations_between_syncs"] = self.stepwise.most_between_syncs
         return out
@@ -102,8 +102,8 @@ def compare_controller(
 ) -> ControllerComparison:
     """Run the controller solver in the twin on ``result``'s log; compare with Python's.
 
-    Each controller solver (:func:`controller_runs`; V+: wc.solve and wc.solve2, URScript:
-    wc_solve) against the reference's estimate of its method. The reference is
+    Each controller solver (:func:`controller_runs`; V+: wc.solve and wc.solve2, URScript
+    and RAPID: wc_solve) against the reference's estimate of its method. The reference is
     the Python solve of the same lengths: the file's scale, no drift removed (the
     controller solvers apply neither).
     """

@@ -14,7 +14,7 @@ import pytest
 from wirecal.lang.rapid.checker import check
 from wirecal.lang.rapid.examples import module
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.rapid.interp import fixed, number_text, run_module
+from wirecal.twin.rapid.interp import fixed, load_module, number_text, run_module
 
 
 @dataclass
@@ -29,9 +29,9 @@ class FakeController:
     count: int = 4294967000
     open_text: str = ""
 
-    def move_abs_j(self, joints_deg, speed, zone, line):
+    def move_abs_j(self, joints_deg, speed, zone):
         self.joints = joints_deg
-        self.calls.append(("move", joints_deg, speed, zone, line))
+        self.calls.append(("move", joints_deg, speed, zone))
         self.now += 2.0
 
     def joints_deg(self):
@@ -118,6 +118,30 @@ def test_div_mod_and_arithmetic() -> None:
         'TPWrite "" \\Num:=Round(2.345 \\Dec:=2) + Trunc(-1.7);',
     )
     assert ctl.pendant == ["3", "2", "-3", "10", "1.35"]
+
+
+def test_arithmetic_executed_is_counted() -> None:
+    """Each +, -, *, /, DIV, MOD and Sqrt executed counts once; a negation, a comparison,
+    a string's + and the FOR loop's own step do not."""
+    body = [
+        "x := 1 + 2 * 3 - 4 / 2;",  # add 2, mul 1, div 1
+        "FOR i FROM 1 TO 5 DO",
+        "  x := x + Sqrt(x);",  # 5 × (add, sqrt)
+        "ENDFOR",
+        "d := SqrtDnum(d * d);",  # mul, sqrt
+        "x := 7 DIV 2 + 7 MOD 2;",  # div 2, add 1
+        "x := -x;",
+        "IF x < 3 THEN",
+        '  TPWrite "a" + "b";',
+        "ENDIF",
+    ]
+    text = "\n".join(
+        ["MODULE T", "VAR num x;", "VAR dnum d := 2;", "PROC main()", *body, "ENDPROC", "ENDMODULE"]
+    )
+    interp = load_module(text, "t.mod", FakeController())
+    assert interp.ops == {}
+    assert interp.execute().status == "completed"
+    assert interp.ops == {"add": 8, "mul": 2, "div": 3, "sqrt": 6}
 
 
 def test_division_by_zero_stops() -> None:

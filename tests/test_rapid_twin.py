@@ -7,6 +7,7 @@ solver (double precision) on the same log, never from the code under test.
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -85,6 +86,24 @@ def test_controller_result_in_the_log_agrees(irb, measured):
     assert set(on_controller) == set(ref)
     for name, value in ref.items():
         assert on_controller[name] == pytest.approx(value, abs=AGREEMENT), name
+
+
+def test_controller_runs_on_the_log_repeat_wc_run_s_own_solve(irb, programs, measured, tmp_path):
+    """wc_solve rerun on the log's readings (``solve --method controller``), the count
+    wrapped during the run, gives what wc_solve wrote at the end of wc_run."""
+    robot, plan = irb
+    _, run = measured
+    text = run.log.read_text(encoding="ascii")
+    in_log = parse_result(result_in_log(text) or "", "WIRECAL.LOG")
+    m = check_log(parse_log(text, "WIRECAL.LOG"), plan, robot)
+    runs = ADAPTER.controller_runs(robot, plan, m, tmp_path, programs)
+    assert list(runs) == ["stepwise"]
+    got = runs["stepwise"]
+    assert got.program == "wc_solve"
+    assert set(got.offsets) == set(in_log)
+    for name, value in in_log.items():
+        assert got.offsets[name] == pytest.approx(value, abs=1e-6), name
+    assert set(got.operations) == {"add", "mul", "div", "sqrt"}
 
 
 def test_flexpendant_paste_reads_as_the_file(irb, measured):
@@ -194,3 +213,55 @@ def test_moves_slowed_for_the_wire_complete_where_the_run_speed_stops(irb, tmp_p
     slowed = {MODULE_FILE: module_text(tight, plan)}
     run = ADAPTER.measure(tight, plan, {}, tmp_path / "slowed", slowed, seed=1)
     assert (run.complete, run.stopped) == (True, None)
+
+
+def test_a_stop_names_its_line_once(irb, tmp_path):
+    """A move beyond a joint's range stops the program; the reason reads as the V+ and
+    URScript ones do: the program, how it ended, the line, then what stopped it."""
+    from wirecal.lang.rapid.module import signal_name
+    from wirecal.twin.rapid.controller import IrcController
+    from wirecal.twin.rapid.interp import run_module
+    from wirecal.twin.world import stop_reason
+
+    robot, plan = irb
+    text = "\n".join(
+        [
+            "MODULE T",
+            "PROC main()",
+            "  MoveAbsJ [[0, 200, 0, 0, 0, 0], [9E9, 9E9, 9E9, 9E9, 9E9, 9E9]], v100, fine, tool0;",
+            "ENDPROC",
+            "ENDMODULE",
+        ]
+    )
+    controller = IrcController(World(robot, {}, plan.theta0_deg, tmp_path), signal_name(robot))
+    outcome = run_module(text, "t.mod", controller)
+    assert stop_reason(outcome, None) == (
+        "main error at line 3: MoveAbsJ: joint 2 out of range (200 deg)"
+    )
+    assert controller.stopped == "line 3: MoveAbsJ: joint 2 out of range (200 deg)"
+
+
+def test_cli_solve_method_controller_runs_wc_solve(tmp_path, monkeypatch):
+    """`wirecal simulate --controller` (the module run in the twin), then `wirecal solve
+    --method controller`: wc_solve on the log's readings agrees with the Python reference
+    and reports the interpreter's operation count."""
+    import json
+
+    from click.testing import CliRunner
+
+    from wirecal.cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    files = [str(IRB / "robot.toml"), str(IRB / "plan.toml")]
+    r = CliRunner().invoke(main, ["simulate", *files, "-o", "run.csv", "--controller"])
+    assert r.exit_code == 0, r.output
+    r = CliRunner().invoke(main, ["solve", *files, "run.csv", "--method", "controller", "--json"])
+    assert r.exit_code == 0, r.output
+    ctl = json.loads(r.output)["methods"]["controller"]
+    assert set(ctl) == {"parameters", "parameters_operations", "parameters_max_difference"}
+    assert ctl["parameters_max_difference"] <= AGREEMENT
+    truth = tomllib.loads((tmp_path / "run.truth.toml").read_text())["errors"]
+    assert ctl["parameters"]["th2"] == pytest.approx(truth["th2"], abs=0.05)
+    # wc_solve: 9 steps × 5 Gauss–Newton iterations over 45 points, each a forward
+    # kinematics of some hundred operations: between 1e5 and 1e6
+    assert 100_000 < ctl["parameters_operations"] < 1_000_000

@@ -4,11 +4,10 @@
 :class:`~wirecal.twin.rapid.controller.IrcController` over the twin's
 :class:`~wirecal.twin.world.World`; the log the PC reads is the file wc_run wrote in
 ``HOME:``. :meth:`RapidAdapter.controller_solve` runs ``wc_solve`` alone on given wire
-lengths: the twin appends a routine ``wc_twin_load`` to the module (the readings as
-wc_meas would have kept them:
-:func:`~wirecal.twin.controller_run.readings_for_lengths`) that opens a result file,
-calls wc_solve and closes it; the result is read from that file's ``# controller:``
-lines.
+lengths (the readings as wc_meas would have kept them:
+:func:`~wirecal.twin.controller_run.readings_for_lengths`),
+:meth:`RapidAdapter.controller_runs` on a checked log's readings
+(:mod:`wirecal.twin.rapid.solver_run`).
 """
 
 from __future__ import annotations
@@ -17,27 +16,17 @@ from pathlib import Path
 
 import numpy as np
 
-from wirecal.lang.rapid.module import (
-    LOG_DIR,
-    LOG_FILE,
-    MODULE_FILE,
-    dnum_literal,
-    num_literal,
-    signal_name,
-)
+from wirecal.lang.rapid.module import LOG_FILE, MODULE_FILE, signal_name
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.controller_result import parse_result, result_in_log
-from wirecal.solver.formats.log import Reading
+from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
-from wirecal.twin.controller_run import readings_for_lengths
+from wirecal.twin.controller_run import ControllerRun, readings_for_lengths
 from wirecal.twin.rapid.controller import IrcController
 from wirecal.twin.rapid.interp import run_module
+from wirecal.twin.rapid.solver_run import controller_solve
 from wirecal.twin.world import Faults, TwinRun, World, stop_reason
-
-SOLVE_FILE = "WCSOLVE.LOG"
-"""The file controller_solve's wc_twin_load has wc_solve write to."""
 
 
 def module_of(programs: dict[str, str]) -> str:
@@ -112,45 +101,27 @@ class RapidAdapter:
         """
         text = module_of(programs)
         readings = readings_for_lengths(robot, plan, lengths_mm, robot.encoder.counter)
-        end = text.rindex("ENDMODULE")
-        module = text[:end] + load_routine(plan, readings) + text[end:]
-        folder.mkdir(parents=True, exist_ok=True)
-        world = World(robot, {}, plan.theta0_deg, folder)
-        controller = IrcController(world, signal_name(robot))
-        outcome = run_module(module, MODULE_FILE, controller, entry="wc_twin_load")
-        if outcome.status != "completed":
-            raise WirecalError(
-                f"the controller solver stopped: {outcome.message} ({MODULE_FILE}, line "
-                f"{outcome.line})"
+        run = controller_solve(robot, plan, readings, folder, text)
+        return {"stepwise": run.offsets}
+
+    def controller_runs(
+        self,
+        robot: Robot,
+        plan: Plan,
+        measured: Measurements,
+        folder: Path,
+        programs: dict[str, str],
+    ) -> dict[str, ControllerRun]:
+        """Run wc_solve on a checked log's own readings, with its operation counts.
+
+        ``wirecal solve --method controller``; step by step only (RAPID has no polish).
+        """
+        text = module_of(programs)
+        return {
+            "stepwise": controller_solve(
+                robot, plan, measured.log.readings, folder / "stepwise", text
             )
-        result = result_in_log((folder / SOLVE_FILE).read_text(encoding="ascii"))
-        if result is None:
-            raise WirecalError("wc_solve wrote no result lines")
-        return {"stepwise": parse_result(result, f"{SOLVE_FILE} (wc_solve)")}
-
-
-def load_routine(plan: Plan, readings: tuple[Reading, ...]) -> str:
-    """Return the twin's routine wc_twin_load: the readings, then wc_solve (docstring).
-
-    wc_meas's slots: each step's zero reading first (slot = step), then the points in
-    plan order (the closing zero reading is not kept).
-    """
-    steps = len(plan.steps)
-    zeros = [r for r in readings if r.kind == "zero" and r.step <= steps]
-    points = [r for r in readings if r.kind == "point"]
-    lines = ["  PROC wc_twin_load()"]
-    for slot, r in enumerate((*zeros, *points), 1):
-        lines.append(f"    wc_rc{{{slot}}} := {dnum_literal(r.counts)};")
-        for k, x in enumerate(r.joints_deg, 1):
-            lines.append(f"    wc_rj{{{slot}, {k}}} := {num_literal(x)};")
-    lines += [
-        f'    Open "{LOG_DIR}" \\File:="{SOLVE_FILE}", wc_log \\Write;',
-        "    wc_solve;",
-        "    Close wc_log;",
-        "  ENDPROC",
-        "",
-    ]
-    return "\n".join(lines) + "\n"
+        }
 
 
 ADAPTER = RapidAdapter()

@@ -62,23 +62,23 @@ class IrcController:
 
     # ---- motion ----
     def move_abs_j(
-        self, joints_deg: tuple[float, ...], speed: tuple[float, ...], zone: str, line: int
+        self, joints_deg: tuple[float, ...], speed: tuple[float, ...], zone: str
     ) -> None:
         """MoveAbsJ: to ``joints_deg`` at speeddata ``speed``; stop on a limit or collision."""
         world = self.world
         q = np.asarray(joints_deg, dtype=float)
         j = world.beyond_limits(q)
         if j is not None:
-            raise self._refuse(f"line {line}: MoveAbsJ: joint {j + 1} out of range ({q[j]:g} deg)")
+            raise self._refuse(f"MoveAbsJ: joint {j + 1} out of range ({q[j]:g} deg)")
         hit = world.collision(q)
         if hit is not None:
-            raise self._refuse(f"line {line}: protective stop: {hit}")
+            raise self._refuse(f"protective stop: {hit}")
         slowest = float(np.min(world.robot.joint_speed_deg_s))
         speed_pct = np.asarray(min(100.0, 100.0 * float(speed[1]) / slowest))
         move = world.profile(q)
         over = world.wire_overspeed(move, float(speed_pct))
         if over is not None:
-            raise self._refuse(f"line {line}: MoveAbsJ: {over}")
+            raise self._refuse(f"MoveAbsJ: {over}")
         world.arrive(q, float(move.duration_s(speed_pct)[0]))
         world.vibrate(float(move.vibration_mm(speed_pct)[0]))
 

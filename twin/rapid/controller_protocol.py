@@ -14,13 +14,14 @@ class RapidController(Protocol):
     """The robot controller as a RAPID program sees it (implemented over the twin's World)."""
 
     def move_abs_j(
-        self, joints_deg: tuple[float, ...], speed: tuple[float, ...], zone: str, line: int
+        self, joints_deg: tuple[float, ...], speed: tuple[float, ...], zone: str
     ) -> None:
         """MoveAbsJ to the six robot axes ``joints_deg`` (jointtarget robax, degrees).
 
         ``speed`` is the speeddata (v_tcp mm/s, v_ori deg/s, v_leax mm/s, v_reax deg/s),
-        ``zone`` the predefined zonedata's name ("fine" stops at the point), ``line`` the
-        program line of the instruction.
+        ``zone`` the predefined zonedata's name ("fine" stops at the point). A refusal
+        (:class:`~wirecal.twin.machine.RunError`) names what stopped, not the line: the
+        interpreter's outcome carries that.
         """
 
     def joints_deg(self) -> tuple[float, ...]:

@@ -24,12 +24,18 @@ its static type, so the arithmetic is the controller's:
 
 What touches the robot, the encoder, files and the FlexPendant goes through a
 :class:`RapidController`. INOUT arguments are copied in and back out on return.
+
+The arithmetic executed is counted in :attr:`Interpreter.ops`, as the V+ and URScript
+twins count theirs: ``+`` and ``-`` of numbers as add, ``*`` as mul, ``/``, ``DIV`` and
+``MOD`` as div, ``Sqrt``/``SqrtDnum`` as sqrt; a negation, a comparison, a string's ``+``
+and a FOR loop's own step are not counted.
 """
 
 from __future__ import annotations
 
 import math
 import operator
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
@@ -54,7 +60,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.twin.machine import Outcome, RunError, f32
 from wirecal.twin.rapid.controller_protocol import RapidController
 
-__all__ = ["RapidController", "run_module"]
+__all__ = ["Interpreter", "RapidController", "load_module", "run_module"]
 
 MAX_CALL_DEPTH = 40
 """Deepest chain of routine calls the twin runs (wirecal's bound; the controller's is
@@ -181,6 +187,9 @@ _FAST: dict[str, Callable[[float, float], float]] = {
     "*": operator.mul,
 }
 
+_COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "DIV": "div", "MOD": "div"}
+"""The kind each arithmetic operator is counted as (:attr:`Interpreter.ops`)."""
+
 _COMPARE: dict[str, Callable[[Any, Any], bool]] = {
     "=": lambda a, b: a == b,
     "<>": lambda a, b: a != b,
@@ -201,6 +210,7 @@ class Interpreter:
         self.globals: Frame = {}
         self.line = 0
         self.depth = 0
+        self.ops: Counter[str] = Counter()  # arithmetic executed: add (+ −), mul, div, sqrt
         self.compiled: dict[str, Callable[[list[Any]], tuple[Any, Frame]]] = {}
         self.sources = {r.name.lower(): r for r in module.routines}
         typer = Typer(self.global_scope, Problems(), self.routines_sig)
@@ -292,8 +302,8 @@ def _parsed(text: str) -> N.Module:
     return parse_module(text)
 
 
-def run_module(text: str, source: str, controller: RapidController, entry: str = "main") -> Outcome:
-    """Check a module, then run its PROC ``entry``; WirecalError lists the checker's problems."""
+def load_module(text: str, source: str, controller: RapidController) -> Interpreter:
+    """Check a module and ready it to run; WirecalError lists the checker's problems."""
     try:
         module = _parsed(text)
     except SyntaxProblem as e:
@@ -304,7 +314,12 @@ def run_module(text: str, source: str, controller: RapidController, entry: str =
         problems = _check_subset(module, source)
     if problems:
         raise WirecalError(problems)
-    return Interpreter(module, checker, controller).execute(entry)
+    return Interpreter(module, checker, controller)
+
+
+def run_module(text: str, source: str, controller: RapidController, entry: str = "main") -> Outcome:
+    """Check a module (:func:`load_module`), then run its PROC ``entry``."""
+    return load_module(text, source, controller).execute(entry)
 
 
 class _Compiler:
@@ -663,9 +678,14 @@ class _Compiler:
         t = self.static(e, want)
         a, b = self.expr(e.a, t), self.expr(e.b, t)
         fn = _FAST.get(op) or (lambda x, y: _arith(op, x, y))
-        if t == NUM:
-            return lambda f: f32(fn(a(f), b(f)))
-        return lambda f: fn(a(f), b(f))
+        ops, kind, single = self.interp.ops, _COUNTED[op], t == NUM
+
+        def arithmetic(f: Frame) -> Any:
+            x, y = a(f), b(f)
+            ops[kind] += 1
+            return f32(fn(x, y)) if single else fn(x, y)
+
+        return arithmetic
 
     def function(self, e: N.FuncCall) -> Eval:
         key = e.name.lower()
@@ -728,14 +748,12 @@ Builder = Callable[[_Compiler, list[N.Arg]], Callable[[Frame], Any]]
 def _move_abs_j(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
     pos, _ = c.args("moveabsj", args)
     target, speed, zone = pos[0], pos[1], pos[2]
-    ctl, interp = c.interp.controller, c.interp
+    ctl = c.interp.controller
 
     def run(frame: Frame) -> None:
         jt, v = target(frame), speed(frame)
         joints = tuple(jt["robax"][f"rax_{i}"] for i in range(1, 7))
-        ctl.move_abs_j(
-            joints, (v["v_tcp"], v["v_ori"], v["v_leax"], v["v_reax"]), zone(frame), interp.line
-        )
+        ctl.move_abs_j(joints, (v["v_tcp"], v["v_ori"], v["v_leax"], v["v_reax"]), zone(frame))
 
     return run
 
@@ -865,15 +883,22 @@ _INSTRUCTIONS: dict[str, Builder] = {
 }
 
 
-def _math(name: str, fn: Callable[..., float], result: Type) -> Builder:
+def _math(name: str, fn: Callable[..., float], result: Type, counted: str | None = None) -> Builder:
+    """Return the builder of a function of numbers; ``counted``: the operation kind it counts."""
+
     def build(c: _Compiler, args: list[N.Arg]) -> Eval:
         pos, _ = c.args(name, args)
+        ops = c.interp.ops
 
         def run(frame: Frame) -> Any:
+            values = [p(frame) for p in pos]
             try:
-                return coerce(fn(*(p(frame) for p in pos)), result)
+                value = coerce(fn(*values), result)
             except (ValueError, ZeroDivisionError):
                 raise RapidError(f"{name}: argument outside its domain") from None
+            if counted:
+                ops[counted] += 1
+            return value
 
         return run
 
@@ -950,8 +975,8 @@ _FUNCTIONS: dict[str, Builder] = {
     "ginput": _group("ginput", NUM),
     "clkread": _clk_read,
     "cjointt": _cjointt,
-    "sqrt": _math("sqrt", math.sqrt, NUM),
-    "sqrtdnum": _math("sqrtdnum", math.sqrt, DNUM),
+    "sqrt": _math("sqrt", math.sqrt, NUM, "sqrt"),
+    "sqrtdnum": _math("sqrtdnum", math.sqrt, DNUM, "sqrt"),
     "abs": _math("abs", abs, NUM),
     "absdnum": _math("absdnum", abs, DNUM),
     "round": _rounding("round", _round_half_away, NUM),
