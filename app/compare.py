@@ -79,6 +79,8 @@ class ControllerComparison:
     polished: ControllerRun | None  # wc.solve2, against the reference's joint estimate
     stepwise_max_difference: float  # largest |controller − reference| (deg, mm)
     polished_max_difference: float | None
+    language: str = ""  # the robot's controller language (its title), for the text
+    float_bits: int = 64  # the width of the reals its solver computes in
 
     def as_json(self) -> dict:
         """Return the ``methods.controller`` entry of ``wirecal solve --json``."""
@@ -122,6 +124,12 @@ def compare_controller(
         for method, run in runs.items()
     }
     joint = runs.get("joint")
+    lang = registered(result.robot).language
     return ControllerComparison(
-        runs["stepwise"], joint, diffs["stepwise"], None if joint is None else diffs["joint"]
+        runs["stepwise"],
+        joint,
+        diffs["stepwise"],
+        None if joint is None else diffs["joint"],
+        lang.title,
+        lang.capabilities.float_bits,
     )

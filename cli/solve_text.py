@@ -21,10 +21,10 @@ if TYPE_CHECKING:
 def controller_text(ctl: ControllerComparison) -> str:
     """Return the controller solver's estimates beside the Python reference as text."""
     if ctl.polished is None:
-        return _ur_controller_text(ctl)
+        return _stepwise_controller_text(ctl)
     lines = [
         "",
-        "Controller solver (the generated V+ run in the digital twin):",
+        f"Controller solver (the generated {ctl.language} run in the digital twin):",
         f"{'parameter':<10}{'wc.solve':>12}{'wc.solve2':>12}",
     ]
     for name, value in ctl.stepwise.offsets.items():
@@ -39,21 +39,25 @@ def controller_text(ctl: ControllerComparison) -> str:
     return "\n".join(lines)
 
 
-def _ur_controller_text(ctl: ControllerComparison) -> str:
-    """Return the URScript controller solver's estimates (one method) as text."""
+def _stepwise_controller_text(ctl: ControllerComparison) -> str:
+    """Return a controller solver's estimates of one method (step by step) as text."""
     run = ctl.stepwise
     lines = [
         "",
-        "Controller solver (the generated URScript wc_solve run in the digital twin, "
-        "32-bit floats):",
-        f"{'parameter':<10}{'wc_solve':>12}",
+        f"Controller solver (the generated {ctl.language} {run.program} run in the digital "
+        f"twin, {ctl.float_bits}-bit floats):",
+        f"{'parameter':<10}{run.program:>12}",
     ]
     lines += [f"{name:<10}{value:12.6f}" for name, value in run.offsets.items()]
+    syncs = (
+        f", {run.syncs:,} sync() (at most {run.most_between_syncs} operations between two)"
+        if run.syncs
+        else ""
+    )
     lines.append(
         f"largest difference from the Python reference (stepwise): "
         f"{ctl.stepwise_max_difference:.2g} deg/mm; {run.total_operations:,} arithmetic "
-        f"operations, {run.syncs:,} sync() (at most {run.most_between_syncs} operations "
-        "between two)"
+        f"operations{syncs}"
     )
     return "\n".join(lines)
 
