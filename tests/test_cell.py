@@ -88,7 +88,8 @@ COLLIDING = {
     # inside the fixture's radius 40
     "ur5e floor": (UR5, UR_THETA0, [-195, 200, -54, -181, -127, 56], "tool fixture and the floor"),
     "viper floor": (VIPER, VIPER_THETA0, [0, 7, 210, -90, 0, -90], "tool fixture and the floor"),
-    "viper self": (VIPER, VIPER_THETA0, [0, -159, 21, -90, 0, -90], "link 1 (a1) and link 3 (a3)"),
+    # the forearm (a3, d4; radius 55) meets the shoulder offset a1 (70) first on the way
+    "viper self": (VIPER, VIPER_THETA0, [0, -159, 21, -90, 0, -90], "link 1 (a1) and link 4 (d4)"),
     "viper box": (
         VIPER,
         VIPER_THETA0,
