@@ -145,7 +145,7 @@ def test_ur5e_zero_pose_keeps_the_wrist_just_above_the_table():
 def test_capsules_skip_adjacent_and_short_chained_pairs():
     """The Viper's forearm (d4) and upper arm (a2) meet at the elbow: skipped, its joint
     limits keep them apart; its d4 and the tool fixture are joined by 80 mm of links,
-    less than their radii (45 + 35) and the margin: skipped; a1 and d4 are checked."""
+    less than their radii (55 + 37) and the margin: skipped; a1 and d4 are checked."""
     viper = load_robot(VIPER / "robot.toml")
     caps = viper.capsules
     skipped = {(a, b): why for a, b, why in caps.skipped}
