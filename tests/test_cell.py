@@ -88,7 +88,8 @@ COLLIDING = {
     # inside the fixture's radius 40
     "ur5e floor": (UR5, UR_THETA0, [-195, 200, -54, -181, -127, 56], "tool fixture and the floor"),
     "viper floor": (VIPER, VIPER_THETA0, [0, 7, 210, -90, 0, -90], "tool fixture and the floor"),
-    "viper self": (VIPER, VIPER_THETA0, [0, -159, 21, -90, 0, -90], "link 1 (a1) and link 3 (a3)"),
+    # the forearm (a3, d4; radius 55) meets the shoulder offset a1 (70) first on the way
+    "viper self": (VIPER, VIPER_THETA0, [0, -159, 21, -90, 0, -90], "link 1 (a1) and link 4 (d4)"),
     "viper box": (
         VIPER,
         VIPER_THETA0,
@@ -144,7 +145,7 @@ def test_ur5e_zero_pose_keeps_the_wrist_just_above_the_table():
 def test_capsules_skip_adjacent_and_short_chained_pairs():
     """The Viper's forearm (d4) and upper arm (a2) meet at the elbow: skipped, its joint
     limits keep them apart; its d4 and the tool fixture are joined by 80 mm of links,
-    less than their radii (45 + 35) and the margin: skipped; a1 and d4 are checked."""
+    less than their radii (55 + 37) and the margin: skipped; a1 and d4 are checked."""
     viper = load_robot(VIPER / "robot.toml")
     caps = viper.capsules
     skipped = {(a, b): why for a, b, why in caps.skipped}

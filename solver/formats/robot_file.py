@@ -26,7 +26,7 @@ Format (angles in degrees, lengths in mm)::
     host = "192.168.1.10"; port = 50000   # URScript: where 'wirecal receive' listens
     key = "…"                             # URScript: the run token's secret (16+ characters)
     [geometry]                            # optional
-    link_radius_mm = [70, 55, 45, 40, 35] # capsule radius of each link (wire clearance)
+    link_radius_mm = [70, 70, 55, 45, 37] # capsule radius per chain step 1-2 … 5-6 (docs/cell.md)
     [cell]                                # optional (wirecal.solver.cell)
     floor_z_mm = -335.0                   # the mounting plane in frame 0 (default 0)
     margin_mm = 10.0                      # gap kept from floor, volumes, the arm itself

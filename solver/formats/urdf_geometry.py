@@ -17,7 +17,7 @@ read:
   radius comes from lengths instead: the larger of :data:`RADIUS_PER_LENGTH` × the capsule's
   length and :data:`RADIUS_PER_REACH` × the arm's (the sum of the capsules' lengths). On the
   UR5 (published radii 40–75 mm) that gives 50–64 mm; on the Viper s650 37–46 mm (the
-  shipped example estimates 35–70 mm).
+  shipped example estimates 37–70 mm).
 
 Either way an estimate: the import says which links it came from, and a measured value
 belongs in the robot file. Containing capsules about DH lines can be wide: the Viper s650's
