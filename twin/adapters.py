@@ -57,6 +57,13 @@ class TwinAdapter(Protocol):
         ...
 
 
+def program_text(programs: dict[str, str], name: str, language: str) -> str:
+    """Return the program file ``name`` of a generation; a WirecalError naming what came."""
+    if name not in programs:
+        raise WirecalError(f"{language} programs: {name} is missing (got {sorted(programs)})")
+    return programs[name]
+
+
 def adapter(key: str) -> TwinAdapter:
     """Return the twin adapter of language ``key`` (``ADAPTER`` in ``wirecal.twin.<key>``)."""
     try:

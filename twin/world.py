@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from wirecal.solver.cell_check import move_collision
+from wirecal.solver.counter import Counter
 from wirecal.solver.exit_geometry import physical_wire_mm
 from wirecal.solver.ik import flange_pose
 from wirecal.solver.kinematics import tool_position
@@ -347,6 +348,17 @@ class TwinRun:
     mount: Outcome  # the mounting program's outcome
     run: Outcome | None  # the measurement program's (None: not started)
     controller: Any = None  # the language's controller adapter, with its own state
+
+
+def counter_start_of(counter: Counter, seed: int, counter_start: float | None) -> float:
+    """Return a measurement run's count at zero wire length.
+
+    ``counter_start`` when given, else drawn over the whole ``counter``'s range from the
+    run's own random stream (``seed``, stream 2), so the run's counts may wrap.
+    """
+    if counter_start is not None:
+        return float(counter_start)
+    return float(counter.random_start(np.random.default_rng([seed, 2])))
 
 
 def stop_reason(mount: Outcome, run: Outcome | None) -> str | None:

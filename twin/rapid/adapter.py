@@ -17,23 +17,21 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.lang.rapid.module import LOG_FILE, MODULE_FILE, signal_name
-from wirecal.solver.errors import WirecalError
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
+from wirecal.twin.adapters import program_text
 from wirecal.twin.controller_run import ControllerRun, readings_for_lengths
 from wirecal.twin.rapid.controller import IrcController
 from wirecal.twin.rapid.interp import run_module
 from wirecal.twin.rapid.solver_run import controller_solve
-from wirecal.twin.world import Faults, TwinRun, World, stop_reason
+from wirecal.twin.world import Faults, TwinRun, World, counter_start_of, stop_reason
 
 
 def module_of(programs: dict[str, str]) -> str:
     """Return the module's text: the one file of a RAPID generation (WirecalError if absent)."""
-    if MODULE_FILE not in programs:
-        raise WirecalError(f"RAPID programs: {MODULE_FILE} is missing (got {sorted(programs)})")
-    return programs[MODULE_FILE]
+    return program_text(programs, MODULE_FILE, "RAPID")
 
 
 class RapidAdapter:
@@ -62,8 +60,6 @@ class RapidAdapter:
         """
         text = module_of(programs)
         folder.mkdir(parents=True, exist_ok=True)
-        rng = np.random.default_rng([seed, 2])
-        start = robot.encoder.counter.random_start(rng) if counter_start is None else counter_start
         world = World(
             robot,
             truth,
@@ -71,7 +67,7 @@ class RapidAdapter:
             folder,
             seed=seed,
             noise_mm=noise_mm,
-            counter_start=float(start),
+            counter_start=counter_start_of(robot.encoder.counter, seed, counter_start),
             faults=faults or Faults(),
             unmodelled=unmodelled,
             wire_limits=True,

@@ -17,17 +17,17 @@ from typing import Protocol
 import numpy as np
 
 from wirecal.lang.urscript.parser import parse_program
-from wirecal.solver.errors import WirecalError
 from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
+from wirecal.twin.adapters import program_text
 from wirecal.twin.controller_run import ControllerRun, readings_for_lengths
 from wirecal.twin.machine import Outcome
 from wirecal.twin.urscript.controller import RAW, URController
 from wirecal.twin.urscript.interp import Interpreter
 from wirecal.twin.urscript.solver_run import controller_solve
-from wirecal.twin.world import Faults, TwinRun, World, stop_reason
+from wirecal.twin.world import Faults, TwinRun, World, counter_start_of, stop_reason
 
 MOUNT, RUN = "wc_mount.script", "wc_run.script"
 
@@ -64,9 +64,7 @@ def run_ur_programs(
 
 def _script(programs: dict[str, str], name: str) -> str:
     """Return the program file ``name`` of a URScript generation (WirecalError if absent)."""
-    if name not in programs:
-        raise WirecalError(f"URScript programs: {name} is missing (got {sorted(programs)})")
-    return programs[name]
+    return program_text(programs, name, "URScript")
 
 
 class URScriptAdapter:
@@ -102,8 +100,6 @@ class URScriptAdapter:
         (default: drawn over the whole int32 range).
         """
         folder.mkdir(parents=True, exist_ok=True)
-        rng = np.random.default_rng([seed, 2])
-        start = RAW.random_start(rng) if counter_start is None else counter_start
         world = World(
             robot,
             truth,
@@ -111,7 +107,7 @@ class URScriptAdapter:
             folder,
             seed=seed,
             noise_mm=noise_mm,
-            counter_start=float(start),
+            counter_start=counter_start_of(RAW, seed, counter_start),
             faults=faults or Faults(),
             unmodelled=unmodelled,
         )

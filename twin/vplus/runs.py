@@ -28,7 +28,15 @@ from wirecal.twin.machine import Outcome
 from wirecal.twin.vplus.controller import VplusController
 from wirecal.twin.vplus.interp import Interpreter
 from wirecal.twin.vplus.solver_run import controller_solve
-from wirecal.twin.world import DEFAULT_UNMODELLED, Faults, Plate, TwinRun, World, stop_reason
+from wirecal.twin.world import (
+    DEFAULT_UNMODELLED,
+    Faults,
+    Plate,
+    TwinRun,
+    World,
+    counter_start_of,
+    stop_reason,
+)
 
 
 def module_of(programs: dict[str, str]) -> tuple[str, str]:
@@ -66,8 +74,6 @@ def run_measurement(
     wire tip as asked; the encoder is ``encoder_truth``.
     """
     disk.mkdir(parents=True, exist_ok=True)
-    rng = np.random.default_rng([seed, 2])
-    start = robot.encoder.counter.random_start(rng) if counter_start is None else counter_start
     world = World(
         robot,
         truth,
@@ -75,7 +81,7 @@ def run_measurement(
         disk,
         seed=seed,
         noise_mm=noise_mm,
-        counter_start=start,
+        counter_start=counter_start_of(robot.encoder.counter, seed, counter_start),
         faults=faults or Faults(),
         proceed_on_pause=proceed_on_pause,
         wire_limits=True,
