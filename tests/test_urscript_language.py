@@ -15,6 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.lang.urscript import URScript
 from wirecal.lang.urscript.parser import BUILTINS, parse_program
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.urscript.interp import Interpreter
@@ -328,10 +329,14 @@ def test_a_generated_program_breaking_a_rule_is_an_internal_error():
     from wirecal.gen.urscript.program import software_problems
 
     robot, _ = _ur5_with("5.20")
+
+    def lint(text: str) -> list[str]:
+        return URScript().lint(text, "wc_x.script", "5.20")
+
     with pytest.raises(WirecalError) as info:
-        software_problems(robot, {"wc_x.script": program("y = z")})
+        software_problems(robot, lint(program("y = z")))
     assert info.value.problems == [
         "internal error: a generated program breaks a URScript rule (please report):",
         "wc_x.script:2: variable z is read but never assigned",
     ]
-    assert software_problems(robot, {"wc_x.script": program("y = 1")}) == []
+    assert software_problems(robot, lint(program("y = 1"))) == []

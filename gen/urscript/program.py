@@ -23,12 +23,10 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import check_limits, joint_target, name_problems, run_steps
+from wirecal.gen.targets import joint_target, name_problems, run_steps
 from wirecal.gen.templating import render
 from wirecal.lang.urscript import URScript
-from wirecal.lang.urscript.parser import parse_program
 from wirecal.lang.urscript.versions import NEEDED, is_refusal
-from wirecal.solver.cell_check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
@@ -42,7 +40,6 @@ from wirecal.solver.run_parameters import (
     READING_INTERVAL_S,
     RunParameters,
 )
-from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 
 ROLES = ("mount", "check", "run")
 """The programs, one ``wc_<role>.script`` each."""
@@ -68,8 +65,6 @@ class UrOptions:
     port: int | None = None  # its port (default: the robot file's)
     zero_tol_mm: float = 0.1  # a zero reading further from the previous: the wire slipped
     spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
-    margin_deg: float = 1.0  # every generated target at least this far inside a limit
-    range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
     solver: bool = True  # wc_run ends with wc_solve, the controller's step-by-step solver
 
 
@@ -196,12 +191,9 @@ def _check(robot: Robot, opt: UrOptions) -> tuple[str, int]:
 def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str, str]:
     """Return the programs by file name; raise :class:`WirecalError` if a rule would be broken.
 
-    A target within ``margin_deg`` of a joint limit, or a wire length beyond the encoder's
-    range, is refused before anything is written, naming the step and point.
+    Rendering only: the plan's safety is the pre-flight's
+    (:meth:`wirecal.gen.backends.Generator.programs`).
     """
-    check_limits(robot, plan, opt.margin_deg)
-    check_wire_range(robot, plan, opt.range_margin_mm)
-    check_cell(robot, plan)
     host, port = _check(robot, opt)
     tables = build_tables(robot, plan)
     mpc = robot.encoder.mm_per_count
@@ -245,38 +237,31 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
     }
     if opt.solver:
         context["t"] = solver_tables(robot, plan, tables)
-    out = {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
-    problems = software_problems(robot, out)
-    if problems:
-        raise WirecalError(problems)
-    return out
+    return {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
 
 
-def software_problems(robot: Robot, programs: dict[str, str]) -> list[str]:
-    """Check the programs as ``wirecal lint --software`` would; return the refused calls.
+def software_problems(robot: Robot, problems: list[str]) -> list[str]:
+    """Return the refused calls among the checker's problems with the programs.
 
-    A call the declared software is not documented to have is the user's problem: each rule
-    once, at its first call (:mod:`wirecal.lang.urscript.versions`; none when ``[controller]
+    ``problems``: ``wirecal lint --software``'s over the generated programs. A call the
+    declared software is not documented to have is the user's problem: each rule once, at
+    its first call (:mod:`wirecal.lang.urscript.versions`; none when ``[controller]
     software`` is not declared). Any other problem is a generator defect: raise
     :class:`WirecalError` saying so.
     """
     software = robot.controller.software
     seen: set[str] = set()
     refused, defects = [], []
-    for name, text in programs.items():
-        try:
-            parse_program(text, name, software)
-        except WirecalError as exc:
-            for problem in exc.problems:
-                where, _, why = problem.partition(": ")
-                if not is_refusal(why):
-                    defects.append(problem)
-                elif why not in seen:
-                    seen.add(why)
-                    refused.append(
-                        f'{robot.source}: controller.software = "{software}": {where}: {why}; '
-                        "wirecal knows no confirmed alternative: not generated"
-                    )
+    for problem in problems:
+        where, _, why = problem.partition(": ")
+        if not is_refusal(why):
+            defects.append(problem)
+        elif why not in seen:
+            seen.add(why)
+            refused.append(
+                f'{robot.source}: controller.software = "{software}": {where}: {why}; '
+                "wirecal knows no confirmed alternative: not generated"
+            )
     if defects:
         head = "internal error: a generated program breaks a URScript rule (please report):"
         raise WirecalError([head, *defects[:20]])
