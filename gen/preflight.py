@@ -57,9 +57,9 @@ def check_limits(robot: Robot, plan: Plan, margin_deg: float) -> None:
         for j in np.flatnonzero(inside & ((q < body_lo) | (q > body_hi))):
             problems.append(
                 f"{plan.source}: {where}: joint {j + 1} = {joint_literal(q[j])} deg is within "
-                f"{margin_deg:g} deg of its body limits [{body_lo[j] + margin_deg:g}, "
-                f"{body_hi[j] - margin_deg:g}] ({robot.source} [cell]); move the point or "
-                "lower --margin"
+                f"{margin_deg:g} deg of its body limits [{body_lo[j] - margin_deg:g}, "
+                f"{body_hi[j] + margin_deg:g}] ({robot.source} [cell]: the arm would fold into "
+                "itself); move the point or lower --margin"
             )
 
     check(plan.theta0_deg, "theta0_deg")

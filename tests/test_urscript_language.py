@@ -15,6 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.gen.request import GenRequest
 from wirecal.lang.urscript import URScript
 from wirecal.lang.urscript.parser import BUILTINS, parse_program
 from wirecal.solver.errors import WirecalError
@@ -216,15 +217,15 @@ def _ur5_with(software: str | None):
     ],
 )
 def test_generation_refuses_calls_older_software_lacks(software, refused):
-    from wirecal.gen.urscript.program import scripts
+    from wirecal.gen.urscript import GENERATOR
 
     robot, plan = _ur5_with(software)
     if not refused:
-        out = scripts(robot, plan)
+        out = GENERATOR.programs(robot, plan, GenRequest())
         assert f"# Controller software: {software}." in out["wc_run.script"]
         return
     with pytest.raises(WirecalError) as info:
-        scripts(robot, plan)
+        GENERATOR.programs(robot, plan, GenRequest())
     lines = info.value.problems
     assert len(lines) == len(refused), lines  # each rule once
     for what in refused:

@@ -27,7 +27,7 @@ from wirecal.twin.machine import Outcome
 from wirecal.twin.urscript.controller import RAW, URController
 from wirecal.twin.urscript.interp import Interpreter
 from wirecal.twin.urscript.solver_run import controller_solve
-from wirecal.twin.world import Faults, TwinRun, World, counter_start_of, stop_reason
+from wirecal.twin.world import Faults, TwinRun, measurement_world, mount_then_run, stop_reason
 
 MOUNT, RUN = "wc_mount.script", "wc_run.script"
 
@@ -53,11 +53,11 @@ def run_ur_programs(
 
     The controller closes the program's sockets when it ends, however it ends.
     """
-    mount = Interpreter(parse_program(mount_text, MOUNT), controller).execute()
-    controller.world.moves = 0  # fault positions count the moves of wc_run
-    run = None
-    if mount.status == "completed":
-        run = Interpreter(parse_program(run_text, RUN), controller).execute()
+    mount, run = mount_then_run(
+        controller.world,
+        Interpreter(parse_program(mount_text, MOUNT), controller).execute,
+        lambda: Interpreter(parse_program(run_text, RUN), controller).execute(),
+    )
     controller.close_all()
     return mount, run
 
@@ -99,16 +99,16 @@ class URScriptAdapter:
         the robot file says). ``counter_start``: the raw count at zero wire length
         (default: drawn over the whole int32 range).
         """
-        folder.mkdir(parents=True, exist_ok=True)
-        world = World(
+        world = measurement_world(
             robot,
+            plan,
             truth,
-            plan.theta0_deg,
             folder,
+            RAW,
             seed=seed,
             noise_mm=noise_mm,
-            counter_start=counter_start_of(RAW, seed, counter_start),
-            faults=faults or Faults(),
+            counter_start=counter_start,
+            faults=faults,
             unmodelled=unmodelled,
         )
         enc = robot.encoder
