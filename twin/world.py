@@ -425,14 +425,15 @@ def measurement_world(
     counter_start: float | None = None,
     faults: Faults | None = None,
     unmodelled: Unmodelled | None = None,
+    wire_limits: bool = True,
     **world: Any,
 ) -> World:
     """Return the world of a measurement run, whatever the language: the one run factory.
 
     The arm at the plan's θ0 with offsets ``truth``, the disk ``folder`` (created), the
     count at zero wire length on the ``counter`` the language reads
-    (:func:`counter_start_of`), the wire's speed and acceleration limits enforced.
-    ``world``: further :class:`World` fields (the operator's answers, the encoder's truth…).
+    (:func:`counter_start_of`), the wire's speed and acceleration limits enforced unless
+    ``wire_limits`` is False. ``world``: further :class:`World` fields (the operator's answers, the encoder's truth…).
     """
     folder.mkdir(parents=True, exist_ok=True)
     return World(
@@ -445,7 +446,7 @@ def measurement_world(
         counter_start=counter_start_of(counter, seed, counter_start),
         faults=faults or Faults(),
         unmodelled=unmodelled,
-        wire_limits=True,
+        wire_limits=wire_limits,
         **world,
     )
 
