@@ -433,7 +433,8 @@ def measurement_world(
     The arm at the plan's θ0 with offsets ``truth``, the disk ``folder`` (created), the
     count at zero wire length on the ``counter`` the language reads
     (:func:`counter_start_of`), the wire's speed and acceleration limits enforced unless
-    ``wire_limits`` is False. ``world``: further :class:`World` fields (the operator's answers, the encoder's truth…).
+    ``wire_limits`` is False. ``world``: further :class:`World` fields (the operator's
+    answers, the encoder's truth…).
     """
     folder.mkdir(parents=True, exist_ok=True)
     return World(
