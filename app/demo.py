@@ -144,7 +144,7 @@ def chain(robot_path: str | Path | None) -> Chain:
     paper = (
         setup_path.is_file()
         and "validation" not in reg.generator.refuses
-        and hasattr(reg.adapter, "paper_validation")
+        and reg.adapter.capabilities.paper_validation
     )
     setup = load_setup(setup_path) if paper else None
     request = GenRequest(validation=setup)
@@ -210,7 +210,9 @@ def _run(
     truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
     options: dict[str, Any] = {"seed": seed}
     encoder = None
-    if reg.takes("encoder_truth"):  # a realistic encoder: its scale off within tolerance
+    if (
+        reg.adapter.capabilities.encoder_truth
+    ):  # a realistic encoder: its scale off within tolerance
         encoder = realistic_encoder(robot.encoder, np.random.default_rng([seed, 4]))
         options["encoder_truth"] = encoder
     with tempfile.TemporaryDirectory() as tmp, _second_process() as pool:
@@ -326,7 +328,9 @@ def _paper_logs(
     the offsets the controller believes ({} before calibration).
     """
     t = time.perf_counter()
-    v = adapter(key).paper_validation(  # type: ignore[attr-defined]
+    if ch.setup is None:
+        raise WirecalError("the paper's validation needs validation.toml beside the robot file")
+    v = adapter(key).paper_validation(
         ch.robot,
         ch.plan,
         truth,

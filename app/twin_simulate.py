@@ -48,7 +48,7 @@ def simulate_in_twin(
     reg = registered(rb)
     run = replace(reg.generator.default_run, readings=samples)  # as wirecal gen runs
     programs = reg.generator.programs(rb, pl, GenRequest(run=run))
-    if reg.takes("encoder_truth"):
+    if reg.adapter.capabilities.encoder_truth:
         kw["encoder_truth"] = true_encoder
     with tempfile.TemporaryDirectory() as tmp:
         twin = reg.measure(rb, pl, errors, Path(tmp), programs, **kw)

@@ -21,7 +21,7 @@ from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
-from wirecal.twin.adapters import program_text
+from wirecal.twin.adapters import AdapterCapabilities, TwinAdapter, program_text
 from wirecal.twin.controller_run import ControllerRun, readings_for_lengths
 from wirecal.twin.rapid.controller import IrcController
 from wirecal.twin.rapid.interp import run_module
@@ -34,10 +34,11 @@ def module_of(programs: dict[str, str]) -> str:
     return program_text(programs, MODULE_FILE, "RAPID")
 
 
-class RapidAdapter:
+class RapidAdapter(TwinAdapter):
     """The RAPID twin adapter (module docstring)."""
 
     key = "rapid"
+    capabilities = AdapterCapabilities(controller_runs=True)
 
     def measure(
         self,

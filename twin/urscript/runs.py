@@ -21,7 +21,7 @@ from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
-from wirecal.twin.adapters import program_text
+from wirecal.twin.adapters import AdapterCapabilities, TwinAdapter, program_text
 from wirecal.twin.controller_run import ControllerRun, readings_for_lengths
 from wirecal.twin.machine import Outcome
 from wirecal.twin.urscript.controller import RAW, URController
@@ -67,10 +67,11 @@ def _script(programs: dict[str, str], name: str) -> str:
     return program_text(programs, name, "URScript")
 
 
-class URScriptAdapter:
+class URScriptAdapter(TwinAdapter):
     """URScript's twin adapter: wc_mount and wc_run on a twin UR, the log sent to a receiver."""
 
     key = "urscript"
+    capabilities = AdapterCapabilities(controller_runs=True)
 
     def measure(
         self,

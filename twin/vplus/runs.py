@@ -23,6 +23,7 @@ from wirecal.solver.simulate import (
     Unmodelled,
     reference_duration_s,
 )
+from wirecal.twin.adapters import AdapterCapabilities, TwinAdapter
 from wirecal.twin.controller_run import ControllerRun, readings_for_lengths
 from wirecal.twin.machine import Outcome
 from wirecal.twin.vplus.controller import VplusController
@@ -166,10 +167,13 @@ def run_validation(
     return ValidationRun(cfg, pln, disk / f"WCVCFG{run}.CSV", disk / f"WCVPLN{run}.CSV", ctl)
 
 
-class VplusAdapter:
+class VplusAdapter(TwinAdapter):
     """V+'s twin adapter: the module's programs on the twin's world."""
 
     key = "vplus"
+    capabilities = AdapterCapabilities(
+        encoder_truth=True, controller_runs=True, paper_validation=True
+    )
 
     def measure(
         self,
