@@ -34,6 +34,15 @@ class Generator(ABC):
     refuses: ClassVar[frozenset[str]]  # GenRequest fields it does not take
     default_run: ClassVar[RunParameters]  # the run when the request gives none
 
+    def __init_subclass__(cls, **kwargs: object) -> None:
+        """Refuse a language's generator that replaces :meth:`programs` (and its duties)."""
+        super().__init_subclass__(**kwargs)
+        if "programs" in vars(cls):
+            raise TypeError(
+                f"{cls.__name__}: a language's generator renders only (render()); "
+                "programs() and its pre-flight and checks are the base's"
+            )
+
     @property
     def language(self) -> Language:
         """The registered language this generator writes."""

@@ -29,10 +29,19 @@ from wirecal.solver.wire_range import check_wire_range
 
 def preflight(robot: Robot, plan: Plan, request: GenRequest, lang: Language) -> None:
     """Refuse, naming every broken rule, a plan the generated programs must not move through."""
-    check_limits(robot, plan, request.margin_deg)
-    check_wire_range(robot, plan, request.range_margin_mm)
-    check_cell(robot, plan)
-    check_software(robot, lang)
+    problems: list[str] = []
+    for check in (
+        lambda: check_limits(robot, plan, request.margin_deg),
+        lambda: check_wire_range(robot, plan, request.range_margin_mm),
+        lambda: check_cell(robot, plan),
+        lambda: check_software(robot, lang),
+    ):
+        try:
+            check()
+        except WirecalError as exc:
+            problems += exc.problems
+    if problems:
+        raise WirecalError(problems)
 
 
 def check_limits(robot: Robot, plan: Plan, margin_deg: float) -> None:

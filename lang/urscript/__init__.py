@@ -11,7 +11,7 @@ from typing import ClassVar
 
 from wirecal.lang.base import Capabilities, Example, Language
 from wirecal.lang.registry import register
-from wirecal.lang.urscript.calibration import SUFFIX, calibration_text
+from wirecal.lang.urscript.calibration import KEYS, SUFFIX, calibration_text
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.robot import Robot
 
@@ -56,6 +56,7 @@ class URScript(Language):
     )
 
     patch_companion = SUFFIX  # Universal Robots' standard-DH deltas (calibration.py)
+    companion_vectors = ("mounting", KEYS)
 
     def patch_section(self, robot: Robot, offsets: Mapping[str, float]) -> str:
         """Return UR's standard-DH deltas of ``offsets`` in calibration.conf's layout."""
