@@ -190,3 +190,16 @@ def test_the_declared_examples_hold() -> None:
     assert len(lang.invalid_examples) >= 25
     assert all(lang.lint(e.text, "v.mod", e.software) == [] for e in lang.valid_examples)
     assert all(lang.lint(e.text, "i.mod", e.software) for e in lang.invalid_examples)
+
+
+def test_a_for_variable_lives_only_in_its_loop():
+    """RAPID Reference Manual, FOR, p. 8-FOR-2 (yumpu.com/en/document/view/5679047, page
+    292): "The loop counter (of data type num) can only be accessed from within the FOR loop
+    and consequently hides other data and routines that have the same name." Read after
+    ENDFOR it is an unknown name; a string i hidden by the loop is a string again after it."""
+    loop = ("FOR i FROM 1 TO 3 DO", '  TPWrite "x"\\Num:=i;', "ENDFOR")
+    after = Rapid().lint(module(*loop, 'TPWrite "y"\\Num:=i;'), "t.mod")
+    assert len(after) == 1
+    assert after[0].startswith("t.mod:6: unknown data name i")
+    hidden = module(*loop, "TPWrite i;", data=('VAR string i := "s";',))
+    assert Rapid().lint(hidden, "t.mod") == []
