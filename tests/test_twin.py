@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from wirecal.app.compare import controller_runs
-from wirecal.app.twin_runs import measure_in_twin
 from wirecal.gen.templating import environment
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.lang.vplus.parser import parse_module
@@ -32,6 +31,7 @@ from wirecal.twin.world import Faults, Plate, World
 
 from .conftest import TABLE5 as TRUTH
 from .conftest import VIPER
+from .twin_runs import measure_in_twin
 
 
 # the generated module still uses base, off and dz as names, which the checker now
