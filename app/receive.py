@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import Outputs, os_problem
+from wirecal.solver.formats.fileio import MAX_INPUT_BYTES, Outputs, os_problem
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.run_token import PREFIX, presents, run_token
 from wirecal.solver.measurements import check_log, describe_missing
@@ -73,6 +73,7 @@ class Received:
     probes: int = 0  # connections that sent no line in time, or nothing at all
     problems: list[str] = field(default_factory=list)  # the log checks at the end marker
     journal_created: bool = False
+    size: int = 0  # bytes of the lines received
 
     @property
     def text(self) -> str:
@@ -380,6 +381,7 @@ def _recv(conn: socket.socket | None) -> bytes | None:
 def _keep(jf, result: Received, line: str) -> None:
     jf.write(line)
     result.lines.append(line)
+    result.size += len(line)
 
 
 def _dropped(jf, result: Received, pending: bytes) -> None:
@@ -399,6 +401,14 @@ def _feed(jf, result: Received, buffered: bytes) -> bytes | None:
             _sync(jf)
             result.stopped = (
                 f"line {len(result.lines) + 1} is not UTF-8 text: is the sender a wirecal program?"
+            )
+            return None
+        if result.size + len(raw) >= MAX_INPUT_BYTES:  # the bound of every other input
+            _sync(jf)
+            result.stopped = (
+                f"more than {MAX_INPUT_BYTES // 2**20} MiB received after line "
+                f"{len(result.lines)}: not a log (a run's log is well under 1 MiB); is the "
+                "sender a wirecal program?"
             )
             return None
         _keep(jf, result, line + "\n")

@@ -48,6 +48,7 @@ import click  # noqa: E402 - after the thread settings
 
 from wirecal import __version__  # noqa: E402
 from wirecal.cli.help_text import HELP_TEXT  # noqa: E402
+from wirecal.cli.interrupt import stop_cleanly  # noqa: E402
 from wirecal.solver.errors import WirecalError, first_problems  # noqa: E402
 
 MAX_ERROR_LINES = 40
@@ -63,9 +64,14 @@ def user_errors(func):
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         try:
-            return func(*args, **kwargs)
+            with stop_cleanly():
+                return func(*args, **kwargs)
         except WirecalError as exc:
             problems, status = exc.problems, exc.exit_status
+        except BrokenPipeError:  # the reader (| head) has what it wants: not an error
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())  # the exit's flush writes nowhere
+            sys.exit(0)
         except OSError as exc:
             problems, status = [f"{exc.filename or 'file'}: {exc.strerror or exc}"], 2
         for line in first_problems(problems, MAX_ERROR_LINES):
@@ -153,7 +159,8 @@ def main() -> None:
         wirecal psi examples/viper_s650/robot.toml examples/viper_s650/paper_plan.toml
 
     Exit status: 0 done; 1 a run or program stopped, or a check asked for failed;
-    2 bad input (a file, option or log to fix: the error lines say which).
+    2 bad input (a file, option or log to fix: the error lines say which); 3 the
+    plausibility gate refused the identification (nothing written).
     """
 
 

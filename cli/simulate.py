@@ -10,7 +10,7 @@ import click
 import numpy as np
 
 from wirecal.cli.main import user_errors
-from wirecal.cli.options import NON_NEGATIVE, PLAN, ROBOT, SEED, number
+from wirecal.cli.options import NON_NEGATIVE, OUTPUT_FILE, PLAN, ROBOT, SEED, number
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.plan_file import load_plan
@@ -53,7 +53,7 @@ def _slip(
     "--output",
     "log_path",
     required=True,
-    type=click.Path(dir_okay=False),
+    type=OUTPUT_FILE,
     help="Log file to write (the format the controller program writes).",
 )
 @click.option(

@@ -10,6 +10,7 @@ import numpy as np
 
 from wirecal.app.urdf_import import ImportOptions, urdf_robot_file
 from wirecal.cli.main import user_errors
+from wirecal.cli.options import OUTPUT_FILE
 from wirecal.lang.registry import default_language, languages
 from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
@@ -42,7 +43,13 @@ def _numbers(count: int | None, what: str):
 @click.option("--tip", required=True, help="Link the wire is attached to (the chain's end).")
 @click.option("--base", default=None, help="The chain's first link (default: the root link).")
 @click.option(
-    "-o", "--out", "out", required=True, type=click.Path(dir_okay=False), help="Robot file."
+    "-o",
+    "--output",
+    "--out",
+    "out",
+    required=True,
+    type=OUTPUT_FILE,
+    help="Robot file to write (--out: the older spelling).",
 )
 @click.option("--name", default=None, help="Robot name (default: the URDF's robot name).")
 @click.option(
@@ -136,7 +143,13 @@ def _tol(parallel_tol_deg: float | None) -> float:
 @click.argument("robot", type=click.Path(dir_okay=False))
 @click.argument("patch", type=click.Path(dir_okay=False), required=False)
 @click.option(
-    "-o", "--out", "out", required=True, type=click.Path(dir_okay=False), help="URDF to write."
+    "-o",
+    "--output",
+    "--out",
+    "out",
+    required=True,
+    type=OUTPUT_FILE,
+    help="URDF to write (--out: the older spelling).",
 )
 @click.option(
     "--from",

@@ -234,13 +234,24 @@ def _drift(result: SolveResult) -> list[Finding]:
     dr = result.drift
     if dr is None or abs(dr.rate_mm_per_h) - 3 * dr.std_mm_per_h <= DRIFT_TOLERANCE_MM_PER_H:
         return []
+    if dr.correctable:
+        return []  # removed from the lengths, with a warning (Drift.warning)
+    why = (
+        "not linear (the zero readings scatter about a line beyond their noise), so "
+        "removing it cannot correct the lengths"
+        if not dr.linear
+        else "not measured well enough to be removed (3σ beyond the tolerance)"
+        if dr.removed
+        else "not removed"
+    )
     return [
         Finding(
             "drift",
             f"the zero readings at θ0 drift by {dr.rate_mm_per_h:+.3f} mm/h (± "
             f"{dr.std_mm_per_h:.3f}, {dr.zeros} readings), beyond the tolerance "
-            f"{DRIFT_TOLERANCE_MM_PER_H:g} mm/h by more than 3σ: fix the encoder's stand and "
-            "the wire's attachment, let the cell reach a steady temperature, and measure again",
+            f"{DRIFT_TOLERANCE_MM_PER_H:g} mm/h by more than 3σ and {why}: fix the encoder's "
+            "stand and the wire's attachment, let the cell reach a steady temperature, and "
+            "measure again",
         )
     ]
 

@@ -34,8 +34,10 @@ from wirecal.solver.formats.capture import (
     RowTest,
     aside_note,
     cells_of,
+    clean_line,
     joined_note,
     take_rows,
+    unfold_header,
 )
 from wirecal.solver.formats.fileio import STDIN as STDIN  # the name callers know
 from wirecal.solver.formats.fileio import read_input
@@ -110,10 +112,14 @@ def parse_table(
     """
     text = text.removeprefix("\ufeff")
     ends_with_newline = text.endswith(("\n", "\r"))
-    lines = [line.strip() for line in text.splitlines()]
+    tidy = str.strip if capture is None else clean_line
+    lines = [tidy(line) for line in text.splitlines()]
     start, found = _check_first_line(
         lines, source, magic, (version, *older), what, anywhere=capture is not None
     )
+    if capture is not None:  # a terminal narrower than the header broke its lines
+        guess = columns({}, found) if callable(columns) else columns
+        lines = unfold_header(lines, start + 1, ",".join(guess))
     header, comments, problems, n = _read_header(lines, start + 1, source, keys)
     if callable(columns):
         columns = columns(header, found)
@@ -175,7 +181,10 @@ def _read_header(
     header: dict[str, tuple[str, int]] = {}
     comments: list[str] = []
     problems: list[str] = []
-    while n < len(lines) and lines[n].startswith("#"):
+    while n < len(lines) and (not lines[n] or lines[n].startswith("#")):
+        if not lines[n]:  # a blank line, or the rest of a line a terminal broke
+            n += 1
+            continue
         body = lines[n][1:].strip()
         key, sep, value = body.partition(":")
         key = key.strip()
