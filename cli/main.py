@@ -178,7 +178,7 @@ for _name, _target, _summary in (
     (
         "gen",
         "wirecal.cli.gen:gen",
-        "Write the controller programs that run PLAN: a V+/eV+ module or URScript programs.",
+        "Write the controller programs that run PLAN: V+/eV+, URScript or ABB RAPID.",
     ),
     (
         "export-urdf",

@@ -24,6 +24,10 @@ class Number(click.FloatRange):
             self.fail(f"{value!r} is not a finite number", param, ctx)
         return super().convert(rv, param, ctx)
 
+    def _describe_range(self) -> str:
+        """Describe the bounds in the help; nothing for a number without any."""
+        return "" if self.min is None and self.max is None else super()._describe_range()
+
 
 def number(
     min: float | None = None,

@@ -54,7 +54,8 @@ if TYPE_CHECKING:
     default="all",
     show_default=True,
     help="Which identification to run and show; 'controller' adds the generated "
-    "V+ solver run in the digital twin beside the Python reference.",
+    "controller solver (V+, URScript or RAPID: the robot file's language) run in the "
+    "digital twin beside the Python reference.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option(

@@ -111,6 +111,14 @@ def _column_end(lines: list[str], k: int, column_line: str) -> int | None:
     return None
 
 
+def fold(lines: list[str], width: int) -> str:
+    """Return ``lines`` as a terminal ``width`` columns wide shows them: longer ones broken."""
+    out = []
+    for line in lines:
+        out += [line[k : k + width] for k in range(0, len(line), width)] or [""]
+    return "\n".join(out) + "\n"
+
+
 def cells_of(text: str) -> tuple[str, ...]:
     """Return the stripped fields of a CSV line (no quoting: refused before)."""
     return tuple(c.strip() for c in text.split(","))

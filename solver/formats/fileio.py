@@ -346,6 +346,7 @@ def read_toml(path: str | Path, what: str) -> dict[str, Any]:
         raise WirecalError(
             f"{source}: not UTF-8 text (byte {exc.start}); is this a {what}?"
         ) from None
+    text = text.removeprefix("\ufeff")  # a byte-order mark some editors write
     depth = toml_depth(text)
     if depth > MAX_TOML_DEPTH:
         raise WirecalError(
