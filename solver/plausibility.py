@@ -22,7 +22,9 @@ controller comparison) and refuses, with what to check, when:
   :data:`~wirecal.solver.scale.DRIFT_TOLERANCE_MM_PER_H` even less three of the fit's σ
   (|b| − 3σ_b > tolerance: a sound log is not refused for its noise) — a wire creeping,
   the stand moving, a temperature far from steady: lengths read at different times no
-  longer compare;
+  longer compare. Unless removing it corrects them (``Drift.correctable``: linear, known
+  to the tolerance, at most :data:`~wirecal.solver.scale.DRIFT_REMOVABLE_MM_PER_H`): then
+  it was removed from the lengths and ``wirecal solve`` warns instead;
 * **bound** — an estimate lies on or beyond its bound Ω (the stepwise estimate pinned at
   Ω, the joint estimate beyond it) or beyond :data:`PLAUSIBLE_DEG` / :data:`PLAUSIBLE_MM`
   (a manufactured arm is not that far from its data sheet: the robot file, the mastering or
@@ -37,7 +39,7 @@ from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import Implausible
 from wirecal.solver.identifiability import Identifiability, analyse_jacobian, covariance
 from wirecal.solver.identify import DEFAULT_OMEGA
-from wirecal.solver.scale import DRIFT_TOLERANCE_MM_PER_H
+from wirecal.solver.scale import DRIFT_REMOVABLE_MM_PER_H, DRIFT_TOLERANCE_MM_PER_H
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult, omega_vector
 from wirecal.solver.verdict import (
@@ -237,12 +239,14 @@ def _drift(result: SolveResult) -> list[Finding]:
     if dr.correctable:
         return []  # removed from the lengths, with a warning (Drift.warning)
     why = (
-        "not linear (the zero readings scatter about a line beyond their noise), so "
+        "not removed from the lengths"
+        if not dr.removed
+        else "not linear (the zero readings scatter about a line beyond their noise), so "
         "removing it cannot correct the lengths"
         if not dr.linear
-        else "not measured well enough to be removed (3σ beyond the tolerance)"
-        if dr.removed
-        else "not removed"
+        else f"beyond {DRIFT_REMOVABLE_MM_PER_H:g} mm/h, more than removing it can correct"
+        if abs(dr.rate_mm_per_h) > DRIFT_REMOVABLE_MM_PER_H
+        else "not measured well enough to be removed (2σ beyond the tolerance)"
     )
     return [
         Finding(

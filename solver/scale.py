@@ -48,6 +48,10 @@ DRIFT_TOLERANCE_MM_PER_H = 0.5
 pose does not move that much in an hour unless the wire slipped, the stand moved or the
 temperature is far from steady (0.5 mm/h is 20 K/h on a 1 m aluminium stand)."""
 
+DRIFT_REMOVABLE_MM_PER_H = 5.0
+"""Largest drift removed rather than refused (mm/h): ten times the tolerance is no longer
+a stand settling or a cell warming but a wire creeping or a loose mount."""
+
 LINEARITY_FALSE_ALARM = 1e-3
 """α of the test that the zero readings lie on the drift's line within their noise."""
 
@@ -192,13 +196,15 @@ class Drift:
 
     @property
     def correctable(self) -> bool:
-        """Whether removing it corrects the lengths: linear, and known to the tolerance.
+        """Whether removing it corrects the lengths: linear, known to the tolerance, not huge.
 
-        Known to the tolerance: what may be left after removal, :data:`DRIFT_SIGNIFICANCE`
-        of its σ, is within :data:`DRIFT_TOLERANCE_MM_PER_H`.
+        Known to the tolerance: twice its σ (95 %) within :data:`DRIFT_TOLERANCE_MM_PER_H`;
+        what is left after removal is in the error budget (:mod:`wirecal.solver.budget`).
+        Not huge: within :data:`DRIFT_REMOVABLE_MM_PER_H`.
         """
-        known = DRIFT_SIGNIFICANCE * self.std_mm_per_h <= DRIFT_TOLERANCE_MM_PER_H
-        return self.removed and self.linear and known
+        known = 2 * self.std_mm_per_h <= DRIFT_TOLERANCE_MM_PER_H
+        small = abs(self.rate_mm_per_h) <= DRIFT_REMOVABLE_MM_PER_H
+        return self.removed and self.linear and known and small
 
     @property
     def warning(self) -> str | None:
