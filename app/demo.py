@@ -317,7 +317,7 @@ def _second_process() -> Iterator[ProcessPoolExecutor]:
         yield pool
     except BaseException:
         for worker in list((pool._processes or {}).values()):
-            worker.terminate()
+            worker.kill()  # SIGKILL: a forked worker inherits the SIGTERM handler
         pool.shutdown(wait=False, cancel_futures=True)
         raise
     pool.shutdown()
