@@ -142,7 +142,7 @@ def solve(
     them side by side, with residuals and the predicted tool-point accuracy after
     calibration. With -o, writes the recommended method's patch (or the one --method
     names) and a table of values for the controller. A result that fails the plausibility
-    gate (see the README) is refused with exit status 3 and nothing written.
+    gate (docs/accuracy.md) is refused with exit status 3 and nothing written.
     """
     rb = load_robot(robot)
     if rb.controller_problem():

@@ -1,8 +1,9 @@
 """Every ```bash block of the README and of docs/ runs as written.
 
 Convention (docs/development.md): a ``bash`` block runs verbatim in a fresh folder holding a
-copy of the repository's ``examples/`` with ``wirecal`` on ``PATH``; the blocks of one page
-run in order in one folder, each by ``bash -euo pipefail``. Everything else is ``text``.
+copy of the repository's tracked files (a fresh clone) with ``wirecal`` on ``PATH``; the
+blocks of one page run in order in one folder, each by ``bash -euo pipefail``. Everything
+else is ``text``.
 """
 
 from __future__ import annotations
@@ -72,6 +73,25 @@ def test_readme_is_short():
     assert len((ROOT / "README.md").read_text(encoding="utf-8").splitlines()) <= 300
 
 
+def fresh_clone(folder: Path) -> None:
+    """Copy into ``folder`` what a fresh clone holds: the repository's tracked files.
+
+    (``examples/``, ``tests/data/``: what a recipe may name.) Outside a git checkout, the
+    examples only.
+    """
+    listed = subprocess.run(
+        ["git", "-C", str(ROOT), "ls-files", "-z"], capture_output=True, text=True
+    )
+    if listed.returncode != 0:
+        shutil.copytree(ROOT / "examples", folder / "examples")
+        return
+    for name in filter(None, listed.stdout.split("\0")):
+        source = ROOT / name
+        if source.is_file() and not source.is_symlink():
+            (folder / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(source, folder / name)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
     "page",
@@ -79,7 +99,7 @@ def test_readme_is_short():
     ids=lambda p: str(p.relative_to(ROOT)),
 )
 def test_bash_blocks_run(page, tmp_path):
-    shutil.copytree(ROOT / "examples", tmp_path / "examples")
+    fresh_clone(tmp_path)
     env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
     for n, block in enumerate(bash_blocks(page.read_text("utf-8")), 1):
         r = subprocess.run(

@@ -980,3 +980,24 @@ def test_sigint_stops_the_demo_within_a_second(tmp_path):
     assert "Traceback" not in err
     assert stopped_s < 2.0  # 1 s on a quiet machine; the CI machine is shared
     assert not (tmp_path / "demo").exists()
+
+
+def test_a_validation_setup_in_another_frame_0_is_refused_clearly(viper):
+    """The Viper's validation.toml under a URDF import's frame 0 (floor at z = 0): 209
+    floor collisions before; now one line per place below the floor, naming frame 0."""
+    from dataclasses import replace
+
+    from wirecal.solver.errors import WirecalError
+    from wirecal.solver.formats.validation_files import load_setup
+    from wirecal.solver.validation import plate_grid
+
+    imported = replace(viper, cell=replace(viper.cell, floor_z_mm=0.0))
+    with pytest.raises(WirecalError) as info:
+        plate_grid(imported, load_setup(VIPER / "validation.toml"))
+    assert len(info.value.problems) == 2
+    assert (
+        "configuration.encoder_mm: z -150 mm lies below the robot file's floor"
+        in (info.value.problems[0])
+    )
+    assert "measure it again in this robot file's frame 0" in info.value.problems[1]
+    plate_grid(viper, load_setup(VIPER / "validation.toml"))  # the shipped pair still fits
