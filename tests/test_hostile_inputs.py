@@ -1001,3 +1001,41 @@ def test_a_validation_setup_in_another_frame_0_is_refused_clearly(viper):
     )
     assert "measure it again in this robot file's frame 0" in info.value.problems[1]
     plate_grid(viper, load_setup(VIPER / "validation.toml"))  # the shipped pair still fits
+
+
+def _solve_text(tmp_path, text: str | bytes):
+    path = tmp_path / "run.csv"
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    r = invoke("solve", ROBOT, PLAN, path)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    return r.output
+
+
+def test_l06_quoted_lines_are_named(tmp_path, log):
+    quoted = "\n".join(f'"{x}"' for x in log.read_text().splitlines()) + "\n"
+    out = _solve_text(tmp_path, quoted)
+    assert "the first line is '\"# wirecal-log 2\"': lines and fields in double quotes" in out
+
+
+def test_nt14_utf16_is_named(tmp_path, log):
+    out = _solve_text(tmp_path, log.read_text().encode("utf-16-le"))
+    assert "UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8" in out
+    assert len(out.splitlines()) == 1
+
+
+def test_nl34_a_version_1_header_over_version_2_rows_is_one_problem(tmp_path, log):
+    text = log.read_text().replace("# wirecal-log 2", "# wirecal-log 1", 1)
+    text = text.replace(",t_s,settle_s\n", "\n", 1)
+    out = _solve_text(tmp_path, text)
+    assert re.search(r"\d+ rows have 14 fields where the column line names 12", out), out
+    assert "has 14 fields" not in out
+
+
+def test_r15_a_tiny_mm_per_count_is_named_as_the_cause(tmp_path):
+    robot = tmp_path / "r.toml"
+    robot.write_text(re.sub(r"mm_per_count = \S+", "mm_per_count = 1e-300", ROBOT.read_text()))
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert "encoder.mm_per_count: is 1e-300 mm" in r.output
+    assert len(max(r.output.splitlines(), key=len)) < 300  # no 300-digit count
