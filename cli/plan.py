@@ -24,6 +24,8 @@ def _joints(value: str | None, n: int) -> np.ndarray | None:
         return None
     try:
         q = np.array([float(x) for x in value.replace(" ", "").split(",")])
+        if not np.all(np.isfinite(q)):  # nan, inf: no angle
+            raise ValueError
     except ValueError:
         raise WirecalError(
             f'--theta0 {value!r}: give {n} joint angles in degrees, e.g. "0,-90,210,-90,0,-90"'

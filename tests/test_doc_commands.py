@@ -120,3 +120,39 @@ def test_api_page_example_is_the_tested_one():
     tested = source.split("keep in step with docs/api.md) ---\n")[1]
     tested = tested.split("    # --- end of the example ---")[0]
     assert shown == [textwrap.dedent(tested)]
+
+
+def _collected(marker: str) -> int:
+    """Return how many tests ``pytest -m MARKER`` collects in the repository."""
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "--collect-only",
+            "-q",
+            "-p",
+            "no:cacheprovider",
+            "-m",
+            marker,
+            str(ROOT / "tests"),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
+    m = re.search(r"^(\d+)(?:/\d+)? tests? collected", r.stdout, re.M)
+    assert m is not None, r.stdout[-2000:]
+    return int(m.group(1))
+
+
+@pytest.mark.slow
+def test_the_quoted_test_counts_are_current():
+    """docs/development.md's counts of the quick loop and the slow tests, read from the page,
+    against what pytest collects: within 10 % (eight branches add tests at once)."""
+    text = (ROOT / "docs" / "development.md").read_text(encoding="utf-8")
+    quick = re.search(r"The quick loop has (\d+) tests and the\s+slow tests are (\d+) more", text)
+    assert quick is not None, "docs/development.md no longer quotes the test counts"
+    for quoted, marker in zip(quick.groups(), ("not slow", "slow"), strict=True):
+        collected = _collected(marker)
+        assert abs(int(quoted) - collected) <= 0.1 * collected, (marker, quoted, collected)

@@ -1039,3 +1039,23 @@ def test_r15_a_tiny_mm_per_count_is_named_as_the_cause(tmp_path):
     assert r.exit_code == 2
     assert "encoder.mm_per_count: is 1e-300 mm" in r.output
     assert len(max(r.output.splitlines(), key=len)) < 300  # no 300-digit count
+
+
+def test_nx19_max_exit_deg_in_radians_is_named(tmp_path):
+    robot = tmp_path / "r.toml"
+    robot.write_text(
+        ROBOT.read_text().replace(
+            'exit = "point"\n',
+            'exit = "eyelet"\naxis = [0.0, 0.0, 1.0]\nmax_exit_deg = 1.5708\n'
+            "exit_edge_radius_mm = 1.0\n",
+        )
+    )
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert "encoder.max_exit_deg: is 1.5708: that is 90 deg in radians; give degrees" in r.output
+
+
+def test_c17_theta0_nan_is_refused_as_an_option():
+    r = invoke("plan", ROBOT, "--theta0", "nan,-90,210,-90,0,-90")
+    assert r.exit_code == 2
+    assert "--theta0 'nan,-90,210,-90,0,-90': give 6 joint angles in degrees" in r.output
