@@ -38,10 +38,37 @@ def _numbers(count: int | None, what: str):
     return parse
 
 
+MAX_WIRE_POINT_MM = 2000.0
+"""A wire fixture farther than this from the tip link's origin is not on the tip link."""
+
+
+def _wire_point(ctx, param, value: str | None):
+    """Read --wire-point-mm: three numbers in mm, refusing metres and far-off points."""
+    point = _numbers(3, "three numbers X,Y,Z (mm)")(ctx, param, value)
+    if point is None:
+        return None
+    largest = max(map(abs, point))
+    if largest > MAX_WIRE_POINT_MM:
+        raise click.BadParameter(
+            f"{value!r}: {largest:g} mm from the tip link's origin; the wire's fixture is on "
+            f"the tip link, within {MAX_WIRE_POINT_MM:g} mm of it: give X,Y,Z in mm"
+        )
+    if 0 < largest < 1:
+        raise click.BadParameter(
+            f"{value!r}: every coordinate under 1 mm: that looks like metres; give X,Y,Z in "
+            "mm (e.g. -60,0,50)"
+        )
+    return point
+
+
 @click.command("import-urdf")
 @click.argument("urdf", type=click.Path(dir_okay=False))
 @click.option("--tip", required=True, help="Link the wire is attached to (the chain's end).")
-@click.option("--base", default=None, help="The chain's first link (default: the root link).")
+@click.option(
+    "--base",
+    default=None,
+    help="The chain's first link (default: the root link of the tree --tip is in).",
+)
 @click.option(
     "-o",
     "--output",
@@ -54,7 +81,7 @@ def _numbers(count: int | None, what: str):
 @click.option("--name", default=None, help="Robot name (default: the URDF's robot name).")
 @click.option(
     "--wire-point-mm",
-    callback=_numbers(3, "three numbers X,Y,Z (mm)"),
+    callback=_wire_point,
     metavar="X,Y,Z",
     help="The wire's attachment point in the tip link's frame, X,Y,Z in mm (default: the "
     "tip link's origin; write --wire-point-mm=-50,0,40 when X is negative).",

@@ -1059,3 +1059,36 @@ def test_c17_theta0_nan_is_refused_as_an_option():
     r = invoke("plan", ROBOT, "--theta0", "nan,-90,210,-90,0,-90")
     assert r.exit_code == 2
     assert "--theta0 'nan,-90,210,-90,0,-90': give 6 joint angles in degrees" in r.output
+
+
+def test_nd07_a_second_root_is_not_in_the_way(tmp_path):
+    """'2 root links (mount, …); name one with --base': the tip's own tree is the chain."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(URDF.read_text().replace("</robot>", '<link name="mount"/>\n</robot>'))
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    assert r.exit_code == 0, r.output
+
+
+@pytest.mark.parametrize(
+    ("point", "message"),
+    [
+        ("1e9,0,0", "1e+09 mm from the tip link's origin"),  # UD03
+        ("-0.06,0,0.05", "every coordinate under 1 mm: that looks like metres"),  # UD04
+    ],
+)
+def test_ud03_ud04_a_wire_point_out_of_place_is_refused(tmp_path, point, message):
+    r = invoke(
+        "import-urdf", URDF, "--tip", "wire", f"--wire-point-mm={point}", "-o", tmp_path / "r"
+    )
+    assert r.exit_code == 2
+    assert message in r.output
+
+
+def test_ns13_a_gauge_of_a_nanometre_is_refused(tmp_path):
+    robot = tmp_path / "r.toml"
+    robot.write_text(
+        ROBOT.read_text().replace("[encoder]\n", "[encoder]\nreference_length_mm = 1e-9\n")
+    )
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert "encoder.reference_length_mm: is 1e-09 mm: a gauge shorter than 50 mm" in r.output

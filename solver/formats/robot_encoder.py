@@ -138,6 +138,10 @@ def _software(table: Table, language: str | None) -> str | None:
     return software
 
 
+MIN_REFERENCE_MM = 50.0
+"""The shortest reference gauge: 0.01 mm of reading noise is 200 ppm of 50 mm."""
+
+
 def _round_angle_in_radians(value: float) -> bool:
     """Whether ``value`` is a multiple of 15 deg (up to 90) written in radians (1.5708)."""
     return any(abs(value - math.radians(k * 15)) < 1e-3 for k in range(1, 7))
@@ -168,6 +172,14 @@ def read_encoder(enc: Table, interface: str | None) -> Encoder | None:
         hi=MAX_TEMPCO_PPM_PER_K,
         unit="ppm/K",
     )
+    if ref is not None and ref < MIN_REFERENCE_MM:
+        enc.add(
+            "reference_length_mm",
+            f"is {ref:g} mm: a gauge shorter than {MIN_REFERENCE_MM:g} mm reads the scale "
+            "no better than its tolerance; give the certified length of the gauge's nests "
+            "in mm (e.g. 500)",
+        )
+        ref = None
     if ref is not None and rng is not None and ref > rng:
         enc.add(
             "reference_length_mm",

@@ -242,7 +242,7 @@ def read_urdf(path: str | Path) -> Urdf:
 
 
 def chain(urdf: Urdf, base: str | None, tip: str) -> list[Joint]:
-    """Return the joints from ``base`` (default: the tree's root link) to ``tip``, in order."""
+    """Return the joints from ``base`` (default: the root of the tree ``tip`` is in) to ``tip``."""
     by_child = _parent_joints(urdf)
     for link, what in ((tip, "--tip"), (base, "--base")):
         if link is not None and link not in urdf.links:
@@ -255,13 +255,12 @@ def chain(urdf: Urdf, base: str | None, tip: str) -> list[Joint]:
             raise WirecalError(
                 f"{urdf.path}: {what} {link!r} is not a link of this URDF (links: {shown}{more})"
             )
-    if base is None:
-        roots = [x for x in urdf.links if x not in by_child]
-        if len(roots) != 1:
-            raise WirecalError(
-                f"{urdf.path}: {len(roots)} root links ({', '.join(roots)}); name one with --base"
-            )
-        base = roots[0]
+    if base is None:  # the root the tip descends from (a URDF may hold several trees)
+        base = tip
+        seen = {tip}
+        while base in by_child and by_child[base].parent not in seen:
+            base = by_child[base].parent
+            seen.add(base)
     path: list[Joint] = []
     link = tip
     while link != base:
