@@ -31,6 +31,7 @@ reset by single bytes: a sender trickling bytes without a line end is stopped).
 
 from __future__ import annotations
 
+import errno
 import os
 import selectors
 import socket
@@ -188,15 +189,28 @@ def _take(
     """
     fd = _create_journal(journal)
     result.journal_created = True
-    with os.fdopen(fd, "w", encoding="utf-8", newline="") as jf:
-        session = _Session(srv, timeout_s, token, jf, result)
-        try:
-            session.run()
-        except KeyboardInterrupt:  # Ctrl-C while waiting: keep what came, say so
-            result.stopped = "interrupted (Ctrl-C)"
-        finally:
-            _sync(jf)
-            session.close()
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as jf:
+            session = _Session(srv, timeout_s, token, jf, result)
+            try:
+                session.run()
+            except KeyboardInterrupt:  # Ctrl-C while waiting: keep what came, say so
+                result.stopped = "interrupted (Ctrl-C)"
+            finally:
+                try:
+                    _sync(jf)
+                finally:
+                    session.close()
+    except OSError as exc:
+        if exc.errno not in _DISK_FULL:
+            raise
+        result.stopped = (  # the journal holds what could be written
+            f"{journal}: {exc.strerror} after line {len(result.lines)} (the journal keeps the "
+            "lines up to there, its last one possibly cut); free space and run again"
+        )
+
+
+_DISK_FULL = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG}
 
 
 @dataclass

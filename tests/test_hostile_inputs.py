@@ -1092,3 +1092,48 @@ def test_ns13_a_gauge_of_a_nanometre_is_refused(tmp_path):
     r = invoke("psi", robot, PLAN)
     assert r.exit_code == 2
     assert "encoder.reference_length_mm: is 1e-09 mm: a gauge shorter than 50 mm" in r.output
+
+
+def test_rk13_a_full_disk_names_the_journal_and_what_it_keeps(tmp_path, monkeypatch):
+    """'error: file: No space left on device', exit 2: the journal was not named."""
+    import errno
+    import socket
+    import threading
+
+    import wirecal.app.receive as rec
+    from wirecal.solver.formats.plan_file import load_plan
+    from wirecal.solver.formats.robot_file import load_robot
+    from wirecal.solver.formats.run_token import run_token, token_line
+    from wirecal.solver.simulate import simulate_log
+
+    keep = rec._keep
+
+    def full_after_20(jf, result, line):
+        if len(result.lines) == 20:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        keep(jf, result, line)
+
+    monkeypatch.setattr(rec, "_keep", full_after_20)
+    ur5 = load_robot(VIPER.parent / "ur5e" / "robot.toml")
+    plan = load_plan(VIPER.parent / "ur5e" / "plan.toml", ur5)
+    text = simulate_log(ur5, plan, {}, seed=1, counter_start=1000.0)
+    ports, out, result = [], tmp_path / "run.csv", {}
+    thread = threading.Thread(
+        target=lambda: result.update(
+            r=rec.receive(0, out, ur5, plan, timeout_s=10, on_listening=ports.append)
+        ),
+        daemon=True,
+    )
+    thread.start()
+    while not ports:
+        thread.join(0.05)
+    with socket.create_connection(("127.0.0.1", ports[0]), timeout=10) as s:
+        hello = token_line(run_token(ur5, plan.fingerprint())) + "\n"
+        with contextlib.suppress(OSError):
+            s.sendall((hello + text + "# end\n").encode())
+    thread.join(20)
+    r = result["r"]
+    assert not r.complete
+    assert r.stopped.startswith(f"{rec.journal_path(out)}: No space left on device after line 20")
+    assert len(rec.journal_path(out).read_text().splitlines()) == 20
+    assert not out.exists()
