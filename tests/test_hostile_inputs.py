@@ -1137,3 +1137,20 @@ def test_rk13_a_full_disk_names_the_journal_and_what_it_keeps(tmp_path, monkeypa
     assert r.stopped.startswith(f"{rec.journal_path(out)}: No space left on device after line 20")
     assert len(rec.journal_path(out).read_text().splitlines()) == 20
     assert not out.exists()
+
+
+def test_nu02_a_16_bit_count_is_suspected_once(tmp_path, log):
+    """A filtered 16-bit count: 'wire length … is negative: is the sign of mm_per_count
+    right?' on every row; now once, naming the counter's width too."""
+    lines = log.read_text().splitlines()
+    first = next(float(x.split(",")[9]) for x in lines if x.startswith("zero,"))
+    shift = 2**15 - 1000 - round(first)  # θ0 just below the 16-bit counter's turn
+    for k, line in enumerate(lines):
+        cells = line.split(",")
+        if cells[0] in ("zero", "point"):
+            counts = round(float(cells[9])) + shift
+            cells[9] = f"{(counts + 2**15) % 2**16 - 2**15:.4f}"
+            lines[k] = ",".join(cells)
+    out = _solve_text(tmp_path, "\n".join(lines) + "\n")
+    assert "or the logged counts wrap sooner than the 24-bit counter" in out, out
+    assert out.count("is negative") == 0
