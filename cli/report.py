@@ -90,33 +90,15 @@ def report(
     inputs = [robot, plan, log, *(config_logs or ()), *(plane_logs or ())]
     inputs += [truth_file] if truth_file else []
     with Outputs([output], force=force, inputs=inputs) as out:
-        html = _report_html(
-            robot,
-            plan,
-            log,
-            config_logs,
-            plane_logs,
-            controller,
-            truth_file,
-            accept_implausible,
-            partial=partial,
-        )
+        logs, flags = (config_logs, plane_logs), (accept_implausible, partial)
+        html = _report_html(robot, plan, log, logs, controller, truth_file, flags)
         out.put(output, html)
     click.echo(f"wrote {output}")
 
 
-def _report_html(
-    robot,
-    plan,
-    log,
-    config_logs,
-    plane_logs,
-    controller,
-    truth_file,
-    accept_implausible,
-    *,
-    partial,
-) -> str:
+def _report_html(robot, plan, log, logs, controller, truth_file, flags) -> str:
+    """Solve and render; ``logs``: (config, plane), ``flags``: (accept, partial)."""
+    (config_logs, plane_logs), (accept_implausible, partial) = logs, flags
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
     parsed = read_log(log)

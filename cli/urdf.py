@@ -38,6 +38,19 @@ def _numbers(count: int | None, what: str):
     return parse
 
 
+def _output(what: str):
+    """Return the ``-o, --output`` option (``--out``: the older spelling) for ``what``."""
+    return click.option(
+        "-o",
+        "--output",
+        "--out",
+        "out",
+        required=True,
+        type=OUTPUT_FILE,
+        help=f"{what} to write (--out: the older spelling).",
+    )
+
+
 MAX_WIRE_POINT_MM = 2000.0
 """A wire fixture farther than this from the tip link's origin is not on the tip link."""
 
@@ -69,15 +82,7 @@ def _wire_point(ctx, param, value: str | None):
     default=None,
     help="The chain's first link (default: the root link of the tree --tip is in).",
 )
-@click.option(
-    "-o",
-    "--output",
-    "--out",
-    "out",
-    required=True,
-    type=OUTPUT_FILE,
-    help="Robot file to write (--out: the older spelling).",
-)
+@_output("Robot file")
 @click.option("--name", default=None, help="Robot name (default: the URDF's robot name).")
 @click.option(
     "--wire-point-mm",
@@ -169,15 +174,7 @@ def _tol(parallel_tol_deg: float | None) -> float:
 @click.command("export-urdf")
 @click.argument("robot", type=click.Path(dir_okay=False))
 @click.argument("patch", type=click.Path(dir_okay=False), required=False)
-@click.option(
-    "-o",
-    "--output",
-    "--out",
-    "out",
-    required=True,
-    type=OUTPUT_FILE,
-    help="URDF to write (--out: the older spelling).",
-)
+@_output("URDF")
 @click.option(
     "--from",
     "source",

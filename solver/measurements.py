@@ -292,8 +292,7 @@ def _negative_lengths(negative: list[tuple[int, float]], src: str, bits: int) ->
     """One problem per negative wire length, or one for them all when there are many."""
     if len(negative) < 3:
         return [
-            f"{src}:{line}: wire length {d:.3f} mm is negative: is the sign of mm_per_count "
-            "right?"
+            f"{src}:{line}: wire length {d:.3f} mm is negative: is the sign of mm_per_count right?"
             for line, d in negative
         ]
     line, d = negative[0]
