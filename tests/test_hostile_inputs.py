@@ -1154,3 +1154,18 @@ def test_nu02_a_16_bit_count_is_suspected_once(tmp_path, log):
     out = _solve_text(tmp_path, "\n".join(lines) + "\n")
     assert "or the logged counts wrap sooner than the 24-bit counter" in out, out
     assert out.count("is negative") == 0
+
+
+def test_cl24_body_limits_in_radians_are_named(tmp_path):
+    """psi flooded ~390 warnings and gen blamed joint 2's limits [-3.3, 0.78]."""
+    robot = tmp_path / "r.toml"
+    text = (VIPER.parent / "ur5e" / "robot.toml").read_text()
+    text = re.sub(
+        r"body_min_deg = \[.*\]", "body_min_deg = [-6.2, -6.2, -3.05, -6.2, -6.2, -6.2]", text
+    )
+    text = re.sub(r"body_max_deg = \[.*\]", "body_max_deg = [6.2, 0.78, 3.05, 6.2, 6.2, 6.2]", text)
+    robot.write_text(text)
+    r = invoke("psi", robot, VIPER.parent / "ur5e" / "plan.toml")
+    assert r.exit_code == 2
+    assert "cell.body_max_deg: every body limit is within ±2π: they look like radians" in r.output
+    assert len(r.output.splitlines()) < 5
