@@ -16,6 +16,7 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from types import FrameType
+from typing import NoReturn
 
 import click
 
@@ -31,6 +32,41 @@ def _terminate(signum: int, frame: FrameType | None) -> None:
     raise Terminated
 
 
+def exit_stopped(number: int) -> NoReturn:
+    """Say that the command stopped on signal ``number`` and end the process at once."""
+    click.echo(f"\nstopped ({signal.Signals(number).name}); nothing written", err=True)
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(EXIT_SIGNAL + number)
+
+
+def _exit_at_once(signum: int, frame: FrameType | None) -> None:
+    exit_stopped(signum)
+
+
+@contextmanager
+def quiet_start() -> Iterator[None]:
+    """While modules are imported (nothing written yet), Ctrl-C ends the process at once.
+
+    Only where Ctrl-C would raise ``KeyboardInterrupt`` (not where it is ignored, as in a
+    background job); the handler before is restored after.
+    """
+    changed = signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if changed:
+        try:
+            signal.signal(signal.SIGINT, _exit_at_once)
+        except ValueError:  # not the main thread
+            changed = False
+    try:
+        yield
+    finally:
+        if changed:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 @contextmanager
 def stop_cleanly() -> Iterator[None]:
     """Run a command so that SIGTERM and Ctrl-C unwind it and then end the process at once."""
@@ -41,14 +77,7 @@ def stop_cleanly() -> Iterator[None]:
     try:
         yield
     except (KeyboardInterrupt, Terminated) as exc:
-        number = signal.SIGINT if isinstance(exc, KeyboardInterrupt) else signal.SIGTERM
-        click.echo(f"\nstopped ({signal.Signals(number).name}); nothing written", err=True)
-        for stream in (sys.stdout, sys.stderr):
-            try:
-                stream.flush()
-            except (OSError, ValueError):
-                pass
-        os._exit(EXIT_SIGNAL + number)
+        exit_stopped(signal.SIGINT if isinstance(exc, KeyboardInterrupt) else signal.SIGTERM)
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)

@@ -46,10 +46,12 @@ gc.set_threshold(*GC_THRESHOLD)
 
 import click  # noqa: E402 - after the thread settings
 
-from wirecal import __version__  # noqa: E402
-from wirecal.cli.help_text import HELP_TEXT  # noqa: E402
-from wirecal.cli.interrupt import stop_cleanly  # noqa: E402
-from wirecal.solver.errors import WirecalError, first_problems  # noqa: E402
+from wirecal.cli.interrupt import quiet_start, stop_cleanly  # noqa: E402
+
+with quiet_start():  # Ctrl-C while starting: no traceback
+    from wirecal import __version__
+    from wirecal.cli.help_text import HELP_TEXT
+    from wirecal.solver.errors import WirecalError, first_problems
 
 MAX_ERROR_LINES = 40
 """Most ``error:`` lines a command prints; a count stands for the rest."""
@@ -125,7 +127,8 @@ class LazyGroup(click.Group):
         """Return the command, importing a lazy one on first use."""
         if cmd_name not in self.commands and cmd_name in self.lazy:
             module, _, attribute = self.lazy[cmd_name][0].partition(":")
-            self.add_command(getattr(importlib.import_module(module), attribute), cmd_name)
+            with quiet_start():  # importing numpy, scipy, matplotlib: Ctrl-C ends it quietly
+                self.add_command(getattr(importlib.import_module(module), attribute), cmd_name)
         return self.commands.get(cmd_name)
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:

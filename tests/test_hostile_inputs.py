@@ -1169,3 +1169,42 @@ def test_cl24_body_limits_in_radians_are_named(tmp_path):
     assert r.exit_code == 2
     assert "cell.body_max_deg: every body limit is within ±2π: they look like radians" in r.output
     assert len(r.output.splitlines()) < 5
+
+
+def test_the_spec_table_of_a_ur_sends_the_user_to_its_own_file(tmp_path):
+    """patch.spec.txt told UR and ABB users to use 'the Adept SPEC utility'."""
+    ur5 = VIPER.parent / "ur5e"
+    log_path = tmp_path / "run.csv"
+    assert invoke("simulate", ur5 / "robot.toml", ur5 / "plan.toml", "-o", log_path).exit_code == 0
+    r = invoke("solve", ur5 / "robot.toml", ur5 / "plan.toml", log_path, "-o", tmp_path / "p.toml")
+    assert r.exit_code == 0, r.output
+    spec = (tmp_path / "p.spec.txt").read_text()
+    assert "SPEC" not in spec
+    assert "the file ending .ur_calibration.conf beside" in spec
+
+
+@pytest.mark.slow
+def test_sigint_stops_the_report_at_once(tmp_path, log):
+    """SIGINT in report once ended in 'Fatal Python error … finalizing' (exit −6)."""
+    import signal
+    import time
+
+    for delay_s in (0.5, 1.5, 2.5):
+        p = subprocess.Popen(
+            [*WIRECAL, "report", str(ROBOT), str(PLAN), str(log), "-o", str(tmp_path / "r.html")],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        )
+        time.sleep(delay_s)
+        t = time.perf_counter()
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=30)
+        if p.returncode == 0:  # finished before the signal
+            (tmp_path / "r.html").unlink()
+            continue
+        assert p.returncode == 128 + signal.SIGINT, err
+        assert "Fatal Python error" not in err
+        assert time.perf_counter() - t < 2.0
+        assert not (tmp_path / "r.html").exists()
