@@ -107,7 +107,14 @@ def assess(
                 f"{abs(m.mm_per_count):g} mm allow at most {limit:.4f} mm (χ² bound, "
                 f"{dof} degrees of freedom, false alarm {FALSE_ALARM:g}): the lengths do "
                 "not fit this robot model (a noisier set-up: state its noise with --noise-mm; "
-                "gross outliers: --robust)",
+                "gross outliers: --robust"
+                + (
+                    "; an encoder scale off beyond [encoder] scale_tolerance_ppm: check "
+                    "mm_per_count, or measure a reference gauge (reference_length_mm), as "
+                    "this log has no reference step)"
+                    if not len(m.reference_mm)
+                    else ")"
+                ),
             )
         )
 

@@ -1208,3 +1208,16 @@ def test_sigint_stops_the_report_at_once(tmp_path, log):
         assert "Fatal Python error" not in err
         assert time.perf_counter() - t < 2.0
         assert not (tmp_path / "r.html").exists()
+
+
+@pytest.mark.parametrize("ppm", [5000, -5000])
+def test_ns07_ns08_a_scale_error_without_a_gauge_names_the_scale(tmp_path, ppm):
+    """A 0.5 % scale error without a gauge: exit 3 with the generic advice only."""
+    log_path = tmp_path / "run.csv"
+    args = ["-o", log_path, "--encoder-scale-ppm", ppm]
+    assert invoke("simulate", ROBOT, PLAN, *args).exit_code == 0
+    r = invoke("solve", ROBOT, PLAN, log_path)
+    assert r.exit_code == 3
+    assert "an encoder scale off beyond [encoder] scale_tolerance_ppm: check mm_per_count" in (
+        " ".join(r.output.split())
+    )
