@@ -1221,3 +1221,14 @@ def test_ns07_ns08_a_scale_error_without_a_gauge_names_the_scale(tmp_path, ppm):
     assert "an encoder scale off beyond [encoder] scale_tolerance_ppm: check mm_per_count" in (
         " ".join(r.output.split())
     )
+
+
+def test_nd21_overflowing_origins_are_refused_before_any_arithmetic(tmp_path):
+    """Overflow warnings and 'differs … by inf mm; please report this URDF' before."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(URDF.read_text().replace('xyz="0 0 0.3"', 'xyz="0 0 1e308"', 1))
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    assert r.exit_code == 2
+    assert "origin xyz 0 0 1e+308 is beyond 10 m" in r.output
+    assert "inf" not in r.output
+    assert "please report" not in r.output
