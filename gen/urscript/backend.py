@@ -83,8 +83,8 @@ class URScriptGenerator(Generator):
         where = f" --host {host} --port {port}" if request.host or request.port else ""
         token = run_token(robot, plan.fingerprint())[:6]
         return (
-            f"run wc_mount, wc_check, then on the PC 'wirecal receive --robot {robot_path} "
-            f"--plan {plan_path}{where} -o LOG' (it listens on {host}:{port}, run token "
+            f"run wc_mount, wc_check, then on the PC 'wirecal receive {robot_path} "
+            f"{plan_path}{where} -o LOG' (it listens on {host}:{port}, run token "
             f"{token}…) and wc_run"
         )
 

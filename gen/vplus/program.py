@@ -72,13 +72,18 @@ class GenOptions:
     crlf: bool = True  # CRLF line ends, as ACE writes V+ files (LF with gen --lf)
 
 
+_SPELLED = {"θ": "theta", "σ": "sigma", "°": " deg", "–": "-", "…": "..."}
+
+
 def _ascii_lines(text: str | None, width: int) -> list[str]:
     """Return ``text`` wrapped to ``width`` for V+ comments and TYPE strings.
 
-    Printable ASCII only, without '"' (others become '?').
+    Printable ASCII only, without '"': θ, σ and ° spelled out, others become '?'.
     """
     if text is None:
         return []
+    for symbol, spelled in _SPELLED.items():
+        text = text.replace(symbol, spelled)
     clean = "".join(ch if 32 <= ord(ch) <= 126 and ch != '"' else "?" for ch in text)
     return textwrap.wrap(clean, width, break_on_hyphens=False)
 
