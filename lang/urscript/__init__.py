@@ -17,6 +17,10 @@ from wirecal.solver.robot import Robot
 
 _TYPES = "UR16e User Manual p. 181; UR5 CB3 User Manual 3.4.5 p. II-69"
 _TICKS = "SW5.20 encoder_get_tick_count page"
+_MOTION = "Script Manual SW10.13, Module motion (q: 6 floats; a pose: 6 floats)"
+_RPC = "Script Manual SW5.20, Remote Procedure Call (RPC)"
+_ASCII = "Script Manual SW10.6, Connecting to URControl (extended ASCII only)"
+_RTDE = "ur_rtde src/script_client.cpp: the register offset injected after the comment"
 
 
 def _program(*body: str) -> str:
@@ -45,6 +49,25 @@ class URScript(Language):
         Example(_program("x = p[0.4, -0.1, 0.3, 0, 3.1416, 0]", "y = x[2]"), _TYPES),
         Example(_program("lo = -2147483648", "hi = 2147483647"), _TYPES),
         Example(_program('c = encoder_get_tick_count(1, opt="raw")'), _TICKS, "5.20"),
+        Example(
+            "def p():\n  global off = # register offset\n24  global k = 2\n  x = off + k\nend\n",
+            _RTDE,
+        ),
+        Example(
+            _program(
+                'camera = rpc_factory("xmlrpc", "http://127.0.0.1/RPC2")',
+                'if (! camera.initialize("RGB")):',
+                '  popup("Camera was not initialized")',
+                "end",
+                "target = camera.getTarget()",
+            ),
+            _RPC,
+        ),
+        Example(
+            _program("movej([0, -1.57, 0, -1.57, 0, 0.5])", "x = p[0.4, 0, 0.3, 0, 3.14, 0]"),
+            _MOTION,
+        ),
+        Example(_program('textmsg("25 \u00b0C")'), _ASCII),
     )
     invalid_examples: ClassVar[tuple[Example, ...]] = (
         Example(_program("x = 2147483648"), _TYPES),
@@ -53,6 +76,11 @@ class URScript(Language):
         Example(_program('c = encoder_get_tick_count(0, opt="rawx")'), _TICKS),
         Example(_program("q = [1, 2, 3]", "x = q[3]"), _TYPES),
         Example(_program('c = encoder_get_tick_count(0, opt="raw")'), _TICKS, "3.15"),
+        Example(_program("movej([0, -1.57, 0, -1.57, 0, 0.5, 0])"), _MOTION),
+        Example(_program("q = [0, 0, 0, 0, 0]", "movej(q)"), _MOTION),
+        Example(_program("x = p[0.4, 0, 0.3, 0, 3.14]"), _MOTION),
+        Example(_program('textmsg("25 \u2192 30")'), _ASCII),
+        Example(_program('x = [1, "a", 2]'), "unconfirmed: a list holds one type"),
     )
 
     patch_companion = SUFFIX  # Universal Robots' standard-DH deltas (calibration.py)
