@@ -207,11 +207,14 @@ def _ur5_with(software: str | None):
 @pytest.mark.parametrize(
     ("software", "refused"),
     [
-        ("3.15", ["time()", 'opt="raw"', "inputs 8-11"]),  # CB3: none confirmed
+        ("3.7", ["filtered count", "inputs 8-11"]),  # CB3 before the conveyor guide's 3.8
+        ("3.15", []),  # CB3: the filtered count, no clock (gen/urscript/cb3.py)
+        ("5.1", ["time()", 'opt="raw"', "inputs 8-11"]),
         ("5.11", ["time()", 'opt="raw"']),
         ("5.19.2", ['opt="raw"']),
         ("5.20", []),
         ("5.25.1", []),
+        ("10.7", ["time()", 'opt="raw"', "inputs 8-11"]),  # PolyScope X: pages not read
     ],
 )
 def test_generation_refuses_calls_older_software_lacks(software, refused):
@@ -238,8 +241,7 @@ def test_generation_refuses_calls_older_software_lacks(software, refused):
     [
         ("5.x", 'give the version as numbers, e.g. "5.20"'),
         ("", "give a non-empty string"),
-        ("10.7", "wirecal knows CB3 3.x, e-Series (PolyScope 5) 5.x"),
-        ("6.0", "wirecal knows CB3 3.x"),
+        ("6.0", "wirecal knows CB3 3.x, e-Series (PolyScope 5) 5.x, PolyScope X 10.x"),
     ],
 )
 def test_software_key_is_checked(software, message):

@@ -42,7 +42,7 @@ class URScript(Language):
         sockets=True,  # socket_open/socket_send_line (SD)
         encoder_interfaces=("pulse",),  # the controller's pulse decoder (SD §14.4)
         counter_bits=32,  # the raw count, an int32 (SD §14.4)
-        software_lines={3: "CB3", 5: "e-Series (PolyScope 5)"},
+        software_lines={3: "CB3", 5: "e-Series (PolyScope 5)", 10: "PolyScope X"},
     )
     interface_notes: ClassVar[Mapping[str, str]] = {"pulse": "the controller's pulse decoder"}
     valid_examples: ClassVar[tuple[Example, ...]] = (

@@ -51,13 +51,17 @@ def run_ur_programs(
 ) -> tuple[Outcome, Outcome | None]:
     """Run ``wc_mount`` (the operator mounts the encoder and continues), then ``wc_run``.
 
-    The controller closes the program's sockets when it ends, however it ends.
+    Each is checked against the controller's declared software first: a call its manual
+    pages do not document is refused by name before anything runs
+    (:mod:`wirecal.lang.urscript.versions`). The controller closes the program's sockets
+    when it ends, however it ends.
     """
-    mount = Interpreter(parse_program(mount_text, MOUNT), controller).execute()
+    software = controller.software
+    mount = Interpreter(parse_program(mount_text, MOUNT, software), controller).execute()
     controller.world.moves = 0  # fault positions count the moves of wc_run
     run = None
     if mount.status == "completed":
-        run = Interpreter(parse_program(run_text, RUN), controller).execute()
+        run = Interpreter(parse_program(run_text, RUN, software), controller).execute()
     controller.close_all()
     return mount, run
 
@@ -113,7 +117,11 @@ class URScriptAdapter:
         )
         enc = robot.encoder
         ctl = URController(
-            world, pulse_inputs or enc.pulse_inputs, encoder_index=enc.channel, pc=pc
+            world,
+            pulse_inputs or enc.pulse_inputs,
+            encoder_index=enc.channel,
+            pc=pc,
+            software=robot.controller.software,
         )
         log = folder / "run.csv"
         if listen is None:
