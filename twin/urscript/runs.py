@@ -57,11 +57,13 @@ def run_ur_programs(
     when it ends, however it ends.
     """
     software = controller.software
-    mount = Interpreter(parse_program(mount_text, MOUNT, software), controller).execute()
+    mount_program = parse_program(mount_text, MOUNT, software)
+    run_program = parse_program(run_text, RUN, software)
+    mount = Interpreter(mount_program, controller).execute()
     controller.world.moves = 0  # fault positions count the moves of wc_run
     run = None
     if mount.status == "completed":
-        run = Interpreter(parse_program(run_text, RUN, software), controller).execute()
+        run = Interpreter(run_program, controller).execute()
     controller.close_all()
     return mount, run
 
