@@ -206,7 +206,7 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
     mpc = robot.encoder.mm_per_count
     speed_rad_s = math.radians(float(np.min(robot.joint_speed_deg_s))) * opt.run.speed_pct / 100
     accel = MOVEJ_DEFAULT_ACCEL_RAD_S2 * opt.run.accel_pct / DEFAULT_RUN.accel_pct
-    context = {
+    context: dict[str, object] = {
         "version": __version__,
         "robot": robot.name,
         "software": robot.controller.software,
@@ -259,7 +259,7 @@ def line_context(robot: Robot, plan: Plan, steps: list[dict]) -> dict[str, objec
     home: list = []
     for step in steps:
         step["home_legs"] = home
-        for target in [*step["vias"], *step["points"]]:  # type: ignore[misc]
+        for target in [*step["vias"], *step["points"]]:
             target["legs"] = legs[k] if legs else []
             k += 1
         home = legs[k] if legs else []

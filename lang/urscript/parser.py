@@ -646,8 +646,7 @@ class _Checker:
                 f"a pose has {POSE_SIZE} numbers p[x, y, z, rx, ry, rz], not {len(e.items)} "
                 f"({MOTION_PAGE})",
             )
-        elif isinstance(e, N.ListLit) and len(set(map(_kind, e.items)) - {None}) > 1:
-            kinds = sorted(set(map(_kind, e.items)) - {None})
+        elif isinstance(e, N.ListLit) and len(kinds := _kinds(e.items)) > 1:
             self.err(
                 line,
                 f"a list mixes {' and '.join(kinds)}: a list holds one type (unconfirmed: "
@@ -753,6 +752,11 @@ class _Checker:
         opt = args.get("opt") if e.name == "encoder_get_tick_count" else None
         if isinstance(opt, N.Str) and opt.text not in TICK_COUNT_OPTS:
             self.err(line, f'{e.name}: opt is "" or "raw", not "{opt.text}"')
+
+
+def _kinds(items: list[N.Expr]) -> list[str]:
+    """Return the types of the literal elements of a list (:func:`_kind`), sorted."""
+    return sorted({k for k in map(_kind, items) if k is not None})
 
 
 def _kind(e: N.Expr) -> str | None:
