@@ -30,8 +30,9 @@ class Rapid(Language):
     title: ClassVar[str] = "ABB RAPID (IRC5, RobotWare 6)"
     suffix: ClassVar[str] = ".mod"
     # program modules (.mod, .modx: RAPID overview, "Program modules": unconfirmed), system
-    # modules (.sys, .sysx) and a task's program file (.prg, older RobotWare: unconfirmed)
-    suffixes: ClassVar[tuple[str, ...]] = (".mod", ".modx", ".sys", ".sysx", ".prg")
+    # modules (.sys, .sysx), a task's program file (.prg, older RobotWare: unconfirmed) and
+    # the I/O configuration whose signals the modules read (EIO.cfg, lang/rapid/eio.py)
+    suffixes: ClassVar[tuple[str, ...]] = (".mod", ".modx", ".sys", ".sysx", ".prg", ".cfg")
     live_check: ClassVar[str] = "wc_check"
     capabilities: ClassVar[Capabilities] = Capabilities(
         int_bits=None,

@@ -125,6 +125,12 @@ class _Build(Transformer):
     def opt_arg(self, meta, c):
         return N.Arg(c[1], c[0])
 
+    def cond_arg(self, meta, c):
+        return N.Arg(None, c[0], condition=c[1])
+
+    def placeholder(self, meta, c):
+        return N.Placeholder(str(c[0]), meta.line)
+
     def mode(self, meta, c):
         return str(c[0]).upper()
 
@@ -329,8 +335,35 @@ def _too_deep(text: str) -> SyntaxProblem | None:
 _TOKEN = re.compile(r'"(?:[^"\n]|"")*"|![^\n]*|[A-Za-z][A-Za-z0-9_]*|[()\[\]{}]')
 
 
+_HEADER = re.compile(r"\A\s*%%%[^\n]*\n(?:(?!%%%)[^\n]*\n)*?\s*%%%[^\n]*(?=\n|\Z)")
+"""The header a controller writes before a saved module (``%%%``, ``VERSION:1``,
+``LANGUAGE:ENGLISH``, ``%%%``): modules saved by IRC5 controllers start with it (e.g.
+SDEBEUL/Kraker1@5a5835c, HOME/linked_m.sys, from a RobotWare 5 backup); its meaning is
+unconfirmed (no page read), wirecal reads past it."""
+
+
+def _without_header(text: str) -> str:
+    """Blank the controller's ``%%%`` header, keeping the line numbers."""
+    m = _HEADER.match(text)
+    return text if m is None else "\n" * m.group().count("\n") + text[m.end() :]
+
+
+def _binary(text: str) -> bool:
+    """Whether ``text`` is no RAPID text (an encrypted module: NUL or control bytes)."""
+    head = text[:4096]
+    controls = sum(1 for ch in head if ord(ch) < 32 and ch not in "\t\n\r\f")
+    return controls > max(2, len(head) // 100)
+
+
 def parse_module(text: str) -> N.Module:
     """Parse one module's text; raise :class:`SyntaxProblem` where the grammar stops."""
+    if _binary(text):
+        raise SyntaxProblem(
+            1,
+            "not RAPID text (control bytes): an encrypted or encoded module, which "
+            "wirecal cannot read; check the other modules with --external-calls",
+        )
+    text = _without_header(text)
     deep = _too_deep(text)
     if deep is not None:
         raise deep
