@@ -34,6 +34,7 @@ class URScript(Language):
     key = "urscript"
     title = "Universal Robots URScript"
     suffix = ".script"
+    suffixes = (".script", ".urscript")
     live_check = "wc_check"
     capabilities = Capabilities(
         int_bits=32,  # int32 (the manuals above)

@@ -25,6 +25,7 @@ class VPlus(Language):
     key = "vplus"
     title = "Adept/Omron V+ and eV+"
     suffix = ".v2"
+    suffixes = (".v2", ".pg")  # .pg: a program file as V+ STOREP writes it (unconfirmed)
     live_check = "wc.check"
     default = True  # robot files written before [controller] existed are V+
     capabilities = Capabilities(
