@@ -90,6 +90,18 @@ class URScript(Language):
         """Return UR's standard-DH deltas of ``offsets`` in calibration.conf's layout."""
         return calibration_text(robot, offsets)
 
+    def lint_files(
+        self,
+        texts: Mapping[str, str],
+        software: str | None = None,
+        *,
+        external_calls: bool = False,
+    ) -> list[str]:
+        """Check a program with the script files included in it (:mod:`.files`)."""
+        from wirecal.lang.urscript.files import check_files
+
+        return check_files(texts, software)
+
     def lint(
         self,
         text: str,

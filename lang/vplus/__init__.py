@@ -52,6 +52,18 @@ class VPlus(Language):
         Example(_program("fine = 1"), "UG p. 99; FINE a keyword: unconfirmed"),
     )
 
+    def lint_files(
+        self,
+        texts: Mapping[str, str],
+        software: str | None = None,
+        *,
+        external_calls: bool = False,
+    ) -> list[str]:
+        """Check V+ files loaded together: a CALL may name a program of any of them."""
+        from wirecal.lang.vplus.files import check_files
+
+        return check_files(texts, external_calls=external_calls)
+
     def lint(
         self,
         text: str,
