@@ -9,8 +9,8 @@ every fragment inserted at the top of its body (each fragment line indented, as 
 layout rule wants), so a call to a function a fragment defines is known, and reports every
 problem at its own file and line. Where in the body an include sits does not change what
 the checker finds (a function is known wherever it is defined in the program); what the
-fragment's own statements do at run time is the twin's, not the checker's. The first file
-that is a whole program is the program (give it first); the others are its includes.
+fragment's own statements do at run time is the twin's, not the checker's. Every file laid
+out as a whole program is a program; every other file is included in each of them.
 """
 
 from __future__ import annotations
@@ -21,38 +21,48 @@ from collections.abc import Mapping
 from wirecal.lang.urscript.parser import parse_program
 from wirecal.solver.errors import WirecalError
 
-_PROGRAM = re.compile(r"\A(\s*(#[^\n]*)?\n)*(def|sec)\s", re.MULTILINE)
-"""A program file: its first line that is neither blank nor a comment opens ``def``/``sec``."""
 
 _WHERE = re.compile(r"^<combined>:(\d+): ")
 
 
 def is_program(text: str) -> bool:
-    """Tell whether a file's text is a whole program (not a fragment to include)."""
-    return bool(_PROGRAM.match(text))
+    """Tell whether a file's text is laid out as a whole program (not a fragment to include).
+
+    As the layout rule has it: the first line (blank and comment lines aside) opens ``def``
+    or ``sec`` in the first column, the last is ``end`` in the first column, every other
+    line is indented. A file of several top-level functions is a fragment.
+    """
+    lines = [x for x in text.splitlines() if x.strip() and not x.lstrip().startswith("#")]
+    return (
+        len(lines) >= 2
+        and re.match(r"(def|sec)\s", lines[0]) is not None
+        and lines[-1].rstrip() == "end"
+        and all(x[:1].isspace() for x in lines[1:-1])
+    )
 
 
 def check_files(texts: Mapping[str, str], software: str | None = None) -> list[str]:
-    """Return the problems of a program and its included files (file name → text).
+    """Return the problems of programs and the files included in them (file name → text).
 
-    The first file that is a whole program (:func:`is_program`) is the program, checked
-    with every other file inserted; without one, each file is checked alone (and so
-    refused as a program).
+    Each file laid out as a whole program (:func:`is_program`) is a program, checked with
+    every other file inserted; without one, each file is checked alone (and so refused as a
+    program). A problem found in an included file is reported once.
     """
-    source = next((s for s, t in texts.items() if is_program(t)), None)
-    if source is None:
+    programs = [s for s, t in texts.items() if is_program(t)]
+    if not programs:
         return [p for s, t in texts.items() for p in _problems(t, s, software)]
-    fragments = [(s, t) for s, t in texts.items() if s != source]
-    text, origin = _combined(source, texts[source], fragments)
+    fragments = [(s, t) for s, t in texts.items() if s not in programs]
     problems: list[str] = []
-    for problem in _problems(text, "<combined>", software):
-        m = _WHERE.match(problem)
-        if m is None:
-            problems.append(problem.replace("<combined>", source, 1))
-        else:
-            file, line = origin[int(m.group(1)) - 1]
-            problems.append(f"{file}:{line}: {problem[m.end() :]}")
-    return problems
+    for source in programs:
+        text, origin = _combined(source, texts[source], fragments)
+        for problem in _problems(text, "<combined>", software):
+            m = _WHERE.match(problem)
+            if m is None:
+                problems.append(problem.replace("<combined>", source, 1))
+            else:
+                file, line = origin[int(m.group(1)) - 1]
+                problems.append(f"{file}:{line}: {problem[m.end() :]}")
+    return list(dict.fromkeys(problems))
 
 
 def _problems(text: str, source: str, software: str | None) -> list[str]:
