@@ -21,7 +21,6 @@ from collections.abc import Mapping
 from wirecal.lang.urscript.parser import parse_program
 from wirecal.solver.errors import WirecalError
 
-
 _WHERE = re.compile(r"^<combined>:(\d+): ")
 
 
