@@ -2,20 +2,10 @@
 
 from __future__ import annotations
 
-from click.testing import CliRunner
-
-from wirecal.cli.main import main
+from .lint_together import lint
 
 MAIN = "def main():\n  x = helper(2)\n  textmsg(x)\nend\n"
 HELPER = "def twice(a):\n  return 2 * a\nend\ndef helper(a):\n  return a + 1\nend\n"
-
-
-def lint(tmp_path, *files: tuple[str, str], args: tuple[str, ...] = ()):
-    paths = []
-    for name, text in files:
-        (tmp_path / name).write_text(text)
-        paths.append(str(tmp_path / name))
-    return CliRunner().invoke(main, ["lint", *args, *paths])
 
 
 def test_an_included_file_defines_what_the_program_calls(tmp_path):

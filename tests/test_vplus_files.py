@@ -2,20 +2,10 @@
 
 from __future__ import annotations
 
-from click.testing import CliRunner
-
-from wirecal.cli.main import main
+from .lint_together import lint
 
 MAIN = ".PROGRAM main()\n    CALL helper(1)\n.END\n"
 HELPER = ".PROGRAM helper(x)\n    TYPE x\n.END\n"
-
-
-def lint(tmp_path, *files: tuple[str, str], args: tuple[str, ...] = ()):
-    paths = []
-    for name, text in files:
-        (tmp_path / name).write_text(text)
-        paths.append(str(tmp_path / name))
-    return CliRunner().invoke(main, ["lint", *args, *paths])
 
 
 def test_a_call_to_a_program_of_another_file(tmp_path):
