@@ -98,13 +98,21 @@ def urcl_sent(script: str, software: str) -> str:
     return "def externalControl():\n" + "".join(f"\t{line}\n" for line in out) + "end\n"
 
 
-def sent(send: str, text: str, software: str | None) -> list[tuple[str, str]]:
-    """Return (label, text) of each form the sender ``send`` sends ``text`` in."""
+def sent(send: str, text: str, software: str | None) -> list[tuple[str, str | tuple[str, str]]]:
+    """Return (label, text) of each form the sender ``send`` sends ``text`` in.
+
+    A text is a whole program, or (program, fragment): a program with a file included.
+    """
     if send == "ur_rtde":
         assert software is not None
         return [(f"{software}, offset {k}", ur_rtde_sent(text, software, k)) for k in (0, 24)]
     if send == "urcl":
         assert software is not None
         return [(software, urcl_sent(text, software))]
+    if send == "python-string":  # a script kept in a Python '''…''' string
+        quotes = "'" * 3
+        body = text.split(quotes, 1)[1].rsplit(quotes, 1)[0]
+        main = 'def main():\n  textmsg("main")\nend\n'
+        return [("in a program", f"def program():\n{body}\nend\n"), ("included", (main, body))]
     assert send == "as-is", send
     return [("as loaded", text)]

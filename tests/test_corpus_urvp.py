@@ -54,4 +54,9 @@ def test_public_programs_lint_clean(key, entry, software):
     lang = language(key)
     short = ".".join(software.split(".")[:2]) if software else None
     for label, program in sent(entry.get("send", "as-is"), text, software):
-        assert lang.lint(program, f"{entry['path']} ({label})", short) == [], label
+        where = f"{entry['path']} ({label})"
+        if isinstance(program, tuple):  # a program and a file included in it
+            files = {"main.script": program[0], where: program[1]}
+            assert lang.lint_files(files, short) == [], label
+        else:
+            assert lang.lint(program, where, short) == [], label
