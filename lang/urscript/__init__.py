@@ -20,6 +20,7 @@ _TICKS = "SW5.20 encoder_get_tick_count page"
 _MOTION = "Script Manual SW10.13, Module motion (q: 6 floats; a pose: 6 floats)"
 _RPC = "Script Manual SW5.20, Remote Procedure Call (RPC)"
 _ASCII = "Script Manual SW10.6, Connecting to URControl (extended ASCII only)"
+_GUIDE = "UR's conveyor tracking guide (CB3 >= 3.8, e-Series >= 5.2)"
 _RTDE = "ur_rtde src/script_client.cpp: the register offset injected after the comment"
 
 
@@ -69,6 +70,11 @@ class URScript(Language):
             _MOTION,
         ),
         Example(_program('textmsg("25 \u00b0C")'), _ASCII),
+        Example(
+            _program("encoder_enable_pulse_decode(0, 1, 8, 9)", "c = encoder_get_tick_count(0)"),
+            _GUIDE,
+            "3.15",
+        ),
     )
     invalid_examples: ClassVar[tuple[Example, ...]] = (
         Example(_program("x = 2147483648"), _TYPES),
@@ -82,6 +88,10 @@ class URScript(Language):
         Example(_program("x = p[0.4, 0, 0.3, 0, 3.14]"), _MOTION),
         Example(_program('textmsg("25 \u2192 30")'), _ASCII),
         Example(_program('x = [1, "a", 2]'), "unconfirmed: a list holds one type"),
+        Example(_program("c = encoder_get_tick_count(0)"), _GUIDE, "3.7"),
+        Example(
+            _program("c = encoder_get_tick_count(0)"), _GUIDE + "; 10.x pages not read", "10.7"
+        ),
     )
 
     patch_companion = SUFFIX  # Universal Robots' standard-DH deltas (calibration.py)
