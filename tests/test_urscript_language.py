@@ -337,3 +337,17 @@ def test_a_generated_program_breaking_a_rule_is_an_internal_error():
         "wc_x.script:2: variable z is read but never assigned",
     ]
     assert software_problems(robot, {"wc_x.script": program("y = 1")}) == []
+
+
+# ---------- statements on one joined text (ur_rtde's injected register offset) ----------
+def test_a_statement_after_another_on_a_joined_text_is_read_as_the_controller_reads_it():
+    sent = "def p():\n  global a = # offset\n24  global b = # offset\n24  x = a + b\nend\n"
+    assert problems(sent) == []
+    assert any("bad syntax" in p for p in problems(sent.replace("24  global b", "24 ) global b")))
+
+
+def test_splitting_a_hostile_joined_text_is_bounded():
+    text = "def p():\n  x = 1 +\n" + "  y = 1 " * 5000 + "z = (\nend\n"
+    found = problems(text)  # a message, never RecursionError, in well under a second
+    assert found
+    assert all(p.startswith("t.script:") for p in found)

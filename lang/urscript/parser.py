@@ -378,25 +378,39 @@ def _split_joined(text: str, n: int, breaks: list[tuple[int, int]]) -> list[tupl
     """
     if not breaks or _parses(text):
         return [(n, text)]
-    pieces = _pieces(text, breaks[0][0], 0)
+    pieces = _pieces(text, breaks[0][0])
     if pieces is None:
         return [(n, text)]
     return [(max([n] + [m for at, m in breaks if at <= start]), piece) for start, piece in pieces]
 
 
-def _pieces(text: str, first_break: int, offset: int) -> list[tuple[int, str]] | None:
-    """Split ``text`` into statements that each parse (offsets into the joined text)."""
-    if _parses(text):
-        return [(offset, text)]
-    for m in re.finditer(r"\s+", text):
-        if offset + m.end() <= first_break or not _STARTS.match(text, m.end()):
-            continue
-        head = text[: m.start()]
-        if _parses(head):
-            rest = _pieces(text[m.end() :], first_break, offset + m.end())
-            if rest is not None:
-                return [(offset, head), *rest]
-    return None
+MAX_SPLIT_TRIES = 200
+"""Parses :func:`_pieces` tries at most on one joined text (a bound for hostile input)."""
+
+
+def _pieces(text: str, first_break: int) -> list[tuple[int, str]] | None:
+    """Split ``text`` into statements that each parse: (offset in the text, statement).
+
+    Left to right, each piece ends at the first statement start after a line break where
+    what comes before parses; None when that fails or takes over :data:`MAX_SPLIT_TRIES`.
+    """
+    pieces: list[tuple[int, str]] = []
+    start, tries = 0, 0
+    while not _parses(text[start:]):
+        for m in re.finditer(r"\s+", text[start:]):
+            at = start + m.end()
+            if at <= first_break or not _STARTS.match(text, at):
+                continue
+            tries += 1
+            if tries > MAX_SPLIT_TRIES:
+                return None
+            if _parses(text[start : start + m.start()]):
+                pieces.append((start, text[start : start + m.start()]))
+                start = at
+                break
+        else:
+            return None
+    return [*pieces, (start, text[start:])]
 
 
 def _parses(text: str) -> bool:
