@@ -1,4 +1,4 @@
-"""``wirecal lint``: check program files with their language's checker (by file suffix)."""
+"""``wirecal lint``: check program files as a controller loads them, each with its language."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import sys
 import click
 
 from wirecal.cli.main import user_errors
-from wirecal.lang.registry import language_of_file
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import read_input
 from wirecal.solver.robot import SOFTWARE_PATTERN
@@ -16,46 +15,77 @@ from wirecal.solver.robot import SOFTWARE_PATTERN
 @click.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @click.option(
+    "--language",
+    "language_key",
+    metavar="KEY",
+    help="The language of every file (rapid, urscript, vplus) when the suffixes do not say it.",
+)
+@click.option(
+    "--separately",
+    is_flag=True,
+    help="Check each file alone instead of the files of one language as one program.",
+)
+@click.option(
     "--external-calls",
     is_flag=True,
-    help="Allow CALLs to programs that are not in the file (loaded from another file).",
+    help="Allow calls to routines and programs in none of the files (loaded from elsewhere).",
 )
 @click.option(
     "--software",
     metavar="VERSION",
-    help='URScript: the controller software ("5.20", "3.15"); a call its manual pages do not '
-    "document is a problem too.",
+    help='The controller software ("5.20", "3.15" for URScript; "6.13" for RAPID); a call '
+    "its manual pages do not document is a problem too.",
 )
 @user_errors
-def lint(files, external_calls, software):
-    """Check V+ program files as a controller's LOAD would, and URScript (.script) files.
+def lint(files, language_key, separately, external_calls, software):
+    """Check program files as the controller would load them, together as one program.
 
-    V+ files, ours or anyone's, against the V+ rules LOAD applies: program format, keywords
-    as names (User's Guide p. 99), declarations first, 15-character names, type prefixes,
-    labels (0-65535), CALL arguments, constants within the ranges of pp. 100 and 102. A file
-    named *.script is URScript, checked against the rules of a script sent to a UR
-    controller (def/sec and end in the first column, other lines indented), the language
-    of the Script Manual (poses, threads, critical sections, default arguments), the
-    functions it calls and their arguments, int32/float32 constants, encoder indices, and
-    variables never assigned. What each rule rests on: docs/languages.md.
+    The files of one language form one program: a RAPID task's modules (global data,
+    types and routines shared), V+ files sharing programs, a URScript program with the
+    files it includes. The language comes from the suffix, or --language:
+
+    RAPID (.mod .modx .sys .sysx .prg) against the RAPID kernel's syntax and the
+    reference manual's instructions, functions and data types; URScript (.script
+    .urscript) against the Script Manual of the --software version; V+ (.v2 .pg) against
+    LOAD's rules in the V+ Language User's Guide v17 (format, keywords, declarations,
+    ranges).
+
+    A file with another suffix is read as V+ unless --language says otherwise. Each rule
+    cites the page it rests on, or says it is unconfirmed: docs/languages.md,
+    docs/rapid.md.
 
     Prints one "file:line: problem" line per problem. CRLF and LF line endings are both
     read.
 
     Exit status: 0 every file clean; 1 problems found; 2 a file cannot be read.
     """
+    from wirecal.lang.registry import language, language_of_file, language_of_suffix
+
     if software is not None and not SOFTWARE_PATTERN.fullmatch(software):
         raise WirecalError([f'--software {software!r}: give the version as numbers, e.g. "5.20"'])
-    texts = {path: read_input(path, "program file")[0].decode("latin-1") for path in files}
+    chosen = language(language_key) if language_key is not None else None
+    groups: dict[str, dict[str, str]] = {}
+    for path in dict.fromkeys(files):
+        lang = chosen or language_of_file(path)
+        if chosen is None and language_of_suffix(path) is None:
+            click.echo(f"{path}: no language has this suffix: read as {lang.title}", err=True)
+        text = read_input(path, "program file")[0].decode("latin-1")
+        groups.setdefault(lang.key, {})[path] = text
     problems = 0
-    for path, text in texts.items():
-        lang = language_of_file(path)
-        found = lang.lint(text, path, software, external_calls=external_calls)
+    for key, texts in groups.items():
+        lang = language(key)
+        units = [{p: t} for p, t in texts.items()] if separately else [texts]
+        found = [
+            line
+            for unit in units
+            for line in lang.lint_files(unit, software, external_calls=external_calls)
+        ]
         for line in found:
             click.echo(line)
         problems += len(found)
-        if not found:
-            click.echo(f"{path}: {lang.title}, no problems", err=True)
+        for path in texts:
+            if not any(line.startswith(f"{path}:") for line in found):
+                click.echo(f"{path}: {lang.title}, no problems", err=True)
     if problems:
         click.echo(f"error: {problems} problem{'s' if problems != 1 else ''} found", err=True)
         sys.exit(1)

@@ -196,7 +196,7 @@ for _name, _target, _summary in (
     (
         "lint",
         "wirecal.cli.lint:lint",
-        "Check V+ program files as a controller's LOAD would, and URScript (.script) files.",
+        "Check program files as the controller would load them, together as one program.",
     ),
     (
         "observe",

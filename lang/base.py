@@ -39,7 +39,8 @@ class Language:
 
     key: ClassVar[str]  # the robot file's [controller] language value
     title: ClassVar[str]  # its name in messages
-    suffix: ClassVar[str]  # program file suffix
+    suffix: ClassVar[str]  # the suffix of the program files wirecal writes
+    suffixes: ClassVar[tuple[str, ...]] = ()  # every suffix its program files take (lint)
     live_check: ClassVar[str]  # the generated program that shows the live counts
     capabilities: ClassVar[Capabilities]
     interface_notes: ClassVar[Mapping[str, str]] = {}  # encoder interface → how it is read
@@ -66,6 +67,30 @@ class Language:
         are allowed (loaded from another file).
         """
         raise NotImplementedError
+
+    def lint_files(
+        self,
+        texts: Mapping[str, str],
+        software: str | None = None,
+        *,
+        external_calls: bool = False,
+    ) -> list[str]:
+        """Check files a controller loads together as one program (file name → text).
+
+        One RAPID task's modules, V+ files sharing programs, a URScript program with the
+        files it includes: a language that knows how they share names overrides this;
+        by default each file is checked alone. Problems are 'SOURCE:LINE: what', each
+        naming the file it is in ([] = clean).
+        """
+        return [
+            problem
+            for source, text in texts.items()
+            for problem in self.lint(text, source, software, external_calls=external_calls)
+        ]
+
+    def all_suffixes(self) -> tuple[str, ...]:
+        """Return every suffix of the language's program files, :attr:`suffix` first."""
+        return (self.suffix, *(s for s in self.suffixes if s != self.suffix))
 
     def patch_section(self, robot: Any, offsets: Mapping[str, float]) -> str | None:
         """Return the text of the language's own patch companion (None: it has none).

@@ -59,13 +59,18 @@ def default_language() -> Language:
     return only
 
 
-def language_of_file(path: str) -> Language:
-    """Return the language whose program suffix ``path`` has; the default language otherwise."""
+def language_of_suffix(path: str) -> Language | None:
+    """Return the language one of whose program suffixes ``path`` has; None if none does."""
     suffix = PurePath(path).suffix.lower()
     for lang in languages().values():
-        if lang.suffix == suffix:
+        if suffix in lang.all_suffixes():
             return lang
-    return default_language()
+    return None
+
+
+def language_of_file(path: str) -> Language:
+    """Return the language whose program suffix ``path`` has; the default language otherwise."""
+    return language_of_suffix(path) or default_language()
 
 
 def first_channel(interface: str | None) -> int:

@@ -69,7 +69,8 @@ class URScriptGenerator(Generator):
             out.append(
                 f"{robot_path}: [controller] software not declared; the programs need "
                 f"e-Series software {'.'.join(map(str, NEEDED))} or later "
-                "(docs/languages.md); declare it and a CB3 or older version is refused"
+                "(docs/languages.md); declare it: a CB3 (3.x) gets the CB3 programs, and a "
+                "version whose pages lack a call they make is refused"
             )
         if robot.controller.key is None:
             out.append(f"{robot_path}: {NO_KEY}")

@@ -29,6 +29,10 @@ class Rapid(Language):
     key: ClassVar[str] = "rapid"
     title: ClassVar[str] = "ABB RAPID (IRC5, RobotWare 6)"
     suffix: ClassVar[str] = ".mod"
+    # program modules (.mod, .modx: RAPID overview, "Program modules": unconfirmed), system
+    # modules (.sys, .sysx), a task's program file (.prg, older RobotWare: unconfirmed) and
+    # the I/O configuration whose signals the modules read (EIO.cfg, lang/rapid/eio.py)
+    suffixes: ClassVar[tuple[str, ...]] = (".mod", ".modx", ".sys", ".sysx", ".prg", ".cfg")
     live_check: ClassVar[str] = "wc_check"
     capabilities: ClassVar[Capabilities] = Capabilities(
         int_bits=None,
@@ -65,6 +69,18 @@ class Rapid(Language):
         from wirecal.lang.rapid.checker import check  # the parser only when linting
 
         return check(text, source, software, external_calls=external_calls)
+
+    def lint_files(
+        self,
+        texts: Mapping[str, str],
+        software: str | None = None,
+        *,
+        external_calls: bool = False,
+    ) -> list[str]:
+        """Check the modules of one task together: each sees the others' global names."""
+        from wirecal.lang.rapid.checker import check_task
+
+        return check_task(texts, software, external_calls=external_calls)
 
     def patch_section(self, robot: Robot, offsets: Mapping[str, float]) -> str:
         """Return the patch's companion: ABB fine calibration's joint offsets (TOML)."""

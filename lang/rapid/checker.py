@@ -27,6 +27,7 @@ from typing import Any
 
 from wirecal.lang.rapid import nodes as N
 from wirecal.lang.rapid import tables as T
+from wirecal.lang.rapid.eio import CONFIG_SUFFIX, config_signals
 from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
 
 SUBSET = "not in wirecal's RAPID subset"
@@ -182,6 +183,8 @@ class Typer:
             return BOOL
         if isinstance(e, N.Name):
             sym = self.symbol(e.name)
+            if sym is not None and sym.type.name in T.SIGNAL_TYPES and not sym.type.dims:
+                return NUM  # a signal in an expression is its value (unconfirmed)
             return sym.type if sym else None
         if isinstance(e, N.Component):
             return self._component(e)
@@ -191,7 +194,7 @@ class Typer:
             return self._aggregate(e, want)
         if isinstance(e, N.Neg):
             got = self.type(e.a)
-            if got is not None and got not in (NUM, DNUM, LITERAL, UNKNOWN):
+            if got is not None and got not in (NUM, DNUM, LITERAL, UNKNOWN, Type("pos")):
                 self.problems.add(self.line, f"- of a {got}: a number is needed")
             return got
         if isinstance(e, N.Not):
@@ -209,7 +212,7 @@ class Typer:
         if e.field.lower() not in parts:
             self.problems.add(self.line, f"{base} has no component {e.field}")
             return None
-        return Type(parts[e.field.lower()])
+        return self.named_type(parts[e.field.lower()])
 
     def _index(self, e: N.Index) -> Type | None:
         base = self.type(e.base)
@@ -256,8 +259,19 @@ class Typer:
             self.expect(item, self.named_type(type_name), f"component {name} of {want}")
         return want
 
+    def operands(self, e: N.BinOp) -> tuple[Type | None, Type | None]:
+        """Return the types of a binary operation's operands.
+
+        An aggregate takes the other operand's type (``[10,10,30] + p.trans``).
+        """
+        if isinstance(e.a, N.Aggregate) and not isinstance(e.b, N.Aggregate):
+            b = self.type(e.b)
+            return self.type(e.a, b if b != LITERAL else None), b
+        a = self.type(e.a)
+        return a, self.type(e.b, a if isinstance(e.b, N.Aggregate) and a != LITERAL else None)
+
     def _binop(self, e: N.BinOp) -> Type | None:
-        a, b = self.type(e.a), self.type(e.b)
+        a, b = self.operands(e)
         if a is None or b is None:
             return None
         if UNKNOWN in (a, b):
@@ -270,6 +284,9 @@ class Typer:
             return BOOL
         if op == "+" and a == b == STRING:
             return STRING
+        vector = _VECTOR_OPS.get((a.name if not a.dims else "", op, b.name if not b.dims else ""))
+        if vector is not None:
+            return Type(vector)
         if op in ("=", "<>") and a == b and a not in (LITERAL,) and not a.dims:
             return BOOL
         both = self.numeric(a, b, op, e)
@@ -342,7 +359,7 @@ class Typer:
         if routine is None and (unlisted or (self.external and key not in T.OTHER_ROUTINES)):
             for a in args:  # a routine of another module: its arguments are still read
                 if a.value is not None and self.root(a.value) is None:
-                    self.type(a.value)
+                    self.untyped(a.value)
             return UNKNOWN
         if routine is None or (routine.returns is None) == function:
             self._unknown(name, function, routine)
@@ -355,6 +372,14 @@ class Typer:
                 f"{'.'.join(map(str, self.software))})",
             )
         return self.named_type(routine.returns) if routine.returns else None
+
+    def untyped(self, e: N.Expr) -> None:
+        """Read an expression whose type no signature gives (an aggregate item by item)."""
+        if isinstance(e, N.Aggregate):
+            for item in e.items:
+                self.untyped(item)
+        else:
+            self.type(e)
 
     def named_type(self, type_name: str) -> Type:
         """Return the type a table or declaration names (an alias followed)."""
@@ -409,11 +434,42 @@ class Typer:
                 self.problems.add(self.line, f"{name} \\{a.name}: {why}")
                 continue
             seen.add(a.name.lower())
-            if (opt.type == "switch") != (a.value is None):
+            if a.condition is not None:
+                self.conditional(name, opt, a.condition)
+            elif (opt.type == "switch") != (a.value is None):
                 need = "takes no value" if opt.type == "switch" else f"needs := a {opt.type}"
                 self.problems.add(self.line, f"{name} \\{a.name} {need}")
             elif a.value is not None:
                 self.argument(name, opt, a)
+
+    def conditional(self, name: str, p: T.P, condition: str) -> None:
+        r"""Check ``\P ? Param``: ``Param`` an optional parameter of the calling routine.
+
+        A conditional argument passes the caller's optional parameter on when it is given
+        (RAPID kernel, conditional arguments: unconfirmed, no page read; controller-loaded:
+        compas-rrc/compas_rrc_start@4b831ac, RRC_Base_Feedback_Rob.sys, ``\FlyBy?FlyBy``).
+        """
+        if self.lang.subset:
+            self.problems.add(
+                self.line, f"{name} \\{p.name}?{condition}: a conditional argument: {SUBSET}"
+            )
+            return
+        sym = self.scope.get(condition.lower())
+        if sym is None or sym.kind != "OPT":
+            self.problems.add(
+                self.line,
+                f"{name} \\{p.name}?{condition}: {condition} is not an optional parameter of "
+                "this routine",
+            )
+        elif (
+            UNKNOWN not in (sym.type,)
+            and p.type != "switch"
+            and sym.type != self.named_type(p.type)
+        ):
+            self.problems.add(
+                self.line,
+                f"{name} \\{p.name}?{condition}: {condition} is a {sym.type}, not a {p.type}",
+            )
 
     def _named(self, name: str, required: list[T.P], positional: list[N.Arg]) -> None:
         """Check required arguments given by name (``Speed:=v100``): each in its place."""
@@ -428,6 +484,9 @@ class Typer:
         assert a.value is not None
         if p.type in T.SIGNAL_TYPES:
             self._signal(name, p, a.value)
+            return
+        if p.type == T.SIGNAL_NAME:
+            self._any_signal(name, p, a.value)
             return
         if p.type in ("anytype", "anynum"):
             if p.var:
@@ -446,7 +505,8 @@ class Typer:
             return
         if p.var:
             self.writable(a.value, f"{name}'s {p.name}")
-        self.expect(a.value, self.named_type(p.type), f"{name}'s {p.name}")
+        want = Type(self.named_type(p.type).name, (None,) * p.dims)
+        self.expect(a.value, want, f"{name}'s {p.name}")
 
     def _signal(self, name: str, p: T.P, e: N.Expr) -> None:
         """Check a signal: a name of the configuration, or (beyond the subset) its data."""
@@ -460,6 +520,21 @@ class Typer:
             self.line,
             f"{name}'s {p.name} is the name of {T.SIGNAL_TYPES[p.type]} signal ({p.type})",
         )
+
+    def _any_signal(self, name: str, p: T.P, e: N.Expr) -> None:
+        """Check a signal of any type: a configured name, a string naming one, or a variable."""
+        if isinstance(e, N.Name) and e.name.lower() not in self.scope and not p.var:
+            self.signals.add(e.name)
+            return
+        if p.var and not self.writable(e, f"{name}'s {p.name}"):
+            return
+        got = self.type(e) if not isinstance(e, N.Name) else self.symbol(e.name)
+        got = got.type if isinstance(got, Symbol) else got
+        if got is None or got == UNKNOWN or (got.name in T.SIGNAL_TYPES and not got.dims):
+            return
+        if got == STRING and not p.var:
+            return
+        self.problems.add(self.line, f"{name}'s {p.name} is an I/O signal, not a {got}")
 
     def _predefined(self, name: str, p: T.P, e: N.Expr) -> None:
         known = [k for k, v in T.PREDEFINED.items() if v == p.type]
@@ -491,6 +566,21 @@ class Typer:
         return True
 
 
+_VECTOR_OPS = {
+    ("pos", "+", "pos"): "pos",
+    ("pos", "-", "pos"): "pos",
+    ("pos", "*", "pos"): "pos",  # the cross product
+    ("num", "*", "pos"): "pos",
+    ("numeric literal", "*", "pos"): "pos",
+    ("pos", "*", "num"): "pos",
+    ("pos", "*", "numeric literal"): "pos",
+    ("pos", "/", "num"): "pos",
+    ("pos", "/", "numeric literal"): "pos",
+    ("orient", "*", "orient"): "orient",
+}
+"""Operators on pos and orient and their result (RAPID kernel, expressions: unconfirmed;
+controller-loaded: SDEBEUL/Kraker1@5a5835c mSettings_Gripper.sys adds two pos)."""
+
 _KIND_WORDS = {"CONST": "a CONST", "PREDEF": "predefined data", "FOR": "a FOR loop variable"}
 
 
@@ -515,6 +605,7 @@ class Checker:
         task: tuple[N.Module, ...] = (),
         external_calls: bool = False,
         subset: bool = False,
+        config: Mapping[str, str] | None = None,
     ):
         self.module, self.problems, self.task = module, Problems(), task
         self.external_calls = external_calls
@@ -522,13 +613,15 @@ class Checker:
         self.lang = dialect(subset, (module, *task))
         predefined = T.PREDEFINED if subset else {**T.PREDEFINED, **T.WIDE_PREDEFINED}
         self.globals: dict[str, Symbol] = {
-            k: Symbol(k, Type(self.lang.resolve(v) or v), "PREDEF") for k, v in predefined.items()
+            k: Symbol(k, Type(self.lang.resolve(v) or v), "PREDEF")
+            for k, v in {**(config or {}), **predefined}.items()
         }
         self.user: dict[str, T.Routine] = {}
         self.traps: set[str] = set()
         self.signals: set[str] = set()
         self.own_types = {u.name.lower() for m in (module, *task) for u in m.unsupported if u.name}
         self.sizes: dict[str, int] = {}
+        self.task_data: set[str] = set()  # global data the task's other modules declare
         self.in_handler = False
         self.labels: set[str] = set()
 
@@ -549,6 +642,8 @@ class Checker:
             else:
                 self.own_type(u, m)
         self.declare_task()
+        self.task_data = {k for k, sym in self.globals.items() if sym.kind != "PREDEF"}
+        self.constant_sizes(m.data)
         for r in m.routines:
             self.signature(r)
         typer = self.typer(self.globals)
@@ -570,6 +665,17 @@ class Checker:
                 if not d.local:
                     self.declare(d, self.globals, typer)
         self.problems = checked
+
+    def constant_sizes(self, data: list[N.Data]) -> None:
+        """Record the module's CONST nums of an integer value: array sizes, declared anywhere.
+
+        An array size may name a CONST declared further down (controller-loaded:
+        compas-rrc/compas_rrc_start@4b831ac, RRC_DataTask_Ctrl.sys; RAPID kernel: unconfirmed).
+        """
+        for d in data:
+            if d.storage == "CONST" and d.type.lower() == "num" and isinstance(d.init, N.Num):
+                if d.init.integer:
+                    self.sizes[d.name.lower()] = int(d.init.value)
 
     def own_type(self, u: N.Unsupported, m: N.Module) -> None:
         """Check a RECORD's component types or an ALIAS's type (declared types only)."""
@@ -617,7 +723,8 @@ class Checker:
         self.name(d.name, d.line, "data")
         sizes = [self.size(x, d.line) for x in d.dims]
         dtype = self.data_type(d.type, sizes, d.line)
-        if d.name.lower() in scope and scope[d.name.lower()].kind != "PREDEF":
+        key = d.name.lower()
+        if key in scope and self.clashes(d, scope):
             self.problems.add(d.line, f"{d.name} is declared twice")
         if dtype is None:
             scope[d.name.lower()] = Symbol(d.name, UNKNOWN, d.storage)
@@ -634,6 +741,21 @@ class Checker:
         if d.storage == "CONST" and dtype.name in self.lang.opaque:
             self.problems.add(d.line, f"a {dtype.name} cannot be a CONST")
         scope[d.name.lower()] = Symbol(d.name, dtype, d.storage)
+
+    def clashes(self, d: N.Data, scope: dict[str, Symbol]) -> bool:
+        """Whether ``d`` clashes with the data of its name already in ``scope``.
+
+        Routine data hides module data and a module's LOCAL data hides the task's global
+        data (RAPID kernel, scope rules: unconfirmed; controller-loaded: the COMPAS RRC and
+        Kraker1 modules do both); predefined data may be declared again.
+        """
+        key = d.name.lower()
+        known = scope[key]
+        if known.kind == "PREDEF":
+            return False
+        if scope is not self.globals:
+            return known is not self.globals.get(key)
+        return not (d.local and key in self.task_data)
 
     def size(self, e: N.Expr, line: int) -> int | None:
         """Return an array size: a positive integer literal, or a CONST num of one."""
@@ -680,7 +802,7 @@ class Checker:
             if not (ptype == "switch" and p.optional):
                 resolved = self.data_type(type_name, [], p.line)
                 ptype = resolved.name if resolved else ptype
-            out.append(T.P(name, ptype, p.optional, p.mode in ("INOUT", "VAR", "PERS")))
+            out.append(T.P(name, ptype, p.optional, p.mode in ("INOUT", "VAR", "PERS"), p.dims))
         return out
 
     def routine(self, r: N.Routine) -> None:
@@ -809,7 +931,7 @@ class Checker:
         elif r.kind != "FUNC" and s.value is not None:
             self.problems.add(s.line, f"RETURN with a value in the {r.kind} {r.name}")
         elif s.value is not None and r.type is not None:
-            typer.expect(s.value, Type(r.type.lower()), f"the value {r.name} returns")
+            typer.expect(s.value, typer.named_type(r.type), f"the value {r.name} returns")
 
 
 _WHAT: dict[type, str] = {
@@ -819,6 +941,7 @@ _WHAT: dict[type, str] = {
     N.Resume: "RETRY and TRYNEXT",
     N.Connect: "CONNECT (interrupts)",
     N.LateCall: "late binding (%name%)",
+    N.Placeholder: "a placeholder <SMT> (a statement not yet written)",
 }
 
 
@@ -864,19 +987,38 @@ def check_task(
     """Check the modules of one task (file name → text) together.
 
     Each module sees the global data and routines of the others (RAPID's task scope); the
-    problems are each module's own, ``SOURCE:LINE: what``.
+    problems are each module's own, ``SOURCE:LINE: what``. A ``.cfg`` file among them is the
+    controller's I/O configuration: the signals it lists are data the modules may read
+    (:mod:`.eio`).
     """
     version = _software(software) if software is not None else []
     modules: dict[str, N.Module] = {}
     out = [f"{source}:{line}: {m}" for source in list(texts)[:1] for line, m in version]
+    config: dict[str, str] = {}
     for source, text in texts.items():
+        if source.lower().endswith(CONFIG_SUFFIX):
+            config.update(config_signals(text))
+    for source, text in texts.items():
+        if source.lower().endswith(CONFIG_SUFFIX):
+            continue
         try:
             modules[source] = parse_module(text)
         except SyntaxProblem as e:
             out.append(f"{source}:{e.line}: {e.message}")
+    first: dict[str, str] = {}
+    for source, module in list(modules.items()):
+        other = first.setdefault(module.name.lower(), source)
+        if other != source:
+            out.append(
+                f"{source}:1: a second module {module.name} in the task (the first: {other}); "
+                "a task holds one module of a name: check them as separate tasks"
+            )
+            del modules[source]
     for source, module in modules.items():
         task = tuple(m for s, m in modules.items() if s != source)
-        checker = Checker(module, None if version else software, task, external_calls)
+        checker = Checker(
+            module, None if version else software, task, external_calls, config=config
+        )
         out += [f"{source}:{line}: {m}" for line, m in checker.run()]
     return out
 

@@ -14,6 +14,14 @@ MOVEABSJ = "RAPID reference manual, MoveAbsJ"
 UNCONFIRMED = "unconfirmed"
 RM = "RAPID Reference Manual (yumpu.com/en/document/view/5679047)"
 MOVEJ = "RAPID reference manual, MoveJ (read in translation)"
+LOADED_RRC = (
+    "unconfirmed; loaded by an IRC5 RobotWare 6 controller: COMPAS RRC's modules, "
+    "compas-rrc/compas_rrc_start@4b831ac robotstudio-stations/backups"
+)
+LOADED_KRAKER = "unconfirmed; loaded by an IRC5 controller: SDEBEUL/Kraker1@5a5835c (a backup)"
+LOADED_PALLET = (
+    "unconfirmed; loaded by an IRC5 controller: EdgarIvanMM/PaletizadoCajasConFrascos@850dc0e"
+)
 
 
 def module(*body: str, data: tuple[str, ...] = ()) -> str:
@@ -262,6 +270,65 @@ VALID: dict[str, str] = {
         '%"step" + ValToStr(n)%;',
         data=("VAR num n := 1;",),
     ).replace("ENDMODULE", "  PROC step1()\n  ENDPROC\nENDMODULE"),
+    # --- RAPID as controllers load it (issue 32): the evidence is a public module that an
+    # IRC5 controller held (a backup), cited; the rule itself is unconfirmed (no page read)
+    f"the controller's %%% header before MODULE ({LOADED_KRAKER})": (
+        "%%%\n  VERSION:1\n  LANGUAGE:ENGLISH\n%%%\n\n" + module('TPWrite "x";')
+    ),
+    f"a conditional argument \\Fast?Fast passes an optional parameter on ({LOADED_RRC})": (
+        "MODULE T\n  PROC go(\\switch Fast)\n    move \\Fast?Fast;\n  ENDPROC\n"
+        "  PROC move(\\switch Fast)\n  ENDPROC\nENDMODULE\n"
+    ),
+    f"a placeholder <SMT> in a routine ({LOADED_PALLET})": module("<SMT>"),
+    f"routine data hides module data of its name ({LOADED_RRC})": module(
+        "VAR num n;", "n := 2;", data=("VAR num n := 1;",)
+    ),
+    f"an array sized by a CONST declared further down ({LOADED_RRC})": module(
+        "a{1} := 1;", data=("VAR num a{size};", "CONST num size := 4;")
+    ),
+    f"an array parameter {{*}} after a switch ({LOADED_RRC})": (
+        "MODULE T\n  VAR num a{3};\n  PROC sum(\\switch Twice, num v{*})\n"
+        '    TPWrite "" \\Num:=v{1};\n  ENDPROC\n  PROC main()\n    sum \\Twice, a;\n'
+        "  ENDPROC\nENDMODULE\n"
+    ),
+    f"an ALIAS is its base type (a RECORD component, a FUNC's value) ({UNCONFIRMED})": (
+        "MODULE T\n  ALIAS num level;\n  RECORD probe\n    level l;\n  ENDRECORD\n"
+        "  VAR probe p;\n  FUNC level twice(level x)\n    RETURN 2 * x + p.l;\n  ENDFUNC\n"
+        "ENDMODULE\n"
+    ),
+    f"UIMessageBox, btnres, icondata; WaitUntil \\Visualize \\Header \\Message \\Icon "
+    f"({LOADED_RRC})": module(
+        'answer := UIMessageBox(\\Header:="h" \\MsgArray:=["a", "b"] \\BtnArray:=["", "OK"]);',
+        'WaitUntil TRUE \\PollRate:=0.1 \\Visualize \\Header:="h" \\Message:="m" \\Icon:=iconInfo;',
+        data=("VAR btnres answer;",),
+    ),
+    f"TPWrite \\Pos, Stop \\AllMoveTasks, GetSysInfo \\SWVersionName ({LOADED_RRC})": module(
+        'TPWrite "at " \\Pos:=p.trans;',
+        "TPWrite GetSysInfo(\\SWVersionName);",
+        "Stop \\AllMoveTasks;",
+        data=("VAR robtarget p;",),
+    ),
+    f"file, data and EGM routines: IsFile, MakeDir, GetDataVal, RobOS, DotProd ({LOADED_RRC})": (
+        module(
+            'IF NOT IsFile("HOME:/logs" \\Directory) MakeDir "HOME:/logs";',
+            'GetDataVal "n", n;',
+            "IF RobOS() n := DotProd(p, p) + VectMagn(p);",
+            "EOffsSet [0, 0, 0, 0, 0, 0];",
+            data=("VAR num n;", "VAR pos p;"),
+        )
+    ),
+    f"tasks data with its task names; egm_minmax ({LOADED_RRC})": module(
+        "mm.min := -1;",
+        data=('PERS tasks all{2} := [["T_ROB1"], ["T_ROB2"]];', "VAR egm_minmax mm := [-1, 1];"),
+    ),
+    f"a pos plus an aggregate, a signal variable read as its value ({LOADED_KRAKER})": module(
+        "p := [10, 10, 30] + p;",
+        "IF sig = 1 p := 2 * p;",
+        data=("VAR pos p;", "VAR signaldi sig;"),
+    ),
+    f"AliasIO from a string naming the signal ({LOADED_KRAKER})": module(
+        'AliasIO "di_1", sig;', data=("VAR signaldi sig;",)
+    ),
 }
 
 
@@ -457,5 +524,56 @@ INVALID: dict[str, tuple[str, str]] = {
     f"a PROC named like RAPID's MoveL ({UNCONFIRMED})": (
         "MODULE T\n  PROC MoveL()\n  ENDPROC\nENDMODULE\n",
         "2: MoveL is a RAPID routine's name: rename it",
+    ),
+    f"a conditional argument on no optional parameter ({UNCONFIRMED})": (
+        "MODULE T\n  PROC go(num Fast)\n    move \\Fast?Fast;\n  ENDPROC\n"
+        "  PROC move(\\switch Fast)\n  ENDPROC\nENDMODULE\n",
+        "3: move \\Fast?Fast: Fast is not an optional parameter of this routine",
+    ),
+    f"a conditional argument for no such optional argument ({UNCONFIRMED})": (
+        "MODULE T\n  PROC go(\\switch Fast)\n    move \\Slow?Fast;\n  ENDPROC\n"
+        "  PROC move(\\switch Fast)\n  ENDPROC\nENDMODULE\n",
+        "3: move \\Slow: no such optional argument",
+    ),
+    f"routine data declared twice in one routine ({UNCONFIRMED})": (
+        module("VAR num n;", "VAR num n;"),
+        "4: n is declared twice",
+    ),
+    f"an array sized by a VAR, not a CONST ({UNCONFIRMED})": (
+        module("a{1} := 1;", data=("VAR num a{size};", "VAR num size := 4;")),
+        "2: an array size must be a positive integer",
+    ),
+    f"an array where an array parameter's {{*}} needs one ({UNCONFIRMED})": (
+        "MODULE T\n  PROC sum(\\switch Twice, num v{*})\n  ENDPROC\n  PROC main()\n"
+        "    sum \\Twice, 3;\n  ENDPROC\nENDMODULE\n",
+        "5: sum's v is a num{*}, not a number",
+    ),
+    f"a string added to a pos ({UNCONFIRMED})": (
+        module('p := p + "x";', data=("VAR pos p;",)),
+        "4: pos + string",
+    ),
+    f"Stop with an optional argument it has not ({UNCONFIRMED})": (
+        module("Stop \\AllTasks;"),
+        "3: Stop \\AllTasks: no such optional argument",
+    ),
+    f"WaitUntil \\Icon given a string ({UNCONFIRMED})": (
+        module('WaitUntil TRUE \\Icon:="info";'),
+        "3: WaitUntil's Icon is a num, not a string",
+    ),
+    f"an unknown UI function ({UNCONFIRMED})": (
+        module('n := UIMessageBoxes(\\Header:="h");', data=("VAR num n;",)),
+        "4: unknown function UIMessageBoxes",
+    ),
+    f"the %%% header not closed ({UNCONFIRMED})": (
+        "%%%\n  VERSION:1\n" + module("Stop;"),
+        "1: syntax error at '%'",
+    ),
+    f"a placeholder <SMT> where an expression is due ({UNCONFIRMED})": (
+        module("n := <SMT>;", data=("VAR num n;",)),
+        "4: syntax error",
+    ),
+    f"800 chained operators ({UNCONFIRMED}: wirecal's bound)": (
+        module("n := " + " + ".join(["1"] * 800) + ";", data=("VAR num n;",)),
+        "4: an expression nested more than 100 levels deep",
     ),
 }

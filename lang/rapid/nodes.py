@@ -92,6 +92,9 @@ class Arg:
     name: str | None = None
     named: bool = False
     """A required argument given by its parameter's name (``Name := value``)."""
+    condition: str | None = None
+    r"""A conditional argument ``\Name ? Param``: given when the caller's optional
+    parameter ``Param`` is."""
 
 
 @dataclass
@@ -254,6 +257,18 @@ class LateCall:
     line: int
 
 
+@dataclass
+class Placeholder:
+    """``<SMT>``: a statement not yet written; a module with one loads, running it fails.
+
+    RAPID kernel, placeholders: unconfirmed, no page read; a controller's backup holds one
+    (EdgarIvanMM/PaletizadoCajasConFrascos@850dc0e, RAPID/TASK1/PROGMOD/MainModule.mod).
+    """
+
+    text: str
+    line: int
+
+
 Stmt = (
     Data
     | Assign
@@ -270,6 +285,7 @@ Stmt = (
     | Resume
     | Connect
     | LateCall
+    | Placeholder
 )
 
 

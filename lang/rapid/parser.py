@@ -8,7 +8,9 @@ problem ``SOURCE:LINE: what``; a block left open names the END keyword it lacks.
 Operators bind, tightest first: ``* / DIV MOD``, ``+ -``, comparisons, ``NOT``, ``AND``,
 ``OR XOR`` (RAPID kernel, expressions: unconfirmed — where NOT falls is wirecal's reading).
 Blocks deeper than :data:`MAX_BLOCK_DEPTH` and brackets deeper than
-:data:`MAX_BRACKET_DEPTH` are refused before parsing (the tree is built recursively).
+:data:`MAX_BRACKET_DEPTH` are refused before parsing, expressions nested deeper than
+:data:`~wirecal.lang.syntax.MAX_EXPRESSION_DEPTH` (chained operators too) after it (the tree
+is built recursively).
 """
 
 from __future__ import annotations
@@ -17,11 +19,12 @@ import re
 from functools import cache
 from importlib import resources
 
-from lark import Lark, Token, Transformer, v_args
+from lark import Lark, Token, Transformer, Tree, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
 
 from wirecal.lang.rapid import nodes as N
 from wirecal.lang.rapid.tables import RESERVED
+from wirecal.lang.syntax import MAX_EXPRESSION_DEPTH
 
 _ENDS = {
     "ENDPROC": "PROC",
@@ -124,6 +127,12 @@ class _Build(Transformer):
 
     def opt_arg(self, meta, c):
         return N.Arg(c[1], c[0])
+
+    def cond_arg(self, meta, c):
+        return N.Arg(None, c[0], condition=c[1])
+
+    def placeholder(self, meta, c):
+        return N.Placeholder(str(c[0]), meta.line)
 
     def mode(self, meta, c):
         return str(c[0]).upper()
@@ -298,8 +307,36 @@ MAX_BRACKET_DEPTH = 100
 """Deepest nesting of parentheses and brackets wirecal reads (wirecal's bound)."""
 
 
+MAX_OPERATOR_RUN = 10_000
+"""Most operators wirecal reads in one run of an expression (between brackets, commas and
+statement ends): a longer chain is refused before parsing, which would take minutes (a
+chain nests one level per operator, and :data:`~wirecal.lang.syntax.MAX_EXPRESSION_DEPTH`
+refuses a nesting beyond 100 after parsing). wirecal's bound."""
+
+_OPERATORS = frozenset("+ - * / < > = AND OR XOR NOT DIV MOD".split())
+
+
+def _long_run(text: str) -> SyntaxProblem | None:
+    """Refuse a run of more than :data:`MAX_OPERATOR_RUN` operators (before parsing)."""
+    run = 0
+    for number, source_line in enumerate(text.splitlines(), 1):
+        for m in _TOKEN.finditer(source_line):
+            run = run + 1 if m.group().upper() in _OPERATORS else 0
+            if run > MAX_OPERATOR_RUN:
+                return SyntaxProblem(
+                    number,
+                    f"more than {MAX_OPERATOR_RUN} operators in a row: wirecal reads at "
+                    f"most {MAX_OPERATOR_RUN} (and nests at most {MAX_EXPRESSION_DEPTH}): "
+                    "split the expression",
+                )
+    return None
+
+
 def _too_deep(text: str) -> SyntaxProblem | None:
     """Refuse up front what is nested deeper than the bounds (the parser recurses per level)."""
+    long_run = _long_run(text)
+    if long_run is not None:
+        return long_run
     blocks: list[int] = []
     brackets = 0
     for number, source_line in enumerate(text.splitlines(), 1):
@@ -326,11 +363,38 @@ def _too_deep(text: str) -> SyntaxProblem | None:
     return None
 
 
-_TOKEN = re.compile(r'"(?:[^"\n]|"")*"|![^\n]*|[A-Za-z][A-Za-z0-9_]*|[()\[\]{}]')
+_TOKEN = re.compile(r'"(?:[^"\n]|"")*"|![^\n]*|[A-Za-z][A-Za-z0-9_]*|[()\[\]{},;]|[-+*/<>=]')
+
+
+_HEADER = re.compile(r"\A\s*%%%[^\n]*\n(?:(?!%%%)[^\n]*\n)*?\s*%%%[^\n]*(?=\n|\Z)")
+"""The header a controller writes before a saved module (``%%%``, ``VERSION:1``,
+``LANGUAGE:ENGLISH``, ``%%%``): modules saved by IRC5 controllers start with it (e.g.
+SDEBEUL/Kraker1@5a5835c, HOME/linked_m.sys, from a RobotWare 5 backup); its meaning is
+unconfirmed (no page read), wirecal reads past it."""
+
+
+def _without_header(text: str) -> str:
+    """Blank the controller's ``%%%`` header, keeping the line numbers."""
+    m = _HEADER.match(text)
+    return text if m is None else "\n" * m.group().count("\n") + text[m.end() :]
+
+
+def _binary(text: str) -> bool:
+    """Whether ``text`` is no RAPID text (an encrypted module: NUL or control bytes)."""
+    head = text[:4096]
+    controls = sum(1 for ch in head if ord(ch) < 32 and ch not in "\t\n\r\f")
+    return controls > max(2, len(head) // 100)
 
 
 def parse_module(text: str) -> N.Module:
     """Parse one module's text; raise :class:`SyntaxProblem` where the grammar stops."""
+    if _binary(text):
+        raise SyntaxProblem(
+            1,
+            "not RAPID text (control bytes): an encrypted or encoded module, which "
+            "wirecal cannot read; check the other modules with --external-calls",
+        )
+    text = _without_header(text)
     deep = _too_deep(text)
     if deep is not None:
         raise deep
@@ -349,6 +413,7 @@ def parse_module(text: str) -> N.Module:
         raise SyntaxProblem(e.line, what) from None
     except UnexpectedEOF:
         raise SyntaxProblem(_last_line(text), _missing(text, 0, "the end of the file")) from None
+    _expression_depth(tree)
     try:
         return _Build().transform(tree)
     except Exception as e:  # lark wraps a SyntaxProblem raised in a callback
@@ -356,6 +421,31 @@ def parse_module(text: str) -> N.Module:
         if isinstance(inner, SyntaxProblem):
             raise inner from None
         raise
+
+
+_EXPRESSIONS = frozenset(
+    "binop signed not_op component index funcall aggregate args arg named_arg opt_arg".split()
+)
+"""The parse tree's expression nodes (the transformer and the checker recurse per level)."""
+
+
+def _expression_depth(tree: Tree) -> None:
+    """Refuse an expression nested deeper than :data:`MAX_EXPRESSION_DEPTH`, without recursion.
+
+    A chain of operators nests one level per operator (``a + a + … + a``), as parentheses do.
+    """
+    stack: list[tuple[Tree, int]] = [(tree, 0)]
+    while stack:
+        node, depth = stack.pop()
+        depth = depth + 1 if node.data in _EXPRESSIONS else 0
+        if depth > MAX_EXPRESSION_DEPTH:
+            raise SyntaxProblem(
+                node.meta.line,
+                f"an expression nested more than {MAX_EXPRESSION_DEPTH} levels deep "
+                "(parentheses or chained operators); wirecal reads at most "
+                f"{MAX_EXPRESSION_DEPTH}: split the expression",
+            )
+        stack.extend((c, depth) for c in node.children if isinstance(c, Tree))
 
 
 def _last_line(text: str) -> int:

@@ -133,6 +133,7 @@ class P:
     type: str
     optional: bool = False
     var: bool = False
+    dims: int = 0  # an array parameter's dimensions ({*}: 1, {*,*}: 2)
 
 
 @dataclass(frozen=True)
@@ -247,10 +248,28 @@ FUNCTIONS: dict[str, Routine] = {
 }
 """The functions of the subset, lower-case name → signature."""
 
-OTHER_ROUTINES = (
-    frozenset(
-        name.lower()
-        for name in """MoveJ MoveL MoveC MoveJDO MoveLDO MoveCDO MoveJSync MoveLSync MoveExtJ
+_CONTROLLER_LOADED = """GetDataVal SetDataVal IsFile MakeDir RemoveFile RemoveDir OpenDir
+    CloseDir ReadDir RenameFile CopyFile FileSize FSSize RemainingRetries RobOS UIMessageBox
+    UIListView UIClientExist UIAlphaEntry UINumTune DotProd VectMagn CrossProd EGMGetId
+    EGMSetupUC EGMSetupAI EGMSetupAO EGMSetupGI EGMActJoint EGMActPose EGMRunJoint EGMRunPose
+    EGMStop EGMReset EGMStreamStart EGMStreamStop EGMGetState EOffsSet EOffsOn EOffsOff PDispOn
+    PDispOff PDispSet WZFree WZEnable WZDisable WZDOSet WZBoxDef WZCylDef WZSphDef WZLimSup
+    BitCheckDnum BitAndDnum BitOrDnum GInputDnum GOutputDnum SetGODnum GInput AInput TPWrite
+    ReadErrData ResetRetryCount StartMoveRetry StopMoveReset CJointT CalcJointT IsMechUnitActive
+    ActUnit DeactUnit TriggIO TriggEquip TriggInt MToolRotCalc MToolTCPCalc CSpeedOverride
+    SetAllDataVal SetSysData GetMecUnitName GetNextSym SetDataSearch ReadVar WriteVar StrLen
+    Abs Round Trunc Sqrt Sin Cos Tan ATan2 ACos ASin Exp Pow NumToDnum DnumToNum ClkRead
+    ClkReset ClkStart ClkStop"""
+"""RAPID routines that public, controller-loaded programs call and wirecal reads without a
+signature (their arguments are read, not matched): the COMPAS RRC controller modules
+(compas-rrc/compas_rrc_start@4b831ac, an IRC5 RobotWare 6 backup), the IRC5 backups
+SDEBEUL/Kraker1@5a5835c and EdgarIvanMM/PaletizadoCajasConFrascos@850dc0e. Each exists in
+the 3HAC050917 reference manual as wirecal's authors know it: unconfirmed, no page read.
+Routines with a signature in the tables above keep it (this set subtracts them)."""
+
+OTHER_ROUTINES = frozenset(
+    name.lower()
+    for name in """MoveJ MoveL MoveC MoveJDO MoveLDO MoveCDO MoveJSync MoveLSync MoveExtJ
     SearchL SearchC TriggL TriggJ TriggC StopMove StartMove ConfJ ConfL SingArea AccSet VelSet
     PathAccLim SetDO SetGO SetAO Set Reset PulseDO InvertDO WaitDI WaitDO WaitGI WaitAI
     WaitUntil WaitRob WaitSyncTask SyncMoveOn SyncMoveOff GripLoad ErrWrite ErrLog TPReadFK
@@ -267,10 +286,9 @@ OTHER_ROUTINES = (
     ReadRawBytes WriteRawBytes PackRawBytes UnpackRawBytes CopyRawBytes ClearRawBytes
     RawBytesLen StrToByte ByteToStr BitCheck BitSet BitClear BitAnd BitOr BitXOr BitNeg
     BitLSh BitRSh ReadCfgData WriteCfgData IPers ExitCycle IsStopMoveAct""".split()
-    )
-    - frozenset(FUNCTIONS)
-    - frozenset(INSTRUCTIONS)
-)
+) | frozenset(name.lower() for name in _CONTROLLER_LOADED.split()) - frozenset(
+    FUNCTIONS
+) - frozenset(INSTRUCTIONS)
 """RAPID instructions and functions outside the subset (a call is "not in the subset")."""
 
 
@@ -296,6 +314,9 @@ RM_RAISE = f"{_RM}, p. 385: the error number must be given outside the error han
 _MOVEJ = "MoveJ (blog.csdn.net/weixin_42126274/article/details/111886431)"
 
 WIDE_RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
+    "tasks": (("taskname", "string"),),
+    "listitem": (("image", "string"), ("text", "string")),
+    "egm_minmax": (("min", "num"), ("max", "num")),
     "pos": (("x", "num"), ("y", "num"), ("z", "num")),
     "orient": (("q1", "num"), ("q2", "num"), ("q3", "num"), ("q4", "num")),
     "pose": (("trans", "pos"), ("rot", "orient")),
@@ -345,13 +366,17 @@ ALIASES: dict[str, str] = {
     "tpnum": "num",
     "inttypes": "num",
     "errstr": "string",
+    "btnres": "num",
+    "buttondata": "num",
+    "icondata": "num",
 }
 """Alias types and the type each names (RM: RAISE's argument is an errnum and ERRNO is
-compared with numbers; the others unconfirmed)."""
+compared with numbers; the others unconfirmed — btnres, buttondata and icondata as the COMPAS
+RRC and Kraker1 modules use them with UIMessageBox and WaitUntil \\Icon)."""
 
 WIDE_OPAQUE = frozenset(
     """socketdev rawbytes signaldi signaldo signalgi signalgo signalai signalao triggdata
-    dir mecunit wzstationary wztemporary shapedata syncident tasks identno stoppointdata
+    dir mecunit wzstationary wztemporary shapedata syncident identno stoppointdata
     errdomain egmident progdisp""".split()
 )
 """Non-value types beyond the subset: declared, passed, not built from literals
@@ -386,10 +411,25 @@ WIDE_PREDEFINED: dict[str, str] = {
     **{k: "stoppointdata" for k in ("inpos20", "inpos50", "inpos100")},
     **{k: "string" for k in ("diskhome", "diskram", "disktemp")},
     **{k: "num" for k in ("eof_bin", "eof_num")},
+    **{k: "icondata" for k in ("iconnone", "iconinfo", "iconwarning", "iconerror")},
+    **{
+        k: "btnres"
+        for k in "resunkwn resok resabort resretry resignore rescancel resyes resno".split()
+    },
+    **{
+        k: "buttondata"
+        for k in "btnnone btnok btnabrtrtryign btnokcancel btnretrycancel btnyesno".split()
+    },
+    "btnyesnocancel": "buttondata",
 }
 """Predefined data beyond the subset (ERRNO: RM p. 385; INTNO: RM p. 112; inpos50: the
 MoveJ page's example ``\\Inpos:=inpos50``; the others unconfirmed). Names starting ERR_
 are errnum constants and SOCKET_ socketstatus ones (:func:`wide_data`)."""
+
+
+SIGNAL_NAME = "signal name"
+"""A parameter taking any I/O signal: its name in the configuration, a string holding the
+name, or a signal variable (AliasIO's)."""
 
 
 def wide_data(name: str) -> str | None:
@@ -429,7 +469,24 @@ _SOCKET = P("Socket", "socketdev", var=True)
 _INTERRUPT = P("Interrupt", "intnum", var=True)
 _SINGLE = (_o("Single"), _o("SingleSafe"))
 
+
+def _wider(base: Routine, *more: P) -> Routine:
+    """Return ``base`` with more optional parameters (RAPID's, beyond the twin's subset)."""
+    return Routine(base.params + more, base.returns, base.source, base.since)
+
+
+_WRITE_MORE = (_o("Pos", "pos"), _o("Orient", "orient"))
+
 WIDE_INSTRUCTIONS: dict[str, Routine] = {
+    # \Pos \Orient (TPWrite, Write), \AllMoveTasks (Stop): unconfirmed; controller-loaded
+    # in the COMPAS RRC modules (compas-rrc/compas_rrc_start@4b831ac)
+    "tpwrite": _wider(INSTRUCTIONS["tpwrite"], *_WRITE_MORE),
+    "write": _wider(INSTRUCTIONS["write"], *_WRITE_MORE),
+    "stop": _wider(INSTRUCTIONS["stop"], _o("AllMoveTasks")),
+    # AliasIO FromSignal (a configured signal's name, or a string naming it), ToSignal (a
+    # signal variable of the module): unconfirmed; controller-loaded with a string in
+    # SDEBEUL/Kraker1@5a5835c mSettings_Sations.sys
+    "aliasio": _r(P("FromSignal", SIGNAL_NAME), P("ToSignal", SIGNAL_NAME, var=True)),
     "movej": _r(_o("Conc"), P("ToPoint", "robtarget"), *_MOVE_TAIL, source=_MOVEJ),
     "movel": _r(_o("Conc"), P("ToPoint", "robtarget"), *_MOVE_TAIL),
     "movec": _r(_o("Conc"), P("CirPoint", "robtarget"), P("ToPoint", "robtarget"), *_MOVE_TAIL),
@@ -468,6 +525,14 @@ WIDE_INSTRUCTIONS: dict[str, Routine] = {
         _o("MaxTime", "num"),
         _o("TimeFlag", "bool", True),
         _o("PollRate", "num"),
+        _o("Visualize"),
+        _o("Header", "string"),
+        _o("Message", "string"),
+        _o("MsgArray", "anytype"),  # a string array
+        _o("Icon", "icondata"),
+        _o("Image", "string"),
+        _o("VisualizeTime", "num"),
+        _o("UIActiveSignal", "signaldo"),
     ),
     "waittestandset": _r(P("Object", "bool", var=True)),
     "socketcreate": _r(_SOCKET, _o("UDP")),
@@ -572,6 +637,7 @@ WIDE_FUNCTIONS: dict[str, Routine] = {
     "testandset": _r(P("Object", "bool", var=True), returns="bool"),
     "getsysinfo": _r(
         *(_o(x) for x in "SerialNo SWVersion RobotType CtrlId LanIp CtrlLang SystemName".split()),
+        _o("SWVersionName"),
         returns="string",
     ),
     "crobt": _r(

@@ -78,6 +78,7 @@ class URController:
     sockets: dict[str, socket.socket] = field(default_factory=dict)
     lines_sent: int = 0
     syncs: int = 0  # sync() calls (each a 2 ms frame)
+    software: str | None = None  # the declared software: a call its pages lack is refused
 
     def __post_init__(self) -> None:
         """No encoder is decoded until a program enables it."""

@@ -51,12 +51,18 @@ def run_ur_programs(
 ) -> tuple[Outcome, Outcome | None]:
     """Run ``wc_mount`` (the operator mounts the encoder and continues), then ``wc_run``.
 
-    The controller closes the program's sockets when it ends, however it ends.
+    Each is checked against the controller's declared software first: a call its manual
+    pages do not document is refused by name before anything runs
+    (:mod:`wirecal.lang.urscript.versions`). The controller closes the program's sockets
+    when it ends, however it ends.
     """
+    software = controller.software
+    mount_program = parse_program(mount_text, MOUNT, software)
+    run_program = parse_program(run_text, RUN, software)
     mount, run = mount_then_run(
         controller.world,
-        Interpreter(parse_program(mount_text, MOUNT), controller).execute,
-        lambda: Interpreter(parse_program(run_text, RUN), controller).execute(),
+        Interpreter(mount_program, controller).execute,
+        lambda: Interpreter(run_program, controller).execute(),
     )
     controller.close_all()
     return mount, run
@@ -118,7 +124,11 @@ class URScriptAdapter(TwinAdapter):
         )
         enc = robot.encoder
         ctl = URController(
-            world, pulse_inputs or enc.pulse_inputs, encoder_index=enc.channel, pc=pc
+            world,
+            pulse_inputs or enc.pulse_inputs,
+            encoder_index=enc.channel,
+            pc=pc,
+            software=robot.controller.software,
         )
         log = folder / "run.csv"
         if listen is None:
