@@ -38,7 +38,13 @@ from scipy.optimize import least_squares
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit_holdout import Holdout, parse_scheme, row_floor, splits, summarise
-from wirecal.solver.fit_model import Layout, lengths_and_jacobian, multilaterate, session_of
+from wirecal.solver.fit_model import (
+    Layout,
+    lengths,
+    lengths_and_jacobian,
+    multilaterate,
+    session_of,
+)
 from wirecal.solver.fit_sessions import change_points, noise_sigma, place, robust_sigma
 from wirecal.solver.identifiability import (
     Identifiability,
@@ -188,8 +194,7 @@ def choose(
 
 def residual(base: Model, layout: Layout, x: np.ndarray, data: Data) -> np.ndarray:
     """Return model − measured length (mm) of every row at ``x``."""
-    model, _ = lengths_and_jacobian(base, layout, x, data.q_rad, data.session)
-    return model - data.length_mm
+    return lengths(base, layout, x, data.q_rad, data.session) - data.length_mm
 
 
 def solve(
@@ -216,7 +221,7 @@ def solve(
         return x
 
     def fun(xf: np.ndarray) -> np.ndarray:
-        return lengths_and_jacobian(base, layout, full(xf), q, session)[0] - length
+        return lengths(base, layout, full(xf), q, session) - length
 
     def jac(xf: np.ndarray) -> np.ndarray:
         return lengths_and_jacobian(base, layout, full(xf), q, session)[1][:, free]

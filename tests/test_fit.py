@@ -316,3 +316,43 @@ def test_no_change_points_in_noise():
     rng = np.random.default_rng(7)
     for _ in range(20):
         assert change_points(rng.normal(0, 1.0, 500)) == []
+
+
+# --- hostile tables (issue 31 item 4; docs/fit.md "What fit refuses") ---------------
+
+
+def test_lengths_alone_match_the_lengths_of_the_jacobian_call():
+    from wirecal.solver.fit_model import lengths
+
+    robot = _robot("ur5e")
+    base = point_model(robot)
+    layout = Layout(("tool_x", "th2", "a2"), 6, 2, True)
+    rng = np.random.default_rng(1)
+    x = rng.normal(0, 1e-3, len(layout.names))
+    x[4:7] = [300.0, -200.0, 100.0]
+    q = np.radians(rng.uniform(-90, 90, (20, 6)))
+    session = np.repeat([0, 1], 10)
+    np.testing.assert_allclose(
+        lengths(base, layout, x, q, session),
+        lengths_and_jacobian(base, layout, x, q, session)[0],
+        rtol=0,
+        atol=1e-9,
+    )
+
+
+def test_ft30_covariance_and_identifiability_are_linear_in_the_rows():
+    """FT30: 100,000 rows ended in a 74.5 GiB (N × N) allocation in the covariance's SVD.
+
+    200,000 rows × 30 columns: an N × N matrix would need 320 GB; the right vectors alone
+    are 30 × 30. (Timing is bench/bench_fit.py's, not this test's.)
+    """
+    from wirecal.solver.identifiability import analyse_jacobian, covariance
+
+    rng = np.random.default_rng(0)
+    J = rng.normal(size=(200_000, 30))
+    J[:, 29] = J[:, 28]  # one degenerate pair: the null-space paths run too
+    cov, identified = covariance(J, 1.0)
+    assert cov.shape == (30, 30)
+    assert identified[:28].all() and not identified[28:].any()
+    ident = analyse_jacobian(J, tuple(f"p{k}" for k in range(30)))
+    assert ident.rank == 29 and len(ident.combinations) == 1
