@@ -37,7 +37,15 @@ from scipy.optimize import least_squares
 
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.fit_holdout import Holdout, parse_scheme, row_floor, splits, summarise
+from wirecal.solver.fit_holdout import (
+    Holdout,
+    check_training,
+    first_same,
+    parse_scheme,
+    row_floor,
+    splits,
+    summarise,
+)
 from wirecal.solver.fit_model import (
     Layout,
     lengths,
@@ -100,7 +108,8 @@ class Data:
     session: np.ndarray  # (N,) 0-based session of each row
     floor_mm: float  # the quantisation floor's RMS at the nominal model (a least σ)
     joint_cov_rad2: np.ndarray | None = None  # (N, n, n) refined joints' covariance
-    excluded: np.ndarray | None = None  # (N,) bool: rows known bad (x, y, z disagree)
+    excluded: np.ndarray | None = None  # (N,) bool: rows known bad (x, y, z disagree, copies)
+    group: np.ndarray | None = None  # (N,) rows at the same logged joints: one group (holdout)
 
 
 def candidates(base: Model) -> tuple[str, ...]:
@@ -407,7 +416,9 @@ def holdout(
     layout, data = core.layout, replace(data, session=core.session)
     k0 = len(layout.names) - layout.n_sessions
     residuals, floors, notes = [], [], []
-    for train, test in splits(kind, share, core.inliers, repeats, seed):
+    group = first_same(data.q_rad) if data.group is None else data.group
+    for train, test in splits(kind, share, core.inliers, group, repeats, seed):
+        check_training(scheme, len(train), int(core.inliers.sum()), len(core.x))
         free = np.ones(len(core.x), dtype=bool)
         unseen = sorted(set(data.session[test]) - set(data.session[train]))
         free[[k0 + s for s in unseen]] = False

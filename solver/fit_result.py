@@ -24,7 +24,7 @@ from wirecal.solver.budget import Budget, budget, sources
 from wirecal.solver.cable_data import CableTable
 from wirecal.solver.errors import Implausible, WirecalError
 from wirecal.solver.fit import Core, Data, fit_core, holdout, nominal_floor, point_model
-from wirecal.solver.fit_holdout import Holdout, row_floor
+from wirecal.solver.fit_holdout import Holdout, copies, first_same, row_floor
 from wirecal.solver.fit_model import lengths_and_jacobian, model_of
 from wirecal.solver.fit_units import check_units
 from wirecal.solver.fit_xyz import XyzCheck, check_xyz, refine_joints
@@ -84,6 +84,11 @@ class FitResult:
     refined: Run | None
 
     @property
+    def copies(self) -> tuple[tuple[int, int], ...]:
+        """Return (row, the earlier row it copies) of each copied row (left out of the fit)."""
+        return copies(self.table.q_deg, self.table.length_mm)
+
+    @property
     def best(self) -> Run:
         """Return the run the patch is written from: the refined one when asked for."""
         return self.refined or self.main
@@ -114,7 +119,10 @@ def _data(
     excluded = np.zeros(n, dtype=bool)
     if xyz is not None:
         excluded[list(xyz.flagged)] = True
-    data = Data(np.radians(q_deg), table.length_mm, np.zeros(n, dtype=int), 0.0, cov, excluded)
+    excluded[[r for r, _ in copies(table.q_deg, table.length_mm)]] = True
+    group = first_same(table.q_deg)
+    session = np.zeros(n, dtype=int)
+    data = Data(np.radians(q_deg), table.length_mm, session, 0.0, cov, excluded, group)
     return replace(data, floor_mm=nominal_floor(base, data, *res))
 
 
@@ -336,6 +344,10 @@ def result_json(result: FitResult) -> dict[str, Any]:
         "table_sha256": t.sha256,
         "rows": len(t.length_mm),
         "resolution": {"joint_deg": result.resolution[0], "length_mm": result.resolution[1]},
+        "copies": [
+            {"row": r, "line": int(t.lines[r]), "of_row": f, "of_line": int(t.lines[f])}
+            for r, f in result.copies
+        ],
         **run_json(result.main, t, flagged),
         "xyz": None,
         "refined": None if result.refined is None else run_json(result.refined, t, flagged),

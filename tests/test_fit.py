@@ -353,6 +353,105 @@ def test_ft30_covariance_and_identifiability_are_linear_in_the_rows():
     J[:, 29] = J[:, 28]  # one degenerate pair: the null-space paths run too
     cov, identified = covariance(J, 1.0)
     assert cov.shape == (30, 30)
-    assert identified[:28].all() and not identified[28:].any()
+    assert identified[:28].all()
+    assert not identified[28:].any()
     ident = analyse_jacobian(J, tuple(f"p{k}" for k in range(30)))
-    assert ident.rank == 29 and len(ident.combinations) == 1
+    assert ident.rank == 29
+    assert len(ident.combinations) == 1
+
+
+def _clean(robot, n, seed=0):
+    return synthetic_table(robot, n, seed=seed, sessions=1, snags=0, typos=0)
+
+
+@pytest.mark.parametrize(
+    ("rows", "scheme", "trains"),
+    [(400, "random:0.999", 0), (30, "random:0.9", 3), (30, "half", 15)],
+)
+def test_ft45_ft46_a_split_training_on_under_twice_the_parameters_is_refused(rows, scheme, trains):
+    """FT45/FT46: random:0.999 (no training row) read RMS/floor 0.98, random:0.9 on 30 rows
+    0.51 (below the floor), half on 30 rows trained 15 rows for 23 parameters unsaid."""
+    from wirecal.solver.errors import WirecalError
+
+    robot = _robot("viper_s650")
+    with pytest.raises(WirecalError, match=rf"--holdout {scheme}: a split trains on {trains} "):
+        fit_table(robot, _clean(robot, rows).table, FitOptions(holdout=scheme, repeats=2))
+
+
+def test_ft45_the_refusal_says_what_share_would_do():
+    from wirecal.solver.errors import WirecalError
+    from wirecal.solver.fit_holdout import check_training
+
+    with pytest.raises(WirecalError, match=r"at most a share 0\.77 "):
+        check_training("random:0.9", 40, 200, 23)  # (200 − 46) / 200 = 0.77
+    with pytest.raises(WirecalError, match="too few rows to hold any out"):
+        check_training("half", 15, 30, 23)
+    check_training("random:0.2", 46, 200, 23)  # exactly twice: accepted
+
+
+def test_ft27_copied_rows_are_named_left_out_and_do_not_shrink_the_sigmas():
+    """FT27: every row twice was not said; held-out rows were copies of training rows and
+    the σ's came out √2 too small."""
+    robot = _robot("viper_s650")
+    table = _clean(robot, 120, seed=3).table
+    twice = np.concatenate([np.arange(120), np.arange(120)])
+    doubled = replace(
+        table,
+        lines=np.arange(2, 242),
+        q_deg=table.q_deg[twice],
+        length_mm=table.length_mm[twice],
+        xyz_mm=table.xyz_mm[twice],
+    )
+    once = fit_table(robot, table, FitOptions(holdout="none"))
+    both = fit_table(robot, doubled, FitOptions(holdout="random:0.2", repeats=2))
+    assert both.copies == tuple((120 + r, r) for r in range(120))
+    assert not both.main.core.inliers[120:].any()
+    np.testing.assert_allclose(both.main.core.std, once.main.core.std, rtol=1e-6)
+
+
+def test_holdout_rule_a_held_out_row_never_trains(monkeypatch):
+    """Rule (fit_holdout): a held-out row never trains, nor a row at its joints.
+
+    Kills the mutation "fit's held-out split can train on its held-out rows" (issue 33)
+    wherever it sits: the rows each refit trains on are recorded at the solver's call.
+    """
+    import wirecal.solver.fit as fit_module
+
+    robot = _robot("viper_s650")
+    table = _clean(robot, 150, seed=2).table
+    again = np.r_[np.arange(150), [3, 70, 140]]  # three repeated readings at old joints
+    length = table.length_mm[again] + np.r_[np.zeros(150), [0.05, -0.05, 0.1]]
+    table = replace(
+        table,
+        lines=np.arange(2, 155),
+        q_deg=table.q_deg[again],
+        length_mm=length,
+        xyz_mm=table.xyz_mm[again],
+    )
+    seen: list[tuple[np.ndarray, np.ndarray]] = []
+    real_splits, real_solve = fit_module.splits, fit_module.solve
+
+    def record_splits(*args, **kwargs):
+        out = real_splits(*args, **kwargs)
+        seen.extend((None, test) for _, test in out)
+        return out
+
+    trained: list[np.ndarray] = []
+
+    def record_solve(base, layout, x0, data, rows, **kwargs):
+        if "free" in kwargs:  # the held-out refits pass which parameters are free
+            trained.append(np.asarray(rows))
+        return real_solve(base, layout, x0, data, rows, **kwargs)
+
+    monkeypatch.setattr(fit_module, "splits", record_splits)
+    monkeypatch.setattr(fit_module, "solve", record_solve)
+    for scheme in ("random:0.3", "half"):
+        seen.clear()
+        trained.clear()
+        fit_table(robot, table, FitOptions(holdout=scheme, repeats=3))
+        assert len(trained) == len(seen) > 0
+        for train, (_, test) in zip(trained, seen, strict=True):
+            assert len(test) > 0
+            assert not set(train) & set(test), scheme
+            q = {tuple(v) for v in table.q_deg[test]}
+            assert not any(tuple(v) in q for v in table.q_deg[train]), scheme
