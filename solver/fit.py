@@ -53,6 +53,7 @@ from wirecal.solver.fit_model import (
     multilaterate,
     session_of,
 )
+from wirecal.solver.fit_select import bic_eliminated
 from wirecal.solver.fit_sessions import change_points, noise_sigma, place, robust_sigma
 from wirecal.solver.identifiability import (
     Identifiability,
@@ -273,6 +274,34 @@ def final_solve(
     return second if cost(second) <= cost(first) * (1 + 1e-9) else first
 
 
+def generalise(
+    base: Model, layout: Layout, x: np.ndarray, data: Data, rows: np.ndarray
+) -> tuple[Layout, np.ndarray, tuple[tuple[str, str], ...]]:
+    """Drop the DH errors BIC does not keep (:mod:`~wirecal.solver.fit_select`) and refit.
+
+    Returns the layout, the estimate and why each DH error was dropped.
+    """
+    r = residual(base, layout, x, data)[rows]
+    sigma = float(np.sqrt(np.sum(r**2) / max(len(rows) - len(x), 1)))
+    _, J = lengths_and_jacobian(base, layout, x, data.q_rad[rows], data.session[rows])
+    dh = [k for k, n in enumerate(layout.geometry) if n not in P.TOOL_NAMES]
+    out = bic_eliminated(J, x, dh, sigma)
+    if not out:
+        return layout, x, ()
+    bar = np.sqrt(np.log(len(rows)))
+    why = tuple(
+        (
+            layout.names[k],
+            f"not worth a parameter (BIC): |z| {z:.2f} < √ln N = {bar:.2f}, "
+            "so it stays at the robot file's value",
+        )
+        for k, z in out
+    )
+    gone = {layout.names[k] for k, _ in out}
+    kept = replace(layout, geometry=tuple(n for n in layout.geometry if n not in gone))
+    return kept, final_solve(base, kept, _carry(layout, x, kept), data, rows), why
+
+
 @dataclass(frozen=True)
 class Pass:
     """One robust pass: its layout and estimate, the residual, the inliers and their σ."""
@@ -364,6 +393,7 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
     noise = max(data.floor_mm, ps.sigma_mm)  # a noisier table identifies less
     layout, x, dropped = choose(base, ps.layout, ps.x, data, rows, noise)
     x = final_solve(base, layout, x, data, rows)
+    layout, x, weak = generalise(base, layout, x, data, rows)
     r = residual(base, layout, x, data)
     _, J = lengths_and_jacobian(base, layout, x, data.q_rad[rows], data.session[rows])
     dof = max(len(rows) - len(x), 1)
@@ -373,7 +403,9 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
         unseen = ", ".join(n for n, ok in zip(layout.names, identified, strict=True) if not ok)
         raise WirecalError(
             f"the fit's parameters {unseen} are not identified by these rows at the fitted "
-            "values; nothing is reported (please report this table with the robot file)"
+            "values (the fit ran far from the robot file's geometry): check that the table is "
+            "this robot's (the joint columns its joints in degrees, in the robot file's "
+            "convention) and that --map names the cable length's column; nothing is reported"
         )
     if not single_session:  # a jump the offsets do not follow
         final = Pass(layout, x, r, ps.inliers, sigma)
@@ -387,7 +419,7 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
         inliers=ps.inliers,
         residual_mm=r,
         sigma_mm=sigma,
-        dropped=dropped,
+        dropped=dropped + weak,
         identifiability=analyse_jacobian(_boundary_jacobian(J, layout), layout.names),
         ignored_jumps=ignored,
     )
