@@ -138,19 +138,9 @@ def correction_mm(robot: Robot, run: Run) -> float:
 
 
 def _findings(result: FitResult, run: Run, budget_mm: float, moved_mm: float, limit: float):
-    """Return the gate's findings on one fit (module docstring), the budget's first."""
+    """Return the gate's findings on one fit (module docstring), the table's problems first."""
     core, ho = run.core, run.holdout
     out = []
-    if budget_mm >= moved_mm:
-        out.append(
-            Finding(
-                "budget",
-                f"the error budget {budget_mm:.3g} mm (the tool-point error this fit's own "
-                f"uncertainty predicts) is not below the correction it makes, {moved_mm:.3g} "
-                "mm: these rows do not carry its parameters; take more rows in more varied "
-                "poses (each joint moved widely) or a table with x, y, z (--refine-joints)",
-            )
-        )
     if ho.rows and not ho.rms_mm <= HOLDOUT_FLOORS * ho.floor_mm:
         cols = ", ".join(
             repr(c) for c in (*result.table.columns.joints, result.table.columns.length)
@@ -161,7 +151,7 @@ def _findings(result: FitResult, run: Run, budget_mm: float, moved_mm: float, li
                 f"the held-out RMS {ho.rms_mm:.4g} mm is {ho.ratio:.0f} times the quantisation "
                 f"floor {ho.floor_mm:.4g} mm (more than {HOLDOUT_FLOORS:g}): check the columns "
                 f"{cols}: this robot's joints in degrees (its convention) and the cable length "
-                "in mm, one row each",
+                "in mm read with the joints of its own row (rows not shifted)",
             )
         )
     if not core.sigma_mm <= limit:
@@ -172,6 +162,21 @@ def _findings(result: FitResult, run: Run, budget_mm: float, moved_mm: float, li
                 f"quantisation floor {run.floor_mm:.4f} mm and the reading noise allow (χ²): "
                 "the table does not fit this robot model; check the column map, the units "
                 "and the robot file (a sensor noisier than --noise-mm: give its σ)",
+            )
+        )
+    if budget_mm >= moved_mm:
+        what = (
+            f"is not below the correction it makes, {moved_mm:.3g} mm: these rows do not "
+            "carry its parameters"
+            if moved_mm > 0
+            else "while it corrects nothing: no DH error is worth a parameter on these rows"
+        )
+        out.append(
+            Finding(
+                "budget",
+                f"the error budget {budget_mm:.3g} mm (the tool-point error this fit's own "
+                f"uncertainty predicts) {what}; take more rows in more varied poses (each "
+                "joint moved widely) or a table with x, y, z (--refine-joints)",
             )
         )
     return out
