@@ -288,3 +288,49 @@ def test_cli_fit_xlsx_without_openpyxl_says_what_to_install(tmp_path, monkeypatc
     r = CliRunner().invoke(main, ["fit", str(VIPER_FILE), str(path)])
     assert r.exit_code == 2
     assert "pip install 'wirecal[xlsx]'" in r.output
+
+
+def _workbook_with_a_huge_cell(path, cell_bytes):
+    """An .xlsx whose first sheet's one cell holds ``cell_bytes`` characters (FT61)."""
+    import io
+    import zipfile
+
+    openpyxl = pytest.importorskip("openpyxl")
+    book = openpyxl.Workbook()
+    book.active.append(["j1"])
+    buf = io.BytesIO()
+    book.save(buf)
+    with zipfile.ZipFile(buf) as src, zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as out:
+        for part in src.infolist():
+            if part.filename != "xl/worksheets/sheet1.xml":
+                out.writestr(part, src.read(part))
+                continue
+            with out.open(part.filename, "w") as sheet:
+                sheet.write(
+                    b'<?xml version="1.0" encoding="UTF-8"?><worksheet xmlns="http://schemas.'
+                    b'openxmlformats.org/spreadsheetml/2006/main"><sheetData><row r="1">'
+                    b'<c r="A1" t="inlineStr"><is><t>'
+                )
+                for _ in range(cell_bytes // 2**20):
+                    sheet.write(b"a" * 2**20)
+                sheet.write(b"</t></is></c></row></sheetData></worksheet>")
+
+
+def test_ft61_a_workbook_unpacking_beyond_the_bound_is_refused_before_it_is_read(tmp_path):
+    """FT61: a 4 MB .xlsx with a 4 GiB cell took 28.6 s and 3.8 GB before an empty reason;
+    the workbooks escaped the 16 MiB input bound. 130 MiB of one cell here (130 kB packed)."""
+    path = tmp_path / "bomb.xlsx"
+    _workbook_with_a_huge_cell(path, 130 * 2**20)
+    assert path.stat().st_size < 2**20
+    r = CliRunner().invoke(main, ["fit", str(VIPER_FILE), str(path)])
+    assert r.exit_code == 2
+    assert "unpacks to more than 128 MiB (at part 'xl/worksheets/sheet1.xml')" in r.output
+    assert len(r.output) < 1000
+
+
+def test_a_workbook_over_the_input_bound_is_refused_by_size(tmp_path):
+    path = tmp_path / "big.xlsx"
+    path.write_bytes(b"PK" + b"\0" * (16 * 2**20))
+    r = CliRunner().invoke(main, ["fit", str(VIPER_FILE), str(path)])
+    assert r.exit_code == 2
+    assert "more than 16 MiB" in r.output

@@ -22,6 +22,8 @@ import csv
 import hashlib
 import io
 import math
+import zipfile
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -30,11 +32,17 @@ import numpy as np
 from wirecal.solver.cable_data import AXES, CableTable, ColumnMap
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.csv_table import read_source
+from wirecal.solver.formats.fileio import read_input
 
 RESOLUTION_QUANTILE = 0.9
 """Share of the values whose decimals fix a column's resolution (the rest may be typos)."""
 
 MAX_DECIMALS = 6
+
+MAX_XLSX_PARTS = 1000
+MAX_XLSX_UNPACKED_BYTES = 128 * 2**20
+"""Bounds of a workbook before it is read (:func:`check_workbook`): a sheet of 100,000 rows
+of ten numbers unpacks to about 40 MB of XML."""
 
 
 def default_map(n_joints: int, header: tuple[str, ...] = ()) -> ColumnMap:
@@ -130,9 +138,10 @@ def _xlsx_cells(path: str | Path, sheet: str | None) -> tuple[tuple[str, ...], C
             f"{path}: reading .xlsx needs openpyxl: pip install 'wirecal[xlsx]' (or save the "
             "sheet as CSV)"
         ) from None
-    _, source, digest = _bytes_digest(path)
+    raw, source, digest = _bytes_digest(path)
+    check_workbook(raw, source)
     try:
-        book = openpyxl.load_workbook(path, read_only=True, data_only=True)
+        book = openpyxl.load_workbook(io.BytesIO(raw), read_only=True, data_only=True)
     except Exception as exc:  # openpyxl raises many types for a damaged file
         raise WirecalError(f"{source}: not a readable .xlsx workbook: {exc}") from None
     names = book.sheetnames
@@ -152,11 +161,39 @@ def _xlsx_cells(path: str | Path, sheet: str | None) -> tuple[tuple[str, ...], C
 
 
 def _bytes_digest(path: str | Path) -> tuple[bytes, str, str]:
+    raw, source = read_input(path, "table")
+    return raw, source, hashlib.sha256(raw).hexdigest()
+
+
+def check_workbook(raw: bytes, source: str) -> None:
+    """Refuse a workbook that unpacks beyond the bounds, before openpyxl reads it.
+
+    An ``.xlsx`` is a zip of XML parts: at most :data:`MAX_XLSX_PARTS` of them, together at
+    most :data:`MAX_XLSX_UNPACKED_BYTES` when unpacked — counted while unpacking, not taken
+    from the sizes the archive declares (a zip bomb declares small ones).
+    """
     try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise WirecalError(f"{path}: cannot read table: {exc.strerror or exc}") from None
-    return raw, str(path), hashlib.sha256(raw).hexdigest()
+        with zipfile.ZipFile(io.BytesIO(raw)) as archive:
+            parts = archive.infolist()
+            if len(parts) > MAX_XLSX_PARTS:
+                raise WirecalError(
+                    f"{source}: {len(parts)} parts in the workbook, more than "
+                    f"{MAX_XLSX_PARTS}: not a table's workbook; save the sheet as CSV"
+                )
+            total = 0
+            for part in parts:
+                with archive.open(part) as stream:
+                    while chunk := stream.read(2**20):
+                        total += len(chunk)
+                        if total > MAX_XLSX_UNPACKED_BYTES:
+                            raise WirecalError(
+                                f"{source}: the workbook unpacks to more than "
+                                f"{MAX_XLSX_UNPACKED_BYTES // 2**20} MiB (at part "
+                                f"{part.filename!r}): not a table's workbook (a zip bomb?); "
+                                "save the sheet as CSV"
+                            )
+    except (zipfile.BadZipFile, zlib.error, EOFError, NotImplementedError) as exc:
+        raise WirecalError(f"{source}: not a readable .xlsx workbook: {exc}") from None
 
 
 def _column_index(cmap: ColumnMap, header: tuple[str, ...], source: str) -> list[int]:
