@@ -232,6 +232,9 @@ def test_cli_fit_report(simulated, tmp_path):
     assert html.count('<img src="data:image/png;base64,') == 2
     assert "RMS / floor" in html
     assert f"new ones at data rows\n{', '.join(str(s) for s in syn.starts[1:])}" in html
+    # the verdict and the budget against the correction come before any figure
+    verdict = html.index('Plausibility (fit): <span class="good">passed')
+    assert verdict < html.index("against a correction of") < html.index("<h2>")
 
 
 @pytest.mark.slow

@@ -459,3 +459,27 @@ def test_holdout_rule_a_held_out_row_never_trains(monkeypatch):
             assert not set(train) & set(test), scheme
             q = {tuple(v) for v in table.q_deg[test]}
             assert not any(tuple(v) in q for v in table.q_deg[train]), scheme
+
+
+def test_bic_elimination_is_the_refit_with_the_dropped_columns_fixed():
+    """fit_select: z² of each drop and the estimates after it, against least squares solved
+    again without the dropped columns (exact for a linear model)."""
+    from wirecal.solver.fit_select import bic_eliminated
+
+    rng = np.random.default_rng(4)
+    n = 400
+    J = rng.normal(size=(n, 6))
+    truth = np.array([3.0, 0.0, 0.0, 2.0, 0.0, 1.0])  # noise σ 1: |z| of a zero ≈ 1
+    y = J @ truth + rng.normal(size=n)
+    x = np.linalg.lstsq(J, y, rcond=None)[0]
+    sigma = float(np.sqrt(np.sum((y - J @ x) ** 2) / (n - 6)))
+    out = bic_eliminated(J, x, [1, 2, 3, 4, 5], sigma)
+    assert {k for k, _ in out} == {1, 2, 4}  # the zeros; 0 is no candidate
+    assert all(z < np.sqrt(np.log(n)) for _, z in out)
+    # the |z| of the last drop, from a refit without the columns dropped before it
+    before = [k for k, _ in out[:-1]]
+    keep = [c for c in range(6) if c not in before]
+    xs = np.linalg.lstsq(J[:, keep], y, rcond=None)[0]
+    cov = sigma**2 * np.linalg.inv(J[:, keep].T @ J[:, keep])
+    last = keep.index(out[-1][0])
+    assert out[-1][1] == pytest.approx(abs(xs[last]) / np.sqrt(cov[last, last]), rel=1e-9)
