@@ -109,6 +109,28 @@ def test_xlsx_sheet(tmp_path):
         read_cable_table(path, MAP, sheet="log")
 
 
+def test_ft56_ft54_a_workbook_names_its_other_sheets_and_uncalculated_formulas(tmp_path):
+    """FT56: the data on the second sheet got 'name the columns with --map' only; FT54:
+    formulas without cached values read as '' with no word of formulas."""
+    openpyxl = pytest.importorskip("openpyxl")
+    book = openpyxl.Workbook()
+    book.active.title = "notes"
+    book.active.append(["written by hand"])
+    ws = book.create_sheet("data")
+    ws.append(["q1", "q2", "q3", "q4", "q5", "q6", "L"])
+    ws.append([1.5, -20, 30.1, 0, 45.5, 90, "=A2*100"])  # openpyxl caches no value
+    path = tmp_path / "t.xlsx"
+    book.save(path)
+    with pytest.raises(
+        WirecalError,
+        match=r"of sheet 'notes', or read another sheet with "
+        r"--sheet \('data'\)",
+    ):
+        read_cable_table(path, MAP)
+    with pytest.raises(WirecalError, match="formula never calculated; open and save"):
+        read_cable_table(path, MAP, sheet="data")
+
+
 def test_sheet_on_a_text_table_is_refused(tmp_path):
     with pytest.raises(WirecalError, match=r"--sheet is for \.xlsx"):
         read_cable_table(_write(tmp_path, HEADER + "1,2,3,4,5,6,7\n"), MAP, sheet="x")
