@@ -243,6 +243,25 @@ def test_cli_fit_json_and_patch(simulated, tmp_path):
     assert (tmp_path / "fit.spec.txt").exists()
 
 
+def test_ft57_gen_with_a_fits_patch_says_a_fit_has_no_plan(simulated, tmp_path):
+    """FT57: 'the patch was solved from another plan; generate with the plan it came from'
+    (a fit's patch has no plan)."""
+    _, path = simulated
+    patch = tmp_path / "fit.toml"
+    r = CliRunner().invoke(
+        main, ["fit", str(VIPER_FILE), str(path), "--holdout", "none", "-o", str(patch)]
+    )
+    assert r.exit_code == 0, r.output
+    plan = VIPER_FILE.parent / "paper_plan.toml"
+    r = CliRunner().invoke(
+        main, ["gen", str(VIPER_FILE), str(plan), "--patch", str(patch), "-o", str(tmp_path / "g")]
+    )
+    assert r.exit_code == 2, r.output
+    assert "the patch comes from `wirecal fit`" in r.output
+    assert "export-urdf --patch" in r.output
+    assert "another plan" not in r.output
+
+
 def test_cli_fit_report(simulated, tmp_path):
     syn, path = simulated
     report = tmp_path / "fit.html"
