@@ -15,7 +15,14 @@ from wirecal.cli.options import (
     SEED,
 )
 from wirecal.solver.fit_gate import Gate, gate_fit, gate_json
-from wirecal.solver.fit_result import FitOptions, FitResult, Run, fit_table, result_json
+from wirecal.solver.fit_result import (
+    FitOptions,
+    FitResult,
+    Run,
+    copies_note,
+    fit_table,
+    result_json,
+)
 from wirecal.solver.formats.cable_table import read_cable_table
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.patch import companion_paths, put_patch
@@ -243,21 +250,6 @@ def run_text(result: FitResult, run: Run) -> list[str]:
     return lines
 
 
-def _copies_text(result: FitResult, shown: int = 10) -> list[str]:
-    """Return the line naming the rows that copy earlier rows (none: no line)."""
-    pairs = result.copies
-    if not pairs:
-        return []
-    named = ", ".join(f"{_rows(result, [r])} = {_rows(result, [f])}" for r, f in pairs[:shown]) + (
-        f", … and {len(pairs) - shown} more" if len(pairs) > shown else ""
-    )
-    return [
-        f"copies (the joints and the length of an earlier row; left out of the fit, and a "
-        f"held-out split keeps rows at the same joints on one side): {len(pairs)}: {named}; "
-        "delete them unless they are repeated readings"
-    ]
-
-
 def fit_text(result: FitResult) -> list[str]:
     """Return what ``wirecal fit`` prints without --json."""
     t = result.table
@@ -265,7 +257,7 @@ def fit_text(result: FitResult) -> list[str]:
     lines = [
         f"Robot {result.robot.name}; table {t.source}: {len(t.length_mm)} rows "
         f"(resolution: joints {jr:g} deg, length {lr:g} mm)",
-        *_copies_text(result),
+        *filter(None, [copies_note(result)]),
         *run_text(result, result.main),
     ]
     if result.xyz is not None:

@@ -40,7 +40,7 @@ from wirecal.solver.budget import Budget, budget, sources
 from wirecal.solver.errors import Implausible
 from wirecal.solver.fit import point_model
 from wirecal.solver.fit_model import lengths_and_jacobian, model_of
-from wirecal.solver.fit_result import FitResult, Run
+from wirecal.solver.fit_result import FitResult, Run, copies_note
 from wirecal.solver.kinematics import Model, tool_position, with_errors
 from wirecal.solver.robot import Robot
 from wirecal.solver.scale import PPM
@@ -226,6 +226,7 @@ def gate_fit(
     passing = [j for j in judged if j.verdict.passed]
     if passing or accept:
         return Gate((passing or judged)[0], tuple(judged))
+    copies = copies_note(result)
     raise Implausible(
         [
             *(
@@ -233,6 +234,7 @@ def gate_fit(
                 for j in judged
                 for f in j.verdict.findings
             ),
+            *([f"{result.table.source}: {copies}"] if copies else []),
             "nothing was written: no fit passed the plausibility gate. To see the estimates "
             "anyway pass --accept-implausible (a patch written with it records the override)",
         ]

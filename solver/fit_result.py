@@ -152,6 +152,23 @@ def fit_table(robot: Robot, table: CableTable, options: FitOptions | None = None
     return FitResult(robot, table, options, res, main, xyz, refined)
 
 
+def copies_note(result: FitResult, shown: int = 10) -> str:
+    """Return the line naming the rows that copy earlier rows ('' when none)."""
+    pairs, t = result.copies, result.table
+    if not pairs:
+        return ""
+    named = ", ".join(
+        f"row {r} (line {int(t.lines[r])}) = row {f} (line {int(t.lines[f])})"
+        for r, f in pairs[:shown]
+    )
+    more = f", … and {len(pairs) - shown} more" if len(pairs) > shown else ""
+    return (
+        f"copies (the joints and the length of an earlier row; left out of the fit, and a "
+        f"held-out split keeps rows at the same joints on one side): {len(pairs)}: "
+        f"{named}{more}; delete them unless they are repeated readings"
+    )
+
+
 def _refuse_ignored_jumps(table: CableTable, core: Core, options: FitOptions) -> None:
     """Refuse a fit whose residual still jumps (unless one session was asked for)."""
     if core.ignored_jumps and not options.single_session:

@@ -154,3 +154,20 @@ def test_refine_joints_writes_the_unrefined_fit_when_the_refined_one_fails(
     assert gate["fit"]["chosen"]
     assert "(fit)" in r.stderr  # 'wrote … (fit)'
     assert read_patch(patch).meta.plausibility.startswith("passed")
+
+
+def test_ft28_rows_repeated_ten_times_are_named_as_copies(tmp_path, viper):
+    """FT28: 40 rows ×10 gave 'the residual still jumps … pass --single-session', the
+    copies not named."""
+    t40 = synthetic_table(viper, 40, seed=1).table
+    idx = np.tile(np.arange(40), 10)
+    t = replace(
+        t40,
+        lines=np.arange(2, 402),
+        q_deg=t40.q_deg[idx],
+        length_mm=t40.length_mm[idx],
+        xyz_mm=t40.xyz_mm[idx],
+    )
+    r, _ = _fit(tmp_path, t)
+    assert "copies (the joints and the length of an earlier row; left out of the fit" in r.output
+    assert ": 360: row 40 (line 42) = row 0 (line 2), " in r.output
