@@ -11,18 +11,20 @@ from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from tests.conftest import ROOT
+from wirecal.solver.accuracy import workspace
 from wirecal.solver.fit import Data, candidates, choose, point_model
 from wirecal.solver.fit_model import (
     Layout,
     length_joint_gradient,
     lengths_and_jacobian,
+    model_of,
     quantisation_floor,
 )
 from wirecal.solver.fit_result import FitOptions, fit_table
 from wirecal.solver.fit_sessions import change_points
 from wirecal.solver.fit_synth import synthetic_table
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.kinematics import tool_position
+from wirecal.solver.kinematics import Model, tool_position
 
 ARMS = ("viper_s650", "abb_irb120", "ur5e")
 
@@ -56,11 +58,21 @@ def _check_recovery(robot, syn, result):
     assert gross <= rejected
     near_start = {s + d for s in syn.starts[1:] for d in range(-2, 3)}
     assert rejected <= set(syn.bad_mm) | near_start
-    # every fitted parameter within 4σ of the truth (DH errors the generator left at 0: 0)
+    # every fitted anchor and offset within 4σ of the truth
     per = core.layout.boundary_per_internal
     for name, value, std in zip(core.layout.names, core.x * per, core.std * per, strict=True):
-        truth = _truth(syn, robot, name)
-        assert abs(value - truth) <= 4 * std, (name, value, truth, std)
+        if name.startswith(("anchor_", "offset_")):
+            truth = _truth(syn, robot, name)
+            assert abs(value - truth) <= 4 * std, (name, value, truth, std)
+    # the DH errors and the attachment as a model: its tool points over the workspace within
+    # 0.15 mm of the truth's on average (per DH error 4σ no longer holds: a DH error BIC
+    # fixes at 0, e.g. th2 = 0.012° at |z| 2.6, moves its correlated partner th3 by 7 of
+    # its σ, and the tool point by microns)
+    fitted = model_of(point_model(robot), core.layout, core.x)
+    true = Model(robot.model(syn.errors).dh, syn.attachment_mm)
+    q = workspace(robot)
+    error = np.linalg.norm(tool_position(fitted, q) - tool_position(true, q), axis=1)
+    assert error.mean() <= 0.15, error.mean()
 
 
 @pytest.mark.parametrize("arm", ["viper_s650", "abb_irb120"])
