@@ -22,7 +22,7 @@ from wirecal.solver.fit_model import (
 )
 from wirecal.solver.fit_result import FitOptions, fit_table
 from wirecal.solver.fit_sessions import change_points
-from wirecal.solver.fit_synth import synthetic_table
+from wirecal.solver.fit_synth import synthetic_table, take_rows
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.kinematics import Model, tool_position
 
@@ -410,14 +410,7 @@ def test_ft27_copied_rows_are_named_left_out_and_do_not_shrink_the_sigmas():
     the σ's came out √2 too small."""
     robot = _robot("viper_s650")
     table = _clean(robot, 120, seed=3).table
-    twice = np.concatenate([np.arange(120), np.arange(120)])
-    doubled = replace(
-        table,
-        lines=np.arange(2, 242),
-        q_deg=table.q_deg[twice],
-        length_mm=table.length_mm[twice],
-        xyz_mm=table.xyz_mm[twice],
-    )
+    doubled = take_rows(table, np.tile(np.arange(120), 2))
     once = fit_table(robot, table, FitOptions(holdout="none"))
     both = fit_table(robot, doubled, FitOptions(holdout="random:0.2", repeats=2))
     assert both.copies == tuple((120 + r, r) for r in range(120))
@@ -436,14 +429,8 @@ def test_holdout_rule_a_held_out_row_never_trains(monkeypatch):
     robot = _robot("viper_s650")
     table = _clean(robot, 150, seed=2).table
     again = np.r_[np.arange(150), [3, 70, 140]]  # three repeated readings at old joints
-    length = table.length_mm[again] + np.r_[np.zeros(150), [0.05, -0.05, 0.1]]
-    table = replace(
-        table,
-        lines=np.arange(2, 155),
-        q_deg=table.q_deg[again],
-        length_mm=length,
-        xyz_mm=table.xyz_mm[again],
-    )
+    table = take_rows(table, again)
+    table = replace(table, length_mm=table.length_mm + np.r_[np.zeros(150), [0.05, -0.05, 0.1]])
     seen: list[tuple[np.ndarray, np.ndarray]] = []
     real_splits, real_solve = fit_module.splits, fit_module.solve
 

@@ -15,7 +15,7 @@ from click.testing import CliRunner
 import wirecal.solver.fit_synth as fit_synth
 from tests.conftest import ROOT
 from wirecal.cli.main import main
-from wirecal.solver.fit_synth import synthetic_table, table_text
+from wirecal.solver.fit_synth import synthetic_table, table_text, take_rows
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.robot_file import load_robot
 
@@ -159,15 +159,7 @@ def test_refine_joints_writes_the_unrefined_fit_when_the_refined_one_fails(
 def test_ft28_rows_repeated_ten_times_are_named_as_copies(tmp_path, viper):
     """FT28: 40 rows ×10 gave 'the residual still jumps … pass --single-session', the
     copies not named."""
-    t40 = synthetic_table(viper, 40, seed=1).table
-    idx = np.tile(np.arange(40), 10)
-    t = replace(
-        t40,
-        lines=np.arange(2, 402),
-        q_deg=t40.q_deg[idx],
-        length_mm=t40.length_mm[idx],
-        xyz_mm=t40.xyz_mm[idx],
-    )
+    t = take_rows(synthetic_table(viper, 40, seed=1).table, np.tile(np.arange(40), 10))
     r, _ = _fit(tmp_path, t)
     assert "copies (the joints and the length of an earlier row; left out of the fit" in r.output
     assert ": 360: row 40 (line 42) = row 0 (line 2), " in r.output
