@@ -79,6 +79,8 @@ HEADLINE = {
     "identifiability": "the points do not identify every parameter",
     "bound": "estimates on their bound or beyond a plausible size",
     "drift": "the zero readings drift beyond the tolerance",
+    "holdout": "held-out rows far above the quantisation floor",
+    "budget": "the error budget is not below the correction",
 }
 
 
@@ -86,7 +88,7 @@ HEADLINE = {
 class Finding:
     """One failed plausibility check."""
 
-    check: str  # "lengths", "residual", "identifiability", "bound" or "drift"
+    check: str  # a key of HEADLINE
     message: str
 
 

@@ -288,8 +288,13 @@ class Patch:
             )
         if plan is not None and self.meta.plan != plan.fingerprint():
             problems.append(
-                f"{self.source}: plan: the patch was solved from another plan; generate with "
-                "the plan it came from"
+                f"{self.source}: plan: the patch comes from `wirecal fit` (table "
+                f"{self.meta.log}), which has no plan: only a patch `wirecal solve` wrote "
+                "for this plan goes here; a fit's patch goes to export-urdf --patch (its "
+                "controller companion was written beside it)"
+                if self.meta.method == "fit"
+                else f"{self.source}: plan: the patch was solved from another plan; generate "
+                "with the plan it came from"
             )
         for name, v in self.parameters.items():
             try:
