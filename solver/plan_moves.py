@@ -14,6 +14,7 @@ import itertools
 
 import numpy as np
 
+from wirecal.solver.cell import SURE_GAP_MM
 from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import wire_path
@@ -86,7 +87,8 @@ def move_clearance(
     checked along the move as ``wirecal gen`` checks it; so does a sample where the arm
     meets itself or the cell (:mod:`~wirecal.solver.cell`).
     """
-    if robot.link_radius_mm is None:
+    radii = robot.link_radius_mm
+    if radii is None:
         raise WirecalError(f"{robot.source}: the wire clearance needs the link radii")
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
     count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg)).astype(int)
@@ -103,21 +105,24 @@ def move_clearance(
             q = q[keep]
         some = kept[lo:hi] > 0
         if some.any():
-            gap = _sample_gaps(robot, model, p0, q, longest_mm)
+            gap = _sample_gaps(robot, model, p0, q, radii, longest_mm)
             out[lo:hi][some] = np.minimum.reduceat(gap, first[some])
     return out
 
 
-def _sample_gaps(robot: Robot, model, p0: np.ndarray, q: np.ndarray, longest_mm: float):
-    """Return each configuration's wire gap (mm) to the links; −inf where it is not safe.
+def _sample_gaps(
+    robot: Robot, model, p0: np.ndarray, q: np.ndarray, radii: np.ndarray, longest_mm: float
+) -> np.ndarray:
+    """Return each configuration's wire gap (mm) to the links (``radii``); −inf where unsafe.
 
-    Not safe: the arm in itself or the cell, or the modelled wire longer than
+    Unsafe: the arm in itself or the cell, or the modelled wire longer than
     ``longest_mm`` (see :func:`move_clearance`).
     """
     q_rad = np.radians(q)
     f = frames(model, q_rad)  # one evaluation of the chain for both checks
-    gap = wire_clearance(model, q_rad, p0, robot.link_radius_mm, wire_trim_mm(robot), f)
-    gap = np.where(robot.cell_gaps(q, p0, model, f).smallest() < 0, -np.inf, gap)
+    gap = wire_clearance(model, q_rad, p0, radii, wire_trim_mm(robot), f)
+    collides = robot.cell_gaps(q, p0, model, f, SURE_GAP_MM).smallest() < 0
+    gap = np.where(collides, -np.inf, gap)
     if np.isfinite(longest_mm):
         d = wire_path(model.pulley, tool_position(model, q_rad, f) - p0)[0]
         gap = np.where(np.nan_to_num(d) > longest_mm, -np.inf, gap)

@@ -276,8 +276,8 @@ def step_by_step(
         # when a choice comes to them (Links)
         iso = iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")[:600]]
         order = [p.parameter for p in pools]
-        prev = [col[t] for t in order]
-        nxt = [col[t] for t in remaining if t != j]
+        prev = np.array([col[t] for t in order], int)
+        nxt = np.array([col[t] for t in remaining if t != j], int)
         # error covariance of the earlier estimates (linearised stepwise map)
         cov_prev = (
             _stepwise_cov(model, theta0, order, [q_all[p.iso[p.picks]] for p in pools], opt)
@@ -289,8 +289,8 @@ def step_by_step(
             iso,
             Links(robot, model, p0, theta0, q_all[iso], via_all[iso], opt),
             psi[iso, col[j]],
-            psi[np.ix_(iso, prev)] if prev else np.zeros((len(iso), 0)),
-            psi[np.ix_(iso, nxt)] if nxt else np.zeros((len(iso), 0)),
+            psi[np.ix_(iso, prev)] if len(prev) else np.zeros((len(iso), 0)),
+            psi[np.ix_(iso, nxt)] if len(nxt) else np.zeros((len(iso), 0)),
             cov_prev,
             [],
         )
