@@ -31,7 +31,8 @@ ARMS = ("viper_s650", "ur5e", "abb_irb120", "puma560")
 def _wirecal(tree: Path, *args: str) -> list[str]:
     """Return the command running ``wirecal ARGS`` on the code in ``tree``."""
     main = "from wirecal.cli.main import main; main()"
-    return ["env", f"PYTHONPATH={tree}", sys.executable, "-c", main, *args]
+    # -P: the working folder (which may hold another checkout's wirecal) not on sys.path
+    return ["env", f"PYTHONPATH={tree}", sys.executable, "-P", "-c", main, *args]
 
 
 def _commands(trees: dict[str, Path], tmp: Path, arms, demo: bool, quick: bool):
@@ -51,6 +52,7 @@ def _commands(trees: dict[str, Path], tmp: Path, arms, demo: bool, quick: bool):
                 "env",
                 f"PYTHONPATH={tree}",
                 sys.executable,
+                "-P",
                 "-m",
                 "pytest",
                 "-q",
