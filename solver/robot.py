@@ -190,15 +190,17 @@ class Robot:
         p0: np.ndarray,
         model: Model | None = None,
         f: Frames | None = None,
+        exact_below_mm: float = np.inf,
     ) -> Gaps:
         """Return the gaps (mm) of configurations ``q_deg`` to the arm's body and the cell.
 
         ``p0``: the wire's exit (the encoder housing's start); ``model``: the arm as built
-        (default nominal); ``f``: the frames of q when the caller has them.
+        (default nominal); ``f``: the frames of q when the caller has them;
+        ``exact_below_mm``: see :func:`~wirecal.solver.cell.cell_gaps`.
         """
         model = self.nominal if model is None else model
         q_rad = np.radians(np.atleast_2d(q_deg))
-        return cell_gaps(self.cell, self.capsules, model, q_rad, p0, f)
+        return cell_gaps(self.cell, self.capsules, model, q_rad, p0, f, exact_below_mm)
 
     def errors(self, names: Sequence[str] | None = None) -> P.ErrorSet:
         """Return the error parameters ``names`` (default: the robot file's ``parameters``)."""
