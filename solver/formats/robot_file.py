@@ -25,6 +25,8 @@ Format (angles in degrees, lengths in mm)::
     software = "5.20"                     # the controller's software version (optional)
     host = "192.168.1.10"; port = 50000   # URScript: where 'wirecal receive' listens
     key = "…"                             # URScript: the run token's secret (16+ characters)
+    [gravity]                             # optional: masses and compliances (robot_gravity)
+    link_mass_kg = [...]; link_com_mm = [[x, y, z], ...]; compliance_urad_per_nm = [...]
     [geometry]                            # optional
     link_radius_mm = [70, 70, 55, 45, 37] # capsule radius per chain step 1-2 … 5-6 (docs/cell.md)
     [cell]                                # optional (wirecal.solver.cell)
@@ -79,6 +81,7 @@ from wirecal.solver.formats.robot_encoder import (
     read_encoder,
     read_language_and_interface,
 )
+from wirecal.solver.formats.robot_gravity import GRAVITY_KEYS, read_gravity
 from wirecal.solver.formats.robot_kinematics import KINEMATICS_KEYS, read_dh, read_limits
 from wirecal.solver.formats.robot_sanity import check_units
 from wirecal.solver.formats.robot_values import (
@@ -122,6 +125,7 @@ _TOP_KEYS = (
     "urdf",
     "controller",
     "cell",
+    "gravity",
 )
 _KEYS = {
     "tool": ("point_mm",),
@@ -188,6 +192,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         radii = np.full(dh.shape[0] - 1, DEFAULT_LINK_RADIUS_MM)
     urdf = _urdf(doc.table("urdf", _KEYS["urdf"], required=False), source)
     cell = read_cell(doc.table("cell", CELL_KEYS, required=False), n)
+    masses, compliance = read_gravity(doc.table("gravity", GRAVITY_KEYS, required=False), dh)
     check_units(doc, dh, lo, hi, encoder, radii)
     doc.raise_if_any()
     dh_rad = valid(dh).copy()
@@ -208,6 +213,8 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         joint_speed_confirmed=valid(speed_confirmed),
         gravity_sag_deg_per_m=valid(sag),
         cell=valid(cell),
+        masses=masses,
+        compliance_urad_per_nm=compliance,
     )
 
 
