@@ -148,6 +148,7 @@ class Robot:
     )  # the floor, keep-out volumes and body limits
     masses: MassModel | None = None  # [gravity]: the links' and payload's masses (None: rigid)
     compliance_urad_per_nm: np.ndarray | None = None  # [gravity]: c_j, µrad/(N·m) (None: 0)
+    compliances: tuple[str, ...] = ()  # [calibration]: compliances to identify (c2, c3, …)
 
     @property
     def n_joints(self) -> int:

@@ -20,6 +20,7 @@ Format (angles in degrees, lengths in mm)::
     [calibration]
     parameters = ["th2", "th3", ...]      # names from wirecal.solver.params
     gravity_sag_deg_per_m = 0.01          # optional: joints 2, 3 sag per m of lever (budget)
+    compliances = ["c2", "c3"]            # optional: compliances to identify (needs [gravity])
     [controller]                          # optional
     language = "vplus"                    # or "urscript" (Universal Robots)
     software = "5.20"                     # the controller's software version (optional)
@@ -129,7 +130,7 @@ _TOP_KEYS = (
 )
 _KEYS = {
     "tool": ("point_mm",),
-    "calibration": ("parameters", "gravity_sag_deg_per_m"),
+    "calibration": ("parameters", "gravity_sag_deg_per_m", "compliances"),
     "geometry": ("link_radius_mm",),
     "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg", "wire_point_mm"),
 }
@@ -193,6 +194,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     urdf = _urdf(doc.table("urdf", _KEYS["urdf"], required=False), source)
     cell = read_cell(doc.table("cell", CELL_KEYS, required=False), n)
     masses, compliance = read_gravity(doc.table("gravity", GRAVITY_KEYS, required=False), dh)
+    compliances = _compliances(calibration, n, masses is not None)
     check_units(doc, dh, lo, hi, encoder, radii)
     doc.raise_if_any()
     dh_rad = valid(dh).copy()
@@ -215,6 +217,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         cell=valid(cell),
         masses=masses,
         compliance_urad_per_nm=compliance,
+        compliances=tuple(compliances),
     )
 
 
@@ -232,6 +235,23 @@ def _parameters(cal: Table, n: int | None) -> list[str] | None:
             P.parse(x, n)
         except ValueError as exc:
             cal.add("parameters", str(exc))
+    return names
+
+
+def _compliances(cal: Table, n: int | None, masses: bool) -> list[str]:
+    """Read ``[calibration] compliances``: c1..cn, each once; they need ``[gravity]``."""
+    names = cal.strings("compliances", [], what="compliance names (c2, c3, …)") or []
+    for x in duplicates(names):
+        cal.add("compliances", f"{x!r} is listed twice")
+    for x in names:
+        if n is not None and not (x.startswith("c") and x[1:].isdigit() and 1 <= int(x[1:]) <= n):
+            cal.add("compliances", f"{x!r} is not a compliance; use c1..c{n}")
+    if names and not masses:
+        cal.add(
+            "compliances",
+            "needs the arm's masses: add a [gravity] table (without link_mass_kg the masses "
+            "are assumed, 10 kg per metre of link)",
+        )
     return names
 
 

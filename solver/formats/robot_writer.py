@@ -186,6 +186,8 @@ def robot_file_text(
         "[calibration]",
         "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
     ]
+    if robot.compliances:
+        lines.append("compliances = [" + ", ".join(json.dumps(c) for c in robot.compliances) + "]")
     if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M:
         lines.append(f"gravity_sag_deg_per_m = {_num(robot.gravity_sag_deg_per_m)}")
     if robot.link_radius_mm is not None:
