@@ -35,6 +35,10 @@ SIGMA_LIMIT_URAD_PER_NM = 0.5
 5 µrad/(N·m), the middle of the 2–8 µrad/(N·m) issue 30 reports for joints 2–4 of an arm
 like the Viper s650 (an independent model's range, not a vendor figure)."""
 
+PRIOR_COMPLIANCE_URAD_PER_NM = 8.0
+"""How far (µrad/(N·m)) beyond the robot file's value a compliance the points do not
+identify may be, in the error budget: the top of issue 30's 2–8 µrad/(N·m)."""
+
 COMPENSATION_ITERATIONS = 4
 """Fixed-point steps of :func:`compensated_joints`: each shrinks the error by c·|∂τ/∂q|
 (≈ 10⁻³), so four leave 10⁻¹² of the sag."""
@@ -47,6 +51,7 @@ class ComplianceObservability:
     identified: tuple[str, ...]
     sigma_urad_per_nm: dict[str, float]  # every candidate's σ at its last evaluation
     reasons: dict[str, str]  # each candidate not identified: why
+    no_torque: tuple[str, ...] = ()  # candidates gravity exerts no torque on: no effect
 
     def describe(self) -> list[str]:
         """Return the analysis in words, one sentence per line."""
@@ -84,12 +89,12 @@ def compliance_observability(
     psi = sensitivity(model, q_deg, theta0_deg, names).psi
     ident = analyse_jacobian(psi, names)
     reasons: dict[str, str] = {}
-    for name in candidates:
-        if name in ident.unobservable:
-            reasons[name] = (
-                f"gravity has no torque about joint {name[1:]} at these points (its axis "
-                "is vertical, or nothing it carries lies off its axis): no wire length moves"
-            )
+    no_torque = tuple(n for n in candidates if n in ident.unobservable)
+    for name in no_torque:
+        reasons[name] = (
+            f"gravity has no torque about joint {name[1:]} at these points (its axis "
+            "is vertical, or nothing it carries lies off its axis): no wire length moves"
+        )
     for combo in ident.combinations:
         terms = " ".join(f"{c:+.4g}·{n}" for n, c in combo)
         for name, _ in combo:
@@ -116,7 +121,7 @@ def compliance_observability(
         )
     order = {n: k for k, n in enumerate(candidates)}
     return ComplianceObservability(
-        tuple(keep), sigma, dict(sorted(reasons.items(), key=lambda kv: order[kv[0]]))
+        tuple(keep), sigma, dict(sorted(reasons.items(), key=lambda kv: order[kv[0]])), no_torque
     )
 
 
