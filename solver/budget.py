@@ -53,6 +53,12 @@ ASSUMED_TEMPERATURE_RISE_K = 0.5
 
 TERMS = ("noise", "scale", "drift", "exit", "sag")
 
+COMPLIANCE_NOTE = (
+    "sag: the identified compliances (no assumed sag); the 95 % bound is the patch's as the "
+    "controller applies it, the sag left in it; bound95_compensated_mm that of targets "
+    "compensated offline"
+)
+
 
 @dataclass(frozen=True)
 class Budget:
@@ -202,14 +208,15 @@ def budget(
     _, Jp = tool_jacobian(model, q_ws, names)
     errs = {k: rms_tool_error(Jp, c) for k, c in covs.items()}
     total = rms_tool_error(Jp, np.sum(list(covs.values()), axis=0))
-    bound, compensated = bound_mm(Jp, errors), None
+    bound, compensated, notes = bound_mm(Jp, errors), None, _notes(src)
     if compliance is not None:
         compensated, bound = _compliance_bounds(model, q_ws, Jp, errors, M, compliance)
+        notes = (*notes[:2], COMPLIANCE_NOTE, *notes[3:])
     return Budget(
         {k: e.mean_mm for k, e in errs.items()},
         total.mean_mm,
         total.max_mm,
-        _notes(src),
+        notes,
         bound,
         compensated,
     )

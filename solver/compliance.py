@@ -30,14 +30,16 @@ from wirecal.solver.identifiability import analyse_jacobian, covariance
 from wirecal.solver.kinematics import Model, gravity_torques, rigid_frames
 from wirecal.solver.sensitivity import sensitivity
 
-SIGMA_LIMIT_URAD_PER_NM = 0.5
-"""Largest σ (µrad/(N·m)) of an identified compliance at the reading noise: a tenth of
-5 µrad/(N·m), the middle of the 2–8 µrad/(N·m) issue 30 reports for joints 2–4 of an arm
-like the Viper s650 (an independent model's range, not a vendor figure)."""
-
 PRIOR_COMPLIANCE_URAD_PER_NM = 8.0
-"""How far (µrad/(N·m)) beyond the robot file's value a compliance the points do not
-identify may be, in the error budget: the top of issue 30's 2–8 µrad/(N·m)."""
+"""How far (µrad/(N·m)) beyond the robot file's value a compliance may be when the points
+do not identify it (the error budget's range for it): the top of the 2–8 µrad/(N·m) issue
+30 reports for joints 2–4 of an arm like the Viper s650 (an independent model's range, not
+a vendor figure)."""
+
+SIGMA_LIMIT_URAD_PER_NM = PRIOR_COMPLIANCE_URAD_PER_NM / 12**0.5
+"""Largest σ (µrad/(N·m)) of an identified compliance at the reading noise: the σ of the
+prior range (uniform over 0–8 µrad/(N·m): 2.31), so an identified compliance is known
+better than the range the budget would otherwise assume for it."""
 
 COMPENSATION_ITERATIONS = 4
 """Fixed-point steps of :func:`compensated_joints`: each shrinks the error by c·|∂τ/∂q|
@@ -116,7 +118,7 @@ def compliance_observability(
         name = keep.pop(worst)
         reasons[name] = (
             f"σ {sd[worst]:.3g} µrad/(N·m) at {noise_mm:g} mm of reading noise, above "
-            f"{SIGMA_LIMIT_URAD_PER_NM:g}: the torque about joint {name[1:]} is too small or "
+            f"{SIGMA_LIMIT_URAD_PER_NM:.3g}: the torque about joint {name[1:]} is too small or "
             "varies too little over these points"
         )
     order = {n: k for k, n in enumerate(candidates)}
