@@ -129,7 +129,7 @@ def test_compliances_key_writes_back():
     assert robot_from_dict(tomllib.loads(text), "again.toml").compliances == ("c2", "c3")
 
 
-def test_observe_names_the_compliances_only_when_the_file_asks(tmp_path):
+def test_observe_and_psi_name_the_compliances_only_when_the_file_asks(tmp_path):
     plan = str(EXAMPLES / "ur5e" / "plan.toml")
     plain = CliRunner().invoke(main, ["observe", str(EXAMPLES / "ur5e" / "robot.toml"), plan])
     assert plain.exit_code == 0
@@ -149,6 +149,10 @@ def test_observe_names_the_compliances_only_when_the_file_asks(tmp_path):
     assert js["compliance"]["identified"] == ["c2", "c3"]
     assert js["compliance"]["sigma_urad_per_nm"]["c1"] is None
     assert set(js["compliance"]["not_identified"]) == {"c1", "c4", "c5", "c6"}
+    psi = CliRunner().invoke(main, ["psi", str(path), plan])
+    assert "Compliances identified with the geometry: c2 (σ" in psi.output
+    psi_js = json.loads(CliRunner().invoke(main, ["psi", str(path), plan, "--json"]).output)
+    assert psi_js["compliance"]["identified"] == ["c2", "c3"]
 
 
 @pytest.mark.slow
