@@ -12,18 +12,22 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from wirecal.app.twin_runs import measure_in_twin
 from wirecal.cli.main import main
 from wirecal.solver.compliance import (
     SIGMA_LIMIT_URAD_PER_NM,
     compensated_joints,
     compliance_observability,
 )
+from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
 from wirecal.solver.formats.truth import load_errors
 from wirecal.solver.kinematics import frames, tool_position
+from wirecal.solver.measurements import check_log
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 ALL_C = tuple(f"c{j}" for j in range(1, 7))
@@ -224,3 +228,28 @@ def test_a_truth_compliance_needs_the_masses(tmp_path):
     truth.write_text("[errors]\nth2 = 0.1\nc2 = 5.0\n")
     with pytest.raises(WirecalError, match=r"errors\.c2: a compliance needs the robot file's"):
         load_errors(truth, robot)
+
+
+@pytest.mark.slow
+def test_the_twins_true_arm_sags_by_its_compliance(tmp_path):
+    # the V+ twin runs the generated module on a true arm with c2 = c3 = 40 µrad/(N·m)
+    # (large, so the sag stands out of the twin's noise): its readings differ from the
+    # rigid arm's (same seed) as the bent model's wire lengths differ: correlated above
+    # 0.95, the median point within a count
+    data = tomllib.loads((EXAMPLES / "viper_s650" / "robot.toml").read_text())
+    data["calibration"]["compliances"] = ["c2", "c3"]
+    robot = robot_from_dict(data, str(EXAMPLES / "viper_s650" / "robot.toml"))
+    plan = load_plan(EXAMPLES / "viper_s650" / "paper_plan.toml", robot)
+    lengths = []
+    for c in (0.0, 40.0):
+        run = measure_in_twin(robot, plan, {"c2": c, "c3": c}, tmp_path / str(c), seed=1)
+        m = check_log(parse_log(Path(run.log).read_text(), "twin"), plan, robot)
+        lengths.append(m.distance_mm)
+    q, _, _ = plan.all_points()
+    q, q0 = np.radians(q), np.radians(plan.theta0_deg)
+    bent = wire_lengths(robot.model({"c2": 40.0, "c3": 40.0}), q, q0)
+    expected = bent - wire_lengths(robot.nominal, q, q0)
+    seen = lengths[1] - lengths[0]
+    assert np.abs(expected).max() > 0.1  # the sag the wire sees
+    assert np.corrcoef(seen, expected)[0, 1] > 0.95
+    assert np.median(np.abs(seen - expected)) <= abs(robot.encoder.mm_per_count)
