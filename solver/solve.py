@@ -152,6 +152,7 @@ class SolveResult:
                 ]
             methods[name] = entry
         m = self.measurements
+        extra = {} if self.compliance is None else {"compliance": self.compliance.as_json()}
         return {
             "robot": self.robot.name,
             "plan": self.plan.fingerprint(),
@@ -170,6 +171,7 @@ class SolveResult:
             ],
             "notes": list(m.notes),
             "encoder": self._encoder_json(),
+            **extra,
         }
 
     def _encoder_json(self) -> dict[str, Any]:

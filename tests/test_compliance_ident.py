@@ -203,6 +203,7 @@ def test_simulate_solve_patch_carry_an_identified_compliance(tmp_path):
     budget = js["encoder"]["budget"]["joint"]
     assert budget["bound95_compensated_mm"] <= budget["bound95_mm"]
     assert js["methods"]["joint"]["parameters"]["c2"] == pytest.approx(c2["offset"])
+    assert js["compliance"]["identified"] == ["c2", "c3"]
 
 
 def test_without_the_key_the_assumed_sag_stays():
