@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wirecal.solver.formats.tracker_table import Cells, cells, columns, read_generic
+from wirecal.solver.formats.tracker_table import Cells, cells, columns, read_generic, read_joints
 from wirecal.solver.tracker_data import TrackerTable
 
 IPA_JOINTS = (
@@ -68,9 +68,26 @@ def read_jacobi(source: str, header: tuple[str, ...], rows: Cells) -> TrackerTab
 
 def read_tracker(path: str | Path) -> TrackerTable:
     """Read a tracker table of any known layout (module docstring)."""
-    source, header, rows = cells(path)
+    return _table(*cells(path))
+
+
+def _table(source: str, header: tuple[str, ...], rows: Cells) -> TrackerTable:
+    """Return the rows of the layout the header tells (module docstring)."""
     if IPA_JOINTS[0] in header:
         return read_ipa(source, header, rows)
     if DIFFERENCE[0] in header:
         return read_jacobi(source, header, rows)
     return read_generic(source, header, rows)
+
+
+def read_pool(path: str | Path) -> tuple[str, np.ndarray, np.ndarray]:
+    """Return a pool of configurations: its name, the rows' lines and joints (deg).
+
+    A tracker table of any known layout, or the generic layout without x, y, z.
+    """
+    source, header, rows = cells(path)
+    if IPA_JOINTS[0] in header or DIFFERENCE[0] in header or "x" in header:
+        table = _table(source, header, rows)
+        return table.source, table.lines, table.q_deg
+    lines, q_deg = read_joints(source, header, rows)
+    return source, lines, q_deg

@@ -5,7 +5,8 @@ header line; blank lines and lines starting with ``#`` are skipped. The generic 
 columns ``j1`` … ``jn`` (the joint angles, **degrees**) and ``x``, ``y``, ``z`` (the
 measured tool point, **mm**, in any fixed frame), other columns ignored. A table whose
 every joint stays within ±2π reads as radians and one whose x, y, z span less than 5 units
-as metres: both are refused, naming the columns, rather than guessed.
+as metres: both are refused, naming the columns, rather than guessed. A pool of
+configurations (``plan --pool``) may leave out x, y, z.
 
 The public data sets' own layouts are :mod:`~wirecal.solver.formats.tracker_sets`; this
 module holds what they share: the bounded text, the named columns as numbers.
@@ -112,18 +113,30 @@ def joint_names(header: tuple[str, ...], source: str) -> tuple[str, ...]:
     return tuple(f"j{i + 1}" for i in range(n))
 
 
-def check_units(table: TrackerTable, joints: tuple[str, ...], xyz: tuple[str, ...]) -> None:
-    """Refuse joints that read as radians and a point that reads as metres (docstring)."""
-    if len(table.q_deg) >= 10 and np.all(np.abs(table.q_deg) <= RADIAN_BOUND):
+def check_joint_units(source: str, q_deg: np.ndarray, joints: tuple[str, ...]) -> None:
+    """Refuse joints that read as radians (module docstring)."""
+    if len(q_deg) >= 10 and np.all(np.abs(q_deg) <= RADIAN_BOUND):
         raise WirecalError(
-            f"{table.source}: every joint ({', '.join(joints)}) stays within ±{RADIAN_BOUND:.2f}: "
+            f"{source}: every joint ({', '.join(joints)}) stays within ±{RADIAN_BOUND:.2f}: "
             "radians, not degrees? convert the joint columns to degrees"
         )
-    if len(table.xyz_mm) >= 10 and np.all(np.ptp(table.xyz_mm, axis=0) < METRE_SPAN):
+
+
+def check_point_units(source: str, xyz_mm: np.ndarray, names: tuple[str, ...]) -> None:
+    """Refuse a measured point that reads as metres (module docstring)."""
+    if len(xyz_mm) >= 10 and np.all(np.ptp(xyz_mm, axis=0) < METRE_SPAN):
         raise WirecalError(
-            f"{table.source}: {', '.join(xyz)} span less than {METRE_SPAN:g} in every "
+            f"{source}: {', '.join(names)} span less than {METRE_SPAN:g} in every "
             "direction: metres, not mm? convert them to mm"
         )
+
+
+def read_joints(source: str, header: tuple[str, ...], rows: Cells) -> tuple[np.ndarray, np.ndarray]:
+    """Return the lines and the joints (deg) of the generic layout, without x, y, z."""
+    joints = joint_names(header, source)
+    lines, q_deg = columns(source, header, rows, joints)
+    check_joint_units(source, q_deg, joints)
+    return lines, q_deg
 
 
 def read_generic(source: str, header: tuple[str, ...], rows: Cells) -> TrackerTable:
@@ -131,8 +144,7 @@ def read_generic(source: str, header: tuple[str, ...], rows: Cells) -> TrackerTa
     joints = joint_names(header, source)
     lines, values = columns(source, header, rows, (*joints, "x", "y", "z"))
     n = len(joints)
-    table = TrackerTable(
-        source, "joints j1…jn (deg), x, y, z (mm)", lines, values[:, :n], values[:, n:]
-    )
-    check_units(table, joints, ("x", "y", "z"))
-    return table
+    check_joint_units(source, values[:, :n], joints)
+    check_point_units(source, values[:, n:], ("x", "y", "z"))
+    kind = "joints j1…jn (deg), x, y, z (mm)"
+    return TrackerTable(source, kind, lines, values[:, :n], values[:, n:])

@@ -1,0 +1,121 @@
+"""Public laser-tracker data through one wire: held-out 3-D RMS of four calibrations.
+
+Per data set (tests/data/tracker/, each with its licence and citation), or any table with
+columns j1…jn (degrees) and x, y, z (mm) with ``--robot R --table T``: over 3 seeds, a
+random 50/50 split; from the training half ``wirecal plan --pool``'s planner chooses θ0
+and at most 60 poses; on them the nominal model (tool point and base frame fitted), the
+3-D tracker calibration, and one wire from the anchor at θ0 (readings: the distance to
+the measured point, rounded to the encoder's count, unknown zero) identified by
+``wirecal fit``'s estimator (:mod:`wirecal.solver.tracker_replay`). Each is judged on the
+held-out half after a rigid registration. Prints per set the medians over the seeds and
+the wire's ratio to the tracker calibration; ``--json`` prints them as JSON (keys
+``nominal_mm``, ``tracker_mm``, ``wire_mm``, ``wire_compliance_mm``, ``anchor_mm``).
+
+``wire_compliance_mm`` is null: the gravity compliance model (issue 30) is not on this
+branch; no second compliance model is written here.
+
+    python bench/bench_tracker_replay.py [--robot R --table T.csv] [--seeds 3] [--points 60]
+        [--json]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"  # one core, before numpy loads
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import sys  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from wirecal.solver.errors import WirecalError  # noqa: E402
+from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
+from wirecal.solver.formats.tracker_sets import read_tracker  # noqa: E402
+from wirecal.solver.tracker_replay import replay  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "tests" / "data" / "tracker"
+SETS = {
+    "UR10 IPA B (joint configurations)": ("ur10", "ur10_ipa/series_b_joint_configurations.csv.gz"),
+    "UR10 IPA C (random poses)": ("ur10", "ur10_ipa/series_c_random_poses.csv.gz"),
+    "UR10 IPA D (ISO cubes)": ("ur10", "ur10_ipa/series_d_iso_cubes.csv.gz"),
+    "UR5 Tsinghua grid": ("ur5", "ur5_jacobi/ur5_grid.csv.gz"),
+}
+COMPLIANCE_NOTE = (
+    "the gravity compliance model (issue 30) is not on this branch; no second model is written here"
+)
+
+
+def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict:
+    """Return one set's medians over the seeds and each seed's figures."""
+    robot, table = load_robot(robot_path), read_tracker(table_path)
+    runs = [replay(robot, table, seed=s, points=points) for s in range(seeds)]
+
+    def median(key: str) -> float:
+        return float(np.median([getattr(r, key) for r in runs]))
+
+    return {
+        "robot": str(
+            robot_path.relative_to(ROOT) if robot_path.is_relative_to(ROOT) else robot_path
+        ),
+        "table": str(
+            table_path.relative_to(ROOT) if table_path.is_relative_to(ROOT) else table_path
+        ),
+        "rows": len(table.q_deg),
+        "points": runs[0].points,
+        "nominal_mm": median("nominal_mm"),
+        "tracker_mm": median("tracker_mm"),
+        "wire_mm": median("wire_mm"),
+        "wire_compliance_mm": None,
+        "wire_compliance_note": COMPLIANCE_NOTE,
+        "wire_over_tracker": median("wire_mm") / median("tracker_mm"),
+        "anchor_mm": [r.anchor_mm.round(3).tolist() for r in runs],
+        "theta0_deg": [r.theta0_deg.round(3).tolist() for r in runs],
+        "per_seed": {
+            key: [round(getattr(r, key), 4) for r in runs]
+            for key in ("nominal_mm", "tracker_mm", "wire_mm")
+        },
+        "wire_parameters": [list(r.wire_parameters) for r in runs],
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--robot", type=Path, help="robot file (with --table)")
+    ap.add_argument("--table", type=Path, help="a tracker table: j1…jn (deg), x, y, z (mm)")
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--points", type=int, default=60)
+    ap.add_argument("--json", action="store_true", help="print the figures as JSON")
+    args = ap.parse_args()
+    if (args.robot is None) != (args.table is None):
+        ap.error("give --robot and --table together")
+    cases = (
+        {str(args.table): (args.robot, args.table)}
+        if args.table
+        else {
+            name: (ROOT / "examples" / arm / "robot.toml", DATA / f)
+            for name, (arm, f) in SETS.items()
+        }
+    )
+    try:
+        out = {name: run_set(r, t, args.seeds, args.points) for name, (r, t) in cases.items()}
+    except WirecalError as exc:
+        sys.exit(f"error: {exc}")
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return
+    print(f"{'data set':<36}{'rows':>6}{'nominal':>9}{'tracker':>9}{'wire':>8}{'wire/tr':>9}")
+    for name, r in out.items():
+        print(
+            f"{name:<36}{r['rows']:>6}{r['nominal_mm']:>9.3f}{r['tracker_mm']:>9.3f}"
+            f"{r['wire_mm']:>8.3f}{r['wire_over_tracker']:>9.2f}"
+        )
+    print(f"medians over {args.seeds} seeds, mm; wire + compliance: n/a ({COMPLIANCE_NOTE})")
+
+
+if __name__ == "__main__":
+    main()
