@@ -44,6 +44,7 @@ SETS = {
     "UR10 IPA C (random poses)": ("ur10", "ur10_ipa/series_c_random_poses.csv.gz"),
     "UR10 IPA D (ISO cubes)": ("ur10", "ur10_ipa/series_d_iso_cubes.csv.gz"),
     "UR5 Tsinghua grid": ("ur5", "ur5_jacobi/ur5_grid.csv.gz"),
+    "WAM (7 axes) Tsinghua grid": ("barrett_wam", "wam_jacobi/wam_grid.csv.gz"),
 }
 COMPLIANCE_NOTE = (
     "the gravity compliance model (issue 30) is not on this branch; no second model is written here"
