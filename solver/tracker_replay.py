@@ -44,7 +44,8 @@ class Replay:
     nominal_mm: float
     tracker_mm: float
     wire_mm: float
-    anchor_mm: np.ndarray  # (3,) the measured point at θ0, the tracker's frame
+    anchor_mm: np.ndarray  # (3,) the anchor the planner chose: the nominal tool point at θ0
+    anchor_tracker_mm: np.ndarray  # (3,) the point the tracker measured at θ0, its frame
     theta0_deg: np.ndarray  # (n,)
     points: int  # poses used (θ0 not counted)
     wire_parameters: tuple[str, ...]  # the geometry the wire fit identified
@@ -94,7 +95,8 @@ def replay(robot: Robot, table: TrackerTable, *, seed: int, points: int) -> Repl
         nominal_mm=held_out(calibrate(base, q[rows], x[rows], TOOL_NAMES).model),
         tracker_mm=held_out(calibrate(base, q[rows], x[rows]).model),
         wire_mm=held_out(wire),
-        anchor_mm=anchor,
+        anchor_mm=plan.anchor_mm,
+        anchor_tracker_mm=anchor,
         theta0_deg=table.q_deg[train[plan.theta0_row]],
         points=len(rows),
         wire_parameters=names,
