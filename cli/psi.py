@@ -13,6 +13,7 @@ from wirecal.cli.options import NON_NEGATIVE
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
 from wirecal.solver.cell_check import check_cell
+from wirecal.solver.compliance import compliance_observability
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
@@ -186,7 +187,9 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
 
     Rank and singular values of the distance Jacobian over all the plan's points,
     the parameters or combinations no wire length can reveal (θ1 always; the tool
-    point against th6/d6 with --all), and the observability indices O1–O5.
+    point against th6/d6 with --all), and the observability indices O1–O5. With the robot
+    file's [calibration] compliances: which of them the plan identifies with the geometry,
+    with their σ at the reading noise, and why not the others.
     """
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
@@ -194,8 +197,15 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
     q, _, _ = pl.all_points()
     result = analyse(rb.nominal, q, pl.theta0_deg, names)
     scale = _scale(rb, q, pl.theta0_deg, tuple(names))
+    compliance = None
+    if rb.compliances:  # the robot file asks for them: which the plan identifies, and why
+        compliance = compliance_observability(
+            rb.nominal, q, pl.theta0_deg, rb.parameters, rb.compliances, READING_NOISE_MM
+        )
     if as_json:
         data = _identifiability_json(result)
+        if compliance is not None:
+            data["compliance"] = compliance.as_json()
         data["scale"] = {
             "std_ppm": None if not np.isfinite(scale.std_ppm) else scale.std_ppm,
             "noise_mm": READING_NOISE_MM,
@@ -211,6 +221,8 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
     for line in result.describe():
         click.echo(line)
     for line in scale.describe(READING_NOISE_MM, rb.encoder.scale_tolerance_ppm):
+        click.echo(line)
+    for line in compliance.describe() if compliance is not None else ():
         click.echo(line)
 
 
