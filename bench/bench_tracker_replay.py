@@ -11,8 +11,9 @@ held-out half after a rigid registration. Prints per set the medians over the se
 the wire's ratio to the tracker calibration; ``--json`` prints them as JSON (keys
 ``nominal_mm``, ``tracker_mm``, ``wire_mm``, ``wire_compliance_mm``, ``anchor_mm``).
 
-``wire_compliance_mm`` is null: the gravity compliance model (issue 30) is not on this
-branch; no second compliance model is written here.
+``wire_compliance_mm``: the same readings refitted with the compliances (issue 30's model)
+among the robot file's ``[calibration] compliances`` that they identify; null for a robot
+file that asks none.
 
     python bench/bench_tracker_replay.py [--robot R --table T.csv] [--seeds 3] [--points 60]
         [--json]
@@ -72,8 +73,9 @@ def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict
     robot, table = load_robot(robot_path), read_tracker(table_path)
     runs = [replay(robot, table, seed=s, points=points) for s in range(seeds)]
 
-    def median(key: str) -> float:
-        return float(np.median([getattr(r, key) for r in runs]))
+    def median(key: str) -> float | None:
+        values = [getattr(r, key) for r in runs]
+        return None if None in values else float(np.median(values))
 
     return {
         "robot": str(
@@ -87,15 +89,14 @@ def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict
         "nominal_mm": median("nominal_mm"),
         "tracker_mm": median("tracker_mm"),
         "wire_mm": median("wire_mm"),
-        "wire_compliance_mm": None,
-        "wire_compliance_note": COMPLIANCE_NOTE,
-        "wire_over_tracker": median("wire_mm") / median("tracker_mm"),
+        "wire_compliance_mm": median("wire_compliance_mm"),
+        "compliances": [list(r.compliances) for r in runs],
         "anchor_mm": [r.anchor_mm.round(3).tolist() for r in runs],
         "anchor_tracker_mm": [r.anchor_tracker_mm.round(3).tolist() for r in runs],
         "theta0_deg": [r.theta0_deg.round(3).tolist() for r in runs],
         "per_seed": {
-            key: [round(getattr(r, key), 4) for r in runs]
-            for key in ("nominal_mm", "tracker_mm", "wire_mm")
+            key: [None if getattr(r, key) is None else round(getattr(r, key), 4) for r in runs]
+            for key in ("nominal_mm", "tracker_mm", "wire_mm", "wire_compliance_mm")
         },
         "wire_parameters": [list(r.wire_parameters) for r in runs],
     }
@@ -158,13 +159,16 @@ def main() -> None:
         print(json.dumps(out, indent=2))
         return
     published = out.pop("published", {})
-    print(f"{'data set':<36}{'rows':>6}{'nominal':>9}{'tracker':>9}{'wire':>8}{'wire/tr':>9}")
+    head = f"{'data set':<36}{'rows':>6}{'nominal':>9}{'tracker':>9}{'wire':>8}{'wire/tr':>9}"
+    print(head + f"{'wire+c':>8}{'(w+c)/tr':>10}")
     for name, r in out.items():
+        wc = r["wire_compliance_mm"]
+        tail = "     n/a       n/a" if wc is None else f"{wc:>8.3f}{wc / r['tracker_mm']:>10.2f}"
         print(
             f"{name:<36}{r['rows']:>6}{r['nominal_mm']:>9.3f}{r['tracker_mm']:>9.3f}"
-            f"{r['wire_mm']:>8.3f}{r['wire_over_tracker']:>9.2f}"
+            f"{r['wire_mm']:>8.3f}{r['wire_mm'] / r['tracker_mm']:>9.2f}" + tail
         )
-    print(f"medians over {args.seeds} seeds, mm; wire + compliance: n/a ({COMPLIANCE_NOTE})")
+    print(f"medians over {args.seeds} seeds, mm (n/a: the robot file asks no compliances)")
     for name, r in published.items():
         print(
             f"{name} grid → 20 random poses, mean error mm: as measured {r['as_measured_mm']:.3f} "

@@ -185,9 +185,11 @@ def _ur10_pool(n: int, seed: int) -> np.ndarray:
     return rng.uniform(lo, hi, (n, 6))
 
 
-def _measured(q_deg: np.ndarray, noise_mm: float, seed: int) -> tuple[np.ndarray, object]:
+def _measured(
+    q_deg: np.ndarray, noise_mm: float, seed: int, bent: dict | None = None
+) -> tuple[np.ndarray, object]:
     robot = load_robot(UR10)
-    truth = robot.model(TRUTH)
+    truth = robot.model({**TRUTH, **(bent or {})})
     rot = Rotation.from_rotvec([0.1, -0.2, 1.3]).as_matrix()
     p = tool_position(truth, np.radians(q_deg)) @ rot.T + [1200.0, -2500.0, 300.0]
     return p + np.random.default_rng(seed).normal(0, noise_mm, p.shape), robot
@@ -280,7 +282,25 @@ def test_replay_of_a_synthetic_ur10():
     assert r.nominal_mm > 0.5
     assert r.tracker_mm < 0.03
     assert r.wire_mm < 0.1
+    assert r.wire_compliance_mm is not None
+    assert r.wire_compliance_mm < 0.1
     assert r.points == 40
+
+
+def test_replay_of_a_ur10_bent_by_gravity():
+    """Joints 2 and 3 yield 8 and 5 µrad/(N·m) (issue 30's model): the rigid fits cannot
+    follow, the wire with the compliances it identifies can."""
+    from wirecal.solver.tracker_data import TrackerTable
+
+    q = _ur10_pool(240, 8)
+    x, robot = _measured(q, 0.01, 9, {"c2": 8.0, "c3": 5.0})
+    table = TrackerTable("synthetic", "synthetic", np.arange(240) + 2, q, x)
+    r = replay(robot, table, seed=1, points=40)
+    assert "c2" in r.compliances, r
+    assert r.wire_mm > 0.1
+    assert r.wire_compliance_mm is not None
+    assert r.wire_compliance_mm < 0.1
+    assert r.wire_compliance_mm < 0.5 * r.wire_mm
 
 
 # --- the command ---------------------------------------------------------------------------
