@@ -1,7 +1,7 @@
 """Public laser-tracker data through one wire: held-out 3-D RMS of four calibrations.
 
-Per data set (tests/data/tracker/, each with its licence and citation), or any table with
-columns j1…jn (degrees) and x, y, z (mm) with ``--robot R --table T``: over 3 seeds, a
+Per data set (tests/data/tracker/, each with its licence, citation and robot file), or any
+table with columns j1…jn (degrees) and x, y, z (mm) with ``--robot R --table T``: over 3 seeds, a
 random 50/50 split; from the training half ``wirecal plan --pool``'s planner chooses θ0
 and at most 60 poses; on them the nominal model (tool point and base frame fitted), the
 3-D tracker calibration, and one wire from the anchor at θ0 (readings: the distance to
@@ -45,18 +45,27 @@ from wirecal.solver.tracker_replay import replay  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "tracker"
 SETS = {
-    "UR10 IPA B (joint configurations)": ("ur10", "ur10_ipa/series_b_joint_configurations.csv.gz"),
-    "UR10 IPA C (random poses)": ("ur10", "ur10_ipa/series_c_random_poses.csv.gz"),
-    "UR10 IPA D (ISO cubes)": ("ur10", "ur10_ipa/series_d_iso_cubes.csv.gz"),
-    "UR5 Tsinghua grid": ("ur5", "ur5_jacobi/ur5_grid.csv.gz"),
-    "WAM (7 axes) Tsinghua grid": ("barrett_wam", "wam_jacobi/wam_grid.csv.gz"),
+    "UR10 IPA B (joint configurations)": (
+        "ur10_ipa",
+        "ur10_ipa/series_b_joint_configurations.csv.gz",
+    ),
+    "UR10 IPA C (random poses)": ("ur10_ipa", "ur10_ipa/series_c_random_poses.csv.gz"),
+    "UR10 IPA D (ISO cubes)": ("ur10_ipa", "ur10_ipa/series_d_iso_cubes.csv.gz"),
+    "UR5 Tsinghua grid": ("ur5_jacobi", "ur5_jacobi/ur5_grid.csv.gz"),
+    "WAM (7 axes) Tsinghua grid": ("wam_jacobi", "wam_jacobi/wam_grid.csv.gz"),
 }
 # The Tsinghua sets' own test: calibrate on the grid, test on the 20 random poses (the
 # thesis's abstract, quoted in the data set's README: mean absolute position error).
 PUBLISHED = {
-    "UR5": ("ur5", "ur5_jacobi/ur5_grid.csv.gz", "ur5_jacobi/ur5_random.csv", 2.5664, 0.1549),
+    "UR5": (
+        "ur5_jacobi",
+        "ur5_jacobi/ur5_grid.csv.gz",
+        "ur5_jacobi/ur5_random.csv",
+        2.5664,
+        0.1549,
+    ),
     "WAM": (
-        "barrett_wam",
+        "wam_jacobi",
         "wam_jacobi/wam_grid.csv.gz",
         "wam_jacobi/wam_random.csv",
         17.7661,
@@ -108,7 +117,7 @@ def published_test(arm: str, grid: str, test: str) -> dict:
     Calibrated on every grid pose; the base frame the calibration found is kept (no second
     registration on the test poses), as a calibration is used.
     """
-    base = point_model(load_robot(ROOT / "examples" / arm / "robot.toml"))
+    base = point_model(load_robot(DATA / arm / "robot.toml"))
     g, t = read_tracker(DATA / grid), read_tracker(DATA / test)
     target = np.loadtxt(DATA / test, delimiter=",", skiprows=1, usecols=(1, 2, 3))
 
@@ -137,10 +146,7 @@ def main() -> None:
     cases = (
         {str(args.table): (args.robot, args.table)}
         if args.table
-        else {
-            name: (ROOT / "examples" / arm / "robot.toml", DATA / f)
-            for name, (arm, f) in SETS.items()
-        }
+        else {name: (DATA / arm / "robot.toml", DATA / f) for name, (arm, f) in SETS.items()}
     )
     try:
         out = {name: run_set(r, t, args.seeds, args.points) for name, (r, t) in cases.items()}

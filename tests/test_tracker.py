@@ -27,7 +27,7 @@ from wirecal.solver.tracker_replay import ZERO_MM, readings_mm, replay
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "tracker"
-UR10 = ROOT / "examples" / "ur10" / "robot.toml"
+UR10 = DATA / "ur10_ipa" / "robot.toml"
 ROWS = {
     "ur10_ipa/series_b_joint_configurations.csv.gz": (1495, 6),
     "ur10_ipa/series_c_random_poses.csv.gz": (2773, 6),
