@@ -18,7 +18,7 @@ from wirecal.cli.main import main
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit import point_model
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.tracker_sets import read_pool, read_tracker
+from wirecal.solver.formats.tracker_sets import IPA_JOINTS, read_pool, read_tracker
 from wirecal.solver.kinematics import tool_position, with_errors
 from wirecal.solver.plan_options import PlanOptions
 from wirecal.solver.plan_pool import greedy_rows, plan_pool
@@ -147,6 +147,28 @@ def test_gzip_bomb_and_broken_gzip_refused(tmp_path):
     broken.write_bytes(b"j1,j2,x,y,z\n1,2,3,4,5\n")
     with pytest.raises(WirecalError, match="not a readable gzip file"):
         read_tracker(broken)
+
+
+@settings(max_examples=30)
+@given(rows=st.integers(1, 12), seed=st.integers(0, 2**32 - 1))
+def test_ipa_layout_round_trip(tmp_path_factory, rows, seed):
+    """Radians with decimal commas in, degrees out; mm and °C as written."""
+    rng = np.random.default_rng(seed)
+    q = np.round(rng.uniform(-6.2, 6.2, (rows, 6)), 6)
+    xyz = np.round(rng.uniform(-3000, 3000, (rows, 3)), 5)
+    temp = np.round(rng.uniform(15, 30, rows), 4)
+    head = ";".join([*IPA_JOINTS, "measurement_x", "measurement_y", "measurement_z"])
+    body = [
+        ";".join(f"{v:.6f}".replace(".", ",") for v in (*a, *b, c))
+        for a, b, c in zip(q, xyz, temp, strict=True)
+    ]
+    path = tmp_path_factory.mktemp("ipa") / "ipa.csv"
+    path.write_text(head + ";measurement_temperature\n" + "\n".join(body) + "\n")
+    t = read_tracker(path)
+    assert np.allclose(t.q_deg, q * 180 / np.pi, atol=1e-9)
+    assert np.allclose(t.xyz_mm, xyz, atol=1e-9)
+    assert t.temperature_c is not None
+    assert np.allclose(t.temperature_c, temp, atol=1e-9)
 
 
 def test_ipa_layout_with_a_bad_cell_names_its_line(tmp_path):
