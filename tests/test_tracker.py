@@ -364,3 +364,29 @@ def test_plan_pool_cli_refusals(tmp_path, extra, text, message):
     assert r.exit_code == 2
     assert message in r.output
     assert "Traceback" not in r.output
+
+
+@pytest.mark.slow
+def test_bench_replays_any_generic_table(tmp_path):
+    """``bench_tracker_replay.py --robot R --table T --json``: the keys the issue names."""
+    import subprocess
+    import sys
+
+    q = _ur10_pool(160, 10)
+    x, _ = _measured(q, 0.01, 11)
+    table = _generic(tmp_path / "t.csv", q, x)
+    bench = ROOT / "bench" / "bench_tracker_replay.py"
+    args = [sys.executable, str(bench), "--robot", str(UR10), "--table", str(table)]
+    r = subprocess.run(
+        [*args, "--seeds", "1", "--points", "30", "--json"], capture_output=True, text=True
+    )
+    assert r.returncode == 0, r.stderr
+    (doc,) = json.loads(r.stdout).values()
+    for key in ("nominal_mm", "tracker_mm", "wire_mm", "wire_compliance_mm", "anchor_mm"):
+        assert key in doc
+    assert doc["tracker_mm"] < 0.03
+    assert doc["nominal_mm"] > 0.5
+    assert doc["points"] == 30
+    bad = subprocess.run([*args[:2], "--table", str(table)], capture_output=True, text=True)
+    assert bad.returncode == 2
+    assert "give --robot and --table together" in bad.stderr
