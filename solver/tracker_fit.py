@@ -74,7 +74,9 @@ def _skew(v: np.ndarray) -> np.ndarray:
     return s - s.transpose(0, 2, 1)
 
 
-def _jacobian(model: Model, q_rad: np.ndarray, names: tuple[str, ...], rotation: np.ndarray):
+def _jacobian(
+    model: Model, q_rad: np.ndarray, names: tuple[str, ...], rotation: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Return R·p (N, 3) and ∂x/∂(e, ω, t) stacked over the rows (3N, m + 6)."""
     p, jp = tool_jacobian(model, q_rad, names)
     rp = p @ rotation.T
@@ -89,7 +91,11 @@ def _jacobian(model: Model, q_rad: np.ndarray, names: tuple[str, ...], rotation:
     return rp, j.reshape(3 * len(p), -1)
 
 
-def _apply(fit: tuple, step: np.ndarray) -> tuple:
+State = tuple[np.ndarray, np.ndarray, np.ndarray]
+"""A fit's state: the parameters e (internal units), the rotation R and the translation t."""
+
+
+def _apply(fit: State, step: np.ndarray) -> State:
     """Return (e, R, t) moved by a step (δe, δω, δt)."""
     values, rotation, t = fit
     m = len(values)
@@ -97,7 +103,9 @@ def _apply(fit: tuple, step: np.ndarray) -> tuple:
     return values + step[:m], turn @ rotation, t + step[m + 3 :]
 
 
-def _residual(base: Model, q_rad, xyz_mm, names, fit: tuple) -> np.ndarray:
+def _residual(
+    base: Model, q_rad: np.ndarray, xyz_mm: np.ndarray, names: tuple[str, ...], fit: State
+) -> np.ndarray:
     """Return the residual x − (R·p + t) of every row (N, 3)."""
     values, rotation, t = fit
     return xyz_mm - tool_position(with_errors(base, names, values), q_rad) @ rotation.T - t
@@ -111,7 +119,7 @@ def _least_squares(
     Levenberg–Marquardt on the column-scaled Gauss–Newton steps: a step that does not lower
     the sum of squares is refused and the damping raised.
     """
-    fit = (np.zeros(len(names)), *register(tool_position(base, q_rad), xyz_mm))
+    fit: State = (np.zeros(len(names)), *register(tool_position(base, q_rad), xyz_mm))
     cost = float(np.sum(_residual(base, q_rad, xyz_mm, names, fit) ** 2))
     damping = 1e-6
     for _ in range(ITERATIONS):
