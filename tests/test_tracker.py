@@ -355,6 +355,11 @@ def test_plan_pool_cli_writes_the_choice(tmp_path):
         (["--theta0", "0,-90,90,-90,90,0"], None, "leave out --theta0"),
         ([], "j1,j2,j3,j4,j5\n" + "10,-90,90,-90,90\n" * 3, "5 joint columns; the robot"),
         ([], "j1,j2,j3,j4,j5,j6\n" + "0.1,-1.5,1.5,-1.5,1.5,0.2\n" * 12, "radians, not degrees"),
+        (
+            [],
+            "j1,j2,j3,j4,j5,j6\n" + "10,-90,90,-90,90,0\n" * 5,
+            "tried leaves enough poses of the pool",
+        ),
     ],
 )
 def test_plan_pool_cli_refusals(tmp_path, extra, text, message):
