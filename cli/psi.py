@@ -13,7 +13,7 @@ from wirecal.cli.options import NON_NEGATIVE
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
 from wirecal.solver.cell_check import check_cell
-from wirecal.solver.compliance import compliance_observability
+from wirecal.solver.compliance import ComplianceObservability, compliance_observability
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
@@ -76,10 +76,16 @@ def psi(
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
     table = psi_table(rb, pl, tol)
+    compliance = _compliance(rb, pl)
     if as_json:
-        print_json(_psi_json(table))
+        data = _psi_json(table)
+        if compliance is not None:
+            data["compliance"] = compliance.as_json()
+        print_json(data)
     else:
         click.echo(_psi_text(table, robot, plan), nl=False)
+        for line in compliance.describe() if compliance is not None else ():
+            click.echo(line)
     problems = cone_problems(rb, pl)
     for check in (lambda: check_wire_range(rb, pl, range_margin), lambda: check_cell(rb, pl)):
         try:
@@ -90,6 +96,16 @@ def psi(
         click.echo(f"{'error' if strict else 'warning'}: {line}", err=True)
     if strict and (problems or table.n_ok != len(table.rows)):
         sys.exit(1)
+
+
+def _compliance(rb, pl) -> ComplianceObservability | None:
+    """Which of the robot file's compliances the plan identifies (None: it asks for none)."""
+    if not rb.compliances:
+        return None
+    q, _, _ = pl.all_points()
+    return compliance_observability(
+        rb.nominal, q, pl.theta0_deg, rb.parameters, rb.compliances, READING_NOISE_MM
+    )
 
 
 def _identifiability_json(ident: Identifiability) -> dict:
@@ -197,11 +213,7 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
     q, _, _ = pl.all_points()
     result = analyse(rb.nominal, q, pl.theta0_deg, names)
     scale = _scale(rb, q, pl.theta0_deg, tuple(names))
-    compliance = None
-    if rb.compliances:  # the robot file asks for them: which the plan identifies, and why
-        compliance = compliance_observability(
-            rb.nominal, q, pl.theta0_deg, rb.parameters, rb.compliances, READING_NOISE_MM
-        )
+    compliance = _compliance(rb, pl)
     if as_json:
         data = _identifiability_json(result)
         if compliance is not None:

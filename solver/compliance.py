@@ -30,10 +30,16 @@ from wirecal.solver.identifiability import analyse_jacobian, covariance
 from wirecal.solver.kinematics import Model, gravity_torques, rigid_frames
 from wirecal.solver.sensitivity import sensitivity
 
-SIGMA_LIMIT_URAD_PER_NM = 0.5
-"""Largest σ (µrad/(N·m)) of an identified compliance at the reading noise: a tenth of
-5 µrad/(N·m), the middle of the 2–8 µrad/(N·m) issue 30 reports for joints 2–4 of an arm
-like the Viper s650 (an independent model's range, not a vendor figure)."""
+PRIOR_COMPLIANCE_URAD_PER_NM = 8.0
+"""How far (µrad/(N·m)) beyond the robot file's value a compliance may be when the points
+do not identify it (the error budget's range for it): the top of the 2–8 µrad/(N·m) issue
+30 reports for joints 2–4 of an arm like the Viper s650 (an independent model's range, not
+a vendor figure)."""
+
+SIGMA_LIMIT_URAD_PER_NM = PRIOR_COMPLIANCE_URAD_PER_NM / 12**0.5
+"""Largest σ (µrad/(N·m)) of an identified compliance at the reading noise: the σ of the
+prior range (uniform over 0–8 µrad/(N·m): 2.31), so an identified compliance is known
+better than the range the budget would otherwise assume for it."""
 
 COMPENSATION_ITERATIONS = 4
 """Fixed-point steps of :func:`compensated_joints`: each shrinks the error by c·|∂τ/∂q|
@@ -47,6 +53,7 @@ class ComplianceObservability:
     identified: tuple[str, ...]
     sigma_urad_per_nm: dict[str, float]  # every candidate's σ at its last evaluation
     reasons: dict[str, str]  # each candidate not identified: why
+    no_torque: tuple[str, ...] = ()  # candidates gravity exerts no torque on: no effect
 
     def describe(self) -> list[str]:
         """Return the analysis in words, one sentence per line."""
@@ -84,12 +91,12 @@ def compliance_observability(
     psi = sensitivity(model, q_deg, theta0_deg, names).psi
     ident = analyse_jacobian(psi, names)
     reasons: dict[str, str] = {}
-    for name in candidates:
-        if name in ident.unobservable:
-            reasons[name] = (
-                f"gravity has no torque about joint {name[1:]} at these points (its axis "
-                "is vertical, or nothing it carries lies off its axis): no wire length moves"
-            )
+    no_torque = tuple(n for n in candidates if n in ident.unobservable)
+    for name in no_torque:
+        reasons[name] = (
+            f"gravity has no torque about joint {name[1:]} at these points (its axis "
+            "is vertical, or nothing it carries lies off its axis): no wire length moves"
+        )
     for combo in ident.combinations:
         terms = " ".join(f"{c:+.4g}·{n}" for n, c in combo)
         for name, _ in combo:
@@ -111,12 +118,12 @@ def compliance_observability(
         name = keep.pop(worst)
         reasons[name] = (
             f"σ {sd[worst]:.3g} µrad/(N·m) at {noise_mm:g} mm of reading noise, above "
-            f"{SIGMA_LIMIT_URAD_PER_NM:g}: the torque about joint {name[1:]} is too small or "
+            f"{SIGMA_LIMIT_URAD_PER_NM:.3g}: the torque about joint {name[1:]} is too small or "
             "varies too little over these points"
         )
     order = {n: k for k, n in enumerate(candidates)}
     return ComplianceObservability(
-        tuple(keep), sigma, dict(sorted(reasons.items(), key=lambda kv: order[kv[0]]))
+        tuple(keep), sigma, dict(sorted(reasons.items(), key=lambda kv: order[kv[0]])), no_torque
     )
 
 

@@ -173,13 +173,6 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     encoder = read_encoder(encoder_table, interface)
     calibration = doc.table("calibration", _KEYS["calibration"])
     parameters = _parameters(calibration, n)
-    sag = calibration.number(
-        "gravity_sag_deg_per_m",
-        DEFAULT_GRAVITY_SAG_DEG_PER_M,
-        lo=0,
-        hi=MAX_GRAVITY_SAG_DEG_PER_M,
-        unit="deg/m",
-    )
     radii = doc.table("geometry", _KEYS["geometry"], required=False).vector(
         "link_radius_mm",
         None,
@@ -195,6 +188,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     cell = read_cell(doc.table("cell", CELL_KEYS, required=False), n)
     masses, compliance = read_gravity(doc.table("gravity", GRAVITY_KEYS, required=False), dh)
     compliances = _compliances(calibration, n, masses is not None)
+    sag = _sag(calibration, bool(compliances))
     check_units(doc, dh, lo, hi, encoder, radii)
     doc.raise_if_any()
     dh_rad = valid(dh).copy()
@@ -236,6 +230,26 @@ def _parameters(cal: Table, n: int | None) -> list[str] | None:
         except ValueError as exc:
             cal.add("parameters", str(exc))
     return names
+
+
+def _sag(cal: Table, compliances: bool) -> float | None:
+    """Read ``gravity_sag_deg_per_m``: the assumed sag, none when compliances are identified.
+
+    The assumed sag is one instance of the compliance model (a weight at the wrist centre,
+    c2 = c3); a file that identifies compliances measures the sag instead of assuming it.
+    """
+    if compliances and "gravity_sag_deg_per_m" in cal.keys():
+        cal.add(
+            "gravity_sag_deg_per_m",
+            "is the assumed sag that [calibration] compliances measure instead; remove it",
+        )
+    return cal.number(
+        "gravity_sag_deg_per_m",
+        0.0 if compliances else DEFAULT_GRAVITY_SAG_DEG_PER_M,
+        lo=0,
+        hi=MAX_GRAVITY_SAG_DEG_PER_M,
+        unit="deg/m",
+    )
 
 
 def _compliances(cal: Table, n: int | None, masses: bool) -> list[str]:

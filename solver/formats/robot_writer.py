@@ -188,7 +188,7 @@ def robot_file_text(
     ]
     if robot.compliances:
         lines.append("compliances = [" + ", ".join(json.dumps(c) for c in robot.compliances) + "]")
-    if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M:
+    if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M and not robot.compliances:
         lines.append(f"gravity_sag_deg_per_m = {_num(robot.gravity_sag_deg_per_m)}")
     if robot.link_radius_mm is not None:
         lines += ["", "[geometry]", *(f"# {line}" for line in geometry_notes or ())]
