@@ -2,7 +2,7 @@
 
 ``wirecal plan --pool TABLE``: the pool is a table of configurations the robot is known to
 reach (a tracker data set, a recorded program's points). The wire's fixed end is the tool
-point at θ0 (paper §2.1), so choosing θ0 from the pool chooses the anchor among reachable
+point at θ0 (the paper's eq. 7: a = p(θ0)), so choosing θ0 from the pool chooses the anchor among reachable
 tool points; the wire model is ``wirecal fit``'s (:mod:`~wirecal.solver.fit_model`: the
 anchor, one length offset, the attachment and the identifiable DH errors).
 
@@ -12,7 +12,8 @@ For each of :data:`THETA0_TRIED` candidate θ0s, spread over the pool's nominal 
 1. the rows whose wire length lies within the encoder's range less its margin, and
    beyond the shortest wire, are eligible (:class:`~wirecal.solver.plan_options.PlanOptions`:
    ``range_margin_mm``, ``min_wire_mm``);
-2. the parameters are the fit's own choice over them (:func:`~wirecal.solver.fit.choose`);
+2. the parameters are the fit's own choice over them (:func:`~wirecal.solver.fit.choose`),
+   less any that moves no length there (θ_n with the attachment on its axis);
 3. N rows are chosen greedily, each the one that lowers the predicted tool-point error
    over the pool most (:func:`greedy_rows`);
 4. the plan's figure is the Cramér–Rao tool-point error over the pool,
