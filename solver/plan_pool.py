@@ -2,9 +2,10 @@
 
 ``wirecal plan --pool TABLE``: the pool is a table of configurations the robot is known to
 reach (a tracker data set, a recorded program's points). The wire's fixed end is the tool
-point at θ0 (the paper's eq. 7: a = p(θ0)), so choosing θ0 from the pool chooses the anchor among reachable
-tool points; the wire model is ``wirecal fit``'s (:mod:`~wirecal.solver.fit_model`: the
-anchor, one length offset, the attachment and the identifiable DH errors).
+point at θ0 (the paper's eq. 7: a = p(θ0)), so choosing θ0 from the pool chooses the
+anchor among reachable tool points; the wire model is ``wirecal fit``'s
+(:mod:`~wirecal.solver.fit_model`: the anchor, one length offset, the attachment and the
+identifiable DH errors).
 
 For each of :data:`THETA0_TRIED` candidate θ0s, spread over the pool's nominal tool points
 (farthest-point order from the pool's centre):
