@@ -1,6 +1,9 @@
 """Public laser-tracker data through one wire: held-out 3-D RMS of four calibrations.
 
-Per data set (tests/data/tracker/, each with its licence, citation and robot file), or any
+Per public data set (read from ``--data DIR``, else ``$WIRECAL_TRACKER_DATA``, else
+``../shared/data/tracker`` beside the clone: one folder per set, as
+tests/data/tracker/<set>/PUBLISHED.md says where each is published; the robot files are in
+tests/data/tracker/<set>/), or any
 table with columns j1…jn (degrees) and x, y, z (mm) with ``--robot R --table T``: over 3 seeds, a
 random 50/50 split; from the training half ``wirecal plan --pool``'s planner chooses θ0
 and at most 60 poses; on them the nominal model (tool point and base frame fitted), the
@@ -15,8 +18,11 @@ the wire's ratio to the tracker calibration; ``--json`` prints them as JSON (key
 among the robot file's ``[calibration] compliances`` that they identify; null for a robot
 file that asks none.
 
-    python bench/bench_tracker_replay.py [--robot R --table T.csv] [--seeds 3] [--points 60]
-        [--json]
+    python bench/bench_tracker_replay.py [--data DIR] [--set ur10_ipa ...]
+        [--robot R --table T.csv] [--seeds 3] [--points 60] [--json]
+
+A set asked for and not found exits 2 naming the folder, the missing files and how to get
+them.
 """
 
 from __future__ import annotations
@@ -36,14 +42,19 @@ import numpy as np  # noqa: E402
 from wirecal.solver.errors import WirecalError  # noqa: E402
 from wirecal.solver.fit import point_model  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.formats.tracker_sets import read_tracker  # noqa: E402
+from wirecal.solver.formats.tracker_sets import (  # noqa: E402
+    SET_FILES,
+    missing_set,
+    read_tracker,
+    tracker_data_dir,
+)
 from wirecal.solver.kinematics import tool_position  # noqa: E402
 from wirecal.solver.params import TOOL_NAMES  # noqa: E402
 from wirecal.solver.tracker_fit import calibrate  # noqa: E402
 from wirecal.solver.tracker_replay import replay  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT / "tests" / "data" / "tracker"
+ROBOTS = ROOT / "tests" / "data" / "tracker"
 SETS = {
     "UR10 IPA B (joint configurations)": (
         "ur10_ipa",
@@ -72,9 +83,6 @@ PUBLISHED = {
         2.9178,
     ),
 }
-COMPLIANCE_NOTE = (
-    "the gravity compliance model (issue 30) is not on this branch; no second model is written here"
-)
 
 
 def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict:
@@ -111,15 +119,15 @@ def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict
     }
 
 
-def published_test(arm: str, grid: str, test: str) -> dict:
+def published_test(data: Path, arm: str, grid: str, test: str) -> dict:
     """Return the mean 3-D error on the test poses: as measured, nominal, tracker-calibrated.
 
     Calibrated on every grid pose; the base frame the calibration found is kept (no second
     registration on the test poses), as a calibration is used.
     """
-    base = point_model(load_robot(DATA / arm / "robot.toml"))
-    g, t = read_tracker(DATA / grid), read_tracker(DATA / test)
-    target = np.loadtxt(DATA / test, delimiter=",", skiprows=1, usecols=(1, 2, 3))
+    base = point_model(load_robot(ROBOTS / arm / "robot.toml"))
+    g, t = read_tracker(data / grid), read_tracker(data / test)
+    target = np.loadtxt(data / test, delimiter=",", skiprows=1, usecols=(1, 2, 3))
 
     def mean_error(fit) -> float:
         p = tool_position(fit.model, np.radians(t.q_deg)) @ fit.rotation.T + fit.translation_mm
@@ -135,6 +143,10 @@ def published_test(arm: str, grid: str, test: str) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, help="folder holding the public sets' folders")
+    ap.add_argument(
+        "--set", action="append", choices=sorted(SET_FILES), help="only this set (repeatable)"
+    )
     ap.add_argument("--robot", type=Path, help="robot file (with --table)")
     ap.add_argument("--table", type=Path, help="a tracker table: j1…jn (deg), x, y, z (mm)")
     ap.add_argument("--seeds", type=int, default=3)
@@ -143,27 +155,45 @@ def main() -> None:
     args = ap.parse_args()
     if (args.robot is None) != (args.table is None):
         ap.error("give --robot and --table together")
+    if args.table and args.set:
+        ap.error("give --set or --table, not both")
+    data = tracker_data_dir(ROOT, args.data)
+    wanted = set(args.set or SET_FILES)
+    missing = [m for s in sorted(wanted) if (m := missing_set(data, s, ROOT))]
+    if missing and not args.table:
+        print("\n".join(f"error: {m}" for m in missing), file=sys.stderr)
+        sys.exit(2)
     cases = (
         {str(args.table): (args.robot, args.table)}
         if args.table
-        else {name: (DATA / arm / "robot.toml", DATA / f) for name, (arm, f) in SETS.items()}
+        else {
+            name: (ROBOTS / arm / "robot.toml", data / f)
+            for name, (arm, f) in SETS.items()
+            if arm in wanted
+        }
     )
     try:
         out = {name: run_set(r, t, args.seeds, args.points) for name, (r, t) in cases.items()}
         if not args.table:
             out["published"] = {
                 name: {
-                    **published_test(*files),
+                    **published_test(data, *files),
                     "published_uncalibrated_mm": before,
                     "published_hybrid_mm": after,
                 }
                 for name, (*files, before, after) in PUBLISHED.items()
+                if files[0] in wanted
             }
     except WirecalError as exc:
         sys.exit(f"error: {exc}")
     if args.json:
         print(json.dumps(out, indent=2))
         return
+    print_text(out, args.seeds)
+
+
+def print_text(out: dict, seeds: int) -> None:
+    """Print the figures as a table, then the Tsinghua sets' own test."""
     published = out.pop("published", {})
     head = f"{'data set':<36}{'rows':>6}{'nominal':>9}{'tracker':>9}{'wire':>8}{'wire/tr':>9}"
     print(head + f"{'wire+c':>8}{'(w+c)/tr':>10}")
@@ -174,7 +204,7 @@ def main() -> None:
             f"{name:<36}{r['rows']:>6}{r['nominal_mm']:>9.3f}{r['tracker_mm']:>9.3f}"
             f"{r['wire_mm']:>8.3f}{r['wire_mm'] / r['tracker_mm']:>9.2f}" + tail
         )
-    print(f"medians over {args.seeds} seeds, mm (n/a: the robot file asks no compliances)")
+    print(f"medians over {seeds} seeds, mm (n/a: the robot file asks no compliances)")
     for name, r in published.items():
         print(
             f"{name} grid → 20 random poses, mean error mm: as measured {r['as_measured_mm']:.3f} "

@@ -18,7 +18,15 @@ from wirecal.cli.main import main
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit import point_model
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.tracker_sets import IPA_JOINTS, read_pool, read_tracker
+from wirecal.solver.formats.tracker_sets import (
+    DATA_ENV,
+    IPA_JOINTS,
+    SET_FILES,
+    missing_set,
+    read_pool,
+    read_tracker,
+    tracker_data_dir,
+)
 from wirecal.solver.kinematics import tool_position, with_errors
 from wirecal.solver.plan_options import PlanOptions
 from wirecal.solver.plan_pool import greedy_rows, plan_pool
@@ -26,8 +34,9 @@ from wirecal.solver.tracker_fit import _jacobian, calibrate, register, registere
 from wirecal.solver.tracker_replay import ZERO_MM, readings_mm, replay
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT / "tests" / "data" / "tracker"
-UR10 = DATA / "ur10_ipa" / "robot.toml"
+ROBOTS = ROOT / "tests" / "data" / "tracker"  # robot files and where each set is published
+DATA = tracker_data_dir(ROOT)  # the public sets themselves: not in the repository
+UR10 = ROBOTS / "ur10_ipa" / "robot.toml"
 ROWS = {
     "ur10_ipa/series_b_joint_configurations.csv.gz": (1495, 6),
     "ur10_ipa/series_c_random_poses.csv.gz": (2773, 6),
@@ -41,22 +50,55 @@ ROWS = {
 TRUTH = {"th2": 0.05, "th3": -0.04, "a2": 0.6, "a3": -0.4, "d4": 0.3, "al3": 0.03, "th5": 0.02}
 
 
+def needs(name: str) -> pytest.MarkDecorator:
+    """Skip unless the public set ``name`` is where :func:`tracker_data_dir` looks."""
+    why = missing_set(DATA, name, ROOT)
+    return pytest.mark.skipif(why is not None, reason=str(why))
+
+
 # --- the public data sets ----------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", sorted(ROWS))
-def test_public_sets_read_with_their_licence_and_citation(name):
+@pytest.mark.parametrize("name", sorted(SET_FILES))
+def test_each_set_says_where_it_is_published(name):
+    """Repository URL, commit, path there, licence and citation; the data itself not here."""
+    text = (ROBOTS / name / "PUBLISHED.md").read_text()
+    assert re.search(r"https://github\.com/[\w-]+/[\w-]+", text)
+    assert re.search(r"commit\s+[0-9a-f]{40}\b", text)
+    assert "MIT" in text
+    assert "Cite:" in text
+    for f in SET_FILES[name]:
+        assert f"`{f}`" in text
+    assert sorted(p.name for p in (ROBOTS / name).iterdir()) == ["PUBLISHED.md", "robot.toml"]
+
+
+@pytest.mark.parametrize(
+    "name", [pytest.param(n, marks=needs(n.split("/")[0])) for n in sorted(ROWS)]
+)
+def test_public_sets_read(name):
     table = read_tracker(DATA / name)
     assert table.q_deg.shape == ROWS[name]
     assert np.isfinite(table.xyz_mm).all()
-    folder = (DATA / name).parent
-    licence = next(p for p in folder.iterdir() if p.name.startswith("LICENSE"))
-    assert licence.read_text().startswith("MIT License")
-    source = (folder / "SOURCE.md").read_text()
-    assert "github.com/" in source
-    assert re.search(r"commit\s+[0-9a-f]{40}\b", source)
 
 
+def test_data_folder_from_option_env_or_beside_the_clone(tmp_path, monkeypatch):
+    monkeypatch.delenv(DATA_ENV, raising=False)
+    assert tracker_data_dir(tmp_path / "repo") == tmp_path / "shared" / "data" / "tracker"
+    monkeypatch.setenv(DATA_ENV, str(tmp_path / "env"))
+    assert tracker_data_dir(tmp_path / "repo") == tmp_path / "env"
+    assert tracker_data_dir(tmp_path / "repo", tmp_path / "opt") == tmp_path / "opt"
+    (tmp_path / "ur5_jacobi").mkdir()
+    (tmp_path / "ur5_jacobi" / "ur5_grid.csv.gz").write_bytes(b"")
+    why = missing_set(tmp_path, "ur5_jacobi", ROOT)
+    assert why is not None
+    assert "missing ur5_random.csv" in why
+    assert "PUBLISHED.md" in why
+    assert DATA_ENV in why
+    (tmp_path / "ur5_jacobi" / "ur5_random.csv").write_bytes(b"")
+    assert missing_set(tmp_path, "ur5_jacobi", ROOT) is None
+
+
+@needs("ur10_ipa")
 def test_ipa_row_in_degrees_and_mm():
     t = read_tracker(DATA / "ur10_ipa/series_b_joint_configurations.csv.gz")
     # the file's first data row: −3,14159;−1,5708;0;−1,5708;0;0 rad, measurement_x 383,76294 mm
@@ -67,6 +109,7 @@ def test_ipa_row_in_degrees_and_mm():
     assert t.where(0).endswith(":2")
 
 
+@needs("ur5_jacobi")
 def test_jacobi_measured_is_target_less_difference():
     t = read_tracker(DATA / "ur5_jacobi/ur5_random.csv")
     # first row: x_t −495.48014933320513, x_dif −2.382049666794785
@@ -395,3 +438,9 @@ def test_bench_replays_any_generic_table(tmp_path):
     bad = subprocess.run([*args[:2], "--table", str(table)], capture_output=True, text=True)
     assert bad.returncode == 2
     assert "give --robot and --table together" in bad.stderr
+    absent = [*args[:2], "--data", str(tmp_path / "none"), "--set", "wam_jacobi"]
+    gone = subprocess.run(absent, capture_output=True, text=True)
+    assert gone.returncode == 2
+    assert "public tracker set 'wam_jacobi' is not in" in gone.stderr
+    assert "PUBLISHED.md" in gone.stderr
+    assert "Traceback" not in gone.stderr
