@@ -1,0 +1,1 @@
+"""Public programs of each controller language the checkers run on (see SOURCES.toml)."""
