@@ -173,7 +173,8 @@ def test_data_before_routines(text):
     lines = text.splitlines()
     first_routine = next(n for n, line in enumerate(lines) if line.startswith("  PROC "))
     data = [n for n, line in enumerate(lines) if re.match(r"  (CONST|VAR|PERS) ", line)]
-    assert data and max(data) < first_routine
+    assert data
+    assert max(data) < first_routine
 
 
 def test_no_line_over_what_controllers_load(text):
