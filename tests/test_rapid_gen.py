@@ -76,7 +76,9 @@ def test_log_header_and_reads(text, irb):
     assert f'wc_out "# plan: {plan.fingerprint()}";' in text
     assert 'wc_out "# mm_per_count: 0.025488";' in text
     assert 'Open "HOME:" \\File:="WIRECAL.LOG", wc_log \\Write;' in text
-    assert text.count("GInputDnum(wc_giCount0)") == 4  # check (2), wc_meas (2)
+    assert text.count("GInputDnum(wc_gi)") == 4  # check (2), wc_meas (2)
+    assert text.count('AliasIO "wc_giCount0", wc_gi;') == 1  # bound at run time (wc_bind)
+    assert text.count("    wc_bind;") == 2  # by wc_check and wc_run
     assert "d := d - 4294967296;" in text
     assert "d := d + 4294967296;" in text
 
@@ -209,3 +211,14 @@ def test_start_after_a_refused_reading_samples_again(text):
     assert len(list(stops(loops[0].body))) == 2
     assert not list(stops([s for s in meas.body if s is not loops[0]]))
     assert 'head := "unsettled,";' in text
+
+
+def test_error_handlers_for_the_log_and_the_arithmetic(text):
+    """wc_run names a refused log, wc_solve a zero divisor, wc_bind a missing signal."""
+    from wirecal.lang.rapid.parser import parse_module
+
+    handlers = {r.name: r.handler for r in parse_module(text).routines}
+    assert all(handlers[name] for name in ("wc_run", "wc_solve", "wc_bind"))
+    assert "IF ERRNO = ERR_FILEOPEN OR ERRNO = ERR_FILEACC THEN" in text
+    assert "IF ERRNO = ERR_DIVZERO THEN" in text
+    assert "    Close wc_log;\n    Open " in text  # a log left open by an aborted run

@@ -514,8 +514,8 @@ class Typer:
             self.signals.add(e.name)
             return
         sym = self.scope.get(e.name.lower()) if isinstance(e, N.Name) else None
-        if sym is not None and not self.lang.subset and sym.type in (Type(p.type), UNKNOWN):
-            return
+        if sym is not None and sym.type in (Type(p.type), UNKNOWN):
+            return  # a signal variable (the subset's: a signalgi bound by AliasIO)
         self.problems.add(
             self.line,
             f"{name}'s {p.name} is the name of {T.SIGNAL_TYPES[p.type]} signal ({p.type})",
@@ -823,7 +823,7 @@ class Checker:
         self.in_handler = False
         self.body(r.body, typer, r)
         for which, handler in handlers.items():
-            if self.lang.subset:
+            if self.lang.subset and which != "ERROR":
                 self.problems.add(r.line, f"an {which} handler: {SUBSET}")
                 continue
             self.in_handler = which == "ERROR"
@@ -868,10 +868,15 @@ class Checker:
             self.test(s, typer, r)
         elif isinstance(s, N.Return):
             self.ret(s, typer, r)
-        elif self.lang.subset and not isinstance(s, N.Exit):
+        elif self.lang.subset and not isinstance(s, N.Exit) and not self.passes_on(s):
             self.problems.add(s.line, f"{_WHAT[type(s)]}: {SUBSET}")
         else:
             self.beyond(s, typer)
+
+    def passes_on(self, s: N.Stmt) -> bool:
+        """Whether ``s`` is ``RAISE;`` in an ERROR handler (the subset runs it: the error
+        goes on to the caller)."""
+        return isinstance(s, N.Raise) and s.value is None and self.in_handler
 
     def beyond(self, s: N.Stmt, typer: Typer) -> None:
         """Check a statement of RAPID beyond the subset (GOTO, RAISE, CONNECT …)."""

@@ -71,10 +71,19 @@ Eval = Callable[[Frame], Any]
 
 
 class RapidError(RunError):
-    """A RAPID run-time error: the program stops with this message."""
+    """A RAPID run-time error: the program stops with this message.
 
-    def __init__(self, message: str):
+    ``errno``: the predefined error name an ERROR handler sees in ERRNO (``err_divzero`` …,
+    :data:`~wirecal.lang.rapid.tables.SUBSET_ERRORS`); None: no handler runs for it.
+    """
+
+    def __init__(self, message: str, errno: str | None = None):
         super().__init__(-1, message)
+        self.errno = errno
+
+
+class _Raise(Exception):
+    """RAISE; in an ERROR handler: the error goes on to the caller."""
 
 
 class _Return(Exception):
@@ -173,7 +182,7 @@ def _arith(op: str, a: float, b: float) -> float:
     if op == "*":
         return a * b
     if b == 0:
-        raise RapidError("division by zero")
+        raise RapidError("division by zero", "err_divzero")
     if op == "/":
         return a / b
     x, y = _integer(a, op), _integer(b, op)
@@ -215,7 +224,9 @@ class Interpreter:
         self.sources = {r.name.lower(): r for r in module.routines}
         typer = Typer(self.global_scope, Problems(), self.routines_sig)
         for k, v in T.PREDEFINED.items():
-            if k == "pi":
+            if k in T.SUBSET_ERRORS:  # ERRNO 0; each error its own number (the twin's)
+                self.globals[k] = float(T.SUBSET_ERRORS.index(k))
+            elif k == "pi":
                 self.globals[k] = f32(3.1415926)
             elif v == "speeddata":
                 self.globals[k] = dict(
@@ -346,7 +357,7 @@ class _Compiler:
         returns = Type(r.type.lower()) if r.type else None
         c = _Compiler(interp, Typer(scope, Problems(), interp.routines_sig), local, returns)
         names = [p.name.lower() for p in r.params]
-        body = c.block(r.body)
+        body = c.handled(c.block(r.body), r.handler)
         is_func = r.kind == "FUNC"
 
         def run(args: list[Any]) -> tuple[Any, Frame]:
@@ -360,6 +371,32 @@ class _Compiler:
             return None, frame
 
         return run
+
+    def handled(
+        self, body: Callable[[Frame], None], handler: list[N.Stmt] | None
+    ) -> Callable[[Frame], None]:
+        """Wrap a routine's body with its ERROR handler: an error with an ERRNO runs it.
+
+        ERRNO is set; the handler's ``RAISE;`` passes the error on to the caller, its
+        RETURN ends the routine (RAPID reference manual, error recovery: unconfirmed).
+        """
+        if handler is None:
+            return body
+        run_handler, globals_ = self.block(handler), self.interp.globals
+
+        def guarded(frame: Frame) -> None:
+            try:
+                body(frame)
+            except RapidError as error:
+                if error.errno is None:
+                    raise
+                globals_["errno"] = globals_[error.errno]
+                try:
+                    run_handler(frame)
+                except _Raise:
+                    raise error from None
+
+        return guarded
 
     # ---- statements ----
     def block(self, stmts: list[N.Stmt]) -> Callable[[Frame], None]:
@@ -408,6 +445,8 @@ class _Compiler:
             return self.test(s)
         if isinstance(s, N.Return):
             return self.ret(s)
+        if isinstance(s, N.Raise):
+            return _raise
         assert isinstance(s, N.Exit), s
 
         def exit_(frame: Frame) -> None:
@@ -717,6 +756,10 @@ class _Compiler:
         return pos, opt
 
 
+def _raise(frame: Frame) -> None:
+    raise _Raise
+
+
 def _constant(v: Any) -> Eval:
     return lambda f: v
 
@@ -782,10 +825,21 @@ def _write(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
     def run(frame: Frame) -> None:
         handle = pos[0](frame)
         if handle is None:
-            raise RapidError("Write: the iodev is not open")
-        ctl.write_file(handle, _string(pos[1](frame) + _text_with_number(opt, frame)), newline)
+            raise RapidError("Write: the iodev is not open", "err_fileacc")
+        text = _string(pos[1](frame) + _text_with_number(opt, frame))
+        _file_call("err_fileacc", lambda: ctl.write_file(handle, text, newline))
 
     return run
+
+
+def _file_call(errno: str, call: Callable[[], Any]) -> Any:
+    """Make a controller's file call; its refusal is a RAPID error with ``errno``."""
+    try:
+        return call()
+    except RapidError:
+        raise
+    except RunError as e:
+        raise RapidError(e.message, errno) from None
 
 
 def _open(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
@@ -795,7 +849,7 @@ def _open(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
 
     def run(frame: Frame) -> None:
         path = device(frame) + ("/" + file(frame) if file else "")
-        store(frame, ctl.open_file(path, append))
+        store(frame, _file_call("err_fileopen", lambda: ctl.open_file(path, append)))
 
     return run
 
@@ -806,9 +860,9 @@ def _close(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
 
     def run(frame: Frame) -> None:
         handle = pos[0](frame)
-        if handle is not None:
-            ctl.close_file(handle)
         store(frame, None)
+        if handle is not None:
+            _file_call("err_fileacc", lambda: ctl.close_file(handle))
 
     return run
 
@@ -865,6 +919,13 @@ def _stop(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
     return run
 
 
+def _alias_io(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+    """AliasIO "name", var: the variable reads the configured signal ``name``."""
+    pos, _ = c.args("aliasio", args)
+    store = c.store(_positional(args, 1))
+    return lambda frame: store(frame, pos[0](frame))
+
+
 _INSTRUCTIONS: dict[str, Builder] = {
     "moveabsj": _move_abs_j,
     "tpwrite": _tp_write,
@@ -880,6 +941,7 @@ _INSTRUCTIONS: dict[str, Builder] = {
     "clkstop": _clock("stop"),
     "waittime": _wait_time,
     "stop": _stop,
+    "aliasio": _alias_io,
 }
 
 
@@ -935,8 +997,20 @@ def _group(name: str, result: Type) -> Builder:
     def build(c: _Compiler, args: list[N.Arg]) -> Eval:
         signal = _positional(args, 0)
         assert isinstance(signal, N.Name)
-        ctl = c.interp.controller
-        return lambda f: coerce(ctl.group_input(signal.name), result)
+        ctl, key = c.interp.controller, signal.name.lower()
+        if key not in c.interp.global_scope and key not in c.local:
+            return lambda f: coerce(ctl.group_input(signal.name), result)
+        bound = c.name(signal.name)  # a signalgi variable: the name AliasIO bound it to
+
+        def read(frame: Frame) -> Any:
+            alias = bound(frame)
+            if alias is None:
+                raise RapidError(
+                    f"{name}: the signal variable {signal.name} is not bound (AliasIO)"
+                )
+            return coerce(ctl.group_input(alias), result)
+
+        return read
 
     return build
 

@@ -16,7 +16,9 @@ MODULE WIRECAL
   ! RobotWare 6: unconfirmed against a page read by wirecal's authors):
   !   MoveAbsJ jointtarget, speeddata, fine, tool0: axes in degrees
   !   CJointT(): the axes' current angles (degrees)
-  !   GInputDnum(signal): a group input of up to 32 bits as a dnum
+  !   GInputDnum(signal): a group input of up to 32 bits as a dnum;
+  !   AliasIO: a signalgi variable bound to the configured signal at run time
+  !   ERROR handlers with ERRNO, ERR_FILEOPEN, ERR_FILEACC, ERR_DIVZERO; RAISE
   !   Open "HOME:" \File:=..., iodev \Write; Write \NoNewLine; Close
   !   TPWrite (a string of at most 80 characters), TPReadNum, WaitTime
   !   ClkReset, ClkStart, ClkRead (s, 1 ms); NumToStr, DnumToStr, NumToDnum,
@@ -31,6 +33,8 @@ MODULE WIRECAL
   ! the readings wc_solve takes: the 9 zero readings, then the 45 points
   VAR dnum wc_rc{54};
   VAR num wc_rj{54, 6};
+  ! the counter's group input, bound to wc_giCount0 by wc_bind (AliasIO) at run time
+  VAR signalgi wc_gi;
   VAR iodev wc_log;
   VAR clock wc_clk;
   VAR dnum wc_zc := 0;
@@ -279,9 +283,10 @@ MODULE WIRECAL
     ! nothing moves, check the counter module and the signal wc_giCount0.
     VAR dnum first;
     VAR dnum d;
-    first := GInputDnum(wc_giCount0);
+    wc_bind;
+    first := GInputDnum(wc_gi);
     FOR k FROM 1 TO 60 DO
-      d := wc_delta(GInputDnum(wc_giCount0), first);
+      d := wc_delta(GInputDnum(wc_gi), first);
       TPWrite "counts " + DnumToStr(d, 0) + "   mm " + DnumToStr(d * 0.025488, 4);
       WaitTime 0.5;
     ENDFOR
@@ -338,13 +343,13 @@ MODULE WIRECAL
     WHILE NOT taken DO
       t := ClkRead(wc_clk);
       ! the count as the log holds it: a signed 32-bit value
-      first := wc_delta(GInputDnum(wc_giCount0), 0);
+      first := wc_delta(GInputDnum(wc_gi), 0);
       sum := 0;
       lo := 0;
       hi := 0;
       FOR k FROM 2 TO 10 DO
         WaitTime 0.02;
-        d := wc_delta(GInputDnum(wc_giCount0), first);
+        d := wc_delta(GInputDnum(wc_gi), first);
         sum := sum + d;
         IF d < lo THEN
           lo := d;
@@ -407,6 +412,10 @@ MODULE WIRECAL
     ! for a slip. Every target is a literal jointtarget (degrees): check it
     ! against the plan.
     TPErase;
+    wc_bind;
+    ! a log left open by an aborted run is closed first (Close of a closed iodev: a no-op,
+    ! unconfirmed), so that Open does not refuse it
+    Close wc_log;
     Open "HOME:" \File:="WIRECAL.LOG", wc_log \Write;
     wc_out "# wirecal-log 2";
     wc_out "# robot: ABB IRB 120";
@@ -609,6 +618,25 @@ MODULE WIRECAL
     wc_out "# end";
     Close wc_log;
     TPWrite "# Run complete: 45 points, the log in HOME:/WIRECAL.LOG";
+  ERROR
+    ! the log refused (HOME: full or not writable: Open, Write or Close failed): say
+    ! so, then the error stops the run (ERR_FILEOPEN, ERR_FILEACC: unconfirmed names)
+    IF ERRNO = ERR_FILEOPEN OR ERRNO = ERR_FILEACC THEN
+      TPWrite "wirecal: the log HOME:/WIRECAL.LOG could not be written:";
+      TPWrite "free space on HOME: (the disk may be full), then run wc_run again.";
+    ENDIF
+    RAISE;
+  ENDPROC
+
+  PROC wc_bind()
+    ! bind wc_gi to the group input wc_giCount0 of the I/O configuration at run time:
+    ! a missing signal is this message, not a module that cannot be linked
+    ! (AliasIO, ERR_ALIASIO_DEF: unconfirmed)
+    AliasIO "wc_giCount0", wc_gi;
+  ERROR
+    TPWrite "wirecal: no group input wc_giCount0 in the I/O configuration:";
+    TPWrite "map the counter's 32-bit count to it (docs/rapid.md), run again.";
+    RAISE;
   ENDPROC
 
   PROC wc_solve()
@@ -1185,5 +1213,14 @@ MODULE WIRECAL
       TPWrite "# " + wc_pn{i} + "  " + wc_pu{i} + "  " + NumToStr(x, 6) + "  " + NumToStr(wc_nom{i} + x, 4);
     ENDFOR
     TPWrite "# Controller solver done: compare with 'wirecal solve --method stepwise'.";
+  ERROR
+    ! a zero divisor (a degenerate step): no controller result, the run goes on and
+    ! closes its log, which 'wirecal solve' reads on the PC
+    IF ERRNO = ERR_DIVZERO THEN
+      TPWrite "# wc_solve: a division by zero: no result on the controller;";
+      TPWrite "# solve the log on the PC (wirecal solve).";
+      RETURN;
+    ENDIF
+    RAISE;
   ENDPROC
 ENDMODULE
