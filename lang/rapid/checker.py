@@ -874,8 +874,7 @@ class Checker:
             self.beyond(s, typer)
 
     def passes_on(self, s: N.Stmt) -> bool:
-        """Whether ``s`` is ``RAISE;`` in an ERROR handler (the subset runs it: the error
-        goes on to the caller)."""
+        """Whether ``s`` is ``RAISE;`` in an ERROR handler: the subset runs it."""
         return isinstance(s, N.Raise) and s.value is None and self.in_handler
 
     def beyond(self, s: N.Stmt, typer: Typer) -> None:
