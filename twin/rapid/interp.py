@@ -38,7 +38,7 @@ import operator
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import lru_cache, singledispatchmethod
 from typing import Any
 
 from wirecal.lang.rapid import nodes as N
@@ -409,51 +409,76 @@ class _Compiler:
 
         return run
 
-    def stmt(self, s: N.Stmt) -> Callable[[Frame], None]:  # noqa: C901
+    def stmt(self, s: N.Stmt) -> Callable[[Frame], None]:
         """Compile one statement; each one sets the interpreter's current line."""
         self.typer.line = s.line
-        interp, line = self.interp, s.line
-        if isinstance(s, N.Data):
-            return self.declare(s)
-        if isinstance(s, N.Assign):
-            want = self.typer.type(s.target)
-            assert want is not None
-            value, store = self.expr(s.value, want), self.store(s.target)
+        return self.compile_stmt(s)
 
-            def assign(frame: Frame) -> None:
-                interp.line = line
-                store(frame, coerce(copy(value(frame)), want))
-
-            return assign
-        if isinstance(s, N.Call):
-            return self.call_stmt(s)
-        if isinstance(s, N.If):
-            return self.if_(s)
-        if isinstance(s, N.For):
-            return self.for_(s)
-        if isinstance(s, N.While):
-            cond, body = self.expr(s.cond, BOOL), self.block(s.body)
-
-            def while_(frame: Frame) -> None:
-                interp.line = line
-                while cond(frame):
-                    body(frame)
-                    interp.line = line
-
-            return while_
-        if isinstance(s, N.Test):
-            return self.test(s)
-        if isinstance(s, N.Return):
-            return self.ret(s)
-        if isinstance(s, N.Raise):
-            return _raise
+    @singledispatchmethod
+    def compile_stmt(self, s: N.Stmt) -> Callable[[Frame], None]:
+        """EXIT (the only statement left once the subset check passed)."""
         assert isinstance(s, N.Exit), s
+        interp, line = self.interp, s.line
 
         def exit_(frame: Frame) -> None:
             interp.line = line
             raise _Exit
 
         return exit_
+
+    @compile_stmt.register
+    def _(self, s: N.Data) -> Callable[[Frame], None]:
+        return self.declare(s)
+
+    @compile_stmt.register
+    def _(self, s: N.Assign) -> Callable[[Frame], None]:
+        interp, line = self.interp, s.line
+        want = self.typer.type(s.target)
+        assert want is not None
+        value, store = self.expr(s.value, want), self.store(s.target)
+
+        def assign(frame: Frame) -> None:
+            interp.line = line
+            store(frame, coerce(copy(value(frame)), want))
+
+        return assign
+
+    @compile_stmt.register
+    def _(self, s: N.Call) -> Callable[[Frame], None]:
+        return self.call_stmt(s)
+
+    @compile_stmt.register
+    def _(self, s: N.If) -> Callable[[Frame], None]:
+        return self.if_(s)
+
+    @compile_stmt.register
+    def _(self, s: N.For) -> Callable[[Frame], None]:
+        return self.for_(s)
+
+    @compile_stmt.register
+    def _(self, s: N.While) -> Callable[[Frame], None]:
+        interp, line = self.interp, s.line
+        cond, body = self.expr(s.cond, BOOL), self.block(s.body)
+
+        def while_(frame: Frame) -> None:
+            interp.line = line
+            while cond(frame):
+                body(frame)
+                interp.line = line
+
+        return while_
+
+    @compile_stmt.register
+    def _(self, s: N.Test) -> Callable[[Frame], None]:
+        return self.test(s)
+
+    @compile_stmt.register
+    def _(self, s: N.Return) -> Callable[[Frame], None]:
+        return self.ret(s)
+
+    @compile_stmt.register
+    def _(self, s: N.Raise) -> Callable[[Frame], None]:
+        return _raise
 
     def declare(self, d: N.Data) -> Callable[[Frame], None]:
         """Compile a routine's data: (re)initialized each time the routine runs."""
@@ -628,39 +653,62 @@ class _Compiler:
         return set_element
 
     # ---- expressions ----
-    def expr(self, e: N.Expr, want: Type | None) -> Eval:  # noqa: C901
-        """Compile an expression; ``want`` is the type its context needs (literals, aggregates)."""
-        if isinstance(e, N.Num):
-            v = coerce(e.value, want) if want in (NUM, DNUM) else e.value
-            return _constant(v)
-        if isinstance(e, N.Str | N.Bool):
-            return _constant(e.value)
-        if isinstance(e, N.Name):
-            return self.name(e.name)
-        if isinstance(e, N.Component):
-            base, name = self.expr(e.base, None), e.field.lower()
-            return lambda f: base(f)[name]
-        if isinstance(e, N.Index):
-            base = self.expr(e.base, None)
-            indices = [self.expr(i, NUM) for i in e.indices]
+    @singledispatchmethod
+    def expr(self, e: N.Expr, want: Type | None) -> Eval:
+        """Compile an expression; ``want`` is the type its context needs (literals, aggregates).
 
-            def element(frame: Frame) -> Any:
-                holder, last = _element_holder(base(frame), [i(frame) for i in indices])
-                return holder[last]
-
-            return element
-        if isinstance(e, N.Aggregate):
-            return self.aggregate(e, want)
-        if isinstance(e, N.Neg):
-            t = self.static(e, want)
-            a = self.expr(e.a, t)
-            return lambda f: coerce(-a(f), t)
-        if isinstance(e, N.Not):
-            a = self.expr(e.a, BOOL)
-            return lambda f: not a(f)
-        if isinstance(e, N.BinOp):
-            return self.binop(e, want)
+        A function call when no case is its own.
+        """
+        assert isinstance(e, N.FuncCall), e
         return self.function(e)
+
+    @expr.register
+    def _(self, e: N.Num, want: Type | None) -> Eval:
+        return _constant(coerce(e.value, want) if want in (NUM, DNUM) else e.value)
+
+    @expr.register(N.Str)
+    @expr.register(N.Bool)
+    def _(self, e: N.Str | N.Bool, want: Type | None) -> Eval:
+        return _constant(e.value)
+
+    @expr.register
+    def _(self, e: N.Name, want: Type | None) -> Eval:
+        return self.name(e.name)
+
+    @expr.register
+    def _(self, e: N.Component, want: Type | None) -> Eval:
+        base, name = self.expr(e.base, None), e.field.lower()
+        return lambda f: base(f)[name]
+
+    @expr.register
+    def _(self, e: N.Index, want: Type | None) -> Eval:
+        base = self.expr(e.base, None)
+        indices = [self.expr(i, NUM) for i in e.indices]
+
+        def element(frame: Frame) -> Any:
+            holder, last = _element_holder(base(frame), [i(frame) for i in indices])
+            return holder[last]
+
+        return element
+
+    @expr.register
+    def _(self, e: N.Aggregate, want: Type | None) -> Eval:
+        return self.aggregate(e, want)
+
+    @expr.register
+    def _(self, e: N.Neg, want: Type | None) -> Eval:
+        t = self.static(e, want)
+        a = self.expr(e.a, t)
+        return lambda f: coerce(-a(f), t)
+
+    @expr.register
+    def _(self, e: N.Not, want: Type | None) -> Eval:
+        a = self.expr(e.a, BOOL)
+        return lambda f: not a(f)
+
+    @expr.register
+    def _(self, e: N.BinOp, want: Type | None) -> Eval:
+        return self.binop(e, want)
 
     def static(self, e: N.Expr, want: Type | None) -> Type:
         """Return the expression's type; a literal one takes the context's (else dnum)."""
