@@ -43,6 +43,9 @@ class FakeController:
         self.count = (self.count + 3) % 2**32
         return self.count
 
+    def has_group_input(self, name):
+        return name.startswith("wc_giCount")
+
     def open_file(self, path, append):
         self.calls.append(("open", path, append))
         return 7
@@ -428,3 +431,41 @@ def test_an_unbound_signal_variable_stops_with_a_message() -> None:
     outcome, _ = run("TPWrite DnumToStr(GInputDnum(gi), 0);", data=("VAR signalgi gi;",))
     assert outcome.status == "error"
     assert "the signal variable gi is not bound (AliasIO)" in outcome.message
+
+
+def test_aliasio_to_a_signal_the_configuration_lacks_runs_the_handler() -> None:
+    """The generated wc_bind's pattern: the handler's message, then the error stops the run."""
+    outcome, ctl = run(
+        'AliasIO "di_missing", gi;',
+        "ERROR",
+        'IF ERRNO = ERR_ALIASIO_DEF TPWrite "no such group input";',
+        "RAISE;",
+        data=("VAR signalgi gi;",),
+    )
+    assert outcome.status == "error"
+    assert "AliasIO: no signal di_missing in the I/O configuration" in outcome.message
+    assert ctl.pendant == ["no such group input"]
+
+
+def test_the_generated_module_names_a_missing_counter_signal() -> None:
+    """WIRECAL.mod on a controller without wc_giCount0: wc_check says so and stops."""
+    from pathlib import Path
+
+    from wirecal.gen.rapid.program import module_text
+    from wirecal.solver.formats.plan_file import load_plan
+    from wirecal.solver.formats.robot_file import load_robot
+
+    irb = Path(__file__).resolve().parent.parent / "examples" / "abb_irb120"
+    robot = load_robot(irb / "robot.toml")
+    text = module_text(robot, load_plan(irb / "plan.toml", robot))
+
+    class Unconfigured(FakeController):
+        def has_group_input(self, name):
+            return False
+
+    ctl = Unconfigured()
+    outcome = load_module(text, "WIRECAL.mod", ctl).execute("wc_check")
+    assert outcome.status == "error"
+    assert "AliasIO: no signal wc_giCount0" in outcome.message
+    assert ctl.pendant[0] == "wirecal: no group input wc_giCount0 in the I/O configuration:"
+    assert not [c for c in ctl.calls if c[0] == "gi"]

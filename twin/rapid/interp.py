@@ -968,10 +968,22 @@ def _stop(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
 
 
 def _alias_io(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
-    """AliasIO "name", var: the variable reads the configured signal ``name``."""
+    """AliasIO "name", var: the variable reads the configured signal ``name``.
+
+    A signal the I/O configuration lacks is ERR_ALIASIO_DEF (its ERROR handler runs).
+    """
     pos, _ = c.args("aliasio", args)
-    store = c.store(_positional(args, 1))
-    return lambda frame: store(frame, pos[0](frame))
+    store, ctl = c.store(_positional(args, 1)), c.interp.controller
+
+    def run(frame: Frame) -> None:
+        name = pos[0](frame)
+        if not ctl.has_group_input(name):
+            raise RapidError(
+                f"AliasIO: no signal {name} in the I/O configuration", "err_aliasio_def"
+            )
+        store(frame, name)
+
+    return run
 
 
 _INSTRUCTIONS: dict[str, Builder] = {
