@@ -55,17 +55,15 @@ def controller_runs(
     are the generated ones (the default request's when not given).
     """
     reg = registered(robot)
-    runs = getattr(reg.adapter, "controller_runs", None)
-    if runs is None:
+    if not reg.adapter.capabilities.controller_runs:
         raise WirecalError(
             f"--method controller: the {reg.language.title} twin does not yet run its "
             "controller solver on a log's readings apart from the measurement run (its result "
             "is in the log wc_run writes)"
         )
-    found: dict[str, ControllerRun] = runs(
+    return reg.adapter.controller_runs(
         robot, plan, m, disk, programs or solver_programs(reg, robot, plan)
     )
-    return found
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,6 @@ for the robot's language, its generator and its twin adapter.
 
 from __future__ import annotations
 
-import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -61,14 +60,6 @@ class Registered:
 
             options = {"listen": listen, "timeout_s": timeout_s, **options}
         return self.adapter.measure(robot, plan, truth, folder, programs, **options)
-
-    def takes(self, option: str) -> bool:
-        """Return whether the adapter's ``measure`` takes the keyword ``option``.
-
-        A twin adapter may model more of the world than the protocol's keywords (V+'s:
-        the true encoder, ``encoder_truth``); callers pass such an option only where taken.
-        """
-        return option in inspect.signature(self.adapter.measure).parameters
 
 
 def registered(robot_or_key: Robot | str) -> Registered:

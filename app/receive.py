@@ -31,6 +31,7 @@ reset by single bytes: a sender trickling bytes without a line end is stopped).
 
 from __future__ import annotations
 
+import errno
 import os
 import selectors
 import socket
@@ -40,7 +41,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import Outputs, os_problem
+from wirecal.solver.formats.fileio import MAX_INPUT_BYTES, Outputs, os_problem
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.run_token import PREFIX, presents, run_token
 from wirecal.solver.measurements import check_log, describe_missing
@@ -73,6 +74,7 @@ class Received:
     probes: int = 0  # connections that sent no line in time, or nothing at all
     problems: list[str] = field(default_factory=list)  # the log checks at the end marker
     journal_created: bool = False
+    size: int = 0  # bytes of the lines received
 
     @property
     def text(self) -> str:
@@ -187,15 +189,28 @@ def _take(
     """
     fd = _create_journal(journal)
     result.journal_created = True
-    with os.fdopen(fd, "w", encoding="utf-8", newline="") as jf:
-        session = _Session(srv, timeout_s, token, jf, result)
-        try:
-            session.run()
-        except KeyboardInterrupt:  # Ctrl-C while waiting: keep what came, say so
-            result.stopped = "interrupted (Ctrl-C)"
-        finally:
-            _sync(jf)
-            session.close()
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as jf:
+            session = _Session(srv, timeout_s, token, jf, result)
+            try:
+                session.run()
+            except KeyboardInterrupt:  # Ctrl-C while waiting: keep what came, say so
+                result.stopped = "interrupted (Ctrl-C)"
+            finally:
+                try:
+                    _sync(jf)
+                finally:
+                    session.close()
+    except OSError as exc:
+        if exc.errno not in _DISK_FULL:
+            raise
+        result.stopped = (  # the journal holds what could be written
+            f"{journal}: {exc.strerror} after line {len(result.lines)} (the journal keeps the "
+            "lines up to there, its last one possibly cut); free space and run again"
+        )
+
+
+_DISK_FULL = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG}
 
 
 @dataclass
@@ -380,6 +395,7 @@ def _recv(conn: socket.socket | None) -> bytes | None:
 def _keep(jf, result: Received, line: str) -> None:
     jf.write(line)
     result.lines.append(line)
+    result.size += len(line)
 
 
 def _dropped(jf, result: Received, pending: bytes) -> None:
@@ -399,6 +415,14 @@ def _feed(jf, result: Received, buffered: bytes) -> bytes | None:
             _sync(jf)
             result.stopped = (
                 f"line {len(result.lines) + 1} is not UTF-8 text: is the sender a wirecal program?"
+            )
+            return None
+        if result.size + len(raw) >= MAX_INPUT_BYTES:  # the bound of every other input
+            _sync(jf)
+            result.stopped = (
+                f"more than {MAX_INPUT_BYTES // 2**20} MiB received after line "
+                f"{len(result.lines)}: not a log (a run's log is well under 1 MiB); is the "
+                "sender a wirecal program?"
             )
             return None
         _keep(jf, result, line + "\n")

@@ -1,128 +1,65 @@
-"""Generate a controller's programs, then run them in the digital twin.
+"""Generate a controller's programs, then run them in the digital twin, in any language.
 
 The composition of ``gen`` and ``twin`` (the twin itself only runs the programs it is
-given); a UR run's log is taken by :func:`wirecal.app.receive.receive`, the very function
-behind ``wirecal receive``.
+given), through the registry: the robot file's language's generator and twin adapter
+(:func:`wirecal.app.languages.registered`); a language that sends its log over a socket
+has it taken by :func:`wirecal.app.receive.receive`, the very function behind ``wirecal
+receive``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
-from wirecal.app.receive import Received, journal_path, receive
-from wirecal.gen.urscript.program import UrOptions, pc_address, scripts
-from wirecal.gen.vplus.program import MODULE_NAME, GenOptions, module_text
+from wirecal.app.languages import registered
+from wirecal.gen.request import GenRequest
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.simulate import IDEAL_ENCODER, EncoderTruth, Unmodelled
-from wirecal.twin.urscript.runs import ADAPTER as UR_ADAPTER
-from wirecal.twin.vplus.runs import run_measurement
-from wirecal.twin.world import Faults, TwinRun
+from wirecal.twin.world import TwinRun
+
+
+def generate(robot: Robot, plan: Plan, request: GenRequest | None = None) -> dict[str, str]:
+    """Return the programs of the robot file's language by file name, as ``wirecal gen``.
+
+    Every duty done (:meth:`wirecal.gen.backends.Generator.programs`: the pre-flight, the
+    rendering, the language's own checker); a WirecalError names what is refused.
+    """
+    return registered(robot).generator.programs(robot, plan, request or GenRequest())
+
+
+def write_programs(
+    robot: Robot,
+    out_dir: str | Path,
+    programs: dict[str, str],
+    request: GenRequest | None = None,
+    *,
+    force: bool = False,
+) -> list[Path]:
+    """Write ``programs`` into ``out_dir`` as the robot's controller takes them; all or none."""
+    gen = registered(robot).generator
+    return gen.write(out_dir, programs, request or GenRequest(), force=force)
 
 
 def measure_in_twin(
     robot: Robot,
     plan: Plan,
     truth: dict[str, float],
-    disk: Path,
-    *,
-    options: GenOptions | None = None,
-    text: str | None = None,
-    seed: int = 0,
-    noise_mm: float = 0.01,
-    counter_start: float | None = None,
-    faults: Faults | None = None,
-    proceed_on_pause: bool = False,
-    encoder_truth: EncoderTruth = IDEAL_ENCODER,
-) -> TwinRun:
-    """Run wc.mount and wc.run of a generated module on a twin robot.
-
-    wc.mount (answered 1) and wc.run of the module generated with ``options`` (or of
-    ``text``, generated with those options) on a twin robot with true offsets ``truth``.
-    """
-    options = options or GenOptions()
-    text = text if text is not None else module_text(robot, plan, options)
-    return run_measurement(
-        robot,
-        plan,
-        truth,
-        disk,
-        {MODULE_NAME: text},
-        log_file=options.log_file,
-        seed=seed,
-        noise_mm=noise_mm,
-        counter_start=counter_start,
-        faults=faults,
-        proceed_on_pause=proceed_on_pause,
-        encoder_truth=encoder_truth,
-    )
-
-
-@dataclass
-class URRun:
-    """A URScript measurement run in the twin: the programs' run and what the PC got."""
-
-    programs: TwinRun
-    received: Received
-
-    @property
-    def log(self) -> Path:
-        """Return the log: the complete one, or the journal of an incomplete run."""
-        return self.received.log if self.received.complete else self.received.journal
-
-
-def measure_ur_in_twin(
-    robot: Robot,
-    plan: Plan,
-    truth: dict[str, float],
     folder: Path,
+    programs: dict[str, str] | None = None,
     *,
-    options: UrOptions | None = None,
-    texts: dict[str, str] | None = None,
-    seed: int = 0,
-    noise_mm: float = 0.01,
-    counter_start: float | None = None,
-    faults: Faults | None = None,
-    pulse_inputs: tuple[int, int] | None = None,
-    pc_listening: bool = True,
+    request: GenRequest | None = None,
     timeout_s: float = 30.0,
-    unmodelled: Unmodelled | None = None,
-) -> URRun:
-    """Run wc_mount and wc_run on a twin UR with ``wirecal receive`` taking the log.
+    **options: Any,
+) -> TwinRun:
+    """Run the mounting and measurement programs on a twin robot with true offsets ``truth``.
 
-    The programs are ``texts`` (by file name), or generated with ``options``. The receiver
-    listens on a free loopback port in a thread and writes ``folder/run.csv``; the twin
-    routes the program's PC address there, so the rows travel over a real TCP socket.
-    With ``pc_listening`` False nobody listens (the connection is refused).
-    ``pulse_inputs``: where the encoder is really wired (default: as the robot file says).
-    ``counter_start``: the raw count at zero wire length (default: drawn over the whole
-    int32 range).
+    ``programs``: the generated ones (default: :func:`generate` with ``request``);
+    ``options``: the twin adapter's (``seed``, ``noise_mm``, ``counter_start``,
+    ``faults``, ``unmodelled``, and what a language's adapter declares,
+    :class:`~wirecal.twin.adapters.AdapterCapabilities`). The log is ``TwinRun.log``.
     """
-    options = options or UrOptions()
-    texts = texts if texts is not None else scripts(robot, plan, options)
-    got: list[Received] = []
-
-    def listen(log: Path, on_listening: Callable[[int], None]) -> Received:
-        got.append(receive(0, log, robot, plan, timeout_s=timeout_s, on_listening=on_listening))
-        return got[0]
-
-    run = UR_ADAPTER.measure(
-        robot,
-        plan,
-        truth,
-        folder,
-        texts,
-        seed=seed,
-        noise_mm=noise_mm,
-        counter_start=counter_start,
-        faults=faults,
-        unmodelled=unmodelled,
-        pulse_inputs=pulse_inputs,
-        pc=pc_address(robot, options),
-        listen=listen if pc_listening else None,
-        timeout_s=timeout_s,
-    )
-    received = got[0] if got else Received(run.log, journal_path(run.log))
-    return URRun(run, received)
+    reg = registered(robot)
+    if programs is None:
+        programs = generate(robot, plan, request)
+    return reg.measure(robot, plan, truth, folder, programs, timeout_s=timeout_s, **options)

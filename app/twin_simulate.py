@@ -31,8 +31,14 @@ def simulate_in_twin(
     slip: tuple[int, float] | None,
     counter_start: float | None,
     true_encoder: EncoderTruth,
-) -> tuple[str, str | None]:
-    """Run the measurement programs in the twin; return the log text and why they stopped.
+    *,
+    echo: bool = False,
+) -> tuple[str, str | None, list[str]]:
+    """Run the measurement programs in the twin; the log text, why they stopped, the console.
+
+    ``echo``: the run also shows every log row on the console where the language can
+    choose (V+ ``gen --echo-log``; URScript's log tab and RAPID's FlexPendant always do),
+    so the console is what an operator would copy and paste into ``wirecal solve -``.
 
     The robot's language's programs in its twin adapter (:func:`wirecal.app.languages.registered`):
     a log file on the controller's disk, or sent over a loopback socket to wirecal receive
@@ -47,8 +53,9 @@ def simulate_in_twin(
     )
     reg = registered(rb)
     run = replace(reg.generator.default_run, readings=samples)  # as wirecal gen runs
-    programs = reg.generator.programs(rb, pl, GenRequest(run=run))
-    if reg.takes("encoder_truth"):
+    echo_log = echo and "echo_log" not in reg.generator.refuses
+    programs = reg.generator.programs(rb, pl, GenRequest(run=run, echo_log=echo_log))
+    if reg.adapter.capabilities.encoder_truth:
         kw["encoder_truth"] = true_encoder
     with tempfile.TemporaryDirectory() as tmp:
         twin = reg.measure(rb, pl, errors, Path(tmp), programs, **kw)
@@ -63,4 +70,4 @@ def simulate_in_twin(
             f"{outcome.message} at {where} ({outcome.status} in {outcome.program} line "
             f"{outcome.line}): " + " / ".join(world.console[-4:])
         )
-    return text, stopped
+    return text, stopped, list(world.console)

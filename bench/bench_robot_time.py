@@ -35,7 +35,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wirecal.app.twin_runs import measure_in_twin  # noqa: E402
-from wirecal.gen.vplus.program import GenOptions  # noqa: E402
+from wirecal.gen.request import GenRequest  # noqa: E402
 from wirecal.solver import montecarlo  # noqa: E402
 from wirecal.solver.accuracy import workspace  # noqa: E402
 from wirecal.solver.formats.log import load_measurements, read_log  # noqa: E402
@@ -60,7 +60,7 @@ VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"
 def twin_time_s(robot, plan, run: RunParameters, truth: dict[str, float]) -> tuple[float, float]:
     """Robot time from the twin's log (last t_s plus its sampling), and the twin's clock."""
     with tempfile.TemporaryDirectory() as folder:
-        r = measure_in_twin(robot, plan, truth, Path(folder), options=GenOptions(run=run), seed=1)
+        r = measure_in_twin(robot, plan, truth, Path(folder), request=GenRequest(run=run), seed=1)
         if r.run is None or r.run.status != "completed":
             raise SystemExit(f"the twin's run did not complete: {r.run}")
         last = read_log(r.log).readings[-1]
@@ -76,7 +76,7 @@ def twin_accuracy(robot, plan, run: RunParameters, truth: dict[str, float], tria
     for seed in range(trials):
         with tempfile.TemporaryDirectory() as folder:
             r = measure_in_twin(
-                robot, plan, truth, Path(folder), options=GenOptions(run=run), seed=100 + seed
+                robot, plan, truth, Path(folder), request=GenRequest(run=run), seed=100 + seed
             )
             result = solve(robot, plan, load_measurements(r.log, plan, robot))
         for method, errs in out.items():

@@ -16,8 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.app.compare import controller_solve
-from wirecal.app.twin_runs import measure_in_twin
-from wirecal.gen.vplus.program import module_text
+from wirecal.app.twin_runs import generate, measure_in_twin
 from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.formats.log import load_measurements, parse_log
 from wirecal.solver.formats.plan_file import load_plan
@@ -55,13 +54,13 @@ def random_truths(robot, plan, text: str, disk: Path, seeds=range(12)) -> dict[s
 def main() -> None:
     robot = load_robot(VIPER / "robot.toml")
     plan = load_plan(VIPER / "paper_plan.toml", robot)
-    text = module_text(robot, plan)
+    (text,) = generate(robot, plan).values()
     t0 = time.perf_counter()
     parse_module(text, "WIRECAL.V2")
     t_parse = time.perf_counter() - t0
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
-        result = measure_in_twin(robot, plan, TRUTH, Path(tmp), seed=1, text=text)
+        result = measure_in_twin(robot, plan, TRUTH, Path(tmp), {"WIRECAL.V2": text}, seed=1)
         t_run = time.perf_counter() - t0
         assert result.run.status == "completed", result.run
         m = load_measurements(result.log, plan, robot)

@@ -25,8 +25,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wirecal.app.demo import run_demo  # noqa: E402
-from wirecal.app.twin_runs import measure_ur_in_twin  # noqa: E402
-from wirecal.gen.urscript.program import scripts  # noqa: E402
+from wirecal.app.twin_runs import generate, measure_in_twin  # noqa: E402
 from wirecal.solver import montecarlo  # noqa: E402
 from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
@@ -63,16 +62,16 @@ def main() -> None:
     )
 
     print("\nThe URScript chain in the twin (one core)")
-    texts = scripts(robot, plan)
+    texts = generate(robot, plan)
     truth = random_errors(robot, 1.0, np.random.default_rng([1, 1]))
     times = []
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(5):
             t0 = time.perf_counter()
-            run = measure_ur_in_twin(robot, plan, truth, Path(tmp) / str(k), texts=texts, seed=k)
+            run = measure_in_twin(robot, plan, truth, Path(tmp) / str(k), texts, seed=k)
             times.append(time.perf_counter() - t0)
-            assert run.received.complete
-        clock = run.programs.world.clock
+            assert run.complete
+        clock = run.world.clock
         print(
             f"  wc_mount + wc_run, {plan.n_points} points, through wirecal receive: "
             f"{1e3 * np.median(times):.0f} ms (median of 5) for {clock:.0f} s of robot time"

@@ -7,7 +7,11 @@ import click
 from wirecal.app.demo import run_demo
 from wirecal.app.progress import ProgressBar
 from wirecal.cli.main import user_errors
-from wirecal.cli.options import NON_NEGATIVE, SEED
+from wirecal.cli.options import SEED, number
+from wirecal.solver.identify import DEFAULT_OMEGA
+
+MAX_SCALE = DEFAULT_OMEGA / 2
+"""The largest --scale: true errors within half the identification's bound Ω."""
 
 
 @click.command()
@@ -29,10 +33,12 @@ from wirecal.cli.options import NON_NEGATIVE, SEED
 )
 @click.option(
     "--scale",
-    type=NON_NEGATIVE,
+    type=number(0.0, MAX_SCALE),
     default=1.0,
     show_default=True,
-    help="True errors are drawn within ±SCALE deg/mm.",
+    help="True errors are drawn within ±SCALE deg/mm: at most half the bound Ω (5) of the "
+    "identification; larger ones reach it and the gate refuses them, as it would a real "
+    "arm's robot file that far off.",
 )
 @click.option(
     "--robot",

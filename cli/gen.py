@@ -32,8 +32,8 @@ _G = GenRequest()
     "out_dir",
     required=True,
     type=click.Path(file_okay=False),
-    help="Folder for the programs (created if missing): WIRECAL.V2 (V+) or "
-    "wc_mount/wc_check/wc_run.script (URScript).",
+    help="Folder for the programs (created if missing): WIRECAL.V2 (V+), "
+    "wc_mount/wc_check/wc_run.script (URScript) or WIRECAL.mod (RAPID).",
 )
 @click.option(
     "--language",
@@ -59,8 +59,9 @@ _G = GenRequest()
     "--speed",
     type=number(),
     help=f"V+: the highest program speed, % of full (default {_D.speed_pct:g}); each move's "
-    "SPEED is lower where the wire's limits (robot file, [encoder]) ask for it. URScript: "
-    f"the one speed of every move (default {PAPER_RUN.speed_pct:g}).",
+    "SPEED is lower where the wire's limits (robot file, [encoder]) ask for it. RAPID: "
+    f"the same, default {PAPER_RUN.speed_pct:g}. URScript: the one speed of every move "
+    f"(default {PAPER_RUN.speed_pct:g}).",
 )
 @click.option(
     "--accel",
@@ -73,7 +74,7 @@ _G = GenRequest()
     "--settle-s",
     type=number(),
     help=f"V+: a fixed wait after each stop before the settle rule (s, default {_D.settle_s:g}; "
-    "the paper waited 3 s). URScript: the wait before reading (default "
+    "the paper waited 3 s). URScript and RAPID: the wait before reading (default "
     f"{PAPER_RUN.settle_s:g}).",
 )
 @click.option(
@@ -152,7 +153,7 @@ _G = GenRequest()
     help="LF line ends instead of CRLF (ACE writes V+ files with CRLF; whether LOAD "
     "accepts LF-only files is not confirmed).",
 )
-@click.option("--force", is_flag=True, help="Replace an existing WIRECAL.V2.")
+@click.option("--force", is_flag=True, help="Replace existing programs of the same names.")
 @user_errors
 def gen(
     robot,
@@ -178,12 +179,14 @@ def gen(
     lf,
     force,
 ):
-    """Write the controller programs that run PLAN: a V+/eV+ module or URScript programs.
+    """Write the controller programs that run PLAN: V+/eV+, URScript or ABB RAPID.
 
     URScript (--language urscript, or [controller] language in the robot file): wc_mount,
     wc_check and wc_run (the measurement; sends the log to 'wirecal receive' on --host,
     --port and mirrors it in the log tab; at its end wc_solve, the step-by-step solver on
-    the controller, unless --no-solver), each a .script file; the rest below is V+.
+    the controller, unless --no-solver), each a .script file. RAPID (ABB): WIRECAL.mod,
+    whose run writes HOME:/WIRECAL.LOG and shows each row on the FlexPendant (no patch or
+    validation programs yet). The rest below is V+.
 
     WIRECAL.V2 holds wc.mount (move to θ0, mount the encoder), wc.check (live counts),
     wc.run (the measurement; writes the log), wc.solve and wc.solve2 (identification on

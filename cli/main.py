@@ -46,9 +46,12 @@ gc.set_threshold(*GC_THRESHOLD)
 
 import click  # noqa: E402 - after the thread settings
 
-from wirecal import __version__  # noqa: E402
-from wirecal.cli.help_text import HELP_TEXT  # noqa: E402
-from wirecal.solver.errors import WirecalError, first_problems  # noqa: E402
+from wirecal.cli.interrupt import quiet_start, stop_cleanly  # noqa: E402
+
+with quiet_start():  # Ctrl-C while starting: no traceback
+    from wirecal import __version__
+    from wirecal.cli.help_text import HELP_TEXT
+    from wirecal.solver.errors import WirecalError, first_problems
 
 MAX_ERROR_LINES = 40
 """Most ``error:`` lines a command prints; a count stands for the rest."""
@@ -63,9 +66,14 @@ def user_errors(func):
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         try:
-            return func(*args, **kwargs)
+            with stop_cleanly():
+                return func(*args, **kwargs)
         except WirecalError as exc:
             problems, status = exc.problems, exc.exit_status
+        except BrokenPipeError:  # the reader (| head) has what it wants: not an error
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())  # the exit's flush writes nowhere
+            sys.exit(0)
         except OSError as exc:
             problems, status = [f"{exc.filename or 'file'}: {exc.strerror or exc}"], 2
         for line in first_problems(problems, MAX_ERROR_LINES):
@@ -119,7 +127,8 @@ class LazyGroup(click.Group):
         """Return the command, importing a lazy one on first use."""
         if cmd_name not in self.commands and cmd_name in self.lazy:
             module, _, attribute = self.lazy[cmd_name][0].partition(":")
-            self.add_command(getattr(importlib.import_module(module), attribute), cmd_name)
+            with quiet_start():  # importing numpy, scipy, matplotlib: Ctrl-C ends it quietly
+                self.add_command(getattr(importlib.import_module(module), attribute), cmd_name)
         return self.commands.get(cmd_name)
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
@@ -153,7 +162,8 @@ def main() -> None:
         wirecal psi examples/viper_s650/robot.toml examples/viper_s650/paper_plan.toml
 
     Exit status: 0 done; 1 a run or program stopped, or a check asked for failed;
-    2 bad input (a file, option or log to fix: the error lines say which).
+    2 bad input (a file, option or log to fix: the error lines say which); 3 the
+    plausibility gate refused the identification (nothing written).
     """
 
 
@@ -171,7 +181,7 @@ for _name, _target, _summary in (
     (
         "gen",
         "wirecal.cli.gen:gen",
-        "Write the controller programs that run PLAN: a V+/eV+ module or URScript programs.",
+        "Write the controller programs that run PLAN: V+/eV+, URScript or ABB RAPID.",
     ),
     (
         "export-urdf",

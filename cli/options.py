@@ -24,6 +24,10 @@ class Number(click.FloatRange):
             self.fail(f"{value!r} is not a finite number", param, ctx)
         return super().convert(rv, param, ctx)
 
+    def _describe_range(self) -> str:
+        """Describe the bounds in the help; nothing for a number without any."""
+        return "" if self.min is None and self.max is None else super()._describe_range()
+
 
 def number(
     min: float | None = None,
@@ -41,11 +45,37 @@ NON_NEGATIVE = number(0.0)  # noises, margins, scales: ≥ 0
 SEED = click.IntRange(0, 2**63 - 1)  # numpy's generators take non-negative seeds
 
 
+class OutputFile(click.Path):
+    """An output file's name: not a folder, and not ``-``.
+
+    ``-`` means standard input or output elsewhere; an output written atomically beside
+    its companions is a file, so ``-o -`` is refused rather than written to a file named
+    ``-``.
+    """
+
+    def __init__(self) -> None:
+        super().__init__(dir_okay=False)
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        """Return the name, failing for ``-``."""
+        if value == "-":
+            self.fail(
+                "'-' (standard output) cannot take this output: it is written as a file "
+                "(with the files beside it); give a file name",
+                param,
+                ctx,
+            )
+        return super().convert(value, param, ctx)
+
+
+OUTPUT_FILE = OutputFile()
+"""The type of every ``-o, --output FILE`` option."""
+
 PATCH_OUTPUT = click.option(
     "-o",
     "--output",
     "patch_path",
-    type=click.Path(dir_okay=False),
+    type=OUTPUT_FILE,
     help="Write the patch (TOML) here, and the SPEC table beside it.",
 )
 """``-o PATCH`` of the commands that identify parameters (solve, fit)."""
@@ -67,3 +97,16 @@ ROBOT = click.argument("robot", type=click.Path(dir_okay=False))
 
 PLAN = click.argument("plan", type=click.Path(dir_okay=False))
 """The plan file argument (simulate, solve)."""
+
+
+def positional(value: str | None, alias: str | None, name: str, option: str) -> str:
+    """Return a positional argument given either in place or by its older option spelling.
+
+    ``receive`` and ``validate`` took the robot file and plan as options; they are
+    positionals now, like every other command's, and the options are kept as aliases.
+    """
+    if value is not None and alias is not None and value != alias:
+        raise click.UsageError(f"{name} given twice ({value} and {option} {alias}); give it once")
+    if value is None and alias is None:
+        raise click.UsageError(f"missing {name} (or its older spelling {option} {name})")
+    return value if value is not None else alias  # type: ignore[return-value]

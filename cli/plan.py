@@ -7,7 +7,7 @@ import numpy as np
 
 from wirecal.app.progress import ProgressBar
 from wirecal.cli.main import print_json, user_errors
-from wirecal.cli.options import SEED, number
+from wirecal.cli.options import OUTPUT_FILE, SEED, number
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.plan_file import plan_to_toml
@@ -24,6 +24,8 @@ def _joints(value: str | None, n: int) -> np.ndarray | None:
         return None
     try:
         q = np.array([float(x) for x in value.replace(" ", "").split(",")])
+        if not np.all(np.isfinite(q)):  # nan, inf: no angle
+            raise ValueError
     except ValueError:
         raise WirecalError(
             f'--theta0 {value!r}: give {n} joint angles in degrees, e.g. "0,-90,210,-90,0,-90"'
@@ -45,7 +47,7 @@ def _tried(d: Design, theta0_deg: np.ndarray | None) -> str:
 @click.option(
     "-o",
     "--output",
-    type=click.Path(dir_okay=False),
+    type=OUTPUT_FILE,
     help="Write the plan (TOML) here; without it, only the summary is shown.",
 )
 @click.option(

@@ -8,7 +8,7 @@ import click
 
 from wirecal.app.receive import HANDSHAKE_S, receive, summary
 from wirecal.cli.main import user_errors
-from wirecal.cli.options import POSITIVE
+from wirecal.cli.options import OUTPUT_FILE, POSITIVE, positional
 from wirecal.lang.registry import language
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
@@ -17,18 +17,18 @@ from wirecal.solver.formats.run_token import NO_KEY, run_token
 
 
 @click.command("receive")
+@click.argument("robot", type=click.Path(dir_okay=False), required=False)
+@click.argument("plan", type=click.Path(dir_okay=False), required=False)
 @click.option(
     "--robot",
-    required=True,
+    "robot_alias",
     type=click.Path(dir_okay=False),
-    help="The robot file the programs were generated from (its key, host and port).",
+    help="ROBOT, as older versions took it.",
 )
 @click.option(
-    "--plan", required=True, type=click.Path(dir_okay=False), help="The plan being measured."
+    "--plan", "plan_alias", type=click.Path(dir_okay=False), help="PLAN, as older versions took it."
 )
-@click.option(
-    "-o", "--output", required=True, type=click.Path(dir_okay=False), help="The log to write."
-)
+@click.option("-o", "--output", required=True, type=OUTPUT_FILE, help="The log to write.")
 @click.option(
     "--port",
     type=click.IntRange(1, 65535),
@@ -49,9 +49,11 @@ from wirecal.solver.formats.run_token import NO_KEY, run_token
 )
 @click.option("--force", is_flag=True, help="Replace an existing log (never the robot or plan).")
 @user_errors
-def receive_cmd(robot, plan, output, port, host, timeout_s, force):
+def receive_cmd(robot, plan, robot_alias, plan_alias, output, port, host, timeout_s, force):
     """Receive a measurement log from a robot program over TCP.
 
+    ROBOT is the robot file the programs were generated from (its key, host and port),
+    PLAN the plan being measured.
     Listens on HOST:PORT for the robot program of PLAN, which must first present the
     run's token (derived from the robot file's [controller] key and the plan, as in the
     generated program); other connections are refused or closed without ending the run.
@@ -62,6 +64,8 @@ def receive_cmd(robot, plan, output, port, host, timeout_s, force):
     OUTPUT.partial keeps every line received (a wirecal log: solve can read it) and what
     is missing is named (exit status 1).
     """
+    robot = positional(robot, robot_alias, "ROBOT", "--robot")
+    plan = positional(plan, plan_alias, "PLAN", "--plan")
     rob = load_robot(robot)
     pl = load_plan(plan, rob)
     lang = language(rob.controller.language)

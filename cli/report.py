@@ -10,6 +10,7 @@ import click
 from wirecal.app.gate import gate
 from wirecal.app.report import Validation, render_report
 from wirecal.cli.main import user_errors
+from wirecal.cli.options import OUTPUT_FILE
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import read_log
@@ -26,9 +27,7 @@ from wirecal.solver.validation_analysis import config_discrepancy, plane_residua
 @click.argument("robot", type=click.Path(dir_okay=False))
 @click.argument("plan", type=click.Path(dir_okay=False))
 @click.argument("log", type=click.Path(dir_okay=False))
-@click.option(
-    "-o", "--output", required=True, type=click.Path(dir_okay=False), help="The HTML file to write."
-)
+@click.option("-o", "--output", required=True, type=OUTPUT_FILE, help="The HTML file to write.")
 @click.option(
     "--config",
     "config_logs",
@@ -59,6 +58,11 @@ from wirecal.solver.validation_analysis import config_discrepancy, plane_residua
     is_flag=True,
     help="Report a result the plausibility gate refuses; the report says so.",
 )
+@click.option(
+    "--partial",
+    is_flag=True,
+    help="Report an incomplete log from the points that are there (as solve --partial).",
+)
 @click.option("--force", is_flag=True, help="Replace an existing report.")
 @user_errors
 def report(
@@ -71,6 +75,7 @@ def report(
     controller,
     truth_file,
     accept_implausible,
+    partial,
     force,
 ):
     """Write a self-contained HTML report of a calibration.
@@ -85,20 +90,21 @@ def report(
     inputs = [robot, plan, log, *(config_logs or ()), *(plane_logs or ())]
     inputs += [truth_file] if truth_file else []
     with Outputs([output], force=force, inputs=inputs) as out:
-        html = _report_html(
-            robot, plan, log, config_logs, plane_logs, controller, truth_file, accept_implausible
-        )
+        logs, flags = (config_logs, plane_logs), (accept_implausible, partial)
+        html = _report_html(robot, plan, log, logs, controller, truth_file, flags)
         out.put(output, html)
     click.echo(f"wrote {output}")
 
 
-def _report_html(
-    robot, plan, log, config_logs, plane_logs, controller, truth_file, accept_implausible
-) -> str:
+def _report_html(robot, plan, log, logs, controller, truth_file, flags) -> str:
+    """Solve and render; ``logs``: (config, plane), ``flags``: (accept, partial)."""
+    (config_logs, plane_logs), (accept_implausible, partial) = logs, flags
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
     parsed = read_log(log)
-    result = solve(rb, pl, check_log(parsed, pl, rb))
+    result = solve(rb, pl, check_log(parsed, pl, rb), partial=partial)
+    for warning in result.unchecked:
+        click.echo(f"warning: {warning}", err=True)
     verdict = gate(result, result.recommended, accept=accept_implausible)
     for finding in verdict.findings:
         click.echo(f"warning: implausible result accepted: {finding.message}", err=True)

@@ -10,8 +10,9 @@ import click
 import numpy as np
 
 from wirecal.cli.main import user_errors
-from wirecal.cli.options import NON_NEGATIVE, PLAN, ROBOT, SEED, number
+from wirecal.cli.options import NON_NEGATIVE, OUTPUT_FILE, PLAN, ROBOT, SEED, number
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.capture import MIN_TERMINAL, fold
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import (
@@ -21,6 +22,7 @@ from wirecal.solver.formats.robot_file import (
     load_robot,
 )
 from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
+from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import (
     IDEAL_ENCODER,
     MAX_DRIFT_MM_PER_H,
@@ -53,7 +55,7 @@ def _slip(
     "--output",
     "log_path",
     required=True,
-    type=click.Path(dir_okay=False),
+    type=OUTPUT_FILE,
     help="Log file to write (the format the controller program writes).",
 )
 @click.option(
@@ -128,8 +130,23 @@ def _slip(
 @click.option(
     "--controller",
     is_flag=True,
-    help="Run the generated V+ programs (wc.mount, wc.run) in the digital twin: "
-    "the log is written by the very program a user would load.",
+    help="Run the generated programs of the robot file's language (V+, URScript or "
+    "RAPID) in the digital twin: the log is written by the very program a user would load.",
+)
+@click.option(
+    "--console",
+    "console_path",
+    type=OUTPUT_FILE,
+    help="With --controller: also write the twin's console (the V+ terminal with "
+    "--echo-log, URScript's log tab, RAPID's FlexPendant) as an operator would copy it, "
+    "to rehearse pasting it into 'wirecal solve ROBOT PLAN -'.",
+)
+@click.option(
+    "--width",
+    type=click.IntRange(MIN_TERMINAL, 1000),
+    default=80,
+    show_default=True,
+    help="The console's width in columns: longer lines are broken there, as a terminal does.",
 )
 @click.option(
     "--ideal-encoder",
@@ -167,6 +184,8 @@ def simulate(
     stop_after,
     counter_start,
     controller,
+    console_path,
+    width,
     ideal_encoder,
     encoder_scale_ppm,
     drift_mm_per_h,
@@ -201,34 +220,34 @@ def simulate(
         )
     truth_path = Path(truth_out) if truth_out else Path(log_path).with_suffix(".truth.toml")
     inputs = [robot, plan, *([errors_file] if errors_file else [])]
-    with Outputs([log_path, truth_path], force=force, inputs=inputs) as out:
+    _check_twin_options(controller, console_path, outliers, stop_after)
+    outputs = [log_path, truth_path, *([console_path] if console_path else [])]
+    with Outputs(outputs, force=force, inputs=inputs) as out:
         if errors_file:
             errors = load_errors(errors_file, rb)
         else:
             errors = random_errors(
                 rb, 1.0 if scale is None else scale, np.random.default_rng([seed, 1])
             )
-        if ideal_encoder and (encoder_scale_ppm is not None or drift_mm_per_h):
-            raise WirecalError("--ideal-encoder excludes --encoder-scale-ppm and --drift-mm-per-h")
-        true_encoder = (
-            IDEAL_ENCODER
-            if ideal_encoder
-            else realistic_encoder(
-                rb.encoder, np.random.default_rng([seed, 4]), encoder_scale_ppm, drift_mm_per_h
-            )
-        )
+        true_encoder = _true_encoder(rb, seed, ideal_encoder, encoder_scale_ppm, drift_mm_per_h)
         stopped = None
         if controller:
-            if outliers or stop_after is not None:
-                raise WirecalError(
-                    "--outliers and --stop-after apply to the direct simulation; "
-                    "the twin injects its own faults (see the README)"
-                )
             from wirecal.app.twin_simulate import simulate_in_twin  # the twin only when asked for
 
-            text, stopped = simulate_in_twin(
-                rb, pl, errors, seed, noise_mm, samples, slip, counter_start, true_encoder
+            text, stopped, console = simulate_in_twin(
+                rb,
+                pl,
+                errors,
+                seed,
+                noise_mm,
+                samples,
+                slip,
+                counter_start,
+                true_encoder,
+                echo=bool(console_path),
             )
+            if console_path:
+                out.put(console_path, fold(console, width))
         else:
             text = simulate_log(
                 rb,
@@ -248,10 +267,37 @@ def simulate(
             truth_path,
             truth_text(rb, errors, None if errors_file else seed) + _encoder_note(true_encoder),
         )
-    click.echo(f"wrote {log_path} ({pl.n_points} points) and the truth to {truth_path}")
+    points = sum(line.startswith("point,") for line in text.splitlines())  # as logged
+    click.echo(f"wrote {log_path} ({points} points) and the truth to {truth_path}")
     if stopped:
         click.echo(f"the controller program stopped: {stopped}", err=True)
         sys.exit(1)
+
+
+def _check_twin_options(
+    controller: bool, console_path: str | None, outliers: int, stop_after: int | None
+) -> None:
+    """Refuse options of the direct simulation with --controller, and --console without."""
+    if console_path and not controller:
+        raise WirecalError("--console shows the twin's console: give --controller too")
+    if controller and (outliers or stop_after is not None):
+        raise WirecalError(
+            "--outliers and --stop-after apply to the direct simulation; "
+            "in the twin, give --slip STEP:MM (the fault the twin injects)"
+        )
+
+
+def _true_encoder(
+    rb: Robot, seed: int, ideal: bool, scale_ppm: float | None, drift_mm_per_h: float
+) -> EncoderTruth:
+    """Return the simulated encoder: ideal, or realistic with the scale and drift given."""
+    if ideal and (scale_ppm is not None or drift_mm_per_h):
+        raise WirecalError("--ideal-encoder excludes --encoder-scale-ppm and --drift-mm-per-h")
+    if ideal:
+        return IDEAL_ENCODER
+    return realistic_encoder(
+        rb.encoder, np.random.default_rng([seed, 4]), scale_ppm, drift_mm_per_h
+    )
 
 
 def _encoder_note(truth: EncoderTruth) -> str:

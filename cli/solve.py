@@ -41,6 +41,7 @@ from wirecal.solver.solve import solve as solve_api
 if TYPE_CHECKING:
     from wirecal.app.compare import ControllerComparison
     from wirecal.solver.solve import SolveResult
+    from wirecal.solver.verdict import Plausibility
 
 
 @click.command()
@@ -54,7 +55,8 @@ if TYPE_CHECKING:
     default="all",
     show_default=True,
     help="Which identification to run and show; 'controller' adds the generated "
-    "V+ solver run in the digital twin beside the Python reference.",
+    "controller solver (V+, URScript or RAPID: the robot file's language) run in the "
+    "digital twin beside the Python reference.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option(
@@ -140,7 +142,7 @@ def solve(
     them side by side, with residuals and the predicted tool-point accuracy after
     calibration. With -o, writes the recommended method's patch (or the one --method
     names) and a table of values for the controller. A result that fails the plausibility
-    gate (see the README) is refused with exit status 3 and nothing written.
+    gate (docs/accuracy.md) is refused with exit status 3 and nothing written.
     """
     rb = load_robot(robot)
     if rb.controller_problem():
@@ -167,10 +169,8 @@ def solve(
         verdict = gate(
             result, chosen, accept=accept_implausible, noise_mm=noise_mm, omega_default=omega
         )
-        for finding in verdict.findings:
-            click.echo(f"warning: implausible result accepted: {finding.message}", err=True)
-        for warning in result.unchecked:
-            click.echo(f"warning: {warning}", err=True)
+        for line in _warnings(result, verdict):
+            click.echo(f"warning: {line}", err=True)
         ctl = _controller(result) if method == "controller" else None
         if patch_path:
             put_patch(
@@ -199,6 +199,15 @@ def solve(
     if patch_path:
         others = " and ".join(str(p) for p in companion_paths(rb, patch_path))
         click.echo(f"wrote {patch_path} ({chosen}) and {others}", err=as_json)
+
+
+def _warnings(result: SolveResult, verdict: Plausibility) -> list[str]:
+    """Return what the user must know of a result that is written or shown."""
+    lines = [f"implausible result accepted: {f.message}" for f in verdict.findings]
+    lines += list(result.unchecked)
+    if result.drift is not None and result.drift.warning:
+        lines.append(f"{result.measurements.source}: {result.drift.warning}")
+    return lines
 
 
 def _controller(result: SolveResult) -> ControllerComparison:

@@ -10,6 +10,7 @@ import numpy as np
 
 from wirecal.app.urdf_import import ImportOptions, urdf_robot_file
 from wirecal.cli.main import user_errors
+from wirecal.cli.options import OUTPUT_FILE
 from wirecal.lang.registry import default_language, languages
 from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
@@ -37,17 +38,55 @@ def _numbers(count: int | None, what: str):
     return parse
 
 
+def _output(what: str):
+    """Return the ``-o, --output`` option (``--out``: the older spelling) for ``what``."""
+    return click.option(
+        "-o",
+        "--output",
+        "--out",
+        "out",
+        required=True,
+        type=OUTPUT_FILE,
+        help=f"{what} to write (--out: the older spelling).",
+    )
+
+
+MAX_WIRE_POINT_MM = 2000.0
+"""A wire fixture farther than this from the tip link's origin is not on the tip link."""
+
+
+def _wire_point(ctx, param, value: str | None):
+    """Read --wire-point-mm: three numbers in mm, refusing metres and far-off points."""
+    point = _numbers(3, "three numbers X,Y,Z (mm)")(ctx, param, value)
+    if point is None:
+        return None
+    largest = max(map(abs, point))
+    if largest > MAX_WIRE_POINT_MM:
+        raise click.BadParameter(
+            f"{value!r}: {largest:g} mm from the tip link's origin; the wire's fixture is on "
+            f"the tip link, within {MAX_WIRE_POINT_MM:g} mm of it: give X,Y,Z in mm"
+        )
+    if 0 < largest < 1:
+        raise click.BadParameter(
+            f"{value!r}: every coordinate under 1 mm: that looks like metres; give X,Y,Z in "
+            "mm (e.g. -60,0,50)"
+        )
+    return point
+
+
 @click.command("import-urdf")
 @click.argument("urdf", type=click.Path(dir_okay=False))
 @click.option("--tip", required=True, help="Link the wire is attached to (the chain's end).")
-@click.option("--base", default=None, help="The chain's first link (default: the root link).")
 @click.option(
-    "-o", "--out", "out", required=True, type=click.Path(dir_okay=False), help="Robot file."
+    "--base",
+    default=None,
+    help="The chain's first link (default: the root link of the tree --tip is in).",
 )
+@_output("Robot file")
 @click.option("--name", default=None, help="Robot name (default: the URDF's robot name).")
 @click.option(
     "--wire-point-mm",
-    callback=_numbers(3, "three numbers X,Y,Z (mm)"),
+    callback=_wire_point,
     metavar="X,Y,Z",
     help="The wire's attachment point in the tip link's frame, X,Y,Z in mm (default: the "
     "tip link's origin; write --wire-point-mm=-50,0,40 when X is negative).",
@@ -135,9 +174,7 @@ def _tol(parallel_tol_deg: float | None) -> float:
 @click.command("export-urdf")
 @click.argument("robot", type=click.Path(dir_okay=False))
 @click.argument("patch", type=click.Path(dir_okay=False), required=False)
-@click.option(
-    "-o", "--out", "out", required=True, type=click.Path(dir_okay=False), help="URDF to write."
-)
+@_output("URDF")
 @click.option(
     "--from",
     "source",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from wirecal.cli.main import print_json, user_errors
+from wirecal.cli.options import positional
 from wirecal.solver.counter import Counter
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.robot_file import load_robot
@@ -25,31 +26,50 @@ def analyse(kind: str, path: str, counter: Counter | None) -> Stats:
     if counter is None:
         raise WirecalError(
             f"{path}: a configuration log's counts wrap at the robot's counter width: "
-            "give --robot ROBOT.toml"
+            "give the robot file: wirecal validate ROBOT.toml configuration …"
         )
     return config_discrepancy(log, counter)
 
 
+KINDS = ("configuration", "plane")
+
+
+def _arguments(args: tuple[str, ...]) -> tuple[str | None, str, str, str | None]:
+    """Split ``[ROBOT] KIND BEFORE [AFTER]`` into its parts."""
+    if args and args[0] in KINDS:
+        robot, rest = None, args
+    else:
+        robot, rest = (args[0] if args else None), args[1:]
+    if len(rest) not in (2, 3) or rest[0] not in KINDS:
+        raise click.UsageError(
+            "give [ROBOT] KIND BEFORE [AFTER]: KIND is configuration or plane, BEFORE and "
+            "AFTER the validation logs"
+        )
+    return robot, rest[0], rest[1], rest[2] if len(rest) == 3 else None
+
+
 @click.command()
-@click.argument("kind", type=click.Choice(["configuration", "plane"]))
-@click.argument("before", type=click.Path(dir_okay=False))
-@click.argument("after", type=click.Path(dir_okay=False), required=False)
+@click.argument("args", nargs=-1, metavar="[ROBOT] KIND BEFORE [AFTER]")
 @click.option(
     "--robot",
-    "robot_file",
+    "robot_alias",
     type=click.Path(dir_okay=False),
-    help="The robot file (configuration logs: the encoder's counter width).",
+    help="ROBOT, as older versions took it.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print the figures as JSON.")
 @user_errors
-def validate(kind, before, after, robot_file, as_json):
+def validate(args, robot_alias, as_json):
     """Compute the validation metric of a log from wc.vcfg or wc.vpln (paper §3.6).
 
-    configuration: per pose, the largest difference among the wire lengths of its four
-    configurations. plane: the absolute residuals of the least-squares plane through the
-    probed points. With a second log (after calibration), also the reduction.
+    KIND configuration: per pose, the largest difference among the wire lengths of its
+    four configurations (ROBOT, the robot file, gives the encoder's counter width).
+    KIND plane: the absolute residuals of the least-squares plane through the probed
+    points. With a second log AFTER (after calibration), also the reduction.
     """
-    counter = load_robot(robot_file).encoder.counter if robot_file else None
+    robot, kind, before, after = _arguments(args)
+    if robot_alias is not None:
+        robot = positional(robot, robot_alias, "ROBOT", "--robot")
+    counter = load_robot(robot).encoder.counter if robot else None
     runs = {"before": analyse(kind, before, counter)}
     if after:
         runs["after"] = analyse(kind, after, counter)

@@ -1,9 +1,9 @@
-"""What every controller language's programs share: targets, limits and the run's steps.
+"""What every controller language's programs share: joint targets and the run's steps.
 
-A generated program moves to literal joint targets only; :func:`check_limits` refuses,
-before anything is written, a target within the margin of a joint limit, and
-:func:`run_steps` lists the measurement run's steps, via points and calibration points in
-plan order, each target written by the backend's own literal function.
+A generated program moves to literal joint targets only (checked before rendering by
+:func:`wirecal.gen.preflight.preflight`); :func:`run_steps` lists the measurement run's
+steps, via points and calibration points in plan order, each target written by the
+backend's own literal function.
 """
 
 from __future__ import annotations
@@ -12,7 +12,6 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 
@@ -21,29 +20,6 @@ def joint_literal(x: float) -> str:
     """Write a joint angle as the operator reads it: up to 4 decimals, no trailing zeros."""
     s = f"{x:.4f}".rstrip("0").rstrip(".")
     return "0" if s in ("-0", "") else s
-
-
-def check_limits(robot: Robot, plan: Plan, margin_deg: float) -> None:
-    """Refuse to generate motion to any configuration within ``margin_deg`` of a limit."""
-    lo, hi = robot.limits_deg(margin_deg, body=False)
-    problems = []
-
-    def check(q, where):
-        for j in np.flatnonzero((q < lo) | (q > hi)):
-            problems.append(
-                f"{plan.source}: {where}: joint {j + 1} = {joint_literal(q[j])} deg is within "
-                f"{margin_deg:g} deg of its limits [{robot.joint_min_deg[j]:g}, "
-                f"{robot.joint_max_deg[j]:g}]; move the point or lower --margin"
-            )
-
-    check(plan.theta0_deg, "theta0_deg")
-    for j, s in enumerate(plan.steps, 1):
-        for i, q in enumerate(s.via_deg, 1):
-            check(q, f"step {j} ({s.parameter}) via point {i}")
-        for i, q in enumerate(s.points_deg, 1):
-            check(q, f"step {j} ({s.parameter}) point {i}")
-    if problems:
-        raise WirecalError(problems)
 
 
 def name_problems(robot: Robot, forbidden: str, strings: str) -> list[str]:

@@ -46,6 +46,8 @@ class Language:
     interface_notes: ClassVar[Mapping[str, str]] = {}  # encoder interface → how it is read
     first_channel: ClassVar[Mapping[str, int]] = {}  # interface → its first channel (default 0)
     patch_companion: ClassVar[str | None] = None  # suffix of its file beside a patch, if any
+    # the companion's per-joint vectors, where it holds them: (table, keys); None: not read back
+    companion_vectors: ClassVar[tuple[str, tuple[str, ...]] | None] = None
     default: ClassVar[bool] = False  # the language of a robot file without [controller]
     valid_examples: ClassVar[tuple[Example, ...]] = ()  # conformance: snippets lint accepts
     invalid_examples: ClassVar[tuple[Example, ...]] = ()  # conformance: snippets lint refuses

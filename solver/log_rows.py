@@ -81,6 +81,7 @@ def read_rows(log: Log, plan: Plan, robot: Robot, tol: Tolerances, problems: lis
             rows.seen[key] = r.line
             if r.kind == "reference":
                 _check_reference(r)
+                _check_spread(r, tol, abs(log.mm_per_count), _REFERENCE_MOVED)
                 rows.references[r.index] = r
                 continue
             k = _check_reading(r, plan, robot, tol, q_plan, position, abs(log.mm_per_count))
@@ -178,13 +179,25 @@ def _check_reading(
             f"{expected[j]:g} (tolerance {tol.joint_deg:g}): the robot was not where the "
             "plan puts it"
         )
+    _check_spread(
+        r,
+        tol,
+        mm_per_count,
+        f"the robot was still moving; lengthen the settle time and repeat step {r.step}",
+    )
+    return k
+
+
+_REFERENCE_MOVED = "the wire tip moved in its nest; seat it again and repeat the reference step"
+
+
+def _check_spread(r: Reading, tol: Tolerances, mm_per_count: float, cause: str) -> None:
+    """Raise :class:`_BadRow` when the reading's samples spread beyond ``tol.spread_mm``."""
     if r.spread > tol.spread_mm / mm_per_count:
         raise _BadRow(
             f"spread of {r.samples} samples is {r.spread:g} counts "
-            f"({r.spread * mm_per_count:.3f} mm > {tol.spread_mm:g} mm): the robot was "
-            f"still moving; lengthen the settle time and repeat step {r.step}"
+            f"({r.spread * mm_per_count:.3f} mm > {tol.spread_mm:g} mm): {cause}"
         )
-    return k
 
 
 def _planned_joints(

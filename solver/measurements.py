@@ -274,6 +274,7 @@ def _lengths(
     ]
     ref = first + float(np.mean(zero_diffs or [0.0]))
     distance = counter.difference(rows.counts, ref) * mpc
+    negative = []
     for k in np.flatnonzero(~np.isnan(distance)):
         line = rows.seen[("point", int(rows.step_no[k]), int(rows.index_no[k]))]
         if distance[k] > robot.encoder.range_mm:
@@ -282,8 +283,22 @@ def _lengths(
                 f"the encoder's range {robot.encoder.range_mm:g} mm"
             )
         elif distance[k] < -tol.zero_mm:
-            problems.append(
-                f"{src}:{line}: wire length {distance[k]:.3f} mm is "
-                "negative: is the sign of mm_per_count right?"
-            )
+            negative.append((line, distance[k]))
+    problems += _negative_lengths(negative, src, robot.encoder.counter_bits)
     return distance
+
+
+def _negative_lengths(negative: list[tuple[int, float]], src: str, bits: int) -> list[str]:
+    """One problem per negative wire length, or one for them all when there are many."""
+    if len(negative) < 3:
+        return [
+            f"{src}:{line}: wire length {d:.3f} mm is negative: is the sign of mm_per_count right?"
+            for line, d in negative
+        ]
+    line, d = negative[0]
+    return [
+        f"{src}:{line}: {len(negative)} points read negative wire lengths (the first "
+        f"{d:.3f} mm): the sign of mm_per_count is wrong, or the logged counts wrap sooner "
+        f"than the {bits}-bit counter of the robot file (a filtered 16-bit count wraps at "
+        "±32768: give counter_bits the width the controller logs)"
+    ]

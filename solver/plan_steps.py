@@ -24,7 +24,7 @@ from wirecal.solver.plan_moves import move_ok, reach_ok
 from wirecal.solver.plan_options import PlanOptions, Progress
 from wirecal.solver.plan_tour import tour
 from wirecal.solver.robot import Robot
-from wirecal.solver.sensitivity import PSI_FLOOR, sensitivity
+from wirecal.solver.sensitivity import sensitivity, within_tolerance
 
 
 def isolating(
@@ -33,16 +33,12 @@ def isolating(
     """Return which candidates isolate parameter j from the others still unknown (eq. 18–19).
 
     |Ψ_t| ≤ tol·|Ψ_j| (or below :data:`~wirecal.solver.sensitivity.PSI_FLOOR`) for every
-    other parameter t of ``remaining``, and |Ψ_j| ≥ 0.05.
+    other parameter t of ``remaining`` (the one rule,
+    :func:`~wirecal.solver.sensitivity.within_tolerance`), and |Ψ_j| ≥ 0.05.
     """
     pj = psi[:, col[j]]
     others = [col[t] for t in remaining if t != j]
-    limit = np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
-    iso = (
-        np.all(np.abs(psi[:, others]) <= limit[:, None], axis=1)
-        if others
-        else np.ones(len(pj), bool)
-    )
+    iso = within_tolerance(pj, psi[:, others], opt.tol).all(axis=1)
     return iso & (np.abs(pj) >= 0.05)
 
 

@@ -22,7 +22,9 @@ controller comparison) and refuses, with what to check, when:
   :data:`~wirecal.solver.scale.DRIFT_TOLERANCE_MM_PER_H` even less three of the fit's σ
   (|b| − 3σ_b > tolerance: a sound log is not refused for its noise) — a wire creeping,
   the stand moving, a temperature far from steady: lengths read at different times no
-  longer compare;
+  longer compare. Unless removing it corrects them (``Drift.correctable``: linear, known
+  to the tolerance, at most :data:`~wirecal.solver.scale.DRIFT_REMOVABLE_MM_PER_H`): then
+  it was removed from the lengths and ``wirecal solve`` warns instead;
 * **bound** — an estimate lies on or beyond its bound Ω (the stepwise estimate pinned at
   Ω, the joint estimate beyond it) or beyond :data:`PLAUSIBLE_DEG` / :data:`PLAUSIBLE_MM`
   (a manufactured arm is not that far from its data sheet: the robot file, the mastering or
@@ -37,7 +39,7 @@ from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import Implausible
 from wirecal.solver.identifiability import Identifiability, analyse_jacobian, covariance
 from wirecal.solver.identify import DEFAULT_OMEGA
-from wirecal.solver.scale import DRIFT_TOLERANCE_MM_PER_H
+from wirecal.solver.scale import DRIFT_REMOVABLE_MM_PER_H, DRIFT_TOLERANCE_MM_PER_H
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult, omega_vector
 from wirecal.solver.verdict import (
@@ -105,7 +107,14 @@ def assess(
                 f"{abs(m.mm_per_count):g} mm allow at most {limit:.4f} mm (χ² bound, "
                 f"{dof} degrees of freedom, false alarm {FALSE_ALARM:g}): the lengths do "
                 "not fit this robot model (a noisier set-up: state its noise with --noise-mm; "
-                "gross outliers: --robust)",
+                "gross outliers: --robust"
+                + (
+                    "; an encoder scale off beyond [encoder] scale_tolerance_ppm: check "
+                    "mm_per_count, or measure a reference gauge (reference_length_mm), as "
+                    "this log has no reference step)"
+                    if not len(m.reference_mm)
+                    else ")"
+                ),
             )
         )
 
@@ -234,13 +243,26 @@ def _drift(result: SolveResult) -> list[Finding]:
     dr = result.drift
     if dr is None or abs(dr.rate_mm_per_h) - 3 * dr.std_mm_per_h <= DRIFT_TOLERANCE_MM_PER_H:
         return []
+    if dr.correctable:
+        return []  # removed from the lengths, with a warning (Drift.warning)
+    why = (
+        "not removed from the lengths"
+        if not dr.removed
+        else "not linear (the zero readings scatter about a line beyond their noise), so "
+        "removing it cannot correct the lengths"
+        if not dr.linear
+        else f"beyond {DRIFT_REMOVABLE_MM_PER_H:g} mm/h, more than removing it can correct"
+        if abs(dr.rate_mm_per_h) > DRIFT_REMOVABLE_MM_PER_H
+        else "not measured well enough to be removed (2σ beyond the tolerance)"
+    )
     return [
         Finding(
             "drift",
             f"the zero readings at θ0 drift by {dr.rate_mm_per_h:+.3f} mm/h (± "
             f"{dr.std_mm_per_h:.3f}, {dr.zeros} readings), beyond the tolerance "
-            f"{DRIFT_TOLERANCE_MM_PER_H:g} mm/h by more than 3σ: fix the encoder's stand and "
-            "the wire's attachment, let the cell reach a steady temperature, and measure again",
+            f"{DRIFT_TOLERANCE_MM_PER_H:g} mm/h by more than 3σ and {why}: fix the encoder's "
+            "stand and the wire's attachment, let the cell reach a steady temperature, and "
+            "measure again",
         )
     ]
 

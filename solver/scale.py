@@ -30,6 +30,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import gammainccinv
 
 from wirecal.solver.identifiability import covariance
 
@@ -46,6 +47,13 @@ DRIFT_TOLERANCE_MM_PER_H = 0.5
 """Largest drift of the zero readings accepted (mm/h): a draw-wire encoder's reading at one
 pose does not move that much in an hour unless the wire slipped, the stand moved or the
 temperature is far from steady (0.5 mm/h is 20 K/h on a 1 m aluminium stand)."""
+
+DRIFT_REMOVABLE_MM_PER_H = 5.0
+"""Largest drift removed rather than refused (mm/h): ten times the tolerance is no longer
+a stand settling or a cell warming but a wire creeping or a loose mount."""
+
+LINEARITY_FALSE_ALARM = 1e-3
+"""α of the test that the zero readings lie on the drift's line within their noise."""
 
 MIN_DRIFT_ZEROS = 4
 """Zero readings needed for a drift fit (two parameters and a scatter)."""
@@ -165,6 +173,7 @@ class Drift:
     t_mean_s: float  # the zeros' mean time
     zeros: int
     removed: bool  # beyond DRIFT_SIGNIFICANCE σ: removed from the lengths
+    linear: bool = True  # the zeros scatter about the line within their noise (χ² test)
 
     @property
     def rate_mm_per_h(self) -> float:
@@ -184,6 +193,32 @@ class Drift:
         if not self.removed:
             return np.zeros_like(np.asarray(t_s, dtype=float))
         return self.rate_mm_per_s * (np.asarray(t_s, dtype=float) - t_ref_s)
+
+    @property
+    def correctable(self) -> bool:
+        """Whether removing it corrects the lengths: linear, known to the tolerance, not huge.
+
+        Known to the tolerance: twice its σ (95 %) within :data:`DRIFT_TOLERANCE_MM_PER_H`;
+        what is left after removal is in the error budget (:mod:`wirecal.solver.budget`).
+        Not huge: within :data:`DRIFT_REMOVABLE_MM_PER_H`.
+        """
+        known = 2 * self.std_mm_per_h <= DRIFT_TOLERANCE_MM_PER_H
+        small = abs(self.rate_mm_per_h) <= DRIFT_REMOVABLE_MM_PER_H
+        return self.removed and self.linear and known and small
+
+    @property
+    def warning(self) -> str | None:
+        """Return what to say of a drift beyond the tolerance that was removed; else None."""
+        beyond = abs(self.rate_mm_per_h) - DRIFT_SIGNIFICANCE * self.std_mm_per_h
+        if not self.correctable or beyond <= DRIFT_TOLERANCE_MM_PER_H:
+            return None
+        return (
+            f"the zero readings drift by {self.rate_mm_per_h:+.3f} ± {self.std_mm_per_h:.3f} "
+            f"mm/h, beyond the tolerance {DRIFT_TOLERANCE_MM_PER_H:g} mm/h; the drift is "
+            "linear and well measured, so it was removed from the lengths. Before the next "
+            "run, fix the encoder's stand and the wire's attachment and let the cell reach a "
+            "steady temperature"
+        )
 
     def text(self) -> str:
         """Describe the drift in words for ``wirecal solve``."""
@@ -214,9 +249,12 @@ def fit_drift(t_s: np.ndarray, zero_mm: np.ndarray, sigma_reading_mm: float) -> 
     sxx = float(dt @ dt)
     b = float(dt @ (z - z.mean())) / sxx
     r = z - z.mean() - b * dt
-    sigma = max(math.sqrt(float(r @ r) / (n - 2)), sigma_reading_mm)
+    scatter = math.sqrt(float(r @ r) / (n - 2))
+    sigma = max(scatter, sigma_reading_mm)
     std = sigma / math.sqrt(sxx)
-    return Drift(b, std, t_mean, n, abs(b) > DRIFT_SIGNIFICANCE * std)
+    chi2_limit = 2 * gammainccinv((n - 2) / 2, LINEARITY_FALSE_ALARM)  # χ²_(n−2)(1 − α)
+    linear = bool(scatter**2 * (n - 2) <= sigma_reading_mm**2 * chi2_limit)
+    return Drift(b, std, t_mean, n, abs(b) > DRIFT_SIGNIFICANCE * std, linear)
 
 
 def find_slips(

@@ -67,14 +67,27 @@ PSI_FLOOR = 0.005
 """|Ψ| below this (half the paper's printed precision) counts as zero."""
 
 
+def within_tolerance(psi_j: np.ndarray, psi_t: np.ndarray, tol: float) -> np.ndarray:
+    """Return where |Ψ_t| ≤ max(tol·|Ψ_j|, PSI_FLOOR): the isolation rule of eq. 18–19.
+
+    ``psi_j`` (k,): each point's Ψ of the step's parameter; ``psi_t`` (k, m): its Ψ of m
+    other parameters; the result (k, m). The one rule of :func:`verdict` and the planner.
+    """
+    limit = np.maximum(tol * np.abs(psi_j), PSI_FLOOR)
+    return np.abs(psi_t) <= limit[..., None]
+
+
 def verdict(
     psi_row: dict[str, float], parameter: str, later: Sequence[str], tol: float = DEFAULT_TOL
 ) -> Verdict:
     """Judge a point of step j: ``ok`` when |Ψ_t| ≤ max(tol·|Ψ_j|, PSI_FLOOR) for every t > j.
 
     The set S_j of eq. 19 asks Ψ_t = 0 for every parameter identified after step j
-    (the flowchart's ``t < j`` is the reversed typo listed in DESIGN.md).
+    (the flowchart's ``t < j`` is the reversed typo listed in DESIGN.md);
+    :func:`within_tolerance` is the rule.
     """
-    limit = max(tol * abs(psi_row[parameter]), PSI_FLOOR)
-    bad = tuple(t for t in later if abs(psi_row[t]) > limit)
+    ok = within_tolerance(
+        np.asarray(psi_row[parameter]), np.array([psi_row[t] for t in later]), tol
+    )
+    bad = tuple(t for t, fine in zip(later, ok, strict=True) if not fine)
     return Verdict(ok=not bad, violations=bad)

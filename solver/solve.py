@@ -230,10 +230,13 @@ def solve(
     through the lengths held at nominal (the tool point), so it leans on those being exact.
     """
     if not m.complete and not partial:
-        raise WirecalError(
-            f"{m.source}: the log is incomplete: missing {m.missing_text()}. "
-            "Finish the run (repeat from the first missing step), or pass "
-            "--partial to solve from the points that are there"
+        raise WirecalError(  # what a capture set aside may be the missing rows: say so
+            [
+                f"{m.source}: the log is incomplete: missing {m.missing_text()}. "
+                "Finish the run (repeat from the first missing step), or pass "
+                "--partial to solve from the points that are there",
+                *m.log.notes,
+            ]
         )
     present = m.present
     step = m.step[present]
@@ -254,6 +257,7 @@ def solve(
     omega = omega_vector(names, robot.n_joints, plan, omega_default)
     fit = _identify(robot, problem, omega, psi, robust)
     drift, clean = _judge_drift(robot, m, fit, k, problem, (omega, psi, robust))
+    drift = _as_corrected(drift, corrections)
     notes.append(_drift_note(m, drift))
     if corrections and clean is not None:
         problem, fit = clean
@@ -407,6 +411,11 @@ def _judge_drift(
     if drift is None or not drift.removed:
         return drift, None
     return drift, (clean, _identify(robot, clean, *how))
+
+
+def _as_corrected(drift: Drift | None, corrections: bool) -> Drift | None:
+    """Return the drift as the lengths saw it: not removed in the controller's view."""
+    return drift if corrections or drift is None else replace(drift, removed=False)
 
 
 def _fit_drift(m: Measurements, sigma_mm: float) -> Drift | None:

@@ -80,6 +80,29 @@ def _pose_reachable(robot: Robot, R, p, margin_deg: float):
     return [found.get(c) for c in CONFIGS]
 
 
+def check_frame(robot: Robot, setup: Setup) -> None:
+    """Refuse a setup whose encoder or plate lies below the robot file's floor.
+
+    Its coordinates are then in another frame 0 (the shipped Viper file's frame 0 is at the
+    shoulder, 335 mm above the floor; a URDF import's is where the URDF's chain begins).
+    """
+    floor = robot.cell.floor_z_mm
+    places = (
+        ("configuration.encoder_mm", setup.encoder_mm),
+        ("plate.origin_mm", setup.plate_origin_mm),
+    )
+    problems = [
+        f"{setup.source}: {key}: z {xyz[2]:g} mm lies below the robot file's floor ([cell] "
+        f"floor_z_mm = {floor:g} in frame 0): the setup was measured in another frame 0 (a "
+        "URDF import's is where the URDF's chain begins); measure it again in this robot "
+        "file's frame 0"
+        for key, xyz in places
+        if xyz[2] < floor
+    ]
+    if problems:
+        raise WirecalError(problems)
+
+
 def config_poses(robot: Robot, setup: Setup, margin_deg: float = 1.0) -> np.ndarray:
     """Return ``setup.poses`` poses for the configuration validation.
 
@@ -88,6 +111,7 @@ def config_poses(robot: Robot, setup: Setup, margin_deg: float = 1.0) -> np.ndar
     margin, with wire lengths within the encoder's range and the arm clear of itself and
     the cell (:mod:`~wirecal.solver.cell`) in every one.
     """
+    check_frame(robot, setup)
     model = robot.nominal
     rng = np.random.default_rng(setup.seed)
     reach = np.abs(robot.dh[:, 1]).sum() + np.abs(robot.dh[:, 3]).sum()
@@ -126,6 +150,7 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
     row reversed, so that each point neighbours the one before it (the probe's search
     starts from the depth found there).
     """
+    check_frame(robot, setup)
     nx, ny = setup.grid
     u = np.linspace(0, setup.plate_size_mm[0], nx)
     v = np.linspace(0, setup.plate_size_mm[1], ny)
@@ -140,11 +165,12 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
         for depth in (0.0, setup.approach_mm + 5.0):
             R, o = pose.matrix(*t)
             o = o - np.array([0, 0, depth])
-            ok = [
-                s.q
+            right = [
+                s
                 for s in ik.solve(robot, R, o, margin_deg=margin_deg)
-                if s.within_limits and s.config == ("righty", "above", "noflip")
+                if s.config == ("righty", "above", "noflip")
             ]
+            ok = [s.q for s in right if s.within_limits]
             gaps = robot.cell_gaps(np.degrees(ok), setup.encoder_mm) if ok else None
             if gaps is not None and gaps.smallest()[0] < CARTESIAN_SLACK_MM:
                 problems.append(
@@ -154,10 +180,12 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
                 )
                 break
             if not ok:
+                where = f"{setup.source}: plate: grid point ({i}, {j}) at {np.round(p, 1).tolist()}"
                 problems.append(
-                    f"{setup.source}: plate: grid point ({i}, {j}) at "
-                    f"{np.round(p, 1).tolist()} is out of reach (righty, above, "
-                    "noflip, tool down); move origin_mm or shrink the plate"
+                    f"{where} {_beyond_limits(robot, right[0].q, margin_deg)}"
+                    if right
+                    else f"{where} is out of reach (righty, above, noflip, tool down); move "
+                    "origin_mm or shrink the plate"
                 )
                 break
         targets.append(t)
@@ -166,6 +194,19 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
             problems[:5] + ([f"… and {len(problems) - 5} more"] if len(problems) > 5 else [])
         )
     return index, points, np.array(targets)
+
+
+def _beyond_limits(robot: Robot, q_rad: np.ndarray, margin_deg: float) -> str:
+    """Say which joint a reachable pose needs beyond its limits (less the margin)."""
+    q = np.degrees(q_rad)
+    lo, hi = robot.joint_min_deg + margin_deg, robot.joint_max_deg - margin_deg
+    k = int(np.argmax(np.maximum(lo - q, q - hi)))
+    return (
+        f"is reachable (righty, above, noflip, tool down) only with joint {k + 1} at "
+        f"{q[k]:.1f} deg, beyond its limits {robot.joint_min_deg[k]:g} … "
+        f"{robot.joint_max_deg[k]:g} deg less the margin {margin_deg:g}: move origin_mm or "
+        "check the robot file's joint limits and frame 0"
+    )
 
 
 # ---------- logs ----------

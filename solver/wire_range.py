@@ -46,6 +46,18 @@ def run_moves(plan: Plan) -> list[tuple[str, np.ndarray, np.ndarray, bool]]:
     return moves
 
 
+def nominal_wire_mm(robot: Robot, theta0_deg, q_deg) -> np.ndarray:
+    """Return the nominal model's wire length (mm) at each configuration of ``q_deg`` (n×6).
+
+    Measured from the tool position at θ0; over a pulley, arc plus span (a tip inside the
+    pulley counts as 0).
+    """
+    model = robot.nominal
+    p0 = tool_position(model, np.radians(np.asarray(theta0_deg, float))[None])[0]
+    tips = tool_position(model, np.radians(np.asarray(q_deg, float)))
+    return np.nan_to_num(wire_path(model.pulley, tips - p0)[0])
+
+
 def check_wire_range(
     robot: Robot, plan: Plan, margin_mm: float = RANGE_MARGIN_MM, min_mm: float = MIN_WIRE_MM
 ) -> None:
@@ -57,12 +69,9 @@ def check_wire_range(
     """
     if not margin_mm >= 0:
         raise WirecalError(f"--range-margin {margin_mm:g}: give a margin of 0 mm or more")
-    model = robot.nominal
-    p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
     moves = run_moves(plan)
     q, first = move_samples(np.array([m[1] for m in moves]), np.array([m[2] for m in moves]))
-    # the modelled wire (over a pulley: arc plus span; a tip inside the pulley counts as 0)
-    d = np.nan_to_num(wire_path(model.pulley, tool_position(model, np.radians(q)) - p0)[0])
+    d = nominal_wire_mm(robot, plan.theta0_deg, q)
     longest = np.maximum.reduceat(d, first)
     # the wire is short near θ0 by construction: only the targets must stay above min_mm
     last = np.r_[first[1:], len(d)] - 1

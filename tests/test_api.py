@@ -11,6 +11,8 @@ import pytest
 
 import wirecal
 
+from .conftest import ROOT
+
 VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"
 
 
@@ -68,3 +70,21 @@ def test_readme_example(tmp_path, monkeypatch):
     patch = wirecal.read_patch(path)
     assert spec.exists()
     assert patch.offsets_for(robot, plan) == pytest.approx(best.as_dict(), abs=1e-12)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("name", "plan_file"),
+    [("viper_s650", "paper_plan.toml"), ("ur5e", "plan.toml"), ("abb_irb120", "plan.toml")],
+)
+def test_generation_and_the_twin_in_any_language(name, plan_file, tmp_path, monkeypatch):
+    """docs/api.md's second example, for each shipped language's example."""
+    monkeypatch.chdir(tmp_path)
+    robot = wirecal.load_robot(ROOT / "examples" / name / "robot.toml")
+    plan = wirecal.load_plan(ROOT / "examples" / name / plan_file, robot)
+    programs = wirecal.generate(robot, plan)
+    written = wirecal.write_programs(robot, "out", programs)
+    assert sorted(p.name for p in written) == sorted(programs)
+    run = wirecal.measure_in_twin(robot, plan, {"th2": 0.3}, Path("twin"), programs, seed=1)
+    assert (run.complete, run.stopped) == (True, None)
+    assert run.log.is_file()

@@ -12,7 +12,6 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wirecal.app.twin_runs import measure_in_twin, measure_ur_in_twin
 from wirecal.cli.main import main
 from wirecal.gen.vplus.program import GenOptions
 from wirecal.solver.errors import WirecalError
@@ -22,6 +21,7 @@ from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.simulate import simulate_log
 
 from .conftest import ROOT, VIPER
+from .twin_runs import measure_in_twin, measure_ur_in_twin
 
 UR5 = ROOT / "examples" / "ur5e"
 

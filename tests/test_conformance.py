@@ -12,7 +12,8 @@ lint clean with its own checker; the snippets its manual allows pass and the one
 forbids are caught; its generator refuses by name a request field it does not take; in
 the twin, the generated programs run to a complete log the PC finds the truth in, a wire
 that slips is caught, and the controller's own solver agrees with the PC reference over
-12 truths. The last test keeps
+12 truths. Its safety section (the pre-flight, the twin's stops, over the registry and a
+toy language) is tests/test_conformance_safety.py. The last test keeps
 language names out of the shared code: nothing outside ``lang/<key>``, ``gen/<key>``,
 ``twin/<key>`` compares or indexes by a language key.
 """

@@ -10,10 +10,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.lang.registry import language
 from wirecal.lang.urscript.calibration import ur_deltas
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.patch_companion import read_companion
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
-from wirecal.solver.formats.ur_calibration import read_ur_calibration
 from wirecal.solver.robot import Controller
 
 from .conftest import ROOT
@@ -194,7 +195,7 @@ def test_solve_writes_ur_deltas_that_read_back(tmp_path):
     assert "patch.ur_calibration.conf" in r.output
     robot = load_robot(ur5 / "robot.toml")
     offsets = read_patch(patch).offsets_for(robot)
-    deltas = read_ur_calibration(conf)
+    deltas = read_companion(conf, language("urscript"))
     expected = ur_deltas(robot, offsets)
     for key, values in expected.items():
         np.testing.assert_allclose(deltas[key], values, rtol=0, atol=1e-15)
@@ -220,4 +221,4 @@ def test_ur_calibration_reader_refuses_a_short_vector(tmp_path):
         "delta_d = [0, 0, 0, 0, 0, 0]\ndelta_alpha = [0, 0, 0, 0, 0, 0]\n"
     )
     with pytest.raises(WirecalError, match=r"mounting\.delta_theta: has 2 values; expected 6"):
-        read_ur_calibration(bad)
+        read_companion(bad, language("urscript"))

@@ -1,8 +1,9 @@
 """Every ```bash block of the README and of docs/ runs as written.
 
 Convention (docs/development.md): a ``bash`` block runs verbatim in a fresh folder holding a
-copy of the repository's ``examples/`` with ``wirecal`` on ``PATH``; the blocks of one page
-run in order in one folder, each by ``bash -euo pipefail``. Everything else is ``text``.
+copy of the repository's tracked files (a fresh clone) with ``wirecal`` on ``PATH``; the
+blocks of one page run in order in one folder, each by ``bash -euo pipefail``. Everything
+else is ``text``.
 """
 
 from __future__ import annotations
@@ -72,6 +73,25 @@ def test_readme_is_short():
     assert len((ROOT / "README.md").read_text(encoding="utf-8").splitlines()) <= 300
 
 
+def fresh_clone(folder: Path) -> None:
+    """Copy into ``folder`` what a fresh clone holds: the repository's tracked files.
+
+    (``examples/``, ``tests/data/``: what a recipe may name.) Outside a git checkout, the
+    examples only.
+    """
+    listed = subprocess.run(
+        ["git", "-C", str(ROOT), "ls-files", "-z"], capture_output=True, text=True
+    )
+    if listed.returncode != 0:
+        shutil.copytree(ROOT / "examples", folder / "examples")
+        return
+    for name in filter(None, listed.stdout.split("\0")):
+        source = ROOT / name
+        if source.is_file() and not source.is_symlink():
+            (folder / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(source, folder / name)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
     "page",
@@ -79,7 +99,7 @@ def test_readme_is_short():
     ids=lambda p: str(p.relative_to(ROOT)),
 )
 def test_bash_blocks_run(page, tmp_path):
-    shutil.copytree(ROOT / "examples", tmp_path / "examples")
+    fresh_clone(tmp_path)
     env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
     for n, block in enumerate(bash_blocks(page.read_text("utf-8")), 1):
         r = subprocess.run(
@@ -100,3 +120,39 @@ def test_api_page_example_is_the_tested_one():
     tested = source.split("keep in step with docs/api.md) ---\n")[1]
     tested = tested.split("    # --- end of the example ---")[0]
     assert shown == [textwrap.dedent(tested)]
+
+
+def _collected(marker: str) -> int:
+    """Return how many tests ``pytest -m MARKER`` collects in the repository."""
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "--collect-only",
+            "-q",
+            "-p",
+            "no:cacheprovider",
+            "-m",
+            marker,
+            str(ROOT / "tests"),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
+    m = re.search(r"^(\d+)(?:/\d+)? tests? collected", r.stdout, re.M)
+    assert m is not None, r.stdout[-2000:]
+    return int(m.group(1))
+
+
+@pytest.mark.slow
+def test_the_quoted_test_counts_are_current():
+    """docs/development.md's counts of the quick loop and the slow tests, read from the page,
+    against what pytest collects: within 10 % (eight branches add tests at once)."""
+    text = (ROOT / "docs" / "development.md").read_text(encoding="utf-8")
+    quick = re.search(r"The quick loop has (\d+) tests and the\s+slow tests are (\d+) more", text)
+    assert quick is not None, "docs/development.md no longer quotes the test counts"
+    for quoted, marker in zip(quick.groups(), ("not slow", "slow"), strict=True):
+        collected = _collected(marker)
+        assert abs(int(quoted) - collected) <= 0.1 * collected, (marker, quoted, collected)

@@ -216,7 +216,8 @@ def test_a_plan_point_within_the_pulley_is_named():
 def test_pulley_robot_through_the_twin_and_the_controller_solver(tmp_path):
     """wc.run in the twin over a 5 mm pulley; wc.solve and wc.solve2 agree with the PC."""
     from wirecal.app.compare import controller_runs
-    from wirecal.app.twin_runs import measure_in_twin
+
+    from .twin_runs import measure_in_twin
 
     robot = _robot(exit="pulley", axis=list(AXIS), pulley_radius_mm=5.0)
     plan = load_plan(VIPER / "paper_plan.toml", robot)

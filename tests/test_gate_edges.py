@@ -96,11 +96,30 @@ def test_plausible_size_edge_is_10_deg_and_10_mm(sound):
 
 
 def test_drift_edge_is_half_a_mm_per_hour_beyond_three_sigma(sound):
-    """Refused when |b| − 3σ_b > 0.5 mm/h (scale.DRIFT_TOLERANCE_MM_PER_H)."""
+    """Refused when |b| − 3σ_b > 0.5 mm/h (scale.DRIFT_TOLERANCE_MM_PER_H) and removing it
+    cannot correct the lengths (here: the zeros do not lie on a line)."""
     sigma_h = 0.1
     for rate_h, refused in ((0.8 * (1 - JUST), False), (0.8 * (1 + JUST), True)):
-        drift = Drift(-rate_h / 3600, sigma_h / 3600, 100.0, 12, True)
+        drift = Drift(-rate_h / 3600, sigma_h / 3600, 100.0, 12, True, linear=False)
         assert ("drift" in _checks(replace(sound, drift=drift))) is refused
+
+
+@pytest.mark.parametrize(
+    ("rate_h", "sigma_h", "refused"),
+    [
+        (1.0, 0.1, False),  # issue 35: the paper's speed, 1 mm/h measured to ±0.1
+        (1.6, 0.25 * (1 - JUST), False),  # known to the tolerance: 2σ ≤ 0.5 mm/h
+        (1.6, 0.25 * (1 + JUST), True),
+        (5.0 * (1 - JUST), 0.1, False),  # scale.DRIFT_REMOVABLE_MM_PER_H
+        (-5.0 * (1 + JUST), 0.1, True),
+    ],
+)
+def test_a_linear_drift_known_to_the_tolerance_is_removed_not_refused(
+    sound, rate_h, sigma_h, refused
+):
+    drift = Drift(rate_h / 3600, sigma_h / 3600, 100.0, 12, True)
+    assert ("drift" in _checks(replace(sound, drift=drift))) is refused
+    assert (drift.warning is None) is refused
 
 
 def test_poorly_identified_edge_is_a_sigma_of_1():

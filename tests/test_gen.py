@@ -168,15 +168,6 @@ def test_log_header_and_columns_as_the_reader_expects(module, paper_plan):
     assert module.count("IOSTAT(") >= 6
 
 
-def test_point_too_close_to_a_limit_is_refused(viper, paper_plan):
-    with pytest.raises(WirecalError) as info:
-        module_text(viper, paper_plan, GenOptions(margin_deg=2.0))
-    assert info.value.problems == [
-        f"{paper_plan.source}: step 7 (a2) point 6: joint 3 = 255 deg is within 2 deg of its "
-        "limits [-29, 256]; move the point or lower --margin"
-    ]
-
-
 def test_bad_options_refused(viper, paper_plan):
     with pytest.raises(WirecalError) as info:
         module_text(

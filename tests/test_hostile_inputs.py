@@ -7,6 +7,7 @@ then hypothesis-mutated robot files, plans and logs through the fast commands.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import shutil
@@ -547,3 +548,687 @@ def test_a_log_pasted_many_times_gives_a_readable_error(tmp_path, log):
     errors = [x for x in r.output.splitlines() if x.startswith("error: ")]
     assert len(errors) == 41
     assert re.fullmatch(r"error: … and \d{4} more problems of the same kinds", errors[-1])
+
+
+# -- issue 35: the cases of the hostile-input run, by case id ------------------------------
+def _without_closing_zero(log) -> str:
+    return "".join(x for x in log.read_text().splitlines(True) if not x.startswith("zero,11,"))
+
+
+@pytest.fixture(scope="module")
+def partial_patch(tmp_path_factory, log):
+    """A --partial run's patch: step 10 solved without its closing zero reading."""
+    folder = tmp_path_factory.mktemp("partial")
+    cut = folder / "cut.csv"
+    cut.write_text(_without_closing_zero(log))
+    patch = folder / "patch.toml"
+    r = invoke("solve", ROBOT, PLAN, cut, "--partial", "-o", patch)
+    assert r.exit_code == 0, r.output
+    return cut, patch
+
+
+UNCHECKED = "step 10 (a1) unchecked: the closing zero reading at θ0 is missing"
+
+
+def test_pa02_gen_patch_types_the_unchecked_mark(tmp_path, partial_patch):
+    """wc.patch, which types the values for SPEC, was byte-identical with and without the
+    mark: now it types the mark (θ spelled out in V+'s ASCII), and gen warns."""
+    _, patch = partial_patch
+    r = invoke("gen", ROBOT, PLAN, "-o", tmp_path / "out", "--patch", patch)
+    assert r.exit_code == 0, r.output
+    assert f"warning: {patch}: {UNCHECKED}" in r.output
+    module = (tmp_path / "out" / "WIRECAL.V2").read_text()
+    wc_patch = module[module.index(".PROGRAM wc.patch()") :]
+    typed = " ".join(re.findall(r'TYPE "    (.*)"', wc_patch[: wc_patch.index(".END")]))
+    assert UNCHECKED.replace("θ", "theta") in typed
+    assert "Measure the step(s) again before entering these values." in typed
+
+
+def test_pa08_export_urdf_and_report_carry_the_unchecked_mark(tmp_path, partial_patch):
+    """export-urdf dropped the mark; report refused the log suggesting --partial, which it
+    did not have."""
+    cut, patch = partial_patch
+    urdf = tmp_path / "cal.urdf"
+    r = invoke("export-urdf", ROBOT, patch, "-o", urdf)
+    assert r.exit_code == 0, r.output
+    assert f"<!-- WARNING: {UNCHECKED}" in urdf.read_text()
+    refused = invoke("report", ROBOT, PLAN, cut, "-o", tmp_path / "r.html")
+    assert refused.exit_code == 2
+    assert "or pass --partial" in refused.output
+    assert "--partial" in invoke("report", "--help").output
+
+
+@pytest.mark.slow
+def test_pa08_report_shows_a_partial_run(tmp_path, partial_patch):
+    cut, _ = partial_patch
+    r = invoke("report", ROBOT, PLAN, cut, "--partial", "-o", tmp_path / "r.html")
+    assert r.exit_code == 0, r.output
+    assert f"warning: {UNCHECKED}" in r.output
+    assert f"Warning: {UNCHECKED}" in (tmp_path / "r.html").read_text()
+
+
+def _plus_1mm(text: str, name: str) -> str:
+    """Move a parameter's offset and value together by 1 mm (value = nominal + offset holds)."""
+    head, marker, rest = text.partition(f"[parameters.{name}]\n")
+    block, sep, tail = rest.partition("\n\n")
+    block = re.sub(
+        r"^(offset|value) = (\S+)$",
+        lambda m: f"{m.group(1)} = {float(m.group(2)) + 1.0!r}",
+        block,
+        flags=re.M,
+    )
+    return head + marker + block + sep + tail
+
+
+PATCH_EDITS = {
+    "PA03": (
+        lambda t: re.sub(r"^unchecked = .*\n", "", t, flags=re.M),
+        "unchecked (the mark of the steps solved without their zero check): deleted since "
+        "wirecal wrote the patch",
+    ),
+    "PA04": (
+        lambda t: re.sub(r"^unchecked = .*$", "unchecked = []", t, flags=re.M),
+        "unchecked (the mark of the steps solved without their zero check): changed",
+    ),
+    "PA06": (
+        lambda t: re.sub(r"^plausibility = .*\n", "", t, flags=re.M),
+        "plausibility (the mark that the plausibility gate was overridden): deleted",
+    ),
+    "PA07": (lambda t: _plus_1mm(t, "a2"), "parameters.a2: changed since wirecal wrote the patch"),
+}
+
+
+@pytest.mark.parametrize("case", PATCH_EDITS)
+def test_an_edited_patch_is_refused_naming_the_edit(tmp_path, partial_patch, case):
+    """The patch had no checksum: each of these edits passed gen --patch with exit 0."""
+    from wirecal.solver.formats.patch_digest import seal
+
+    text = partial_patch[1].read_text()
+    overridden = seal(
+        re.sub(r"^plausibility = .*$", 'plausibility = "overridden: x"', text, count=1, flags=re.M)
+    )
+    edit, message = PATCH_EDITS[case]
+    edited = tmp_path / "patch.toml"
+    edited.write_text(edit(overridden))
+    assert edited.read_text() != overridden
+    r = invoke("gen", ROBOT, PLAN, "-o", tmp_path / "out", "--patch", edited)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert f"error: {edited}: {message}" in r.output
+    assert "write it again with wirecal solve" in r.output
+    assert not (tmp_path / "out").exists()
+    sealed = tmp_path / "sealed.toml"  # the same patch as wirecal wrote it is taken
+    sealed.write_text(overridden)
+    assert invoke("gen", ROBOT, PLAN, "-o", tmp_path / "ok", "--patch", sealed).exit_code == 0
+
+
+def test_a_patch_without_its_digest_is_refused(tmp_path, partial_patch):
+    text = partial_patch[1].read_text()
+    bare = tmp_path / "patch.toml"
+    bare.write_text(text[: text.index("\n[digest]")] + "\n")
+    r = invoke("export-urdf", ROBOT, bare, "-o", tmp_path / "cal.urdf")
+    assert r.exit_code == 2
+    assert f"error: {bare}: digest: missing" in r.output
+
+
+CAPTURES = {
+    "TP02": lambda line: f"\x1b[32m{line}\x1b[0m" if line[:1].isalpha() else line,
+    "TP03": lambda line: f"\x1b[1;33m{line}\x1b[0m" if line.startswith("#") else line,
+    "TP07": lambda line: line.replace(",", "\t") if line[:1].isalpha() else line,
+    "TP07b": lambda line: line.replace(",", ",\t"),
+    "TP24": lambda line: f"[2026-11-27 05:18:38.123] {line}",
+    "TP24b": lambda line: f"05:18:38 | {line}",
+}
+
+
+@pytest.mark.parametrize("case", CAPTURES)
+def test_a_capture_is_read_through_what_terminal_loggers_add(log, case):
+    """Colour codes, tabs, timestamp prefixes: 'missing steps 1–10 (all points)' before."""
+    from wirecal.solver.formats.log import parse_log
+
+    clean = parse_log(log.read_text(), "run.csv")
+    captured = "\n".join(map(CAPTURES[case], log.read_text().splitlines())) + "\n"
+    got = parse_log(captured, "terminal")
+    assert [(r.kind, r.step, r.index, r.counts) for r in got.readings] == [
+        (r.kind, r.step, r.index, r.counts) for r in clean.readings
+    ]
+
+
+@pytest.mark.parametrize("width", [40, 41, 55, 64, 71, 72, 80])
+def test_tp09_a_capture_folded_at_any_width_of_40_or_more(log, width):
+    """At 71 columns or fewer the 72-character '# plan:' line broke the header."""
+    from wirecal.solver.formats.capture import fold
+    from wirecal.solver.formats.log import parse_log
+
+    text = log.read_text()
+    got = parse_log(fold(text.splitlines(), width), "terminal")
+    assert got.plan == parse_log(text, "run.csv").plan
+    assert len(got.readings) == text.count("\npoint,") + text.count("\nzero,")
+
+
+def test_tp02_a_refused_capture_names_what_it_set_aside(tmp_path, log):
+    """Every row unreadable: the refusal said only 'missing steps 1–10'."""
+    prefixed = "\n".join(
+        f"robot> {x}" if x[:1].isalpha() and not x.startswith("kind") else x
+        for x in log.read_text().splitlines()
+    )
+    r = CliRunner().invoke(main, ["solve", str(ROBOT), str(PLAN), "-"], input=prefixed + "\n")
+    assert r.exit_code == 2
+    assert "the log is incomplete: missing" in r.output
+    assert re.search(r"<stdin>: set aside \d+ line\(s\) that are not log rows", r.output)
+
+
+@pytest.mark.slow
+def test_the_twins_console_can_be_rehearsed(tmp_path):
+    """simulate --controller --console: what the operator copies, at 40 columns, solves."""
+    console = tmp_path / "console.txt"
+    r = invoke(
+        "simulate", ROBOT, PLAN, "-o", tmp_path / "run.csv", "--controller", "--console",
+        console, "--width", 40,
+    )  # fmt: skip
+    assert r.exit_code == 0, r.output
+    lines = console.read_text().splitlines()
+    assert max(map(len, lines)) == 40
+    assert "# wirecal-log 2" in lines
+    solved = CliRunner().invoke(
+        main, ["solve", str(ROBOT), str(PLAN), "-"], input=console.read_text()
+    )
+    assert solved.exit_code == 0, solved.output
+    assert "joined" in solved.output
+
+
+@pytest.mark.slow
+def test_rk28_receive_is_bounded_as_every_other_input(tmp_path):
+    """A complete log followed by 100 MiB of comments was published (105 MB, exit 0):
+    now the run stops at 16 MiB, nothing is published, and the message says why."""
+    import socket
+    import threading
+
+    from wirecal.app.receive import journal_path, receive
+    from wirecal.solver.formats.fileio import MAX_INPUT_BYTES
+    from wirecal.solver.formats.plan_file import load_plan
+    from wirecal.solver.formats.robot_file import load_robot
+    from wirecal.solver.formats.run_token import run_token, token_line
+    from wirecal.solver.simulate import simulate_log
+
+    ur5 = load_robot(VIPER.parent / "ur5e" / "robot.toml")
+    plan = load_plan(VIPER.parent / "ur5e" / "plan.toml", ur5)
+    text = simulate_log(ur5, plan, {}, seed=1, counter_start=1000.0)
+    flood = ("# " + "x" * 1000 + "\n") * (MAX_INPUT_BYTES // 1000 + 100)
+    ports, out = [], tmp_path / "run.csv"
+    result = {}
+
+    def serve():
+        result["r"] = receive(0, out, ur5, plan, timeout_s=20, on_listening=ports.append)
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    while not ports:
+        thread.join(0.05)
+    hello = token_line(run_token(ur5, plan.fingerprint())) + "\n"
+    with socket.create_connection(("127.0.0.1", ports[0]), timeout=20) as s:
+        try:
+            s.sendall((hello + text + flood + "# end\n").encode())
+        except OSError:
+            pass  # the receiver stopped reading and closed: what it should do
+    thread.join(30)
+    r = result["r"]
+    assert not r.complete
+    assert not out.exists()
+    assert "more than 16 MiB received" in r.stopped
+    assert journal_path(out).stat().st_size <= MAX_INPUT_BYTES
+
+
+URDF_UNITS = {
+    "ND22": (
+        ('rpy="1.5707963267948966 0 0"', 'rpy="-90 0 0"'),
+        r"joint '\w+': origin rpy value 1 is -90, beyond ±2π: URDF angles are radians; "
+        r"written in degrees\?",
+    ),
+    "ND24": (
+        ('lower="-2.5" upper="2.5"', 'lower="-170" upper="170"'),
+        r"joint '\w+': limit lower=-170, beyond ±4π: URDF limits are radians",
+    ),
+    "ND26": (
+        ('xyz="0 0 0.3"', 'xyz="0 0 300"'),
+        r"joint '\w+': origin xyz 0 0 300 is beyond 10 m: URDF lengths are metres; written "
+        r"in millimetres\?",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", URDF_UNITS)
+def test_urdf_units_are_checked_naming_joint_and_attribute(tmp_path, case):
+    """Degrees imported as radians without a word (ND22); the others blamed the output."""
+    (old, new), message = URDF_UNITS[case]
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(URDF.read_text().replace(old, new, 1))
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert re.search(message, r.output), r.output
+    assert not (tmp_path / "r.toml").exists()
+
+
+def test_nl49_a_reference_reading_with_a_large_spread_is_refused(tmp_path):
+    robot, log_path = _with_gauge(tmp_path)
+    lines = log_path.read_text().splitlines()
+    k = next(i for i, x in enumerate(lines) if x.startswith("reference,"))
+    cells = lines[k].split(",")
+    cells[11] = str(round(127 / MM_PER_COUNT))  # a 127 mm spread of the samples
+    lines[k] = ",".join(cells)
+    log_path.write_text("\n".join(lines) + "\n")
+    r = invoke("solve", robot, PLAN, log_path)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert re.search(
+        rf"gauge\.csv:{k + 1}: spread of \d+ samples is \d+ counts \(127\.0\d\d mm > 0\.1 mm\): "
+        "the wire tip moved in its nest; seat it again and repeat the reference step",
+        r.output,
+    ), r.output
+
+
+def test_r40_a_toml_file_with_a_byte_order_mark_is_read(tmp_path):
+    robot = tmp_path / "robot.toml"
+    robot.write_bytes(b"\xef\xbb\xbf" + ROBOT.read_bytes())
+    assert invoke("psi", robot, PLAN).exit_code == 0
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["simulate", ROBOT, PLAN, "-o", "-"],  # S05
+        ["solve", ROBOT, PLAN, "LOG", "-o", "-"],  # NO07
+        ["export-urdf", ROBOT, "-o", "-"],
+        ["report", ROBOT, PLAN, "LOG", "-o", "-"],
+    ],
+    ids=lambda a: " ".join(map(str, a[:1])),
+)
+def test_s05_no07_output_dash_is_refused_not_a_file_named_dash(tmp_path, log, args):
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        r = invoke(*[log if a == "LOG" else a for a in args])
+    finally:
+        os.chdir(cwd)
+    assert r.exit_code == 2
+    assert "'-' (standard output) cannot take this output" in r.output
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ng09_help_lists_every_exit_status():
+    r = invoke("--help")
+    assert "3 the" in r.output
+    assert "plausibility gate refused" in " ".join(r.output.split())
+
+
+def test_ng11_a_closed_pipe_is_not_an_error():
+    """'| head -1': 'error: file: Broken pipe', exit 2."""
+    code = "from wirecal.cli.main import main; main()"
+    p = subprocess.run(
+        f"{sys.executable} -c '{code}' psi {ROBOT} {PLAN} | head -1; "
+        "echo status=${PIPESTATUS[0]}",
+        shell=True,
+        executable="/bin/bash",
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert "status=0" in p.stdout, p.stderr
+    assert "error" not in p.stderr.lower(), p.stderr
+
+
+def test_ng12_wrote_counts_the_points_logged(tmp_path):
+    r = invoke("simulate", ROBOT, PLAN, "-o", tmp_path / "a.csv", "--stop-after", 40)
+    logged = (tmp_path / "a.csv").read_text().count("\npoint,")
+    assert logged < 69
+    assert f"({logged} points)" in r.output
+
+
+def test_ng14_no_range_of_none_in_any_help():
+    for command in COMMANDS:
+        assert "None]" not in invoke(command, "--help").output, command
+
+
+def test_receive_and_validate_take_positionals_and_the_old_options(tmp_path):
+    """Every other command takes ROBOT PLAN as positionals; the options stay as aliases."""
+    plane = tmp_path / "plane.csv"
+    both = invoke("validate", ROBOT, "plane", plane)
+    old = invoke("validate", "plane", plane, "--robot", ROBOT)
+    assert both.exit_code == old.exit_code == 2  # the log is missing: read past the shape
+    assert "plane.csv" in both.output
+    assert "plane.csv" in old.output
+    twice = invoke("receive", ROBOT, PLAN, "--robot", PLAN, "-o", tmp_path / "r.csv")
+    assert twice.exit_code == 2
+    assert "ROBOT given twice" in twice.output
+    assert "receive [OPTIONS] [ROBOT] [PLAN]" in invoke("receive", "--help").output
+
+
+def test_demo_refuses_to_overwrite_before_working(tmp_path):
+    """The demo worked 15–20 s before refusing: now at once."""
+    import time
+
+    (tmp_path / "report.html").write_text("an earlier report\n")
+    t = time.perf_counter()
+    r = invoke("demo", "-o", tmp_path)
+    assert r.exit_code == 2
+    assert "report.html: exists; choose another name or pass --force" in r.output
+    assert time.perf_counter() - t < 5  # the programs alone take 15 s and more
+    assert (tmp_path / "report.html").read_text() == "an earlier report\n"
+
+
+WIRECAL = [sys.executable, "-c", "from wirecal.cli.main import main; main()"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("delay_s", [0.4, 0.8, 1.2, 1.6])
+def test_sigterm_leaves_no_temporary_file(tmp_path, log, delay_s):
+    """SIGTERM during solve -o / export-urdf left empty hidden .tmp files (2 of 8 tries)."""
+    import signal
+    import time
+
+    runs = [
+        [*WIRECAL, "solve", ROBOT, PLAN, log, "-o", tmp_path / "patch.toml"],
+        [*WIRECAL, "export-urdf", ROBOT, "-o", tmp_path / "arm.urdf"],
+    ]
+    for args in runs:
+        p = subprocess.Popen(list(map(str, args)), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        time.sleep(delay_s)
+        p.send_signal(signal.SIGTERM)
+        _, err = p.communicate(timeout=60)
+        assert p.returncode in (0, 128 + signal.SIGTERM, -signal.SIGTERM), err
+        assert b"Traceback" not in err
+        left = [f.name for f in tmp_path.iterdir() if f.name.startswith(".")]
+        assert left == [], left
+        if p.returncode == 128 + signal.SIGTERM:
+            assert b"stopped (SIGTERM); nothing written" in err
+            assert not any(tmp_path.iterdir())
+        for f in tmp_path.iterdir():
+            f.unlink()
+
+
+@pytest.mark.slow
+def test_sigint_stops_the_demo_within_a_second(tmp_path):
+    """Ctrl-C took 9.5–11 s to stop the demo (its second process ran on)."""
+    import signal
+    import time
+
+    p = subprocess.Popen(
+        [*WIRECAL, "demo", "-o", str(tmp_path / "demo")],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        # Ctrl-C as a terminal sends it, even where this test runs in a background job
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        start_new_session=True,
+    )
+    assert p.stdout is not None
+    for line in p.stdout:  # the progress lines, echoed as they come
+        if line.startswith("[2/7]"):  # the second process is at work too
+            break
+    time.sleep(0.5)
+    t = time.perf_counter()
+    p.send_signal(signal.SIGINT)
+    try:
+        _, err = p.communicate(timeout=30)  # EOF: every process holding the pipes has ended
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(p.pid, signal.SIGKILL)  # whatever is left of the demo's processes
+    stopped_s = time.perf_counter() - t
+    assert p.returncode == 128 + signal.SIGINT, err
+    assert "Fatal Python error" not in err
+    assert "Traceback" not in err
+    assert stopped_s < 2.0  # 1 s on a quiet machine; the CI machine is shared
+    assert not (tmp_path / "demo").exists()
+
+
+def test_a_validation_setup_in_another_frame_0_is_refused_clearly(viper):
+    """The Viper's validation.toml under a URDF import's frame 0 (floor at z = 0): 209
+    floor collisions before; now one line per place below the floor, naming frame 0."""
+    from dataclasses import replace
+
+    from wirecal.solver.errors import WirecalError
+    from wirecal.solver.formats.validation_files import load_setup
+    from wirecal.solver.validation import plate_grid
+
+    imported = replace(viper, cell=replace(viper.cell, floor_z_mm=0.0))
+    with pytest.raises(WirecalError) as info:
+        plate_grid(imported, load_setup(VIPER / "validation.toml"))
+    assert len(info.value.problems) == 2
+    assert (
+        "configuration.encoder_mm: z -150 mm lies below the robot file's floor"
+        in (info.value.problems[0])
+    )
+    assert "measure it again in this robot file's frame 0" in info.value.problems[1]
+    plate_grid(viper, load_setup(VIPER / "validation.toml"))  # the shipped pair still fits
+
+
+def _solve_text(tmp_path, text: str | bytes):
+    path = tmp_path / "run.csv"
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    r = invoke("solve", ROBOT, PLAN, path)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    return r.output
+
+
+def test_l06_quoted_lines_are_named(tmp_path, log):
+    quoted = "\n".join(f'"{x}"' for x in log.read_text().splitlines()) + "\n"
+    out = _solve_text(tmp_path, quoted)
+    assert "the first line is '\"# wirecal-log 2\"': lines and fields in double quotes" in out
+
+
+def test_nt14_utf16_is_named(tmp_path, log):
+    out = _solve_text(tmp_path, log.read_text().encode("utf-16-le"))
+    assert "UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8" in out
+    assert len(out.splitlines()) == 1
+
+
+def test_nl34_a_version_1_header_over_version_2_rows_is_one_problem(tmp_path, log):
+    text = log.read_text().replace("# wirecal-log 2", "# wirecal-log 1", 1)
+    text = text.replace(",t_s,settle_s\n", "\n", 1)
+    out = _solve_text(tmp_path, text)
+    assert re.search(r"\d+ rows have 14 fields where the column line names 12", out), out
+    assert "has 14 fields" not in out
+
+
+def test_r15_a_tiny_mm_per_count_is_named_as_the_cause(tmp_path):
+    robot = tmp_path / "r.toml"
+    robot.write_text(re.sub(r"mm_per_count = \S+", "mm_per_count = 1e-300", ROBOT.read_text()))
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert "encoder.mm_per_count: is 1e-300 mm" in r.output
+    assert len(max(r.output.splitlines(), key=len)) < 300  # no 300-digit count
+
+
+def test_nx19_max_exit_deg_in_radians_is_named(tmp_path):
+    robot = tmp_path / "r.toml"
+    robot.write_text(
+        ROBOT.read_text().replace(
+            'exit = "point"\n',
+            'exit = "eyelet"\naxis = [0.0, 0.0, 1.0]\nmax_exit_deg = 1.5708\n'
+            "exit_edge_radius_mm = 1.0\n",
+        )
+    )
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert "encoder.max_exit_deg: is 1.5708: that is 90 deg in radians; give degrees" in r.output
+
+
+def test_c17_theta0_nan_is_refused_as_an_option():
+    r = invoke("plan", ROBOT, "--theta0", "nan,-90,210,-90,0,-90")
+    assert r.exit_code == 2
+    assert "--theta0 'nan,-90,210,-90,0,-90': give 6 joint angles in degrees" in r.output
+
+
+def test_nd07_a_second_root_is_not_in_the_way(tmp_path):
+    """'2 root links (mount, …); name one with --base': the tip's own tree is the chain."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(URDF.read_text().replace("</robot>", '<link name="mount"/>\n</robot>'))
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    assert r.exit_code == 0, r.output
+
+
+@pytest.mark.parametrize(
+    ("point", "message"),
+    [
+        ("1e9,0,0", "1e+09 mm from the tip link's origin"),  # UD03
+        ("-0.06,0,0.05", "every coordinate under 1 mm: that looks like metres"),  # UD04
+    ],
+)
+def test_ud03_ud04_a_wire_point_out_of_place_is_refused(tmp_path, point, message):
+    r = invoke(
+        "import-urdf", URDF, "--tip", "wire", f"--wire-point-mm={point}", "-o", tmp_path / "r"
+    )
+    assert r.exit_code == 2
+    assert message in r.output
+
+
+def test_ns13_a_gauge_of_a_nanometre_is_refused(tmp_path):
+    robot = tmp_path / "r.toml"
+    robot.write_text(
+        ROBOT.read_text().replace("[encoder]\n", "[encoder]\nreference_length_mm = 1e-9\n")
+    )
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert "encoder.reference_length_mm: is 1e-09 mm: a gauge shorter than 50 mm" in r.output
+
+
+def test_rk13_a_full_disk_names_the_journal_and_what_it_keeps(tmp_path, monkeypatch):
+    """'error: file: No space left on device', exit 2: the journal was not named."""
+    import errno
+    import socket
+    import threading
+
+    import wirecal.app.receive as rec
+    from wirecal.solver.formats.plan_file import load_plan
+    from wirecal.solver.formats.robot_file import load_robot
+    from wirecal.solver.formats.run_token import run_token, token_line
+    from wirecal.solver.simulate import simulate_log
+
+    keep = rec._keep
+
+    def full_after_20(jf, result, line):
+        if len(result.lines) == 20:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        keep(jf, result, line)
+
+    monkeypatch.setattr(rec, "_keep", full_after_20)
+    ur5 = load_robot(VIPER.parent / "ur5e" / "robot.toml")
+    plan = load_plan(VIPER.parent / "ur5e" / "plan.toml", ur5)
+    text = simulate_log(ur5, plan, {}, seed=1, counter_start=1000.0)
+    ports, out, result = [], tmp_path / "run.csv", {}
+    thread = threading.Thread(
+        target=lambda: result.update(
+            r=rec.receive(0, out, ur5, plan, timeout_s=10, on_listening=ports.append)
+        ),
+        daemon=True,
+    )
+    thread.start()
+    while not ports:
+        thread.join(0.05)
+    with socket.create_connection(("127.0.0.1", ports[0]), timeout=10) as s:
+        hello = token_line(run_token(ur5, plan.fingerprint())) + "\n"
+        with contextlib.suppress(OSError):
+            s.sendall((hello + text + "# end\n").encode())
+    thread.join(20)
+    r = result["r"]
+    assert not r.complete
+    assert r.stopped.startswith(f"{rec.journal_path(out)}: No space left on device after line 20")
+    assert len(rec.journal_path(out).read_text().splitlines()) == 20
+    assert not out.exists()
+
+
+def test_nu02_a_16_bit_count_is_suspected_once(tmp_path, log):
+    """A filtered 16-bit count: 'wire length … is negative: is the sign of mm_per_count
+    right?' on every row; now once, naming the counter's width too."""
+    lines = log.read_text().splitlines()
+    first = next(float(x.split(",")[9]) for x in lines if x.startswith("zero,"))
+    shift = 2**15 - 1000 - round(first)  # θ0 just below the 16-bit counter's turn
+    for k, line in enumerate(lines):
+        cells = line.split(",")
+        if cells[0] in ("zero", "point"):
+            counts = round(float(cells[9])) + shift
+            cells[9] = f"{(counts + 2**15) % 2**16 - 2**15:.4f}"
+            lines[k] = ",".join(cells)
+    out = _solve_text(tmp_path, "\n".join(lines) + "\n")
+    assert "or the logged counts wrap sooner than the 24-bit counter" in out, out
+    assert out.count("is negative") == 0
+
+
+def test_cl24_body_limits_in_radians_are_named(tmp_path):
+    """psi flooded ~390 warnings and gen blamed joint 2's limits [-3.3, 0.78]."""
+    robot = tmp_path / "r.toml"
+    text = (VIPER.parent / "ur5e" / "robot.toml").read_text()
+    text = re.sub(
+        r"body_min_deg = \[.*\]", "body_min_deg = [-6.2, -6.2, -3.05, -6.2, -6.2, -6.2]", text
+    )
+    text = re.sub(r"body_max_deg = \[.*\]", "body_max_deg = [6.2, 0.78, 3.05, 6.2, 6.2, 6.2]", text)
+    robot.write_text(text)
+    r = invoke("psi", robot, VIPER.parent / "ur5e" / "plan.toml")
+    assert r.exit_code == 2
+    assert "cell.body_max_deg: every body limit is within ±2π: they look like radians" in r.output
+    assert len(r.output.splitlines()) < 5
+
+
+def test_the_spec_table_of_a_ur_sends_the_user_to_its_own_file(tmp_path):
+    """patch.spec.txt told UR and ABB users to use 'the Adept SPEC utility'."""
+    ur5 = VIPER.parent / "ur5e"
+    log_path = tmp_path / "run.csv"
+    assert invoke("simulate", ur5 / "robot.toml", ur5 / "plan.toml", "-o", log_path).exit_code == 0
+    r = invoke("solve", ur5 / "robot.toml", ur5 / "plan.toml", log_path, "-o", tmp_path / "p.toml")
+    assert r.exit_code == 0, r.output
+    spec = (tmp_path / "p.spec.txt").read_text()
+    assert "SPEC" not in spec
+    assert "the file ending .ur_calibration.conf beside" in spec
+
+
+@pytest.mark.slow
+def test_sigint_stops_the_report_at_once(tmp_path, log):
+    """SIGINT in report once ended in 'Fatal Python error … finalizing' (exit −6)."""
+    import signal
+    import time
+
+    for delay_s in (0.5, 1.5, 2.5):
+        p = subprocess.Popen(
+            [*WIRECAL, "report", str(ROBOT), str(PLAN), str(log), "-o", str(tmp_path / "r.html")],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        )
+        time.sleep(delay_s)
+        t = time.perf_counter()
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=30)
+        if p.returncode == 0:  # finished before the signal
+            (tmp_path / "r.html").unlink()
+            continue
+        assert p.returncode == 128 + signal.SIGINT, err
+        assert "Fatal Python error" not in err
+        assert time.perf_counter() - t < 2.0
+        assert not (tmp_path / "r.html").exists()
+
+
+@pytest.mark.parametrize("ppm", [5000, -5000])
+def test_ns07_ns08_a_scale_error_without_a_gauge_names_the_scale(tmp_path, ppm):
+    """A 0.5 % scale error without a gauge: exit 3 with the generic advice only."""
+    log_path = tmp_path / "run.csv"
+    args = ["-o", log_path, "--encoder-scale-ppm", ppm]
+    assert invoke("simulate", ROBOT, PLAN, *args).exit_code == 0
+    r = invoke("solve", ROBOT, PLAN, log_path)
+    assert r.exit_code == 3
+    assert "an encoder scale off beyond [encoder] scale_tolerance_ppm: check mm_per_count" in (
+        " ".join(r.output.split())
+    )
+
+
+def test_nd21_overflowing_origins_are_refused_before_any_arithmetic(tmp_path):
+    """Overflow warnings and 'differs … by inf mm; please report this URDF' before."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(URDF.read_text().replace('xyz="0 0 0.3"', 'xyz="0 0 1e308"', 1))
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    assert r.exit_code == 2
+    assert "origin xyz 0 0 1e+308 is beyond 10 m" in r.output
+    assert "inf" not in r.output
+    assert "please report" not in r.output

@@ -297,8 +297,9 @@ def test_wire_slip_names_the_step_to_repeat(viper, paper_plan):
 def test_negative_distance_points_at_the_sign(viper, paper_plan, log_text):
     text = log_text.replace("# mm_per_count: 0.025488", "# mm_per_count: -0.025488")
     got = problems(text, viper, paper_plan)
-    assert got
-    assert all("is negative: is the sign of mm_per_count right?" in p for p in got)
+    assert len(got) == 1  # one problem for every negative length (issue 35 NU02)
+    assert "points read negative wire lengths" in got[0]
+    assert "the sign of mm_per_count is wrong, or the logged counts wrap sooner" in got[0]
 
 
 def test_missing_header_and_zero(viper, paper_plan, log_text):

@@ -307,7 +307,8 @@ def test_gen_failure_removes_the_folder_it_made(tmp_path, monkeypatch):
         (["gen", ROBOT, PLAN, "-o", "OUT", "--margin", "-1"], "is not in the range x>=0"),
         (["plan", ROBOT, "-o", "OUT", "--tol", "nan"], "not a finite number"),
         (["psi", ROBOT, PLAN, "--tol", "nan"], "not a finite number"),
-        (["demo", "-o", "OUT", "--scale", "-1"], "is not in the range x>=0"),
+        (["demo", "-o", "OUT", "--scale", "-1"], "is not in the range 0.0<=x<=2.5"),
+        (["demo", "-o", "OUT", "--scale", "20"], "is not in the range 0.0<=x<=2.5"),  # NG08
         (["demo", "-o", "OUT", "--seed", "-5"], "is not in the range"),
     ],
 )

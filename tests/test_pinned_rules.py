@@ -12,7 +12,7 @@ from wirecal.solver.accuracy import tool_error
 from wirecal.solver.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.kinematics import Model
 from wirecal.solver.plan_options import PlanOptions
-from wirecal.solver.plan_steps import step_error
+from wirecal.solver.plan_steps import isolating, step_error
 from wirecal.solver.sensitivity import PSI_FLOOR, verdict
 
 
@@ -77,3 +77,17 @@ def test_the_planner_counts_the_leak_of_earlier_estimates():
     later = np.array([[0.5], [0.5]])
     value = step_error(psi_j, none, np.zeros((0, 0)), later, opt)
     assert value == pytest.approx(0.011**2 / 2 + opt.prior**2 * 0.5**2, rel=1e-12)
+
+
+def test_the_planner_isolates_by_the_psi_rule():
+    # The planner's isolating points (plan_steps.isolating) follow the one rule of
+    # wirecal psi (sensitivity.within_tolerance): |Ψ_t| ≤ max(tol·|Ψ_j|, 0.005), and the
+    # planner's own |Ψ_j| ≥ 0.05. With tol = 0.05: 0.05 · 2.0 = 0.1 (equal passes);
+    # 0.05 · 0.06 = 0.003 < 0.005, so the floor decides at |Ψ_j| = 0.06.
+    psi = np.array(
+        [[2.0, 0.1], [2.0, 0.1001], [0.06, 0.0049], [0.06, 0.0051], [0.049, 0.0], [0.05, 0.0]]
+    )
+    found = isolating(psi, {"j": 0, "t": 1}, "j", ["j", "t"], PlanOptions(tol=0.05))
+    assert found.tolist() == [True, False, True, False, False, True]
+    alone = isolating(psi, {"j": 0, "t": 1}, "j", ["j"], PlanOptions(tol=0.05))
+    assert alone.tolist() == [True, True, True, True, False, True]  # no other: |Ψ_j| only

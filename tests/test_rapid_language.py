@@ -215,3 +215,16 @@ def test_any_configuration_text_reads_without_a_crash(text: str) -> None:
 
     signals = config_signals(text)
     assert all(t.startswith("signal") for t in signals.values())
+
+
+def test_a_for_variable_lives_only_in_its_loop():
+    """RAPID Reference Manual, FOR, p. 8-FOR-2 (yumpu.com/en/document/view/5679047, page
+    292): "The loop counter (of data type num) can only be accessed from within the FOR loop
+    and consequently hides other data and routines that have the same name." Read after
+    ENDFOR it is an unknown name; a string i hidden by the loop is a string again after it."""
+    loop = ("FOR i FROM 1 TO 3 DO", '  TPWrite "x"\\Num:=i;', "ENDFOR")
+    after = Rapid().lint(module(*loop, 'TPWrite "y"\\Num:=i;'), "t.mod")
+    assert len(after) == 1
+    assert after[0].startswith("t.mod:6: unknown data name i")
+    hidden = module(*loop, "TPWrite i;", data=('VAR string i := "s";',))
+    assert Rapid().lint(hidden, "t.mod") == []

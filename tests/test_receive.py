@@ -491,7 +491,7 @@ def test_gen_writes_and_names_the_token_receive_expects(tmp_path, ur5, plan):
         texts.append((tmp_path / folder / "wc_run.script").read_text())
     assert texts[0] == texts[1]
     assert f'  socket_send_line("{token_line(token)}", "wc")\n' in texts[0]
-    assert f"'wirecal receive --robot {ROBOT} --plan {PLAN} -o LOG'" in r.stdout
+    assert f"'wirecal receive {ROBOT} {PLAN} -o LOG'" in r.stdout
     assert f"(it listens on 192.168.1.10:50000, run token {token[:6]}…)" in r.stdout
     assert "[controller] key is not set" in r.stderr
 

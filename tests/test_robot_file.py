@@ -176,8 +176,9 @@ CASES = {
     ),
     "tiny scale": (
         lambda d: d["encoder"].__setitem__("mm_per_count", 1e-300),
-        "r.toml: encoder.counter_bits: a signed 24-bit counter tells lengths apart up to "
-        "8388608 counts (8.38861e-294 mm at 1e-300 mm/count)",
+        "r.toml: encoder.mm_per_count: is 1e-300 mm: range_mm 1250 would be 1.25e+303 "
+        "counts, more than a 64-bit counter holds; give the encoder's resolution in mm per "
+        "count",  # issue 35 R15: the cause named, not the counter's width
     ),
     "boolean is not a number": (
         lambda d: d["tool"].__setitem__("point_mm", [-60.0, True, 50.0]),

@@ -15,7 +15,6 @@ import re
 import numpy as np
 import pytest
 
-from wirecal.app.twin_runs import measure_in_twin
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.formats.log import load_measurements, read_log
@@ -28,6 +27,8 @@ from wirecal.solver.run_parameters import (
 )
 from wirecal.twin.run_moves import move_of_step, run_targets
 from wirecal.twin.world import Faults
+
+from .twin_runs import measure_in_twin
 
 TRUTH = {"th2": 0.05, "th3": -0.04, "a2": 0.1, "d4": -0.08}
 

@@ -13,6 +13,7 @@ from click.testing import CliRunner
 from wirecal.cli.main import main
 from wirecal.solver.errors import Problems, WirecalError
 from wirecal.solver.formats.patch import PatchMeta, PatchValue, patch_text, read_patch
+from wirecal.solver.formats.patch_digest import seal
 from wirecal.solver.formats.plan_file import plan_from_dict
 from wirecal.solver.formats.robot_file import robot_from_dict
 from wirecal.solver.formats.toml_fields import Table, document
@@ -254,13 +255,13 @@ def test_patch_unidentified_std_and_verdict(viper, paper_plan, tmp_path):
     the points do not identify: both read back."""
     path = tmp_path / "patch.toml"
     text = _patch(viper, paper_plan).replace("std = 0.02", "std = inf")
-    path.write_text(
-        text.replace("[parameters.th2]", 'plausibility = "overridden: x"\n\n[parameters.th2]')
+    path.write_text(  # as solve writes it: sealed with the mark
+        seal(text.replace("[parameters.th2]", 'plausibility = "overridden: x"\n\n[parameters.th2]'))
     )
     patch = read_patch(path)
     assert patch.meta.plausibility == "overridden: x"
     assert patch.parameters["a2"].std == float("inf")
-    path.write_text(text.replace("std = inf", "std = -inf"))
+    path.write_text(seal(text.replace("std = inf", "std = -inf")))
     with pytest.raises(WirecalError, match=r"parameters\.a2\.std: is -inf; give a number ≥ 0 mm"):
         read_patch(path)
 
@@ -296,7 +297,7 @@ def test_patch_refused(viper, paper_plan, tmp_path, edit, message):
 
 def test_patch_of_another_robot_or_plan(viper, paper_plan, printed_plan, tmp_path):
     path = tmp_path / "patch.toml"
-    path.write_text(_patch(viper, printed_plan).replace("Adept Viper s650", "UR5"))
+    path.write_text(seal(_patch(viper, printed_plan).replace("Adept Viper s650", "UR5")))
     with pytest.raises(WirecalError) as info:
         read_patch(path).offsets_for(viper, paper_plan)
     assert info.value.problems == [

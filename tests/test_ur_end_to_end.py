@@ -17,10 +17,11 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
+from wirecal.lang.registry import language
+from wirecal.solver.formats.patch_companion import read_companion
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.truth import random_errors
-from wirecal.solver.formats.ur_calibration import read_ur_calibration
 from wirecal.twin.urscript.controller import URController
 from wirecal.twin.urscript.runs import run_ur_programs
 from wirecal.twin.world import World
@@ -107,7 +108,7 @@ def test_gen_twin_receive_solve(tmp_path):
     data = json.loads(solved.stdout)
     joint = data["methods"]["joint"]["parameters"]
     assert max(abs(v - truth.get(k, 0.0)) for k, v in joint.items()) < 0.05
-    deltas = read_ur_calibration(tmp_path / "patch.ur_calibration.conf")
+    deltas = read_companion(tmp_path / "patch.ur_calibration.conf", language("urscript"))
     assert set(deltas) == {"delta_theta", "delta_a", "delta_d", "delta_alpha"}
     # th2 (deg) is the second joint's delta_theta (rad)
     assert deltas["delta_theta"][1] == pytest.approx(np.radians(joint["th2"]), abs=1e-9)

@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 from wirecal.app.receive import summary
-from wirecal.app.twin_runs import measure_ur_in_twin
 from wirecal.gen.urscript.program import scripts
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import load_measurements, parse_log, read_log
@@ -22,6 +21,8 @@ from wirecal.solver.measurements import check_log
 from wirecal.solver.solve import solve
 from wirecal.twin.run_moves import move_of_step
 from wirecal.twin.world import Faults, World
+
+from .twin_runs import measure_ur_in_twin
 
 HEADER_LINES = 6  # the wirecal-log header and the column line
 

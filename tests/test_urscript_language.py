@@ -15,6 +15,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.gen.request import GenRequest
+from wirecal.lang.urscript import URScript
 from wirecal.lang.urscript.parser import BUILTINS, parse_program
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.urscript.interp import Interpreter
@@ -207,23 +209,26 @@ def _ur5_with(software: str | None):
 @pytest.mark.parametrize(
     ("software", "refused"),
     [
-        ("3.15", ["time()", 'opt="raw"', "inputs 8-11"]),  # CB3: none confirmed
+        ("3.7", ["filtered count", "inputs 8-11"]),  # CB3 before the conveyor guide's 3.8
+        ("3.15", []),  # CB3: the filtered count, no clock (gen/urscript/cb3.py)
+        ("5.1", ["time()", 'opt="raw"', "inputs 8-11"]),
         ("5.11", ["time()", 'opt="raw"']),
         ("5.19.2", ['opt="raw"']),
         ("5.20", []),
         ("5.25.1", []),
+        ("10.7", ["time()", 'opt="raw"', "inputs 8-11"]),  # PolyScope X: pages not read
     ],
 )
 def test_generation_refuses_calls_older_software_lacks(software, refused):
-    from wirecal.gen.urscript.program import scripts
+    from wirecal.gen.urscript import GENERATOR
 
     robot, plan = _ur5_with(software)
     if not refused:
-        out = scripts(robot, plan)
+        out = GENERATOR.programs(robot, plan, GenRequest())
         assert f"# Controller software: {software}." in out["wc_run.script"]
         return
     with pytest.raises(WirecalError) as info:
-        scripts(robot, plan)
+        GENERATOR.programs(robot, plan, GenRequest())
     lines = info.value.problems
     assert len(lines) == len(refused), lines  # each rule once
     for what in refused:
@@ -238,8 +243,7 @@ def test_generation_refuses_calls_older_software_lacks(software, refused):
     [
         ("5.x", 'give the version as numbers, e.g. "5.20"'),
         ("", "give a non-empty string"),
-        ("10.7", "wirecal knows CB3 3.x, e-Series (PolyScope 5) 5.x"),
-        ("6.0", "wirecal knows CB3 3.x"),
+        ("6.0", "wirecal knows CB3 3.x, e-Series (PolyScope 5) 5.x, PolyScope X 10.x"),
     ],
 )
 def test_software_key_is_checked(software, message):
@@ -328,10 +332,28 @@ def test_a_generated_program_breaking_a_rule_is_an_internal_error():
     from wirecal.gen.urscript.program import software_problems
 
     robot, _ = _ur5_with("5.20")
+
+    def lint(text: str) -> list[str]:
+        return URScript().lint(text, "wc_x.script", "5.20")
+
     with pytest.raises(WirecalError) as info:
-        software_problems(robot, {"wc_x.script": program("y = z")})
+        software_problems(robot, lint(program("y = z")))
     assert info.value.problems == [
         "internal error: a generated program breaks a URScript rule (please report):",
         "wc_x.script:2: variable z is read but never assigned",
     ]
-    assert software_problems(robot, {"wc_x.script": program("y = 1")}) == []
+    assert software_problems(robot, lint(program("y = 1"))) == []
+
+
+# ---------- statements on one joined text (ur_rtde's injected register offset) ----------
+def test_a_statement_after_another_on_a_joined_text_is_read_as_the_controller_reads_it():
+    sent = "def p():\n  global a = # offset\n24  global b = # offset\n24  x = a + b\nend\n"
+    assert problems(sent) == []
+    assert any("bad syntax" in p for p in problems(sent.replace("24  global b", "24 ) global b")))
+
+
+def test_splitting_a_hostile_joined_text_is_bounded():
+    text = "def p():\n  x = 1 +\n" + "  y = 1 " * 5000 + "z = (\nend\n"
+    found = problems(text)  # a message, never RecursionError, in well under a second
+    assert found
+    assert all(p.startswith("t.script:") for p in found)

@@ -327,3 +327,16 @@ def test_pulse_decoder_arguments_are_checked(ur5, tmp_path, call, message):
     out = run_on(cell_for(ur5, tmp_path), call)
     assert out.status == "error"
     assert out.message == message
+
+
+def test_round_and_floor_at_halves():
+    """floor(f): the largest integer not greater than f (SD 16.9, confirmed), so
+    floor(-2.5) = -3 (not -2, as truncation gives). round(f) at a half: the twin rounds
+    half up, round(2.5) = 3 and round(-2.5) = -2 (not Python's round half to even, 2 and
+    -2); the manual's rule for halves was not read: unconfirmed."""
+    out = run(
+        'textmsg(str_cat("", floor(-2.5)), str_cat(" ", floor(2.5)))',
+        'textmsg(str_cat("", round(2.5)), str_cat(" ", round(-2.5)))',
+        'textmsg(str_cat("", round(3.5)), str_cat(" ", round(-0.4)))',
+    )
+    assert out.console == ["-3 2", "3 -2", "4 0"]

@@ -134,7 +134,7 @@ def test_validate_command_needs_the_robot_for_a_configuration_log(tmp_path):
     path = str(_config_log(tmp_path, rows))
     r = CliRunner().invoke(main, ["validate", "configuration", path, "--json"])
     assert r.exit_code != 0
-    assert "give --robot ROBOT.toml" in r.output
+    assert "give the robot file: wirecal validate ROBOT.toml configuration" in r.output
     r = CliRunner().invoke(
         main, ["validate", "configuration", path, "--robot", str(VIPER / "robot.toml"), "--json"]
     )

@@ -99,10 +99,10 @@ def test_double_literals_are_whole_doubles_and_close(x):
 
 # ---------- the conveyor-tracking option, checked before any motion (UG pp. 310, 317) ----------
 def test_without_the_conveyor_option_nothing_moves(viper, paper_plan, tmp_path):
-    from wirecal.app.twin_runs import measure_in_twin
     from wirecal.twin.world import Faults
 
     from .conftest import TABLE5
+    from .twin_runs import measure_in_twin
 
     r = measure_in_twin(
         viper, paper_plan, TABLE5, tmp_path, seed=1, faults=Faults(no_conveyor_option=True)

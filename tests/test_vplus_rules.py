@@ -288,12 +288,14 @@ def test_lint_cli(tmp_path):
     runner = CliRunner()
     r = runner.invoke(main, ["lint", str(good)])
     assert r.exit_code == 0, r.output
-    r = runner.invoke(main, ["lint", str(good), str(bad)])
+    r = runner.invoke(main, ["lint", "--separately", str(good), str(bad)])
     assert r.exit_code == 1
     lines = r.stdout.strip().splitlines()
     assert len(lines) == 2, lines
     assert lines[0].startswith(f"{bad}:2: t.main: 'off' is a V+ keyword")
     assert lines[1].startswith(f"{bad}:3: t.main: 'pi' is a V+ keyword")
+    together = runner.invoke(main, ["lint", str(good), str(bad)]).stdout  # one memory
+    assert f"{bad}:1: program t.main is also defined in {good}" in together
     r = runner.invoke(main, ["lint", str(good), str(tmp_path / "MISSING.V2")])
     assert r.exit_code == 2
     assert "error: " in r.stderr

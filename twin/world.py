@@ -16,11 +16,14 @@ reported with the colliding pair (:meth:`World.collision`), as a real protective
 A language's controller adapter (``twin/<key>/controller.py``) holds a World and maps its
 instructions onto these methods, raising its own errors with its own codes:
 
-* motion, in this order for a move: :meth:`beyond_limits` (against ``limits``),
-  :meth:`collision`, :meth:`profile` (time, vibration and wire speed of a joint move),
-  :meth:`wire_overspeed`, :meth:`arrive` (after the language's own move time),
-  :meth:`vibrate`; ``joints`` (commanded, deg, single precision), ``actual`` (where the
-  arm really is), ``moves`` (counted; a run sets it to 0 after mounting);
+* motion: :meth:`move`, the one move protocol: it refuses a target beyond the
+  controller's joint limits (:class:`BeyondLimit`), a move into the arm itself, the floor
+  or the cell (:class:`Collision`), a move that would run the wire beyond the encoder's
+  speed or acceleration (:class:`WireOverspeed`), in that order, returning the
+  :data:`Refusal` the controller maps to its own stop; else the arm arrives (after the
+  profile's time, or the language's own) and vibrates along the wire. ``joints``
+  (commanded, deg, single precision), ``actual`` (where the arm really is), ``moves``
+  (counted; a run sets it to 0 after mounting);
 * encoder: :meth:`read_count` (one read, the unwrapped count; wrap it with the counter the
   language reads; raises :class:`EncoderFailure`, :class:`~wirecal.twin.machine.RunError`
   −1100 beyond the wire's range);
@@ -46,6 +49,7 @@ from wirecal.solver.counter import Counter
 from wirecal.solver.exit_geometry import physical_wire_mm
 from wirecal.solver.ik import flange_pose
 from wirecal.solver.kinematics import tool_position
+from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import VIBRATION_HZ, VIBRATION_TAU_S, Moves, move_profiles
 from wirecal.solver.simulate import (
@@ -57,6 +61,10 @@ from wirecal.solver.simulate import (
     reference_lengths,
 )
 from wirecal.twin.machine import Outcome, RunError, f32
+
+IN_PLACE_DEG = 1e-3
+"""A move shorter than this on every joint (deg) stays in place: a target equal to the
+commanded joints up to a language's literals (URScript's radians, single precision)."""
 
 RANGE_EXCEEDED_CODE = -1100
 """The twin's own code for a wire pulled beyond the encoder's range."""
@@ -83,6 +91,35 @@ DEFAULT_UNMODELLED = Unmodelled()
 
 class EncoderFailure(Exception):
     """The encoder stopped counting (the fault ``encoder_fails_at_read``)."""
+
+
+@dataclass(frozen=True)
+class BeyondLimit:
+    """A move's target beyond the controller's joint limits (joint 0-based, deg)."""
+
+    joint: int
+    target_deg: float
+    min_deg: float
+    max_deg: float
+
+
+@dataclass(frozen=True)
+class Collision:
+    """A move into the arm itself, the floor or the cell: the move and the colliding pair."""
+
+    where: str  # "move N to (q…): <the pair> … at joints (…)"
+
+
+@dataclass(frozen=True)
+class WireOverspeed:
+    """A move that would run the wire beyond the encoder's speed or acceleration."""
+
+    move: str  # "move N to (q…)"
+    why: str  # the speed or acceleration and the encoder's limit
+
+
+Refusal = BeyondLimit | Collision | WireOverspeed
+"""Why :meth:`World.move` refused a move (each controller maps it to its own stop)."""
 
 
 @dataclass(frozen=True)
@@ -185,13 +222,43 @@ class World:
         self.clock += seconds
 
     # ---- motion ----
-    def beyond_limits(self, q_deg: np.ndarray) -> int | None:
-        """Return the index of the first joint beyond the controller's limits, if any."""
-        lo, hi = self.limits.limits_deg(body=False)
-        out = np.flatnonzero((q_deg < lo) | (q_deg > hi))
-        return int(out[0]) if out.size else None
+    def move(
+        self, q_deg: np.ndarray, speed_pct: float, duration_s: float | None = None
+    ) -> Refusal | None:
+        """Move the arm to ``q_deg`` at ``speed_pct``, or return why the cell refuses.
 
-    def collision(self, q_deg: np.ndarray) -> str | None:
+        Checks, in this order, the controller's joint limits (``limits``), a collision on
+        the joint-interpolated move, the wire's speed and acceleration (when the run
+        enforces them: ``wire_limits``); the arm then arrives after ``duration_s`` (the
+        language's own move time) or the move profile's, and vibrates along the wire. A
+        target within :data:`IN_PLACE_DEG` of the commanded joints is a move in place (no
+        travel: the profile of a vanishing move is not resolved).
+        """
+        q = np.asarray(q_deg, dtype=float)
+        lo, hi = self.limits.limits_deg(body=False)
+        beyond = np.flatnonzero((q < lo) | (q > hi))
+        if beyond.size:
+            j = int(beyond[0])
+            return BeyondLimit(j, float(q[j]), float(lo[j]), float(hi[j]))
+        hit = self._collision(q)
+        if hit is not None:
+            return Collision(f"{self._move_name(q)}: {hit}")
+        start = np.asarray(self.joints, dtype=float)
+        in_place = float(np.max(np.abs(q - start))) < IN_PLACE_DEG
+        move = self._profile(start if in_place else q)
+        over = self._wire_overspeed(move, speed_pct)
+        if over is not None:
+            return WireOverspeed(self._move_name(q), over)
+        speed = np.asarray(speed_pct)
+        self._arrive(q, float(move.duration_s(speed)[0]) if duration_s is None else duration_s)
+        self._vibrate(float(move.vibration_mm(speed)[0]))
+        return None
+
+    def _move_name(self, q_deg: np.ndarray) -> str:
+        """Name the next move: its number and target (deg)."""
+        return f"move {self.moves + 1} to ({', '.join(f'{x:g}' for x in q_deg)})"
+
+    def _collision(self, q_deg: np.ndarray) -> str | None:
         """Return where the true arm collides on the move to ``q_deg``, or None.
 
         The joint-interpolated move from the current joints, sampled as the planner
@@ -200,17 +267,13 @@ class World:
         (the planner's margin aside), a real arm would stop (a protective stop).
         """
         start = np.asarray(self.joints, dtype=float)
-        target = np.asarray(q_deg, float)
-        hit = move_collision(self.robot, self.model, self.p0, start, target, contact=True)
-        if hit is None:
-            return None
-        return f"move {self.moves + 1} to ({', '.join(f'{x:g}' for x in q_deg)}): {hit}"
+        return move_collision(self.robot, self.model, self.p0, start, q_deg, contact=True)
 
-    def profile(self, q_deg: np.ndarray) -> Moves:
+    def _profile(self, q_deg: np.ndarray) -> Moves:
         """Return the move from the current joints to ``q_deg`` on the true arm."""
         return move_profiles(self.robot, self.model, self.p0, np.asarray(self.joints), q_deg)
 
-    def wire_overspeed(self, move: Moves, speed_pct: float) -> str | None:
+    def _wire_overspeed(self, move: Moves, speed_pct: float) -> str | None:
         """Return why ``move`` at ``speed_pct`` would run the wire beyond the encoder's limits.
 
         None when within them, or when the run does not enforce them (``wire_limits``).
@@ -232,7 +295,7 @@ class World:
             )
         return None
 
-    def arrive(self, q_deg: np.ndarray, seconds: float) -> None:
+    def _arrive(self, q_deg: np.ndarray, seconds: float) -> None:
         """End a move at ``q_deg`` after ``seconds``: the clock, the true arm, the faults."""
         self.clock += seconds
         self.joints = tuple(f32(x) for x in q_deg)
@@ -243,7 +306,7 @@ class World:
             self.slip += f.slip_mm
         self.pose_error = self.rng.normal(0, self.noise_mm)
 
-    def vibrate(self, amplitude_mm: float) -> None:
+    def _vibrate(self, amplitude_mm: float) -> None:
         """Start the vibration along the wire after a move.
 
         It decays, or with the fault "still vibrating" it does not, until the operator
@@ -348,6 +411,58 @@ class TwinRun:
     mount: Outcome  # the mounting program's outcome
     run: Outcome | None  # the measurement program's (None: not started)
     controller: Any = None  # the language's controller adapter, with its own state
+
+
+def measurement_world(
+    robot: Robot,
+    plan: Plan,
+    truth: dict[str, float],
+    folder: Path,
+    counter: Counter,
+    *,
+    seed: int = 0,
+    noise_mm: float = 0.01,
+    counter_start: float | None = None,
+    faults: Faults | None = None,
+    unmodelled: Unmodelled | None = None,
+    wire_limits: bool = True,
+    **world: Any,
+) -> World:
+    """Return the world of a measurement run, whatever the language: the one run factory.
+
+    The arm at the plan's θ0 with offsets ``truth``, the disk ``folder`` (created), the
+    count at zero wire length on the ``counter`` the language reads
+    (:func:`counter_start_of`), the wire's speed and acceleration limits enforced unless
+    ``wire_limits`` is False. ``world``: further :class:`World` fields (the operator's
+    answers, the encoder's truth…).
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    return World(
+        robot,
+        truth,
+        plan.theta0_deg,
+        folder,
+        seed=seed,
+        noise_mm=noise_mm,
+        counter_start=counter_start_of(counter, seed, counter_start),
+        faults=faults or Faults(),
+        unmodelled=unmodelled,
+        wire_limits=wire_limits,
+        **world,
+    )
+
+
+def mount_then_run(
+    world: World, mount: Callable[[], Outcome], run: Callable[[], Outcome]
+) -> tuple[Outcome, Outcome | None]:
+    """Run the mounting program, then (if it completed) the measurement program.
+
+    The world's move count starts again for the run: fault positions count its moves
+    (:func:`~wirecal.twin.run_moves.move_of_step`).
+    """
+    mounted = mount()
+    world.moves = 0
+    return mounted, run() if mounted.status == "completed" else None
 
 
 def counter_start_of(counter: Counter, seed: int, counter_start: float | None) -> float:

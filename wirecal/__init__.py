@@ -62,11 +62,11 @@ _API = {
     # the plausibility gate between identification and any output
     "gate": "wirecal.app.gate",
     "assess": "wirecal.solver.plausibility",
-    # generate the controller programs
-    "module_text": "wirecal.gen.vplus.program",
-    "write_module": "wirecal.gen.vplus.program",
-    "GenOptions": "wirecal.gen.vplus.program",
-    # the digital twin
+    # generate the controller programs, in the robot file's language
+    "generate": "wirecal.app.twin_runs",
+    "write_programs": "wirecal.app.twin_runs",
+    "GenRequest": "wirecal.gen.request",
+    # the digital twin, in the robot file's language
     "measure_in_twin": "wirecal.app.twin_runs",
     "compare_controller": "wirecal.app.compare",
     "ControllerComparison": "wirecal.app.compare",

@@ -5,8 +5,9 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
+from wirecal.gen.backends import Generator
 from wirecal.gen.rapid.program import RapidOptions, module_text, write_module
-from wirecal.gen.request import GenRequest, refuse_unsupported
+from wirecal.gen.request import GenRequest
 from wirecal.lang.rapid import Rapid
 from wirecal.lang.rapid.module import LOG_DIR, LOG_FILE, MODULE_FILE, signal_name
 from wirecal.solver.plan import Plan
@@ -14,7 +15,7 @@ from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import PAPER_RUN
 
 
-class RapidGenerator:
+class RapidGenerator(Generator):
     """:func:`~wirecal.gen.rapid.program.module_text` for a :class:`GenRequest`."""
 
     key = Rapid.key
@@ -24,18 +25,15 @@ class RapidGenerator:
     default_run = PAPER_RUN
 
     def options(self, request: GenRequest) -> RapidOptions:
-        """Return the module's options for ``request`` (refusing what it does not take)."""
-        refuse_unsupported(request, self.refuses, Rapid.title)
+        """Return the module's options for ``request``."""
         return RapidOptions(
             run=request.run or self.default_run,
             zero_tol_mm=request.zero_tol_mm,
             spread_tol_mm=request.spread_tol_mm,
-            margin_deg=request.margin_deg,
-            range_margin_mm=request.range_margin_mm,
             solver=request.solver,
         )
 
-    def programs(self, robot: Robot, plan: Plan, request: GenRequest) -> dict[str, str]:
+    def render(self, robot: Robot, plan: Plan, request: GenRequest) -> dict[str, str]:
         """Return ``{"WIRECAL.mod": text}`` (LF line ends; :meth:`write` sets them)."""
         return {MODULE_FILE: module_text(robot, plan, self.options(request))}
 

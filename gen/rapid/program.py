@@ -24,7 +24,7 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import check_limits, joint_target, name_problems, run_steps
+from wirecal.gen.targets import joint_target, name_problems, run_steps
 from wirecal.gen.templating import render
 from wirecal.lang.rapid.module import (
     GROUP_COUNTER_BITS,
@@ -35,7 +35,6 @@ from wirecal.lang.rapid.module import (
     num_literal,
     signal_name,
 )
-from wirecal.solver.cell_check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
@@ -48,7 +47,6 @@ from wirecal.solver.run_parameters import (
     RunParameters,
     run_timeline,
 )
-from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 
 STRING_MAX = 80
 """A RAPID string's longest value, in characters (unconfirmed)."""
@@ -80,8 +78,6 @@ class RapidOptions:
     run: RunParameters = PAPER_RUN
     zero_tol_mm: float = 0.1  # a zero reading further from the previous: the wire slipped
     spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
-    margin_deg: float = 1.0  # every generated target at least this far inside a limit
-    range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
     solver: bool = True  # wc_run ends with wc_solve, the controller's step-by-step solver
 
 
@@ -207,12 +203,9 @@ def _check(robot: Robot, opt: RapidOptions) -> None:
 def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) -> str:
     """Return the module WIRECAL's text; raise :class:`WirecalError` if a rule would break.
 
-    A target within ``margin_deg`` of a joint limit, a wire length beyond the encoder's
-    range or a move into the cell is refused before anything is written.
+    Rendering only: the plan's safety is the pre-flight's
+    (:meth:`wirecal.gen.backends.Generator.programs`).
     """
-    check_limits(robot, plan, opt.margin_deg)
-    check_wire_range(robot, plan, opt.range_margin_mm)
-    check_cell(robot, plan)
     _check(robot, opt)
     tables = build_tables(robot, plan)
     mpc = robot.encoder.mm_per_count

@@ -5,8 +5,15 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
-from wirecal.gen.request import GenRequest, refuse_unsupported
-from wirecal.gen.urscript.program import UrOptions, pc_address, scripts, write_scripts
+from wirecal.gen.backends import Generator
+from wirecal.gen.request import GenRequest
+from wirecal.gen.urscript.program import (
+    UrOptions,
+    pc_address,
+    scripts,
+    software_problems,
+    write_scripts,
+)
 from wirecal.lang.urscript import URScript
 from wirecal.lang.urscript.versions import NEEDED
 from wirecal.solver.formats.run_token import NO_KEY, run_token
@@ -15,7 +22,7 @@ from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import PAPER_RUN
 
 
-class URScriptGenerator:
+class URScriptGenerator(Generator):
     """:func:`~wirecal.gen.urscript.program.scripts` for a :class:`GenRequest`."""
 
     key = URScript.key
@@ -25,22 +32,23 @@ class URScriptGenerator:
     default_run = PAPER_RUN
 
     def options(self, request: GenRequest) -> UrOptions:
-        """Return the scripts' options for ``request`` (refusing what they do not take)."""
-        refuse_unsupported(request, self.refuses, URScript.title)
+        """Return the scripts' options for ``request``."""
         return UrOptions(
             run=request.run or self.default_run,
             host=request.host,
             port=request.port,
             zero_tol_mm=request.zero_tol_mm,
             spread_tol_mm=request.spread_tol_mm,
-            margin_deg=request.margin_deg,
-            range_margin_mm=request.range_margin_mm,
             solver=request.solver,
         )
 
-    def programs(self, robot: Robot, plan: Plan, request: GenRequest) -> dict[str, str]:
+    def render(self, robot: Robot, plan: Plan, request: GenRequest) -> dict[str, str]:
         """Return the three ``.script`` files by name."""
         return scripts(robot, plan, self.options(request))
+
+    def checker_problems(self, robot: Robot, problems: list[str]) -> list[str]:
+        """Return the calls the declared software lacks (the user's); raise on a defect."""
+        return software_problems(robot, problems)
 
     def write(
         self,
@@ -61,7 +69,8 @@ class URScriptGenerator:
             out.append(
                 f"{robot_path}: [controller] software not declared; the programs need "
                 f"e-Series software {'.'.join(map(str, NEEDED))} or later "
-                "(docs/languages.md); declare it and a CB3 or older version is refused"
+                "(docs/languages.md); declare it: a CB3 (3.x) gets the CB3 programs, and a "
+                "version whose pages lack a call they make is refused"
             )
         if robot.controller.key is None:
             out.append(f"{robot_path}: {NO_KEY}")
@@ -75,8 +84,8 @@ class URScriptGenerator:
         where = f" --host {host} --port {port}" if request.host or request.port else ""
         token = run_token(robot, plan.fingerprint())[:6]
         return (
-            f"run wc_mount, wc_check, then on the PC 'wirecal receive --robot {robot_path} "
-            f"--plan {plan_path}{where} -o LOG' (it listens on {host}:{port}, run token "
+            f"run wc_mount, wc_check, then on the PC 'wirecal receive {robot_path} "
+            f"{plan_path}{where} -o LOG' (it listens on {host}:{port}, run token "
             f"{token}…) and wc_run"
         )
 

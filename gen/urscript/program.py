@@ -23,15 +23,15 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import check_limits, joint_target, name_problems, run_steps
+from wirecal.gen.targets import joint_target, name_problems, run_steps
 from wirecal.gen.templating import render
+from wirecal.gen.urscript.cb3 import FILTERED_RANGE, is_cb3, move_legs
 from wirecal.lang.urscript import URScript
-from wirecal.lang.urscript.parser import parse_program
-from wirecal.lang.urscript.versions import NEEDED, is_refusal
-from wirecal.solver.cell_check import check_cell
+from wirecal.lang.urscript.versions import is_refusal, needed
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
+from wirecal.solver.formats.log import COLUMNS_V1
 from wirecal.solver.formats.log import VERSION as LOG_VERSION
 from wirecal.solver.formats.run_token import run_token, token_line
 from wirecal.solver.plan import Plan
@@ -42,16 +42,12 @@ from wirecal.solver.run_parameters import (
     READING_INTERVAL_S,
     RunParameters,
 )
-from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 
 ROLES = ("mount", "check", "run")
 """The programs, one ``wc_<role>.script`` each."""
 
 RAW_COUNTER_BITS = URScript.capabilities.counter_bits
 """The programs read the raw count, an int32 (SD §14.4): the robot file's counter_bits."""
-
-FILTERED_RANGE = 2**16
-"""The filtered count's range [0; 65536[ (SD §14.4), which the programs do not use."""
 
 MOVEJ_DEFAULT_ACCEL_RAD_S2 = 1.4
 """movej's default joint acceleration (SD §14.22): what ``--accel`` at its default gives."""
@@ -68,8 +64,6 @@ class UrOptions:
     port: int | None = None  # its port (default: the robot file's)
     zero_tol_mm: float = 0.1  # a zero reading further from the previous: the wire slipped
     spread_tol_mm: float = 0.1  # a point's samples spread wider: the robot still moved
-    margin_deg: float = 1.0  # every generated target at least this far inside a limit
-    range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
     solver: bool = True  # wc_run ends with wc_solve, the controller's step-by-step solver
 
 
@@ -196,22 +190,18 @@ def _check(robot: Robot, opt: UrOptions) -> tuple[str, int]:
 def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str, str]:
     """Return the programs by file name; raise :class:`WirecalError` if a rule would be broken.
 
-    A target within ``margin_deg`` of a joint limit, or a wire length beyond the encoder's
-    range, is refused before anything is written, naming the step and point.
+    Rendering only: the plan's safety is the pre-flight's
+    (:meth:`wirecal.gen.backends.Generator.programs`).
     """
-    check_limits(robot, plan, opt.margin_deg)
-    check_wire_range(robot, plan, opt.range_margin_mm)
-    check_cell(robot, plan)
     host, port = _check(robot, opt)
     tables = build_tables(robot, plan)
     mpc = robot.encoder.mm_per_count
     speed_rad_s = math.radians(float(np.min(robot.joint_speed_deg_s))) * opt.run.speed_pct / 100
     accel = MOVEJ_DEFAULT_ACCEL_RAD_S2 * opt.run.accel_pct / DEFAULT_RUN.accel_pct
-    context = {
+    context: dict[str, object] = {
         "version": __version__,
         "robot": robot.name,
         "software": robot.controller.software,
-        "needed": ".".join(map(str, NEEDED)),
         "fingerprint": plan.fingerprint(),
         "token_line": token_line(run_token(robot, plan.fingerprint())),
         "host": host,
@@ -223,8 +213,6 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
         "accel_rad": _fixed(accel, 6),
         "settle": f"{opt.run.settle_s:g}",
         "settle_3": f"{opt.run.settle_s:.3f}",
-        "log_version": LOG_VERSION,
-        "columns": ",".join(LOG_COLUMNS),
         "interval": f"{READING_INTERVAL_S:g}",
         "samples": opt.run.readings,
         "deg_per_rad_1e4": _fixed(10000 * 180 / math.pi, 9),
@@ -234,7 +222,6 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
         "spread_tol": f"{opt.spread_tol_mm:g}",
         "spread_counts": f"{np.floor(opt.spread_tol_mm / abs(mpc)):g}",
         "theta0": joint_target(plan.theta0_deg, rad_literal),
-        "steps": run_steps(plan, tables.first, rad_literal),
         "nsteps": len(plan.steps),
         "npoints": plan.n_points,
         "solver": opt.solver,
@@ -243,40 +230,62 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
         "n": tables.n,
         "m": len(tables.names),
     }
+    context |= line_context(robot, plan, run_steps(plan, tables.first, rad_literal))
     if opt.solver:
         context["t"] = solver_tables(robot, plan, tables)
-    out = {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
-    problems = software_problems(robot, out)
-    if problems:
-        raise WirecalError(problems)
-    return out
+    return {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
 
 
-def software_problems(robot: Robot, programs: dict[str, str]) -> list[str]:
-    """Check the programs as ``wirecal lint --software`` would; return the refused calls.
+def line_context(robot: Robot, plan: Plan, steps: list[dict]) -> dict[str, object]:
+    """Return what the programs take from the declared product line (:mod:`.cb3` for CB3).
 
-    A call the declared software is not documented to have is the user's problem: each rule
-    once, at its first call (:mod:`wirecal.lang.urscript.versions`; none when ``[controller]
+    ``steps`` (:func:`run_steps`) get each move's legs: none but on CB3.
+    """
+    cb3 = is_cb3(robot.controller.software)
+    legs = move_legs(robot, plan, rad_literal) if cb3 else None
+    k = 0
+    home: list = []
+    for step in steps:
+        step["home_legs"] = home
+        for target in [*step["vias"], *step["points"]]:
+            target["legs"] = legs[k] if legs else []
+            k += 1
+        home = legs[k] if legs else []
+        k += 1
+    return {
+        "cb3": cb3,
+        "clock": not cb3,
+        "t0": "" if cb3 else ", t0",
+        "needed": ".".join(map(str, needed(3 if cb3 else 5))),
+        "log_version": 1 if cb3 else LOG_VERSION,
+        "columns": ",".join(COLUMNS_V1 if cb3 else LOG_COLUMNS),
+        "steps": steps,
+        "closing_legs": home,
+    }
+
+
+def software_problems(robot: Robot, problems: list[str]) -> list[str]:
+    """Return the refused calls among the checker's problems with the programs.
+
+    ``problems``: ``wirecal lint --software``'s over the generated programs. A call the
+    declared software is not documented to have is the user's problem: each rule once, at
+    its first call (:mod:`wirecal.lang.urscript.versions`; none when ``[controller]
     software`` is not declared). Any other problem is a generator defect: raise
     :class:`WirecalError` saying so.
     """
     software = robot.controller.software
     seen: set[str] = set()
     refused, defects = [], []
-    for name, text in programs.items():
-        try:
-            parse_program(text, name, software)
-        except WirecalError as exc:
-            for problem in exc.problems:
-                where, _, why = problem.partition(": ")
-                if not is_refusal(why):
-                    defects.append(problem)
-                elif why not in seen:
-                    seen.add(why)
-                    refused.append(
-                        f'{robot.source}: controller.software = "{software}": {where}: {why}; '
-                        "wirecal knows no confirmed alternative: not generated"
-                    )
+    for problem in problems:
+        where, _, why = problem.partition(": ")
+        if not is_refusal(why):
+            defects.append(problem)
+        elif why not in seen:
+            seen.add(why)
+            refused.append(
+                f'{robot.source}: controller.software = "{software}": {where}: {why}; '
+                "wirecal knows no confirmed alternative: not generated"
+            )
     if defects:
         head = "internal error: a generated program breaks a URScript rule (please report):"
         raise WirecalError([head, *defects[:20]])

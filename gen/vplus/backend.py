@@ -5,7 +5,8 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
-from wirecal.gen.request import GenRequest, refuse_unsupported
+from wirecal.gen.backends import Generator
+from wirecal.gen.request import GenRequest
 from wirecal.gen.vplus.program import MODULE_NAME, GenOptions, module_text, write_module
 from wirecal.lang.vplus import VPlus
 from wirecal.solver.plan import Plan
@@ -13,7 +14,7 @@ from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN
 
 
-class VPlusGenerator:
+class VPlusGenerator(Generator):
     """:func:`~wirecal.gen.vplus.program.module_text` for a :class:`GenRequest`."""
 
     key = VPlus.key
@@ -21,8 +22,7 @@ class VPlusGenerator:
     default_run = DEFAULT_RUN
 
     def options(self, request: GenRequest) -> GenOptions:
-        """Return the module's options for ``request`` (refusing what V+ does not take)."""
-        refuse_unsupported(request, self.refuses, VPlus.title)
+        """Return the module's options for ``request``."""
         return GenOptions(
             run=request.run or self.default_run,
             zero_tol_mm=request.zero_tol_mm,
@@ -32,12 +32,11 @@ class VPlusGenerator:
             patch=request.patch,
             patch_warning=request.patch_warning,
             validation=request.validation,
-            range_margin_mm=request.range_margin_mm,
             echo_log=request.echo_log,
             crlf=request.crlf,
         )
 
-    def programs(self, robot: Robot, plan: Plan, request: GenRequest) -> dict[str, str]:
+    def render(self, robot: Robot, plan: Plan, request: GenRequest) -> dict[str, str]:
         """Return ``{WIRECAL.V2: the module}`` (LF line ends; :meth:`write` sets the file's)."""
         return {MODULE_NAME: module_text(robot, plan, self.options(request))}
 

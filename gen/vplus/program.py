@@ -18,11 +18,10 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import check_limits, joint_literal, name_problems, run_steps
+from wirecal.gen.targets import joint_literal, name_problems, run_steps
 from wirecal.gen.templating import render
 from wirecal.gen.vplus.literals import MAX_LINE, double_literal, long_lines, ppoint
 from wirecal.lang.vplus.parser import parse_module
-from wirecal.solver.cell_check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
@@ -39,7 +38,6 @@ from wirecal.solver.run_parameters import (
     run_timeline,
 )
 from wirecal.solver.validation import CONFIGS, Setup, config_poses, plate_grid
-from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range
 
 MODULE_NAME = "WIRECAL.V2"
 STRIDE = 8  # flattened index c*STRIDE + k (k ≤ 7): tables by configuration and joint
@@ -70,18 +68,22 @@ class GenOptions:
     patch: dict[str, float] | None = None  # identified offsets (deg, mm) for wc.patch
     patch_warning: str | None = None  # the patch's overridden plausibility gate, if so
     validation: Setup | None = None  # adds wc.vcfg and wc.vpln (paper §3.6)
-    range_margin_mm: float = RANGE_MARGIN_MM  # every wire length this far inside range_mm
     echo_log: bool = False  # wc.run also TYPEs each log line (a controller without a disk)
     crlf: bool = True  # CRLF line ends, as ACE writes V+ files (LF with gen --lf)
+
+
+_SPELLED = {"θ": "theta", "σ": "sigma", "°": " deg", "–": "-", "…": "..."}
 
 
 def _ascii_lines(text: str | None, width: int) -> list[str]:
     """Return ``text`` wrapped to ``width`` for V+ comments and TYPE strings.
 
-    Printable ASCII only, without '"' (others become '?').
+    Printable ASCII only, without '"': θ, σ and ° spelled out, others become '?'.
     """
     if text is None:
         return []
+    for symbol, spelled in _SPELLED.items():
+        text = text.replace(symbol, spelled)
     clean = "".join(ch if 32 <= ord(ch) <= 126 and ch != '"' else "?" for ch in text)
     return textwrap.wrap(clean, width, break_on_hyphens=False)
 
@@ -190,10 +192,11 @@ def _configuration_lines(t: Tables, c: int) -> list[str]:
 
 
 def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str:
-    """Return the whole V+ module; raise :class:`WirecalError` if a rule would be broken."""
-    check_limits(robot, plan, opt.margin_deg)
-    check_wire_range(robot, plan, opt.range_margin_mm)
-    check_cell(robot, plan)
+    """Return the whole V+ module; raise :class:`WirecalError` if a rule would be broken.
+
+    Rendering only: the plan's safety is the pre-flight's
+    (:meth:`wirecal.gen.backends.Generator.programs`).
+    """
     tables = build_tables(robot, plan)
     _check_options(robot, opt, tables)
     if np.any(np.abs(tables.nominal) * 10000 >= 2**24):

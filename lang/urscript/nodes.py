@@ -98,6 +98,20 @@ class Call(Expr):
 
 
 @dataclass(slots=True)
+class RpcCall(Expr):
+    """``handle.method(args)``: a remote procedure call through an ``rpc_factory`` handle.
+
+    The method is the XML-RPC server's, not the controller's: any name, any arguments
+    (Script Manual SW5.20, "Remote Procedure Call (RPC)").
+    """
+
+    base: Expr
+    method: str
+    args: list[Expr]
+    kwargs: dict[str, Expr]
+
+
+@dataclass(slots=True)
 class Neg(Expr):
     """Unary minus."""
 
@@ -167,7 +181,7 @@ class Assign(Stmt):
 class CallStmt(Stmt):
     """A function called for its effect."""
 
-    call: Call
+    call: Call | RpcCall
 
 
 @dataclass(slots=True)

@@ -21,7 +21,14 @@ Universal Robots' client library, no page read). :func:`parse_program` rejects, 
   that overflow), floats beyond float32 (UR16e User Manual p. 181); an encoder index
   other than 0 or 1 and ``opt`` other than "" or "raw" (SW5.20 encoder_get_tick_count); a
   constant index beyond a list whose every assignment is a literal;
-* a function defined twice; a variable read but never assigned, nor a parameter.
+* a function defined twice; a variable read but never assigned, nor a parameter;
+* a character beyond extended ASCII (SW10.6, confirmed); a pose literal of other than 6
+  numbers, a list of other than 6 given as a motion's joint positions (SW10.13 Module
+  motion, confirmed); a list literal mixing types (unconfirmed).
+
+It accepts the remote procedure call ``handle.method(…)`` and ``!`` for ``not`` (SW5.20,
+"Remote Procedure Call (RPC)", confirmed), and a statement ur_rtde puts after another on
+one joined text (:func:`_split_joined`).
 
 The twin runs a subset of this language (:mod:`wirecal.twin.urscript.interp` refuses the
 rest before running).
@@ -100,6 +107,28 @@ ENCODER_INDICES = (0, 1)
 
 TICK_COUNT_OPTS = ("", "raw")
 """encoder_get_tick_count's opt: "" (filtered) or "raw" (SW5.20 encoder_get_tick_count page)."""
+
+POSE_SIZE = 6
+"""Joint positions, joint speeds and poses are 6 floats (:data:`MOTION_PAGE`)."""
+
+MOTION_PAGE = "Script Manual SW10.13, Module motion"
+"""Where "lists of 6 floats, one for each robot joint" and "poses … of 6 floats" are read:
+https://www.universal-robots.com/manuals/EN/HTML/SW10_13/Content/prod-scriptmanual/all_scripts/Module_otion.htm"""
+
+JOINT_VECTORS = {
+    "movej": "q",
+    "movel": "pose",
+    "movep": "pose",
+    "servoj": "q",
+    "speedj": "qd",
+    "optimovej": "q",
+    "optimovel": "pose",
+}
+"""The motion functions' parameter that takes joint positions or speeds (or a pose)."""
+
+EXTENDED_ASCII = 0xFF
+"""The highest character a script may hold: "the text can only consist of extended ASCII
+characters" (Script Manual SW10.6, Connecting to URControl)."""
 
 _LINES = re.compile(r"\r\n|\n|\r")
 
@@ -199,6 +228,11 @@ class _Terminals(Transformer):
             raise _LineError(f"{name}: a keyword argument given twice")
         return call
 
+    def remote_call(self, c):
+        base, method, *items = c
+        call = self.funcall([method, *items])
+        return N.RpcCall(base, method, call.args, call.kwargs)
+
     def call_line(self, c):
         return N.CallStmt(c[0])
 
@@ -278,16 +312,19 @@ def parse_program(text: str, source: str = "<script>", software: str | None = No
     """
     problems: list[str] = []
     steps: list[N.Stmt] = []
-    lines = [(n, strip_comment(raw).rstrip()) for n, raw in enumerate(_LINES.split(text), 1)]
-    lines = _statements([(n, s) for n, s in lines if s.strip()])
-    if not lines:
+    raw_lines = _LINES.split(text)
+    problems += _not_extended_ascii(source, raw_lines)
+    lines = [(n, strip_comment(raw).rstrip()) for n, raw in enumerate(raw_lines, 1)]
+    joined = _statements([(n, s) for n, s in lines if s.strip()])
+    if not joined:
         raise WirecalError([f"{source}: no program in the file (a script starts with def)"])
-    for k, (n, raw) in enumerate(lines):
-        _layout(source, n, raw, k == 0, k == len(lines) - 1, problems)
-        step = _step(source, n, raw.strip(), problems)
-        if step is not None:
-            step.line = n
-            steps.append(step)
+    for k, (n, raw, breaks) in enumerate(joined):
+        _layout(source, n, raw, k == 0, k == len(joined) - 1, problems)
+        for line, piece in _split_joined(raw.strip(), n, breaks):
+            step = _step(source, line, piece, problems)
+            if step is not None:
+                step.line = line
+                steps.append(step)
     program = _nest(steps, source, problems)
     if program is not None:
         _Checker(program, source, problems, software).check()
@@ -301,18 +338,100 @@ _CONTINUES = re.compile(r"(\b(and|or|xor|not)|[-+*/%,=<>(\[])\s*$")
 """A line ending in an operator, a comma or an opening bracket goes on on the next line."""
 
 
-def _statements(lines: list[tuple[int, str]]) -> list[tuple[int, str]]:
-    """Join the lines of one statement (open brackets, a trailing operator): (first line, text).
+_Joined = tuple[int, str, list[tuple[int, int]]]
+"""A statement's first line, its text and where each joined line starts in the stripped text."""
+
+
+def _statements(lines: list[tuple[int, str]]) -> list[_Joined]:
+    """Join the lines of one statement (open brackets, a trailing operator).
 
     The public scripts of Universal Robots' client library split long ``str_cat`` calls
     and ``or`` chains over lines this way.
     """
-    out: list[tuple[int, str]] = []
+    out: list[_Joined] = []
     for n, line in lines:
         if out and _goes_on(out[-1][1]):
-            out[-1] = (out[-1][0], out[-1][1] + " " + line.strip())
+            first, text, breaks = out[-1]
+            joined = text + " " + line.strip()
+            breaks.append((len(joined.strip()) - len(line.strip()), n))
+            out[-1] = (first, joined, breaks)
         else:
-            out.append((n, line))
+            out.append((n, line, []))
+    return out
+
+
+_STARTS = re.compile(
+    r"(global|local|def|thread|sec|if|while|return|halt|end|elif|else)\b|[A-Za-z_]\w*\s*[=(\[.]"
+)
+"""What a statement after another on the same joined text starts with."""
+
+
+def _split_joined(text: str, n: int, breaks: list[tuple[int, int]]) -> list[tuple[int, str]]:
+    """Return the statements of a joined text as (line, text).
+
+    The controller reads statements from the text, not from its lines: ur_rtde sends
+    ``global reg_offset_float = # float register offset`` with the value it injects, e.g.
+    ``24``, at the start of the next line, before that line's own statement (ur_rtde
+    ``src/script_client.cpp``, ``scanAndInjectAdditionalScriptCode``; the controller runs
+    it). A joined text that does not parse is split where a statement starts after a line
+    break, if every piece then parses; otherwise it stays whole (and is reported).
+    """
+    if not breaks or _parses(text):
+        return [(n, text)]
+    pieces = _pieces(text, breaks[0][0])
+    if pieces is None:
+        return [(n, text)]
+    return [(max([n] + [m for at, m in breaks if at <= start]), piece) for start, piece in pieces]
+
+
+MAX_SPLIT_TRIES = 200
+"""Parses :func:`_pieces` tries at most on one joined text (a bound for hostile input)."""
+
+
+def _pieces(text: str, first_break: int) -> list[tuple[int, str]] | None:
+    """Split ``text`` into statements that each parse: (offset in the text, statement).
+
+    Left to right, each piece ends at the first statement start after a line break where
+    what comes before parses; None when that fails or takes over :data:`MAX_SPLIT_TRIES`.
+    """
+    pieces: list[tuple[int, str]] = []
+    start, tries = 0, 0
+    while not _parses(text[start:]):
+        for m in re.finditer(r"\s+", text[start:]):
+            at = start + m.end()
+            if at <= first_break or not _STARTS.match(text, at):
+                continue
+            tries += 1
+            if tries > MAX_SPLIT_TRIES:
+                return None
+            if _parses(text[start : start + m.start()]):
+                pieces.append((start, text[start : start + m.start()]))
+                start = at
+                break
+        else:
+            return None
+    return [*pieces, (start, text[start:])]
+
+
+def _parses(text: str) -> bool:
+    try:
+        parse_line(text)
+    except (_LineError, NestingError, LarkError):
+        return False
+    return True
+
+
+def _not_extended_ascii(source: str, lines: list[str]) -> list[str]:
+    """Report a character beyond extended ASCII (:data:`EXTENDED_ASCII`), once per line."""
+    out = []
+    for n, line in enumerate(lines, 1):
+        bad = next((ch for ch in line if ord(ch) > EXTENDED_ASCII), None)
+        if bad is not None:
+            out.append(
+                f"{source}:{n}: {bad!r} (U+{ord(bad):04X}) is not an extended ASCII character: "
+                "a script's text can only be extended ASCII (Script Manual SW10.6, "
+                "Connecting to URControl)"
+            )
     return out
 
 
@@ -534,8 +653,20 @@ class _Checker:
                 self.expr(sub, line)
 
     def literal(self, e: N.Expr, line: int) -> None:
-        """Numbers the controller cannot hold: ints beyond 32 bits, floats beyond float32."""
-        if isinstance(e, N.Num) and e.is_int and not INT32[0] <= e.value <= INT32[1]:
+        """Literals the controller cannot hold (module docstring)."""
+        if isinstance(e, N.Pose) and len(e.items) != POSE_SIZE:
+            self.err(
+                line,
+                f"a pose has {POSE_SIZE} numbers p[x, y, z, rx, ry, rz], not {len(e.items)} "
+                f"({MOTION_PAGE})",
+            )
+        elif isinstance(e, N.ListLit) and len(kinds := _kinds(e.items)) > 1:
+            self.err(
+                line,
+                f"a list mixes {' and '.join(kinds)}: a list holds one type (unconfirmed: "
+                "no manual page read states it)",
+            )
+        elif isinstance(e, N.Num) and e.is_int and not INT32[0] <= e.value <= INT32[1]:
             self.err(line, f"{e.value} is outside the 32-bit int range [-2^31, 2^31-1]")
         elif isinstance(e, N.Num) and not e.is_int and abs(e.value) > FLOAT32_MAX:
             self.err(line, f"{e.value:g} is beyond the largest 32-bit float (3.4e38)")
@@ -580,6 +711,7 @@ class _Checker:
                 return
             b = found
             self.arguments(e, line)
+            self.vector(e, line)
             self.documented(e, line)
         if not b.any_keywords:
             self.signature(e, b, line)
@@ -599,6 +731,23 @@ class _Checker:
         if missing:
             self.err(line, f"{e.name} needs {', '.join(missing)}")
 
+    def vector(self, e: N.Call, line: int) -> None:
+        """Check that a list given as a motion's joint positions or speeds has 6 elements."""
+        param = JOINT_VECTORS.get(e.name)
+        given = dict(zip(BUILTINS[e.name].params, e.args, strict=False)) | e.kwargs
+        value = given.get(param) if param else None
+        size = None
+        if isinstance(value, N.ListLit):
+            size = len(value.items)
+        elif isinstance(value, N.Var):
+            size = self.lengths.get(value.name)
+        if size is not None and size != POSE_SIZE:
+            self.err(
+                line,
+                f"{e.name}: {param} is {POSE_SIZE} joint values, one per joint, not {size} "
+                f"({MOTION_PAGE})",
+            )
+
     def documented(self, e: N.Call, line: int) -> None:
         """Report a call the declared software's manual pages do not document."""
         if self.version is None or self.software is None:
@@ -617,6 +766,19 @@ class _Checker:
         opt = args.get("opt") if e.name == "encoder_get_tick_count" else None
         if isinstance(opt, N.Str) and opt.text not in TICK_COUNT_OPTS:
             self.err(line, f'{e.name}: opt is "" or "raw", not "{opt.text}"')
+
+
+def _kinds(items: list[N.Expr]) -> list[str]:
+    """Return the types of the literal elements of a list (:func:`_kind`), sorted."""
+    return sorted({k for k in map(_kind, items) if k is not None})
+
+
+def _kind(e: N.Expr) -> str | None:
+    """Return the type of a literal list element ("numbers", …); None if not a literal."""
+    kinds = {N.Num: "numbers", N.Str: "strings", N.Bool: "booleans", N.Pose: "poses"}
+    if isinstance(e, N.Neg):
+        return _kind(e.expr)
+    return "lists" if isinstance(e, N.ListLit) else kinds.get(type(e))
 
 
 def _constant(e: N.Expr) -> int | float | None:
@@ -656,6 +818,8 @@ def operands(e: N.Expr) -> list[N.Expr]:
         return [e.base]
     if isinstance(e, N.Call):
         return [*e.args, *e.kwargs.values()]
+    if isinstance(e, N.RpcCall):
+        return [e.base, *e.args, *e.kwargs.values()]
     if isinstance(e, (N.Neg, N.Not)):
         return [e.expr]
     if isinstance(e, (N.BinOp, N.Compare, N.Logic)):

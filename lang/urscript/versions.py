@@ -1,14 +1,17 @@
 """Which controller software documents a URScript call: the rule behind ``[controller] software``.
 
-A call is accepted for a declared software version no older than the oldest manual page on
-which it was read (:data:`SINCE`); an older version is refused. No page read gives a
-function's *first* version, so "documented from" is the version of the page read, and an
-older controller may or may not have the call: it is not confirmed there, and a program
-that stops at an unknown call mid-run leaves the robot and the wire where they were.
+A call is accepted for a declared software version of a product line (the major version: 3
+CB3, 5 e-Series, 10 PolyScope X) no older than the oldest page of that line on which it was
+read (:data:`SINCE`); an older version, or a line on whose pages it was not read, is
+refused. No page read gives a function's *first* version, so "documented from" is the
+version of the page read, and an older controller may or may not have the call: it is not
+confirmed there, and a program that stops at an unknown call mid-run leaves the robot and
+the wire where they were.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from wirecal.solver.robot import SOFTWARE_PATTERN
@@ -18,46 +21,73 @@ _UR = "https://www.universal-robots.com/manuals/EN/HTML"
 
 @dataclass(frozen=True)
 class Since:
-    """A URScript call and the oldest software on whose manual page it was read.
+    """A URScript call and, per product line, the oldest software whose page documents it.
 
-    The call counts when ``function`` is called (with ``keyword`` given, if set).
+    The call counts when ``function`` is called (with ``keyword`` given, if set);
+    ``versions`` maps a major version to the oldest (major, minor) read for it.
     """
 
     function: str
     keyword: str | None
-    version: tuple[int, int]
+    versions: Mapping[int, tuple[int, int]]
     what: str
     source: str
 
+    def documented(self) -> str:
+        """Say where the call is documented from: "3.8 (CB3), 5.2 (e-Series)"."""
+        return ", ".join(f"{v[0]}.{v[1]} ({LINES[m]})" for m, v in sorted(self.versions.items()))
+
+
+LINES = {3: "CB3", 5: "e-Series", 10: "PolyScope X"}
+"""The product lines by major version (UR's software numbering)."""
+
+CONVEYOR_GUIDE = (
+    "https://www.universal-robots.com/articles/ur/programming/"
+    "new-conveyor-tracking-guide-cb3-38-and-e-series-52 (software at least 3.8 on CB3 or 5.2 "
+    "on e-Series; the controllers decode up to 40 kHz)"
+)
+"""UR's conveyor tracking guide: the encoder calls on CB3 from 3.8 and on e-Series from 5.2."""
 
 SINCE: tuple[Since, ...] = (
     Since(
         "time",
         None,
-        (5, 19),
+        {5: (5, 19)},
         "time() returning struct(sec, nanosec)",
         f"{_UR}/SW5_19/Content/prod-scriptmanual/G5/time2.htm",
     ),
     Since(
         "encoder_get_tick_count",
         "opt",
-        (5, 20),
+        {5: (5, 20)},
         'encoder_get_tick_count(i, opt="raw")',
         f"{_UR}/SW5_20/Content/prod-scriptmanual/G5/encoder_get_tick_count_encoder_index.htm "
         "(the 2021 G5 Script Manual lists encoder_get_tick_count(encoder_index) without opt)",
     ),
     Since(
+        "encoder_get_tick_count",
+        None,
+        {3: (3, 8), 5: (5, 2)},
+        "encoder_get_tick_count(encoder_index), the filtered count",
+        CONVEYOR_GUIDE,
+    ),
+    Since(
         "encoder_enable_pulse_decode",
         None,
-        (5, 0),
+        {3: (3, 8), 5: (5, 2)},
         "encoder_enable_pulse_decode(i, type, A, B) on digital inputs 8-11",
-        "Universal Robots e-Series Script Directory (PolyScope 5), §14.2, p. 26 (text copy; "
-        "its minor version is not stated)",
+        CONVEYOR_GUIDE,
     ),
 )
 
-NEEDED = max(s.version for s in SINCE)
-"""The oldest software all of :data:`SINCE` is documented on: 5.20."""
+
+def needed(major: int) -> tuple[int, int]:
+    """Return the oldest software of a line on which every call of :data:`SINCE` for it is read."""
+    return max(s.versions[major] for s in SINCE if major in s.versions)
+
+
+NEEDED = needed(5)
+"""The oldest e-Series software all of :data:`SINCE` is documented on: 5.20."""
 
 
 def version_of(software: str) -> tuple[int, ...]:
@@ -71,7 +101,8 @@ def too_new(function: str, keywords: set[str], version: tuple[int, ...]) -> Sinc
     """Return the rule a call breaks on software ``version``, or None."""
     for s in SINCE:
         wanted = s.keyword is None or s.keyword in keywords
-        if s.function == function and wanted and version[:2] < s.version:
+        oldest = s.versions.get(version[0])
+        if s.function == function and wanted and (oldest is None or version[:2] < oldest):
             return s
     return None
 
@@ -81,10 +112,7 @@ _REFUSAL = " is documented from software "
 
 def refusal(s: Since, software: str) -> str:
     """Say why a call is refused on ``software``, naming the call, the version and the page."""
-    return (
-        f"{s.what}{_REFUSAL}{s.version[0]}.{s.version[1]} on ({s.source}); "
-        f"not confirmed on {software}"
-    )
+    return f"{s.what}{_REFUSAL}{s.documented()} on ({s.source}); not confirmed on {software}"
 
 
 def is_refusal(problem: str) -> bool:

@@ -43,6 +43,8 @@ class VPlus(Language):
         Example(_program("SET p = HERE\nAPPRO p, 50\nDEPARTS 30"), "unconfirmed"),
         Example(_program("65535 x = 16777215\ny = -16777216"), "UG pp. 35, 102"),
         Example(_program('$s = "' + "a" * 128 + '"'), "UG p. 100"),
+        Example(_program("READY\nALIGN"), "unconfirmed: READY, ALIGN keyword pages not read"),
+        Example(_program("stop = STATE(4) BAND 4"), "adept_experimental adept_ros.v2 l. 344"),
     )
     invalid_examples: ClassVar[tuple[Example, ...]] = (
         Example(_program("70000 x = 1"), "UG p. 35"),
@@ -50,7 +52,22 @@ class VPlus(Language):
         Example(_program("x = 16777216"), "UG p. 102"),
         Example(_program("x = 1E+400"), "UG p. 102"),
         Example(_program("fine = 1"), "UG p. 99; FINE a keyword: unconfirmed"),
+        Example(_program("ready = 1"), "UG p. 99; READY a keyword: unconfirmed"),
+        Example(_program("SET dest = HERE"), "UG p. 99; DEST a keyword: unconfirmed"),
+        Example(_program("AUTO align"), "UG p. 99; ALIGN a keyword: unconfirmed"),
     )
+
+    def lint_files(
+        self,
+        texts: Mapping[str, str],
+        software: str | None = None,
+        *,
+        external_calls: bool = False,
+    ) -> list[str]:
+        """Check V+ files loaded together: a CALL may name a program of any of them."""
+        from wirecal.lang.vplus.files import check_files
+
+        return check_files(texts, external_calls=external_calls)
 
     def lint(
         self,

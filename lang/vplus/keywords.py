@@ -56,11 +56,19 @@ def keywords() -> dict[str, Keyword]:
 #: kinds of keyword that are not reserved as names
 NOT_RESERVED = ("monitor command",)
 
+#: keywords a public controller-loaded program uses as a name, and where: the rule of p. 99
+#: is not applied to them (rejecting a name a controller loads is as wrong as accepting one
+#: it refuses)
+USED_AS_NAMES = {
+    "stop": "BenjaminSchellenbeck/adept_experimental@bdd7478 adept_driver/V+/adept_ros.v2 "
+    "line 344, 'stop = STATE(4) BAND 4' (created in ACE 3.6.3.2)",
+}
+
 
 def keyword(name: str) -> Keyword | None:
     """Return the keyword a name collides with, if it is reserved."""
     k = keywords().get(name.lower())
-    if k is None or all(kind in NOT_RESERVED for kind in k.kinds):
+    if k is None or all(kind in NOT_RESERVED for kind in k.kinds) or k.name in USED_AS_NAMES:
         return None
     if name.startswith("$") and k.kinds == ("function",):
         return None  # $chr is a string variable in Adept's ros.v2

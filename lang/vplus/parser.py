@@ -258,16 +258,21 @@ def parse_module(text: str, source: str = "<module>", *, external_calls: bool = 
 @lru_cache(maxsize=4)
 def _parse_module(text: str, source: str, external_calls: bool) -> Module:
     """Parse and check a module (see :func:`parse_module`)."""
-    reader = _ModuleReader(source)
-    for n, raw in enumerate(_LINES.split(text), 1):
-        reader.line(n, _strip_comment(raw).strip())
-    problems, programs = reader.close()
+    problems, programs = read_programs(text, source)
     _check_module(programs, source, problems, external_calls)
     if not programs and not problems:
         problems.append(f"{source}: no .PROGRAM in the file")
     if problems:
         raise WirecalError(problems)
     return Module(source, programs)
+
+
+def read_programs(text: str, source: str) -> tuple[list[str], dict[str, Program]]:
+    """Read a module file's programs, unchecked: the problems found reading it and them."""
+    reader = _ModuleReader(source)
+    for n, raw in enumerate(_LINES.split(text), 1):
+        reader.line(n, _strip_comment(raw).strip())
+    return reader.close()
 
 
 class _ModuleReader:
@@ -645,7 +650,19 @@ def transformation_names(programs: dict[str, Program]) -> set[str]:
     return names
 
 
-def _check_module(programs, source, problems, external_calls) -> None:
+def check_programs(
+    programs: dict[str, Program],
+    source: str,
+    problems: list[str],
+    external_calls: bool,
+    visible: dict[str, Program],
+) -> None:
+    """Check a file's ``programs`` with ``visible`` (theirs and other files') as callable."""
+    _check_module(programs, source, problems, external_calls, visible)
+
+
+def _check_module(programs, source, problems, external_calls, visible=None) -> None:
+    visible = programs if visible is None else visible
     names: dict[str, str] = {}
 
     def register(name: str, where: str) -> None:
@@ -657,9 +674,9 @@ def _check_module(programs, source, problems, external_calls) -> None:
                 f"{where}: {bare!r} and {other!r} share their first {SIGNIFICANT} characters"
             )
 
-    transforms = transformation_names(programs)
+    transforms = transformation_names(visible)
     for prog in programs.values():
-        checker = _Checker(prog, programs, source, problems, register, transforms)
+        checker = _Checker(prog, visible, source, problems, register, transforms)
         checker.define(prog.line, prog.name, "program")
         for p in prog.params:
             checker.define(prog.line, p.name, "parameter")

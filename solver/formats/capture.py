@@ -30,6 +30,15 @@ MAX_PIECES = 8
 SHOWN = 3
 """How many set-aside lines a note quotes."""
 _CONTINUATION = re.compile(r"[0-9.,+\-eE]+")
+MIN_TERMINAL = 40
+"""The narrowest terminal whose captures are read (its broken header lines joined)."""
+_ESCAPE = re.compile(r"\x1b\[[0-?]*[ -/]*[@-~]|\x1b\][^\x07\x1b]*(?:\x07|\x1b\\)?|\x1b[@-_]")
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
+_TIMESTAMP = re.compile(
+    r"\[?(?:\d{4}-\d{2}-\d{2}[T ])?\d{1,2}:\d{2}(?::\d{2}(?:[.,]\d+)?)?"
+    r"(?:Z|[+-]\d{2}:?\d{2})?\]?(?:\s*[:|>-])?\s+"
+)
+_TAB = re.compile(r"\s*\t\s*")
 
 
 @dataclass(frozen=True)
@@ -48,6 +57,66 @@ class Taken:
     problems: list[str]
     aside: list[int]  # 0-based indices of the lines set aside
     joined: list[int]  # 0-based indices of the first pieces of joined rows
+
+
+def clean_line(line: str) -> str:
+    """Return a captured line as the terminal showed it, stripped.
+
+    What terminal loggers add is removed: colour and other escape codes, control
+    characters, a timestamp before the line (``[2026-11-27 05:18:38]``, ``05:18:38.123``,
+    ISO 8601); tabs between fields become commas in a line without one.
+    """
+    line = _CONTROL.sub("", _ESCAPE.sub("", line)).strip()
+    line = _TIMESTAMP.sub("", line, count=1) if _TIMESTAMP.match(line) else line
+    if "\t" in line and "," not in line:
+        line = _TAB.sub(",", line)
+    return line.replace("\t", " ").strip()
+
+
+def unfold_header(lines: list[str], first: int, column_line: str) -> list[str]:
+    """Return ``lines`` with the header lines and the column line a terminal broke joined.
+
+    From index ``first`` to the column line: a line without ``#`` or ``,`` after a ``#``
+    line of at least :data:`MIN_TERMINAL` characters continues it (the terminal broke it:
+    ``# plan: <64 hex digits>`` is 72); pieces that make the column line
+    together are that line. Each join is put on its first line and the other pieces left
+    blank, so line numbers stay those of the capture.
+    """
+    out = list(lines)
+    head: int | None = None  # the header line being continued
+    for k in range(first, len(out)):
+        end = _column_end(out, k, column_line)
+        if end is not None:
+            out[k:end] = [column_line, *[""] * (end - k - 1)]
+            return out
+        line = out[k]
+        if line.startswith("#"):
+            head = k
+        elif line and "," not in line and head is not None and len(lines[k - 1]) >= MIN_TERMINAL:
+            out[head], out[k] = out[head] + line, ""
+        elif line:
+            return out
+    return out
+
+
+def _column_end(lines: list[str], k: int, column_line: str) -> int | None:
+    """Return the end of the pieces from line k that make ``column_line``; None if they do not."""
+    text = ""
+    for j in range(k, min(len(lines), k + MAX_PIECES)):
+        text += lines[j]
+        if text == column_line:
+            return j + 1
+        if not text or not column_line.startswith(text):
+            return None
+    return None
+
+
+def fold(lines: list[str], width: int) -> str:
+    """Return ``lines`` as a terminal ``width`` columns wide shows them: longer ones broken."""
+    out = []
+    for line in lines:
+        out += [line[k : k + width] for k in range(0, len(line), width)] or [""]
+    return "\n".join(out) + "\n"
 
 
 def cells_of(text: str) -> tuple[str, ...]:

@@ -25,6 +25,7 @@ double quotes (a spreadsheet's export), rows with the wrong number of fields (ea
 from __future__ import annotations
 
 import hashlib
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,8 +35,10 @@ from wirecal.solver.formats.capture import (
     RowTest,
     aside_note,
     cells_of,
+    clean_line,
     joined_note,
     take_rows,
+    unfold_header,
 )
 from wirecal.solver.formats.fileio import STDIN as STDIN  # the name callers know
 from wirecal.solver.formats.fileio import read_input
@@ -74,6 +77,11 @@ class Table:
 def read_source(path: str | Path, what: str) -> tuple[str, str, str]:
     """Return the text, its source name and the sha256 of its bytes; ``-`` reads standard input."""
     raw, source = read_input(path, what)
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")) or b"\x00" in raw[:4096]:
+        raise WirecalError(
+            f"{source}: UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8 "
+            f"(a wirecal {what} is plain UTF-8 text)"
+        )
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -110,10 +118,14 @@ def parse_table(
     """
     text = text.removeprefix("\ufeff")
     ends_with_newline = text.endswith(("\n", "\r"))
-    lines = [line.strip() for line in text.splitlines()]
+    tidy = str.strip if capture is None else clean_line
+    lines = [tidy(line) for line in text.splitlines()]
     start, found = _check_first_line(
         lines, source, magic, (version, *older), what, anywhere=capture is not None
     )
+    if capture is not None:  # a terminal narrower than the header broke its lines
+        guess = columns({}, found) if callable(columns) else columns
+        lines = unfold_header(lines, start + 1, ",".join(guess))
     header, comments, problems, n = _read_header(lines, start + 1, source, keys)
     if callable(columns):
         columns = columns(header, found)
@@ -150,6 +162,12 @@ def _check_first_line(
     if anywhere:
         start = next((k for k, line in enumerate(lines) if line.startswith(magic)), start)
     first = lines[start] if lines else ""
+    if first.strip('"').startswith(magic) and first.startswith('"'):
+        raise WirecalError(
+            f"{source}:{start + 1}: the first line is {first!r}: lines and fields in double "
+            "quotes (a spreadsheet's export); use the file as written, or save it as plain "
+            "CSV without quotes"
+        )
     if not first.startswith(magic):
         raise WirecalError(
             f"{source}:{start + 1}: not a wirecal {what}: the first line must be "
@@ -175,7 +193,10 @@ def _read_header(
     header: dict[str, tuple[str, int]] = {}
     comments: list[str] = []
     problems: list[str] = []
-    while n < len(lines) and lines[n].startswith("#"):
+    while n < len(lines) and (not lines[n] or lines[n].startswith("#")):
+        if not lines[n]:  # a blank line, or the rest of a line a terminal broke
+            n += 1
+            continue
         body = lines[n][1:].strip()
         key, sep, value = body.partition(":")
         key = key.strip()
@@ -274,8 +295,11 @@ def _check_widths(
     problems: list[str],
     notes: list[str],
 ) -> list[Row]:
-    """Keep the rows of ``width`` fields; one short on line ``last_cut`` is a note."""
-    kept = []
+    """Keep the rows of ``width`` fields; one short on line ``last_cut`` is a note.
+
+    Most rows of one other width are one problem: the header does not match the rows.
+    """
+    kept, wrong = [], []
     for row in rows:
         if len(row.cells) == width:
             kept.append(row)
@@ -285,5 +309,18 @@ def _check_widths(
                 "writing it)"
             )
         else:
-            problems.append(f"{source}:{row.line}: has {len(row.cells)} fields; expected {width}")
+            wrong.append(row)
+    widths = Counter(len(row.cells) for row in wrong)
+    common, n = widths.most_common(1)[0] if widths else (0, 0)
+    if n >= 3 and n > len(kept):
+        first = next(row.line for row in wrong if len(row.cells) == common)
+        problems.append(
+            f"{source}:{first}: {n} rows have {common} fields where the column line names "
+            f"{width}: the first line's version or the column line does not match the rows "
+            "(e.g. a version 1 header above version 2 rows); use the file as written"
+        )
+        wrong = [row for row in wrong if len(row.cells) != common]
+    problems += [
+        f"{source}:{row.line}: has {len(row.cells)} fields; expected {width}" for row in wrong
+    ]
     return kept

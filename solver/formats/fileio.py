@@ -15,10 +15,13 @@ import errno
 import os
 import re
 import shutil
+import signal
 import sys
 import tempfile
+import threading
 import tomllib
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -47,6 +50,23 @@ def _same_file(a: Path, b: Path) -> bool:
         return os.path.samefile(a, b)
     except OSError:  # one of them does not exist yet
         return a.resolve() == b.resolve()
+
+
+_DEFERRED = {signal.SIGINT, signal.SIGTERM}
+
+
+@contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """Hold Ctrl-C and SIGTERM until the block is done (where the platform can)."""
+    mask = getattr(signal, "pthread_sigmask", None)
+    if mask is None or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = mask(signal.SIG_BLOCK, _DEFERRED)
+    try:
+        yield
+    finally:
+        mask(signal.SIG_SETMASK, old)
 
 
 class Outputs:
@@ -88,7 +108,7 @@ class Outputs:
     # -- reserve ---------------------------------------------------------------------
     def __enter__(self) -> Outputs:
         """Check the outputs can be written and reserve them."""
-        self._check()
+        self.check()
         try:
             if self.folder is not None and not self.folder.exists():
                 try:
@@ -97,20 +117,22 @@ class Outputs:
                     raise os_problem(self.folder, exc) from None
                 self._created_folder = True
             for path in self.paths:
-                try:
-                    fd, tmp = tempfile.mkstemp(
-                        dir=path.parent, prefix=f".{path.name}.", suffix=".tmp"
-                    )
-                except OSError as exc:
-                    raise os_problem(path, exc) from None
-                os.close(fd)
-                self._tmp[path] = Path(tmp)
+                with _signals_deferred():  # a temporary file is always one of self._tmp
+                    try:
+                        fd, tmp = tempfile.mkstemp(
+                            dir=path.parent, prefix=f".{path.name}.", suffix=".tmp"
+                        )
+                    except OSError as exc:
+                        raise os_problem(path, exc) from None
+                    os.close(fd)
+                    self._tmp[path] = Path(tmp)
         except BaseException:
             self._discard()
             raise
         return self
 
-    def _check(self) -> None:
+    def check(self) -> None:
+        """Refuse, all problems at once, outputs that cannot be written (class docstring)."""
         problems = []
         for k, path in enumerate(self.paths):
             if path in self.paths[:k]:
@@ -245,9 +267,10 @@ class Outputs:
             pass
 
     def _discard(self) -> None:
-        for tmp in self._tmp.values():
-            tmp.unlink(missing_ok=True)
-        self._tmp.clear()
+        with _signals_deferred():  # a second Ctrl-C does not stop the clean-up halfway
+            for tmp in self._tmp.values():
+                tmp.unlink(missing_ok=True)
+            self._tmp.clear()
         if self._created_folder and self.folder is not None:
             try:
                 self.folder.rmdir()  # only if still empty, i.e. the command failed
@@ -323,6 +346,7 @@ def read_toml(path: str | Path, what: str) -> dict[str, Any]:
         raise WirecalError(
             f"{source}: not UTF-8 text (byte {exc.start}); is this a {what}?"
         ) from None
+    text = text.removeprefix("\ufeff")  # a byte-order mark some editors write
     depth = toml_depth(text)
     if depth > MAX_TOML_DEPTH:
         raise WirecalError(

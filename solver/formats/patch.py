@@ -26,6 +26,7 @@ from wirecal.lang.registry import language
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs, read_toml
+from wirecal.solver.formats.patch_digest import DIGEST_TABLE, edits, seal
 from wirecal.solver.formats.robot_file import MAX_DH_ANGLE_DEG, MAX_LENGTH_MM
 from wirecal.solver.formats.toml_fields import Table, document, valid
 from wirecal.solver.identify import Estimate
@@ -33,6 +34,7 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.verdict import override_warning
 
+UNCHECKED_ADVICE = "Measure the step(s) again before entering these values."
 _FIELD = {"th": "theta offset", "d": "d", "a": "a", "al": "alpha", "tool": "tool point"}
 
 
@@ -91,7 +93,7 @@ def patch_text(
         ]
         if std is not None:  # inf (valid TOML) where the points do not identify it
             lines.append(f"std = {std!r}")
-    return "\n".join(lines) + "\n"
+    return seal("\n".join(lines) + "\n")
 
 
 def spec_table(
@@ -104,13 +106,10 @@ def spec_table(
         lines += [*textwrap.wrap(f"WARNING: {warning}", 88, break_on_hyphens=False), ""]
     if unchecked:
         lines += [f"WARNING: {w}." for w in unchecked]
-        lines += ["Measure the step(s) again before entering these values.", ""]
+        lines += [UNCHECKED_ADVICE, ""]
     lines += [
         f"Kinematic parameters for {robot.name} identified by wirecal ({estimate.method}).",
-        "Enter the 'new value' column in the controller's kinematic settings (Adept SPEC",
-        "utility: link dimensions and joint calibration offsets). Save a copy of SPEC first.",
-        "DH row i holds alpha(i-1), a(i-1), theta(i), d(i) (Craig). Check the sign",
-        "convention of the controller's joint-offset field on one joint before entering all.",
+        *_entry_advice(language(robot.controller.language)),
         "",
         f"{'parameter':<10}{'DH row':>7}  {'field':<14}{'unit':<6}{'nominal':>12}"
         f"{'new value':>12}{'offset':>11}{'sigma':>9}",
@@ -123,6 +122,23 @@ def spec_table(
             f"{value:12.4f}{offset:+11.4f}{sigma}"
         )
     return "\n".join(lines) + "\n"
+
+
+def _entry_advice(lang: Language) -> tuple[str, ...]:
+    """Where the table's values go: Adept's SPEC, or the language's own companion file."""
+    if lang.patch_companion is None:
+        return (
+            "Enter the 'new value' column in the controller's kinematic settings (Adept SPEC",
+            "utility: link dimensions and joint calibration offsets). Save a copy of SPEC first.",
+            "DH row i holds alpha(i-1), a(i-1), theta(i), d(i) (Craig). Check the sign",
+            "convention of the controller's joint-offset field on one joint before entering all.",
+        )
+    return (
+        f"A {lang.title} controller takes no Craig DH table: this table is for reading.",
+        f"What the controller can take is in the file ending {lang.patch_companion} beside",
+        "this one (it says which values have no place there). DH row i holds alpha(i-1),",
+        "a(i-1), theta(i), d(i) (Craig).",
+    )
 
 
 def spec_path(path: str | Path) -> Path:
@@ -194,6 +210,7 @@ _KEYS = (
     "plausibility",
     "unchecked",
     "parameters",
+    DIGEST_TABLE,
 )
 _VALUE_KEYS = ("unit", "nominal", "offset", "value", "std")
 _SHA256 = re.compile(r"^[0-9a-f]{64}$")
@@ -245,8 +262,16 @@ class Patch:
 
     @property
     def warning(self) -> str | None:
-        """Return the overridden gate's warning, which every artefact made from it carries."""
-        return override_warning(self.meta.plausibility)
+        """Return the warning every artefact made from the patch carries; None if it has none.
+
+        The overridden gate's (:func:`~wirecal.solver.verdict.override_warning`) and each
+        step solved without its zero check (a --partial run's ``unchecked``).
+        """
+        parts = [override_warning(self.meta.plausibility)]
+        parts += [f"{u}." for u in self.meta.unchecked]
+        if self.meta.unchecked:
+            parts.append(UNCHECKED_ADVICE)
+        return " ".join(p for p in parts if p) or None
 
     def offsets_for(self, robot: Robot, plan: Plan | None = None) -> dict[str, float]:
         """Return the identified offsets, once the patch is shown to belong here.
@@ -290,7 +315,8 @@ class Patch:
 
 def read_patch(path: str | Path) -> Patch:
     """Read and validate a patch written by :func:`put_patch` (module docstring)."""
-    doc = document(read_toml(path, "patch file"), str(path), "patch file", _KEYS)
+    data = read_toml(path, "patch file")
+    doc = document(data, str(path), "patch file", _KEYS)
     text = {key: doc.string(key) for key in ("robot", "log", "method", "date", "wirecal")}
     digests = {key: doc.string(key) for key in ("plan", "log_sha256")}
     for key, digest in digests.items():
@@ -304,6 +330,7 @@ def read_patch(path: str | Path) -> Patch:
     if table.present and not values:
         table.add("", "is empty; a patch holds at least one parameter")
     doc.raise_if_any()
+    _check_digest(data, str(path))
     meta = PatchMeta(
         **{k: valid(v) for k, v in (text | digests).items()},
         residual_rms_mm=valid(rms),
@@ -311,6 +338,24 @@ def read_patch(path: str | Path) -> Patch:
         unchecked=tuple(valid(unchecked)),
     )
     return Patch(meta, {n: v for n, v in values.items() if v is not None}, str(path))
+
+
+_WHAT = {
+    "plausibility": " (the mark that the plausibility gate was overridden)",
+    "unchecked": " (the mark of the steps solved without their zero check)",
+}
+
+
+def _check_digest(data: dict, source: str) -> None:
+    """Refuse a patch edited since it was written, naming each edit (:mod:`.patch_digest`)."""
+    problems = [
+        f"{source}: {entry}{_WHAT.get(entry, '')}: {what} since wirecal wrote the patch; a "
+        "patch is not edited by hand: write it again with wirecal solve … -o PATCH --force "
+        "(docs/formats.md)"
+        for entry, what in edits(data)
+    ]
+    if problems:
+        raise WirecalError(problems)
 
 
 def _value(t: Table) -> PatchValue | None:

@@ -46,9 +46,16 @@ def read_cell(table: Table, n: int | None) -> CellModel | None:
         )
         for key in ("body_min_deg", "body_max_deg")
     ]
-    if body[0] is not None and body[1] is not None and body[0].shape == body[1].shape:
-        for j in np.flatnonzero(body[0] >= body[1]):
-            table.add("body_max_deg", f"joint {j + 1}: {body[1][j]:g} is not above body_min_deg")
+    lo, hi = body
+    if lo is not None and hi is not None and lo.shape == hi.shape:
+        for j in np.flatnonzero(lo >= hi):
+            table.add("body_max_deg", f"joint {j + 1}: {hi[j]:g} is not above body_min_deg")
+        if max(np.max(np.abs(lo)), np.max(np.abs(hi))) <= 2 * np.pi + 1e-9:
+            table.add(
+                "body_max_deg",
+                "every body limit is within ±2π: they look like radians (joint 2's would be "
+                f"[{np.degrees(lo[1]):.4g}, {np.degrees(hi[1]):.4g}] deg); give degrees",
+            )
     boxes = [_box(t) for t in table.tables("box", BOX_KEYS, required=False)]
     spaces = [_half_space(t) for t in table.tables("half_space", HALF_SPACE_KEYS, required=False)]
     housing = _housing(table.table("encoder_housing", HOUSING_KEYS, required=False))

@@ -8,6 +8,8 @@ exit (:mod:`wirecal.solver.exit_geometry`). The format is in
 
 from __future__ import annotations
 
+import math
+
 from wirecal.lang.registry import default_language, first_channel, languages
 from wirecal.solver.exit_geometry import Exit, Eyelet, Pulley
 from wirecal.solver.formats.robot_values import (
@@ -136,6 +138,15 @@ def _software(table: Table, language: str | None) -> str | None:
     return software
 
 
+MIN_REFERENCE_MM = 50.0
+"""The shortest reference gauge: 0.01 mm of reading noise is 200 ppm of 50 mm."""
+
+
+def _round_angle_in_radians(value: float) -> bool:
+    """Whether ``value`` is a multiple of 15 deg (up to 90) written in radians (1.5708)."""
+    return any(abs(value - math.radians(k * 15)) < 1e-3 for k in range(1, 7))
+
+
 def read_encoder(enc: Table, interface: str | None) -> Encoder | None:
     """Read the rest of ``[encoder]``, read through ``interface``."""
     mpc = enc.number("mm_per_count", lo=-MAX_MM_PER_COUNT, hi=MAX_MM_PER_COUNT, unit="mm")
@@ -161,6 +172,14 @@ def read_encoder(enc: Table, interface: str | None) -> Encoder | None:
         hi=MAX_TEMPCO_PPM_PER_K,
         unit="ppm/K",
     )
+    if ref is not None and ref < MIN_REFERENCE_MM:
+        enc.add(
+            "reference_length_mm",
+            f"is {ref:g} mm: a gauge shorter than {MIN_REFERENCE_MM:g} mm reads the scale "
+            "no better than its tolerance; give the certified length of the gauge's nests "
+            "in mm (e.g. 500)",
+        )
+        ref = None
     if ref is not None and rng is not None and ref > rng:
         enc.add(
             "reference_length_mm",
@@ -261,6 +280,12 @@ def _exit(enc: Table) -> tuple[bool, Exit | None]:
             return False, None
         return True, Pulley(axis, radius)
     cone = enc.number("max_exit_deg", above=0, hi=MAX_EXIT_DEG, unit="deg")
+    if cone is not None and _round_angle_in_radians(cone):
+        enc.add(
+            "max_exit_deg",
+            f"is {cone:g}: that is {math.degrees(cone):.0f} deg in radians; give degrees",
+        )
+        cone = None
     edge = enc.number("exit_edge_radius_mm", lo=0, hi=MAX_EXIT_RADIUS_MM, unit="mm")
     if axis is None or cone is None or edge is None:
         return False, None

@@ -81,7 +81,14 @@ def _check_counter(enc: Encoder, doc: Table) -> None:
     wire length the encoder can give, so no reading is a counter turn away from another.
     """
     half, mpc = enc.counter.half, abs(enc.mm_per_count)
-    if enc.range_mm / mpc >= half:
+    if enc.range_mm / mpc >= 2**63:  # more counts than any counter holds: the resolution
+        doc.add(
+            "encoder.mm_per_count",
+            f"is {enc.mm_per_count:g} mm: range_mm {enc.range_mm:g} would be "
+            f"{enc.range_mm / mpc:.3g} counts, more than a 64-bit counter holds; give the "
+            "encoder's resolution in mm per count (a Unimeasure EP-50: 0.025488)",
+        )
+    elif enc.range_mm / mpc >= half:
         doc.add(
             "encoder.counter_bits",
             f"a signed {enc.counter_bits}-bit counter tells lengths apart up to {half} counts "

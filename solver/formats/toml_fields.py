@@ -41,7 +41,7 @@ KINDS: dict[str, tuple[str, tuple[str, ...]]] = {
     "truth file": ("a truth file (true offsets of a simulated robot)", ("errors",)),
     "patch file": ("a patch written by wirecal solve", ("parameters", "log_sha256")),
     "validation setup": ("a validation setup", ("configuration", "plate")),
-    "UR calibration file": ("UR standard-DH deltas written by wirecal solve", ("mounting",)),
+    "patch companion": ("a patch's companion (UR standard-DH deltas)", ("mounting",)),
 }
 """Each wirecal TOML document: what it is, and the top-level keys that identify it."""
 

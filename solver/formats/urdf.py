@@ -162,7 +162,7 @@ def _joint(el: ET.Element, path: Path, links: set[str]) -> Joint:
     if norm == 0 and el.get("type") in MOVING:  # a fixed joint's axis is ignored
         raise WirecalError(f"{where}: <axis xyz> is the zero vector")
     limit = el.find("limit")
-    return Joint(
+    joint = Joint(
         name=name,
         type=el.get("type", ""),
         parent=parent.get("link", ""),
@@ -179,6 +179,38 @@ def _joint(el: ET.Element, path: Path, links: set[str]) -> Joint:
         velocity_rad_s=_limit(limit, "velocity", where),
         mimic=el.find("mimic") is not None,
     )
+    _check_units(joint, where)
+    return joint
+
+
+MAX_ANGLE_RAD = 2 * math.pi
+"""An origin angle beyond this is in degrees (a URDF's angles are radians)."""
+MAX_LIMIT_RAD = 4 * math.pi
+"""A joint limit beyond this is in degrees (the widest arms turn ±2 turns)."""
+MAX_OFFSET_M = 10.0
+"""An origin offset beyond this is in millimetres (a URDF's lengths are metres)."""
+
+
+def _check_units(j: Joint, where: str) -> None:
+    """Refuse angles written in degrees and lengths in millimetres, naming the attribute."""
+    for k, v in enumerate(j.rpy_rad):
+        if abs(v) > MAX_ANGLE_RAD:
+            raise WirecalError(
+                f"{where}: origin rpy value {k + 1} is {v:g}, beyond ±2π: URDF angles are "
+                "radians; written in degrees? Convert them (× π/180) and import again"
+            )
+    for key, v in (("lower", j.lower_rad), ("upper", j.upper_rad)):
+        if v is not None and abs(v) > MAX_LIMIT_RAD and j.type in MOVING:
+            raise WirecalError(
+                f"{where}: limit {key}={v:g}, beyond ±4π: URDF limits are radians; written "
+                "in degrees? Convert them (× π/180) and import again"
+            )
+    if np.max(np.abs(j.xyz_m)) > MAX_OFFSET_M:
+        raise WirecalError(
+            f"{where}: origin xyz {' '.join(f'{v:g}' for v in j.xyz_m)} is beyond "
+            f"{MAX_OFFSET_M:g} m: URDF lengths are metres; written in millimetres? Divide "
+            "them by 1000 and import again"
+        )
 
 
 def read_urdf(path: str | Path) -> Urdf:
@@ -210,7 +242,7 @@ def read_urdf(path: str | Path) -> Urdf:
 
 
 def chain(urdf: Urdf, base: str | None, tip: str) -> list[Joint]:
-    """Return the joints from ``base`` (default: the tree's root link) to ``tip``, in order."""
+    """Return the joints from ``base`` (default: the root of the tree ``tip`` is in) to ``tip``."""
     by_child = _parent_joints(urdf)
     for link, what in ((tip, "--tip"), (base, "--base")):
         if link is not None and link not in urdf.links:
@@ -223,13 +255,12 @@ def chain(urdf: Urdf, base: str | None, tip: str) -> list[Joint]:
             raise WirecalError(
                 f"{urdf.path}: {what} {link!r} is not a link of this URDF (links: {shown}{more})"
             )
-    if base is None:
-        roots = [x for x in urdf.links if x not in by_child]
-        if len(roots) != 1:
-            raise WirecalError(
-                f"{urdf.path}: {len(roots)} root links ({', '.join(roots)}); name one with --base"
-            )
-        base = roots[0]
+    if base is None:  # the root the tip descends from (a URDF may hold several trees)
+        base = tip
+        seen = {tip}
+        while base in by_child and by_child[base].parent not in seen:
+            base = by_child[base].parent
+            seen.add(base)
     path: list[Joint] = []
     link = tip
     while link != base:

@@ -21,12 +21,12 @@ from wirecal.solver.measurements import Measurements
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
-from wirecal.twin.adapters import program_text
+from wirecal.twin.adapters import AdapterCapabilities, TwinAdapter, program_text
 from wirecal.twin.controller_run import ControllerRun, readings_for_lengths
 from wirecal.twin.rapid.controller import IrcController
 from wirecal.twin.rapid.interp import run_module
 from wirecal.twin.rapid.solver_run import controller_solve
-from wirecal.twin.world import Faults, TwinRun, World, counter_start_of, stop_reason
+from wirecal.twin.world import Faults, TwinRun, measurement_world, mount_then_run, stop_reason
 
 
 def module_of(programs: dict[str, str]) -> str:
@@ -34,10 +34,11 @@ def module_of(programs: dict[str, str]) -> str:
     return program_text(programs, MODULE_FILE, "RAPID")
 
 
-class RapidAdapter:
+class RapidAdapter(TwinAdapter):
     """The RAPID twin adapter (module docstring)."""
 
     key = "rapid"
+    capabilities = AdapterCapabilities(controller_runs=True)
 
     def measure(
         self,
@@ -59,25 +60,24 @@ class RapidAdapter:
         over the 32-bit counter's range); the wire's speed limits are enforced.
         """
         text = module_of(programs)
-        folder.mkdir(parents=True, exist_ok=True)
-        world = World(
+        world = measurement_world(
             robot,
+            plan,
             truth,
-            plan.theta0_deg,
             folder,
+            robot.encoder.counter,
             seed=seed,
             noise_mm=noise_mm,
-            counter_start=counter_start_of(robot.encoder.counter, seed, counter_start),
-            faults=faults or Faults(),
+            counter_start=counter_start,
+            faults=faults,
             unmodelled=unmodelled,
-            wire_limits=True,
         )
         controller = IrcController(world, signal_name(robot))
-        mount = run_module(text, MODULE_FILE, controller, entry="wc_mount")
-        world.moves = 0  # fault positions count the moves of wc_run
-        run = None
-        if mount.status == "completed":
-            run = run_module(text, MODULE_FILE, controller, entry="wc_run")
+        mount, run = mount_then_run(
+            world,
+            lambda: run_module(text, MODULE_FILE, controller, entry="wc_mount"),
+            lambda: run_module(text, MODULE_FILE, controller, entry="wc_run"),
+        )
         stopped = stop_reason(mount, run)
         return TwinRun(folder / LOG_FILE, stopped is None, stopped, world, mount, run, controller)
 

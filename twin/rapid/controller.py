@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.twin.machine import RunError
-from wirecal.twin.world import EncoderFailure, World
+from wirecal.twin.world import BeyondLimit, Collision, EncoderFailure, WireOverspeed, World
 
 GROUP_RANGE = 2**32
 """The group input's values: 32 bits, unsigned (GInputDnum reads up to 32 signals)."""
@@ -67,20 +67,15 @@ class IrcController:
         """MoveAbsJ: to ``joints_deg`` at speeddata ``speed``; stop on a limit or collision."""
         world = self.world
         q = np.asarray(joints_deg, dtype=float)
-        j = world.beyond_limits(q)
-        if j is not None:
-            raise self._refuse(f"MoveAbsJ: joint {j + 1} out of range ({q[j]:g} deg)")
-        hit = world.collision(q)
-        if hit is not None:
-            raise self._refuse(f"protective stop: {hit}")
         slowest = float(np.min(world.robot.joint_speed_deg_s))
-        speed_pct = np.asarray(min(100.0, 100.0 * float(speed[1]) / slowest))
-        move = world.profile(q)
-        over = world.wire_overspeed(move, float(speed_pct))
-        if over is not None:
-            raise self._refuse(f"MoveAbsJ: {over}")
-        world.arrive(q, float(move.duration_s(speed_pct)[0]))
-        world.vibrate(float(move.vibration_mm(speed_pct)[0]))
+        speed_pct = min(100.0, 100.0 * float(speed[1]) / slowest)
+        match world.move(q, speed_pct):
+            case BeyondLimit(joint=j):
+                raise self._refuse(f"MoveAbsJ: joint {j + 1} out of range ({q[j]:g} deg)")
+            case Collision(where=where):
+                raise self._refuse(f"protective stop: {where}")
+            case WireOverspeed(why=why):
+                raise self._refuse(f"MoveAbsJ: {why}")
 
     def joints_deg(self) -> tuple[float, ...]:
         """CJointT: the commanded joints (deg, single precision)."""

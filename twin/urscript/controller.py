@@ -5,11 +5,14 @@ its limits, the draw-wire encoder's physics, unmodelled errors, faults, the cloc
 offers the URScript functions the generated programs call:
 
 * ``movej(q, a, v, t, r)``: q in rad, a rad/s², v rad/s of the leading axis (SD 14.22);
-  the move takes the time of the leading joint's trapezoidal profile (``t`` > 0 sets it)
-  and no settling (the programs sleep for that). A target beyond a joint limit stops the
-  program (the controller's own message was not read: *unconfirmed*), and so does a move
-  through the arm itself, the floor or a ``[cell]`` volume (a protective stop naming the
-  colliding pair; the controller's own message is not modelled);
+  the move takes the time of the leading joint's trapezoidal profile (``t`` > 0 sets it);
+  the tool then vibrates along the wire and settles (the programs sleep for that). Through
+  the world's one move protocol (:meth:`~wirecal.twin.world.World.move`): a target beyond
+  a joint limit stops the program (the controller's own message was not read:
+  *unconfirmed*), and so does a move through the arm itself, the floor or a ``[cell]``
+  volume (a protective stop naming the colliding pair; the controller's own message is not
+  modelled) or one that would run the wire beyond the encoder's speed or acceleration (v
+  taken as a percentage of the slowest joint's maximum speed; the twin's own stop);
 * ``get_actual_joint_positions()``: the commanded joints in rad (joint encoders do not see
   the unmodelled errors; the wire does);
 * the encoder: ``encoder_enable_pulse_decode(i, 1, A, B)`` (SD 14.2: index 0 or 1,
@@ -52,7 +55,7 @@ import numpy as np
 from wirecal.solver.counter import Counter
 from wirecal.twin.machine import Stopped, f32
 from wirecal.twin.urscript.interp import URError, number, to_float, to_str
-from wirecal.twin.world import EncoderFailure, World
+from wirecal.twin.world import BeyondLimit, Collision, EncoderFailure, WireOverspeed, World
 
 FILTERED_RANGE = 2**16
 """The filtered count's range [0; 65536[ (Script Manual SW5.20)."""
@@ -75,6 +78,7 @@ class URController:
     sockets: dict[str, socket.socket] = field(default_factory=dict)
     lines_sent: int = 0
     syncs: int = 0  # sync() calls (each a 2 ms frame)
+    software: str | None = None  # the declared software: a call its pages lack is refused
 
     def __post_init__(self) -> None:
         """No encoder is decoded until a program enables it."""
@@ -92,17 +96,20 @@ class URController:
         if not isinstance(q, list) or len(q) != len(w.joints):
             raise URError(f"movej: q must be a list of {len(w.joints)} joint positions")
         q_deg = np.degrees([to_float(x) for x in q])
-        j = w.beyond_limits(q_deg)
-        if j is not None:
-            raise URError(
-                f"movej: joint {j + 1} target {q_deg[j]:.3f} deg is beyond its limit "
-                f"[{w.limits.joint_min_deg[j]:g}, {w.limits.joint_max_deg[j]:g}] deg"
-            )
-        hit = w.collision(q_deg)
-        if hit is not None:
-            raise URError(f"protective stop: movej: {hit}")
+        a_rad_s2, v_rad_s = number(a, "movej a"), number(v, "movej v")
         dist = float(np.max(np.abs(np.radians(q_deg - np.asarray(w.joints)))))
-        w.arrive(q_deg, _trapezoid_s(dist, number(a, "movej a"), number(v, "movej v"), t))
+        slowest = math.radians(float(np.min(w.robot.joint_speed_deg_s)))
+        speed_pct = min(100.0, 100.0 * v_rad_s / slowest)
+        match w.move(q_deg, speed_pct, _trapezoid_s(dist, a_rad_s2, v_rad_s, t)):
+            case BeyondLimit(joint=j, min_deg=lo, max_deg=hi):
+                raise URError(
+                    f"movej: joint {j + 1} target {q_deg[j]:.3f} deg is beyond its limit "
+                    f"[{lo:g}, {hi:g}] deg"
+                )
+            case Collision(where=where):
+                raise URError(f"protective stop: movej: {where}")
+            case WireOverspeed(move=move, why=why):
+                raise URError(f"movej: {move}: {why}")
 
     def get_actual_joint_positions(self) -> list[float]:
         """Return the joints in rad, base to wrist 3."""

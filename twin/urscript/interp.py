@@ -141,7 +141,7 @@ class Interpreter:
         return fn
 
 
-_UNRUN = (N.Jump, N.Critical, N.ThreadOp, N.Pose, N.RunThread)
+_UNRUN = (N.Jump, N.Critical, N.ThreadOp, N.Pose, N.RunThread, N.RpcCall)
 """Valid URScript (the checker accepts it) that wirecal never emits and the twin does not run."""
 
 

@@ -22,7 +22,7 @@ import numpy as np
 from wirecal.solver import ik
 from wirecal.solver.simulate import RANGE_EXCEEDED
 from wirecal.twin.vplus.interp import UNMODELLED, Trans, VError
-from wirecal.twin.world import EncoderFailure, World
+from wirecal.twin.world import BeyondLimit, Collision, EncoderFailure, WireOverspeed, World
 
 ERRORS = {
     1: "Success",
@@ -129,20 +129,13 @@ class VplusController:
             self.tools_at_cartesian.add(self.tool)
             target = self._joints_for(target)
         q = np.asarray(target, dtype=float)
-        j = w.beyond_limits(q)
-        if j is not None:
-            raise VError(-1004, f"*Joint {j + 1} out of range* ({q[j]:g} deg)")
-        hit = w.collision(q)
-        if hit is not None:
-            raise VError(PROTECTIVE_STOP, f"{ERRORS[PROTECTIVE_STOP]} {hit}")
-        move = w.profile(q)
-        over = w.wire_overspeed(move, self.speed_pct)
-        if over is not None:
-            where = f"move {w.moves + 1} to ({', '.join(f'{x:g}' for x in q)})"
-            raise VError(-1101, f"{ERRORS[-1101]} {where} at SPEED {self.speed_pct:g}: {over}")
-        speed = np.asarray(self.speed_pct)
-        w.arrive(q, float(move.duration_s(speed)[0]))
-        w.vibrate(float(move.vibration_mm(speed)[0]))
+        match w.move(q, self.speed_pct):
+            case BeyondLimit(joint=j):
+                raise VError(-1004, f"*Joint {j + 1} out of range* ({q[j]:g} deg)")
+            case Collision(where=where):
+                raise VError(PROTECTIVE_STOP, f"{ERRORS[PROTECTIVE_STOP]} {where}")
+            case WireOverspeed(move=move, why=why):
+                raise VError(-1101, f"{ERRORS[-1101]} {move} at SPEED {self.speed_pct:g}: {why}")
 
     def break_(self) -> None:
         """BREAK: nothing to wait for; the twin's motions end at once."""

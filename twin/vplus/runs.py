@@ -23,6 +23,7 @@ from wirecal.solver.simulate import (
     Unmodelled,
     reference_duration_s,
 )
+from wirecal.twin.adapters import AdapterCapabilities, TwinAdapter
 from wirecal.twin.controller_run import ControllerRun, readings_for_lengths
 from wirecal.twin.machine import Outcome
 from wirecal.twin.vplus.controller import VplusController
@@ -34,7 +35,8 @@ from wirecal.twin.world import (
     Plate,
     TwinRun,
     World,
-    counter_start_of,
+    measurement_world,
+    mount_then_run,
     stop_reason,
 )
 
@@ -73,19 +75,18 @@ def run_measurement(
     ends there. The operator confirms every prompt of the reference step (1), seating the
     wire tip as asked; the encoder is ``encoder_truth``.
     """
-    disk.mkdir(parents=True, exist_ok=True)
-    world = World(
+    world = measurement_world(
         robot,
+        plan,
         truth,
-        plan.theta0_deg,
         disk,
+        robot.encoder.counter,
         seed=seed,
         noise_mm=noise_mm,
-        counter_start=counter_start_of(robot.encoder.counter, seed, counter_start),
-        faults=faults or Faults(),
-        proceed_on_pause=proceed_on_pause,
-        wire_limits=True,
+        counter_start=counter_start,
+        faults=faults,
         unmodelled=unmodelled,
+        proceed_on_pause=proceed_on_pause,
         answers=["1"] * (1 + _reference_prompts(robot)),
         encoder_truth=encoder_truth,
         run_s=run_timeline(robot, plan, DEFAULT_RUN).total_s + reference_duration_s(robot.encoder),
@@ -93,14 +94,17 @@ def run_measurement(
     controller = VplusController(world)
     name, text = module_of(programs)
     interp = Interpreter(parse_module(text, name), controller)
-    mount = interp.execute("wc.mount")
-    world.moves = 0  # fault positions count the moves of wc.run (see move_of_step)
-    opened = len(controller.written)
-    run = interp.execute("wc.run") if mount.status == "completed" else None
-    written = controller.written[opened:]
+    opened: list[int] = []
+
+    def run() -> Outcome:
+        opened.append(len(controller.written))
+        return interp.execute("wc.run")
+
+    mount, ran = mount_then_run(world, lambda: interp.execute("wc.mount"), run)
+    written = controller.written[opened[0] :] if opened else []
     log = disk / log_file if log_file else (written[0] if written else disk / "no log")
-    stopped = stop_reason(mount, run)
-    return TwinRun(log, stopped is None, stopped, world, mount, run, controller)
+    stopped = stop_reason(mount, ran)
+    return TwinRun(log, stopped is None, stopped, world, mount, ran, controller)
 
 
 def _reference_prompts(robot: Robot) -> int:
@@ -163,10 +167,13 @@ def run_validation(
     return ValidationRun(cfg, pln, disk / f"WCVCFG{run}.CSV", disk / f"WCVPLN{run}.CSV", ctl)
 
 
-class VplusAdapter:
+class VplusAdapter(TwinAdapter):
     """V+'s twin adapter: the module's programs on the twin's world."""
 
     key = "vplus"
+    capabilities = AdapterCapabilities(
+        encoder_truth=True, controller_runs=True, paper_validation=True
+    )
 
     def measure(
         self,

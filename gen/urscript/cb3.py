@@ -1,0 +1,74 @@
+"""What the URScript programs do differently on CB3 (software 3.x): the count and the clock.
+
+The CB3 manuals document the filtered count only (``encoder_get_tick_count(encoder_index)``,
+from 3.8: :data:`~wirecal.lang.urscript.versions.CONVEYOR_GUIDE`); ``opt="raw"`` and
+``time()`` are read on e-Series pages only (:mod:`wirecal.lang.urscript.versions`). So a
+CB3 program
+
+* reads the filtered count, a float in [0; 65536[ that wraps (SW5.20 page; its range on
+  3.x is *unconfirmed*), rounds it to a whole count and unwraps it against the previous
+  reading: the step to the nearest count modulo 2^16. That is right while the wire moves
+  less than half the range between two readings, so every move is cut into legs whose
+  nominal wire change is at most :data:`LEG_FRACTION` of the range, with a reading at the
+  end of each (:func:`move_legs`): the legs lie on the same straight joint-space line as
+  the move, so the path is the one the plan checked;
+* has no clock: it writes a version 1 log (no ``t_s``, ``settle_s``: its readings carry no
+  time, which the log reader takes, :mod:`wirecal.solver.formats.log`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from wirecal.gen.targets import joint_target
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.plan import Plan
+from wirecal.solver.robot import Robot
+from wirecal.solver.wire_range import nominal_wire_mm, run_moves
+
+CB3 = 3
+"""The major software version of the CB3 line."""
+
+FILTERED_RANGE = 2**16
+"""The filtered count's range [0; 65536[ (SW5.20 encoder_get_tick_count page)."""
+
+LEG_FRACTION = 0.25
+"""A leg changes the nominal wire by at most this fraction of the filtered range: half of
+what the unwrapping tolerates, the rest for the model's errors."""
+
+MAX_LEGS = 64
+"""More legs than this for one move: the encoder's counts are too fine for the filtered count."""
+
+
+def is_cb3(software: str | None) -> bool:
+    """Tell whether a declared controller software is of the CB3 line (3.x)."""
+    return software is not None and int(software.split(".")[0]) == CB3
+
+
+def move_legs(
+    robot: Robot, plan: Plan, target: Callable[[np.ndarray], str]
+) -> list[list[dict[str, str]]]:
+    """Return each move's intermediate joint targets, in the order of ``run_moves(plan)``.
+
+    A move is cut into the fewest equal joint-space legs whose nominal wire change is at
+    most :data:`LEG_FRACTION` of the filtered range; ``target`` writes a joint target.
+    Raises :class:`WirecalError` naming the move when more than :data:`MAX_LEGS` would be
+    needed.
+    """
+    limit_mm = LEG_FRACTION * FILTERED_RANGE * abs(robot.encoder.mm_per_count)
+    out = []
+    for where, start, end, _ in run_moves(plan):
+        for n in range(1, MAX_LEGS + 1):
+            q = start + np.linspace(0.0, 1.0, n + 1)[:, None] * (end - start)
+            if np.all(np.abs(np.diff(nominal_wire_mm(robot, plan.theta0_deg, q))) <= limit_mm):
+                break
+        else:
+            raise WirecalError(
+                f"{plan.source}: {where}: the wire changes more than {MAX_LEGS} x "
+                f"{limit_mm:.0f} mm: the CB3 programs read the filtered count, which wraps "
+                f"every {FILTERED_RANGE * abs(robot.encoder.mm_per_count):.0f} mm"
+            )
+        out.append([joint_target(x, target) for x in q[1:-1]])
+    return out
