@@ -84,6 +84,7 @@ CASES = [
 ]
 
 
+@pytest.mark.slow  # with the cache full: 45 s on one core; the largest modules take 2-7 s
 @pytest.mark.parametrize(("unit", "software"), CASES)
 def test_public_programs_lint_as_listed(unit: Unit, software: str | None) -> None:
     missing = [cached(e) for e in unit.entries if not cached(e).is_file()]
