@@ -72,3 +72,52 @@ def wilson(k: int, n: int, z: float = WILSON_Z) -> tuple[float, float]:
     centre = (p + z**2 / (2 * n)) / (1 + z**2 / n)
     half = z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / (1 + z**2 / n)
     return float(centre - half), float(centre + half)
+
+
+@dataclass(frozen=True)
+class ComplianceTrial:
+    """One calibration of an arm whose file identifies compliances: both errors, both bounds.
+
+    ``error_patch_mm``: the geometry alone (what the controller applies; the sag left in
+    it) against the true, bent arm; ``error_compensated_mm``: the geometry and the
+    identified compliances (targets compensated offline). Means over the workspace (mm).
+    """
+
+    error_patch_mm: float
+    error_compensated_mm: float
+    bound_mm: float  # bound95_mm
+    bound_compensated_mm: float  # bound95_compensated_mm
+    truth: dict[str, float]
+    estimate: dict[str, float]
+    std: dict[str, float]
+
+
+def compliance_trial(
+    robot: Robot, plan: Plan, seed: int, unmodelled: Unmodelled | None, compliant: bool
+) -> ComplianceTrial:
+    """Simulate, solve and judge one calibration of a compliant (or rigid) true arm.
+
+    ``robot`` lists ``compliances``; the truth draws them (:func:`random_errors`) or, for a
+    rigid arm, sets them to 0.
+    """
+    truth = random_errors(robot, 1.0, np.random.default_rng([seed, 1]))
+    if not compliant:
+        truth.update({n: -robot.nominal_value(n) for n in robot.compliances})
+    encoder = realistic_encoder(robot.encoder, np.random.default_rng([seed, 4]))
+    text = simulate_log(robot, plan, truth, seed=seed, encoder=encoder, unmodelled=unmodelled)
+    result = solve(robot, plan, check_log(parse_log(text, f"simulated run {seed}"), plan, robot))
+    joint = result.estimates["joint"]
+    budget = result.budgets["joint"]
+    believed = joint.as_dict()
+    geometry = {n: v for n, v in believed.items() if n not in robot.compliances}
+    ws = workspace(robot)
+    std = dict(zip(joint.names, joint.std if joint.std is not None else [], strict=False))
+    return ComplianceTrial(
+        error_vs_truth_mm(robot, truth, geometry, ws),
+        error_vs_truth_mm(robot, truth, believed, ws),
+        budget.bound,
+        budget.bound if budget.bound_compensated is None else budget.bound_compensated,
+        truth,
+        believed,
+        {n: float(s) for n, s in std.items()},
+    )

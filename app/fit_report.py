@@ -1,10 +1,11 @@
 """Write ``wirecal fit --report``'s self-contained HTML page.
 
-One page (Jinja2 template, matplotlib figures embedded as PNG, as ``wirecal report``): the
-table and its resolution, the parameters with σ, the ones left out and why, the sessions,
-the outliers, the held-out figures beside the quantisation floor, the x, y, z cross-check,
-the refined fit, the error budget and the plausibility verdict; figures of the residual row
-by row (sessions and outliers marked) and of the inliers' residuals against the floor.
+One page (Jinja2 template, matplotlib figures embedded as PNG, as ``wirecal report``): first
+the plausibility verdict on each fit with why and its budget against its correction; then
+the table and its resolution, the parameters with σ, the ones left out and why, the
+sessions, the outliers, the held-out figures beside the quantisation floor, the x, y, z
+cross-check, the refined fit, the error budget; figures of the residual row by row
+(sessions and outliers marked) and of the inliers' residuals against the floor.
 """
 
 from __future__ import annotations
@@ -17,9 +18,8 @@ import numpy as np
 
 from wirecal.app.report import AFTER, BEFORE, _png
 from wirecal.gen.templating import render
-from wirecal.solver.budget import Budget
+from wirecal.solver.fit_gate import Gate
 from wirecal.solver.fit_result import FitResult, Run, parameters_json
-from wirecal.solver.verdict import Plausibility
 
 
 def residual_figure(run: Run) -> str:
@@ -70,14 +70,14 @@ def _run_context(run: Run) -> dict:
     }
 
 
-def render_fit_report(result: FitResult, verdict: Plausibility, budget: Budget) -> str:
-    """Render the fit's report as one self-contained HTML page."""
+def render_fit_report(result: FitResult, gate: Gate) -> str:
+    """Render the fit's report as one self-contained HTML page, the gate's verdict first."""
     return render(
         "report/fit.html.j2",
         result=result,
         table=result.table,
         main=_run_context(result.main),
         refined=None if result.refined is None else _run_context(result.refined),
-        verdict=verdict,
-        budget=budget,
+        gate=gate,
+        budget=gate.chosen.budget,
     )

@@ -38,7 +38,12 @@ from wirecal.solver.formats.urdf_geometry import (
     link_radii,
     wide_links,
 )
-from wirecal.solver.formats.urdf_model import UrdfChain, fk_difference_mm, read_chain
+from wirecal.solver.formats.urdf_model import (
+    UrdfChain,
+    chain_masses,
+    fk_difference_mm,
+    read_chain,
+)
 from wirecal.solver.identifiability import propose_parameters
 from wirecal.solver.kinematics import Model
 from wirecal.solver.robot import (
@@ -118,6 +123,7 @@ def urdf_robot_file(urdf: str | Path, out_path: Path, opt: ImportOptions) -> Imp
         ),
         controller=Controller(opt.language, opt.host, opt.port),
         joint_speed_confirmed=confirmed,
+        masses=chain_masses(ch),
     )
     source = os.path.relpath(Path(urdf).resolve(), out_path.resolve().parent)
     notes += [_radii_note(radii), *([cell_note] if cell_note else [])]

@@ -1,16 +1,23 @@
 """``wirecal fit`` on simulated tables: held-out RMS of the cable length beside the floor.
 
-Three arms (Viper s650, ABB IRB 120, UR5e), data sets of 100 to 2000 rows from
+Three arms (Viper s650, ABB IRB 120, UR5e), tables from
 :func:`~wirecal.solver.fit_synth.synthetic_table`: random configurations in the middle 80 %
-of the joint ranges, joints logged to 0.1°, lengths to 0.01 mm with 0.02 mm reading noise,
-an anchor anywhere in the cell, three sessions with offset jumps of 3–30 mm, three snagged
-and two mistyped rows. Per case (mean over the seeds): the held-out RMS (random 20 %,
-5 repeats), the quantisation floor over the same rows, their ratio, the same with the joints
-refined from the controller's x, y, z (--refine-joints), whether the sessions were found
-within ±2 rows, and the time of one fit (one BLAS thread). Goal: ratio ≤ 1.2 from a few
-hundred rows; 1000 rows in seconds.
+of the joint ranges (or, "narrow", ±20° about mid-range: rows that carry little), joints
+logged to 0.1°, lengths to 0.01 mm with 0.02 mm reading noise, an anchor anywhere in the
+cell, three sessions with offset jumps of 3–30 mm, three snagged and two mistyped rows.
+Three sections, medians over the seeds:
 
-    python bench/bench_fit.py [--seeds N]
+1. **Parameter choice** — first half trains, second half held out (``--holdout half``):
+   RMS/floor, DH errors kept and the error budget, *before* (every identified DH error, the
+   choice up to issue 31: :func:`~wirecal.solver.fit.generalise` replaced by the identity)
+   and *after* (BIC backward elimination). Goal: after ≤ 1.3 floors.
+2. **Held-out, refined joints** — random 20 %, 5 repeats; the same with joints refined from
+   x, y, z; sessions found within ±2 rows; the time of one fit (one BLAS thread).
+3. **Rows** — one fit (``--holdout none``) of 10,000 and 100,000 rows: seconds and the
+   process's peak memory (before issue 31, 20,000 rows took 6.4 GB and 100,000 ended in a
+   74.5 GiB allocation: an N × N matrix).
+
+    python bench/bench_fit.py [--seeds N] [--skip-rows]
 """
 
 from __future__ import annotations
@@ -21,24 +28,71 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = "1"  # one core, before numpy loads
 
 import argparse  # noqa: E402
+import resource  # noqa: E402
 import time  # noqa: E402
+from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
+from unittest import mock  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from wirecal.solver import fit  # noqa: E402
+from wirecal.solver.fit_gate import fit_budget  # noqa: E402
 from wirecal.solver.fit_result import FitOptions, fit_table  # noqa: E402
 from wirecal.solver.fit_synth import synthetic_table  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
+from wirecal.solver.robot import Robot  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 ARMS = ("viper_s650", "abb_irb120", "ur5e")
 SIZES = (100, 300, 1000, 2000)
+NARROW_DEG = 20.0
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, default=3)
-    args = ap.parse_args()
+def _narrow(robot: Robot) -> Robot:
+    """Return the robot with its joint limits ±NARROW_DEG about mid-range (for the tables)."""
+    mid = (robot.joint_min_deg + robot.joint_max_deg) / 2
+    return replace(
+        robot,
+        joint_min_deg=np.maximum(robot.joint_min_deg, mid - NARROW_DEG),
+        joint_max_deg=np.minimum(robot.joint_max_deg, mid + NARROW_DEG),
+    )
+
+
+def _half(robot: Robot, table) -> tuple[float, int, float]:
+    """Return RMS/floor of the half split, the DH errors kept and the error budget (mm)."""
+    r = fit_table(robot, table, FitOptions(holdout="half"))
+    kept = sum(not n.startswith("tool_") for n in r.main.core.layout.geometry)
+    return r.main.holdout.ratio, kept, fit_budget(r, r.main).total
+
+
+def choice(seeds: int) -> None:
+    """Section 1: the parameter choice before and after, first half → second half."""
+    print("1. parameter choice: first half -> second half (medians)")
+    print(f"{'arm':<12}{'table':>12}{'ratio':>14}{'DH kept':>12}{'budget mm':>16}")
+    for arm in ARMS:
+        robot = load_robot(EXAMPLES / arm / "robot.toml")
+        for label, n, source in (
+            ("300", 300, robot),
+            ("1000", 1000, robot),
+            ("300 narrow", 300, _narrow(robot)),
+        ):
+            rows = []
+            for seed in range(seeds):
+                table = synthetic_table(source, n, seed=seed).table
+                with mock.patch.object(fit, "generalise", lambda b, lay, x, d, r: (lay, x, ())):
+                    before = _half(robot, table)
+                rows.append((*before, *_half(robot, table)))
+            m = np.median(np.array(rows, dtype=float), axis=0)
+            print(
+                f"{arm:<12}{label:>12}{m[0]:>7.2f}→{m[3]:<6.2f}{m[1]:>5.0f}→{m[4]:<6.0f}"
+                f"{m[2]:>8.3f}→{m[5]:<7.3f}"
+            )
+
+
+def holdout(seeds: int) -> None:
+    """Section 2: random 20 % held out, the refined joints, the sessions, the time."""
+    print("\n2. held-out random 20 %, 5 repeats (medians)")
     print(
         f"{'arm':<12}{'rows':>6}{'held-out':>10}{'floor':>8}{'ratio':>7}"
         f"{'refined':>9}{'floor':>8}{'ratio':>7}{'sessions':>10}{'fit s':>7}"
@@ -47,7 +101,7 @@ def main() -> None:
         robot = load_robot(EXAMPLES / arm / "robot.toml")
         for n in SIZES:
             rows = []
-            for seed in range(args.seeds):
+            for seed in range(seeds):
                 syn = synthetic_table(robot, n, seed=seed)
                 t0 = time.perf_counter()
                 fit_table(robot, syn.table, FitOptions(holdout="none"))
@@ -57,23 +111,39 @@ def main() -> None:
                 assert f is not None
                 found = np.array(m.core.starts)
                 ok = found.size == len(syn.starts) and np.all(np.abs(found - syn.starts) <= 2)
-                rows.append(
-                    (
-                        m.holdout.rms_mm,
-                        m.holdout.floor_mm,
-                        f.holdout.rms_mm,
-                        f.holdout.floor_mm,
-                        ok,
-                        seconds,
-                    )
-                )
+                ho, hf = m.holdout, f.holdout
+                rows.append((ho.rms_mm, ho.floor_mm, hf.rms_mm, hf.floor_mm, ok, seconds))
             a = np.array(rows, dtype=float)
-            mean = a.mean(axis=0)
+            md = np.median(a, axis=0)
             print(
-                f"{arm:<12}{n:>6}{mean[0]:>10.4f}{mean[1]:>8.4f}{mean[0] / mean[1]:>7.2f}"
-                f"{mean[2]:>9.4f}{mean[3]:>8.4f}{mean[2] / mean[3]:>7.2f}"
-                f"{int(a[:, 4].sum()):>6}/{args.seeds:<3}{mean[5]:>7.2f}"
+                f"{arm:<12}{n:>6}{md[0]:>10.4f}{md[1]:>8.4f}{md[0] / md[1]:>7.2f}"
+                f"{md[2]:>9.4f}{md[3]:>8.4f}{md[2] / md[3]:>7.2f}"
+                f"{int(a[:, 4].sum()):>6}/{seeds:<3}{md[5]:>7.2f}"
             )
+
+
+def many_rows() -> None:
+    """Section 3: seconds and peak memory of one fit of 10,000 and 100,000 rows."""
+    print("\n3. rows: one fit, --holdout none (viper_s650, peak memory of the process)")
+    robot = load_robot(EXAMPLES / "viper_s650" / "robot.toml")
+    for n in (10_000, 100_000):
+        table = synthetic_table(robot, n, seed=0).table
+        t0 = time.perf_counter()
+        fit_table(robot, table, FitOptions(holdout="none"))
+        seconds = time.perf_counter() - t0
+        peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        print(f"{n:>8} rows {seconds:7.1f} s  peak {peak_mb:6.0f} MB")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--skip-rows", action="store_true", help="leave out section 3")
+    args = ap.parse_args()
+    choice(args.seeds)
+    holdout(args.seeds)
+    if not args.skip_rows:
+        many_rows()
 
 
 if __name__ == "__main__":

@@ -14,13 +14,13 @@ from wirecal.cli.options import (
     POSITIVE,
     SEED,
 )
+from wirecal.solver.fit_gate import Gate, gate_fit, gate_json
 from wirecal.solver.fit_result import (
     FitOptions,
     FitResult,
     Run,
-    fit_budget,
+    copies_note,
     fit_table,
-    gate_fit,
     result_json,
 )
 from wirecal.solver.formats.cable_table import read_cable_table
@@ -69,8 +69,8 @@ from wirecal.solver.verdict import READING_NOISE_MM
 @click.option(
     "--refine-joints",
     is_flag=True,
-    help="Refine the logged joints from the controller's x, y, z and fit again (reported "
-    "separately; the patch is then the refined fit's).",
+    help="Refine the logged joints from the controller's x, y, z and fit again (both fits "
+    "reported; a patch holds the refined fit when it passes the gate, else the other).",
 )
 @click.option(
     "--joint-resolution-deg",
@@ -127,8 +127,10 @@ def fit(
     controller's nominal x, y, z. Fits the anchor, the wire attachment, a length offset per
     sensor session (jumps found automatically), optionally the cable's scale, and the DH
     errors these rows identify; rejects outliers beyond 5σ; validates on held-out rows
-    beside the quantisation floor of the joints' and the length's resolution. A fit the
-    plausibility gate refuses exits with status 3 and writes nothing (docs/fit.md).
+    beside the quantisation floor of the joints' and the length's resolution. The
+    plausibility gate's verdict comes first: a fit it refuses (its error budget not below
+    the correction it makes, held-out rows beyond 10 floors, the residual, implausible
+    sizes) exits with status 3 and writes nothing (docs/fit.md).
     """
     rb = load_robot(robot)
     options = FitOptions(
@@ -146,43 +148,55 @@ def fit(
     with Outputs(paths, force=force, inputs=[robot, table]) as out:
         tb = read_cable_table(table, column_map, sheet=sheet, n_joints=rb.n_joints)
         result = fit_table(rb, tb, options)
-        verdict = gate_fit(result, accept=accept_implausible, noise_mm=noise_mm)
-        for finding in verdict.findings:
+        gate = gate_fit(result, accept=accept_implausible, noise_mm=noise_mm)
+        chosen = gate.chosen
+        for finding in chosen.verdict.findings:
             click.echo(f"warning: implausible result accepted: {finding.message}", err=True)
-        budget = fit_budget(result)
         if patch_path:
             put_patch(
                 out,
                 patch_path,
                 rb,
-                result.estimate(),
+                result.estimate(chosen.run),
                 plan_fingerprint=tb.sha256,
                 log_path=tb.source,
                 log_sha256=tb.sha256,
                 version=__version__,
-                plausibility=verdict.patch_field(),
+                plausibility=chosen.verdict.patch_field(),
             )
         if report_path:
             from wirecal.app.fit_report import render_fit_report  # matplotlib only here
 
-            out.put(report_path, render_fit_report(result, verdict, budget))
+            out.put(report_path, render_fit_report(result, gate))
     if as_json:
         data = result_json(result)
-        data["plausibility"] = verdict.as_json()
-        data["budget"] = budget.as_json()
+        data["plausibility"] = chosen.verdict.as_json()
+        data["budget"] = chosen.budget.as_json()
+        data["gate"] = gate_json(gate)
         print_json(data)
     else:
-        click.echo("\n".join(fit_text(result)))
-        click.echo(
-            f"error budget (tool point, mean over the workspace): {budget.total:.4f} mm "
-            f"(noise {budget.terms['noise']:.4f}, scale {budget.terms['scale']:.4f})"
-        )
-        click.echo(f"plausibility: {verdict.summary()}")
+        click.echo("\n".join([*gate_text(gate), "", *fit_text(result)]))
     if patch_path:
         others = " and ".join(str(p) for p in companion_paths(rb, patch_path))
-        click.echo(f"wrote {patch_path} and {others}", err=as_json)
+        click.echo(f"wrote {patch_path} and {others} ({chosen.label})", err=as_json)
     if report_path:
         click.echo(f"wrote {report_path}", err=as_json)
+
+
+def gate_text(gate: Gate) -> list[str]:
+    """Return the gate's verdict on each fit, why first, and which fit a patch holds."""
+    lines = []
+    for j in gate.judged:
+        lines += [
+            f"plausibility ({j.label}): {j.verdict.summary()}",
+            *(f"  why: {f.message}" for f in j.verdict.findings),
+            f"  error budget (tool point, mean over the workspace) {j.budget.total:.4f} mm "
+            f"(noise {j.budget.terms['noise']:.4f}, scale {j.budget.terms['scale']:.4f}) "
+            f"against a correction of {j.correction_mm:.4f} mm",
+        ]
+    if len(gate.judged) > 1:
+        lines.append(f"a patch holds the {gate.chosen.label}")
+    return lines
 
 
 def _rows(result: FitResult, rows, values=None) -> str:
@@ -243,6 +257,7 @@ def fit_text(result: FitResult) -> list[str]:
     lines = [
         f"Robot {result.robot.name}; table {t.source}: {len(t.length_mm)} rows "
         f"(resolution: joints {jr:g} deg, length {lr:g} mm)",
+        *filter(None, [copies_note(result)]),
         *run_text(result, result.main),
     ]
     if result.xyz is not None:

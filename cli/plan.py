@@ -8,6 +8,7 @@ import numpy as np
 from wirecal.app.progress import ProgressBar
 from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import OUTPUT_FILE, SEED, number
+from wirecal.cli.plan_pool import plan_from_pool
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.plan_file import plan_to_toml
@@ -88,7 +89,14 @@ def _tried(d: Design, theta0_deg: np.ndarray | None) -> str:
 @click.option(
     "--points",
     type=click.IntRange(1, 1000),
-    help="Joint design: calibration points in all [default: POINTS-PER-STEP per step].",
+    help="Joint design: calibration points in all [default: POINTS-PER-STEP per step]; "
+    "with --pool: at most this many poses [default: 60].",
+)
+@click.option(
+    "--pool",
+    type=click.Path(dir_okay=False),
+    help="Choose θ0 and the poses from this table of configurations the robot reaches "
+    "(j1…jn in degrees, or a tracker data set); -o then writes the chosen ones as CSV.",
 )
 @click.option(
     "--allow-partial",
@@ -100,7 +108,18 @@ def _tried(d: Design, theta0_deg: np.ndarray | None) -> str:
 @click.option("--force", is_flag=True, help="Replace an existing plan file.")
 @user_errors
 def plan(
-    robot, output, theta0, points_per_step, tol, seed, method, points, allow_partial, as_json, force
+    robot,
+    output,
+    theta0,
+    points_per_step,
+    tol,
+    seed,
+    method,
+    points,
+    pool,
+    allow_partial,
+    as_json,
+    force,
 ):
     """Design a calibration plan for ROBOT's [calibration] parameters.
 
@@ -117,6 +136,13 @@ def plan(
     error (exit 2, nothing written) unless --allow-partial.
     """
     rb = load_robot(robot)
+    if pool is not None:
+        if theta0 is not None or method != "joint":
+            raise WirecalError(
+                "--pool chooses θ0 for the joint method: leave out --theta0 and --for"
+            )
+        plan_from_pool(rb, pool, points, output, as_json, force)
+        return
     theta0_deg = _joints(theta0, rb.n_joints)
     if rb.controller_problem():
         click.echo(

@@ -13,6 +13,7 @@ from wirecal.cli.options import NON_NEGATIVE
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
 from wirecal.solver.cell_check import check_cell
+from wirecal.solver.compliance import ComplianceObservability, compliance_observability
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.plan_file import load_plan
@@ -75,10 +76,16 @@ def psi(
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
     table = psi_table(rb, pl, tol)
+    compliance = _compliance(rb, pl)
     if as_json:
-        print_json(_psi_json(table))
+        data = _psi_json(table)
+        if compliance is not None:
+            data["compliance"] = compliance.as_json()
+        print_json(data)
     else:
         click.echo(_psi_text(table, robot, plan), nl=False)
+        for line in compliance.describe() if compliance is not None else ():
+            click.echo(line)
     problems = cone_problems(rb, pl)
     for check in (lambda: check_wire_range(rb, pl, range_margin), lambda: check_cell(rb, pl)):
         try:
@@ -89,6 +96,16 @@ def psi(
         click.echo(f"{'error' if strict else 'warning'}: {line}", err=True)
     if strict and (problems or table.n_ok != len(table.rows)):
         sys.exit(1)
+
+
+def _compliance(rb, pl) -> ComplianceObservability | None:
+    """Which of the robot file's compliances the plan identifies (None: it asks for none)."""
+    if not rb.compliances:
+        return None
+    q, _, _ = pl.all_points()
+    return compliance_observability(
+        rb.nominal, q, pl.theta0_deg, rb.parameters, rb.compliances, READING_NOISE_MM
+    )
 
 
 def _identifiability_json(ident: Identifiability) -> dict:
@@ -186,7 +203,9 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
 
     Rank and singular values of the distance Jacobian over all the plan's points,
     the parameters or combinations no wire length can reveal (θ1 always; the tool
-    point against th6/d6 with --all), and the observability indices O1–O5.
+    point against th6/d6 with --all), and the observability indices O1–O5. With the robot
+    file's [calibration] compliances: which of them the plan identifies with the geometry,
+    with their σ at the reading noise, and why not the others.
     """
     rb = load_robot(robot)
     pl = load_plan(plan, rb)
@@ -194,8 +213,11 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
     q, _, _ = pl.all_points()
     result = analyse(rb.nominal, q, pl.theta0_deg, names)
     scale = _scale(rb, q, pl.theta0_deg, tuple(names))
+    compliance = _compliance(rb, pl)
     if as_json:
         data = _identifiability_json(result)
+        if compliance is not None:
+            data["compliance"] = compliance.as_json()
         data["scale"] = {
             "std_ppm": None if not np.isfinite(scale.std_ppm) else scale.std_ppm,
             "noise_mm": READING_NOISE_MM,
@@ -211,6 +233,8 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
     for line in result.describe():
         click.echo(line)
     for line in scale.describe(READING_NOISE_MM, rb.encoder.scale_tolerance_ppm):
+        click.echo(line)
+    for line in compliance.describe() if compliance is not None else ():
         click.echo(line)
 
 

@@ -121,6 +121,27 @@ def _encoder_text(result: SolveResult) -> list[str]:
     return lines
 
 
+def _compliance_text(result: SolveResult) -> list[str]:
+    """Return the compliances the robot file asked for: identified ones, the other bound."""
+    comp, joint = result.compliance, result.estimates.get("joint")
+    if comp is None or joint is None:
+        return []
+    lines = ["", "Gravity compliance (joint method; µrad/(N·m)):"]
+    std = dict(zip(joint.names, joint.std if joint.std is not None else [], strict=False))
+    for name, value in joint.as_dict().items():
+        if name in comp.identified:
+            total = result.robot.nominal_value(name) + value
+            lines.append(f"  {name:<8}{total:12.4f}" + (_sigma(std[name]) if name in std else ""))
+    lines += [f"  {line}" for line in comp.describe()]
+    b = result.budgets.get("joint")
+    if b is not None and b.bound_compensated is not None:
+        lines.append(
+            f"  95 % bound {b.bound:.4f} mm for the patch as the controller applies it (the "
+            f"sag left in it); {b.bound_compensated:.4f} mm for targets compensated offline"
+        )
+    return lines
+
+
 def solve_text(result: SolveResult) -> str:
     """Return ``wirecal solve``'s text: the estimates side by side, accuracy, budget, steps."""
     est = result.estimates
@@ -172,6 +193,7 @@ def solve_text(result: SolveResult) -> str:
         f"noise σ from the joint residual: {result.sigma_mm:.4f} mm; "
         f"recommended: {result.recommended}"
     )
+    lines += _compliance_text(result)
     lines += _encoder_text(result)
     if "stepwise" in est:
         lines += ["", "Step-by-step (paper): rms before → after, |Ψ_j|, leak of later parameters"]

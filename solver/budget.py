@@ -38,7 +38,7 @@ as bounded errors of either sign at their edges, the exit wrap as a known bias.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -53,6 +53,12 @@ ASSUMED_TEMPERATURE_RISE_K = 0.5
 
 TERMS = ("noise", "scale", "drift", "exit", "sag")
 
+COMPLIANCE_NOTE = (
+    "sag: the identified compliances (no assumed sag); the 95 % bound is the patch's as the "
+    "controller applies it, the sag left in it; bound95_compensated_mm that of targets "
+    "compensated offline"
+)
+
 
 @dataclass(frozen=True)
 class Budget:
@@ -63,16 +69,38 @@ class Budget:
     worst: float  # the total's worst configuration
     notes: tuple[str, ...]
     bound: float  # 95 % bound of the mean over the workspace (:mod:`wirecal.solver.bound`)
+    bound_compensated: float | None = None  # the same for targets compensated offline
 
     def as_json(self) -> dict:
         """Return the budget as a JSON-ready dict."""
-        return {
+        out = {
             "terms_mm": dict(self.terms),
             "total_mm": self.total,
             "worst_mm": self.worst,
             "bound95_mm": self.bound,
             "notes": list(self.notes),
         }
+        if self.bound_compensated is not None:
+            out["bound95_compensated_mm"] = self.bound_compensated
+        return out
+
+
+@dataclass(frozen=True)
+class ComplianceTerms:
+    """The compliances in the joint method's budget (internal units, rad/(N·m)).
+
+    ``left`` (m,) is what the controller leaves of the estimated parameters: the value of
+    each identified compliance (nominal + offset; the controller takes none), 0 for the
+    geometry. ``names`` are the compliances the points do not identify (with a torque),
+    ``wire`` (N, k) their wire-length Jacobian, ``prior`` (k,) the largest value each may
+    have beyond the robot file's, ``nominal`` (k,) the file's.
+    """
+
+    left: np.ndarray
+    names: tuple[str, ...]
+    wire: np.ndarray
+    prior: np.ndarray
+    nominal: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -141,11 +169,15 @@ def budget(
     step: np.ndarray | None,
     src: Sources,
     q_ws: np.ndarray,
+    compliance: ComplianceTerms | None = None,
 ) -> Budget:
     """Return the error budget of a method (module docstring).
 
     ``J`` (N, m) is the wire-length Jacobian at the measured points in internal units;
     ``step`` the points' steps for the stepwise method, None for the joint method.
+    ``compliance``: the joint method's compliances; the bound is then the patch's as the
+    controller applies it (the sag left in it) and ``bound_compensated`` the bound of
+    targets compensated offline with the identified compliances.
     """
     if step is None:
         M = least_squares_map(J)
@@ -176,13 +208,50 @@ def budget(
     _, Jp = tool_jacobian(model, q_ws, names)
     errs = {k: rms_tool_error(Jp, c) for k, c in covs.items()}
     total = rms_tool_error(Jp, np.sum(list(covs.values()), axis=0))
+    bound, compensated, notes = bound_mm(Jp, errors), None, _notes(src)
+    if compliance is not None:
+        compensated, bound = _compliance_bounds(model, q_ws, Jp, errors, M, compliance)
+        notes = (*notes[:2], COMPLIANCE_NOTE, *notes[3:])
     return Budget(
         {k: e.mean_mm for k, e in errs.items()},
         total.mean_mm,
         total.max_mm,
-        _notes(src),
-        bound_mm(Jp, errors),
+        notes,
+        bound,
+        compensated,
     )
+
+
+def _compliance_bounds(
+    model: Model,
+    q_ws: np.ndarray,
+    Jp: np.ndarray,
+    errors: ErrorModel,
+    M: np.ndarray,
+    c: ComplianceTerms,
+) -> tuple[float, float]:
+    """Return the 95 % bounds for targets compensated offline and for the patch alone.
+
+    A compliance the points do not identify, between the file's value and ``prior`` beyond
+    it, is absorbed by the estimates (M·J_u·c_u) and moves the tool (−c_u): the error over
+    the parameters and those compliances is [M·J_u; −I]·c_u, taken like the assumed sag, at
+    its middle ± its half. The patch alone (the controller takes no compliance) also leaves
+    every compliance's whole value: −``left``, and −``nominal`` for the others.
+    """
+    k = len(c.names)
+    _, Ju = tool_jacobian(model, q_ws, c.names)
+    Jx = np.concatenate([Jp, Ju], axis=2)
+    V = np.vstack([M @ c.wire, -np.eye(k)]) * (c.prior / 2)  # (m + k, k)
+    pad = np.zeros((len(errors.edges), k))
+    cov = np.zeros((Jx.shape[2],) * 2)
+    cov[: len(errors.cov), : len(errors.cov)] = errors.cov
+    extended = ErrorModel(
+        cov,
+        np.concatenate([errors.bias, np.zeros(k)]) + V.sum(axis=1),
+        np.vstack([np.hstack([errors.edges, pad]), V.T]),
+    )
+    left = -np.concatenate([c.left, c.nominal])
+    return bound_mm(Jx, extended), bound_mm(Jx, replace(extended, bias=extended.bias + left))
 
 
 def _notes(src: Sources) -> tuple[str, ...]:

@@ -37,8 +37,23 @@ from scipy.optimize import least_squares
 
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.fit_holdout import Holdout, parse_scheme, row_floor, splits, summarise
-from wirecal.solver.fit_model import Layout, lengths_and_jacobian, multilaterate, session_of
+from wirecal.solver.fit_holdout import (
+    Holdout,
+    check_training,
+    first_same,
+    parse_scheme,
+    row_floor,
+    splits,
+    summarise,
+)
+from wirecal.solver.fit_model import (
+    Layout,
+    lengths,
+    lengths_and_jacobian,
+    multilaterate,
+    session_of,
+)
+from wirecal.solver.fit_select import bic_eliminated
 from wirecal.solver.fit_sessions import change_points, noise_sigma, place, robust_sigma
 from wirecal.solver.identifiability import (
     Identifiability,
@@ -94,7 +109,8 @@ class Data:
     session: np.ndarray  # (N,) 0-based session of each row
     floor_mm: float  # the quantisation floor's RMS at the nominal model (a least σ)
     joint_cov_rad2: np.ndarray | None = None  # (N, n, n) refined joints' covariance
-    excluded: np.ndarray | None = None  # (N,) bool: rows known bad (x, y, z disagree)
+    excluded: np.ndarray | None = None  # (N,) bool: rows known bad (x, y, z disagree, copies)
+    group: np.ndarray | None = None  # (N,) rows at the same logged joints: one group (holdout)
 
 
 def candidates(base: Model) -> tuple[str, ...]:
@@ -188,8 +204,7 @@ def choose(
 
 def residual(base: Model, layout: Layout, x: np.ndarray, data: Data) -> np.ndarray:
     """Return model − measured length (mm) of every row at ``x``."""
-    model, _ = lengths_and_jacobian(base, layout, x, data.q_rad, data.session)
-    return model - data.length_mm
+    return lengths(base, layout, x, data.q_rad, data.session) - data.length_mm
 
 
 def solve(
@@ -216,7 +231,7 @@ def solve(
         return x
 
     def fun(xf: np.ndarray) -> np.ndarray:
-        return lengths_and_jacobian(base, layout, full(xf), q, session)[0] - length
+        return lengths(base, layout, full(xf), q, session) - length
 
     def jac(xf: np.ndarray) -> np.ndarray:
         return lengths_and_jacobian(base, layout, full(xf), q, session)[1][:, free]
@@ -257,6 +272,34 @@ def final_solve(
         return float(np.sum(residual(base, layout, x, data)[rows] ** 2))
 
     return second if cost(second) <= cost(first) * (1 + 1e-9) else first
+
+
+def generalise(
+    base: Model, layout: Layout, x: np.ndarray, data: Data, rows: np.ndarray
+) -> tuple[Layout, np.ndarray, tuple[tuple[str, str], ...]]:
+    """Drop the DH errors BIC does not keep (:mod:`~wirecal.solver.fit_select`) and refit.
+
+    Returns the layout, the estimate and why each DH error was dropped.
+    """
+    r = residual(base, layout, x, data)[rows]
+    sigma = float(np.sqrt(np.sum(r**2) / max(len(rows) - len(x), 1)))
+    _, J = lengths_and_jacobian(base, layout, x, data.q_rad[rows], data.session[rows])
+    dh = [k for k, n in enumerate(layout.geometry) if n not in P.TOOL_NAMES]
+    out = bic_eliminated(J, x, dh, sigma)
+    if not out:
+        return layout, x, ()
+    bar = np.sqrt(np.log(len(rows)))
+    why = tuple(
+        (
+            layout.names[k],
+            f"not worth a parameter (BIC): |z| {z:.2f} < √ln N = {bar:.2f}, "
+            "so it stays at the robot file's value",
+        )
+        for k, z in out
+    )
+    gone = {layout.names[k] for k, _ in out}
+    kept = replace(layout, geometry=tuple(n for n in layout.geometry if n not in gone))
+    return kept, final_solve(base, kept, _carry(layout, x, kept), data, rows), why
 
 
 @dataclass(frozen=True)
@@ -350,6 +393,7 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
     noise = max(data.floor_mm, ps.sigma_mm)  # a noisier table identifies less
     layout, x, dropped = choose(base, ps.layout, ps.x, data, rows, noise)
     x = final_solve(base, layout, x, data, rows)
+    layout, x, weak = generalise(base, layout, x, data, rows)
     r = residual(base, layout, x, data)
     _, J = lengths_and_jacobian(base, layout, x, data.q_rad[rows], data.session[rows])
     dof = max(len(rows) - len(x), 1)
@@ -359,7 +403,9 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
         unseen = ", ".join(n for n, ok in zip(layout.names, identified, strict=True) if not ok)
         raise WirecalError(
             f"the fit's parameters {unseen} are not identified by these rows at the fitted "
-            "values; nothing is reported (please report this table with the robot file)"
+            "values (the fit ran far from the robot file's geometry): check that the table is "
+            "this robot's (the joint columns its joints in degrees, in the robot file's "
+            "convention) and that --map names the cable length's column; nothing is reported"
         )
     if not single_session:  # a jump the offsets do not follow
         final = Pass(layout, x, r, ps.inliers, sigma)
@@ -373,7 +419,7 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
         inliers=ps.inliers,
         residual_mm=r,
         sigma_mm=sigma,
-        dropped=dropped,
+        dropped=dropped + weak,
         identifiability=analyse_jacobian(_boundary_jacobian(J, layout), layout.names),
         ignored_jumps=ignored,
     )
@@ -402,7 +448,9 @@ def holdout(
     layout, data = core.layout, replace(data, session=core.session)
     k0 = len(layout.names) - layout.n_sessions
     residuals, floors, notes = [], [], []
-    for train, test in splits(kind, share, core.inliers, repeats, seed):
+    group = first_same(data.q_rad) if data.group is None else data.group
+    for train, test in splits(kind, share, core.inliers, group, repeats, seed):
+        check_training(scheme, len(train), int(core.inliers.sum()), len(core.x))
         free = np.ones(len(core.x), dtype=bool)
         unseen = sorted(set(data.session[test]) - set(data.session[train]))
         free[[k0 + s for s in unseen]] = False

@@ -8,6 +8,13 @@ rows and predicts the lengths of its held-out rows. Schemes:
 * ``half`` — the first half of the rows trains, the second half is held out (once);
 * ``none`` — no validation.
 
+Two rules keep the held-out figure out-of-sample (:func:`splits`): **a held-out row never
+trains** — rows at the same joints (copies, repeated readings) form one group, and a group
+is held out or trains as a whole (``half``: with its first row); and **a split trains on at
+least twice as many rows as the fit has parameters** (:data:`MIN_ROWS_PER_PARAMETER`), else
+the refit follows its own rows' noise and the figure reads below the floor
+(:func:`check_training`).
+
 A session with no training row (``half`` with a re-mount in the second half) cannot be
 predicted: its offset is taken from its held-out rows' median (one number per session, said
 in the notes). The figures pool every held-out row of every repeat: RMS, mean absolute and
@@ -80,23 +87,65 @@ def parse_scheme(text: str) -> tuple[str, float]:
     return "random", share
 
 
+MIN_ROWS_PER_PARAMETER = 2
+"""A split's training rows per fitted parameter, at least (module docstring)."""
+
+
+def first_same(values: np.ndarray) -> np.ndarray:
+    """Return each row's group: the first row (0-based) with exactly the same values."""
+    _, first, inverse = np.unique(values, axis=0, return_index=True, return_inverse=True)
+    return first[inverse.ravel()]
+
+
+def copies(q: np.ndarray, length_mm: np.ndarray) -> tuple[tuple[int, int], ...]:
+    """Return (row, the earlier row it copies) of each row repeating joints and length.
+
+    A copy adds no information (the fit leaves it out) and, held out, tests a training row.
+    """
+    first = first_same(np.column_stack([q, length_mm]))
+    return tuple((int(r), int(f)) for r, f in enumerate(first) if f != r)
+
+
 def splits(
-    scheme: str, share: float, inliers: np.ndarray, repeats: int, seed: int
+    scheme: str, share: float, inliers: np.ndarray, group: np.ndarray, repeats: int, seed: int
 ) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Return (training rows, held-out rows) of each split, inlier rows only."""
+    """Return (training rows, held-out rows) of each split, inlier rows only.
+
+    ``group`` (N,): each row's group (:func:`first_same` of the joints); a group never
+    straddles a split (module docstring). ``random:F`` holds out a share F of the groups.
+    """
     rows = np.flatnonzero(inliers)
-    if scheme == "half":
-        half = len(inliers) // 2
-        return [(rows[rows < half], rows[rows >= half])]
     if scheme == "none":
         return []
+    if scheme == "half":
+        held = group[rows] >= len(inliers) // 2  # each row with its group's first row
+        return [(rows[~held], rows[held])]
+    groups = np.unique(group[rows])
     rng = np.random.default_rng(seed)
-    k = max(1, round(share * len(rows)))
+    k = max(1, round(share * len(groups)))
     out = []
     for _ in range(repeats):
-        perm = rng.permutation(rows)
-        out.append((np.sort(perm[k:]), np.sort(perm[:k])))
+        held = np.isin(group[rows], rng.permutation(groups)[:k])
+        out.append((rows[~held], rows[held]))
     return out
+
+
+def check_training(scheme: str, n_train: int, n_inliers: int, n_parameters: int) -> None:
+    """Refuse a split with fewer than twice as many training rows as parameters."""
+    need = MIN_ROWS_PER_PARAMETER * n_parameters
+    if n_train >= need:
+        return
+    most = (n_inliers - need) / n_inliers if n_inliers else 0.0
+    fix = (
+        f"hold out at most a share {np.floor(most * 100) / 100:.2f} (--holdout random:F)"
+        if most >= 0.01
+        else "the table has too few rows to hold any out: add rows or pass --holdout none"
+    )
+    raise WirecalError(
+        f"--holdout {scheme}: a split trains on {n_train} rows for {n_parameters} parameters; "
+        f"a held-out figure needs at least {need} training rows (twice the parameters), "
+        f"else it reads the training rows' own noise: {fix}"
+    )
 
 
 def row_floor(

@@ -23,7 +23,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver import params as P
-from wirecal.solver.kinematics import Model, joint_jacobian, tool_jacobian, with_errors
+from wirecal.solver.kinematics import (
+    Model,
+    joint_jacobian,
+    tool_jacobian,
+    tool_position,
+    with_errors,
+)
 from wirecal.solver.scale import PPM
 
 ANCHOR_NAMES = ("anchor_x", "anchor_y", "anchor_z")
@@ -80,6 +86,15 @@ class Layout:
 def model_of(base: Model, layout: Layout, x: np.ndarray) -> Model:
     """Return the robot model at the geometry of ``x`` (attachment as its tool point)."""
     return with_errors(base, layout.geometry, layout.split(x)[0])
+
+
+def lengths(
+    base: Model, layout: Layout, x: np.ndarray, q_rad: np.ndarray, session: np.ndarray
+) -> np.ndarray:
+    """Return the model's lengths L (N,) in mm, without the Jacobian (module docstring)."""
+    _, anchor, kappa, offsets = layout.split(x)
+    p = tool_position(model_of(base, layout, x), q_rad)
+    return (1 + kappa) * np.linalg.norm(p - anchor, axis=1) + offsets[session]
 
 
 def lengths_and_jacobian(

@@ -4,12 +4,8 @@
 the controller's x, y, z when given (:mod:`~wirecal.solver.fit_xyz`), fits
 (:mod:`~wirecal.solver.fit`), validates on held-out rows
 (:mod:`~wirecal.solver.fit_holdout`), and, with ``refine_joints``, fits again from joints
-refined from x, y, z (reported separately). :func:`assess_fit` is the plausibility gate's
-verdict on it and :func:`fit_budget` its error budget (:mod:`~wirecal.solver.budget`): the
-nuisance parameters (anchor, offsets, scale) are projected out of the Jacobian first
-(Frisch–Waugh–Lovell: the DH block of J⁺ is the pseudo-inverse of the DH columns less
-their projection on the nuisance columns), so the budget is the DH errors' own; its sag
-term is the robot file's gravity sag at the fitted model, from the fitted anchor.
+refined from x, y, z (reported separately). The gate's verdict on each fit and its error
+budget are :mod:`~wirecal.solver.fit_gate`'s.
 """
 
 from __future__ import annotations
@@ -19,29 +15,15 @@ from typing import Any
 
 import numpy as np
 
-from wirecal.solver.accuracy import workspace
-from wirecal.solver.budget import Budget, budget, sources
 from wirecal.solver.cable_data import CableTable
-from wirecal.solver.errors import Implausible, WirecalError
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit import Core, Data, fit_core, holdout, nominal_floor, point_model
-from wirecal.solver.fit_holdout import Holdout, row_floor
-from wirecal.solver.fit_model import lengths_and_jacobian, model_of
-from wirecal.solver.fit_units import check_units
+from wirecal.solver.fit_holdout import Holdout, copies, first_same, row_floor
+from wirecal.solver.fit_units import check_columns, check_units
 from wirecal.solver.fit_xyz import XyzCheck, check_xyz, refine_joints
 from wirecal.solver.identify import Estimate
 from wirecal.solver.kinematics import Model
 from wirecal.solver.robot import Robot
-from wirecal.solver.scale import PPM
-from wirecal.solver.simulate import sagged_tool_points
-from wirecal.solver.verdict import (
-    PLAUSIBLE_DEG,
-    PLAUSIBLE_MM,
-    READING_NOISE_MM,
-    Finding,
-    Plausibility,
-    implausible,
-    residual_limit_mm,
-)
 
 MIN_ROWS = 20
 """Fewer rows than this cannot carry the anchor, the attachment, offsets and DH errors."""
@@ -84,13 +66,13 @@ class FitResult:
     refined: Run | None
 
     @property
-    def best(self) -> Run:
-        """Return the run the patch is written from: the refined one when asked for."""
-        return self.refined or self.main
+    def copies(self) -> tuple[tuple[int, int], ...]:
+        """Return (row, the earlier row it copies) of each copied row (left out of the fit)."""
+        return copies(self.table.q_deg, self.table.length_mm)
 
-    def estimate(self) -> Estimate:
-        """Return the DH errors and the attachment as a patch's estimate (deg, mm)."""
-        core = self.best.core
+    def estimate(self, run: Run) -> Estimate:
+        """Return a run's DH errors and attachment as a patch's estimate (deg, mm)."""
+        core = run.core
         g = len(core.layout.geometry)
         per = core.layout.boundary_per_internal[:g]
         return Estimate(
@@ -114,7 +96,10 @@ def _data(
     excluded = np.zeros(n, dtype=bool)
     if xyz is not None:
         excluded[list(xyz.flagged)] = True
-    data = Data(np.radians(q_deg), table.length_mm, np.zeros(n, dtype=int), 0.0, cov, excluded)
+    excluded[[r for r, _ in copies(table.q_deg, table.length_mm)]] = True
+    group = first_same(table.q_deg)
+    session = np.zeros(n, dtype=int)
+    data = Data(np.radians(q_deg), table.length_mm, session, 0.0, cov, excluded, group)
     return replace(data, floor_mm=nominal_floor(base, data, *res))
 
 
@@ -145,6 +130,7 @@ def fit_table(robot: Robot, table: CableTable, options: FitOptions | None = None
     if table.q_deg.shape[1] != robot.n_joints:
         raise WirecalError(f"{table.source}: joints for {table.q_deg.shape[1]}-joint arm")
     base = point_model(robot)
+    check_columns(robot, table)
     check_units(base, table)
     res = (
         options.joint_resolution_deg or table.joint_resolution_deg,
@@ -166,6 +152,23 @@ def fit_table(robot: Robot, table: CableTable, options: FitOptions | None = None
     return FitResult(robot, table, options, res, main, xyz, refined)
 
 
+def copies_note(result: FitResult, shown: int = 10) -> str:
+    """Return the line naming the rows that copy earlier rows ('' when none)."""
+    pairs, t = result.copies, result.table
+    if not pairs:
+        return ""
+    named = ", ".join(
+        f"row {r} (line {int(t.lines[r])}) = row {f} (line {int(t.lines[f])})"
+        for r, f in pairs[:shown]
+    )
+    more = f", … and {len(pairs) - shown} more" if len(pairs) > shown else ""
+    return (
+        f"copies (the joints and the length of an earlier row; left out of the fit, and a "
+        f"held-out split keeps rows at the same joints on one side): {len(pairs)}: "
+        f"{named}{more}; delete them unless they are repeated readings"
+    )
+
+
 def _refuse_ignored_jumps(table: CableTable, core: Core, options: FitOptions) -> None:
     """Refuse a fit whose residual still jumps (unless one session was asked for)."""
     if core.ignored_jumps and not options.single_session:
@@ -175,113 +178,6 @@ def _refuse_ignored_jumps(table: CableTable, core: Core, options: FitOptions) ->
             "session: the lengths do not follow one model; check the column map and the "
             "robot file, or pass --single-session to fit one offset anyway"
         )
-
-
-def assess_fit(result: FitResult, noise_mm: float = READING_NOISE_MM) -> Plausibility:
-    """Return the plausibility gate's verdict on a fit: residual and plausible sizes.
-
-    Residual: σ of the final fit against σ_model = √(floor² + noise²) by the gate's χ² bound
-    (:func:`~wirecal.solver.verdict.residual_limit_mm`); sizes: no DH error beyond
-    :data:`PLAUSIBLE_DEG` deg or :data:`PLAUSIBLE_MM` mm. Identifiability holds by
-    construction (every parameter chosen has its σ below the gate's limit).
-    """
-    run = result.best
-    core = run.core
-    sigma_model = float(np.hypot(run.floor_mm, noise_mm))
-    dof = int(core.inliers.sum()) - len(core.x)
-    limit = residual_limit_mm(sigma_model, dof)
-    findings = []
-    if dof > 0 and not core.sigma_mm <= limit:
-        findings.append(
-            Finding(
-                "residual",
-                f"the residual σ {core.sigma_mm:.4g} mm exceeds {limit:.4f} mm, what the "
-                f"quantisation floor {run.floor_mm:.4f} mm and reading noise {noise_mm:g} mm "
-                f"allow (χ², {dof} degrees of freedom): the table does not fit this robot "
-                "model (a noisier sensor: --noise-mm)",
-            )
-        )
-    est = result.estimate()
-    dh = [not n.startswith("tool_") for n in est.names]  # the attachment is fitted freely
-    huge = implausible([n for n, d in zip(est.names, dh, strict=True) if d], est.values[dh])
-    if huge:
-        findings.append(
-            Finding(
-                "bound",
-                f"estimates beyond a physically plausible size ({PLAUSIBLE_DEG:g} deg, "
-                f"{PLAUSIBLE_MM:g} mm): {', '.join(huge)}: the robot file or the table is wrong",
-            )
-        )
-    return Plausibility(
-        method="fit",
-        findings=tuple(findings),
-        noise_model_mm=sigma_model,
-        residual_limit_mm=float(limit),
-        residual_sigma_mm=core.sigma_mm,
-        identifiability=core.identifiability,
-        unidentified=(),
-    )
-
-
-def gate_fit(result: FitResult, *, accept: bool = False, noise_mm: float = READING_NOISE_MM):
-    """Return :func:`assess_fit`'s verdict; raise :class:`Implausible` unless passed/accepted."""
-    verdict = assess_fit(result, noise_mm)
-    if verdict.passed or accept:
-        return verdict
-    raise Implausible(
-        [
-            *(f"{result.table.source}: {f.message}" for f in verdict.findings),
-            "nothing was written: this fit is not plausible; check the column map, the units "
-            "and the robot file. To see the estimates anyway pass --accept-implausible (a "
-            "patch written with it records the override)",
-        ]
-    )
-
-
-def _sag_mm(
-    robot: Robot,
-    model: Model,
-    parts: tuple[np.ndarray, np.ndarray, float, np.ndarray],
-    q_deg: np.ndarray,
-) -> np.ndarray:
-    """Return what the robot file's gravity sag adds to each row's length at the fit (mm).
-
-    The sag of :func:`~wirecal.solver.simulate.sagged_tool_points` at the fitted model, the
-    wire from the fitted anchor, times the fitted scale (1 + κ).
-    """
-    _, anchor, kappa, _ = parts
-    p, sagged = sagged_tool_points(robot, model, q_deg)
-    extra = np.linalg.norm(sagged - anchor, axis=1) - np.linalg.norm(p - anchor, axis=1)
-    return (1 + kappa) * extra
-
-
-def fit_budget(result: FitResult) -> Budget:
-    """Return the error budget of the DH errors and attachment (module docstring)."""
-    run = result.best
-    core, layout = run.core, run.core.layout
-    base = point_model(result.robot)
-    rows = np.flatnonzero(core.inliers)
-    _, J = lengths_and_jacobian(
-        base, layout, core.x, np.radians(run.q_deg[rows]), core.session[rows]
-    )
-    g = len(layout.geometry)
-    nuisance = J[:, g:]
-    J_geo = J[:, :g] - nuisance @ np.linalg.lstsq(nuisance, J[:, :g], rcond=None)[0]
-    enc = result.robot.encoder
-    model = model_of(base, layout, core.x)
-    src = sources(
-        sigma_mm=core.sigma_mm,
-        lengths_mm=result.table.length_mm[rows],
-        scale_std=enc.scale_tolerance_ppm * PPM,
-        measured_scale=False,
-        drum_ppm_per_k=enc.temperature_coefficient_ppm_per_k,
-        t_s=None,
-        drift=None,
-        t_zero_ref_s=None,
-        exit_mm=np.zeros(len(rows)),
-        sag_mm=_sag_mm(result.robot, model, layout.split(core.x), run.q_deg[rows]),
-    )
-    return budget(model, layout.geometry, J_geo, None, src, workspace(result.robot))
 
 
 def parameters_json(run: Run) -> dict[str, Any]:
@@ -336,6 +232,10 @@ def result_json(result: FitResult) -> dict[str, Any]:
         "table_sha256": t.sha256,
         "rows": len(t.length_mm),
         "resolution": {"joint_deg": result.resolution[0], "length_mm": result.resolution[1]},
+        "copies": [
+            {"row": r, "line": int(t.lines[r]), "of_row": f, "of_line": int(t.lines[f])}
+            for r, f in result.copies
+        ],
         **run_json(result.main, t, flagged),
         "xyz": None,
         "refined": None if result.refined is None else run_json(result.refined, t, flagged),

@@ -13,7 +13,7 @@ fitted, absorbs), each uniform within ±:data:`ERROR_SIZE` deg or mm.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -143,6 +143,18 @@ def synthetic_table(
         typos=tuple(sorted(int(b) for b in bad[snags:])),
         bad_mm=bad_mm,
         q_true_deg=q_true,
+    )
+
+
+def take_rows(table: CableTable, rows: np.ndarray) -> CableTable:
+    """Return a table of ``table``'s ``rows`` in that order (repeats allowed), lines from 2."""
+    rows = np.asarray(rows)
+    return replace(
+        table,
+        lines=np.arange(2, len(rows) + 2),
+        q_deg=table.q_deg[rows],
+        length_mm=table.length_mm[rows],
+        xyz_mm=None if table.xyz_mm is None else table.xyz_mm[rows],
     )
 
 

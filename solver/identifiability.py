@@ -78,7 +78,8 @@ def covariance(J: np.ndarray, sigma2: float) -> tuple[np.ndarray, np.ndarray]:
     restricted to the seen directions) and the (m,) mask of identified parameters.
     """
     m = J.shape[1]
-    _, s, vt = np.linalg.svd(J, full_matrices=True)
+    # the right vectors only (m, m): U of N rows would be N × N (20,000 rows: 3 GB)
+    _, s, vt = np.linalg.svd(J, full_matrices=J.shape[0] < m)
     s = np.concatenate([s, np.zeros(m - s.size)])
     seen = s > RANK_RTOL * (s[0] if s[0] > 0 else 1.0)
     cov = sigma2 * (vt[seen].T / s[seen] ** 2) @ vt[seen]
@@ -129,7 +130,7 @@ def analyse_jacobian(J: np.ndarray, names: tuple[str, ...]) -> Identifiability:
     rest = [k for k in range(len(names)) if k not in alone]
     combos: list[tuple[tuple[str, float], ...]] = []
     if rest and rank < len(rest):
-        _, sr, vt = np.linalg.svd(J[:, rest])
+        _, sr, vt = np.linalg.svd(J[:, rest], full_matrices=J.shape[0] < len(rest))
         sr = np.concatenate([sr, np.zeros(len(rest) - sr.size)])
         null = vt[sr <= tol]
         for row in _rref(null):
@@ -233,7 +234,7 @@ def _null_combination(J: np.ndarray, names: tuple[str, ...], columns: list[int])
     """
     norm = np.linalg.norm(J, axis=0)
     norm = np.where(norm > 0, norm, 1.0)
-    v = np.linalg.svd(J / norm)[2][-1]
+    v = np.linalg.svd(J / norm, full_matrices=J.shape[0] < J.shape[1])[2][-1]
     keep = np.abs(v) > 1e-3 * np.max(np.abs(v))
     c = v / norm
     c = c / c[-1] if keep[-1] else c / c[np.argmax(np.abs(v))]

@@ -11,6 +11,14 @@ Derivatives of the tool point p with respect to the error parameters (paper §2.
 * a_{i-1}    — translation along x_{i-1}:                 ∂p/∂a_{i-1} = x_{i-1}
 * α_{i-1}    — rotation about x_{i-1} through o_{i-1}:    ∂p/∂α_{i-1} = x_{i-1} × (p − o_{i-1})
 * tool point — ∂p/∂t = R_n (columns of the last frame)
+* c_j        — compliance of joint j (:mod:`~wirecal.solver.gravity`): the joint turns by
+  c_j·τ_j(q), so                                          ∂p/∂c_j = τ_j · z_j × (p − o_j)
+
+A model with masses (``Model.masses``) and compliances bends under gravity: its frames are
+those of the commanded joints plus δθ_j = c_j·τ_j(q), τ evaluated at the commanded
+configuration on the model's own (rigid) frames (:mod:`~wirecal.solver.gravity`, first
+order). Every derivative is then taken at the deflected frames; the geometric parameters'
+columns leave out their effect on τ (c·∂τ/∂e, relative size c·|∂τ/∂θ| ≈ 10⁻⁴–10⁻³).
 
 Angular derivatives are in mm/rad here; callers convert at the boundary.
 """
@@ -18,13 +26,14 @@ Angular derivatives are in mm/rad here; callers convert at the boundary.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache, lru_cache
 
 import numpy as np
 
 from wirecal.solver import params as P
 from wirecal.solver.exit_geometry import Pulley
+from wirecal.solver.gravity import MassModel, gravity_torques_nm
 
 
 @dataclass(frozen=True)
@@ -35,11 +44,15 @@ class Model:
     per configuration of a batch (Monte Carlo trials evaluated in one call). ``pulley`` is
     the encoder's guide pulley when the wire's path over it is modelled (None: the wire
     leaves from a point, paper eq. 7); see :mod:`~wirecal.solver.exit_geometry`.
+    ``masses`` and ``compliance`` (rad/(N·m), (n,) or (N, n)) make the arm bend under
+    gravity (module docstring); without masses it is rigid, as without compliance.
     """
 
     dh: np.ndarray  # (n, 4) or (N, n, 4): α_{i-1}, a_{i-1}, θ offset, d_i
     tool_point: np.ndarray  # (3,) or (N, 3)
     pulley: Pulley | None = None
+    masses: MassModel | None = None
+    compliance: np.ndarray | None = None  # (n,) or (N, n), rad/(N·m)
 
     @property
     def n_joints(self) -> int:
@@ -81,21 +94,31 @@ def with_errors(base: Model, names: Sequence[str], values: np.ndarray) -> Model:
     lead = values.shape[:-1]
     dh = np.array(np.broadcast_to(base.dh, lead + np.shape(base.dh)[-2:]), dtype=float)
     tool = np.array(np.broadcast_to(base.tool_point, (*lead, 3)), dtype=float)
-    for k, name in enumerate(names):
-        p = P.parse(name, dh.shape[-2])
+    n = dh.shape[-2]
+    parsed = [P.parse(name, n) for name in names]
+    compliance = base.compliance
+    if any(p.kind == "c" for p in parsed):
+        start = np.zeros(n) if compliance is None else compliance
+        compliance = np.array(np.broadcast_to(start, (*lead, n)), dtype=float)
+    for k, p in enumerate(parsed):
         if p.kind == "tool":
             tool[..., p.row] += values[..., k]
+        elif p.kind == "c":
+            compliance[..., p.row] += values[..., k]  # type: ignore[index]
         else:
             dh[..., p.row, P.DH_COLUMN[p.kind]] += values[..., k]
-    return Model(dh=dh, tool_point=tool, pulley=base.pulley)
+    return Model(dh, tool, base.pulley, base.masses, compliance)
 
 
 def repeat(model: Model, counts: int) -> Model:
     """Each model of a batch repeated ``counts`` times in a row (for T trials × k points)."""
+    c = model.compliance
     return Model(
         np.repeat(model.dh, counts, axis=0),
         np.repeat(model.tool_point, counts, axis=0),
         model.pulley,
+        model.masses,
+        c if c is None or c.ndim == 1 else np.repeat(c, counts, axis=0),
     )
 
 
@@ -107,6 +130,7 @@ class Frames:
     z: np.ndarray  # (N, n+1, 3) z axes
     o: np.ndarray  # (N, n+1, 3) origins
     R_last: np.ndarray  # (N, 3, 3) rotation of the last frame
+    torque_nm: np.ndarray | None = None  # (N, n) gravity torques of a bent arm's frames
 
 
 def _rotate(R: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -174,7 +198,34 @@ def _advance(P: Vector, a, X: Vector, d, Z: Vector) -> Vector:
 
 
 def frames(model: Model, q: np.ndarray) -> Frames:
-    """All frames of the chain for joint angles ``q`` (N, n) in radians.
+    """All frames of the chain for commanded joint angles ``q`` (N, n) in radians.
+
+    A model with masses and compliance: the frames of the arm bent under gravity, with the
+    gravity torques at ``q`` (module docstring); otherwise :func:`rigid_frames`.
+    """
+    c = model.compliance
+    if model.masses is None or c is None or not np.any(c):
+        return rigid_frames(model, q)
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    rigid = rigid_frames(model, q)
+    torque = gravity_torques_nm(model.masses, rigid.x, rigid.z, rigid.o)
+    return replace(rigid_frames(model, q + c * torque), torque_nm=torque)
+
+
+def gravity_torques(model: Model, f: Frames) -> np.ndarray:
+    """Return the gravity torques (N·m, (N, n)) at the commanded joints of frames ``f``.
+
+    Bent frames carry them; rigid frames are the commanded ones, so they give them.
+    """
+    if f.torque_nm is not None:
+        return f.torque_nm
+    if model.masses is None:
+        raise ValueError("compliance parameters need the arm's masses ([gravity])")
+    return gravity_torques_nm(model.masses, f.x, f.z, f.o)
+
+
+def rigid_frames(model: Model, q: np.ndarray) -> Frames:
+    """All frames of the rigid chain for joint angles ``q`` (N, n) in radians.
 
     A batched model (dh (N, n, 4)) gives configuration k its own model k. The rotation
     is carried as its three columns X, Y, Z; per joint, RotX(α) turns (Y, Z) by α, the
@@ -216,7 +267,7 @@ def _layout(names: tuple[str, ...], n: int) -> dict[str, tuple[np.ndarray, np.nd
     groups: dict[str, tuple[list[int], list[int]]] = {}
     for k, name in enumerate(names):
         par = P.parse(name, n)
-        frame = par.row + 1 if par.kind in ("th", "d") else par.row
+        frame = par.row + 1 if par.kind in ("th", "d", "c") else par.row
         cols, frames_ = groups.setdefault(par.kind, ([], []))
         cols.append(k)
         frames_.append(frame)
@@ -255,6 +306,10 @@ def tool_jacobian(
             J[:, :, cols] = f.z[:, fr].transpose(0, 2, 1)
         elif kind == "a":  # translation along x_{i-1}
             J[:, :, cols] = f.x[:, fr].transpose(0, 2, 1)
+        elif kind == "c":  # the joint's turn c_j·τ_j: τ_j times the θ_j column
+            tau = gravity_torques(model, f)[:, fr - 1, None]
+            turn = _cross(f.z[:, fr], p[:, None] - f.o[:, fr]) * tau
+            J[:, :, cols] = turn.transpose(0, 2, 1)
         else:  # tool point component: a column of the last frame
             J[:, :, cols] = f.R_last[:, :, fr]
     return p, J

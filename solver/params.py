@@ -5,7 +5,9 @@ Craig's modified DH row i (1-based) holds α_{i-1}, a_{i-1}, θ_i, d_i, so:
 * ``th<i>`` — offset of θ_i, row i;      ``d<i>``  — offset of d_i, row i;
 * ``a<k>``  — offset of a_k, row k+1;    ``al<k>`` — offset of α_k, row k+1;
 * ``tool_x``/``tool_y``/``tool_z`` — the wire attachment point in the last frame
-  (used by the identifiability analysis to show its redundancy with th6/d6).
+  (used by the identifiability analysis to show its redundancy with th6/d6);
+* ``c<j>`` — compliance of joint j under its gravity torque (:mod:`~wirecal.solver.gravity`),
+  µrad/(N·m) at the boundary, rad/(N·m) inside; not a DH offset.
 
 Angular parameters are degrees at the boundary, radians inside: the one unit rule is
 :data:`UNIT` with :data:`INTERNAL_PER_BOUNDARY`, and every module asks it (:func:`unit_of`,
@@ -22,23 +24,25 @@ from functools import cache
 
 import numpy as np
 
-_PATTERN = re.compile(r"^(th|d|al|a)(\d+)$")
+_PATTERN = re.compile(r"^(th|d|al|a|c)(\d+)$")
 TOOL_NAMES = ("tool_x", "tool_y", "tool_z")
 DH_COLUMN = {"al": 0, "a": 1, "th": 2, "d": 3}
 """Column of the DH table (α_{i-1}, a_{i-1}, θ offset, d_i) each kind of parameter offsets."""
 
-UNIT = {"th": "deg", "al": "deg", "a": "mm", "d": "mm", "tool": "mm"}
+UNIT = {"th": "deg", "al": "deg", "a": "mm", "d": "mm", "tool": "mm", "c": "urad/Nm"}
 """Each kind of parameter's boundary unit (files, command line, logs, controller): angles
-(θ, α) in degrees, lengths (a, d, the tool point) in mm (DESIGN.md)."""
+(θ, α) in degrees, lengths (a, d, the tool point) in mm (DESIGN.md); compliances in
+µrad/(N·m), written ``urad/Nm``."""
 
-INTERNAL_PER_BOUNDARY = {"deg": math.pi / 180.0, "mm": 1.0}
-"""Internal units (rad, mm: the mathematics) per boundary unit."""
+INTERNAL_PER_BOUNDARY = {"deg": math.pi / 180.0, "mm": 1.0, "urad/Nm": 1e-6}
+"""Internal units (rad, mm, rad/(N·m): the mathematics) per boundary unit."""
 
 BOUNDARY_PER_INTERNAL = {u: 1.0 / f for u, f in INTERNAL_PER_BOUNDARY.items()}
 """Boundary units per internal unit: 180/π deg per rad, 1 for mm."""
 
-UNIT_KINDS = {u: ", ".join(k for k, v in UNIT.items() if v == u) for u in INTERNAL_PER_BOUNDARY}
-"""Each boundary unit's kinds of parameter, in words: ``{"deg": "th, al", "mm": "a, d, tool"}``."""
+UNIT_KINDS = {u: ", ".join(k for k, v in UNIT.items() if v == u) for u in ("deg", "mm")}
+"""Each offset unit's kinds of parameter, in words: ``{"deg": "th, al", "mm": "a, d, tool"}``
+(a patch's ``[parameters]``; compliances have their own table)."""
 
 
 @dataclass(frozen=True)
@@ -56,14 +60,15 @@ class Param:
 
     @property
     def unit(self) -> str:
-        """Return the parameter's boundary unit, ``deg`` or ``mm`` (:data:`UNIT`)."""
+        """Return the parameter's boundary unit, ``deg``, ``mm`` or ``urad/Nm`` (:data:`UNIT`)."""
         return UNIT[self.kind]
 
 
 def unit_of(name: str) -> str:
     """Return the boundary unit of the parameter ``name`` without parsing it against an arm.
 
-    ``deg`` for th*, al*; ``mm`` for a*, d* and any other name (tool_x, tool_y, tool_z).
+    ``deg`` for th*, al*; ``urad/Nm`` for c*; ``mm`` for a*, d* and any other name
+    (tool_x, tool_y, tool_z).
     """
     m = _PATTERN.match(name)
     return UNIT[m.group(1) if m else "tool"]
@@ -77,13 +82,14 @@ def parse(name: str, n_joints: int) -> Param:
     m = _PATTERN.match(name)
     if m:
         kind, idx = m.group(1), int(m.group(2))
-        if kind in ("th", "d") and 1 <= idx <= n_joints:
+        if kind in ("th", "d", "c") and 1 <= idx <= n_joints:
             return Param(name, kind, idx - 1)
         if kind in ("a", "al") and 0 <= idx <= n_joints - 1:
             return Param(name, kind, idx)
     raise ValueError(
         f"unknown parameter {name!r}; use th1..th{n_joints}, d1..d{n_joints}, "
-        f"a0..a{n_joints - 1}, al0..al{n_joints - 1} or {', '.join(TOOL_NAMES)}"
+        f"a0..a{n_joints - 1}, al0..al{n_joints - 1}, {', '.join(TOOL_NAMES)} "
+        f"or the compliances c1..c{n_joints}"
     )
 
 

@@ -17,6 +17,7 @@ import itertools
 import numpy as np
 
 from wirecal.solver import ik
+from wirecal.solver.cell import SURE_GAP_MM
 from wirecal.solver.exit_geometry import wire_path, within_cone
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan_moves import move_clearance, move_ok, reach_ok
@@ -112,7 +113,7 @@ def _point_failures(
         "range": (d >= opt.min_wire_mm) & (d <= robot.encoder.range_mm - opt.range_margin_mm),
         "cone": within_cone(robot.encoder.exit, p - p0),
         "wrist": wrist,
-        "cell": robot.cell_gaps(q, p0, model).smallest() >= 0,
+        "cell": robot.cell_gaps(q, p0, model, exact_below_mm=SURE_GAP_MM).smallest() >= 0,
     }
 
 

@@ -91,28 +91,53 @@ def step_error(psi_j, psi_prev, cov_prev, psi_next, opt: PlanOptions) -> float:
 
 
 class Links:
-    """Which moves between a step's candidates keep the wire clear, worked out on demand.
+    """Which of a step's candidates are reached, and which moves between them are clear.
 
-    ``ok(sources, js)``: whether the moves from each of the candidates ``sources`` to each
-    of the candidates ``js`` are safe (:func:`~wirecal.solver.plan_moves.move_ok`); every
-    move is checked once, however often the greedy choices of a step ask about it.
+    ``ok(sources, js)``: whether each of the candidates ``js`` is reached from θ0 with the
+    wire clear (:func:`~wirecal.solver.plan_moves.reach_ok`, through its via point if it
+    has one) and the moves from every one of the candidates ``sources`` to it are safe
+    (:func:`~wirecal.solver.plan_moves.move_ok`). Both are properties of the candidates
+    alone, so asking only about the head of a ranking gives the choice a check of every
+    candidate first would; each is worked out on demand and once, however often the greedy
+    choices of a step ask about it.
     """
 
-    def __init__(self, robot: Robot, model, p0: np.ndarray, q: np.ndarray, opt: PlanOptions):
-        self.robot, self.model, self.p0, self.q, self.opt = robot, model, p0, q, opt
+    def __init__(
+        self,
+        robot: Robot,
+        model,
+        p0: np.ndarray,
+        theta0: np.ndarray,
+        q: np.ndarray,
+        via: np.ndarray,
+        opt: PlanOptions,
+    ):
+        self.robot, self.model, self.p0, self.opt = robot, model, p0, opt
+        self.theta0, self.q, self.via = theta0, q, via
+        self.reached = np.zeros(len(q), np.int8)  # 0 unknown, 1 reached, 2 not
         self.known = np.zeros((len(q), len(q)), np.int8)  # 0 unknown, 1 clear, 2 not
 
     def ok(self, sources: list[int], js: np.ndarray) -> np.ndarray:
-        """Return whether the moves from every one of ``sources`` to each of ``js`` are safe."""
-        i = np.repeat(np.asarray(sources, int), len(js))
-        j = np.tile(js, len(sources))
+        """Return whether each of ``js`` is reached and linked to every one of ``sources``."""
+        js = np.asarray(js, int)
+        new = np.unique(js[self.reached[js] == 0])
+        if len(new):
+            reach = reach_ok(
+                self.robot, self.model, self.p0, self.theta0, self.q[new], self.via[new], self.opt
+            )
+            self.reached[new] = np.where(reach, 1, 2)
+        out = self.reached[js] == 1
+        near = js[out]
+        i = np.repeat(np.asarray(sources, int), len(near))
+        j = np.tile(near, len(sources))
         todo = self.known[i, j] == 0
         if todo.any():
             clear = move_ok(
                 self.robot, self.model, self.p0, self.q[i[todo]], self.q[j[todo]], self.opt
             )
             self.known[i[todo], j[todo]] = np.where(clear, 1, 2)
-        return np.all((self.known[i, j] == 1).reshape(len(sources), len(js)), axis=0)
+        out[out] = np.all((self.known[i, j] == 1).reshape(len(sources), len(near)), axis=0)
+        return out
 
 
 def choose_points(
@@ -243,12 +268,12 @@ def step_by_step(
                 )
             break
         j, iso = best
-        # the most sensitive isolating points, their moves from θ0 checked finely
+        # the most sensitive isolating points; their moves from θ0 are checked finely
+        # when a choice comes to them (Links)
         iso = iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")[:600]]
-        iso = iso[reach_ok(robot, model, p0, theta0, q_all[iso], via_all[iso], opt)]
         order = [p.parameter for p in pools]
-        prev = [col[t] for t in order]
-        nxt = [col[t] for t in remaining if t != j]
+        prev = np.array([col[t] for t in order], int)
+        nxt = np.array([col[t] for t in remaining if t != j], int)
         # error covariance of the earlier estimates (linearised stepwise map)
         cov_prev = (
             _stepwise_cov(model, theta0, order, [q_all[p.iso[p.picks]] for p in pools], opt)
@@ -258,10 +283,10 @@ def step_by_step(
         pool = StepPool(
             j,
             iso,
-            Links(robot, model, p0, q_all[iso], opt),
+            Links(robot, model, p0, theta0, q_all[iso], via_all[iso], opt),
             psi[iso, col[j]],
-            psi[np.ix_(iso, prev)] if prev else np.zeros((len(iso), 0)),
-            psi[np.ix_(iso, nxt)] if nxt else np.zeros((len(iso), 0)),
+            psi[np.ix_(iso, prev)] if len(prev) else np.zeros((len(iso), 0)),
+            psi[np.ix_(iso, nxt)] if len(nxt) else np.zeros((len(iso), 0)),
             cov_prev,
             [],
         )

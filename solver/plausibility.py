@@ -35,6 +35,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from wirecal.solver import params as P
+from wirecal.solver.compliance import SIGMA_LIMIT_URAD_PER_NM
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import Implausible
 from wirecal.solver.identifiability import Identifiability, analyse_jacobian, covariance
@@ -185,7 +187,12 @@ def _identifiability(ident: Identifiability, J: np.ndarray, sigma_model: float) 
         return findings
     cov, _ = covariance(J, sigma_model**2)
     sd = np.sqrt(np.clip(np.diag(cov), 0, None))
-    weak = [f"{n} ±{s:.3g}" for n, s in zip(ident.names, sd, strict=True) if s >= POORLY_IDENTIFIED]
+    # a compliance: twice the σ it was chosen by (wirecal.solver.compliance), in µrad/(N·m)
+    limit = [
+        2 * SIGMA_LIMIT_URAD_PER_NM if P.unit_of(n) == "urad/Nm" else POORLY_IDENTIFIED
+        for n in ident.names
+    ]
+    weak = [f"{n} ±{s:.3g}" for n, s, w in zip(ident.names, sd, limit, strict=True) if s >= w]
     if weak:
         findings.append(
             Finding(
@@ -202,7 +209,10 @@ def _identifiability(ident: Identifiability, J: np.ndarray, sigma_model: float) 
 
 
 def _bounds(result: SolveResult, method: str, omega_default: float) -> list[Finding]:
-    """Estimates on or beyond their Ω, or beyond a physically plausible size."""
+    """Estimates on or beyond their Ω, or beyond a physically plausible size.
+
+    Compliances have no Ω (no step bounds them): only their plausible size.
+    """
     est = result.estimates[method]
     names = est.names
     robot = result.robot
@@ -211,7 +221,7 @@ def _bounds(result: SolveResult, method: str, omega_default: float) -> list[Find
     on_bound = [
         f"{n} {v:+.4g}"
         for n, v, w in zip(names, est.values, omega, strict=True)
-        if abs(v) >= w * (1 - 1e-9)
+        if abs(v) >= w * (1 - 1e-9) and P.unit_of(n) != "urad/Nm"
     ]
     findings = []
     if on_bound:

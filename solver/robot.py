@@ -18,6 +18,7 @@ from wirecal.solver import params as P
 from wirecal.solver.cell import Capsules, CellModel, Gaps, body_limits, capsules, cell_gaps
 from wirecal.solver.counter import Counter
 from wirecal.solver.exit_geometry import Exit, Pulley
+from wirecal.solver.gravity import MassModel
 from wirecal.solver.kinematics import Frames, Model, with_errors
 
 CONTROLLER_JOINTS = 6
@@ -145,6 +146,9 @@ class Robot:
     cell: CellModel = field(
         default_factory=CellModel
     )  # the floor, keep-out volumes and body limits
+    masses: MassModel | None = None  # [gravity]: the links' and payload's masses (None: rigid)
+    compliance_urad_per_nm: np.ndarray | None = None  # [gravity]: c_j, µrad/(N·m) (None: 0)
+    compliances: tuple[str, ...] = ()  # [calibration]: compliances to identify (c2, c3, …)
 
     @property
     def n_joints(self) -> int:
@@ -158,7 +162,11 @@ class Robot:
         tool = np.array(self.tool_point, dtype=float)
         dh.flags.writeable = tool.flags.writeable = False
         pulley = self.encoder.exit if isinstance(self.encoder.exit, Pulley) else None
-        return Model(dh=dh, tool_point=tool, pulley=pulley)
+        c = self.compliance_urad_per_nm
+        compliance = (
+            None if c is None else np.asarray(c, dtype=float) * P.INTERNAL_PER_BOUNDARY["urad/Nm"]
+        )
+        return Model(dh, tool, pulley, self.masses, compliance)
 
     @cached_property
     def capsules(self) -> Capsules:
@@ -190,15 +198,17 @@ class Robot:
         p0: np.ndarray,
         model: Model | None = None,
         f: Frames | None = None,
+        exact_below_mm: float = np.inf,
     ) -> Gaps:
         """Return the gaps (mm) of configurations ``q_deg`` to the arm's body and the cell.
 
         ``p0``: the wire's exit (the encoder housing's start); ``model``: the arm as built
-        (default nominal); ``f``: the frames of q when the caller has them.
+        (default nominal); ``f``: the frames of q when the caller has them;
+        ``exact_below_mm``: see :func:`~wirecal.solver.cell.cell_gaps`.
         """
         model = self.nominal if model is None else model
         q_rad = np.radians(np.atleast_2d(q_deg))
-        return cell_gaps(self.cell, self.capsules, model, q_rad, p0, f)
+        return cell_gaps(self.cell, self.capsules, model, q_rad, p0, f, exact_below_mm)
 
     def errors(self, names: Sequence[str] | None = None) -> P.ErrorSet:
         """Return the error parameters ``names`` (default: the robot file's ``parameters``)."""
@@ -222,6 +232,9 @@ class Robot:
         p = P.parse(name, self.n_joints)
         if p.kind == "tool":
             return float(self.tool_point[p.row])
+        if p.kind == "c":
+            c = self.compliance_urad_per_nm
+            return 0.0 if c is None else float(c[p.row])
         value = float(self.dh[p.row, P.DH_COLUMN[p.kind]])
         return value * P.BOUNDARY_PER_INTERNAL[p.unit]
 

@@ -114,7 +114,9 @@ class Unmodelled:
       tool point scatters by about ``repeatability_mm``/2 (1σ) at 600 mm;
     * compliance under gravity: joints 2 and 3 sag by ``compliance_deg_per_m`` per metre of
       horizontal lever arm from their axis to the wrist centre (the weight of the forearm,
-      wrist and tool; 0.01 deg/m gives ≈ 0.05 mm at full reach).
+      wrist and tool; 0.01 deg/m gives ≈ 0.05 mm at full reach): the assumed instance of
+      the compliance model (:mod:`~wirecal.solver.gravity`: a weight at the wrist centre,
+      c2 = c3). A model that carries compliances bends by them instead: no assumed sag.
     """
 
     repeatability_mm: float = 0.02
@@ -132,8 +134,13 @@ class Unmodelled:
         return dq - self.sag_deg(model, q_deg).reshape(dq.shape)
 
     def sag_deg(self, model: Model, q_deg: np.ndarray) -> np.ndarray:
-        """Return how far joints 2 and 3 sag under gravity at ``q_deg`` (deg, (N, n))."""
+        """Return how far joints 2 and 3 sag under gravity at ``q_deg`` (deg, (N, n)).
+
+        Zero for a model with compliances: its frames bend by them (class docstring).
+        """
         q = np.atleast_2d(q_deg)
+        if model.compliance is not None:
+            return np.zeros(q.shape)
         o = frames(model, np.radians(q)).o
         centre = o[:, 4]
         sag = np.zeros(q.shape)

@@ -13,7 +13,19 @@ from typing import Any
 import numpy as np
 
 from wirecal.solver.accuracy import workspace
-from wirecal.solver.budget import Budget, budget, least_squares_map, sources
+from wirecal.solver.budget import (
+    Budget,
+    ComplianceTerms,
+    Sources,
+    budget,
+    least_squares_map,
+    sources,
+)
+from wirecal.solver.compliance import (
+    PRIOR_COMPLIANCE_URAD_PER_NM,
+    ComplianceObservability,
+    compliance_observability,
+)
 from wirecal.solver.distance import wire_jacobian
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.identifiability import covariance
@@ -29,12 +41,14 @@ from wirecal.solver.identify import (
 )
 from wirecal.solver.kinematics import with_errors
 from wirecal.solver.measurements import Measurements
+from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan import Plan
 from wirecal.solver.plan_exit import unmodelled_exit_mm
 from wirecal.solver.robot import Robot
 from wirecal.solver.scale import PPM, Drift, ScaleEstimate, estimate_scale, fit_drift
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.simulate import sag_lengths_mm
+from wirecal.solver.verdict import READING_NOISE_MM
 
 METHODS = ("stepwise", "joint")
 STEPWISE_BUDGET_MISS = 1.36
@@ -62,6 +76,7 @@ class SolveResult:
     scale: ScaleEstimate | None = None  # from the log's reference rows
     drift: Drift | None = None  # the zero readings' drift (timed logs)
     encoder_notes: tuple[str, ...] = ()  # what was done about the scale and the drift
+    compliance: ComplianceObservability | None = None  # the compliances the file asked for
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -137,6 +152,7 @@ class SolveResult:
                 ]
             methods[name] = entry
         m = self.measurements
+        extra = {} if self.compliance is None else {"compliance": self.compliance.as_json()}
         return {
             "robot": self.robot.name,
             "plan": self.plan.fingerprint(),
@@ -155,6 +171,7 @@ class SolveResult:
             ],
             "notes": list(m.notes),
             "encoder": self._encoder_json(),
+            **extra,
         }
 
     def _encoder_json(self) -> dict[str, Any]:
@@ -252,8 +269,10 @@ def solve(
     factor, notes = _reference_scale(robot, m)
     k = factor if factor is not None and corrections else 1.0
     d = m.distance_mm[present] * k
-    problem = Problem(base, names, np.radians(q_deg), np.radians(m.theta0_deg), d, step)
-    psi = sensitivity(base, q_deg, m.theta0_deg, names).psi
+    comp = _compliances(robot, q_deg, m.theta0_deg, names)
+    solved = names + (comp.identified if comp is not None else ())
+    problem = Problem(base, solved, np.radians(q_deg), np.radians(m.theta0_deg), d, step)
+    psi = sensitivity(base, q_deg, m.theta0_deg, solved).psi
     omega = omega_vector(names, robot.n_joints, plan, omega_default)
     fit = _identify(robot, problem, omega, psi, robust)
     drift, clean = _judge_drift(robot, m, fit, k, problem, (omega, psi, robust))
@@ -300,10 +319,8 @@ def solve(
             unmodelled_exit_mm(robot, plan)[present],
             sag_lengths_mm(robot, plan)[present],
         )
-        for method in estimates:
-            budgets[method] = budget(
-                base, names, J, step if method == "stepwise" else None, src, ws
-            )
+        for method, est in estimates.items():
+            budgets[method] = _budget(robot, problem, J, step, src, ws, len(names), comp, est)
             predicted[method] = {"mean": budgets[method].total, "max": budgets[method].worst}
     return SolveResult(
         robot,
@@ -313,12 +330,13 @@ def solve(
         predicted,
         sigma,
         left,
-        psi,
+        psi[:, : len(names)],
         m.step[present],
         budgets=budgets,
         scale=scale,
         drift=drift,
         encoder_notes=tuple(notes),
+        compliance=comp,
     )
 
 
@@ -354,11 +372,68 @@ def valid_length(enc) -> float:
     return float(enc.reference_length_mm)
 
 
+def _budget(
+    robot: Robot,
+    problem: Problem,
+    J: np.ndarray,
+    step: np.ndarray,
+    src: Sources,
+    ws: np.ndarray,
+    n_plan: int,
+    comp: ComplianceObservability | None,
+    est: Estimate,
+) -> Budget:
+    """Return a method's budget: the stepwise one of the plan's ``n_plan`` parameters."""
+    if est.method == "stepwise":
+        return budget(problem.base, problem.names[:n_plan], J[:, :n_plan], step, src, ws)
+    terms = _compliance_terms(robot, problem, comp, est)
+    return budget(problem.base, problem.names, J, None, src, ws, terms)
+
+
+def _compliances(
+    robot: Robot, q_deg: np.ndarray, theta0_deg: np.ndarray, names: tuple[str, ...]
+) -> ComplianceObservability | None:
+    """Which of the robot file's ``compliances`` the measured points identify (None: none asked)."""
+    if not robot.compliances:
+        return None
+    return compliance_observability(
+        robot.nominal, q_deg, theta0_deg, names, robot.compliances, READING_NOISE_MM
+    )
+
+
+def _compliance_terms(
+    robot: Robot, problem: Problem, comp: ComplianceObservability | None, est: Estimate
+) -> ComplianceTerms | None:
+    """Return the joint budget's compliances: the identified ones' values, the others' prior."""
+    if comp is None:
+        return None
+    values = est.as_dict()
+    errors = problem.errors
+    left = np.array(
+        [robot.nominal_value(n) + values[n] if n in comp.identified else 0.0 for n in errors.names]
+    )
+    others = tuple(n for n in robot.compliances if n in comp.reasons and n not in comp.no_torque)
+    unit = ErrorSet(others, robot.n_joints)
+    wire = wire_jacobian(problem.base, problem.q, problem.q0, others)[1]
+    return ComplianceTerms(
+        errors.to_internal(left),
+        others,
+        np.reshape(wire, (len(problem.q), len(others))),
+        unit.to_internal(np.full(len(others), PRIOR_COMPLIANCE_URAD_PER_NM)),
+        unit.to_internal([robot.nominal_value(n) for n in others]),
+    )
+
+
 def _identify(
     robot: Robot, problem: Problem, omega: np.ndarray, psi: np.ndarray, robust: bool
 ) -> Fit:
-    """Run the stepwise and joint methods; their estimates and the noise σ (mm)."""
-    sw = run_stepwise(problem, omega, psi)
+    """Run the stepwise and joint methods; their estimates and the noise σ (mm).
+
+    The stepwise method solves the plan's parameters (``omega``'s); the joint method also
+    the identified compliances after them, from the stepwise values and 0.
+    """
+    geometry = replace(problem, names=problem.names[: len(omega)])
+    sw = run_stepwise(geometry, omega, psi[:, : len(omega)])
     if not np.all(np.isfinite(sw.values)):
         bad = [n for n, v in zip(problem.names, sw.values, strict=True) if not np.isfinite(v)]
         raise WirecalError(
@@ -366,7 +441,8 @@ def _identify(
             f"{', '.join(bad)}: the model's wire lengths are not finite numbers; check the "
             "robot file's sizes and units (mm, deg)"
         )
-    return (sw, *_joint_fit(problem, sw.values, robust))
+    start = np.concatenate([sw.values, np.zeros(len(problem.names) - len(omega))])
+    return (sw, *_joint_fit(problem, start, robust))
 
 
 def _joint_fit(problem: Problem, start: np.ndarray, robust: bool) -> tuple[Estimate, float]:

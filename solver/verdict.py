@@ -54,6 +54,10 @@ PLAUSIBLE_DEG = 10.0
 PLAUSIBLE_MM = 10.0
 """Largest believable offset of an angle (deg) or a length (mm) from the data sheet."""
 
+PLAUSIBLE_URAD_PER_NM = 100.0
+"""Largest believable compliance offset (µrad/(N·m)): wirecal's bound, ten times the
+largest of issue 30's 2–8 µrad/(N·m); light arms' drives may reach tens."""
+
 
 OVERRIDDEN = "overridden: "
 """How a patch's ``plausibility`` field starts when the user overrode the gate."""
@@ -79,6 +83,8 @@ HEADLINE = {
     "identifiability": "the points do not identify every parameter",
     "bound": "estimates on their bound or beyond a plausible size",
     "drift": "the zero readings drift beyond the tolerance",
+    "holdout": "held-out rows far above the quantisation floor",
+    "budget": "the error budget is not below the correction",
 }
 
 
@@ -86,7 +92,7 @@ HEADLINE = {
 class Finding:
     """One failed plausibility check."""
 
-    check: str  # "lengths", "residual", "identifiability", "bound" or "drift"
+    check: str  # a key of HEADLINE
     message: str
 
 
@@ -141,9 +147,10 @@ def _num(x: float) -> float | None:
 def implausible(names: Sequence[str], values: np.ndarray) -> list[str]:
     """Return ``"name value"`` of each estimate beyond :data:`PLAUSIBLE_DEG` / :data:`PLAUSIBLE_MM`.
 
-    Angles (θ, α) in deg, lengths in mm, boundary units.
+    Angles (θ, α) in deg, lengths in mm, compliances in µrad/(N·m)
+    (:data:`PLAUSIBLE_URAD_PER_NM`), boundary units.
     """
-    plausible = {"deg": PLAUSIBLE_DEG, "mm": PLAUSIBLE_MM}
+    plausible = {"deg": PLAUSIBLE_DEG, "mm": PLAUSIBLE_MM, "urad/Nm": PLAUSIBLE_URAD_PER_NM}
     return [
         f"{n} {v:+.4g}"
         for n, v in zip(names, values, strict=True)

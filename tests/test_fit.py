@@ -11,18 +11,20 @@ from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from tests.conftest import ROOT
+from wirecal.solver.accuracy import workspace
 from wirecal.solver.fit import Data, candidates, choose, point_model
 from wirecal.solver.fit_model import (
     Layout,
     length_joint_gradient,
     lengths_and_jacobian,
+    model_of,
     quantisation_floor,
 )
 from wirecal.solver.fit_result import FitOptions, fit_table
 from wirecal.solver.fit_sessions import change_points
-from wirecal.solver.fit_synth import synthetic_table
+from wirecal.solver.fit_synth import synthetic_table, take_rows
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.kinematics import tool_position
+from wirecal.solver.kinematics import Model, tool_position
 
 ARMS = ("viper_s650", "abb_irb120", "ur5e")
 
@@ -56,11 +58,21 @@ def _check_recovery(robot, syn, result):
     assert gross <= rejected
     near_start = {s + d for s in syn.starts[1:] for d in range(-2, 3)}
     assert rejected <= set(syn.bad_mm) | near_start
-    # every fitted parameter within 4σ of the truth (DH errors the generator left at 0: 0)
+    # every fitted anchor and offset within 4σ of the truth
     per = core.layout.boundary_per_internal
     for name, value, std in zip(core.layout.names, core.x * per, core.std * per, strict=True):
-        truth = _truth(syn, robot, name)
-        assert abs(value - truth) <= 4 * std, (name, value, truth, std)
+        if name.startswith(("anchor_", "offset_")):
+            truth = _truth(syn, robot, name)
+            assert abs(value - truth) <= 4 * std, (name, value, truth, std)
+    # the DH errors and the attachment as a model: its tool points over the workspace within
+    # 0.15 mm of the truth's on average (per DH error 4σ no longer holds: a DH error BIC
+    # fixes at 0, e.g. th2 = 0.012° at |z| 2.6, moves its correlated partner th3 by 7 of
+    # its σ, and the tool point by microns)
+    fitted = model_of(point_model(robot), core.layout, core.x)
+    true = Model(robot.model(syn.errors).dh, syn.attachment_mm)
+    q = workspace(robot)
+    error = np.linalg.norm(tool_position(fitted, q) - tool_position(true, q), axis=1)
+    assert error.mean() <= 0.15, error.mean()
 
 
 @pytest.mark.parametrize("arm", ["viper_s650", "abb_irb120"])
@@ -69,8 +81,12 @@ def test_fit_recovers_sessions_outliers_and_the_truth(arm):
     syn = synthetic_table(robot, 400, seed=3)
     result = fit_table(robot, syn.table, FitOptions(holdout="random:0.2", repeats=3))
     _check_recovery(robot, syn, result)
-    # every truth parameter was fitted (the generator perturbs identifiable ones only)
-    assert set(syn.errors) <= set(result.main.core.layout.geometry)
+    # every truth parameter was fitted (the generator perturbs identifiable ones only), or
+    # left at 0 by BIC when its truth is small (under 0.15 deg or mm, σ's of 0.02–0.05)
+    core = result.main.core
+    bic = {name for name, why in core.dropped if "(BIC)" in why}
+    for name, truth in syn.errors.items():
+        assert name in core.layout.geometry or (name in bic and abs(truth) < 0.15), name
 
 
 @pytest.mark.slow
@@ -134,13 +150,13 @@ def test_budget_has_the_robot_files_gravity_sag():
     """The fit's budget carries the sag term: none without sag, proportional to it."""
     from dataclasses import replace
 
-    from wirecal.solver.fit_result import fit_budget
+    from wirecal.solver.fit_gate import fit_budget
 
     robot = _robot("viper_s650")
     syn = synthetic_table(robot, 200, seed=1, sessions=1, snags=0, typos=0)
     result = fit_table(robot, syn.table, FitOptions(holdout="none"))
     sag = {
-        k: fit_budget(replace(result, robot=replace(robot, gravity_sag_deg_per_m=k)))
+        k: fit_budget(r := replace(result, robot=replace(robot, gravity_sag_deg_per_m=k)), r.main)
         for k in (0.0, 0.01, 0.02)
     }
     assert sag[0.0].terms["sag"] == 0.0
@@ -316,3 +332,153 @@ def test_no_change_points_in_noise():
     rng = np.random.default_rng(7)
     for _ in range(20):
         assert change_points(rng.normal(0, 1.0, 500)) == []
+
+
+# --- hostile tables (issue 31 item 4; docs/fit.md "What fit refuses") ---------------
+
+
+def test_lengths_alone_match_the_lengths_of_the_jacobian_call():
+    from wirecal.solver.fit_model import lengths
+
+    robot = _robot("ur5e")
+    base = point_model(robot)
+    layout = Layout(("tool_x", "th2", "a2"), 6, 2, True)
+    rng = np.random.default_rng(1)
+    x = rng.normal(0, 1e-3, len(layout.names))
+    x[4:7] = [300.0, -200.0, 100.0]
+    q = np.radians(rng.uniform(-90, 90, (20, 6)))
+    session = np.repeat([0, 1], 10)
+    np.testing.assert_allclose(
+        lengths(base, layout, x, q, session),
+        lengths_and_jacobian(base, layout, x, q, session)[0],
+        rtol=0,
+        atol=1e-9,
+    )
+
+
+def test_ft30_covariance_and_identifiability_are_linear_in_the_rows():
+    """FT30: 100,000 rows ended in a 74.5 GiB (N × N) allocation in the covariance's SVD.
+
+    200,000 rows × 30 columns: an N × N matrix would need 320 GB; the right vectors alone
+    are 30 × 30. (Timing is bench/bench_fit.py's, not this test's.)
+    """
+    from wirecal.solver.identifiability import analyse_jacobian, covariance
+
+    rng = np.random.default_rng(0)
+    J = rng.normal(size=(200_000, 30))
+    J[:, 29] = J[:, 28]  # one degenerate pair: the null-space paths run too
+    cov, identified = covariance(J, 1.0)
+    assert cov.shape == (30, 30)
+    assert identified[:28].all()
+    assert not identified[28:].any()
+    ident = analyse_jacobian(J, tuple(f"p{k}" for k in range(30)))
+    assert ident.rank == 29
+    assert len(ident.combinations) == 1
+
+
+def _clean(robot, n, seed=0):
+    return synthetic_table(robot, n, seed=seed, sessions=1, snags=0, typos=0)
+
+
+@pytest.mark.parametrize(
+    ("rows", "scheme", "trains"),
+    [(400, "random:0.999", 0), (30, "random:0.9", 3), (30, "half", 15)],
+)
+def test_ft45_ft46_a_split_training_on_under_twice_the_parameters_is_refused(rows, scheme, trains):
+    """FT45/FT46: random:0.999 (no training row) read RMS/floor 0.98, random:0.9 on 30 rows
+    0.51 (below the floor), half on 30 rows trained 15 rows for 23 parameters unsaid."""
+    from wirecal.solver.errors import WirecalError
+
+    robot = _robot("viper_s650")
+    with pytest.raises(WirecalError, match=rf"--holdout {scheme}: a split trains on {trains} "):
+        fit_table(robot, _clean(robot, rows).table, FitOptions(holdout=scheme, repeats=2))
+
+
+def test_ft45_the_refusal_says_what_share_would_do():
+    from wirecal.solver.errors import WirecalError
+    from wirecal.solver.fit_holdout import check_training
+
+    with pytest.raises(WirecalError, match=r"at most a share 0\.77 "):
+        check_training("random:0.9", 40, 200, 23)  # (200 − 46) / 200 = 0.77
+    with pytest.raises(WirecalError, match="too few rows to hold any out"):
+        check_training("half", 15, 30, 23)
+    check_training("random:0.2", 46, 200, 23)  # exactly twice: accepted
+
+
+def test_ft27_copied_rows_are_named_left_out_and_do_not_shrink_the_sigmas():
+    """FT27: every row twice was not said; held-out rows were copies of training rows and
+    the σ's came out √2 too small."""
+    robot = _robot("viper_s650")
+    table = _clean(robot, 120, seed=3).table
+    doubled = take_rows(table, np.tile(np.arange(120), 2))
+    once = fit_table(robot, table, FitOptions(holdout="none"))
+    both = fit_table(robot, doubled, FitOptions(holdout="random:0.2", repeats=2))
+    assert both.copies == tuple((120 + r, r) for r in range(120))
+    assert not both.main.core.inliers[120:].any()
+    np.testing.assert_allclose(both.main.core.std, once.main.core.std, rtol=1e-6)
+
+
+def test_holdout_rule_a_held_out_row_never_trains(monkeypatch):
+    """Rule (fit_holdout): a held-out row never trains, nor a row at its joints.
+
+    Kills the mutation "fit's held-out split can train on its held-out rows" (issue 33)
+    wherever it sits: the rows each refit trains on are recorded at the solver's call.
+    """
+    import wirecal.solver.fit as fit_module
+
+    robot = _robot("viper_s650")
+    table = _clean(robot, 150, seed=2).table
+    again = np.r_[np.arange(150), [3, 70, 140]]  # three repeated readings at old joints
+    table = take_rows(table, again)
+    table = replace(table, length_mm=table.length_mm + np.r_[np.zeros(150), [0.05, -0.05, 0.1]])
+    seen: list[tuple[np.ndarray, np.ndarray]] = []
+    real_splits, real_solve = fit_module.splits, fit_module.solve
+
+    def record_splits(*args, **kwargs):
+        out = real_splits(*args, **kwargs)
+        seen.extend((None, test) for _, test in out)
+        return out
+
+    trained: list[np.ndarray] = []
+
+    def record_solve(base, layout, x0, data, rows, **kwargs):
+        if "free" in kwargs:  # the held-out refits pass which parameters are free
+            trained.append(np.asarray(rows))
+        return real_solve(base, layout, x0, data, rows, **kwargs)
+
+    monkeypatch.setattr(fit_module, "splits", record_splits)
+    monkeypatch.setattr(fit_module, "solve", record_solve)
+    for scheme in ("random:0.3", "half"):
+        seen.clear()
+        trained.clear()
+        fit_table(robot, table, FitOptions(holdout=scheme, repeats=3))
+        assert len(trained) == len(seen) > 0
+        for train, (_, test) in zip(trained, seen, strict=True):
+            assert len(test) > 0
+            assert not set(train) & set(test), scheme
+            q = {tuple(v) for v in table.q_deg[test]}
+            assert not any(tuple(v) in q for v in table.q_deg[train]), scheme
+
+
+def test_bic_elimination_is_the_refit_with_the_dropped_columns_fixed():
+    """fit_select: z² of each drop and the estimates after it, against least squares solved
+    again without the dropped columns (exact for a linear model)."""
+    from wirecal.solver.fit_select import bic_eliminated
+
+    rng = np.random.default_rng(4)
+    n = 400
+    J = rng.normal(size=(n, 6))
+    truth = np.array([3.0, 0.0, 0.0, 2.0, 0.0, 1.0])  # noise σ 1: |z| of a zero ≈ 1
+    y = J @ truth + rng.normal(size=n)
+    x = np.linalg.lstsq(J, y, rcond=None)[0]
+    sigma = float(np.sqrt(np.sum((y - J @ x) ** 2) / (n - 6)))
+    out = bic_eliminated(J, x, [1, 2, 3, 4, 5], sigma)
+    assert {k for k, _ in out} == {1, 2, 4}  # the zeros; 0 is no candidate
+    assert all(z < np.sqrt(np.log(n)) for _, z in out)
+    # the |z| of the last drop, from a refit without the columns dropped before it
+    before = [k for k, _ in out[:-1]]
+    keep = [c for c in range(6) if c not in before]
+    xs = np.linalg.lstsq(J[:, keep], y, rcond=None)[0]
+    cov = sigma**2 * np.linalg.inv(J[:, keep].T @ J[:, keep])
+    last = keep.index(out[-1][0])
+    assert out[-1][1] == pytest.approx(abs(xs[last]) / np.sqrt(cov[last, last]), rel=1e-9)

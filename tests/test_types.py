@@ -59,7 +59,15 @@ def test_error_set_units_columns_and_rows():
 
 @pytest.mark.parametrize(
     ("name", "unit"),
-    [("th2", "deg"), ("al0", "deg"), ("al12", "deg"), ("a0", "mm"), ("d6", "mm"), ("tool_x", "mm")],
+    [
+        ("th2", "deg"),
+        ("al0", "deg"),
+        ("al12", "deg"),
+        ("a0", "mm"),
+        ("d6", "mm"),
+        ("tool_x", "mm"),
+        ("c3", "urad/Nm"),
+    ],
 )
 def test_unit_of_a_name_without_an_arm(name, unit):
     """The deg/mm rule from the name alone: al before a, tool_* a length."""
@@ -69,7 +77,11 @@ def test_unit_of_a_name_without_an_arm(name, unit):
 def test_one_unit_table_words_and_factors():
     assert P.UNIT_KINDS == {"deg": "th, al", "mm": "a, d, tool"}
     assert P.INTERNAL_PER_BOUNDARY["deg"] == pytest.approx(0.017453292519943295, rel=1e-15)
-    assert P.BOUNDARY_PER_INTERNAL == {"deg": pytest.approx(57.29577951308232, rel=1e-15), "mm": 1}
+    assert P.BOUNDARY_PER_INTERNAL == {
+        "deg": pytest.approx(57.29577951308232, rel=1e-15),
+        "mm": 1,
+        "urad/Nm": pytest.approx(1e6, rel=1e-15),  # compliances: µrad/(N·m) outside
+    }
 
 
 def test_error_set_refuses_an_unknown_parameter():

@@ -26,7 +26,7 @@ from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
 from wirecal.solver.formats.stl import stl_vertices
 from wirecal.solver.identify import Estimate
-from wirecal.solver.kinematics import tool_position
+from wirecal.solver.kinematics import frames, tool_position
 
 from .conftest import DATA
 from .test_urdf import TOL_MM, make_urdf, urdf_fk
@@ -494,3 +494,77 @@ def test_the_comma_separated_numbers_read_back(values):
             _numbers(3, "X")(None, None, text)
     with pytest.raises(click.BadParameter):
         _numbers(None, "numbers")(None, None, text + ",x")
+
+
+def _urdf_link_centres_mm(path: Path, q: np.ndarray) -> tuple[dict[str, tuple], np.ndarray]:
+    """Each chain link's <inertial> (mass, centre in the base link, mm) and tool0, by hand."""
+    import xml.etree.ElementTree as ET
+
+    from scipy.spatial.transform import Rotation
+
+    root = ET.parse(path).getroot()
+    joints = {j.get("name"): j for j in root.iter("joint")}
+    by_child = {j.find("child").get("link"): j for j in joints.values()}
+    links, link = [], "tool0"
+    while link in by_child:
+        links.append(link)
+        link = by_child[link].find("parent").get("link")
+    T, out, k = np.eye(4), {}, 0
+    for child in reversed(links):
+        j = by_child[child]
+        o = j.find("origin")
+        step = np.eye(4)
+        step[:3, :3] = Rotation.from_euler(
+            "xyz", [float(v) for v in o.get("rpy").split()]
+        ).as_matrix()
+        step[:3, 3] = [1000.0 * float(v) for v in o.get("xyz").split()]
+        T = T @ step
+        if j.get("type") == "revolute":
+            turn = np.eye(4)
+            axis = np.array([float(v) for v in j.find("axis").get("xyz").split()])
+            turn[:3, :3] = Rotation.from_rotvec(axis * q[k]).as_matrix()
+            T, k = T @ turn, k + 1
+        el = next(e for e in root.iter("link") if e.get("name") == child)
+        inertial = el.find("inertial")
+        if inertial is not None:
+            xyz = np.array([1000.0 * float(v) for v in inertial.find("origin").get("xyz").split()])
+            out[child] = (float(inertial.find("mass").get("value")), T[:3, :3] @ xyz + T[:3, 3])
+    return out, T[:3, :3] @ np.array([-50.0, 0.0, 40.0]) + T[:3, 3]  # the wire point
+
+
+def test_import_reads_the_links_inertials_into_gravity(ur5):
+    # the robot file's masses are the URDF's, and each centre lies where the URDF's own chain
+    # puts it: its distance to the wire point (-50, 0, 40 in tool0) agrees at random joints
+    robot = load_robot(ur5[0] / "robot.toml")
+    assert robot.masses is not None
+    assert not robot.masses.assumed
+    np.testing.assert_allclose(robot.masses.link_mass_kg, [3.7, 8.393, 2.275, 1.219, 1.219, 0.1879])
+    for q in np.random.default_rng(2).uniform(-np.pi, np.pi, (4, 6)):
+        centres, wire = _urdf_link_centres_mm(UR5_URDF, q)
+        f = frames(robot.nominal, q[None])
+        here_wire = tool_position(robot.nominal, q[None])[0]
+        for k, name in enumerate(
+            [
+                "shoulder_link",
+                "upper_arm_link",
+                "forearm_link",
+                "wrist_1_link",
+                "wrist_2_link",
+                "wrist_3_link",
+            ]
+        ):
+            R = np.stack([f.x[0, k + 1], np.cross(f.z[0, k + 1], f.x[0, k + 1]), f.z[0, k + 1]], 1)
+            here = f.o[0, k + 1] + R @ robot.masses.link_com_mm[k]
+            want = np.linalg.norm(centres[name][1] - wire)
+            assert np.linalg.norm(here - here_wire) == pytest.approx(want, abs=1e-6), name
+
+
+def test_import_refuses_a_negative_link_mass_naming_the_link(tmp_path):
+    bad = tmp_path / "ur5.urdf"
+    bad.write_text(UR5_URDF.read_text().replace('<mass value="8.393"/>', '<mass value="-1"/>'))
+    r = CliRunner().invoke(
+        main, ["import-urdf", str(bad), "--tip", "tool0", "-o", str(tmp_path / "r.toml")]
+    )
+    assert r.exit_code != 0
+    assert "link 'upper_arm_link': <inertial>: <mass value> is not a mass" in r.output
+    assert not (tmp_path / "r.toml").exists()

@@ -52,6 +52,9 @@ _API = {
     "SolveResult": "wirecal.solver.solve",
     "Budget": "wirecal.solver.budget",
     "write_patch": "wirecal.solver.formats.patch",
+    # gravity compliance: what one wire identifies, and offline compensation
+    "compliance_observability": "wirecal.solver.compliance",
+    "compensated_joints": "wirecal.solver.compliance",
     "read_patch": "wirecal.solver.formats.patch",
     # fit a cable-length table taken without wirecal
     "read_cable_table": "wirecal.solver.formats.cable_table",

@@ -22,6 +22,8 @@ import csv
 import hashlib
 import io
 import math
+import zipfile
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -30,11 +32,17 @@ import numpy as np
 from wirecal.solver.cable_data import AXES, CableTable, ColumnMap
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.csv_table import read_source
+from wirecal.solver.formats.fileio import read_input
 
 RESOLUTION_QUANTILE = 0.9
 """Share of the values whose decimals fix a column's resolution (the rest may be typos)."""
 
 MAX_DECIMALS = 6
+
+MAX_XLSX_PARTS = 1000
+MAX_XLSX_UNPACKED_BYTES = 128 * 2**20
+"""Bounds of a workbook before it is read (:func:`check_workbook`): a sheet of 100,000 rows
+of ten numbers unpacks to about 40 MB of XML."""
 
 
 def default_map(n_joints: int, header: tuple[str, ...] = ()) -> ColumnMap:
@@ -76,16 +84,21 @@ def read_cable_table(
     path: str | Path, column_map: str | None = None, *, sheet: str | None = None, n_joints: int = 6
 ) -> CableTable:
     """Read a CSV/TSV or ``.xlsx`` cable-length table (module docstring)."""
+    sheets, empty = "", ""
     if str(path).lower().endswith((".xlsx", ".xlsm")):
-        header, rows, source, digest = _xlsx_cells(path, sheet)
+        header, rows, source, digest, sheets = _xlsx_cells(path, sheet)
+        empty = (
+            " (an empty cell: if it shows a value in Excel it is a formula never calculated; "
+            "open and save the workbook in Excel or LibreOffice)"
+        )
     else:
         if sheet is not None:
             raise WirecalError(f"{path}: --sheet is for .xlsx workbooks; this is a text table")
         text, source, digest = read_source(path, "table")
         header, rows = _text_cells(text, source)
     cmap = parse_map(column_map, n_joints, header)
-    index = _column_index(cmap, header, source)
-    lines, values = _numbers(rows, index, cmap, source)
+    index = _column_index(cmap, header, source, sheets)
+    lines, values = _numbers(rows, index, cmap, source, empty)
     q, length = values[:, :n_joints], values[:, n_joints]
     return CableTable(
         source=source,
@@ -121,8 +134,13 @@ def _text_cells(text: str, source: str) -> tuple[tuple[str, ...], Cells]:
     return header, rows
 
 
-def _xlsx_cells(path: str | Path, sheet: str | None) -> tuple[tuple[str, ...], Cells, str, str]:
-    """Return the header and the data rows (row number, cells) of a workbook's sheet."""
+def _xlsx_cells(
+    path: str | Path, sheet: str | None
+) -> tuple[tuple[str, ...], Cells, str, str, str]:
+    """Return a workbook sheet's header, data rows (row number, cells), source and sha256.
+
+    And, for messages, which sheet was read and the others (empty for a single sheet).
+    """
     try:
         import openpyxl  # an optional extra, imported only for a workbook
     except ImportError:
@@ -130,9 +148,10 @@ def _xlsx_cells(path: str | Path, sheet: str | None) -> tuple[tuple[str, ...], C
             f"{path}: reading .xlsx needs openpyxl: pip install 'wirecal[xlsx]' (or save the "
             "sheet as CSV)"
         ) from None
-    _, source, digest = _bytes_digest(path)
+    raw, source, digest = _bytes_digest(path)
+    check_workbook(raw, source)
     try:
-        book = openpyxl.load_workbook(path, read_only=True, data_only=True)
+        book = openpyxl.load_workbook(io.BytesIO(raw), read_only=True, data_only=True)
     except Exception as exc:  # openpyxl raises many types for a damaged file
         raise WirecalError(f"{source}: not a readable .xlsx workbook: {exc}") from None
     names = book.sheetnames
@@ -148,33 +167,77 @@ def _xlsx_cells(path: str | Path, sheet: str | None) -> tuple[tuple[str, ...], C
     if not rows:
         raise WirecalError(f"{source}: sheet {ws.title!r} is empty")
     header = tuple(str(c).strip() for c in rows[0][1])
-    return header, rows[1:], source, digest
+    others = [n for n in names if n != ws.title]
+    sheets = (
+        f" of sheet {ws.title!r}, or read another sheet with --sheet ("
+        + ", ".join(repr(n) for n in others)
+        + ")"
+        if others
+        else ""
+    )
+    return header, rows[1:], source, digest, sheets
 
 
 def _bytes_digest(path: str | Path) -> tuple[bytes, str, str]:
+    raw, source = read_input(path, "table")
+    return raw, source, hashlib.sha256(raw).hexdigest()
+
+
+def check_workbook(raw: bytes, source: str) -> None:
+    """Refuse a workbook that unpacks beyond the bounds, before openpyxl reads it.
+
+    An ``.xlsx`` is a zip of XML parts: at most :data:`MAX_XLSX_PARTS` of them, together at
+    most :data:`MAX_XLSX_UNPACKED_BYTES` when unpacked — counted while unpacking, not taken
+    from the sizes the archive declares (a zip bomb declares small ones).
+    """
     try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise WirecalError(f"{path}: cannot read table: {exc.strerror or exc}") from None
-    return raw, str(path), hashlib.sha256(raw).hexdigest()
+        with zipfile.ZipFile(io.BytesIO(raw)) as archive:
+            parts = archive.infolist()
+            if len(parts) > MAX_XLSX_PARTS:
+                raise WirecalError(
+                    f"{source}: {len(parts)} parts in the workbook, more than "
+                    f"{MAX_XLSX_PARTS}: not a table's workbook; save the sheet as CSV"
+                )
+            total = 0
+            for part in parts:
+                with archive.open(part) as stream:
+                    while chunk := stream.read(2**20):
+                        total += len(chunk)
+                        if total > MAX_XLSX_UNPACKED_BYTES:
+                            raise WirecalError(
+                                f"{source}: the workbook unpacks to more than "
+                                f"{MAX_XLSX_UNPACKED_BYTES // 2**20} MiB (at part "
+                                f"{part.filename!r}): not a table's workbook (a zip bomb?); "
+                                "save the sheet as CSV"
+                            )
+    except (zipfile.BadZipFile, zlib.error, EOFError, NotImplementedError) as exc:
+        raise WirecalError(f"{source}: not a readable .xlsx workbook: {exc}") from None
 
 
-def _column_index(cmap: ColumnMap, header: tuple[str, ...], source: str) -> list[int]:
-    """Return the position of each mapped column; raise naming the absent ones."""
+def _column_index(
+    cmap: ColumnMap, header: tuple[str, ...], source: str, sheets: str = ""
+) -> list[int]:
+    """Return the position of each mapped column; raise naming the absent ones.
+
+    ``sheets``: for a workbook, which sheet was read and the others (appended to the advice).
+    """
     absent = [c for c in cmap.columns if c not in header]
     if absent:
         raise WirecalError(
             f"{source}: no column {', '.join(repr(c) for c in absent)}; the header has "
             f"{', '.join(repr(h) for h in header)}: name the columns with --map "
-            '"j1=…,…,j6=…,length=…"'
+            f'"j1=…,…,j6=…,length=…"{sheets}'
         )
     return [header.index(c) for c in cmap.columns]
 
 
 def _numbers(
-    rows: Cells, index: list[int], cmap: ColumnMap, source: str
+    rows: Cells, index: list[int], cmap: ColumnMap, source: str, empty: str = ""
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Return the rows' lines and their mapped cells as numbers; raise on any non-number."""
+    """Return the rows' lines and their mapped cells as numbers; raise on any non-number.
+
+    ``empty``: what to add to the message of an empty cell (a workbook's formulas).
+    """
     problems: list[str] = []
     lines, values = [], []
     for line, cells in rows:
@@ -183,7 +246,8 @@ def _numbers(
             cell = cells[k] if k < len(cells) else ""
             value = _number(cell)
             if value is None:
-                problems.append(f"{source}:{line}: column {col!r} is {cell!r}, not a number")
+                hint = empty if cell == "" else ""
+                problems.append(f"{source}:{line}: column {col!r} is {cell!r}, not a number{hint}")
             row.append(value)
         lines.append(line)
         values.append(row)

@@ -1,7 +1,10 @@
 """Parameter patch files: the identified offsets, and the table to enter in the controller.
 
 The patch (TOML) records, per parameter, the nominal value, the identified offset, the new
-value and its σ, with the plan fingerprint, the log's sha256, the method and the date.
+value and its σ, with the plan fingerprint, the log's sha256, the method and the date; the
+joint method's identified compliances (:mod:`wirecal.solver.compliance`) go to their own
+``[compliance]`` table, in µrad/(N·m). No controller file wirecal writes carries them (the
+SPEC table and the languages' companions say so, :data:`COMPLIANCE_NOT_CARRIED`).
 Beside it, ``<name>.spec.txt`` lists the values to enter in the controller's kinematic
 settings (Adept's SPEC utility). :func:`read_patch` reads a patch back (``wirecal gen
 --patch``) with the field rules of :mod:`wirecal.solver.formats.toml_fields`, and refuses
@@ -17,7 +20,7 @@ import json
 import math
 import re
 import textwrap
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -38,8 +41,27 @@ UNCHECKED_ADVICE = "Measure the step(s) again before entering these values."
 _FIELD = {"th": "theta offset", "d": "d", "a": "a", "al": "alpha", "tool": "tool point"}
 
 
-def _rows(robot: Robot, estimate: Estimate):
+COMPLIANCE_NOT_CARRIED = (
+    "Not carried: the gravity compliances in the patch's [compliance] table. The values "
+    "here are link dimensions and joint offsets only (no kinematic setting wirecal writes, "
+    "V+ SPEC, UR calibration.conf or ABB fine calibration, takes a joint compliance; "
+    "whether a controller option such as ABB's Absolute Accuracy does is unconfirmed "
+    "here). The arm sags as before: bound95_mm includes that sag. To remove it, command "
+    "compensated targets computed offline: wirecal.compensated_joints(model, q) gives the "
+    "joints to command for the joints q of the calibrated geometry (docs/accuracy.md)."
+)
+"""What the SPEC table and the companions say when the patch has compliances."""
+
+
+def _is_compliance(name: str) -> bool:
+    return P.unit_of(name) == "urad/Nm"
+
+
+def _rows(robot: Robot, estimate: Estimate, compliance: bool = False):
+    """Yield each parameter's row (the compliances' with ``compliance``, else the others')."""
     for k, name in enumerate(estimate.names):
+        if _is_compliance(name) != compliance:
+            continue
         p = P.parse(name, robot.n_joints)
         nominal = robot.nominal_value(name)
         offset = float(estimate.values[k])
@@ -93,6 +115,18 @@ def patch_text(
         ]
         if std is not None:  # inf (valid TOML) where the points do not identify it
             lines.append(f"std = {std!r}")
+    for name, p, nominal, offset, value, std in _rows(robot, estimate, compliance=True):
+        lines += [
+            "",
+            f"[compliance.{name}]",
+            "# joint compliance under gravity: the joint turns by value × its gravity torque",
+            f'unit = "{p.unit}"',
+            f"nominal = {nominal!r}",
+            f"offset = {offset!r}",
+            f"value = {value!r}",
+        ]
+        if std is not None:
+            lines.append(f"std = {std!r}")
     return seal("\n".join(lines) + "\n")
 
 
@@ -121,6 +155,8 @@ def spec_table(
             f"{name:<10}{row!s:>7}  {_FIELD[p.kind]:<14}{p.unit:<6}{nominal:12.4f}"
             f"{value:12.4f}{offset:+11.4f}{sigma}"
         )
+    if any(_is_compliance(n) for n in estimate.names):
+        lines += ["", *textwrap.wrap(COMPLIANCE_NOT_CARRIED, 88, break_on_hyphens=False)]
     return "\n".join(lines) + "\n"
 
 
@@ -181,7 +217,12 @@ def put_patch(out: Outputs, path: str | Path, robot: Robot, estimate: Estimate, 
     lang = language(robot.controller.language)
     own = _companion(lang, path)
     if own is not None:
-        out.put(own, lang.patch_section(robot, estimate.as_dict()) or "")
+        geometry = {n: v for n, v in estimate.as_dict().items() if not _is_compliance(n)}
+        text = lang.patch_section(robot, geometry) or ""
+        if len(geometry) < len(estimate.names):
+            note = textwrap.wrap(COMPLIANCE_NOT_CARRIED, 86, break_on_hyphens=False)
+            text += "\n" + "\n".join(f"# {line}" for line in note) + "\n"
+        out.put(own, text)
 
 
 def write_patch(
@@ -211,6 +252,7 @@ _KEYS = (
     "unchecked",
     "parameters",
     DIGEST_TABLE,
+    "compliance",
 )
 _VALUE_KEYS = ("unit", "nominal", "offset", "value", "std")
 _SHA256 = re.compile(r"^[0-9a-f]{64}$")
@@ -259,6 +301,7 @@ class Patch:
     meta: PatchMeta
     parameters: dict[str, PatchValue]
     source: str
+    compliance: dict[str, PatchValue] = field(default_factory=dict)  # c<j>, µrad/(N·m)
 
     @property
     def warning(self) -> str | None:
@@ -288,8 +331,13 @@ class Patch:
             )
         if plan is not None and self.meta.plan != plan.fingerprint():
             problems.append(
-                f"{self.source}: plan: the patch was solved from another plan; generate with "
-                "the plan it came from"
+                f"{self.source}: plan: the patch comes from `wirecal fit` (table "
+                f"{self.meta.log}), which has no plan: only a patch `wirecal solve` wrote "
+                "for this plan goes here; a fit's patch goes to export-urdf --patch (its "
+                "controller companion was written beside it)"
+                if self.meta.method == "fit"
+                else f"{self.source}: plan: the patch was solved from another plan; generate "
+                "with the plan it came from"
             )
         for name, v in self.parameters.items():
             try:
@@ -329,6 +377,8 @@ def read_patch(path: str | Path) -> Patch:
     values = {name: _value(table.table(name, _VALUE_KEYS)) for name in table.keys()}
     if table.present and not values:
         table.add("", "is empty; a patch holds at least one parameter")
+    ctable = doc.table("compliance", None, required=False)
+    compliance = {n: _compliance(ctable, n) for n in ctable.keys()}
     doc.raise_if_any()
     _check_digest(data, str(path))
     meta = PatchMeta(
@@ -337,7 +387,12 @@ def read_patch(path: str | Path) -> Patch:
         plausibility=valid(plausibility),
         unchecked=tuple(valid(unchecked)),
     )
-    return Patch(meta, {n: v for n, v in values.items() if v is not None}, str(path))
+    return Patch(
+        meta,
+        {n: v for n, v in values.items() if v is not None},
+        str(path),
+        {n: v for n, v in compliance.items() if v is not None},
+    )
 
 
 _WHAT = {
@@ -358,8 +413,16 @@ def _check_digest(data: dict, source: str) -> None:
         raise WirecalError(problems)
 
 
-def _value(t: Table) -> PatchValue | None:
-    unit = t.string("unit", choices=P.UNIT_KINDS)
+def _compliance(table: Table, name: str) -> PatchValue | None:
+    """Read one ``[compliance.<name>]`` table: a compliance c<j>, in µrad/(N·m)."""
+    if not (name.startswith("c") and name[1:].isdigit()):
+        table.add(name, "is not a compliance; name them c1, c2, …")
+        return None
+    return _value(table.table(name, _VALUE_KEYS), {"urad/Nm": "µrad/(N·m)"})
+
+
+def _value(t: Table, units: dict[str, str] = P.UNIT_KINDS) -> PatchValue | None:
+    unit = t.string("unit", choices=units)
     bound = MAX_DH_ANGLE_DEG if unit == "deg" else MAX_LENGTH_MM
     nominal, offset, value = (
         t.number(key, lo=-bound, hi=bound, unit=unit or "")

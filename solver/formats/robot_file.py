@@ -20,11 +20,14 @@ Format (angles in degrees, lengths in mm)::
     [calibration]
     parameters = ["th2", "th3", ...]      # names from wirecal.solver.params
     gravity_sag_deg_per_m = 0.01          # optional: joints 2, 3 sag per m of lever (budget)
+    compliances = ["c2", "c3"]            # optional: compliances to identify (needs [gravity])
     [controller]                          # optional
     language = "vplus"                    # or "urscript" (Universal Robots)
     software = "5.20"                     # the controller's software version (optional)
     host = "192.168.1.10"; port = 50000   # URScript: where 'wirecal receive' listens
     key = "…"                             # URScript: the run token's secret (16+ characters)
+    [gravity]                             # optional: masses and compliances (robot_gravity)
+    link_mass_kg = [...]; link_com_mm = [[x, y, z], ...]; compliance_urad_per_nm = [...]
     [geometry]                            # optional
     link_radius_mm = [70, 70, 55, 45, 37] # capsule radius per chain step 1-2 … 5-6 (docs/cell.md)
     [cell]                                # optional (wirecal.solver.cell)
@@ -79,6 +82,7 @@ from wirecal.solver.formats.robot_encoder import (
     read_encoder,
     read_language_and_interface,
 )
+from wirecal.solver.formats.robot_gravity import GRAVITY_KEYS, read_gravity
 from wirecal.solver.formats.robot_kinematics import KINEMATICS_KEYS, read_dh, read_limits
 from wirecal.solver.formats.robot_sanity import check_units
 from wirecal.solver.formats.robot_values import (
@@ -122,10 +126,11 @@ _TOP_KEYS = (
     "urdf",
     "controller",
     "cell",
+    "gravity",
 )
 _KEYS = {
     "tool": ("point_mm",),
-    "calibration": ("parameters", "gravity_sag_deg_per_m"),
+    "calibration": ("parameters", "gravity_sag_deg_per_m", "compliances"),
     "geometry": ("link_radius_mm",),
     "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg", "wire_point_mm"),
 }
@@ -168,13 +173,6 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     encoder = read_encoder(encoder_table, interface)
     calibration = doc.table("calibration", _KEYS["calibration"])
     parameters = _parameters(calibration, n)
-    sag = calibration.number(
-        "gravity_sag_deg_per_m",
-        DEFAULT_GRAVITY_SAG_DEG_PER_M,
-        lo=0,
-        hi=MAX_GRAVITY_SAG_DEG_PER_M,
-        unit="deg/m",
-    )
     radii = doc.table("geometry", _KEYS["geometry"], required=False).vector(
         "link_radius_mm",
         None,
@@ -188,6 +186,9 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         radii = np.full(dh.shape[0] - 1, DEFAULT_LINK_RADIUS_MM)
     urdf = _urdf(doc.table("urdf", _KEYS["urdf"], required=False), source)
     cell = read_cell(doc.table("cell", CELL_KEYS, required=False), n)
+    masses, compliance = read_gravity(doc.table("gravity", GRAVITY_KEYS, required=False), dh)
+    compliances = _compliances(calibration, n, masses is not None)
+    sag = _sag(calibration, bool(compliances))
     check_units(doc, dh, lo, hi, encoder, radii)
     doc.raise_if_any()
     dh_rad = valid(dh).copy()
@@ -208,6 +209,9 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         joint_speed_confirmed=valid(speed_confirmed),
         gravity_sag_deg_per_m=valid(sag),
         cell=valid(cell),
+        masses=masses,
+        compliance_urad_per_nm=compliance,
+        compliances=tuple(compliances),
     )
 
 
@@ -225,6 +229,43 @@ def _parameters(cal: Table, n: int | None) -> list[str] | None:
             P.parse(x, n)
         except ValueError as exc:
             cal.add("parameters", str(exc))
+    return names
+
+
+def _sag(cal: Table, compliances: bool) -> float | None:
+    """Read ``gravity_sag_deg_per_m``: the assumed sag, none when compliances are identified.
+
+    The assumed sag is one instance of the compliance model (a weight at the wrist centre,
+    c2 = c3); a file that identifies compliances measures the sag instead of assuming it.
+    """
+    if compliances and "gravity_sag_deg_per_m" in cal.keys():
+        cal.add(
+            "gravity_sag_deg_per_m",
+            "is the assumed sag that [calibration] compliances measure instead; remove it",
+        )
+    return cal.number(
+        "gravity_sag_deg_per_m",
+        0.0 if compliances else DEFAULT_GRAVITY_SAG_DEG_PER_M,
+        lo=0,
+        hi=MAX_GRAVITY_SAG_DEG_PER_M,
+        unit="deg/m",
+    )
+
+
+def _compliances(cal: Table, n: int | None, masses: bool) -> list[str]:
+    """Read ``[calibration] compliances``: c1..cn, each once; they need ``[gravity]``."""
+    names = cal.strings("compliances", [], what="compliance names (c2, c3, …)") or []
+    for x in duplicates(names):
+        cal.add("compliances", f"{x!r} is listed twice")
+    for x in names:
+        if n is not None and not (x.startswith("c") and x[1:].isdigit() and 1 <= int(x[1:]) <= n):
+            cal.add("compliances", f"{x!r} is not a compliance; use c1..c{n}")
+    if names and not masses:
+        cal.add(
+            "compliances",
+            "needs the arm's masses: add a [gravity] table (without link_mass_kg the masses "
+            "are assumed, 10 kg per metre of link)",
+        )
     return names
 
 

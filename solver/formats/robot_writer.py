@@ -11,6 +11,7 @@ from collections.abc import Sequence
 
 from wirecal.solver.cell import CellModel
 from wirecal.solver.exit_geometry import Exit, Pulley
+from wirecal.solver.gravity import DOWN
 from wirecal.solver.robot import DEFAULT_GRAVITY_SAG_DEG_PER_M, Encoder, Robot, UrdfSource
 
 TIDY = 1e-11
@@ -185,11 +186,14 @@ def robot_file_text(
         "[calibration]",
         "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
     ]
-    if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M:
+    if robot.compliances:
+        lines.append("compliances = [" + ", ".join(json.dumps(c) for c in robot.compliances) + "]")
+    if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M and not robot.compliances:
         lines.append(f"gravity_sag_deg_per_m = {_num(robot.gravity_sag_deg_per_m)}")
     if robot.link_radius_mm is not None:
         lines += ["", "[geometry]", *(f"# {line}" for line in geometry_notes or ())]
         lines.append(f"link_radius_mm = {vec(robot.link_radius_mm)}")
+    lines += _gravity_lines(robot)
     if write_cell:
         lines += _cell_lines(robot.cell)
     if urdf_source is not None and robot.urdf is not None:
@@ -197,6 +201,29 @@ def robot_file_text(
     for line in tables:
         lines.append(line)
     return "\n".join(lines) + "\n"
+
+
+def _gravity_lines(robot: Robot) -> list[str]:
+    """Return the ``[gravity]`` table's lines (none for a rigid arm without masses)."""
+    m = robot.masses
+    if m is None:
+        return []
+    lines = ["", "[gravity]"]
+    if m.source:
+        lines.append(f"source = {json.dumps(m.source, ensure_ascii=False)}")
+    if not m.assumed:
+        lines.append("link_mass_kg = [" + ", ".join(_num(v) for v in m.link_mass_kg) + "]")
+        rows = ", ".join("[" + ", ".join(_num(v) for v in r) + "]" for r in m.link_com_mm)
+        lines.append(f"link_com_mm = [{rows}]")
+    if m.payload_mass_kg:
+        lines.append(f"payload_mass_kg = {_num(m.payload_mass_kg)}")
+        lines.append("payload_com_mm = [" + ", ".join(_num(v) for v in m.payload_com_mm) + "]")
+    if tuple(m.direction) != DOWN:
+        lines.append("direction = [" + ", ".join(_num(v) for v in m.direction) + "]")
+    if robot.compliance_urad_per_nm is not None:
+        c = ", ".join(_num(v) for v in robot.compliance_urad_per_nm)
+        lines.append(f"compliance_urad_per_nm = [{c}]")
+    return lines
 
 
 def _urdf_lines(urdf: UrdfSource, source: str) -> list[str]:

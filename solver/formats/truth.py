@@ -7,6 +7,7 @@ Format::
     [errors]
     th2 = 0.675
     a2 = 0.105
+    c2 = 5.2                        # a compliance, µrad/(N·m) (needs the robot's [gravity])
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import numpy as np
 from wirecal.solver import params as P
 from wirecal.solver.formats.fileio import read_toml
 from wirecal.solver.formats.robot_file import MAX_DH_ANGLE_DEG, MAX_LENGTH_MM
+from wirecal.solver.formats.robot_gravity import MAX_COMPLIANCE_URAD_PER_NM
 from wirecal.solver.formats.toml_fields import document
 from wirecal.solver.robot import Robot
 
@@ -48,7 +50,11 @@ def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
         except ValueError as exc:
             table.add(name, str(exc))
             continue
+        if p.kind == "c" and robot.masses is None:
+            table.add(name, "a compliance needs the robot file's [gravity] table (the masses)")
+            continue
         bound = MAX_DH_ANGLE_DEG if p.angular else MAX_LENGTH_MM
+        bound = MAX_COMPLIANCE_URAD_PER_NM if p.kind == "c" else bound
         value = table.number(name, lo=-bound, hi=bound, unit=p.unit)
         if value is not None:
             out[name] = value
@@ -56,14 +62,24 @@ def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
     return out
 
 
+TRUE_COMPLIANCE_URAD_PER_NM = (2.0, 8.0)
+"""Range (µrad/(N·m)) a simulated arm's compliances are drawn from: issue 30's independent
+model of a Viper-sized arm ("joints 2–4 yielding 2–8 µrad/N·m under gravity"; its
+compliance terms took the wire's error on real IRB 120 tracker data down by a fifth)."""
+
+
 def random_errors(robot: Robot, scale: float, rng: np.random.Generator) -> dict[str, float]:
     """Draw uniform offsets for the robot's calibration parameters.
 
     Offsets uniform within ±scale (deg for angles, mm for lengths) for the robot's
-    calibration parameters.
+    calibration parameters; then, when the robot file lists ``compliances``, each of them
+    uniform in :data:`TRUE_COMPLIANCE_URAD_PER_NM` (the true compliance less the file's).
     """
     values = rng.uniform(-scale, scale, len(robot.parameters))
-    return {n: float(v) for n, v in zip(robot.parameters, values, strict=True)}
+    out = {n: float(v) for n, v in zip(robot.parameters, values, strict=True)}
+    for name in robot.compliances:
+        out[name] = float(rng.uniform(*TRUE_COMPLIANCE_URAD_PER_NM)) - robot.nominal_value(name)
+    return out
 
 
 def truth_text(robot: Robot, errors: dict[str, float], seed: int | None) -> str:

@@ -87,6 +87,36 @@ def _floats(text: str | None, default: str, where: str, count: int = 3) -> np.nd
     return values
 
 
+MAX_LINK_MASS_KG = 10_000.0
+"""Largest link mass an ``<inertial>`` may give (kg): the robot file's own bound."""
+
+
+def inertial(urdf: Urdf, link: str) -> tuple[float, np.ndarray] | None:
+    """Return a link's ``<inertial>`` mass (kg) and centre of mass (mm, in the link's frame).
+
+    None when the link has no ``<inertial>``; a mass that is missing, negative or not a
+    number is refused naming the link. The centre's ``rpy`` does not move it.
+    """
+    el = next((e for e in urdf.root.iter("link") if e.get("name") == link), None)
+    block = None if el is None else el.find("inertial")
+    if block is None:
+        return None
+    where = f"{urdf.path}: link {link!r}: <inertial>"
+    mass_el = block.find("mass")
+    try:
+        mass = float(mass_el.get("value", "")) if mass_el is not None else math.nan
+    except ValueError:
+        mass = math.nan
+    if not 0.0 <= mass <= MAX_LINK_MASS_KG:
+        raise WirecalError(
+            f"{where}: <mass value> is not a mass of 0 to {MAX_LINK_MASS_KG:g} kg; correct the "
+            "URDF or remove the <inertial> (the masses are then assumed)"
+        )
+    origin = block.find("origin")
+    xyz = _floats(None if origin is None else origin.get("xyz"), "0 0 0", f"{where} origin xyz")
+    return mass, xyz * 1000.0
+
+
 def _limit(el: ET.Element | None, key: str, where: str) -> float | None:
     if el is None or el.get(key) is None:
         return None

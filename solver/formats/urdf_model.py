@@ -26,7 +26,8 @@ from wirecal.solver.dh_from_axes import (
     dh_from_axes,
 )
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.urdf import MOVING, Joint, Urdf, chain, origin_mm
+from wirecal.solver.formats.urdf import MOVING, Joint, Urdf, chain, inertial, origin_mm
+from wirecal.solver.gravity import MassModel
 from wirecal.solver.kinematics import Model
 
 
@@ -107,6 +108,32 @@ def read_chain(
     offsets = {link: (k, _inv(F[k]) @ L) for link, (k, L) in link_frames.items()}
     wire = np.zeros(3) if wire_point_mm is None else np.asarray(wire_point_mm, dtype=float)
     return UrdfChain(urdf, tuple(path), tuple(moving), dh, offsets, wire)
+
+
+def chain_masses(ch: UrdfChain) -> MassModel | None:
+    """Return the chain's links' masses from their ``<inertial>`` (None: no link has one).
+
+    Link k of the robot file (the body joint k turns) gathers every chain link after moving
+    joint k (fixed joints fold links together): their masses add, their centres (each the
+    ``<inertial>`` origin in its link's frame, moved into DH frame k by the link's constant
+    offset) average by mass. Links off the chain (a gripper's fingers) are left out; the
+    base's links (k = 0) hold no torque.
+    """
+    n = len(ch.moving)
+    mass, moment = np.zeros(n), np.zeros((n, 3))
+    found = False
+    for link, (k, D) in ch.link_offsets.items():
+        data = inertial(ch.urdf, link)
+        if data is None or k == 0:
+            continue
+        m_kg, com_mm = data
+        found = True
+        mass[k - 1] += m_kg
+        moment[k - 1] += m_kg * (D[:3, :3] @ com_mm + D[:3, 3])
+    if not found:
+        return None
+    com = np.divide(moment, mass[:, None], out=np.zeros((n, 3)), where=mass[:, None] > 0)
+    return MassModel(mass, com, source=f"URDF <inertial> of {ch.urdf.path.name}")
 
 
 def calibrated_origins(ch: UrdfChain, model: Model) -> dict[str, np.ndarray]:

@@ -1,0 +1,103 @@
+"""Where people wait: ``wirecal plan`` of every shipped arm, ``wirecal demo`` and (optional)
+the quick test loop, each timed as a whole process against the same command run on the code
+before, in one run.
+
+CPU time (user + system of the child and its children, which the machine's load touches far
+less than the wall time) and wall time, median of ``--runs`` runs; the runs of the code
+before and now are interleaved, so a change of the machine's load touches both alike, and
+each figure is given as the ratio now / before. The code before is a checkout of it (for
+example ``git worktree add --detach ../before main``) given as ``--before``; its commands
+run with the same interpreter and that checkout first on ``PYTHONPATH``. Every plan file
+written by the two is compared byte for byte.
+
+    python bench/bench_speed.py --before ../before [--runs 3] [--arms viper_s650 ur5e]
+        [--no-demo] [--quick-loop]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from bench_startup import medians_s
+
+NOW = Path(__file__).resolve().parents[1]
+ARMS = ("viper_s650", "ur5e", "abb_irb120", "puma560")
+
+
+def _wirecal(tree: Path, *args: str) -> list[str]:
+    """Return the command running ``wirecal ARGS`` on the code in ``tree``."""
+    main = "from wirecal.cli.main import main; main()"
+    # -P: the working folder (which may hold another checkout's wirecal) not on sys.path
+    return ["env", f"PYTHONPATH={tree}", sys.executable, "-P", "-c", main, *args]
+
+
+def _commands(trees: dict[str, Path], tmp: Path, arms, demo: bool, quick: bool):
+    """Return the commands to time: (figure, tree's name) → command."""
+    out: dict[tuple[str, str], list[str]] = {}
+    for arm in arms:
+        for name, tree in trees.items():
+            robot = str(tree / "examples" / arm / "robot.toml")
+            plan = str(tmp / f"{name}_{arm}.toml")
+            out[(f"plan {arm}", name)] = _wirecal(tree, "plan", robot, "-o", plan, "--force")
+    for name, tree in trees.items():
+        if demo:
+            folder = str(tmp / f"{name}_demo")
+            out[("demo", name)] = _wirecal(tree, "demo", "-o", folder, "--force")
+        if quick:
+            out[("quick loop", name)] = [
+                "env",
+                f"PYTHONPATH={tree}",
+                sys.executable,
+                "-P",
+                "-m",
+                "pytest",
+                "-q",
+                "-m",
+                "not slow",
+                "-p",
+                "no:cacheprovider",
+                "--rootdir",
+                str(tree),
+                str(tree / "tests"),
+            ]
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--before", type=Path, required=True, help="a checkout of the code before")
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--arms", nargs="+", default=list(ARMS), choices=ARMS)
+    ap.add_argument("--no-demo", action="store_true", help="leave out wirecal demo")
+    ap.add_argument("--quick-loop", action="store_true", help="time pytest -m 'not slow' too")
+    args = ap.parse_args()
+    trees = {"before": args.before.resolve(), "now": NOW}
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")  # as the command line sets them
+    print(f"load average at the start: {os.getloadavg()[0]:.1f}")
+    with tempfile.TemporaryDirectory() as tmp:
+        cmds = _commands(trees, Path(tmp), args.arms, not args.no_demo, args.quick_loop)
+        flat = {f"{fig} | {name}": cmd for (fig, name), cmd in cmds.items()}
+        times = medians_s(flat, args.runs)
+        same = {
+            arm: (Path(tmp) / f"before_{arm}.toml").read_bytes()
+            == (Path(tmp) / f"now_{arm}.toml").read_bytes()
+            for arm in args.arms
+        }
+    print(f"load average at the end: {os.getloadavg()[0]:.1f}; median of {args.runs} runs")
+    print("| figure | before: CPU s / wall s | now: CPU s / wall s | ratio CPU (wall) |")
+    print("|---|---|---|---|")
+    for fig in dict.fromkeys(fig for fig, _ in cmds):
+        (bw, bc), (nw, nc) = times[f"{fig} | before"], times[f"{fig} | now"]
+        ratio = f"{nc / bc:.2f} ({nw / bw:.2f})"
+        print(f"| {fig} | {bc:.2f} / {bw:.2f} | {nc:.2f} / {nw:.2f} | {ratio} |")
+    for arm, equal in same.items():
+        print(f"plan file of {arm}: {'byte for byte the same' if equal else 'DIFFERS'}")
+
+
+if __name__ == "__main__":
+    main()

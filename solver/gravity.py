@@ -1,0 +1,105 @@
+"""Static gravity torques at the joints of a serial arm, for its joint compliance.
+
+Joint j yields under the static gravity torque it holds: δθ_j = c_j · τ_j(q), with c_j
+its compliance (rad/(N·m); the robot file's ``compliance_urad_per_nm``) and
+
+    τ_j(q) = z_j · Σ_{k ≥ j} (r_k − o_j) × m_k g ĝ        (N·m; lengths mm / 1000)
+
+over the links k carried by joint j (link k is the body moved by joint k, its centre of
+mass ``link_com_mm[k]`` in DH frame k, Craig's modified convention) and the payload (its
+centre in the last frame). ĝ is the direction of gravity in the base frame. A positive c_j
+makes the joint give way in the direction gravity pulls it.
+
+First-order approximation: τ is evaluated at the commanded configuration, not at the
+deflected one; the difference, c·(∂τ/∂q)·c·τ, is of order (c·τ)² (10⁻¹⁰ rad for the
+compliances of industrial arms, 1–10 µrad/(N·m) under tens of N·m).
+
+Nothing here imports the kinematics: the torques are computed from the frames' axes and
+origins, arrays (N, n+1, 3) of :class:`~wirecal.solver.kinematics.Frames`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+STANDARD_GRAVITY_M_S2 = 9.80665
+"""Standard acceleration of gravity (m/s²)."""
+
+DEFAULT_LINK_KG_PER_M = 10.0
+"""A link's mass per metre of its length (a_{k} and d_{k+1}) when the robot file gives no
+masses: an assumption (a hollow cast-aluminium link of industrial arms of 5–20 kg payload
+weighs 5–20 kg/m), stated so that the torques' shape over the workspace is plausible; the
+identified compliance absorbs the masses' overall scale of each joint only when the
+masses' distribution is right."""
+
+DOWN = (0.0, 0.0, -1.0)
+"""Gravity's direction in the base frame when the robot file gives none (floor-mounted)."""
+
+
+@dataclass(frozen=True)
+class MassModel:
+    """Masses and centres of mass of an arm's links and payload, and gravity's direction.
+
+    ``link_com_mm[k]`` is link k+1's centre of mass in DH frame k+1 (the frame joint k+1
+    turns); ``payload_com_mm`` is in the last frame (the flange). ``assumed`` says the
+    masses are :func:`default_masses`' (no data sheet or URDF), ``source`` where they come
+    from.
+    """
+
+    link_mass_kg: np.ndarray  # (n,)
+    link_com_mm: np.ndarray  # (n, 3)
+    payload_mass_kg: float = 0.0
+    payload_com_mm: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    direction: np.ndarray = field(default_factory=lambda: np.array(DOWN))
+    assumed: bool = False
+    source: str = ""
+
+    @property
+    def n_joints(self) -> int:
+        """Return the number of links (one per joint)."""
+        return int(np.shape(self.link_mass_kg)[0])
+
+
+def default_masses(dh: np.ndarray) -> MassModel:
+    """Assumed masses when the robot file gives none (:data:`DEFAULT_LINK_KG_PER_M`).
+
+    Link k (frame k) reaches frame k+1's origin, (a_k, −sin α_k·d_{k+1}, cos α_k·d_{k+1})
+    in frame k (Craig's T_{k,k+1}); its mass is its length × 10 kg/m, its centre half-way.
+    The last link reaches nothing: it gets the mass and centre of no length (0 kg).
+    """
+    dh = np.asarray(dh, dtype=float)
+    n = dh.shape[0]
+    reach = np.zeros((n, 3))
+    alpha, a, d = dh[1:, 0], dh[1:, 1], dh[1:, 3]
+    reach[:-1] = np.stack([a, -np.sin(alpha) * d, np.cos(alpha) * d], axis=1)
+    mass = np.linalg.norm(reach, axis=1) / 1000.0 * DEFAULT_LINK_KG_PER_M
+    return MassModel(mass, reach / 2.0, assumed=True, source="assumed: 10 kg/m of link")
+
+
+def gravity_torques_nm(
+    masses: MassModel, x: np.ndarray, z: np.ndarray, o: np.ndarray
+) -> np.ndarray:
+    """Return the static gravity torque τ_j (N·m) about each joint axis, (N, n).
+
+    ``x``, ``z``, ``o``: the frames' x and z axes and origins, (N, n+1, 3), frame 0 the base.
+    Vectorised: the moments of the links beyond each joint are reverse cumulative sums,
+    M_j = Σ_{k≥j} r_k × F_k − o_j × Σ_{k≥j} F_k.
+    """
+    y = np.cross(z, x)
+    R = np.stack([x[:, 1:], y[:, 1:], z[:, 1:]], axis=-1)  # (N, n, 3, 3): columns x, y, z
+    r = o[:, 1:] + np.einsum("nkij,kj->nki", R, masses.link_com_mm)  # (N, n, 3)
+    weight = STANDARD_GRAVITY_M_S2 * np.asarray(masses.direction, dtype=float)
+    F = np.asarray(masses.link_mass_kg, dtype=float)[:, None] * weight  # (n, 3)
+    moment = np.cross(r, F)  # (N, n, 3), N·mm
+    if masses.payload_mass_kg:
+        r_pay = o[:, -1] + R[:, -1] @ np.asarray(masses.payload_com_mm, dtype=float)
+        F_pay = masses.payload_mass_kg * weight
+        moment[:, -1] += np.cross(r_pay, F_pay)
+        F = F.copy()
+        F[-1] += F_pay
+    S1 = np.cumsum(moment[:, ::-1], axis=1)[:, ::-1]
+    S0 = np.cumsum(F[::-1], axis=0)[::-1]
+    M = S1 - np.cross(o[:, 1:], S0)
+    return np.einsum("nkc,nkc->nk", z[:, 1:], M) / 1000.0

@@ -1,0 +1,165 @@
+"""``wirecal fit`` on hostile tables (issue 31 item 4, the FT cases of the hostile-input
+list): each once answered wrongly with exit 0 or with a misleading message; each now ends
+as a refusal naming the column, the rows or the cause, or as a fit that says why it is not
+written first."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import wirecal.solver.fit_synth as fit_synth
+from tests.conftest import ROOT
+from wirecal.cli.main import main
+from wirecal.solver.fit_synth import synthetic_table, table_text, take_rows
+from wirecal.solver.formats.patch import read_patch
+from wirecal.solver.formats.robot_file import load_robot
+
+VIPER = ROOT / "examples" / "viper_s650" / "robot.toml"
+
+
+@pytest.fixture(scope="module")
+def viper():
+    return load_robot(VIPER)
+
+
+@pytest.fixture(scope="module")
+def table(viper):
+    return synthetic_table(viper, 200, seed=1).table
+
+
+def _fit(tmp_path, table, *args, name="t.csv"):
+    path = tmp_path / name
+    path.write_text(table_text(table), encoding="utf-8")
+    r = CliRunner().invoke(main, ["fit", str(VIPER), str(path), *args])
+    assert "Traceback" not in r.output
+    return r, path
+
+
+def test_ft14_joint_6_in_radians_is_refused_whatever_noise_is_allowed(tmp_path, table):
+    """FT14: with joint 6 in radians and --noise-mm 30 (the old hint): exit 0, 'passed',
+    held-out RMS 24.6 mm, the attachment 54 mm off."""
+    q = table.q_deg.copy()
+    q[:, 5] = np.radians(q[:, 5])
+    rad = replace(table, q_deg=q, joint_resolution_deg=1e-4)
+    r, _ = _fit(tmp_path, rad, "--noise-mm", "30")
+    assert r.exit_code == 2, r.output
+    assert "'j6': stays within ±2π" in r.output
+    assert "it looks like radians; give degrees" in r.output
+    assert "'j5'" not in r.output  # only the column in radians is named
+
+
+def test_a_joint_that_barely_moves_in_degrees_is_not_called_radians(tmp_path, viper):
+    """The per-column test in the other direction: a wrist that moves within ±6° is fine."""
+    narrow = replace(
+        viper,
+        joint_min_deg=np.r_[viper.joint_min_deg[:5], -6.0],
+        joint_max_deg=np.r_[viper.joint_max_deg[:5], 6.0],
+    )
+    t = synthetic_table(narrow, 200, seed=2).table
+    r, _ = _fit(tmp_path, t, "--holdout", "none")
+    assert "radians" not in r.output
+    assert r.exit_code == 0, r.output
+
+
+def test_ft38_rows_shifted_are_refused_by_the_held_out_floors_despite_noise_mm(tmp_path, table):
+    """FT38: lengths shifted by 7 rows; with a noise allowance large enough for the residual
+    gate, the held-out RMS (thousands of floors) still refuses it, naming the columns."""
+    shifted = replace(table, length_mm=np.roll(table.length_mm, 7))
+    r, _path = _fit(tmp_path, shifted, "--noise-mm", "300", "-o", str(tmp_path / "p.toml"))
+    assert r.exit_code == 3, r.output
+    assert "times the quantisation floor" in r.output
+    assert "check the columns 'j1', 'j2', 'j3', 'j4', 'j5', 'j6', 'length'" in r.output
+    assert "rows not shifted" in r.output
+    assert not (tmp_path / "p.toml").exists()
+
+
+def test_ft32_a_constant_length_column_is_not_called_metres(tmp_path, table):
+    r, _ = _fit(tmp_path, replace(table, length_mm=np.full(200, 812.5)))
+    assert r.exit_code == 2
+    assert "'length': every row holds 812.5: not a cable length" in r.output
+    assert "metres" not in r.output
+
+
+def test_ft21_negative_lengths_name_the_column_and_lines(tmp_path, table):
+    r, _ = _fit(tmp_path, replace(table, length_mm=-table.length_mm))
+    assert r.exit_code == 2
+    assert "'length': 200 negative length(s) (line(s) 2, 3, 4," in r.output
+    assert "please report" not in r.output
+
+
+def test_ft33_every_row_at_the_same_joints_is_named(tmp_path, table):
+    same = replace(table, q_deg=np.repeat(table.q_deg[:1], 200, axis=0))
+    r, _ = _fit(tmp_path, same)
+    assert r.exit_code == 2
+    assert "every row has the same joints" in r.output
+    assert "counts or µm" not in r.output
+
+
+def test_ft37_another_robots_table_names_the_joint_limits(tmp_path):
+    ur5e = load_robot(ROOT / "examples" / "ur5e" / "robot.toml")
+    r, _ = _fit(tmp_path, synthetic_table(ur5e, 200, seed=1).table)
+    assert r.exit_code == 2
+    assert "beyond joint 2's limits [-190, 45] deg of Adept Viper s650" in r.output
+    assert "a table of another robot" in r.output
+    assert "please report" not in r.output
+
+
+def _narrow_table(viper, width_deg, seed, error_size, monkeypatch):
+    """A table whose joints move ±width_deg about mid-range: the rows carry little."""
+    monkeypatch.setattr(fit_synth, "ERROR_SIZE", error_size)
+    mid = (viper.joint_min_deg + viper.joint_max_deg) / 2
+    narrow = replace(
+        viper,
+        joint_min_deg=np.maximum(viper.joint_min_deg, mid - width_deg),
+        joint_max_deg=np.minimum(viper.joint_max_deg, mid + width_deg),
+    )
+    return synthetic_table(narrow, 200, seed=seed, sessions=1, snags=0, typos=0).table
+
+
+def test_a_fit_whose_budget_exceeds_its_correction_is_not_passed(tmp_path, viper, monkeypatch):
+    """Issue 31: 'plausibility: passed' beside an error budget of 4.4 mm and a patch; now
+    exit 3 and nothing written; with the override the verdict and why come first."""
+    t = _narrow_table(viper, 20, 1, 0.05, monkeypatch)
+    patch = tmp_path / "p.toml"
+    r, _ = _fit(tmp_path, t, "--refine-joints", "-o", str(patch))
+    assert r.exit_code == 3, r.output
+    assert "refined fit: the error budget" in r.output
+    assert "fit: the error budget" in r.output
+    assert not patch.exists()
+    r, _ = _fit(tmp_path, t, "-o", str(patch), "--accept-implausible")
+    assert r.exit_code == 0, r.output
+    lines = r.stdout.splitlines()
+    assert lines[0] == ("plausibility (fit): failed: the error budget is not below the correction")
+    assert lines[1].startswith("  why: the error budget ")
+    assert read_patch(patch).meta.plausibility.startswith("overridden")
+
+
+def test_refine_joints_writes_the_unrefined_fit_when_the_refined_one_fails(
+    tmp_path, viper, monkeypatch
+):
+    """Issue 31: --refine-joints wrote nothing, not even the unrefined fit, when its refined
+    fit failed the gate, and pointed at the column map."""
+    t = _narrow_table(viper, 15, 0, 0.5, monkeypatch)
+    patch = tmp_path / "p.toml"
+    r, _ = _fit(tmp_path, t, "--refine-joints", "-o", str(patch), "--json")
+    assert r.exit_code == 0, r.output
+    gate = {g["fit"]: g for g in json.loads(r.stdout)["gate"]}
+    assert not gate["refined fit"]["passed"]
+    assert gate["fit"]["passed"]
+    assert gate["fit"]["chosen"]
+    assert "(fit)" in r.stderr  # 'wrote … (fit)'
+    assert read_patch(patch).meta.plausibility.startswith("passed")
+
+
+def test_ft28_rows_repeated_ten_times_are_named_as_copies(tmp_path, viper):
+    """FT28: 40 rows ×10 gave 'the residual still jumps … pass --single-session', the
+    copies not named."""
+    t = take_rows(synthetic_table(viper, 40, seed=1).table, np.tile(np.arange(40), 10))
+    r, _ = _fit(tmp_path, t)
+    assert "copies (the joints and the length of an earlier row; left out of the fit" in r.output
+    assert ": 360: row 40 (line 42) = row 0 (line 2), " in r.output

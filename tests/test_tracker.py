@@ -1,0 +1,446 @@
+"""Laser-tracker data: the public sets, their readers, the 3-D calibration, the replay, --pool."""
+
+from __future__ import annotations
+
+import gzip
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+from wirecal.cli.main import main
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.fit import point_model
+from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.tracker_sets import (
+    DATA_ENV,
+    IPA_JOINTS,
+    SET_FILES,
+    missing_set,
+    read_pool,
+    read_tracker,
+    tracker_data_dir,
+)
+from wirecal.solver.kinematics import tool_position, with_errors
+from wirecal.solver.plan_options import PlanOptions
+from wirecal.solver.plan_pool import greedy_rows, plan_pool
+from wirecal.solver.tracker_fit import _jacobian, calibrate, register, registered_rms_mm
+from wirecal.solver.tracker_replay import ZERO_MM, readings_mm, replay
+
+ROOT = Path(__file__).resolve().parents[1]
+ROBOTS = ROOT / "tests" / "data" / "tracker"  # robot files and where each set is published
+DATA = tracker_data_dir(ROOT)  # the public sets themselves: not in the repository
+UR10 = ROBOTS / "ur10_ipa" / "robot.toml"
+ROWS = {
+    "ur10_ipa/series_b_joint_configurations.csv.gz": (1495, 6),
+    "ur10_ipa/series_c_random_poses.csv.gz": (2773, 6),
+    "ur10_ipa/series_d_iso_cubes.csv.gz": (632, 6),
+    "ur5_jacobi/ur5_grid.csv.gz": (1000, 6),
+    "ur5_jacobi/ur5_random.csv": (20, 6),
+    "wam_jacobi/wam_grid.csv.gz": (216, 7),
+    "wam_jacobi/wam_random.csv": (20, 7),
+}
+# The synthetic UR10's errors (deg, mm): the truth the calibrations must find.
+TRUTH = {"th2": 0.05, "th3": -0.04, "a2": 0.6, "a3": -0.4, "d4": 0.3, "al3": 0.03, "th5": 0.02}
+
+
+def needs(name: str) -> pytest.MarkDecorator:
+    """Skip unless the public set ``name`` is where :func:`tracker_data_dir` looks."""
+    why = missing_set(DATA, name, ROOT)
+    return pytest.mark.skipif(why is not None, reason=str(why))
+
+
+# --- the public data sets ----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", sorted(SET_FILES))
+def test_each_set_says_where_it_is_published(name):
+    """Repository URL, commit, path there, licence and citation; the data itself not here."""
+    text = (ROBOTS / name / "PUBLISHED.md").read_text()
+    assert re.search(r"https://github\.com/[\w-]+/[\w-]+", text)
+    assert re.search(r"commit\s+[0-9a-f]{40}\b", text)
+    assert "MIT" in text
+    assert "Cite:" in text
+    for f in SET_FILES[name]:
+        assert f"`{f}`" in text
+    assert sorted(p.name for p in (ROBOTS / name).iterdir()) == ["PUBLISHED.md", "robot.toml"]
+
+
+@pytest.mark.parametrize(
+    "name", [pytest.param(n, marks=needs(n.split("/")[0])) for n in sorted(ROWS)]
+)
+def test_public_sets_read(name):
+    table = read_tracker(DATA / name)
+    assert table.q_deg.shape == ROWS[name]
+    assert np.isfinite(table.xyz_mm).all()
+
+
+def test_data_folder_from_option_env_or_beside_the_clone(tmp_path, monkeypatch):
+    monkeypatch.delenv(DATA_ENV, raising=False)
+    assert tracker_data_dir(tmp_path / "repo") == tmp_path / "shared" / "data" / "tracker"
+    monkeypatch.setenv(DATA_ENV, str(tmp_path / "env"))
+    assert tracker_data_dir(tmp_path / "repo") == tmp_path / "env"
+    assert tracker_data_dir(tmp_path / "repo", tmp_path / "opt") == tmp_path / "opt"
+    (tmp_path / "ur5_jacobi").mkdir()
+    (tmp_path / "ur5_jacobi" / "ur5_grid.csv.gz").write_bytes(b"")
+    why = missing_set(tmp_path, "ur5_jacobi", ROOT)
+    assert why is not None
+    assert "missing ur5_random.csv" in why
+    assert "PUBLISHED.md" in why
+    assert DATA_ENV in why
+    (tmp_path / "ur5_jacobi" / "ur5_random.csv").write_bytes(b"")
+    assert missing_set(tmp_path, "ur5_jacobi", ROOT) is None
+
+
+@needs("ur10_ipa")
+def test_ipa_row_in_degrees_and_mm():
+    t = read_tracker(DATA / "ur10_ipa/series_b_joint_configurations.csv.gz")
+    # the file's first data row: −3,14159;−1,5708;0;−1,5708;0;0 rad, measurement_x 383,76294 mm
+    assert t.q_deg[0] == pytest.approx([-180.0, -90.0, 0.0, -90.0, 0.0, 0.0], abs=1e-3)
+    assert t.xyz_mm[0] == pytest.approx([383.76294, -3240.8734, 201.93157])
+    assert t.temperature_c is not None
+    assert t.temperature_c[0] == pytest.approx(21.86750031)
+    assert t.where(0).endswith(":2")
+
+
+@needs("ur5_jacobi")
+def test_jacobi_measured_is_target_less_difference():
+    t = read_tracker(DATA / "ur5_jacobi/ur5_random.csv")
+    # first row: x_t −495.48014933320513, x_dif −2.382049666794785
+    assert t.xyz_mm[0, 0] == pytest.approx(-495.48014933320513 + 2.382049666794785)
+    assert t.q_deg[0, 0] == pytest.approx(17.272893800633657)
+
+
+# --- the generic reader ------------------------------------------------------------------
+
+
+def _generic(path: Path, q: np.ndarray, xyz: np.ndarray, delimiter: str = ",") -> Path:
+    n = q.shape[1]
+    head = delimiter.join([*(f"j{i + 1}" for i in range(n)), "x", "y", "z", "note"])
+    body = [
+        delimiter.join([*map(repr, map(float, a)), *map(repr, map(float, b)), "ok"])
+        for a, b in zip(q, xyz, strict=True)
+    ]
+    path.write_text("# a comment\n" + head + "\n" + "\n".join(body) + "\n")
+    return path
+
+
+@settings(max_examples=40)
+@given(
+    n=st.integers(2, 7),
+    rows=st.integers(10, 30),
+    seed=st.integers(0, 2**32 - 1),
+    delimiter=st.sampled_from([",", ";", "\t"]),
+)
+def test_generic_table_round_trip(tmp_path_factory, n, rows, seed, delimiter):
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(-170, 170, (rows, n))
+    q[0, 0] = 100.0  # not every joint within ±2π: degrees
+    xyz = rng.uniform(-1500, 1500, (rows, 3))
+    path = _generic(tmp_path_factory.mktemp("t") / "t.csv", q, xyz, delimiter)
+    t = read_tracker(path)
+    assert np.array_equal(t.q_deg, q)
+    assert np.array_equal(t.xyz_mm, xyz)
+    assert t.lines[0] == 3
+    source, _lines, pool = read_pool(path)
+    assert np.array_equal(pool, q)
+    assert source == str(path)
+
+
+def test_generic_table_gzip(tmp_path):
+    q = np.tile([[10.0, -90.0, 45.0]], (12, 1))
+    xyz = np.arange(36.0).reshape(12, 3) * 10
+    plain = _generic(tmp_path / "t.csv", q, xyz)
+    packed = tmp_path / "t.csv.gz"
+    packed.write_bytes(gzip.compress(plain.read_bytes()))
+    assert np.array_equal(read_tracker(packed).xyz_mm, xyz)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("j1,j2,x,y\n1,2,3,4\n", "no column 'z'"),
+        ("a,b,x,y,z\n1,2,3,4,5\n", "no joint columns j1, j2"),
+        ("j1,j2,x,y,z\n1,2,3,4,5\n1,oops,3,4,5\n", "t.csv:3: column 'j2' is 'oops'"),
+        ("j1,j2,x,y,z\n1,2,3,4,nan\n", "column 'z' is 'nan', not a number"),
+        ("j1,j2,x,y,z\n", "header but no data rows"),
+        ("j1,j2,x,y,z\n" + "0.1,-1.2,100,200,300\n" * 12, "radians, not degrees?"),
+        ("j1,j2,x,y,z\n" + "".join(f"{k}0,20,0.{k},0.5,1.{k}\n" for k in range(12)), "metres"),
+    ],
+)
+def test_malformed_tables_are_refused_by_name(tmp_path, text, message):
+    path = tmp_path / "t.csv"
+    path.write_text(text)
+    with pytest.raises(WirecalError, match=re.escape(message)):
+        read_tracker(path)
+
+
+def test_gzip_bomb_and_broken_gzip_refused(tmp_path):
+    bomb = tmp_path / "bomb.csv.gz"
+    bomb.write_bytes(gzip.compress(b"j1,j2,x,y,z\n" + b"0" * (17 * 2**20)))
+    with pytest.raises(WirecalError, match="inflates to more than 16 MiB"):
+        read_tracker(bomb)
+    broken = tmp_path / "broken.csv.gz"
+    broken.write_bytes(b"j1,j2,x,y,z\n1,2,3,4,5\n")
+    with pytest.raises(WirecalError, match="not a readable gzip file"):
+        read_tracker(broken)
+
+
+@settings(max_examples=30)
+@given(rows=st.integers(1, 12), seed=st.integers(0, 2**32 - 1))
+def test_ipa_layout_round_trip(tmp_path_factory, rows, seed):
+    """Radians with decimal commas in, degrees out; mm and °C as written."""
+    rng = np.random.default_rng(seed)
+    q = np.round(rng.uniform(-6.2, 6.2, (rows, 6)), 6)
+    xyz = np.round(rng.uniform(-3000, 3000, (rows, 3)), 5)
+    temp = np.round(rng.uniform(15, 30, rows), 4)
+    head = ";".join([*IPA_JOINTS, "measurement_x", "measurement_y", "measurement_z"])
+    body = [
+        ";".join(f"{v:.6f}".replace(".", ",") for v in (*a, *b, c))
+        for a, b, c in zip(q, xyz, temp, strict=True)
+    ]
+    path = tmp_path_factory.mktemp("ipa") / "ipa.csv"
+    path.write_text(head + ";measurement_temperature\n" + "\n".join(body) + "\n")
+    t = read_tracker(path)
+    assert np.allclose(t.q_deg, q * 180 / np.pi, atol=1e-9)
+    assert np.allclose(t.xyz_mm, xyz, atol=1e-9)
+    assert t.temperature_c is not None
+    assert np.allclose(t.temperature_c, temp, atol=1e-9)
+
+
+def test_ipa_layout_with_a_bad_cell_names_its_line(tmp_path):
+    path = tmp_path / "ipa.csv"
+    head = "shoulder_pan_joint;shoulder_lift_joint;elbow_joint;wrist_1_joint;wrist_2_joint;"
+    head += "wrist_3_joint;measurement_x;measurement_y;measurement_z;measurement_temperature"
+    path.write_text(head + "\n0,1;0;0;0;0;0;1;2;3;21\n0,1;0;0;0;x;0;1;2;3;21\n")
+    with pytest.raises(WirecalError, match=re.escape("ipa.csv:3: column 'wrist_2_joint' is 'x'")):
+        read_tracker(path)
+
+
+# --- the 3-D calibration and the registration ----------------------------------------------
+
+
+@settings(max_examples=30)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_registration_undoes_a_rigid_motion(seed):
+    rng = np.random.default_rng(seed)
+    p = rng.uniform(-1000, 1000, (20, 3))
+    rot = Rotation.random(random_state=seed % 2**31).as_matrix()
+    t = rng.uniform(-3000, 3000, 3)
+    x = p @ rot.T + t
+    r, tt = register(p, x)
+    assert np.allclose(r, rot, atol=1e-9)
+    assert np.allclose(tt, t, atol=1e-6)
+    assert registered_rms_mm(p, x) < 1e-6
+    bent = x.copy()
+    bent[0] += [3.0, 0.0, 0.0]  # one point 3 mm off: the RMS sees it
+    assert 0.1 < registered_rms_mm(p, bent) < 3.0
+
+
+def _ur10_pool(n: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    lo = np.array([-90.0, -150.0, 30.0, -150.0, 30.0, -90.0])
+    hi = np.array([90.0, -40.0, 140.0, -30.0, 150.0, 90.0])
+    return rng.uniform(lo, hi, (n, 6))
+
+
+def _measured(
+    q_deg: np.ndarray, noise_mm: float, seed: int, bent: dict | None = None
+) -> tuple[np.ndarray, object]:
+    robot = load_robot(UR10)
+    truth = robot.model({**TRUTH, **(bent or {})})
+    rot = Rotation.from_rotvec([0.1, -0.2, 1.3]).as_matrix()
+    p = tool_position(truth, np.radians(q_deg)) @ rot.T + [1200.0, -2500.0, 300.0]
+    return p + np.random.default_rng(seed).normal(0, noise_mm, p.shape), robot
+
+
+def test_tracker_jacobian_matches_finite_differences():
+    robot = load_robot(UR10)
+    base = point_model(robot)
+    q = np.radians(_ur10_pool(5, 1))
+    names = ("th2", "a3", "al4", "d5", "tool_x")
+    rot = Rotation.from_rotvec([0.3, 0.1, -0.7]).as_matrix()
+    _, j = _jacobian(base, q, names, rot)
+    h = 1e-6
+    fd = []
+    for k in range(len(names)):
+        e = np.zeros(len(names))
+        e[k] = h
+        up = tool_position(with_errors(base, names, e), q) @ rot.T
+        down = tool_position(with_errors(base, names, -e), q) @ rot.T
+        fd.append(((up - down) / (2 * h)).reshape(-1))
+    for k in range(3):  # the rotation: exp([δω]×)·R
+        w = np.zeros(3)
+        w[k] = h
+        turn = [Rotation.from_rotvec(s * w).as_matrix() @ rot for s in (1, -1)]
+        p = tool_position(base, q)
+        fd.append(((p @ turn[0].T - p @ turn[1].T) / (2 * h)).reshape(-1))
+    fd.extend(np.tile(np.eye(3)[k], len(q)) for k in range(3))
+    assert np.allclose(j, np.array(fd).T, atol=1e-5)
+
+
+def test_tracker_calibration_finds_the_truth():
+    q = _ur10_pool(120, 2)
+    x, robot = _measured(q, 0.01, 3)
+    base = point_model(robot)
+    qr = np.radians(q)
+    fit = calibrate(base, qr[:60], x[:60])
+    nominal = calibrate(base, qr[:60], x[:60], ("tool_x", "tool_y", "tool_z"))
+    held = registered_rms_mm(tool_position(fit.model, qr[60:]), x[60:])
+    assert held < 0.03  # noise 0.01 mm per axis: 0.017 mm in 3-D
+    assert registered_rms_mm(tool_position(nominal.model, qr[60:]), x[60:]) > 0.5
+    assert {"th2", "a2", "d4"} <= set(fit.names)
+
+
+# --- the pool planner and the replay --------------------------------------------------------
+
+
+@settings(max_examples=30)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 12))
+def test_greedy_rows_are_distinct(seed, n):
+    rng = np.random.default_rng(seed)
+    J = rng.normal(size=(15, 5))
+    W = np.diag(rng.uniform(0, 1, 5))
+    rows = greedy_rows(J, W, n)
+    assert len(rows) == min(n, 15)
+    assert len(set(rows.tolist())) == len(rows)
+
+
+def test_pool_plan_keeps_the_wire_range_and_the_joint_limits():
+    robot = load_robot(UR10)
+    q = _ur10_pool(300, 4)
+    q[0, 5] = 400.0  # beyond the joint limits: left out, counted
+    plan = plan_pool(robot, q, 30, PlanOptions())
+    assert len(plan.rows) == 30
+    assert plan.theta0_row not in plan.rows
+    assert 0 not in plan.rows
+    assert plan.outside == 1
+    assert plan.theta0_tried == 24
+    p = tool_position(point_model(robot), np.radians(q))
+    wire = np.linalg.norm(p[plan.rows] - p[plan.theta0_row], axis=1)
+    assert wire.min() >= 40.0
+    assert wire.max() <= robot.encoder.range_mm - 50.0
+
+
+def test_readings_are_whole_counts_with_an_unknown_zero():
+    xyz = np.array([[0.0, 0.0, 100.0], [30.0, 40.0, 0.0]])
+    r = readings_mm(xyz, np.zeros(3), 0.025488)
+    counts = (r - ZERO_MM) / 0.025488
+    assert np.allclose(counts, np.round(counts))
+    assert abs(r[1] - ZERO_MM - 50.0) <= 0.013
+
+
+def test_replay_of_a_synthetic_ur10():
+    """A geometric truth and 0.01 mm noise: both calibrations near the noise, nominal not."""
+    from wirecal.solver.tracker_data import TrackerTable
+
+    q = _ur10_pool(240, 5)
+    x, robot = _measured(q, 0.01, 6)
+    table = TrackerTable("synthetic", "synthetic", np.arange(240) + 2, q, x)
+    r = replay(robot, table, seed=0, points=40)
+    assert r.nominal_mm > 0.5
+    assert r.tracker_mm < 0.03
+    assert r.wire_mm < 0.1
+    assert r.wire_compliance_mm is not None
+    assert r.wire_compliance_mm < 0.1
+    assert r.points == 40
+
+
+def test_replay_of_a_ur10_bent_by_gravity():
+    """Joints 2 and 3 yield 8 and 5 µrad/(N·m) (issue 30's model): the rigid fits cannot
+    follow, the wire with the compliances it identifies can."""
+    from wirecal.solver.tracker_data import TrackerTable
+
+    q = _ur10_pool(240, 8)
+    x, robot = _measured(q, 0.01, 9, {"c2": 8.0, "c3": 5.0})
+    table = TrackerTable("synthetic", "synthetic", np.arange(240) + 2, q, x)
+    r = replay(robot, table, seed=1, points=40)
+    assert "c2" in r.compliances, r
+    assert r.wire_mm > 0.1
+    assert r.wire_compliance_mm is not None
+    assert r.wire_compliance_mm < 0.1
+    assert r.wire_compliance_mm < 0.5 * r.wire_mm
+
+
+# --- the command ---------------------------------------------------------------------------
+
+
+def test_plan_pool_cli_writes_the_choice(tmp_path):
+    q = _ur10_pool(200, 7)
+    pool = tmp_path / "pool.csv"
+    pool.write_text("j1,j2,j3,j4,j5,j6\n" + "".join(",".join(map(str, r)) + "\n" for r in q))
+    out = tmp_path / "chosen.csv"
+    args = ["plan", str(UR10), "--pool", str(pool), "--points", "25", "-o", str(out), "--json"]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.output)
+    assert doc["points"] == 25
+    assert len(doc["lines"]) == 25
+    assert doc["outside_limits"] == 0
+    lines = [s for s in out.read_text().splitlines() if not s.startswith("#")]
+    assert lines[0] == "role,pool_line,j1,j2,j3,j4,j5,j6"
+    assert lines[1].startswith(f"theta0,{doc['theta0_line']},")
+    assert len(lines) == 27
+    again = CliRunner().invoke(main, args)  # never overwritten silently
+    assert again.exit_code != 0
+    assert "exists" in again.output
+
+
+@pytest.mark.parametrize(
+    ("extra", "text", "message"),
+    [
+        (["--theta0", "0,-90,90,-90,90,0"], None, "leave out --theta0"),
+        ([], "j1,j2,j3,j4,j5\n" + "10,-90,90,-90,90\n" * 3, "5 joint columns; the robot"),
+        ([], "j1,j2,j3,j4,j5,j6\n" + "0.1,-1.5,1.5,-1.5,1.5,0.2\n" * 12, "radians, not degrees"),
+        (
+            [],
+            "j1,j2,j3,j4,j5,j6\n" + "10,-90,90,-90,90,0\n" * 5,
+            "tried leaves enough poses of the pool",
+        ),
+    ],
+)
+def test_plan_pool_cli_refusals(tmp_path, extra, text, message):
+    pool = tmp_path / "pool.csv"
+    pool.write_text(text or "j1,j2,j3,j4,j5,j6\n10,-90,90,-90,90,0\n")
+    r = CliRunner().invoke(main, ["plan", str(UR10), "--pool", str(pool), *extra])
+    assert r.exit_code == 2
+    assert message in r.output
+    assert "Traceback" not in r.output
+
+
+@pytest.mark.slow
+def test_bench_replays_any_generic_table(tmp_path):
+    """``bench_tracker_replay.py --robot R --table T --json``: the keys the issue names."""
+    import subprocess
+    import sys
+
+    q = _ur10_pool(160, 10)
+    x, _ = _measured(q, 0.01, 11)
+    table = _generic(tmp_path / "t.csv", q, x)
+    bench = ROOT / "bench" / "bench_tracker_replay.py"
+    args = [sys.executable, str(bench), "--robot", str(UR10), "--table", str(table)]
+    r = subprocess.run(
+        [*args, "--seeds", "1", "--points", "30", "--json"], capture_output=True, text=True
+    )
+    assert r.returncode == 0, r.stderr
+    (doc,) = json.loads(r.stdout).values()
+    for key in ("nominal_mm", "tracker_mm", "wire_mm", "wire_compliance_mm", "anchor_mm"):
+        assert key in doc
+    assert doc["tracker_mm"] < 0.03
+    assert doc["nominal_mm"] > 0.5
+    assert doc["points"] == 30
+    bad = subprocess.run([*args[:2], "--table", str(table)], capture_output=True, text=True)
+    assert bad.returncode == 2
+    assert "give --robot and --table together" in bad.stderr
+    absent = [*args[:2], "--data", str(tmp_path / "none"), "--set", "wam_jacobi"]
+    gone = subprocess.run(absent, capture_output=True, text=True)
+    assert gone.returncode == 2
+    assert "public tracker set 'wam_jacobi' is not in" in gone.stderr
+    assert "PUBLISHED.md" in gone.stderr
+    assert "Traceback" not in gone.stderr
