@@ -76,7 +76,9 @@ def test_log_header_and_reads(text, irb):
     assert f'wc_out "# plan: {plan.fingerprint()}";' in text
     assert 'wc_out "# mm_per_count: 0.025488";' in text
     assert 'Open "HOME:" \\File:="WIRECAL.LOG", wc_log \\Write;' in text
-    assert text.count("GInputDnum(wc_giCount0)") == 4  # check (2), wc_meas (2)
+    assert text.count("GInputDnum(wc_gi)") == 4  # check (2), wc_meas (2)
+    assert text.count('AliasIO "wc_giCount0", wc_gi;') == 1  # bound at run time (wc_bind)
+    assert text.count("    wc_bind;") == 2  # by wc_check and wc_run
     assert "d := d - 4294967296;" in text
     assert "d := d + 4294967296;" in text
 
@@ -164,3 +166,59 @@ def test_module_lints_clean(irb, text):
     assert Rapid().lint(text, "WIRECAL.mod", software) == []
     bare = module_text(robot, plan, RapidOptions(solver=False))
     assert Rapid().lint(bare, "WIRECAL.mod", software) == []
+
+
+# ---------- as careful as the V+ module (issue 32) ----------
+def test_data_before_routines(text):
+    """Every module-level declaration comes before the first routine, as every public
+    module does (the module syntax lists data before routines)."""
+    lines = text.splitlines()
+    first_routine = next(n for n, line in enumerate(lines) if line.startswith("  PROC "))
+    data = [n for n, line in enumerate(lines) if re.match(r"  (CONST|VAR|PERS) ", line)]
+    assert data
+    assert max(data) < first_routine
+
+
+def test_no_line_over_what_controllers_load(text):
+    """200 characters: below the longest lines seen in controller-loaded modules (248, 231)."""
+    assert max(len(line) for line in text.splitlines()) <= 200
+
+
+def test_the_spread_message_states_the_tests_real_size(text):
+    """0.1 mm at 0.025488 mm/count is a 3-count test: 3 × 0.025488 = 0.076 mm."""
+    assert "IF hi - lo > 3 THEN" in text
+    assert "samples spread over 3 counts (0.076 mm)" in text
+    assert "0.1 mm: the robot" not in text
+
+
+def test_start_after_a_refused_reading_samples_again(text):
+    """Both Stops of wc_meas (a wide spread, a jumped zero) lie inside the sampling loop,
+    and the refused reading is logged as unsettled (not used)."""
+    from wirecal.lang.rapid import nodes as N
+    from wirecal.lang.rapid.parser import parse_module
+
+    meas = next(r for r in parse_module(text).routines if r.name == "wc_meas")
+    loops = [s for s in meas.body if isinstance(s, N.While)]
+    assert len(loops) == 1
+
+    def stops(stmts):
+        for s in stmts:
+            if isinstance(s, N.Call) and s.name == "Stop":
+                yield s
+            for body in [b for _, b in getattr(s, "branches", [])] + [getattr(s, "orelse", [])]:
+                yield from stops(body)
+
+    assert len(list(stops(loops[0].body))) == 2
+    assert not list(stops([s for s in meas.body if s is not loops[0]]))
+    assert 'head := "unsettled,";' in text
+
+
+def test_error_handlers_for_the_log_and_the_arithmetic(text):
+    """wc_run names a refused log, wc_solve a zero divisor, wc_bind a missing signal."""
+    from wirecal.lang.rapid.parser import parse_module
+
+    handlers = {r.name: r.handler for r in parse_module(text).routines}
+    assert all(handlers[name] for name in ("wc_run", "wc_solve", "wc_bind"))
+    assert "IF ERRNO = ERR_FILEOPEN OR ERRNO = ERR_FILEACC THEN" in text
+    assert "IF ERRNO = ERR_DIVZERO THEN" in text
+    assert "    Close wc_log;\n    Open " in text  # a log left open by an aborted run

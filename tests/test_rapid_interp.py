@@ -14,6 +14,7 @@ import pytest
 from wirecal.lang.rapid.checker import check
 from wirecal.lang.rapid.examples import module
 from wirecal.solver.errors import WirecalError
+from wirecal.twin.machine import RunError
 from wirecal.twin.rapid.interp import fixed, load_module, number_text, run_module
 
 
@@ -41,6 +42,9 @@ class FakeController:
         self.calls.append(("gi", name))
         self.count = (self.count + 3) % 2**32
         return self.count
+
+    def has_group_input(self, name):
+        return name.startswith("wc_giCount")
 
     def open_file(self, path, append):
         self.calls.append(("open", path, append))
@@ -265,7 +269,8 @@ BEYOND = {
     "SetDO": ("SetDO do1, 1;", (), "SetDO: a RAPID instruction"),
     "GOTO": ("l1:", (), "a label \\(GOTO\\)"),
     "RAISE": ("RAISE 10;", (), "RAISE"),
-    "ERRNO": ("IF ERRNO = 1 Stop;", (), "ERRNO: RAPID's predefined data"),
+    "INTNO": ("IF INTNO = 1 Stop;", (), "INTNO: RAPID's predefined data"),
+    "an error the subset does not name": ("IF ERRNO = ERR_OVERFLOW Stop;", (), "ERR_OVERFLOW"),
     "late binding": ('%"main"%;', (), "late binding"),
     "a named argument": ("WaitTime Time:=1;", (), "a named required argument"),
 }
@@ -347,3 +352,120 @@ def test_a_func_returns_data_of_its_type() -> None:
     # the num: 0.1 rounded to single, times 13, rounded again: 1.300000072 (not 1.299999952,
     # what 0.1 * 13 in double rounded once would give)
     assert ctl.pendant == ["1.300000072 1.300000000000"]
+
+
+# ---------- ERROR handlers, RAISE, AliasIO (the generated module's, issue 32) ----------
+def test_an_error_handler_sees_errno_and_returns() -> None:
+    outcome, ctl = run(
+        "VAR num x := 0;",
+        "x := 1 / x;",
+        'TPWrite "not reached";',
+        "ERROR",
+        "IF ERRNO = ERR_DIVZERO THEN",
+        '  TPWrite "divided by zero";',
+        "  RETURN;",
+        "ENDIF",
+        "RAISE;",
+    )
+    assert outcome.status == "completed", outcome
+    assert ctl.pendant == ["divided by zero"]
+
+
+def test_raise_in_a_handler_passes_the_error_on() -> None:
+    outcome, ctl = run(
+        "inner;",
+        'TPWrite "not reached";',
+        extra=(
+            "PROC inner()",
+            "  VAR num x := 0;",
+            "  x := 2 / x;",
+            "ERROR",
+            '  TPWrite "inner saw it";',
+            "  RAISE;",
+            "ENDPROC",
+        ),
+    )
+    assert outcome.status == "error", outcome
+    assert "division by zero" in outcome.message
+    assert ctl.pendant == ["inner saw it"]
+
+
+def test_a_refused_write_is_err_fileacc_for_the_handler() -> None:
+    class FullDisk(FakeController):
+        def write_file(self, handle, text, newline=True):
+            raise RunError(3, "Write: WIRECAL.LOG: the disk is full")
+
+    text = "\n".join(
+        [
+            "MODULE T",
+            "VAR iodev log;",
+            "PROC main()",
+            '  Open "HOME:" \\File:="L.LOG", log \\Write;',
+            '  Write log, "x";',
+            "ERROR",
+            '  IF ERRNO = ERR_FILEACC TPWrite "the disk may be full";',
+            "  RAISE;",
+            "ENDPROC",
+            "ENDMODULE",
+            "",
+        ]
+    )
+    ctl = FullDisk()
+    outcome = run_module(text, "t.mod", ctl)
+    assert outcome.status == "error"
+    assert "the disk is full" in outcome.message
+    assert ctl.pendant == ["the disk may be full"]
+
+
+def test_aliasio_binds_a_signalgi_variable_to_the_configured_signal() -> None:
+    outcome, ctl = run(
+        'AliasIO "wc_giCount0", gi;',
+        "TPWrite DnumToStr(GInputDnum(gi), 0);",
+        data=("VAR signalgi gi;",),
+    )
+    assert outcome.status == "completed", outcome
+    assert ("gi", "wc_giCount0") in ctl.calls
+
+
+def test_an_unbound_signal_variable_stops_with_a_message() -> None:
+    outcome, _ = run("TPWrite DnumToStr(GInputDnum(gi), 0);", data=("VAR signalgi gi;",))
+    assert outcome.status == "error"
+    assert "the signal variable gi is not bound (AliasIO)" in outcome.message
+
+
+def test_aliasio_to_a_signal_the_configuration_lacks_runs_the_handler() -> None:
+    """The generated wc_bind's pattern: the handler's message, then the error stops the run."""
+    outcome, ctl = run(
+        'AliasIO "di_missing", gi;',
+        "ERROR",
+        'IF ERRNO = ERR_ALIASIO_DEF TPWrite "no such group input";',
+        "RAISE;",
+        data=("VAR signalgi gi;",),
+    )
+    assert outcome.status == "error"
+    assert "AliasIO: no signal di_missing in the I/O configuration" in outcome.message
+    assert ctl.pendant == ["no such group input"]
+
+
+def test_the_generated_module_names_a_missing_counter_signal() -> None:
+    """WIRECAL.mod on a controller without wc_giCount0: wc_check says so and stops."""
+    from pathlib import Path
+
+    from wirecal.gen.rapid.program import module_text
+    from wirecal.solver.formats.plan_file import load_plan
+    from wirecal.solver.formats.robot_file import load_robot
+
+    irb = Path(__file__).resolve().parent.parent / "examples" / "abb_irb120"
+    robot = load_robot(irb / "robot.toml")
+    text = module_text(robot, load_plan(irb / "plan.toml", robot))
+
+    class Unconfigured(FakeController):
+        def has_group_input(self, name):
+            return False
+
+    ctl = Unconfigured()
+    outcome = load_module(text, "WIRECAL.mod", ctl).execute("wc_check")
+    assert outcome.status == "error"
+    assert "AliasIO: no signal wc_giCount0" in outcome.message
+    assert ctl.pendant[0] == "wirecal: no group input wc_giCount0 in the I/O configuration:"
+    assert not [c for c in ctl.calls if c[0] == "gi"]

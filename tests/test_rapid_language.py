@@ -37,7 +37,8 @@ OUTSIDE = {
     "a RECORD": "MODULE T\n  RECORD r\n    num x;\n  ENDRECORD\nENDMODULE\n",
     "a zonedata variable": module("", data=("VAR zonedata z := z10;",)),
     "SetDO": module("SetDO do1, 1;"),
-    "ERRNO": module("IF ERRNO = ERR_DIVZERO Stop;"),
+    "ERR_OVERFLOW": module("IF ERRNO = ERR_OVERFLOW Stop;"),
+    "a BACKWARD handler": module("Stop;", "BACKWARD", "  Stop;"),
     "a named argument": module("WaitTime Time:=1;"),
     "exclusive parameters": "MODULE T\n  PROC p(\\switch a | switch b)\n  ENDPROC\nENDMODULE\n",
     "a VAR parameter": "MODULE T\n  PROC p(VAR num a)\n  ENDPROC\nENDMODULE\n",
@@ -190,6 +191,30 @@ def test_the_declared_examples_hold() -> None:
     assert len(lang.invalid_examples) >= 25
     assert all(lang.lint(e.text, "v.mod", e.software) == [] for e in lang.valid_examples)
     assert all(lang.lint(e.text, "i.mod", e.software) for e in lang.invalid_examples)
+
+
+OPERATORS = ["+", "-", "*", "/", " DIV ", " MOD ", " AND ", " OR ", "<", "="]
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.sampled_from(OPERATORS), min_size=1, max_size=300), st.integers(0, 130))
+def test_any_chain_or_nesting_is_answered_never_crashed(ops: list[str], parens: int) -> None:
+    """Chained operators and brackets at any depth: problems, never RecursionError."""
+    expression = "(" * parens + "1" + "".join(f"{op}1" for op in ops) + ")" * parens
+    found = check(module(f"x := {expression};", data=("VAR num x;",)), "t.mod")
+    if parens > 100:
+        assert any("nested more than 100" in p for p in found), found
+    if parens + len(ops) <= 50:
+        assert not any("nested" in p for p in found), found
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.text(alphabet=st.sampled_from('-Name "SignalType DI GO EIO_SIGNAL:\\\n x')))
+def test_any_configuration_text_reads_without_a_crash(text: str) -> None:
+    from wirecal.lang.rapid.eio import config_signals
+
+    signals = config_signals(text)
+    assert all(t.startswith("signal") for t in signals.values())
 
 
 def test_a_for_variable_lives_only_in_its_loop():

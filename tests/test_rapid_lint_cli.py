@@ -96,6 +96,109 @@ def test_a_signal_of_the_wrong_kind_is_refused(tmp_path):
     assert f"{bad}:3: SetDO's Signal is the name of a digital output signal" in r.output
 
 
+# A task of the shape of a ROS-Industrial driver's (two system modules and a motion module;
+# written here, not copied): a RECORD of robjoint and extjoint with PERS arrays of it and a
+# lock in one .sys, routines taking the record in another, and a .mod that copies the path
+# under the lock in a TRAP, moves through it and logs each point.
+
+CELL_COMMON = """MODULE Cell_common(SYSMODULE)
+  RECORD cell_point
+    robjoint joints;
+    extjoint axes;
+    num duration_s;
+  ENDRECORD
+  CONST num MAX_POINTS := 50;
+  PERS bool cell_lock := FALSE;
+  PERS cell_point cell_path{MAX_POINTS};
+  PERS num cell_size := 0;
+  PERS bool cell_new := FALSE;
+ENDMODULE
+"""
+
+CELL_LOG = """MODULE Cell_log(SYSMODULE)
+  PROC log_point(cell_point p, num index)
+    TPWrite "point " \\Num:=index;
+    TPWrite "j1 " \\Num:=p.joints.rax_1;
+  ENDPROC
+  FUNC bool is_stopped(num tolerance_deg)
+    VAR jointtarget now;
+    now := CJointT();
+    RETURN ABS(now.robax.rax_1) < tolerance_deg;
+  ENDFUNC
+ENDMODULE
+"""
+
+CELL_MOTION = """MODULE Cell_motion
+  LOCAL CONST zonedata CORNER := z10;
+  LOCAL VAR cell_point path{MAX_POINTS};
+  LOCAL VAR num size := 0;
+  LOCAL VAR intnum new_path;
+  PROC main()
+    VAR jointtarget target;
+    VAR zonedata zone;
+    IDelete new_path;
+    CONNECT new_path WITH on_new_path;
+    IPers cell_new, new_path;
+    WHILE TRUE DO
+      IF size > 0 THEN
+        FOR i FROM 1 TO size DO
+          target.robax := path{i}.joints;
+          target.extax := path{i}.axes;
+          log_point path{i}, i;
+          zone := CORNER;
+          IF i = size zone := fine;
+          MoveAbsJ target, v100, \\T:=path{i}.duration_s, zone, tool0;
+        ENDFOR
+        size := 0;
+      ENDIF
+      IF is_stopped(0.1) WaitTime 0.05;
+    ENDWHILE
+  ERROR
+    ErrWrite \\W, "Motion error", "Aborting the path.";
+    size := 0;
+    ExitCycle;
+  ENDPROC
+  LOCAL PROC take_path()
+    WaitTestAndSet cell_lock;
+    path := cell_path;
+    size := cell_size;
+    cell_new := FALSE;
+    cell_lock := FALSE;
+  ENDPROC
+  LOCAL TRAP on_new_path
+    take_path;
+  ENDTRAP
+ENDMODULE
+"""
+
+
+def test_a_drivers_task_of_system_modules_and_a_motion_module_lints_clean(tmp_path):
+    files = [
+        write(tmp_path, name, text)
+        for name, text in (
+            ("Cell_common.sys", CELL_COMMON),
+            ("Cell_log.sys", CELL_LOG),
+            ("Cell_motion.mod", CELL_MOTION),
+        )
+    ]
+    together = lint(*files)
+    assert together.exit_code == 0, together.output
+    assert f"{files[2]}: ABB RAPID (IRC5, RobotWare 6), no problems" in together.output
+    alone = lint("--separately", *files)
+    assert alone.exit_code == 1
+    unknown = [
+        (3, "unknown data type cell_point"),
+        (17, "unknown instruction log_point"),
+        (24, "unknown function is_stopped"),
+        (32, "unknown data name cell_lock"),
+        (33, "unknown data name cell_path"),
+        (34, "unknown data name cell_size"),
+    ]
+    for line, what in unknown:
+        assert f"{files[2]}:{line}: {what}" in alone.output, (line, what)
+    assert f"{files[0]}: ABB RAPID (IRC5, RobotWare 6), no problems" in alone.output
+
+
 def test_two_modules_of_one_name_are_two_tasks(tmp_path):
     one = write(tmp_path, "one.mod", MAIN.replace("path{n_points}", "path{3}"))
     two = write(tmp_path, "two.mod", MAIN.replace("path{n_points}", "path{3}"))

@@ -58,6 +58,17 @@ V_TCP_MM_S = 250
 """wc_v's TCP speed (mm/s): high enough that the joints' v_ori cap leads (unconfirmed)."""
 
 
+MAX_LINE = 200
+"""The longest line the module may have (characters). Controllers loaded longer ones: 248 in
+SDEBEUL/Kraker1@5a5835c RAPID/TASK1/PROGMOD/mStation.mod line 206 (an IRC5 backup), 231 in
+COMPAS RRC's RRC_Control_Ctrl.sys line 293 (compas-rrc/compas_rrc_start@5d95af8, RobotWare
+6); ABB's own limit is unconfirmed, so wirecal stays below every line seen loaded."""
+
+AGGREGATE_WIDTH = 100
+"""Characters of values on one line of a long aggregate (a table's line stays far within
+:data:`MAX_LINE`)."""
+
+
 @dataclass(frozen=True)
 class RapidOptions:
     """Options of the generated RAPID module."""
@@ -71,8 +82,14 @@ class RapidOptions:
 
 
 def _aggregate(values: Iterable, literal=num_literal) -> str:
-    """Write a RAPID aggregate ``[a, b, …]``."""
-    return "[" + ", ".join(literal(v) for v in values) + "]"
+    """Write a RAPID aggregate ``[a, b, …]``, wrapped to lines of :data:`AGGREGATE_WIDTH`."""
+    lines, line = [], ""
+    for item in (literal(v) for v in values):
+        if line and len(line) + len(item) + 2 > AGGREGATE_WIDTH:
+            lines.append(line + ",")
+            line = ""
+        line = f"{line}, {item}" if line else item
+    return "[" + "\n    ".join([*lines, line]) + "]"
 
 
 def _matrix(rows: np.ndarray, literal=num_literal) -> str:
@@ -195,6 +212,7 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
     bits = GROUP_COUNTER_BITS
     steps = run_steps(plan, tables.first, jointtarget)
     slower, closing_v = move_speeds(robot, plan, opt.run, steps)
+    spread_counts = float(np.floor(opt.spread_tol_mm / abs(mpc)))  # the test's real size
     context = {
         "version": __version__,
         "robot": robot.name,
@@ -219,8 +237,8 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
         "samples": opt.run.readings,
         "mpc": repr(mpc),
         "zero_tol": f"{opt.zero_tol_mm:g}",
-        "spread_tol": f"{opt.spread_tol_mm:g}",
-        "spread_counts": f"{np.floor(opt.spread_tol_mm / abs(mpc)):g}",
+        "spread_counts": f"{spread_counts:g}",
+        "spread_test": f"{spread_counts:g} counts ({spread_counts * abs(mpc):.3f} mm)",
         "theta0": joint_target(plan.theta0_deg, jointtarget),
         "steps": steps,
         "nsteps": len(plan.steps),
@@ -239,12 +257,16 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
 
 
 def _check_strings(text: str) -> None:
-    """Refuse a module with a string literal longer than RAPID's 80 characters."""
+    """Refuse a string literal over RAPID's 80 characters or a line over :data:`MAX_LINE`."""
     long = [
         f"{MODULE_FILE}:{n}: a string of more than {STRING_MAX} characters"
         for n, line in enumerate(text.splitlines(), 1)
         for piece in line.split('"')[1::2]
         if len(piece) > STRING_MAX
+    ] + [
+        f"{MODULE_FILE}:{n}: a line of {len(line)} characters (at most {MAX_LINE})"
+        for n, line in enumerate(text.splitlines(), 1)
+        if len(line) > MAX_LINE
     ]
     if long:
         raise WirecalError(["internal error: the generated module breaks a RAPID rule:", *long])

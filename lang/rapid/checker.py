@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import singledispatchmethod
 from typing import Any
 
 from wirecal.lang.rapid import nodes as N
@@ -167,42 +168,67 @@ class Typer:
             e = e.base
         return e if isinstance(e, N.Name) else None
 
-    def type(self, e: N.Expr, want: Type | None = None) -> Type | None:  # noqa: C901
-        """Return the type of ``e`` (``want``: the type the context needs, for aggregates)."""
-        if isinstance(e, N.Num):
-            return LITERAL
-        if isinstance(e, N.Str):
-            if len(e.value) > T.STRING_MAX:
-                self.problems.add(
-                    self.line,
-                    f"a string of {len(e.value)} characters: a RAPID string holds at most "
-                    f"{T.STRING_MAX} (RAPID kernel, built-in data types: string)",
-                )
-            return STRING
-        if isinstance(e, N.Bool):
-            return BOOL
-        if isinstance(e, N.Name):
-            sym = self.symbol(e.name)
-            if sym is not None and sym.type.name in T.SIGNAL_TYPES and not sym.type.dims:
-                return NUM  # a signal in an expression is its value (unconfirmed)
-            return sym.type if sym else None
-        if isinstance(e, N.Component):
-            return self._component(e)
-        if isinstance(e, N.Index):
-            return self._index(e)
-        if isinstance(e, N.Aggregate):
-            return self._aggregate(e, want)
-        if isinstance(e, N.Neg):
-            got = self.type(e.a)
-            if got is not None and got not in (NUM, DNUM, LITERAL, UNKNOWN, Type("pos")):
-                self.problems.add(self.line, f"- of a {got}: a number is needed")
-            return got
-        if isinstance(e, N.Not):
-            self.expect(e.a, BOOL, "NOT's operand")
-            return BOOL
-        if isinstance(e, N.BinOp):
-            return self._binop(e)
+    @singledispatchmethod
+    def type(self, e: N.Expr, want: Type | None = None) -> Type | None:
+        """Return the type of ``e`` (``want``: the type the context needs, for aggregates).
+
+        A function call when no case is its own.
+        """
+        assert isinstance(e, N.FuncCall), e
         return self.call(e.name, e.args, function=True)
+
+    @type.register
+    def _(self, e: N.Num, want: Type | None = None) -> Type | None:
+        return LITERAL
+
+    @type.register
+    def _(self, e: N.Str, want: Type | None = None) -> Type | None:
+        if len(e.value) > T.STRING_MAX:
+            self.problems.add(
+                self.line,
+                f"a string of {len(e.value)} characters: a RAPID string holds at most "
+                f"{T.STRING_MAX} (RAPID kernel, built-in data types: string)",
+            )
+        return STRING
+
+    @type.register
+    def _(self, e: N.Bool, want: Type | None = None) -> Type | None:
+        return BOOL
+
+    @type.register
+    def _(self, e: N.Name, want: Type | None = None) -> Type | None:
+        sym = self.symbol(e.name)
+        if sym is not None and sym.type.name in T.SIGNAL_TYPES and not sym.type.dims:
+            return NUM  # a signal in an expression is its value (unconfirmed)
+        return sym.type if sym else None
+
+    @type.register
+    def _(self, e: N.Component, want: Type | None = None) -> Type | None:
+        return self._component(e)
+
+    @type.register
+    def _(self, e: N.Index, want: Type | None = None) -> Type | None:
+        return self._index(e)
+
+    @type.register
+    def _(self, e: N.Aggregate, want: Type | None = None) -> Type | None:
+        return self._aggregate(e, want)
+
+    @type.register
+    def _(self, e: N.Neg, want: Type | None = None) -> Type | None:
+        got = self.type(e.a)
+        if got is not None and got not in (NUM, DNUM, LITERAL, UNKNOWN, Type("pos")):
+            self.problems.add(self.line, f"- of a {got}: a number is needed")
+        return got
+
+    @type.register
+    def _(self, e: N.Not, want: Type | None = None) -> Type | None:
+        self.expect(e.a, BOOL, "NOT's operand")
+        return BOOL
+
+    @type.register
+    def _(self, e: N.BinOp, want: Type | None = None) -> Type | None:
+        return self._binop(e)
 
     def _component(self, e: N.Component) -> Type | None:
         base = self.type(e.base)
@@ -514,8 +540,8 @@ class Typer:
             self.signals.add(e.name)
             return
         sym = self.scope.get(e.name.lower()) if isinstance(e, N.Name) else None
-        if sym is not None and not self.lang.subset and sym.type in (Type(p.type), UNKNOWN):
-            return
+        if sym is not None and sym.type in (Type(p.type), UNKNOWN):
+            return  # a signal variable (the subset's: a signalgi bound by AliasIO)
         self.problems.add(
             self.line,
             f"{name}'s {p.name} is the name of {T.SIGNAL_TYPES[p.type]} signal ({p.type})",
@@ -823,7 +849,7 @@ class Checker:
         self.in_handler = False
         self.body(r.body, typer, r)
         for which, handler in handlers.items():
-            if self.lang.subset:
+            if self.lang.subset and which != "ERROR":
                 self.problems.add(r.line, f"an {which} handler: {SUBSET}")
                 continue
             self.in_handler = which == "ERROR"
@@ -838,40 +864,62 @@ class Checker:
             typer.line = s.line
             self.stmt(s, typer, r)
 
-    def stmt(self, s: N.Stmt, typer: Typer, r: N.Routine) -> None:  # noqa: C901
-        """Check one statement."""
-        if isinstance(s, N.Data):
-            if s.storage == "PERS":
-                self.problems.add(s.line, "PERS data cannot be declared in a routine")
-            self.declare(s, typer.scope, typer)
-        elif isinstance(s, N.Assign):
-            if typer.writable(s.target, "the left of :="):
-                want = typer.type(s.target)
-                if want is not None:
-                    typer.expect(s.value, want, f"{_text(s.target)}")
-        elif isinstance(s, N.Call) and s.name.lower() in self.traps:
-            self.problems.add(s.line, f"{s.name} is a TRAP: an interrupt runs it, a call cannot")
-        elif isinstance(s, N.Call):
-            typer.call(s.name, s.args, function=False)
-        elif isinstance(s, N.If):
-            for cond, body in s.branches:
-                typer.line = s.line
-                typer.expect(cond, BOOL, "an IF condition")
-                self.body(body, typer, r)
-            self.body(s.orelse, typer, r)
-        elif isinstance(s, N.For):
-            self.loop(s, typer, r)
-        elif isinstance(s, N.While):
-            typer.expect(s.cond, BOOL, "a WHILE condition")
-            self.body(s.body, typer, r)
-        elif isinstance(s, N.Test):
-            self.test(s, typer, r)
-        elif isinstance(s, N.Return):
-            self.ret(s, typer, r)
-        elif self.lang.subset and not isinstance(s, N.Exit):
+    @singledispatchmethod
+    def stmt(self, s: N.Stmt, typer: Typer, r: N.Routine) -> None:
+        """Check one statement (RAPID beyond the subset, or EXIT, when no case is its own)."""
+        if self.lang.subset and not isinstance(s, N.Exit) and not self.passes_on(s):
             self.problems.add(s.line, f"{_WHAT[type(s)]}: {SUBSET}")
         else:
             self.beyond(s, typer)
+
+    @stmt.register
+    def _(self, s: N.Data, typer: Typer, r: N.Routine) -> None:
+        if s.storage == "PERS":
+            self.problems.add(s.line, "PERS data cannot be declared in a routine")
+        self.declare(s, typer.scope, typer)
+
+    @stmt.register
+    def _(self, s: N.Assign, typer: Typer, r: N.Routine) -> None:
+        if typer.writable(s.target, "the left of :="):
+            want = typer.type(s.target)
+            if want is not None:
+                typer.expect(s.value, want, f"{_text(s.target)}")
+
+    @stmt.register
+    def _(self, s: N.Call, typer: Typer, r: N.Routine) -> None:
+        if s.name.lower() in self.traps:
+            self.problems.add(s.line, f"{s.name} is a TRAP: an interrupt runs it, a call cannot")
+        else:
+            typer.call(s.name, s.args, function=False)
+
+    @stmt.register
+    def _(self, s: N.If, typer: Typer, r: N.Routine) -> None:
+        for cond, body in s.branches:
+            typer.line = s.line
+            typer.expect(cond, BOOL, "an IF condition")
+            self.body(body, typer, r)
+        self.body(s.orelse, typer, r)
+
+    @stmt.register
+    def _(self, s: N.While, typer: Typer, r: N.Routine) -> None:
+        typer.expect(s.cond, BOOL, "a WHILE condition")
+        self.body(s.body, typer, r)
+
+    @stmt.register
+    def _(self, s: N.For, typer: Typer, r: N.Routine) -> None:
+        self.loop(s, typer, r)
+
+    @stmt.register
+    def _(self, s: N.Test, typer: Typer, r: N.Routine) -> None:
+        self.test(s, typer, r)
+
+    @stmt.register
+    def _(self, s: N.Return, typer: Typer, r: N.Routine) -> None:
+        self.ret(s, typer, r)
+
+    def passes_on(self, s: N.Stmt) -> bool:
+        """Whether ``s`` is ``RAISE;`` in an ERROR handler: the subset runs it."""
+        return isinstance(s, N.Raise) and s.value is None and self.in_handler
 
     def beyond(self, s: N.Stmt, typer: Typer) -> None:
         """Check a statement of RAPID beyond the subset (GOTO, RAISE, CONNECT …)."""

@@ -59,19 +59,25 @@ jointtarget, robjoint, extjoint, speeddata: unconfirmed)."""
 ATOMIC = frozenset({"num", "dnum", "bool", "string"})
 """The atomic types (kernel-types)."""
 
-OPAQUE = frozenset({"iodev", "clock"})
-"""Non-value types of the subset: a file (iodev) and a clock (reference manual: unconfirmed)."""
+OPAQUE = frozenset({"iodev", "clock", "signalgi"})
+"""Non-value types of the subset: a file (iodev), a clock and a group input bound with
+AliasIO (reference manual: unconfirmed)."""
 
 SUBSET_TYPES = ATOMIC | OPAQUE | frozenset(RECORDS)
 """The data types a wirecal module may declare."""
 
 OTHER_TYPES = frozenset(
     """robtarget pos orient pose confdata tooldata wobjdata loaddata zonedata stoppointdata
-    intnum errnum signaldi signaldo signalgi signalgo signalai signalao byte rawbytes
+    intnum errnum signaldi signaldo signalgo signalai signalao byte rawbytes
     socketdev socketstatus triggdata tpnum dir switch egmident mecunit errdomain errstr
     identno shapedata wzstestablished syncident tasks progdisp""".split()
 )
 """RAPID data types outside the subset (a declaration of one is "not in the subset")."""
+
+SUBSET_ERRORS = ("errno", "err_divzero", "err_fileopen", "err_fileacc", "err_aliasio_def")
+"""ERRNO and the error numbers an ERROR handler of wirecal's module compares it with:
+division by zero, a file that cannot be opened or written, AliasIO's signal not defined
+(RAPID reference manual, error recovery and AliasIO: unconfirmed, no page read)."""
 
 SPEEDS = (5, 10, 20, 30, 40, 50, 60, 80, 100, 150, 200, 300, 400, 500, 600, 800, 1000)
 SPEEDS_FAST = (1500, 2000, 2500, 3000, 4000, 5000, 6000, 7000)
@@ -85,10 +91,12 @@ PREDEFINED: dict[str, str] = {
     "tool0": "tooldata",
     "pi": "num",
     "wobj0": "wobjdata",
+    **{k: "num" for k in SUBSET_ERRORS},
 }
 """Predefined data the subset reads, name → type (reference manual, speeddata and zonedata
 "Predefined data", tooldata tool0: unconfirmed; pi: ROS-Industrial's abb_driver modules use
-it undeclared, its value 3.1415926 is unconfirmed)."""
+it undeclared, its value 3.1415926 is unconfirmed; ERRNO and the errors of
+:data:`SUBSET_ERRORS`, errnum, a num alias)."""
 
 
 OTHER_DATA_PREFIXES = (
@@ -200,6 +208,7 @@ INSTRUCTIONS: dict[str, Routine] = {
         source=_U,
     ),
     "close": Routine((P("IODevice", "iodev", var=True),), source=_U),
+    "aliasio": Routine((P("FromSignal", "string"), P("ToSignal", "signalgi", var=True)), source=_U),
     "clkreset": Routine((P("Clock", "clock", var=True),), source=_U),
     "clkstart": Routine((P("Clock", "clock", var=True),), source=_U),
     "clkstop": Routine((P("Clock", "clock", var=True),), source=_U),

@@ -92,6 +92,10 @@ class IrcController:
             pass  # the input holds its last value
         return self.last_count
 
+    def has_group_input(self, name: str) -> bool:
+        """AliasIO: only the counter's group input is configured."""
+        return name == self.signal
+
     # ---- files ----
     def open_file(self, path: str, append: bool) -> int:
         """Open ``HOME:/name``: a file in the world's disk folder (emptied unless append)."""

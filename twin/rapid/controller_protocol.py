@@ -30,6 +30,9 @@ class RapidController(Protocol):
     def group_input(self, name: str) -> int:
         """Return the group input signal ``name``'s value, unsigned (GInputDnum, GInput)."""
 
+    def has_group_input(self, name: str) -> bool:
+        """Return whether the I/O configuration defines the group input ``name`` (AliasIO)."""
+
     def open_file(self, path: str, append: bool) -> int:
         r"""Open ``path`` for writing; return a handle for :meth:`write_file`.
 

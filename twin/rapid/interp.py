@@ -38,7 +38,7 @@ import operator
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import lru_cache, singledispatchmethod
 from typing import Any
 
 from wirecal.lang.rapid import nodes as N
@@ -71,10 +71,19 @@ Eval = Callable[[Frame], Any]
 
 
 class RapidError(RunError):
-    """A RAPID run-time error: the program stops with this message."""
+    """A RAPID run-time error: the program stops with this message.
 
-    def __init__(self, message: str):
+    ``errno``: the predefined error name an ERROR handler sees in ERRNO (``err_divzero`` …,
+    :data:`~wirecal.lang.rapid.tables.SUBSET_ERRORS`); None: no handler runs for it.
+    """
+
+    def __init__(self, message: str, errno: str | None = None):
         super().__init__(-1, message)
+        self.errno = errno
+
+
+class _Raise(Exception):
+    """RAISE; in an ERROR handler: the error goes on to the caller."""
 
 
 class _Return(Exception):
@@ -173,7 +182,7 @@ def _arith(op: str, a: float, b: float) -> float:
     if op == "*":
         return a * b
     if b == 0:
-        raise RapidError("division by zero")
+        raise RapidError("division by zero", "err_divzero")
     if op == "/":
         return a / b
     x, y = _integer(a, op), _integer(b, op)
@@ -215,7 +224,9 @@ class Interpreter:
         self.sources = {r.name.lower(): r for r in module.routines}
         typer = Typer(self.global_scope, Problems(), self.routines_sig)
         for k, v in T.PREDEFINED.items():
-            if k == "pi":
+            if k in T.SUBSET_ERRORS:  # ERRNO 0; each error its own number (the twin's)
+                self.globals[k] = float(T.SUBSET_ERRORS.index(k))
+            elif k == "pi":
                 self.globals[k] = f32(3.1415926)
             elif v == "speeddata":
                 self.globals[k] = dict(
@@ -346,7 +357,7 @@ class _Compiler:
         returns = Type(r.type.lower()) if r.type else None
         c = _Compiler(interp, Typer(scope, Problems(), interp.routines_sig), local, returns)
         names = [p.name.lower() for p in r.params]
-        body = c.block(r.body)
+        body = c.handled(c.block(r.body), r.handler)
         is_func = r.kind == "FUNC"
 
         def run(args: list[Any]) -> tuple[Any, Frame]:
@@ -361,6 +372,32 @@ class _Compiler:
 
         return run
 
+    def handled(
+        self, body: Callable[[Frame], None], handler: list[N.Stmt] | None
+    ) -> Callable[[Frame], None]:
+        """Wrap a routine's body with its ERROR handler: an error with an ERRNO runs it.
+
+        ERRNO is set; the handler's ``RAISE;`` passes the error on to the caller, its
+        RETURN ends the routine (RAPID reference manual, error recovery: unconfirmed).
+        """
+        if handler is None:
+            return body
+        run_handler, globals_ = self.block(handler), self.interp.globals
+
+        def guarded(frame: Frame) -> None:
+            try:
+                body(frame)
+            except RapidError as error:
+                if error.errno is None:
+                    raise
+                globals_["errno"] = globals_[error.errno]
+                try:
+                    run_handler(frame)
+                except _Raise:
+                    raise error from None
+
+        return guarded
+
     # ---- statements ----
     def block(self, stmts: list[N.Stmt]) -> Callable[[Frame], None]:
         """Compile statements in order (declarations enter the scope as they come)."""
@@ -372,49 +409,76 @@ class _Compiler:
 
         return run
 
-    def stmt(self, s: N.Stmt) -> Callable[[Frame], None]:  # noqa: C901
+    def stmt(self, s: N.Stmt) -> Callable[[Frame], None]:
         """Compile one statement; each one sets the interpreter's current line."""
         self.typer.line = s.line
-        interp, line = self.interp, s.line
-        if isinstance(s, N.Data):
-            return self.declare(s)
-        if isinstance(s, N.Assign):
-            want = self.typer.type(s.target)
-            assert want is not None
-            value, store = self.expr(s.value, want), self.store(s.target)
+        return self.compile_stmt(s)
 
-            def assign(frame: Frame) -> None:
-                interp.line = line
-                store(frame, coerce(copy(value(frame)), want))
-
-            return assign
-        if isinstance(s, N.Call):
-            return self.call_stmt(s)
-        if isinstance(s, N.If):
-            return self.if_(s)
-        if isinstance(s, N.For):
-            return self.for_(s)
-        if isinstance(s, N.While):
-            cond, body = self.expr(s.cond, BOOL), self.block(s.body)
-
-            def while_(frame: Frame) -> None:
-                interp.line = line
-                while cond(frame):
-                    body(frame)
-                    interp.line = line
-
-            return while_
-        if isinstance(s, N.Test):
-            return self.test(s)
-        if isinstance(s, N.Return):
-            return self.ret(s)
+    @singledispatchmethod
+    def compile_stmt(self, s: N.Stmt) -> Callable[[Frame], None]:
+        """EXIT (the only statement left once the subset check passed)."""
         assert isinstance(s, N.Exit), s
+        interp, line = self.interp, s.line
 
         def exit_(frame: Frame) -> None:
             interp.line = line
             raise _Exit
 
         return exit_
+
+    @compile_stmt.register
+    def _(self, s: N.Data) -> Callable[[Frame], None]:
+        return self.declare(s)
+
+    @compile_stmt.register
+    def _(self, s: N.Assign) -> Callable[[Frame], None]:
+        interp, line = self.interp, s.line
+        want = self.typer.type(s.target)
+        assert want is not None
+        value, store = self.expr(s.value, want), self.store(s.target)
+
+        def assign(frame: Frame) -> None:
+            interp.line = line
+            store(frame, coerce(copy(value(frame)), want))
+
+        return assign
+
+    @compile_stmt.register
+    def _(self, s: N.Call) -> Callable[[Frame], None]:
+        return self.call_stmt(s)
+
+    @compile_stmt.register
+    def _(self, s: N.If) -> Callable[[Frame], None]:
+        return self.if_(s)
+
+    @compile_stmt.register
+    def _(self, s: N.For) -> Callable[[Frame], None]:
+        return self.for_(s)
+
+    @compile_stmt.register
+    def _(self, s: N.While) -> Callable[[Frame], None]:
+        interp, line = self.interp, s.line
+        cond, body = self.expr(s.cond, BOOL), self.block(s.body)
+
+        def while_(frame: Frame) -> None:
+            interp.line = line
+            while cond(frame):
+                body(frame)
+                interp.line = line
+
+        return while_
+
+    @compile_stmt.register
+    def _(self, s: N.Test) -> Callable[[Frame], None]:
+        return self.test(s)
+
+    @compile_stmt.register
+    def _(self, s: N.Return) -> Callable[[Frame], None]:
+        return self.ret(s)
+
+    @compile_stmt.register
+    def _(self, s: N.Raise) -> Callable[[Frame], None]:
+        return _raise
 
     def declare(self, d: N.Data) -> Callable[[Frame], None]:
         """Compile a routine's data: (re)initialized each time the routine runs."""
@@ -589,39 +653,62 @@ class _Compiler:
         return set_element
 
     # ---- expressions ----
-    def expr(self, e: N.Expr, want: Type | None) -> Eval:  # noqa: C901
-        """Compile an expression; ``want`` is the type its context needs (literals, aggregates)."""
-        if isinstance(e, N.Num):
-            v = coerce(e.value, want) if want in (NUM, DNUM) else e.value
-            return _constant(v)
-        if isinstance(e, N.Str | N.Bool):
-            return _constant(e.value)
-        if isinstance(e, N.Name):
-            return self.name(e.name)
-        if isinstance(e, N.Component):
-            base, name = self.expr(e.base, None), e.field.lower()
-            return lambda f: base(f)[name]
-        if isinstance(e, N.Index):
-            base = self.expr(e.base, None)
-            indices = [self.expr(i, NUM) for i in e.indices]
+    @singledispatchmethod
+    def expr(self, e: N.Expr, want: Type | None) -> Eval:
+        """Compile an expression; ``want`` is the type its context needs (literals, aggregates).
 
-            def element(frame: Frame) -> Any:
-                holder, last = _element_holder(base(frame), [i(frame) for i in indices])
-                return holder[last]
-
-            return element
-        if isinstance(e, N.Aggregate):
-            return self.aggregate(e, want)
-        if isinstance(e, N.Neg):
-            t = self.static(e, want)
-            a = self.expr(e.a, t)
-            return lambda f: coerce(-a(f), t)
-        if isinstance(e, N.Not):
-            a = self.expr(e.a, BOOL)
-            return lambda f: not a(f)
-        if isinstance(e, N.BinOp):
-            return self.binop(e, want)
+        A function call when no case is its own.
+        """
+        assert isinstance(e, N.FuncCall), e
         return self.function(e)
+
+    @expr.register
+    def _(self, e: N.Num, want: Type | None) -> Eval:
+        return _constant(coerce(e.value, want) if want in (NUM, DNUM) else e.value)
+
+    @expr.register(N.Str)
+    @expr.register(N.Bool)
+    def _(self, e: N.Str | N.Bool, want: Type | None) -> Eval:
+        return _constant(e.value)
+
+    @expr.register
+    def _(self, e: N.Name, want: Type | None) -> Eval:
+        return self.name(e.name)
+
+    @expr.register
+    def _(self, e: N.Component, want: Type | None) -> Eval:
+        base, name = self.expr(e.base, None), e.field.lower()
+        return lambda f: base(f)[name]
+
+    @expr.register
+    def _(self, e: N.Index, want: Type | None) -> Eval:
+        base = self.expr(e.base, None)
+        indices = [self.expr(i, NUM) for i in e.indices]
+
+        def element(frame: Frame) -> Any:
+            holder, last = _element_holder(base(frame), [i(frame) for i in indices])
+            return holder[last]
+
+        return element
+
+    @expr.register
+    def _(self, e: N.Aggregate, want: Type | None) -> Eval:
+        return self.aggregate(e, want)
+
+    @expr.register
+    def _(self, e: N.Neg, want: Type | None) -> Eval:
+        t = self.static(e, want)
+        a = self.expr(e.a, t)
+        return lambda f: coerce(-a(f), t)
+
+    @expr.register
+    def _(self, e: N.Not, want: Type | None) -> Eval:
+        a = self.expr(e.a, BOOL)
+        return lambda f: not a(f)
+
+    @expr.register
+    def _(self, e: N.BinOp, want: Type | None) -> Eval:
+        return self.binop(e, want)
 
     def static(self, e: N.Expr, want: Type | None) -> Type:
         """Return the expression's type; a literal one takes the context's (else dnum)."""
@@ -717,6 +804,10 @@ class _Compiler:
         return pos, opt
 
 
+def _raise(frame: Frame) -> None:
+    raise _Raise
+
+
 def _constant(v: Any) -> Eval:
     return lambda f: v
 
@@ -782,10 +873,21 @@ def _write(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
     def run(frame: Frame) -> None:
         handle = pos[0](frame)
         if handle is None:
-            raise RapidError("Write: the iodev is not open")
-        ctl.write_file(handle, _string(pos[1](frame) + _text_with_number(opt, frame)), newline)
+            raise RapidError("Write: the iodev is not open", "err_fileacc")
+        text = _string(pos[1](frame) + _text_with_number(opt, frame))
+        _file_call("err_fileacc", lambda: ctl.write_file(handle, text, newline))
 
     return run
+
+
+def _file_call(errno: str, call: Callable[[], Any]) -> Any:
+    """Make a controller's file call; its refusal is a RAPID error with ``errno``."""
+    try:
+        return call()
+    except RapidError:
+        raise
+    except RunError as e:
+        raise RapidError(e.message, errno) from None
 
 
 def _open(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
@@ -795,7 +897,7 @@ def _open(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
 
     def run(frame: Frame) -> None:
         path = device(frame) + ("/" + file(frame) if file else "")
-        store(frame, ctl.open_file(path, append))
+        store(frame, _file_call("err_fileopen", lambda: ctl.open_file(path, append)))
 
     return run
 
@@ -806,9 +908,9 @@ def _close(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
 
     def run(frame: Frame) -> None:
         handle = pos[0](frame)
-        if handle is not None:
-            ctl.close_file(handle)
         store(frame, None)
+        if handle is not None:
+            _file_call("err_fileacc", lambda: ctl.close_file(handle))
 
     return run
 
@@ -865,6 +967,25 @@ def _stop(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
     return run
 
 
+def _alias_io(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+    """AliasIO "name", var: the variable reads the configured signal ``name``.
+
+    A signal the I/O configuration lacks is ERR_ALIASIO_DEF (its ERROR handler runs).
+    """
+    pos, _ = c.args("aliasio", args)
+    store, ctl = c.store(_positional(args, 1)), c.interp.controller
+
+    def run(frame: Frame) -> None:
+        name = pos[0](frame)
+        if not ctl.has_group_input(name):
+            raise RapidError(
+                f"AliasIO: no signal {name} in the I/O configuration", "err_aliasio_def"
+            )
+        store(frame, name)
+
+    return run
+
+
 _INSTRUCTIONS: dict[str, Builder] = {
     "moveabsj": _move_abs_j,
     "tpwrite": _tp_write,
@@ -880,6 +1001,7 @@ _INSTRUCTIONS: dict[str, Builder] = {
     "clkstop": _clock("stop"),
     "waittime": _wait_time,
     "stop": _stop,
+    "aliasio": _alias_io,
 }
 
 
@@ -935,8 +1057,20 @@ def _group(name: str, result: Type) -> Builder:
     def build(c: _Compiler, args: list[N.Arg]) -> Eval:
         signal = _positional(args, 0)
         assert isinstance(signal, N.Name)
-        ctl = c.interp.controller
-        return lambda f: coerce(ctl.group_input(signal.name), result)
+        ctl, key = c.interp.controller, signal.name.lower()
+        if key not in c.interp.global_scope and key not in c.local:
+            return lambda f: coerce(ctl.group_input(signal.name), result)
+        bound = c.name(signal.name)  # a signalgi variable: the name AliasIO bound it to
+
+        def read(frame: Frame) -> Any:
+            alias = bound(frame)
+            if alias is None:
+                raise RapidError(
+                    f"{name}: the signal variable {signal.name} is not bound (AliasIO)"
+                )
+            return coerce(ctl.group_input(alias), result)
+
+        return read
 
     return build
 
