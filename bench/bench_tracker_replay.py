@@ -23,7 +23,8 @@ file that asks none.
         [--robot R --table T.csv] [--seeds 3] [--points 60] [--json]
 
 A set asked for and not found exits 2 naming the folder, the missing files and the
-``git clone`` (and commit) that brings them.
+``git clone`` (and commit) that brings them; a file that is not the published bytes at that
+commit (git's blob id) is named in a note on stderr.
 """
 
 from __future__ import annotations
@@ -47,6 +48,7 @@ from wirecal.solver.formats.tracker_published import (  # noqa: E402
     PUBLISHED_SETS,
     locate_set,
     tracker_data_dir,
+    unpublished,
 )
 from wirecal.solver.formats.tracker_sets import read_tracker  # noqa: E402
 from wirecal.solver.kinematics import tool_position  # noqa: E402
@@ -138,7 +140,10 @@ def published_test(files: dict[str, Path], arm: str, grid: str, test: str) -> di
 
 
 def located(data: Path, wanted: set[str]) -> dict[str, dict[str, Path]]:
-    """Return each wanted set's files; exit 2 naming every set not found and how to get it."""
+    """Return each wanted set's files; exit 2 naming every set not found and how to get it.
+
+    A file whose bytes are not the published ones is read, with a note on stderr.
+    """
     files, missing = {}, []
     for name in sorted(wanted):
         try:
@@ -148,6 +153,14 @@ def located(data: Path, wanted: set[str]) -> dict[str, dict[str, Path]]:
     if missing:
         print("\n".join(missing), file=sys.stderr)
         sys.exit(2)
+    for name in sorted(wanted):
+        if differ := unpublished(name, files[name]):
+            commit = PUBLISHED_SETS[name].commit
+            print(
+                f"note: not the bytes published at {commit}: {', '.join(differ)}; the figures"
+                " may differ from docs/benchmarks.md",
+                file=sys.stderr,
+            )
     return files
 
 

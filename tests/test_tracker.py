@@ -21,8 +21,10 @@ from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.tracker_published import (
     DATA_ENV,
     PUBLISHED_SETS,
+    PublishedSet,
     locate_set,
     tracker_data_dir,
+    unpublished,
 )
 from wirecal.solver.formats.tracker_sets import IPA_JOINTS, read_pool, read_tracker
 from wirecal.solver.kinematics import tool_position, with_errors
@@ -66,11 +68,16 @@ def needs(name: str) -> pytest.MarkDecorator:
     return pytest.mark.skipif(isinstance(why, str), reason=str(why))
 
 
-def public(name: str, path: str) -> Path:
-    """Return the file at ``path`` in set ``name``'s repository (for a test that ``needs`` it)."""
+def public_set(name: str) -> dict[str, Path]:
+    """Return public set ``name``'s files by path there (for a test that ``needs`` it)."""
     files = FOUND[name]
     assert not isinstance(files, str), files
-    return files[path]
+    return files
+
+
+def public(name: str, path: str) -> Path:
+    """Return the file at ``path`` in set ``name``'s repository (for a test that ``needs`` it)."""
+    return public_set(name)[path]
 
 
 # --- the public data sets ----------------------------------------------------------------
@@ -87,7 +94,7 @@ def test_each_set_says_where_it_is_published(name):
     assert f"checkout {published.commit}" in text
     assert "MIT" in text
     assert "Cite:" in text
-    for path, packed in published.files:
+    for path, packed, _blob in published.files:
         assert f"`{published.clone}/{path}`" in text
         assert f"`{name}/{packed}`" in text
     assert sorted(p.name for p in (ROBOTS / name).iterdir()) == ["PUBLISHED.md", "robot.toml"]
@@ -150,7 +157,7 @@ def _lay_out(folder: Path, texts: dict[tuple[str, str], str], layout: str) -> Pa
     """Write ``texts`` as clones in ``folder``, as if ``folder`` were a clone, or compressed."""
     for (name, path), text in texts.items():
         published = PUBLISHED_SETS[name]
-        packed = dict(published.files)[path]
+        packed = {p: z for p, z, _blob in published.files}[path]
         file = {
             "clones": folder / published.clone / path,
             "clone": folder / path,
@@ -185,7 +192,7 @@ def test_a_clone_is_preferred_to_compressed_copies(tmp_path):
     files = locate_set(tmp_path, "ur5_jacobi", ROOT)
     assert files == {
         path: tmp_path / "serial_robots_datasets" / path
-        for path, _ in PUBLISHED_SETS["ur5_jacobi"].files
+        for path, *_ in PUBLISHED_SETS["ur5_jacobi"].files
     }
 
 
@@ -207,6 +214,33 @@ def test_a_set_not_found_names_the_files_and_the_clone(tmp_path):
     assert str(ROBOTS / "ur5_jacobi" / "PUBLISHED.md") in why
     with pytest.raises(WirecalError, match="public tracker set 'wam_jacobi' is not in"):
         locate_set(tmp_path / "none", "wam_jacobi", ROOT)
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=needs(n)) for n in sorted(PUBLISHED_SETS)])
+def test_public_files_are_the_published_bytes(name):
+    """git's blob ids at the commit PUBLISHED.md names, in either layout."""
+    assert unpublished(name, public_set(name)) == []
+
+
+def test_bytes_not_published_are_named(tmp_path, monkeypatch):
+    texts = _synthetic_sets(5)
+    _lay_out(tmp_path, texts, "compressed")
+    files = locate_set(tmp_path, "wam_jacobi", ROOT)
+    assert sorted(unpublished("wam_jacobi", files)) == sorted(
+        f"{path} ({file})" for path, file in files.items()
+    )
+    # `printf 'hello\n' | git hash-object --stdin`, compressed or not
+    hello = "ce013625030ba8dba906f756967f9e9ca394464a"
+    packed = PublishedSet("https://github.com/o/r", "0" * 40, (("a.csv", "a.csv.gz", hello),))
+    monkeypatch.setitem(PUBLISHED_SETS, "hello", packed)
+    (tmp_path / "hello").mkdir()
+    (tmp_path / "hello" / "a.csv.gz").write_bytes(gzip.compress(b"hello\n"))
+    assert unpublished("hello", locate_set(tmp_path, "hello", ROOT)) == []
+    (tmp_path / "r").mkdir()
+    (tmp_path / "r" / "a.csv").write_bytes(b"hello\r\n")  # line endings converted
+    assert unpublished("hello", locate_set(tmp_path, "hello", ROOT)) == [
+        f"a.csv ({tmp_path / 'r' / 'a.csv'})"
+    ]
 
 
 @needs("ur10_ipa")

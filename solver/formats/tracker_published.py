@@ -15,11 +15,13 @@ is published). A data folder (:func:`tracker_data_dir`) may hold, for each set:
 
 from __future__ import annotations
 
+import hashlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
 
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.tracker_table import read_text
 
 DATA_ENV = "WIRECAL_TRACKER_DATA"
 
@@ -28,13 +30,14 @@ DATA_ENV = "WIRECAL_TRACKER_DATA"
 class PublishedSet:
     """One public set: the repository publishing it, the commit read, its files there.
 
-    ``files`` pairs each file's path in the repository with its name in the compressed
-    layout.
+    ``files``: each file's path in the repository, its name in the compressed layout and
+    its git blob id at ``commit`` (``git ls-tree``: the SHA-1 of its bytes, see
+    :func:`unpublished`).
     """
 
     url: str
     commit: str
-    files: tuple[tuple[str, str], ...]
+    files: tuple[tuple[str, str, str], ...]
 
     @property
     def clone(self) -> str:
@@ -52,25 +55,50 @@ PUBLISHED_SETS = {
             (
                 "Series_B/measurements_joint_configurations.csv",
                 "series_b_joint_configurations.csv.gz",
+                "be2de9e38f0d656687078b6ecf4b3fa8972eb5e7",
             ),
-            ("Series_C/measurements_random_poses.csv", "series_c_random_poses.csv.gz"),
-            ("Series_D/measurements_iso_cubes.csv", "series_d_iso_cubes.csv.gz"),
+            (
+                "Series_C/measurements_random_poses.csv",
+                "series_c_random_poses.csv.gz",
+                "2c3da0a57afb9419c03f8cc5642662d609906b98",
+            ),
+            (
+                "Series_D/measurements_iso_cubes.csv",
+                "series_d_iso_cubes.csv.gz",
+                "0b1c786d99513fc6cb58d1efb4ba3d368193e8ce",
+            ),
         ),
     ),
     "ur5_jacobi": PublishedSet(
         _JACOBI,
         _JACOBI_COMMIT,
         (
-            ("UR5/3D_UR5_uncalibrated_grid_cleaned.csv", "ur5_grid.csv.gz"),
-            ("UR5/3D_UR5_uncalibrated_random_cleaned.csv", "ur5_random.csv"),
+            (
+                "UR5/3D_UR5_uncalibrated_grid_cleaned.csv",
+                "ur5_grid.csv.gz",
+                "258137a56aae5b1ab7b1de39991d99d28ecb8301",
+            ),
+            (
+                "UR5/3D_UR5_uncalibrated_random_cleaned.csv",
+                "ur5_random.csv",
+                "ed302f8a4e17ec1b63ca2e07e537383d67d8a05e",
+            ),
         ),
     ),
     "wam_jacobi": PublishedSet(
         _JACOBI,
         _JACOBI_COMMIT,
         (
-            ("WAM/3D_WAM_uncalibrated_grid_cleaned.csv", "wam_grid.csv.gz"),
-            ("WAM/3D_WAM_uncalibrated_random_cleaned.csv", "wam_random.csv"),
+            (
+                "WAM/3D_WAM_uncalibrated_grid_cleaned.csv",
+                "wam_grid.csv.gz",
+                "d70786b21ceeca64f133ce3dbfd5d1b8742b06a3",
+            ),
+            (
+                "WAM/3D_WAM_uncalibrated_random_cleaned.csv",
+                "wam_random.csv",
+                "9f048adc6704de8bbeb06b1670befbac3d82cd76",
+            ),
         ),
     ),
 }
@@ -102,12 +130,12 @@ def locate_set(folder: Path, name: str, repo: Path) -> dict[str, Path]:
     """
     published = PUBLISHED_SETS[name]
     found: dict[str, Path] = {}
-    for path, packed in published.files:
+    for path, packed, _blob in published.files:
         places = (folder / published.clone / path, folder / path, folder / name / packed)
         hit = next((p for p in places if p.is_file()), None)
         if hit is not None:
             found[path] = hit
-    absent = [path for path, _ in published.files if path not in found]
+    absent = [path for path, *_ in published.files if path not in found]
     if not absent:
         return found
     clone = folder / published.clone
@@ -119,3 +147,21 @@ def locate_set(folder: Path, name: str, repo: Path) -> dict[str, Path]:
         f"  or point --data DIR or {DATA_ENV}=DIR at the folder holding {published.clone}/"
         f" ({repo / 'tests' / 'data' / 'tracker' / name / 'PUBLISHED.md'})"
     )
+
+
+def unpublished(name: str, files: dict[str, Path]) -> list[str]:
+    """Return the files of set ``name`` whose bytes are not those published at its commit.
+
+    ``files`` as :func:`locate_set` returns them; each differing one as ``path there (file
+    here)``. The bytes (inflated when compressed) are hashed as git hashes a blob (SHA-1
+    of ``blob <size>``, a NUL byte, the bytes) and compared with the blob id there.
+    Another commit, an edited copy or line endings converted on checkout differ: the
+    figures in docs/benchmarks.md were measured on the published bytes.
+    """
+    blobs = {path: blob for path, _packed, blob in PUBLISHED_SETS[name].files}
+    differ = []
+    for path, file in files.items():
+        raw = read_text(file)[0].encode("utf-8")
+        if hashlib.sha1(b"blob %d\0" % len(raw) + raw).hexdigest() != blobs[path]:
+            differ.append(f"{path} ({file})")
+    return differ
