@@ -1,7 +1,8 @@
 """Public laser-tracker data through one wire: held-out 3-D RMS of four calibrations.
 
 Per public data set (read from ``--data DIR``, else ``$WIRECAL_TRACKER_DATA``, else
-``../shared/data/tracker`` beside the clone: one folder per set, as
+``../shared/data/tracker`` beside the clone: a folder holding the publishing repositories as
+cloned, or the older compressed copies, :mod:`wirecal.solver.formats.tracker_published`;
 tests/data/tracker/<set>/PUBLISHED.md says where each is published; the robot files are in
 tests/data/tracker/<set>/), or any
 table with columns j1…jn (degrees) and x, y, z (mm) with ``--robot R --table T``: over 3 seeds, a
@@ -21,8 +22,9 @@ file that asks none.
     python bench/bench_tracker_replay.py [--data DIR] [--set ur10_ipa ...]
         [--robot R --table T.csv] [--seeds 3] [--points 60] [--json]
 
-A set asked for and not found exits 2 naming the folder, the missing files and how to get
-them.
+A set asked for and not found exits 2 naming the folder, the missing files and the
+``git clone`` (and commit) that brings them; a file that is not the published bytes at that
+commit (git's blob id) is named in a note on stderr.
 """
 
 from __future__ import annotations
@@ -42,12 +44,13 @@ import numpy as np  # noqa: E402
 from wirecal.solver.errors import WirecalError  # noqa: E402
 from wirecal.solver.fit import point_model  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.formats.tracker_sets import (  # noqa: E402
-    SET_FILES,
-    missing_set,
-    read_tracker,
+from wirecal.solver.formats.tracker_published import (  # noqa: E402
+    PUBLISHED_SETS,
+    locate_set,
     tracker_data_dir,
+    unpublished,
 )
+from wirecal.solver.formats.tracker_sets import read_tracker  # noqa: E402
 from wirecal.solver.kinematics import tool_position  # noqa: E402
 from wirecal.solver.params import TOOL_NAMES  # noqa: E402
 from wirecal.solver.tracker_fit import calibrate  # noqa: E402
@@ -55,33 +58,28 @@ from wirecal.solver.tracker_replay import replay  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = ROOT / "tests" / "data" / "tracker"
+# Each set's files by their path in the publishing repository (tracker_published).
+UR10_B = "Series_B/measurements_joint_configurations.csv"
+UR5_GRID, UR5_TEST = (
+    "UR5/3D_UR5_uncalibrated_grid_cleaned.csv",
+    "UR5/3D_UR5_uncalibrated_random_cleaned.csv",
+)
+WAM_GRID, WAM_TEST = (
+    "WAM/3D_WAM_uncalibrated_grid_cleaned.csv",
+    "WAM/3D_WAM_uncalibrated_random_cleaned.csv",
+)
 SETS = {
-    "UR10 IPA B (joint configurations)": (
-        "ur10_ipa",
-        "ur10_ipa/series_b_joint_configurations.csv.gz",
-    ),
-    "UR10 IPA C (random poses)": ("ur10_ipa", "ur10_ipa/series_c_random_poses.csv.gz"),
-    "UR10 IPA D (ISO cubes)": ("ur10_ipa", "ur10_ipa/series_d_iso_cubes.csv.gz"),
-    "UR5 Tsinghua grid": ("ur5_jacobi", "ur5_jacobi/ur5_grid.csv.gz"),
-    "WAM (7 axes) Tsinghua grid": ("wam_jacobi", "wam_jacobi/wam_grid.csv.gz"),
+    "UR10 IPA B (joint configurations)": ("ur10_ipa", UR10_B),
+    "UR10 IPA C (random poses)": ("ur10_ipa", "Series_C/measurements_random_poses.csv"),
+    "UR10 IPA D (ISO cubes)": ("ur10_ipa", "Series_D/measurements_iso_cubes.csv"),
+    "UR5 Tsinghua grid": ("ur5_jacobi", UR5_GRID),
+    "WAM (7 axes) Tsinghua grid": ("wam_jacobi", WAM_GRID),
 }
 # The Tsinghua sets' own test: calibrate on the grid, test on the 20 random poses (the
 # thesis's abstract, quoted in the data set's README: mean absolute position error).
 PUBLISHED = {
-    "UR5": (
-        "ur5_jacobi",
-        "ur5_jacobi/ur5_grid.csv.gz",
-        "ur5_jacobi/ur5_random.csv",
-        2.5664,
-        0.1549,
-    ),
-    "WAM": (
-        "wam_jacobi",
-        "wam_jacobi/wam_grid.csv.gz",
-        "wam_jacobi/wam_random.csv",
-        17.7661,
-        2.9178,
-    ),
+    "UR5": ("ur5_jacobi", UR5_GRID, UR5_TEST, 2.5664, 0.1549),
+    "WAM": ("wam_jacobi", WAM_GRID, WAM_TEST, 17.7661, 2.9178),
 }
 
 
@@ -119,15 +117,15 @@ def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict
     }
 
 
-def published_test(data: Path, arm: str, grid: str, test: str) -> dict:
+def published_test(files: dict[str, Path], arm: str, grid: str, test: str) -> dict:
     """Return the mean 3-D error on the test poses: as measured, nominal, tracker-calibrated.
 
     Calibrated on every grid pose; the base frame the calibration found is kept (no second
     registration on the test poses), as a calibration is used.
     """
     base = point_model(load_robot(ROBOTS / arm / "robot.toml"))
-    g, t = read_tracker(data / grid), read_tracker(data / test)
-    target = np.loadtxt(data / test, delimiter=",", skiprows=1, usecols=(1, 2, 3))
+    g, t = read_tracker(files[grid]), read_tracker(files[test])
+    target = np.loadtxt(files[test], delimiter=",", skiprows=1, usecols=(1, 2, 3))
 
     def mean_error(fit) -> float:
         p = tool_position(fit.model, np.radians(t.q_deg)) @ fit.rotation.T + fit.translation_mm
@@ -141,11 +139,40 @@ def published_test(data: Path, arm: str, grid: str, test: str) -> dict:
     }
 
 
+def located(data: Path, wanted: set[str]) -> dict[str, dict[str, Path]]:
+    """Return each wanted set's files; exit 2 naming every set not found and how to get it.
+
+    A file whose bytes are not the published ones is read, with a note on stderr.
+    """
+    files, missing = {}, []
+    for name in sorted(wanted):
+        try:
+            files[name] = locate_set(data, name, ROOT)
+        except WirecalError as exc:
+            missing.append(f"error: {exc}")
+    if missing:
+        print("\n".join(missing), file=sys.stderr)
+        sys.exit(2)
+    for name in sorted(wanted):
+        if differ := unpublished(name, files[name]):
+            commit = PUBLISHED_SETS[name].commit
+            print(
+                f"note: not the bytes published at {commit}: {', '.join(differ)}; the figures"
+                " may differ from docs/benchmarks.md",
+                file=sys.stderr,
+            )
+    return files
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", type=Path, help="folder holding the public sets' folders")
     ap.add_argument(
-        "--set", action="append", choices=sorted(SET_FILES), help="only this set (repeatable)"
+        "--data",
+        type=Path,
+        help="folder holding the clones of the publishing repositories (or <set>/*.csv.gz)",
+    )
+    ap.add_argument(
+        "--set", action="append", choices=sorted(PUBLISHED_SETS), help="only this set (repeatable)"
     )
     ap.add_argument("--robot", type=Path, help="robot file (with --table)")
     ap.add_argument("--table", type=Path, help="a tracker table: j1…jn (deg), x, y, z (mm)")
@@ -157,17 +184,13 @@ def main() -> None:
         ap.error("give --robot and --table together")
     if args.table and args.set:
         ap.error("give --set or --table, not both")
-    data = tracker_data_dir(ROOT, args.data)
-    wanted = set(args.set or SET_FILES)
-    missing = [m for s in sorted(wanted) if (m := missing_set(data, s, ROOT))]
-    if missing and not args.table:
-        print("\n".join(f"error: {m}" for m in missing), file=sys.stderr)
-        sys.exit(2)
+    wanted = set(args.set or PUBLISHED_SETS)
+    files = {} if args.table else located(tracker_data_dir(ROOT, args.data), wanted)
     cases = (
         {str(args.table): (args.robot, args.table)}
         if args.table
         else {
-            name: (ROBOTS / arm / "robot.toml", data / f)
+            name: (ROBOTS / arm / "robot.toml", files[arm][f])
             for name, (arm, f) in SETS.items()
             if arm in wanted
         }
@@ -177,12 +200,12 @@ def main() -> None:
         if not args.table:
             out["published"] = {
                 name: {
-                    **published_test(data, *files),
+                    **published_test(files[arm], arm, *tests),
                     "published_uncalibrated_mm": before,
                     "published_hybrid_mm": after,
                 }
-                for name, (*files, before, after) in PUBLISHED.items()
-                if files[0] in wanted
+                for name, (arm, *tests, before, after) in PUBLISHED.items()
+                if arm in wanted
             }
     except WirecalError as exc:
         sys.exit(f"error: {exc}")

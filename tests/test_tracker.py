@@ -18,15 +18,15 @@ from wirecal.cli.main import main
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit import point_model
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.tracker_sets import (
+from wirecal.solver.formats.tracker_published import (
     DATA_ENV,
-    IPA_JOINTS,
-    SET_FILES,
-    missing_set,
-    read_pool,
-    read_tracker,
+    PUBLISHED_SETS,
+    PublishedSet,
+    locate_set,
     tracker_data_dir,
+    unpublished,
 )
+from wirecal.solver.formats.tracker_sets import IPA_JOINTS, read_pool, read_tracker
 from wirecal.solver.kinematics import tool_position, with_errors
 from wirecal.solver.plan_options import PlanOptions
 from wirecal.solver.plan_pool import greedy_rows, plan_pool
@@ -37,47 +37,75 @@ ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = ROOT / "tests" / "data" / "tracker"  # robot files and where each set is published
 DATA = tracker_data_dir(ROOT)  # the public sets themselves: not in the repository
 UR10 = ROBOTS / "ur10_ipa" / "robot.toml"
+# Each public file by its set and path in the publishing repository: rows, joints.
 ROWS = {
-    "ur10_ipa/series_b_joint_configurations.csv.gz": (1495, 6),
-    "ur10_ipa/series_c_random_poses.csv.gz": (2773, 6),
-    "ur10_ipa/series_d_iso_cubes.csv.gz": (632, 6),
-    "ur5_jacobi/ur5_grid.csv.gz": (1000, 6),
-    "ur5_jacobi/ur5_random.csv": (20, 6),
-    "wam_jacobi/wam_grid.csv.gz": (216, 7),
-    "wam_jacobi/wam_random.csv": (20, 7),
+    ("ur10_ipa", "Series_B/measurements_joint_configurations.csv"): (1495, 6),
+    ("ur10_ipa", "Series_C/measurements_random_poses.csv"): (2773, 6),
+    ("ur10_ipa", "Series_D/measurements_iso_cubes.csv"): (632, 6),
+    ("ur5_jacobi", "UR5/3D_UR5_uncalibrated_grid_cleaned.csv"): (1000, 6),
+    ("ur5_jacobi", "UR5/3D_UR5_uncalibrated_random_cleaned.csv"): (20, 6),
+    ("wam_jacobi", "WAM/3D_WAM_uncalibrated_grid_cleaned.csv"): (216, 7),
+    ("wam_jacobi", "WAM/3D_WAM_uncalibrated_random_cleaned.csv"): (20, 7),
 }
 # The synthetic UR10's errors (deg, mm): the truth the calibrations must find.
 TRUTH = {"th2": 0.05, "th3": -0.04, "a2": 0.6, "a3": -0.4, "d4": 0.3, "al3": 0.03, "th5": 0.02}
 
 
+def _located(name: str) -> dict[str, Path] | str:
+    """Return the public set's files where :func:`tracker_data_dir` looks, or why not."""
+    try:
+        return locate_set(DATA, name, ROOT)
+    except WirecalError as exc:
+        return str(exc)
+
+
+FOUND = {name: _located(name) for name in PUBLISHED_SETS}
+
+
 def needs(name: str) -> pytest.MarkDecorator:
     """Skip unless the public set ``name`` is where :func:`tracker_data_dir` looks."""
-    why = missing_set(DATA, name, ROOT)
-    return pytest.mark.skipif(why is not None, reason=str(why))
+    why = FOUND[name]
+    return pytest.mark.skipif(isinstance(why, str), reason=str(why))
+
+
+def public_set(name: str) -> dict[str, Path]:
+    """Return public set ``name``'s files by path there (for a test that ``needs`` it)."""
+    files = FOUND[name]
+    assert not isinstance(files, str), files
+    return files
+
+
+def public(name: str, path: str) -> Path:
+    """Return the file at ``path`` in set ``name``'s repository (for a test that ``needs`` it)."""
+    return public_set(name)[path]
 
 
 # --- the public data sets ----------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", sorted(SET_FILES))
+@pytest.mark.parametrize("name", sorted(PUBLISHED_SETS))
 def test_each_set_says_where_it_is_published(name):
-    """Repository URL, commit, path there, licence and citation; the data itself not here."""
+    """Repository URL, commit, path there, licence, citation, the clone; the data not here."""
     text = (ROBOTS / name / "PUBLISHED.md").read_text()
-    assert re.search(r"https://github\.com/[\w-]+/[\w-]+", text)
-    assert re.search(r"commit\s+[0-9a-f]{40}\b", text)
+    published = PUBLISHED_SETS[name]
+    assert re.fullmatch(r"https://github\.com/[\w-]+/[\w-]+", published.url)
+    assert re.fullmatch(r"[0-9a-f]{40}", published.commit)
+    assert f"git clone {published.url}" in text
+    assert f"checkout {published.commit}" in text
     assert "MIT" in text
     assert "Cite:" in text
-    for f in SET_FILES[name]:
-        assert f"`{f}`" in text
+    for path, packed, _blob in published.files:
+        assert f"`{published.clone}/{path}`" in text
+        assert f"`{name}/{packed}`" in text
     assert sorted(p.name for p in (ROBOTS / name).iterdir()) == ["PUBLISHED.md", "robot.toml"]
 
 
 @pytest.mark.parametrize(
-    "name", [pytest.param(n, marks=needs(n.split("/")[0])) for n in sorted(ROWS)]
+    ("name", "path"), [pytest.param(*k, marks=needs(k[0])) for k in sorted(ROWS)]
 )
-def test_public_sets_read(name):
-    table = read_tracker(DATA / name)
-    assert table.q_deg.shape == ROWS[name]
+def test_public_sets_read(name, path):
+    table = read_tracker(public(name, path))
+    assert table.q_deg.shape == ROWS[name, path]
     assert np.isfinite(table.xyz_mm).all()
 
 
@@ -87,20 +115,137 @@ def test_data_folder_from_option_env_or_beside_the_clone(tmp_path, monkeypatch):
     monkeypatch.setenv(DATA_ENV, str(tmp_path / "env"))
     assert tracker_data_dir(tmp_path / "repo") == tmp_path / "env"
     assert tracker_data_dir(tmp_path / "repo", tmp_path / "opt") == tmp_path / "opt"
-    (tmp_path / "ur5_jacobi").mkdir()
-    (tmp_path / "ur5_jacobi" / "ur5_grid.csv.gz").write_bytes(b"")
-    why = missing_set(tmp_path, "ur5_jacobi", ROOT)
-    assert why is not None
-    assert "missing ur5_random.csv" in why
-    assert "PUBLISHED.md" in why
+
+
+def _ipa_text(q_rad: np.ndarray, xyz_mm: np.ndarray, temp_c: np.ndarray) -> str:
+    """Return rows in the IPA layout: ``;``-separated, decimal commas, radians."""
+    head = ";".join([*IPA_JOINTS, "measurement_x", "measurement_y", "measurement_z"])
+    body = [
+        ";".join(f"{v:.6f}".replace(".", ",") for v in (*a, *b, c))
+        for a, b, c in zip(q_rad, xyz_mm, temp_c, strict=True)
+    ]
+    return head + ";measurement_temperature\n" + "\n".join(body) + "\n"
+
+
+def _jacobi_text(q_deg: np.ndarray, target_mm: np.ndarray, dif_mm: np.ndarray) -> str:
+    """Return rows in the Tsinghua layout: step, target, difference (mm), joints (deg)."""
+    n = q_deg.shape[1]
+    head = ",".join(["step_order", "x_t", "y_t", "z_t", "x_dif", "y_dif", "z_dif"])
+    head += "".join(f",joint_{i + 1}" for i in range(n))
+    body = [
+        ",".join([str(k), *map(repr, map(float, r))])
+        for k, r in enumerate(np.hstack([target_mm, dif_mm, q_deg]))
+    ]
+    return head + "\n" + "\n".join(body) + "\n"
+
+
+def _synthetic_sets(seed: int) -> dict[tuple[str, str], str]:
+    """Return generated text for every file of every public set, keyed as ROWS."""
+    rng = np.random.default_rng(seed)
+    out = {}
+    for (name, path), (_rows, n) in ROWS.items():
+        q, xyz = rng.uniform(-170, 170, (9, n)), rng.uniform(-900, 900, (9, 3))
+        out[name, path] = (
+            _ipa_text(np.radians(q), xyz, rng.uniform(19, 24, 9))
+            if name == "ur10_ipa"
+            else _jacobi_text(q, xyz, rng.uniform(-3, 3, (9, 3)))
+        )
+    return out
+
+
+def _lay_out(folder: Path, texts: dict[tuple[str, str], str], layout: str) -> Path:
+    """Write ``texts`` as clones in ``folder``, as if ``folder`` were a clone, or compressed."""
+    for (name, path), text in texts.items():
+        published = PUBLISHED_SETS[name]
+        packed = {p: z for p, z, _blob in published.files}[path]
+        file = {
+            "clones": folder / published.clone / path,
+            "clone": folder / path,
+            "compressed": folder / name / packed,
+        }[layout]
+        file.parent.mkdir(parents=True, exist_ok=True)
+        raw = text.encode()
+        file.write_bytes(
+            gzip.compress(raw) if packed.endswith(".gz") and layout == "compressed" else raw
+        )
+    return folder
+
+
+@pytest.mark.parametrize("layout", ["clones", "clone", "compressed"])
+def test_sets_read_as_published_or_compressed(tmp_path, layout):
+    """Cloned as published, or gzip-compressed under our names: the same rows."""
+    texts = _synthetic_sets(7)
+    folder = _lay_out(tmp_path / layout, texts, layout)
+    for (name, path), text in texts.items():
+        plain = tmp_path / "plain" / name / path
+        plain.parent.mkdir(parents=True, exist_ok=True)
+        plain.write_text(text)
+        want, got = read_tracker(plain), read_tracker(locate_set(folder, name, ROOT)[path])
+        assert np.array_equal(got.q_deg, want.q_deg)
+        assert np.array_equal(got.xyz_mm, want.xyz_mm)
+        assert np.array_equal(got.lines, want.lines)
+
+
+def test_a_clone_is_preferred_to_compressed_copies(tmp_path):
+    _lay_out(tmp_path, _synthetic_sets(1), "compressed")
+    _lay_out(tmp_path, _synthetic_sets(2), "clones")
+    files = locate_set(tmp_path, "ur5_jacobi", ROOT)
+    assert files == {
+        path: tmp_path / "serial_robots_datasets" / path
+        for path, *_ in PUBLISHED_SETS["ur5_jacobi"].files
+    }
+
+
+def test_a_set_not_found_names_the_files_and_the_clone(tmp_path):
+    texts = _synthetic_sets(3)
+    grid = ("ur5_jacobi", "UR5/3D_UR5_uncalibrated_grid_cleaned.csv")
+    _lay_out(tmp_path, {grid: texts[grid]}, "clones")
+    with pytest.raises(WirecalError) as err:
+        locate_set(tmp_path, "ur5_jacobi", ROOT)
+    why = str(err.value)
+    assert "missing UR5/3D_UR5_uncalibrated_random_cleaned.csv of" in why
+    assert "grid_cleaned" not in why
+    clone = tmp_path / "serial_robots_datasets"
+    assert (
+        f"git clone https://github.com/pauljac7700/serial_robots_datasets {clone} && git -C"
+        f" {clone} checkout 759068d85a8b95183cd71ff96d9dfc5173bc57fc" in why
+    )
     assert DATA_ENV in why
-    (tmp_path / "ur5_jacobi" / "ur5_random.csv").write_bytes(b"")
-    assert missing_set(tmp_path, "ur5_jacobi", ROOT) is None
+    assert str(ROBOTS / "ur5_jacobi" / "PUBLISHED.md") in why
+    with pytest.raises(WirecalError, match="public tracker set 'wam_jacobi' is not in"):
+        locate_set(tmp_path / "none", "wam_jacobi", ROOT)
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=needs(n)) for n in sorted(PUBLISHED_SETS)])
+def test_public_files_are_the_published_bytes(name):
+    """git's blob ids at the commit PUBLISHED.md names, in either layout."""
+    assert unpublished(name, public_set(name)) == []
+
+
+def test_bytes_not_published_are_named(tmp_path, monkeypatch):
+    texts = _synthetic_sets(5)
+    _lay_out(tmp_path, texts, "compressed")
+    files = locate_set(tmp_path, "wam_jacobi", ROOT)
+    assert sorted(unpublished("wam_jacobi", files)) == sorted(
+        f"{path} ({file})" for path, file in files.items()
+    )
+    # `printf 'hello\n' | git hash-object --stdin`, compressed or not
+    hello = "ce013625030ba8dba906f756967f9e9ca394464a"
+    packed = PublishedSet("https://github.com/o/r", "0" * 40, (("a.csv", "a.csv.gz", hello),))
+    monkeypatch.setitem(PUBLISHED_SETS, "hello", packed)
+    (tmp_path / "hello").mkdir()
+    (tmp_path / "hello" / "a.csv.gz").write_bytes(gzip.compress(b"hello\n"))
+    assert unpublished("hello", locate_set(tmp_path, "hello", ROOT)) == []
+    (tmp_path / "r").mkdir()
+    (tmp_path / "r" / "a.csv").write_bytes(b"hello\r\n")  # line endings converted
+    assert unpublished("hello", locate_set(tmp_path, "hello", ROOT)) == [
+        f"a.csv ({tmp_path / 'r' / 'a.csv'})"
+    ]
 
 
 @needs("ur10_ipa")
 def test_ipa_row_in_degrees_and_mm():
-    t = read_tracker(DATA / "ur10_ipa/series_b_joint_configurations.csv.gz")
+    t = read_tracker(public("ur10_ipa", "Series_B/measurements_joint_configurations.csv"))
     # the file's first data row: −3,14159;−1,5708;0;−1,5708;0;0 rad, measurement_x 383,76294 mm
     assert t.q_deg[0] == pytest.approx([-180.0, -90.0, 0.0, -90.0, 0.0, 0.0], abs=1e-3)
     assert t.xyz_mm[0] == pytest.approx([383.76294, -3240.8734, 201.93157])
@@ -111,7 +256,7 @@ def test_ipa_row_in_degrees_and_mm():
 
 @needs("ur5_jacobi")
 def test_jacobi_measured_is_target_less_difference():
-    t = read_tracker(DATA / "ur5_jacobi/ur5_random.csv")
+    t = read_tracker(public("ur5_jacobi", "UR5/3D_UR5_uncalibrated_random_cleaned.csv"))
     # first row: x_t −495.48014933320513, x_dif −2.382049666794785
     assert t.xyz_mm[0, 0] == pytest.approx(-495.48014933320513 + 2.382049666794785)
     assert t.q_deg[0, 0] == pytest.approx(17.272893800633657)
@@ -200,13 +345,8 @@ def test_ipa_layout_round_trip(tmp_path_factory, rows, seed):
     q = np.round(rng.uniform(-6.2, 6.2, (rows, 6)), 6)
     xyz = np.round(rng.uniform(-3000, 3000, (rows, 3)), 5)
     temp = np.round(rng.uniform(15, 30, rows), 4)
-    head = ";".join([*IPA_JOINTS, "measurement_x", "measurement_y", "measurement_z"])
-    body = [
-        ";".join(f"{v:.6f}".replace(".", ",") for v in (*a, *b, c))
-        for a, b, c in zip(q, xyz, temp, strict=True)
-    ]
     path = tmp_path_factory.mktemp("ipa") / "ipa.csv"
-    path.write_text(head + ";measurement_temperature\n" + "\n".join(body) + "\n")
+    path.write_text(_ipa_text(q, xyz, temp))
     t = read_tracker(path)
     assert np.allclose(t.q_deg, q * 180 / np.pi, atol=1e-9)
     assert np.allclose(t.xyz_mm, xyz, atol=1e-9)
@@ -442,5 +582,5 @@ def test_bench_replays_any_generic_table(tmp_path):
     gone = subprocess.run(absent, capture_output=True, text=True)
     assert gone.returncode == 2
     assert "public tracker set 'wam_jacobi' is not in" in gone.stderr
-    assert "PUBLISHED.md" in gone.stderr
+    assert "git clone https://github.com/pauljac7700/serial_robots_datasets" in gone.stderr
     assert "Traceback" not in gone.stderr

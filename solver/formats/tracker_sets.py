@@ -13,14 +13,12 @@ The layout is told by the header (:func:`read_tracker`):
   mirrors the errors about the nominal target and gives the same calibration figures).
 * otherwise the generic layout of :mod:`~wirecal.solver.formats.tracker_table`.
 
-The public sets are not in the repository: they are read where they are put
-(:func:`tracker_data_dir`), one folder per set, the file names of
-tests/data/tracker/<set>/PUBLISHED.md.
+The public sets are not in the repository: they are read as published (a git clone) or
+as gzip-compressed copies, where :mod:`~wirecal.solver.formats.tracker_published` finds them.
 """
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -40,44 +38,6 @@ IPA_POINT = ("measurement_x", "measurement_y", "measurement_z")
 IPA_TEMPERATURE = "measurement_temperature"
 TARGET = ("x_t", "y_t", "z_t")
 DIFFERENCE = ("x_dif", "y_dif", "z_dif")
-DATA_ENV = "WIRECAL_TRACKER_DATA"
-# The files of each public set, as tests/data/tracker/<set>/PUBLISHED.md names them.
-SET_FILES = {
-    "ur10_ipa": (
-        "series_b_joint_configurations.csv.gz",
-        "series_c_random_poses.csv.gz",
-        "series_d_iso_cubes.csv.gz",
-    ),
-    "ur5_jacobi": ("ur5_grid.csv.gz", "ur5_random.csv"),
-    "wam_jacobi": ("wam_grid.csv.gz", "wam_random.csv"),
-}
-
-
-def tracker_data_dir(repo: Path, given: Path | None = None) -> Path:
-    """Return the folder holding the public sets' folders (``ur10_ipa/`` …).
-
-    ``given`` (a ``--data DIR``), else the environment's ``WIRECAL_TRACKER_DATA``, else
-    ``<repo>/../shared/data/tracker`` (a copy of shared/ beside the clone).
-    """
-    if given is not None:
-        return given
-    env = os.environ.get(DATA_ENV)
-    return Path(env) if env else repo.parent / "shared" / "data" / "tracker"
-
-
-def missing_set(folder: Path, name: str, repo: Path) -> str | None:
-    """Return why set ``name`` is not in ``folder`` and how to get it, or None.
-
-    None when every file ``SET_FILES[name]`` lists is there.
-    """
-    absent = [f for f in SET_FILES[name] if not (folder / name / f).is_file()]
-    if not absent:
-        return None
-    return (
-        f"public tracker set {name!r} is not in {folder / name} (missing {', '.join(absent)}):"
-        f" download it as {repo / 'tests' / 'data' / 'tracker' / name / 'PUBLISHED.md'} says,"
-        f" or point --data DIR or {DATA_ENV}=DIR at the folder holding {name}/"
-    )
 
 
 def read_ipa(source: str, header: tuple[str, ...], rows: Cells) -> TrackerTable:
