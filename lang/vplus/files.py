@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from wirecal.lang.vplus.parser import Program, check_programs, read_programs
+from wirecal.solver.errors import WirecalError
 
 
 def check_files(texts: Mapping[str, str], *, external_calls: bool = False) -> list[str]:
@@ -22,7 +23,11 @@ def check_files(texts: Mapping[str, str], *, external_calls: bool = False) -> li
     visible: dict[str, Program] = {}
     where: dict[str, str] = {}
     for source, text in texts.items():
-        found, programs = read_programs(text, source)
+        try:  # a file refused whole (blocks nested too deep) is that file's problem
+            found, programs = read_programs(text, source)
+        except WirecalError as exc:
+            problems += exc.problems
+            continue
         problems += found
         for name, prog in programs.items():
             if name in where and where[name] != source:
@@ -36,5 +41,8 @@ def check_files(texts: Mapping[str, str], *, external_calls: bool = False) -> li
     for source, programs in read:
         if not programs and not any(p.startswith(f"{source}:") for p in problems):
             problems.append(f"{source}: no .PROGRAM in the file")
-        check_programs(programs, source, problems, external_calls, visible)
+        try:
+            check_programs(programs, source, problems, external_calls, visible)
+        except WirecalError as exc:
+            problems += exc.problems
     return problems
