@@ -265,9 +265,8 @@ def movej_speeds(robot: Robot, plan: Plan, run: RunParameters, steps: list[dict]
     run_a = _accel_rad_s2(run)
 
     def movej(pct: float) -> dict[str, str]:
-        v = _speed_rad_s(robot, pct)
-        a = min(run_a, v / MOVE_OVERHEAD_S)
-        return {"v": _down(v), "a": _down(a)}
+        v = _down(_speed_rad_s(robot, pct))
+        return {"v": _fixed(v, 6), "a": _fixed(_down(min(run_a, v / MOVE_OVERHEAD_S)), 6)}
 
     pct = run_timeline(robot, plan, run).speed_pct
     if is_cb3(robot.controller.software):  # θ0 first (in place), then run_moves' moves
@@ -276,9 +275,9 @@ def movej_speeds(robot: Robot, plan: Plan, run: RunParameters, steps: list[dict]
     return give_move_speeds(steps, speeds, "move")
 
 
-def _down(x: float) -> str:
-    """Write ``x`` rounded down to 6 decimals (a limit's value never rounds up)."""
-    return _fixed(math.floor(x * 1e6) / 1e6, 6)
+def _down(x: float) -> float:
+    """Return ``x`` rounded down to 6 decimals (a limit's value never rounds up)."""
+    return math.floor(x * 1e6) / 1e6
 
 
 def line_context(robot: Robot, plan: Plan, steps: list[dict]) -> dict[str, object]:
