@@ -8,12 +8,15 @@ backend's own literal function.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
+from typing import TypeVar, cast
 
 import numpy as np
 
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
+
+T = TypeVar("T")
 
 
 def joint_literal(x: float) -> str:
@@ -65,3 +68,19 @@ def run_steps(
             }
         )
     return steps
+
+
+def give_move_speeds(steps: list[dict[str, object]], speeds: Iterable[T], key: str) -> T:
+    """Give each move of ``steps`` its value of ``speeds``; return the closing move's.
+
+    ``speeds``: one value per move in the run's order (:func:`run_steps`'s steps: per
+    step θ0, its vias, its points; last θ0), as
+    :func:`~wirecal.solver.run_parameters.run_timeline` lists the SPEEDs the wire allows.
+    A step's move to θ0 gets ``"zero_" + key``, each via and point ``key``.
+    """
+    values = iter(speeds)
+    for step in steps:
+        step["zero_" + key] = next(values)
+        for move in [*cast(list, step["vias"]), *cast(list, step["points"])]:
+            move[key] = next(values)
+    return next(values)

@@ -71,6 +71,12 @@ move of the paper plan, seed 2: 0.9 was not enough; 0.8 held on seeds 1–8)."""
 PATH_SAMPLES = 33
 """Points along each move at which the wire speed is evaluated."""
 
+AT_MOUNT_MM = 1e-3
+"""A tool point nearer the mount than this is at it (the wire leaves at the tool's speed):
+beyond the rounding of a controller's single-precision joints (a URScript target of -62
+deg is held as -61.999996 deg: 4e-5 mm at the UR5's tool), whose random direction
+would otherwise read as a kink in the wire's rate, 19,000 mm of d²ℓ/ds² instead of 18."""
+
 VIBRATION_TAU_S = 0.08
 """Decay time constant of the vibration after a stop (the twin's model; an estimate)."""
 
@@ -175,10 +181,16 @@ class Moves:
         with np.errstate(invalid="ignore"):
             return _finite(self.wire_rate_mm * self.cruise(speed_pct))
 
-    def wire_accel_mm_s2(self, speed_pct: np.ndarray) -> np.ndarray:
-        """Bound on the peak wire acceleration (mm/s²) of each move at ``speed_pct``."""
+    def wire_accel_mm_s2(
+        self, speed_pct: np.ndarray, ramp_s: float = MOVE_OVERHEAD_S
+    ) -> np.ndarray:
+        """Bound on the peak wire acceleration (mm/s²) of each move at ``speed_pct``.
+
+        ``ramp_s``: the time the move takes to reach cruise (a language's own, when its
+        move names an acceleration; else the model's :data:`MOVE_OVERHEAD_S`).
+        """
         c = _finite(self.cruise(speed_pct))
-        return self.wire_curve_mm * c**2 + self.wire_rate_mm * c / MOVE_OVERHEAD_S
+        return self.wire_curve_mm * c**2 + self.wire_rate_mm * c / ramp_s
 
     def vibration_mm(self, speed_pct: np.ndarray) -> np.ndarray:
         """Vibration amplitude (mm) after each move at ``speed_pct``."""
@@ -216,7 +228,7 @@ def move_profiles(
     tool_rate = np.linalg.norm(dp, axis=2)
     with np.errstate(invalid="ignore", divide="ignore"):
         rate = np.einsum("msc,msc->ms", wire, dp) / length
-    rate = np.where(length > 1e-6, rate, tool_rate)  # leaving the mount: at the tool's speed
+    rate = np.where(length > AT_MOUNT_MM, rate, tool_rate)  # leaving the mount: tool's speed
     curve = np.gradient(rate, s, axis=1)
     travel = np.abs(dq) / robot.joint_speed_deg_s
     slowest = travel.max(axis=1)

@@ -7,13 +7,15 @@ example: ``gen`` refuses the example's colliding plan (``colliding_plan.toml`` b
 plan, which names the pair in a ``# collides:`` line), and the same programs rendered
 with the pre-flight bypassed stop in the twin at that move, naming the pair; a point
 beyond the controller's limit stops the run; a point within the margin of a limit is
-refused; a wire beyond the encoder's range is refused, and stops the run when bypassed;
+refused; a wire beyond the encoder's range is refused, and stops the run when bypassed; a
+move beyond the wire's speed or acceleration limit stops the run, naming the limit;
 the patch companion, where there is one, round-trips. The toy language
 (:mod:`tests.toy_language`), registered only here, gets all of it from the shared code.
 
 Mutations these tests kill (docs/development.md lists them): the pre-flight's
 ``check_cell`` or ``check_limits`` call removed; ``World.move``'s collision, limit or wire
-check removed; a controller's mapping of a refusal dropped.
+check removed; a controller's mapping of a refusal dropped; a language's runs with the
+wire's limits off.
 """
 
 from __future__ import annotations
@@ -48,6 +50,8 @@ KEYS = [*sorted(languages()), TOY]
 COLLIDING = "colliding_plan.toml"
 SHORT_RANGE_MM = 100.0
 """An encoder range every example plan exceeds (its longest wires are 300-600 mm)."""
+SLOW_WIRE = 1.0
+"""A wire speed (mm/s) and acceleration (mm/s²) every example plan's first point exceeds."""
 
 
 @dataclass(frozen=True)
@@ -165,6 +169,22 @@ def test_the_wire_beyond_the_encoders_range_is_refused_and_stops_the_run(case, t
     assert not run.complete
     assert RANGE_EXCEEDED in out.message
     assert f"beyond the encoder's range_mm {SHORT_RANGE_MM:g}" in out.message
+
+
+@pytest.mark.parametrize("limit", ["max_wire_speed_mm_s", "max_wire_accel_mm_s2"])
+def test_a_move_beyond_the_wires_limits_stops_naming_the_limit(case, limit, tmp_path):
+    """The programs generated for the robot file's wire run on an encoder whose wire may
+    run at only 1 mm/s (or accelerate at 1 mm/s²): the first move to a point stops the
+    run before it moves, naming the limit."""
+    reg = registered(case.robot)
+    programs = reg.generator.programs(case.robot, case.plan, GenRequest())
+    slow = replace(case.robot, encoder=replace(case.robot.encoder, **{limit: SLOW_WIRE}))
+    run = reg.measure(slow, case.plan, {}, tmp_path, programs, seed=3)
+    out = _outcome(run)
+    assert not run.complete
+    assert out.status == "error", out
+    assert f"beyond the encoder's {limit} {SLOW_WIRE:g}" in out.message
+    assert run.world.moves == move_of_step(case.plan, 1, 1) - 1
 
 
 def _numbers(value) -> list[float]:

@@ -51,7 +51,13 @@ from wirecal.solver.ik import flange_pose
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.run_parameters import VIBRATION_HZ, VIBRATION_TAU_S, Moves, move_profiles
+from wirecal.solver.run_parameters import (
+    MOVE_OVERHEAD_S,
+    VIBRATION_HZ,
+    VIBRATION_TAU_S,
+    Moves,
+    move_profiles,
+)
 from wirecal.solver.simulate import (
     IDEAL_ENCODER,
     OPERATOR_SEAT_S,
@@ -223,14 +229,20 @@ class World:
 
     # ---- motion ----
     def move(
-        self, q_deg: np.ndarray, speed_pct: float, duration_s: float | None = None
+        self,
+        q_deg: np.ndarray,
+        speed_pct: float,
+        duration_s: float | None = None,
+        ramp_s: float = MOVE_OVERHEAD_S,
     ) -> Refusal | None:
         """Move the arm to ``q_deg`` at ``speed_pct``, or return why the cell refuses.
 
         Checks, in this order, the controller's joint limits (``limits``), a collision on
         the joint-interpolated move, the wire's speed and acceleration (when the run
-        enforces them: ``wire_limits``); the arm then arrives after ``duration_s`` (the
-        language's own move time) or the move profile's, and vibrates along the wire. A
+        enforces them: ``wire_limits``; ``ramp_s`` the time to reach cruise, the
+        language's own when its move names an acceleration); the arm then arrives after
+        ``duration_s`` (the language's own move time) or the move profile's, and vibrates
+        along the wire. A
         target within :data:`IN_PLACE_DEG` of the commanded joints is a move in place (no
         travel: the profile of a vanishing move is not resolved).
         """
@@ -246,7 +258,7 @@ class World:
         start = np.asarray(self.joints, dtype=float)
         in_place = float(np.max(np.abs(q - start))) < IN_PLACE_DEG
         move = self._profile(start if in_place else q)
-        over = self._wire_overspeed(move, speed_pct)
+        over = self._wire_overspeed(move, speed_pct, ramp_s)
         if over is not None:
             return WireOverspeed(self._move_name(q), over)
         speed = np.asarray(speed_pct)
@@ -273,7 +285,7 @@ class World:
         """Return the move from the current joints to ``q_deg`` on the true arm."""
         return move_profiles(self.robot, self.model, self.p0, np.asarray(self.joints), q_deg)
 
-    def _wire_overspeed(self, move: Moves, speed_pct: float) -> str | None:
+    def _wire_overspeed(self, move: Moves, speed_pct: float, ramp_s: float) -> str | None:
         """Return why ``move`` at ``speed_pct`` would run the wire beyond the encoder's limits.
 
         None when within them, or when the run does not enforce them (``wire_limits``).
@@ -282,7 +294,7 @@ class World:
         if not self.wire_limits:
             return None
         speed = float(move.wire_speed_mm_s(np.asarray(speed_pct))[0])
-        accel = float(move.wire_accel_mm_s2(np.asarray(speed_pct))[0])
+        accel = float(move.wire_accel_mm_s2(np.asarray(speed_pct), ramp_s)[0])
         if enc.max_wire_speed_mm_s is not None and speed > enc.max_wire_speed_mm_s:
             return (
                 f"the wire would run at {speed:.0f} mm/s, beyond the encoder's "

@@ -24,7 +24,7 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import joint_target, name_problems, run_steps
+from wirecal.gen.targets import give_move_speeds, joint_target, name_problems, run_steps
 from wirecal.gen.templating import render
 from wirecal.lang.rapid.module import (
     GROUP_COUNTER_BITS,
@@ -136,12 +136,7 @@ def move_speeds(
     speeds = [float(x) for x in run_timeline(robot, plan, run).speed_pct]
     slower = sorted({x for x in speeds if x < run.speed_pct}, reverse=True)
     names = {x: f"wc_v{k}" for k, x in enumerate(slower, 1)}
-    moves = iter(names.get(x, "wc_v") for x in speeds)
-    for step in steps:
-        step["zero_v"] = next(moves)
-        step["vias"] = [{**via, "v": next(moves)} for via in step["vias"]]
-        step["points"] = [{**point, "v": next(moves)} for point in step["points"]]
-    closing = next(moves)
+    closing = give_move_speeds(steps, (names.get(x, "wc_v") for x in speeds), "v")
     declared = [{"name": names[x], "v_ori": v_ori_deg_s(robot, x), "pct": f"{x:g}"} for x in slower]
     return declared, closing
 

@@ -12,6 +12,8 @@ CB3 program
   nominal wire change is at most :data:`LEG_FRACTION` of the range, with a reading at the
   end of each (:func:`move_legs`): the legs lie on the same straight joint-space line as
   the move, so the path is the one the plan checked;
+* moves each leg as a move of its own (it stops there): a move runs at the speed its
+  slowest leg allows the wire (:func:`leg_speeds_pct`);
 * has no clock: it writes a version 1 log (no ``t_s``, ``settle_s``: its readings carry no
   time, which the log reader takes, :mod:`wirecal.solver.formats.log`).
 """
@@ -24,8 +26,10 @@ import numpy as np
 
 from wirecal.gen.targets import joint_target
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
+from wirecal.solver.run_parameters import move_profiles, move_speeds_pct
 from wirecal.solver.wire_range import nominal_wire_mm, run_moves
 
 CB3 = 3
@@ -52,10 +56,17 @@ def move_legs(
 ) -> list[list[dict[str, str]]]:
     """Return each move's intermediate joint targets, in the order of ``run_moves(plan)``.
 
+    ``target`` writes a joint target (:func:`leg_joints` cuts the moves).
+    """
+    return [[joint_target(x, target) for x in q[1:-1]] for q in leg_joints(robot, plan)]
+
+
+def leg_joints(robot: Robot, plan: Plan) -> list[np.ndarray]:
+    """Return each move's legs as its joints (deg), start to end, in ``run_moves`` order.
+
     A move is cut into the fewest equal joint-space legs whose nominal wire change is at
-    most :data:`LEG_FRACTION` of the filtered range; ``target`` writes a joint target.
-    Raises :class:`WirecalError` naming the move when more than :data:`MAX_LEGS` would be
-    needed.
+    most :data:`LEG_FRACTION` of the filtered range. Raises :class:`WirecalError` naming
+    the move when more than :data:`MAX_LEGS` would be needed.
     """
     limit_mm = LEG_FRACTION * FILTERED_RANGE * abs(robot.encoder.mm_per_count)
     out = []
@@ -70,5 +81,23 @@ def move_legs(
                 f"{limit_mm:.0f} mm: the CB3 programs read the filtered count, which wraps "
                 f"every {FILTERED_RANGE * abs(robot.encoder.mm_per_count):.0f} mm"
             )
-        out.append([joint_target(x, target) for x in q[1:-1]])
+        out.append(q)
     return out
+
+
+def leg_speeds_pct(robot: Robot, plan: Plan, speed_pct: float) -> np.ndarray:
+    """Return each move's SPEED (%) its legs allow, in ``run_moves`` order.
+
+    Each leg stops, so it is a move of its own to the wire's limits
+    (:func:`~wirecal.solver.run_parameters.move_speeds_pct`, nominal model): the move
+    takes its slowest leg's.
+    """
+    legs = leg_joints(robot, plan)
+    model = robot.nominal
+    p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
+    moves = move_profiles(
+        robot, model, p0, np.vstack([q[:-1] for q in legs]), np.vstack([q[1:] for q in legs])
+    )
+    pct = move_speeds_pct(robot, moves, speed_pct)
+    ends = np.cumsum([len(q) - 1 for q in legs])
+    return np.array([pct[e - len(q) + 1 : e].min() for e, q in zip(ends, legs, strict=True)])

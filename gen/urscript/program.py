@@ -23,9 +23,9 @@ import numpy as np
 
 from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import joint_target, name_problems, run_steps
+from wirecal.gen.targets import give_move_speeds, joint_target, name_problems, run_steps
 from wirecal.gen.templating import render
-from wirecal.gen.urscript.cb3 import FILTERED_RANGE, is_cb3, move_legs
+from wirecal.gen.urscript.cb3 import FILTERED_RANGE, is_cb3, leg_speeds_pct, move_legs
 from wirecal.lang.urscript import URScript
 from wirecal.lang.urscript.versions import is_refusal, needed
 from wirecal.solver.errors import WirecalError
@@ -38,9 +38,11 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import (
     DEFAULT_RUN,
+    MOVE_OVERHEAD_S,
     PAPER_RUN,
     READING_INTERVAL_S,
     RunParameters,
+    run_timeline,
 )
 
 ROLES = ("mount", "check", "run")
@@ -57,8 +59,9 @@ MOVEJ_DEFAULT_ACCEL_RAD_S2 = 1.4
 class UrOptions:
     """Options of the generated URScript programs."""
 
-    # the paper's one speed and fixed settle: the URScript programs do not yet read the
-    # wire's limits or the settle rule of the V+ module (wirecal.solver.run_parameters)
+    # the paper's speed (each move slower where the wire's limits ask for it, as V+'s and
+    # RAPID's) and fixed settle: the URScript programs do not yet read the settle rule of
+    # the V+ module (wirecal.solver.run_parameters)
     run: RunParameters = PAPER_RUN
     host: str | None = None  # the PC running 'wirecal receive' (default: the robot file's)
     port: int | None = None  # its port (default: the robot file's)
@@ -196,8 +199,8 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
     host, port = _check(robot, opt)
     tables = build_tables(robot, plan)
     mpc = robot.encoder.mm_per_count
-    speed_rad_s = math.radians(float(np.min(robot.joint_speed_deg_s))) * opt.run.speed_pct / 100
-    accel = MOVEJ_DEFAULT_ACCEL_RAD_S2 * opt.run.accel_pct / DEFAULT_RUN.accel_pct
+    speed_rad_s = _speed_rad_s(robot, opt.run.speed_pct)
+    accel = _accel_rad_s2(opt.run)
     context: dict[str, object] = {
         "version": __version__,
         "robot": robot.name,
@@ -211,6 +214,7 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
         "speed": f"{opt.run.speed_pct:g}",
         "speed_rad": _fixed(speed_rad_s, 6),
         "accel_rad": _fixed(accel, 6),
+        "ramp_s": f"{MOVE_OVERHEAD_S:g} s",
         "settle": f"{opt.run.settle_s:g}",
         "settle_3": f"{opt.run.settle_s:.3f}",
         "interval": f"{READING_INTERVAL_S:g}",
@@ -230,10 +234,50 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
         "n": tables.n,
         "m": len(tables.names),
     }
-    context |= line_context(robot, plan, run_steps(plan, tables.first, rad_literal))
+    steps = run_steps(plan, tables.first, rad_literal)
+    context["closing"] = movej_speeds(robot, plan, opt.run, steps)
+    context |= line_context(robot, plan, steps)
     if opt.solver:
         context["t"] = solver_tables(robot, plan, tables)
     return {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
+
+
+def _speed_rad_s(robot: Robot, speed_pct: float) -> float:
+    """Return movej's v (rad/s, leading axis) at ``speed_pct`` of the slowest joint's speed."""
+    return math.radians(float(np.min(robot.joint_speed_deg_s))) * speed_pct / 100
+
+
+def _accel_rad_s2(run: RunParameters) -> float:
+    """Return the run's movej a (rad/s²): the default at ``--accel``'s default, in proportion."""
+    return MOVEJ_DEFAULT_ACCEL_RAD_S2 * run.accel_pct / DEFAULT_RUN.accel_pct
+
+
+def movej_speeds(robot: Robot, plan: Plan, run: RunParameters, steps: list[dict]) -> dict[str, str]:
+    """Give every move of ``steps`` its movej v and a; return the closing move's.
+
+    v: the run's speed unless the encoder's wire speed or acceleration asks for less
+    (:func:`~wirecal.solver.run_parameters.run_timeline`'s speeds, the V+ and RAPID
+    rule). a: the run's, at most v / ``MOVE_OVERHEAD_S``, so the leading axis's ramp
+    (v/a of movej's trapezoid, SD §14.22) lasts at least the ramp the wire's acceleration
+    was bounded with. Both rounded down to 6 decimals. A CB3 move and its legs: the
+    slowest leg's (each leg stops, :func:`~.cb3.leg_speeds_pct`).
+    """
+    run_a = _accel_rad_s2(run)
+
+    def movej(pct: float) -> dict[str, str]:
+        v = _down(_speed_rad_s(robot, pct))
+        return {"v": _fixed(v, 6), "a": _fixed(_down(min(run_a, v / MOVE_OVERHEAD_S)), 6)}
+
+    pct = run_timeline(robot, plan, run).speed_pct
+    if is_cb3(robot.controller.software):  # θ0 first (in place), then run_moves' moves
+        pct = np.r_[pct[:1], np.minimum(pct[1:], leg_speeds_pct(robot, plan, run.speed_pct))]
+    speeds = (movej(float(x)) for x in pct)
+    return give_move_speeds(steps, speeds, "move")
+
+
+def _down(x: float) -> float:
+    """Return ``x`` rounded down to 6 decimals (a limit's value never rounds up)."""
+    return math.floor(x * 1e6) / 1e6
 
 
 def line_context(robot: Robot, plan: Plan, steps: list[dict]) -> dict[str, object]:

@@ -12,13 +12,12 @@ import textwrap
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import cast
 
 import numpy as np
 
 from wirecal import __version__
 from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import joint_literal, name_problems, run_steps
+from wirecal.gen.targets import give_move_speeds, joint_literal, name_problems, run_steps
 from wirecal.gen.templating import render
 from wirecal.gen.vplus.literals import MAX_LINE, double_literal, long_lines, ppoint
 from wirecal.lang.vplus.parser import parse_module
@@ -205,12 +204,8 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
             "±1677 mm/deg; the controller's SPEC table cannot print it"
         )
     steps = run_steps(plan, tables.first, ppoint)
-    speeds = iter(_num(x) for x in run_timeline(robot, plan, opt.run).speed_pct)
-    for step in steps:  # each move's SPEED, in the run's order (θ0, vias, points)
-        step["zero_speed"] = next(speeds)
-        for move in [*cast(list, step["vias"]), *cast(list, step["points"])]:
-            move["speed"] = next(speeds)
-    closing_speed = next(speeds)
+    speeds = (_num(x) for x in run_timeline(robot, plan, opt.run).speed_pct)
+    closing_speed = give_move_speeds(steps, speeds, "speed")  # each move's SPEED
     patch = None
     if opt.patch is not None:
         missing = [n for n in plan.order if n not in opt.patch]

@@ -12,7 +12,8 @@ offers the URScript functions the generated programs call:
   *unconfirmed*), and so does a move through the arm itself, the floor or a ``[cell]``
   volume (a protective stop naming the colliding pair; the controller's own message is not
   modelled) or one that would run the wire beyond the encoder's speed or acceleration (v
-  taken as a percentage of the slowest joint's maximum speed; the twin's own stop);
+  taken as a percentage of the slowest joint's maximum speed, the ramp to it lasting v/a
+  as the trapezoid's; the twin's own stop, naming the limit);
 * ``get_actual_joint_positions()``: the commanded joints in rad (joint encoders do not see
   the unmodelled errors; the wire does);
 * the encoder: ``encoder_enable_pulse_decode(i, 1, A, B)`` (SD 14.2: index 0 or 1,
@@ -53,6 +54,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wirecal.solver.counter import Counter
+from wirecal.solver.run_parameters import MOVE_OVERHEAD_S
 from wirecal.twin.machine import Stopped, f32
 from wirecal.twin.urscript.interp import URError, number, to_float, to_str
 from wirecal.twin.world import BeyondLimit, Collision, EncoderFailure, WireOverspeed, World
@@ -100,7 +102,11 @@ class URController:
         dist = float(np.max(np.abs(np.radians(q_deg - np.asarray(w.joints)))))
         slowest = math.radians(float(np.min(w.robot.joint_speed_deg_s)))
         speed_pct = min(100.0, 100.0 * v_rad_s / slowest)
-        match w.move(q_deg, speed_pct, _trapezoid_s(dist, a_rad_s2, v_rad_s, t)):
+        duration_s = _trapezoid_s(dist, a_rad_s2, v_rad_s, t)
+        # the leading axis's ramp v/a (a > 0 and v > 0 unless t > 0 sets the time: then
+        # the model's ramp, how the controller shapes such a move is not modelled)
+        ramp_s = slowest * speed_pct / 100 / a_rad_s2 if t == 0 else MOVE_OVERHEAD_S
+        match w.move(q_deg, speed_pct, duration_s, ramp_s):
             case BeyondLimit(joint=j, min_deg=lo, max_deg=hi):
                 raise URError(
                     f"movej: joint {j + 1} target {q_deg[j]:.3f} deg is beyond its limit "

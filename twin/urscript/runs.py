@@ -117,10 +117,6 @@ class URScriptAdapter(TwinAdapter):
             counter_start=counter_start,
             faults=faults,
             unmodelled=unmodelled,
-            # not enforced: the URScript programs move at one speed, not capped per move by
-            # the wire's limits as V+'s and RAPID's are; enforced, the UR5e demo's distance
-            # validation stops at move 56 (63,075 mm/s² > max_wire_accel_mm_s2 49,000)
-            wire_limits=False,
         )
         enc = robot.encoder
         ctl = URController(
