@@ -92,6 +92,17 @@ def test_ft21_negative_lengths_name_the_column_and_lines(tmp_path, table):
     assert "please report" not in r.output
 
 
+def test_ft41_the_length_mapped_to_a_coordinate_column_names_the_map(tmp_path):
+    """``--map length=x`` on the shipped table: refused naming column 'x' and ``--map``."""
+    table = ROOT / "examples" / "viper_s650" / "simulated_cable_table.csv"
+    joints = ",".join(f"j{j}=j{j}" for j in range(1, 7))
+    r = CliRunner().invoke(main, ["fit", str(VIPER), str(table), "--map", f"{joints},length=x"])
+    assert r.exit_code == 2, r.output
+    assert "'x': 189 negative length(s) (line(s) 7, 8, 9," in r.output
+    assert "check --map (which column holds the length)" in r.output
+    assert "please report" not in r.output and "Traceback" not in r.output
+
+
 def test_ft33_every_row_at_the_same_joints_is_named(tmp_path, table):
     same = replace(table, q_deg=np.repeat(table.q_deg[:1], 200, axis=0))
     r, _ = _fit(tmp_path, same)
