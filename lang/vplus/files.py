@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from wirecal.lang.vplus.parser import Program, check_programs, read_programs
+from wirecal.solver.errors import WirecalError
 
 
 def check_files(texts: Mapping[str, str], *, external_calls: bool = False) -> list[str]:
@@ -22,7 +23,11 @@ def check_files(texts: Mapping[str, str], *, external_calls: bool = False) -> li
     visible: dict[str, Program] = {}
     where: dict[str, str] = {}
     for source, text in texts.items():
-        found, programs = read_programs(text, source)
+        try:
+            found, programs = read_programs(text, source)
+        except WirecalError as exc:  # a file nested too deep to read: its problem, not a crash
+            problems += exc.problems
+            continue
         problems += found
         for name, prog in programs.items():
             if name in where and where[name] != source:
