@@ -604,7 +604,51 @@ def test_pa08_report_shows_a_partial_run(tmp_path, partial_patch):
     r = invoke("report", ROBOT, PLAN, cut, "--partial", "-o", tmp_path / "r.html")
     assert r.exit_code == 0, r.output
     assert f"warning: {UNCHECKED}" in r.output
-    assert f"Warning: {UNCHECKED}" in (tmp_path / "r.html").read_text()
+    html = (tmp_path / "r.html").read_text()
+    assert f"Warning: {UNCHECKED}" in html
+    assert "Measure the unchecked step(s) again (their zero check is missing)" in _next_steps(html)
+
+
+def _next_steps(html: str) -> str:
+    """The report's "What to do next" list as text (tags dropped, lines joined)."""
+    start = html.index("<h3>What to do next</h3>")
+    text = re.sub(r"<[^>]+>", "", html[start : html.index("</ul>", start)])
+    return " ".join(text.split())
+
+
+def _counts_stuck(text: str) -> str:
+    """The log with every reading's counts at one value: the gate refuses it."""
+    return re.sub(r"^((?:zero|point),(?:[^,]*,){8})[^,]*", r"\g<1>1234.0000", text, flags=re.M)
+
+
+@pytest.mark.parametrize(
+    ("stuck", "steps"),
+    [
+        (
+            False,
+            [
+                "Write the patch: wirecal solve ROBOT PLAN LOG -o patch.toml",
+                "enter the new values",
+                "Validate: run the validation programs again after calibration",
+            ],
+        ),
+        (True, ["Do not enter these values: the plausibility gate refused them."]),
+    ],
+    ids=["passed", "overridden"],
+)
+def test_the_report_says_what_to_do_next(tmp_path, log, stuck, steps):
+    """The report had no "what to do next" and pointed at "the README" (issue 35): its
+    list names the commands to run, or, for a refusal overridden, not to enter the values."""
+    run = tmp_path / "run.csv"
+    run.write_text(_counts_stuck(log.read_text()) if stuck else log.read_text())
+    out = tmp_path / "r.html"
+    r = invoke("report", ROBOT, PLAN, run, "-o", out, *(["--accept-implausible"] * stuck))
+    assert r.exit_code == 0, r.output
+    html = out.read_text()
+    shown = _next_steps(html)
+    assert [step in shown for step in steps] == [True] * len(steps), shown
+    assert ("Write the patch" in shown) is not stuck
+    assert "README" not in html
 
 
 def _plus_1mm(text: str, name: str) -> str:
