@@ -15,6 +15,7 @@ import subprocess
 import sys
 
 import click
+import numpy as np
 import pytest
 from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
@@ -1076,10 +1077,12 @@ def test_nl34_a_version_1_header_over_version_2_rows_is_one_problem(tmp_path, lo
     assert "has 14 fields" not in out
 
 
-def test_r15_a_tiny_mm_per_count_is_named_as_the_cause(tmp_path):
+@pytest.mark.parametrize("command", ["psi", "solve"], ids=["R15", "R15b"])
+def test_r15_a_tiny_mm_per_count_is_named_as_the_cause(tmp_path, log, command):
+    """R15b: solve with a log refused the robot file with R15's 300-digit count too."""
     robot = tmp_path / "r.toml"
     robot.write_text(re.sub(r"mm_per_count = \S+", "mm_per_count = 1e-300", ROBOT.read_text()))
-    r = invoke("psi", robot, PLAN)
+    r = invoke(command, robot, PLAN, *([log] if command == "solve" else []))
     assert r.exit_code == 2
     assert "encoder.mm_per_count: is 1e-300 mm" in r.output
     assert len(max(r.output.splitlines(), key=len)) < 300  # no 300-digit count
@@ -1105,10 +1108,15 @@ def test_c17_theta0_nan_is_refused_as_an_option():
     assert "--theta0 'nan,-90,210,-90,0,-90': give 6 joint angles in degrees" in r.output
 
 
-def test_nd07_a_second_root_is_not_in_the_way(tmp_path):
-    """'2 root links (mount, …); name one with --base': the tip's own tree is the chain."""
+@pytest.mark.parametrize(
+    "loose", [["mount"], [f"loose{k}" for k in range(8)]], ids=["ND07", "ND12"]
+)
+def test_nd07_a_second_root_is_not_in_the_way(tmp_path, loose):
+    """'2 root links (mount, …)' (ND07), '9 root links …' (ND12); 'name one with --base':
+    the tip's own tree is the chain, whatever loose links the file has beside it."""
     urdf = tmp_path / "arm.urdf"
-    urdf.write_text(URDF.read_text().replace("</robot>", '<link name="mount"/>\n</robot>'))
+    links = "".join(f'<link name="{name}"/>\n' for name in loose)
+    urdf.write_text(URDF.read_text().replace("</robot>", f"{links}</robot>"))
     r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
     assert r.exit_code == 0, r.output
 
@@ -1255,16 +1263,53 @@ def test_sigint_stops_the_report_at_once(tmp_path, log):
 
 
 @pytest.mark.parametrize("ppm", [5000, -5000])
-def test_ns07_ns08_a_scale_error_without_a_gauge_names_the_scale(tmp_path, ppm):
-    """A 0.5 % scale error without a gauge: exit 3 with the generic advice only."""
+def test_ns07_ns08_a_scale_error_without_a_gauge_is_diagnosed(tmp_path, ppm):
+    """A 0.5 % scale error without a gauge: exit 3 with the generic advice only. Now the
+    residual finding says the scale explains the misfit, by how much and which way, and
+    what mm_per_count would be: the true one is the file's × (1 + ppm·10⁻⁶) (simulate's
+    --encoder-scale-ppm), 0.025488 × 1.005 = 0.025615 (0.025361 for −5000); the run's
+    0.5 K warming adds about 10 ppm, and the fit's own error is a few per cent of 5000."""
     log_path = tmp_path / "run.csv"
     args = ["-o", log_path, "--encoder-scale-ppm", ppm]
     assert invoke("simulate", ROBOT, PLAN, *args).exit_code == 0
     r = invoke("solve", ROBOT, PLAN, log_path)
     assert r.exit_code == 3
-    assert "an encoder scale off beyond [encoder] scale_tolerance_ppm: check mm_per_count" in (
-        " ".join(r.output.split())
+    text = " ".join(r.output.split())
+    found = re.search(
+        r"the encoder's scale explains it: the lengths read (\d+) ppm (longer|shorter) fit to "
+        r"σ ([\d.]+) mm, a scale off beyond \[encoder\] scale_tolerance_ppm 500: "
+        r"mm_per_count 0.025488 would be about ([\d.]+); check it",
+        text,
     )
+    assert found is not None, text
+    assert abs(int(found.group(1)) - abs(ppm)) < 0.05 * abs(ppm)
+    assert found.group(2) == ("longer" if ppm > 0 else "shorter")
+    limit = float(re.search(r"allow at most ([\d.]+) mm", text).group(1))
+    assert float(found.group(3)) <= limit
+    assert float(found.group(4)) == pytest.approx(0.025488 * (1 + ppm * 1e-6), rel=5e-4)
+    assert "measure a reference gauge (reference_length_mm)" in text
+
+
+def test_a_misfit_the_scale_does_not_explain_keeps_the_general_advice(tmp_path, log):
+    """Lengths off by ±0.3 mm at random: no scale fits them, so the scale is only a hint."""
+    rng = np.random.default_rng(7)
+    lines = log.read_text().splitlines(keepends=True)
+    noisy = tmp_path / "noisy.csv"
+    noisy.write_text(
+        "".join(
+            re.sub(
+                r"^(point,(?:[^,]*,){8})([^,]*)",
+                lambda m: f"{m.group(1)}{float(m.group(2)) + rng.choice([-12, 12]):.4f}",
+                line,
+            )
+            for line in lines
+        )
+    )
+    r = invoke("solve", ROBOT, PLAN, noisy)
+    assert r.exit_code == 3, r.output
+    text = " ".join(r.output.split())
+    assert "an encoder scale off beyond [encoder] scale_tolerance_ppm: check mm_per_count" in text
+    assert "the encoder's scale explains it" not in text
 
 
 def test_nd21_overflowing_origins_are_refused_before_any_arithmetic(tmp_path):
