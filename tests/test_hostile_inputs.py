@@ -1147,7 +1147,8 @@ def test_ns13_a_gauge_of_a_nanometre_is_refused(tmp_path):
 
 
 def test_rk13_a_full_disk_names_the_journal_and_what_it_keeps(tmp_path, monkeypatch):
-    """'error: file: No space left on device', exit 2: the journal was not named."""
+    """RK13, NK23: 'error: file: No space left on device', exit 2: the journal was not
+    named."""
     import errno
     import socket
     import threading
@@ -1237,7 +1238,8 @@ def test_the_spec_table_of_a_ur_sends_the_user_to_its_own_file(tmp_path):
 
 @pytest.mark.slow
 def test_sigint_stops_the_report_at_once(tmp_path, log):
-    """SIGINT in report once ended in 'Fatal Python error … finalizing' (exit −6)."""
+    """NC09: SIGINT in report once ended in 'Fatal Python error … finalizing' (exit −6;
+    once in 50 tries, not reproduced since)."""
     import signal
     import time
 
