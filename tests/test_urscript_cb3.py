@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from wirecal.app.twin_runs import measure_ur_in_twin
 from wirecal.gen.urscript.program import scripts
 from wirecal.lang.registry import language
 from wirecal.solver.errors import WirecalError
@@ -24,6 +23,8 @@ from wirecal.solver.solve import solve
 from wirecal.twin.urscript.controller import URController
 from wirecal.twin.urscript.runs import run_ur_programs
 from wirecal.twin.world import World
+
+from .twin_runs import measure_ur_in_twin
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 HALF_RANGE_COUNTS = 2**15  # the filtered count wraps at 2^16 (SW5.20 page)
