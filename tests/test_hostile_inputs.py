@@ -1077,6 +1077,17 @@ def test_nl34_a_version_1_header_over_version_2_rows_is_one_problem(tmp_path, lo
     assert "has 14 fields" not in out
 
 
+def test_nl34_a_version_1_first_line_over_a_version_2_column_line_is_named(tmp_path, log):
+    """Only the first line says version 1: 'the column line must be …' (version 1's) sent
+    the user to change the column line of a version 2 log instead of its first line."""
+    text = log.read_text().replace("# wirecal-log 2", "# wirecal-log 1", 1)
+    out = _solve_text(tmp_path, text)
+    assert (
+        "that is version 2's column line below a first line of version 1; make them agree "
+        "(the first line '# wirecal-log 2' if the rows are version 2's)"
+    ) in " ".join(out.split()), out
+
+
 @pytest.mark.parametrize("command", ["psi", "solve"], ids=["R15", "R15b"])
 def test_r15_a_tiny_mm_per_count_is_named_as_the_cause(tmp_path, log, command):
     """R15b: solve with a log refused the robot file with R15's 300-digit count too."""
