@@ -41,6 +41,7 @@ from wirecal.solver.errors import Implausible
 from wirecal.solver.fit import point_model
 from wirecal.solver.fit_model import lengths_and_jacobian, model_of
 from wirecal.solver.fit_result import FitResult, Run, copies_note
+from wirecal.solver.fit_sessions import MIN_SESSION_ROWS
 from wirecal.solver.kinematics import Model, tool_position, with_errors
 from wirecal.solver.robot import Robot
 from wirecal.solver.scale import PPM
@@ -57,6 +58,10 @@ from wirecal.solver.verdict import (
 
 HOLDOUT_FLOORS = 10.0
 """A held-out RMS beyond this many quantisation floors is refused (module docstring)."""
+
+ZERO_RUN_CORRELATION = 0.2
+"""Successive rows' residuals correlated beyond this (and 4 standard errors, 4/√N) name a
+length zero that moves every few rows: rows sharing an offset share their residual."""
 
 
 @dataclass(frozen=True)
@@ -137,6 +142,25 @@ def correction_mm(robot: Robot, run: Run) -> float:
     return float(np.mean(np.linalg.norm(moved, axis=1)))
 
 
+def _zero_runs(residual_mm: np.ndarray) -> str:
+    """Return the finding's evidence of a zero that moves every few rows ('' if none).
+
+    Rows in a run that shares an offset share their residual, so successive residuals
+    correlate; unrelated rows' correlation is 0 ± 1/√N.
+    """
+    r = residual_mm - residual_mm.mean()
+    n, power = len(r), float(r @ r)
+    rho = float(r[:-1] @ r[1:]) / power if n > 2 and power > 0 else 0.0
+    if rho < max(ZERO_RUN_CORRELATION, 4 / np.sqrt(n)):
+        return ""
+    return (
+        f"; successive rows share their residual (correlation {rho:.2f}; unrelated rows "
+        f"0 ± {1 / np.sqrt(n):.2f}): the length's zero moves every few rows (a sensor "
+        "re-zeroed or re-mounted between rows), or the rows follow a path along which the "
+        "model misfits"
+    )
+
+
 def _findings(result: FitResult, run: Run, budget_mm: float, moved_mm: float, limit: float):
     """Return the gate's findings on one fit (module docstring), the table's problems first."""
     core, ho = run.core, run.holdout
@@ -161,7 +185,10 @@ def _findings(result: FitResult, run: Run, budget_mm: float, moved_mm: float, li
                 f"the residual σ {core.sigma_mm:.4g} mm exceeds {limit:.4f} mm, what the "
                 f"quantisation floor {run.floor_mm:.4f} mm and the reading noise allow (χ²): "
                 "the table does not fit this robot model; check the column map, the units "
-                "and the robot file (a sensor noisier than --noise-mm: give its σ)",
+                "and the robot file (a sensor noisier than --noise-mm: give its σ; a length "
+                f"sensor re-zeroed every row or every few rows: offsets of runs shorter than "
+                f"{MIN_SESSION_ROWS} rows cannot be fitted, keep its zero between rows)"
+                + _zero_runs(core.residual_mm[core.inliers]),
             )
         )
     if budget_mm >= moved_mm:

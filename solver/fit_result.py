@@ -19,6 +19,7 @@ from wirecal.solver.cable_data import CableTable
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit import Core, Data, fit_core, holdout, nominal_floor, point_model
 from wirecal.solver.fit_holdout import Holdout, copies, first_same, row_floor
+from wirecal.solver.fit_sessions import MIN_SESSION_ROWS
 from wirecal.solver.fit_units import check_columns, check_units
 from wirecal.solver.fit_xyz import XyzCheck, check_xyz, refine_joints
 from wirecal.solver.identify import Estimate
@@ -176,7 +177,9 @@ def _refuse_ignored_jumps(table: CableTable, core: Core, options: FitOptions) ->
         raise WirecalError(
             f"{table.source}: the residual still jumps at {where} after fitting an offset per "
             "session: the lengths do not follow one model; check the column map and the "
-            "robot file, or pass --single-session to fit one offset anyway"
+            "robot file, and whether the length sensor was re-zeroed every few rows (the fit "
+            f"finds sessions of {MIN_SESSION_ROWS} rows or more; keep its zero between rows), "
+            "or pass --single-session to fit one offset anyway"
         )
 
 

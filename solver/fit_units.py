@@ -75,8 +75,9 @@ def check_columns(robot: Robot, table: CableTable) -> None:
         problems.add(
             col,
             f"{negative.size} negative length(s) (line(s) {_lines(table, negative)}): a cable's "
-            "length is not negative; give the absolute length in mm (readings from another "
-            "zero: add a constant; the fit finds the offset)",
+            "length is not negative: check --map (which column holds the length), or give "
+            "the absolute length in mm (readings from another zero: add a constant; the fit "
+            "finds the offset)",
         )
     if np.all(np.ptp(table.q_deg, axis=0) == 0):
         problems.add(

@@ -37,11 +37,13 @@ import numpy as np
 
 from wirecal.solver import params as P
 from wirecal.solver.compliance import SIGMA_LIMIT_URAD_PER_NM
-from wirecal.solver.distance import wire_lengths
+from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.errors import Implausible
 from wirecal.solver.identifiability import Identifiability, analyse_jacobian, covariance
 from wirecal.solver.identify import DEFAULT_OMEGA
-from wirecal.solver.scale import DRIFT_REMOVABLE_MM_PER_H, DRIFT_TOLERANCE_MM_PER_H
+from wirecal.solver.kinematics import with_errors
+from wirecal.solver.params import ErrorSet
+from wirecal.solver.scale import DRIFT_REMOVABLE_MM_PER_H, DRIFT_TOLERANCE_MM_PER_H, PPM
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import SolveResult, omega_vector
 from wirecal.solver.verdict import (
@@ -109,14 +111,7 @@ def assess(
                 f"{abs(m.mm_per_count):g} mm allow at most {limit:.4f} mm (χ² bound, "
                 f"{dof} degrees of freedom, false alarm {FALSE_ALARM:g}): the lengths do "
                 "not fit this robot model (a noisier set-up: state its noise with --noise-mm; "
-                "gross outliers: --robust"
-                + (
-                    "; an encoder scale off beyond [encoder] scale_tolerance_ppm: check "
-                    "mm_per_count, or measure a reference gauge (reference_length_mm), as "
-                    "this log has no reference step)"
-                    if not len(m.reference_mm)
-                    else ")"
-                ),
+                f"gross outliers: --robust{_scale_hint(result, limit)}",
             )
         )
 
@@ -133,6 +128,54 @@ def assess(
         residual_sigma_mm=result.sigma_mm,
         identifiability=ident,
         unidentified=unidentified,
+    )
+
+
+def _scale_hint(result: SolveResult, limit_mm: float) -> str:
+    """Return the residual finding's end: the encoder's scale, when the log has no gauge."""
+    if len(result.measurements.reference_mm):
+        return ")"
+    return _scale_explains(result, limit_mm) or (
+        "; an encoder scale off beyond [encoder] scale_tolerance_ppm: check mm_per_count, or "
+        "measure a reference gauge (reference_length_mm), as this log has no reference step)"
+    )
+
+
+def _scale_explains(result: SolveResult, limit_mm: float) -> str:
+    """Return the residual finding's diagnosis of an encoder scale error ('' if none).
+
+    The joint fit linearised at its estimate with the scale s as one more unknown (the
+    lengths read (1 + s)·d̃, column −d̃, :func:`~wirecal.solver.identify.joint`'s): when
+    its residual σ is within ``limit_mm`` and s beyond the robot file's tolerance, the
+    scale explains the misfit. Without a gauge s leans on the lengths the plan holds at
+    nominal (:mod:`~wirecal.solver.scale`), so a wrong one of those looks the same.
+    """
+    est, m, robot = result.estimates.get("joint"), result.measurements, result.robot
+    if est is None:
+        return ""
+    errors = ErrorSet(est.names, robot.n_joints)
+    q, q0 = np.radians(m.joints_deg[m.present]), np.radians(m.theta0_deg)
+    model = with_errors(robot.nominal, est.names, errors.to_internal(est.values))
+    d, J = wire_jacobian(model, q, q0, est.names)
+    measured = m.distance_mm[m.present]
+    A = np.column_stack([J, -measured])
+    dof = len(measured) - A.shape[1]
+    if dof <= 0:
+        return ""
+    step, *_ = np.linalg.lstsq(A, measured - d, rcond=None)
+    left = measured - d - A @ step
+    sigma = float(np.sqrt(left @ left / dof))
+    s_ppm, tolerance = float(step[-1]) / PPM, robot.encoder.scale_tolerance_ppm
+    if not (sigma <= limit_mm and abs(s_ppm) > tolerance):
+        return ""
+    return (
+        f"); the encoder's scale explains it: the lengths read {abs(s_ppm):.0f} ppm "
+        f"{'longer' if s_ppm > 0 else 'shorter'} fit to σ {sigma:.4f} mm, a scale off "
+        f"beyond [encoder] scale_tolerance_ppm {tolerance:g}: mm_per_count {m.mm_per_count:g} "
+        f"would be about {m.mm_per_count * (1 + s_ppm * PPM):.6g}; check it against the "
+        "encoder's data sheet or measure a reference gauge (reference_length_mm), as this "
+        "log has no reference step; unless a length the plan leaves at the robot file's "
+        "value is wrong by as much"
     )
 
 

@@ -6,6 +6,7 @@ written first."""
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -90,6 +91,55 @@ def test_ft21_negative_lengths_name_the_column_and_lines(tmp_path, table):
     assert r.exit_code == 2
     assert "'length': 200 negative length(s) (line(s) 2, 3, 4," in r.output
     assert "please report" not in r.output
+
+
+def test_ft41_the_length_mapped_to_a_coordinate_column_names_the_map(tmp_path):
+    """``--map length=x`` on the shipped table: refused naming column 'x' and ``--map``."""
+    table = ROOT / "examples" / "viper_s650" / "simulated_cable_table.csv"
+    joints = ",".join(f"j{j}=j{j}" for j in range(1, 7))
+    r = CliRunner().invoke(main, ["fit", str(VIPER), str(table), "--map", f"{joints},length=x"])
+    assert r.exit_code == 2, r.output
+    assert "'x': 189 negative length(s) (line(s) 7, 8, 9," in r.output
+    assert "check --map (which column holds the length)" in r.output
+    assert "please report" not in r.output
+    assert "Traceback" not in r.output
+
+
+def _rezeroed(table, every: int):
+    """The table with a new length offset (±30 mm) every ``every`` rows."""
+    rng = np.random.default_rng(3)
+    n = len(table.length_mm)
+    jumps = np.repeat(rng.uniform(-30, 30, n // every + 1), every)[:n]
+    return replace(table, length_mm=table.length_mm + jumps)
+
+
+@pytest.mark.parametrize(("case", "every"), [("FT34", 2), ("FT35", 1)])
+def test_ft34_ft35_a_sensor_re_zeroed_every_few_rows_is_named(tmp_path, table, case, every):
+    """An offset jump every 2 rows (FT34) or every row (FT35) got the residual gate's advice
+    ('--noise-mm', the column map, units) without the cause. Both name it now; every 2 rows
+    also shows its evidence: pairs of rows share their residual (correlation near 0.5)."""
+    r, _ = _fit(tmp_path, _rezeroed(table, every))
+    assert r.exit_code == 3, r.output
+    text = " ".join(r.output.split())
+    assert (
+        "a length sensor re-zeroed every row or every few rows: "
+        "offsets of runs shorter than 5 rows cannot be fitted" in text
+    )
+    evidence = re.search(r"successive rows share their residual \(correlation (\S+);", text)
+    if case == "FT34":
+        assert evidence is not None, text
+        assert 0.25 < float(evidence.group(1)) < 0.6
+        assert "the length's zero moves every few rows" in text
+    else:
+        assert evidence is None  # an offset per row is noise to the fit: only the advice
+
+
+def test_a_clean_table_shows_no_zero_runs(tmp_path, table):
+    """The correlation evidence is not shown for a table refused for another reason."""
+    noisy = replace(table, length_mm=table.length_mm + np.random.default_rng(4).normal(0, 5, 200))
+    r, _ = _fit(tmp_path, noisy)
+    assert r.exit_code == 3, r.output
+    assert "successive rows share their residual" not in r.output
 
 
 def test_ft33_every_row_at_the_same_joints_is_named(tmp_path, table):

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
@@ -72,6 +73,23 @@ def test_unreachable_plate_is_a_clear_error(viper, setup):
         in info.value.problems[0]
     )
     assert info.value.problems[-1].startswith("… and ")
+
+
+def test_a_plate_point_beyond_a_joint_limit_is_not_called_out_of_reach(viper, setup):
+    """Issue 35: a joint limit was reported as "out of reach". With joint 1 limited to
+    -10 deg, the plate's first point (220, -125) needs j1 = atan2(-125, 220) = -29.6 deg."""
+    lo = viper.joint_min_deg.copy()
+    lo[0] = -10.0
+    with pytest.raises(WirecalError) as info:
+        plate_grid(dataclasses.replace(viper, joint_min_deg=lo), setup)
+    first = info.value.problems[0]
+    assert "grid point (1, 1) at [220.0, -125.0, -300.0] is reachable" in first
+    assert "out of reach" not in first
+    expected_deg = np.degrees(np.arctan2(-125.0, 220.0))
+    shown_deg = float(re.search(r"only with joint 1 at (-?[\d.]+) deg", first).group(1))
+    assert abs(shown_deg - expected_deg) < 0.1  # the printed angle is rounded to 0.1 deg
+    assert "beyond its limits -10 … 170 deg less the margin 1" in first
+    assert "check the robot file's joint limits" in first
 
 
 def test_setup_file_errors(tmp_path):

@@ -23,9 +23,9 @@ def check_files(texts: Mapping[str, str], *, external_calls: bool = False) -> li
     visible: dict[str, Program] = {}
     where: dict[str, str] = {}
     for source, text in texts.items():
-        try:  # a file refused whole (blocks nested too deep) is that file's problem
+        try:
             found, programs = read_programs(text, source)
-        except WirecalError as exc:
+        except WirecalError as exc:  # a file nested too deep to read: its problem, not a crash
             problems += exc.problems
             continue
         problems += found
@@ -41,8 +41,5 @@ def check_files(texts: Mapping[str, str], *, external_calls: bool = False) -> li
     for source, programs in read:
         if not programs and not any(p.startswith(f"{source}:") for p in problems):
             problems.append(f"{source}: no .PROGRAM in the file")
-        try:
-            check_programs(programs, source, problems, external_calls, visible)
-        except WirecalError as exc:
-            problems += exc.problems
+        check_programs(programs, source, problems, external_calls, visible)
     return problems

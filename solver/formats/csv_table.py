@@ -24,6 +24,7 @@ double quotes (a spreadsheet's export), rows with the wrong number of fields (ea
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 from collections import Counter
 from collections.abc import Callable
@@ -127,10 +128,12 @@ def parse_table(
         guess = columns({}, found) if callable(columns) else columns
         lines = unfold_header(lines, start + 1, ",".join(guess))
     header, comments, problems, n = _read_header(lines, start + 1, source, keys)
+    line = lines[n] if n < len(lines) else ""
+    hint = _other_version(line, columns, header, (version, *older), (found, magic))
     if callable(columns):
         columns = columns(header, found)
     kinds = capture.kinds if capture is not None else None
-    _check_column_line(lines, n, source, columns, problems, kinds)
+    _check_column_line(lines, n, source, columns, problems, kinds, hint)
     notes: list[str] = []
     if capture is None:
         rows = _read_rows(lines, n + 1)
@@ -210,6 +213,32 @@ def _read_header(
     return header, comments, problems, n
 
 
+def _other_version(
+    line: str,
+    columns: tuple[str, ...] | Callable[[dict[str, tuple[str, int]], int], tuple[str, ...]],
+    header: dict[str, tuple[str, int]],
+    versions: tuple[int, ...],
+    first: tuple[int, str],
+) -> str:
+    """Say so when ``line`` is another version's column line ('' if not).
+
+    ``first``: the version the first line gives and the magic it starts with.
+    """
+    if not callable(columns):
+        return ""
+    found, magic = first
+    got = ",".join(c.strip() for c in line.split(","))
+    for other in versions:
+        with contextlib.suppress(WirecalError):  # columns that this header cannot have
+            if other != found and ",".join(columns(header, other)) == got:
+                return (
+                    f": that is version {other}'s column line below a first line of version "
+                    f"{found}; make them agree (the first line '{magic} {other}' if the rows "
+                    f"are version {other}'s)"
+                )
+    return ""
+
+
 def _check_column_line(
     lines: list[str],
     n: int,
@@ -217,11 +246,13 @@ def _check_column_line(
     columns: tuple[str, ...],
     problems: list[str],
     kinds: tuple[str, ...] | None = None,
+    hint: str = "",
 ) -> None:
     """Raise unless line n is the column line and no later line has double quotes.
 
     ``kinds`` (a terminal capture): only the lines that start with a row kind, quoted
-    or not, count; other terminal text may quote.
+    or not, count; other terminal text may quote. ``hint`` ends a wrong column line's
+    message (another version's column line).
     """
     expected = ",".join(columns)
     if n >= len(lines):
@@ -233,7 +264,8 @@ def _check_column_line(
         raise WirecalError(
             [
                 *problems,
-                f"{source}:{n + 1}: columns are {got!r}; the column line must be '{expected}'",
+                f"{source}:{n + 1}: columns are {got!r}; the column line must be "
+                f"'{expected}'{hint}",
             ]
         )
     quoted = [
