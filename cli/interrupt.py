@@ -67,6 +67,20 @@ def quiet_start() -> Iterator[None]:
             signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
+def ignore_after_end() -> None:
+    """Ignore Ctrl-C and SIGTERM through the shutdown of an interpreter whose command ended.
+
+    Its outputs are published or withdrawn by then, so a signal can change nothing; caught
+    by Python's default handler while modules are torn down it ended the process killed by
+    SIGINT, or once in "Fatal Python error … finalizing" (NC09).
+    """
+    for number in (signal.SIGINT, signal.SIGTERM):
+        try:
+            signal.signal(number, signal.SIG_IGN)
+        except ValueError:  # not the main thread: leave the signals alone
+            return
+
+
 @contextmanager
 def stop_cleanly() -> Iterator[None]:
     """Run a command so that SIGTERM and Ctrl-C unwind it and then end the process at once."""

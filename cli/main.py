@@ -46,7 +46,7 @@ gc.set_threshold(*GC_THRESHOLD)
 
 import click  # noqa: E402 - after the thread settings
 
-from wirecal.cli.interrupt import quiet_start, stop_cleanly  # noqa: E402
+from wirecal.cli.interrupt import ignore_after_end, quiet_start, stop_cleanly  # noqa: E402
 
 with quiet_start():  # Ctrl-C while starting: no traceback
     from wirecal import __version__
@@ -100,6 +100,18 @@ class LazyGroup(click.Group):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.lazy: dict[str, tuple[str, str]] = {}
+
+    def main(self, args: Any = None, *rest: Any, **kwargs: Any) -> Any:
+        """Run the command line; once it has ended, a signal is ignored (:func:`ignore_after_end`).
+
+        Only for the process's own command line (``args`` None): a test's runner passes its
+        arguments and keeps its signals.
+        """
+        try:
+            return super().main(args, *rest, **kwargs)
+        finally:
+            if args is None:
+                ignore_after_end()
 
     def add_lazy_command(self, name: str, target: str, summary: str) -> None:
         """Register ``name`` as ``module:attribute`` to import when run, with its summary."""
