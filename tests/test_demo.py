@@ -195,3 +195,23 @@ def test_demo_on_the_irb120(tmp_path):
         "truth.toml",
         "validation.csv",
     ]
+
+
+def _table(text: str) -> list[str]:
+    """The demo's before/after table: its header to the controller line, without the time."""
+    lines = text.splitlines()
+    start = next(
+        i for i, line in enumerate(lines) if line.split() == ["before", "after", "reduction"]
+    )
+    end = next(i for i in range(start, len(lines)) if lines[i].startswith("controller solver"))
+    return [*lines[start:end], lines[end].split("; total")[0]]
+
+
+def test_the_readme_quotes_the_demos_table_as_it_prints_it(tmp_path):
+    """The README's demo table is what `wirecal demo` (its default seed) prints, digit for
+    digit; only the run's total time may differ. A change that moves a figure fails here
+    until the README quotes the new one."""
+    readme = (VIPER.parents[1] / "README.md").read_text(encoding="utf-8")
+    r = CliRunner().invoke(main, ["demo", "-o", str(tmp_path / "d")], catch_exceptions=False)
+    assert r.exit_code == 0, r.output
+    assert _table(r.output) == _table(readme)

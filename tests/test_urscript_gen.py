@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -45,8 +46,12 @@ def ur5():
 
 
 def test_golden_scripts(ur5):
-    """The shipped example's programs, byte for byte (regenerate on purpose only)."""
+    """The shipped example's programs, byte for byte; WIRECAL_UPDATE_GOLDEN=1 rewrites them
+    after an intended change (review the diff)."""
     out = scripts(*ur5)
+    if os.environ.get("WIRECAL_UPDATE_GOLDEN"):
+        for name, text in out.items():
+            (GOLDEN / name).write_bytes(text.encode("ascii"))
     assert sorted(out) == sorted(p.name for p in GOLDEN.glob("*.script"))
     for name, text in out.items():
         assert text == (GOLDEN / name).read_text(encoding="ascii"), name
