@@ -1334,3 +1334,33 @@ def test_nd21_overflowing_origins_are_refused_before_any_arithmetic(tmp_path):
     assert "origin xyz 0 0 1e+308 is beyond 10 m" in r.output
     assert "inf" not in r.output
     assert "please report" not in r.output
+
+
+@pytest.mark.parametrize(("length", "refused"), [(71, False), (72, True), (120, True)])
+def test_ra04_a_robot_name_longer_than_a_rapid_string_is_refused_by_its_key(
+    tmp_path, length, refused
+):
+    """RA04: a 120-character name gave 'internal error: the generated module breaks a RAPID
+    rule'. The module logs the name in one string, '# robot: NAME' (9 + n characters), and
+    a RAPID string holds 80 (kernel types: "0 to 80 characters"): n ≤ 71 is written, longer is
+    refused naming the key and the length to shorten it to."""
+    irb = VIPER.parent / "abb_irb120"
+    name = "A" * length
+    robot = re.sub(
+        r'^name = ".*"$', f'name = "{name}"', (irb / "robot.toml").read_text(), count=1, flags=re.M
+    )
+    plan = re.sub(
+        r'^robot = ".*"$', f'robot = "{name}"', (irb / "plan.toml").read_text(), count=1, flags=re.M
+    )
+    (tmp_path / "robot.toml").write_text(robot)
+    (tmp_path / "plan.toml").write_text(plan)
+    r = invoke("gen", tmp_path / "robot.toml", tmp_path / "plan.toml", "-o", tmp_path / "out")
+    if not refused:
+        assert r.exit_code == 0, r.output
+        assert f'"# robot: {name}"' in (tmp_path / "out" / "WIRECAL.mod").read_text()
+        return
+    assert r.exit_code == 2, r.output
+    assert "internal error" not in r.output
+    assert f"{length} characters" in r.output
+    assert "a RAPID string holds 80: shorten the name to 71 characters or fewer" in r.output
+    assert not (tmp_path / "out").exists()

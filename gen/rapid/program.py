@@ -35,6 +35,7 @@ from wirecal.lang.rapid.module import (
     num_literal,
     signal_name,
 )
+from wirecal.lang.rapid.tables import STRING_MAX
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
@@ -47,9 +48,6 @@ from wirecal.solver.run_parameters import (
     RunParameters,
     run_timeline,
 )
-
-STRING_MAX = 80
-"""A RAPID string's longest value, in characters (unconfirmed)."""
 
 EXTERNAL_AXES = "[9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]"
 """A jointtarget's extax for a robot without external axes (9E+09: not used)."""
@@ -191,6 +189,13 @@ def _check(robot: Robot, opt: RapidOptions) -> None:
         )
     problems += robot.program_problems()
     problems += name_problems(robot, '"\\', "a RAPID string")
+    header = f"# robot: {robot.name}"  # the log's header line, one string in run.mod.j2
+    if len(header) > STRING_MAX:
+        problems.append(
+            f"{robot.source}: name {robot.name!r}: {len(robot.name)} characters; the module logs "
+            f"it in one string, '# robot: …', and a RAPID string holds {STRING_MAX}: shorten the "
+            f"name to {STRING_MAX - len(header) + len(robot.name)} characters or fewer"
+        )
     if problems:
         raise WirecalError(problems)
 

@@ -1,7 +1,7 @@
 r"""What wirecal's RAPID checker knows: data types, predefined data, instructions, functions.
 
 Each instruction and function carries the page its signature comes from (``source``) and the
-RobotWare version it needs (``since``). Pages read (through the ``search`` tool; ABB's own
+RobotWare version it needs (``since``). Pages read (stored public copies; ABB's own
 PDFs were not reachable, so the reading was of copies and translations):
 
 * ``kernel-types``: RAPID kernel manual, "Built-in data types" (num: IEEE 754, exact integers
@@ -303,7 +303,7 @@ OTHER_ROUTINES = frozenset(
 
 # --- RAPID beyond the twin's subset: what the checker reads in others' programs -----------
 #
-# Pages read for these (through the ``search`` tool):
+# Pages read for these (stored public copies):
 #
 # * ``RM``: "RAPID Reference Manual" (an S4C-era edition: "Basic Characteristics RAPID"),
 #   yumpu.com/en/document/view/5679047 — page 211-212 robtarget (trans pos, rot orient,
