@@ -27,7 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from wirecal.solver.identifiability import analyse_jacobian, covariance
-from wirecal.solver.kinematics import Model, gravity_torques, rigid_frames
+from wirecal.solver.kinematics import Model, bends, gravity_torques, rigid_frames
 from wirecal.solver.sensitivity import sensitivity
 
 PRIOR_COMPLIANCE_URAD_PER_NM = 8.0
@@ -137,9 +137,9 @@ def compensated_joints(model: Model, q: np.ndarray) -> np.ndarray:
     model does). A model without masses or compliance returns q.
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    c = model.compliance
-    if model.masses is None or c is None or not np.any(c):
+    if not bends(model):
         return q
+    c = model.compliance
     rigid = replace(model, compliance=None)
     command = q
     for _ in range(COMPENSATION_ITERATIONS):

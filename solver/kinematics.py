@@ -197,18 +197,26 @@ def _advance(P: Vector, a, X: Vector, d, Z: Vector) -> Vector:
     return P + a * X + d * Z
 
 
+def bends(model: Model) -> bool:
+    """Whether ``model`` bends under gravity: it has masses and a nonzero compliance."""
+    return (
+        model.masses is not None and model.compliance is not None and bool(np.any(model.compliance))
+    )
+
+
 def frames(model: Model, q: np.ndarray) -> Frames:
     """All frames of the chain for commanded joint angles ``q`` (N, n) in radians.
 
     A model with masses and compliance: the frames of the arm bent under gravity, with the
     gravity torques at ``q`` (module docstring); otherwise :func:`rigid_frames`.
     """
-    c = model.compliance
-    if model.masses is None or c is None or not np.any(c):
+    if not bends(model):
         return rigid_frames(model, q)
+    masses, c = model.masses, model.compliance
+    assert masses is not None  # bends(model)
     q = np.atleast_2d(np.asarray(q, dtype=float))
     rigid = rigid_frames(model, q)
-    torque = gravity_torques_nm(model.masses, rigid.x, rigid.z, rigid.o)
+    torque = gravity_torques_nm(masses, rigid.x, rigid.z, rigid.o)
     return replace(rigid_frames(model, q + c * torque), torque_nm=torque)
 
 
