@@ -8,7 +8,6 @@ import numpy as np
 from wirecal.app.progress import ProgressBar
 from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import OUTPUT_FILE, SEED, number
-from wirecal.cli.plan_pool import plan_from_pool
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.plan_file import plan_to_toml
@@ -141,6 +140,8 @@ def plan(
             raise WirecalError(
                 "--pool chooses θ0 for the joint method: leave out --theta0 and --for"
             )
+        from wirecal.cli.plan_pool import plan_from_pool  # the fit's modules: only with --pool
+
         plan_from_pool(rb, pool, points, output, as_json, force)
         return
     theta0_deg = _joints(theta0, rb.n_joints)
