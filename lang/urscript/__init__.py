@@ -12,7 +12,6 @@ from typing import ClassVar
 from wirecal.lang.base import Capabilities, Example, Language
 from wirecal.lang.registry import register
 from wirecal.lang.urscript.calibration import KEYS, SUFFIX, calibration_text
-from wirecal.solver.errors import WirecalError
 from wirecal.solver.robot import Robot
 
 _TYPES = "UR16e User Manual p. 181; UR5 CB3 User Manual 3.4.5 p. II-69"
@@ -122,10 +121,6 @@ class URScript(Language):
         external_calls: bool = False,
     ) -> list[str]:
         """Check a script as sent to the controller (``external_calls`` does not apply)."""
-        from wirecal.lang.urscript.parser import parse_program
+        from wirecal.lang.urscript.parser import program_problems
 
-        try:
-            parse_program(text, source, software)
-        except WirecalError as exc:
-            return list(exc.problems)
-        return []
+        return program_problems(text, source, software)

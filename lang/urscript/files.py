@@ -18,8 +18,7 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 
-from wirecal.lang.urscript.parser import parse_program
-from wirecal.solver.errors import WirecalError
+from wirecal.lang.urscript.parser import program_problems
 
 _WHERE = re.compile(r"^<combined>:(\d+): ")
 
@@ -49,12 +48,12 @@ def check_files(texts: Mapping[str, str], software: str | None = None) -> list[s
     """
     programs = [s for s, t in texts.items() if is_program(t)]
     if not programs:
-        return [p for s, t in texts.items() for p in _problems(t, s, software)]
+        return [p for s, t in texts.items() for p in program_problems(t, s, software)]
     fragments = [(s, t) for s, t in texts.items() if s not in programs]
     problems: list[str] = []
     for source in programs:
         text, origin = _combined(source, texts[source], fragments)
-        for problem in _problems(text, "<combined>", software):
+        for problem in program_problems(text, "<combined>", software):
             m = _WHERE.match(problem)
             if m is None:
                 problems.append(problem.replace("<combined>", source, 1))
@@ -62,14 +61,6 @@ def check_files(texts: Mapping[str, str], software: str | None = None) -> list[s
                 file, line = origin[int(m.group(1)) - 1]
                 problems.append(f"{file}:{line}: {problem[m.end() :]}")
     return list(dict.fromkeys(problems))
-
-
-def _problems(text: str, source: str, software: str | None) -> list[str]:
-    try:
-        parse_program(text, source, software)
-    except WirecalError as exc:
-        return list(exc.problems)
-    return []
 
 
 def _combined(

@@ -334,6 +334,15 @@ def parse_program(text: str, source: str = "<script>", software: str | None = No
     return program
 
 
+def program_problems(text: str, source: str, software: str | None = None) -> list[str]:
+    """Return :func:`parse_program`'s problems with ``text`` ('FILE:LINE: what'), none if clean."""
+    try:
+        parse_program(text, source, software)
+    except WirecalError as exc:
+        return list(exc.problems)
+    return []
+
+
 _CONTINUES = re.compile(r"(\b(and|or|xor|not)|[-+*/%,=<>(\[])\s*$")
 """A line ending in an operator, a comma or an opening bracket goes on on the next line."""
 
