@@ -6,7 +6,9 @@ post-calibration accuracy.
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -246,6 +248,50 @@ def solve(
     :class:`~wirecal.solver.identify.ScalePrior`): the wire lengths tell the scale only
     through the lengths held at nominal (the tool point), so it leans on those being exact.
     """
+    left, names, step = _measured_steps(plan, m, partial)
+    factor, notes = _reference_scale(robot, m)
+    k = factor if factor is not None and corrections else 1.0
+    problem, psi, comp = _problem(robot, m, names, step, k)
+    omega = omega_vector(names, robot.n_joints, plan, omega_default)
+    fit = _identify(robot, problem, omega, psi, robust)
+    drift, clean = _judge_drift(robot, m, fit, k, problem, (omega, psi, robust))
+    drift = _as_corrected(drift, corrections)
+    notes.append(_drift_note(m, drift))
+    problem, fit = clean if corrections and clean is not None else (problem, fit)
+    sw, jt, sigma = fit
+    scale, scale_std = _scale_estimate(robot, m, factor, sigma)
+    refine = refine_scale and corrections
+    jt = _joint_with_scale(jt, problem, scale, scale_std, sigma, refine=refine, robust=robust)
+    estimates = {name: e for name, e in (("stepwise", sw), ("joint", jt)) if name in methods}
+    src = functools.partial(
+        _error_sources, robot, plan, m, sigma, problem.d, scale, scale_std, drift
+    )
+    budgets = _budgets(robot, problem, psi, step, sigma, src, len(names), comp, estimates)
+    return SolveResult(
+        robot,
+        plan,
+        m,
+        estimates,
+        {name: _predicted(budgets.get(name)) for name in estimates},
+        sigma,
+        left,
+        psi[:, : len(names)],
+        m.step[m.present],
+        budgets=budgets,
+        scale=scale,
+        drift=drift,
+        encoder_notes=tuple(notes),
+        compliance=comp,
+    )
+
+
+def _measured_steps(
+    plan: Plan, m: Measurements, partial: bool
+) -> tuple[tuple[str, ...], tuple[str, ...], np.ndarray]:
+    """Return the parameters left nominal, those solved and the present rows' steps renumbered.
+
+    Refuses an incomplete log unless ``partial``, and a log without a calibration point.
+    """
     if not m.complete and not partial:
         raise WirecalError(  # what a capture set aside may be the missing rows: say so
             [
@@ -255,88 +301,127 @@ def solve(
                 *m.log.notes,
             ]
         )
-    present = m.present
-    step = m.step[present]
+    step = m.step[m.present]
     left = tuple(n for j, n in enumerate(plan.order) if not np.any(step == j + 1))
     names = tuple(n for n in plan.order if n not in left)
     renumber = {plan.order.index(n) + 1: k + 1 for k, n in enumerate(names)}
     step = np.array([renumber[s] for s in step])
     if not names:
         raise WirecalError(f"{m.source}: no calibration point was measured; nothing to solve")
+    return left, names, step
 
+
+def _problem(
+    robot: Robot, m: Measurements, names: tuple[str, ...], step: np.ndarray, k: float
+) -> tuple[Problem, np.ndarray, ComplianceObservability | None]:
+    """Return the identification problem of the measured points, its ψ and the compliances.
+
+    The lengths are scaled by ``k``; the compliances the points identify are solved
+    beside ``names``.
+    """
     base = robot.nominal
-    q_deg = m.joints_deg[present]
-    factor, notes = _reference_scale(robot, m)
-    k = factor if factor is not None and corrections else 1.0
-    d = m.distance_mm[present] * k
+    q_deg = m.joints_deg[m.present]
+    d = m.distance_mm[m.present] * k
     comp = _compliances(robot, q_deg, m.theta0_deg, names)
     solved = names + (comp.identified if comp is not None else ())
     problem = Problem(base, solved, np.radians(q_deg), np.radians(m.theta0_deg), d, step)
     psi = sensitivity(base, q_deg, m.theta0_deg, solved).psi
-    omega = omega_vector(names, robot.n_joints, plan, omega_default)
-    fit = _identify(robot, problem, omega, psi, robust)
-    drift, clean = _judge_drift(robot, m, fit, k, problem, (omega, psi, robust))
-    drift = _as_corrected(drift, corrections)
-    notes.append(_drift_note(m, drift))
-    if corrections and clean is not None:
-        problem, fit = clean
-        d = problem.d
-    sw, jt, sigma = fit
-    estimates: dict[str, Estimate] = {}
-    if "stepwise" in methods:
-        estimates["stepwise"] = sw
-    scale = None
-    if factor is not None:
-        enc = robot.encoder
-        scale = estimate_scale(
-            m.reference_mm, valid_length(enc), enc.reference_uncertainty_mm, sigma
-        )
-    scale_std = scale.std if scale is not None else robot.encoder.scale_tolerance_ppm * PPM
-    if refine_scale and scale is not None and corrections and np.isfinite(sigma) and sigma > 0:
+    return problem, psi, comp
+
+
+def _scale_estimate(
+    robot: Robot, m: Measurements, factor: float | None, sigma: float
+) -> tuple[ScaleEstimate | None, float]:
+    """Return the scale estimated from the log's reference rows and its σ.
+
+    Without reference rows (``factor`` None) no estimate, and the σ is the encoder's
+    scale tolerance.
+    """
+    enc = robot.encoder
+    if factor is None:
+        return None, enc.scale_tolerance_ppm * PPM
+    scale = estimate_scale(m.reference_mm, valid_length(enc), enc.reference_uncertainty_mm, sigma)
+    return scale, scale.std
+
+
+def _budgets(
+    robot: Robot,
+    problem: Problem,
+    psi: np.ndarray,
+    step: np.ndarray,
+    sigma: float,
+    sources_of: Callable[[], Sources],
+    n_plan: int,
+    comp: ComplianceObservability | None,
+    estimates: dict[str, Estimate],
+) -> dict[str, Budget]:
+    """Return each method's error budget over the robot's workspace.
+
+    Empty when the points leave a direction of the parameters unseen (the tool error is
+    unbounded along it); ``sources_of`` is called only when every direction is seen.
+    """
+    J = problem.errors.per_internal(psi)  # internal units
+    if not covariance(J, sigma**2)[1].all():
+        return {}
+    src = sources_of()
+    ws = workspace(robot)
+    return {
+        method: _budget(robot, problem, J, step, src, ws, n_plan, comp, est)
+        for method, est in estimates.items()
+    }
+
+
+def _predicted(budget: Budget | None) -> dict[str, float]:
+    """Return a method's predicted tool error: unbounded without a budget."""
+    return UNIDENTIFIED if budget is None else {"mean": budget.total, "max": budget.worst}
+
+
+def _joint_with_scale(
+    jt: Estimate,
+    problem: Problem,
+    scale: ScaleEstimate | None,
+    scale_std: float,
+    sigma: float,
+    *,
+    refine: bool,
+    robust: bool,
+) -> Estimate:
+    """Return the joint estimate with the scale's uncertainty in it.
+
+    Refined jointly with the scale (a :class:`~wirecal.solver.identify.ScalePrior`) when
+    ``refine`` and a reference scale and a finite noise σ are there; otherwise the scale's
+    σ is added to its covariance.
+    """
+    if refine and scale is not None and np.isfinite(sigma) and sigma > 0:
         prior = ScalePrior(scale.std, sigma / scale.std)
         x = problem.errors.to_internal(jt.values)
-        jt = joint(problem, x, loss="soft_l1" if robust else "linear", scale=prior)
-    else:
-        jt = _with_scale_sigma(jt, problem, scale_std)
-    if "joint" in methods:
-        estimates["joint"] = jt
+        return joint(problem, x, loss="soft_l1" if robust else "linear", scale=prior)
+    return _with_scale_sigma(jt, problem, scale_std)
 
-    J = problem.errors.per_internal(psi)  # internal units
-    _, identified = covariance(J, sigma**2)
-    predicted = dict.fromkeys(estimates, UNIDENTIFIED)
-    budgets: dict[str, Budget] = {}
-    if identified.all():  # otherwise the tool error is unbounded along the unseen directions
-        ws = workspace(robot)
-        src = sources(
-            sigma,
-            d,
-            scale_std,
-            scale is not None,
-            robot.encoder.temperature_coefficient_ppm_per_k,
-            None if m.t_s is None else m.t_s[present],
-            drift,
-            m.reference_t_s,
-            unmodelled_exit_mm(robot, plan)[present],
-            sag_lengths_mm(robot, plan)[present],
-        )
-        for method, est in estimates.items():
-            budgets[method] = _budget(robot, problem, J, step, src, ws, len(names), comp, est)
-            predicted[method] = {"mean": budgets[method].total, "max": budgets[method].worst}
-    return SolveResult(
-        robot,
-        plan,
-        m,
-        estimates,
-        predicted,
+
+def _error_sources(
+    robot: Robot,
+    plan: Plan,
+    m: Measurements,
+    sigma: float,
+    d: np.ndarray,
+    scale: ScaleEstimate | None,
+    scale_std: float,
+    drift: Drift | None,
+) -> Sources:
+    """Return the error budget's sources for the measured points (:func:`budget.sources`)."""
+    present = m.present
+    return sources(
         sigma,
-        left,
-        psi[:, : len(names)],
-        m.step[present],
-        budgets=budgets,
-        scale=scale,
-        drift=drift,
-        encoder_notes=tuple(notes),
-        compliance=comp,
+        d,
+        scale_std,
+        scale is not None,
+        robot.encoder.temperature_coefficient_ppm_per_k,
+        None if m.t_s is None else m.t_s[present],
+        drift,
+        m.reference_t_s,
+        unmodelled_exit_mm(robot, plan)[present],
+        sag_lengths_mm(robot, plan)[present],
     )
 
 
