@@ -27,6 +27,7 @@ plus an error of its certified uncertainty.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -307,55 +308,20 @@ def simulate_log(
     mpc = enc.mm_per_count if mm_per_count is None else mm_per_count
     start = enc.counter.random_start(rng) if counter_start is None else counter_start
     d_points = true_lengths(robot.model(errors), plan, enc.exit)
-    q, step_no, index_no = plan.all_points()
-
-    # One entry per reading in run order: each step's zero at θ0, then its points; last
-    # the closing zero at θ0 (logged as the zero of step N+1), which sees a slip in step N.
-    n_steps = len(plan.steps)
-    order = [
-        (j, k)
-        for j in range(1, n_steps + 1)
-        for k in (None, *(int(i) for i in np.flatnonzero(step_no == j)))
-    ] + [(n_steps + 1, None)]
-    kinds = ["zero" if k is None else "point" for _, k in order]
-    steps = [j for j, _ in order]
-    indices = [0 if k is None else int(index_no[k]) for _, k in order]
-    joints = [plan.theta0_deg if k is None else q[k] for _, k in order]
+    kinds, steps, indices, joints, points = _run_order(plan)
     lengths = _row_lengths(
-        robot, errors, plan, np.array(joints), [k for _, k in order], d_points, unmodelled, seed
+        robot, errors, plan, np.array(joints), points, d_points, unmodelled, seed
     )
     # The closing zero draws from its own generator, so a seed gives the same readings as
     # before the closing zero existed, with one row added.
     closing_rng = np.random.default_rng([seed, 3])
     lengths[:-1] += rng.normal(0.0, noise_mm, len(lengths) - 1)
-    steps_arr = np.asarray(steps)
-    if faults.slip is not None:
-        slip_step, slip_mm = faults.slip
-        after = (steps_arr > slip_step) | (
-            (steps_arr == slip_step) & (np.asarray(kinds) == "point")
-        )
-        lengths[after] += slip_mm
-    if faults.outliers:
-        pts = np.flatnonzero(np.asarray(kinds) == "point")
-        chosen = rng.choice(pts, size=min(faults.outliers, len(pts)), replace=False)
-        lengths[chosen] += faults.outlier_mm * rng.choice((-1.0, 1.0), size=len(chosen))
+    _add_faults(lengths, np.asarray(steps), np.asarray(kinds) == "point", faults, rng)
     lengths[-1] += closing_rng.normal(0.0, noise_mm)
 
     _check_finite(lengths, "true wire length", steps, indices, f"the true errors on {robot.source}")
-    # Beyond the range either way (a fault shortening the wire by more than it can be
-    # long) the encoder stops counting: the twin's error, with its cause.
-    beyond = np.flatnonzero(np.abs(lengths) > enc.range_mm)
-    if len(beyond):
-        i = int(beyond[0])
-        raise WirecalError(
-            f"{RANGE_EXCEEDED}: step {steps[i]} point {indices[i]}: the wire would be "
-            f"{lengths[i]:.1f} mm long, beyond the encoder's range_mm {enc.range_mm:g}"
-        )
-    run = replace(run, readings=samples)
-    timeline = run_timeline(robot, plan, run)
-    offset = reference_duration_s(enc)
-    times = timeline.reading_s + offset
-    total = timeline.total_s + offset
+    _check_range(lengths, enc.range_mm, steps, indices)
+    times, total, settle_s = _reading_times(robot, plan, replace(run, readings=samples))
     # What the encoder reads of those wire lengths (scale, temperature, drift).
     reading = lengths * encoder.read_factor(times, total) + encoder.drift_mm(times)
     _check_finite(reading, "encoder's reading", steps, indices, "the true encoder")
@@ -363,16 +329,100 @@ def simulate_log(
     tail = sample_counts(reading[-1:], mpc, start, enc.counter, samples, closing_rng)
     mean, spread = np.concatenate([head[0], tail[0]]), np.concatenate([head[1], tail[1]])
     rows = _reference_rows(enc, encoder, plan, noise_mm, samples, start, seed, total)
-    rows += [
+    rows += _reading_rows(
+        zip(kinds, steps, indices, joints, mean, strict=True),
+        spread,
+        times,
+        settle_s,
+        samples,
+    )
+    return _log_text(robot, plan, mpc, rows, faults)
+
+
+def _reading_rows(
+    readings: Iterable[tuple[str, int, int, np.ndarray, float]],
+    spread: np.ndarray,
+    times: np.ndarray,
+    settle_s: np.ndarray,
+    samples: int,
+) -> list[str]:
+    """Return the log's rows of ``readings`` (kind, step, index, joints, mean count)."""
+    return [
         format_row(*args, samples, sp, t, settle)
-        for args, sp, t, settle in zip(
-            zip(kinds, steps, indices, joints, mean, strict=True),
-            spread,
-            times,
-            timeline.settle_s,
-            strict=True,
-        )
+        for args, sp, t, settle in zip(readings, spread, times, settle_s, strict=True)
     ]
+
+
+def _run_order(
+    plan: Plan,
+) -> tuple[list[str], list[int], list[int], list[np.ndarray], list[int | None]]:
+    """Return every reading's kind, step, index, joints and point (None: a zero) in run order.
+
+    Each step's zero at θ0, then its points; last the closing zero at θ0 (logged as the
+    zero of step N+1), which sees a slip in step N.
+    """
+    q, step_no, index_no = plan.all_points()
+    n_steps = len(plan.steps)
+    order = [
+        (j, k)
+        for j in range(1, n_steps + 1)
+        for k in (None, *(int(i) for i in np.flatnonzero(step_no == j)))
+    ] + [(n_steps + 1, None)]
+    kinds = ["zero" if k is None else "point" for _, k in order]
+    indices = [0 if k is None else int(index_no[k]) for _, k in order]
+    joints = [plan.theta0_deg if k is None else q[k] for _, k in order]
+    return kinds, [j for j, _ in order], indices, joints, [k for _, k in order]
+
+
+def _reading_times(
+    robot: Robot, plan: Plan, run: RunParameters
+) -> tuple[np.ndarray, float, np.ndarray]:
+    """Return each reading's time, the run's duration and each reading's settle time in s.
+
+    The times count from the reference step's start (its duration comes first).
+    """
+    timeline = run_timeline(robot, plan, run)
+    offset = reference_duration_s(robot.encoder)
+    return timeline.reading_s + offset, timeline.total_s + offset, timeline.settle_s
+
+
+def _add_faults(
+    lengths: np.ndarray,
+    steps: np.ndarray,
+    is_point: np.ndarray,
+    faults: Faults,
+    rng: np.random.Generator,
+) -> None:
+    """Add the wire's slip and the outliers of ``faults`` to the rows' ``lengths`` in place."""
+    if faults.slip is not None:
+        slip_step, slip_mm = faults.slip
+        after = (steps > slip_step) | ((steps == slip_step) & is_point)
+        lengths[after] += slip_mm
+    if faults.outliers:
+        pts = np.flatnonzero(is_point)
+        chosen = rng.choice(pts, size=min(faults.outliers, len(pts)), replace=False)
+        lengths[chosen] += faults.outlier_mm * rng.choice((-1.0, 1.0), size=len(chosen))
+
+
+def _check_range(
+    lengths: np.ndarray, range_mm: float, steps: list[int], indices: list[int]
+) -> None:
+    """Refuse a wire length beyond the encoder's range either way.
+
+    A fault shortening the wire by more than it can be long, say: the encoder stops
+    counting, the twin's error, with its cause.
+    """
+    beyond = np.flatnonzero(np.abs(lengths) > range_mm)
+    if len(beyond):
+        i = int(beyond[0])
+        raise WirecalError(
+            f"{RANGE_EXCEEDED}: step {steps[i]} point {indices[i]}: the wire would be "
+            f"{lengths[i]:.1f} mm long, beyond the encoder's range_mm {range_mm:g}"
+        )
+
+
+def _log_text(robot: Robot, plan: Plan, mpc: float, rows: list[str], faults: Faults) -> str:
+    """Return the log's text: its header and ``rows``, cut as ``faults`` stops or truncates."""
     if faults.stop_after is not None:
         rows = rows[: faults.stop_after]
     text = format_header(
