@@ -22,6 +22,7 @@ from wirecal.solver.formats.robot_file import (
     load_robot,
 )
 from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
+from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import (
     IDEAL_ENCODER,
@@ -202,6 +203,47 @@ def simulate(
     --ideal-encoder turns all of that off. The log goes to -o; the truth (and the true
     encoder) goes to its own file, never into the log.
     """
+    rb, pl = _load_checked(robot, plan, errors_file, scale, slip, counter_start)
+    truth_path = Path(truth_out) if truth_out else Path(log_path).with_suffix(".truth.toml")
+    inputs = [robot, plan, *([errors_file] if errors_file else [])]
+    _check_twin_options(controller, console_path, outliers, stop_after)
+    outputs = [log_path, truth_path, *([console_path] if console_path else [])]
+    with Outputs(outputs, force=force, inputs=inputs) as out:
+        errors = _true_errors(rb, errors_file, scale, seed)
+        true_encoder = _true_encoder(rb, seed, ideal_encoder, encoder_scale_ppm, drift_mm_per_h)
+        run = (seed, noise_mm, samples, counter_start, true_encoder)
+        if controller:
+            text, stopped = _twin_log(out, rb, pl, errors, run, slip, console_path, width)
+        else:
+            faults = Faults(
+                slip=slip, outliers=outliers, outlier_mm=outlier_mm, stop_after=stop_after
+            )
+            text, stopped = _direct_log(rb, pl, errors, run, faults), None
+        out.put(log_path, text)
+        out.put(
+            truth_path,
+            truth_text(rb, errors, None if errors_file else seed) + _encoder_note(true_encoder),
+        )
+    points = sum(line.startswith("point,") for line in text.splitlines())  # as logged
+    click.echo(f"wrote {log_path} ({points} points) and the truth to {truth_path}")
+    if stopped:
+        click.echo(f"the controller program stopped: {stopped}", err=True)
+        sys.exit(1)
+
+
+_Run = tuple[int, float, int, float | None, EncoderTruth]
+"""The run's seed, noise (mm), samples per point, counter start and true encoder."""
+
+
+def _load_checked(
+    robot: str,
+    plan: str,
+    errors_file: str | None,
+    scale: float | None,
+    slip: tuple[int, float] | None,
+    counter_start: float | None,
+) -> tuple[Robot, Plan]:
+    """Load ROBOT and PLAN, refusing options that contradict them or each other."""
     rb = load_robot(robot)
     if rb.controller_problem():
         raise WirecalError(f"{rb.controller_problem()}; 'wirecal simulate' writes that log")
@@ -218,60 +260,66 @@ def simulate(
             f"--counter-start {counter_start:g}: the robot file's "
             f"{counter.bits}-bit counter holds {-counter.half}…{counter.half - 1}"
         )
-    truth_path = Path(truth_out) if truth_out else Path(log_path).with_suffix(".truth.toml")
-    inputs = [robot, plan, *([errors_file] if errors_file else [])]
-    _check_twin_options(controller, console_path, outliers, stop_after)
-    outputs = [log_path, truth_path, *([console_path] if console_path else [])]
-    with Outputs(outputs, force=force, inputs=inputs) as out:
-        if errors_file:
-            errors = load_errors(errors_file, rb)
-        else:
-            errors = random_errors(
-                rb, 1.0 if scale is None else scale, np.random.default_rng([seed, 1])
-            )
-        true_encoder = _true_encoder(rb, seed, ideal_encoder, encoder_scale_ppm, drift_mm_per_h)
-        stopped = None
-        if controller:
-            from wirecal.app.twin_simulate import simulate_in_twin  # the twin only when asked for
+    return rb, pl
 
-            text, stopped, console = simulate_in_twin(
-                rb,
-                pl,
-                errors,
-                seed,
-                noise_mm,
-                samples,
-                slip,
-                counter_start,
-                true_encoder,
-                echo=bool(console_path),
-            )
-            if console_path:
-                out.put(console_path, fold(console, width))
-        else:
-            text = simulate_log(
-                rb,
-                pl,
-                errors,
-                seed=seed,
-                noise_mm=noise_mm,
-                samples=samples,
-                faults=Faults(
-                    slip=slip, outliers=outliers, outlier_mm=outlier_mm, stop_after=stop_after
-                ),
-                counter_start=counter_start,
-                encoder=true_encoder,
-            )
-        out.put(log_path, text)
-        out.put(
-            truth_path,
-            truth_text(rb, errors, None if errors_file else seed) + _encoder_note(true_encoder),
-        )
-    points = sum(line.startswith("point,") for line in text.splitlines())  # as logged
-    click.echo(f"wrote {log_path} ({points} points) and the truth to {truth_path}")
-    if stopped:
-        click.echo(f"the controller program stopped: {stopped}", err=True)
-        sys.exit(1)
+
+def _true_errors(
+    rb: Robot, errors_file: str | None, scale: float | None, seed: int
+) -> dict[str, float]:
+    """Return the true robot's offsets: the truth file's, or drawn within ±``scale``."""
+    if errors_file:
+        return load_errors(errors_file, rb)
+    return random_errors(rb, 1.0 if scale is None else scale, np.random.default_rng([seed, 1]))
+
+
+def _twin_log(
+    out: Outputs,
+    rb: Robot,
+    pl: Plan,
+    errors: dict[str, float],
+    run: _Run,
+    slip: tuple[int, float] | None,
+    console_path: str | None,
+    width: int,
+) -> tuple[str, str | None]:
+    """Return the log the robot file's programs write in the twin and why they stopped.
+
+    The twin's console goes to ``console_path`` (folded at ``width``) when given.
+    """
+    from wirecal.app.twin_simulate import simulate_in_twin  # the twin only when asked for
+
+    seed, noise_mm, samples, counter_start, true_encoder = run
+    text, stopped, console = simulate_in_twin(
+        rb,
+        pl,
+        errors,
+        seed,
+        noise_mm,
+        samples,
+        slip,
+        counter_start,
+        true_encoder,
+        echo=bool(console_path),
+    )
+    if console_path:
+        out.put(console_path, fold(console, width))
+    return text, stopped
+
+
+def _direct_log(rb: Robot, pl: Plan, errors: dict[str, float], run: _Run, faults: Faults) -> str:
+    """Return the log of the direct simulation (no programs run), with ``faults``."""
+    seed, noise_mm, samples, counter_start, true_encoder = run
+    return simulate_log(
+        rb,
+        pl,
+        errors,
+        seed=seed,
+        noise_mm=noise_mm,
+        samples=samples,
+        faults=faults,
+        counter_start=counter_start,
+        encoder=true_encoder,
+    )
 
 
 def _check_twin_options(
