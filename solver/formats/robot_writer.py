@@ -12,7 +12,13 @@ from collections.abc import Sequence
 from wirecal.solver.cell import CellModel
 from wirecal.solver.exit_geometry import Exit, Pulley
 from wirecal.solver.gravity import DOWN
-from wirecal.solver.robot import DEFAULT_GRAVITY_SAG_DEG_PER_M, Encoder, Robot, UrdfSource
+from wirecal.solver.robot import (
+    DEFAULT_GRAVITY_SAG_DEG_PER_M,
+    Controller,
+    Encoder,
+    Robot,
+    UrdfSource,
+)
 
 TIDY = 1e-11
 """Numbers written to a robot file are the shortest decimals within TIDY (mm or deg) of the
@@ -34,13 +40,18 @@ def _num(x: float, tidy: float = TIDY) -> str:
     return repr(x)
 
 
+def _vec(values, tidy: float = TIDY) -> str:
+    """Return ``values`` as a TOML array of :func:`_num` decimals."""
+    return "[" + ", ".join(_num(v, tidy) for v in values) + "]"
+
+
 def _exit_lines(exit_: Exit | None) -> list[str]:
     """Return the robot file lines of an exit (none for the ideal point exit)."""
     if exit_ is None:
         return []
     lines = [
         f"exit = {json.dumps(exit_.kind)}",
-        "axis = [" + ", ".join(_num(c) for c in exit_.axis) + "]",
+        f"axis = {_vec(exit_.axis)}",
     ]
     if isinstance(exit_, Pulley):
         return [*lines, f"pulley_radius_mm = {_num(exit_.radius_mm)}"]
@@ -68,10 +79,6 @@ def _scale_lines(enc: Encoder) -> list[str]:
 
 def _cell_lines(cell: CellModel) -> list[str]:
     """Return the robot file lines of ``[cell]`` (the floor and margin always written)."""
-
-    def vec(values) -> str:
-        return "[" + ", ".join(_num(v) for v in values) + "]"
-
     lines = [
         "",
         "[cell]",
@@ -81,22 +88,22 @@ def _cell_lines(cell: CellModel) -> list[str]:
     ]
     for key, limits in (("body_min_deg", cell.body_min_deg), ("body_max_deg", cell.body_max_deg)):
         if limits is not None:
-            lines.append(f"{key} = {vec(limits)}")
+            lines.append(f"{key} = {_vec(limits)}")
     if cell.housing is not None:
         h = cell.housing
         lines += [
             "",
             "[cell.encoder_housing]",
-            f"direction = {vec(h.direction)}",
+            f"direction = {_vec(h.direction)}",
             f"length_mm = {_num(h.length_mm)}",
             f"radius_mm = {_num(h.radius_mm)}",
         ]
     for b in cell.boxes:
         lines += ["", "[[cell.box]]", f"name = {json.dumps(b.name, ensure_ascii=False)}"]
-        lines += [f"min_mm = {vec(b.min_mm)}", f"max_mm = {vec(b.max_mm)}"]
+        lines += [f"min_mm = {_vec(b.min_mm)}", f"max_mm = {_vec(b.max_mm)}"]
     for w in cell.half_spaces:
         lines += ["", "[[cell.half_space]]", f"name = {json.dumps(w.name, ensure_ascii=False)}"]
-        lines += [f"point_mm = {vec(w.point_mm)}", f"normal = {vec(w.normal)}"]
+        lines += [f"point_mm = {_vec(w.point_mm)}", f"normal = {_vec(w.normal)}"]
     return lines
 
 
@@ -123,76 +130,17 @@ def robot_file_text(
     comments, and the cell model as ``[cell]`` unless not ``write_cell`` (the caller writes
     its own, or none, in ``tables``: lines of further tables, appended as given).
     """
-    dh = robot.dh_deg()
-
-    def vec(values, tidy: float = TIDY) -> str:
-        return "[" + ", ".join(_num(v, tidy) for v in values) + "]"
-
     lines = [f"# {h}" if h else "#" for h in header]
     lines += [
         f"name = {json.dumps(robot.name, ensure_ascii=False)}",
-        "",
-        "[kinematics]",
-        'convention = "craig"',
-        "# rows: [alpha_deg, a_mm, theta_offset_deg, d_mm]",
-        "dh = [",
-        *(f"    {vec(row)},  # {note}" for row, note in zip(dh, row_notes, strict=True)),
-        "]",
-        f"joint_min_deg = {vec(robot.joint_min_deg, LIMIT_TIDY)}",
-        f"joint_max_deg = {vec(robot.joint_max_deg, LIMIT_TIDY)}",
-        *(f"# {line}" for line in speed_notes),
-        f"joint_speed_deg_s = {vec(robot.joint_speed_deg_s, LIMIT_TIDY)}",
-        *([] if robot.joint_speed_confirmed else ["joint_speed_confirmed = false"]),
-        "",
-        "[tool]",
-        "# wire attachment point in the last joint's frame",
-        f"point_mm = {vec(robot.tool_point)}",
-        "",
-        "[encoder]",
-        f"# {encoder_note}",
-        f"mm_per_count = {_num(robot.encoder.mm_per_count)}",
-        f"range_mm = {_num(robot.encoder.range_mm)}",
-        f"counter_bits = {robot.encoder.counter_bits}",
-        f"interface = {json.dumps(robot.encoder.interface)}",
-        f"channel = {robot.encoder.channel}",
-        f"belt_mode = {robot.encoder.belt_mode}",
-        *(
-            [f"pulse_inputs = [{robot.encoder.pulse_inputs[0]}, {robot.encoder.pulse_inputs[1]}]"]
-            if robot.encoder.interface == "pulse"
-            else []
-        ),
-        *_exit_lines(robot.encoder.exit),
-        *(
-            f"{key} = {_num(value)}"
-            for key, value in (
-                ("max_wire_speed_mm_s", robot.encoder.max_wire_speed_mm_s),
-                ("max_wire_accel_mm_s2", robot.encoder.max_wire_accel_mm_s2),
-            )
-            if value is not None
-        ),
-        *_scale_lines(robot.encoder),
-        "",
-        "[controller]",
-        f"language = {json.dumps(robot.controller.language)}",
-        *(
-            [f"software = {json.dumps(robot.controller.software)}"]
-            if robot.controller.software
-            else []
-        ),
-        *([f"host = {json.dumps(robot.controller.host)}"] if robot.controller.host else []),
-        *([f"port = {robot.controller.port}"] if robot.controller.port else []),
-        *([f"key = {json.dumps(robot.controller.key)}"] if robot.controller.key else []),
-        "",
-        "[calibration]",
-        "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
+        *_kinematics_lines(robot, row_notes, speed_notes),
+        *_encoder_lines(robot.encoder, encoder_note),
+        *_controller_lines(robot.controller),
+        *_calibration_lines(robot),
     ]
-    if robot.compliances:
-        lines.append("compliances = [" + ", ".join(json.dumps(c) for c in robot.compliances) + "]")
-    if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M and not robot.compliances:
-        lines.append(f"gravity_sag_deg_per_m = {_num(robot.gravity_sag_deg_per_m)}")
     if robot.link_radius_mm is not None:
         lines += ["", "[geometry]", *(f"# {line}" for line in geometry_notes or ())]
-        lines.append(f"link_radius_mm = {vec(robot.link_radius_mm)}")
+        lines.append(f"link_radius_mm = {_vec(robot.link_radius_mm)}")
     lines += _gravity_lines(robot)
     if write_cell:
         lines += _cell_lines(robot.cell)
@@ -201,6 +149,88 @@ def robot_file_text(
     for line in tables:
         lines.append(line)
     return "\n".join(lines) + "\n"
+
+
+def _kinematics_lines(robot: Robot, row_notes: list[str], speed_notes: Sequence[str]) -> list[str]:
+    """Return the ``[kinematics]`` table (DH rows, one note each; limits; speeds) and ``[tool]``."""
+    return [
+        "",
+        "[kinematics]",
+        'convention = "craig"',
+        "# rows: [alpha_deg, a_mm, theta_offset_deg, d_mm]",
+        "dh = [",
+        *(
+            f"    {_vec(row)},  # {note}"
+            for row, note in zip(robot.dh_deg(), row_notes, strict=True)
+        ),
+        "]",
+        f"joint_min_deg = {_vec(robot.joint_min_deg, LIMIT_TIDY)}",
+        f"joint_max_deg = {_vec(robot.joint_max_deg, LIMIT_TIDY)}",
+        *(f"# {line}" for line in speed_notes),
+        f"joint_speed_deg_s = {_vec(robot.joint_speed_deg_s, LIMIT_TIDY)}",
+        *([] if robot.joint_speed_confirmed else ["joint_speed_confirmed = false"]),
+        "",
+        "[tool]",
+        "# wire attachment point in the last joint's frame",
+        f"point_mm = {_vec(robot.tool_point)}",
+    ]
+
+
+def _encoder_lines(enc: Encoder, note: str) -> list[str]:
+    """Return the ``[encoder]`` table, ``note`` its comment."""
+    return [
+        "",
+        "[encoder]",
+        f"# {note}",
+        f"mm_per_count = {_num(enc.mm_per_count)}",
+        f"range_mm = {_num(enc.range_mm)}",
+        f"counter_bits = {enc.counter_bits}",
+        f"interface = {json.dumps(enc.interface)}",
+        f"channel = {enc.channel}",
+        f"belt_mode = {enc.belt_mode}",
+        *(
+            [f"pulse_inputs = [{enc.pulse_inputs[0]}, {enc.pulse_inputs[1]}]"]
+            if enc.interface == "pulse"
+            else []
+        ),
+        *_exit_lines(enc.exit),
+        *(
+            f"{key} = {_num(value)}"
+            for key, value in (
+                ("max_wire_speed_mm_s", enc.max_wire_speed_mm_s),
+                ("max_wire_accel_mm_s2", enc.max_wire_accel_mm_s2),
+            )
+            if value is not None
+        ),
+        *_scale_lines(enc),
+    ]
+
+
+def _controller_lines(ctrl: Controller) -> list[str]:
+    """Return the ``[controller]`` table (the keys not given left out)."""
+    return [
+        "",
+        "[controller]",
+        f"language = {json.dumps(ctrl.language)}",
+        *([f"software = {json.dumps(ctrl.software)}"] if ctrl.software else []),
+        *([f"host = {json.dumps(ctrl.host)}"] if ctrl.host else []),
+        *([f"port = {ctrl.port}"] if ctrl.port else []),
+        *([f"key = {json.dumps(ctrl.key)}"] if ctrl.key else []),
+    ]
+
+
+def _calibration_lines(robot: Robot) -> list[str]:
+    """Return the ``[calibration]`` table: parameters, compliances or the gravity sag."""
+    lines = [
+        "",
+        "[calibration]",
+        "parameters = [" + ", ".join(json.dumps(p) for p in robot.parameters) + "]",
+    ]
+    if robot.compliances:
+        lines.append("compliances = [" + ", ".join(json.dumps(c) for c in robot.compliances) + "]")
+    if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M and not robot.compliances:
+        lines.append(f"gravity_sag_deg_per_m = {_num(robot.gravity_sag_deg_per_m)}")
+    return lines
 
 
 def _gravity_lines(robot: Robot) -> list[str]:
