@@ -14,6 +14,7 @@ Values are internal units (rad, mm) inside; :class:`Estimate` reports deg and mm
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -266,6 +267,42 @@ def joint(
     are ``scale_ppm``/``scale_std_ppm``, and the parameters' σ then carry the scale's
     uncertainty.
     """
+    m = len(problem.names)
+    evaluate = _evaluator(problem, scale)
+
+    x = _minimise(evaluate, x0 if scale is None else np.append(x0, 0.0), loss, f_scale_mm)
+    r, J = evaluate(x)
+    # Boundary units, so that the rank tolerance compares deg with mm, not rad with mm.
+    Jb = problem.errors.per_boundary(J[:, :m])
+    if scale is not None:
+        Jb = np.column_stack([Jb, J[:, m]])
+    std, corr = _std_and_correlation(r, Jb, problem.d.size, m)
+    scale_ppm = scale_std_ppm = None
+    if scale is not None:
+        scale_ppm = float(x[m]) / PPM
+        scale_std_ppm = None if std is None else float(std[m]) / PPM
+        std = None if std is None else std[:m]
+        corr = None if corr is None else corr[:m, :m]
+    return Estimate(
+        "joint",
+        problem.names,
+        problem.errors.to_boundary(x[:m]),
+        float(np.sqrt(np.mean(r[: problem.d.size] ** 2))),
+        std=std,
+        correlation=corr,
+        scale_ppm=scale_ppm,
+        scale_std_ppm=scale_std_ppm,
+    )
+
+
+def _evaluator(
+    problem: Problem, scale: ScalePrior | None
+) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """Return x ↦ (residuals, Jacobian) of :func:`joint`'s problem (internal units).
+
+    One pass over the chain gives both, kept for the same x (the solver asks for the
+    residuals and the Jacobian of a point one after the other).
+    """
     last: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
     m = len(problem.names)
 
@@ -289,7 +326,19 @@ def joint(
                 last[key] = (r, np.column_stack([np.vstack([J, np.zeros(m)]), col]))
         return last[key]
 
-    # MINPACK's Levenberg–Marquardt for plain least squares; a robust loss needs "trf".
+    return evaluate
+
+
+def _minimise(
+    evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+    x0: np.ndarray,
+    loss: Loss,
+    f_scale_mm: float,
+) -> np.ndarray:
+    """Return the x that minimises the residuals of ``evaluate`` from ``x0``.
+
+    MINPACK's Levenberg–Marquardt for plain least squares; a robust loss needs "trf".
+    """
     from scipy.optimize import least_squares  # imported here: code generation needs Ω only
 
     def residuals(x: np.ndarray) -> np.ndarray:
@@ -301,7 +350,7 @@ def joint(
     method: Literal["lm", "trf"] = "lm" if loss == "linear" else "trf"
     res = least_squares(
         residuals,
-        x0 if scale is None else np.append(x0, 0.0),
+        x0,
         jac=jacobian,
         method=method,
         loss=loss,
@@ -312,35 +361,25 @@ def joint(
         gtol=1e-12,
         max_nfev=200,
     )
-    r, J = evaluate(res.x)
-    n, k = r.size, J.shape[1]
-    std = corr = None
-    # Boundary units, so that the rank tolerance compares deg with mm, not rad with mm.
-    Jb = problem.errors.per_boundary(J[:, :m])
-    if scale is not None:
-        Jb = np.column_stack([Jb, J[:, m]])
-    if n > k:
-        sigma2 = float(r[: problem.d.size] @ r[: problem.d.size]) / (problem.d.size - m)
-        cov, identified = covariance(Jb, sigma2)
-        sd = np.sqrt(np.clip(np.diag(cov), 0, None))
-        with np.errstate(invalid="ignore", divide="ignore"):
-            corr = cov / np.outer(sd, sd)
-        corr[~identified] = np.nan
-        corr[:, ~identified] = np.nan
-        std = np.where(identified, sd, np.inf)
-    scale_ppm = scale_std_ppm = None
-    if scale is not None:
-        scale_ppm = float(res.x[m]) / PPM
-        scale_std_ppm = None if std is None else float(std[m]) / PPM
-        std = None if std is None else std[:m]
-        corr = None if corr is None else corr[:m, :m]
-    return Estimate(
-        "joint",
-        problem.names,
-        problem.errors.to_boundary(res.x[:m]),
-        float(np.sqrt(np.mean(r[: problem.d.size] ** 2))),
-        std=std,
-        correlation=corr,
-        scale_ppm=scale_ppm,
-        scale_std_ppm=scale_std_ppm,
-    )
+    return res.x
+
+
+def _std_and_correlation(
+    r: np.ndarray, Jb: np.ndarray, n_lengths: int, m: int
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Return the σ and correlations of a solution, rank-aware (None without spare rows).
+
+    ``r`` and ``Jb`` (boundary units) are the residuals and Jacobian at the solution;
+    σ² of a reading from the first ``n_lengths`` residuals over the ``m`` parameters. A
+    parameter the points do not identify gets σ = inf and NaN correlations.
+    """
+    if r.size <= Jb.shape[1]:
+        return None, None
+    sigma2 = float(r[:n_lengths] @ r[:n_lengths]) / (n_lengths - m)
+    cov, identified = covariance(Jb, sigma2)
+    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(sd, sd)
+    corr[~identified] = np.nan
+    corr[:, ~identified] = np.nan
+    return np.where(identified, sd, np.inf), corr
