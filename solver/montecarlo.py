@@ -20,12 +20,12 @@ method's error budget (:mod:`wirecal.solver.budget`) for the same set-up: its pr
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from wirecal.solver.accuracy import crb, noise_covariance, workspace
-from wirecal.solver.budget import Budget, budget, sources
+from wirecal.solver.budget import Budget, Sources, budget, sources
 from wirecal.solver.distance import wire_jacobian
 from wirecal.solver.identify import Problem, joint, omega_vector, stepwise
 from wirecal.solver.kinematics import repeat, tool_jacobian, tool_position, with_errors
@@ -117,12 +117,8 @@ def run(
     base = robot.nominal
     mpc = robot.encoder.mm_per_count
     times = _times(robot, plan)
-    d = measured_lengths(with_errors(base, names, truth), plan, mpc, noise_mm, rng, encoder, times)
+    problem, factor, scale_std = _measured(robot, plan, truth, noise_mm, rng, encoder, times)
     sigma_model = float(np.sqrt(noise_mm**2 + mpc**2 / 12))
-    factor, scale_std = _reference(robot, encoder, T, noise_mm, times[2], rng)
-    d = d * factor[:, None]
-    q, step, _ = plan.all_points()
-    problem = Problem(base, names, np.radians(q), np.radians(plan.theta0_deg), d, step)
     omega = omega_vector(names, n, plan)
     q_ws = workspace(robot, n_workspace)
 
@@ -136,47 +132,21 @@ def run(
         )
     if "joint" in methods:
         t0 = time.perf_counter()
-        est_j = np.array(
-            [
-                errors.to_internal(
-                    joint(
-                        Problem(base, names, problem.q, problem.q0, d[t], step),
-                        est_sw[t],
-                    ).values
-                )
-                for t in range(T)
-            ]
-        )
+        est_j = _joint_estimates(problem, errors, est_sw)
         t_j = time.perf_counter() - t0 + t_sw  # the joint method starts from stepwise
         out["joint"] = _figures(
             est_j - truth, tool_errors(robot, names, est_j, truth, q_ws), errors, t_j
         )
 
-    # The bound at the mean truth, for the noise model of the readings: per-point σ and
-    # quantisation, plus the mean zero reading's error common to every length.
-    sigma2 = sigma_model**2
     mean_model = with_errors(base, names, truth.mean(axis=0))
     d_mean, J = wire_jacobian(mean_model, problem.q, problem.q0, names)
-    cov = crb(J, noise_covariance(len(q), np.sqrt(sigma2), np.sqrt(sigma2 / len(plan.steps))))
-    draws = rng.multivariate_normal(np.zeros(len(names)), cov, size=max(T, 200))
-    _, Jp = tool_jacobian(base, q_ws, names)
-    tool_crb = np.linalg.norm(np.einsum("qim,tm->tqi", Jp, draws), axis=2)
+    draws, tool_crb = _bound_draws(problem, J, len(plan.steps), sigma_model, q_ws, T, rng)
     before = tool_errors(robot, names, np.zeros_like(truth), truth, q_ws).mean()
     true_factor = 1 + encoder.scale_ppm * PPM
-    src = sources(
-        sigma_model,
-        d_mean,
-        robot.encoder.scale_tolerance_ppm * PPM if scale_std is None else scale_std,
-        scale_std is not None,
-        robot.encoder.temperature_coefficient_ppm_per_k,
-        times[1],
-        None,
-        float(times[0].mean()),
-        unmodelled_exit_mm(robot, plan),
-        np.zeros(len(q)),  # the simulated arm does not sag
-    )
+    src = _sources(robot, plan, sigma_model, d_mean, scale_std, times)
     budgets = {
-        mth: budget(base, names, J, step if mth == "stepwise" else None, src, q_ws) for mth in out
+        mth: budget(base, names, J, problem.step if mth == "stepwise" else None, src, q_ws)
+        for mth in out
     }
     return MonteCarlo(
         T,
@@ -185,6 +155,92 @@ def run(
         float(before),
         budgets,
         float(np.sqrt(np.mean((factor - true_factor) ** 2))) / PPM,
+    )
+
+
+def _measured(
+    robot: Robot,
+    plan: Plan,
+    truth: np.ndarray,
+    noise_mm: float,
+    rng: np.random.Generator,
+    encoder: EncoderTruth,
+    times: tuple[np.ndarray, np.ndarray, float],
+) -> tuple[Problem, np.ndarray, float | None]:
+    """Return the problem of the T robots' simulated readings, their reference scale and σ.
+
+    The lengths (T, N) are read by ``encoder`` and scaled by each run's reference factor
+    (:func:`_reference`; its σ None without a reference gauge).
+    """
+    base, names = robot.nominal, plan.order
+    mpc = robot.encoder.mm_per_count
+    d = measured_lengths(with_errors(base, names, truth), plan, mpc, noise_mm, rng, encoder, times)
+    factor, scale_std = _reference(robot, encoder, truth.shape[0], noise_mm, times[2], rng)
+    q, step, _ = plan.all_points()
+    d = d * factor[:, None]
+    return (
+        Problem(base, names, np.radians(q), np.radians(plan.theta0_deg), d, step),
+        factor,
+        scale_std,
+    )
+
+
+def _joint_estimates(problem: Problem, errors: ErrorSet, est_sw: np.ndarray) -> np.ndarray:
+    """Return the joint method's estimates (T, m), each robot's started from its stepwise one.
+
+    ``problem.d`` holds the T robots' lengths (T, N); internal units.
+    """
+    return np.array(
+        [
+            errors.to_internal(joint(replace(problem, d=problem.d[t]), est_sw[t]).values)
+            for t in range(len(est_sw))
+        ]
+    )
+
+
+def _bound_draws(
+    problem: Problem,
+    J: np.ndarray,
+    n_steps: int,
+    sigma_mm: float,
+    q_ws: np.ndarray,
+    T: int,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return draws of the parameters' error at the Cramér–Rao bound and their tool errors.
+
+    The bound at the mean truth (``J`` there), for the noise model of the readings:
+    per-point σ and quantisation, plus the mean zero reading's error common to every
+    length. At least 200 draws.
+    """
+    sigma2 = sigma_mm**2
+    n_points = J.shape[0]
+    cov = crb(J, noise_covariance(n_points, np.sqrt(sigma2), np.sqrt(sigma2 / n_steps)))
+    draws = rng.multivariate_normal(np.zeros(len(problem.names)), cov, size=max(T, 200))
+    _, Jp = tool_jacobian(problem.base, q_ws, problem.names)
+    return draws, np.linalg.norm(np.einsum("qim,tm->tqi", Jp, draws), axis=2)
+
+
+def _sources(
+    robot: Robot,
+    plan: Plan,
+    sigma_mm: float,
+    d_mean: np.ndarray,
+    scale_std: float | None,
+    times: tuple[np.ndarray, np.ndarray, float],
+) -> Sources:
+    """Return the budget's sources for the simulated runs (no drift, no sag)."""
+    return sources(
+        sigma_mm,
+        d_mean,
+        robot.encoder.scale_tolerance_ppm * PPM if scale_std is None else scale_std,
+        scale_std is not None,
+        robot.encoder.temperature_coefficient_ppm_per_k,
+        times[1],
+        None,
+        float(times[0].mean()),
+        unmodelled_exit_mm(robot, plan),
+        np.zeros(len(d_mean)),  # the simulated arm does not sag
     )
 
 
