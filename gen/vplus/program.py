@@ -198,24 +198,12 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
     """
     tables = build_tables(robot, plan)
     _check_options(robot, opt, tables)
-    if np.any(np.abs(tables.nominal) * 10000 >= 2**24):
-        raise WirecalError(
-            f"{robot.source}: a nominal value of {tables.names} is beyond "
-            "±1677 mm/deg; the controller's SPEC table cannot print it"
-        )
+    _check_printable(robot, tables)
     steps = run_steps(plan, tables.first, ppoint)
     speeds = (_num(x) for x in run_timeline(robot, plan, opt.run).speed_pct)
     closing_speed = give_move_speeds(steps, speeds, "speed")  # each move's SPEED
-    patch = None
-    if opt.patch is not None:
-        missing = [n for n in plan.order if n not in opt.patch]
-        if missing:
-            raise WirecalError(f"patch: no value for {', '.join(missing)}")
-        patch = [
-            double_literal(x) for x in tables.errors.to_internal([opt.patch[n] for n in plan.order])
-        ]
+    patch = _patch_literals(plan, tables, opt.patch)
     fp = plan.fingerprint()
-    mpc = robot.encoder.mm_per_count
     text = render(
         "vplus/wirecal.v2.j2",
         version=__version__,
@@ -229,26 +217,8 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         m=len(plan.order),
         stride=STRIDE,
         axes=AXES,
-        speed=_num(min(SAFE_SPEED_PCT, opt.run.speed_pct)),
-        speed_cap=_num(opt.run.speed_pct),
         closing_speed=closing_speed,
         wire_limits=_wire_limits(robot),
-        accel=_num(opt.run.accel_pct),
-        settle=_num(opt.run.settle_s),
-        settle_max=_num(opt.run.settle_max_s),
-        settle_window=SETTLE_WINDOW,
-        settle_counts=SETTLE_SPREAD_COUNTS,
-        samples=opt.run.readings,
-        zero_tol=_num(opt.zero_tol_mm),
-        margin=_num(opt.margin_deg),
-        spread_counts=_num(np.floor(opt.spread_tol_mm / abs(robot.encoder.mm_per_count))),
-        spread_tol=_num(opt.spread_tol_mm),
-        mpc=repr(mpc),
-        bits=robot.encoder.counter.bits,
-        half=robot.encoder.counter.half,
-        # 2^24 is beyond the integer range (UG p. 102): written as a real, which holds it
-        full=f"{robot.encoder.counter.full}.0",
-        encoder=robot.encoder,
         log_file=opt.log_file,
         log_magic=f"{LOG_MAGIC} {LOG_VERSION}",
         log_columns=",".join(LOG_COLUMNS),
@@ -264,7 +234,65 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         v=_validation_context(robot, opt),
         echo=opt.echo_log,
         pulley=tables.pulley is not None,
+        **_run_context(opt),
+        **_encoder_context(robot, opt),
     )
+    _check_module(text)
+    return text
+
+
+def _check_printable(robot: Robot, tables: Tables) -> None:
+    """Refuse a nominal value the controller's SPEC table cannot print (±1677 mm/deg)."""
+    if np.any(np.abs(tables.nominal) * 10000 >= 2**24):
+        raise WirecalError(
+            f"{robot.source}: a nominal value of {tables.names} is beyond "
+            "±1677 mm/deg; the controller's SPEC table cannot print it"
+        )
+
+
+def _patch_literals(plan: Plan, tables: Tables, patch: dict[str, float] | None) -> list[str] | None:
+    """Return the patch's values as V+ literals in the plan's order (internal units)."""
+    if patch is None:
+        return None
+    missing = [n for n in plan.order if n not in patch]
+    if missing:
+        raise WirecalError(f"patch: no value for {', '.join(missing)}")
+    return [double_literal(x) for x in tables.errors.to_internal([patch[n] for n in plan.order])]
+
+
+def _run_context(opt: GenOptions) -> dict[str, object]:
+    """Return the template's run settings: speeds, acceleration, settling, samples, tolerances."""
+    return {
+        "speed": _num(min(SAFE_SPEED_PCT, opt.run.speed_pct)),
+        "speed_cap": _num(opt.run.speed_pct),
+        "accel": _num(opt.run.accel_pct),
+        "settle": _num(opt.run.settle_s),
+        "settle_max": _num(opt.run.settle_max_s),
+        "settle_window": SETTLE_WINDOW,
+        "settle_counts": SETTLE_SPREAD_COUNTS,
+        "samples": opt.run.readings,
+        "zero_tol": _num(opt.zero_tol_mm),
+        "margin": _num(opt.margin_deg),
+        "spread_tol": _num(opt.spread_tol_mm),
+    }
+
+
+def _encoder_context(robot: Robot, opt: GenOptions) -> dict[str, object]:
+    """Return the template's encoder settings: resolution, counter and the spread in counts."""
+    enc = robot.encoder
+    return {
+        "spread_counts": _num(np.floor(opt.spread_tol_mm / abs(enc.mm_per_count))),
+        "mpc": repr(enc.mm_per_count),
+        "bits": enc.counter.bits,
+        "half": enc.counter.half,
+        # 2^24 is beyond the integer range (UG p. 102): written as a real, which holds it
+        "full": f"{enc.counter.full}.0",
+        "encoder": enc,
+    }
+
+
+def _check_module(text: str) -> None:
+    """Refuse a module that breaks a V+ rule: a generator defect, never the user's."""
     problems = long_lines(text, MODULE_NAME)
     try:
         parse_module(text, MODULE_NAME)
@@ -277,7 +305,6 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
                 *problems[:20],
             ]
         )
-    return text
 
 
 def _validation_context(robot: Robot, opt: GenOptions) -> dict | None:
