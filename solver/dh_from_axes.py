@@ -141,58 +141,13 @@ def dh_from_axes(
     z = np.array([_unit(a) for a in np.asarray(axes, dtype=float)])
     n = len(z)
     # Snap nearly parallel neighbours first, so every later construction sees exact lines.
-    snapped = []
-    for i in range(n - 1):
-        s = np.linalg.norm(np.cross(z[i], z[i + 1]))
-        if 0 < s < parallel_tol:
-            z[i + 1] = z[i] if z[i] @ z[i + 1] > 0 else -z[i]
-            snapped.append((i, float(s)))
-        elif parallel_tol <= s < NEAR_PARALLEL:
-            raise ChainError(
-                f"the axes of joints {names[i]!r} and {names[i + 1]!r} are {np.degrees(s):.3g}° "
-                "from parallel: their common normal lies far away. The URDF's angles look "
-                "rounded (e.g. 1.5708 for π/2): write them with full precision, or accept "
-                f"them as parallel with --parallel-tol-deg {_up2(np.degrees(s) * 1.01):.2g} (the "
-                "import then reports how far the tip moves)"
-            )
-
-    # Frame 0 and the foot of x0 on axis 1.
-    z1, p1 = z[0], points[0]
-    if abs(z1[0]) < 1e-12 and abs(p1[1] * z1[2] - p1[2] * z1[1]) < 1e-9:
-        F0 = np.eye(4)
-        t = -(p1[1] * z1[1] + p1[2] * z1[2])  # z1 ⊥ x: the line meets the x axis here
-        foot = p1 + t * z1
-    else:
-        foot = p1 - (p1 @ z1) * z1
-        ref = np.array([1.0, 0, 0]) if abs(z1[0]) < 0.9 else np.array([0, 1.0, 0])
-        F0 = _frame(_unit(ref - (ref @ z1) * z1), z1, foot)
+    snapped = _snap_parallel(z, names, parallel_tol)
+    F0, foot = _frame0(z[0], points[0])
     x_prev = F0[:3, 0]
-
     F = [F0]
     for i in range(n):
-        if i == n - 1:
-            o = points[i] + ((tip[:3, 3] - points[i]) @ z[i]) * z[i]
-            x = _unit(x_prev - (x_prev @ z[i]) * z[i])
-        elif np.linalg.norm(np.cross(z[i], z[i + 1])) == 0:  # parallel: o_i where x_{i-1} meets
-            o = points[i] + ((foot - points[i]) @ z[i]) * z[i]
-            gap = points[i + 1] - o
-            gap = gap - (gap @ z[i]) * z[i]
-            if np.linalg.norm(gap) > 1e-9:
-                x = _toward(_unit(gap), x_prev, z[i])
-            else:  # the same line: joints i and i+1 turn about one axis
-                raise ChainError(
-                    f"joints {names[i]!r} and {names[i + 1]!r} turn about the same line: "
-                    "the two angles cannot be told apart"
-                )
-        else:
-            o, f = _closest(points[i], z[i], points[i + 1], z[i + 1])
-            x = _unit(np.cross(z[i], z[i + 1]))
-            if np.linalg.norm(f - o) > 1e-6:
-                x = _unit(f - o)  # equals ±(z_i × z_{i+1}) up to round-off
-                x = _unit(x - (x @ z[i]) * z[i] - (x @ z[i + 1]) * z[i + 1])
-            x = _toward(x, x_prev, z[i])
-        Fi = _frame(x, z[i], o)
-        F.append(Fi)
+        o, x = _origin_and_x(i, points, z, x_prev, foot, tip, names)
+        F.append(_frame(x, z[i], o))
         x_prev = x
         foot = o + ((points[i + 1] - o) @ x) * x if i < n - 1 else foot
 
@@ -209,3 +164,73 @@ def dh_from_axes(
         tip_offset=tip_offset,
         snapped=tuple(snapped),
     )
+
+
+def _snap_parallel(z: np.ndarray, names: list[str], parallel_tol: float) -> list[tuple[int, float]]:
+    """Make axes within ``parallel_tol`` (sine) of their neighbour's exactly parallel, in place.
+
+    Returns (joint index, sine) of each snapped pair; refuses a pair near parallel beyond
+    the tolerance (its common normal lies far away: the URDF's angles look rounded).
+    """
+    snapped = []
+    for i in range(len(z) - 1):
+        s = np.linalg.norm(np.cross(z[i], z[i + 1]))
+        if 0 < s < parallel_tol:
+            z[i + 1] = z[i] if z[i] @ z[i + 1] > 0 else -z[i]
+            snapped.append((i, float(s)))
+        elif parallel_tol <= s < NEAR_PARALLEL:
+            raise ChainError(
+                f"the axes of joints {names[i]!r} and {names[i + 1]!r} are {np.degrees(s):.3g}° "
+                "from parallel: their common normal lies far away. The URDF's angles look "
+                "rounded (e.g. 1.5708 for π/2): write them with full precision, or accept "
+                f"them as parallel with --parallel-tol-deg {_up2(np.degrees(s) * 1.01):.2g} (the "
+                "import then reports how far the tip moves)"
+            )
+    return snapped
+
+
+def _frame0(z1: np.ndarray, p1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return frame 0 (4, 4) and the foot of x0 on axis 1 (the line p1 + t·z1)."""
+    if abs(z1[0]) < 1e-12 and abs(p1[1] * z1[2] - p1[2] * z1[1]) < 1e-9:
+        t = -(p1[1] * z1[1] + p1[2] * z1[2])  # z1 ⊥ x: the line meets the x axis here
+        return np.eye(4), p1 + t * z1
+    foot = p1 - (p1 @ z1) * z1
+    ref = np.array([1.0, 0, 0]) if abs(z1[0]) < 0.9 else np.array([0, 1.0, 0])
+    return _frame(_unit(ref - (ref @ z1) * z1), z1, foot), foot
+
+
+def _origin_and_x(
+    i: int,
+    points: np.ndarray,
+    z: np.ndarray,
+    x_prev: np.ndarray,
+    foot: np.ndarray,
+    tip: np.ndarray,
+    names: list[str],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return joint ``i``'s frame origin and x axis.
+
+    On the common normal of axes i and i+1; for parallel axes where x_{i-1} meets axis i;
+    for the last joint at the tip's foot on its axis, x along x_{i-1}.
+    """
+    n = len(z)
+    if i == n - 1:
+        o = points[i] + ((tip[:3, 3] - points[i]) @ z[i]) * z[i]
+        return o, _unit(x_prev - (x_prev @ z[i]) * z[i])
+    if np.linalg.norm(np.cross(z[i], z[i + 1])) == 0:  # parallel: o_i where x_{i-1} meets
+        o = points[i] + ((foot - points[i]) @ z[i]) * z[i]
+        gap = points[i + 1] - o
+        gap = gap - (gap @ z[i]) * z[i]
+        if np.linalg.norm(gap) > 1e-9:
+            return o, _toward(_unit(gap), x_prev, z[i])
+        # the same line: joints i and i+1 turn about one axis
+        raise ChainError(
+            f"joints {names[i]!r} and {names[i + 1]!r} turn about the same line: "
+            "the two angles cannot be told apart"
+        )
+    o, f = _closest(points[i], z[i], points[i + 1], z[i + 1])
+    x = _unit(np.cross(z[i], z[i + 1]))
+    if np.linalg.norm(f - o) > 1e-6:
+        x = _unit(f - o)  # equals ±(z_i × z_{i+1}) up to round-off
+        x = _unit(x - (x @ z[i]) * z[i] - (x @ z[i + 1]) * z[i + 1])
+    return o, _toward(x, x_prev, z[i])
