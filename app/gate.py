@@ -19,3 +19,16 @@ def gate(result: SolveResult, method: str, **options: Any) -> Plausibility:
     """:func:`wirecal.solver.plausibility.gate`, its findings naming the robot's live-check."""
     live_check = language(result.robot.controller.language).live_check
     return _gate(result, method, live_check=live_check, **options)
+
+
+def warnings(result: SolveResult, verdict: Plausibility) -> list[str]:
+    """Return what the user must know of a result that is written or shown.
+
+    The gate's findings accepted, the checks left undone and a drift to heed: ``solve``
+    and ``report`` state the same.
+    """
+    lines = [f"implausible result accepted: {f.message}" for f in verdict.findings]
+    lines += list(result.unchecked)
+    if result.drift is not None and result.drift.warning:
+        lines.append(f"{result.measurements.source}: {result.drift.warning}")
+    return lines

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from wirecal.app.gate import gate
+from wirecal.app.gate import gate, warnings
 from wirecal.app.report import Validation, render_report
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import OUTPUT_FILE
@@ -103,11 +103,9 @@ def _report_html(robot, plan, log, logs, controller, truth_file, flags) -> str:
     pl = load_plan(plan, rb)
     parsed = read_log(log)
     result = solve(rb, pl, check_log(parsed, pl, rb), partial=partial)
-    for warning in result.unchecked:
-        click.echo(f"warning: {warning}", err=True)
     verdict = gate(result, result.recommended, accept=accept_implausible)
-    for finding in verdict.findings:
-        click.echo(f"warning: implausible result accepted: {finding.message}", err=True)
+    for line in warnings(result, verdict):  # as solve states them
+        click.echo(f"warning: {line}", err=True)
     validations = []
     if config_logs:
         validations.append(

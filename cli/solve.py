@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import click
 
 from wirecal import __version__
-from wirecal.app.gate import gate
+from wirecal.app.gate import gate, warnings
 from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import (
     ACCEPT_IMPLAUSIBLE,
@@ -40,6 +40,9 @@ from wirecal.solver.solve import solve as solve_api
 
 if TYPE_CHECKING:
     from wirecal.app.compare import ControllerComparison
+    from wirecal.solver.measurements import Measurements
+    from wirecal.solver.plan import Plan
+    from wirecal.solver.robot import Robot
     from wirecal.solver.solve import SolveResult
     from wirecal.solver.verdict import Plausibility
 
@@ -152,39 +155,74 @@ def solve(
     if log == STDIN and sys.stdin is not None and sys.stdin.isatty():
         click.echo("paste the log, then Ctrl-D (Windows: Ctrl-Z, Enter)", err=True)
     with Outputs(paths, force=force, inputs=[robot, plan, log]) as out:
-        parsed = read_log(log)
-        m = check_log(parsed, pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), accept_foreign)
-        methods = ("stepwise", "joint") if method in ("all", "controller") else (method,)
-        result = solve_api(
-            rb,
-            pl,
-            m,
-            methods=methods,
-            omega_default=omega,
-            robust=robust,
-            partial=partial,
-            refine_scale=refine_scale,
+        m = check_log(
+            read_log(log), pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), accept_foreign
         )
+        options = (omega, robust, partial, refine_scale)
+        result = _solve(rb, pl, m, method, options)
         chosen = result.recommended if method in ("all", "controller") else method
         verdict = gate(
             result, chosen, accept=accept_implausible, noise_mm=noise_mm, omega_default=omega
         )
-        for line in _warnings(result, verdict):
+        for line in warnings(result, verdict):
             click.echo(f"warning: {line}", err=True)
         ctl = _controller(result) if method == "controller" else None
         if patch_path:
-            put_patch(
-                out,
-                patch_path,
-                rb,
-                result.estimates[chosen],
-                plan_fingerprint=pl.fingerprint(),
-                log_path=m.source,
-                log_sha256=m.sha256,
-                version=__version__,
-                plausibility=verdict.patch_field(),
-                unchecked=result.unchecked,
-            )
+            _put_patch(out, patch_path, result, chosen, verdict)
+    _show(result, chosen, verdict, ctl, as_json)
+    if patch_path:
+        others = " and ".join(str(p) for p in companion_paths(rb, patch_path))
+        click.echo(f"wrote {patch_path} ({chosen}) and {others}", err=as_json)
+
+
+def _solve(
+    rb: Robot, pl: Plan, m: Measurements, method: str, options: tuple[float, bool, bool, bool]
+) -> SolveResult:
+    """Solve by --method (both methods for "all" and "controller").
+
+    ``options``: --omega, --robust, --partial, --refine-scale.
+    """
+    omega, robust, partial, refine_scale = options
+    methods = ("stepwise", "joint") if method in ("all", "controller") else (method,)
+    return solve_api(
+        rb,
+        pl,
+        m,
+        methods=methods,
+        omega_default=omega,
+        robust=robust,
+        partial=partial,
+        refine_scale=refine_scale,
+    )
+
+
+def _put_patch(
+    out: Outputs, patch_path: str, result: SolveResult, chosen: str, verdict: Plausibility
+) -> None:
+    """Write the ``chosen`` method's patch and its companions, with the log and the verdict."""
+    m = result.measurements
+    put_patch(
+        out,
+        patch_path,
+        result.robot,
+        result.estimates[chosen],
+        plan_fingerprint=result.plan.fingerprint(),
+        log_path=m.source,
+        log_sha256=m.sha256,
+        version=__version__,
+        plausibility=verdict.patch_field(),
+        unchecked=result.unchecked,
+    )
+
+
+def _show(
+    result: SolveResult,
+    chosen: str,
+    verdict: Plausibility,
+    ctl: ControllerComparison | None,
+    as_json: bool,
+) -> None:
+    """Print the result, the verdict and the controller's, as text or --json."""
     if as_json:
         data = result.as_json()
         data["plausibility"] = verdict.as_json()
@@ -196,18 +234,6 @@ def solve(
         click.echo(f"plausibility ({chosen}): {verdict.summary()}")
         if ctl:
             click.echo(controller_text(ctl))
-    if patch_path:
-        others = " and ".join(str(p) for p in companion_paths(rb, patch_path))
-        click.echo(f"wrote {patch_path} ({chosen}) and {others}", err=as_json)
-
-
-def _warnings(result: SolveResult, verdict: Plausibility) -> list[str]:
-    """Return what the user must know of a result that is written or shown."""
-    lines = [f"implausible result accepted: {f.message}" for f in verdict.findings]
-    lines += list(result.unchecked)
-    if result.drift is not None and result.drift.warning:
-        lines.append(f"{result.measurements.source}: {result.drift.warning}")
-    return lines
 
 
 def _controller(result: SolveResult) -> ControllerComparison:
