@@ -15,6 +15,7 @@ from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.plan_design import Design
 from wirecal.solver.plan_options import PlanOptions
 from wirecal.solver.planner import design
+from wirecal.solver.robot import Robot
 
 _D = PlanOptions()
 
@@ -33,6 +34,57 @@ def _joints(value: str | None, n: int) -> np.ndarray | None:
     if q.shape != (n,):
         raise WirecalError(f"--theta0 has {q.size} values; the robot has {n} joints")
     return q
+
+
+def _plan_from_pool(
+    rb: Robot,
+    pool: str,
+    options: tuple[str | None, str, int | None],
+    output: str | None,
+    as_json: bool,
+    force: bool,
+) -> None:
+    """Plan from a pool of measured poses (--pool); ``options``: --theta0, --for, --points."""
+    theta0, method, points = options
+    if theta0 is not None or method != "joint":
+        raise WirecalError("--pool chooses θ0 for the joint method: leave out --theta0 and --for")
+    from wirecal.cli.plan_pool import plan_from_pool  # the fit's modules: only with --pool
+
+    plan_from_pool(rb, pool, points, output, as_json, force)
+
+
+def _controller_note(rb: Robot) -> str:
+    """Say which commands take a plan for a robot file the controller cannot run."""
+    return (
+        f"note: {rb.controller_problem()}: 'psi' and 'observe' take this plan; "
+        "'gen', 'simulate' and 'solve' do not"
+    )
+
+
+def _unplanned(robot: str, rb: Robot, d: Design, theta0_deg: np.ndarray | None) -> list[str]:
+    """Return the refusal of a plan that leaves parameters out (without --allow-partial)."""
+    return [
+        f"{robot}: {len(d.excluded)} of the {len(rb.parameters)} parameters of "
+        f"[calibration] cannot be planned ({_tried(d, theta0_deg)}); nothing "
+        "written:",
+        *(f"not planned: {name}: {why}" for name, why in d.excluded.items()),
+        "remove them from [calibration] parameters, try another --theta0 or "
+        "--seed, or give --allow-partial to take the plan without them",
+    ]
+
+
+def _summary(d: Design) -> dict[str, object]:
+    """Return the plan's summary as --json prints it."""
+    return {
+        "theta0_deg": d.plan.theta0_deg.tolist(),
+        "order": list(d.plan.order),
+        "points": d.plan.n_points,
+        "method": d.method,
+        "robot_time_s": d.robot_time_s,
+        "predicted_tool_error_mm": d.predicted,
+        "excluded": d.excluded,
+        "fingerprint": d.plan.fingerprint(),
+    }
 
 
 def _tried(d: Design, theta0_deg: np.ndarray | None) -> str:
@@ -136,21 +188,11 @@ def plan(
     """
     rb = load_robot(robot)
     if pool is not None:
-        if theta0 is not None or method != "joint":
-            raise WirecalError(
-                "--pool chooses θ0 for the joint method: leave out --theta0 and --for"
-            )
-        from wirecal.cli.plan_pool import plan_from_pool  # the fit's modules: only with --pool
-
-        plan_from_pool(rb, pool, points, output, as_json, force)
+        _plan_from_pool(rb, pool, (theta0, method, points), output, as_json, force)
         return
     theta0_deg = _joints(theta0, rb.n_joints)
     if rb.controller_problem():
-        click.echo(
-            f"note: {rb.controller_problem()}: 'psi' and 'observe' take this plan; "
-            "'gen', 'simulate' and 'solve' do not",
-            err=True,
-        )
+        click.echo(_controller_note(rb), err=True)
     if points is not None and method != "joint":
         raise WirecalError("--points applies to --for joint; give --points-per-step instead")
     opt = PlanOptions(
@@ -160,31 +202,11 @@ def plan(
         with ProgressBar(f"planning {rb.name}") as bar:
             d = design(rb, theta0_deg, opt, bar.update)
         if d.excluded and not allow_partial:
-            raise WirecalError(
-                [
-                    f"{robot}: {len(d.excluded)} of the {len(rb.parameters)} parameters of "
-                    f"[calibration] cannot be planned ({_tried(d, theta0_deg)}); nothing "
-                    "written:",
-                    *(f"not planned: {name}: {why}" for name, why in d.excluded.items()),
-                    "remove them from [calibration] parameters, try another --theta0 or "
-                    "--seed, or give --allow-partial to take the plan without them",
-                ]
-            )
+            raise WirecalError(_unplanned(robot, rb, d, theta0_deg))
         if output:
             out.put(output, plan_to_toml(d.plan, d.header()))
     if as_json:
-        print_json(
-            {
-                "theta0_deg": d.plan.theta0_deg.tolist(),
-                "order": list(d.plan.order),
-                "points": d.plan.n_points,
-                "method": d.method,
-                "robot_time_s": d.robot_time_s,
-                "predicted_tool_error_mm": d.predicted,
-                "excluded": d.excluded,
-                "fingerprint": d.plan.fingerprint(),
-            }
-        )
+        print_json(_summary(d))
         return
     click.echo(d.header())
     if output:
