@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import click
 
 from wirecal import __version__
@@ -14,7 +16,8 @@ from wirecal.cli.options import (
     POSITIVE,
     SEED,
 )
-from wirecal.solver.fit_gate import Gate, gate_fit, gate_json
+from wirecal.solver.cable_data import CableTable
+from wirecal.solver.fit_gate import Gate, Judged, gate_fit, gate_json
 from wirecal.solver.fit_result import (
     FitOptions,
     FitResult,
@@ -27,6 +30,7 @@ from wirecal.solver.formats.cable_table import read_cable_table
 from wirecal.solver.formats.fileio import Outputs
 from wirecal.solver.formats.patch import companion_paths, put_patch
 from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.robot import Robot
 from wirecal.solver.verdict import READING_NOISE_MM
 
 
@@ -149,38 +153,61 @@ def fit(
         tb = read_cable_table(table, column_map, sheet=sheet, n_joints=rb.n_joints)
         result = fit_table(rb, tb, options)
         gate = gate_fit(result, accept=accept_implausible, noise_mm=noise_mm)
-        chosen = gate.chosen
-        for finding in chosen.verdict.findings:
+        for finding in gate.chosen.verdict.findings:
             click.echo(f"warning: implausible result accepted: {finding.message}", err=True)
         if patch_path:
-            put_patch(
-                out,
-                patch_path,
-                rb,
-                result.estimate(chosen.run),
-                plan_fingerprint=tb.sha256,
-                log_path=tb.source,
-                log_sha256=tb.sha256,
-                version=__version__,
-                plausibility=chosen.verdict.patch_field(),
-            )
+            _put_patch(out, patch_path, rb, tb, result, gate.chosen)
         if report_path:
-            from wirecal.app.fit_report import render_fit_report  # matplotlib only here
-
-            out.put(report_path, render_fit_report(result, gate))
+            _put_report(out, report_path, result, gate)
     if as_json:
-        data = result_json(result)
-        data["plausibility"] = chosen.verdict.as_json()
-        data["budget"] = chosen.budget.as_json()
-        data["gate"] = gate_json(gate)
-        print_json(data)
+        print_json(_json(result, gate))
     else:
         click.echo("\n".join([*gate_text(gate), "", *fit_text(result)]))
+    _say_written(rb, patch_path, report_path, gate.chosen.label, as_json)
+
+
+def _say_written(
+    rb: Robot, patch_path: str | None, report_path: str | None, label: str, as_json: bool
+) -> None:
+    """Say which files were written (on stderr with --json)."""
     if patch_path:
         others = " and ".join(str(p) for p in companion_paths(rb, patch_path))
-        click.echo(f"wrote {patch_path} and {others} ({chosen.label})", err=as_json)
+        click.echo(f"wrote {patch_path} and {others} ({label})", err=as_json)
     if report_path:
         click.echo(f"wrote {report_path}", err=as_json)
+
+
+def _put_patch(
+    out: Outputs, patch_path: str, rb: Robot, tb: CableTable, result: FitResult, chosen: Judged
+) -> None:
+    """Write the chosen fit's patch and its companions, the table standing for the log."""
+    put_patch(
+        out,
+        patch_path,
+        rb,
+        result.estimate(chosen.run),
+        plan_fingerprint=tb.sha256,
+        log_path=tb.source,
+        log_sha256=tb.sha256,
+        version=__version__,
+        plausibility=chosen.verdict.patch_field(),
+    )
+
+
+def _put_report(out: Outputs, report_path: str, result: FitResult, gate: Gate) -> None:
+    """Write the fit's HTML report (--report)."""
+    from wirecal.app.fit_report import render_fit_report  # matplotlib only here
+
+    out.put(report_path, render_fit_report(result, gate))
+
+
+def _json(result: FitResult, gate: Gate) -> dict[str, Any]:
+    """Return the fit, the chosen fit's verdict and budget and the gate as --json prints them."""
+    data = result_json(result)
+    data["plausibility"] = gate.chosen.verdict.as_json()
+    data["budget"] = gate.chosen.budget.as_json()
+    data["gate"] = gate_json(gate)
+    return data
 
 
 def gate_text(gate: Gate) -> list[str]:
