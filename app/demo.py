@@ -26,7 +26,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from importlib import resources
@@ -55,7 +55,7 @@ from wirecal.solver.formats.validation_files import load_setup, read_validation_
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.simulate import Unmodelled, realistic_encoder
+from wirecal.solver.simulate import EncoderTruth, Unmodelled, realistic_encoder
 from wirecal.solver.solve import SolveResult, solve
 from wirecal.solver.validation import Setup, distance_plan, distance_residuals
 from wirecal.solver.validation_analysis import Stats, config_discrepancy, plane_residuals
@@ -211,26 +211,14 @@ def _run(
     """Do the demo's work (module docstring); every output goes into ``out``."""
     robot, plan, reg, seconds = ch.robot, ch.plan, ch.reg, step.seconds
     truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
-    options: dict[str, Any] = {"seed": seed}
-    encoder = None
-    if (
-        reg.adapter.capabilities.encoder_truth
-    ):  # a realistic encoder: its scale off within tolerance
-        encoder = realistic_encoder(robot.encoder, np.random.default_rng([seed, 4]))
-        options["encoder_truth"] = encoder
+    encoder = _true_encoder(reg, robot, seed)
+    options = {"seed": seed, **({} if encoder is None else {"encoder_truth": encoder})}
     with tempfile.TemporaryDirectory() as tmp, _second_process() as pool:
         disk = Path(tmp)
-        before = None
-        text = "measurement run in the digital twin"
-        if ch.setup is not None:  # the paper's validation before calibration, beside the rest
-            before = pool.submit(
-                _paper_logs, reg.language.key, ch, truth, programs, disk / "before", {}, 1, seed
-            )
-            text += ", the validation before calibration in a second process"
-        t = step(text)
-        run = reg.measure(robot, plan, truth, disk / "cal", programs, **options)
-        if not run.complete:
-            raise WirecalError(f"the twin's measurement run stopped: {run.stopped}")
+        before = _start_before(pool, ch, truth, programs, disk / "before", seed)
+        beside = "" if before is None else ", the validation before calibration in a second process"
+        t = step("measurement run in the digital twin" + beside)
+        run = _measure(ch, truth, disk / "cal", programs, options)
         seconds["measure"] = time.perf_counter() - t
         t = step("identification on the PC (step-by-step and joint)")
         log_text, result, verdict = _identify(out, folder, ch.log_name, run.log, robot, plan)
@@ -240,19 +228,11 @@ def _run(
         comparison, difference = _controller(result, log_text, ch, programs, disk / "ctl")
         seconds["controller"] = time.perf_counter() - t
         t = step("validation before and after calibration, with unmodelled errors")
+        validations = _validations(
+            out, folder, ch, (truth, identified), programs, disk, seed, before
+        )
         if before is not None:
-            logs = {
-                "before": before.result(),
-                "after": _paper_logs(
-                    reg.language.key, ch, truth, programs, disk / "after", identified, 2, seed
-                ),
-            }
-            for name, path in zip(PAPER_LOGS, (p for k in logs for p in logs[k][:2]), strict=True):
-                out.put(folder / name, path.read_text(encoding="ascii"))
-            validations = _paper_validations(logs, ch.robot.encoder.counter)
             seconds["validate before"] = before.result().seconds
-        else:
-            validations = [_distance_validation(out, folder, ch, truth, disk, identified, seed)]
         seconds["validate"] = time.perf_counter() - t
     companion = reg.language.patch_companion
     t = step("patch" + (f" and patch{companion}" if companion else ""))
@@ -276,6 +256,69 @@ def _run(
         bound_mm=_bound(result),
         encoder_scale_ppm=None if encoder is None else encoder.scale_ppm,
     )
+
+
+def _measure(
+    ch: Chain,
+    truth: dict[str, float],
+    disk: Path,
+    programs: dict[str, str],
+    options: dict[str, Any],
+) -> Any:
+    """Return the twin's measurement run of the programs; refuse one that stopped."""
+    run = ch.reg.measure(ch.robot, ch.plan, truth, disk, programs, **options)
+    if not run.complete:
+        raise WirecalError(f"the twin's measurement run stopped: {run.stopped}")
+    return run
+
+
+def _true_encoder(reg: Registered, robot: Robot, seed: int) -> EncoderTruth | None:
+    """Return a realistic encoder (its scale off within tolerance) where the twin takes one."""
+    if not reg.adapter.capabilities.encoder_truth:
+        return None
+    return realistic_encoder(robot.encoder, np.random.default_rng([seed, 4]))
+
+
+def _start_before(
+    pool: ProcessPoolExecutor,
+    ch: Chain,
+    truth: dict[str, float],
+    programs: dict[str, str],
+    disk: Path,
+    seed: int,
+) -> Future[ValidationLogs] | None:
+    """Start the paper's validation before calibration in ``pool`` (None without a setup)."""
+    if ch.setup is None:
+        return None
+    return pool.submit(_paper_logs, ch.reg.language.key, ch, truth, programs, disk, {}, 1, seed)
+
+
+def _validations(
+    out: Outputs,
+    folder: Path,
+    ch: Chain,
+    errors: tuple[dict[str, float], dict[str, float]],
+    programs: dict[str, str],
+    disk: Path,
+    seed: int,
+    before: Future[ValidationLogs] | None,
+) -> list[Validation]:
+    """Validate before and after calibration; ``errors``: the truth and the identified.
+
+    The paper's validation (its run ``before`` calibration started in a second process) or,
+    without a validation setup, the distance validation. Writes the logs into ``out``.
+    """
+    truth, identified = errors
+    if before is None:
+        return [_distance_validation(out, folder, ch, truth, disk, identified, seed)]
+    key = ch.reg.language.key
+    logs = {
+        "before": before.result(),
+        "after": _paper_logs(key, ch, truth, programs, disk / "after", identified, 2, seed),
+    }
+    for name, path in zip(PAPER_LOGS, (p for k in logs for p in logs[k][:2]), strict=True):
+        out.put(folder / name, path.read_text(encoding="ascii"))
+    return _paper_validations(logs, ch.robot.encoder.counter)
 
 
 def _controller(
