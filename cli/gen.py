@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import click
 
 from wirecal.app.languages import language_mismatch, registered
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
+from wirecal.gen.backends import Generator
 from wirecal.gen.request import GenRequest
 from wirecal.lang.registry import languages
 from wirecal.solver.errors import WirecalError
@@ -16,7 +18,9 @@ from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.validation_files import load_setup
+from wirecal.solver.plan import Plan
 from wirecal.solver.plan_exit import cone_problems
+from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
 
 _D = RunParameters()
@@ -155,30 +159,7 @@ _G = GenRequest()
 )
 @click.option("--force", is_flag=True, help="Replace existing programs of the same names.")
 @user_errors
-def gen(
-    robot,
-    plan,
-    out_dir,
-    language,
-    host,
-    port,
-    speed,
-    accel,
-    settle_s,
-    settle_max_s,
-    samples,
-    zero_tol,
-    spread_tol,
-    margin,
-    log_name,
-    patch_file,
-    setup_file,
-    range_margin,
-    no_solver,
-    echo_log,
-    lf,
-    force,
-):
+def gen(robot: str, plan: str, out_dir: str, force: bool, **options: Any) -> None:
     """Write the controller programs that run PLAN: V+/eV+, URScript or ABB RAPID.
 
     URScript (--language urscript, or [controller] language in the robot file): wc_mount,
@@ -197,39 +178,60 @@ def gen(
     itself, the floor and the robot file's [cell] (a plan that is not is refused, naming
     step, point and the colliding pair); the same inputs give the same bytes.
     """
-    rb = load_robot(robot)
-    if language is not None and language != rb.controller.language:
-        raise WirecalError(language_mismatch(rb, language))
-    pl = load_plan(plan, rb)
-    for line in cone_problems(rb, pl):  # a plan made for a wider exit (the paper's) still runs
-        click.echo(f"warning: {line}", err=True)
+    rb, pl = _load(robot, plan, options["language"])
     backend = registered(rb).generator
-    patch = read_patch(patch_file) if patch_file else None
-    if patch is not None and patch.warning:
-        click.echo(f"warning: {patch_file}: {patch.warning}", err=True)
-    request = GenRequest(
-        run=_run(backend.default_run, speed, accel, settle_s, samples, settle_max_s),
-        zero_tol_mm=zero_tol,
-        spread_tol_mm=spread_tol,
-        margin_deg=margin,
-        range_margin_mm=range_margin,
-        solver=not no_solver,
-        patch=patch.offsets_for(rb, pl) if patch is not None else None,
-        patch_warning=patch.warning if patch is not None else None,
-        validation=load_setup(setup_file) if setup_file else None,
-        host=host,
-        port=port,
-        log_file=log_name,
-        echo_log=echo_log,
-        crlf=not lf,
-    )
+    request = _request(backend, rb, pl, options)
     programs = backend.programs(rb, pl, request)
-    inputs = [robot, plan, *(f for f in (patch_file, setup_file) if f)]
+    inputs = [robot, plan, *(f for f in (options["patch_file"], options["setup_file"]) if f)]
     paths = backend.write(out_dir, programs, request, force=force, inputs=inputs)
     for note in backend.notes(rb, robot):
         click.echo(f"warning: {note}", err=True)
     steps = backend.next_steps(rb, pl, request, robot, plan)
     click.echo(f"wrote {', '.join(str(p) for p in paths)}: {steps}")
+
+
+def _load(robot: str, plan: str, language: str | None) -> tuple[Robot, Plan]:
+    """Load ROBOT and PLAN; refuse a --language that is not the robot file's.
+
+    Warns of the plan's points beyond the robot file's exit cone (a plan made for a wider
+    exit, the paper's, still runs).
+    """
+    rb = load_robot(robot)
+    if language is not None and language != rb.controller.language:
+        raise WirecalError(language_mismatch(rb, language))
+    pl = load_plan(plan, rb)
+    for line in cone_problems(rb, pl):
+        click.echo(f"warning: {line}", err=True)
+    return rb, pl
+
+
+def _request(backend: Generator, rb: Robot, pl: Plan, options: dict[str, Any]) -> GenRequest:
+    """Return the generation the options ask for (the language's run defaults for the rest).
+
+    Reads --patch (warning of an overridden plausibility gate) and --validation.
+    """
+    o = options
+    patch_file, setup_file = o["patch_file"], o["setup_file"]
+    patch = read_patch(patch_file) if patch_file else None
+    if patch is not None and patch.warning:
+        click.echo(f"warning: {patch_file}: {patch.warning}", err=True)
+    run = (o["speed"], o["accel"], o["settle_s"], o["samples"], o["settle_max_s"])
+    return GenRequest(
+        run=_run(backend.default_run, *run),
+        zero_tol_mm=o["zero_tol"],
+        spread_tol_mm=o["spread_tol"],
+        margin_deg=o["margin"],
+        range_margin_mm=o["range_margin"],
+        solver=not o["no_solver"],
+        patch=patch.offsets_for(rb, pl) if patch is not None else None,
+        patch_warning=patch.warning if patch is not None else None,
+        validation=load_setup(setup_file) if setup_file else None,
+        host=o["host"],
+        port=o["port"],
+        log_file=o["log_name"],
+        echo_log=o["echo_log"],
+        crlf=not o["lf"],
+    )
 
 
 def _run(
