@@ -159,42 +159,10 @@ def read_encoder(enc: Table, interface: str | None) -> Encoder | None:
     channel = enc.integer("channel", first_channel(interface), lo=0, hi=1 if pulse else 16)
     mode = enc.integer("belt_mode", 0, lo=0, hi=16)
     inputs = _pulse_inputs(enc, pulse)
-    tol = enc.number(
-        "scale_tolerance_ppm", DEFAULT_SCALE_TOLERANCE_PPM, lo=0, hi=MAX_SCALE_PPM, unit="ppm"
-    )
-    ref = enc.number("reference_length_mm", None, above=0, hi=MAX_RANGE_MM, unit="mm")
-    ref_u = enc.number("reference_uncertainty_mm", 0.0, lo=0, hi=MAX_REFERENCE_U_MM, unit="mm")
-    repeats = enc.integer("reference_repeats", 3, lo=1, hi=20)
-    tempco = enc.number(
-        "temperature_coefficient_ppm_per_k",
-        DEFAULT_DRUM_PPM_PER_K,
-        lo=-MAX_TEMPCO_PPM_PER_K,
-        hi=MAX_TEMPCO_PPM_PER_K,
-        unit="ppm/K",
-    )
-    if ref is not None and ref < MIN_REFERENCE_MM:
-        enc.add(
-            "reference_length_mm",
-            f"is {ref:g} mm: a gauge shorter than {MIN_REFERENCE_MM:g} mm reads the scale "
-            "no better than its tolerance; give the certified length of the gauge's nests "
-            "in mm (e.g. 500)",
-        )
-        ref = None
-    if ref is not None and rng is not None and ref > rng:
-        enc.add(
-            "reference_length_mm",
-            f"is {ref:g} mm, beyond range_mm {rng:g}: the wire cannot reach nest B; "
-            "use a shorter gauge",
-        )
-        ref = None
+    tol, ref, ref_u, repeats, tempco = _scale(enc, rng)
     scale = (tol, ref_u, repeats, tempco)
     exit_ok, exit_ = _exit(enc)
-    wire_speed = enc.number(
-        "max_wire_speed_mm_s", None, above=0, hi=MAX_WIRE_SPEED_MM_S, unit="mm/s"
-    )
-    wire_accel = enc.number(
-        "max_wire_accel_mm_s2", None, above=0, hi=MAX_WIRE_ACCEL_MM_S2, unit="mm/s²"
-    )
+    wire_speed, wire_accel = _wire_limits(enc)
     if mpc is None or rng is None or bits is None or interface is None:
         return None
     if channel is None or mode is None or inputs is None or not exit_ok:
@@ -218,6 +186,52 @@ def read_encoder(enc: Table, interface: str | None) -> Encoder | None:
         reference_repeats=valid(repeats),
         temperature_coefficient_ppm_per_k=valid(tempco),
     )
+
+
+def _scale(
+    enc: Table, range_mm: float | None
+) -> tuple[float | None, float | None, float | None, int | None, float | None]:
+    """Read the scale's keys: tolerance, reference gauge (length, uncertainty, repeats), drum.
+
+    A reference gauge too short to tell the scale, or beyond ``range_mm``, is refused
+    (its length then None).
+    """
+    tol = enc.number(
+        "scale_tolerance_ppm", DEFAULT_SCALE_TOLERANCE_PPM, lo=0, hi=MAX_SCALE_PPM, unit="ppm"
+    )
+    ref = enc.number("reference_length_mm", None, above=0, hi=MAX_RANGE_MM, unit="mm")
+    ref_u = enc.number("reference_uncertainty_mm", 0.0, lo=0, hi=MAX_REFERENCE_U_MM, unit="mm")
+    repeats = enc.integer("reference_repeats", 3, lo=1, hi=20)
+    tempco = enc.number(
+        "temperature_coefficient_ppm_per_k",
+        DEFAULT_DRUM_PPM_PER_K,
+        lo=-MAX_TEMPCO_PPM_PER_K,
+        hi=MAX_TEMPCO_PPM_PER_K,
+        unit="ppm/K",
+    )
+    if ref is not None and ref < MIN_REFERENCE_MM:
+        enc.add(
+            "reference_length_mm",
+            f"is {ref:g} mm: a gauge shorter than {MIN_REFERENCE_MM:g} mm reads the scale "
+            "no better than its tolerance; give the certified length of the gauge's nests "
+            "in mm (e.g. 500)",
+        )
+        ref = None
+    if ref is not None and range_mm is not None and ref > range_mm:
+        enc.add(
+            "reference_length_mm",
+            f"is {ref:g} mm, beyond range_mm {range_mm:g}: the wire cannot reach nest B; "
+            "use a shorter gauge",
+        )
+        ref = None
+    return tol, ref, ref_u, repeats, tempco
+
+
+def _wire_limits(enc: Table) -> tuple[float | None, float | None]:
+    """Read the wire's speed and acceleration limits (mm/s, mm/s²; None: not given)."""
+    speed = enc.number("max_wire_speed_mm_s", None, above=0, hi=MAX_WIRE_SPEED_MM_S, unit="mm/s")
+    accel = enc.number("max_wire_accel_mm_s2", None, above=0, hi=MAX_WIRE_ACCEL_MM_S2, unit="mm/s²")
+    return speed, accel
 
 
 def _pulse_inputs(enc: Table, pulse: bool) -> tuple[int, int] | None:
