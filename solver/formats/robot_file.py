@@ -83,7 +83,12 @@ from wirecal.solver.formats.robot_encoder import (
     read_language_and_interface,
 )
 from wirecal.solver.formats.robot_gravity import GRAVITY_KEYS, read_gravity
-from wirecal.solver.formats.robot_kinematics import KINEMATICS_KEYS, read_dh, read_limits
+from wirecal.solver.formats.robot_kinematics import (
+    KINEMATICS_KEYS,
+    dh_radians,
+    read_dh,
+    read_limits,
+)
 from wirecal.solver.formats.robot_sanity import check_units
 from wirecal.solver.formats.robot_values import (
     MAX_DH_ANGLE_DEG,
@@ -153,17 +158,8 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     dh = read_dh(kin)
     n = None if dh is None else dh.shape[0]
     lo, hi = read_limits(kin, n)
-    speed = kin.vector(
-        "joint_speed_deg_s",
-        length=n,
-        labels="(one per joint)",
-        above=0,
-        hi=MAX_SPEED_DEG_S,
-        unit="deg/s",
-    )
-    speed_confirmed = kin.boolean("joint_speed_confirmed", True)
-    tool = doc.table("tool", _KEYS["tool"])
-    point = tool.vector(
+    speed, speed_confirmed = _speeds(kin, n)
+    point = doc.table("tool", _KEYS["tool"]).vector(
         "point_mm", length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm"
     )
     controller_table = doc.table("controller", CONTROLLER_KEYS, required=False)
@@ -173,29 +169,18 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     encoder = read_encoder(encoder_table, interface)
     calibration = doc.table("calibration", _KEYS["calibration"])
     parameters = _parameters(calibration, n)
-    radii = doc.table("geometry", _KEYS["geometry"], required=False).vector(
-        "link_radius_mm",
-        None,
-        length=None if n is None else n - 1,
-        labels="(one per link)",
-        lo=0,
-        hi=MAX_LENGTH_MM,
-        unit="mm",
-    )
-    if dh is not None and radii is None:
-        radii = np.full(dh.shape[0] - 1, DEFAULT_LINK_RADIUS_MM)
+    radii = _link_radii(doc.table("geometry", _KEYS["geometry"], required=False), n)
     urdf = _urdf(doc.table("urdf", _KEYS["urdf"], required=False), source)
     cell = read_cell(doc.table("cell", CELL_KEYS, required=False), n)
-    masses, compliance = read_gravity(doc.table("gravity", GRAVITY_KEYS, required=False), dh)
+    dh_rad = dh_radians(dh)
+    masses, compliance = read_gravity(doc.table("gravity", GRAVITY_KEYS, required=False), dh_rad)
     compliances = _compliances(calibration, n, masses is not None)
     sag = _sag(calibration, bool(compliances))
     check_units(doc, dh, lo, hi, encoder, radii)
     doc.raise_if_any()
-    dh_rad = valid(dh).copy()
-    dh_rad[:, [0, 2]] = np.radians(dh_rad[:, [0, 2]])
     return Robot(
         name=valid(name).strip(),
-        dh=dh_rad,
+        dh=valid(dh_rad),
         joint_min_deg=valid(lo),
         joint_max_deg=valid(hi),
         joint_speed_deg_s=valid(speed),
@@ -213,6 +198,35 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         compliance_urad_per_nm=compliance,
         compliances=tuple(compliances),
     )
+
+
+def _speeds(kin: Table, n: int | None) -> tuple[np.ndarray | None, bool | None]:
+    """Read ``joint_speed_deg_s`` (one per joint) and ``joint_speed_confirmed``."""
+    speed = kin.vector(
+        "joint_speed_deg_s",
+        length=n,
+        labels="(one per joint)",
+        above=0,
+        hi=MAX_SPEED_DEG_S,
+        unit="deg/s",
+    )
+    return speed, kin.boolean("joint_speed_confirmed", True)
+
+
+def _link_radii(geometry: Table, n: int | None) -> np.ndarray | None:
+    """Read ``[geometry] link_radius_mm``, one per link; the default radius when not given."""
+    radii = geometry.vector(
+        "link_radius_mm",
+        None,
+        length=None if n is None else n - 1,
+        labels="(one per link)",
+        lo=0,
+        hi=MAX_LENGTH_MM,
+        unit="mm",
+    )
+    if n is not None and radii is None:
+        radii = np.full(n - 1, DEFAULT_LINK_RADIUS_MM)
+    return radii
 
 
 def _parameters(cal: Table, n: int | None) -> list[str] | None:

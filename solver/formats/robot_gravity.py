@@ -46,14 +46,16 @@ MAX_COMPLIANCE_URAD_PER_NM = 10_000.0
 about 10–100 µrad/(N·m), heavy arms' gearboxes 0.1–10."""
 
 
-def read_gravity(table: Table, dh: np.ndarray | None) -> tuple[MassModel | None, np.ndarray | None]:
+def read_gravity(
+    table: Table, dh_rad: np.ndarray | None
+) -> tuple[MassModel | None, np.ndarray | None]:
     """Read ``[gravity]``: the mass model and the compliances (None, None when absent).
 
-    ``dh`` is the DH table in file units (None when it has problems).
+    ``dh_rad`` is the DH table, its angles in radians (None when it has problems).
     """
     if not table.present:
         return None, None
-    n = None if dh is None else dh.shape[0]
+    n = None if dh_rad is None else dh_rad.shape[0]
     source = table.string("source", "")
     mass, com = _links(table, n)
     payload = table.number("payload_mass_kg", 0.0, lo=0, hi=MAX_MASS_KG, unit="kg")
@@ -78,11 +80,9 @@ def read_gravity(table: Table, dh: np.ndarray | None) -> tuple[MassModel | None,
         hi=MAX_COMPLIANCE_URAD_PER_NM,
         unit="µrad/(N·m)",
     )
-    if dh is None or payload is None or pay_com is None or direction is None:
+    if dh_rad is None or payload is None or pay_com is None or direction is None:
         return None, c
     if mass is None or com is None or com.shape[0] != n:
-        dh_rad = np.array(dh, dtype=float)
-        dh_rad[:, [0, 2]] = np.radians(dh_rad[:, [0, 2]])
         assumed = default_masses(dh_rad)
         return replace(
             assumed,

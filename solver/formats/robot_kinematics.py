@@ -46,6 +46,15 @@ def read_dh(kin: Table) -> np.ndarray | None:
     return dh
 
 
+def dh_radians(dh: np.ndarray | None) -> np.ndarray | None:
+    """Return the DH table with its angles (α, θ offset) in radians (None stays None)."""
+    if dh is None:
+        return None
+    dh_rad = np.array(dh, dtype=float)
+    dh_rad[:, [0, 2]] = np.radians(dh_rad[:, [0, 2]])
+    return dh_rad
+
+
 def read_limits(kin: Table, n: int | None) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Read ``joint_min_deg`` and ``joint_max_deg`` (``n`` joints; each min below its max)."""
     lo, hi = (
