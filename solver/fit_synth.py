@@ -106,34 +106,16 @@ def synthetic_table(
     length = np.linalg.norm(p - anchor, axis=1) + offsets[session]
     length += rng.normal(0, noise_mm, n_rows)
     q_log = np.round(q_true / joint_resolution_deg) * joint_resolution_deg
-    bad = rng.choice(n_rows, snags + typos, replace=False)
-    length[bad[:snags]] += rng.uniform(5, 40, snags)
-    for k, row in enumerate(bad[snags:]):
-        if k % 2:
-            length[row] += rng.choice([-1, 1]) * 9 * 10 ** rng.integers(0, 2)  # swapped digits
-        else:
-            j = rng.integers(0, robot.n_joints)
-            q_log[row, j] += rng.choice([-1, 1]) * 10.0  # one digit off
+    bad = _spoil(length, q_log, snags, typos, rng)
     length = np.round(length / length_resolution_mm) * length_resolution_mm
     implied = np.linalg.norm(tool_position(true, np.radians(q_log[bad])) - anchor, axis=1)
     bad_mm = {
         int(r): float(length[r] - implied[k] - offsets[session[r]]) for k, r in enumerate(bad)
     }
     tcp = tool_position(Model(robot.nominal.dh, np.array(CONTROLLER_TCP_MM)), np.radians(q_true))
-    table = CableTable(
-        source="<synthetic>",
-        sha256="0" * 64,
-        columns=ColumnMap(tuple(f"j{i + 1}" for i in range(robot.n_joints)), "length", AXES),
-        lines=np.arange(2, n_rows + 2),
-        q_deg=q_log,
-        length_mm=length,
-        xyz_mm=np.round(tcp, 2),
-        joint_resolution_deg=joint_resolution_deg,
-        length_resolution_mm=length_resolution_mm,
-        xyz_resolution_mm=0.01,
-    )
+    resolutions = (joint_resolution_deg, length_resolution_mm)
     return Synthetic(
-        table=table,
+        table=_table(q_log, length, np.round(tcp, 2), resolutions),
         errors=err,
         attachment_mm=attach,
         anchor_mm=anchor,
@@ -143,6 +125,44 @@ def synthetic_table(
         typos=tuple(sorted(int(b) for b in bad[snags:])),
         bad_mm=bad_mm,
         q_true_deg=q_true,
+    )
+
+
+def _spoil(
+    length: np.ndarray, q_log: np.ndarray, snags: int, typos: int, rng: np.random.Generator
+) -> np.ndarray:
+    """Spoil rows in place: ``snags`` cable snags, then ``typos`` typing errors; return them.
+
+    A snag lengthens the cable 5–40 mm; the typos alternate a joint one digit off (±10°)
+    and a length with swapped digits (±9 or ±90 mm). The snags' rows come first.
+    """
+    bad = rng.choice(len(length), snags + typos, replace=False)
+    length[bad[:snags]] += rng.uniform(5, 40, snags)
+    for k, row in enumerate(bad[snags:]):
+        if k % 2:
+            length[row] += rng.choice([-1, 1]) * 9 * 10 ** rng.integers(0, 2)  # swapped digits
+        else:
+            j = rng.integers(0, q_log.shape[1])
+            q_log[row, j] += rng.choice([-1, 1]) * 10.0  # one digit off
+    return bad
+
+
+def _table(
+    q_log: np.ndarray, length: np.ndarray, xyz_mm: np.ndarray, resolutions: tuple[float, float]
+) -> CableTable:
+    """Return the synthetic rows as a table read from a file (lines from 2, resolutions given)."""
+    n_rows, n_joints = q_log.shape
+    return CableTable(
+        source="<synthetic>",
+        sha256="0" * 64,
+        columns=ColumnMap(tuple(f"j{i + 1}" for i in range(n_joints)), "length", AXES),
+        lines=np.arange(2, n_rows + 2),
+        q_deg=q_log,
+        length_mm=length,
+        xyz_mm=xyz_mm,
+        joint_resolution_deg=resolutions[0],
+        length_resolution_mm=resolutions[1],
+        xyz_resolution_mm=0.01,
     )
 
 
