@@ -111,7 +111,6 @@ def compliance_trial(
     believed = joint.as_dict()
     geometry = {n: v for n, v in believed.items() if n not in robot.compliances}
     ws = workspace(robot)
-    std = dict(zip(joint.names, joint.std if joint.std is not None else [], strict=False))
     return ComplianceTrial(
         error_vs_truth_mm(robot, truth, geometry, ws),
         error_vs_truth_mm(robot, truth, believed, ws),
@@ -119,5 +118,5 @@ def compliance_trial(
         budget.bound if budget.bound_compensated is None else budget.bound_compensated,
         truth,
         believed,
-        {n: float(s) for n, s in std.items()},
+        joint.std_by_name(),
     )

@@ -170,7 +170,7 @@ def render_report(
     robot, plan = result.robot, result.plan
     sw, jt = result.estimates.get("stepwise"), result.estimates.get("joint")
     params = []
-    std = dict(zip(jt.names, jt.std, strict=True)) if jt is not None and jt.std is not None else {}
+    std = jt.std_by_name() if jt is not None else {}
     for name in plan.order:  # a partial log's parameters left at nominal have no estimate
         params.append(
             {

@@ -127,7 +127,7 @@ def _compliance_text(result: SolveResult) -> list[str]:
     if comp is None or joint is None:
         return []
     lines = ["", "Gravity compliance (joint method; µrad/(N·m)):"]
-    std = dict(zip(joint.names, joint.std if joint.std is not None else [], strict=False))
+    std = joint.std_by_name()
     for name, value in joint.as_dict().items():
         if name in comp.identified:
             total = result.robot.nominal_value(name) + value
@@ -161,7 +161,7 @@ def solve_text(result: SolveResult) -> str:
     head = f"{'parameter':<10}{'unit':<5}" + "".join(f"{m:>12}" for m in methods)
     joint, sigma = est.get("joint"), None
     if joint is not None and joint.std is not None:
-        sigma = dict(zip(joint.names, joint.std, strict=True))
+        sigma = joint.std_by_name()
         head += f"{'± σ (joint)':>14}"
     lines += ["", head]
     for name in names:

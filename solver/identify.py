@@ -109,6 +109,12 @@ class Estimate:
         """Return the offsets by parameter name (boundary units)."""
         return {n: float(v) for n, v in zip(self.names, self.values, strict=True)}
 
+    def std_by_name(self) -> dict[str, float]:
+        """Return the σ by parameter name (boundary units; inf: unidentified); empty without."""
+        if self.std is None:
+            return {}
+        return {n: float(s) for n, s in zip(self.names, self.std, strict=True)}
+
 
 @dataclass(frozen=True)
 class StepDiagnostics:

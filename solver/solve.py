@@ -130,7 +130,7 @@ class SolveResult:
                 "predicted_tool_error_mm": {k: _finite(v) for k, v in self.predicted[name].items()},
             }
             if est.std is not None and est.correlation is not None:  # set together
-                entry["std"] = {n: _finite(s) for n, s in zip(est.names, est.std, strict=True)}
+                entry["std"] = {n: _finite(s) for n, s in est.std_by_name().items()}
                 entry["correlation"] = {
                     a: {b: _finite(est.correlation[i, k]) for k, b in enumerate(est.names)}
                     for i, a in enumerate(est.names)
