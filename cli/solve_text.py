@@ -15,6 +15,7 @@ from wirecal.solver.exit_geometry import describe
 
 if TYPE_CHECKING:
     from wirecal.app.compare import ControllerComparison
+    from wirecal.solver.identify import Estimate
     from wirecal.solver.solve import SolveResult
 
 
@@ -144,27 +145,43 @@ def _compliance_text(result: SolveResult) -> list[str]:
 
 def solve_text(result: SolveResult) -> str:
     """Return ``wirecal solve``'s text: the estimates side by side, accuracy, budget, steps."""
-    est = result.estimates
-    names = result.plan.order
-    methods = list(est)
+    lines = _heading(result)
+    lines += ["", *_estimates_table(result)]
+    lines += _accuracy_lines(result)
+    lines += _compliance_text(result)
+    lines += _encoder_text(result)
+    if "stepwise" in result.estimates:
+        lines += ["", *_step_lines(result.estimates["stepwise"])]
+    return "\n".join(lines)
+
+
+def _heading(result: SolveResult) -> list[str]:
+    """Return the robot, the log, the wire's exit and what the log lacks."""
+    m = result.measurements
     lines = [
-        f"Robot {result.robot.name}; log {result.measurements.source}; "
-        f"{int(result.measurements.present.sum())} points",
+        f"Robot {result.robot.name}; log {m.source}; {int(m.present.sum())} points",
         f"wire exit: {describe(result.robot.encoder.exit)}",
     ]
-    for note in result.measurements.notes:
+    for note in m.notes:
         lines.append(f"note: {note}")
-    if result.measurements.missing:
-        lines.append(f"missing: {result.measurements.missing_text()}")
+    if m.missing:
+        lines.append(f"missing: {m.missing_text()}")
     if result.left_nominal:
         lines.append("left at nominal (no points): " + ", ".join(result.left_nominal))
+    return lines
+
+
+def _estimates_table(result: SolveResult) -> list[str]:
+    """Return the methods' estimates side by side, the joint method's σ beside them."""
+    est = result.estimates
+    methods = list(est)
     head = f"{'parameter':<10}{'unit':<5}" + "".join(f"{m:>12}" for m in methods)
     joint, sigma = est.get("joint"), None
     if joint is not None and joint.std is not None:
         sigma = joint.std_by_name()
         head += f"{'± σ (joint)':>14}"
-    lines += ["", head]
-    for name in names:
+    lines = [head]
+    for name in result.plan.order:
         if name in result.left_nominal:
             continue
         row = f"{name:<10}{P.unit_of(name):<5}" + "".join(
@@ -173,37 +190,38 @@ def solve_text(result: SolveResult) -> str:
         if sigma is not None:
             row += _sigma(sigma[name])
         lines.append(row)
-    lines.append(
-        f"{'residual RMS (mm)':<15}" + "".join(f"{est[m].residual_rms_mm:12.4f}" for m in methods)
-    )
-    lines.append(
+    return lines
+
+
+def _accuracy_lines(result: SolveResult) -> list[str]:
+    """Return each method's residual, predicted tool error and bound, and the noise σ."""
+    est, methods = result.estimates, list(result.estimates)
+    return [
+        f"{'residual RMS (mm)':<15}" + "".join(f"{est[m].residual_rms_mm:12.4f}" for m in methods),
         f"{'tool error (mm)':<15}"
         + "".join(_mm(result.predicted[m]["mean"]) for m in methods)
-        + "   predicted mean over 1000 configurations"
-    )
-    lines.append(f"{'  worst':<15}" + "".join(_mm(result.predicted[m]["max"]) for m in methods))
-    lines.append(
+        + "   predicted mean over 1000 configurations",
+        f"{'  worst':<15}" + "".join(_mm(result.predicted[m]["max"]) for m in methods),
         f"{'  95 % bound':<15}"
         + "".join(
             _mm(result.budgets[m].bound if m in result.budgets else float("inf")) for m in methods
         )
-        + "   the mean stays below it in 95 % of calibrations"
-    )
-    lines.append(
+        + "   the mean stays below it in 95 % of calibrations",
         f"noise σ from the joint residual: {result.sigma_mm:.4f} mm; "
-        f"recommended: {result.recommended}"
-    )
-    lines += _compliance_text(result)
-    lines += _encoder_text(result)
-    if "stepwise" in est:
-        lines += ["", "Step-by-step (paper): rms before → after, |Ψ_j|, leak of later parameters"]
-        for j, s in enumerate(est["stepwise"].steps, 1):
-            worst = s.worst_leak
-            leak = f"{worst[0]} {worst[1]:+.3f}/unit" if worst and abs(worst[1]) >= 5e-4 else "none"
-            bound = "  ON BOUND Ω" if s.on_bound else ""
-            lines.append(
-                f"{j:3d} {s.parameter:<5}{s.n_points:3d} pts  {s.rms_before_mm:8.4f} → "
-                f"{s.rms_after_mm:7.4f} mm  |Ψ| {s.psi_strength:5.2f}  leak {leak}"
-                f"{bound}"
-            )
-    return "\n".join(lines)
+        f"recommended: {result.recommended}",
+    ]
+
+
+def _step_lines(stepwise: Estimate) -> list[str]:
+    """Return the step-by-step method's steps (paper): rms before and after, |Ψ_j|, leak."""
+    lines = ["Step-by-step (paper): rms before → after, |Ψ_j|, leak of later parameters"]
+    for j, s in enumerate(stepwise.steps, 1):
+        worst = s.worst_leak
+        leak = f"{worst[0]} {worst[1]:+.3f}/unit" if worst and abs(worst[1]) >= 5e-4 else "none"
+        bound = "  ON BOUND Ω" if s.on_bound else ""
+        lines.append(
+            f"{j:3d} {s.parameter:<5}{s.n_points:3d} pts  {s.rms_before_mm:8.4f} → "
+            f"{s.rms_after_mm:7.4f} mm  |Ψ| {s.psi_strength:5.2f}  leak {leak}"
+            f"{bound}"
+        )
+    return lines
