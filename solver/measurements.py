@@ -150,12 +150,7 @@ def check_log(
     drift: dict[int, float] = {}
     if first_zero is not None:
         drift = _zero_drift(zeros, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
-        for s in sorted({int(x) for x in rows.step_no[~np.isnan(rows.counts)]}):
-            if s not in zeros:
-                problems.append(
-                    f"{src}: step {s} has points but no zero reading; the zero "
-                    "check at θ0 guards against a slipped wire"
-                )
+        problems += _steps_without_zero(rows, src)
         distance = _lengths(rows, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
     else:
         distance = rows.counts
@@ -186,6 +181,16 @@ def check_log(
         reference_mm=reference_mm,
         **_times(rows, drift, n_steps),
     )
+
+
+def _steps_without_zero(rows: LogRows, src: str) -> list[str]:
+    """Return a problem for each step with points but no zero reading."""
+    return [
+        f"{src}: step {s} has points but no zero reading; the zero "
+        "check at θ0 guards against a slipped wire"
+        for s in sorted({int(x) for x in rows.step_no[~np.isnan(rows.counts)]})
+        if s not in rows.zeros
+    ]
 
 
 def _times(rows: LogRows, drift: dict[int, float], n_steps: int) -> dict:
