@@ -55,23 +55,35 @@ def plan_process(arm: str, method: str) -> tuple[float, float, float]:
     return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024
 
 
+METHODS = ("joint", "stepwise")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials", type=int, default=300)
     ap.add_argument("--repeat", type=int, default=3, help="'wirecal plan' runs per arm")
     args = ap.parse_args()
-    T = args.trials
-    methods = ("joint", "stepwise")
+    print_plan_costs(args.repeat)
+    designs = print_designs(args.trials)
+    print_viper_plans(designs, args.trials)
+
+
+def print_plan_costs(repeat: int) -> None:
+    """Print each arm's and design's 'wirecal plan' process: median wall, CPU, peak memory."""
     runs = {}
     with ProgressBar("timing 'wirecal plan'") as bar:
-        for k, (arm, method) in enumerate((a, m) for a in ARMS for m in methods):
-            runs[arm, method] = [plan_process(arm, method) for _ in range(args.repeat)]
-            bar.update((k + 1) / (len(ARMS) * len(methods)))
-    print(f"'wirecal plan', median of {args.repeat} runs (whole process, one core)")
+        for k, (arm, method) in enumerate((a, m) for a in ARMS for m in METHODS):
+            runs[arm, method] = [plan_process(arm, method) for _ in range(repeat)]
+            bar.update((k + 1) / (len(ARMS) * len(METHODS)))
+    print(f"'wirecal plan', median of {repeat} runs (whole process, one core)")
     print(f"{'arm':<12}{'design':<10}{'wall s':>8}{'CPU s':>8}{'peak MiB':>10}")
     for (arm, method), r in runs.items():
         wall, cpu, mib = np.median(np.array(r), axis=0)
         print(f"{arm:<12}{method:<10}{wall:8.1f}{cpu:8.1f}{mib:10.0f}")
+
+
+def print_designs(T: int) -> dict:
+    """Print each arm's designs with a Monte Carlo of T calibrations; return the designs."""
     print(
         f"\n{'arm':<22}{'design':<10}{'plan s':>8}{'points':>8}{'vias':>6}{'robot min':>11}"
         f"{'CRB mm':>9}{'stepw. mm':>11}{'MC before':>11}{'MC joint':>10}{'MC stepw.':>11}"
@@ -79,7 +91,7 @@ def main() -> None:
     designs = {}
     with ProgressBar("designing and Monte Carlo") as bar:
         rows = []
-        for k, (arm, method) in enumerate((a, m) for a in ARMS for m in methods):
+        for k, (arm, method) in enumerate((a, m) for a in ARMS for m in METHODS):
             robot = load_robot(EXAMPLES / arm / "robot.toml")
             t0 = time.perf_counter()
             d = design(robot, opt=PlanOptions(method=method))
@@ -95,9 +107,13 @@ def main() -> None:
                 f"{mc.methods['joint'].tool_mean_mm:10.4f}"
                 f"{mc.methods['stepwise'].tool_mean_mm:11.4f}"
             )
-            bar.update((k + 1) / (len(ARMS) * len(methods)))
+            bar.update((k + 1) / (len(ARMS) * len(METHODS)))
     print("\n".join(rows))
+    return designs
 
+
+def print_viper_plans(designs: dict, T: int) -> None:
+    """Print the Viper's designed plans beside the corrected paper plan (Monte Carlo of T)."""
     robot, d = designs["viper_s650", "joint"]
     _, ds = designs["viper_s650", "stepwise"]
     paper = load_plan(EXAMPLES / "viper_s650" / "paper_plan.toml", robot)
