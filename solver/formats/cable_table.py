@@ -97,8 +97,9 @@ def read_cable_table(
         text, source, digest = read_source(path, "table")
         header, rows = _text_cells(text, source)
     cmap = parse_map(column_map, n_joints, header)
-    index = _column_index(cmap, header, source, sheets)
-    lines, values = _numbers(rows, index, cmap, source, empty)
+    advice = f': name the columns with --map "j1=…,…,j6=…,length=…"{sheets}'
+    index = column_index(cmap.columns, header, source, advice)
+    lines, values = column_numbers(rows, cmap.columns, index, source, empty=empty)
     q, length = values[:, :n_joints], values[:, n_joints]
     return CableTable(
         source=source,
@@ -214,37 +215,44 @@ def check_workbook(raw: bytes, source: str) -> None:
         raise WirecalError(f"{source}: not a readable .xlsx workbook: {exc}") from None
 
 
-def _column_index(
-    cmap: ColumnMap, header: tuple[str, ...], source: str, sheets: str = ""
+def column_index(
+    names: tuple[str, ...], header: tuple[str, ...], source: str, advice: str = ""
 ) -> list[int]:
-    """Return the position of each mapped column; raise naming the absent ones.
+    """Return the position of each named column; raise naming the absent ones.
 
-    ``sheets``: for a workbook, which sheet was read and the others (appended to the advice).
+    ``advice``: what to do, appended to the message (how to name the columns).
     """
-    absent = [c for c in cmap.columns if c not in header]
+    absent = [c for c in names if c not in header]
     if absent:
         raise WirecalError(
             f"{source}: no column {', '.join(repr(c) for c in absent)}; the header has "
-            f"{', '.join(repr(h) for h in header)}: name the columns with --map "
-            f'"j1=…,…,j6=…,length=…"{sheets}'
+            f"{', '.join(repr(h) for h in header)}{advice}"
         )
-    return [header.index(c) for c in cmap.columns]
+    return [header.index(c) for c in names]
 
 
-def _numbers(
-    rows: Cells, index: list[int], cmap: ColumnMap, source: str, empty: str = ""
+def column_numbers(
+    rows: Cells,
+    names: tuple[str, ...],
+    index: list[int],
+    source: str,
+    *,
+    empty: str = "",
+    decimal_comma: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Return the rows' lines and their mapped cells as numbers; raise on any non-number.
+    """Return the rows' lines (N,) and their named cells as numbers (N, k).
 
-    ``empty``: what to add to the message of an empty cell (a workbook's formulas).
+    Raise naming every cell (``file:line``, at most ten) that is not a finite number, and
+    on a table without rows. ``empty``: what to add to the message of an empty cell (a
+    workbook's formulas); ``decimal_comma``: text cells write 0,5 for 0.5.
     """
     problems: list[str] = []
     lines, values = [], []
     for line, cells in rows:
         row = []
-        for col, k in zip(cmap.columns, index, strict=True):
+        for col, k in zip(names, index, strict=True):
             cell = cells[k] if k < len(cells) else ""
-            value = _number(cell)
+            value = _number(cell.replace(",", ".") if decimal_comma else cell)
             if value is None:
                 hint = empty if cell == "" else ""
                 problems.append(f"{source}:{line}: column {col!r} is {cell!r}, not a number{hint}")

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.cable_table import _number, _text_cells
+from wirecal.solver.formats.cable_table import _text_cells, column_index, column_numbers
 from wirecal.solver.formats.fileio import MAX_INPUT_BYTES, read_input
 from wirecal.solver.tracker_data import TrackerTable
 
@@ -75,28 +75,8 @@ def columns(
     Raise naming every absent column, or every cell (``file:line``, at most ten) that is not
     a finite number; ``decimal_comma``: cells write 0,5 for 0.5.
     """
-    absent = [c for c in names if c not in header]
-    if absent:
-        raise WirecalError(
-            f"{source}: no column {', '.join(map(repr, absent))}; the header has "
-            f"{', '.join(map(repr, header))}"
-        )
-    index = [header.index(c) for c in names]
-    problems: list[str] = []
-    values = np.empty((len(rows), len(names)))
-    for r, (line, row) in enumerate(rows):
-        for k, (name, i) in enumerate(zip(names, index, strict=True)):
-            cell = row[i] if i < len(row) else ""
-            value = _number(cell.replace(",", ".") if decimal_comma else cell)
-            if value is None:
-                problems.append(f"{source}:{line}: column {name!r} is {cell!r}, not a number")
-            values[r, k] = np.nan if value is None else value
-    if problems:
-        more = [f"… and {len(problems) - 10} more"] if len(problems) > 10 else []
-        raise WirecalError(problems[:10] + more)
-    if not rows:
-        raise WirecalError(f"{source}: the table has a header but no data rows")
-    return np.array([line for line, _ in rows], dtype=int), values
+    index = column_index(names, header, source)
+    return column_numbers(rows, names, index, source, decimal_comma=decimal_comma)
 
 
 def joint_names(header: tuple[str, ...], source: str) -> tuple[str, ...]:
