@@ -25,6 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from wirecal.gen.targets import joint_target
+from wirecal.lang.urscript.versions import version_of
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan import Plan
@@ -48,17 +49,17 @@ MAX_LEGS = 64
 
 def is_cb3(software: str | None) -> bool:
     """Tell whether a declared controller software is of the CB3 line (3.x)."""
-    return software is not None and int(software.split(".")[0]) == CB3
+    return software is not None and version_of(software)[0] == CB3
 
 
 def move_legs(
-    robot: Robot, plan: Plan, target: Callable[[np.ndarray], str]
+    legs: list[np.ndarray], target: Callable[[np.ndarray], str]
 ) -> list[list[dict[str, str]]]:
-    """Return each move's intermediate joint targets, in the order of ``run_moves(plan)``.
+    """Return each move's intermediate joint targets of its ``legs`` (:func:`leg_joints`).
 
-    ``target`` writes a joint target (:func:`leg_joints` cuts the moves).
+    ``target`` writes a joint target.
     """
-    return [[joint_target(x, target) for x in q[1:-1]] for q in leg_joints(robot, plan)]
+    return [[joint_target(x, target) for x in q[1:-1]] for q in legs]
 
 
 def leg_joints(robot: Robot, plan: Plan) -> list[np.ndarray]:
@@ -85,14 +86,15 @@ def leg_joints(robot: Robot, plan: Plan) -> list[np.ndarray]:
     return out
 
 
-def leg_speeds_pct(robot: Robot, plan: Plan, speed_pct: float) -> np.ndarray:
-    """Return each move's SPEED (%) its legs allow, in ``run_moves`` order.
+def leg_speeds_pct(
+    robot: Robot, plan: Plan, legs: list[np.ndarray], speed_pct: float
+) -> np.ndarray:
+    """Return each move's SPEED (%) its ``legs`` (:func:`leg_joints`) allow, in ``run_moves`` order.
 
     Each leg stops, so it is a move of its own to the wire's limits
     (:func:`~wirecal.solver.run_parameters.move_speeds_pct`, nominal model): the move
     takes its slowest leg's.
     """
-    legs = leg_joints(robot, plan)
     model = robot.nominal
     p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
     moves = move_profiles(

@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
+from itertools import repeat
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +26,13 @@ from wirecal import __version__
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import give_move_speeds, joint_target, name_problems, run_steps
 from wirecal.gen.templating import render
-from wirecal.gen.urscript.cb3 import FILTERED_RANGE, is_cb3, leg_speeds_pct, move_legs
+from wirecal.gen.urscript.cb3 import (
+    FILTERED_RANGE,
+    is_cb3,
+    leg_joints,
+    leg_speeds_pct,
+    move_legs,
+)
 from wirecal.lang.urscript import URScript
 from wirecal.lang.urscript.versions import is_refusal, needed
 from wirecal.solver.errors import WirecalError
@@ -235,8 +242,9 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
         "m": len(tables.names),
     }
     steps = run_steps(plan, tables.first, rad_literal)
-    context["closing"] = movej_speeds(robot, plan, opt.run, steps)
-    context |= line_context(robot, plan, steps)
+    legs = leg_joints(robot, plan) if is_cb3(robot.controller.software) else None
+    context["closing"] = movej_speeds(robot, plan, opt.run, steps, legs)
+    context |= line_context(steps, legs)
     if opt.solver:
         context["t"] = solver_tables(robot, plan, tables)
     return {f"wc_{role}.script": render(f"urscript/{role}.script.j2", **context) for role in ROLES}
@@ -252,15 +260,21 @@ def _accel_rad_s2(run: RunParameters) -> float:
     return MOVEJ_DEFAULT_ACCEL_RAD_S2 * run.accel_pct / DEFAULT_RUN.accel_pct
 
 
-def movej_speeds(robot: Robot, plan: Plan, run: RunParameters, steps: list[dict]) -> dict[str, str]:
+def movej_speeds(
+    robot: Robot,
+    plan: Plan,
+    run: RunParameters,
+    steps: list[dict],
+    legs: list[np.ndarray] | None = None,
+) -> dict[str, str]:
     """Give every move of ``steps`` its movej v and a; return the closing move's.
 
     v: the run's speed unless the encoder's wire speed or acceleration asks for less
     (:func:`~wirecal.solver.run_parameters.run_timeline`'s speeds, the V+ and RAPID
     rule). a: the run's, at most v / ``MOVE_OVERHEAD_S``, so the leading axis's ramp
     (v/a of movej's trapezoid, SD §14.22) lasts at least the ramp the wire's acceleration
-    was bounded with. Both rounded down to 6 decimals. A CB3 move and its legs: the
-    slowest leg's (each leg stops, :func:`~.cb3.leg_speeds_pct`).
+    was bounded with. Both rounded down to 6 decimals. A CB3 move cut into ``legs``
+    (:func:`~.cb3.leg_joints`): the slowest leg's (each leg stops, :func:`~.cb3.leg_speeds_pct`).
     """
     run_a = _accel_rad_s2(run)
 
@@ -269,8 +283,8 @@ def movej_speeds(robot: Robot, plan: Plan, run: RunParameters, steps: list[dict]
         return {"v": _fixed(v, 6), "a": _fixed(_down(min(run_a, v / MOVE_OVERHEAD_S)), 6)}
 
     pct = run_timeline(robot, plan, run).speed_pct
-    if is_cb3(robot.controller.software):  # θ0 first (in place), then run_moves' moves
-        pct = np.r_[pct[:1], np.minimum(pct[1:], leg_speeds_pct(robot, plan, run.speed_pct))]
+    if legs is not None:  # θ0 first (in place), then run_moves' moves
+        pct = np.r_[pct[:1], np.minimum(pct[1:], leg_speeds_pct(robot, plan, legs, run.speed_pct))]
     speeds = (movej(float(x)) for x in pct)
     return give_move_speeds(steps, speeds, "move")
 
@@ -280,22 +294,15 @@ def _down(x: float) -> float:
     return math.floor(x * 1e6) / 1e6
 
 
-def line_context(robot: Robot, plan: Plan, steps: list[dict]) -> dict[str, object]:
+def line_context(steps: list[dict], legs: list[np.ndarray] | None) -> dict[str, object]:
     """Return what the programs take from the declared product line (:mod:`.cb3` for CB3).
 
-    ``steps`` (:func:`run_steps`) get each move's legs: none but on CB3.
+    ``steps`` (:func:`run_steps`) get each move's intermediate targets of its ``legs``
+    (:func:`~.cb3.leg_joints`, in ``run_moves`` order; θ0 first, in place): none but on CB3.
     """
-    cb3 = is_cb3(robot.controller.software)
-    legs = move_legs(robot, plan, rad_literal) if cb3 else None
-    k = 0
-    home: list = []
-    for step in steps:
-        step["home_legs"] = home
-        for target in [*step["vias"], *step["points"]]:
-            target["legs"] = legs[k] if legs else []
-            k += 1
-        home = legs[k] if legs else []
-        k += 1
+    cb3 = legs is not None
+    targets = [[], *move_legs(legs, rad_literal)] if legs is not None else repeat([])
+    home = give_move_speeds(steps, targets, "legs")
     return {
         "cb3": cb3,
         "clock": not cb3,
