@@ -316,12 +316,20 @@ refuses a nesting beyond 100 after parsing). wirecal's bound."""
 _OPERATORS = frozenset("+ - * / < > = AND OR XOR NOT DIV MOD".split())
 
 
-def _long_run(text: str) -> SyntaxProblem | None:
-    """Refuse a run of more than :data:`MAX_OPERATOR_RUN` operators (before parsing)."""
+def _too_deep(text: str) -> SyntaxProblem | None:
+    """Refuse up front what the parser would take too long or recurse too deep on.
+
+    One pass over the tokens counts the runs of operators, the brackets and the blocks. A
+    run of more than :data:`MAX_OPERATOR_RUN` operators is named first, wherever it is
+    (parsing it would take minutes); else the first nesting beyond the bounds.
+    """
     run = 0
+    nesting = _Nesting()
+    deep: SyntaxProblem | None = None
     for number, source_line in enumerate(text.splitlines(), 1):
         for m in _TOKEN.finditer(source_line):
-            run = run + 1 if m.group().upper() in _OPERATORS else 0
+            word = m.group().upper()
+            run = run + 1 if word in _OPERATORS else 0
             if run > MAX_OPERATOR_RUN:
                 return SyntaxProblem(
                     number,
@@ -329,38 +337,37 @@ def _long_run(text: str) -> SyntaxProblem | None:
                     f"most {MAX_OPERATOR_RUN} (and nests at most {MAX_EXPRESSION_DEPTH}): "
                     "split the expression",
                 )
-    return None
+            if deep is None:
+                deep = nesting.see(word, number)
+    return deep
 
 
-def _too_deep(text: str) -> SyntaxProblem | None:
-    """Refuse up front what is nested deeper than the bounds (the parser recurses per level)."""
-    long_run = _long_run(text)
-    if long_run is not None:
-        return long_run
-    blocks: list[int] = []
-    brackets = 0
-    for number, source_line in enumerate(text.splitlines(), 1):
-        for m in _TOKEN.finditer(source_line):
-            word = m.group().upper()
-            if word in ("(", "[", "{"):
-                brackets += 1
-                if brackets > MAX_BRACKET_DEPTH:
-                    return SyntaxProblem(
-                        number, f"brackets nested more than {MAX_BRACKET_DEPTH} deep"
-                    )
-            elif word in (")", "]", "}"):
-                brackets -= 1
-            elif word in ("THEN", "FOR", "WHILE", "TEST"):
-                blocks.append(number)
-                if len(blocks) > MAX_BLOCK_DEPTH:
-                    return SyntaxProblem(
-                        number,
-                        f"blocks nested more than {MAX_BLOCK_DEPTH} deep: wirecal reads at most "
-                        f"{MAX_BLOCK_DEPTH}",
-                    )
-            elif word in ("ENDIF", "ENDFOR", "ENDWHILE", "ENDTEST") and blocks:
-                blocks.pop()
-    return None
+class _Nesting:
+    """The brackets and blocks open so far, token by token (:func:`_too_deep`)."""
+
+    def __init__(self) -> None:
+        self.brackets = 0
+        self.blocks = 0
+
+    def see(self, word: str, number: int) -> SyntaxProblem | None:
+        """Count one token (upper case) of line ``number``; the problem if nested too deep."""
+        if word in ("(", "[", "{"):
+            self.brackets += 1
+            if self.brackets > MAX_BRACKET_DEPTH:
+                return SyntaxProblem(number, f"brackets nested more than {MAX_BRACKET_DEPTH} deep")
+        elif word in (")", "]", "}"):
+            self.brackets -= 1
+        elif word in ("THEN", "FOR", "WHILE", "TEST"):
+            self.blocks += 1
+            if self.blocks > MAX_BLOCK_DEPTH:
+                return SyntaxProblem(
+                    number,
+                    f"blocks nested more than {MAX_BLOCK_DEPTH} deep: wirecal reads at most "
+                    f"{MAX_BLOCK_DEPTH}",
+                )
+        elif word in ("ENDIF", "ENDFOR", "ENDWHILE", "ENDTEST") and self.blocks:
+            self.blocks -= 1
+        return None
 
 
 _TOKEN = re.compile(r'"(?:[^"\n]|"")*"|![^\n]*|[A-Za-z][A-Za-z0-9_]*|[()\[\]{},;]|[-+*/<>=]')
