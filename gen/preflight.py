@@ -93,15 +93,12 @@ def check_software(robot: Robot, lang: Language) -> None:
             f"{robot.source}: [controller] language is {controller.language!r}, not "
             f"{lang.key!r}: the {lang.title} generator does not write its programs"
         )
-    lines = lang.capabilities.software_lines
     software = controller.software
-    if software is None or not lines or int(software.split(".")[0]) in lines:
-        return
-    known = ", ".join(f"{name} {major}.x" for major, name in lines.items())
-    raise WirecalError(
-        f'{robot.source}: controller.software = "{software}": the {lang.title} programs are '
-        f"written for {known}"
-    )
+    if software is not None and not lang.knows_software(software):
+        raise WirecalError(
+            f'{robot.source}: controller.software = "{software}": the {lang.title} programs '
+            f"are written for {lang.software_lines_text()}"
+        )
 
 
 def output_problems(robot: Robot, programs: dict[str, str], lang: Language) -> list[str]:

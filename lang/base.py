@@ -88,6 +88,19 @@ class Language:
             for problem in self.lint(text, source, software, external_calls=external_calls)
         ]
 
+    def knows_software(self, software: str) -> bool:
+        """Whether declared ``software`` ("major.minor…") is of one of the language's lines.
+
+        Any software is, for a language not versioned (no ``software_lines``).
+        """
+        lines = self.capabilities.software_lines
+        return not lines or int(software.split(".")[0]) in lines
+
+    def software_lines_text(self) -> str:
+        """Name the language's product lines: "CB3 3.x, e-Series 5.x, PolyScope X 10.x"."""
+        lines = self.capabilities.software_lines
+        return ", ".join(f"{name} {major}.x" for major, name in lines.items())
+
     def all_suffixes(self) -> tuple[str, ...]:
         """Return every suffix of the language's program files, :attr:`suffix` first."""
         return (self.suffix, *(s for s in self.suffixes if s != self.suffix))

@@ -12,6 +12,7 @@ from typing import ClassVar
 from wirecal.lang.base import Capabilities, Example, Language
 from wirecal.lang.registry import register
 from wirecal.lang.urscript.calibration import KEYS, SUFFIX, calibration_text
+from wirecal.lang.urscript.versions import LINES
 from wirecal.solver.robot import Robot
 
 _TYPES = "UR16e User Manual p. 181; UR5 CB3 User Manual 3.4.5 p. II-69"
@@ -43,7 +44,7 @@ class URScript(Language):
         sockets=True,  # socket_open/socket_send_line (SD)
         encoder_interfaces=("pulse",),  # the controller's pulse decoder (SD §14.4)
         counter_bits=32,  # the raw count, an int32 (SD §14.4)
-        software_lines={3: "CB3", 5: "e-Series (PolyScope 5)", 10: "PolyScope X"},
+        software_lines=LINES,  # the product lines by major version (versions.LINES)
     )
     interface_notes: ClassVar[Mapping[str, str]] = {"pulse": "the controller's pulse decoder"}
     valid_examples: ClassVar[tuple[Example, ...]] = (

@@ -129,11 +129,9 @@ def _software(table: Table, language: str | None) -> str | None:
     if not SOFTWARE_PATTERN.fullmatch(software):
         table.add("software", f'is {software!r}; give the version as numbers, e.g. "5.20"')
         return None
-    lines = languages()[language].capabilities.software_lines if language else {}
-    major = int(software.split(".")[0])
-    if lines and major not in lines:
-        known = ", ".join(f"{name} {m}.x" for m, name in lines.items())
-        table.add("software", f"is {software!r}; wirecal knows {known}")
+    lang = languages()[language] if language else None
+    if lang is not None and not lang.knows_software(software):
+        table.add("software", f"is {software!r}; wirecal knows {lang.software_lines_text()}")
         return None
     return software
 
