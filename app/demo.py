@@ -136,8 +136,8 @@ def chain(robot_path: str | Path | None) -> Chain:
     path = Path(robot_path) if robot_path is not None else example_files()["robot"]
     rb = load_robot(path)
     reg = registered(rb)
-    plans = [path.with_name(n) for n in PLANS if path.with_name(n).is_file()]
-    if not plans:
+    plan = plan_beside(path)
+    if plan is None:
         raise WirecalError(
             f"{path}: no {' or '.join(PLANS)} beside it; design one with wirecal plan"
         )
@@ -150,7 +150,12 @@ def chain(robot_path: str | Path | None) -> Chain:
     setup = load_setup(setup_path) if paper else None
     request = GenRequest(validation=setup)
     log_name = SOCKET_LOG if "log_file" in reg.generator.refuses else request.log_file
-    return Chain(rb, reg, load_plan(plans[0], rb), setup, request, log_name)
+    return Chain(rb, reg, load_plan(plan, rb), setup, request, log_name)
+
+
+def plan_beside(robot_path: Path) -> Path | None:
+    """Return the plan the demo takes beside a robot file: the first of :data:`PLANS` there."""
+    return next((p for n in PLANS if (p := robot_path.with_name(n)).is_file()), None)
 
 
 def run_demo(

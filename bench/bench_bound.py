@@ -37,7 +37,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wirecal.app.coverage import compliance_trial, trial, wilson, with_gauge  # noqa: E402
-from wirecal.app.demo import example_files  # noqa: E402
+from wirecal.app.demo import example_files, plan_beside  # noqa: E402
 from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot, robot_from_dict  # noqa: E402
 from wirecal.solver.simulate import Unmodelled  # noqa: E402
@@ -47,7 +47,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials", type=int, default=300)
     ap.add_argument("--no-unmodelled", action="store_true")
-    ap.add_argument("--compliance", choices=sorted(PLANS), help="the compliance cases' arm")
+    ap.add_argument("--compliance", choices=sorted(ARMS), help="the compliance cases' arm")
     args = ap.parse_args()
     if args.compliance:
         compliance_cases(args.compliance, args.trials)
@@ -82,8 +82,8 @@ def main() -> None:
         )
 
 
-PLANS = {"viper_s650": "paper_plan.toml", "ur5e": "plan.toml", "abb_irb120": "plan.toml"}
-"""Each arm's shipped plan."""
+ARMS = ("viper_s650", "ur5e", "abb_irb120")
+"""The arms with a shipped plan (the demo's beside each robot file, :func:`plan_beside`)."""
 
 
 def compliance_cases(arm: str, trials: int) -> None:
@@ -92,8 +92,10 @@ def compliance_cases(arm: str, trials: int) -> None:
     data = tomllib.loads((folder / "robot.toml").read_text())
     data["calibration"]["compliances"] = ["c2", "c3", "c4", "c5"]
     without = robot_from_dict(data, str(folder / "robot.toml"))
-    plan = load_plan(folder / PLANS[arm], without)
-    print(f"{arm}, {PLANS[arm]}: {trials} calibrations per case; repeatability 0.02 mm")
+    plan_path = plan_beside(folder / "robot.toml")
+    assert plan_path is not None
+    plan = load_plan(plan_path, without)
+    print(f"{arm}, {plan_path.name}: {trials} calibrations per case; repeatability 0.02 mm")
     print(
         f"{'gauge':<6}{'compl.':<7}{'ident.':<8}{'patch: cover':>13}{'bound/err':>10}"
         f"{'comp.: cover':>13}{'bound/err':>10}{'err mm':>8}{'c err/σ':>9}{'s':>5}"

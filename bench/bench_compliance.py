@@ -34,20 +34,23 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wirecal.app.coverage import ComplianceTrial, compliance_trial, with_gauge  # noqa: E402
+from wirecal.app.demo import plan_beside  # noqa: E402
 from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
 from wirecal.solver.formats.robot_file import robot_from_dict  # noqa: E402
 from wirecal.solver.robot import Robot  # noqa: E402
 from wirecal.solver.simulate import Unmodelled  # noqa: E402
 
-PLANS = {"viper_s650": "paper_plan.toml", "ur5e": "plan.toml", "abb_irb120": "plan.toml"}
-"""Each arm's shipped plan."""
+ARMS = ("viper_s650", "ur5e", "abb_irb120")
+"""The arms with a shipped plan (the demo's beside each robot file, :func:`plan_beside`)."""
 
 
 def _arm(arm: str) -> tuple[Robot, Path]:
     folder = Path(__file__).resolve().parents[1] / "examples" / arm
     data = tomllib.loads((folder / "robot.toml").read_text())
     data["calibration"]["compliances"] = ["c2", "c3", "c4", "c5"]
-    return with_gauge(robot_from_dict(data, str(folder / "robot.toml"))), folder / PLANS[arm]
+    plan_path = plan_beside(folder / "robot.toml")
+    assert plan_path is not None
+    return with_gauge(robot_from_dict(data, str(folder / "robot.toml"))), plan_path
 
 
 def _report(robot: Robot, on: list[ComplianceTrial], off: list[ComplianceTrial]) -> list[str]:
@@ -83,7 +86,7 @@ def _report(robot: Robot, on: list[ComplianceTrial], off: list[ComplianceTrial])
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--truths", type=int, default=100)
-    ap.add_argument("--arms", nargs="+", default=list(PLANS), choices=list(PLANS))
+    ap.add_argument("--arms", nargs="+", default=list(ARMS), choices=list(ARMS))
     args = ap.parse_args()
     for arm in args.arms:
         robot, plan_path = _arm(arm)

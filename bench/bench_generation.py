@@ -17,6 +17,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from wirecal.app.demo import plan_beside
 from wirecal.app.languages import registered
 from wirecal.gen.preflight import _lint, output_problems, preflight
 from wirecal.gen.request import GenRequest
@@ -24,7 +25,8 @@ from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-SHIPPED = (("viper_s650", "paper_plan.toml"), ("ur5e", "plan.toml"), ("abb_irb120", "plan.toml"))
+SHIPPED = ("viper_s650", "ur5e", "abb_irb120")
+"""The examples timed, each with its shipped plan (the demo's, :func:`plan_beside`)."""
 
 
 def median_s(work: Callable[[], object], runs: int) -> float:
@@ -38,10 +40,12 @@ def median_s(work: Callable[[], object], runs: int) -> float:
     return statistics.median(times)
 
 
-def row(name: str, plan_file: str, runs: int) -> str:
+def row(name: str, runs: int) -> str:
     """Return one example's line: each part's median and the checker's share."""
     robot = load_robot(EXAMPLES / name / "robot.toml")
-    plan = load_plan(EXAMPLES / name / plan_file, robot)
+    plan_path = plan_beside(EXAMPLES / name / "robot.toml")
+    assert plan_path is not None
+    plan = load_plan(plan_path, robot)
     gen, request = registered(robot).generator, GenRequest()
     out = gen.render(robot, plan, request)
     pre = median_s(lambda: preflight(robot, plan, request, gen.language), runs)
@@ -59,8 +63,8 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=3)
     args = ap.parse_args()
     print("example      language  pre-flight  render  checker  programs()  checker share")
-    for name, plan_file in SHIPPED:
-        print(row(name, plan_file, args.runs))
+    for name in SHIPPED:
+        print(row(name, args.runs))
 
 
 if __name__ == "__main__":
