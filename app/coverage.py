@@ -22,8 +22,9 @@ from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.simulate import Unmodelled, realistic_encoder, simulate_log
-from wirecal.solver.solve import solve
+from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters
+from wirecal.solver.simulate import EncoderTruth, Unmodelled, realistic_encoder, simulate_log
+from wirecal.solver.solve import SolveResult, solve
 
 GAUGE_LENGTH_MM = 500.0
 """The simulated reference gauge's certified nest distance (a catalogue gauge's)."""
@@ -54,12 +55,35 @@ class Trial:
     scale_ppm: float  # the true encoder's scale error
 
 
+def simulated_calibration(
+    robot: Robot,
+    plan: Plan,
+    truth: dict[str, float],
+    seed: int,
+    *,
+    unmodelled: Unmodelled | None = None,
+    drift_mm_per_h: float = 0.0,
+    run: RunParameters = DEFAULT_RUN,
+) -> tuple[SolveResult, EncoderTruth]:
+    """Simulate a run of ``plan`` on the true arm and solve it; return it and the true encoder.
+
+    The true arm is ``robot`` with the ``truth`` offsets, read by a realistic encoder drawn
+    from ``seed`` (its zero drifting by ``drift_mm_per_h``), at the ``run`` settings.
+    """
+    encoder = realistic_encoder(
+        robot.encoder, np.random.default_rng([seed, 4]), zero_drift_mm_per_h=drift_mm_per_h
+    )
+    text = simulate_log(
+        robot, plan, truth, seed=seed, encoder=encoder, unmodelled=unmodelled, run=run
+    )
+    log = parse_log(text, f"simulated run {seed}")
+    return solve(robot, plan, check_log(log, plan, robot)), encoder
+
+
 def trial(robot: Robot, plan: Plan, seed: int, unmodelled: Unmodelled | None) -> Trial:
     """Simulate, solve and judge one calibration (module docstring)."""
     truth = random_errors(robot, 1.0, np.random.default_rng([seed, 1]))
-    encoder = realistic_encoder(robot.encoder, np.random.default_rng([seed, 4]))
-    text = simulate_log(robot, plan, truth, seed=seed, encoder=encoder, unmodelled=unmodelled)
-    result = solve(robot, plan, check_log(parse_log(text, f"simulated run {seed}"), plan, robot))
+    result, encoder = simulated_calibration(robot, plan, truth, seed, unmodelled=unmodelled)
     best = result.recommended
     budget = result.budgets[best]
     error = error_vs_truth_mm(robot, truth, result.estimates[best].as_dict(), workspace(robot))
@@ -103,9 +127,7 @@ def compliance_trial(
     truth = random_errors(robot, 1.0, np.random.default_rng([seed, 1]))
     if not compliant:
         truth.update({n: -robot.nominal_value(n) for n in robot.compliances})
-    encoder = realistic_encoder(robot.encoder, np.random.default_rng([seed, 4]))
-    text = simulate_log(robot, plan, truth, seed=seed, encoder=encoder, unmodelled=unmodelled)
-    result = solve(robot, plan, check_log(parse_log(text, f"simulated run {seed}"), plan, robot))
+    result, _ = simulated_calibration(robot, plan, truth, seed, unmodelled=unmodelled)
     joint = result.estimates["joint"]
     budget = result.budgets["joint"]
     believed = joint.as_dict()

@@ -20,17 +20,14 @@ import argparse  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from wirecal.app.coverage import simulated_calibration  # noqa: E402
 from wirecal.app.demo import example_files  # noqa: E402
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace  # noqa: E402
-from wirecal.solver.formats.log import parse_log  # noqa: E402
 from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 from wirecal.solver.formats.truth import random_errors  # noqa: E402
-from wirecal.solver.measurements import check_log  # noqa: E402
 from wirecal.solver.plausibility import assess  # noqa: E402
 from wirecal.solver.run_parameters import PAPER_RUN  # noqa: E402
-from wirecal.solver.simulate import realistic_encoder, simulate_log  # noqa: E402
-from wirecal.solver.solve import solve  # noqa: E402
 
 
 def main() -> None:
@@ -46,11 +43,9 @@ def main() -> None:
     rates, sigmas, errors = [], [], []
     for seed in range(args.trials):
         truth = random_errors(robot, 1.0, np.random.default_rng([seed, 1]))
-        encoder = realistic_encoder(
-            robot.encoder, np.random.default_rng([seed, 4]), None, args.drift
+        result, _ = simulated_calibration(
+            robot, plan, truth, seed, drift_mm_per_h=args.drift, run=PAPER_RUN
         )
-        text = simulate_log(robot, plan, truth, seed=seed, encoder=encoder, run=PAPER_RUN)
-        result = solve(robot, plan, check_log(parse_log(text, "run.csv"), plan, robot))
         verdict = assess(result, result.recommended)
         passed += verdict.passed
         drift = result.drift
