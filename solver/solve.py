@@ -499,7 +499,11 @@ def _compliance_terms(
     )
     others = tuple(n for n in robot.compliances if n in comp.reasons and n not in comp.no_torque)
     unit = ErrorSet(others, robot.n_joints)
-    wire = wire_jacobian(problem.base, problem.q, problem.q0, others)[1]
+    wire = (  # every compliance asked for identified: none at its prior
+        wire_jacobian(problem.base, problem.q, problem.q0, others)[1]
+        if others
+        else np.zeros((len(problem.q), 0))
+    )
     return ComplianceTerms(
         errors.to_internal(left),
         others,

@@ -25,9 +25,11 @@ from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
-from wirecal.solver.formats.truth import load_errors
+from wirecal.solver.formats.truth import load_errors, random_errors
 from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.measurements import check_log
+from wirecal.solver.simulate import simulate_log
+from wirecal.solver.solve import solve
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 ALL_C = tuple(f"c{j}" for j in range(1, 7))
@@ -75,6 +77,25 @@ def test_one_wire_on_the_ur5e_plan_identifies_c2_c3_and_says_why_not_the_others(
     for name in ("c4", "c5"):  # the wrist's torques are a few N·m at most
         assert r.sigma_urad_per_nm[name] > SIGMA_LIMIT_URAD_PER_NM
         assert "too small or varies too little" in r.reasons[name]
+
+
+def test_solve_when_every_compliance_asked_for_is_identified():
+    """The file asks for c2 and c3, the two the UR5e plan identifies: no compliance is left
+    at its prior. ``solve`` used to stop with a traceback (the budget's Jacobian of no
+    compliance could not be shaped)."""
+    data = copy.deepcopy(UR5E)
+    data["calibration"]["compliances"] = ["c2", "c3"]
+    robot = robot_from_dict(data, "ur5e.toml")
+    plan = load_plan(EXAMPLES / "ur5e" / "plan.toml", robot)
+    truth = random_errors(robot, 1.0, np.random.default_rng(2))
+    text = simulate_log(robot, plan, truth, seed=2)
+    result = solve(robot, plan, check_log(parse_log(text, "run.csv"), plan, robot))
+    assert result.compliance is not None
+    assert result.compliance.identified == ("c2", "c3")
+    budget = result.budgets["joint"]
+    assert budget.bound_compensated is not None
+    assert 0 < budget.bound_compensated < 1.0  # mm
+    assert 0 < budget.bound < 1.0
 
 
 def test_a_wall_mounted_arm_shows_joint_1_its_torque():
