@@ -221,8 +221,12 @@ def solve(
     """Return the least-squares ``x`` over ``rows`` from ``x0`` (analytic Jacobian).
 
     ``free`` (k,) bool: the parameters to adjust (default all); the others keep ``x0``'s.
+    Each point's lengths and Jacobian are evaluated together: the solver asks for the
+    Jacobian at the point whose residual it has just accepted, so the frames are computed
+    once per point.
     """
     free = np.ones(len(x0), dtype=bool) if free is None else free
+    every = bool(free.all())
     q, length, session = data.q_rad[rows], data.length_mm[rows], data.session[rows]
 
     def full(xf: np.ndarray) -> np.ndarray:
@@ -230,11 +234,19 @@ def solve(
         x[free] = xf
         return x
 
+    at: dict[bytes, np.ndarray] = {}  # the Jacobian at the last point evaluated
+
     def fun(xf: np.ndarray) -> np.ndarray:
-        return lengths(base, layout, full(xf), q, session) - length
+        model, J = lengths_and_jacobian(base, layout, full(xf), q, session)
+        at.clear()
+        at[xf.tobytes()] = J if every else J[:, free]
+        return model - length
 
     def jac(xf: np.ndarray) -> np.ndarray:
-        return lengths_and_jacobian(base, layout, full(xf), q, session)[1][:, free]
+        J = at.pop(xf.tobytes(), None)  # handed out once: the solver scales it in place
+        return (
+            lengths_and_jacobian(base, layout, full(xf), q, session)[1][:, free] if J is None else J
+        )
 
     sol = least_squares(
         fun, x0[free], jac=jac, loss=loss, f_scale=f_scale, x_scale="jac", method="trf"
@@ -274,20 +286,46 @@ def final_solve(
     return second if cost(second) <= cost(first) * (1 + 1e-9) else first
 
 
+@dataclass(frozen=True)
+class Estimate:
+    """A fit at its estimate, evaluated once: the residual, ∂L/∂x, σ and the covariance."""
+
+    layout: Layout
+    x: np.ndarray
+    residual_mm: np.ndarray  # (N,) model − measured, every row
+    jacobian: np.ndarray  # (len(rows), k) ∂L/∂x over the rows fitted
+    sigma_mm: float  # the residual's σ over the rows fitted
+    cov: np.ndarray  # (k, k) σ²·(JᵀJ)⁺ over the directions the rows see
+    identified: np.ndarray  # (k,) bool
+
+
+def evaluate(base: Model, layout: Layout, x: np.ndarray, data: Data, rows: np.ndarray) -> Estimate:
+    """Return the fit at ``x`` over ``rows``: the covariance from R of a thin QR of ∂L/∂x.
+
+    R (k × k) has the Jacobian's singular values and right vectors: the SVD of the
+    covariance runs on k rows instead of N.
+    """
+    model, J = lengths_and_jacobian(base, layout, x, data.q_rad, data.session)
+    r = model - data.length_mm
+    sigma = float(np.sqrt(np.sum(r[rows] ** 2) / max(len(rows) - len(x), 1)))
+    J = J[rows]
+    R = np.linalg.qr(J, mode="r") if len(rows) > len(x) else J
+    cov, identified = covariance(np.asarray(R), sigma**2)
+    return Estimate(layout, x, r, J, sigma, cov, identified)
+
+
 def generalise(
     base: Model, layout: Layout, x: np.ndarray, data: Data, rows: np.ndarray
-) -> tuple[Layout, np.ndarray, tuple[tuple[str, str], ...]]:
+) -> tuple[Estimate, tuple[tuple[str, str], ...]]:
     """Drop the DH errors BIC does not keep (:mod:`~wirecal.solver.fit_select`) and refit.
 
-    Returns the layout, the estimate and why each DH error was dropped.
+    Returns the final fit evaluated at its estimate and why each DH error was dropped.
     """
-    r = residual(base, layout, x, data)[rows]
-    sigma = float(np.sqrt(np.sum(r**2) / max(len(rows) - len(x), 1)))
-    _, J = lengths_and_jacobian(base, layout, x, data.q_rad[rows], data.session[rows])
+    est = evaluate(base, layout, x, data, rows)
     dh = [k for k, n in enumerate(layout.geometry) if n not in P.TOOL_NAMES]
-    out = bic_eliminated(J, x, dh, sigma)
+    out = bic_eliminated(est.cov, x, dh, len(rows))
     if not out:
-        return layout, x, ()
+        return est, ()
     bar = np.sqrt(np.log(len(rows)))
     why = tuple(
         (
@@ -299,7 +337,8 @@ def generalise(
     )
     gone = {layout.names[k] for k, _ in out}
     kept = replace(layout, geometry=tuple(n for n in layout.geometry if n not in gone))
-    return kept, final_solve(base, kept, _carry(layout, x, kept), data, rows), why
+    x = final_solve(base, kept, _carry(layout, x, kept), data, rows)
+    return evaluate(base, kept, x, data, rows), why
 
 
 @dataclass(frozen=True)
@@ -363,15 +402,26 @@ def _with_sessions(
 def _settle_sessions(
     base: Model, layout: Layout, x: np.ndarray, data: Data, single_session: bool
 ) -> tuple[Pass, Data, tuple[int, ...], tuple[int, ...]]:
-    """Refit with the sessions found until they stand; return the pass, starts, ignored jumps."""
+    """Refit with the sessions found until they stand; return the pass, starts, ignored jumps.
+
+    A boundary may alternate between rows a few apart (each fit places it where the other
+    did not: simulated, rows 450 and 452 of 1000 in turn); once a set of sessions comes
+    back, the cycle stands and its fit of least robust σ is kept.
+    """
     starts: tuple[int, ...] = (0,)
+    passes: dict[tuple[int, ...], tuple[Pass, Data]] = {}
     for _ in range(MAX_SESSION_PASSES):
         ps = robust_pass(base, layout, x, data)
+        passes[starts] = (ps, data)
         found = _session_starts(ps, data)
         if single_session:
             return ps, data, starts, found[1:]
         if found == starts:
             return ps, data, starts, ()
+        if found in passes:
+            cycle = list(passes)[list(passes).index(found) :]
+            best = min(cycle, key=lambda s: passes[s][0].sigma_mm)
+            return *passes[best], best, ()
         starts = found
         layout, x, data = _with_sessions(ps, data, starts)
     raise WirecalError(
@@ -393,12 +443,14 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
     noise = max(data.floor_mm, ps.sigma_mm)  # a noisier table identifies less
     layout, x, dropped = choose(base, ps.layout, ps.x, data, rows, noise)
     x = final_solve(base, layout, x, data, rows)
-    layout, x, weak = generalise(base, layout, x, data, rows)
-    r = residual(base, layout, x, data)
-    _, J = lengths_and_jacobian(base, layout, x, data.q_rad[rows], data.session[rows])
-    dof = max(len(rows) - len(x), 1)
-    sigma = float(np.sqrt(np.sum(r[rows] ** 2) / dof))
-    cov, identified = covariance(J, sigma**2)
+    est, weak = generalise(base, layout, x, data, rows)
+    layout, x, r, sigma, identified = (
+        est.layout,
+        est.x,
+        est.residual_mm,
+        est.sigma_mm,
+        est.identified,
+    )
     if not identified.all():  # choose() keeps identifiable parameters only: a defect
         unseen = ", ".join(n for n, ok in zip(layout.names, identified, strict=True) if not ok)
         raise WirecalError(
@@ -413,14 +465,14 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
     return Core(
         layout=layout,
         x=x,
-        std=np.sqrt(np.clip(np.diag(cov), 0, None)),
+        std=np.sqrt(np.clip(np.diag(est.cov), 0, None)),
         starts=starts,
         session=data.session,
         inliers=ps.inliers,
         residual_mm=r,
         sigma_mm=sigma,
         dropped=dropped + weak,
-        identifiability=analyse_jacobian(_boundary_jacobian(J, layout), layout.names),
+        identifiability=analyse_jacobian(_boundary_jacobian(est.jacobian, layout), layout.names),
         ignored_jumps=ignored,
     )
 

@@ -464,6 +464,7 @@ def test_bic_elimination_is_the_refit_with_the_dropped_columns_fixed():
     """fit_select: z² of each drop and the estimates after it, against least squares solved
     again without the dropped columns (exact for a linear model)."""
     from wirecal.solver.fit_select import bic_eliminated
+    from wirecal.solver.identifiability import covariance
 
     rng = np.random.default_rng(4)
     n = 400
@@ -472,7 +473,7 @@ def test_bic_elimination_is_the_refit_with_the_dropped_columns_fixed():
     y = J @ truth + rng.normal(size=n)
     x = np.linalg.lstsq(J, y, rcond=None)[0]
     sigma = float(np.sqrt(np.sum((y - J @ x) ** 2) / (n - 6)))
-    out = bic_eliminated(J, x, [1, 2, 3, 4, 5], sigma)
+    out = bic_eliminated(covariance(J, sigma**2)[0], x, [1, 2, 3, 4, 5], n)
     assert {k for k, _ in out} == {1, 2, 4}  # the zeros; 0 is no candidate
     assert all(z < np.sqrt(np.log(n)) for _, z in out)
     # the |z| of the last drop, from a refit without the columns dropped before it
