@@ -36,6 +36,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from wirecal.solver import params as P
+from wirecal.solver.compliance import SIGMA_LIMIT_URAD_PER_NM
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit_holdout import (
     Holdout,
@@ -138,8 +139,17 @@ def candidates(base: Model) -> tuple[str, ...]:
 
 
 def point_model(robot: Robot) -> Model:
-    """Return the robot's nominal model with the wire leaving from a point (the anchor)."""
-    return Model(dh=robot.nominal.dh, tool_point=robot.nominal.tool_point)
+    """Return the robot's nominal model with the wire leaving from a point (the anchor).
+
+    With ``[calibration] compliances`` it carries the arm's masses and compliances (the
+    robot file's, else 0), so the fit can estimate c_j beside the geometry
+    (:func:`choose`); otherwise it is rigid.
+    """
+    nominal = robot.nominal
+    if not robot.compliances or nominal.masses is None:
+        return Model(dh=nominal.dh, tool_point=nominal.tool_point)
+    c = np.zeros(robot.n_joints) if nominal.compliance is None else nominal.compliance
+    return Model(nominal.dh, nominal.tool_point, masses=nominal.masses, compliance=c)
 
 
 def start(base: Model, layout: Layout, data: Data) -> np.ndarray:
@@ -165,12 +175,22 @@ def _carry(old: Layout, x: np.ndarray, new: Layout) -> np.ndarray:
 
 
 def choose(
-    base: Model, layout: Layout, x: np.ndarray, data: Data, rows: np.ndarray, sigma_mm: float
+    base: Model,
+    layout: Layout,
+    x: np.ndarray,
+    data: Data,
+    rows: np.ndarray,
+    sigma_mm: float,
+    compliances: tuple[str, ...] = (),
 ) -> tuple[Layout, np.ndarray, tuple[tuple[str, str], ...]]:
     """Choose the identifiable DH errors at ``x`` over ``rows`` (module docstring, step 2).
 
     ``layout`` may hold any geometry; the result holds the attachment and the chosen DH
     errors, with ``x`` carried over (a newly added parameter starts at 0).
+    ``compliances`` (c_j, ``base`` with the arm's masses) are tried after the DH errors,
+    each kept when it raises the rank and its σ stays below
+    :data:`~wirecal.solver.compliance.SIGMA_LIMIT_URAD_PER_NM` (and the others' below
+    theirs): a compliance whose torque changes too little over the rows is a θ_j offset.
 
     The columns are judged at the nominal DH geometry (``x``'s attachment, anchor, offsets
     and scale): which DH errors can be told apart is the arm's structure, and a DH error
@@ -179,15 +199,18 @@ def choose(
     dropped out (0: the axes parallel again), and the final fit ran along the exact
     degeneracy d₂ − d₃ (d₂ +2683 mm, d₃ −2683 mm).
     """
-    full = replace(layout, geometry=(*P.TOOL_NAMES, *candidates(base)))
+    full = replace(layout, geometry=(*P.TOOL_NAMES, *candidates(base), *compliances))
     xf = _carry(layout, x, full)
     g = len(full.geometry)
     nominal = xf.copy()
-    nominal[3:g] = 0.0  # the DH errors (the attachment, fitted, stays)
+    nominal[3:g] = 0.0  # the DH errors and compliances (the attachment, fitted, stays)
     _, J = lengths_and_jacobian(base, full, nominal, data.q_rad[rows], data.session[rows])
     order = [*range(3), *range(g, len(full.names)), *range(3, g)]  # required first
     limit = np.full(len(full.names), np.inf)  # attachment, anchor, offsets: what they are
-    limit[3:g] = POORLY_IDENTIFIED  # DH errors: deg or mm
+    limit[3:g] = [
+        SIGMA_LIMIT_URAD_PER_NM if n in compliances else POORLY_IDENTIFIED
+        for n in full.geometry[3:]
+    ]  # DH errors: deg or mm; compliances: µrad/(N·m)
     if layout.scale:
         limit[g + 3] = DEFAULT_SCALE_TOLERANCE_PPM
     sel = select_columns(
@@ -431,17 +454,28 @@ def _settle_sessions(
     )
 
 
-def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bool = False) -> Core:
-    """Fit the model to every row of ``data`` (module docstring, steps 1–4)."""
+def fit_core(
+    base: Model,
+    data: Data,
+    *,
+    scale: bool = False,
+    single_session: bool = False,
+    compliances: tuple[str, ...] = (),
+) -> Core:
+    """Fit the model to every row of ``data`` (module docstring, steps 1–4).
+
+    ``compliances``: the c_j to try beside the DH errors (:func:`choose`; ``base`` from
+    :func:`point_model` of a robot file that asks for them).
+    """
     n = len(data.length_mm)
     data = replace(data, session=np.zeros(n, dtype=int))
     layout = Layout(P.TOOL_NAMES, base.n_joints, 1, scale)
     x = start(base, layout, data)
-    layout, x, _ = choose(base, layout, x, data, np.arange(n), data.floor_mm)
+    layout, x, _ = choose(base, layout, x, data, np.arange(n), data.floor_mm, compliances)
     ps, data, starts, ignored = _settle_sessions(base, layout, x, data, single_session)
     rows = np.flatnonzero(ps.inliers)
     noise = max(data.floor_mm, ps.sigma_mm)  # a noisier table identifies less
-    layout, x, dropped = choose(base, ps.layout, ps.x, data, rows, noise)
+    layout, x, dropped = choose(base, ps.layout, ps.x, data, rows, noise, compliances)
     x = final_solve(base, layout, x, data, rows)
     est, weak = generalise(base, layout, x, data, rows)
     layout, x, r, sigma, identified = (
