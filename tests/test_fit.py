@@ -295,7 +295,7 @@ def test_a_fit_whose_parameters_are_not_identified_is_refused(monkeypatch):
     robot = _robot("viper_s650")
     syn = synthetic_table(robot, 100, seed=1, sessions=1, snags=0, typos=0)
 
-    def degenerate(base, layout, x, data, rows, sigma_mm):
+    def degenerate(base, layout, x, data, rows, sigma_mm, compliances=()):
         both = replace(layout, geometry=(*layout.geometry[:3], "d2", "d3"))
         return both, F._carry(layout, x, both), ()
 
