@@ -20,6 +20,10 @@ Three sections, medians over the seeds:
    shift of an estimate between the two in σ (before issue 31, 20,000 rows took 6.4 GB and
    100,000 ended in a 74.5 GiB allocation: an N × N matrix).
 
+4. **RobotCali** — with ``WIRECAL_ROBOTCALI_DATA`` the path of ``RobotCali-new.xlsx``
+   (github.com/Lizhibing1490183152/RobotCali, no licence: read where it is, never copied
+   into the repository): ``--holdout half`` and ``random:0.2`` before and after BIC.
+
     python bench/bench_fit.py [--seeds N] [--skip-rows | --rows-only] [--before CHECKOUT]
         [--runs R]
 """
@@ -46,6 +50,7 @@ from wirecal.solver import fit  # noqa: E402
 from wirecal.solver.fit_gate import fit_budget  # noqa: E402
 from wirecal.solver.fit_result import FitOptions, fit_table  # noqa: E402
 from wirecal.solver.fit_synth import synthetic_table  # noqa: E402
+from wirecal.solver.formats.cable_table import read_cable_table  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 from wirecal.solver.robot import Robot  # noqa: E402
 
@@ -189,6 +194,32 @@ def many_rows(before: Path | None, runs: int) -> None:
             print(f"{'':>8}  CPU now/before {cpu[0] / cpu[1]:.2f}; largest shift {shift:.2g} σ")
 
 
+ROBOTCALI_MAP = "j1=q1,j2=q2,j3=q3,j4=q4,j5=q5,j6=q6,length=L,x=x,y=y,z=z"
+
+
+def robotcali(path: Path) -> None:
+    """Section 4: the public RobotCali table (ABB IRB 120), before and after BIC."""
+    robot = load_robot(EXAMPLES / "abb_irb120" / "robot.toml")
+    table = read_cable_table(path, ROBOTCALI_MAP)
+    print(f"\n4. RobotCali ({path.name}: {len(table.length_mm)} rows, ABB IRB 120)")
+    print(
+        f"{'holdout':<14}{'choice':<8}{'held-out mm':>12}{'floor':>8}{'ratio':>7}"
+        f"{'DH kept':>9}{'budget mm':>11}"
+    )
+    for scheme in ("half", "random:0.2"):
+        for label in ("before", "after"):
+            patch = _every_identified if label == "before" else fit.generalise
+            with mock.patch.object(fit, "generalise", patch):
+                r = fit_table(robot, table, FitOptions(holdout=scheme))
+            ho = r.main.holdout
+            kept = sum(not n.startswith("tool_") for n in r.main.core.layout.geometry)
+            budget = fit_budget(r, r.main).total
+            print(
+                f"{scheme:<14}{label:<8}{ho.rms_mm:>12.4f}{ho.floor_mm:>8.4f}"
+                f"{ho.ratio:>7.2f}{kept:>9}{budget:>11.3f}"
+            )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=3)
@@ -197,6 +228,9 @@ def main() -> None:
     ap.add_argument("--before", type=Path, help="a checkout of the code before (section 3)")
     ap.add_argument("--runs", type=int, default=1, help="runs per tree in section 3")
     args = ap.parse_args()
+    cali = os.environ.get("WIRECAL_ROBOTCALI_DATA")
+    if cali:
+        robotcali(Path(cali))
     if not args.rows_only:
         choice(args.seeds)
         holdout(args.seeds)
