@@ -429,7 +429,8 @@ def _settle_sessions(
 
     A boundary may alternate between rows a few apart (each fit places it where the other
     did not: simulated, rows 450 and 452 of 1000 in turn); once a set of sessions comes
-    back, the cycle stands and its fit of least robust σ is kept.
+    back, the cycle stands and its fit with the fewest outliers (then the least robust σ) is
+    kept: rows given the wrong session's offset are outliers of their fit.
     """
     starts: tuple[int, ...] = (0,)
     passes: dict[tuple[int, ...], tuple[Pass, Data]] = {}
@@ -443,7 +444,7 @@ def _settle_sessions(
             return ps, data, starts, ()
         if found in passes:
             cycle = list(passes)[list(passes).index(found) :]
-            best = min(cycle, key=lambda s: passes[s][0].sigma_mm)
+            best = min(cycle, key=lambda s: (np.sum(~passes[s][0].inliers), passes[s][0].sigma_mm))
             return *passes[best], best, ()
         starts = found
         layout, x, data = _with_sessions(ps, data, starts)
