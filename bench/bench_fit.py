@@ -13,11 +13,19 @@ Three sections, medians over the seeds:
    and *after* (BIC backward elimination). Goal: after ≤ 1.3 floors.
 2. **Held-out, refined joints** — random 20 %, 5 repeats; the same with joints refined from
    x, y, z; sessions found within ±2 rows; the time of one fit (one BLAS thread).
-3. **Rows** — one fit (``--holdout none``) of 10,000 and 100,000 rows: seconds and the
-   process's peak memory (before issue 31, 20,000 rows took 6.4 GB and 100,000 ended in a
-   74.5 GiB allocation: an N × N matrix).
+3. **Rows** — one fit (``--holdout none``) of 10,000 and 100,000 rows, each in its own
+   process: CPU and wall seconds of the fit and the process's peak memory; with
+   ``--before CHECKOUT`` (for example ``git archive main | tar -x -C ../before``) the same
+   fit by the code there, interleaved run by run, the ratio of CPU times and the largest
+   shift of an estimate between the two in σ (before issue 31, 20,000 rows took 6.4 GB and
+   100,000 ended in a 74.5 GiB allocation: an N × N matrix).
 
-    python bench/bench_fit.py [--seeds N] [--skip-rows]
+4. **RobotCali** — with ``WIRECAL_ROBOTCALI_DATA`` the path of ``RobotCali-new.xlsx``
+   (github.com/Lizhibing1490183152/RobotCali, no licence: read where it is, never copied
+   into the repository): ``--holdout half`` and ``random:0.2`` before and after BIC.
+
+    python bench/bench_fit.py [--seeds N] [--skip-rows | --rows-only] [--before CHECKOUT]
+        [--runs R]
 """
 
 from __future__ import annotations
@@ -28,7 +36,9 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = "1"  # one core, before numpy loads
 
 import argparse  # noqa: E402
-import resource  # noqa: E402
+import json  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
 import time  # noqa: E402
 from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -40,10 +50,12 @@ from wirecal.solver import fit  # noqa: E402
 from wirecal.solver.fit_gate import fit_budget  # noqa: E402
 from wirecal.solver.fit_result import FitOptions, fit_table  # noqa: E402
 from wirecal.solver.fit_synth import synthetic_table  # noqa: E402
+from wirecal.solver.formats.cable_table import read_cable_table  # noqa: E402
 from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 from wirecal.solver.robot import Robot  # noqa: E402
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+NOW = Path(__file__).resolve().parents[1]
+EXAMPLES = NOW / "examples"
 ARMS = ("viper_s650", "abb_irb120", "ur5e")
 SIZES = (100, 300, 1000, 2000)
 NARROW_DEG = 20.0
@@ -66,6 +78,11 @@ def _half(robot: Robot, table) -> tuple[float, int, float]:
     return r.main.holdout.ratio, kept, fit_budget(r, r.main).total
 
 
+def _every_identified(base, layout, x, data, rows):
+    """The choice up to issue 31: every identified DH error kept (no BIC)."""
+    return fit.evaluate(base, layout, x, data, rows), ()
+
+
 def choice(seeds: int) -> None:
     """Section 1: the parameter choice before and after, first half → second half."""
     print("1. parameter choice: first half -> second half (medians)")
@@ -80,7 +97,7 @@ def choice(seeds: int) -> None:
             rows = []
             for seed in range(seeds):
                 table = synthetic_table(source, n, seed=seed).table
-                with mock.patch.object(fit, "generalise", lambda b, lay, x, d, r: (lay, x, ())):
+                with mock.patch.object(fit, "generalise", _every_identified):
                     before = _half(robot, table)
                 rows.append((*before, *_half(robot, table)))
             m = np.median(np.array(rows, dtype=float), axis=0)
@@ -122,28 +139,103 @@ def holdout(seeds: int) -> None:
             )
 
 
-def many_rows() -> None:
-    """Section 3: seconds and peak memory of one fit of 10,000 and 100,000 rows."""
-    print("\n3. rows: one fit, --holdout none (viper_s650, peak memory of the process)")
-    robot = load_robot(EXAMPLES / "viper_s650" / "robot.toml")
+FIT_CHILD = """
+import json, os, resource, sys, time
+for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[var] = "1"
+from pathlib import Path
+from wirecal.solver.fit_result import FitOptions, fit_table
+from wirecal.solver.fit_synth import synthetic_table
+from wirecal.solver.formats.robot_file import load_robot
+robot = load_robot(Path(sys.argv[1]))
+table = synthetic_table(robot, int(sys.argv[2]), seed=0).table
+cpu, wall = time.process_time(), time.perf_counter()
+core = fit_table(robot, table, FitOptions(holdout="none")).main.core
+cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
+per = core.layout.boundary_per_internal
+print(json.dumps({"cpu": cpu, "wall": wall,
+    "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    "x": dict(zip(core.layout.names, (core.x * per).tolist())),
+    "std": dict(zip(core.layout.names, (core.std * per).tolist()))}))
+"""
+
+
+def _fit_in(tree: Path, rows: int) -> dict:
+    """Return the figures of one fit of ``rows`` rows by the code in ``tree`` (a process)."""
+    robot = str(tree / "examples" / "viper_s650" / "robot.toml")
+    cmd = [sys.executable, "-P", "-c", FIT_CHILD, robot, str(rows)]
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    return json.loads(subprocess.run(cmd, check=True, capture_output=True, env=env).stdout)
+
+
+def _shift_sigma(now: dict, before: dict) -> float:
+    """Return the largest |x_now − x_before| / σ over the parameters both fits hold."""
+    common = now["x"].keys() & before["x"].keys()
+    return max(abs(now["x"][k] - before["x"][k]) / now["std"][k] for k in common)
+
+
+def many_rows(before: Path | None, runs: int) -> None:
+    """Section 3: CPU, wall and peak memory of one fit of 10,000 and 100,000 rows."""
+    print("\n3. rows: one fit, --holdout none (viper_s650; medians of each process's figures)")
+    trees = {"now": NOW} if before is None else {"before": before, "now": NOW}
+    print(f"{'rows':>8}{'code':>8}{'CPU s':>8}{'wall s':>8}{'peak MB':>9}{'kept':>6}")
     for n in (10_000, 100_000):
-        table = synthetic_table(robot, n, seed=0).table
-        t0 = time.perf_counter()
-        fit_table(robot, table, FitOptions(holdout="none"))
-        seconds = time.perf_counter() - t0
-        peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        print(f"{n:>8} rows {seconds:7.1f} s  peak {peak_mb:6.0f} MB")
+        got: dict[str, list[dict]] = {name: [] for name in trees}
+        for _ in range(runs):  # interleaved: a change of the machine's load touches both
+            for name, tree in trees.items():
+                got[name].append(_fit_in(tree, n))
+        for name, figs in got.items():
+            med = [np.median([f[key] for f in figs]) for key in ("cpu", "wall", "peak_mb")]
+            kept = len(figs[0]["x"])
+            print(f"{n:>8}{name:>8}{med[0]:>8.2f}{med[1]:>8.2f}{med[2]:>9.0f}{kept:>6}")
+        if before is not None:
+            cpu = [np.median([f["cpu"] for f in got[t]]) for t in ("now", "before")]
+            shift = _shift_sigma(got["now"][0], got["before"][0])
+            print(f"{'':>8}  CPU now/before {cpu[0] / cpu[1]:.2f}; largest shift {shift:.2g} σ")
+
+
+ROBOTCALI_MAP = "j1=q1,j2=q2,j3=q3,j4=q4,j5=q5,j6=q6,length=L,x=x,y=y,z=z"
+
+
+def robotcali(path: Path) -> None:
+    """Section 4: the public RobotCali table (ABB IRB 120), before and after BIC."""
+    robot = load_robot(EXAMPLES / "abb_irb120" / "robot.toml")
+    table = read_cable_table(path, ROBOTCALI_MAP)
+    print(f"\n4. RobotCali ({path.name}: {len(table.length_mm)} rows, ABB IRB 120)")
+    print(
+        f"{'holdout':<14}{'choice':<8}{'held-out mm':>12}{'floor':>8}{'ratio':>7}"
+        f"{'DH kept':>9}{'budget mm':>11}"
+    )
+    for scheme in ("half", "random:0.2"):
+        for label in ("before", "after"):
+            patch = _every_identified if label == "before" else fit.generalise
+            with mock.patch.object(fit, "generalise", patch):
+                r = fit_table(robot, table, FitOptions(holdout=scheme))
+            ho = r.main.holdout
+            kept = sum(not n.startswith("tool_") for n in r.main.core.layout.geometry)
+            budget = fit_budget(r, r.main).total
+            print(
+                f"{scheme:<14}{label:<8}{ho.rms_mm:>12.4f}{ho.floor_mm:>8.4f}"
+                f"{ho.ratio:>7.2f}{kept:>9}{budget:>11.3f}"
+            )
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--skip-rows", action="store_true", help="leave out section 3")
+    ap.add_argument("--rows-only", action="store_true", help="section 3 only")
+    ap.add_argument("--before", type=Path, help="a checkout of the code before (section 3)")
+    ap.add_argument("--runs", type=int, default=1, help="runs per tree in section 3")
     args = ap.parse_args()
-    choice(args.seeds)
-    holdout(args.seeds)
+    cali = os.environ.get("WIRECAL_ROBOTCALI_DATA")
+    if cali:
+        robotcali(Path(cali))
+    if not args.rows_only:
+        choice(args.seeds)
+        holdout(args.seeds)
     if not args.skip_rows:
-        many_rows()
+        many_rows(args.before, args.runs)
 
 
 if __name__ == "__main__":

@@ -36,6 +36,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from wirecal.solver import params as P
+from wirecal.solver.compliance import SIGMA_LIMIT_URAD_PER_NM
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit_holdout import (
     Holdout,
@@ -138,8 +139,17 @@ def candidates(base: Model) -> tuple[str, ...]:
 
 
 def point_model(robot: Robot) -> Model:
-    """Return the robot's nominal model with the wire leaving from a point (the anchor)."""
-    return Model(dh=robot.nominal.dh, tool_point=robot.nominal.tool_point)
+    """Return the robot's nominal model with the wire leaving from a point (the anchor).
+
+    With ``[calibration] compliances`` it carries the arm's masses and compliances (the
+    robot file's, else 0), so the fit can estimate c_j beside the geometry
+    (:func:`choose`); otherwise it is rigid.
+    """
+    nominal = robot.nominal
+    if not robot.compliances or nominal.masses is None:
+        return Model(dh=nominal.dh, tool_point=nominal.tool_point)
+    c = np.zeros(robot.n_joints) if nominal.compliance is None else nominal.compliance
+    return Model(nominal.dh, nominal.tool_point, masses=nominal.masses, compliance=c)
 
 
 def start(base: Model, layout: Layout, data: Data) -> np.ndarray:
@@ -165,12 +175,22 @@ def _carry(old: Layout, x: np.ndarray, new: Layout) -> np.ndarray:
 
 
 def choose(
-    base: Model, layout: Layout, x: np.ndarray, data: Data, rows: np.ndarray, sigma_mm: float
+    base: Model,
+    layout: Layout,
+    x: np.ndarray,
+    data: Data,
+    rows: np.ndarray,
+    sigma_mm: float,
+    compliances: tuple[str, ...] = (),
 ) -> tuple[Layout, np.ndarray, tuple[tuple[str, str], ...]]:
     """Choose the identifiable DH errors at ``x`` over ``rows`` (module docstring, step 2).
 
     ``layout`` may hold any geometry; the result holds the attachment and the chosen DH
     errors, with ``x`` carried over (a newly added parameter starts at 0).
+    ``compliances`` (c_j, ``base`` with the arm's masses) are tried after the DH errors,
+    each kept when it raises the rank and its σ stays below
+    :data:`~wirecal.solver.compliance.SIGMA_LIMIT_URAD_PER_NM` (and the others' below
+    theirs): a compliance whose torque changes too little over the rows is a θ_j offset.
 
     The columns are judged at the nominal DH geometry (``x``'s attachment, anchor, offsets
     and scale): which DH errors can be told apart is the arm's structure, and a DH error
@@ -179,15 +199,18 @@ def choose(
     dropped out (0: the axes parallel again), and the final fit ran along the exact
     degeneracy d₂ − d₃ (d₂ +2683 mm, d₃ −2683 mm).
     """
-    full = replace(layout, geometry=(*P.TOOL_NAMES, *candidates(base)))
+    full = replace(layout, geometry=(*P.TOOL_NAMES, *candidates(base), *compliances))
     xf = _carry(layout, x, full)
     g = len(full.geometry)
     nominal = xf.copy()
-    nominal[3:g] = 0.0  # the DH errors (the attachment, fitted, stays)
+    nominal[3:g] = 0.0  # the DH errors and compliances (the attachment, fitted, stays)
     _, J = lengths_and_jacobian(base, full, nominal, data.q_rad[rows], data.session[rows])
     order = [*range(3), *range(g, len(full.names)), *range(3, g)]  # required first
     limit = np.full(len(full.names), np.inf)  # attachment, anchor, offsets: what they are
-    limit[3:g] = POORLY_IDENTIFIED  # DH errors: deg or mm
+    limit[3:g] = [
+        SIGMA_LIMIT_URAD_PER_NM if n in compliances else POORLY_IDENTIFIED
+        for n in full.geometry[3:]
+    ]  # DH errors: deg or mm; compliances: µrad/(N·m)
     if layout.scale:
         limit[g + 3] = DEFAULT_SCALE_TOLERANCE_PPM
     sel = select_columns(
@@ -221,8 +244,12 @@ def solve(
     """Return the least-squares ``x`` over ``rows`` from ``x0`` (analytic Jacobian).
 
     ``free`` (k,) bool: the parameters to adjust (default all); the others keep ``x0``'s.
+    Each point's lengths and Jacobian are evaluated together: the solver asks for the
+    Jacobian at the point whose residual it has just accepted, so the frames are computed
+    once per point.
     """
     free = np.ones(len(x0), dtype=bool) if free is None else free
+    every = bool(free.all())
     q, length, session = data.q_rad[rows], data.length_mm[rows], data.session[rows]
 
     def full(xf: np.ndarray) -> np.ndarray:
@@ -230,11 +257,19 @@ def solve(
         x[free] = xf
         return x
 
+    at: dict[bytes, np.ndarray] = {}  # the Jacobian at the last point evaluated
+
     def fun(xf: np.ndarray) -> np.ndarray:
-        return lengths(base, layout, full(xf), q, session) - length
+        model, J = lengths_and_jacobian(base, layout, full(xf), q, session)
+        at.clear()
+        at[xf.tobytes()] = J if every else J[:, free]
+        return model - length
 
     def jac(xf: np.ndarray) -> np.ndarray:
-        return lengths_and_jacobian(base, layout, full(xf), q, session)[1][:, free]
+        J = at.pop(xf.tobytes(), None)  # handed out once: the solver scales it in place
+        return (
+            lengths_and_jacobian(base, layout, full(xf), q, session)[1][:, free] if J is None else J
+        )
 
     sol = least_squares(
         fun, x0[free], jac=jac, loss=loss, f_scale=f_scale, x_scale="jac", method="trf"
@@ -274,20 +309,46 @@ def final_solve(
     return second if cost(second) <= cost(first) * (1 + 1e-9) else first
 
 
+@dataclass(frozen=True)
+class Estimate:
+    """A fit at its estimate, evaluated once: the residual, ∂L/∂x, σ and the covariance."""
+
+    layout: Layout
+    x: np.ndarray
+    residual_mm: np.ndarray  # (N,) model − measured, every row
+    jacobian: np.ndarray  # (len(rows), k) ∂L/∂x over the rows fitted
+    sigma_mm: float  # the residual's σ over the rows fitted
+    cov: np.ndarray  # (k, k) σ²·(JᵀJ)⁺ over the directions the rows see
+    identified: np.ndarray  # (k,) bool
+
+
+def evaluate(base: Model, layout: Layout, x: np.ndarray, data: Data, rows: np.ndarray) -> Estimate:
+    """Return the fit at ``x`` over ``rows``: the covariance from R of a thin QR of ∂L/∂x.
+
+    R (k × k) has the Jacobian's singular values and right vectors: the SVD of the
+    covariance runs on k rows instead of N.
+    """
+    model, J = lengths_and_jacobian(base, layout, x, data.q_rad, data.session)
+    r = model - data.length_mm
+    sigma = float(np.sqrt(np.sum(r[rows] ** 2) / max(len(rows) - len(x), 1)))
+    J = J[rows]
+    R = np.linalg.qr(J, mode="r") if len(rows) > len(x) else J
+    cov, identified = covariance(np.asarray(R), sigma**2)
+    return Estimate(layout, x, r, J, sigma, cov, identified)
+
+
 def generalise(
     base: Model, layout: Layout, x: np.ndarray, data: Data, rows: np.ndarray
-) -> tuple[Layout, np.ndarray, tuple[tuple[str, str], ...]]:
+) -> tuple[Estimate, tuple[tuple[str, str], ...]]:
     """Drop the DH errors BIC does not keep (:mod:`~wirecal.solver.fit_select`) and refit.
 
-    Returns the layout, the estimate and why each DH error was dropped.
+    Returns the final fit evaluated at its estimate and why each DH error was dropped.
     """
-    r = residual(base, layout, x, data)[rows]
-    sigma = float(np.sqrt(np.sum(r**2) / max(len(rows) - len(x), 1)))
-    _, J = lengths_and_jacobian(base, layout, x, data.q_rad[rows], data.session[rows])
+    est = evaluate(base, layout, x, data, rows)
     dh = [k for k, n in enumerate(layout.geometry) if n not in P.TOOL_NAMES]
-    out = bic_eliminated(J, x, dh, sigma)
+    out = bic_eliminated(est.cov, x, dh, len(rows))
     if not out:
-        return layout, x, ()
+        return est, ()
     bar = np.sqrt(np.log(len(rows)))
     why = tuple(
         (
@@ -299,7 +360,8 @@ def generalise(
     )
     gone = {layout.names[k] for k, _ in out}
     kept = replace(layout, geometry=tuple(n for n in layout.geometry if n not in gone))
-    return kept, final_solve(base, kept, _carry(layout, x, kept), data, rows), why
+    x = final_solve(base, kept, _carry(layout, x, kept), data, rows)
+    return evaluate(base, kept, x, data, rows), why
 
 
 @dataclass(frozen=True)
@@ -363,15 +425,27 @@ def _with_sessions(
 def _settle_sessions(
     base: Model, layout: Layout, x: np.ndarray, data: Data, single_session: bool
 ) -> tuple[Pass, Data, tuple[int, ...], tuple[int, ...]]:
-    """Refit with the sessions found until they stand; return the pass, starts, ignored jumps."""
+    """Refit with the sessions found until they stand; return the pass, starts, ignored jumps.
+
+    A boundary may alternate between rows a few apart (each fit places it where the other
+    did not: simulated, rows 450 and 452 of 1000 in turn); once a set of sessions comes
+    back, the cycle stands and its fit with the fewest outliers (then the least robust σ) is
+    kept: rows given the wrong session's offset are outliers of their fit.
+    """
     starts: tuple[int, ...] = (0,)
+    passes: dict[tuple[int, ...], tuple[Pass, Data]] = {}
     for _ in range(MAX_SESSION_PASSES):
         ps = robust_pass(base, layout, x, data)
+        passes[starts] = (ps, data)
         found = _session_starts(ps, data)
         if single_session:
             return ps, data, starts, found[1:]
         if found == starts:
             return ps, data, starts, ()
+        if found in passes:
+            cycle = list(passes)[list(passes).index(found) :]
+            best = min(cycle, key=lambda s: (np.sum(~passes[s][0].inliers), passes[s][0].sigma_mm))
+            return *passes[best], best, ()
         starts = found
         layout, x, data = _with_sessions(ps, data, starts)
     raise WirecalError(
@@ -381,24 +455,37 @@ def _settle_sessions(
     )
 
 
-def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bool = False) -> Core:
-    """Fit the model to every row of ``data`` (module docstring, steps 1–4)."""
+def fit_core(
+    base: Model,
+    data: Data,
+    *,
+    scale: bool = False,
+    single_session: bool = False,
+    compliances: tuple[str, ...] = (),
+) -> Core:
+    """Fit the model to every row of ``data`` (module docstring, steps 1–4).
+
+    ``compliances``: the c_j to try beside the DH errors (:func:`choose`; ``base`` from
+    :func:`point_model` of a robot file that asks for them).
+    """
     n = len(data.length_mm)
     data = replace(data, session=np.zeros(n, dtype=int))
     layout = Layout(P.TOOL_NAMES, base.n_joints, 1, scale)
     x = start(base, layout, data)
-    layout, x, _ = choose(base, layout, x, data, np.arange(n), data.floor_mm)
+    layout, x, _ = choose(base, layout, x, data, np.arange(n), data.floor_mm, compliances)
     ps, data, starts, ignored = _settle_sessions(base, layout, x, data, single_session)
     rows = np.flatnonzero(ps.inliers)
     noise = max(data.floor_mm, ps.sigma_mm)  # a noisier table identifies less
-    layout, x, dropped = choose(base, ps.layout, ps.x, data, rows, noise)
+    layout, x, dropped = choose(base, ps.layout, ps.x, data, rows, noise, compliances)
     x = final_solve(base, layout, x, data, rows)
-    layout, x, weak = generalise(base, layout, x, data, rows)
-    r = residual(base, layout, x, data)
-    _, J = lengths_and_jacobian(base, layout, x, data.q_rad[rows], data.session[rows])
-    dof = max(len(rows) - len(x), 1)
-    sigma = float(np.sqrt(np.sum(r[rows] ** 2) / dof))
-    cov, identified = covariance(J, sigma**2)
+    est, weak = generalise(base, layout, x, data, rows)
+    layout, x, r, sigma, identified = (
+        est.layout,
+        est.x,
+        est.residual_mm,
+        est.sigma_mm,
+        est.identified,
+    )
     if not identified.all():  # choose() keeps identifiable parameters only: a defect
         unseen = ", ".join(n for n, ok in zip(layout.names, identified, strict=True) if not ok)
         raise WirecalError(
@@ -413,14 +500,14 @@ def fit_core(base: Model, data: Data, *, scale: bool = False, single_session: bo
     return Core(
         layout=layout,
         x=x,
-        std=np.sqrt(np.clip(np.diag(cov), 0, None)),
+        std=np.sqrt(np.clip(np.diag(est.cov), 0, None)),
         starts=starts,
         session=data.session,
         inliers=ps.inliers,
         residual_mm=r,
         sigma_mm=sigma,
         dropped=dropped + weak,
-        identifiability=analyse_jacobian(_boundary_jacobian(J, layout), layout.names),
+        identifiability=analyse_jacobian(_boundary_jacobian(est.jacobian, layout), layout.names),
         ignored_jumps=ignored,
     )
 

@@ -25,8 +25,8 @@ import numpy as np
 from wirecal.solver import params as P
 from wirecal.solver.kinematics import (
     Model,
-    joint_jacobian,
-    tool_jacobian,
+    frames,
+    tool_gradient,
     tool_position,
     with_errors,
 )
@@ -88,13 +88,44 @@ def model_of(base: Model, layout: Layout, x: np.ndarray) -> Model:
     return with_errors(base, layout.geometry, layout.split(x)[0])
 
 
+CHUNK_ROWS = 8192
+"""Rows evaluated together: a chunk's frames stay in the processor's cache, which halves
+the time of the frames at 100,000 rows against one batch of every row."""
+
+
+def _chunks(n_rows: int) -> list[slice]:
+    """Return the slices of ``n_rows`` rows, :data:`CHUNK_ROWS` at a time."""
+    return [slice(i, i + CHUNK_ROWS) for i in range(0, n_rows, CHUNK_ROWS)]
+
+
 def lengths(
     base: Model, layout: Layout, x: np.ndarray, q_rad: np.ndarray, session: np.ndarray
 ) -> np.ndarray:
     """Return the model's lengths L (N,) in mm, without the Jacobian (module docstring)."""
     _, anchor, kappa, offsets = layout.split(x)
-    p = tool_position(model_of(base, layout, x), q_rad)
+    model = model_of(base, layout, x)
+    p = np.concatenate([tool_position(model, q_rad[c]) for c in _chunks(len(q_rad))])
     return (1 + kappa) * np.linalg.norm(p - anchor, axis=1) + offsets[session]
+
+
+def _along_wire(
+    model: Model, q_rad: np.ndarray, anchor: np.ndarray, names: tuple[str, ...]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return ‖p − a‖ (N,), the wire's direction u (N, 3) and uᵀ·∂p/∂e (N, m).
+
+    Row chunk by row chunk (:data:`CHUNK_ROWS`), the derivatives along the wire from
+    :func:`~wirecal.solver.kinematics.tool_gradient` (no (N, 3, m) Jacobian).
+    """
+    dist, u = np.empty(len(q_rad)), np.empty((len(q_rad), 3))
+    along = np.empty((len(q_rad), len(names)))
+    for c in _chunks(len(q_rad)):
+        f = frames(model, q_rad[c])
+        p = tool_position(model, q_rad[c], f)
+        span = p - anchor
+        dist[c] = np.linalg.norm(span, axis=1)
+        u[c] = span / dist[c, None]
+        along[c] = tool_gradient(model, f, p, u[c], names)
+    return dist, u, along
 
 
 def lengths_and_jacobian(
@@ -102,13 +133,10 @@ def lengths_and_jacobian(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Return the model's lengths L (N,) and ∂L/∂x (N, k), internal units (module docstring)."""
     _, anchor, kappa, offsets = layout.split(x)
-    p, Jp = tool_jacobian(model_of(base, layout, x), q_rad, layout.geometry)
-    span = p - anchor
-    dist = np.linalg.norm(span, axis=1)
-    u = span / dist[:, None]
+    dist, u, along = _along_wire(model_of(base, layout, x), q_rad, anchor, layout.geometry)
     J = np.zeros((len(q_rad), len(layout.names)))
     g = len(layout.geometry)
-    J[:, :g] = (1 + kappa) * np.einsum("nc,ncm->nm", u, Jp)
+    J[:, :g] = (1 + kappa) * along
     J[:, g : g + 3] = -(1 + kappa) * u
     if layout.scale:
         J[:, g + 3] = dist
@@ -122,10 +150,8 @@ def length_joint_gradient(
 ) -> np.ndarray:
     """Return ∂L/∂q (N, n) in mm/rad: how a joint's error moves the modelled length."""
     _, anchor, kappa, _ = layout.split(x)
-    p, Jq = joint_jacobian(model_of(base, layout, x), q_rad)
-    span = p - anchor
-    u = span / np.linalg.norm(span, axis=1)[:, None]
-    return (1 + kappa) * np.einsum("nc,ncm->nm", u, Jq)
+    joints = tuple(f"th{i + 1}" for i in range(base.n_joints))  # ∂p/∂q_j = ∂p/∂θ_j
+    return (1 + kappa) * _along_wire(model_of(base, layout, x), q_rad, anchor, joints)[2]
 
 
 def quantisation_floor(

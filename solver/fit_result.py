@@ -104,8 +104,20 @@ def _data(
     return replace(data, floor_mm=nominal_floor(base, data, *res))
 
 
-def _run(base: Model, data: Data, options: FitOptions, res: tuple[float, float]) -> Run:
-    core = fit_core(base, data, scale=options.scale, single_session=options.single_session)
+def _run(
+    base: Model,
+    data: Data,
+    options: FitOptions,
+    res: tuple[float, float],
+    compliances: tuple[str, ...],
+) -> Run:
+    core = fit_core(
+        base,
+        data,
+        scale=options.scale,
+        single_session=options.single_session,
+        compliances=compliances,
+    )
     ho = holdout(
         base,
         core,
@@ -140,7 +152,8 @@ def fit_table(robot: Robot, table: CableTable, options: FitOptions | None = None
     xyz = None
     if table.xyz_mm is not None and table.xyz_resolution_mm is not None:
         xyz = check_xyz(base, table.q_deg, table.xyz_mm, res[0], table.xyz_resolution_mm)
-    main = _run(base, _data(base, table.q_deg, table, res, xyz), options, res)
+    asked = robot.compliances if base.masses is not None else ()  # point_model's rule
+    main = _run(base, _data(base, table.q_deg, table, res, xyz), options, res, asked)
     _refuse_ignored_jumps(table, main.core, options)
     refined = None
     if options.refine_joints:
@@ -149,7 +162,7 @@ def fit_table(robot: Robot, table: CableTable, options: FitOptions | None = None
         q, cov = refine_joints(
             base, xyz, table.q_deg, table.xyz_mm, res[0], table.xyz_resolution_mm
         )
-        refined = _run(base, _data(base, q, table, res, xyz, cov), options, res)
+        refined = _run(base, _data(base, q, table, res, xyz, cov), options, res, asked)
     return FitResult(robot, table, options, res, main, xyz, refined)
 
 

@@ -23,20 +23,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from wirecal.solver.identifiability import covariance
-
 
 def bic_eliminated(
-    J: np.ndarray, x: np.ndarray, candidates: list[int], sigma_mm: float
+    cov: np.ndarray, x: np.ndarray, candidates: list[int], n_rows: int
 ) -> list[tuple[int, float]]:
     """Return (column, |z| when dropped) of each candidate BIC drops, in order (docstring).
 
-    ``J`` (N, m): ∂L/∂x at the estimate ``x`` (m,) over the rows fitted; ``candidates``:
-    the columns that may be dropped (the DH errors); ``sigma_mm``: the residual's σ.
+    ``cov`` (m, m): σ²·(JᵀJ)⁻¹ of the estimate ``x`` (m,) over the ``n_rows`` rows fitted;
+    ``candidates``: the columns that may be dropped (the DH errors).
     """
-    cov = covariance(J, sigma_mm**2)[0]
+    cov = np.array(cov, dtype=float)
     x = np.array(x, dtype=float)
-    penalty = np.log(len(J))
+    penalty = np.log(n_rows)
     left = list(candidates)
     dropped: list[tuple[int, float]] = []
     while left:

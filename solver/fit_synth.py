@@ -89,14 +89,24 @@ def synthetic_table(
     joint_resolution_deg: float = 0.1,
     length_resolution_mm: float = 0.01,
     noise_mm: float = READING_NOISE_MM,
+    compliance_urad_per_nm: np.ndarray | None = None,
 ) -> Synthetic:
-    """Return a simulated table of ``n_rows`` rows and its truth (module docstring)."""
+    """Return a simulated table of ``n_rows`` rows and its truth (module docstring).
+
+    ``compliance_urad_per_nm`` (n,): the true arm bends under gravity with these joint
+    compliances and the robot file's masses (:func:`~wirecal.solver.kinematics.frames`);
+    None: rigid.
+    """
     rng = np.random.default_rng(seed)
     names = truth_names(robot)
     err = dict(zip(names, rng.uniform(-ERROR_SIZE, ERROR_SIZE, len(names)), strict=True))
     attach = robot.tool_point + rng.uniform(-30, 30, 3)
     true = robot.model(err)
-    true = Model(true.dh, attach)
+    if compliance_urad_per_nm is None:
+        true = Model(true.dh, attach)
+    else:
+        c = np.asarray(compliance_urad_per_nm, dtype=float) * 1e-6  # rad/(N·m)
+        true = Model(true.dh, attach, masses=robot.masses, compliance=c)
     q_true = _configurations(robot, n_rows, rng)
     p = tool_position(true, np.radians(q_true))
     anchor = _anchor(p, rng)

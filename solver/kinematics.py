@@ -282,16 +282,11 @@ def _layout(names: tuple[str, ...], n: int) -> dict[str, tuple[np.ndarray, np.nd
     return {kind: (np.array(c), np.array(f)) for kind, (c, f) in groups.items()}
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Return a × b over the last axis (faster than np.cross for stacks of 3-vectors)."""
-    return np.stack(
-        [
-            a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-            a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-            a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0],
-        ],
-        axis=-1,
-    )
+def _cross(a: np.ndarray, b: np.ndarray, axis: int = -1) -> np.ndarray:
+    """Return a × b over ``axis`` (faster than np.cross for stacks of 3-vectors)."""
+    a0, a1, a2 = np.moveaxis(a, axis, 0)
+    b0, b1, b2 = np.moveaxis(b, axis, 0)
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=axis)
 
 
 def tool_jacobian(
@@ -321,6 +316,38 @@ def tool_jacobian(
         else:  # tool point component: a column of the last frame
             J[:, :, cols] = f.R_last[:, :, fr]
     return p, J
+
+
+def tool_gradient(
+    model: Model, f: Frames, p: np.ndarray, u: np.ndarray, names: Sequence[str]
+) -> np.ndarray:
+    """Return uᵀ·∂p/∂e (N, m): the tool point's derivatives along one direction per row.
+
+    The same columns as ``einsum("nc,ncm->nm", u, tool_jacobian(…)[1])`` (module
+    docstring), without the (N, 3, m) Jacobian: a rotation's column
+    uᵀ(z × (p − o)) = z·(p × u − o × u) shares p × u, and every product runs over the
+    rows of one frame at a time (the frames' storage is contiguous along the rows).
+    ``f``: the frames of the configurations, ``p`` (N, 3) their tool points, ``u`` (N, 3)
+    the directions.
+    """
+    ut = np.ascontiguousarray(u.T)  # (3, N)
+    pu = _cross(np.ascontiguousarray(p.T), ut, axis=0)
+    out = np.empty((len(p), len(names)))
+    for kind, (cols, fr) in _layout(tuple(names), model.n_joints).items():
+        if kind == "tool":  # a column of the last frame
+            out[:, cols] = np.einsum("nc,nck->nk", u, f.R_last[:, :, fr])
+            continue
+        axes = (f.z if kind in ("th", "d", "c") else f.x).transpose(1, 2, 0)[fr]  # (k, 3, N)
+        if kind in ("d", "a"):  # translation along the axis
+            along = np.einsum("kcn,cn->kn", axes, ut)
+        else:  # rotation about the axis through the frame's origin
+            o = f.o.transpose(1, 2, 0)[fr]
+            lever = pu - _cross(o, ut, axis=-2)
+            along = np.einsum("kcn,kcn->kn", axes, lever)
+        if kind == "c":  # the joint's turn c_j·τ_j: τ_j times the θ_j column
+            along *= gravity_torques(model, f)[:, fr - 1].T
+        out[:, cols] = along.T
+    return out
 
 
 def joint_jacobian(

@@ -22,6 +22,7 @@ from wirecal.solver.kinematics import (
     Model,
     frames,
     gravity_torques,
+    tool_gradient,
     tool_jacobian,
     tool_position,
     with_errors,
@@ -110,6 +111,20 @@ def test_tool_jacobian_matches_finite_differences(viper, q):
         size = max(np.abs(fd).max(), 1e-3 if name.startswith("c") else 1.0)
         tol = 1e-6 if name.startswith("c") else 2e-3
         assert np.abs(J[:, :, k] - fd).max() <= tol * size + 1e-5, name  # + round-off
+
+
+@settings(max_examples=25, deadline=None)
+@given(configs, arrays(np.float64, (3,), elements=st.floats(-1.0, 1.0)))
+def test_tool_gradient_is_the_jacobian_along_a_direction(viper, q, direction):
+    # every kind of column (θ, α, a, d, the attachment, c) of a bent arm: uᵀ·∂p/∂e from the
+    # (N, 3, m) Jacobian (itself checked against finite differences above)
+    model = _viper_model(viper)
+    names = ("th2", "th6", "al1", "al4", "a2", "d4", "d6", "tool_y", "tool_z", "c2", "c3")
+    f = frames(model, q)
+    p, J = tool_jacobian(model, q, names, f)
+    u = np.broadcast_to(direction, p.shape) + np.linspace(0, 1, len(p))[:, None]
+    want = np.einsum("nc,ncm->nm", u, J)
+    np.testing.assert_allclose(tool_gradient(model, f, p, u, names), want, rtol=1e-12, atol=1e-9)
 
 
 def test_wire_jacobian_of_compliances_matches_finite_differences(viper, paper_plan):

@@ -123,6 +123,30 @@ def test_single_session_fits_one_offset_and_lists_the_jumps():
     assert abs(core.ignored_jumps[0] - syn.starts[1]) <= 2
 
 
+def test_a_boundary_that_alternates_between_two_rows_ends_the_session_search(monkeypatch):
+    """A boundary found at row 450, then 452, then 450 … once ran out of refits ("did not
+    settle"): a set of sessions found again ends the search, keeping the cycle's fit with
+    the fewest outliers."""
+    from wirecal.solver import fit as F
+
+    robot = _robot("viper_s650")
+    syn = synthetic_table(robot, 300, seed=2, sessions=2, snags=0, typos=0)
+    true = syn.starts[1]
+    seen: list[tuple[int, ...]] = []
+    found = F._session_starts
+
+    def alternate(ps, data, values=None):
+        if values is not None:  # the final check for jumps left in the residual
+            return found(ps, data, values)
+        seen.append(tuple(int(s) for s in np.unique(data.session, return_index=True)[1]))
+        return (0, true + 2 * (len(seen) % 2))  # true+2, true, true+2, …
+
+    monkeypatch.setattr(F, "_session_starts", alternate)
+    core = fit_table(robot, syn.table, FitOptions(holdout="none")).main.core
+    assert seen == [(0,), (0, true + 2), (0, true)]  # (0, true + 2) found again: a cycle
+    assert core.starts == (0, true)  # the boundary where the lengths jump fits best
+
+
 def test_one_session_and_no_snags_gives_one_offset_and_no_outliers():
     robot = _robot("ur5e")
     syn = synthetic_table(robot, 300, seed=4, sessions=1, snags=0, typos=0)
@@ -295,7 +319,7 @@ def test_a_fit_whose_parameters_are_not_identified_is_refused(monkeypatch):
     robot = _robot("viper_s650")
     syn = synthetic_table(robot, 100, seed=1, sessions=1, snags=0, typos=0)
 
-    def degenerate(base, layout, x, data, rows, sigma_mm):
+    def degenerate(base, layout, x, data, rows, sigma_mm, compliances=()):
         both = replace(layout, geometry=(*layout.geometry[:3], "d2", "d3"))
         return both, F._carry(layout, x, both), ()
 
@@ -464,6 +488,7 @@ def test_bic_elimination_is_the_refit_with_the_dropped_columns_fixed():
     """fit_select: z² of each drop and the estimates after it, against least squares solved
     again without the dropped columns (exact for a linear model)."""
     from wirecal.solver.fit_select import bic_eliminated
+    from wirecal.solver.identifiability import covariance
 
     rng = np.random.default_rng(4)
     n = 400
@@ -472,7 +497,7 @@ def test_bic_elimination_is_the_refit_with_the_dropped_columns_fixed():
     y = J @ truth + rng.normal(size=n)
     x = np.linalg.lstsq(J, y, rcond=None)[0]
     sigma = float(np.sqrt(np.sum((y - J @ x) ** 2) / (n - 6)))
-    out = bic_eliminated(J, x, [1, 2, 3, 4, 5], sigma)
+    out = bic_eliminated(covariance(J, sigma**2)[0], x, [1, 2, 3, 4, 5], n)
     assert {k for k, _ in out} == {1, 2, 4}  # the zeros; 0 is no candidate
     assert all(z < np.sqrt(np.log(n)) for _, z in out)
     # the |z| of the last drop, from a refit without the columns dropped before it
