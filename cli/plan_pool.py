@@ -21,13 +21,16 @@ from wirecal.solver.robot import Robot
 DEFAULT_POINTS = 60
 """Poses chosen when --points is not given."""
 
+PREDICTED = "RMS over the pool after a rigid registration, at the reading noise"
+"""What the plan's predicted tool-point error is (:mod:`~wirecal.solver.plan_pool`)."""
+
 
 def selection_csv(plan: PoolPlan, source: str, lines: np.ndarray, q_deg: np.ndarray) -> str:
     """Return the chosen configurations as CSV: role, pool line, j1…jn (deg)."""
     n = q_deg.shape[1]
     out = [
         f"# wirecal plan --pool {source}: θ0 (the wire's anchor) and {len(plan.rows)} poses",
-        f"# predicted tool-point error {plan.predicted_mm:.4f} mm (Cramér–Rao, mean over the pool)",
+        f"# predicted tool-point error {plan.predicted_mm:.4f} mm ({PREDICTED})",
         "role,pool_line," + ",".join(f"j{i + 1}" for i in range(n)),
     ]
     rows = [("theta0", plan.theta0_row), *(("point", int(r)) for r in plan.rows)]
@@ -73,9 +76,10 @@ def plan_from_pool(
     )
     click.echo(
         f"{len(plan.rows)} of the pool's {len(q_deg)} configurations, the best of "
-        f"{plan.theta0_tried} θ0 tried; identifies {', '.join(plan.names)}"
+        f"{plan.theta0_tried} θ0 tried; for a fit of {', '.join(plan.names)} "
+        "(the DH errors and compliances with a prior)"
     )
-    click.echo(f"predicted tool-point error {plan.predicted_mm:.4f} mm (Cramér–Rao, mean)")
+    click.echo(f"predicted tool-point error {plan.predicted_mm:.4f} mm ({PREDICTED})")
     if plan.outside:
         click.echo(f"note: {plan.outside} pool rows beyond the robot file's joint limits left out")
     if output:
