@@ -177,6 +177,11 @@ def plan_pool(robot: Robot, q_deg: np.ndarray, n_points: int, opt: PlanOptions) 
     """
     lo, hi = robot.limits_deg(0.0)
     inside = np.flatnonzero(np.all((q_deg >= lo) & (q_deg <= hi), axis=1))
+    if len(inside) == 0:
+        raise WirecalError(
+            f"none of the pool's {len(q_deg)} configurations is within the robot file's joint "
+            "limits: give a pool of this robot's configurations, in its joint convention"
+        )
     pool = wire_pool(robot, np.radians(q_deg[inside]), opt.prior)
     wire_mm = (opt.min_wire_mm, robot.encoder.range_mm - opt.range_margin_mm)
     tried = spread(pool.p_mm, THETA0_TRIED)
