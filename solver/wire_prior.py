@@ -17,9 +17,17 @@ ridge in the identifiable combinations, not a choice of named parameters). The a
 the attachment and the length offset have no prior.
 
 The estimate minimises Σ r_i²/σ² + Σ (x_k/σ_k)², σ the readings' residual (estimated from
-it, at least the readings' floor), refitted until σ settles; the posterior covariance
-(JᵀJ/σ² + Λ)⁻¹, Λ = diag(1/σ_k²), is what the pool planner minimises the tool point's
-error with (:mod:`~wirecal.solver.plan_pool`).
+it, at least the readings' floor), refitted until σ settles. How large the DH errors are
+is the arm's: an arm far from its data sheet (the Tsinghua UR5, 2.6 mm before
+calibration) widens the prior, by the evidence (:func:`map_fit`). The posterior
+covariance (JᵀJ/σ² + Λ)⁻¹, Λ = diag(1/σ_k²), is what the pool planner minimises the tool
+point's error with (:mod:`~wirecal.solver.plan_pool`), at the planner's ``prior``.
+
+Why a prior and not BIC on the identifiable combinations: BIC keeps or drops whole
+directions, and a weak direction dropped is fixed at the data sheet's value however large
+the arm's own error along it, kept it is fitted to the unmodelled residual; the prior
+shrinks each direction by how weakly the readings see it, continuously, the same for
+every arm; and the planner's criterion (the posterior) is then the fit's own.
 """
 
 from __future__ import annotations
@@ -39,6 +47,9 @@ from wirecal.solver.robot import Robot
 
 SIGMA_PASSES = 3
 """Refits with the residual's σ: the first from the starting σ, each next from the last."""
+
+PRIOR_SCALES = (1.0, 2.0, 4.0, 8.0)
+"""The prior sizes tried, in units of the planner's ``prior``: the data choose by evidence."""
 
 
 def bending(robot: Robot) -> Model:
@@ -82,13 +93,16 @@ class WireMap:
     sigma_mm: float  # RMS of the readings' residual at x
 
 
-def map_fit(base: Model, layout: Layout, data: Data, prior: float) -> WireMap:
-    """Return the maximum a posteriori estimate of ``layout`` from one session's ``data``.
+def _map_at(base: Model, layout: Layout, data: Data, prior: float) -> tuple[WireMap, float]:
+    """Return the maximum a posteriori fit at prior size ``prior`` and its log evidence.
 
-    Starts at the nominal geometry (the anchor and offset by multilateration); σ of the
-    readings starts at ``prior`` and is then the residual's RMS (at least ``data.floor_mm``).
+    σ of the readings starts at ``prior`` and is then the residual's RMS (at least
+    ``data.floor_mm``), :data:`SIGMA_PASSES` times. The evidence is Laplace's
+    approximation (MacKay 1992): −χ²/2 − N·ln σ − ½ Σ (x_k/σ_k)² − Σ ln σ_k − ½ ln det H,
+    H = JᵀJ/σ² + Λ, over the parameters with a prior (the others' terms do not depend on it).
     """
-    weight = 1.0 / prior_sigma(base, layout, prior)  # 0 where there is no prior
+    sd = prior_sigma(base, layout, prior)
+    weight = 1.0 / sd  # 0 where there is no prior
     q, length, session = data.q_rad, data.length_mm, data.session
     x, sigma = start(base, layout, data), prior
     for _ in range(SIGMA_PASSES):
@@ -103,4 +117,26 @@ def map_fit(base: Model, layout: Layout, data: Data, prior: float) -> WireMap:
         x = least_squares(fun, x, jac=jac, x_scale="jac", method="trf").x
         r = lengths(base, layout, x, q, session) - length
         sigma = max(float(np.sqrt(np.mean(r**2))), data.floor_mm, 1e-9)
-    return WireMap(model_of(base, layout, x), layout, x, sigma)
+    J = lengths_and_jacobian(base, layout, x, q, session)[1] / sigma
+    scale = np.maximum(np.linalg.norm(J, axis=0), weight)
+    H = (J.T @ J + np.diag(weight**2)) / np.outer(scale, scale)
+    has = np.isfinite(sd)
+    evidence = (
+        -len(r) / 2
+        - len(r) * np.log(sigma)
+        - 0.5 * float(np.sum((weight * x) ** 2))
+        - float(np.sum(np.log(sd[has])))
+        - 0.5 * (np.linalg.slogdet(H)[1] + 2 * float(np.sum(np.log(scale))))
+    )
+    return WireMap(model_of(base, layout, x), layout, x, sigma), evidence
+
+
+def map_fit(base: Model, layout: Layout, data: Data, prior: float) -> WireMap:
+    """Return the maximum a posteriori estimate of ``layout`` from one session's ``data``.
+
+    The prior's size is ``prior`` times the one of :data:`PRIOR_SCALES` of the largest
+    evidence (:func:`_map_at`): an arm far from its data sheet widens its own prior.
+    Starts at the nominal geometry (the anchor and offset by multilateration).
+    """
+    fits = [_map_at(base, layout, data, prior * k) for k in PRIOR_SCALES]
+    return max(fits, key=lambda f: f[1])[0]
