@@ -40,12 +40,6 @@ SAFETY_ROUNDS = 4
 def as_plan(rb: Robot, q_deg: np.ndarray, pp: PoolPlan, source: str) -> Plan:
     """Return θ0 and the chosen poses as a plan: the poses split over the steps in order."""
     order = rb.parameters
-    if len(pp.rows) < len(order):
-        raise WirecalError(
-            f"{len(pp.rows)} poses for the {len(order)} steps of {rb.source}'s [calibration] "
-            "parameters: a plan file needs a pose per step; give --points of at least "
-            f"{len(order)}"
-        )
     empty = np.empty((0, rb.n_joints))
     chunks = np.array_split(q_deg[pp.rows], len(order))
     steps = tuple(Step(p, c, empty) for p, c in zip(order, chunks, strict=True))
@@ -112,11 +106,6 @@ def safe_plan(
 
     Raises :class:`WirecalError` naming every problem when no safe choice is found.
     """
-    if not rb.parameters:
-        raise WirecalError(
-            f"{rb.source}: no [calibration] parameters: a plan file has a step for each; "
-            "name them, or write the choice as CSV (-o CHOSEN.csv)"
-        )
     lo, hi = rb.limits_deg(GenRequest().margin_deg)
     usable = np.flatnonzero(np.all((q_deg >= lo) & (q_deg <= hi), axis=1))
     refused = len(q_deg) - len(usable)
@@ -136,6 +125,12 @@ def safe_plan(
             found.theta0_tried,
             found.outside,
         )
+        if len(pp.rows) < len(rb.parameters):
+            raise WirecalError(
+                f"{source}: nothing written: {len(pp.rows)} poses for the "
+                f"{len(rb.parameters)} steps of {rb.source}'s [calibration] parameters: a plan "
+                f"file needs a pose per step; give --points of at least {len(rb.parameters)}"
+            )
         pp = toured(rb, q_deg, pp)
         unsafe = _unsafe(rb, q_deg, pp)
         if unsafe and len(unsafe) == len(pp.rows):  # every move refused: θ0 is the suspect

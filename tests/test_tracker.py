@@ -606,6 +606,18 @@ def test_plan_pool_refuses_a_plan_the_preflight_refuses(tmp_path):
     assert "Traceback" not in r.output
 
 
+def test_plan_pool_file_needs_a_pose_per_step(tmp_path):
+    """A plan file has a step per [calibration] parameter (10 here): 5 poses are refused."""
+    pool = tmp_path / "pool.csv"
+    _ur5e_pool(pool)
+    out = tmp_path / "p.toml"
+    args = ["plan", str(UR5E), "--pool", str(pool), "--points", "5", "-o", str(out)]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 2, r.output
+    assert "a plan file needs a pose per step; give --points of at least 10" in r.output
+    assert not out.exists()
+
+
 @pytest.mark.slow
 def test_bench_replays_any_generic_table(tmp_path):
     """``bench_tracker_replay.py --robot R --table T --json``: the keys the issue names."""
