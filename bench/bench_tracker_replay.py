@@ -9,15 +9,15 @@ table with columns j1…jn (degrees) and x, y, z (mm) with ``--robot R --table T
 random 50/50 split; from the training half ``wirecal plan --pool``'s planner chooses θ0
 and at most 60 poses; on them the nominal model (tool point and base frame fitted), the
 3-D tracker calibration, and one wire from the anchor at θ0 (readings: the distance to
-the measured point, rounded to the encoder's count, unknown zero) identified by
-``wirecal fit``'s estimator (:mod:`wirecal.solver.tracker_replay`). Each is judged on the
-held-out half after a rigid registration. Prints per set the medians over the seeds and
-the wire's ratio to the tracker calibration; ``--json`` prints them as JSON (keys
+the measured point, rounded to the encoder's count, unknown zero) identified by the
+wire model with a prior where the readings are weak (:mod:`wirecal.solver.tracker_replay`).
+Each is judged on the held-out half after a rigid registration. Prints per set the medians
+over the seeds and the wire's ratio to the tracker calibration; ``--json`` prints them as JSON (keys
 ``nominal_mm``, ``tracker_mm``, ``wire_mm``, ``wire_compliance_mm``, ``anchor_mm``).
 
-``wire_compliance_mm``: the same readings refitted with the compliances (issue 30's model)
-among the robot file's ``[calibration] compliances`` that they identify; null for a robot
-file that asks none.
+``wire_compliance_mm``: the same readings fitted with the compliances (issue 30's model)
+of the robot file's ``[calibration] compliances``; null for a robot file that asks none.
+``predicted_mm``: the plan's predicted tool-point error at the reading noise, per seed.
 
     python bench/bench_tracker_replay.py [--data DIR] [--set ur10_ipa ...]
         [--robot R --table T.csv] [--seeds 3] [--points 60] [--json]
@@ -105,7 +105,6 @@ def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict
         "tracker_mm": median("tracker_mm"),
         "wire_mm": median("wire_mm"),
         "wire_compliance_mm": median("wire_compliance_mm"),
-        "compliances": [list(r.compliances) for r in runs],
         "anchor_mm": [r.anchor_mm.round(3).tolist() for r in runs],
         "anchor_tracker_mm": [r.anchor_tracker_mm.round(3).tolist() for r in runs],
         "theta0_deg": [r.theta0_deg.round(3).tolist() for r in runs],
@@ -113,7 +112,7 @@ def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict
             key: [None if getattr(r, key) is None else round(getattr(r, key), 4) for r in runs]
             for key in ("nominal_mm", "tracker_mm", "wire_mm", "wire_compliance_mm")
         },
-        "wire_parameters": [list(r.wire_parameters) for r in runs],
+        "predicted_mm": [round(r.predicted_mm, 4) for r in runs],
     }
 
 

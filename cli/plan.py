@@ -147,7 +147,8 @@ def _tried(d: Design, theta0_deg: np.ndarray | None) -> str:
     "--pool",
     type=click.Path(dir_okay=False),
     help="Choose θ0 and the poses from this table of configurations the robot reaches "
-    "(j1…jn in degrees, or a tracker data set); -o then writes the chosen ones as CSV.",
+    "(j1…jn in degrees, or a tracker data set); -o then writes the chosen ones as CSV, "
+    "or to a .toml name as a plan 'gen' takes (the pre-flight applied).",
 )
 @click.option(
     "--allow-partial",

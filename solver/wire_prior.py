@@ -1,0 +1,142 @@
+"""One wire's fit with a prior where the data is weak (maximum a posteriori), and its plan's.
+
+Sixty scalar readings of one wire carry the geometry unevenly: some combinations of DH
+errors well, others barely (the ISO cubes of a tracker data set keep the tool's
+orientation, and the wire then sees the wrist's errors hardly at all). Dropping the weakly
+seen errors (an identifiability limit, then BIC) fixes them at the robot file's value,
+all or nothing; keeping them fits the unmodelled part of the readings (gravity, heat, the
+gears) into them. Here every DH error of rows 2…n (:func:`~wirecal.solver.fit.candidates`)
+is estimated, each with a zero-mean Gaussian prior: a length σ ``prior`` mm (the
+planner's :attr:`~wirecal.solver.plan_options.PlanOptions.prior`, the size of a still
+unknown offset), an angle the one that moves a point at the arm's longest link (a or d)
+by as much (:func:`prior_sigma`; 0.05° for 0.5 mm on a UR10's 612 mm), so that neither
+kind is favoured; each compliance asked with σ
+:data:`~wirecal.solver.compliance.PRIOR_COMPLIANCE_URAD_PER_NM`: the data decide where they
+are strong, the prior where they are weak, by the same weights for every combination (a
+ridge in the identifiable combinations, not a choice of named parameters). The anchor,
+the attachment and the length offset have no prior.
+
+The estimate minimises Σ r_i²/σ² + Σ (x_k/σ_k)², σ the readings' residual (estimated from
+it, at least the readings' floor), refitted until σ settles. How large the DH errors are
+is the arm's: an arm far from its data sheet (the Tsinghua UR5, 2.6 mm before
+calibration) widens the prior, by the evidence (:func:`map_fit`). The posterior
+covariance (JᵀJ/σ² + Λ)⁻¹, Λ = diag(1/σ_k²), is what the pool planner minimises the tool
+point's error with (:mod:`~wirecal.solver.plan_pool`), at the planner's ``prior``.
+
+Why a prior and not BIC on the identifiable combinations: BIC keeps or drops whole
+directions, and a weak direction dropped is fixed at the data sheet's value however large
+the arm's own error along it, kept it is fitted to the unmodelled residual; the prior
+shrinks each direction by how weakly the readings see it, continuously, the same for
+every arm; and the planner's criterion (the posterior) is then the fit's own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from wirecal.solver.compliance import PRIOR_COMPLIANCE_URAD_PER_NM
+from wirecal.solver.fit import Data, candidates, point_model, start
+from wirecal.solver.fit_model import Layout, lengths, lengths_and_jacobian, model_of
+from wirecal.solver.gravity import default_masses
+from wirecal.solver.kinematics import Model
+from wirecal.solver.params import TOOL_NAMES, ErrorSet
+from wirecal.solver.robot import Robot
+
+SIGMA_PASSES = 3
+"""Refits with the residual's σ: the first from the starting σ, each next from the last."""
+
+PRIOR_SCALES = (1.0, 2.0, 4.0, 8.0)
+"""The prior sizes tried, in units of the planner's ``prior``: the data choose by evidence."""
+
+
+def bending(robot: Robot) -> Model:
+    """Return the point model with the arm's masses and no compliance yet (to identify).
+
+    The robot file's ``[gravity]`` masses, else the assumed ones
+    (:func:`~wirecal.solver.gravity.default_masses`).
+    """
+    base = point_model(robot)
+    masses = robot.masses if robot.masses is not None else default_masses(base.dh)
+    return replace(base, masses=masses, compliance=np.zeros(base.n_joints))
+
+
+def wire_layout(base: Model, compliances: tuple[str, ...] = ()) -> Layout:
+    """Return the wire's parameters: the attachment, every DH error of rows 2…n, ``compliances``."""
+    return Layout((*TOOL_NAMES, *candidates(base), *compliances), base.n_joints, 1, False)
+
+
+def prior_sigma(base: Model, layout: Layout, prior: float) -> np.ndarray:
+    """Return each parameter's prior σ, internal units (module docstring); inf: no prior."""
+    sigma = np.full(len(layout.names), np.inf)
+    g = len(layout.geometry)
+    errors = ErrorSet(layout.geometry[len(TOOL_NAMES) :], layout.n_joints)
+    link_mm = float(np.max(np.abs(base.dh[:, [1, 3]])))
+    by_unit = {
+        "mm": prior,
+        "deg": np.degrees(prior / link_mm),
+        "urad/Nm": PRIOR_COMPLIANCE_URAD_PER_NM,
+    }
+    sigma[len(TOOL_NAMES) : g] = errors.to_internal([by_unit[u] for u in errors.units])
+    return sigma
+
+
+@dataclass(frozen=True)
+class WireMap:
+    """The maximum a posteriori fit of one wire: model, parameters, the residual's σ."""
+
+    model: Model
+    layout: Layout
+    x: np.ndarray  # internal units
+    sigma_mm: float  # RMS of the readings' residual at x
+
+
+def _map_at(base: Model, layout: Layout, data: Data, prior: float) -> tuple[WireMap, float]:
+    """Return the maximum a posteriori fit at prior size ``prior`` and its log evidence.
+
+    σ of the readings starts at ``prior`` and is then the residual's RMS (at least
+    ``data.floor_mm``), :data:`SIGMA_PASSES` times. The evidence is Laplace's
+    approximation (MacKay 1992): −χ²/2 − N·ln σ − ½ Σ (x_k/σ_k)² − Σ ln σ_k − ½ ln det H,
+    H = JᵀJ/σ² + Λ, over the parameters with a prior (the others' terms do not depend on it).
+    """
+    sd = prior_sigma(base, layout, prior)
+    weight = 1.0 / sd  # 0 where there is no prior
+    q, length, session = data.q_rad, data.length_mm, data.session
+    x, sigma = start(base, layout, data), prior
+    for _ in range(SIGMA_PASSES):
+        w = sigma * weight
+
+        def fun(v: np.ndarray, w: np.ndarray = w) -> np.ndarray:
+            return np.concatenate([lengths(base, layout, v, q, session) - length, w * v])
+
+        def jac(v: np.ndarray, w: np.ndarray = w) -> np.ndarray:
+            return np.vstack([lengths_and_jacobian(base, layout, v, q, session)[1], np.diag(w)])
+
+        x = least_squares(fun, x, jac=jac, x_scale="jac", method="trf").x
+        r = lengths(base, layout, x, q, session) - length
+        sigma = max(float(np.sqrt(np.mean(r**2))), data.floor_mm, 1e-9)
+    J = lengths_and_jacobian(base, layout, x, q, session)[1] / sigma
+    scale = np.maximum(np.linalg.norm(J, axis=0), weight)
+    H = (J.T @ J + np.diag(weight**2)) / np.outer(scale, scale)
+    has = np.isfinite(sd)
+    evidence = (
+        -len(r) / 2
+        - len(r) * np.log(sigma)
+        - 0.5 * float(np.sum((weight * x) ** 2))
+        - float(np.sum(np.log(sd[has])))
+        - 0.5 * (np.linalg.slogdet(H)[1] + 2 * float(np.sum(np.log(scale))))
+    )
+    return WireMap(model_of(base, layout, x), layout, x, sigma), evidence
+
+
+def map_fit(base: Model, layout: Layout, data: Data, prior: float) -> WireMap:
+    """Return the maximum a posteriori estimate of ``layout`` from one session's ``data``.
+
+    The prior's size is ``prior`` times the one of :data:`PRIOR_SCALES` of the largest
+    evidence (:func:`_map_at`): an arm far from its data sheet widens its own prior.
+    Starts at the nominal geometry (the anchor and offset by multilateration).
+    """
+    fits = [_map_at(base, layout, data, prior * k) for k in PRIOR_SCALES]
+    return max(fits, key=lambda f: f[1])[0]
