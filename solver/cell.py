@@ -249,16 +249,17 @@ def cell_gaps(
         rows.append(_pair_gaps(a, b, s, t, r[s] + r[t] + m, exact_below_mm))
         labels += [f"{caps.names[i]} and {caps.names[j]}" for i, j in caps.pairs]
     mv = np.flatnonzero(caps.moving)
+    am, bm = a[:, mv], b[:, mv]
     planes = [("floor", (0.0, 0.0, cell.floor_z_mm), (0.0, 0.0, 1.0))]
     planes += [(h.name, h.point_mm, h.normal) for h in cell.half_spaces]
     for name, point, normal in planes:
         nrm, pt = np.asarray(normal)[:, None, None], np.asarray(point)[:, None, None]
-        height = np.minimum(_dot(a[:, mv] - pt, nrm), _dot(b[:, mv] - pt, nrm))
+        height = np.minimum(_dot(am - pt, nrm), _dot(bm - pt, nrm))
         rows.append(height - (r[mv] + m)[:, None])
         labels += [f"{caps.names[i]} and the {name}" for i in mv]
     for box in cell.boxes:
         keep = r[mv] + m + BOX_STEP_MM / 2
-        rows.append(_box_gaps(box, a[:, mv], b[:, mv], keep) - keep[:, None])
+        rows.append(_box_gaps(box, am, bm, keep) - keep[:, None])
         labels += [f"{caps.names[i]} and box {box.name!r}" for i in mv]
     if cell.housing is not None:
         rows.append(_housing_gaps(cell.housing, m, caps, a, b, p0))

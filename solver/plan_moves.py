@@ -159,11 +159,25 @@ def reach_ok(
 ) -> np.ndarray:
     """Return whether each point q is reached from θ0 with the wire clear.
 
-    Directly, or through its via point (NaN row: none): the moves from θ0 to the points
-    and to the via points in one sweep, then the second legs where the first is clear.
+    Directly, or through its via point (NaN row: none): :func:`reach_and_move_ok`.
+    """
+    return reach_and_move_ok(robot, model, p0, theta0, q, via, q[:0], q[:0], opt, step_deg)[0]
+
+
+def reach_and_move_ok(
+    robot: Robot, model, p0, theta0, q, via, a, b, opt: PlanOptions, step_deg: float = 2.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return whether each point q is reached from θ0, and whether each move a → b is safe.
+
+    Reached directly, or through its via point (NaN row: none); the moves from θ0 to the
+    points and to the via points are swept together with the moves a → b (one sweep's
+    fixed cost, :func:`move_ok`), then the second legs where the first is clear.
     """
     direct = np.isnan(via[:, 0])
-    ok = move_ok(robot, model, p0, theta0, np.where(direct[:, None], q, via), opt, step_deg)
+    first = np.where(direct[:, None], q, via)
+    starts = np.vstack([np.broadcast_to(theta0, first.shape), a])
+    clear = move_ok(robot, model, p0, starts, np.vstack([first, b]), opt, step_deg)
+    ok = clear[: len(q)]
     viaed = np.flatnonzero(~direct & ok)
     ok[viaed] = move_ok(robot, model, p0, via[viaed], q[viaed], opt, step_deg)
-    return ok
+    return ok, clear[len(q) :]

@@ -20,7 +20,7 @@ from wirecal.solver.accuracy import stepwise_map
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan_candidates import blocked
-from wirecal.solver.plan_moves import move_ok, reach_ok
+from wirecal.solver.plan_moves import reach_and_move_ok
 from wirecal.solver.plan_options import PlanOptions, Progress
 from wirecal.solver.plan_tour import tour
 from wirecal.solver.robot import Robot
@@ -120,24 +120,34 @@ class Links:
     def ok(self, sources: list[int], js: np.ndarray) -> np.ndarray:
         """Return whether each of ``js`` is reached and linked to every one of ``sources``."""
         js = np.asarray(js, int)
-        new = np.unique(js[self.reached[js] == 0])
-        if len(new):
-            reach = reach_ok(
-                self.robot, self.model, self.p0, self.theta0, self.q[new], self.via[new], self.opt
-            )
-            self.reached[new] = np.where(reach, 1, 2)
+        self._work_out(sources, js)
         out = self.reached[js] == 1
         near = js[out]
         i = np.repeat(np.asarray(sources, int), len(near))
         j = np.tile(near, len(sources))
-        todo = self.known[i, j] == 0
-        if todo.any():
-            clear = move_ok(
-                self.robot, self.model, self.p0, self.q[i[todo]], self.q[j[todo]], self.opt
-            )
-            self.known[i[todo], j[todo]] = np.where(clear, 1, 2)
         out[out] = np.all((self.known[i, j] == 1).reshape(len(sources), len(near)), axis=0)
         return out
+
+    def _work_out(self, sources: list[int], js: np.ndarray) -> None:
+        """Work out what :meth:`ok` asks and is not known yet, in one sweep.
+
+        Whether the candidates ``js`` are reached, and the moves to them from ``sources``
+        (also for those whose reach is not known yet: one sweep costs less than two).
+        """
+        new = np.unique(js[self.reached[js] == 0])
+        maybe = js[self.reached[js] != 2]
+        i = np.repeat(np.asarray(sources, int), len(maybe))
+        j = np.tile(maybe, len(sources))
+        todo = self.known[i, j] == 0
+        i, j = i[todo], j[todo]
+        if not len(new) and not len(i):
+            return
+        q, via = self.q, self.via
+        reach, clear = reach_and_move_ok(
+            self.robot, self.model, self.p0, self.theta0, q[new], via[new], q[i], q[j], self.opt
+        )
+        self.reached[new] = np.where(reach, 1, 2)
+        self.known[i, j] = np.where(clear, 1, 2)
 
 
 def choose_points(
