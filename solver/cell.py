@@ -249,16 +249,17 @@ def cell_gaps(
         rows.append(_pair_gaps(a, b, s, t, r[s] + r[t] + m, exact_below_mm))
         labels += [f"{caps.names[i]} and {caps.names[j]}" for i, j in caps.pairs]
     mv = np.flatnonzero(caps.moving)
+    am, bm = a[:, mv], b[:, mv]
     planes = [("floor", (0.0, 0.0, cell.floor_z_mm), (0.0, 0.0, 1.0))]
     planes += [(h.name, h.point_mm, h.normal) for h in cell.half_spaces]
     for name, point, normal in planes:
         nrm, pt = np.asarray(normal)[:, None, None], np.asarray(point)[:, None, None]
-        height = np.minimum(_dot(a[:, mv] - pt, nrm), _dot(b[:, mv] - pt, nrm))
+        height = np.minimum(_dot(am - pt, nrm), _dot(bm - pt, nrm))
         rows.append(height - (r[mv] + m)[:, None])
         labels += [f"{caps.names[i]} and the {name}" for i in mv]
     for box in cell.boxes:
         keep = r[mv] + m + BOX_STEP_MM / 2
-        rows.append(_box_gaps(box, a[:, mv], b[:, mv], keep) - keep[:, None])
+        rows.append(_box_gaps(box, am, bm, keep) - keep[:, None])
         labels += [f"{caps.names[i]} and box {box.name!r}" for i in mv]
     if cell.housing is not None:
         rows.append(_housing_gaps(cell.housing, m, caps, a, b, p0))
@@ -300,10 +301,10 @@ def _pair_gaps(
     return gap
 
 
-def _to_box(box: Box, p_lo: np.ndarray, p_hi: np.ndarray) -> np.ndarray:
-    """Return the distance (mm) from boxes [p_lo, p_hi] (component-first) to ``box``."""
+def _to_box(lo: np.ndarray, hi: np.ndarray, p_lo: np.ndarray, p_hi: np.ndarray) -> np.ndarray:
+    """Return the distance (mm) from boxes [p_lo, p_hi] (component-first) to box [lo, hi]."""
     shape = (3,) + (1,) * (p_lo.ndim - 1)
-    lo, hi = np.reshape(box.min_mm, shape), np.reshape(box.max_mm, shape)
+    lo, hi = lo.reshape(shape), hi.reshape(shape)
     out = np.maximum(np.maximum(lo - p_hi, p_lo - hi), 0.0)
     return np.sqrt(_dot(out, out))
 
@@ -313,18 +314,21 @@ def _box_gaps(box: Box, a: np.ndarray, b: np.ndarray, near_mm: np.ndarray) -> np
 
     The distance from the box to the segment's own bounding box bounds it from below;
     where that is under ``near_mm`` (S,), the smallest distance of points every
-    :data:`BOX_STEP_MM` or closer along the segment is returned instead.
+    :data:`BOX_STEP_MM` or closer along the segment is returned instead (the segment's
+    own points: a gap does not depend on which other configurations are asked about).
     """
-    best = _to_box(box, np.minimum(a, b), np.maximum(a, b))
+    lo, hi = np.array(box.min_mm, float), np.array(box.max_mm, float)
+    best = _to_box(lo, hi, np.minimum(a, b), np.maximum(a, b))
     s, k = np.nonzero(best < near_mm[:, None])
     if not len(s):
         return best
-    a, b = a[:, s, k], b[:, s, k]
-    longest = float(np.max(np.sqrt(_dot(b - a, b - a))))
-    near = np.full(len(s), np.inf)
-    for u in np.linspace(0.0, 1.0, int(np.ceil(longest / BOX_STEP_MM)) + 1):
-        p = a + u * (b - a)
-        near = np.minimum(near, _to_box(box, p, p))
+    a, d = a[:, s, k], b[:, s, k] - a[:, s, k]
+    count = np.ceil(np.sqrt(_dot(d, d)) / BOX_STEP_MM).astype(int) + 1
+    near = np.empty(len(s))
+    for c in np.unique(count):
+        m = count == c
+        p = a[:, None, m] + np.linspace(0.0, 1.0, c)[:, None] * d[:, None, m]
+        near[m] = np.min(_to_box(lo, hi, p, p), axis=0)
     best[s, k] = near
     return best
 

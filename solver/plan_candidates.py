@@ -19,7 +19,7 @@ import numpy as np
 from wirecal.solver import ik
 from wirecal.solver.cell import SURE_GAP_MM
 from wirecal.solver.exit_geometry import wire_path, within_cone
-from wirecal.solver.kinematics import tool_position
+from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.plan_moves import move_clearance, move_ok, reach_ok
 from wirecal.solver.plan_options import PlanOptions
 from wirecal.solver.robot import Robot
@@ -104,7 +104,8 @@ def _point_failures(
     an eyelet's exit cone (the points read the encoder), the wrist singularity of an
     analytic wrist (|sin θ5| ≥ sin 8°) and the arm clear of itself and the cell.
     """
-    p = tool_position(model, np.radians(q))
+    f = frames(model, np.radians(q))  # one evaluation of the chain for the tool and the cell
+    p = tool_position(model, np.radians(q), f)
     d = wire_path(model.pulley, p - p0)[0]
     wrist = np.ones(len(q), bool)
     if ik.analytic_structure(model):
@@ -113,7 +114,7 @@ def _point_failures(
         "range": (d >= opt.min_wire_mm) & (d <= robot.encoder.range_mm - opt.range_margin_mm),
         "cone": within_cone(robot.encoder.exit, p - p0),
         "wrist": wrist,
-        "cell": robot.cell_gaps(q, p0, model, exact_below_mm=SURE_GAP_MM).smallest() >= 0,
+        "cell": robot.cell_gaps(q, p0, model, f, SURE_GAP_MM).smallest() >= 0,
     }
 
 

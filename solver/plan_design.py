@@ -24,7 +24,7 @@ from wirecal.solver.plan_exit import largest_exit_deg
 from wirecal.solver.plan_joint import joint_choice
 from wirecal.solver.plan_options import Method, PlanOptions, Progress
 from wirecal.solver.plan_predict import predicted_accuracy, robot_time
-from wirecal.solver.plan_steps import step_by_step, step_error
+from wirecal.solver.plan_steps import StepPool, step_by_step, step_error
 from wirecal.solver.plan_tour import tour
 from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import sensitivity
@@ -169,16 +169,8 @@ def design_at(
     tick = progress or (lambda f: None)
     model = robot.nominal
     check_theta0(robot, theta0, opt)
-    q_all = candidates(robot, theta0, opt, np.random.default_rng(opt.seed))
     p0 = tool_position(model, np.radians(theta0)[None])[0]
-    usable, via_all = screen(robot, model, p0, theta0, q_all, opt)
-    tick(0.5)
-    q_all, via_all = q_all[usable], via_all[usable]
-    if len(q_all) < opt.points_per_step:
-        raise WirecalError(
-            f"{robot.source}: almost no usable configuration around θ0 "
-            f"{theta0.tolist()}: {blocked(robot, theta0, opt)}"
-        )
+    q_all, via_all = _usable(robot, p0, theta0, opt, tick)
     names = list(robot.parameters)
     excluded = _unidentifiable(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
     unidentifiable = tuple(excluded)
@@ -187,34 +179,10 @@ def design_at(
     pools = step_by_step(robot, theta0, q_all, via_all, psi, remaining, excluded, opt, tick)
     if opt.method == "joint":
         joint_choice(robot, theta0, q_all, via_all, psi, remaining, pools, opt)
-    steps = []
-    for k, pool in enumerate(pools):
-        pts = pool.iso[pool.picks]
-        path = tour(robot, model, p0, theta0, q_all[pts], via_all[pts], opt)
-        if path is None:
-            raise WirecalError(
-                f"{robot.source}: step {k + 1} ({pool.parameter}): no visiting "
-                "order keeps the wire clear of the links; try another "
-                "--seed or --theta0, or check the link radii"
-            )
-        pool.picks = [pool.picks[i] for i in path]
-        first_via = via_all[pool.iso[pool.picks[0]]]
-        steps.append(
-            StepDesign(
-                pool.parameter,
-                q_all[pts[path]],
-                float(np.sqrt(np.mean(pool.pj[pool.picks] ** 2))),
-                step_error(
-                    pool.pj[pool.picks],
-                    pool.pprev[pool.picks],
-                    pool.cov_prev,
-                    pool.pnext[pool.picks],
-                    opt,
-                ),
-                pool.leak_paper,
-                first_via[None] if not np.isnan(first_via[0]) else np.zeros((0, len(theta0))),
-            )
-        )
+    steps = [
+        _step_design(robot, p0, theta0, q_all, via_all, k, pool, opt)
+        for k, pool in enumerate(pools)
+    ]
     plan = Plan(
         theta0,
         tuple(p.parameter for p in pools),
@@ -228,6 +196,62 @@ def design_at(
     d.cell_line = cell_line(robot)
     tick(1.0)
     return d
+
+
+def _usable(
+    robot: Robot, p0: np.ndarray, theta0: np.ndarray, opt: PlanOptions, tick: Progress
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return the usable candidates around θ0 and their via points (NaN rows: none).
+
+    Drawn (:func:`~wirecal.solver.plan_candidates.candidates`) and screened
+    (:func:`~wirecal.solver.plan_candidates.screen`); raises when fewer than a step's
+    points are left, saying what blocked the others.
+    """
+    q_all = candidates(robot, theta0, opt, np.random.default_rng(opt.seed))
+    usable, via_all = screen(robot, robot.nominal, p0, theta0, q_all, opt)
+    tick(0.5)
+    if usable.sum() < opt.points_per_step:
+        raise WirecalError(
+            f"{robot.source}: almost no usable configuration around θ0 "
+            f"{theta0.tolist()}: {blocked(robot, theta0, opt)}"
+        )
+    return q_all[usable], via_all[usable]
+
+
+def _step_design(
+    robot: Robot,
+    p0: np.ndarray,
+    theta0: np.ndarray,
+    q_all: np.ndarray,
+    via_all: np.ndarray,
+    k: int,
+    pool: StepPool,
+    opt: PlanOptions,
+) -> StepDesign:
+    """Return step k's design: its points in visiting order (:func:`tour`), and figures.
+
+    Puts ``pool.picks`` in the visiting order; raises when no order keeps the wire clear.
+    """
+    pts = pool.iso[pool.picks]
+    path = tour(robot, robot.nominal, p0, theta0, q_all[pts], via_all[pts], opt)
+    if path is None:
+        raise WirecalError(
+            f"{robot.source}: step {k + 1} ({pool.parameter}): no visiting "
+            "order keeps the wire clear of the links; try another "
+            "--seed or --theta0, or check the link radii"
+        )
+    pool.picks = [pool.picks[i] for i in path]
+    first_via = via_all[pool.iso[pool.picks[0]]]
+    return StepDesign(
+        pool.parameter,
+        q_all[pts[path]],
+        float(np.sqrt(np.mean(pool.pj[pool.picks] ** 2))),
+        step_error(
+            pool.pj[pool.picks], pool.pprev[pool.picks], pool.cov_prev, pool.pnext[pool.picks], opt
+        ),
+        pool.leak_paper,
+        first_via[None] if not np.isnan(first_via[0]) else np.zeros((0, len(theta0))),
+    )
 
 
 def exit_line(robot: Robot, plan: Plan) -> str:

@@ -6,6 +6,8 @@ joining the step whose parameter it isolates, so the step-by-step method still r
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 from wirecal.solver.accuracy import workspace
@@ -13,7 +15,7 @@ from wirecal.solver.kinematics import tool_jacobian, tool_position
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan_options import PlanOptions
 from wirecal.solver.plan_steps import StepPool, step_errors
-from wirecal.solver.plan_tour import visit_s
+from wirecal.solver.plan_tour import visit_floor_s, visit_s
 from wirecal.solver.robot import Robot
 
 
@@ -43,9 +45,8 @@ def joint_choice(
     with the first points alone.
     """
     order = [p.parameter for p in pools]
-    col = [names.index(t) for t in order]
     errors = ErrorSet(tuple(order), robot.n_joints)
-    x_all = errors.per_internal(psi[:, col])  # (N, m) mm per rad, mm per mm
+    x_all = errors.per_internal(psi[:, [names.index(t) for t in order]])  # mm/rad, mm/mm
     _, jp = tool_jacobian(robot.nominal, workspace(robot, 500), order)
     w = np.einsum("nim,nik->mk", jp, jp) / len(jp)
     s2 = opt.sigma_mm**2
@@ -54,64 +55,135 @@ def joint_choice(
         rows = x_all[p.iso[p.picks]]
         info = info + rows.T @ rows / s2
     sigma = np.linalg.inv(info)
-    cand = np.concatenate([p.iso for p in pools])
-    step = np.concatenate([np.full(len(p.iso), k) for k, p in enumerate(pools)])
-    local = np.concatenate([np.arange(len(p.iso)) for p in pools])
-    x = x_all[cand]
-    p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
-    has_via = ~np.isnan(via_all[cand, 0])
-    cost = np.full(len(cand), np.inf)
-    allowed = np.ones(len(cand), bool)
-
-    def update(k: int, added: int) -> None:
-        """Recompute step k's admissible candidates and their costs.
-
-        The costs from all of the step's points, or only from the ``added`` last ones
-        (the others already counted).
-        """
-        mine = np.flatnonzero(step == k)
-        pool, q = pools[k], q_all[cand[mine]]
-        here = q_all[pool.iso[pool.picks]]
-        spread = np.min(np.max(np.abs(q[:, None] - here[None]), axis=2), axis=1)
-        ok = spread >= opt.spread_deg
-        if has_via[mine][pool.picks].any():
-            ok &= ~has_via[mine]
-        args = (pool.pj, pool.pprev, pool.cov_prev, pool.pnext)
-        now = step_errors(*args, pool.picks[:-1], pool.picks[-1:], opt)[0]
-        ok[ok] = step_errors(*args, pool.picks, np.flatnonzero(ok), opt) <= now
-        allowed[mine] = ok
-        for a in here[len(here) - added :] if added else (theta0, *here):
-            cost[mine[ok]] = np.minimum(cost[mine[ok]], visit_s(robot, opt.run, p0, a, q[ok]))
-
-    for k in range(len(pools)):
-        update(k, 0)
+    c = _Candidates(robot, theta0, q_all, via_all, pools, opt)
+    x = x_all[c.cand]
     budget = opt.points if opt.points is not None else opt.points_per_step * len(pools)
     while sum(len(p.picks) for p in pools) < budget:
         a = x @ sigma
         gain = np.einsum("nm,mk,nk->n", a, w, a) / (s2 + np.einsum("nm,nm->n", a, x))
-        ranked = np.flatnonzero(allowed)
-        ranked = ranked[np.argsort(-gain[ranked] / cost[ranked], kind="stable")]
-        best = _first_linked(ranked, step, local, pools)
+        best = _first_linked(c, gain)
         if best is None:
             break
-        k = int(step[best])
-        pools[k].picks.append(int(local[best]))
+        k = int(c.step[best])
+        pools[k].picks.append(int(c.local[best]))
         sx = sigma @ x[best]
         sigma = sigma - np.outer(sx, sx) / (s2 + x[best] @ sx)
-        update(k, 1)
+        c.update(k, 1)
 
 
-def _first_linked(ranked: np.ndarray, step: np.ndarray, local: np.ndarray, pools) -> int | None:
+class _Candidates:
+    """Every step's candidates in the joint design: which may join, and the time each adds.
+
+    ``cand`` (screened candidates), ``step`` (the step's index) and ``local`` (the index
+    in the step's pool) per candidate of all steps; ``allowed`` whether it may join its
+    step now (:meth:`update`). The robot time a candidate would add is the least
+    :func:`~wirecal.solver.plan_tour.visit_s` from the configurations counted for it
+    (θ0 and its step's points while it was allowed: :meth:`update`); it is worked out
+    only for candidates at the head of the ranking (:meth:`head`), the others ranked by
+    a lower bound of it (:func:`~wirecal.solver.plan_tour.visit_floor_s`), which gives
+    the ranking that working out every candidate's would.
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        theta0: np.ndarray,
+        q_all: np.ndarray,
+        via_all: np.ndarray,
+        pools: list[StepPool],
+        opt: PlanOptions,
+    ):
+        self.robot, self.theta0, self.pools, self.opt = robot, theta0, pools, opt
+        self.cand = np.concatenate([p.iso for p in pools])
+        self.q = q_all[self.cand]
+        self.step = np.concatenate([np.full(len(p.iso), k) for k, p in enumerate(pools)])
+        self.local = np.concatenate([np.arange(len(p.iso)) for p in pools])
+        self.p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
+        self.has_via = ~np.isnan(via_all[self.cand, 0])
+        self.allowed = np.ones(len(self.cand), bool)
+        # per step, the configurations counted and for which candidates; per candidate
+        # the robot time from those counted so far (`counted` of them) and the bound
+        self.starts: list[list[tuple[np.ndarray, np.ndarray]]] = [[] for _ in pools]
+        self.cost = np.full(len(self.cand), np.inf)
+        self.counted = np.zeros(len(self.cand), int)
+        self.floor = np.full(len(self.cand), np.inf)
+        for k in range(len(pools)):
+            self.update(k, 0)
+
+    def update(self, k: int, added: int) -> None:
+        """Recompute step k's admissible candidates; count θ0 and its points for them.
+
+        All of the step's points, or only the ``added`` last ones (the others counted).
+        """
+        opt = self.opt
+        mine = np.flatnonzero(self.step == k)
+        pool, q = self.pools[k], self.q[mine]
+        here = self.q[mine[pool.picks]]
+        spread = np.min(np.max(np.abs(q[:, None] - here[None]), axis=2), axis=1)
+        ok = spread >= opt.spread_deg
+        if self.has_via[mine][pool.picks].any():
+            ok &= ~self.has_via[mine]
+        args = (pool.pj, pool.pprev, pool.cov_prev, pool.pnext)
+        now = step_errors(*args, pool.picks[:-1], pool.picks[-1:], opt)[0]
+        ok[ok] = step_errors(*args, pool.picks, np.flatnonzero(ok), opt) <= now
+        self.allowed[mine] = ok
+        for a in here[len(here) - added :] if added else (self.theta0, *here):
+            self.starts[k].append((a, mine[ok]))
+            floor = visit_floor_s(self.robot, opt.run, a, q[ok])
+            self.floor[mine[ok]] = np.minimum(self.floor[mine[ok]], floor)
+
+    def _count(self, idx: np.ndarray) -> None:
+        """Work out the robot time of candidates ``idx`` from every configuration counted.
+
+        The moves from the configurations not yet counted for them, all in one evaluation.
+        """
+        starts, ends = [np.zeros((0, self.q.shape[1]))], [np.zeros(0, int)]
+        for k in np.unique(self.step[idx]):
+            mine = idx[self.step[idx] == k]
+            for n, (a, members) in enumerate(self.starts[k]):
+                new = mine[(self.counted[mine] <= n) & np.isin(mine, members)]
+                starts.append(np.broadcast_to(a, (len(new), len(a))))
+                ends.append(new)
+        end = np.concatenate(ends)
+        t = visit_s(self.robot, self.opt.run, self.p0, np.concatenate(starts), self.q[end])
+        np.minimum.at(self.cost, end, t)
+        self.counted[idx] = [len(self.starts[k]) for k in self.step[idx]]
+
+    def head(self, gain: np.ndarray, n: int) -> np.ndarray:
+        """Return the first ``n`` allowed candidates by ``gain`` per second of robot time.
+
+        The order of a stable sort of them all by gain per second; where a candidate's
+        time is not worked out, its bound ranks it no lower, so the candidates ranked
+        above the first ``n`` by bounds are worked out until those ``n`` are exact.
+        """
+        ranked = np.flatnonzero(self.allowed)
+        while True:
+            stale = (
+                self.counted[ranked] < np.array([len(s) for s in self.starts])[self.step[ranked]]
+            )
+            per_s = -gain[ranked] / np.where(stale, self.floor[ranked], self.cost[ranked])
+            order = ranked[np.argsort(per_s, kind="stable")]
+            if not stale[np.isin(ranked, order[:n])].any():
+                return order[:n]
+            ahead = order[: 4 * n]
+            self._count(ahead[np.isin(ahead, ranked[stale])])
+
+
+def _first_linked(c: _Candidates, gain: np.ndarray) -> int | None:
     """Return the first ranked candidate with clear moves from its step's points, or None.
 
-    Checked in blocks of eight, one sweep per step and block.
+    Ranked by ``gain`` per second of robot time (:meth:`_Candidates.head`); checked in
+    blocks of eight, one sweep per step and block.
     """
-    for start in range(0, len(ranked), 8):
-        block = ranked[start : start + 8]
+    for end in itertools.count(8, 8):
+        block = c.head(gain, end)[end - 8 :]
+        if not len(block):
+            return None
         linked = np.zeros(len(block), bool)
-        for k in np.unique(step[block]):
-            mine = step[block] == k
-            linked[mine] = pools[k].links.ok(pools[k].picks, local[block[mine]])
+        for k in np.unique(c.step[block]):
+            mine = c.step[block] == k
+            pool = c.pools[k]
+            linked[mine] = pool.links.ok(pool.picks, c.local[block[mine]])
         if linked.any():
             return int(block[np.argmax(linked)])
     return None

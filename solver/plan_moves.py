@@ -34,10 +34,9 @@ def move_samples(
     """
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
     count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg)).astype(int)
-    move = np.repeat(np.arange(len(a)), count)
     first = np.cumsum(count) - count
-    t = (np.arange(len(move)) - first[move] + 1) / count[move]
-    return a[move] + t[:, None] * (b[move] - a[move]), first
+    t = (np.arange(count.sum()) - np.repeat(first - 1, count)) / np.repeat(count, count)
+    return np.repeat(a, count, axis=0) + t[:, None] * np.repeat(b - a, count, axis=0), first
 
 
 CHUNK_SAMPLES = 4096
@@ -139,13 +138,20 @@ def move_ok(robot: Robot, model, p0, a, b, opt: PlanOptions, step_deg: float = 2
     a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
     ok = np.abs(b[:, -1] - a[:, -1]) <= 180
     longest = robot.encoder.range_mm - opt.range_margin_mm
+    samples = np.sum(np.ceil(np.max(np.abs(b - a), axis=1) / step_deg))
     # a quick pass over every fourth sample rejects most blocked moves (a gap there is a
-    # gap of the full sampling); the moves it passes then get the other samples
-    for rest in (False, True):
+    # gap of the full sampling); the moves it passes then get the other samples. A few
+    # moves are swept in one pass: a pass's fixed cost outweighs what the quick one saves
+    passes = ((4, False), (4, True)) if samples > ONE_PASS_SAMPLES else ((1, False),)
+    for every, rest in passes:
         idx = np.flatnonzero(ok)
-        gap = move_clearance(robot, model, p0, a[idx], b[idx], step_deg, 4, longest, rest)
+        gap = move_clearance(robot, model, p0, a[idx], b[idx], step_deg, every, longest, rest)
         ok[idx] = gap >= opt.clearance_mm
     return ok
+
+
+ONE_PASS_SAMPLES = 1024
+"""Moves with at most this many samples in all are swept in one pass (:func:`move_ok`)."""
 
 
 def reach_ok(
@@ -153,13 +159,25 @@ def reach_ok(
 ) -> np.ndarray:
     """Return whether each point q is reached from θ0 with the wire clear.
 
-    Directly, or through its via point (NaN row: none).
+    Directly, or through its via point (NaN row: none): :func:`reach_and_move_ok`.
+    """
+    return reach_and_move_ok(robot, model, p0, theta0, q, via, q[:0], q[:0], opt, step_deg)[0]
+
+
+def reach_and_move_ok(
+    robot: Robot, model, p0, theta0, q, via, a, b, opt: PlanOptions, step_deg: float = 2.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return whether each point q is reached from θ0, and whether each move a → b is safe.
+
+    Reached directly, or through its via point (NaN row: none); the moves from θ0 to the
+    points and to the via points are swept together with the moves a → b (one sweep's
+    fixed cost, :func:`move_ok`), then the second legs where the first is clear.
     """
     direct = np.isnan(via[:, 0])
-    ok = np.zeros(len(q), bool)
-    ok[direct] = move_ok(robot, model, p0, theta0, q[direct], opt, step_deg)
-    viaed = np.flatnonzero(~direct)
-    ok[viaed] = move_ok(robot, model, p0, theta0, via[viaed], opt, step_deg)
-    viaed = viaed[ok[viaed]]  # the second leg only where the first is clear
+    first = np.where(direct[:, None], q, via)
+    starts = np.vstack([np.broadcast_to(theta0, first.shape), a])
+    clear = move_ok(robot, model, p0, starts, np.vstack([first, b]), opt, step_deg)
+    ok = clear[: len(q)]
+    viaed = np.flatnonzero(~direct & ok)
     ok[viaed] = move_ok(robot, model, p0, via[viaed], q[viaed], opt, step_deg)
-    return ok
+    return ok, clear[len(q) :]

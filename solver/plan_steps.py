@@ -20,7 +20,7 @@ from wirecal.solver.accuracy import stepwise_map
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan_candidates import blocked
-from wirecal.solver.plan_moves import move_ok, reach_ok
+from wirecal.solver.plan_moves import reach_and_move_ok
 from wirecal.solver.plan_options import PlanOptions, Progress
 from wirecal.solver.plan_tour import tour
 from wirecal.solver.robot import Robot
@@ -120,24 +120,34 @@ class Links:
     def ok(self, sources: list[int], js: np.ndarray) -> np.ndarray:
         """Return whether each of ``js`` is reached and linked to every one of ``sources``."""
         js = np.asarray(js, int)
-        new = np.unique(js[self.reached[js] == 0])
-        if len(new):
-            reach = reach_ok(
-                self.robot, self.model, self.p0, self.theta0, self.q[new], self.via[new], self.opt
-            )
-            self.reached[new] = np.where(reach, 1, 2)
+        self._work_out(sources, js)
         out = self.reached[js] == 1
         near = js[out]
         i = np.repeat(np.asarray(sources, int), len(near))
         j = np.tile(near, len(sources))
-        todo = self.known[i, j] == 0
-        if todo.any():
-            clear = move_ok(
-                self.robot, self.model, self.p0, self.q[i[todo]], self.q[j[todo]], self.opt
-            )
-            self.known[i[todo], j[todo]] = np.where(clear, 1, 2)
         out[out] = np.all((self.known[i, j] == 1).reshape(len(sources), len(near)), axis=0)
         return out
+
+    def _work_out(self, sources: list[int], js: np.ndarray) -> None:
+        """Work out what :meth:`ok` asks and is not known yet, in one sweep.
+
+        Whether the candidates ``js`` are reached, and the moves to them from ``sources``
+        (also for those whose reach is not known yet: one sweep costs less than two).
+        """
+        new = np.unique(js[self.reached[js] == 0])
+        maybe = js[self.reached[js] != 2]
+        i = np.repeat(np.asarray(sources, int), len(maybe))
+        j = np.tile(maybe, len(sources))
+        todo = self.known[i, j] == 0
+        i, j = i[todo], j[todo]
+        if not len(new) and not len(i):
+            return
+        q, via = self.q, self.via
+        reach, clear = reach_and_move_ok(
+            self.robot, self.model, self.p0, self.theta0, q[new], via[new], q[i], q[j], self.opt
+        )
+        self.reached[new] = np.where(reach, 1, 2)
+        self.known[i, j] = np.where(clear, 1, 2)
 
 
 def choose_points(
@@ -250,64 +260,25 @@ def step_by_step(
     for the stepwise design the paper's choice for comparison. Parameters that cannot be
     isolated go into ``excluded``.
     """
-    model = robot.nominal
-    p0 = tool_position(model, np.radians(theta0)[None])[0]
-    has_via = ~np.isnan(via_all[:, 0])
+    p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
     col = {n: k for k, n in enumerate(remaining)}
     n_params = len(remaining)
     remaining = list(remaining)
     pools: list[StepPool] = []
-    k_first = opt.points_per_step if opt.method == "stepwise" else opt.min_points
     while remaining:
         best = most_informative(psi, col, remaining, opt)
         if best is None:
-            for j in remaining:
-                excluded[j] = (
-                    f"cannot be isolated: no {opt.points_per_step} points leave it alone "
-                    f"among {', '.join(t for t in remaining if t != j)}"
-                )
+            excluded.update(_not_isolated(remaining, opt))
             break
         j, iso = best
-        # the most sensitive isolating points; their moves from θ0 are checked finely
-        # when a choice comes to them (Links)
-        iso = iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")[:600]]
-        order = [p.parameter for p in pools]
-        prev = np.array([col[t] for t in order], int)
-        nxt = np.array([col[t] for t in remaining if t != j], int)
-        # error covariance of the earlier estimates (linearised stepwise map)
-        cov_prev = (
-            _stepwise_cov(model, theta0, order, [q_all[p.iso[p.picks]] for p in pools], opt)
-            if order
-            else np.zeros((0, 0))
-        )
-        pool = StepPool(
-            j,
-            iso,
-            Links(robot, model, p0, theta0, q_all[iso], via_all[iso], opt),
-            psi[iso, col[j]],
-            psi[np.ix_(iso, prev)] if len(prev) else np.zeros((len(iso), 0)),
-            psi[np.ix_(iso, nxt)] if len(nxt) else np.zeros((len(iso), 0)),
-            cov_prev,
-            [],
-        )
-        args = (pool.pj, pool.pprev, cov_prev, pool.pnext, q_all[iso], has_via[iso], pool.links)
-        ours = choose_points(*args, replace(opt, points_per_step=k_first), "ours")
-        if ours is None:
-            excluded[j] = f"too few isolating points {opt.spread_deg:g} deg apart"
-            remaining.remove(j)
-            continue
-        if opt.method == "stepwise":
-            paper = choose_points(*args, opt, "paper")
-            pool.leak_paper = (
-                step_error(pool.pj[paper], pool.pprev[paper], cov_prev, pool.pnext[paper], opt)
-                if paper is not None
-                else np.inf
-            )
-        pts = iso[ours]
-        path = tour(robot, model, p0, theta0, q_all[pts], via_all[pts], opt)
-        pool.picks = [ours[i] for i in path] if path is not None else ours
-        pools.append(pool)
         remaining.remove(j)
+        pool = _step_pool(
+            robot, p0, theta0, (q_all, via_all, psi, col), j, iso, pools, remaining, opt
+        )
+        if not _choose_step_points(robot, p0, theta0, q_all, via_all, pool, opt):
+            excluded[j] = f"too few isolating points {opt.spread_deg:g} deg apart"
+            continue
+        pools.append(pool)
         tick(0.5 + 0.4 * len(pools) / n_params)
     if not pools:
         raise WirecalError(
@@ -316,3 +287,89 @@ def step_by_step(
             "another --theta0"
         )
     return pools
+
+
+def _not_isolated(remaining: list[str], opt: PlanOptions) -> dict[str, str]:
+    """Return why each parameter of ``remaining`` is not planned: none can be isolated."""
+    return {
+        j: f"cannot be isolated: no {opt.points_per_step} points leave it alone "
+        f"among {', '.join(t for t in remaining if t != j)}"
+        for j in remaining
+    }
+
+
+def _step_pool(
+    robot: Robot,
+    p0: np.ndarray,
+    theta0: np.ndarray,
+    screened: tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, int]],
+    j: str,
+    iso: np.ndarray,
+    pools: list[StepPool],
+    later: list[str],
+    opt: PlanOptions,
+) -> StepPool:
+    """Return step j's :class:`StepPool`, no points chosen yet.
+
+    ``screened``: the usable candidates, their via points, their Ψ and Ψ's column per
+    parameter; ``iso`` the candidates isolating j, of which the 600 most sensitive are
+    kept; ``pools`` the steps before (their points give the earlier estimates' error
+    covariance), ``later`` the parameters after j.
+    """
+    q_all, via_all, psi, col = screened
+    # the most sensitive isolating points; their moves from θ0 are checked finely
+    # when a choice comes to them (Links)
+    iso = iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")[:600]]
+    order = [p.parameter for p in pools]
+    prev = np.array([col[t] for t in order], int)
+    nxt = np.array([col[t] for t in later], int)
+    # error covariance of the earlier estimates (linearised stepwise map)
+    cov_prev = (
+        _stepwise_cov(robot.nominal, theta0, order, [q_all[p.iso[p.picks]] for p in pools], opt)
+        if order
+        else np.zeros((0, 0))
+    )
+    return StepPool(
+        j,
+        iso,
+        Links(robot, robot.nominal, p0, theta0, q_all[iso], via_all[iso], opt),
+        psi[iso, col[j]],
+        psi[np.ix_(iso, prev)] if len(prev) else np.zeros((len(iso), 0)),
+        psi[np.ix_(iso, nxt)] if len(nxt) else np.zeros((len(iso), 0)),
+        cov_prev,
+        [],
+    )
+
+
+def _choose_step_points(
+    robot: Robot,
+    p0: np.ndarray,
+    theta0: np.ndarray,
+    q_all: np.ndarray,
+    via_all: np.ndarray,
+    pool: StepPool,
+    opt: PlanOptions,
+) -> bool:
+    """Choose a step's points into ``pool.picks``, in visiting order; False: too few.
+
+    The leak-aware choice (:func:`choose_points`) of ``points_per_step`` points
+    (``min_points`` for the joint design); for the stepwise design the paper's choice
+    beside it (``pool.leak_paper``).
+    """
+    k_first = opt.points_per_step if opt.method == "stepwise" else opt.min_points
+    has_via = ~np.isnan(via_all[pool.iso, 0])
+    args = (pool.pj, pool.pprev, pool.cov_prev, pool.pnext, q_all[pool.iso], has_via, pool.links)
+    ours = choose_points(*args, replace(opt, points_per_step=k_first), "ours")
+    if ours is None:
+        return False
+    if opt.method == "stepwise":
+        paper = choose_points(*args, opt, "paper")
+        pool.leak_paper = (
+            step_error(pool.pj[paper], pool.pprev[paper], pool.cov_prev, pool.pnext[paper], opt)
+            if paper is not None
+            else np.inf
+        )
+    pts = pool.iso[ours]
+    path = tour(robot, robot.nominal, p0, theta0, q_all[pts], via_all[pts], opt)
+    pool.picks = [ours[i] for i in path] if path is not None else ours
+    return True

@@ -15,8 +15,10 @@ from wirecal.solver.plan_moves import move_ok
 from wirecal.solver.plan_options import PlanOptions
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import (
+    MOVE_OVERHEAD_S,
     READING_INTERVAL_S,
     RunParameters,
+    cruise_per_pct,
     move_durations_s,
     move_profiles,
     move_speeds_pct,
@@ -30,15 +32,30 @@ def visit_s(
     """Return the robot time (s) a point adds when visited from ``start_deg``.
 
     The move at the SPEED the wire allows, the predicted settle and the readings (the
-    run's time model).
+    run's time model). ``start_deg``: one configuration (n,) or one per point (M, n).
     """
     if not len(ends_deg):
         return np.zeros(0)
-    starts = np.repeat(np.asarray(start_deg, dtype=float)[None], len(ends_deg), axis=0)
+    starts = np.broadcast_to(np.asarray(start_deg, dtype=float), np.shape(ends_deg))
     moves = move_profiles(robot, robot.nominal, p0, starts, ends_deg)
     pct = move_speeds_pct(robot, moves, run.speed_pct)
     settle = settle_time_s(moves.vibration_mm(pct), robot.encoder.mm_per_count, run)
     return moves.duration_s(pct) + settle + READING_INTERVAL_S * (run.readings - 1)
+
+
+def visit_floor_s(
+    robot: Robot, run: RunParameters, start_deg: np.ndarray, ends_deg: np.ndarray
+) -> np.ndarray:
+    """Return a lower bound (s) of :func:`visit_s`, from the joint motions alone.
+
+    The move at ``run.speed_pct`` (the wire may only ask for less), the settle of a stop
+    without vibration and the readings: each term at most its value in :func:`visit_s`.
+    """
+    dq = np.asarray(ends_deg, dtype=float) - np.asarray(start_deg, dtype=float)
+    with np.errstate(divide="ignore"):
+        move = 1.0 / (cruise_per_pct(robot, dq) * run.speed_pct) + MOVE_OVERHEAD_S
+    settle = settle_time_s(np.zeros(len(dq)), robot.encoder.mm_per_count, run)
+    return move + settle + READING_INTERVAL_S * (run.readings - 1)
 
 
 def tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.ndarray | None:

@@ -230,18 +230,24 @@ def move_profiles(
         rate = np.einsum("msc,msc->ms", wire, dp) / length
     rate = np.where(length > AT_MOUNT_MM, rate, tool_rate)  # leaving the mount: tool's speed
     curve = np.gradient(rate, s, axis=1)
-    travel = np.abs(dq) / robot.joint_speed_deg_s
-    slowest = travel.max(axis=1)
-    with np.errstate(divide="ignore"):
-        cruise_per_pct = np.where(slowest > 0, 0.01 / slowest, np.inf)
     seg = np.linalg.norm(np.diff(p, axis=1), axis=2).sum(axis=1)
     return Moves(
         np.abs(rate).max(axis=1),
         np.abs(curve).max(axis=1),
         tool_rate.max(axis=1),
         seg,
-        cruise_per_pct,
+        cruise_per_pct(robot, dq),
     )
+
+
+def cruise_per_pct(robot: Robot, dq_deg: np.ndarray) -> np.ndarray:
+    """ṡ (1/s) at 1 % program speed of moves by ``dq_deg`` (M, n): the slowest joint's.
+
+    Infinite for a move without travel.
+    """
+    slowest = (np.abs(dq_deg) / robot.joint_speed_deg_s).max(axis=1)
+    with np.errstate(divide="ignore"):
+        return np.where(slowest > 0, 0.01 / slowest, np.inf)
 
 
 def move_speeds_pct(robot: Robot, moves: Moves, speed_pct: float) -> np.ndarray:
