@@ -6,9 +6,10 @@ and the plan ``wirecal plan`` designs for that file at the shipped plan's θ0, w
 points for the compliances, :mod:`~wirecal.solver.plan_compliance`): ``--truths`` true
 arms (offsets within ±1 deg/mm, compliances uniform in 2–8 µrad/(N·m): issue 30's range,
 :data:`~wirecal.solver.formats.truth.TRUE_COMPLIANCE_URAD_PER_NM`), each simulated with a
-realistic encoder and the twin's repeatability (0.02 mm) and solved as ``wirecal solve``
-does (:func:`~wirecal.app.coverage.compliance_trial`); the same seeds again with a rigid
-true arm (compliances 0). Printed per arm:
+realistic encoder and the twin's repeatability (0.02 mm, declared in the robot file as
+``repeatability_mm``: the zero readings' mean, :mod:`~wirecal.solver.zero_reading`) and
+solved as ``wirecal solve`` does (:func:`~wirecal.app.coverage.compliance_trial`); the
+same seeds again with a rigid true arm (compliances 0). Printed per arm:
 
 * which compliances the plan identifies, and per identified c_j the share of runs within
   ±10 % of its truth, and the median |error|/σ;
@@ -51,11 +52,16 @@ from wirecal.solver.simulate import Unmodelled  # noqa: E402
 PLANS = {"viper_s650": "paper_plan.toml", "ur5e": "plan.toml", "abb_irb120": "plan.toml"}
 """Each arm's shipped plan."""
 
+REPEATABILITY_MM = 0.02
+"""The true arms' repeatability (the twin's), declared in the robot file so that the zero
+readings are read as what they are (:mod:`~wirecal.solver.zero_reading`)."""
+
 
 def _arm(arm: str) -> tuple[Robot, Path]:
     folder = Path(__file__).resolve().parents[1] / "examples" / arm
     data = tomllib.loads((folder / "robot.toml").read_text())
     data["calibration"]["compliances"] = ["c2", "c3", "c4", "c5"]
+    data["calibration"]["repeatability_mm"] = REPEATABILITY_MM
     return with_gauge(robot_from_dict(data, str(folder / "robot.toml"))), folder / PLANS[arm]
 
 
@@ -119,9 +125,10 @@ def main() -> None:
         print(f"{arm}, gauge, {args.truths} truths (2–8 µrad/(N·m)):")
         for name, plan in _plans(robot, plan_path, args.plans):
             t0 = time.perf_counter()
+            twin = Unmodelled(REPEATABILITY_MM, 0.0)
             runs = {
                 compliant: [
-                    compliance_trial(robot, plan, seed, Unmodelled(0.02, 0.0), compliant)
+                    compliance_trial(robot, plan, seed, twin, compliant)
                     for seed in range(1, args.truths + 1)
                 ]
                 for compliant in (True, False)

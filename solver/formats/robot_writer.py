@@ -188,6 +188,8 @@ def robot_file_text(
     ]
     if robot.compliances:
         lines.append("compliances = [" + ", ".join(json.dumps(c) for c in robot.compliances) + "]")
+    if robot.repeatability_mm is not None:
+        lines.append(f"repeatability_mm = {_num(robot.repeatability_mm)}")
     if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M and not robot.compliances:
         lines.append(f"gravity_sag_deg_per_m = {_num(robot.gravity_sag_deg_per_m)}")
     if robot.link_radius_mm is not None:
