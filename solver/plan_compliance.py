@@ -9,7 +9,8 @@ geometry being estimated with them (the joint method's Fisher information, the c
 ``solve`` reports), per second of robot time it adds, until the added time reaches
 :data:`TIME_SHARE` of the plan's. A point joins the step whose parameter it isolates, under
 the joint design's rules (a clear move from each of the step's points, ``spread_deg`` from
-them, at most one via point per step). Without ``compliances`` nothing changes.
+them, at most one via point per step, no rise of the step's step-by-step error: that method
+stays as good). Without ``compliances`` nothing changes.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from wirecal.solver.plan import Plan, Step
 from wirecal.solver.plan_joint import _first_linked
 from wirecal.solver.plan_options import PlanOptions
 from wirecal.solver.plan_predict import robot_time
-from wirecal.solver.plan_steps import StepPool
+from wirecal.solver.plan_steps import StepPool, step_errors
 from wirecal.solver.plan_tour import visit_s
 from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import sensitivity
@@ -148,8 +149,7 @@ class _Costs:
     """The robot time (s) each candidate adds, worked out on demand and kept up to date.
 
     A candidate's visit from θ0 or the nearest of its step's points (the joint design's
-    time model); allowed when ``spread_deg`` from every point of its step and without a
-    via point when the step has one.
+    time model); whether it may join its step (:meth:`_allow`).
     """
 
     def __init__(self, robot, theta0, q_all, via_all, pools: list[StepPool], opt: PlanOptions):
@@ -162,21 +162,30 @@ class _Costs:
         self.cost = np.full(len(self.cand), np.nan)  # nan: not worked out yet
         self.allowed = np.ones(len(self.cand), bool)
         for k in range(len(pools)):
-            self._restrict(k, self._picked(k))
+            self._allow(k)
 
     def _picked(self, k: int) -> np.ndarray:
         """Return step k's points (deg)."""
         pool = self.pools[k]
         return self.q[np.flatnonzero(self.step == k)[pool.picks]]
 
-    def _restrict(self, k: int, points: np.ndarray) -> None:
-        """Forbid step k's candidates within ``spread_deg`` of ``points`` or with a via."""
-        mine = np.flatnonzero(self.step == k)
+    def _allow(self, k: int) -> None:
+        """Work out which of step k's candidates may join it (the joint design's rules).
+
+        ``spread_deg`` from each of its points, no via point when it has one, and no rise
+        of its step-by-step error (:func:`~wirecal.solver.plan_steps.step_errors`).
+        """
+        mine, pool, points = np.flatnonzero(self.step == k), self.pools[k], self._picked(k)
+        ok = np.ones(len(mine), bool)
         if len(points):
             gap = np.max(np.abs(self.q[mine][:, None] - points[None]), axis=2)
-            self.allowed[mine] &= np.min(gap, axis=1) >= self.opt.spread_deg
-        if self.has_via[mine][self.pools[k].picks].any():
-            self.allowed[mine] &= ~self.has_via[mine]
+            ok = np.min(gap, axis=1) >= self.opt.spread_deg
+        if self.has_via[mine][pool.picks].any():
+            ok &= ~self.has_via[mine]
+        args = (pool.pj, pool.pprev, pool.cov_prev, pool.pnext)
+        now = step_errors(*args, pool.picks[:-1], pool.picks[-1:], self.opt)[0]
+        ok[ok] = step_errors(*args, pool.picks, np.flatnonzero(ok), self.opt) <= now
+        self.allowed[mine] = ok
 
     def _visit(self, start: np.ndarray, js: np.ndarray) -> np.ndarray:
         """Return the robot time of the moves from ``start`` to candidates ``js``."""
@@ -195,7 +204,7 @@ class _Costs:
         """Add candidate ``j`` to its step: the step's allowed candidates and costs change."""
         k = int(self.step[j])
         self.pools[k].picks.append(int(self.local[j]))
-        self._restrict(k, self.q[j][None])
+        self._allow(k)
         known = np.flatnonzero((self.step == k) & ~np.isnan(self.cost))
         if len(known):
             self.cost[known] = np.minimum(self.cost[known], self._visit(self.q[j], known))

@@ -46,9 +46,13 @@ def test_plan_adds_points_that_identify_the_shoulder_and_elbow_within_the_time()
     assert aware.plan.n_points > plain.plan.n_points
     assert aware.robot_time_s <= 1.25 * plain.robot_time_s  # issue 30's time limit
     before, after = _sigma(robot, plain.plan), _sigma(robot, aware.plan)
-    # Figures at commit time: c2 0.265 -> 0.197, c3 1.0 -> 0.53 µrad/(N·m).
-    assert after["c2"] < 0.85 * before["c2"]
+    # Figures at commit time: c2 0.265 -> 0.23, c3 1.0 -> 0.574 µrad/(N·m).
+    assert after["c2"] < 0.92 * before["c2"]
     assert after["c3"] < 0.7 * before["c3"]
+    # The step-by-step method stays as good: no step's expected error rises.
+    for mine, theirs in zip(aware.steps, plain.steps, strict=True):
+        assert mine.parameter == theirs.parameter
+        assert mine.leak_ours <= theirs.leak_ours * (1 + 1e-9)
     assert max(after["c2"], after["c3"]) <= SIGMA_LIMIT_URAD_PER_NM
     lines = aware.compliance_lines
     assert "points added for c2, c3." in lines[0]  # c4, c5: no plan of this time identifies
