@@ -31,6 +31,7 @@ from wirecal.solver.plan_steps import StepPool, step_errors
 from wirecal.solver.plan_tour import visit_s
 from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import sensitivity
+from wirecal.solver.verdict import READING_NOISE_MM
 
 TIME_SHARE = 0.15
 """Robot time the compliance points may add, as a share of the plan's before them: issue
@@ -57,34 +58,44 @@ def add_compliance_points(
 
     ``names``: the planned geometric parameters. Targeted are the compliances whose σ
     could reach :data:`~wirecal.solver.compliance.SIGMA_LIMIT_URAD_PER_NM` with the points
-    the time allows (:func:`_reach`); no such plan identifies the others. The lines give
-    each compliance's σ predicted by the analysis ``solve`` makes
-    (:func:`~wirecal.solver.compliance.compliance_observability`), with and without them.
+    the time allows (:func:`_reach`); no such plan identifies the others. A target the
+    added points leave unidentified by the analysis ``solve`` makes
+    (:func:`~wirecal.solver.compliance.compliance_observability`, at
+    :data:`~wirecal.solver.verdict.READING_NOISE_MM`) is dropped and the points designed
+    again for the others: points that vary a torque without identifying its compliance
+    only let the unmodelled sag bend the geometry more. The lines give each compliance's
+    predicted σ, with and without the points.
     """
     comps = list(robot.compliances)
-    model = robot.nominal
-    psi = sensitivity(model, q_all, theta0, [*names, *comps]).psi  # mm per deg, mm, µrad/(N·m)
-    s2 = opt.sigma_mm**2
+    psi = sensitivity(robot.nominal, q_all, theta0, [*names, *comps]).psi  # mm/deg, µrad/(N·m)
+    s2 = READING_NOISE_MM**2
     prior = np.r_[np.full(len(names), opt.prior), np.full(len(comps), PRIOR_COMPLIANCE_URAD_PER_NM)]
-    info = np.diag(prior**-2.0)
+    first = [list(p.picks) for p in pools]
     picked = [int(p.iso[i]) for p in pools for i in p.picks]
-    info = info + psi[picked].T @ psi[picked] / s2
+    info = np.diag(prior**-2.0) + psi[picked].T @ psi[picked] / s2
     n_extra = int(np.ceil(TIME_SHARE * len(picked)))
     target = [j for j in range(len(names), psi.shape[1]) if _reach(psi, info, j, n_extra, s2)]
-    before = _sigmas(robot, q_all[picked], theta0, names, opt.sigma_mm)
-    if target:
-        budget_s = TIME_SHARE * robot_time(robot, _draft(robot, theta0, pools, q_all), opt.run)
+    before = after = _sigmas(robot, q_all[picked], theta0, names)
+    budget_s = TIME_SHARE * robot_time(robot, _draft(robot, theta0, pools, q_all), opt.run)
+    while target:
         _greedy(robot, theta0, q_all, via_all, psi, info, target, pools, opt, budget_s)
-    picked = [int(p.iso[i]) for p in pools for i in p.picks]
-    after = _sigmas(robot, q_all[picked], theta0, names, opt.sigma_mm)
-    return _lines(before, after, [comps[t - len(names)] for t in target], opt.sigma_mm)
+        picked = [int(p.iso[i]) for p in pools for i in p.picks]
+        after = _sigmas(robot, q_all[picked], theta0, names)
+        missed = [j for j in target if after[comps[j - len(names)]] > SIGMA_LIMIT_URAD_PER_NM]
+        if not missed:
+            break
+        target = [j for j in target if j not in missed]
+        for pool, picks in zip(pools, first, strict=True):
+            pool.picks = list(picks)
+        after = before
+    return _lines(before, after, [comps[t - len(names)] for t in target])
 
 
-def _sigmas(
-    robot: Robot, q: np.ndarray, theta0: np.ndarray, names: list[str], sigma_mm: float
-) -> dict[str, float]:
+def _sigmas(robot: Robot, q: np.ndarray, theta0: np.ndarray, names: list[str]) -> dict[str, float]:
     """Return each compliance's σ (µrad/(N·m)) at points ``q`` as ``solve`` would find it."""
-    found = compliance_observability(robot.nominal, q, theta0, names, robot.compliances, sigma_mm)
+    found = compliance_observability(
+        robot.nominal, q, theta0, names, robot.compliances, READING_NOISE_MM
+    )
     return found.sigma_urad_per_nm
 
 
@@ -107,7 +118,7 @@ def _greedy(
     of all parameters, Σ_o that of the others alone (o: every column but the targets).
     Only the :data:`SHORTLIST` largest gains are costed (:class:`_Costs`).
     """
-    s2 = opt.sigma_mm**2
+    s2 = READING_NOISE_MM**2
     others = np.setdiff1d(np.arange(psi.shape[1]), target)
     costs = _Costs(robot, theta0, q_all, via_all, pools, opt)
     x = psi[costs.cand]
@@ -234,14 +245,13 @@ def _draft(robot: Robot, theta0: np.ndarray, pools: list[StepPool], q_all: np.nd
     return Plan(theta0, tuple(p.parameter for p in pools), steps, robot=robot.name)
 
 
-def _lines(
-    before: dict[str, float], after: dict[str, float], target: list[str], sigma_mm: float
-) -> list[str]:
+def _lines(before: dict[str, float], after: dict[str, float], target: list[str]) -> list[str]:
     """Return the header's lines: each compliance's predicted σ, with and without the points."""
     head = (
-        f"Compliances (sigma {sigma_mm:g} mm, estimated with the geometry; identified when "
+        f"Compliances (sigma {READING_NOISE_MM:g} mm per reading, as 'solve' takes it, estimated "
+        "with the geometry; identified when "
         f"sigma <= {SIGMA_LIMIT_URAD_PER_NM:.2f} urad/Nm): points added for "
-        + (", ".join(target) if target else "none (no plan of this time identifies one)")
+        + (", ".join(target) if target else "none: no points of this time identify one")
         + "."
     )
     rows = [

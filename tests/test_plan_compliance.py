@@ -16,27 +16,30 @@ from wirecal.solver.compliance import SIGMA_LIMIT_URAD_PER_NM, compliance_observ
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import robot_from_dict
 from wirecal.solver.planner import design
+from wirecal.solver.verdict import READING_NOISE_MM
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 ASKED = ["c2", "c3", "c4", "c5"]
 
 
-def _ur5e_asking_compliances():
-    data = copy.deepcopy(tomllib.loads((EXAMPLES / "ur5e" / "robot.toml").read_text()))
+def _asking_compliances(arm: str = "ur5e"):
+    data = copy.deepcopy(tomllib.loads((EXAMPLES / arm / "robot.toml").read_text()))
     data["calibration"]["compliances"] = ASKED
-    return robot_from_dict(data, "ur5e.toml")
+    return robot_from_dict(data, f"{arm}.toml")
 
 
 def _sigma(robot, plan) -> dict[str, float]:
     q, _, _ = plan.all_points()
     names = list(robot.parameters)
-    found = compliance_observability(robot.nominal, q, plan.theta0_deg, names, ASKED, 0.011)
+    found = compliance_observability(
+        robot.nominal, q, plan.theta0_deg, names, ASKED, READING_NOISE_MM
+    )
     return found.sigma_urad_per_nm
 
 
 @pytest.mark.slow
 def test_plan_adds_points_that_identify_the_shoulder_and_elbow_within_the_time():
-    robot = _ur5e_asking_compliances()
+    robot = _asking_compliances()
     theta0 = load_plan(EXAMPLES / "ur5e" / "plan.toml", robot).theta0_deg
     plain = design(replace(robot, compliances=()), theta0)
     aware = design(robot, theta0)
@@ -46,7 +49,7 @@ def test_plan_adds_points_that_identify_the_shoulder_and_elbow_within_the_time()
     assert aware.plan.n_points > plain.plan.n_points
     assert aware.robot_time_s <= 1.25 * plain.robot_time_s  # issue 30's time limit
     before, after = _sigma(robot, plain.plan), _sigma(robot, aware.plan)
-    # Figures at commit time: c2 0.265 -> 0.23, c3 1.0 -> 0.574 µrad/(N·m).
+    # Figures at commit time: c2 0.483 -> 0.414, c3 1.82 -> 1.05 µrad/(N·m).
     assert after["c2"] < 0.92 * before["c2"]
     assert after["c3"] < 0.7 * before["c3"]
     # The step-by-step method stays as good: no step's expected error rises.
@@ -65,8 +68,20 @@ def test_plan_adds_points_that_identify_the_shoulder_and_elbow_within_the_time()
 
 
 @pytest.mark.slow
+def test_no_points_are_added_for_compliances_they_would_not_identify():
+    """Viper s650 (assumed masses) at the paper's θ0: c2 would stay at σ ≈ 3.3 > 2.31."""
+    robot = _asking_compliances("viper_s650")
+    theta0 = load_plan(EXAMPLES / "viper_s650" / "paper_plan.toml", robot).theta0_deg
+    plain = design(replace(robot, compliances=()), theta0)
+    aware = design(robot, theta0)
+    assert aware.plan.fingerprint() == plain.plan.fingerprint()
+    assert "points added for none" in aware.compliance_lines[0]
+    assert all("(not identified;" in line for line in aware.compliance_lines[1:])
+
+
+@pytest.mark.slow
 def test_cli_plan_writes_the_compliances_predicted_sigma_in_the_header(tmp_path):
-    robot = _ur5e_asking_compliances()
+    robot = _asking_compliances()
     text = (EXAMPLES / "ur5e" / "robot.toml").read_text()
     robot_file = tmp_path / "ur5e.toml"
     robot_file.write_text(
