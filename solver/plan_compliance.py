@@ -163,7 +163,15 @@ class _Costs:
     time model); whether it may join its step (:meth:`_allow`).
     """
 
-    def __init__(self, robot, theta0, q_all, via_all, pools: list[StepPool], opt: PlanOptions):
+    def __init__(
+        self,
+        robot: Robot,
+        theta0: np.ndarray,
+        q_all: np.ndarray,
+        via_all: np.ndarray,
+        pools: list[StepPool],
+        opt: PlanOptions,
+    ):
         self.robot, self.theta0, self.pools, self.opt = robot, theta0, pools, opt
         self.cand = np.concatenate([p.iso for p in pools])
         self.step = np.concatenate([np.full(len(p.iso), k) for k, p in enumerate(pools)])
