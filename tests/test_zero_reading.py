@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 import copy
+import json
 import tomllib
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
 from wirecal.app.coverage import with_gauge
+from wirecal.cli.main import main
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.plan_file import load_plan
@@ -94,3 +97,21 @@ def test_declared_repeatability_removes_the_geometrys_bias():
     # Without it every length reads ~0.019 mm short and d6 absorbs ~0.011 mm of it.
     assert mean[None] < -0.006
     assert abs(mean[0.02]) < 0.4 * abs(mean[None])  # 10 runs: its standard error ~0.0016
+
+
+def test_cli_solve_reads_the_lengths_from_the_declared_repeatability(tmp_path):
+    plan = str(EXAMPLES / "ur5e" / "plan.toml")
+    text = (EXAMPLES / "ur5e" / "robot.toml").read_text()
+    plain, declared = tmp_path / "plain.toml", tmp_path / "declared.toml"
+    plain.write_text(text)
+    declared.write_text(text.replace("[calibration]\n", "[calibration]\nrepeatability_mm = 0.02\n"))
+    log = tmp_path / "run.log"
+    res = CliRunner().invoke(main, ["simulate", str(plain), plan, "-o", str(log), "--seed", "2"])
+    assert res.exit_code == 0, res.output
+    d6 = {}
+    for path in (plain, declared):
+        res = CliRunner().invoke(main, ["solve", str(path), plan, str(log), "--json"])
+        assert res.exit_code == 0, res.output
+        d6[path.name] = json.loads(res.output)["methods"]["joint"]["parameters"]["d6"]
+    # Every length 18.7 µm longer (E‖δ‖ at the UR5e's θ0, 0.02 mm): d6 takes about 0.6 of it.
+    assert 0.005 < d6["declared.toml"] - d6["plain.toml"] < 0.019
