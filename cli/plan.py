@@ -183,6 +183,16 @@ def plan(
                 "predicted_tool_error_mm": d.predicted,
                 "excluded": d.excluded,
                 "fingerprint": d.plan.fingerprint(),
+                **(
+                    {
+                        "compliance_sigma_urad_per_nm": {
+                            n: (s if np.isfinite(s) else None)
+                            for n, s in d.compliance_sigma.items()
+                        }
+                    }
+                    if d.compliance_sigma
+                    else {}
+                ),
             }
         )
         return

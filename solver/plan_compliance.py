@@ -53,8 +53,8 @@ def add_compliance_points(
     names: list[str],
     pools: list[StepPool],
     opt: PlanOptions,
-) -> list[str]:
-    """Add points to ``pools`` for the robot file's compliances; return the header's lines.
+) -> tuple[list[str], dict[str, float]]:
+    """Add points to ``pools`` for the robot file's compliances; the header's lines and σ.
 
     ``names``: the planned geometric parameters. Targeted are the compliances whose σ
     could reach :data:`~wirecal.solver.compliance.SIGMA_LIMIT_URAD_PER_NM` with the points
@@ -64,7 +64,7 @@ def add_compliance_points(
     :data:`~wirecal.solver.verdict.READING_NOISE_MM`) is dropped and the points designed
     again for the others: points that vary a torque without identifying its compliance
     only let the unmodelled sag bend the geometry more. The lines give each compliance's
-    predicted σ, with and without the points.
+    predicted σ, with and without the points; the σ (µrad/(N·m)) with them.
     """
     comps = list(robot.compliances)
     psi = sensitivity(robot.nominal, q_all, theta0, [*names, *comps]).psi  # mm/deg, µrad/(N·m)
@@ -88,7 +88,7 @@ def add_compliance_points(
         for pool, picks in zip(pools, first, strict=True):
             pool.picks = list(picks)
         after = before
-    return _lines(before, after, [comps[t - len(names)] for t in target])
+    return _lines(before, after, [comps[t - len(names)] for t in target]), after
 
 
 def _sigmas(robot: Robot, q: np.ndarray, theta0: np.ndarray, names: list[str]) -> dict[str, float]:

@@ -59,6 +59,7 @@ class Design:
     search_line: str = ""  # the θ0 search in words, when it went past the first θ0s
     unidentifiable: tuple[str, ...] = ()  # excluded as unobservable or redundant
     compliance_lines: tuple[str, ...] = ()  # the compliances' predicted σ, in words
+    compliance_sigma: dict[str, float] = field(default_factory=dict)  # µrad/(N·m), predicted
 
     def isolation_failed(self) -> list[str]:
         """Return the parameters excluded as not isolated (another θ0 may isolate them)."""
@@ -193,7 +194,7 @@ def design_at(
     compliance = (
         add_compliance_points(robot, theta0, q_all, via_all, remaining, pools, opt)
         if robot.compliances
-        else []
+        else ([], {})
     )
     steps = []
     for k, pool in enumerate(pools):
@@ -230,7 +231,7 @@ def design_at(
         robot=robot.name,
     )
     d = Design(plan, steps, excluded, method=opt.method, unidentifiable=unidentifiable)
-    d.compliance_lines = tuple(compliance)
+    d.compliance_lines, d.compliance_sigma = tuple(compliance[0]), compliance[1]
     d.predicted = predicted_accuracy(robot, plan, unplanned=tuple(excluded))
     d.robot_time_s = robot_time(robot, plan, opt.run)
     d.exit_line = exit_line(robot, plan)

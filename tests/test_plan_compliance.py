@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import json
 import tomllib
 from dataclasses import replace
 from pathlib import Path
@@ -90,8 +91,12 @@ def test_cli_plan_writes_the_compliances_predicted_sigma_in_the_header(tmp_path)
     out = tmp_path / "plan.toml"
     shipped = load_plan(EXAMPLES / "ur5e" / "plan.toml", robot)
     theta0 = ",".join(f"{v:g}" for v in shipped.theta0_deg)
-    res = CliRunner().invoke(main, ["plan", str(robot_file), "--theta0", theta0, "-o", str(out)])
+    args = ["plan", str(robot_file), "--theta0", theta0, "-o", str(out), "--json"]
+    res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
+    sigma = json.loads(res.output)["compliance_sigma_urad_per_nm"]
+    assert sorted(sigma) == ASKED
+    assert sigma["c2"] < 2.31 < sigma["c5"]
     header = [line for line in out.read_text().splitlines() if line.startswith("# compliance c")]
     assert [line.split(":")[0] for line in header] == [f"# compliance {c}" for c in ASKED]
     assert load_plan(out, robot).n_points > shipped.n_points
