@@ -84,7 +84,16 @@ def _summary(d: Design) -> dict[str, object]:
         "predicted_tool_error_mm": d.predicted,
         "excluded": d.excluded,
         "fingerprint": d.plan.fingerprint(),
+        **_compliance_summary(d),
     }
+
+
+def _compliance_summary(d: Design) -> dict[str, object]:
+    """Return the compliances' predicted σ for --json (nothing when none is planned for)."""
+    if not d.compliance_sigma:
+        return {}
+    sigma = {n: (s if np.isfinite(s) else None) for n, s in d.compliance_sigma.items()}
+    return {"compliance_sigma_urad_per_nm": sigma}
 
 
 def _tried(d: Design, theta0_deg: np.ndarray | None) -> str:

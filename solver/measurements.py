@@ -28,6 +28,7 @@ from wirecal.solver.plan import Plan
 from wirecal.solver.readings import Log, Reading
 from wirecal.solver.robot import Robot
 from wirecal.solver.scale import find_slips
+from wirecal.solver.zero_reading import expected_zero_mm
 
 
 @dataclass(frozen=True)
@@ -152,6 +153,10 @@ def check_log(
         drift = _zero_drift(zeros, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
         problems += _steps_without_zero(rows, src)
         distance = _lengths(rows, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
+        if robot.repeatability_mm is not None:  # the zeros read E‖δ‖, not 0 (zero_reading)
+            distance = distance + expected_zero_mm(
+                robot.nominal, first_zero.joints_deg, robot.repeatability_mm
+            )
     else:
         distance = rows.counts
     reference_mm = reference_pairs(rows, robot.encoder, mpc, src, problems)

@@ -20,6 +20,7 @@ from wirecal.solver.identifiability import analyse
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan import Plan, Step
 from wirecal.solver.plan_candidates import blocked, candidates, screen
+from wirecal.solver.plan_compliance import add_compliance_points
 from wirecal.solver.plan_exit import largest_exit_deg
 from wirecal.solver.plan_joint import joint_choice
 from wirecal.solver.plan_options import Method, PlanOptions, Progress
@@ -57,6 +58,8 @@ class Design:
     theta0_tried: int = 1  # θ0s designed to find this plan (1: the θ0 given)
     search_line: str = ""  # the θ0 search in words, when it went past the first θ0s
     unidentifiable: tuple[str, ...] = ()  # excluded as unobservable or redundant
+    compliance_lines: tuple[str, ...] = ()  # the compliances' predicted σ, in words
+    compliance_sigma: dict[str, float] = field(default_factory=dict)  # µrad/(N·m), predicted
 
     def isolation_failed(self) -> list[str]:
         """Return the parameters excluded as not isolated (another θ0 may isolate them)."""
@@ -117,6 +120,7 @@ class Design:
             )
         for name, why in self.excluded.items():
             lines.append(f"not planned: {name}: {why}")
+        lines += self.compliance_lines
         return "\n".join(lines)
 
 
@@ -179,6 +183,11 @@ def design_at(
     pools = step_by_step(robot, theta0, q_all, via_all, psi, remaining, excluded, opt, tick)
     if opt.method == "joint":
         joint_choice(robot, theta0, q_all, via_all, psi, remaining, pools, opt)
+    compliance = (
+        add_compliance_points(robot, theta0, q_all, via_all, remaining, pools, opt)
+        if robot.compliances
+        else ([], {})
+    )
     steps = [
         _step_design(robot, p0, theta0, q_all, via_all, k, pool, opt)
         for k, pool in enumerate(pools)
@@ -190,6 +199,7 @@ def design_at(
         robot=robot.name,
     )
     d = Design(plan, steps, excluded, method=opt.method, unidentifiable=unidentifiable)
+    d.compliance_lines, d.compliance_sigma = tuple(compliance[0]), compliance[1]
     d.predicted = predicted_accuracy(robot, plan, unplanned=tuple(excluded))
     d.robot_time_s = robot_time(robot, plan, opt.run)
     d.exit_line = exit_line(robot, plan)

@@ -173,17 +173,29 @@ def _first_linked(c: _Candidates, gain: np.ndarray) -> int | None:
     """Return the first ranked candidate with clear moves from its step's points, or None.
 
     Ranked by ``gain`` per second of robot time (:meth:`_Candidates.head`); checked in
-    blocks of eight, one sweep per step and block.
+    blocks of eight (:func:`linked_in_block`).
     """
     for end in itertools.count(8, 8):
         block = c.head(gain, end)[end - 8 :]
         if not len(block):
             return None
-        linked = np.zeros(len(block), bool)
-        for k in np.unique(c.step[block]):
-            mine = c.step[block] == k
-            pool = c.pools[k]
-            linked[mine] = pool.links.ok(pool.picks, c.local[block[mine]])
-        if linked.any():
-            return int(block[np.argmax(linked)])
+        best = linked_in_block(block, c.step, c.local, c.pools)
+        if best is not None:
+            return best
     return None
+
+
+def linked_in_block(
+    block: np.ndarray, step: np.ndarray, local: np.ndarray, pools: list[StepPool]
+) -> int | None:
+    """Return the first candidate of ``block`` with clear moves from its step's points, or None.
+
+    One sweep per step: ``step`` and ``local`` give each candidate's step and its index in
+    that step's pool.
+    """
+    linked = np.zeros(len(block), bool)
+    for k in np.unique(step[block]):
+        mine = step[block] == k
+        pool = pools[k]
+        linked[mine] = pool.links.ok(pool.picks, local[block[mine]])
+    return int(block[np.argmax(linked)]) if linked.any() else None

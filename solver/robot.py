@@ -149,6 +149,7 @@ class Robot:
     masses: MassModel | None = None  # [gravity]: the links' and payload's masses (None: rigid)
     compliance_urad_per_nm: np.ndarray | None = None  # [gravity]: c_j, µrad/(N·m) (None: 0)
     compliances: tuple[str, ...] = ()  # [calibration]: compliances to identify (c2, c3, …)
+    repeatability_mm: float | None = None  # [calibration]: the arm's (zero_reading); None: 0
 
     @property
     def n_joints(self) -> int:

@@ -43,6 +43,7 @@ from wirecal.solver.readings import REFERENCE_STEP
 from wirecal.solver.robot import DEFAULT_GRAVITY_SAG_DEG_PER_M, Encoder, Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters, run_timeline
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM
+from wirecal.solver.zero_reading import joint_sigma_rad
 
 RANGE_EXCEEDED = "*Draw-wire range exceeded*"  # the twin's error text for the same cause
 
@@ -112,7 +113,8 @@ class Unmodelled:
     really is.
 
     * repeatability: each move lands with independent joint errors of σ chosen so that the
-      tool point scatters by about ``repeatability_mm``/2 (1σ) at 600 mm;
+      tool point scatters by about ``repeatability_mm``/2 (1σ) at 600 mm
+      (:func:`~wirecal.solver.zero_reading.joint_sigma_rad`);
     * compliance under gravity: joints 2 and 3 sag by ``compliance_deg_per_m`` per metre of
       horizontal lever arm from their axis to the wrist centre (the weight of the forearm,
       wrist and tool; 0.01 deg/m gives ≈ 0.05 mm at full reach): the assumed instance of
@@ -130,7 +132,7 @@ class Unmodelled:
 
         One configuration (n,) or many (N, n); the repeatability's draws come first.
         """
-        sigma = np.degrees(0.5 * self.repeatability_mm / 600.0)
+        sigma = np.degrees(joint_sigma_rad(self.repeatability_mm))
         dq = rng.normal(0.0, sigma, np.shape(q_deg))
         return dq - self.sag_deg(model, q_deg).reshape(dq.shape)
 

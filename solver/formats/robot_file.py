@@ -21,6 +21,7 @@ Format (angles in degrees, lengths in mm)::
     parameters = ["th2", "th3", ...]      # names from wirecal.solver.params
     gravity_sag_deg_per_m = 0.01          # optional: joints 2, 3 sag per m of lever (budget)
     compliances = ["c2", "c3"]            # optional: compliances to identify (needs [gravity])
+    repeatability_mm = 0.02               # optional: the arm's pose repeatability (zero_reading)
     [controller]                          # optional
     language = "vplus"                    # or "urscript" (Universal Robots)
     software = "5.20"                     # the controller's software version (optional)
@@ -95,6 +96,7 @@ from wirecal.solver.formats.robot_values import (
     MAX_GRAVITY_SAG_DEG_PER_M,
     MAX_LENGTH_MM,
     MAX_RANGE_MM,
+    MAX_REPEATABILITY_MM,
     MAX_SCALE_PPM,
     MAX_SPEED_DEG_S,
 )
@@ -135,7 +137,7 @@ _TOP_KEYS = (
 )
 _KEYS = {
     "tool": ("point_mm",),
-    "calibration": ("parameters", "gravity_sag_deg_per_m", "compliances"),
+    "calibration": ("parameters", "gravity_sag_deg_per_m", "compliances", "repeatability_mm"),
     "geometry": ("link_radius_mm",),
     "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg", "wire_point_mm"),
 }
@@ -176,6 +178,9 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     masses, compliance = read_gravity(doc.table("gravity", GRAVITY_KEYS, required=False), dh_rad)
     compliances = _compliances(calibration, n, masses is not None)
     sag = _sag(calibration, bool(compliances))
+    repeatability = calibration.number(
+        "repeatability_mm", None, above=0, hi=MAX_REPEATABILITY_MM, unit="mm"
+    )
     check_units(doc, dh, lo, hi, encoder, radii)
     doc.raise_if_any()
     return Robot(
@@ -197,6 +202,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         masses=masses,
         compliance_urad_per_nm=compliance,
         compliances=tuple(compliances),
+        repeatability_mm=repeatability,
     )
 
 

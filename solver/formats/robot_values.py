@@ -38,6 +38,8 @@ MAX_TEMPCO_PPM_PER_K = 1000.0
 """Largest |temperature coefficient| (ppm/K): metals and plastics are below 200."""
 MAX_GRAVITY_SAG_DEG_PER_M = 1.0
 """Largest gravity sag (deg per metre of lever): 1 deg/m bends a 0.6 m arm by 10 mm."""
+MAX_REPEATABILITY_MM = 1.0
+"""Largest pose repeatability (mm): industrial arms state 0.01–0.1 mm; 1 mm is a slip."""
 METRES_RATIO = 0.01
 """Links adding up to less than this fraction of the encoder's range are in metres."""
 MAX_EXIT_DEG = 90.0

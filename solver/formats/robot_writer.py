@@ -228,6 +228,8 @@ def _calibration_lines(robot: Robot) -> list[str]:
     ]
     if robot.compliances:
         lines.append("compliances = [" + ", ".join(json.dumps(c) for c in robot.compliances) + "]")
+    if robot.repeatability_mm is not None:
+        lines.append(f"repeatability_mm = {_num(robot.repeatability_mm)}")
     if robot.gravity_sag_deg_per_m != DEFAULT_GRAVITY_SAG_DEG_PER_M and not robot.compliances:
         lines.append(f"gravity_sag_deg_per_m = {_num(robot.gravity_sag_deg_per_m)}")
     return lines

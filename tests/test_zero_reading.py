@@ -1,0 +1,117 @@
+"""The zero readings of an arm that does not return exactly to θ0 (solver/zero_reading.py)."""
+
+from __future__ import annotations
+
+import copy
+import json
+import tomllib
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from wirecal.app.coverage import with_gauge
+from wirecal.cli.main import main
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.formats.log import parse_log
+from wirecal.solver.formats.plan_file import load_plan
+from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
+from wirecal.solver.formats.truth import random_errors
+from wirecal.solver.kinematics import tool_position
+from wirecal.solver.measurements import check_log
+from wirecal.solver.simulate import Unmodelled, simulate_log
+from wirecal.solver.solve import solve
+from wirecal.solver.zero_reading import expected_zero_mm
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def _robot(arm: str, **calibration):
+    data = copy.deepcopy(tomllib.loads((EXAMPLES / arm / "robot.toml").read_text()))
+    data["calibration"].update(calibration)
+    return robot_from_dict(data, f"{arm}.toml")
+
+
+@pytest.mark.parametrize(
+    ("arm", "plan"), [("ur5e", "plan.toml"), ("viper_s650", "paper_plan.toml")]
+)
+def test_expected_zero_is_the_mean_of_the_twins_zero_readings(arm, plan):
+    robot = _robot(arm)
+    theta0 = load_plan(EXAMPLES / arm / plan, robot).theta0_deg
+    q = np.tile(theta0, (100_000, 1))
+    landed = q + Unmodelled(0.02, 0.0).joint_errors_deg(robot.nominal, q, np.random.default_rng(3))
+    p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
+    read = np.linalg.norm(tool_position(robot.nominal, np.radians(landed)) - p0, axis=1)
+    # Monte Carlo of 10⁵ returns: its standard error is 0.16 % of the mean.
+    assert expected_zero_mm(robot.nominal, theta0, 0.02) == pytest.approx(read.mean(), rel=0.01)
+    assert 0.005 < read.mean() < 0.03  # the size the docs quote (11–19 µm)
+    # Linear in the repeatability: δ scales with σ_q.
+    assert expected_zero_mm(robot.nominal, theta0, 0.04) == pytest.approx(
+        2 * expected_zero_mm(robot.nominal, theta0, 0.02), rel=1e-9
+    )
+
+
+def test_declared_repeatability_lengthens_every_wire_by_the_expected_zero():
+    robot = _robot("ur5e")
+    declared = replace(robot, repeatability_mm=0.02)
+    plan = load_plan(EXAMPLES / "ur5e" / "plan.toml", robot)
+    text = simulate_log(robot, plan, {}, seed=4, unmodelled=Unmodelled(0.02, 0.0))
+    plain = check_log(parse_log(text, "run"), plan, robot).distance_mm
+    read = check_log(parse_log(text, "run"), plan, declared).distance_mm
+    shift = expected_zero_mm(robot.nominal, plan.theta0_deg, 0.02)
+    np.testing.assert_allclose(read - plain, shift, rtol=0, atol=1e-12)
+
+
+def _text(robot) -> str:
+    return robot_file_text(robot, header=[], row_notes=[""] * 6, encoder_note="")
+
+
+def test_robot_file_reads_writes_and_refuses_repeatability():
+    robot = _robot("ur5e", repeatability_mm=0.03)
+    assert robot.repeatability_mm == 0.03
+    again = robot_from_dict(tomllib.loads(_text(robot)), "again.toml")
+    assert again.repeatability_mm == 0.03
+    assert _robot("ur5e").repeatability_mm is None
+    assert "repeatability_mm" not in _text(_robot("ur5e"))
+    for bad in (0.0, -0.01, 5.0):
+        with pytest.raises(WirecalError, match=r"ur5e\.toml.*repeatability_mm"):
+            _robot("ur5e", repeatability_mm=bad)
+
+
+@pytest.mark.slow
+def test_declared_repeatability_removes_the_geometrys_bias():
+    """Rigid UR5e, gauge, the twin's repeatability: d6's mean error over 10 runs."""
+    plan = load_plan(EXAMPLES / "ur5e" / "plan.toml", _robot("ur5e"))
+    mean = {}
+    for declared in (None, 0.02):
+        robot = with_gauge(replace(_robot("ur5e"), repeatability_mm=declared))
+        errors = []
+        for seed in range(1, 11):
+            truth = random_errors(robot, 1.0, np.random.default_rng([seed, 1]))
+            text = simulate_log(robot, plan, truth, seed=seed, unmodelled=Unmodelled(0.02, 0.0))
+            result = solve(robot, plan, check_log(parse_log(text, "run"), plan, robot))
+            errors.append(result.estimates["joint"].as_dict()["d6"] - truth["d6"])
+        mean[declared] = np.mean(errors)
+    # Without it every length reads ~0.019 mm short and d6 absorbs ~0.011 mm of it.
+    assert mean[None] < -0.006
+    assert abs(mean[0.02]) < 0.4 * abs(mean[None])  # 10 runs: its standard error ~0.0016
+
+
+def test_cli_solve_reads_the_lengths_from_the_declared_repeatability(tmp_path):
+    plan = str(EXAMPLES / "ur5e" / "plan.toml")
+    text = (EXAMPLES / "ur5e" / "robot.toml").read_text()
+    plain, declared = tmp_path / "plain.toml", tmp_path / "declared.toml"
+    plain.write_text(text)
+    declared.write_text(text.replace("[calibration]\n", "[calibration]\nrepeatability_mm = 0.02\n"))
+    log = tmp_path / "run.log"
+    res = CliRunner().invoke(main, ["simulate", str(plain), plan, "-o", str(log), "--seed", "2"])
+    assert res.exit_code == 0, res.output
+    d6 = {}
+    for path in (plain, declared):
+        res = CliRunner().invoke(main, ["solve", str(path), plan, str(log), "--json"])
+        assert res.exit_code == 0, res.output
+        d6[path.name] = json.loads(res.output)["methods"]["joint"]["parameters"]["d6"]
+    # Every length 18.7 µm longer (E‖δ‖ at the UR5e's θ0, 0.02 mm): d6 takes about 0.6 of it.
+    assert 0.005 < d6["declared.toml"] - d6["plain.toml"] < 0.019
