@@ -149,16 +149,12 @@ def check_log(
     if first_zero is None and log.readings:
         problems.append(f"{src}: no zero reading: the log must start with the zero reading at θ0")
     drift: dict[int, float] = {}
+    distance = rows.counts
     if first_zero is not None:
         drift = _zero_drift(zeros, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
         problems += _steps_without_zero(rows, src)
         distance = _lengths(rows, first_zero.counts, n_steps, robot, tol, mpc, src, problems)
-        if robot.repeatability_mm is not None:  # the zeros read E‖δ‖, not 0 (zero_reading)
-            distance = distance + expected_zero_mm(
-                robot.nominal, first_zero.joints_deg, robot.repeatability_mm
-            )
-    else:
-        distance = rows.counts
+        distance = distance + _zero_offset_mm(robot, first_zero.joints_deg)
     reference_mm = reference_pairs(rows, robot.encoder, mpc, src, problems)
     if not problems:  # a duplicated or foreign row explains a timer going backwards
         problems += timer_problems(log, rows.zeros, plan, robot)
@@ -312,3 +308,14 @@ def _negative_lengths(negative: list[tuple[int, float]], src: str, bits: int) ->
         f"than the {bits}-bit counter of the robot file (a filtered 16-bit count wraps at "
         "±32768: give counter_bits the width the controller logs)"
     ]
+
+
+def _zero_offset_mm(robot: Robot, theta0_deg: np.ndarray) -> float:
+    """Return what the zero readings read at θ0: E‖δ‖ with a declared repeatability, else 0.
+
+    An arm back at θ0 within its repeatability reads a length ‖δ‖ ≥ 0, the reference of every
+    other length (:mod:`~wirecal.solver.zero_reading`).
+    """
+    if robot.repeatability_mm is None:
+        return 0.0
+    return float(expected_zero_mm(robot.nominal, theta0_deg, robot.repeatability_mm))
