@@ -43,7 +43,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from wirecal.solver.accuracy import rms_tool_error, stepwise_map
-from wirecal.solver.bound import ErrorModel, bound_mm
+from wirecal.solver.bound import ErrorModel, bound_mm, joined
 from wirecal.solver.identifiability import RANK_RTOL, covariance
 from wirecal.solver.kinematics import Model, tool_jacobian
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM, Drift
@@ -185,73 +185,104 @@ def budget(
     else:
         M = stepwise_map(J, step)
         noise = src.sigma_mm**2 * M @ M.T
-    b_scale = M @ src.lengths_mm
-    b_exit = M @ src.exit_mm
-    b_sag = M @ src.sag_mm
-    scale = src.scale_std**2 * np.outer(b_scale, b_scale)
-    drift, thermal = _drift(M, src)
-    covs = {
-        "noise": noise,
-        "scale": scale,
-        "drift": drift + np.outer(thermal, thermal),
-        "exit": np.outer(b_exit, b_exit),
-        "sag": np.outer(b_sag, b_sag),
-    }
-    edges = [v for v in (thermal, b_sag / 2) if np.any(v)]  # the sag: between 0 and b_sag
-    if not src.measured_scale:
-        edges.append(src.scale_std * b_scale)
-    errors = ErrorModel(
-        noise + drift + (scale if src.measured_scale else 0.0),
-        b_exit + b_sag / 2,
-        np.reshape(edges, (len(edges), len(b_exit))),
-    )
+    parts = _term_errors(M, noise, src)
+    errors = joined(list(parts.values()))
     _, Jp = tool_jacobian(model, q_ws, names)
-    errs = {k: rms_tool_error(Jp, c) for k, c in covs.items()}
-    total = rms_tool_error(Jp, np.sum(list(covs.values()), axis=0))
-    bound, compensated, notes = bound_mm(Jp, errors), None, _notes(src)
-    if compliance is not None:
-        compensated, bound = _compliance_bounds(model, q_ws, Jp, errors, M, compliance)
-        notes = (*notes[:2], COMPLIANCE_NOTE, *notes[3:])
-    return Budget(
-        {k: e.mean_mm for k, e in errs.items()},
-        total.mean_mm,
-        total.max_mm,
-        notes,
-        bound,
-        compensated,
-    )
+    errs = {k: rms_tool_error(Jp, e.second_moment()).mean_mm for k, e in parts.items()}
+    if compliance is None:
+        total = rms_tool_error(Jp, errors.second_moment())
+        return Budget(errs, total.mean_mm, total.max_mm, _notes(src), bound_mm(Jp, errors))
+    return _with_compliance(model, q_ws, Jp, M, compliance, src, errors, errs)
 
 
-def _compliance_bounds(
+def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, ErrorModel]:
+    """Return each term's parameter error with its distribution (module docstring).
+
+    Gaussian: the noise, a measured scale, the zero drift; uniform within its limits: the
+    scale known by its tolerance, the temperature's scale change (either sign), the sag
+    (between none and the declared one: bias and edge half of it); a known bias: the exit.
+    """
+    m = len(M)
+    none, zero = np.zeros((0, m)), np.zeros(m)
+    b_scale = M @ src.lengths_mm
+    b_sag = M @ src.sag_mm / 2
+    drift, thermal = _drift(M, src)
+    if src.measured_scale:
+        scale = ErrorModel(src.scale_std**2 * np.outer(b_scale, b_scale), zero, none)
+    else:
+        scale = ErrorModel(np.zeros((m, m)), zero, src.scale_std * b_scale[None, :])
+    return {
+        "noise": ErrorModel(noise, zero, none),
+        "scale": scale,
+        "drift": ErrorModel(drift, zero, thermal[None, :]),
+        "exit": ErrorModel(np.zeros((m, m)), M @ src.exit_mm, none),
+        "sag": ErrorModel(np.zeros((m, m)), b_sag, b_sag[None, :]),
+    }
+
+
+def _with_compliance(
     model: Model,
     q_ws: np.ndarray,
     Jp: np.ndarray,
-    errors: ErrorModel,
     M: np.ndarray,
     c: ComplianceTerms,
-) -> tuple[float, float]:
-    """Return the 95 % bounds for targets compensated offline and for the patch alone.
+    src: Sources,
+    errors: ErrorModel,
+    errs: dict[str, float],
+) -> Budget:
+    """Return the joint budget with the compliances (:func:`compliance_errors`).
 
-    A compliance the points do not identify, between the file's value and ``prior`` beyond
-    it, is absorbed by the estimates (M·J_u·c_u) and moves the tool (−c_u): the error over
-    the parameters and those compliances is [M·J_u; −I]·c_u, taken like the assumed sag, at
-    its middle ± its half. The patch alone (the controller takes no compliance) also leaves
-    every compliance's whole value: −``left``, and −``nominal`` for the others.
+    The term ``compliance`` and the total gain the unidentified compliances; the identified
+    ones are parameters, their σ in the noise term. ``bound`` is the patch's (the
+    controller takes no compliance: the identified values and the others' file values are
+    left, −``left`` and −``nominal``), ``bound_compensated`` that of compensated targets.
+    """
+    Jx, unseen = compliance_errors(model, q_ws, Jp, M, c)
+    size, k = len(unseen.bias), len(unseen.edges)
+    terms = {**errs, "compliance": rms_tool_error(Jx, unseen.second_moment()).mean_mm}
+    padded = ErrorModel(
+        _padded(errors.cov, size),
+        np.pad(errors.bias, (0, k)),
+        np.pad(errors.edges, ((0, 0), (0, k))),
+    )
+    extended = joined([padded, unseen])
+    total = rms_tool_error(Jx, extended.second_moment())
+    left = -np.concatenate([c.left, c.nominal])
+    notes = _notes(src)
+    return Budget(
+        terms,
+        total.mean_mm,
+        total.max_mm,
+        (*notes[:2], COMPLIANCE_NOTE, *notes[3:]),
+        bound_mm(Jx, replace(extended, bias=extended.bias + left)),
+        bound_mm(Jx, extended),
+    )
+
+
+def compliance_errors(
+    model: Model, q_ws: np.ndarray, Jp: np.ndarray, M: np.ndarray, c: ComplianceTerms
+) -> tuple[np.ndarray, ErrorModel]:
+    """Return ``Jp`` (Q, 3, m) extended by the compliances the points do not identify.
+
+    And those compliances' error model over the m + k (the one rule of the budget's
+    compliance term and of both bounds).
+
+    Such a compliance is uniform between the robot file's value and ``prior`` beyond it
+    (the range :data:`~wirecal.solver.compliance.PRIOR_COMPLIANCE_URAD_PER_NM`; nothing
+    measured narrows it). The estimates absorb it (M·J_u·c_u) and it moves the tool
+    (−c_u): the error is [M·J_u; −I]·c_u, its middle a bias and its half-range the edges.
     """
     k = len(c.names)
     _, Ju = tool_jacobian(model, q_ws, c.names)
-    Jx = np.concatenate([Jp, Ju], axis=2)
     V = np.vstack([M @ c.wire, -np.eye(k)]) * (c.prior / 2)  # (m + k, k)
-    pad = np.zeros((len(errors.edges), k))
-    cov = np.zeros((Jx.shape[2],) * 2)
-    cov[: len(errors.cov), : len(errors.cov)] = errors.cov
-    extended = ErrorModel(
-        cov,
-        np.concatenate([errors.bias, np.zeros(k)]) + V.sum(axis=1),
-        np.vstack([np.hstack([errors.edges, pad]), V.T]),
-    )
-    left = -np.concatenate([c.left, c.nominal])
-    return bound_mm(Jx, extended), bound_mm(Jx, replace(extended, bias=extended.bias + left))
+    return np.concatenate([Jp, Ju], axis=2), ErrorModel(np.zeros((len(V),) * 2), V.sum(1), V.T)
+
+
+def _padded(cov: np.ndarray, size: int) -> np.ndarray:
+    """Return ``cov`` (m, m) in the top-left corner of zeros (size, size)."""
+    out = np.zeros((size, size))
+    out[: len(cov), : len(cov)] = cov
+    return out
 
 
 def _notes(src: Sources) -> tuple[str, ...]:
