@@ -15,14 +15,17 @@ The budget's sources enter δe in three ways, each with a stated distribution:
   (the GUM's rectangular distribution for a quantity of which only the limits are known,
   JCGM 100:2008 §4.3.7: the scale known only to its datasheet tolerance, the assumed
   temperature change, a one-sided term between 0 and v as the bias v/2 and the edge v/2);
+* of a known size but either sign: δe gains Σ_l s_l·w_l, s_l = ±1 with equal probability
+  (the temperature's change over the run, of the size assumed);
 * known: a fixed bias b (an eyelet's edge wrap, always a longer wire).
 
-The bound is the 95 % quantile of E(x + b + Σ ε_k v_k) over x ~ N(0, Σ) and the ε_k
-jointly: P(E ≤ bound) = 95 % (up to the linearisation) when each term has its stated
+The bound is the 95 % quantile of E(x + b + Σ ε_k v_k + Σ s_l w_l) over x ~ N(0, Σ), the
+ε_k and the s_l jointly: P(E ≤ bound) = 95 % (up to the linearisation) when each term has its stated
 distribution. E is not a generalised χ² (a mean of norms, not a quadratic form), so the
 quantile is taken from :data:`DRAWS` draws of (x, ε): the R_d low-discrepancy sequence
 (Roberts 2018: x_n = frac(s + n·α), α_k = φ_d^−k with φ_d the root of x^(d+1) = x + 1),
-shifted by a fixed random s, through the normal's inverse for x and 2u − 1 for ε
+shifted by a fixed random s, through the normal's inverse for x, 2u − 1 for ε and the
+sign of u − ½ for s
 (quasi-random: a half-normal's 95 % point to under 1 %, where 1,000 independent draws
 scatter by 3 %; the same inputs give the same bound; no scipy.stats, whose import alone
 doubled ``wirecal solve``'s start-up).
@@ -49,22 +52,29 @@ _CHUNK = 64  # draws per block: (3, chunk, Q) floats stay in the cache
 
 @dataclass(frozen=True)
 class ErrorModel:
-    """The parameter error δe = x + bias + Σ ε_k·edges[k], x ~ N(0, cov), ε_k ~ U(−1, 1).
+    """The parameter error δe = x + bias + Σ ε_k·edges[k] + Σ s_l·signs[l] (module docstring).
 
-    Internal units (rad, mm); ``edges`` is (k, m), k ≥ 0.
+    x ~ N(0, cov), ε_k ~ U(−1, 1), s_l = ±1. Internal units (rad, mm); ``edges`` (k, m)
+    and ``signs`` (l, m), k, l ≥ 0.
     """
 
     cov: np.ndarray
     bias: np.ndarray
     edges: np.ndarray
+    signs: np.ndarray | None = None  # None: (0, m)
+
+    def sign_terms(self) -> np.ndarray:
+        """Return ``signs`` as an (l, m) array."""
+        return np.zeros((0, len(self.bias))) if self.signs is None else self.signs
 
     def second_moment(self) -> np.ndarray:
-        """Return E[δe·δeᵀ] = cov + bias·biasᵀ + edgesᵀ·edges/3 (a uniform ε has variance 1/3).
+        """Return E[δe·δeᵀ] = cov + bias·biasᵀ + edgesᵀ·edges/3 + signsᵀ·signs.
 
-        The expected (RMS) error of the budget's terms uses it: the same distributions as
-        the bound.
+        A uniform ε has variance 1/3, a sign 1. The expected (RMS) error of the budget's
+        terms uses it: the same distributions as the bound.
         """
-        return self.cov + np.outer(self.bias, self.bias) + self.edges.T @ self.edges / 3.0
+        w = self.sign_terms()
+        return self.cov + np.outer(self.bias, self.bias) + self.edges.T @ self.edges / 3.0 + w.T @ w
 
 
 def joined(models: list[ErrorModel]) -> ErrorModel:
@@ -74,10 +84,12 @@ def joined(models: list[ErrorModel]) -> ErrorModel:
     edges dropped).
     """
     edges = np.vstack([m.edges for m in models])
+    signs = np.vstack([m.sign_terms() for m in models])
     return ErrorModel(
         np.sum([m.cov for m in models], axis=0),
         np.sum([m.bias for m in models], axis=0),
         edges[np.any(edges != 0, axis=1)],
+        signs[np.any(signs != 0, axis=1)],
     )
 
 
@@ -105,14 +117,16 @@ def low_discrepancy(dim: int, draws: int, seed: int) -> np.ndarray:
 def draws_of(model: ErrorModel, draws: int = DRAWS, seed: int = SEED) -> np.ndarray:
     """Return ``draws`` parameter errors δe of ``model`` (draws, m) (module docstring).
 
-    The Gaussian's coordinates come first in the sequence, the uniform ε_k after them.
+    The Gaussian's coordinates come first in the sequence, the uniform ε_k after them,
+    the signs s_l last.
     """
     w, U = np.linalg.eigh((model.cov + model.cov.T) / 2)
     root = U * np.sqrt(np.clip(w, 0.0, None))  # cov = root·rootᵀ, also when singular
-    k = len(model.edges)
-    u = np.clip(low_discrepancy(len(w) + k, draws, seed), 1e-12, 1 - 1e-12)
-    x = ndtri(u[:, : len(w)]) @ root.T
-    return x + model.bias + (2.0 * u[:, len(w) :] - 1.0) @ model.edges.reshape(k, len(w))
+    m, k, signs = len(w), len(model.edges), model.sign_terms()
+    u = np.clip(low_discrepancy(m + k + len(signs), draws, seed), 1e-12, 1 - 1e-12)
+    x = ndtri(u[:, :m]) @ root.T + model.bias
+    x += (2.0 * u[:, m : m + k] - 1.0) @ model.edges.reshape(k, m)
+    return x + np.sign(u[:, m + k :] - 0.5) @ signs
 
 
 def bound_mm(

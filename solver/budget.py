@@ -199,8 +199,9 @@ def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, Er
     """Return each term's parameter error with its distribution (module docstring).
 
     Gaussian: the noise, a measured scale, the zero drift; uniform within its limits: the
-    scale known by its tolerance, the temperature's scale change (either sign), the sag
-    (between none and the declared one: bias and edge half of it); a known bias: the exit.
+    scale known by its tolerance, the sag (between none and the declared one: bias and
+    edge half of it); the assumed size of either sign: the temperature's scale change; a
+    known bias: the exit.
     """
     m = len(M)
     none, zero = np.zeros((0, m)), np.zeros(m)
@@ -214,7 +215,7 @@ def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, Er
     return {
         "noise": ErrorModel(noise, zero, none),
         "scale": scale,
-        "drift": ErrorModel(drift, zero, thermal[None, :]),
+        "drift": ErrorModel(drift, zero, none, thermal[None, :]),
         "exit": ErrorModel(np.zeros((m, m)), M @ src.exit_mm, none),
         "sag": ErrorModel(np.zeros((m, m)), b_sag, b_sag[None, :]),
     }
