@@ -8,7 +8,9 @@ budget's terms are parameter covariances, each turned into the mean over the wor
 the RMS tool-point error (:func:`~wirecal.solver.accuracy.tool_error`):
 
 * **noise** — the reading noise σ (from the joint residual): σ²·(JᵀJ)⁺, the Cramér–Rao
-  bound, for the joint method; σ²·A·Aᵀ for the stepwise one;
+  bound, for the joint method; σ²·A·Aᵀ for the stepwise one; and the error of the zero
+  reference every length is read from (the mean of the steps' zero readings, σ/√zeros),
+  common to all lengths: δd = z·1, so δe = z·M·1;
 * **scale** — every length is off by the same factor: δd = ε·d, so δe = ε·M·d. ε is the
   reference's σ when the log has reference rows, else the datasheet's
   ``scale_tolerance_ppm`` taken as the size of the error (a tolerance is a bound, not a
@@ -119,6 +121,7 @@ class Sources:
     thermal_ppm_per_k: float  # α_drum − α_arm
     exit_mm: np.ndarray  # (N,) the wire length the model leaves out at each point
     sag_mm: np.ndarray  # (N,) the length the robot file's gravity sag adds at each point
+    sigma_zero_mm: float = 0.0  # σ of the zero reference every length is read from
 
 
 def sources(
@@ -132,11 +135,13 @@ def sources(
     t_zero_ref_s: float | None,
     exit_mm: np.ndarray,
     sag_mm: np.ndarray,
+    zeros: int = 0,
 ) -> Sources:
     """Gather the budget's inputs (see :class:`Sources`).
 
     ``scale_std`` is the reference's σ of the scale when ``measured_scale``, else the
-    tolerance (dimensionless); the times are None for an untimed log.
+    tolerance (dimensionless); the times are None for an untimed log. ``zeros``: the zero
+    readings whose mean every length is read from (0: none), each with the reading noise.
     """
     timed = t_s is not None and t_zero_ref_s is not None and np.all(np.isfinite(t_s))
     t = np.asarray(t_s, dtype=float) if timed else None
@@ -154,6 +159,7 @@ def sources(
         thermal_ppm_per_k=drum_ppm_per_k - ARM_PPM_PER_K,
         exit_mm=np.asarray(exit_mm, dtype=float),
         sag_mm=np.asarray(sag_mm, dtype=float),
+        sigma_zero_mm=sigma_mm / np.sqrt(zeros) if zeros > 0 else 0.0,
     )
 
 
@@ -205,6 +211,7 @@ def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, Er
     """
     m = len(M)
     none, zero = np.zeros((0, m)), np.zeros(m)
+    b_zero = src.sigma_zero_mm * M.sum(axis=1)  # the zero reference's error, in every length
     b_scale = M @ src.lengths_mm
     b_sag = M @ src.sag_mm / 2
     drift, thermal = _drift(M, src)
@@ -213,7 +220,7 @@ def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, Er
     else:
         scale = ErrorModel(np.zeros((m, m)), zero, src.scale_std * b_scale[None, :])
     return {
-        "noise": ErrorModel(noise, zero, none),
+        "noise": ErrorModel(noise + np.outer(b_zero, b_zero), zero, none),
         "scale": scale,
         "drift": ErrorModel(drift, zero, none, thermal[None, :]),
         "exit": ErrorModel(np.zeros((m, m)), M @ src.exit_mm, none),

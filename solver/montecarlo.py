@@ -174,6 +174,7 @@ def run(
         float(times[0].mean()),
         unmodelled_exit_mm(robot, plan),
         np.zeros(len(q)),  # the simulated arm does not sag
+        len(plan.steps),
     )
     budgets = {
         mth: budget(base, names, J, step if mth == "stepwise" else None, src, q_ws) for mth in out

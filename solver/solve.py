@@ -318,6 +318,7 @@ def solve(
             m.reference_t_s,
             unmodelled_exit_mm(robot, plan)[present],
             sag_lengths_mm(robot, plan)[present],
+            sum(1 for s in m.zero_drift_mm if s <= len(plan.steps)),  # the reference's zeros
         )
         for method, est in estimates.items():
             budgets[method] = _budget(robot, problem, J, step, src, ws, len(names), comp, est)

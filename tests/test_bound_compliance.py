@@ -11,8 +11,8 @@ import pytest
 
 from wirecal.app.coverage import with_gauge
 from wirecal.app.report import render_report, sag_summary
-from wirecal.solver.accuracy import workspace
-from wirecal.solver.budget import ComplianceTerms, compliance_errors
+from wirecal.solver.accuracy import rms_tool_error, workspace
+from wirecal.solver.budget import ComplianceTerms, budget, compliance_errors, sources
 from wirecal.solver.compliance import workspace_sag
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.plan_file import load_plan
@@ -91,3 +91,25 @@ def test_a_compliant_calibration_reports_its_sag_and_the_budget_its_compliances(
     assert "Sag under gravity, before and after compensation" in html
     assert "compliances not identified" in html
     assert "95 % bound, targets compensated offline" in html
+
+
+def test_the_zero_reference_enters_every_length(ur5e):
+    """Every length is read from the mean of ``zeros`` zero readings: a common error of
+    σ/√zeros, δe = z·M·1; the noise term's second moment gains σ²/zeros·(M·1)(M·1)ᵀ."""
+    rng = np.random.default_rng(2)
+    names = ("a2", "a3", "d4")
+    J = rng.normal(size=(30, 3))
+    q = workspace(ur5e, 50)
+
+    def noise_mm(zeros: int) -> float:
+        src = sources(0.01, np.zeros(30), 0.0, True, 0.0, None, None, None,
+                      np.zeros(30), np.zeros(30), zeros)  # fmt: skip
+        return budget(ur5e.nominal, names, J, None, src, q).terms["noise"]
+
+    M = np.linalg.pinv(J)
+    cov = 0.01**2 * np.linalg.inv(J.T @ J)
+    ones = M.sum(axis=1)
+    Jp = tool_jacobian(ur5e.nominal, q, names)[1]
+    expected = rms_tool_error(Jp, cov + 0.01**2 / 4 * np.outer(ones, ones)).mean_mm
+    assert noise_mm(4) == pytest.approx(expected, rel=1e-9)
+    assert noise_mm(0) == pytest.approx(rms_tool_error(Jp, cov).mean_mm, rel=1e-9)
