@@ -3,39 +3,42 @@
 Each identification method is, linearised, a linear map M of the measured wire lengths to
 the parameters (the joint method: M = J⁺, the least-squares pseudo-inverse; the stepwise
 method: the map A of :func:`~wirecal.solver.accuracy.stepwise_map`). An error δd of the
-lengths becomes δe = M·δd and the tool-point error J_p(q)·δe at a configuration q. The
-budget's terms are parameter covariances, each turned into the mean over the workspace of
-the RMS tool-point error (:func:`~wirecal.solver.accuracy.tool_error`):
+lengths becomes δe = M·δd and the tool-point error J_p(q)·δe at a configuration q. Each
+term is a parameter error with a stated distribution (:class:`~wirecal.solver.bound.ErrorModel`);
+its figure is the mean over the workspace of the RMS tool-point error under that
+distribution, from its second moment (:func:`~wirecal.solver.accuracy.rms_tool_error`):
 
 * **noise** — the reading noise σ (from the joint residual): σ²·(JᵀJ)⁺, the Cramér–Rao
   bound, for the joint method; σ²·A·Aᵀ for the stepwise one; and the error of the zero
   reference every length is read from (the mean of the steps' zero readings, σ/√zeros),
   common to all lengths: δd = z·1, so δe = z·M·1;
 * **scale** — every length is off by the same factor: δd = ε·d, so δe = ε·M·d. ε is the
-  reference's σ when the log has reference rows, else the datasheet's
-  ``scale_tolerance_ppm`` taken as the size of the error (a tolerance is a bound, not a
-  standard deviation: the budget reports the error at its edge);
+  reference's σ when the log has reference rows (Gaussian), else uniform within the
+  datasheet's ``scale_tolerance_ppm`` (a tolerance is a limit, not a standard deviation:
+  the GUM's rectangular distribution, JCGM 100:2008 §4.3.7);
 * **drift** — the zero drift's uncertainty σ_b (and the fitted drift itself when it was
   left in): δd_i = b·(t_i − t_ref); and the temperature: the drum's expansion relative to
-  the arm's, (α_drum − α_arm)·ΔT over an assumed rise of :data:`ASSUMED_TEMPERATURE_RISE_K`
-  across the run, a scale that changes from the reference's time (the start; without a
-  reference, the run's middle): δd_i = α·ΔT·d_i·(t_i − t_ref)/T. Untimed (version 1) logs:
-  no drift term, said so;
+  the arm's, (α_drum − α_arm)·ΔT over an assumed change of
+  :data:`ASSUMED_TEMPERATURE_RISE_K` across the run, of either sign equally likely: a scale
+  that changes from the reference's time (the start; without a reference, the run's
+  middle): δd_i = α·ΔT·d_i·(t_i − t_ref)/T. Untimed (version 1) logs: no drift term, said
+  so;
 * **exit** — the wire's wrap on an eyelet's exit edge, which the model leaves out
   (:func:`~wirecal.solver.plan_exit.unmodelled_exit_mm`, per point at the nominal
   model): a deterministic δd_i, so δe = M·δd; zero for a point exit and for a guide
   pulley (the model carries its arc);
 * **sag** — joints 2 and 3 bending under gravity, which no kinematic parameter models: the
   robot file's ``gravity_sag_deg_per_m`` (:func:`~wirecal.solver.simulate.sag_lengths_mm`),
-  at most that (between none and it in the bound). The parameters absorb part of it, a bias
-  the residual cannot show.
+  uniform between none and it. The parameters absorb part of it, a bias the residual
+  cannot show;
+* **compliance** — with the robot file's ``compliances``, those the points do not identify
+  (with a torque), uniform between the file's value and
+  :data:`~wirecal.solver.compliance.PRIOR_COMPLIANCE_URAD_PER_NM` beyond it
+  (:func:`compliance_errors`); the identified ones are parameters, their σ in the noise.
 
-The total adds the covariances (independent sources): the expected (RMS) error, the
-bounded terms at their edges; a mean, not a bound (``bench/bench_bound.py``: 7–12 % of
-realistic calibrations exceed it). The **bound** is the error a calibration
-stays below with 95 % probability (:mod:`wirecal.solver.bound`): the noise, a measured
-scale and the drift as Gaussian, the scale known only to its tolerance and the temperature
-as bounded errors of either sign at their edges, the exit wrap as a known bias.
+The total is the second moment of all the terms together (independent sources): the
+expected (RMS) error, a mean, not a bound. The **bound** is the error a calibration stays
+below with 95 % probability (:mod:`wirecal.solver.bound`), from the same error models.
 """
 
 from __future__ import annotations
@@ -51,7 +54,8 @@ from wirecal.solver.kinematics import Model, tool_jacobian
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM, Drift
 
 ASSUMED_TEMPERATURE_RISE_K = 0.5
-"""Temperature rise over a run the budget assumes (K): the simulated realistic run's."""
+"""Temperature change over a run the budget assumes (K): the simulated realistic run's rise;
+its sign is taken as unknown."""
 
 TERMS = ("noise", "scale", "drift", "exit", "sag")
 
