@@ -11,7 +11,9 @@ distribution, from its second moment (:func:`~wirecal.solver.accuracy.rms_tool_e
 * **noise** — the reading noise σ (from the joint residual): σ²·(JᵀJ)⁺, the Cramér–Rao
   bound, for the joint method; σ²·A·Aᵀ for the stepwise one; and the error of the zero
   reference every length is read from (the mean of the steps' zero readings, σ/√zeros),
-  common to all lengths: δd = z·1, so δe = z·M·1;
+  common to all lengths: δd = z·1, so δe = z·M·1; and the zero readings' length where the
+  arm really stops at θ0, ‖δp‖ ≥ 0 whatever the direction, uniform between none and
+  :data:`CHI3_MEAN`·σ, every length as much too short;
 * **scale** — every length is off by the same factor: δd = ε·d, so δe = ε·M·d. ε is the
   reference's σ when the log has reference rows (Gaussian), else uniform within the
   datasheet's ``scale_tolerance_ppm`` (a tolerance is a limit, not a standard deviation:
@@ -56,6 +58,14 @@ from wirecal.solver.scale import ARM_PPM_PER_K, PPM, Drift
 ASSUMED_TEMPERATURE_RISE_K = 0.5
 """Temperature change over a run the budget assumes (K): the simulated realistic run's rise;
 its sign is taken as unknown."""
+
+CHI3_MEAN = 2 * np.sqrt(2 / np.pi)
+"""E‖δp‖ / σ for a 3-D Gaussian δp of σ per axis (the mean of a χ with 3 degrees of freedom).
+
+At θ0 the wire is as short as it gets (the model's zero length): where the arm really
+stops, δp off, it is ‖δp‖ long, never shorter, whatever the direction. Every zero reading
+therefore reads long by up to that, 1.6 σ when the residual's σ is all the arm's
+repeatability, none when it is all the encoder's reading noise: uniform between."""
 
 TERMS = ("noise", "scale", "drift", "exit", "sag")
 
@@ -126,6 +136,7 @@ class Sources:
     exit_mm: np.ndarray  # (N,) the wire length the model leaves out at each point
     sag_mm: np.ndarray  # (N,) the length the robot file's gravity sag adds at each point
     sigma_zero_mm: float = 0.0  # σ of the zero reference every length is read from
+    zero_bias_mm: float = 0.0  # the most the zero reference may read long (:data:`CHI3_MEAN`)
 
 
 def sources(
@@ -164,6 +175,7 @@ def sources(
         exit_mm=np.asarray(exit_mm, dtype=float),
         sag_mm=np.asarray(sag_mm, dtype=float),
         sigma_zero_mm=sigma_mm / np.sqrt(zeros) if zeros > 0 else 0.0,
+        zero_bias_mm=CHI3_MEAN * sigma_mm if zeros > 0 else 0.0,
     )
 
 
@@ -216,6 +228,7 @@ def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, Er
     m = len(M)
     none, zero = np.zeros((0, m)), np.zeros(m)
     b_zero = src.sigma_zero_mm * M.sum(axis=1)  # the zero reference's error, in every length
+    long_zero = -src.zero_bias_mm / 2 * M.sum(axis=1)  # a zero read long: every length short
     b_scale = M @ src.lengths_mm
     b_sag = M @ src.sag_mm / 2
     drift, thermal = _drift(M, src)
@@ -224,7 +237,7 @@ def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, Er
     else:
         scale = ErrorModel(np.zeros((m, m)), zero, src.scale_std * b_scale[None, :])
     return {
-        "noise": ErrorModel(noise + np.outer(b_zero, b_zero), zero, none),
+        "noise": ErrorModel(noise + np.outer(b_zero, b_zero), long_zero, long_zero[None, :]),
         "scale": scale,
         "drift": ErrorModel(drift, zero, none, thermal[None, :]),
         "exit": ErrorModel(np.zeros((m, m)), M @ src.exit_mm, none),
