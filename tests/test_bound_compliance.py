@@ -95,7 +95,9 @@ def test_a_compliant_calibration_reports_its_sag_and_the_budget_its_compliances(
 
 def test_the_zero_reference_enters_every_length(ur5e):
     """Every length is read from the mean of ``zeros`` zero readings: a common error of
-    σ/√zeros, δe = z·M·1; the noise term's second moment gains σ²/zeros·(M·1)(M·1)ᵀ."""
+    σ/√zeros, δe = z·M·1, and the zero read long by u ~ U(0, 1.5958·σ) (E‖δp‖ of a 3-D
+    Gaussian: 2·√(2/π)·σ), every length as much short: the noise term's second moment gains
+    (σ²/zeros + E[u²])·(M·1)(M·1)ᵀ, E[u²] = (1.5958·σ)²/3."""
     rng = np.random.default_rng(2)
     names = ("a2", "a3", "d4")
     J = rng.normal(size=(30, 3))
@@ -110,6 +112,7 @@ def test_the_zero_reference_enters_every_length(ur5e):
     cov = 0.01**2 * np.linalg.inv(J.T @ J)
     ones = M.sum(axis=1)
     Jp = tool_jacobian(ur5e.nominal, q, names)[1]
-    expected = rms_tool_error(Jp, cov + 0.01**2 / 4 * np.outer(ones, ones)).mean_mm
-    assert noise_mm(4) == pytest.approx(expected, rel=1e-9)
+    long_zero = (1.5957691 * 0.01) ** 2 / 3
+    expected = rms_tool_error(Jp, cov + (0.01**2 / 4 + long_zero) * np.outer(ones, ones)).mean_mm
+    assert noise_mm(4) == pytest.approx(expected, rel=1e-7)  # the constant to 8 digits
     assert noise_mm(0) == pytest.approx(rms_tool_error(Jp, cov).mean_mm, rel=1e-9)
