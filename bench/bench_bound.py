@@ -15,10 +15,15 @@ arm's robot file with ``[calibration] compliances = ["c2", "c3", "c4", "c5"]`` a
 plan (the Viper: the corrected paper plan), gauge off/on × compliance off (a rigid true arm)
 / on (c2..c5 drawn within 2–8 µrad/(N·m)); the twin's repeatability, no assumed sag. Per
 case: the coverage of bound95_mm over the patch's error (geometry only, the sag left in it)
-and of bound95_compensated_mm over the compensated error, and the median of bound/error.
+and of bound95_compensated_mm over the compensated error, the median of bound/error, and its
+floor: the errors' 95 % point over their median, the least median ratio any bound that is
+the same for every run could have while covering 95 % of them (a bound that covers must
+reach the 95 % point; where one term with a fixed distribution dominates, as the scale
+within its tolerance without a gauge, no honest bound gets below it). Several arms in
+one run: ``--compliance ur5e viper_s650 abb_irb120``.
 
     python bench/bench_bound.py [--trials 300] [--no-unmodelled]
-    python bench/bench_bound.py --compliance ur5e [--trials 40]
+    python bench/bench_bound.py --compliance ur5e viper_s650 abb_irb120 [--trials 40]
 """
 
 from __future__ import annotations
@@ -47,10 +52,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials", type=int, default=300)
     ap.add_argument("--no-unmodelled", action="store_true")
-    ap.add_argument("--compliance", choices=sorted(ARMS), help="the compliance cases' arm")
+    ap.add_argument(
+        "--compliance", choices=sorted(ARMS), nargs="+", help="the compliance cases' arms"
+    )
     args = ap.parse_args()
     if args.compliance:
-        compliance_cases(args.compliance, args.trials)
+        for arm in args.compliance:
+            compliance_cases(arm, args.trials)
         return
     files = example_files()
     without = load_robot(files["robot"])
@@ -97,8 +105,8 @@ def compliance_cases(arm: str, trials: int) -> None:
     plan = load_plan(plan_path, without)
     print(f"{arm}, {plan_path.name}: {trials} calibrations per case; repeatability 0.02 mm")
     print(
-        f"{'gauge':<6}{'compl.':<7}{'ident.':<8}{'patch: cover':>13}{'bound/err':>10}"
-        f"{'comp.: cover':>13}{'bound/err':>10}{'err mm':>8}{'c err/σ':>9}{'s':>5}"
+        f"{'gauge':<6}{'compl.':<7}{'ident.':<8}{'patch: cover':>13}{'bound/err':>10}{'floor':>6}"
+        f"{'comp.: cover':>13}{'bound/err':>10}{'floor':>6}{'err mm':>8}{'c err/σ':>9}{'s':>5}"
     )
     for gauge_name, robot in (("no", without), ("yes", with_gauge(without))):
         for compliant in (False, True):
@@ -120,10 +128,20 @@ def compliance_cases(arm: str, trials: int) -> None:
             ]
             print(
                 f"{gauge_name:<6}{'on' if compliant else 'off':<7}{','.join(ident) or '-':<8}"
-                f"{np.mean(ep <= bp):13.0%}{np.median(bp / ep):10.2f}"
-                f"{np.mean(ec <= bc):13.0%}{np.median(bc / ec):10.2f}{np.median(ec):8.4f}"
+                f"{np.mean(ep <= bp):13.0%}{np.median(bp / ep):10.2f}{floor(ep):6.2f}"
+                f"{np.mean(ec <= bc):13.0%}{np.median(bc / ec):10.2f}{floor(ec):6.2f}"
+                f"{np.median(ec):8.4f}"
                 f"{np.median(z) if z else float('nan'):9.2f}{time.perf_counter() - t0:5.0f}"
             )
+
+
+def floor(error_mm: np.ndarray) -> float:
+    """Return the least median bound/error of a bound the same for every run that covers 95 %.
+
+    Such a bound is at least the errors' 95 % point; its median ratio is that over their
+    median (module docstring): the ratio the runs' own spread allows.
+    """
+    return float(np.quantile(error_mm, 0.95) / np.median(error_mm))
 
 
 if __name__ == "__main__":

@@ -102,10 +102,14 @@ def _encoder_text(result: SolveResult) -> list[str]:
         ("drift", "drift"),
         ("exit", "wire exit"),
         ("sag", "gravity sag"),
+        ("compliance", "compliances"),  # the unidentified ones; only when the file asks
     ):
-        lines.append(
-            f"{label:<15}" + "".join(f"{result.budgets[m].terms[term]:12.4f}" for m in methods)
-        )
+        values = [result.budgets[m].terms.get(term) for m in methods]
+        if any(v is not None for v in values):
+            lines.append(
+                f"{label:<15}"
+                + "".join("-".rjust(12) if v is None else f"{v:12.4f}" for v in values)
+            )
     lines.append(f"{'total':<15}" + "".join(f"{result.budgets[m].total:12.4f}" for m in methods))
     lines.append(
         f"{'95 % bound':<15}"

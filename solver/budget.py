@@ -3,37 +3,44 @@
 Each identification method is, linearised, a linear map M of the measured wire lengths to
 the parameters (the joint method: M = J⁺, the least-squares pseudo-inverse; the stepwise
 method: the map A of :func:`~wirecal.solver.accuracy.stepwise_map`). An error δd of the
-lengths becomes δe = M·δd and the tool-point error J_p(q)·δe at a configuration q. The
-budget's terms are parameter covariances, each turned into the mean over the workspace of
-the RMS tool-point error (:func:`~wirecal.solver.accuracy.tool_error`):
+lengths becomes δe = M·δd and the tool-point error J_p(q)·δe at a configuration q. Each
+term is a parameter error with a stated distribution (:class:`~wirecal.solver.bound.ErrorModel`);
+its figure is the mean over the workspace of the RMS tool-point error under that
+distribution, from its second moment (:func:`~wirecal.solver.accuracy.rms_tool_error`):
 
 * **noise** — the reading noise σ (from the joint residual): σ²·(JᵀJ)⁺, the Cramér–Rao
-  bound, for the joint method; σ²·A·Aᵀ for the stepwise one;
+  bound, for the joint method; σ²·A·Aᵀ for the stepwise one; and the error of the zero
+  reference every length is read from (the mean of the steps' zero readings, σ/√zeros),
+  common to all lengths: δd = z·1, so δe = z·M·1; and the zero readings' length where the
+  arm really stops at θ0, ‖δp‖ ≥ 0 whatever the direction, uniform between none and
+  :data:`CHI3_MEAN`·σ, every length as much too short;
 * **scale** — every length is off by the same factor: δd = ε·d, so δe = ε·M·d. ε is the
-  reference's σ when the log has reference rows, else the datasheet's
-  ``scale_tolerance_ppm`` taken as the size of the error (a tolerance is a bound, not a
-  standard deviation: the budget reports the error at its edge);
+  reference's σ when the log has reference rows (Gaussian), else uniform within the
+  datasheet's ``scale_tolerance_ppm`` (a tolerance is a limit, not a standard deviation:
+  the GUM's rectangular distribution, JCGM 100:2008 §4.3.7);
 * **drift** — the zero drift's uncertainty σ_b (and the fitted drift itself when it was
   left in): δd_i = b·(t_i − t_ref); and the temperature: the drum's expansion relative to
-  the arm's, (α_drum − α_arm)·ΔT over an assumed rise of :data:`ASSUMED_TEMPERATURE_RISE_K`
-  across the run, a scale that changes from the reference's time (the start; without a
-  reference, the run's middle): δd_i = α·ΔT·d_i·(t_i − t_ref)/T. Untimed (version 1) logs:
-  no drift term, said so;
+  the arm's, (α_drum − α_arm)·ΔT over an assumed change of
+  :data:`ASSUMED_TEMPERATURE_RISE_K` across the run, of either sign equally likely: a scale
+  that changes from the reference's time (the start; without a reference, the run's
+  middle): δd_i = α·ΔT·d_i·(t_i − t_ref)/T. Untimed (version 1) logs: no drift term, said
+  so;
 * **exit** — the wire's wrap on an eyelet's exit edge, which the model leaves out
   (:func:`~wirecal.solver.plan_exit.unmodelled_exit_mm`, per point at the nominal
   model): a deterministic δd_i, so δe = M·δd; zero for a point exit and for a guide
   pulley (the model carries its arc);
 * **sag** — joints 2 and 3 bending under gravity, which no kinematic parameter models: the
   robot file's ``gravity_sag_deg_per_m`` (:func:`~wirecal.solver.simulate.sag_lengths_mm`),
-  at most that (between none and it in the bound). The parameters absorb part of it, a bias
-  the residual cannot show.
+  uniform between none and it. The parameters absorb part of it, a bias the residual
+  cannot show;
+* **compliance** — with the robot file's ``compliances``, those the points do not identify
+  (with a torque), uniform between the file's value and
+  :data:`~wirecal.solver.compliance.PRIOR_COMPLIANCE_URAD_PER_NM` beyond it
+  (:func:`compliance_errors`); the identified ones are parameters, their σ in the noise.
 
-The total adds the covariances (independent sources): the expected (RMS) error, the
-bounded terms at their edges; a mean, not a bound (``bench/bench_bound.py``: 7–12 % of
-realistic calibrations exceed it). The **bound** is the error a calibration
-stays below with 95 % probability (:mod:`wirecal.solver.bound`): the noise, a measured
-scale and the drift as Gaussian, the scale known only to its tolerance and the temperature
-as bounded errors of either sign at their edges, the exit wrap as a known bias.
+The total is the second moment of all the terms together (independent sources): the
+expected (RMS) error, a mean, not a bound. The **bound** is the error a calibration stays
+below with 95 % probability (:mod:`wirecal.solver.bound`), from the same error models.
 """
 
 from __future__ import annotations
@@ -43,13 +50,22 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from wirecal.solver.accuracy import rms_tool_error, stepwise_map
-from wirecal.solver.bound import ErrorModel, bound_mm
+from wirecal.solver.bound import ErrorModel, bound_mm, joined
 from wirecal.solver.identifiability import RANK_RTOL, covariance
 from wirecal.solver.kinematics import Model, tool_jacobian
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM, Drift
 
 ASSUMED_TEMPERATURE_RISE_K = 0.5
-"""Temperature rise over a run the budget assumes (K): the simulated realistic run's."""
+"""Temperature change over a run the budget assumes (K): the simulated realistic run's rise;
+its sign is taken as unknown."""
+
+CHI3_MEAN = 2 * np.sqrt(2 / np.pi)
+"""E‖δp‖ / σ for a 3-D Gaussian δp of σ per axis (the mean of a χ with 3 degrees of freedom).
+
+At θ0 the wire is as short as it gets (the model's zero length): where the arm really
+stops, δp off, it is ‖δp‖ long, never shorter, whatever the direction. Every zero reading
+therefore reads long by up to that, 1.6 σ when the residual's σ is all the arm's
+repeatability, none when it is all the encoder's reading noise: uniform between."""
 
 TERMS = ("noise", "scale", "drift", "exit", "sag")
 
@@ -119,6 +135,8 @@ class Sources:
     thermal_ppm_per_k: float  # α_drum − α_arm
     exit_mm: np.ndarray  # (N,) the wire length the model leaves out at each point
     sag_mm: np.ndarray  # (N,) the length the robot file's gravity sag adds at each point
+    sigma_zero_mm: float = 0.0  # σ of the zero reference every length is read from
+    zero_bias_mm: float = 0.0  # the most the zero reference may read long (:data:`CHI3_MEAN`)
 
 
 def sources(
@@ -132,11 +150,17 @@ def sources(
     t_zero_ref_s: float | None,
     exit_mm: np.ndarray,
     sag_mm: np.ndarray,
+    zeros: int = 0,
+    *,
+    zero_corrected: bool = False,
 ) -> Sources:
     """Gather the budget's inputs (see :class:`Sources`).
 
     ``scale_std`` is the reference's σ of the scale when ``measured_scale``, else the
-    tolerance (dimensionless); the times are None for an untimed log.
+    tolerance (dimensionless); the times are None for an untimed log. ``zeros``: the zero
+    readings whose mean every length is read from (0: none), each with the reading noise.
+    ``zero_corrected``: the lengths already carry what the zeros read long (a declared
+    repeatability, :mod:`~wirecal.solver.zero_reading`), so no bias is budgeted for it.
     """
     timed = t_s is not None and t_zero_ref_s is not None and np.all(np.isfinite(t_s))
     t = np.asarray(t_s, dtype=float) if timed else None
@@ -154,6 +178,8 @@ def sources(
         thermal_ppm_per_k=drum_ppm_per_k - ARM_PPM_PER_K,
         exit_mm=np.asarray(exit_mm, dtype=float),
         sag_mm=np.asarray(sag_mm, dtype=float),
+        sigma_zero_mm=sigma_mm / np.sqrt(zeros) if zeros > 0 else 0.0,
+        zero_bias_mm=CHI3_MEAN * sigma_mm if zeros > 0 and not zero_corrected else 0.0,
     )
 
 
@@ -185,73 +211,107 @@ def budget(
     else:
         M = stepwise_map(J, step)
         noise = src.sigma_mm**2 * M @ M.T
-    b_scale = M @ src.lengths_mm
-    b_exit = M @ src.exit_mm
-    b_sag = M @ src.sag_mm
-    scale = src.scale_std**2 * np.outer(b_scale, b_scale)
-    drift, thermal = _drift(M, src)
-    covs = {
-        "noise": noise,
-        "scale": scale,
-        "drift": drift + np.outer(thermal, thermal),
-        "exit": np.outer(b_exit, b_exit),
-        "sag": np.outer(b_sag, b_sag),
-    }
-    edges = [v for v in (thermal, b_sag / 2) if np.any(v)]  # the sag: between 0 and b_sag
-    if not src.measured_scale:
-        edges.append(src.scale_std * b_scale)
-    errors = ErrorModel(
-        noise + drift + (scale if src.measured_scale else 0.0),
-        b_exit + b_sag / 2,
-        np.reshape(edges, (len(edges), len(b_exit))),
-    )
+    parts = _term_errors(M, noise, src)
+    errors = joined(list(parts.values()))
     _, Jp = tool_jacobian(model, q_ws, names)
-    errs = {k: rms_tool_error(Jp, c) for k, c in covs.items()}
-    total = rms_tool_error(Jp, np.sum(list(covs.values()), axis=0))
-    bound, compensated, notes = bound_mm(Jp, errors), None, _notes(src)
-    if compliance is not None:
-        compensated, bound = _compliance_bounds(model, q_ws, Jp, errors, M, compliance)
-        notes = (*notes[:2], COMPLIANCE_NOTE, *notes[3:])
-    return Budget(
-        {k: e.mean_mm for k, e in errs.items()},
-        total.mean_mm,
-        total.max_mm,
-        notes,
-        bound,
-        compensated,
-    )
+    errs = {k: rms_tool_error(Jp, e.second_moment()).mean_mm for k, e in parts.items()}
+    if compliance is None:
+        total = rms_tool_error(Jp, errors.second_moment())
+        return Budget(errs, total.mean_mm, total.max_mm, _notes(src), bound_mm(Jp, errors))
+    return _with_compliance(model, q_ws, Jp, M, compliance, src, errors, errs)
 
 
-def _compliance_bounds(
+def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, ErrorModel]:
+    """Return each term's parameter error with its distribution (module docstring).
+
+    Gaussian: the noise, a measured scale, the zero drift; uniform within its limits: the
+    scale known by its tolerance, the sag (between none and the declared one: bias and
+    edge half of it); the assumed size of either sign: the temperature's scale change; a
+    known bias: the exit.
+    """
+    m = len(M)
+    none, zero = np.zeros((0, m)), np.zeros(m)
+    b_zero = src.sigma_zero_mm * M.sum(axis=1)  # the zero reference's error, in every length
+    long_zero = -src.zero_bias_mm / 2 * M.sum(axis=1)  # a zero read long: every length short
+    b_scale = M @ src.lengths_mm
+    b_sag = M @ src.sag_mm / 2
+    drift, thermal = _drift(M, src)
+    if src.measured_scale:
+        scale = ErrorModel(src.scale_std**2 * np.outer(b_scale, b_scale), zero, none)
+    else:
+        scale = ErrorModel(np.zeros((m, m)), zero, src.scale_std * b_scale[None, :])
+    return {
+        "noise": ErrorModel(noise + np.outer(b_zero, b_zero), long_zero, long_zero[None, :]),
+        "scale": scale,
+        "drift": ErrorModel(drift, zero, none, thermal[None, :]),
+        "exit": ErrorModel(np.zeros((m, m)), M @ src.exit_mm, none),
+        "sag": ErrorModel(np.zeros((m, m)), b_sag, b_sag[None, :]),
+    }
+
+
+def _with_compliance(
     model: Model,
     q_ws: np.ndarray,
     Jp: np.ndarray,
-    errors: ErrorModel,
     M: np.ndarray,
     c: ComplianceTerms,
-) -> tuple[float, float]:
-    """Return the 95 % bounds for targets compensated offline and for the patch alone.
+    src: Sources,
+    errors: ErrorModel,
+    errs: dict[str, float],
+) -> Budget:
+    """Return the joint budget with the compliances (:func:`compliance_errors`).
 
-    A compliance the points do not identify, between the file's value and ``prior`` beyond
-    it, is absorbed by the estimates (M·J_u·c_u) and moves the tool (−c_u): the error over
-    the parameters and those compliances is [M·J_u; −I]·c_u, taken like the assumed sag, at
-    its middle ± its half. The patch alone (the controller takes no compliance) also leaves
-    every compliance's whole value: −``left``, and −``nominal`` for the others.
+    The term ``compliance`` and the total gain the unidentified compliances; the identified
+    ones are parameters, their σ in the noise term. ``bound`` is the patch's (the
+    controller takes no compliance: the identified values and the others' file values are
+    left, −``left`` and −``nominal``), ``bound_compensated`` that of compensated targets.
+    """
+    Jx, unseen = compliance_errors(model, q_ws, Jp, M, c)
+    size, k = len(unseen.bias), len(unseen.edges)
+    terms = {**errs, "compliance": rms_tool_error(Jx, unseen.second_moment()).mean_mm}
+    padded = ErrorModel(
+        _padded(errors.cov, size),
+        np.pad(errors.bias, (0, k)),
+        np.pad(errors.edges, ((0, 0), (0, k))),
+    )
+    extended = joined([padded, unseen])
+    total = rms_tool_error(Jx, extended.second_moment())
+    left = -np.concatenate([c.left, c.nominal])
+    notes = _notes(src)
+    return Budget(
+        terms,
+        total.mean_mm,
+        total.max_mm,
+        (*notes[:2], COMPLIANCE_NOTE, *notes[3:]),
+        bound_mm(Jx, replace(extended, bias=extended.bias + left)),
+        bound_mm(Jx, extended),
+    )
+
+
+def compliance_errors(
+    model: Model, q_ws: np.ndarray, Jp: np.ndarray, M: np.ndarray, c: ComplianceTerms
+) -> tuple[np.ndarray, ErrorModel]:
+    """Return ``Jp`` (Q, 3, m) extended by the compliances the points do not identify.
+
+    And those compliances' error model over the m + k (the one rule of the budget's
+    compliance term and of both bounds).
+
+    Such a compliance is uniform between the robot file's value and ``prior`` beyond it
+    (the range :data:`~wirecal.solver.compliance.PRIOR_COMPLIANCE_URAD_PER_NM`; nothing
+    measured narrows it). The estimates absorb it (M·J_u·c_u) and it moves the tool
+    (−c_u): the error is [M·J_u; −I]·c_u, its middle a bias and its half-range the edges.
     """
     k = len(c.names)
     _, Ju = tool_jacobian(model, q_ws, c.names)
-    Jx = np.concatenate([Jp, Ju], axis=2)
     V = np.vstack([M @ c.wire, -np.eye(k)]) * (c.prior / 2)  # (m + k, k)
-    pad = np.zeros((len(errors.edges), k))
-    cov = np.zeros((Jx.shape[2],) * 2)
-    cov[: len(errors.cov), : len(errors.cov)] = errors.cov
-    extended = ErrorModel(
-        cov,
-        np.concatenate([errors.bias, np.zeros(k)]) + V.sum(axis=1),
-        np.vstack([np.hstack([errors.edges, pad]), V.T]),
-    )
-    left = -np.concatenate([c.left, c.nominal])
-    return bound_mm(Jx, extended), bound_mm(Jx, replace(extended, bias=extended.bias + left))
+    return np.concatenate([Jp, Ju], axis=2), ErrorModel(np.zeros((len(V),) * 2), V.sum(1), V.T)
+
+
+def _padded(cov: np.ndarray, size: int) -> np.ndarray:
+    """Return ``cov`` (m, m) in the top-left corner of zeros (size, size)."""
+    out = np.zeros((size, size))
+    out[: len(cov), : len(cov)] = cov
+    return out
 
 
 def _notes(src: Sources) -> tuple[str, ...]:

@@ -27,7 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from wirecal.solver.identifiability import analyse_jacobian, covariance
-from wirecal.solver.kinematics import Model, bends, gravity_torques, rigid_frames
+from wirecal.solver.kinematics import Model, bends, gravity_torques, rigid_frames, tool_position
 from wirecal.solver.sensitivity import sensitivity
 
 PRIOR_COMPLIANCE_URAD_PER_NM = 8.0
@@ -145,3 +145,35 @@ def compensated_joints(model: Model, q: np.ndarray) -> np.ndarray:
     for _ in range(COMPENSATION_ITERATIONS):
         command = q - c * gravity_torques(rigid, rigid_frames(rigid, command))
     return command
+
+
+@dataclass(frozen=True)
+class Sag:
+    """The tool point's sag under gravity at configurations (mm, (Q,)), before and after.
+
+    ``before_mm``: the bent arm against the rigid one at the commanded joints (the patch as
+    a controller applies it); ``after_mm``: at the joints :func:`compensated_joints` gives
+    for the identified compliances (what the others leave).
+    """
+
+    before_mm: np.ndarray
+    after_mm: np.ndarray
+
+
+def workspace_sag(model: Model, identified: Sequence[int], q: np.ndarray) -> Sag:
+    """Return ``model``'s sag over ``q`` (rad, (Q, n)) before and after compensation.
+
+    ``model`` is the calibrated arm (the identified compliances' values, the file's for
+    the others); the compensation takes only the compliances of joints ``identified``
+    (0-based rows).
+    """
+    rigid = replace(model, compliance=None)
+    p = tool_position(rigid, q)
+    c = np.zeros(model.n_joints)
+    if model.compliance is not None:
+        c[list(identified)] = np.asarray(model.compliance)[list(identified)]
+    command = compensated_joints(replace(model, compliance=c), q)
+    return Sag(
+        np.linalg.norm(tool_position(model, q) - p, axis=1),
+        np.linalg.norm(tool_position(model, command) - p, axis=1),
+    )

@@ -78,6 +78,19 @@ def default_masses(dh: np.ndarray) -> MassModel:
     return MassModel(mass, reach / 2.0, assumed=True, source="assumed: 10 kg/m of link")
 
 
+def wrist_weight(n_joints: int) -> MassModel:
+    """Return a weight of 1 N at the wrist centre (frame 4's origin) and no other mass.
+
+    The mass model of the robot file's ``gravity_sag_deg_per_m``: with it, c_2 = c_3 = the
+    sag (deg/(N·m)) turns joints 2 and 3 by the sag per metre of lever arm from their axis
+    to the wrist centre, in the direction gravity pulls
+    (:class:`~wirecal.solver.simulate.Unmodelled`).
+    """
+    mass = np.zeros(n_joints)
+    mass[3] = 1.0 / STANDARD_GRAVITY_M_S2  # link 4: the wrist, its centre at frame 4's origin
+    return MassModel(mass, np.zeros((n_joints, 3)), source="the assumed sag: 1 N at the wrist")
+
+
 def gravity_torques_nm(
     masses: MassModel, x: np.ndarray, z: np.ndarray, o: np.ndarray
 ) -> np.ndarray:

@@ -241,6 +241,8 @@ def _sources(
         float(times[0].mean()),
         unmodelled_exit_mm(robot, plan),
         np.zeros(len(d_mean)),  # the simulated arm does not sag
+        len(plan.steps),
+        zero_corrected=robot.repeatability_mm is not None,
     )
 
 

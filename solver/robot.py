@@ -117,8 +117,9 @@ class UrdfSource:
 
 
 DEFAULT_GRAVITY_SAG_DEG_PER_M = 0.01
-"""How far joints 2 and 3 sag under gravity per metre of horizontal lever arm to the wrist
-centre (deg/m), when the robot file does not say: the digital twin's value (≈ 0.05 mm at
+"""How far joints 2 and 3 sag under gravity per metre of lever arm to the wrist centre, the
+way gravity pulls (deg/m; :func:`~wirecal.solver.gravity.wrist_weight`), when the robot file
+does not say: the digital twin's value (≈ 0.05 mm at
 full reach of the Viper s650), an assumption for any real arm (unconfirmed)."""
 
 

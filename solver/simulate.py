@@ -37,7 +37,8 @@ from wirecal.solver.distance import wire_vectors
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import Exit, physical_wire_mm
 from wirecal.solver.formats.log import format_header, format_row
-from wirecal.solver.kinematics import Model, frames, tool_position
+from wirecal.solver.gravity import gravity_torques_nm, wrist_weight
+from wirecal.solver.kinematics import Model, rigid_frames, tool_position
 from wirecal.solver.plan import Plan
 from wirecal.solver.readings import REFERENCE_STEP
 from wirecal.solver.robot import DEFAULT_GRAVITY_SAG_DEG_PER_M, Encoder, Robot
@@ -116,10 +117,12 @@ class Unmodelled:
       tool point scatters by about ``repeatability_mm``/2 (1σ) at 600 mm
       (:func:`~wirecal.solver.zero_reading.joint_sigma_rad`);
     * compliance under gravity: joints 2 and 3 sag by ``compliance_deg_per_m`` per metre of
-      horizontal lever arm from their axis to the wrist centre (the weight of the forearm,
-      wrist and tool; 0.01 deg/m gives ≈ 0.05 mm at full reach): the assumed instance of
-      the compliance model (:mod:`~wirecal.solver.gravity`: a weight at the wrist centre,
-      c2 = c3). A model that carries compliances bends by them instead: no assumed sag.
+      lever arm from their axis to the wrist centre, in the direction gravity pulls (the
+      weight of the forearm, wrist and tool; 0.01 deg/m gives ≈ 0.05 mm at full reach): the
+      assumed instance of the compliance model, δθ_j = c_j·τ_j(q) with a weight of 1 N at
+      the wrist centre (:func:`~wirecal.solver.gravity.wrist_weight`) and c2 = c3 =
+      ``compliance_deg_per_m`` per N·m. A model that carries compliances bends by them
+      instead: no assumed sag.
     """
 
     repeatability_mm: float = 0.02
@@ -139,18 +142,16 @@ class Unmodelled:
     def sag_deg(self, model: Model, q_deg: np.ndarray) -> np.ndarray:
         """Return how far joints 2 and 3 sag under gravity at ``q_deg`` (deg, (N, n)).
 
-        Zero for a model with compliances: its frames bend by them (class docstring).
+        The joints are at ``q_deg`` − sag: the sag is −c·τ(q) (class docstring). Zero for a
+        model with compliances: its frames bend by them.
         """
         q = np.atleast_2d(q_deg)
         if model.compliance is not None:
             return np.zeros(q.shape)
-        o = frames(model, np.radians(q)).o
-        centre = o[:, 4]
-        sag = np.zeros(q.shape)
-        for j in (1, 2):  # joints 2 and 3: lever arm in the horizontal plane
-            lever = np.hypot(*(centre - o[:, j + 1])[:, :2].T) / 1000.0
-            sag[:, j] = self.compliance_deg_per_m * lever
-        return sag
+        f = rigid_frames(model, np.radians(q))
+        c = np.zeros(q.shape[1])
+        c[1:3] = self.compliance_deg_per_m  # deg/(N·m) under a 1 N weight: deg/m of lever
+        return -c * gravity_torques_nm(wrist_weight(q.shape[1]), f.x, f.z, f.o)
 
 
 def sagged_tool_points(

@@ -422,6 +422,8 @@ def _error_sources(
         m.reference_t_s,
         unmodelled_exit_mm(robot, plan)[present],
         sag_lengths_mm(robot, plan)[present],
+        sum(1 for s in m.zero_drift_mm if s <= len(plan.steps)),  # the reference's zeros
+        zero_corrected=robot.repeatability_mm is not None,
     )
 
 
