@@ -18,12 +18,13 @@ import numpy as np
 
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace
 from wirecal.solver.formats.log import parse_log
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters
-from wirecal.solver.simulate import EncoderTruth, Unmodelled, realistic_encoder, simulate_log
+from wirecal.solver.simulate import EncoderTruth, Unmodelled, realistic_encoder
 from wirecal.solver.solve import SolveResult, solve
 
 GAUGE_LENGTH_MM = 500.0

@@ -21,9 +21,9 @@ from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.formats.log import load_measurements, parse_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.formats.truth import load_errors
 from wirecal.solver.measurements import check_log
-from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 
 VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"

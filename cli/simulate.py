@@ -21,6 +21,7 @@ from wirecal.solver.formats.robot_file import (
     MAX_SCALE_PPM,
     load_robot,
 )
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
@@ -30,7 +31,6 @@ from wirecal.solver.simulate import (
     EncoderTruth,
     Faults,
     realistic_encoder,
-    simulate_log,
 )
 
 

@@ -11,7 +11,7 @@ bound's figure is the same statistic for Gaussian parameter errors with the CRB 
 
 With a true ``encoder`` (:class:`~wirecal.solver.simulate.EncoderTruth`) the readings carry
 its scale and temperature; when the robot file gives a reference gauge, each trial reads
-it first (pairs of nests, as :func:`~wirecal.solver.simulate.simulate_log`) and its
+it first (pairs of nests, as :func:`~wirecal.solver.simulate.simulate_run`) and its
 lengths are scaled by the measured k̂ (:func:`~wirecal.solver.scale.estimate_scale`), and
 the joint method refines the scale as ``wirecal solve`` does. ``budget`` holds each
 method's error budget (:mod:`wirecal.solver.budget`) for the same set-up: its prediction.

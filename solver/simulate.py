@@ -8,7 +8,9 @@ Each reading adds one Gaussian error per point (σ, default 0.01 mm: it does not
 out over samples, like repeatability), is quantised at mm_per_count, sampled N times with
 ±1-count electrical jitter, and counted by a signed counter of ``counter_bits`` that wraps.
 Each reading's ``t_s`` is its time in the run's time model (:func:`run_timeline`, the
-program's default speed and settle time).
+program's default speed and settle time). A run is returned as data (:class:`SimulatedRun`,
+:func:`simulate_run`); the log format writes its text
+(:func:`~wirecal.solver.formats.simulated_log.simulate_log`).
 
 The encoder itself is :class:`EncoderTruth`: ideal by default in the Python API (the
 figures of the tests and the Monte Carlo of the noise alone), realistic in ``wirecal
@@ -36,11 +38,10 @@ from wirecal.solver.counter import Counter
 from wirecal.solver.distance import wire_vectors
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import Exit, physical_wire_mm
-from wirecal.solver.formats.log import format_header, format_row
 from wirecal.solver.gravity import gravity_torques_nm, wrist_weight
 from wirecal.solver.kinematics import Model, rigid_frames, tool_position
 from wirecal.solver.plan import Plan
-from wirecal.solver.readings import REFERENCE_STEP
+from wirecal.solver.readings import REFERENCE_STEP, Reading
 from wirecal.solver.robot import DEFAULT_GRAVITY_SAG_DEG_PER_M, Encoder, Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters, run_timeline
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM
@@ -58,6 +59,10 @@ class Faults:
     outlier_mm: float = 1.0  # size of that error (random sign)
     stop_after: int | None = None  # readings written before the run stops
     truncate_last: bool = False  # the last line is cut mid-write
+
+
+NO_FAULTS = Faults()
+"""A run without faults (the default)."""
 
 
 TEMPERATURE_CHANGE_K = 0.5
@@ -264,7 +269,7 @@ def measured_lengths(
 
     Wire lengths as a checked log gives them: per-point noise, counts quantised, each
     measured from the mean of the steps' zero readings. Vectorised over a batched model
-    (Monte Carlo); the same reading model as :func:`simulate_log` without the counter.
+    (Monte Carlo); the same reading model as :func:`simulate_run` without the counter.
     ``times`` (the steps' zero times, the points' times, the run's total, s) is needed for
     an encoder with temperature or drift.
     """
@@ -281,7 +286,23 @@ def measured_lengths(
     return (counts[..., n_zero:] - counts[..., :n_zero].mean(axis=-1, keepdims=True)) * mm_per_count
 
 
-def simulate_log(
+@dataclass(frozen=True)
+class SimulatedRun:
+    """A simulated run as its log records it: the header's facts and the readings.
+
+    ``readings`` in run order, those of a run that stops (:attr:`Faults.stop_after`) cut;
+    ``truncate_last``: the log's last line is cut mid-write (:attr:`Faults.truncate_last`).
+    Each reading's ``line`` is 0: it is not read from a file.
+    """
+
+    robot: str  # the robot file's name
+    plan: str  # the plan's fingerprint
+    mm_per_count: float  # the robot file's (or the one given), as the controller logs it
+    readings: tuple[Reading, ...]
+    truncate_last: bool = False
+
+
+def simulate_run(
     robot: Robot,
     plan: Plan,
     errors: dict[str, float],
@@ -289,14 +310,14 @@ def simulate_log(
     seed: int,
     noise_mm: float = 0.01,
     samples: int = 10,
-    faults: Faults = Faults(),
+    faults: Faults = NO_FAULTS,
     counter_start: float | None = None,
     mm_per_count: float | None = None,
     encoder: EncoderTruth = IDEAL_ENCODER,
     run: RunParameters = DEFAULT_RUN,
     unmodelled: Unmodelled | None = None,
-) -> str:
-    """Return the text of the log a run of ``plan`` on the true robot would write.
+) -> SimulatedRun:
+    """Return what the log of a run of ``plan`` on the true robot would record.
 
     ``run``: the program's speed and settle settings, which set each reading's ``t_s``
     (``samples`` is its readings per point). ``unmodelled``: the arm lands where the
@@ -304,7 +325,8 @@ def simulate_log(
     reading's wire measured from the tool point at θ0 of the true robot, as the twin does.
 
     ``encoder`` is the true encoder (ideal by default; :func:`realistic_encoder`); the
-    reference step comes first when the robot file asks for one.
+    reference step comes first when the robot file asks for one. ``faults``: the wire's
+    slip and outliers change the readings; a stop cuts them; a cut last line is recorded.
     """
     rng = np.random.default_rng(seed)
     enc = robot.encoder
@@ -332,14 +354,10 @@ def simulate_log(
     tail = sample_counts(reading[-1:], mpc, start, enc.counter, samples, closing_rng)
     mean, spread = np.concatenate([head[0], tail[0]]), np.concatenate([head[1], tail[1]])
     rows = _reference_rows(enc, encoder, plan, noise_mm, samples, start, seed, total)
-    rows += _reading_rows(
-        zip(kinds, steps, indices, joints, mean, strict=True),
-        spread,
-        times,
-        settle_s,
-        samples,
-    )
-    return _log_text(robot, plan, mpc, rows, faults)
+    readings = zip(kinds, steps, indices, joints, mean, strict=True)
+    rows += _reading_rows(readings, spread, times, settle_s, samples)
+    cut = tuple(rows[: faults.stop_after])  # all of them when the run does not stop
+    return SimulatedRun(robot.name, plan.fingerprint(), mpc, cut, faults.truncate_last)
 
 
 def _reading_rows(
@@ -348,12 +366,38 @@ def _reading_rows(
     times: np.ndarray,
     settle_s: np.ndarray,
     samples: int,
-) -> list[str]:
+) -> list[Reading]:
     """Return the log's rows of ``readings`` (kind, step, index, joints, mean count)."""
     return [
-        format_row(*args, samples, sp, t, settle)
+        _reading(*args, samples, sp, t, settle)
         for args, sp, t, settle in zip(readings, spread, times, settle_s, strict=True)
     ]
+
+
+def _reading(
+    kind: str,
+    step: int,
+    index: int,
+    joints_deg: np.ndarray,
+    counts: float,
+    samples: int,
+    spread: float,
+    t_s: float,
+    settle_s: float,
+) -> Reading:
+    """Return one row of a simulated run (not read from a file: its line is 0)."""
+    return Reading(
+        kind,
+        step,
+        index,
+        joints_deg,
+        float(counts),
+        samples,
+        float(spread),
+        line=0,
+        t_s=float(t_s),
+        settle_s=float(settle_s),
+    )
 
 
 def _run_order(
@@ -424,22 +468,6 @@ def _check_range(
         )
 
 
-def _log_text(robot: Robot, plan: Plan, mpc: float, rows: list[str], faults: Faults) -> str:
-    """Return the log's text: its header and ``rows``, cut as ``faults`` stops or truncates."""
-    if faults.stop_after is not None:
-        rows = rows[: faults.stop_after]
-    text = format_header(
-        robot.name,
-        plan.fingerprint(),
-        mpc,
-        ("simulated by wirecal; the truth is kept in a separate file",),
-    )
-    text += "\n".join(rows) + ("\n" if rows else "")
-    if faults.truncate_last and rows:
-        text = text[: -(len(rows[-1]) // 2) - 1]
-    return text
-
-
 def _row_lengths(
     robot: Robot,
     errors: dict[str, float],
@@ -492,7 +520,7 @@ def _reference_rows(
     start: float,
     seed: int,
     total_s: float,
-) -> list[str]:
+) -> list[Reading]:
     """Return the log rows of the reference step (none when the robot file asks for none).
 
     Drawn from a generator of their own, so the plan's readings of a seed stay the same.
@@ -506,6 +534,6 @@ def _reference_rows(
     reading = physical * truth.read_factor(times, total_s) + truth.drift_mm(times)
     mean, spread = sample_counts(reading, enc.mm_per_count, start, enc.counter, samples, rng)
     return [
-        format_row("reference", REFERENCE_STEP, i + 1, plan.theta0_deg, c, samples, sp, t, 0.0)
+        _reading("reference", REFERENCE_STEP, i + 1, plan.theta0_deg, c, samples, sp, t, 0.0)
         for i, (c, sp, t) in enumerate(zip(mean, spread, times, strict=True))
     ]

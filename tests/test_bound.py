@@ -32,10 +32,11 @@ from wirecal.solver.bound import (
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.measurements import check_log
 from wirecal.solver.scale import ARM_PPM_PER_K
-from wirecal.solver.simulate import Unmodelled, sag_lengths_mm, simulate_log
+from wirecal.solver.simulate import Unmodelled, sag_lengths_mm
 from wirecal.solver.solve import solve
 
 from .conftest import VIPER

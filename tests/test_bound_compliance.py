@@ -17,10 +17,11 @@ from wirecal.solver.compliance import workspace_sag
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import robot_from_dict
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.kinematics import tool_jacobian
 from wirecal.solver.measurements import check_log
-from wirecal.solver.simulate import Unmodelled, realistic_encoder, simulate_log
+from wirecal.solver.simulate import Unmodelled, realistic_encoder
 from wirecal.solver.solve import solve
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

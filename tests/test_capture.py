@@ -18,7 +18,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.simulate import simulate_log
+from wirecal.solver.formats.simulated_log import simulate_log
 
 from .conftest import ROOT, VIPER
 from .twin_runs import measure_in_twin, measure_ur_in_twin

@@ -25,10 +25,10 @@ from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.patch import read_patch
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.formats.truth import load_errors, random_errors
 from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.measurements import check_log
-from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

@@ -34,11 +34,11 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log, read_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 
 from .conftest import ROOT

@@ -11,12 +11,12 @@ import pytest
 
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.formats.log import parse_log
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.identifiability import analyse_jacobian
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plausibility import _identifiability, assess
 from wirecal.solver.scale import Drift
-from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 
 JUST = 1e-6  # relative step either side of an edge

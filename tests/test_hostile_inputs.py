@@ -489,7 +489,8 @@ def test_simulate_never_writes_nan_counts(tmp_path, option, message):
 def test_simulate_log_refuses_a_reading_that_is_not_finite(viper, paper_plan, table5):
     """The API's own guard, below the command's option bounds: a scale of −100 % reads inf."""
     from wirecal.solver.errors import WirecalError
-    from wirecal.solver.simulate import EncoderTruth, simulate_log
+    from wirecal.solver.formats.simulated_log import simulate_log
+    from wirecal.solver.simulate import EncoderTruth
 
     with pytest.raises(
         WirecalError, match=r"encoder's reading of step 1 zero reading is (inf|nan)"
@@ -794,7 +795,7 @@ def test_rk28_receive_is_bounded_as_every_other_input(tmp_path):
     from wirecal.solver.formats.plan_file import load_plan
     from wirecal.solver.formats.robot_file import load_robot
     from wirecal.solver.formats.run_token import run_token, token_line
-    from wirecal.solver.simulate import simulate_log
+    from wirecal.solver.formats.simulated_log import simulate_log
 
     ur5 = load_robot(VIPER.parent / "ur5e" / "robot.toml")
     plan = load_plan(VIPER.parent / "ur5e" / "plan.toml", ur5)
@@ -1168,7 +1169,7 @@ def test_rk13_a_full_disk_names_the_journal_and_what_it_keeps(tmp_path, monkeypa
     from wirecal.solver.formats.plan_file import load_plan
     from wirecal.solver.formats.robot_file import load_robot
     from wirecal.solver.formats.run_token import run_token, token_line
-    from wirecal.solver.simulate import simulate_log
+    from wirecal.solver.formats.simulated_log import simulate_log
 
     keep = rec._keep
 

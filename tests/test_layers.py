@@ -8,8 +8,8 @@ of a module or inside a function (a lazy import is still a dependency), and so d
 for type checking only. ``from wirecal import __version__`` is allowed everywhere: the
 package root is imported before any of its parts anyway.
 
-Today's violations are listed in :data:`KNOWN`, each with the issue that removes it. The
-test fails on a new violation and on a listed one that is gone, so the list only shrinks.
+There are no exceptions (the last, the simulation writing the log's text, went with
+issue 33): the test fails on any violation.
 """
 
 from __future__ import annotations
@@ -43,14 +43,6 @@ LAYERS = {
     "wirecal.cli": 6,
 }
 """Each layer's package and its height: a module imports only strictly lower layers."""
-
-KNOWN = {
-    ("wirecal.solver.simulate", "wirecal.solver.formats.log"): (
-        "issue 25 item 3: simulate writes the log's text; it should return readings that the "
-        "log format writes"
-    ),
-}
-"""Violations of today, (importer, imported) → the issue that removes it."""
 
 
 def layer(module: str) -> str | None:
@@ -100,11 +92,8 @@ def violations(root: Path) -> set[tuple[str, str]]:
 
 
 def test_layers_import_only_downwards():
-    found = violations(ROOT)
-    new = sorted(found - KNOWN.keys())
-    gone = sorted(KNOWN.keys() - found)
-    assert not new, f"imports against the layer order (docs/architecture.md): {new}"
-    assert not gone, f"fixed, so remove them from KNOWN in tests/test_layers.py: {gone}"
+    found = sorted(violations(ROOT))
+    assert not found, f"imports against the layer order (docs/architecture.md): {found}"
 
 
 def test_every_source_folder_is_checked():

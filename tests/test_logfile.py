@@ -10,9 +10,10 @@ import pytest
 
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.log_rows import Tolerances
 from wirecal.solver.measurements import check_log
-from wirecal.solver.simulate import Faults, simulate_log
+from wirecal.solver.simulate import Faults
 from wirecal.solver.solve import solve
 
 from .conftest import TABLE5 as TRUTH

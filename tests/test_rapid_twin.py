@@ -18,8 +18,8 @@ from wirecal.solver.formats.controller_result import parse_result, result_in_log
 from wirecal.solver.formats.log import parse_log, read_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.measurements import check_log
-from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 from wirecal.twin.rapid.adapter import ADAPTER
 from wirecal.twin.world import Faults, World

@@ -31,7 +31,7 @@ from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.formats.run_token import run_token, token_line
-from wirecal.solver.simulate import simulate_log
+from wirecal.solver.formats.simulated_log import simulate_log
 
 from .conftest import ROOT
 

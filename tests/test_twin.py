@@ -15,13 +15,14 @@ from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import load_measurements, parse_log, read_log
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.identify import Problem
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import check_log
 from wirecal.solver.plan_predict import robot_time
 from wirecal.solver.run_parameters import DEFAULT_RUN, PAPER_RUN, run_timeline
-from wirecal.solver.simulate import EncoderTruth, simulate_log
+from wirecal.solver.simulate import EncoderTruth
 from wirecal.solver.solve import solve
 from wirecal.twin.run_moves import move_of_step, where_in_run
 from wirecal.twin.vplus.controller import VplusController

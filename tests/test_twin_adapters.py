@@ -14,8 +14,8 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import load_measurements, parse_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.measurements import check_log
-from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 from wirecal.twin.adapters import adapter
 from wirecal.twin.urscript.controller import URController

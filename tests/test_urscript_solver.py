@@ -21,8 +21,8 @@ from wirecal.solver.formats.controller_result import parse_result, result_in_log
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.measurements import check_log
-from wirecal.solver.simulate import simulate_log
 from wirecal.solver.solve import solve
 from wirecal.twin.urscript.solver_run import READING_INTS, ur_readings
 

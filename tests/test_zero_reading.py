@@ -18,10 +18,11 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import parse_log
 from wirecal.solver.formats.plan_file import load_plan
 from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
+from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import check_log
-from wirecal.solver.simulate import Unmodelled, simulate_log
+from wirecal.solver.simulate import Unmodelled
 from wirecal.solver.solve import solve
 from wirecal.solver.zero_reading import expected_zero_mm
 

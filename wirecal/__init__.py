@@ -36,7 +36,7 @@ _API = {
     "Design": "wirecal.solver.plan_design",
     "psi_table": "wirecal.app.psi_view",
     # simulate a measurement run
-    "simulate_log": "wirecal.solver.simulate",
+    "simulate_log": "wirecal.solver.formats.simulated_log",
     "EncoderTruth": "wirecal.solver.simulate",
     "realistic_encoder": "wirecal.solver.simulate",
     "random_errors": "wirecal.solver.formats.truth",

@@ -71,22 +71,21 @@ HEADER_KEYS = ("robot", "plan", "mm_per_count")
 KINDS = ("zero", "point", "unsettled", "reference")
 
 
-def format_row(
-    kind: str,
-    step: int,
-    index: int,
-    joints_deg,
-    counts: float,
-    samples: int,
-    spread: float,
-    t_s: float,
-    settle_s: float,
-) -> str:
-    """One data line, numbers written without loss at the log's resolution."""
-    joints = ",".join(f"{x:.4f}" for x in joints_deg)
+def format_row(reading: Reading) -> str:
+    """One data line, numbers written without loss at the log's resolution.
+
+    The line of this version: a reading without its ``t_s`` and ``settle_s`` is refused.
+    """
+    r = reading
+    if r.t_s is None or r.settle_s is None:
+        raise WirecalError(
+            f"a version {VERSION} log row needs t_s and settle_s: {r.kind} of step {r.step} "
+            f"index {r.index} has t_s {r.t_s}, settle_s {r.settle_s}"
+        )
+    joints = ",".join(f"{x:.4f}" for x in r.joints_deg)
     return (
-        f"{kind},{step},{index},{joints},{counts:.4f},{samples:d},{spread:g},"
-        f"{t_s:.3f},{settle_s:.3f}"
+        f"{r.kind},{r.step},{r.index},{joints},{r.counts:.4f},{r.samples:d},{r.spread:g},"
+        f"{r.t_s:.3f},{r.settle_s:.3f}"
     )
 
 
