@@ -9,11 +9,12 @@ import numpy as np
 import pytest
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.simulated_log import simulate_log
+from wirecal.solver.formats.log import format_row, parse_log
+from wirecal.solver.formats.simulated_log import simulate_log, simulated_log_text
 from wirecal.solver.log_rows import Tolerances
 from wirecal.solver.measurements import check_log
-from wirecal.solver.simulate import Faults
+from wirecal.solver.readings import Reading
+from wirecal.solver.simulate import Faults, simulate_run
 from wirecal.solver.solve import solve
 
 from .conftest import TABLE5 as TRUTH
@@ -44,6 +45,40 @@ def line_no(text, prefix):
 
 def replace_line(text, prefix, new):
     return "\n".join(new if line.startswith(prefix) else line for line in lines(text)) + "\n"
+
+
+def test_a_row_is_written_at_the_logs_resolution():
+    row = Reading("point", 2, 3, np.arange(1.0, 7.0), 1234.5, 10, 1.0, 0, 1.25, 0.5)
+    assert format_row(row) == (
+        "point,2,3,1.0000,2.0000,3.0000,4.0000,5.0000,6.0000,1234.5000,10,1,1.250,0.500"
+    )
+
+
+def test_a_row_without_times_is_refused():
+    row = Reading("zero", 1, 0, np.zeros(6), 0.0, 10, 0.0, 0)  # as a version 1 log reads
+    with pytest.raises(WirecalError, match="version 2 log row needs t_s and settle_s"):
+        format_row(row)
+
+
+def test_the_simulation_returns_readings_that_the_log_writes(viper, paper_plan, log_text):
+    run = simulate_run(viper, paper_plan, TRUTH, seed=5, counter_start=1000.0)
+    assert (run.robot, run.plan) == (viper.name, paper_plan.fingerprint())
+    assert run.mm_per_count == viper.encoder.mm_per_count
+    n_points = len(paper_plan.all_points()[0])
+    n_zeros = len(paper_plan.steps) + 1  # each step's and the closing one
+    assert len(run.readings) == n_points + n_zeros
+    assert [r.kind for r in run.readings].count("zero") == n_zeros
+    assert simulated_log_text(run) == log_text
+    assert np.isfinite(measure(log_text, viper, paper_plan).distance_mm).all()
+
+
+def test_a_stopped_run_returns_the_readings_before_the_stop(viper, paper_plan):
+    whole = simulate_run(viper, paper_plan, TRUTH, seed=5, counter_start=1000.0)
+    stopped = simulate_run(
+        viper, paper_plan, TRUTH, seed=5, counter_start=1000.0, faults=Faults(stop_after=7)
+    )
+    assert len(stopped.readings) == 7
+    assert [r.counts for r in stopped.readings] == [r.counts for r in whole.readings[:7]]
 
 
 def test_clean_log(viper, paper_plan, log_text):
