@@ -330,6 +330,8 @@ def generalise(
     Returns the final fit evaluated at its estimate and why each DH error was dropped.
     """
     est = evaluate(base, layout, x, data, rows)
+    if not est.identified.all():
+        return est, ()  # not BIC's to drop as "not worth a parameter": fit_core refuses it
     dh = [k for k, n in enumerate(layout.geometry) if n not in P.TOOL_NAMES]
     out = bic_eliminated(est.cov, x, dh, len(rows))
     if not out:
