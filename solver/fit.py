@@ -351,7 +351,7 @@ def generalise(
     return evaluate(base, kept, x, data, rows), why
 
 
-SUBSAMPLE_ROWS = 16384
+SUBSAMPLE_ROWS = 4096
 """Rows of a large table the first robust solve uses (:func:`robust_pass`)."""
 
 
