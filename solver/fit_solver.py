@@ -32,8 +32,7 @@ STEP_TOL = 1e-4
 """The last step, in units of the parameters' σ, below which the fit has converged."""
 
 MAX_EVALUATIONS = 100
-"""Evaluations of the model before the solver stops where it is (as scipy's default 100·k
-would rarely be reached: a fit converges in 3–10)."""
+"""Evaluations of the model before the solver stops where it is (a fit's solve takes 3–15)."""
 
 _MIN_WEIGHT = np.finfo(float).eps
 
