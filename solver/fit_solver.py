@@ -57,6 +57,11 @@ def _cost(r: np.ndarray, loss: SolverLoss, f_scale: float) -> float:
     return _weights(r, loss, f_scale)[0]
 
 
+def _negligible(predicted: float, cost: float, dof: int) -> bool:
+    """Return whether a step's predicted decrease is below ½ STEP_TOL² σ², σ² = 2·cost/dof."""
+    return predicted <= STEP_TOL**2 * cost / max(dof, 1)
+
+
 def levenberg_marquardt(
     evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
     x0: np.ndarray,
@@ -66,11 +71,14 @@ def levenberg_marquardt(
 ) -> np.ndarray:
     """Return the ``x`` that minimises the cost of ``evaluate(x)``'s residual (module docstring).
 
-    ``evaluate(x)`` returns the residual r (N,) and ∂r/∂x (N, k) at ``x``.
+    ``evaluate(x)`` returns the residual r (N,) and ∂r/∂x (N, k) at ``x``; a point where
+    either is not finite is a failed step (a start there: ``ValueError``).
     """
     x = np.asarray(x0, dtype=float).copy()
     r, J = evaluate(x)
     cost = _cost(r, loss, f_scale)
+    if not (np.isfinite(cost) and np.all(np.isfinite(J))):
+        raise ValueError("the residual or its Jacobian is not finite at the start")  # as scipy
     lam = 0.0  # a good start: Gauss–Newton first, damped only when a step fails
     for _ in range(MAX_EVALUATIONS):
         _, d1, w = _weights(r, loss, f_scale)
@@ -82,14 +90,12 @@ def levenberg_marquardt(
         predicted = -(g @ step + 0.5 * step @ H @ step)
         r_new, J_new = evaluate(x + step)
         new_cost = _cost(r_new, loss, f_scale)
-        if new_cost < cost and predicted > 0 and (cost - new_cost) > 0.25 * predicted:
+        gain = cost - new_cost > 0.25 * predicted > 0 and np.all(np.isfinite(J_new))
+        if gain:
             x, r, J, cost = x + step, r_new, J_new, new_cost
             lam = lam / 10 if lam > 1e-6 else 0.0
-            variance = 2 * cost / max(len(r) - len(x), 1)
-            if predicted <= 0.5 * STEP_TOL**2 * variance:
-                break
-        elif predicted <= 0.5 * STEP_TOL**2 * 2 * cost / max(len(r) - len(x), 1):
-            break  # at the minimum to rounding: no step can lower the cost
-        else:
+        if _negligible(predicted, cost, len(r) - len(x)):
+            break  # converged, or at the minimum to rounding: no step can lower the cost
+        if not gain:
             lam = max(10 * lam, 1e-3)
     return x
