@@ -13,7 +13,7 @@ identifiable DH errors). The steps:
    default datasheet tolerance, 500 ppm)
    (:func:`~wirecal.solver.identifiability.select_columns`). Row 1 is a rigid motion of the
    arm that the anchor absorbs; θ_n and d_n move the attachment, which is fitted.
-3. **Robust fit, sessions**: ``least_squares`` with the soft-L1 loss, f_scale the robust
+3. **Robust fit, sessions**: least squares with the soft-L1 loss, f_scale the robust
    σ of the residual; rows beyond :data:`REJECT_SIGMA` σ are outliers (and rows whose x, y,
    z disagree with their joints, ``Data.excluded``); the lengths less the
    model without offsets, ordered by row, give the offset jumps
@@ -33,7 +33,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from wirecal.solver import params as P
 from wirecal.solver.compliance import SIGMA_LIMIT_URAD_PER_NM
@@ -56,13 +55,13 @@ from wirecal.solver.fit_model import (
 )
 from wirecal.solver.fit_select import bic_eliminated
 from wirecal.solver.fit_sessions import change_points, noise_sigma, place, robust_sigma
+from wirecal.solver.fit_solver import SolverLoss, levenberg_marquardt
 from wirecal.solver.identifiability import (
     Identifiability,
     analyse_jacobian,
     covariance,
     select_columns,
 )
-from wirecal.solver.identify import Loss
 from wirecal.solver.kinematics import Model, tool_position
 from wirecal.solver.robot import DEFAULT_SCALE_TOLERANCE_PPM, Robot
 from wirecal.solver.verdict import POORLY_IDENTIFIED, implausible
@@ -237,19 +236,18 @@ def solve(
     data: Data,
     rows: np.ndarray,
     *,
-    loss: Loss = "linear",
+    loss: SolverLoss = "linear",
     f_scale: float = 1.0,
     free: np.ndarray | None = None,
 ) -> np.ndarray:
     """Return the least-squares ``x`` over ``rows`` from ``x0`` (analytic Jacobian).
 
     ``free`` (k,) bool: the parameters to adjust (default all); the others keep ``x0``'s.
-    Each point's lengths and Jacobian are evaluated together: the solver asks for the
-    Jacobian at the point whose residual it has just accepted, so the frames are computed
-    once per point.
+    The solver is :func:`~wirecal.solver.fit_solver.levenberg_marquardt` (the normal
+    equations, k × k, instead of a factorisation of the N × k Jacobian); each point's
+    lengths and Jacobian are evaluated together.
     """
     free = np.ones(len(x0), dtype=bool) if free is None else free
-    every = bool(free.all())
     q, length, session = data.q_rad[rows], data.length_mm[rows], data.session[rows]
 
     def full(xf: np.ndarray) -> np.ndarray:
@@ -257,24 +255,11 @@ def solve(
         x[free] = xf
         return x
 
-    at: dict[bytes, np.ndarray] = {}  # the Jacobian at the last point evaluated
-
-    def fun(xf: np.ndarray) -> np.ndarray:
+    def fun(xf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         model, J = lengths_and_jacobian(base, layout, full(xf), q, session)
-        at.clear()
-        at[xf.tobytes()] = J if every else J[:, free]
-        return model - length
+        return model - length, J[:, free]
 
-    def jac(xf: np.ndarray) -> np.ndarray:
-        J = at.pop(xf.tobytes(), None)  # handed out once: the solver scales it in place
-        return (
-            lengths_and_jacobian(base, layout, full(xf), q, session)[1][:, free] if J is None else J
-        )
-
-    sol = least_squares(
-        fun, x0[free], jac=jac, loss=loss, f_scale=f_scale, x_scale="jac", method="trf"
-    )
-    return full(sol.x)
+    return full(levenberg_marquardt(fun, x0[free], loss=loss, f_scale=f_scale))
 
 
 def _implausible(layout: Layout, x: np.ndarray) -> list[str]:
@@ -345,6 +330,8 @@ def generalise(
     Returns the final fit evaluated at its estimate and why each DH error was dropped.
     """
     est = evaluate(base, layout, x, data, rows)
+    if not est.identified.all():
+        return est, ()  # not BIC's to drop as "not worth a parameter": fit_core refuses it
     dh = [k for k, n in enumerate(layout.geometry) if n not in P.TOOL_NAMES]
     out = bic_eliminated(est.cov, x, dh, len(rows))
     if not out:
@@ -364,6 +351,20 @@ def generalise(
     return evaluate(base, kept, x, data, rows), why
 
 
+SUBSAMPLE_ROWS = 4096
+"""Rows of a large table the first robust solve uses (:func:`robust_pass`)."""
+
+
+def subsample(n_rows: int) -> np.ndarray:
+    """Return every row, or of more than 2 × :data:`SUBSAMPLE_ROWS` rows an even stride of them.
+
+    An even stride, not a random draw: the fit stays deterministic, and the rows' order
+    (the sessions) is sampled evenly.
+    """
+    stride = 1 if n_rows <= 2 * SUBSAMPLE_ROWS else -(-n_rows // SUBSAMPLE_ROWS)
+    return np.arange(0, n_rows, stride)
+
+
 @dataclass(frozen=True)
 class Pass:
     """One robust pass: its layout and estimate, the residual, the inliers and their σ."""
@@ -376,10 +377,14 @@ class Pass:
 
 
 def robust_pass(base: Model, layout: Layout, x0: np.ndarray, data: Data) -> Pass:
-    """Soft-L1 fit (f_scale: the residual's robust σ), then the rows beyond 5σ rejected."""
-    rows = np.arange(len(data.length_mm))
+    """Soft-L1 fit (f_scale: the residual's robust σ), then the rows beyond 5σ rejected.
+
+    The first of the two solves runs on :func:`subsample`'s rows: it travels from the start
+    (the most iterations), the second, on every row, from near its end.
+    """
+    n = len(data.length_mm)
     x = x0
-    for _ in range(2):  # the second pass with the σ of the first's residual
+    for rows in (subsample(n), np.arange(n)):  # the second with the σ of the first's residual
         r = residual(base, layout, x, data)
         sigma = max(robust_sigma(r), data.floor_mm)
         x = solve(base, layout, x, data, rows, loss="soft_l1", f_scale=sigma)

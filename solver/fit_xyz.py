@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wirecal.solver.kinematics import Model, frames, joint_jacobian
+from wirecal.solver.kinematics import Model, bends, frames, joint_jacobian, rigid_frames
 
 XYZ_REJECT = 5.0
 """A row is flagged beyond this many times the median disagreement (and its rounding bound)."""
@@ -60,13 +60,15 @@ def check_xyz(
     xyz_resolution_mm: float,
 ) -> XyzCheck:
     """Fit the controller's TCP and flag the rows that disagree (module docstring)."""
-    f = frames(base, np.radians(q_deg))
+    q_rad = np.radians(q_deg)
+    f = frames(base, q_rad)
+    rigid = rigid_frames(base, q_rad) if bends(base) else f  # joint_jacobian's, any TCP
     o, R = f.o[:, -1], f.R_last
     rows = np.arange(len(q_deg))
     for _ in range(2):
         t = _tcp(o, R, xyz_mm, rows)
         dist = np.linalg.norm(xyz_mm - o - np.einsum("nij,j->ni", R, t), axis=1)
-        _, J = joint_jacobian(Model(base.dh, t), np.radians(q_deg))
+        _, J = joint_jacobian(Model(base.dh, t), q_rad, rigid)
         bound = np.linalg.norm(J, axis=1).sum(axis=1) * np.radians(joint_resolution_deg) / 2
         bound += np.sqrt(3) * xyz_resolution_mm / 2
         tol = np.maximum(bound, XYZ_REJECT * np.median(dist[rows]))

@@ -311,8 +311,8 @@ def test_a_twist_fitted_to_noise_does_not_split_parallel_axes():
 
 
 def test_a_fit_whose_parameters_are_not_identified_is_refused(monkeypatch):
-    """Should the choice ever keep a degenerate pair (d2, d3 of parallel axes), the fit
-    runs along it (tens of metres): refused, not reported with a small σ."""
+    """Should the choice ever keep a degenerate pair (d2, d3 of parallel axes): refused,
+    neither reported with a small σ nor dropped by BIC as "not worth a parameter"."""
     from wirecal.solver import fit as F
     from wirecal.solver.errors import WirecalError
 
