@@ -21,7 +21,7 @@ from wirecal.solver.fit_model import (
     quantisation_floor,
 )
 from wirecal.solver.fit_result import FitOptions, fit_table
-from wirecal.solver.fit_sessions import change_points
+from wirecal.solver.fit_sessions import change_points, noise_sigma, place
 from wirecal.solver.fit_synth import synthetic_table, take_rows
 from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.kinematics import Model, tool_position
@@ -339,7 +339,10 @@ def test_a_fit_whose_parameters_are_not_identified_is_refused(monkeypatch):
 )
 @example([12, 12], [8.0] * 4, 0)  # two snags inflated σ elevenfold: the jump went unseen
 @example([52], [8.0] * 4, 0)  # one session: the difference σ came out 22 % low, a cut paid
+@example([22, 22], [8.0] * 4, 33)  # snags at rows 19, 20: the search cuts at 19, place at 22
 def test_change_points_find_jumps_within_two_rows(lengths, jumps, seed):
+    """The fit's session starts (the search, then each boundary placed robustly, as
+    ``fit._session_starts`` does) lie within two rows of the true jumps."""
     rng = np.random.default_rng(seed)
     level = np.cumsum([0.0] + [j * rng.choice([-1, 1]) for j in jumps[: len(lengths) - 1]])
     values = np.concatenate([np.full(n, lv) for n, lv in zip(lengths, level, strict=True)])
@@ -349,7 +352,8 @@ def test_change_points_find_jumps_within_two_rows(lengths, jumps, seed):
     truth = np.cumsum(lengths)[:-1]
     found = change_points(values)
     assert len(found) == len(truth)
-    assert np.all(np.abs(np.array(found) - truth) <= 2)
+    starts = place(values, (0, *found), noise_sigma(values))[1:]
+    assert np.all(np.abs(np.array(starts) - truth) <= 2)
 
 
 def test_no_change_points_in_noise():
