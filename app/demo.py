@@ -236,9 +236,8 @@ def _run(
         log_text, result, verdict = _identify(out, folder, ch.log_name, run.log, robot, plan)
         identified = result.estimates[result.recommended].as_dict()
         seconds["solve"] = time.perf_counter() - t
-        t = step("the controller solver's result")
-        comparison, difference = _controller(result, log_text, ch, programs, disk / "ctl")
-        seconds["controller"] = time.perf_counter() - t
+        t = step("the controller solver's result, in the second process")
+        controller = pool.submit(_controller, result, log_text, ch, programs, disk / "ctl")
         t = step("validation before and after calibration, with unmodelled errors")
         if before is not None:
             logs = {
@@ -254,6 +253,7 @@ def _run(
         else:
             validations = [_distance_validation(out, folder, ch, truth, disk, identified, seed)]
         seconds["validate"] = time.perf_counter() - t
+        comparison, difference, seconds["controller"] = controller.result()
     companion = reg.language.patch_companion
     t = step("patch" + (f" and patch{companion}" if companion else ""))
     for name, program in programs.items():
@@ -280,21 +280,23 @@ def _run(
 
 def _controller(
     result: SolveResult, log_text: str, ch: Chain, programs: dict[str, str], disk: Path
-) -> tuple[ControllerComparison | None, float]:
-    """Return the controller solver's comparison (if run here) and its largest difference.
+) -> tuple[ControllerComparison | None, float, float]:
+    """Return the controller solver's comparison (if run here), its largest difference, seconds.
 
     From the log when the measurement program ends with the solver (against the PC's
     stepwise estimate); else the language's solvers in the twin on the log's readings
     (:func:`~wirecal.app.compare.compare_controller`).
     """
+    t = time.perf_counter()
     found = result_in_log(log_text)
     if found is not None:
         on_controller = parse_result(found, f"{ch.log_name} (controller solver)")
         pc = result.estimates["stepwise"].as_dict()
-        return None, max(abs(on_controller[n] - v) for n, v in pc.items())
+        difference = max(abs(on_controller[n] - v) for n, v in pc.items())
+        return None, difference, time.perf_counter() - t
     comparison = compare_controller(result, disk, programs=programs)
     differences = (comparison.stepwise_max_difference, comparison.polished_max_difference)
-    return comparison, max(d for d in differences if d is not None)
+    return comparison, max(d for d in differences if d is not None), time.perf_counter() - t
 
 
 class ValidationLogs(NamedTuple):
