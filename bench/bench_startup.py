@@ -31,14 +31,18 @@ from wirecal.cli.main import GC_THRESHOLD
 VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"
 
 
-def medians_s(commands: dict[str, list[str]], runs: int) -> dict[str, tuple[float, float]]:
+def medians_s(
+    commands: dict[str, list[str]], runs: int, warm: bool = True
+) -> dict[str, tuple[float, float]]:
     """Median wall and CPU time (user + system) of each command, run in turn ``runs`` times.
 
-    The CPU time of a child process hardly depends on what else the machine runs; the wall
-    time does, two- to threefold on a shared machine.
+    The CPU time counts the command's own children (those it waits for, as a process pool
+    it shuts down). The CPU time of a child process hardly depends on what else the machine
+    runs; the wall time does, two- to threefold on a shared machine. ``warm``: each command
+    runs once unmeasured first (writing the bytecode caches).
     """
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in commands}
-    for cmd in commands.values():  # unmeasured: writes the bytecode caches
+    for cmd in commands.values() if warm else ():
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     for _ in range(runs):
         for name, cmd in commands.items():
