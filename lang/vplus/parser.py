@@ -20,6 +20,7 @@ beyond 2^53, reals beyond about 1E+307 (p. 102). Rules: User's Guide v17 p. 35�
 
 from __future__ import annotations
 
+import copy
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -238,7 +239,21 @@ _build = ast_utils.create_transformer(N, _Terminals())
 
 
 def parse_step(line: str) -> N.Stmt:
-    """One step (no label, no comment) → its node; lark's exception when it is not V+."""
+    """One step (no label, no comment) → its node; lark's exception when it is not V+.
+
+    A new statement node each call (its line is set by the caller); the expressions in it
+    are shared with the other parses of the same text, and nothing changes them.
+    """
+    return copy.copy(_parsed_step(line))
+
+
+@lru_cache(maxsize=32768)
+def _parsed_step(line: str) -> N.Stmt:
+    """Parse one step (see :func:`parse_step`), kept by its text.
+
+    The modules of one robot (generated with other options, before and after a patch)
+    share most of their lines, and a module repeats many.
+    """
     tree = _parser().parse(line)
     check_line_depth(tree)
     return _build.transform(tree)
