@@ -91,6 +91,7 @@ def main() -> None:
     trees = {"before": args.before.resolve(), "now": NOW}
     for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")  # as the command line sets them
+    os.environ.pop("PYTHONDONTWRITEBYTECODE", None)  # the children cache bytecode, as CI's
     print(f"load average at the start: {os.getloadavg()[0]:.1f}")
     with tempfile.TemporaryDirectory() as tmp:
         cmds = _commands(trees, Path(tmp), args.arms, not args.no_demo)
