@@ -15,6 +15,8 @@ Viper s650, the default), the paper's two procedures run before and after calibr
 believing the patch after), the one before calibration in a second process beside the
 rest. Otherwise the measurement programs run again over new points (unmodelled errors on)
 and their wire lengths are compared with those the nominal and the calibrated model predict.
+The controller solver's runs go to the second process too, beside the validation after
+calibration.
 
 Every output goes to one folder and none is overwritten unless asked.
 """
