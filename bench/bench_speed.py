@@ -5,12 +5,12 @@ command run on the code before, in one run.
 CPU time (user + system of the child and its children, which the machine's load touches far
 less than the wall time; the demo's second process included) and wall time, median of
 ``--runs`` runs (the test loops: ``--test-runs``, one by default, without the unmeasured
-first run the commands get); the runs of the code before and now are interleaved, so a
-change of the machine's load touches both alike, and each figure is given as the ratio now /
-before. The code before is a checkout of it (for example ``git worktree add --detach
-../before main``) given as ``--before``; its commands run with the same interpreter and that
-checkout first on ``PYTHONPATH``. Every plan file written by the two is compared byte for
-byte.
+first run the commands get, timed whether or not a test fails); the runs of the code before
+and now are interleaved, so a change of the machine's load touches both alike, and each
+figure is given as the ratio now / before. The code before is a checkout of it (for example
+``git worktree add --detach ../before main``) given as ``--before``; its commands run with
+the same interpreter and that checkout first on ``PYTHONPATH``. Every plan file written by
+the two is compared byte for byte.
 
     python bench/bench_speed.py --before ../before [--runs 3] [--arms viper_s650 ur5e]
         [--no-demo] [--quick-loop] [--suite] [--test-runs 1]
@@ -74,7 +74,7 @@ def _timed(cmds: dict[tuple[str, str], list[str]], runs: int, warm: bool):
     if not cmds:
         return {}
     flat = {f"{fig} | {name}": cmd for (fig, name), cmd in cmds.items()}
-    times = medians_s(flat, runs, warm=warm)
+    times = medians_s(flat, runs, warm=warm, check=warm)  # a failing test: timed all the same
     return {key: times[f"{key[0]} | {key[1]}"] for key in cmds}
 
 
