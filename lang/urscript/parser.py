@@ -36,17 +36,22 @@ rest before running).
 
 from __future__ import annotations
 
-import copy
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass
-from functools import cache, lru_cache, singledispatchmethod
+from functools import cache, singledispatchmethod
 from importlib import resources
 
 from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError
 
-from wirecal.lang.syntax import NestingError, check_block_depth, check_line_depth, walk_tree
+from wirecal.lang.syntax import (
+    NestingError,
+    check_block_depth,
+    check_line_depth,
+    kept_by_text,
+    walk_tree,
+)
 from wirecal.lang.urscript import nodes as N
 from wirecal.lang.urscript.versions import refusal, too_new, version_of
 from wirecal.solver.errors import WirecalError
@@ -285,22 +290,9 @@ class _LineError(Exception):
 _build = ast_utils.create_transformer(N, _Terminals())
 
 
+@kept_by_text
 def parse_line(line: str) -> N.Stmt:
-    """One line (no comment) → its node; lark's exception when it is not URScript.
-
-    A new statement node each call (its line is set by the caller); the expressions in it
-    are shared with the other parses of the same text, and nothing changes them.
-    """
-    return copy.copy(_parsed_line(line))
-
-
-@lru_cache(maxsize=32768)
-def _parsed_line(line: str) -> N.Stmt:
-    """Parse one line (see :func:`parse_line`), kept by its text.
-
-    The scripts of one robot (generated with other options, before and after a patch)
-    share most of their lines.
-    """
+    """One line (no comment) → its node; lark's exception when it is not URScript."""
     tree = _parser().parse(line)
     check_line_depth(tree)
     return _build.transform(tree)

@@ -20,7 +20,6 @@ beyond 2^53, reals beyond about 1E+307 (p. 102). Rules: User's Guide v17 p. 35�
 
 from __future__ import annotations
 
-import copy
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -30,7 +29,13 @@ from importlib import resources
 from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedToken
 
-from wirecal.lang.syntax import NestingError, check_block_depth, check_line_depth, walk_tree
+from wirecal.lang.syntax import (
+    NestingError,
+    check_block_depth,
+    check_line_depth,
+    kept_by_text,
+    walk_tree,
+)
 from wirecal.lang.vplus import nodes as N
 from wirecal.lang.vplus.forms import FormError, operands
 from wirecal.lang.vplus.keywords import VALUE_KINDS, is_kind, keyword
@@ -238,22 +243,9 @@ class _Terminals(Transformer):
 _build = ast_utils.create_transformer(N, _Terminals())
 
 
+@kept_by_text
 def parse_step(line: str) -> N.Stmt:
-    """One step (no label, no comment) → its node; lark's exception when it is not V+.
-
-    A new statement node each call (its line is set by the caller); the expressions in it
-    are shared with the other parses of the same text, and nothing changes them.
-    """
-    return copy.copy(_parsed_step(line))
-
-
-@lru_cache(maxsize=32768)
-def _parsed_step(line: str) -> N.Stmt:
-    """Parse one step (see :func:`parse_step`), kept by its text.
-
-    The modules of one robot (generated with other options, before and after a patch)
-    share most of their lines, and a module repeats many.
-    """
+    """One step (no label, no comment) → its node; lark's exception when it is not V+."""
     tree = _parser().parse(line)
     check_line_depth(tree)
     return _build.transform(tree)
