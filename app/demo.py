@@ -15,6 +15,8 @@ Viper s650, the default), the paper's two procedures run before and after calibr
 believing the patch after), the one before calibration in a second process beside the
 rest. Otherwise the measurement programs run again over new points (unmodelled errors on)
 and their wire lengths are compared with those the nominal and the calibrated model predict.
+The controller solver's runs go to the second process too, beside the validation after
+calibration.
 
 Every output goes to one folder and none is overwritten unless asked.
 """
@@ -229,9 +231,8 @@ def _run(
         log_text, result, verdict = _identify(out, folder, ch.log_name, run.log, robot, plan)
         identified = result.estimates[result.recommended].as_dict()
         seconds["solve"] = time.perf_counter() - t
-        t = step("the controller solver's result")
-        comparison, difference = _controller(result, log_text, ch, programs, disk / "ctl")
-        seconds["controller"] = time.perf_counter() - t
+        t = step("the controller solver's result, in the second process")
+        controller = pool.submit(_controller, result, log_text, ch, programs, disk / "ctl")
         t = step("validation before and after calibration, with unmodelled errors")
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before
@@ -239,6 +240,7 @@ def _run(
         if before is not None:
             seconds["validate before"] = before.result().seconds
         seconds["validate"] = time.perf_counter() - t
+        comparison, difference, seconds["controller"] = controller.result()
     companion = reg.language.patch_companion
     t = step("patch" + (f" and patch{companion}" if companion else ""))
     for name, program in programs.items():
@@ -328,21 +330,23 @@ def _validations(
 
 def _controller(
     result: SolveResult, log_text: str, ch: Chain, programs: dict[str, str], disk: Path
-) -> tuple[ControllerComparison | None, float]:
-    """Return the controller solver's comparison (if run here) and its largest difference.
+) -> tuple[ControllerComparison | None, float, float]:
+    """Return the controller solver's comparison (if run here), its largest difference, seconds.
 
     From the log when the measurement program ends with the solver (against the PC's
     stepwise estimate); else the language's solvers in the twin on the log's readings
     (:func:`~wirecal.app.compare.compare_controller`).
     """
+    t = time.perf_counter()
     found = result_in_log(log_text)
     if found is not None:
         on_controller = parse_result(found, f"{ch.log_name} (controller solver)")
         pc = result.estimates["stepwise"].as_dict()
-        return None, max(abs(on_controller[n] - v) for n, v in pc.items())
+        difference = max(abs(on_controller[n] - v) for n, v in pc.items())
+        return None, difference, time.perf_counter() - t
     comparison = compare_controller(result, disk, programs=programs)
     differences = (comparison.stepwise_max_difference, comparison.polished_max_difference)
-    return comparison, max(d for d in differences if d is not None)
+    return comparison, max(d for d in differences if d is not None), time.perf_counter() - t
 
 
 class ValidationLogs(NamedTuple):

@@ -1,17 +1,19 @@
 """Where people wait: ``wirecal plan`` of every shipped arm, ``wirecal demo`` and (optional)
-the quick test loop, each timed as a whole process against the same command run on the code
-before, in one run.
+the quick test loop and the whole suite, each timed as a whole process against the same
+command run on the code before, in one run.
 
 CPU time (user + system of the child and its children, which the machine's load touches far
-less than the wall time) and wall time, median of ``--runs`` runs; the runs of the code
-before and now are interleaved, so a change of the machine's load touches both alike, and
-each figure is given as the ratio now / before. The code before is a checkout of it (for
-example ``git worktree add --detach ../before main``) given as ``--before``; its commands
-run with the same interpreter and that checkout first on ``PYTHONPATH``. Every plan file
-written by the two is compared byte for byte.
+less than the wall time; the demo's second process included) and wall time, median of
+``--runs`` runs (the test loops: ``--test-runs``, one by default, without the unmeasured
+first run the commands get, timed whether or not a test fails); the runs of the code before
+and now are interleaved, so a change of the machine's load touches both alike, and each
+figure is given as the ratio now / before. The code before is a checkout of it (for example
+``git worktree add --detach ../before main``) given as ``--before``; its commands run with
+the same interpreter and that checkout first on ``PYTHONPATH``. Every plan file written by
+the two is compared byte for byte.
 
     python bench/bench_speed.py --before ../before [--runs 3] [--arms viper_s650 ur5e]
-        [--no-demo] [--quick-loop]
+        [--no-demo] [--quick-loop] [--suite] [--test-runs 1]
 """
 
 from __future__ import annotations
@@ -35,8 +37,14 @@ def _wirecal(tree: Path, *args: str) -> list[str]:
     return ["env", f"PYTHONPATH={tree}", sys.executable, "-P", "-c", main, *args]
 
 
-def _commands(trees: dict[str, Path], tmp: Path, arms, demo: bool, quick: bool):
-    """Return the commands to time: (figure, tree's name) → command."""
+def _pytest(tree: Path, *args: str) -> list[str]:
+    """Return the command running the tests of ``tree`` (the README's, with ``args``)."""
+    run = ["env", f"PYTHONPATH={tree}", sys.executable, "-P", "-m", "pytest", "-q"]
+    return [*run, *args, "-p", "no:cacheprovider", "--rootdir", str(tree), str(tree / "tests")]
+
+
+def _commands(trees: dict[str, Path], tmp: Path, arms, demo: bool):
+    """Return the commands of plan and demo to time: (figure, tree's name) → command."""
     out: dict[tuple[str, str], list[str]] = {}
     for arm in arms:
         for name, tree in trees.items():
@@ -47,52 +55,61 @@ def _commands(trees: dict[str, Path], tmp: Path, arms, demo: bool, quick: bool):
         if demo:
             folder = str(tmp / f"{name}_demo")
             out[("demo", name)] = _wirecal(tree, "demo", "-o", folder, "--force")
-        if quick:
-            out[("quick loop", name)] = [
-                "env",
-                f"PYTHONPATH={tree}",
-                sys.executable,
-                "-P",
-                "-m",
-                "pytest",
-                "-q",
-                "-m",
-                "not slow",
-                "-p",
-                "no:cacheprovider",
-                "--rootdir",
-                str(tree),
-                str(tree / "tests"),
-            ]
     return out
+
+
+def _test_commands(trees: dict[str, Path], quick: bool, suite: bool):
+    """Return the test loops to time: (figure, tree's name) → command."""
+    out: dict[tuple[str, str], list[str]] = {}
+    for name, tree in trees.items():
+        if quick:
+            out[("quick loop", name)] = _pytest(tree, "-m", "not slow")
+        if suite:
+            out[("whole suite", name)] = _pytest(tree)
+    return out
+
+
+def _timed(cmds: dict[tuple[str, str], list[str]], runs: int, warm: bool):
+    """Return each command's median (wall s, CPU s), keyed as ``cmds``."""
+    if not cmds:
+        return {}
+    flat = {f"{fig} | {name}": cmd for (fig, name), cmd in cmds.items()}
+    times = medians_s(flat, runs, warm=warm, check=warm)  # a failing test: timed all the same
+    return {key: times[f"{key[0]} | {key[1]}"] for key in cmds}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--before", type=Path, required=True, help="a checkout of the code before")
     ap.add_argument("--runs", type=int, default=3)
-    ap.add_argument("--arms", nargs="+", default=list(ARMS), choices=ARMS)
+    ap.add_argument("--arms", nargs="*", default=list(ARMS), choices=ARMS)
     ap.add_argument("--no-demo", action="store_true", help="leave out wirecal demo")
     ap.add_argument("--quick-loop", action="store_true", help="time pytest -m 'not slow' too")
+    ap.add_argument("--suite", action="store_true", help="time the whole suite (pytest) too")
+    ap.add_argument("--test-runs", type=int, default=1, help="runs of each test loop")
     args = ap.parse_args()
     trees = {"before": args.before.resolve(), "now": NOW}
     for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")  # as the command line sets them
+    os.environ.pop("PYTHONDONTWRITEBYTECODE", None)  # the children cache bytecode, as CI's
     print(f"load average at the start: {os.getloadavg()[0]:.1f}")
     with tempfile.TemporaryDirectory() as tmp:
-        cmds = _commands(trees, Path(tmp), args.arms, not args.no_demo, args.quick_loop)
-        flat = {f"{fig} | {name}": cmd for (fig, name), cmd in cmds.items()}
-        times = medians_s(flat, args.runs)
+        cmds = _commands(trees, Path(tmp), args.arms, not args.no_demo)
+        times = _timed(cmds, args.runs, warm=True)
+        tests = _test_commands(trees, args.quick_loop, args.suite)
+        times |= _timed(tests, args.test_runs, warm=False)
         same = {
             arm: (Path(tmp) / f"before_{arm}.toml").read_bytes()
             == (Path(tmp) / f"now_{arm}.toml").read_bytes()
             for arm in args.arms
         }
     print(f"load average at the end: {os.getloadavg()[0]:.1f}; median of {args.runs} runs")
+    if tests:
+        print(f"(the test loops: median of {args.test_runs} run(s), no unmeasured first run)")
     print("| figure | before: CPU s / wall s | now: CPU s / wall s | ratio CPU (wall) |")
     print("|---|---|---|---|")
-    for fig in dict.fromkeys(fig for fig, _ in cmds):
-        (bw, bc), (nw, nc) = times[f"{fig} | before"], times[f"{fig} | now"]
+    for fig in dict.fromkeys(fig for fig, _ in times):
+        (bw, bc), (nw, nc) = times[(fig, "before")], times[(fig, "now")]
         ratio = f"{nc / bc:.2f} ({nw / bw:.2f})"
         print(f"| {fig} | {bc:.2f} / {bw:.2f} | {nc:.2f} / {nw:.2f} | {ratio} |")
     for arm, equal in same.items():

@@ -1,12 +1,15 @@
 """What the parsers of every controller language share: the nesting bounds they read.
 
 A program nested deeper than these bounds is refused up front (the checks and the
-interpreters recurse per level), and a helper walks a parsed program's block tree.
+interpreters recurse per level), a helper walks a parsed program's block tree, and the
+line parsers keep each line's node by its text.
 """
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable, Iterator
+from functools import lru_cache
 from typing import TypeVar
 
 from wirecal.solver.errors import WirecalError
@@ -20,6 +23,10 @@ level, so a deeper program is refused up front."""
 MAX_EXPRESSION_DEPTH = 100
 """Deepest parse tree of one line (nested parentheses, a chain of operators) the parsers
 read; wirecal's bound (its generated V+ and URScript lines reach 12), not a controller's."""
+
+
+KEPT_LINES = 32768
+"""How many distinct lines a line parser keeps (:func:`kept_by_text`)."""
 
 
 class NestingError(Exception):
@@ -73,3 +80,21 @@ def walk_tree(steps: list[S], children: Callable[[S], list[list[S]]]) -> Iterato
         yield s
         for body in children(s):
             yield from walk_tree(body, children)
+
+
+def kept_by_text(parse_line: Callable[[str], S]) -> Callable[[str], S]:
+    """Return ``parse_line`` keeping each line's node by its text, a new copy per call.
+
+    The modules of one robot (generated with other options, before and after a patch)
+    share most of their lines and a module repeats many, so a process parses each distinct
+    line once. The copy is shallow: the caller sets its line number; the expressions in it
+    are shared with the other copies, and nothing changes them. A line that does not parse
+    raises each time.
+    """
+    kept = lru_cache(maxsize=KEPT_LINES)(parse_line)
+
+    def parse(line: str) -> S:
+        return copy.copy(kept(line))
+
+    parse.__doc__ = parse_line.__doc__
+    return parse

@@ -35,6 +35,34 @@ def printed_plan(viper):
     return load_plan(VIPER / "paper_plan_as_printed.toml", viper)
 
 
+@pytest.fixture(scope="session")
+def viper_module(viper, paper_plan) -> str:
+    """The V+ module of the Viper's paper plan (the default options), generated once."""
+    from wirecal.gen.vplus.program import GenOptions, module_text
+
+    from .twin_runs import generated
+
+    return generated(module_text, viper, paper_plan, GenOptions())
+
+
+@pytest.fixture(scope="session")
+def viper_setup():
+    """The Viper's shipped validation set-up (``validation.toml``)."""
+    from wirecal.solver.formats.validation_files import load_setup
+
+    return load_setup(VIPER / "validation.toml")
+
+
+@pytest.fixture(scope="session")
+def viper_validation_module(viper, paper_plan, viper_setup) -> str:
+    """The V+ module of the Viper's paper plan with the validation programs, generated once."""
+    from wirecal.gen.vplus.program import GenOptions, module_text
+
+    from .twin_runs import generated
+
+    return generated(module_text, viper, paper_plan, GenOptions(validation=viper_setup))
+
+
 def _table5() -> dict[str, float]:
     from wirecal.solver.formats.truth import load_errors
 

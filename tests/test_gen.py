@@ -27,8 +27,8 @@ GOLDEN = VIPER.parents[1] / "tests" / "golden" / "viper_s650" / "WIRECAL.V2"
 
 
 @pytest.fixture(scope="module")
-def module(viper, paper_plan):
-    return module_text(viper, paper_plan)
+def module(viper_module):
+    return viper_module
 
 
 def test_golden_file(module):

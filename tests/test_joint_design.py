@@ -135,17 +135,16 @@ def test_stage_lines_are_printed_and_counted():
 
 
 @pytest.mark.slow
-def test_probe_search_starts_near_the_last_contact(viper, paper_plan, tmp_path):
+def test_probe_search_starts_near_the_last_contact(
+    viper, paper_plan, viper_setup, viper_validation_module, tmp_path
+):
     """A robot as nominal: every one of the 19 × 11 grid points is found to 1/128 mm
     (flange 100 mm above the plate at -300 mm) in under half the moves of a search from
     the approach height in 1, 0.1 and 0.01 mm steps (44 per point here)."""
-    from wirecal.app.demo import example_files
-    from wirecal.gen.vplus.program import GenOptions, module_text
-    from wirecal.solver.formats.validation_files import load_setup, read_validation_log
+    from wirecal.solver.formats.validation_files import read_validation_log
     from wirecal.twin.vplus.runs import run_validation
 
-    setup = load_setup(example_files()["validation"])
-    text = module_text(viper, paper_plan, GenOptions(validation=setup))
+    setup, text = viper_setup, viper_validation_module
     v = run_validation(
         viper, paper_plan, {}, setup, tmp_path, text, controller={}, run=1, unmodelled=None
     )

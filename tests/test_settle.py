@@ -146,8 +146,10 @@ def _check_wire_speeds(robot, plan, text) -> np.ndarray:
     return peaks
 
 
-def test_generated_speeds_keep_the_paper_plans_wire_within_its_limit(viper, paper_plan):
-    peaks = _check_wire_speeds(viper, paper_plan, module_text(viper, paper_plan))
+def test_generated_speeds_keep_the_paper_plans_wire_within_its_limit(
+    viper, paper_plan, viper_module
+):
+    peaks = _check_wire_speeds(viper, paper_plan, viper_module)
     assert peaks.max() > 0.5 * viper.encoder.max_wire_speed_mm_s  # the limit is used
 
 
@@ -158,8 +160,10 @@ def test_generated_speeds_keep_the_designed_plans_wire_within_its_limit(viper):
 
 
 @pytest.mark.slow
-def test_the_twin_refuses_a_hand_edited_speed_beyond_the_wire_limit(viper, paper_plan, tmp_path):
-    text = module_text(viper, paper_plan)
+def test_the_twin_refuses_a_hand_edited_speed_beyond_the_wire_limit(
+    viper, paper_plan, viper_module, tmp_path
+):
+    text = viper_module
     moves = _program_moves(text)
     k = int(np.argmin([speed for speed, _ in moves]))  # the move the wire slows most
     speed, target = moves[k]

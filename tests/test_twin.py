@@ -11,12 +11,11 @@ import pytest
 
 from wirecal.app.compare import controller_runs
 from wirecal.gen.templating import environment
-from wirecal.gen.vplus.program import GenOptions, module_text
+from wirecal.gen.vplus.program import GenOptions
 from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import load_measurements, parse_log, read_log
 from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.identify import Problem
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.measurements import check_log
@@ -31,7 +30,6 @@ from wirecal.twin.vplus.runs import run_validation
 from wirecal.twin.world import Faults, Plate, World
 
 from .conftest import TABLE5 as TRUTH
-from .conftest import VIPER
 from .twin_runs import measure_in_twin
 
 
@@ -338,12 +336,12 @@ def test_fault_slip_during_the_last_step(viper, paper_plan, tmp_path):
     assert "repeat from step 10" in problem
 
 
-def test_fault_wire_beyond_the_encoders_range(viper, paper_plan, tmp_path):
+def test_fault_wire_beyond_the_encoders_range(viper, paper_plan, viper_module, tmp_path):
     """A 500 mm encoder on the paper plan (it needs 603 mm; gen refuses it: the conformance
     suite's safety section): a program run anyway stops with the twin's error and its
     cause, and the direct simulator stops the same way, naming step and point."""
     short = replace(viper, encoder=replace(viper.encoder, range_mm=500.0))
-    r, out = _fault(short, paper_plan, tmp_path, Faults(), text=module_text(viper, paper_plan))
+    r, out = _fault(short, paper_plan, tmp_path, Faults(), text=viper_module)
     assert out.status == "error"
     assert out.message.startswith("*Draw-wire range exceeded*: the wire would be 5")
     assert "mm long, beyond the encoder's range_mm 500" in out.message
@@ -376,11 +374,12 @@ def test_echo_log_without_a_disk(viper, paper_plan, tmp_path):
 
 
 @pytest.mark.slow
-def test_validation_sets_the_null_tool_and_takes_any_run_number(viper, paper_plan, tmp_path):
+def test_validation_sets_the_null_tool_and_takes_any_run_number(
+    viper, paper_plan, viper_setup, viper_validation_module, tmp_path
+):
     """TOOL NULL before every Cartesian move, recorded in the header; run 12 (which the
     old $CHR(48+run) turned into 'WCVCFG<.CSV') names its files WCVCFG12/WCVPLN12."""
-    setup = load_setup(VIPER / "validation.toml")
-    text = module_text(viper, paper_plan, GenOptions(validation=setup))
+    setup, text = viper_setup, viper_validation_module
     v = run_validation(
         viper, paper_plan, TRUTH, setup, tmp_path, text, controller={}, run=12, unmodelled=None
     )
@@ -392,8 +391,8 @@ def test_validation_sets_the_null_tool_and_takes_any_run_number(viper, paper_pla
 
 
 @pytest.fixture(scope="module")
-def module(viper, paper_plan):
-    return module_text(viper, paper_plan)
+def module(viper_module):
+    return viper_module
 
 
 def _controller_case(viper, plan, module, tmp_path, seed):

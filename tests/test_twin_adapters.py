@@ -8,7 +8,7 @@ import pytest
 from wirecal.gen.rapid.program import MODULE_FILE
 from wirecal.gen.rapid.program import module_text as rapid_module
 from wirecal.gen.urscript.program import scripts
-from wirecal.gen.vplus.program import MODULE_NAME, module_text
+from wirecal.gen.vplus.program import MODULE_NAME
 from wirecal.lang.urscript.parser import BUILTINS, parse_program
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.formats.log import load_measurements, parse_log
@@ -92,9 +92,9 @@ def test_ur_measure_without_a_receiver_is_incomplete(ur5, ur5_plan, tmp_path):
 
 
 @pytest.mark.slow
-def test_vplus_adapter_measures_the_whole_plan(viper, paper_plan, tmp_path):
+def test_vplus_adapter_measures_the_whole_plan(viper, paper_plan, viper_module, tmp_path):
     """V+'s adapter: the module's run logs the whole plan in the file wc.run opened."""
-    programs = {MODULE_NAME: module_text(viper, paper_plan)}
+    programs = {MODULE_NAME: viper_module}
     run = adapter(viper.controller.language).measure(
         viper, paper_plan, TABLE5, tmp_path / "disk", programs, seed=2
     )
@@ -122,12 +122,12 @@ def worst_difference(estimates, reference) -> float:
 
 @pytest.mark.slow
 def test_controller_solvers_on_lengths_agree_with_the_reference(
-    viper, paper_plan, ur5, ur5_plan, irb, irb_plan, tmp_path
+    viper, paper_plan, viper_module, ur5, ur5_plan, irb, irb_plan, tmp_path
 ):
     """Each adapter's controller_solve on the plan points' wire lengths (the zero readings
     on a counter about to wrap) agrees with the PC reference on the same lengths."""
     for robot, plan, programs, methods in (
-        (viper, paper_plan, {MODULE_NAME: module_text(viper, paper_plan)}, {"stepwise", "joint"}),
+        (viper, paper_plan, {MODULE_NAME: viper_module}, {"stepwise", "joint"}),
         (ur5, ur5_plan, scripts(ur5, ur5_plan), {"stepwise"}),
         (irb, irb_plan, {MODULE_FILE: rapid_module(irb, irb_plan)}, {"stepwise"}),
     ):

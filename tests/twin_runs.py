@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from wirecal.app.receive import Received, journal_path, receive
 from wirecal.gen.urscript.program import UrOptions, pc_address, scripts
@@ -21,6 +22,22 @@ from wirecal.solver.simulate import IDEAL_ENCODER, EncoderTruth, Unmodelled
 from wirecal.twin.urscript.runs import ADAPTER as UR_ADAPTER
 from wirecal.twin.vplus.runs import run_measurement
 from wirecal.twin.world import Faults, TwinRun
+
+_GENERATED: dict[tuple, tuple[Robot, Plan, Any]] = {}
+
+
+def generated(render: Callable[[Robot, Plan, Any], Any], robot: Robot, plan: Plan, options):
+    """Return ``render(robot, plan, options)``, generated once a session for these objects.
+
+    A generator gives the same text for the same robot, plan and options (test_gen.py's
+    ``test_deterministic`` checks it); the tests share it instead of generating it again.
+    The robot and plan are kept with the text, so their ids stay theirs.
+    """
+    key = (render, id(robot), id(plan), repr(options))
+    hit = _GENERATED.get(key)
+    if hit is None:
+        hit = _GENERATED[key] = (robot, plan, render(robot, plan, options))
+    return hit[2]
 
 
 def measure_in_twin(
@@ -44,7 +61,7 @@ def measure_in_twin(
     ``text``, generated with those options) on a twin robot with true offsets ``truth``.
     """
     options = options or GenOptions()
-    text = text if text is not None else module_text(robot, plan, options)
+    text = text if text is not None else generated(module_text, robot, plan, options)
     return run_measurement(
         robot,
         plan,
@@ -102,7 +119,7 @@ def measure_ur_in_twin(
     int32 range).
     """
     options = options or UrOptions()
-    texts = texts if texts is not None else scripts(robot, plan, options)
+    texts = texts if texts is not None else dict(generated(scripts, robot, plan, options))
     got: list[Received] = []
 
     def listen(log: Path, on_listening: Callable[[int], None]) -> Received:

@@ -11,6 +11,7 @@ import struct
 from dataclasses import dataclass, field
 
 _S = struct.Struct("f")
+_PACK, _UNPACK = _S.pack, _S.unpack
 
 
 class RunError(Exception):
@@ -24,7 +25,7 @@ class RunError(Exception):
 def f32(x: float) -> float:
     """Round to IEEE single precision (a V+ REAL, a URScript float)."""
     try:
-        return _S.unpack(_S.pack(x))[0]
+        return _UNPACK(_PACK(x))[0]
     except OverflowError:
         raise RunError(-405, "*Floating-point overflow*") from None
 

@@ -16,7 +16,7 @@ is built recursively).
 from __future__ import annotations
 
 import re
-from functools import cache
+from functools import cache, lru_cache
 from importlib import resources
 
 from lark import Lark, Token, Transformer, Tree, v_args
@@ -394,7 +394,17 @@ def _binary(text: str) -> bool:
 
 
 def parse_module(text: str) -> N.Module:
-    """Parse one module's text; raise :class:`SyntaxProblem` where the grammar stops."""
+    """Parse one module's text; raise :class:`SyntaxProblem` where the grammar stops.
+
+    The last few modules parsed are kept (nothing changes a parsed module): a generated
+    module is checked by the generator, then run in the twin several times.
+    """
+    return _parse_module(text)
+
+
+@lru_cache(maxsize=8)
+def _parse_module(text: str) -> N.Module:
+    """Parse one module's text (see :func:`parse_module`)."""
     if _binary(text):
         raise SyntaxProblem(
             1,

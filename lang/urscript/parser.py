@@ -45,7 +45,13 @@ from importlib import resources
 from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError
 
-from wirecal.lang.syntax import NestingError, check_block_depth, check_line_depth, walk_tree
+from wirecal.lang.syntax import (
+    NestingError,
+    check_block_depth,
+    check_line_depth,
+    kept_by_text,
+    walk_tree,
+)
 from wirecal.lang.urscript import nodes as N
 from wirecal.lang.urscript.versions import refusal, too_new, version_of
 from wirecal.solver.errors import WirecalError
@@ -284,6 +290,7 @@ class _LineError(Exception):
 _build = ast_utils.create_transformer(N, _Terminals())
 
 
+@kept_by_text
 def parse_line(line: str) -> N.Stmt:
     """One line (no comment) → its node; lark's exception when it is not URScript."""
     tree = _parser().parse(line)

@@ -29,7 +29,13 @@ from importlib import resources
 from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedToken
 
-from wirecal.lang.syntax import NestingError, check_block_depth, check_line_depth, walk_tree
+from wirecal.lang.syntax import (
+    NestingError,
+    check_block_depth,
+    check_line_depth,
+    kept_by_text,
+    walk_tree,
+)
 from wirecal.lang.vplus import nodes as N
 from wirecal.lang.vplus.forms import FormError, operands
 from wirecal.lang.vplus.keywords import VALUE_KINDS, is_kind, keyword
@@ -237,6 +243,7 @@ class _Terminals(Transformer):
 _build = ast_utils.create_transformer(N, _Terminals())
 
 
+@kept_by_text
 def parse_step(line: str) -> N.Stmt:
     """One step (no label, no comment) → its node; lark's exception when it is not V+."""
     tree = _parser().parse(line)

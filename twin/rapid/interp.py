@@ -38,7 +38,7 @@ import operator
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache, singledispatchmethod
+from functools import singledispatchmethod
 from typing import Any
 
 from wirecal.lang.rapid import nodes as N
@@ -307,16 +307,10 @@ def _calls(stmts: list[N.Stmt]) -> list[N.Call]:
     return out
 
 
-@lru_cache(maxsize=8)
-def _parsed(text: str) -> N.Module:
-    """Parse a module once for its several runs (wc_mount, wc_run; the tree is not changed)."""
-    return parse_module(text)
-
-
 def load_module(text: str, source: str, controller: RapidController) -> Interpreter:
     """Check a module and ready it to run; WirecalError lists the checker's problems."""
     try:
-        module = _parsed(text)
+        module = parse_module(text)  # kept for its several runs (wc_mount, wc_run)
     except SyntaxProblem as e:
         raise WirecalError([f"{source}:{e.line}: {e.message}"]) from None
     checker = Checker(module, subset=True)

@@ -595,13 +595,12 @@ class _Compiler:
 
     # ---------- statements ----------
     def stmt(self, s: N.Stmt) -> Callable:
-        prog = self.prog.name
         interp = self.i
-        line = s.line
+        where = (self.prog.name, s.line)
         inner = self._stmt(s)
 
         def run(frame):
-            interp.where = (prog, line)
+            interp.where = where
             inner(frame)
 
         return run
@@ -922,20 +921,21 @@ def _labelled(fns: list[Callable], labels: dict[int, int]) -> Callable:
 
 def _arithmetic(interp, op: str, a: Callable, b: Callable) -> Callable:
     """Compile ``a op b`` for +, -, *, / and MOD, counting the operations as executed."""
+    ops = interp.ops  # cleared, never replaced
     if op == "+":
 
         def f(frame):
-            interp.ops["add"] += 1
+            ops["add"] += 1
             return a(frame) + b(frame)
     elif op == "-":
 
         def f(frame):
-            interp.ops["add"] += 1
+            ops["add"] += 1
             return a(frame) - b(frame)
     elif op == "*":
 
         def f(frame):
-            interp.ops["mul"] += 1
+            ops["mul"] += 1
             return a(frame) * b(frame)
     else:
         f = _division(interp, op, a, b)
@@ -944,10 +944,11 @@ def _arithmetic(interp, op: str, a: Callable, b: Callable) -> Callable:
 
 def _division(interp, op: str, a: Callable, b: Callable) -> Callable:
     """Compile ``a / b`` or ``a MOD b``; a zero divisor is V+ error -409."""
+    ops = interp.ops
     if op == "/":
 
         def f(frame):
-            interp.ops["div"] += 1
+            ops["div"] += 1
             d = b(frame)
             if d == 0:
                 raise VError(-409, "*Division by zero*")
