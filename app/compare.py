@@ -16,8 +16,8 @@ from pathlib import Path
 from wirecal.app.languages import Registered, registered
 from wirecal.gen.request import GenRequest
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.measurements import Measurements
-from wirecal.solver.plan import Plan
+from wirecal.solver.log.measurements import Measurements
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.solve import SolveResult, solve
 from wirecal.twin.controller_run import ControllerRun

@@ -16,12 +16,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from wirecal.formats.log import parse_log
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.truth import random_errors
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.truth import random_errors
-from wirecal.solver.measurements import check_log
-from wirecal.solver.plan import Plan
+from wirecal.solver.log.measurements import check_log
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters
 from wirecal.solver.simulate import EncoderTruth, Unmodelled, realistic_encoder

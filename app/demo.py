@@ -42,25 +42,25 @@ from wirecal.app.compare import ControllerComparison, compare_controller
 from wirecal.app.gate import gate
 from wirecal.app.languages import Registered, registered
 from wirecal.app.report import Validation, render_report
+from wirecal.formats.controller_result import parse_result, result_in_log
+from wirecal.formats.fileio import Outputs
+from wirecal.formats.log import read_log
+from wirecal.formats.patch import companion_paths, put_patch
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.truth import random_errors, truth_text
+from wirecal.formats.validation_files import load_setup, read_validation_log
 from wirecal.gen.request import GenRequest
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace
 from wirecal.solver.counter import Counter
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.controller_result import parse_result, result_in_log
-from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.log import read_log
-from wirecal.solver.formats.patch import companion_paths, put_patch
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.truth import random_errors, truth_text
-from wirecal.solver.formats.validation_files import load_setup, read_validation_log
-from wirecal.solver.measurements import check_log
-from wirecal.solver.plan import Plan
+from wirecal.solver.log.measurements import check_log
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import EncoderTruth, Unmodelled, realistic_encoder
 from wirecal.solver.solve import SolveResult, solve
-from wirecal.solver.validation import Setup, distance_plan, distance_residuals
-from wirecal.solver.validation_analysis import Stats, config_discrepancy, plane_residuals
+from wirecal.solver.validation.analysis import Stats, config_discrepancy, plane_residuals
+from wirecal.solver.validation.design import Setup, distance_plan, distance_residuals
 from wirecal.solver.verdict import Plausibility
 from wirecal.twin.adapters import adapter
 

@@ -18,8 +18,8 @@ import numpy as np
 
 from wirecal.app.report import AFTER, BEFORE, _png
 from wirecal.gen.templating import render
-from wirecal.solver.fit_gate import Gate
-from wirecal.solver.fit_result import FitResult, Run, parameters_json
+from wirecal.solver.fit.gate import Gate
+from wirecal.solver.fit.result import FitResult, Run, parameters_json
 
 
 def residual_figure(run: Run) -> str:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 from wirecal.gen.backends import Generator, generator
 from wirecal.lang.base import Language
 from wirecal.lang.registry import language
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.twin.adapters import TwinAdapter, adapter
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver.identifiability import Identifiability, analyse
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import DEFAULT_TOL, PSI_FLOOR, sensitivity, verdict
 

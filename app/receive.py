@@ -1,12 +1,12 @@
 """Receiving a measurement log over TCP from a controller program (the PC side).
 
 A controller without file output (URScript) sends its log as lines over a socket: first
-the run token (:mod:`wirecal.solver.formats.run_token`), then the ``wirecal-log`` header,
+the run token (:mod:`wirecal.formats.run_token`), then the ``wirecal-log`` header,
 the column line, the rows, and last the end marker :data:`END_MARKER`. :func:`receive`
 listens on one address and takes one run so that nothing received is lost and nothing
 but a checked, complete log is published — on a shop network too:
 
-* ``LOG`` is reserved before listening (an :class:`~wirecal.solver.formats.fileio.Outputs`
+* ``LOG`` is reserved before listening (an :class:`~wirecal.formats.fileio.Outputs`
   set: an existing file is refused unless ``force``, and the robot file or plan is never
   an output, even with ``force``);
 * a connection becomes the sender only when its first line presents the run's token
@@ -20,7 +20,7 @@ but a checked, complete log is published — on a shop network too:
   killed ``wirecal`` still leaves every received row on disk. An existing journal is never
   overwritten: it holds the rows of an earlier run;
 * at the end marker the received text is read as a log and checked against the plan and
-  robot (:func:`~wirecal.solver.measurements.check_log`, every point and the closing zero
+  robot (:func:`~wirecal.solver.log.measurements.check_log`, every point and the closing zero
   reading): ``LOG`` is published atomically only when it passes, and the journal removed;
   otherwise the journal is kept and the problems are named.
 
@@ -40,12 +40,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from wirecal.formats.fileio import MAX_INPUT_BYTES, Outputs, os_problem
+from wirecal.formats.log import parse_log
+from wirecal.formats.run_token import PREFIX, presents, run_token
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import MAX_INPUT_BYTES, Outputs, os_problem
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.run_token import PREFIX, presents, run_token
-from wirecal.solver.measurements import check_log, describe_missing
-from wirecal.solver.plan import Plan
+from wirecal.solver.log.measurements import check_log, describe_missing
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 
 END_MARKER = "# end"

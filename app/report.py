@@ -26,7 +26,7 @@ from wirecal.solver.accuracy import tool_error, workspace
 from wirecal.solver.compliance import workspace_sag
 from wirecal.solver.kinematics import bends
 from wirecal.solver.solve import SolveResult
-from wirecal.solver.validation_analysis import Stats, reduction
+from wirecal.solver.validation.analysis import Stats, reduction
 from wirecal.solver.verdict import OVERRIDDEN
 
 if TYPE_CHECKING:

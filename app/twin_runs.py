@@ -14,7 +14,7 @@ from typing import Any
 
 from wirecal.app.languages import registered
 from wirecal.gen.request import GenRequest
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.twin.world import TwinRun
 

@@ -14,7 +14,7 @@ from typing import Any
 
 from wirecal.app.languages import registered
 from wirecal.gen.request import GenRequest
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import EncoderTruth
 from wirecal.twin.run_moves import move_of_step, where_in_run

@@ -2,10 +2,10 @@
 
 Everything the robot file needs comes from the URDF, the options or a stated rule, and the
 file says which: the DH rows, limits and speeds from the URDF's joints
-(:mod:`wirecal.solver.formats.urdf_model`); the wire attachment point from ``--wire-point-mm`` in
+(:mod:`wirecal.formats.urdf_model`); the wire attachment point from ``--wire-point-mm`` in
 the tip link's frame; the encoder interface and counter width from the controller language's
 declaration (:class:`wirecal.lang.base.Capabilities`); the link radii from the URDF's
-geometry or lengths (:mod:`wirecal.solver.formats.urdf_geometry`); the mounting plane from
+geometry or lengths (:mod:`wirecal.formats.urdf_geometry`); the mounting plane from
 the URDF's root link.
 
 Joint speeds a URDF gives as placeholders — every joint the same whole number of rad/s, or
@@ -25,12 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from wirecal.lang.registry import default_language, first_channel, language
-from wirecal.solver.dh_from_axes import PARALLEL_TOL
-from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
-from wirecal.solver.formats.urdf import MOVING, chain, matrix_rpy, origin_mm, read_urdf
-from wirecal.solver.formats.urdf_geometry import (
+from wirecal.formats.robot_file import robot_file_text, robot_from_dict
+from wirecal.formats.urdf import MOVING, chain, matrix_rpy, origin_mm, read_urdf
+from wirecal.formats.urdf_geometry import (
     RADIUS_PER_LENGTH,
     RADIUS_PER_REACH,
     WIDE_RATIO,
@@ -38,12 +35,15 @@ from wirecal.solver.formats.urdf_geometry import (
     link_radii,
     wide_links,
 )
-from wirecal.solver.formats.urdf_model import (
+from wirecal.formats.urdf_model import (
     UrdfChain,
     chain_masses,
     fk_difference_mm,
     read_chain,
 )
+from wirecal.lang.registry import default_language, first_channel, language
+from wirecal.solver.dh_from_axes import PARALLEL_TOL
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.identifiability import propose_parameters
 from wirecal.solver.kinematics import Model
 from wirecal.solver.robot import (

@@ -43,8 +43,8 @@ import numpy as np  # noqa: E402
 
 from wirecal.app.coverage import compliance_trial, trial, wilson, with_gauge  # noqa: E402
 from wirecal.app.demo import example_files, plan_beside  # noqa: E402
-from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot, robot_from_dict  # noqa: E402
+from wirecal.formats.plan_file import load_plan  # noqa: E402
+from wirecal.formats.robot_file import load_robot, robot_from_dict  # noqa: E402
 from wirecal.solver.simulate import Unmodelled  # noqa: E402
 
 

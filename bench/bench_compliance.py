@@ -3,9 +3,9 @@
 Per arm (robot file with ``[calibration] compliances = ["c2", "c3", "c4", "c5"]`` and a
 reference gauge, :func:`~wirecal.app.coverage.with_gauge`) and per plan (its shipped plan,
 and the plan ``wirecal plan`` designs for that file at the shipped plan's θ0, with the
-points for the compliances, :mod:`~wirecal.solver.plan_compliance`): ``--truths`` true
+points for the compliances, :mod:`~wirecal.solver.plan.compliance`): ``--truths`` true
 arms (offsets within ±1 deg/mm, compliances uniform in 2–8 µrad/(N·m): issue 30's range,
-:data:`~wirecal.solver.formats.truth.TRUE_COMPLIANCE_URAD_PER_NM`), each simulated with a
+:data:`~wirecal.formats.truth.TRUE_COMPLIANCE_URAD_PER_NM`), each simulated with a
 realistic encoder and the twin's repeatability (0.02 mm, declared in the robot file as
 ``repeatability_mm``: the zero readings' mean, :mod:`~wirecal.solver.zero_reading`) and
 solved as ``wirecal solve`` does (:func:`~wirecal.app.coverage.compliance_trial`); the
@@ -43,10 +43,10 @@ import numpy as np  # noqa: E402
 
 from wirecal.app.coverage import ComplianceTrial, compliance_trial, with_gauge  # noqa: E402
 from wirecal.app.demo import plan_beside  # noqa: E402
-from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
-from wirecal.solver.formats.robot_file import robot_from_dict  # noqa: E402
-from wirecal.solver.plan import Plan  # noqa: E402
-from wirecal.solver.planner import design  # noqa: E402
+from wirecal.formats.plan_file import load_plan  # noqa: E402
+from wirecal.formats.robot_file import robot_from_dict  # noqa: E402
+from wirecal.solver.plan.calibration_plan import Plan  # noqa: E402
+from wirecal.solver.plan.planner import design  # noqa: E402
 from wirecal.solver.robot import Robot  # noqa: E402
 from wirecal.solver.simulate import Unmodelled  # noqa: E402
 

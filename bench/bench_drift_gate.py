@@ -22,10 +22,10 @@ import numpy as np  # noqa: E402
 
 from wirecal.app.coverage import simulated_calibration  # noqa: E402
 from wirecal.app.demo import example_files  # noqa: E402
+from wirecal.formats.plan_file import load_plan  # noqa: E402
+from wirecal.formats.robot_file import load_robot  # noqa: E402
+from wirecal.formats.truth import random_errors  # noqa: E402
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace  # noqa: E402
-from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.formats.truth import random_errors  # noqa: E402
 from wirecal.solver.plausibility import assess  # noqa: E402
 from wirecal.solver.run_parameters import PAPER_RUN  # noqa: E402
 

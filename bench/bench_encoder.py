@@ -27,10 +27,10 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wirecal.app.coverage import with_gauge  # noqa: E402
+from wirecal.formats.plan_file import load_plan  # noqa: E402
+from wirecal.formats.robot_file import load_robot  # noqa: E402
 from wirecal.solver import montecarlo  # noqa: E402
-from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.planner import design  # noqa: E402
+from wirecal.solver.plan.planner import design  # noqa: E402
 from wirecal.solver.scale import ARM_PPM_PER_K  # noqa: E402
 from wirecal.solver.simulate import TEMPERATURE_CHANGE_K, EncoderTruth  # noqa: E402
 

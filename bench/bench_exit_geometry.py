@@ -21,14 +21,14 @@ from pathlib import Path
 import numpy as np
 
 import wirecal
+from wirecal.formats.fileio import read_toml
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import robot_from_dict
 from wirecal.solver.accuracy import workspace
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import far_field_edge_wrap_mm
-from wirecal.solver.formats.fileio import read_toml
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import robot_from_dict
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan_exit import unmodelled_exit_mm
+from wirecal.solver.plan.exit import unmodelled_exit_mm
 
 VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"
 THETA0 = np.array([0.0, -90.0, 210.0, -90.0, 0.0, -90.0])

@@ -1,7 +1,7 @@
 """``wirecal fit`` on simulated tables: held-out RMS of the cable length beside the floor.
 
 Three arms (Viper s650, ABB IRB 120, UR5e), tables from
-:func:`~wirecal.solver.fit_synth.synthetic_table`: random configurations in the middle 80 %
+:func:`~wirecal.solver.fit.synth.synthetic_table`: random configurations in the middle 80 %
 of the joint ranges (or, "narrow", ±20° about mid-range: rows that carry little), joints
 logged to 0.1°, lengths to 0.01 mm with 0.02 mm reading noise, an anchor anywhere in the
 cell, three sessions with offset jumps of 3–30 mm, three snagged and two mistyped rows.
@@ -9,7 +9,7 @@ Three sections, medians over the seeds:
 
 1. **Parameter choice** — first half trains, second half held out (``--holdout half``):
    RMS/floor, DH errors kept and the error budget, *before* (every identified DH error, the
-   choice up to issue 31: :func:`~wirecal.solver.fit.generalise` replaced by the identity)
+   choice up to issue 31: :func:`~wirecal.solver.fit.calibrate.generalise` replaced by the identity)
    and *after* (BIC backward elimination). Goal: after ≤ 1.3 floors.
 2. **Held-out, refined joints** — random 20 %, 5 repeats; the same with joints refined from
    x, y, z; sessions found within ±2 rows; the time of one fit (one BLAS thread).
@@ -46,12 +46,12 @@ from unittest import mock  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from wirecal.solver import fit  # noqa: E402
-from wirecal.solver.fit_gate import fit_budget  # noqa: E402
-from wirecal.solver.fit_result import FitOptions, fit_table  # noqa: E402
-from wirecal.solver.fit_synth import synthetic_table  # noqa: E402
-from wirecal.solver.formats.cable_table import read_cable_table  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
+from wirecal.formats.cable_table import read_cable_table  # noqa: E402
+from wirecal.formats.robot_file import load_robot  # noqa: E402
+from wirecal.solver.fit import calibrate as fit  # noqa: E402
+from wirecal.solver.fit.gate import fit_budget  # noqa: E402
+from wirecal.solver.fit.result import FitOptions, fit_table  # noqa: E402
+from wirecal.solver.fit.synth import synthetic_table  # noqa: E402
 from wirecal.solver.robot import Robot  # noqa: E402
 
 NOW = Path(__file__).resolve().parents[1]
@@ -144,9 +144,9 @@ import json, os, resource, sys, time
 for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[var] = "1"
 from pathlib import Path
-from wirecal.solver.fit_result import FitOptions, fit_table
-from wirecal.solver.fit_synth import synthetic_table
-from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.fit.result import FitOptions, fit_table
+from wirecal.solver.fit.synth import synthetic_table
+from wirecal.formats.robot_file import load_robot
 robot = load_robot(Path(sys.argv[1]))
 table = synthetic_table(robot, int(sys.argv[2]), seed=0).table
 cpu, wall = time.process_time(), time.perf_counter()

@@ -19,10 +19,10 @@ from pathlib import Path
 
 from wirecal.app.demo import plan_beside
 from wirecal.app.languages import registered
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
 from wirecal.gen.preflight import _lint, output_problems, preflight
 from wirecal.gen.request import GenRequest
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 SHIPPED = ("viper_s650", "ur5e", "abb_irb120")

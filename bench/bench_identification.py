@@ -22,13 +22,13 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from wirecal.formats.log import parse_log  # noqa: E402
+from wirecal.formats.plan_file import load_plan  # noqa: E402
+from wirecal.formats.robot_file import load_robot  # noqa: E402
+from wirecal.formats.simulated_log import simulate_log  # noqa: E402
+from wirecal.formats.truth import load_errors  # noqa: E402
 from wirecal.solver import montecarlo  # noqa: E402
-from wirecal.solver.formats.log import parse_log  # noqa: E402
-from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.formats.simulated_log import simulate_log  # noqa: E402
-from wirecal.solver.formats.truth import load_errors  # noqa: E402
-from wirecal.solver.measurements import check_log  # noqa: E402
+from wirecal.solver.log.measurements import check_log  # noqa: E402
 from wirecal.solver.solve import solve  # noqa: E402
 
 VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"

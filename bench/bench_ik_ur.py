@@ -1,4 +1,4 @@
-"""Inverse kinematics of the UR5e: the closed form (solver/ik_ur.py, Newton-polished) against
+"""Inverse kinematics of the UR5e: the closed form (solver/ik/ur.py, Newton-polished) against
 the numeric search that solved it before (damped least squares from 24 random starts and the
 spherical-wrist seeds), on random reachable poses of the nominal and of a calibrated UR5e.
 
@@ -22,8 +22,9 @@ from unittest import mock  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from wirecal.solver import ik, ik_ur  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
+from wirecal.formats.robot_file import load_robot  # noqa: E402
+from wirecal.solver.ik import solutions as ik  # noqa: E402
+from wirecal.solver.ik import ur as ik_ur  # noqa: E402
 
 UR5 = Path(__file__).resolve().parents[1] / "examples" / "ur5e" / "robot.toml"
 

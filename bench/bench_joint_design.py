@@ -21,10 +21,10 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wirecal.app.progress import ProgressBar  # noqa: E402
+from wirecal.formats.robot_file import load_robot  # noqa: E402
 from wirecal.solver import montecarlo  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.plan_options import PlanOptions  # noqa: E402
-from wirecal.solver.planner import design  # noqa: E402
+from wirecal.solver.plan.options import PlanOptions  # noqa: E402
+from wirecal.solver.plan.planner import design  # noqa: E402
 
 ROBOT = Path(__file__).resolve().parents[1] / "examples" / "viper_s650" / "robot.toml"
 THETA0 = np.array([-72, -156, 235, 3, 64, 41], float)

@@ -19,8 +19,8 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from wirecal.formats.robot_file import load_robot  # noqa: E402
 from wirecal.solver.distance import wire_jacobian  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
 
 ROBOT = Path(__file__).resolve().parents[1] / "examples" / "viper_s650" / "robot.toml"
 

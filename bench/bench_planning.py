@@ -27,13 +27,13 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wirecal.app.progress import ProgressBar  # noqa: E402
+from wirecal.formats.plan_file import load_plan  # noqa: E402
+from wirecal.formats.robot_file import load_robot  # noqa: E402
+from wirecal.formats.truth import load_errors  # noqa: E402
 from wirecal.solver import montecarlo  # noqa: E402
-from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.formats.truth import load_errors  # noqa: E402
-from wirecal.solver.plan_options import PlanOptions  # noqa: E402
-from wirecal.solver.plan_predict import predicted_accuracy, robot_time  # noqa: E402
-from wirecal.solver.planner import design  # noqa: E402
+from wirecal.solver.plan.options import PlanOptions  # noqa: E402
+from wirecal.solver.plan.planner import design  # noqa: E402
+from wirecal.solver.plan.predict import predicted_accuracy, robot_time  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 ARMS = ("viper_s650", "puma560", "abb_irb120", "ur5e")

@@ -35,16 +35,16 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wirecal.app.twin_runs import measure_in_twin  # noqa: E402
+from wirecal.formats.log import load_measurements, read_log  # noqa: E402
+from wirecal.formats.plan_file import load_plan  # noqa: E402
+from wirecal.formats.robot_file import load_robot  # noqa: E402
+from wirecal.formats.truth import load_errors  # noqa: E402
 from wirecal.gen.request import GenRequest  # noqa: E402
 from wirecal.solver import montecarlo  # noqa: E402
 from wirecal.solver.accuracy import workspace  # noqa: E402
-from wirecal.solver.formats.log import load_measurements, read_log  # noqa: E402
-from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.formats.truth import load_errors  # noqa: E402
 from wirecal.solver.params import ErrorSet  # noqa: E402
-from wirecal.solver.plan_predict import predicted_accuracy  # noqa: E402
-from wirecal.solver.planner import design  # noqa: E402
+from wirecal.solver.plan.planner import design  # noqa: E402
+from wirecal.solver.plan.predict import predicted_accuracy  # noqa: E402
 from wirecal.solver.run_parameters import (  # noqa: E402
     DEFAULT_RUN,
     PAPER_RUN,

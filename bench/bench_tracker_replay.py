@@ -2,7 +2,7 @@
 
 Per public data set (read from ``--data DIR``, else ``$WIRECAL_TRACKER_DATA``, else
 ``../shared/data/tracker`` beside the clone: a folder holding the publishing repositories as
-cloned, or the older compressed copies, :mod:`wirecal.solver.formats.tracker_published`;
+cloned, or the older compressed copies, :mod:`wirecal.formats.tracker_published`;
 tests/data/tracker/<set>/PUBLISHED.md says where each is published; the robot files are in
 tests/data/tracker/<set>/), or any
 table with columns j1…jn (degrees) and x, y, z (mm) with ``--robot R --table T``: over 3 seeds, a
@@ -10,7 +10,7 @@ random 50/50 split; from the training half ``wirecal plan --pool``'s planner cho
 and at most 60 poses; on them the nominal model (tool point and base frame fitted), the
 3-D tracker calibration, and one wire from the anchor at θ0 (readings: the distance to
 the measured point, rounded to the encoder's count, unknown zero) identified by the
-wire model with a prior where the readings are weak (:mod:`wirecal.solver.tracker_replay`).
+wire model with a prior where the readings are weak (:mod:`wirecal.solver.tracker.replay`).
 Each is judged on the held-out half after a rigid registration. Prints per set the medians
 over the seeds and the wire's ratio to the tracker calibration; ``--json`` prints them as JSON (keys
 ``nominal_mm``, ``tracker_mm``, ``wire_mm``, ``wire_compliance_mm``, ``anchor_mm``).
@@ -41,20 +41,20 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from wirecal.solver.errors import WirecalError  # noqa: E402
-from wirecal.solver.fit import point_model  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.formats.tracker_published import (  # noqa: E402
+from wirecal.formats.robot_file import load_robot  # noqa: E402
+from wirecal.formats.tracker_published import (  # noqa: E402
     PUBLISHED_SETS,
     locate_set,
     tracker_data_dir,
     unpublished,
 )
-from wirecal.solver.formats.tracker_sets import read_tracker  # noqa: E402
+from wirecal.formats.tracker_sets import read_tracker  # noqa: E402
+from wirecal.solver.errors import WirecalError  # noqa: E402
+from wirecal.solver.fit.calibrate import point_model  # noqa: E402
 from wirecal.solver.kinematics import tool_position  # noqa: E402
 from wirecal.solver.params import TOOL_NAMES  # noqa: E402
-from wirecal.solver.tracker_fit import calibrate  # noqa: E402
-from wirecal.solver.tracker_replay import replay  # noqa: E402
+from wirecal.solver.tracker.fit import calibrate  # noqa: E402
+from wirecal.solver.tracker.replay import replay  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = ROOT / "tests" / "data" / "tracker"

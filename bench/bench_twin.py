@@ -17,12 +17,12 @@ import numpy as np
 
 from wirecal.app.compare import controller_runs
 from wirecal.app.twin_runs import generate, measure_in_twin
-from wirecal.solver.formats.log import load_measurements, parse_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.truth import load_errors
-from wirecal.solver.measurements import check_log
+from wirecal.formats.log import load_measurements, parse_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.truth import load_errors
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.solve import solve
 
 VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"

@@ -26,10 +26,10 @@ import numpy as np  # noqa: E402
 
 from wirecal.app.demo import run_demo  # noqa: E402
 from wirecal.app.twin_runs import generate, measure_in_twin  # noqa: E402
+from wirecal.formats.plan_file import load_plan  # noqa: E402
+from wirecal.formats.robot_file import load_robot  # noqa: E402
+from wirecal.formats.truth import random_errors  # noqa: E402
 from wirecal.solver import montecarlo  # noqa: E402
-from wirecal.solver.formats.plan_file import load_plan  # noqa: E402
-from wirecal.solver.formats.robot_file import load_robot  # noqa: E402
-from wirecal.solver.formats.truth import random_errors  # noqa: E402
 
 UR5E = Path(__file__).resolve().parents[1] / "examples" / "ur5e"
 

@@ -16,9 +16,13 @@ from wirecal.cli.options import (
     POSITIVE,
     SEED,
 )
-from wirecal.solver.cable_data import CableTable
-from wirecal.solver.fit_gate import Gate, Judged, gate_fit, gate_json
-from wirecal.solver.fit_result import (
+from wirecal.formats.cable_table import read_cable_table
+from wirecal.formats.fileio import Outputs
+from wirecal.formats.patch import companion_paths, put_patch
+from wirecal.formats.robot_file import load_robot
+from wirecal.solver.fit.cable_data import CableTable
+from wirecal.solver.fit.gate import Gate, Judged, gate_fit, gate_json
+from wirecal.solver.fit.result import (
     FitOptions,
     FitResult,
     Run,
@@ -26,10 +30,6 @@ from wirecal.solver.fit_result import (
     fit_table,
     result_json,
 )
-from wirecal.solver.formats.cable_table import read_cable_table
-from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.patch import companion_paths, put_patch
-from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.robot import Robot
 from wirecal.solver.verdict import READING_NOISE_MM
 

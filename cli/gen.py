@@ -10,16 +10,16 @@ import click
 from wirecal.app.languages import language_mismatch, registered
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, POSITIVE, number
+from wirecal.formats.patch import read_patch
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.validation_files import load_setup
 from wirecal.gen.backends import Generator
 from wirecal.gen.request import GenRequest
 from wirecal.lang.registry import languages
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.patch import read_patch
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.validation_files import load_setup
-from wirecal.solver.plan import Plan
-from wirecal.solver.plan_exit import cone_problems
+from wirecal.solver.plan.calibration_plan import Plan
+from wirecal.solver.plan.exit import cone_problems
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import PAPER_RUN, RunParameters
 

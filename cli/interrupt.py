@@ -2,7 +2,7 @@
 
 SIGTERM (``kill``, a closed session, a service manager) is turned into :class:`Terminated`,
 an exception like Ctrl-C's ``KeyboardInterrupt``: either unwinds through the command's
-:class:`~wirecal.solver.formats.fileio.Outputs`, which withdraws every output and removes
+:class:`~wirecal.formats.fileio.Outputs`, which withdraws every output and removes
 its temporary files. Then the process ends at once, by ``os._exit``, without the
 interpreter's finalization: a signal arriving while modules are being imported or torn down
 can otherwise end it in "Fatal Python error" (seen once in 50 Ctrl-C of ``report``).

@@ -7,8 +7,8 @@ import sys
 import click
 
 from wirecal.cli.main import user_errors
+from wirecal.formats.fileio import read_input
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import read_input
 from wirecal.solver.robot import SOFTWARE_PATTERN
 
 

@@ -8,13 +8,13 @@ import numpy as np
 from wirecal.app.progress import ProgressBar
 from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import OUTPUT_FILE, SEED, number
+from wirecal.formats.fileio import Outputs
+from wirecal.formats.plan_file import plan_to_toml
+from wirecal.formats.robot_file import load_robot
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.plan_file import plan_to_toml
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.plan_design import Design
-from wirecal.solver.plan_options import PlanOptions
-from wirecal.solver.planner import design
+from wirecal.solver.plan.design import Design
+from wirecal.solver.plan.options import PlanOptions
+from wirecal.solver.plan.planner import design
 from wirecal.solver.robot import Robot
 
 _D = PlanOptions()

@@ -1,6 +1,6 @@
 """``wirecal plan ROBOT --pool TABLE``: θ0 and at most N poses from reachable configurations.
 
-The planner is :mod:`wirecal.solver.plan_pool`; this module reads the pool, prints the
+The planner is :mod:`wirecal.solver.plan.pool`; this module reads the pool, prints the
 choice and writes it (``-o``) as a CSV of the chosen configurations, θ0 first, each with
 its line in the pool, so the poses can be taught or replayed in that order; or, to a
 ``.toml`` name, as a plan file ``gen`` takes, the pre-flight applied
@@ -14,19 +14,19 @@ import numpy as np
 
 from wirecal.cli.main import print_json
 from wirecal.cli.plan_pool_file import safe_plan
+from wirecal.formats.fileio import Outputs
+from wirecal.formats.plan_file import plan_to_toml
+from wirecal.formats.tracker_sets import read_pool
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.plan_file import plan_to_toml
-from wirecal.solver.formats.tracker_sets import read_pool
-from wirecal.solver.plan_options import PlanOptions
-from wirecal.solver.plan_pool import PoolPlan, plan_pool
+from wirecal.solver.plan.options import PlanOptions
+from wirecal.solver.plan.pool import PoolPlan, plan_pool
 from wirecal.solver.robot import Robot
 
 DEFAULT_POINTS = 60
 """Poses chosen when --points is not given."""
 
 PREDICTED = "RMS over the pool after a rigid registration, at the reading noise"
-"""What the plan's predicted tool-point error is (:mod:`~wirecal.solver.plan_pool`)."""
+"""What the plan's predicted tool-point error is (:mod:`~wirecal.solver.plan.pool`)."""
 
 
 def selection_csv(plan: PoolPlan, source: str, lines: np.ndarray, q_deg: np.ndarray) -> str:

@@ -8,7 +8,7 @@ does not apply to poses nobody chose to isolate a parameter).
 Before anything is written, the pre-flight ``gen`` applies
 (:func:`~wirecal.gen.preflight.check_limits`,
 :func:`~wirecal.solver.wire_range.check_wire_range`,
-:func:`~wirecal.solver.cell_check.check_cell`): the pool rows within ``gen``'s margin of a
+:func:`~wirecal.solver.cell.check.check_cell`): the pool rows within ``gen``'s margin of a
 joint or body limit are left out before choosing; each chosen pose whose move from θ0 and
 back, or from the pose before it in its step, leaves the wire's range or meets the arm,
 the floor or the cell is refused and the choice made again without it (at most
@@ -23,13 +23,13 @@ import numpy as np
 
 from wirecal.gen.preflight import check_limits
 from wirecal.gen.request import GenRequest
-from wirecal.solver.cell_check import check_cell
+from wirecal.solver.cell.check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan import Plan, Step
-from wirecal.solver.plan_options import PlanOptions
-from wirecal.solver.plan_pool import PoolPlan, plan_pool
-from wirecal.solver.plan_tour import tour
+from wirecal.solver.plan.calibration_plan import Plan, Step
+from wirecal.solver.plan.options import PlanOptions
+from wirecal.solver.plan.pool import PoolPlan, plan_pool
+from wirecal.solver.plan.tour import tour
 from wirecal.solver.robot import Robot
 from wirecal.solver.wire_range import check_wire_range
 
@@ -50,7 +50,7 @@ def toured(rb: Robot, q_deg: np.ndarray, pp: PoolPlan) -> PoolPlan:
     """Return ``pp`` with each step's poses in the planner's visiting order over clear moves.
 
     The steps' poses as :func:`as_plan` splits them, each step ordered by
-    :func:`~wirecal.solver.plan_tour.tour` (a step it cannot order keeps the chosen order:
+    :func:`~wirecal.solver.plan.tour.tour` (a step it cannot order keeps the chosen order:
     the pre-flight then names the move).
     """
     theta0 = q_deg[pp.theta0_row]

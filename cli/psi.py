@@ -10,16 +10,16 @@ import numpy as np
 from wirecal.app.psi_view import PsiTable, psi_table
 from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import NON_NEGATIVE
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
 from wirecal.gen.templating import render
 from wirecal.solver import params as P
-from wirecal.solver.cell_check import check_cell
+from wirecal.solver.cell.check import check_cell
 from wirecal.solver.compliance import ComplianceObservability, compliance_observability
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.identifiability import Identifiability, analyse
-from wirecal.solver.plan_exit import cone_problems
+from wirecal.solver.plan.exit import cone_problems
 from wirecal.solver.scale import ScaleObservability, scale_observability
 from wirecal.solver.sensitivity import DEFAULT_TOL, sensitivity
 from wirecal.solver.verdict import READING_NOISE_MM

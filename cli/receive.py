@@ -9,11 +9,11 @@ import click
 from wirecal.app.receive import HANDSHAKE_S, receive, summary
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import OUTPUT_FILE, POSITIVE, positional
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.run_token import NO_KEY, run_token
 from wirecal.lang.registry import language
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.run_token import NO_KEY, run_token
 
 
 @click.command("receive")

@@ -11,16 +11,16 @@ from wirecal.app.gate import gate, warnings
 from wirecal.app.report import Validation, render_report
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import OUTPUT_FILE
+from wirecal.formats.fileio import Outputs
+from wirecal.formats.log import read_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.truth import load_errors
+from wirecal.formats.validation_files import read_validation_log
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.log import read_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.truth import load_errors
-from wirecal.solver.formats.validation_files import read_validation_log
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.solve import solve
-from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
+from wirecal.solver.validation.analysis import config_discrepancy, plane_residuals
 
 
 @click.command()

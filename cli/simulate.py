@@ -11,19 +11,19 @@ import numpy as np
 
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, OUTPUT_FILE, PLAN, ROBOT, SEED, number
-from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.capture import MIN_TERMINAL, fold
-from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import (
+from wirecal.formats.capture import MIN_TERMINAL, fold
+from wirecal.formats.fileio import Outputs
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import (
     MAX_DH_ANGLE_DEG,
     MAX_RANGE_MM,
     MAX_SCALE_PPM,
     load_robot,
 )
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.truth import load_errors, random_errors, truth_text
-from wirecal.solver.plan import Plan
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.truth import load_errors, random_errors, truth_text
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import (
     IDEAL_ENCODER,

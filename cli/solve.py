@@ -26,22 +26,22 @@ from wirecal.cli.options import (
     ROBOT,
 )
 from wirecal.cli.solve_text import controller_text, solve_text
+from wirecal.formats.csv_table import STDIN
+from wirecal.formats.fileio import Outputs
+from wirecal.formats.log import read_log
+from wirecal.formats.patch import companion_paths, put_patch
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.csv_table import STDIN
-from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.log import read_log
-from wirecal.solver.formats.patch import companion_paths, put_patch
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.identify import DEFAULT_OMEGA
-from wirecal.solver.measurements import Tolerances, check_log
+from wirecal.solver.log.measurements import Tolerances, check_log
 from wirecal.solver.plausibility import READING_NOISE_MM
 from wirecal.solver.solve import solve as solve_api
 
 if TYPE_CHECKING:
     from wirecal.app.compare import ControllerComparison
-    from wirecal.solver.measurements import Measurements
-    from wirecal.solver.plan import Plan
+    from wirecal.solver.log.measurements import Measurements
+    from wirecal.solver.plan.calibration_plan import Plan
     from wirecal.solver.robot import Robot
     from wirecal.solver.solve import SolveResult
     from wirecal.solver.verdict import Plausibility

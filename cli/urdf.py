@@ -11,14 +11,14 @@ import numpy as np
 from wirecal.app.urdf_import import ImportOptions, urdf_robot_file
 from wirecal.cli.main import user_errors
 from wirecal.cli.options import OUTPUT_FILE
+from wirecal.formats.fileio import Outputs
+from wirecal.formats.patch import read_patch
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.urdf import dh_urdf_text, read_urdf, urdf_with_origins
+from wirecal.formats.urdf_model import calibrated_origins, read_chain
 from wirecal.lang.registry import default_language, languages
 from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.patch import read_patch
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.urdf import dh_urdf_text, read_urdf, urdf_with_origins
-from wirecal.solver.formats.urdf_model import calibrated_origins, read_chain
 
 
 def _numbers(count: int | None, what: str):

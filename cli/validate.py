@@ -6,11 +6,11 @@ import click
 
 from wirecal.cli.main import print_json, user_errors
 from wirecal.cli.options import positional
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.validation_files import read_validation_log
 from wirecal.solver.counter import Counter
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.validation_files import read_validation_log
-from wirecal.solver.validation_analysis import (
+from wirecal.solver.validation.analysis import (
     Stats,
     config_discrepancy,
     plane_residuals,

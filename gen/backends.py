@@ -22,7 +22,7 @@ from wirecal.gen.request import GenRequest, refuse_unsupported
 from wirecal.lang.base import Language
 from wirecal.lang.registry import language
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import RunParameters
 

@@ -4,7 +4,7 @@
 target within the margin of a joint limit or of a body limit of ``[cell]``
 (:func:`check_limits`), a wire length beyond the encoder's range
 (:func:`~wirecal.solver.wire_range.check_wire_range`), a move into the arm itself, the
-floor or a keep-out volume (:func:`~wirecal.solver.cell_check.check_cell`), a declared
+floor or a keep-out volume (:func:`~wirecal.solver.cell.check.check_cell`), a declared
 controller software of a line the language does not know (:func:`check_software`).
 :func:`output_problems` runs the language's own checker over what was rendered, against
 the declared software. :class:`~wirecal.gen.backends.Generator` calls both around a
@@ -20,9 +20,9 @@ import numpy as np
 from wirecal.gen.request import GenRequest
 from wirecal.gen.targets import joint_literal
 from wirecal.lang.base import Language
-from wirecal.solver.cell_check import check_cell
+from wirecal.solver.cell.check import check_cell
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.wire_range import check_wire_range
 

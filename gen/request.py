@@ -11,7 +11,7 @@ from dataclasses import dataclass, field, fields
 
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.run_parameters import RunParameters
-from wirecal.solver.validation import Setup
+from wirecal.solver.validation.design import Setup
 from wirecal.solver.wire_range import RANGE_MARGIN_MM
 
 

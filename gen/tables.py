@@ -22,7 +22,7 @@ from wirecal.solver.exit_geometry import Pulley, bend_coordinates, wire_path
 from wirecal.solver.identify import omega_vector
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.params import ErrorSet
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 
 KIND_CODE = {"th": 1, "d": 2, "a": 3, "al": 4, "tool": 5}

@@ -13,7 +13,7 @@ from typing import TypeVar, cast
 
 import numpy as np
 
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 
 T = TypeVar("T")

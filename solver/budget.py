@@ -26,7 +26,7 @@ distribution, from its second moment (:func:`~wirecal.solver.accuracy.rms_tool_e
   middle): δd_i = α·ΔT·d_i·(t_i − t_ref)/T. Untimed (version 1) logs: no drift term, said
   so;
 * **exit** — the wire's wrap on an eyelet's exit edge, which the model leaves out
-  (:func:`~wirecal.solver.plan_exit.unmodelled_exit_mm`, per point at the nominal
+  (:func:`~wirecal.solver.plan.exit.unmodelled_exit_mm`, per point at the nominal
   model): a deterministic δd_i, so δe = M·δd; zero for a point exit and for a guide
   pulley (the model carries its arc);
 * **sag** — joints 2 and 3 bending under gravity, which no kinematic parameter models: the

@@ -24,7 +24,7 @@ from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.kinematics import Model, with_errors
 from wirecal.solver.params import ErrorSet
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.scale import PPM
 
 DEFAULT_OMEGA = 5.0

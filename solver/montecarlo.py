@@ -30,8 +30,8 @@ from wirecal.solver.distance import wire_jacobian
 from wirecal.solver.identify import Problem, joint, omega_vector, stepwise
 from wirecal.solver.kinematics import repeat, tool_jacobian, tool_position, with_errors
 from wirecal.solver.params import ErrorSet
-from wirecal.solver.plan import Plan
-from wirecal.solver.plan_exit import unmodelled_exit_mm
+from wirecal.solver.plan.calibration_plan import Plan
+from wirecal.solver.plan.exit import unmodelled_exit_mm
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
 from wirecal.solver.scale import PPM

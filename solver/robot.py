@@ -2,7 +2,7 @@
 
 The robot model: a serial arm's nominal kinematics (Craig's modified DH), joint limits
 and speeds, the wire attachment point and the draw-wire encoder. Files are read by
-:mod:`wirecal.solver.formats.robot_file`.
+:mod:`wirecal.formats.robot_file`.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from functools import cached_property
 import numpy as np
 
 from wirecal.solver import params as P
-from wirecal.solver.cell import Capsules, CellModel, Gaps, body_limits, capsules, cell_gaps
+from wirecal.solver.cell.model import Capsules, CellModel, Gaps, body_limits, capsules, cell_gaps
 from wirecal.solver.counter import Counter
 from wirecal.solver.exit_geometry import Exit, Pulley
 from wirecal.solver.gravity import MassModel
@@ -81,7 +81,7 @@ class Controller:
 
     A URScript program has no file output: it sends the log over a TCP socket to
     ``wirecal receive`` on ``host``:``port`` (the robot is the client), first presenting
-    the run token derived from ``key`` (:mod:`wirecal.solver.formats.run_token`). ``software`` is
+    the run token derived from ``key`` (:mod:`wirecal.formats.run_token`). ``software`` is
     the controller's software version as written ("5.20", "3.15.8"), or None if not
     declared; generation uses only calls that version has (docs/languages.md).
     """
@@ -172,7 +172,7 @@ class Robot:
 
     @cached_property
     def capsules(self) -> Capsules:
-        """The arm's capsules and self-collision pairs (:mod:`~wirecal.solver.cell`)."""
+        """The arm's capsules and self-collision pairs (:mod:`~wirecal.solver.cell.model`)."""
         radii = self.link_radius_mm
         if radii is None:
             radii = np.full(self.n_joints - 1, DEFAULT_LINK_RADIUS_MM)
@@ -184,7 +184,7 @@ class Robot:
         """Return the lower and upper joint limits (deg), each ``margin_deg`` inside.
 
         With ``body`` (the default) the joint limits narrowed first by the cell's body
-        limits (:func:`~wirecal.solver.cell.body_limits`): where plans may go. Without, the
+        limits (:func:`~wirecal.solver.cell.model.body_limits`): where plans may go. Without, the
         robot file's joint limits alone: what the controller enforces (inverse kinematics,
         the generated targets). ``margin_deg`` may differ per joint (an array).
         """
@@ -206,7 +206,7 @@ class Robot:
 
         ``p0``: the wire's exit (the encoder housing's start); ``model``: the arm as built
         (default nominal); ``f``: the frames of q when the caller has them;
-        ``exact_below_mm``: see :func:`~wirecal.solver.cell.cell_gaps`.
+        ``exact_below_mm``: see :func:`~wirecal.solver.cell.model.cell_gaps`.
         """
         model = self.nominal if model is None else model
         q_rad = np.radians(np.atleast_2d(q_deg))

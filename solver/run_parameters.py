@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver.kinematics import joint_jacobian, tool_position
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 
 MOVE_OVERHEAD_S = 0.5

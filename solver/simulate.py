@@ -10,7 +10,7 @@ out over samples, like repeatability), is quantised at mm_per_count, sampled N t
 Each reading's ``t_s`` is its time in the run's time model (:func:`run_timeline`, the
 program's default speed and settle time). A run is returned as data (:class:`SimulatedRun`,
 :func:`simulate_run`); the log format writes its text
-(:func:`~wirecal.solver.formats.simulated_log.simulate_log`).
+(:func:`~wirecal.formats.simulated_log.simulate_log`).
 
 The encoder itself is :class:`EncoderTruth`: ideal by default in the Python API (the
 figures of the tests and the Monte Carlo of the noise alone), realistic in ``wirecal
@@ -40,8 +40,8 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import Exit, physical_wire_mm
 from wirecal.solver.gravity import gravity_torques_nm, wrist_weight
 from wirecal.solver.kinematics import Model, rigid_frames, tool_position
-from wirecal.solver.plan import Plan
-from wirecal.solver.readings import REFERENCE_STEP, Reading
+from wirecal.solver.log.readings import REFERENCE_STEP, Reading
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import DEFAULT_GRAVITY_SAG_DEG_PER_M, Encoder, Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, RunParameters, run_timeline
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM

@@ -42,10 +42,10 @@ from wirecal.solver.identify import (
     run_stepwise,
 )
 from wirecal.solver.kinematics import with_errors
-from wirecal.solver.measurements import Measurements
+from wirecal.solver.log.measurements import Measurements
 from wirecal.solver.params import ErrorSet
-from wirecal.solver.plan import Plan
-from wirecal.solver.plan_exit import unmodelled_exit_mm
+from wirecal.solver.plan.calibration_plan import Plan
+from wirecal.solver.plan.exit import unmodelled_exit_mm
 from wirecal.solver.robot import Robot
 from wirecal.solver.scale import PPM, Drift, ScaleEstimate, estimate_scale, fit_drift
 from wirecal.solver.sensitivity import sensitivity

@@ -5,9 +5,9 @@ errors well, others barely (the ISO cubes of a tracker data set keep the tool's
 orientation, and the wire then sees the wrist's errors hardly at all). Dropping the weakly
 seen errors (an identifiability limit, then BIC) fixes them at the robot file's value,
 all or nothing; keeping them fits the unmodelled part of the readings (gravity, heat, the
-gears) into them. Here every DH error of rows 2…n (:func:`~wirecal.solver.fit.candidates`)
+gears) into them. Here every DH error of rows 2…n (:func:`~wirecal.solver.fit.calibrate.candidates`)
 is estimated, each with a zero-mean Gaussian prior: a length σ ``prior`` mm (the
-planner's :attr:`~wirecal.solver.plan_options.PlanOptions.prior`, the size of a still
+planner's :attr:`~wirecal.solver.plan.options.PlanOptions.prior`, the size of a still
 unknown offset), an angle the one that moves a point at the arm's longest link (a or d)
 by as much (:func:`prior_sigma`; 0.05° for 0.5 mm on a UR10's 612 mm), so that neither
 kind is favoured; each compliance asked with σ
@@ -21,7 +21,7 @@ it, at least the readings' floor), refitted until σ settles. How large the DH e
 is the arm's: an arm far from its data sheet (the Tsinghua UR5, 2.6 mm before
 calibration) widens the prior, by the evidence (:func:`map_fit`). The posterior
 covariance (JᵀJ/σ² + Λ)⁻¹, Λ = diag(1/σ_k²), is what the pool planner minimises the tool
-point's error with (:mod:`~wirecal.solver.plan_pool`), at the planner's ``prior``.
+point's error with (:mod:`~wirecal.solver.plan.pool`), at the planner's ``prior``.
 
 Why a prior and not BIC on the identifiable combinations: BIC keeps or drops whole
 directions, and a weak direction dropped is fixed at the data sheet's value however large
@@ -38,8 +38,8 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from wirecal.solver.compliance import PRIOR_COMPLIANCE_URAD_PER_NM
-from wirecal.solver.fit import Data, candidates, point_model, start
-from wirecal.solver.fit_model import Layout, lengths, lengths_and_jacobian, model_of
+from wirecal.solver.fit.calibrate import Data, candidates, point_model, start
+from wirecal.solver.fit.model import Layout, lengths, lengths_and_jacobian, model_of
 from wirecal.solver.gravity import default_masses
 from wirecal.solver.kinematics import Model
 from wirecal.solver.params import TOOL_NAMES, ErrorSet

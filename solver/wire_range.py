@@ -4,7 +4,7 @@ The draw-wire encoder counts only within its measuring range, and a wire pulled 
 end of its drum, or wound back to zero, can break the encoder or lose its zero. So the
 plan is checked before any program is generated or any Ψ table is trusted: at θ0, every
 point and via point, and along every joint-interpolated move between them (sampled as the
-planner samples moves, :func:`~wirecal.solver.plan_moves.move_samples`), the nominal wire
+planner samples moves, :func:`~wirecal.solver.plan.moves.move_samples`), the nominal wire
 length must stay within ``range_mm`` less a margin and above a few millimetres.
 """
 
@@ -15,8 +15,8 @@ import numpy as np
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import wire_path
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan import Plan
-from wirecal.solver.plan_moves import move_samples
+from wirecal.solver.plan.calibration_plan import Plan
+from wirecal.solver.plan.moves import move_samples
 from wirecal.solver.robot import Robot
 
 RANGE_MARGIN_MM = 20.0  # default: the wire stays this far inside the encoder's range

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
 
 from . import hypothesis_profiles  # noqa: F401  (selects the profile on import)
 
@@ -48,7 +48,7 @@ def viper_module(viper, paper_plan) -> str:
 @pytest.fixture(scope="session")
 def viper_setup():
     """The Viper's shipped validation set-up (``validation.toml``)."""
-    from wirecal.solver.formats.validation_files import load_setup
+    from wirecal.formats.validation_files import load_setup
 
     return load_setup(VIPER / "validation.toml")
 
@@ -64,7 +64,7 @@ def viper_validation_module(viper, paper_plan, viper_setup) -> str:
 
 
 def _table5() -> dict[str, float]:
-    from wirecal.solver.formats.truth import load_errors
+    from wirecal.formats.truth import load_errors
 
     return load_errors(VIPER / "paper_table5_errors.toml", load_robot(VIPER / "robot.toml"))
 

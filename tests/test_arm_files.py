@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from wirecal.solver.formats.robot_file import load_robot
+from wirecal.formats.robot_file import load_robot
 from wirecal.solver.kinematics import frames
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

@@ -19,6 +19,10 @@ from scipy.stats import binom
 from wirecal.app.coverage import trial, wilson
 from wirecal.app.report import render_report
 from wirecal.cli.main import main
+from wirecal.formats.log import parse_log
+from wirecal.formats.robot_file import robot_file_text, robot_from_dict
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.truth import random_errors
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace
 from wirecal.solver.bound import (
     BOUND_PROBABILITY,
@@ -30,11 +34,7 @@ from wirecal.solver.bound import (
     mean_tool_error,
 )
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.truth import random_errors
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.scale import ARM_PPM_PER_K
 from wirecal.solver.simulate import Unmodelled, sag_lengths_mm
 from wirecal.solver.solve import solve

@@ -11,16 +11,16 @@ import pytest
 
 from wirecal.app.coverage import with_gauge
 from wirecal.app.report import render_report, sag_summary
+from wirecal.formats.log import parse_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import robot_from_dict
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.truth import random_errors
 from wirecal.solver.accuracy import rms_tool_error, workspace
 from wirecal.solver.budget import ComplianceTerms, budget, compliance_errors, sources
 from wirecal.solver.compliance import workspace_sag
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import robot_from_dict
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.kinematics import tool_jacobian
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.simulate import Unmodelled, realistic_encoder
 from wirecal.solver.solve import solve
 

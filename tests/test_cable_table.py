@@ -13,13 +13,13 @@ from hypothesis import strategies as st
 
 from tests.conftest import ROOT
 from wirecal.cli.main import main
+from wirecal.formats.cable_table import parse_map, read_cable_table, resolution
+from wirecal.formats.patch import read_patch
+from wirecal.formats.robot_file import load_robot
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.fit import point_model
-from wirecal.solver.fit_synth import synthetic_table, table_text
-from wirecal.solver.fit_units import check_units
-from wirecal.solver.formats.cable_table import parse_map, read_cable_table, resolution
-from wirecal.solver.formats.patch import read_patch
-from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.fit.calibrate import point_model
+from wirecal.solver.fit.synth import synthetic_table, table_text
+from wirecal.solver.fit.units import check_units
 
 VIPER_FILE = ROOT / "examples" / "viper_s650" / "robot.toml"
 HEADER = "q1,q2,q3,q4,q5,q6,L\n"

@@ -13,12 +13,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.formats.log import parse_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.simulated_log import simulate_log
 from wirecal.gen.vplus.program import GenOptions
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.simulated_log import simulate_log
 
 from .conftest import ROOT, VIPER
 from .twin_runs import measure_in_twin, measure_ur_in_twin

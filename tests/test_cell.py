@@ -22,13 +22,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot, robot_file_text, robot_from_dict
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot, robot_file_text, robot_from_dict
-from wirecal.solver.plan_candidates import blocked
-from wirecal.solver.plan_options import PlanOptions
-from wirecal.solver.plan_predict import predicted_accuracy
-from wirecal.solver.planner import design
+from wirecal.solver.plan.candidates import blocked
+from wirecal.solver.plan.options import PlanOptions
+from wirecal.solver.plan.planner import design
+from wirecal.solver.plan.predict import predicted_accuracy
 
 from .conftest import VIPER
 

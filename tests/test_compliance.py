@@ -14,9 +14,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from wirecal.formats.robot_file import load_robot, robot_file_text, robot_from_dict
 from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.robot_file import load_robot, robot_file_text, robot_from_dict
 from wirecal.solver.gravity import STANDARD_GRAVITY_M_S2, MassModel, default_masses
 from wirecal.solver.kinematics import (
     Model,

@@ -14,6 +14,12 @@ from click.testing import CliRunner
 
 from wirecal.app.twin_runs import measure_in_twin
 from wirecal.cli.main import main
+from wirecal.formats.log import parse_log
+from wirecal.formats.patch import read_patch
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import robot_file_text, robot_from_dict
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.truth import load_errors, random_errors
 from wirecal.solver.compliance import (
     SIGMA_LIMIT_URAD_PER_NM,
     compensated_joints,
@@ -21,14 +27,8 @@ from wirecal.solver.compliance import (
 )
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.patch import read_patch
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.truth import load_errors, random_errors
 from wirecal.solver.kinematics import frames, tool_position
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.solve import solve
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

@@ -28,16 +28,16 @@ import numpy as np
 import pytest
 
 from wirecal.app.languages import registered
+from wirecal.formats.log import parse_log, read_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.truth import random_errors
 from wirecal.gen.request import GenRequest
 from wirecal.lang.registry import languages
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log, read_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.truth import random_errors
-from wirecal.solver.measurements import check_log
-from wirecal.solver.plan import Plan
+from wirecal.solver.log.measurements import check_log
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.solve import solve
 

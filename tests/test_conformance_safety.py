@@ -28,13 +28,13 @@ import numpy as np
 import pytest
 
 from wirecal.app.languages import registered
+from wirecal.formats.patch_companion import read_companion
+from wirecal.formats.plan_file import load_plan
 from wirecal.gen.backends import Generator
 from wirecal.gen.request import GenRequest
 from wirecal.lang.registry import languages
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.patch_companion import read_companion
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import RANGE_EXCEEDED
 from wirecal.twin.machine import Outcome

@@ -10,11 +10,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.formats.patch_companion import read_companion
+from wirecal.formats.robot_file import robot_file_text, robot_from_dict
 from wirecal.lang.registry import language
 from wirecal.lang.urscript.calibration import ur_deltas
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.patch_companion import read_companion
-from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
 from wirecal.solver.robot import Controller
 
 from .conftest import ROOT
@@ -178,8 +178,8 @@ def test_solve_writes_ur_deltas_that_read_back(tmp_path):
     from click.testing import CliRunner
 
     from wirecal.cli.main import main
-    from wirecal.solver.formats.patch import read_patch
-    from wirecal.solver.formats.robot_file import load_robot
+    from wirecal.formats.patch import read_patch
+    from wirecal.formats.robot_file import load_robot
 
     ur5 = ROOT / "examples" / "ur5e"
     runner = CliRunner()
@@ -207,8 +207,8 @@ def test_solve_writes_ur_deltas_that_read_back(tmp_path):
 
 
 def test_v_plus_solve_writes_no_ur_deltas(tmp_path):
-    from wirecal.solver.formats.patch import companion_paths
-    from wirecal.solver.formats.robot_file import load_robot
+    from wirecal.formats.patch import companion_paths
+    from wirecal.formats.robot_file import load_robot
 
     viper = load_robot(ROOT / "examples" / "viper_s650" / "robot.toml")
     assert [p.name for p in companion_paths(viper, tmp_path / "p.toml")] == ["p.spec.txt"]

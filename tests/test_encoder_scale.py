@@ -17,14 +17,14 @@ from hypothesis import strategies as st
 
 from tests.conftest import TABLE5, VIPER
 from wirecal.cli.main import main
+from wirecal.formats.log import parse_log
+from wirecal.formats.robot_file import robot_file_text, robot_from_dict
+from wirecal.formats.simulated_log import simulate_log
 from wirecal.solver import montecarlo
 from wirecal.solver.accuracy import workspace
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
-from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.run_parameters import PAPER_RUN
 from wirecal.solver.scale import ARM_PPM_PER_K, estimate_scale, find_slips
 from wirecal.solver.simulate import EncoderTruth, Faults, realistic_encoder

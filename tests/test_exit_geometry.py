@@ -13,6 +13,9 @@ from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 import wirecal
+from wirecal.formats.fileio import read_toml
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot, robot_file_text, robot_from_dict
 from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import (
@@ -25,11 +28,8 @@ from wirecal.solver.exit_geometry import (
     wire_path,
     wrap,
 )
-from wirecal.solver.formats.fileio import read_toml
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot, robot_file_text, robot_from_dict
 from wirecal.solver.kinematics import tool_position, with_errors
-from wirecal.solver.plan_exit import cone_problems, largest_exit_deg, unmodelled_exit_mm
+from wirecal.solver.plan.exit import cone_problems, largest_exit_deg, unmodelled_exit_mm
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.simulate import true_lengths
 

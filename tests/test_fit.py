@@ -11,19 +11,19 @@ from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from tests.conftest import ROOT
+from wirecal.formats.robot_file import load_robot
 from wirecal.solver.accuracy import workspace
-from wirecal.solver.fit import Data, candidates, choose, point_model
-from wirecal.solver.fit_model import (
+from wirecal.solver.fit.calibrate import Data, candidates, choose, point_model
+from wirecal.solver.fit.model import (
     Layout,
     length_joint_gradient,
     lengths_and_jacobian,
     model_of,
     quantisation_floor,
 )
-from wirecal.solver.fit_result import FitOptions, fit_table
-from wirecal.solver.fit_sessions import change_points, noise_sigma, place
-from wirecal.solver.fit_synth import synthetic_table, take_rows
-from wirecal.solver.formats.robot_file import load_robot
+from wirecal.solver.fit.result import FitOptions, fit_table
+from wirecal.solver.fit.sessions import change_points, noise_sigma, place
+from wirecal.solver.fit.synth import synthetic_table, take_rows
 from wirecal.solver.kinematics import Model, tool_position
 
 ARMS = ("viper_s650", "abb_irb120", "ur5e")
@@ -127,7 +127,7 @@ def test_a_boundary_that_alternates_between_two_rows_ends_the_session_search(mon
     """A boundary found at row 450, then 452, then 450 … once ran out of refits ("did not
     settle"): a set of sessions found again ends the search, keeping the cycle's fit with
     the fewest outliers."""
-    from wirecal.solver import fit as F
+    from wirecal.solver.fit import calibrate as F
 
     robot = _robot("viper_s650")
     syn = synthetic_table(robot, 300, seed=2, sessions=2, snags=0, typos=0)
@@ -174,7 +174,7 @@ def test_budget_has_the_robot_files_gravity_sag():
     """The fit's budget carries the sag term: none without sag, proportional to it."""
     from dataclasses import replace
 
-    from wirecal.solver.fit_gate import fit_budget
+    from wirecal.solver.fit.gate import fit_budget
 
     robot = _robot("viper_s650")
     syn = synthetic_table(robot, 200, seed=1, sessions=1, snags=0, typos=0)
@@ -193,7 +193,7 @@ def test_a_jump_left_in_the_residual_is_refused_naming_its_row():
     from dataclasses import replace
 
     from wirecal.solver.errors import WirecalError
-    from wirecal.solver.fit_result import _refuse_ignored_jumps
+    from wirecal.solver.fit.result import _refuse_ignored_jumps
 
     robot = _robot("viper_s650")
     syn = synthetic_table(robot, 100, seed=1, sessions=1, snags=0, typos=0)
@@ -313,8 +313,8 @@ def test_a_twist_fitted_to_noise_does_not_split_parallel_axes():
 def test_a_fit_whose_parameters_are_not_identified_is_refused(monkeypatch):
     """Should the choice ever keep a degenerate pair (d2, d3 of parallel axes): refused,
     neither reported with a small σ nor dropped by BIC as "not worth a parameter"."""
-    from wirecal.solver import fit as F
     from wirecal.solver.errors import WirecalError
+    from wirecal.solver.fit import calibrate as F
 
     robot = _robot("viper_s650")
     syn = synthetic_table(robot, 100, seed=1, sessions=1, snags=0, typos=0)
@@ -342,7 +342,7 @@ def test_a_fit_whose_parameters_are_not_identified_is_refused(monkeypatch):
 @example([22, 22], [8.0] * 4, 33)  # snags at rows 19, 20: the search cuts at 19, place at 22
 def test_change_points_find_jumps_within_two_rows(lengths, jumps, seed):
     """The fit's session starts (the search, then each boundary placed robustly, as
-    ``fit._session_starts`` does) lie within two rows of the true jumps."""
+    ``fit.calibrate._session_starts`` does) lie within two rows of the true jumps."""
     rng = np.random.default_rng(seed)
     level = np.cumsum([0.0] + [j * rng.choice([-1, 1]) for j in jumps[: len(lengths) - 1]])
     values = np.concatenate([np.full(n, lv) for n, lv in zip(lengths, level, strict=True)])
@@ -366,7 +366,7 @@ def test_no_change_points_in_noise():
 
 
 def test_lengths_alone_match_the_lengths_of_the_jacobian_call():
-    from wirecal.solver.fit_model import lengths
+    from wirecal.solver.fit.model import lengths
 
     robot = _robot("ur5e")
     base = point_model(robot)
@@ -424,7 +424,7 @@ def test_ft45_ft46_a_split_training_on_under_twice_the_parameters_is_refused(row
 
 def test_ft45_the_refusal_says_what_share_would_do():
     from wirecal.solver.errors import WirecalError
-    from wirecal.solver.fit_holdout import check_training
+    from wirecal.solver.fit.holdout import check_training
 
     with pytest.raises(WirecalError, match=r"at most a share 0\.77 "):
         check_training("random:0.9", 40, 200, 23)  # (200 − 46) / 200 = 0.77
@@ -452,7 +452,7 @@ def test_holdout_rule_a_held_out_row_never_trains(monkeypatch):
     Kills the mutation "fit's held-out split can train on its held-out rows" (issue 33)
     wherever it sits: the rows each refit trains on are recorded at the solver's call.
     """
-    import wirecal.solver.fit as fit_module
+    import wirecal.solver.fit.calibrate as fit_module
 
     robot = _robot("viper_s650")
     table = _clean(robot, 150, seed=2).table
@@ -491,7 +491,7 @@ def test_holdout_rule_a_held_out_row_never_trains(monkeypatch):
 def test_bic_elimination_is_the_refit_with_the_dropped_columns_fixed():
     """fit_select: z² of each drop and the estimates after it, against least squares solved
     again without the dropped columns (exact for a linear model)."""
-    from wirecal.solver.fit_select import bic_eliminated
+    from wirecal.solver.fit.select import bic_eliminated
     from wirecal.solver.identifiability import covariance
 
     rng = np.random.default_rng(4)

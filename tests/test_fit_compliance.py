@@ -1,7 +1,7 @@
 """``wirecal fit`` with ``[calibration] compliances``: c_j estimated beside the geometry.
 
 The compliant tables are simulated by the robot model's own frames bent under gravity
-(:func:`~wirecal.solver.fit_synth.synthetic_table` with a compliant truth: the kinematics'
+(:func:`~wirecal.solver.fit.synth.synthetic_table` with a compliant truth: the kinematics'
 ``frames``, not the fit's length model), joints logged to 0.01° (at a pendant's 0.1° the
 rounding floor, 0.23 mm, hides the sag: σ(c3) ≈ 11 µrad/(N·m) at 1000 rows).
 """
@@ -17,10 +17,10 @@ from click.testing import CliRunner
 
 from tests.conftest import ROOT
 from wirecal.cli.main import main
-from wirecal.solver.fit_result import FitOptions, fit_table
-from wirecal.solver.fit_synth import synthetic_table, table_text
-from wirecal.solver.formats.patch import read_patch
-from wirecal.solver.formats.robot_file import load_robot
+from wirecal.formats.patch import read_patch
+from wirecal.formats.robot_file import load_robot
+from wirecal.solver.fit.result import FitOptions, fit_table
+from wirecal.solver.fit.synth import synthetic_table, table_text
 
 VIPER = ROOT / "examples" / "viper_s650" / "robot.toml"
 TRUTH_URAD_PER_NM = np.array([0.0, 6.0, 8.0, 0.0, 0.0, 0.0])  # issue 30's range, joints 2, 3

@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-import wirecal.solver.fit_synth as fit_synth
+import wirecal.solver.fit.synth as fit_synth
 from tests.conftest import ROOT
 from wirecal.cli.main import main
-from wirecal.solver.fit_synth import synthetic_table, table_text, take_rows
-from wirecal.solver.formats.patch import read_patch
-from wirecal.solver.formats.robot_file import load_robot
+from wirecal.formats.patch import read_patch
+from wirecal.formats.robot_file import load_robot
+from wirecal.solver.fit.synth import synthetic_table, table_text, take_rows
 
 VIPER = ROOT / "examples" / "viper_s650" / "robot.toml"
 

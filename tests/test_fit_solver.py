@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from wirecal.solver.fit_solver import levenberg_marquardt
+from wirecal.solver.fit.solver import levenberg_marquardt
 
 
 def _problem(seed: int, outliers: int):

@@ -22,9 +22,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.formats import fileio, plan_file, robot_file, truth, validation_files
+from wirecal.formats import patch as patch_format
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats import fileio, plan_file, robot_file, truth, validation_files
-from wirecal.solver.formats import patch as patch_format
 from wirecal.solver.identify import Estimate
 
 from .conftest import VIPER

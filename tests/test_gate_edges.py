@@ -9,12 +9,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from wirecal.formats.log import parse_log
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.truth import random_errors
 from wirecal.solver.distance import wire_lengths
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.identifiability import analyse_jacobian
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.plausibility import _identifiability, assess
 from wirecal.solver.scale import Drift
 from wirecal.solver.solve import solve

@@ -13,12 +13,12 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
+from wirecal.formats.robot_file import robot_from_dict
 from wirecal.gen.tables import build_tables
 from wirecal.gen.vplus.literals import double_literal
 from wirecal.gen.vplus.program import GenOptions, line_ends, module_text
 from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.robot_file import robot_from_dict
 from wirecal.solver.run_parameters import RunParameters
 
 from .conftest import VIPER

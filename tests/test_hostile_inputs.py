@@ -488,8 +488,8 @@ def test_simulate_never_writes_nan_counts(tmp_path, option, message):
 @pytest.mark.filterwarnings("ignore:divide by zero:RuntimeWarning")
 def test_simulate_log_refuses_a_reading_that_is_not_finite(viper, paper_plan, table5):
     """The API's own guard, below the command's option bounds: a scale of −100 % reads inf."""
+    from wirecal.formats.simulated_log import simulate_log
     from wirecal.solver.errors import WirecalError
-    from wirecal.solver.formats.simulated_log import simulate_log
     from wirecal.solver.simulate import EncoderTruth
 
     with pytest.raises(
@@ -687,7 +687,7 @@ PATCH_EDITS = {
 @pytest.mark.parametrize("case", PATCH_EDITS)
 def test_an_edited_patch_is_refused_naming_the_edit(tmp_path, partial_patch, case):
     """The patch had no checksum: each of these edits passed gen --patch with exit 0."""
-    from wirecal.solver.formats.patch_digest import seal
+    from wirecal.formats.patch_digest import seal
 
     text = partial_patch[1].read_text()
     overridden = seal(
@@ -730,7 +730,7 @@ CAPTURES = {
 @pytest.mark.parametrize("case", CAPTURES)
 def test_a_capture_is_read_through_what_terminal_loggers_add(log, case):
     """Colour codes, tabs, timestamp prefixes: 'missing steps 1–10 (all points)' before."""
-    from wirecal.solver.formats.log import parse_log
+    from wirecal.formats.log import parse_log
 
     clean = parse_log(log.read_text(), "run.csv")
     captured = "\n".join(map(CAPTURES[case], log.read_text().splitlines())) + "\n"
@@ -743,8 +743,8 @@ def test_a_capture_is_read_through_what_terminal_loggers_add(log, case):
 @pytest.mark.parametrize("width", [40, 41, 55, 64, 71, 72, 80])
 def test_tp09_a_capture_folded_at_any_width_of_40_or_more(log, width):
     """At 71 columns or fewer the 72-character '# plan:' line broke the header."""
-    from wirecal.solver.formats.capture import fold
-    from wirecal.solver.formats.log import parse_log
+    from wirecal.formats.capture import fold
+    from wirecal.formats.log import parse_log
 
     text = log.read_text()
     got = parse_log(fold(text.splitlines(), width), "terminal")
@@ -791,11 +791,11 @@ def test_rk28_receive_is_bounded_as_every_other_input(tmp_path):
     import threading
 
     from wirecal.app.receive import journal_path, receive
-    from wirecal.solver.formats.fileio import MAX_INPUT_BYTES
-    from wirecal.solver.formats.plan_file import load_plan
-    from wirecal.solver.formats.robot_file import load_robot
-    from wirecal.solver.formats.run_token import run_token, token_line
-    from wirecal.solver.formats.simulated_log import simulate_log
+    from wirecal.formats.fileio import MAX_INPUT_BYTES
+    from wirecal.formats.plan_file import load_plan
+    from wirecal.formats.robot_file import load_robot
+    from wirecal.formats.run_token import run_token, token_line
+    from wirecal.formats.simulated_log import simulate_log
 
     ur5 = load_robot(VIPER.parent / "ur5e" / "robot.toml")
     plan = load_plan(VIPER.parent / "ur5e" / "plan.toml", ur5)
@@ -1033,9 +1033,9 @@ def test_a_validation_setup_in_another_frame_0_is_refused_clearly(viper):
     floor collisions before; now one line per place below the floor, naming frame 0."""
     from dataclasses import replace
 
+    from wirecal.formats.validation_files import load_setup
     from wirecal.solver.errors import WirecalError
-    from wirecal.solver.formats.validation_files import load_setup
-    from wirecal.solver.validation import plate_grid
+    from wirecal.solver.validation.design import plate_grid
 
     imported = replace(viper, cell=replace(viper.cell, floor_z_mm=0.0))
     with pytest.raises(WirecalError) as info:
@@ -1166,10 +1166,10 @@ def test_rk13_a_full_disk_names_the_journal_and_what_it_keeps(tmp_path, monkeypa
     import threading
 
     import wirecal.app.receive as rec
-    from wirecal.solver.formats.plan_file import load_plan
-    from wirecal.solver.formats.robot_file import load_robot
-    from wirecal.solver.formats.run_token import run_token, token_line
-    from wirecal.solver.formats.simulated_log import simulate_log
+    from wirecal.formats.plan_file import load_plan
+    from wirecal.formats.robot_file import load_robot
+    from wirecal.formats.run_token import run_token, token_line
+    from wirecal.formats.simulated_log import simulate_log
 
     keep = rec._keep
 

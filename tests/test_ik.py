@@ -12,10 +12,11 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from wirecal.solver import ik, ik_ur
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.ik import analytic_structure, configuration, flange_pose, solve
-from wirecal.solver.ik_ur import ur_structure
+from wirecal.formats.robot_file import load_robot
+from wirecal.solver.ik import solutions as ik
+from wirecal.solver.ik import ur as ik_ur
+from wirecal.solver.ik.solutions import analytic_structure, configuration, flange_pose, solve
+from wirecal.solver.ik.ur import ur_structure
 
 from .conftest import TABLE5 as TRUTH
 
@@ -88,7 +89,7 @@ def test_unreachable_pose_has_no_solution(viper):
     assert solve(viper, R, np.array([2000.0, 0, 0])) == []
 
 
-# --- UR-type arms: the closed form of solver/ik_ur.py ----------------------------------------
+# --- UR-type arms: the closed form of solver/ik/ur.py ----------------------------------------
 
 UR5_FILE = Path(__file__).resolve().parents[1] / "examples" / "ur5e" / "robot.toml"
 UR5 = load_robot(UR5_FILE)

@@ -13,8 +13,8 @@ from wirecal.app.progress import ProgressBar
 from wirecal.app.psi_view import psi_table
 from wirecal.cli.main import main
 from wirecal.solver import montecarlo
-from wirecal.solver.plan_options import PlanOptions
-from wirecal.solver.planner import design
+from wirecal.solver.plan.options import PlanOptions
+from wirecal.solver.plan.planner import design
 
 from .conftest import VIPER
 
@@ -141,7 +141,7 @@ def test_probe_search_starts_near_the_last_contact(
     """A robot as nominal: every one of the 19 × 11 grid points is found to 1/128 mm
     (flange 100 mm above the plate at -300 mm) in under half the moves of a search from
     the approach height in 1, 0.1 and 0.01 mm steps (44 per point here)."""
-    from wirecal.solver.formats.validation_files import read_validation_log
+    from wirecal.formats.validation_files import read_validation_log
     from wirecal.twin.vplus.runs import run_validation
 
     setup, text = viper_setup, viper_validation_module

@@ -1,6 +1,6 @@
 """The layer rule of docs/architecture.md: each layer imports only the layers below it.
 
-    solver  ←  lang  ←  solver/formats  ←  gen, twin  ←  app  ←  wirecal (the API)  ←  cli
+    solver  ←  lang  ←  formats←  gen, twin  ←  app  ←  wirecal (the API)  ←  cli
 
 ``lang`` holds the controller languages' front ends and their registry; ``gen`` and ``twin``
 both import it and are peers: neither imports the other. Every import counts, at the top
@@ -35,7 +35,7 @@ FOLDERS = {
 LAYERS = {
     "wirecal.solver": 0,
     "wirecal.lang": 1,
-    "wirecal.solver.formats": 2,
+    "wirecal.formats": 2,
     "wirecal.gen": 3,
     "wirecal.twin": 3,
     "wirecal.app": 4,
@@ -132,12 +132,12 @@ def test_every_source_folder_is_checked():
         ("app", "import wirecal\n", {("wirecal.app.x", "wirecal")}),
         ("gen", "from wirecal import __version__\n", set()),
         ("cli", "from wirecal.app.demo import run_demo\nimport numpy\n", set()),
-        ("twin", "from wirecal.solver.formats.log import parse_log\n", set()),
+        ("twin", "from wirecal.formats.log import parse_log\n", set()),
         ("gen", "from wirecal.lang.vplus.parser import parse_module\n", set()),
         (
             "lang",
-            "from wirecal.solver.formats.robot_file import load_robot\n",
-            {("wirecal.lang.x", "wirecal.solver.formats.robot_file")},
+            "from wirecal.formats.robot_file import load_robot\n",
+            {("wirecal.lang.x", "wirecal.formats.robot_file")},
         ),
     ],
 )

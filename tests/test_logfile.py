@@ -8,12 +8,12 @@ import re
 import numpy as np
 import pytest
 
+from wirecal.formats.log import format_row, parse_log
+from wirecal.formats.simulated_log import simulate_log, simulated_log_text
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import format_row, parse_log
-from wirecal.solver.formats.simulated_log import simulate_log, simulated_log_text
-from wirecal.solver.log_rows import Tolerances
-from wirecal.solver.measurements import check_log
-from wirecal.solver.readings import Reading
+from wirecal.solver.log.measurements import check_log
+from wirecal.solver.log.readings import Reading
+from wirecal.solver.log.rows import Tolerances
 from wirecal.solver.simulate import Faults, simulate_run
 from wirecal.solver.solve import solve
 

@@ -17,9 +17,9 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
+from wirecal.formats import fileio
+from wirecal.formats.fileio import Outputs
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats import fileio
-from wirecal.solver.formats.fileio import Outputs
 
 from .conftest import VIPER
 

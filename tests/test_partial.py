@@ -12,10 +12,10 @@ from click.testing import CliRunner
 
 from wirecal.app.report import render_report
 from wirecal.cli.main import main
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.patch import read_patch
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.measurements import check_log
+from wirecal.formats.log import parse_log
+from wirecal.formats.patch import read_patch
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.solve import solve
 
 from .conftest import TABLE5, VIPER

@@ -14,12 +14,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.formats.controller_result import read_result
+from wirecal.formats.log import parse_log
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.validation_files import read_validation_log
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.controller_result import read_result
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.validation_files import read_validation_log
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 
 from .conftest import VIPER
 

@@ -12,9 +12,9 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
+from wirecal.formats.truth import truth_text
 from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.accuracy import error_vs_truth_mm, workspace
-from wirecal.solver.formats.truth import truth_text
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.params import ErrorSet
 from wirecal.twin.vplus.controller import VplusController

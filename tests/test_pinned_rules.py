@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from wirecal.solver.accuracy import tool_error
-from wirecal.solver.clearance import wire_clearance, wire_trim_mm
+from wirecal.solver.cell.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.kinematics import Model
-from wirecal.solver.plan_options import PlanOptions
-from wirecal.solver.plan_steps import isolating, step_error
+from wirecal.solver.plan.options import PlanOptions
+from wirecal.solver.plan.steps import isolating, step_error
 from wirecal.solver.sensitivity import PSI_FLOOR, verdict
 
 

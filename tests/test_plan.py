@@ -7,9 +7,9 @@ import tomllib
 import numpy as np
 import pytest
 
+from wirecal.formats.plan_file import load_plan, plan_from_dict, plan_to_toml
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.plan_file import load_plan, plan_from_dict, plan_to_toml
-from wirecal.solver.plan import fingerprint
+from wirecal.solver.plan.calibration_plan import fingerprint
 
 from .conftest import VIPER
 

@@ -13,10 +13,10 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import robot_from_dict
 from wirecal.solver.compliance import SIGMA_LIMIT_URAD_PER_NM, compliance_observability
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import robot_from_dict
-from wirecal.solver.planner import design
+from wirecal.solver.plan.planner import design
 from wirecal.solver.verdict import READING_NOISE_MM
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

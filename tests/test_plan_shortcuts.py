@@ -14,12 +14,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan_candidates import candidates, screen
-from wirecal.solver.plan_design import _unidentifiable
-from wirecal.solver.plan_joint import _Candidates
-from wirecal.solver.plan_options import PlanOptions
-from wirecal.solver.plan_steps import step_by_step
-from wirecal.solver.plan_tour import visit_floor_s, visit_s
+from wirecal.solver.plan.candidates import candidates, screen
+from wirecal.solver.plan.design import _unidentifiable
+from wirecal.solver.plan.joint import _Candidates
+from wirecal.solver.plan.options import PlanOptions
+from wirecal.solver.plan.steps import step_by_step
+from wirecal.solver.plan.tour import visit_floor_s, visit_s
 from wirecal.solver.run_parameters import DEFAULT_RUN, PAPER_RUN
 from wirecal.solver.sensitivity import sensitivity
 

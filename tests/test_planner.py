@@ -12,16 +12,16 @@ from click.testing import CliRunner
 
 from wirecal.app.psi_view import psi_table
 from wirecal.cli.main import main
+from wirecal.formats.plan_file import load_plan, plan_from_dict
+from wirecal.formats.robot_file import load_robot
 from wirecal.solver import montecarlo
-from wirecal.solver.clearance import wire_clearance, wire_trim_mm
+from wirecal.solver.cell.clearance import wire_clearance, wire_trim_mm
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.plan_file import load_plan, plan_from_dict
-from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan_moves import move_samples
-from wirecal.solver.plan_options import PlanOptions
-from wirecal.solver.plan_predict import predicted_accuracy, robot_time
-from wirecal.solver.planner import design
+from wirecal.solver.plan.moves import move_samples
+from wirecal.solver.plan.options import PlanOptions
+from wirecal.solver.plan.planner import design
+from wirecal.solver.plan.predict import predicted_accuracy, robot_time
 from wirecal.solver.run_parameters import PAPER_RUN, run_timeline
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range, run_moves
 

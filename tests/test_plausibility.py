@@ -15,11 +15,11 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.truth import random_errors
+from wirecal.formats.log import parse_log
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.truth import random_errors
 from wirecal.solver.identifiability import covariance
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.plausibility import assess
 from wirecal.solver.solve import solve
 from wirecal.solver.verdict import chi2_quantile

@@ -11,14 +11,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot, robot_from_dict
 from wirecal.gen.rapid import GENERATOR
 from wirecal.gen.rapid.program import RapidOptions, line_ends, module_text
 from wirecal.gen.request import GenRequest
 from wirecal.lang.rapid import Rapid
 from wirecal.lang.rapid.module import num_literal
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
 
 ROOT = Path(__file__).resolve().parent.parent
 IRB = ROOT / "examples" / "abb_irb120"

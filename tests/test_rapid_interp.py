@@ -451,9 +451,9 @@ def test_the_generated_module_names_a_missing_counter_signal() -> None:
     """WIRECAL.mod on a controller without wc_giCount0: wc_check says so and stops."""
     from pathlib import Path
 
+    from wirecal.formats.plan_file import load_plan
+    from wirecal.formats.robot_file import load_robot
     from wirecal.gen.rapid.program import module_text
-    from wirecal.solver.formats.plan_file import load_plan
-    from wirecal.solver.formats.robot_file import load_robot
 
     irb = Path(__file__).resolve().parent.parent / "examples" / "abb_irb120"
     robot = load_robot(irb / "robot.toml")

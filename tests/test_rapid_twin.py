@@ -13,13 +13,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from wirecal.formats.controller_result import parse_result, result_in_log
+from wirecal.formats.log import parse_log, read_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.simulated_log import simulate_log
 from wirecal.gen.rapid.program import MODULE_FILE, module_text
-from wirecal.solver.formats.controller_result import parse_result, result_in_log
-from wirecal.solver.formats.log import parse_log, read_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.solve import solve
 from wirecal.twin.rapid.adapter import ADAPTER
 from wirecal.twin.world import Faults, World

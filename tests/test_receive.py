@@ -26,12 +26,12 @@ from wirecal.app.receive import (
     summary,
 )
 from wirecal.cli.main import main
+from wirecal.formats.log import parse_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.run_token import run_token, token_line
+from wirecal.formats.simulated_log import simulate_log
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.run_token import run_token, token_line
-from wirecal.solver.formats.simulated_log import simulate_log
 
 from .conftest import ROOT
 

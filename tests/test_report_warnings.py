@@ -7,7 +7,7 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
-from wirecal.solver.formats.simulated_log import simulate_log
+from wirecal.formats.simulated_log import simulate_log
 from wirecal.solver.run_parameters import PAPER_RUN
 from wirecal.solver.simulate import realistic_encoder
 

@@ -10,8 +10,8 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
+from wirecal.formats.robot_file import load_robot, robot_file_text, robot_from_dict
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.robot_file import load_robot, robot_file_text, robot_from_dict
 
 from .conftest import VIPER
 

@@ -15,10 +15,10 @@ import re
 import numpy as np
 import pytest
 
+from wirecal.formats.log import load_measurements, read_log
 from wirecal.gen.vplus.program import GenOptions, module_text
 from wirecal.solver.distance import wire_lengths
-from wirecal.solver.formats.log import load_measurements, read_log
-from wirecal.solver.planner import design
+from wirecal.solver.plan.planner import design
 from wirecal.solver.run_parameters import (
     DEFAULT_RUN,
     PAPER_RUN,

@@ -11,12 +11,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.formats.fileio import Outputs
+from wirecal.formats.robot_file import load_robot
 from wirecal.lang.registry import language
 from wirecal.lang.urscript.calibration import calibration_text, ur_deltas
 from wirecal.solver import params as P
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.robot_file import load_robot
 from wirecal.solver.kinematics import frames, tool_position
 from wirecal.solver.standard_dh import flange_pose, from_modified, to_modified
 from wirecal.solver.standard_dh import tool_position as std_tool_position

@@ -15,12 +15,14 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
-from wirecal.solver import plan_candidates, plan_steps, planner
-from wirecal.solver.formats.robot_file import load_robot
+from wirecal.formats.robot_file import load_robot
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan_design import Design
-from wirecal.solver.plan_options import PlanOptions
-from wirecal.solver.planner import MORE_THETA0_DESIGNED, THETA0_TRIES, design
+from wirecal.solver.plan import candidates as plan_candidates
+from wirecal.solver.plan import planner
+from wirecal.solver.plan import steps as plan_steps
+from wirecal.solver.plan.design import Design
+from wirecal.solver.plan.options import PlanOptions
+from wirecal.solver.plan.planner import MORE_THETA0_DESIGNED, THETA0_TRIES, design
 from wirecal.solver.sensitivity import sensitivity
 
 UR5 = Path(__file__).parent.parent / "examples" / "ur5e" / "robot.toml"

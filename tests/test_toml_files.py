@@ -11,14 +11,14 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
+from wirecal.formats.patch import PatchMeta, PatchValue, patch_text, read_patch
+from wirecal.formats.patch_digest import seal
+from wirecal.formats.plan_file import plan_from_dict
+from wirecal.formats.robot_file import robot_from_dict
+from wirecal.formats.toml_fields import Table, document
+from wirecal.formats.truth import load_errors
+from wirecal.formats.validation_files import load_setup
 from wirecal.solver.errors import Problems, WirecalError
-from wirecal.solver.formats.patch import PatchMeta, PatchValue, patch_text, read_patch
-from wirecal.solver.formats.patch_digest import seal
-from wirecal.solver.formats.plan_file import plan_from_dict
-from wirecal.solver.formats.robot_file import robot_from_dict
-from wirecal.solver.formats.toml_fields import Table, document
-from wirecal.solver.formats.truth import load_errors
-from wirecal.solver.formats.validation_files import load_setup
 from wirecal.solver.identify import Estimate
 
 from .conftest import VIPER

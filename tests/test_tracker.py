@@ -15,10 +15,8 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from wirecal.cli.main import main
-from wirecal.solver.errors import WirecalError
-from wirecal.solver.fit import point_model
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.tracker_published import (
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.tracker_published import (
     DATA_ENV,
     PUBLISHED_SETS,
     PublishedSet,
@@ -26,12 +24,14 @@ from wirecal.solver.formats.tracker_published import (
     tracker_data_dir,
     unpublished,
 )
-from wirecal.solver.formats.tracker_sets import IPA_JOINTS, read_pool, read_tracker
+from wirecal.formats.tracker_sets import IPA_JOINTS, read_pool, read_tracker
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.fit.calibrate import point_model
 from wirecal.solver.kinematics import tool_position, with_errors
-from wirecal.solver.plan_options import PlanOptions
-from wirecal.solver.plan_pool import greedy_rows, plan_pool
-from wirecal.solver.tracker_fit import _jacobian, calibrate, register, registered_rms_mm
-from wirecal.solver.tracker_replay import ZERO_MM, readings_mm, replay
+from wirecal.solver.plan.options import PlanOptions
+from wirecal.solver.plan.pool import greedy_rows, plan_pool
+from wirecal.solver.tracker.fit import _jacobian, calibrate, register, registered_rms_mm
+from wirecal.solver.tracker.replay import ZERO_MM, readings_mm, replay
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = ROOT / "tests" / "data" / "tracker"  # robot files and where each set is published
@@ -478,7 +478,7 @@ def test_readings_are_whole_counts_with_an_unknown_zero():
 
 def test_replay_of_a_synthetic_ur10():
     """A geometric truth and 0.01 mm noise: both calibrations near the noise, nominal not."""
-    from wirecal.solver.tracker_data import TrackerTable
+    from wirecal.solver.tracker.data import TrackerTable
 
     q = _ur10_pool(240, 5)
     x, robot = _measured(q, 0.01, 6)
@@ -495,7 +495,7 @@ def test_replay_of_a_synthetic_ur10():
 def test_replay_of_a_ur10_bent_by_gravity():
     """Joints 2 and 3 yield 8 and 5 µrad/(N·m) (issue 30's model): the rigid fits cannot
     follow, the wire fitted with them can."""
-    from wirecal.solver.tracker_data import TrackerTable
+    from wirecal.solver.tracker.data import TrackerTable
 
     q = _ur10_pool(240, 8)
     x, robot = _measured(q, 0.01, 9, {"c2": 8.0, "c3": 5.0})
@@ -555,7 +555,7 @@ def test_plan_pool_cli_refusals(tmp_path, extra, text, message):
 
 def _ur5e_pool(path: Path) -> None:
     """The UR5e example plan's θ0 and points, twice more each moved by a few degrees."""
-    from wirecal.solver.formats.plan_file import load_plan
+    from wirecal.formats.plan_file import load_plan
 
     robot = load_robot(UR5E)
     plan = load_plan(ROOT / "examples" / "ur5e" / "plan.toml", robot)
@@ -571,7 +571,7 @@ UR5E = ROOT / "examples" / "ur5e" / "robot.toml"
 @pytest.mark.slow
 def test_plan_pool_writes_a_plan_gen_takes(tmp_path):
     """-o PLAN.toml: θ0 and the poses as a plan; the pre-flight of gen passes; gen writes."""
-    from wirecal.solver.formats.plan_file import load_plan
+    from wirecal.formats.plan_file import load_plan
 
     pool = tmp_path / "pool.csv"
     _ur5e_pool(pool)

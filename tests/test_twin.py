@@ -10,16 +10,16 @@ import numpy as np
 import pytest
 
 from wirecal.app.compare import controller_runs
+from wirecal.formats.log import load_measurements, parse_log, read_log
+from wirecal.formats.simulated_log import simulate_log
 from wirecal.gen.templating import environment
 from wirecal.gen.vplus.program import GenOptions
 from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import load_measurements, parse_log, read_log
-from wirecal.solver.formats.simulated_log import simulate_log
 from wirecal.solver.identify import Problem
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.measurements import check_log
-from wirecal.solver.plan_predict import robot_time
+from wirecal.solver.log.measurements import check_log
+from wirecal.solver.plan.predict import robot_time
 from wirecal.solver.run_parameters import DEFAULT_RUN, PAPER_RUN, run_timeline
 from wirecal.solver.simulate import EncoderTruth
 from wirecal.solver.solve import solve

@@ -5,17 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from wirecal.formats.log import load_measurements, parse_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.simulated_log import simulate_log
 from wirecal.gen.rapid.program import MODULE_FILE
 from wirecal.gen.rapid.program import module_text as rapid_module
 from wirecal.gen.urscript.program import scripts
 from wirecal.gen.vplus.program import MODULE_NAME
 from wirecal.lang.urscript.parser import BUILTINS, parse_program
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import load_measurements, parse_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.solve import solve
 from wirecal.twin.adapters import adapter
 from wirecal.twin.urscript.controller import URController

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from wirecal.solver import params as P
 from wirecal.solver.counter import Counter
-from wirecal.solver.ik import flange_pose, solve
+from wirecal.solver.ik.solutions import flange_pose, solve
 from wirecal.solver.params import ErrorSet
 
 

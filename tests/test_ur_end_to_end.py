@@ -17,11 +17,11 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
+from wirecal.formats.patch_companion import read_companion
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.truth import random_errors
 from wirecal.lang.registry import language
-from wirecal.solver.formats.patch_companion import read_companion
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.truth import random_errors
 from wirecal.twin.urscript.controller import URController
 from wirecal.twin.urscript.runs import run_ur_programs
 from wirecal.twin.world import World

@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 
 from wirecal.app.receive import summary
+from wirecal.formats.log import load_measurements, parse_log, read_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.truth import random_errors
 from wirecal.gen.urscript.program import scripts
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import load_measurements, parse_log, read_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.truth import random_errors
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.solve import solve
 from wirecal.twin.run_moves import move_of_step
 from wirecal.twin.world import Faults, World
@@ -173,7 +173,7 @@ def test_the_log_carries_the_controller_solvers_result(ur5, ur5_plan, texts, tru
     """wc_solve runs at the end of wc_run; its result arrives in the log as comment lines
     and agrees with the PC's stepwise estimate; solve --method controller reruns it."""
     from wirecal.app.compare import compare_controller
-    from wirecal.solver.formats.controller_result import parse_result, result_in_log
+    from wirecal.formats.controller_result import parse_result, result_in_log
 
     r = run(ur5, ur5_plan, texts, truth, tmp_path)
     text = r.log.read_text(encoding="ascii")

@@ -15,12 +15,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.formats.patch import write_patch
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.urdf import matrix_rpy, read_urdf
+from wirecal.formats.urdf_model import read_chain
 from wirecal.solver.dh_from_axes import dh_frames
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.patch import write_patch
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.urdf import matrix_rpy, read_urdf
-from wirecal.solver.formats.urdf_model import read_chain
 from wirecal.solver.identify import Estimate
 from wirecal.solver.kinematics import tool_position
 

@@ -20,11 +20,11 @@ from hypothesis import strategies as st
 from wirecal.app.urdf_import import placeholder_speeds
 from wirecal.cli.main import main
 from wirecal.cli.urdf import _numbers
+from wirecal.formats.patch import write_patch
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot, robot_from_dict
+from wirecal.formats.stl import stl_vertices
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.patch import write_patch
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot, robot_from_dict
-from wirecal.solver.formats.stl import stl_vertices
 from wirecal.solver.identify import Estimate
 from wirecal.solver.kinematics import frames, tool_position
 

@@ -18,8 +18,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.formats import urdf as U
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats import urdf as U
 
 SECONDS = 10  # each refusal must come well within this (the loop once never ended)
 

@@ -11,13 +11,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from wirecal.formats.log import load_measurements
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.truth import random_errors
 from wirecal.gen.urscript.program import scripts
 from wirecal.lang.registry import language
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import load_measurements
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.solve import solve
 from wirecal.twin.urscript.controller import URController

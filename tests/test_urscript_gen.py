@@ -24,12 +24,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.cli.main import main
+from wirecal.formats.log import parse_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.run_token import run_token, token_line
 from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.run_token import run_token, token_line
 
 ROOT = Path(__file__).resolve().parent.parent
 UR5 = ROOT / "examples" / "ur5e"

@@ -195,8 +195,8 @@ def _ur5_with(software: str | None):
     import tomllib
     from pathlib import Path
 
-    from wirecal.solver.formats.plan_file import load_plan
-    from wirecal.solver.formats.robot_file import robot_from_dict
+    from wirecal.formats.plan_file import load_plan
+    from wirecal.formats.robot_file import robot_from_dict
 
     ur5 = Path(__file__).resolve().parents[1] / "examples" / "ur5e"
     data = copy.deepcopy(tomllib.loads((ur5 / "robot.toml").read_text()))
@@ -257,7 +257,7 @@ def test_software_key_is_checked(software, message):
 def test_software_is_written_back():
     import tomllib
 
-    from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
+    from wirecal.formats.robot_file import robot_file_text, robot_from_dict
 
     robot, _ = _ur5_with("5.23.1")
     text = robot_file_text(robot, header=[], row_notes=[""] * 6, encoder_note="")

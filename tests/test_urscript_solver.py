@@ -15,14 +15,14 @@ from click.testing import CliRunner
 
 from wirecal.app.compare import controller_runs
 from wirecal.cli.main import main
+from wirecal.formats.controller_result import parse_result, result_in_log
+from wirecal.formats.log import parse_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.simulated_log import simulate_log
 from wirecal.gen.urscript.program import OPS_PER_SYNC, UrOptions, float_literal, scripts
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.controller_result import parse_result, result_in_log
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.solve import solve
 from wirecal.twin.urscript.solver_run import READING_INTS, ur_readings
 

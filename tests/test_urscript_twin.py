@@ -10,9 +10,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.formats.robot_file import load_robot
 from wirecal.lang.urscript.parser import parse_program
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.robot_file import load_robot
 from wirecal.twin.urscript.controller import URController
 from wirecal.twin.urscript.interp import Interpreter
 from wirecal.twin.world import Faults, World

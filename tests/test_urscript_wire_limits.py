@@ -15,10 +15,10 @@ from pathlib import Path
 import pytest
 
 from wirecal.app.languages import registered
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
 from wirecal.gen.request import GenRequest
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import load_robot
-from wirecal.solver.validation import distance_plan
+from wirecal.solver.validation.design import distance_plan
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 RUN_V_RAD_S = 0.2 * math.pi

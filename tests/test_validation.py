@@ -12,14 +12,14 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
+from wirecal.formats.validation_files import load_setup, read_validation_log
 from wirecal.solver import pose
 from wirecal.solver.counter import Counter
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.validation_files import load_setup, read_validation_log
-from wirecal.solver.ik import solve
+from wirecal.solver.ik.solutions import solve
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.validation import CONFIGS, config_poses, plate_grid
-from wirecal.solver.validation_analysis import config_discrepancy, plane_residuals
+from wirecal.solver.validation.analysis import config_discrepancy, plane_residuals
+from wirecal.solver.validation.design import CONFIGS, config_poses, plate_grid
 
 from .conftest import VIPER
 

@@ -8,11 +8,11 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wirecal.solver.fit import Data, point_model
-from wirecal.solver.formats.robot_file import load_robot
+from wirecal.formats.robot_file import load_robot
+from wirecal.solver.fit.calibrate import Data, point_model
 from wirecal.solver.kinematics import tool_jacobian, tool_position, with_errors
-from wirecal.solver.plan_pool import greedy_rows, registered_weight
-from wirecal.solver.tracker_fit import registered_rms_mm
+from wirecal.solver.plan.pool import greedy_rows, registered_weight
+from wirecal.solver.tracker.fit import registered_rms_mm
 from wirecal.solver.wire_prior import bending, map_fit, prior_sigma, wire_layout
 
 ROOT = Path(__file__).resolve().parents[1]

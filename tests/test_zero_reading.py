@@ -14,14 +14,14 @@ from click.testing import CliRunner
 
 from wirecal.app.coverage import with_gauge
 from wirecal.cli.main import main
+from wirecal.formats.log import parse_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import robot_file_text, robot_from_dict
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.truth import random_errors
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.log import parse_log
-from wirecal.solver.formats.plan_file import load_plan
-from wirecal.solver.formats.robot_file import robot_file_text, robot_from_dict
-from wirecal.solver.formats.simulated_log import simulate_log
-from wirecal.solver.formats.truth import random_errors
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.measurements import check_log
+from wirecal.solver.log.measurements import check_log
 from wirecal.solver.simulate import Unmodelled
 from wirecal.solver.solve import solve
 from wirecal.solver.zero_reading import expected_zero_mm

@@ -25,7 +25,7 @@ from wirecal.gen.request import GenRequest
 from wirecal.gen.targets import joint_literal
 from wirecal.lang import registry
 from wirecal.lang.base import Capabilities, Language
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN
 from wirecal.twin.adapters import TwinAdapter

@@ -16,7 +16,7 @@ from typing import Any
 from wirecal.app.receive import Received, journal_path, receive
 from wirecal.gen.urscript.program import UrOptions, pc_address, scripts
 from wirecal.gen.vplus.program import MODULE_NAME, GenOptions, module_text
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import IDEAL_ENCODER, EncoderTruth, Unmodelled
 from wirecal.twin.urscript.runs import ADAPTER as UR_ADAPTER

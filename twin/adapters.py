@@ -17,11 +17,11 @@ from typing import Any, ClassVar
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.measurements import Measurements
-from wirecal.solver.plan import Plan
+from wirecal.solver.log.measurements import Measurements
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
-from wirecal.solver.validation import Setup
+from wirecal.solver.validation.design import Setup
 from wirecal.twin.controller_run import ControllerRun
 from wirecal.twin.world import Faults, TwinRun
 

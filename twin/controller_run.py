@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wirecal.formats.log import Reading
 from wirecal.solver.counter import Counter
-from wirecal.solver.formats.log import Reading
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 
 BELOW_WRAP_COUNTS = 20_000

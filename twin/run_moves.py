@@ -7,7 +7,7 @@ world counts the moves (``World.moves``), which these functions name.
 
 from __future__ import annotations
 
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 
 
 def run_targets(plan: Plan) -> list[str]:

@@ -44,12 +44,12 @@ from typing import Any
 
 import numpy as np
 
-from wirecal.solver.cell_check import move_collision
+from wirecal.solver.cell.check import move_collision
 from wirecal.solver.counter import Counter
 from wirecal.solver.exit_geometry import physical_wire_mm
-from wirecal.solver.ik import flange_pose
+from wirecal.solver.ik.solutions import flange_pose
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import (
     MOVE_OVERHEAD_S,

@@ -10,7 +10,7 @@ from wirecal.gen.rapid.program import RapidOptions, module_text, write_module
 from wirecal.gen.request import GenRequest
 from wirecal.lang.rapid import Rapid
 from wirecal.lang.rapid.module import LOG_DIR, LOG_FILE, MODULE_FILE, signal_name
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import PAPER_RUN
 

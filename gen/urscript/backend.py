@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
+from wirecal.formats.run_token import NO_KEY, run_token
 from wirecal.gen.backends import Generator
 from wirecal.gen.request import GenRequest
 from wirecal.gen.urscript.program import (
@@ -16,8 +17,7 @@ from wirecal.gen.urscript.program import (
 )
 from wirecal.lang.urscript import URScript
 from wirecal.lang.urscript.versions import NEEDED
-from wirecal.solver.formats.run_token import NO_KEY, run_token
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import PAPER_RUN
 

@@ -15,7 +15,7 @@ CB3 program
 * moves each leg as a move of its own (it stops there): a move runs at the speed its
   slowest leg allows the wire (:func:`leg_speeds_pct`);
 * has no clock: it writes a version 1 log (no ``t_s``, ``settle_s``: its readings carry no
-  time, which the log reader takes, :mod:`wirecal.solver.formats.log`).
+  time, which the log reader takes, :mod:`wirecal.formats.log`).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from wirecal.gen.targets import joint_target
 from wirecal.lang.urscript.versions import version_of
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import move_profiles, move_speeds_pct
 from wirecal.solver.wire_range import nominal_wire_mm, run_moves

@@ -23,6 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from wirecal import __version__
+from wirecal.formats.fileio import Outputs
+from wirecal.formats.log import COLUMNS as LOG_COLUMNS
+from wirecal.formats.log import COLUMNS_V1
+from wirecal.formats.log import VERSION as LOG_VERSION
+from wirecal.formats.run_token import run_token, token_line
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import give_move_speeds, joint_target, name_problems, run_steps
 from wirecal.gen.templating import render
@@ -36,12 +41,7 @@ from wirecal.gen.urscript.cb3 import (
 from wirecal.lang.urscript import URScript
 from wirecal.lang.urscript.versions import is_refusal, needed
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
-from wirecal.solver.formats.log import COLUMNS_V1
-from wirecal.solver.formats.log import VERSION as LOG_VERSION
-from wirecal.solver.formats.run_token import run_token, token_line
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import (
     DEFAULT_RUN,

@@ -9,7 +9,7 @@ from wirecal.gen.backends import Generator
 from wirecal.gen.request import GenRequest
 from wirecal.gen.vplus.program import MODULE_NAME, GenOptions, module_text, write_module
 from wirecal.lang.vplus import VPlus
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN
 

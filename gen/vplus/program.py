@@ -16,17 +16,17 @@ from pathlib import Path
 import numpy as np
 
 from wirecal import __version__
+from wirecal.formats.fileio import Outputs
+from wirecal.formats.log import COLUMNS as LOG_COLUMNS
+from wirecal.formats.log import MAGIC as LOG_MAGIC
+from wirecal.formats.log import VERSION as LOG_VERSION
 from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import give_move_speeds, joint_literal, name_problems, run_steps
 from wirecal.gen.templating import render
 from wirecal.gen.vplus.literals import MAX_LINE, double_literal, long_lines, ppoint
 from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.fileio import Outputs
-from wirecal.solver.formats.log import COLUMNS as LOG_COLUMNS
-from wirecal.solver.formats.log import MAGIC as LOG_MAGIC
-from wirecal.solver.formats.log import VERSION as LOG_VERSION
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import (
     DEFAULT_RUN,
@@ -36,14 +36,14 @@ from wirecal.solver.run_parameters import (
     RunParameters,
     run_timeline,
 )
-from wirecal.solver.validation import CONFIGS, Setup, config_poses, plate_grid
+from wirecal.solver.validation.design import CONFIGS, Setup, config_poses, plate_grid
 
 MODULE_NAME = "WIRECAL.V2"
 STRIDE = 8  # flattened index c*STRIDE + k (k ≤ 7): tables by configuration and joint
 AXES = 4  # flattened index i*AXES + a (a = 1..3)
 PROBE_MARGIN_MM = 2.0
 """After a contact, the touch probe's 1 mm search at the next grid point, a neighbour
-(:func:`~wirecal.solver.validation.plate_grid`), starts this far above the depth found.
+(:func:`~wirecal.solver.validation.design.plate_grid`), starts this far above the depth found.
 The plate is flat and the controller's error changes little over a grid step: in the
 twin, before calibration with true errors of up to 1 deg/mm, neighbouring depths differ
 by at most 0.3 mm. A probe already touching there goes back up to the approach height

@@ -16,7 +16,7 @@ the ROS driver's documentation, not from a Universal Robots manual; the ``[mount
 section name is an assumption. (UR's controller reports its own factory calibration as
 full dh_theta/dh_a/dh_d/dh_alpha values, per the ROS driver's ur_calibration docs.) The
 file is for reading and for ROS users' URDF tools; do not copy it onto a controller.
-The file is read back by :func:`wirecal.solver.formats.patch_companion.read_companion`.
+The file is read back by :func:`wirecal.formats.patch_companion.read_companion`.
 """
 
 from __future__ import annotations

@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.lang.rapid.module import LOG_FILE, MODULE_FILE, signal_name
-from wirecal.solver.measurements import Measurements
-from wirecal.solver.plan import Plan
+from wirecal.solver.log.measurements import Measurements
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.simulate import Unmodelled
 from wirecal.twin.adapters import AdapterCapabilities, TwinAdapter, program_text

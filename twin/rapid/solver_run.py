@@ -3,7 +3,7 @@
 The twin appends a routine ``wc_twin_load`` to the module: it stores the readings as
 wc_meas would have kept them (``wc_rc``, ``wc_rj``), opens a result file, calls wc_solve
 and closes it; the result is read from that file's ``# controller:`` lines
-(:func:`~wirecal.solver.formats.controller_result.result_in_log`), the operations from
+(:func:`~wirecal.formats.controller_result.result_in_log`), the operations from
 the interpreter's count (:attr:`~wirecal.twin.rapid.interp.Interpreter.ops`).
 """
 
@@ -13,11 +13,11 @@ from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
 
+from wirecal.formats.controller_result import parse_result, result_in_log
+from wirecal.formats.log import Reading
 from wirecal.lang.rapid.module import LOG_DIR, MODULE_FILE, dnum_literal, num_literal, signal_name
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.controller_result import parse_result, result_in_log
-from wirecal.solver.formats.log import Reading
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.twin.controller_run import ControllerRun
 from wirecal.twin.rapid.controller import IrcController

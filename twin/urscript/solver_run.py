@@ -2,7 +2,7 @@
 
 The readings list wc_run keeps (``rd``) is rebuilt from the log and handed to wc_solve;
 the lines it sends are taken as the socket would carry them, and its result read from
-them (:func:`~wirecal.solver.formats.controller_result.result_in_log`).
+them (:func:`~wirecal.formats.controller_result.result_in_log`).
 """
 
 from __future__ import annotations
@@ -13,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
+from wirecal.formats.controller_result import parse_result, result_in_log
+from wirecal.formats.log import Reading
 from wirecal.lang.urscript.parser import parse_program
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.controller_result import parse_result, result_in_log
-from wirecal.solver.formats.log import Reading
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.twin.controller_run import ControllerRun
 from wirecal.twin.machine import Halt, RunError, Stopped

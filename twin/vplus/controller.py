@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wirecal.solver import ik
+from wirecal.solver.ik import solutions as ik
 from wirecal.solver.simulate import RANGE_EXCEEDED
 from wirecal.twin.vplus.interp import UNMODELLED, Trans, VError
 from wirecal.twin.world import BeyondLimit, Collision, EncoderFailure, WireOverspeed, World

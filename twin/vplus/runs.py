@@ -13,8 +13,8 @@ import numpy as np
 
 from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.measurements import Measurements
-from wirecal.solver.plan import Plan
+from wirecal.solver.log.measurements import Measurements
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import DEFAULT_RUN, run_timeline
 from wirecal.solver.simulate import (

@@ -14,11 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
+from wirecal.formats.controller_result import read_result
+from wirecal.formats.log import Reading
 from wirecal.lang.vplus.parser import parse_module
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.formats.controller_result import read_result
-from wirecal.solver.formats.log import Reading
-from wirecal.solver.plan import Plan
+from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.twin.controller_run import ControllerRun
 from wirecal.twin.machine import f32

@@ -1,0 +1,187 @@
+"""Calibration plan files (TOML): read, validate against a robot, and write.
+
+Format (joint angles in degrees)::
+
+    theta0_deg = [0, -90, 210, -90, 0, -90]      # encoder mounted here (wire length 0)
+    order = ["th6", "d6", ...]                   # identification order, one step each
+    [[step]]
+    parameter = "th6"
+    points_deg = [[0, -90, 210, -90, -26, -180], ...]
+    via_deg = [[...], ...]                       # optional: passed (blended) from θ0 to
+                                                 # the first point, in this order
+    omega = 5.0                                  # optional: bound Ω_j (deg or mm), ≤ 1000
+
+Field rules: :mod:`wirecal.formats.toml_fields`; every joint angle within the robot's
+limits.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from wirecal.formats.fileio import read_toml
+from wirecal.formats.toml_fields import Table, document, duplicates, valid
+from wirecal.solver import params as P
+from wirecal.solver.distance import wire_lengths
+from wirecal.solver.plan.calibration_plan import Plan, Step
+from wirecal.solver.robot import Robot
+
+_TOP_KEYS = ("theta0_deg", "order", "step", "robot", "description")
+_STEP_KEYS = ("parameter", "points_deg", "via_deg", "omega")
+MAX_OMEGA = 1000.0
+"""Largest bound Ω_j of a step (deg or mm): offsets beyond it are not calibration errors."""
+
+
+MAX_STEP_POINTS = 1000
+"""Most points (and via points) of one step: ``wirecal plan`` designs at most 1000 in all;
+a larger list is refused before any work, which grows with the points."""
+
+
+def load_plan(path: str | Path, robot: Robot) -> Plan:
+    """Read and validate a plan against a robot; raise :class:`WirecalError` listing problems."""
+    return plan_from_dict(read_toml(path, "plan file"), robot, str(path))
+
+
+def plan_from_dict(data: dict[str, Any], robot: Robot, source: str = "<plan>") -> Plan:
+    """Validate a parsed plan against the robot it is for (see module docstring)."""
+    doc = document(data, source, "plan file", _TOP_KEYS)
+    n = robot.n_joints
+    theta0 = doc.vector("theta0_deg", length=n, labels="(one per joint, deg)")
+    if theta0 is not None:
+        _check_limits(theta0[None], robot, "theta0_deg", doc)
+    plan_robot = doc.string("robot", None)
+    if plan_robot is not None and plan_robot != robot.name:
+        doc.add(
+            "robot",
+            f"plan is for {plan_robot!r} but the robot file describes "
+            f"{robot.name!r}; use the matching robot file",
+        )
+    description = doc.string("description", None)
+    order = _order(doc, robot)
+    raw_steps = doc.tables("step", _STEP_KEYS)
+    steps = [_step(st, j, order, robot, theta0) for j, st in enumerate(raw_steps, 1)]
+    if raw_steps and len(raw_steps) != len(order):
+        doc.add(
+            "step",
+            f"has {len(raw_steps)} step(s) but order names {len(order)} "
+            "parameter(s); give one [[step]] per parameter",
+        )
+    doc.raise_if_any()
+    return Plan(
+        theta0_deg=valid(theta0),
+        order=tuple(order),
+        steps=tuple(s for s in steps if s is not None),
+        robot=plan_robot,
+        description=description,
+        source=source,
+    )
+
+
+def _order(doc: Table, robot: Robot) -> list[str]:
+    order = doc.strings("order", what="parameter names") or []
+    for name in order:
+        if name not in robot.parameters:
+            try:
+                P.parse(name, robot.n_joints)
+                doc.add(
+                    "order",
+                    f"{name!r} is not in the robot file's [calibration] parameters "
+                    f"{list(robot.parameters)}",
+                )
+            except ValueError as exc:
+                doc.add("order", str(exc))
+    if duplicates(order):
+        doc.add("order", f"lists {duplicates(order)[0]!r} twice")
+    return order
+
+
+def _step(
+    st: Table, j: int, order: list[str], robot: Robot, theta0: np.ndarray | None
+) -> Step | None:
+    n = robot.n_joints
+    param = st.string("parameter")
+    if param is not None and j <= len(order) and param != order[j - 1]:
+        st.add(
+            "parameter",
+            f"is {param!r} but order[{j}] is {order[j - 1]!r}; steps must follow the order",
+        )
+    joints = "(one per joint, deg)"
+    points = st.matrix("points_deg", cols=n, labels=joints, max_rows=MAX_STEP_POINTS)
+    via = st.matrix("via_deg", [], cols=n, labels=joints, nonempty=False, max_rows=MAX_STEP_POINTS)
+    for key, q in (("points_deg", points), ("via_deg", via)):
+        if q is not None:
+            _check_limits(q, robot, st.name(key), st)
+    if points is not None and theta0 is not None:
+        _check_wire(points, theta0, robot, st.name("points_deg"), st)
+    omega = st.number("omega", None, above=0, hi=MAX_OMEGA, unit="(deg or mm)")
+    if param is None or points is None or via is None or not st.present:
+        return None
+    return Step(param, points, via, omega)
+
+
+def _check_limits(q: np.ndarray, robot: Robot, where: str, table: Table) -> None:
+    lo, hi = robot.joint_min_deg, robot.joint_max_deg
+    for i, row in enumerate(q, 1):
+        for j in np.flatnonzero((row < lo) | (row > hi)):
+            label = where if q.shape[0] == 1 and where == "theta0_deg" else f"{where}[{i}]"
+            table.problems.add(
+                label, f"joint {j + 1} = {row[j]:g} deg is beyond its limits [{lo[j]:g}, {hi[j]:g}]"
+            )
+
+
+MIN_WIRE_MM = 1.0
+"""Shortest wire length a plan point may have: at θ0 itself the wire has no direction, so
+its derivatives (Ψ, the Jacobian) are undefined."""
+
+
+def _check_wire(q: np.ndarray, theta0: np.ndarray, robot: Robot, where: str, table: Table) -> None:
+    d = wire_lengths(robot.nominal, np.radians(q), np.radians(theta0))
+    for i in np.flatnonzero(np.isnan(d)):  # only within a pulley's circle
+        table.problems.add(
+            f"{where}[{i + 1}]",
+            "the tool point there is within the guide pulley's circle (encoder."
+            "pulley_radius_mm), where no wire reaches it; move or remove the point",
+        )
+    for i in np.flatnonzero(d < MIN_WIRE_MM):
+        table.problems.add(
+            f"{where}[{i + 1}]",
+            f"the wire length there is {d[i]:.3g} mm (below {MIN_WIRE_MM:g} mm): the point "
+            "(nearly) coincides with θ0, where the wire has no direction; move or remove it",
+        )
+
+
+def plan_to_toml(plan: Plan, header: str = "") -> str:
+    """Serialise a plan in the canonical file layout (numbers as given, one point per line)."""
+
+    def vec(v: np.ndarray) -> str:
+        return "[" + ", ".join(_short(x) for x in v) + "]"
+
+    lines = [f"# {h}" for h in header.splitlines()] if header else []
+    if plan.robot:
+        lines.append(f"robot = {json.dumps(plan.robot, ensure_ascii=False)}")
+    if plan.description:
+        lines.append(f"description = {json.dumps(plan.description, ensure_ascii=False)}")
+    lines.append(f"theta0_deg = {vec(plan.theta0_deg)}")
+    lines.append("order = [" + ", ".join(json.dumps(o) for o in plan.order) + "]")
+    for s in plan.steps:
+        lines += ["", "[[step]]", f"parameter = {json.dumps(s.parameter)}"]
+        if s.omega is not None:
+            lines.append(f"omega = {_short(s.omega)}")
+        lines.append("points_deg = [")
+        lines += [f"    {vec(r)}," for r in s.points_deg]
+        lines.append("]")
+        if len(s.via_deg):
+            lines.append("via_deg = [")
+            lines += [f"    {vec(r)}," for r in s.via_deg]
+            lines.append("]")
+    return "\n".join(lines) + "\n"
+
+
+def _short(x: float) -> str:
+    """Shortest text that reads back to the same float, without a trailing '.0'."""
+    s = repr(float(x))
+    return s[:-2] if s.endswith(".0") else s

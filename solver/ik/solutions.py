@@ -1,0 +1,289 @@
+"""Inverse kinematics: every solution for a flange pose, with V+ configuration names.
+
+Analytic for 6R arms of the common industrial structure in Craig's convention — α1 = ±90°,
+α2 = 0, α3, α4, α5 = ±90° and a spherical wrist (a4 = a5 = d5 = 0), any lengths and joint
+offsets (row 1's α0, a0 act as a fixed base transform). With φ_i the DH angles
+(q_i + offset_i), s_k = sin α_k:
+
+* wrist centre c = o6 − d6·z6 = o4, which depends on φ1..φ3 only;
+* in frame 1 the wrist centre is (a1 + u_x, −s1(d2 + d3), s1·u_y) with
+  (u_x, u_y) = RotZ(φ2)·(a2 + a3 cφ3 + s3 d4 sφ3, a3 sφ3 − s3 d4 cφ3): the horizontal
+  reach fixes x1 = ±√(r² − (d2 + d3)²) (shoulder: righty/lefty) and φ1, then
+  a3 cφ3 + s3 d4 sφ3 = (|u|² − a2² − a3² − d4²) / 2a2 gives φ3 (elbow: above/below) and φ2;
+* the wrist rotation M = RotX(α3)ᵀ R3ᵀ R6 = RotZ(φ4) RotX(α4) RotZ(φ5) RotX(α5) RotZ(φ6)
+  has m33 = −s4 s5 cφ5, (m13, m23) = s5 sφ5 (cφ4, sφ4), (m31, m32) = s4 sφ5 (cφ6, −sφ6):
+  two solutions ±sφ5 (wrist: noflip/flip).
+
+Each analytic solution is polished by Gauss–Newton on the exact model; arms outside the
+class are solved numerically (damped least squares from many starts). Configuration
+names (wirecal's convention; the V+ manual's exact definitions are unconfirmed):
+righty when the wrist centre lies ahead of the joint-1 axis along the arm (x1 ≥ 0);
+above when the elbow is above the line from joint 2 to the wrist centre; flip when
+the DH angle φ5 = q5 + offset5 is negative (a small offset must not merge the two wrist
+solutions).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from wirecal.solver.ik import ur as ik_ur
+from wirecal.solver.kinematics import Model, flange_jacobian, frames, table_property
+from wirecal.solver.robot import Robot
+
+HALF_PI = np.pi / 2
+
+
+@dataclass(frozen=True)
+class Solution:
+    """One inverse-kinematics solution, its configuration and whether it is within limits."""
+
+    q: np.ndarray  # joint angles (rad)
+    config: tuple[str, str, str]  # ("righty"|"lefty", "above"|"below", "noflip"|"flip")
+    within_limits: bool
+
+
+def flange_pose(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation (3, 3) and origin (3,) of the last frame for one configuration (rad)."""
+    f = frames(model, np.atleast_2d(q))
+    return f.R_last[0], f.o[0, -1]
+
+
+@table_property
+def analytic_structure(dh: np.ndarray) -> bool:
+    """Whether :func:`solve` can use the closed form for this model."""
+    if dh.shape[0] != 6:
+        return False
+    alpha = dh[:, 0]
+    right = [np.isclose(abs(np.sin(alpha[k])), 1, atol=1e-12) for k in (1, 3, 4, 5)]
+    return bool(
+        all(right)
+        and np.isclose(np.sin(alpha[2]), 0, atol=1e-12)
+        and np.cos(alpha[2]) > 0
+        and abs(dh[4, 1]) < 1e-12
+        and abs(dh[5, 1]) < 1e-12
+        and abs(dh[4, 3]) < 1e-12
+        and abs(dh[2, 1]) > 1e-9
+    )
+
+
+def _rot_x(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def _rot_z(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
+    """Closed-form DH angles φ (8 at most) for a flange pose; see the module doc."""
+    dh = model.dh
+    alpha, a, off, d = dh.T
+    base = _rot_x(alpha[0])
+    Rb, ob = base.T @ R, base.T @ o - np.array([a[0], 0, 0])
+    s1, s3, s4, s5 = (np.sign(np.sin(alpha[k])) for k in (1, 3, 4, 5))
+    c = ob - d[5] * Rb[:, 2]
+    y1 = -s1 * (d[1] + d[2])
+    r2 = c[0] ** 2 + c[1] ** 2
+    out: list[np.ndarray] = []
+    if r2 < y1**2:
+        return out
+    for shoulder in (1, -1):
+        x1 = shoulder * np.sqrt(r2 - y1**2)
+        phi1 = np.arctan2(c[1], c[0]) - np.arctan2(y1, x1)
+        ux, uy = x1 - a[1], s1 * (c[2] - d[0])
+        k = (ux**2 + uy**2 - a[2] ** 2 - a[3] ** 2 - d[3] ** 2) / (2 * a[2])
+        rr = np.hypot(a[3], d[3])
+        if abs(k) > rr * (1 + 1e-12):
+            continue
+        beta = np.arctan2(s3 * d[3], a[3])
+        for elbow in (1, -1):
+            phi3 = beta + elbow * np.arccos(np.clip(k / rr, -1, 1))
+            px = a[2] + a[3] * np.cos(phi3) + s3 * d[3] * np.sin(phi3)
+            py = a[3] * np.sin(phi3) - s3 * d[3] * np.cos(phi3)
+            phi2 = np.arctan2(uy, ux) - np.arctan2(py, px)
+            q123 = np.array([phi1, phi2, phi3]) - off[:3]
+            f = frames(Model(dh, model.tool_point), np.r_[q123, 0, 0, 0][None])
+            X3, Z3 = f.x[0, 3], f.z[0, 3]
+            R3 = np.column_stack([X3, np.cross(Z3, X3), Z3])
+            M = _rot_x(alpha[3]).T @ R3.T @ R
+            h = np.hypot(M[0, 2], M[1, 2])
+            for wrist in (1, -1):
+                s_phi5 = wrist * h
+                phi5 = np.arctan2(s_phi5, -s4 * s5 * M[2, 2])
+                if h > 1e-9:
+                    phi4 = np.arctan2(s5 * M[1, 2] * wrist, s5 * M[0, 2] * wrist)
+                    phi6 = np.arctan2(-s4 * M[2, 1] * wrist, s4 * M[2, 0] * wrist)
+                else:  # wrist singular: φ4 and φ6 turn about one axis; keep φ4 = 0
+                    phi4 = 0.0
+                    N = _rot_x(alpha[4]) @ _rot_z(phi5) @ _rot_x(alpha[5])
+                    X = N.T @ M
+                    phi6 = np.arctan2(X[1, 0], X[0, 0])
+                out.append(np.array([phi1, phi2, phi3, phi4, phi5, phi6]))
+                if h <= 1e-9:
+                    break
+    return out
+
+
+def _pose_error(model, q, R, o, f=None):
+    """Return the pose error (mm, and mrad-weighted rotation) of q; ``f``: q's frames."""
+    f = frames(model, np.atleast_2d(q)) if f is None else f
+    Rq, oq = f.R_last[0], f.o[0, -1]
+    E = R @ Rq.T
+    rotvec = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
+    return np.r_[o - oq, rotvec * 1000.0]  # 1 rad of orientation weighs as 1 m
+
+
+CONVERGED = 1e-10
+"""Newton stops when no component of the pose error (mm, and mrad as mm per metre) exceeds this."""
+
+ACCEPTED = 1e-7
+"""A short :func:`follow` accepts an error up to this; :func:`solve` accepts only
+:data:`CONVERGED`."""
+
+PRE_ITERATIONS = 12
+"""Newton steps before candidates that have met are merged (:func:`_distinct_starts`)."""
+
+MAX_STEP_RAD = 0.2
+"""Largest joint step of one Newton iteration. Near a singularity the least-squares step is
+long and wrong (the first model error the seed does not know is divided by a small singular
+value); capping it keeps Newton in the basin it started in."""
+
+
+SAME_RAD = 1e-6
+"""Two converged solutions are one when no joint differs by more than this (rad)."""
+
+MET_RAD = 1e-2
+"""A candidate after :data:`PRE_ITERATIONS` Newton steps this near a start runs to it (rad)."""
+
+
+def _polish(model, q, R, o, iterations=60, accept=CONVERGED, done=CONVERGED):
+    """Newton from ``q``: stop once no pose error exceeds ``done``; ok if within ``accept``."""
+    for _ in range(iterations):
+        f = frames(model, q[None])  # one evaluation of the chain per Newton step
+        e = _pose_error(model, q, R, o, f)
+        if np.max(np.abs(e)) < done:
+            return q, True
+        step = np.linalg.lstsq(flange_jacobian(model, q, f), e, rcond=None)[0]
+        q = q + step * min(1.0, MAX_STEP_RAD / max(np.max(np.abs(step)), 1e-300))
+    return q, np.max(np.abs(_pose_error(model, q, R, o))) < accept
+
+
+def follow(model: Model, q: np.ndarray, R: np.ndarray, o: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Return the solution nearest ``q`` by Newton from it.
+
+    A small Cartesian step in the same configuration (much cheaper than :func:`solve`).
+    Newton stops within :data:`ACCEPTED`: its next step, to :data:`CONVERGED`, would move
+    the joints by less than a controller's single-precision joint angle resolves.
+    """
+    q = np.asarray(q, dtype=float)
+    return _polish(model, q, R, o, iterations=8, accept=ACCEPTED, done=ACCEPTED)
+
+
+def solve(
+    robot: Robot,
+    R: np.ndarray,
+    o: np.ndarray,
+    *,
+    model: Model | None = None,
+    margin_deg: float = 0.0,
+    seed: int = 0,
+) -> list[Solution]:
+    """Return every distinct solution for the flange pose (R, o).
+
+    Every distinct solution for the flange pose (R, o), each put into the robot's joint
+    limits less ``margin_deg`` where a turn of ±360° allows it.
+
+    ``model`` is the kinematic model the controller believes (default: the robot's
+    nominal model; a calibrated controller's is patched).
+    """
+    model = robot.nominal if model is None else model
+    lo_deg, hi_deg = robot.limits_deg(margin_deg, body=False)
+    dh = np.asarray(model.dh)
+    if analytic_structure(model):  # exact already: nothing to merge before polishing
+        starts = [phi - dh[:, 2] for phi in _analytic(model, R, o)]
+    elif ik_ur.ur_structure(model):  # three parallel axes, offset wrist: solver/ik/ur.py
+        starts = _distinct_starts(model, ik_ur.candidates(model, R, o), R, o)
+    else:
+        rng = np.random.default_rng(seed)
+        structural = dh.copy()
+        structural[:, 0] = np.round(structural[:, 0] / HALF_PI) * HALF_PI
+        structural[4:, 1] = 0.0
+        structural[4, 3] = 0.0
+        seeds = [phi - dh[:, 2] for phi in _analytic(Model(structural, model.tool_point), R, o)]
+        seeds += list(rng.uniform(-np.pi, np.pi, (24, 6)))
+        starts = _distinct_starts(model, seeds, R, o)
+    solutions: list[Solution] = []
+    for q0 in starts:
+        q, ok = _polish(model, q0, R, o)
+        if not ok:
+            continue
+        q = (q + np.pi) % (2 * np.pi) - np.pi
+        q, inside = _into_limits(q, lo_deg, hi_deg)
+        if any(_same(q, s.q, SAME_RAD) for s in solutions):
+            continue
+        solutions.append(Solution(q, configuration(model, q), inside))
+    return solutions
+
+
+def _distinct_starts(model, candidates, R, o, iterations=PRE_ITERATIONS):
+    """Return the candidates after a few Newton steps, those that met another dropped.
+
+    Near a UR wrist singularity many samples run to the same solution; polishing each to
+    the end would cost several times as much. A candidate still on its way is dropped
+    within :data:`MET_RAD` of a start; a converged one only when it is the same solution
+    (:data:`SAME_RAD`): near the elbow fold two distinct solutions lie closer than
+    :data:`MET_RAD` (hypothesis found a UR5 folded to 180.02°, its elbow branches 0.04°,
+    0.49° and 0.53° apart in joints 3, 2 and 4).
+    """
+    starts: list[np.ndarray] = []
+    for q0 in candidates:
+        q, done = _polish(model, np.asarray(q0, dtype=float), R, o, iterations)
+        if not any(_same(q, s, SAME_RAD if done else MET_RAD) for s in starts):
+            starts.append(q)
+    return starts
+
+
+def _same(q1, q2, atol_rad):
+    """Whether two joint vectors are the same solution: every joint within ``atol_rad`` mod 2π."""
+    return bool(np.all(np.abs(_wrapped(q1 - q2)) <= atol_rad))
+
+
+def _wrapped(x):
+    return (x + np.pi) % (2 * np.pi) - np.pi
+
+
+def _into_limits(q, lo_deg, hi_deg):
+    lo, hi = np.radians(lo_deg), np.radians(hi_deg)
+    q = q.copy()
+    for j in range(len(q)):
+        for turn in (0.0, 2 * np.pi, -2 * np.pi):
+            if lo[j] <= q[j] + turn <= hi[j]:
+                q[j] += turn
+                break
+    return q, bool(np.all((q >= lo - 1e-12) & (q <= hi + 1e-12)))
+
+
+def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
+    """Return wirecal's names of a solution's configuration (see the module doc)."""
+    if ik_ur.ur_structure(model):
+        return ik_ur.configuration(model, q)
+    f = frames(model, np.atleast_2d(q))
+    o2, o3 = f.o[0, 2], f.o[0, 3]
+    centre = f.o[0, 4]
+    z1 = f.z[0, 1]
+    r = centre - f.o[0, 1]
+    x1 = r - np.dot(r, z1) * z1
+    ahead = np.dot(x1, f.x[0, 1])
+    line = centre - o2
+    t = np.dot(o3 - o2, line) / max(np.dot(line, line), 1e-300)
+    offset = (o3 - o2) - t * line
+    return (
+        "righty" if ahead >= 0 else "lefty",
+        "above" if offset[2] >= 0 else "below",
+        "flip" if _wrapped(q[4] + model.dh[4, 2]) < 0 else "noflip",
+    )

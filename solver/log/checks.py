@@ -1,0 +1,88 @@
+"""A log's checks as a whole: its origin (plan, robot, encoder scale) and its timer.
+
+A log of another plan, robot or encoder scale is refused before any row is read
+(:func:`check_origin`); the controller's timer ``t_s`` must never run backwards and must count
+seconds (:func:`timer_problems`, :data:`TIMER_RATIO_BOUNDS`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.log.readings import Log, Reading
+from wirecal.solver.plan.calibration_plan import Plan
+from wirecal.solver.robot import Robot
+from wirecal.solver.run_parameters import RunParameters, run_timeline
+
+FASTEST_RUN = RunParameters(speed_pct=100.0, settle_s=0.0, readings=1)
+"""The quickest run a generated program makes: full speed, no fixed settle, one reading."""
+
+
+TIMER_RATIO_BOUNDS = (0.5, 500.0)
+"""The run's time between its zero readings over the time model's fastest run
+(:func:`~wirecal.solver.run_parameters.run_timeline`): below 0.5 the robot would have moved
+faster than it can (a timer at zero, or in minutes); above 500 slower than at 1 % speed
+with 60 s settling (about 100 times, pauses included): a timer in milliseconds."""
+
+
+def timer_problems(log: Log, zeros: dict[int, Reading], plan: Plan, robot: Robot) -> list[str]:
+    """Check the controller's timer ``t_s``: never backwards, and in seconds.
+
+    In seconds: the time between the first and the last zero reading compared with the
+    robot time of the same moves (:data:`TIMER_RATIO_BOUNDS`).
+    """
+    src = log.source
+    timed = [(r.line, r.t_s) for r in log.readings if r.t_s is not None]
+    for (line_before, before), (line, t) in itertools.pairwise(timed):
+        if t < before:
+            return [
+                f"{src}:{line}: t_s {t:g} s is before the previous reading's "
+                f"{before:g} s (line {line_before}): the controller's timer never runs "
+                "backwards; keep one run per log, its lines in the order written"
+            ]
+    zero_t = {s: (r.line, r.t_s) for s, r in sorted(zeros.items()) if r.t_s is not None}
+    if len(zero_t) < 2:
+        return []
+    (s0, (line0, t0)), (s1, (line1, t1)) = list(zero_t.items())[:: len(zero_t) - 1]
+    model = run_timeline(robot, plan, FASTEST_RUN).reading_s
+    at_zero = np.cumsum([0] + [1 + len(st.points_deg) for st in plan.steps])
+    fastest_s = float(model[at_zero[s1 - 1]] - model[at_zero[s0 - 1]])
+    lo, hi = TIMER_RATIO_BOUNDS
+    if lo <= (t1 - t0) / fastest_s <= hi:
+        return []
+    unit = "at zero or in minutes" if (t1 - t0) / fastest_s < lo else "in milliseconds"
+    return [
+        f"{src}:{line0}-{line1}: t_s says steps {s0}–{s1} took {t1 - t0:g} s; the robot "
+        f"needs {fastest_s:.0f} s at full speed, and well under {hi * fastest_s:.0f} s even "
+        f"at 1 % speed: is the controller's timer {unit}? t_s is in seconds since the "
+        "start of the run"
+    ]
+
+
+def check_origin(log: Log, plan: Plan, robot: Robot) -> None:
+    """Refuse a log of another plan, robot or encoder scale, before any row is read."""
+    src = log.source
+    problems: list[str] = []
+    if log.plan != plan.fingerprint():
+        problems.append(
+            f"{src}: plan fingerprint {log.plan[:16]}… differs from {plan.source} "
+            f"({plan.fingerprint()[:16]}…): the log was taken with another plan; "
+            "use that plan, or --accept-foreign if you are sure"
+        )
+    if log.robot != robot.name:
+        problems.append(
+            f"{src}: robot {log.robot!r} differs from {robot.source} "
+            f"({robot.name!r}); use the matching robot file, or --accept-foreign"
+        )
+    if not math.isclose(abs(log.mm_per_count), abs(robot.encoder.mm_per_count), rel_tol=1e-6):
+        problems.append(
+            f"{src}: mm_per_count {log.mm_per_count!r} differs from the robot "
+            f"file's encoder.mm_per_count {robot.encoder.mm_per_count!r}; use the matching "
+            "robot file, or --accept-foreign"
+        )
+    if problems:  # a log of another plan or robot: row-by-row complaints would be noise
+        raise WirecalError(problems)

@@ -1,0 +1,268 @@
+"""Design of experiments (paper §2.2–2.3, §3.4): the planner's entry point and θ0 search.
+
+Design of experiments (paper §2.2–2.3, §3.4): θ0, the identification order and one point
+set per parameter, for any 6R arm. :func:`design` chooses θ0 when not given (the search
+here) and designs around it (:func:`~wirecal.solver.plan.design.design_at`). The parts:
+
+* :mod:`~wirecal.solver.plan.options` — the planner's settings;
+* :mod:`~wirecal.solver.plan.candidates` — candidate configurations around θ0 and their
+  screening;
+* :mod:`~wirecal.solver.plan.moves` — the moves' checks: the arm and the wire clear;
+* :mod:`~wirecal.solver.plan.steps` — the order of §3.4 and each step's points;
+* :mod:`~wirecal.solver.plan.joint` — the joint method's further points;
+* :mod:`~wirecal.solver.plan.tour` — the visiting order of a step's points;
+* :mod:`~wirecal.solver.plan.predict` — a plan's predicted accuracy and robot time;
+* :mod:`~wirecal.solver.plan.design` — the design at one θ0 and its figures.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+
+import numpy as np
+
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.kinematics import tool_position
+from wirecal.solver.plan.candidates import candidates, point_checks, screen
+from wirecal.solver.plan.design import Design, design_at
+from wirecal.solver.plan.options import DEFAULT_OPTIONS, PlanOptions, Progress, part_progress
+from wirecal.solver.plan.steps import isolating, most_informative
+from wirecal.solver.robot import Robot
+from wirecal.solver.sensitivity import sensitivity
+
+
+def design(
+    robot: Robot,
+    theta0: np.ndarray | None = None,
+    opt: PlanOptions = DEFAULT_OPTIONS,
+    progress: Progress | None = None,
+) -> Design:
+    """Return a plan for the robot file's parameters (θ0 chosen when not given).
+
+    θ0 chosen: the best plan (fewest parameters unplanned, then the smallest predicted
+    error) of the first :data:`THETA0_TRIES` θ0 drawn clear of the cell; when it leaves
+    parameters unplanned (but unobservable or redundant ones, which no θ0 plans), up to
+    :data:`MORE_THETA0_DESIGNED` more θ0, the best of
+    :data:`MORE_THETA0_CHECKED` further draws by a quick check (:func:`_isolated_count`),
+    until one gives a complete plan (:func:`_search_further`). A θ0 given is the only one
+    tried. ``progress`` is called with the fraction of the work done (0…1) as it advances.
+    """
+    _check_room(robot, opt)
+    if theta0 is not None:
+        return design_at(robot, np.asarray(theta0, dtype=float), opt, progress)
+    draws = _theta0_draws(robot, opt)
+    first = draws[:THETA0_TRIES]
+    parts = len(first) + MORE_THETA0_DESIGNED
+    best, problems = None, []
+    for k, t0 in enumerate(first):
+        try:
+            d = design_at(robot, t0, opt, part_progress(progress, k, parts))
+        except WirecalError as exc:
+            problems.append(exc.problems[0])
+            continue
+        if best is None or _score(d) < _score(best):
+            best = d
+    if best is not None:
+        best.theta0_tried = len(first)
+    if best is None or best.isolation_failed():
+        more = draws[THETA0_TRIES : THETA0_TRIES + MORE_THETA0_CHECKED]
+        best = _search_further(
+            robot,
+            more,
+            (best, problems),
+            opt,
+            lambda k: part_progress(progress, len(first) + k, parts),
+        )
+    if best is None:
+        raise WirecalError(
+            [
+                f"{robot.source}: no θ0 tried gives a plan ({len(problems)} tried; each "
+                "θ0's reasons follow)",
+                *problems,
+            ]
+        )
+    return best
+
+
+THETA0_TRIES = 6
+"""θ0 designed first, all of them; the best plan of them is kept when it is complete."""
+
+
+MORE_THETA0_CHECKED = 60
+"""Further θ0 drawn when the first leave parameters unplanned, each given the quick check
+of :func:`_isolated_count` (0.1–0.7 s on the UR5, a tenth of a design)."""
+
+
+MORE_THETA0_DESIGNED = 4
+"""Of those, designed at most, best checked first; the first complete plan is kept."""
+
+
+def _score(d: Design) -> tuple[int, float]:
+    """Return a plan's rank among θ0s: parameters unplanned, then the predicted errors."""
+    return (len(d.excluded), d.predicted["stepwise"] + d.predicted["joint"] * 5)
+
+
+def _search_further(
+    robot: Robot,
+    more: np.ndarray,
+    so_far: tuple[Design | None, list[str]],
+    opt: PlanOptions,
+    part: Callable[[int], Progress | None],
+) -> Design | None:
+    """Return the first complete plan at the θ0s ``more``, else the best plan of all.
+
+    Each θ0 in the order drawn gets the quick check of :func:`_isolated_count`; one
+    around which every parameter of [calibration] (but the unidentifiable) is isolated is
+    designed at once, and the search stops at its plan if complete (every parameter
+    planned but the unidentifiable). Otherwise, after all are checked, the θ0s
+    isolating the most parameters (ties in the order drawn) are designed. At most
+    :data:`MORE_THETA0_DESIGNED` designs in all. ``so_far``: the best plan of the first
+    θ0s (None: none) and why the others gave none, a list this extends; ``part(k)`` is
+    the progress callback of the k-th design. The plan returned says how many θ0s were
+    designed (``theta0_tried``) and, in ``search_line``, how the search went.
+    """
+    search = _Search(robot, opt, part, *so_far)
+    counts: list[int] = []
+    for t0 in more:
+        if search.spent:
+            return search.result(len(counts))
+        counts.append(_isolated_count(robot, t0, opt))
+        if counts[-1] >= search.target and search.attempt(len(counts) - 1, t0):
+            return search.result(len(counts))
+    for i in np.argsort(-np.array(counts, dtype=int), kind="stable"):
+        if search.spent or (i not in search.designed and search.attempt(int(i), more[i])):
+            break
+    return search.result(len(counts))
+
+
+class _Search:
+    """The θ0s designed after the first ones: the best plan so far and why others failed.
+
+    ``attempt`` designs one θ0 and keeps the plan if it ranks better (:func:`_score`);
+    ``spent`` once :data:`MORE_THETA0_DESIGNED` are designed.
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        opt: PlanOptions,
+        part: Callable[[int], Progress | None],
+        best: Design | None,
+        problems: list[str],
+    ) -> None:
+        self.robot, self.opt, self.part = robot, opt, part
+        self.best, self.problems = best, problems
+        self.before = len(problems) if best is None else best.theta0_tried
+        self.designed: list[int] = []
+        # the quick check's count that calls for a design at once
+        self.target = len(robot.parameters) - (len(best.unidentifiable) if best else 0)
+
+    @property
+    def spent(self) -> bool:
+        """Whether :data:`MORE_THETA0_DESIGNED` θ0s are designed (no more may be)."""
+        return len(self.designed) >= MORE_THETA0_DESIGNED
+
+    def attempt(self, i: int, theta0: np.ndarray) -> bool:
+        """Design at θ0 (draw ``i``); return whether its plan is complete."""
+        self.designed.append(i)
+        try:
+            d = design_at(self.robot, theta0, self.opt, self.part(len(self.designed) - 1))
+        except WirecalError as exc:
+            self.problems.append(exc.problems[0])
+            return False
+        if self.best is None or _score(d) < _score(self.best):
+            self.best = d
+        return not d.isolation_failed()
+
+    def result(self, checked: int) -> Design | None:
+        """Return the best plan, saying how many θ0s were checked and designed."""
+        tried = len(self.designed)
+        if self.best is not None and tried:
+            self.best.theta0_tried = self.before + tried
+            self.best.search_line = (
+                f"theta0 search: the first {self.before} theta0 drawn left parameters "
+                f"unplanned; {checked} more checked quickly (how many parameters each "
+                f"isolates), {tried} designed: {self.before + tried} theta0 tried in all."
+            )
+        return self.best
+
+
+def _isolated_count(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> int:
+    """Return how many parameters the order of §3.4 isolates around θ0: a quick check.
+
+    The candidates of :func:`~wirecal.solver.plan.design.design_at` and its screening
+    (:func:`screen`), applied only to candidates isolating a parameter still unknown
+    (:func:`isolating`; few do), so a fraction of a design's time; no points, via points or
+    tours are chosen. The order stops where the design's does when no parameter is
+    unidentifiable.
+    """
+    model = robot.nominal
+    q = candidates(robot, theta0, opt, np.random.default_rng(opt.seed))
+    p0 = tool_position(model, np.radians(theta0)[None])[0]
+    q = q[point_checks(robot, model, p0, q, opt)]
+    names = list(robot.parameters)
+    col = {n: k for k, n in enumerate(names)}
+    psi = sensitivity(model, q, theta0, names).psi
+    state = np.zeros(len(q), np.int8)  # 0 not screened yet, 1 usable, 2 not
+    remaining = names
+    while remaining:
+        todo = np.zeros(len(q), bool)
+        for j in remaining:
+            todo |= isolating(psi, col, j, remaining, opt)
+        todo &= state == 0
+        if todo.any():
+            state[todo] = np.where(screen(robot, model, p0, theta0, q[todo], opt)[0], 1, 2)
+        best = most_informative(psi[state == 1], col, remaining, opt)
+        if best is None:
+            break
+        remaining = [t for t in remaining if t != best[0]]
+    return len(names) - len(remaining)
+
+
+def _check_room(robot: Robot, opt: PlanOptions) -> None:
+    """Raise when a joint's body limits leave no room for points inside the margin."""
+    body_lo, body_hi = robot.limits_deg()
+    lo, hi = robot.limits_deg(opt.margin_deg)
+    span = body_hi - body_lo
+    narrow = np.flatnonzero(lo >= hi)
+    if narrow.size:
+        raise WirecalError(
+            [
+                f"{robot.source}: joint {j + 1}: range {span[j]:g} deg leaves no room for "
+                f"points {opt.margin_deg:g} deg inside both limits; check joint_min_deg, "
+                "joint_max_deg and [cell] body_min_deg, body_max_deg (degrees)"
+                for j in narrow
+            ]
+        )
+
+
+THETA0_DRAWS = 1000
+"""θ0 candidates drawn at once; those clear of the arm and the cell are tried in order
+(the first :data:`THETA0_TRIES`, then :data:`MORE_THETA0_CHECKED` more if need be)."""
+
+
+def _theta0_draws(robot: Robot, opt: PlanOptions) -> np.ndarray:
+    """Return the θ0 (deg, whole degrees) drawn clear of the arm's body and the cell.
+
+    Drawn 20 deg inside the body limits (less on a joint with a narrow range); raise,
+    naming what blocked them, when none of :data:`THETA0_DRAWS` is clear.
+    """
+    rng = np.random.default_rng([opt.seed, 99])
+    lo, hi = robot.limits_deg()
+    inset = np.clip((hi - lo) / 4, opt.margin_deg, 20.0)
+    t0 = np.round(rng.uniform(*robot.limits_deg(inset), (THETA0_DRAWS, robot.n_joints)), 0)
+    p0 = tool_position(robot.nominal, np.radians(t0))
+    gaps = robot.cell_gaps(t0, p0)
+    clear = gaps.smallest() >= 0
+    if not clear.any():
+        # "link 2 (a2) and the floor: 2249 mm into each other, …" → "link 2 and the floor"
+        causes = sorted(
+            {re.sub(r" \(.*?\)", "", gaps.cause(k)).split(":")[0] for k in range(len(t0))}
+        )
+        raise WirecalError(
+            f"{robot.source}: all {THETA0_DRAWS} θ0 drawn collide (cell) — "
+            + "; ".join(causes[:5])
+            + ": check [cell] floor_z_mm and its boxes, or give --theta0"
+        )
+    return t0[clear]

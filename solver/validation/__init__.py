@@ -1,0 +1,4 @@
+"""The paper's validation procedures (§3.6) and a third of wire lengths.
+
+Their design and their analyses.
+"""
