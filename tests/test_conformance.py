@@ -267,7 +267,7 @@ def test_a_slipped_wire_is_caught(example, programs, truth, tmp_path_factory):
 # ---------- no language names in the shared code ----------
 OWN_FOLDERS = ("lang", "gen", "twin", "templates")
 """A language's own code: ``<folder>/<key>/``; anywhere else a key literal is a dispatch."""
-PACKAGE_FOLDERS = ("solver", "lang", "gen", "twin", "app", "cli", "wirecal")
+PACKAGE_FOLDERS = ("solver", "lang", "formats", "gen", "twin", "app", "cli", "wirecal")
 
 ALLOWED = {
     ("solver/robot.py", "vplus"): (
