@@ -24,7 +24,7 @@ from wirecal.solver.compliance import (
 )
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan.calibration_plan import Plan, Step
-from wirecal.solver.plan.joint import linked_in_block
+from wirecal.solver.plan.joint import linked_in_block, pooled_candidates
 from wirecal.solver.plan.options import PlanOptions
 from wirecal.solver.plan.predict import robot_time
 from wirecal.solver.plan.steps import StepPool, step_errors
@@ -174,9 +174,7 @@ class _Costs:
         opt: PlanOptions,
     ):
         self.robot, self.theta0, self.pools, self.opt = robot, theta0, pools, opt
-        self.cand = np.concatenate([p.iso for p in pools])
-        self.step = np.concatenate([np.full(len(p.iso), k) for k, p in enumerate(pools)])
-        self.local = np.concatenate([np.arange(len(p.iso)) for p in pools])
+        self.cand, self.step, self.local = pooled_candidates(pools)
         self.q, self.has_via = q_all[self.cand], ~np.isnan(via_all[self.cand, 0])
         self.p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
         self.cost = np.full(len(self.cand), np.nan)  # nan: not worked out yet

@@ -94,10 +94,8 @@ class _Candidates:
         opt: PlanOptions,
     ):
         self.robot, self.theta0, self.pools, self.opt = robot, theta0, pools, opt
-        self.cand = np.concatenate([p.iso for p in pools])
+        self.cand, self.step, self.local = pooled_candidates(pools)
         self.q = q_all[self.cand]
-        self.step = np.concatenate([np.full(len(p.iso), k) for k, p in enumerate(pools)])
-        self.local = np.concatenate([np.arange(len(p.iso)) for p in pools])
         self.p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
         self.has_via = ~np.isnan(via_all[self.cand, 0])
         self.allowed = np.ones(len(self.cand), bool)
@@ -167,6 +165,17 @@ class _Candidates:
                 return order[:n]
             ahead = order[: 4 * n]
             self._count(ahead[np.isin(ahead, ranked[stale])])
+
+
+def pooled_candidates(pools: list[StepPool]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return every step's candidates in one row: their indices, their step, their place in it.
+
+    The layout the joint design and the compliances' points rank candidates over.
+    """
+    cand = np.concatenate([p.iso for p in pools])
+    step = np.concatenate([np.full(len(p.iso), k) for k, p in enumerate(pools)])
+    local = np.concatenate([np.arange(len(p.iso)) for p in pools])
+    return cand, step, local
 
 
 def _first_linked(c: _Candidates, gain: np.ndarray) -> int | None:
