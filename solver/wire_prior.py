@@ -32,35 +32,22 @@ every arm; and the planner's criterion (the posterior) is then the fit's own.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from wirecal.solver.compliance import PRIOR_COMPLIANCE_URAD_PER_NM
-from wirecal.solver.fit.calibrate import Data, candidates, point_model, start
+from wirecal.solver.fit.calibrate import Data, candidates, start
 from wirecal.solver.fit.model import Layout, lengths, lengths_and_jacobian, model_of
-from wirecal.solver.gravity import default_masses
 from wirecal.solver.kinematics import Model
 from wirecal.solver.params import TOOL_NAMES, ErrorSet
-from wirecal.solver.robot import Robot
 
 SIGMA_PASSES = 3
 """Refits with the residual's σ: the first from the starting σ, each next from the last."""
 
 PRIOR_SCALES = (1.0, 2.0, 4.0, 8.0)
 """The prior sizes tried, in units of the planner's ``prior``: the data choose by evidence."""
-
-
-def bending(robot: Robot) -> Model:
-    """Return the point model with the arm's masses and no compliance yet (to identify).
-
-    The robot file's ``[gravity]`` masses, else the assumed ones
-    (:func:`~wirecal.solver.gravity.default_masses`).
-    """
-    base = point_model(robot)
-    masses = robot.masses if robot.masses is not None else default_masses(base.dh)
-    return replace(base, masses=masses, compliance=np.zeros(base.n_joints))
 
 
 def wire_layout(base: Model, compliances: tuple[str, ...] = ()) -> Layout:

@@ -13,7 +13,7 @@ from wirecal.solver.fit.calibrate import Data, point_model
 from wirecal.solver.kinematics import tool_jacobian, tool_position, with_errors
 from wirecal.solver.plan.pool import greedy_rows, registered_weight
 from wirecal.solver.tracker.fit import registered_rms_mm
-from wirecal.solver.wire_prior import bending, map_fit, prior_sigma, wire_layout
+from wirecal.solver.wire_prior import map_fit, prior_sigma, wire_layout
 
 ROOT = Path(__file__).resolve().parents[1]
 UR10 = ROOT / "tests" / "data" / "tracker" / "ur10_ipa" / "robot.toml"
@@ -74,7 +74,7 @@ def test_greedy_rows_with_a_prior():
 def test_the_prior_of_each_kind_of_parameter():
     """0.5 mm for lengths; the angle moving the UR10's 612 mm link by 0.5 mm; compliances 8."""
     robot = load_robot(UR10)
-    base = bending(robot)
+    base = point_model(robot)
     layout = wire_layout(base, ("c2",))
     sigma = dict(zip(layout.names, prior_sigma(base, layout, 0.5), strict=True))
     assert sigma["a2"] == 0.5

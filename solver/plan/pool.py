@@ -40,7 +40,7 @@ from wirecal.solver.kinematics import Model, tool_jacobian
 from wirecal.solver.params import TOOL_NAMES
 from wirecal.solver.plan.options import PlanOptions
 from wirecal.solver.robot import Robot
-from wirecal.solver.wire_prior import bending, prior_sigma, wire_layout
+from wirecal.solver.wire_prior import prior_sigma, wire_layout
 
 THETA0_TRIED = 24
 """Candidate θ0s, spread over the pool's tool points."""
@@ -160,7 +160,7 @@ def n_fixed(layout: Layout) -> int:
 
 def wire_pool(robot: Robot, q_rad: np.ndarray, prior: float) -> Pool:
     """Return the pool's shared part; with the compliances the robot file asks, if any."""
-    base = bending(robot) if robot.compliances else point_model(robot)
+    base = point_model(robot)  # with the masses when the file asks compliances
     layout = wire_layout(base, robot.compliances)
     g = len(layout.geometry)
     p, jp = tool_jacobian(base, q_rad, layout.geometry)

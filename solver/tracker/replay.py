@@ -37,7 +37,7 @@ from wirecal.solver.plan.pool import plan_pool
 from wirecal.solver.robot import Robot
 from wirecal.solver.tracker.data import TrackerTable
 from wirecal.solver.tracker.fit import calibrate, registered_rms_mm
-from wirecal.solver.wire_prior import bending, map_fit, wire_layout
+from wirecal.solver.wire_prior import map_fit, wire_layout
 
 ZERO_MM = -123.456
 """The reading at zero distance: any value; the fit is not told it (an unknown zero)."""
@@ -101,7 +101,7 @@ def replay(robot: Robot, table: TrackerTable, *, seed: int, points: int) -> Repl
     length = readings_mm(x[rows], anchor, robot.encoder.mm_per_count)
     wire = wire_map(base, (), table.q_deg[rows], length, robot)
     bent = (
-        wire_map(bending(robot), robot.compliances, table.q_deg[rows], length, robot)
+        wire_map(base, robot.compliances, table.q_deg[rows], length, robot)
         if robot.compliances
         else None
     )
