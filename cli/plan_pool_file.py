@@ -43,7 +43,7 @@ def as_plan(rb: Robot, q_deg: np.ndarray, pp: PoolPlan, source: str) -> Plan:
     empty = np.empty((0, rb.n_joints))
     chunks = np.array_split(q_deg[pp.rows], len(order))
     steps = tuple(Step(p, c, empty) for p, c in zip(order, chunks, strict=True))
-    return Plan(q_deg[pp.theta0_row], tuple(order), steps, rb.name, None, source)
+    return Plan(q_deg[pp.theta0_row], tuple(order), steps, rb.name, None, source, joint_only=True)
 
 
 def toured(rb: Robot, q_deg: np.ndarray, pp: PoolPlan) -> PoolPlan:

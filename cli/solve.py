@@ -183,17 +183,34 @@ def _solve(
     ``options``: --omega, --robust, --partial, --refine-scale.
     """
     omega, robust, partial, refine_scale = options
-    methods = ("stepwise", "joint") if method in ("all", "controller") else (method,)
     return solve_api(
         rb,
         pl,
         m,
-        methods=methods,
+        methods=_methods(pl, method),
         omega_default=omega,
         robust=robust,
         partial=partial,
         refine_scale=refine_scale,
     )
+
+
+def _methods(pl: Plan, method: str) -> tuple[str, ...]:
+    """Return the methods --method runs: both for "all" and "controller".
+
+    A plan written from a pool (``joint_only``) isolates no parameter in its steps: the
+    joint method alone, and --method stepwise or controller is refused.
+    """
+    if not pl.joint_only:
+        return ("stepwise", "joint") if method in ("all", "controller") else (method,)
+    if method in ("stepwise", "controller"):
+        raise WirecalError(
+            f"{pl.source}: joint_only = true: the plan was written from a pool for the joint "
+            "method and its steps do not isolate their parameters, so the step-by-step "
+            f"estimate (--method {method}) does not apply: use --method joint (the default "
+            "runs it alone)"
+        )
+    return ("joint",)
 
 
 def _put_patch(

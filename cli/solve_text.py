@@ -166,6 +166,12 @@ def _heading(result: SolveResult) -> list[str]:
         f"Robot {result.robot.name}; log {m.source}; {int(m.present.sum())} points",
         f"wire exit: {describe(result.robot.encoder.exit)}",
     ]
+    if result.plan.joint_only:
+        lines.append(
+            "plan: written from a pool for the joint method (joint_only = true): its steps do "
+            "not isolate their parameters, so the step-by-step estimate does not apply; the "
+            "joint method alone"
+        )
     for note in m.notes:
         lines.append(f"note: {note}")
     if m.missing:

@@ -11,6 +11,10 @@ Format (joint angles in degrees)::
                                                  # the first point, in this order
     omega = 5.0                                  # optional: bound Ω_j (deg or mm), ≤ 1000
 
+``joint_only = true`` (optional; ``plan --pool`` writes it): the steps split poses chosen
+for the joint method, so the step-by-step estimate does not apply and ``solve`` runs the
+joint method alone.
+
 Field rules: :mod:`wirecal.formats.toml_fields`; every joint angle within the robot's
 limits.
 """
@@ -30,7 +34,7 @@ from wirecal.solver.distance import wire_lengths
 from wirecal.solver.plan.calibration_plan import Plan, Step
 from wirecal.solver.robot import Robot
 
-_TOP_KEYS = ("theta0_deg", "order", "step", "robot", "description")
+_TOP_KEYS = ("theta0_deg", "order", "step", "robot", "description", "joint_only")
 _STEP_KEYS = ("parameter", "points_deg", "via_deg", "omega")
 MAX_OMEGA = 1000.0
 """Largest bound Ω_j of a step (deg or mm): offsets beyond it are not calibration errors."""
@@ -61,6 +65,7 @@ def plan_from_dict(data: dict[str, Any], robot: Robot, source: str = "<plan>") -
             f"{robot.name!r}; use the matching robot file",
         )
     description = doc.string("description", None)
+    joint_only = doc.boolean("joint_only", False)
     order = _order(doc, robot)
     raw_steps = doc.tables("step", _STEP_KEYS)
     steps = [_step(st, j, order, robot, theta0) for j, st in enumerate(raw_steps, 1)]
@@ -78,6 +83,7 @@ def plan_from_dict(data: dict[str, Any], robot: Robot, source: str = "<plan>") -
         robot=plan_robot,
         description=description,
         source=source,
+        joint_only=bool(joint_only),
     )
 
 
@@ -165,6 +171,8 @@ def plan_to_toml(plan: Plan, header: str = "") -> str:
         lines.append(f"robot = {json.dumps(plan.robot, ensure_ascii=False)}")
     if plan.description:
         lines.append(f"description = {json.dumps(plan.description, ensure_ascii=False)}")
+    if plan.joint_only:
+        lines.append("joint_only = true")
     lines.append(f"theta0_deg = {vec(plan.theta0_deg)}")
     lines.append("order = [" + ", ".join(json.dumps(o) for o in plan.order) + "]")
     for s in plan.steps:

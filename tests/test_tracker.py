@@ -648,3 +648,53 @@ def test_bench_replays_any_generic_table(tmp_path):
     assert "public tracker set 'wam_jacobi' is not in" in gone.stderr
     assert "git clone https://github.com/pauljac7700/serial_robots_datasets" in gone.stderr
     assert "Traceback" not in gone.stderr
+
+
+def test_a_pool_plan_file_says_it_is_for_the_joint_method(tmp_path):
+    """``plan --pool -o PLAN.toml`` writes ``joint_only = true``; read back it keeps it, and
+    the fingerprint (θ0, order, points) is that of the same plan without the mark."""
+    from wirecal.cli.plan_pool_file import as_plan
+    from wirecal.formats.plan_file import load_plan, plan_to_toml
+    from wirecal.solver.plan.pool import PoolPlan
+
+    robot = load_robot(UR5E)
+    q = load_plan(ROOT / "examples" / "ur5e" / "plan.toml", robot).all_points()[0]
+    rows = np.arange(1, 1 + len(robot.parameters))
+    pp = PoolPlan(0, rows, robot.parameters, np.zeros(3), 0.1, 1, 0)
+    plan = as_plan(robot, q, pp, "pool.csv")
+    path = tmp_path / "pool_plan.toml"
+    path.write_text(plan_to_toml(plan))
+    assert "\njoint_only = true\n" in path.read_text()
+    back = load_plan(path, robot)
+    assert back.joint_only
+    path.write_text(path.read_text().replace("joint_only = true\n", ""))
+    assert not load_plan(path, robot).joint_only
+    assert load_plan(path, robot).fingerprint() == back.fingerprint()
+
+
+def test_solve_says_the_stepwise_estimate_does_not_apply_to_a_pool_plan(tmp_path):
+    """A plan written from a pool printed a stepwise column, budget and steps beside the
+    joint ones, though its header says the step-by-step estimate does not apply: now the
+    joint method alone, the reason said, and --method stepwise refused naming the mark."""
+    viper = ROOT / "examples" / "viper_s650"
+    plan = tmp_path / "pool_plan.toml"
+    plan.write_text("joint_only = true\n" + (viper / "paper_plan.toml").read_text())
+    log = tmp_path / "run.csv"
+    runner = CliRunner()
+    r = runner.invoke(main, ["simulate", str(viper / "robot.toml"), str(plan), "-o", str(log)])
+    assert r.exit_code == 0, r.output
+    args = ["solve", str(viper / "robot.toml"), str(plan), str(log)]
+    r = runner.invoke(main, args)
+    assert r.exit_code == 0, r.output
+    assert "the step-by-step estimate does not apply; the joint method alone" in r.output
+    assert not re.search(r"^(parameter|source) .*stepwise", r.output, re.M), r.output
+    assert "Step-by-step (paper)" not in r.output
+    assert re.search(r"^parameter unit +joint +± σ \(joint\)$", r.output, re.M), r.output
+    assert "recommended: joint" in r.output
+    r = runner.invoke(main, [*args, "--json"])
+    assert list(json.loads(r.output)["methods"]) == ["joint"]
+    for method in ("stepwise", "controller"):
+        r = runner.invoke(main, [*args, "--method", method])
+        assert r.exit_code == 2, r.output
+        assert f"{plan.name}: joint_only = true:" in r.output
+        assert f"(--method {method}) does not apply: use --method joint" in r.output

@@ -37,6 +37,9 @@ class Plan:
     robot: str | None = None
     description: str | None = None
     source: str = field(default="<memory>", compare=False)
+    joint_only: bool = False
+    """The steps split poses chosen for the joint method (``plan --pool``): none isolates
+    its parameter, so the step-by-step estimate does not apply."""
 
     @property
     def n_points(self) -> int:
