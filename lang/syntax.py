@@ -8,6 +8,7 @@ line parsers keep each line's node by its text.
 from __future__ import annotations
 
 import copy
+import re
 from collections.abc import Callable, Iterator
 from functools import lru_cache
 from typing import TypeVar
@@ -23,6 +24,55 @@ level, so a deeper program is refused up front."""
 MAX_EXPRESSION_DEPTH = 100
 """Deepest parse tree of one line (nested parentheses, a chain of operators) the parsers
 read; wirecal's bound (its generated V+ and URScript lines reach 12), not a controller's."""
+
+
+MAX_OPERATOR_RUN = 10_000
+"""Most operators wirecal reads in one run of an expression (between brackets, commas and
+statement ends, whatever the operands): a longer chain is refused before parsing, which
+would take minutes and gigabytes (a chain nests one level per operator, and
+:data:`MAX_EXPRESSION_DEPTH` refuses a nesting beyond 100 only after parsing). wirecal's
+bound."""
+
+OPERATOR_WORDS = frozenset("AND OR XOR NOT DIV MOD BAND BOR BXOR".split())
+"""The operators spelled as words (upper case) in RAPID, V+ and URScript."""
+
+_OPERATOR_SIGNS = frozenset("+-*/^%<>=&|~")
+_RUN_ENDS = frozenset("()[]{},;")
+_LINE_TOKEN = re.compile(r'"[^"\n]*"|[A-Za-z_][A-Za-z0-9_.]*|[()\[\]{},;]|[-+*/^%<>=!&|~]')
+
+
+class OperatorRun:
+    """The operators of the run seen so far, token by token (see :data:`MAX_OPERATOR_RUN`)."""
+
+    def __init__(self) -> None:
+        self.run = 0
+
+    def see(self, token: str) -> bool:
+        """Count ``token`` (upper case): True once the run is longer than the bound."""
+        if token in _RUN_ENDS:
+            self.run = 0
+        elif token in OPERATOR_WORDS or token in _OPERATOR_SIGNS:
+            self.run += 1
+        return self.run > MAX_OPERATOR_RUN
+
+
+OPERATOR_RUN_PROBLEM = (
+    f"more than {MAX_OPERATOR_RUN} operators in a row: wirecal reads at most "
+    f"{MAX_OPERATOR_RUN} (and nests at most {MAX_EXPRESSION_DEPTH}): split the expression"
+)
+
+
+def check_operator_run(line: str) -> None:
+    """Raise :class:`NestingError` for a line with too long a run of operators, unparsed.
+
+    A line shorter than :data:`MAX_OPERATOR_RUN` characters cannot hold such a run and
+    is not scanned.
+    """
+    if len(line) <= MAX_OPERATOR_RUN:
+        return
+    run = OperatorRun()
+    if any(run.see(m.group().upper()) for m in _LINE_TOKEN.finditer(line)):
+        raise NestingError(OPERATOR_RUN_PROBLEM)
 
 
 KEPT_LINES = 32768

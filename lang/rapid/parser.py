@@ -24,7 +24,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
 
 from wirecal.lang.rapid import nodes as N
 from wirecal.lang.rapid.tables import RESERVED
-from wirecal.lang.syntax import MAX_EXPRESSION_DEPTH
+from wirecal.lang.syntax import MAX_EXPRESSION_DEPTH, OPERATOR_RUN_PROBLEM, OperatorRun
 
 _ENDS = {
     "ENDPROC": "PROC",
@@ -307,36 +307,22 @@ MAX_BRACKET_DEPTH = 100
 """Deepest nesting of parentheses and brackets wirecal reads (wirecal's bound)."""
 
 
-MAX_OPERATOR_RUN = 10_000
-"""Most operators wirecal reads in one run of an expression (between brackets, commas and
-statement ends): a longer chain is refused before parsing, which would take minutes (a
-chain nests one level per operator, and :data:`~wirecal.lang.syntax.MAX_EXPRESSION_DEPTH`
-refuses a nesting beyond 100 after parsing). wirecal's bound."""
-
-_OPERATORS = frozenset("+ - * / < > = AND OR XOR NOT DIV MOD".split())
-
-
 def _too_deep(text: str) -> SyntaxProblem | None:
     """Refuse up front what the parser would take too long or recurse too deep on.
 
-    One pass over the tokens counts the runs of operators, the brackets and the blocks. A
-    run of more than :data:`MAX_OPERATOR_RUN` operators is named first, wherever it is
-    (parsing it would take minutes); else the first nesting beyond the bounds.
+    One pass over the tokens counts the runs of operators
+    (:class:`~wirecal.lang.syntax.OperatorRun`), the brackets and the blocks. A run of more
+    than :data:`~wirecal.lang.syntax.MAX_OPERATOR_RUN` operators is named first, wherever it
+    is (parsing it would take minutes); else the first nesting beyond the bounds.
     """
-    run = 0
+    run = OperatorRun()
     nesting = _Nesting()
     deep: SyntaxProblem | None = None
     for number, source_line in enumerate(text.splitlines(), 1):
         for m in _TOKEN.finditer(source_line):
             word = m.group().upper()
-            run = run + 1 if word in _OPERATORS else 0
-            if run > MAX_OPERATOR_RUN:
-                return SyntaxProblem(
-                    number,
-                    f"more than {MAX_OPERATOR_RUN} operators in a row: wirecal reads at "
-                    f"most {MAX_OPERATOR_RUN} (and nests at most {MAX_EXPRESSION_DEPTH}): "
-                    "split the expression",
-                )
+            if run.see(word):
+                return SyntaxProblem(number, OPERATOR_RUN_PROBLEM)
             if deep is None:
                 deep = nesting.see(word, number)
     return deep

@@ -49,6 +49,7 @@ from wirecal.lang.syntax import (
     NestingError,
     check_block_depth,
     check_line_depth,
+    check_operator_run,
     kept_by_text,
     walk_tree,
 )
@@ -293,6 +294,7 @@ _build = ast_utils.create_transformer(N, _Terminals())
 @kept_by_text
 def parse_line(line: str) -> N.Stmt:
     """One line (no comment) → its node; lark's exception when it is not URScript."""
+    check_operator_run(line)
     tree = _parser().parse(line)
     check_line_depth(tree)
     return _build.transform(tree)

@@ -33,6 +33,7 @@ from wirecal.lang.syntax import (
     NestingError,
     check_block_depth,
     check_line_depth,
+    check_operator_run,
     kept_by_text,
     walk_tree,
 )
@@ -349,6 +350,11 @@ class _ModuleReader:
                 )
             if not line:
                 return
+        try:
+            check_operator_run(line)  # before the constants' check too, linear as it is
+        except NestingError as exc:
+            self.problems.append(f"{self.source}:{n}: {name}: {exc}")
+            return
         self.problems += [f"{self.source}:{n}: {name}: {p}" for p in literal_problems(line)]
         try:
             step = parse_step(line)
@@ -401,8 +407,10 @@ def literal_problems(line: str) -> list[str]:
     """Constants of a step outside the ranges of User's Guide pp. 100 and 102."""
     out = []
     for m in _LITERAL.finditer(line):
-        minus = line[: m.start()].rstrip().endswith("-")
-        out += _literal_problem(m, minus)
+        before = m.start() - 1
+        while before >= 0 and line[before].isspace():
+            before -= 1
+        out += _literal_problem(m, before >= 0 and line[before] == "-")
     return out
 
 
