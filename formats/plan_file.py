@@ -58,6 +58,7 @@ def plan_from_dict(data: dict[str, Any], robot: Robot, source: str = "<plan>") -
     if theta0 is not None:
         _check_limits(theta0[None], robot, "theta0_deg", doc)
     plan_robot = doc.string("robot", None)
+    plan_robot = plan_robot.strip() if plan_robot is not None else None  # as the robot file's
     if plan_robot is not None and plan_robot != robot.name:
         doc.add(
             "robot",

@@ -1401,3 +1401,17 @@ def test_ra04_a_robot_name_longer_than_a_rapid_string_is_refused_by_its_key(
     assert f"{length} characters" in r.output
     assert "a RAPID string holds 80: shorten the name to 71 characters or fewer" in r.output
     assert not (tmp_path / "out").exists()
+
+
+def test_ra04_a_name_with_a_trailing_space_is_the_same_name_in_robot_and_plan(tmp_path):
+    """RA04's first try: 'plan is for 'ABB IRB 120 ' but the robot file describes 'ABB IRB
+    120'': the robot file's name is read stripped, the plan's was not."""
+    irb = VIPER.parent / "abb_irb120"
+    robot = re.sub(r'^(name = ".*)"$', r'\1 "', (irb / "robot.toml").read_text(), flags=re.M)
+    plan = re.sub(r'^(robot = ".*)"$', r'\1 "', (irb / "plan.toml").read_text(), flags=re.M)
+    assert 'name = "ABB IRB 120 "' in robot
+    assert 'robot = "ABB IRB 120 "' in plan
+    (tmp_path / "robot.toml").write_text(robot)
+    (tmp_path / "plan.toml").write_text(plan)
+    r = invoke("psi", tmp_path / "robot.toml", tmp_path / "plan.toml")
+    assert r.exit_code == 0, r.output
