@@ -23,17 +23,28 @@ _D = PlanOptions()
 def _joints(value: str | None, n: int) -> np.ndarray | None:
     if value is None:
         return None
+    items = value.replace(" ", "").split(",")
     try:
-        q = np.array([float(x) for x in value.replace(" ", "").split(",")])
-        if not np.all(np.isfinite(q)):  # nan, inf: no angle
-            raise ValueError
+        q = np.array([float(x) for x in items])
     except ValueError:
+        q = np.array([np.nan])
+    if not np.all(np.isfinite(q)):  # nan, inf, a word: no angle
+        bad = next(x for x in items if not _finite(x))
         raise WirecalError(
-            f'--theta0 {value!r}: give {n} joint angles in degrees, e.g. "0,-90,210,-90,0,-90"'
-        ) from None
+            f"--theta0 {value!r}: {bad!r} is not an angle: give {n} joint angles in degrees, "
+            'e.g. "0,-90,210,-90,0,-90"'
+        )
     if q.shape != (n,):
         raise WirecalError(f"--theta0 has {q.size} values; the robot has {n} joints")
     return q
+
+
+def _finite(text: str) -> bool:
+    """Return whether ``text`` reads as a finite number."""
+    try:
+        return bool(np.isfinite(float(text)))
+    except ValueError:
+        return False
 
 
 def _plan_from_pool(

@@ -1153,7 +1153,15 @@ def test_nx19_max_exit_deg_in_radians_is_named(tmp_path):
 def test_c17_theta0_nan_is_refused_as_an_option():
     r = invoke("plan", ROBOT, "--theta0", "nan,-90,210,-90,0,-90")
     assert r.exit_code == 2
-    assert "--theta0 'nan,-90,210,-90,0,-90': give 6 joint angles in degrees" in r.output
+    assert "--theta0 'nan,-90,210,-90,0,-90': 'nan' is not an angle: give 6 joint" in r.output
+
+
+@pytest.mark.parametrize(("value", "bad"), [("0,-90,inf,-90,0,-90", "inf"), ("0,x,1", "x")])
+def test_c17_the_value_that_is_no_angle_is_named(value, bad):
+    """C17: '--theta0 nan,…' gave 'give 6 joint angles', not which of the six is wrong."""
+    r = invoke("plan", ROBOT, "--theta0", value)
+    assert r.exit_code == 2
+    assert f"--theta0 {value!r}: {bad!r} is not an angle" in r.output
 
 
 @pytest.mark.parametrize(
