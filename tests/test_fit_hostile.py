@@ -218,3 +218,25 @@ def test_ft28_rows_repeated_ten_times_are_named_as_copies(tmp_path, viper):
     r, _ = _fit(tmp_path, t)
     assert "copies (the joints and the length of an earlier row; left out of the fit" in r.output
     assert ": 360: row 40 (line 42) = row 0 (line 2), " in r.output
+
+
+def test_ft27_the_shipped_table_twice_fits_as_once(tmp_path):
+    """FT27 through the CLI: the shipped table with every row twice was refused ('offset_4,
+    offset_5, offset_6 are not identified … the fit ran far'): the copies, left out of the
+    fit, were still searched for sessions, and a session of copies alone has an offset no
+    row identifies. Now the copies are named and the fit is the table's own."""
+    shipped = ROOT / "examples" / "viper_s650" / "simulated_cable_table.csv"
+    text = shipped.read_text(encoding="utf-8")
+    rows = [x for x in text.splitlines(True) if x[:1] not in ("#", "j")]
+    doubled = tmp_path / "twice.csv"
+    doubled.write_text(text + "".join(rows), encoding="utf-8")
+    once = CliRunner().invoke(main, ["fit", str(VIPER), str(shipped), "--holdout", "none"])
+    twice = CliRunner().invoke(main, ["fit", str(VIPER), str(doubled), "--holdout", "none"])
+    assert once.exit_code == 0, once.output
+    assert twice.exit_code == 0, twice.output
+    assert (
+        f"keeps rows at the same joints on one side): {len(rows)}: row {len(rows)} (line "
+        in twice.output
+    )
+    sigma = r"residual σ [\d.]+ mm over \d+ rows"
+    assert re.search(sigma, twice.output).group() == re.search(sigma, once.output).group()

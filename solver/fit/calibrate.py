@@ -407,9 +407,14 @@ def _session_starts(ps: Pass, data: Data, values: np.ndarray | None = None) -> t
     Every row is searched, the fit's outliers too: rows a fit rejects may be a session it
     does not yet follow (the search deals with lone outliers itself); then every boundary is
     placed robustly (:func:`~wirecal.solver.fit.sessions.place`). ``values``: search these.
+    Rows known bad (``data.excluded``: copies, x, y, z disagreeing) are not searched: a
+    session of copies alone would have an offset no row identifies.
     """
     u = offset_sequence(ps.layout, ps.x, ps.residual_mm, data) if values is None else values
-    return place(u, (0, *change_points(u)), noise_sigma(u))
+    bad = data.excluded if data.excluded is not None and not data.excluded.all() else None
+    kept = np.arange(u.size) if bad is None else np.flatnonzero(~bad)
+    found = place(u[kept], (0, *change_points(u[kept])), noise_sigma(u[kept]))
+    return (0, *(int(kept[s]) for s in found[1:]))
 
 
 def _with_sessions(
