@@ -1181,6 +1181,10 @@ def test_nd07_a_second_root_is_not_in_the_way(tmp_path, loose):
     ("point", "message"),
     [
         ("1e9,0,0", "1e+09 mm from the tip link's origin"),  # UD03
+        (
+            "5000,0,0",
+            "5000 mm from the tip link's origin; the wire's fixture is on the tip",
+        ),  # UD03
         ("-0.06,0,0.05", "every coordinate under 1 mm: that looks like metres"),  # UD04
     ],
 )
