@@ -198,19 +198,16 @@ def _solve(
 def _methods(pl: Plan, method: str) -> tuple[str, ...]:
     """Return the methods --method runs: both for "all" and "controller".
 
-    A plan written from a pool (``joint_only``) isolates no parameter in its steps: the
-    joint method alone, and --method stepwise or controller is refused.
+    The controller's solver (wc.solve, then wc.solve2 from it) is step by step: refused for
+    a plan written from a pool (``joint_only``), whose steps isolate no parameter.
     """
-    if not pl.joint_only:
-        return ("stepwise", "joint") if method in ("all", "controller") else (method,)
-    if method in ("stepwise", "controller"):
+    if pl.joint_only and method == "controller":
         raise WirecalError(
             f"{pl.source}: joint_only = true: the plan was written from a pool for the joint "
-            "method and its steps do not isolate their parameters, so the step-by-step "
-            f"estimate (--method {method}) does not apply: use --method joint (the default "
-            "runs it alone)"
+            "method; the controller's solver starts step by step, which does not apply: "
+            "use --method joint (the default runs it alone)"
         )
-    return ("joint",)
+    return ("stepwise", "joint") if method in ("all", "controller") else (method,)
 
 
 def _put_patch(

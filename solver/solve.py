@@ -248,6 +248,7 @@ def solve(
     :class:`~wirecal.solver.identify.ScalePrior`): the wire lengths tell the scale only
     through the lengths held at nominal (the tool point), so it leans on those being exact.
     """
+    methods = _applicable(plan, methods)
     left, names, step = _measured_steps(plan, m, partial)
     factor, notes = _reference_scale(robot, m)
     k = factor if factor is not None and corrections else 1.0
@@ -283,6 +284,23 @@ def solve(
         encoder_notes=tuple(notes),
         compliance=comp,
     )
+
+
+def _applicable(plan: Plan, methods: tuple[str, ...]) -> tuple[str, ...]:
+    """Return ``methods``, or the joint method alone for a plan written from a pool.
+
+    Such a plan's steps isolate no parameter (``plan.joint_only``): the stepwise method
+    alone is refused.
+    """
+    if not plan.joint_only:
+        return methods
+    if "joint" not in methods:
+        raise WirecalError(
+            f"{plan.source}: joint_only = true: the plan was written from a pool for the joint "
+            "method and its steps do not isolate their parameters, so the step-by-step "
+            "estimate does not apply: solve by the joint method (--method joint)"
+        )
+    return ("joint",)
 
 
 def _measured_steps(

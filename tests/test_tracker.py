@@ -693,8 +693,15 @@ def test_solve_says_the_stepwise_estimate_does_not_apply_to_a_pool_plan(tmp_path
     assert "recommended: joint" in r.output
     r = runner.invoke(main, [*args, "--json"])
     assert list(json.loads(r.output)["methods"]) == ["joint"]
-    for method in ("stepwise", "controller"):
-        r = runner.invoke(main, [*args, "--method", method])
-        assert r.exit_code == 2, r.output
-        assert f"{plan.name}: joint_only = true:" in r.output
-        assert f"(--method {method}) does not apply: use --method joint" in r.output
+    r = runner.invoke(main, [*args, "--method", "stepwise"])
+    assert r.exit_code == 2, r.output
+    assert f"{plan.name}: joint_only = true: the plan was written from a pool" in r.output
+    assert "estimate does not apply: solve by the joint method (--method joint)" in r.output
+    r = runner.invoke(main, [*args, "--method", "controller"])
+    assert r.exit_code == 2, r.output
+    assert "the controller's solver starts step by step, which does not apply" in r.output
+    r = runner.invoke(main, ["report", *args[1:], "-o", str(tmp_path / "r.html")])
+    assert r.exit_code == 0, r.output
+    html = (tmp_path / "r.html").read_text()
+    assert 'alt="step residuals"' not in html
+    assert "<th>source</th><th>joint</th>" in html
