@@ -27,30 +27,41 @@ read; wirecal's bound (its generated V+ and URScript lines reach 12), not a cont
 
 
 MAX_OPERATOR_RUN = 10_000
-"""Most operators wirecal reads in one run of an expression (between brackets, commas and
-statement ends, whatever the operands): a longer chain is refused before parsing, which
-would take minutes and gigabytes (a chain nests one level per operator, and
-:data:`MAX_EXPRESSION_DEPTH` refuses a nesting beyond 100 only after parsing). wirecal's
-bound."""
+"""Most operators wirecal reads in one run of an expression (at one level of brackets,
+between commas and statement ends, whatever the operands, bracketed or not): a longer
+chain is refused before parsing, which would take minutes and gigabytes (a chain nests one
+level per operator, and :data:`MAX_EXPRESSION_DEPTH` refuses a nesting beyond 100 only
+after parsing). wirecal's bound."""
 
 OPERATOR_WORDS = frozenset("AND OR XOR NOT DIV MOD BAND BOR BXOR".split())
 """The operators spelled as words (upper case) in RAPID, V+ and URScript."""
 
 _OPERATOR_SIGNS = frozenset("+-*/^%<>=&|~")
-_RUN_ENDS = frozenset("()[]{},;")
 _LINE_TOKEN = re.compile(r'"[^"\n]*"|[A-Za-z_][A-Za-z0-9_.]*|[()\[\]{},;]|[-+*/^%<>=!&|~]')
 
 
 class OperatorRun:
-    """The operators of the run seen so far, token by token (see :data:`MAX_OPERATOR_RUN`)."""
+    """The operators of the run seen so far, token by token (see :data:`MAX_OPERATOR_RUN`).
+
+    A bracket opens a run of its own and, closed, continues the run around it (``(a)+(a)``
+    is a run of one operator); a comma ends the run, a semicolon every run.
+    """
 
     def __init__(self) -> None:
         self.run = 0
+        self.outer: list[int] = []  # the runs around the open brackets
 
     def see(self, token: str) -> bool:
         """Count ``token`` (upper case): True once the run is longer than the bound."""
-        if token in _RUN_ENDS:
+        if token in ("(", "[", "{"):
+            self.outer.append(self.run)
             self.run = 0
+        elif token in (")", "]", "}"):
+            self.run = self.outer.pop() if self.outer else 0
+        elif token == ",":
+            self.run = 0
+        elif token == ";":
+            self.run, self.outer = 0, []
         elif token in OPERATOR_WORDS or token in _OPERATOR_SIGNS:
             self.run += 1
         return self.run > MAX_OPERATOR_RUN
@@ -63,16 +74,23 @@ OPERATOR_RUN_PROBLEM = (
 
 
 def check_operator_run(line: str) -> None:
-    """Raise :class:`NestingError` for a line with too long a run of operators, unparsed.
+    """Raise :class:`NestingError` for a long line that would parse too slowly, unparsed.
 
-    A line shorter than :data:`MAX_OPERATOR_RUN` characters cannot hold such a run and
-    is not scanned.
+    Too slowly: a run of more than :data:`MAX_OPERATOR_RUN` operators, or brackets nested
+    deeper than :data:`MAX_EXPRESSION_DEPTH` (each nests the tree at least a level). A line
+    of at most :data:`MAX_OPERATOR_RUN` characters parses fast and is not scanned.
     """
     if len(line) <= MAX_OPERATOR_RUN:
         return
     run = OperatorRun()
-    if any(run.see(m.group().upper()) for m in _LINE_TOKEN.finditer(line)):
-        raise NestingError(OPERATOR_RUN_PROBLEM)
+    for m in _LINE_TOKEN.finditer(line):
+        if run.see(m.group().upper()):
+            raise NestingError(OPERATOR_RUN_PROBLEM)
+        if len(run.outer) > MAX_EXPRESSION_DEPTH:
+            raise NestingError(
+                f"brackets nested more than {MAX_EXPRESSION_DEPTH} deep; wirecal reads at "
+                f"most {MAX_EXPRESSION_DEPTH}: split the expression"
+            )
 
 
 KEPT_LINES = 32768

@@ -450,9 +450,8 @@ def test_lint_refuses_deep_nesting(tmp_path, suffix, blocks, operators, message)
     assert re.search(re.escape(path.name) + message, r.output), r.output
 
 
-def _chain_program(suffix: str, terms: int) -> str:
-    """A RAPID, V+ or URScript program whose one line adds ``terms`` variables."""
-    expression = "+".join(["a"] * terms)
+def _chain_program(suffix: str, expression: str) -> str:
+    """A RAPID, V+ or URScript program whose one line sets x to ``expression``."""
     if suffix == ".mod":
         body = ["  PROC main()", "    VAR num a;", "    VAR num x;", f"    x := {expression};"]
         return "\n".join(["MODULE t", *body, "  ENDPROC", "ENDMODULE"]) + "\n"
@@ -461,25 +460,32 @@ def _chain_program(suffix: str, terms: int) -> str:
     return f"def t():\n  x = {expression}\nend\n"
 
 
+RUN = r"more than 10000 operators in a row: wirecal reads at most 10000"
+
+
 @pytest.mark.parametrize("suffix", [".mod", ".v2", ".script"])
 @pytest.mark.parametrize(
-    ("terms", "message"),
+    ("expression", "message"),
     [
-        (800, r"(an expression|the line) nest(ed|s) (more than 100|\d+) levels deep .*at most 100"),
-        (20_001, r"more than 10000 operators in a row: wirecal reads at most 10000"),
+        ("+".join(["a"] * 800), r"(an expression|the line) nest(ed|s) (more than 100|\d+) levels"),
+        ("+".join(["a"] * 20_001), RUN),
+        ("+".join(["(a)"] * 20_001), RUN),
+        ("(" * 5000 + "a" + ")" * 5000, r"brackets nested more than 100 deep"),
     ],
-    ids=["800 terms", "20001 terms"],
+    ids=["800 terms", "20001 terms", "20001 bracketed terms", "5000 brackets"],
 )
 def test_ra21_a_chain_of_variables_is_refused_before_it_costs_minutes(
-    tmp_path, suffix, terms, message
+    tmp_path, suffix, expression, message
 ):
     """RA21: a line of 1.5 M chained '+' terms ended in a RecursionError after 67 s and
     3.2 GB; 800 are enough to nest too deep. The bound on a run of operators skipped runs
-    whose operands are variables (RAPID: 300 000 took 17 s, 0.6 GB) and V+ and URScript
-    had none (1.5 M: 324 s and 57 s, then refused; V+'s check of constants was quadratic).
-    20 001 terms stand in for 1.5 M: over the same bound, refused before parsing."""
+    whose operands are variables or bracketed (RAPID: 300 000 variables took 17 s, 0.6 GB;
+    100 000 '(a)' 25 s), and V+ and URScript had none (1.5 M terms: 324 s and 57 s, then
+    refused; V+'s check of constants was quadratic; 100 000 brackets took 8 s, and
+    URScript then found no problem). 20 001 terms stand in for 1.5 M: over the same bound,
+    refused before parsing."""
     path = tmp_path / f"chain{suffix}"
-    path.write_text(_chain_program(suffix, terms))
+    path.write_text(_chain_program(suffix, expression))
     r = invoke("lint", path)
     outcome_is_clean(r)
     assert r.exit_code == 1, r.output
