@@ -36,7 +36,9 @@ after parsing). wirecal's bound."""
 OPERATOR_WORDS = frozenset("AND OR XOR NOT DIV MOD BAND BOR BXOR".split())
 """The operators spelled as words (upper case) in RAPID, V+ and URScript."""
 
-_OPERATOR_SIGNS = frozenset("+-*/^%<>=&|~")
+_OPERATORS = OPERATOR_WORDS | frozenset("+-*/^%<>=&|~")
+RUN_TOKENS = _OPERATORS | frozenset("()[]{},;")
+"""The tokens :class:`OperatorRun` counts (upper case); every other one leaves it as it is."""
 _LINE_TOKEN = re.compile(r'"[^"\n]*"|[A-Za-z_][A-Za-z0-9_.]*|[()\[\]{},;]|[-+*/^%<>=!&|~]')
 
 
@@ -53,7 +55,9 @@ class OperatorRun:
 
     def see(self, token: str) -> bool:
         """Count ``token`` (upper case): True once the run is longer than the bound."""
-        if token in ("(", "[", "{"):
+        if token in _OPERATORS:
+            self.run += 1
+        elif token in ("(", "[", "{"):
             self.outer.append(self.run)
             self.run = 0
         elif token in (")", "]", "}"):
@@ -62,8 +66,6 @@ class OperatorRun:
             self.run = 0
         elif token == ";":
             self.run, self.outer = 0, []
-        elif token in OPERATOR_WORDS or token in _OPERATOR_SIGNS:
-            self.run += 1
         return self.run > MAX_OPERATOR_RUN
 
 
@@ -84,7 +86,8 @@ def check_operator_run(line: str) -> None:
         return
     run = OperatorRun()
     for m in _LINE_TOKEN.finditer(line):
-        if run.see(m.group().upper()):
+        word = m.group().upper()
+        if word in RUN_TOKENS and run.see(word):
             raise NestingError(OPERATOR_RUN_PROBLEM)
         if len(run.outer) > MAX_EXPRESSION_DEPTH:
             raise NestingError(

@@ -24,7 +24,12 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
 
 from wirecal.lang.rapid import nodes as N
 from wirecal.lang.rapid.tables import RESERVED
-from wirecal.lang.syntax import MAX_EXPRESSION_DEPTH, OPERATOR_RUN_PROBLEM, OperatorRun
+from wirecal.lang.syntax import (
+    MAX_EXPRESSION_DEPTH,
+    OPERATOR_RUN_PROBLEM,
+    RUN_TOKENS,
+    OperatorRun,
+)
 
 _ENDS = {
     "ENDPROC": "PROC",
@@ -321,7 +326,7 @@ def _too_deep(text: str) -> SyntaxProblem | None:
     for number, source_line in enumerate(text.splitlines(), 1):
         for m in _TOKEN.finditer(source_line):
             word = m.group().upper()
-            if run.see(word):
+            if word in RUN_TOKENS and run.see(word):
                 return SyntaxProblem(number, OPERATOR_RUN_PROBLEM)
             if deep is None:
                 deep = nesting.see(word, number)
