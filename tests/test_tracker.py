@@ -700,6 +700,12 @@ def test_solve_says_the_stepwise_estimate_does_not_apply_to_a_pool_plan(tmp_path
     r = runner.invoke(main, [*args, "--method", "controller"])
     assert r.exit_code == 2, r.output
     assert "the controller's solver starts step by step, which does not apply" in r.output
+    r = runner.invoke(main, ["gen", *args[1:3], "-o", str(tmp_path / "programs")])
+    assert r.exit_code == 0, r.output
+    assert (
+        "the controller's step-by-step solver (V+ wc.solve, URScript wc_solve) does not "
+        in r.output
+    )
     r = runner.invoke(main, ["report", *args[1:], "-o", str(tmp_path / "r.html")])
     assert r.exit_code == 0, r.output
     html = (tmp_path / "r.html").read_text()
