@@ -248,7 +248,6 @@ def solve(
     :class:`~wirecal.solver.identify.ScalePrior`): the wire lengths tell the scale only
     through the lengths held at nominal (the tool point), so it leans on those being exact.
     """
-    methods = _applicable(plan, methods)
     left, names, step = _measured_steps(plan, m, partial)
     factor, notes = _reference_scale(robot, m)
     k = factor if factor is not None and corrections else 1.0
@@ -263,7 +262,7 @@ def solve(
     scale, scale_std = _scale_estimate(robot, m, factor, sigma)
     refine = refine_scale and corrections
     jt = _joint_with_scale(jt, problem, scale, scale_std, sigma, refine=refine, robust=robust)
-    estimates = {name: e for name, e in (("stepwise", sw), ("joint", jt)) if name in methods}
+    estimates = _estimates(plan, methods, sw, jt)
     src = functools.partial(
         _error_sources, robot, plan, m, sigma, problem.d, scale, scale_std, drift
     )
@@ -286,21 +285,22 @@ def solve(
     )
 
 
-def _applicable(plan: Plan, methods: tuple[str, ...]) -> tuple[str, ...]:
-    """Return ``methods``, or the joint method alone for a plan written from a pool.
+def _estimates(
+    plan: Plan, methods: tuple[str, ...], sw: Estimate, jt: Estimate
+) -> dict[str, Estimate]:
+    """Return the estimates of ``methods``; the joint one alone for a plan from a pool.
 
     Such a plan's steps isolate no parameter (``plan.joint_only``): the stepwise method
     alone is refused.
     """
-    if not plan.joint_only:
-        return methods
-    if "joint" not in methods:
+    if plan.joint_only and "joint" not in methods:
         raise WirecalError(
             f"{plan.source}: joint_only = true: the plan was written from a pool for the joint "
             "method and its steps do not isolate their parameters, so the step-by-step "
             "estimate does not apply: solve by the joint method (--method joint)"
         )
-    return ("joint",)
+    kept = ("joint",) if plan.joint_only else methods
+    return {name: e for name, e in (("stepwise", sw), ("joint", jt)) if name in kept}
 
 
 def _measured_steps(
