@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from wirecal.formats.capture import (
+    MIN_TERMINAL,
     RowTest,
     aside_note,
     cells_of,
@@ -130,6 +131,7 @@ def parse_table(
     header, comments, problems, n = _read_header(lines, start + 1, source, keys)
     line = lines[n] if n < len(lines) else ""
     hint = _other_version(line, columns, header, (version, *older), (found, magic))
+    hint = hint or _narrow_terminal(lines, n)
     if callable(columns):
         columns = columns(header, found)
     kinds = capture.kinds if capture is not None else None
@@ -237,6 +239,26 @@ def _other_version(
                     f"are version {other}'s)"
                 )
     return ""
+
+
+def _narrow_terminal(lines: list[str], n: int) -> str:
+    """Return the end of a wrong column line's message for a header a terminal broke.
+
+    When line n looks like the rest of the ``#`` line before it, broken by a terminal
+    narrower than those a capture is read from
+    (:data:`~wirecal.formats.capture.MIN_TERMINAL`); else "".
+    """
+    line = lines[n] if n < len(lines) else ""
+    before = lines[n - 1] if n > 0 else ""
+    if not line or "," in line or not before.startswith("#") or len(before) >= MIN_TERMINAL:
+        return ""
+    if any(len(x) > len(before) for x in lines[: n + 1]):  # wider than that terminal
+        return ""
+    return (
+        f": it looks like the rest of line {n} ({before!r}), broken by a terminal "
+        f"{len(before)} columns wide; copy the log again from a terminal at least "
+        f"{MIN_TERMINAL} columns wide"
+    )
 
 
 def _check_column_line(

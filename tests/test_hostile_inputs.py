@@ -794,6 +794,38 @@ def test_tp09_a_capture_folded_at_any_width_of_40_or_more(log, width):
     assert len(got.readings) == text.count("\npoint,") + text.count("\nzero,")
 
 
+@pytest.mark.parametrize("width", [20, 30, 39])
+def test_tp09_a_capture_folded_narrower_than_40_names_the_terminal(tmp_path, log, width):
+    """TP09 below the widths read: 'columns are 'af37aaf4…'' did not say that the '# plan:'
+    line before it was broken by the terminal, nor what to do."""
+    from wirecal.formats.capture import fold
+
+    folded = fold(log.read_text().splitlines(), width)
+    r = CliRunner().invoke(main, ["solve", str(ROBOT), str(PLAN), "-"], input=folded)
+    assert r.exit_code == 2, r.output
+    assert re.search(
+        rf"<stdin>:\d+: columns are '[^']+'; the column line must be '[^']+': it looks like "
+        rf"the rest of line \d+ \('# [^']+'\), broken by a terminal {width} columns wide; "
+        "copy the log again from a terminal at least 40 columns wide",
+        r.output,
+    ), r.output
+
+
+def test_tp09_a_wrong_column_line_below_a_short_header_is_not_blamed_on_a_terminal(tmp_path, log):
+    """The other direction: a column line with spaces for commas below a short header
+    line is not taken for its broken end (the '# plan:' line above is wider)."""
+    lines = log.read_text().splitlines()
+    k = next(i for i, x in enumerate(lines) if x.startswith("kind,"))
+    lines[k : k + 1] = ["# a short comment", lines[k].replace(",", " ")]
+    k += 1
+    bad = tmp_path / "run.csv"
+    bad.write_text("\n".join(lines) + "\n")
+    r = invoke("solve", ROBOT, PLAN, bad)
+    assert r.exit_code == 2, r.output
+    assert f"run.csv:{k + 1}: columns are 'kind step index" in r.output
+    assert "broken by a terminal" not in r.output
+
+
 def test_tp02_a_refused_capture_names_what_it_set_aside(tmp_path, log):
     """Every row unreadable: the refusal said only 'missing steps 1–10'."""
     prefixed = "\n".join(
