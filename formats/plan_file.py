@@ -10,6 +10,15 @@ Format (joint angles in degrees)::
     via_deg = [[...], ...]                       # optional: passed (blended) from θ0 to
                                                  # the first point, in this order
     omega = 5.0                                  # optional: bound Ω_j (deg or mm), ≤ 1000
+    [[step]]                                     # optional, last: the payload step
+    parameter = "payload"
+    payload_kg = 5.0                             # the mass the operator mounts at the flange
+    payload_com_mm = [0, 0, 50]                  # its centre in the last frame
+    points_deg = [...]                           # measured with it, after the zero at θ0
+
+The payload step (``wirecal plan`` adds it when the robot file's ``[calibration]
+payload_kg`` is given and it pays, :mod:`wirecal.solver.plan.payload`) needs the robot
+file's ``compliances`` and may not exceed its ``rated_payload_kg``.
 
 Field rules: :mod:`wirecal.formats.toml_fields`; every joint angle within the robot's
 limits.
@@ -24,14 +33,15 @@ from typing import Any
 import numpy as np
 
 from wirecal.formats.fileio import read_toml
+from wirecal.formats.robot_gravity import MAX_MASS_KG
 from wirecal.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver import params as P
 from wirecal.solver.distance import wire_lengths
-from wirecal.solver.plan.calibration_plan import Plan, Step
+from wirecal.solver.plan.calibration_plan import PAYLOAD_STEP, Plan, Step
 from wirecal.solver.robot import Robot
 
 _TOP_KEYS = ("theta0_deg", "order", "step", "robot", "description")
-_STEP_KEYS = ("parameter", "points_deg", "via_deg", "omega")
+_STEP_KEYS = ("parameter", "points_deg", "via_deg", "omega", "payload_kg", "payload_com_mm")
 MAX_OMEGA = 1000.0
 """Largest bound Ω_j of a step (deg or mm): offsets beyond it are not calibration errors."""
 
@@ -64,11 +74,12 @@ def plan_from_dict(data: dict[str, Any], robot: Robot, source: str = "<plan>") -
     order = _order(doc, robot)
     raw_steps = doc.tables("step", _STEP_KEYS)
     steps = [_step(st, j, order, robot, theta0) for j, st in enumerate(raw_steps, 1)]
-    if raw_steps and len(raw_steps) != len(order):
+    payload = bool(raw_steps) and (raw_steps[-1].data or {}).get("parameter") == PAYLOAD_STEP
+    if raw_steps and len(raw_steps) != len(order) + payload:
         doc.add(
             "step",
             f"has {len(raw_steps)} step(s) but order names {len(order)} "
-            "parameter(s); give one [[step]] per parameter",
+            "parameter(s); give one [[step]] per parameter (and the payload step last)",
         )
     doc.raise_if_any()
     return Plan(
@@ -109,6 +120,7 @@ def _step(
             "parameter",
             f"is {param!r} but order[{j}] is {order[j - 1]!r}; steps must follow the order",
         )
+    kg, com = _payload(st, param == PAYLOAD_STEP and j == len(order) + 1, robot)
     joints = "(one per joint, deg)"
     points = st.matrix("points_deg", cols=n, labels=joints, max_rows=MAX_STEP_POINTS)
     via = st.matrix("via_deg", [], cols=n, labels=joints, nonempty=False, max_rows=MAX_STEP_POINTS)
@@ -120,7 +132,37 @@ def _step(
     omega = st.number("omega", None, above=0, hi=MAX_OMEGA, unit="(deg or mm)")
     if param is None or points is None or via is None or not st.present:
         return None
-    return Step(param, points, via, omega)
+    return Step(param, points, via, omega, kg, com)
+
+
+def _payload(st: Table, payload: bool, robot: Robot) -> tuple[float, tuple[float, float, float]]:
+    """Read a step's ``payload_kg`` and ``payload_com_mm``: the payload step's, and only its."""
+    kg = st.number("payload_kg", None, above=0, hi=MAX_MASS_KG, unit="kg")
+    com = st.vector("payload_com_mm", [0.0, 0.0, 0.0], length=3, labels="(x, y, z)", unit="mm")
+    if not payload:
+        for key in ("payload_kg", "payload_com_mm"):
+            if key in st.keys():
+                st.add(key, f"only the payload step (parameter = {PAYLOAD_STEP!r}, last) has one")
+        return 0.0, (0.0, 0.0, 0.0)
+    if kg is None:
+        st.add("payload_kg", "the payload step needs its mass (kg)")
+    elif not robot.compliances or robot.masses is None:
+        st.add(
+            "payload_kg",
+            "the payload step is for compliances: the robot file lists none in [calibration] "
+            "compliances; use the matching robot file or remove the step",
+        )
+    elif (
+        robot.rated_payload_kg is None or kg + robot.masses.payload_mass_kg > robot.rated_payload_kg
+    ):
+        st.add(
+            "payload_kg",
+            f"{kg:g} kg is not allowed on this arm: the robot file's rated_payload_kg "
+            f"({robot.rated_payload_kg}) must state its rated payload and take it with the "
+            "tool's mass",
+        )
+    xyz = (0.0, 0.0, 0.0) if com is None else (float(com[0]), float(com[1]), float(com[2]))
+    return float(kg or 0.0), xyz
 
 
 def _check_limits(q: np.ndarray, robot: Robot, where: str, table: Table) -> None:
@@ -171,6 +213,9 @@ def plan_to_toml(plan: Plan, header: str = "") -> str:
         lines += ["", "[[step]]", f"parameter = {json.dumps(s.parameter)}"]
         if s.omega is not None:
             lines.append(f"omega = {_short(s.omega)}")
+        if s.parameter == PAYLOAD_STEP:
+            lines.append(f"payload_kg = {_short(s.payload_kg)}")
+            lines.append(f"payload_com_mm = {vec(np.array(s.payload_com_mm))}")
         lines.append("points_deg = [")
         lines += [f"    {vec(r)}," for r in s.points_deg]
         lines.append("]")

@@ -24,6 +24,7 @@ from wirecal.solver.plan.compliance import add_compliance_points
 from wirecal.solver.plan.exit import largest_exit_deg
 from wirecal.solver.plan.joint import joint_choice
 from wirecal.solver.plan.options import Method, PlanOptions, Progress
+from wirecal.solver.plan.payload import payload_step, plan_sigmas
 from wirecal.solver.plan.predict import predicted_accuracy, robot_time
 from wirecal.solver.plan.steps import StepPool, step_by_step, step_error
 from wirecal.solver.plan.tour import tour
@@ -198,8 +199,12 @@ def design_at(
         tuple(Step(s.parameter, s.points_deg, s.via_deg) for s in steps),
         robot=robot.name,
     )
+    lines, sigma = compliance
+    if robot.payload_kg is not None:
+        plan, more = payload_step(robot, plan, remaining, opt)
+        lines, sigma = [*lines, *more], plan_sigmas(robot, plan, remaining)
     d = Design(plan, steps, excluded, method=opt.method, unidentifiable=unidentifiable)
-    d.compliance_lines, d.compliance_sigma = tuple(compliance[0]), compliance[1]
+    d.compliance_lines, d.compliance_sigma = tuple(lines), sigma
     d.predicted = predicted_accuracy(robot, plan, unplanned=tuple(excluded))
     d.robot_time_s = robot_time(robot, plan, opt.run)
     d.exit_line = exit_line(robot, plan)
