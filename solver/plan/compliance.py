@@ -38,7 +38,7 @@ TIME_SHARE = 0.15
 30 allows 25 %; the greedy counts each point's visit from its step's nearest point, which
 the tour's insertion can exceed, so the share is set below it."""
 
-PAYLOAD_SHARE = 0.10
+PAYLOAD_SHARE = 0.05
 """The share of :data:`TIME_SHARE` when the robot file gives a payload step's mass: the
 rest of issue 30's 25 % goes to the payload step (:mod:`~wirecal.solver.plan.payload`),
 whose points identify the compliances better per second."""

@@ -161,6 +161,12 @@ def _unidentifiable(model, q: np.ndarray, theta0: np.ndarray, names: list[str]) 
     return excluded
 
 
+MAX_TIME_RATIO = 1.24
+"""Robot time of a plan with the compliances' points and the payload step over the same
+plan without either (issue 30: at most 1.25×; the payload step takes what the
+compliance points leave, :mod:`~wirecal.solver.plan.payload`)."""
+
+
 def design_at(
     robot: Robot, theta0: np.ndarray, opt: PlanOptions, progress: Progress | None = None
 ) -> Design:
@@ -184,6 +190,7 @@ def design_at(
     pools = step_by_step(robot, theta0, q_all, via_all, psi, remaining, excluded, opt, tick)
     if opt.method == "joint":
         joint_choice(robot, theta0, q_all, via_all, psi, remaining, pools, opt)
+    plain_s = _plain_time(robot, p0, theta0, (q_all, via_all), pools, opt)
     compliance = (
         add_compliance_points(robot, theta0, q_all, via_all, remaining, pools, opt)
         if robot.compliances
@@ -200,8 +207,10 @@ def design_at(
         robot=robot.name,
     )
     lines, sigma = compliance
-    if robot.payload_kg is not None:
-        plan, more = payload_step(robot, plan, remaining, opt)
+    if plain_s is not None:
+        budget_s = MAX_TIME_RATIO * plain_s - robot_time(robot, plan, opt.run)
+        direct = np.vstack([plan.all_points()[0], q_all[np.isnan(via_all[:, 0])]])
+        plan, more = payload_step(robot, plan, remaining, opt, (direct, budget_s))
         lines, sigma = [*lines, *more], plan_sigmas(robot, plan, remaining)
     d = Design(plan, steps, excluded, method=opt.method, unidentifiable=unidentifiable)
     d.compliance_lines, d.compliance_sigma = tuple(lines), sigma
@@ -211,6 +220,31 @@ def design_at(
     d.cell_line = cell_line(robot)
     tick(1.0)
     return d
+
+
+def _plain_time(
+    robot: Robot,
+    p0: np.ndarray,
+    theta0: np.ndarray,
+    candidates_: tuple[np.ndarray, np.ndarray],
+    pools: list[StepPool],
+    opt: PlanOptions,
+) -> float | None:
+    """Return the robot time (s) of the plan without compliance points, for a payload step.
+
+    None without a payload step's mass: the time is only its budget's scale
+    (:data:`MAX_TIME_RATIO`). The steps are toured here as :func:`design_at` tours them.
+    """
+    if robot.payload_kg is None or not robot.compliances:
+        return None
+    q_all, via_all = candidates_
+    steps = [
+        _step_design(robot, p0, theta0, q_all, via_all, k, pool, opt)
+        for k, pool in enumerate(pools)
+    ]
+    order = tuple(p.parameter for p in pools)
+    plain = Plan(theta0, order, tuple(Step(s.parameter, s.points_deg, s.via_deg) for s in steps))
+    return robot_time(robot, plain, opt.run)
 
 
 def _usable(

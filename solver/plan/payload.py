@@ -11,7 +11,9 @@ The step (:func:`payload_step`), when the robot file gives ``[calibration] paylo
 the points of the plan that bring the most information about the listed compliances
 with the mass on (a greedy Ds-optimal choice, the geometry estimated with them, as
 :mod:`~wirecal.solver.plan.compliance` does without it), as many as
-:data:`TIME_SHARE` of the plan's robot time allows, in a visiting order that keeps the
+the robot time left allows (the designer's budget: the plan with the compliances' points
+and this step at most :data:`~wirecal.solver.plan.design.MAX_TIME_RATIO` of the plan
+without them), in a visiting order that keeps the
 arm and the wire clear (:func:`~wirecal.solver.plan.tour.tour`). It is kept only when it
 pays: each per cent of robot time it adds must cut the largest predicted σ of the
 listed compliances by at least :data:`PAYS_PER_TIME` per cent. The operator's two stops
@@ -35,14 +37,13 @@ from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.verdict import READING_NOISE_MM
 
-TIME_SHARE = 0.08
-"""Robot time the payload step may add, as a share of the plan's with the compliances'
-points (:data:`~wirecal.solver.plan.compliance.PAYLOAD_SHARE` of the plan before them):
-issue 30 allows 25 % over the plan without compliances for both."""
-
 PAYS_PER_TIME = 1.0
 """Least cut of the largest predicted compliance σ (per cent) per per cent of robot time
 the step adds, for the step to be kept."""
+
+MAX_TRIES = 60
+"""Candidates tried for the step (each its tour and time worked out): the best by gain
+first; one too far for the time left, or without a clear tour, is passed over."""
 
 MOUNT_STOPS = 2
 """The operator's stops the step adds: mounting the mass, removing it."""
@@ -64,11 +65,18 @@ def plan_sigmas(robot: Robot, plan: Plan, geometry: list[str]) -> dict[str, floa
 
 
 def payload_step(
-    robot: Robot, plan: Plan, geometry: list[str], opt: PlanOptions
+    robot: Robot,
+    plan: Plan,
+    geometry: list[str],
+    opt: PlanOptions,
+    candidates_deg: tuple[np.ndarray, float],
 ) -> tuple[Plan, list[str]]:
     """Return ``plan`` with the payload step when it pays, and the header's lines.
 
-    ``geometry``: the planned parameters, estimated with the compliances.
+    ``geometry``: the planned parameters, estimated with the compliances;
+    ``candidates_deg``: the designer's screened candidates reached without a via point
+    (clear of the arm, the cell and the wire from θ0), and the robot time (s) the step
+    may add.
     """
     kg = robot.payload_kg
     assert kg is not None
@@ -76,8 +84,8 @@ def payload_step(
     com = np.asarray(robot.payload_com_mm, dtype=float)
     before = plan_sigmas(robot, plan, geometry)
     base_s = robot_time(robot, plan, opt.run)
-    q = np.unique(plan.all_points()[0], axis=0)
-    picks = _choose(robot, plan, q, geometry, kg, com, base_s * TIME_SHARE, opt)
+    q, budget_s = candidates_deg
+    picks = _choose(robot, plan, q, geometry, kg, com, budget_s, opt)
     step = Step(PAYLOAD_STEP, q[picks], np.zeros((0, plan.theta0_deg.size)), None, kg, tuple(com))
     with_step = replace(plan, steps=(*plan.steps, step)) if len(picks) else plan
     after = plan_sigmas(robot, with_step, geometry) if len(picks) else before
@@ -101,8 +109,9 @@ def _choose(
     """Return the points (rows of ``q``) for the step: Ds-optimal, in visiting order.
 
     Greedy on log det of the compliances' information (the geometry estimated with
-    them) with the mass on; the points are added while the step's tour (from θ0 and
-    back) stays within ``budget_s``.
+    them) with the mass on; a point is added when the step's tour (from θ0 and back)
+    stays clear and within ``budget_s``, else the next best is tried
+    (:data:`MAX_TRIES` in all).
     """
     names = [*geometry, *robot.compliances]
     theta0 = plan.theta0_deg
@@ -118,17 +127,21 @@ def _choose(
     others = np.arange(len(geometry))
     chosen: list[int] = []
     order: list[int] = []
-    while len(chosen) < len(q):
+    tried = np.zeros(len(q), bool)
+    for _ in range(MAX_TRIES):
         sig, sig_o = np.linalg.inv(info), np.linalg.inv(info[np.ix_(others, others)])
         xo = x[:, others]
         gain = np.log1p(np.einsum("nm,mk,nk->n", x, sig, x) / s2) - np.log1p(
             np.einsum("nm,mk,nk->n", xo, sig_o, xo) / s2
         )
-        gain[chosen] = -np.inf
+        gain[tried] = -np.inf
         best = int(np.argmax(gain))
+        if not np.isfinite(gain[best]):
+            break
+        tried[best] = True
         path = _tour(robot, theta0, q[[*chosen, best]], opt)
         if path is None or _step_time(robot, plan, q[[*chosen, best]][path], opt) > budget_s:
-            break
+            continue  # too far for the time left, or no clear tour: the next best
         chosen.append(best)
         order = [chosen[i] for i in path]
         info = info + np.outer(x[best], x[best]) / s2
