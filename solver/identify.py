@@ -43,6 +43,19 @@ def omega_vector(
     return ErrorSet(names, n_joints).to_internal(bound)
 
 
+def at_points(model: Model, plan: Plan, present: np.ndarray | None = None) -> Model:
+    """Return ``model`` as it is at ``plan``'s points (those ``present``): loads mounted.
+
+    The points of a payload step carry its mass (:meth:`Plan.loads`); without one, the
+    model itself.
+    """
+    loads = plan.loads()
+    if loads is None:
+        return model
+    kg = loads[0] if present is None else loads[0][present]
+    return loaded(model, kg, loads[1])
+
+
 @dataclass(frozen=True)
 class Problem:
     """The data of one calibration: points, θ0, measured lengths, the plan's steps.
