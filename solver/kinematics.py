@@ -110,7 +110,9 @@ def with_errors(base: Model, names: Sequence[str], values: np.ndarray) -> Model:
     return Model(dh, tool, base.pulley, base.masses, compliance)
 
 
-def loaded(model: Model, kg: np.ndarray, com_mm: Sequence[float] | np.ndarray) -> Model:
+def loaded(
+    model: Model, kg: Sequence[float] | np.ndarray, com_mm: Sequence[float] | np.ndarray
+) -> Model:
     """Return ``model`` with ``kg[i]`` (kg) at the flange at configuration i, centre ``com_mm``.
 
     The mass the operator mounts for a plan's payload step
