@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from wirecal.formats.fileio import read_toml
-from wirecal.formats.robot_gravity import MAX_MASS_KG
+from wirecal.formats.robot_gravity import MAX_MASS_KG, read_com
 from wirecal.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver import params as P
 from wirecal.solver.distance import wire_lengths
@@ -138,7 +138,7 @@ def _step(
 def _payload(st: Table, payload: bool, robot: Robot) -> tuple[float, tuple[float, float, float]]:
     """Read a step's ``payload_kg`` and ``payload_com_mm``: the payload step's, and only its."""
     kg = st.number("payload_kg", None, above=0, hi=MAX_MASS_KG, unit="kg")
-    com = st.vector("payload_com_mm", [0.0, 0.0, 0.0], length=3, labels="(x, y, z)", unit="mm")
+    com = read_com(st, "payload_com_mm")
     if not payload:
         for key in ("payload_kg", "payload_com_mm"):
             if key in st.keys():

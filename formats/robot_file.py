@@ -85,7 +85,7 @@ from wirecal.formats.robot_encoder import (
     read_encoder,
     read_language_and_interface,
 )
-from wirecal.formats.robot_gravity import GRAVITY_KEYS, MAX_MASS_KG, read_gravity
+from wirecal.formats.robot_gravity import GRAVITY_KEYS, MAX_MASS_KG, read_com, read_gravity
 from wirecal.formats.robot_kinematics import (
     KINEMATICS_KEYS,
     dh_radians,
@@ -311,15 +311,7 @@ def _payload(cal: Table, compliances: bool, masses: MassModel | None) -> dict:
     """
     rated = cal.number("rated_payload_kg", None, above=0, hi=MAX_MASS_KG, unit="kg")
     kg = cal.number("payload_kg", None, above=0, hi=MAX_MASS_KG, unit="kg")
-    com = cal.vector(
-        "payload_com_mm",
-        [0.0, 0.0, 0.0],
-        length=3,
-        labels="(x, y, z)",
-        lo=-MAX_LENGTH_MM,
-        hi=MAX_LENGTH_MM,
-        unit="mm",
-    )
+    com = read_com(cal, "payload_com_mm")
     if kg is not None and not compliances:
         cal.add(
             "payload_kg", "is the payload step's mass, for [calibration] compliances; list them"
