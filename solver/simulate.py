@@ -360,15 +360,8 @@ def simulate_run(
     readings = zip(kinds, steps, indices, joints, mean, strict=True)
     rows += _reading_rows(readings, spread, times, settle_s, samples)
     cut = tuple(rows[: faults.stop_after])  # all of them when the run does not stop
-    pay = plan.payload_step
-    return SimulatedRun(
-        robot.name,
-        plan.fingerprint(),
-        mpc,
-        cut,
-        faults.truncate_last,
-        None if pay is None else pay.payload_kg,
-    )
+    kg = None if plan.payload_step is None else plan.payload_step.payload_kg
+    return SimulatedRun(robot.name, plan.fingerprint(), mpc, cut, faults.truncate_last, kg)
 
 
 def _reading_rows(
