@@ -209,7 +209,7 @@ class World:
         answer = self.answers.pop(0)
         self.show(f"> {answer}")
         if answer.strip() == "1":
-            self._mount(text)
+            self.handle_mass(text)
         if answer.strip() == "1" and len(self.gauge_mm):
             self.clock += OPERATOR_SEAT_S
             self.pose_error = self.rng.normal(0, self.noise_mm)  # each seating anew
@@ -221,11 +221,12 @@ class World:
                 self.nest = None
         return answer
 
-    def _mount(self, text: str) -> None:
+    def handle_mass(self, text: str) -> None:
         """Mount or remove the plan's payload mass when a confirmed prompt asks for it.
 
-        The programs' prompts end "when it is mounted …" and "when it is removed …"; the
-        operator holds the plan's mass (:attr:`payload`) and nothing else.
+        The programs' prompts say "when it is mounted" and "when it is removed" (V+ PROMPT
+        answered 1, URScript popup continued); the operator holds the plan's mass
+        (:attr:`payload`) and nothing else.
         """
         if self.payload is None:
             return

@@ -74,7 +74,7 @@ def run_measurement(
     default the first file wc.run opens for writing). ``proceed_on_pause``: the operator
     continues after each PAUSE (having steadied the arm: a vibration stops), else the run
     ends there. The operator confirms every prompt of the reference step and of the payload
-    step (1: mounting and removing the plan's mass, :meth:`World._mount`), seating the
+    step (1: mounting and removing the plan's mass, :meth:`World.handle_mass`), seating the
     wire tip as asked; the encoder is ``encoder_truth``.
     """
     world = measurement_world(
