@@ -21,6 +21,7 @@ from wirecal.formats.log import parse_log
 from wirecal.formats.plan_file import load_plan, plan_from_dict, plan_to_toml
 from wirecal.formats.robot_file import load_robot, robot_from_dict
 from wirecal.formats.simulated_log import simulate_log
+from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import GenOptions, line_ends, module_text
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
@@ -32,7 +33,7 @@ from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import solve
 
 from .conftest import VIPER
-from .twin_runs import generated, measure_in_twin
+from .twin_runs import generated, measure_in_twin, measure_ur_in_twin
 
 GOLDEN = VIPER.parents[1] / "tests" / "golden" / "viper_s650_payload" / "WIRECAL.V2"
 KG, COM = 5.0, (0.0, 0.0, 50.0)
@@ -244,19 +245,84 @@ def test_the_twin_operator_mounts_the_mass_and_solve_finds_the_compliances(
         assert abs(got[name] - truth) < 4 * std[name]
 
 
-def test_urscript_programs_refuse_a_payload_plan(tmp_path):
-    """Only V+ prompts for the mass yet: `gen` for a UR says so and writes nothing."""
-    ur = VIPER.parent / "ur5e"
-    keys = 'compliances = ["c2", "c3"]\nrated_payload_kg = 5.0\npayload_kg = 5.0\n'
-    text = (ur / "robot.toml").read_text().replace("[calibration]\n", "[calibration]\n" + keys, 1)
+UR = GOLDEN.parents[1] / "ur5e_payload"
+
+
+@pytest.fixture(scope="module")
+def ur_robot():
+    """The UR5e asking c2, c3, with a 5 kg payload step (its rated payload)."""
+    return load_robot(UR / "robot.toml")
+
+
+@pytest.fixture(scope="module")
+def ur_plan(ur_robot):
+    """The plan ``wirecal plan`` designed for it at the shipped plan's θ0: 9 points with it."""
+    return load_plan(UR / "plan.toml", ur_robot)
+
+
+@pytest.fixture(scope="module")
+def ur_run_script(ur_robot, ur_plan) -> str:
+    return generated(scripts, ur_robot, ur_plan, UrOptions())["wc_run.script"]
+
+
+def test_payload_golden_script(ur_run_script):
+    """The URScript wc_run of the payload plan is the reviewed one (WIRECAL_UPDATE_GOLDEN=1
+    rewrites it after an intended change: review the diff)."""
+    path = UR / "wc_run.script"
+    if os.environ.get("WIRECAL_UPDATE_GOLDEN"):
+        path.write_text(ur_run_script, encoding="ascii", newline="\n")
+    assert ur_run_script == path.read_text(encoding="ascii")
+
+
+def test_the_urscript_run_asks_by_popup_and_tells_the_controller(ur_run_script, ur_plan):
+    """Zero, popup to mount, set_payload of tool and mass, the points; back at θ0 the popup
+    to remove, set_payload of the tool alone, the closing zero; no wc_solve."""
+    n = len(ur_plan.steps)
+    order = [
+        f"z = wc_meas({n}, 0,",
+        'popup("Payload step: mount the 5 kg mass',
+        "set_payload(5, [0, 0, 0.05])",
+        f"wc_meas({n}, 1,",
+        'popup("Remove the 5 kg mass',
+        "set_payload(0, [0, 0, 0])",
+        f"wc_meas({n + 1}, 0,",
+    ]
+    at = [ur_run_script.index(x) for x in order]
+    assert at == sorted(at)
+    assert 'wc_send("# payload_kg: 5")' in ur_run_script
+    assert "wc_solve(" not in ur_run_script
+
+
+@pytest.mark.slow
+def test_the_ur_twin_operator_mounts_the_mass_and_solve_finds_the_compliances(
+    ur_robot, ur_plan, tmp_path
+):
+    run = measure_ur_in_twin(ur_robot, ur_plan, TRUE_C, tmp_path, seed=2)
+    assert run.programs.complete
+    assert run.programs.world.mounted_kg == 0.0
+    assert run.programs.controller.payload[0] == 0.0  # the tool's alone again
+    log = parse_log(run.log.read_text(), str(run.log))
+    assert log.payload_kg == KG
+    est = solve(ur_robot, ur_plan, check_log(log, ur_plan, ur_robot)).estimates["joint"]
+    got, std = est.as_dict(), est.std_by_name()
+    for name, truth in TRUE_C.items():
+        assert abs(got[name] - truth) < 4 * std[name]
+        assert std[name] < 1.0
+
+
+def test_rapid_programs_refuse_a_payload_plan(viper, paper_plan, tmp_path):
+    """RAPID does not prompt for the mass yet: `gen --language rapid` says so."""
+    irb = VIPER.parent / "abb_irb120"
+    keys = 'compliances = ["c2", "c3"]\nrated_payload_kg = 3.0\npayload_kg = 3.0\n'
+    text = (irb / "robot.toml").read_text().replace("[calibration]\n", "[calibration]\n" + keys, 1)
     (tmp_path / "robot.toml").write_text(text)
     rb = robot_from_dict(tomllib.loads(text), "robot.toml")
-    base = plan_from_dict(tomllib.loads((ur / "plan.toml").read_text()), rb)
+    base = plan_from_dict(tomllib.loads((irb / "plan.toml").read_text()), rb)
     q = base.steps[0].points_deg[:2]
-    pl = replace(base, steps=(*base.steps, Step(PAYLOAD_STEP, q, np.zeros((0, 6)), None, 5.0)))
+    pl = replace(base, steps=(*base.steps, Step(PAYLOAD_STEP, q, np.zeros((0, 6)), None, 3.0)))
     (tmp_path / "plan.toml").write_text(plan_to_toml(pl))
     args = ["gen", str(tmp_path / "robot.toml"), str(tmp_path / "plan.toml")]
     out = CliRunner().invoke(main, [*args, "-o", str(tmp_path / "out")])
     assert out.exit_code == 2, out.output
-    assert "do not prompt for it yet (only V+ does)" in out.output
+    assert "do not prompt for it yet (only V+ and URScript do)" in out.output
     assert not (tmp_path / "out").exists()
