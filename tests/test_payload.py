@@ -11,6 +11,7 @@ import copy
 import os
 import tomllib
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -35,7 +36,7 @@ from wirecal.solver.solve import solve
 from .conftest import VIPER
 from .twin_runs import generated, measure_in_twin, measure_ur_in_twin
 
-GOLDEN = VIPER.parents[1] / "tests" / "golden" / "viper_s650_payload" / "WIRECAL.V2"
+GOLDEN = Path(__file__).parent / "data" / "payload_viper_s650" / "WIRECAL.V2"
 KG, COM = 5.0, (0.0, 0.0, 50.0)
 TRUE_C = {"c2": 4.0, "c3": 6.0}  # µrad/(N·m): within issue 30's 2–8
 
@@ -245,7 +246,7 @@ def test_the_twin_operator_mounts_the_mass_and_solve_finds_the_compliances(
         assert abs(got[name] - truth) < 4 * std[name]
 
 
-UR = GOLDEN.parents[1] / "ur5e_payload"
+UR = GOLDEN.parents[1] / "payload_ur5e"
 
 
 @pytest.fixture(scope="module")
