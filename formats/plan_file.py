@@ -146,23 +146,32 @@ def _payload(st: Table, payload: bool, robot: Robot) -> tuple[float, tuple[float
         return 0.0, (0.0, 0.0, 0.0)
     if kg is None:
         st.add("payload_kg", "the payload step needs its mass (kg)")
-    elif not robot.compliances or robot.masses is None:
+    else:
+        _check_payload(st, kg, robot)
+    xyz = (0.0, 0.0, 0.0) if com is None else (float(com[0]), float(com[1]), float(com[2]))
+    return float(kg or 0.0), xyz
+
+
+def _check_payload(st: Table, kg: float, robot: Robot) -> None:
+    """Refuse a payload step the robot file does not ask for or whose mass it cannot take."""
+    if not robot.compliances or robot.masses is None:
         st.add(
             "payload_kg",
             "the payload step is for compliances: the robot file lists none in [calibration] "
             "compliances; use the matching robot file or remove the step",
         )
-    elif (
-        robot.rated_payload_kg is None or kg + robot.masses.payload_mass_kg > robot.rated_payload_kg
-    ):
+    elif robot.rated_payload_kg is None:
         st.add(
             "payload_kg",
-            f"{kg:g} kg is not allowed on this arm: the robot file's rated_payload_kg "
-            f"({robot.rated_payload_kg}) must state its rated payload and take it with the "
-            "tool's mass",
+            "the robot file states no rated payload: add [calibration] rated_payload_kg (the "
+            "data sheet's), so that the mass is checked against it",
         )
-    xyz = (0.0, 0.0, 0.0) if com is None else (float(com[0]), float(com[1]), float(com[2]))
-    return float(kg or 0.0), xyz
+    elif kg + robot.masses.payload_mass_kg > robot.rated_payload_kg:
+        st.add(
+            "payload_kg",
+            f"{kg:g} kg with the tool's {robot.masses.payload_mass_kg:g} kg exceeds the arm's "
+            f"rated payload {robot.rated_payload_kg:g} kg (robot file); use a lighter mass",
+        )
 
 
 def _check_limits(q: np.ndarray, robot: Robot, where: str, table: Table) -> None:
