@@ -8,6 +8,7 @@ plan files' keys and refusals, the log's ``payload_kg`` marker, the V+ programs'
 from __future__ import annotations
 
 import copy
+import functools
 import os
 import tomllib
 from dataclasses import replace
@@ -16,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from wirecal.cli.main import main
 from wirecal.formats.log import parse_log
@@ -29,7 +32,8 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.gravity import gravity_torques_nm, with_load
 from wirecal.solver.kinematics import loaded, rigid_frames, tool_position
 from wirecal.solver.log.measurements import check_log
-from wirecal.solver.plan.calibration_plan import PAYLOAD_STEP, Step
+from wirecal.solver.plan.calibration_plan import PAYLOAD_STEP, Plan, Step
+from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import solve
 
@@ -50,16 +54,23 @@ def _data(**calibration) -> dict:
 HERE = GOLDEN.parent
 
 
+@functools.cache
+def _designed(folder: Path) -> tuple[Robot, Plan]:
+    """Return ``folder``'s robot file and the plan ``wirecal plan`` designed for it."""
+    robot = load_robot(folder / "robot.toml")
+    return robot, load_plan(folder / "plan.toml", robot)
+
+
 @pytest.fixture(scope="module")
 def robot():
     """The Viper asking c2, c3, with a 5 kg payload step (its rated payload, data sheet)."""
-    return load_robot(HERE / "robot.toml")
+    return _designed(HERE)[0]
 
 
 @pytest.fixture(scope="module")
-def plan(robot):
+def plan():
     """The plan ``wirecal plan`` designed for it: 10 points with the mass on."""
-    return load_plan(HERE / "plan.toml", robot)
+    return _designed(HERE)[1]
 
 
 # ---- the model ------------------------------------------------------------------------
@@ -254,13 +265,13 @@ UR = GOLDEN.parents[1] / "payload_ur5e"
 @pytest.fixture(scope="module")
 def ur_robot():
     """The UR5e asking c2, c3, with a 5 kg payload step (its rated payload)."""
-    return load_robot(UR / "robot.toml")
+    return _designed(UR)[0]
 
 
 @pytest.fixture(scope="module")
-def ur_plan(ur_robot):
+def ur_plan():
     """The plan ``wirecal plan`` designed for it at the shipped plan's θ0: 9 points with it."""
-    return load_plan(UR / "plan.toml", ur_robot)
+    return _designed(UR)[1]
 
 
 @pytest.fixture(scope="module")
@@ -329,3 +340,24 @@ def test_rapid_programs_refuse_a_payload_plan(viper, paper_plan, tmp_path):
     assert out.exit_code == 2, out.output
     assert "do not prompt for it yet (only V+ and URScript do)" in out.output
     assert not (tmp_path / "out").exists()
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    kg=st.floats(min_value=0.01, max_value=5.0, allow_nan=False),
+    com=st.tuples(*[st.floats(min_value=-500.0, max_value=500.0, allow_nan=False)] * 3),
+)
+def test_the_payload_step_reads_back_as_written(kg, com):
+    """Any mass within the rating and centre within range: the file reads back the same
+    step and fingerprint; the mass is in the fingerprint."""
+    robot, plan = _designed(HERE)
+    step = replace(plan.steps[-1], payload_kg=kg, payload_com_mm=com)
+    mine = replace(plan, steps=(*plan.steps[:-1], step))
+    back = plan_from_dict(tomllib.loads(plan_to_toml(mine)), robot)
+    assert back.payload_step is not None
+    assert (back.payload_step.payload_kg, back.payload_step.payload_com_mm) == (kg, com)
+    assert back.fingerprint() == mine.fingerprint()
+    assert (back.fingerprint() == plan.fingerprint()) == (
+        round(kg, 6) == KG
+        and all(round(c, 6) == round(p, 6) for c, p in zip(com, COM, strict=True))
+    )
