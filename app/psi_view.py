@@ -45,12 +45,15 @@ class PsiTable:
 
 
 def psi_table(robot: Robot, plan: Plan, tol: float = DEFAULT_TOL) -> PsiTable:
-    """Ψ rows and verdicts for every step and point (1-based step and index), nominal model."""
+    """Ψ rows and verdicts for every step and point (1-based step and index), nominal model.
+
+    The parameters' steps: a payload step isolates none (it is for the compliances).
+    """
     model = robot.nominal
     q, step_no, index = plan.all_points()
     psi = sensitivity(model, q, plan.theta0_deg, plan.order).psi
     rows = []
-    for k in range(len(q)):
+    for k in np.flatnonzero(step_no <= len(plan.order)):
         j = int(step_no[k]) - 1
         row = {name: float(psi[k, c]) for c, name in enumerate(plan.order)}
         v = verdict(row, plan.order[j], plan.order[j + 1 :], tol)

@@ -22,8 +22,13 @@ same seeds again with a rigid true arm (compliances 0). Printed per arm:
 The designed plan's robot time is printed beside that of the plan designed without the
 compliances (issue 30: at most 1.25×).
 
+``--payload``: the robot files also give ``[calibration] payload_kg`` (the arm's rated
+payload, :data:`RATED_PAYLOAD_KG`, at 50 mm from the flange) and ``rated_payload_kg``,
+so ``plan`` adds the payload step when it pays (:mod:`~wirecal.solver.plan.payload`) and
+the twin's arm carries the mass in that step.
+
     python bench/bench_compliance.py [--truths 100] [--arms ur5e viper_s650 abb_irb120]
-        [--plans shipped designed]
+        [--plans shipped designed] [--payload]
 """
 
 from __future__ import annotations
@@ -53,16 +58,27 @@ from wirecal.solver.simulate import Unmodelled  # noqa: E402
 ARMS = ("viper_s650", "ur5e", "abb_irb120")
 """The arms with a shipped plan (the demo's beside each robot file, :func:`plan_beside`)."""
 
+RATED_PAYLOAD_KG = {"viper_s650": 5.0, "ur5e": 5.0, "abb_irb120": 3.0}
+"""The arms' rated payloads (data sheets: Adept Viper s650 5 kg maximum; Universal Robots
+UR5e 5 kg; ABB IRB 120 3 kg), the payload step's mass in the bench."""
+
+PAYLOAD_COM_MM = [0.0, 0.0, 50.0]
+"""The bench's mass's centre from the flange: a plate 50 mm out along the flange axis."""
+
 REPEATABILITY_MM = 0.02
 """The true arms' repeatability (the twin's), declared in the robot file so that the zero
 readings are read as what they are (:mod:`~wirecal.solver.zero_reading`)."""
 
 
-def _arm(arm: str) -> tuple[Robot, Path]:
+def _arm(arm: str, payload: bool) -> tuple[Robot, Path]:
     folder = Path(__file__).resolve().parents[1] / "examples" / arm
     data = tomllib.loads((folder / "robot.toml").read_text())
     data["calibration"]["compliances"] = ["c2", "c3", "c4", "c5"]
     data["calibration"]["repeatability_mm"] = REPEATABILITY_MM
+    if payload:
+        data["calibration"]["rated_payload_kg"] = RATED_PAYLOAD_KG[arm]
+        data["calibration"]["payload_kg"] = RATED_PAYLOAD_KG[arm]
+        data["calibration"]["payload_com_mm"] = PAYLOAD_COM_MM
     plan_path = plan_beside(folder / "robot.toml")
     assert plan_path is not None
     return with_gauge(robot_from_dict(data, str(folder / "robot.toml"))), plan_path
@@ -105,7 +121,7 @@ def _plans(robot: Robot, shipped: Path, which: list[str]) -> list[tuple[str, Pla
     if "designed" in which:
         t0 = time.perf_counter()
         with_c = design(robot, plan.theta0_deg)
-        without = design(replace(robot, compliances=()), plan.theta0_deg)
+        without = design(replace(robot, compliances=(), payload_kg=None), plan.theta0_deg)
         print(
             f"  designed at θ0 of {shipped.name} in {time.perf_counter() - t0:.0f} s: robot time "
             f"{with_c.robot_time_s:.0f} s, {with_c.robot_time_s / without.robot_time_s:.2f}× "
@@ -122,10 +138,12 @@ def main() -> None:
     ap.add_argument("--truths", type=int, default=100)
     ap.add_argument("--arms", nargs="+", default=list(ARMS), choices=list(ARMS))
     ap.add_argument("--plans", nargs="+", default=["shipped", "designed"])
+    ap.add_argument("--payload", action="store_true", help="the payload step (rated payload)")
     args = ap.parse_args()
     for arm in args.arms:
-        robot, plan_path = _arm(arm)
-        print(f"{arm}, gauge, {args.truths} truths (2–8 µrad/(N·m)):")
+        robot, plan_path = _arm(arm, args.payload)
+        extra = f", payload step {robot.payload_kg:g} kg" if args.payload else ""
+        print(f"{arm}, gauge{extra}, {args.truths} truths (2–8 µrad/(N·m)):")
         for name, plan in _plans(robot, plan_path, args.plans):
             t0 = time.perf_counter()
             twin = Unmodelled(REPEATABILITY_MM, 0.0)

@@ -19,6 +19,7 @@ from wirecal.solver.compliance import ComplianceObservability, compliance_observ
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.identifiability import Identifiability, analyse
+from wirecal.solver.identify import at_points
 from wirecal.solver.plan.exit import cone_problems
 from wirecal.solver.scale import ScaleObservability, scale_observability
 from wirecal.solver.sensitivity import DEFAULT_TOL, sensitivity
@@ -99,12 +100,15 @@ def psi(
 
 
 def _compliance(rb, pl) -> ComplianceObservability | None:
-    """Which of the robot file's compliances the plan identifies (None: it asks for none)."""
+    """Which of the robot file's compliances the plan identifies (None: it asks for none).
+
+    The points of a payload step with its mass on (:func:`at_points`).
+    """
     if not rb.compliances:
         return None
     q, _, _ = pl.all_points()
     return compliance_observability(
-        rb.nominal, q, pl.theta0_deg, rb.parameters, rb.compliances, READING_NOISE_MM
+        at_points(rb.nominal, pl), q, pl.theta0_deg, rb.parameters, rb.compliances, READING_NOISE_MM
     )
 
 

@@ -6,6 +6,7 @@ Format (UTF-8)::
     # robot: Adept Viper s650
     # plan: <sha256 fingerprint of the plan>
     # mm_per_count: 0.025488          (negative when counts fall as the wire extends)
+    # payload_kg: 5                   (only with the plan's payload step: the mass mounted)
     # <free comments>
     kind,step,index,j1,j2,j3,j4,j5,j6,counts,samples,spread,t_s,settle_s
     zero,1,0,0.0000,-90.0000,...,8388000.5000,10,1,3.500,3.000
@@ -21,6 +22,11 @@ them; ``spread`` their max − min (counts); ``t_s`` the controller's timer when
 began (s since the start of the run, 1 ms resolution); ``settle_s`` how long the program
 waited after the move before sampling (s): the settle rule's wait. Version 1 logs (no
 ``t_s``, ``settle_s``) are still read: their readings carry no time.
+
+``payload_kg`` (optional) marks a log taken with a plan's payload step: its points (the
+plan's last step, after that step's zero reading at θ0) were measured with that mass at
+the flange; it must match the plan's, and a plan with a payload step needs it
+(:func:`~wirecal.solver.log.checks.payload_problems`). Logs without it read as before.
 
 ``reference`` rows (version 2, optional: when the robot file's ``[encoder]`` gives
 ``reference_length_mm``) come first: the wire tip seated by the operator in the nests of
@@ -68,6 +74,7 @@ TIME_COLUMNS = ("t_s", "settle_s")
 COLUMNS_V1 = ("kind", "step", "index", *JOINT_COLUMNS, "counts", "samples", "spread")
 COLUMNS = (*COLUMNS_V1, *TIME_COLUMNS)
 HEADER_KEYS = ("robot", "plan", "mm_per_count")
+OPTIONAL_KEYS = ("payload_kg",)
 KINDS = ("zero", "point", "unsettled", "reference")
 
 
@@ -90,15 +97,24 @@ def format_row(reading: Reading) -> str:
 
 
 def format_header(
-    robot: str, fingerprint: str, mm_per_count: float, comments: tuple[str, ...] = ()
+    robot: str,
+    fingerprint: str,
+    mm_per_count: float,
+    comments: tuple[str, ...] = (),
+    payload_kg: float | None = None,
 ) -> str:
-    """Return a log's header: magic and version, header fields, comments, column names."""
+    """Return a log's header: magic and version, header fields, comments, column names.
+
+    ``payload_kg``: the payload step's mass (module docstring), for a plan with one.
+    """
     lines = [
         f"{MAGIC} {VERSION}",
         f"# robot: {robot}",
         f"# plan: {fingerprint}",
         f"# mm_per_count: {mm_per_count!r}",
     ]
+    if payload_kg is not None:
+        lines.append(f"# payload_kg: {payload_kg:g}")
     lines += [f"# {c}" for c in comments]
     lines.append(",".join(COLUMNS))
     return "\n".join(lines) + "\n"
@@ -142,7 +158,7 @@ def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bo
         older=OLDER_VERSIONS,
         what="log",
         columns=lambda _header, version: COLUMNS if version == VERSION else COLUMNS_V1,
-        keys=HEADER_KEYS,
+        keys=(*HEADER_KEYS, *OPTIONAL_KEYS),
         capture=ROW_TEST if terminal else None,
     )
     problems = [*table.problems, *table.missing(HEADER_KEYS)]
@@ -159,6 +175,15 @@ def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bo
                 raise ValueError
         except ValueError:
             bad(line, f"mm_per_count {value!r} is not a non-zero number")
+    payload = None
+    if "payload_kg" in table.header:
+        value, line = table.header["payload_kg"]
+        try:
+            payload = float(value)
+            if not math.isfinite(payload) or payload <= 0:
+                raise ValueError
+        except ValueError:
+            bad(line, f"payload_kg {value!r} is not a positive mass (kg)")
     parsed = (_parse_row(row.cells, row.line, bad) for row in table.rows)
     readings = [r for r in parsed if r is not None]
     problems += lossy_counts(table.rows, source)
@@ -173,6 +198,7 @@ def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bo
         sha256=sha256,
         notes=table.notes,
         version=table.version,
+        payload_kg=payload,
     )
 
 

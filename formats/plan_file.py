@@ -10,6 +10,15 @@ Format (joint angles in degrees)::
     via_deg = [[...], ...]                       # optional: passed (blended) from θ0 to
                                                  # the first point, in this order
     omega = 5.0                                  # optional: bound Ω_j (deg or mm), ≤ 1000
+    [[step]]                                     # optional, last: the payload step
+    parameter = "payload"
+    payload_kg = 5.0                             # the mass the operator mounts at the flange
+    payload_com_mm = [0, 0, 50]                  # its centre in the last frame
+    points_deg = [...]                           # measured with it, after the zero at θ0
+
+The payload step (``wirecal plan`` adds it when the robot file's ``[calibration]
+payload_kg`` is given and it pays, :mod:`wirecal.solver.plan.payload`) needs the robot
+file's ``compliances`` and may not exceed its ``rated_payload_kg``.
 
 ``joint_only = true`` (optional; ``plan --pool`` writes it): the steps split poses chosen
 for the joint method, so the step-by-step estimate does not apply and ``solve`` runs the
@@ -28,14 +37,15 @@ from typing import Any
 import numpy as np
 
 from wirecal.formats.fileio import read_toml
+from wirecal.formats.robot_gravity import MAX_MASS_KG, read_com
 from wirecal.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver import params as P
 from wirecal.solver.distance import wire_lengths
-from wirecal.solver.plan.calibration_plan import Plan, Step
+from wirecal.solver.plan.calibration_plan import PAYLOAD_STEP, Plan, Step
 from wirecal.solver.robot import Robot
 
 _TOP_KEYS = ("theta0_deg", "order", "step", "robot", "description", "joint_only")
-_STEP_KEYS = ("parameter", "points_deg", "via_deg", "omega")
+_STEP_KEYS = ("parameter", "points_deg", "via_deg", "omega", "payload_kg", "payload_com_mm")
 MAX_OMEGA = 1000.0
 """Largest bound Ω_j of a step (deg or mm): offsets beyond it are not calibration errors."""
 
@@ -70,11 +80,12 @@ def plan_from_dict(data: dict[str, Any], robot: Robot, source: str = "<plan>") -
     order = _order(doc, robot)
     raw_steps = doc.tables("step", _STEP_KEYS)
     steps = [_step(st, j, order, robot, theta0) for j, st in enumerate(raw_steps, 1)]
-    if raw_steps and len(raw_steps) != len(order):
+    payload = bool(raw_steps) and (raw_steps[-1].data or {}).get("parameter") == PAYLOAD_STEP
+    if raw_steps and len(raw_steps) != len(order) + payload:
         doc.add(
             "step",
             f"has {len(raw_steps)} step(s) but order names {len(order)} "
-            "parameter(s); give one [[step]] per parameter",
+            "parameter(s); give one [[step]] per parameter (and the payload step last)",
         )
     doc.raise_if_any()
     return Plan(
@@ -116,6 +127,7 @@ def _step(
             "parameter",
             f"is {param!r} but order[{j}] is {order[j - 1]!r}; steps must follow the order",
         )
+    kg, com = _payload(st, param == PAYLOAD_STEP and j == len(order) + 1, robot)
     joints = "(one per joint, deg)"
     points = st.matrix("points_deg", cols=n, labels=joints, max_rows=MAX_STEP_POINTS)
     via = st.matrix("via_deg", [], cols=n, labels=joints, nonempty=False, max_rows=MAX_STEP_POINTS)
@@ -127,7 +139,46 @@ def _step(
     omega = st.number("omega", None, above=0, hi=MAX_OMEGA, unit="(deg or mm)")
     if param is None or points is None or via is None or not st.present:
         return None
-    return Step(param, points, via, omega)
+    return Step(param, points, via, omega, kg, com)
+
+
+def _payload(st: Table, payload: bool, robot: Robot) -> tuple[float, tuple[float, float, float]]:
+    """Read a step's ``payload_kg`` and ``payload_com_mm``: the payload step's, and only its."""
+    kg = st.number("payload_kg", None, above=0, hi=MAX_MASS_KG, unit="kg")
+    com = read_com(st, "payload_com_mm")
+    if not payload:
+        for key in ("payload_kg", "payload_com_mm"):
+            if key in st.keys():
+                st.add(key, f"only the payload step (parameter = {PAYLOAD_STEP!r}, last) has one")
+        return 0.0, (0.0, 0.0, 0.0)
+    if kg is None:
+        st.add("payload_kg", "the payload step needs its mass (kg)")
+    else:
+        _check_payload(st, kg, robot)
+    xyz = (0.0, 0.0, 0.0) if com is None else (float(com[0]), float(com[1]), float(com[2]))
+    return float(kg or 0.0), xyz
+
+
+def _check_payload(st: Table, kg: float, robot: Robot) -> None:
+    """Refuse a payload step the robot file does not ask for or whose mass it cannot take."""
+    if not robot.compliances or robot.masses is None:
+        st.add(
+            "payload_kg",
+            "the payload step is for compliances: the robot file lists none in [calibration] "
+            "compliances; use the matching robot file or remove the step",
+        )
+    elif robot.rated_payload_kg is None:
+        st.add(
+            "payload_kg",
+            "the robot file states no rated payload: add [calibration] rated_payload_kg (the "
+            "data sheet's), so that the mass is checked against it",
+        )
+    elif kg + robot.masses.payload_mass_kg > robot.rated_payload_kg:
+        st.add(
+            "payload_kg",
+            f"{kg:g} kg with the tool's {robot.masses.payload_mass_kg:g} kg exceeds the arm's "
+            f"rated payload {robot.rated_payload_kg:g} kg (robot file); use a lighter mass",
+        )
 
 
 def _check_limits(q: np.ndarray, robot: Robot, where: str, table: Table) -> None:
@@ -180,6 +231,9 @@ def plan_to_toml(plan: Plan, header: str = "") -> str:
         lines += ["", "[[step]]", f"parameter = {json.dumps(s.parameter)}"]
         if s.omega is not None:
             lines.append(f"omega = {_short(s.omega)}")
+        if s.parameter == PAYLOAD_STEP:
+            lines.append(f"payload_kg = {_short(s.payload_kg)}")
+            lines.append(f"payload_com_mm = {vec(np.array(s.payload_com_mm))}")
         lines.append("points_deg = [")
         lines += [f"    {vec(r)}," for r in s.points_deg]
         lines.append("]")

@@ -22,6 +22,9 @@ Format (angles in degrees, lengths in mm)::
     gravity_sag_deg_per_m = 0.01          # optional: joints 2, 3 sag per m of lever (budget)
     compliances = ["c2", "c3"]            # optional: compliances to identify (needs [gravity])
     repeatability_mm = 0.02               # optional: the arm's pose repeatability (zero_reading)
+    rated_payload_kg = 5.0                # optional: the arm's rated payload (data sheet)
+    payload_kg = 5.0                      # optional: a mass for plan's payload step (needs
+    payload_com_mm = [0, 0, 50]           #   compliances, rated_payload_kg); its centre (flange)
     [controller]                          # optional
     language = "vplus"                    # or "urscript" (Universal Robots)
     software = "5.20"                     # the controller's software version (optional)
@@ -82,7 +85,7 @@ from wirecal.formats.robot_encoder import (
     read_encoder,
     read_language_and_interface,
 )
-from wirecal.formats.robot_gravity import GRAVITY_KEYS, read_gravity
+from wirecal.formats.robot_gravity import GRAVITY_KEYS, MAX_MASS_KG, read_com, read_gravity
 from wirecal.formats.robot_kinematics import (
     KINEMATICS_KEYS,
     dh_radians,
@@ -102,6 +105,7 @@ from wirecal.formats.robot_values import (
 from wirecal.formats.robot_writer import robot_file_text
 from wirecal.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver import params as P
+from wirecal.solver.gravity import MassModel
 from wirecal.solver.robot import (
     DEFAULT_GRAVITY_SAG_DEG_PER_M,
     DEFAULT_LINK_RADIUS_MM,
@@ -137,7 +141,15 @@ _TOP_KEYS = (
 )
 _KEYS = {
     "tool": ("point_mm",),
-    "calibration": ("parameters", "gravity_sag_deg_per_m", "compliances", "repeatability_mm"),
+    "calibration": (
+        "parameters",
+        "gravity_sag_deg_per_m",
+        "compliances",
+        "repeatability_mm",
+        "rated_payload_kg",
+        "payload_kg",
+        "payload_com_mm",
+    ),
     "geometry": ("link_radius_mm",),
     "urdf": ("source", "base_link", "tip_link", "parallel_tol_deg", "wire_point_mm"),
 }
@@ -181,6 +193,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     repeatability = calibration.number(
         "repeatability_mm", None, above=0, hi=MAX_REPEATABILITY_MM, unit="mm"
     )
+    payload = _payload(calibration, bool(compliances), masses)
     check_units(doc, dh, lo, hi, encoder, radii)
     doc.raise_if_any()
     return Robot(
@@ -203,6 +216,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         compliance_urad_per_nm=compliance,
         compliances=tuple(compliances),
         repeatability_mm=repeatability,
+        **payload,
     )
 
 
@@ -287,6 +301,35 @@ def _compliances(cal: Table, n: int | None, masses: bool) -> list[str]:
             "are assumed, 10 kg per metre of link)",
         )
     return names
+
+
+def _payload(cal: Table, compliances: bool, masses: MassModel | None) -> dict:
+    """Read the payload step's mass, its centre and the arm's rated payload.
+
+    ``payload_kg`` needs ``compliances`` (the step is for them) and ``rated_payload_kg``;
+    with the tool's own mass (``[gravity] payload_mass_kg``) it may not exceed the rating.
+    """
+    rated = cal.number("rated_payload_kg", None, above=0, hi=MAX_MASS_KG, unit="kg")
+    kg = cal.number("payload_kg", None, above=0, hi=MAX_MASS_KG, unit="kg")
+    com = read_com(cal, "payload_com_mm")
+    if kg is not None and not compliances:
+        cal.add(
+            "payload_kg", "is the payload step's mass, for [calibration] compliances; list them"
+        )
+    if kg is not None and rated is None:
+        cal.add(
+            "payload_kg",
+            "needs the arm's rated payload: add rated_payload_kg (the data sheet's), so that "
+            "the mass is checked against it",
+        )
+    tool = masses.payload_mass_kg if masses is not None else 0.0
+    if kg is not None and rated is not None and kg + tool > rated:
+        cal.add(
+            "payload_kg",
+            f"{kg:g} kg with the tool's {tool:g} kg ([gravity] payload_mass_kg) exceeds the "
+            f"rated payload {rated:g} kg; use a lighter mass",
+        )
+    return {"rated_payload_kg": rated, "payload_kg": kg, "payload_com_mm": com}
 
 
 def _urdf(table: Table, source: str) -> UrdfSource | None:

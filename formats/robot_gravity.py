@@ -59,15 +59,7 @@ def read_gravity(
     source = table.string("source", "")
     mass, com = _links(table, n)
     payload = table.number("payload_mass_kg", 0.0, lo=0, hi=MAX_MASS_KG, unit="kg")
-    pay_com = table.vector(
-        "payload_com_mm",
-        [0.0, 0.0, 0.0],
-        length=3,
-        labels="(x, y, z)",
-        lo=-MAX_LENGTH_MM,
-        hi=MAX_LENGTH_MM,
-        unit="mm",
-    )
+    pay_com = read_com(table, "payload_com_mm")
     direction: tuple[float, float, float] | None = DOWN
     if "direction" in table.keys():
         direction = unit_vector(table, "direction", "gravity's direction", ", e.g. [0, 0, -1]")
@@ -92,6 +84,19 @@ def read_gravity(
             direction=np.array(direction),
         ), c
     return MassModel(mass, com, payload, pay_com, np.array(direction), False, source or ""), c
+
+
+def read_com(table: Table, key: str) -> np.ndarray | None:
+    """Read a mass's centre (mm, default the origin) in the last frame: x, y, z in range."""
+    return table.vector(
+        key,
+        [0.0, 0.0, 0.0],
+        length=3,
+        labels="(x, y, z)",
+        lo=-MAX_LENGTH_MM,
+        hi=MAX_LENGTH_MM,
+        unit="mm",
+    )
 
 
 def _links(table: Table, n: int | None) -> tuple[np.ndarray | None, np.ndarray | None]:

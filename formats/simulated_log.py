@@ -68,7 +68,9 @@ def simulate_log(
 def simulated_log_text(run: SimulatedRun) -> str:
     """Return the log's text of ``run``: its header and rows, the last cut if it asks."""
     rows = [format_row(r) for r in run.readings]
-    text = format_header(run.robot, run.plan, run.mm_per_count, (SIMULATED_NOTE,))
+    text = format_header(
+        run.robot, run.plan, run.mm_per_count, (SIMULATED_NOTE,), payload_kg=run.payload_kg
+    )
     text += "\n".join(rows) + ("\n" if rows else "")
     if run.truncate_last and rows:
         text = text[: -(len(rows[-1]) // 2) - 1]

@@ -33,6 +33,7 @@ class Generator(ABC):
     key: ClassVar[str]  # the language key
     refuses: ClassVar[frozenset[str]]  # GenRequest fields it does not take
     default_run: ClassVar[RunParameters]  # the run when the request gives none
+    payload_step: ClassVar[bool] = False  # its programs prompt for a plan's payload step
 
     def __init_subclass__(cls, **kwargs: object) -> None:
         """Refuse a language's generator that replaces :meth:`programs` (and its duties)."""
@@ -57,6 +58,12 @@ class Generator(ABC):
         """
         lang = self.language
         refuse_unsupported(request, self.refuses, lang.title)
+        if plan.payload_step is not None and not self.payload_step:
+            raise WirecalError(
+                f"{plan.source}: the plan has a payload step (a mass mounted at the flange); "
+                f"the {lang.title} programs do not prompt for it yet (only V+ and URScript "
+                "do): plan without [calibration] payload_kg for this controller"
+            )
         preflight(robot, plan, request, lang)
         out = self.render(robot, plan, request)
         problems = output_problems(robot, out, lang)

@@ -13,7 +13,7 @@ from typing import TypeVar, cast
 
 import numpy as np
 
-from wirecal.solver.plan.calibration_plan import Plan
+from wirecal.solver.plan.calibration_plan import PAYLOAD_STEP, Plan
 from wirecal.solver.robot import Robot
 
 T = TypeVar("T")
@@ -60,6 +60,7 @@ def run_steps(
                 "number": j,
                 "parameter": s.parameter,
                 "count": len(s.points_deg),
+                "payload_kg": f"{s.payload_kg:g}" if s.parameter == PAYLOAD_STEP else None,
                 "vias": [joint_target(v, target) for v in s.via_deg],
                 "points": [
                     {"index": i, "global": int(first[j - 1]) + i - 1, **joint_target(p, target)}
@@ -68,6 +69,24 @@ def run_steps(
             }
         )
     return steps
+
+
+def payload_context(plan: Plan) -> dict[str, object] | None:
+    """Return the payload step for a template (None without one): mass, centre, step, points.
+
+    ``kg`` and ``com_mm`` as written in the programs (the plan's numbers, shortest form),
+    ``step`` its number (the last), ``points_before`` the points of the parameters' steps:
+    the controller solver's, which has no gravity model and leaves the step's points out.
+    """
+    step = plan.payload_step
+    if step is None:
+        return None
+    return {
+        "kg": f"{step.payload_kg:g}",
+        "com_mm": [f"{x:g}" for x in step.payload_com_mm],
+        "step": len(plan.steps),
+        "points_before": plan.n_points - len(step.points_deg),
+    }
 
 
 def give_move_speeds(steps: list[dict[str, object]], speeds: Iterable[T], key: str) -> T:

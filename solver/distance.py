@@ -14,6 +14,7 @@ or (T, n). Results are (k,)/(k, m), or (T, k)/(T, k, m) for T models.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -29,7 +30,24 @@ def _stack(model: Model, q: np.ndarray, q0: np.ndarray) -> tuple[Model, np.ndarr
     q0 = np.broadcast_to(np.asarray(q0, dtype=float), (T, q.shape[-1]))
     Q = np.concatenate([q0[:, None, :], q], axis=1).reshape(-1, q.shape[-1])
     k1 = q.shape[1] + 1
-    return (repeat(model, k1) if model.batched else model), Q, k1
+    big = repeat(model, k1) if model.batched else model
+    return _load_at_points(big, T, k1), Q, k1
+
+
+def _load_at_points(model: Model, T: int, k1: int) -> Model:
+    """Return the model with its per-point load (kg) for the batch: none at θ0.
+
+    The mass is mounted after the zero reading at θ0 (the plan's payload step), so the
+    wire's exit, p(θ0), is that of the arm without it.
+    """
+    masses = model.masses
+    if masses is None or masses.load_kg is None:
+        return model
+    kg = np.asarray(masses.load_kg, dtype=float)
+    if kg.shape != (k1 - 1,):
+        raise ValueError(f"the mounted load is given for {kg.size} points; there are {k1 - 1}")
+    per = np.tile(np.concatenate([[0.0], kg]), T)
+    return replace(model, masses=replace(masses, load_kg=per))
 
 
 def _shape(model: Model, arr: np.ndarray) -> np.ndarray:

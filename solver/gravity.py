@@ -20,7 +20,7 @@ origins, arrays (N, n+1, 3) of :class:`~wirecal.solver.kinematics.Frames`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -45,7 +45,9 @@ class MassModel:
     ``link_com_mm[k]`` is link k+1's centre of mass in DH frame k+1 (the frame joint k+1
     turns); ``payload_com_mm`` is in the last frame (the flange). ``assumed`` says the
     masses are :func:`default_masses`' (no data sheet or URDF), ``source`` where they come
-    from.
+    from. ``load_kg`` (one per configuration the model is evaluated at, or None) is a
+    mass the operator mounts at the flange for some of them, its centre ``load_com_mm``
+    in the last frame (the plan's payload step, :func:`with_load`).
     """
 
     link_mass_kg: np.ndarray  # (n,)
@@ -55,6 +57,8 @@ class MassModel:
     direction: np.ndarray = field(default_factory=lambda: np.array(DOWN))
     assumed: bool = False
     source: str = ""
+    load_kg: np.ndarray | None = None  # (N,): a mass mounted for some configurations
+    load_com_mm: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     @property
     def n_joints(self) -> int:
@@ -91,6 +95,21 @@ def wrist_weight(n_joints: int) -> MassModel:
     return MassModel(mass, np.zeros((n_joints, 3)), source="the assumed sag: 1 N at the wrist")
 
 
+def with_load(masses: MassModel, load_kg: np.ndarray, com_mm: np.ndarray) -> MassModel:
+    """Return ``masses`` with a mass ``load_kg[i]`` (kg) at the flange for configuration i.
+
+    The calibration payload (the plan's payload step) beside the tool's own
+    ``payload_mass_kg``; ``com_mm`` is its centre in the last frame.
+    """
+    kg = np.asarray(load_kg, dtype=float)
+    return replace(masses, load_kg=kg, load_com_mm=np.asarray(com_mm, dtype=float))
+
+
+def unloaded(masses: MassModel | None) -> MassModel | None:
+    """Return ``masses`` without a per-configuration load (as at θ0, where none is mounted)."""
+    return masses if masses is None or masses.load_kg is None else replace(masses, load_kg=None)
+
+
 def gravity_torques_nm(
     masses: MassModel, x: np.ndarray, z: np.ndarray, o: np.ndarray
 ) -> np.ndarray:
@@ -112,7 +131,32 @@ def gravity_torques_nm(
         moment[:, -1] += np.cross(r_pay, F_pay)
         F = F.copy()
         F[-1] += F_pay
+    if masses.load_kg is not None:
+        moment, F = _with_load_moment(masses, moment, F, o[:, -1], R[:, -1], weight)
     S1 = np.cumsum(moment[:, ::-1], axis=1)[:, ::-1]
-    S0 = np.cumsum(F[::-1], axis=0)[::-1]
+    S0 = np.cumsum(F[..., ::-1, :], axis=-2)[..., ::-1, :]  # (n, 3), or (N, n, 3) with a load
     M = S1 - np.cross(o[:, 1:], S0)
     return np.einsum("nkc,nkc->nk", z[:, 1:], M) / 1000.0
+
+
+def _with_load_moment(
+    masses: MassModel,
+    moment: np.ndarray,
+    F: np.ndarray,
+    o_last: np.ndarray,
+    R_last: np.ndarray,
+    weight: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Add the per-configuration load's moment and force to the last link's (N, n, 3)."""
+    kg = np.asarray(masses.load_kg, dtype=float)
+    if kg.shape != (len(o_last),):
+        raise ValueError(
+            f"the mounted load is given for {kg.size} configurations; the model is "
+            f"evaluated at {len(o_last)}"
+        )
+    F_load = kg[:, None] * weight  # (N, 3)
+    r_load = o_last + R_last @ masses.load_com_mm
+    moment, F = moment.copy(), np.array(np.broadcast_to(F, moment.shape))
+    moment[:, -1] += np.cross(r_load, F_load)
+    F[:, -1] += F_load
+    return moment, F

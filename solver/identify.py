@@ -22,7 +22,7 @@ import numpy as np
 
 from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.identifiability import covariance
-from wirecal.solver.kinematics import Model, with_errors
+from wirecal.solver.kinematics import Model, loaded, with_errors
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.scale import PPM
@@ -43,6 +43,19 @@ def omega_vector(
     return ErrorSet(names, n_joints).to_internal(bound)
 
 
+def at_points(model: Model, plan: Plan, present: np.ndarray | None = None) -> Model:
+    """Return ``model`` as it is at ``plan``'s points (those ``present``): loads mounted.
+
+    The points of a payload step carry its mass (:meth:`Plan.loads`); without one, the
+    model itself.
+    """
+    loads = plan.loads()
+    if loads is None:
+        return model
+    kg = loads[0] if present is None else loads[0][present]
+    return loaded(model, kg, loads[1])
+
+
 @dataclass(frozen=True)
 class Problem:
     """The data of one calibration: points, θ0, measured lengths, the plan's steps.
@@ -56,15 +69,26 @@ class Problem:
     q0: np.ndarray  # (n,) radians
     d: np.ndarray  # (N,) or (T, N) mm
     step: np.ndarray  # (N,) 1-based step of each point
+    load_kg: np.ndarray | None = None  # (N,) the mass at the flange per point (payload step)
+    load_com_mm: np.ndarray | None = None  # its centre in the last frame
 
     @property
     def errors(self) -> ErrorSet:
         """The parameters, in identification order, with their units."""
         return ErrorSet(self.names, self.base.n_joints)
 
+    def at(self, x: np.ndarray | None = None) -> Model:
+        """Return the model at offsets ``x`` (None: the base) at the points ``q``: loads on."""
+        model = self.base if x is None else with_errors(self.base, self.names, x)
+        if self.load_kg is None:
+            return model
+        return loaded(
+            model, self.load_kg, np.zeros(3) if self.load_com_mm is None else self.load_com_mm
+        )
+
     def residuals(self, x: np.ndarray) -> np.ndarray:
         """Return the model's wire lengths minus the measured ones (mm) at offsets ``x``."""
-        return wire_lengths(with_errors(self.base, self.names, x), self.q, self.q0) - self.d
+        return wire_lengths(self.at(x), self.q, self.q0) - self.d
 
 
 @dataclass(frozen=True)
@@ -317,7 +341,7 @@ def _evaluator(
         key = x.tobytes()
         if key not in last:
             d, J = wire_jacobian(
-                with_errors(problem.base, problem.names, x[:m]),
+                problem.at(x[:m]),
                 problem.q,
                 problem.q0,
                 problem.names,

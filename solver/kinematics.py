@@ -33,7 +33,7 @@ import numpy as np
 
 from wirecal.solver import params as P
 from wirecal.solver.exit_geometry import Pulley
-from wirecal.solver.gravity import MassModel, gravity_torques_nm
+from wirecal.solver.gravity import MassModel, gravity_torques_nm, with_load
 
 
 @dataclass(frozen=True)
@@ -108,6 +108,24 @@ def with_errors(base: Model, names: Sequence[str], values: np.ndarray) -> Model:
         else:
             dh[..., p.row, P.DH_COLUMN[p.kind]] += values[..., k]
     return Model(dh, tool, base.pulley, base.masses, compliance)
+
+
+def loaded(
+    model: Model, kg: Sequence[float] | np.ndarray, com_mm: Sequence[float] | np.ndarray
+) -> Model:
+    """Return ``model`` with ``kg[i]`` (kg) at the flange at configuration i, centre ``com_mm``.
+
+    The mass the operator mounts for a plan's payload step
+    (:func:`~wirecal.solver.gravity.with_load`); a model without masses cannot carry it.
+    """
+    if model.masses is None:
+        raise ValueError("a mounted mass needs the arm's masses ([gravity])")
+    return replace(
+        model,
+        masses=with_load(
+            model.masses, np.asarray(kg, dtype=float), np.asarray(com_mm, dtype=float)
+        ),
+    )
 
 
 def repeat(model: Model, counts: int) -> Model:

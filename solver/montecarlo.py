@@ -179,7 +179,9 @@ def _measured(
     q, step, _ = plan.all_points()
     d = d * factor[:, None]
     return (
-        Problem(base, names, np.radians(q), np.radians(plan.theta0_deg), d, step),
+        Problem(
+            base, names, np.radians(q), np.radians(plan.theta0_deg), d, step, *(plan.loads() or ())
+        ),
         factor,
         scale_std,
     )

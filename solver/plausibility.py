@@ -40,7 +40,7 @@ from wirecal.solver.compliance import SIGMA_LIMIT_URAD_PER_NM
 from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.errors import Implausible
 from wirecal.solver.identifiability import Identifiability, analyse_jacobian, covariance
-from wirecal.solver.identify import DEFAULT_OMEGA
+from wirecal.solver.identify import DEFAULT_OMEGA, at_points
 from wirecal.solver.kinematics import with_errors
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.scale import DRIFT_REMOVABLE_MM_PER_H, DRIFT_TOLERANCE_MM_PER_H, PPM
@@ -90,7 +90,7 @@ def assess(
     names = est.names
     present = m.present
     q_deg = m.joints_deg[present]
-    base = robot.nominal
+    base = at_points(robot.nominal, result.plan, present)  # a payload step's mass on
     J = sensitivity(base, q_deg, m.theta0_deg, names).psi  # boundary units
     ident = analyse_jacobian(J, names)
     findings: list[Finding] = []
@@ -156,7 +156,7 @@ def _scale_explains(result: SolveResult, limit_mm: float) -> str:
     errors = ErrorSet(est.names, robot.n_joints)
     q, q0 = np.radians(m.joints_deg[m.present]), np.radians(m.theta0_deg)
     model = with_errors(robot.nominal, est.names, errors.to_internal(est.values))
-    d, J = wire_jacobian(model, q, q0, est.names)
+    d, J = wire_jacobian(at_points(model, result.plan, m.present), q, q0, est.names)
     measured = m.distance_mm[m.present]
     A = np.column_stack([J, -measured])
     dof = len(measured) - A.shape[1]

@@ -151,6 +151,9 @@ class Robot:
     compliance_urad_per_nm: np.ndarray | None = None  # [gravity]: c_j, µrad/(N·m) (None: 0)
     compliances: tuple[str, ...] = ()  # [calibration]: compliances to identify (c2, c3, …)
     repeatability_mm: float | None = None  # [calibration]: the arm's (zero_reading); None: 0
+    rated_payload_kg: float | None = None  # [calibration]: the data sheet's rated payload
+    payload_kg: float | None = None  # [calibration]: the plan's payload step's mass (None: none)
+    payload_com_mm: np.ndarray | None = None  # [calibration]: its centre in the last frame
 
     @property
     def n_joints(self) -> int:

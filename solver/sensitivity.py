@@ -11,11 +11,12 @@ free span from the pulley to the tool point, the gradient of the wire length
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from wirecal.solver.exit_geometry import wire_path
+from wirecal.solver.gravity import unloaded
 from wirecal.solver.kinematics import Model, tool_jacobian
 from wirecal.solver.params import ErrorSet
 
@@ -44,7 +45,8 @@ def sensitivity(
     names = tuple(names)
     errors = ErrorSet(names, model.n_joints)
     p, J = tool_jacobian(model, np.radians(np.atleast_2d(q_deg)), names)
-    p0, J0 = tool_jacobian(model, np.radians(np.atleast_2d(theta0_deg)), names)
+    at_zero = replace(model, masses=unloaded(model.masses))  # no load mounted at θ0
+    p0, J0 = tool_jacobian(at_zero, np.radians(np.atleast_2d(theta0_deg)), names)
     nu = p - p0[0]
     nu_hat = wire_path(model.pulley, nu)[1]
     phi_i, phi_0 = errors.per_boundary(J), errors.per_boundary(J0[0])

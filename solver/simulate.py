@@ -39,7 +39,7 @@ from wirecal.solver.distance import wire_vectors
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import Exit, physical_wire_mm
 from wirecal.solver.gravity import gravity_torques_nm, wrist_weight
-from wirecal.solver.kinematics import Model, rigid_frames, tool_position
+from wirecal.solver.kinematics import Model, loaded, rigid_frames, tool_position
 from wirecal.solver.log.readings import REFERENCE_STEP, Reading
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import DEFAULT_GRAVITY_SAG_DEG_PER_M, Encoder, Robot
@@ -252,6 +252,8 @@ def true_lengths(model: Model, plan: Plan, exit_: Exit | None = None) -> np.ndar
     the model's own (its pulley, or a point).
     """
     q, _, _ = plan.all_points()
+    loads = plan.loads()  # a payload step's points: the mass at the flange
+    model = model if loads is None else loaded(model, *loads)
     v = wire_vectors(model, np.radians(q), np.radians(plan.theta0_deg))
     return physical_wire_mm(model.pulley if exit_ is None else exit_, v)
 
@@ -300,6 +302,7 @@ class SimulatedRun:
     mm_per_count: float  # the robot file's (or the one given), as the controller logs it
     readings: tuple[Reading, ...]
     truncate_last: bool = False
+    payload_kg: float | None = None  # the payload step's mass, as the log's header says
 
 
 def simulate_run(
@@ -357,7 +360,8 @@ def simulate_run(
     readings = zip(kinds, steps, indices, joints, mean, strict=True)
     rows += _reading_rows(readings, spread, times, settle_s, samples)
     cut = tuple(rows[: faults.stop_after])  # all of them when the run does not stop
-    return SimulatedRun(robot.name, plan.fingerprint(), mpc, cut, faults.truncate_last)
+    kg = None if plan.payload_step is None else plan.payload_step.payload_kg
+    return SimulatedRun(robot.name, plan.fingerprint(), mpc, cut, faults.truncate_last, kg)
 
 
 def _reading_rows(
@@ -487,8 +491,11 @@ def _row_lengths(
     model = robot.model(errors)
     rng = np.random.default_rng([seed, 6])
     actual = joints_deg + unmodelled.joint_errors_deg(model, joints_deg, rng)
-    p = tool_position(model, np.radians(actual))
     p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
+    loads = plan.loads()  # the payload step's points carry its mass, its zero none
+    if loads is not None:
+        model = loaded(model, [0.0 if k is None else loads[0][k] for k in points], loads[1])
+    p = tool_position(model, np.radians(actual))
     return np.asarray(physical_wire_mm(robot.encoder.exit, p - p0), dtype=float)
 
 

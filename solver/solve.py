@@ -41,7 +41,7 @@ from wirecal.solver.identify import (
     omega_vector,
     run_stepwise,
 )
-from wirecal.solver.kinematics import with_errors
+from wirecal.solver.kinematics import Model
 from wirecal.solver.log.measurements import Measurements
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan.calibration_plan import Plan
@@ -251,7 +251,7 @@ def solve(
     left, names, step = _measured_steps(plan, m, partial)
     factor, notes = _reference_scale(robot, m)
     k = factor if factor is not None and corrections else 1.0
-    problem, psi, comp = _problem(robot, m, names, step, k)
+    problem, psi, comp = _problem(robot, plan, m, (names, step), k)
     omega = omega_vector(names, robot.n_joints, plan, omega_default)
     fit = _identify(robot, problem, omega, psi, robust)
     drift, clean = _judge_drift(robot, m, fit, k, problem, (omega, psi, robust))
@@ -323,6 +323,7 @@ def _measured_steps(
     left = tuple(n for j, n in enumerate(plan.order) if not np.any(step == j + 1))
     names = tuple(n for n in plan.order if n not in left)
     renumber = {plan.order.index(n) + 1: k + 1 for k, n in enumerate(names)}
+    renumber[len(plan.order) + 1] = len(names) + 1  # the payload step: no parameter's
     step = np.array([renumber[s] for s in step])
     if not names:
         raise WirecalError(f"{m.source}: no calibration point was measured; nothing to solve")
@@ -330,20 +331,30 @@ def _measured_steps(
 
 
 def _problem(
-    robot: Robot, m: Measurements, names: tuple[str, ...], step: np.ndarray, k: float
+    robot: Robot,
+    plan: Plan,
+    m: Measurements,
+    measured: tuple[tuple[str, ...], np.ndarray],
+    k: float,
 ) -> tuple[Problem, np.ndarray, ComplianceObservability | None]:
     """Return the identification problem of the measured points, its ψ and the compliances.
 
-    The lengths are scaled by ``k``; the compliances the points identify are solved
-    beside ``names``.
+    ``measured``: the parameters solved and the points' steps. The lengths are scaled by
+    ``k``; the compliances the points identify are solved beside the parameters; the
+    points of a payload step carry its mass (:meth:`~wirecal.solver.identify.Problem.at`).
     """
-    base = robot.nominal
+    names, step = measured
     q_deg = m.joints_deg[m.present]
     d = m.distance_mm[m.present] * k
-    comp = _compliances(robot, q_deg, m.theta0_deg, names)
-    solved = names + (comp.identified if comp is not None else ())
-    problem = Problem(base, solved, np.radians(q_deg), np.radians(m.theta0_deg), d, step)
-    psi = sensitivity(base, q_deg, m.theta0_deg, solved).psi
+    pay = plan.payload_step
+    load = plan.point_load_kg()[m.present] if pay is not None else None
+    com = np.array(pay.payload_com_mm) if pay is not None else None
+    problem = Problem(
+        robot.nominal, names, np.radians(q_deg), np.radians(m.theta0_deg), d, step, load, com
+    )
+    comp = _compliances(robot, problem.at(), q_deg, m.theta0_deg, names)
+    problem = replace(problem, names=names + (comp.identified if comp is not None else ()))
+    psi = sensitivity(problem.at(), q_deg, m.theta0_deg, problem.names).psi
     return problem, psi, comp
 
 
@@ -454,7 +465,7 @@ def _with_scale_sigma(est: Estimate, problem: Problem, scale_std: float) -> Esti
     if est.std is None or est.correlation is None or scale_std == 0:
         return est
     _, J = wire_jacobian(
-        with_errors(problem.base, problem.names, problem.errors.to_internal(est.values)),
+        problem.at(problem.errors.to_internal(est.values)),
         problem.q,
         problem.q0,
         problem.names,
@@ -496,13 +507,16 @@ def _budget(
 
 
 def _compliances(
-    robot: Robot, q_deg: np.ndarray, theta0_deg: np.ndarray, names: tuple[str, ...]
+    robot: Robot, model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray, names: tuple[str, ...]
 ) -> ComplianceObservability | None:
-    """Which of the robot file's ``compliances`` the measured points identify (None: none asked)."""
+    """Which of the robot file's ``compliances`` the measured points identify (None: none asked).
+
+    ``model``: the nominal one as at the points (a payload step's mass on).
+    """
     if not robot.compliances:
         return None
     return compliance_observability(
-        robot.nominal, q_deg, theta0_deg, names, robot.compliances, READING_NOISE_MM
+        model, q_deg, theta0_deg, names, robot.compliances, READING_NOISE_MM
     )
 
 
@@ -520,7 +534,7 @@ def _compliance_terms(
     others = tuple(n for n in robot.compliances if n in comp.reasons and n not in comp.no_torque)
     unit = ErrorSet(others, robot.n_joints)
     wire = (  # every compliance asked for identified: none at its prior
-        wire_jacobian(problem.base, problem.q, problem.q0, others)[1]
+        wire_jacobian(problem.at(), problem.q, problem.q0, others)[1]
         if others
         else np.zeros((len(problem.q), 0))
     )

@@ -162,7 +162,8 @@ def test_every_function_row_is_well_formed():
     for name, b in BUILTINS.items():
         assert name.isidentifier()
         assert 0 <= b.required <= len(b.params)
-        assert b.source == "unconfirmed" or any(k in b.source for k in ("SD", "SW")), name
+        pages = ("SD", "SW", "UR article")  # Script Manual pages, or a UR support article
+        assert b.source == "unconfirmed" or any(k in b.source for k in pages), name
     # the functions wirecal emits were read on a page
     for name in ("movej", "encoder_get_tick_count", "socket_open", "textmsg", "floor"):
         assert BUILTINS[name].source != "unconfirmed", name

@@ -48,7 +48,7 @@ from wirecal.solver.cell.check import move_collision
 from wirecal.solver.counter import Counter
 from wirecal.solver.exit_geometry import physical_wire_mm
 from wirecal.solver.ik.solutions import flange_pose
-from wirecal.solver.kinematics import tool_position
+from wirecal.solver.kinematics import loaded, tool_position
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.run_parameters import (
@@ -161,6 +161,7 @@ class World:
     encoder_truth: EncoderTruth = IDEAL_ENCODER  # the true scale, temperature, drift
     run_s: float = 0.0  # the run's duration, for the temperature's time course
     pull_mm: Callable[[float], float] | None = None  # the operator pulls the wire (clock, s)
+    payload: tuple[float, tuple[float, float, float]] | None = None  # the plan's mass, centre
 
     def __post_init__(self) -> None:
         """Derive the true model and start the world's state."""
@@ -188,6 +189,7 @@ class World:
         self.vibration = (0.0, VIBRATION_TAU_S, 0.0, 0.0)  # amplitude mm, τ, phase, since
         self.nest: int | None = None  # the gauge nest the wire tip is seated in (0 A, 1 B)
         self.gauge_mm = reference_lengths(self.robot.encoder, self.encoder_truth)[:2]
+        self.mounted_kg = 0.0  # the mass the operator has mounted at the flange
 
     # ---- operator and console ----
     def show(self, text: str) -> None:
@@ -206,6 +208,8 @@ class World:
             return None
         answer = self.answers.pop(0)
         self.show(f"> {answer}")
+        if answer.strip() == "1":
+            self.handle_mass(text)
         if answer.strip() == "1" and len(self.gauge_mm):
             self.clock += OPERATOR_SEAT_S
             self.pose_error = self.rng.normal(0, self.noise_mm)  # each seating anew
@@ -216,6 +220,21 @@ class World:
             elif "reattached" in text:
                 self.nest = None
         return answer
+
+    def handle_mass(self, text: str) -> None:
+        """Mount or remove the plan's payload mass when a confirmed prompt asks for it.
+
+        The programs' prompts say "when it is mounted" and "when it is removed" (V+ PROMPT
+        answered 1, URScript popup continued); the operator holds the plan's mass
+        (:attr:`payload`) and nothing else.
+        """
+        if self.payload is None:
+            return
+        if "when it is mounted" in text:
+            self.mounted_kg = self.payload[0]
+        elif "when it is removed" in text:
+            self.mounted_kg = 0.0
+        self._wire_at = None
 
     def steady(self) -> bool:
         """At a pause: whether the operator continues (having steadied the arm)."""
@@ -395,7 +414,10 @@ class World:
         Kept while the arm stands: the settle rule reads the counter several times per point.
         """
         if self._wire_at is None or self._wire_at[0] is not self.actual:
-            p = tool_position(self.model, np.radians(self.actual)[None])[0]
+            model = self.model
+            if self.mounted_kg and self.payload is not None:
+                model = loaded(model, [self.mounted_kg], self.payload[1])
+            p = tool_position(model, np.radians(self.actual)[None])[0]
             wire = float(physical_wire_mm(self.robot.encoder.exit, p - self.p0))
             self._wire_at = (self.actual, wire)
         return self._wire_at[1]
@@ -449,6 +471,7 @@ def measurement_world(
     answers, the encoder's truth…).
     """
     folder.mkdir(parents=True, exist_ok=True)
+    pay = plan.payload_step
     return World(
         robot,
         truth,
@@ -460,8 +483,14 @@ def measurement_world(
         faults=faults or Faults(),
         unmodelled=unmodelled,
         wire_limits=wire_limits,
+        payload=None if pay is None else (pay.payload_kg, pay.payload_com_mm),
         **world,
     )
+
+
+def payload_prompts(plan: Plan) -> int:
+    """Return the prompts of a plan's payload step: mount the mass, remove it (none without)."""
+    return 0 if plan.payload_step is None else 2
 
 
 def mount_then_run(

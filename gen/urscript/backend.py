@@ -30,6 +30,7 @@ class URScriptGenerator(Generator):
     # (SD "script over port 30002"), no patch or validation programs yet
     refuses = frozenset({"patch", "validation", "log_file", "echo_log", "crlf"})
     default_run = PAPER_RUN
+    payload_step = True  # wc_run asks for the mass by popup and tells set_payload
 
     def options(self, request: GenRequest) -> UrOptions:
         """Return the scripts' options for ``request``."""

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import repeat
 from pathlib import Path
 
@@ -29,7 +29,13 @@ from wirecal.formats.log import COLUMNS_V1
 from wirecal.formats.log import VERSION as LOG_VERSION
 from wirecal.formats.run_token import run_token, token_line
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import give_move_speeds, joint_target, name_problems, run_steps
+from wirecal.gen.targets import (
+    give_move_speeds,
+    joint_target,
+    name_problems,
+    payload_context,
+    run_steps,
+)
 from wirecal.gen.templating import render
 from wirecal.gen.urscript.cb3 import (
     FILTERED_RANGE,
@@ -156,6 +162,35 @@ def solver_tables(robot: Robot, plan: Plan, tables: Tables) -> dict[str, str]:
     return out
 
 
+def _payload(robot: Robot, plan: Plan) -> dict[str, object] | None:
+    """Return the payload step for the templates, with set_payload's arguments.
+
+    set_payload(mass, CoG) sets the whole active payload (kg, CoG in m in the flange frame;
+    :data:`~wirecal.lang.urscript.versions.PAYLOAD_ARTICLE`): the tool's (the robot file's
+    ``[gravity] payload_mass_kg``) with the mass, and the tool's alone after it.
+    """
+    ctx = payload_context(plan)
+    step = plan.payload_step
+    if ctx is None or step is None:
+        return None
+    masses = robot.masses
+    tool_kg = 0.0 if masses is None else float(masses.payload_mass_kg)
+    tool_cog = np.zeros(3) if masses is None else np.asarray(masses.payload_com_mm, dtype=float)
+    total = tool_kg + step.payload_kg
+    cog = (tool_kg * tool_cog + step.payload_kg * np.asarray(step.payload_com_mm)) / total
+    return ctx | {
+        "total_kg": f"{total:g}",
+        "cog_m": _metres(cog),
+        "tool_kg": f"{tool_kg:g}",
+        "tool_cog_m": _metres(tool_cog),
+    }
+
+
+def _metres(v_mm: np.ndarray) -> str:
+    """Return a point in mm as a URScript list in m."""
+    return "[" + ", ".join(_fixed(x / 1000, 6) for x in v_mm) + "]"
+
+
 def _fixed(x: float, digits: int) -> str:
     """Return ``x`` with at most ``digits`` decimals, no trailing zeros, never ``-0``."""
     s = f"{x:.{digits}f}".rstrip("0").rstrip(".")
@@ -204,6 +239,8 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
     (:meth:`wirecal.gen.backends.Generator.programs`).
     """
     host, port = _check(robot, opt)
+    if plan.payload_step is not None:  # its points need the gravity model of 'wirecal solve'
+        opt = replace(opt, solver=False)
     tables = build_tables(robot, plan)
     mpc = robot.encoder.mm_per_count
     speed_rad_s = _speed_rad_s(robot, opt.run.speed_pct)
@@ -240,6 +277,7 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
         "nit": STEP_ITERATIONS,
         "n": tables.n,
         "m": len(tables.names),
+        "payload": _payload(robot, plan),
     }
     steps = run_steps(plan, tables.first, rad_literal)
     legs = leg_joints(robot, plan) if is_cb3(robot.controller.software) else None

@@ -19,6 +19,7 @@ class VPlusGenerator(Generator):
 
     key = VPlus.key
     refuses = frozenset({"solver", "host", "port"})  # the log is a file; no socket
+    payload_step = True  # wc.run prompts the operator to mount and remove the mass
     default_run = DEFAULT_RUN
 
     def options(self, request: GenRequest) -> GenOptions:

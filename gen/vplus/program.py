@@ -21,7 +21,13 @@ from wirecal.formats.log import COLUMNS as LOG_COLUMNS
 from wirecal.formats.log import MAGIC as LOG_MAGIC
 from wirecal.formats.log import VERSION as LOG_VERSION
 from wirecal.gen.tables import JOINT_ITERATIONS, STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import give_move_speeds, joint_literal, name_problems, run_steps
+from wirecal.gen.targets import (
+    give_move_speeds,
+    joint_literal,
+    name_problems,
+    payload_context,
+    run_steps,
+)
 from wirecal.gen.templating import render
 from wirecal.gen.vplus.literals import MAX_LINE, double_literal, long_lines, ppoint
 from wirecal.lang.vplus.parser import parse_module
@@ -149,9 +155,9 @@ def data_lines(t: Tables, robot: Robot) -> list[str]:
         lines += [
             f"wc.first[{s + 1}] = {int(t.first[s])}",
             f"wc.count[{s + 1}] = {int(t.count[s])}",
-            f"wc.spar[{s + 1}] = {int(t.spar[s])}",
-            _put("wc.om", s + 1, t.omega[s]),
         ]
+        if s < len(t.spar):  # a payload step (last) has no parameter
+            lines += [f"wc.spar[{s + 1}] = {int(t.spar[s])}", _put("wc.om", s + 1, t.omega[s])]
     for j, (name, unit) in enumerate(zip(t.names, t.errors.units, strict=True)):
         lines += [
             f"wc.pk[{j + 1}] = {int(t.pk[j])}",
@@ -234,6 +240,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         v=_validation_context(robot, opt),
         echo=opt.echo_log,
         pulley=tables.pulley is not None,
+        payload=payload_context(plan),
         **_run_context(opt),
         **_encoder_context(robot, opt),
     )

@@ -48,6 +48,14 @@ CONVEYOR_GUIDE = (
 )
 """UR's conveyor tracking guide: the encoder calls on CB3 from 3.8 and on e-Series from 5.2."""
 
+PAYLOAD_ARTICLE = (
+    "https://www.universal-robots.com/articles/ur/programming/"
+    "how-to-change-payload-and-center-of-gravity-settings-using-urscript (set_payload(mass, "
+    "CoG): mass in kg, CoG [Cx, Cy, Cz] in m; valid for CB3 3.3 onwards and every e-Series "
+    "version)"
+)
+"""UR's article on setting the active payload from URScript during a program."""
+
 SINCE: tuple[Since, ...] = (
     Since(
         "time",
@@ -78,6 +86,7 @@ SINCE: tuple[Since, ...] = (
         "encoder_enable_pulse_decode(i, type, A, B) on digital inputs 8-11",
         CONVEYOR_GUIDE,
     ),
+    Since("set_payload", None, {3: (3, 3), 5: (5, 0)}, "set_payload(mass, CoG)", PAYLOAD_ARTICLE),
 )
 
 

@@ -86,3 +86,32 @@ def check_origin(log: Log, plan: Plan, robot: Robot) -> None:
         )
     if problems:  # a log of another plan or robot: row-by-row complaints would be noise
         raise WirecalError(problems)
+
+
+def payload_problems(log: Log, plan: Plan) -> list[str]:
+    """Check the log's ``payload_kg`` marker against the plan's payload step.
+
+    A plan with a payload step needs a log that says its points were measured with the
+    mass at the flange, and that mass; a log that says so needs such a plan.
+    """
+    step = plan.payload_step
+    number = len(plan.steps)
+    if step is None and log.payload_kg is not None:
+        return [
+            f"{log.source}: the log says a {log.payload_kg:g} kg payload was mounted "
+            "(payload_kg) but the plan has no payload step; use the plan it was taken with"
+        ]
+    if step is None:
+        return []
+    if log.payload_kg is None:
+        return [
+            f"{log.source}: the plan's step {number} is a payload step ({step.payload_kg:g} kg "
+            "at the flange) but the log has no '# payload_kg' line saying the mass was "
+            "mounted: take the log with the programs generated for this plan"
+        ]
+    if not math.isclose(log.payload_kg, step.payload_kg, rel_tol=1e-6, abs_tol=1e-9):
+        return [
+            f"{log.source}: the log's payload_kg {log.payload_kg:g} kg is not the plan's "
+            f"payload step's {step.payload_kg:g} kg; use the plan it was taken with"
+        ]
+    return []

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.log.checks import check_origin, timer_problems
+from wirecal.solver.log.checks import check_origin, payload_problems, timer_problems
 from wirecal.solver.log.readings import Log, Reading
 from wirecal.solver.log.rows import (
     DEFAULT_TOLERANCES,
@@ -143,6 +143,7 @@ def check_log(
         check_origin(log, plan, robot)
     src = log.source
     problems: list[str] = []
+    problems += payload_problems(log, plan)
     rows = read_rows(log, plan, robot, tol, problems)
     zeros, n_steps, mpc = rows.zeros, len(plan.steps), log.mm_per_count
     first_zero = zeros[min(zeros)] if zeros else None

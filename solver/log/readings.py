@@ -46,3 +46,4 @@ class Log:
     sha256: str
     version: int
     notes: tuple[str, ...] = ()
+    payload_kg: float | None = None  # the payload step's mass, as the log's header says

@@ -19,12 +19,24 @@ import numpy as np
 
 @dataclass(frozen=True)
 class Step:
-    """One identification step: its parameter, points and via points (deg)."""
+    """One identification step: its parameter, points and via points (deg).
+
+    The payload step (:data:`PAYLOAD_STEP`, after the parameters' steps) has no
+    parameter: its points are measured with a mass ``payload_kg`` mounted at the flange,
+    its centre ``payload_com_mm`` in the last frame, after its zero reading at θ0; the
+    compliances are solved from them (:mod:`~wirecal.solver.plan.payload`).
+    """
 
     parameter: str
     points_deg: np.ndarray  # (k, n)
     via_deg: np.ndarray  # (v, n), possibly empty
     omega: float | None = None
+    payload_kg: float = 0.0
+    payload_com_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+PAYLOAD_STEP = "payload"
+"""The ``parameter`` of the payload step, the last of a plan that has one."""
 
 
 @dataclass(frozen=True)
@@ -40,6 +52,25 @@ class Plan:
     joint_only: bool = False
     """The steps split poses chosen for the joint method (``plan --pool``): none isolates
     its parameter, so the step-by-step estimate does not apply."""
+
+    @property
+    def payload_step(self) -> Step | None:
+        """Return the payload step (the last step, with a mass mounted), or None."""
+        last = self.steps[-1] if self.steps else None
+        return last if last is not None and last.parameter == PAYLOAD_STEP else None
+
+    def loads(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Return the mass (kg) at each point and its centre (mm), or None without one."""
+        step = self.payload_step
+        if step is None:
+            return None
+        return self.point_load_kg(), np.array(step.payload_com_mm, dtype=float)
+
+    def point_load_kg(self) -> np.ndarray:
+        """Return the mass (kg) mounted at each point of :meth:`all_points`, (N,)."""
+        return np.concatenate(
+            [np.full(len(s.points_deg), s.payload_kg) for s in self.steps] or [np.zeros(0)]
+        )
 
     @property
     def n_points(self) -> int:
@@ -65,7 +96,11 @@ def _num(x: float) -> str:
 
 
 def fingerprint(plan: Plan) -> str:
-    """sha256 (hex) of the normalised plan: θ0, order, and each step's points and vias."""
+    """sha256 (hex) of the normalised plan: θ0, order, and each step's points and vias.
+
+    The payload step's mass and centre are in it; a plan without one has the
+    fingerprint it had before payload steps existed.
+    """
     canon = {
         "theta0_deg": [_num(v) for v in plan.theta0_deg],
         "order": list(plan.order),
@@ -74,9 +109,20 @@ def fingerprint(plan: Plan) -> str:
                 "parameter": s.parameter,
                 "points_deg": [[_num(v) for v in row] for row in s.points_deg],
                 "via_deg": [[_num(v) for v in row] for row in s.via_deg],
+                **_payload_canon(s),
             }
             for s in plan.steps
         ],
     }
     text = json.dumps(canon, separators=(",", ":"), sort_keys=True)
     return hashlib.sha256(text.encode("ascii")).hexdigest()
+
+
+def _payload_canon(step: Step) -> dict[str, object]:
+    """Return the payload step's mass and centre as the fingerprint has them (others: none)."""
+    if step.parameter != PAYLOAD_STEP:
+        return {}
+    return {
+        "payload_kg": _num(step.payload_kg),
+        "payload_com_mm": [_num(v) for v in step.payload_com_mm],
+    }

@@ -24,6 +24,7 @@ from wirecal.solver.plan.compliance import add_compliance_points
 from wirecal.solver.plan.exit import largest_exit_deg
 from wirecal.solver.plan.joint import joint_choice
 from wirecal.solver.plan.options import Method, PlanOptions, Progress
+from wirecal.solver.plan.payload import payload_step, plan_sigmas
 from wirecal.solver.plan.predict import predicted_accuracy, robot_time
 from wirecal.solver.plan.steps import StepPool, step_by_step, step_error
 from wirecal.solver.plan.tour import tour
@@ -160,6 +161,12 @@ def _unidentifiable(model, q: np.ndarray, theta0: np.ndarray, names: list[str]) 
     return excluded
 
 
+MAX_TIME_RATIO = 1.24
+"""Robot time of a plan with the compliances' points and the payload step over the same
+plan without either (issue 30: at most 1.25×; the payload step takes what the
+compliance points leave, :mod:`~wirecal.solver.plan.payload`)."""
+
+
 def design_at(
     robot: Robot, theta0: np.ndarray, opt: PlanOptions, progress: Progress | None = None
 ) -> Design:
@@ -183,6 +190,7 @@ def design_at(
     pools = step_by_step(robot, theta0, q_all, via_all, psi, remaining, excluded, opt, tick)
     if opt.method == "joint":
         joint_choice(robot, theta0, q_all, via_all, psi, remaining, pools, opt)
+    plain_s = _plain_time(robot, p0, theta0, (q_all, via_all), pools, opt)
     compliance = (
         add_compliance_points(robot, theta0, q_all, via_all, remaining, pools, opt)
         if robot.compliances
@@ -198,14 +206,45 @@ def design_at(
         tuple(Step(s.parameter, s.points_deg, s.via_deg) for s in steps),
         robot=robot.name,
     )
+    lines, sigma = compliance
+    if plain_s is not None:
+        budget_s = MAX_TIME_RATIO * plain_s - robot_time(robot, plan, opt.run)
+        direct = np.vstack([plan.all_points()[0], q_all[np.isnan(via_all[:, 0])]])
+        plan, more = payload_step(robot, plan, remaining, opt, (direct, budget_s))
+        lines, sigma = [*lines, *more], plan_sigmas(robot, plan, remaining)
     d = Design(plan, steps, excluded, method=opt.method, unidentifiable=unidentifiable)
-    d.compliance_lines, d.compliance_sigma = tuple(compliance[0]), compliance[1]
+    d.compliance_lines, d.compliance_sigma = tuple(lines), sigma
     d.predicted = predicted_accuracy(robot, plan, unplanned=tuple(excluded))
     d.robot_time_s = robot_time(robot, plan, opt.run)
     d.exit_line = exit_line(robot, plan)
     d.cell_line = cell_line(robot)
     tick(1.0)
     return d
+
+
+def _plain_time(
+    robot: Robot,
+    p0: np.ndarray,
+    theta0: np.ndarray,
+    candidates_: tuple[np.ndarray, np.ndarray],
+    pools: list[StepPool],
+    opt: PlanOptions,
+) -> float | None:
+    """Return the robot time (s) of the plan without compliance points, for a payload step.
+
+    None without a payload step's mass: the time is only its budget's scale
+    (:data:`MAX_TIME_RATIO`). The steps are toured here as :func:`design_at` tours them.
+    """
+    if robot.payload_kg is None or not robot.compliances:
+        return None
+    q_all, via_all = candidates_
+    steps = [
+        _step_design(robot, p0, theta0, q_all, via_all, k, pool, opt)
+        for k, pool in enumerate(pools)
+    ]
+    order = tuple(p.parameter for p in pools)
+    plain = Plan(theta0, order, tuple(Step(s.parameter, s.points_deg, s.via_deg) for s in steps))
+    return robot_time(robot, plain, opt.run)
 
 
 def _usable(

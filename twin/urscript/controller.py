@@ -81,6 +81,7 @@ class URController:
     lines_sent: int = 0
     syncs: int = 0  # sync() calls (each a 2 ms frame)
     software: str | None = None  # the declared software: a call its pages lack is refused
+    payload: tuple[float, object] | None = None  # the last set_payload (kg, CoG m)
 
     def __post_init__(self) -> None:
         """No encoder is decoded until a program enables it."""
@@ -207,6 +208,12 @@ class URController:
         self.world.show(f"[popup {to_str(title)}] {to_str(s)}")
         if blocking and (warning or error) and not self.world.proceed_on_pause:
             raise Stopped(to_str(s))
+        if blocking:  # the operator does what it asks, then presses Continue
+            self.world.handle_mass(to_str(s))
+
+    def set_payload(self, m, cog=None) -> None:
+        """set_payload: the active payload the controller is told (kg, CoG in m), recorded."""
+        self.payload = (number(m, "set_payload m"), cog)
 
     # ---- sockets ----
     def socket_open(self, address, port, socket_name="socket_0") -> bool:

@@ -37,6 +37,7 @@ from wirecal.twin.world import (
     World,
     measurement_world,
     mount_then_run,
+    payload_prompts,
     stop_reason,
 )
 
@@ -72,7 +73,8 @@ def run_measurement(
     The log is ``log_file`` on the disk (the name the module was generated with; by
     default the first file wc.run opens for writing). ``proceed_on_pause``: the operator
     continues after each PAUSE (having steadied the arm: a vibration stops), else the run
-    ends there. The operator confirms every prompt of the reference step (1), seating the
+    ends there. The operator confirms every prompt of the reference step and of the payload
+    step (1: mounting and removing the plan's mass, :meth:`World.handle_mass`), seating the
     wire tip as asked; the encoder is ``encoder_truth``.
     """
     world = measurement_world(
@@ -87,7 +89,7 @@ def run_measurement(
         faults=faults,
         unmodelled=unmodelled,
         proceed_on_pause=proceed_on_pause,
-        answers=["1"] * (1 + _reference_prompts(robot)),
+        answers=["1"] * (1 + _reference_prompts(robot) + payload_prompts(plan)),
         encoder_truth=encoder_truth,
         run_s=run_timeline(robot, plan, DEFAULT_RUN).total_s + reference_duration_s(robot.encoder),
     )
