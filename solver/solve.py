@@ -491,7 +491,11 @@ def _compliances(
 def _compliance_terms(
     robot: Robot, problem: Problem, comp: ComplianceObservability | None, est: Estimate
 ) -> ComplianceTerms | None:
-    """Return the joint budget's compliances: the identified ones' values, the others' prior."""
+    """Return the joint budget's compliances: the identified ones' values, the others' prior.
+
+    With the joint fit's residuals, from which the budget reads what the points say of the
+    others (:func:`~wirecal.solver.budget.compliance_likelihood`).
+    """
     if comp is None:
         return None
     values = est.as_dict()
@@ -512,6 +516,7 @@ def _compliance_terms(
         np.reshape(wire, (len(problem.q), len(others))),
         unit.to_internal(np.full(len(others), PRIOR_COMPLIANCE_URAD_PER_NM)),
         unit.to_internal([robot.nominal_value(n) for n in others]),
+        problem.residuals(errors.to_internal(est.values)),
     )
 
 
