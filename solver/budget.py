@@ -56,6 +56,7 @@ from wirecal.solver.bound import ErrorModel, bound_mm, joined, truncated_model
 from wirecal.solver.box_gaussian import BoxGaussian
 from wirecal.solver.identifiability import RANK_RTOL, covariance
 from wirecal.solver.kinematics import Model, tool_jacobian
+from wirecal.solver.params import ErrorSet
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM, Drift
 
 ASSUMED_TEMPERATURE_RISE_K = 0.5
@@ -89,6 +90,8 @@ class Budget:
     notes: tuple[str, ...]
     bound: float  # 95 % bound of the mean over the workspace (:mod:`wirecal.solver.bound`)
     bound_compensated: float | None = None  # the same for targets compensated offline
+    # the unidentified compliances' posterior (value, σ; µrad/(N·m)), as the bound takes them
+    posterior: dict[str, tuple[float, float]] | None = None
 
     def as_json(self) -> dict:
         """Return the budget as a JSON-ready dict."""
@@ -101,6 +104,10 @@ class Budget:
         }
         if self.bound_compensated is not None:
             out["bound95_compensated_mm"] = self.bound_compensated
+        if self.posterior:
+            out["compliances_not_identified_urad_per_nm"] = {
+                n: {"value": v, "std": sd} for n, (v, sd) in self.posterior.items()
+            }
         return out
 
 
@@ -278,14 +285,35 @@ def _with_compliance(
     total = rms_tool_error(Jx, extended.second_moment())
     left = -np.concatenate([c.left, c.nominal])
     notes = _notes(src)
+    posterior = _posterior(model, c, unseen)
+    said = ", ".join(f"{n} {v:.2g} ± {sd:.2g}" for n, (v, sd) in posterior.items())
     return Budget(
         terms,
         total.mean_mm,
         total.max_mm,
-        (*notes[:2], COMPLIANCE_NOTE, *notes[3:]),
+        (*notes[:2], COMPLIANCE_NOTE, *notes[3:])
+        + ((f"{POSTERIOR_NOTE}: {said} µrad/(N·m)",) if posterior else ()),
         bound_mm(Jx, replace(extended, bias=extended.bias + left)),
         bound_mm(Jx, extended),
+        posterior,
     )
+
+
+POSTERIOR_NOTE = (
+    "compliance: those not identified as the bound takes them, their range (the file's "
+    "value to 8 µrad/(N·m) beyond) narrowed by what the readings say"
+)
+
+
+def _posterior(model: Model, c: ComplianceTerms, unseen: ErrorModel) -> dict:
+    """Return each unidentified compliance's posterior value and σ (µrad/(N·m))."""
+    if unseen.truncated is None or not c.names:
+        return {}
+    units = ErrorSet(c.names, model.n_joints)
+    mean, cov = unseen.truncated.moments
+    value = units.to_boundary(c.nominal + mean)
+    sd = units.to_boundary(np.sqrt(np.clip(np.diag(cov), 0.0, None)))
+    return {n: (float(v), float(s)) for n, v, s in zip(c.names, value, sd, strict=True)}
 
 
 def compliance_errors(
