@@ -34,11 +34,11 @@ distribution, from its second moment (:func:`~wirecal.solver.accuracy.rms_tool_e
   uniform between none and it. The parameters absorb part of it, a bias the residual
   cannot show;
 * **compliance** — with the robot file's ``compliances``, those the points do not identify
-  (with a torque): their posterior (:func:`compliance_errors`), the prior uniform between
-  the file's value and :data:`~wirecal.solver.compliance.PRIOR_COMPLIANCE_URAD_PER_NM`
-  beyond it times what the readings say of them, N(ĉ, s²) (:func:`compliance_likelihood`):
-  a truncated Gaussian, the uniform where they say nothing; the identified ones are
-  parameters, their σ in the noise.
+  (with a torque): their posterior (:func:`compliance_errors`), the prior uniform over the
+  stated range :data:`~wirecal.solver.compliance.COMPLIANCE_RANGE_URAD_PER_NM` times what
+  the readings say of them, N(ĉ, S) (:func:`compliance_likelihood`): a Gaussian restricted
+  to the range, the uniform where they say nothing; the identified ones are parameters,
+  their σ in the noise.
 
 The total is the second moment of all the terms together (independent sources): the
 expected (RMS) error, a mean, not a bound. The **bound** is the error a calibration stays
@@ -54,6 +54,7 @@ import numpy as np
 from wirecal.solver.accuracy import rms_tool_error, stepwise_map
 from wirecal.solver.bound import ErrorModel, bound_mm, joined, truncated_model
 from wirecal.solver.box_gaussian import BoxGaussian
+from wirecal.solver.compliance import COMPLIANCE_RANGE_URAD_PER_NM
 from wirecal.solver.identifiability import RANK_RTOL, covariance
 from wirecal.solver.kinematics import Model, tool_jacobian
 from wirecal.solver.params import ErrorSet
@@ -118,9 +119,9 @@ class ComplianceTerms:
     ``left`` (m,) is what the controller leaves of the estimated parameters: the value of
     each identified compliance (nominal + offset; the controller takes none), 0 for the
     geometry. ``names`` are the compliances the points do not identify (with a torque),
-    ``wire`` (N, k) their wire-length Jacobian, ``prior`` (k,) the largest value each may
-    have beyond the robot file's, ``nominal`` (k,) the file's; ``residual_mm`` (N,) the
-    joint fit's residuals (model − measured), what the readings say of them.
+    ``wire`` (N, k) their wire-length Jacobian, ``prior`` (2, k) the range of each, as
+    offsets from the robot file's value, ``nominal`` (k,) the file's; ``residual_mm`` (N,)
+    the joint fit's residuals (model − measured), what the readings say of them.
     """
 
     left: np.ndarray
@@ -300,8 +301,8 @@ def _with_compliance(
 
 
 POSTERIOR_NOTE = (
-    "compliance: those not identified as the bound takes them, their range (the file's "
-    "value to 8 µrad/(N·m) beyond) narrowed by what the readings say"
+    "compliance: those not identified as the bound takes them, their range ({:g}–{:g} "
+    "µrad/(N·m)) narrowed by what the readings say".format(*COMPLIANCE_RANGE_URAD_PER_NM)
 )
 
 
@@ -330,8 +331,8 @@ def compliance_errors(
     Jacobian J and the least-squares map M (:func:`_with_compliance`).
 
     The offsets of such compliances from the robot file's values are their posterior: the
-    prior, each uniform over 0 to ``prior``
-    (:data:`~wirecal.solver.compliance.PRIOR_COMPLIANCE_URAD_PER_NM`), times what the
+    prior, each uniform over the stated range ``prior``
+    (:data:`~wirecal.solver.compliance.COMPLIANCE_RANGE_URAD_PER_NM`), times what the
     readings say of them together, N(ĉ, S) (:func:`compliance_likelihood`): that Gaussian
     restricted to the box (:class:`~wirecal.solver.box_gaussian.BoxGaussian`), the uniform
     where the readings say nothing. The geometry's estimates absorb them (M·J_u·c_u) and
@@ -362,8 +363,7 @@ def compliance_likelihood(J: np.ndarray, c: ComplianceTerms, src: Sources) -> Bo
     B[seen] = _estimator(J, c.wire[:, seen])
     said = joined(list(_term_errors(B, src.sigma_mm**2 * B @ B.T, src).values()))
     cov = said.second_moment() - np.outer(said.bias, said.bias)
-    k = len(seen)
-    return BoxGaussian(-B @ c.residual_mm - said.bias, cov, ~seen, np.zeros(k), c.prior)
+    return BoxGaussian(-B @ c.residual_mm - said.bias, cov, ~seen, c.prior[0], c.prior[1])
 
 
 def _separated(J: np.ndarray, wire: np.ndarray) -> np.ndarray:

@@ -61,7 +61,8 @@ def test_a_compliance_the_readings_cannot_separate_keeps_its_prior(ur5e):
     M, wire = np.linalg.pinv(J), J @ np.array([[0.3], [-1.0], [2.0]])
     prior = 8e-6  # rad/(N·m)
     residual = rng.normal(0.0, 0.01, n)
-    terms = ComplianceTerms(np.zeros(m), ("c4",), wire, np.array([prior]), np.zeros(1), residual)
+    span = np.array([[0.0], [prior]])  # offsets 0 to p from the file's value
+    terms = ComplianceTerms(np.zeros(m), ("c4",), wire, span, np.zeros(1), residual)
     Jp = tool_jacobian(ur5e.nominal, q, ("a2", "a3", "d4"))[1]
     Jx, unseen = compliance_errors(ur5e.nominal, q, (Jp, J, M), terms, _src(0.01, n))
     G = np.concatenate([M @ wire[:, 0], [-1.0]])
@@ -84,7 +85,8 @@ def test_what_the_readings_say_of_an_unidentified_compliance(ur5e):
         d = J @ rng.normal(size=m) + w[:, 0] * truth
         e_fit = np.linalg.lstsq(J, d, rcond=None)[0]
         residual = J @ e_fit - d  # model − measured, the compliance left out of the fit
-        terms = ComplianceTerms(np.zeros(m), ("c4",), w, np.array([8e-6]), np.zeros(1), residual)
+        span = np.array([[0.0], [8e-6]])
+        terms = ComplianceTerms(np.zeros(m), ("c4",), w, span, np.zeros(1), residual)
         post = compliance_likelihood(J, terms, _src(1e-7, n))
         sigma = 1e-7 * np.sqrt(np.linalg.inv(A.T @ A)[m, m])
         assert post.mean[0] == pytest.approx(truth, abs=1e-12)
