@@ -232,4 +232,5 @@ def bound_mm(
         return float(np.quantile(E, probability))
     order = np.argsort(E)
     below = np.cumsum(weights[order])
-    return float(E[order][min(np.searchsorted(below, probability), draws - 1)])
+    at = min(int(np.searchsorted(below, probability)), draws - 1)
+    return float(E[order][at])
