@@ -126,6 +126,14 @@ def test_a_compliant_calibration_reports_its_sag_and_the_budget_its_compliances(
     result = solve(robot, plan, check_log(parse_log(text, "run"), plan, robot))
     joint = result.budgets["joint"]
     assert 0 < joint.terms["compliance"] < joint.total
+    # c4, c5 not identified: their posterior lies in the stated 2–8 µrad/(N·m), no wider
+    # than the uniform's σ 6/√12 = 1.73 (the readings can only narrow it).
+    assert set(joint.posterior) == {"c4", "c5"}
+    for value, sd in joint.posterior.values():
+        assert 2.0 < value < 8.0
+        assert 0.0 < sd < 1.74
+    said = joint.as_json()["compliances_not_identified_urad_per_nm"]
+    assert said["c4"]["value"] == joint.posterior["c4"][0]
     assert "compliance" not in result.budgets["stepwise"].terms
     sag = sag_summary(result)
     assert sag is not None
