@@ -18,11 +18,12 @@ The budget's sources enter δe in three ways, each with a stated distribution:
 * of a known size but either sign: δe gains Σ_l s_l·w_l, s_l = ±1 with equal probability
   (the temperature's change over the run, of the size assumed);
 * known: a fixed bias b (an eyelet's edge wrap, always a longer wire);
-* a Gaussian restricted to a range (:class:`Truncated`): δe gains Σ t_j·u_j, t_j the
-  posterior of a quantity known to lie in [lo, hi] (its prior, uniform there) that the
-  readings estimate as N(μ, σ²): N(μ, σ²) truncated to [lo, hi], independent — the uniform
-  when σ ≫ hi − lo (the readings say nothing), a half-Gaussian at the edge when μ lies
-  there (an unidentified compliance, :func:`~wirecal.solver.budget.compliance_errors`).
+* a Gaussian restricted to a box (:class:`Truncated`): δe gains Σ t_j·u_j, t the
+  posterior of quantities known to lie in a box (their prior, uniform there) that the
+  readings estimate as N(μ, S) together: N(μ, S) restricted to the box
+  (:class:`~wirecal.solver.box_gaussian.BoxGaussian`, weighted draws) — the uniform where
+  the readings say nothing, a half-Gaussian at an edge where μ lies there (the unidentified
+  compliances, :func:`~wirecal.solver.budget.compliance_errors`).
 
 The bound is the 95 % quantile of E(x + b + Σ ε_k v_k + Σ s_l w_l + Σ t_j u_j) over
 x ~ N(0, Σ), the ε_k, the s_l and the t_j jointly: P(E ≤ bound) = 95 % (up to the
@@ -30,10 +31,10 @@ linearisation) when each term has its stated distribution. E is not a generalise
 mean of norms, not a quadratic form), so the quantile is taken from :data:`DRAWS` draws of
 (x, ε, s, t): the R_d low-discrepancy sequence (Roberts 2018: x_n = frac(s + n·α),
 α_k = φ_d^−k with φ_d the root of x^(d+1) = x + 1), shifted by a fixed random s, through
-the normal's inverse for x, 2u − 1 for ε, the sign of u − ½ for s and the truncated
-normal's inverse for t (quasi-random: a half-normal's 95 % point to under 1 %, where as
-many independent draws scatter by 1.5 %; the same inputs give the same bound; no
-scipy.stats, whose import alone doubled ``wirecal solve``'s start-up).
+the normal's inverse for x, 2u − 1 for ε, the sign of u − ½ for s and the GHK sampler
+for t, whose weights make the quantile a weighted one (quasi-random: a half-normal's 95 %
+point to under 1 %, where as many independent draws scatter by 1.5 %; the same inputs give
+the same bound; no scipy.stats, whose import alone doubled ``wirecal solve``'s start-up).
 """
 
 from __future__ import annotations
@@ -120,20 +121,14 @@ class ErrorModel:
         """Return the model over ``size`` ≥ m parameters, the extra ones without error."""
         extra = size - len(self.bias)
         t = self.truncated
+        moved = None if t is None else np.pad(t.directions, ((0, 0), (0, extra)))
         return ErrorModel(
             np.pad(self.cov, ((0, extra), (0, extra))),
             np.pad(self.bias, (0, extra)),
             np.pad(self.edges, ((0, 0), (0, extra))),
             np.pad(self.sign_terms(), ((0, 0), (0, extra))),
-            None
-            if t is None
-            else Truncated(np.pad(t.directions, ((0, 0), (0, extra))), t.posterior),
+            None if t is None or moved is None else Truncated(moved, t.posterior),
         )
-
-
-def _padded(t: Truncated | None, extra: int) -> Truncated | None:
-    """Return ``t`` over ``extra`` more parameters it does not move."""
-    return None if t is None else Truncated(np.pad(t.directions, ((0, 0), (0, extra))), t.posterior)
 
 
 def joined(models: list[ErrorModel]) -> ErrorModel:

@@ -48,7 +48,7 @@ class BoxGaussian:
         g = g[np.argsort(np.diag(self.cov)[g], kind="stable")]
         log_w = np.zeros(n)
         if g.size:
-            L = np.linalg.cholesky(self.cov[np.ix_(g, g)])
+            L = _root(self.cov[np.ix_(g, g)])
             z = np.zeros((n, g.size))
             for i, j in enumerate(g):
                 centre = self.mean[j] + z[:, :i] @ L[i, :i]
@@ -65,6 +65,18 @@ class BoxGaussian:
         mean = w @ t
         d = t - mean
         return mean, (d.T * w) @ d
+
+
+def _root(S: np.ndarray) -> np.ndarray:
+    """Return the Cholesky factor of ``S``.
+
+    Of S + 10⁻¹² of its diagonal's largest where round-off left it not quite positive
+    definite.
+    """
+    try:
+        return np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        return np.linalg.cholesky(S + 1e-12 * np.max(np.diag(S)) * np.eye(len(S)))
 
 
 def truncated_standard(

@@ -358,29 +358,26 @@ def compliance_likelihood(J: np.ndarray, c: ComplianceTerms, src: Sources) -> Bo
     biases are taken off ĉ, S is the rest's covariance. A compliance the points do not
     separate from the geometry is left out of the estimate: flat, its prior alone.
     """
-    seen = _separated(J, c.wire)
+    seen = _estimator(J, c.wire)[1]
     B = np.zeros((len(seen), len(J)))
-    B[seen] = _estimator(J, c.wire[:, seen])
+    B[seen] = _estimator(J, c.wire[:, seen])[0]
     said = joined(list(_term_errors(B, src.sigma_mm**2 * B @ B.T, src).values()))
     cov = said.second_moment() - np.outer(said.bias, said.bias)
     return BoxGaussian(-B @ c.residual_mm - said.bias, cov, ~seen, c.prior[0], c.prior[1])
 
 
-def _separated(J: np.ndarray, wire: np.ndarray) -> np.ndarray:
-    """Return which columns of ``wire`` the points tell from ``J``'s (the rank rule)."""
-    full = np.hstack([J, wire])
-    norms = np.linalg.norm(full, axis=0)
-    return np.asarray(covariance(full / np.where(norms > 0, norms, 1.0), 1.0)[1][J.shape[1] :])
+def _estimator(J: np.ndarray, wire: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the rows of [J, wire]⁺ for ``wire``'s coefficients (k, N) and which it tells.
 
-
-def _estimator(J: np.ndarray, wire: np.ndarray) -> np.ndarray:
-    """Return the rows of [J, wire]⁺ that estimate ``wire``'s coefficients (k, N)."""
+    The columns scaled to unit norm, so the rank rule of
+    :func:`~wirecal.solver.identifiability.covariance` compares shapes, not units.
+    """
     full = np.hstack([J, wire])
     norms = np.linalg.norm(full, axis=0)
     norms = np.where(norms > 0, norms, 1.0)
-    cov, _ = covariance(full / norms, 1.0)
+    cov, identified = covariance(full / norms, 1.0)
     m = J.shape[1]
-    return (cov @ (full / norms).T)[m:] / norms[m:, None]
+    return (cov @ (full / norms).T)[m:] / norms[m:, None], identified[m:]
 
 
 def _notes(src: Sources) -> tuple[str, ...]:
