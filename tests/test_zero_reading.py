@@ -25,6 +25,7 @@ from wirecal.solver.log.measurements import check_log
 from wirecal.solver.simulate import Unmodelled
 from wirecal.solver.solve import solve
 from wirecal.solver.zero_reading import expected_zero_mm
+from wirecal.twin.world import DEFAULT_UNMODELLED, World
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -160,3 +161,15 @@ def test_cli_simulate_lands_the_arm_within_the_declared_repeatability(tmp_path):
     # wire here (six joints, the UR5e's levers), 2.5 × the 0.02 mm arm's (the test above).
     rms = float(np.sqrt(np.mean((d[1] - d[0]) ** 2)))
     assert 0.03 < rms < 0.12
+
+
+def test_the_twins_world_takes_the_declared_repeatability(tmp_path):
+    """The twin (validation runs, ``simulate --controller``) lands its arm as declared."""
+    robot = _robot("ur5e", repeatability_mm=0.03)
+    q0 = load_plan(EXAMPLES / "ur5e" / "plan.toml", robot).theta0_deg
+    world = World(robot, {}, q0, tmp_path, unmodelled=DEFAULT_UNMODELLED)
+    assert world.unmodelled is not None
+    assert world.unmodelled.repeatability_mm == 0.03
+    plain = World(_robot("ur5e"), {}, q0, tmp_path, unmodelled=DEFAULT_UNMODELLED)
+    assert plain.unmodelled is not None
+    assert plain.unmodelled.repeatability_mm == 0.02  # the twin's default, as before
