@@ -42,9 +42,11 @@ PRIOR_COMPLIANCE_URAD_PER_NM = COMPLIANCE_RANGE_URAD_PER_NM[1]
 (the planner's prior size of a compliance, and the identification rule's range 0–8)."""
 
 SIGMA_LIMIT_URAD_PER_NM = PRIOR_COMPLIANCE_URAD_PER_NM / 12**0.5
-"""Largest σ (µrad/(N·m)) of an identified compliance at the reading noise: the σ of the
-prior range (uniform over 0–8 µrad/(N·m): 2.31), so an identified compliance is known
-better than the range the budget would otherwise assume for it."""
+"""Largest σ (µrad/(N·m)) of an identified compliance at the reading noise: the σ of a
+uniform over 0–8 µrad/(N·m) (2.31), so an identified compliance is known better than
+anything from rigid to the range's top. (The budget's prior of one not identified is the
+narrower :data:`COMPLIANCE_RANGE_URAD_PER_NM`, σ 1.73, narrowed further by the readings;
+the rule stays as it was, so the patch carries the compliances it did.)"""
 
 COMPENSATION_ITERATIONS = 4
 """Fixed-point steps of :func:`compensated_joints`: each shrinks the error by c·|∂τ/∂q|
