@@ -115,6 +115,7 @@ class ComplianceTrial:
     truth: dict[str, float]
     estimate: dict[str, float]
     std: dict[str, float]
+    posterior: dict[str, tuple[float, float]]  # the unidentified compliances' (value, σ)
 
 
 def compliance_trial(
@@ -142,4 +143,5 @@ def compliance_trial(
         truth,
         believed,
         joint.std_by_name(),
+        budget.posterior or {},
     )

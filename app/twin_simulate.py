@@ -16,7 +16,7 @@ from wirecal.app.languages import registered
 from wirecal.gen.request import GenRequest
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
-from wirecal.solver.simulate import EncoderTruth
+from wirecal.solver.simulate import EncoderTruth, declared_unmodelled
 from wirecal.twin.run_moves import move_of_step, where_in_run
 from wirecal.twin.world import Faults as TwinFaults
 
@@ -55,6 +55,8 @@ def simulate_in_twin(
     run = replace(reg.generator.default_run, readings=samples)  # as wirecal gen runs
     echo_log = echo and "echo_log" not in reg.generator.refuses
     programs = reg.generator.programs(rb, pl, GenRequest(run=run, echo_log=echo_log))
+    if (unmodelled := declared_unmodelled(rb)) is not None:  # the arm lands as declared
+        kw["unmodelled"] = unmodelled
     if reg.adapter.capabilities.encoder_truth:
         kw["encoder_truth"] = true_encoder
     with tempfile.TemporaryDirectory() as tmp:

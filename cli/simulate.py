@@ -30,6 +30,7 @@ from wirecal.solver.simulate import (
     MAX_DRIFT_MM_PER_H,
     EncoderTruth,
     Faults,
+    declared_unmodelled,
     realistic_encoder,
 )
 
@@ -319,6 +320,7 @@ def _direct_log(rb: Robot, pl: Plan, errors: dict[str, float], run: _Run, faults
         faults=faults,
         counter_start=counter_start,
         encoder=true_encoder,
+        unmodelled=declared_unmodelled(rb),
     )
 
 

@@ -22,6 +22,7 @@ from wirecal.formats.robot_file import MAX_DH_ANGLE_DEG, MAX_LENGTH_MM
 from wirecal.formats.robot_gravity import MAX_COMPLIANCE_URAD_PER_NM
 from wirecal.formats.toml_fields import document
 from wirecal.solver import params as P
+from wirecal.solver.compliance import COMPLIANCE_RANGE_URAD_PER_NM
 from wirecal.solver.robot import Robot
 
 _KEYS = ("robot", "seed", "errors")
@@ -62,10 +63,11 @@ def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
     return out
 
 
-TRUE_COMPLIANCE_URAD_PER_NM = (2.0, 8.0)
-"""Range (µrad/(N·m)) a simulated arm's compliances are drawn from: issue 30's independent
-model of a Viper-sized arm ("joints 2–4 yielding 2–8 µrad/N·m under gravity"; its
-compliance terms took the wire's error on real IRB 120 tracker data down by a fifth)."""
+TRUE_COMPLIANCE_URAD_PER_NM = COMPLIANCE_RANGE_URAD_PER_NM
+"""Range (µrad/(N·m)) a simulated arm's compliances are drawn from: the stated range the
+error budget takes for one the points do not identify (issue 30's independent model of a
+Viper-sized arm, "joints 2–4 yielding 2–8 µrad/N·m under gravity"; its compliance terms
+took the wire's error on real IRB 120 tracker data down by a fifth)."""
 
 
 def random_errors(robot: Robot, scale: float, rng: np.random.Generator) -> dict[str, float]:

@@ -17,26 +17,35 @@ The budget's sources enter δe in three ways, each with a stated distribution:
   temperature change, a one-sided term between 0 and v as the bias v/2 and the edge v/2);
 * of a known size but either sign: δe gains Σ_l s_l·w_l, s_l = ±1 with equal probability
   (the temperature's change over the run, of the size assumed);
-* known: a fixed bias b (an eyelet's edge wrap, always a longer wire).
+* known: a fixed bias b (an eyelet's edge wrap, always a longer wire);
+* a Gaussian restricted to a box (:class:`Truncated`): δe gains Σ t_j·u_j, t the
+  posterior of quantities known to lie in a box (their prior, uniform there) that the
+  readings estimate as N(μ, S) together: N(μ, S) restricted to the box
+  (:class:`~wirecal.solver.box_gaussian.BoxGaussian`, weighted draws) — the uniform where
+  the readings say nothing, a half-Gaussian at an edge where μ lies there (the unidentified
+  compliances, :func:`~wirecal.solver.budget.compliance_errors`).
 
-The bound is the 95 % quantile of E(x + b + Σ ε_k v_k + Σ s_l w_l) over x ~ N(0, Σ), the
-ε_k and the s_l jointly: P(E ≤ bound) = 95 % (up to the linearisation) when each term has its stated
-distribution. E is not a generalised χ² (a mean of norms, not a quadratic form), so the
-quantile is taken from :data:`DRAWS` draws of (x, ε, s): the R_d low-discrepancy sequence
-(Roberts 2018: x_n = frac(s + n·α), α_k = φ_d^−k with φ_d the root of x^(d+1) = x + 1),
-shifted by a fixed random s, through the normal's inverse for x, 2u − 1 for ε and the
-sign of u − ½ for s
-(quasi-random: a half-normal's 95 % point to under 1 %, where as many independent draws
-scatter by 1.5 %; the same inputs give the same bound; no scipy.stats, whose import alone
-doubled ``wirecal solve``'s start-up).
+The bound is the 95 % quantile of E(x + b + Σ ε_k v_k + Σ s_l w_l + Σ t_j u_j) over
+x ~ N(0, Σ), the ε_k, the s_l and the t_j jointly: P(E ≤ bound) = 95 % (up to the
+linearisation) when each term has its stated distribution. E is not a generalised χ² (a
+mean of norms, not a quadratic form), so the quantile is taken from :data:`DRAWS` draws of
+(x, ε, s, t): the R_d low-discrepancy sequence (Roberts 2018: x_n = frac(s + n·α),
+α_k = φ_d^−k with φ_d the root of x^(d+1) = x + 1), shifted by a fixed random s, through
+the normal's inverse for x, 2u − 1 for ε, the sign of u − ½ for s and the GHK sampler
+for t, whose weights make the quantile a weighted one (quasi-random: a half-normal's 95 %
+point to under 1 %, where as many independent draws scatter by 1.5 %; the same inputs give
+the same bound; no scipy.stats, whose import alone doubled ``wirecal solve``'s start-up).
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.special import ndtri
+
+from wirecal.solver.box_gaussian import BoxGaussian
 
 BOUND_PROBABILITY = 0.95
 """The probability the bound holds with."""
@@ -52,45 +61,93 @@ _CHUNK = 64  # draws per block: (3, chunk, Q) floats stay in the cache
 
 
 @dataclass(frozen=True)
-class ErrorModel:
-    """The parameter error δe = x + bias + Σ ε_k·edges[k] + Σ s_l·signs[l] (module docstring).
+class Truncated:
+    """A vector t of quantities known in a box, posterior ``posterior``, moving δe by Uᵀ·t.
 
-    x ~ N(0, cov), ε_k ~ U(−1, 1), s_l = ±1. Internal units (rad, mm); ``edges`` (k, m)
-    and ``signs`` (l, m), k, l ≥ 0.
+    ``directions`` U (k, m). Centred: δe gains Uᵀ·(t − E[t]); E[t] is in the bias of the
+    :class:`ErrorModel` that holds it (:func:`truncated_model`). Its moments are those of
+    :data:`DRAWS` draws of the sequence the bound uses (the same rule as the bound's).
+    """
+
+    directions: np.ndarray
+    posterior: BoxGaussian
+
+    @functools.cached_property
+    def moments(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return E[t] (k,) and Cov[t] (k, k)."""
+        return self.posterior.moments(_probabilities(len(self.posterior.mean), DRAWS, SEED))
+
+
+def truncated_model(directions: np.ndarray, posterior: BoxGaussian) -> ErrorModel:
+    """Return the error Uᵀ·t of a box-restricted Gaussian t (:class:`Truncated`)."""
+    t = Truncated(np.asarray(directions, dtype=float), posterior)
+    m = t.directions.shape[1]
+    return ErrorModel(np.zeros((m, m)), t.moments[0] @ t.directions, np.zeros((0, m)), None, t)
+
+
+@dataclass(frozen=True)
+class ErrorModel:
+    """The parameter error δe = x + bias + Σ ε_k·edges[k] + Σ s_l·signs[l] + Σ t_j·u_j.
+
+    x ~ N(0, cov), ε_k ~ U(−1, 1), s_l = ±1, t_j the centred :class:`Truncated` along
+    u_j (module docstring). Internal units (rad, mm); ``edges`` (k, m) and ``signs`` (l, m),
+    k, l ≥ 0.
     """
 
     cov: np.ndarray
     bias: np.ndarray
     edges: np.ndarray
     signs: np.ndarray | None = None  # None: (0, m)
+    truncated: Truncated | None = None
 
     def sign_terms(self) -> np.ndarray:
         """Return ``signs`` as an (l, m) array."""
         return np.zeros((0, len(self.bias))) if self.signs is None else self.signs
 
     def second_moment(self) -> np.ndarray:
-        """Return E[δe·δeᵀ] = cov + bias·biasᵀ + edgesᵀ·edges/3 + signsᵀ·signs.
+        """Return E[δe·δeᵀ] = cov + bias·biasᵀ + edgesᵀ·edges/3 + signsᵀ·signs + Uᵀ·Var t·U.
 
         A uniform ε has variance 1/3, a sign 1. The expected (RMS) error of the budget's
         terms uses it: the same distributions as the bound.
         """
         w = self.sign_terms()
-        return self.cov + np.outer(self.bias, self.bias) + self.edges.T @ self.edges / 3.0 + w.T @ w
+        out = self.cov + np.outer(self.bias, self.bias) + self.edges.T @ self.edges / 3.0 + w.T @ w
+        if self.truncated is not None:
+            u = self.truncated.directions
+            out = out + u.T @ self.truncated.moments[1] @ u
+        return out
+
+    def padded(self, size: int) -> ErrorModel:
+        """Return the model over ``size`` ≥ m parameters, the extra ones without error."""
+        extra = size - len(self.bias)
+        t = self.truncated
+        moved = None if t is None else np.pad(t.directions, ((0, 0), (0, extra)))
+        return ErrorModel(
+            np.pad(self.cov, ((0, extra), (0, extra))),
+            np.pad(self.bias, (0, extra)),
+            np.pad(self.edges, ((0, 0), (0, extra))),
+            np.pad(self.sign_terms(), ((0, 0), (0, extra))),
+            None if t is None or moved is None else Truncated(moved, t.posterior),
+        )
 
 
 def joined(models: list[ErrorModel]) -> ErrorModel:
     """Return the error of independent sources together.
 
     Covariances and biases add; the terms known by their limits are all kept (the all-zero
-    edges dropped).
+    edges dropped), and the one box-restricted term if any.
     """
     edges = np.vstack([m.edges for m in models])
     signs = np.vstack([m.sign_terms() for m in models])
+    ts = [m.truncated for m in models if m.truncated is not None]
+    if len(ts) > 1:
+        raise ValueError("one box-restricted term per error model")  # none joins two
     return ErrorModel(
         np.sum([m.cov for m in models], axis=0),
         np.sum([m.bias for m in models], axis=0),
         edges[np.any(edges != 0, axis=1)],
         signs[np.any(signs != 0, axis=1)],
+        ts[0] if ts else None,
     )
 
 
@@ -115,19 +172,32 @@ def low_discrepancy(dim: int, draws: int, seed: int) -> np.ndarray:
     return np.asarray((shift + n * alpha) % 1.0)
 
 
-def draws_of(model: ErrorModel, draws: int = DRAWS, seed: int = SEED) -> np.ndarray:
-    """Return ``draws`` parameter errors δe of ``model`` (draws, m) (module docstring).
+def _probabilities(dim: int, draws: int, seed: int) -> np.ndarray:
+    """Return the sequence's points kept off 0 and 1 (the normal's inverse is finite)."""
+    return np.clip(low_discrepancy(dim, draws, seed), 1e-12, 1 - 1e-12)
+
+
+def draws_of(
+    model: ErrorModel, draws: int = DRAWS, seed: int = SEED
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Return ``draws`` parameter errors δe of ``model`` (draws, m) and their weights.
 
     The Gaussian's coordinates come first in the sequence, the uniform ε_k after them,
-    the signs s_l last.
+    the signs s_l, then the box-restricted t (centred: its mean is in the bias; weighted,
+    :class:`~wirecal.solver.box_gaussian.BoxGaussian`; None: equal weights).
     """
     w, U = np.linalg.eigh((model.cov + model.cov.T) / 2)
     root = U * np.sqrt(np.clip(w, 0.0, None))  # cov = root·rootᵀ, also when singular
-    m, k, signs = len(w), len(model.edges), model.sign_terms()
-    u = np.clip(low_discrepancy(m + k + len(signs), draws, seed), 1e-12, 1 - 1e-12)
+    m, k, signs, t = len(w), len(model.edges), model.sign_terms(), model.truncated
+    n = m + k + len(signs)
+    u = _probabilities(n + (0 if t is None else len(t.posterior.mean)), draws, seed)
     x = ndtri(u[:, :m]) @ root.T + model.bias
     x += (2.0 * u[:, m : m + k] - 1.0) @ model.edges.reshape(k, m)
-    return x + np.sign(u[:, m + k :] - 0.5) @ signs
+    x += np.sign(u[:, m + k : n] - 0.5) @ signs
+    if t is None:
+        return x, None
+    drawn, weights = t.posterior.sample(u[:, n:])
+    return x + (drawn - t.moments[0]) @ t.directions, weights
 
 
 def bound_mm(
@@ -139,9 +209,12 @@ def bound_mm(
 ) -> float:
     """Return the ``probability`` quantile of E over the model's draws (module docstring).
 
-    Single precision for the products (1e-7 beside the draws' 1 %, and half the time).
+    Weighted draws (a box-restricted term) give the weighted quantile: the least E whose
+    draws at or below it weigh ``probability``. Single precision for the products (1e-7
+    beside the draws' 1 %, and half the time).
     """
-    de = draws_of(model, draws, seed).astype(np.float32)
+    de, weights = draws_of(model, draws, seed)
+    de = de.astype(np.float32)
     q = Jp.shape[0]
     A = np.ascontiguousarray(Jp.transpose(1, 2, 0)).astype(np.float32)  # (3, m, Q)
     ones = np.full(q, 1.0 / q, dtype=np.float32)  # the mean over configurations as a product
@@ -150,4 +223,9 @@ def bound_mm(
         p = de[start : start + _CHUNK] @ A  # (3, chunk, Q)
         p *= p
         E[start : start + _CHUNK] = np.sqrt(p.sum(axis=0)) @ ones
-    return float(np.quantile(E, probability))
+    if weights is None:
+        return float(np.quantile(E, probability))
+    order = np.argsort(E)
+    below = np.cumsum(weights[order])
+    at = min(int(np.searchsorted(below, probability)), draws - 1)
+    return float(E[order][at])

@@ -34,9 +34,11 @@ distribution, from its second moment (:func:`~wirecal.solver.accuracy.rms_tool_e
   uniform between none and it. The parameters absorb part of it, a bias the residual
   cannot show;
 * **compliance** — with the robot file's ``compliances``, those the points do not identify
-  (with a torque), uniform between the file's value and
-  :data:`~wirecal.solver.compliance.PRIOR_COMPLIANCE_URAD_PER_NM` beyond it
-  (:func:`compliance_errors`); the identified ones are parameters, their σ in the noise.
+  (with a torque): their posterior (:func:`compliance_errors`), the prior uniform over the
+  stated range :data:`~wirecal.solver.compliance.COMPLIANCE_RANGE_URAD_PER_NM` times what
+  the readings say of them, N(ĉ, S) (:func:`compliance_likelihood`): a Gaussian restricted
+  to the range, the uniform where they say nothing; the identified ones are parameters,
+  their σ in the noise.
 
 The total is the second moment of all the terms together (independent sources): the
 expected (RMS) error, a mean, not a bound. The **bound** is the error a calibration stays
@@ -50,9 +52,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from wirecal.solver.accuracy import rms_tool_error, stepwise_map
-from wirecal.solver.bound import ErrorModel, bound_mm, joined
+from wirecal.solver.bound import ErrorModel, bound_mm, joined, truncated_model
+from wirecal.solver.box_gaussian import BoxGaussian
+from wirecal.solver.compliance import COMPLIANCE_RANGE_URAD_PER_NM
 from wirecal.solver.identifiability import RANK_RTOL, covariance
 from wirecal.solver.kinematics import Model, tool_jacobian
+from wirecal.solver.params import ErrorSet
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM, Drift
 
 ASSUMED_TEMPERATURE_RISE_K = 0.5
@@ -86,6 +91,8 @@ class Budget:
     notes: tuple[str, ...]
     bound: float  # 95 % bound of the mean over the workspace (:mod:`wirecal.solver.bound`)
     bound_compensated: float | None = None  # the same for targets compensated offline
+    # the unidentified compliances' posterior (value, σ; µrad/(N·m)), as the bound takes them
+    posterior: dict[str, tuple[float, float]] | None = None
 
     def as_json(self) -> dict:
         """Return the budget as a JSON-ready dict."""
@@ -98,6 +105,10 @@ class Budget:
         }
         if self.bound_compensated is not None:
             out["bound95_compensated_mm"] = self.bound_compensated
+        if self.posterior:
+            out["compliances_not_identified_urad_per_nm"] = {
+                n: {"value": v, "std": sd} for n, (v, sd) in self.posterior.items()
+            }
         return out
 
 
@@ -108,8 +119,9 @@ class ComplianceTerms:
     ``left`` (m,) is what the controller leaves of the estimated parameters: the value of
     each identified compliance (nominal + offset; the controller takes none), 0 for the
     geometry. ``names`` are the compliances the points do not identify (with a torque),
-    ``wire`` (N, k) their wire-length Jacobian, ``prior`` (k,) the largest value each may
-    have beyond the robot file's, ``nominal`` (k,) the file's.
+    ``wire`` (N, k) their wire-length Jacobian, ``prior`` (2, k) the range of each, as
+    offsets from the robot file's value, ``nominal`` (k,) the file's; ``residual_mm`` (N,)
+    the joint fit's residuals (model − measured), what the readings say of them.
     """
 
     left: np.ndarray
@@ -117,6 +129,7 @@ class ComplianceTerms:
     wire: np.ndarray
     prior: np.ndarray
     nominal: np.ndarray
+    residual_mm: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -218,7 +231,7 @@ def budget(
     if compliance is None:
         total = rms_tool_error(Jp, errors.second_moment())
         return Budget(errs, total.mean_mm, total.max_mm, _notes(src), bound_mm(Jp, errors))
-    return _with_compliance(model, q_ws, Jp, M, compliance, src, errors, errs)
+    return _with_compliance(model, q_ws, (Jp, J, M), compliance, src, errors, errs)
 
 
 def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, ErrorModel]:
@@ -252,8 +265,7 @@ def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, Er
 def _with_compliance(
     model: Model,
     q_ws: np.ndarray,
-    Jp: np.ndarray,
-    M: np.ndarray,
+    maps: tuple[np.ndarray, np.ndarray, np.ndarray],
     c: ComplianceTerms,
     src: Sources,
     errors: ErrorModel,
@@ -261,57 +273,111 @@ def _with_compliance(
 ) -> Budget:
     """Return the joint budget with the compliances (:func:`compliance_errors`).
 
-    The term ``compliance`` and the total gain the unidentified compliances; the identified
-    ones are parameters, their σ in the noise term. ``bound`` is the patch's (the
-    controller takes no compliance: the identified values and the others' file values are
-    left, −``left`` and −``nominal``), ``bound_compensated`` that of compensated targets.
+    ``maps``: the tool-point Jacobian over the workspace, the wire-length Jacobian and the
+    least-squares map. The term ``compliance`` and the total gain the unidentified
+    compliances; the identified ones are parameters, their σ in the noise term. ``bound``
+    is the patch's (the controller takes no compliance: the identified values and the
+    others' file values are left, −``left`` and −``nominal``), ``bound_compensated`` that
+    of compensated targets.
     """
-    Jx, unseen = compliance_errors(model, q_ws, Jp, M, c)
-    size, k = len(unseen.bias), len(unseen.edges)
+    Jx, unseen = compliance_errors(model, q_ws, maps, c, src)
     terms = {**errs, "compliance": rms_tool_error(Jx, unseen.second_moment()).mean_mm}
-    padded = ErrorModel(
-        _padded(errors.cov, size),
-        np.pad(errors.bias, (0, k)),
-        np.pad(errors.edges, ((0, 0), (0, k))),
-    )
-    extended = joined([padded, unseen])
+    extended = joined([errors.padded(len(unseen.bias)), unseen])
     total = rms_tool_error(Jx, extended.second_moment())
     left = -np.concatenate([c.left, c.nominal])
     notes = _notes(src)
+    posterior = _posterior(model, c, unseen)
+    said = ", ".join(f"{n} {v:.2g} ± {sd:.2g}" for n, (v, sd) in posterior.items())
     return Budget(
         terms,
         total.mean_mm,
         total.max_mm,
-        (*notes[:2], COMPLIANCE_NOTE, *notes[3:]),
+        (*notes[:2], COMPLIANCE_NOTE, *notes[3:])
+        + ((f"{POSTERIOR_NOTE}: {said} µrad/(N·m)",) if posterior else ()),
         bound_mm(Jx, replace(extended, bias=extended.bias + left)),
         bound_mm(Jx, extended),
+        posterior,
     )
 
 
+POSTERIOR_NOTE = (
+    "compliance: those not identified as the bound takes them, their range ({:g}–{:g} "
+    "µrad/(N·m)) narrowed by what the readings say".format(*COMPLIANCE_RANGE_URAD_PER_NM)
+)
+
+
+def _posterior(model: Model, c: ComplianceTerms, unseen: ErrorModel) -> dict:
+    """Return each unidentified compliance's posterior value and σ (µrad/(N·m))."""
+    if unseen.truncated is None or not c.names:
+        return {}
+    units = ErrorSet(c.names, model.n_joints)
+    mean, cov = unseen.truncated.moments
+    value = units.to_boundary(c.nominal + mean)
+    sd = units.to_boundary(np.sqrt(np.clip(np.diag(cov), 0.0, None)))
+    return {n: (float(v), float(s)) for n, v, s in zip(c.names, value, sd, strict=True)}
+
+
 def compliance_errors(
-    model: Model, q_ws: np.ndarray, Jp: np.ndarray, M: np.ndarray, c: ComplianceTerms
+    model: Model,
+    q_ws: np.ndarray,
+    maps: tuple[np.ndarray, np.ndarray, np.ndarray],
+    c: ComplianceTerms,
+    src: Sources,
 ) -> tuple[np.ndarray, ErrorModel]:
-    """Return ``Jp`` (Q, 3, m) extended by the compliances the points do not identify.
+    """Return the tool-point Jacobian (Q, 3, m) extended by the unidentified compliances.
 
     And those compliances' error model over the m + k (the one rule of the budget's
-    compliance term and of both bounds).
+    compliance term and of both bounds). ``maps``: the tool-point Jacobian, the wire-length
+    Jacobian J and the least-squares map M (:func:`_with_compliance`).
 
-    Such a compliance is uniform between the robot file's value and ``prior`` beyond it
-    (the range :data:`~wirecal.solver.compliance.PRIOR_COMPLIANCE_URAD_PER_NM`; nothing
-    measured narrows it). The estimates absorb it (M·J_u·c_u) and it moves the tool
-    (−c_u): the error is [M·J_u; −I]·c_u, its middle a bias and its half-range the edges.
+    The offsets of such compliances from the robot file's values are their posterior: the
+    prior, each uniform over the stated range ``prior``
+    (:data:`~wirecal.solver.compliance.COMPLIANCE_RANGE_URAD_PER_NM`), times what the
+    readings say of them together, N(ĉ, S) (:func:`compliance_likelihood`): that Gaussian
+    restricted to the box (:class:`~wirecal.solver.box_gaussian.BoxGaussian`), the uniform
+    where the readings say nothing. The geometry's estimates absorb them (M·J_u·c_u) and
+    they move the tool (−c_u): the error is [M·J_u; −I]·c_u. The geometry's own noise is
+    independent of ĉ (M·J_u⁺ = 0 on the residual), so the posterior joins the budget's
+    other terms as an independent source.
     """
+    Jp, J, M = maps
     k = len(c.names)
     _, Ju = tool_jacobian(model, q_ws, c.names)
-    V = np.vstack([M @ c.wire, -np.eye(k)]) * (c.prior / 2)  # (m + k, k)
-    return np.concatenate([Jp, Ju], axis=2), ErrorModel(np.zeros((len(V),) * 2), V.sum(1), V.T)
+    V = np.vstack([M @ c.wire, -np.eye(k)])  # (m + k, k)
+    return np.concatenate([Jp, Ju], axis=2), truncated_model(V.T, compliance_likelihood(J, c, src))
 
 
-def _padded(cov: np.ndarray, size: int) -> np.ndarray:
-    """Return ``cov`` (m, m) in the top-left corner of zeros (size, size)."""
-    out = np.zeros((size, size))
-    out[: len(cov), : len(cov)] = cov
-    return out
+def compliance_likelihood(J: np.ndarray, c: ComplianceTerms, src: Sources) -> BoxGaussian:
+    """Return the posterior of the unidentified compliances' offsets (internal units).
+
+    What the readings say: ĉ, their least-squares estimate with the geometry ``J`` (N, m)
+    from the joint fit's residual (the geometry's share of it is zero at the fit): the rows
+    B of [J, J_u]⁺ for them (columns scaled to unit norm for the rank rule of
+    :func:`~wirecal.solver.identifiability.covariance`), ĉ = −B·r. Every budget term moves
+    ĉ through B as it moves the geometry through M (:func:`_term_errors`): their known
+    biases are taken off ĉ, S is the rest's covariance. A compliance the points do not
+    separate from the geometry is left out of the estimate: flat, its prior alone.
+    """
+    seen = _estimator(J, c.wire)[1]
+    B = np.zeros((len(seen), len(J)))
+    B[seen] = _estimator(J, c.wire[:, seen])[0]
+    said = joined(list(_term_errors(B, src.sigma_mm**2 * B @ B.T, src).values()))
+    cov = said.second_moment() - np.outer(said.bias, said.bias)
+    return BoxGaussian(-B @ c.residual_mm - said.bias, cov, ~seen, c.prior[0], c.prior[1])
+
+
+def _estimator(J: np.ndarray, wire: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the rows of [J, wire]⁺ for ``wire``'s coefficients (k, N) and which it tells.
+
+    The columns scaled to unit norm, so the rank rule of
+    :func:`~wirecal.solver.identifiability.covariance` compares shapes, not units.
+    """
+    full = np.hstack([J, wire])
+    norms = np.linalg.norm(full, axis=0)
+    norms = np.where(norms > 0, norms, 1.0)
+    cov, identified = covariance(full / norms, 1.0)
+    m = J.shape[1]
+    return (cov @ (full / norms).T)[m:] / norms[m:, None], identified[m:]
 
 
 def _notes(src: Sources) -> tuple[str, ...]:

@@ -30,16 +30,23 @@ from wirecal.solver.identifiability import analyse_jacobian, covariance
 from wirecal.solver.kinematics import Model, bends, gravity_torques, rigid_frames, tool_position
 from wirecal.solver.sensitivity import sensitivity
 
-PRIOR_COMPLIANCE_URAD_PER_NM = 8.0
-"""How far (µrad/(N·m)) beyond the robot file's value a compliance may be when the points
-do not identify it (the error budget's range for it): the top of the 2–8 µrad/(N·m) issue
-30 reports for joints 2–4 of an arm like the Viper s650 (an independent model's range, not
-a vendor figure)."""
+COMPLIANCE_RANGE_URAD_PER_NM = (2.0, 8.0)
+"""The range (µrad/(N·m)) of a compliance's true value: the error budget's prior (uniform)
+of one the points do not identify, and the range simulated arms draw theirs from
+(:func:`~wirecal.formats.truth.random_errors`): issue 30's independent model of an arm like
+the Viper s650, "joints 2–4 yielding 2–8 µrad/N·m under gravity" (not a vendor figure). A
+stiffer arm is bounded conservatively: its sag is smaller than the range's."""
+
+PRIOR_COMPLIANCE_URAD_PER_NM = COMPLIANCE_RANGE_URAD_PER_NM[1]
+"""How far (µrad/(N·m)) a compliance may be: the top of :data:`COMPLIANCE_RANGE_URAD_PER_NM`
+(the planner's prior size of a compliance, and the identification rule's range 0–8)."""
 
 SIGMA_LIMIT_URAD_PER_NM = PRIOR_COMPLIANCE_URAD_PER_NM / 12**0.5
-"""Largest σ (µrad/(N·m)) of an identified compliance at the reading noise: the σ of the
-prior range (uniform over 0–8 µrad/(N·m): 2.31), so an identified compliance is known
-better than the range the budget would otherwise assume for it."""
+"""Largest σ (µrad/(N·m)) of an identified compliance at the reading noise: the σ of a
+uniform over 0–8 µrad/(N·m) (2.31), so an identified compliance is known better than
+anything from rigid to the range's top. (The budget's prior of one not identified is the
+narrower :data:`COMPLIANCE_RANGE_URAD_PER_NM`, σ 1.73, narrowed further by the readings;
+the rule stays as it was, so the patch carries the compliances it did.)"""
 
 COMPENSATION_ITERATIONS = 4
 """Fixed-point steps of :func:`compensated_joints`: each shrinks the error by c·|∂τ/∂q|

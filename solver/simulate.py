@@ -110,6 +110,23 @@ class EncoderTruth:
 IDEAL_ENCODER = EncoderTruth()
 
 
+DEFAULT_REPEATABILITY_MM = 0.02
+"""The twin's arm repeatability (mm) when the robot file declares none: the value the twin
+has always used (an assumption, no datasheet's)."""
+
+
+def declared_unmodelled(robot: Robot) -> Unmodelled | None:
+    """Return the errors ``wirecal simulate`` gives the true arm: the declared repeatability.
+
+    A robot file with ``[calibration] repeatability_mm`` gets an arm that lands within it
+    (no assumed sag: the file's compliances or none); without the key the arm lands exactly,
+    as before the key existed.
+    """
+    if robot.repeatability_mm is None:
+        return None
+    return Unmodelled(robot.repeatability_mm, 0.0)
+
+
 @dataclass(frozen=True)
 class Unmodelled:
     """Physical effects no kinematic parameter can absorb.
@@ -120,7 +137,10 @@ class Unmodelled:
 
     * repeatability: each move lands with independent joint errors of σ chosen so that the
       tool point scatters by about ``repeatability_mm``/2 (1σ) at 600 mm
-      (:func:`~wirecal.solver.zero_reading.joint_sigma_rad`);
+      (:func:`~wirecal.solver.zero_reading.joint_sigma_rad`); None (the default): the
+      robot file's ``[calibration] repeatability_mm``, else
+      :data:`DEFAULT_REPEATABILITY_MM` (:meth:`for_robot`), so the true arm repeats as the
+      file says the solver should assume;
     * compliance under gravity: joints 2 and 3 sag by ``compliance_deg_per_m`` per metre of
       lever arm from their axis to the wrist centre, in the direction gravity pulls (the
       weight of the forearm, wrist and tool; 0.01 deg/m gives ≈ 0.05 mm at full reach): the
@@ -130,8 +150,17 @@ class Unmodelled:
       instead: no assumed sag.
     """
 
-    repeatability_mm: float = 0.02
+    repeatability_mm: float | None = None
     compliance_deg_per_m: float = DEFAULT_GRAVITY_SAG_DEG_PER_M
+
+    def for_robot(self, robot: Robot) -> Unmodelled:
+        """Return these errors with the repeatability resolved for ``robot`` (class docstring)."""
+        if self.repeatability_mm is not None:
+            return self
+        declared = robot.repeatability_mm
+        return replace(
+            self, repeatability_mm=DEFAULT_REPEATABILITY_MM if declared is None else declared
+        )
 
     def joint_errors_deg(
         self, model: Model, q_deg: np.ndarray, rng: np.random.Generator
@@ -140,7 +169,8 @@ class Unmodelled:
 
         One configuration (n,) or many (N, n); the repeatability's draws come first.
         """
-        sigma = np.degrees(joint_sigma_rad(self.repeatability_mm))
+        r = DEFAULT_REPEATABILITY_MM if self.repeatability_mm is None else self.repeatability_mm
+        sigma = np.degrees(joint_sigma_rad(r))
         dq = rng.normal(0.0, sigma, np.shape(q_deg))
         return dq - self.sag_deg(model, q_deg).reshape(dq.shape)
 
@@ -490,7 +520,7 @@ def _row_lengths(
         return np.array([0.0 if k is None else d_points[k] for k in points])
     model = robot.model(errors)
     rng = np.random.default_rng([seed, 6])
-    actual = joints_deg + unmodelled.joint_errors_deg(model, joints_deg, rng)
+    actual = joints_deg + unmodelled.for_robot(robot).joint_errors_deg(model, joints_deg, rng)
     p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
     loads = plan.loads()  # the payload step's points carry its mass, its zero none
     if loads is not None:

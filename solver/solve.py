@@ -24,7 +24,7 @@ from wirecal.solver.budget import (
     sources,
 )
 from wirecal.solver.compliance import (
-    PRIOR_COMPLIANCE_URAD_PER_NM,
+    COMPLIANCE_RANGE_URAD_PER_NM,
     ComplianceObservability,
     compliance_observability,
 )
@@ -523,7 +523,13 @@ def _compliances(
 def _compliance_terms(
     robot: Robot, problem: Problem, comp: ComplianceObservability | None, est: Estimate
 ) -> ComplianceTerms | None:
-    """Return the joint budget's compliances: the identified ones' values, the others' prior."""
+    """Return the joint budget's compliances: the identified ones' values, the others' prior.
+
+    The prior of the others is :data:`~wirecal.solver.compliance.COMPLIANCE_RANGE_URAD_PER_NM`
+    as offsets from the file's values.
+    With the joint fit's residuals, from which the budget reads what the points say of the
+    others (:func:`~wirecal.solver.budget.compliance_likelihood`).
+    """
     if comp is None:
         return None
     values = est.as_dict()
@@ -533,6 +539,7 @@ def _compliance_terms(
     )
     others = tuple(n for n in robot.compliances if n in comp.reasons and n not in comp.no_torque)
     unit = ErrorSet(others, robot.n_joints)
+    nominal = np.array([robot.nominal_value(n) for n in others])
     wire = (  # every compliance asked for identified: none at its prior
         wire_jacobian(problem.at(), problem.q, problem.q0, others)[1]
         if others
@@ -542,8 +549,9 @@ def _compliance_terms(
         errors.to_internal(left),
         others,
         np.reshape(wire, (len(problem.q), len(others))),
-        unit.to_internal(np.full(len(others), PRIOR_COMPLIANCE_URAD_PER_NM)),
-        unit.to_internal([robot.nominal_value(n) for n in others]),
+        unit.to_internal(np.subtract.outer(COMPLIANCE_RANGE_URAD_PER_NM, nominal)),
+        unit.to_internal(nominal),
+        problem.residuals(errors.to_internal(est.values)),
     )
 
 

@@ -17,7 +17,14 @@ from wirecal.formats.robot_file import robot_from_dict
 from wirecal.formats.simulated_log import simulate_log
 from wirecal.formats.truth import random_errors
 from wirecal.solver.accuracy import rms_tool_error, workspace
-from wirecal.solver.budget import ComplianceTerms, budget, compliance_errors, sources
+from wirecal.solver.bound import DRAWS, SEED, low_discrepancy
+from wirecal.solver.budget import (
+    ComplianceTerms,
+    budget,
+    compliance_errors,
+    compliance_likelihood,
+    sources,
+)
 from wirecal.solver.compliance import workspace_sag
 from wirecal.solver.kinematics import tool_jacobian
 from wirecal.solver.log.measurements import check_log
@@ -36,21 +43,58 @@ def ur5e():
     return robot_from_dict(data, "ur5e.toml")
 
 
-def test_an_unidentified_compliance_is_uniform_between_the_file_and_the_prior(ur5e):
-    """c_u ~ U(0, p) beyond the file's value: E[c_u²] = p²/3, and the error over the
-    parameters and the compliance is G·c_u, G = [M·J_u; −1]: second moment G·Gᵀ·p²/3."""
+def _src(sigma_mm: float, n: int):
+    """Sources with the reading noise alone (a measured, exact scale; no times, no zeros)."""
+    return sources(sigma_mm, np.zeros(n), 0.0, True, 0.0, None, None, None,
+                   np.zeros(n), np.zeros(n))  # fmt: skip
+
+
+def test_a_compliance_the_readings_cannot_separate_keeps_its_prior(ur5e):
+    """A compliance whose wire column is a combination of the geometry's says nothing: its
+    posterior is the prior, U(0, p) beyond the file's value, E[c_u²] = p²/3, and the error
+    over the parameters and the compliance is G·c_u, G = [M·J_u; −1]: second moment
+    G·Gᵀ·p²/3 (the bound's 4,096 draws: to 0.5 %)."""
     rng = np.random.default_rng(1)
     q = workspace(ur5e, 20)
     m, n = 3, 12
-    M, wire = rng.normal(size=(m, n)), rng.normal(size=(n, 1))
+    J = rng.normal(size=(n, m))
+    M, wire = np.linalg.pinv(J), J @ np.array([[0.3], [-1.0], [2.0]])
     prior = 8e-6  # rad/(N·m)
-    terms = ComplianceTerms(np.zeros(m), ("c4",), wire, np.array([prior]), np.zeros(1))
+    residual = rng.normal(0.0, 0.01, n)
+    span = np.array([[0.0], [prior]])  # offsets 0 to p from the file's value
+    terms = ComplianceTerms(np.zeros(m), ("c4",), wire, span, np.zeros(1), residual)
     Jp = tool_jacobian(ur5e.nominal, q, ("a2", "a3", "d4"))[1]
-    Jx, unseen = compliance_errors(ur5e.nominal, q, Jp, M, terms)
+    Jx, unseen = compliance_errors(ur5e.nominal, q, (Jp, J, M), terms, _src(0.01, n))
     G = np.concatenate([M @ wire[:, 0], [-1.0]])
-    np.testing.assert_allclose(unseen.second_moment(), np.outer(G, G) * prior**2 / 3, rtol=1e-12)
+    np.testing.assert_allclose(unseen.second_moment(), np.outer(G, G) * prior**2 / 3, rtol=0.005)
     np.testing.assert_allclose(Jx[:, :, :m], Jp, rtol=0)
     np.testing.assert_allclose(Jx[:, :, m], tool_jacobian(ur5e.nominal, q, ("c4",))[1][:, :, 0])
+
+
+def test_what_the_readings_say_of_an_unidentified_compliance(ur5e):
+    """Lengths d = J·e + w·c + noise, fitted without c: the residual says ĉ = −B·r, B the
+    compliance's row of [J, w]⁺, with σ²·[(AᵀA)⁻¹]_cc, A = [J, w] (computed here by
+    numpy's inverse); noise-free, ĉ is the truth. Its posterior with a sharp likelihood
+    inside the range is that Gaussian; at the range's edge a half-Gaussian (mean 0.798 σ
+    above the edge)."""
+    rng = np.random.default_rng(4)
+    n, m = 40, 3
+    J, w = rng.normal(size=(n, m)), rng.normal(size=(n, 1))
+    A = np.hstack([J, w])
+    for truth in (3e-6, 0.0):
+        d = J @ rng.normal(size=m) + w[:, 0] * truth
+        e_fit = np.linalg.lstsq(J, d, rcond=None)[0]
+        residual = J @ e_fit - d  # model − measured, the compliance left out of the fit
+        span = np.array([[0.0], [8e-6]])
+        terms = ComplianceTerms(np.zeros(m), ("c4",), w, span, np.zeros(1), residual)
+        post = compliance_likelihood(J, terms, _src(1e-7, n))
+        sigma = 1e-7 * np.sqrt(np.linalg.inv(A.T @ A)[m, m])
+        assert post.mean[0] == pytest.approx(truth, abs=1e-12)
+        assert post.cov[0, 0] == pytest.approx(sigma**2, rel=1e-9)
+        mean, _ = post.moments(low_discrepancy(1, DRAWS, SEED))
+        expected = truth + (0.7979 * sigma if truth == 0 else 0.0)  # √(2/π)·σ at the edge
+        assert mean[0] == pytest.approx(expected, abs=0.01 * sigma)
+        assert not post.flat[0]
 
 
 def test_workspace_sag_is_removed_by_compensating_every_compliance(ur5e):
@@ -82,6 +126,14 @@ def test_a_compliant_calibration_reports_its_sag_and_the_budget_its_compliances(
     result = solve(robot, plan, check_log(parse_log(text, "run"), plan, robot))
     joint = result.budgets["joint"]
     assert 0 < joint.terms["compliance"] < joint.total
+    # c4, c5 not identified: their posterior lies in the stated 2–8 µrad/(N·m), no wider
+    # than the uniform's σ 6/√12 = 1.73 (the readings can only narrow it).
+    assert set(joint.posterior) == {"c4", "c5"}
+    for value, sd in joint.posterior.values():
+        assert 2.0 < value < 8.0
+        assert 0.0 < sd < 1.74
+    said = joint.as_json()["compliances_not_identified_urad_per_nm"]
+    assert said["c4"]["value"] == joint.posterior["c4"][0]
     assert "compliance" not in result.budgets["stepwise"].terms
     sag = sag_summary(result)
     assert sag is not None

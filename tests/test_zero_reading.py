@@ -25,6 +25,7 @@ from wirecal.solver.log.measurements import check_log
 from wirecal.solver.simulate import Unmodelled
 from wirecal.solver.solve import solve
 from wirecal.solver.zero_reading import expected_zero_mm
+from wirecal.twin.world import DEFAULT_UNMODELLED, World
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -116,3 +117,59 @@ def test_cli_solve_reads_the_lengths_from_the_declared_repeatability(tmp_path):
         d6[path.name] = json.loads(res.output)["methods"]["joint"]["parameters"]["d6"]
     # Every length 18.7 µm longer (E‖δ‖ at the UR5e's θ0, 0.02 mm): d6 takes about 0.6 of it.
     assert 0.005 < d6["declared.toml"] - d6["plain.toml"] < 0.019
+
+
+def _landing_rms_mm(robot, unmodelled) -> float:
+    """RMS over the UR5e plan's rows of the wire length the arm's landing adds (no noise)."""
+    plan = load_plan(EXAMPLES / "ur5e" / "plan.toml", robot)
+    exact = simulate_log(robot, plan, {}, seed=5, noise_mm=0.0)
+    landed = simulate_log(robot, plan, {}, seed=5, noise_mm=0.0, unmodelled=unmodelled)
+    rigid = replace(robot, repeatability_mm=None)  # read both alike: no zero correction
+    d = [check_log(parse_log(t, "run"), plan, rigid).distance_mm for t in (exact, landed)]
+    return float(np.sqrt(np.mean((d[1] - d[0]) ** 2)))
+
+
+def test_the_twins_arm_repeats_as_the_robot_file_declares():
+    plain, declared = _robot("ur5e"), _robot("ur5e", repeatability_mm=0.05)
+    assert Unmodelled().for_robot(plain).repeatability_mm == 0.02  # the default, stated
+    assert Unmodelled().for_robot(declared).repeatability_mm == 0.05
+    assert Unmodelled(0.03).for_robot(declared).repeatability_mm == 0.03  # explicit wins
+    # The landing's scatter is linear in the repeatability (σ_q ∝ r, the same draws): 2.5×.
+    small = _landing_rms_mm(plain, Unmodelled(compliance_deg_per_m=0.0))
+    large = _landing_rms_mm(declared, Unmodelled(compliance_deg_per_m=0.0))
+    assert small > 0.002  # the default arm does not land exactly
+    assert large == pytest.approx(2.5 * small, rel=0.06)  # less: the counts round alike
+
+
+def test_cli_simulate_lands_the_arm_within_the_declared_repeatability(tmp_path):
+    plan_path = EXAMPLES / "ur5e" / "plan.toml"
+    text = (EXAMPLES / "ur5e" / "robot.toml").read_text()
+    plain, declared = tmp_path / "plain.toml", tmp_path / "declared.toml"
+    plain.write_text(text)
+    declared.write_text(text.replace("[calibration]\n", "[calibration]\nrepeatability_mm = 0.05\n"))
+    robot = _robot("ur5e")
+    plan = load_plan(plan_path, robot)
+    d = []
+    for path in (plain, declared):
+        log = tmp_path / f"{path.stem}.log"
+        args = ["simulate", str(path), str(plan_path), "-o", str(log), "--seed", "2"]
+        res = CliRunner().invoke(main, args)
+        assert res.exit_code == 0, res.output
+        d.append(check_log(parse_log(log.read_text(), "run"), plan, robot).distance_mm)
+    # The same seed: the same truth, encoder and noise; the plain arm lands exactly, as
+    # before, the declared one with joints of σ 0.025 mm / 600 mm each: 0.062 mm RMS of
+    # wire here (six joints, the UR5e's levers), 2.5 × the 0.02 mm arm's (the test above).
+    rms = float(np.sqrt(np.mean((d[1] - d[0]) ** 2)))
+    assert 0.03 < rms < 0.12
+
+
+def test_the_twins_world_takes_the_declared_repeatability(tmp_path):
+    """The twin (validation runs, ``simulate --controller``) lands its arm as declared."""
+    robot = _robot("ur5e", repeatability_mm=0.03)
+    q0 = load_plan(EXAMPLES / "ur5e" / "plan.toml", robot).theta0_deg
+    world = World(robot, {}, q0, tmp_path, unmodelled=DEFAULT_UNMODELLED)
+    assert world.unmodelled is not None
+    assert world.unmodelled.repeatability_mm == 0.03
+    plain = World(_robot("ur5e"), {}, q0, tmp_path, unmodelled=DEFAULT_UNMODELLED)
+    assert plain.unmodelled is not None
+    assert plain.unmodelled.repeatability_mm == 0.02  # the twin's default, as before

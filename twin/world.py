@@ -167,6 +167,8 @@ class World:
         """Derive the true model and start the world's state."""
         self.rng = np.random.default_rng(self.seed)
         self.model = self.robot.model(self.truth)
+        if self.unmodelled is not None:  # the arm repeats as the robot file declares
+            self.unmodelled = self.unmodelled.for_robot(self.robot)
         self.p0 = tool_position(self.model, np.radians(self.mount_deg)[None])[0]
         if self.encoder_point_mm is not None:
             self.p0 = np.asarray(self.encoder_point_mm, dtype=float)
