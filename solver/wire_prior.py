@@ -35,11 +35,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from wirecal.solver.compliance import PRIOR_COMPLIANCE_URAD_PER_NM
 from wirecal.solver.fit.calibrate import Data, candidates, start
 from wirecal.solver.fit.model import Layout, lengths, lengths_and_jacobian, model_of
+from wirecal.solver.fit.solver import levenberg_marquardt
 from wirecal.solver.kinematics import Model
 from wirecal.solver.params import TOOL_NAMES, ErrorSet
 
@@ -84,8 +84,10 @@ def _map_at(base: Model, layout: Layout, data: Data, prior: float) -> tuple[Wire
     """Return the maximum a posteriori fit at prior size ``prior`` and its log evidence.
 
     σ of the readings starts at ``prior`` and is then the residual's RMS (at least
-    ``data.floor_mm``), :data:`SIGMA_PASSES` times. The evidence is Laplace's
-    approximation (MacKay 1992): −χ²/2 − N·ln σ − ½ Σ (x_k/σ_k)² − Σ ln σ_k − ½ ln det H,
+    ``data.floor_mm``), :data:`SIGMA_PASSES` times; each pass a Levenberg–Marquardt solve
+    (:func:`~wirecal.solver.fit.solver.levenberg_marquardt`) of the readings' residual
+    beside the prior's rows x_k·σ/σ_k. The evidence is Laplace's approximation
+    (MacKay 1992): −χ²/2 − N·ln σ − ½ Σ (x_k/σ_k)² − Σ ln σ_k − ½ ln det H,
     H = JᵀJ/σ² + Λ, over the parameters with a prior (the others' terms do not depend on it).
     """
     sd = prior_sigma(base, layout, prior)
@@ -95,13 +97,11 @@ def _map_at(base: Model, layout: Layout, data: Data, prior: float) -> tuple[Wire
     for _ in range(SIGMA_PASSES):
         w = sigma * weight
 
-        def fun(v: np.ndarray, w: np.ndarray = w) -> np.ndarray:
-            return np.concatenate([lengths(base, layout, v, q, session) - length, w * v])
+        def evaluate(v: np.ndarray, w: np.ndarray = w) -> tuple[np.ndarray, np.ndarray]:
+            model_mm, jac = lengths_and_jacobian(base, layout, v, q, session)
+            return np.concatenate([model_mm - length, w * v]), np.vstack([jac, np.diag(w)])
 
-        def jac(v: np.ndarray, w: np.ndarray = w) -> np.ndarray:
-            return np.vstack([lengths_and_jacobian(base, layout, v, q, session)[1], np.diag(w)])
-
-        x = least_squares(fun, x, jac=jac, x_scale="jac", method="trf").x
+        x = levenberg_marquardt(evaluate, x)
         r = lengths(base, layout, x, q, session) - length
         sigma = max(float(np.sqrt(np.mean(r**2))), data.floor_mm, 1e-9)
     J = lengths_and_jacobian(base, layout, x, q, session)[1] / sigma
