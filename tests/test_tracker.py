@@ -30,7 +30,13 @@ from wirecal.solver.fit.calibrate import point_model
 from wirecal.solver.kinematics import tool_position, with_errors
 from wirecal.solver.plan.options import PlanOptions
 from wirecal.solver.plan.pool import greedy_rows, plan_pool
-from wirecal.solver.tracker.fit import _jacobian, calibrate, register, registered_rms_mm
+from wirecal.solver.tracker.fit import (
+    _jacobian,
+    calibrate,
+    register,
+    registered_rms_mm,
+    residual_and_jacobian,
+)
 from wirecal.solver.tracker.replay import ZERO_MM, readings_mm, replay
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -422,6 +428,27 @@ def test_tracker_jacobian_matches_finite_differences():
         p = tool_position(base, q)
         fd.append(((p @ turn[0].T - p @ turn[1].T) / (2 * h)).reshape(-1))
     fd.extend(np.tile(np.eye(3)[k], len(q)) for k in range(3))
+    assert np.allclose(j, np.array(fd).T, atol=1e-5)
+
+
+def test_tracker_residual_jacobian_matches_finite_differences_away_from_the_start():
+    """At a turn ω of 0.4 rad from the start R0 (the left Jacobian of the rotations)."""
+    robot = load_robot(UR10)
+    base = point_model(robot)
+    q = np.radians(_ur10_pool(5, 4))
+    names = ("th3", "a2", "al2", "tool_z")
+    rot0 = Rotation.from_rotvec([0.2, -0.5, 0.9]).as_matrix()
+    x = np.random.default_rng(5).normal(0, 500, (5, 3))
+    v = np.array([0.001, 0.3, 0.002, -0.5, 0.3, -0.2, 0.15, 10.0, -4.0, 2.0])
+    _, j = residual_and_jacobian(base, q, x, names, rot0, v)
+    h = 1e-6
+    fd = []
+    for k in range(len(v)):
+        dv = np.zeros(len(v))
+        dv[k] = h
+        up = residual_and_jacobian(base, q, x, names, rot0, v + dv)[0]
+        down = residual_and_jacobian(base, q, x, names, rot0, v - dv)[0]
+        fd.append((up - down) / (2 * h))
     assert np.allclose(j, np.array(fd).T, atol=1e-5)
 
 
