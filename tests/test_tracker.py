@@ -463,6 +463,7 @@ def test_tracker_calibration_finds_the_truth():
     assert held < 0.03  # noise 0.01 mm per axis: 0.017 mm in 3-D
     assert registered_rms_mm(tool_position(nominal.model, qr[60:]), x[60:]) > 0.5
     assert {"th2", "a2", "d4"} <= set(fit.names)
+    assert "th6" not in fit.names  # the tool point on its axis: θ6 moves nothing
 
 
 # --- the pool planner and the replay --------------------------------------------------------
