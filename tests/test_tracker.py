@@ -30,7 +30,13 @@ from wirecal.solver.fit.calibrate import point_model
 from wirecal.solver.kinematics import tool_position, with_errors
 from wirecal.solver.plan.options import PlanOptions
 from wirecal.solver.plan.pool import greedy_rows, plan_pool
-from wirecal.solver.tracker.fit import _jacobian, calibrate, register, registered_rms_mm
+from wirecal.solver.tracker.fit import (
+    _jacobian,
+    calibrate,
+    register,
+    registered_rms_mm,
+    residual_and_jacobian,
+)
 from wirecal.solver.tracker.replay import ZERO_MM, readings_mm, replay
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -425,6 +431,27 @@ def test_tracker_jacobian_matches_finite_differences():
     assert np.allclose(j, np.array(fd).T, atol=1e-5)
 
 
+def test_tracker_residual_jacobian_matches_finite_differences_away_from_the_start():
+    """At a turn ω of 0.4 rad from the start R0 (the left Jacobian of the rotations)."""
+    robot = load_robot(UR10)
+    base = point_model(robot)
+    q = np.radians(_ur10_pool(5, 4))
+    names = ("th3", "a2", "al2", "tool_z")
+    rot0 = Rotation.from_rotvec([0.2, -0.5, 0.9]).as_matrix()
+    x = np.random.default_rng(5).normal(0, 500, (5, 3))
+    v = np.array([0.001, 0.3, 0.002, -0.5, 0.3, -0.2, 0.15, 10.0, -4.0, 2.0])
+    _, j = residual_and_jacobian(base, q, x, names, rot0, v)
+    h = 1e-6
+    fd = []
+    for k in range(len(v)):
+        dv = np.zeros(len(v))
+        dv[k] = h
+        up = residual_and_jacobian(base, q, x, names, rot0, v + dv)[0]
+        down = residual_and_jacobian(base, q, x, names, rot0, v - dv)[0]
+        fd.append((up - down) / (2 * h))
+    assert np.allclose(j, np.array(fd).T, atol=1e-5)
+
+
 def test_tracker_calibration_finds_the_truth():
     q = _ur10_pool(120, 2)
     x, robot = _measured(q, 0.01, 3)
@@ -436,6 +463,7 @@ def test_tracker_calibration_finds_the_truth():
     assert held < 0.03  # noise 0.01 mm per axis: 0.017 mm in 3-D
     assert registered_rms_mm(tool_position(nominal.model, qr[60:]), x[60:]) > 0.5
     assert {"th2", "a2", "d4"} <= set(fit.names)
+    assert "th6" not in fit.names  # the tool point on its axis: θ6 moves nothing
 
 
 # --- the pool planner and the replay --------------------------------------------------------

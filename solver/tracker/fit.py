@@ -2,17 +2,21 @@
 
 A tracker measures the tool point in its own frame: x_i = R·p(q_i; e) + t, with p the
 robot model's tool point (:func:`~wirecal.solver.kinematics.tool_jacobian`), e the DH errors
-and the tool point, (R, t) the base frame in the tracker's. Gauss–Newton, the rotation
-updated multiplicatively (R ← exp([δω]×)·R), damped (Levenberg–Marquardt):
+and the tool point, (R, t) the base frame in the tracker's, R = exp([ω]×)·R0 from the
+nominal model's registration R0; wirecal's Levenberg–Marquardt
+(:func:`~wirecal.solver.fit.solver.levenberg_marquardt`, as ``wirecal fit``'s) on
 
-    ∂x/∂e = R·∂p/∂e,   ∂x/∂ω = −[R·p]×,   ∂x/∂t = I.
+    ∂x/∂e = R·∂p/∂e,   ∂x/∂ω = −[R·p]×·J_l(ω),   ∂x/∂t = I,
+
+J_l the left Jacobian of the rotations (:func:`_left_jacobian`).
 
 Parameters: the tool point and the base frame always; then the DH errors of rows 2…n in
 :func:`~wirecal.solver.fit.calibrate.candidates`' order, each kept when it raises the rank and
 leaves every σ (from the residual of the tool-and-frame fit) below
 :data:`~wirecal.solver.verdict.POORLY_IDENTIFIED` deg or mm
-(:func:`~wirecal.solver.identifiability.select_columns`). Row 1 is a rigid motion of the
-arm that the base frame absorbs.
+(:func:`~wirecal.solver.identifiability.select_columns`); a DH error whose column is zero
+to round-off (θ6 with the tool point on its axis) is not a candidate. Row 1 is a rigid
+motion of the arm that the base frame absorbs.
 
 A model is judged on poses it was not fitted to by :func:`registered_rms_mm`: its tool
 points rigidly registered onto the measured ones (Arun, Huang & Blostein 1987: the SVD of
@@ -29,15 +33,13 @@ from scipy.spatial.transform import Rotation
 
 from wirecal.solver import params as P
 from wirecal.solver.fit.calibrate import candidates
-from wirecal.solver.identifiability import select_columns
+from wirecal.solver.fit.solver import levenberg_marquardt
+from wirecal.solver.identifiability import RANK_RTOL, select_columns
 from wirecal.solver.kinematics import Model, tool_jacobian, tool_position, with_errors
 from wirecal.solver.verdict import POORLY_IDENTIFIED
 
 FRAME_NAMES = ("frame_rx", "frame_ry", "frame_rz", "frame_x", "frame_y", "frame_z")
 """The base frame's small rotation (rad) and translation (mm) in the tracker's frame."""
-
-ITERATIONS = 50
-"""Levenberg–Marquardt steps at most; it stops earlier when a step gains nothing."""
 
 
 @dataclass(frozen=True)
@@ -91,24 +93,38 @@ def _jacobian(
     return rp, j.reshape(3 * len(p), -1)
 
 
-State = tuple[np.ndarray, np.ndarray, np.ndarray]
-"""A fit's state: the parameters e (internal units), the rotation R and the translation t."""
+def _left_jacobian(w: np.ndarray) -> np.ndarray:
+    """Return J_l(ω) (3, 3): exp([ω + δ]×) ≈ exp([J_l(ω)·δ]×)·exp([ω]×) for small δ."""
+    theta = float(np.linalg.norm(w))
+    k = _skew(w[None])[0]
+    if theta < 1e-8:
+        return np.eye(3) + k / 2
+    return (
+        np.eye(3)
+        + (1 - np.cos(theta)) / theta**2 * k
+        + (theta - np.sin(theta)) / theta**3 * (k @ k)
+    )
 
 
-def _apply(fit: State, step: np.ndarray) -> State:
-    """Return (e, R, t) moved by a step (δe, δω, δt)."""
-    values, rotation, t = fit
-    m = len(values)
-    turn = Rotation.from_rotvec(step[m : m + 3]).as_matrix()
-    return values + step[:m], turn @ rotation, t + step[m + 3 :]
+def residual_and_jacobian(
+    base: Model,
+    q_rad: np.ndarray,
+    xyz_mm: np.ndarray,
+    names: tuple[str, ...],
+    rotation0: np.ndarray,
+    v: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return R·p + t − x (3N,) and its Jacobian (3N, m + 6) at v = (e, ω, t).
 
-
-def _residual(
-    base: Model, q_rad: np.ndarray, xyz_mm: np.ndarray, names: tuple[str, ...], fit: State
-) -> np.ndarray:
-    """Return the residual x − (R·p + t) of every row (N, 3)."""
-    values, rotation, t = fit
-    return xyz_mm - tool_position(with_errors(base, names, values), q_rad) @ rotation.T - t
+    R = exp([ω]×)·R0, ``rotation0`` R0 the rigid registration the fit starts from; the
+    rotation's columns are :func:`_jacobian`'s (a turn δω applied on the left) times
+    :func:`_left_jacobian` (module docstring).
+    """
+    m = len(names)
+    rotation = Rotation.from_rotvec(v[m : m + 3]).as_matrix() @ rotation0
+    rp, j = _jacobian(with_errors(base, names, v[:m]), q_rad, names, rotation)
+    j[:, m : m + 3] = j[:, m : m + 3] @ _left_jacobian(v[m : m + 3])
+    return (rp + v[m + 3 :] - xyz_mm).reshape(-1), j
 
 
 def _least_squares(
@@ -116,33 +132,21 @@ def _least_squares(
 ) -> TrackerFit:
     """Return the least-squares fit of ``names`` and the base frame (module docstring).
 
-    Levenberg–Marquardt on the column-scaled Gauss–Newton steps: a step that does not lower
-    the sum of squares is refused and the damping raised.
+    From the nominal model's rigid registration, by wirecal's Levenberg–Marquardt
+    (:func:`~wirecal.solver.fit.solver.levenberg_marquardt`).
     """
-    fit: State = (np.zeros(len(names)), *register(tool_position(base, q_rad), xyz_mm))
-    cost = float(np.sum(_residual(base, q_rad, xyz_mm, names, fit) ** 2))
-    damping = 1e-6
-    for _ in range(ITERATIONS):
-        _, j = _jacobian(with_errors(base, names, fit[0]), q_rad, names, fit[1])
-        r = _residual(base, q_rad, xyz_mm, names, fit).reshape(-1)
-        scale = np.maximum(np.linalg.norm(j, axis=0), 1e-12)
-        js = j / scale
-        a, g = js.T @ js, js.T @ r
-        while damping < 1e6:
-            step = np.linalg.solve(a + damping * np.eye(len(g)), g) / scale
-            trial = _apply(fit, step)
-            new = float(np.sum(_residual(base, q_rad, xyz_mm, names, trial) ** 2))
-            if new < cost:
-                break
-            damping *= 10
-        else:
-            break
-        fit, damping, small = trial, damping / 10, cost - new < 1e-12 * cost
-        cost = new
-        if small:
-            break
-    model = with_errors(base, names, fit[0])
-    return TrackerFit(names, fit[0], model, fit[1], fit[2], float(np.sqrt(cost / len(q_rad))))
+    rotation0, t0 = register(tool_position(base, q_rad), xyz_mm)
+    v0 = np.concatenate([np.zeros(len(names) + 3), t0])
+
+    def evaluate(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return residual_and_jacobian(base, q_rad, xyz_mm, names, rotation0, v)
+
+    v = levenberg_marquardt(evaluate, v0)
+    m = len(names)
+    rotation = Rotation.from_rotvec(v[m : m + 3]).as_matrix() @ rotation0
+    r = evaluate(v)[0]
+    model = with_errors(base, names, v[:m])
+    return TrackerFit(names, v[:m], model, rotation, v[m + 3 :], float(np.sqrt(r @ r / len(q_rad))))
 
 
 def calibrate(
@@ -161,7 +165,12 @@ def calibrate(
     j = np.concatenate(
         [P.ErrorSet(full, base.n_joints).per_boundary(j[:, : len(full)]), j[:, len(full) :]], axis=1
     )
-    order = [*range(3), *range(len(full), len(full) + 6), *range(3, len(full))]
+    moves = np.linalg.norm(j, axis=0) > RANK_RTOL * np.max(np.linalg.norm(j, axis=0))
+    order = [
+        *range(3),
+        *range(len(full), len(full) + 6),
+        *(k for k in range(3, len(full)) if moves[k]),  # θ6 with the tool on its axis: none
+    ]
     limit = np.full(len(order), POORLY_IDENTIFIED)
     limit[:9] = np.inf
     sel = select_columns(
