@@ -38,13 +38,31 @@ def move_collision(
     A collision is a gap under the cell's margin, or with ``contact`` (the twin's arm as
     built) capsules that touch: the margin is the planner's, not the robot's.
     """
+    return move_sweep(robot, model, p0, a, b, contact)[0]
+
+
+def move_sweep(
+    robot: Robot,
+    model: Model,
+    p0: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    contact: bool = False,
+) -> tuple[str | None, np.ndarray, float]:
+    """Return :func:`move_collision`'s answer, the move's last sample (deg) and its smallest gap."""
     q, _ = move_samples(np.r_[a][None], np.r_[b][None])
     gaps = robot.cell_gaps(q, p0, model)
-    hit = np.flatnonzero(gaps.smallest() < (-gaps.margin_mm if contact else 0.0))
+    smallest = gaps.smallest()
+    hit = np.flatnonzero(smallest < collision_below_mm(gaps.margin_mm, contact))
     if not hit.size:
-        return None
+        return None, q[-1], float(smallest[-1])
     k = int(hit[0])
-    return f"{gaps.cause(k)} at joints {_joints(q[k])}"
+    return f"{gaps.cause(k)} at joints {_joints(q[k])}", q[-1], float(smallest[-1])
+
+
+def collision_below_mm(margin_mm: float, contact: bool) -> float:
+    """Return the smallest gap under which a configuration collides (:func:`move_collision`)."""
+    return -margin_mm if contact else 0.0
 
 
 def body_problem(robot: Robot, q_deg: np.ndarray) -> str | None:
