@@ -246,13 +246,7 @@ def rigid_frames(model: Model, q: np.ndarray) -> Frames:
     n = q.shape[1]
     if n != model.n_joints:
         raise ValueError(f"configurations have {n} joints; the model has {model.n_joints}")
-    terms, (X, Y, Z), P = _joint_terms(model, q)
-    stored = [(X, Z, P)]
-    for ca, sa, a, d, c, s in terms:
-        Y, Z = _turn(ca, sa, Y, Z)  # RotX(α_{i-1})
-        P = _advance(P, a, X, d, Z)  # TransX(a_{i-1}), then TransZ(d_i) along the new z
-        X, Y = _turn(c, s, X, Y)  # RotZ(θ_i + offset_i)
-        stored.append((X, Z, P))
+    stored, (X, Y, Z) = _recurrence(model, q)
     chain = np.array(stored).reshape(n + 1, 3, 3, -1).transpose(3, 0, 1, 2)
     last = np.array([X, Y, Z]).reshape(3, 3, -1).transpose(2, 1, 0)  # columns X, Y, Z
     return Frames(
@@ -261,6 +255,31 @@ def rigid_frames(model: Model, q: np.ndarray) -> Frames:
         o=chain[:, :, 2],
         R_last=np.ascontiguousarray(last),
     )
+
+
+def _recurrence(model: Model, q: np.ndarray) -> tuple[list[tuple], tuple]:
+    """Return each frame's (x, z, o) and the last frame's axes (X, Y, Z) (:func:`rigid_frames`)."""
+    terms, (X, Y, Z), P = _joint_terms(model, q)
+    stored = [(X, Z, P)]
+    for ca, sa, a, d, c, s in terms:
+        Y, Z = _turn(ca, sa, Y, Z)  # RotX(α_{i-1})
+        P = _advance(P, a, X, d, Z)  # TransX(a_{i-1}), then TransZ(d_i) along the new z
+        X, Y = _turn(c, s, X, Y)  # RotZ(θ_i + offset_i)
+        stored.append((X, Z, P))
+    return stored, (X, Y, Z)
+
+
+def one_chain(model: Model, q: np.ndarray) -> tuple[list[tuple], tuple] | None:
+    """Return one configuration's rigid frames as Python floats, or None where it cannot.
+
+    ``q`` (n,) rad; per frame its (x, z, o) 3-tuples and the last frame's axes (X, Y, Z),
+    the very numbers of :func:`frames` without building its arrays (a Newton step of the
+    inverse kinematics needs a handful of them). None for a model that bends under
+    gravity or one model per configuration: use :func:`frames`.
+    """
+    if bends(model) or np.ndim(model.dh) != 2:
+        return None
+    return _recurrence(model, np.asarray(q, dtype=float)[None])
 
 
 def tool_position(model: Model, q: np.ndarray, f: Frames | None = None) -> np.ndarray:

@@ -30,7 +30,7 @@ ROUNDING_MM = 1e-6
 
 
 def chain_reach_mm(model: Model) -> np.ndarray:
-    """Return L_j (n,): a bound on the distance of any point of the arm beyond joint j from its axis."""
+    """Return L_j (n,): a bound on the distance from axis j of any point of the arm beyond it."""
     dh = np.asarray(model.dh)
     lengths = np.abs(dh[:, 1]) + np.abs(dh[:, 3])
     return np.cumsum(lengths[::-1])[::-1] + float(np.linalg.norm(model.tool_point))

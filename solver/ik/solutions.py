@@ -25,12 +25,13 @@ solutions).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from wirecal.solver.ik import ur as ik_ur
-from wirecal.solver.kinematics import Model, flange_jacobian, frames, table_property
+from wirecal.solver.kinematics import Model, flange_jacobian, frames, one_chain, table_property
 from wirecal.solver.robot import Robot
 
 HALF_PI = np.pi / 2
@@ -161,14 +162,44 @@ MET_RAD = 1e-2
 """A candidate after :data:`PRE_ITERATIONS` Newton steps this near a start runs to it (rad)."""
 
 
+def _newton_terms(model, q, R, o) -> tuple[np.ndarray, Callable[[], np.ndarray]]:
+    """Return q's pose error and a function giving its flange Jacobian (one chain evaluation).
+
+    On Python floats where the model allows (:func:`~wirecal.solver.kinematics.one_chain`):
+    the same numbers as :func:`_pose_error` and
+    :func:`~wirecal.solver.kinematics.flange_jacobian` (the same operations in the same
+    order; the rotations multiplied as the same arrays), at a fraction of the cost.
+    """
+    chain = one_chain(model, q)
+    if chain is None:
+        f = frames(model, q[None])
+        return _pose_error(model, q, R, o, f), lambda: flange_jacobian(model, q, f)
+    stored, axes = chain
+    Rq = np.array(axes).T.copy()  # columns X, Y, Z, laid out as frames' R_last
+    E = R @ Rq.T
+    rotvec = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
+    e = np.r_[o - np.array(stored[-1][2]), rotvec * 1000.0]
+    return e, lambda: _flange_jacobian_floats(stored)
+
+
+def _flange_jacobian_floats(stored: list[tuple]) -> np.ndarray:
+    """Return :func:`~wirecal.solver.kinematics.flange_jacobian` from one chain's floats."""
+    p0, p1, p2 = (c + 0.0 for c in stored[-1][2])  # the flange (a zero tool point added)
+    cols = []
+    for _, (z0, z1, z2), (o0, o1, o2) in stored[1:]:
+        b0, b1, b2 = p0 - o0, p1 - o1, p2 - o2
+        turn = (z1 * b2 - z2 * b1, z2 * b0 - z0 * b2, z0 * b1 - z1 * b0)
+        cols.append((*turn, z0 * 1000.0, z1 * 1000.0, z2 * 1000.0))
+    return np.array(cols).T.copy()
+
+
 def _polish(model, q, R, o, iterations=60, accept=CONVERGED, done=CONVERGED):
     """Newton from ``q``: stop once no pose error exceeds ``done``; ok if within ``accept``."""
     for _ in range(iterations):
-        f = frames(model, q[None])  # one evaluation of the chain per Newton step
-        e = _pose_error(model, q, R, o, f)
+        e, jacobian = _newton_terms(model, q, R, o)  # one evaluation of the chain per step
         if np.max(np.abs(e)) < done:
             return q, True
-        step = np.linalg.lstsq(flange_jacobian(model, q, f), e, rcond=None)[0]
+        step = np.linalg.lstsq(jacobian(), e, rcond=None)[0]
         q = q + step * min(1.0, MAX_STEP_RAD / max(np.max(np.abs(step)), 1e-300))
     return q, np.max(np.abs(_pose_error(model, q, R, o))) < accept
 
