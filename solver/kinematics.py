@@ -178,23 +178,45 @@ def _joint_terms(model: Model, q: np.ndarray) -> tuple[Iterator[tuple], tuple, V
     return zip(*cols, strict=True), tuple(axes), np.zeros((3, N))
 
 
-def _turn(c, s, U: Vector, V: Vector) -> tuple[Vector, Vector]:
+def _turn(c, s, U: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rotate the pair of axes (U, V) by the angle of cosine c, sine s: (cU + sV, cV − sU)."""
-    if isinstance(U, tuple):
-        (u0, u1, u2), (v0, v1, v2) = U, V
-        return (
-            (c * u0 + s * v0, c * u1 + s * v1, c * u2 + s * v2),
-            (c * v0 - s * u0, c * v1 - s * u1, c * v2 - s * u2),
-        )
     return c * U + s * V, c * V - s * U
 
 
-def _advance(P: Vector, a, X: Vector, d, Z: Vector) -> Vector:
+def _advance(P: np.ndarray, a, X: np.ndarray, d, Z: np.ndarray) -> np.ndarray:
     """Move the origin P by a along X and d along Z: P + aX + dZ."""
-    if isinstance(P, tuple):
-        (p0, p1, p2), (x0, x1, x2), (z0, z1, z2) = P, X, Z
-        return (p0 + a * x0 + d * z0, p1 + a * x1 + d * z1, p2 + a * x2 + d * z2)
     return P + a * X + d * Z
+
+
+def _recurrence_floats(terms: Iterator[tuple]) -> tuple[list[tuple], tuple]:
+    """:func:`_recurrence` of one configuration on Python floats, written out.
+
+    The same products and sums in the same order as :func:`_turn` and :func:`_advance`
+    (the same numbers), without a call per step.
+    """
+    (x0, x1, x2), (y0, y1, y2), (z0, z1, z2) = _BASE_AXES
+    p0 = p1 = p2 = 0.0
+    stored = [((x0, x1, x2), (z0, z1, z2), (p0, p1, p2))]
+    for ca, sa, a, d, c, s in terms:
+        y0, y1, y2, z0, z1, z2 = (  # RotX(α_{i-1})
+            ca * y0 + sa * z0,
+            ca * y1 + sa * z1,
+            ca * y2 + sa * z2,
+            ca * z0 - sa * y0,
+            ca * z1 - sa * y1,
+            ca * z2 - sa * y2,
+        )
+        p0, p1, p2 = p0 + a * x0 + d * z0, p1 + a * x1 + d * z1, p2 + a * x2 + d * z2
+        x0, x1, x2, y0, y1, y2 = (  # RotZ(θ_i + offset_i)
+            c * x0 + s * y0,
+            c * x1 + s * y1,
+            c * x2 + s * y2,
+            c * y0 - s * x0,
+            c * y1 - s * x1,
+            c * y2 - s * x2,
+        )
+        stored.append(((x0, x1, x2), (z0, z1, z2), (p0, p1, p2)))
+    return stored, ((x0, x1, x2), (y0, y1, y2), (z0, z1, z2))
 
 
 def bends(model: Model) -> bool:
@@ -260,6 +282,8 @@ def rigid_frames(model: Model, q: np.ndarray) -> Frames:
 def _recurrence(model: Model, q: np.ndarray) -> tuple[list[tuple], tuple]:
     """Return each frame's (x, z, o) and the last frame's axes (X, Y, Z) (:func:`rigid_frames`)."""
     terms, (X, Y, Z), P = _joint_terms(model, q)
+    if isinstance(P, tuple):  # one configuration: Python floats
+        return _recurrence_floats(terms)
     stored = [(X, Z, P)]
     for ca, sa, a, d, c, s in terms:
         Y, Z = _turn(ca, sa, Y, Z)  # RotX(α_{i-1})
