@@ -299,11 +299,13 @@ def one_chain(model: Model, q: np.ndarray) -> tuple[list[tuple], tuple] | None:
     ``q`` (n,) rad; per frame its (x, z, o) 3-tuples and the last frame's axes (X, Y, Z),
     the very numbers of :func:`frames` without building its arrays (a Newton step of the
     inverse kinematics needs a handful of them). None for a model that bends under
-    gravity or one model per configuration: use :func:`frames`.
+    gravity, one model per configuration or ``q`` not one configuration: use
+    :func:`frames`.
     """
-    if bends(model) or np.ndim(model.dh) != 2:
+    q = np.asarray(q, dtype=float)
+    if bends(model) or np.ndim(model.dh) != 2 or q.shape != (model.n_joints,):
         return None
-    return _recurrence(model, np.asarray(q, dtype=float)[None])
+    return _recurrence(model, q[None])
 
 
 def tool_position(model: Model, q: np.ndarray, f: Frames | None = None) -> np.ndarray:

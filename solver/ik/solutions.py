@@ -48,8 +48,12 @@ class Solution:
 
 def flange_pose(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rotation (3, 3) and origin (3,) of the last frame for one configuration (rad)."""
-    f = frames(model, np.atleast_2d(q))
-    return f.R_last[0], f.o[0, -1]
+    chain = one_chain(model, q)
+    if chain is None:
+        f = frames(model, np.atleast_2d(q))
+        return f.R_last[0], f.o[0, -1]
+    stored, axes = chain
+    return np.array(axes).T.copy(), np.array(stored[-1][2])  # laid out as frames' arrays
 
 
 @table_property
@@ -303,13 +307,18 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     """Return wirecal's names of a solution's configuration (see the module doc)."""
     if ik_ur.ur_structure(model):
         return ik_ur.configuration(model, q)
-    f = frames(model, np.atleast_2d(q))
-    o2, o3 = f.o[0, 2], f.o[0, 3]
-    centre = f.o[0, 4]
-    z1 = f.z[0, 1]
-    r = centre - f.o[0, 1]
+    chain = one_chain(model, q)
+    if chain is None:
+        f = frames(model, np.atleast_2d(q))
+        x, z, o = f.x[0], f.z[0], f.o[0]
+    else:  # the same numbers as arrays of frames' (Python floats: cheaper for one)
+        x, z, o = (np.array(v) for v in zip(*chain[0], strict=True))
+    o2, o3 = o[2], o[3]
+    centre = o[4]
+    z1 = z[1]
+    r = centre - o[1]
     x1 = r - np.dot(r, z1) * z1
-    ahead = np.dot(x1, f.x[0, 1])
+    ahead = np.dot(x1, x[1])
     line = centre - o2
     t = np.dot(o3 - o2, line) / max(np.dot(line, line), 1e-300)
     offset = (o3 - o2) - t * line
