@@ -15,8 +15,8 @@ Viper s650, the default), the paper's two procedures run before and after calibr
 believing the patch after), the one before calibration in a second process beside the
 rest. Otherwise the measurement programs run again over new points (unmodelled errors on)
 and their wire lengths are compared with those the nominal and the calibrated model predict.
-The controller solver's runs go to the second process too, beside the validation after
-calibration.
+The controller solver's runs and the report's figures of the identification go to a third
+process, beside the validation after calibration (:func:`_workers`).
 
 Every output goes to one folder and none is overwritten unless asked.
 """
@@ -41,7 +41,7 @@ from wirecal import __version__
 from wirecal.app.compare import ControllerComparison, compare_controller
 from wirecal.app.gate import gate
 from wirecal.app.languages import Registered, registered
-from wirecal.app.report import Validation, render_report
+from wirecal.app.report import Validation, render_report, result_figures
 from wirecal.formats.controller_result import parse_result, result_in_log
 from wirecal.formats.fileio import Outputs
 from wirecal.formats.log import read_log
@@ -220,7 +220,7 @@ def _run(
     truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
     encoder = _true_encoder(reg, robot, seed)
     options = {"seed": seed, **({} if encoder is None else {"encoder_truth": encoder})}
-    with tempfile.TemporaryDirectory() as tmp, _second_process() as pool:
+    with tempfile.TemporaryDirectory() as tmp, _workers() as pool:
         disk = Path(tmp)
         before = _start_before(pool, ch, truth, programs, disk / "before", seed)
         beside = "" if before is None else ", the validation before calibration in a second process"
@@ -231,8 +231,9 @@ def _run(
         log_text, result, verdict = _identify(out, folder, ch.log_name, run.log, robot, plan)
         identified = result.estimates[result.recommended].as_dict()
         seconds["solve"] = time.perf_counter() - t
-        t = step("the controller solver's result, in the second process")
+        t = step("the controller solver's result and the report's figures, in another process")
         controller = pool.submit(_controller, result, log_text, ch, programs, disk / "ctl")
+        figures = pool.submit(result_figures, result)
         t = step("validation before and after calibration, with unmodelled errors")
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before
@@ -248,7 +249,14 @@ def _run(
     _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, ch.log_name)
     seconds["patch"] = time.perf_counter() - t
     t = step("report")
-    html = render_report(result, validations, comparison, truth, plausibility=verdict.patch_field())
+    html = render_report(
+        result,
+        validations,
+        comparison,
+        truth,
+        plausibility=verdict.patch_field(),
+        figures=figures.result(),
+    )
     out.put(folder / "report.html", html)
     seconds["report"] = time.perf_counter() - t
     return DemoResult(
@@ -357,16 +365,22 @@ class ValidationLogs(NamedTuple):
     seconds: float
 
 
+WORKERS = 2
+"""The demo's worker processes: the validation before calibration in one; the controller
+solver's runs, then the report's figures of the identification in the other."""
+
+
 @contextmanager
-def _second_process() -> Iterator[ProcessPoolExecutor]:
-    """One worker process, forked where the platform forks safely.
+def _workers() -> Iterator[ProcessPoolExecutor]:
+    """:data:`WORKERS` worker processes, forked where the platform forks safely.
 
     A forked worker inherits every import and the module the generator parsed and checked
     (the parser keeps the last few); elsewhere it starts afresh. When the demo stops
-    (Ctrl-C, an error), the worker is ended at once instead of finishing its run (10 s).
+    (Ctrl-C, an error), the workers are ended at once instead of finishing their runs.
     """
     fork = sys.platform.startswith("linux") and "fork" in mp.get_all_start_methods()
-    pool = ProcessPoolExecutor(max_workers=1, mp_context=mp.get_context("fork" if fork else None))
+    context = mp.get_context("fork" if fork else None)
+    pool = ProcessPoolExecutor(max_workers=WORKERS, mp_context=context)
     try:
         yield pool
     except BaseException:

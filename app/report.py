@@ -195,14 +195,34 @@ def sag_summary(result: SolveResult) -> dict[str, float] | None:
     }
 
 
+def result_figures(result: SolveResult) -> dict[str, str | None]:
+    """Return the report's figures of the identification alone: Ψ, residuals, correlations.
+
+    As embeddable PNGs (None: a figure the result has nothing for). They need no
+    validation, so the demo draws them in another process while it validates.
+    """
+    sw, jt = result.estimates.get("stepwise"), result.estimates.get("joint")
+    return {
+        "psi": psi_figure(result),
+        "residuals": residual_figure(result) if sw else None,
+        "correlation": correlation_figure(jt.names, jt.correlation)
+        if jt is not None and jt.correlation is not None
+        else None,
+    }
+
+
 def render_report(
     result: SolveResult,
     validations: Sequence[Validation] = (),
     controller: ControllerComparison | None = None,
     truth: dict[str, float] | None = None,
     plausibility: str = "",
+    figures: dict[str, str | None] | None = None,
 ) -> str:
-    """Render the report's HTML; ``plausibility`` the gate's verdict (a patch's field)."""
+    """Render the report's HTML; ``plausibility`` the gate's verdict (a patch's field).
+
+    ``figures``: :func:`result_figures` of ``result`` when drawn already.
+    """
     robot, plan = result.robot, result.plan
     sw, jt = result.estimates.get("stepwise"), result.estimates.get("joint")
     params = []
@@ -236,13 +256,7 @@ def render_report(
         truth=truth is not None,
         plausibility=plausibility.removeprefix(OVERRIDDEN),
         overridden=plausibility.startswith(OVERRIDDEN),
-        figures={
-            "psi": psi_figure(result),
-            "residuals": residual_figure(result) if sw else None,
-            "correlation": correlation_figure(jt.names, jt.correlation)
-            if jt is not None and jt.correlation is not None
-            else None,
-        },
+        figures=result_figures(result) if figures is None else figures,
         validations=[{"v": v, "figure": histogram_figure(v)} for v in validations],
         sag=sag_summary(result),
     )
