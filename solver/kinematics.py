@@ -146,6 +146,18 @@ Vector = tuple[float, float, float] | np.ndarray
 _BASE_AXES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
+@lru_cache(maxsize=16)
+def _table_floats(raw: bytes, n: int) -> tuple[list, list, list, list, np.ndarray]:
+    """Return a DH table's cos α, sin α, a, d as floats and its θ offsets (n,), kept per table.
+
+    The twin and the inverse kinematics evaluate one model's chain tens of thousands of
+    times; its constant terms are taken once (the same numbers).
+    """
+    dh = np.frombuffer(raw).reshape(n, 4)
+    ca, sa = np.cos(dh[:, 0]), np.sin(dh[:, 0])
+    return ca.tolist(), sa.tolist(), dh[:, 1].tolist(), dh[:, 3].tolist(), dh[:, 2].copy()
+
+
 def _joint_terms(model: Model, q: np.ndarray) -> tuple[Iterator[tuple], tuple, Vector]:
     """Per joint (cos α, sin α, a, d, cos θ, sin θ), and the base frame's axes and origin.
 
@@ -156,19 +168,14 @@ def _joint_terms(model: Model, q: np.ndarray) -> tuple[Iterator[tuple], tuple, V
     """
     dh = model.dh
     N = q.shape[0]
+    if dh.ndim == 2 and N == 1:
+        ca, sa, a, d, offset = _table_floats(np.asarray(dh, float).tobytes(), dh.shape[0])
+        th = q[0] + offset
+        cols = (ca, sa, a, d, np.cos(th).tolist(), np.sin(th).tolist())
+        return zip(*cols, strict=True), _BASE_AXES, (0.0, 0.0, 0.0)
     th = np.ascontiguousarray((q + dh[..., 2]).T)  # (n, N): a row per joint
     ca, sa, ct, st = np.cos(dh[..., 0]), np.sin(dh[..., 0]), np.cos(th), np.sin(th)
     a, d = dh[..., 1], dh[..., 3]
-    if dh.ndim == 2 and N == 1:
-        cols = (
-            ca.tolist(),
-            sa.tolist(),
-            a.tolist(),
-            d.tolist(),
-            ct[:, 0].tolist(),
-            st[:, 0].tolist(),
-        )
-        return zip(*cols, strict=True), _BASE_AXES, (0.0, 0.0, 0.0)
     if dh.ndim == 2:
         cols = (ca.tolist(), sa.tolist(), a.tolist(), d.tolist(), ct, st)
     else:
