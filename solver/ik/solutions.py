@@ -140,7 +140,7 @@ def _pose_error(model, q, R, o, f=None):
     Rq, oq = f.R_last[0], f.o[0, -1]
     E = R @ Rq.T
     rotvec = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
-    return np.r_[o - oq, rotvec * 1000.0]  # 1 rad of orientation weighs as 1 m
+    return np.concatenate((o - oq, rotvec * 1000.0))  # 1 rad of orientation weighs as 1 m
 
 
 CONVERGED = 1e-10
@@ -182,7 +182,7 @@ def _newton_terms(model, q, R, o) -> tuple[np.ndarray, Callable[[], np.ndarray]]
     Rq = np.array(axes).T.copy()  # columns X, Y, Z, laid out as frames' R_last
     E = R @ Rq.T
     rotvec = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
-    e = np.r_[o - np.array(stored[-1][2]), rotvec * 1000.0]
+    e = np.concatenate((o - np.array(stored[-1][2]), rotvec * 1000.0))
     return e, lambda: _flange_jacobian_floats(stored)
 
 
