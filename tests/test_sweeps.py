@@ -2,8 +2,7 @@
 
 The bound itself is checked against the capsules' ends computed from the frames (how far
 each end really moves along a joint path), and a run of short moves gives the same
-answers with the skipping as :func:`move_collision` evaluating every move, collisions
-included.
+answers with the skipping as ``move_sweep`` evaluating every move, collisions included.
 """
 
 from __future__ import annotations
@@ -16,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.formats.robot_file import load_robot
-from wirecal.solver.cell.check import move_collision
+from wirecal.solver.cell.check import move_sweep
 from wirecal.solver.cell.model import capsule_ends
 from wirecal.solver.cell.sweep import Sweeps, chain_reach_mm
 from wirecal.solver.kinematics import frames, tool_position
@@ -59,7 +58,7 @@ def test_a_run_of_short_moves_gets_every_answer_of_the_full_check(arm, seed, con
     answers = []
     for _ in range(60):  # a random walk of 0.05–3° steps, sometimes into the arm or cell
         target = np.clip(q + rng.normal(0.0, rng.choice([0.05, 0.5, 3.0]), arm.n_joints), lo, hi)
-        want = move_collision(arm, model, p0, q, target, contact=contact)
+        want = move_sweep(arm, model, p0, q, target, contact=contact)[0]
         assert sweeps.collision(q, target) == want
         answers.append(want is None)
         if want is None:

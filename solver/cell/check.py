@@ -24,23 +24,6 @@ def _joints(q: np.ndarray) -> str:
     return "(" + ", ".join(f"{x:.1f}" for x in q) + ") deg"
 
 
-def move_collision(
-    robot: Robot,
-    model: Model,
-    p0: np.ndarray,
-    a: np.ndarray,
-    b: np.ndarray,
-    contact: bool = False,
-) -> str | None:
-    """Return the first collision along the joint-interpolated move a → b (deg), or None.
-
-    In words: what collides (the pair, or a link and the floor or a volume) and where.
-    A collision is a gap under the cell's margin, or with ``contact`` (the twin's arm as
-    built) capsules that touch: the margin is the planner's, not the robot's.
-    """
-    return move_sweep(robot, model, p0, a, b, contact)[0]
-
-
 def move_sweep(
     robot: Robot,
     model: Model,
@@ -49,7 +32,13 @@ def move_sweep(
     b: np.ndarray,
     contact: bool = False,
 ) -> tuple[str | None, np.ndarray, float]:
-    """Return :func:`move_collision`'s answer, the move's last sample (deg) and its smallest gap."""
+    """Return the first collision along the joint-interpolated move a → b (deg), or None.
+
+    In words: what collides (the pair, or a link and the floor or a volume) and where.
+    A collision is a gap under the cell's margin, or with ``contact`` (the twin's arm as
+    built) capsules that touch: the margin is the planner's, not the robot's. With it, the
+    move's last sample (deg) and that sample's smallest gap (mm).
+    """
     q, _ = move_samples(np.r_[a][None], np.r_[b][None])
     gaps = robot.cell_gaps(q, p0, model)
     smallest = gaps.smallest()
@@ -61,7 +50,7 @@ def move_sweep(
 
 
 def collision_below_mm(margin_mm: float, contact: bool) -> float:
-    """Return the smallest gap under which a configuration collides (:func:`move_collision`)."""
+    """Return the smallest gap under which a configuration collides (:func:`move_sweep`)."""
     return -margin_mm if contact else 0.0
 
 

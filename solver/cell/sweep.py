@@ -41,7 +41,7 @@ class Sweeps:
     """The collision checks of one arm's successive moves (module docstring).
 
     ``model`` the arm as built, ``p0`` the wire's exit; ``contact``: as
-    :func:`~wirecal.solver.cell.check.move_collision`'s.
+    :func:`~wirecal.solver.cell.check.move_sweep`'s.
     """
 
     robot: Robot
@@ -58,7 +58,7 @@ class Sweeps:
         self.below = collision_below_mm(self.robot.cell.margin_mm, self.contact)
 
     def collision(self, a_deg: np.ndarray, b_deg: np.ndarray) -> str | None:
-        """Return where the move a → b (deg) collides, or None (as ``move_collision``)."""
+        """Return where the move a → b (deg) collides, or None (as ``move_sweep``)."""
         if self._clear(a_deg, b_deg):
             self.skipped += 1
             return None
