@@ -112,7 +112,8 @@ def gravity_torques_floats(
     com = np.asarray(masses.link_com_mm, dtype=float).tolist()
     mass = np.asarray(masses.link_mass_kg, dtype=float).tolist()
     n = len(mass)
-    S1 = S0 = (0.0, 0.0, 0.0)
+    S1: tuple[float, ...] = (0.0, 0.0, 0.0)
+    S0: tuple[float, ...] = S1
     tau = [0.0] * n
     for k in range(n - 1, -1, -1):  # the reverse cumulative sums, from the last link
         xk, zk, ok, (c0, c1, c2) = x[k + 1], z[k + 1], o[k + 1], com[k]

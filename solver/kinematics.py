@@ -169,10 +169,10 @@ def _joint_terms(model: Model, q: np.ndarray) -> tuple[Iterator[tuple], tuple, V
     dh = model.dh
     N = q.shape[0]
     if dh.ndim == 2 and N == 1:
-        ca, sa, a, d, offset = _table_floats(np.asarray(dh, float).tobytes(), dh.shape[0])
+        *table, offset = _table_floats(np.asarray(dh, float).tobytes(), dh.shape[0])
         th = q[0] + offset
-        cols = (ca, sa, a, d, np.cos(th).tolist(), np.sin(th).tolist())
-        return zip(*cols, strict=True), _BASE_AXES, (0.0, 0.0, 0.0)
+        one = (*table, np.cos(th).tolist(), np.sin(th).tolist())
+        return zip(*one, strict=True), _BASE_AXES, (0.0, 0.0, 0.0)
     th = np.ascontiguousarray((q + dh[..., 2]).T)  # (n, N): a row per joint
     ca, sa, ct, st = np.cos(dh[..., 0]), np.sin(dh[..., 0]), np.cos(th), np.sin(th)
     a, d = dh[..., 1], dh[..., 3]
