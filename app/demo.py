@@ -24,6 +24,7 @@ Every output goes to one folder and none is overwritten unless asked.
 from __future__ import annotations
 
 import multiprocessing as mp
+import os
 import sys
 import tempfile
 import time
@@ -33,7 +34,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 
@@ -232,8 +233,10 @@ def _run(
         identified = result.estimates[result.recommended].as_dict()
         seconds["solve"] = time.perf_counter() - t
         t = step("the controller solver's result and the report's figures, in another process")
-        controller = pool.submit(_controller, result, log_text, ch, programs, disk / "ctl")
-        figures = pool.submit(result_figures, result)
+        nice = os.nice(0) if hasattr(os, "nice") else None
+        args = (result, log_text, ch, programs, disk / "ctl")
+        controller = pool.submit(_yielding, nice, _controller, *args)
+        figures = pool.submit(_yielding, nice, result_figures, result)
         t = step("validation before and after calibration, with unmodelled errors")
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before
@@ -363,6 +366,24 @@ class ValidationLogs(NamedTuple):
     configuration: Path
     plane: Path
     seconds: float
+
+
+T = TypeVar("T")
+
+YIELD_NICE = 5
+"""How far the work with the most slack (the controller solver's runs, the report's figures
+of the identification: the report needs them last) yields to the validations on the
+processor (nice): on two cores, the validation after calibration, on the path of the
+demo's end, keeps a core of its own."""
+
+
+def _yielding(parent_nice: int | None, work: Callable[..., T], *args: Any) -> T:
+    """Do ``work`` in a worker niced :data:`YIELD_NICE` below the demo (where it can)."""
+    if parent_nice is not None:
+        behind = parent_nice + YIELD_NICE - os.nice(0)
+        if behind > 0:
+            os.nice(behind)
+    return work(*args)
 
 
 WORKERS = 2
