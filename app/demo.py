@@ -234,8 +234,9 @@ def _run(
         seconds["solve"] = time.perf_counter() - t
         t = step("the controller solver's result and the report's figures, in another process")
         nice = os.nice(0) if hasattr(os, "nice") else None
-        args = (result, log_text, ch, programs, disk / "ctl")
-        controller = pool.submit(_yielding, nice, _controller, *args)
+        controller = pool.submit(
+            _yielding, nice, _controller, result, log_text, ch, programs, disk / "ctl"
+        )
         figures = pool.submit(_yielding, nice, result_figures, result)
         t = step("validation before and after calibration, with unmodelled errors")
         validations = _validations(
