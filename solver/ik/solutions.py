@@ -112,8 +112,9 @@ def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
             py = a[3] * np.sin(phi3) - s3 * d[3] * np.cos(phi3)
             phi2 = np.arctan2(uy, ux) - np.arctan2(py, px)
             q123 = np.array([phi1, phi2, phi3]) - off[:3]
-            f = frames(Model(dh, model.tool_point), np.r_[q123, 0, 0, 0][None])
-            X3, Z3 = f.x[0, 3], f.z[0, 3]
+            chain = one_chain(Model(dh, model.tool_point), np.concatenate((q123, np.zeros(3))))
+            assert chain is not None  # a rigid model's one configuration
+            X3, Z3 = np.array(chain[0][3][0]), np.array(chain[0][3][1])
             R3 = np.column_stack([X3, np.cross(Z3, X3), Z3])
             M = _rot_x(alpha[3]).T @ R3.T @ R
             h = np.hypot(M[0, 2], M[1, 2])
