@@ -16,7 +16,8 @@ believing the patch after), the one before calibration in a second process besid
 rest. Otherwise the measurement programs run again over new points (unmodelled errors on)
 and their wire lengths are compared with those the nominal and the calibrated model predict.
 The controller solver's runs and the report's figures of the identification go to a third
-process, beside the validation after calibration (:func:`_workers`).
+process, beside the validation after calibration, and the validations' histograms to a
+worker too (:func:`_workers`): the demo's own process never imports matplotlib.
 
 Every output goes to one folder and none is overwritten unless asked.
 """
@@ -42,7 +43,7 @@ from wirecal import __version__
 from wirecal.app.compare import ControllerComparison, compare_controller
 from wirecal.app.gate import gate
 from wirecal.app.languages import Registered, registered
-from wirecal.app.report import Validation, render_report, result_figures
+from wirecal.app.report import Validation, histograms, render_report, result_figures
 from wirecal.formats.controller_result import parse_result, result_in_log
 from wirecal.formats.fileio import Outputs
 from wirecal.formats.log import read_log
@@ -242,6 +243,7 @@ def _run(
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before
         )
+        drawn = pool.submit(histograms, validations)
         if before is not None:
             seconds["validate before"] = before.result().seconds
         seconds["validate"] = time.perf_counter() - t
@@ -260,6 +262,7 @@ def _run(
         truth,
         plausibility=verdict.patch_field(),
         figures=figures.result(),
+        drawn=drawn.result(),
     )
     out.put(folder / "report.html", html)
     seconds["report"] = time.perf_counter() - t
