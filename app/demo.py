@@ -43,7 +43,13 @@ from wirecal import __version__
 from wirecal.app.compare import ControllerComparison, compare_controller
 from wirecal.app.gate import gate
 from wirecal.app.languages import Registered, registered
-from wirecal.app.report import Validation, histograms, render_report, result_figures
+from wirecal.app.report import (
+    Validation,
+    histograms,
+    ready_to_draw,
+    render_report,
+    result_figures,
+)
 from wirecal.formats.controller_result import parse_result, result_in_log
 from wirecal.formats.fileio import Outputs
 from wirecal.formats.log import read_log
@@ -239,6 +245,7 @@ def _run(
             _yielding, nice, _controller, result, log_text, ch, programs, disk / "ctl"
         )
         figures = pool.submit(_yielding, nice, result_figures, result)
+        pool.submit(_yielding, nice, ready_to_draw)  # the other worker, for the histograms
         t = step("validation before and after calibration, with unmodelled errors")
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before

@@ -97,6 +97,11 @@ def _pyplot() -> Any:
     return plt
 
 
+def ready_to_draw() -> None:
+    """Import matplotlib now (a worker's idle time, before it is asked for figures)."""
+    _pyplot()
+
+
 def _png(fig) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
