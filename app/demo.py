@@ -15,8 +15,9 @@ Viper s650, the default), the paper's two procedures run before and after calibr
 believing the patch after), the one before calibration in a second process beside the
 rest. Otherwise the measurement programs run again over new points (unmodelled errors on)
 and their wire lengths are compared with those the nominal and the calibrated model predict.
-The controller solver's runs go to the second process too, beside the validation after
-calibration.
+The controller solver's runs and the report's figures of the identification go to a third
+process, beside the validation after calibration, and the validations' histograms to a
+worker too (:func:`_workers`): the demo's own process never imports matplotlib.
 
 Every output goes to one folder and none is overwritten unless asked.
 """
@@ -24,6 +25,7 @@ Every output goes to one folder and none is overwritten unless asked.
 from __future__ import annotations
 
 import multiprocessing as mp
+import os
 import sys
 import tempfile
 import time
@@ -33,7 +35,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 
@@ -41,7 +43,13 @@ from wirecal import __version__
 from wirecal.app.compare import ControllerComparison, compare_controller
 from wirecal.app.gate import gate
 from wirecal.app.languages import Registered, registered
-from wirecal.app.report import Validation, render_report
+from wirecal.app.report import (
+    Validation,
+    histograms,
+    ready_to_draw,
+    render_report,
+    result_figures,
+)
 from wirecal.formats.controller_result import parse_result, result_in_log
 from wirecal.formats.fileio import Outputs
 from wirecal.formats.log import read_log
@@ -220,7 +228,7 @@ def _run(
     truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
     encoder = _true_encoder(reg, robot, seed)
     options = {"seed": seed, **({} if encoder is None else {"encoder_truth": encoder})}
-    with tempfile.TemporaryDirectory() as tmp, _second_process() as pool:
+    with tempfile.TemporaryDirectory() as tmp, _workers() as pool:
         disk = Path(tmp)
         before = _start_before(pool, ch, truth, programs, disk / "before", seed)
         beside = "" if before is None else ", the validation before calibration in a second process"
@@ -231,12 +239,18 @@ def _run(
         log_text, result, verdict = _identify(out, folder, ch.log_name, run.log, robot, plan)
         identified = result.estimates[result.recommended].as_dict()
         seconds["solve"] = time.perf_counter() - t
-        t = step("the controller solver's result, in the second process")
-        controller = pool.submit(_controller, result, log_text, ch, programs, disk / "ctl")
+        t = step("the controller solver's result and the report's figures, in another process")
+        nice = os.nice(0) if hasattr(os, "nice") else None
+        controller = pool.submit(
+            _yielding, nice, _controller, result, log_text, ch, programs, disk / "ctl"
+        )
+        figures = pool.submit(_yielding, nice, result_figures, result)
+        pool.submit(_yielding, nice, ready_to_draw)  # the other worker, for the histograms
         t = step("validation before and after calibration, with unmodelled errors")
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before
         )
+        drawn = pool.submit(histograms, validations)
         if before is not None:
             seconds["validate before"] = before.result().seconds
         seconds["validate"] = time.perf_counter() - t
@@ -248,7 +262,15 @@ def _run(
     _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, ch.log_name)
     seconds["patch"] = time.perf_counter() - t
     t = step("report")
-    html = render_report(result, validations, comparison, truth, plausibility=verdict.patch_field())
+    html = render_report(
+        result,
+        validations,
+        comparison,
+        truth,
+        plausibility=verdict.patch_field(),
+        figures=figures.result(),
+        drawn=drawn.result(),
+    )
     out.put(folder / "report.html", html)
     seconds["report"] = time.perf_counter() - t
     return DemoResult(
@@ -357,16 +379,40 @@ class ValidationLogs(NamedTuple):
     seconds: float
 
 
+T = TypeVar("T")
+
+YIELD_NICE = 5
+"""How far the work with the most slack (the controller solver's runs, the report's figures
+of the identification: the report needs them last) yields to the validations on the
+processor (nice): on two cores, the validation after calibration, on the path of the
+demo's end, keeps a core of its own."""
+
+
+def _yielding(parent_nice: int | None, work: Callable[..., T], *args: Any) -> T:
+    """Do ``work`` in a worker niced :data:`YIELD_NICE` below the demo (where it can)."""
+    if parent_nice is not None:
+        behind = parent_nice + YIELD_NICE - os.nice(0)
+        if behind > 0:
+            os.nice(behind)
+    return work(*args)
+
+
+WORKERS = 2
+"""The demo's worker processes: the validation before calibration in one; the controller
+solver's runs, then the report's figures of the identification in the other."""
+
+
 @contextmanager
-def _second_process() -> Iterator[ProcessPoolExecutor]:
-    """One worker process, forked where the platform forks safely.
+def _workers() -> Iterator[ProcessPoolExecutor]:
+    """:data:`WORKERS` worker processes, forked where the platform forks safely.
 
     A forked worker inherits every import and the module the generator parsed and checked
     (the parser keeps the last few); elsewhere it starts afresh. When the demo stops
-    (Ctrl-C, an error), the worker is ended at once instead of finishing its run (10 s).
+    (Ctrl-C, an error), the workers are ended at once instead of finishing their runs.
     """
     fork = sys.platform.startswith("linux") and "fork" in mp.get_all_start_methods()
-    pool = ProcessPoolExecutor(max_workers=1, mp_context=mp.get_context("fork" if fork else None))
+    context = mp.get_context("fork" if fork else None)
+    pool = ProcessPoolExecutor(max_workers=WORKERS, mp_context=context)
     try:
         yield pool
     except BaseException:

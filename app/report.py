@@ -12,12 +12,9 @@ import base64
 import io
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from functools import cache
+from typing import TYPE_CHECKING, Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 
 from wirecal.gen.templating import render
@@ -86,10 +83,29 @@ class Validation:
         return reduction(self.before, self.after)
 
 
+@cache
+def _pyplot() -> Any:
+    """Return matplotlib's pyplot on the Agg backend, imported when a figure is first drawn.
+
+    The demo draws its figures in a worker process: its own process never imports it.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def ready_to_draw() -> None:
+    """Import matplotlib now (a worker's idle time, before it is asked for figures)."""
+    _pyplot()
+
+
 def _png(fig) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-    plt.close(fig)
+    _pyplot().close(fig)
     return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
 
 
@@ -97,7 +113,7 @@ def psi_figure(result: SolveResult) -> str:
     """|Ψ| of every measured point (the Ψ ``solve`` computed), steps separated."""
     plan, step, names = result.plan, result.step, result.names
     psi = np.abs(result.psi)
-    fig, ax = plt.subplots(figsize=(7, 6.5))
+    fig, ax = _pyplot().subplots(figsize=(7, 6.5))
     im = ax.imshow(psi, aspect="auto", cmap="magma_r", vmin=0)
     for b in np.flatnonzero(np.diff(step)) + 0.5:
         ax.axhline(b, color="white", lw=1.5)
@@ -113,7 +129,7 @@ def psi_figure(result: SolveResult) -> str:
 def residual_figure(result: SolveResult) -> str:
     """Plot the stepwise method's residuals per step; the figure as embeddable PNG."""
     steps = result.estimates["stepwise"].steps
-    fig, ax = plt.subplots(figsize=(7, 3))
+    fig, ax = _pyplot().subplots(figsize=(7, 3))
     x = np.arange(len(steps))
     ax.bar(
         x - 0.2,
@@ -133,7 +149,7 @@ def residual_figure(result: SolveResult) -> str:
 
 def correlation_figure(names: Sequence[str], correlation: np.ndarray) -> str:
     """Plot the joint estimate's parameter correlations; the figure as embeddable PNG."""
-    fig, ax = plt.subplots(figsize=(5, 4.3))
+    fig, ax = _pyplot().subplots(figsize=(5, 4.3))
     im = ax.imshow(correlation, cmap="coolwarm", vmin=-1, vmax=1)
     ax.set_xticks(range(len(names)), names, rotation=45)
     ax.set_yticks(range(len(names)), names)
@@ -144,7 +160,7 @@ def correlation_figure(names: Sequence[str], correlation: np.ndarray) -> str:
 
 def histogram_figure(v: Validation) -> str:
     """Plot a validation's before/after histogram; the figure as embeddable PNG."""
-    fig, ax = plt.subplots(figsize=(7, 3.2))
+    fig, ax = _pyplot().subplots(figsize=(7, 3.2))
     hi = max(v.before.max, v.after.max)
     bins = np.linspace(0, hi * 1.02, 34).tolist()
     for s, colour, name in ((v.before, BEFORE, "Before"), (v.after, AFTER, "After")):
@@ -195,14 +211,41 @@ def sag_summary(result: SolveResult) -> dict[str, float] | None:
     }
 
 
+def result_figures(result: SolveResult) -> dict[str, str | None]:
+    """Return the report's figures of the identification alone: Ψ, residuals, correlations.
+
+    As embeddable PNGs (None: a figure the result has nothing for). They need no
+    validation, so the demo draws them in another process while it validates.
+    """
+    sw, jt = result.estimates.get("stepwise"), result.estimates.get("joint")
+    return {
+        "psi": psi_figure(result),
+        "residuals": residual_figure(result) if sw else None,
+        "correlation": correlation_figure(jt.names, jt.correlation)
+        if jt is not None and jt.correlation is not None
+        else None,
+    }
+
+
+def histograms(validations: Sequence[Validation]) -> list[str]:
+    """Return each validation's histogram (:func:`histogram_figure`), as embeddable PNGs."""
+    return [histogram_figure(v) for v in validations]
+
+
 def render_report(
     result: SolveResult,
     validations: Sequence[Validation] = (),
     controller: ControllerComparison | None = None,
     truth: dict[str, float] | None = None,
     plausibility: str = "",
+    figures: dict[str, str | None] | None = None,
+    drawn: Sequence[str] | None = None,
 ) -> str:
-    """Render the report's HTML; ``plausibility`` the gate's verdict (a patch's field)."""
+    """Render the report's HTML; ``plausibility`` the gate's verdict (a patch's field).
+
+    ``figures``: :func:`result_figures` of ``result``, ``drawn``: :func:`histograms` of
+    ``validations``, when drawn already.
+    """
     robot, plan = result.robot, result.plan
     sw, jt = result.estimates.get("stepwise"), result.estimates.get("joint")
     params = []
@@ -236,13 +279,12 @@ def render_report(
         truth=truth is not None,
         plausibility=plausibility.removeprefix(OVERRIDDEN),
         overridden=plausibility.startswith(OVERRIDDEN),
-        figures={
-            "psi": psi_figure(result),
-            "residuals": residual_figure(result) if sw else None,
-            "correlation": correlation_figure(jt.names, jt.correlation)
-            if jt is not None and jt.correlation is not None
-            else None,
-        },
-        validations=[{"v": v, "figure": histogram_figure(v)} for v in validations],
+        figures=result_figures(result) if figures is None else figures,
+        validations=[
+            {"v": v, "figure": f}
+            for v, f in zip(
+                validations, histograms(validations) if drawn is None else drawn, strict=True
+            )
+        ],
         sag=sag_summary(result),
     )

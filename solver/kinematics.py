@@ -164,6 +164,18 @@ Vector = tuple[float, float, float] | np.ndarray
 _BASE_AXES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
+@lru_cache(maxsize=16)
+def _table_floats(raw: bytes, n: int) -> tuple[list, list, list, list, np.ndarray]:
+    """Return a DH table's cos α, sin α, a, d as floats and its θ offsets (n,), kept per table.
+
+    The twin and the inverse kinematics evaluate one model's chain tens of thousands of
+    times; its constant terms are taken once (the same numbers).
+    """
+    dh = np.frombuffer(raw).reshape(n, 4)
+    ca, sa = np.cos(dh[:, 0]), np.sin(dh[:, 0])
+    return ca.tolist(), sa.tolist(), dh[:, 1].tolist(), dh[:, 3].tolist(), dh[:, 2].copy()
+
+
 def _joint_terms(model: Model, q: np.ndarray) -> tuple[Iterator[tuple], tuple, Vector]:
     """Per joint (cos α, sin α, a, d, cos θ, sin θ), and the base frame's axes and origin.
 
@@ -174,19 +186,14 @@ def _joint_terms(model: Model, q: np.ndarray) -> tuple[Iterator[tuple], tuple, V
     """
     dh = model.dh
     N = q.shape[0]
+    if dh.ndim == 2 and N == 1:
+        *table, offset = _table_floats(np.asarray(dh, float).tobytes(), dh.shape[0])
+        th = q[0] + offset
+        one = (*table, np.cos(th).tolist(), np.sin(th).tolist())
+        return zip(*one, strict=True), _BASE_AXES, (0.0, 0.0, 0.0)
     th = np.ascontiguousarray((q + dh[..., 2]).T)  # (n, N): a row per joint
     ca, sa, ct, st = np.cos(dh[..., 0]), np.sin(dh[..., 0]), np.cos(th), np.sin(th)
     a, d = dh[..., 1], dh[..., 3]
-    if dh.ndim == 2 and N == 1:
-        cols = (
-            ca.tolist(),
-            sa.tolist(),
-            a.tolist(),
-            d.tolist(),
-            ct[:, 0].tolist(),
-            st[:, 0].tolist(),
-        )
-        return zip(*cols, strict=True), _BASE_AXES, (0.0, 0.0, 0.0)
     if dh.ndim == 2:
         cols = (ca.tolist(), sa.tolist(), a.tolist(), d.tolist(), ct, st)
     else:
@@ -196,23 +203,45 @@ def _joint_terms(model: Model, q: np.ndarray) -> tuple[Iterator[tuple], tuple, V
     return zip(*cols, strict=True), tuple(axes), np.zeros((3, N))
 
 
-def _turn(c, s, U: Vector, V: Vector) -> tuple[Vector, Vector]:
+def _turn(c, s, U: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rotate the pair of axes (U, V) by the angle of cosine c, sine s: (cU + sV, cV − sU)."""
-    if isinstance(U, tuple):
-        (u0, u1, u2), (v0, v1, v2) = U, V
-        return (
-            (c * u0 + s * v0, c * u1 + s * v1, c * u2 + s * v2),
-            (c * v0 - s * u0, c * v1 - s * u1, c * v2 - s * u2),
-        )
     return c * U + s * V, c * V - s * U
 
 
-def _advance(P: Vector, a, X: Vector, d, Z: Vector) -> Vector:
+def _advance(P: np.ndarray, a, X: np.ndarray, d, Z: np.ndarray) -> np.ndarray:
     """Move the origin P by a along X and d along Z: P + aX + dZ."""
-    if isinstance(P, tuple):
-        (p0, p1, p2), (x0, x1, x2), (z0, z1, z2) = P, X, Z
-        return (p0 + a * x0 + d * z0, p1 + a * x1 + d * z1, p2 + a * x2 + d * z2)
     return P + a * X + d * Z
+
+
+def _recurrence_floats(terms: Iterator[tuple]) -> tuple[list[tuple], tuple]:
+    """:func:`_recurrence` of one configuration on Python floats, written out.
+
+    The same products and sums in the same order as :func:`_turn` and :func:`_advance`
+    (the same numbers), without a call per step.
+    """
+    (x0, x1, x2), (y0, y1, y2), (z0, z1, z2) = _BASE_AXES
+    p0 = p1 = p2 = 0.0
+    stored = [((x0, x1, x2), (z0, z1, z2), (p0, p1, p2))]
+    for ca, sa, a, d, c, s in terms:
+        y0, y1, y2, z0, z1, z2 = (  # RotX(α_{i-1})
+            ca * y0 + sa * z0,
+            ca * y1 + sa * z1,
+            ca * y2 + sa * z2,
+            ca * z0 - sa * y0,
+            ca * z1 - sa * y1,
+            ca * z2 - sa * y2,
+        )
+        p0, p1, p2 = p0 + a * x0 + d * z0, p1 + a * x1 + d * z1, p2 + a * x2 + d * z2
+        x0, x1, x2, y0, y1, y2 = (  # RotZ(θ_i + offset_i)
+            c * x0 + s * y0,
+            c * x1 + s * y1,
+            c * x2 + s * y2,
+            c * y0 - s * x0,
+            c * y1 - s * x1,
+            c * y2 - s * x2,
+        )
+        stored.append(((x0, x1, x2), (z0, z1, z2), (p0, p1, p2)))
+    return stored, ((x0, x1, x2), (y0, y1, y2), (z0, z1, z2))
 
 
 def bends(model: Model) -> bool:
@@ -264,13 +293,7 @@ def rigid_frames(model: Model, q: np.ndarray) -> Frames:
     n = q.shape[1]
     if n != model.n_joints:
         raise ValueError(f"configurations have {n} joints; the model has {model.n_joints}")
-    terms, (X, Y, Z), P = _joint_terms(model, q)
-    stored = [(X, Z, P)]
-    for ca, sa, a, d, c, s in terms:
-        Y, Z = _turn(ca, sa, Y, Z)  # RotX(α_{i-1})
-        P = _advance(P, a, X, d, Z)  # TransX(a_{i-1}), then TransZ(d_i) along the new z
-        X, Y = _turn(c, s, X, Y)  # RotZ(θ_i + offset_i)
-        stored.append((X, Z, P))
+    stored, (X, Y, Z) = _recurrence(model, q)
     chain = np.array(stored).reshape(n + 1, 3, 3, -1).transpose(3, 0, 1, 2)
     last = np.array([X, Y, Z]).reshape(3, 3, -1).transpose(2, 1, 0)  # columns X, Y, Z
     return Frames(
@@ -279,6 +302,35 @@ def rigid_frames(model: Model, q: np.ndarray) -> Frames:
         o=chain[:, :, 2],
         R_last=np.ascontiguousarray(last),
     )
+
+
+def _recurrence(model: Model, q: np.ndarray) -> tuple[list[tuple], tuple]:
+    """Return each frame's (x, z, o) and the last frame's axes (X, Y, Z) (:func:`rigid_frames`)."""
+    terms, (X, Y, Z), P = _joint_terms(model, q)
+    if isinstance(P, tuple):  # one configuration: Python floats
+        return _recurrence_floats(terms)
+    stored = [(X, Z, P)]
+    for ca, sa, a, d, c, s in terms:
+        Y, Z = _turn(ca, sa, Y, Z)  # RotX(α_{i-1})
+        P = _advance(P, a, X, d, Z)  # TransX(a_{i-1}), then TransZ(d_i) along the new z
+        X, Y = _turn(c, s, X, Y)  # RotZ(θ_i + offset_i)
+        stored.append((X, Z, P))
+    return stored, (X, Y, Z)
+
+
+def one_chain(model: Model, q: np.ndarray) -> tuple[list[tuple], tuple] | None:
+    """Return one configuration's rigid frames as Python floats, or None where it cannot.
+
+    ``q`` (n,) rad; per frame its (x, z, o) 3-tuples and the last frame's axes (X, Y, Z),
+    the very numbers of :func:`frames` without building its arrays (a Newton step of the
+    inverse kinematics needs a handful of them). None for a model that bends under
+    gravity, one model per configuration or ``q`` not one configuration: use
+    :func:`frames`.
+    """
+    q = np.asarray(q, dtype=float)
+    if bends(model) or np.ndim(model.dh) != 2 or q.shape != (model.n_joints,):
+        return None
+    return _recurrence(model, q[None])
 
 
 def tool_position(model: Model, q: np.ndarray, f: Frames | None = None) -> np.ndarray:

@@ -173,8 +173,7 @@ class Moves:
 
     def duration_s(self, speed_pct: np.ndarray) -> np.ndarray:
         """Duration (s) of each move at ``speed_pct``: travel at cruise plus one ramp."""
-        with np.errstate(divide="ignore"):
-            return 1.0 / self.cruise(speed_pct) + MOVE_OVERHEAD_S
+        return travel_duration_s(self.cruise_per_pct, speed_pct)
 
     def wire_speed_mm_s(self, speed_pct: np.ndarray) -> np.ndarray:
         """Peak wire speed (mm/s) of each move at ``speed_pct``."""
@@ -199,6 +198,15 @@ class Moves:
         return np.array(
             [vibration_amplitude_mm(v, s) for v, s in zip(peak, self.tool_length_mm, strict=True)]
         )
+
+
+def travel_duration_s(cruise_per_pct: np.ndarray, speed_pct: np.ndarray) -> np.ndarray:
+    """Duration (s) of moves at ``speed_pct``, ṡ at 1 % ``cruise_per_pct``: travel plus one ramp.
+
+    Needs no more of a move than its joints' travel (:func:`cruise_per_pct`).
+    """
+    with np.errstate(divide="ignore"):
+        return 1.0 / (cruise_per_pct * np.asarray(speed_pct, dtype=float)) + MOVE_OVERHEAD_S
 
 
 def _finite(x: np.ndarray) -> np.ndarray:

@@ -38,8 +38,8 @@ from wirecal.solver.counter import Counter
 from wirecal.solver.distance import wire_vectors
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import Exit, physical_wire_mm
-from wirecal.solver.gravity import gravity_torques_nm, wrist_weight
-from wirecal.solver.kinematics import Model, loaded, rigid_frames, tool_position
+from wirecal.solver.gravity import gravity_torques_floats, gravity_torques_nm, wrist_weight
+from wirecal.solver.kinematics import Model, loaded, one_chain, rigid_frames, tool_position
 from wirecal.solver.log.readings import REFERENCE_STEP, Reading
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import DEFAULT_GRAVITY_SAG_DEG_PER_M, Encoder, Robot
@@ -183,10 +183,17 @@ class Unmodelled:
         q = np.atleast_2d(q_deg)
         if model.compliance is not None:
             return np.zeros(q.shape)
-        f = rigid_frames(model, np.radians(q))
         c = np.zeros(q.shape[1])
         c[1:3] = self.compliance_deg_per_m  # deg/(N·m) under a 1 N weight: deg/m of lever
-        return -c * gravity_torques_nm(wrist_weight(q.shape[1]), f.x, f.z, f.o)
+        weight = wrist_weight(q.shape[1])
+        chain = one_chain(model, np.radians(q[0])) if len(q) == 1 else None
+        if chain is not None:  # one configuration (the twin's every move): on floats
+            x, z, o = zip(*chain[0], strict=True)
+            tau = gravity_torques_floats(weight, list(x), list(z), list(o))
+            if tau is not None:
+                return -c * np.array([tau])
+        f = rigid_frames(model, np.radians(q))
+        return -c * gravity_torques_nm(weight, f.x, f.z, f.o)
 
 
 def sagged_tool_points(

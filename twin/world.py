@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from wirecal.solver.cell.check import move_collision
+from wirecal.solver.cell.sweep import Sweeps
 from wirecal.solver.counter import Counter
 from wirecal.solver.exit_geometry import physical_wire_mm
 from wirecal.solver.ik.solutions import flange_pose
@@ -56,7 +56,9 @@ from wirecal.solver.run_parameters import (
     VIBRATION_HZ,
     VIBRATION_TAU_S,
     Moves,
+    cruise_per_pct,
     move_profiles,
+    travel_duration_s,
 )
 from wirecal.solver.simulate import (
     IDEAL_ENCODER,
@@ -188,7 +190,14 @@ class World:
         self.pose_error = self.rng.normal(0, self.noise_mm)
         self.slip = 0.0
         self._wire_at: tuple[np.ndarray, float] | None = None  # (actual, its wire mm)
-        self.vibration = (0.0, VIBRATION_TAU_S, 0.0, 0.0)  # amplitude mm, τ, phase, since
+        # amplitude (mm, or the move whose profile gives it when first read), τ, phase, since
+        self.vibration: tuple[float | Callable[[], float], float, float, float] = (
+            0.0,
+            VIBRATION_TAU_S,
+            0.0,
+            0.0,
+        )
+        self.sweeps = Sweeps(self.robot, self.model, self.p0, contact=True)
         self.nest: int | None = None  # the gauge nest the wire tip is seated in (0 A, 1 B)
         self.gauge_mm = reference_lengths(self.robot.encoder, self.encoder_truth)[:2]
         self.mounted_kg = 0.0  # the mass the operator has mounted at the flange
@@ -277,14 +286,17 @@ class World:
         if hit is not None:
             return Collision(f"{self._move_name(q)}: {hit}")
         start = np.asarray(self.joints, dtype=float)
-        in_place = float(np.max(np.abs(q - start))) < IN_PLACE_DEG
-        move = self._profile(start if in_place else q)
-        over = self._wire_overspeed(move, speed_pct, ramp_s)
+        end = start if float(np.max(np.abs(q - start))) < IN_PLACE_DEG else q
+        move = self._profile(start, end) if self.wire_limits else None
+        over = None if move is None else self._wire_overspeed(move, speed_pct, ramp_s)
         if over is not None:
             return WireOverspeed(self._move_name(q), over)
         speed = np.asarray(speed_pct)
-        self._arrive(q, float(move.duration_s(speed)[0]) if duration_s is None else duration_s)
-        self._vibrate(float(move.vibration_mm(speed)[0]))
+        if duration_s is None:
+            travel = cruise_per_pct(self.robot, (end - start)[None])
+            duration_s = float(travel_duration_s(travel, speed)[0])
+        self._arrive(q, duration_s)
+        self._vibrate(lambda: float((move or self._profile(start, end)).vibration_mm(speed)[0]))
         return None
 
     def _move_name(self, q_deg: np.ndarray) -> str:
@@ -299,12 +311,11 @@ class World:
         arm's body and the robot file's ``[cell]``: where the true arm's capsules touch
         (the planner's margin aside), a real arm would stop (a protective stop).
         """
-        start = np.asarray(self.joints, dtype=float)
-        return move_collision(self.robot, self.model, self.p0, start, q_deg, contact=True)
+        return self.sweeps.collision(np.asarray(self.joints, dtype=float), q_deg)
 
-    def _profile(self, q_deg: np.ndarray) -> Moves:
-        """Return the move from the current joints to ``q_deg`` on the true arm."""
-        return move_profiles(self.robot, self.model, self.p0, np.asarray(self.joints), q_deg)
+    def _profile(self, start_deg: np.ndarray, end_deg: np.ndarray) -> Moves:
+        """Return the move from ``start_deg`` to ``end_deg`` on the true arm."""
+        return move_profiles(self.robot, self.model, self.p0, start_deg, end_deg)
 
     def _wire_overspeed(self, move: Moves, speed_pct: float, ramp_s: float) -> str | None:
         """Return why ``move`` at ``speed_pct`` would run the wire beyond the encoder's limits.
@@ -339,11 +350,12 @@ class World:
             self.slip += f.slip_mm
         self.pose_error = self.rng.normal(0, self.noise_mm)
 
-    def _vibrate(self, amplitude_mm: float) -> None:
+    def _vibrate(self, amplitude_mm: Callable[[], float]) -> None:
         """Start the vibration along the wire after a move.
 
         It decays, or with the fault "still vibrating" it does not, until the operator
-        steadies the arm at a pause.
+        steadies the arm at a pause. ``amplitude_mm`` is evaluated when the encoder is
+        first read (a run that reads no count after a move skips the move's profile).
         """
         f = self.faults
         phase = float(self.rng.uniform(0, 2 * math.pi))
@@ -400,6 +412,9 @@ class World:
                 f"encoder's range_mm {enc.range_mm:g}",
             )
         amplitude, tau, phase, since = self.vibration
+        if callable(amplitude):
+            amplitude = amplitude()
+            self.vibration = (amplitude, tau, phase, since)
         t = self.clock - since
         d += amplitude * math.exp(-t / tau) * math.cos(2 * math.pi * VIBRATION_HZ * t + phase)
         jitter = int(self.rng.choice((-1, 0, 0, 0, 1)))

@@ -24,27 +24,34 @@ def _joints(q: np.ndarray) -> str:
     return "(" + ", ".join(f"{x:.1f}" for x in q) + ") deg"
 
 
-def move_collision(
+def move_sweep(
     robot: Robot,
     model: Model,
     p0: np.ndarray,
     a: np.ndarray,
     b: np.ndarray,
     contact: bool = False,
-) -> str | None:
+) -> tuple[str | None, np.ndarray, float]:
     """Return the first collision along the joint-interpolated move a → b (deg), or None.
 
     In words: what collides (the pair, or a link and the floor or a volume) and where.
     A collision is a gap under the cell's margin, or with ``contact`` (the twin's arm as
-    built) capsules that touch: the margin is the planner's, not the robot's.
+    built) capsules that touch: the margin is the planner's, not the robot's. With it, the
+    move's last sample (deg) and that sample's smallest gap (mm).
     """
     q, _ = move_samples(np.r_[a][None], np.r_[b][None])
     gaps = robot.cell_gaps(q, p0, model)
-    hit = np.flatnonzero(gaps.smallest() < (-gaps.margin_mm if contact else 0.0))
+    smallest = gaps.smallest()
+    hit = np.flatnonzero(smallest < collision_below_mm(gaps.margin_mm, contact))
     if not hit.size:
-        return None
+        return None, q[-1], float(smallest[-1])
     k = int(hit[0])
-    return f"{gaps.cause(k)} at joints {_joints(q[k])}"
+    return f"{gaps.cause(k)} at joints {_joints(q[k])}", q[-1], float(smallest[-1])
+
+
+def collision_below_mm(margin_mm: float, contact: bool) -> float:
+    """Return the smallest gap under which a configuration collides (:func:`move_sweep`)."""
+    return -margin_mm if contact else 0.0
 
 
 def body_problem(robot: Robot, q_deg: np.ndarray) -> str | None:

@@ -25,12 +25,13 @@ solutions).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from wirecal.solver.ik import ur as ik_ur
-from wirecal.solver.kinematics import Model, flange_jacobian, frames, table_property
+from wirecal.solver.kinematics import Model, flange_jacobian, frames, one_chain, table_property
 from wirecal.solver.robot import Robot
 
 HALF_PI = np.pi / 2
@@ -47,8 +48,12 @@ class Solution:
 
 def flange_pose(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rotation (3, 3) and origin (3,) of the last frame for one configuration (rad)."""
-    f = frames(model, np.atleast_2d(q))
-    return f.R_last[0], f.o[0, -1]
+    chain = one_chain(model, q)
+    if chain is None:
+        f = frames(model, np.atleast_2d(q))
+        return f.R_last[0], f.o[0, -1]
+    stored, axes = chain
+    return np.array(axes).T.copy(), np.array(stored[-1][2])  # laid out as frames' arrays
 
 
 @table_property
@@ -107,8 +112,9 @@ def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
             py = a[3] * np.sin(phi3) - s3 * d[3] * np.cos(phi3)
             phi2 = np.arctan2(uy, ux) - np.arctan2(py, px)
             q123 = np.array([phi1, phi2, phi3]) - off[:3]
-            f = frames(Model(dh, model.tool_point), np.r_[q123, 0, 0, 0][None])
-            X3, Z3 = f.x[0, 3], f.z[0, 3]
+            chain = one_chain(Model(dh, model.tool_point), np.concatenate((q123, np.zeros(3))))
+            assert chain is not None  # a rigid model's one configuration
+            X3, Z3 = np.array(chain[0][3][0]), np.array(chain[0][3][1])
             R3 = np.column_stack([X3, np.cross(Z3, X3), Z3])
             M = _rot_x(alpha[3]).T @ R3.T @ R
             h = np.hypot(M[0, 2], M[1, 2])
@@ -135,7 +141,7 @@ def _pose_error(model, q, R, o, f=None):
     Rq, oq = f.R_last[0], f.o[0, -1]
     E = R @ Rq.T
     rotvec = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
-    return np.r_[o - oq, rotvec * 1000.0]  # 1 rad of orientation weighs as 1 m
+    return np.concatenate((o - oq, rotvec * 1000.0))  # 1 rad of orientation weighs as 1 m
 
 
 CONVERGED = 1e-10
@@ -161,14 +167,44 @@ MET_RAD = 1e-2
 """A candidate after :data:`PRE_ITERATIONS` Newton steps this near a start runs to it (rad)."""
 
 
+def _newton_terms(model, q, R, o) -> tuple[np.ndarray, Callable[[], np.ndarray]]:
+    """Return q's pose error and a function giving its flange Jacobian (one chain evaluation).
+
+    On Python floats where the model allows (:func:`~wirecal.solver.kinematics.one_chain`):
+    the same numbers as :func:`_pose_error` and
+    :func:`~wirecal.solver.kinematics.flange_jacobian` (the same operations in the same
+    order; the rotations multiplied as the same arrays), at a fraction of the cost.
+    """
+    chain = one_chain(model, q)
+    if chain is None:
+        f = frames(model, q[None])
+        return _pose_error(model, q, R, o, f), lambda: flange_jacobian(model, q, f)
+    stored, axes = chain
+    Rq = np.array(axes).T.copy()  # columns X, Y, Z, laid out as frames' R_last
+    E = R @ Rq.T
+    rotvec = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
+    e = np.concatenate((o - np.array(stored[-1][2]), rotvec * 1000.0))
+    return e, lambda: _flange_jacobian_floats(stored)
+
+
+def _flange_jacobian_floats(stored: list[tuple]) -> np.ndarray:
+    """Return :func:`~wirecal.solver.kinematics.flange_jacobian` from one chain's floats."""
+    p0, p1, p2 = (c + 0.0 for c in stored[-1][2])  # the flange (a zero tool point added)
+    cols = []
+    for _, (z0, z1, z2), (o0, o1, o2) in stored[1:]:
+        b0, b1, b2 = p0 - o0, p1 - o1, p2 - o2
+        turn = (z1 * b2 - z2 * b1, z2 * b0 - z0 * b2, z0 * b1 - z1 * b0)
+        cols.append((*turn, z0 * 1000.0, z1 * 1000.0, z2 * 1000.0))
+    return np.array(cols).T.copy()
+
+
 def _polish(model, q, R, o, iterations=60, accept=CONVERGED, done=CONVERGED):
     """Newton from ``q``: stop once no pose error exceeds ``done``; ok if within ``accept``."""
     for _ in range(iterations):
-        f = frames(model, q[None])  # one evaluation of the chain per Newton step
-        e = _pose_error(model, q, R, o, f)
+        e, jacobian = _newton_terms(model, q, R, o)  # one evaluation of the chain per step
         if np.max(np.abs(e)) < done:
             return q, True
-        step = np.linalg.lstsq(flange_jacobian(model, q, f), e, rcond=None)[0]
+        step = np.linalg.lstsq(jacobian(), e, rcond=None)[0]
         q = q + step * min(1.0, MAX_STEP_RAD / max(np.max(np.abs(step)), 1e-300))
     return q, np.max(np.abs(_pose_error(model, q, R, o))) < accept
 
@@ -272,13 +308,18 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     """Return wirecal's names of a solution's configuration (see the module doc)."""
     if ik_ur.ur_structure(model):
         return ik_ur.configuration(model, q)
-    f = frames(model, np.atleast_2d(q))
-    o2, o3 = f.o[0, 2], f.o[0, 3]
-    centre = f.o[0, 4]
-    z1 = f.z[0, 1]
-    r = centre - f.o[0, 1]
+    chain = one_chain(model, q)
+    if chain is None:
+        f = frames(model, np.atleast_2d(q))
+        x, z, o = f.x[0], f.z[0], f.o[0]
+    else:  # the same numbers as arrays of frames' (Python floats: cheaper for one)
+        x, z, o = (np.array(v) for v in zip(*chain[0], strict=True))
+    o2, o3 = o[2], o[3]
+    centre = o[4]
+    z1 = z[1]
+    r = centre - o[1]
     x1 = r - np.dot(r, z1) * z1
-    ahead = np.dot(x1, f.x[0, 1])
+    ahead = np.dot(x1, x[1])
     line = centre - o2
     t = np.dot(o3 - o2, line) / max(np.dot(line, line), 1e-300)
     offset = (o3 - o2) - t * line

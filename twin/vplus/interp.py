@@ -176,6 +176,8 @@ class _Compiler:
             elif decl.scope == "LOCAL":
                 self.locals.add(name)
         self.nslots = len(self.params) + len(self.autos)
+        for name in ("expr", "_stmt"):  # bound once: each lookup of a dispatcher wraps anew
+            setattr(self, name, vars(_Compiler)[name].__get__(self, _Compiler))
 
     def compile(self) -> Callable:
         body = self.body(self.prog.body)

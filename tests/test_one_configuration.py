@@ -1,0 +1,108 @@
+"""One configuration on Python floats (issue 34): the same numbers as the arrays, bit for bit.
+
+The twin and its controllers' inverse kinematics evaluate one configuration at a time at
+every move; those paths (kinematics.one_chain, the Newton step of ik/solutions.py, the
+sag's gravity torques) must give exactly the numbers of the vectorised code evaluating a
+batch of configurations, or the twin's logs would change with the speed-up.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.truth import random_errors
+from wirecal.solver.gravity import (
+    MassModel,
+    gravity_torques_floats,
+    gravity_torques_nm,
+    wrist_weight,
+)
+from wirecal.solver.ik import solutions as ik
+from wirecal.solver.kinematics import flange_jacobian, frames, one_chain
+from wirecal.solver.simulate import Unmodelled
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+ARMS = ("viper_s650", "ur5e", "abb_irb120", "puma560")
+ANGLES = st.lists(st.floats(-3.2, 3.2), min_size=6, max_size=6).map(np.array)
+
+
+@pytest.fixture(scope="module", params=ARMS)
+def models(request):
+    robot = load_robot(EXAMPLES / request.param / "robot.toml")
+    truth = random_errors(robot, 1.0, np.random.default_rng(3))
+    return robot.nominal, robot.model(truth)
+
+
+def _batch(model, q):
+    """The frames of q as the second row of a batch (the vectorised path)."""
+    return frames(model, np.stack([np.zeros_like(q), q]))
+
+
+@settings(max_examples=40, deadline=None)
+@given(q=ANGLES)
+def test_one_chain_gives_the_batch_frames(models, q):
+    for model in models:
+        stored, (X, Y, Z) = one_chain(model, q)
+        f = _batch(model, q)
+        assert np.array_equal(np.array([s[0] for s in stored]), f.x[1])
+        assert np.array_equal(np.array([s[1] for s in stored]), f.z[1])
+        assert np.array_equal(np.array([s[2] for s in stored]), f.o[1])
+        assert np.array_equal(np.array([X, Y, Z]).T, f.R_last[1])
+
+
+@settings(max_examples=40, deadline=None)
+@given(q=ANGLES, target=ANGLES)
+def test_the_newton_step_on_floats_gives_the_arrays_step(models, q, target):
+    for model in models:
+        R, o = (a[1] for a in (_batch(model, target).R_last, _batch(model, target).o[:, -1]))
+        f = _batch(model, q)
+        e, jacobian = ik._newton_terms(model, q, R, o)
+        f1 = frames(model, q[None])
+        assert np.array_equal(e, ik._pose_error(model, q, R, o, f1))
+        assert np.array_equal(jacobian(), flange_jacobian(model, q, f1))
+        assert np.array_equal(ik.flange_pose(model, q)[0], f.R_last[1])
+
+
+def test_the_configuration_names_from_floats_are_the_arrays(models, monkeypatch):
+    q = np.random.default_rng(5).uniform(-3, 3, (200, 6))
+    on_floats = [[ik.configuration(model, x) for x in q] for model in models]
+    with monkeypatch.context() as m:
+        m.setattr(ik, "one_chain", lambda model, q: None)  # frames' arrays, as before
+        assert on_floats == [[ik.configuration(model, x) for x in q] for model in models]
+
+
+@settings(max_examples=40, deadline=None)
+@given(q=ANGLES, seed=st.integers(0, 2**32 - 1))
+def test_gravity_torques_on_floats_equal_the_vectorised_ones(models, q, seed):
+    rng = np.random.default_rng(seed)
+    masses = (
+        wrist_weight(6),
+        MassModel(rng.uniform(0.5, 5.0, 6), rng.uniform(-80.0, 80.0, (6, 3))),
+    )
+    for model in models:
+        f = _batch(model, q)
+        stored, _ = one_chain(model, q)
+        x, z, o = (list(v) for v in zip(*stored, strict=True))
+        for m in masses:
+            torque = gravity_torques_floats(m, x, z, o)
+            assert np.array_equal(np.array(torque), gravity_torques_nm(m, f.x, f.z, f.o)[1])
+
+
+def test_the_sag_of_one_configuration_is_a_row_of_the_batchs(models):
+    q = np.random.default_rng(6).uniform(-150.0, 150.0, (50, 6))
+    for model in models:
+        batch = Unmodelled().sag_deg(model, q)
+        for k in range(len(q)):
+            assert np.array_equal(Unmodelled().sag_deg(model, q[k]), batch[k : k + 1])
+
+
+def test_a_payload_keeps_the_vectorised_form():
+    m = MassModel(np.ones(6), np.zeros((6, 3)), payload_mass_kg=1.0)
+    axes = [(1.0, 0.0, 0.0)] * 7
+    assert gravity_torques_floats(m, axes, axes, [(0.0, 0.0, 0.0)] * 7) is None
