@@ -25,17 +25,23 @@ from wirecal.formats.log import parse_log
 from wirecal.formats.plan_file import load_plan, plan_from_dict, plan_to_toml
 from wirecal.formats.robot_file import load_robot, robot_from_dict
 from wirecal.formats.simulated_log import simulate_log
+from wirecal.gen.rapid.backend import RapidGenerator
+from wirecal.gen.rapid.program import RapidOptions
+from wirecal.gen.rapid.program import module_text as rapid_module_text
+from wirecal.gen.request import GenRequest
 from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import GenOptions, line_ends, module_text
+from wirecal.lang.rapid import Rapid
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.gravity import gravity_torques_nm, with_load
 from wirecal.solver.kinematics import loaded, rigid_frames, tool_position
 from wirecal.solver.log.measurements import check_log
-from wirecal.solver.plan.calibration_plan import PAYLOAD_STEP, Plan, Step
+from wirecal.solver.plan.calibration_plan import PAYLOAD_STEP, Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import solve
+from wirecal.twin.rapid.adapter import ADAPTER as RAPID_ADAPTER
 
 from .conftest import VIPER
 from .twin_runs import generated, measure_in_twin, measure_ur_in_twin
@@ -324,22 +330,118 @@ def test_the_ur_twin_operator_mounts_the_mass_and_solve_finds_the_compliances(
         assert std[name] < 1.0
 
 
-def test_rapid_programs_refuse_a_payload_plan(viper, paper_plan, tmp_path):
-    """RAPID does not prompt for the mass yet: `gen --language rapid` says so."""
-    irb = VIPER.parent / "abb_irb120"
-    keys = 'compliances = ["c2", "c3"]\nrated_payload_kg = 3.0\npayload_kg = 3.0\n'
-    text = (irb / "robot.toml").read_text().replace("[calibration]\n", "[calibration]\n" + keys, 1)
-    (tmp_path / "robot.toml").write_text(text)
-    rb = robot_from_dict(tomllib.loads(text), "robot.toml")
-    base = plan_from_dict(tomllib.loads((irb / "plan.toml").read_text()), rb)
-    q = base.steps[0].points_deg[:2]
-    pl = replace(base, steps=(*base.steps, Step(PAYLOAD_STEP, q, np.zeros((0, 6)), None, 3.0)))
-    (tmp_path / "plan.toml").write_text(plan_to_toml(pl))
-    args = ["gen", str(tmp_path / "robot.toml"), str(tmp_path / "plan.toml")]
-    out = CliRunner().invoke(main, [*args, "-o", str(tmp_path / "out")])
-    assert out.exit_code == 2, out.output
-    assert "do not prompt for it yet (only V+ and URScript do)" in out.output
-    assert not (tmp_path / "out").exists()
+IRB = GOLDEN.parents[1] / "payload_abb_irb120"
+
+
+@pytest.fixture(scope="module")
+def irb_robot():
+    """The IRB 120 asking c2, c3, with a 3 kg payload step (its rated payload)."""
+    return _designed(IRB)[0]
+
+
+@pytest.fixture(scope="module")
+def irb_plan():
+    """The plan ``wirecal plan`` designed for it: 10 points with the mass on."""
+    return _designed(IRB)[1]
+
+
+@pytest.fixture(scope="module")
+def rapid_module(irb_robot, irb_plan) -> str:
+    return generated(rapid_module_text, irb_robot, irb_plan, RapidOptions())
+
+
+def test_payload_golden_rapid_module(rapid_module):
+    """The RAPID module of the payload plan is the reviewed one (WIRECAL_UPDATE_GOLDEN=1
+    rewrites it after an intended change: review the diff)."""
+    path = IRB / "WIRECAL.mod"
+    if os.environ.get("WIRECAL_UPDATE_GOLDEN"):
+        path.write_text(rapid_module, encoding="ascii", newline="\n")
+    assert rapid_module == path.read_text(encoding="ascii")
+
+
+def test_the_rapid_run_asks_and_tells_gripload_at_theta0(rapid_module, irb_plan):
+    """Zero, TPReadNum to mount, GripLoad of the mass, the points; back at θ0 TPReadNum to
+    remove, GripLoad load0, the closing zero; the log's marker; no wc_solve."""
+    run = rapid_module[rapid_module.index("PROC wc_run()") :]
+    n = len(irb_plan.steps)
+    order = [
+        f"wc_meas {n}, 0, 0;",
+        'TPReadNum answer, "1 when it is mounted',
+        "GripLoad wc_load;",
+        f"wc_meas {n}, 1, 0;",
+        "MoveAbsJ wc_theta0, ",
+        'TPReadNum answer, "1 when it is removed',
+        "GripLoad load0;",
+        f"wc_meas {n + 1}, 0, 0;",
+    ]
+    at, pos = [], 0
+    for x in order:  # each after the one before
+        pos = run.index(x, pos)
+        at.append(pos)
+    assert at == sorted(at)
+    assert "PERS loaddata wc_load := [3, [0, 0, 50], [1, 0, 0, 0], 0, 0, 0];" in rapid_module
+    assert 'wc_out "# payload_kg: 3";' in run
+    assert "PROC wc_solve" not in rapid_module
+    assert "yumpu.com/en/document/view/5679047, p. 183" in rapid_module  # the page read
+
+
+def test_an_off_axis_fractional_mass_passes_the_checker(irb_robot, irb_plan):
+    """The loaddata of another mass and centre: written as the plan says, the checker clean."""
+    step = replace(irb_plan.steps[-1], payload_kg=0.25, payload_com_mm=(-12.5, 3.0, 80.0))
+    plan = replace(irb_plan, steps=(*irb_plan.steps[:-1], step))
+    text = rapid_module_text(irb_robot, plan)
+    assert "wc_load := [0.25, [-12.5, 3, 80], [1, 0, 0, 0], 0, 0, 0];" in text
+    assert Rapid().lint(text, "WIRECAL.mod", irb_robot.controller.software) == []
+
+
+def test_the_checker_refuses_a_gripload_of_another_type():
+    """Right both ways: GripLoad takes a loaddata, not a number or a tooldata."""
+    for arg in ("3", "tool0"):
+        text = "MODULE T\n  PROC main()\n    GripLoad " + arg + ";\n  ENDPROC\nENDMODULE\n"
+        problems = Rapid().lint(text, "t.mod")
+        assert any("GripLoad" in p and "loaddata" in p for p in problems), problems
+
+
+def test_gen_writes_the_rapid_payload_module(tmp_path):
+    """`wirecal gen` on the IRB 120's payload plan: exit 0, the module with GripLoad."""
+    args = ["gen", str(IRB / "robot.toml"), str(IRB / "plan.toml"), "-o", str(tmp_path)]
+    out = CliRunner().invoke(main, args)
+    assert out.exit_code == 0, out.output
+    text = (tmp_path / "WIRECAL.mod").read_bytes().decode("ascii")
+    assert "GripLoad wc_load;\r\n" in text
+    assert "GripLoad load0;\r\n" in text
+
+
+def test_a_language_that_does_not_prompt_refuses_a_payload_plan(irb_robot, irb_plan):
+    """The generators' base refuses a payload plan for a language whose programs would not
+    ask for the mass (every shipped language asks; a new one must say so)."""
+
+    class Silent(RapidGenerator):
+        payload_step = False
+
+    with pytest.raises(WirecalError, match="do not prompt for it: plan without"):
+        Silent().programs(irb_robot, irb_plan, GenRequest())
+
+
+@pytest.mark.slow
+def test_the_rapid_twin_operator_mounts_the_mass_and_solve_finds_the_compliances(
+    irb_robot, irb_plan, rapid_module, tmp_path
+):
+    run = RAPID_ADAPTER.measure(
+        irb_robot, irb_plan, TRUE_C, tmp_path, {"WIRECAL.mod": rapid_module}, seed=2
+    )
+    assert run.complete, run.stopped
+    assert run.world.mounted_kg == 0.0  # removed before the closing zero
+    assert run.controller.load == (0.0, (0.0, 0.0, 0.0))  # load0 again
+    pendant = "\n".join(run.controller.flexpendant)
+    assert pendant.index("when it is mounted") < pendant.index("when it is removed")
+    log = parse_log(run.log.read_text(), str(run.log))
+    assert log.payload_kg == 3.0
+    est = solve(irb_robot, irb_plan, check_log(log, irb_plan, irb_robot)).estimates["joint"]
+    got, std = est.as_dict(), est.std_by_name()
+    for name, truth in TRUE_C.items():
+        assert abs(got[name] - truth) < 4 * std[name]
+        assert std[name] < 3.0
 
 
 @settings(max_examples=60, deadline=None)

@@ -70,6 +70,9 @@ class FakeController:
         self.pendant.append(prompt)
         return 1.0
 
+    def grip_load(self, mass_kg, cog_mm):
+        self.calls.append(("gripload", mass_kg, cog_mm))
+
     def wait_time(self, seconds):
         self.now += seconds
 
@@ -469,3 +472,14 @@ def test_the_generated_module_names_a_missing_counter_signal() -> None:
     assert "AliasIO: no signal wc_giCount0" in outcome.message
     assert ctl.pendant[0] == "wirecal: no group input wc_giCount0 in the I/O configuration:"
     assert not [c for c in ctl.calls if c[0] == "gi"]
+
+
+def test_gripload_tells_the_controller_the_payload_and_load0_none() -> None:
+    """GripLoad of a loaddata: its mass (kg) and centre (mm); load0: no payload."""
+    _, ctl = run(
+        "GripLoad wc_load;",
+        "GripLoad load0;",
+        data=("PERS loaddata wc_load := [2.5, [-10, 0, 50], [1, 0, 0, 0], 0, 0, 0];",),
+    )
+    loads = [c for c in ctl.calls if c[0] == "gripload"]
+    assert loads == [("gripload", 2.5, (-10.0, 0.0, 50.0)), ("gripload", 0.0, (0.0, 0.0, 0.0))]

@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -27,7 +28,13 @@ from wirecal.formats.fileio import Outputs
 from wirecal.formats.log import COLUMNS as LOG_COLUMNS
 from wirecal.formats.log import VERSION as LOG_VERSION
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import give_move_speeds, joint_target, name_problems, run_steps
+from wirecal.gen.targets import (
+    give_move_speeds,
+    joint_target,
+    name_problems,
+    payload_context,
+    run_steps,
+)
 from wirecal.gen.templating import render
 from wirecal.lang.rapid.module import (
     GROUP_COUNTER_BITS,
@@ -207,6 +214,8 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
     (:meth:`wirecal.gen.backends.Generator.programs`).
     """
     _check(robot, opt)
+    if plan.payload_step is not None:  # its points need the gravity model of 'wirecal solve'
+        opt = replace(opt, solver=False)
     tables = build_tables(robot, plan)
     mpc = robot.encoder.mm_per_count
     bits = GROUP_COUNTER_BITS
@@ -248,12 +257,27 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
         "nit": STEP_ITERATIONS,
         "n": tables.n,
         "m": len(tables.names),
+        "payload": _payload(plan),
     }
     if opt.solver:
         context["t"] = solver_tables(tables)
     text = render("rapid/wirecal.mod.j2", **context)
     _check_strings(text)
     return text
+
+
+def _payload(plan: Plan) -> dict[str, object] | None:
+    """Return the payload step for the templates, with GripLoad's loaddata (None without one).
+
+    The loaddata (:data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`): the plan's mass (kg),
+    its centre (mm; a payload's is in the tool frame, tool0's: the flange), axes of moment
+    [1, 0, 0, 0] and inertia 0 (a point mass: the mass's own inertia is not in the plan).
+    """
+    ctx = payload_context(plan)
+    if ctx is None:
+        return None
+    cog = ", ".join(cast(list[str], ctx["com_mm"]))
+    return ctx | {"loaddata": f"[{ctx['kg']}, [{cog}], [1, 0, 0, 0], 0, 0, 0]"}
 
 
 def _check_strings(text: str) -> None:

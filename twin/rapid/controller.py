@@ -24,6 +24,8 @@ encoder, the disk, the operator, the clock), calling it in the order its docstri
   number is not modelled);
 * ``TPWrite`` / ``TPErase`` / ``TPReadNum``: the FlexPendant is the world's console; the
   operator answers from the world's scripted answers;
+* ``GripLoad``: the payload the controller is told is recorded (:attr:`IrcController.load`);
+  the twin models no dynamics, so it moves nothing;
 * ``WaitTime`` and the clocks: the world's clock.
 """
 
@@ -55,6 +57,7 @@ class IrcController:
     open_line: dict[int, str] = field(default_factory=dict)  # text after \NoNewLine
     flexpendant: list[str] = field(default_factory=list)
     last_count: int = 0  # the group input's value: it holds when the encoder fails
+    load: tuple[float, tuple[float, float, float]] | None = None  # the last GripLoad (kg, mm)
 
     def _refuse(self, why: str) -> RunError:
         self.stopped = why
@@ -143,6 +146,10 @@ class IrcController:
             return float(answer)
         except ValueError:
             return 0.0
+
+    def grip_load(self, mass_kg: float, cog_mm: tuple[float, float, float]) -> None:
+        """GripLoad: the payload the controller is told, recorded (kg, centre in mm)."""
+        self.load = (mass_kg, cog_mm)
 
     # ---- time and stopping ----
     def wait_time(self, seconds: float) -> None:
