@@ -10,7 +10,8 @@ step-by-step solver (the port of templates/urscript/solve.script.j2). Determinis
 same robot, plan, options and wirecal version give the same bytes.
 
 RAPID facts used are listed, with what is unconfirmed, in the module's own header
-(templates/rapid/wirecal.mod.j2): no page of ABB's RAPID reference was read for them.
+(templates/rapid/wirecal.mod.j2): no page of ABB's RAPID reference was read for them but
+loaddata's (a payload plan's GripLoad, :data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`).
 """
 
 from __future__ import annotations

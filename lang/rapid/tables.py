@@ -10,7 +10,9 @@ PDFs were not reachable, so the reading was of copies and translations):
 * ``MoveAbsJ``: RAPID reference manual, instructions, MoveAbsJ (syntax ``MoveAbsJ [\Conc]
   ToJointPos [\ID] [\NoEOffs] Speed [\V]|[\T] Zone [\Z] [\Inpos] Tool [\WObj]`` and
   its arguments), read in translations at 360docs.net/doc/7114964515.html and
-  abbjqr.gbsrobot.com/news/index.php?itemid=24292.
+  abbjqr.gbsrobot.com/news/index.php?itemid=24292;
+* ``loaddata``: :data:`LOADDATA_PAGE` (an older RAPID Reference Manual, p. 183), with
+  ``GripLoad`` as a controller-loaded program uses it (:data:`GRIPLOAD_LOADED`).
 
 Everything else below is marked "unconfirmed": written from the 3HAC050917 manual's
 structure as wirecal's authors know it, not from a page read for this table. ``since`` is
