@@ -397,6 +397,18 @@ def test_an_off_axis_fractional_mass_passes_the_checker(irb_robot, irb_plan):
     assert Rapid().lint(text, "WIRECAL.mod", irb_robot.controller.software) == []
 
 
+def test_gripload_declares_the_tool_with_the_mass(irb_robot, irb_plan):
+    """A tool of 1 kg at 20 mm ([gravity] payload_mass_kg) with a 2 kg mass at 50 mm: the
+    controller is told 3 kg at their common centre, (1·20 + 2·50)/3 = 40 mm — never less
+    than the flange carries; load0 after (tool0 declares no tool load before the step)."""
+    masses = replace(irb_robot.masses, payload_mass_kg=1.0, payload_com_mm=np.array([0, 0, 20.0]))
+    step = replace(irb_plan.steps[-1], payload_kg=2.0, payload_com_mm=(0.0, 0.0, 50.0))
+    plan = replace(irb_plan, steps=(*irb_plan.steps[:-1], step))
+    text = rapid_module_text(replace(irb_robot, masses=masses), plan)
+    assert "wc_load := [3, [0, 0, 40], [1, 0, 0, 0], 0, 0, 0];" in text
+    assert "GripLoad load0;" in text
+
+
 def test_the_checker_refuses_a_gripload_of_another_type():
     """Right both ways: GripLoad takes a loaddata, not a number or a tooldata."""
     for arg in ("3", "tool0"):

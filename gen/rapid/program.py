@@ -20,7 +20,6 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import cast
 
 import numpy as np
 
@@ -30,6 +29,7 @@ from wirecal.formats.log import COLUMNS as LOG_COLUMNS
 from wirecal.formats.log import VERSION as LOG_VERSION
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import (
+    flange_loads,
     give_move_speeds,
     joint_target,
     name_problems,
@@ -258,7 +258,7 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
         "nit": STEP_ITERATIONS,
         "n": tables.n,
         "m": len(tables.names),
-        "payload": _payload(plan),
+        "payload": _payload(robot, plan),
     }
     if opt.solver:
         context["t"] = solver_tables(tables)
@@ -267,18 +267,27 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
     return text
 
 
-def _payload(plan: Plan) -> dict[str, object] | None:
+def _payload(robot: Robot, plan: Plan) -> dict[str, object] | None:
     """Return the payload step for the templates, with GripLoad's loaddata (None without one).
 
-    The loaddata (:data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`): the plan's mass (kg),
-    its centre (mm; a payload's is in the tool frame, tool0's: the flange), axes of moment
+    The loaddata (:data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`): the whole load at the
+    flange while the mass is on, the tool's (the robot file's ``[gravity] payload_mass_kg``;
+    the module moves with tool0, which declares none) with the plan's mass, at their common
+    centre (mm; a payload's is in the tool frame, tool0's: the flange); axes of moment
     [1, 0, 0, 0] and inertia 0 (a point mass: the mass's own inertia is not in the plan).
     """
     ctx = payload_context(plan)
-    if ctx is None:
+    loads = flange_loads(robot, plan)
+    if ctx is None or loads is None:
         return None
-    cog = ", ".join(cast(list[str], ctx["com_mm"]))
-    return ctx | {"loaddata": f"[{ctx['kg']}, [{cog}], [1, 0, 0, 0], 0, 0, 0]"}
+    (total, cog), (tool_kg, _) = loads
+    centre = ", ".join(_fixed(x, 4) for x in cog)
+    return ctx | {
+        "total_kg": f"{total:g}",
+        "tool_kg": f"{tool_kg:g}",
+        "cog_mm": f"[{centre}]",
+        "loaddata": f"[{total:g}, [{centre}], [1, 0, 0, 0], 0, 0, 0]",
+    }
 
 
 def _check_strings(text: str) -> None:

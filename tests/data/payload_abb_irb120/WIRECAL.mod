@@ -43,10 +43,12 @@ MODULE WIRECAL
   VAR iodev wc_log;
   VAR clock wc_clk;
   VAR dnum wc_zc := 0;
-  ! the payload step's mass as GripLoad tells the controller: 3 kg, its centre
-  ! [0, 0, 50] mm in tool0's frame (the flange), axes of moment the
-  ! flange's, inertia 0: a point mass (the mass's own inertia is not in the plan; the
-  ! mass and centre are the plan's, the ones the operator is asked to mount)
+  ! the load at the flange while the payload step's mass is on, as GripLoad tells the
+  ! controller: the 3 kg mass at [0, 0, 50] mm with the tool's 0 kg
+  ! (the robot file's [gravity] payload_mass_kg; tool0 declares none), 3 kg at
+  ! [0, 0, 50] mm in tool0's frame (the flange); axes of moment the flange's;
+  ! inertia 0, a point mass (the mass's own inertia is not in the plan; the mass and
+  ! centre are the plan's, the ones the operator is asked to mount)
   PERS loaddata wc_load := [3, [0, 0, 50], [1, 0, 0, 0], 0, 0, 0];
 
   PROC wc_mount()
@@ -438,7 +440,7 @@ MODULE WIRECAL
     TPWrite "# Closing zero reading at theta0";
     MoveAbsJ wc_theta0, wc_v, fine, tool0;
     ! the payload step ends: the arm still at theta0, the operator removes the mass;
-    ! GripLoad load0: the controller is told no payload again
+    ! GripLoad load0: the controller is told no payload again, as before the step
     TPWrite "# Remove the 3 kg mass from the flange; leave the wire on.";
     TPReadNum answer, "1 when it is removed and you are clear, other: stop";
     wc_confirmed answer;
