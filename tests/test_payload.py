@@ -389,11 +389,15 @@ def test_the_rapid_run_asks_and_tells_gripload_at_theta0(rapid_module, irb_plan)
 
 
 def test_an_off_axis_fractional_mass_passes_the_checker(irb_robot, irb_plan):
-    """The loaddata of another mass and centre: written as the plan says, the checker clean."""
-    step = replace(irb_plan.steps[-1], payload_kg=0.25, payload_com_mm=(-12.5, 3.0, 80.0))
+    """The loaddata of another mass and centre: written as the plan says, the checker clean,
+    the FlexPendant's lines within a RAPID string's 80 characters for the longest numbers."""
+    com = (-123.4567, 98.7654, -321.0987)
+    step = replace(irb_plan.steps[-1], payload_kg=0.123456, payload_com_mm=com)
     plan = replace(irb_plan, steps=(*irb_plan.steps[:-1], step))
     text = rapid_module_text(irb_robot, plan)
-    assert "wc_load := [0.25, [-12.5, 3, 80], [1, 0, 0, 0], 0, 0, 0];" in text
+    load = "[0.123456, [-123.4567, 98.7654, -321.0987], [1, 0, 0, 0], 0, 0, 0]"
+    assert f"wc_load := {load};" in text
+    assert '"# its centre at [-123.457, 98.7654, -321.099] mm in the flange frame;"' in text
     assert Rapid().lint(text, "WIRECAL.mod", irb_robot.controller.software) == []
 
 

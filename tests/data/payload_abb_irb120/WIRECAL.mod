@@ -400,8 +400,9 @@ MODULE WIRECAL
     ! operator mounts it, then GripLoad tells the controller the payload (wc_load).
     ! wc_solve is not generated: the step's points need the gravity model only
     ! 'wirecal solve' has.
-    TPWrite "# Payload step: mount the 3 kg mass at the flange, its";
-    TPWrite "# centre at [0, 0, 50] mm in the flange frame; leave the wire on.";
+    TPWrite "# Payload step: mount the 3 kg mass at the flange,";
+    TPWrite "# its centre at [0, 0, 50] mm in the flange frame;";
+    TPWrite "# leave the wire on its fixture.";
     TPReadNum answer, "1 when it is mounted and you are clear, other: stop";
     wc_confirmed answer;
     GripLoad wc_load;
