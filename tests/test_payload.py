@@ -397,7 +397,13 @@ def test_an_off_axis_fractional_mass_passes_the_checker(irb_robot, irb_plan):
     text = rapid_module_text(irb_robot, plan)
     load = "[0.123456, [-123.4567, 98.7654, -321.0987], [1, 0, 0, 0], 0, 0, 0]"
     assert f"wc_load := {load};" in text
-    assert '"# its centre at [-123.457, 98.7654, -321.099] mm in the flange frame;"' in text
+    assert '"# its centre at [-123.4567, 98.7654, -321.0987] mm in the flange frame;"' in text
+    lines = [x for x in text.splitlines() if x.lstrip().startswith('TPWrite "')]
+    assert max(len(x.split('"')[1]) for x in lines) <= 80
+    assert Rapid().lint(text, "WIRECAL.mod", irb_robot.controller.software) == []
+    far = replace(step, payload_kg=1e-05, payload_com_mm=(-9999.9999, 1e-05, 9999.9999))
+    text = rapid_module_text(irb_robot, replace(plan, steps=(*plan.steps[:-1], far)))
+    assert "wc_load := [0.00001, [-9999.9999, 0, 9999.9999], [1, 0, 0, 0], 0, 0, 0];" in text
     assert Rapid().lint(text, "WIRECAL.mod", irb_robot.controller.software) == []
 
 

@@ -281,13 +281,21 @@ def _payload(robot: Robot, plan: Plan) -> dict[str, object] | None:
     if ctx is None or loads is None:
         return None
     (total, cog), (tool_kg, _) = loads
-    centre = ", ".join(_fixed(x, 4) for x in cog)
+    step = plan.payload_step
+    assert step is not None  # loads is not None
+    centre, mass = _mm(cog), _fixed(total, 6)  # fixed point: no exponent, short strings
     return ctx | {
-        "total_kg": f"{total:g}",
-        "tool_kg": f"{tool_kg:g}",
-        "cog_mm": f"[{centre}]",
-        "loaddata": f"[{total:g}, [{centre}], [1, 0, 0, 0], 0, 0, 0]",
+        "total_kg": mass,
+        "tool_kg": _fixed(tool_kg, 6),
+        "cog_mm": centre,
+        "centre_mm": _mm(np.asarray(step.payload_com_mm)),
+        "loaddata": f"[{mass}, {centre}, [1, 0, 0, 0], 0, 0, 0]",
     }
+
+
+def _mm(v_mm: np.ndarray) -> str:
+    """Return a point in mm as a RAPID pos aggregate, 4 decimals (within 80 characters)."""
+    return "[" + ", ".join(_fixed(x, 4) for x in v_mm) + "]"
 
 
 def _check_strings(text: str) -> None:
