@@ -437,6 +437,18 @@ def test_gen_writes_the_rapid_payload_module(tmp_path):
     assert "GripLoad load0;\r\n" in text
 
 
+def test_the_rapid_twin_stops_a_move_with_the_mass_undeclared(
+    irb_robot, irb_plan, rapid_module, tmp_path
+):
+    """A module that forgets GripLoad: the twin's IRC5 stops at the first move with the
+    mass on, by name (the rest of the run is not made)."""
+    forgot = rapid_module.replace("    GripLoad wc_load;\n", "", 1)
+    run = RAPID_ADAPTER.measure(irb_robot, irb_plan, {}, tmp_path, {"WIRECAL.mod": forgot})
+    assert not run.complete
+    assert "3 kg mounted and 0 kg declared (GripLoad)" in run.stopped
+    assert run.world.mounted_kg == 3.0
+
+
 def test_a_language_that_does_not_prompt_refuses_a_payload_plan(irb_robot, irb_plan):
     """The generators' base refuses a payload plan for a language whose programs would not
     ask for the mass (every shipped language asks; a new one must say so)."""
