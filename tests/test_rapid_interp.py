@@ -483,3 +483,12 @@ def test_gripload_tells_the_controller_the_payload_and_load0_none() -> None:
     )
     loads = [c for c in ctl.calls if c[0] == "gripload"]
     assert loads == [("gripload", 2.5, (-10.0, 0.0, 50.0)), ("gripload", 0.0, (0.0, 0.0, 0.0))]
+
+
+def test_the_twin_refuses_pos_and_orient_arithmetic_by_name() -> None:
+    """pos and orient are the subset's data (a loaddata's parts), not its arithmetic: each
+    operation is refused by line before running, never a crash."""
+    with pytest.raises(WirecalError, match=r"t.mod:\d+: pos \+ pos: not in wirecal's RAPID subset"):
+        run("a := a + a;", data=("VAR pos a := [1, 2, 3];",))
+    with pytest.raises(WirecalError, match=r"orient \* orient: not in wirecal's RAPID subset"):
+        run("o := o * o;", data=("VAR orient o := [1, 0, 0, 0];",))
