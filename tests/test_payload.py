@@ -472,6 +472,9 @@ def test_the_rapid_twin_operator_mounts_the_mass_and_solve_finds_the_compliances
     assert run.controller.load == (0.0, (0.0, 0.0, 0.0))  # load0 again
     pendant = "\n".join(run.controller.flexpendant)
     assert pendant.index("when it is mounted") < pendant.index("when it is removed")
+    pasted = parse_log(pendant, "pasted")  # the FlexPendant's lines, the prompts among them
+    assert pasted.payload_kg == 3.0
+    assert len(pasted.readings) == len(parse_log(run.log.read_text(), "file").readings)
     _solves_the_compliances(irb_robot, irb_plan, run.log, 3.0, std_max=3.0)
 
 
