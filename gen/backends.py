@@ -61,8 +61,8 @@ class Generator(ABC):
         if plan.payload_step is not None and not self.payload_step:
             raise WirecalError(
                 f"{plan.source}: the plan has a payload step (a mass mounted at the flange); "
-                f"the {lang.title} programs do not prompt for it yet (only V+ and URScript "
-                "do): plan without [calibration] payload_kg for this controller"
+                f"the {lang.title} programs do not prompt for it: plan without "
+                "[calibration] payload_kg for this controller"
             )
         preflight(robot, plan, request, lang)
         out = self.render(robot, plan, request)

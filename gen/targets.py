@@ -89,6 +89,28 @@ def payload_context(plan: Plan) -> dict[str, object] | None:
     }
 
 
+Load = tuple[float, np.ndarray]
+"""A load at the flange: its mass (kg) and centre (mm, in the flange frame)."""
+
+
+def flange_loads(robot: Robot, plan: Plan) -> tuple[Load, Load] | None:
+    """Return the payload step's whole load at the flange and the tool's alone (None without).
+
+    The tool's is the robot file's ``[gravity] payload_mass_kg`` at its ``payload_com_mm``
+    (0 kg without ``[gravity]``); the whole load is the tool's with the step's mass, at
+    their common centre of mass.
+    """
+    step = plan.payload_step
+    if step is None:
+        return None
+    masses = robot.masses
+    tool_kg = 0.0 if masses is None else float(masses.payload_mass_kg)
+    tool_cog = np.zeros(3) if masses is None else np.asarray(masses.payload_com_mm, dtype=float)
+    total = tool_kg + step.payload_kg
+    cog = (tool_kg * tool_cog + step.payload_kg * np.asarray(step.payload_com_mm)) / total
+    return (total, cog), (tool_kg, tool_cog)
+
+
 def give_move_speeds(steps: list[dict[str, object]], speeds: Iterable[T], key: str) -> T:
     """Give each move of ``steps`` its value of ``speeds``; return the closing move's.
 

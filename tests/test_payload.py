@@ -25,17 +25,23 @@ from wirecal.formats.log import parse_log
 from wirecal.formats.plan_file import load_plan, plan_from_dict, plan_to_toml
 from wirecal.formats.robot_file import load_robot, robot_from_dict
 from wirecal.formats.simulated_log import simulate_log
+from wirecal.gen.rapid.backend import RapidGenerator
+from wirecal.gen.rapid.program import RapidOptions
+from wirecal.gen.rapid.program import module_text as rapid_module_text
+from wirecal.gen.request import GenRequest
 from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import GenOptions, line_ends, module_text
+from wirecal.lang.rapid import Rapid
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.gravity import gravity_torques_nm, with_load
 from wirecal.solver.kinematics import loaded, rigid_frames, tool_position
 from wirecal.solver.log.measurements import check_log
-from wirecal.solver.plan.calibration_plan import PAYLOAD_STEP, Plan, Step
+from wirecal.solver.plan.calibration_plan import PAYLOAD_STEP, Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import solve
+from wirecal.twin.rapid.adapter import ADAPTER as RAPID_ADAPTER
 
 from .conftest import VIPER
 from .twin_runs import generated, measure_in_twin, measure_ur_in_twin
@@ -251,12 +257,21 @@ def test_the_twin_operator_mounts_the_mass_and_solve_finds_the_compliances(
     assert run.world.mounted_kg == 0.0  # removed before the closing zero
     console = "\n".join(run.world.console)
     assert console.index("when it is mounted") < console.index("when it is removed")
-    log = parse_log(run.log.read_text(), str(run.log))
-    assert log.payload_kg == KG
+    _solves_the_compliances(robot, plan, run.log, KG)
+
+
+def _solves_the_compliances(
+    robot: Robot, plan: Plan, log_path: Path, kg: float, std_max: float = np.inf
+) -> None:
+    """The log says the mass; ``solve`` of it finds each true compliance within 4σ (and σ
+    below ``std_max``, µrad/(N·m))."""
+    log = parse_log(log_path.read_text(), str(log_path))
+    assert log.payload_kg == kg
     est = solve(robot, plan, check_log(log, plan, robot)).estimates["joint"]
     got, std = est.as_dict(), est.std_by_name()
     for name, truth in TRUE_C.items():
         assert abs(got[name] - truth) < 4 * std[name]
+        assert std[name] < std_max
 
 
 UR = GOLDEN.parents[1] / "payload_ur5e"
@@ -315,31 +330,152 @@ def test_the_ur_twin_operator_mounts_the_mass_and_solve_finds_the_compliances(
     assert run.programs.complete
     assert run.programs.world.mounted_kg == 0.0
     assert run.programs.controller.payload[0] == 0.0  # the tool's alone again
-    log = parse_log(run.log.read_text(), str(run.log))
-    assert log.payload_kg == KG
-    est = solve(ur_robot, ur_plan, check_log(log, ur_plan, ur_robot)).estimates["joint"]
-    got, std = est.as_dict(), est.std_by_name()
-    for name, truth in TRUE_C.items():
-        assert abs(got[name] - truth) < 4 * std[name]
-        assert std[name] < 1.0
+    _solves_the_compliances(ur_robot, ur_plan, run.log, KG, std_max=1.0)
 
 
-def test_rapid_programs_refuse_a_payload_plan(viper, paper_plan, tmp_path):
-    """RAPID does not prompt for the mass yet: `gen --language rapid` says so."""
-    irb = VIPER.parent / "abb_irb120"
-    keys = 'compliances = ["c2", "c3"]\nrated_payload_kg = 3.0\npayload_kg = 3.0\n'
-    text = (irb / "robot.toml").read_text().replace("[calibration]\n", "[calibration]\n" + keys, 1)
-    (tmp_path / "robot.toml").write_text(text)
-    rb = robot_from_dict(tomllib.loads(text), "robot.toml")
-    base = plan_from_dict(tomllib.loads((irb / "plan.toml").read_text()), rb)
-    q = base.steps[0].points_deg[:2]
-    pl = replace(base, steps=(*base.steps, Step(PAYLOAD_STEP, q, np.zeros((0, 6)), None, 3.0)))
-    (tmp_path / "plan.toml").write_text(plan_to_toml(pl))
-    args = ["gen", str(tmp_path / "robot.toml"), str(tmp_path / "plan.toml")]
-    out = CliRunner().invoke(main, [*args, "-o", str(tmp_path / "out")])
-    assert out.exit_code == 2, out.output
-    assert "do not prompt for it yet (only V+ and URScript do)" in out.output
-    assert not (tmp_path / "out").exists()
+IRB = GOLDEN.parents[1] / "payload_abb_irb120"
+
+
+@pytest.fixture(scope="module")
+def irb_robot():
+    """The IRB 120 asking c2, c3, with a 3 kg payload step (its rated payload)."""
+    return _designed(IRB)[0]
+
+
+@pytest.fixture(scope="module")
+def irb_plan():
+    """The plan ``wirecal plan`` designed for it: 10 points with the mass on."""
+    return _designed(IRB)[1]
+
+
+@pytest.fixture(scope="module")
+def rapid_module(irb_robot, irb_plan) -> str:
+    return generated(rapid_module_text, irb_robot, irb_plan, RapidOptions())
+
+
+def test_payload_golden_rapid_module(rapid_module):
+    """The RAPID module of the payload plan is the reviewed one (WIRECAL_UPDATE_GOLDEN=1
+    rewrites it after an intended change: review the diff)."""
+    path = IRB / "WIRECAL.mod"
+    if os.environ.get("WIRECAL_UPDATE_GOLDEN"):
+        path.write_text(rapid_module, encoding="ascii", newline="\n")
+    assert rapid_module == path.read_text(encoding="ascii")
+
+
+def test_the_rapid_run_asks_and_tells_gripload_at_theta0(rapid_module, irb_plan):
+    """Zero, TPReadNum to mount, GripLoad of the mass, the points; back at θ0 TPReadNum to
+    remove, GripLoad load0, the closing zero; the log's marker; no wc_solve."""
+    run = rapid_module[rapid_module.index("PROC wc_run()") :]
+    n = len(irb_plan.steps)
+    order = [
+        f"wc_meas {n}, 0, 0;",
+        'TPReadNum answer, "1 when it is mounted',
+        "GripLoad wc_load;",
+        f"wc_meas {n}, 1, 0;",
+        "MoveAbsJ wc_theta0, ",
+        'TPReadNum answer, "1 when it is removed',
+        "GripLoad load0;",
+        f"wc_meas {n + 1}, 0, 0;",
+    ]
+    at, pos = [], 0
+    for x in order:  # each after the one before
+        pos = run.index(x, pos)
+        at.append(pos)
+    assert at == sorted(at)
+    assert "PERS loaddata wc_load := [3, [0, 0, 50], [1, 0, 0, 0], 0, 0, 0];" in rapid_module
+    assert 'wc_out "# payload_kg: 3";' in run
+    assert "PROC wc_solve" not in rapid_module
+    assert "yumpu.com/en/document/view/5679047, p. 183" in rapid_module  # the page read
+
+
+def test_an_off_axis_fractional_mass_passes_the_checker(irb_robot, irb_plan):
+    """The loaddata of another mass and centre: written as the plan says, the checker clean,
+    the FlexPendant's lines within a RAPID string's 80 characters for the longest numbers."""
+    com = (-123.4567, 98.7654, -321.0987)
+    step = replace(irb_plan.steps[-1], payload_kg=0.123456, payload_com_mm=com)
+    plan = replace(irb_plan, steps=(*irb_plan.steps[:-1], step))
+    text = rapid_module_text(irb_robot, plan)
+    load = "[0.123456, [-123.4567, 98.7654, -321.0987], [1, 0, 0, 0], 0, 0, 0]"
+    assert f"wc_load := {load};" in text
+    assert '"# its centre at [-123.4567, 98.7654, -321.0987] mm in the flange frame;"' in text
+    lines = [x for x in text.splitlines() if x.lstrip().startswith('TPWrite "')]
+    assert max(len(x.split('"')[1]) for x in lines) <= 80
+    assert Rapid().lint(text, "WIRECAL.mod", irb_robot.controller.software) == []
+    far = replace(step, payload_kg=1e-05, payload_com_mm=(-9999.9999, 1e-05, 9999.9999))
+    text = rapid_module_text(irb_robot, replace(plan, steps=(*plan.steps[:-1], far)))
+    assert "wc_load := [0.00001, [-9999.9999, 0, 9999.9999], [1, 0, 0, 0], 0, 0, 0];" in text
+    assert Rapid().lint(text, "WIRECAL.mod", irb_robot.controller.software) == []
+
+
+def test_gripload_declares_the_tool_with_the_mass(irb_robot, irb_plan):
+    """A tool of 1 kg at 20 mm ([gravity] payload_mass_kg) with a 2 kg mass at 50 mm: the
+    controller is told 3 kg at their common centre, (1·20 + 2·50)/3 = 40 mm — never less
+    than the flange carries; load0 after (tool0 declares no tool load before the step)."""
+    masses = replace(irb_robot.masses, payload_mass_kg=1.0, payload_com_mm=np.array([0, 0, 20.0]))
+    step = replace(irb_plan.steps[-1], payload_kg=2.0, payload_com_mm=(0.0, 0.0, 50.0))
+    plan = replace(irb_plan, steps=(*irb_plan.steps[:-1], step))
+    text = rapid_module_text(replace(irb_robot, masses=masses), plan)
+    assert "wc_load := [3, [0, 0, 40], [1, 0, 0, 0], 0, 0, 0];" in text
+    assert "GripLoad load0;" in text
+
+
+def test_the_checker_refuses_a_gripload_of_another_type():
+    """Right both ways: GripLoad takes a loaddata, not a number or a tooldata."""
+    for arg in ("3", "tool0"):
+        text = "MODULE T\n  PROC main()\n    GripLoad " + arg + ";\n  ENDPROC\nENDMODULE\n"
+        problems = Rapid().lint(text, "t.mod")
+        assert any("GripLoad" in p and "loaddata" in p for p in problems), problems
+
+
+def test_gen_writes_the_rapid_payload_module(tmp_path):
+    """`wirecal gen` on the IRB 120's payload plan: exit 0, the module with GripLoad."""
+    args = ["gen", str(IRB / "robot.toml"), str(IRB / "plan.toml"), "-o", str(tmp_path)]
+    out = CliRunner().invoke(main, args)
+    assert out.exit_code == 0, out.output
+    text = (tmp_path / "WIRECAL.mod").read_bytes().decode("ascii")
+    assert "GripLoad wc_load;\r\n" in text
+    assert "GripLoad load0;\r\n" in text
+
+
+def test_the_rapid_twin_stops_a_move_with_the_mass_undeclared(
+    irb_robot, irb_plan, rapid_module, tmp_path
+):
+    """A module that forgets GripLoad: the twin's IRC5 stops at the first move with the
+    mass on, by name (the rest of the run is not made)."""
+    forgot = rapid_module.replace("    GripLoad wc_load;\n", "", 1)
+    run = RAPID_ADAPTER.measure(irb_robot, irb_plan, {}, tmp_path, {"WIRECAL.mod": forgot})
+    assert not run.complete
+    assert "3 kg mounted and 0 kg declared (GripLoad)" in run.stopped
+    assert run.world.mounted_kg == 3.0
+
+
+def test_a_language_that_does_not_prompt_refuses_a_payload_plan(irb_robot, irb_plan):
+    """The generators' base refuses a payload plan for a language whose programs would not
+    ask for the mass (every shipped language asks; a new one must say so)."""
+
+    class Silent(RapidGenerator):
+        payload_step = False
+
+    with pytest.raises(WirecalError, match="do not prompt for it: plan without"):
+        Silent().programs(irb_robot, irb_plan, GenRequest())
+
+
+@pytest.mark.slow
+def test_the_rapid_twin_operator_mounts_the_mass_and_solve_finds_the_compliances(
+    irb_robot, irb_plan, rapid_module, tmp_path
+):
+    run = RAPID_ADAPTER.measure(
+        irb_robot, irb_plan, TRUE_C, tmp_path, {"WIRECAL.mod": rapid_module}, seed=2
+    )
+    assert run.complete, run.stopped
+    assert run.world.mounted_kg == 0.0  # removed before the closing zero
+    assert run.controller.load == (0.0, (0.0, 0.0, 0.0))  # load0 again
+    pendant = "\n".join(run.controller.flexpendant)
+    assert pendant.index("when it is mounted") < pendant.index("when it is removed")
+    pasted = parse_log(pendant, "pasted")  # the FlexPendant's lines, the prompts among them
+    assert pasted.payload_kg == 3.0
+    assert len(pasted.readings) == len(parse_log(run.log.read_text(), "file").readings)
+    _solves_the_compliances(irb_robot, irb_plan, run.log, 3.0, std_max=3.0)
 
 
 @settings(max_examples=60, deadline=None)

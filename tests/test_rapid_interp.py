@@ -70,6 +70,9 @@ class FakeController:
         self.pendant.append(prompt)
         return 1.0
 
+    def grip_load(self, mass_kg, cog_mm):
+        self.calls.append(("gripload", mass_kg, cog_mm))
+
     def wait_time(self, seconds):
         self.now += seconds
 
@@ -469,3 +472,23 @@ def test_the_generated_module_names_a_missing_counter_signal() -> None:
     assert "AliasIO: no signal wc_giCount0" in outcome.message
     assert ctl.pendant[0] == "wirecal: no group input wc_giCount0 in the I/O configuration:"
     assert not [c for c in ctl.calls if c[0] == "gi"]
+
+
+def test_gripload_tells_the_controller_the_payload_and_load0_none() -> None:
+    """GripLoad of a loaddata: its mass (kg) and centre (mm); load0: no payload."""
+    _, ctl = run(
+        "GripLoad wc_load;",
+        "GripLoad load0;",
+        data=("PERS loaddata wc_load := [2.5, [-10, 0, 50], [1, 0, 0, 0], 0, 0, 0];",),
+    )
+    loads = [c for c in ctl.calls if c[0] == "gripload"]
+    assert loads == [("gripload", 2.5, (-10.0, 0.0, 50.0)), ("gripload", 0.0, (0.0, 0.0, 0.0))]
+
+
+def test_the_twin_refuses_pos_and_orient_arithmetic_by_name() -> None:
+    """pos and orient are the subset's data (a loaddata's parts), not its arithmetic: each
+    operation is refused by line before running, never a crash."""
+    with pytest.raises(WirecalError, match=r"t.mod:\d+: pos \+ pos: not in wirecal's RAPID subset"):
+        run("a := a + a;", data=("VAR pos a := [1, 2, 3];",))
+    with pytest.raises(WirecalError, match=r"orient \* orient: not in wirecal's RAPID subset"):
+        run("o := o * o;", data=("VAR orient o := [1, 0, 0, 0];",))

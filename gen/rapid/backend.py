@@ -23,6 +23,7 @@ class RapidGenerator(Generator):
     # no patch or validation programs yet
     refuses = frozenset({"patch", "validation", "host", "port", "log_file", "echo_log"})
     default_run = PAPER_RUN
+    payload_step = True  # wc_run asks for the mass (TPReadNum) and tells GripLoad
 
     def options(self, request: GenRequest) -> RapidOptions:
         """Return the module's options for ``request``."""

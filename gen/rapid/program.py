@@ -10,14 +10,15 @@ step-by-step solver (the port of templates/urscript/solve.script.j2). Determinis
 same robot, plan, options and wirecal version give the same bytes.
 
 RAPID facts used are listed, with what is unconfirmed, in the module's own header
-(templates/rapid/wirecal.mod.j2): no page of ABB's RAPID reference was read for them.
+(templates/rapid/wirecal.mod.j2): no page of ABB's RAPID reference was read for them but
+loaddata's (a payload plan's GripLoad, :data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +28,14 @@ from wirecal.formats.fileio import Outputs
 from wirecal.formats.log import COLUMNS as LOG_COLUMNS
 from wirecal.formats.log import VERSION as LOG_VERSION
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
-from wirecal.gen.targets import give_move_speeds, joint_target, name_problems, run_steps
+from wirecal.gen.targets import (
+    flange_loads,
+    give_move_speeds,
+    joint_target,
+    name_problems,
+    payload_context,
+    run_steps,
+)
 from wirecal.gen.templating import render
 from wirecal.lang.rapid.module import (
     GROUP_COUNTER_BITS,
@@ -207,6 +215,8 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
     (:meth:`wirecal.gen.backends.Generator.programs`).
     """
     _check(robot, opt)
+    if plan.payload_step is not None:  # its points need the gravity model of 'wirecal solve'
+        opt = replace(opt, solver=False)
     tables = build_tables(robot, plan)
     mpc = robot.encoder.mm_per_count
     bits = GROUP_COUNTER_BITS
@@ -248,12 +258,44 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
         "nit": STEP_ITERATIONS,
         "n": tables.n,
         "m": len(tables.names),
+        "payload": _payload(robot, plan),
     }
     if opt.solver:
         context["t"] = solver_tables(tables)
     text = render("rapid/wirecal.mod.j2", **context)
     _check_strings(text)
     return text
+
+
+def _payload(robot: Robot, plan: Plan) -> dict[str, object] | None:
+    """Return the payload step for the templates, with GripLoad's loaddata (None without one).
+
+    The loaddata (:data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`): the whole load at the
+    flange while the mass is on, the tool's (the robot file's ``[gravity] payload_mass_kg``;
+    the module moves with tool0, which declares none) with the plan's mass, at their common
+    centre (mm; a payload's is in the tool frame, tool0's: the flange); axes of moment
+    [1, 0, 0, 0] and inertia 0 (a point mass: the mass's own inertia is not in the plan).
+    """
+    ctx = payload_context(plan)
+    loads = flange_loads(robot, plan)
+    if ctx is None or loads is None:
+        return None
+    (total, cog), (tool_kg, _) = loads
+    step = plan.payload_step
+    assert step is not None  # loads is not None
+    centre, mass = _mm(cog), _fixed(total, 6)  # fixed point: no exponent, short strings
+    return ctx | {
+        "total_kg": mass,
+        "tool_kg": _fixed(tool_kg, 6),
+        "cog_mm": centre,
+        "centre_mm": _mm(np.asarray(step.payload_com_mm)),
+        "loaddata": f"[{mass}, {centre}, [1, 0, 0, 0], 0, 0, 0]",
+    }
+
+
+def _mm(v_mm: np.ndarray) -> str:
+    """Return a point in mm as a RAPID pos aggregate, 4 decimals (within 80 characters)."""
+    return "[" + ", ".join(_fixed(x, 4) for x in v_mm) + "]"
 
 
 def _check_strings(text: str) -> None:

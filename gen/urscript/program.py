@@ -30,6 +30,7 @@ from wirecal.formats.log import VERSION as LOG_VERSION
 from wirecal.formats.run_token import run_token, token_line
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import (
+    flange_loads,
     give_move_speeds,
     joint_target,
     name_problems,
@@ -170,14 +171,10 @@ def _payload(robot: Robot, plan: Plan) -> dict[str, object] | None:
     ``[gravity] payload_mass_kg``) with the mass, and the tool's alone after it.
     """
     ctx = payload_context(plan)
-    step = plan.payload_step
-    if ctx is None or step is None:
+    loads = flange_loads(robot, plan)
+    if ctx is None or loads is None:
         return None
-    masses = robot.masses
-    tool_kg = 0.0 if masses is None else float(masses.payload_mass_kg)
-    tool_cog = np.zeros(3) if masses is None else np.asarray(masses.payload_com_mm, dtype=float)
-    total = tool_kg + step.payload_kg
-    cog = (tool_kg * tool_cog + step.payload_kg * np.asarray(step.payload_com_mm)) / total
+    (total, cog), (tool_kg, tool_cog) = loads
     return ctx | {
         "total_kg": f"{total:g}",
         "cog_m": _metres(cog),

@@ -310,15 +310,25 @@ class Typer:
             return BOOL
         if op == "+" and a == b == STRING:
             return STRING
-        vector = _VECTOR_OPS.get((a.name if not a.dims else "", op, b.name if not b.dims else ""))
+        vector = self._vector(a, op, b)
         if vector is not None:
-            return Type(vector)
+            return vector
         if op in ("=", "<>") and a == b and a not in (LITERAL,) and not a.dims:
             return BOOL
         both = self.numeric(a, b, op, e)
         if both is None:
             return None
         return BOOL if op in ("=", "<>", "<", ">", "<=", ">=") else both
+
+    def _vector(self, a: Type, op: str, b: Type) -> Type | None:
+        """Return the type of an operation on pos or orient (None: not one).
+
+        The subset has them as data (a loaddata's parts), not arithmetic: refused there.
+        """
+        vector = _VECTOR_OPS.get((a.name if not a.dims else "", op, b.name if not b.dims else ""))
+        if vector is not None and self.lang.subset:
+            self.problems.add(self.line, f"{a.name} {op} {b.name}: {SUBSET}")
+        return None if vector is None else Type(vector)
 
     def numeric(self, a: Type, b: Type, op: str, e: N.BinOp) -> Type | None:
         """Return the type two numeric operands combine to (num, dnum or a literal)."""

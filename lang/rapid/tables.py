@@ -10,7 +10,9 @@ PDFs were not reachable, so the reading was of copies and translations):
 * ``MoveAbsJ``: RAPID reference manual, instructions, MoveAbsJ (syntax ``MoveAbsJ [\Conc]
   ToJointPos [\ID] [\NoEOffs] Speed [\V]|[\T] Zone [\Z] [\Inpos] Tool [\WObj]`` and
   its arguments), read in translations at 360docs.net/doc/7114964515.html and
-  abbjqr.gbsrobot.com/news/index.php?itemid=24292.
+  abbjqr.gbsrobot.com/news/index.php?itemid=24292;
+* ``loaddata``: :data:`LOADDATA_PAGE` (an older RAPID Reference Manual, p. 183), with
+  ``GripLoad`` as a controller-loaded program uses it (:data:`GRIPLOAD_LOADED`).
 
 Everything else below is marked "unconfirmed": written from the 3HAC050917 manual's
 structure as wirecal's authors know it, not from a page read for this table. ``since`` is
@@ -52,9 +54,38 @@ RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
     "extjoint": tuple((f"eax_{c}", "num") for c in "abcdef"),
     "jointtarget": (("robax", "robjoint"), ("extax", "extjoint")),
     "speeddata": (("v_tcp", "num"), ("v_ori", "num"), ("v_leax", "num"), ("v_reax", "num")),
+    "pos": (("x", "num"), ("y", "num"), ("z", "num")),
+    "orient": (("q1", "num"), ("q2", "num"), ("q3", "num"), ("q4", "num")),
+    "loaddata": (
+        ("mass", "num"),
+        ("cog", "pos"),
+        ("aom", "orient"),
+        ("ix", "num"),
+        ("iy", "num"),
+        ("iz", "num"),
+    ),
 }
 """The record types of the subset and their components (reference manual, data types
-jointtarget, robjoint, extjoint, speeddata: unconfirmed)."""
+jointtarget, robjoint, extjoint, speeddata, pos: unconfirmed; loaddata's mass (num, kg), cog
+(pos, mm) and aom (orient, a quaternion): :data:`LOADDATA_PAGE`; its ix, iy, iz (num, the
+moments of inertia about the axes of moment, kgm^2): unconfirmed — the RAPID manual's names
+as ROS-Industrial's abb_rapid_msgs LoadData.msg repeats them, not read on an ABB page)."""
+
+LOADDATA_PAGE = (
+    "RAPID Reference Manual (yumpu.com/en/document/view/5679047), p. 183, loaddata: "
+    "mass in kg, cog in mm in the tool coordinate system for a payload, aom a quaternion; "
+    "the payload connected and disconnected with GripLoad; load data lighter or heavier "
+    "than the true load impairs path accuracy, with a risk of overshooting"
+)
+"""The page read for loaddata and GripLoad's use."""
+
+GRIPLOAD_LOADED = (
+    "GripLoad of a loaddata built at run time loaded by an IRC5 controller: "
+    "EdgarIvanMM/PaletizadoCajasConFrascos@850dc0e RAPID/TASK1/PROGMOD/MainModule.mod "
+    "lines 67, 170-171"
+)
+"""A controller-loaded program using GripLoad as wirecal's module does (GripLoad's own page:
+unconfirmed, not read)."""
 
 ATOMIC = frozenset({"num", "dnum", "bool", "string"})
 """The atomic types (kernel-types)."""
@@ -67,7 +98,7 @@ SUBSET_TYPES = ATOMIC | OPAQUE | frozenset(RECORDS)
 """The data types a wirecal module may declare."""
 
 OTHER_TYPES = frozenset(
-    """robtarget pos orient pose confdata tooldata wobjdata loaddata zonedata stoppointdata
+    """robtarget pose confdata tooldata wobjdata zonedata stoppointdata
     intnum errnum signaldi signaldo signalgo signalai signalao byte rawbytes
     socketdev socketstatus triggdata tpnum dir switch egmident mecunit errdomain errstr
     identno shapedata wzstestablished syncident tasks progdisp""".split()
@@ -89,14 +120,16 @@ PREDEFINED: dict[str, str] = {
     "fine": "zonedata",
     **{f"z{z}": "zonedata" for z in ZONES},
     "tool0": "tooldata",
+    "load0": "loaddata",
     "pi": "num",
     "wobj0": "wobjdata",
     **{k: "num" for k in SUBSET_ERRORS},
 }
 """Predefined data the subset reads, name → type (reference manual, speeddata and zonedata
-"Predefined data", tooldata tool0: unconfirmed; pi: ROS-Industrial's abb_driver modules use
-it undeclared, its value 3.1415926 is unconfirmed; ERRNO and the errors of
-:data:`SUBSET_ERRORS`, errnum, a num alias)."""
+"Predefined data", tooldata tool0, loaddata load0 (no payload): unconfirmed — load0 is used
+so in controller-loaded programs, EdgarIvanMM/PaletizadoCajasConFrascos@850dc0e; pi:
+ROS-Industrial's abb_driver modules use it undeclared, its value 3.1415926 is unconfirmed;
+ERRNO and the errors of :data:`SUBSET_ERRORS`, errnum, a num alias)."""
 
 
 OTHER_DATA_PREFIXES = (
@@ -215,6 +248,7 @@ INSTRUCTIONS: dict[str, Routine] = {
     "incr": Routine((P("Name", "num", var=True),), source=_U),
     "decr": Routine((P("Name", "num", var=True),), source=_U),
     "stop": Routine((P("NoRegain", "switch", True),), source=_U),
+    "gripload": Routine((P("Load", "loaddata"),), source=f"{LOADDATA_PAGE}; {GRIPLOAD_LOADED}"),
 }
 """The instructions of the subset, lower-case name → signature."""
 
@@ -326,8 +360,6 @@ WIDE_RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
     "tasks": (("taskname", "string"),),
     "listitem": (("image", "string"), ("text", "string")),
     "egm_minmax": (("min", "num"), ("max", "num")),
-    "pos": (("x", "num"), ("y", "num"), ("z", "num")),
-    "orient": (("q1", "num"), ("q2", "num"), ("q3", "num"), ("q4", "num")),
     "pose": (("trans", "pos"), ("rot", "orient")),
     "confdata": (("cf1", "num"), ("cf4", "num"), ("cf6", "num"), ("cfx", "num")),
     "robtarget": (
@@ -335,14 +367,6 @@ WIDE_RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
         ("rot", "orient"),
         ("robconf", "confdata"),
         ("extax", "extjoint"),
-    ),
-    "loaddata": (
-        ("mass", "num"),
-        ("cog", "pos"),
-        ("aom", "orient"),
-        ("ix", "num"),
-        ("iy", "num"),
-        ("iz", "num"),
     ),
     "tooldata": (("robhold", "bool"), ("tframe", "pose"), ("tload", "loaddata")),
     "wobjdata": (
@@ -363,7 +387,7 @@ WIDE_RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
     ),
 }
 """Record types beyond the subset (robtarget: RM p. 211; zonedata: the PC SDK's ZoneData;
-pos, orient, pose, confdata, loaddata, tooldata, wobjdata: unconfirmed)."""
+pose, confdata, tooldata, wobjdata: unconfirmed; pos, orient, loaddata are the subset's)."""
 
 ALIASES: dict[str, str] = {
     "errnum": "num",
@@ -411,7 +435,6 @@ WIDE_PREDEFINED: dict[str, str] = {
     "edge": "dionum",
     "on": "dionum",
     "off": "dionum",
-    "load0": "loaddata",
     "z0": "zonedata",
     **{k: "inttypes" for k in ("sint", "int", "dint", "lint", "usint", "uint", "udint", "ulint")},
     **{k: "symnum" for k in ("op_undef", "op_auto", "op_man_prog", "op_man_test")},
@@ -504,7 +527,6 @@ WIDE_INSTRUCTIONS: dict[str, Routine] = {
     "singarea": _r(_o("Wrist"), _o("LockAxis4"), _o("Off")),
     "accset": _r(P("Acc", "num"), P("Ramp", "num"), _o("FinePointRamp", "num")),
     "velset": _r(P("Override", "num"), P("Max", "num")),
-    "gripload": _r(P("Load", "loaddata")),
     "stopmove": _r(_o("Quick"), _o("AllMotionTasks")),
     "startmove": _r(_o("AllMotionTasks")),
     "clearpath": _r(),

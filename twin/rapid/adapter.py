@@ -26,7 +26,14 @@ from wirecal.twin.controller_run import ControllerRun, readings_for_lengths
 from wirecal.twin.rapid.controller import IrcController
 from wirecal.twin.rapid.interp import run_module
 from wirecal.twin.rapid.solver_run import controller_solve
-from wirecal.twin.world import Faults, TwinRun, measurement_world, mount_then_run, stop_reason
+from wirecal.twin.world import (
+    Faults,
+    TwinRun,
+    measurement_world,
+    mount_then_run,
+    payload_prompts,
+    stop_reason,
+)
 
 
 def module_of(programs: dict[str, str]) -> str:
@@ -57,7 +64,9 @@ class RapidAdapter(TwinAdapter):
         """Run wc_mount, then wc_run, on a true robot with ``truth`` offsets.
 
         ``counter_start``: the group input's count at zero wire length (default: drawn
-        over the 32-bit counter's range); the wire's speed limits are enforced.
+        over the 32-bit counter's range); the wire's speed limits are enforced. The operator
+        answers 1 to wc_mount and to the payload step's two prompts (mounting and removing
+        the plan's mass, :meth:`~wirecal.twin.world.World.handle_mass`).
         """
         text = module_of(programs)
         world = measurement_world(
@@ -71,6 +80,7 @@ class RapidAdapter(TwinAdapter):
             counter_start=counter_start,
             faults=faults,
             unmodelled=unmodelled,
+            answers=["1"] * (1 + payload_prompts(plan)),
         )
         controller = IrcController(world, signal_name(robot))
         mount, run = mount_then_run(

@@ -24,6 +24,10 @@ encoder, the disk, the operator, the clock), calling it in the order its docstri
   number is not modelled);
 * ``TPWrite`` / ``TPErase`` / ``TPReadNum``: the FlexPendant is the world's console; the
   operator answers from the world's scripted answers;
+* ``GripLoad``: the payload the controller is told is recorded (:attr:`IrcController.load`);
+  the twin models no dynamics, but a ``MoveAbsJ`` with a mass mounted heavier than the
+  declared payload stops the program (the unsafe direction: RAPID Reference Manual,
+  loaddata, p. 183, "impaired path accuracy including running the risk of overshooting");
 * ``WaitTime`` and the clocks: the world's clock.
 """
 
@@ -55,6 +59,7 @@ class IrcController:
     open_line: dict[int, str] = field(default_factory=dict)  # text after \NoNewLine
     flexpendant: list[str] = field(default_factory=list)
     last_count: int = 0  # the group input's value: it holds when the encoder fails
+    load: tuple[float, tuple[float, float, float]] | None = None  # the last GripLoad (kg, mm)
 
     def _refuse(self, why: str) -> RunError:
         self.stopped = why
@@ -64,8 +69,18 @@ class IrcController:
     def move_abs_j(
         self, joints_deg: tuple[float, ...], speed: tuple[float, ...], zone: str
     ) -> None:
-        """MoveAbsJ: to ``joints_deg`` at speeddata ``speed``; stop on a limit or collision."""
+        """MoveAbsJ: to ``joints_deg`` at speeddata ``speed``; stop when it cannot.
+
+        A joint limit, a collision, the wire's speed, or a mass at the flange heavier than
+        the payload GripLoad declared (the unsafe direction) stops the program.
+        """
         world = self.world
+        declared_kg = 0.0 if self.load is None else self.load[0]
+        if world.mounted_kg > declared_kg + 1e-9:
+            raise self._refuse(
+                f"MoveAbsJ with {world.mounted_kg:g} kg mounted and {declared_kg:g} kg "
+                "declared (GripLoad): the controller would move a load lighter than the truth"
+            )
         q = np.asarray(joints_deg, dtype=float)
         slowest = float(np.min(world.robot.joint_speed_deg_s))
         speed_pct = min(100.0, 100.0 * float(speed[1]) / slowest)
@@ -143,6 +158,10 @@ class IrcController:
             return float(answer)
         except ValueError:
             return 0.0
+
+    def grip_load(self, mass_kg: float, cog_mm: tuple[float, float, float]) -> None:
+        """GripLoad: the payload the controller is told, recorded (kg, centre in mm)."""
+        self.load = (mass_kg, cog_mm)
 
     # ---- time and stopping ----
     def wait_time(self, seconds: float) -> None:

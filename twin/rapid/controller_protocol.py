@@ -55,6 +55,9 @@ class RapidController(Protocol):
     def tp_read_num(self, prompt: str) -> float:
         """TPReadNum: the number the operator answers to ``prompt``."""
 
+    def grip_load(self, mass_kg: float, cog_mm: tuple[float, float, float]) -> None:
+        """GripLoad: the payload the controller is told (mass, centre in the tool frame)."""
+
     def wait_time(self, seconds: float) -> None:
         """WaitTime: let ``seconds`` pass (the robot at rest)."""
 

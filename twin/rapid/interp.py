@@ -228,6 +228,8 @@ class Interpreter:
                 self.globals[k] = float(T.SUBSET_ERRORS.index(k))
             elif k == "pi":
                 self.globals[k] = f32(3.1415926)
+            elif v == "loaddata":  # load0: no payload (the twin's; ABB's value: unconfirmed)
+                self.globals[k] = default(Type(v))
             elif v == "speeddata":
                 self.globals[k] = dict(
                     zip(("v_tcp", "v_ori", "v_leax", "v_reax"), T.speed_values(k), strict=True)
@@ -980,6 +982,19 @@ def _alias_io(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
     return run
 
 
+def _grip_load(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
+    """GripLoad load: the controller is told the payload's mass (kg) and centre (mm)."""
+    pos, _ = c.args("gripload", args)
+    ctl = c.interp.controller
+
+    def run(frame: Frame) -> None:
+        load = pos[0](frame)
+        cog = load["cog"]
+        ctl.grip_load(float(load["mass"]), (cog["x"], cog["y"], cog["z"]))
+
+    return run
+
+
 _INSTRUCTIONS: dict[str, Builder] = {
     "moveabsj": _move_abs_j,
     "tpwrite": _tp_write,
@@ -996,6 +1011,7 @@ _INSTRUCTIONS: dict[str, Builder] = {
     "waittime": _wait_time,
     "stop": _stop,
     "aliasio": _alias_io,
+    "gripload": _grip_load,
 }
 
 
