@@ -16,7 +16,6 @@ from click.testing import CliRunner
 
 from wirecal.cli.main import main
 from wirecal.formats.robot_file import load_robot
-from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan import candidates as plan_candidates
 from wirecal.solver.plan import planner
 from wirecal.solver.plan import steps as plan_steps
@@ -121,10 +120,9 @@ def test_the_quick_check_counts_as_a_full_screening(ur5):
     counts = []
     for theta0 in ([268, -95, 78, -62, -222, -270], [243, 285, 117, -83, 295, 312]):
         t0 = np.array(theta0, float)
-        q = plan_candidates.candidates(ur5, t0, opt, np.random.default_rng(opt.seed))
-        p0 = tool_position(ur5.nominal, np.radians(t0)[None])[0]
-        usable = plan_candidates.screen(ur5, ur5.nominal, p0, t0, q, opt)[0]
-        psi = sensitivity(ur5.nominal, q[usable], t0, names).psi
+        cands = plan_candidates.Screened(ur5, t0, opt)
+        usable = cands.usable(np.ones(len(cands.q), bool))
+        psi = sensitivity(ur5.nominal, cands.q[usable], t0, names).psi
         remaining = list(names)
         while (best := plan_steps.most_informative(psi, col, remaining, opt)) is not None:
             remaining.remove(best[0])

@@ -19,7 +19,7 @@ from wirecal.solver.exit_geometry import describe
 from wirecal.solver.identifiability import analyse
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan.calibration_plan import Plan, Step
-from wirecal.solver.plan.candidates import blocked, candidates, screen
+from wirecal.solver.plan.candidates import Screened, no_usable_error
 from wirecal.solver.plan.compliance import add_compliance_points
 from wirecal.solver.plan.exit import largest_exit_deg
 from wirecal.solver.plan.joint import joint_choice
@@ -174,17 +174,21 @@ def design_at(
     model = robot.nominal
     check_theta0(robot, theta0, opt)
     p0 = tool_position(model, np.radians(theta0)[None])[0]
-    q_all, via_all = _usable(robot, p0, theta0, opt, tick)
+    cands = Screened(robot, theta0, opt)
+    if len(cands.q) < opt.points_per_step:
+        raise no_usable_error(robot, theta0, opt)
+    q_all, via_all = cands.q, cands.via
+    tick(0.5)
     names = list(robot.parameters)
     excluded = _unidentifiable(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
     unidentifiable = tuple(excluded)
     remaining = [n for n in names if n not in excluded]
     psi = sensitivity(model, q_all, theta0, remaining).psi
-    pools = step_by_step(robot, theta0, q_all, via_all, psi, remaining, excluded, opt, tick)
+    pools = step_by_step(robot, theta0, cands, psi, remaining, excluded, opt, tick)
     if opt.method == "joint":
         joint_choice(robot, theta0, q_all, via_all, psi, remaining, pools, opt)
     compliance = (
-        add_compliance_points(robot, theta0, q_all, via_all, remaining, pools, opt)
+        add_compliance_points(robot, theta0, cands, remaining, pools, opt)
         if robot.compliances
         else ([], {})
     )
@@ -206,26 +210,6 @@ def design_at(
     d.cell_line = cell_line(robot)
     tick(1.0)
     return d
-
-
-def _usable(
-    robot: Robot, p0: np.ndarray, theta0: np.ndarray, opt: PlanOptions, tick: Progress
-) -> tuple[np.ndarray, np.ndarray]:
-    """Return the usable candidates around θ0 and their via points (NaN rows: none).
-
-    Drawn (:func:`~wirecal.solver.plan.candidates.candidates`) and screened
-    (:func:`~wirecal.solver.plan.candidates.screen`); raises when fewer than a step's
-    points are left, saying what blocked the others.
-    """
-    q_all = candidates(robot, theta0, opt, np.random.default_rng(opt.seed))
-    usable, via_all = screen(robot, robot.nominal, p0, theta0, q_all, opt)
-    tick(0.5)
-    if usable.sum() < opt.points_per_step:
-        raise WirecalError(
-            f"{robot.source}: almost no usable configuration around θ0 "
-            f"{theta0.tolist()}: {blocked(robot, theta0, opt)}"
-        )
-    return q_all[usable], via_all[usable]
 
 
 def _step_design(

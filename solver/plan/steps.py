@@ -12,14 +12,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from wirecal.solver.accuracy import stepwise_map
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan.candidates import blocked
+from wirecal.solver.plan.candidates import Screened, blocked, no_usable_error
 from wirecal.solver.plan.moves import reach_and_move_ok
 from wirecal.solver.plan.options import PlanOptions, Progress
 from wirecal.solver.plan.tour import tour
@@ -42,24 +42,51 @@ def isolating(
     return iso & (np.abs(pj) >= 0.05)
 
 
+FirstUsable = Callable[[list[np.ndarray], list[int]], list[np.ndarray]]
+"""Given rankings of candidates and counts, each ranking's first usable candidates
+(:meth:`~wirecal.solver.plan.candidates.Screened.first_usable`)."""
+
+
+def every_row(orders: list[np.ndarray], counts: list[int]) -> list[np.ndarray]:
+    """Return each ranking's first ones: the :data:`FirstUsable` of candidates all usable."""
+    return [order[:n] for order, n in zip(orders, counts, strict=True)]
+
+
+def ranked_isolating(
+    psi: np.ndarray, col: dict[str, int], j: str, remaining: list[str], opt: PlanOptions
+) -> np.ndarray:
+    """Return the candidates isolating j (:func:`isolating`), most sensitive first.
+
+    By decreasing |Ψ_j|, ties in the order of the candidates.
+    """
+    iso = np.flatnonzero(isolating(psi, col, j, remaining, opt))
+    return iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")]
+
+
 def most_informative(
-    psi: np.ndarray, col: dict[str, int], remaining: list[str], opt: PlanOptions
+    psi: np.ndarray,
+    col: dict[str, int],
+    remaining: list[str],
+    opt: PlanOptions,
+    first_usable: FirstUsable = every_row,
 ) -> tuple[str, np.ndarray] | None:
     """Choose the next parameter to isolate and its isolating candidates.
 
-    The parameter whose ``points_per_step`` most sensitive isolating candidates
-    (:func:`isolating`) carry the most information (Σψ²); None when no parameter has
-    that many isolating candidates.
+    The parameter whose ``points_per_step`` most sensitive usable isolating candidates
+    (:func:`ranked_isolating`, ``first_usable``) carry the most information (Σψ²);
+    None when no parameter has that many. Returns it and its isolating candidates,
+    most sensitive first (not all of them screened).
     """
     k = opt.points_per_step
+    orders = [ranked_isolating(psi, col, j, remaining, opt) for j in remaining]
     best: tuple[float, str, np.ndarray] | None = None
-    for j in remaining:
-        iso = isolating(psi, col, j, remaining, opt)
-        if iso.sum() < k:
+    tops = first_usable(orders, [k] * len(orders))
+    for j, order, top in zip(remaining, orders, tops, strict=True):
+        if len(top) < k:
             continue
-        info = float(np.sort(psi[iso, col[j]] ** 2)[-k:].sum())
+        info = float(np.sort(psi[top, col[j]] ** 2).sum())
         if best is None or info > best[0]:
-            best = (info, j, np.flatnonzero(iso))
+            best = (info, j, order)
     return None if best is None else (best[1], best[2])
 
 
@@ -244,8 +271,7 @@ def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarra
 def step_by_step(
     robot: Robot,
     theta0: np.ndarray,
-    q_all: np.ndarray,
-    via_all: np.ndarray,
+    cands: Screened,
     psi: np.ndarray,
     remaining: list[str],
     excluded: dict[str, str],
@@ -254,36 +280,38 @@ def step_by_step(
 ) -> list[StepPool]:
     """Return the steps in the order they isolate their parameters, with their points.
 
-    The order of §3.4 (:func:`most_informative`); per step the leak-aware greedy
+    The order of §3.4 (:func:`most_informative`) among the usable candidates (``cands``,
+    ``psi`` their Ψ: only isolating ones are screened); per step the leak-aware greedy
     choice (:func:`choose_points`) of ``points_per_step`` points (``min_points`` for the joint
     design), its error covariance taking the earlier steps' choices into account, and
     for the stepwise design the paper's choice for comparison. Parameters that cannot be
     isolated go into ``excluded``.
     """
-    p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
+    p0, q_all, via_all = cands.p0, cands.q, cands.via
     col = {n: k for k, n in enumerate(remaining)}
     n_params = len(remaining)
     remaining = list(remaining)
     pools: list[StepPool] = []
     while remaining:
-        best = most_informative(psi, col, remaining, opt)
+        best = most_informative(psi, col, remaining, opt, cands.first_usable)
         if best is None:
             excluded.update(_not_isolated(remaining, opt))
             break
         j, iso = best
         remaining.remove(j)
-        pool = _step_pool(
-            robot, p0, theta0, (q_all, via_all, psi, col), j, iso, pools, remaining, opt
-        )
+        pool = _step_pool(robot, cands, (psi, col), j, iso, pools, remaining, opt)
         if not _choose_step_points(robot, p0, theta0, q_all, via_all, pool, opt):
             excluded[j] = f"too few isolating points {opt.spread_deg:g} deg apart"
             continue
         pools.append(pool)
         tick(0.5 + 0.4 * len(pools) / n_params)
     if not pools:
+        usable = int(cands.usable(np.ones(len(q_all), bool)).sum())
+        if usable < opt.points_per_step:
+            raise no_usable_error(robot, theta0, opt)
         raise WirecalError(
             f"{robot.source}: no parameter can be isolated around θ0 {theta0.tolist()} "
-            f"by the {len(q_all)} usable candidates ({blocked(robot, theta0, opt)}); try "
+            f"by the {usable} usable candidates ({blocked(robot, theta0, opt)}); try "
             "another --theta0"
         )
     return pools
@@ -300,9 +328,8 @@ def _not_isolated(remaining: list[str], opt: PlanOptions) -> dict[str, str]:
 
 def _step_pool(
     robot: Robot,
-    p0: np.ndarray,
-    theta0: np.ndarray,
-    screened: tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, int]],
+    cands: Screened,
+    sens: tuple[np.ndarray, dict[str, int]],
     j: str,
     iso: np.ndarray,
     pools: list[StepPool],
@@ -311,15 +338,16 @@ def _step_pool(
 ) -> StepPool:
     """Return step j's :class:`StepPool`, no points chosen yet.
 
-    ``screened``: the usable candidates, their via points, their Ψ and Ψ's column per
-    parameter; ``iso`` the candidates isolating j, of which the 600 most sensitive are
-    kept; ``pools`` the steps before (their points give the earlier estimates' error
-    covariance), ``later`` the parameters after j.
+    ``cands``: the candidates; ``sens``: their Ψ and Ψ's column per parameter; ``iso``
+    the candidates isolating j, most sensitive first, of which the first
+    :data:`POOL_SIZE` usable are kept; ``pools`` the steps before (their points give the
+    earlier estimates' error covariance), ``later`` the parameters after j.
     """
-    q_all, via_all, psi, col = screened
-    # the most sensitive isolating points; their moves from θ0 are checked finely
+    psi, col = sens
+    theta0, q_all, via_all = cands.theta0, cands.q, cands.via
+    # the most sensitive usable isolating points; their moves from θ0 are checked finely
     # when a choice comes to them (Links)
-    iso = iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")[:600]]
+    iso = cands.first_usable([iso], [POOL_SIZE])[0]
     order = [p.parameter for p in pools]
     prev = np.array([col[t] for t in order], int)
     nxt = np.array([col[t] for t in later], int)
@@ -332,13 +360,17 @@ def _step_pool(
     return StepPool(
         j,
         iso,
-        Links(robot, robot.nominal, p0, theta0, q_all[iso], via_all[iso], opt),
+        Links(robot, robot.nominal, cands.p0, theta0, q_all[iso], via_all[iso], opt),
         psi[iso, col[j]],
         psi[np.ix_(iso, prev)] if len(prev) else np.zeros((len(iso), 0)),
         psi[np.ix_(iso, nxt)] if len(nxt) else np.zeros((len(iso), 0)),
         cov_prev,
         [],
     )
+
+
+POOL_SIZE = 600
+"""A step's candidates: its most sensitive usable isolating ones (:func:`_step_pool`)."""
 
 
 def _choose_step_points(
