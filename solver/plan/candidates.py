@@ -146,19 +146,20 @@ def _screen_moves(
 
     via = np.full(q.shape, np.nan)
     direct = move_ok(robot, model, p0, theta0, q, opt, coarse)
-    arm = slice(0, 3)
-    for first in ("arm", "wrist"):
-        need = np.flatnonzero(~direct & np.isnan(via[:, 0]))
-        if not len(need):
-            break
-        v = np.tile(theta0, (len(need), 1))
-        if first == "arm":
-            v[:, arm] = q[need, arm]
-        else:
-            v[:, 3:] = q[need, 3:]
-        good = length_ok(v)
-        good[good] = reach_ok(robot, model, p0, theta0, q[need[good]], v[good], opt, coarse)
-        via[need[good]] = v[good]
+    need = np.flatnonzero(~direct)
+    # the two via points of each: the arm's joints moved first, or the wrist's; both tried
+    # in one sweep (few make a move clear, so trying the wrist's where the arm's does
+    # costs little)
+    arm, wrist = np.tile(theta0, (len(need), 1)), np.tile(theta0, (len(need), 1))
+    arm[:, :3], wrist[:, 3:] = q[need, :3], q[need, 3:]
+    v = np.vstack([arm, wrist])
+    ends = np.vstack([q[need], q[need]])
+    # a via point at the candidate or at θ0 makes the direct move again: not clear
+    good = length_ok(v) & np.any(v != ends, axis=1) & np.any(v != theta0, axis=1)
+    good[good] = reach_ok(robot, model, p0, theta0, ends[good], v[good], opt, coarse)
+    by_arm, by_wrist = good.reshape(2, len(need))
+    via[need[by_wrist]] = wrist[by_wrist]
+    via[need[by_arm]] = arm[by_arm]  # the arm's first where both make it clear
     return direct | ~np.isnan(via[:, 0]), via
 
 

@@ -227,7 +227,8 @@ def _step_design(
     Puts ``pool.picks`` in the visiting order; raises when no order keeps the wire clear.
     """
     pts = pool.iso[pool.picks]
-    path = tour(robot, robot.nominal, p0, theta0, q_all[pts], via_all[pts], opt)
+    clear = pool.links.between(pool.picks)
+    path = tour(robot, robot.nominal, p0, theta0, q_all[pts], via_all[pts], opt, clear)
     if path is None:
         raise WirecalError(
             f"{robot.source}: step {k + 1} ({pool.parameter}): no visiting "

@@ -20,7 +20,7 @@ import numpy as np
 from wirecal.solver.accuracy import stepwise_map
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan.candidates import Screened, blocked, no_usable_error
-from wirecal.solver.plan.moves import reach_and_move_ok
+from wirecal.solver.plan.moves import move_ok, reach_and_move_ok
 from wirecal.solver.plan.options import PlanOptions, Progress
 from wirecal.solver.plan.tour import tour
 from wirecal.solver.robot import Robot
@@ -123,7 +123,8 @@ class Links:
     ``ok(sources, js)``: whether each of the candidates ``js`` is reached from θ0 with the
     wire clear (:func:`~wirecal.solver.plan.moves.reach_ok`, through its via point if it
     has one) and the moves from every one of the candidates ``sources`` to it are safe
-    (:func:`~wirecal.solver.plan.moves.move_ok`). Both are properties of the candidates
+    (:func:`~wirecal.solver.plan.moves.move_ok`); ``between(js)``: the moves between
+    them, both ways (the tour's). Both are properties of the candidates
     alone, so asking only about the head of a ranking gives the choice a check of every
     candidate first would; each is worked out on demand and once, however often the greedy
     choices of a step ask about it.
@@ -154,6 +155,20 @@ class Links:
         j = np.tile(near, len(sources))
         out[out] = np.all((self.known[i, j] == 1).reshape(len(sources), len(near)), axis=0)
         return out
+
+    def between(self, js: list[int]) -> np.ndarray:
+        """Return whether each move between the candidates ``js`` is safe, (n, n).
+
+        The moves not known yet worked out in one sweep; the diagonal (no move) is True.
+        """
+        js_ = np.asarray(js, int)
+        i, j = np.repeat(js_, len(js_)), np.tile(js_, len(js_))
+        todo = (self.known[i, j] == 0) & (i != j)
+        if todo.any():
+            q = self.q
+            clear = move_ok(self.robot, self.model, self.p0, q[i[todo]], q[j[todo]], self.opt)
+            self.known[i[todo], j[todo]] = np.where(clear, 1, 2)
+        return ((self.known[i, j] == 1) | (i == j)).reshape(len(js_), len(js_))
 
     def _work_out(self, sources: list[int], js: np.ndarray) -> None:
         """Work out what :meth:`ok` asks and is not known yet, in one sweep.
@@ -402,6 +417,7 @@ def _choose_step_points(
             else np.inf
         )
     pts = pool.iso[ours]
-    path = tour(robot, robot.nominal, p0, theta0, q_all[pts], via_all[pts], opt)
+    clear = pool.links.between(ours)
+    path = tour(robot, robot.nominal, p0, theta0, q_all[pts], via_all[pts], opt, clear)
     pool.picks = [ours[i] for i in path] if path is not None else ours
     return True
