@@ -16,6 +16,7 @@ from click.testing import CliRunner
 
 from wirecal.cli.main import main
 from wirecal.formats.robot_file import load_robot
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan import candidates as plan_candidates
 from wirecal.solver.plan import planner
 from wirecal.solver.plan import steps as plan_steps
@@ -178,3 +179,34 @@ def test_unidentifiable_parameters_send_no_search_further(monkeypatch, ur5):
     assert stand.checked == []
     assert stand.designed == list(range(1, 7))
     assert list(d.excluded) == ["p0"]
+
+
+def test_why_a_theta0_gives_no_plan_is_worked_out_only_when_shown(monkeypatch, ur5):
+    """A θ0 without a plan (Blocked) costs its reason (a sweep of every candidate's move)
+    only when no θ0 gives a plan: then every reason is shown, each worked out once."""
+    stand = Stand(
+        monkeypatch, dict.fromkeys(range(1, 11), 0), dict.fromkeys(range(7, 11), N_PARAMS)
+    )
+    asked: list[int] = []
+
+    def reason(j1: int) -> str:
+        asked.append(j1)
+        return f"θ0 {j1}: blocked"
+
+    def fails(robot, theta0, opt, progress=None):
+        j1 = int(theta0[0])
+        if j1 in failing:
+            stand.designed.append(j1)
+            raise plan_candidates.Blocked(lambda: reason(j1))
+        return stand.design_at(robot, theta0, opt, progress)
+
+    monkeypatch.setattr(planner, "design_at", fails)
+    failing = {1, 2}
+    assert design(ur5).predicted["joint"] == pytest.approx(0.03)
+    assert asked == []
+    failing = set(range(1, 11))
+    with pytest.raises(WirecalError) as exc:
+        design(ur5)
+    assert asked == [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]
+    assert exc.value.problems[1:] == [f"θ0 {j}: blocked" for j in range(1, 11)]
+    assert "no θ0 tried gives a plan (10 tried" in exc.value.problems[0]

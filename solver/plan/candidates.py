@@ -14,6 +14,7 @@ the wire's clearance from the links and the cell along the joint-interpolated mo
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 
 import numpy as np
 
@@ -203,11 +204,41 @@ BLOCKED_WHY = {
 blocks, in words (:func:`blocked`)."""
 
 
-def no_usable_error(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> WirecalError:
+class Blocked(WirecalError):
+    """No plan around a θ0, for a reason that says what blocked its candidates (:func:`blocked`).
+
+    The reason is worked out when first read (``problems``, ``str``): it sweeps every
+    candidate's move from θ0, which the θ0 search spares for a θ0 it passes over.
+    """
+
+    def __init__(self, reason: Callable[[], str]):
+        Exception.__init__(self)
+        self._reason = reason
+        self._problems: list[str] | None = None
+
+    @property
+    def problems(self) -> list[str]:
+        """Return the one problem: the reason, worked out once."""
+        if self._problems is None:
+            self._problems = [self._reason()]
+        return self._problems
+
+    @problems.setter
+    def problems(self, value: list[str]) -> None:
+        self._problems = list(value)
+
+    def __str__(self) -> str:
+        """Return the reason (worked out now if not yet)."""
+        return "\n".join(self.problems)
+
+
+def no_usable_error(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> Blocked:
     """Return the error of a θ0 around which fewer than a step's candidates are usable."""
-    return WirecalError(
-        f"{robot.source}: almost no usable configuration around θ0 "
-        f"{theta0.tolist()}: {blocked(robot, theta0, opt)}"
+    return Blocked(
+        lambda: (
+            f"{robot.source}: almost no usable configuration around θ0 "
+            f"{theta0.tolist()}: {blocked(robot, theta0, opt)}"
+        )
     )
 
 

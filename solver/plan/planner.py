@@ -54,12 +54,13 @@ def design(
     draws = _theta0_draws(robot, opt)
     first = draws[:THETA0_TRIES]
     parts = len(first) + MORE_THETA0_DESIGNED
-    best, problems = None, []
+    best: Design | None = None
+    problems: list[WirecalError] = []  # why each θ0 gave no plan, worked out if shown
     for k, t0 in enumerate(first):
         try:
             d = design_at(robot, t0, opt, part_progress(progress, k, parts))
         except WirecalError as exc:
-            problems.append(exc.problems[0])
+            problems.append(exc)
             continue
         if best is None or _score(d) < _score(best):
             best = d
@@ -79,7 +80,7 @@ def design(
             [
                 f"{robot.source}: no θ0 tried gives a plan ({len(problems)} tried; each "
                 "θ0's reasons follow)",
-                *problems,
+                *(exc.problems[0] for exc in problems),
             ]
         )
     return best
@@ -106,7 +107,7 @@ def _score(d: Design) -> tuple[int, float]:
 def _search_further(
     robot: Robot,
     more: np.ndarray,
-    so_far: tuple[Design | None, list[str]],
+    so_far: tuple[Design | None, list[WirecalError]],
     opt: PlanOptions,
     part: Callable[[int], Progress | None],
 ) -> Design | None:
@@ -149,7 +150,7 @@ class _Search:
         opt: PlanOptions,
         part: Callable[[int], Progress | None],
         best: Design | None,
-        problems: list[str],
+        problems: list[WirecalError],
     ) -> None:
         self.robot, self.opt, self.part = robot, opt, part
         self.best, self.problems = best, problems
@@ -169,7 +170,7 @@ class _Search:
         try:
             d = design_at(self.robot, theta0, self.opt, self.part(len(self.designed) - 1))
         except WirecalError as exc:
-            self.problems.append(exc.problems[0])
+            self.problems.append(exc)
             return False
         if self.best is None or _score(d) < _score(self.best):
             self.best = d

@@ -18,8 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from wirecal.solver.accuracy import stepwise_map
-from wirecal.solver.errors import WirecalError
-from wirecal.solver.plan.candidates import Screened, blocked, no_usable_error
+from wirecal.solver.plan.candidates import Blocked, Screened, blocked, no_usable_error
 from wirecal.solver.plan.moves import move_ok, reach_and_move_ok
 from wirecal.solver.plan.options import PlanOptions, Progress
 from wirecal.solver.plan.tour import tour
@@ -321,15 +320,20 @@ def step_by_step(
         pools.append(pool)
         tick(0.5 + 0.4 * len(pools) / n_params)
     if not pools:
-        usable = int(cands.usable(np.ones(len(q_all), bool)).sum())
-        if usable < opt.points_per_step:
-            raise no_usable_error(robot, theta0, opt)
-        raise WirecalError(
-            f"{robot.source}: no parameter can be isolated around θ0 {theta0.tolist()} "
-            f"by the {usable} usable candidates ({blocked(robot, theta0, opt)}); try "
-            "another --theta0"
-        )
+        raise Blocked(lambda: _none_isolated(robot, cands, opt))
     return pools
+
+
+def _none_isolated(robot: Robot, cands: Screened, opt: PlanOptions) -> str:
+    """Return why no parameter is isolated around θ0, with what blocked the candidates."""
+    usable = int(cands.usable(np.ones(len(cands.q), bool)).sum())
+    if usable < opt.points_per_step:
+        return no_usable_error(robot, cands.theta0, opt).problems[0]
+    return (
+        f"{robot.source}: no parameter can be isolated around θ0 {cands.theta0.tolist()} "
+        f"by the {usable} usable candidates ({blocked(robot, cands.theta0, opt)}); try "
+        "another --theta0"
+    )
 
 
 def _not_isolated(remaining: list[str], opt: PlanOptions) -> dict[str, str]:
