@@ -1,9 +1,11 @@
 """The planner's exact shortcuts give the answers of the work they save.
 
-The joint design ranks its candidates by gain per second of robot time, working out the
-time only where a lower bound of it cannot settle the ranking; and a capsule's box gap
-does not depend on which other configurations are asked about with it (what lets the
-sweeps merge and split their calls freely).
+The candidates' moves from θ0 are screened only where a choice asks (the order of §3.4,
+a step's pool, the compliances' bound); the joint design ranks its candidates by gain
+per second of robot time, working out the time only where a lower bound of it cannot
+settle the ranking; and a capsule's box gap does not depend on which other
+configurations are asked about with it (what lets the sweeps merge and split their
+calls freely).
 """
 
 from __future__ import annotations
@@ -14,11 +16,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan.candidates import candidates, screen
+from wirecal.solver.plan.candidates import Screened
 from wirecal.solver.plan.design import _unidentifiable
 from wirecal.solver.plan.joint import _Candidates
 from wirecal.solver.plan.options import PlanOptions
-from wirecal.solver.plan.steps import step_by_step
+from wirecal.solver.plan.steps import POOL_SIZE, most_informative, step_by_step
 from wirecal.solver.plan.tour import visit_floor_s, visit_s
 from wirecal.solver.run_parameters import DEFAULT_RUN, PAPER_RUN
 from wirecal.solver.sensitivity import sensitivity
@@ -49,15 +51,44 @@ def joint_candidates(viper):
     """The joint design's candidates around the Viper's θ0, the planner's settings."""
     opt = PlanOptions()
     model = viper.nominal
-    q = candidates(viper, THETA0, opt, np.random.default_rng(0))
-    p0 = tool_position(model, np.radians(THETA0)[None])[0]
-    usable, via = screen(viper, model, p0, THETA0, q, opt)
-    q, via = q[usable], via[usable]
-    excluded = _unidentifiable(model, q, THETA0, list(viper.parameters))
+    cands = Screened(viper, THETA0, opt)
+    excluded = _unidentifiable(model, cands.q, THETA0, list(viper.parameters))
     names = [n for n in viper.parameters if n not in excluded]
-    psi = sensitivity(model, q, THETA0, names).psi
-    pools = step_by_step(viper, THETA0, q, via, psi, names, {}, opt, lambda f: None)
-    return _Candidates(viper, THETA0, q, via, pools, opt)
+    psi = sensitivity(model, cands.q, THETA0, names).psi
+    pools = step_by_step(viper, THETA0, cands, psi, names, {}, opt, lambda f: None)
+    return _Candidates(viper, THETA0, cands.q, cands.via, pools, opt)
+
+
+@pytest.mark.slow
+def test_screening_on_demand_makes_the_choices_of_screening_all(viper):
+    """Around the Viper's θ0: the order of §3.4 and each step's pool (its POOL_SIZE most
+    sensitive usable isolating candidates, in order) are those of every candidate
+    screened first, while fewer than half the candidates are screened; and the first
+    usable candidates of random rankings are those of the full screening."""
+    opt = PlanOptions()
+    lazy, full = Screened(viper, THETA0, opt), Screened(viper, THETA0, opt)
+    usable = full.usable(np.ones(len(full.q), bool))
+    assert 0.2 < usable.mean() < 0.8  # both kinds of candidates, many of each
+    names = list(viper.parameters)
+    col = {n: k for k, n in enumerate(names)}
+    psi = sensitivity(viper.nominal, lazy.q, THETA0, names).psi
+    remaining = list(names)
+    while (want := most_informative(psi, col, remaining, opt, full.first_usable)) is not None:
+        got = most_informative(psi, col, remaining, opt, lazy.first_usable)
+        assert got is not None
+        assert got[0] == want[0]
+        iso = want[1][usable[want[1]]][:POOL_SIZE]  # the full screening's pool
+        assert np.array_equal(lazy.first_usable([got[1]], [POOL_SIZE])[0], iso)
+        remaining.remove(want[0])
+    assert most_informative(psi, col, remaining, opt, lazy.first_usable) is None
+    assert np.count_nonzero(lazy.state) < len(lazy.q) / 2
+    screened = lazy.state > 0
+    assert np.array_equal(lazy.state[screened] == 1, usable[screened])
+    assert np.array_equal(lazy.via[screened], full.via[screened], equal_nan=True)
+    rng = np.random.default_rng(2)
+    for n in (1, 7, 300):
+        order = rng.permutation(len(lazy.q))[:2000]
+        assert np.array_equal(lazy.first_usable([order], [n])[0], order[usable[order]][:n])
 
 
 def _ranking_by_times(c: _Candidates, gain: np.ndarray) -> np.ndarray:

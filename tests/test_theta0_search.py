@@ -16,7 +16,7 @@ from click.testing import CliRunner
 
 from wirecal.cli.main import main
 from wirecal.formats.robot_file import load_robot
-from wirecal.solver.kinematics import tool_position
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan import candidates as plan_candidates
 from wirecal.solver.plan import planner
 from wirecal.solver.plan import steps as plan_steps
@@ -121,10 +121,9 @@ def test_the_quick_check_counts_as_a_full_screening(ur5):
     counts = []
     for theta0 in ([268, -95, 78, -62, -222, -270], [243, 285, 117, -83, 295, 312]):
         t0 = np.array(theta0, float)
-        q = plan_candidates.candidates(ur5, t0, opt, np.random.default_rng(opt.seed))
-        p0 = tool_position(ur5.nominal, np.radians(t0)[None])[0]
-        usable = plan_candidates.screen(ur5, ur5.nominal, p0, t0, q, opt)[0]
-        psi = sensitivity(ur5.nominal, q[usable], t0, names).psi
+        cands = plan_candidates.Screened(ur5, t0, opt)
+        usable = cands.usable(np.ones(len(cands.q), bool))
+        psi = sensitivity(ur5.nominal, cands.q[usable], t0, names).psi
         remaining = list(names)
         while (best := plan_steps.most_informative(psi, col, remaining, opt)) is not None:
             remaining.remove(best[0])
@@ -180,3 +179,34 @@ def test_unidentifiable_parameters_send_no_search_further(monkeypatch, ur5):
     assert stand.checked == []
     assert stand.designed == list(range(1, 7))
     assert list(d.excluded) == ["p0"]
+
+
+def test_why_a_theta0_gives_no_plan_is_worked_out_only_when_shown(monkeypatch, ur5):
+    """A θ0 without a plan (Blocked) costs its reason (a sweep of every candidate's move)
+    only when no θ0 gives a plan: then every reason is shown, each worked out once."""
+    stand = Stand(
+        monkeypatch, dict.fromkeys(range(1, 11), 0), dict.fromkeys(range(7, 11), N_PARAMS)
+    )
+    asked: list[int] = []
+
+    def reason(j1: int) -> str:
+        asked.append(j1)
+        return f"θ0 {j1}: blocked"
+
+    def fails(robot, theta0, opt, progress=None):
+        j1 = int(theta0[0])
+        if j1 in failing:
+            stand.designed.append(j1)
+            raise plan_candidates.Blocked(lambda: reason(j1))
+        return stand.design_at(robot, theta0, opt, progress)
+
+    monkeypatch.setattr(planner, "design_at", fails)
+    failing = {1, 2}
+    assert design(ur5).predicted["joint"] == pytest.approx(0.03)
+    assert asked == []
+    failing = set(range(1, 11))
+    with pytest.raises(WirecalError) as exc:
+        design(ur5)
+    assert asked == [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]
+    assert exc.value.problems[1:] == [f"θ0 {j}: blocked" for j in range(1, 11)]
+    assert "no θ0 tried gives a plan (10 tried" in exc.value.problems[0]

@@ -24,6 +24,7 @@ from wirecal.solver.compliance import (
 )
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan.calibration_plan import Plan, Step
+from wirecal.solver.plan.candidates import Screened
 from wirecal.solver.plan.joint import linked_in_block, pooled_candidates
 from wirecal.solver.plan.options import PlanOptions
 from wirecal.solver.plan.predict import robot_time
@@ -53,17 +54,17 @@ GAIN_FLOOR = 1e-6
 def add_compliance_points(
     robot: Robot,
     theta0: np.ndarray,
-    q_all: np.ndarray,
-    via_all: np.ndarray,
+    cands: Screened,
     names: list[str],
     pools: list[StepPool],
     opt: PlanOptions,
 ) -> tuple[list[str], dict[str, float]]:
     """Add points to ``pools`` for the robot file's compliances; the header's lines and σ.
 
-    ``names``: the planned geometric parameters. Targeted are the compliances whose σ
-    could reach :data:`~wirecal.solver.compliance.SIGMA_LIMIT_URAD_PER_NM` with the points
-    the time allows (:func:`_reach`); no such plan identifies the others. A target the
+    ``cands``: the candidates around θ0; ``names``: the planned geometric parameters.
+    Targeted are the compliances whose σ could reach
+    :data:`~wirecal.solver.compliance.SIGMA_LIMIT_URAD_PER_NM` with the points the time
+    allows (:func:`_reach`); no such plan identifies the others. A target the
     added points leave unidentified by the analysis ``solve`` makes
     (:func:`~wirecal.solver.compliance.compliance_observability`, at
     :data:`~wirecal.solver.verdict.READING_NOISE_MM`) is dropped and the points designed
@@ -72,6 +73,7 @@ def add_compliance_points(
     predicted σ, with and without the points; the σ (µrad/(N·m)) with them.
     """
     comps = list(robot.compliances)
+    q_all, via_all = cands.q, cands.via
     psi = sensitivity(robot.nominal, q_all, theta0, [*names, *comps]).psi  # mm/deg, µrad/(N·m)
     s2 = READING_NOISE_MM**2
     prior = np.r_[np.full(len(names), opt.prior), np.full(len(comps), PRIOR_COMPLIANCE_URAD_PER_NM)]
@@ -80,7 +82,9 @@ def add_compliance_points(
     info = np.diag(prior**-2.0) + psi[picked].T @ psi[picked] / s2
     share = TIME_SHARE if robot.payload_kg is None else PAYLOAD_SHARE
     n_extra = int(np.ceil(share * len(picked)))
-    target = [j for j in range(len(names), psi.shape[1]) if _reach(psi, info, j, n_extra, s2)]
+    target = [
+        j for j in range(len(names), psi.shape[1]) if _reach(psi, info, j, n_extra, s2, cands)
+    ]
     before = after = _sigmas(robot, q_all[picked], theta0, names)
     budget_s = share * robot_time(robot, _draft(robot, theta0, pools, q_all), opt.run)
     while target:
@@ -216,12 +220,23 @@ class _Costs:
         return visit_s(self.robot, self.opt.run, self.p0, start, self.q[js])
 
     def of(self, js: np.ndarray) -> np.ndarray:
-        """Return the costs of candidates ``js``, working out those not known yet."""
-        new = js[np.isnan(self.cost[js])]
+        """Return the costs of candidates ``js``, working out those not known yet.
+
+        The visits from θ0 and from every point of their steps, all in one evaluation.
+        """
+        new = np.unique(js[np.isnan(self.cost[js])])
+        if not len(new):
+            return self.cost[js]
+        starts, ends = [], []
         for k in np.unique(self.step[new]):
             mine = new[self.step[new] == k]
-            times = [self._visit(a, mine) for a in (self.theta0, *self._picked(k))]
-            self.cost[mine] = np.min(times, axis=0)
+            for a in (self.theta0, *self._picked(k)):
+                starts.append(np.broadcast_to(a, (len(mine), len(a))))
+                ends.append(mine)
+        end = np.concatenate(ends)
+        t = visit_s(self.robot, self.opt.run, self.p0, np.concatenate(starts), self.q[end])
+        self.cost[new] = np.inf
+        np.minimum.at(self.cost, end, t)
         return self.cost[js]
 
     def pick(self, j: int) -> None:
@@ -234,11 +249,14 @@ class _Costs:
             self.cost[known] = np.minimum(self.cost[known], self._visit(self.q[j], known))
 
 
-def _reach(psi: np.ndarray, info: np.ndarray, j: int, n_extra: int, s2: float) -> bool:
+def _reach(
+    psi: np.ndarray, info: np.ndarray, j: int, n_extra: int, s2: float, cands: Screened
+) -> bool:
     """Whether ``n_extra`` candidates could bring parameter j's σ to the identification limit.
 
-    The candidates of the largest gain for j alone (the others estimated with it), added
-    together: an optimistic bound, since the greedy shares the points between the targets.
+    The usable candidates of the largest gain for j alone (the others estimated with it),
+    added together: an optimistic bound, since the greedy shares the points between the
+    targets. Only the candidates ranked before the ``n_extra``-th usable are screened.
     """
     others = np.setdiff1d(np.arange(psi.shape[1]), [j])
     sig, sig_o = np.linalg.inv(info), np.linalg.inv(info[np.ix_(others, others)])
@@ -246,7 +264,7 @@ def _reach(psi: np.ndarray, info: np.ndarray, j: int, n_extra: int, s2: float) -
     gain = np.log1p(np.einsum("nm,mk,nk->n", psi, sig, psi) / s2) - np.log1p(
         np.einsum("nm,mk,nk->n", xo, sig_o, xo) / s2
     )
-    best = psi[np.argsort(-gain)[:n_extra]]
+    best = psi[cands.first_usable([np.argsort(-gain, kind="stable")], [n_extra])[0]]
     sigma = np.sqrt(np.linalg.inv(info + best.T @ best / s2)[j, j])
     return bool(sigma <= SIGMA_LIMIT_URAD_PER_NM)
 

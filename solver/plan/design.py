@@ -19,7 +19,7 @@ from wirecal.solver.exit_geometry import describe
 from wirecal.solver.identifiability import analyse
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan.calibration_plan import Plan, Step
-from wirecal.solver.plan.candidates import blocked, candidates, screen
+from wirecal.solver.plan.candidates import Screened, no_usable_error
 from wirecal.solver.plan.compliance import add_compliance_points
 from wirecal.solver.plan.exit import largest_exit_deg
 from wirecal.solver.plan.joint import joint_choice
@@ -181,18 +181,22 @@ def design_at(
     model = robot.nominal
     check_theta0(robot, theta0, opt)
     p0 = tool_position(model, np.radians(theta0)[None])[0]
-    q_all, via_all = _usable(robot, p0, theta0, opt, tick)
+    cands = Screened(robot, theta0, opt)
+    if len(cands.q) < opt.points_per_step:
+        raise no_usable_error(robot, theta0, opt)
+    q_all, via_all = cands.q, cands.via
+    tick(0.5)
     names = list(robot.parameters)
     excluded = _unidentifiable(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
     unidentifiable = tuple(excluded)
     remaining = [n for n in names if n not in excluded]
     psi = sensitivity(model, q_all, theta0, remaining).psi
-    pools = step_by_step(robot, theta0, q_all, via_all, psi, remaining, excluded, opt, tick)
+    pools = step_by_step(robot, theta0, cands, psi, remaining, excluded, opt, tick)
     if opt.method == "joint":
         joint_choice(robot, theta0, q_all, via_all, psi, remaining, pools, opt)
     plain_s = _plain_time(robot, p0, theta0, (q_all, via_all), pools, opt)
     compliance = (
-        add_compliance_points(robot, theta0, q_all, via_all, remaining, pools, opt)
+        add_compliance_points(robot, theta0, cands, remaining, pools, opt)
         if robot.compliances
         else ([], {})
     )
@@ -209,7 +213,8 @@ def design_at(
     lines, sigma = compliance
     if plain_s is not None:
         budget_s = MAX_TIME_RATIO * plain_s - robot_time(robot, plan, opt.run)
-        direct = np.vstack([plan.all_points()[0], q_all[np.isnan(via_all[:, 0])]])
+        usable = cands.usable(np.ones(len(q_all), bool))  # the step's pool: all screened
+        direct = np.vstack([plan.all_points()[0], q_all[usable & np.isnan(via_all[:, 0])]])
         plan, more = payload_step(robot, plan, remaining, opt, (direct, budget_s))
         lines, sigma = [*lines, *more], plan_sigmas(robot, plan, remaining)
     d = Design(plan, steps, excluded, method=opt.method, unidentifiable=unidentifiable)
@@ -247,26 +252,6 @@ def _plain_time(
     return robot_time(robot, plain, opt.run)
 
 
-def _usable(
-    robot: Robot, p0: np.ndarray, theta0: np.ndarray, opt: PlanOptions, tick: Progress
-) -> tuple[np.ndarray, np.ndarray]:
-    """Return the usable candidates around θ0 and their via points (NaN rows: none).
-
-    Drawn (:func:`~wirecal.solver.plan.candidates.candidates`) and screened
-    (:func:`~wirecal.solver.plan.candidates.screen`); raises when fewer than a step's
-    points are left, saying what blocked the others.
-    """
-    q_all = candidates(robot, theta0, opt, np.random.default_rng(opt.seed))
-    usable, via_all = screen(robot, robot.nominal, p0, theta0, q_all, opt)
-    tick(0.5)
-    if usable.sum() < opt.points_per_step:
-        raise WirecalError(
-            f"{robot.source}: almost no usable configuration around θ0 "
-            f"{theta0.tolist()}: {blocked(robot, theta0, opt)}"
-        )
-    return q_all[usable], via_all[usable]
-
-
 def _step_design(
     robot: Robot,
     p0: np.ndarray,
@@ -282,7 +267,8 @@ def _step_design(
     Puts ``pool.picks`` in the visiting order; raises when no order keeps the wire clear.
     """
     pts = pool.iso[pool.picks]
-    path = tour(robot, robot.nominal, p0, theta0, q_all[pts], via_all[pts], opt)
+    clear = pool.links.between(pool.picks)
+    path = tour(robot, robot.nominal, p0, theta0, q_all[pts], via_all[pts], opt, clear)
     if path is None:
         raise WirecalError(
             f"{robot.source}: step {k + 1} ({pool.parameter}): no visiting "

@@ -24,10 +24,10 @@ import numpy as np
 
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan.candidates import candidates, point_checks, screen
+from wirecal.solver.plan.candidates import Screened
 from wirecal.solver.plan.design import Design, design_at
 from wirecal.solver.plan.options import DEFAULT_OPTIONS, PlanOptions, Progress, part_progress
-from wirecal.solver.plan.steps import isolating, most_informative
+from wirecal.solver.plan.steps import most_informative
 from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import sensitivity
 
@@ -54,12 +54,13 @@ def design(
     draws = _theta0_draws(robot, opt)
     first = draws[:THETA0_TRIES]
     parts = len(first) + MORE_THETA0_DESIGNED
-    best, problems = None, []
+    best: Design | None = None
+    problems: list[WirecalError] = []  # why each θ0 gave no plan, worked out if shown
     for k, t0 in enumerate(first):
         try:
             d = design_at(robot, t0, opt, part_progress(progress, k, parts))
         except WirecalError as exc:
-            problems.append(exc.problems[0])
+            problems.append(exc)
             continue
         if best is None or _score(d) < _score(best):
             best = d
@@ -79,7 +80,7 @@ def design(
             [
                 f"{robot.source}: no θ0 tried gives a plan ({len(problems)} tried; each "
                 "θ0's reasons follow)",
-                *problems,
+                *(exc.problems[0] for exc in problems),
             ]
         )
     return best
@@ -106,7 +107,7 @@ def _score(d: Design) -> tuple[int, float]:
 def _search_further(
     robot: Robot,
     more: np.ndarray,
-    so_far: tuple[Design | None, list[str]],
+    so_far: tuple[Design | None, list[WirecalError]],
     opt: PlanOptions,
     part: Callable[[int], Progress | None],
 ) -> Design | None:
@@ -149,7 +150,7 @@ class _Search:
         opt: PlanOptions,
         part: Callable[[int], Progress | None],
         best: Design | None,
-        problems: list[str],
+        problems: list[WirecalError],
     ) -> None:
         self.robot, self.opt, self.part = robot, opt, part
         self.best, self.problems = best, problems
@@ -169,7 +170,7 @@ class _Search:
         try:
             d = design_at(self.robot, theta0, self.opt, self.part(len(self.designed) - 1))
         except WirecalError as exc:
-            self.problems.append(exc.problems[0])
+            self.problems.append(exc)
             return False
         if self.best is None or _score(d) < _score(self.best):
             self.best = d
@@ -191,31 +192,17 @@ class _Search:
 def _isolated_count(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> int:
     """Return how many parameters the order of §3.4 isolates around θ0: a quick check.
 
-    The candidates of :func:`~wirecal.solver.plan.design.design_at` and its screening
-    (:func:`screen`), applied only to candidates isolating a parameter still unknown
-    (:func:`isolating`; few do), so a fraction of a design's time; no points, via points or
-    tours are chosen. The order stops where the design's does when no parameter is
-    unidentifiable.
+    The candidates of :func:`~wirecal.solver.plan.design.design_at`, screened only where
+    the order asks (:class:`Screened`), so a fraction of a design's time; no points, via
+    points or tours are chosen. The order stops where the design's does when no parameter
+    is unidentifiable.
     """
-    model = robot.nominal
-    q = candidates(robot, theta0, opt, np.random.default_rng(opt.seed))
-    p0 = tool_position(model, np.radians(theta0)[None])[0]
-    q = q[point_checks(robot, model, p0, q, opt)]
+    cands = Screened(robot, theta0, opt)
     names = list(robot.parameters)
     col = {n: k for k, n in enumerate(names)}
-    psi = sensitivity(model, q, theta0, names).psi
-    state = np.zeros(len(q), np.int8)  # 0 not screened yet, 1 usable, 2 not
+    psi = sensitivity(robot.nominal, cands.q, theta0, names).psi
     remaining = names
-    while remaining:
-        todo = np.zeros(len(q), bool)
-        for j in remaining:
-            todo |= isolating(psi, col, j, remaining, opt)
-        todo &= state == 0
-        if todo.any():
-            state[todo] = np.where(screen(robot, model, p0, theta0, q[todo], opt)[0], 1, 2)
-        best = most_informative(psi[state == 1], col, remaining, opt)
-        if best is None:
-            break
+    while (best := most_informative(psi, col, remaining, opt, cands.first_usable)) is not None:
         remaining = [t for t in remaining if t != best[0]]
     return len(names) - len(remaining)
 

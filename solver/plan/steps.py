@@ -12,15 +12,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from wirecal.solver.accuracy import stepwise_map
-from wirecal.solver.errors import WirecalError
-from wirecal.solver.kinematics import tool_position
-from wirecal.solver.plan.candidates import blocked
-from wirecal.solver.plan.moves import reach_and_move_ok
+from wirecal.solver.plan.candidates import Blocked, Screened, blocked, no_usable_error
+from wirecal.solver.plan.moves import move_ok, reach_and_move_ok
 from wirecal.solver.plan.options import PlanOptions, Progress
 from wirecal.solver.plan.tour import tour
 from wirecal.solver.robot import Robot
@@ -42,24 +41,51 @@ def isolating(
     return iso & (np.abs(pj) >= 0.05)
 
 
+FirstUsable = Callable[[list[np.ndarray], list[int]], list[np.ndarray]]
+"""Given rankings of candidates and counts, each ranking's first usable candidates
+(:meth:`~wirecal.solver.plan.candidates.Screened.first_usable`)."""
+
+
+def every_row(orders: list[np.ndarray], counts: list[int]) -> list[np.ndarray]:
+    """Return each ranking's first ones: the :data:`FirstUsable` of candidates all usable."""
+    return [order[:n] for order, n in zip(orders, counts, strict=True)]
+
+
+def ranked_isolating(
+    psi: np.ndarray, col: dict[str, int], j: str, remaining: list[str], opt: PlanOptions
+) -> np.ndarray:
+    """Return the candidates isolating j (:func:`isolating`), most sensitive first.
+
+    By decreasing |Ψ_j|, ties in the order of the candidates.
+    """
+    iso = np.flatnonzero(isolating(psi, col, j, remaining, opt))
+    return iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")]
+
+
 def most_informative(
-    psi: np.ndarray, col: dict[str, int], remaining: list[str], opt: PlanOptions
+    psi: np.ndarray,
+    col: dict[str, int],
+    remaining: list[str],
+    opt: PlanOptions,
+    first_usable: FirstUsable = every_row,
 ) -> tuple[str, np.ndarray] | None:
     """Choose the next parameter to isolate and its isolating candidates.
 
-    The parameter whose ``points_per_step`` most sensitive isolating candidates
-    (:func:`isolating`) carry the most information (Σψ²); None when no parameter has
-    that many isolating candidates.
+    The parameter whose ``points_per_step`` most sensitive usable isolating candidates
+    (:func:`ranked_isolating`, ``first_usable``) carry the most information (Σψ²);
+    None when no parameter has that many. Returns it and its isolating candidates,
+    most sensitive first (not all of them screened).
     """
     k = opt.points_per_step
+    orders = [ranked_isolating(psi, col, j, remaining, opt) for j in remaining]
     best: tuple[float, str, np.ndarray] | None = None
-    for j in remaining:
-        iso = isolating(psi, col, j, remaining, opt)
-        if iso.sum() < k:
+    tops = first_usable(orders, [k] * len(orders))
+    for j, order, top in zip(remaining, orders, tops, strict=True):
+        if len(top) < k:
             continue
-        info = float(np.sort(psi[iso, col[j]] ** 2)[-k:].sum())
+        info = float(np.sort(psi[top, col[j]] ** 2).sum())
         if best is None or info > best[0]:
-            best = (info, j, np.flatnonzero(iso))
+            best = (info, j, order)
     return None if best is None else (best[1], best[2])
 
 
@@ -96,7 +122,8 @@ class Links:
     ``ok(sources, js)``: whether each of the candidates ``js`` is reached from θ0 with the
     wire clear (:func:`~wirecal.solver.plan.moves.reach_ok`, through its via point if it
     has one) and the moves from every one of the candidates ``sources`` to it are safe
-    (:func:`~wirecal.solver.plan.moves.move_ok`). Both are properties of the candidates
+    (:func:`~wirecal.solver.plan.moves.move_ok`); ``between(js)``: the moves between
+    them, both ways (the tour's). Both are properties of the candidates
     alone, so asking only about the head of a ranking gives the choice a check of every
     candidate first would; each is worked out on demand and once, however often the greedy
     choices of a step ask about it.
@@ -127,6 +154,20 @@ class Links:
         j = np.tile(near, len(sources))
         out[out] = np.all((self.known[i, j] == 1).reshape(len(sources), len(near)), axis=0)
         return out
+
+    def between(self, js: list[int]) -> np.ndarray:
+        """Return whether each move between the candidates ``js`` is safe, (n, n).
+
+        The moves not known yet worked out in one sweep; the diagonal (no move) is True.
+        """
+        js_ = np.asarray(js, int)
+        i, j = np.repeat(js_, len(js_)), np.tile(js_, len(js_))
+        todo = (self.known[i, j] == 0) & (i != j)
+        if todo.any():
+            q = self.q
+            clear = move_ok(self.robot, self.model, self.p0, q[i[todo]], q[j[todo]], self.opt)
+            self.known[i[todo], j[todo]] = np.where(clear, 1, 2)
+        return ((self.known[i, j] == 1) | (i == j)).reshape(len(js_), len(js_))
 
     def _work_out(self, sources: list[int], js: np.ndarray) -> None:
         """Work out what :meth:`ok` asks and is not known yet, in one sweep.
@@ -244,8 +285,7 @@ def _stepwise_cov(model, theta0, order, chosen_q, opt: PlanOptions) -> np.ndarra
 def step_by_step(
     robot: Robot,
     theta0: np.ndarray,
-    q_all: np.ndarray,
-    via_all: np.ndarray,
+    cands: Screened,
     psi: np.ndarray,
     remaining: list[str],
     excluded: dict[str, str],
@@ -254,39 +294,46 @@ def step_by_step(
 ) -> list[StepPool]:
     """Return the steps in the order they isolate their parameters, with their points.
 
-    The order of §3.4 (:func:`most_informative`); per step the leak-aware greedy
+    The order of §3.4 (:func:`most_informative`) among the usable candidates (``cands``,
+    ``psi`` their Ψ: only isolating ones are screened); per step the leak-aware greedy
     choice (:func:`choose_points`) of ``points_per_step`` points (``min_points`` for the joint
     design), its error covariance taking the earlier steps' choices into account, and
     for the stepwise design the paper's choice for comparison. Parameters that cannot be
     isolated go into ``excluded``.
     """
-    p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
+    p0, q_all, via_all = cands.p0, cands.q, cands.via
     col = {n: k for k, n in enumerate(remaining)}
     n_params = len(remaining)
     remaining = list(remaining)
     pools: list[StepPool] = []
     while remaining:
-        best = most_informative(psi, col, remaining, opt)
+        best = most_informative(psi, col, remaining, opt, cands.first_usable)
         if best is None:
             excluded.update(_not_isolated(remaining, opt))
             break
         j, iso = best
         remaining.remove(j)
-        pool = _step_pool(
-            robot, p0, theta0, (q_all, via_all, psi, col), j, iso, pools, remaining, opt
-        )
+        pool = _step_pool(robot, cands, (psi, col), j, iso, pools, remaining, opt)
         if not _choose_step_points(robot, p0, theta0, q_all, via_all, pool, opt):
             excluded[j] = f"too few isolating points {opt.spread_deg:g} deg apart"
             continue
         pools.append(pool)
         tick(0.5 + 0.4 * len(pools) / n_params)
     if not pools:
-        raise WirecalError(
-            f"{robot.source}: no parameter can be isolated around θ0 {theta0.tolist()} "
-            f"by the {len(q_all)} usable candidates ({blocked(robot, theta0, opt)}); try "
-            "another --theta0"
-        )
+        raise Blocked(lambda: _none_isolated(robot, cands, opt))
     return pools
+
+
+def _none_isolated(robot: Robot, cands: Screened, opt: PlanOptions) -> str:
+    """Return why no parameter is isolated around θ0, with what blocked the candidates."""
+    usable = int(cands.usable(np.ones(len(cands.q), bool)).sum())
+    if usable < opt.points_per_step:
+        return no_usable_error(robot, cands.theta0, opt).problems[0]
+    return (
+        f"{robot.source}: no parameter can be isolated around θ0 {cands.theta0.tolist()} "
+        f"by the {usable} usable candidates ({blocked(robot, cands.theta0, opt)}); try "
+        "another --theta0"
+    )
 
 
 def _not_isolated(remaining: list[str], opt: PlanOptions) -> dict[str, str]:
@@ -300,9 +347,8 @@ def _not_isolated(remaining: list[str], opt: PlanOptions) -> dict[str, str]:
 
 def _step_pool(
     robot: Robot,
-    p0: np.ndarray,
-    theta0: np.ndarray,
-    screened: tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, int]],
+    cands: Screened,
+    sens: tuple[np.ndarray, dict[str, int]],
     j: str,
     iso: np.ndarray,
     pools: list[StepPool],
@@ -311,15 +357,16 @@ def _step_pool(
 ) -> StepPool:
     """Return step j's :class:`StepPool`, no points chosen yet.
 
-    ``screened``: the usable candidates, their via points, their Ψ and Ψ's column per
-    parameter; ``iso`` the candidates isolating j, of which the 600 most sensitive are
-    kept; ``pools`` the steps before (their points give the earlier estimates' error
-    covariance), ``later`` the parameters after j.
+    ``cands``: the candidates; ``sens``: their Ψ and Ψ's column per parameter; ``iso``
+    the candidates isolating j, most sensitive first, of which the first
+    :data:`POOL_SIZE` usable are kept; ``pools`` the steps before (their points give the
+    earlier estimates' error covariance), ``later`` the parameters after j.
     """
-    q_all, via_all, psi, col = screened
-    # the most sensitive isolating points; their moves from θ0 are checked finely
+    psi, col = sens
+    theta0, q_all, via_all = cands.theta0, cands.q, cands.via
+    # the most sensitive usable isolating points; their moves from θ0 are checked finely
     # when a choice comes to them (Links)
-    iso = iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")[:600]]
+    iso = cands.first_usable([iso], [POOL_SIZE])[0]
     order = [p.parameter for p in pools]
     prev = np.array([col[t] for t in order], int)
     nxt = np.array([col[t] for t in later], int)
@@ -332,13 +379,17 @@ def _step_pool(
     return StepPool(
         j,
         iso,
-        Links(robot, robot.nominal, p0, theta0, q_all[iso], via_all[iso], opt),
+        Links(robot, robot.nominal, cands.p0, theta0, q_all[iso], via_all[iso], opt),
         psi[iso, col[j]],
         psi[np.ix_(iso, prev)] if len(prev) else np.zeros((len(iso), 0)),
         psi[np.ix_(iso, nxt)] if len(nxt) else np.zeros((len(iso), 0)),
         cov_prev,
         [],
     )
+
+
+POOL_SIZE = 600
+"""A step's candidates: its most sensitive usable isolating ones (:func:`_step_pool`)."""
 
 
 def _choose_step_points(
@@ -370,6 +421,7 @@ def _choose_step_points(
             else np.inf
         )
     pts = pool.iso[ours]
-    path = tour(robot, robot.nominal, p0, theta0, q_all[pts], via_all[pts], opt)
+    clear = pool.links.between(ours)
+    path = tour(robot, robot.nominal, p0, theta0, q_all[pts], via_all[pts], opt, clear)
     pool.picks = [ours[i] for i in path] if path is not None else ours
     return True

@@ -58,32 +58,47 @@ def visit_floor_s(
     return move + settle + READING_INTERVAL_S * (run.readings - 1)
 
 
-def tour(robot: Robot, model, p0, theta0, pts, vias, opt: PlanOptions) -> np.ndarray | None:
+def tour(
+    robot: Robot,
+    model,
+    p0,
+    theta0,
+    pts,
+    vias,
+    opt: PlanOptions,
+    clear: np.ndarray | None = None,
+) -> np.ndarray | None:
     """Return the visiting order from θ0 and back, or None.
 
     The visiting order from θ0 and back (nearest neighbour, improved by 2-opt) over
-    moves that keep the arm and the wire clear (``move_ok``); a point reached through a
-    via point can only come first, and last only when it is the step's only point and its
+    moves that keep the arm and the wire clear (``move_ok``; ``clear``: whether each move
+    between the points is, (n, n), when the caller knows); a point reached through a via
+    point can only come first, and last only when it is the step's only point and its
     direct move back to θ0 is clear. Returns the order, or None when no order keeps every
     move clear.
     """
     n = len(pts)
     a, b = np.repeat(pts, n, axis=0), np.tile(pts, (n, 1))
-    clear = move_ok(robot, model, p0, a, b, opt).reshape(n, n)
     has_via = ~np.isnan(vias[:, 0])
-
-    def move_s(starts, ends):
-        return move_durations_s(robot, opt.run, starts, ends, model, p0)
-
-    leg = move_s(a, b).reshape(n, n)
     t0 = np.broadcast_to(theta0, pts.shape)
-    first = np.where(has_via[:, None], vias, pts)  # through its via point, if it has one
-    start = move_s(t0, first) + np.where(has_via, move_s(first, pts), 0.0)
-    back = move_s(pts, t0)
-    bad = 1e4
     # the way back to θ0 is the way there reversed, except from a point reached via
     home = np.ones(n, bool)
-    home[has_via] = move_ok(robot, model, p0, pts[has_via], t0[has_via], opt)
+    if clear is None:
+        ok = move_ok(
+            robot, model, p0, np.vstack([a, pts[has_via]]), np.vstack([b, t0[has_via]]), opt
+        )
+        clear, home[has_via] = ok[: n * n].reshape(n, n), ok[n * n :]
+    elif has_via.any():
+        home[has_via] = move_ok(robot, model, p0, pts[has_via], t0[has_via], opt)
+    first = np.where(has_via[:, None], vias, pts)  # through its via point, if it has one
+    # the legs between points, from θ0 (to the via point, on to the point) and back: one call
+    times = move_durations_s(
+        robot, opt.run, np.vstack([a, t0, first, pts]), np.vstack([b, first, pts, t0]), model, p0
+    )
+    leg = times[: n * n].reshape(n, n)
+    to_first, on, back = times[n * n :].reshape(3, n)
+    start = to_first + np.where(has_via, on, 0.0)
+    bad = 1e4
     last_bad = np.where(has_via & (n > 1), bad, 0.0) + np.where(home, 0.0, bad)
 
     def total(path):
