@@ -240,12 +240,7 @@ def _run(
         identified = result.estimates[result.recommended].as_dict()
         seconds["solve"] = time.perf_counter() - t
         t = step("the controller solver's result and the report's figures, in another process")
-        nice = os.nice(0) if hasattr(os, "nice") else None
-        controller = pool.submit(
-            _yielding, nice, _controller, result, log_text, ch, programs, disk / "ctl"
-        )
-        figures = pool.submit(_yielding, nice, result_figures, result)
-        pool.submit(_yielding, nice, ready_to_draw)  # the other worker, for the histograms
+        controller, figures = _submit_controller(pool, result, log_text, ch, programs, disk)
         t = step("validation before and after calibration, with unmodelled errors")
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before
@@ -263,14 +258,9 @@ def _run(
     seconds["patch"] = time.perf_counter() - t
     t = step("report")
     html = render_report(
-        result,
-        validations,
-        comparison,
-        truth,
-        plausibility=verdict.patch_field(),
-        figures=figures.result(),
-        drawn=drawn.result(),
-    )
+        result, validations, comparison, truth, plausibility=verdict.patch_field(),
+        figures=figures.result(), drawn=drawn.result(),
+    )  # fmt: skip
     out.put(folder / "report.html", html)
     seconds["report"] = time.perf_counter() - t
     return DemoResult(
@@ -285,6 +275,23 @@ def _run(
         bound_mm=_bound(result),
         encoder_scale_ppm=None if encoder is None else encoder.scale_ppm,
     )
+
+
+def _submit_controller(
+    pool: Any, result: Any, log_text: str, ch: Chain, programs: dict[str, str], disk: Path
+) -> tuple[Any, Any]:
+    """Start the controller solver's run and the report's figures in the demo's workers.
+
+    Both yield to the main process (niced); the other worker is readied for the
+    validation's histograms. Returns the two futures.
+    """
+    nice = os.nice(0) if hasattr(os, "nice") else None
+    controller = pool.submit(
+        _yielding, nice, _controller, result, log_text, ch, programs, disk / "ctl"
+    )
+    figures = pool.submit(_yielding, nice, result_figures, result)
+    pool.submit(_yielding, nice, ready_to_draw)  # the other worker, for the histograms
+    return controller, figures
 
 
 def _measure(
