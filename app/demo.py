@@ -257,10 +257,8 @@ def _run(
     _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, ch.log_name)
     seconds["patch"] = time.perf_counter() - t
     t = step("report")
-    html = render_report(
-        result, validations, comparison, truth, plausibility=verdict.patch_field(),
-        figures=figures.result(), drawn=drawn.result(),
-    )  # fmt: skip
+    figures_ = {"figures": figures.result(), "drawn": drawn.result()}
+    html = render_report(result, validations, comparison, truth, verdict.patch_field(), **figures_)
     out.put(folder / "report.html", html)
     seconds["report"] = time.perf_counter() - t
     return DemoResult(

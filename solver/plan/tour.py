@@ -8,6 +8,7 @@ neighbour, then 2-opt) over clear moves (:func:`tour`); the time is the run's ti
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 
 import numpy as np
 
@@ -107,6 +108,12 @@ def tour(
             t += leg[x, y] + bad * (not clear[x, y] or has_via[y])
         return t
 
+    path = _shortest_path(n, total)
+    return np.array(path) if total(path) < bad else None
+
+
+def _shortest_path(n: int, total: Callable[[list[int]], float]) -> list[int]:
+    """Return an order of ``n`` points of low ``total``: nearest neighbour, then 2-opt."""
     left = list(range(n))
     path: list[int] = []
     while left:
@@ -120,4 +127,4 @@ def tour(
             cand = path[:i] + path[i : j + 1][::-1] + path[j + 1 :]
             if total(cand) < total(path) - 1e-9:
                 path, improved = cand, True
-    return np.array(path) if total(path) < bad else None
+    return path
