@@ -46,8 +46,8 @@ def readme_tests(tree: Path) -> dict[str, list[str]]:
     """Return the arguments of the quick loop and the whole suite as ``tree``'s README gives them.
 
     The quick loop: the README's command line ``pytest … -m "not slow"``; the whole suite:
-    the first other ``pytest …`` it quotes in backticks (``pytest -q -n auto``, or the code
-    before pytest-xdist's ``pytest -q``).
+    the first other ``pytest …`` it quotes in backticks (``pytest -q -n auto --dist
+    loadfile``, or the code before pytest-xdist's ``pytest -q``).
     """
     text = (tree / "README.md").read_text(encoding="utf-8")
     lines = [line for line in text.splitlines() if line.startswith("pytest ")]
