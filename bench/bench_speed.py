@@ -2,8 +2,11 @@
 the quick test loop and the whole suite, each timed as a whole process against the same
 command run on the code before, in one run.
 
+Each tree's test loops run as its own README gives them (:func:`readme_tests`), so the code
+before runs its whole suite in one process and the code now on pytest-xdist's workers.
 CPU time (user + system of the child and its children, which the machine's load touches far
-less than the wall time; the demo's second process included) and wall time, median of
+less than the wall time; the demo's second process and pytest-xdist's workers included) and
+wall time, median of
 ``--runs`` runs (the test loops: ``--test-runs``, one by default, without the unmeasured
 first run the commands get, timed whether or not a test fails); the runs of the code before
 and now are interleaved, so a change of the machine's load touches both alike, and each
@@ -20,6 +23,8 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
+import shlex
 import sys
 import tempfile
 from pathlib import Path
@@ -37,10 +42,25 @@ def _wirecal(tree: Path, *args: str) -> list[str]:
     return ["env", f"PYTHONPATH={tree}", sys.executable, "-P", "-c", main, *args]
 
 
-def _pytest(tree: Path, *args: str) -> list[str]:
-    """Return the command running the tests of ``tree`` (the README's, with ``args``)."""
-    run = ["env", f"PYTHONPATH={tree}", sys.executable, "-P", "-m", "pytest", "-q"]
-    return [*run, *args, "-p", "no:cacheprovider", "--rootdir", str(tree), str(tree / "tests")]
+def readme_tests(tree: Path) -> dict[str, list[str]]:
+    """Return the arguments of the quick loop and the whole suite as ``tree``'s README gives them.
+
+    The quick loop: the README's command line ``pytest … -m "not slow"``; the whole suite:
+    the first other ``pytest …`` it quotes in backticks (``pytest -q -n auto --dist
+    loadfile``, or the code before pytest-xdist's ``pytest -q``).
+    """
+    text = (tree / "README.md").read_text(encoding="utf-8")
+    lines = [line for line in text.splitlines() if line.startswith("pytest ")]
+    quick = next(shlex.split(line)[1:] for line in lines if "not slow" in line)
+    quoted = re.findall(r"`(pytest [^`]*)`", text)
+    suite = next(shlex.split(q)[1:] for q in quoted if "not slow" not in q)
+    return {"quick loop": quick, "whole suite": suite}
+
+
+def _pytest(tree: Path, args: list[str]) -> list[str]:
+    """Return the command running ``pytest ARGS`` on the tests of ``tree``."""
+    run = ["env", f"PYTHONPATH={tree}", sys.executable, "-P", "-m", "pytest", *args]
+    return [*run, "-p", "no:cacheprovider", "--rootdir", str(tree), str(tree / "tests")]
 
 
 def _commands(trees: dict[str, Path], tmp: Path, arms, demo: bool):
@@ -61,11 +81,11 @@ def _commands(trees: dict[str, Path], tmp: Path, arms, demo: bool):
 def _test_commands(trees: dict[str, Path], quick: bool, suite: bool):
     """Return the test loops to time: (figure, tree's name) → command."""
     out: dict[tuple[str, str], list[str]] = {}
+    wanted = {"quick loop": quick, "whole suite": suite}
     for name, tree in trees.items():
-        if quick:
-            out[("quick loop", name)] = _pytest(tree, "-m", "not slow")
-        if suite:
-            out[("whole suite", name)] = _pytest(tree)
+        for loop, args in readme_tests(tree).items():
+            if wanted[loop]:
+                out[(loop, name)] = _pytest(tree, args)
     return out
 
 
@@ -112,6 +132,10 @@ def main() -> None:
         (bw, bc), (nw, nc) = times[(fig, "before")], times[(fig, "now")]
         ratio = f"{nc / bc:.2f} ({nw / bw:.2f})"
         print(f"| {fig} | {bc:.2f} / {bw:.2f} | {nc:.2f} / {nw:.2f} | {ratio} |")
+    for name, tree in trees.items():
+        for loop, given in readme_tests(tree).items():
+            if (loop, name) in tests:
+                print(f"{loop}, {name}: pytest {shlex.join(given)} (its README's)")
     for arm, equal in same.items():
         print(f"plan file of {arm}: {'byte for byte the same' if equal else 'DIFFERS'}")
 

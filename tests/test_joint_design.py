@@ -17,13 +17,15 @@ from wirecal.solver.plan.options import PlanOptions
 from wirecal.solver.plan.planner import design
 
 from .conftest import VIPER
+from .designs import THETA0 as SHIPPED_THETA0
+from .designs import designed
 
-THETA0 = np.array([-72, -156, 235, 3, 64, 41], float)  # 'wirecal plan' --for stepwise's
+THETA0 = np.array(SHIPPED_THETA0["viper_s650"], float)  # 'wirecal plan' --for stepwise's
 
 
 @pytest.fixture(scope="module")
-def both(viper):
-    return {m: design(viper, THETA0, PlanOptions(method=m)) for m in ("joint", "stepwise")}
+def both():
+    return {m: designed("viper_s650", m)[1] for m in ("joint", "stepwise")}
 
 
 @pytest.mark.slow

@@ -25,17 +25,12 @@ from wirecal.solver.plan.predict import predicted_accuracy, robot_time
 from wirecal.solver.run_parameters import PAPER_RUN, run_timeline
 from wirecal.solver.wire_range import RANGE_MARGIN_MM, check_wire_range, run_moves
 
-from .conftest import ROOT, VIPER
+from .conftest import VIPER
+from .designs import THETA0
+from .designs import designed as shared_design
 
 pytestmark = pytest.mark.slow  # designs plans for four arms: tens of seconds
 
-# θ0 as 'wirecal plan' chooses them (seed 0); fixed here to keep the tests quick
-THETA0 = {
-    "viper_s650": [-72, -156, 235, 3, 64, 41],
-    "puma560": [112, -123, -32, 8, -53, -288],
-    "abb_irb120": [21, 5, -36, -43, -43, -184],
-    "ur5e": [-195, 236, -54, -181, -127, 56],  # inside its [cell] (issue 21)
-}
 OPT = PlanOptions()
 STEPWISE = PlanOptions(method="stepwise")
 
@@ -44,9 +39,7 @@ STEPWISE = PlanOptions(method="stepwise")
     scope="module", params=[(arm, m) for arm in sorted(THETA0) for m in ("joint", "stepwise")]
 )
 def designed(request):
-    arm, method = request.param
-    robot = load_robot(ROOT / "examples" / arm / "robot.toml")
-    return robot, design(robot, np.array(THETA0[arm], float), PlanOptions(method=method))
+    return shared_design(*request.param)
 
 
 def _sequences(plan):
@@ -148,7 +141,7 @@ def test_monte_carlo_recovers_the_errors(designed):
 
 
 def test_viper_plan_beats_the_corrected_paper_plan(viper, paper_plan):
-    d = design(viper, np.array(THETA0["viper_s650"], float), STEPWISE)
+    _, d = shared_design("viper_s650", STEPWISE.method)
     paper = predicted_accuracy(viper, paper_plan)
     assert d.plan.n_points <= paper_plan.n_points
     assert d.robot_time_s <= robot_time(viper, paper_plan)
