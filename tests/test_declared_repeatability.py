@@ -7,9 +7,7 @@ the log is sound, and a bad log or a slipped wire must still be caught.
 
 from __future__ import annotations
 
-import copy
 import json
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +18,6 @@ from scipy import integrate, stats
 from wirecal.cli.main import main
 from wirecal.formats.log import parse_log
 from wirecal.formats.plan_file import load_plan
-from wirecal.formats.robot_file import robot_from_dict
 from wirecal.formats.simulated_log import simulate_log
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.log.measurements import check_log
@@ -30,14 +27,9 @@ from wirecal.solver.solve import solve
 from wirecal.solver.verdict import FALSE_ALARM
 from wirecal.solver.zero_reading import SLIP_FACTOR
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+from .test_zero_reading import EXAMPLES, _robot
+
 PLANS = {"ur5e": "plan.toml", "viper_s650": "paper_plan.toml", "abb_irb120": "plan.toml"}
-
-
-def _robot(arm: str, **calibration):
-    data = copy.deepcopy(tomllib.loads((EXAMPLES / arm / "robot.toml").read_text()))
-    data["calibration"].update(calibration)
-    return robot_from_dict(data, f"{arm}.toml")
 
 
 def _robot_file(tmp_path: Path, arm: str, repeatability_mm: float | None) -> str:
