@@ -102,7 +102,8 @@ _G = GenRequest()
     default=_G.zero_tol_mm,
     show_default=True,
     help="Largest jump of a zero reading from the previous one before the run pauses (mm): "
-    "a slip; a slow drift is fitted on the PC.",
+    "a slip; a slow drift is fitted on the PC. With a declared repeatability_mm at least "
+    "5.84 times the zero readings' mean length (docs/faults.md).",
 )
 @click.option(
     "--spread-tol",

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import ClassVar, final
 
 from wirecal.gen.preflight import output_problems, preflight
-from wirecal.gen.request import GenRequest, refuse_unsupported
+from wirecal.gen.request import GenRequest, refuse_unsupported, with_slip_tolerance
 from wirecal.lang.base import Language
 from wirecal.lang.registry import language
 from wirecal.solver.errors import WirecalError
@@ -54,7 +54,8 @@ class Generator(ABC):
         """Return file name → program text (deterministic), every duty done.
 
         Refuses the request's fields the language does not take (by option), then a plan
-        the pre-flight refuses, then programs its own checker refuses.
+        the pre-flight refuses, then programs its own checker refuses. The zero readings'
+        slip check takes the arm's declared repeatability (:func:`with_slip_tolerance`).
         """
         lang = self.language
         refuse_unsupported(request, self.refuses, lang.title)
@@ -65,7 +66,7 @@ class Generator(ABC):
                 "[calibration] payload_kg for this controller"
             )
         preflight(robot, plan, request, lang)
-        out = self.render(robot, plan, request)
+        out = self.render(robot, plan, with_slip_tolerance(robot, plan, request))
         problems = output_problems(robot, out, lang)
         if problems:
             raise WirecalError(self.checker_problems(robot, problems))

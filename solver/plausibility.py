@@ -10,14 +10,19 @@ controller comparison) and refuses, with what to check, when:
   robot file's geometry gives at the measured points (every count equal: the encoder did
   not count; twice as much: lengths in the robot file in another unit, or mm_per_count);
 * **residual** — the joint fit's residual σ exceeds what the noise model allows: with
-  reading noise σ_r (``noise_mm``) and quantisation q = |mm_per_count| (uniform, q²/12),
-  σ_model² = σ_r² + q²/12, and the residual sum of squares of ν = N − m degrees of freedom
+  reading noise σ_r (``noise_mm``), quantisation q = |mm_per_count| (uniform, q²/12) and,
+  when the robot file declares ``[calibration] repeatability_mm``, what the arm's landing
+  adds to the lengths, σ_a (:func:`~wirecal.solver.zero_reading.length_sigma_mm`, the rule
+  of the twin's arm and the zero readings), σ_model² = σ_r² + q²/12 + σ_a² (like the
+  reading noise's, the zero reference's own error, common to every length, is not in it),
+  and the residual sum of squares of ν = N − m degrees of freedom
   is refused beyond σ_model²·χ²_ν(1 − α), α = :data:`FALSE_ALARM` (the chance that a sound
   log of that noise is refused);
 * **identifiability** — the distance Jacobian at the *measured* configurations is rank
-  deficient (the unobservable parameters and combinations are named), or the noise model
-  leaves a parameter's σ at :data:`POORLY_IDENTIFIED` deg or mm or more (the typical size
-  of the errors being calibrated, paper §2.2: the data cannot tell its sign);
+  deficient (the unobservable parameters and combinations are named), or the reading
+  noise's model (σ_r² + q²/12) leaves a parameter's σ at :data:`POORLY_IDENTIFIED` deg
+  or mm or more (the typical size of the errors being calibrated, paper §2.2: the data
+  cannot tell its sign);
 * **drift** — the zero readings drift faster than
   :data:`~wirecal.solver.scale.DRIFT_TOLERANCE_MM_PER_H` even less three of the fit's σ
   (|b| − 3σ_b > tolerance: a sound log is not refused for its noise) — a wire creeping,
@@ -41,7 +46,7 @@ from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.errors import Implausible
 from wirecal.solver.identifiability import Identifiability, analyse_jacobian, covariance
 from wirecal.solver.identify import DEFAULT_OMEGA, at_points
-from wirecal.solver.kinematics import with_errors
+from wirecal.solver.kinematics import Model, with_errors
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.scale import DRIFT_REMOVABLE_MM_PER_H, DRIFT_TOLERANCE_MM_PER_H, PPM
 from wirecal.solver.sensitivity import sensitivity
@@ -57,6 +62,7 @@ from wirecal.solver.verdict import (
     implausible,
     residual_limit_mm,
 )
+from wirecal.solver.zero_reading import length_sigma_mm
 
 LENGTH_SPAN_RATIO = 2.0
 """The measured lengths' span may differ from the model's by this factor either way."""
@@ -100,15 +106,18 @@ def assess(
     findings += _lengths(measured, model, m.source, live_check)
 
     sigma_model = float(np.hypot(noise_mm, abs(m.mm_per_count) / np.sqrt(12)))
+    landing = _landing_sigma_mm(result, base)
+    sigma_length = float(np.hypot(sigma_model, landing))  # one reading of a length
     dof = len(measured) - len(names)
-    limit = residual_limit_mm(sigma_model, dof)
+    limit = residual_limit_mm(sigma_length, dof)
     if dof > 0 and not result.sigma_mm <= limit:
+        arm = f", the arm's repeatability {landing:.3g} mm (σ)" if landing else ""
         findings.append(
             Finding(
                 "residual",
                 f"the residual is far above the noise: σ {result.sigma_mm:.4g} mm from the "
                 f"joint fit; reading noise {noise_mm:g} mm and quantisation "
-                f"{abs(m.mm_per_count):g} mm allow at most {limit:.4f} mm (χ² bound, "
+                f"{abs(m.mm_per_count):g} mm{arm} allow at most {limit:.4f} mm (χ² bound, "
                 f"{dof} degrees of freedom, false alarm {FALSE_ALARM:g}): the lengths do "
                 "not fit this robot model (a noisier set-up: state its noise with --noise-mm; "
                 f"gross outliers: --robust{_scale_hint(result, limit)}",
@@ -123,12 +132,21 @@ def assess(
     return Plausibility(
         method=method,
         findings=tuple(findings),
-        noise_model_mm=sigma_model,
+        noise_model_mm=sigma_length,
         residual_limit_mm=float(limit),
         residual_sigma_mm=result.sigma_mm,
         identifiability=ident,
         unidentified=unidentified,
     )
+
+
+def _landing_sigma_mm(result: SolveResult, base: Model) -> float:
+    """Return σ_a, what the declared repeatability adds to a length (0 without the key)."""
+    m, r = result.measurements, result.robot.repeatability_mm
+    if r is None:
+        return 0.0
+    q = np.radians(m.joints_deg[m.present])
+    return length_sigma_mm(base, q, np.radians(m.theta0_deg), r)
 
 
 def _scale_hint(result: SolveResult, limit_mm: float) -> str:

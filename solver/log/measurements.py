@@ -11,7 +11,7 @@ controller solver uses the same readings).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -28,7 +28,7 @@ from wirecal.solver.log.rows import (
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.solver.scale import find_slips
-from wirecal.solver.zero_reading import expected_zero_mm
+from wirecal.solver.zero_reading import expected_zero_mm, slip_tolerance_mm
 
 
 @dataclass(frozen=True)
@@ -137,8 +137,11 @@ def check_log(
     Raises :class:`WirecalError` listing every ``file:line: problem``. A fingerprint,
     robot-name or encoder-scale mismatch is refused unless ``accept_foreign``. Missing
     points are not an error here: they are listed in the result (a run that stopped is
-    still readable).
+    still readable). The zero readings' slip tolerance ``tol.zero_mm`` is the floor of
+    :func:`~wirecal.solver.zero_reading.slip_tolerance_mm` (the generated programs' check).
     """
+    zero_mm = slip_tolerance_mm(robot.nominal, plan.theta0_deg, robot.repeatability_mm, tol.zero_mm)
+    tol = replace(tol, zero_mm=zero_mm)
     if not accept_foreign:
         check_origin(log, plan, robot)
     src = log.source
