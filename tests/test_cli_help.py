@@ -67,36 +67,40 @@ def test_version():
     assert r.output == f"wirecal, version {__version__}\n"
 
 
+def heavy_imported(imports: str, heavy: tuple[str, ...], folder: Path) -> str:
+    """Return which of the modules ``heavy`` a fresh Python has loaded after ``imports``."""
+    code = f"import sys\n{imports}\nprint(' '.join(m for m in {heavy!r} if m in sys.modules))\n"
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=folder
+    )
+    return out.stdout.strip()
+
+
+def command_imports(name: str, modules: str) -> str:
+    """Return the imports of the command line loading command ``name``, then ``modules``."""
+    return (
+        "from wirecal.cli.main import main\nimport click\n"
+        f"main.get_command(click.Context(main), {name!r})\nimport {modules}"
+    )
+
+
 def test_importing_the_cli_imports_no_heavy_package(tmp_path):
     """``wirecal --help`` costs little more than importing click: no matplotlib, lark,
     jinja2, numpy or scipy until a command needs them."""
-    code = (
-        "import sys\n"
-        "import wirecal, wirecal.cli.main\n"
-        "heavy = ('matplotlib', 'lark', 'jinja2', 'numpy', 'scipy')\n"
-        "print(' '.join(m for m in heavy if m in sys.modules))\n"
-    )
-    out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path
-    )
-    assert out.stdout.strip() == ""
+    heavy = ("matplotlib", "lark", "jinja2", "numpy", "scipy")
+    assert heavy_imported("import wirecal, wirecal.cli.main", heavy, tmp_path) == ""
 
 
 def test_solve_imports_neither_the_twin_nor_matplotlib(tmp_path):
     """Nor scipy.stats, which doubled its start-up for one χ² quantile."""
-    code = (
-        "import sys\n"
-        "from wirecal.cli.main import main\n"
-        "import click\n"
-        "main.get_command(click.Context(main), 'solve')\n"
-        "import wirecal.solver.plausibility\n"
-        "heavy = ('matplotlib', 'lark', 'jinja2', 'scipy.stats')\n"
-        "print(' '.join(m for m in heavy if m in sys.modules))\n"
-    )
-    out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path
-    )
-    assert out.stdout.strip() == ""
+    imports = command_imports("solve", "wirecal.solver.plausibility")
+    assert heavy_imported(imports, ("matplotlib", "lark", "jinja2", "scipy.stats"), tmp_path) == ""
+
+
+def test_plan_imports_no_scipy(tmp_path):
+    """``wirecal plan`` needs numpy only: scipy.special alone cost 0.17 s of its CPU."""
+    imports = command_imports("plan", "wirecal.solver.plan.planner, wirecal.solver.plan.compliance")
+    assert heavy_imported(imports, ("matplotlib", "lark", "jinja2", "scipy"), tmp_path) == ""
 
 
 HELP_MODULE = Path(__file__).resolve().parents[1] / "cli" / "help_text.py"
