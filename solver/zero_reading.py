@@ -52,3 +52,22 @@ def expected_zero_mm(model: Model, theta0_deg: np.ndarray, repeatability_mm: flo
     delta = (z * np.sqrt(np.clip(lam, 0.0, None))) @ V.T
     length, _ = wire_path(model.pulley, delta)
     return float(weight @ length)
+
+
+def length_scatter_mm(
+    model: Model, q_deg: np.ndarray, theta0_deg: np.ndarray, repeatability_mm: float
+) -> float:
+    """Return the RMS over the points of the σ (mm) the arm's landing puts on a wire length.
+
+    An arm of this repeatability lands at q + δq (module docstring), so the length of point
+    i scatters by σ_q·‖J_iᵀ·∇ℓ_i‖ (J_i the tool point's joint Jacobian, ∇ℓ_i the wire
+    length's gradient, :func:`~wirecal.solver.exit_geometry.wire_path`, at q_i). The
+    residual of the points holds it; the reference gauge's readings, taken without the arm,
+    do not.
+    """
+    q = np.radians(np.atleast_2d(np.asarray(q_deg, dtype=float)))
+    p, J = joint_jacobian(model, q)
+    p0, _ = joint_jacobian(model, np.radians(np.asarray(theta0_deg, dtype=float))[None])
+    _, grad = wire_path(model.pulley, p - p0[0])
+    g = np.einsum("ni,nij->nj", grad, J)
+    return float(joint_sigma_rad(repeatability_mm) * np.sqrt(np.mean(np.sum(g**2, axis=1))))
