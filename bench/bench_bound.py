@@ -132,9 +132,12 @@ def robot_path(arm: str) -> Path:
 def compliance_cases(arm: str, trials: int) -> None:
     """Print coverage and median bound/error, gauge × compliance (module docstring)."""
     path = robot_path(arm)
+    if not path.is_file():
+        raise SystemExit(f"{arm}: neither one of {', '.join(ARMS)} nor a robot file")
     data = tomllib.loads(path.read_text())
-    data["calibration"]["compliances"] = ["c2", "c3", "c4", "c5"]
-    data["calibration"]["repeatability_mm"] = REPEATABILITY_MM  # the twin's arm's, declared
+    calibration = data.setdefault("calibration", {})
+    calibration["compliances"] = ["c2", "c3", "c4", "c5"]
+    calibration["repeatability_mm"] = REPEATABILITY_MM  # the twin's arm's, declared
     without = robot_from_dict(data, str(path))
     plan_path = plan_beside(path)
     if plan_path is None:
