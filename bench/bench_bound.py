@@ -31,8 +31,17 @@ without a gauge, where the scale dominates, a bound at the scale's 95 % point mi
 those (7 of the first 100 seeds, where 5 are expected). Several arms in one run:
 ``--compliance ur5e viper_s650 abb_irb120``.
 
+Any robot file and plan: give ``--compliance`` the robot file's path instead of an arm's
+name; the plan is the one beside it (the demo's rule, :func:`plan_beside`: ``plan.toml``
+first), and the file is taken as above (``compliances`` set to c2..c5 whatever it lists,
+``repeatability_mm`` 0.02; its other keys, a payload step's mass among them, as they are).
+The payload plans (issue 30's payload step, designed for c2, c3 with the arm's rated payload
+at 50 mm from the flange): ``--compliance tests/data/payload_ur5e/robot.toml
+tests/data/payload_viper_s650/robot.toml tests/data/payload_abb_irb120/robot.toml``.
+
     python bench/bench_bound.py [--trials 300] [--no-unmodelled]
     python bench/bench_bound.py --compliance ur5e viper_s650 abb_irb120 [--trials 40]
+    python bench/bench_bound.py --compliance tests/data/payload_*/robot.toml [--trials 40]
 """
 
 from __future__ import annotations
@@ -51,11 +60,12 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from wirecal.app.coverage import compliance_trial, trial, wilson, with_gauge  # noqa: E402
-from wirecal.app.demo import example_files, plan_beside  # noqa: E402
+from wirecal.app.demo import PLANS, example_files, plan_beside  # noqa: E402
 from wirecal.formats.plan_file import load_plan  # noqa: E402
 from wirecal.formats.robot_file import load_robot, robot_from_dict  # noqa: E402
 from wirecal.solver.bound import BOUND_PROBABILITY  # noqa: E402
 from wirecal.solver.compliance import COMPLIANCE_RANGE_URAD_PER_NM  # noqa: E402
+from wirecal.solver.plan.calibration_plan import Plan  # noqa: E402
 from wirecal.solver.simulate import Unmodelled, realistic_encoder  # noqa: E402
 
 
@@ -64,7 +74,10 @@ def main() -> None:
     ap.add_argument("--trials", type=int, default=300)
     ap.add_argument("--no-unmodelled", action="store_true")
     ap.add_argument(
-        "--compliance", choices=sorted(ARMS), nargs="+", help="the compliance cases' arms"
+        "--compliance",
+        nargs="+",
+        metavar="ARM_OR_ROBOT_FILE",
+        help=f"the compliance cases' arms ({', '.join(ARMS)}) or robot files",
     )
     args = ap.parse_args()
     if args.compliance:
@@ -109,15 +122,26 @@ ARMS = ("viper_s650", "ur5e", "abb_irb120")
 """The arms with a shipped plan (the demo's beside each robot file, :func:`plan_beside`)."""
 
 
+def robot_path(arm: str) -> Path:
+    """Return the robot file of ``arm``: a shipped arm's (:data:`ARMS`) or the path given."""
+    if arm in ARMS:
+        return Path(__file__).resolve().parents[1] / "examples" / arm / "robot.toml"
+    return Path(arm)
+
+
 def compliance_cases(arm: str, trials: int) -> None:
     """Print coverage and median bound/error, gauge × compliance (module docstring)."""
-    folder = Path(__file__).resolve().parents[1] / "examples" / arm
-    data = tomllib.loads((folder / "robot.toml").read_text())
-    data["calibration"]["compliances"] = ["c2", "c3", "c4", "c5"]
-    data["calibration"]["repeatability_mm"] = REPEATABILITY_MM  # the twin's arm's, declared
-    without = robot_from_dict(data, str(folder / "robot.toml"))
-    plan_path = plan_beside(folder / "robot.toml")
-    assert plan_path is not None
+    path = robot_path(arm)
+    if not path.is_file():
+        raise SystemExit(f"{arm}: neither one of {', '.join(ARMS)} nor a robot file")
+    data = tomllib.loads(path.read_text())
+    calibration = data.setdefault("calibration", {})
+    calibration["compliances"] = ["c2", "c3", "c4", "c5"]
+    calibration["repeatability_mm"] = REPEATABILITY_MM  # the twin's arm's, declared
+    without = robot_from_dict(data, str(path))
+    plan_path = plan_beside(path)
+    if plan_path is None:
+        raise SystemExit(f"{path}: no plan beside it (one of {', '.join(PLANS)})")
     plan = load_plan(plan_path, without)
     tol = without.encoder.scale_tolerance_ppm
     beyond = sum(
@@ -126,7 +150,8 @@ def compliance_cases(arm: str, trials: int) -> None:
         for s in range(1, trials + 1)
     )
     print(
-        f"{arm}, {plan_path.name}: {trials} calibrations per case; repeatability 0.02 mm; "
+        f"{arm}, {plan_path.name}{_payload(plan)}: {trials} calibrations per case; "
+        f"repeatability 0.02 mm; "
         f"true scale beyond {BOUND_PROBABILITY:.0%} of its ±{tol:g} ppm in {beyond} runs"
     )
     print(
@@ -148,6 +173,16 @@ def compliance_cases(arm: str, trials: int) -> None:
             runs, seconds = cases[compliant]
             head = f"{gauge_name:<6}{'on' if compliant else 'off':<7}"
             print(head + _row(robot, runs, None if compliant else bent) + f"{seconds:5.0f}")
+
+
+def _payload(plan: Plan) -> str:
+    """Return the header's note of the plan's payload step (mass, points), or nothing."""
+    step = plan.payload_step
+    return (
+        ""
+        if step is None
+        else f" (payload step {step.payload_kg:g} kg, {len(step.points_deg)} points)"
+    )
 
 
 def _row(robot, runs: list, bent: np.ndarray | None) -> str:

@@ -51,6 +51,7 @@ from wirecal.solver.scale import PPM, Drift, ScaleEstimate, estimate_scale, fit_
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.simulate import sag_lengths_mm
 from wirecal.solver.verdict import READING_NOISE_MM
+from wirecal.solver.zero_reading import length_sigma_mm
 
 METHODS = ("stepwise", "joint")
 STEPWISE_BUDGET_MISS = 1.36
@@ -369,8 +370,26 @@ def _scale_estimate(
     enc = robot.encoder
     if factor is None:
         return None, enc.scale_tolerance_ppm * PPM
-    scale = estimate_scale(m.reference_mm, valid_length(enc), enc.reference_uncertainty_mm, sigma)
+    reading = _gauge_reading_sigma(robot, m, sigma)
+    scale = estimate_scale(m.reference_mm, valid_length(enc), enc.reference_uncertainty_mm, reading)
     return scale, scale.std
+
+
+def _gauge_reading_sigma(robot: Robot, m: Measurements, sigma: float) -> float:
+    """Return the σ (mm) of one reading of the reference gauge, from the residual's ``sigma``.
+
+    The gauge is read with the wire's tip in its nests, without the arm: when the robot
+    file declares the arm's repeatability, the residual's σ holds the scatter the arm's
+    landing puts on the points' lengths (:func:`~wirecal.solver.zero_reading.length_sigma_mm`)
+    and the gauge's readings do not, so it is taken off (in quadrature). Never below the
+    counts' quantisation, mm_per_count/√12. Without the key: ``sigma`` (as before it).
+    """
+    if robot.repeatability_mm is None:
+        return sigma
+    q = np.radians(m.joints_deg[m.present])
+    arm = length_sigma_mm(robot.nominal, q, np.radians(m.theta0_deg), robot.repeatability_mm)
+    counts = abs(robot.encoder.mm_per_count) / math.sqrt(12)
+    return max(math.sqrt(max(sigma**2 - arm**2, 0.0)), counts)
 
 
 def _budgets(

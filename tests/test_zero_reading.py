@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from wirecal.app.coverage import with_gauge
+from wirecal.app.coverage import GAUGE_LENGTH_MM, with_gauge
 from wirecal.cli.main import main
 from wirecal.formats.log import parse_log
 from wirecal.formats.plan_file import load_plan
@@ -24,7 +24,7 @@ from wirecal.solver.kinematics import tool_position
 from wirecal.solver.log.measurements import check_log
 from wirecal.solver.simulate import Unmodelled
 from wirecal.solver.solve import solve
-from wirecal.solver.zero_reading import expected_zero_mm
+from wirecal.solver.zero_reading import expected_zero_mm, length_sigma_mm
 from wirecal.twin.world import DEFAULT_UNMODELLED, World
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -173,3 +173,44 @@ def test_the_twins_world_takes_the_declared_repeatability(tmp_path):
     plain = World(_robot("ur5e"), {}, q0, tmp_path, unmodelled=DEFAULT_UNMODELLED)
     assert plain.unmodelled is not None
     assert plain.unmodelled.repeatability_mm == 0.02  # the twin's default, as before
+
+
+def test_length_scatter_is_that_of_the_twins_landing():
+    """σ of each point's wire length from the arm's landing: against a Monte Carlo of the twin."""
+    robot = _robot("ur5e")
+    plan = load_plan(EXAMPLES / "ur5e" / "plan.toml", robot)
+    q = np.array([p for s in plan.steps for p in s.points_deg])
+    p0 = tool_position(robot.nominal, np.radians(plan.theta0_deg)[None])[0]
+    exact = np.linalg.norm(tool_position(robot.nominal, np.radians(q)) - p0, axis=1)
+    rng = np.random.default_rng(5)
+    draws = []
+    for _ in range(2000):
+        landed = q + Unmodelled(0.02, 0.0).joint_errors_deg(robot.nominal, q, rng)
+        draws.append(np.linalg.norm(tool_position(robot.nominal, np.radians(landed)) - p0, axis=1))
+    rms = np.sqrt(np.mean(np.var(np.array(draws) - exact, axis=0)))
+    # 2000 draws per point: the RMS of the σ is known to ~1 %.
+    sigma = length_sigma_mm(robot.nominal, np.radians(q), np.radians(plan.theta0_deg), 0.02)
+    assert sigma == pytest.approx(rms, rel=0.03)
+    assert 0.005 < rms < 0.02  # the size it has at 0.02 mm (0.011 mm)
+
+
+def _gauge_reading_mm(robot, plan, seed: int, landing_mm: float) -> tuple[float, float]:
+    """Return the σ of one gauge reading the scale took (one pair, certified exactly) and σ."""
+    text = simulate_log(robot, plan, {}, seed=seed, unmodelled=Unmodelled(landing_mm, 0.0))
+    result = solve(robot, plan, check_log(parse_log(text, "run"), plan, robot))
+    return result.scale.std * GAUGE_LENGTH_MM / np.sqrt(2), result.sigma_mm
+
+
+def test_the_gauges_reading_noise_leaves_out_the_arms_landing():
+    """The gauge is read without the arm: its σ is the readings', not the residual's."""
+    plain = with_gauge(_robot("ur5e"), uncertainty_mm=0.0, repeats=1)
+    declared = replace(plain, repeatability_mm=0.02)
+    plan = load_plan(EXAMPLES / "ur5e" / "plan.toml", plain)
+    seeds = range(1, 4)
+    # The reading noise itself: the residual of an arm that lands exactly (noise, counts).
+    reading = np.mean([_gauge_reading_mm(plain, plan, s, 1e-9)[1] for s in seeds])
+    taken = np.mean([_gauge_reading_mm(declared, plan, s, 0.02)[0] for s in seeds])
+    before = np.mean([_gauge_reading_mm(plain, plan, s, 0.02)[0] for s in seeds])
+    # Three runs of ~60 points: each σ within ~10 % (taken 11 % above); the arm adds ~38 %.
+    assert taken == pytest.approx(reading, rel=0.2)
+    assert before > 1.25 * reading  # without the key: the residual's σ, as before
