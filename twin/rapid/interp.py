@@ -120,6 +120,20 @@ def coerce(value: Any, want: Type) -> Any:
     return value
 
 
+def _num(value: Any) -> float:
+    """Return ``value`` as a num (single precision)."""
+    return f32(float(value))
+
+
+_SCALAR: dict[Type, Callable[[Any], Any]] = {
+    NUM: _num,
+    DNUM: float,
+    BOOL: lambda v: v,
+    STRING: lambda v: v,
+}
+"""What :func:`coerce` of a copy does to data of these types, without its type tests."""
+
+
 def default(t: Type) -> Any:
     """Return the value data of type ``t`` starts with (0, FALSE, "", zeros)."""
     if t.dims:
@@ -432,6 +446,14 @@ class _Compiler:
         want = self.typer.type(s.target)
         assert want is not None
         value, store = self.expr(s.value, want), self.store(s.target)
+        scalar = _SCALAR.get(want)
+        if scalar is not None:  # a scalar is no record nor array: nothing to copy
+
+            def assign_scalar(frame: Frame) -> None:
+                interp.line = line
+                store(frame, scalar(value(frame)))
+
+            return assign_scalar
 
         def assign(frame: Frame) -> None:
             interp.line = line
@@ -680,6 +702,14 @@ class _Compiler:
     def _(self, e: N.Index, want: Type | None) -> Eval:
         base = self.expr(e.base, None)
         indices = [self.expr(i, NUM) for i in e.indices]
+        if len(indices) == 1:  # the common case, without the list of indices
+            index = indices[0]
+
+            def element_1(frame: Frame) -> Any:
+                array = base(frame)
+                return array[_position(array, index(frame))]
+
+            return element_1
 
         def element(frame: Frame) -> Any:
             holder, last = _element_holder(base(frame), [i(frame) for i in indices])
@@ -808,17 +838,20 @@ def _constant(v: Any) -> Eval:
     return lambda f: v
 
 
+def _position(array: list[Any], i: float) -> int:
+    """Return the position in ``array`` of its element ``i`` (from 1)."""
+    k = int(i)
+    if k != i or not 1 <= k <= len(array):
+        raise RapidError(f"index {i:g} outside 1..{len(array)}")
+    return k - 1
+
+
 def _element_holder(array: list[Any], indices: list[float]) -> tuple[list[Any], int]:
     """Return the list holding the element ``indices`` (from 1) and its position."""
     holder = array
-    for depth, i in enumerate(indices):
-        k = int(i)
-        if k != i or not 1 <= k <= len(holder):
-            raise RapidError(f"index {i:g} outside 1..{len(holder)}")
-        if depth == len(indices) - 1:
-            return holder, k - 1
-        holder = holder[k - 1]
-    raise AssertionError("no index")
+    for i in indices[:-1]:
+        holder = holder[_position(holder, i)]
+    return holder, _position(holder, indices[-1])
 
 
 def _positional(args: list[N.Arg], n: int) -> N.Expr:
