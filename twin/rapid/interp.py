@@ -38,7 +38,6 @@ import operator
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import singledispatchmethod
 from typing import Any
 
 from wirecal.lang.rapid import nodes as N
@@ -56,6 +55,7 @@ from wirecal.lang.rapid.checker import (
     Typer,
 )
 from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
+from wirecal.lang.syntax import node_method
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.machine import Outcome, RunError, f32
 from wirecal.twin.rapid.controller_protocol import RapidController
@@ -424,7 +424,7 @@ class _Compiler:
         self.typer.line = s.line
         return self.compile_stmt(s)
 
-    @singledispatchmethod
+    @node_method
     def compile_stmt(self, s: N.Stmt) -> Callable[[Frame], None]:
         """EXIT (the only statement left once the subset check passed)."""
         assert isinstance(s, N.Exit), s
@@ -671,7 +671,7 @@ class _Compiler:
         return set_element
 
     # ---- expressions ----
-    @singledispatchmethod
+    @node_method
     def expr(self, e: N.Expr, want: Type | None) -> Eval:
         """Compile an expression; ``want`` is the type its context needs (literals, aggregates).
 

@@ -35,8 +35,8 @@ import math
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import fields
-from functools import singledispatchmethod
 
+from wirecal.lang.syntax import node_method
 from wirecal.lang.urscript import nodes as N
 from wirecal.lang.urscript.parser import Program, operands, walk
 from wirecal.solver.errors import WirecalError
@@ -241,7 +241,7 @@ class _Compiler:
 
         return run
 
-    @singledispatchmethod
+    @node_method
     def _stmt(self, s: N.Stmt) -> Callable:  # pragma: no cover - every statement is registered
         raise AssertionError(type(s).__name__)
 
@@ -324,7 +324,7 @@ class _Compiler:
 
         return get
 
-    @singledispatchmethod
+    @node_method
     def expr(self, e: N.Expr) -> Callable:  # pragma: no cover - every expression is registered
         raise AssertionError(type(e).__name__)
 
