@@ -453,17 +453,21 @@ _COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "%": "div"}
 
 def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Callable:
     """Compile ``a op b``, counting the operations as executed (module docstring)."""
-    kind = _COUNTED[op]
+    kind, divides = _COUNTED[op], op in "/%"
+    int_op, float_op = _INT_OPS.get(op), _FLOAT_OPS[op]
 
     def f(frame):
         x, y = a(frame), b(frame)
-        x, y = number(x, op), number(y, op)
+        if type(x) is not float:  # a float is a number: the check only for the others
+            x = number(x, op)
+        if type(y) is not float:
+            y = number(y, op)
         interp.ops[kind] += 1
-        if op in "/%" and y == 0:
+        if divides and y == 0:
             raise URError("division by zero")
-        if isinstance(x, int) and isinstance(y, int) and op != "/":
-            return i32(_INT_OPS[op](x, y))
-        return f32(_FLOAT_OPS[op](float(x), float(y)))
+        if int_op is not None and isinstance(x, int) and isinstance(y, int):
+            return i32(int_op(x, y))
+        return f32(float_op(float(x), float(y)))
 
     return f
 
