@@ -1,8 +1,9 @@
 """What the parsers of every controller language share: the nesting bounds they read.
 
 A program nested deeper than these bounds is refused up front (the checks and the
-interpreters recurse per level), a helper walks a parsed program's block tree, and the
-line parsers keep each line's node by its text.
+interpreters recurse per level), a helper walks a parsed program's block tree, the
+line parsers keep each line's node by its text, and the checkers and interpreters dispatch
+on a node's class (:class:`node_method`).
 """
 
 from __future__ import annotations
@@ -10,8 +11,8 @@ from __future__ import annotations
 import copy
 import re
 from collections.abc import Callable, Iterator
-from functools import lru_cache
-from typing import TypeVar
+from functools import lru_cache, singledispatchmethod
+from typing import Any, TypeVar
 
 from wirecal.solver.errors import WirecalError
 
@@ -169,3 +170,25 @@ def kept_by_text(parse_line: Callable[[str], S]) -> Callable[[str], S]:
 
     parse.__doc__ = parse_line.__doc__
     return parse
+
+
+class node_method(singledispatchmethod):
+    """``functools.singledispatchmethod``, bound once per instance.
+
+    Python 3.11 builds a new wrapper (``functools.update_wrapper``) at every attribute
+    access of a ``singledispatchmethod``; a checker or compiler calls its per-node method
+    once per node, so the wrapper is kept in the instance's ``__dict__`` at its first
+    access (the instance finds it there before the class's descriptor). The cases are
+    registered in the class body, so the kept wrapper dispatches as a new one would.
+    """
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        """Remember the attribute's name, where an instance keeps its wrapper."""
+        self.attribute = name
+
+    def __get__(self, obj: Any, cls: type | None = None) -> Any:
+        """Return the dispatching wrapper, kept in ``obj`` from its first access."""
+        method = super().__get__(obj, cls)
+        if obj is not None:
+            obj.__dict__[self.attribute] = method
+        return method

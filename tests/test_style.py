@@ -8,6 +8,7 @@ is split into well-named steps with one purpose each.
 from __future__ import annotations
 
 import ast
+from functools import cache
 
 from .conftest import ROOT
 from .test_layers import FOLDERS
@@ -18,8 +19,12 @@ STILL_LONG: set[str] = set()
 """Functions over MAX_LINES allowed for now, by name."""
 
 
+@cache
 def _long_functions() -> dict[str, list[str]]:
-    """Return function name → where each over MAX_LINES is (``path:line: n lines``)."""
+    """Return function name → where each over MAX_LINES is (``path:line: n lines``).
+
+    Walked once per session: two tests read it, and nothing changes the sources meanwhile.
+    """
     found: dict[str, list[str]] = {}
     for folder in [*FOLDERS, "bench"]:
         for path in sorted((ROOT / folder).rglob("*.py")):

@@ -23,13 +23,13 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import singledispatchmethod
 from typing import Any
 
 from wirecal.lang.rapid import nodes as N
 from wirecal.lang.rapid import tables as T
 from wirecal.lang.rapid.eio import CONFIG_SUFFIX, config_signals
 from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
+from wirecal.lang.syntax import node_method
 
 SUBSET = "not in wirecal's RAPID subset"
 
@@ -168,7 +168,7 @@ class Typer:
             e = e.base
         return e if isinstance(e, N.Name) else None
 
-    @singledispatchmethod
+    @node_method
     def type(self, e: N.Expr, want: Type | None = None) -> Type | None:
         """Return the type of ``e`` (``want``: the type the context needs, for aggregates).
 
@@ -874,7 +874,7 @@ class Checker:
             typer.line = s.line
             self.stmt(s, typer, r)
 
-    @singledispatchmethod
+    @node_method
     def stmt(self, s: N.Stmt, typer: Typer, r: N.Routine) -> None:
         """Check one statement (RAPID beyond the subset, or EXIT, when no case is its own)."""
         if self.lang.subset and not isinstance(s, N.Exit) and not self.passes_on(s):

@@ -39,7 +39,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass
-from functools import cache, singledispatchmethod
+from functools import cache
 from importlib import resources
 
 from lark import Lark, Transformer, ast_utils
@@ -51,6 +51,7 @@ from wirecal.lang.syntax import (
     check_line_depth,
     check_operator_run,
     kept_by_text,
+    node_method,
     walk_tree,
 )
 from wirecal.lang.urscript import nodes as N
@@ -621,7 +622,7 @@ class _Checker:
             for body in children(s):
                 self.jumps(body, inner)
 
-    @singledispatchmethod
+    @node_method
     def stmt(self, s: N.Stmt) -> None:
         pass  # Def, HaltStmt, Jump, Critical: nothing to check on the line itself
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from functools import cache, lru_cache, singledispatchmethod
+from functools import cache, lru_cache
 from importlib import resources
 
 from lark import Lark, Transformer, ast_utils
@@ -35,6 +35,7 @@ from wirecal.lang.syntax import (
     check_line_depth,
     check_operator_run,
     kept_by_text,
+    node_method,
     walk_tree,
 )
 from wirecal.lang.vplus import nodes as N
@@ -728,7 +729,7 @@ class _Checker:
             self.stmt(s)
 
     # ---------- statements ----------
-    @singledispatchmethod
+    @node_method
     def stmt(self, s: N.Stmt) -> None:  # pragma: no cover - every node type is registered
         raise AssertionError(type(s).__name__)
 
@@ -940,7 +941,7 @@ class _Checker:
         if "?" not in (got, want) and got != want:
             self.err(f"type-prefix misuse: a {_word(got)} where a {_word(want)} is needed")
 
-    @singledispatchmethod
+    @node_method
     def kind(self, e: N.Expr) -> str:
         """Return the kind of an expression: n, s, l, b, t, or ?.
 

@@ -38,7 +38,6 @@ import operator
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import singledispatchmethod
 from typing import Any
 
 from wirecal.lang.rapid import nodes as N
@@ -56,6 +55,7 @@ from wirecal.lang.rapid.checker import (
     Typer,
 )
 from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
+from wirecal.lang.syntax import node_method
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.machine import Outcome, RunError, f32
 from wirecal.twin.rapid.controller_protocol import RapidController
@@ -118,6 +118,20 @@ def coerce(value: Any, want: Type) -> Any:
     if want.name in T.RECORDS and isinstance(value, dict):
         return {k: coerce(value[k], Type(t)) for k, t in T.RECORDS[want.name]}
     return value
+
+
+def _num(value: Any) -> float:
+    """Return ``value`` as a num (single precision)."""
+    return f32(float(value))
+
+
+_SCALAR: dict[Type, Callable[[Any], Any]] = {
+    NUM: _num,
+    DNUM: float,
+    BOOL: lambda v: v,
+    STRING: lambda v: v,
+}
+"""What :func:`coerce` of a copy does to data of these types, without its type tests."""
 
 
 def default(t: Type) -> Any:
@@ -410,7 +424,7 @@ class _Compiler:
         self.typer.line = s.line
         return self.compile_stmt(s)
 
-    @singledispatchmethod
+    @node_method
     def compile_stmt(self, s: N.Stmt) -> Callable[[Frame], None]:
         """EXIT (the only statement left once the subset check passed)."""
         assert isinstance(s, N.Exit), s
@@ -432,6 +446,14 @@ class _Compiler:
         want = self.typer.type(s.target)
         assert want is not None
         value, store = self.expr(s.value, want), self.store(s.target)
+        scalar = _SCALAR.get(want)
+        if scalar is not None:  # a scalar is no record nor array: nothing to copy
+
+            def assign_scalar(frame: Frame) -> None:
+                interp.line = line
+                store(frame, scalar(value(frame)))
+
+            return assign_scalar
 
         def assign(frame: Frame) -> None:
             interp.line = line
@@ -649,7 +671,7 @@ class _Compiler:
         return set_element
 
     # ---- expressions ----
-    @singledispatchmethod
+    @node_method
     def expr(self, e: N.Expr, want: Type | None) -> Eval:
         """Compile an expression; ``want`` is the type its context needs (literals, aggregates).
 
@@ -680,6 +702,14 @@ class _Compiler:
     def _(self, e: N.Index, want: Type | None) -> Eval:
         base = self.expr(e.base, None)
         indices = [self.expr(i, NUM) for i in e.indices]
+        if len(indices) == 1:  # the common case, without the list of indices
+            index = indices[0]
+
+            def element_1(frame: Frame) -> Any:
+                array = base(frame)
+                return array[_position(array, index(frame))]
+
+            return element_1
 
         def element(frame: Frame) -> Any:
             holder, last = _element_holder(base(frame), [i(frame) for i in indices])
@@ -808,17 +838,20 @@ def _constant(v: Any) -> Eval:
     return lambda f: v
 
 
+def _position(array: list[Any], i: float) -> int:
+    """Return the position in ``array`` of its element ``i`` (from 1)."""
+    k = int(i)
+    if k != i or not 1 <= k <= len(array):
+        raise RapidError(f"index {i:g} outside 1..{len(array)}")
+    return k - 1
+
+
 def _element_holder(array: list[Any], indices: list[float]) -> tuple[list[Any], int]:
     """Return the list holding the element ``indices`` (from 1) and its position."""
     holder = array
-    for depth, i in enumerate(indices):
-        k = int(i)
-        if k != i or not 1 <= k <= len(holder):
-            raise RapidError(f"index {i:g} outside 1..{len(holder)}")
-        if depth == len(indices) - 1:
-            return holder, k - 1
-        holder = holder[k - 1]
-    raise AssertionError("no index")
+    for i in indices[:-1]:
+        holder = holder[_position(holder, i)]
+    return holder, _position(holder, indices[-1])
 
 
 def _positional(args: list[N.Arg], n: int) -> N.Expr:

@@ -35,8 +35,8 @@ import math
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import fields
-from functools import singledispatchmethod
 
+from wirecal.lang.syntax import node_method
 from wirecal.lang.urscript import nodes as N
 from wirecal.lang.urscript.parser import Program, operands, walk
 from wirecal.solver.errors import WirecalError
@@ -241,7 +241,7 @@ class _Compiler:
 
         return run
 
-    @singledispatchmethod
+    @node_method
     def _stmt(self, s: N.Stmt) -> Callable:  # pragma: no cover - every statement is registered
         raise AssertionError(type(s).__name__)
 
@@ -324,7 +324,7 @@ class _Compiler:
 
         return get
 
-    @singledispatchmethod
+    @node_method
     def expr(self, e: N.Expr) -> Callable:  # pragma: no cover - every expression is registered
         raise AssertionError(type(e).__name__)
 
@@ -453,17 +453,21 @@ _COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "%": "div"}
 
 def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Callable:
     """Compile ``a op b``, counting the operations as executed (module docstring)."""
-    kind = _COUNTED[op]
+    kind, divides = _COUNTED[op], op in "/%"
+    int_op, float_op = _INT_OPS.get(op), _FLOAT_OPS[op]
 
     def f(frame):
         x, y = a(frame), b(frame)
-        x, y = number(x, op), number(y, op)
+        if type(x) is not float:  # a float is a number: the check only for the others
+            x = number(x, op)
+        if type(y) is not float:
+            y = number(y, op)
         interp.ops[kind] += 1
-        if op in "/%" and y == 0:
+        if divides and y == 0:
             raise URError("division by zero")
-        if isinstance(x, int) and isinstance(y, int) and op != "/":
-            return i32(_INT_OPS[op](x, y))
-        return f32(_FLOAT_OPS[op](float(x), float(y)))
+        if int_op is not None and isinstance(x, int) and isinstance(y, int):
+            return i32(int_op(x, y))
+        return f32(float_op(float(x), float(y)))
 
     return f
 

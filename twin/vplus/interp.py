@@ -22,8 +22,8 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Callable
-from functools import singledispatchmethod
 
+from wirecal.lang.syntax import node_method
 from wirecal.lang.vplus import nodes as N
 from wirecal.lang.vplus.forms import FormError, operands
 from wirecal.lang.vplus.keywords import keyword
@@ -413,7 +413,7 @@ class _Compiler:
         return lambda frame: _Ref(*interp._value_cell(f(frame)))
 
     # ---------- expressions: (function, is_double) ----------
-    @singledispatchmethod
+    @node_method
     def expr(self, e: N.Expr):
         return _refuse(f"{type(e).__name__} as a value"), False
 
@@ -607,7 +607,7 @@ class _Compiler:
 
         return run
 
-    @singledispatchmethod
+    @node_method
     def _stmt(self, s: N.Stmt) -> Callable:  # pragma: no cover - every step type is registered
         raise AssertionError(type(s).__name__)
 
