@@ -145,8 +145,7 @@ def check_log(
     if not accept_foreign:
         check_origin(log, plan, robot)
     src = log.source
-    problems: list[str] = []
-    problems += payload_problems(log, plan)
+    problems = payload_problems(log, plan)  # a new list: the checks below add to it
     rows = read_rows(log, plan, robot, tol, problems)
     zeros, n_steps, mpc = rows.zeros, len(plan.steps), log.mm_per_count
     first_zero = zeros[min(zeros)] if zeros else None
