@@ -16,7 +16,7 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from types import FrameType
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import click
 
@@ -28,8 +28,18 @@ class Terminated(BaseException):
     """SIGTERM arrived: unwind like Ctrl-C."""
 
 
+_RECEIVED: list[int] = []
+"""The signals a running command received (:func:`stop_cleanly`)."""
+
+
 def _terminate(signum: int, frame: FrameType | None) -> None:
+    _RECEIVED.append(signum)
     raise Terminated
+
+
+def _interrupt(signum: int, frame: FrameType | None) -> None:
+    _RECEIVED.append(signum)
+    raise KeyboardInterrupt
 
 
 def exit_stopped(number: int) -> NoReturn:
@@ -83,15 +93,39 @@ def ignore_after_end() -> None:
 
 @contextmanager
 def stop_cleanly() -> Iterator[None]:
-    """Run a command so that SIGTERM and Ctrl-C unwind it and then end the process at once."""
-    try:
-        previous = signal.signal(signal.SIGTERM, _terminate)
-    except ValueError:  # not the main thread: leave the signals alone
-        previous = None
+    """Run a command so that SIGTERM and Ctrl-C unwind it and then end the process at once.
+
+    An error that a signal caused is the signal: Ctrl-C while a compiled module initialises
+    (a lazy ``import scipy.optimize``) surfaces as ``ImportError: initialization failed``,
+    which then ends the command like the Ctrl-C it was, not in a traceback.
+    """
+    previous = _install({signal.SIGTERM: _terminate, signal.SIGINT: _interrupt})
     try:
         yield
     except (KeyboardInterrupt, Terminated) as exc:
         exit_stopped(signal.SIGINT if isinstance(exc, KeyboardInterrupt) else signal.SIGTERM)
+    except Exception:
+        if _RECEIVED:
+            exit_stopped(_RECEIVED[0])
+        raise
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+
+
+def _install(handlers: dict[int, Any]) -> dict[int, Any]:
+    """Install ``handlers`` where Python's own would run; return the handlers replaced.
+
+    SIGINT only where it raises ``KeyboardInterrupt`` (not where it is ignored, as in a
+    background job); none outside the main thread.
+    """
+    previous: dict[int, Any] = {}
+    for number, handler in handlers.items():
+        current = signal.getsignal(number)
+        if number == signal.SIGINT and current is not signal.default_int_handler:
+            continue
+        try:
+            previous[number] = signal.signal(number, handler)
+        except ValueError:  # not the main thread: leave the signals alone
+            return previous
+    return previous

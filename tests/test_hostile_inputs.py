@@ -1465,3 +1465,32 @@ def test_ra04_a_name_with_a_trailing_space_is_the_same_name_in_robot_and_plan(tm
     (tmp_path / "plan.toml").write_text(plan)
     r = invoke("psi", tmp_path / "robot.toml", tmp_path / "plan.toml")
     assert r.exit_code == 0, r.output
+
+
+def test_nc09_an_error_a_ctrl_c_caused_ends_as_the_ctrl_c():
+    """NC09 again: Ctrl-C while scipy's compiled optimizer initialised (report's lazy import)
+    surfaced as 'ImportError: initialization failed': exit 1 and a traceback, not the stop."""
+    import signal
+
+    code = (
+        "import os, signal\n"
+        "from wirecal.cli.interrupt import stop_cleanly\n"
+        "with stop_cleanly():\n"
+        "    try:\n"
+        "        os.kill(os.getpid(), signal.SIGINT)\n"
+        "        signal.pause()\n"
+        "    except KeyboardInterrupt:\n"
+        "        raise ImportError('initialization failed')\n"
+    )
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 128 + signal.SIGINT, p.stderr
+    assert "Traceback" not in p.stderr
+    assert "stopped (SIGINT); nothing written" in p.stderr
+    # an error no signal caused is still the error
+    plain = code.replace(
+        "        os.kill(os.getpid(), signal.SIGINT)\n        signal.pause()\n",
+        "        raise KeyboardInterrupt\n",
+    )
+    p = subprocess.run([sys.executable, "-c", plain], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 1
+    assert "ImportError: initialization failed" in p.stderr
