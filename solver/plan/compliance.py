@@ -25,10 +25,10 @@ from wirecal.solver.compliance import (
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan.calibration_plan import Plan, Step
 from wirecal.solver.plan.candidates import Screened
-from wirecal.solver.plan.joint import linked_in_block, pooled_candidates
+from wirecal.solver.plan.joint import linked_in_block, may_join, pooled_candidates
 from wirecal.solver.plan.options import PlanOptions
 from wirecal.solver.plan.predict import robot_time
-from wirecal.solver.plan.steps import StepPool, step_errors
+from wirecal.solver.plan.steps import StepPool
 from wirecal.solver.plan.tour import visit_s
 from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import sensitivity
@@ -200,20 +200,10 @@ class _Costs:
     def _allow(self, k: int) -> None:
         """Work out which of step k's candidates may join it (the joint design's rules).
 
-        ``spread_deg`` from each of its points, no via point when it has one, and no rise
-        of its step-by-step error (:func:`~wirecal.solver.plan.steps.step_errors`).
+        :func:`~wirecal.solver.plan.joint.may_join`, as the joint design applies them.
         """
-        mine, pool, points = np.flatnonzero(self.step == k), self.pools[k], self._picked(k)
-        ok = np.ones(len(mine), bool)
-        if len(points):
-            gap = np.max(np.abs(self.q[mine][:, None] - points[None]), axis=2)
-            ok = np.min(gap, axis=1) >= self.opt.spread_deg
-        if self.has_via[mine][pool.picks].any():
-            ok &= ~self.has_via[mine]
-        args = (pool.pj, pool.pprev, pool.cov_prev, pool.pnext)
-        now = step_errors(*args, pool.picks[:-1], pool.picks[-1:], self.opt)[0]
-        ok[ok] = step_errors(*args, pool.picks, np.flatnonzero(ok), self.opt) <= now
-        self.allowed[mine] = ok
+        mine = np.flatnonzero(self.step == k)
+        self.allowed[mine] = may_join(self.q[mine], self.has_via[mine], self.pools[k], self.opt)
 
     def _visit(self, start: np.ndarray, js: np.ndarray) -> np.ndarray:
         """Return the robot time of the moves from ``start`` to candidates ``js``."""

@@ -116,14 +116,8 @@ class _Candidates:
         opt = self.opt
         mine = np.flatnonzero(self.step == k)
         pool, q = self.pools[k], self.q[mine]
-        here = self.q[mine[pool.picks]]
-        spread = np.min(np.max(np.abs(q[:, None] - here[None]), axis=2), axis=1)
-        ok = spread >= opt.spread_deg
-        if self.has_via[mine][pool.picks].any():
-            ok &= ~self.has_via[mine]
-        args = (pool.pj, pool.pprev, pool.cov_prev, pool.pnext)
-        now = step_errors(*args, pool.picks[:-1], pool.picks[-1:], opt)[0]
-        ok[ok] = step_errors(*args, pool.picks, np.flatnonzero(ok), opt) <= now
+        here = q[pool.picks]
+        ok = may_join(q, self.has_via[mine], pool, opt)
         self.allowed[mine] = ok
         for a in here[len(here) - added :] if added else (self.theta0, *here):
             self.starts[k].append((a, mine[ok]))
@@ -165,6 +159,26 @@ class _Candidates:
                 return order[:n]
             ahead = order[: 4 * n]
             self._count(ahead[np.isin(ahead, ranked[stale])])
+
+
+def may_join(q: np.ndarray, has_via: np.ndarray, pool: StepPool, opt: PlanOptions) -> np.ndarray:
+    """Return which of a step's pool ``q`` (deg, in the pool's order) may join the step.
+
+    The joint design's rules: ``spread_deg`` from each of its points, no via point when
+    one of its points has one, and no rise of its step-by-step error
+    (:func:`~wirecal.solver.plan.steps.step_errors`). ``has_via``: per candidate.
+    """
+    points = q[pool.picks]
+    ok = np.ones(len(q), bool)
+    if len(points):
+        gap = np.max(np.abs(q[:, None] - points[None]), axis=2)
+        ok = np.min(gap, axis=1) >= opt.spread_deg
+    if has_via[pool.picks].any():
+        ok &= ~has_via
+    args = (pool.pj, pool.pprev, pool.cov_prev, pool.pnext)
+    now = step_errors(*args, pool.picks[:-1], pool.picks[-1:], opt)[0]
+    ok[ok] = step_errors(*args, pool.picks, np.flatnonzero(ok), opt) <= now
+    return ok
 
 
 def pooled_candidates(pools: list[StepPool]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
