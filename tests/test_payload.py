@@ -338,7 +338,8 @@ IRB = GOLDEN.parents[1] / "payload_abb_irb120"
 
 @pytest.fixture(scope="module")
 def irb_robot():
-    """The IRB 120 asking c2, c3, with a 3 kg payload step (its rated payload)."""
+    """The IRB 120 asking c2, c3, with a 2.9 kg payload step (with its 0.1 kg tool, within
+    its rated payload)."""
     return _designed(IRB)[0]
 
 
@@ -382,8 +383,8 @@ def test_the_rapid_run_asks_and_tells_gripload_at_theta0(rapid_module, irb_plan)
         pos = run.index(x, pos)
         at.append(pos)
     assert at == sorted(at)
-    assert "PERS loaddata wc_load := [3, [0, 0, 50], [1, 0, 0, 0], 0, 0, 0];" in rapid_module
-    assert 'wc_out "# payload_kg: 3";' in run
+    assert "PERS loaddata wc_load := [2.9, [0, 0, 50], [1, 0, 0, 0], 0, 0, 0];" in rapid_module
+    assert 'wc_out "# payload_kg: 2.9";' in run
     assert "PROC wc_solve" not in rapid_module
     assert "yumpu.com/en/document/view/5679047, p. 183" in rapid_module  # the page read
 
@@ -407,15 +408,20 @@ def test_an_off_axis_fractional_mass_passes_the_checker(irb_robot, irb_plan):
     assert Rapid().lint(text, "WIRECAL.mod", irb_robot.controller.software) == []
 
 
-def test_gripload_declares_the_tool_with_the_mass(irb_robot, irb_plan):
-    """A tool of 1 kg at 20 mm ([gravity] payload_mass_kg) with a 2 kg mass at 50 mm: the
-    controller is told 3 kg at their common centre, (1·20 + 2·50)/3 = 40 mm — never less
-    than the flange carries; load0 after (tool0 declares no tool load before the step)."""
+def test_gripload_declares_the_mass_and_wc_tool_the_tool(irb_robot, irb_plan):
+    """A tool of 1 kg at 20 mm ([gravity] payload_mass_kg) with a 2 kg mass at 50 mm: every
+    move's wc_tool declares the tool's 1 kg (its tload), GripLoad the 2 kg mass alone, 3 kg
+    in all — never less than the flange carries (the RAPID Reference Manual's tooldata page:
+    tload the tool's own load, the payload connected with GripLoad); load0 after."""
     masses = replace(irb_robot.masses, payload_mass_kg=1.0, payload_com_mm=np.array([0, 0, 20.0]))
     step = replace(irb_plan.steps[-1], payload_kg=2.0, payload_com_mm=(0.0, 0.0, 50.0))
     plan = replace(irb_plan, steps=(*irb_plan.steps[:-1], step))
     text = rapid_module_text(replace(irb_robot, masses=masses), plan)
-    assert "wc_load := [3, [0, 0, 40], [1, 0, 0, 0], 0, 0, 0];" in text
+    assert "wc_load := [2, [0, 0, 50], [1, 0, 0, 0], 0, 0, 0];" in text
+    assert (
+        "wc_tool := [TRUE, [[0, 0, 0], [1, 0, 0, 0]], [1, [0, 0, 20], [1, 0, 0, 0], 0, 0, 0]];"
+        in text
+    )
     assert "GripLoad load0;" in text
 
 
@@ -445,8 +451,22 @@ def test_the_rapid_twin_stops_a_move_with_the_mass_undeclared(
     forgot = rapid_module.replace("    GripLoad wc_load;\n", "", 1)
     run = RAPID_ADAPTER.measure(irb_robot, irb_plan, {}, tmp_path, {"WIRECAL.mod": forgot})
     assert not run.complete
-    assert "3 kg mounted and 0 kg declared (GripLoad)" in run.stopped
-    assert run.world.mounted_kg == 3.0
+    assert "3 kg at the flange and 0.1 kg declared (the tool's tload 0.1 kg, GripLoad 0 kg)" in (
+        run.stopped
+    )
+    assert run.world.mounted_kg == 2.9
+
+
+def test_the_rapid_twin_stops_a_move_without_the_tools_load(
+    irb_robot, irb_plan, rapid_module, tmp_path
+):
+    """A module whose moves name tool0 (no tool load) while the flange carries the robot
+    file's 0.1 kg tool: the twin's IRC5 stops its first move (wc_mount's), by name."""
+    bare = rapid_module.replace(", fine, wc_tool;", ", fine, tool0;")
+    run = RAPID_ADAPTER.measure(irb_robot, irb_plan, {}, tmp_path, {"WIRECAL.mod": bare})
+    assert not run.complete
+    assert "0.1 kg at the flange and 0 kg declared (the tool's tload 0 kg" in run.stopped
+    assert not run.log.exists() or "# end" not in run.log.read_text()
 
 
 def test_a_language_that_does_not_prompt_refuses_a_payload_plan(irb_robot, irb_plan):
@@ -473,9 +493,9 @@ def test_the_rapid_twin_operator_mounts_the_mass_and_solve_finds_the_compliances
     pendant = "\n".join(run.controller.flexpendant)
     assert pendant.index("when it is mounted") < pendant.index("when it is removed")
     pasted = parse_log(pendant, "pasted")  # the FlexPendant's lines, the prompts among them
-    assert pasted.payload_kg == 3.0
+    assert pasted.payload_kg == 2.9
     assert len(pasted.readings) == len(parse_log(run.log.read_text(), "file").readings)
-    _solves_the_compliances(irb_robot, irb_plan, run.log, 3.0, std_max=3.0)
+    _solves_the_compliances(irb_robot, irb_plan, run.log, 2.9, std_max=3.0)
 
 
 @settings(max_examples=60, deadline=None)

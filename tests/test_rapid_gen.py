@@ -10,7 +10,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
+from wirecal.cli.main import main
 from wirecal.formats.plan_file import load_plan
 from wirecal.formats.robot_file import load_robot, robot_from_dict
 from wirecal.gen.rapid import GENERATOR
@@ -97,6 +99,43 @@ def test_refuses_other_encoder(irb):
     robot = robot_from_dict(data, "bits.toml")
     with pytest.raises(WirecalError, match="counter_bits = 32"):
         module_text(robot, irb[1])
+
+
+def test_every_move_declares_the_tools_load(irb, text):
+    """Every MoveAbsJ names wc_tool, a PERS tooldata held by the robot, its TCP the flange,
+    its tload the robot file's [gravity] payload_mass_kg at payload_com_mm (0.1 kg at
+    [-25, 0, 20] mm, written here by hand): tool0 declares no load (RAPID Reference Manual,
+    tooldata), which would tell the controller less than the flange carries."""
+    tool = "[TRUE, [[0, 0, 0], [1, 0, 0, 0]], [0.1, [-25, 0, 20], [1, 0, 0, 0], 0, 0, 0]]"
+    assert f"  PERS tooldata wc_tool := {tool};\n" in text
+    moves = re.findall(r"^\s*MoveAbsJ .*$", text, re.M)
+    plan = irb[1]  # the points and vias, θ0 per step, wc_mount's and the closing θ0
+    assert (
+        len(moves) == plan.n_points + sum(len(s.via_deg) for s in plan.steps) + len(plan.steps) + 2
+    )
+    assert all(m.endswith(", fine, wc_tool;") for m in moves)
+    assert "tool0;" not in text
+    assert "pp. 225-227" in text  # the page read
+
+
+@pytest.mark.parametrize("mass", [None, 0.0])
+def test_a_robot_file_without_the_tools_mass_is_refused(tmp_path, mass):
+    """No [gravity] payload_mass_kg (or 0): the flange carries at least the wire's fixture,
+    so the module would declare too little; `wirecal gen` refuses, naming the key, exit 2,
+    nothing written."""
+    data = (IRB / "robot.toml").read_text(encoding="utf-8")
+    data = data.replace(
+        "payload_mass_kg = 0.1\n", "" if mass is None else f"payload_mass_kg = {mass}\n"
+    )
+    robot = tmp_path / "robot.toml"
+    robot.write_text(data, encoding="utf-8")
+    out = CliRunner().invoke(
+        main, ["gen", str(robot), str(IRB / "plan.toml"), "-o", str(tmp_path / "o")]
+    )
+    assert out.exit_code == 2, out.output
+    assert "[gravity] payload_mass_kg: no tool mass" in out.output
+    assert "Traceback" not in out.output
+    assert not (tmp_path / "o" / "WIRECAL.mod").exists()
 
 
 def test_moves_the_wire_limits_slow_get_their_own_speeddata(irb):

@@ -30,9 +30,9 @@ class FakeController:
     count: int = 4294967000
     open_text: str = ""
 
-    def move_abs_j(self, joints_deg, speed, zone):
+    def move_abs_j(self, joints_deg, speed, zone, tool_kg):
         self.joints = joints_deg
-        self.calls.append(("move", joints_deg, speed, zone))
+        self.calls.append(("move", joints_deg, speed, zone, tool_kg))
         self.now += 2.0
 
     def joints_deg(self):
@@ -215,6 +215,7 @@ def test_routines_inout_func_and_records() -> None:
     assert move[1] == (0.0, -3.0, 0.0, 0.0, 0.0, 0.0)
     assert move[2] == (100.0, 500.0, 5000.0, 1000.0)
     assert move[3] == "fine"
+    assert move[4] == 0.0  # tool0: no tool load (RAPID Reference Manual, tooldata)
 
 
 def test_file_group_input_and_clock() -> None:

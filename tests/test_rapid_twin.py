@@ -227,18 +227,20 @@ def test_a_stop_names_its_line_once(irb, tmp_path):
     text = "\n".join(
         [
             "MODULE T",
+            "PERS tooldata t := [TRUE, [[0, 0, 0], [1, 0, 0, 0]],",
+            "  [0.1, [0, 0, 0], [1, 0, 0, 0], 0, 0, 0]];",
             "PROC main()",
-            "  MoveAbsJ [[0, 200, 0, 0, 0, 0], [9E9, 9E9, 9E9, 9E9, 9E9, 9E9]], v100, fine, tool0;",
+            "  MoveAbsJ [[0, 200, 0, 0, 0, 0], [9E9, 9E9, 9E9, 9E9, 9E9, 9E9]], v100, fine, t;",
             "ENDPROC",
             "ENDMODULE",
         ]
-    )
+    )  # t: the robot file's 0.1 kg tool, so the move's load is declared
     controller = IrcController(World(robot, {}, plan.theta0_deg, tmp_path), signal_name(robot))
     outcome = run_module(text, "t.mod", controller)
     assert stop_reason(outcome, None) == (
-        "main error at line 3: MoveAbsJ: joint 2 out of range (200 deg)"
+        "main error at line 5: MoveAbsJ: joint 2 out of range (200 deg)"
     )
-    assert controller.stopped == "line 3: MoveAbsJ: joint 2 out of range (200 deg)"
+    assert controller.stopped == "line 5: MoveAbsJ: joint 2 out of range (200 deg)"
 
 
 def test_cli_solve_method_controller_runs_wc_solve(tmp_path, monkeypatch):

@@ -11,7 +11,9 @@ same robot, plan, options and wirecal version give the same bytes.
 
 RAPID facts used are listed, with what is unconfirmed, in the module's own header
 (templates/rapid/wirecal.mod.j2): no page of ABB's RAPID reference was read for them but
-loaddata's (a payload plan's GripLoad, :data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`).
+tooldata's (:data:`~wirecal.lang.rapid.tables.TOOLDATA_PAGE`: every move declares the tool's
+own load, ``wc_tool``) and loaddata's (a payload plan's GripLoad,
+:data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`).
 """
 
 from __future__ import annotations
@@ -29,7 +31,6 @@ from wirecal.formats.log import COLUMNS as LOG_COLUMNS
 from wirecal.formats.log import VERSION as LOG_VERSION
 from wirecal.gen.tables import STEP_ITERATIONS, Tables, build_tables
 from wirecal.gen.targets import (
-    flange_loads,
     give_move_speeds,
     joint_target,
     name_problems,
@@ -196,6 +197,7 @@ def _check(robot: Robot, opt: RapidOptions) -> None:
             f"counter_bits = {GROUP_COUNTER_BITS}"
         )
     problems += robot.program_problems()
+    problems += _tool_problems(robot)
     problems += name_problems(robot, '"\\', "a RAPID string")
     header = f"# robot: {robot.name}"  # the log's header line, one string in run.mod.j2
     if len(header) > STRING_MAX:
@@ -206,6 +208,27 @@ def _check(robot: Robot, opt: RapidOptions) -> None:
         )
     if problems:
         raise WirecalError(problems)
+
+
+def _tool_problems(robot: Robot) -> list[str]:
+    """Refuse a robot file that gives the tool no mass: the module would declare too little.
+
+    Every move declares the flange's load as ``wc_tool``'s tload (the tooldata page,
+    :data:`~wirecal.lang.rapid.tables.TOOLDATA_PAGE`), and the flange always carries the
+    wire's fixture: 0 kg (the key left out, or written 0) would tell the controller less
+    than the truth, the unsafe direction (:data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`).
+    No default is guessed: a mass too light is that direction, one too heavy impairs the
+    path too (the same page).
+    """
+    if robot.masses is not None and robot.masses.payload_mass_kg > 0:
+        return []
+    return [
+        f"{robot.source}: [gravity] payload_mass_kg: no tool mass; the RAPID module declares "
+        "the load at the flange in every move (tooldata wc_tool), and the flange carries at "
+        "least the wire's fixture: give the mass (kg) of everything mounted on the flange "
+        "(tool, fixture, the wire's attachment) and its centre, payload_com_mm (mm, flange "
+        "frame), in [gravity]"
+    ]
 
 
 def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) -> str:
@@ -258,6 +281,7 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
         "nit": STEP_ITERATIONS,
         "n": tables.n,
         "m": len(tables.names),
+        "tool": _tool(robot),
         "payload": _payload(robot, plan),
     }
     if opt.solver:
@@ -267,28 +291,42 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
     return text
 
 
+def _tool(robot: Robot) -> dict[str, str]:
+    """Return ``wc_tool``'s tooldata: held by the robot, TCP the flange, the tool's load.
+
+    :data:`~wirecal.lang.rapid.tables.TOOLDATA_PAGE`: robhold TRUE; tframe tool0's (the
+    centre of the mounting flange, the wrist frame: the targets are jointtargets, so the
+    TCP moves no path); tload the robot file's ``[gravity] payload_mass_kg`` at its
+    ``payload_com_mm`` (the wrist frame), axes of moment [1, 0, 0, 0], inertia 0 (a
+    point mass: the robot file gives none). :func:`_tool_problems` has refused 0 kg.
+    """
+    masses = robot.masses
+    assert masses is not None  # _tool_problems
+    mass, cog = _fixed(masses.payload_mass_kg, 6), _mm(np.asarray(masses.payload_com_mm))
+    return {
+        "kg": mass,
+        "cog_mm": cog,
+        "tooldata": f"[TRUE, [[0, 0, 0], [1, 0, 0, 0]], [{mass}, {cog}, [1, 0, 0, 0], 0, 0, 0]]",
+    }
+
+
 def _payload(robot: Robot, plan: Plan) -> dict[str, object] | None:
     """Return the payload step for the templates, with GripLoad's loaddata (None without one).
 
-    The loaddata (:data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`): the whole load at the
-    flange while the mass is on, the tool's (the robot file's ``[gravity] payload_mass_kg``;
-    the module moves with tool0, which declares none) with the plan's mass, at their common
-    centre (mm; a payload's is in the tool frame, tool0's: the flange); axes of moment
-    [1, 0, 0, 0] and inertia 0 (a point mass: the mass's own inertia is not in the plan).
+    The loaddata (:data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`): the plan's mass alone,
+    at its centre (mm; a payload's is in the tool frame, ``wc_tool``'s: the flange), axes
+    of moment [1, 0, 0, 0] and inertia 0 (a point mass: the mass's own inertia is not in
+    the plan). The tool's own load is ``wc_tool``'s tload, declared in every move: the
+    tooldata page (:data:`~wirecal.lang.rapid.tables.TOOLDATA_PAGE`) has tload hold the
+    tool's load only, the payload connected with GripLoad.
     """
     ctx = payload_context(plan)
-    loads = flange_loads(robot, plan)
-    if ctx is None or loads is None:
-        return None
-    (total, cog), (tool_kg, _) = loads
     step = plan.payload_step
-    assert step is not None  # loads is not None
-    centre, mass = _mm(cog), _fixed(total, 6)  # fixed point: no exponent, short strings
+    if ctx is None or step is None:
+        return None
+    centre, mass = _mm(np.asarray(step.payload_com_mm)), _fixed(step.payload_kg, 6)
     return ctx | {
-        "total_kg": mass,
-        "tool_kg": _fixed(tool_kg, 6),
-        "cog_mm": centre,
-        "centre_mm": _mm(np.asarray(step.payload_com_mm)),
+        "centre_mm": centre,
         "loaddata": f"[{mass}, {centre}, [1, 0, 0, 0], 0, 0, 0]",
     }
 

@@ -536,8 +536,8 @@ class Typer:
             if sym is None or sym.kind != "OPT":
                 self.problems.add(self.line, f"{name} takes an optional parameter's name")
             return
-        if p.type in ("zonedata", "tooldata", "wobjdata") and self.lang.subset:
-            self._predefined(name, p, a.value)
+        if p.type == "tooldata" or (p.type in ("zonedata", "wobjdata") and self.lang.subset):
+            (self._tool if p.type == "tooldata" else self._predefined)(name, p, a.value)
             return
         if p.var:
             self.writable(a.value, f"{name}'s {p.name}")
@@ -571,6 +571,25 @@ class Typer:
         if got == STRING and not p.var:
             return
         self.problems.add(self.line, f"{name}'s {p.name} is an I/O signal, not a {got}")
+
+    def _tool(self, name: str, p: T.P, e: N.Expr) -> None:
+        """Check a Tool: a tooldata persistent, entire (:data:`~T.TOOLDATA_PAGE`).
+
+        The page: "Arguments of the type tool data in any motion instruction should only be
+        an entire persistent (not array element or record component)"; tool0 is one, and so
+        is a PERS parameter (an optional one is not judged).
+        """
+        sym = self.scope.get(e.name.lower()) if isinstance(e, N.Name) else None
+        if isinstance(e, N.Name) and (sym is None or sym.kind in ("PERS", "PREDEF", "OPT")):
+            self.expect(e, Type("tooldata"), f"{name}'s {p.name}")
+            return
+        if sym is not None and sym.type == UNKNOWN:
+            return
+        self.problems.add(
+            self.line,
+            f"{name}'s {p.name}: a tooldata PERS, whole (not a VAR, a CONST, an array "
+            "element or a component: RAPID Reference Manual, tooldata)",
+        )
 
     def _predefined(self, name: str, p: T.P, e: N.Expr) -> None:
         known = [k for k, v in T.PREDEFINED.items() if v == p.type]
@@ -845,7 +864,7 @@ class Checker:
         """Check a routine's body in its scope."""
         scope = dict(self.globals)
         for p in r.params:
-            kind = "OPT" if p.optional else "INOUT" if p.mode == "INOUT" else "IN"
+            kind = "OPT" if p.optional else p.mode if p.mode in ("INOUT", "PERS") else "IN"
             for type_name, name in [(p.type, p.name), *p.alternatives]:
                 known = self.lang.resolve(type_name)
                 ptype = Type(known, (None,) * p.dims) if known else UNKNOWN

@@ -13,6 +13,7 @@ KERNEL_TYPES = "RAPID kernel, built-in data types (num, dnum, string)"
 MOVEABSJ = "RAPID reference manual, MoveAbsJ"
 UNCONFIRMED = "unconfirmed"
 RM = "RAPID Reference Manual (yumpu.com/en/document/view/5679047)"
+TOOLDATA = f"{RM}, pp. 225-227, tooldata"
 MOVEJ = "RAPID reference manual, MoveJ (read in translation)"
 LOADED_RRC = (
     "unconfirmed; loaded by an IRC5 RobotWare 6 controller: COMPAS RRC's modules, "
@@ -42,6 +43,19 @@ VALID: dict[str, str] = {
             "CONST jointtarget jt := [[0, -30, 30, 0, 60, 0], [9E9, 9E9, 9E9, 9E9, 9E9, 9E9]];",
             "VAR speeddata v := [200, 20, 5000, 1000];",
         ),
+    ),
+    f"a PERS tooldata of the tool's load, moved with ({TOOLDATA})": module(
+        "MoveAbsJ jt, v100, fine, grip;",
+        "grip.tload.mass := 0.5;",
+        data=(
+            "PERS tooldata grip := [TRUE, [[0, 0, 100], [1, 0, 0, 0]], "
+            "[0.4, [0, 0, 30], [1, 0, 0, 0], 0, 0, 0]];",
+            "CONST jointtarget jt := [[0, -30, 30, 0, 60, 0], [9E9, 9E9, 9E9, 9E9, 9E9, 9E9]];",
+        ),
+    ),
+    f"a PERS tooldata parameter passed on to a move ({TOOLDATA})": (
+        "MODULE T\n  PROC go(jointtarget jt, PERS tooldata t)\n"
+        "    MoveAbsJ jt, v100, fine, t;\n  ENDPROC\nENDMODULE\n"
     ),
     f"num and dnum arithmetic, literals of either ({KERNEL_TYPES})": module(
         "n := n * 2 + 1 / 3 - 7 DIV 2 + 7 MOD 2;",
@@ -349,6 +363,29 @@ INVALID: dict[str, tuple[str, str]] = {
     f"a num where MoveAbsJ takes a jointtarget ({MOVEABSJ})": (
         module("MoveAbsJ 5, v100, fine, tool0;"),
         "3: MoveAbsJ's ToJointPos is a jointtarget, not a number",
+    ),
+    f"a CONST tooldata in a move: a tool is an entire persistent ({TOOLDATA})": (
+        module(
+            "MoveAbsJ jt, v100, fine, grip;",
+            data=(
+                "CONST tooldata grip := [TRUE, [[0, 0, 0], [1, 0, 0, 0]], "
+                "[0.4, [0, 0, 30], [1, 0, 0, 0], 0, 0, 0]];",
+                "VAR jointtarget jt;",
+            ),
+        ),
+        "5: MoveAbsJ's Tool: a tooldata PERS, whole",
+    ),
+    f"an IN tooldata parameter in a move, not a persistent ({TOOLDATA})": (
+        "MODULE T\n  PROC go(jointtarget jt, tooldata t)\n"
+        "    MoveAbsJ jt, v100, fine, t;\n  ENDPROC\nENDMODULE\n",
+        "3: MoveAbsJ's Tool: a tooldata PERS, whole",
+    ),
+    f"an element of a tooldata array in a move ({TOOLDATA})": (
+        module(
+            "MoveAbsJ jt, v100, fine, tools{1};",
+            data=("PERS tooldata tools{2};", "VAR jointtarget jt;"),
+        ),
+        "5: MoveAbsJ's Tool: a tooldata PERS, whole",
     ),
     f"num and dnum mixed ({KERNEL_TYPES})": (
         module("d := d + n;", data=("VAR num n;", "VAR dnum d;")),

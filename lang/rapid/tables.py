@@ -12,7 +12,8 @@ PDFs were not reachable, so the reading was of copies and translations):
   its arguments), read in translations at 360docs.net/doc/7114964515.html and
   abbjqr.gbsrobot.com/news/index.php?itemid=24292;
 * ``loaddata``: :data:`LOADDATA_PAGE` (an older RAPID Reference Manual, p. 183), with
-  ``GripLoad`` as a controller-loaded program uses it (:data:`GRIPLOAD_LOADED`).
+  ``GripLoad`` as a controller-loaded program uses it (:data:`GRIPLOAD_LOADED`);
+* ``tooldata``: :data:`TOOLDATA_PAGE` (the same manual, pp. 225–227).
 
 Everything else below is marked "unconfirmed": written from the 3HAC050917 manual's
 structure as wirecal's authors know it, not from a page read for this table. ``since`` is
@@ -56,6 +57,7 @@ RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
     "speeddata": (("v_tcp", "num"), ("v_ori", "num"), ("v_leax", "num"), ("v_reax", "num")),
     "pos": (("x", "num"), ("y", "num"), ("z", "num")),
     "orient": (("q1", "num"), ("q2", "num"), ("q3", "num"), ("q4", "num")),
+    "pose": (("trans", "pos"), ("rot", "orient")),
     "loaddata": (
         ("mass", "num"),
         ("cog", "pos"),
@@ -64,12 +66,16 @@ RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
         ("iy", "num"),
         ("iz", "num"),
     ),
+    "tooldata": (("robhold", "bool"), ("tframe", "pose"), ("tload", "loaddata")),
 }
 """The record types of the subset and their components (reference manual, data types
 jointtarget, robjoint, extjoint, speeddata, pos: unconfirmed; loaddata's mass (num, kg), cog
 (pos, mm) and aom (orient, a quaternion): :data:`LOADDATA_PAGE`; its ix, iy, iz (num, the
 moments of inertia about the axes of moment, kgm^2): unconfirmed — the RAPID manual's names
-as ROS-Industrial's abb_rapid_msgs LoadData.msg repeats them, not read on an ABB page)."""
+as ROS-Industrial's abb_rapid_msgs LoadData.msg repeats them, not read on an ABB page;
+tooldata's robhold (bool), tframe (pose: trans, a pos in mm, and rot, a quaternion) and
+tload (loaddata): :data:`TOOLDATA_PAGE`; pose's component names trans and rot: tool0's
+value there is written as their aggregate, the names themselves unconfirmed)."""
 
 LOADDATA_PAGE = (
     "RAPID Reference Manual (yumpu.com/en/document/view/5679047), p. 183, loaddata: "
@@ -78,6 +84,15 @@ LOADDATA_PAGE = (
     "than the true load impairs path accuracy, with a risk of overshooting"
 )
 """The page read for loaddata and GripLoad's use."""
+
+TOOLDATA_PAGE = (
+    "RAPID Reference Manual (yumpu.com/en/document/view/5679047), pp. 225-227, tooldata: "
+    "robhold TRUE, the robot holds the tool; tframe the TCP in the wrist coordinate system "
+    "(tool0's: the centre of the mounting flange); tload the tool's own load, the payload "
+    "connected and disconnected with GripLoad; an incorrect load can cause overshooting; "
+    "a tool in a motion instruction only an entire persistent"
+)
+"""The page read for tooldata (components, tool0's value, the Tool argument's rule)."""
 
 GRIPLOAD_LOADED = (
     "GripLoad of a loaddata built at run time loaded by an IRC5 controller: "
@@ -98,7 +113,7 @@ SUBSET_TYPES = ATOMIC | OPAQUE | frozenset(RECORDS)
 """The data types a wirecal module may declare."""
 
 OTHER_TYPES = frozenset(
-    """robtarget pose confdata tooldata wobjdata zonedata stoppointdata
+    """robtarget confdata wobjdata zonedata stoppointdata
     intnum errnum signaldi signaldo signalgo signalai signalao byte rawbytes
     socketdev socketstatus triggdata tpnum dir switch egmident mecunit errdomain errstr
     identno shapedata wzstestablished syncident tasks progdisp""".split()
@@ -126,10 +141,11 @@ PREDEFINED: dict[str, str] = {
     **{k: "num" for k in SUBSET_ERRORS},
 }
 """Predefined data the subset reads, name → type (reference manual, speeddata and zonedata
-"Predefined data", tooldata tool0, loaddata load0 (no payload): unconfirmed — load0 is used
-so in controller-loaded programs, EdgarIvanMM/PaletizadoCajasConFrascos@850dc0e; pi:
-ROS-Industrial's abb_driver modules use it undeclared, its value 3.1415926 is unconfirmed;
-ERRNO and the errors of :data:`SUBSET_ERRORS`, errnum, a num alias)."""
+"Predefined data": unconfirmed; tool0, the flange with no tool load: :data:`TOOLDATA_PAGE`;
+loaddata load0 (no payload): unconfirmed — load0 is used so in controller-loaded programs,
+EdgarIvanMM/PaletizadoCajasConFrascos@850dc0e; pi: ROS-Industrial's abb_driver modules use
+it undeclared, its value 3.1415926 is unconfirmed; ERRNO and the errors of
+:data:`SUBSET_ERRORS`, errnum, a num alias)."""
 
 
 OTHER_DATA_PREFIXES = (
@@ -360,7 +376,6 @@ WIDE_RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
     "tasks": (("taskname", "string"),),
     "listitem": (("image", "string"), ("text", "string")),
     "egm_minmax": (("min", "num"), ("max", "num")),
-    "pose": (("trans", "pos"), ("rot", "orient")),
     "confdata": (("cf1", "num"), ("cf4", "num"), ("cf6", "num"), ("cfx", "num")),
     "robtarget": (
         ("trans", "pos"),
@@ -368,7 +383,6 @@ WIDE_RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
         ("robconf", "confdata"),
         ("extax", "extjoint"),
     ),
-    "tooldata": (("robhold", "bool"), ("tframe", "pose"), ("tload", "loaddata")),
     "wobjdata": (
         ("robhold", "bool"),
         ("ufprog", "bool"),
@@ -387,7 +401,7 @@ WIDE_RECORDS: dict[str, tuple[tuple[str, str], ...]] = {
     ),
 }
 """Record types beyond the subset (robtarget: RM p. 211; zonedata: the PC SDK's ZoneData;
-pose, confdata, tooldata, wobjdata: unconfirmed; pos, orient, loaddata are the subset's)."""
+confdata, wobjdata: unconfirmed; pos, orient, pose, loaddata, tooldata are the subset's)."""
 
 ALIASES: dict[str, str] = {
     "errnum": "num",

@@ -25,9 +25,13 @@ encoder, the disk, the operator, the clock), calling it in the order its docstri
 * ``TPWrite`` / ``TPErase`` / ``TPReadNum``: the FlexPendant is the world's console; the
   operator answers from the world's scripted answers;
 * ``GripLoad``: the payload the controller is told is recorded (:attr:`IrcController.load`);
-  the twin models no dynamics, but a ``MoveAbsJ`` with a mass mounted heavier than the
-  declared payload stops the program (the unsafe direction: RAPID Reference Manual,
-  loaddata, p. 183, "impaired path accuracy including running the risk of overshooting");
+  the twin models no dynamics, but a ``MoveAbsJ`` whose flange carries more than the
+  controller is told stops the program (the unsafe direction: RAPID Reference Manual,
+  loaddata, p. 183, "impaired path accuracy including running the risk of overshooting"):
+  the flange carries the tool (the true robot's ``[gravity] payload_mass_kg``) and the
+  mass mounted, the controller is told the move's tool load (its tooldata's tload) and
+  the payload (the last GripLoad; the manual's tooldata page, pp. 225–227: the tool's
+  load in tload, the payload connected with GripLoad);
 * ``WaitTime`` and the clocks: the world's clock.
 """
 
@@ -67,19 +71,23 @@ class IrcController:
 
     # ---- motion ----
     def move_abs_j(
-        self, joints_deg: tuple[float, ...], speed: tuple[float, ...], zone: str
+        self, joints_deg: tuple[float, ...], speed: tuple[float, ...], zone: str, tool_kg: float
     ) -> None:
         """MoveAbsJ: to ``joints_deg`` at speeddata ``speed``; stop when it cannot.
 
-        A joint limit, a collision, the wire's speed, or a mass at the flange heavier than
-        the payload GripLoad declared (the unsafe direction) stops the program.
+        A joint limit, a collision, the wire's speed, or a load at the flange heavier than
+        the tool's ``tool_kg`` with the payload GripLoad declared (the unsafe direction)
+        stops the program.
         """
         world = self.world
-        declared_kg = 0.0 if self.load is None else self.load[0]
-        if world.mounted_kg > declared_kg + 1e-9:
+        masses = world.robot.masses
+        carried_kg = world.mounted_kg + (0.0 if masses is None else masses.payload_mass_kg)
+        payload_kg = 0.0 if self.load is None else self.load[0]
+        if carried_kg > tool_kg + payload_kg + 1e-9:
             raise self._refuse(
-                f"MoveAbsJ with {world.mounted_kg:g} kg mounted and {declared_kg:g} kg "
-                "declared (GripLoad): the controller would move a load lighter than the truth"
+                f"MoveAbsJ with {carried_kg:g} kg at the flange and {tool_kg + payload_kg:g} "
+                f"kg declared (the tool's tload {tool_kg:g} kg, GripLoad {payload_kg:g} kg): "
+                "the controller would move a load lighter than the truth"
             )
         q = np.asarray(joints_deg, dtype=float)
         slowest = float(np.min(world.robot.joint_speed_deg_s))

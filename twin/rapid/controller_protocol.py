@@ -14,12 +14,13 @@ class RapidController(Protocol):
     """The robot controller as a RAPID program sees it (implemented over the twin's World)."""
 
     def move_abs_j(
-        self, joints_deg: tuple[float, ...], speed: tuple[float, ...], zone: str
+        self, joints_deg: tuple[float, ...], speed: tuple[float, ...], zone: str, tool_kg: float
     ) -> None:
         """MoveAbsJ to the six robot axes ``joints_deg`` (jointtarget robax, degrees).
 
         ``speed`` is the speeddata (v_tcp mm/s, v_ori deg/s, v_leax mm/s, v_reax deg/s),
-        ``zone`` the predefined zonedata's name ("fine" stops at the point). A refusal
+        ``zone`` the predefined zonedata's name ("fine" stops at the point), ``tool_kg``
+        the Tool argument's tload mass (the tool's own load, kg). A refusal
         (:class:`~wirecal.twin.machine.RunError`) names what stopped, not the line: the
         interpreter's outcome carries that.
         """

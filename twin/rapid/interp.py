@@ -152,6 +152,14 @@ def default(t: Type) -> Any:
     return None  # iodev: not open
 
 
+def _tool0() -> dict[str, Any]:
+    """Return tool0: robot-held, the flange's frame, no tool load (T.TOOLDATA_PAGE)."""
+    tool = default(Type("tooldata"))
+    tool["robhold"] = True
+    tool["tframe"]["rot"]["q1"] = tool["tload"]["aom"]["q1"] = 1.0
+    return tool
+
+
 def copy(value: Any) -> Any:
     """Return a copy of a value (records and arrays are values in RAPID)."""
     if isinstance(value, list):
@@ -244,6 +252,8 @@ class Interpreter:
                 self.globals[k] = f32(3.1415926)
             elif v == "loaddata":  # load0: no payload (the twin's; ABB's value: unconfirmed)
                 self.globals[k] = default(Type(v))
+            elif v == "tooldata":  # tool0: the flange, no tool load (T.TOOLDATA_PAGE)
+                self.globals[k] = _tool0()
             elif v == "speeddata":
                 self.globals[k] = dict(
                     zip(("v_tcp", "v_ori", "v_leax", "v_reax"), T.speed_values(k), strict=True)
@@ -867,13 +877,14 @@ Builder = Callable[[_Compiler, list[N.Arg]], Callable[[Frame], Any]]
 
 def _move_abs_j(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
     pos, _ = c.args("moveabsj", args)
-    target, speed, zone = pos[0], pos[1], pos[2]
+    target, speed, zone, tool = pos[0], pos[1], pos[2], pos[3]
     ctl = c.interp.controller
 
     def run(frame: Frame) -> None:
         jt, v = target(frame), speed(frame)
         joints = tuple(jt["robax"][f"rax_{i}"] for i in range(1, 7))
-        ctl.move_abs_j(joints, (v["v_tcp"], v["v_ori"], v["v_leax"], v["v_reax"]), zone(frame))
+        speeds = (v["v_tcp"], v["v_ori"], v["v_leax"], v["v_reax"])
+        ctl.move_abs_j(joints, speeds, zone(frame), float(tool(frame)["tload"]["mass"]))
 
     return run
 

@@ -13,8 +13,16 @@ MODULE WIRECAL
   ! the FlexPendant's lines pasted).
   !
   ! RAPID used (RAPID Instructions, Functions and Data types reference manual,
-  ! RobotWare 6: unconfirmed against a page read by wirecal's authors):
-  !   MoveAbsJ jointtarget, speeddata, fine, tool0: axes in degrees
+  ! RobotWare 6: unconfirmed against a page read by wirecal's authors, but tooldata
+  ! and loaddata below):
+  !   MoveAbsJ jointtarget, speeddata, fine, wc_tool: axes in degrees
+  !   tooldata [robhold, tframe, tload]: robhold TRUE the robot holds the tool, tframe
+  !   the TCP in the wrist frame (tool0's: the centre of the mounting flange), tload the
+  !   tool's own load (mass kg, cog mm in the wrist frame, aom, inertia; 0: a point
+  !   mass), a PERS outside any routine, the payload connected with GripLoad: RAPID
+  !   Reference Manual, tooldata (yumpu.com/en/document/view/5679047, pp. 225-227).
+  !   UNCONFIRMED: that wirecal's flange frame (the robot file's last DH frame) is ABB's
+  !   wrist frame for a centre off the flange's axis.
   !   CJointT(): the axes' current angles (degrees)
   !   GInputDnum(signal): a group input of up to 32 bits as a dnum;
   !   AliasIO: a signalgi variable bound to the configured signal at run time
@@ -27,6 +35,11 @@ MODULE WIRECAL
   ! mapped to the group input wc_giCount0: docs/rapid.md); how fast
   ! MoveAbsJ moves at wc_v (its v_ori is meant to cap the joints' speed).
 
+  ! the tool every move declares: held by the robot, its TCP the flange (tool0's frame:
+  ! the targets are jointtargets, so the TCP changes no path), its load the robot
+  ! file's [gravity] payload_mass_kg, 0.1 kg at [-25, 0, 20] mm (payload_com_mm, the
+  ! flange frame): the tool, the fixture and the wire's attachment; inertia 0, a point mass
+  PERS tooldata wc_tool := [TRUE, [[0, 0, 0], [1, 0, 0, 0]], [0.1, [-25, 0, 20], [1, 0, 0, 0], 0, 0, 0]];
   CONST jointtarget wc_theta0 := [[21, 5, -36, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]];
   ! theta0 (deg): 21, 5, -36, -43, -43, -184
   CONST speeddata wc_v := [250, 50, 5000, 1000];
@@ -265,7 +278,7 @@ MODULE WIRECAL
     VAR num answer;
     TPErase;
     TPWrite "wirecal: moving to theta0";
-    MoveAbsJ wc_theta0, wc_v, fine, tool0;
+    MoveAbsJ wc_theta0, wc_v, fine, wc_tool;
     TPWrite "Mount the draw-wire encoder: its wire tip on the fixture of the";
     TPWrite "flange (wire length zero), the wire clear of every link.";
     TPReadNum answer, "Mounted? 1 = yes, any other number: stop";
@@ -428,189 +441,189 @@ MODULE WIRECAL
 
     ! ---- step 1 of 9: d6, 2 points ----
     TPWrite "# Step 1 of 9: d6, 2 points";
-    MoveAbsJ wc_theta0, wc_v, fine, tool0;
+    MoveAbsJ wc_theta0, wc_v, fine, wc_tool;
     wc_meas 1, 0, 1;
     ! point 1 (deg): 21, 5, -36, -43, 79.32, -234.33
-    MoveAbsJ [[21, 5, -36, -43, 79.32, -234.33], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, -43, 79.32, -234.33], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 1, 1, 10;
     ! point 2 (deg): 21, 5, -36, -43, 80.93, -213.04
-    MoveAbsJ [[21, 5, -36, -43, 80.93, -213.04], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, -43, 80.93, -213.04], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 1, 2, 11;
 
     ! ---- step 2 of 9: th5, 2 points ----
     TPWrite "# Step 2 of 9: th5, 2 points";
-    MoveAbsJ wc_theta0, wc_v, fine, tool0;
+    MoveAbsJ wc_theta0, wc_v, fine, wc_tool;
     wc_meas 2, 0, 2;
     ! point 1 (deg): 21, 5, -36, -140.13, -28.55, -184
-    MoveAbsJ [[21, 5, -36, -140.13, -28.55, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, -140.13, -28.55, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 2, 1, 12;
     ! point 2 (deg): 21, 5, -36, 128.74, 79.28, -361.06
-    MoveAbsJ [[21, 5, -36, 128.74, 79.28, -361.06], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, 128.74, 79.28, -361.06], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 2, 2, 13;
 
     ! ---- step 3 of 9: th4, 2 points ----
     TPWrite "# Step 3 of 9: th4, 2 points";
-    MoveAbsJ wc_theta0, wc_v, fine, tool0;
+    MoveAbsJ wc_theta0, wc_v, fine, wc_tool;
     wc_meas 3, 0, 3;
     ! point 1 (deg): 21, 5, -56.58, -41.96, 65.33, -184
-    MoveAbsJ [[21, 5, -56.58, -41.96, 65.33, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -56.58, -41.96, 65.33, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 3, 1, 14;
     ! point 2 (deg): 21, -8.27, -36, -43, 50.58, -184
-    MoveAbsJ [[21, -8.27, -36, -43, 50.58, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -8.27, -36, -43, 50.58, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 3, 2, 15;
 
     ! ---- step 4 of 9: th6, 9 points ----
     TPWrite "# Step 4 of 9: th6, 9 points";
-    MoveAbsJ wc_theta0, wc_v, fine, tool0;
+    MoveAbsJ wc_theta0, wc_v, fine, wc_tool;
     wc_meas 4, 0, 4;
     ! point 1 (deg): 21, 5, -36, 130.16, 113.22, -248.39
-    MoveAbsJ [[21, 5, -36, 130.16, 113.22, -248.39], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, 130.16, 113.22, -248.39], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 4, 1, 16;
     ! point 2 (deg): 21, 5, -36, 145.8, 107.42, -184
-    MoveAbsJ [[21, 5, -36, 145.8, 107.42, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, 145.8, 107.42, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 4, 2, 17;
     ! point 3 (deg): 21, 5, -36, 105.52, 104.78, -184
-    MoveAbsJ [[21, 5, -36, 105.52, 104.78, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, 105.52, 104.78, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 4, 3, 18;
     ! point 4 (deg): 21, 5, -36, 105.72, 89.43, -184
-    MoveAbsJ [[21, 5, -36, 105.72, 89.43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, 105.72, 89.43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 4, 4, 19;
     ! point 5 (deg): 21, 5, -36, 121.18, 68.13, -184
-    MoveAbsJ [[21, 5, -36, 121.18, 68.13, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, 121.18, 68.13, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 4, 5, 20;
     ! point 6 (deg): 21, 5, -36, 90.69, -43, -345.22
-    MoveAbsJ [[21, 5, -36, 90.69, -43, -345.22], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, 90.69, -43, -345.22], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 4, 6, 21;
     ! point 7 (deg): 21, 5, -36, 81.3, -41.22, -345.8
-    MoveAbsJ [[21, 5, -36, 81.3, -41.22, -345.8], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, 81.3, -41.22, -345.8], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 4, 7, 22;
     ! point 8 (deg): 21, 5, -36, 66.91, -43, -338.12
-    MoveAbsJ [[21, 5, -36, 66.91, -43, -338.12], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, 66.91, -43, -338.12], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 4, 8, 23;
     ! point 9 (deg): 21, 5, -36, -12.74, -86.16, -354.3
-    MoveAbsJ [[21, 5, -36, -12.74, -86.16, -354.3], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -36, -12.74, -86.16, -354.3], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 4, 9, 24;
 
     ! ---- step 5 of 9: d4, 7 points ----
     TPWrite "# Step 5 of 9: d4, 7 points";
-    MoveAbsJ wc_theta0, wc_v, fine, tool0;
+    MoveAbsJ wc_theta0, wc_v, fine, wc_tool;
     wc_meas 5, 0, 5;
     ! point 1 (deg): 21, 5, -74.26, -43, 43.59, -184
-    MoveAbsJ [[21, 5, -74.26, -43, 43.59, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -74.26, -43, 43.59, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 5, 1, 25;
     ! point 2 (deg): 21, 5, -81.67, 4.57, 42.83, -184
-    MoveAbsJ [[21, 5, -81.67, 4.57, 42.83, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -81.67, 4.57, 42.83, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 5, 2, 26;
     ! point 3 (deg): 21, 5, -73.85, -43, -25.67, -334.26
-    MoveAbsJ [[21, 5, -73.85, -43, -25.67, -334.26], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -73.85, -43, -25.67, -334.26], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 5, 3, 27;
     ! point 4 (deg): 21, 5, -72.78, -43, 10.73, -351.34
-    MoveAbsJ [[21, 5, -72.78, -43, 10.73, -351.34], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, -72.78, -43, 10.73, -351.34], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 5, 4, 28;
     ! point 5 (deg): 21, 5, 11.84, -43, -106.92, -184
-    MoveAbsJ [[21, 5, 11.84, -43, -106.92, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, 11.84, -43, -106.92, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 5, 5, 29;
     ! point 6 (deg): 21, 5, 18.5, -43, -113.89, -184
-    MoveAbsJ [[21, 5, 18.5, -43, -113.89, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, 18.5, -43, -113.89, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 5, 6, 30;
     ! point 7 (deg): 21, 5, 36.71, 140.63, -99.24, -184
-    MoveAbsJ [[21, 5, 36.71, 140.63, -99.24, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 5, 36.71, 140.63, -99.24, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 5, 7, 31;
 
     ! ---- step 6 of 9: th3, 5 points ----
     TPWrite "# Step 6 of 9: th3, 5 points";
-    MoveAbsJ wc_theta0, wc_v, fine, tool0;
+    MoveAbsJ wc_theta0, wc_v, fine, wc_tool;
     wc_meas 6, 0, 6;
     ! point 1 (deg): 21, -17.76, 18.31, -43, -43, -184
-    MoveAbsJ [[21, -17.76, 18.31, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -17.76, 18.31, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 6, 1, 32;
     ! point 2 (deg): 21, -15.9, 23.27, -43, -43, -184
-    MoveAbsJ [[21, -15.9, 23.27, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -15.9, 23.27, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 6, 2, 33;
     ! point 3 (deg): 21, -22.16, 41.14, -43, -43, -184
-    MoveAbsJ [[21, -22.16, 41.14, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -22.16, 41.14, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 6, 3, 34;
     ! point 4 (deg): 21, -22.75, 41.16, -13.08, -43, -184
-    MoveAbsJ [[21, -22.75, 41.16, -13.08, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -22.75, 41.16, -13.08, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 6, 4, 35;
     ! point 5 (deg): 21, -6.46, 35.32, 129.58, -43, -184
-    MoveAbsJ [[21, -6.46, 35.32, 129.58, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -6.46, 35.32, 129.58, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 6, 5, 36;
 
     ! ---- step 7 of 9: th2, 2 points ----
     TPWrite "# Step 7 of 9: th2, 2 points";
-    MoveAbsJ wc_theta0, wc_v, fine, tool0;
+    MoveAbsJ wc_theta0, wc_v, fine, wc_tool;
     wc_meas 7, 0, 7;
     ! point 1 (deg): -97.78, 5, 24.63, -43, -43, -184
-    MoveAbsJ [[-97.78, 5, 24.63, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[-97.78, 5, 24.63, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 7, 1, 37;
     ! point 2 (deg): -139.93, -9.89, 31.76, -43, -43, -184
-    MoveAbsJ [[-139.93, -9.89, 31.76, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[-139.93, -9.89, 31.76, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 7, 2, 38;
 
     ! ---- step 8 of 9: a2, 10 points ----
     TPWrite "# Step 8 of 9: a2, 10 points";
-    MoveAbsJ wc_theta0, wc_v, fine, tool0;
+    MoveAbsJ wc_theta0, wc_v, fine, wc_tool;
     wc_meas 8, 0, 8;
     ! point 1 (deg): 21, -70.94, 40.59, -43, -8.53, -184
-    MoveAbsJ [[21, -70.94, 40.59, -43, -8.53, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -70.94, 40.59, -43, -8.53, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 8, 1, 39;
     ! point 2 (deg): 21, -61.45, 30.73, -134.84, -43, -184
-    MoveAbsJ [[21, -61.45, 30.73, -134.84, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -61.45, 30.73, -134.84, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 8, 2, 40;
     ! point 3 (deg): 21, -34.14, 1.8, -148.13, -43, -184
-    MoveAbsJ [[21, -34.14, 1.8, -148.13, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -34.14, 1.8, -148.13, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 8, 3, 41;
     ! point 4 (deg): 21, 58.84, -94.03, -43, -94.48, -184
-    MoveAbsJ [[21, 58.84, -94.03, -43, -94.48, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 58.84, -94.03, -43, -94.48, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 8, 4, 42;
     ! point 5 (deg): 21, 65.18, -97.66, -43, -76.55, -184
-    MoveAbsJ [[21, 65.18, -97.66, -43, -76.55, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 65.18, -97.66, -43, -76.55, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 8, 5, 43;
     ! point 6 (deg): 21, 61.29, -89.46, -43, -78.68, -184
-    MoveAbsJ [[21, 61.29, -89.46, -43, -78.68, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 61.29, -89.46, -43, -78.68, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 8, 6, 44;
     ! point 7 (deg): 21, 74.04, -101.1, -43, -77.17, -184
-    MoveAbsJ [[21, 74.04, -101.1, -43, -77.17, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, 74.04, -101.1, -43, -77.17, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 8, 7, 45;
     ! point 8 (deg): -8.55, 81.52, -99.59, -43, -43, -184
-    MoveAbsJ [[-8.55, 81.52, -99.59, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[-8.55, 81.52, -99.59, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 8, 8, 46;
     ! point 9 (deg): -100.94, 5, 20.02, -152.88, -43, -184
-    MoveAbsJ [[-100.94, 5, 20.02, -152.88, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[-100.94, 5, 20.02, -152.88, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 8, 9, 47;
     ! point 10 (deg): 121.55, 104.54, -79.58, -43, -43, -184
-    MoveAbsJ [[121.55, 104.54, -79.58, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[121.55, 104.54, -79.58, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 8, 10, 48;
 
     ! ---- step 9 of 9: a3, 6 points ----
     TPWrite "# Step 9 of 9: a3, 6 points";
-    MoveAbsJ wc_theta0, wc_v, fine, tool0;
+    MoveAbsJ wc_theta0, wc_v, fine, wc_tool;
     wc_meas 9, 0, 9;
     ! via 1 (deg): -155.67, 5, -36, -43, -43, -184
-    MoveAbsJ [[-155.67, 5, -36, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[-155.67, 5, -36, -43, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     ! point 1 (deg): -155.67, 5, -36, -43, 97.16, -184
-    MoveAbsJ [[-155.67, 5, -36, -43, 97.16, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[-155.67, 5, -36, -43, 97.16, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 9, 1, 49;
     ! point 2 (deg): -147.46, 5, -36, -43, 58.7, -40.12
-    MoveAbsJ [[-147.46, 5, -36, -43, 58.7, -40.12], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[-147.46, 5, -36, -43, 58.7, -40.12], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 9, 2, 50;
     ! point 3 (deg): -127.01, 5, -48.71, -152.71, -43, -184
-    MoveAbsJ [[-127.01, 5, -48.71, -152.71, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[-127.01, 5, -48.71, -152.71, -43, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 9, 3, 51;
     ! point 4 (deg): 21, -99.58, -36, -116.97, -102.54, -184
-    MoveAbsJ [[21, -99.58, -36, -116.97, -102.54, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -99.58, -36, -116.97, -102.54, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 9, 4, 52;
     ! point 5 (deg): 21, -99.6, -36, -116.05, -108.82, -184
-    MoveAbsJ [[21, -99.6, -36, -116.05, -108.82, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -99.6, -36, -116.05, -108.82, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 9, 5, 53;
     ! point 6 (deg): 21, -92.35, -36, -119.25, -99.04, -184
-    MoveAbsJ [[21, -92.35, -36, -119.25, -99.04, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, tool0;
+    MoveAbsJ [[21, -92.35, -36, -119.25, -99.04, -184], [9E+09, 9E+09, 9E+09, 9E+09, 9E+09, 9E+09]], wc_v, fine, wc_tool;
     wc_meas 9, 6, 54;
 
     ! ---- end: the closing zero reading at theta0 (checks step 9) ----
     TPWrite "# Closing zero reading at theta0";
-    MoveAbsJ wc_theta0, wc_v, fine, tool0;
+    MoveAbsJ wc_theta0, wc_v, fine, wc_tool;
     wc_meas 10, 0, 0;
     ! the controller solver on the readings just taken (its lines are log comments)
     TPWrite "# wc_solve: step-by-step identification on the controller ...";
