@@ -187,18 +187,23 @@ def gen(robot: str, plan: str, out_dir: str, force: bool, **options: Any) -> Non
     paths = backend.write(out_dir, programs, request, force=force, inputs=inputs)
     for note in backend.notes(rb, robot):
         click.echo(f"warning: {note}", err=True)
-    if pl.joint_only and request.solver:
-        click.echo(f"warning: {plan}: {JOINT_ONLY_SOLVER}", err=True)
+    if pl.joint_only:
+        click.echo(f"note: {plan}: {JOINT_ONLY_SOLVER}", err=True)
     steps = backend.next_steps(rb, pl, request, robot, plan)
     click.echo(f"wrote {', '.join(str(p) for p in paths)}: {steps}")
 
 
 JOINT_ONLY_SOLVER = (
-    "joint_only = true: the plan was written from a pool for the joint method, so the "
-    "controller's step-by-step solver (V+ wc.solve, URScript wc_solve) does not apply to its "
-    "log: solve it with 'wirecal solve', which runs the joint method (URScript: --no-solver "
-    "leaves wc_solve out)"
+    "joint_only = true: the plan was written from a pool for the joint method; its steps "
+    "isolate no parameter, so the controller's step-by-step solver does not apply and is "
+    "left out (V+ wc.solve and wc.solve2, URScript and RAPID wc_solve): solve the log with "
+    "'wirecal solve', which runs the joint method"
 )
+"""Why ``gen`` leaves the controller's solver out of a pool's plan (the generators' rule:
+:func:`wirecal.gen.targets.stepwise_solver`, and the V+ module's ``solver``).
+
+Left out rather than refused: the measurement programs are what a pool's plan is generated
+for, and V+ has no --no-solver to ask for them without it."""
 
 
 def _load(robot: str, plan: str, language: str | None) -> tuple[Robot, Plan]:

@@ -89,6 +89,17 @@ def payload_context(plan: Plan) -> dict[str, object] | None:
     }
 
 
+def stepwise_solver(plan: Plan, asked: bool) -> bool:
+    """Return whether the programs end with the controller's step-by-step solver.
+
+    As ``asked``, but never for a payload step (its points need the gravity model only
+    ``wirecal solve`` has) nor for a plan written from a pool (``joint_only``: its steps
+    isolate no parameter, so the stepwise solver does not apply; ``gen`` says so). The
+    V+ module keeps its solver for a payload step (it leaves the step's points out).
+    """
+    return asked and plan.payload_step is None and not plan.joint_only
+
+
 Load = tuple[float, np.ndarray]
 """A load at the flange: its mass (kg) and centre (mm, in the flange frame)."""
 

@@ -199,3 +199,40 @@ def test_cli_gen(tmp_path):
     assert again.exit_code == 2
     assert "exists; choose another name or pass --force" in again.output
     assert "Usage:" in runner.invoke(main, ["gen", "--help"]).output
+
+
+@pytest.mark.parametrize(
+    ("arm", "plan_name", "program", "solver"),
+    [
+        ("viper_s650", "paper_plan.toml", "WIRECAL.V2", ".PROGRAM wc.solve"),
+        ("ur5e", "plan.toml", "wc_run.script", "def wc_solve"),
+        ("abb_irb120", "plan.toml", "WIRECAL.mod", "PROC wc_solve"),
+    ],
+)
+def test_gen_leaves_the_stepwise_solver_out_of_a_pool_plan(
+    tmp_path, arm, plan_name, program, solver
+):
+    """A plan written from a pool (``joint_only = true``, as ``plan --pool -o`` writes it)
+    isolates no parameter per step: ``gen`` writes the measurement programs without the
+    controller's step-by-step solver (V+ has no --no-solver to ask for that), the program's
+    comment and the command's note saying why, exit 0; the plan without the mark keeps it."""
+    folder = VIPER.parent / arm
+    plan = tmp_path / "pool_plan.toml"
+    plan.write_text("joint_only = true\n" + (folder / plan_name).read_text(encoding="utf-8"))
+    runner = CliRunner()
+    r = runner.invoke(
+        main, ["gen", str(folder / "robot.toml"), str(plan), "-o", str(tmp_path / "o")]
+    )
+    assert r.exit_code == 0, r.output
+    assert f"note: {plan}: joint_only = true:" in r.output
+    assert "step-by-step solver does not apply and is left out" in r.output
+    text = (tmp_path / "o" / program).read_text(encoding="ascii")
+    assert solver not in text
+    assert "not generated: the plan was written from a pool" in text
+    r = runner.invoke(
+        main,
+        ["gen", str(folder / "robot.toml"), str(folder / plan_name), "-o", str(tmp_path / "s")],
+    )
+    assert r.exit_code == 0, r.output
+    assert solver in (tmp_path / "s" / program).read_text(encoding="ascii")
+    assert "joint_only" not in r.output

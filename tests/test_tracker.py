@@ -618,7 +618,8 @@ def test_plan_pool_writes_a_plan_gen_takes(tmp_path):
     prog = tmp_path / "prog"
     g = CliRunner().invoke(main, ["gen", str(UR5E), str(out), "-o", str(prog)])
     assert g.exit_code == 0, g.output
-    assert (prog / "wc_run.script").exists()
+    assert "def wc_solve" not in (prog / "wc_run.script").read_text()  # stepwise: no
+    assert "step-by-step solver does not apply and is left out" in g.output
 
 
 def test_plan_pool_refuses_a_plan_the_preflight_refuses(tmp_path):
@@ -730,10 +731,8 @@ def test_solve_says_the_stepwise_estimate_does_not_apply_to_a_pool_plan(tmp_path
     assert "the controller's solver starts step by step, which does not apply" in r.output
     r = runner.invoke(main, ["gen", *args[1:3], "-o", str(tmp_path / "programs")])
     assert r.exit_code == 0, r.output
-    assert (
-        "the controller's step-by-step solver (V+ wc.solve, URScript wc_solve) does not "
-        in r.output
-    )
+    assert "the controller's step-by-step solver does not apply and is left out" in r.output
+    assert ".PROGRAM wc.solve" not in (tmp_path / "programs" / "WIRECAL.V2").read_text()
     r = runner.invoke(main, ["report", *args[1:], "-o", str(tmp_path / "r.html")])
     assert r.exit_code == 0, r.output
     html = (tmp_path / "r.html").read_text()

@@ -36,6 +36,7 @@ from wirecal.gen.targets import (
     name_problems,
     payload_context,
     run_steps,
+    stepwise_solver,
 )
 from wirecal.gen.templating import render
 from wirecal.lang.rapid.module import (
@@ -238,8 +239,7 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
     (:meth:`wirecal.gen.backends.Generator.programs`).
     """
     _check(robot, opt)
-    if plan.payload_step is not None:  # its points need the gravity model of 'wirecal solve'
-        opt = replace(opt, solver=False)
+    opt = replace(opt, solver=stepwise_solver(plan, opt.solver))
     tables = build_tables(robot, plan)
     mpc = robot.encoder.mm_per_count
     bits = GROUP_COUNTER_BITS
@@ -278,6 +278,7 @@ def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) ->
         "npoints": plan.n_points,
         "nreadings": len(plan.steps) + plan.n_points,
         "solver": opt.solver,
+        "joint_only": plan.joint_only,
         "nit": STEP_ITERATIONS,
         "n": tables.n,
         "m": len(tables.names),

@@ -36,6 +36,7 @@ from wirecal.gen.targets import (
     name_problems,
     payload_context,
     run_steps,
+    stepwise_solver,
 )
 from wirecal.gen.templating import render
 from wirecal.gen.urscript.cb3 import (
@@ -236,8 +237,7 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
     (:meth:`wirecal.gen.backends.Generator.programs`).
     """
     host, port = _check(robot, opt)
-    if plan.payload_step is not None:  # its points need the gravity model of 'wirecal solve'
-        opt = replace(opt, solver=False)
+    opt = replace(opt, solver=stepwise_solver(plan, opt.solver))
     tables = build_tables(robot, plan)
     mpc = robot.encoder.mm_per_count
     speed_rad_s = _speed_rad_s(robot, opt.run.speed_pct)
@@ -270,6 +270,7 @@ def scripts(robot: Robot, plan: Plan, opt: UrOptions = UrOptions()) -> dict[str,
         "nsteps": len(plan.steps),
         "npoints": plan.n_points,
         "solver": opt.solver,
+        "joint_only": plan.joint_only,
         "rd_zeros": _list([0] * 8 * (len(plan.steps) + plan.n_points), str),
         "nit": STEP_ITERATIONS,
         "n": tables.n,

@@ -241,6 +241,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         echo=opt.echo_log,
         pulley=tables.pulley is not None,
         payload=payload_context(plan),
+        solver=not plan.joint_only,  # a pool's plan: the stepwise solver does not apply
         **_run_context(opt),
         **_encoder_context(robot, opt),
     )
