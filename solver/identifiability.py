@@ -186,28 +186,32 @@ def select_columns(
     """Choose the identifiable parameters of a Jacobian, greedily in column order.
 
     The first ``n_required`` columns are always kept; each later one is kept when it raises
-    the rank of the kept columns (:data:`RANK_RTOL`) and, with a noise ``sigma_mm``, leaves
-    every kept parameter's σ (σ²·(JᵀJ)⁻¹, boundary units of ``J``) below ``max_std`` (one
-    limit, or one per column). A
-    candidate left out for the rank is named with the degenerate combination it completes.
+    the rank of the kept columns, scaled to unit length (:data:`RANK_RTOL`; a column zero
+    to round-off, no longer than RANK_RTOL times the longest, stays zero), when
+    :func:`covariance` identifies every kept parameter with it, and, with a noise
+    ``sigma_mm``, when it leaves every kept parameter's σ (σ²·(JᵀJ)⁻¹, boundary units of
+    ``J``) below ``max_std`` (one limit, or one per column). A candidate left out is named
+    with the degenerate combination it completes.
     """
     names = tuple(names)
     if J.shape[0] > J.shape[1]:  # R of J = QR has J's singular values and right vectors
         J = np.asarray(np.linalg.qr(J, mode="r"))
+    unit = _unit_columns(J)
     limit = np.broadcast_to(np.asarray(max_std, dtype=float), (len(names),))
     kept = list(range(n_required))
-    rank = _rank(J[:, kept]) if kept else 0
+    rank = _rank(unit[:, kept]) if kept else 0
+    known = covariance(J[:, kept], 1.0)[1] if kept else np.zeros(0, dtype=bool)  # so far
     dropped: list[tuple[str, str]] = []
     for k in range(n_required, len(names)):
         trial = [*kept, k]
-        r = _rank(J[:, trial])
-        if r <= rank:
-            dropped.append(
-                (names[k], "degenerate: " + _null_combination(J[:, trial], names, trial))
-            )
+        r = _rank(unit[:, trial])
+        cov, identified = covariance(J[:, trial], 1.0 if sigma_mm is None else sigma_mm**2)
+        if r <= rank or not identified[-1] or np.any(known & ~identified[:-1]):
+            why = "degenerate: " if r <= rank else "not identified: nearly "
+            dropped.append((names[k], why + _null_combination(J[:, trial], names, trial)))
             continue
         if sigma_mm is not None:
-            std = np.sqrt(np.diag(covariance(J[:, trial], sigma_mm**2)[0]))
+            std = np.sqrt(np.diag(cov))
             over = std / limit[trial]
             if np.max(over) >= 1:
                 worst = int(np.argmax(over))
@@ -221,22 +225,34 @@ def select_columns(
                 )
                 continue
         kept.append(k)
-        rank = r
+        rank, known = r, identified
     return Selection(tuple(kept), tuple(dropped))
+
+
+def _unit_columns(J: np.ndarray) -> np.ndarray:
+    """Return J's columns scaled to unit length, those zero to round-off left zero.
+
+    Zero to round-off: no longer than :data:`RANK_RTOL` times the longest column. Scaled,
+    such a column would be a unit column of round-off, of any direction: it would raise the
+    rank of any set it joins.
+    """
+    norm = np.linalg.norm(J, axis=0)
+    zero = norm <= RANK_RTOL * (np.max(norm) if norm.size else 0.0)
+    return np.where(zero, 0.0, J / np.where(zero, 1.0, norm))
 
 
 def _null_combination(J: np.ndarray, names: tuple[str, ...], columns: list[int]) -> str:
     """Return the direction J sees least, in words, scaled to the last column's +1.
 
     Terms are kept by their share of the direction with the columns scaled to unit length
-    (above 0.1 %), so a scale in ppm beside lengths in mm is not lost; coefficients are in
-    the columns' own units.
+    (above 0.1 %; :func:`_unit_columns`), so a scale in ppm beside lengths in mm is not
+    lost; coefficients are in the columns' own units.
     """
     norm = np.linalg.norm(J, axis=0)
-    norm = np.where(norm > 0, norm, 1.0)
-    v = np.linalg.svd(J / norm, full_matrices=J.shape[0] < J.shape[1])[2][-1]
+    unit = _unit_columns(J)
+    v = np.linalg.svd(unit, full_matrices=J.shape[0] < J.shape[1])[2][-1]
     keep = np.abs(v) > 1e-3 * np.max(np.abs(v))
-    c = v / norm
+    c = v / np.where(np.any(unit, axis=0), norm, 1.0)
     c = c / c[-1] if keep[-1] else c / c[np.argmax(np.abs(v))]
     terms = " ".join(
         f"{x:+.3g}·{names[k]}" for k, x, ok in zip(columns, c, keep, strict=True) if ok
@@ -244,10 +260,9 @@ def _null_combination(J: np.ndarray, names: tuple[str, ...], columns: list[int])
     return f"{terms} changes no length"
 
 
-def _rank(J: np.ndarray) -> int:
-    """Return the rank of J's columns scaled to unit length (their units do not count)."""
-    norm = np.linalg.norm(J, axis=0)
-    s = np.linalg.svd(J / np.where(norm > 0, norm, 1.0), compute_uv=False)
+def _rank(unit: np.ndarray) -> int:
+    """Return the rank of columns scaled to unit length (:func:`_unit_columns`)."""
+    s = np.linalg.svd(unit, compute_uv=False)
     return int(np.sum(s > RANK_RTOL * s[0])) if s.size and s[0] > 0 else 0
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from wirecal.solver import params as P
-from wirecal.solver.identifiability import analyse, observability_indices
+from wirecal.solver.identifiability import analyse, observability_indices, select_columns
 
 
 def test_th1_unobservable_from_any_points(viper):
@@ -61,3 +61,33 @@ def test_observability_indices_formulas():
     assert np.isclose(o["O4"], 0.25)
     assert np.isclose(o["O5"], 1 / 1.75)
     assert observability_indices(np.array([3.0, 0.0]), 5)["O1"] == 0.0
+
+
+def test_select_columns_drops_a_column_zero_to_round_off():
+    """A column of round-off (1e-17 of the others: θ6 with the tool on its axis) is zero,
+    not a unit column of any direction: it is left out as degenerate, by name, and the
+    columns after it are chosen as without it."""
+    rng = np.random.default_rng(0)
+    J = rng.normal(size=(40, 4))
+    J[:, 2] = 1e-17 * rng.normal(size=40)
+    names = ("a", "b", "th6", "d")
+    sel = select_columns(J, names, 1)
+    assert sel.kept == (0, 1, 3)
+    assert [n for n, _ in sel.dropped] == ["th6"]
+    assert sel.dropped[0][1] == "degenerate: +1·th6 changes no length"
+    with_noise = select_columns(J, names, 1, sigma_mm=0.01, max_std=10.0)
+    assert with_noise.kept == (0, 1, 3)
+
+
+def test_select_columns_refuses_a_column_the_covariance_does_not_identify():
+    """A column 1e-5 of another plus 1e-10 of a third direction: of unit length, its
+    direction differs by 1e-5 (the rank test passes), but JᵀJ sees it 1e-10 below the
+    largest, under RANK_RTOL: the covariance does not identify it, so it is left out
+    even with no σ limit (its restricted σ would be finite, not the truth)."""
+    rng = np.random.default_rng(1)
+    a, b = rng.normal(size=30), rng.normal(size=30)
+    J = np.column_stack([a, 1e-5 * a + 1e-10 * b])
+    sel = select_columns(J, ("p", "q"), 1, sigma_mm=0.01)
+    assert sel.kept == (0,)
+    assert sel.dropped[0][0] == "q"
+    assert sel.dropped[0][1].startswith("not identified: nearly ")

@@ -14,9 +14,9 @@ Parameters: the tool point and the base frame always; then the DH errors of rows
 :func:`~wirecal.solver.fit.calibrate.candidates`' order, each kept when it raises the rank and
 leaves every σ (from the residual of the tool-and-frame fit) below
 :data:`~wirecal.solver.verdict.POORLY_IDENTIFIED` deg or mm
-(:func:`~wirecal.solver.identifiability.select_columns`); a DH error whose column is zero
-to round-off (θ6 with the tool point on its axis) is not a candidate. Row 1 is a rigid
-motion of the arm that the base frame absorbs.
+(:func:`~wirecal.solver.identifiability.select_columns`, which leaves a column zero to
+round-off out: θ6 with the tool point on its axis). Row 1 is a rigid motion of the arm that
+the base frame absorbs.
 
 A model is judged on poses it was not fitted to by :func:`registered_rms_mm`: its tool
 points rigidly registered onto the measured ones (Arun, Huang & Blostein 1987: the SVD of
@@ -34,7 +34,7 @@ from scipy.spatial.transform import Rotation
 from wirecal.solver import params as P
 from wirecal.solver.fit.calibrate import candidates
 from wirecal.solver.fit.solver import levenberg_marquardt
-from wirecal.solver.identifiability import RANK_RTOL, select_columns
+from wirecal.solver.identifiability import select_columns
 from wirecal.solver.kinematics import Model, tool_jacobian, tool_position, with_errors
 from wirecal.solver.verdict import POORLY_IDENTIFIED
 
@@ -165,12 +165,7 @@ def calibrate(
     j = np.concatenate(
         [P.ErrorSet(full, base.n_joints).per_boundary(j[:, : len(full)]), j[:, len(full) :]], axis=1
     )
-    moves = np.linalg.norm(j, axis=0) > RANK_RTOL * np.max(np.linalg.norm(j, axis=0))
-    order = [
-        *range(3),
-        *range(len(full), len(full) + 6),
-        *(k for k in range(3, len(full)) if moves[k]),  # θ6 with the tool on its axis: none
-    ]
+    order = [*range(3), *range(len(full), len(full) + 6), *range(3, len(full))]
     limit = np.full(len(order), POORLY_IDENTIFIED)
     limit[:9] = np.inf
     sel = select_columns(
