@@ -11,9 +11,10 @@ shorten every wire length by as much and bias the geometry (d6, th6 by up to 2 �
 gauge). When the robot file gives the arm's repeatability
 (``[calibration] repeatability_mm``), the lengths are read from the reference plus
 :func:`expected_zero_mm`. The same rule sizes what the repeatability adds to the lengths'
-scatter (:func:`length_sigma_mm`, the plausibility gate's noise model) and how far two zero
-readings may differ before a slipped wire is suspected (:func:`slip_tolerance_mm`, the
-generated programs' check and the log reader's).
+scatter (:func:`length_sigma_mm`, the plausibility gates' noise model: ``solve``'s and,
+through :func:`landing_sigma_mm`, ``fit``'s) and how far two zero readings may differ before
+a slipped wire is suspected (:func:`slip_tolerance_mm`, the generated programs' check and
+the log reader's).
 """
 
 from __future__ import annotations
@@ -82,8 +83,19 @@ def length_sigma_mm(
     v = wire_vectors(model, q_rad, theta0_rad)
     _, gradient = wire_path(model.pulley, v)  # none at a point on θ0's: taken as 0 there
     _, J = joint_jacobian(model, q_rad)
-    along = np.einsum("kc,kcn->kn", np.nan_to_num(gradient), J)
-    return joint_sigma_rad(repeatability_mm) * float(np.sqrt(np.mean(np.sum(along**2, axis=1))))
+    return landing_sigma_mm(np.einsum("kc,kcn->kn", np.nan_to_num(gradient), J), repeatability_mm)
+
+
+def landing_sigma_mm(gradient_mm_per_rad: np.ndarray, repeatability_mm: float) -> float:
+    """Return the RMS over the rows of what landing adds to a length (σ, mm), from ∂ℓ/∂q.
+
+    ``gradient_mm_per_rad`` (N, n): each row's length gradient in the joints; the arm
+    lands at q + δq, δq ~ N(0, σ_q²·I) (:func:`joint_sigma_rad`), so the length moves by
+    σ_q·‖∂ℓ/∂q‖ (1σ). The rule of :func:`length_sigma_mm` (the wire from θ0's tool point)
+    and of ``wirecal fit``'s gate (the wire from its fitted anchor).
+    """
+    g = np.asarray(gradient_mm_per_rad, dtype=float)
+    return joint_sigma_rad(repeatability_mm) * float(np.sqrt(np.mean(np.sum(g**2, axis=1))))
 
 
 def slip_tolerance_mm(

@@ -188,3 +188,45 @@ def test_a_slipped_wire_is_still_refused_by_the_log_reader(tmp_path):
     assert code == 2, out
     assert "the wire slipped" in out
     assert "tolerance 0.28 mm" in out
+
+
+def test_fit_gate_takes_the_declared_repeatability_by_solves_rule():
+    """``wirecal fit`` on a table from a Viper that repeats to 0.05 mm (joints logged to
+    1e-4°, lengths to 1 µm: the landing dominates the floor): with the key declared the
+    gate passes it, its noise model grown by σ_a (``landing_sigma_mm``, solve's rule; the
+    held-out floor too);
+    without the key the same table is refused; a table 0.3 mm noisier is still refused."""
+    from dataclasses import replace
+
+    from wirecal.formats.robot_file import load_robot
+    from wirecal.solver.errors import Implausible
+    from wirecal.solver.fit.gate import gate_fit
+    from wirecal.solver.fit.result import FitOptions, fit_table
+    from wirecal.solver.fit.synth import synthetic_table
+
+    robot = load_robot(EXAMPLES / "viper_s650" / "robot.toml")
+    declared = replace(robot, repeatability_mm=0.05)
+    syn = synthetic_table(
+        declared,
+        300,
+        seed=1,
+        sessions=1,
+        snags=0,
+        typos=0,
+        joint_resolution_deg=1e-4,
+        length_resolution_mm=0.001,
+        repeatability_mm=0.05,
+    )
+    options = FitOptions(repeats=2)
+    gate = gate_fit(fit_table(declared, syn.table, options))
+    verdict = gate.chosen.verdict
+    assert verdict.passed, verdict.findings
+    # the noise model explains the residual (the reading noise 0.02 mm alone would not)
+    assert verdict.residual_sigma_mm > 0.025
+    assert abs(verdict.residual_sigma_mm / verdict.noise_model_mm - 1) < 0.15
+    with pytest.raises(Implausible, match="the residual σ"):
+        gate_fit(fit_table(robot, syn.table, options))
+    rng = np.random.default_rng(7)
+    noisy = replace(syn.table, length_mm=syn.table.length_mm + rng.normal(0, 0.3, 300))
+    with pytest.raises(Implausible, match="the residual σ"):
+        gate_fit(fit_table(declared, noisy, options))

@@ -2,13 +2,16 @@
 
 :func:`assess_run` judges one fit (:class:`~wirecal.solver.fit.result.Run`):
 
-* **residual** — σ of the final fit against σ_model = √(floor² + noise²) by the gate's χ²
-  bound (:func:`~wirecal.solver.verdict.residual_limit_mm`);
+* **residual** — σ of the final fit against σ_model = √(floor² + noise² + σ_a²) by the gate's
+  χ² bound (:func:`~wirecal.solver.verdict.residual_limit_mm`); σ_a what the robot file's
+  ``[calibration] repeatability_mm`` adds to a length (0 without it; ``solve``'s rule,
+  :func:`~wirecal.solver.zero_reading.landing_sigma_mm`, through the fitted ∂L/∂q);
 * **bound** — no DH error beyond :data:`~wirecal.solver.verdict.PLAUSIBLE_DEG` deg or
   :data:`~wirecal.solver.verdict.PLAUSIBLE_MM` mm;
 * **holdout** — the held-out RMS at most :data:`HOLDOUT_FLOORS` times the quantisation
-  floor; ``--noise-mm`` does not move it, so no noise allowance makes a unit error pass
-  (a joint in radians read as degrees: hundreds of floors);
+  floor (with σ_a: an arm's landing is no allowance but the arm's, at most 1 mm);
+  ``--noise-mm`` does not move it, so no noise allowance makes a unit error pass (a joint
+  in radians read as degrees: hundreds of floors);
 * **budget** — the error budget (:func:`fit_budget`: the mean tool-point error over the
   workspace that the fit's own uncertainty predicts) below the correction it makes
   (:func:`correction_mm`: the mean over the same workspace of how far the fitted DH errors
@@ -39,7 +42,7 @@ from wirecal.solver.accuracy import workspace
 from wirecal.solver.budget import Budget, budget, sources
 from wirecal.solver.errors import Implausible
 from wirecal.solver.fit.calibrate import point_model
-from wirecal.solver.fit.model import lengths_and_jacobian, model_of
+from wirecal.solver.fit.model import length_joint_gradient, lengths_and_jacobian, model_of
 from wirecal.solver.fit.result import FitResult, Run, copies_note
 from wirecal.solver.fit.sessions import MIN_SESSION_ROWS
 from wirecal.solver.kinematics import Model, tool_position, with_errors
@@ -55,6 +58,7 @@ from wirecal.solver.verdict import (
     implausible,
     residual_limit_mm,
 )
+from wirecal.solver.zero_reading import landing_sigma_mm
 
 HOLDOUT_FLOORS = 10.0
 """A held-out RMS beyond this many quantisation floors is refused (module docstring)."""
@@ -161,19 +165,24 @@ def _zero_runs(residual_mm: np.ndarray) -> str:
     )
 
 
-def _findings(result: FitResult, run: Run, budget_mm: float, moved_mm: float, limit: float):
+def _findings(
+    result: FitResult, run: Run, budget_mm: float, moved_mm: float, limit: float, landing: float
+):
     """Return the gate's findings on one fit (module docstring), the table's problems first."""
     core, ho = run.core, run.holdout
     out = []
-    if ho.rows and not ho.rms_mm <= HOLDOUT_FLOORS * ho.floor_mm:
+    floor = float(np.hypot(ho.floor_mm, landing))
+    if ho.rows and not ho.rms_mm <= HOLDOUT_FLOORS * floor:
         cols = ", ".join(
             repr(c) for c in (*result.table.columns.joints, result.table.columns.length)
         )
+        arm = f" with the arm's repeatability {landing:.3g} mm (σ)" if landing else ""
         out.append(
             Finding(
                 "holdout",
-                f"the held-out RMS {ho.rms_mm:.4g} mm is {ho.ratio:.0f} times the quantisation "
-                f"floor {ho.floor_mm:.4g} mm (more than {HOLDOUT_FLOORS:g}): check the columns "
+                f"the held-out RMS {ho.rms_mm:.4g} mm is {ho.rms_mm / floor:.0f} times the "
+                f"quantisation floor {ho.floor_mm:.4g} mm{arm} (more than {HOLDOUT_FLOORS:g}): "
+                "check the columns "
                 f"{cols}: this robot's joints in degrees (its convention) and the cable length "
                 "in mm read with the joints of its own row (rows not shifted)",
             )
@@ -214,12 +223,13 @@ def assess_run(
 ) -> Judged:
     """Return one fit's budget, correction and the gate's verdict (module docstring)."""
     core = run.core
-    sigma_model = float(np.hypot(run.floor_mm, noise_mm))
+    landing = _landing_mm(result, run)
+    sigma_model = float(np.sqrt(run.floor_mm**2 + noise_mm**2 + landing**2))
     dof = int(core.inliers.sum()) - len(core.x)
     limit = residual_limit_mm(sigma_model, dof) if dof > 0 else float("inf")
     spent = fit_budget(result, run)
     moved = correction_mm(result.robot, run)
-    findings = _findings(result, run, spent.total, moved, limit)
+    findings = _findings(result, run, spent.total, moved, limit, landing)
     est = result.estimate(run)
     dh = [not n.startswith("tool_") for n in est.names]  # the attachment is fitted freely
     huge = implausible([n for n, d in zip(est.names, dh, strict=True) if d], est.values[dh])
@@ -241,6 +251,22 @@ def assess_run(
         unidentified=(),
     )
     return Judged(label, run, spent, moved, verdict)
+
+
+def _landing_mm(result: FitResult, run: Run) -> float:
+    """Return σ_a, what the declared repeatability adds to a length (0 without the key).
+
+    ``solve``'s rule (:func:`~wirecal.solver.zero_reading.landing_sigma_mm`) with the
+    fitted model's ∂L/∂q (the wire from the fitted anchor) at the fit's rows.
+    """
+    r = result.robot.repeatability_mm
+    if r is None:
+        return 0.0
+    core = run.core
+    q = np.radians(run.q_deg[core.inliers])
+    return landing_sigma_mm(
+        length_joint_gradient(point_model(result.robot), core.layout, core.x, q), r
+    )
 
 
 def gate_fit(

@@ -21,6 +21,7 @@ from wirecal.solver.fit.cable_data import AXES, CableTable, ColumnMap
 from wirecal.solver.kinematics import Model, tool_position
 from wirecal.solver.robot import Robot
 from wirecal.solver.verdict import READING_NOISE_MM
+from wirecal.solver.zero_reading import joint_sigma_rad
 
 ERROR_SIZE = 0.5
 """Largest true DH error (deg or mm)."""
@@ -90,25 +91,23 @@ def synthetic_table(
     length_resolution_mm: float = 0.01,
     noise_mm: float = READING_NOISE_MM,
     compliance_urad_per_nm: np.ndarray | None = None,
+    repeatability_mm: float | None = None,
 ) -> Synthetic:
     """Return a simulated table of ``n_rows`` rows and its truth (module docstring).
 
     ``compliance_urad_per_nm`` (n,): the true arm bends under gravity with these joint
     compliances and the robot file's masses (:func:`~wirecal.solver.kinematics.frames`);
-    None: rigid.
+    None: rigid. ``repeatability_mm``: the arm lands off the joints it logs, each by
+    N(0, σ_q²) (:func:`~wirecal.solver.zero_reading.joint_sigma_rad`, the twin's rule);
+    None: exactly on them.
     """
     rng = np.random.default_rng(seed)
     names = truth_names(robot)
     err = dict(zip(names, rng.uniform(-ERROR_SIZE, ERROR_SIZE, len(names)), strict=True))
     attach = robot.tool_point + rng.uniform(-30, 30, 3)
-    true = robot.model(err)
-    if compliance_urad_per_nm is None:
-        true = Model(true.dh, attach)
-    else:
-        c = np.asarray(compliance_urad_per_nm, dtype=float) * 1e-6  # rad/(N·m)
-        true = Model(true.dh, attach, masses=robot.masses, compliance=c)
+    true = _true_model(robot, err, attach, compliance_urad_per_nm)
     q_true = _configurations(robot, n_rows, rng)
-    p = tool_position(true, np.radians(q_true))
+    p = tool_position(true, _landed(np.radians(q_true), repeatability_mm, rng))
     anchor = _anchor(p, rng)
     starts = _starts(n_rows, sessions, rng)
     offsets = 100 + np.cumsum(rng.choice([-1, 1], len(starts)) * rng.uniform(3, 30, len(starts)))
@@ -136,6 +135,26 @@ def synthetic_table(
         bad_mm=bad_mm,
         q_true_deg=q_true,
     )
+
+
+def _true_model(
+    robot: Robot, err: dict[str, float], attach: np.ndarray, compliance: np.ndarray | None
+) -> Model:
+    """Return the true arm: the DH errors, the attachment, and (given) its compliances."""
+    true = robot.model(err)
+    if compliance is None:
+        return Model(true.dh, attach)
+    c = np.asarray(compliance, dtype=float) * 1e-6  # rad/(N·m)
+    return Model(true.dh, attach, masses=robot.masses, compliance=c)
+
+
+def _landed(
+    q_rad: np.ndarray, repeatability_mm: float | None, rng: np.random.Generator
+) -> np.ndarray:
+    """Return where an arm of this repeatability lands for the joints ``q_rad`` (rad)."""
+    if repeatability_mm is None:
+        return q_rad
+    return q_rad + rng.normal(0, joint_sigma_rad(repeatability_mm), q_rad.shape)
 
 
 def _spoil(
