@@ -26,6 +26,18 @@ MAX_EXPRESSION_DEPTH = 100
 """Deepest parse tree of one line (nested parentheses, a chain of operators) the parsers
 read; wirecal's bound (its generated V+ and URScript lines reach 12), not a controller's."""
 
+MAX_BRACKET_DEPTH = 100
+"""Deepest nesting of brackets (``()``, ``[]``, ``{}``) wirecal reads in RAPID, V+ and
+URScript, counted on the text before parsing (:func:`check_operator_run`; RAPID's module
+scan counts across lines, as its aggregates span them): one rule for the three, whatever a
+parse tree keeps of the brackets (URScript's collapses them). wirecal's bound, not a
+controller's."""
+
+BRACKET_PROBLEM = (
+    f"brackets nested more than {MAX_BRACKET_DEPTH} deep; wirecal reads at most "
+    f"{MAX_BRACKET_DEPTH}: split the expression"
+)
+
 
 MAX_OPERATOR_RUN = 10_000
 """Most operators wirecal reads in one run of an expression (at one level of brackets,
@@ -77,24 +89,22 @@ OPERATOR_RUN_PROBLEM = (
 
 
 def check_operator_run(line: str) -> None:
-    """Raise :class:`NestingError` for a long line that would parse too slowly, unparsed.
+    """Raise :class:`NestingError` for a line nested too deep or too slow to parse, unparsed.
 
-    Too slowly: a run of more than :data:`MAX_OPERATOR_RUN` operators, or brackets nested
-    deeper than :data:`MAX_EXPRESSION_DEPTH` (each nests the tree at least a level). A line
-    of at most :data:`MAX_OPERATOR_RUN` characters parses fast and is not scanned.
+    A run of more than :data:`MAX_OPERATOR_RUN` operators, or brackets nested deeper than
+    :data:`MAX_BRACKET_DEPTH` (outside strings). A line of at most
+    :data:`MAX_OPERATOR_RUN` characters and at most that many opening brackets is not
+    scanned: it parses fast and cannot nest them deeper.
     """
-    if len(line) <= MAX_OPERATOR_RUN:
+    if len(line) <= MAX_OPERATOR_RUN and sum(map(line.count, "([{")) <= MAX_BRACKET_DEPTH:
         return
     run = OperatorRun()
     for m in _LINE_TOKEN.finditer(line):
         word = m.group().upper()
         if word in RUN_TOKENS and run.see(word):
             raise NestingError(OPERATOR_RUN_PROBLEM)
-        if len(run.outer) > MAX_EXPRESSION_DEPTH:
-            raise NestingError(
-                f"brackets nested more than {MAX_EXPRESSION_DEPTH} deep; wirecal reads at "
-                f"most {MAX_EXPRESSION_DEPTH}: split the expression"
-            )
+        if len(run.outer) > MAX_BRACKET_DEPTH:
+            raise NestingError(BRACKET_PROBLEM)
 
 
 KEPT_LINES = 32768

@@ -471,8 +471,9 @@ RUN = r"more than 10000 operators in a row: wirecal reads at most 10000"
         ("+".join(["a"] * 20_001), RUN),
         ("+".join(["(a)"] * 20_001), RUN),
         ("(" * 5000 + "a" + ")" * 5000, r"brackets nested more than 100 deep"),
+        ("(" * 101 + "a" + ")" * 101, r"brackets nested more than 100 deep"),
     ],
-    ids=["800 terms", "20001 terms", "20001 bracketed terms", "5000 brackets"],
+    ids=["800 terms", "20001 terms", "20001 bracketed terms", "5000 brackets", "101 brackets"],
 )
 def test_ra21_a_chain_of_variables_is_refused_before_it_costs_minutes(
     tmp_path, suffix, expression, message
@@ -490,6 +491,23 @@ def test_ra21_a_chain_of_variables_is_refused_before_it_costs_minutes(
     outcome_is_clean(r)
     assert r.exit_code == 1, r.output
     assert re.search(re.escape(path.name) + r":\d+: (t: )?" + message, r.output), r.output
+
+
+def test_one_bracket_rule_for_the_three_languages(tmp_path):
+    """A short line of 101 nested brackets: URScript's parse tree collapses brackets, so it
+    once passed where V+ and RAPID refused; the one rule (lang/syntax.py) refuses it in all
+    three, by the same words; 100 brackets pass URScript's lint."""
+    for suffix in (".mod", ".v2", ".script"):
+        path = tmp_path / f"b{suffix}"
+        path.write_text(_chain_program(suffix, "(" * 101 + "1" + ")" * 101))
+        r = invoke("lint", path)
+        outcome_is_clean(r)
+        assert r.exit_code == 1, r.output
+        assert "brackets nested more than 100 deep; wirecal reads at most 100" in r.output
+    path = tmp_path / "ok.script"
+    path.write_text(_chain_program(".script", "(" * 100 + "1" + ")" * 100))
+    r = invoke("lint", path)
+    assert r.exit_code == 0, r.output
 
 
 @pytest.mark.parametrize("suffix", [".v2", ".script"])

@@ -8,7 +8,8 @@ problem ``SOURCE:LINE: what``; a block left open names the END keyword it lacks.
 Operators bind, tightest first: ``* / DIV MOD``, ``+ -``, comparisons, ``NOT``, ``AND``,
 ``OR XOR`` (RAPID kernel, expressions: unconfirmed — where NOT falls is wirecal's reading).
 Blocks deeper than :data:`MAX_BLOCK_DEPTH` and brackets deeper than
-:data:`MAX_BRACKET_DEPTH` are refused before parsing, expressions nested deeper than
+:data:`~wirecal.lang.syntax.MAX_BRACKET_DEPTH` (the three languages' one rule) are refused
+before parsing, expressions nested deeper than
 :data:`~wirecal.lang.syntax.MAX_EXPRESSION_DEPTH` (chained operators too) after it (the tree
 is built recursively).
 """
@@ -25,6 +26,8 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
 from wirecal.lang.rapid import nodes as N
 from wirecal.lang.rapid.tables import RESERVED
 from wirecal.lang.syntax import (
+    BRACKET_PROBLEM,
+    MAX_BRACKET_DEPTH,
     MAX_EXPRESSION_DEPTH,
     OPERATOR_RUN_PROBLEM,
     RUN_TOKENS,
@@ -308,9 +311,6 @@ MAX_BLOCK_DEPTH = 64
 """Deepest nesting of blocks (IF, FOR, WHILE, TEST) wirecal reads; wirecal's bound, far
 beyond its modules (the controller's own limit is unconfirmed)."""
 
-MAX_BRACKET_DEPTH = 100
-"""Deepest nesting of parentheses and brackets wirecal reads (wirecal's bound)."""
-
 
 def _too_deep(text: str) -> SyntaxProblem | None:
     """Refuse up front what the parser would take too long or recurse too deep on.
@@ -345,7 +345,7 @@ class _Nesting:
         if word in ("(", "[", "{"):
             self.brackets += 1
             if self.brackets > MAX_BRACKET_DEPTH:
-                return SyntaxProblem(number, f"brackets nested more than {MAX_BRACKET_DEPTH} deep")
+                return SyntaxProblem(number, BRACKET_PROBLEM)
         elif word in (")", "]", "}"):
             self.brackets -= 1
         elif word in ("THEN", "FOR", "WHILE", "TEST"):
