@@ -118,11 +118,11 @@ def test_every_move_declares_the_tools_load(irb, text):
     assert "pp. 225-227" in text  # the page read
 
 
-@pytest.mark.parametrize("mass", [None, 0.0])
+@pytest.mark.parametrize("mass", [None, 0.0, 1e-7])
 def test_a_robot_file_without_the_tools_mass_is_refused(tmp_path, mass):
-    """No [gravity] payload_mass_kg (or 0): the flange carries at least the wire's fixture,
-    so the module would declare too little; `wirecal gen` refuses, naming the key, exit 2,
-    nothing written."""
+    """No [gravity] payload_mass_kg (or 0, or a mass written as 0): the flange carries at
+    least the wire's fixture, so the module would declare too little; `wirecal gen`
+    refuses, naming the key, exit 2, nothing written."""
     data = (IRB / "robot.toml").read_text(encoding="utf-8")
     data = data.replace(
         "payload_mass_kg = 0.1\n", "" if mass is None else f"payload_mass_kg = {mass}\n"

@@ -219,9 +219,10 @@ def _tool_problems(robot: Robot) -> list[str]:
     wire's fixture: 0 kg (the key left out, or written 0) would tell the controller less
     than the truth, the unsafe direction (:data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`).
     No default is guessed: a mass too light is that direction, one too heavy impairs the
-    path too (the same page).
+    path too (the same page). A mass the module would write as 0 (below 0.5 mg: it writes
+    kg to 6 decimals) is no mass either.
     """
-    if robot.masses is not None and robot.masses.payload_mass_kg > 0:
+    if robot.masses is not None and _fixed(robot.masses.payload_mass_kg, 6) != "0":
         return []
     return [
         f"{robot.source}: [gravity] payload_mass_kg: no tool mass; the RAPID module declares "
