@@ -71,6 +71,25 @@ def run_steps(
     return steps
 
 
+def tool_mass_problems(robot: Robot, declares: str) -> list[str]:
+    """Return the problem of a robot file that gives the tool no mass, for programs that declare it.
+
+    ``declares``: how the programs tell the controller the tool's mass. The flange always
+    carries the wire's fixture, so 0 kg (``[gravity]`` or its ``payload_mass_kg`` left out,
+    or written 0) would tell the controller less than the truth, the unsafe direction; no
+    default is guessed. A mass below 0.5 mg (0 to 6 decimals, as the programs write kg) is
+    no mass either.
+    """
+    if robot.masses is not None and round(float(robot.masses.payload_mass_kg), 6) != 0:
+        return []
+    return [
+        f"{robot.source}: [gravity] payload_mass_kg: no tool mass; {declares}, and the flange "
+        "carries at least the wire's fixture: give the mass (kg) of everything mounted on the "
+        "flange (tool, fixture, the wire's attachment) and its centre, payload_com_mm (mm, "
+        "flange frame), in [gravity]"
+    ]
+
+
 def payload_context(plan: Plan) -> dict[str, object] | None:
     """Return the payload step for a template (None without one): mass, centre, step, points.
 

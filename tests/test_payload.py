@@ -32,6 +32,7 @@ from wirecal.gen.request import GenRequest
 from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import GenOptions, line_ends, module_text
 from wirecal.lang.rapid import Rapid
+from wirecal.lang.urscript import URScript
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.gravity import gravity_torques_nm, with_load
@@ -42,6 +43,9 @@ from wirecal.solver.robot import Robot
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import solve
 from wirecal.twin.rapid.adapter import ADAPTER as RAPID_ADAPTER
+from wirecal.twin.urscript.controller import URController
+from wirecal.twin.urscript.interp import URError
+from wirecal.twin.world import World
 
 from .conftest import VIPER
 from .twin_runs import generated, measure_in_twin, measure_ur_in_twin
@@ -304,16 +308,21 @@ def test_payload_golden_script(ur_run_script):
 
 
 def test_the_urscript_run_asks_by_popup_and_tells_the_controller(ur_run_script, ur_plan):
-    """Zero, popup to mount, set_payload of tool and mass, the points; back at θ0 the popup
-    to remove, set_payload of the tool alone, the closing zero; no wc_solve."""
+    """Zero, popup to mount, the active payload read and declared with the mass at their
+    common centre, the points; back at θ0 the popup to remove, the payload read restored,
+    the closing zero; no wc_solve."""
     n = len(ur_plan.steps)
     order = [
         f"z = wc_meas({n}, 0,",
         'popup("Payload step: mount the 5 kg mass',
-        "set_payload(5, [0, 0, 0.05])",
+        "wc_m0 = get_target_payload()",
+        "wc_c0 = get_target_payload_cog()",
+        "wc_mt = wc_m0 + 5",
+        "set_payload(wc_mt, [(wc_m0 * wc_c0[0] + 0) / wc_mt, (wc_m0 * wc_c0[1] + 0) / wc_mt, "
+        "(wc_m0 * wc_c0[2] + 0.25) / wc_mt])",
         f"wc_meas({n}, 1,",
         'popup("Remove the 5 kg mass',
-        "set_payload(0, [0, 0, 0])",
+        "set_payload(wc_m0, wc_c0)",
         f"wc_meas({n + 1}, 0,",
     ]
     at = [ur_run_script.index(x) for x in order]
@@ -331,6 +340,82 @@ def test_the_ur_twin_operator_mounts_the_mass_and_solve_finds_the_compliances(
     assert run.programs.world.mounted_kg == 0.0
     assert run.programs.controller.payload[0] == 0.0  # the tool's alone again
     _solves_the_compliances(ur_robot, ur_plan, run.log, KG, std_max=1.0)
+
+
+def _with_tool(robot: Robot, kg: float, com_mm: tuple[float, float, float]) -> Robot:
+    """Return ``robot`` with a tool of ``kg`` at ``com_mm`` ([gravity] payload_mass_kg)."""
+    assert robot.masses is not None
+    masses = replace(robot.masses, payload_mass_kg=kg, payload_com_mm=np.array(com_mm))
+    return replace(robot, masses=masses)
+
+
+def test_the_ur_twin_runs_a_payload_step_the_robot_file_gives_no_tool(ur_robot, ur_plan, tmp_path):
+    """The robot file gives no tool mass; the flange carries a 1 kg tool at 20 mm, the
+    Installation's payload. The e-Series wc_run reads it and declares 6 kg for the step, so
+    the twin (which stops a move declaring less than the flange carries) runs it to the end,
+    and the Installation's 1 kg at [0, 0, 0.02] m is restored exactly. The former program
+    declared the robot file's 0 kg with the 5 kg mass: its first move with the mass stopped."""
+    texts = dict(generated(scripts, ur_robot, ur_plan, UrOptions()))
+    true_arm = _with_tool(ur_robot, 1.0, (0.0, 0.0, 20.0))
+    run = measure_ur_in_twin(true_arm, ur_plan, TRUE_C, tmp_path, texts=texts, seed=2)
+    assert run.programs.complete, run.programs.stopped
+    assert run.programs.world.mounted_kg == 0.0
+    m, cog = run.programs.controller.payload
+    assert m == 1.0
+    assert cog == pytest.approx([0.0, 0.0, 0.02], abs=1e-7)  # a 32-bit float
+
+
+def test_the_ur_twin_stops_a_move_declaring_less_than_the_flange_carries(
+    ur_robot, ur_plan, tmp_path
+):
+    """The twin's Installation payload is the true arm's tool (1 kg at 20 mm), read back by
+    get_target_payload(_cog); after set_payload(0.5, …) a movej stops, naming both masses."""
+    arm = _with_tool(ur_robot, 1.0, (0.0, 0.0, 20.0))
+    cell = URController(World(arm, {}, np.asarray(ur_plan.theta0_deg), tmp_path, noise_mm=0.0))
+    assert cell.get_target_payload() == 1.0
+    assert cell.get_target_payload_cog() == pytest.approx([0.0, 0.0, 0.02], abs=1e-7)
+    here = [float(np.radians(x)) for x in ur_plan.theta0_deg]
+    cell.movej(here)  # the Installation's payload declares the tool: the move runs
+    cell.set_payload(0.5, [0.0, 0.0, 0.0])
+    with pytest.raises(URError, match=r"1 kg at the flange and 0\.5 kg declared"):
+        cell.movej(here)
+
+
+@pytest.mark.parametrize("mass", [None, 0.0, 1e-7])
+def test_a_cb3_payload_plan_without_the_tools_mass_is_refused(tmp_path, mass):
+    """CB3 pages document no way to read the Installation's payload, so a CB3 payload step
+    declares the robot file's tool with the mass: without that tool mass (left out, 0, or a
+    mass written as 0) it would declare too little; `wirecal gen` refuses, naming the key,
+    exit 2, nothing written. The e-Series programs need none (they read it)."""
+    text = (UR / "robot.toml").read_text(encoding="utf-8")
+    text = text.replace('software = "5.20"', 'software = "3.15"')
+    text = text.replace("rated_payload_kg = 5.0", "rated_payload_kg = 6.0")  # room for a tool
+    if mass is not None:
+        text = text.replace("[gravity]\n", f"[gravity]\npayload_mass_kg = {mass}\n", 1)
+    robot = tmp_path / "robot.toml"
+    robot.write_text(text, encoding="utf-8")
+    out = CliRunner().invoke(
+        main, ["gen", str(robot), str(UR / "plan.toml"), "-o", str(tmp_path / "o")]
+    )
+    assert out.exit_code == 2, out.output
+    assert "[gravity] payload_mass_kg: no tool mass; a CB3 program's payload step" in out.output
+    assert "Traceback" not in out.output
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
+def test_a_cb3_payload_step_declares_the_robot_files_tool_with_the_mass(ur_robot, ur_plan):
+    """CB3 (3.15): a 1 kg tool at 20 mm with the 5 kg mass at 50 mm: set_payload(6 kg at
+    (1·20 + 5·50)/6 = 45 mm), then the tool's alone; no call read on e-Series pages only,
+    and the checker refuses get_target_payload for 3.15, by name."""
+    cb3 = _with_tool(ur_robot, 1.0, (0.0, 0.0, 20.0))
+    cb3 = replace(cb3, controller=replace(cb3.controller, software="3.15"))
+    cb3 = replace(cb3, rated_payload_kg=6.0)
+    run = generated(scripts, cb3, ur_plan, UrOptions())["wc_run.script"]
+    at = [run.index(x) for x in ("set_payload(6, [0, 0, 0.045])", "set_payload(1, [0, 0, 0.02])")]
+    assert at == sorted(at)
+    assert "get_target_payload" not in run
+    problems = URScript().lint("def t():\n  m = get_target_payload()\nend\n", "t.script", "3.15")
+    assert any("get_target_payload() is documented from software 5.20" in p for p in problems)
 
 
 IRB = GOLDEN.parents[1] / "payload_abb_irb120"

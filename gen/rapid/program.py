@@ -37,6 +37,7 @@ from wirecal.gen.targets import (
     payload_context,
     run_steps,
     stepwise_solver,
+    tool_mass_problems,
 )
 from wirecal.gen.templating import render
 from wirecal.lang.rapid.module import (
@@ -198,7 +199,10 @@ def _check(robot: Robot, opt: RapidOptions) -> None:
             f"counter_bits = {GROUP_COUNTER_BITS}"
         )
     problems += robot.program_problems()
-    problems += _tool_problems(robot)
+    problems += tool_mass_problems(
+        robot,
+        "the RAPID module declares the load at the flange in every move (tooldata wc_tool)",
+    )
     problems += name_problems(robot, '"\\', "a RAPID string")
     header = f"# robot: {robot.name}"  # the log's header line, one string in run.mod.j2
     if len(header) > STRING_MAX:
@@ -209,28 +213,6 @@ def _check(robot: Robot, opt: RapidOptions) -> None:
         )
     if problems:
         raise WirecalError(problems)
-
-
-def _tool_problems(robot: Robot) -> list[str]:
-    """Refuse a robot file that gives the tool no mass: the module would declare too little.
-
-    Every move declares the flange's load as ``wc_tool``'s tload (the tooldata page,
-    :data:`~wirecal.lang.rapid.tables.TOOLDATA_PAGE`), and the flange always carries the
-    wire's fixture: 0 kg (the key left out, or written 0) would tell the controller less
-    than the truth, the unsafe direction (:data:`~wirecal.lang.rapid.tables.LOADDATA_PAGE`).
-    No default is guessed: a mass too light is that direction, one too heavy impairs the
-    path too (the same page). A mass the module would write as 0 (below 0.5 mg: it writes
-    kg to 6 decimals) is no mass either.
-    """
-    if robot.masses is not None and _fixed(robot.masses.payload_mass_kg, 6) != "0":
-        return []
-    return [
-        f"{robot.source}: [gravity] payload_mass_kg: no tool mass; the RAPID module declares "
-        "the load at the flange in every move (tooldata wc_tool), and the flange carries at "
-        "least the wire's fixture: give the mass (kg) of everything mounted on the flange "
-        "(tool, fixture, the wire's attachment) and its centre, payload_com_mm (mm, flange "
-        "frame), in [gravity]"
-    ]
 
 
 def module_text(robot: Robot, plan: Plan, opt: RapidOptions = RapidOptions()) -> str:
@@ -300,10 +282,11 @@ def _tool(robot: Robot) -> dict[str, str]:
     centre of the mounting flange, the wrist frame: the targets are jointtargets, so the
     TCP moves no path); tload the robot file's ``[gravity] payload_mass_kg`` at its
     ``payload_com_mm`` (the wrist frame), axes of moment [1, 0, 0, 0], inertia 0 (a
-    point mass: the robot file gives none). :func:`_tool_problems` has refused 0 kg.
+    point mass: the robot file gives none). 0 kg is refused
+    (:func:`~wirecal.gen.targets.tool_mass_problems`).
     """
     masses = robot.masses
-    assert masses is not None  # _tool_problems
+    assert masses is not None  # tool_mass_problems
     mass, cog = _fixed(masses.payload_mass_kg, 6), _mm(np.asarray(masses.payload_com_mm))
     return {
         "kg": mass,

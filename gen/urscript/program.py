@@ -37,6 +37,7 @@ from wirecal.gen.targets import (
     payload_context,
     run_steps,
     stepwise_solver,
+    tool_mass_problems,
 )
 from wirecal.gen.templating import render
 from wirecal.gen.urscript.cb3 import (
@@ -165,18 +166,36 @@ def solver_tables(robot: Robot, plan: Plan, tables: Tables) -> dict[str, str]:
 
 
 def _payload(robot: Robot, plan: Plan) -> dict[str, object] | None:
-    """Return the payload step for the templates, with set_payload's arguments.
+    """Return the payload step for the templates: what the programs tell set_payload.
 
     set_payload(mass, CoG) sets the whole active payload (kg, CoG in m in the flange frame;
-    :data:`~wirecal.lang.urscript.versions.PAYLOAD_ARTICLE`): the tool's (the robot file's
-    ``[gravity] payload_mass_kg``) with the mass, and the tool's alone after it.
+    :data:`~wirecal.lang.urscript.versions.PAYLOAD_ARTICLE`), and a program starts with the
+    Installation's (the same article). On e-Series the program reads that payload when the
+    step starts (``get_target_payload()``, ``get_target_payload_cog()``:
+    :data:`~wirecal.lang.urscript.versions.PAYLOAD_READ`), declares it with the step's mass
+    at their common centre (``moment_m``: the mass times its centre, kg·m) and restores it
+    after: never less than the flange carries, whatever the robot file says. Those calls are
+    read on e-Series pages only, so on CB3 the tool is the robot file's ``[gravity]
+    payload_mass_kg`` at its ``payload_com_mm`` (``total_kg``/``cog_m``, ``tool_kg``/
+    ``tool_cog_m`` after), and a robot file without it is refused.
     """
-    ctx = payload_context(plan)
-    loads = flange_loads(robot, plan)
-    if ctx is None or loads is None:
+    ctx, step, loads = payload_context(plan), plan.payload_step, flange_loads(robot, plan)
+    if ctx is None or step is None or loads is None:
         return None
+    if not is_cb3(robot.controller.software):
+        moment = [_fixed(step.payload_kg * x / 1000, 9) for x in step.payload_com_mm]
+        return ctx | {"read": True, "moment_m": moment}
+    problems = tool_mass_problems(
+        robot,
+        "a CB3 program's payload step declares it with the step's mass (set_payload), the "
+        "Installation's payload being unreadable there (get_target_payload is read on "
+        "e-Series pages only)",
+    )
+    if problems:
+        raise WirecalError(problems)
     (total, cog), (tool_kg, tool_cog) = loads
     return ctx | {
+        "read": False,
         "total_kg": f"{total:g}",
         "cog_m": _metres(cog),
         "tool_kg": f"{tool_kg:g}",

@@ -56,6 +56,15 @@ PAYLOAD_ARTICLE = (
 )
 """UR's article on setting the active payload from URScript during a program."""
 
+PAYLOAD_READ = (
+    "Universal Robots e-Series Script Directory (PolyScope 5), text copy, §15.20 "
+    "get_target_payload() (the active payload's mass, kg) and §15.21 get_target_payload_cog() "
+    "(its CoG [CoGx, CoGy, CoGz], m, from the tool flange), p. 57; the copy does not state "
+    "its software version (it deprecates set_payload 'since SW 5.10.0', so 5.10 or later): "
+    "taken as from 5.20, the oldest the e-Series programs need; read on no CB3 page"
+)
+"""Where reading the active payload is documented (e-Series only)."""
+
 SINCE: tuple[Since, ...] = (
     Since(
         "time",
@@ -87,6 +96,8 @@ SINCE: tuple[Since, ...] = (
         CONVEYOR_GUIDE,
     ),
     Since("set_payload", None, {3: (3, 3), 5: (5, 0)}, "set_payload(mass, CoG)", PAYLOAD_ARTICLE),
+    Since("get_target_payload", None, {5: (5, 20)}, "get_target_payload()", PAYLOAD_READ),
+    Since("get_target_payload_cog", None, {5: (5, 20)}, "get_target_payload_cog()", PAYLOAD_READ),
 )
 
 

@@ -14,6 +14,13 @@ offers the URScript functions the generated programs call:
   modelled) or one that would run the wire beyond the encoder's speed or acceleration (v
   taken as a percentage of the slowest joint's maximum speed, the ramp to it lasting v/a
   as the trapezoid's; the twin's own stop, naming the limit);
+* the payload: ``set_payload(m, cog)`` records the active payload (UR's payload article);
+  until a program sets it, it is the Installation's, which the twin takes as the true
+  robot's tool (``[gravity] payload_mass_kg`` at ``payload_com_mm``);
+  ``get_target_payload()`` and ``get_target_payload_cog()`` read it (SD 15.20, 15.21). A
+  ``movej`` while the flange carries more than the active payload (the tool and a mounted
+  mass) stops the program: the unsafe direction; the controller's own behaviour is not
+  modelled;
 * ``get_actual_joint_positions()``: the commanded joints in rad (joint encoders do not see
   the unmodelled errors; the wire does);
 * the encoder: ``encoder_enable_pulse_decode(i, 1, A, B)`` (SD 14.2: index 0 or 1,
@@ -64,6 +71,9 @@ FILTERED_RANGE = 2**16
 RAW = Counter(32)
 """The raw count: an int32 (SW5.20)."""
 SOCKET_TIMEOUT_S = 2.0
+PAYLOAD_TOL_KG = 1e-5
+"""A declared payload lighter than the flange's load by more than this stops a move: a float
+of the program (32 bits) holds a few kg to about 1e-6 kg."""
 FRAME_S = 0.002
 """The controller's frame: every thread gets 2 ms of "physical" time per frame (SW5.25.1)."""
 
@@ -100,6 +110,7 @@ class URController:
             raise URError(f"movej: q must be a list of {len(w.joints)} joint positions")
         q_deg = np.degrees([to_float(x) for x in q])
         a_rad_s2, v_rad_s = number(a, "movej a"), number(v, "movej v")
+        self._check_payload()
         dist = float(np.max(np.abs(np.radians(q_deg - np.asarray(w.joints)))))
         slowest = math.radians(float(np.min(w.robot.joint_speed_deg_s)))
         speed_pct = min(100.0, 100.0 * v_rad_s / slowest)
@@ -211,9 +222,52 @@ class URController:
         if blocking:  # the operator does what it asks, then presses Continue
             self.world.handle_mass(to_str(s))
 
+    # ---- payload ----
     def set_payload(self, m, cog=None) -> None:
         """set_payload: the active payload the controller is told (kg, CoG in m), recorded."""
         self.payload = (number(m, "set_payload m"), cog)
+
+    def get_target_payload(self) -> float:
+        """get_target_payload: the active payload's mass (kg; SD 15.20)."""
+        return to_float(self._active_payload()[0])
+
+    def get_target_payload_cog(self) -> list:
+        """get_target_payload_cog: the active payload's CoG (m, from the tool flange; SD 15.21)."""
+        return [to_float(x) for x in self._active_payload()[1]]
+
+    def _active_payload(self) -> tuple[float, list]:
+        """Return the active payload: the last set_payload's, else the Installation's.
+
+        The Installation's is the flange's true load, the tool of the twin's true robot
+        (its ``[gravity] payload_mass_kg`` at ``payload_com_mm``): the operator set it as
+        docs/urscript.md asks.
+        """
+        if self.payload is not None:
+            m, cog = self.payload
+            cog_m = cog if isinstance(cog, list) else [0, 0, 0]
+            return m, [number(x, "set_payload cog") for x in cog_m]
+        masses = self.world.robot.masses
+        if masses is None:
+            return 0.0, [0.0, 0.0, 0.0]
+        return masses.payload_mass_kg, [float(x) / 1000 for x in masses.payload_com_mm]
+
+    def _check_payload(self) -> None:
+        """Stop a move whose flange carries more than the active payload declares.
+
+        The flange carries the true robot's tool and the mass mounted. The twin models no
+        dynamics; UR's payload article says wrong settings "can lead to incorrect movements
+        which then lead to protective stops" (the controller's own behaviour with too light
+        a payload is not modelled: the twin stops, naming both masses).
+        """
+        masses = self.world.robot.masses
+        carried_kg = self.world.mounted_kg + (0.0 if masses is None else masses.payload_mass_kg)
+        declared_kg = self._active_payload()[0]
+        if carried_kg > declared_kg + PAYLOAD_TOL_KG:
+            raise URError(
+                f"protective stop: movej with {carried_kg:g} kg at the flange and "
+                f"{declared_kg:g} kg declared (the active payload): the controller would move a "
+                "load lighter than the truth"
+            )
 
     # ---- sockets ----
     def socket_open(self, address, port, socket_name="socket_0") -> bool:
