@@ -229,6 +229,8 @@ def test_gen_leaves_the_stepwise_solver_out_of_a_pool_plan(
     text = (tmp_path / "o" / program).read_text(encoding="ascii")
     assert solver not in text
     assert "not generated: the plan was written from a pool" in text
+    name = solver.split()[-1]  # wc.solve, wc_solve: named only where it says why it is absent
+    assert [x for x in text.splitlines() if name in x and "not generated" not in x] == []
     r = runner.invoke(
         main,
         ["gen", str(folder / "robot.toml"), str(folder / plan_name), "-o", str(tmp_path / "s")],
