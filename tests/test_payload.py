@@ -381,28 +381,6 @@ def test_the_ur_twin_stops_a_move_declaring_less_than_the_flange_carries(
         cell.movej(here)
 
 
-@pytest.mark.parametrize("mass", [None, 0.0, 1e-7])
-def test_a_cb3_payload_plan_without_the_tools_mass_is_refused(tmp_path, mass):
-    """CB3 pages document no way to read the Installation's payload, so a CB3 payload step
-    declares the robot file's tool with the mass: without that tool mass (left out, 0, or a
-    mass written as 0) it would declare too little; `wirecal gen` refuses, naming the key,
-    exit 2, nothing written. The e-Series programs need none (they read it)."""
-    text = (UR / "robot.toml").read_text(encoding="utf-8")
-    text = text.replace('software = "5.20"', 'software = "3.15"')
-    text = text.replace("rated_payload_kg = 5.0", "rated_payload_kg = 6.0")  # room for a tool
-    if mass is not None:
-        text = text.replace("[gravity]\n", f"[gravity]\npayload_mass_kg = {mass}\n", 1)
-    robot = tmp_path / "robot.toml"
-    robot.write_text(text, encoding="utf-8")
-    out = CliRunner().invoke(
-        main, ["gen", str(robot), str(UR / "plan.toml"), "-o", str(tmp_path / "o")]
-    )
-    assert out.exit_code == 2, out.output
-    assert "[gravity] payload_mass_kg: no tool mass; a CB3 program's payload step" in out.output
-    assert "Traceback" not in out.output
-    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
-
-
 def test_a_cb3_payload_step_declares_the_robot_files_tool_with_the_mass(ur_robot, ur_plan):
     """CB3 (3.15): a 1 kg tool at 20 mm with the 5 kg mass at 50 mm: set_payload(6 kg at
     (1·20 + 5·50)/6 = 45 mm), then the tool's alone; no call read on e-Series pages only,
@@ -526,6 +504,43 @@ def test_gen_writes_the_rapid_payload_module(tmp_path):
     text = (tmp_path / "WIRECAL.mod").read_bytes().decode("ascii")
     assert "GripLoad wc_load;\r\n" in text
     assert "GripLoad load0;\r\n" in text
+
+
+def _without_tool(folder: Path, cb3: bool, mass: float | None) -> str:
+    """Return ``folder``'s robot file with the tool's mass left out (None) or ``mass``;
+    ``cb3``: the UR5e's declared as a CB3 (3.15) with room for a tool in its rating."""
+    text = (folder / "robot.toml").read_text(encoding="utf-8")
+    text = text.replace("payload_mass_kg = 0.1\n", "")  # the IRB 120's
+    if cb3:
+        text = text.replace('software = "5.20"', 'software = "3.15"')
+        text = text.replace("rated_payload_kg = 5.0", "rated_payload_kg = 6.0")
+    if mass is not None:
+        text = text.replace("[gravity]\n", f"[gravity]\npayload_mass_kg = {mass}\n", 1)
+    return text
+
+
+@pytest.mark.parametrize("mass", [None, 0.0, 1e-7])
+@pytest.mark.parametrize(
+    ("folder", "cb3", "declares"),
+    [
+        ("payload_abb_irb120", False, "the RAPID module declares the load at the flange"),
+        ("payload_ur5e", True, "a CB3 program's payload step declares it"),
+    ],
+)
+def test_a_robot_file_without_the_tools_mass_is_refused(tmp_path, folder, cb3, declares, mass):
+    """No [gravity] payload_mass_kg (or 0, or a mass written as 0): the flange carries at
+    least the wire's fixture, so the program would declare too little: the RAPID module in
+    every move, a CB3 payload step (CB3 pages document no way to read the Installation's
+    payload; the e-Series programs read it and need none). `wirecal gen` refuses, naming
+    the key, exit 2, nothing written."""
+    robot = tmp_path / "robot.toml"
+    robot.write_text(_without_tool(GOLDEN.parents[1] / folder, cb3, mass), encoding="utf-8")
+    plan = GOLDEN.parents[1] / folder / "plan.toml"
+    out = CliRunner().invoke(main, ["gen", str(robot), str(plan), "-o", str(tmp_path / "o")])
+    assert out.exit_code == 2, out.output
+    assert f"[gravity] payload_mass_kg: no tool mass; {declares}" in out.output
+    assert "Traceback" not in out.output
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
 
 
 def test_the_rapid_twin_stops_a_move_with_the_mass_undeclared(

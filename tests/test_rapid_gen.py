@@ -10,9 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from wirecal.cli.main import main
 from wirecal.formats.plan_file import load_plan
 from wirecal.formats.robot_file import load_robot, robot_from_dict
 from wirecal.gen.rapid import GENERATOR
@@ -116,26 +114,6 @@ def test_every_move_declares_the_tools_load(irb, text):
     assert all(m.endswith(", fine, wc_tool;") for m in moves)
     assert "tool0;" not in text
     assert "pp. 225-227" in text  # the page read
-
-
-@pytest.mark.parametrize("mass", [None, 0.0, 1e-7])
-def test_a_robot_file_without_the_tools_mass_is_refused(tmp_path, mass):
-    """No [gravity] payload_mass_kg (or 0, or a mass written as 0): the flange carries at
-    least the wire's fixture, so the module would declare too little; `wirecal gen`
-    refuses, naming the key, exit 2, nothing written."""
-    data = (IRB / "robot.toml").read_text(encoding="utf-8")
-    data = data.replace(
-        "payload_mass_kg = 0.1\n", "" if mass is None else f"payload_mass_kg = {mass}\n"
-    )
-    robot = tmp_path / "robot.toml"
-    robot.write_text(data, encoding="utf-8")
-    out = CliRunner().invoke(
-        main, ["gen", str(robot), str(IRB / "plan.toml"), "-o", str(tmp_path / "o")]
-    )
-    assert out.exit_code == 2, out.output
-    assert "[gravity] payload_mass_kg: no tool mass" in out.output
-    assert "Traceback" not in out.output
-    assert not (tmp_path / "o" / "WIRECAL.mod").exists()
 
 
 def test_moves_the_wire_limits_slow_get_their_own_speeddata(irb):

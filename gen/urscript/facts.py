@@ -46,6 +46,13 @@ int / float width                         int 32 bit; float 32 bit              
                                                                                    user manual)
 script sent to port 30002                 starts with def/sec in column 1, ends    yes (SW10.6)
                                           with end in column 1, lines by \n
+get_target_payload(),                     the active payload: mass kg; CoG [CoGx,  yes (SD 15.20,
+get_target_payload_cog()                  CoGy, CoGz] m from the tool flange        15.21, p. 57;
+                                                                                   e-Series)
+set_payload(m, cog)                       the whole active payload; resets the     yes (UR
+                                          payload inertia matrix                   article; SD
+                                                                                   15.43)
+the payload calls on CB3 (SW 3.x)         get_target_payload(_cog)                 no
 halt; int32 overflow in a subtraction                                              no
 the same functions on CB3 (SW 3.x)        e.g. pulse-decoder input numbers         no
 calibration.conf delta_theta, delta_a,    deltas to the nominal standard DH        no (ROS
