@@ -33,6 +33,7 @@ from wirecal.gen.urscript.program import UrOptions, scripts
 from wirecal.gen.vplus.program import GenOptions, line_ends, module_text
 from wirecal.lang.rapid import Rapid
 from wirecal.lang.urscript import URScript
+from wirecal.lang.urscript.parser import parse_program
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.gravity import gravity_torques_nm, with_load
@@ -44,7 +45,7 @@ from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.solve import solve
 from wirecal.twin.rapid.adapter import ADAPTER as RAPID_ADAPTER
 from wirecal.twin.urscript.controller import URController
-from wirecal.twin.urscript.interp import URError
+from wirecal.twin.urscript.interp import Interpreter, URError
 from wirecal.twin.world import World
 
 from .conftest import VIPER
@@ -363,6 +364,32 @@ def test_the_ur_twin_runs_a_payload_step_the_robot_file_gives_no_tool(ur_robot, 
     m, cog = run.programs.controller.payload
     assert m == 1.0
     assert cog == pytest.approx([0.0, 0.0, 0.02], abs=1e-7)  # a 32-bit float
+
+
+def test_the_declared_load_is_the_installations_with_an_off_axis_mass(ur_robot, ur_plan, tmp_path):
+    """wc_run's payload lines run in the twin with the Installation's 1 kg at [0, 0, 20] mm
+    and a 2.345 kg mass at [0, -12.5, 47.3] mm: the controller is told 3.345 kg at
+    (1·c_tool + 2.345·c_mass)/3.345, then exactly the Installation's again (32-bit floats:
+    1e-6)."""
+    step = replace(ur_plan.steps[-1], payload_kg=2.345, payload_com_mm=(0.0, -12.5, 47.3))
+    plan = replace(ur_plan, steps=(*ur_plan.steps[:-1], step))
+    run = generated(scripts, ur_robot, plan, UrOptions())["wc_run.script"].splitlines()
+    first = run.index("  wc_m0 = get_target_payload()")
+    declare = run[first : first + 4]
+    arm = _with_tool(ur_robot, 1.0, (0.0, 0.0, 20.0))
+
+    def told(*body: str) -> tuple[float, list]:
+        cell = URController(World(arm, {}, np.asarray(plan.theta0_deg), tmp_path, noise_mm=0))
+        text = "def t():\n" + "\n".join(body) + "\nend\n"
+        Interpreter(parse_program(text, "t.script"), cell).execute()
+        return cell.payload
+
+    m, cog = told(*declare)
+    assert m == pytest.approx(3.345, abs=1e-6)
+    expected_m = (1.0 * np.array([0, 0, 0.02]) + 2.345 * np.array([0, -0.0125, 0.0473])) / 3.345
+    assert cog == pytest.approx(expected_m.tolist(), abs=1e-6)
+    m, cog = told(*declare, "  set_payload(wc_m0, wc_c0)")
+    assert (m, cog) == (1.0, pytest.approx([0.0, 0.0, 0.02], abs=1e-7))
 
 
 def test_the_ur_twin_stops_a_move_declaring_less_than_the_flange_carries(
