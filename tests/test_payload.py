@@ -350,20 +350,44 @@ def _with_tool(robot: Robot, kg: float, com_mm: tuple[float, float, float]) -> R
     return replace(robot, masses=masses)
 
 
+def _lighter(plan, kg: float):
+    """Return ``plan`` with its payload step's mass ``kg``."""
+    return replace(plan, steps=(*plan.steps[:-1], replace(plan.steps[-1], payload_kg=kg)))
+
+
 def test_the_ur_twin_runs_a_payload_step_the_robot_file_gives_no_tool(ur_robot, ur_plan, tmp_path):
     """The robot file gives no tool mass; the flange carries a 1 kg tool at 20 mm, the
-    Installation's payload. The e-Series wc_run reads it and declares 6 kg for the step, so
-    the twin (which stops a move declaring less than the flange carries) runs it to the end,
-    and the Installation's 1 kg at [0, 0, 0.02] m is restored exactly. The former program
-    declared the robot file's 0 kg with the 5 kg mass: its first move with the mass stopped."""
-    texts = dict(generated(scripts, ur_robot, ur_plan, UrOptions()))
+    Installation's payload, and the step a 4 kg mass (5 kg in all: the rating). The e-Series
+    wc_run reads it and declares 5 kg for the step, so the twin (which stops a move declaring
+    less than the flange carries) runs it to the end, and the Installation's 1 kg at
+    [0, 0, 0.02] m is restored exactly. The former program declared the robot file's 0 kg
+    with the mass: its first move with the mass stopped."""
+    plan = _lighter(ur_plan, 4.0)
+    texts = dict(generated(scripts, ur_robot, plan, UrOptions()))
     true_arm = _with_tool(ur_robot, 1.0, (0.0, 0.0, 20.0))
-    run = measure_ur_in_twin(true_arm, ur_plan, TRUE_C, tmp_path, texts=texts, seed=2)
+    run = measure_ur_in_twin(true_arm, plan, TRUE_C, tmp_path, texts=texts, seed=2)
     assert run.programs.complete, run.programs.stopped
     assert run.programs.world.mounted_kg == 0.0
     m, cog = run.programs.controller.payload
     assert m == 1.0
     assert cog == pytest.approx([0.0, 0.0, 0.02], abs=1e-7)  # a 32-bit float
+
+
+def test_the_ur_run_refuses_a_tool_and_mass_beyond_the_rating_before_moving(
+    ur_robot, ur_plan, tmp_path
+):
+    """The shipped step's 5 kg (the UR5e's rating) with the Installation's 1 kg tool: 6 kg
+    would be carried. wc_run checks before its first move and stops with an error popup
+    naming the rating; the arm never moved (the receiver waits 2 s for a token in vain)."""
+    texts = dict(generated(scripts, ur_robot, ur_plan, UrOptions()))
+    true_arm = _with_tool(ur_robot, 1.0, (0.0, 0.0, 20.0))
+    run = measure_ur_in_twin(
+        true_arm, ur_plan, TRUE_C, tmp_path, texts=texts, seed=2, timeout_s=2.0
+    )
+    assert not run.programs.complete
+    assert "exceeds the rated 5 kg" in run.programs.world.console[-1]
+    assert run.programs.world.mounted_kg == 0.0
+    assert run.programs.world.moves == 0
 
 
 def test_the_declared_load_is_the_installations_with_an_off_axis_mass(ur_robot, ur_plan, tmp_path):

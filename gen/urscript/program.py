@@ -175,9 +175,11 @@ def _payload(robot: Robot, plan: Plan) -> dict[str, object] | None:
     :data:`~wirecal.lang.urscript.versions.PAYLOAD_READ`), declares it with the step's mass
     at their common centre (``moment_m``: the mass times its centre, kg·m, each a signed
     term, "+ 0.25") and restores it after: never less than the flange carries, whatever the
-    robot file says. Those calls are read on e-Series pages only, so on CB3 the tool is the
-    robot file's ``[gravity] payload_mass_kg`` at its ``payload_com_mm`` (``total_kg``/
-    ``cog_m``, ``tool_kg``/``tool_cog_m`` after), and a robot file without it is refused.
+    robot file says; ``rated_kg``: the program refuses to move when that payload and the
+    step's mass exceed the rating. Those calls are read on e-Series pages only, so on CB3
+    the tool is the robot file's ``[gravity] payload_mass_kg`` at its ``payload_com_mm``
+    (``total_kg``/``cog_m``, ``tool_kg``/``tool_cog_m`` after), and a robot file without it
+    is refused.
     """
     ctx, step, loads = payload_context(plan), plan.payload_step, flange_loads(robot, plan)
     if ctx is None or step is None or loads is None:
@@ -185,7 +187,8 @@ def _payload(robot: Robot, plan: Plan) -> dict[str, object] | None:
     if not is_cb3(robot.controller.software):
         moment = [step.payload_kg * x / 1000 for x in step.payload_com_mm]
         terms = [f"{'-' if m < 0 else '+'} {_fixed(abs(m), 9)}" for m in moment]
-        return ctx | {"read": True, "moment_m": terms}
+        rated = f"{robot.rated_payload_kg:g}"
+        return ctx | {"read": True, "moment_m": terms, "rated_kg": rated}
     problems = tool_mass_problems(
         robot,
         "a CB3 program's payload step declares it with the step's mass (set_payload), the "
