@@ -19,8 +19,14 @@ over the seeds and the wire's ratio to the tracker calibration; ``--json`` print
 of the robot file's ``[calibration] compliances``; null for a robot file that asks none.
 ``predicted_mm``: the plan's predicted tool-point error at the reading noise, per seed.
 
+``--anchors`` replays instead the rigid wire from every θ0 the planner tries (each with its
+own 60 poses) and from the chosen θ0 with every training pose within the encoder's range
+(:func:`~wirecal.solver.tracker.replay.lottery`): per seed the chosen θ0's figure, the best,
+median and worst of the others, the rank correlation of the planner's predicted error with
+the held-out one, the every-pose figure and the tracker calibration beside them.
+
     python bench/bench_tracker_replay.py [--data DIR] [--set ur10_ipa ...]
-        [--robot R --table T.csv] [--seeds 3] [--points 60] [--json]
+        [--robot R --table T.csv] [--seeds 3] [--points 60] [--anchors] [--json]
 
 A set asked for and not found exits 2 naming the folder, the missing files and the
 ``git clone`` (and commit) that brings them; a file that is not the published bytes at that
@@ -40,6 +46,7 @@ import sys  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from scipy.stats import spearmanr  # noqa: E402
 
 from wirecal.formats.robot_file import load_robot  # noqa: E402
 from wirecal.formats.tracker_published import (  # noqa: E402
@@ -54,7 +61,7 @@ from wirecal.solver.fit.calibrate import point_model  # noqa: E402
 from wirecal.solver.kinematics import tool_position  # noqa: E402
 from wirecal.solver.params import TOOL_NAMES  # noqa: E402
 from wirecal.solver.tracker.fit import calibrate  # noqa: E402
-from wirecal.solver.tracker.replay import replay  # noqa: E402
+from wirecal.solver.tracker.replay import lottery, replay  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = ROOT / "tests" / "data" / "tracker"
@@ -113,6 +120,27 @@ def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict
             for key in ("nominal_mm", "tracker_mm", "wire_mm", "wire_compliance_mm")
         },
         "predicted_mm": [round(r.predicted_mm, 4) for r in runs],
+    }
+
+
+def anchor_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict:
+    """Return one set's anchor lottery per seed (module docstring, ``--anchors``)."""
+    robot, table = load_robot(robot_path), read_tracker(table_path)
+    runs = [lottery(robot, table, seed=s, points=points) for s in range(seeds)]
+
+    def each(f) -> list[float]:
+        return [round(float(f(r)), 4) for r in runs]
+
+    return {
+        "theta0_tried": [len(r.wire_mm) for r in runs],
+        "chosen_wire_mm": each(lambda r: r.wire_mm[r.chosen]),
+        "best_wire_mm": each(lambda r: np.min(r.wire_mm)),
+        "median_wire_mm": each(lambda r: np.median(r.wire_mm)),
+        "worst_wire_mm": each(lambda r: np.max(r.wire_mm)),
+        "spearman": each(lambda r: spearmanr(r.predicted_mm, r.wire_mm).statistic),
+        "every_pose_wire_mm": each(lambda r: r.every_pose_mm),
+        "tracker_mm": each(lambda r: r.tracker_mm),
+        "tracker_every_pose_mm": each(lambda r: r.tracker_every_pose_mm),
     }
 
 
@@ -177,6 +205,9 @@ def main() -> None:
     ap.add_argument("--table", type=Path, help="a tracker table: j1…jn (deg), x, y, z (mm)")
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--points", type=int, default=60)
+    ap.add_argument(
+        "--anchors", action="store_true", help="one wire from every θ0 tried (module docstring)"
+    )
     ap.add_argument("--json", action="store_true", help="print the figures as JSON")
     args = ap.parse_args()
     if (args.robot is None) != (args.table is None):
@@ -194,9 +225,10 @@ def main() -> None:
             if arm in wanted
         }
     )
+    one = anchor_set if args.anchors else run_set
     try:
-        out = {name: run_set(r, t, args.seeds, args.points) for name, (r, t) in cases.items()}
-        if not args.table:
+        out = {name: one(r, t, args.seeds, args.points) for name, (r, t) in cases.items()}
+        if not args.table and not args.anchors:
             out["published"] = {
                 name: {
                     **published_test(files[arm], arm, *tests),
@@ -210,8 +242,10 @@ def main() -> None:
         sys.exit(f"error: {exc}")
     if args.json:
         print(json.dumps(out, indent=2))
-        return
-    print_text(out, args.seeds)
+    elif args.anchors:
+        print_anchors(out)
+    else:
+        print_text(out, args.seeds)
 
 
 def print_text(out: dict, seeds: int) -> None:
@@ -233,6 +267,28 @@ def print_text(out: dict, seeds: int) -> None:
             f"(published {r['published_uncalibrated_mm']}), nominal {r['nominal_mm']:.3f}, "
             f"tracker {r['tracker_mm']:.3f} (published hybrid {r['published_hybrid_mm']})"
         )
+
+
+def print_anchors(out: dict) -> None:
+    """Print each set's anchor lottery (``--anchors``), one line a seed."""
+    print(
+        f"{'data set':<36}{'seed':>5}{'chosen':>8}{'best':>7}{'median':>8}{'worst':>7}"
+        f"{'rho':>7}{'every':>7}{'tracker':>9}{'tr every':>10}"
+    )
+    keys = ("chosen_wire_mm", "best_wire_mm", "median_wire_mm", "worst_wire_mm")
+    for name, r in out.items():
+        for s, row in enumerate(zip(*(r[k] for k in keys), strict=True)):
+            print(
+                f"{name:<36}{s:>5}{row[0]:>8.3f}{row[1]:>7.3f}{row[2]:>8.3f}{row[3]:>7.3f}"
+                f"{r['spearman'][s]:>7.2f}{r['every_pose_wire_mm'][s]:>7.3f}"
+                f"{r['tracker_mm'][s]:>9.3f}{r['tracker_every_pose_mm'][s]:>10.3f}"
+            )
+    print(
+        "one rigid wire's held-out 3-D RMS (mm) from the planner's θ0 (chosen) and the best, "
+        "median and worst of the θ0s it tried, each with its own planned poses; rho: rank "
+        "correlation of the predicted error with it; every: the chosen θ0 read at every "
+        "training pose in range; the tracker calibration of the planned poses and of every one"
+    )
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit.calibrate import point_model
 from wirecal.solver.kinematics import tool_position, with_errors
 from wirecal.solver.plan.options import PlanOptions
-from wirecal.solver.plan.pool import greedy_rows, plan_pool
+from wirecal.solver.plan.pool import anchor_plans, greedy_rows, plan_pool
 from wirecal.solver.tracker.fit import (
     _jacobian,
     calibrate,
@@ -37,7 +37,7 @@ from wirecal.solver.tracker.fit import (
     registered_rms_mm,
     residual_and_jacobian,
 )
-from wirecal.solver.tracker.replay import ZERO_MM, readings_mm, replay
+from wirecal.solver.tracker.replay import ZERO_MM, lottery, readings_mm, replay
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = ROOT / "tests" / "data" / "tracker"  # robot files and where each set is published
@@ -496,6 +496,19 @@ def test_pool_plan_keeps_the_wire_range_and_the_joint_limits():
     assert wire.max() <= robot.encoder.range_mm - 50.0
 
 
+def test_pool_plan_is_the_least_predicted_of_the_anchors_tried():
+    robot = load_robot(UR10)
+    q = _ur10_pool(300, 4)
+    q[0, 5] = 400.0  # beyond the joint limits: no θ0, no pose
+    plans = anchor_plans(robot, q, 30, PlanOptions())
+    assert 1 < len(plans) <= 24
+    assert len({pl.theta0_row for pl in plans}) == len(plans)
+    assert all(0 not in pl.rows and pl.theta0_row != 0 and pl.outside == 1 for pl in plans)
+    chosen = plan_pool(robot, q, 30, PlanOptions())
+    assert chosen.predicted_mm == min(pl.predicted_mm for pl in plans)
+    assert chosen.theta0_row in {pl.theta0_row for pl in plans}
+
+
 def test_readings_are_whole_counts_with_an_unknown_zero():
     xyz = np.array([[0.0, 0.0, 100.0], [30.0, 40.0, 0.0]])
     r = readings_mm(xyz, np.zeros(3), 0.025488)
@@ -533,6 +546,24 @@ def test_replay_of_a_ur10_bent_by_gravity():
     assert r.wire_compliance_mm is not None
     assert r.wire_compliance_mm < 0.1
     assert r.wire_compliance_mm < 0.5 * r.wire_mm
+
+
+@pytest.mark.slow
+def test_anchor_lottery_of_a_synthetic_ur10():
+    """Every θ0 tried and every pose: on a geometric truth at 0.01 mm, all near the noise."""
+    from wirecal.solver.tracker.data import TrackerTable
+
+    q = _ur10_pool(200, 5)
+    x, robot = _measured(q, 0.01, 6)
+    table = TrackerTable("synthetic", "synthetic", np.arange(200) + 2, q, x)
+    r = lottery(robot, table, seed=0, points=30)
+    assert len(r.wire_mm) == len(r.predicted_mm) > 1
+    assert r.predicted_mm[r.chosen] == r.predicted_mm.min()
+    assert np.median(r.wire_mm) < 0.1  # nominal: > 0.5 mm (test_replay_of_a_synthetic_ur10)
+    assert r.every_pose_mm < 0.05
+    assert r.tracker_mm < 0.03
+    assert r.tracker_every_pose_mm < 0.03
+    assert r.wire_mm[r.chosen] == replay(robot, table, seed=0, points=30).wire_mm
 
 
 # --- the command ---------------------------------------------------------------------------
@@ -668,6 +699,17 @@ def test_bench_replays_any_generic_table(tmp_path):
     assert doc["tracker_mm"] < 0.03
     assert doc["nominal_mm"] > 0.5
     assert doc["points"] == 30
+    lot = subprocess.run(
+        [*args, "--seeds", "1", "--points", "30", "--anchors", "--json"],
+        capture_output=True,
+        text=True,
+    )
+    assert lot.returncode == 0, lot.stderr
+    (doc,) = json.loads(lot.stdout).values()
+    for key in ("chosen_wire_mm", "best_wire_mm", "every_pose_wire_mm", "spearman"):
+        assert len(doc[key]) == 1
+    assert doc["best_wire_mm"][0] <= doc["chosen_wire_mm"][0] <= doc["worst_wire_mm"][0]
+    assert doc["tracker_every_pose_mm"][0] < 0.03
     bad = subprocess.run([*args[:2], "--table", str(table)], capture_output=True, text=True)
     assert bad.returncode == 2
     assert "give --robot and --table together" in bad.stderr

@@ -134,12 +134,17 @@ class Pool:
     prior_var: np.ndarray  # (k,) internal units; inf: no prior
 
 
+def eligible_rows(p_mm: np.ndarray, row: int, wire_mm: tuple[float, float]) -> np.ndarray:
+    """Return the rows of ``p_mm`` (N, 3) whose wire from row ``row`` lies within ``wire_mm``."""
+    length = np.linalg.norm(p_mm - p_mm[row], axis=1)
+    return np.flatnonzero((length >= wire_mm[0]) & (length <= wire_mm[1]))
+
+
 def _at_anchor(
     pool: Pool, row: int, n: int, sigma_mm: float, wire_mm: tuple[float, float]
 ) -> PoolPlan | None:
     """Return the best plan with θ0 at pool row ``row``; None when too few rows are eligible."""
-    length = np.linalg.norm(pool.p_mm - pool.p_mm[row], axis=1)
-    eligible = np.flatnonzero((length >= wire_mm[0]) & (length <= wire_mm[1]))
+    eligible = eligible_rows(pool.p_mm, row, wire_mm)
     if len(eligible) < n_fixed(pool.layout):
         return None
     x = np.zeros(len(pool.layout.names))
@@ -169,11 +174,14 @@ def wire_pool(robot: Robot, q_rad: np.ndarray, prior: float) -> Pool:
     return Pool(base, layout, q_rad, p, weight, prior_sigma(base, layout, prior) ** 2)
 
 
-def plan_pool(robot: Robot, q_deg: np.ndarray, n_points: int, opt: PlanOptions) -> PoolPlan:
-    """Choose θ0 and at most ``n_points`` poses of the pool ``q_deg`` (module docstring).
+def anchor_plans(
+    robot: Robot, q_deg: np.ndarray, n_points: int, opt: PlanOptions
+) -> list[PoolPlan]:
+    """Return the plan at each θ0 tried that leaves enough poses (module docstring, 1–3).
 
-    Rows beyond the robot file's joint limits are left out (counted in ``outside``); the
-    others are taken as reachable without collision, as the moves that recorded them.
+    Rows are the pool's (``q_deg``). Rows beyond the robot file's joint limits are left out
+    (counted in ``outside``); the others are taken as reachable without collision, as the
+    moves that recorded them.
     """
     lo, hi = robot.limits_deg(0.0)
     inside = np.flatnonzero(np.all((q_deg >= lo) & (q_deg <= hi), axis=1))
@@ -183,7 +191,7 @@ def plan_pool(robot: Robot, q_deg: np.ndarray, n_points: int, opt: PlanOptions) 
             "limits: give a pool of this robot's configurations, in its joint convention"
         )
     pool = wire_pool(robot, np.radians(q_deg[inside]), opt.prior)
-    wire_mm = (opt.min_wire_mm, robot.encoder.range_mm - opt.range_margin_mm)
+    wire_mm = pool_wire_mm(robot, opt)
     tried = spread(pool.p_mm, THETA0_TRIED)
     plans = [_at_anchor(pool, int(r), n_points, opt.sigma_mm, wire_mm) for r in tried]
     found = [pl for pl in plans if pl is not None]
@@ -193,13 +201,29 @@ def plan_pool(robot: Robot, q_deg: np.ndarray, n_points: int, opt: PlanOptions) 
             f"encoder's range ({wire_mm[0]:g}–{wire_mm[1]:g} mm of wire) and the joint limits: "
             "give a pool that moves the tool around more, or an encoder of a longer range"
         )
-    best = min(found, key=lambda pl: pl.predicted_mm)
-    return PoolPlan(
-        int(inside[best.theta0_row]),
-        inside[best.rows],
-        best.names,
-        best.anchor_mm,
-        best.predicted_mm,
-        len(tried),
-        len(q_deg) - len(inside),
-    )
+    outside = len(q_deg) - len(inside)
+    return [
+        PoolPlan(
+            int(inside[pl.theta0_row]),
+            inside[pl.rows],
+            pl.names,
+            pl.anchor_mm,
+            pl.predicted_mm,
+            len(tried),
+            outside,
+        )
+        for pl in found
+    ]
+
+
+def pool_wire_mm(robot: Robot, opt: PlanOptions) -> tuple[float, float]:
+    """Return the wire lengths (mm) a pose may ask: the shortest, the range less its margin."""
+    return opt.min_wire_mm, robot.encoder.range_mm - opt.range_margin_mm
+
+
+def plan_pool(robot: Robot, q_deg: np.ndarray, n_points: int, opt: PlanOptions) -> PoolPlan:
+    """Choose θ0 and at most ``n_points`` poses of the pool ``q_deg`` (module docstring).
+
+    The plan of the least predicted error of :func:`anchor_plans`.
+    """
+    return min(anchor_plans(robot, q_deg, n_points, opt), key=lambda pl: pl.predicted_mm)

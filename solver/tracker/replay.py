@@ -21,6 +21,10 @@ poses, four models:
   (:func:`~wirecal.solver.plan.pool.wire_pool`), and the rigid wire uses the same poses;
 * each judged on the held-out half: its tool points rigidly registered onto the measured
   ones (:func:`~wirecal.solver.tracker.fit.registered_rms_mm`).
+
+:func:`lottery` replays the rigid wire from every θ0 the planner tried, each with its own
+planned poses, and from the chosen θ0 with every training pose the wire reaches: what the
+choice of θ0 and the count of poses are worth on a data set (``--anchors`` of the bench).
 """
 
 from __future__ import annotations
@@ -33,7 +37,7 @@ from wirecal.solver.fit.calibrate import Data, nominal_floor, point_model
 from wirecal.solver.kinematics import Model, tool_position
 from wirecal.solver.params import TOOL_NAMES
 from wirecal.solver.plan.options import PlanOptions
-from wirecal.solver.plan.pool import plan_pool
+from wirecal.solver.plan.pool import anchor_plans, eligible_rows, plan_pool, pool_wire_mm
 from wirecal.solver.robot import Robot
 from wirecal.solver.tracker.data import TrackerTable
 from wirecal.solver.tracker.fit import calibrate, registered_rms_mm
@@ -86,33 +90,89 @@ def split(n_rows: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     return np.sort(order[: n_rows // 2]), np.sort(order[n_rows // 2 :])
 
 
+def held_out_mm(model: Model, table: TrackerTable, test: np.ndarray) -> float:
+    """Return ``model``'s 3-D RMS (mm) on rows ``test`` after a rigid registration."""
+    q_rad = np.radians(table.q_deg[test])
+    return registered_rms_mm(tool_position(model, q_rad), table.xyz_mm[test])
+
+
+def one_wire_mm(
+    robot: Robot,
+    table: TrackerTable,
+    wire: tuple[int, np.ndarray],
+    test: np.ndarray,
+    compliances: tuple[str, ...] = (),
+) -> float:
+    """Return the held-out figure of one wire: ``wire`` = (θ0's row, the rows read)."""
+    theta0_row, rows = wire
+    anchor = table.xyz_mm[theta0_row]
+    length = readings_mm(table.xyz_mm[rows], anchor, robot.encoder.mm_per_count)
+    model = wire_map(point_model(robot), compliances, table.q_deg[rows], length, robot)
+    return held_out_mm(model, table, test)
+
+
 def replay(robot: Robot, table: TrackerTable, *, seed: int, points: int) -> Replay:
     """Replay ``table`` once (module docstring): split ``seed``, at most ``points`` poses."""
     base = point_model(robot)
     train, test = split(len(table.q_deg), seed)
     plan = plan_pool(robot, table.q_deg[train], points, PlanOptions(seed=seed))
     rows = train[plan.rows]
-    anchor = table.xyz_mm[train[plan.theta0_row]]
+    wire = (int(train[plan.theta0_row]), rows)
     q, x = np.radians(table.q_deg), table.xyz_mm
-
-    def held_out(model: Model) -> float:
-        return registered_rms_mm(tool_position(model, q[test]), x[test])
-
-    length = readings_mm(x[rows], anchor, robot.encoder.mm_per_count)
-    wire = wire_map(base, (), table.q_deg[rows], length, robot)
-    bent = (
-        wire_map(base, robot.compliances, table.q_deg[rows], length, robot)
-        if robot.compliances
-        else None
-    )
     return Replay(
-        nominal_mm=held_out(calibrate(base, q[rows], x[rows], TOOL_NAMES).model),
-        tracker_mm=held_out(calibrate(base, q[rows], x[rows]).model),
-        wire_mm=held_out(wire),
-        wire_compliance_mm=None if bent is None else held_out(bent),
+        nominal_mm=held_out_mm(calibrate(base, q[rows], x[rows], TOOL_NAMES).model, table, test),
+        tracker_mm=held_out_mm(calibrate(base, q[rows], x[rows]).model, table, test),
+        wire_mm=one_wire_mm(robot, table, wire, test),
+        wire_compliance_mm=(
+            one_wire_mm(robot, table, wire, test, robot.compliances) if robot.compliances else None
+        ),
         anchor_mm=plan.anchor_mm,
-        anchor_tracker_mm=anchor,
-        theta0_deg=table.q_deg[train[plan.theta0_row]],
+        anchor_tracker_mm=x[wire[0]],
+        theta0_deg=table.q_deg[wire[0]],
         points=len(rows),
         predicted_mm=plan.predicted_mm,
+    )
+
+
+@dataclass(frozen=True)
+class Lottery:
+    """One rigid wire from every θ0 the pool planner tried, and from its θ0 at every pose."""
+
+    predicted_mm: np.ndarray  # (k,) each θ0's predicted error (the planner's figure)
+    wire_mm: np.ndarray  # (k,) held-out figure of one wire from each θ0, its planned poses
+    chosen: int  # the planner's θ0 (the least predicted error), an index of both
+    every_pose_mm: float  # one wire from the chosen θ0 read at every eligible training pose
+    tracker_mm: float  # the tracker calibration of the chosen θ0's planned poses
+    tracker_every_pose_mm: float  # the tracker calibration of every training pose
+
+
+def lottery(robot: Robot, table: TrackerTable, *, seed: int, points: int) -> Lottery:
+    """Replay one wire from every θ0 tried (:func:`~wirecal.solver.plan.pool.anchor_plans`).
+
+    What the planner's choice of θ0 is worth against the held-out figure of the others,
+    and what more poses from the same θ0 could give: every training pose whose wire lies
+    within the encoder's range (:func:`~wirecal.solver.plan.pool.eligible_rows`).
+    """
+    base = point_model(robot)
+    train, test = split(len(table.q_deg), seed)
+    opt = PlanOptions(seed=seed)
+    plans = anchor_plans(robot, table.q_deg[train], points, opt)
+    predicted = np.array([pl.predicted_mm for pl in plans])
+    chosen = int(np.argmin(predicted))
+    theta0, rows = int(train[plans[chosen].theta0_row]), train[plans[chosen].rows]
+    p = tool_position(base, np.radians(table.q_deg[train]))
+    every = train[eligible_rows(p, plans[chosen].theta0_row, pool_wire_mm(robot, opt))]
+    q, x = np.radians(table.q_deg), table.xyz_mm
+    return Lottery(
+        predicted_mm=predicted,
+        wire_mm=np.array(
+            [
+                one_wire_mm(robot, table, (int(train[pl.theta0_row]), train[pl.rows]), test)
+                for pl in plans
+            ]
+        ),
+        chosen=chosen,
+        every_pose_mm=one_wire_mm(robot, table, (theta0, every), test),
+        tracker_mm=held_out_mm(calibrate(base, q[rows], x[rows]).model, table, test),
+        tracker_every_pose_mm=held_out_mm(calibrate(base, q[train], x[train]).model, table, test),
     )
