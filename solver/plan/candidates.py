@@ -148,6 +148,9 @@ def _screen_moves(
     via = np.full(q.shape, np.nan)
     direct = move_ok(robot, model, p0, theta0, q, opt, coarse)
     need = np.flatnonzero(~direct)
+    # a candidate where the wire itself is not clear (every move's last sample) is reached
+    # by no via point: only the others try them (half of the Viper's blocked moves end so)
+    need = need[move_ok(robot, model, p0, q[need], q[need], opt, coarse)]
     # the two via points of each: the arm's joints moved first, or the wrist's; both tried
     # in one sweep (few make a move clear, so trying the wrist's where the arm's does
     # costs little)
