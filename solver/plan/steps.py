@@ -35,10 +35,28 @@ def isolating(
     other parameter t of ``remaining`` (the one rule,
     :func:`~wirecal.solver.sensitivity.within_tolerance`), and |Ψ_j| ≥ 0.05.
     """
-    pj = psi[:, col[j]]
-    others = [col[t] for t in remaining if t != j]
-    iso = within_tolerance(pj, psi[:, others], opt.tol).all(axis=1)
-    return iso & (np.abs(pj) >= 0.05)
+    return isolating_each(psi, col, remaining, opt)[:, remaining.index(j)]
+
+
+def isolating_each(psi: np.ndarray, col: dict[str, int], remaining: list[str], opt) -> np.ndarray:
+    """Return :func:`isolating` for every parameter of ``remaining`` at once, (N, m).
+
+    Every other |Ψ_t| within the tolerance is the largest of them within it: per
+    candidate the largest |Ψ| of ``remaining`` but j's own (the second largest where j's
+    is the largest), one comparison per parameter instead of one per pair.
+    """
+    a = np.abs(psi[:, [col[t] for t in remaining]])
+    if not remaining:
+        return np.zeros(a.shape, bool)
+    rows = np.arange(len(a))
+    top = np.argmax(a, axis=1)
+    rest = a.copy()
+    rest[rows, top] = 0.0  # |Ψ| ≥ 0: zero stands for none (within any tolerance)
+    largest = np.max(a, axis=1, initial=0.0)
+    second = np.max(rest, axis=1, initial=0.0)
+    others = np.where(top[:, None] == np.arange(a.shape[1]), second[:, None], largest[:, None])
+    iso = within_tolerance(a, others[..., None], opt.tol)[..., 0]
+    return iso & (a >= 0.05)
 
 
 FirstUsable = Callable[[list[np.ndarray], list[int]], list[np.ndarray]]
@@ -58,8 +76,13 @@ def ranked_isolating(
 
     By decreasing |Ψ_j|, ties in the order of the candidates.
     """
-    iso = np.flatnonzero(isolating(psi, col, j, remaining, opt))
-    return iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")]
+    return ranked(psi, col, j, isolating(psi, col, j, remaining, opt))
+
+
+def ranked(psi: np.ndarray, col: dict[str, int], j: str, iso: np.ndarray) -> np.ndarray:
+    """Return the candidates of the mask ``iso`` by decreasing |Ψ_j|, ties in their order."""
+    idx = np.flatnonzero(iso)
+    return idx[np.argsort(-np.abs(psi[idx, col[j]]), kind="stable")]
 
 
 def most_informative(
@@ -77,7 +100,8 @@ def most_informative(
     most sensitive first (not all of them screened).
     """
     k = opt.points_per_step
-    orders = [ranked_isolating(psi, col, j, remaining, opt) for j in remaining]
+    each = isolating_each(psi, col, remaining, opt)
+    orders = [ranked(psi, col, j, each[:, k]) for k, j in enumerate(remaining)]
     best: tuple[float, str, np.ndarray] | None = None
     tops = first_usable(orders, [k] * len(orders))
     for j, order, top in zip(remaining, orders, tops, strict=True):
