@@ -160,4 +160,4 @@ def test_isolating_every_parameter_at_once_is_the_rule_per_pair(seed, m):
         for t in remaining:
             if t != j:
                 want &= np.abs(psi[:, col[t]]) <= np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
-        assert np.array_equal(got[:, k], want & (np.abs(pj) >= 0.05)), j
+        assert np.array_equal(got[k], want & (np.abs(pj) >= 0.05)), j

@@ -35,26 +35,21 @@ def isolating(
     other parameter t of ``remaining`` (the one rule,
     :func:`~wirecal.solver.sensitivity.within_tolerance`), and |Ψ_j| ≥ 0.05.
     """
-    return isolating_each(psi, col, remaining, opt)[:, remaining.index(j)]
+    return isolating_each(psi, col, remaining, opt)[remaining.index(j)]
 
 
 def isolating_each(psi: np.ndarray, col: dict[str, int], remaining: list[str], opt) -> np.ndarray:
-    """Return :func:`isolating` for every parameter of ``remaining`` at once, (N, m).
+    """Return :func:`isolating` for every parameter of ``remaining`` at once, (m, N).
 
     Every other |Ψ_t| within the tolerance is the largest of them within it: per
-    candidate the largest |Ψ| of ``remaining`` but j's own (the second largest where j's
-    is the largest), one comparison per parameter instead of one per pair.
+    candidate the largest |Ψ| of the parameters before j and after j in ``remaining``
+    (running maxima), one comparison per parameter instead of one per pair.
     """
-    a = np.abs(psi[:, [col[t] for t in remaining]])
-    if not remaining:
-        return np.zeros(a.shape, bool)
-    rows = np.arange(len(a))
-    top = np.argmax(a, axis=1)
-    rest = a.copy()
-    rest[rows, top] = 0.0  # |Ψ| ≥ 0: zero stands for none (within any tolerance)
-    largest = np.max(a, axis=1, initial=0.0)
-    second = np.max(rest, axis=1, initial=0.0)
-    others = np.where(top[:, None] == np.arange(a.shape[1]), second[:, None], largest[:, None])
+    a = np.abs(psi[:, [col[t] for t in remaining]]).T  # (m, N): a row per parameter
+    none = np.zeros((1, a.shape[1]))  # |Ψ| ≥ 0: zero stands for no other parameter
+    before = np.vstack([none, np.maximum.accumulate(a, axis=0)[:-1]])
+    after = np.vstack([np.maximum.accumulate(a[::-1], axis=0)[-2::-1], none])
+    others = np.maximum(before, after) if len(a) else a
     iso = within_tolerance(a, others[..., None], opt.tol)[..., 0]
     return iso & (a >= 0.05)
 
@@ -101,7 +96,7 @@ def most_informative(
     """
     k = opt.points_per_step
     each = isolating_each(psi, col, remaining, opt)
-    orders = [ranked(psi, col, j, each[:, k]) for k, j in enumerate(remaining)]
+    orders = [ranked(psi, col, j, each[k]) for k, j in enumerate(remaining)]
     best: tuple[float, str, np.ndarray] | None = None
     tops = first_usable(orders, [k] * len(orders))
     for j, order, top in zip(remaining, orders, tops, strict=True):
