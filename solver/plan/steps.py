@@ -45,12 +45,13 @@ def isolating_each(psi: np.ndarray, col: dict[str, int], remaining: list[str], o
     candidate the largest |Ψ| of the parameters before j and after j in ``remaining``
     (running maxima), one comparison per parameter instead of one per pair.
     """
-    a = np.abs(psi[:, [col[t] for t in remaining]]).T  # (m, N): a row per parameter
-    none = np.zeros((1, a.shape[1]))  # |Ψ| ≥ 0: zero stands for no other parameter
-    before = np.vstack([none, np.maximum.accumulate(a, axis=0)[:-1]])
-    after = np.vstack([np.maximum.accumulate(a[::-1], axis=0)[-2::-1], none])
-    others = np.maximum(before, after) if len(a) else a
-    iso = within_tolerance(a, others[..., None], opt.tol)[..., 0]
+    a = np.ascontiguousarray(np.abs(psi[:, [col[t] for t in remaining]]).T)  # (m, N)
+    before = np.zeros_like(a)  # |Ψ| ≥ 0: zero stands for no other parameter
+    after = np.zeros_like(a)
+    for k in range(1, len(a)):  # a row at a time: numpy's accumulate along rows is slow
+        before[k] = np.maximum(before[k - 1], a[k - 1])
+        after[-1 - k] = np.maximum(after[-k], a[-k])
+    iso = within_tolerance(a, np.maximum(before, after)[..., None], opt.tol)[..., 0]
     return iso & (a >= 0.05)
 
 
