@@ -41,7 +41,9 @@ def design(
     """Return a plan for the robot file's parameters (θ0 chosen when not given).
 
     θ0 chosen: the best plan (fewest parameters unplanned, then the smallest predicted
-    error) of the first :data:`THETA0_TRIES` θ0 drawn clear of the cell; when it leaves
+    error) of the first :data:`THETA0_TRIES` θ0 drawn clear of the cell, each designed up
+    to its steps' first points and the :data:`THETA0_FINISHED` ranked first by those
+    finished (:func:`_best_finished`); when it leaves
     parameters unplanned (but unobservable or redundant ones, which no θ0 plans), up to
     :data:`MORE_THETA0_DESIGNED` more θ0, the best of
     :data:`MORE_THETA0_CHECKED` further draws by a quick check (:func:`_isolated_count`),
