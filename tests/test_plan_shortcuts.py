@@ -20,10 +20,10 @@ from wirecal.solver.plan.candidates import Screened
 from wirecal.solver.plan.design import _unidentifiable
 from wirecal.solver.plan.joint import _Candidates
 from wirecal.solver.plan.options import PlanOptions
-from wirecal.solver.plan.steps import POOL_SIZE, most_informative, step_by_step
+from wirecal.solver.plan.steps import POOL_SIZE, isolating_each, most_informative, step_by_step
 from wirecal.solver.plan.tour import visit_floor_s, visit_s
 from wirecal.solver.run_parameters import DEFAULT_RUN, PAPER_RUN
-from wirecal.solver.sensitivity import sensitivity
+from wirecal.solver.sensitivity import PSI_FLOOR, sensitivity
 
 THETA0 = np.array([-72, -156, 235, 3, 64, 41], float)  # 'wirecal plan' --for stepwise's
 
@@ -137,3 +137,27 @@ def test_a_box_gap_does_not_depend_on_the_configurations_asked_with_it(viper, se
     together = viper.cell_gaps(q, p0).gap
     alone = np.concatenate([viper.cell_gaps(q[k : k + 1], p0).gap for k in range(40)], axis=1)
     assert np.array_equal(together, alone)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), m=st.integers(1, 8))
+def test_isolating_every_parameter_at_once_is_the_rule_per_pair(seed, m):
+    """The largest other |Ψ| within the tolerance ⇔ each other |Ψ_t| within it (eq.
+    18–19 per pair, as ``psi --strict`` judges a point), with ties, zeros, one parameter
+    left, and |Ψ| near the floor and the 0.05 threshold."""
+    rng = np.random.default_rng(seed)
+    scale = rng.choice([0.001, 0.004, 0.05, 1.0, 10.0], size=(400, m))
+    psi = np.round(rng.normal(size=(400, m)) * scale, int(rng.integers(1, 4)))
+    psi[:, rng.integers(0, m)] = psi[:, 0]  # equal |Ψ| in two columns
+    names = [f"p{k}" for k in range(m)]
+    col = {n: k for k, n in enumerate(names)}
+    remaining = [n for n in names if rng.random() < 0.8] or names[:1]
+    opt = PlanOptions()
+    got = isolating_each(psi, col, remaining, opt)
+    for k, j in enumerate(remaining):
+        pj = psi[:, col[j]]
+        want = np.ones(len(psi), bool)
+        for t in remaining:
+            if t != j:
+                want &= np.abs(psi[:, col[t]]) <= np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
+        assert np.array_equal(got[k], want & (np.abs(pj) >= 0.05)), j

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import tomllib
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -18,11 +19,17 @@ from wirecal.cli.main import main
 from wirecal.formats.robot_file import load_robot
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan import candidates as plan_candidates
+from wirecal.solver.plan import design as plan_design
 from wirecal.solver.plan import planner
 from wirecal.solver.plan import steps as plan_steps
 from wirecal.solver.plan.design import Design
 from wirecal.solver.plan.options import PlanOptions
-from wirecal.solver.plan.planner import MORE_THETA0_DESIGNED, THETA0_TRIES, design
+from wirecal.solver.plan.planner import (
+    MORE_THETA0_DESIGNED,
+    THETA0_FINISHED,
+    THETA0_TRIES,
+    design,
+)
 from wirecal.solver.sensitivity import sensitivity
 
 UR5 = Path(__file__).parent.parent / "examples" / "ur5e" / "robot.toml"
@@ -31,27 +38,47 @@ N_PARAMS = 10  # the UR5e's [calibration] parameters
 
 
 class Stand:
-    """Stand-ins for ``design_at`` and ``_isolated_count``, keyed by θ0's joint 1.
+    """Stand-ins for the designs and ``_isolated_count``, keyed by θ0's joint 1.
 
     ``unplanned[j1]``: parameters a design at that θ0 leaves unplanned; ``isolated[j1]``:
-    the quick check's count. Records the θ0s designed and checked, in order.
+    the quick check's count; θ0s in ``failing`` give no plan (a :class:`Blocked` error).
+    A θ0 taken to its steps (``design_steps``) ranks as its finished plan will: the
+    θ0s staged, finished or designed whole (``design_at``), and checked, are recorded
+    in order.
     """
 
     def __init__(self, monkeypatch, unplanned: dict[int, int], isolated: dict[int, int]):
         self.unplanned, self.isolated = unplanned, isolated
+        self.staged: list[int] = []
         self.designed: list[int] = []
         self.checked: list[int] = []
+        self.failing: set[int] = set()
         draws = np.zeros((len(unplanned), 6))
         draws[:, 0] = list(unplanned)
         monkeypatch.setattr(planner, "_theta0_draws", lambda robot, opt: draws)
         monkeypatch.setattr(planner, "design_at", self.design_at)
+        monkeypatch.setattr(planner, "design_steps", self.design_steps)
+        monkeypatch.setattr(planner, "finish", self.finish)
         monkeypatch.setattr(planner, "_isolated_count", self.count)
 
-    def design_at(self, robot, theta0, opt, progress=None) -> Design:
-        j1 = int(theta0[0])
-        self.designed.append(j1)
+    def plan(self, j1: int) -> Design:
+        if j1 in self.failing:
+            raise plan_candidates.Blocked(lambda: f"θ0 {j1}: blocked")
         excluded = {f"p{k}": "stand-in" for k in range(self.unplanned[j1])}
         return Design(None, [], excluded, {"joint": 0.01 * j1, "stepwise": 0.0})  # type: ignore[arg-type]
+
+    def design_at(self, robot, theta0, opt, progress=None) -> Design:
+        self.designed.append(int(theta0[0]))
+        return self.plan(int(theta0[0]))
+
+    def design_steps(self, robot, theta0, opt, progress=None) -> SimpleNamespace:
+        self.staged.append(int(theta0[0]))
+        d = self.plan(int(theta0[0]))
+        return SimpleNamespace(j1=int(theta0[0]), rank=planner._score(d), design=d)
+
+    def finish(self, steps: SimpleNamespace, progress=None) -> Design:
+        self.designed.append(steps.j1)
+        return steps.design
 
     def count(self, robot, theta0, opt) -> int:
         self.checked.append(int(theta0[0]))
@@ -67,7 +94,9 @@ def test_complete_at_the_first_theta0s_checks_no_more(monkeypatch, ur5):
     # θ0 with joint 1 = 3 is complete; 1 ranks better on the error but is incomplete
     stand = Stand(monkeypatch, {1: 2, 2: 1, 3: 0, 4: 5, 5: 0, 6: 3, 7: 0}, {7: 10})
     d = design(ur5)
-    assert stand.designed == [1, 2, 3, 4, 5, 6]
+    assert stand.staged == [1, 2, 3, 4, 5, 6]
+    assert THETA0_FINISHED == 2
+    assert stand.designed == [3, 5]  # the two ranked first by their steps
     assert stand.checked == []
     assert d.predicted["joint"] == pytest.approx(0.03)  # the better complete one (3, not 5)
     assert d.theta0_tried == THETA0_TRIES
@@ -80,7 +109,8 @@ def test_the_first_complete_plan_beyond_the_first_theta0s_is_kept(monkeypatch, u
     unplanned = {**first, **{7: 9, 8: 5, 9: 1, 10: 4, 11: 0, 12: 0}}
     stand = Stand(monkeypatch, unplanned, {7: 2, 8: 5, 9: N_PARAMS, 10: 4, 11: N_PARAMS})
     d = design(ur5)
-    assert stand.designed == [*range(1, 7), 9, 11]
+    assert stand.staged == [*range(1, 7)]
+    assert stand.designed == [1, 2, 9, 11]  # 1 and 2 rank first of the six
     assert stand.checked == [7, 8, 9, 10, 11]
     assert not d.excluded
     assert d.predicted["joint"] == pytest.approx(0.11)
@@ -97,7 +127,7 @@ def test_without_a_complete_plan_the_fewest_unplanned_is_returned(monkeypatch, u
     # every further θ0 checked, then the most isolating designed first (ties as drawn)
     assert stand.checked == list(range(7, 14))
     assert MORE_THETA0_DESIGNED == 4
-    assert stand.designed == [*range(1, 7), 12, 8, 10, 11]
+    assert stand.designed == [1, 2, 12, 8, 10, 11]
     assert len(d.excluded) == 2  # θ0 12's plan; 13 (1 unplanned) ranks last and is not designed
     assert d.theta0_tried == THETA0_TRIES + MORE_THETA0_DESIGNED
 
@@ -106,6 +136,7 @@ def test_a_theta0_given_is_the_only_one_tried(monkeypatch, ur5):
     stand = Stand(monkeypatch, {1: 3, 2: 0}, {2: N_PARAMS})
     d = design(ur5, np.array([1.0, 0, 0, 0, 0, 0]))
     assert stand.designed == [1]
+    assert stand.staged == []
     assert stand.checked == []
     assert len(d.excluded) == 3
     assert d.theta0_tried == 1
@@ -168,17 +199,35 @@ def test_the_urdf_ur5_plans_every_parameter_at_any_seed(tmp_path, urdf_ur5, seed
 def test_unidentifiable_parameters_send_no_search_further(monkeypatch, ur5):
     """An unobservable or redundant parameter is excluded at every θ0: no more θ0 tried."""
     stand = Stand(monkeypatch, dict.fromkeys(range(1, 9), 1), dict.fromkeys(range(1, 9), 9))
+    plan = stand.plan
 
-    def design_at(robot, theta0, opt, progress=None) -> Design:
-        d = stand.design_at(robot, theta0, opt, progress)
+    def unidentifiable(j1: int) -> Design:
+        d = plan(j1)
         d.unidentifiable = ("p0",)
         return d
 
-    monkeypatch.setattr(planner, "design_at", design_at)
+    monkeypatch.setattr(stand, "plan", unidentifiable)
     d = design(ur5)
     assert stand.checked == []
-    assert stand.designed == list(range(1, 7))
+    assert stand.staged == list(range(1, 7))
+    assert stand.designed == [1, 2]
     assert list(d.excluded) == ["p0"]
+
+
+def test_a_theta0_whose_finish_fails_gives_way_to_the_next_ranked(monkeypatch, ur5):
+    """The θ0s finished are the THETA0_FINISHED that rank first and give a plan."""
+    stand = Stand(monkeypatch, dict.fromkeys(range(1, 8), 0), {7: N_PARAMS})
+
+    def finish(steps: SimpleNamespace, progress=None) -> Design:
+        stand.designed.append(steps.j1)
+        if steps.j1 == 2:
+            raise WirecalError("θ0 2: no visiting order keeps the wire clear")
+        return steps.design
+
+    monkeypatch.setattr(planner, "finish", finish)
+    d = design(ur5)
+    assert stand.designed == [1, 2, 3]
+    assert d.predicted["joint"] == pytest.approx(0.01)
 
 
 def test_why_a_theta0_gives_no_plan_is_worked_out_only_when_shown(monkeypatch, ur5):
@@ -193,20 +242,36 @@ def test_why_a_theta0_gives_no_plan_is_worked_out_only_when_shown(monkeypatch, u
         asked.append(j1)
         return f"θ0 {j1}: blocked"
 
-    def fails(robot, theta0, opt, progress=None):
-        j1 = int(theta0[0])
-        if j1 in failing:
-            stand.designed.append(j1)
-            raise plan_candidates.Blocked(lambda: reason(j1))
-        return stand.design_at(robot, theta0, opt, progress)
+    plan = stand.plan
 
-    monkeypatch.setattr(planner, "design_at", fails)
-    failing = {1, 2}
+    def fails(j1: int) -> Design:
+        if j1 in stand.failing:
+            raise plan_candidates.Blocked(lambda: reason(j1))
+        return plan(j1)
+
+    monkeypatch.setattr(stand, "plan", fails)
+    stand.failing = {1, 2}
     assert design(ur5).predicted["joint"] == pytest.approx(0.03)
     assert asked == []
-    failing = set(range(1, 11))
+    stand.failing = set(range(1, 11))
     with pytest.raises(WirecalError) as exc:
         design(ur5)
     assert asked == [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]
     assert exc.value.problems[1:] == [f"θ0 {j}: blocked" for j in range(1, 11)]
     assert "no θ0 tried gives a plan (10 tried" in exc.value.problems[0]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("arm", ["viper_s650", "abb_irb120"])
+def test_the_theta0_a_full_search_keeps_is_among_those_finished(arm):
+    """Finishing all six first θ0s would keep one of the THETA0_FINISHED ranked first by
+    their steps' first points, so the shipped arms' plans are those of the full search."""
+    robot = load_robot(Path(__file__).parent.parent / "examples" / arm / "robot.toml")
+    opt = PlanOptions()
+    staged = [
+        plan_design.design_steps(robot, t0, opt)
+        for t0 in planner._theta0_draws(robot, opt)[:THETA0_TRIES]
+    ]
+    scores = [planner._score(plan_design.finish(s)) for s in staged]
+    ranked = sorted(range(len(staged)), key=lambda k: staged[k].rank)
+    assert min(range(len(scores)), key=scores.__getitem__) in ranked[:THETA0_FINISHED]

@@ -17,6 +17,11 @@ def _dot(u, v) -> np.ndarray:
     return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 
 
+def _unit(x: np.ndarray) -> np.ndarray:
+    """Return x clamped to [0, 1] (``np.clip``'s numbers without its per-call overhead)."""
+    return np.minimum(np.maximum(x, 0.0), 1.0)
+
+
 def segment_distance(p1, q1, p2, q2) -> np.ndarray:
     """Return the shortest distance between segments p1–q1 and p2–q2.
 
@@ -31,11 +36,11 @@ def segment_distance(p1, q1, p2, q2) -> np.ndarray:
     b = _dot(d1, d2)
     denom = a * e - b * b
     with np.errstate(invalid="ignore", divide="ignore"):
-        s = np.where(denom > 1e-12, np.clip((b * f - c * e) / denom, 0, 1), 0.0)
+        s = np.where(denom > 1e-12, _unit((b * f - c * e) / denom), 0.0)
         t = np.where(e > 1e-12, (b * s + f) / e, 0.0)
-        s = np.where(t < 0, np.clip(-c / np.where(a > 1e-12, a, 1), 0, 1), s)
-        s = np.where(t > 1, np.clip((b - c) / np.where(a > 1e-12, a, 1), 0, 1), s)
-    t = np.clip(t, 0, 1)
+        s = np.where(t < 0, _unit(-c / np.where(a > 1e-12, a, 1)), s)
+        s = np.where(t > 1, _unit((b - c) / np.where(a > 1e-12, a, 1)), s)
+    t = _unit(t)
     gap = (p1 + s * d1) - (p2 + t * d2)
     return np.sqrt(_dot(gap, gap))
 
@@ -70,7 +75,7 @@ def wire_clearance(
     p = o[-1] + R[:, 0] * t[0] + R[:, 1] * t[1] + R[:, 2] * t[2]
     enc = np.asarray(encoder, dtype=float)[:, None]
     length = np.sqrt(_dot(p - enc, p - enc))
-    keep = np.clip(1 - trim_mm / np.maximum(length, 1e-9), 0, 1)
+    keep = _unit(1 - trim_mm / np.maximum(length, 1e-9))
     wire_end = enc + keep * (p - enc)
     starts = o[1:-1].transpose(1, 0, 2)  # (3, caps, N); capsule k: frame k origin → k+1
     ends = o[2:].transpose(1, 0, 2)

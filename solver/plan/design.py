@@ -175,16 +175,53 @@ def design_at(
     Step by step (paper §3.4), each step's points chosen by the leak-aware greedy: all
     ``points_per_step`` of them for the stepwise method, the first ``min_points`` for the
     joint method, whose remaining points
-    :func:`~wirecal.solver.plan.joint.joint_choice` then adds over all steps.
+    :func:`~wirecal.solver.plan.joint.joint_choice` then adds over all steps
+    (:func:`design_steps`, then :func:`finish`).
+    """
+    return finish(design_steps(robot, theta0, opt, progress), progress)
+
+
+@dataclass
+class Steps:
+    """A design around θ0 up to its steps' first points (:func:`design_steps`).
+
+    ``rank``: the plan of those points ranked as :func:`score` ranks a finished plan
+    (parameters unplanned, then the predicted errors): the θ0 search finishes the θ0s
+    that rank first (:func:`~wirecal.solver.plan.planner.design`).
+    """
+
+    robot: Robot
+    theta0: np.ndarray
+    opt: PlanOptions
+    cands: Screened
+    psi: np.ndarray  # the candidates' Ψ, columns ``remaining``
+    remaining: list[str]  # the parameters but the unidentifiable
+    excluded: dict[str, str]
+    unidentifiable: tuple[str, ...]
+    pools: list[StepPool]
+    rank: tuple[int, float] = (0, 0.0)
+
+
+def score(excluded: int, predicted: dict[str, float]) -> tuple[int, float]:
+    """Return a plan's rank among θ0s: parameters unplanned, then the predicted errors."""
+    return (excluded, predicted["stepwise"] + predicted["joint"] * 5)
+
+
+def design_steps(
+    robot: Robot, theta0: np.ndarray, opt: PlanOptions, progress: Progress | None = None
+) -> Steps:
+    """Design around θ0 up to the steps' first points and rank them (:class:`Steps`).
+
+    The candidates screened, the unidentifiable parameters set aside, the order of §3.4
+    and each step's first points (:func:`~wirecal.solver.plan.steps.step_by_step`).
     """
     tick = progress or (lambda f: None)
     model = robot.nominal
     check_theta0(robot, theta0, opt)
-    p0 = tool_position(model, np.radians(theta0)[None])[0]
     cands = Screened(robot, theta0, opt)
     if len(cands.q) < opt.points_per_step:
         raise no_usable_error(robot, theta0, opt)
-    q_all, via_all = cands.q, cands.via
+    q_all = cands.q
     tick(0.5)
     names = list(robot.parameters)
     excluded = _unidentifiable(model, q_all[:: max(1, len(q_all) // 3000)], theta0, names)
@@ -192,8 +229,27 @@ def design_at(
     remaining = [n for n in names if n not in excluded]
     psi = sensitivity(model, q_all, theta0, remaining).psi
     pools = step_by_step(robot, theta0, cands, psi, remaining, excluded, opt, tick)
+    s = Steps(robot, theta0, opt, cands, psi, remaining, excluded, unidentifiable, pools)
+    first = Plan(
+        theta0,
+        tuple(p.parameter for p in pools),
+        tuple(Step(p.parameter, q_all[p.iso[p.picks]], q_all[:0]) for p in pools),
+    )
+    s.rank = score(len(excluded), predicted_accuracy(robot, first, unplanned=tuple(excluded)))
+    return s
+
+
+def finish(s: Steps, progress: Progress | None = None) -> Design:
+    """Return the plan of a design up to its steps (:func:`design_steps`), finished.
+
+    The joint method's further points, each step's tour, the compliances' points and a
+    payload step when the robot file asks for them, and the predictions.
+    """
+    robot, theta0, opt, cands, pools = s.robot, s.theta0, s.opt, s.cands, s.pools
+    q_all, via_all, remaining, excluded = cands.q, cands.via, s.remaining, s.excluded
+    p0 = cands.p0
     if opt.method == "joint":
-        joint_choice(robot, theta0, q_all, via_all, psi, remaining, pools, opt)
+        joint_choice(robot, theta0, q_all, via_all, s.psi, remaining, pools, opt)
     plain_s = _plain_time(robot, p0, theta0, (q_all, via_all), pools, opt)
     compliance = (
         add_compliance_points(robot, theta0, cands, remaining, pools, opt)
@@ -207,7 +263,7 @@ def design_at(
     plan = Plan(
         theta0,
         tuple(p.parameter for p in pools),
-        tuple(Step(s.parameter, s.points_deg, s.via_deg) for s in steps),
+        tuple(Step(sd.parameter, sd.points_deg, sd.via_deg) for sd in steps),
         robot=robot.name,
     )
     lines, sigma = compliance
@@ -217,13 +273,13 @@ def design_at(
         direct = np.vstack([plan.all_points()[0], q_all[usable & np.isnan(via_all[:, 0])]])
         plan, more = payload_step(robot, plan, remaining, opt, (direct, budget_s))
         lines, sigma = [*lines, *more], plan_sigmas(robot, plan, remaining)
-    d = Design(plan, steps, excluded, method=opt.method, unidentifiable=unidentifiable)
+    d = Design(plan, steps, excluded, method=opt.method, unidentifiable=s.unidentifiable)
     d.compliance_lines, d.compliance_sigma = tuple(lines), sigma
     d.predicted = predicted_accuracy(robot, plan, unplanned=tuple(excluded))
     d.robot_time_s = robot_time(robot, plan, opt.run)
     d.exit_line = exit_line(robot, plan)
     d.cell_line = cell_line(robot)
-    tick(1.0)
+    (progress or (lambda f: None))(1.0)
     return d
 
 

@@ -25,7 +25,7 @@ import numpy as np
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan.candidates import Screened
-from wirecal.solver.plan.design import Design, design_at
+from wirecal.solver.plan.design import Design, Steps, design_at, design_steps, finish, score
 from wirecal.solver.plan.options import DEFAULT_OPTIONS, PlanOptions, Progress, part_progress
 from wirecal.solver.plan.steps import most_informative
 from wirecal.solver.robot import Robot
@@ -41,7 +41,9 @@ def design(
     """Return a plan for the robot file's parameters (θ0 chosen when not given).
 
     θ0 chosen: the best plan (fewest parameters unplanned, then the smallest predicted
-    error) of the first :data:`THETA0_TRIES` θ0 drawn clear of the cell; when it leaves
+    error) of the first :data:`THETA0_TRIES` θ0 drawn clear of the cell, each designed up
+    to its steps' first points and the :data:`THETA0_FINISHED` ranked first by those
+    finished (:func:`_best_finished`); when it leaves
     parameters unplanned (but unobservable or redundant ones, which no θ0 plans), up to
     :data:`MORE_THETA0_DESIGNED` more θ0, the best of
     :data:`MORE_THETA0_CHECKED` further draws by a quick check (:func:`_isolated_count`),
@@ -53,17 +55,17 @@ def design(
         return design_at(robot, np.asarray(theta0, dtype=float), opt, progress)
     draws = _theta0_draws(robot, opt)
     first = draws[:THETA0_TRIES]
-    parts = len(first) + MORE_THETA0_DESIGNED
-    best: Design | None = None
+    parts = len(first) + THETA0_FINISHED + MORE_THETA0_DESIGNED
     problems: list[WirecalError] = []  # why each θ0 gave no plan, worked out if shown
+    staged: list[Steps] = []
     for k, t0 in enumerate(first):
         try:
-            d = design_at(robot, t0, opt, part_progress(progress, k, parts))
+            staged.append(design_steps(robot, t0, opt, part_progress(progress, k, parts)))
         except WirecalError as exc:
             problems.append(exc)
-            continue
-        if best is None or _score(d) < _score(best):
-            best = d
+    best = _best_finished(
+        staged, problems, lambda k: part_progress(progress, len(first) + k, parts)
+    )
     if best is not None:
         best.theta0_tried = len(first)
     if best is None or best.isolation_failed():
@@ -73,7 +75,7 @@ def design(
             more,
             (best, problems),
             opt,
-            lambda k: part_progress(progress, len(first) + k, parts),
+            lambda k: part_progress(progress, len(first) + THETA0_FINISHED + k, parts),
         )
     if best is None:
         raise WirecalError(
@@ -87,7 +89,14 @@ def design(
 
 
 THETA0_TRIES = 6
-"""θ0 designed first, all of them; the best plan of them is kept when it is complete."""
+"""θ0 designed first, all of them up to their steps' first points; the best plan of those
+finished is kept when it is complete."""
+
+
+THETA0_FINISHED = 2
+"""Of the first θ0s, those finished (the joint design's further points, the tours, the
+predictions: a third of a design), the best ranked by their steps' first points first
+(:attr:`~wirecal.solver.plan.design.Steps.rank`)."""
 
 
 MORE_THETA0_CHECKED = 60
@@ -101,7 +110,32 @@ MORE_THETA0_DESIGNED = 4
 
 def _score(d: Design) -> tuple[int, float]:
     """Return a plan's rank among θ0s: parameters unplanned, then the predicted errors."""
-    return (len(d.excluded), d.predicted["stepwise"] + d.predicted["joint"] * 5)
+    return score(len(d.excluded), d.predicted)
+
+
+def _best_finished(
+    staged: list[Steps], problems: list[WirecalError], part: Callable[[int], Progress | None]
+) -> Design | None:
+    """Return the best plan of the first θ0s, finishing the :data:`THETA0_FINISHED` ranked first.
+
+    In the order of their steps' rank (:attr:`~wirecal.solver.plan.design.Steps.rank`,
+    ties in the order drawn); one whose finish fails adds its reason to ``problems`` and
+    the next is finished instead. ``part(k)``: the progress callback of the k-th finish.
+    """
+    best: Design | None = None
+    finished = 0
+    for s in sorted(staged, key=lambda s: s.rank):
+        if finished == THETA0_FINISHED:
+            break
+        try:
+            d = finish(s, part(finished))
+        except WirecalError as exc:
+            problems.append(exc)
+            continue
+        finished += 1
+        if best is None or _score(d) < _score(best):
+            best = d
+    return best
 
 
 def _search_further(

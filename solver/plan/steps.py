@@ -35,10 +35,24 @@ def isolating(
     other parameter t of ``remaining`` (the one rule,
     :func:`~wirecal.solver.sensitivity.within_tolerance`), and |Ψ_j| ≥ 0.05.
     """
-    pj = psi[:, col[j]]
-    others = [col[t] for t in remaining if t != j]
-    iso = within_tolerance(pj, psi[:, others], opt.tol).all(axis=1)
-    return iso & (np.abs(pj) >= 0.05)
+    return isolating_each(psi, col, remaining, opt)[remaining.index(j)]
+
+
+def isolating_each(psi: np.ndarray, col: dict[str, int], remaining: list[str], opt) -> np.ndarray:
+    """Return :func:`isolating` for every parameter of ``remaining`` at once, (m, N).
+
+    Every other |Ψ_t| within the tolerance is the largest of them within it: per
+    candidate the largest |Ψ| of the parameters before j and after j in ``remaining``
+    (running maxima), one comparison per parameter instead of one per pair.
+    """
+    a = np.ascontiguousarray(np.abs(psi[:, [col[t] for t in remaining]]).T)  # (m, N)
+    before = np.zeros_like(a)  # |Ψ| ≥ 0: zero stands for no other parameter
+    after = np.zeros_like(a)
+    for k in range(1, len(a)):  # a row at a time: numpy's accumulate along rows is slow
+        before[k] = np.maximum(before[k - 1], a[k - 1])
+        after[-1 - k] = np.maximum(after[-k], a[-k])
+    iso = within_tolerance(a, np.maximum(before, after)[..., None], opt.tol)[..., 0]
+    return iso & (a >= 0.05)
 
 
 FirstUsable = Callable[[list[np.ndarray], list[int]], list[np.ndarray]]
@@ -58,8 +72,13 @@ def ranked_isolating(
 
     By decreasing |Ψ_j|, ties in the order of the candidates.
     """
-    iso = np.flatnonzero(isolating(psi, col, j, remaining, opt))
-    return iso[np.argsort(-np.abs(psi[iso, col[j]]), kind="stable")]
+    return ranked(psi, col, j, isolating(psi, col, j, remaining, opt))
+
+
+def ranked(psi: np.ndarray, col: dict[str, int], j: str, iso: np.ndarray) -> np.ndarray:
+    """Return the candidates of the mask ``iso`` by decreasing |Ψ_j|, ties in their order."""
+    idx = np.flatnonzero(iso)
+    return idx[np.argsort(-np.abs(psi[idx, col[j]]), kind="stable")]
 
 
 def most_informative(
@@ -77,7 +96,8 @@ def most_informative(
     most sensitive first (not all of them screened).
     """
     k = opt.points_per_step
-    orders = [ranked_isolating(psi, col, j, remaining, opt) for j in remaining]
+    each = isolating_each(psi, col, remaining, opt)
+    orders = [ranked(psi, col, j, each[k]) for k, j in enumerate(remaining)]
     best: tuple[float, str, np.ndarray] | None = None
     tops = first_usable(orders, [k] * len(orders))
     for j, order, top in zip(remaining, orders, tops, strict=True):
