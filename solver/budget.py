@@ -95,6 +95,9 @@ class Budget:
     bound_compensated: float | None = None  # the same for targets compensated offline
     # the unidentified compliances' posterior (value, σ; µrad/(N·m)), as the bound takes them
     posterior: dict[str, tuple[float, float]] | None = None
+    # the zero drift left in the lengths as the budget charged it (mean, σ; mm/s;
+    # :func:`drift_posterior`): the joint estimate's covariance carries it too
+    drift_left_mm_per_s: tuple[float, float] | None = None
 
     def as_json(self) -> dict:
         """Return the budget as a JSON-ready dict."""
@@ -306,6 +309,7 @@ def _with_compliance(
         bound_mm(Jx, replace(extended, bias=extended.bias + left)),
         bound_mm(Jx, extended),
         posterior,
+        src.drift_left_mm_per_s,
     )
 
 
