@@ -24,7 +24,10 @@ bound that covers must reach the 95 % point; where one term with a fixed distrib
 dominates, as the scale within its tolerance without a gauge, no honest bound gets below
 it). On the rigid rows, ``shared``: the compliant arm's 95 % point over the rigid arm's
 median (compensated errors), the least median ratio on the rigid arm of a bound that
-covers both when the readings cannot tell the two arms apart. ``post σ``: the unidentified
+covers both when the readings cannot tell the two arms apart. ``c err/σ``: the identified
+compliances' median |ĉ − c|/σ, σ the joint estimate's (the patch's ``[compliance]`` std; about
+0.67, the half-normal's median, when it is honest), ``c cover``: how many of them ĉ ± 1.96 σ
+covers. ``post σ``: the unidentified
 compliance the readings narrowed most, its posterior σ over its prior's (1: they said
 nothing). The header counts the runs whose true scale lies beyond 95 % of its tolerance:
 without a gauge, where the scale dominates, a bound at the scale's 95 % point misses about
@@ -178,7 +181,7 @@ def compliance_cases(arm: str, trials: int, scenario: Scenario) -> None:
     print(
         f"{'gauge':<6}{'compl.':<7}{'ident.':<8}{'patch: cover':>13}{'bound/err':>10}{'floor':>6}"
         f"{'comp.: cover':>13}{'bound/err':>10}{'floor':>6}{'shared':>7}{'err mm':>8}"
-        f"{'c err/σ':>8}{'post σ':>9}{'s':>5}"
+        f"{'c err/σ':>8}{'c cover':>8}{'post σ':>9}{'s':>5}"
     )
     for gauge_name, robot in (("no", without), ("yes", with_gauge(without))):
         cases = {}
@@ -237,6 +240,7 @@ def _row(robot, runs: list, bent: np.ndarray | None) -> str:
         f"{np.mean(ep <= bp):13.0%}{np.median(bp / ep):10.2f}{floor(ep):6.2f}"
         f"{np.mean(ec <= bc):13.0%}{np.median(bc / ec):10.2f}{floor(ec):6.2f}{shared:7.2f}"
         f"{np.median(ec):8.4f}{np.median(z) if z else np.nan:8.2f}"
+        f"{np.mean(np.array(z) <= 1.96) if z else np.nan:8.0%}"
         f"{told:>4}{post.get(told, np.nan):5.2f}"
     )
 
