@@ -245,8 +245,9 @@ def solve(
     view of the log: the file's scale, no drift removed); both are estimated either way.
     The joint estimate's σ and correlations include the scale's uncertainty (the
     reference's σ, or the tolerance without one) and, with the robot file's
-    ``compliances``, the zero drift left in the lengths (:func:`_with_drift_sigma`). ``refine_scale`` refines the scale
-    jointly with the parameters instead (:func:`~wirecal.solver.identify.joint` with a
+    ``compliances``, the zero drift left in the lengths (:func:`_with_drift_sigma`).
+    ``refine_scale`` refines the scale jointly with the parameters instead
+    (:func:`~wirecal.solver.identify.joint` with a
     :class:`~wirecal.solver.identify.ScalePrior`): the wire lengths tell the scale only
     through the lengths held at nominal (the tool point), so it leans on those being exact.
     """
