@@ -65,14 +65,19 @@ def simulated_calibration(
     unmodelled: Unmodelled | None = None,
     drift_mm_per_h: float = 0.0,
     run: RunParameters = DEFAULT_RUN,
+    scale_ppm: float | None = None,
 ) -> tuple[SolveResult, EncoderTruth]:
     """Simulate a run of ``plan`` on the true arm and solve it; return it and the true encoder.
 
     The true arm is ``robot`` with the ``truth`` offsets, read by a realistic encoder drawn
-    from ``seed`` (its zero drifting by ``drift_mm_per_h``), at the ``run`` settings.
+    from ``seed`` (its zero drifting by ``drift_mm_per_h``; its scale ``scale_ppm`` off when
+    given, else drawn), at the ``run`` settings.
     """
     encoder = realistic_encoder(
-        robot.encoder, np.random.default_rng([seed, 4]), zero_drift_mm_per_h=drift_mm_per_h
+        robot.encoder,
+        np.random.default_rng([seed, 4]),
+        scale_ppm=scale_ppm,
+        zero_drift_mm_per_h=drift_mm_per_h,
     )
     text = simulate_log(
         robot, plan, truth, seed=seed, encoder=encoder, unmodelled=unmodelled, run=run
@@ -100,6 +105,15 @@ def wilson(k: int, n: int, z: float = WILSON_Z) -> tuple[float, float]:
 
 
 @dataclass(frozen=True)
+class Scenario:
+    """What a simulated run's encoder and speed are beyond the realistic defaults."""
+
+    drift_mm_per_h: float = 0.0  # the zero's drift
+    run: RunParameters = DEFAULT_RUN
+    scale_ppm: float | None = None  # the true scale's error; None: drawn in the tolerance
+
+
+@dataclass(frozen=True)
 class ComplianceTrial:
     """One calibration of an arm whose file identifies compliances: both errors, both bounds.
 
@@ -119,17 +133,31 @@ class ComplianceTrial:
 
 
 def compliance_trial(
-    robot: Robot, plan: Plan, seed: int, unmodelled: Unmodelled | None, compliant: bool
+    robot: Robot,
+    plan: Plan,
+    seed: int,
+    unmodelled: Unmodelled | None,
+    compliant: bool,
+    encoder: Scenario = Scenario(),
 ) -> ComplianceTrial:
     """Simulate, solve and judge one calibration of a compliant (or rigid) true arm.
 
     ``robot`` lists ``compliances``; the truth draws them (:func:`random_errors`) or, for a
-    rigid arm, sets them to 0.
+    rigid arm, sets them to 0. ``encoder``: the run's zero drift, speed and scale.
     """
     truth = random_errors(robot, 1.0, np.random.default_rng([seed, 1]))
     if not compliant:
         truth.update({n: -robot.nominal_value(n) for n in robot.compliances})
-    result, _ = simulated_calibration(robot, plan, truth, seed, unmodelled=unmodelled)
+    result, _ = simulated_calibration(
+        robot,
+        plan,
+        truth,
+        seed,
+        unmodelled=unmodelled,
+        drift_mm_per_h=encoder.drift_mm_per_h,
+        run=encoder.run,
+        scale_ppm=encoder.scale_ppm,
+    )
     joint = result.estimates["joint"]
     budget = result.budgets["joint"]
     believed = joint.as_dict()

@@ -24,12 +24,22 @@ bound that covers must reach the 95 % point; where one term with a fixed distrib
 dominates, as the scale within its tolerance without a gauge, no honest bound gets below
 it). On the rigid rows, ``shared``: the compliant arm's 95 % point over the rigid arm's
 median (compensated errors), the least median ratio on the rigid arm of a bound that
-covers both when the readings cannot tell the two arms apart. ``post σ``: the unidentified
+covers both when the readings cannot tell the two arms apart. ``c err/σ``: the identified
+compliances' median |ĉ − c|/σ, σ the joint estimate's (the patch's ``[compliance]`` std; about
+0.67, the half-normal's median, when it is honest), ``c cover``: how many of them ĉ ± 1.96 σ
+covers. ``post σ``: the unidentified
 compliance the readings narrowed most, its posterior σ over its prior's (1: they said
 nothing). The header counts the runs whose true scale lies beyond 95 % of its tolerance:
 without a gauge, where the scale dominates, a bound at the scale's 95 % point misses about
 those (7 of the first 100 seeds, where 5 are expected). Several arms in one run:
 ``--compliance ur5e viper_s650 abb_irb120``.
+
+The encoder's scenarios (issue 30's outside check; with ``--compliance`` only): ``--drift
+MM_PER_H`` drifts the zero readings by that much (the realistic encoder's is none),
+``--paper-run`` runs the plan at the paper's settings (20 % speed, 3 s settle: a run two
+to three times longer, so the zero readings tell the drift about four times better),
+``--scale-ppm PPM`` sets the encoder's true scale error instead of drawing it within the
+tolerance (``--scale-ppm 500``: at the tolerance's edge).
 
 Any robot file and plan: give ``--compliance`` the robot file's path instead of an arm's
 name; the plan is the one beside it (the demo's rule, :func:`plan_beside`: ``plan.toml``
@@ -42,6 +52,7 @@ tests/data/payload_viper_s650/robot.toml tests/data/payload_abb_irb120/robot.tom
     python bench/bench_bound.py [--trials 300] [--no-unmodelled]
     python bench/bench_bound.py --compliance ur5e viper_s650 abb_irb120 [--trials 40]
     python bench/bench_bound.py --compliance tests/data/payload_*/robot.toml [--trials 40]
+    python bench/bench_bound.py --compliance viper_s650 --drift 1 [--paper-run] [--scale-ppm 500]
 """
 
 from __future__ import annotations
@@ -59,13 +70,20 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from wirecal.app.coverage import compliance_trial, trial, wilson, with_gauge  # noqa: E402
+from wirecal.app.coverage import (  # noqa: E402
+    Scenario,
+    compliance_trial,
+    trial,
+    wilson,
+    with_gauge,
+)
 from wirecal.app.demo import PLANS, example_files, plan_beside  # noqa: E402
 from wirecal.formats.plan_file import load_plan  # noqa: E402
 from wirecal.formats.robot_file import load_robot, robot_from_dict  # noqa: E402
 from wirecal.solver.bound import BOUND_PROBABILITY  # noqa: E402
 from wirecal.solver.compliance import COMPLIANCE_RANGE_URAD_PER_NM  # noqa: E402
 from wirecal.solver.plan.calibration_plan import Plan  # noqa: E402
+from wirecal.solver.run_parameters import PAPER_RUN  # noqa: E402
 from wirecal.solver.simulate import Unmodelled, realistic_encoder  # noqa: E402
 
 
@@ -79,10 +97,15 @@ def main() -> None:
         metavar="ARM_OR_ROBOT_FILE",
         help=f"the compliance cases' arms ({', '.join(ARMS)}) or robot files",
     )
+    ap.add_argument("--drift", type=float, default=0.0, help="zero drift, mm/h")
+    ap.add_argument("--paper-run", action="store_true", help="20 % speed, 3 s settle")
+    ap.add_argument("--scale-ppm", type=float, help="the true scale's error (ppm)")
     args = ap.parse_args()
     if args.compliance:
+        run = PAPER_RUN if args.paper_run else Scenario().run
+        scenario = Scenario(args.drift, run, args.scale_ppm)
         for arm in args.compliance:
-            compliance_cases(arm, args.trials)
+            compliance_cases(arm, args.trials, scenario)
         return
     files = example_files()
     without = load_robot(files["robot"])
@@ -129,7 +152,7 @@ def robot_path(arm: str) -> Path:
     return Path(arm)
 
 
-def compliance_cases(arm: str, trials: int) -> None:
+def compliance_cases(arm: str, trials: int, scenario: Scenario) -> None:
     """Print coverage and median bound/error, gauge × compliance (module docstring)."""
     path = robot_path(arm)
     if not path.is_file():
@@ -153,18 +176,19 @@ def compliance_cases(arm: str, trials: int) -> None:
         f"{arm}, {plan_path.name}{_payload(plan)}: {trials} calibrations per case; "
         f"repeatability 0.02 mm; "
         f"true scale beyond {BOUND_PROBABILITY:.0%} of its ±{tol:g} ppm in {beyond} runs"
+        + _scenario(scenario)
     )
     print(
         f"{'gauge':<6}{'compl.':<7}{'ident.':<8}{'patch: cover':>13}{'bound/err':>10}{'floor':>6}"
         f"{'comp.: cover':>13}{'bound/err':>10}{'floor':>6}{'shared':>7}{'err mm':>8}"
-        f"{'c err/σ':>8}{'post σ':>9}{'s':>5}"
+        f"{'c err/σ':>8}{'c cover':>8}{'post σ':>9}{'s':>5}"
     )
     for gauge_name, robot in (("no", without), ("yes", with_gauge(without))):
         cases = {}
         for compliant in (True, False):
             t0 = time.perf_counter()
             runs = [
-                compliance_trial(robot, plan, seed, Unmodelled(None, 0.0), compliant)
+                compliance_trial(robot, plan, seed, Unmodelled(None, 0.0), compliant, scenario)
                 for seed in range(1, trials + 1)
             ]
             cases[compliant] = (runs, time.perf_counter() - t0)
@@ -173,6 +197,15 @@ def compliance_cases(arm: str, trials: int) -> None:
             runs, seconds = cases[compliant]
             head = f"{gauge_name:<6}{'on' if compliant else 'off':<7}"
             print(head + _row(robot, runs, None if compliant else bent) + f"{seconds:5.0f}")
+
+
+def _scenario(scenario: Scenario) -> str:
+    """Return the header's note of the encoder's scenario (none for the default)."""
+    out = f"; zero drift {scenario.drift_mm_per_h:g} mm/h" if scenario.drift_mm_per_h else ""
+    out += "; the paper's run (20 % speed, 3 s settle)" if scenario.run == PAPER_RUN else ""
+    if scenario.scale_ppm is not None:
+        out += f"; true scale {scenario.scale_ppm:+g} ppm (the 'beyond' count is of drawn ones)"
+    return out
 
 
 def _payload(plan: Plan) -> str:
@@ -207,6 +240,7 @@ def _row(robot, runs: list, bent: np.ndarray | None) -> str:
         f"{np.mean(ep <= bp):13.0%}{np.median(bp / ep):10.2f}{floor(ep):6.2f}"
         f"{np.mean(ec <= bc):13.0%}{np.median(bc / ec):10.2f}{floor(ec):6.2f}{shared:7.2f}"
         f"{np.median(ec):8.4f}{np.median(z) if z else np.nan:8.2f}"
+        f"{np.mean(np.array(z) <= 1.96) if z else np.nan:8.0%}"
         f"{told:>4}{post.get(told, np.nan):5.2f}"
     )
 

@@ -19,7 +19,9 @@ distribution, from its second moment (:func:`~wirecal.solver.accuracy.rms_tool_e
   datasheet's ``scale_tolerance_ppm`` (a tolerance is a limit, not a standard deviation:
   the GUM's rectangular distribution, JCGM 100:2008 §4.3.7);
 * **drift** — the zero drift's uncertainty σ_b (and the fitted drift itself when it was
-  left in): δd_i = b·(t_i − t_ref); and the temperature: the drum's expansion relative to
+  left in): δd_i = b·(t_i − t_ref); with the robot file's ``compliances``, the drift left
+  in the lengths as the zero readings and the joint fit's residual tell it together
+  (:func:`drift_posterior`); and the temperature: the drum's expansion relative to
   the arm's, (α_drum − α_arm)·ΔT over an assumed change of
   :data:`ASSUMED_TEMPERATURE_RISE_K` across the run, of either sign equally likely: a scale
   that changes from the reference's time (the start; without a reference, the run's
@@ -93,6 +95,9 @@ class Budget:
     bound_compensated: float | None = None  # the same for targets compensated offline
     # the unidentified compliances' posterior (value, σ; µrad/(N·m)), as the bound takes them
     posterior: dict[str, tuple[float, float]] | None = None
+    # the zero drift left in the lengths as the budget charged it (mean, σ; mm/s;
+    # :func:`drift_posterior`): the joint estimate's covariance carries it too
+    drift_left_mm_per_s: tuple[float, float] | None = None
 
     def as_json(self) -> dict:
         """Return the budget as a JSON-ready dict."""
@@ -150,6 +155,9 @@ class Sources:
     sag_mm: np.ndarray  # (N,) the length the robot file's gravity sag adds at each point
     sigma_zero_mm: float = 0.0  # σ of the zero reference every length is read from
     zero_bias_mm: float = 0.0  # the most the zero reference may read long (:data:`CHI3_MEAN`)
+    # the drift left in the lengths, (mean, σ) in mm/s (:func:`drift_posterior`); None: the
+    # zero readings' fit alone
+    drift_left_mm_per_s: tuple[float, float] | None = None
 
 
 def sources(
@@ -216,8 +224,11 @@ def budget(
     ``step`` the points' steps for the stepwise method, None for the joint method.
     ``compliance``: the joint method's compliances; the bound is then the patch's as the
     controller applies it (the sag left in it) and ``bound_compensated`` the bound of
-    targets compensated offline with the identified compliances.
+    targets compensated offline with the identified compliances, and the drift is the one
+    the residual narrows (:func:`drift_posterior`).
     """
+    if compliance is not None:
+        src = replace(src, drift_left_mm_per_s=drift_posterior(J, compliance, src))
     if step is None:
         M = least_squares_map(J)
         noise = covariance(J, src.sigma_mm**2)[0]
@@ -248,7 +259,7 @@ def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, Er
     long_zero = -src.zero_bias_mm / 2 * M.sum(axis=1)  # a zero read long: every length short
     b_scale = M @ src.lengths_mm
     b_sag = M @ src.sag_mm / 2
-    drift, thermal = _drift(M, src)
+    drift, drift_bias, thermal = _drift(M, src)
     if src.measured_scale:
         scale = ErrorModel(src.scale_std**2 * np.outer(b_scale, b_scale), zero, none)
     else:
@@ -256,7 +267,7 @@ def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, Er
     return {
         "noise": ErrorModel(noise + np.outer(b_zero, b_zero), long_zero, long_zero[None, :]),
         "scale": scale,
-        "drift": ErrorModel(drift, zero, none, thermal[None, :]),
+        "drift": ErrorModel(drift, drift_bias, none, thermal[None, :]),
         "exit": ErrorModel(np.zeros((m, m)), M @ src.exit_mm, none),
         "sag": ErrorModel(np.zeros((m, m)), b_sag, b_sag[None, :]),
     }
@@ -293,10 +304,12 @@ def _with_compliance(
         total.mean_mm,
         total.max_mm,
         (*notes[:2], COMPLIANCE_NOTE, *notes[3:])
-        + ((f"{POSTERIOR_NOTE}: {said} µrad/(N·m)",) if posterior else ()),
+        + ((f"{POSTERIOR_NOTE}: {said} µrad/(N·m)",) if posterior else ())
+        + _drift_note(src),
         bound_mm(Jx, replace(extended, bias=extended.bias + left)),
         bound_mm(Jx, extended),
         posterior,
+        src.drift_left_mm_per_s,
     )
 
 
@@ -380,6 +393,17 @@ def _estimator(J: np.ndarray, wire: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return (cov @ (full / norms).T)[m:] / norms[m:, None], identified[m:]
 
 
+def _drift_note(src: Sources) -> tuple[str, ...]:
+    """Return the note of the drift the residual narrowed (:func:`drift_posterior`), if any."""
+    if src.drift_left_mm_per_s is None or src.drift is None:
+        return ()
+    mean, sd = (3.6e6 * v for v in src.drift_left_mm_per_s)  # mm/s -> µm/h
+    return (
+        f"drift: left in the lengths {mean:+.0f} ± {sd:.0f} µm/h as the zero readings "
+        f"(± {src.drift.std_mm_per_h * 1000:.0f}) and the points' residual tell it together",
+    )
+
+
 def _notes(src: Sources) -> tuple[str, ...]:
     """Return what the budget's terms were taken from."""
     notes = [
@@ -399,22 +423,58 @@ def _notes(src: Sources) -> tuple[str, ...]:
     return tuple(notes)
 
 
-def _drift(M: np.ndarray, src: Sources) -> tuple[np.ndarray, np.ndarray]:
-    """Return the zero drift's parameter covariance and the temperature's parameter error.
+def _drift(M: np.ndarray, src: Sources) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the zero drift's parameter covariance and bias, and the temperature's error.
 
-    The drift is random (its fit's σ, and the fitted rate when it was left in); the
+    The drift left in the lengths, b·(t − t_ref) moving the parameters by b·M·(t − t_ref):
+    its posterior N(mean, σ²) when the residual was read for it (:func:`drift_posterior`);
+    else from the zero readings' fit alone, random: its σ, and the fitted rate b̂ when it
+    was left in (the second moment b̂² + σ² of the flat prior's posterior N(b̂, σ²)). The
     temperature's scale change is a bounded error of unknown sign: its edge, α·ΔT over the
     assumed rise (zero for an untimed log).
     """
     m = M.shape[0]
-    cov, edge = np.zeros((m, m)), np.zeros(m)
+    cov, bias, edge = np.zeros((m, m)), np.zeros(m), np.zeros(m)
     if src.t_s is None:
-        return cov, edge
-    if src.drift is not None:
-        g = M @ (src.t_s - src.t_zero_ref_s)
+        return cov, bias, edge
+    g = M @ (src.t_s - src.t_zero_ref_s)
+    if src.drift_left_mm_per_s is not None:
+        mean, sd = src.drift_left_mm_per_s
+        cov, bias = sd**2 * np.outer(g, g), mean * g
+    elif src.drift is not None:
         left = 0.0 if src.drift.removed else src.drift.rate_mm_per_s**2
         cov += (src.drift.std_mm_per_s**2 + left) * np.outer(g, g)
     if src.run_s > 0:
         rate = src.thermal_ppm_per_k * PPM * ASSUMED_TEMPERATURE_RISE_K / src.run_s
         edge = rate * (M @ (src.lengths_mm * (src.t_s - src.t_scale_ref_s)))
-    return cov, edge
+    return cov, bias, edge
+
+
+def drift_posterior(J: np.ndarray, c: ComplianceTerms, src: Sources) -> tuple[float, float] | None:
+    """Return the posterior (mean, σ; mm/s) of the zero drift left in the lengths.
+
+    Two independent readings of it. The zero readings' fit
+    (:func:`~wirecal.solver.scale.fit_drift`): N(b̂, σ_b²) when the drift was left in,
+    N(0, σ_b²) once b̂ was removed (b − b̂ remains). And the joint fit's residual
+    ``c.residual_mm``: what of b·(t − t_ref) the geometry ``J`` (N, m) and the
+    unidentified compliances ``c.wire`` cannot take up stays in it, read by w, the
+    drift's row of [J, J_u, t − t_ref]⁺ (:func:`_estimator`), as −w·r; every other budget
+    term moves that reading through w as it moves the geometry through M
+    (:func:`_term_errors`): their known biases are taken off it, the rest is its variance
+    (as :func:`compliance_likelihood` reads the compliances). With a flat prior the
+    posterior is the two Gaussians' product. None for an untimed log or without a drift
+    fit; the zeros' alone where the points do not tell the drift from the parameters.
+    """
+    d = src.drift
+    if src.t_s is None or d is None:
+        return None
+    prior_mean, prior_var = (0.0 if d.removed else d.rate_mm_per_s), d.std_mm_per_s**2
+    w, seen = _estimator(np.hstack([J, c.wire]), (src.t_s - src.t_zero_ref_s)[:, None])
+    if not seen[0]:
+        return prior_mean, d.std_mm_per_s
+    others = replace(src, drift=None)  # every term but the drift itself
+    said = joined(list(_term_errors(w, src.sigma_mm**2 * w @ w.T, others).values()))
+    var = float(said.second_moment()[0, 0] - said.bias[0] ** 2)
+    read = float(-w[0] @ c.residual_mm - said.bias[0])
+    precision = 1.0 / prior_var + 1.0 / var
+    return (prior_mean / prior_var + read / var) / precision, precision**-0.5

@@ -244,8 +244,10 @@ def solve(
     (:mod:`wirecal.solver.scale`) unless ``corrections`` is False (the controller solver's
     view of the log: the file's scale, no drift removed); both are estimated either way.
     The joint estimate's σ and correlations include the scale's uncertainty (the
-    reference's σ, or the tolerance without one). ``refine_scale`` refines the scale
-    jointly with the parameters instead (:func:`~wirecal.solver.identify.joint` with a
+    reference's σ, or the tolerance without one) and, with the robot file's
+    ``compliances``, the zero drift left in the lengths (:func:`_with_drift_sigma`).
+    ``refine_scale`` refines the scale jointly with the parameters instead
+    (:func:`~wirecal.solver.identify.joint` with a
     :class:`~wirecal.solver.identify.ScalePrior`): the wire lengths tell the scale only
     through the lengths held at nominal (the tool point), so it leans on those being exact.
     """
@@ -268,6 +270,7 @@ def solve(
         _error_sources, robot, plan, m, sigma, problem.d, scale, scale_std, drift
     )
     budgets = _budgets(robot, problem, psi, step, sigma, src, len(names), comp, estimates)
+    estimates = _with_drift_sigma(estimates, budgets, problem, m)
     return SolveResult(
         robot,
         plan,
@@ -444,7 +447,7 @@ def _joint_with_scale(
         prior = ScalePrior(scale.std, sigma / scale.std)
         x = problem.errors.to_internal(jt.values)
         return joint(problem, x, loss="soft_l1" if robust else "linear", scale=prior)
-    return _with_scale_sigma(jt, problem, scale_std)
+    return _with_length_error(jt, problem, scale_std, problem.d)  # ε moves it by ε·J⁺·d
 
 
 def _error_sources(
@@ -475,13 +478,36 @@ def _error_sources(
     )
 
 
-def _with_scale_sigma(est: Estimate, problem: Problem, scale_std: float) -> Estimate:
-    """Return the joint estimate with the scale's σ added to its covariance.
+def _with_drift_sigma(
+    estimates: dict[str, Estimate], budgets: dict[str, Budget], problem: Problem, m: Measurements
+) -> dict[str, Estimate]:
+    """Return the estimates, the joint one's covariance carrying the drift left in the lengths.
 
-    A scale error ε moves the estimate by ε·J⁺·d (:mod:`wirecal.solver.budget`): the
-    covariance gains scale_std²·(J⁺d)(J⁺d)ᵀ, in boundary units.
+    A drift b left in them moves the estimate by b·J⁺·(t − t_ref)
+    (:mod:`wirecal.solver.budget`); with the joint budget's posterior N(mean, σ²) of b
+    (:func:`~wirecal.solver.budget.drift_posterior`, the robot file's ``compliances`` only)
+    the covariance gains its second moment, (mean² + σ²)·(J⁺(t − t_ref))(J⁺(t − t_ref))ᵀ.
     """
-    if est.std is None or est.correlation is None or scale_std == 0:
+    joint_budget = budgets.get("joint")
+    if joint_budget is None or joint_budget.drift_left_mm_per_s is None:
+        return estimates
+    assert m.t_s is not None  # a drift was read: the log is timed
+    assert m.reference_t_s is not None
+    rms = math.hypot(*joint_budget.drift_left_mm_per_s)
+    pattern = m.t_s[m.present] - m.reference_t_s
+    return {**estimates, "joint": _with_length_error(estimates["joint"], problem, rms, pattern)}
+
+
+def _with_length_error(
+    est: Estimate, problem: Problem, rms: float, pattern: np.ndarray
+) -> Estimate:
+    """Return the estimate with a random error of the lengths added to its covariance.
+
+    The lengths' error is a coefficient of RMS ``rms`` times ``pattern`` (N,): it moves the
+    estimate by that coefficient times J⁺·pattern, so the covariance gains
+    rms²·(J⁺·pattern)(J⁺·pattern)ᵀ, in boundary units.
+    """
+    if est.std is None or est.correlation is None or rms == 0:
         return est
     _, J = wire_jacobian(
         problem.at(problem.errors.to_internal(est.values)),
@@ -489,10 +515,10 @@ def _with_scale_sigma(est: Estimate, problem: Problem, scale_std: float) -> Esti
         problem.q0,
         problem.names,
     )
-    b = problem.errors.to_boundary(least_squares_map(J) @ problem.d)
+    b = problem.errors.to_boundary(least_squares_map(J) @ pattern)
     finite = np.isfinite(est.std)
     sd = np.where(finite, est.std, 0.0)
-    cov = np.nan_to_num(est.correlation) * np.outer(sd, sd) + scale_std**2 * np.outer(b, b)
+    cov = np.nan_to_num(est.correlation) * np.outer(sd, sd) + rms**2 * np.outer(b, b)
     std = np.sqrt(np.diag(cov))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(std, std)
