@@ -3,7 +3,9 @@ the quick test loop and the whole suite, each timed as a whole process against t
 command run on the code before, in one run.
 
 Each tree's test loops run as its own README gives them (:func:`readme_tests`), so the code
-before runs its whole suite in one process and the code now on pytest-xdist's workers.
+before runs its whole suite in one process and the code now on pytest-xdist's workers, with
+the BLAS thread settings of the bench's shell (the commands timed set one thread, as
+``wirecal`` does).
 CPU time (user + system of the child and its children, which the machine's load touches far
 less than the wall time; the demo's second process and pytest-xdist's workers included) and
 wall time, median of
@@ -29,7 +31,12 @@ import sys
 import tempfile
 from pathlib import Path
 
-from bench_startup import medians_s
+THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+SHELL_THREADS = {var: os.environ.get(var) for var in THREADS}
+"""The BLAS thread settings of the shell the bench started in (:func:`_pytest`), read before
+``wirecal.cli.main`` (which bench_startup imports) sets them."""
+
+from bench_startup import medians_s  # noqa: E402 - after reading the shell's settings
 
 NOW = Path(__file__).resolve().parents[1]
 ARMS = ("viper_s650", "ur5e", "abb_irb120", "puma560")
@@ -58,8 +65,13 @@ def readme_tests(tree: Path) -> dict[str, list[str]]:
 
 
 def _pytest(tree: Path, args: list[str]) -> list[str]:
-    """Return the command running ``pytest ARGS`` on the tests of ``tree``."""
-    run = ["env", f"PYTHONPATH={tree}", sys.executable, "-P", "-m", "pytest", *args]
+    """Return the command running ``pytest ARGS`` on the tests of ``tree``.
+
+    With the BLAS thread settings of the bench's shell (none set: numpy's default), as the
+    README's command runs there; the commands the bench times set theirs as ``wirecal`` does.
+    """
+    unset = [arg for var, value in SHELL_THREADS.items() if value is None for arg in ("-u", var)]
+    run = ["env", *unset, f"PYTHONPATH={tree}", sys.executable, "-P", "-m", "pytest", *args]
     return [*run, "-p", "no:cacheprovider", "--rootdir", str(tree), str(tree / "tests")]
 
 
@@ -109,8 +121,8 @@ def main() -> None:
     ap.add_argument("--test-runs", type=int, default=1, help="runs of each test loop")
     args = ap.parse_args()
     trees = {"before": args.before.resolve(), "now": NOW}
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(var, "1")  # as the command line sets them
+    for var in THREADS:
+        os.environ.setdefault(var, "1")  # as the command line sets them (not the test loops)
     os.environ.pop("PYTHONDONTWRITEBYTECODE", None)  # the children cache bytecode, as CI's
     print(f"load average at the start: {os.getloadavg()[0]:.1f}")
     with tempfile.TemporaryDirectory() as tmp:

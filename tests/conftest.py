@@ -2,6 +2,11 @@
 
 Importing :mod:`tests.hypothesis_profiles` selects the Hypothesis profile (``ci`` under
 ``CI=true``, or the one ``HYPOTHESIS_PROFILE`` names).
+
+:mod:`wirecal.cli.main` is imported before anything imports numpy, so the tests run as the
+``wirecal`` command does: one BLAS thread (numpy's default starts a thread per core, which
+spin and cost CPU beside the tests' small matrices) and the command's garbage-collector
+thresholds, also for the commands the tests run in-process.
 """
 
 from __future__ import annotations
@@ -10,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+import wirecal.cli.main  # noqa: F401  (first: one BLAS thread, its GC thresholds; docstring)
 from wirecal.formats.plan_file import load_plan
 from wirecal.formats.robot_file import load_robot
 

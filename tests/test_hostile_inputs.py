@@ -1492,6 +1492,8 @@ def test_nc09_an_error_a_ctrl_c_caused_ends_as_the_ctrl_c():
 
     code = (
         "import os, signal\n"
+        # a terminal's Ctrl-C, also where pytest runs as a background job (SIGINT ignored)
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "from wirecal.cli.interrupt import stop_cleanly\n"
         "with stop_cleanly():\n"
         "    try:\n"

@@ -19,9 +19,14 @@ from wirecal.formats.plan_file import load_plan
 from wirecal.formats.robot_file import load_robot
 from wirecal.formats.simulated_log import simulate_log
 from wirecal.gen.rapid.program import MODULE_FILE, module_text
+from wirecal.lang.rapid.module import signal_name
+from wirecal.lang.rapid.parser import parse_module
 from wirecal.solver.log.measurements import check_log
 from wirecal.solver.solve import solve
 from wirecal.twin.rapid.adapter import ADAPTER
+from wirecal.twin.rapid.controller import IrcController
+from wirecal.twin.rapid.interp import load_module
+from wirecal.twin.rapid.solver_run import LOAD, load_routine
 from wirecal.twin.world import Faults, World
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -128,6 +133,22 @@ def test_slip_stops_the_run(irb, programs, tmp_path):
     )
     assert not run.complete
     assert "jumped" in run.log.read_text(encoding="ascii")
+
+
+def test_the_twins_routine_parsed_apart_is_the_joined_module_parsed(
+    irb, programs, measured, tmp_path
+):
+    """wc_solve's run parses the module and the twin's routine apart: the same module, at
+    the same line numbers, as the routine written before ENDMODULE and the text parsed."""
+    robot, plan = irb
+    text = programs[MODULE_FILE]
+    routine = load_routine(plan, read_log(measured[1].log).readings)
+    end = text.rindex("ENDMODULE")
+    joined = parse_module(text[:end] + routine + text[end:])
+    controller = IrcController(World(robot, {}, plan.theta0_deg, tmp_path), signal_name(robot))
+    apart = load_module(text, MODULE_FILE, controller, appended=routine)
+    assert apart.module == joined
+    assert apart.module.routines[-1].name == LOAD
 
 
 def _agreement(robot, plan, programs, folder: Path, seed: int) -> float:

@@ -99,9 +99,22 @@ def _case(robot, plan, text, seed, tmp_path):
     return run, {n: abs(run.offsets[n] - v) for n, v in ref.items()}
 
 
+@pytest.fixture(scope="module")
+def case(ur5, run_text, tmp_path_factory):
+    """:func:`_case` of a seed, run once a module (two tests read seed 1's run)."""
+    runs: dict[int, tuple] = {}
+
+    def run(seed: int) -> tuple:
+        if seed not in runs:
+            runs[seed] = _case(*ur5, run_text, seed, tmp_path_factory.mktemp(f"seed{seed}"))
+        return runs[seed]
+
+    return run
+
+
 @pytest.mark.parametrize("seed", [0, 1])
-def test_agrees_with_the_reference(ur5, run_text, tmp_path, seed):
-    _, diff = _case(*ur5, run_text, seed, tmp_path)
+def test_agrees_with_the_reference(case, seed):
+    _, diff = case(seed)
     assert max(diff.values()) <= AGREEMENT
 
 
@@ -112,11 +125,11 @@ def test_agrees_with_the_reference_more_truths(ur5, run_text, tmp_path, seed):
     assert max(diff.values()) <= AGREEMENT
 
 
-def test_operations_and_pacing(ur5, run_text, tmp_path):
+def test_operations_and_pacing(ur5, case):
     """One sqrt per point and iteration (50 points x 5); only + - * / and sqrt; sync()
     after every joint of every forward kinematics keeps < 400 operations between two."""
-    robot, plan = ur5
-    run, _ = _case(robot, plan, run_text, 1, tmp_path)
+    _, plan = ur5
+    run, _ = case(1)
     ops = run.operations
     assert set(ops) == {"add", "mul", "div", "sqrt"}
     assert ops["sqrt"] == plan.n_points * 5

@@ -37,7 +37,7 @@ import math
 import operator
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from wirecal.lang.rapid import nodes as N
@@ -333,10 +333,18 @@ def _calls(stmts: list[N.Stmt]) -> list[N.Call]:
     return out
 
 
-def load_module(text: str, source: str, controller: RapidController) -> Interpreter:
-    """Check a module and ready it to run; WirecalError lists the checker's problems."""
+def load_module(
+    text: str, source: str, controller: RapidController, *, appended: str = ""
+) -> Interpreter:
+    """Check a module and ready it to run; WirecalError lists the checker's problems.
+
+    ``appended``: routines to run as if written before the module's ENDMODULE (the
+    twin's own, :mod:`~wirecal.twin.rapid.solver_run`), parsed apart from the module.
+    """
     try:
         module = parse_module(text)  # kept for its several runs (wc_mount, wc_run)
+        if appended:
+            module = _with_appended(module, text, appended)
     except SyntaxProblem as e:
         raise WirecalError([f"{source}:{e.line}: {e.message}"]) from None
     checker = Checker(module, subset=True)
@@ -346,6 +354,25 @@ def load_module(text: str, source: str, controller: RapidController) -> Interpre
     if problems:
         raise WirecalError(problems)
     return Interpreter(module, checker, controller)
+
+
+def _with_appended(module: N.Module, text: str, appended: str) -> N.Module:
+    """Return ``module`` (the parse of ``text``) with the routines of ``appended`` added.
+
+    The module's own parse is the one kept for ``text`` (the generator's check and the
+    twin's runs parse that text too); ``appended`` is parsed alone, on the lines it has in
+    ``text`` with it inserted before ENDMODULE, so every line number is the joined text's.
+    """
+    before = text[: text.rindex("ENDMODULE")]
+    alone = parse_module(
+        f"MODULE {module.name}\n" + "\n" * (before.count("\n") - 1) + appended + "ENDMODULE\n"
+    )
+    return replace(
+        module,
+        data=[*module.data, *alone.data],
+        routines=[*module.routines, *alone.routines],
+        unsupported=[*module.unsupported, *alone.unsupported],
+    )
 
 
 def run_module(text: str, source: str, controller: RapidController, entry: str = "main") -> Outcome:

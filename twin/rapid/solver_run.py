@@ -39,11 +39,9 @@ def controller_solve(
     The points in plan order, as wc_run writes them; the twin's FlexPendant lines are the
     run's console.
     """
-    end = text.rindex("ENDMODULE")
-    module = text[:end] + load_routine(plan, readings) + text[end:]
     folder.mkdir(parents=True, exist_ok=True)
     controller = IrcController(World(robot, {}, plan.theta0_deg, folder), signal_name(robot))
-    interp = load_module(module, MODULE_FILE, controller)
+    interp = load_module(text, MODULE_FILE, controller, appended=load_routine(plan, readings))
     outcome = interp.execute(LOAD)
     if outcome.status != "completed":
         raise WirecalError(

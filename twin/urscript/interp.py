@@ -453,16 +453,18 @@ _COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "%": "div"}
 
 def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Callable:
     """Compile ``a op b``, counting the operations as executed (module docstring)."""
-    kind, divides = _COUNTED[op], op in "/%"
+    kind, divides, ops = _COUNTED[op], op in "/%", interp.ops
     int_op, float_op = _INT_OPS.get(op), _FLOAT_OPS[op]
 
     def f(frame):
         x, y = a(frame), b(frame)
-        if type(x) is not float:  # a float is a number: the check only for the others
-            x = number(x, op)
-        if type(y) is not float:
-            y = number(y, op)
-        interp.ops[kind] += 1
+        if type(x) is float and type(y) is float:  # the usual case: two numbers, no int
+            ops[kind] += 1
+            if divides and y == 0:
+                raise URError("division by zero")
+            return f32(float_op(x, y))
+        x, y = number(x, op), number(y, op)
+        ops[kind] += 1
         if divides and y == 0:
             raise URError("division by zero")
         if int_op is not None and isinstance(x, int) and isinstance(y, int):
