@@ -39,10 +39,13 @@ def move_samples(
     return np.repeat(a, count, axis=0) + t[:, None] * np.repeat(b - a, count, axis=0), first
 
 
-CHUNK_SAMPLES = 4096
+CHUNK_SAMPLES = 1536
 """Configurations evaluated per batch along moves: the batch's arrays (a few capsules ×
 this many configurations) stay in the processor's cache, which makes a sweep about 1.5
-times faster than batches of 16,384 (and far faster than one batch of millions)."""
+times faster than batches of 16,384 (and far faster than one batch of millions); the
+capsule pairs' arrays (3 × 11 pairs × this many, 0.4 MB each) fit a 2 MB cache beside
+the others, which makes the planner's sweeps 10–14 % faster than batches of 4,096 (the
+same gaps: each configuration's is its own)."""
 
 
 def _kept(count: np.ndarray, every: int, rest: bool) -> np.ndarray:
