@@ -19,6 +19,7 @@ from wirecal.solver.kinematics import tool_position
 from wirecal.solver.plan.candidates import Screened
 from wirecal.solver.plan.design import _unidentifiable
 from wirecal.solver.plan.joint import _Candidates
+from wirecal.solver.plan.moves import move_clearance, reach_and_move_ok
 from wirecal.solver.plan.options import PlanOptions
 from wirecal.solver.plan.steps import POOL_SIZE, isolating_each, most_informative, step_by_step
 from wirecal.solver.plan.tour import visit_floor_s, visit_s
@@ -161,3 +162,37 @@ def test_isolating_every_parameter_at_once_is_the_rule_per_pair(seed, m):
             if t != j:
                 want &= np.abs(psi[:, col[t]]) <= np.maximum(opt.tol * np.abs(pj), PSI_FLOOR)
         assert np.array_equal(got[k], want & (np.abs(pj) >= 0.05)), j
+
+
+@pytest.mark.parametrize("step_deg", [2.0, 10.0])
+def test_legs_swept_together_give_each_legs_answer_alone(viper, step_deg):
+    """``reach_and_move_ok`` sweeps the moves from θ0, the second legs from the via
+    points and the moves a → b in one call, with quick passes and a leg's block sparing
+    its path's other legs: the answers of every leg swept alone over all its samples."""
+    rng = np.random.default_rng(7)
+    opt = PlanOptions()
+    lo, hi = viper.limits_deg(opt.margin_deg)
+    model = viper.nominal
+    p0 = tool_position(model, np.radians(THETA0)[None])[0]
+    near = lambda n, sd: np.clip(THETA0 + rng.normal(0.0, sd, (n, 6)), lo, hi)  # noqa: E731
+    q = near(120, 40.0)
+    via = np.where(rng.random(120)[:, None] < 0.5, np.nan, near(120, 20.0))
+    a, b = near(30, 40.0), near(30, 40.0)
+    longest = viper.encoder.range_mm - opt.range_margin_mm
+
+    def alone(x, y):  # one leg: joint 6 within 180°, every sample clear
+        gap = [
+            move_clearance(viper, model, p0, x[k], y[k], step_deg, 1, longest)
+            for k in range(len(x))
+        ]
+        return (np.abs(y[:, -1] - x[:, -1]) <= 180) & (np.concatenate(gap) >= opt.clearance_mm)
+
+    direct = np.isnan(via[:, 0])
+    t0 = np.broadcast_to(THETA0, q.shape)
+    want = np.where(direct, alone(t0, q), alone(t0, np.where(direct[:, None], q, via)))
+    want[~direct] &= alone(via[~direct], q[~direct])
+    reached, clear = reach_and_move_ok(viper, model, p0, THETA0, q, via, a, b, opt, step_deg)
+    assert np.array_equal(reached, want)
+    assert np.array_equal(clear, alone(a, b))
+    for answers in (reached[direct], reached[~direct], clear):  # not all one answer
+        assert 0 < answers.sum() < len(answers)

@@ -98,14 +98,18 @@ def tour(
     )
     leg = times[: n * n].reshape(n, n)
     to_first, on, back = times[n * n :].reshape(3, n)
-    start = to_first + np.where(has_via, on, 0.0)
     bad = 1e4
     last_bad = np.where(has_via & (n > 1), bad, 0.0) + np.where(home, 0.0, bad)
+    # Python floats in lists (the same sums in the same order): the 2-opt below sums
+    # thousands of short paths
+    start = (to_first + np.where(has_via, on, 0.0)).tolist()
+    back_, last_ = back.tolist(), last_bad.tolist()
+    legs = (leg + bad * (~clear | has_via[None, :])).tolist()
 
     def total(path):
-        t = start[path[0]] + back[path[-1]] + last_bad[path[-1]]
+        t = start[path[0]] + back_[path[-1]] + last_[path[-1]]
         for x, y in itertools.pairwise(path):
-            t += leg[x, y] + bad * (not clear[x, y] or has_via[y])
+            t += legs[x][y]
         return t
 
     path = _shortest_path(n, total)
