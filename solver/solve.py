@@ -238,18 +238,15 @@ def solve(
 ) -> SolveResult:
     """Identify the plan's parameters from checked measurements.
 
-    Refuses an incomplete log unless ``partial``; then parameters whose step has no
-    points stay at nominal and are listed in ``left_nominal``. The lengths are scaled by
-    the reference rows' scale and a significant zero drift is removed
-    (:mod:`wirecal.solver.scale`) unless ``corrections`` is False (the controller solver's
-    view of the log: the file's scale, no drift removed); both are estimated either way.
-    The joint estimate's σ and correlations include the scale's uncertainty (the
-    reference's σ, or the tolerance without one) and, with the robot file's
-    ``compliances``, the zero drift left in the lengths (:func:`_with_drift_sigma`).
-    ``refine_scale`` refines the scale jointly with the parameters instead
-    (:func:`~wirecal.solver.identify.joint` with a
-    :class:`~wirecal.solver.identify.ScalePrior`): the wire lengths tell the scale only
-    through the lengths held at nominal (the tool point), so it leans on those being exact.
+    Refuses an incomplete log unless ``partial`` (then parameters whose step has no points
+    stay at nominal, listed in ``left_nominal``). The lengths are scaled by the reference
+    rows' scale and a significant zero drift is removed (:mod:`wirecal.solver.scale`) unless
+    ``corrections`` is False (the controller solver's view: the file's scale, no drift
+    removed); both are estimated either way. The joint σ and correlations include the
+    scale's uncertainty and, with ``compliances``, the drift left in the lengths
+    (:func:`_with_drift_sigma`). ``refine_scale`` refines the scale jointly instead
+    (:class:`~wirecal.solver.identify.ScalePrior`): the lengths tell the scale only through
+    the lengths held at nominal (the tool point), so it leans on those being exact.
     """
     left, names, step = _measured_steps(plan, m, partial)
     factor, notes = _reference_scale(robot, m)
