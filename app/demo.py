@@ -15,9 +15,10 @@ Viper s650, the default), the paper's two procedures run before and after calibr
 believing the patch after), the one before calibration in a second process beside the
 rest. Otherwise the measurement programs run again over new points (unmodelled errors on)
 and their wire lengths are compared with those the nominal and the calibrated model predict.
-The controller solver's runs and the report's figures of the identification go to a third
-process, beside the validation after calibration, and the validations' histograms to a
-worker too (:func:`_workers`): the demo's own process never imports matplotlib.
+The controller solver's runs go to a third process, beside the validation after
+calibration; the report's figures (the identification's, the validations' histograms) to a
+drawing process forked before the generation, which imports matplotlib meanwhile on the
+other core (:func:`_workers`): the demo's own process never imports matplotlib.
 
 Every output goes to one folder and none is overwritten unless asked.
 """
@@ -188,12 +189,14 @@ def run_demo(
     # the names known before the programs are generated: refused before any work
     Outputs([folder / n for n in ch.outputs({})], force=force, folder=folder).check()
     step = _Steps(progress)
-    t = step(f"generating the {ch.reg.language.title} programs")
-    programs = ch.reg.generator.programs(ch.robot, ch.plan, ch.request)
-    step.seconds["generate"] = time.perf_counter() - t
-    names = ch.outputs(programs)
-    with Outputs([folder / n for n in names], force=force, folder=folder) as out:
-        r = _run(out, folder, ch, programs, seed, scale, step)
+    with _workers(DRAWERS) as drawer:
+        drawer.submit(_yielding, _nice(), ready_to_draw)  # on the other core, while generating
+        t = step(f"generating the {ch.reg.language.title} programs")
+        programs = ch.reg.generator.programs(ch.robot, ch.plan, ch.request)
+        step.seconds["generate"] = time.perf_counter() - t
+        names = ch.outputs(programs)
+        with Outputs([folder / n for n in names], force=force, folder=folder) as out:
+            r = _run(out, folder, ch, programs, seed, scale, step, drawer)
     r.outputs, r.wall_s = names, time.perf_counter() - wall
     return r
 
@@ -222,13 +225,17 @@ def _run(
     seed: int,
     scale: float,
     step: _Steps,
+    drawer: ProcessPoolExecutor,
 ) -> DemoResult:
-    """Do the demo's work (module docstring); every output goes into ``out``."""
+    """Do the demo's work (module docstring); every output goes into ``out``.
+
+    ``drawer``: the worker that draws the report's figures (matplotlib imported already).
+    """
     robot, plan, reg, seconds = ch.robot, ch.plan, ch.reg, step.seconds
     truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
     encoder = _true_encoder(reg, robot, seed)
     options = {"seed": seed, **({} if encoder is None else {"encoder_truth": encoder})}
-    with tempfile.TemporaryDirectory() as tmp, _workers() as pool:
+    with tempfile.TemporaryDirectory() as tmp, _workers(WORKERS) as pool:
         disk = Path(tmp)
         before = _start_before(pool, ch, truth, programs, disk / "before", seed)
         beside = "" if before is None else ", the validation before calibration in a second process"
@@ -240,12 +247,15 @@ def _run(
         identified = result.estimates[result.recommended].as_dict()
         seconds["solve"] = time.perf_counter() - t
         t = step("the controller solver's result and the report's figures, in another process")
-        controller, figures = _submit_controller(pool, result, log_text, ch, programs, disk)
+        controller = pool.submit(
+            _yielding, _nice(), _controller, result, log_text, ch, programs, disk / "ctl"
+        )
+        figures = drawer.submit(_yielding, _nice(), result_figures, result)
         t = step("validation before and after calibration, with unmodelled errors")
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before
         )
-        drawn = pool.submit(histograms, validations)
+        drawn = drawer.submit(histograms, validations)
         if before is not None:
             seconds["validate before"] = before.result().seconds
         seconds["validate"] = time.perf_counter() - t
@@ -273,23 +283,6 @@ def _run(
         bound_mm=_bound(result),
         encoder_scale_ppm=None if encoder is None else encoder.scale_ppm,
     )
-
-
-def _submit_controller(
-    pool: Any, result: Any, log_text: str, ch: Chain, programs: dict[str, str], disk: Path
-) -> tuple[Any, Any]:
-    """Start the controller solver's run and the report's figures in the demo's workers.
-
-    Both yield to the main process (niced); the other worker is readied for the
-    validation's histograms. Returns the two futures.
-    """
-    nice = os.nice(0) if hasattr(os, "nice") else None
-    controller = pool.submit(
-        _yielding, nice, _controller, result, log_text, ch, programs, disk / "ctl"
-    )
-    figures = pool.submit(_yielding, nice, result_figures, result)
-    pool.submit(_yielding, nice, ready_to_draw)  # the other worker, for the histograms
-    return controller, figures
 
 
 def _measure(
@@ -346,10 +339,9 @@ def _validations(
     if before is None:
         return [_distance_validation(out, folder, ch, truth, disk, identified, seed)]
     key = ch.reg.language.key
-    logs = {
-        "before": before.result(),
-        "after": _paper_logs(key, ch, truth, programs, disk / "after", identified, 2, seed),
-    }
+    # after calibration first, here, while the run before calibration ends in its process
+    after = _paper_logs(key, ch, truth, programs, disk / "after", identified, 2, seed)
+    logs = {"before": before.result(), "after": after}
     for name, path in zip(PAPER_LOGS, (p for k in logs for p in logs[k][:2]), strict=True):
         out.put(folder / name, path.read_text(encoding="ascii"))
     return _paper_validations(logs, ch.robot.encoder.counter)
@@ -402,22 +394,32 @@ def _yielding(parent_nice: int | None, work: Callable[..., T], *args: Any) -> T:
     return work(*args)
 
 
+def _nice() -> int | None:
+    """Return the demo's own nice value (None where the platform has none)."""
+    return os.nice(0) if hasattr(os, "nice") else None
+
+
 WORKERS = 2
-"""The demo's worker processes: the validation before calibration in one; the controller
-solver's runs, then the report's figures of the identification in the other."""
+"""The demo's twin workers, forked once the programs are generated (and parsed): the
+validation before calibration in one, the controller solver's runs in the other."""
+
+DRAWERS = 1
+"""The demo's drawing worker, forked before the programs are generated: it imports
+matplotlib on the other core while the demo generates, then draws the report's figures."""
 
 
 @contextmanager
-def _workers() -> Iterator[ProcessPoolExecutor]:
-    """:data:`WORKERS` worker processes, forked where the platform forks safely.
+def _workers(count: int) -> Iterator[ProcessPoolExecutor]:
+    """``count`` worker processes, forked where the platform forks safely.
 
-    A forked worker inherits every import and the module the generator parsed and checked
-    (the parser keeps the last few); elsewhere it starts afresh. When the demo stops
-    (Ctrl-C, an error), the workers are ended at once instead of finishing their runs.
+    A forked worker inherits every import and, forked after the generation, the module
+    the generator parsed and checked (the parser keeps the last few); elsewhere it starts
+    afresh. When the demo stops (Ctrl-C, an error), the workers are ended at once instead
+    of finishing their runs.
     """
     fork = sys.platform.startswith("linux") and "fork" in mp.get_all_start_methods()
     context = mp.get_context("fork" if fork else None)
-    pool = ProcessPoolExecutor(max_workers=WORKERS, mp_context=context)
+    pool = ProcessPoolExecutor(max_workers=count, mp_context=context)
     try:
         yield pool
     except BaseException:
