@@ -110,7 +110,7 @@ def unloaded(masses: MassModel | None) -> MassModel | None:
     return masses if masses is None or masses.load_kg is None else replace(masses, load_kg=None)
 
 
-def _cross3(a: tuple, b: tuple) -> tuple[float, float, float]:
+def cross3(a: tuple, b: tuple) -> tuple[float, float, float]:
     """Return a × b of two 3-tuples: numpy's cross's products and differences, in its order."""
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
@@ -136,16 +136,16 @@ def gravity_torques_floats(
     tau = [0.0] * n
     for k in range(n - 1, -1, -1):  # the reverse cumulative sums, from the last link
         xk, zk, ok, (c0, c1, c2) = x[k + 1], z[k + 1], o[k + 1], com[k]
-        yk = _cross3(zk, xk)
+        yk = cross3(zk, xk)
         r = tuple(ok[i] + (xk[i] * c0 + zk[i] * c2 + yk[i] * c1) for i in range(3))
         F = tuple(mass[k] * w for w in weight)
-        moment = _cross3(r, F)
+        moment = cross3(r, F)
         if k == n - 1:
             S1, S0 = moment, F
         else:
             S1 = tuple(S1[i] + moment[i] for i in range(3))
             S0 = tuple(S0[i] + F[i] for i in range(3))
-        arm = _cross3(ok, S0)
+        arm = cross3(ok, S0)
         M = tuple(S1[i] - arm[i] for i in range(3))
         tau[k] = (zk[0] * M[0] + zk[2] * M[2] + zk[1] * M[1]) / 1000.0
     return tau

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wirecal.solver.gravity import cross3
 from wirecal.solver.ik import ur as ik_ur
 from wirecal.solver.kinematics import Model, flange_jacobian, frames, one_chain, table_property
 from wirecal.solver.robot import Robot
@@ -114,8 +115,8 @@ def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
             q123 = np.array([phi1, phi2, phi3]) - off[:3]
             chain = one_chain(Model(dh, model.tool_point), np.concatenate((q123, np.zeros(3))))
             assert chain is not None  # a rigid model's one configuration
-            X3, Z3 = np.array(chain[0][3][0]), np.array(chain[0][3][1])
-            R3 = np.column_stack([X3, np.cross(Z3, X3), Z3])
+            X3, Z3 = chain[0][3][0], chain[0][3][1]
+            R3 = np.column_stack([X3, cross3(Z3, X3), Z3])
             M = _rot_x(alpha[3]).T @ R3.T @ R
             h = np.hypot(M[0, 2], M[1, 2])
             for wrist in (1, -1):
@@ -260,7 +261,7 @@ def solve(
             continue
         q = (q + np.pi) % (2 * np.pi) - np.pi
         q, inside = _into_limits(q, lo_deg, hi_deg)
-        if any(_same(q, s.q, SAME_RAD) for s in solutions):
+        if _same_as_any(q, [s.q for s in solutions], SAME_RAD):
             continue
         solutions.append(Solution(q, configuration(model, q), inside))
     return solutions
@@ -289,18 +290,26 @@ def _same(q1, q2, atol_rad):
     return bool(np.all(np.abs(_wrapped(q1 - q2)) <= atol_rad))
 
 
+def _same_as_any(q, others: list[np.ndarray], atol_rad) -> bool:
+    """Whether ``q`` is the same solution as any of ``others`` (:func:`_same`, at once)."""
+    if not others:
+        return False
+    return bool(np.any(np.all(np.abs(_wrapped(q - np.array(others))) <= atol_rad, axis=1)))
+
+
 def _wrapped(x):
     return (x + np.pi) % (2 * np.pi) - np.pi
 
 
 def _into_limits(q, lo_deg, hi_deg):
     lo, hi = np.radians(lo_deg), np.radians(hi_deg)
-    q = q.copy()
-    for j in range(len(q)):
+    into = q.tolist()  # floats: the same sums and comparisons as the array's elements
+    for j, (qj, lo_j, hi_j) in enumerate(zip(into, lo.tolist(), hi.tolist(), strict=True)):
         for turn in (0.0, 2 * np.pi, -2 * np.pi):
-            if lo[j] <= q[j] + turn <= hi[j]:
-                q[j] += turn
+            if lo_j <= qj + turn <= hi_j:
+                into[j] = qj + turn
                 break
+    q = np.array(into)
     return q, bool(np.all((q >= lo - 1e-12) & (q <= hi + 1e-12)))
 
 
