@@ -286,7 +286,7 @@ class World:
         if hit is not None:
             return Collision(f"{self._move_name(q)}: {hit}")
         start = np.asarray(self.joints, dtype=float)
-        end = start if float(np.max(np.abs(q - start))) < IN_PLACE_DEG else q
+        end = start if float(np.abs(q - start).max()) < IN_PLACE_DEG else q
         move = self._profile(start, end) if self.wire_limits else None
         over = None if move is None else self._wire_overspeed(move, speed_pct, ramp_s)
         if over is not None:

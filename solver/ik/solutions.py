@@ -203,10 +203,10 @@ def _polish(model, q, R, o, iterations=60, accept=CONVERGED, done=CONVERGED):
     """Newton from ``q``: stop once no pose error exceeds ``done``; ok if within ``accept``."""
     for _ in range(iterations):
         e, jacobian = _newton_terms(model, q, R, o)  # one evaluation of the chain per step
-        if np.max(np.abs(e)) < done:
+        if np.abs(e).max() < done:  # the method: numpy's same reduction, less overhead
             return q, True
         step = np.linalg.lstsq(jacobian(), e, rcond=None)[0]
-        q = q + step * min(1.0, MAX_STEP_RAD / max(np.max(np.abs(step)), 1e-300))
+        q = q + step * min(1.0, MAX_STEP_RAD / max(np.abs(step).max(), 1e-300))
     return q, np.max(np.abs(_pose_error(model, q, R, o))) < accept
 
 
@@ -321,8 +321,8 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     if chain is None:
         f = frames(model, np.atleast_2d(q))
         x, z, o = f.x[0], f.z[0], f.o[0]
-    else:  # the same numbers as arrays of frames' (Python floats: cheaper for one)
-        x, z, o = (np.array(v) for v in zip(*chain[0], strict=True))
+    else:  # the same numbers as frames' arrays, of the frames used (cheaper for one)
+        x, z, o = (np.array([k[axis] for k in chain[0][:5]]) for axis in range(3))
     o2, o3 = o[2], o[3]
     centre = o[4]
     z1 = z[1]
