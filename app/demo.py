@@ -16,9 +16,9 @@ believing the patch after), the one before calibration in a second process besid
 rest. Otherwise the measurement programs run again over new points (unmodelled errors on)
 and their wire lengths are compared with those the nominal and the calibrated model predict.
 The controller solver's runs go to a third process, beside the validation after
-calibration; the report's figures (the identification's, the validations' histograms) to a
-drawing process forked before the generation, which imports matplotlib meanwhile on the
-other core (:func:`_workers`): the demo's own process never imports matplotlib.
+calibration; the report's figures (the identification's, the validations' histograms) to
+two drawing processes forked before the generation, which import matplotlib meanwhile on
+the other core (:func:`_workers`): the demo's own process never imports matplotlib.
 
 Every output goes to one folder and none is overwritten unless asked.
 """
@@ -46,7 +46,7 @@ from wirecal.app.gate import gate
 from wirecal.app.languages import Registered, registered
 from wirecal.app.report import (
     Validation,
-    histograms,
+    histogram_figure,
     ready_to_draw,
     render_report,
     result_figures,
@@ -190,7 +190,8 @@ def run_demo(
     Outputs([folder / n for n in ch.outputs({})], force=force, folder=folder).check()
     step = _Steps(progress)
     with _workers(DRAWERS) as drawer:
-        drawer.submit(_yielding, _nice(), ready_to_draw)  # on the other core, while generating
+        for _ in range(DRAWERS):  # on the other core, while generating
+            drawer.submit(_yielding, _nice(), ready_to_draw)
         t = step(f"generating the {ch.reg.language.title} programs")
         programs = ch.reg.generator.programs(ch.robot, ch.plan, ch.request)
         step.seconds["generate"] = time.perf_counter() - t
@@ -255,7 +256,7 @@ def _run(
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before
         )
-        drawn = drawer.submit(histograms, validations)
+        drawn = [drawer.submit(histogram_figure, v) for v in validations]  # side by side
         if before is not None:
             seconds["validate before"] = before.result().seconds
         seconds["validate"] = time.perf_counter() - t
@@ -267,7 +268,7 @@ def _run(
     _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, ch.log_name)
     seconds["patch"] = time.perf_counter() - t
     t = step("report")
-    figures_ = {"figures": figures.result(), "drawn": drawn.result()}
+    figures_ = {"figures": figures.result(), "drawn": [d.result() for d in drawn]}
     html = render_report(result, validations, comparison, truth, verdict.patch_field(), **figures_)
     out.put(folder / "report.html", html)
     seconds["report"] = time.perf_counter() - t
@@ -403,9 +404,11 @@ WORKERS = 2
 """The demo's twin workers, forked once the programs are generated (and parsed): the
 validation before calibration in one, the controller solver's runs in the other."""
 
-DRAWERS = 1
-"""The demo's drawing worker, forked before the programs are generated: it imports
-matplotlib on the other core while the demo generates, then draws the report's figures."""
+DRAWERS = 2
+"""The demo's drawing workers, forked before the programs are generated: they import
+matplotlib on the other core while the demo generates, then draw the report's figures —
+the identification's, then the two validations' histograms side by side (the report
+waits for them last)."""
 
 
 @contextmanager
