@@ -182,9 +182,18 @@ def _newton_terms(model, q, R, o) -> tuple[np.ndarray, Callable[[], np.ndarray]]
         return _pose_error(model, q, R, o, f), lambda: flange_jacobian(model, q, f)
     stored, axes = chain
     Rq = np.array(axes).T.copy()  # columns X, Y, Z, laid out as frames' R_last
-    E = R @ Rq.T
-    rotvec = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
-    e = np.concatenate((o - np.array(stored[-1][2]), rotvec * 1000.0))
+    E = (R @ Rq.T).tolist()  # then on floats: the arrays' element-wise operations
+    (o0, o1, o2), (f0, f1, f2) = np.asarray(o).tolist(), stored[-1][2]
+    e = np.array(
+        [
+            o0 - f0,
+            o1 - f1,
+            o2 - f2,
+            0.5 * (E[2][1] - E[1][2]) * 1000.0,
+            0.5 * (E[0][2] - E[2][0]) * 1000.0,
+            0.5 * (E[1][0] - E[0][1]) * 1000.0,
+        ]
+    )
     return e, lambda: _flange_jacobian_floats(stored)
 
 
