@@ -25,6 +25,7 @@ Every output goes to one folder and none is overwritten unless asked.
 
 from __future__ import annotations
 
+import gc
 import multiprocessing as mp
 import os
 import sys
@@ -189,17 +190,44 @@ def run_demo(
     # the names known before the programs are generated: refused before any work
     Outputs([folder / n for n in ch.outputs({})], force=force, folder=folder).check()
     step = _Steps(progress)
-    with _workers(DRAWERS) as drawer:
+    with _fewer_collections(), _workers(DRAWERS) as drawer:
         for _ in range(DRAWERS):  # on the other core, while generating
             drawer.submit(_yielding, _nice(), ready_to_draw)
         t = step(f"generating the {ch.reg.language.title} programs")
         programs = ch.reg.generator.programs(ch.robot, ch.plan, ch.request)
         step.seconds["generate"] = time.perf_counter() - t
+        gc.freeze()  # the parsed module and the parser's lines too, before the twin's workers fork
         names = ch.outputs(programs)
         with Outputs([folder / n for n in names], force=force, folder=folder) as out:
             r = _run(out, folder, ch, programs, seed, scale, step, drawer)
     r.outputs, r.wall_s = names, time.perf_counter() - wall
     return r
+
+
+GC_THRESHOLDS = (10_000, 50, 1_000)
+"""The cyclic garbage collector's thresholds during the demo (Python's: 700, 10, 10). The
+twin's runs allocate millions of short-lived objects; with Python's thresholds the
+collector ran about 150 times per paper validation, a full collection of every object
+among them (0.1 s each). Young cycles are still collected, every 10,000 allocations."""
+
+
+@contextmanager
+def _fewer_collections() -> Iterator[None]:
+    """Collect cyclic garbage less often during the demo, never the objects it started with.
+
+    The objects alive at the start (and those frozen later: :func:`gc.freeze`) are left
+    out of every collection, in the demo's process and its forked workers (whose copies
+    of them then stay shared with the demo's: a collection writes to every object it
+    visits); :data:`GC_THRESHOLDS` meanwhile. Both undone at the end.
+    """
+    thresholds = gc.get_threshold()
+    gc.freeze()
+    gc.set_threshold(*GC_THRESHOLDS)
+    try:
+        yield
+    finally:
+        gc.set_threshold(*thresholds)
+        gc.unfreeze()
 
 
 class _Steps:
