@@ -296,8 +296,15 @@ def _run(
     _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, ch.log_name)
     seconds["patch"] = time.perf_counter() - t
     t = step("report")
-    figures_ = {"figures": figures.result(), "drawn": [d.result() for d in drawn]}
-    html = render_report(result, validations, comparison, truth, verdict.patch_field(), **figures_)
+    html = render_report(
+        result,
+        validations,
+        comparison,
+        truth,
+        verdict.patch_field(),
+        figures=figures.result(),
+        drawn=[d.result() for d in drawn],
+    )
     out.put(folder / "report.html", html)
     seconds["report"] = time.perf_counter() - t
     return DemoResult(
