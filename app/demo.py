@@ -256,10 +256,7 @@ def _run(
     step: _Steps,
     drawer: ProcessPoolExecutor,
 ) -> DemoResult:
-    """Do the demo's work (module docstring); every output goes into ``out``.
-
-    ``drawer``: the worker that draws the report's figures (matplotlib imported already).
-    """
+    """Do the demo's work (module docstring) into ``out``; ``drawer``: the drawing workers."""
     robot, plan, reg, seconds = ch.robot, ch.plan, ch.reg, step.seconds
     truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
     encoder = _true_encoder(reg, robot, seed)
@@ -276,10 +273,7 @@ def _run(
         identified = result.estimates[result.recommended].as_dict()
         seconds["solve"] = time.perf_counter() - t
         t = step("the controller solver's result and the report's figures, in another process")
-        controller = pool.submit(
-            _yielding, _nice(), _controller, result, log_text, ch, programs, disk / "ctl"
-        )
-        figures = drawer.submit(_yielding, _nice(), result_figures, result)
+        controller, figures = _submit_controller(pool, drawer, result, log_text, ch, programs, disk)
         t = step("validation before and after calibration, with unmodelled errors")
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before
@@ -296,15 +290,8 @@ def _run(
     _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, ch.log_name)
     seconds["patch"] = time.perf_counter() - t
     t = step("report")
-    html = render_report(
-        result,
-        validations,
-        comparison,
-        truth,
-        verdict.patch_field(),
-        figures=figures.result(),
-        drawn=[d.result() for d in drawn],
-    )
+    drawings: dict[str, Any] = {"figures": figures.result(), "drawn": [d.result() for d in drawn]}
+    html = render_report(result, validations, comparison, truth, verdict.patch_field(), **drawings)
     out.put(folder / "report.html", html)
     seconds["report"] = time.perf_counter() - t
     return DemoResult(
@@ -319,6 +306,27 @@ def _run(
         bound_mm=_bound(result),
         encoder_scale_ppm=None if encoder is None else encoder.scale_ppm,
     )
+
+
+def _submit_controller(
+    pool: ProcessPoolExecutor,
+    drawer: ProcessPoolExecutor,
+    result: SolveResult,
+    log_text: str,
+    ch: Chain,
+    programs: dict[str, str],
+    disk: Path,
+) -> tuple[Future, Future]:
+    """Start the controller solver's runs (a twin worker) and the identification's figures.
+
+    The figures in a drawing worker; both yield to the demo's process (niced). Returns
+    the two futures.
+    """
+    nice = _nice()
+    controller = pool.submit(
+        _yielding, nice, _controller, result, log_text, ch, programs, disk / "ctl"
+    )
+    return controller, drawer.submit(_yielding, nice, result_figures, result)
 
 
 def _measure(
