@@ -15,15 +15,17 @@ Viper s650, the default), the paper's two procedures run before and after calibr
 believing the patch after), the one before calibration in a second process beside the
 rest. Otherwise the measurement programs run again over new points (unmodelled errors on)
 and their wire lengths are compared with those the nominal and the calibrated model predict.
-The controller solver's runs and the report's figures of the identification go to a third
-process, beside the validation after calibration, and the validations' histograms to a
-worker too (:func:`_workers`): the demo's own process never imports matplotlib.
+The controller solver's runs go to a third process, beside the validation after
+calibration; the report's figures (the identification's, the validations' histograms) to
+two drawing processes forked before the generation, which import matplotlib meanwhile on
+the other core (:func:`_workers`): the demo's own process never imports matplotlib.
 
 Every output goes to one folder and none is overwritten unless asked.
 """
 
 from __future__ import annotations
 
+import gc
 import multiprocessing as mp
 import os
 import sys
@@ -45,7 +47,7 @@ from wirecal.app.gate import gate
 from wirecal.app.languages import Registered, registered
 from wirecal.app.report import (
     Validation,
-    histograms,
+    histogram_figure,
     ready_to_draw,
     render_report,
     result_figures,
@@ -188,14 +190,44 @@ def run_demo(
     # the names known before the programs are generated: refused before any work
     Outputs([folder / n for n in ch.outputs({})], force=force, folder=folder).check()
     step = _Steps(progress)
-    t = step(f"generating the {ch.reg.language.title} programs")
-    programs = ch.reg.generator.programs(ch.robot, ch.plan, ch.request)
-    step.seconds["generate"] = time.perf_counter() - t
-    names = ch.outputs(programs)
-    with Outputs([folder / n for n in names], force=force, folder=folder) as out:
-        r = _run(out, folder, ch, programs, seed, scale, step)
+    with _fewer_collections(), _workers(DRAWERS) as drawer:
+        for _ in range(DRAWERS):  # on the other core, while generating
+            drawer.submit(_yielding, _nice(), ready_to_draw)
+        t = step(f"generating the {ch.reg.language.title} programs")
+        programs = ch.reg.generator.programs(ch.robot, ch.plan, ch.request)
+        step.seconds["generate"] = time.perf_counter() - t
+        gc.freeze()  # the parsed module and the parser's lines too, before the twin's workers fork
+        names = ch.outputs(programs)
+        with Outputs([folder / n for n in names], force=force, folder=folder) as out:
+            r = _run(out, folder, ch, programs, seed, scale, step, drawer)
     r.outputs, r.wall_s = names, time.perf_counter() - wall
     return r
+
+
+GC_THRESHOLDS = (10_000, 50, 1_000)
+"""The cyclic garbage collector's thresholds during the demo (Python's: 700, 10, 10). The
+twin's runs allocate millions of short-lived objects; with Python's thresholds the
+collector ran about 150 times per paper validation, a full collection of every object
+among them (0.1 s each). Young cycles are still collected, every 10,000 allocations."""
+
+
+@contextmanager
+def _fewer_collections() -> Iterator[None]:
+    """Collect cyclic garbage less often during the demo, never the objects it started with.
+
+    The objects alive at the start (and those frozen later: :func:`gc.freeze`) are left
+    out of every collection, in the demo's process and its forked workers (whose copies
+    of them then stay shared with the demo's: a collection writes to every object it
+    visits); :data:`GC_THRESHOLDS` meanwhile. Both undone at the end.
+    """
+    thresholds = gc.get_threshold()
+    gc.freeze()
+    gc.set_threshold(*GC_THRESHOLDS)
+    try:
+        yield
+    finally:
+        gc.set_threshold(*thresholds)
+        gc.unfreeze()
 
 
 class _Steps:
@@ -222,13 +254,14 @@ def _run(
     seed: int,
     scale: float,
     step: _Steps,
+    drawer: ProcessPoolExecutor,
 ) -> DemoResult:
-    """Do the demo's work (module docstring); every output goes into ``out``."""
+    """Do the demo's work (module docstring) into ``out``; ``drawer``: the drawing workers."""
     robot, plan, reg, seconds = ch.robot, ch.plan, ch.reg, step.seconds
     truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
     encoder = _true_encoder(reg, robot, seed)
     options = {"seed": seed, **({} if encoder is None else {"encoder_truth": encoder})}
-    with tempfile.TemporaryDirectory() as tmp, _workers() as pool:
+    with tempfile.TemporaryDirectory() as tmp, _workers(WORKERS) as pool:
         disk = Path(tmp)
         before = _start_before(pool, ch, truth, programs, disk / "before", seed)
         beside = "" if before is None else ", the validation before calibration in a second process"
@@ -240,12 +273,12 @@ def _run(
         identified = result.estimates[result.recommended].as_dict()
         seconds["solve"] = time.perf_counter() - t
         t = step("the controller solver's result and the report's figures, in another process")
-        controller, figures = _submit_controller(pool, result, log_text, ch, programs, disk)
+        controller, figures = _submit_controller(pool, drawer, result, log_text, ch, programs, disk)
         t = step("validation before and after calibration, with unmodelled errors")
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before
         )
-        drawn = pool.submit(histograms, validations)
+        drawn = [drawer.submit(histogram_figure, v) for v in validations]  # side by side
         if before is not None:
             seconds["validate before"] = before.result().seconds
         seconds["validate"] = time.perf_counter() - t
@@ -257,8 +290,8 @@ def _run(
     _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, ch.log_name)
     seconds["patch"] = time.perf_counter() - t
     t = step("report")
-    figures_ = {"figures": figures.result(), "drawn": drawn.result()}
-    html = render_report(result, validations, comparison, truth, verdict.patch_field(), **figures_)
+    drawings: dict[str, Any] = {"figures": figures.result(), "drawn": [d.result() for d in drawn]}
+    html = render_report(result, validations, comparison, truth, verdict.patch_field(), **drawings)
     out.put(folder / "report.html", html)
     seconds["report"] = time.perf_counter() - t
     return DemoResult(
@@ -276,20 +309,24 @@ def _run(
 
 
 def _submit_controller(
-    pool: Any, result: Any, log_text: str, ch: Chain, programs: dict[str, str], disk: Path
-) -> tuple[Any, Any]:
-    """Start the controller solver's run and the report's figures in the demo's workers.
+    pool: ProcessPoolExecutor,
+    drawer: ProcessPoolExecutor,
+    result: SolveResult,
+    log_text: str,
+    ch: Chain,
+    programs: dict[str, str],
+    disk: Path,
+) -> tuple[Future, Future]:
+    """Start the controller solver's runs (a twin worker) and the identification's figures.
 
-    Both yield to the main process (niced); the other worker is readied for the
-    validation's histograms. Returns the two futures.
+    The figures in a drawing worker; both yield to the demo's process (niced). Returns
+    the two futures.
     """
-    nice = os.nice(0) if hasattr(os, "nice") else None
+    nice = _nice()
     controller = pool.submit(
         _yielding, nice, _controller, result, log_text, ch, programs, disk / "ctl"
     )
-    figures = pool.submit(_yielding, nice, result_figures, result)
-    pool.submit(_yielding, nice, ready_to_draw)  # the other worker, for the histograms
-    return controller, figures
+    return controller, drawer.submit(_yielding, nice, result_figures, result)
 
 
 def _measure(
@@ -346,10 +383,9 @@ def _validations(
     if before is None:
         return [_distance_validation(out, folder, ch, truth, disk, identified, seed)]
     key = ch.reg.language.key
-    logs = {
-        "before": before.result(),
-        "after": _paper_logs(key, ch, truth, programs, disk / "after", identified, 2, seed),
-    }
+    # after calibration first, here, while the run before calibration ends in its process
+    after = _paper_logs(key, ch, truth, programs, disk / "after", identified, 2, seed)
+    logs = {"before": before.result(), "after": after}
     for name, path in zip(PAPER_LOGS, (p for k in logs for p in logs[k][:2]), strict=True):
         out.put(folder / name, path.read_text(encoding="ascii"))
     return _paper_validations(logs, ch.robot.encoder.counter)
@@ -402,22 +438,34 @@ def _yielding(parent_nice: int | None, work: Callable[..., T], *args: Any) -> T:
     return work(*args)
 
 
+def _nice() -> int | None:
+    """Return the demo's own nice value (None where the platform has none)."""
+    return os.nice(0) if hasattr(os, "nice") else None
+
+
 WORKERS = 2
-"""The demo's worker processes: the validation before calibration in one; the controller
-solver's runs, then the report's figures of the identification in the other."""
+"""The demo's twin workers, forked once the programs are generated (and parsed): the
+validation before calibration in one, the controller solver's runs in the other."""
+
+DRAWERS = 2
+"""The demo's drawing workers, forked before the programs are generated: they import
+matplotlib on the other core while the demo generates, then draw the report's figures —
+the identification's, then the two validations' histograms side by side (the report
+waits for them last)."""
 
 
 @contextmanager
-def _workers() -> Iterator[ProcessPoolExecutor]:
-    """:data:`WORKERS` worker processes, forked where the platform forks safely.
+def _workers(count: int) -> Iterator[ProcessPoolExecutor]:
+    """``count`` worker processes, forked where the platform forks safely.
 
-    A forked worker inherits every import and the module the generator parsed and checked
-    (the parser keeps the last few); elsewhere it starts afresh. When the demo stops
-    (Ctrl-C, an error), the workers are ended at once instead of finishing their runs.
+    A forked worker inherits every import and, forked after the generation, the module
+    the generator parsed and checked (the parser keeps the last few); elsewhere it starts
+    afresh. When the demo stops (Ctrl-C, an error), the workers are ended at once instead
+    of finishing their runs.
     """
     fork = sys.platform.startswith("linux") and "fork" in mp.get_all_start_methods()
     context = mp.get_context("fork" if fork else None)
-    pool = ProcessPoolExecutor(max_workers=WORKERS, mp_context=context)
+    pool = ProcessPoolExecutor(max_workers=count, mp_context=context)
     try:
         yield pool
     except BaseException:

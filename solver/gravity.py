@@ -21,6 +21,7 @@ origins, arrays (N, n+1, 3) of :class:`~wirecal.solver.kinematics.Frames`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -82,17 +83,22 @@ def default_masses(dh: np.ndarray) -> MassModel:
     return MassModel(mass, reach / 2.0, assumed=True, source="assumed: 10 kg/m of link")
 
 
+@lru_cache(maxsize=8)
 def wrist_weight(n_joints: int) -> MassModel:
     """Return a weight of 1 N at the wrist centre (frame 4's origin) and no other mass.
 
     The mass model of the robot file's ``gravity_sag_deg_per_m``: with it, c_2 = c_3 = the
     sag (deg/(N·m)) turns joints 2 and 3 by the sag per metre of lever arm from their axis
     to the wrist centre, in the direction gravity pulls
-    (:class:`~wirecal.solver.simulate.Unmodelled`).
+    (:class:`~wirecal.solver.simulate.Unmodelled`). One per number of joints, shared (the
+    twin's sag at every move asks for it): its arrays are read-only.
     """
     mass = np.zeros(n_joints)
     mass[3] = 1.0 / STANDARD_GRAVITY_M_S2  # link 4: the wrist, its centre at frame 4's origin
-    return MassModel(mass, np.zeros((n_joints, 3)), source="the assumed sag: 1 N at the wrist")
+    com = np.zeros((n_joints, 3))
+    for a in (mass, com):
+        a.setflags(write=False)
+    return MassModel(mass, com, source="the assumed sag: 1 N at the wrist")
 
 
 def with_load(masses: MassModel, load_kg: np.ndarray, com_mm: np.ndarray) -> MassModel:
@@ -110,7 +116,7 @@ def unloaded(masses: MassModel | None) -> MassModel | None:
     return masses if masses is None or masses.load_kg is None else replace(masses, load_kg=None)
 
 
-def _cross3(a: tuple, b: tuple) -> tuple[float, float, float]:
+def cross3(a: tuple, b: tuple) -> tuple[float, float, float]:
     """Return a × b of two 3-tuples: numpy's cross's products and differences, in its order."""
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
@@ -134,20 +140,25 @@ def gravity_torques_floats(
     S1: tuple[float, ...] = (0.0, 0.0, 0.0)
     S0: tuple[float, ...] = S1
     tau = [0.0] * n
+    w0, w1, w2 = weight
     for k in range(n - 1, -1, -1):  # the reverse cumulative sums, from the last link
         xk, zk, ok, (c0, c1, c2) = x[k + 1], z[k + 1], o[k + 1], com[k]
-        yk = _cross3(zk, xk)
-        r = tuple(ok[i] + (xk[i] * c0 + zk[i] * c2 + yk[i] * c1) for i in range(3))
-        F = tuple(mass[k] * w for w in weight)
-        moment = _cross3(r, F)
+        y0, y1, y2 = cross3(zk, xk)
+        r = (  # written out per component: a generator per sum costs more than the sum
+            ok[0] + (xk[0] * c0 + zk[0] * c2 + y0 * c1),
+            ok[1] + (xk[1] * c0 + zk[1] * c2 + y1 * c1),
+            ok[2] + (xk[2] * c0 + zk[2] * c2 + y2 * c1),
+        )
+        F = (mass[k] * w0, mass[k] * w1, mass[k] * w2)
+        moment = cross3(r, F)
         if k == n - 1:
             S1, S0 = moment, F
         else:
-            S1 = tuple(S1[i] + moment[i] for i in range(3))
-            S0 = tuple(S0[i] + F[i] for i in range(3))
-        arm = _cross3(ok, S0)
-        M = tuple(S1[i] - arm[i] for i in range(3))
-        tau[k] = (zk[0] * M[0] + zk[2] * M[2] + zk[1] * M[1]) / 1000.0
+            S1 = (S1[0] + moment[0], S1[1] + moment[1], S1[2] + moment[2])
+            S0 = (S0[0] + F[0], S0[1] + F[1], S0[2] + F[2])
+        a0, a1, a2 = cross3(ok, S0)
+        M0, M1, M2 = S1[0] - a0, S1[1] - a1, S1[2] - a2
+        tau[k] = (zk[0] * M0 + zk[2] * M2 + zk[1] * M1) / 1000.0
     return tau
 
 

@@ -187,10 +187,8 @@ def _joint_terms(model: Model, q: np.ndarray) -> tuple[Iterator[tuple], tuple, V
     dh = model.dh
     N = q.shape[0]
     if dh.ndim == 2 and N == 1:
-        *table, offset = _table_floats(np.asarray(dh, float).tobytes(), dh.shape[0])
-        th = q[0] + offset
-        one = (*table, np.cos(th).tolist(), np.sin(th).tolist())
-        return zip(*one, strict=True), _BASE_AXES, (0.0, 0.0, 0.0)
+        terms = _one_terms(np.asarray(dh, float).tobytes(), dh.shape[0], q[0])
+        return terms, _BASE_AXES, (0.0, 0.0, 0.0)
     th = np.ascontiguousarray((q + dh[..., 2]).T)  # (n, N): a row per joint
     ca, sa, ct, st = np.cos(dh[..., 0]), np.sin(dh[..., 0]), np.cos(th), np.sin(th)
     a, d = dh[..., 1], dh[..., 3]
@@ -201,6 +199,13 @@ def _joint_terms(model: Model, q: np.ndarray) -> tuple[Iterator[tuple], tuple, V
     axes = np.zeros((3, 3, N))
     axes[0, 0] = axes[1, 1] = axes[2, 2] = 1.0
     return zip(*cols, strict=True), tuple(axes), np.zeros((3, N))
+
+
+def _one_terms(raw: bytes, n: int, q: np.ndarray) -> Iterator[tuple]:
+    """Per joint (cos α, sin α, a, d, cos θ, sin θ), floats: the table ``raw``, joints ``q``."""
+    *table, offset = _table_floats(raw, n)
+    th = q + offset
+    return zip(*table, np.cos(th).tolist(), np.sin(th).tolist(), strict=True)
 
 
 def _turn(c, s, U: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -330,7 +335,19 @@ def one_chain(model: Model, q: np.ndarray) -> tuple[list[tuple], tuple] | None:
     q = np.asarray(q, dtype=float)
     if bends(model) or np.ndim(model.dh) != 2 or q.shape != (model.n_joints,):
         return None
-    return _recurrence(model, q[None])
+    return _kept_chain(np.asarray(model.dh, float).tobytes(), q.tobytes())
+
+
+@lru_cache(maxsize=4)
+def _kept_chain(raw_dh: bytes, raw_q: bytes) -> tuple[list[tuple], tuple]:
+    """:func:`one_chain` of a table and joints given by their bytes; the last few kept.
+
+    The controller's inverse kinematics asks for a configuration's chain again and again
+    (its names, then a Newton step from it; the step's result, then its names). The
+    callers only read what it returns.
+    """
+    q = np.frombuffer(raw_q)
+    return _recurrence_floats(_one_terms(raw_dh, q.size, q))
 
 
 def tool_position(model: Model, q: np.ndarray, f: Frames | None = None) -> np.ndarray:

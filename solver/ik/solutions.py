@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wirecal.solver.gravity import cross3
 from wirecal.solver.ik import ur as ik_ur
 from wirecal.solver.kinematics import Model, flange_jacobian, frames, one_chain, table_property
 from wirecal.solver.robot import Robot
@@ -114,8 +115,8 @@ def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
             q123 = np.array([phi1, phi2, phi3]) - off[:3]
             chain = one_chain(Model(dh, model.tool_point), np.concatenate((q123, np.zeros(3))))
             assert chain is not None  # a rigid model's one configuration
-            X3, Z3 = np.array(chain[0][3][0]), np.array(chain[0][3][1])
-            R3 = np.column_stack([X3, np.cross(Z3, X3), Z3])
+            X3, Z3 = chain[0][3][0], chain[0][3][1]
+            R3 = np.column_stack([X3, cross3(Z3, X3), Z3])
             M = _rot_x(alpha[3]).T @ R3.T @ R
             h = np.hypot(M[0, 2], M[1, 2])
             for wrist in (1, -1):
@@ -181,9 +182,18 @@ def _newton_terms(model, q, R, o) -> tuple[np.ndarray, Callable[[], np.ndarray]]
         return _pose_error(model, q, R, o, f), lambda: flange_jacobian(model, q, f)
     stored, axes = chain
     Rq = np.array(axes).T.copy()  # columns X, Y, Z, laid out as frames' R_last
-    E = R @ Rq.T
-    rotvec = 0.5 * np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
-    e = np.concatenate((o - np.array(stored[-1][2]), rotvec * 1000.0))
+    E = (R @ Rq.T).tolist()  # then on floats: the arrays' element-wise operations
+    (o0, o1, o2), (f0, f1, f2) = np.asarray(o).tolist(), stored[-1][2]
+    e = np.array(
+        [
+            o0 - f0,
+            o1 - f1,
+            o2 - f2,
+            0.5 * (E[2][1] - E[1][2]) * 1000.0,
+            0.5 * (E[0][2] - E[2][0]) * 1000.0,
+            0.5 * (E[1][0] - E[0][1]) * 1000.0,
+        ]
+    )
     return e, lambda: _flange_jacobian_floats(stored)
 
 
@@ -202,10 +212,10 @@ def _polish(model, q, R, o, iterations=60, accept=CONVERGED, done=CONVERGED):
     """Newton from ``q``: stop once no pose error exceeds ``done``; ok if within ``accept``."""
     for _ in range(iterations):
         e, jacobian = _newton_terms(model, q, R, o)  # one evaluation of the chain per step
-        if np.max(np.abs(e)) < done:
+        if np.abs(e).max() < done:  # the method: numpy's same reduction, less overhead
             return q, True
         step = np.linalg.lstsq(jacobian(), e, rcond=None)[0]
-        q = q + step * min(1.0, MAX_STEP_RAD / max(np.max(np.abs(step)), 1e-300))
+        q = q + step * min(1.0, MAX_STEP_RAD / max(np.abs(step).max(), 1e-300))
     return q, np.max(np.abs(_pose_error(model, q, R, o))) < accept
 
 
@@ -260,7 +270,7 @@ def solve(
             continue
         q = (q + np.pi) % (2 * np.pi) - np.pi
         q, inside = _into_limits(q, lo_deg, hi_deg)
-        if any(_same(q, s.q, SAME_RAD) for s in solutions):
+        if _same_as_any(q, [s.q for s in solutions], SAME_RAD):
             continue
         solutions.append(Solution(q, configuration(model, q), inside))
     return solutions
@@ -289,18 +299,26 @@ def _same(q1, q2, atol_rad):
     return bool(np.all(np.abs(_wrapped(q1 - q2)) <= atol_rad))
 
 
+def _same_as_any(q, others: list[np.ndarray], atol_rad) -> bool:
+    """Whether ``q`` is the same solution as any of ``others`` (:func:`_same`, at once)."""
+    if not others:
+        return False
+    return bool(np.any(np.all(np.abs(_wrapped(q - np.array(others))) <= atol_rad, axis=1)))
+
+
 def _wrapped(x):
     return (x + np.pi) % (2 * np.pi) - np.pi
 
 
 def _into_limits(q, lo_deg, hi_deg):
     lo, hi = np.radians(lo_deg), np.radians(hi_deg)
-    q = q.copy()
-    for j in range(len(q)):
+    into = q.tolist()  # floats: the same sums and comparisons as the array's elements
+    for j, (qj, lo_j, hi_j) in enumerate(zip(into, lo.tolist(), hi.tolist(), strict=True)):
         for turn in (0.0, 2 * np.pi, -2 * np.pi):
-            if lo[j] <= q[j] + turn <= hi[j]:
-                q[j] += turn
+            if lo_j <= qj + turn <= hi_j:
+                into[j] = qj + turn
                 break
+    q = np.array(into)
     return q, bool(np.all((q >= lo - 1e-12) & (q <= hi + 1e-12)))
 
 
@@ -312,8 +330,8 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     if chain is None:
         f = frames(model, np.atleast_2d(q))
         x, z, o = f.x[0], f.z[0], f.o[0]
-    else:  # the same numbers as arrays of frames' (Python floats: cheaper for one)
-        x, z, o = (np.array(v) for v in zip(*chain[0], strict=True))
+    else:  # the same numbers as frames' arrays, of the frames used (cheaper for one)
+        x, z, o = (np.array([k[axis] for k in chain[0][:5]]) for axis in range(3))
     o2, o3 = o[2], o[3]
     centre = o[4]
     z1 = z[1]

@@ -159,42 +159,74 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
     ex, ey = np.array([np.cos(yaw), np.sin(yaw), 0]), np.array([-np.sin(yaw), np.cos(yaw), 0])
     index = [(i + 1, j + 1) for j in range(ny) for i in range(nx)[:: 1 if j % 2 == 0 else -1]]
     points = np.array([setup.plate_origin_mm + u[i - 1] * ex + v[j - 1] * ey for i, j in index])
-    targets, problems = [], []
-    for (i, j), p in zip(index, points, strict=True):
-        flange = p + np.array([0, 0, setup.probe_mm[2] + setup.approach_mm])
-        t = (*flange, setup.plate_yaw_deg, 180.0, 0.0)
-        for depth in (0.0, setup.approach_mm + 5.0):
-            R, o = pose.matrix(*t)
-            o = o - np.array([0, 0, depth])
-            right = [
-                s
-                for s in ik.solve(robot, R, o, margin_deg=margin_deg)
-                if s.config == ("righty", "above", "noflip")
-            ]
-            ok = [s.q for s in right if s.within_limits]
-            gaps = robot.cell_gaps(np.degrees(ok), setup.encoder_mm) if ok else None
-            if gaps is not None and gaps.smallest()[0] < CARTESIAN_SLACK_MM:
-                problems.append(
-                    f"{setup.source}: plate: grid point ({i}, {j}) at "
-                    f"{np.round(p, 1).tolist()}: the arm would collide: {gaps.cause(0)}; "
-                    "move origin_mm or correct [cell] in the robot file"
-                )
-                break
-            if not ok:
-                where = f"{setup.source}: plate: grid point ({i}, {j}) at {np.round(p, 1).tolist()}"
-                problems.append(
-                    f"{where} {_beyond_limits(robot, right[0].q, margin_deg)}"
-                    if right
-                    else f"{where} is out of reach (righty, above, noflip, tool down); move "
-                    "origin_mm or shrink the plate"
-                )
-                break
-        targets.append(t)
+    above = np.array([0, 0, setup.probe_mm[2] + setup.approach_mm])
+    targets = [(*(p + above), setup.plate_yaw_deg, 180.0, 0.0) for p in points]
+    depths = (0.0, setup.approach_mm + 5.0)
+    solved = [[_down_solutions(robot, t, depth, margin_deg) for depth in depths] for t in targets]
+    ok: list[np.ndarray] = []
+    column = []  # per target and depth: the first solution within limits' place in ok, or None
+    for two in solved:
+        inside = [[s.q for s in right if s.within_limits] for right in two]
+        column.append(
+            [len(ok) + sum(map(len, inside[:d])) if q else None for d, q in enumerate(inside)]
+        )
+        ok += [q for qs in inside for q in qs]
+    # the arm's gaps to itself and the cell at every target and depth, in one evaluation
+    gaps = robot.cell_gaps(np.degrees(ok), setup.encoder_mm) if ok else None
+    problems = [
+        problem
+        for (i, j), p, two, cols in zip(index, points, solved, column, strict=True)
+        if (
+            problem := _grid_problem(
+                robot,
+                setup,
+                margin_deg,
+                gaps,
+                f"({i}, {j}) at {np.round(p, 1).tolist()}",
+                two,
+                cols,
+            )
+        )
+    ]
     if problems:
         raise WirecalError(
             problems[:5] + ([f"… and {len(problems) - 5} more"] if len(problems) > 5 else [])
         )
     return index, points, np.array(targets)
+
+
+def _grid_problem(robot, setup, margin_deg, gaps, point: str, two: list, columns: list) -> str:
+    """Return a grid point's first problem at its two depths ("" if none).
+
+    ``two``: its solutions at each depth; ``columns``: each depth's first solution within
+    limits, its column of ``gaps`` (None: none within limits).
+    """
+    where = f"{setup.source}: plate: grid point {point}"
+    for right, k in zip(two, columns, strict=True):
+        if k is not None and gaps is not None and gaps.smallest()[k] < CARTESIAN_SLACK_MM:
+            return (
+                f"{where}: the arm would collide: {gaps.cause(k)}; "
+                "move origin_mm or correct [cell] in the robot file"
+            )
+        if k is None:
+            return (
+                f"{where} {_beyond_limits(robot, right[0].q, margin_deg)}"
+                if right
+                else f"{where} is out of reach (righty, above, noflip, tool down); move "
+                "origin_mm or shrink the plate"
+            )
+    return ""
+
+
+def _down_solutions(robot: Robot, target: tuple, depth_mm: float, margin_deg: float) -> list:
+    """Return the solutions (righty, above, noflip) for the flange ``depth_mm`` below ``target``."""
+    R, o = pose.matrix(*target)
+    o = o - np.array([0, 0, depth_mm])
+    return [
+        s
+        for s in ik.solve(robot, R, o, margin_deg=margin_deg)
+        if s.config == ("righty", "above", "noflip")
+    ]
 
 
 def _beyond_limits(robot: Robot, q_rad: np.ndarray, margin_deg: float) -> str:
