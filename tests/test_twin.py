@@ -493,3 +493,20 @@ def test_drift_at_the_papers_speed_does_not_stop_the_run(viper, paper_plan, tmp_
     assert dr is not None
     assert dr.removed
     assert abs(dr.rate_mm_per_h - 1.0) < 3 * dr.std_mm_per_h
+
+
+@pytest.mark.parametrize(
+    ("body", "message"),
+    [
+        ("    a = 1.0E+20\n    b = a*a\n    TYPE b\n", "*Floating-point overflow* (-405)"),
+        ("    a = 1.0E+20\n    TYPE a*a\n", "*Floating-point overflow* (-405)"),
+    ],
+)
+def test_a_real_beyond_its_range_stops_the_program_by_name(
+    viper, paper_plan, tmp_path, body, message
+):
+    """A product beyond a REAL's range (1e40 > 3.4e38) is the overflow error of every other
+    REAL operation, whether stored or typed at once: never a traceback of the twin."""
+    _, out = run_program(viper, paper_plan, tmp_path, f".PROGRAM t.main()\n{body}.END\n")
+    assert out.status == "error"
+    assert out.message == message

@@ -23,11 +23,18 @@ class RunError(Exception):
 
 
 def f32(x: float) -> float:
-    """Round to IEEE single precision (a V+ REAL, a URScript float)."""
+    """Round to IEEE single precision (a V+ REAL, a URScript float).
+
+    A finite ``x`` beyond the single range is the overflow error: Python's ``struct``
+    packs it as infinity on some versions and raises on others.
+    """
     try:
-        return _UNPACK(_PACK(x))[0]
+        r = _UNPACK(_PACK(x))[0]
     except OverflowError:
         raise RunError(-405, "*Floating-point overflow*") from None
+    if r - r != 0.0 and x - x == 0.0:  # r infinite (or NaN) from a finite x
+        raise RunError(-405, "*Floating-point overflow*")
+    return r
 
 
 class Halt(Exception):

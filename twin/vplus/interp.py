@@ -964,9 +964,10 @@ def _single_arithmetic(ops: Counter, counter: str, combine: Callable, a: Callabl
         ops[counter] += 1
         v = combine(a(frame), b(frame))
         try:
-            return _UNPACK_F32(_PACK_F32(v))[0]
+            r = _UNPACK_F32(_PACK_F32(v))[0]
         except (OverflowError, struct.error):  # f32's overflow error; a string, or a fault
             return v if isinstance(v, str) else f32(v)
+        return r if r - r == 0.0 else f32(v)  # f32's error for a finite v packed infinite
 
     return f
 
@@ -1039,6 +1040,6 @@ def _text(v) -> str:
     """TYPE's text of a value: strings as they are, numbers in a short general format."""
     if isinstance(v, str):
         return v
-    if isinstance(v, float) and v == int(v) and abs(v) < 1e15:
+    if isinstance(v, float) and abs(v) < 1e15 and v == int(v):  # NaN, ±inf: the format
         return str(int(v))
     return f"{v:.7g}"
