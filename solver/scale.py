@@ -30,9 +30,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import gammainccinv
 
 from wirecal.solver.identifiability import covariance
+from wirecal.solver.verdict import chi2_quantile
 
 PPM = 1e-6
 
@@ -252,7 +252,7 @@ def fit_drift(t_s: np.ndarray, zero_mm: np.ndarray, sigma_reading_mm: float) -> 
     scatter = math.sqrt(float(r @ r) / (n - 2))
     sigma = max(scatter, sigma_reading_mm)
     std = sigma / math.sqrt(sxx)
-    chi2_limit = 2 * gammainccinv((n - 2) / 2, LINEARITY_FALSE_ALARM)  # χ²_(n−2)(1 − α)
+    chi2_limit = chi2_quantile(LINEARITY_FALSE_ALARM, n - 2)  # χ²_(n−2)(1 − α)
     linear = bool(scatter**2 * (n - 2) <= sigma_reading_mm**2 * chi2_limit)
     return Drift(b, std, t_mean, n, abs(b) > DRIFT_SIGNIFICANCE * std, linear)
 
