@@ -262,16 +262,22 @@ def test_why_a_theta0_gives_no_plan_is_worked_out_only_when_shown(monkeypatch, u
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("arm", ["viper_s650", "abb_irb120"])
-def test_the_theta0_a_full_search_keeps_is_among_those_finished(arm):
-    """Finishing all six first θ0s would keep one of the THETA0_FINISHED ranked first by
-    their steps' first points, so the shipped arms' plans are those of the full search."""
+@pytest.mark.parametrize(("arm", "seed"), [("viper_s650", 0), ("abb_irb120", 0), ("abb_irb120", 6)])
+def test_the_theta0_a_full_search_keeps_is_among_those_finished(arm, seed):
+    """Finishing all six first θ0s would keep one of those the search finishes: the
+    THETA0_FINISHED ranked first by their steps' first points and any within THETA0_CLOSE of
+    the first. The IRB 120 at seed 6 needs the second rule: its full search keeps the θ0
+    ranked fourth (a plan predicting 0.035 mm step-by-step; the two ranked first: 0.051)."""
     robot = load_robot(Path(__file__).parent.parent / "examples" / arm / "robot.toml")
-    opt = PlanOptions()
+    opt = PlanOptions(seed=seed)
     staged = [
         plan_design.design_steps(robot, t0, opt)
         for t0 in planner._theta0_draws(robot, opt)[:THETA0_TRIES]
     ]
     scores = [planner._score(plan_design.finish(s)) for s in staged]
     ranked = sorted(range(len(staged)), key=lambda k: staged[k].rank)
-    assert min(range(len(scores)), key=scores.__getitem__) in ranked[:THETA0_FINISHED]
+    first = staged[ranked[0]].rank
+    finished = ranked[:THETA0_FINISHED] + [
+        k for k in ranked[THETA0_FINISHED:] if planner._close(staged[k].rank, first)
+    ]
+    assert min(range(len(scores)), key=scores.__getitem__) in finished
