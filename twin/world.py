@@ -252,6 +252,14 @@ class World:
             self.mounted_kg = 0.0
         self._wire_at = None
 
+    def flange_load_kg(self) -> float:
+        """Return the load the flange truly carries (kg).
+
+        The true robot's tool (its ``[gravity] payload_mass_kg``) and the mass mounted.
+        """
+        masses = self.robot.masses
+        return self.mounted_kg + (0.0 if masses is None else masses.payload_mass_kg)
+
     def steady(self) -> bool:
         """At a pause: whether the operator continues (having steadied the arm)."""
         if self.proceed_on_pause:

@@ -80,8 +80,7 @@ class IrcController:
         stops the program.
         """
         world = self.world
-        masses = world.robot.masses
-        carried_kg = world.mounted_kg + (0.0 if masses is None else masses.payload_mass_kg)
+        carried_kg = world.flange_load_kg()
         payload_kg = 0.0 if self.load is None else self.load[0]
         if carried_kg > tool_kg + payload_kg + 1e-9:
             raise self._refuse(

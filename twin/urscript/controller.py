@@ -259,8 +259,7 @@ class URController:
         which then lead to protective stops" (the controller's own behaviour with too light
         a payload is not modelled: the twin stops, naming both masses).
         """
-        masses = self.world.robot.masses
-        carried_kg = self.world.mounted_kg + (0.0 if masses is None else masses.payload_mass_kg)
+        carried_kg = self.world.flange_load_kg()
         declared_kg = self._active_payload()[0]
         if carried_kg > declared_kg + PAYLOAD_TOL_KG:
             raise URError(
