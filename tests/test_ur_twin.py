@@ -19,7 +19,9 @@ from wirecal.gen.urscript.program import scripts
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.log.measurements import check_log
 from wirecal.solver.solve import solve
+from wirecal.twin.machine import Outcome
 from wirecal.twin.run_moves import move_of_step
+from wirecal.twin.urscript.runs import _why_stopped
 from wirecal.twin.world import Faults, World
 
 from .twin_runs import measure_ur_in_twin
@@ -240,3 +242,21 @@ def test_cli_simulate_controller_runs_the_urscript_programs(tmp_path):
     text = log.read_text()
     assert text.startswith("# wirecal-log 2\n# robot: Universal Robots UR5e\n")
     assert text.splitlines()[-1].startswith("zero,5,0,")  # the rows up to the stop
+
+
+def test_a_stopped_run_shows_the_programs_own_reason_before_the_receivers():
+    """The reason a run stopped is the program's: its error popup's text (a ``stopped``
+    outcome's message), or the last line it showed before a ``halt``; the receiver's
+    follows. When the programs completed, only the receiver knows why the log is short."""
+    mount = Outcome("completed", "wc_mount")
+    popup = Outcome("stopped", "wc_run", 24, "Cannot connect to the PC", ["[popup wirecal] …"])
+    halted = Outcome("halted", "wc_run", 25, "halt", ["x", "[popup wirecal] Cannot connect"])
+    done = Outcome("completed", "wc_run", 900)
+    got = "no sender presented the run token within 2 s (--timeout)"
+    assert _why_stopped(mount, popup, got) == (
+        f"wc_run stopped at line 24: Cannot connect to the PC (wirecal receive: {got})"
+    )
+    assert _why_stopped(mount, halted, "") == (
+        "wc_run halted at line 25: halt after: [popup wirecal] Cannot connect"
+    )
+    assert _why_stopped(mount, done, got) == got

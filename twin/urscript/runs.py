@@ -198,10 +198,25 @@ def _with_receiver(
     if "error" in box:
         raise box["error"]  # type: ignore[misc]
     got: Reception = box["received"]  # type: ignore[assignment]
-    stopped = None if got.complete else (got.stopped or stop_reason(mount, run))
+    stopped = None if got.complete else _why_stopped(mount, run, got.stopped)
     return TwinRun(
         got.log if got.complete else got.journal, got.complete, stopped, ctl.world, mount, run, ctl
     )
+
+
+def _why_stopped(mount: Outcome, run: Outcome | None, received: str) -> str:
+    """Return why an incomplete run stopped.
+
+    The program's own reason first (its error popup's text, or the last line it showed
+    before a ``halt``), then what the receiver saw.
+    """
+    own = stop_reason(mount, run)
+    if own is None:  # the programs completed: only the receiver knows what went wrong
+        return received
+    last = run or mount
+    if last.status == "halted" and last.console:
+        own += f" after: {last.console[-1]}"
+    return f"{own} (wirecal receive: {received})" if received else own
 
 
 def _closed_port() -> int:
