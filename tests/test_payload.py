@@ -280,11 +280,12 @@ def _solves_the_compliances(
 
 
 UR = GOLDEN.parents[1] / "payload_ur5e"
+UR_KG = 3.5  # the step's mass: 1.5 kg of the UR5e's rated 5 kg left for the tool
 
 
 @pytest.fixture(scope="module")
 def ur_robot():
-    """The UR5e asking c2, c3, with a 5 kg payload step (its rated payload)."""
+    """The UR5e asking c2, c3, with a 3.5 kg payload step (of its rated 5 kg)."""
     return _designed(UR)[0]
 
 
@@ -315,20 +316,20 @@ def test_the_urscript_run_asks_by_popup_and_tells_the_controller(ur_run_script, 
     n = len(ur_plan.steps)
     order = [
         f"z = wc_meas({n}, 0,",
-        'popup("Payload step: mount the 5 kg mass',
+        'popup("Payload step: mount the 3.5 kg mass',
         "wc_m0 = get_target_payload()",
         "wc_c0 = get_target_payload_cog()",
-        "wc_mt = wc_m0 + 5",
+        "wc_mt = wc_m0 + 3.5",
         "set_payload(wc_mt, [(wc_m0 * wc_c0[0] + 0) / wc_mt, (wc_m0 * wc_c0[1] + 0) / wc_mt, "
-        "(wc_m0 * wc_c0[2] + 0.25) / wc_mt])",
+        "(wc_m0 * wc_c0[2] + 0.175) / wc_mt])",
         f"wc_meas({n}, 1,",
-        'popup("Remove the 5 kg mass',
+        'popup("Remove the 3.5 kg mass',
         "set_payload(wc_m0, wc_c0)",
         f"wc_meas({n + 1}, 0,",
     ]
     at = [ur_run_script.index(x) for x in order]
     assert at == sorted(at)
-    assert 'wc_send("# payload_kg: 5")' in ur_run_script
+    assert 'wc_send("# payload_kg: 3.5")' in ur_run_script
     assert "wc_solve(" not in ur_run_script
 
 
@@ -340,7 +341,7 @@ def test_the_ur_twin_operator_mounts_the_mass_and_solve_finds_the_compliances(
     assert run.programs.complete
     assert run.programs.world.mounted_kg == 0.0
     assert run.programs.controller.payload[0] == 0.0  # the tool's alone again
-    _solves_the_compliances(ur_robot, ur_plan, run.log, KG, std_max=1.0)
+    _solves_the_compliances(ur_robot, ur_plan, run.log, UR_KG, std_max=1.0)
 
 
 def _with_tool(robot: Robot, kg: float, com_mm: tuple[float, float, float]) -> Robot:
@@ -350,44 +351,38 @@ def _with_tool(robot: Robot, kg: float, com_mm: tuple[float, float, float]) -> R
     return replace(robot, masses=masses)
 
 
-def _lighter(plan, kg: float):
-    """Return ``plan`` with its payload step's mass ``kg``."""
-    return replace(plan, steps=(*plan.steps[:-1], replace(plan.steps[-1], payload_kg=kg)))
-
-
 def test_the_ur_twin_runs_a_payload_step_the_robot_file_gives_no_tool(ur_robot, ur_plan, tmp_path):
-    """The robot file gives no tool mass; the flange carries a 1 kg tool at 20 mm, the
-    Installation's payload, and the step a 4 kg mass (5 kg in all: the rating). The e-Series
-    wc_run reads it and declares 5 kg for the step, so the twin (which stops a move declaring
-    less than the flange carries) runs it to the end, and the Installation's 1 kg at
-    [0, 0, 0.02] m is restored exactly. The former program declared the robot file's 0 kg
-    with the mass: its first move with the mass stopped."""
-    plan = _lighter(ur_plan, 4.0)
-    texts = dict(generated(scripts, ur_robot, plan, UrOptions()))
-    true_arm = _with_tool(ur_robot, 1.0, (0.0, 0.0, 20.0))
-    run = measure_ur_in_twin(true_arm, plan, TRUE_C, tmp_path, texts=texts, seed=2)
+    """The shipped example with a real tool: the robot file gives no tool mass; the flange
+    carries a 1.5 kg tool at 20 mm, the Installation's payload, and the step its 3.5 kg
+    mass (5 kg in all: the UR5e's rating). The e-Series wc_run reads the tool and declares
+    5 kg for the step, so the twin (which stops a move declaring less than the flange
+    carries) runs it to the end, and the Installation's 1.5 kg at [0, 0, 0.02] m is
+    restored exactly. The former example's 5 kg step refused any tool before moving."""
+    true_arm = _with_tool(ur_robot, 1.5, (0.0, 0.0, 20.0))
+    run = measure_ur_in_twin(true_arm, ur_plan, TRUE_C, tmp_path, seed=2)
     assert run.programs.complete, run.programs.stopped
     assert run.programs.world.mounted_kg == 0.0
     m, cog = run.programs.controller.payload
-    assert m == 1.0
+    assert m == 1.5
     assert cog == pytest.approx([0.0, 0.0, 0.02], abs=1e-7)  # a 32-bit float
 
 
 def test_the_ur_run_refuses_a_tool_and_mass_beyond_the_rating_before_moving(
     ur_robot, ur_plan, tmp_path
 ):
-    """The shipped step's 5 kg (the UR5e's rating) with the Installation's 1 kg tool: 6 kg
-    would be carried. wc_run checks before its first move and stops with an error popup
-    naming the rating; the arm never moved (the receiver waits 2 s for a token in vain)."""
-    texts = dict(generated(scripts, ur_robot, ur_plan, UrOptions()))
-    true_arm = _with_tool(ur_robot, 1.0, (0.0, 0.0, 20.0))
-    run = measure_ur_in_twin(
-        true_arm, ur_plan, TRUE_C, tmp_path, texts=texts, seed=2, timeout_s=2.0
-    )
+    """The shipped step's 3.5 kg with the Installation's 1.6 kg tool: 5.1 kg would be
+    carried, over the UR5e's rated 5 kg. wc_run checks before its first move and stops
+    with an error popup naming the rating; the arm never moved (the receiver waits 2 s for
+    a token in vain). The run's reason is the program's own popup, not the receiver's."""
+    true_arm = _with_tool(ur_robot, 1.6, (0.0, 0.0, 20.0))
+    run = measure_ur_in_twin(true_arm, ur_plan, TRUE_C, tmp_path, seed=2, timeout_s=2.0)
     assert not run.programs.complete
     assert "exceeds the rated 5 kg" in run.programs.world.console[-1]
     assert run.programs.world.mounted_kg == 0.0
     assert run.programs.world.moves == 0
+    why = run.programs.stopped
+    assert why.startswith("wc_run stopped at line 159: The Installation's payload plus the 3.5 kg")
+    assert why.endswith(f"(wirecal receive: {run.received.stopped})")
 
 
 def test_the_declared_load_is_the_installations_with_an_off_axis_mass(ur_robot, ur_plan, tmp_path):
@@ -433,14 +428,14 @@ def test_the_ur_twin_stops_a_move_declaring_less_than_the_flange_carries(
 
 
 def test_a_cb3_payload_step_declares_the_robot_files_tool_with_the_mass(ur_robot, ur_plan):
-    """CB3 (3.15): a 1 kg tool at 20 mm with the 5 kg mass at 50 mm: set_payload(6 kg at
-    (1·20 + 5·50)/6 = 45 mm), then the tool's alone; no call read on e-Series pages only,
-    and the checker refuses get_target_payload for 3.15, by name."""
+    """CB3 (3.15): a 1 kg tool at 20 mm with the 3.5 kg mass at 50 mm: set_payload(4.5 kg
+    at (1·20 + 3.5·50)/4.5 = 43.333 mm), then the tool's alone; no call read on e-Series
+    pages only, and the checker refuses get_target_payload for 3.15, by name."""
     cb3 = _with_tool(ur_robot, 1.0, (0.0, 0.0, 20.0))
     cb3 = replace(cb3, controller=replace(cb3.controller, software="3.15"))
-    cb3 = replace(cb3, rated_payload_kg=6.0)
     run = generated(scripts, cb3, ur_plan, UrOptions())["wc_run.script"]
-    at = [run.index(x) for x in ("set_payload(6, [0, 0, 0.045])", "set_payload(1, [0, 0, 0.02])")]
+    declared = ("set_payload(4.5, [0, 0, 0.043333])", "set_payload(1, [0, 0, 0.02])")
+    at = [run.index(x) for x in declared]
     assert at == sorted(at)
     assert "get_target_payload" not in run
     problems = URScript().lint("def t():\n  m = get_target_payload()\nend\n", "t.script", "3.15")
