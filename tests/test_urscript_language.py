@@ -165,8 +165,35 @@ def test_every_function_row_is_well_formed():
         pages = ("SD", "SW", "UR article")  # Script Manual pages, or a UR support article
         assert b.source == "unconfirmed" or any(k in b.source for k in pages), name
     # the functions wirecal emits were read on a page
-    for name in ("movej", "encoder_get_tick_count", "socket_open", "textmsg", "floor"):
+    emitted = ("movej", "encoder_get_tick_count", "socket_open", "textmsg", "floor")
+    payload = ("get_target_payload", "get_target_payload_cog", "set_payload")
+    for name in (*emitted, *payload):
         assert BUILTINS[name].source != "unconfirmed", name
+
+
+def test_the_payload_calls_as_the_script_directory_gives_them():
+    """set_target_payload(m, cog, inertia=[0]*6, transition_time=0) (SD §15.46: kg, m from
+    the tool mount, kg·m² at the CoG, s): 2 to 4 arguments, by those names; the deprecated
+    set_payload_mass/_cog and get_target_payload_inertia read too (§15.44, 15.45, 15.22);
+    get_target_payload_mass on no Universal Robots page read."""
+    b = BUILTINS["set_target_payload"]
+    assert (b.params, b.required) == (("m", "cog", "inertia", "transition_time"), 2)
+    assert "§15.46" in b.source and "kg*m^2" in b.source
+    for name, section in [
+        ("set_payload_cog", "§15.44"),
+        ("set_payload_mass", "§15.45"),
+        ("get_target_payload_inertia", "§15.22"),
+        ("set_payload", "§15.43"),
+    ]:
+        assert section in BUILTINS[name].source, name
+    assert BUILTINS["get_target_payload_mass"].source == "unconfirmed"
+    ok = "set_target_payload(1.5, [0, 0, 0.05], [0, 0, 0, 0, 0, 0], transition_time=0.5)"
+    assert URScript().lint(program(ok), "t.script", "5.20") == []
+    for bad, why in [
+        ("set_target_payload(1.5)", "set_target_payload needs cog"),
+        ("set_target_payload(1.5, [0, 0, 0], [0, 0, 0, 0, 0, 0], 0, 1)", "at most 4 argument"),
+    ]:
+        assert any(why in p for p in URScript().lint(program(bad), "t.script", "5.20")), bad
 
 
 def test_the_twin_refuses_what_it_does_not_run():

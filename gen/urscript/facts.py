@@ -52,6 +52,12 @@ get_target_payload_cog()                  CoGy, CoGz] m from the tool flange    
 set_payload(m, cog)                       the whole active payload; resets the     yes (UR
                                           payload inertia matrix                   article; SD
                                                                                    15.43)
+set_target_payload(m, cog, inertia=[0,    m kg; cog m from the tool mount; inertia yes (SD
+0, 0, 0, 0, 0], transition_time=0)        kg·m² at the CoG, flange axes; s. Not     15.46, p.
+                                          emitted: no page gives its first version 65-66;
+                                                                                   SW10.6)
+get_target_payload_mass()                 no UR page read has it (SD 15.20's mass  no
+                                          getter is get_target_payload())
 the payload calls on CB3 (SW 3.x)         get_target_payload(_cog)                 no
 halt; int32 overflow in a subtraction                                              no
 the same functions on CB3 (SW 3.x)        e.g. pulse-decoder input numbers         no
@@ -195,6 +201,38 @@ FACTS: tuple[Fact, ...] = (
         "low-level controller started, guaranteed monotonic",
         True,
         SD + "§15.49, p. 67 (text copy); whether CB3 software has it is not confirmed",
+    ),
+    Fact(
+        "get_target_payload",
+        "get_target_payload(): the active payload's mass (kg); get_target_payload_cog(): its "
+        "CoG [CoGx, CoGy, CoGz] (m) with respect to the tool flange",
+        True,
+        SD + "15.20, 15.21, p. 57",
+    ),
+    Fact(
+        "set_payload",
+        "set_payload(m, cog): mass kg, CoG [CoGx, CoGy, CoGz] m from the tool mount; resets "
+        "the payload inertia matrix; deprecated since SW 5.10.0 for set_target_payload",
+        True,
+        SD + "15.43, p. 64; Universal Robots article how-to-change-payload-and-center-of-"
+        "gravity-settings-using-urscript (CB3 3.3 and every e-Series)",
+    ),
+    Fact(
+        "set_target_payload",
+        "set_target_payload(m, cog, inertia=[0, 0, 0, 0, 0, 0], transition_time=0): m kg; cog "
+        "[CoGx, CoGy, CoGz] m from the tool mount; inertia [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] "
+        "kg·m² at the CoG in the flange's axes (a zero matrix when left out); transition_time "
+        "s (0: at once, as set_payload). Not emitted: no page read gives its first version",
+        True,
+        SD + "15.46, p. 65-66; "
+        f"{_UR}/SW10_6/Content/prod-scriptmanual/G5/set_target_payload.htm",
+    ),
+    Fact(
+        "get_target_payload_mass",
+        "a getter of the active payload's mass by this name: on no Universal Robots page "
+        "read (the Script Directory's is get_target_payload(), 15.20)",
+        False,
+        "not found on a Universal Robots page",
     ),
     Fact(
         "halt",
