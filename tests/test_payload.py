@@ -34,8 +34,8 @@ from wirecal.gen.vplus.program import GenOptions, line_ends, module_text
 from wirecal.lang.rapid import Rapid
 from wirecal.lang.urscript import URScript
 from wirecal.lang.urscript.parser import parse_program
-from wirecal.solver.distance import wire_lengths
 from wirecal.solver.compliance import SIGMA_LIMIT_URAD_PER_NM
+from wirecal.solver.distance import wire_lengths
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.gravity import gravity_torques_nm, with_load
 from wirecal.solver.kinematics import loaded, rigid_frames, tool_position

@@ -224,8 +224,7 @@ FACTS: tuple[Fact, ...] = (
         "kg·m² at the CoG in the flange's axes (a zero matrix when left out); transition_time "
         "s (0: at once, as set_payload). Not emitted: no page read gives its first version",
         True,
-        SD + "15.46, p. 65-66; "
-        f"{_UR}/SW10_6/Content/prod-scriptmanual/G5/set_target_payload.htm",
+        SD + f"15.46, p. 65-66; {_UR}/SW10_6/Content/prod-scriptmanual/G5/set_target_payload.htm",
     ),
     Fact(
         "get_target_payload_mass",
