@@ -30,6 +30,7 @@ import multiprocessing as mp
 import os
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -261,7 +262,7 @@ def _run(
     truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
     encoder = _true_encoder(reg, robot, seed)
     options = {"seed": seed, **({} if encoder is None else {"encoder_truth": encoder})}
-    with tempfile.TemporaryDirectory() as tmp, _workers(WORKERS) as pool:
+    with tempfile.TemporaryDirectory() as tmp, _workers(WORKERS, (drawer,)) as pool:
         disk = Path(tmp)
         before = _start_before(pool, ch, truth, programs, disk / "before", seed)
         beside = "" if before is None else ", the validation before calibration in a second process"
@@ -455,17 +456,21 @@ waits for them last)."""
 
 
 @contextmanager
-def _workers(count: int) -> Iterator[ProcessPoolExecutor]:
-    """``count`` worker processes, forked where the platform forks safely.
+def _workers(
+    count: int, beside: tuple[ProcessPoolExecutor, ...] = ()
+) -> Iterator[ProcessPoolExecutor]:
+    """Start ``count`` worker processes now, forked where it is safe.
 
-    A forked worker inherits every import and, forked after the generation, the module
-    the generator parsed and checked (the parser keeps the last few); elsewhere it starts
+    :func:`_start_method` decides, ``beside`` being the demo's pools already running; a
+    first task starts the workers at once, so they fork in the state it checked. A forked
+    worker inherits every import and, forked after the generation, the module the
+    generator parsed and checked (the parser keeps the last few); elsewhere it starts
     afresh. When the demo stops (Ctrl-C, an error), the workers are ended at once instead
     of finishing their runs.
     """
-    fork = sys.platform.startswith("linux") and "fork" in mp.get_all_start_methods()
-    context = mp.get_context("fork" if fork else None)
+    context = mp.get_context(_start_method(beside))
     pool = ProcessPoolExecutor(max_workers=count, mp_context=context)
+    pool.submit(int)  # fork now (a fork context starts every worker at the first task)
     try:
         yield pool
     except BaseException:
@@ -474,6 +479,33 @@ def _workers(count: int) -> Iterator[ProcessPoolExecutor]:
         pool.shutdown(wait=False, cancel_futures=True)
         raise
     pool.shutdown()
+
+
+def _start_method(beside: tuple[ProcessPoolExecutor, ...] = ()) -> str | None:
+    """Return "fork" where the platform forks and no thread but ``beside``'s own runs.
+
+    A fork copies the calling thread alone: a lock another thread holds stays held in the
+    child, which may deadlock (Python 3.12+ warns of a fork beside threads). An executor's
+    own threads (its manager, its call queue's feeder) take only that executor's locks,
+    which the workers of another pool never take (they have their own queues), and the
+    interpreter resets its own locks in the child. Any other thread — a receiver's, a BLAS
+    pool's (the OS's thread count tells) — makes it "forkserver", whose single-threaded
+    server forks the workers. None (the platform's default) where fork is not the rule.
+    """
+    if not sys.platform.startswith("linux") or "fork" not in mp.get_all_start_methods():
+        return None
+    known = {threading.current_thread().ident}
+    for pool in beside:  # CPython's attribute names (3.9-3.13); absent: not known, no fork
+        queue = getattr(pool, "_call_queue", None)
+        for thread in (
+            getattr(pool, "_executor_manager_thread", None),
+            getattr(queue, "_thread", None),
+        ):
+            if thread is not None:
+                known.add(thread.ident)
+    running = {t.ident for t in threading.enumerate()}
+    alone = running <= known and len(os.listdir("/proc/self/task")) == len(running)
+    return "fork" if alone else "forkserver"
 
 
 def _paper_logs(
