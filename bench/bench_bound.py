@@ -45,9 +45,11 @@ Any robot file and plan: give ``--compliance`` the robot file's path instead of 
 name; the plan is the one beside it (the demo's rule, :func:`plan_beside`: ``plan.toml``
 first), and the file is taken as above (``compliances`` set to c2..c5 whatever it lists,
 ``repeatability_mm`` 0.02; its other keys, a payload step's mass among them, as they are).
-The payload plans (issue 30's payload step, designed for c2, c3 with the arm's rated payload
-at 50 mm from the flange): ``--compliance tests/data/payload_ur5e/robot.toml
-tests/data/payload_viper_s650/robot.toml tests/data/payload_abb_irb120/robot.toml``.
+The payload plans (issue 30's payload step, designed for c2, c3 with a mass 50 mm out from
+the flange: 3.5 kg on the UR5e and the Viper, 1.5 kg of their 5 kg left for the tool; 2.9 kg
+on the IRB 120, with its 0.1 kg tool its rated 3 kg):
+``--compliance tests/data/payload_ur5e/robot.toml tests/data/payload_viper_s650/robot.toml
+tests/data/payload_abb_irb120/robot.toml``.
 
     python bench/bench_bound.py [--trials 300] [--no-unmodelled]
     python bench/bench_bound.py --compliance ur5e viper_s650 abb_irb120 [--trials 40]
