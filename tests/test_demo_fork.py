@@ -3,11 +3,13 @@
 A fork copies the calling thread alone; a lock another thread holds stays held in the
 child. The demo forks its twin workers while its drawing pool runs (that pool's manager and
 queue feeder threads take only that pool's locks): "fork" then, and "forkserver" beside any
-other thread. Checked in a fresh interpreter, whose threads the test knows.
+other thread. Checked in a fresh interpreter with one BLAS thread (as the command line
+sets it), whose threads the test knows.
 """
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -35,7 +37,16 @@ with _workers(1) as drawer:                    # a pool with its threads running
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="fork is the rule on Linux")
 def test_workers_fork_only_beside_the_demos_own_threads():
+    one_blas_thread = {
+        v: "1" for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+    }
+    env = {**os.environ, **one_blas_thread}  # as the command line sets them: no BLAS pool
     out = subprocess.run(
-        [sys.executable, "-c", CHECK], capture_output=True, text=True, timeout=60, check=True
+        [sys.executable, "-c", CHECK],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+        env=env,
     )
     assert out.stdout.split() == ["fork", "fork", "forkserver", "fork", "forkserver"]
