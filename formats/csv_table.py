@@ -42,7 +42,7 @@ from wirecal.formats.capture import (
     unfold_header,
 )
 from wirecal.formats.fileio import STDIN as STDIN  # the name callers know
-from wirecal.formats.fileio import read_input
+from wirecal.formats.fileio import decode_text, read_input
 from wirecal.solver.errors import WirecalError
 
 
@@ -79,18 +79,7 @@ class Table:
 def read_source(path: str | Path, what: str) -> tuple[str, str, str]:
     """Return the text, its source name and the sha256 of its bytes; ``-`` reads standard input."""
     raw, source = read_input(path, what)
-    if raw.startswith((b"\xff\xfe", b"\xfe\xff")) or b"\x00" in raw[:4096]:
-        raise WirecalError(
-            f"{source}: UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8 "
-            f"(a wirecal {what} is plain UTF-8 text)"
-        )
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise WirecalError(
-            f"{source}: not UTF-8 text (byte {exc.start}); is this a wirecal {what}?"
-        ) from None
-    return text, source, hashlib.sha256(raw).hexdigest()
+    return decode_text(raw, source, f"wirecal {what}"), source, hashlib.sha256(raw).hexdigest()
 
 
 def parse_table(

@@ -326,6 +326,25 @@ def read_input(path: str | Path, what: str, max_bytes: int = MAX_INPUT_BYTES) ->
     return raw, source
 
 
+def decode_text(raw: bytes, source: str, what: str) -> str:
+    """Return an input's bytes as UTF-8 text; a :class:`WirecalError` names any other encoding.
+
+    UTF-16 (what Windows calls "Unicode") is told by its byte-order mark or by NUL bytes,
+    which no UTF-8 text input holds.
+    """
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")) or b"\x00" in raw[:4096]:
+        raise WirecalError(
+            f"{source}: UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8 "
+            f"(a {what} is plain UTF-8 text)"
+        )
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise WirecalError(
+            f"{source}: not UTF-8 text (byte {exc.start}); is this a {what}?"
+        ) from None
+
+
 def toml_depth(text: str) -> int:
     """Return how deep the arrays and tables of a TOML text nest (strings, comments aside)."""
     data = np.frombuffer(_TOML_SKIP.sub("", text).encode("utf-8"), dtype=np.uint8)
@@ -340,12 +359,7 @@ def read_toml(path: str | Path, what: str) -> dict[str, Any]:
     Bounded: at most :data:`MAX_INPUT_BYTES`, nested at most :data:`MAX_TOML_DEPTH` deep.
     """
     raw, source = read_input(path, what)
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise WirecalError(
-            f"{source}: not UTF-8 text (byte {exc.start}); is this a {what}?"
-        ) from None
+    text = decode_text(raw, source, what)
     text = text.removeprefix("\ufeff")  # a byte-order mark some editors write
     depth = toml_depth(text)
     if depth > MAX_TOML_DEPTH:

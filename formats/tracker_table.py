@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.formats.cable_table import _text_cells, column_index, column_numbers
-from wirecal.formats.fileio import MAX_INPUT_BYTES, read_input
+from wirecal.formats.fileio import MAX_INPUT_BYTES, decode_text, read_input
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.tracker.data import TrackerTable
 
@@ -49,10 +49,7 @@ def read_text(path: str | Path) -> tuple[str, str]:
                 f"{source}: inflates to more than {MAX_INPUT_BYTES // 2**20} MiB: not a "
                 "tracker table; check the file name"
             )
-    try:
-        return raw.decode("utf-8"), source
-    except UnicodeDecodeError as exc:
-        raise WirecalError(f"{source}: not UTF-8 text (byte {exc.start}): not a table") from None
+    return decode_text(raw, source, "tracker table"), source
 
 
 def cells(path: str | Path) -> tuple[str, tuple[str, ...], Cells]:

@@ -1162,6 +1162,46 @@ def test_nt14_utf16_is_named(tmp_path, log):
     assert len(out.splitlines()) == 1
 
 
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le"])
+@pytest.mark.parametrize("which", ["robot file", "plan file"])
+def test_nt14_a_toml_file_in_utf16_is_named(tmp_path, which, encoding):
+    """NT14's neighbour: a robot file or plan saved as UTF-16 (Windows' "Unicode") was
+    'not UTF-8 text (byte 0)', the encoding not named as it is for a log."""
+    source = ROBOT if which == "robot file" else PLAN
+    bad = tmp_path / source.name
+    bad.write_bytes(source.read_text().encode(encoding))
+    args = [bad, PLAN] if which == "robot file" else [ROBOT, bad]
+    r = invoke("psi", *args)
+    assert r.exit_code == 2, r.output
+    assert r.output == (
+        f"error: {bad}: UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8 "
+        f"(a {which} is plain UTF-8 text)\n"
+    )
+
+
+def test_a_toml_file_with_non_ascii_utf8_is_still_read(tmp_path):
+    """The valid neighbour of NT14: UTF-8 beyond ASCII (a name with 'ö', a comment with
+    'θ₀') reads as before."""
+    robot = tmp_path / "robot.toml"
+    text = re.sub(
+        r'^name = ".*"$', 'name = "Viper s650 (Kärcher)"', ROBOT.read_text(), count=1, flags=re.M
+    )
+    robot.write_text("# θ₀ and Ψ, µm\n" + text, encoding="utf-8")
+    plan = tmp_path / "plan.toml"
+    plan.write_text(
+        re.sub(
+            r'^robot = ".*"$',
+            'robot = "Viper s650 (Kärcher)"',
+            PLAN.read_text(),
+            count=1,
+            flags=re.M,
+        ),
+        encoding="utf-8",
+    )
+    r = invoke("psi", robot, plan)
+    assert r.exit_code == 0, r.output
+
+
 def test_nl34_a_version_1_header_over_version_2_rows_is_one_problem(tmp_path, log):
     text = log.read_text().replace("# wirecal-log 2", "# wirecal-log 1", 1)
     text = text.replace(",t_s,settle_s\n", "\n", 1)
