@@ -259,7 +259,7 @@ def _check_column_line(
     kinds: tuple[str, ...] | None = None,
     hint: str = "",
 ) -> None:
-    """Raise unless line n is the column line and no later line has double quotes.
+    """Raise unless line n is the column line and neither it nor a later line has double quotes.
 
     ``kinds`` (a terminal capture): only the lines that start with a row kind, quoted
     or not, count; other terminal text may quote. ``hint`` ends a wrong column line's
@@ -271,7 +271,7 @@ def _check_column_line(
             [*problems, f"{source}:{n}: the column line is missing: it must be '{expected}'"]
         )
     got = ",".join(c.strip() for c in lines[n].split(","))
-    if got != expected:
+    if got.replace('"', "") != expected:
         raise WirecalError(
             [
                 *problems,
@@ -284,6 +284,8 @@ def _check_column_line(
         for k in range(n + 1, len(lines))
         if '"' in lines[k] and (kinds is None or lines[k].split(",")[0].strip('" ') in kinds)
     ]
+    if got != expected:  # the column line itself is right but for its quotes
+        quoted.insert(0, n + 1)
     if quoted:
         raise WirecalError(
             f"{source}:{quoted[0]}: fields are in double quotes on {len(quoted)} "

@@ -1156,6 +1156,32 @@ def test_l06_quoted_lines_are_named(tmp_path, log):
     assert "the first line is '\"# wirecal-log 2\"': lines and fields in double quotes" in out
 
 
+def test_l06_quoted_fields_below_unquoted_comments_are_named(tmp_path, log):
+    """L06's neighbour: every field quoted, the '#' lines not (a script's export): 'columns
+    are '"kind","step",…'; the column line must be 'kind,step,…'' left the quotes unnamed."""
+    lines = log.read_text().splitlines()
+    quoted = [x if x.startswith("#") else ",".join(f'"{c}"' for c in x.split(",")) for x in lines]
+    out = _solve_text(tmp_path, "\n".join(quoted) + "\n")
+    column_line = next(k for k, x in enumerate(lines) if x.startswith("kind,")) + 1
+    rows = sum(1 for x in lines if not x.startswith("#"))
+    assert out == (
+        f"error: {tmp_path / 'run.csv'}:{column_line}: fields are in double quotes on {rows} "
+        "line(s): a spreadsheet re-saved the file; use the file as written, or save it as "
+        "plain CSV without quotes\n"
+    )
+
+
+def test_a_wrong_column_line_in_quotes_is_still_named_as_columns(tmp_path, log):
+    """The other direction: quotes around a column line that is wrong beyond its quotes
+    keep the columns message, which shows what the line must be."""
+    text = log.read_text()
+    line = next(x for x in text.splitlines() if x.startswith("kind,"))
+    wrong = ",".join(f'"{c}"' for c in line.replace("counts", "count").split(","))
+    out = _solve_text(tmp_path, text.replace(line, wrong, 1))
+    assert "the column line must be 'kind,step,index," in out
+    assert "fields are in double quotes" not in out
+
+
 def test_nt14_utf16_is_named(tmp_path, log):
     out = _solve_text(tmp_path, log.read_text().encode("utf-16-le"))
     assert "UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8" in out
