@@ -948,6 +948,37 @@ def test_urdf_units_are_checked_naming_joint_and_attribute(tmp_path, case):
     assert not (tmp_path / "r.toml").exists()
 
 
+@pytest.mark.parametrize(("velocity", "joints"), [("180", 1), ("1e308", 1), ("1e308", 6)])
+def test_nd24_urdf_speeds_in_deg_s_are_named_by_joint_and_attribute(tmp_path, velocity, joints):
+    """ND24's neighbour for <limit velocity>: 180 (deg/s written for rad/s) was blamed on
+    the output file ('r.toml: kinematics.joint_speed_deg_s: value 1 is 10313.24…'), 1e308
+    on one joint too ('value 1 is inf'), and 1e308 on every joint ended in a traceback
+    (OverflowError in the placeholder-speed check)."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(URDF.read_text().replace('velocity="3.0"', f'velocity="{velocity}"', joints))
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {urdf}: joint 'j1': limit velocity={float(velocity):g}, beyond 174.5 rad/s "
+        "(10000 deg/s): URDF velocities are rad/s; written in deg/s? Convert them (× π/180) "
+        "and import again\n"
+    )
+    assert not (tmp_path / "r.toml").exists()
+
+
+def test_a_fast_urdf_joint_in_rad_s_is_imported(tmp_path):
+    """The valid neighbour: 17.45 rad/s (1000 deg/s, a fast wrist) imports as 1000 deg/s."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(URDF.read_text().replace('velocity="3.0"', 'velocity="17.453292519943"'))
+    out = tmp_path / "r.toml"
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", out)
+    assert r.exit_code == 0, r.output
+    speeds = re.search(r"^joint_speed_deg_s = \[(.*)\]", out.read_text(), re.M)
+    assert speeds is not None
+    assert [float(v) for v in speeds.group(1).split(",")] == pytest.approx([1000.0] * 6, abs=1e-6)
+
+
 def test_nl49_a_reference_reading_with_a_large_spread_is_refused(tmp_path):
     robot, log_path = _with_gauge(tmp_path)
     lines = log_path.read_text().splitlines()
