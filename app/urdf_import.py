@@ -139,9 +139,28 @@ def urdf_robot_file(urdf: str | Path, out_path: Path, opt: ImportOptions) -> Imp
         tables=cell,
         write_cell=False,  # the mounting plane from the URDF's root link, or a note why not
     )
-    robot_from_dict(tomllib.loads(text), str(out_path))  # what is written reads back
+    _reads_back(text, urdf, out_path)
     warnings = ([] if confirmed else speed_notes) + _wide_warning(radii)
     return Imported(text, ch, params, notes, warnings)
+
+
+def _reads_back(text: str, urdf: str | Path, out_path: Path) -> None:
+    """Raise unless the robot file ``text`` passes the robot file's checks.
+
+    Its values are the URDF's, so the problems name the URDF, not the file not yet written.
+    """
+    try:
+        robot_from_dict(tomllib.loads(text), f"{urdf} (as the robot file {out_path})")
+    except WirecalError as exc:
+        raise WirecalError(
+            [
+                *exc.problems,
+                f"{urdf}: the robot file made from it fails the check(s) above: its values "
+                "are the URDF's (joint origins in m, limits in rad, velocities in rad/s) and, "
+                "in [encoder], the options --mm-per-count, --range-mm and --counter-bits; "
+                "correct them and import again",
+            ]
+        ) from None
 
 
 def _encoder(opt: ImportOptions) -> Encoder:

@@ -30,6 +30,11 @@ LIMIT_TIDY = 1e-7
 radians with 11 digits give 185.00000000003°; 185.0 is what the vendor meant."""
 
 
+SCALE_TIDY = 1e-12
+"""``mm_per_count`` is a scale: written to within SCALE_TIDY of itself, not of a mm (a
+length of range_mm then moves by 1e-12 of it; 1e-300 stays 1e-300, not 0)."""
+
+
 def _num(x: float, tidy: float = TIDY) -> str:
     """Return the shortest decimal within ``tidy`` of ``x`` (−0 written as 0)."""
     x = float(x)
@@ -182,7 +187,7 @@ def _encoder_lines(enc: Encoder, note: str) -> list[str]:
         "",
         "[encoder]",
         f"# {note}",
-        f"mm_per_count = {_num(enc.mm_per_count)}",
+        f"mm_per_count = {_num(enc.mm_per_count, SCALE_TIDY * abs(enc.mm_per_count))}",
         f"range_mm = {_num(enc.range_mm)}",
         f"counter_bits = {enc.counter_bits}",
         f"interface = {json.dumps(enc.interface)}",

@@ -979,6 +979,59 @@ def test_a_fast_urdf_joint_in_rad_s_is_imported(tmp_path):
     assert [float(v) for v in speeds.group(1).split(",")] == pytest.approx([1000.0] * 6, abs=1e-6)
 
 
+def test_nd26_a_robot_file_the_urdf_makes_too_long_names_the_urdf(tmp_path):
+    """ND26's neighbour: each origin within the URDF's 10 m, yet 9.99 m and the next joint's
+    offsets make a DH d of 10 020 mm, beyond the robot file's 10 000: the refusal named the
+    output file ('r.toml: kinematics.dh[1]: value 4 is 10020.0'), which the user cannot fix."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(URDF.read_text().replace('xyz="0 0 0.3"', 'xyz="0 0 9.99"', 1))
+    out = tmp_path / "r.toml"
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", out)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    lines = r.output.splitlines()
+    assert lines[0] == (
+        f"error: {urdf} (as the robot file {out}): kinematics.dh[1]: value 4 is 10020.0; "
+        "give a number within ±10000 mm"
+    )
+    assert lines[-1] == (
+        f"error: {urdf}: the robot file made from it fails the check(s) above: its values "
+        "are the URDF's (joint origins in m, limits in rad, velocities in rad/s) and, in "
+        "[encoder], the options --mm-per-count, --range-mm and --counter-bits; correct them "
+        "and import again"
+    )
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        ("--range-mm=1e9", "encoder.range_mm: is 1000000000.0; give a number > 0 and ≤ 100000 mm"),
+        ("--mm-per-count=1e-300", "encoder.mm_per_count: is 1e-300 mm"),  # R15's message
+    ],
+)
+def test_nd26_an_encoder_option_the_robot_file_refuses_names_the_option(tmp_path, option, message):
+    """The import's encoder options pass the robot file's checks too; --mm-per-count 1e-300
+    was written as 0.0 (an absolute rounding) and refused as 'must not be zero'."""
+    out = tmp_path / "r.toml"
+    r = invoke("import-urdf", URDF, "--tip", "wire", option, "-o", out)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert f"error: {URDF} (as the robot file {out}): {message}" in r.output
+    assert "must not be zero" not in r.output
+    assert "the options --mm-per-count, --range-mm and --counter-bits" in r.output
+    assert not out.exists()
+
+
+def test_a_fine_encoder_scale_is_written_to_its_digits(tmp_path):
+    """The valid neighbour: a 1.234567e-05 mm/count encoder is written as given."""
+    out = tmp_path / "r.toml"
+    scale = ["--mm-per-count=1.234567e-05", "--counter-bits=32"]
+    r = invoke("import-urdf", URDF, "--tip", "wire", *scale, "-o", out)
+    assert r.exit_code == 0, r.output
+    assert "mm_per_count = 1.234567e-05\n" in out.read_text()
+
+
 def test_nl49_a_reference_reading_with_a_large_spread_is_refused(tmp_path):
     robot, log_path = _with_gauge(tmp_path)
     lines = log_path.read_text().splitlines()
