@@ -14,6 +14,7 @@ from wirecal.formats.robot_values import (
     MAX_LENGTH_MM,
     point_mm,
     unit_vector,
+    within_a_turn,
 )
 from wirecal.formats.toml_fields import Table
 from wirecal.solver.cell.model import DEFAULT_MARGIN_MM, Box, CellModel, HalfSpace, Housing
@@ -50,7 +51,7 @@ def read_cell(table: Table, n: int | None) -> CellModel | None:
     if lo is not None and hi is not None and lo.shape == hi.shape:
         for j in np.flatnonzero(lo >= hi):
             table.add("body_max_deg", f"joint {j + 1}: {hi[j]:g} is not above body_min_deg")
-        if max(np.max(np.abs(lo)), np.max(np.abs(hi))) <= 2 * np.pi + 1e-9:
+        if within_a_turn(np.r_[lo, hi]):
             table.add(
                 "body_max_deg",
                 "every body limit is within ±2π: they look like radians (joint 2's would be "

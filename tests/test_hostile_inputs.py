@@ -1356,6 +1356,37 @@ def test_nx19_max_exit_deg_in_radians_is_named(tmp_path):
     assert "encoder.max_exit_deg: is 1.5708: that is 90 deg in radians; give degrees" in r.output
 
 
+def _plan_in_radians(scale: float) -> str:
+    """The paper plan with every angle (θ0, points, vias) times ``scale``."""
+    vector = re.compile(r"\[(-?[\d.]+(?:, -?[\d.]+){5})\]")
+    return vector.sub(
+        lambda m: "[" + ", ".join(f"{float(v) * scale:.6f}" for v in m.group(1).split(",")) + "]",
+        PLAN.read_text(),
+    )
+
+
+def test_nx19_a_plan_in_radians_is_named_once(tmp_path):
+    """NX19's neighbour for plans: a plan typed in radians was refused point by point as
+    'the wire length there is 0.938 mm (below 1 mm): the point (nearly) coincides with
+    θ0', radians not named."""
+    plan = tmp_path / "plan.toml"
+    plan.write_text(_plan_in_radians(np.pi / 180))
+    r = invoke("psi", ROBOT, plan)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {plan}: theta0_deg: θ0 and every point of the plan are within ±2π: they look "
+        "like radians (θ0 would be [0, -90, 210, -90, 0, -90] deg); give degrees\n"
+    )
+
+
+def test_a_plan_in_degrees_near_zero_is_not_called_radians(tmp_path):
+    """The valid neighbour: the plan in degrees still loads; one point within ±2π of zero
+    on every joint (a small move) is a point, not radians."""
+    plan = tmp_path / "plan.toml"
+    plan.write_text(_plan_in_radians(1.0))
+    assert invoke("psi", ROBOT, plan).exit_code == 0
+
+
 def test_c17_theta0_nan_is_refused_as_an_option():
     r = invoke("plan", ROBOT, "--theta0", "nan,-90,210,-90,0,-90")
     assert r.exit_code == 2
