@@ -38,9 +38,9 @@ import numpy as np
 
 from wirecal.formats.fileio import read_toml
 from wirecal.formats.robot_gravity import MAX_MASS_KG, read_com
-from wirecal.formats.robot_values import within_a_turn
 from wirecal.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver import params as P
+from wirecal.solver.angle_units import within_a_turn
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.plan.calibration_plan import PAYLOAD_STEP, Plan, Step
 from wirecal.solver.robot import Robot

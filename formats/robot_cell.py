@@ -14,9 +14,9 @@ from wirecal.formats.robot_values import (
     MAX_LENGTH_MM,
     point_mm,
     unit_vector,
-    within_a_turn,
 )
 from wirecal.formats.toml_fields import Table
+from wirecal.solver.angle_units import within_a_turn
 from wirecal.solver.cell.model import DEFAULT_MARGIN_MM, Box, CellModel, HalfSpace, Housing
 
 CELL_KEYS = (

@@ -10,8 +10,9 @@ import math
 
 import numpy as np
 
-from wirecal.formats.robot_values import METRES_RATIO, MIN_JOINT_RANGE_DEG, within_a_turn
+from wirecal.formats.robot_values import METRES_RATIO, MIN_JOINT_RANGE_DEG
 from wirecal.formats.toml_fields import Table
+from wirecal.solver.angle_units import within_a_turn
 from wirecal.solver.robot import Encoder
 
 

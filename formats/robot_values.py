@@ -51,15 +51,6 @@ AXIS_TOLERANCE = 0.01
 normalised exactly."""
 
 
-def within_a_turn(angles_deg: np.ndarray) -> bool:
-    """Whether angles meant in degrees all lie within ±2π: they were written in radians.
-
-    Joint limits, body limits or a plan's angles that all fit within ±6.3° leave an arm no
-    room to move; in radians the same numbers span up to ±360°.
-    """
-    return bool(np.all(np.abs(angles_deg) <= 2 * np.pi + 1e-9))
-
-
 def point_mm(table: Table, key: str) -> tuple[float, float, float] | None:
     """Read a point (x, y, z) in mm, each coordinate within :data:`MAX_LENGTH_MM`."""
     v = table.vector(key, length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM)
