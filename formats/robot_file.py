@@ -209,7 +209,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         link_radius_mm=radii,
         urdf=urdf,
         controller=valid(controller),
-        joint_speed_confirmed=valid(speed_confirmed),
+        joint_speed_confirmed=speed_confirmed,  # None: not stated
         gravity_sag_deg_per_m=valid(sag),
         cell=valid(cell),
         masses=masses,
@@ -230,7 +230,7 @@ def _speeds(kin: Table, n: int | None) -> tuple[np.ndarray | None, bool | None]:
         hi=MAX_SPEED_DEG_S,
         unit="deg/s",
     )
-    return speed, kin.boolean("joint_speed_confirmed", True)
+    return speed, kin.boolean("joint_speed_confirmed", None)
 
 
 def _link_radii(geometry: Table, n: int | None) -> np.ndarray | None:

@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from wirecal.solver.cell.model import CellModel
 from wirecal.solver.exit_geometry import Exit, Pulley
 from wirecal.solver.gravity import DOWN
+from wirecal.solver.joint_speeds import placeholder_speeds
 from wirecal.solver.robot import (
     DEFAULT_GRAVITY_SAG_DEG_PER_M,
     Controller,
@@ -48,6 +49,19 @@ def _num(x: float, tidy: float = TIDY) -> str:
 def _vec(values, tidy: float = TIDY) -> str:
     """Return ``values`` as a TOML array of :func:`_num` decimals."""
     return "[" + ", ".join(_num(v, tidy) for v in values) + "]"
+
+
+def _confirmed_line(robot: Robot) -> list[str]:
+    """Return the ``joint_speed_confirmed`` line when it says something.
+
+    False: a URDF's placeholders; true: speeds that would read as placeholders otherwise (a
+    heavy arm's, given by the user).
+    """
+    if robot.joint_speed_confirmed is False:
+        return ["joint_speed_confirmed = false"]
+    if robot.joint_speed_confirmed and placeholder_speeds(robot.joint_speed_deg_s):
+        return ["joint_speed_confirmed = true"]
+    return []
 
 
 def _exit_lines(exit_: Exit | None) -> list[str]:
@@ -173,7 +187,7 @@ def _kinematics_lines(robot: Robot, row_notes: list[str], speed_notes: Sequence[
         f"joint_max_deg = {_vec(robot.joint_max_deg, LIMIT_TIDY)}",
         *(f"# {line}" for line in speed_notes),
         f"joint_speed_deg_s = {_vec(robot.joint_speed_deg_s, LIMIT_TIDY)}",
-        *([] if robot.joint_speed_confirmed else ["joint_speed_confirmed = false"]),
+        *_confirmed_line(robot),
         "",
         "[tool]",
         "# wire attachment point in the last joint's frame",

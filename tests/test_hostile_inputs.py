@@ -1387,6 +1387,60 @@ def test_a_plan_in_degrees_near_zero_is_not_called_radians(tmp_path):
     assert invoke("psi", ROBOT, plan).exit_code == 0
 
 
+VIPER_RAD_S = "joint_speed_deg_s = [5.72, 5.24, 6.54, 6.54, 6.54, 10.47]"
+"""The Viper s650's speeds (328, 300, 375, 375, 375, 600 °/s) written in rad/s."""
+
+
+def test_gen_refuses_joint_speeds_in_rad_s_until_confirmed(tmp_path):
+    """A new case beside NX19 and CL24 (units of the robot file): speeds typed in rad/s were
+    taken as deg/s without a word, and gen wrote every move at SPEED 100 — the shipped file
+    needs SPEED 12.6 … 99.2 to keep the wire within its speed limit: the real wire would run
+    up to 8 times faster than the encoder allows. gen now refuses, naming the key and both
+    ways out; psi and plan (estimates only) still run."""
+    robot = tmp_path / "robot.toml"
+    robot.write_text(
+        re.sub(r"^joint_speed_deg_s = .*$", VIPER_RAD_S, ROBOT.read_text(), flags=re.M)
+    )
+    assert invoke("psi", robot, PLAN).exit_code == 0
+    r = invoke("gen", robot, PLAN, "-o", tmp_path / "out")
+    assert r.exit_code == 2, r.output
+    assert (
+        f"error: {robot}: kinematics.joint_speed_deg_s: joint(s) 1 (5.72 °/s), 2 (5.24 °/s), "
+        "3 (6.54 °/s), 4 (6.54 °/s), 5 (6.54 °/s), 6 (10.47 °/s) are slower than 60 °/s, "
+        "implausible for an industrial arm: rad/s written as deg/s? gen times every move "
+        "from these speeds, and speeds below the real ones let the wire run faster than the "
+        "encoder allows; give the data sheet's maximum joint speeds in deg/s, or set "
+        "joint_speed_confirmed = true if they are right"
+    ) in " ".join(r.output.split()), r.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_slow_joint_speeds_confirmed_are_used(tmp_path):
+    """The valid neighbour: a heavy arm's slow joints, confirmed, generate (slower moves)."""
+    robot = tmp_path / "robot.toml"
+    slow = "joint_speed_deg_s = [45.0, 40.0, 50.0, 90.0, 90.0, 120.0]\njoint_speed_confirmed = true"
+    robot.write_text(re.sub(r"^joint_speed_deg_s = .*$", slow, ROBOT.read_text(), flags=re.M))
+    r = invoke("gen", robot, PLAN, "-o", tmp_path / "out")
+    assert r.exit_code == 0, r.output
+    module = (tmp_path / "out" / "WIRECAL.V2").read_text()
+    speeds = [float(v) for v in re.findall(r"^\s*SPEED ([\d.]+) ALWAYS", module, re.M)]
+    assert len(speeds) > 50
+    assert max(speeds) <= 100
+
+
+def test_slow_speeds_given_to_import_urdf_are_written_confirmed(tmp_path):
+    """The speeds given with --joint-speed-deg-s are the user's: slow ones are written with
+    joint_speed_confirmed = true, so that gen does not ask again."""
+    from wirecal.formats.robot_file import load_robot
+
+    out = tmp_path / "r.toml"
+    speeds = "--joint-speed-deg-s=45,40,50,90,90,120"
+    r = invoke("import-urdf", URDF, "--tip", "wire", speeds, "-o", out)
+    assert r.exit_code == 0, r.output
+    assert "\njoint_speed_confirmed = true\n" in out.read_text()
+    assert load_robot(out).speed_problem() is None
+
+
 def test_c17_theta0_nan_is_refused_as_an_option():
     r = invoke("plan", ROBOT, "--theta0", "nan,-90,210,-90,0,-90")
     assert r.exit_code == 2
