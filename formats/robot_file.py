@@ -101,6 +101,7 @@ from wirecal.formats.robot_values import (
     MAX_REPEATABILITY_MM,
     MAX_SCALE_PPM,
     MAX_SPEED_DEG_S,
+    in_metres,
 )
 from wirecal.formats.robot_writer import robot_file_text
 from wirecal.formats.toml_fields import Table, document, duplicates, valid
@@ -173,9 +174,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     n = None if dh is None else dh.shape[0]
     lo, hi = read_limits(kin, n)
     speed, speed_confirmed = _speeds(kin, n)
-    point = doc.table("tool", _KEYS["tool"]).vector(
-        "point_mm", length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm"
-    )
+    point = _tool_point(doc.table("tool", _KEYS["tool"]))
     controller_table = doc.table("controller", CONTROLLER_KEYS, required=False)
     encoder_table = doc.table("encoder", ENCODER_KEYS)
     language, interface = read_language_and_interface(controller_table, encoder_table)
@@ -231,6 +230,21 @@ def _speeds(kin: Table, n: int | None) -> tuple[np.ndarray | None, bool | None]:
         unit="deg/s",
     )
     return speed, kin.boolean("joint_speed_confirmed", None)
+
+
+def _tool_point(tool: Table) -> np.ndarray | None:
+    """Read ``[tool] point_mm``, refusing a point in metres."""
+    point = tool.vector(
+        "point_mm", length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm"
+    )
+    if point is not None and in_metres(point):
+        tool.add(
+            "point_mm",
+            f"[{', '.join(f'{v:g}' for v in point)}]: every coordinate under 1 mm: that looks "
+            "like metres; give it in mm (e.g. [-60, 0, 50])",
+        )
+        return None
+    return point
 
 
 def _link_radii(geometry: Table, n: int | None) -> np.ndarray | None:

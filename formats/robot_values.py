@@ -6,6 +6,8 @@ slip (a wrong unit, a missing decimal point) that would only fail later.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from wirecal.formats.toml_fields import Table
@@ -49,6 +51,14 @@ MAX_EXIT_RADIUS_MM = 100.0
 AXIS_TOLERANCE = 0.01
 """A unit vector (an exit axis, a normal) must have length 1 to within this; it is then
 normalised exactly."""
+
+
+def in_metres(point_mm: Sequence[float] | np.ndarray) -> bool:
+    """Whether a point meant in mm is in metres: every coordinate under 1 mm, not all zero.
+
+    A wire's attachment 0.06 mm from the flange is a slip for 60 mm (0.06 m).
+    """
+    return bool(0 < np.max(np.abs(point_mm)) < 1)
 
 
 def point_mm(table: Table, key: str) -> tuple[float, float, float] | None:

@@ -1441,6 +1441,32 @@ def test_slow_speeds_given_to_import_urdf_are_written_confirmed(tmp_path):
     assert load_robot(out).speed_problem() is None
 
 
+def test_ud04_a_tool_point_in_metres_in_the_robot_file_is_named(tmp_path):
+    """UD04's neighbour in the robot file: [tool] point_mm = [-0.06, 0, 0.05] was taken as
+    mm and the plan blamed ('step[3].points_deg[3]: the wire length there is 0.0459 mm …
+    coincides with θ0'); the import's rule for --wire-point-mm now reads the file too."""
+    robot = tmp_path / "robot.toml"
+    metres = "point_mm = [-0.06, 0.0, 0.05]"
+    robot.write_text(re.sub(r"^point_mm = .*$", metres, ROBOT.read_text(), flags=re.M))
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {robot}: tool.point_mm: [-0.06, 0, 0.05]: every coordinate under 1 mm: that "
+        "looks like metres; give it in mm (e.g. [-60, 0, 50])\n"
+    )
+
+
+@pytest.mark.parametrize("point", ["[0.0, 0.0, 0.0]", "[0.0, 0.0, 1.5]"])
+def test_a_tool_point_at_or_near_the_flange_centre_is_read(tmp_path, point):
+    """The valid neighbours: a wire at the flange's centre, or 1.5 mm from it."""
+    robot = tmp_path / "robot.toml"
+    text = re.sub(r"^point_mm = .*$", f"point_mm = {point}", ROBOT.read_text(), flags=re.M)
+    robot.write_text(text)
+    r = invoke("psi", robot, PLAN)
+    outcome_is_clean(r)
+    assert "metres" not in r.output
+
+
 def test_c17_theta0_nan_is_refused_as_an_option():
     r = invoke("plan", ROBOT, "--theta0", "nan,-90,210,-90,0,-90")
     assert r.exit_code == 2
