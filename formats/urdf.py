@@ -115,6 +115,7 @@ def inertial(urdf: Urdf, link: str) -> tuple[float, np.ndarray] | None:
         )
     origin = block.find("origin")
     xyz = _floats(None if origin is None else origin.get("xyz"), "0 0 0", f"{where} origin xyz")
+    _check_metres(xyz, f"{where} origin xyz")
     return mass, xyz * 1000.0
 
 
@@ -244,11 +245,15 @@ def _check_units(j: Joint, where: str) -> None:
             f"rad/s ({MAX_SPEED_DEG_S:g} deg/s): URDF velocities are rad/s; written in deg/s? "
             "Convert them (× π/180) and import again"
         )
-    if np.max(np.abs(j.xyz_m)) > MAX_OFFSET_M:
+    _check_metres(j.xyz_m, f"{where}: origin xyz")
+
+
+def _check_metres(xyz_m: np.ndarray, what: str) -> None:
+    """Refuse an offset ``what`` names that is in millimetres (beyond :data:`MAX_OFFSET_M`)."""
+    if np.max(np.abs(xyz_m)) > MAX_OFFSET_M:
         raise WirecalError(
-            f"{where}: origin xyz {' '.join(f'{v:g}' for v in j.xyz_m)} is beyond "
-            f"{MAX_OFFSET_M:g} m: URDF lengths are metres; written in millimetres? Divide "
-            "them by 1000 and import again"
+            f"{what} {' '.join(f'{v:g}' for v in xyz_m)} is beyond {MAX_OFFSET_M:g} m: URDF "
+            "lengths are metres; written in millimetres? Divide them by 1000 and import again"
         )
 
 

@@ -1032,6 +1032,27 @@ def test_a_fine_encoder_scale_is_written_to_its_digits(tmp_path):
     assert "mm_per_count = 1.234567e-05\n" in out.read_text()
 
 
+@pytest.mark.parametrize("xyz", ["50 0 0", "1e306 0 0"])
+def test_nd21_nd26_an_inertial_origin_in_millimetres_is_named(tmp_path, xyz):
+    """ND21's and ND26's neighbour in <inertial>: a centre of mass at 50 m was blamed on
+    gravity.link_com_mm beside a second, wrong problem ('give link_mass_kg and link_com_mm
+    together'); 1e306 m overflowed (RuntimeWarning) into 'value 1 is inf'."""
+    inertial = (
+        f'<link name="l2"><inertial><origin xyz="{xyz}"/><mass value="3"/>'
+        '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>'
+    )
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(URDF.read_text().replace('<link name="l2"/>', inertial, 1))
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    shown = " ".join(f"{float(v):g}" for v in xyz.split())
+    assert r.output == (
+        f"error: {urdf}: link 'l2': <inertial> origin xyz {shown} is beyond 10 m: URDF "
+        "lengths are metres; written in millimetres? Divide them by 1000 and import again\n"
+    )
+
+
 def test_nl49_a_reference_reading_with_a_large_spread_is_refused(tmp_path):
     robot, log_path = _with_gauge(tmp_path)
     lines = log_path.read_text().splitlines()
