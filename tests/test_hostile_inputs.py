@@ -1053,6 +1053,41 @@ def test_nd21_nd26_an_inertial_origin_in_millimetres_is_named(tmp_path, xyz):
     )
 
 
+def _with_collision(tmp_path, geometry: str):
+    urdf = tmp_path / "arm.urdf"
+    collision = f'<link name="l2"><collision><geometry>{geometry}</geometry></collision></link>'
+    urdf.write_text(URDF.read_text().replace('<link name="l2"/>', collision, 1))
+    return urdf
+
+
+@pytest.mark.parametrize(
+    ("geometry", "reach"),
+    [('<box size="300 300 300"/>', "259.8"), ('<cylinder radius="1e306" length="1"/>', "inf")],
+)
+def test_nd26_collision_geometry_in_millimetres_is_named(tmp_path, geometry, reach):
+    """ND26's neighbour in <collision>: a box of 300 (mm meant, metres read) was dropped as
+    'no readable geometry' and link 2 got the length rule's 61 mm radius — a capsule far
+    thinner than the body the URDF meant (282 mm when in metres), so plan could route the
+    wire through the arm; a radius of 1e306 printed numpy's RuntimeWarnings."""
+    urdf = _with_collision(tmp_path, geometry)
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {urdf}: link 'l2': its geometry reaches {reach} m from the link's origin, "
+        "beyond 10 m: URDF lengths are metres; written in millimetres? Divide them by 1000 "
+        '(a mesh in mm: scale="0.001 0.001 0.001") and import again\n'
+    )
+
+
+def test_collision_geometry_in_metres_sets_the_radius(tmp_path):
+    """The valid neighbour: the same box in metres is read, and widens link 2."""
+    urdf = _with_collision(tmp_path, '<box size="0.3 0.3 0.3"/>')
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    assert r.exit_code == 0, r.output
+    assert "link radii 46, 282, 51, 46, 46 mm" in r.output
+
+
 def test_nl49_a_reference_reading_with_a_large_spread_is_refused(tmp_path):
     robot, log_path = _with_gauge(tmp_path)
     lines = log_path.read_text().splitlines()
