@@ -101,7 +101,7 @@ from wirecal.formats.robot_values import (
     MAX_REPEATABILITY_MM,
     MAX_SCALE_PPM,
     MAX_SPEED_DEG_S,
-    in_metres,
+    not_metres,
 )
 from wirecal.formats.robot_writer import robot_file_text
 from wirecal.formats.toml_fields import Table, document, duplicates, valid
@@ -237,14 +237,7 @@ def _tool_point(tool: Table) -> np.ndarray | None:
     point = tool.vector(
         "point_mm", length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm"
     )
-    if point is not None and in_metres(point):
-        tool.add(
-            "point_mm",
-            f"[{', '.join(f'{v:g}' for v in point)}]: every coordinate under 1 mm: that looks "
-            "like metres; give it in mm (e.g. [-60, 0, 50])",
-        )
-        return None
-    return point
+    return not_metres(tool, "point_mm", point, " (e.g. [-60, 0, 50])")
 
 
 def _link_radii(geometry: Table, n: int | None) -> np.ndarray | None:

@@ -61,6 +61,23 @@ def in_metres(point_mm: Sequence[float] | np.ndarray) -> bool:
     return bool(0 < np.max(np.abs(point_mm)) < 1)
 
 
+def not_metres(
+    table: Table, key: str, point: np.ndarray | None, example: str = ""
+) -> np.ndarray | None:
+    """Return ``point``; None, with a problem naming ``key``, when it is in metres.
+
+    ``example`` (" (e.g. …)") ends the problem.
+    """
+    if point is None or not in_metres(point):
+        return point
+    table.add(
+        key,
+        f"[{', '.join(f'{v:g}' for v in point)}]: every coordinate under 1 mm: that looks like "
+        f"metres; give it in mm{example}",
+    )
+    return None
+
+
 def point_mm(table: Table, key: str) -> tuple[float, float, float] | None:
     """Read a point (x, y, z) in mm, each coordinate within :data:`MAX_LENGTH_MM`."""
     v = table.vector(key, length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM)
