@@ -917,6 +917,18 @@ def test_rk28_receive_is_bounded_as_every_other_input(tmp_path):
     assert journal_path(out).stat().st_size <= MAX_INPUT_BYTES
 
 
+def _import_refused(tmp_path, text: str):
+    """Import ``text`` as a URDF: refused cleanly (status 2), nothing written; its name and
+    the command's output."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(text)
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert not (tmp_path / "r.toml").exists()
+    return urdf, r.output
+
+
 URDF_UNITS = {
     "ND22": (
         ('rpy="1.5707963267948966 0 0"', 'rpy="-90 0 0"'),
@@ -939,13 +951,8 @@ URDF_UNITS = {
 def test_urdf_units_are_checked_naming_joint_and_attribute(tmp_path, case):
     """Degrees imported as radians without a word (ND22); the others blamed the output."""
     (old, new), message = URDF_UNITS[case]
-    urdf = tmp_path / "arm.urdf"
-    urdf.write_text(URDF.read_text().replace(old, new, 1))
-    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
-    outcome_is_clean(r)
-    assert r.exit_code == 2
-    assert re.search(message, r.output), r.output
-    assert not (tmp_path / "r.toml").exists()
+    _, output = _import_refused(tmp_path, URDF.read_text().replace(old, new, 1))
+    assert re.search(message, output), output
 
 
 @pytest.mark.parametrize(("velocity", "joints"), [("180", 1), ("1e308", 1), ("1e308", 6)])
@@ -954,17 +961,13 @@ def test_nd24_urdf_speeds_in_deg_s_are_named_by_joint_and_attribute(tmp_path, ve
     the output file ('r.toml: kinematics.joint_speed_deg_s: value 1 is 10313.24…'), 1e308
     on one joint too ('value 1 is inf'), and 1e308 on every joint ended in a traceback
     (OverflowError in the placeholder-speed check)."""
-    urdf = tmp_path / "arm.urdf"
-    urdf.write_text(URDF.read_text().replace('velocity="3.0"', f'velocity="{velocity}"', joints))
-    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
-    outcome_is_clean(r)
-    assert r.exit_code == 2
-    assert r.output == (
+    text = URDF.read_text().replace('velocity="3.0"', f'velocity="{velocity}"', joints)
+    urdf, output = _import_refused(tmp_path, text)
+    assert output == (
         f"error: {urdf}: joint 'j1': limit velocity={float(velocity):g}, beyond 174.5 rad/s "
         "(10000 deg/s): URDF velocities are rad/s; written in deg/s? Convert them (× π/180) "
         "and import again\n"
     )
-    assert not (tmp_path / "r.toml").exists()
 
 
 def test_a_fast_urdf_joint_in_rad_s_is_imported(tmp_path):
@@ -983,13 +986,9 @@ def test_nd26_a_robot_file_the_urdf_makes_too_long_names_the_urdf(tmp_path):
     """ND26's neighbour: each origin within the URDF's 10 m, yet 9.99 m and the next joint's
     offsets make a DH d of 10 020 mm, beyond the robot file's 10 000: the refusal named the
     output file ('r.toml: kinematics.dh[1]: value 4 is 10020.0'), which the user cannot fix."""
-    urdf = tmp_path / "arm.urdf"
-    urdf.write_text(URDF.read_text().replace('xyz="0 0 0.3"', 'xyz="0 0 9.99"', 1))
+    urdf, output = _import_refused(tmp_path, URDF.read_text().replace("0 0 0.3", "0 0 9.99", 1))
     out = tmp_path / "r.toml"
-    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", out)
-    outcome_is_clean(r)
-    assert r.exit_code == 2
-    lines = r.output.splitlines()
+    lines = output.splitlines()
     assert lines[0] == (
         f"error: {urdf} (as the robot file {out}): kinematics.dh[1]: value 4 is 10020.0; "
         "give a number within ±10000 mm"
@@ -1000,7 +999,6 @@ def test_nd26_a_robot_file_the_urdf_makes_too_long_names_the_urdf(tmp_path):
         "[encoder], the options --mm-per-count, --range-mm and --counter-bits; correct them "
         "and import again"
     )
-    assert not out.exists()
 
 
 @pytest.mark.parametrize(
@@ -1041,23 +1039,19 @@ def test_nd21_nd26_an_inertial_origin_in_millimetres_is_named(tmp_path, xyz):
         f'<link name="l2"><inertial><origin xyz="{xyz}"/><mass value="3"/>'
         '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>'
     )
-    urdf = tmp_path / "arm.urdf"
-    urdf.write_text(URDF.read_text().replace('<link name="l2"/>', inertial, 1))
-    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
-    outcome_is_clean(r)
-    assert r.exit_code == 2
+    urdf, output = _import_refused(
+        tmp_path, URDF.read_text().replace('<link name="l2"/>', inertial)
+    )
     shown = " ".join(f"{float(v):g}" for v in xyz.split())
-    assert r.output == (
+    assert output == (
         f"error: {urdf}: link 'l2': <inertial> origin xyz {shown} is beyond 10 m: URDF "
         "lengths are metres; written in millimetres? Divide them by 1000 and import again\n"
     )
 
 
-def _with_collision(tmp_path, geometry: str):
-    urdf = tmp_path / "arm.urdf"
+def _with_collision(geometry: str) -> str:
     collision = f'<link name="l2"><collision><geometry>{geometry}</geometry></collision></link>'
-    urdf.write_text(URDF.read_text().replace('<link name="l2"/>', collision, 1))
-    return urdf
+    return URDF.read_text().replace('<link name="l2"/>', collision, 1)
 
 
 @pytest.mark.parametrize(
@@ -1069,11 +1063,8 @@ def test_nd26_collision_geometry_in_millimetres_is_named(tmp_path, geometry, rea
     'no readable geometry' and link 2 got the length rule's 61 mm radius — a capsule far
     thinner than the body the URDF meant (282 mm when in metres), so plan could route the
     wire through the arm; a radius of 1e306 printed numpy's RuntimeWarnings."""
-    urdf = _with_collision(tmp_path, geometry)
-    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
-    outcome_is_clean(r)
-    assert r.exit_code == 2
-    assert r.output == (
+    urdf, output = _import_refused(tmp_path, _with_collision(geometry))
+    assert output == (
         f"error: {urdf}: link 'l2': its geometry reaches {reach} m from the link's origin, "
         "beyond 10 m: URDF lengths are metres; written in millimetres? Divide them by 1000 "
         '(a mesh in mm: scale="0.001 0.001 0.001") and import again\n'
@@ -1082,7 +1073,8 @@ def test_nd26_collision_geometry_in_millimetres_is_named(tmp_path, geometry, rea
 
 def test_collision_geometry_in_metres_sets_the_radius(tmp_path):
     """The valid neighbour: the same box in metres is read, and widens link 2."""
-    urdf = _with_collision(tmp_path, '<box size="0.3 0.3 0.3"/>')
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(_with_collision('<box size="0.3 0.3 0.3"/>'))
     r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
     assert r.exit_code == 0, r.output
     assert "link radii 46, 282, 51, 46, 46 mm" in r.output
