@@ -326,17 +326,33 @@ def read_input(path: str | Path, what: str, max_bytes: int = MAX_INPUT_BYTES) ->
     return raw, source
 
 
-def decode_text(raw: bytes, source: str, what: str) -> str:
-    """Return an input's bytes as UTF-8 text; a :class:`WirecalError` names any other encoding.
+def is_utf16(raw: bytes) -> bool:
+    """Whether ``raw`` is UTF-16 text (what Windows calls "Unicode").
 
-    UTF-16 (what Windows calls "Unicode") is told by its byte-order mark or by NUL bytes,
-    which no UTF-8 text input holds.
+    Told by its byte-order mark, or, without one, by a NUL in nine of ten of the high bytes
+    of its first 2048 characters (ASCII text in UTF-16 has every one NUL).
     """
-    if raw.startswith((b"\xff\xfe", b"\xfe\xff")) or b"\x00" in raw[:4096]:
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return True
+    head = np.frombuffer(raw[:4096], dtype=np.uint8)[: len(raw[:4096]) // 2 * 2]
+    if head.size < 2:
+        return False
+    return bool(max(np.mean(head[1::2] == 0), np.mean(head[0::2] == 0)) >= 0.9)
+
+
+def refuse_utf16(raw: bytes, source: str, what: str) -> None:
+    """Raise a :class:`WirecalError` naming the encoding if ``raw`` is UTF-16."""
+    if is_utf16(raw):
         raise WirecalError(
-            f"{source}: UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8 "
-            f"(a {what} is plain UTF-8 text)"
+            f"{source}: UTF-16 text; save it as UTF-8 (a {what} is plain UTF-8 text)"
         )
+
+
+def decode_text(raw: bytes, source: str, what: str) -> str:
+    """Return an input's bytes as UTF-8 text; a :class:`WirecalError` names any other encoding."""
+    refuse_utf16(raw, source, what)
+    if b"\x00" in raw[:4096]:
+        raise WirecalError(f"{source}: not text (it holds NUL bytes); is this a {what}?")
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -510,6 +510,28 @@ def test_one_bracket_rule_for_the_three_languages(tmp_path):
     assert r.exit_code == 0, r.output
 
 
+@pytest.mark.parametrize("suffix", [".v2", ".script", ".mod"])
+def test_nt14_lint_names_a_utf16_program(tmp_path, suffix):
+    """NT14's neighbour in lint: a program saved as UTF-16 gave one 'code outside a program'
+    per line (3306 for the Viper's module), the encoding not named."""
+    program = tmp_path / f"p{suffix}"
+    program.write_bytes('.PROGRAM a()\n    TYPE "x"\n.END\n'.encode("utf-16"))
+    r = invoke("lint", program)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {program}: UTF-16 text; save it as UTF-8 (a program file is plain UTF-8 text)\n"
+    )
+
+
+def test_lint_still_reads_latin_1_programs(tmp_path):
+    """The valid neighbour: a V+ comment in Latin-1 (a byte above 127, not UTF-8) lints."""
+    program = tmp_path / "p.v2"
+    program.write_bytes('.PROGRAM a()\n    ; Fa\xe7ade\n    TYPE "x"\n.END\n'.encode("latin-1"))
+    r = invoke("lint", program)
+    assert r.exit_code == 0, r.output
+
+
 @pytest.mark.parametrize("suffix", [".v2", ".script"])
 def test_lint_reads_nesting_up_to_its_bounds(tmp_path, suffix):
     """63 IFs inside the program (64 blocks with URScript's def) and a 90-operator line."""
@@ -1316,7 +1338,7 @@ def test_a_wrong_column_line_in_quotes_is_still_named_as_columns(tmp_path, log):
 
 def test_nt14_utf16_is_named(tmp_path, log):
     out = _solve_text(tmp_path, log.read_text().encode("utf-16-le"))
-    assert "UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8" in out
+    assert "UTF-16 text; save it as UTF-8 (a wirecal log is plain UTF-8 text)" in out
     assert len(out.splitlines()) == 1
 
 
@@ -1332,8 +1354,7 @@ def test_nt14_a_toml_file_in_utf16_is_named(tmp_path, which, encoding):
     r = invoke("psi", *args)
     assert r.exit_code == 2, r.output
     assert r.output == (
-        f"error: {bad}: UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8 "
-        f"(a {which} is plain UTF-8 text)\n"
+        f"error: {bad}: UTF-16 text; save it as UTF-8 (a {which} is plain UTF-8 text)\n"
     )
 
 
