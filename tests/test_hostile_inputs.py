@@ -1536,6 +1536,20 @@ def test_a_tool_point_at_or_near_the_flange_centre_is_read(tmp_path, point):
     assert "metres" not in r.output
 
 
+def test_plan_says_when_points_is_fewer_than_the_steps_keep(tmp_path):
+    """A new case beside C17 (plan's options): --points 5 wrote a plan of 20 points without
+    a word (each of the Viper's 10 steps keeps at least 2); --points 25 is honoured."""
+    r = invoke("plan", ROBOT, "--points", 5, "-o", tmp_path / "p.toml")
+    assert r.exit_code == 0, r.output
+    assert (
+        "note: --points 5: each of the plan's 10 steps keeps at least 2 points, so it has 20"
+    ) in r.output
+    r = invoke("plan", ROBOT, "--points", 25, "-o", tmp_path / "q.toml")
+    assert r.exit_code == 0, r.output
+    assert "note: --points" not in r.output
+    assert "(25 points, 0 via points)" in r.output
+
+
 def test_c17_theta0_nan_is_refused_as_an_option():
     r = invoke("plan", ROBOT, "--theta0", "nan,-90,210,-90,0,-90")
     assert r.exit_code == 2
