@@ -1550,6 +1550,32 @@ def test_plan_says_when_points_is_fewer_than_the_steps_keep(tmp_path):
     assert "(25 points, 0 via points)" in r.output
 
 
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--width", 40], "--width folds the twin's console: give --console FILE too"),
+        (["--outlier-mm", 5], "--outlier-mm sizes the outliers: give --outliers N too"),
+    ],
+    ids=["width", "outlier-mm"],
+)
+def test_simulate_refuses_an_option_it_would_ignore(tmp_path, args, message):
+    """A new case beside S05 (simulate's options): --width without --console and
+    --outlier-mm without --outliers were ignored without a word (exit 0), where --console
+    without --controller is refused."""
+    r = invoke("simulate", ROBOT, PLAN, "-o", tmp_path / "run.csv", *args)
+    assert r.exit_code == 2
+    assert f"error: {message}" in r.output
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_simulate_takes_the_options_with_what_they_apply_to(tmp_path):
+    """The valid neighbour: --outlier-mm with --outliers, and the defaults, still run."""
+    r = invoke(
+        "simulate", ROBOT, PLAN, "-o", tmp_path / "run.csv", "--outliers", 2, "--outlier-mm", 5
+    )
+    assert r.exit_code == 0, r.output
+
+
 def test_c17_theta0_nan_is_refused_as_an_option():
     r = invoke("plan", ROBOT, "--theta0", "nan,-90,210,-90,0,-90")
     assert r.exit_code == 2
