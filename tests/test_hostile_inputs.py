@@ -1576,6 +1576,25 @@ def test_simulate_takes_the_options_with_what_they_apply_to(tmp_path):
     assert r.exit_code == 0, r.output
 
 
+def test_refine_scale_without_a_reference_step_is_refused(tmp_path, log):
+    """A new case beside the options above: solve --refine-scale on a log without a
+    reference step ran without a word and without refining anything."""
+    r = invoke("solve", ROBOT, PLAN, log, "--refine-scale")
+    assert r.exit_code == 2
+    assert (
+        f"error: --refine-scale refines the scale the log's reference step measured; {log} "
+        "has no reference step (a gauge, [encoder] reference_length_mm, and a run with it): "
+        "leave it out"
+    ) in " ".join(r.output.split())
+
+
+def test_refine_scale_with_a_reference_step_runs(tmp_path):
+    """The valid neighbour: a log with its reference step takes --refine-scale."""
+    robot, log_path = _with_gauge(tmp_path)
+    r = invoke("solve", robot, PLAN, log_path, "--refine-scale")
+    assert r.exit_code == 0, r.output
+
+
 def test_c17_theta0_nan_is_refused_as_an_option():
     r = invoke("plan", ROBOT, "--theta0", "nan,-90,210,-90,0,-90")
     assert r.exit_code == 2
