@@ -12,6 +12,7 @@ from wirecal.formats.robot_values import (
     MAX_CELL_MARGIN_MM,
     MAX_JOINT_DEG,
     MAX_LENGTH_MM,
+    not_metres,
     point_mm,
     unit_vector,
 )
@@ -80,6 +81,8 @@ def _box(table: Table) -> Box | None:
         return None
     if not all(a < b for a, b in zip(lo, hi, strict=True)):
         table.add("max_mm", f"{list(hi)} is not above min_mm {list(lo)} in every coordinate")
+        return None
+    if not_metres(table, "", np.r_[lo, hi]) is None:  # a box of under 1 mm: no obstacle
         return None
     return Box(name, lo, hi)
 

@@ -1595,6 +1595,35 @@ def test_refine_scale_with_a_reference_step_runs(tmp_path):
     assert r.exit_code == 0, r.output
 
 
+def _with_box(tmp_path, lo: str, hi: str):
+    robot = tmp_path / "robot.toml"
+    box = f'\n[[cell.box]]\nname = "fence"\nmin_mm = {lo}\nmax_mm = {hi}\n'
+    robot.write_text(ROBOT.read_text().replace("\n[gravity]", box + "\n[gravity]", 1))
+    return robot
+
+
+def test_ud04_a_cell_box_in_metres_is_named(tmp_path):
+    """UD04's neighbour in [cell]: a box in metres (a fence 0.4–0.6 m) became a box of
+    0.2 mm at the base, into which link 1 reached on every move: psi warned 80 times and
+    gen refused each point as a collision with box 'fence', the unit not named."""
+    robot = _with_box(tmp_path, "[0.4, -0.5, -0.335]", "[0.6, 0.5, 0.5]")
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {robot}: cell.box[2]: [0.4, -0.5, -0.335, 0.6, 0.5, 0.5]: every coordinate "
+        "under 1 mm: that looks like metres; give it in mm\n"
+    )
+
+
+def test_a_cell_box_in_mm_at_the_origin_is_read(tmp_path):
+    """The valid neighbour: a box from the origin (a corner at 0, 0, 0) in mm."""
+    robot = _with_box(tmp_path, "[0.0, 0.0, 0.0]", "[600.0, 500.0, 500.0]")
+    r = invoke("psi", robot, PLAN)
+    outcome_is_clean(r)
+    assert "metres" not in r.output
+    assert "box 'fence'" in r.output  # read, and in the arm's way
+
+
 def test_c17_theta0_nan_is_refused_as_an_option():
     r = invoke("plan", ROBOT, "--theta0", "nan,-90,210,-90,0,-90")
     assert r.exit_code == 2
