@@ -105,4 +105,6 @@ def _housing(table: Table) -> Housing | bool | None:
     radius = table.number("radius_mm", above=0, hi=MAX_LENGTH_MM, unit="mm")
     if direction is None or length is None or radius is None:
         return False
+    if not_metres(table, "", np.array([length, radius])) is None:
+        return False
     return Housing(direction, length, radius)

@@ -54,7 +54,7 @@ normalised exactly."""
 
 
 def in_metres(point_mm: Sequence[float] | np.ndarray) -> bool:
-    """Whether a point meant in mm is in metres: every coordinate under 1 mm, not all zero.
+    """Whether a point meant in mm is in metres: every value under 1 mm, not all zero.
 
     A wire's attachment 0.06 mm from the flange is a slip for 60 mm (0.06 m).
     """
@@ -72,7 +72,7 @@ def not_metres(
         return point
     table.add(
         key,
-        f"[{', '.join(f'{v:g}' for v in point)}]: every coordinate under 1 mm: that looks like "
+        f"[{', '.join(f'{v:g}' for v in point)}]: every value under 1 mm: that looks like "
         f"metres; give it in mm{example}",
     )
     return None

@@ -1520,7 +1520,7 @@ def test_ud04_a_tool_point_in_metres_in_the_robot_file_is_named(tmp_path):
     r = invoke("psi", robot, PLAN)
     assert r.exit_code == 2
     assert r.output == (
-        f"error: {robot}: tool.point_mm: [-0.06, 0, 0.05]: every coordinate under 1 mm: that "
+        f"error: {robot}: tool.point_mm: [-0.06, 0, 0.05]: every value under 1 mm: that "
         "looks like metres; give it in mm (e.g. [-60, 0, 50])\n"
     )
 
@@ -1610,8 +1610,25 @@ def test_ud04_a_cell_box_in_metres_is_named(tmp_path):
     r = invoke("psi", robot, PLAN)
     assert r.exit_code == 2
     assert r.output == (
-        f"error: {robot}: cell.box[2]: [0.4, -0.5, -0.335, 0.6, 0.5, 0.5]: every coordinate "
-        "under 1 mm: that looks like metres; give it in mm\n"
+        f"error: {robot}: cell.box[2]: [0.4, -0.5, -0.335, 0.6, 0.5, 0.5]: every value under "
+        "1 mm: that looks like metres; give it in mm\n"
+    )
+
+
+def test_ud04_an_encoder_housing_in_metres_is_named(tmp_path):
+    """UD04's neighbour for the encoder housing: 0.12 m by 0.05 m was read as a 0.12 mm
+    cylinder, no obstacle to the arm or the wire, without a word."""
+    robot = tmp_path / "robot.toml"
+    housing = (
+        "\n[cell.encoder_housing]\ndirection = [0.0, 0.0, -1.0]\nlength_mm = 0.12\n"
+        "radius_mm = 0.05\n"
+    )
+    robot.write_text(ROBOT.read_text().replace("\n[gravity]", housing + "\n[gravity]", 1))
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {robot}: cell.encoder_housing: [0.12, 0.05]: every value under 1 mm: "
+        "that looks like metres; give it in mm\n"
     )
 
 

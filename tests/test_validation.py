@@ -140,7 +140,7 @@ def test_ud04_a_setup_in_metres_is_named(tmp_path, old, new, message):
     with pytest.raises(WirecalError) as info:
         load_setup(bad)
     assert info.value.problems == [
-        f"{bad}: {message}: every coordinate under 1 mm: that looks like metres; give it in mm"
+        f"{bad}: {message}: every value under 1 mm: that looks like metres; give it in mm"
     ]
 
 
