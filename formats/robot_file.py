@@ -251,6 +251,8 @@ def _link_radii(geometry: Table, n: int | None) -> np.ndarray | None:
         hi=MAX_LENGTH_MM,
         unit="mm",
     )
+    if radii is not None:  # in metres: a problem; the units check reads them as given
+        not_metres(geometry, "link_radius_mm", radii)
     if n is not None and radii is None:
         radii = np.full(n - 1, DEFAULT_LINK_RADIUS_MM)
     return radii

@@ -58,7 +58,7 @@ def in_metres(point_mm: Sequence[float] | np.ndarray) -> bool:
 
     A wire's attachment 0.06 mm from the flange is a slip for 60 mm (0.06 m).
     """
-    return bool(0 < np.max(np.abs(point_mm)) < 1)
+    return bool(0 < np.max(np.abs(point_mm), initial=0.0) < 1)
 
 
 def not_metres(

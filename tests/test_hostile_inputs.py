@@ -1632,6 +1632,21 @@ def test_ud04_an_encoder_housing_in_metres_is_named(tmp_path):
     )
 
 
+def test_ud04_link_radii_in_metres_are_named(tmp_path):
+    """UD04's neighbour in [geometry]: link radii in metres (0.07 …) made capsules of
+    0.07 mm for the wire clearance and the collision checks; gen wrote the programs
+    without a word."""
+    robot = tmp_path / "robot.toml"
+    metres = "link_radius_mm = [0.07, 0.07, 0.055, 0.045, 0.037]"
+    robot.write_text(re.sub(r"^link_radius_mm = .*$", metres, ROBOT.read_text(), flags=re.M))
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {robot}: geometry.link_radius_mm: [0.07, 0.07, 0.055, 0.045, 0.037]: every "
+        "value under 1 mm: that looks like metres; give it in mm\n"
+    )
+
+
 def test_a_cell_box_in_mm_at_the_origin_is_read(tmp_path):
     """The valid neighbour: a box from the origin (a corner at 0, 0, 0) in mm."""
     robot = _with_box(tmp_path, "[0.0, 0.0, 0.0]", "[600.0, 500.0, 500.0]")
