@@ -1510,21 +1510,6 @@ def test_slow_speeds_given_to_import_urdf_are_written_confirmed(tmp_path):
     assert load_robot(out).speed_problem() is None
 
 
-def test_ud04_a_tool_point_in_metres_in_the_robot_file_is_named(tmp_path):
-    """UD04's neighbour in the robot file: [tool] point_mm = [-0.06, 0, 0.05] was taken as
-    mm and the plan blamed ('step[3].points_deg[3]: the wire length there is 0.0459 mm …
-    coincides with θ0'); the import's rule for --wire-point-mm now reads the file too."""
-    robot = tmp_path / "robot.toml"
-    metres = "point_mm = [-0.06, 0.0, 0.05]"
-    robot.write_text(re.sub(r"^point_mm = .*$", metres, ROBOT.read_text(), flags=re.M))
-    r = invoke("psi", robot, PLAN)
-    assert r.exit_code == 2
-    assert r.output == (
-        f"error: {robot}: tool.point_mm: [-0.06, 0, 0.05]: every value under 1 mm: that "
-        "looks like metres; give it in mm (e.g. [-60, 0, 50])\n"
-    )
-
-
 @pytest.mark.parametrize("point", ["[0.0, 0.0, 0.0]", "[0.0, 0.0, 1.5]"])
 def test_a_tool_point_at_or_near_the_flange_centre_is_read(tmp_path, point):
     """The valid neighbours: a wire at the flange's centre, or 1.5 mm from it."""
@@ -1595,61 +1580,75 @@ def test_refine_scale_with_a_reference_step_runs(tmp_path):
     assert r.exit_code == 0, r.output
 
 
-def _with_box(tmp_path, lo: str, hi: str):
+def _appended(text: str, table: str) -> str:
+    """The Viper's robot file text with ``table`` added before [gravity]."""
+    return text.replace("\n[gravity]", table + "\n[gravity]", 1)
+
+
+METRES = {
+    # case: (the robot file's edit, the key and values named, the example given)
+    "tool point": (
+        lambda t: re.sub(r"^point_mm = .*$", "point_mm = [-0.06, 0.0, 0.05]", t, flags=re.M),
+        "tool.point_mm: [-0.06, 0, 0.05]",
+        " (e.g. [-60, 0, 50])",
+    ),
+    "link radii": (
+        lambda t: re.sub(
+            r"^link_radius_mm = .*$",
+            "link_radius_mm = [0.07, 0.07, 0.055, 0.045, 0.037]",
+            t,
+            flags=re.M,
+        ),
+        "geometry.link_radius_mm: [0.07, 0.07, 0.055, 0.045, 0.037]",
+        "",
+    ),
+    "cell box": (
+        lambda t: _appended(
+            t,
+            '\n[[cell.box]]\nname = "fence"\nmin_mm = [0.4, -0.5, -0.335]\n'
+            "max_mm = [0.6, 0.5, 0.5]\n",
+        ),
+        "cell.box[2]: [0.4, -0.5, -0.335, 0.6, 0.5, 0.5]",
+        "",
+    ),
+    "encoder housing": (
+        lambda t: _appended(
+            t,
+            "\n[cell.encoder_housing]\ndirection = [0.0, 0.0, -1.0]\nlength_mm = 0.12\n"
+            "radius_mm = 0.05\n",
+        ),
+        "cell.encoder_housing: [0.12, 0.05]",
+        "",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", METRES)
+def test_ud04_lengths_in_metres_in_the_robot_file_are_named(tmp_path, case):
+    """UD04's neighbours in the robot file, each taken as mm without naming the unit: a tool
+    point of [-0.06, 0, 0.05] (the plan was blamed: 'the wire length there is 0.0459 mm …
+    coincides with θ0'); link radii of 0.07 … (0.07 mm capsules for the wire clearance and
+    the collision checks, and gen wrote the programs); a fence box 0.4–0.6 m (a 0.2 mm box
+    at the base that link 1 reached into on every move: 80 psi warnings, a collision per
+    gen point); an encoder housing of 0.12 by 0.05 m (a 0.12 mm cylinder, no obstacle)."""
+    edit, named, example = METRES[case]
     robot = tmp_path / "robot.toml"
-    box = f'\n[[cell.box]]\nname = "fence"\nmin_mm = {lo}\nmax_mm = {hi}\n'
-    robot.write_text(ROBOT.read_text().replace("\n[gravity]", box + "\n[gravity]", 1))
-    return robot
-
-
-def test_ud04_a_cell_box_in_metres_is_named(tmp_path):
-    """UD04's neighbour in [cell]: a box in metres (a fence 0.4–0.6 m) became a box of
-    0.2 mm at the base, into which link 1 reached on every move: psi warned 80 times and
-    gen refused each point as a collision with box 'fence', the unit not named."""
-    robot = _with_box(tmp_path, "[0.4, -0.5, -0.335]", "[0.6, 0.5, 0.5]")
+    robot.write_text(edit(ROBOT.read_text()))
     r = invoke("psi", robot, PLAN)
     assert r.exit_code == 2
     assert r.output == (
-        f"error: {robot}: cell.box[2]: [0.4, -0.5, -0.335, 0.6, 0.5, 0.5]: every value under "
-        "1 mm: that looks like metres; give it in mm\n"
-    )
-
-
-def test_ud04_an_encoder_housing_in_metres_is_named(tmp_path):
-    """UD04's neighbour for the encoder housing: 0.12 m by 0.05 m was read as a 0.12 mm
-    cylinder, no obstacle to the arm or the wire, without a word."""
-    robot = tmp_path / "robot.toml"
-    housing = (
-        "\n[cell.encoder_housing]\ndirection = [0.0, 0.0, -1.0]\nlength_mm = 0.12\n"
-        "radius_mm = 0.05\n"
-    )
-    robot.write_text(ROBOT.read_text().replace("\n[gravity]", housing + "\n[gravity]", 1))
-    r = invoke("psi", robot, PLAN)
-    assert r.exit_code == 2
-    assert r.output == (
-        f"error: {robot}: cell.encoder_housing: [0.12, 0.05]: every value under 1 mm: "
-        "that looks like metres; give it in mm\n"
-    )
-
-
-def test_ud04_link_radii_in_metres_are_named(tmp_path):
-    """UD04's neighbour in [geometry]: link radii in metres (0.07 …) made capsules of
-    0.07 mm for the wire clearance and the collision checks; gen wrote the programs
-    without a word."""
-    robot = tmp_path / "robot.toml"
-    metres = "link_radius_mm = [0.07, 0.07, 0.055, 0.045, 0.037]"
-    robot.write_text(re.sub(r"^link_radius_mm = .*$", metres, ROBOT.read_text(), flags=re.M))
-    r = invoke("psi", robot, PLAN)
-    assert r.exit_code == 2
-    assert r.output == (
-        f"error: {robot}: geometry.link_radius_mm: [0.07, 0.07, 0.055, 0.045, 0.037]: every "
-        "value under 1 mm: that looks like metres; give it in mm\n"
+        f"error: {robot}: {named}: every value under 1 mm: that looks like metres; give it in "
+        f"mm{example}\n"
     )
 
 
 def test_a_cell_box_in_mm_at_the_origin_is_read(tmp_path):
     """The valid neighbour: a box from the origin (a corner at 0, 0, 0) in mm."""
-    robot = _with_box(tmp_path, "[0.0, 0.0, 0.0]", "[600.0, 500.0, 500.0]")
+    robot = tmp_path / "robot.toml"
+    box = (
+        '\n[[cell.box]]\nname = "fence"\nmin_mm = [0.0, 0.0, 0.0]\nmax_mm = [600.0, 500.0, 500.0]\n'
+    )
+    robot.write_text(_appended(ROBOT.read_text(), box))
     r = invoke("psi", robot, PLAN)
     outcome_is_clean(r)
     assert "metres" not in r.output
