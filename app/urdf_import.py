@@ -9,7 +9,7 @@ geometry or lengths (:mod:`wirecal.formats.urdf_geometry`); the mounting plane f
 the URDF's root link.
 
 Joint speeds a URDF gives as placeholders — every joint the same whole number of rad/s, or
-any joint below :data:`MIN_PLAUSIBLE_SPEED_DEG_S` — are written with
+any joint below :data:`~wirecal.solver.joint_speeds.MIN_PLAUSIBLE_SPEED_DEG_S` — are written with
 ``joint_speed_confirmed = false``: ``plan`` works (its times are estimates), ``gen`` refuses
 until the data sheet's speeds are entered, because the programs time every move from them
 (:meth:`wirecal.solver.robot.Robot.speed_problem`).
@@ -45,6 +45,7 @@ from wirecal.lang.registry import default_language, first_channel, language
 from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.identifiability import propose_parameters
+from wirecal.solver.joint_speeds import placeholder_speeds
 from wirecal.solver.kinematics import Model
 from wirecal.solver.robot import (
     Controller,
@@ -57,9 +58,6 @@ CONTINUOUS_DEG = 360.0
 """Range written for a URDF ``continuous`` joint (no limits in the file): one turn each way."""
 PROPOSAL_POINTS = 300
 EXACT_MM = 1e-9
-MIN_PLAUSIBLE_SPEED_DEG_S = 60.0
-"""Slowest joint speed taken as real (deg/s): industrial arms a draw wire calibrates move every
-joint at 100–600 °/s; a URDF template's 1 rad/s (57.3 °/s) is below it."""
 CELL_MARGIN_MM = 10.0
 """``[cell] margin_mm`` written by the import."""
 
@@ -139,9 +137,28 @@ def urdf_robot_file(urdf: str | Path, out_path: Path, opt: ImportOptions) -> Imp
         tables=cell,
         write_cell=False,  # the mounting plane from the URDF's root link, or a note why not
     )
-    robot_from_dict(tomllib.loads(text), str(out_path))  # what is written reads back
+    _reads_back(text, urdf, out_path)
     warnings = ([] if confirmed else speed_notes) + _wide_warning(radii)
     return Imported(text, ch, params, notes, warnings)
+
+
+def _reads_back(text: str, urdf: str | Path, out_path: Path) -> None:
+    """Raise unless the robot file ``text`` passes the robot file's checks.
+
+    Its values are the URDF's, so the problems name the URDF, not the file not yet written.
+    """
+    try:
+        robot_from_dict(tomllib.loads(text), f"{urdf} (as the robot file {out_path})")
+    except WirecalError as exc:
+        raise WirecalError(
+            [
+                *exc.problems,
+                f"{urdf}: the robot file made from it fails the check(s) above: its values "
+                "are the URDF's (joint origins in m, limits in rad, velocities in rad/s) and, "
+                "in [encoder], the options --mm-per-count, --range-mm and --counter-bits; "
+                "correct them and import again",
+            ]
+        ) from None
 
 
 def _encoder(opt: ImportOptions) -> Encoder:
@@ -191,25 +208,6 @@ def _limits(ch: UrdfChain) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str
     if problems:
         raise WirecalError(problems)
     return np.array(lo), np.array(hi), np.array(speed), notes
-
-
-def placeholder_speeds(speed_deg_s: np.ndarray) -> str | None:
-    """Return why joint speeds look like a URDF's placeholders, or None.
-
-    Placeholders: every joint the same whole number of rad/s (templates write 1.0), or any
-    joint slower than :data:`MIN_PLAUSIBLE_SPEED_DEG_S`.
-    """
-    rad_s = np.radians(speed_deg_s)
-    if np.all(rad_s == rad_s[0]) and abs(rad_s[0] - round(rad_s[0])) < 1e-9:
-        return f"every joint's <limit velocity> is {rad_s[0]:g} rad/s, a template's placeholder"
-    slow = np.flatnonzero(speed_deg_s < MIN_PLAUSIBLE_SPEED_DEG_S)
-    if slow.size:
-        joints = ", ".join(f"{j + 1} ({speed_deg_s[j]:.4g} °/s)" for j in slow)
-        return (
-            f"joint(s) {joints} are slower than {MIN_PLAUSIBLE_SPEED_DEG_S:g} °/s, "
-            "implausible for an industrial arm"
-        )
-    return None
 
 
 def _speeds(

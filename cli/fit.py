@@ -15,13 +15,16 @@ from wirecal.cli.options import (
     PATCH_OUTPUT,
     POSITIVE,
     SEED,
+    given,
 )
 from wirecal.formats.cable_table import read_cable_table
 from wirecal.formats.fileio import Outputs
 from wirecal.formats.patch import companion_paths, put_patch
 from wirecal.formats.robot_file import load_robot
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.fit.cable_data import CableTable
 from wirecal.solver.fit.gate import Gate, Judged, gate_fit, gate_json
+from wirecal.solver.fit.holdout import parse_scheme
 from wirecal.solver.fit.result import (
     FitOptions,
     FitResult,
@@ -136,6 +139,7 @@ def fit(
     the correction it makes, held-out rows beyond 10 floors, the residual, implausible
     sizes) exits with status 3 and writes nothing (docs/fit.md).
     """
+    _random_only(holdout)
     rb = load_robot(robot)
     options = FitOptions(
         holdout=holdout,
@@ -164,6 +168,17 @@ def fit(
     else:
         click.echo("\n".join([*gate_text(gate), "", *fit_text(result)]))
     _say_written(rb, patch_path, report_path, gate.chosen.label, as_json)
+
+
+def _random_only(holdout: str) -> None:
+    """Refuse --repeats and --seed, which act on random splits only, with another --holdout."""
+    if parse_scheme(holdout)[0] == "random":
+        return
+    for name in ("repeats", "seed"):
+        if given(name):
+            raise WirecalError(
+                f"--{name} acts on --holdout random:F only; with --holdout {holdout} leave it out"
+            )
 
 
 def _say_written(

@@ -7,7 +7,7 @@ import sys
 import click
 
 from wirecal.cli.main import user_errors
-from wirecal.formats.fileio import read_input
+from wirecal.formats.fileio import read_input, refuse_utf16
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.robot import SOFTWARE_PATTERN
 
@@ -69,7 +69,9 @@ def lint(files, language_key, separately, external_calls, software):
         lang = chosen or language_of_file(path)
         if chosen is None and language_of_suffix(path) is None:
             click.echo(f"{path}: no language has this suffix: read as {lang.title}", err=True)
-        text = read_input(path, "program file")[0].decode("latin-1")
+        raw, source = read_input(path, "program file")
+        refuse_utf16(raw, source, "program file")
+        text = raw.decode("latin-1")  # a controller's 8-bit text
         groups.setdefault(lang.key, {})[path] = text
     problems = 0
     for key, texts in groups.items():

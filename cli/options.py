@@ -6,6 +6,7 @@ import math
 from typing import Any
 
 import click
+from click.core import ParameterSource
 
 
 class Number(click.FloatRange):
@@ -27,6 +28,16 @@ class Number(click.FloatRange):
     def _describe_range(self) -> str:
         """Describe the bounds in the help; nothing for a number without any."""
         return "" if self.min is None and self.max is None else super()._describe_range()
+
+
+def given(name: str) -> bool:
+    """Whether the current command's option ``name`` (its parameter name) was given.
+
+    Given, not left at its default: an option that only acts with another is refused
+    without it, never ignored.
+    """
+    source = click.get_current_context().get_parameter_source(name)
+    return source not in (None, ParameterSource.DEFAULT, ParameterSource.DEFAULT_MAP)
 
 
 def number(

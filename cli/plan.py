@@ -230,5 +230,11 @@ def plan(
         print_json(_summary(d))
         return
     click.echo(d.header())
+    if points is not None and d.plan.n_points > points:
+        click.echo(
+            f"note: --points {points}: each of the plan's {len(d.plan.steps)} steps keeps at "
+            f"least {opt.min_points} points, so it has {d.plan.n_points}",
+            err=True,
+        )
     if output:
         click.echo(f"wrote {output}")

@@ -10,7 +10,7 @@ import click
 import numpy as np
 
 from wirecal.cli.main import user_errors
-from wirecal.cli.options import NON_NEGATIVE, OUTPUT_FILE, PLAN, ROBOT, SEED, number
+from wirecal.cli.options import NON_NEGATIVE, OUTPUT_FILE, PLAN, ROBOT, SEED, given, number
 from wirecal.formats.capture import MIN_TERMINAL, fold
 from wirecal.formats.fileio import Outputs
 from wirecal.formats.plan_file import load_plan
@@ -327,9 +327,17 @@ def _direct_log(rb: Robot, pl: Plan, errors: dict[str, float], run: _Run, faults
 def _check_twin_options(
     controller: bool, console_path: str | None, outliers: int, stop_after: int | None
 ) -> None:
-    """Refuse options of the direct simulation with --controller, and --console without."""
+    """Refuse options that would be ignored.
+
+    The direct simulation's with --controller; --console without --controller, --width
+    without --console, --outlier-mm without --outliers.
+    """
     if console_path and not controller:
         raise WirecalError("--console shows the twin's console: give --controller too")
+    if given("width") and not console_path:
+        raise WirecalError("--width folds the twin's console: give --console FILE too")
+    if given("outlier_mm") and not outliers:
+        raise WirecalError("--outlier-mm sizes the outliers: give --outliers N too")
     if controller and (outliers or stop_after is not None):
         raise WirecalError(
             "--outliers and --stop-after apply to the direct simulation; "

@@ -159,6 +159,7 @@ def solve(
         m = check_log(
             read_log(log), pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), accept_foreign
         )
+        _check_refine_scale(refine_scale, m, log)
         options = (omega, robust, partial, refine_scale)
         result = _solve(rb, pl, m, method, options)
         chosen = result.recommended if method in ("all", "controller") else method
@@ -174,6 +175,16 @@ def solve(
     if patch_path:
         others = " and ".join(str(p) for p in companion_paths(rb, patch_path))
         click.echo(f"wrote {patch_path} ({chosen}) and {others}", err=as_json)
+
+
+def _check_refine_scale(refine_scale: bool, m: Measurements, log: str) -> None:
+    """Refuse --refine-scale for a log without the reference step whose scale it refines."""
+    if refine_scale and not len(m.reference_mm):
+        raise WirecalError(
+            f"--refine-scale refines the scale the log's reference step measured; {log} "
+            "has no reference step (a gauge, [encoder] reference_length_mm, and a run with "
+            "it): leave it out"
+        )
 
 
 def _solve(

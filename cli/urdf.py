@@ -14,6 +14,7 @@ from wirecal.cli.options import OUTPUT_FILE
 from wirecal.formats.fileio import Outputs
 from wirecal.formats.patch import read_patch
 from wirecal.formats.robot_file import load_robot
+from wirecal.formats.robot_values import in_metres
 from wirecal.formats.urdf import dh_urdf_text, read_urdf, urdf_with_origins
 from wirecal.formats.urdf_model import calibrated_origins, read_chain
 from wirecal.lang.registry import default_language, languages
@@ -66,7 +67,7 @@ def _wire_point(ctx, param, value: str | None):
             f"{value!r}: {largest:g} mm from the tip link's origin; the wire's fixture is on "
             f"the tip link, within {MAX_WIRE_POINT_MM:g} mm of it: give X,Y,Z in mm"
         )
-    if 0 < largest < 1:
+    if in_metres(point):
         raise click.BadParameter(
             f"{value!r}: every coordinate under 1 mm: that looks like metres; give X,Y,Z in "
             "mm (e.g. -60,0,50)"

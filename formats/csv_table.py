@@ -42,7 +42,7 @@ from wirecal.formats.capture import (
     unfold_header,
 )
 from wirecal.formats.fileio import STDIN as STDIN  # the name callers know
-from wirecal.formats.fileio import read_input
+from wirecal.formats.fileio import decode_text, read_input
 from wirecal.solver.errors import WirecalError
 
 
@@ -79,18 +79,7 @@ class Table:
 def read_source(path: str | Path, what: str) -> tuple[str, str, str]:
     """Return the text, its source name and the sha256 of its bytes; ``-`` reads standard input."""
     raw, source = read_input(path, what)
-    if raw.startswith((b"\xff\xfe", b"\xfe\xff")) or b"\x00" in raw[:4096]:
-        raise WirecalError(
-            f"{source}: UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8 "
-            f"(a wirecal {what} is plain UTF-8 text)"
-        )
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise WirecalError(
-            f"{source}: not UTF-8 text (byte {exc.start}); is this a wirecal {what}?"
-        ) from None
-    return text, source, hashlib.sha256(raw).hexdigest()
+    return decode_text(raw, source, f"wirecal {what}"), source, hashlib.sha256(raw).hexdigest()
 
 
 def parse_table(
@@ -270,7 +259,7 @@ def _check_column_line(
     kinds: tuple[str, ...] | None = None,
     hint: str = "",
 ) -> None:
-    """Raise unless line n is the column line and no later line has double quotes.
+    """Raise unless line n is the column line and neither it nor a later line has double quotes.
 
     ``kinds`` (a terminal capture): only the lines that start with a row kind, quoted
     or not, count; other terminal text may quote. ``hint`` ends a wrong column line's
@@ -282,7 +271,7 @@ def _check_column_line(
             [*problems, f"{source}:{n}: the column line is missing: it must be '{expected}'"]
         )
     got = ",".join(c.strip() for c in lines[n].split(","))
-    if got != expected:
+    if got.replace('"', "") != expected:
         raise WirecalError(
             [
                 *problems,
@@ -295,6 +284,8 @@ def _check_column_line(
         for k in range(n + 1, len(lines))
         if '"' in lines[k] and (kinds is None or lines[k].split(",")[0].strip('" ') in kinds)
     ]
+    if got != expected:  # the column line itself is right but for its quotes
+        quoted.insert(0, n + 1)
     if quoted:
         raise WirecalError(
             f"{source}:{quoted[0]}: fields are in double quotes on {len(quoted)} "

@@ -326,6 +326,41 @@ def read_input(path: str | Path, what: str, max_bytes: int = MAX_INPUT_BYTES) ->
     return raw, source
 
 
+def is_utf16(raw: bytes) -> bool:
+    """Whether ``raw`` is UTF-16 text (what Windows calls "Unicode").
+
+    Told by its byte-order mark, or, without one, by a NUL in nine of ten of the high bytes
+    of its first 2048 characters (ASCII text in UTF-16 has every one NUL).
+    """
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return True
+    head = np.frombuffer(raw[:4096], dtype=np.uint8)[: len(raw[:4096]) // 2 * 2]
+    if head.size < 2:
+        return False
+    return bool(max(np.mean(head[1::2] == 0), np.mean(head[0::2] == 0)) >= 0.9)
+
+
+def refuse_utf16(raw: bytes, source: str, what: str) -> None:
+    """Raise a :class:`WirecalError` naming the encoding if ``raw`` is UTF-16."""
+    if is_utf16(raw):
+        raise WirecalError(
+            f"{source}: UTF-16 text; save it as UTF-8 (a {what} is plain UTF-8 text)"
+        )
+
+
+def decode_text(raw: bytes, source: str, what: str) -> str:
+    """Return an input's bytes as UTF-8 text; a :class:`WirecalError` names any other encoding."""
+    refuse_utf16(raw, source, what)
+    if b"\x00" in raw[:4096]:
+        raise WirecalError(f"{source}: not text (it holds NUL bytes); is this a {what}?")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise WirecalError(
+            f"{source}: not UTF-8 text (byte {exc.start}); is this a {what}?"
+        ) from None
+
+
 def toml_depth(text: str) -> int:
     """Return how deep the arrays and tables of a TOML text nest (strings, comments aside)."""
     data = np.frombuffer(_TOML_SKIP.sub("", text).encode("utf-8"), dtype=np.uint8)
@@ -340,12 +375,7 @@ def read_toml(path: str | Path, what: str) -> dict[str, Any]:
     Bounded: at most :data:`MAX_INPUT_BYTES`, nested at most :data:`MAX_TOML_DEPTH` deep.
     """
     raw, source = read_input(path, what)
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise WirecalError(
-            f"{source}: not UTF-8 text (byte {exc.start}); is this a {what}?"
-        ) from None
+    text = decode_text(raw, source, what)
     text = text.removeprefix("\ufeff")  # a byte-order mark some editors write
     depth = toml_depth(text)
     if depth > MAX_TOML_DEPTH:

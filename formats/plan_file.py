@@ -40,6 +40,7 @@ from wirecal.formats.fileio import read_toml
 from wirecal.formats.robot_gravity import MAX_MASS_KG, read_com
 from wirecal.formats.toml_fields import Table, document, duplicates, valid
 from wirecal.solver import params as P
+from wirecal.solver.angle_units import within_a_turn
 from wirecal.solver.distance import wire_lengths
 from wirecal.solver.plan.calibration_plan import PAYLOAD_STEP, Plan, Step
 from wirecal.solver.robot import Robot
@@ -65,8 +66,6 @@ def plan_from_dict(data: dict[str, Any], robot: Robot, source: str = "<plan>") -
     doc = document(data, source, "plan file", _TOP_KEYS)
     n = robot.n_joints
     theta0 = doc.vector("theta0_deg", length=n, labels="(one per joint, deg)")
-    if theta0 is not None:
-        _check_limits(theta0[None], robot, "theta0_deg", doc)
     plan_robot = doc.string("robot", None)
     plan_robot = plan_robot.strip() if plan_robot is not None else None  # as the robot file's
     if plan_robot is not None and plan_robot != robot.name:
@@ -79,7 +78,9 @@ def plan_from_dict(data: dict[str, Any], robot: Robot, source: str = "<plan>") -
     joint_only = doc.boolean("joint_only", False)
     order = _order(doc, robot)
     raw_steps = doc.tables("step", _STEP_KEYS)
-    steps = [_step(st, j, order, robot, theta0) for j, st in enumerate(raw_steps, 1)]
+    read = [(st, _point_sets(st, n)) for st in raw_steps]
+    _check_angles(doc, theta0, read, robot)
+    steps = [_step(st, j, order, robot, *q) for j, (st, q) in enumerate(read, 1)]
     payload = bool(raw_steps) and (raw_steps[-1].data or {}).get("parameter") == PAYLOAD_STEP
     if raw_steps and len(raw_steps) != len(order) + payload:
         doc.add(
@@ -117,10 +118,57 @@ def _order(doc: Table, robot: Robot) -> list[str]:
     return order
 
 
+def _point_sets(st: Table, n: int) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Return a step's ``points_deg`` and ``via_deg`` (None where they have problems)."""
+    joints = "(one per joint, deg)"
+    points = st.matrix("points_deg", cols=n, labels=joints, max_rows=MAX_STEP_POINTS)
+    via = st.matrix("via_deg", [], cols=n, labels=joints, nonempty=False, max_rows=MAX_STEP_POINTS)
+    return points, via
+
+
+def _check_angles(
+    doc: Table,
+    theta0: np.ndarray | None,
+    steps: list[tuple[Table, tuple[np.ndarray | None, np.ndarray | None]]],
+    robot: Robot,
+) -> None:
+    """Check θ0 and each step's points and vias against the joint limits and the wire.
+
+    A plan whose angles all lie within ±2π is in radians: one problem says so, not one
+    per point beyond a limit or too near θ0.
+    """
+    sets = [
+        (st, key, q)
+        for st, qs in steps
+        for key, q in zip(("points_deg", "via_deg"), qs, strict=True)
+    ]
+    if theta0 is not None and any(q is not None and q.size for _, _, q in sets):
+        angles = np.concatenate([theta0, *(q.ravel() for _, _, q in sets if q is not None)])
+        if within_a_turn(angles):
+            doc.add(
+                "theta0_deg",
+                "θ0 and every point of the plan are within ±2π: they look like radians (θ0 "
+                f"would be [{', '.join(f'{v:.4g}' for v in np.degrees(theta0))}] deg); give "
+                "degrees",
+            )
+            return
+    if theta0 is not None:
+        _check_limits(theta0[None], robot, "theta0_deg", doc)
+    for st, key, q in sets:
+        if q is not None:
+            _check_limits(q, robot, st.name(key), st)
+            if key == "points_deg" and theta0 is not None:
+                _check_wire(q, theta0, robot, st.name(key), st)
+
+
 def _step(
-    st: Table, j: int, order: list[str], robot: Robot, theta0: np.ndarray | None
+    st: Table,
+    j: int,
+    order: list[str],
+    robot: Robot,
+    points: np.ndarray | None,
+    via: np.ndarray | None,
 ) -> Step | None:
-    n = robot.n_joints
     param = st.string("parameter")
     if param is not None and j <= len(order) and param != order[j - 1]:
         st.add(
@@ -128,14 +176,6 @@ def _step(
             f"is {param!r} but order[{j}] is {order[j - 1]!r}; steps must follow the order",
         )
     kg, com = _payload(st, param == PAYLOAD_STEP and j == len(order) + 1, robot)
-    joints = "(one per joint, deg)"
-    points = st.matrix("points_deg", cols=n, labels=joints, max_rows=MAX_STEP_POINTS)
-    via = st.matrix("via_deg", [], cols=n, labels=joints, nonempty=False, max_rows=MAX_STEP_POINTS)
-    for key, q in (("points_deg", points), ("via_deg", via)):
-        if q is not None:
-            _check_limits(q, robot, st.name(key), st)
-    if points is not None and theta0 is not None:
-        _check_wire(points, theta0, robot, st.name("points_deg"), st)
     omega = st.number("omega", None, above=0, hi=MAX_OMEGA, unit="(deg or mm)")
     if param is None or points is None or via is None or not st.present:
         return None

@@ -12,10 +12,12 @@ from wirecal.formats.robot_values import (
     MAX_CELL_MARGIN_MM,
     MAX_JOINT_DEG,
     MAX_LENGTH_MM,
+    not_metres,
     point_mm,
     unit_vector,
 )
 from wirecal.formats.toml_fields import Table
+from wirecal.solver.angle_units import within_a_turn
 from wirecal.solver.cell.model import DEFAULT_MARGIN_MM, Box, CellModel, HalfSpace, Housing
 
 CELL_KEYS = (
@@ -50,7 +52,7 @@ def read_cell(table: Table, n: int | None) -> CellModel | None:
     if lo is not None and hi is not None and lo.shape == hi.shape:
         for j in np.flatnonzero(lo >= hi):
             table.add("body_max_deg", f"joint {j + 1}: {hi[j]:g} is not above body_min_deg")
-        if max(np.max(np.abs(lo)), np.max(np.abs(hi))) <= 2 * np.pi + 1e-9:
+        if within_a_turn(np.r_[lo, hi]):
             table.add(
                 "body_max_deg",
                 "every body limit is within ±2π: they look like radians (joint 2's would be "
@@ -80,6 +82,8 @@ def _box(table: Table) -> Box | None:
     if not all(a < b for a, b in zip(lo, hi, strict=True)):
         table.add("max_mm", f"{list(hi)} is not above min_mm {list(lo)} in every coordinate")
         return None
+    if not_metres(table, "", np.r_[lo, hi]) is None:  # a box of under 1 mm: no obstacle
+        return None
     return Box(name, lo, hi)
 
 
@@ -100,5 +104,7 @@ def _housing(table: Table) -> Housing | bool | None:
     length = table.number("length_mm", above=0, hi=MAX_LENGTH_MM, unit="mm")
     radius = table.number("radius_mm", above=0, hi=MAX_LENGTH_MM, unit="mm")
     if direction is None or length is None or radius is None:
+        return False
+    if not_metres(table, "", np.array([length, radius])) is None:
         return False
     return Housing(direction, length, radius)

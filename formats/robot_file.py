@@ -101,6 +101,7 @@ from wirecal.formats.robot_values import (
     MAX_REPEATABILITY_MM,
     MAX_SCALE_PPM,
     MAX_SPEED_DEG_S,
+    not_metres,
 )
 from wirecal.formats.robot_writer import robot_file_text
 from wirecal.formats.toml_fields import Table, document, duplicates, valid
@@ -173,9 +174,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
     n = None if dh is None else dh.shape[0]
     lo, hi = read_limits(kin, n)
     speed, speed_confirmed = _speeds(kin, n)
-    point = doc.table("tool", _KEYS["tool"]).vector(
-        "point_mm", length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm"
-    )
+    point = _tool_point(doc.table("tool", _KEYS["tool"]))
     controller_table = doc.table("controller", CONTROLLER_KEYS, required=False)
     encoder_table = doc.table("encoder", ENCODER_KEYS)
     language, interface = read_language_and_interface(controller_table, encoder_table)
@@ -209,7 +208,7 @@ def robot_from_dict(data: dict[str, Any], source: str = "<robot>") -> Robot:
         link_radius_mm=radii,
         urdf=urdf,
         controller=valid(controller),
-        joint_speed_confirmed=valid(speed_confirmed),
+        joint_speed_confirmed=speed_confirmed,  # None: not stated
         gravity_sag_deg_per_m=valid(sag),
         cell=valid(cell),
         masses=masses,
@@ -230,7 +229,15 @@ def _speeds(kin: Table, n: int | None) -> tuple[np.ndarray | None, bool | None]:
         hi=MAX_SPEED_DEG_S,
         unit="deg/s",
     )
-    return speed, kin.boolean("joint_speed_confirmed", True)
+    return speed, kin.boolean("joint_speed_confirmed", None)
+
+
+def _tool_point(tool: Table) -> np.ndarray | None:
+    """Read ``[tool] point_mm``, refusing a point in metres."""
+    point = tool.vector(
+        "point_mm", length=3, labels="(x, y, z)", lo=-MAX_LENGTH_MM, hi=MAX_LENGTH_MM, unit="mm"
+    )
+    return not_metres(tool, "point_mm", point, " (e.g. [-60, 0, 50])")
 
 
 def _link_radii(geometry: Table, n: int | None) -> np.ndarray | None:
@@ -244,6 +251,8 @@ def _link_radii(geometry: Table, n: int | None) -> np.ndarray | None:
         hi=MAX_LENGTH_MM,
         unit="mm",
     )
+    if radii is not None:  # in metres: a problem; the units check reads them as given
+        not_metres(geometry, "link_radius_mm", radii)
     if n is not None and radii is None:
         radii = np.full(n - 1, DEFAULT_LINK_RADIUS_MM)
     return radii

@@ -12,6 +12,7 @@ import numpy as np
 
 from wirecal.formats.robot_values import METRES_RATIO, MIN_JOINT_RANGE_DEG
 from wirecal.formats.toml_fields import Table
+from wirecal.solver.angle_units import within_a_turn
 from wirecal.solver.robot import Encoder
 
 
@@ -58,7 +59,7 @@ def _check_joint_ranges(lo: np.ndarray, hi: np.ndarray, doc: Table) -> None:
     """Per joint: limits in radians, or a range too narrow to plan."""
     for j in np.flatnonzero(hi > lo):
         span = hi[j] - lo[j]
-        if max(abs(lo[j]), abs(hi[j])) <= 2 * math.pi + 1e-9:
+        if within_a_turn(np.array([lo[j], hi[j]])):
             doc.add(
                 "kinematics.joint_max_deg",
                 f"joint {j + 1}: limits [{lo[j]:g}, {hi[j]:g}] are within ±2π: they look like "

@@ -6,6 +6,8 @@ slip (a wrong unit, a missing decimal point) that would only fail later.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from wirecal.formats.toml_fields import Table
@@ -49,6 +51,31 @@ MAX_EXIT_RADIUS_MM = 100.0
 AXIS_TOLERANCE = 0.01
 """A unit vector (an exit axis, a normal) must have length 1 to within this; it is then
 normalised exactly."""
+
+
+def in_metres(point_mm: Sequence[float] | np.ndarray) -> bool:
+    """Whether a point meant in mm is in metres: every value under 1 mm, not all zero.
+
+    A wire's attachment 0.06 mm from the flange is a slip for 60 mm (0.06 m).
+    """
+    return bool(0 < np.max(np.abs(point_mm), initial=0.0) < 1)
+
+
+def not_metres(
+    table: Table, key: str, point: np.ndarray | None, example: str = ""
+) -> np.ndarray | None:
+    """Return ``point``; None, with a problem naming ``key``, when it is in metres.
+
+    ``example`` (" (e.g. …)") ends the problem.
+    """
+    if point is None or not in_metres(point):
+        return point
+    table.add(
+        key,
+        f"[{', '.join(f'{v:g}' for v in point)}]: every value under 1 mm: that looks like "
+        f"metres; give it in mm{example}",
+    )
+    return None
 
 
 def point_mm(table: Table, key: str) -> tuple[float, float, float] | None:

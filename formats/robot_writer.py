@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from wirecal.solver.cell.model import CellModel
 from wirecal.solver.exit_geometry import Exit, Pulley
 from wirecal.solver.gravity import DOWN
+from wirecal.solver.joint_speeds import placeholder_speeds
 from wirecal.solver.robot import (
     DEFAULT_GRAVITY_SAG_DEG_PER_M,
     Controller,
@@ -30,6 +31,11 @@ LIMIT_TIDY = 1e-7
 radians with 11 digits give 185.00000000003°; 185.0 is what the vendor meant."""
 
 
+SCALE_TIDY = 1e-12
+"""``mm_per_count`` is a scale: written to within SCALE_TIDY of itself, not of a mm (a
+length of range_mm then moves by 1e-12 of it; 1e-300 stays 1e-300, not 0)."""
+
+
 def _num(x: float, tidy: float = TIDY) -> str:
     """Return the shortest decimal within ``tidy`` of ``x`` (−0 written as 0)."""
     x = float(x)
@@ -43,6 +49,19 @@ def _num(x: float, tidy: float = TIDY) -> str:
 def _vec(values, tidy: float = TIDY) -> str:
     """Return ``values`` as a TOML array of :func:`_num` decimals."""
     return "[" + ", ".join(_num(v, tidy) for v in values) + "]"
+
+
+def _confirmed_line(robot: Robot) -> list[str]:
+    """Return the ``joint_speed_confirmed`` line when it says something.
+
+    False: a URDF's placeholders; true: speeds that would read as placeholders otherwise (a
+    heavy arm's, given by the user).
+    """
+    if robot.joint_speed_confirmed is False:
+        return ["joint_speed_confirmed = false"]
+    if robot.joint_speed_confirmed and placeholder_speeds(robot.joint_speed_deg_s):
+        return ["joint_speed_confirmed = true"]
+    return []
 
 
 def _exit_lines(exit_: Exit | None) -> list[str]:
@@ -168,7 +187,7 @@ def _kinematics_lines(robot: Robot, row_notes: list[str], speed_notes: Sequence[
         f"joint_max_deg = {_vec(robot.joint_max_deg, LIMIT_TIDY)}",
         *(f"# {line}" for line in speed_notes),
         f"joint_speed_deg_s = {_vec(robot.joint_speed_deg_s, LIMIT_TIDY)}",
-        *([] if robot.joint_speed_confirmed else ["joint_speed_confirmed = false"]),
+        *_confirmed_line(robot),
         "",
         "[tool]",
         "# wire attachment point in the last joint's frame",
@@ -182,7 +201,7 @@ def _encoder_lines(enc: Encoder, note: str) -> list[str]:
         "",
         "[encoder]",
         f"# {note}",
-        f"mm_per_count = {_num(enc.mm_per_count)}",
+        f"mm_per_count = {_num(enc.mm_per_count, SCALE_TIDY * abs(enc.mm_per_count))}",
         f"range_mm = {_num(enc.range_mm)}",
         f"counter_bits = {enc.counter_bits}",
         f"interface = {json.dumps(enc.interface)}",

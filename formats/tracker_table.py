@@ -22,14 +22,12 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.formats.cable_table import _text_cells, column_index, column_numbers
-from wirecal.formats.fileio import MAX_INPUT_BYTES, read_input
+from wirecal.formats.fileio import MAX_INPUT_BYTES, decode_text, read_input
+from wirecal.solver.angle_units import TURN_RAD, within_a_turn
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.tracker.data import TrackerTable
 
 Cells = list[tuple[int, tuple[str, ...]]]
-
-RADIAN_BOUND = 2 * np.pi
-"""Joints that all stay within ± this read as radians (refused by the degree layout)."""
 
 METRE_SPAN = 5.0
 """x, y, z that all span less than this read as metres (refused by the mm layout)."""
@@ -49,10 +47,7 @@ def read_text(path: str | Path) -> tuple[str, str]:
                 f"{source}: inflates to more than {MAX_INPUT_BYTES // 2**20} MiB: not a "
                 "tracker table; check the file name"
             )
-    try:
-        return raw.decode("utf-8"), source
-    except UnicodeDecodeError as exc:
-        raise WirecalError(f"{source}: not UTF-8 text (byte {exc.start}): not a table") from None
+    return decode_text(raw, source, "tracker table"), source
 
 
 def cells(path: str | Path) -> tuple[str, tuple[str, ...], Cells]:
@@ -95,9 +90,9 @@ def joint_names(header: tuple[str, ...], source: str) -> tuple[str, ...]:
 
 def check_joint_units(source: str, q_deg: np.ndarray, joints: tuple[str, ...]) -> None:
     """Refuse joints that read as radians (module docstring)."""
-    if len(q_deg) >= 10 and np.all(np.abs(q_deg) <= RADIAN_BOUND):
+    if len(q_deg) >= 10 and within_a_turn(q_deg):
         raise WirecalError(
-            f"{source}: every joint ({', '.join(joints)}) stays within ±{RADIAN_BOUND:.2f}: "
+            f"{source}: every joint ({', '.join(joints)}) stays within ±{TURN_RAD:.2f}: "
             "radians, not degrees? convert the joint columns to degrees"
         )
 

@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.formats.fileio import read_input
+from wirecal.formats.robot_values import MAX_SPEED_DEG_S
 from wirecal.solver.dh_from_axes import dh_frames
 from wirecal.solver.errors import WirecalError
 
@@ -114,6 +115,7 @@ def inertial(urdf: Urdf, link: str) -> tuple[float, np.ndarray] | None:
         )
     origin = block.find("origin")
     xyz = _floats(None if origin is None else origin.get("xyz"), "0 0 0", f"{where} origin xyz")
+    _check_metres(xyz, f"{where} origin xyz")
     return mass, xyz * 1000.0
 
 
@@ -219,10 +221,12 @@ MAX_LIMIT_RAD = 4 * math.pi
 """A joint limit beyond this is in degrees (the widest arms turn ±2 turns)."""
 MAX_OFFSET_M = 10.0
 """An origin offset beyond this is in millimetres (a URDF's lengths are metres)."""
+MAX_VELOCITY_RAD_S = math.radians(MAX_SPEED_DEG_S)
+"""A joint velocity beyond the robot file's bound is in deg/s (a URDF's are rad/s)."""
 
 
 def _check_units(j: Joint, where: str) -> None:
-    """Refuse angles written in degrees and lengths in millimetres, naming the attribute."""
+    """Refuse angles and speeds in degrees and lengths in millimetres, naming the attribute."""
     for k, v in enumerate(j.rpy_rad):
         if abs(v) > MAX_ANGLE_RAD:
             raise WirecalError(
@@ -235,11 +239,21 @@ def _check_units(j: Joint, where: str) -> None:
                 f"{where}: limit {key}={v:g}, beyond ±4π: URDF limits are radians; written "
                 "in degrees? Convert them (× π/180) and import again"
             )
-    if np.max(np.abs(j.xyz_m)) > MAX_OFFSET_M:
+    if j.type in MOVING and (j.velocity_rad_s or 0.0) > MAX_VELOCITY_RAD_S:
         raise WirecalError(
-            f"{where}: origin xyz {' '.join(f'{v:g}' for v in j.xyz_m)} is beyond "
-            f"{MAX_OFFSET_M:g} m: URDF lengths are metres; written in millimetres? Divide "
-            "them by 1000 and import again"
+            f"{where}: limit velocity={j.velocity_rad_s:g}, beyond {MAX_VELOCITY_RAD_S:.4g} "
+            f"rad/s ({MAX_SPEED_DEG_S:g} deg/s): URDF velocities are rad/s; written in deg/s? "
+            "Convert them (× π/180) and import again"
+        )
+    _check_metres(j.xyz_m, f"{where}: origin xyz")
+
+
+def _check_metres(xyz_m: np.ndarray, what: str) -> None:
+    """Refuse an offset ``what`` names that is in millimetres (beyond :data:`MAX_OFFSET_M`)."""
+    if np.max(np.abs(xyz_m)) > MAX_OFFSET_M:
+        raise WirecalError(
+            f"{what} {' '.join(f'{v:g}' for v in xyz_m)} is beyond {MAX_OFFSET_M:g} m: URDF "
+            "lengths are metres; written in millimetres? Divide them by 1000 and import again"
         )
 
 

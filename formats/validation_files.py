@@ -23,13 +23,15 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from wirecal.formats.csv_table import Row, parse_table, read_source
 from wirecal.formats.fileio import read_toml
 from wirecal.formats.robot_file import MAX_LENGTH_MM
-from wirecal.formats.toml_fields import document, valid
+from wirecal.formats.robot_values import not_metres
+from wirecal.formats.toml_fields import MISSING, Table, document, valid
 from wirecal.solver.errors import WirecalError, first_problems
 from wirecal.solver.validation.analysis import ValidationLog
 from wirecal.solver.validation.design import Setup
@@ -51,23 +53,21 @@ def load_setup(path: str | Path) -> Setup:
     )
     cfg = doc.table("configuration", _SETUP_KEYS["configuration"])
     plate = doc.table("plate", _SETUP_KEYS["plate"])
-    xyz = "(x, y, z)"
-    far = MAX_LENGTH_MM
-    encoder_mm = cfg.vector("encoder_mm", length=3, labels=xyz, lo=-far, hi=far, unit="mm")
+    encoder_mm = _mm(cfg, "encoder_mm")
     poses = cfg.integer("poses", 50, lo=1, hi=100_000)
     seed = cfg.integer("seed", 1, lo=0)
-    origin = plate.vector("origin_mm", length=3, labels=xyz, lo=-far, hi=far, unit="mm")
+    origin = _mm(plate, "origin_mm")
     yaw = plate.number("yaw_deg", 0.0, lo=-360, hi=360, unit="deg")
-    size = plate.vector(
-        "size_mm", [400, 250], length=2, labels="(along the grid's two axes)", above=0, hi=far
+    size = _mm(
+        plate, "size_mm", [400, 250], length=2, labels="(along the grid's two axes)", above=0
     )
     grid = plate.vector(
         "grid", [19, 11], length=2, labels="(points along each axis)", integer=True, lo=1, hi=1000
     )
     if grid is not None and min(grid) < 2:
         plate.add("grid", "needs at least 2 × 2 points to fit a plane")
-    approach = plate.number("approach_mm", 5.0, lo=0.5, hi=far, unit="mm")
-    probe = plate.vector("probe_mm", [0, 0, 100], length=3, labels=xyz, lo=-far, hi=far, unit="mm")
+    approach = plate.number("approach_mm", 5.0, lo=0.5, hi=MAX_LENGTH_MM, unit="mm")
+    probe = _mm(plate, "probe_mm", [0, 0, 100])
     signal = plate.integer("signal", 1001, lo=1)
     doc.raise_if_any()
     size, grid = valid(size), valid(grid)
@@ -84,6 +84,23 @@ def load_setup(path: str | Path) -> Setup:
         signal=valid(signal),
         source=str(path),
     )
+
+
+def _mm(
+    table: Table,
+    key: str,
+    default: Any = MISSING,
+    *,
+    length: int = 3,
+    labels: str = "(x, y, z)",
+    above: float | None = None,
+) -> np.ndarray | None:
+    """Read lengths (mm) within ±:data:`MAX_LENGTH_MM` (above ``above`` if given), not metres."""
+    lo = None if above is not None else -MAX_LENGTH_MM
+    v = table.vector(
+        key, default, length=length, labels=labels, lo=lo, hi=MAX_LENGTH_MM, above=above, unit="mm"
+    )
+    return not_metres(table, key, v)
 
 
 COLUMNS = {

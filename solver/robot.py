@@ -19,6 +19,7 @@ from wirecal.solver.cell.model import Capsules, CellModel, Gaps, body_limits, ca
 from wirecal.solver.counter import Counter
 from wirecal.solver.exit_geometry import Exit, Pulley
 from wirecal.solver.gravity import MassModel
+from wirecal.solver.joint_speeds import placeholder_speeds
 from wirecal.solver.kinematics import Frames, Model, with_errors
 
 CONTROLLER_JOINTS = 6
@@ -142,7 +143,7 @@ class Robot:
     link_radius_mm: np.ndarray | None = None  # capsules between joint frames; see clearance
     urdf: UrdfSource | None = None
     controller: Controller = Controller()
-    joint_speed_confirmed: bool = True  # false: speeds a URDF gave as placeholders (gen refuses)
+    joint_speed_confirmed: bool | None = None  # false: a URDF's placeholders; None: not stated
     gravity_sag_deg_per_m: float = DEFAULT_GRAVITY_SAG_DEG_PER_M  # joints 2, 3 (the budget's)
     cell: CellModel = field(
         default_factory=CellModel
@@ -254,13 +255,21 @@ class Robot:
         joint speed) from ``joint_speed_deg_s``: speeds below the real ones would let the real
         wire run faster than the encoder allows.
         """
-        if self.joint_speed_confirmed:
+        if self.joint_speed_confirmed is False:
+            return (
+                f"{self.source}: kinematics.joint_speed_confirmed = false: the joint speeds "
+                "came from a URDF that gave placeholders; enter the data sheet's maximum joint "
+                "speeds in joint_speed_deg_s and set joint_speed_confirmed = true (or re-import "
+                "with import-urdf --joint-speed-deg-s)"
+            )
+        why = placeholder_speeds(self.joint_speed_deg_s)
+        if self.joint_speed_confirmed or why is None:
             return None
         return (
-            f"{self.source}: kinematics.joint_speed_confirmed = false: the joint speeds came "
-            "from a URDF that gave placeholders; enter the data sheet's maximum joint speeds "
-            "in joint_speed_deg_s and set joint_speed_confirmed = true (or re-import with "
-            "import-urdf --joint-speed-deg-s)"
+            f"{self.source}: kinematics.joint_speed_deg_s: {why}: rad/s written as deg/s? gen "
+            "times every move from these speeds, and speeds below the real ones let the wire "
+            "run faster than the encoder allows; give the data sheet's maximum joint speeds "
+            "in deg/s, or set joint_speed_confirmed = true if they are right"
         )
 
     def controller_problem(self) -> str | None:

@@ -240,3 +240,27 @@ def test_ft27_the_shipped_table_twice_fits_as_once(tmp_path):
     )
     sigma = r"residual σ [\d.]+ mm over \d+ rows"
     assert re.search(sigma, twice.output).group() == re.search(sigma, once.output).group()
+
+
+@pytest.mark.parametrize(
+    ("args", "option"),
+    [
+        (["--holdout", "none", "--repeats", "10"], "--repeats"),
+        (["--holdout", "half", "--seed", "3"], "--seed"),
+    ],
+)
+def test_a_split_option_without_random_splits_is_refused(tmp_path, table, args, option):
+    """A new case beside FT45/FT46 (fit's --holdout): --repeats with --holdout none and
+    --seed with --holdout half were ignored without a word (exit 0)."""
+    r, _ = _fit(tmp_path, table, *args)
+    assert r.exit_code == 2, r.output
+    assert (
+        f"error: {option} acts on --holdout random:F only; with --holdout {args[1]} leave it out"
+    ) in r.output
+
+
+def test_the_split_options_with_random_splits_are_taken(tmp_path, table):
+    """The valid neighbour: --repeats and --seed with random:F."""
+    r, _ = _fit(tmp_path, table, "--holdout", "random:0.2", "--repeats", "2", "--seed", "3")
+    assert "acts on --holdout random:F only" not in r.output
+    assert "2 split(s)" in r.output

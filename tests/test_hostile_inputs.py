@@ -510,6 +510,28 @@ def test_one_bracket_rule_for_the_three_languages(tmp_path):
     assert r.exit_code == 0, r.output
 
 
+@pytest.mark.parametrize("suffix", [".v2", ".script", ".mod"])
+def test_nt14_lint_names_a_utf16_program(tmp_path, suffix):
+    """NT14's neighbour in lint: a program saved as UTF-16 gave one 'code outside a program'
+    per line (3306 for the Viper's module), the encoding not named."""
+    program = tmp_path / f"p{suffix}"
+    program.write_bytes('.PROGRAM a()\n    TYPE "x"\n.END\n'.encode("utf-16"))
+    r = invoke("lint", program)
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {program}: UTF-16 text; save it as UTF-8 (a program file is plain UTF-8 text)\n"
+    )
+
+
+def test_lint_still_reads_latin_1_programs(tmp_path):
+    """The valid neighbour: a V+ comment in Latin-1 (a byte above 127, not UTF-8) lints."""
+    program = tmp_path / "p.v2"
+    program.write_bytes('.PROGRAM a()\n    ; Fa\xe7ade\n    TYPE "x"\n.END\n'.encode("latin-1"))
+    r = invoke("lint", program)
+    assert r.exit_code == 0, r.output
+
+
 @pytest.mark.parametrize("suffix", [".v2", ".script"])
 def test_lint_reads_nesting_up_to_its_bounds(tmp_path, suffix):
     """63 IFs inside the program (64 blocks with URScript's def) and a 90-operator line."""
@@ -917,6 +939,18 @@ def test_rk28_receive_is_bounded_as_every_other_input(tmp_path):
     assert journal_path(out).stat().st_size <= MAX_INPUT_BYTES
 
 
+def _import_refused(tmp_path, text: str):
+    """Import ``text`` as a URDF: refused cleanly (status 2), nothing written; its name and
+    the command's output."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(text)
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    outcome_is_clean(r)
+    assert r.exit_code == 2
+    assert not (tmp_path / "r.toml").exists()
+    return urdf, r.output
+
+
 URDF_UNITS = {
     "ND22": (
         ('rpy="1.5707963267948966 0 0"', 'rpy="-90 0 0"'),
@@ -939,13 +973,133 @@ URDF_UNITS = {
 def test_urdf_units_are_checked_naming_joint_and_attribute(tmp_path, case):
     """Degrees imported as radians without a word (ND22); the others blamed the output."""
     (old, new), message = URDF_UNITS[case]
+    _, output = _import_refused(tmp_path, URDF.read_text().replace(old, new, 1))
+    assert re.search(message, output), output
+
+
+@pytest.mark.parametrize(("velocity", "joints"), [("180", 1), ("1e308", 1), ("1e308", 6)])
+def test_nd24_urdf_speeds_in_deg_s_are_named_by_joint_and_attribute(tmp_path, velocity, joints):
+    """ND24's neighbour for <limit velocity>: 180 (deg/s written for rad/s) was blamed on
+    the output file ('r.toml: kinematics.joint_speed_deg_s: value 1 is 10313.24…'), 1e308
+    on one joint too ('value 1 is inf'), and 1e308 on every joint ended in a traceback
+    (OverflowError in the placeholder-speed check)."""
+    text = URDF.read_text().replace('velocity="3.0"', f'velocity="{velocity}"', joints)
+    urdf, output = _import_refused(tmp_path, text)
+    assert output == (
+        f"error: {urdf}: joint 'j1': limit velocity={float(velocity):g}, beyond 174.5 rad/s "
+        "(10000 deg/s): URDF velocities are rad/s; written in deg/s? Convert them (× π/180) "
+        "and import again\n"
+    )
+
+
+def test_a_fast_urdf_joint_in_rad_s_is_imported(tmp_path):
+    """The valid neighbour: 17.45 rad/s (1000 deg/s, a fast wrist) imports as 1000 deg/s."""
     urdf = tmp_path / "arm.urdf"
-    urdf.write_text(URDF.read_text().replace(old, new, 1))
-    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    urdf.write_text(URDF.read_text().replace('velocity="3.0"', 'velocity="17.453292519943"'))
+    out = tmp_path / "r.toml"
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", out)
+    assert r.exit_code == 0, r.output
+    speeds = re.search(r"^joint_speed_deg_s = \[(.*)\]", out.read_text(), re.M)
+    assert speeds is not None
+    assert [float(v) for v in speeds.group(1).split(",")] == pytest.approx([1000.0] * 6, abs=1e-6)
+
+
+def test_nd26_a_robot_file_the_urdf_makes_too_long_names_the_urdf(tmp_path):
+    """ND26's neighbour: each origin within the URDF's 10 m, yet 9.99 m and the next joint's
+    offsets make a DH d of 10 020 mm, beyond the robot file's 10 000: the refusal named the
+    output file ('r.toml: kinematics.dh[1]: value 4 is 10020.0'), which the user cannot fix."""
+    urdf, output = _import_refused(tmp_path, URDF.read_text().replace("0 0 0.3", "0 0 9.99", 1))
+    out = tmp_path / "r.toml"
+    lines = output.splitlines()
+    assert lines[0] == (
+        f"error: {urdf} (as the robot file {out}): kinematics.dh[1]: value 4 is 10020.0; "
+        "give a number within ±10000 mm"
+    )
+    assert lines[-1] == (
+        f"error: {urdf}: the robot file made from it fails the check(s) above: its values "
+        "are the URDF's (joint origins in m, limits in rad, velocities in rad/s) and, in "
+        "[encoder], the options --mm-per-count, --range-mm and --counter-bits; correct them "
+        "and import again"
+    )
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        ("--range-mm=1e9", "encoder.range_mm: is 1000000000.0; give a number > 0 and ≤ 100000 mm"),
+        ("--mm-per-count=1e-300", "encoder.mm_per_count: is 1e-300 mm"),  # R15's message
+    ],
+)
+def test_nd26_an_encoder_option_the_robot_file_refuses_names_the_option(tmp_path, option, message):
+    """The import's encoder options pass the robot file's checks too; --mm-per-count 1e-300
+    was written as 0.0 (an absolute rounding) and refused as 'must not be zero'."""
+    out = tmp_path / "r.toml"
+    r = invoke("import-urdf", URDF, "--tip", "wire", option, "-o", out)
     outcome_is_clean(r)
     assert r.exit_code == 2
-    assert re.search(message, r.output), r.output
-    assert not (tmp_path / "r.toml").exists()
+    assert f"error: {URDF} (as the robot file {out}): {message}" in r.output
+    assert "must not be zero" not in r.output
+    assert "the options --mm-per-count, --range-mm and --counter-bits" in r.output
+    assert not out.exists()
+
+
+def test_a_fine_encoder_scale_is_written_to_its_digits(tmp_path):
+    """The valid neighbour: a 1.234567e-05 mm/count encoder is written as given."""
+    out = tmp_path / "r.toml"
+    scale = ["--mm-per-count=1.234567e-05", "--counter-bits=32"]
+    r = invoke("import-urdf", URDF, "--tip", "wire", *scale, "-o", out)
+    assert r.exit_code == 0, r.output
+    assert "mm_per_count = 1.234567e-05\n" in out.read_text()
+
+
+@pytest.mark.parametrize("xyz", ["50 0 0", "1e306 0 0"])
+def test_nd21_nd26_an_inertial_origin_in_millimetres_is_named(tmp_path, xyz):
+    """ND21's and ND26's neighbour in <inertial>: a centre of mass at 50 m was blamed on
+    gravity.link_com_mm beside a second, wrong problem ('give link_mass_kg and link_com_mm
+    together'); 1e306 m overflowed (RuntimeWarning) into 'value 1 is inf'."""
+    inertial = (
+        f'<link name="l2"><inertial><origin xyz="{xyz}"/><mass value="3"/>'
+        '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>'
+    )
+    urdf, output = _import_refused(
+        tmp_path, URDF.read_text().replace('<link name="l2"/>', inertial)
+    )
+    shown = " ".join(f"{float(v):g}" for v in xyz.split())
+    assert output == (
+        f"error: {urdf}: link 'l2': <inertial> origin xyz {shown} is beyond 10 m: URDF "
+        "lengths are metres; written in millimetres? Divide them by 1000 and import again\n"
+    )
+
+
+def _with_collision(geometry: str) -> str:
+    collision = f'<link name="l2"><collision><geometry>{geometry}</geometry></collision></link>'
+    return URDF.read_text().replace('<link name="l2"/>', collision, 1)
+
+
+@pytest.mark.parametrize(
+    ("geometry", "reach"),
+    [('<box size="300 300 300"/>', "259.8"), ('<cylinder radius="1e306" length="1"/>', "inf")],
+)
+def test_nd26_collision_geometry_in_millimetres_is_named(tmp_path, geometry, reach):
+    """ND26's neighbour in <collision>: a box of 300 (mm meant, metres read) was dropped as
+    'no readable geometry' and link 2 got the length rule's 61 mm radius — a capsule far
+    thinner than the body the URDF meant (282 mm when in metres), so plan could route the
+    wire through the arm; a radius of 1e306 printed numpy's RuntimeWarnings."""
+    urdf, output = _import_refused(tmp_path, _with_collision(geometry))
+    assert output == (
+        f"error: {urdf}: link 'l2': its geometry reaches {reach} m from the link's origin, "
+        "beyond 10 m: URDF lengths are metres; written in millimetres? Divide them by 1000 "
+        '(a mesh in mm: scale="0.001 0.001 0.001") and import again\n'
+    )
+
+
+def test_collision_geometry_in_metres_sets_the_radius(tmp_path):
+    """The valid neighbour: the same box in metres is read, and widens link 2."""
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(_with_collision('<box size="0.3 0.3 0.3"/>'))
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml")
+    assert r.exit_code == 0, r.output
+    assert "link radii 46, 282, 51, 46, 46 mm" in r.output
 
 
 def test_nl49_a_reference_reading_with_a_large_spread_is_refused(tmp_path):
@@ -1156,10 +1310,75 @@ def test_l06_quoted_lines_are_named(tmp_path, log):
     assert "the first line is '\"# wirecal-log 2\"': lines and fields in double quotes" in out
 
 
+def test_l06_quoted_fields_below_unquoted_comments_are_named(tmp_path, log):
+    """L06's neighbour: every field quoted, the '#' lines not (a script's export): 'columns
+    are '"kind","step",…'; the column line must be 'kind,step,…'' left the quotes unnamed."""
+    lines = log.read_text().splitlines()
+    quoted = [x if x.startswith("#") else ",".join(f'"{c}"' for c in x.split(",")) for x in lines]
+    out = _solve_text(tmp_path, "\n".join(quoted) + "\n")
+    column_line = next(k for k, x in enumerate(lines) if x.startswith("kind,")) + 1
+    rows = sum(1 for x in lines if not x.startswith("#"))
+    assert out == (
+        f"error: {tmp_path / 'run.csv'}:{column_line}: fields are in double quotes on {rows} "
+        "line(s): a spreadsheet re-saved the file; use the file as written, or save it as "
+        "plain CSV without quotes\n"
+    )
+
+
+def test_a_wrong_column_line_in_quotes_is_still_named_as_columns(tmp_path, log):
+    """The other direction: quotes around a column line that is wrong beyond its quotes
+    keep the columns message, which shows what the line must be."""
+    text = log.read_text()
+    line = next(x for x in text.splitlines() if x.startswith("kind,"))
+    wrong = ",".join(f'"{c}"' for c in line.replace("counts", "count").split(","))
+    out = _solve_text(tmp_path, text.replace(line, wrong, 1))
+    assert "the column line must be 'kind,step,index," in out
+    assert "fields are in double quotes" not in out
+
+
 def test_nt14_utf16_is_named(tmp_path, log):
     out = _solve_text(tmp_path, log.read_text().encode("utf-16-le"))
-    assert "UTF-16 text (or not text: it holds NUL bytes); save it as UTF-8" in out
+    assert "UTF-16 text; save it as UTF-8 (a wirecal log is plain UTF-8 text)" in out
     assert len(out.splitlines()) == 1
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le"])
+@pytest.mark.parametrize("which", ["robot file", "plan file"])
+def test_nt14_a_toml_file_in_utf16_is_named(tmp_path, which, encoding):
+    """NT14's neighbour: a robot file or plan saved as UTF-16 (Windows' "Unicode") was
+    'not UTF-8 text (byte 0)', the encoding not named as it is for a log."""
+    source = ROBOT if which == "robot file" else PLAN
+    bad = tmp_path / source.name
+    bad.write_bytes(source.read_text().encode(encoding))
+    args = [bad, PLAN] if which == "robot file" else [ROBOT, bad]
+    r = invoke("psi", *args)
+    assert r.exit_code == 2, r.output
+    assert r.output == (
+        f"error: {bad}: UTF-16 text; save it as UTF-8 (a {which} is plain UTF-8 text)\n"
+    )
+
+
+def test_a_toml_file_with_non_ascii_utf8_is_still_read(tmp_path):
+    """The valid neighbour of NT14: UTF-8 beyond ASCII (a name with 'ö', a comment with
+    'θ₀') reads as before."""
+    robot = tmp_path / "robot.toml"
+    text = re.sub(
+        r'^name = ".*"$', 'name = "Viper s650 (Kärcher)"', ROBOT.read_text(), count=1, flags=re.M
+    )
+    robot.write_text("# θ₀ and Ψ, µm\n" + text, encoding="utf-8")
+    plan = tmp_path / "plan.toml"
+    plan.write_text(
+        re.sub(
+            r'^robot = ".*"$',
+            'robot = "Viper s650 (Kärcher)"',
+            PLAN.read_text(),
+            count=1,
+            flags=re.M,
+        ),
+        encoding="utf-8",
+    )
+    r = invoke("psi", robot, plan)
+    assert r.exit_code == 0, r.output
 
 
 def test_nl34_a_version_1_header_over_version_2_rows_is_one_problem(tmp_path, log):
@@ -1204,6 +1423,236 @@ def test_nx19_max_exit_deg_in_radians_is_named(tmp_path):
     r = invoke("psi", robot, PLAN)
     assert r.exit_code == 2
     assert "encoder.max_exit_deg: is 1.5708: that is 90 deg in radians; give degrees" in r.output
+
+
+def _plan_in_radians(scale: float) -> str:
+    """The paper plan with every angle (θ0, points, vias) times ``scale``."""
+    vector = re.compile(r"\[(-?[\d.]+(?:, -?[\d.]+){5})\]")
+    return vector.sub(
+        lambda m: "[" + ", ".join(f"{float(v) * scale:.6f}" for v in m.group(1).split(",")) + "]",
+        PLAN.read_text(),
+    )
+
+
+def test_nx19_a_plan_in_radians_is_named_once(tmp_path):
+    """NX19's neighbour for plans: a plan typed in radians was refused point by point as
+    'the wire length there is 0.938 mm (below 1 mm): the point (nearly) coincides with
+    θ0', radians not named."""
+    plan = tmp_path / "plan.toml"
+    plan.write_text(_plan_in_radians(np.pi / 180))
+    r = invoke("psi", ROBOT, plan)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {plan}: theta0_deg: θ0 and every point of the plan are within ±2π: they look "
+        "like radians (θ0 would be [0, -90, 210, -90, 0, -90] deg); give degrees\n"
+    )
+
+
+def test_a_plan_in_degrees_near_zero_is_not_called_radians(tmp_path):
+    """The valid neighbour: the plan in degrees still loads; one point within ±2π of zero
+    on every joint (a small move) is a point, not radians."""
+    plan = tmp_path / "plan.toml"
+    plan.write_text(_plan_in_radians(1.0))
+    assert invoke("psi", ROBOT, plan).exit_code == 0
+
+
+VIPER_RAD_S = "joint_speed_deg_s = [5.72, 5.24, 6.54, 6.54, 6.54, 10.47]"
+"""The Viper s650's speeds (328, 300, 375, 375, 375, 600 °/s) written in rad/s."""
+
+
+def test_gen_refuses_joint_speeds_in_rad_s_until_confirmed(tmp_path):
+    """A new case beside NX19 and CL24 (units of the robot file): speeds typed in rad/s were
+    taken as deg/s without a word, and gen wrote every move at SPEED 100 — the shipped file
+    needs SPEED 12.6 … 99.2 to keep the wire within its speed limit: the real wire would run
+    up to 8 times faster than the encoder allows. gen now refuses, naming the key and both
+    ways out; psi and plan (estimates only) still run."""
+    robot = tmp_path / "robot.toml"
+    robot.write_text(
+        re.sub(r"^joint_speed_deg_s = .*$", VIPER_RAD_S, ROBOT.read_text(), flags=re.M)
+    )
+    assert invoke("psi", robot, PLAN).exit_code == 0
+    r = invoke("gen", robot, PLAN, "-o", tmp_path / "out")
+    assert r.exit_code == 2, r.output
+    assert (
+        f"error: {robot}: kinematics.joint_speed_deg_s: joint(s) 1 (5.72 °/s), 2 (5.24 °/s), "
+        "3 (6.54 °/s), 4 (6.54 °/s), 5 (6.54 °/s), 6 (10.47 °/s) are slower than 60 °/s, "
+        "implausible for an industrial arm: rad/s written as deg/s? gen times every move "
+        "from these speeds, and speeds below the real ones let the wire run faster than the "
+        "encoder allows; give the data sheet's maximum joint speeds in deg/s, or set "
+        "joint_speed_confirmed = true if they are right"
+    ) in " ".join(r.output.split()), r.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_slow_joint_speeds_confirmed_are_used(tmp_path):
+    """The valid neighbour: a heavy arm's slow joints, confirmed, generate (slower moves)."""
+    robot = tmp_path / "robot.toml"
+    slow = "joint_speed_deg_s = [45.0, 40.0, 50.0, 90.0, 90.0, 120.0]\njoint_speed_confirmed = true"
+    robot.write_text(re.sub(r"^joint_speed_deg_s = .*$", slow, ROBOT.read_text(), flags=re.M))
+    r = invoke("gen", robot, PLAN, "-o", tmp_path / "out")
+    assert r.exit_code == 0, r.output
+    module = (tmp_path / "out" / "WIRECAL.V2").read_text()
+    speeds = [float(v) for v in re.findall(r"^\s*SPEED ([\d.]+) ALWAYS", module, re.M)]
+    assert len(speeds) > 50
+    assert max(speeds) <= 100
+
+
+def test_slow_speeds_given_to_import_urdf_are_written_confirmed(tmp_path):
+    """The speeds given with --joint-speed-deg-s are the user's: slow ones are written with
+    joint_speed_confirmed = true, so that gen does not ask again."""
+    from wirecal.formats.robot_file import load_robot
+
+    out = tmp_path / "r.toml"
+    speeds = "--joint-speed-deg-s=45,40,50,90,90,120"
+    r = invoke("import-urdf", URDF, "--tip", "wire", speeds, "-o", out)
+    assert r.exit_code == 0, r.output
+    assert "\njoint_speed_confirmed = true\n" in out.read_text()
+    assert load_robot(out).speed_problem() is None
+
+
+@pytest.mark.parametrize("point", ["[0.0, 0.0, 0.0]", "[0.0, 0.0, 1.5]"])
+def test_a_tool_point_at_or_near_the_flange_centre_is_read(tmp_path, point):
+    """The valid neighbours: a wire at the flange's centre, or 1.5 mm from it."""
+    robot = tmp_path / "robot.toml"
+    text = re.sub(r"^point_mm = .*$", f"point_mm = {point}", ROBOT.read_text(), flags=re.M)
+    robot.write_text(text)
+    r = invoke("psi", robot, PLAN)
+    outcome_is_clean(r)
+    assert "metres" not in r.output
+
+
+def test_plan_says_when_points_is_fewer_than_the_steps_keep(tmp_path):
+    """A new case beside C17 (plan's options): --points 5 wrote a plan of 20 points without
+    a word (each of the Viper's 10 steps keeps at least 2); --points 25 is honoured."""
+    r = invoke("plan", ROBOT, "--points", 5, "-o", tmp_path / "p.toml")
+    assert r.exit_code == 0, r.output
+    assert (
+        "note: --points 5: each of the plan's 10 steps keeps at least 2 points, so it has 20"
+    ) in r.output
+    r = invoke("plan", ROBOT, "--points", 25, "-o", tmp_path / "q.toml")
+    assert r.exit_code == 0, r.output
+    assert "note: --points" not in r.output
+    assert "(25 points, 0 via points)" in r.output
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--width", 40], "--width folds the twin's console: give --console FILE too"),
+        (["--outlier-mm", 5], "--outlier-mm sizes the outliers: give --outliers N too"),
+    ],
+    ids=["width", "outlier-mm"],
+)
+def test_simulate_refuses_an_option_it_would_ignore(tmp_path, args, message):
+    """A new case beside S05 (simulate's options): --width without --console and
+    --outlier-mm without --outliers were ignored without a word (exit 0), where --console
+    without --controller is refused."""
+    r = invoke("simulate", ROBOT, PLAN, "-o", tmp_path / "run.csv", *args)
+    assert r.exit_code == 2
+    assert f"error: {message}" in r.output
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_simulate_takes_the_options_with_what_they_apply_to(tmp_path):
+    """The valid neighbour: --outlier-mm with --outliers, and the defaults, still run."""
+    r = invoke(
+        "simulate", ROBOT, PLAN, "-o", tmp_path / "run.csv", "--outliers", 2, "--outlier-mm", 5
+    )
+    assert r.exit_code == 0, r.output
+
+
+def test_refine_scale_without_a_reference_step_is_refused(tmp_path, log):
+    """A new case beside the options above: solve --refine-scale on a log without a
+    reference step ran without a word and without refining anything."""
+    r = invoke("solve", ROBOT, PLAN, log, "--refine-scale")
+    assert r.exit_code == 2
+    assert (
+        f"error: --refine-scale refines the scale the log's reference step measured; {log} "
+        "has no reference step (a gauge, [encoder] reference_length_mm, and a run with it): "
+        "leave it out"
+    ) in " ".join(r.output.split())
+
+
+def test_refine_scale_with_a_reference_step_runs(tmp_path):
+    """The valid neighbour: a log with its reference step takes --refine-scale."""
+    robot, log_path = _with_gauge(tmp_path)
+    r = invoke("solve", robot, PLAN, log_path, "--refine-scale")
+    assert r.exit_code == 0, r.output
+
+
+def _appended(text: str, table: str) -> str:
+    """The Viper's robot file text with ``table`` added before [gravity]."""
+    return text.replace("\n[gravity]", table + "\n[gravity]", 1)
+
+
+METRES = {
+    # case: (the robot file's edit, the key and values named, the example given)
+    "tool point": (
+        lambda t: re.sub(r"^point_mm = .*$", "point_mm = [-0.06, 0.0, 0.05]", t, flags=re.M),
+        "tool.point_mm: [-0.06, 0, 0.05]",
+        " (e.g. [-60, 0, 50])",
+    ),
+    "link radii": (
+        lambda t: re.sub(
+            r"^link_radius_mm = .*$",
+            "link_radius_mm = [0.07, 0.07, 0.055, 0.045, 0.037]",
+            t,
+            flags=re.M,
+        ),
+        "geometry.link_radius_mm: [0.07, 0.07, 0.055, 0.045, 0.037]",
+        "",
+    ),
+    "cell box": (
+        lambda t: _appended(
+            t,
+            '\n[[cell.box]]\nname = "fence"\nmin_mm = [0.4, -0.5, -0.335]\n'
+            "max_mm = [0.6, 0.5, 0.5]\n",
+        ),
+        "cell.box[2]: [0.4, -0.5, -0.335, 0.6, 0.5, 0.5]",
+        "",
+    ),
+    "encoder housing": (
+        lambda t: _appended(
+            t,
+            "\n[cell.encoder_housing]\ndirection = [0.0, 0.0, -1.0]\nlength_mm = 0.12\n"
+            "radius_mm = 0.05\n",
+        ),
+        "cell.encoder_housing: [0.12, 0.05]",
+        "",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", METRES)
+def test_ud04_lengths_in_metres_in_the_robot_file_are_named(tmp_path, case):
+    """UD04's neighbours in the robot file, each taken as mm without naming the unit: a tool
+    point of [-0.06, 0, 0.05] (the plan was blamed: 'the wire length there is 0.0459 mm …
+    coincides with θ0'); link radii of 0.07 … (0.07 mm capsules for the wire clearance and
+    the collision checks, and gen wrote the programs); a fence box 0.4–0.6 m (a 0.2 mm box
+    at the base that link 1 reached into on every move: 80 psi warnings, a collision per
+    gen point); an encoder housing of 0.12 by 0.05 m (a 0.12 mm cylinder, no obstacle)."""
+    edit, named, example = METRES[case]
+    robot = tmp_path / "robot.toml"
+    robot.write_text(edit(ROBOT.read_text()))
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {robot}: {named}: every value under 1 mm: that looks like metres; give it in "
+        f"mm{example}\n"
+    )
+
+
+def test_a_cell_box_in_mm_at_the_origin_is_read(tmp_path):
+    """The valid neighbour: a box from the origin (a corner at 0, 0, 0) in mm."""
+    robot = tmp_path / "robot.toml"
+    box = (
+        '\n[[cell.box]]\nname = "fence"\nmin_mm = [0.0, 0.0, 0.0]\nmax_mm = [600.0, 500.0, 500.0]\n'
+    )
+    robot.write_text(_appended(ROBOT.read_text(), box))
+    r = invoke("psi", robot, PLAN)
+    outcome_is_clean(r)
+    assert "metres" not in r.output
+    assert "box 'fence'" in r.output  # read, and in the arm's way
 
 
 def test_c17_theta0_nan_is_refused_as_an_option():

@@ -17,7 +17,6 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wirecal.app.urdf_import import placeholder_speeds
 from wirecal.cli.main import main
 from wirecal.cli.urdf import _numbers
 from wirecal.formats.patch import write_patch
@@ -26,6 +25,7 @@ from wirecal.formats.robot_file import load_robot, robot_from_dict
 from wirecal.formats.stl import stl_vertices
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.identify import Estimate
+from wirecal.solver.joint_speeds import placeholder_speeds
 from wirecal.solver.kinematics import frames, tool_position
 
 from .conftest import DATA
@@ -217,7 +217,7 @@ def test_viper_urdf_to_v_plus_module_and_placeholder_speeds_refused(viper, tmp_p
     urdf.write_text(text, encoding="utf-8")
     flagged = tmp_path / "flagged.toml"
     r = run("import-urdf", urdf, "--tip", "link_6", "--wire-point-mm=-60,0,50", "-o", flagged)
-    assert "warning: ACTION NEEDED: every joint's <limit velocity> is 1 rad/s" in r.output
+    assert "warning: ACTION NEEDED: every joint's speed is 1 rad/s" in r.output
     assert "joint_speed_confirmed = false" in flagged.read_text(encoding="utf-8")
     r = run("gen", flagged, tmp_path / "plan.toml", "-o", tmp_path / "refused", ok=False)
     assert r.exit_code == 2

@@ -106,6 +106,44 @@ def test_setup_file_errors(tmp_path):
     assert "plate.grid: needs at least 2 × 2 points" in text
 
 
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        (
+            "encoder_mm = [850.0, 0.0, -150.0]",
+            "encoder_mm = [0.85, 0.0, -0.15]",
+            "configuration.encoder_mm: [0.85, 0, -0.15]",
+        ),
+        (
+            "probe_mm = [0.0, 0.0, 100.0]",
+            "probe_mm = [0.0, 0.0, 0.1]",
+            "plate.probe_mm: [0, 0, 0.1]",
+        ),
+        (
+            "origin_mm = [220.0, -125.0, -300.0]",
+            "origin_mm = [0.22, -0.125, -0.3]",
+            "plate.origin_mm: [0.22, -0.125, -0.3]",
+        ),
+        ("size_mm = [400.0, 250.0]", "size_mm = [0.4, 0.25]", "plate.size_mm: [0.4, 0.25]"),
+    ],
+    ids=["encoder", "probe", "origin", "size"],
+)
+def test_ud04_a_setup_in_metres_is_named(tmp_path, old, new, message):
+    """UD04's neighbour in the validation setup: encoder_mm in metres was taken as mm and gen
+    wrote the configuration run for an encoder at the robot's base without a word; the
+    probe, the plate's corner and size in metres were refused 206 times as collisions or
+    out of reach, the unit not named."""
+    text = SETUP.read_text()
+    assert old in text
+    bad = tmp_path / "v.toml"
+    bad.write_text(text.replace(old, new))
+    with pytest.raises(WirecalError) as info:
+        load_setup(bad)
+    assert info.value.problems == [
+        f"{bad}: {message}: every value under 1 mm: that looks like metres; give it in mm"
+    ]
+
+
 HEADER = (
     "# wirecal-validation 1\n# kind: {kind}\n# robot: Adept Viper s650\n# setup: x\n"
     "# mm_per_count: 0.025488\n"

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from wirecal.solver.angle_units import within_a_turn
 from wirecal.solver.errors import Problems, WirecalError
 from wirecal.solver.fit.cable_data import CableTable
 from wirecal.solver.fit.model import multilaterate
@@ -117,7 +118,7 @@ def radian_columns(base: Model, table: CableTable) -> list[tuple[int, float, flo
     given = _misfit_mm(base, q, table.length_mm)
     found = []
     for j in range(q.shape[1]):
-        if np.ptp(q[:, j]) == 0 or np.max(np.abs(q[:, j])) > 2 * np.pi + 1e-6:
+        if np.ptp(q[:, j]) == 0 or not within_a_turn(q[:, j]):
             continue
         trial = q.copy()
         trial[:, j] = np.degrees(q[:, j])
@@ -132,7 +133,7 @@ def check_units(base: Model, table: CableTable) -> None:
     problems = Problems(table.source)
     _check_magnitudes(table)
     q = table.q_deg
-    if len(q) and np.all(np.abs(q) <= 2 * np.pi + 1e-6):
+    if len(q) and within_a_turn(q):
         cols = ", ".join(repr(c) for c in table.columns.joints)
         problems.add(
             "joints",
