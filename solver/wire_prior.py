@@ -42,11 +42,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver.compliance import PRIOR_COMPLIANCE_URAD_PER_NM
-from wirecal.solver.fit.calibrate import Data, candidates, start
+from wirecal.solver.fit.calibrate import Data, candidates, nominal_floor, point_model, start
 from wirecal.solver.fit.model import Layout, lengths, lengths_and_jacobian, model_of
 from wirecal.solver.fit.solver import levenberg_marquardt
+from wirecal.solver.identifiability import RANK_RTOL
 from wirecal.solver.kinematics import Model
 from wirecal.solver.params import TOOL_NAMES, ErrorSet
+from wirecal.solver.robot import Robot
 
 SIGMA_PASSES = 3
 """Refits with the residual's σ: the first from the starting σ, each next from the last."""
@@ -92,6 +94,7 @@ class WireMap:
     layout: Layout
     x: np.ndarray  # internal units
     sigma_mm: float  # RMS of the readings' residual at x
+    prior: float  # the prior's size the fit used (:func:`prior_sigma`'s ``prior``)
 
 
 def _map_at(base: Model, layout: Layout, data: Data, prior: float) -> tuple[WireMap, float]:
@@ -134,7 +137,7 @@ def _map_at(base: Model, layout: Layout, data: Data, prior: float) -> tuple[Wire
         - float(np.sum(np.log(sd[has])))
         - 0.5 * (np.linalg.slogdet(H)[1] + 2 * float(np.sum(np.log(scale))))
     )
-    return WireMap(model_of(base, layout, x), layout, x, sigma), evidence
+    return WireMap(model_of(base, layout, x), layout, x, sigma, prior), evidence
 
 
 def map_fit(base: Model, layout: Layout, data: Data, prior: float) -> WireMap:
@@ -146,3 +149,84 @@ def map_fit(base: Model, layout: Layout, data: Data, prior: float) -> WireMap:
     """
     fits = [_map_at(base, layout, data, prior * k) for k in PRIOR_SCALES]
     return max(fits, key=lambda f: f[1])[0]
+
+
+def fit_wire(
+    robot: Robot,
+    compliances: tuple[str, ...],
+    q_deg: np.ndarray,
+    length_mm: np.ndarray,
+    prior: float,
+    joint_resolution_deg: float,
+) -> tuple[WireMap, Data]:
+    """Return one wire's fit of ``robot`` from its readings, and the data it was fitted to.
+
+    The one fit ``wirecal solve`` runs on a plan from a pool and the tracker replay scores:
+    :func:`map_fit` of :func:`wire_layout` (``compliances`` beside the geometry) on
+    :func:`~wirecal.solver.fit.calibrate.point_model`, one session, the floor from the
+    encoder's count and ``joint_resolution_deg`` (a least σ of the readings).
+    """
+    base = point_model(robot)
+    q_rad = np.radians(q_deg)
+    session = np.zeros(len(q_rad), dtype=int)
+    floor = nominal_floor(
+        base,
+        Data(q_rad, length_mm, session, 0.0),
+        joint_resolution_deg,
+        abs(robot.encoder.mm_per_count),
+    )
+    data = Data(q_rad, length_mm, session, floor)
+    return map_fit(base, wire_layout(base, compliances), data, prior), data
+
+
+@dataclass(frozen=True)
+class Posterior:
+    """The linearised posterior of a :class:`WireMap` at its estimate (internal units).
+
+    With J the readings' Jacobian, σ the residual's, Λ the prior's precision and
+    P = (JᵀJ/σ² + Λ)⁻¹: ``map`` M = P·Jᵀ/σ² (a length error δd moves the estimate by M·δd),
+    ``noise`` σ²·M·Mᵀ (the readings' share of P), ``prior_share`` the prior's,
+    (M·J − I)·Λ⁻¹·(M·J − I)ᵀ over the parameters with a prior (the shrinkage toward zero of
+    what the readings see weakly); ``noise`` + ``prior_share`` = P. ``effective`` is the
+    count of parameters the readings carry, trace(J·M) (≤ the parameters), ``sigma_mm`` the
+    residual's σ on N − ``effective`` degrees of freedom (at least the readings' floor).
+    """
+
+    map: np.ndarray  # (k, N)
+    noise: np.ndarray  # (k, k)
+    prior_share: np.ndarray  # (k, k)
+    prior_sd: np.ndarray  # (k,) inf: no prior
+    effective: float
+    sigma_mm: float
+    residual_mm: np.ndarray  # (N,) model − measured at the estimate
+    jacobian: np.ndarray  # (N, k) ∂L/∂x at the estimate
+
+
+def posterior(base: Model, fit: WireMap, data: Data) -> Posterior:
+    """Return the posterior of ``fit`` (:class:`Posterior`) at the prior size it chose.
+
+    The readings' σ is ``fit.sigma_mm`` (the one the fit weighed the prior with); the
+    Hessian is scaled by its columns before the pseudo-inverse, as :func:`_map_at`'s.
+    """
+    layout, x = fit.layout, fit.x
+    r, J = lengths_and_jacobian(base, layout, x, data.q_rad, data.session)
+    r = r - data.length_mm
+    sd = prior_sigma(base, layout, fit.prior)
+    w = 1.0 / sd
+    scale = np.maximum(np.linalg.norm(J, axis=0) / fit.sigma_mm, w)
+    H = (J.T @ J / fit.sigma_mm**2 + np.diag(w**2)) / np.outer(scale, scale)
+    P = np.linalg.pinv(H, rcond=RANK_RTOL, hermitian=True) / np.outer(scale, scale)
+    M = P @ J.T / fit.sigma_mm**2
+    B = (M @ J - np.eye(len(x)))[:, np.isfinite(sd)]
+    effective = float(np.trace(J @ M))
+    dof = max(len(r) - effective, 1.0)
+    return Posterior(
+        M,
+        fit.sigma_mm**2 * M @ M.T,
+        B * sd[np.isfinite(sd)] ** 2 @ B.T,
+        sd,
+        effective,
+        max(float(np.sqrt(r @ r / dof)), data.floor_mm),
+        r,
+        J,
+    )

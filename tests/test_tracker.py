@@ -760,7 +760,7 @@ def test_solve_says_the_stepwise_estimate_does_not_apply_to_a_pool_plan(tmp_path
     assert "the step-by-step estimate does not apply; the joint method alone" in r.output
     assert not re.search(r"^(parameter|source) .*stepwise", r.output, re.M), r.output
     assert "Step-by-step (paper)" not in r.output
-    assert re.search(r"^parameter unit +joint +± σ \(joint\)$", r.output, re.M), r.output
+    assert re.search(r"^parameter unit +joint +± σ \(joint\) +σ/prior$", r.output, re.M), r.output
     assert "recommended: joint" in r.output
     r = runner.invoke(main, [*args, "--json"])
     assert list(json.loads(r.output)["methods"]) == ["joint"]

@@ -15,7 +15,8 @@ poses, four models:
   prior where the readings are weak (:func:`~wirecal.solver.wire_prior.map_fit`: every DH
   error of rows 2…n, the attachment, the anchor and one offset);
 * **wire + compliance** — the same readings fitted with the joint compliances of the robot
-  file's ``[calibration] compliances`` beside them (issue 30's model δθ_j = c_j·τ_j(q),
+  file's ``[calibration] compliances`` beside them (what ``wirecal solve`` fits for such a
+  file) (issue 30's model δθ_j = c_j·τ_j(q),
   :mod:`~wirecal.solver.gravity`; the file's masses, else the assumed ones), each with its
   prior; the plan is made for this fit when the file asks compliances
   (:func:`~wirecal.solver.plan.pool.wire_pool`), and the rigid wire uses the same poses;
@@ -33,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wirecal.solver.fit.calibrate import Data, nominal_floor, point_model
+from wirecal.solver.fit.calibrate import point_model
 from wirecal.solver.kinematics import Model, tool_position
 from wirecal.solver.params import TOOL_NAMES
 from wirecal.solver.plan.options import PlanOptions
@@ -41,10 +42,13 @@ from wirecal.solver.plan.pool import anchor_plans, eligible_rows, plan_pool, poo
 from wirecal.solver.robot import Robot
 from wirecal.solver.tracker.data import TrackerTable
 from wirecal.solver.tracker.fit import calibrate, registered_rms_mm
-from wirecal.solver.wire_prior import map_fit, wire_layout
+from wirecal.solver.wire_prior import fit_wire
 
 ZERO_MM = -123.456
 """The reading at zero distance: any value; the fit is not told it (an unknown zero)."""
+
+JOINT_RESOLUTION_DEG = 1e-6
+"""The tracker tables' joints, taken as exact: the readings' floor is the count's."""
 
 
 @dataclass(frozen=True)
@@ -66,22 +70,6 @@ def readings_mm(xyz_mm: np.ndarray, anchor_mm: np.ndarray, mm_per_count: float) 
     """Return the wire's readings: ‖x − anchor‖ rounded to whole counts, plus the zero."""
     counts = np.round(np.linalg.norm(xyz_mm - anchor_mm, axis=1) / mm_per_count)
     return counts * mm_per_count + ZERO_MM
-
-
-def wire_map(
-    base: Model,
-    compliances: tuple[str, ...],
-    q_deg: np.ndarray,
-    length_mm: np.ndarray,
-    robot: Robot,
-) -> Model:
-    """Return the model one wire's readings give (:func:`~wirecal.solver.wire_prior.map_fit`)."""
-    mpc = robot.encoder.mm_per_count
-    q_rad = np.radians(q_deg)
-    session = np.zeros(len(q_rad), dtype=int)
-    floor = nominal_floor(base, Data(q_rad, length_mm, session, 0.0), 1e-6, mpc)
-    data = Data(q_rad, length_mm, session, floor)
-    return map_fit(base, wire_layout(base, compliances), data, PlanOptions.prior).model
 
 
 def split(n_rows: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -107,8 +95,10 @@ def one_wire_mm(
     theta0_row, rows = wire
     anchor = table.xyz_mm[theta0_row]
     length = readings_mm(table.xyz_mm[rows], anchor, robot.encoder.mm_per_count)
-    model = wire_map(point_model(robot), compliances, table.q_deg[rows], length, robot)
-    return held_out_mm(model, table, test)
+    fit, _ = fit_wire(
+        robot, compliances, table.q_deg[rows], length, PlanOptions.prior, JOINT_RESOLUTION_DEG
+    )
+    return held_out_mm(fit.model, table, test)
 
 
 def replay(robot: Robot, table: TrackerTable, *, seed: int, points: int) -> Replay:
