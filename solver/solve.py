@@ -257,6 +257,13 @@ def solve(
     """
     if plan.joint_only:
         _estimates(plan, methods, None, None)  # refuses the stepwise method alone
+        if refine_scale:
+            raise WirecalError(
+                f"{plan.source}: joint_only = true: --refine-scale refines the scale in the "
+                "joint method of the file's [calibration] parameters; a plan from a pool is "
+                "solved by the wire fit it was made for, which does not: leave it out (the "
+                "reference rows' scale is applied either way)"
+            )
         return _solve_pool(robot, plan, m, partial=partial, corrections=corrections)
     left, names, step = _measured_steps(plan, m, partial)
     factor, notes = _reference_scale(robot, m)

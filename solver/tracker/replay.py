@@ -42,7 +42,7 @@ from wirecal.solver.plan.pool import anchor_plans, eligible_rows, plan_pool, poo
 from wirecal.solver.robot import Robot
 from wirecal.solver.tracker.data import TrackerTable
 from wirecal.solver.tracker.fit import calibrate, registered_rms_mm
-from wirecal.solver.wire_prior import fit_wire
+from wirecal.solver.wire_prior import WireMap, fit_wire
 
 ZERO_MM = -123.456
 """The reading at zero distance: any value; the fit is not told it (an unknown zero)."""
@@ -84,6 +84,24 @@ def held_out_mm(model: Model, table: TrackerTable, test: np.ndarray) -> float:
     return registered_rms_mm(tool_position(model, q_rad), table.xyz_mm[test])
 
 
+def wire_fit(
+    robot: Robot,
+    table: TrackerTable,
+    wire: tuple[int, np.ndarray],
+    compliances: tuple[str, ...] = (),
+) -> WireMap:
+    """Return one wire's fit: ``wire`` = (θ0's row, the rows read), the anchor at θ0's point.
+
+    :func:`~wirecal.solver.wire_prior.fit_wire`, the fit ``wirecal solve`` runs on a plan
+    from a pool, on the readings :func:`readings_mm` of the rows.
+    """
+    theta0_row, rows = wire
+    anchor = table.xyz_mm[theta0_row]
+    length = readings_mm(table.xyz_mm[rows], anchor, robot.encoder.mm_per_count)
+    q_deg = table.q_deg[rows]
+    return fit_wire(robot, compliances, q_deg, length, PlanOptions.prior, JOINT_RESOLUTION_DEG)[0]
+
+
 def one_wire_mm(
     robot: Robot,
     table: TrackerTable,
@@ -91,14 +109,8 @@ def one_wire_mm(
     test: np.ndarray,
     compliances: tuple[str, ...] = (),
 ) -> float:
-    """Return the held-out figure of one wire: ``wire`` = (θ0's row, the rows read)."""
-    theta0_row, rows = wire
-    anchor = table.xyz_mm[theta0_row]
-    length = readings_mm(table.xyz_mm[rows], anchor, robot.encoder.mm_per_count)
-    fit, _ = fit_wire(
-        robot, compliances, table.q_deg[rows], length, PlanOptions.prior, JOINT_RESOLUTION_DEG
-    )
-    return held_out_mm(fit.model, table, test)
+    """Return the held-out figure of one wire (:func:`wire_fit`)."""
+    return held_out_mm(wire_fit(robot, table, wire, compliances).model, table, test)
 
 
 def replay(robot: Robot, table: TrackerTable, *, seed: int, points: int) -> Replay:
