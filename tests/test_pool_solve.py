@@ -11,11 +11,14 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from hypothesis import given
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from wirecal.cli.main import main
@@ -148,3 +151,73 @@ def test_the_posterior_is_split_into_the_readings_and_the_prior():
     assert np.allclose(post.noise + post.prior_share, P, atol=1e-9 * np.outer(sd, sd).max())
     no_prior = int(np.sum(np.isinf(prior_sigma(base, fit.layout, fit.prior))))
     assert no_prior < post.effective < len(fit.x)
+
+
+@given(
+    st.lists(
+        st.floats(-359.9999, 359.9999, allow_nan=False).map(lambda v: round(v, 4)),
+        min_size=6,
+        max_size=6,
+    )
+)
+def test_a_ppoint_line_keeps_the_limit_and_the_pose(q):
+    """A pose recorded to 0.0001° (a pool's) broke V+'s 80-character line ("internal error
+    … please report"): the literal now fits, within 0.005° of each angle, exact when it can."""
+    from wirecal.gen.vplus.literals import MAX_LINE, PPOINT_PREFIX, ppoint
+
+    text = ppoint(q)
+    assert len(PPOINT_PREFIX + text) <= MAX_LINE
+    values = [float(v) for v in re.fullmatch(r"#PPOINT\((.*)\)", text).group(1).split(",")]
+    assert np.allclose(values, q, atol=0.005 + 1e-9)
+    if len(PPOINT_PREFIX + "#PPOINT(" + ", ".join(f"{v:.4f}" for v in q) + ")") <= MAX_LINE:
+        assert values == pytest.approx(q, abs=1e-9)
+
+
+def _viper_pool(path: Path) -> None:
+    """The Viper paper plan's θ0 and points, and twice more each moved, to 4 decimals."""
+    viper = ROOT / "examples" / "viper_s650"
+    robot = load_robot(viper / "robot.toml")
+    plan = load_plan(viper / "paper_plan.toml", robot)
+    q = plan.all_points()[0]
+    rng = np.random.default_rng(0)
+    pool = np.vstack([plan.theta0_deg[None], q, q + rng.normal(0, 4, q.shape)])
+    pool = np.vstack([pool, q + rng.normal(0, 8, q.shape)])
+    path.write_text(
+        "j1,j2,j3,j4,j5,j6\n" + "".join(",".join(f"{v:.4f}" for v in r) + "\n" for r in pool)
+    )
+
+
+@pytest.mark.slow
+def test_a_pool_plan_through_gen_solve_report_and_export(tmp_path):
+    """A V+ arm: plan --pool → gen (its 4-decimal poses within the line limit) → a run →
+    solve -o PATCH (the pool fit's parameters, the prior's share in the budget) →
+    gen --patch refused (part of a fit) → export-urdf and report take the patch / the fit."""
+    robot = ROOT / "examples" / "viper_s650" / "robot.toml"
+    pool, plan, log, patch = (tmp_path / n for n in ("pool.csv", "plan.toml", "run.csv", "p.toml"))
+    _viper_pool(pool)
+    runner = CliRunner()
+
+    def run(*args: str, code: int = 0) -> str:
+        r = runner.invoke(main, list(args))
+        assert r.exit_code == code, r.output
+        assert "Traceback" not in r.output
+        return r.output
+
+    run("plan", str(robot), "--pool", str(pool), "--points", "40", "-o", str(plan))
+    out = run("gen", str(robot), str(plan), "-o", str(tmp_path / "prog"))
+    assert "runs the wire fit the plan was made for" in out
+    run("simulate", str(robot), str(plan), "-o", str(log), "--seed", "2")
+    out = run("solve", str(robot), str(plan), str(log), "-o", str(patch))
+    assert re.search(r"^prior's share +\d", out, re.M), out
+    assert re.search(r"^al4 +deg .* +\d\.\d\d$", out, re.M), out  # beyond the file's list
+    out = run("solve", str(robot), str(plan), str(log), "--refine-scale", code=2)
+    assert "--refine-scale refines the scale in the joint method" in out
+    out = run(
+        "gen", str(robot), str(plan), "-o", str(tmp_path / "p2"), "--patch", str(patch), code=2
+    )
+    assert "patch: holds tool_x, tool_y, tool_z" in out
+    assert "entering part of a fit is not the fit" in out
+    run("export-urdf", str(robot), str(patch), "-o", str(tmp_path / "cal.urdf"))
+    run("report", str(robot), str(plan), str(log), "-o", str(tmp_path / "r.html"))
+    html = (tmp_path / "r.html").read_text()
+    assert ">al4<" in html or "al4</td>" in html
