@@ -221,3 +221,28 @@ def test_a_pool_plan_through_gen_solve_report_and_export(tmp_path):
     run("report", str(robot), str(plan), str(log), "-o", str(tmp_path / "r.html"))
     html = (tmp_path / "r.html").read_text()
     assert ">al4<" in html or "al4</td>" in html
+
+
+def test_the_ur_companion_names_the_tool_point_it_cannot_carry(tmp_path):
+    """A pool plan's patch holds the wire's attachment (tool_*): UR's companion refused the
+    whole patch for it, so ``solve -o`` wrote nothing on a UR; now the deltas are written
+    and the tool point named as not carried. The base frame is still refused."""
+    import tomllib
+
+    from wirecal.formats.patch_companion import read_companion
+    from wirecal.lang.registry import language
+    from wirecal.lang.urscript.calibration import calibration_text
+    from wirecal.solver.errors import WirecalError
+
+    ur5e = load_robot(ROOT / "examples" / "ur5e" / "robot.toml")
+    text = calibration_text(ur5e, {"d4": 0.25, "tool_z": 0.8, "tool_x": -0.1})
+    assert "# Not carried: the tool point's offsets" in text
+    assert "#   tool_z +0.8000 mm, tool_x -0.1000 mm" in text
+    assert tomllib.loads(text)["mounting"]["delta_d"] == pytest.approx(
+        [0, 0, 0, 0.00025, 0, 0], abs=1e-15
+    )
+    path = tmp_path / "p.ur_calibration.conf"
+    path.write_text(text)
+    assert read_companion(path, language("urscript"))["delta_d"][3] == pytest.approx(0.00025)
+    with pytest.raises(WirecalError, match="a0"):
+        calibration_text(ur5e, {"a0": 0.1, "tool_z": 0.8})
