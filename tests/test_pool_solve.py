@@ -221,6 +221,7 @@ def test_a_pool_plan_through_gen_solve_report_and_export(tmp_path):
     run("report", str(robot), str(plan), str(log), "-o", str(tmp_path / "r.html"))
     html = (tmp_path / "r.html").read_text()
     assert ">al4<" in html or "al4</td>" in html
+    assert "the prior's share" in html  # the budget's row
 
 
 def test_the_ur_companion_names_the_tool_point_it_cannot_carry(tmp_path):
