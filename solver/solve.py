@@ -336,21 +336,16 @@ def _solve_pool(
     left, names, _ = _measured_steps(plan, m, partial)
     factor, notes = _reference_scale(robot, m)
     k = factor if factor is not None and corrections else 1.0
-    present, q_deg = m.present, m.joints_deg[m.present]
-    d = m.distance_mm[present] * k
-    sol = pool_estimate(robot, q_deg, d)
-    drift = _fit_drift(m, sol.sigma_mm)
-    if corrections and drift is not None and drift.removed:
-        assert m.t_s is not None  # a drift was fitted: the log is timed
-        assert m.reference_t_s is not None
-        d = (m.distance_mm[present] - drift.correction_mm(m.t_s[present], m.reference_t_s)) * k
-        sol = pool_estimate(robot, q_deg, d)
+    drift, sol, d = _pool_drift(robot, m, k)
+    if not corrections:  # the controller's view: the lengths as read
+        d = m.distance_mm[m.present] * k
+        sol = pool_estimate(robot, m.joints_deg[m.present], d)
     drift = _as_corrected(drift, corrections)
     notes.append(_drift_note(m, drift))
     scale, scale_std = _scale_estimate(robot, m, factor, sol.sigma_mm)
     src = _error_sources(robot, plan, m, sol.sigma_mm, d, scale, scale_std, drift)
     b = _pool_budget(robot, sol, src)
-    psi = sensitivity(robot.nominal, q_deg, m.theta0_deg, names).psi
+    psi = sensitivity(robot.nominal, m.joints_deg[m.present], m.theta0_deg, names).psi
     return SolveResult(
         robot,
         plan,
@@ -360,13 +355,39 @@ def _solve_pool(
         sol.sigma_mm,
         left,
         psi,
-        m.step[present],
+        m.step[m.present],
         budgets={} if b is None else {"joint": b},
         scale=scale,
         drift=drift,
         encoder_notes=tuple(notes),
         prior=sol.fit,
     )
+
+
+def _pool_drift(
+    robot: Robot, m: Measurements, k: float
+) -> tuple[Drift | None, PoolSolution, np.ndarray]:
+    """Return the zero readings' drift, the pool fit and its lengths, as :func:`_judge_drift`.
+
+    The fit's σ still holds the drift, which then looks insignificant: it is judged again
+    by the σ of a fit with the drift taken out, and when then removed, that fit is the one
+    kept (its lengths, ×``k``, returned with it).
+    """
+    present, q_deg = m.present, m.joints_deg[m.present]
+    d = m.distance_mm[present] * k
+    sol = pool_estimate(robot, q_deg, d)
+    drift = _fit_drift(m, sol.sigma_mm)
+    if drift is None:
+        return None, sol, d
+    assert m.t_s is not None  # a drift was fitted: the log is timed
+    assert m.reference_t_s is not None
+    removed = replace(drift, removed=True).correction_mm(m.t_s[present], m.reference_t_s)
+    d_clean = (m.distance_mm[present] - removed) * k
+    clean = pool_estimate(robot, q_deg, d_clean)
+    drift = _fit_drift(m, clean.sigma_mm)
+    if drift is None or not drift.removed:
+        return drift, sol, d
+    return drift, clean, d_clean
 
 
 def _pool_budget(robot: Robot, sol: PoolSolution, src: Sources) -> Budget | None:

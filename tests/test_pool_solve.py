@@ -217,6 +217,10 @@ def test_a_pool_plan_through_gen_solve_report_and_export(tmp_path):
     )
     assert "patch: holds tool_x, tool_y, tool_z" in out
     assert "entering part of a fit is not the fit" in out
+    drift = ("--drift-mm-per-h", "3", "--samples", "500", "--noise-mm", "0.002", "--seed", "1")
+    run("simulate", str(robot), str(plan), "-o", str(tmp_path / "drift.csv"), *drift)
+    out = run("solve", str(robot), str(plan), str(tmp_path / "drift.csv"))
+    assert "well measured, so it was removed from the lengths" in out  # judged on a clean σ
     run("export-urdf", str(robot), str(patch), "-o", str(tmp_path / "cal.urdf"))
     run("report", str(robot), str(plan), str(log), "-o", str(tmp_path / "r.html"))
     html = (tmp_path / "r.html").read_text()
