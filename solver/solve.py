@@ -329,11 +329,13 @@ def _solve_pool(
     """Solve a plan from a pool by the wire fit it was planned for (:mod:`.solve_pool`).
 
     The lengths as :func:`solve` takes them: the reference's scale, a significant drift
-    removed (judged by the fit's σ; the fit then run again on the clean lengths). The
+    removed (:func:`_pool_drift`). Ψ (the report's) is the file's parameters'. The
     budget's map and its prior's share are the posterior's; ``--robust`` and ``--omega``
     do not apply (the fit's loss is soft-L1 always, no step bounds a parameter).
     """
-    left, names, _ = _measured_steps(plan, m, partial)
+    # refuses an incomplete log unless partial; every parameter is fitted from every point
+    # there is, none left at nominal for its step's lack of points
+    _measured_steps(plan, m, partial)
     factor, notes = _reference_scale(robot, m)
     k = factor if factor is not None and corrections else 1.0
     drift, sol, d = _pool_drift(robot, m, k)
@@ -345,7 +347,7 @@ def _solve_pool(
     scale, scale_std = _scale_estimate(robot, m, factor, sol.sigma_mm)
     src = _error_sources(robot, plan, m, sol.sigma_mm, d, scale, scale_std, drift)
     b = _pool_budget(robot, sol, src)
-    psi = sensitivity(robot.nominal, m.joints_deg[m.present], m.theta0_deg, names).psi
+    psi = sensitivity(robot.nominal, m.joints_deg[m.present], m.theta0_deg, plan.order).psi
     return SolveResult(
         robot,
         plan,
@@ -353,7 +355,7 @@ def _solve_pool(
         {"joint": sol.estimate},
         {"joint": _predicted(b)},
         sol.sigma_mm,
-        left,
+        (),
         psi,
         m.step[m.present],
         budgets={} if b is None else {"joint": b},
