@@ -126,9 +126,7 @@ def _map_at(base: Model, layout: Layout, data: Data, prior: float) -> tuple[Wire
         r = lengths(base, layout, x, q, session) - length
         sigma = max(float(np.sqrt(np.mean(r**2))), data.floor_mm, 1e-9)
         robust = soft_l1_weight(r, ROBUST_SCALE * sigma)
-    J = lengths_and_jacobian(base, layout, x, q, session)[1] / sigma
-    scale = np.maximum(np.linalg.norm(J, axis=0), weight)
-    H = (J.T @ J + np.diag(weight**2)) / np.outer(scale, scale)
+    H, scale = _scaled_hessian(lengths_and_jacobian(base, layout, x, q, session)[1] / sigma, weight)
     has = np.isfinite(sd)
     evidence = (
         -len(r) / 2
@@ -202,31 +200,39 @@ class Posterior:
     jacobian: np.ndarray  # (N, k) ∂L/∂x at the estimate
 
 
+def _scaled_hessian(J: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return H = JᵀJ + diag(``weight``²) over its column scales, and the scales.
+
+    ``J`` the readings' Jacobian over their σ; each column scaled by the larger of its
+    norm and its prior's weight, so that H's conditioning is the problem's, not the units'.
+    """
+    scale = np.maximum(np.linalg.norm(J, axis=0), weight)
+    return (J.T @ J + np.diag(weight**2)) / np.outer(scale, scale), scale
+
+
+def _gain(J: np.ndarray, sigma_mm: float, weight: np.ndarray) -> np.ndarray:
+    """Return M = P·Jᵀ/σ², P = (JᵀJ/σ² + Λ)⁻¹, Λ = diag(``weight``²)."""
+    H, scale = _scaled_hessian(J / sigma_mm, weight)
+    P = np.linalg.pinv(H, rcond=RANK_RTOL, hermitian=True) / np.outer(scale, scale)
+    return P @ J.T / sigma_mm**2
+
+
 def posterior(base: Model, fit: WireMap, data: Data) -> Posterior:
     """Return the posterior of ``fit`` (:class:`Posterior`) at the prior size it chose.
 
-    The readings' σ is ``fit.sigma_mm`` (the one the fit weighed the prior with); the
-    Hessian is scaled by its columns before the pseudo-inverse, as :func:`_map_at`'s.
+    The count the readings carry is taken at the σ the fit weighed the prior with
+    (``fit.sigma_mm``, the residual's RMS); the posterior at the σ on the degrees of freedom
+    left, N − ``effective`` (larger: the RMS of a fit of many parameters is short of the
+    readings' σ).
     """
     layout, x = fit.layout, fit.x
     r, J = lengths_and_jacobian(base, layout, x, data.q_rad, data.session)
     r = r - data.length_mm
     sd = prior_sigma(base, layout, fit.prior)
-    w = 1.0 / sd
-    scale = np.maximum(np.linalg.norm(J, axis=0) / fit.sigma_mm, w)
-    H = (J.T @ J / fit.sigma_mm**2 + np.diag(w**2)) / np.outer(scale, scale)
-    P = np.linalg.pinv(H, rcond=RANK_RTOL, hermitian=True) / np.outer(scale, scale)
-    M = P @ J.T / fit.sigma_mm**2
+    effective = float(np.trace(J @ _gain(J, fit.sigma_mm, 1.0 / sd)))
+    sigma = max(float(np.sqrt(r @ r / max(len(r) - effective, 1.0))), data.floor_mm)
+    M = _gain(J, sigma, 1.0 / sd)
     B = (M @ J - np.eye(len(x)))[:, np.isfinite(sd)]
-    effective = float(np.trace(J @ M))
-    dof = max(len(r) - effective, 1.0)
     return Posterior(
-        M,
-        fit.sigma_mm**2 * M @ M.T,
-        B * sd[np.isfinite(sd)] ** 2 @ B.T,
-        sd,
-        effective,
-        max(float(np.sqrt(r @ r / dof)), data.floor_mm),
-        r,
-        J,
+        M, sigma**2 * M @ M.T, B * sd[np.isfinite(sd)] ** 2 @ B.T, sd, effective, sigma, r, J
     )

@@ -136,7 +136,8 @@ def test_solve_of_a_pool_plan_is_the_replays_fit(tmp_path):
 
 def test_the_posterior_is_split_into_the_readings_and_the_prior():
     """noise + the prior's share = (JᵀJ/σ² + Λ)⁻¹, computed here by a plain inverse; the
-    readings carry fewer parameters than are fitted, more than those without a prior."""
+    readings carry fewer parameters than are fitted, more than those without a prior, and
+    σ is the residual's on the degrees of freedom they leave."""
     table = _table(80, 5)
     robot = load_robot(UR10)
     rows = np.arange(1, 61)
@@ -146,11 +147,14 @@ def test_the_posterior_is_split_into_the_readings_and_the_prior():
     post = posterior(base, fit, data)
     J = post.jacobian
     lam = 1.0 / prior_sigma(base, fit.layout, fit.prior) ** 2
-    P = np.linalg.inv(J.T @ J / fit.sigma_mm**2 + np.diag(lam))
+    P = np.linalg.inv(J.T @ J / post.sigma_mm**2 + np.diag(lam))
     sd = np.sqrt(np.diag(P))
     assert np.allclose(post.noise + post.prior_share, P, atol=1e-9 * np.outer(sd, sd).max())
     no_prior = int(np.sum(np.isinf(prior_sigma(base, fit.layout, fit.prior))))
     assert no_prior < post.effective < len(fit.x)
+    rss = float(np.sum(post.residual_mm**2))
+    assert post.sigma_mm == pytest.approx(np.sqrt(rss / (60 - post.effective)), rel=1e-12)
+    assert post.sigma_mm > fit.sigma_mm  # the RMS of a fit of many parameters is short
 
 
 @given(
