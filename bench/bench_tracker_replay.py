@@ -19,6 +19,11 @@ over the seeds and the wire's ratio to the tracker calibration; ``--json`` print
 of the robot file's ``[calibration] compliances``; null for a robot file that asks none.
 ``predicted_mm``: the plan's predicted tool-point error at the reading noise, per seed.
 
+``--preflight`` chooses θ0 and the poses as ``plan --pool -o PLAN.toml`` does for a user,
+``gen``'s pre-flight applied (:func:`~wirecal.cli.plan_pool_file.safe_plan`: poses whose
+move leaves the wire's range or meets the floor left out, the choice made again); the fit
+is the same either way (the one ``wirecal solve`` runs on such a plan).
+
 ``--anchors`` replays instead the rigid wire from every θ0 the planner tries (each with its
 own 60 poses) and from the chosen θ0 with every training pose within the encoder's range
 (:func:`~wirecal.solver.tracker.replay.lottery`): per seed the chosen θ0's figure, the best,
@@ -26,7 +31,7 @@ median and worst of the others, the rank correlation of the planner's predicted 
 the held-out one, the every-pose figure and the tracker calibration beside them.
 
     python bench/bench_tracker_replay.py [--data DIR] [--set ur10_ipa ...]
-        [--robot R --table T.csv] [--seeds 3] [--points 60] [--anchors] [--json]
+        [--robot R --table T.csv] [--seeds 3] [--points 60] [--anchors | --preflight] [--json]
 
 A set asked for and not found exits 2 naming the folder, the missing files and the
 ``git clone`` (and commit) that brings them; a file that is not the published bytes at that
@@ -48,6 +53,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.stats import spearmanr  # noqa: E402
 
+from wirecal.cli.plan_pool_file import safe_plan  # noqa: E402
 from wirecal.formats.robot_file import load_robot  # noqa: E402
 from wirecal.formats.tracker_published import (  # noqa: E402
     PUBLISHED_SETS,
@@ -60,6 +66,8 @@ from wirecal.solver.errors import WirecalError  # noqa: E402
 from wirecal.solver.fit.calibrate import point_model  # noqa: E402
 from wirecal.solver.kinematics import tool_position  # noqa: E402
 from wirecal.solver.params import TOOL_NAMES  # noqa: E402
+from wirecal.solver.plan.options import PlanOptions  # noqa: E402
+from wirecal.solver.plan.pool import PoolPlan, plan_pool  # noqa: E402
 from wirecal.solver.tracker.fit import calibrate  # noqa: E402
 from wirecal.solver.tracker.replay import lottery, replay  # noqa: E402
 
@@ -90,10 +98,18 @@ PUBLISHED = {
 }
 
 
-def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict:
+def preflight_choice(robot, q_deg: np.ndarray, points: int, opt: PlanOptions) -> PoolPlan:
+    """Return the choice ``plan --pool -o PLAN.toml`` writes: gen's pre-flight applied."""
+    return safe_plan(robot, q_deg, points, opt, "the replay's plan")[0]
+
+
+def run_set(
+    robot_path: Path, table_path: Path, seeds: int, points: int, preflight: bool = False
+) -> dict:
     """Return one set's medians over the seeds and each seed's figures."""
     robot, table = load_robot(robot_path), read_tracker(table_path)
-    runs = [replay(robot, table, seed=s, points=points) for s in range(seeds)]
+    choose = preflight_choice if preflight else plan_pool
+    runs = [replay(robot, table, seed=s, points=points, choose=choose) for s in range(seeds)]
 
     def median(key: str) -> float | None:
         values = [getattr(r, key) for r in runs]
@@ -208,6 +224,11 @@ def main() -> None:
     ap.add_argument(
         "--anchors", action="store_true", help="one wire from every θ0 tried (module docstring)"
     )
+    ap.add_argument(
+        "--preflight",
+        action="store_true",
+        help="choose as 'plan --pool -o PLAN.toml' does: gen's pre-flight applied",
+    )
     ap.add_argument("--json", action="store_true", help="print the figures as JSON")
     args = ap.parse_args()
     if (args.robot is None) != (args.table is None):
@@ -225,9 +246,15 @@ def main() -> None:
             if arm in wanted
         }
     )
-    one = anchor_set if args.anchors else run_set
+    if args.anchors and args.preflight:
+        ap.error("give --anchors or --preflight, not both")
     try:
-        out = {name: one(r, t, args.seeds, args.points) for name, (r, t) in cases.items()}
+        out = {
+            name: anchor_set(r, t, args.seeds, args.points)
+            if args.anchors
+            else run_set(r, t, args.seeds, args.points, args.preflight)
+            for name, (r, t) in cases.items()
+        }
         if not args.table and not args.anchors:
             out["published"] = {
                 name: {

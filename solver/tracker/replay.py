@@ -30,6 +30,7 @@ choice of θ0 and the count of poses are worth on a data set (``--anchors`` of t
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,7 +39,13 @@ from wirecal.solver.fit.calibrate import point_model
 from wirecal.solver.kinematics import Model, tool_position
 from wirecal.solver.params import TOOL_NAMES
 from wirecal.solver.plan.options import PlanOptions
-from wirecal.solver.plan.pool import anchor_plans, eligible_rows, plan_pool, pool_wire_mm
+from wirecal.solver.plan.pool import (
+    PoolPlan,
+    anchor_plans,
+    eligible_rows,
+    plan_pool,
+    pool_wire_mm,
+)
 from wirecal.solver.robot import Robot
 from wirecal.solver.tracker.data import TrackerTable
 from wirecal.solver.tracker.fit import calibrate, registered_rms_mm
@@ -113,11 +120,21 @@ def one_wire_mm(
     return held_out_mm(wire_fit(robot, table, wire, compliances).model, table, test)
 
 
-def replay(robot: Robot, table: TrackerTable, *, seed: int, points: int) -> Replay:
-    """Replay ``table`` once (module docstring): split ``seed``, at most ``points`` poses."""
+Choose = Callable[[Robot, np.ndarray, int, PlanOptions], PoolPlan]
+"""How a replay chooses θ0 and the poses from the training rows (the pool planner's choice)."""
+
+
+def replay(
+    robot: Robot, table: TrackerTable, *, seed: int, points: int, choose: Choose = plan_pool
+) -> Replay:
+    """Replay ``table`` once (module docstring): split ``seed``, at most ``points`` poses.
+
+    ``choose``: the planner's choice by default; the bench's ``--preflight`` passes the one
+    ``plan --pool -o PLAN.toml`` writes, with ``gen``'s pre-flight applied.
+    """
     base = point_model(robot)
     train, test = split(len(table.q_deg), seed)
-    plan = plan_pool(robot, table.q_deg[train], points, PlanOptions(seed=seed))
+    plan = choose(robot, table.q_deg[train], points, PlanOptions(seed=seed))
     rows = train[plan.rows]
     wire = (int(train[plan.theta0_row]), rows)
     q, x = np.radians(table.q_deg), table.xyz_mm
