@@ -67,9 +67,9 @@ from wirecal.solver.fit.calibrate import point_model  # noqa: E402
 from wirecal.solver.kinematics import tool_position  # noqa: E402
 from wirecal.solver.params import TOOL_NAMES  # noqa: E402
 from wirecal.solver.plan.options import PlanOptions  # noqa: E402
-from wirecal.solver.plan.pool import PoolPlan, plan_pool  # noqa: E402
+from wirecal.solver.plan.pool import PoolPlan  # noqa: E402
 from wirecal.solver.tracker.fit import calibrate  # noqa: E402
-from wirecal.solver.tracker.replay import lottery, replay  # noqa: E402
+from wirecal.solver.tracker.replay import Replay, lottery, replay  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = ROOT / "tests" / "data" / "tracker"
@@ -103,19 +103,32 @@ def preflight_choice(robot, q_deg: np.ndarray, points: int, opt: PlanOptions) ->
     return safe_plan(robot, q_deg, points, opt, "the replay's plan")[0]
 
 
+def replays(
+    robot, table, seeds: int, points: int, preflight: bool
+) -> tuple[list[Replay], dict[int, str]]:
+    """Return the seeds' replays and, with ``preflight``, why a seed has no plan file."""
+    if not preflight:
+        return [replay(robot, table, seed=s, points=points) for s in range(seeds)], {}
+    runs, no_plan = [], {}
+    for s in range(seeds):
+        try:
+            runs.append(replay(robot, table, seed=s, points=points, choose=preflight_choice))
+        except WirecalError as exc:
+            no_plan[s] = str(exc)
+    return runs, no_plan
+
+
 def run_set(
     robot_path: Path, table_path: Path, seeds: int, points: int, preflight: bool = False
 ) -> dict:
-    """Return one set's medians over the seeds and each seed's figures."""
+    """Return one set's medians over the seeds and each seed's figures.
+
+    With ``preflight`` a seed whose plan file the pre-flight refuses has no figures: named
+    in ``no_plan`` (seed → why), the medians over the others.
+    """
     robot, table = load_robot(robot_path), read_tracker(table_path)
-    choose = preflight_choice if preflight else plan_pool
-    runs = [replay(robot, table, seed=s, points=points, choose=choose) for s in range(seeds)]
-
-    def median(key: str) -> float | None:
-        values = [getattr(r, key) for r in runs]
-        return None if None in values else float(np.median(values))
-
-    return {
+    runs, no_plan = replays(robot, table, seeds, points, preflight)
+    where = {
         "robot": str(
             robot_path.relative_to(ROOT) if robot_path.is_relative_to(ROOT) else robot_path
         ),
@@ -123,6 +136,17 @@ def run_set(
             table_path.relative_to(ROOT) if table_path.is_relative_to(ROOT) else table_path
         ),
         "rows": len(table.q_deg),
+        **({"no_plan": no_plan} if preflight else {}),
+    }
+    if not runs:
+        return where
+
+    def median(key: str) -> float | None:
+        values = [getattr(r, key) for r in runs]
+        return None if None in values else float(np.median(values))
+
+    return {
+        **where,
         "points": runs[0].points,
         "nominal_mm": median("nominal_mm"),
         "tracker_mm": median("tracker_mm"),
@@ -281,12 +305,18 @@ def print_text(out: dict, seeds: int) -> None:
     head = f"{'data set':<36}{'rows':>6}{'nominal':>9}{'tracker':>9}{'wire':>8}{'wire/tr':>9}"
     print(head + f"{'wire+c':>8}{'(w+c)/tr':>10}")
     for name, r in out.items():
+        if "wire_mm" not in r:
+            print(f"{name:<36}{r['rows']:>6}  no plan file on any seed (the pre-flight)")
+            continue
         wc = r["wire_compliance_mm"]
         tail = "     n/a       n/a" if wc is None else f"{wc:>8.3f}{wc / r['tracker_mm']:>10.2f}"
         print(
             f"{name:<36}{r['rows']:>6}{r['nominal_mm']:>9.3f}{r['tracker_mm']:>9.3f}"
             f"{r['wire_mm']:>8.3f}{r['wire_mm'] / r['tracker_mm']:>9.2f}" + tail
         )
+        if r.get("no_plan"):
+            seeds_left = ", ".join(str(k) for k in r["no_plan"])
+            print(f"  no plan file on seed {seeds_left} (the pre-flight): medians of the others")
     print(f"medians over {seeds} seeds, mm (n/a: the robot file asks no compliances)")
     for name, r in published.items():
         print(

@@ -710,6 +710,15 @@ def test_bench_replays_any_generic_table(tmp_path):
         assert len(doc[key]) == 1
     assert doc["best_wire_mm"][0] <= doc["chosen_wire_mm"][0] <= doc["worst_wire_mm"][0]
     assert doc["tracker_every_pose_mm"][0] < 0.03
+    pre = subprocess.run(
+        [*args, "--seeds", "1", "--points", "30", "--preflight", "--json"],
+        capture_output=True,
+        text=True,
+    )
+    assert pre.returncode == 0, pre.stderr
+    (doc,) = json.loads(pre.stdout).values()
+    assert doc["points"] == 30
+    assert doc["wire_mm"] < 0.1  # the user's plan file, the same fit
     bad = subprocess.run([*args[:2], "--table", str(table)], capture_output=True, text=True)
     assert bad.returncode == 2
     assert "give --robot and --table together" in bad.stderr
