@@ -1,8 +1,9 @@
 """``wirecal plan ROBOT --pool TABLE -o PLAN.toml``: the pool's choice as a plan ``gen`` takes.
 
-The plan is the joint method's: θ0 and the chosen poses, split over the steps of the robot
-file's ``[calibration] parameters`` in the order chosen (the plan file has one step per
-parameter; the joint estimate uses every point whatever its step, the step-by-step one
+The plan is for the pool planner's wire fit, which ``wirecal solve`` runs on it
+(:mod:`~wirecal.solver.solve_pool`): θ0 and the chosen poses, split over the steps of the
+robot file's ``[calibration] parameters`` in the order chosen (the plan file has one step
+per parameter; the fit uses every point whatever its step, the step-by-step estimate
 does not apply to poses nobody chose to isolate a parameter).
 
 Before anything is written, the pre-flight ``gen`` applies
