@@ -226,7 +226,10 @@ def test_a_pool_plan_through_gen_solve_report_and_export(tmp_path):
     out = run("solve", str(robot), str(plan), str(tmp_path / "drift.csv"))
     assert "well measured, so it was removed from the lengths" in out  # judged on a clean σ
     run("export-urdf", str(robot), str(patch), "-o", str(tmp_path / "cal.urdf"))
-    run("report", str(robot), str(plan), str(log), "-o", str(tmp_path / "r.html"))
+    report = ("report", str(robot), str(plan), str(log), "-o", str(tmp_path / "r.html"))
+    out = run(*report, "--controller", code=2)  # was a KeyError traceback: no wc.solve
+    assert "report without --controller" in out
+    run(*report)
     html = (tmp_path / "r.html").read_text()
     assert ">al4<" in html or "al4</td>" in html
     assert "the prior's share" in html  # the budget's row
