@@ -210,6 +210,8 @@ def test_a_pool_plan_through_gen_solve_report_and_export(tmp_path):
     run("plan", str(robot), "--pool", str(pool), "--points", "40", "-o", str(plan))
     out = run("gen", str(robot), str(plan), "-o", str(tmp_path / "prog"))
     assert "runs the wire fit the plan was made for" in out
+    out = run("observe", str(robot), str(plan))
+    assert "'wirecal solve' runs the wire fit this plan was chosen for" in out
     run("simulate", str(robot), str(plan), "-o", str(log), "--seed", "2")
     out = run("solve", str(robot), str(plan), str(log), "-o", str(patch))
     assert re.search(r"^prior's share +\d", out, re.M), out
