@@ -42,7 +42,9 @@ class PriorFit:
     fitted: int  # every parameter fitted: the estimate's, the anchor (3), the offset
     anchor_mm: np.ndarray  # (3,) the wire's fixed end, base frame
     offset_mm: float  # the length at zero distance less the zero reading
-    jacobian: np.ndarray  # (N, m) ∂L/∂e of the estimate's parameters, boundary units
+    # (N, m) ∂L/∂e of the estimate's parameters, boundary units, the anchor's and the
+    # offset's columns projected out: what the readings say of e once those are fitted
+    jacobian: np.ndarray
 
     def as_json(self) -> dict[str, Any]:
         """Return the fit's description for ``wirecal solve --json``."""
@@ -94,6 +96,8 @@ def _prior_fit(wm: WireMap, post: Posterior) -> PriorFit:
     layout, g = wm.layout, len(wm.layout.geometry)
     per = layout.boundary_per_internal
     _, anchor, _, offsets = layout.split(wm.x)
+    J, nuisance = post.jacobian[:, :g], post.jacobian[:, g:]
+    J = J - nuisance @ np.linalg.lstsq(nuisance, J, rcond=None)[0]
     return PriorFit(
         dict(zip(layout.geometry, (post.prior_sd * per)[:g].tolist(), strict=True)),
         wm.prior,
@@ -101,7 +105,7 @@ def _prior_fit(wm: WireMap, post: Posterior) -> PriorFit:
         len(layout.names),
         anchor.copy(),
         float(offsets[0]),
-        post.jacobian[:, :g] / per[:g],
+        J / per[:g],
     )
 
 
