@@ -42,6 +42,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver.compliance import PRIOR_COMPLIANCE_URAD_PER_NM
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import Pulley
 from wirecal.solver.fit.calibrate import Data, candidates, nominal_floor, point_model, start
 from wirecal.solver.fit.model import Layout, lengths, lengths_and_jacobian, model_of
 from wirecal.solver.fit.solver import levenberg_marquardt
@@ -149,6 +151,22 @@ def map_fit(base: Model, layout: Layout, data: Data, prior: float) -> WireMap:
     return max(fits, key=lambda f: f[1])[0]
 
 
+def check_exit(robot: Robot) -> None:
+    """Refuse a guide pulley: the wire fit models a straight wire from a point (the anchor).
+
+    Over a pulley the wire's length is an arc and a span the anchor cannot stand for, and
+    the error budget leaves it out (the paper's model carries it); an eyelet's wrap is
+    budgeted (``exit``), so it is taken.
+    """
+    if isinstance(robot.encoder.exit, Pulley):
+        raise WirecalError(
+            f'{robot.source}: [encoder] exit = "pulley": the wire fit of a plan from a pool '
+            "models a straight wire from a point, which a guide pulley's arc is not: use "
+            "'wirecal plan' (the paper's model carries the pulley), or an encoder with a "
+            'point exit (exit = "point")'
+        )
+
+
 def fit_wire(
     robot: Robot,
     compliances: tuple[str, ...],
@@ -162,8 +180,10 @@ def fit_wire(
     The one fit ``wirecal solve`` runs on a plan from a pool and the tracker replay scores:
     :func:`map_fit` of :func:`wire_layout` (``compliances`` beside the geometry) on
     :func:`~wirecal.solver.fit.calibrate.point_model`, one session, the floor from the
-    encoder's count and ``joint_resolution_deg`` (a least σ of the readings).
+    encoder's count and ``joint_resolution_deg`` (a least σ of the readings). A guide
+    pulley is refused (:func:`check_exit`).
     """
+    check_exit(robot)
     base = point_model(robot)
     q_rad = np.radians(q_deg)
     session = np.zeros(len(q_rad), dtype=int)

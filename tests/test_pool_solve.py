@@ -260,3 +260,20 @@ def test_the_ur_companion_names_the_tool_point_it_cannot_carry(tmp_path):
     assert read_companion(path, language("urscript"))["delta_d"][3] == pytest.approx(0.00025)
     with pytest.raises(WirecalError, match="a0"):
         calibration_text(ur5e, {"a0": 0.1, "tool_z": 0.8})
+
+
+def test_a_guide_pulley_is_refused_before_the_robot_moves(tmp_path):
+    """The pool's wire fit models a straight wire from a point: over a guide pulley (an arc
+    the budget leaves out) ``plan --pool`` refuses, naming the key, before any run."""
+    text = (ROOT / "examples" / "ur5e" / "robot.toml").read_text()
+    robot = tmp_path / "robot.toml"
+    robot.write_text(
+        text.replace('exit = "point"', 'exit = "pulley"\naxis = [0, 0, 1]\npulley_radius_mm = 15.0')
+    )
+    pool = tmp_path / "pool.csv"
+    q = np.random.default_rng(1).uniform(-60.0, 60.0, (40, 6)) + np.array([0, -90, 90, -90, 90, 0])
+    pool.write_text("j1,j2,j3,j4,j5,j6\n" + "".join(",".join(map(str, r)) + "\n" for r in q))
+    r = CliRunner().invoke(main, ["plan", str(robot), "--pool", str(pool)])
+    assert r.exit_code == 2, r.output
+    assert 'exit = "pulley": the wire fit of a plan from a pool' in r.output
+    assert "Traceback" not in r.output
