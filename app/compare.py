@@ -97,6 +97,14 @@ class ControllerComparison:
         return out
 
 
+JOINT_ONLY_CONTROLLER = (
+    "joint_only = true: the plan was written from a pool for the wire fit 'wirecal solve' "
+    "runs; the controller's solver starts step by step, which does not apply, and gen "
+    "leaves it out: solve without --method controller, report without --controller"
+)
+"""Why the controller's solver is not run for a plan from a pool (``solve``, ``report``)."""
+
+
 def compare_controller(
     result: SolveResult, disk: Path, *, programs: dict[str, str] | None = None
 ) -> ControllerComparison:
@@ -108,6 +116,8 @@ def compare_controller(
     controller solvers apply neither).
     """
     m = result.measurements
+    if result.plan.joint_only:  # gen wrote no controller solver for it
+        raise WirecalError(f"{result.plan.source}: {JOINT_ONLY_CONTROLLER}")
     if result.left_nominal or m.missing:
         raise WirecalError(
             "--method controller needs a complete log (the controller solver "

@@ -19,6 +19,11 @@ over the seeds and the wire's ratio to the tracker calibration; ``--json`` print
 of the robot file's ``[calibration] compliances``; null for a robot file that asks none.
 ``predicted_mm``: the plan's predicted tool-point error at the reading noise, per seed.
 
+``--preflight`` chooses θ0 and the poses as ``plan --pool -o PLAN.toml`` does for a user,
+``gen``'s pre-flight applied (:func:`~wirecal.cli.plan_pool_file.safe_plan`: poses whose
+move leaves the wire's range or meets the floor left out, the choice made again); the fit
+is the same either way (the one ``wirecal solve`` runs on such a plan).
+
 ``--anchors`` replays instead the rigid wire from every θ0 the planner tries (each with its
 own 60 poses) and from the chosen θ0 with every training pose within the encoder's range
 (:func:`~wirecal.solver.tracker.replay.lottery`): per seed the chosen θ0's figure, the best,
@@ -26,7 +31,7 @@ median and worst of the others, the rank correlation of the planner's predicted 
 the held-out one, the every-pose figure and the tracker calibration beside them.
 
     python bench/bench_tracker_replay.py [--data DIR] [--set ur10_ipa ...]
-        [--robot R --table T.csv] [--seeds 3] [--points 60] [--anchors] [--json]
+        [--robot R --table T.csv] [--seeds 3] [--points 60] [--anchors | --preflight] [--json]
 
 A set asked for and not found exits 2 naming the folder, the missing files and the
 ``git clone`` (and commit) that brings them; a file that is not the published bytes at that
@@ -48,6 +53,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.stats import spearmanr  # noqa: E402
 
+from wirecal.cli.plan_pool_file import safe_plan  # noqa: E402
 from wirecal.formats.robot_file import load_robot  # noqa: E402
 from wirecal.formats.tracker_published import (  # noqa: E402
     PUBLISHED_SETS,
@@ -60,8 +66,10 @@ from wirecal.solver.errors import WirecalError  # noqa: E402
 from wirecal.solver.fit.calibrate import point_model  # noqa: E402
 from wirecal.solver.kinematics import tool_position  # noqa: E402
 from wirecal.solver.params import TOOL_NAMES  # noqa: E402
+from wirecal.solver.plan.options import PlanOptions  # noqa: E402
+from wirecal.solver.plan.pool import PoolPlan  # noqa: E402
 from wirecal.solver.tracker.fit import calibrate  # noqa: E402
-from wirecal.solver.tracker.replay import lottery, replay  # noqa: E402
+from wirecal.solver.tracker.replay import Replay, lottery, replay  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = ROOT / "tests" / "data" / "tracker"
@@ -90,16 +98,37 @@ PUBLISHED = {
 }
 
 
-def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict:
-    """Return one set's medians over the seeds and each seed's figures."""
+def preflight_choice(robot, q_deg: np.ndarray, points: int, opt: PlanOptions) -> PoolPlan:
+    """Return the choice ``plan --pool -o PLAN.toml`` writes: gen's pre-flight applied."""
+    return safe_plan(robot, q_deg, points, opt, "the replay's plan")[0]
+
+
+def replays(
+    robot, table, seeds: int, points: int, preflight: bool
+) -> tuple[list[Replay], dict[int, str]]:
+    """Return the seeds' replays and, with ``preflight``, why a seed has no plan file."""
+    if not preflight:
+        return [replay(robot, table, seed=s, points=points) for s in range(seeds)], {}
+    runs, no_plan = [], {}
+    for s in range(seeds):
+        try:
+            runs.append(replay(robot, table, seed=s, points=points, choose=preflight_choice))
+        except WirecalError as exc:
+            no_plan[s] = str(exc)
+    return runs, no_plan
+
+
+def run_set(
+    robot_path: Path, table_path: Path, seeds: int, points: int, preflight: bool = False
+) -> dict:
+    """Return one set's medians over the seeds and each seed's figures.
+
+    With ``preflight`` a seed whose plan file the pre-flight refuses has no figures: named
+    in ``no_plan`` (seed → why), the medians over the others.
+    """
     robot, table = load_robot(robot_path), read_tracker(table_path)
-    runs = [replay(robot, table, seed=s, points=points) for s in range(seeds)]
-
-    def median(key: str) -> float | None:
-        values = [getattr(r, key) for r in runs]
-        return None if None in values else float(np.median(values))
-
-    return {
+    runs, no_plan = replays(robot, table, seeds, points, preflight)
+    where = {
         "robot": str(
             robot_path.relative_to(ROOT) if robot_path.is_relative_to(ROOT) else robot_path
         ),
@@ -107,6 +136,17 @@ def run_set(robot_path: Path, table_path: Path, seeds: int, points: int) -> dict
             table_path.relative_to(ROOT) if table_path.is_relative_to(ROOT) else table_path
         ),
         "rows": len(table.q_deg),
+        **({"no_plan": no_plan} if preflight else {}),
+    }
+    if not runs:
+        return where
+
+    def median(key: str) -> float | None:
+        values = [getattr(r, key) for r in runs]
+        return None if None in values else float(np.median(values))
+
+    return {
+        **where,
         "points": runs[0].points,
         "nominal_mm": median("nominal_mm"),
         "tracker_mm": median("tracker_mm"),
@@ -208,6 +248,11 @@ def main() -> None:
     ap.add_argument(
         "--anchors", action="store_true", help="one wire from every θ0 tried (module docstring)"
     )
+    ap.add_argument(
+        "--preflight",
+        action="store_true",
+        help="choose as 'plan --pool -o PLAN.toml' does: gen's pre-flight applied",
+    )
     ap.add_argument("--json", action="store_true", help="print the figures as JSON")
     args = ap.parse_args()
     if (args.robot is None) != (args.table is None):
@@ -225,9 +270,15 @@ def main() -> None:
             if arm in wanted
         }
     )
-    one = anchor_set if args.anchors else run_set
+    if args.anchors and args.preflight:
+        ap.error("give --anchors or --preflight, not both")
     try:
-        out = {name: one(r, t, args.seeds, args.points) for name, (r, t) in cases.items()}
+        out = {
+            name: anchor_set(r, t, args.seeds, args.points)
+            if args.anchors
+            else run_set(r, t, args.seeds, args.points, args.preflight)
+            for name, (r, t) in cases.items()
+        }
         if not args.table and not args.anchors:
             out["published"] = {
                 name: {
@@ -254,12 +305,18 @@ def print_text(out: dict, seeds: int) -> None:
     head = f"{'data set':<36}{'rows':>6}{'nominal':>9}{'tracker':>9}{'wire':>8}{'wire/tr':>9}"
     print(head + f"{'wire+c':>8}{'(w+c)/tr':>10}")
     for name, r in out.items():
+        if "wire_mm" not in r:
+            print(f"{name:<36}{r['rows']:>6}  no plan file on any seed (the pre-flight)")
+            continue
         wc = r["wire_compliance_mm"]
         tail = "     n/a       n/a" if wc is None else f"{wc:>8.3f}{wc / r['tracker_mm']:>10.2f}"
         print(
             f"{name:<36}{r['rows']:>6}{r['nominal_mm']:>9.3f}{r['tracker_mm']:>9.3f}"
             f"{r['wire_mm']:>8.3f}{r['wire_mm'] / r['tracker_mm']:>9.2f}" + tail
         )
+        if r.get("no_plan"):
+            seeds_left = ", ".join(str(k) for k in r["no_plan"])
+            print(f"  no plan file on seed {seeds_left} (the pre-flight): medians of the others")
     print(f"medians over {seeds} seeds, mm (n/a: the robot file asks no compliances)")
     for name, r in published.items():
         print(

@@ -197,7 +197,7 @@ JOINT_ONLY_SOLVER = (
     "joint_only = true: the plan was written from a pool for the joint method; its steps "
     "isolate no parameter, so the controller's step-by-step solver does not apply and is "
     "left out (V+ wc.solve and wc.solve2, URScript and RAPID wc_solve): solve the log with "
-    "'wirecal solve', which runs the joint method"
+    "'wirecal solve', which runs the wire fit the plan was made for"
 )
 """Why ``gen`` leaves the controller's solver out of a pool's plan (the generators' rule:
 :func:`wirecal.gen.targets.stepwise_solver`, and the V+ module's ``solver``).

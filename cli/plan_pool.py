@@ -48,7 +48,7 @@ def plan_header(plan: PoolPlan, source: str, lines: np.ndarray) -> str:
     return "\n".join(
         [
             f"wirecal plan --pool {source}: θ0 (the wire's anchor) and {len(plan.rows)} poses, "
-            "for the joint method",
+            "for the wire fit 'wirecal solve' runs on this plan",
             "the steps split the poses, each in a clear visiting order: the step-by-step "
             "estimate does not apply",
             f"predicted tool-point error {plan.predicted_mm:.4f} mm ({PREDICTED})",

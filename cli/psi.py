@@ -231,6 +231,13 @@ def observe(robot: str, plan: str, all_params: bool, as_json: bool) -> None:
         print_json(data)
         return
     click.echo(f"Robot {rb.name}; plan {plan} ({pl.n_points} points)")
+    if pl.joint_only:
+        click.echo(
+            "note: joint_only = true: 'wirecal solve' runs the wire fit this plan was chosen "
+            "for (the anchor fitted, every DH error with a prior; its predicted error is the "
+            "one 'wirecal plan --pool' printed); below, the paper's model of the file's "
+            "parameters at these points"
+        )
     click.echo(
         "Singular values: " + " ".join(f"{s:.4g}" for s in np.asarray(result.singular_values))
     )

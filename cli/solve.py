@@ -214,11 +214,9 @@ def _methods(pl: Plan, method: str) -> tuple[str, ...]:
     a plan written from a pool (``joint_only``), whose steps isolate no parameter.
     """
     if pl.joint_only and method == "controller":
-        raise WirecalError(
-            f"{pl.source}: joint_only = true: the plan was written from a pool for the joint "
-            "method; the controller's solver starts step by step, which does not apply: "
-            "use --method joint (the default runs it alone)"
-        )
+        from wirecal.app.compare import JOINT_ONLY_CONTROLLER  # the twin's module: only here
+
+        raise WirecalError(f"{pl.source}: {JOINT_ONLY_CONTROLLER}")
     return ("stepwise", "joint") if method in ("all", "controller") else (method,)
 
 

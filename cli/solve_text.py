@@ -17,6 +17,7 @@ if TYPE_CHECKING:
     from wirecal.app.compare import ControllerComparison
     from wirecal.solver.identify import Estimate
     from wirecal.solver.solve import SolveResult
+    from wirecal.solver.solve_pool import PriorFit
 
 
 def controller_text(ctl: ControllerComparison) -> str:
@@ -103,6 +104,7 @@ def _encoder_text(result: SolveResult) -> list[str]:
         ("exit", "wire exit"),
         ("sag", "gravity sag"),
         ("compliance", "compliances"),  # the unidentified ones; only when the file asks
+        ("prior", "prior's share"),  # a plan from a pool: what the readings see weakly
     ):
         values = [result.budgets[m].terms.get(term) for m in methods]
         if any(v is not None for v in values):
@@ -172,6 +174,8 @@ def _heading(result: SolveResult) -> list[str]:
             "not isolate their parameters, so the step-by-step estimate does not apply; the "
             "joint method alone"
         )
+    if result.prior is not None:
+        lines += _pool_fit_lines(result.prior)
     for note in m.notes:
         lines.append(f"note: {note}")
     if m.missing:
@@ -190,8 +194,12 @@ def _estimates_table(result: SolveResult) -> list[str]:
     if joint is not None and joint.std is not None:
         sigma = joint.std_by_name()
         head += f"{'± σ (joint)':>14}"
+    prior = None if result.prior is None else result.prior.prior_sd
+    if prior is not None:
+        head += f"{'σ/prior':>9}"
     lines = [head]
-    for name in result.plan.order:
+    names = result.plan.order if prior is None else est["joint"].names
+    for name in names:
         if name in result.left_nominal:
             continue
         row = f"{name:<10}{P.unit_of(name):<5}" + "".join(
@@ -199,8 +207,25 @@ def _estimates_table(result: SolveResult) -> list[str]:
         )
         if sigma is not None:
             row += _sigma(sigma[name])
+        if prior is not None:
+            known = sigma is not None and np.isfinite(prior[name])
+            row += f"{sigma[name] / prior[name]:9.2f}" if known else f"{'-':>9}"  # type: ignore[index]
         lines.append(row)
     return lines
+
+
+def _pool_fit_lines(fit: PriorFit) -> list[str]:
+    """Return what the fit of a plan from a pool is: the one the plan was made for."""
+    return [
+        "fit: the one the plan was made for (wirecal plan --pool): one wire from an anchor "
+        "fitted with the geometry, one length offset, the attachment (tool_*, no prior), "
+        "every DH error of rows 2…n and the file's compliances, each with a zero-mean prior "
+        f"(σ {fit.prior_mm:g} mm, angles to match), soft-L1 loss; the readings carry "
+        f"{fit.effective:.1f} of the {fit.fitted} parameters; σ/prior near 1: the prior "
+        "holds it (the readings barely see it)",
+        f"anchor {', '.join(f'{v:.2f}' for v in fit.anchor_mm)} mm (base frame), length "
+        f"offset {fit.offset_mm:+.3f} mm: the fit's own, not in the patch",
+    ]
 
 
 def _accuracy_lines(result: SolveResult) -> list[str]:

@@ -19,9 +19,9 @@ from wirecal.solver.robot import Robot
 T = TypeVar("T")
 
 
-def joint_literal(x: float) -> str:
+def joint_literal(x: float, decimals: int = 4) -> str:
     """Write a joint angle as the operator reads it: up to 4 decimals, no trailing zeros."""
-    s = f"{x:.4f}".rstrip("0").rstrip(".")
+    s = f"{x:.{decimals}f}".rstrip("0").rstrip(".")
     return "0" if s in ("-0", "") else s
 
 

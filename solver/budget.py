@@ -42,6 +42,12 @@ distribution, from its second moment (:func:`~wirecal.solver.accuracy.rms_tool_e
   to the range, the uniform where they say nothing; the identified ones are parameters,
   their σ in the noise.
 
+* **prior** — a fit with a prior where the readings are weak (a plan from a pool,
+  :mod:`~wirecal.solver.wire_prior`): its map is M = P·Jᵀ/σ² with P the posterior
+  covariance, the noise term σ²·M·Mᵀ, and the prior's share (M·J − I)·Λ⁻¹·(M·J − I)ᵀ —
+  the arm's own error along what the readings see weakly, which the fit shrinks toward the
+  data sheet (:class:`PriorTerms`).
+
 The total is the second moment of all the terms together (independent sources): the
 expected (RMS) error, a mean, not a bound. The **bound** is the error a calibration stays
 below with 95 % probability (:mod:`wirecal.solver.bound`), from the same error models.
@@ -160,6 +166,19 @@ class Sources:
     drift_left_mm_per_s: tuple[float, float] | None = None
 
 
+@dataclass(frozen=True)
+class PriorTerms:
+    """A fit with a prior, linearised (:class:`~wirecal.solver.wire_prior.Posterior`'s rows).
+
+    ``map`` (m, N) moves the m parameters by M·δd for a length error δd; ``noise`` (m, m) is
+    the readings' share of the posterior, ``share`` (m, m) the prior's (internal units).
+    """
+
+    map: np.ndarray
+    noise: np.ndarray
+    share: np.ndarray
+
+
 def sources(
     sigma_mm: float,
     lengths_mm: np.ndarray,
@@ -217,6 +236,7 @@ def budget(
     src: Sources,
     q_ws: np.ndarray,
     compliance: ComplianceTerms | None = None,
+    prior: PriorTerms | None = None,
 ) -> Budget:
     """Return the error budget of a method (module docstring).
 
@@ -225,17 +245,22 @@ def budget(
     ``compliance``: the joint method's compliances; the bound is then the patch's as the
     controller applies it (the sag left in it) and ``bound_compensated`` the bound of
     targets compensated offline with the identified compliances, and the drift is the one
-    the residual narrows (:func:`drift_posterior`).
+    the residual narrows (:func:`drift_posterior`). ``prior``: a fit with a prior (its map
+    and shares replace J's; ``J`` and ``step`` unused), its share a term of its own.
     """
     if compliance is not None:
         src = replace(src, drift_left_mm_per_s=drift_posterior(J, compliance, src))
-    if step is None:
+    if prior is not None:
+        M, noise = prior.map, prior.noise
+    elif step is None:
         M = least_squares_map(J)
         noise = covariance(J, src.sigma_mm**2)[0]
     else:
         M = stepwise_map(J, step)
         noise = src.sigma_mm**2 * M @ M.T
     parts = _term_errors(M, noise, src)
+    if prior is not None:
+        parts["prior"] = ErrorModel(prior.share, np.zeros(len(M)), np.zeros((0, len(M))))
     errors = joined(list(parts.values()))
     _, Jp = tool_jacobian(model, q_ws, names)
     errs = {k: rms_tool_error(Jp, e.second_moment()).mean_mm for k, e in parts.items()}

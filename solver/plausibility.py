@@ -22,7 +22,12 @@ controller comparison) and refuses, with what to check, when:
   deficient (the unobservable parameters and combinations are named), or the reading
   noise's model (σ_r² + q²/12) leaves a parameter's σ at :data:`POORLY_IDENTIFIED` deg
   or mm or more (the typical size of the errors being calibrated, paper §2.2: the data
-  cannot tell its sign);
+  cannot tell its sign). A fit with a prior (a plan from a pool,
+  :mod:`~wirecal.solver.solve_pool`) is judged on its posterior: the readings' Jacobian
+  with the prior's rows must have full rank (a direction neither holds: the attachment
+  unseen); a direction the readings see weakly is the prior's, its share of the tool
+  point's error in the budget, not a finding. Its residual's degrees of freedom are N
+  less the parameters the readings carry;
 * **drift** — the zero readings drift faster than
   :data:`~wirecal.solver.scale.DRIFT_TOLERANCE_MM_PER_H` even less three of the fit's σ
   (|b| − 3σ_b > tolerance: a sound log is not refused for its noise) — a wire creeping,
@@ -97,18 +102,18 @@ def assess(
     present = m.present
     q_deg = m.joints_deg[present]
     base = at_points(robot.nominal, result.plan, present)  # a payload step's mass on
-    J = sensitivity(base, q_deg, m.theta0_deg, names).psi  # boundary units
-    ident = analyse_jacobian(J, names)
+    sigma_model = float(np.hypot(noise_mm, abs(m.mm_per_count) / np.sqrt(12)))
+    J, ident = _jacobian(result, method, base, sigma_model)
     findings: list[Finding] = []
 
     measured = m.distance_mm[present]
     model = wire_lengths(base, np.radians(q_deg), np.radians(m.theta0_deg))
     findings += _lengths(measured, model, m.source, live_check)
 
-    sigma_model = float(np.hypot(noise_mm, abs(m.mm_per_count) / np.sqrt(12)))
     landing = _landing_sigma_mm(result, base)
     sigma_length = float(np.hypot(sigma_model, landing))  # one reading of a length
-    dof = len(measured) - len(names)
+    fitted = len(names) if result.prior is None else result.prior.effective
+    dof = int(len(measured) - fitted)
     limit = residual_limit_mm(sigma_length, dof)
     if dof > 0 and not result.sigma_mm <= limit:
         arm = f", the arm's repeatability {landing:.3g} mm (σ)" if landing else ""
@@ -126,7 +131,7 @@ def assess(
 
     _, identified = covariance(J, 1.0)
     unidentified = tuple(n for n, ok in zip(names, identified, strict=True) if not ok)
-    findings += _identifiability(ident, J, sigma_model)
+    findings += _identifiability(ident, J, sigma_model, each=result.prior is None)
     findings += _bounds(result, method, omega_default)
     findings += _drift(result)
     return Plausibility(
@@ -138,6 +143,25 @@ def assess(
         identifiability=ident,
         unidentified=unidentified,
     )
+
+
+def _jacobian(
+    result: SolveResult, method: str, base: Model, sigma_model: float
+) -> tuple[np.ndarray, Identifiability]:
+    """Return the Jacobian the gate judges the estimate's parameters by, and its analysis.
+
+    The distance Jacobian Ψ at the measured points (boundary units); for a fit with a prior
+    (a plan from a pool) the readings' Jacobian of that fit over ``sigma_model`` with the
+    prior's rows 1/σ_k below it: what the readings do not carry, the prior does, so the
+    rank is the posterior's (a parameter without a prior, the attachment, must be seen).
+    """
+    m, names = result.measurements, result.estimates[method].names
+    if result.prior is None:
+        J = sensitivity(base, m.joints_deg[m.present], m.theta0_deg, names).psi
+        return J, analyse_jacobian(J, names)
+    rows = 1.0 / np.array([result.prior.prior_sd[n] for n in names])
+    J = np.vstack([result.prior.jacobian / sigma_model, np.diag(rows)])
+    return J, analyse_jacobian(J, names)
 
 
 def _landing_sigma_mm(result: SolveResult, base: Model) -> float:
@@ -232,8 +256,10 @@ def _lengths(measured: np.ndarray, model: np.ndarray, source: str, check: str) -
     return []
 
 
-def _identifiability(ident: Identifiability, J: np.ndarray, sigma_model: float) -> list[Finding]:
-    """Rank deficiency (named) and parameters the noise model leaves unidentified."""
+def _identifiability(
+    ident: Identifiability, J: np.ndarray, sigma_model: float, *, each: bool = True
+) -> list[Finding]:
+    """Rank deficiency (named) and, with ``each``, the parameters the noise leaves unidentified."""
     findings = []
     if ident.rank < len(ident.names):
         detail = " ".join(ident.describe()[1:-1])
@@ -245,6 +271,8 @@ def _identifiability(ident: Identifiability, J: np.ndarray, sigma_model: float) 
                 "points identify every parameter (wirecal observe ROBOT PLAN; wirecal plan)",
             )
         )
+        return findings
+    if not each:
         return findings
     cov, _ = covariance(J, sigma_model**2)
     sd = np.sqrt(np.clip(np.diag(cov), 0, None))

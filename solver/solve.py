@@ -30,6 +30,7 @@ from wirecal.solver.compliance import (
 )
 from wirecal.solver.distance import wire_jacobian
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.fit.calibrate import point_model
 from wirecal.solver.identifiability import covariance
 from wirecal.solver.identify import (
     DEFAULT_OMEGA,
@@ -50,6 +51,7 @@ from wirecal.solver.robot import Robot
 from wirecal.solver.scale import PPM, Drift, ScaleEstimate, estimate_scale, fit_drift
 from wirecal.solver.sensitivity import sensitivity
 from wirecal.solver.simulate import sag_lengths_mm
+from wirecal.solver.solve_pool import PoolSolution, PriorFit, pool_estimate
 from wirecal.solver.verdict import READING_NOISE_MM
 from wirecal.solver.zero_reading import length_sigma_mm
 
@@ -80,6 +82,7 @@ class SolveResult:
     drift: Drift | None = None  # the zero readings' drift (timed logs)
     encoder_notes: tuple[str, ...] = ()  # what was done about the scale and the drift
     compliance: ComplianceObservability | None = None  # the compliances the file asked for
+    prior: PriorFit | None = None  # a plan from a pool: the wire fit with a prior it ran
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -156,6 +159,8 @@ class SolveResult:
             methods[name] = entry
         m = self.measurements
         extra = {} if self.compliance is None else {"compliance": self.compliance.as_json()}
+        if self.prior is not None:
+            extra["pool_fit"] = self.prior.as_json()
         return {
             "robot": self.robot.name,
             "plan": self.plan.fingerprint(),
@@ -247,7 +252,19 @@ def solve(
     (:func:`_with_drift_sigma`). ``refine_scale`` refines the scale jointly instead
     (:class:`~wirecal.solver.identify.ScalePrior`): the lengths tell the scale only through
     the lengths held at nominal (the tool point), so it leans on those being exact.
+    A plan from a pool (``plan.joint_only``) is solved by the fit it was planned for
+    (:func:`_solve_pool`).
     """
+    if plan.joint_only:
+        _estimates(plan, methods, None, None)  # refuses the stepwise method alone
+        if refine_scale:
+            raise WirecalError(
+                f"{plan.source}: joint_only = true: --refine-scale refines the scale in the "
+                "joint method of the file's [calibration] parameters; a plan from a pool is "
+                "solved by the wire fit it was made for, which does not: leave it out (the "
+                "reference rows' scale is applied either way)"
+            )
+        return _solve_pool(robot, plan, m, partial=partial, corrections=corrections)
     left, names, step = _measured_steps(plan, m, partial)
     factor, notes = _reference_scale(robot, m)
     k = factor if factor is not None and corrections else 1.0
@@ -287,7 +304,7 @@ def solve(
 
 
 def _estimates(
-    plan: Plan, methods: tuple[str, ...], sw: Estimate, jt: Estimate
+    plan: Plan, methods: tuple[str, ...], sw: Estimate | None, jt: Estimate | None
 ) -> dict[str, Estimate]:
     """Return the estimates of ``methods``; the joint one alone for a plan from a pool.
 
@@ -301,7 +318,87 @@ def _estimates(
             "estimate does not apply: solve by the joint method (--method joint)"
         )
     kept = ("joint",) if plan.joint_only else methods
-    return {name: e for name, e in (("stepwise", sw), ("joint", jt)) if name in kept}
+    return {
+        name: e for name, e in (("stepwise", sw), ("joint", jt)) if name in kept and e is not None
+    }
+
+
+def _solve_pool(
+    robot: Robot, plan: Plan, m: Measurements, *, partial: bool, corrections: bool
+) -> SolveResult:
+    """Solve a plan from a pool by the wire fit it was planned for (:mod:`.solve_pool`).
+
+    The lengths as :func:`solve` takes them: the reference's scale, a significant drift
+    removed (:func:`_pool_drift`). Ψ (the report's) is the file's parameters'. The
+    budget's map and its prior's share are the posterior's; ``--robust`` and ``--omega``
+    do not apply (the fit's loss is soft-L1 always, no step bounds a parameter).
+    """
+    # refuses an incomplete log unless partial; every parameter is fitted from every point
+    # there is, none left at nominal for its step's lack of points
+    _measured_steps(plan, m, partial)
+    factor, notes = _reference_scale(robot, m)
+    k = factor if factor is not None and corrections else 1.0
+    drift, sol, d = _pool_drift(robot, m, k)
+    if not corrections:  # the controller's view: the lengths as read
+        d = m.distance_mm[m.present] * k
+        sol = pool_estimate(robot, m.joints_deg[m.present], d)
+    drift = _as_corrected(drift, corrections)
+    notes.append(_drift_note(m, drift))
+    scale, scale_std = _scale_estimate(robot, m, factor, sol.sigma_mm)
+    src = _error_sources(robot, plan, m, sol.sigma_mm, d, scale, scale_std, drift)
+    b = _pool_budget(robot, sol, src)
+    psi = sensitivity(robot.nominal, m.joints_deg[m.present], m.theta0_deg, plan.order).psi
+    return SolveResult(
+        robot,
+        plan,
+        m,
+        {"joint": sol.estimate},
+        {"joint": _predicted(b)},
+        sol.sigma_mm,
+        (),
+        psi,
+        m.step[m.present],
+        budgets={} if b is None else {"joint": b},
+        scale=scale,
+        drift=drift,
+        encoder_notes=tuple(notes),
+        prior=sol.fit,
+    )
+
+
+def _pool_drift(
+    robot: Robot, m: Measurements, k: float
+) -> tuple[Drift | None, PoolSolution, np.ndarray]:
+    """Return the zero readings' drift, the pool fit and its lengths, as :func:`_judge_drift`.
+
+    The fit's σ still holds the drift, which then looks insignificant: it is judged again
+    by the σ of a fit with the drift taken out, and when then removed, that fit is the one
+    kept (its lengths, ×``k``, returned with it).
+    """
+    present, q_deg = m.present, m.joints_deg[m.present]
+    d = m.distance_mm[present] * k
+    sol = pool_estimate(robot, q_deg, d)
+    drift = _fit_drift(m, sol.sigma_mm)
+    if drift is None:
+        return None, sol, d
+    assert m.t_s is not None  # a drift was fitted: the log is timed
+    assert m.reference_t_s is not None
+    removed = replace(drift, removed=True).correction_mm(m.t_s[present], m.reference_t_s)
+    d_clean = (m.distance_mm[present] - removed) * k
+    clean = pool_estimate(robot, q_deg, d_clean)
+    drift = _fit_drift(m, clean.sigma_mm)
+    if drift is None or not drift.removed:
+        return drift, sol, d
+    return drift, clean, d_clean
+
+
+def _pool_budget(robot: Robot, sol: PoolSolution, src: Sources) -> Budget | None:
+    """Return the pool fit's budget over the workspace; None when a parameter is unbounded."""
+    if not np.all(np.isfinite(sol.terms.noise)):
+        return None
+    base = point_model(robot)
+    names = sol.estimate.names
+    return budget(base, names, sol.fit.jacobian, None, src, workspace(robot), prior=sol.terms)
 
 
 def _measured_steps(

@@ -42,11 +42,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver.compliance import PRIOR_COMPLIANCE_URAD_PER_NM
-from wirecal.solver.fit.calibrate import Data, candidates, start
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import Pulley
+from wirecal.solver.fit.calibrate import Data, candidates, nominal_floor, point_model, start
 from wirecal.solver.fit.model import Layout, lengths, lengths_and_jacobian, model_of
 from wirecal.solver.fit.solver import levenberg_marquardt
+from wirecal.solver.identifiability import RANK_RTOL
 from wirecal.solver.kinematics import Model
 from wirecal.solver.params import TOOL_NAMES, ErrorSet
+from wirecal.solver.robot import Robot
 
 SIGMA_PASSES = 3
 """Refits with the residual's σ: the first from the starting σ, each next from the last."""
@@ -92,6 +96,7 @@ class WireMap:
     layout: Layout
     x: np.ndarray  # internal units
     sigma_mm: float  # RMS of the readings' residual at x
+    prior: float  # the prior's size the fit used (:func:`prior_sigma`'s ``prior``)
 
 
 def _map_at(base: Model, layout: Layout, data: Data, prior: float) -> tuple[WireMap, float]:
@@ -123,9 +128,7 @@ def _map_at(base: Model, layout: Layout, data: Data, prior: float) -> tuple[Wire
         r = lengths(base, layout, x, q, session) - length
         sigma = max(float(np.sqrt(np.mean(r**2))), data.floor_mm, 1e-9)
         robust = soft_l1_weight(r, ROBUST_SCALE * sigma)
-    J = lengths_and_jacobian(base, layout, x, q, session)[1] / sigma
-    scale = np.maximum(np.linalg.norm(J, axis=0), weight)
-    H = (J.T @ J + np.diag(weight**2)) / np.outer(scale, scale)
+    H, scale = _scaled_hessian(lengths_and_jacobian(base, layout, x, q, session)[1] / sigma, weight)
     has = np.isfinite(sd)
     evidence = (
         -len(r) / 2
@@ -134,7 +137,7 @@ def _map_at(base: Model, layout: Layout, data: Data, prior: float) -> tuple[Wire
         - float(np.sum(np.log(sd[has])))
         - 0.5 * (np.linalg.slogdet(H)[1] + 2 * float(np.sum(np.log(scale))))
     )
-    return WireMap(model_of(base, layout, x), layout, x, sigma), evidence
+    return WireMap(model_of(base, layout, x), layout, x, sigma, prior), evidence
 
 
 def map_fit(base: Model, layout: Layout, data: Data, prior: float) -> WireMap:
@@ -146,3 +149,110 @@ def map_fit(base: Model, layout: Layout, data: Data, prior: float) -> WireMap:
     """
     fits = [_map_at(base, layout, data, prior * k) for k in PRIOR_SCALES]
     return max(fits, key=lambda f: f[1])[0]
+
+
+def check_exit(robot: Robot) -> None:
+    """Refuse a guide pulley: the wire fit models a straight wire from a point (the anchor).
+
+    Over a pulley the wire's length is an arc and a span the anchor cannot stand for, and
+    the error budget leaves it out (the paper's model carries it); an eyelet's wrap is
+    budgeted (``exit``), so it is taken.
+    """
+    if isinstance(robot.encoder.exit, Pulley):
+        raise WirecalError(
+            f'{robot.source}: [encoder] exit = "pulley": the wire fit of a plan from a pool '
+            "models a straight wire from a point, which a guide pulley's arc is not: use "
+            "'wirecal plan' (the paper's model carries the pulley), or an encoder with a "
+            'point exit (exit = "point")'
+        )
+
+
+def fit_wire(
+    robot: Robot,
+    compliances: tuple[str, ...],
+    q_deg: np.ndarray,
+    length_mm: np.ndarray,
+    prior: float,
+    joint_resolution_deg: float,
+) -> tuple[WireMap, Data]:
+    """Return one wire's fit of ``robot`` from its readings, and the data it was fitted to.
+
+    The one fit ``wirecal solve`` runs on a plan from a pool and the tracker replay scores:
+    :func:`map_fit` of :func:`wire_layout` (``compliances`` beside the geometry) on
+    :func:`~wirecal.solver.fit.calibrate.point_model`, one session, the floor from the
+    encoder's count and ``joint_resolution_deg`` (a least σ of the readings). A guide
+    pulley is refused (:func:`check_exit`).
+    """
+    check_exit(robot)
+    base = point_model(robot)
+    q_rad = np.radians(q_deg)
+    session = np.zeros(len(q_rad), dtype=int)
+    floor = nominal_floor(
+        base,
+        Data(q_rad, length_mm, session, 0.0),
+        joint_resolution_deg,
+        abs(robot.encoder.mm_per_count),
+    )
+    data = Data(q_rad, length_mm, session, floor)
+    return map_fit(base, wire_layout(base, compliances), data, prior), data
+
+
+@dataclass(frozen=True)
+class Posterior:
+    """The linearised posterior of a :class:`WireMap` at its estimate (internal units).
+
+    With J the readings' Jacobian, σ the residual's, Λ the prior's precision and
+    P = (JᵀJ/σ² + Λ)⁻¹: ``map`` M = P·Jᵀ/σ² (a length error δd moves the estimate by M·δd),
+    ``noise`` σ²·M·Mᵀ (the readings' share of P), ``prior_share`` the prior's,
+    (M·J − I)·Λ⁻¹·(M·J − I)ᵀ over the parameters with a prior (the shrinkage toward zero of
+    what the readings see weakly); ``noise`` + ``prior_share`` = P. ``effective`` is the
+    count of parameters the readings carry, trace(J·M) (≤ the parameters), ``sigma_mm`` the
+    residual's σ on N − ``effective`` degrees of freedom (at least the readings' floor).
+    """
+
+    map: np.ndarray  # (k, N)
+    noise: np.ndarray  # (k, k)
+    prior_share: np.ndarray  # (k, k)
+    prior_sd: np.ndarray  # (k,) inf: no prior
+    effective: float
+    sigma_mm: float
+    residual_mm: np.ndarray  # (N,) model − measured at the estimate
+    jacobian: np.ndarray  # (N, k) ∂L/∂x at the estimate
+
+
+def _scaled_hessian(J: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return H = JᵀJ + diag(``weight``²) over its column scales, and the scales.
+
+    ``J`` the readings' Jacobian over their σ; each column scaled by the larger of its
+    norm and its prior's weight, so that H's conditioning is the problem's, not the units'.
+    """
+    scale = np.maximum(np.linalg.norm(J, axis=0), weight)
+    return (J.T @ J + np.diag(weight**2)) / np.outer(scale, scale), scale
+
+
+def _gain(J: np.ndarray, sigma_mm: float, weight: np.ndarray) -> np.ndarray:
+    """Return M = P·Jᵀ/σ², P = (JᵀJ/σ² + Λ)⁻¹, Λ = diag(``weight``²)."""
+    H, scale = _scaled_hessian(J / sigma_mm, weight)
+    P = np.linalg.pinv(H, rcond=RANK_RTOL, hermitian=True) / np.outer(scale, scale)
+    return P @ J.T / sigma_mm**2
+
+
+def posterior(base: Model, fit: WireMap, data: Data) -> Posterior:
+    """Return the posterior of ``fit`` (:class:`Posterior`) at the prior size it chose.
+
+    The count the readings carry is taken at the σ the fit weighed the prior with
+    (``fit.sigma_mm``, the residual's RMS); the posterior at the σ on the degrees of freedom
+    left, N − ``effective`` (larger: the RMS of a fit of many parameters is short of the
+    readings' σ).
+    """
+    layout, x = fit.layout, fit.x
+    r, J = lengths_and_jacobian(base, layout, x, data.q_rad, data.session)
+    r = r - data.length_mm
+    sd = prior_sigma(base, layout, fit.prior)
+    effective = float(np.trace(J @ _gain(J, fit.sigma_mm, 1.0 / sd)))
+    sigma = max(float(np.sqrt(r @ r / max(len(r) - effective, 1.0))), data.floor_mm)
+    M = _gain(J, sigma, 1.0 / sd)
+    B = (M @ J - np.eye(len(x)))[:, np.isfinite(sd)]
+    return Posterior(
+        M, sigma**2 * M @ M.T, B * sd[np.isfinite(sd)] ** 2 @ B.T, sd, effective, sigma, r, J
+    )

@@ -699,17 +699,25 @@ def test_bench_replays_any_generic_table(tmp_path):
     assert doc["tracker_mm"] < 0.03
     assert doc["nominal_mm"] > 0.5
     assert doc["points"] == 30
-    lot = subprocess.run(
-        [*args, "--seeds", "1", "--points", "30", "--anchors", "--json"],
-        capture_output=True,
-        text=True,
-    )
-    assert lot.returncode == 0, lot.stderr
-    (doc,) = json.loads(lot.stdout).values()
+
+    def bench_json(flag: str) -> dict:
+        r = subprocess.run(
+            [*args, "--seeds", "1", "--points", "30", flag, "--json"],
+            capture_output=True,
+            text=True,
+        )
+        assert r.returncode == 0, r.stderr
+        (doc,) = json.loads(r.stdout).values()
+        return doc
+
+    doc = bench_json("--anchors")
     for key in ("chosen_wire_mm", "best_wire_mm", "every_pose_wire_mm", "spearman"):
         assert len(doc[key]) == 1
     assert doc["best_wire_mm"][0] <= doc["chosen_wire_mm"][0] <= doc["worst_wire_mm"][0]
     assert doc["tracker_every_pose_mm"][0] < 0.03
+    doc = bench_json("--preflight")
+    assert doc["points"] == 30
+    assert doc["wire_mm"] < 0.1  # the user's plan file, the same fit
     bad = subprocess.run([*args[:2], "--table", str(table)], capture_output=True, text=True)
     assert bad.returncode == 2
     assert "give --robot and --table together" in bad.stderr
@@ -760,7 +768,7 @@ def test_solve_says_the_stepwise_estimate_does_not_apply_to_a_pool_plan(tmp_path
     assert "the step-by-step estimate does not apply; the joint method alone" in r.output
     assert not re.search(r"^(parameter|source) .*stepwise", r.output, re.M), r.output
     assert "Step-by-step (paper)" not in r.output
-    assert re.search(r"^parameter unit +joint +± σ \(joint\)$", r.output, re.M), r.output
+    assert re.search(r"^parameter unit +joint +± σ \(joint\) +σ/prior$", r.output, re.M), r.output
     assert "recommended: joint" in r.output
     r = runner.invoke(main, [*args, "--json"])
     assert list(json.loads(r.output)["methods"]) == ["joint"]

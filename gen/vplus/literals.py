@@ -19,9 +19,29 @@ from wirecal.gen.targets import joint_literal
 MAX_LINE = 80
 
 
+PPOINT_PREFIX = "    SET #wc.p = "
+"""The line every #PPOINT literal is written in (the templates' moves to θ0 and the points)."""
+
+PPOINT_FORMS = ((4, ", "), (4, ","), (3, ","), (2, ","))
+"""Decimals and separator of a #PPOINT literal, tried in turn until its line fits."""
+
+
 def ppoint(q: Iterable[float]) -> str:
-    """Write a #PPOINT(...) literal of joint angles."""
-    return "#PPOINT(" + ", ".join(joint_literal(x) for x in q) + ")"
+    """Write a #PPOINT(...) literal of joint angles within the line limit.
+
+    Four decimals and ", " as the operator reads them; where that line would pass
+    :data:`MAX_LINE` (six angles of four decimals and three digits before the point, as a
+    pose recorded to 0.0001° in a pool can be) the first of :data:`PPOINT_FORMS` that
+    fits: the pose commanded is then within 0.0005° (three decimals) or 0.005° (two) of
+    the plan's, well inside the log's joint tolerance, and the log records the joints
+    reached, which the solve uses.
+    """
+    values = [float(x) for x in q]
+    for decimals, sep in PPOINT_FORMS:
+        text = "#PPOINT(" + sep.join(joint_literal(x, decimals) for x in values) + ")"
+        if len(PPOINT_PREFIX) + len(text) <= MAX_LINE:
+            break
+    return text
 
 
 MAX_MANTISSA = 2**53

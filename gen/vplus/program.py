@@ -259,12 +259,25 @@ def _check_printable(robot: Robot, tables: Tables) -> None:
 
 
 def _patch_literals(plan: Plan, tables: Tables, patch: dict[str, float] | None) -> list[str] | None:
-    """Return the patch's values as V+ literals in the plan's order (internal units)."""
+    """Return the patch's values as V+ literals in the plan's order (internal units).
+
+    Refuses a patch with parameters beyond the plan's order (a plan from a pool is solved
+    for every DH error and the attachment): wc.patch types the plan's alone, and part of
+    a fit entered in SPEC is not the fit.
+    """
     if patch is None:
         return None
     missing = [n for n in plan.order if n not in patch]
     if missing:
         raise WirecalError(f"patch: no value for {', '.join(missing)}")
+    beyond = [n for n in patch if n not in plan.order]
+    if beyond:
+        raise WirecalError(
+            f"patch: holds {', '.join(beyond)} beyond the plan's parameters "
+            f"({', '.join(plan.order)}), and wc.patch types the plan's alone: entering part "
+            "of a fit is not the fit. Enter every value from the .spec.txt file 'wirecal solve "
+            "-o' wrote beside the patch, or generate without --patch"
+        )
     return [double_literal(x) for x in tables.errors.to_internal([patch[n] for n in plan.order])]
 
 

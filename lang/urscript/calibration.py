@@ -9,7 +9,10 @@ metres and radians, of the calibrated model's standard-DH table
 wirecal parameters map one to one: ``th<i>`` → delta_theta[i-1], ``d<i>`` → delta_d[i-1],
 ``a<i>`` → delta_a[i-1], ``al<i>`` → delta_alpha[i-1] (i ≥ 1). ``a0``/``al0`` move the
 base frame and the ``tool_*`` components the tool point: neither has a place in these
-deltas, so they are refused rather than dropped.
+deltas, so :func:`ur_deltas` refuses them rather than dropping them. The companion
+(:func:`calibration_text`) names the tool point's components in a comment as not carried
+(the fit of a plan from a pool estimates the wire's attachment beside the geometry: the
+installation's TCP holds it, not these deltas); a0/al0 it refuses.
 
 UNCONFIRMED: the names delta_theta/delta_a/delta_d/delta_alpha and their units come from
 the ROS driver's documentation, not from a Universal Robots manual; the ``[mounting]``
@@ -75,7 +78,12 @@ def _vector(values: np.ndarray) -> str:
 
 
 def calibration_text(robot: Robot, offsets: Mapping[str, float]) -> str:
-    """Return the deltas as text in calibration.conf's layout, with the tables they come from."""
+    """Return the deltas as text in calibration.conf's layout, with the tables they come from.
+
+    The tool point's components are named in a comment as not carried (module docstring).
+    """
+    tool = {n: v for n, v in offsets.items() if n.startswith("tool_")}
+    offsets = {n: v for n, v in offsets.items() if n not in tool}
     deltas = ur_deltas(robot, offsets)
     nominal = from_modified(robot).table
     calibrated = from_modified(robot.model(offsets)).table
@@ -84,6 +92,13 @@ def calibration_text(robot: Robot, offsets: Mapping[str, float]) -> str:
         "# UNCONFIRMED layout: key names from the ROS driver docs, not a Universal Robots",
         "# manual. For reading and ROS/URDF tools; do not copy onto a controller.",
     ]
+    if tool:
+        moved = ", ".join(f"{n} {v:+.4f} mm" for n, v in tool.items())
+        lines += [
+            "# Not carried: the tool point's offsets (flange frame), which these deltas cannot",
+            "# hold; set them in the installation's TCP where the wire's point is the tool's:",
+            f"#   {moved}",
+        ]
     for title, table in (("Nominal", nominal), ("Calibrated", calibrated)):
         lines.append(
             f"# {title} standard DH per joint: theta_offset [rad], d [m], a [m], alpha [rad]"

@@ -40,7 +40,7 @@ from wirecal.solver.kinematics import Model, tool_jacobian
 from wirecal.solver.params import TOOL_NAMES
 from wirecal.solver.plan.options import PlanOptions
 from wirecal.solver.robot import Robot
-from wirecal.solver.wire_prior import prior_sigma, wire_layout
+from wirecal.solver.wire_prior import check_exit, prior_sigma, wire_layout
 
 THETA0_TRIED = 24
 """Candidate θ0s, spread over the pool's tool points."""
@@ -183,6 +183,7 @@ def anchor_plans(
     (counted in ``outside``); the others are taken as reachable without collision, as the
     moves that recorded them.
     """
+    check_exit(robot)
     lo, hi = robot.limits_deg(0.0)
     inside = np.flatnonzero(np.all((q_deg >= lo) & (q_deg <= hi), axis=1))
     if len(inside) == 0:

@@ -15,7 +15,8 @@ poses, four models:
   prior where the readings are weak (:func:`~wirecal.solver.wire_prior.map_fit`: every DH
   error of rows 2…n, the attachment, the anchor and one offset);
 * **wire + compliance** — the same readings fitted with the joint compliances of the robot
-  file's ``[calibration] compliances`` beside them (issue 30's model δθ_j = c_j·τ_j(q),
+  file's ``[calibration] compliances`` beside them (what ``wirecal solve`` fits for such a
+  file) (issue 30's model δθ_j = c_j·τ_j(q),
   :mod:`~wirecal.solver.gravity`; the file's masses, else the assumed ones), each with its
   prior; the plan is made for this fit when the file asks compliances
   (:func:`~wirecal.solver.plan.pool.wire_pool`), and the rigid wire uses the same poses;
@@ -29,22 +30,32 @@ choice of θ0 and the count of poses are worth on a data set (``--anchors`` of t
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from wirecal.solver.fit.calibrate import Data, nominal_floor, point_model
+from wirecal.solver.fit.calibrate import point_model
 from wirecal.solver.kinematics import Model, tool_position
 from wirecal.solver.params import TOOL_NAMES
 from wirecal.solver.plan.options import PlanOptions
-from wirecal.solver.plan.pool import anchor_plans, eligible_rows, plan_pool, pool_wire_mm
+from wirecal.solver.plan.pool import (
+    PoolPlan,
+    anchor_plans,
+    eligible_rows,
+    plan_pool,
+    pool_wire_mm,
+)
 from wirecal.solver.robot import Robot
 from wirecal.solver.tracker.data import TrackerTable
 from wirecal.solver.tracker.fit import calibrate, registered_rms_mm
-from wirecal.solver.wire_prior import map_fit, wire_layout
+from wirecal.solver.wire_prior import WireMap, fit_wire
 
 ZERO_MM = -123.456
 """The reading at zero distance: any value; the fit is not told it (an unknown zero)."""
+
+JOINT_RESOLUTION_DEG = 1e-6
+"""The tracker tables' joints, taken as exact: the readings' floor is the count's."""
 
 
 @dataclass(frozen=True)
@@ -68,22 +79,6 @@ def readings_mm(xyz_mm: np.ndarray, anchor_mm: np.ndarray, mm_per_count: float) 
     return counts * mm_per_count + ZERO_MM
 
 
-def wire_map(
-    base: Model,
-    compliances: tuple[str, ...],
-    q_deg: np.ndarray,
-    length_mm: np.ndarray,
-    robot: Robot,
-) -> Model:
-    """Return the model one wire's readings give (:func:`~wirecal.solver.wire_prior.map_fit`)."""
-    mpc = robot.encoder.mm_per_count
-    q_rad = np.radians(q_deg)
-    session = np.zeros(len(q_rad), dtype=int)
-    floor = nominal_floor(base, Data(q_rad, length_mm, session, 0.0), 1e-6, mpc)
-    data = Data(q_rad, length_mm, session, floor)
-    return map_fit(base, wire_layout(base, compliances), data, PlanOptions.prior).model
-
-
 def split(n_rows: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     """Return the training and held-out rows of a random 50/50 split."""
     order = np.random.default_rng(seed).permutation(n_rows)
@@ -96,6 +91,24 @@ def held_out_mm(model: Model, table: TrackerTable, test: np.ndarray) -> float:
     return registered_rms_mm(tool_position(model, q_rad), table.xyz_mm[test])
 
 
+def wire_fit(
+    robot: Robot,
+    table: TrackerTable,
+    wire: tuple[int, np.ndarray],
+    compliances: tuple[str, ...] = (),
+) -> WireMap:
+    """Return one wire's fit: ``wire`` = (θ0's row, the rows read), the anchor at θ0's point.
+
+    :func:`~wirecal.solver.wire_prior.fit_wire`, the fit ``wirecal solve`` runs on a plan
+    from a pool, on the readings :func:`readings_mm` of the rows.
+    """
+    theta0_row, rows = wire
+    anchor = table.xyz_mm[theta0_row]
+    length = readings_mm(table.xyz_mm[rows], anchor, robot.encoder.mm_per_count)
+    q_deg = table.q_deg[rows]
+    return fit_wire(robot, compliances, q_deg, length, PlanOptions.prior, JOINT_RESOLUTION_DEG)[0]
+
+
 def one_wire_mm(
     robot: Robot,
     table: TrackerTable,
@@ -103,19 +116,25 @@ def one_wire_mm(
     test: np.ndarray,
     compliances: tuple[str, ...] = (),
 ) -> float:
-    """Return the held-out figure of one wire: ``wire`` = (θ0's row, the rows read)."""
-    theta0_row, rows = wire
-    anchor = table.xyz_mm[theta0_row]
-    length = readings_mm(table.xyz_mm[rows], anchor, robot.encoder.mm_per_count)
-    model = wire_map(point_model(robot), compliances, table.q_deg[rows], length, robot)
-    return held_out_mm(model, table, test)
+    """Return the held-out figure of one wire (:func:`wire_fit`)."""
+    return held_out_mm(wire_fit(robot, table, wire, compliances).model, table, test)
 
 
-def replay(robot: Robot, table: TrackerTable, *, seed: int, points: int) -> Replay:
-    """Replay ``table`` once (module docstring): split ``seed``, at most ``points`` poses."""
+Choose = Callable[[Robot, np.ndarray, int, PlanOptions], PoolPlan]
+"""How a replay chooses θ0 and the poses from the training rows (the pool planner's choice)."""
+
+
+def replay(
+    robot: Robot, table: TrackerTable, *, seed: int, points: int, choose: Choose = plan_pool
+) -> Replay:
+    """Replay ``table`` once (module docstring): split ``seed``, at most ``points`` poses.
+
+    ``choose``: the planner's choice by default; the bench's ``--preflight`` passes the one
+    ``plan --pool -o PLAN.toml`` writes, with ``gen``'s pre-flight applied.
+    """
     base = point_model(robot)
     train, test = split(len(table.q_deg), seed)
-    plan = plan_pool(robot, table.q_deg[train], points, PlanOptions(seed=seed))
+    plan = choose(robot, table.q_deg[train], points, PlanOptions(seed=seed))
     rows = train[plan.rows]
     wire = (int(train[plan.theta0_row]), rows)
     q, x = np.radians(table.q_deg), table.xyz_mm
