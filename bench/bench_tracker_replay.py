@@ -231,7 +231,8 @@ def located(data: Path, wanted: set[str]) -> dict[str, dict[str, Path]]:
     return files
 
 
-def main() -> None:
+def _parser() -> argparse.ArgumentParser:
+    """Return the bench's command line."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument(
         "--data",
@@ -254,6 +255,11 @@ def main() -> None:
         help="choose as 'plan --pool -o PLAN.toml' does: gen's pre-flight applied",
     )
     ap.add_argument("--json", action="store_true", help="print the figures as JSON")
+    return ap
+
+
+def main() -> None:
+    ap = _parser()
     args = ap.parse_args()
     if (args.robot is None) != (args.table is None):
         ap.error("give --robot and --table together")

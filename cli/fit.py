@@ -134,10 +134,9 @@ def fit(
     controller's nominal x, y, z. Fits the anchor, the wire attachment, a length offset per
     sensor session (jumps found automatically), optionally the cable's scale, and the DH
     errors these rows identify; rejects outliers beyond 5σ; validates on held-out rows
-    beside the quantisation floor of the joints' and the length's resolution. The
-    plausibility gate's verdict comes first: a fit it refuses (its error budget not below
-    the correction it makes, held-out rows beyond 10 floors, the residual, implausible
-    sizes) exits with status 3 and writes nothing (docs/fit.md).
+    beside the resolutions' quantisation floor. The gate's verdict comes first: a fit it
+    refuses (its error budget not below the correction it makes, held-out rows beyond 10
+    floors, the residual, implausible sizes) exits with status 3, nothing written (docs/fit.md).
     """
     _random_only(holdout)
     rb = load_robot(robot)

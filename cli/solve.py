@@ -159,7 +159,8 @@ def solve(
         m = check_log(
             read_log(log), pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), accept_foreign
         )
-        _check_refine_scale(refine_scale, m, log)
+        if not pl.joint_only:  # a pool plan refuses --refine-scale itself
+            _check_refine_scale(refine_scale, m, log)
         options = (omega, robust, partial, refine_scale)
         result = _solve(rb, pl, m, method, options)
         chosen = result.recommended if method in ("all", "controller") else method

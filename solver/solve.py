@@ -243,27 +243,15 @@ def solve(
 ) -> SolveResult:
     """Identify the plan's parameters from checked measurements.
 
-    Refuses an incomplete log unless ``partial`` (then parameters whose step has no points
-    stay at nominal, listed in ``left_nominal``). The lengths are scaled by the reference
-    rows' scale and a significant zero drift is removed (:mod:`wirecal.solver.scale`) unless
-    ``corrections`` is False (the controller solver's view: the file's scale, no drift
-    removed); both are estimated either way. The joint σ and correlations include the
-    scale's uncertainty and, with ``compliances``, the drift left in the lengths
-    (:func:`_with_drift_sigma`). ``refine_scale`` refines the scale jointly instead
-    (:class:`~wirecal.solver.identify.ScalePrior`): the lengths tell the scale only through
-    the lengths held at nominal (the tool point), so it leans on those being exact.
-    A plan from a pool (``plan.joint_only``) is solved by the fit it was planned for
-    (:func:`_solve_pool`).
+    Refuses an incomplete log unless ``partial`` (steps without points stay at nominal:
+    ``left_nominal``). The reference rows' scale applies and a significant zero drift is
+    removed (:mod:`wirecal.solver.scale`) unless ``corrections`` is False (the controller
+    solver's view). The joint σ includes the scale's and the drift's uncertainty
+    (:func:`_with_drift_sigma`); ``refine_scale`` refines the scale jointly (``ScalePrior``).
+    A pool's plan gets the fit it was planned for (:func:`_solve_pool`).
     """
     if plan.joint_only:
-        _estimates(plan, methods, None, None)  # refuses the stepwise method alone
-        if refine_scale:
-            raise WirecalError(
-                f"{plan.source}: joint_only = true: --refine-scale refines the scale in the "
-                "joint method of the file's [calibration] parameters; a plan from a pool is "
-                "solved by the wire fit it was made for, which does not: leave it out (the "
-                "reference rows' scale is applied either way)"
-            )
+        _refuse_for_pool(plan, methods, refine_scale)
         return _solve_pool(robot, plan, m, partial=partial, corrections=corrections)
     left, names, step = _measured_steps(plan, m, partial)
     factor, notes = _reference_scale(robot, m)
@@ -301,6 +289,18 @@ def solve(
         encoder_notes=tuple(notes),
         compliance=comp,
     )
+
+
+def _refuse_for_pool(plan: Plan, methods: tuple[str, ...], refine_scale: bool) -> None:
+    """Refuse the stepwise method alone and --refine-scale for a pool's plan."""
+    _estimates(plan, methods, None, None)  # refuses the stepwise method alone
+    if refine_scale:
+        raise WirecalError(
+            f"{plan.source}: joint_only = true: --refine-scale refines the scale in the "
+            "joint method of the file's [calibration] parameters; a plan from a pool is "
+            "solved by the wire fit it was made for, which does not: leave it out (the "
+            "reference rows' scale is applied either way)"
+        )
 
 
 def _estimates(
