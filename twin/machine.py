@@ -10,8 +10,10 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass, field
 
-_S = struct.Struct("f")
-_PACK, _UNPACK = _S.pack, _S.unpack
+SINGLE = struct.Struct("f")
+"""IEEE single precision: an interpreter's hot path rounds with ``SINGLE.unpack(SINGLE.pack(x))``
+inline where the result is finite, and leaves every other case to :func:`f32`."""
+_PACK, _UNPACK = SINGLE.pack, SINGLE.unpack
 
 
 class RunError(Exception):
