@@ -57,7 +57,7 @@ from wirecal.lang.rapid.checker import (
 from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
 from wirecal.lang.syntax import node_method
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import SINGLE, Outcome, RunError, f32
+from wirecal.twin.machine import Outcome, RunError, f32, rounded
 from wirecal.twin.rapid.controller_protocol import RapidController
 
 __all__ = ["Interpreter", "RapidController", "load_module", "run_module"]
@@ -829,27 +829,15 @@ class _Compiler:
         a, b = self.expr(e.a, t), self.expr(e.b, t)
         fn = _FAST.get(op) or (lambda x, y: _arith(op, x, y))
         ops, kind = self.interp.ops, _COUNTED[op]
-        if t != NUM:
+        if t == NUM:
+            fn = rounded(fn)
 
-            def arithmetic(f: Frame) -> Any:
-                x, y = a(f), b(f)
-                ops[kind] += 1
-                return fn(x, y)
-
-            return arithmetic
-        pack, unpack = SINGLE.pack, SINGLE.unpack
-
-        def arithmetic_num(f: Frame) -> Any:
+        def arithmetic(f: Frame) -> Any:
             x, y = a(f), b(f)
             ops[kind] += 1
-            v = fn(x, y)
-            try:  # f32(v) inline where it is finite (one call fewer per operation)
-                r = unpack(pack(v))[0]
-            except OverflowError:
-                return f32(v)
-            return r if r - r == 0.0 else f32(v)
+            return fn(x, y)
 
-        return arithmetic_num
+        return arithmetic
 
     def function(self, e: N.FuncCall) -> Eval:
         key = e.name.lower()

@@ -41,7 +41,7 @@ from wirecal.lang.syntax import node_method
 from wirecal.lang.urscript import nodes as N
 from wirecal.lang.urscript.parser import Program, operands, walk
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import SINGLE, Halt, Outcome, RunError, Stopped, f32
+from wirecal.twin.machine import Halt, Outcome, RunError, Stopped, f32, rounded
 
 INT_MIN = -(2**31)
 
@@ -460,8 +460,7 @@ _COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "%": "div"}
 def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Callable:
     """Compile ``a op b``, counting the operations as executed (module docstring)."""
     kind, divides, ops = _COUNTED[op], op in "/%", interp.ops
-    int_op, float_op = _INT_OPS.get(op), _FLOAT_OPS[op]
-    pack, unpack = SINGLE.pack, SINGLE.unpack
+    int_op, float_op, single = _INT_OPS.get(op), _FLOAT_OPS[op], rounded(_FLOAT_OPS[op])
 
     def f(frame):
         x, y = a(frame), b(frame)
@@ -469,12 +468,7 @@ def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Calla
             ops[kind] += 1
             if divides and y == 0:
                 raise URError("division by zero")
-            v = float_op(x, y)
-            try:  # f32(v) inline where it is finite (one call fewer per operation)
-                r = unpack(pack(v))[0]
-            except OverflowError:
-                return f32(v)
-            return r if r - r == 0.0 else f32(v)
+            return single(x, y)
         x, y = number(x, op), number(y, op)
         ops[kind] += 1
         if divides and y == 0:
