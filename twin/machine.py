@@ -8,7 +8,9 @@ parsers' nesting bounds are in :mod:`wirecal.lang.syntax`).
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 _S = struct.Struct("f")
 _PACK, _UNPACK = _S.pack, _S.unpack
@@ -35,6 +37,24 @@ def f32(x: float) -> float:
     if r - r != 0.0 and x - x == 0.0:  # r infinite (or NaN) from a finite x
         raise RunError(-405, "*Floating-point overflow*")
     return r
+
+
+def rounded(op: Callable[[Any, Any], Any]) -> Callable[[Any, Any], float]:
+    """Return ``op`` with its result rounded by :func:`f32`, in one call (a hot path's).
+
+    A finite result is rounded here; any other goes through :func:`f32` (its overflow
+    error), so the numbers and errors are :func:`f32`'s.
+    """
+
+    def single(x: Any, y: Any) -> float:
+        v = op(x, y)
+        try:
+            r = _UNPACK(_PACK(v))[0]
+        except OverflowError:
+            return f32(v)
+        return r if r - r == 0.0 else f32(v)
+
+    return single
 
 
 class Halt(Exception):

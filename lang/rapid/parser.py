@@ -387,16 +387,21 @@ def _binary(text: str) -> bool:
 def parse_module(text: str) -> N.Module:
     """Parse one module's text; raise :class:`SyntaxProblem` where the grammar stops.
 
-    The last modules parsed are kept (nothing changes a parsed module): a generated
-    module is checked by the generator, then run in the twin several times; 32 of them,
-    so that checking short modules in between (each a few kB kept) does not push out a
-    generated one (about 1 MB kept, 0.25 s to parse).
+    The last modules parsed are kept (nothing changes a parsed module), long and short
+    apart so that neither pushes out the other: the last 32 of :data:`SHORT_MODULE_CHARS`
+    or more (a generated module is checked by the generator, then run in the twin several
+    times; about 1 MB kept, 0.25 s to parse) and the last 256 shorter ones (a few kB kept
+    each, about 5 ms to parse: with 32 slots for all, a process checking many short
+    modules parsed the same ones again).
     """
-    return _parse_module(text)
+    return (_parse_long if len(text) >= SHORT_MODULE_CHARS else _parse_short)(text)
 
 
-@lru_cache(maxsize=32)
-def _parse_module(text: str) -> N.Module:
+SHORT_MODULE_CHARS = 10_000
+"""A module's text shorter than this is kept among the short ones (:func:`parse_module`)."""
+
+
+def _parse(text: str) -> N.Module:
     """Parse one module's text (see :func:`parse_module`)."""
     if _binary(text):
         raise SyntaxProblem(
@@ -432,6 +437,9 @@ def _parse_module(text: str) -> N.Module:
             raise inner from None
         raise
 
+
+_parse_long = lru_cache(maxsize=32)(_parse)
+_parse_short = lru_cache(maxsize=256)(_parse)
 
 _EXPRESSIONS = frozenset(
     "binop signed not_op component index funcall aggregate args arg named_arg opt_arg".split()

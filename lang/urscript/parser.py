@@ -39,7 +39,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, lru_cache
 from importlib import resources
 
 from lark import Lark, Transformer, ast_utils
@@ -318,8 +318,16 @@ def parse_program(text: str, source: str = "<script>", software: str | None = No
     """Parse and check one ``.script`` program; raise :class:`WirecalError` listing problems.
 
     With ``software`` ("5.20"), a call that version's manual pages do not document is a
-    problem too (:mod:`wirecal.lang.urscript.versions`).
+    problem too (:mod:`wirecal.lang.urscript.versions`). The last programs parsed are kept
+    (nothing changes a parsed program): a generated program is checked by the generator,
+    then run in the twin, and each twin run parses its two programs again.
     """
+    return _parse_program(text, source, software)
+
+
+@lru_cache(maxsize=16)
+def _parse_program(text: str, source: str, software: str | None) -> Program:
+    """Parse and check one program (see :func:`parse_program`); one that fails is not kept."""
     problems: list[str] = []
     steps: list[N.Stmt] = []
     raw_lines = _LINES.split(text)

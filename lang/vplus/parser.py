@@ -257,14 +257,16 @@ def parse_module(text: str, source: str = "<module>", *, external_calls: bool = 
     """Parse and check a module; raise :class:`WirecalError` listing every problem.
 
     ``external_calls``: CALLs to programs that are not in this module are allowed (they
-    may be loaded from another file), as LOAD allows them. The last few modules parsed
-    are kept: the demo and the benches run one module in several cells, and nothing
-    changes a parsed module.
+    may be loaded from another file), as LOAD allows them. The last modules parsed are
+    kept (nothing changes a parsed module): the demo and the benches run one module in
+    several cells, the generator checks a module the twin then runs; 16 of them, so that
+    modules checked in between do not push out a generated one (its lines are kept apart,
+    :func:`~wirecal.lang.syntax.kept_by_text`, so a module kept holds little of its own).
     """
     return _parse_module(text, source, external_calls)
 
 
-@lru_cache(maxsize=4)
+@lru_cache(maxsize=16)
 def _parse_module(text: str, source: str, external_calls: bool) -> Module:
     """Parse and check a module (see :func:`parse_module`)."""
     problems, programs = read_programs(text, source)

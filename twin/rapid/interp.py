@@ -57,7 +57,7 @@ from wirecal.lang.rapid.checker import (
 from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
 from wirecal.lang.syntax import node_method
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import Outcome, RunError, f32
+from wirecal.twin.machine import Outcome, RunError, f32, rounded
 from wirecal.twin.rapid.controller_protocol import RapidController
 
 __all__ = ["Interpreter", "RapidController", "load_module", "run_module"]
@@ -828,12 +828,14 @@ class _Compiler:
         t = self.static(e, want)
         a, b = self.expr(e.a, t), self.expr(e.b, t)
         fn = _FAST.get(op) or (lambda x, y: _arith(op, x, y))
-        ops, kind, single = self.interp.ops, _COUNTED[op], t == NUM
+        ops, kind = self.interp.ops, _COUNTED[op]
+        if t == NUM:
+            fn = rounded(fn)
 
         def arithmetic(f: Frame) -> Any:
             x, y = a(f), b(f)
             ops[kind] += 1
-            return f32(fn(x, y)) if single else fn(x, y)
+            return fn(x, y)
 
         return arithmetic
 

@@ -32,6 +32,7 @@ log and popups, time — goes through the controller
 from __future__ import annotations
 
 import math
+import operator
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import fields
@@ -40,7 +41,7 @@ from wirecal.lang.syntax import node_method
 from wirecal.lang.urscript import nodes as N
 from wirecal.lang.urscript.parser import Program, operands, walk
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import Halt, Outcome, RunError, Stopped, f32
+from wirecal.twin.machine import Halt, Outcome, RunError, Stopped, f32, rounded
 
 INT_MIN = -(2**31)
 
@@ -251,9 +252,14 @@ class _Compiler:
         name = s.target.name
         store = self.i.globals if self.is_global(name) else None
         if not s.target.indices:
-            if store is not None:
-                return lambda frame: store.__setitem__(name, _copy(value(frame)))
-            return lambda frame: frame.__setitem__(name, _copy(value(frame)))
+
+            def assign(frame):  # a list or struct is copied (_copy), a number or string not
+                v = value(frame)
+                (frame if store is None else store)[name] = (
+                    _copy(v) if isinstance(v, (list, dict)) else v
+                )
+
+            return assign
         get = self.read(name)
         indices = [self.expr(e) for e in s.target.indices]
 
@@ -454,7 +460,7 @@ _COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "%": "div"}
 def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Callable:
     """Compile ``a op b``, counting the operations as executed (module docstring)."""
     kind, divides, ops = _COUNTED[op], op in "/%", interp.ops
-    int_op, float_op = _INT_OPS.get(op), _FLOAT_OPS[op]
+    int_op, float_op, single = _INT_OPS.get(op), _FLOAT_OPS[op], rounded(_FLOAT_OPS[op])
 
     def f(frame):
         x, y = a(frame), b(frame)
@@ -462,7 +468,7 @@ def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Calla
             ops[kind] += 1
             if divides and y == 0:
                 raise URError("division by zero")
-            return f32(float_op(x, y))
+            return single(x, y)
         x, y = number(x, op), number(y, op)
         ops[kind] += 1
         if divides and y == 0:
@@ -481,10 +487,10 @@ _INT_OPS: dict[str, Callable[[int, int], int]] = {
     "%": lambda x, y: int(math.fmod(x, y)),
 }
 _FLOAT_OPS: dict[str, Callable[[float, float], float]] = {
-    "+": lambda x, y: x + y,
-    "-": lambda x, y: x - y,
-    "*": lambda x, y: x * y,
-    "/": lambda x, y: x / y,
+    "+": operator.add,
+    "-": operator.sub,
+    "*": operator.mul,
+    "/": operator.truediv,
     "%": math.fmod,
 }
 
