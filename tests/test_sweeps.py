@@ -29,9 +29,8 @@ def arm(request):
     return load_robot(EXAMPLES / request.param / "robot.toml")
 
 
-@settings(max_examples=30, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1))
-def test_no_capsule_end_moves_farther_than_the_reach_bound(arm, seed):
+def _moved_and_bound_mm(arm, seed: int) -> tuple[float, float]:
+    """How far any capsule end moves along a random 3° move from a random pose, and the bound."""
     rng = np.random.default_rng(seed)
     model = arm.nominal
     lo, hi = arm.limits_deg()
@@ -41,9 +40,26 @@ def test_no_capsule_end_moves_farther_than_the_reach_bound(arm, seed):
     starts, ends = capsule_ends(model, arm.capsules, frames(model, np.radians(path)))
     points = np.concatenate([starts, ends], axis=1)  # (3, 2S, 50)
     moved = np.linalg.norm(points - points[:, :, :1], axis=0).max()
-    bound = np.abs(np.radians(dq)) @ chain_reach_mm(model)
+    return float(moved), float(np.abs(np.radians(dq)) @ chain_reach_mm(model))
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_no_capsule_end_moves_farther_than_the_reach_bound(arm, seed):
+    moved, bound = _moved_and_bound_mm(arm, seed)
     assert moved <= bound * (1 + 1e-9)
-    assert bound < 20 * max(moved, 1e-9)  # a bound, but not a useless one
+
+
+def test_the_reach_bound_is_not_useless(arm):
+    """A bound, but not a useless one: over 200 fixed draws the bound is a few times the move.
+
+    A per-draw factor is no property: a folded arm moves its ends far less than the sum of
+    the joints' reaches says (seed 36799507 on the IRB 120: 20.7×), so the claim is on the
+    distribution (measured on the three arms: median 4.0–5.3×, 90th percentile 7.3–8.2×).
+    """
+    ratios = np.array([b / m for m, b in (_moved_and_bound_mm(arm, s) for s in range(200))])
+    assert np.median(ratios) < 6.0
+    assert np.percentile(ratios, 90) < 10.0
 
 
 @settings(max_examples=20, deadline=None)
