@@ -106,3 +106,38 @@ def test_a_payload_keeps_the_vectorised_form():
     m = MassModel(np.ones(6), np.zeros((6, 3)), payload_mass_kg=1.0)
     axes = [(1.0, 0.0, 0.0)] * 7
     assert gravity_torques_floats(m, axes, axes, [(0.0, 0.0, 0.0)] * 7) is None
+
+
+def _across(model, q_a, q_b, part):
+    """Bisect the joint segment q_a → q_b to where configuration name ``part`` changes."""
+    side = ik.configuration(model, q_a)[part]
+    for _ in range(80):
+        mid = (q_a + q_b) / 2
+        if ik.configuration(model, mid)[part] == side:
+            q_a = mid
+        else:
+            q_b = mid
+    return q_a, q_b
+
+
+@pytest.mark.parametrize("part", [0, 1])
+def test_the_names_on_floats_leave_a_sign_near_zero_to_the_arrays(models, monkeypatch, part):
+    """Where righty/lefty or above/below changes, the floats decide nothing; names still equal."""
+    rng = np.random.default_rng(11)
+    undecided = 0
+    for model in models:
+        if one_chain(model, np.zeros(6)) is None or ik.ik_ur.ur_structure(model):
+            continue  # the arrays' path already, or the UR's own names
+        q = rng.uniform(-3, 3, (400, 6))
+        names = [ik.configuration(model, x)[part] for x in q]
+        pairs = [(q[k], q[k + 1]) for k in range(len(q) - 1) if names[k] != names[k + 1]][:5]
+        for q_a, q_b in pairs:
+            for x in _across(model, q_a, q_b, part):
+                on_floats = ik.configuration(model, x)
+                undecided += ik._configuration_floats(model, x, one_chain(model, x)[0]) is None
+                with monkeypatch.context() as m:
+                    m.setattr(ik, "one_chain", lambda model, q: None)
+                    assert ik.configuration(model, x) == on_floats
+    if all(one_chain(m, np.zeros(6)) is None or ik.ik_ur.ur_structure(m) for m in models):
+        pytest.skip("no arm here whose names come from the floats")
+    assert undecided > 0  # the bisection ends within the margin: the arrays decided there
