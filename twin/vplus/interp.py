@@ -32,6 +32,7 @@ from wirecal.lang.vplus.keywords import keyword
 from wirecal.lang.vplus.parser import CONSTANTS, FUNCTIONS, Module, Program, transformation_names
 from wirecal.solver import pose
 from wirecal.twin.machine import Halt, Outcome, RunError, f32
+from wirecal.twin.vplus.fused import fused
 
 
 class Trans:
@@ -178,6 +179,7 @@ class _Compiler:
             elif decl.scope == "LOCAL":
                 self.locals.add(name)
         self.nslots = len(self.params) + len(self.autos)
+        self.slot_of: dict[Callable, int] = {}  # a DOUBLE AUTO scalar's setter → its slot
         for name in ("expr", "_stmt"):  # bound once: each lookup of a dispatcher wraps anew
             setattr(self, name, vars(_Compiler)[name].__get__(self, _Compiler))
 
@@ -281,7 +283,10 @@ class _Compiler:
     def _auto_storage(self, rounding: bool, slot: int, index_fns, undefined):
         """Compile the access to an AUTO variable: a value in the frame."""
         if index_fns is None:
-            return self._auto_scalar(rounding, slot, undefined)
+            get, put = self._auto_scalar(rounding, slot, undefined)
+            if not rounding:
+                self.slot_of[put] = slot  # written in place by an assignment to it
+            return get, put
         ix = self._indexer(index_fns)
 
         def aget(frame):
@@ -375,6 +380,17 @@ class _Compiler:
     def var(self, v: N.Var):
         """(getter, setter) of a variable node."""
         return self.storage(v.kind, v.name, [self.expr(x)[0] for x in v.index] if v.index else None)
+
+    def _auto_leaf(self, v: N.Var) -> tuple[int, bool] | None:
+        """Return an AUTO numeric scalar's slot and whether it is DOUBLE (else None)."""
+        name = v.name
+        if v.index is not None or name in CONSTANTS or name in self.params:
+            return None
+        if name not in self.autos or v.kind != "n" or name in self.i.transforms:
+            return None
+        if _is_keyword_value(v):
+            return None
+        return self.autos[name], self.is_double(name)
 
     def ref_of(self, e: N.Expr | None) -> Callable:
         """Compile a CALL argument.
@@ -485,7 +501,8 @@ class _Compiler:
         a, da = self.expr(e.left)
         b, db = self.expr(e.right)
         if da or db:
-            return _arithmetic(self.i, op, a, b), True
+            nodes = _arithmetic(self.i, op, a, b)
+            return fused(e, self._auto_leaf, self.i.ops, nodes) or nodes, True
         if op in _SINGLE:
             return _single_arithmetic(self.i.ops, *_SINGLE[op], a, b), False
         return self._single(_arithmetic(self.i, op, a, b)), False
@@ -619,6 +636,13 @@ class _Compiler:
     def _(self, s: N.Assign):
         _, put = self.var(s.target)
         f, _ = self.expr(s.value)
+        slot = self.slot_of.get(put)
+        if slot is not None:  # a DOUBLE AUTO scalar: its setter's store, in place
+
+            def assign(frame):
+                frame[slot] = f(frame)
+
+            return assign
         return lambda frame: put(frame, f(frame))
 
     @_stmt.register
