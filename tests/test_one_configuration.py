@@ -141,3 +141,32 @@ def test_the_names_on_floats_leave_a_sign_near_zero_to_the_arrays(models, monkey
     if all(one_chain(m, np.zeros(6)) is None or ik.ik_ur.ur_structure(m) for m in models):
         pytest.skip("no arm here whose names come from the floats")
     assert undecided > 0  # the bisection ends within the margin: the arrays decided there
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    q=st.lists(st.floats(-20.0, 20.0), min_size=6, max_size=6),
+    others=st.lists(st.lists(st.floats(-4.0, 4.0), min_size=6, max_size=6), max_size=3),
+)
+def test_a_solutions_wrapping_limits_and_merging_on_floats_are_the_arrays(q, others):
+    """ik.each_solution's floats: numpy's wrap into [-π, π), turns into the limits, merge."""
+    lo_deg, hi_deg = (
+        np.array([-170.0, -190, -29, -190, -120, -360]),
+        np.array([170.0, 45, 256, 190, 120, 360]),
+    )
+    lo, hi = np.radians(lo_deg), np.radians(hi_deg)
+    arrays = (np.array(q) + np.pi) % (2 * np.pi) - np.pi  # the code before, on arrays
+    for j in range(6):
+        for turn in (0.0, 2 * np.pi, -2 * np.pi):
+            if lo[j] <= arrays[j] + turn <= hi[j]:
+                arrays[j] += turn
+                break
+    inside = bool(np.all((arrays >= lo - 1e-12) & (arrays <= hi + 1e-12)))
+    wrapped = [ik._wrapped(x) for x in q]
+    assert np.array_equal(np.array(wrapped), (np.array(q) + np.pi) % (2 * np.pi) - np.pi)
+    assert ik._into_limits(wrapped, lo.tolist(), hi.tolist()) == (arrays.tolist(), inside)
+    near = [list(arrays + np.array(o) * 1e-6) for o in others]
+    merged = bool(
+        others and np.any(np.all(np.abs(ik._wrapped(arrays - np.array(near))) <= 2e-6, axis=1))
+    )
+    assert ik._same_as_any(arrays.tolist(), near, 2e-6) == merged

@@ -265,7 +265,7 @@ def each_solution(
     there; the solutions after it are never polished.
     """
     model = robot.nominal if model is None else model
-    lo_deg, hi_deg = robot.limits_deg(margin_deg, body=False)
+    lo, hi = (np.radians(b).tolist() for b in robot.limits_deg(margin_deg, body=False))
     dh = np.asarray(model.dh)
     if analytic_structure(model):  # exact already: nothing to merge before polishing
         starts = [phi - dh[:, 2] for phi in _analytic(model, R, o)]
@@ -280,16 +280,16 @@ def each_solution(
         seeds = [phi - dh[:, 2] for phi in _analytic(Model(structural, model.tool_point), R, o)]
         seeds += list(rng.uniform(-np.pi, np.pi, (24, 6)))
         starts = _distinct_starts(model, seeds, R, o)
-    found: list[np.ndarray] = []
+    found: list[list[float]] = []
     for q0 in starts:
         q, ok = _polish(model, q0, R, o)
         if not ok:
             continue
-        q = (q + np.pi) % (2 * np.pi) - np.pi
-        q, inside = _into_limits(q, lo_deg, hi_deg)
-        if _same_as_any(q, found, SAME_RAD):
+        wrapped, inside = _into_limits([_wrapped(x) for x in q.tolist()], lo, hi)
+        if _same_as_any(wrapped, found, SAME_RAD):
             continue
-        found.append(q)
+        found.append(wrapped)
+        q = np.array(wrapped)
         yield Solution(q, configuration(model, q), inside)
 
 
@@ -316,27 +316,36 @@ def _same(q1, q2, atol_rad):
     return bool(np.all(np.abs(_wrapped(q1 - q2)) <= atol_rad))
 
 
-def _same_as_any(q, others: list[np.ndarray], atol_rad) -> bool:
-    """Whether ``q`` is the same solution as any of ``others`` (:func:`_same`, at once)."""
-    if not others:
-        return False
-    return bool(np.any(np.all(np.abs(_wrapped(q - np.array(others))) <= atol_rad, axis=1)))
+def _same_as_any(q: list[float], others: list[list[float]], atol_rad: float) -> bool:
+    """Whether ``q`` is the same solution as any of ``others`` (:func:`_same`, on floats)."""
+    return any(
+        all(abs(_wrapped(a - b)) <= atol_rad for a, b in zip(q, other, strict=True))
+        for other in others
+    )
 
 
 def _wrapped(x):
+    """Return angles ``x`` (rad, an array or a float) wrapped into [-π, π).
+
+    On a float the same number as numpy's: Python's ``%`` takes the divisor's sign as
+    numpy's remainder does.
+    """
     return (x + np.pi) % (2 * np.pi) - np.pi
 
 
-def _into_limits(q, lo_deg, hi_deg):
-    lo, hi = np.radians(lo_deg), np.radians(hi_deg)
-    into = q.tolist()  # floats: the same sums and comparisons as the array's elements
-    for j, (qj, lo_j, hi_j) in enumerate(zip(into, lo.tolist(), hi.tolist(), strict=True)):
+def _into_limits(q: list[float], lo: list[float], hi: list[float]) -> tuple[list[float], bool]:
+    """Return ``q`` (rad) with each joint turned by ±360° into [lo, hi] (rad) where that fits.
+
+    And whether every joint is then within its limits (1e-12 rad of slack).
+    """
+    into = list(q)
+    for j, (qj, lo_j, hi_j) in enumerate(zip(q, lo, hi, strict=True)):
         for turn in (0.0, 2 * np.pi, -2 * np.pi):
             if lo_j <= qj + turn <= hi_j:
                 into[j] = qj + turn
                 break
-    q = np.array(into)
-    return q, bool(np.all((q >= lo - 1e-12) & (q <= hi + 1e-12)))
+    inside = all(x >= a - 1e-12 and x <= b + 1e-12 for x, a, b in zip(into, lo, hi, strict=True))
+    return into, inside
 
 
 def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
@@ -403,5 +412,5 @@ def _configuration_floats(model: Model, q: np.ndarray, stored: list[tuple]):
     return (
         "righty" if ahead >= 0 else "lefty",
         "above" if above >= 0 else "below",
-        "flip" if (phi5 + np.pi) % (2 * np.pi) - np.pi < 0 else "noflip",
+        "flip" if _wrapped(phi5) < 0 else "noflip",
     )
