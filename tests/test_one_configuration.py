@@ -25,6 +25,7 @@ from wirecal.solver.gravity import (
 )
 from wirecal.solver.ik import solutions as ik
 from wirecal.solver.kinematics import flange_jacobian, frames, one_chain
+from wirecal.solver.run_parameters import cruise_per_pct, one_travel_duration_s, travel_duration_s
 from wirecal.solver.simulate import Unmodelled
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -170,3 +171,20 @@ def test_a_solutions_wrapping_limits_and_merging_on_floats_are_the_arrays(q, oth
         others and np.any(np.all(np.abs(ik._wrapped(arrays - np.array(near))) <= 2e-6, axis=1))
     )
     assert ik._same_as_any(arrays.tolist(), near, 2e-6) == merged
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    start=st.lists(st.floats(-360.0, 360.0), min_size=6, max_size=6),
+    step=st.lists(st.sampled_from([0.0, 1e-9, 0.3, -2.0, 45.0]), min_size=6, max_size=6),
+    speed=st.sampled_from([0.0, 1.0, 37.5, 100.0]),
+)
+def test_one_moves_duration_on_floats_is_the_arrays(start, step, speed):
+    """The twin's every move: travel_duration_s of cruise_per_pct, on floats, bit for bit."""
+    robot = load_robot(EXAMPLES / "viper_s650" / "robot.toml")
+    a = np.array(start)
+    b = a + np.array(step)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        want = float(travel_duration_s(cruise_per_pct(robot, (b - a)[None]), np.asarray(speed))[0])
+    got = one_travel_duration_s(robot, a, b, speed)
+    assert got == want or (np.isnan(got) and np.isnan(want))

@@ -207,22 +207,34 @@ class _Compiler:
         """Compile a statement list.
 
         A GOTO to one of its labels continues there, a GOTO to any other label leaves it
-        (to an enclosing list that has the label).
+        (to an enclosing list that has the label). Each statement's place (program, line)
+        goes into the interpreter's ``where`` as it starts, by the list's own loop.
         """
         fns: list[Callable] = []
+        places: list[tuple[str, int]] = []  # each statement's place, set as it starts
         labels: dict[int, int] = {}
         for s in steps:
             if isinstance(s, N.Label):
                 labels[s.number] = len(fns)
             else:
-                fns.append(self.stmt(s))
+                fns.append(self._stmt(s))
+                places.append((self.prog.name, s.line))
+        interp = self.i
+        steps_at = list(zip(places, fns, strict=True))
         if labels:
-            return _labelled(fns, labels)
-        if len(fns) == 1:
-            return fns[0]
+            return _labelled(interp, steps_at, labels)
+        if len(steps_at) == 1:
+            ((where, f),) = steps_at
+
+            def one(frame):
+                interp.where = where
+                f(frame)
+
+            return one
 
         def run(frame):
-            for f in fns:
+            for where, f in steps_at:
+                interp.where = where
                 f(frame)
 
         return run
@@ -617,17 +629,6 @@ class _Compiler:
         raise AssertionError(name)  # pragma: no cover - FUNCTIONS and this list agree
 
     # ---------- statements ----------
-    def stmt(self, s: N.Stmt) -> Callable:
-        interp = self.i
-        where = (self.prog.name, s.line)
-        inner = self._stmt(s)
-
-        def run(frame):
-            interp.where = where
-            inner(frame)
-
-        return run
-
     @node_method
     def _stmt(self, s: N.Stmt) -> Callable:  # pragma: no cover - every step type is registered
         raise AssertionError(type(s).__name__)
@@ -930,16 +931,22 @@ _COMPARE = {
 }
 
 
-def _labelled(fns: list[Callable], labels: dict[int, int]) -> Callable:
-    """Compile a statement list with labels: a GOTO to one of them continues there."""
-    n = len(fns)
+def _labelled(
+    interp: Interpreter, steps: list[tuple[tuple[str, int], Callable]], labels: dict[int, int]
+) -> Callable:
+    """Compile a statement list with labels: a GOTO to one of them continues there.
+
+    ``steps``: each statement's place (set in ``interp.where`` as it starts) and closure.
+    """
+    n = len(steps)
 
     def run_labelled(frame):
         pc = 0
         while pc < n:
             try:
                 while pc < n:
-                    fns[pc](frame)
+                    interp.where, f = steps[pc]
+                    f(frame)
                     pc += 1
             except _Goto as g:
                 if g.label not in labels:
