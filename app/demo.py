@@ -15,10 +15,12 @@ Viper s650, the default), the paper's two procedures run before and after calibr
 believing the patch after), the one before calibration in a second process beside the
 rest. Otherwise the measurement programs run again over new points (unmodelled errors on)
 and their wire lengths are compared with those the nominal and the calibrated model predict.
-The controller solver's runs go to a third process, beside the validation after
-calibration; the report's figures (the identification's, the validations' histograms) to
-two drawing processes forked before the generation, which import matplotlib meanwhile on
-the other core (:func:`_workers`): the demo's own process never imports matplotlib.
+The controller solver's runs go to a third process, forked once the identification is
+done (it inherits the identification's imports, scipy's optimiser among them, instead of
+importing them again), beside the validation after calibration; the report's figures (the
+identification's, the validations' histograms) to two drawing processes forked before the
+generation, which import matplotlib meanwhile on the other core (:func:`_workers`): the
+demo's own process never imports matplotlib.
 
 Every output goes to one folder and none is overwritten unless asked.
 """
@@ -34,7 +36,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -262,7 +264,7 @@ def _run(
     truth = random_errors(robot, scale, np.random.default_rng([seed, 1]))
     encoder = _true_encoder(reg, robot, seed)
     options = {"seed": seed, **({} if encoder is None else {"encoder_truth": encoder})}
-    with tempfile.TemporaryDirectory() as tmp, _workers(WORKERS, (drawer,)) as pool:
+    with tempfile.TemporaryDirectory() as tmp, _workers(1, (drawer,)) as pool, ExitStack() as later:
         disk = Path(tmp)
         before = _start_before(pool, ch, truth, programs, disk / "before", seed)
         beside = "" if before is None else ", the validation before calibration in a second process"
@@ -274,7 +276,10 @@ def _run(
         identified = result.estimates[result.recommended].as_dict()
         seconds["solve"] = time.perf_counter() - t
         t = step("the controller solver's result and the report's figures, in another process")
-        controller, figures = _submit_controller(pool, drawer, result, log_text, ch, programs, disk)
+        solver = later.enter_context(_workers(1, (drawer, pool)))  # forked now: the imports
+        controller, figures = _submit_controller(
+            solver, drawer, result, log_text, ch, programs, disk
+        )
         t = step("validation before and after calibration, with unmodelled errors")
         validations = _validations(
             out, folder, ch, (truth, identified), programs, disk, seed, before
@@ -443,10 +448,6 @@ def _nice() -> int | None:
     """Return the demo's own nice value (None where the platform has none)."""
     return os.nice(0) if hasattr(os, "nice") else None
 
-
-WORKERS = 2
-"""The demo's twin workers, forked once the programs are generated (and parsed): the
-validation before calibration in one, the controller solver's runs in the other."""
 
 DRAWERS = 2
 """The demo's drawing workers, forked before the programs are generated: they import

@@ -209,6 +209,28 @@ def travel_duration_s(cruise_per_pct: np.ndarray, speed_pct: np.ndarray) -> np.n
         return 1.0 / (cruise_per_pct * np.asarray(speed_pct, dtype=float)) + MOVE_OVERHEAD_S
 
 
+def one_travel_duration_s(
+    robot: Robot, start_deg: np.ndarray, end_deg: np.ndarray, speed_pct: float
+) -> float:
+    """Return the duration (s) of one move at ``speed_pct``, on Python floats.
+
+    :func:`travel_duration_s` of :func:`cruise_per_pct` for the single move start → end
+    (deg), the same number: the arrays' element-wise quotients, their largest, the cruise
+    and the duration in the same operations. A quotient that is not finite (a NaN, which
+    numpy's largest keeps and Python's may not) leaves the move to the arrays.
+    """
+    dq = [b - a for a, b in zip(start_deg.tolist(), end_deg.tolist(), strict=True)]
+    speeds = robot.joint_speed_deg_s.tolist()
+    quotients = [abs(d) / v if v else math.inf for d, v in zip(dq, speeds, strict=True)]
+    if not all(math.isfinite(x) for x in quotients):
+        travel = cruise_per_pct(robot, np.array([dq]))
+        return float(travel_duration_s(travel, np.asarray(speed_pct))[0])
+    slowest = max(quotients)
+    cruise = 0.01 / slowest if slowest > 0 else math.inf
+    rate = cruise * float(speed_pct)
+    return (1.0 / rate if rate else math.copysign(math.inf, rate)) + MOVE_OVERHEAD_S
+
+
 def _finite(x: np.ndarray) -> np.ndarray:
     """``x`` with the values of moves without travel (∞·0) as 0."""
     return np.where(np.isfinite(x), x, 0.0)

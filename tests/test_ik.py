@@ -83,6 +83,24 @@ def test_eight_configurations_of_a_generic_pose(viper):
     )
 
 
+def test_each_solution_polishes_only_as_far_as_it_is_asked(viper):
+    """The V+ controller takes the first solution of its configuration: those after it are
+    never polished, and the ones yielded are solve's, in its order."""
+    model = viper.model({"th2": 0.3, "a2": 0.2})
+    R, o = flange_pose(model, np.radians([10, -60, 150, 20, 40, 30.0]))
+    every = solve(viper, R, o, model=model)
+    with mock.patch.object(ik, "_polish", wraps=ik._polish) as polish:
+        first = next(ik.each_solution(viper, R, o, model=model))
+    assert polish.call_count < len(every)
+    assert np.array_equal(first.q, every[0].q)
+    assert first.config == every[0].config
+    lazy = list(ik.each_solution(viper, R, o, model=model))
+    assert [(s.config, s.within_limits) for s in lazy] == [
+        (s.config, s.within_limits) for s in every
+    ]
+    assert all(np.array_equal(a.q, b.q) for a, b in zip(lazy, every, strict=True))
+
+
 def test_unreachable_pose_has_no_solution(viper):
     model = viper.nominal
     R, _ = flange_pose(model, np.zeros(6))

@@ -25,6 +25,7 @@ from wirecal.solver.gravity import (
 )
 from wirecal.solver.ik import solutions as ik
 from wirecal.solver.kinematics import flange_jacobian, frames, one_chain
+from wirecal.solver.run_parameters import cruise_per_pct, one_travel_duration_s, travel_duration_s
 from wirecal.solver.simulate import Unmodelled
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -106,3 +107,84 @@ def test_a_payload_keeps_the_vectorised_form():
     m = MassModel(np.ones(6), np.zeros((6, 3)), payload_mass_kg=1.0)
     axes = [(1.0, 0.0, 0.0)] * 7
     assert gravity_torques_floats(m, axes, axes, [(0.0, 0.0, 0.0)] * 7) is None
+
+
+def _across(model, q_a, q_b, part):
+    """Bisect the joint segment q_a → q_b to where configuration name ``part`` changes."""
+    side = ik.configuration(model, q_a)[part]
+    for _ in range(80):
+        mid = (q_a + q_b) / 2
+        if ik.configuration(model, mid)[part] == side:
+            q_a = mid
+        else:
+            q_b = mid
+    return q_a, q_b
+
+
+@pytest.mark.parametrize("part", [0, 1])
+def test_the_names_on_floats_leave_a_sign_near_zero_to_the_arrays(models, monkeypatch, part):
+    """Where righty/lefty or above/below changes, the floats decide nothing; names still equal."""
+    rng = np.random.default_rng(11)
+    undecided = 0
+    for model in models:
+        if one_chain(model, np.zeros(6)) is None or ik.ik_ur.ur_structure(model):
+            continue  # the arrays' path already, or the UR's own names
+        q = rng.uniform(-3, 3, (400, 6))
+        names = [ik.configuration(model, x)[part] for x in q]
+        pairs = [(q[k], q[k + 1]) for k in range(len(q) - 1) if names[k] != names[k + 1]][:5]
+        for q_a, q_b in pairs:
+            for x in _across(model, q_a, q_b, part):
+                on_floats = ik.configuration(model, x)
+                undecided += ik._configuration_floats(model, x, one_chain(model, x)[0]) is None
+                with monkeypatch.context() as m:
+                    m.setattr(ik, "one_chain", lambda model, q: None)
+                    assert ik.configuration(model, x) == on_floats
+    if all(one_chain(m, np.zeros(6)) is None or ik.ik_ur.ur_structure(m) for m in models):
+        pytest.skip("no arm here whose names come from the floats")
+    assert undecided > 0  # the bisection ends within the margin: the arrays decided there
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    q=st.lists(st.floats(-20.0, 20.0), min_size=6, max_size=6),
+    others=st.lists(st.lists(st.floats(-4.0, 4.0), min_size=6, max_size=6), max_size=3),
+)
+def test_a_solutions_wrapping_limits_and_merging_on_floats_are_the_arrays(q, others):
+    """ik.each_solution's floats: numpy's wrap into [-π, π), turns into the limits, merge."""
+    lo_deg, hi_deg = (
+        np.array([-170.0, -190, -29, -190, -120, -360]),
+        np.array([170.0, 45, 256, 190, 120, 360]),
+    )
+    lo, hi = np.radians(lo_deg), np.radians(hi_deg)
+    arrays = (np.array(q) + np.pi) % (2 * np.pi) - np.pi  # the code before, on arrays
+    for j in range(6):
+        for turn in (0.0, 2 * np.pi, -2 * np.pi):
+            if lo[j] <= arrays[j] + turn <= hi[j]:
+                arrays[j] += turn
+                break
+    inside = bool(np.all((arrays >= lo - 1e-12) & (arrays <= hi + 1e-12)))
+    wrapped = [ik._wrapped(x) for x in q]
+    assert np.array_equal(np.array(wrapped), (np.array(q) + np.pi) % (2 * np.pi) - np.pi)
+    assert ik._into_limits(wrapped, lo.tolist(), hi.tolist()) == (arrays.tolist(), inside)
+    near = [list(arrays + np.array(o) * 1e-6) for o in others]
+    merged = bool(
+        others and np.any(np.all(np.abs(ik._wrapped(arrays - np.array(near))) <= 2e-6, axis=1))
+    )
+    assert ik._same_as_any(arrays.tolist(), near, 2e-6) == merged
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    start=st.lists(st.floats(-360.0, 360.0), min_size=6, max_size=6),
+    step=st.lists(st.sampled_from([0.0, 1e-9, 0.3, -2.0, 45.0]), min_size=6, max_size=6),
+    speed=st.sampled_from([0.0, 1.0, 37.5, 100.0]),
+)
+def test_one_moves_duration_on_floats_is_the_arrays(start, step, speed):
+    """The twin's every move: travel_duration_s of cruise_per_pct, on floats, bit for bit."""
+    robot = load_robot(EXAMPLES / "viper_s650" / "robot.toml")
+    a = np.array(start)
+    b = a + np.array(step)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        want = float(travel_duration_s(cruise_per_pct(robot, (b - a)[None]), np.asarray(speed))[0])
+    got = one_travel_duration_s(robot, a, b, speed)
+    assert got == want or (np.isnan(got) and np.isnan(want))

@@ -56,9 +56,8 @@ from wirecal.solver.run_parameters import (
     VIBRATION_HZ,
     VIBRATION_TAU_S,
     Moves,
-    cruise_per_pct,
     move_profiles,
-    travel_duration_s,
+    one_travel_duration_s,
 )
 from wirecal.solver.simulate import (
     IDEAL_ENCODER,
@@ -306,8 +305,7 @@ class World:
             return WireOverspeed(self._move_name(q), over)
         speed = np.asarray(speed_pct)
         if duration_s is None:
-            travel = cruise_per_pct(self.robot, (end - start)[None])
-            duration_s = float(travel_duration_s(travel, speed)[0])
+            duration_s = one_travel_duration_s(self.robot, start, end, speed_pct)
         self._arrive(q, duration_s)
         self._vibrate(lambda: float((move or self._profile(start, end)).vibration_mm(speed)[0]))
         return None

@@ -31,16 +31,19 @@ def move_sweep(
     a: np.ndarray,
     b: np.ndarray,
     contact: bool = False,
+    exact_below_mm: float = np.inf,
 ) -> tuple[str | None, np.ndarray, float]:
     """Return the first collision along the joint-interpolated move a → b (deg), or None.
 
     In words: what collides (the pair, or a link and the floor or a volume) and where.
     A collision is a gap under the cell's margin, or with ``contact`` (the twin's arm as
     built) capsules that touch: the margin is the planner's, not the robot's. With it, the
-    move's last sample (deg) and that sample's smallest gap (mm).
+    move's last sample (deg) and that sample's smallest gap (mm): with ``exact_below_mm``
+    (:func:`~wirecal.solver.cell.model.cell_gaps`) a lower bound of it where it exceeds
+    that, the same answer and words otherwise.
     """
     q, _ = move_samples(np.r_[a][None], np.r_[b][None])
-    gaps = robot.cell_gaps(q, p0, model)
+    gaps = robot.cell_gaps(q, p0, model, exact_below_mm=exact_below_mm)
     smallest = gaps.smallest()
     hit = np.flatnonzero(smallest < collision_below_mm(gaps.margin_mm, contact))
     if not hit.size:

@@ -11,7 +11,9 @@ the sampled points may miss by that much). The samples of a move a → b lie on 
 segment between a and b, each joint within max(|a_j − q_j|, |b_j − q_j|) of an anchor q, so
 a move whose every gap at the anchor exceeds the bound is clear: the check's answer
 (None) without evaluating it. A model that bends under gravity turns its joints by the
-torques too; its moves are always evaluated.
+torques too; its moves are always evaluated. A move evaluated takes the capsule pairs' gaps
+beyond :data:`~wirecal.solver.cell.model.SURE_GAP_MM` as lower bounds (the same answers and
+words; an anchor's smallest gap then bounds its true one from below, so a skip stays sound).
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wirecal.solver.cell.check import collision_below_mm, move_sweep
-from wirecal.solver.cell.model import BOX_STEP_MM
+from wirecal.solver.cell.model import BOX_STEP_MM, SURE_GAP_MM
 from wirecal.solver.kinematics import Model, bends
 from wirecal.solver.robot import Robot
 
@@ -63,7 +65,7 @@ class Sweeps:
             self.skipped += 1
             return None
         hit, last, smallest = move_sweep(
-            self.robot, self.model, self.p0, a_deg, b_deg, self.contact
+            self.robot, self.model, self.p0, a_deg, b_deg, self.contact, SURE_GAP_MM
         )
         if hit is None:
             self.anchor = (last, smallest)

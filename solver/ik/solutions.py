@@ -25,7 +25,7 @@ solutions).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -247,8 +247,25 @@ def solve(
     ``model`` is the kinematic model the controller believes (default: the robot's
     nominal model; a calibrated controller's is patched).
     """
+    return list(each_solution(robot, R, o, model=model, margin_deg=margin_deg, seed=seed))
+
+
+def each_solution(
+    robot: Robot,
+    R: np.ndarray,
+    o: np.ndarray,
+    *,
+    model: Model | None = None,
+    margin_deg: float = 0.0,
+    seed: int = 0,
+) -> Iterator[Solution]:
+    """Yield :func:`solve`'s solutions one by one, in its order, each polished when asked for.
+
+    A caller that takes the first solution of a configuration (the V+ controller) stops
+    there; the solutions after it are never polished.
+    """
     model = robot.nominal if model is None else model
-    lo_deg, hi_deg = robot.limits_deg(margin_deg, body=False)
+    lo, hi = (np.radians(b).tolist() for b in robot.limits_deg(margin_deg, body=False))
     dh = np.asarray(model.dh)
     if analytic_structure(model):  # exact already: nothing to merge before polishing
         starts = [phi - dh[:, 2] for phi in _analytic(model, R, o)]
@@ -263,17 +280,17 @@ def solve(
         seeds = [phi - dh[:, 2] for phi in _analytic(Model(structural, model.tool_point), R, o)]
         seeds += list(rng.uniform(-np.pi, np.pi, (24, 6)))
         starts = _distinct_starts(model, seeds, R, o)
-    solutions: list[Solution] = []
+    found: list[list[float]] = []
     for q0 in starts:
         q, ok = _polish(model, q0, R, o)
         if not ok:
             continue
-        q = (q + np.pi) % (2 * np.pi) - np.pi
-        q, inside = _into_limits(q, lo_deg, hi_deg)
-        if _same_as_any(q, [s.q for s in solutions], SAME_RAD):
+        wrapped, inside = _into_limits([_wrapped(x) for x in q.tolist()], lo, hi)
+        if _same_as_any(wrapped, found, SAME_RAD):
             continue
-        solutions.append(Solution(q, configuration(model, q), inside))
-    return solutions
+        found.append(wrapped)
+        q = np.array(wrapped)
+        yield Solution(q, configuration(model, q), inside)
 
 
 def _distinct_starts(model, candidates, R, o, iterations=PRE_ITERATIONS):
@@ -299,27 +316,36 @@ def _same(q1, q2, atol_rad):
     return bool(np.all(np.abs(_wrapped(q1 - q2)) <= atol_rad))
 
 
-def _same_as_any(q, others: list[np.ndarray], atol_rad) -> bool:
-    """Whether ``q`` is the same solution as any of ``others`` (:func:`_same`, at once)."""
-    if not others:
-        return False
-    return bool(np.any(np.all(np.abs(_wrapped(q - np.array(others))) <= atol_rad, axis=1)))
+def _same_as_any(q: list[float], others: list[list[float]], atol_rad: float) -> bool:
+    """Whether ``q`` is the same solution as any of ``others`` (:func:`_same`, on floats)."""
+    return any(
+        all(abs(_wrapped(a - b)) <= atol_rad for a, b in zip(q, other, strict=True))
+        for other in others
+    )
 
 
 def _wrapped(x):
+    """Return angles ``x`` (rad, an array or a float) wrapped into [-π, π).
+
+    On a float the same number as numpy's: Python's ``%`` takes the divisor's sign as
+    numpy's remainder does.
+    """
     return (x + np.pi) % (2 * np.pi) - np.pi
 
 
-def _into_limits(q, lo_deg, hi_deg):
-    lo, hi = np.radians(lo_deg), np.radians(hi_deg)
-    into = q.tolist()  # floats: the same sums and comparisons as the array's elements
-    for j, (qj, lo_j, hi_j) in enumerate(zip(into, lo.tolist(), hi.tolist(), strict=True)):
+def _into_limits(q: list[float], lo: list[float], hi: list[float]) -> tuple[list[float], bool]:
+    """Return ``q`` (rad) with each joint turned by ±360° into [lo, hi] (rad) where that fits.
+
+    And whether every joint is then within its limits (1e-12 rad of slack).
+    """
+    into = list(q)
+    for j, (qj, lo_j, hi_j) in enumerate(zip(q, lo, hi, strict=True)):
         for turn in (0.0, 2 * np.pi, -2 * np.pi):
             if lo_j <= qj + turn <= hi_j:
                 into[j] = qj + turn
                 break
-    q = np.array(into)
-    return q, bool(np.all((q >= lo - 1e-12) & (q <= hi + 1e-12)))
+    inside = all(x >= a - 1e-12 and x <= b + 1e-12 for x, a, b in zip(into, lo, hi, strict=True))
+    return into, inside
 
 
 def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
@@ -327,11 +353,14 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
     if ik_ur.ur_structure(model):
         return ik_ur.configuration(model, q)
     chain = one_chain(model, q)
-    if chain is None:
+    if chain is not None:
+        names = _configuration_floats(model, q, chain[0])
+        if names is not None:
+            return names
+        x, z, o = (np.array([k[axis] for k in chain[0][:5]]) for axis in range(3))
+    else:
         f = frames(model, np.atleast_2d(q))
         x, z, o = f.x[0], f.z[0], f.o[0]
-    else:  # the same numbers as frames' arrays, of the frames used (cheaper for one)
-        x, z, o = (np.array([k[axis] for k in chain[0][:5]]) for axis in range(3))
     o2, o3 = o[2], o[3]
     centre = o[4]
     z1 = z[1]
@@ -345,4 +374,43 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
         "righty" if ahead >= 0 else "lefty",
         "above" if offset[2] >= 0 else "below",
         "flip" if _wrapped(q[4] + model.dh[4, 2]) < 0 else "noflip",
+    )
+
+
+SIGN_SURE = 1e-12
+""":func:`_configuration_floats` decides a sign only where the value exceeds this times the
+1-norm of the vectors it is made of: numpy's dot products may add in another order (or
+fused), so the two ways differ by a few ulps of those norms (below 1e-14 of them), never
+across a margin this wide."""
+
+
+def _configuration_floats(model: Model, q: np.ndarray, stored: list[tuple]):
+    """:func:`configuration`'s names on the chain's floats, or None where a sign is close.
+
+    The same names as numpy's arrays give (their dot products round alike to within
+    :data:`SIGN_SURE`, so a sign decided here is theirs); None leaves a sign within that
+    of zero to the arrays.
+    """
+    x1_axis, (z0, z1, z2), p1 = stored[1]
+    o2, o3, centre = stored[2][2], stored[3][2], stored[4][2]
+    r0, r1, r2 = centre[0] - p1[0], centre[1] - p1[1], centre[2] - p1[2]
+    rz = r0 * z0 + r1 * z1 + r2 * z2
+    h0, h1, h2 = r0 - rz * z0, r1 - rz * z1, r2 - rz * z2
+    ahead = h0 * x1_axis[0] + h1 * x1_axis[1] + h2 * x1_axis[2]
+    d0, d1, d2 = o3[0] - o2[0], o3[1] - o2[1], o3[2] - o2[2]
+    l0, l1, l2 = centre[0] - o2[0], centre[1] - o2[1], centre[2] - o2[2]
+    ll = l0 * l0 + l1 * l1 + l2 * l2
+    if ll < 1e-100:
+        return None
+    t = (d0 * l0 + d1 * l1 + d2 * l2) / ll
+    above = d2 - t * l2
+    if abs(ahead) <= SIGN_SURE * (abs(r0) + abs(r1) + abs(r2)):
+        return None
+    if abs(above) <= SIGN_SURE * (abs(d0) + abs(d1) + abs(d2)):
+        return None
+    phi5 = float(q[4]) + float(model.dh[4, 2])
+    return (
+        "righty" if ahead >= 0 else "lefty",
+        "above" if above >= 0 else "below",
+        "flip" if _wrapped(phi5) < 0 else "noflip",
     )

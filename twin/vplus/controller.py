@@ -113,7 +113,7 @@ class VplusController:
             if ok and ik.configuration(self.believed, q) == current:
                 return np.degrees(q)
         self.requested = {}
-        for s in ik.solve(self.world.limits, R, p, model=self.believed):
+        for s in ik.each_solution(self.world.limits, R, p, model=self.believed):
             if s.config == want and s.within_limits:
                 return np.degrees(s.q)
         raise VError(-931, f"*Location out of range* ({'/'.join(want)})")

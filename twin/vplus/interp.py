@@ -32,6 +32,7 @@ from wirecal.lang.vplus.keywords import keyword
 from wirecal.lang.vplus.parser import CONSTANTS, FUNCTIONS, Module, Program, transformation_names
 from wirecal.solver import pose
 from wirecal.twin.machine import Halt, Outcome, RunError, f32
+from wirecal.twin.vplus.fused import fused
 
 
 class Trans:
@@ -178,6 +179,7 @@ class _Compiler:
             elif decl.scope == "LOCAL":
                 self.locals.add(name)
         self.nslots = len(self.params) + len(self.autos)
+        self.slot_of: dict[Callable, int] = {}  # a DOUBLE AUTO scalar's setter → its slot
         for name in ("expr", "_stmt"):  # bound once: each lookup of a dispatcher wraps anew
             setattr(self, name, vars(_Compiler)[name].__get__(self, _Compiler))
 
@@ -205,22 +207,34 @@ class _Compiler:
         """Compile a statement list.
 
         A GOTO to one of its labels continues there, a GOTO to any other label leaves it
-        (to an enclosing list that has the label).
+        (to an enclosing list that has the label). Each statement's place (program, line)
+        goes into the interpreter's ``where`` as it starts, by the list's own loop.
         """
         fns: list[Callable] = []
+        places: list[tuple[str, int]] = []  # each statement's place, set as it starts
         labels: dict[int, int] = {}
         for s in steps:
             if isinstance(s, N.Label):
                 labels[s.number] = len(fns)
             else:
-                fns.append(self.stmt(s))
+                fns.append(self._stmt(s))
+                places.append((self.prog.name, s.line))
+        interp = self.i
+        steps_at = list(zip(places, fns, strict=True))
         if labels:
-            return _labelled(fns, labels)
-        if len(fns) == 1:
-            return fns[0]
+            return _labelled(interp, steps_at, labels)
+        if len(steps_at) == 1:
+            ((where, f),) = steps_at
+
+            def one(frame):
+                interp.where = where
+                f(frame)
+
+            return one
 
         def run(frame):
-            for f in fns:
+            for where, f in steps_at:
+                interp.where = where
                 f(frame)
 
         return run
@@ -281,7 +295,10 @@ class _Compiler:
     def _auto_storage(self, rounding: bool, slot: int, index_fns, undefined):
         """Compile the access to an AUTO variable: a value in the frame."""
         if index_fns is None:
-            return self._auto_scalar(rounding, slot, undefined)
+            get, put = self._auto_scalar(rounding, slot, undefined)
+            if not rounding:
+                self.slot_of[put] = slot  # written in place by an assignment to it
+            return get, put
         ix = self._indexer(index_fns)
 
         def aget(frame):
@@ -375,6 +392,17 @@ class _Compiler:
     def var(self, v: N.Var):
         """(getter, setter) of a variable node."""
         return self.storage(v.kind, v.name, [self.expr(x)[0] for x in v.index] if v.index else None)
+
+    def _auto_leaf(self, v: N.Var) -> tuple[int, bool] | None:
+        """Return an AUTO numeric scalar's slot and whether it is DOUBLE (else None)."""
+        name = v.name
+        if v.index is not None or name in CONSTANTS or name in self.params:
+            return None
+        if name not in self.autos or v.kind != "n" or name in self.i.transforms:
+            return None
+        if _is_keyword_value(v):
+            return None
+        return self.autos[name], self.is_double(name)
 
     def ref_of(self, e: N.Expr | None) -> Callable:
         """Compile a CALL argument.
@@ -485,7 +513,8 @@ class _Compiler:
         a, da = self.expr(e.left)
         b, db = self.expr(e.right)
         if da or db:
-            return _arithmetic(self.i, op, a, b), True
+            nodes = _arithmetic(self.i, op, a, b)
+            return fused(e, self._auto_leaf, self.i.ops, nodes) or nodes, True
         if op in _SINGLE:
             return _single_arithmetic(self.i.ops, *_SINGLE[op], a, b), False
         return self._single(_arithmetic(self.i, op, a, b)), False
@@ -600,17 +629,6 @@ class _Compiler:
         raise AssertionError(name)  # pragma: no cover - FUNCTIONS and this list agree
 
     # ---------- statements ----------
-    def stmt(self, s: N.Stmt) -> Callable:
-        interp = self.i
-        where = (self.prog.name, s.line)
-        inner = self._stmt(s)
-
-        def run(frame):
-            interp.where = where
-            inner(frame)
-
-        return run
-
     @node_method
     def _stmt(self, s: N.Stmt) -> Callable:  # pragma: no cover - every step type is registered
         raise AssertionError(type(s).__name__)
@@ -619,6 +637,13 @@ class _Compiler:
     def _(self, s: N.Assign):
         _, put = self.var(s.target)
         f, _ = self.expr(s.value)
+        slot = self.slot_of.get(put)
+        if slot is not None:  # a DOUBLE AUTO scalar: its setter's store, in place
+
+            def assign(frame):
+                frame[slot] = f(frame)
+
+            return assign
         return lambda frame: put(frame, f(frame))
 
     @_stmt.register
@@ -906,16 +931,22 @@ _COMPARE = {
 }
 
 
-def _labelled(fns: list[Callable], labels: dict[int, int]) -> Callable:
-    """Compile a statement list with labels: a GOTO to one of them continues there."""
-    n = len(fns)
+def _labelled(
+    interp: Interpreter, steps: list[tuple[tuple[str, int], Callable]], labels: dict[int, int]
+) -> Callable:
+    """Compile a statement list with labels: a GOTO to one of them continues there.
+
+    ``steps``: each statement's place (set in ``interp.where`` as it starts) and closure.
+    """
+    n = len(steps)
 
     def run_labelled(frame):
         pc = 0
         while pc < n:
             try:
                 while pc < n:
-                    fns[pc](frame)
+                    interp.where, f = steps[pc]
+                    f(frame)
                     pc += 1
             except _Goto as g:
                 if g.label not in labels:

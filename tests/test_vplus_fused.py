@@ -1,0 +1,92 @@
+"""The V+ twin's fused arithmetic (twin/vplus/fused.py): the node-by-node closures' numbers.
+
+An expression of +, - and * on AUTO scalars compiled into one function must give the very
+values, operation counts (their order of first count too) and errors of the closures it
+replaces; the tests run the same programs with fusion off and compare.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from wirecal.lang.vplus.parser import parse_module
+from wirecal.twin.vplus import interp as vplus_interp
+from wirecal.twin.vplus.controller import VplusController
+from wirecal.twin.vplus.interp import Interpreter
+from wirecal.twin.world import World
+
+PROGRAM = """.PROGRAM t.main()
+    GLOBAL DOUBLE ga, gb, gc, g1, g2, g3
+    GLOBAL gr
+    AUTO DOUBLE a, b, c, x
+    AUTO r, s
+    a = ga
+    b = gb
+    c = gc
+    r = gr
+    s = r*r+r
+    x = a*b+c*a-(b-c)*r
+    g1 = x*(a+^D2)-3*c*r
+    g2 = a*b*c-x+s*a
+    g3 = ((a-b)*(a+b))-(c*c)
+    IF a*b > c THEN
+        TYPE "more"
+    END
+.END
+"""
+
+FINITE = st.floats(-1e6, 1e6, allow_nan=False)
+
+
+def _run(viper, plan, tmp_path, source, values, *, fuse):
+    cell = VplusController(World(viper, {}, plan.theta0_deg, tmp_path))
+    interp = Interpreter(parse_module(source, "t.v2"), cell)
+    for name, v in values.items():
+        interp.set_global(name, v)
+    if fuse:
+        out = interp.execute("t.main")
+    else:
+        with pytest.MonkeyPatch.context() as m:
+            m.setattr(vplus_interp, "fused", lambda *args: None)
+            out = interp.execute("t.main")
+    results = [interp.gvals.get(g) for g in ("g1", "g2", "g3")]
+    return out, results, list(interp.ops.items())
+
+
+@settings(max_examples=40, deadline=None)
+@given(a=FINITE, b=FINITE, c=FINITE, r=FINITE)
+def test_fused_arithmetic_gives_the_closures_numbers_and_counts(
+    viper, paper_plan, tmp_path_factory, a, b, c, r
+):
+    tmp_path = tmp_path_factory.mktemp("fused")
+    values = {"ga": a, "gb": b, "gc": c, "gr": float(np.float32(r))}
+    fused = _run(viper, paper_plan, tmp_path, PROGRAM, values, fuse=True)
+    nodes = _run(viper, paper_plan, tmp_path, PROGRAM, values, fuse=False)
+    assert fused[0].status == nodes[0].status == "completed"
+    assert fused[0].console == nodes[0].console
+    assert np.array_equal(np.array(fused[1]), np.array(nodes[1]), equal_nan=True)
+    assert fused[2] == nodes[2]  # the counts, and the order each kind was first counted
+
+
+def test_an_undefined_scalar_in_a_fused_expression_is_the_closures_error(
+    viper, paper_plan, tmp_path
+):
+    source = ".PROGRAM t.main()\n    AUTO DOUBLE a, b, x\n    a = 1\n    x = a*b+a\n.END\n"
+    fused = _run(viper, paper_plan, tmp_path, source, {}, fuse=True)
+    nodes = _run(viper, paper_plan, tmp_path, source, {}, fuse=False)
+    assert fused[0].message == nodes[0].message == "*Undefined value* b (-406)"
+    assert (fused[0].program, fused[0].line) == (nodes[0].program, nodes[0].line) == ("t.main", 4)
+    assert fused[2] == nodes[2]
+
+
+def test_the_double_expressions_are_fused(viper, paper_plan, tmp_path, monkeypatch):
+    """The comparisons above are not vacuous: the program's DOUBLE expressions are fused."""
+    made = []
+    original = vplus_interp.fused
+    monkeypatch.setattr(vplus_interp, "fused", lambda *args: made.append(original(*args)))
+    cell = VplusController(World(viper, {}, paper_plan.theta0_deg, tmp_path))
+    Interpreter(parse_module(PROGRAM, "t.v2"), cell).execute("t.main")
+    assert sum(f is not None for f in made) >= 5  # g1 … g3, x and a*b, with their subtrees
