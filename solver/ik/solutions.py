@@ -241,8 +241,8 @@ def solve(
 ) -> list[Solution]:
     """Return every distinct solution for the flange pose (R, o).
 
-    Every distinct solution for the flange pose (R, o), each put into the robot's joint
-    limits less ``margin_deg`` where a turn of ±360° allows it.
+    Each is put into the robot's joint limits less ``margin_deg`` where a turn of ±360°
+    allows it (:func:`each_solution` yields them one by one, in this order).
 
     ``model`` is the kinematic model the controller believes (default: the robot's
     nominal model; a calibrated controller's is patched).
