@@ -285,15 +285,12 @@ def _run(
             out, folder, ch, (truth, identified), programs, disk, seed, before
         )
         drawn = [drawer.submit(histogram_figure, v) for v in validations]  # side by side
-        if before is not None:
-            seconds["validate before"] = before.result().seconds
+        seconds |= {} if before is None else {"validate before": before.result().seconds}
         seconds["validate"] = time.perf_counter() - t
         comparison, difference, seconds["controller"] = controller.result()
     companion = reg.language.patch_companion
     t = step("patch" + (f" and patch{companion}" if companion else ""))
-    for name, program in programs.items():
-        out.put(folder / name, program)
-    _put_truth_and_patch(out, folder, robot, plan, truth, seed, result, verdict, ch.log_name)
+    _put_outputs(out, folder, ch, programs, (truth, seed), result, verdict)
     seconds["patch"] = time.perf_counter() - t
     t = step("report")
     drawings: dict[str, Any] = {"figures": figures.result(), "drawn": [d.result() for d in drawn]}
@@ -616,26 +613,26 @@ def _bound(result: SolveResult) -> float | None:
     return None if best is None else best.bound
 
 
-def _put_truth_and_patch(
+def _put_outputs(
     out: Outputs,
     folder: Path,
-    robot: Robot,
-    plan: Plan,
-    truth: dict[str, float],
-    seed: int,
+    ch: Chain,
+    programs: dict[str, str],
+    truth_seed: tuple[dict[str, float], int],
     result: SolveResult,
     verdict: Plausibility,
-    log_name: str,
 ) -> None:
-    """Queue the truth file and the recommended estimate's patch (solved from ``log_name``)."""
-    out.put(folder / "truth.toml", truth_text(robot, truth, seed))
+    """Queue the programs, the truth file (errors, seed) and the recommended patch."""
+    for name, program in programs.items():
+        out.put(folder / name, program)
+    out.put(folder / "truth.toml", truth_text(ch.robot, *truth_seed))
     put_patch(
         out,
         folder / "patch.toml",
-        robot,
+        ch.robot,
         result.estimates[result.recommended],
-        plan_fingerprint=plan.fingerprint(),
-        log_path=log_name,
+        plan_fingerprint=ch.plan.fingerprint(),
+        log_path=ch.log_name,
         log_sha256=result.measurements.sha256,
         version=__version__,
         plausibility=verdict.patch_field(),
