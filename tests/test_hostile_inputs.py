@@ -1521,6 +1521,7 @@ def test_a_tool_point_at_or_near_the_flange_centre_is_read(tmp_path, point):
     assert "metres" not in r.output
 
 
+@pytest.mark.slow  # two Viper plans: 3.8 s of CPU alone
 def test_plan_says_when_points_is_fewer_than_the_steps_keep(tmp_path):
     """A new case beside C17 (plan's options): --points 5 wrote a plan of 20 points without
     a word (each of the Viper's 10 steps keeps at least 2); --points 25 is honoured."""
