@@ -17,6 +17,7 @@ from typing import Protocol
 import numpy as np
 
 from wirecal.lang.urscript.parser import parse_program
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.log.measurements import Measurements
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
@@ -169,6 +170,14 @@ class URScriptAdapter(TwinAdapter):
         }
 
 
+RECEIVER_GRACE_S = 30.0
+"""How much longer than its own wait the receiver's thread may take to end.
+
+The receiver ends by itself within its timeout once the programs have ended (or at once,
+the wait ended for a program that never connected); joining it for just that timeout raced
+it on a busy machine (the join returned first, the reception not yet handed over)."""
+
+
 def _with_receiver(
     ctl: URController, programs: dict[str, str], log: Path, listen: Listen, timeout_s: float
 ) -> TwinRun:
@@ -194,7 +203,12 @@ def _with_receiver(
         mount, run = run_ur_programs(ctl, _script(programs, MOUNT), _script(programs, RUN))
         if ctl.lines_sent == 0 and ctl.receiver is not None:
             _end_wait(ctl.receiver)  # the program never connected: end the receiver's wait
-        thread.join(timeout_s)
+        thread.join(timeout_s + RECEIVER_GRACE_S)
+    if thread.is_alive():
+        raise WirecalError(
+            f"the twin's receiver did not end {timeout_s + RECEIVER_GRACE_S:g} s after the "
+            "programs did (its own wait is bounded): a machine too busy? run it again"
+        )
     if "error" in box:
         raise box["error"]  # type: ignore[misc]
     got: Reception = box["received"]  # type: ignore[assignment]
