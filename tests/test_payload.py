@@ -255,6 +255,17 @@ def test_the_v_plus_run_prompts_at_theta0_around_the_payload_step(payload_module
     assert "FOR s = 1 TO wc.m\n" in payload_module  # the controller solver: parameters' steps
 
 
+def test_the_v_plus_comment_says_what_the_payload_check_covered(payload_module):
+    """The comment names the check made (the step's mass against the rating less the robot
+    file's declared tool), not a claim that everything on the flange is within the rating."""
+    comment = " ".join(
+        line.lstrip("; ") for line in payload_module.splitlines() if line.startswith(";")
+    )
+    assert "within its rated payload" not in comment
+    assert "rated_payload_kg less the tool it declares ([gravity] payload_mass_kg" in comment
+    assert "not what is on the flange" in comment
+
+
 @pytest.mark.slow
 def test_the_twin_operator_mounts_the_mass_and_solve_finds_the_compliances(
     robot, plan, payload_module, tmp_path
