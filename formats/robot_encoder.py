@@ -20,6 +20,7 @@ from wirecal.formats.robot_values import (
     MAX_TEMPCO_PPM_PER_K,
     MAX_WIRE_ACCEL_MM_S2,
     MAX_WIRE_SPEED_MM_S,
+    MIN_RANGE_MM,
     unit_vector,
 )
 from wirecal.formats.run_token import MIN_KEY_CHARS
@@ -151,7 +152,7 @@ def read_encoder(enc: Table, interface: str | None) -> Encoder | None:
     if mpc == 0:
         enc.add("mm_per_count", "must not be zero")
         mpc = None
-    rng = enc.number("range_mm", above=0, hi=MAX_RANGE_MM, unit="mm")
+    rng = _range_mm(enc)
     bits = enc.integer("counter_bits", lo=8, hi=64)
     pulse = interface == "pulse"
     channel = enc.integer("channel", first_channel(interface), lo=0, hi=1 if pulse else 16)
@@ -184,6 +185,19 @@ def read_encoder(enc: Table, interface: str | None) -> Encoder | None:
         reference_repeats=valid(repeats),
         temperature_coefficient_ppm_per_k=valid(tempco),
     )
+
+
+def _range_mm(enc: Table) -> float | None:
+    """Read ``range_mm``; None, with a problem naming the unit, when it is in metres."""
+    rng = enc.number("range_mm", above=0, hi=MAX_RANGE_MM, unit="mm")
+    if rng is not None and rng < MIN_RANGE_MM:
+        enc.add(
+            "range_mm",
+            f"is {rng:g}: a wire under {MIN_RANGE_MM:g} mm spans no arm; that looks like "
+            f"metres ({rng * 1000:g} mm); give the encoder's range in mm",
+        )
+        return None
+    return rng
 
 
 def _scale(

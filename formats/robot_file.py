@@ -56,7 +56,8 @@ wire can calibrate (each rule says what to do when it fails):
 * degrees, not radians: twists α and θ offsets whose non-zero values are all within ±π with
   one at ±π/2 or ±π; a joint whose limits both lie within ±2π;
 * millimetres, not metres: the arm's links (Σ|a| + Σ|d|) add up to less than 1 % of the
-  encoder's range or less than its widest link radius;
+  encoder's range or less than its widest link radius; a range_mm under 10 mm
+  (:data:`~wirecal.formats.robot_values.MIN_RANGE_MM`: 1.25 for a 1250 mm wire);
 * each joint's range wider than 10° (:data:`MIN_JOINT_RANGE_DEG`): plan design and the
   generated programs keep every point 5° inside each limit;
 * a counter wide enough for the wire: 2^(bits−1)·|mm_per_count| must exceed range_mm, or two

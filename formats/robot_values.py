@@ -23,6 +23,9 @@ MAX_JOINTS = 12
 MAX_SPEED_DEG_S = 10_000.0
 MAX_MM_PER_COUNT = 10.0
 MAX_RANGE_MM = 100_000.0
+MIN_RANGE_MM = 10.0
+"""A ``range_mm`` under this is in metres (1.25 for a 1250 mm wire): a wire that short
+spans no arm, and 10 m is still a draw wire's range."""
 MAX_WIRE_SPEED_MM_S = 20_000.0
 """Largest wire speed limit (mm/s): catalogue draw-wire sensors allow 1–10 m/s."""
 MAX_WIRE_ACCEL_MM_S2 = 1_000_000.0

@@ -1643,6 +1643,30 @@ def test_ud04_lengths_in_metres_in_the_robot_file_are_named(tmp_path, case):
     )
 
 
+@pytest.mark.parametrize("value", ["1.25", "0.5"])
+def test_an_encoder_range_in_metres_is_named(tmp_path, value):
+    """UD04's neighbour in [encoder]: range_mm = 1.25 for a 1250 mm wire was read as
+    1.25 mm, and every message after it said 'range_mm 1.25' (gen: 'the nominal wire is
+    61.5 mm long, beyond the encoder's range_mm 1.25') without naming the unit."""
+    robot = tmp_path / "robot.toml"
+    robot.write_text(ROBOT.read_text().replace("range_mm = 1250.0", f"range_mm = {value}"))
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 2
+    assert r.output == (
+        f"error: {robot}: encoder.range_mm: is {value}: a wire under 10 mm spans no arm; "
+        f"that looks like metres ({float(value) * 1000:g} mm); give the encoder's range in mm\n"
+    )
+
+
+def test_a_short_encoder_range_in_mm_is_read(tmp_path):
+    """The valid neighbour: a short encoder's 50 mm range is mm, not metres."""
+    robot = tmp_path / "robot.toml"
+    robot.write_text(ROBOT.read_text().replace("range_mm = 1250.0", "range_mm = 50.0"))
+    r = invoke("psi", robot, PLAN)
+    assert r.exit_code == 0, r.output
+    assert "metres" not in r.output
+
+
 def test_a_cell_box_in_mm_at_the_origin_is_read(tmp_path):
     """The valid neighbour: a box from the origin (a corner at 0, 0, 0) in mm."""
     robot = tmp_path / "robot.toml"
