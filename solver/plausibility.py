@@ -8,7 +8,8 @@ controller comparison) and refuses, with what to check, when:
 
 * **lengths** — the measured wire lengths span less than half or more than twice what the
   robot file's geometry gives at the measured points (every count equal: the encoder did
-  not count; twice as much: lengths in the robot file in another unit, or mm_per_count);
+  not count; |mm_per_count| times as much, within 10 %: the log's counts are millimetres;
+  twice as much: lengths in the robot file in another unit, or mm_per_count);
 * **residual** — the joint fit's residual σ exceeds what the noise model allows: with
   reading noise σ_r (``noise_mm``), quantisation q = |mm_per_count| (uniform, q²/12) and,
   when the robot file declares ``[calibration] repeatability_mm``, what the arm's landing
@@ -71,6 +72,9 @@ from wirecal.solver.zero_reading import length_sigma_mm
 
 LENGTH_SPAN_RATIO = 2.0
 """The measured lengths' span may differ from the model's by this factor either way."""
+COUNTS_IN_MM_TOLERANCE = 0.1
+"""A span ratio within this fraction of |mm_per_count| means the log's counts are in mm: the
+arm's errors and the encoder's scale change the span by a few per cent at most."""
 
 
 LIVE_CHECK = "the live-count program 'wirecal gen' writes"
@@ -108,7 +112,7 @@ def assess(
 
     measured = m.distance_mm[present]
     model = wire_lengths(base, np.radians(q_deg), np.radians(m.theta0_deg))
-    findings += _lengths(measured, model, m.source, live_check)
+    findings += _lengths(measured, model, m.mm_per_count, m.source, live_check)
 
     landing = _landing_sigma_mm(result, base)
     sigma_length = float(np.hypot(sigma_model, landing))  # one reading of a length
@@ -221,13 +225,33 @@ def _scale_explains(result: SolveResult, limit_mm: float) -> str:
     )
 
 
-def _lengths(measured: np.ndarray, model: np.ndarray, source: str, check: str) -> list[Finding]:
-    """Return the span of the measured lengths against the robot model's at the same points."""
+def _lengths(
+    measured: np.ndarray, model: np.ndarray, mm_per_count: float, source: str, check: str
+) -> list[Finding]:
+    """Return the span of the measured lengths against the robot model's at the same points.
+
+    A span ``mm_per_count`` times the model's is counts that were already millimetres.
+    """
     span_measured = float(np.ptp(measured)) if measured.size else 0.0
     span_model = float(np.ptp(model)) if model.size else 0.0
     if span_model <= 0:
         return []  # every point at one distance: the identifiability check speaks
     ratio = span_measured / span_model
+    if (
+        ratio < 1 / LENGTH_SPAN_RATIO
+        and abs(ratio / abs(mm_per_count) - 1) < COUNTS_IN_MM_TOLERANCE
+    ):
+        return [
+            Finding(
+                "lengths",
+                f"implausible wire lengths: {source}'s span {span_measured:.3f} mm where the "
+                f"robot file's geometry gives {span_model:.1f} mm at the same points, "
+                f"{ratio:.4g} times as much: the log's counts column looks like millimetres "
+                f"(its span is mm_per_count {abs(mm_per_count):g} × the expected one), as a "
+                "program that logged the wire's length writes; log the raw count (as the "
+                "programs 'wirecal gen' writes do) and measure again",
+            )
+        ]
     if ratio < 1 / LENGTH_SPAN_RATIO:
         why = (
             "every count is the same: the encoder did not count"

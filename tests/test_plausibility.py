@@ -92,6 +92,37 @@ def test_stuck_encoder_is_refused(tmp_path, log_text):
     assert re.search(r"span 0\.000 mm where the robot file's geometry gives \d{3}\.\d mm", r.output)
 
 
+def test_counts_logged_in_mm_are_named(tmp_path, log_text):
+    """A controller program that logged the wire's length, not the count: refused with 'the
+    encoder counted far less than the wire moved', never named. Its span is mm_per_count
+    (0.025488) times the model's: the counts column holds millimetres."""
+    log = tmp_path / "in_mm.csv"
+    log.write_text(counts_set(log_text, lambda c: f"{float(c) * 0.025488:.4f}"))
+    patch = tmp_path / "patch.toml"
+    r = run("solve", ROBOT, PLAN, log, "-o", patch)
+    refused(r, patch)
+    assert re.search(
+        r"span 1\d\.\d{3} mm where the robot file's geometry gives \d{3}\.\d mm at the same "
+        r"points, 0\.02[45]\d* times as much: the log's counts column looks like millimetres "
+        r"\(its span is mm_per_count 0\.025488 × the expected one\)",
+        r.output,
+    )
+    assert "log the raw count" in r.output
+    assert "counted far less" not in r.output
+
+
+def test_an_encoder_counting_a_fifth_is_not_taken_for_mm(tmp_path, log_text):
+    """The neighbour: counts a fifth of the true ones (a span ratio of 0.2, far from
+    mm_per_count) still read as an encoder that counted less than the wire moved."""
+    log = tmp_path / "fifth.csv"
+    log.write_text(counts_set(log_text, lambda c: f"{float(c) * 0.2:.4f}"))
+    patch = tmp_path / "patch.toml"
+    r = run("solve", ROBOT, PLAN, log, "-o", patch)
+    refused(r, patch)
+    assert "the encoder counted far less than the wire moved" in r.output
+    assert "millimetres" not in r.output
+
+
 def test_robot_file_in_metres_is_refused(tmp_path, viper, paper_plan, log_text):
     text = (VIPER / "robot.toml").read_text()
     for mm, m in (
