@@ -309,14 +309,20 @@ def _radii_note(radii: LinkRadii) -> str:
     """Return the printed summary of the link radii and where they came from."""
     by_length = [str(k) for k, links in enumerate(radii.measured, 1) if not links]
     values = ", ".join(f"{r:g}" for r in radii.radius_mm)
+    why = "no readable geometry beside them"
+    if radii.only_beyond:
+        why += (
+            f"; link(s) {', '.join(map(str, radii.only_beyond))}: geometry read, but only "
+            "beyond the link's ends"
+        )
     if not by_length:
         source = "all from the URDF's collision geometry"
     elif len(by_length) == len(radii.measured):
-        source = "all from link lengths (no readable geometry; see [geometry])"
+        source = f"all from link lengths ({why}; see [geometry])"
     else:
         source = (
-            f"link(s) {', '.join(by_length)} from link lengths (no readable geometry; see "
-            "[geometry]), the others from the URDF's collision geometry"
+            f"link(s) {', '.join(by_length)} from link lengths ({why}; see [geometry]), the "
+            "others from the URDF's collision geometry"
         )
     return f"link radii {values} mm: {source}; measure them if you can"
 

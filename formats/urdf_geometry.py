@@ -7,7 +7,9 @@ URDF link on the chain is rigid with one DH frame
 q = 0, each point of the moving links' geometry is taken by the nearest capsule segment; the
 radius of capsule k is the largest distance of the points beside segment k (their foot
 between its ends), so the capsule contains them. Points beyond every segment's ends (the base
-column under frame 1, joint housings) are counted and reported, not covered. The geometry
+column under frame 1, joint housings) are counted and reported, not covered; a link whose
+own geometry lies only there is named (its unit is not guessed: housings stand past joints,
+and millimetres read as metres reach beyond ``MAX_OFFSET_M``, refused). The geometry
 read:
 
 * ``<collision>`` elements (``<visual>`` when a link has none): cylinders (their end discs),
@@ -60,6 +62,7 @@ class LinkRadii:
     measured: tuple[tuple[str, ...], ...]  # links whose geometry gave the radius; () by length
     notes: tuple[str, ...]  # why some radii come from lengths
     uncovered: str | None = None  # how much geometry lies beyond the capsules' ends
+    only_beyond: tuple[int, ...] = ()  # links (1-based) whose own geometry is all beyond its ends
     by_length_mm: np.ndarray | None = None  # the length rule's radii, for comparison
 
 
@@ -190,7 +193,8 @@ def link_radii(ch: UrdfChain) -> LinkRadii:
     starts, ends = F[1:n, :3, 3], F[2 : n + 1, :3, 3]
     lengths = np.linalg.norm(ends - starts, axis=1)
     by_length = np.maximum(RADIUS_PER_LENGTH * lengths, RADIUS_PER_REACH * lengths.sum())
-    points, pads, unreadable = _chain_points(ch, F)
+    points, pads, frames, unreadable = _chain_points(ch, F)
+    own = np.bincount(frames, minlength=n + 1)  # geometry points of each DH frame's links
     found = np.full(n - 1, -np.inf)
     beyond = 0
     if len(points):
@@ -200,9 +204,16 @@ def link_radii(ch: UrdfChain) -> LinkRadii:
     radii = by_length.copy()
     measured: list[tuple[str, ...]] = []
     notes: list[str] = []
+    only_beyond = []
     for k in range(1, n):
         if k in unreadable or not np.isfinite(found[k - 1]):
             why = unreadable.get(k, "no collision or visual geometry beside it")
+            if k not in unreadable and own[k]:
+                only_beyond.append(k)
+                why = (
+                    f"its links' {own[k]} geometry point(s) lie beyond its ends, none beside "
+                    "it (a housing past a joint, or a geometry <origin> off the link: check it)"
+                )
             measured.append(())
             notes.append(f"link {k}: {why}")
             continue
@@ -214,7 +225,9 @@ def link_radii(ch: UrdfChain) -> LinkRadii:
         if beyond
         else None
     )
-    return LinkRadii(np.ceil(radii), tuple(measured), tuple(notes), uncovered, by_length)
+    return LinkRadii(
+        np.ceil(radii), tuple(measured), tuple(notes), uncovered, tuple(only_beyond), by_length
+    )
 
 
 def wide_links(radii: LinkRadii) -> list[int]:
@@ -230,14 +243,15 @@ def wide_links(radii: LinkRadii) -> list[int]:
     ]
 
 
-def _chain_points(ch: UrdfChain, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
-    """Return the geometry points (k, 3) of the moving links in frame 0 at q = 0, their pads.
+def _chain_points(ch: UrdfChain, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+    """Return the moving links' geometry points (k, 3) in frame 0 at q = 0, pads, DH frames.
 
-    And, per DH frame whose links' geometry cannot be read, why. The base's own links
-    (frame 0) are left out: no capsule models them.
+    Each point's pad (mm) and its link's DH frame; and, per DH frame whose links' geometry
+    cannot be read, why. The base's own links (frame 0) are left out: no capsule models them.
     """
     elements = {el.get("name"): el for el in ch.urdf.root.findall("link")}
     points, pads, unreadable = [np.zeros((0, 3))], [np.zeros(0)], {}
+    frames = [np.zeros(0, dtype=int)]
     for link, (k, D) in ch.link_offsets.items():
         if k == 0 or k in unreadable:
             continue
@@ -252,4 +266,5 @@ def _chain_points(ch: UrdfChain, F: np.ndarray) -> tuple[np.ndarray, np.ndarray,
             _check_metres(p, pad, f"{ch.urdf.path}: link {link!r}")
             points.append(p @ T[:3, :3].T + T[:3, 3])
             pads.append(np.full(len(p), pad))
-    return np.concatenate(points), np.concatenate(pads), unreadable
+            frames.append(np.full(len(p), k))
+    return np.concatenate(points), np.concatenate(pads), np.concatenate(frames), unreadable

@@ -1093,6 +1093,30 @@ def test_nd26_collision_geometry_in_millimetres_is_named(tmp_path, geometry, rea
     )
 
 
+def test_collision_geometry_only_beyond_the_link_ends_is_named(tmp_path):
+    """A 0.1 m box (metres, as URDF lengths are) 0.3 m behind link 2's origin, past its
+    ends: the import said 'all from link lengths (no readable geometry …)' of geometry it had
+    read. Its unit cannot be told from where it lies (housings stand past joints): the
+    import names the link and where its geometry is instead."""
+    urdf = tmp_path / "arm.urdf"
+    collision = (
+        '<link name="l2"><collision><origin xyz="-0.3 0 0"/><geometry><box size="0.1 0.1 0.1"/>'
+        "</geometry></collision></link>"
+    )
+    urdf.write_text(URDF.read_text().replace('<link name="l2"/>', collision, 1))
+    out = tmp_path / "r.toml"
+    r = invoke("import-urdf", urdf, "--tip", "wire", "-o", out)
+    assert r.exit_code == 0, r.output
+    assert (
+        "note: link radii 46, 61, 51, 46, 46 mm: all from link lengths (no readable geometry "
+        "beside them; link(s) 2: geometry read, but only beyond the link's ends; see "
+        "[geometry])" in r.output
+    )
+    text = out.read_text()
+    assert "# link 2: its links' 8 geometry point(s) lie beyond its ends, none beside it" in text
+    assert "# link 1: no collision or visual geometry beside it" in text
+
+
 def test_collision_geometry_in_metres_sets_the_radius(tmp_path):
     """The valid neighbour: the same box in metres is read, and widens link 2."""
     urdf = tmp_path / "arm.urdf"
