@@ -338,10 +338,9 @@ def _solve_pool(
     _measured_steps(plan, m, partial)
     factor, notes = _reference_scale(robot, m)
     k = factor if factor is not None and corrections else 1.0
-    drift, sol, d = _pool_drift(robot, m, k)
-    if not corrections:  # the controller's view: the lengths as read
-        d = m.distance_mm[m.present] * k
-        sol = pool_estimate(robot, m.joints_deg[m.present], d)
+    drift, first, clean = _pool_drift(robot, m, k)
+    # the controller's view (no corrections): the lengths as read, their fit
+    sol, d = clean if corrections and clean is not None else first
     drift = _as_corrected(drift, corrections)
     notes.append(_drift_note(m, drift))
     scale, scale_std = _scale_estimate(robot, m, factor, sol.sigma_mm)
@@ -368,28 +367,25 @@ def _solve_pool(
 
 def _pool_drift(
     robot: Robot, m: Measurements, k: float
-) -> tuple[Drift | None, PoolSolution, np.ndarray]:
-    """Return the zero readings' drift, the pool fit and its lengths, as :func:`_judge_drift`.
+) -> tuple[Drift | None, tuple[PoolSolution, np.ndarray], tuple[PoolSolution, np.ndarray] | None]:
+    """Return the zero readings' drift and the pool fits, as :func:`_judge_drift`.
 
-    The fit's σ still holds the drift, which then looks insignificant: it is judged again
-    by the σ of a fit with the drift taken out, and when then removed, that fit is the one
-    kept (its lengths, ×``k``, returned with it).
+    The fit of the lengths as read (×``k``) and, when the drift is removed, the fit without
+    it (else None), each with its lengths. The first fit's σ still holds the drift, which
+    then looks insignificant: it is judged again by the σ of a fit with the drift taken out.
     """
-    present, q_deg = m.present, m.joints_deg[m.present]
-    d = m.distance_mm[present] * k
-    sol = pool_estimate(robot, q_deg, d)
-    drift = _fit_drift(m, sol.sigma_mm)
+    q_deg = m.joints_deg[m.present]
+    d = m.distance_mm[m.present] * k
+    first = (pool_estimate(robot, q_deg, d), d)
+    drift = _fit_drift(m, first[0].sigma_mm)
     if drift is None:
-        return None, sol, d
-    assert m.t_s is not None  # a drift was fitted: the log is timed
-    assert m.reference_t_s is not None
-    removed = replace(drift, removed=True).correction_mm(m.t_s[present], m.reference_t_s)
-    d_clean = (m.distance_mm[present] - removed) * k
+        return None, first, None
+    d_clean = _drift_removed_mm(m, drift) * k
     clean = pool_estimate(robot, q_deg, d_clean)
     drift = _fit_drift(m, clean.sigma_mm)
     if drift is None or not drift.removed:
-        return drift, sol, d
-    return drift, clean, d_clean
+        return drift, first, None
+    return drift, first, (clean, d_clean)
 
 
 def _pool_budget(robot: Robot, sol: PoolSolution, src: Sources) -> Budget | None:
@@ -748,15 +744,20 @@ def _judge_drift(
     drift = _fit_drift(m, first[2])
     if drift is None:
         return None, None
-    assert m.t_s is not None
-    assert m.reference_t_s is not None
-    present = m.present
-    removed = replace(drift, removed=True).correction_mm(m.t_s[present], m.reference_t_s)
-    clean = replace(problem, d=(m.distance_mm[present] - removed) * factor)
+    clean = replace(problem, d=_drift_removed_mm(m, drift) * factor)
     drift = _fit_drift(m, _joint_fit(clean, first[1].values, how[2])[1])
     if drift is None or not drift.removed:
         return drift, None
     return drift, (clean, _identify(robot, clean, *how))
+
+
+def _drift_removed_mm(m: Measurements, drift: Drift) -> np.ndarray:
+    """Return the points' lengths with the fitted ``drift`` taken out (before any scale)."""
+    assert m.t_s is not None  # a drift was fitted: the log is timed
+    assert m.reference_t_s is not None
+    present = m.present
+    removed = replace(drift, removed=True).correction_mm(m.t_s[present], m.reference_t_s)
+    return m.distance_mm[present] - removed
 
 
 def _as_corrected(drift: Drift | None, corrections: bool) -> Drift | None:
