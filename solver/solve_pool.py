@@ -22,6 +22,7 @@ import numpy as np
 
 from wirecal.solver.budget import PriorTerms
 from wirecal.solver.fit.calibrate import point_model
+from wirecal.solver.fit.model import geometry_jacobian
 from wirecal.solver.identify import Estimate
 from wirecal.solver.plan.options import PlanOptions
 from wirecal.solver.robot import Robot
@@ -96,8 +97,7 @@ def _prior_fit(wm: WireMap, post: Posterior) -> PriorFit:
     layout, g = wm.layout, len(wm.layout.geometry)
     per = layout.boundary_per_internal
     _, anchor, _, offsets = layout.split(wm.x)
-    J, nuisance = post.jacobian[:, :g], post.jacobian[:, g:]
-    J = J - nuisance @ np.linalg.lstsq(nuisance, J, rcond=None)[0]
+    J = geometry_jacobian(post.jacobian, g)
     return PriorFit(
         dict(zip(layout.geometry, (post.prior_sd * per)[:g].tolist(), strict=True)),
         wm.prior,

@@ -42,7 +42,12 @@ from wirecal.solver.accuracy import workspace
 from wirecal.solver.budget import Budget, budget, sources
 from wirecal.solver.errors import Implausible
 from wirecal.solver.fit.calibrate import point_model
-from wirecal.solver.fit.model import length_joint_gradient, lengths_and_jacobian, model_of
+from wirecal.solver.fit.model import (
+    geometry_jacobian,
+    length_joint_gradient,
+    lengths_and_jacobian,
+    model_of,
+)
 from wirecal.solver.fit.result import FitResult, Run, copies_note
 from wirecal.solver.fit.sessions import MIN_SESSION_ROWS
 from wirecal.solver.kinematics import Model, tool_position, with_errors
@@ -113,8 +118,7 @@ def fit_budget(result: FitResult, run: Run) -> Budget:
         base, layout, core.x, np.radians(run.q_deg[rows]), core.session[rows]
     )
     g = len(layout.geometry)
-    nuisance = J[:, g:]
-    J_geo = J[:, :g] - nuisance @ np.linalg.lstsq(nuisance, J[:, :g], rcond=None)[0]
+    J_geo = geometry_jacobian(J, g)
     enc = result.robot.encoder
     model = model_of(base, layout, core.x)
     src = sources(

@@ -145,6 +145,16 @@ def lengths_and_jacobian(
     return (1 + kappa) * dist + offsets[session], J
 
 
+def geometry_jacobian(J: np.ndarray, g: int) -> np.ndarray:
+    """Return ∂L/∂(the geometry's ``g`` parameters) with the other columns' span projected out.
+
+    ``J`` is :func:`lengths_and_jacobian`'s (the geometry's columns first): what the lengths
+    tell of the geometry once the anchor, the scale and the offsets are fitted beside it.
+    """
+    nuisance = J[:, g:]
+    return J[:, :g] - nuisance @ np.linalg.lstsq(nuisance, J[:, :g], rcond=None)[0]
+
+
 def length_joint_gradient(
     base: Model, layout: Layout, x: np.ndarray, q_rad: np.ndarray
 ) -> np.ndarray:
