@@ -250,10 +250,7 @@ def render_report(
     sw, jt = result.estimates.get("stepwise"), result.estimates.get("joint")
     params = []
     std = jt.std_by_name() if jt is not None else {}
-    # a partial log's parameters left at nominal have no estimate; a plan from a pool is
-    # solved for every DH error of rows 2…n, the attachment and the compliances
-    names = plan.order if result.prior is None or jt is None else jt.names
-    for name in names:
+    for name in result.listed:  # a partial log's parameters left at nominal: no estimate
         params.append(
             {
                 "name": name,

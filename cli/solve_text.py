@@ -198,8 +198,7 @@ def _estimates_table(result: SolveResult) -> list[str]:
     if prior is not None:
         head += f"{'σ/prior':>9}"
     lines = [head]
-    names = result.plan.order if prior is None else est["joint"].names
-    for name in names:
+    for name in result.listed:
         if name in result.left_nominal:
             continue
         row = f"{name:<10}{P.unit_of(name):<5}" + "".join(

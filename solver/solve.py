@@ -90,6 +90,15 @@ class SolveResult:
         return tuple(n for n in self.plan.order if n not in self.left_nominal)
 
     @property
+    def listed(self) -> tuple[str, ...]:
+        """The parameters the estimates list: the plan's order, or a pool fit's own.
+
+        A plan from a pool is solved for every DH error of rows 2…n, the attachment and the
+        compliances (:mod:`~wirecal.solver.solve_pool`), not its ``order`` alone.
+        """
+        return self.plan.order if self.prior is None else self.estimates["joint"].names
+
+    @property
     def unchecked(self) -> tuple[str, ...]:
         """Name each step whose closing zero check is missing, and what that hides.
 
