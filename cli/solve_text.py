@@ -207,8 +207,9 @@ def _estimates_table(result: SolveResult) -> list[str]:
         if sigma is not None:
             row += _sigma(sigma[name])
         if prior is not None:
-            known = sigma is not None and np.isfinite(prior[name])
-            row += f"{sigma[name] / prior[name]:9.2f}" if known else f"{'-':>9}"  # type: ignore[index]
+            finite = bool(np.isfinite(prior[name]))
+            ratio = sigma[name] / prior[name] if sigma is not None and finite else None
+            row += f"{'-':>9}" if ratio is None else f"{ratio:9.2f}"
         lines.append(row)
     return lines
 
