@@ -460,7 +460,7 @@ _COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "%": "div"}
 def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Callable:
     """Compile ``a op b``, counting the operations as executed (module docstring)."""
     kind, divides, ops = _COUNTED[op], op in "/%", interp.ops
-    int_op, float_op, single = _INT_OPS.get(op), _FLOAT_OPS[op], rounded(_FLOAT_OPS[op])
+    int_op, single = _INT_OPS.get(op), rounded(_FLOAT_OPS[op])
 
     def f(frame):
         x, y = a(frame), b(frame)
@@ -475,7 +475,7 @@ def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Calla
             raise URError("division by zero")
         if int_op is not None and isinstance(x, int) and isinstance(y, int):
             return i32(int_op(x, y))
-        return f32(float_op(float(x), float(y)))
+        return single(float(x), float(y))
 
     return f
 
