@@ -276,7 +276,7 @@ def solve(
     scale, scale_std = _scale_estimate(robot, m, factor, sigma)
     refine = refine_scale and corrections
     jt = _joint_with_scale(jt, problem, scale, scale_std, sigma, refine=refine, robust=robust)
-    estimates = _estimates(plan, methods, sw, jt)
+    estimates = {name: e for name, e in (("stepwise", sw), ("joint", jt)) if name in methods}
     src = functools.partial(
         _error_sources, robot, plan, m, sigma, problem.d, scale, scale_std, drift
     )
@@ -301,8 +301,17 @@ def solve(
 
 
 def _refuse_for_pool(plan: Plan, methods: tuple[str, ...], refine_scale: bool) -> None:
-    """Refuse the stepwise method alone and --refine-scale for a pool's plan."""
-    _estimates(plan, methods, None, None)  # refuses the stepwise method alone
+    """Refuse the stepwise method alone and --refine-scale for a pool's plan.
+
+    Such a plan's steps isolate no parameter (``plan.joint_only``): the step-by-step
+    estimate does not apply.
+    """
+    if "joint" not in methods:
+        raise WirecalError(
+            f"{plan.source}: joint_only = true: the plan was written from a pool for the joint "
+            "method and its steps do not isolate their parameters, so the step-by-step "
+            "estimate does not apply: solve by the joint method (--method joint)"
+        )
     if refine_scale:
         raise WirecalError(
             f"{plan.source}: joint_only = true: --refine-scale refines the scale in the "
@@ -310,26 +319,6 @@ def _refuse_for_pool(plan: Plan, methods: tuple[str, ...], refine_scale: bool) -
             "solved by the wire fit it was made for, which does not: leave it out (the "
             "reference rows' scale is applied either way)"
         )
-
-
-def _estimates(
-    plan: Plan, methods: tuple[str, ...], sw: Estimate | None, jt: Estimate | None
-) -> dict[str, Estimate]:
-    """Return the estimates of ``methods``; the joint one alone for a plan from a pool.
-
-    Such a plan's steps isolate no parameter (``plan.joint_only``): the stepwise method
-    alone is refused.
-    """
-    if plan.joint_only and "joint" not in methods:
-        raise WirecalError(
-            f"{plan.source}: joint_only = true: the plan was written from a pool for the joint "
-            "method and its steps do not isolate their parameters, so the step-by-step "
-            "estimate does not apply: solve by the joint method (--method joint)"
-        )
-    kept = ("joint",) if plan.joint_only else methods
-    return {
-        name: e for name, e in (("stepwise", sw), ("joint", jt)) if name in kept and e is not None
-    }
 
 
 def _solve_pool(
