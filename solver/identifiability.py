@@ -87,6 +87,16 @@ def covariance(J: np.ndarray, sigma2: float) -> tuple[np.ndarray, np.ndarray]:
     return cov, identified
 
 
+def std_and_correlation(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the σ (a negative rounding of a variance as 0) and correlations of ``cov``.
+
+    A correlation of a parameter with σ = 0 is NaN (0/0) or ±inf.
+    """
+    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return sd, cov / np.outer(sd, sd)
+
+
 NULL_COMPONENT = 1e-6
 """A parameter whose share of a unit null-space vector exceeds this is not identified."""
 

@@ -21,7 +21,7 @@ from typing import Literal
 import numpy as np
 
 from wirecal.solver.distance import wire_jacobian, wire_lengths
-from wirecal.solver.identifiability import covariance
+from wirecal.solver.identifiability import covariance, std_and_correlation
 from wirecal.solver.kinematics import Model, loaded, with_errors
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan.calibration_plan import Plan
@@ -407,9 +407,7 @@ def _std_and_correlation(
         return None, None
     sigma2 = float(r[:n_lengths] @ r[:n_lengths]) / (n_lengths - m)
     cov, identified = covariance(Jb, sigma2)
-    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(sd, sd)
+    sd, corr = std_and_correlation(cov)
     corr[~identified] = np.nan
     corr[:, ~identified] = np.nan
     return np.where(identified, sd, np.inf), corr

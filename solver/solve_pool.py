@@ -23,6 +23,7 @@ import numpy as np
 from wirecal.solver.budget import PriorTerms
 from wirecal.solver.fit.calibrate import point_model
 from wirecal.solver.fit.model import geometry_jacobian
+from wirecal.solver.identifiability import std_and_correlation
 from wirecal.solver.identify import Estimate
 from wirecal.solver.plan.options import PlanOptions
 from wirecal.solver.robot import Robot
@@ -84,9 +85,7 @@ def pool_estimate(robot: Robot, q_deg: np.ndarray, length_mm: np.ndarray) -> Poo
     g = len(wm.layout.geometry)
     per = wm.layout.boundary_per_internal
     cov = (post.noise + post.prior_share)[:g, :g] * np.outer(per[:g], per[:g])
-    std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(std, std)
+    std, corr = std_and_correlation(cov)
     residual = float(np.sqrt(np.mean(post.residual_mm**2)))
     estimate = Estimate("joint", wm.layout.geometry, wm.x[:g] * per[:g], residual, std, corr)
     return PoolSolution(estimate, _prior_fit(wm, post), _terms(post, g), post.sigma_mm)
