@@ -110,7 +110,7 @@ def _deep_rapid() -> dict[str, str]:
             "indices": "x := a" + " {1}" * n + ";",
             "aggregates": "x := " + "[ " * k + "1" + " ]" * k + ";",
             "calls": "x := " + "Abs( " * k + "1" + " )" * k + ";",
-            "calls in a statement": "Proc " + "Abs( " * k + "1" + " )" * k + ";",
+            "calls in a statement": "Report " + "Abs( " * k + "1" + " )" * k + ";",
             "optional arguments": "x := " + "f(\\a:= " * k + "1" + " )" * k + ";",
         }
         for name, line in chains.items():
