@@ -10,13 +10,15 @@ Operators bind, tightest first: ``* / DIV MOD``, ``+ -``, comparisons, ``NOT``, 
 Blocks deeper than :data:`MAX_BLOCK_DEPTH` and brackets deeper than
 :data:`~wirecal.lang.syntax.MAX_BRACKET_DEPTH` (the three languages' one rule) are refused
 before parsing, expressions nested deeper than
-:data:`~wirecal.lang.syntax.MAX_EXPRESSION_DEPTH` (chained operators too) after it (the tree
-is built recursively).
+:data:`~wirecal.lang.syntax.MAX_EXPRESSION_DEPTH` (chained operators too) while parsing,
+before anything recursive runs on them (the parser builds the expressions' nodes as it
+reduces their rules; the statements' nodes are built from its tree afterwards).
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from functools import cache, lru_cache
 from importlib import resources
 
@@ -55,11 +57,36 @@ class SyntaxProblem(Exception):
         self.line, self.message = line, message
 
 
+def _grammar() -> str:
+    return resources.files(__package__).joinpath("rapid.lark").read_text(encoding="utf-8")
+
+
 @cache
 def _parser() -> Lark:
-    grammar = resources.files(__package__).joinpath("rapid.lark").read_text(encoding="utf-8")
+    """Return the parser that builds a module's expressions as it parses (:class:`_Expressions`).
+
+    The statements and declarations stay lark trees, their source lines propagated from
+    their first token (``propagate_positions``), and :class:`_Build` makes them nodes.
+    """
     return Lark(
-        grammar, parser="lalr", lexer="basic", propagate_positions=True, maybe_placeholders=True
+        _grammar(),
+        parser="lalr",
+        lexer="basic",
+        propagate_positions=True,
+        maybe_placeholders=True,
+        transformer=_expressions,
+    )
+
+
+@cache
+def _tree_parser() -> Lark:
+    """Return the parser that keeps every expression a lark tree: where one nests too deep."""
+    return Lark(
+        _grammar(),
+        parser="lalr",
+        lexer="basic",
+        propagate_positions=True,
+        maybe_placeholders=True,
     )
 
 
@@ -82,62 +109,118 @@ def _string(text: str) -> str:
     return "".join(out)
 
 
-@v_args(meta=True)
-class _Build(Transformer):
-    """The lark tree → nodes (rules get their source line through ``meta``)."""
+class _TooDeep(Exception):
+    """An expression nests deeper than :data:`MAX_EXPRESSION_DEPTH` (:func:`_parse` says where)."""
 
-    def NAME(self, t: Token) -> str:
-        return str(t)
 
-    def number(self, meta, c):
+_Rule = Callable[["_Expressions", list], object]
+
+
+def _nesting(build: _Rule) -> _Rule:
+    """Make ``build``, an expression rule's callback, count the rule's levels as it builds.
+
+    A node's level is one more than its deepest child's (a node of another rule, or a
+    token, is level 0), as :func:`_expression_depth` counts down a tree: the chain of
+    expression rules nested in each other. Beyond :data:`MAX_EXPRESSION_DEPTH` it raises
+    :class:`_TooDeep`, before anything recursive runs on the nodes.
+    """
+
+    def counted(self: _Expressions, c: list) -> object:
+        node = build(self, c)
+        levels = self.levels
+        level = 1 + max((levels[id(x)][0] for x in c if id(x) in levels), default=0)
+        if level > MAX_EXPRESSION_DEPTH:
+            raise _TooDeep
+        levels[id(node)] = (level, node)  # keeps the node, so no other object takes its id
+        return node
+
+    counted.__name__ = build.__name__
+    return counted
+
+
+class _Expressions(Transformer):
+    """The expression rules → nodes, called by the parser as it reduces each rule.
+
+    Names stay lark tokens until a rule takes them (the statements' source lines are
+    propagated from their first token). ``levels``: each expression node built in the
+    current parse by ``id``, with its level (:func:`_nesting`); emptied after each parse.
+    """
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.levels: dict[int, tuple[int, object]] = {}
+
+    def number(self, c):
         text = str(c[0])
         return N.Num(float(text), text.isdigit())
 
-    def string(self, meta, c):
+    def string(self, c):
         return N.Str(_string(str(c[0])))
 
-    def boolean(self, meta, c):
+    def boolean(self, c):
         return N.Bool(str(c[0]).upper() == "TRUE")
 
-    def name(self, meta, c):
-        return N.Name(c[0])
+    def name(self, c):
+        return N.Name(str(c[0]))
 
-    def component(self, meta, c):
-        return N.Component(c[0], c[1])
+    @_nesting
+    def component(self, c):
+        return N.Component(c[0], str(c[1]))
 
-    def index(self, meta, c):
+    @_nesting
+    def index(self, c):
         return N.Index(c[0], c[1:])
 
-    def aggregate(self, meta, c):
+    @_nesting
+    def aggregate(self, c):
         return N.Aggregate(list(c))
 
-    def binop(self, meta, c):
+    @_nesting
+    def binop(self, c):
         op = str(c[1])
         return N.BinOp(op.upper() if op.isalpha() else op, c[0], c[2])
 
-    def signed(self, meta, c):
+    @_nesting
+    def signed(self, c):
         return N.Neg(c[1]) if str(c[0]) == "-" else c[1]
 
-    def not_op(self, meta, c):
+    @_nesting
+    def not_op(self, c):
         return N.Not(c[1])
 
-    def funcall(self, meta, c):
-        return N.FuncCall(c[0], c[1] or [])
+    @_nesting
+    def funcall(self, c):
+        return N.FuncCall(str(c[0]), c[1] or [])
 
-    def args(self, meta, c):
+    @_nesting
+    def args(self, c):
         return list(c)
 
-    def arg(self, meta, c):
+    @_nesting
+    def arg(self, c):
         return N.Arg(c[0])
 
-    def named_arg(self, meta, c):
-        return N.Arg(c[1], c[0], named=True)
+    @_nesting
+    def named_arg(self, c):
+        return N.Arg(c[1], str(c[0]), named=True)
 
-    def opt_arg(self, meta, c):
-        return N.Arg(c[1], c[0])
+    @_nesting
+    def opt_arg(self, c):
+        return N.Arg(c[1], str(c[0]))
 
-    def cond_arg(self, meta, c):
-        return N.Arg(None, c[0], condition=c[1])
+    def cond_arg(self, c):
+        return N.Arg(None, str(c[0]), condition=str(c[1]))
+
+
+_expressions = _Expressions()
+
+
+@v_args(meta=True)
+class _Build(Transformer):
+    """The statements' and declarations' lark trees → nodes (their source line from ``meta``)."""
+
+    def NAME(self, t: Token) -> str:
+        return str(t)
 
     def placeholder(self, meta, c):
         return N.Placeholder(str(c[0]), meta.line)
@@ -414,7 +497,7 @@ def _parse(text: str) -> N.Module:
     if deep is not None:
         raise deep
     try:
-        tree = _parser().parse(text)
+        tree = _parsed(text)
     except UnexpectedToken as e:
         raise SyntaxProblem(
             e.line if e.line > 0 else _last_line(text), _unexpected(e, text)
@@ -428,7 +511,6 @@ def _parse(text: str) -> N.Module:
         raise SyntaxProblem(e.line, what) from None
     except UnexpectedEOF:
         raise SyntaxProblem(_last_line(text), _missing(text, 0, "the end of the file")) from None
-    _expression_depth(tree)
     try:
         return _Build().transform(tree)
     except Exception as e:  # lark wraps a SyntaxProblem raised in a callback
@@ -436,6 +518,23 @@ def _parse(text: str) -> N.Module:
         if isinstance(inner, SyntaxProblem):
             raise inner from None
         raise
+
+
+def _parsed(text: str) -> Tree:
+    """Return the module's tree, its expressions built; raise lark's exception where it stops.
+
+    An expression nested too deep is refused as the tree of every expression says
+    (:func:`_expression_depth`: its line, after any syntax error later in the text).
+    """
+    levels = _expressions.levels
+    try:
+        return _parser().parse(text)
+    except _TooDeep:
+        levels.clear()
+        _expression_depth(_tree_parser().parse(text))
+        raise AssertionError("an expression counted too deep is not in the tree") from None
+    finally:
+        levels.clear()
 
 
 _parse_long = lru_cache(maxsize=32)(_parse)
