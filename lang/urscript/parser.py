@@ -303,6 +303,8 @@ def parse_line(line: str) -> N.Stmt:
 
 def strip_comment(line: str) -> str:
     """Return ``line`` without its ``#`` comment (a ``#`` inside a string is kept)."""
+    if "#" not in line:
+        return line
     quote = ""
     for k, ch in enumerate(line):
         if quote:
@@ -452,6 +454,8 @@ def _not_extended_ascii(source: str, lines: list[str]) -> list[str]:
     """Report a character beyond extended ASCII (:data:`EXTENDED_ASCII`), once per line."""
     out = []
     for n, line in enumerate(lines, 1):
+        if line.isascii():
+            continue
         bad = next((ch for ch in line if ord(ch) > EXTENDED_ASCII), None)
         if bad is not None:
             out.append(

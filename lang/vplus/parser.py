@@ -30,6 +30,7 @@ from lark import Lark, Transformer, ast_utils
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedToken
 
 from wirecal.lang.syntax import (
+    KEPT_LINES,
     NestingError,
     check_block_depth,
     check_line_depth,
@@ -406,15 +407,19 @@ _LITERAL = re.compile(
 )
 
 
-def literal_problems(line: str) -> list[str]:
-    """Constants of a step outside the ranges of User's Guide pp. 100 and 102."""
+@lru_cache(maxsize=KEPT_LINES)
+def literal_problems(line: str) -> tuple[str, ...]:
+    """Constants of a step outside the ranges of User's Guide pp. 100 and 102.
+
+    Kept by the line's text, as its parse is (:func:`~wirecal.lang.syntax.kept_by_text`).
+    """
     out = []
     for m in _LITERAL.finditer(line):
         before = m.start() - 1
         while before >= 0 and line[before].isspace():
             before -= 1
         out += _literal_problem(m, before >= 0 and line[before] == "-")
-    return out
+    return tuple(out)
 
 
 def _literal_problem(m: re.Match, minus: bool) -> list[str]:
@@ -468,6 +473,8 @@ def _integer_problem(text: str, value: int, minus: bool) -> list[str]:
 
 
 def _strip_comment(line: str) -> str:
+    if ";" not in line:
+        return line
     out, quoted = [], False
     for ch in line:
         if ch == '"':
