@@ -62,7 +62,7 @@ def _walked(text: str) -> tuple[int, str] | None:
     return None
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=25, deadline=None)
 @given(
     st.lists(st.sampled_from(WRAPS), min_size=30, max_size=90),
     st.integers(min_value=1, max_value=12),
