@@ -57,8 +57,17 @@ class SyntaxProblem(Exception):
         self.line, self.message = line, message
 
 
-def _grammar() -> str:
-    return resources.files(__package__).joinpath("rapid.lark").read_text(encoding="utf-8")
+def _lark(transformer: Transformer | None) -> Lark:
+    """Return a parser of the grammar that applies ``transformer`` as it reduces each rule."""
+    grammar = resources.files(__package__).joinpath("rapid.lark").read_text(encoding="utf-8")
+    return Lark(
+        grammar,
+        parser="lalr",
+        lexer="basic",
+        propagate_positions=True,
+        maybe_placeholders=True,
+        transformer=transformer,
+    )
 
 
 @cache
@@ -68,26 +77,13 @@ def _parser() -> Lark:
     The statements and declarations stay lark trees, their source lines propagated from
     their first token (``propagate_positions``), and :class:`_Build` makes them nodes.
     """
-    return Lark(
-        _grammar(),
-        parser="lalr",
-        lexer="basic",
-        propagate_positions=True,
-        maybe_placeholders=True,
-        transformer=_expressions,
-    )
+    return _lark(_expressions)
 
 
 @cache
 def _tree_parser() -> Lark:
     """Return the parser that keeps every expression a lark tree: where one nests too deep."""
-    return Lark(
-        _grammar(),
-        parser="lalr",
-        lexer="basic",
-        propagate_positions=True,
-        maybe_placeholders=True,
-    )
+    return _lark(None)
 
 
 def _string(text: str) -> str:
@@ -473,7 +469,7 @@ def parse_module(text: str) -> N.Module:
     The last modules parsed are kept (nothing changes a parsed module), long and short
     apart so that neither pushes out the other: the last 32 of :data:`SHORT_MODULE_CHARS`
     or more (a generated module is checked by the generator, then run in the twin several
-    times; about 1 MB kept, 0.25 s to parse) and the last 256 shorter ones (a few kB kept
+    times; about 1 MB kept, 0.15 s to parse) and the last 256 shorter ones (a few kB kept
     each, about 5 ms to parse: with 32 slots for all, a process checking many short
     modules parsed the same ones again).
     """
