@@ -18,6 +18,7 @@ reduces their rules; the statements' nodes are built from its tree afterwards).
 from __future__ import annotations
 
 import re
+import threading
 from collections.abc import Callable
 from functools import cache, lru_cache
 from importlib import resources
@@ -144,7 +145,16 @@ class _Expressions(Transformer):
 
     def __init__(self) -> None:
         super().__init__()
-        self.levels: dict[int, tuple[int, object]] = {}
+        self._threads = threading.local()  # one parser, its parses in any thread
+
+    @property
+    def levels(self) -> dict[int, tuple[int, object]]:
+        """The current thread's expression nodes of its current parse, by ``id``."""
+        try:
+            return self._threads.levels
+        except AttributeError:
+            self._threads.levels = {}
+            return self._threads.levels
 
     def number(self, c):
         text = str(c[0])
