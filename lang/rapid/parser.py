@@ -20,7 +20,7 @@ from __future__ import annotations
 import re
 import threading
 from collections.abc import Callable
-from functools import cache, lru_cache
+from functools import cache, lru_cache, update_wrapper
 from importlib import resources
 
 from lark import Lark, Token, Transformer, Tree, v_args
@@ -107,7 +107,7 @@ def _string(text: str) -> str:
 
 
 class _TooDeep(Exception):
-    """An expression nests deeper than :data:`MAX_EXPRESSION_DEPTH` (:func:`_parse` says where)."""
+    """An expression nests deeper than :data:`MAX_EXPRESSION_DEPTH` (:func:`_parsed` says where)."""
 
 
 _Rule = Callable[["_Expressions", list], object]
@@ -131,8 +131,7 @@ def _nesting(build: _Rule) -> _Rule:
         levels[id(node)] = (level, node)  # keeps the node, so no other object takes its id
         return node
 
-    counted.__name__ = build.__name__
-    return counted
+    return update_wrapper(counted, build)
 
 
 class _Expressions(Transformer):
@@ -546,10 +545,10 @@ def _parsed(text: str) -> Tree:
 _parse_long = lru_cache(maxsize=32)(_parse)
 _parse_short = lru_cache(maxsize=256)(_parse)
 
-_EXPRESSIONS = frozenset(
-    "binop signed not_op component index funcall aggregate args arg named_arg opt_arg".split()
-)
-"""The parse tree's expression nodes (the transformer and the checker recurse per level)."""
+_EXPRESSIONS = frozenset(n for n, f in vars(_Expressions).items() if hasattr(f, "__wrapped__"))
+"""The parse tree's expression nodes, the rules :func:`_nesting` counts (binop, signed,
+not_op, component, index, funcall, aggregate, args, arg, named_arg, opt_arg): the checker
+recurses per level."""
 
 
 def _expression_depth(tree: Tree) -> None:
