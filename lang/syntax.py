@@ -201,7 +201,10 @@ def shallow_copy(node: S) -> S:
 
 @cache
 def _slots(cls: type) -> tuple[str, ...]:
-    """Return the slots of ``cls`` and its bases (``__weakref__`` and ``__dict__`` are none)."""
+    """Return the slots of ``cls`` and its bases (``__weakref__`` and ``__dict__`` are none).
+
+    Their names as declared: no node declares a private ``__name``, which Python mangles.
+    """
     names = (getattr(k, "__slots__", ()) for k in cls.__mro__)
     slots = [n for group in names for n in ((group,) if isinstance(group, str) else group)]
     return tuple(n for n in dict.fromkeys(slots) if n not in ("__dict__", "__weakref__"))
