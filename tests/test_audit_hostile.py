@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from wirecal.cli.main import main
 
-from .conftest import VIPER
+from .conftest import DATA, VIPER
 
 ROBOT = VIPER / "robot.toml"
 PLAN = VIPER / "paper_plan.toml"
@@ -50,3 +50,27 @@ def test_au01_theta0_near_the_zero_pose_in_degrees_is_read(tmp_path):
         r = _run("psi", ROBOT, _plan(tmp_path, theta0))
         assert r.exit_code == 0, r.output
         assert "radians" not in r.output
+
+
+def test_au04_a_nan_range_margin_is_refused_where_it_is_given():
+    """psi --range-margin nan printed a warning and exited 0 with the range check off
+    (--strict: exit 1, "a check failed"); now click refuses it, status 2, as --tol nan."""
+    for command in (["psi", ROBOT, PLAN], ["gen", ROBOT, PLAN, "-o", "out"]):
+        r = _run(*command, "--range-margin", "nan")
+        assert r.exit_code == 2, r.output
+        assert "'--range-margin': 'nan' is not a finite number" in r.output
+
+
+def test_au04_a_range_margin_is_read():
+    r = _run("psi", ROBOT, PLAN, "--range-margin", "5", "--strict")
+    assert r.exit_code == 0, r.output
+
+
+def test_au05_import_urdf_refuses_a_non_finite_encoder_option_by_its_name(tmp_path):
+    """--parallel-tol-deg nan, --range-mm nan were blamed on the robot file being written
+    ('urdf.parallel_tol_deg: is nan'); the option is named now."""
+    urdf = DATA / "twisted_arm.urdf"
+    for option in ("--parallel-tol-deg", "--range-mm", "--mm-per-count"):
+        r = _run("import-urdf", urdf, "-o", tmp_path / "r.toml", option, "nan")
+        assert r.exit_code == 2, r.output
+        assert f"'{option}': 'nan' is not a finite number" in r.output
