@@ -74,3 +74,39 @@ def test_au05_import_urdf_refuses_a_non_finite_encoder_option_by_its_name(tmp_pa
         r = _run("import-urdf", urdf, "-o", tmp_path / "r.toml", option, "nan")
         assert r.exit_code == 2, r.output
         assert f"'{option}': 'nan' is not a finite number" in r.output
+
+
+def _gauge_run(tmp_path):
+    """The Viper's robot file with a 500 mm reference gauge and a simulated log of it."""
+    robot = tmp_path / "gauge.toml"
+    text = ROBOT.read_text(encoding="utf-8")
+    robot.write_text(text.replace("[encoder]\n", "[encoder]\nreference_length_mm = 500.0\n"))
+    log = tmp_path / "gauge.csv"
+    r = _run("simulate", robot, PLAN, "-o", log, "--seed", 2)
+    assert r.exit_code == 0, r.output
+    return robot, log
+
+
+def test_au02_refine_scale_with_the_stepwise_method_alone_is_refused(tmp_path):
+    """solve --method stepwise --refine-scale ran the stepwise method and refined nothing,
+    without a word (the scale is refined in the joint method only)."""
+    robot, log = _gauge_run(tmp_path)
+    r = _run("solve", robot, PLAN, log, "--method", "stepwise", "--refine-scale")
+    assert r.exit_code == 2, r.output
+    assert "error: --refine-scale refines the scale in the joint method; --method stepwise" in (
+        " ".join(r.output.split())
+    )
+
+
+def test_au02_refine_scale_is_refused_before_the_log_is_read(tmp_path):
+    """Without a gauge in the robot file the log is not read first (here: none there)."""
+    r = _run("solve", ROBOT, PLAN, tmp_path / "absent.csv", "--refine-scale")
+    assert r.exit_code == 2, r.output
+    assert "declares no gauge ([encoder] reference_length_mm)" in r.output
+
+
+def test_au02_refine_scale_runs_with_the_joint_method_and_a_gauge(tmp_path):
+    robot, log = _gauge_run(tmp_path)
+    for method in ("joint", "all"):
+        r = _run("solve", robot, PLAN, log, "--method", method, "--refine-scale")
+        assert r.exit_code == 0, r.output
