@@ -71,7 +71,7 @@ def test_au05_import_urdf_refuses_a_non_finite_encoder_option_by_its_name(tmp_pa
     ('urdf.parallel_tol_deg: is nan'); the option is named now."""
     urdf = DATA / "twisted_arm.urdf"
     for option in ("--parallel-tol-deg", "--range-mm", "--mm-per-count"):
-        r = _run("import-urdf", urdf, "-o", tmp_path / "r.toml", option, "nan")
+        r = _run("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml", option, "nan")
         assert r.exit_code == 2, r.output
         assert f"'{option}': 'nan' is not a finite number" in r.output
 
@@ -110,3 +110,31 @@ def test_au02_refine_scale_runs_with_the_joint_method_and_a_gauge(tmp_path):
     for method in ("joint", "all"):
         r = _run("solve", robot, PLAN, log, "--method", method, "--refine-scale")
         assert r.exit_code == 0, r.output
+
+
+def _twisted(tmp_path, xyz: str):
+    text = (DATA / "twisted_arm.urdf").read_text(encoding="utf-8")
+    assert '<origin xyz="0 0 0.3" rpy="0 0 0.2"/>' in text
+    path = tmp_path / "arm.urdf"
+    path.write_text(text.replace('<origin xyz="0 0 0.3"', f'<origin xyz="{xyz}"'))
+    return path
+
+
+def test_au06_a_joint_origin_reaching_beyond_10_m_is_millimetres(tmp_path):
+    """The URDF's two unit rules (joint origins, link geometry) were twins: an origin was
+    refused per coordinate, a shape by its distance; 8 m, 8 m, 0 (11.3 m away) passed.
+    One rule now (urdf.check_reach): the distance from the frame's origin."""
+    r = _run("import-urdf", _twisted(tmp_path, "8 8 0"), "--tip", "wire", "-o", tmp_path / "r.toml")
+    assert r.exit_code == 2, r.output
+    assert re.search(
+        r"joint '\w+': origin xyz 8 8 0 is beyond 10 m: URDF lengths are metres; written in "
+        r"millimetres\? Divide them by 1000 and import again",
+        " ".join(r.output.split()),
+    ), r.output
+
+
+def test_au06_a_joint_origin_within_10_m_is_metres(tmp_path):
+    r = _run(
+        "import-urdf", _twisted(tmp_path, "0 0 0.5"), "--tip", "wire", "-o", tmp_path / "r.toml"
+    )
+    assert r.exit_code == 0, r.output
