@@ -218,9 +218,11 @@ def check_workbook(raw: bytes, source: str) -> None:
 def column_index(
     names: tuple[str, ...], header: tuple[str, ...], source: str, advice: str = ""
 ) -> list[int]:
-    """Return the position of each named column; raise naming the absent ones.
+    """Return the position of each named column; raise naming the absent or repeated ones.
 
-    ``advice``: what to do, appended to the message (how to name the columns).
+    ``advice``: what to do, appended to the absent ones' message (how to name the columns).
+    A column the header names twice is refused: which of them holds the values is not known
+    (a map names columns, so it cannot tell them apart either).
     """
     absent = [c for c in names if c not in header]
     if absent:
@@ -228,6 +230,14 @@ def column_index(
             f"{source}: no column {', '.join(repr(c) for c in absent)}; the header has "
             f"{', '.join(repr(h) for h in header)}{advice}"
         )
+    for c in names:
+        where = [str(k + 1) for k, h in enumerate(header) if h == c]
+        if len(where) > 1:
+            raise WirecalError(
+                f"{source}: the header names {c!r} {len(where)} times (columns "
+                f"{', '.join(where)}): which holds the values is not known; give the "
+                "others other names in the header"
+            )
     return [header.index(c) for c in names]
 
 

@@ -138,3 +138,36 @@ def test_au06_a_joint_origin_within_10_m_is_metres(tmp_path):
         "import-urdf", _twisted(tmp_path, "0 0 0.5"), "--tip", "wire", "-o", tmp_path / "r.toml"
     )
     assert r.exit_code == 0, r.output
+
+
+TABLE = VIPER / "simulated_cable_table.csv"
+
+
+def _table_with(tmp_path, extra: str, value):
+    """The shipped cable table with a column ``extra`` appended (``value(cells)`` per row)."""
+    lines = TABLE.read_text(encoding="utf-8").splitlines()
+    first = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    out = [*lines[:first], f"{lines[first]},{extra}"]
+    out += [f"{line},{value(line.split(','))}" for line in lines[first + 1 :]]
+    path = tmp_path / "table.csv"
+    path.write_text("\n".join(out) + "\n", encoding="utf-8")
+    return path
+
+
+def test_au07_a_column_named_twice_is_refused(tmp_path):
+    """A second 'length' column (here 1.5 times the first) was ignored without a word:
+    the first one fitted, exit 0; which one was meant is not known."""
+    table = _table_with(tmp_path, "length", lambda c: f"{float(c[6]) * 1.5:.2f}")
+    r = _run("fit", ROBOT, table)
+    assert r.exit_code == 2, r.output
+    assert (
+        "the header names 'length' 2 times (columns 7, 11): which holds the values is not "
+        "known; give the others other names in the header"
+    ) in " ".join(r.output.split())
+
+
+def test_au07_a_repeated_column_fit_does_not_read_is_no_matter(tmp_path):
+    """The neighbour: two 'note' columns, neither read by the fit."""
+    table = _table_with(tmp_path, "note,note", lambda c: "a,b")
+    r = _run("fit", ROBOT, table)
+    assert r.exit_code == 0, r.output
