@@ -21,6 +21,8 @@ from wirecal.formats.robot_values import (
     MAX_WIRE_ACCEL_MM_S2,
     MAX_WIRE_SPEED_MM_S,
     MIN_RANGE_MM,
+    MIN_WIRE_ACCEL_MM_S2,
+    MIN_WIRE_SPEED_MM_S,
     unit_vector,
 )
 from wirecal.formats.run_token import MIN_KEY_CHARS
@@ -243,6 +245,20 @@ def _wire_limits(enc: Table) -> tuple[float | None, float | None]:
     """Read the wire's speed and acceleration limits (mm/s, mm/s²; None: not given)."""
     speed = enc.number("max_wire_speed_mm_s", None, above=0, hi=MAX_WIRE_SPEED_MM_S, unit="mm/s")
     accel = enc.number("max_wire_accel_mm_s2", None, above=0, hi=MAX_WIRE_ACCEL_MM_S2, unit="mm/s²")
+    if speed is not None and speed < MIN_WIRE_SPEED_MM_S:
+        enc.add(
+            "max_wire_speed_mm_s",
+            f"is {speed:g}: a wire limited to under {MIN_WIRE_SPEED_MM_S:g} mm/s would take "
+            f"about a minute per metre; that looks like m/s ({speed * 1000:g} mm/s); give mm/s",
+        )
+        speed = None
+    if accel is not None and accel < MIN_WIRE_ACCEL_MM_S2:
+        enc.add(
+            "max_wire_accel_mm_s2",
+            f"is {accel:g}: under {MIN_WIRE_ACCEL_MM_S2:g} mm/s² (0.1 g); that looks like "
+            f"m/s² ({accel * 1000:g} mm/s²) or g; give mm/s²",
+        )
+        accel = None
     return speed, accel
 
 

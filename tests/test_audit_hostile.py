@@ -171,3 +171,43 @@ def test_au07_a_repeated_column_fit_does_not_read_is_no_matter(tmp_path):
     table = _table_with(tmp_path, "note,note", lambda c: "a,b")
     r = _run("fit", ROBOT, table)
     assert r.exit_code == 0, r.output
+
+
+def _robot_with(tmp_path, old: str, new: str):
+    text = ROBOT.read_text(encoding="utf-8")
+    assert old in text
+    path = tmp_path / "robot.toml"
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    return path
+
+
+def test_au08_wire_limits_in_metres_are_named(tmp_path):
+    """max_wire_speed_mm_s = 1 (1 m/s) and max_wire_accel_mm_s2 = 49 (5 g in m/s²) were
+    taken as 1 mm/s and 49 mm/s²: gen wrote programs crawling at the wire's pace, exit 0."""
+    for old, new, message in (
+        (
+            "max_wire_speed_mm_s = 1000.0",
+            "max_wire_speed_mm_s = 1.0",
+            "encoder.max_wire_speed_mm_s: is 1: a wire limited to under 20 mm/s would take "
+            "about a minute per metre; that looks like m/s (1000 mm/s); give mm/s",
+        ),
+        (
+            "max_wire_accel_mm_s2 = 49000.0",
+            "max_wire_accel_mm_s2 = 49.0",
+            "encoder.max_wire_accel_mm_s2: is 49: under 1000 mm/s² (0.1 g); that looks like "
+            "m/s² (49000 mm/s²) or g; give mm/s²",
+        ),
+    ):
+        r = _run("psi", _robot_with(tmp_path, old, new), PLAN)
+        assert r.exit_code == 2, r.output
+        assert message in " ".join(r.output.split())
+
+
+def test_au08_slow_wire_limits_in_mm_are_read(tmp_path):
+    """The neighbours: 20 mm/s and 1000 mm/s² (0.1 g), the lowest read as given."""
+    robot = _robot_with(tmp_path, "max_wire_speed_mm_s = 1000.0", "max_wire_speed_mm_s = 20.0")
+    r = _run("psi", robot, PLAN)
+    assert r.exit_code == 0, r.output
+    robot = _robot_with(tmp_path, "max_wire_accel_mm_s2 = 49000.0", "max_wire_accel_mm_s2 = 1e3")
+    r = _run("psi", robot, PLAN)
+    assert r.exit_code == 0, r.output
