@@ -41,6 +41,10 @@ GRAVITY_KEYS = (
 
 MAX_MASS_KG = 10_000.0
 """Largest link or payload mass (kg): heavier than the heaviest industrial arm's link."""
+MAX_KG_PER_M = 5000.0
+"""Heaviest links per metre of DH lengths (kg/m): 5 t a metre is beyond any arm's links (an
+estimate: the heaviest industrial arms weigh some 10 t over metres of links); grams read as
+kg make a 20 kg arm of 1.3 m 13 t a metre."""
 MAX_COMPLIANCE_URAD_PER_NM = 10_000.0
 """Largest compliance (µrad/(N·m)): 0.01 rad per N·m; harmonic drives of light arms are
 about 10–100 µrad/(N·m), heavy arms' gearboxes 0.1–10."""
@@ -58,6 +62,13 @@ def read_gravity(
     n = None if dh_rad is None else dh_rad.shape[0]
     source = table.string("source", "")
     mass, com = _links(table, n)
+    if mass is not None and dh_rad is not None and _in_grams(mass, dh_rad):
+        table.add(
+            "link_mass_kg",
+            f"the links weigh {mass.sum():g} kg in all, more than {MAX_KG_PER_M:g} kg per "
+            "metre of the DH table's lengths: that looks like grams; give kg",
+        )
+        mass = None
     payload = table.number("payload_mass_kg", 0.0, lo=0, hi=MAX_MASS_KG, unit="kg")
     pay_com = read_com(table, "payload_com_mm")
     direction: tuple[float, float, float] | None = DOWN
@@ -84,6 +95,12 @@ def read_gravity(
             direction=np.array(direction),
         ), c
     return MassModel(mass, com, payload, pay_com, np.array(direction), False, source or ""), c
+
+
+def _in_grams(mass_kg: np.ndarray, dh_rad: np.ndarray) -> bool:
+    """Whether link masses meant in kg are in grams: over :data:`MAX_KG_PER_M` of links."""
+    length_m = float(np.abs(dh_rad[:, [1, 3]]).sum()) / 1000.0
+    return float(mass_kg.sum()) > MAX_KG_PER_M * length_m
 
 
 def read_com(table: Table, key: str) -> np.ndarray | None:

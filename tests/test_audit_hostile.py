@@ -6,16 +6,24 @@ docs/development.md lists the cases; each test here failed before its fix.
 from __future__ import annotations
 
 import re
+import tomllib
 
+import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
+from wirecal.formats.robot_file import robot_from_dict
+from wirecal.solver.errors import WirecalError
 
 from .conftest import DATA, VIPER
 
 ROBOT = VIPER / "robot.toml"
 PLAN = VIPER / "paper_plan.toml"
 THETA0 = "theta0_deg = [0, -90, 210, -90, 0, -90]"
+
+
+def robot_from_text(text: str):
+    return robot_from_dict(tomllib.loads(text), "robot.toml")
 
 
 def _run(*args: object):
@@ -211,3 +219,39 @@ def test_au08_slow_wire_limits_in_mm_are_read(tmp_path):
     robot = _robot_with(tmp_path, "max_wire_accel_mm_s2 = 49000.0", "max_wire_accel_mm_s2 = 1e3")
     r = _run("psi", robot, PLAN)
     assert r.exit_code == 0, r.output
+
+
+UR5E = VIPER.parent / "ur5e" / "robot.toml"
+PAYLOAD_ROBOT = DATA / "payload_viper_s650" / "robot.toml"
+
+
+def test_au09_link_masses_in_grams_are_named():
+    """The UR5e's link masses in grams (17.7 t of links) were read as kg, exit 0: the
+    compliances identified from them would be a thousand times too small."""
+    text = UR5E.read_text(encoding="utf-8")
+    line = "link_mass_kg = [3.761, 8.058, 2.846, 1.37, 1.3, 0.365]"
+    assert line in text
+    grams = text.replace(line, "link_mass_kg = [3761, 8058, 2846, 1370, 1300, 365]")
+    with pytest.raises(WirecalError) as exc:
+        robot_from_text(grams)
+    assert (
+        "gravity.link_mass_kg: the links weigh 17700 kg in all, more than 5000 kg per metre "
+        "of the DH table's lengths: that looks like grams; give kg"
+    ) in str(exc.value)
+    assert robot_from_text(text).masses is not None  # the neighbour: the file as shipped
+
+
+def test_au10_a_tool_heavier_than_the_rating_is_named():
+    """A tool of 500 (grams, as kg) with a 5 kg rating: refused as 'use a lighter mass' for
+    the payload step, and not at all without one; the tool and the rating are named now."""
+    text = PAYLOAD_ROBOT.read_text(encoding="utf-8")
+    assert "\n[gravity]\n" in text
+    heavy = text.replace("\n[gravity]\n", "\n[gravity]\npayload_mass_kg = 500.0\n")
+    with pytest.raises(WirecalError) as exc:
+        robot_from_text(heavy)
+    assert (
+        "calibration.rated_payload_kg: is 5 kg, less than the tool's own 500 kg ([gravity] "
+        "payload_mass_kg): the arm cannot carry its tool"
+    ) in str(exc.value)
+    light = text.replace("\n[gravity]\n", "\n[gravity]\npayload_mass_kg = 1.0\n")
+    assert robot_from_text(light).masses.payload_mass_kg == 1.0
