@@ -24,7 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from wirecal.formats.robot_values import MAX_LENGTH_MM, unit_vector
+from wirecal.formats.robot_values import MAX_LENGTH_MM, not_metres, unit_vector
 from wirecal.formats.toml_fields import Table
 from wirecal.solver.gravity import DOWN, MassModel, default_masses
 
@@ -104,8 +104,11 @@ def _in_grams(mass_kg: np.ndarray, dh_rad: np.ndarray) -> bool:
 
 
 def read_com(table: Table, key: str) -> np.ndarray | None:
-    """Read a mass's centre (mm, default the origin) in the last frame: x, y, z in range."""
-    return table.vector(
+    """Read a mass's centre (mm, default the origin) in the last frame: x, y, z in range.
+
+    None, with a problem, when it is in metres (:func:`~.robot_values.not_metres`).
+    """
+    com = table.vector(
         key,
         [0.0, 0.0, 0.0],
         length=3,
@@ -114,6 +117,7 @@ def read_com(table: Table, key: str) -> np.ndarray | None:
         hi=MAX_LENGTH_MM,
         unit="mm",
     )
+    return not_metres(table, key, com)
 
 
 def _links(table: Table, n: int | None) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -137,4 +141,6 @@ def _links(table: Table, n: int | None) -> tuple[np.ndarray | None, np.ndarray |
         )
     if com is not None and n is not None and com.shape[0] != n:
         table.add("link_com_mm", f"has {com.shape[0]} rows; expected {n} (one per link)")
+    if com is not None and not_metres(table, "link_com_mm", com.ravel()) is None:
+        com = None
     return mass, com

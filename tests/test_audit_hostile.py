@@ -255,3 +255,29 @@ def test_au10_a_tool_heavier_than_the_rating_is_named():
     ) in str(exc.value)
     light = text.replace("\n[gravity]\n", "\n[gravity]\npayload_mass_kg = 1.0\n")
     assert robot_from_text(light).masses.payload_mass_kg == 1.0
+
+
+def test_au11_mass_centres_in_metres_are_named():
+    """A tool's centre [-0.025, 0, 0.02] and the UR5e's link centres in metres were read as
+    mm, exit 0 (the tool point, link radii and boxes already had the rule)."""
+    text = UR5E.read_text(encoding="utf-8")
+    line = "link_mass_kg = [3.761, 8.058, 2.846, 1.37, 1.3, 0.365]"
+    tool = text.replace(line, f"{line}\npayload_mass_kg = 1.0\npayload_com_mm = [-0.025, 0, 0.02]")
+    with pytest.raises(WirecalError) as exc:
+        robot_from_text(tool)
+    assert (
+        "gravity.payload_com_mm: [-0.025, 0, 0.02]: every value under 1 mm: that looks like "
+        "metres; give it in mm"
+    ) in str(exc.value)
+    rows = re.search(r"link_com_mm = \[\n(.*?)\n\]", text, re.S)
+    assert rows is not None
+    metres = re.sub(r"-?\d+\.\d+", lambda m: f"{float(m.group(0)) / 1000:g}", rows.group(1))
+    with pytest.raises(WirecalError, match=r"gravity\.link_com_mm: \[0, -0\.00193, -0\.02561, "):
+        robot_from_text(text.replace(rows.group(1), metres))
+
+
+def test_au11_mass_centres_in_mm_are_read():
+    text = UR5E.read_text(encoding="utf-8")
+    line = "link_mass_kg = [3.761, 8.058, 2.846, 1.37, 1.3, 0.365]"
+    tool = text.replace(line, f"{line}\npayload_mass_kg = 1.0\npayload_com_mm = [-25, 0, 20]")
+    assert list(robot_from_text(tool).masses.payload_com_mm) == [-25, 0, 20]
