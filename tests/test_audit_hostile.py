@@ -281,3 +281,38 @@ def test_au11_mass_centres_in_mm_are_read():
     line = "link_mass_kg = [3.761, 8.058, 2.846, 1.37, 1.3, 0.365]"
     tool = text.replace(line, f"{line}\npayload_mass_kg = 1.0\npayload_com_mm = [-25, 0, 20]")
     assert list(robot_from_text(tool).masses.payload_com_mm) == [-25, 0, 20]
+
+
+def _demo_result(before_mm: float, after_mm: float):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(
+        validations=[],
+        tool_error_mm={"before": before_mm, "after": after_mm},
+        predicted_mm=None,
+        bound_mm=None,
+        controller_difference=4.7e-7,
+        total_s=9.0,
+        folder="demo",
+        outputs=["report.html"],
+    )
+
+
+def test_au12_demo_of_an_arm_without_errors_prints_no_reduction(monkeypatch, tmp_path):
+    """demo --scale 0 (a perfect arm) ended in a ZeroDivisionError traceback after writing
+    every output: the tool-point error before calibration is 0, its reduction undefined."""
+    import wirecal.cli.demo as cli_demo
+
+    monkeypatch.setattr(cli_demo, "run_demo", lambda folder, **o: _demo_result(0.0, 0.0714))
+    r = _run("demo", "--scale", "0", "-o", tmp_path / "demo")
+    assert r.exit_code == 0, r.output
+    assert re.search(r"tool-point error vs truth, mean \(mm\) +0\.0000 +0\.0714 +—\n", r.output)
+
+
+def test_au12_demo_prints_the_reduction_of_an_arm_with_errors(monkeypatch, tmp_path):
+    import wirecal.cli.demo as cli_demo
+
+    monkeypatch.setattr(cli_demo, "run_demo", lambda folder, **o: _demo_result(0.5, 0.05))
+    r = _run("demo", "-o", tmp_path / "demo")
+    assert r.exit_code == 0, r.output
+    assert re.search(r"0\.5000 +0\.0500 +90%\n", r.output), r.output
