@@ -6,6 +6,7 @@ docs/development.md lists the cases; each test here failed before its fix.
 from __future__ import annotations
 
 import re
+import socket
 import tomllib
 
 import pytest
@@ -316,3 +317,22 @@ def test_au12_demo_prints_the_reduction_of_an_arm_with_errors(monkeypatch, tmp_p
     r = _run("demo", "-o", tmp_path / "demo")
     assert r.exit_code == 0, r.output
     assert re.search(r"0\.5000 +0\.0500 +90%\n", r.output), r.output
+
+
+def test_au13_receive_says_listening_only_once_it_listens(tmp_path):
+    """'listening on …' was printed before the log was reserved and the port bound: then
+    'error: … is also an input', or 'cannot listen on …', contradicted it."""
+    plan = UR5E.parent / "plan.toml"
+    r = _run("receive", UR5E, plan, "-o", UR5E, "--timeout", 1)
+    assert r.exit_code == 2, r.output
+    assert "is also an input" in r.output
+    assert "listening on" not in r.output
+    with socket.socket() as probe:  # a free port on the loopback
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    out = tmp_path / "run.csv"
+    r = _run(
+        "receive", UR5E, plan, "-o", out, "--timeout", 0.2, "--host", "127.0.0.1", "--port", port
+    )
+    assert r.exit_code == 1, r.output  # the neighbour: it listens, and says so, then times out
+    assert f"listening on 127.0.0.1:{port} for the run of plan" in r.output
