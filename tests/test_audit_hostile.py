@@ -336,3 +336,58 @@ def test_au13_receive_says_listening_only_once_it_listens(tmp_path):
     )
     assert r.exit_code == 1, r.output  # the neighbour: it listens, and says so, then times out
     assert f"listening on 127.0.0.1:{port} for the run of plan" in r.output
+
+
+def _validation_log(path, rows, robot="Adept Viper s650", setup="test"):
+    head = ["# wirecal-validation 1", "# kind: configuration", f"# robot: {robot}"]
+    head += [f"# setup: {setup}", "# mm_per_count: 0.025488"]
+    columns = "pose,config,j1,j2,j3,j4,j5,j6,counts,samples,spread"
+    body = [f"1,{c},0,0,0,0,0,0,{counts},10,0" for c, counts in enumerate(rows, 1)]
+    path.write_text("\n".join([*head, columns, *body]) + "\n", encoding="utf-8")
+    return path
+
+
+BEFORE = (100, 140, 120, 90)  # a discrepancy of 50 counts
+AFTER = (100, 102, 101, 99)
+
+
+def test_au14_the_same_run_as_before_and_after_is_refused(tmp_path):
+    """validate … BEFORE BEFORE printed 'reduction 0%' with exit 0: the same readings,
+    not a calibration's effect."""
+    before = _validation_log(tmp_path / "b.csv", BEFORE)
+    copy = _validation_log(tmp_path / "copy.csv", BEFORE)
+    r = _run("validate", ROBOT, "configuration", before, copy)
+    assert r.exit_code == 2, r.output
+    assert f"{copy}: holds the readings of {before}, the same run" in " ".join(r.output.split())
+
+
+def test_au15_a_validation_log_of_another_robot_is_refused(tmp_path):
+    """A UR5e's robot file with the Viper's log was taken (its 32-bit counter unwrapping a
+    24-bit count); the robot is named now, as solve names a measurement log's."""
+    before = _validation_log(tmp_path / "b.csv", BEFORE)
+    r = _run("validate", UR5E, "configuration", before)
+    assert r.exit_code == 2, r.output
+    assert (
+        f"{before}: robot 'Adept Viper s650' differs from {UR5E} ('Universal Robots UR5e'); "
+        "use the matching robot file"
+    ) in " ".join(r.output.split())
+
+
+def test_au16_before_and_after_of_two_setups_are_refused(tmp_path):
+    """BEFORE and AFTER of two validation setups (other poses, another plate) gave a
+    'reduction' that compares unlike runs, exit 0."""
+    before = _validation_log(tmp_path / "b.csv", BEFORE, setup="one")
+    after = _validation_log(tmp_path / "a.csv", AFTER, setup="two")
+    r = _run("validate", ROBOT, "configuration", before, after)
+    assert r.exit_code == 2, r.output
+    assert "BEFORE and AFTER compare only when taken with one validation setup" in (
+        " ".join(r.output.split())
+    )
+
+
+def test_au14_to_au16_before_and_after_of_one_setup_are_compared(tmp_path):
+    before = _validation_log(tmp_path / "b.csv", BEFORE)
+    after = _validation_log(tmp_path / "a.csv", AFTER)
+    r = _run("validate", ROBOT, "configuration", before, after)
+    assert r.exit_code == 0, r.output
+    assert re.search(r"reduction +94%", r.output), r.output
