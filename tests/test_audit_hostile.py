@@ -392,3 +392,32 @@ def test_au14_to_au16_before_and_after_of_one_setup_are_compared(tmp_path):
     r = _run("validate", ROBOT, "configuration", before, after)
     assert r.exit_code == 0, r.output
     assert re.search(r"reduction +94%", r.output), r.output
+
+
+def _import(tmp_path, *options):
+    urdf = DATA / "twisted_arm.urdf"
+    return _run("import-urdf", urdf, "--tip", "wire", "-o", tmp_path / "r.toml", *options)
+
+
+def test_au17_import_urdf_refuses_host_and_port_for_a_language_without_sockets(tmp_path):
+    """--host and --port ('URScript: …') with --language vplus were written into the V+
+    robot file without a word; gen refuses them for V+, import-urdf now too."""
+    r = _import(tmp_path, "--language", "vplus", "--host", "x", "--port", 50000)
+    assert r.exit_code == 2, r.output
+    assert (
+        "--host and --port: the Adept/Omron V+ and eV+ programs (--language vplus) write their "
+        "log to the controller's disk, not over TCP: leave them out"
+    ) in " ".join(r.output.split())
+    r = _import(tmp_path, "--language", "urscript", "--host", "192.168.1.10", "--port", 50000)
+    assert r.exit_code == 0, r.output  # the neighbour: URScript sends its log over TCP
+
+
+def test_au18_import_urdf_refuses_joint_speeds_in_rad_s(tmp_path):
+    """--joint-speed-deg-s 3.14,… (rad/s) was written as 3.14 °/s, confirmed."""
+    r = _import(tmp_path, "--joint-speed-deg-s", "3.14,3.14,3.14,3.14,3.14,3.14")
+    assert r.exit_code == 2, r.output
+    assert "--joint-speed-deg-s: every speed is within 2π (6.28 °/s, slower than any arm's" in (
+        " ".join(r.output.split())
+    )
+    r = _import(tmp_path, "--joint-speed-deg-s", "20,20,20,30,30,30", "--force")
+    assert r.exit_code == 0, r.output  # the neighbour: a heavy arm's slow joints, in °/s
