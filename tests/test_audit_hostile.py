@@ -421,3 +421,22 @@ def test_au18_import_urdf_refuses_joint_speeds_in_rad_s(tmp_path):
     )
     r = _import(tmp_path, "--joint-speed-deg-s", "20,20,20,30,30,30", "--force")
     assert r.exit_code == 0, r.output  # the neighbour: a heavy arm's slow joints, in °/s
+
+
+def test_au20_a_resolution_far_coarser_than_the_values_is_refused():
+    """fit --joint-resolution-deg 10 on joints logged to 0.1 deg: the gate then allowed a
+    residual σ up to 27.7 mm ('passed'), a hundred times the table's own floor."""
+    for option, value, steps in (
+        ("--joint-resolution-deg", "10", "the joint values take steps of 0.1 deg"),
+        ("--length-resolution-mm", "100", "the length values take steps of 0.01 mm"),
+    ):
+        r = _run("fit", ROBOT, TABLE, option, value)
+        assert r.exit_code == 2, r.output
+        assert f"{option} {value}: {steps}, more than 10 times finer" in " ".join(r.output.split())
+
+
+def test_au20_a_resolution_a_few_times_the_values_steps_is_taken():
+    """The neighbour: 0.5 deg on values printed to 0.1 deg (a controller's own steps)."""
+    r = _run("fit", ROBOT, TABLE, "--joint-resolution-deg", "0.5")
+    assert r.exit_code == 0, r.output
+    assert "resolution: joints 0.5 deg" in r.output
