@@ -71,6 +71,7 @@ def parse_map(text: str | None, n_joints: int, header: tuple[str, ...] = ()) -> 
     missing = [k for k in keys[: n_joints + 1] if k not in given]
     if missing:
         problems.append(f"--map: {', '.join(missing)} missing; map every joint and the length")
+    problems += _shared_columns(given)
     axes = [a for a in AXES if a in given]
     if axes and len(axes) != 3:
         problems.append("--map: give x, y and z together, or none of them")
@@ -78,6 +79,16 @@ def parse_map(text: str | None, n_joints: int, header: tuple[str, ...] = ()) -> 
         raise WirecalError(problems)
     xyz = (given["x"], given["y"], given["z"]) if axes else None
     return ColumnMap(tuple(given[k] for k in keys[:n_joints]), given["length"], xyz)
+
+
+def _shared_columns(given: dict[str, str]) -> list[str]:
+    """Return a problem for each column the map gives two keys (one column, one meaning)."""
+    roles = {c: [k for k, col in given.items() if col == c] for c in given.values()}
+    return [
+        f"--map: column {c!r} is given for {' and '.join(keys)}; each key needs its own column"
+        for c, keys in roles.items()
+        if len(keys) > 1
+    ]
 
 
 def read_cable_table(

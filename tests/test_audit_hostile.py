@@ -440,3 +440,16 @@ def test_au20_a_resolution_a_few_times_the_values_steps_is_taken():
     r = _run("fit", ROBOT, TABLE, "--joint-resolution-deg", "0.5")
     assert r.exit_code == 0, r.output
     assert "resolution: joints 0.5 deg" in r.output
+
+
+MAP = "j1=j1,j2=j2,j3=j3,j4=j4,j5=j5,j6=j6,length=length"
+
+
+def test_au19_one_column_mapped_to_two_keys_is_named():
+    """--map j1=j1,j2=j1,…: refused only through its symptom ("'j1': 153 rows beyond joint
+    2's limits … joints in another convention?"); the map itself is named now."""
+    r = _run("fit", ROBOT, TABLE, "--map", MAP.replace("j2=j2", "j2=j1"))
+    assert r.exit_code == 2, r.output
+    assert "--map: column 'j1' is given for j1 and j2; each key needs its own column" in r.output
+    r = _run("fit", ROBOT, TABLE, "--map", MAP)
+    assert r.exit_code == 0, r.output  # the neighbour: each key its own column
