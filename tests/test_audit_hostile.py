@@ -453,3 +453,20 @@ def test_au19_one_column_mapped_to_two_keys_is_named():
     assert "--map: column 'j1' is given for j1 and j2; each key needs its own column" in r.output
     r = _run("fit", ROBOT, TABLE, "--map", MAP)
     assert r.exit_code == 0, r.output  # the neighbour: each key its own column
+
+
+WALL = '\n[[cell.half_space]]\nname = "wall"\npoint_mm = {}\nnormal = [-1.0, 0.0, 0.0]\n'
+
+
+def test_au21_a_half_space_point_in_metres_is_named():
+    """A wall at [0.9, 0, 0] (metres) was read as 0.9 mm: gen blamed the plan ('the tool
+    fixture and the wall: 494 mm into each other'); boxes and housings had the rule."""
+    text = ROBOT.read_text(encoding="utf-8")
+    assert "\n[gravity]" in text
+    metres = text.replace("\n[gravity]", WALL.format("[0.9, 0.0, 0.0]") + "\n[gravity]", 1)
+    assert (
+        "cell.half_space[1].point_mm: [0.9, 0, 0]: every value under 1 mm: that looks like "
+        "metres; give it in mm"
+    ) in refusal(metres)
+    mm = text.replace("\n[gravity]", WALL.format("[900.0, 0.0, 0.0]") + "\n[gravity]", 1)
+    assert robot_from_text(mm).cell.half_spaces[0].point_mm[0] == 900.0
