@@ -470,3 +470,22 @@ def test_au21_a_half_space_point_in_metres_is_named():
     ) in refusal(metres)
     mm = text.replace("\n[gravity]", WALL.format("[900.0, 0.0, 0.0]") + "\n[gravity]", 1)
     assert robot_from_text(mm).cell.half_spaces[0].point_mm[0] == 900.0
+
+
+def test_au22_more_outliers_than_points_is_refused(tmp_path):
+    """simulate --outliers 1000 on the 69-point plan wrote 69 outliers without a word."""
+    r = _run("simulate", ROBOT, PLAN, "-o", tmp_path / "run.csv", "--outliers", 1000)
+    assert r.exit_code == 2, r.output
+    assert "--outliers 1000: the plan has 69 points; give at most 69" in r.output
+    r = _run("simulate", ROBOT, PLAN, "-o", tmp_path / "all.csv", "--outliers", 69)
+    assert r.exit_code == 0, r.output  # the neighbour: every point an outlier
+
+
+def test_au23_a_stop_after_the_end_of_the_run_is_refused(tmp_path):
+    """simulate --stop-after 100000 (a fault: the run stops) wrote the complete run."""
+    r = _run("simulate", ROBOT, PLAN, "-o", tmp_path / "run.csv", "--stop-after", 100000)
+    assert r.exit_code == 2, r.output
+    assert "--stop-after 100000: the run writes 80 readings, so it would not stop" in r.output
+    r = _run("simulate", ROBOT, PLAN, "-o", tmp_path / "cut.csv", "--stop-after", 79)
+    assert r.exit_code == 0, r.output  # the neighbour: the closing zero is cut
+    assert "(69 points)" in r.output
