@@ -489,3 +489,12 @@ def test_au23_a_stop_after_the_end_of_the_run_is_refused(tmp_path):
     r = _run("simulate", ROBOT, PLAN, "-o", tmp_path / "cut.csv", "--stop-after", 79)
     assert r.exit_code == 0, r.output  # the neighbour: the closing zero is cut
     assert "(69 points)" in r.output
+
+
+def test_au24_a_theta0_beyond_a_limit_is_said_to_be_beyond(tmp_path):
+    """plan --theta0 …,500,…: 'joint 3 = 500 deg is within 5 deg of its limits [-29, 256]'."""
+    for value, words in (("500", "is beyond its limits"), ("253", "is within 5 deg of its limits")):
+        theta0 = f"0,-90,{value},-90,0,-90"
+        r = _run("plan", ROBOT, "--theta0", theta0, "-o", tmp_path / "plan.toml")
+        assert r.exit_code == 2, r.output
+        assert f"theta0: joint 3 = {value} deg {words} [-29, 256]" in r.output
