@@ -498,3 +498,26 @@ def test_au24_a_theta0_beyond_a_limit_is_said_to_be_beyond(tmp_path):
         r = _run("plan", ROBOT, "--theta0", theta0, "-o", tmp_path / "plan.toml")
         assert r.exit_code == 2, r.output
         assert f"theta0: joint 3 = {value} deg {words} [-29, 256]" in r.output
+
+
+def _lengths_over(tmp_path, divisor: float):
+    """The shipped table with its lengths divided by ``divisor`` (mm to another unit)."""
+    lines = TABLE.read_text(encoding="utf-8").splitlines()
+    first = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    out = lines[: first + 1]
+    for line in lines[first + 1 :]:
+        cells = line.split(",")
+        cells[6] = f"{float(cells[6]) / divisor:.6f}"
+        out.append(",".join(cells))
+    path = tmp_path / "table.csv"
+    path.write_text("\n".join(out) + "\n", encoding="utf-8")
+    return path
+
+
+def test_au25_lengths_in_inches_are_not_called_metres_alone(tmp_path):
+    """Lengths in inches were refused as 'they look like metres; give mm'."""
+    r = _run("fit", ROBOT, _lengths_over(tmp_path, 25.4))
+    assert r.exit_code == 2, r.output
+    assert "they look like metres (or inches: under 1/50 of it); give mm" in (
+        " ".join(r.output.split())
+    )
