@@ -123,5 +123,5 @@ def _report_html(robot, plan, log, logs, controller, truth_file, flags) -> str:
             from wirecal.app.compare import compare_controller  # the twin only when asked
 
             ctl = compare_controller(result, Path(tmp))
-    truth = load_errors(truth_file, rb) if truth_file else None
+    truth = load_errors(truth_file, rb, result.measurements.sha256) if truth_file else None
     return render_report(result, validations, ctl, truth, plausibility=verdict.patch_field())

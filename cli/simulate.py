@@ -13,6 +13,7 @@ from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, OUTPUT_FILE, PLAN, ROBOT, SEED, given, number
 from wirecal.formats.capture import MIN_TERMINAL, fold
 from wirecal.formats.fileio import Outputs
+from wirecal.formats.log import text_sha256
 from wirecal.formats.plan_file import load_plan
 from wirecal.formats.robot_file import (
     MAX_DH_ANGLE_DEG,
@@ -223,7 +224,8 @@ def simulate(
         out.put(log_path, text)
         out.put(
             truth_path,
-            truth_text(rb, errors, None if errors_file else seed) + _encoder_note(true_encoder),
+            truth_text(rb, errors, None if errors_file else seed, text_sha256(text))
+            + _encoder_note(true_encoder),
         )
     points = sum(line.startswith("point,") for line in text.splitlines())  # as logged
     click.echo(f"wrote {log_path} ({points} points) and the truth to {truth_path}")

@@ -5,6 +5,7 @@ docs/development.md lists the cases; each test here failed before its fix.
 
 from __future__ import annotations
 
+import hashlib
 import re
 import socket
 import tomllib
@@ -13,7 +14,8 @@ import pytest
 from click.testing import CliRunner
 
 from wirecal.cli.main import main
-from wirecal.formats.robot_file import robot_from_dict
+from wirecal.formats.robot_file import load_robot, robot_from_dict
+from wirecal.formats.truth import load_errors
 from wirecal.solver.errors import WirecalError
 
 from .conftest import DATA, VIPER
@@ -521,3 +523,21 @@ def test_au25_lengths_in_inches_are_not_called_metres_alone(tmp_path):
     assert "they look like metres (or inches: under 1/50 of it); give mm" in (
         " ".join(r.output.split())
     )
+
+
+def test_au26_the_truth_of_another_run_is_refused_by_report(tmp_path):
+    """report --truth with the truth of another simulation showed its offsets beside this
+    log's estimates as 'the true offsets', exit 0."""
+    for name, seed in (("a", 1), ("b", 2)):
+        r = _run("simulate", ROBOT, PLAN, "-o", tmp_path / f"{name}.csv", "--seed", seed)
+        assert r.exit_code == 0, r.output
+    out = tmp_path / "r.html"
+    args = ("report", ROBOT, PLAN, tmp_path / "a.csv", "-o", out, "--truth")
+    r = _run(*args, tmp_path / "b.truth.toml")
+    assert r.exit_code == 2, r.output
+    assert "log_sha256: the truth was written with another log" in r.output
+    assert not out.exists()
+    # the neighbour: the truth written beside this log (its bytes' sha256) is read
+    sha = hashlib.sha256((tmp_path / "a.csv").read_bytes()).hexdigest()
+    robot = load_robot(ROBOT)
+    assert load_errors(tmp_path / "a.truth.toml", robot, sha)
