@@ -541,3 +541,16 @@ def test_au26_the_truth_of_another_run_is_refused_by_report(tmp_path):
     sha = hashlib.sha256((tmp_path / "a.csv").read_bytes()).hexdigest()
     robot = load_robot(ROBOT)
     assert load_errors(tmp_path / "a.truth.toml", robot, sha)
+
+
+def test_au27_lint_names_a_file_of_wirecal_s_own_that_is_no_program():
+    """lint robot.toml read it as V+ ('no language has this suffix') and listed 95 problems,
+    one per line of the robot file."""
+    r = _run("lint", ROBOT)
+    assert r.exit_code == 2, r.output
+    assert (
+        f"{ROBOT}: a TOML file (a robot file, plan, patch, truth or validation setup), not a "
+        "program"
+    ) in " ".join(r.output.split())
+    r = _run("lint", "--language", "vplus", ROBOT)  # the neighbour: asked to read it as V+
+    assert r.exit_code == 1, r.output
