@@ -112,5 +112,11 @@ def plan_from_pool(
         )
     elif plan.outside:
         click.echo(f"note: {plan.outside} pool rows beyond the robot file's joint limits left out")
+    distinct = len(np.unique(q_deg, axis=0))
+    if distinct < len(q_deg):
+        click.echo(
+            f"note: the pool's {len(q_deg)} rows hold {distinct} distinct configurations: the "
+            "plan may visit one more than once, and its prediction rests on that few"
+        )
     if output:
         click.echo(f"wrote {output}")

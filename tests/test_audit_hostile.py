@@ -554,3 +554,24 @@ def test_au27_lint_names_a_file_of_wirecal_s_own_that_is_no_program():
     ) in " ".join(r.output.split())
     r = _run("lint", "--language", "vplus", ROBOT)  # the neighbour: asked to read it as V+
     assert r.exit_code == 1, r.output
+
+
+def _pool(tmp_path, rows: int, times: int):
+    """The shipped table's first ``rows`` configurations, each ``times`` over, as a pool."""
+    lines = TABLE.read_text(encoding="utf-8").splitlines()
+    first = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    joints = [",".join(line.split(",")[:6]) for line in lines[first + 1 : first + 1 + rows]]
+    path = tmp_path / f"pool{times}.csv"
+    path.write_text("\n".join(["j1,j2,j3,j4,j5,j6", *joints * times]) + "\n", encoding="utf-8")
+    return path
+
+
+def test_au28_a_pool_of_few_distinct_configurations_says_so(tmp_path):
+    """3 configurations 50 times over: 40 'poses' planned, 24 of them one configuration,
+    without a word beyond the predicted error."""
+    r = _run("plan", ROBOT, "--pool", _pool(tmp_path, 3, 50), "--points", 40)
+    assert r.exit_code == 0, r.output
+    assert "note: the pool's 150 rows hold 3 distinct configurations" in r.output
+    r = _run("plan", ROBOT, "--pool", _pool(tmp_path, 30, 1), "--points", 20)
+    assert r.exit_code == 0, r.output  # the neighbour: every row its own configuration
+    assert "distinct configurations" not in r.output
