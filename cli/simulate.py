@@ -222,11 +222,7 @@ def simulate(
             )
             text, stopped = _direct_log(rb, pl, errors, run, faults), None
         out.put(log_path, text)
-        out.put(
-            truth_path,
-            truth_text(rb, errors, None if errors_file else seed, text_sha256(text))
-            + _encoder_note(true_encoder),
-        )
+        out.put(truth_path, _truth(rb, errors, None if errors_file else seed, text, true_encoder))
     points = sum(line.startswith("point,") for line in text.splitlines())  # as logged
     click.echo(f"wrote {log_path} ({points} points) and the truth to {truth_path}")
     if stopped:
@@ -345,6 +341,13 @@ def _check_twin_options(
             "--outliers and --stop-after apply to the direct simulation; "
             "in the twin, give --slip STEP:MM (the fault the twin injects)"
         )
+
+
+def _truth(
+    rb: Robot, errors: dict[str, float], seed: int | None, log: str, encoder: EncoderTruth
+) -> str:
+    """Return the truth file of the run that wrote ``log``: its errors and its encoder."""
+    return truth_text(rb, errors, seed, text_sha256(log)) + _encoder_note(encoder)
 
 
 def _true_encoder(

@@ -259,13 +259,7 @@ def solve(
     (:func:`_with_drift_sigma`); ``refine_scale`` refines the scale jointly (``ScalePrior``).
     A pool's plan gets the fit it was planned for (:func:`_solve_pool`).
     """
-    refuse_options(robot, plan, methods, refine_scale)
-    if refine_scale and not len(m.reference_mm):
-        raise WirecalError(
-            f"--refine-scale refines the scale the log's reference step measured; {m.source} "
-            "has no reference step (a gauge, [encoder] reference_length_mm, and a run with "
-            "it): leave it out"
-        )
+    refuse_options(robot, plan, methods, refine_scale, m)
     if plan.joint_only:
         return _solve_pool(robot, plan, m, partial=partial, corrections=corrections)
     left, names, step = _measured_steps(plan, m, partial)
@@ -306,13 +300,20 @@ def solve(
     )
 
 
-def refuse_options(robot: Robot, plan: Plan, methods: tuple[str, ...], refine_scale: bool) -> None:
-    """Refuse methods and a scale refinement the plan or robot file cannot take.
+def refuse_options(
+    robot: Robot,
+    plan: Plan,
+    methods: tuple[str, ...],
+    refine_scale: bool,
+    m: Measurements | None = None,
+) -> None:
+    """Refuse methods and a scale refinement the plan, robot file or log ``m`` cannot take.
 
-    Asked before the log is read (the command line) and by :func:`solve`. A pool's plan
-    (``plan.joint_only``) isolates no parameter in its steps: the step-by-step estimate
-    does not apply, and its wire fit refines no scale. ``refine_scale`` refines the scale
-    in the joint method, from the reference gauge the robot file declares.
+    Asked before the log is read (the command line, ``m`` None) and by :func:`solve`. A
+    pool's plan (``plan.joint_only``) isolates no parameter in its steps: the step-by-step
+    estimate does not apply, and its wire fit refines no scale. ``refine_scale`` refines
+    the scale in the joint method, from the reference gauge the robot file declares and
+    the log's reference step measured.
     """
     if plan.joint_only and "joint" not in methods:
         raise WirecalError(
@@ -340,6 +341,12 @@ def refuse_options(robot: Robot, plan: Plan, methods: tuple[str, ...], refine_sc
             f"--refine-scale refines the scale the reference gauge measured; {robot.source} "
             "declares no gauge ([encoder] reference_length_mm), so its logs have no "
             "reference step: leave it out"
+        )
+    if m is not None and not len(m.reference_mm):
+        raise WirecalError(
+            f"--refine-scale refines the scale the log's reference step measured; {m.source} "
+            "has no reference step (a gauge, [encoder] reference_length_mm, and a run with "
+            "it): leave it out"
         )
 
 
