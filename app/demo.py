@@ -625,7 +625,8 @@ def _put_outputs(
     """Queue the programs, the truth file (errors, seed) and the recommended patch."""
     for name, program in programs.items():
         out.put(folder / name, program)
-    out.put(folder / "truth.toml", truth_text(ch.robot, *truth_seed))
+    log_sha256 = result.measurements.sha256
+    out.put(folder / "truth.toml", truth_text(ch.robot, *truth_seed, log_sha256))
     put_patch(
         out,
         folder / "patch.toml",

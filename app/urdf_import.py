@@ -42,6 +42,7 @@ from wirecal.formats.urdf_model import (
     read_chain,
 )
 from wirecal.lang.registry import default_language, first_channel, language
+from wirecal.solver.angle_units import TURN_RAD, within_a_turn
 from wirecal.solver.dh_from_axes import PARALLEL_TOL
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.identifiability import propose_parameters
@@ -119,7 +120,7 @@ def urdf_robot_file(urdf: str | Path, out_path: Path, opt: ImportOptions) -> Imp
         urdf=UrdfSource(
             str(urdf), ch.base_link, ch.tip_link, opt.parallel_tol_deg, opt.wire_point_mm
         ),
-        controller=Controller(opt.language, opt.host, opt.port),
+        controller=_controller(opt),
         joint_speed_confirmed=confirmed,
         masses=chain_masses(ch),
     )
@@ -159,6 +160,18 @@ def _reads_back(text: str, urdf: str | Path, out_path: Path) -> None:
                 "correct them and import again",
             ]
         ) from None
+
+
+def _controller(opt: ImportOptions) -> Controller:
+    """Return the controller of the options; --host and --port only for a language with sockets."""
+    lang = language(opt.language)
+    given = [name for name, v in (("--host", opt.host), ("--port", opt.port)) if v is not None]
+    if given and not lang.capabilities.sockets:
+        raise WirecalError(
+            f"{' and '.join(given)}: the {lang.title} programs (--language {opt.language}) "
+            "write their log to the controller's disk, not over TCP: leave them out"
+        )
+    return Controller(opt.language, opt.host, opt.port)
 
 
 def _encoder(opt: ImportOptions) -> Encoder:
@@ -220,6 +233,11 @@ def _speeds(
             raise WirecalError(
                 f"--joint-speed-deg-s: give {n} positive speeds (deg/s), one per joint of "
                 f"{ch.base_link} → {ch.tip_link}"
+            )
+        if within_a_turn(np.array(given)):
+            raise WirecalError(
+                f"--joint-speed-deg-s: every speed is within 2π ({TURN_RAD:.2f} °/s, slower "
+                "than any arm's joint): they look like rad/s; give deg/s (× 180/π)"
             )
         return np.array(given, dtype=float), True, ["from import-urdf --joint-speed-deg-s"]
     why = placeholder_speeds(urdf_speed)

@@ -81,10 +81,8 @@ def demo(folder, seed, scale, robot, force):
             f"{name:<38}{v.before.mean:10.4f}{v.after.mean:10.4f}{100 * v.reduction['mean']:10.0f}%"
         )
     tb, ta = r.tool_error_mm["before"], r.tool_error_mm["after"]
-    click.echo(
-        f"{'tool-point error vs truth, mean (mm)':<38}{tb:10.4f}{ta:10.4f}"
-        f"{100 * (1 - ta / tb):10.0f}%"
-    )
+    cut = f"{100 * (1 - ta / tb):10.0f}%" if tb > 0 else f"{'—':>11}"  # --scale 0: no error
+    click.echo(f"{'tool-point error vs truth, mean (mm)':<38}{tb:10.4f}{ta:10.4f}{cut}")
     if r.predicted_mm is not None:
         scale = (
             ""

@@ -140,7 +140,7 @@ _G = GenRequest()
 )
 @click.option(
     "--range-margin",
-    type=click.FloatRange(min=0.0),
+    type=NON_NEGATIVE,
     default=_G.range_margin_mm,
     show_default=True,
     help="Refuse a plan whose nominal wire length, at a point or along a move, comes "

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import click
 
@@ -10,6 +11,17 @@ from wirecal.cli.main import user_errors
 from wirecal.formats.fileio import read_input, refuse_utf16
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.robot import SOFTWARE_PATTERN
+
+NOT_PROGRAMS = {
+    ".toml": "a TOML file (a robot file, plan, patch, truth or validation setup)",
+    ".csv": "a CSV file (a log or table)",
+    ".urdf": "a URDF",
+    ".html": "an HTML file (a report)",
+    ".xlsx": "a workbook",
+    ".stl": "a mesh",
+}
+"""Suffixes of the files wirecal reads and writes that are not programs: lint says so
+rather than reading one as V+ (a suffix no language has) and listing every line."""
 
 
 @click.command()
@@ -67,6 +79,11 @@ def lint(files, language_key, separately, external_calls, software):
     groups: dict[str, dict[str, str]] = {}
     for path in dict.fromkeys(files):
         lang = chosen or language_of_file(path)
+        if chosen is None and Path(path).suffix.lower() in NOT_PROGRAMS:
+            raise WirecalError(
+                f"{path}: {NOT_PROGRAMS[Path(path).suffix.lower()]}, not a program: give the "
+                "program files 'wirecal gen' wrote (or --language to read it as one)"
+            )
         if chosen is None and language_of_suffix(path) is None:
             click.echo(f"{path}: no language has this suffix: read as {lang.title}", err=True)
         raw, source = read_input(path, "program file")

@@ -58,6 +58,25 @@ def plan_header(plan: PoolPlan, source: str, lines: np.ndarray) -> str:
     )
 
 
+def _notes(plan: PoolPlan, refused: int | None, q_deg: np.ndarray) -> list[str]:
+    """Return what the choice left out of the pool, and a pool that repeats its rows."""
+    notes = []
+    if refused:
+        notes.append(
+            f"{refused} pool rows the pre-flight of 'gen' refuses left out (within 1 deg of "
+            "a joint or body limit, beyond the wire's range, or colliding)"
+        )
+    elif plan.outside:
+        notes.append(f"{plan.outside} pool rows beyond the robot file's joint limits left out")
+    distinct = len(np.unique(q_deg, axis=0))
+    if distinct < len(q_deg):
+        notes.append(
+            f"the pool's {len(q_deg)} rows hold {distinct} distinct configurations: the plan "
+            "may visit one more than once, and its prediction rests on that few"
+        )
+    return notes
+
+
 def plan_from_pool(
     rb: Robot, pool: str, points: int | None, output: str | None, as_json: bool, force: bool
 ) -> None:
@@ -105,12 +124,7 @@ def plan_from_pool(
         "(the DH errors and compliances with a prior)"
     )
     click.echo(f"predicted tool-point error {plan.predicted_mm:.4f} mm ({PREDICTED})")
-    if refused:
-        click.echo(
-            f"note: {refused} pool rows the pre-flight of 'gen' refuses left out (within "
-            "1 deg of a joint or body limit, beyond the wire's range, or colliding)"
-        )
-    elif plan.outside:
-        click.echo(f"note: {plan.outside} pool rows beyond the robot file's joint limits left out")
+    for note in _notes(plan, refused, q_deg):
+        click.echo(f"note: {note}")
     if output:
         click.echo(f"wrote {output}")

@@ -53,7 +53,7 @@ def _fmt(x: float) -> str:
 )
 @click.option(
     "--range-margin",
-    type=click.FloatRange(min=0.0),
+    type=NON_NEGATIVE,
     default=RANGE_MARGIN_MM,
     show_default=True,
     help="The nominal wire must stay this far inside the encoder's range_mm, at every "

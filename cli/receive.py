@@ -82,12 +82,15 @@ def receive_cmd(robot, plan, robot_alias, plan_alias, output, port, host, timeou
     if rob.controller.key is None:
         click.echo(f"warning: {robot}: {NO_KEY}", err=True)
     token = run_token(rob, pl.fingerprint())
-    click.echo(
-        f"listening on {host}:{port} for the run of plan {pl.fingerprint()[:12]}… (token "
-        f"{token[:6]}…; a sender has {min(HANDSHAKE_S, timeout_s):g} s to present it); "
-        "Ctrl-C to stop",
-        err=True,
-    )
+
+    def listening(bound: int) -> None:  # once the log is reserved and the port bound
+        click.echo(
+            f"listening on {host}:{bound} for the run of plan {pl.fingerprint()[:12]}… (token "
+            f"{token[:6]}…; a sender has {min(HANDSHAKE_S, timeout_s):g} s to present it); "
+            "Ctrl-C to stop",
+            err=True,
+        )
+
     result = receive(
         port,
         output,
@@ -96,6 +99,7 @@ def receive_cmd(robot, plan, robot_alias, plan_alias, output, port, host, timeou
         timeout_s=timeout_s,
         force=force,
         host=host,
+        on_listening=listening,
         on_refused=lambda message: click.echo(f"warning: {message}", err=True),
     )
     for line in summary(result, rob, pl):

@@ -20,7 +20,7 @@ from wirecal.formats.validation_files import read_validation_log
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.log.measurements import check_log
 from wirecal.solver.solve import solve
-from wirecal.solver.validation.analysis import config_discrepancy, plane_residuals
+from wirecal.solver.validation.analysis import check_logs, config_discrepancy, plane_residuals
 
 
 @click.command()
@@ -108,26 +108,20 @@ def _report_html(robot, plan, log, logs, controller, truth_file, flags) -> str:
         click.echo(f"warning: {line}", err=True)
     validations = []
     if config_logs:
+        runs = [read_validation_log(p, "configuration") for p in config_logs]
+        check_logs(runs, rb)
         validations.append(
-            Validation(
-                "configuration",
-                *(
-                    config_discrepancy(read_validation_log(p, "configuration"), rb.encoder.counter)
-                    for p in config_logs
-                ),
-            )
+            Validation("configuration", *(config_discrepancy(v, rb.encoder.counter) for v in runs))
         )
     if plane_logs:
-        validations.append(
-            Validation(
-                "plane", *(plane_residuals(read_validation_log(p, "plane"))[0] for p in plane_logs)
-            )
-        )
+        runs = [read_validation_log(p, "plane") for p in plane_logs]
+        check_logs(runs, rb)
+        validations.append(Validation("plane", *(plane_residuals(v)[0] for v in runs)))
     ctl = None
     if controller:
         with tempfile.TemporaryDirectory() as tmp:
             from wirecal.app.compare import compare_controller  # the twin only when asked
 
             ctl = compare_controller(result, Path(tmp))
-    truth = load_errors(truth_file, rb) if truth_file else None
+    truth = load_errors(truth_file, rb, result.measurements.sha256) if truth_file else None
     return render_report(result, validations, ctl, truth, plausibility=verdict.patch_field())

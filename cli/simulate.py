@@ -13,6 +13,7 @@ from wirecal.cli.main import user_errors
 from wirecal.cli.options import NON_NEGATIVE, OUTPUT_FILE, PLAN, ROBOT, SEED, given, number
 from wirecal.formats.capture import MIN_TERMINAL, fold
 from wirecal.formats.fileio import Outputs
+from wirecal.formats.log import text_sha256
 from wirecal.formats.plan_file import load_plan
 from wirecal.formats.robot_file import (
     MAX_DH_ANGLE_DEG,
@@ -221,10 +222,7 @@ def simulate(
             )
             text, stopped = _direct_log(rb, pl, errors, run, faults), None
         out.put(log_path, text)
-        out.put(
-            truth_path,
-            truth_text(rb, errors, None if errors_file else seed) + _encoder_note(true_encoder),
-        )
+        out.put(truth_path, _truth(rb, errors, None if errors_file else seed, text, true_encoder))
     points = sum(line.startswith("point,") for line in text.splitlines())  # as logged
     click.echo(f"wrote {log_path} ({points} points) and the truth to {truth_path}")
     if stopped:
@@ -343,6 +341,13 @@ def _check_twin_options(
             "--outliers and --stop-after apply to the direct simulation; "
             "in the twin, give --slip STEP:MM (the fault the twin injects)"
         )
+
+
+def _truth(
+    rb: Robot, errors: dict[str, float], seed: int | None, log: str, encoder: EncoderTruth
+) -> str:
+    """Return the truth file of the run that wrote ``log``: its errors and its encoder."""
+    return truth_text(rb, errors, seed, text_sha256(log)) + _encoder_note(encoder)
 
 
 def _true_encoder(

@@ -36,6 +36,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.identify import DEFAULT_OMEGA
 from wirecal.solver.log.measurements import Tolerances, check_log
 from wirecal.solver.plausibility import READING_NOISE_MM
+from wirecal.solver.solve import refuse_options
 from wirecal.solver.solve import solve as solve_api
 
 if TYPE_CHECKING:
@@ -152,6 +153,7 @@ def solve(
     if rb.controller_problem():
         raise WirecalError(f"{rb.controller_problem()}; 'wirecal solve' reads that log")
     pl = load_plan(plan, rb)
+    refuse_options(rb, pl, _methods(pl, method), refine_scale)  # before the log is read
     paths = [patch_path, *companion_paths(rb, patch_path)] if patch_path else []
     if log == STDIN and sys.stdin is not None and sys.stdin.isatty():
         click.echo("paste the log, then Ctrl-D (Windows: Ctrl-Z, Enter)", err=True)
@@ -159,8 +161,6 @@ def solve(
         m = check_log(
             read_log(log), pl, rb, Tolerances(joint_tol, spread_tol, zero_tol), accept_foreign
         )
-        if not pl.joint_only:  # a pool plan refuses --refine-scale itself
-            _check_refine_scale(refine_scale, m, log)
         options = (omega, robust, partial, refine_scale)
         result = _solve(rb, pl, m, method, options)
         chosen = result.recommended if method in ("all", "controller") else method
@@ -176,16 +176,6 @@ def solve(
     if patch_path:
         others = " and ".join(str(p) for p in companion_paths(rb, patch_path))
         click.echo(f"wrote {patch_path} ({chosen}) and {others}", err=as_json)
-
-
-def _check_refine_scale(refine_scale: bool, m: Measurements, log: str) -> None:
-    """Refuse --refine-scale for a log without the reference step whose scale it refines."""
-    if refine_scale and not len(m.reference_mm):
-        raise WirecalError(
-            f"--refine-scale refines the scale the log's reference step measured; {log} "
-            "has no reference step (a gauge, [encoder] reference_length_mm, and a run with "
-            "it): leave it out"
-        )
 
 
 def _solve(

@@ -10,7 +10,7 @@ import numpy as np
 
 from wirecal.app.urdf_import import ImportOptions, urdf_robot_file
 from wirecal.cli.main import user_errors
-from wirecal.cli.options import OUTPUT_FILE
+from wirecal.cli.options import OUTPUT_FILE, POSITIVE, number
 from wirecal.formats.fileio import Outputs
 from wirecal.formats.patch import read_patch
 from wirecal.formats.robot_file import load_robot
@@ -106,10 +106,10 @@ def _wire_point(ctx, param, value: str | None):
     help="The data sheet's maximum joint speeds, S1,…,Sn in deg/s, instead of the URDF's.",
 )
 @click.option(
-    "--mm-per-count", default=0.025488, show_default=True, type=float, help="Encoder scale."
+    "--mm-per-count", default=0.025488, show_default=True, type=number(), help="Encoder scale."
 )
 @click.option(
-    "--range-mm", default=1250.0, show_default=True, type=float, help="Encoder wire range."
+    "--range-mm", default=1250.0, show_default=True, type=POSITIVE, help="Encoder wire range."
 )
 @click.option(
     "--counter-bits",
@@ -137,7 +137,7 @@ def _wire_point(ctx, param, value: str | None):
 )
 @click.option(
     "--parallel-tol-deg",
-    type=click.FloatRange(0, 0.05, min_open=True),
+    type=number(0, 0.05, min_open=True),
     default=None,
     help="Take axes this close to parallel as parallel (a URDF with rounded angles); the "
     "import reports how far the tip then moves.",

@@ -12,20 +12,21 @@ from wirecal.solver.counter import Counter
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.validation.analysis import (
     Stats,
+    ValidationLog,
+    check_logs,
     config_discrepancy,
     plane_residuals,
     reduction,
 )
 
 
-def analyse(kind: str, path: str, counter: Counter | None) -> Stats:
-    """Read a validation log of ``kind`` (configuration or plane) and return its statistics."""
-    log = read_validation_log(path, kind)
-    if kind == "plane":
+def analyse(log: ValidationLog, counter: Counter | None) -> Stats:
+    """Return a validation log's statistics (configuration or plane, its kind)."""
+    if log.kind == "plane":
         return plane_residuals(log)[0]
     if counter is None:
         raise WirecalError(
-            f"{path}: a configuration log's counts wrap at the robot's counter width: "
+            f"{log.source}: a configuration log's counts wrap at the robot's counter width: "
             "give the robot file: wirecal validate ROBOT.toml configuration …"
         )
     return config_discrepancy(log, counter)
@@ -69,10 +70,11 @@ def validate(args, robot_alias, as_json):
     robot, kind, before, after = _arguments(args)
     if robot_alias is not None:
         robot = positional(robot, robot_alias, "ROBOT", "--robot")
-    counter = load_robot(robot).encoder.counter if robot else None
-    runs = {"before": analyse(kind, before, counter)}
-    if after:
-        runs["after"] = analyse(kind, after, counter)
+    rob = load_robot(robot) if robot else None
+    logs = [read_validation_log(path, kind) for path in (before, after) if path]
+    check_logs(logs, rob)
+    counter = rob.encoder.counter if rob is not None else None
+    runs = dict(zip(("before", "after"), (analyse(log, counter) for log in logs), strict=False))
     figures = {
         name: {"mean_mm": s.mean, "std_mm": s.std, "max_mm": s.max, "n": int(s.values.size)}
         for name, s in runs.items()

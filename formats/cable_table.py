@@ -71,6 +71,7 @@ def parse_map(text: str | None, n_joints: int, header: tuple[str, ...] = ()) -> 
     missing = [k for k in keys[: n_joints + 1] if k not in given]
     if missing:
         problems.append(f"--map: {', '.join(missing)} missing; map every joint and the length")
+    problems += _shared_columns(given)
     axes = [a for a in AXES if a in given]
     if axes and len(axes) != 3:
         problems.append("--map: give x, y and z together, or none of them")
@@ -78,6 +79,16 @@ def parse_map(text: str | None, n_joints: int, header: tuple[str, ...] = ()) -> 
         raise WirecalError(problems)
     xyz = (given["x"], given["y"], given["z"]) if axes else None
     return ColumnMap(tuple(given[k] for k in keys[:n_joints]), given["length"], xyz)
+
+
+def _shared_columns(given: dict[str, str]) -> list[str]:
+    """Return a problem for each column the map gives two keys (one column, one meaning)."""
+    roles = {c: [k for k, col in given.items() if col == c] for c in given.values()}
+    return [
+        f"--map: column {c!r} is given for {' and '.join(keys)}; each key needs its own column"
+        for c, keys in roles.items()
+        if len(keys) > 1
+    ]
 
 
 def read_cable_table(
@@ -218,9 +229,11 @@ def check_workbook(raw: bytes, source: str) -> None:
 def column_index(
     names: tuple[str, ...], header: tuple[str, ...], source: str, advice: str = ""
 ) -> list[int]:
-    """Return the position of each named column; raise naming the absent ones.
+    """Return the position of each named column; raise naming the absent or repeated ones.
 
-    ``advice``: what to do, appended to the message (how to name the columns).
+    ``advice``: what to do, appended to the absent ones' message (how to name the columns).
+    A column the header names twice is refused: which of them holds the values is not known
+    (a map names columns, so it cannot tell them apart either).
     """
     absent = [c for c in names if c not in header]
     if absent:
@@ -228,6 +241,14 @@ def column_index(
             f"{source}: no column {', '.join(repr(c) for c in absent)}; the header has "
             f"{', '.join(repr(h) for h in header)}{advice}"
         )
+    for c in names:
+        where = [str(k + 1) for k, h in enumerate(header) if h == c]
+        if len(where) > 1:
+            raise WirecalError(
+                f"{source}: the header names {c!r} {len(where)} times (columns "
+                f"{', '.join(where)}): which holds the values is not known; give the "
+                "others other names in the header"
+            )
     return [header.index(c) for c in names]
 
 

@@ -140,6 +140,11 @@ def load_measurements(
     return check_log(read_log(path), plan, robot, tol, accept_foreign)
 
 
+def text_sha256(text: str) -> str:
+    """Return the sha256 of ``text`` as wirecal writes it (UTF-8): a log's fingerprint."""
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
 def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bool = True) -> Log:
     """Parse a log's text.
 
@@ -149,7 +154,7 @@ def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bo
     (``wirecal receive``), where a line that is no row is an error.
     """
     if sha256 is None:
-        sha256 = hashlib.sha256(text.encode("utf-8")).hexdigest()
+        sha256 = text_sha256(text)
     table = parse_table(
         text,
         source,

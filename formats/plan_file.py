@@ -118,6 +118,22 @@ def _order(doc: Table, robot: Robot) -> list[str]:
     return order
 
 
+def _theta0_in_radians(theta0: np.ndarray, sets: list[np.ndarray]) -> bool:
+    """Whether θ0 alone was written in radians: within ±2π, and in degrees nearer the points.
+
+    A plan's points lie around its θ0 (the wire is short); a θ0 near the zero pose in
+    degrees has points nearer itself than its values times 57.3 (all zero: equal, kept).
+    """
+    if not within_a_turn(theta0):
+        return False
+    q = np.concatenate(sets)
+
+    def nearest(x: np.ndarray) -> float:
+        return float(np.min(np.max(np.abs(q - x), axis=1)))
+
+    return nearest(np.degrees(theta0)) < nearest(theta0)
+
+
 def _point_sets(st: Table, n: int) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Return a step's ``points_deg`` and ``via_deg`` (None where they have problems)."""
     joints = "(one per joint, deg)"
@@ -150,6 +166,14 @@ def _check_angles(
                 "θ0 and every point of the plan are within ±2π: they look like radians (θ0 "
                 f"would be [{', '.join(f'{v:.4g}' for v in np.degrees(theta0))}] deg); give "
                 "degrees",
+            )
+            return
+        if _theta0_in_radians(theta0, [q for _, _, q in sets if q is not None and q.size]):
+            doc.add(
+                "theta0_deg",
+                "θ0 is within ±2π while the points are not: θ0 looks like radians (in degrees "
+                f"[{', '.join(f'{v:.4g}' for v in np.degrees(theta0))}], nearer the plan's "
+                "points); give degrees",
             )
             return
     if theta0 is not None:

@@ -91,6 +91,8 @@ def _half_space(table: Table) -> HalfSpace | None:
     """Read one ``[[cell.half_space]]``: a point on its plane and the free side's normal."""
     name = table.string("name")
     point, normal = point_mm(table, "point_mm"), unit_vector(table, "normal")
+    if point is not None and not_metres(table, "point_mm", np.array(point)) is None:
+        point = None
     if name is None or point is None or normal is None:
         return None
     return HalfSpace(name, point, normal)

@@ -21,6 +21,8 @@ from wirecal.formats.robot_values import (
     MAX_WIRE_ACCEL_MM_S2,
     MAX_WIRE_SPEED_MM_S,
     MIN_RANGE_MM,
+    MIN_WIRE_ACCEL_MM_S2,
+    MIN_WIRE_SPEED_MM_S,
     unit_vector,
 )
 from wirecal.formats.run_token import MIN_KEY_CHARS
@@ -190,14 +192,25 @@ def read_encoder(enc: Table, interface: str | None) -> Encoder | None:
 def _range_mm(enc: Table) -> float | None:
     """Read ``range_mm``; None, with a problem naming the unit, when it is in metres."""
     rng = enc.number("range_mm", above=0, hi=MAX_RANGE_MM, unit="mm")
-    if rng is not None and rng < MIN_RANGE_MM:
-        enc.add(
-            "range_mm",
-            f"is {rng:g}: a wire under {MIN_RANGE_MM:g} mm spans no arm; that looks like "
-            f"metres ({rng * 1000:g} mm); give the encoder's range in mm",
-        )
-        return None
-    return rng
+    return _in_unit(
+        enc,
+        "range_mm",
+        rng,
+        MIN_RANGE_MM,
+        f"a wire under {MIN_RANGE_MM:g} mm spans no arm; that looks like metres "
+        f"({(rng or 0) * 1000:g} mm); give the encoder's range in mm",
+    )
+
+
+def _in_unit(enc: Table, key: str, value: float | None, least: float, why: str) -> float | None:
+    """Return ``value``; None, with a problem ``is value: why``, under ``least``.
+
+    Such a value is in a larger unit (metres for mm): ``why`` says which.
+    """
+    if value is None or value >= least:
+        return value
+    enc.add(key, f"is {value:g}: {why}")
+    return None
 
 
 def _scale(
@@ -243,6 +256,22 @@ def _wire_limits(enc: Table) -> tuple[float | None, float | None]:
     """Read the wire's speed and acceleration limits (mm/s, mm/s²; None: not given)."""
     speed = enc.number("max_wire_speed_mm_s", None, above=0, hi=MAX_WIRE_SPEED_MM_S, unit="mm/s")
     accel = enc.number("max_wire_accel_mm_s2", None, above=0, hi=MAX_WIRE_ACCEL_MM_S2, unit="mm/s²")
+    speed = _in_unit(
+        enc,
+        "max_wire_speed_mm_s",
+        speed,
+        MIN_WIRE_SPEED_MM_S,
+        f"a wire limited to under {MIN_WIRE_SPEED_MM_S:g} mm/s would take about a minute per "
+        f"metre; that looks like m/s ({(speed or 0) * 1000:g} mm/s); give mm/s",
+    )
+    accel = _in_unit(
+        enc,
+        "max_wire_accel_mm_s2",
+        accel,
+        MIN_WIRE_ACCEL_MM_S2,
+        f"under {MIN_WIRE_ACCEL_MM_S2:g} mm/s² (0.1 g); that looks like m/s² "
+        f"({(accel or 0) * 1000:g} mm/s²) or g; give mm/s²",
+    )
     return speed, accel
 
 

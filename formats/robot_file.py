@@ -333,7 +333,14 @@ def _payload(cal: Table, compliances: bool, masses: MassModel | None) -> dict:
             "the mass is checked against it",
         )
     tool = masses.payload_mass_kg if masses is not None else 0.0
-    if kg is not None and rated is not None and kg + tool > rated:
+    if rated is not None and tool > rated:
+        cal.add(
+            "rated_payload_kg",
+            f"is {rated:g} kg, less than the tool's own {tool:g} kg ([gravity] "
+            "payload_mass_kg): the arm cannot carry its tool; give both in kg (the tool in "
+            "grams?)",
+        )
+    elif kg is not None and rated is not None and kg + tool > rated:
         cal.add(
             "payload_kg",
             f"{kg:g} kg with the tool's {tool:g} kg ([gravity] payload_mass_kg) exceeds the "

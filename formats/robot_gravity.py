@@ -24,7 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from wirecal.formats.robot_values import MAX_LENGTH_MM, unit_vector
+from wirecal.formats.robot_values import MAX_LENGTH_MM, not_metres, unit_vector
 from wirecal.formats.toml_fields import Table
 from wirecal.solver.gravity import DOWN, MassModel, default_masses
 
@@ -41,6 +41,10 @@ GRAVITY_KEYS = (
 
 MAX_MASS_KG = 10_000.0
 """Largest link or payload mass (kg): heavier than the heaviest industrial arm's link."""
+MAX_KG_PER_M = 5000.0
+"""Heaviest links per metre of DH lengths (kg/m): 5 t a metre is beyond any arm's links (an
+estimate: the heaviest industrial arms weigh some 10 t over metres of links); grams read as
+kg make a 20 kg arm of 1.3 m 13 t a metre."""
 MAX_COMPLIANCE_URAD_PER_NM = 10_000.0
 """Largest compliance (µrad/(N·m)): 0.01 rad per N·m; harmonic drives of light arms are
 about 10–100 µrad/(N·m), heavy arms' gearboxes 0.1–10."""
@@ -58,6 +62,13 @@ def read_gravity(
     n = None if dh_rad is None else dh_rad.shape[0]
     source = table.string("source", "")
     mass, com = _links(table, n)
+    if mass is not None and dh_rad is not None and _in_grams(mass, dh_rad):
+        table.add(
+            "link_mass_kg",
+            f"the links weigh {mass.sum():g} kg in all, more than {MAX_KG_PER_M:g} kg per "
+            "metre of the DH table's lengths: that looks like grams; give kg",
+        )
+        mass = None
     payload = table.number("payload_mass_kg", 0.0, lo=0, hi=MAX_MASS_KG, unit="kg")
     pay_com = read_com(table, "payload_com_mm")
     direction: tuple[float, float, float] | None = DOWN
@@ -86,9 +97,18 @@ def read_gravity(
     return MassModel(mass, com, payload, pay_com, np.array(direction), False, source or ""), c
 
 
+def _in_grams(mass_kg: np.ndarray, dh_rad: np.ndarray) -> bool:
+    """Whether link masses meant in kg are in grams: over :data:`MAX_KG_PER_M` of links."""
+    length_m = float(np.abs(dh_rad[:, [1, 3]]).sum()) / 1000.0
+    return float(mass_kg.sum()) > MAX_KG_PER_M * length_m
+
+
 def read_com(table: Table, key: str) -> np.ndarray | None:
-    """Read a mass's centre (mm, default the origin) in the last frame: x, y, z in range."""
-    return table.vector(
+    """Read a mass's centre (mm, default the origin) in the last frame: x, y, z in range.
+
+    None, with a problem, when it is in metres (:func:`~.robot_values.not_metres`).
+    """
+    com = table.vector(
         key,
         [0.0, 0.0, 0.0],
         length=3,
@@ -97,6 +117,7 @@ def read_com(table: Table, key: str) -> np.ndarray | None:
         hi=MAX_LENGTH_MM,
         unit="mm",
     )
+    return not_metres(table, key, com)
 
 
 def _links(table: Table, n: int | None) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -120,4 +141,6 @@ def _links(table: Table, n: int | None) -> tuple[np.ndarray | None, np.ndarray |
         )
     if com is not None and n is not None and com.shape[0] != n:
         table.add("link_com_mm", f"has {com.shape[0]} rows; expected {n} (one per link)")
+    if com is not None and not_metres(table, "link_com_mm", com.ravel()) is None:
+        com = None
     return mass, com

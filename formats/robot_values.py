@@ -30,6 +30,11 @@ MAX_WIRE_SPEED_MM_S = 20_000.0
 """Largest wire speed limit (mm/s): catalogue draw-wire sensors allow 1–10 m/s."""
 MAX_WIRE_ACCEL_MM_S2 = 1_000_000.0
 """Largest wire acceleration limit (mm/s²): about 100 g; catalogues give 5–20 g."""
+MIN_WIRE_SPEED_MM_S = 20.0
+"""A wire speed limit under this is in m/s (1 for 1000 mm/s): a sensor that slow would
+take a minute per metre of wire."""
+MIN_WIRE_ACCEL_MM_S2 = 1000.0
+"""A wire acceleration limit under this (0.1 g) is in m/s² (49 for 5 g) or in g."""
 MAX_CELL_MARGIN_MM = 500.0
 """Largest ``[cell] margin_mm``: a gap wider than half a metre leaves no arm room to move."""
 MIN_JOINT_RANGE_DEG = 10.0

@@ -4,6 +4,7 @@ Format::
 
     robot = "Adept Viper s650"      # optional; must match the robot file
     seed = 3                        # optional, how they were drawn (a whole number ≥ 0)
+    log_sha256 = "…"                # optional: the log simulated with them (its bytes')
     [errors]
     th2 = 0.675
     a2 = 0.105
@@ -25,14 +26,15 @@ from wirecal.solver import params as P
 from wirecal.solver.compliance import COMPLIANCE_RANGE_URAD_PER_NM
 from wirecal.solver.robot import Robot
 
-_KEYS = ("robot", "seed", "errors")
+_KEYS = ("robot", "seed", "log_sha256", "errors")
 
 
-def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
+def load_errors(path: str | Path, robot: Robot, log_sha256: str | None = None) -> dict[str, float]:
     """Return the ``[errors]`` table of a truth file, validated against the robot.
 
     Offsets are bounded like the robot file's values (±360 deg, ±10 000 mm); a truth file
-    for another robot is refused.
+    for another robot is refused, and, given the ``log_sha256`` of the log it is compared
+    with, one written with another log.
     """
     doc = document(read_toml(path, "truth file"), str(path), "truth file", _KEYS)
     name = doc.string("robot", None)
@@ -41,6 +43,13 @@ def load_errors(path: str | Path, robot: Robot) -> dict[str, float]:
             "robot",
             f"the truth is for {name!r} but the robot file describes {robot.name!r}; "
             "use the matching robot file",
+        )
+    written = doc.string("log_sha256", None)
+    if written is not None and log_sha256 is not None and written != log_sha256:
+        doc.add(
+            "log_sha256",
+            f"the truth was written with another log ({written[:12]}…, this one is "
+            f"{log_sha256[:12]}…); give the truth file simulate wrote beside this log",
         )
     doc.integer("seed", None, lo=0)
     table = doc.table("errors", None)
@@ -84,8 +93,10 @@ def random_errors(robot: Robot, scale: float, rng: np.random.Generator) -> dict[
     return out
 
 
-def truth_text(robot: Robot, errors: dict[str, float], seed: int | None) -> str:
-    """Return the text of a truth file holding ``errors`` (deg, mm)."""
+def truth_text(
+    robot: Robot, errors: dict[str, float], seed: int | None, log_sha256: str | None = None
+) -> str:
+    """Return the text of a truth file holding ``errors`` (deg, mm), of the log ``log_sha256``."""
     lines = [
         "# wirecal truth: the simulated robot's true error offsets (deg, mm).",
         "# Kept apart from the log; compare a solve's result against it.",
@@ -93,6 +104,8 @@ def truth_text(robot: Robot, errors: dict[str, float], seed: int | None) -> str:
     ]
     if seed is not None:
         lines.append(f"seed = {seed}")
+    if log_sha256 is not None:
+        lines.append(f'log_sha256 = "{log_sha256}"')
     lines += ["", "[errors]"]
     lines += [f"{name} = {value!r}" for name, value in errors.items()]
     return "\n".join(lines) + "\n"

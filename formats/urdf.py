@@ -248,13 +248,23 @@ def _check_units(j: Joint, where: str) -> None:
     _check_metres(j.xyz_m, f"{where}: origin xyz")
 
 
-def _check_metres(xyz_m: np.ndarray, what: str) -> None:
-    """Refuse an offset ``what`` names that is in millimetres (beyond :data:`MAX_OFFSET_M`)."""
-    if np.max(np.abs(xyz_m)) > MAX_OFFSET_M:
+def check_reach(reach_m: float, what: str, fix: str = "") -> None:
+    """Refuse a length in millimetres: a reach beyond :data:`MAX_OFFSET_M` (or NaN).
+
+    ``reach_m``: how far an origin offset or a shape reaches from its frame's origin (m);
+    ``what`` says so, ending where the message goes on with "beyond 10 m"; ``fix`` adds
+    to "Divide them by 1000".
+    """
+    if not reach_m <= MAX_OFFSET_M:
         raise WirecalError(
-            f"{what} {' '.join(f'{v:g}' for v in xyz_m)} is beyond {MAX_OFFSET_M:g} m: URDF "
-            "lengths are metres; written in millimetres? Divide them by 1000 and import again"
+            f"{what} beyond {MAX_OFFSET_M:g} m: URDF lengths are metres; written in "
+            f"millimetres? Divide them by 1000{fix} and import again"
         )
+
+
+def _check_metres(xyz_m: np.ndarray, what: str) -> None:
+    """Refuse an origin offset ``what`` names that is in millimetres (:func:`check_reach`)."""
+    check_reach(math.hypot(*xyz_m), f"{what} {' '.join(f'{v:g}' for v in xyz_m)} is")
 
 
 def read_urdf(path: str | Path) -> Urdf:

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from wirecal.formats.stl import stl_vertices
-from wirecal.formats.urdf import MAX_OFFSET_M, rpy_matrix
+from wirecal.formats.urdf import check_reach, rpy_matrix
 from wirecal.formats.urdf_model import UrdfChain
 from wirecal.solver.dh_from_axes import dh_frames
 from wirecal.solver.errors import WirecalError
@@ -133,20 +133,19 @@ def _shape(geometry: ET.Element, urdf_path: Path) -> tuple[np.ndarray, float]:
     return 1000.0 * stl_vertices(path) * scale, 0.0
 
 
-def _check_metres(points: np.ndarray, pad: float, where: str) -> None:
-    """Refuse a shape (points in its link's frame, mm) reaching beyond ``MAX_OFFSET_M``.
+def _check_shape_reach(points: np.ndarray, pad: float, where: str) -> None:
+    """Refuse a shape (points in its link's frame, mm) reaching too far (:func:`check_reach`).
 
     Such a shape was written in millimetres; read as metres it would be dropped as lying
     beyond the links, leaving the link the length rule's thin capsule.
     """
     finite = np.nan_to_num(points, nan=np.inf)  # inf − inf of an overflowed shape: nan
     reach_m = (float(np.max(np.linalg.norm(finite, axis=1), initial=0.0)) + pad) / 1000.0
-    if not reach_m <= MAX_OFFSET_M:
-        raise WirecalError(
-            f"{where}: its geometry reaches {reach_m:.4g} m from the link's origin, beyond "
-            f"{MAX_OFFSET_M:g} m: URDF lengths are metres; written in millimetres? Divide "
-            'them by 1000 (a mesh in mm: scale="0.001 0.001 0.001") and import again'
-        )
+    check_reach(
+        reach_m,
+        f"{where}: its geometry reaches {reach_m:.4g} m from the link's origin,",
+        ' (a mesh in mm: scale="0.001 0.001 0.001")',
+    )
 
 
 def _link_points(link: ET.Element, urdf_path: Path) -> list[tuple[np.ndarray, float]]:
@@ -263,7 +262,7 @@ def _chain_points(ch: UrdfChain, F: np.ndarray) -> tuple[np.ndarray, np.ndarray,
             continue
         T = F[k] @ D
         for p, pad in shapes:
-            _check_metres(p, pad, f"{ch.urdf.path}: link {link!r}")
+            _check_shape_reach(p, pad, f"{ch.urdf.path}: link {link!r}")
             points.append(p @ T[:3, :3].T + T[:3, 3])
             pads.append(np.full(len(p), pad))
             frames.append(np.full(len(p), k))

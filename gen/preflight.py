@@ -23,7 +23,7 @@ from wirecal.lang.base import Language
 from wirecal.solver.cell.check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan.calibration_plan import Plan
-from wirecal.solver.robot import Robot
+from wirecal.solver.robot import Robot, near_limits
 from wirecal.solver.wire_range import check_wire_range
 
 
@@ -57,18 +57,20 @@ def check_limits(robot: Robot, plan: Plan, margin_deg: float) -> None:
 
     def check(q: np.ndarray, where: str) -> None:
         for j in np.flatnonzero((q < lo) | (q > hi)):
+            lo_j, hi_j = robot.joint_min_deg[j], robot.joint_max_deg[j]
             problems.append(
-                f"{plan.source}: {where}: joint {j + 1} = {joint_literal(q[j])} deg is within "
-                f"{margin_deg:g} deg of its limits [{robot.joint_min_deg[j]:g}, "
-                f"{robot.joint_max_deg[j]:g}]; move the point or lower --margin"
+                f"{plan.source}: {where}: joint {j + 1} = {joint_literal(q[j])} deg is "
+                f"{near_limits(q[j], lo_j, hi_j, margin_deg)} its limits [{lo_j:g}, "
+                f"{hi_j:g}]; move the point or lower --margin"
             )
         inside = (q >= lo) & (q <= hi)
         for j in np.flatnonzero(inside & ((q < body_lo) | (q > body_hi))):
+            lo_j, hi_j = body_lo[j] - margin_deg, body_hi[j] + margin_deg
             problems.append(
-                f"{plan.source}: {where}: joint {j + 1} = {joint_literal(q[j])} deg is within "
-                f"{margin_deg:g} deg of its body limits [{body_lo[j] - margin_deg:g}, "
-                f"{body_hi[j] + margin_deg:g}] ({robot.source} [cell]: the arm would fold into "
-                "itself); move the point or lower --margin"
+                f"{plan.source}: {where}: joint {j + 1} = {joint_literal(q[j])} deg is "
+                f"{near_limits(q[j], lo_j, hi_j, margin_deg)} its body limits [{lo_j:g}, "
+                f"{hi_j:g}] ({robot.source} [cell]: the arm would fold into itself); move the "
+                "point or lower --margin"
             )
 
     check(plan.theta0_deg, "theta0_deg")

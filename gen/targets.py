@@ -90,21 +90,29 @@ def tool_mass_problems(robot: Robot, declares: str) -> list[str]:
     ]
 
 
-def payload_context(plan: Plan) -> dict[str, object] | None:
+def payload_context(robot: Robot, plan: Plan) -> dict[str, object] | None:
     """Return the payload step for a template (None without one): mass, centre, step, points.
 
     ``kg`` and ``com_mm`` as written in the programs (the plan's numbers, shortest form),
     ``step`` its number (the last), ``points_before`` the points of the parameters' steps:
     the controller solver's, which has no gravity model and leaves the step's points out.
+    What the plan's mass was checked against (:mod:`wirecal.formats.plan_file`):
+    ``rated_kg``, the robot file's ``[calibration] rated_payload_kg``; ``tool_kg``, the tool
+    it declares (``[gravity] payload_mass_kg``); ``spare_kg``, what the rating leaves for
+    the tool beyond the step's mass.
     """
-    step = plan.payload_step
-    if step is None:
+    step, loads = plan.payload_step, flange_loads(robot, plan)
+    if step is None or loads is None or robot.rated_payload_kg is None:
         return None
+    tool_kg = loads[1][0]
     return {
         "kg": f"{step.payload_kg:g}",
         "com_mm": [f"{x:g}" for x in step.payload_com_mm],
         "step": len(plan.steps),
         "points_before": plan.n_points - len(step.points_deg),
+        "rated_kg": f"{robot.rated_payload_kg:g}",
+        "tool_kg": f"{tool_kg:g}",
+        "spare_kg": f"{robot.rated_payload_kg - step.payload_kg:g}",
     }
 
 

@@ -37,6 +37,16 @@ DEFAULT_DRUM_PPM_PER_K = 23.0
 """The drum's linear expansion (ppm/K) when the robot file gives none: aluminium."""
 
 
+def near_limits(value_deg: float, lo_deg: float, hi_deg: float, margin_deg: float) -> str:
+    """Say where a joint value refused for its margin lies: beyond a limit, or within margin.
+
+    ``lo_deg`` and ``hi_deg`` are the limits themselves (the margin not yet taken off).
+    """
+    if value_deg < lo_deg or value_deg > hi_deg:
+        return "beyond"
+    return f"within {margin_deg:g} deg of"
+
+
 @dataclass(frozen=True)
 class Encoder:
     """The draw-wire encoder and how the controller program reads it.

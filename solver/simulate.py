@@ -396,7 +396,7 @@ def simulate_run(
     rows = _reference_rows(enc, encoder, plan, noise_mm, samples, start, seed, total)
     readings = zip(kinds, steps, indices, joints, mean, strict=True)
     rows += _reading_rows(readings, spread, times, settle_s, samples)
-    cut = tuple(rows[: faults.stop_after])  # all of them when the run does not stop
+    cut = _stopped(rows, faults.stop_after)
     kg = None if plan.payload_step is None else plan.payload_step.payload_kg
     return SimulatedRun(robot.name, plan.fingerprint(), mpc, cut, faults.truncate_last, kg)
 
@@ -488,8 +488,23 @@ def _add_faults(
         lengths[after] += slip_mm
     if faults.outliers:
         pts = np.flatnonzero(is_point)
-        chosen = rng.choice(pts, size=min(faults.outliers, len(pts)), replace=False)
+        if faults.outliers > len(pts):
+            raise WirecalError(
+                f"--outliers {faults.outliers}: the plan has {len(pts)} points; give at "
+                f"most {len(pts)}"
+            )
+        chosen = rng.choice(pts, size=faults.outliers, replace=False)
         lengths[chosen] += faults.outlier_mm * rng.choice((-1.0, 1.0), size=len(chosen))
+
+
+def _stopped(rows: list, stop_after: int | None) -> tuple:
+    """Return the rows a run writes before it stops after ``stop_after`` (None: all)."""
+    if stop_after is not None and stop_after >= len(rows):
+        raise WirecalError(
+            f"--stop-after {stop_after}: the run writes {len(rows)} readings, so it would "
+            f"not stop; give fewer than {len(rows)}"
+        )
+    return tuple(rows[:stop_after])
 
 
 def _check_range(

@@ -259,8 +259,8 @@ def solve(
     (:func:`_with_drift_sigma`); ``refine_scale`` refines the scale jointly (``ScalePrior``).
     A pool's plan gets the fit it was planned for (:func:`_solve_pool`).
     """
+    refuse_options(robot, plan, methods, refine_scale, m)
     if plan.joint_only:
-        _refuse_for_pool(plan, methods, refine_scale)
         return _solve_pool(robot, plan, m, partial=partial, corrections=corrections)
     left, names, step = _measured_steps(plan, m, partial)
     factor, notes = _reference_scale(robot, m)
@@ -300,24 +300,53 @@ def solve(
     )
 
 
-def _refuse_for_pool(plan: Plan, methods: tuple[str, ...], refine_scale: bool) -> None:
-    """Refuse the stepwise method alone and --refine-scale for a pool's plan.
+def refuse_options(
+    robot: Robot,
+    plan: Plan,
+    methods: tuple[str, ...],
+    refine_scale: bool,
+    m: Measurements | None = None,
+) -> None:
+    """Refuse methods and a scale refinement the plan, robot file or log ``m`` cannot take.
 
-    Such a plan's steps isolate no parameter (``plan.joint_only``): the step-by-step
-    estimate does not apply.
+    Asked before the log is read (the command line, ``m`` None) and by :func:`solve`. A
+    pool's plan (``plan.joint_only``) isolates no parameter in its steps: the step-by-step
+    estimate does not apply, and its wire fit refines no scale. ``refine_scale`` refines
+    the scale in the joint method, from the reference gauge the robot file declares and
+    the log's reference step measured.
     """
-    if "joint" not in methods:
+    if plan.joint_only and "joint" not in methods:
         raise WirecalError(
             f"{plan.source}: joint_only = true: the plan was written from a pool for the joint "
             "method and its steps do not isolate their parameters, so the step-by-step "
             "estimate does not apply: solve by the joint method (--method joint)"
         )
-    if refine_scale:
+    if not refine_scale:
+        return
+    if plan.joint_only:
         raise WirecalError(
             f"{plan.source}: joint_only = true: --refine-scale refines the scale in the "
             "joint method of the file's [calibration] parameters; a plan from a pool is "
             "solved by the wire fit it was made for, which does not: leave it out (the "
             "reference rows' scale is applied either way)"
+        )
+    if "joint" not in methods:
+        raise WirecalError(
+            "--refine-scale refines the scale in the joint method; --method stepwise runs "
+            "the step-by-step method alone, which takes the reference's scale as measured: "
+            "leave --refine-scale out, or solve by --method joint or all"
+        )
+    if robot.encoder.reference_length_mm is None:
+        raise WirecalError(
+            f"--refine-scale refines the scale the reference gauge measured; {robot.source} "
+            "declares no gauge ([encoder] reference_length_mm), so its logs have no "
+            "reference step: leave it out"
+        )
+    if m is not None and not len(m.reference_mm):
+        raise WirecalError(
+            f"--refine-scale refines the scale the log's reference step measured; {m.source} "
+            "has no reference step (a gauge, [encoder] reference_length_mm, and a run with "
+            "it): leave it out"
         )
 
 

@@ -172,8 +172,8 @@ def test_gen_refuses_a_ur5e_point_beyond_the_elbows_body_limit(tmp_path):
     plan.write_text(plan_text("Universal Robots UR5e", UR_THETA0, folded), encoding="utf-8")
     r = run_cli("gen", str(UR5 / "robot.toml"), str(plan), "-o", str(tmp_path / "out"))
     assert r.exit_code == 2
-    within = "joint 3 = 190 deg is within 1 deg of its body limits [-175, 175]"
-    assert f"step 1 (th2) point 1: {within}" in r.output
+    beyond = "joint 3 = 190 deg is beyond its body limits [-175, 175]"  # not "within" (AU24)
+    assert f"step 1 (th2) point 1: {beyond}" in r.output
 
 
 def test_psi_strict_fails_on_a_collision(tmp_path):

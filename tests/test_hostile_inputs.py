@@ -1588,13 +1588,14 @@ def test_simulate_takes_the_options_with_what_they_apply_to(tmp_path):
 
 def test_refine_scale_without_a_reference_step_is_refused(tmp_path, log):
     """A new case beside the options above: solve --refine-scale on a log without a
-    reference step ran without a word and without refining anything."""
+    reference step ran without a word and without refining anything. Refused before the
+    log is read when the robot file declares no gauge (AU02)."""
     r = invoke("solve", ROBOT, PLAN, log, "--refine-scale")
     assert r.exit_code == 2
     assert (
-        f"error: --refine-scale refines the scale the log's reference step measured; {log} "
-        "has no reference step (a gauge, [encoder] reference_length_mm, and a run with it): "
-        "leave it out"
+        "error: --refine-scale refines the scale the reference gauge measured; "
+        f"{ROBOT} declares no gauge ([encoder] reference_length_mm), so its logs have no "
+        "reference step: leave it out"
     ) in " ".join(r.output.split())
 
 

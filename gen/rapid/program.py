@@ -305,7 +305,7 @@ def _payload(robot: Robot, plan: Plan) -> dict[str, object] | None:
     tooldata page (:data:`~wirecal.lang.rapid.tables.TOOLDATA_PAGE`) has tload hold the
     tool's load only, the payload connected with GripLoad.
     """
-    ctx = payload_context(plan)
+    ctx = payload_context(robot, plan)
     step = plan.payload_step
     if ctx is None or step is None:
         return None

@@ -181,14 +181,13 @@ def _payload(robot: Robot, plan: Plan) -> dict[str, object] | None:
     (``total_kg``/``cog_m``, ``tool_kg``/``tool_cog_m`` after), and a robot file without it
     is refused.
     """
-    ctx, step, loads = payload_context(plan), plan.payload_step, flange_loads(robot, plan)
+    ctx, step, loads = payload_context(robot, plan), plan.payload_step, flange_loads(robot, plan)
     if ctx is None or step is None or loads is None:
         return None
     if not is_cb3(robot.controller.software):
         moment = [step.payload_kg * x / 1000 for x in step.payload_com_mm]
         terms = [f"{'-' if m < 0 else '+'} {_fixed(abs(m), 9)}" for m in moment]
-        rated = f"{robot.rated_payload_kg:g}"
-        return ctx | {"read": True, "moment_m": terms, "rated_kg": rated}
+        return ctx | {"read": True, "moment_m": terms}
     problems = tool_mass_problems(
         robot,
         "a CB3 program's payload step declares it with the step's mass (set_payload), the "

@@ -240,7 +240,7 @@ def module_text(robot: Robot, plan: Plan, opt: GenOptions = GenOptions()) -> str
         v=_validation_context(robot, opt),
         echo=opt.echo_log,
         pulley=tables.pulley is not None,
-        payload=payload_context(plan),
+        payload=payload_context(robot, plan),
         solver=not plan.joint_only,  # a pool's plan: the stepwise solver does not apply
         **_run_context(opt),
         **_encoder_context(robot, opt),

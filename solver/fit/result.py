@@ -133,6 +133,32 @@ def _run(
     return Run(core, ho, float(np.sqrt(np.mean(f**2))), np.degrees(data.q_rad))
 
 
+MAX_RESOLUTION_RATIO = 10.0
+"""A declared resolution at most this many times the table's own steps: a controller may
+print more decimals than its counts resolve (a few times finer), never a hundred times."""
+
+
+def _resolution(given: float | None, read: float, table: CableTable, what: str) -> float:
+    """Return the resolution of ``what`` (joint deg, length mm): ``given``, or ``read``.
+
+    A given one far coarser than the steps the table's values take inflates the
+    quantisation floor the gate allows: refused.
+    """
+    if given is None:
+        return read
+    unit, option = (
+        ("deg", "--joint-resolution-deg") if what == "joint" else ("mm", "--length-resolution-mm")
+    )
+    if given > MAX_RESOLUTION_RATIO * read:
+        raise WirecalError(
+            f"{table.source}: {option} {given:g}: the {what} values take steps of {read:g} "
+            f"{unit}, more than {MAX_RESOLUTION_RATIO:g} times finer; a coarser resolution "
+            "widens the quantisation floor the gate allows: leave it out (read off the "
+            "values) or give the controller's own"
+        )
+    return given
+
+
 def fit_table(robot: Robot, table: CableTable, options: FitOptions | None = None) -> FitResult:
     """Fit ``robot``'s cable model to ``table`` (module docstring); raise what blocks it."""
     options = options or FitOptions()
@@ -146,8 +172,8 @@ def fit_table(robot: Robot, table: CableTable, options: FitOptions | None = None
     check_columns(robot, table)
     check_units(base, table)
     res = (
-        options.joint_resolution_deg or table.joint_resolution_deg,
-        options.length_resolution_mm or table.length_resolution_mm,
+        _resolution(options.joint_resolution_deg, table.joint_resolution_deg, table, "joint"),
+        _resolution(options.length_resolution_mm, table.length_resolution_mm, table, "length"),
     )
     xyz = None
     if table.xyz_mm is not None and table.xyz_resolution_mm is not None:

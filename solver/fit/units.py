@@ -158,7 +158,8 @@ def check_units(base: Model, table: CableTable) -> None:
         problems.add(
             col,
             f"the lengths span {span:.4g} while the robot file's tool point moves over "
-            f"{reach:.0f} mm at these joints: they look like metres; give mm",
+            f"{reach:.0f} mm at these joints: they look like metres (or inches: under "
+            f"1/{METRES_RATIO:g} of it); give mm",
         )
     elif span > SPAN_MARGIN * reach:
         problems.add(

@@ -73,19 +73,32 @@ def check_origin(log: Log, plan: Plan, robot: Robot) -> None:
             f"({plan.fingerprint()[:16]}…): the log was taken with another plan; "
             "use that plan, or --accept-foreign if you are sure"
         )
-    if log.robot != robot.name:
-        problems.append(
-            f"{src}: robot {log.robot!r} differs from {robot.source} "
-            f"({robot.name!r}); use the matching robot file, or --accept-foreign"
-        )
-    if not math.isclose(abs(log.mm_per_count), abs(robot.encoder.mm_per_count), rel_tol=1e-6):
-        problems.append(
-            f"{src}: mm_per_count {log.mm_per_count!r} differs from the robot "
-            f"file's encoder.mm_per_count {robot.encoder.mm_per_count!r}; use the matching "
-            "robot file, or --accept-foreign"
-        )
+    problems += robot_problems(src, log.robot, log.mm_per_count, robot, ", or --accept-foreign")
     if problems:  # a log of another plan or robot: row-by-row complaints would be noise
         raise WirecalError(problems)
+
+
+def robot_problems(
+    src: str, name: str, mm_per_count: float | None, robot: Robot, other: str = ""
+) -> list[str]:
+    """Return the problems of a log (a measurement or validation log) of another robot.
+
+    ``name`` and ``mm_per_count`` (None: the log has none) are its header's; ``other``
+    ends each problem's advice (", or --accept-foreign" where that option exists).
+    """
+    problems = []
+    if name != robot.name:
+        problems.append(
+            f"{src}: robot {name!r} differs from {robot.source} "
+            f"({robot.name!r}); use the matching robot file{other}"
+        )
+    enc = robot.encoder.mm_per_count
+    if mm_per_count is not None and not math.isclose(abs(mm_per_count), abs(enc), rel_tol=1e-6):
+        problems.append(
+            f"{src}: mm_per_count {mm_per_count!r} differs from the robot "
+            f"file's encoder.mm_per_count {enc!r}; use the matching robot file{other}"
+        )
+    return problems
 
 
 def payload_problems(log: Log, plan: Plan) -> list[str]:

@@ -28,7 +28,7 @@ from wirecal.solver.plan.payload import payload_step, plan_sigmas
 from wirecal.solver.plan.predict import predicted_accuracy, robot_time
 from wirecal.solver.plan.steps import StepPool, step_by_step, step_error
 from wirecal.solver.plan.tour import tour
-from wirecal.solver.robot import Robot
+from wirecal.solver.robot import Robot, near_limits
 from wirecal.solver.sensitivity import sensitivity
 
 
@@ -131,9 +131,9 @@ def check_theta0(robot: Robot, theta0: np.ndarray, opt: PlanOptions) -> None:
     inner_lo, inner_hi = robot.limits_deg(opt.margin_deg)
     for j in np.flatnonzero((theta0 < inner_lo) | (theta0 > inner_hi)):
         raise WirecalError(
-            f"theta0: joint {j + 1} = {theta0[j]:g} deg is within "
-            f"{opt.margin_deg:g} deg of its limits [{lo[j]:g}, {hi[j]:g}] (the joint "
-            "limits, narrowed by [cell] body limits)"
+            f"theta0: joint {j + 1} = {theta0[j]:g} deg is "
+            f"{near_limits(theta0[j], lo[j], hi[j], opt.margin_deg)} its limits [{lo[j]:g}, "
+            f"{hi[j]:g}] (the joint limits, narrowed by [cell] body limits)"
         )
     p0 = tool_position(robot.nominal, np.radians(theta0)[None])[0]
     gaps = robot.cell_gaps(theta0, p0)

@@ -7,12 +7,15 @@ least-squares plane through the probed points (§3.6.2, eq. 21–25).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from wirecal.solver.counter import Counter
 from wirecal.solver.errors import WirecalError
+from wirecal.solver.log.checks import robot_problems
+from wirecal.solver.robot import Robot
 
 
 @dataclass(frozen=True)
@@ -127,3 +130,30 @@ def plane_residuals(log: ValidationLog) -> tuple[Stats, np.ndarray]:
         )
     coef, *_ = np.linalg.lstsq(U, z, rcond=None)
     return Stats.of(np.abs(U @ coef - z)), coef
+
+
+def check_logs(logs: list[ValidationLog], robot: Robot | None) -> None:
+    """Refuse logs of another robot, and a BEFORE and AFTER not of one setup or the same.
+
+    ``logs``: BEFORE, then AFTER if given; ``robot``: the robot file (None: not given).
+    """
+    problems = []
+    for log in logs:
+        mpc = log.mm_per_count if math.isfinite(log.mm_per_count) else None
+        if robot is not None:
+            problems += robot_problems(log.source, log.robot, mpc, robot)
+    if len(logs) == 2:
+        before, after = logs
+        if before.setup != after.setup:
+            problems.append(
+                f"{after.source}: setup {after.setup[:16]}… differs from {before.source}'s "
+                f"({before.setup[:16]}…): BEFORE and AFTER compare only when taken with one "
+                "validation setup; generate both programs from the same one"
+            )
+        elif np.array_equal(before.rows, after.rows):
+            problems.append(
+                f"{after.source}: holds the readings of {before.source}, the same run: give "
+                "the log taken after calibration as AFTER"
+            )
+    if problems:
+        raise WirecalError(problems)
