@@ -57,6 +57,26 @@ def rounded(op: Callable[[Any, Any], Any]) -> Callable[[Any, Any], float]:
     return single
 
 
+ROUNDING_NAMES: dict[str, Any] = {"_pack": _PACK, "_unpack": _UNPACK, "_f32": f32}
+"""What the lines of :func:`rounding_source` name (bound in a generated function's globals)."""
+
+
+def rounding_source(value: str, result: str) -> list[str]:
+    """Return Python lines setting ``result`` to ``value`` rounded as :func:`rounded` does.
+
+    Generated code's form of :func:`rounded` (no call): a finite result rounded here, any
+    other through :func:`f32` (its overflow error). ``value`` is a variable's name.
+    """
+    return [
+        "try:",
+        f"    {result} = _unpack(_pack({value}))[0]",
+        "except OverflowError:",
+        f"    {result} = _f32({value})",
+        f"if {result} - {result} != 0.0:",
+        f"    {result} = _f32({value})",
+    ]
+
+
 class Halt(Exception):
     """HALT (V+) or halt (URScript): the program stops."""
 

@@ -16,10 +16,10 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import cache
 from types import CodeType, FunctionType
 
 from wirecal.lang.vplus import nodes as N
+from wirecal.twin.fused_code import code
 from wirecal.twin.machine import f32
 
 _COUNTER = {"+": "add", "-": "add", "*": "mul"}
@@ -80,9 +80,8 @@ def fused(e: N.BinOp, leaf: Leaf, ops: Counter, nodes: Callable) -> Callable | N
     )
 
 
-@cache
 def _code(slots: tuple[int, ...], counts: tuple[tuple[str, int], ...], value: str) -> CodeType:
-    """Return the fused function's code (kept: the same expressions recur run after run)."""
+    """Return the fused function's code (kept by its text, as every fused statement's)."""
     reads = "".join(f"    x{k} = frame[{slot}]\n" for k, slot in enumerate(slots))
     undefined = " or ".join(f"x{k} is None" for k in range(len(slots))) or "False"
     count = "".join(f'    ops["{kind}"] += {n}\n' for kind, n in counts)
@@ -90,6 +89,4 @@ def _code(slots: tuple[int, ...], counts: tuple[tuple[str, int], ...], value: st
         f"def fused(frame):\n{reads}    if {undefined}:\n        return nodes(frame)\n"
         f"{count}    return {value}\n"
     )
-    namespace: dict = {}
-    exec(compile(text, "<V+ fused arithmetic>", "exec"), namespace)
-    return namespace["fused"].__code__
+    return code(text)
