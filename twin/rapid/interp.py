@@ -307,13 +307,41 @@ def load_module(
             module = _with_appended(module, text, appended)
     except SyntaxProblem as e:
         raise WirecalError([f"{source}:{e.line}: {e.message}"]) from None
-    checker = Checker(module, subset=True)
-    problems = [f"{source}:{line}: {m}" for line, m in checker.run()]
+    checker, found = _checked(module) if not appended else _check(module)
+    problems = [f"{source}:{line}: {m}" for line, m in found]
     if not problems:
         problems = _check_subset(module, source)
     if problems:
         raise WirecalError(problems)
     return Interpreter(module, checker, controller)
+
+
+CHECKS_KEPT = 8
+"""Modules whose check is kept (a module's parse is kept by its text: a measurement is a
+mounting run and a measuring run of one module, and a test runs the same module often)."""
+
+_CHECKED: dict[int, tuple[N.Module, Checker, list[tuple[int, str]]]] = {}
+
+
+def _check(module: N.Module) -> tuple[Checker, list[tuple[int, str]]]:
+    checker = Checker(module, subset=True)
+    return checker, checker.run()
+
+
+def _checked(module: N.Module) -> tuple[Checker, list[tuple[int, str]]]:
+    """Return :func:`_check` of ``module``, kept for the same parsed module (CHECKS_KEPT).
+
+    Neither the module (a kept parse) nor the checker's tables change once checked: the
+    interpreter reads the checker's routines and global data, and copies the scope.
+    """
+    kept = _CHECKED.get(id(module))
+    if kept is not None and kept[0] is module:
+        return kept[1], kept[2]
+    checker, problems = _check(module)
+    if len(_CHECKED) >= CHECKS_KEPT:
+        del _CHECKED[next(iter(_CHECKED))]
+    _CHECKED[id(module)] = (module, checker, problems)
+    return checker, problems
 
 
 def _with_appended(module: N.Module, text: str, appended: str) -> N.Module:

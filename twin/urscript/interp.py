@@ -105,8 +105,30 @@ _UNRUN = (N.Jump, N.Critical, N.ThreadOp, N.Pose, N.RunThread, N.RpcCall)
 """Valid URScript (the checker accepts it) that wirecal never emits and the twin does not run."""
 
 
+SUBSET_CHECKS_KEPT = 16
+"""Programs whose subset check is kept, per kind of cell (a parse is kept by its text: the
+twin runs the same programs again and again)."""
+
+_CHECKED: dict[tuple[int, type], tuple[Program, list[str]]] = {}
+
+
 def _check_subset(program: Program, cell) -> None:
-    """Refuse, before running, what the twin does not run: raise :class:`WirecalError`."""
+    """Refuse, before running, what the twin does not run: raise :class:`WirecalError`.
+
+    The answer is kept per parsed program and kind of cell (:data:`SUBSET_CHECKS_KEPT`).
+    """
+    key = (id(program), type(cell))
+    kept = _CHECKED.get(key)
+    if kept is None or kept[0] is not program:
+        if len(_CHECKED) >= SUBSET_CHECKS_KEPT:
+            del _CHECKED[next(iter(_CHECKED))]
+        kept = _CHECKED[key] = (program, _subset_problems(program, cell))
+    if kept[1]:
+        raise WirecalError(kept[1])
+
+
+def _subset_problems(program: Program, cell) -> list[str]:
+    """Return what the twin does not run in ``program`` on ``cell``, by line."""
     problems = []
     for s in walk([program.functions[program.name]]):
         where = f"{program.source}:{s.line}"
@@ -123,8 +145,7 @@ def _check_subset(program: Program, cell) -> None:
             for e in exprs
             if isinstance(e, N.Call) and e.name not in program.functions and not _runs(e.name, cell)
         ]
-    if problems:
-        raise WirecalError(sorted(set(problems)))
+    return sorted(set(problems))
 
 
 def _expressions(s: N.Stmt) -> list[N.Expr]:
