@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from functools import lru_cache
 from types import CodeType, FunctionType
 from typing import Any
@@ -26,13 +27,59 @@ from wirecal.twin.machine import ROUNDING_NAMES, rounding_source
 CODES_KEPT = 4096
 """Compiled functions kept by their text (a generated module has some hundreds)."""
 
+RECIPES_KEPT = 16384
+"""Statements whose written-out function is kept (a generated module has some hundreds)."""
+
+Maker = Callable[[Any], Any]
+"""What makes a name's value anew for each compiler (its argument): a node's closure."""
+
+
+@dataclass(frozen=True)
+class Recipe:
+    """A statement written out: its code, the values it binds, the names made per compiler."""
+
+    code: CodeType
+    bound: dict[str, Any]
+    made: tuple[tuple[str, Maker], ...]
+
+    def function(self, compiler: Any, names: dict[str, Any]) -> Callable[[Any], Any]:
+        """Return the function for ``compiler``, with ``names`` (its counter, interpreter …)."""
+        made = {name: make(compiler) for name, make in self.made}
+        return FunctionType(self.code, {**self.bound, **names, **made})
+
+
+_RECIPES: dict[int, tuple[Any, Recipe | None]] = {}
+
+
+def recipe_of(node: Any, write: Callable[[], Recipe | None]) -> Recipe | None:
+    """Return ``write()`` for ``node``, kept for that very node (a parse is kept by its text).
+
+    What is written depends on the node and on its place in its program (a variable's
+    scope, a datum's type), which are the same for the same node; what depends on the run
+    (the counter, the interpreter, the closures of the nodes not written out) is made
+    for each compiler (:meth:`Recipe.function`).
+    """
+    kept = _RECIPES.get(id(node))
+    if kept is not None and kept[0] is node:
+        return kept[1]
+    recipe = write()
+    if len(_RECIPES) >= RECIPES_KEPT:
+        del _RECIPES[next(iter(_RECIPES))]
+    _RECIPES[id(node)] = (node, recipe)
+    return recipe
+
 
 class Source:
-    """The source of one generated function ``fused(f)`` (``f``: the frame) and its names."""
+    """The source of one generated function ``fused(f)`` (``f``: the frame) and its names.
+
+    The names every such function of a language has (its counter ``ops``, its
+    interpreter …) are given when the function is made (:meth:`Recipe.function`).
+    """
 
     def __init__(self, bound: dict[str, Any]):
         self.lines: list[str] = []
         self.bound: dict[str, Any] = {**ROUNDING_NAMES, **bound}
+        self.made: list[tuple[str, Maker]] = []
         self.depth = 0
         self.kinds: list[str] = []  # the operations counted, in the order first counted
         self._names = 0
@@ -42,6 +89,13 @@ class Source:
         name = f"k{self._names}"
         self._names += 1
         self.bound[name] = value
+        return name
+
+    def make(self, maker: Maker) -> str:
+        """Return a new global name of the function whose value ``maker`` makes per compiler."""
+        name = f"k{self._names}"
+        self._names += 1
+        self.made.append((name, maker))
         return name
 
     def temp(self) -> str:
@@ -98,8 +152,8 @@ class Source:
         self.emit(*rounding_source(value, result))
         return result
 
-    def function(self) -> Callable[[Any], Any]:
-        """Return the function, its code compiled once per text."""
+    def recipe(self) -> Recipe:
+        """Return the function's recipe, its code compiled once per text."""
         lines = self.lines
         if self.kinds:
             counts = [f"if n_{k}: ops[{k!r}] += n_{k}" for k in self.kinds]
@@ -107,7 +161,7 @@ class Source:
             lines = [start, "try:", *("    " + x for x in lines), "finally:"]
             lines += ["    " + x for x in counts]
         body = "".join(f"    {line}\n" for line in lines)
-        return FunctionType(code(f"def fused(f):\n{body}"), self.bound)
+        return Recipe(code(f"def fused(f):\n{body}"), self.bound, tuple(self.made))
 
 
 @lru_cache(maxsize=CODES_KEPT)

@@ -23,7 +23,7 @@ from typing import Any, Protocol
 from wirecal.lang.rapid import nodes as N
 from wirecal.lang.rapid.checker import BOOL, DNUM, LITERAL, NUM, STRING, Type
 from wirecal.lang.syntax import node_method
-from wirecal.twin.fused_code import Source
+from wirecal.twin.fused_code import Recipe, Source, recipe_of
 from wirecal.twin.machine import f32
 from wirecal.twin.rapid.values import (
     COUNTED,
@@ -60,30 +60,45 @@ def fused_assign(c: Compiling, s: N.Assign) -> Callable | None:
     None for data of another type than num, dnum, bool and string (a record, an array:
     copied, not written out).
     """
+    recipe = recipe_of(s, lambda: _assign(c, s))
+    return None if recipe is None else recipe.function(c, _names(c))
+
+
+def fused_value(c: Compiling, e: N.Expr) -> Callable | None:
+    """Return the expression ``e`` (a condition: bool) as one function of the frame.
+
+    None where its root is a node not written out.
+    """
+    recipe = recipe_of(e, lambda: _value(c, e))
+    return None if recipe is None else recipe.function(c, _names(c))
+
+
+def _names(c: Compiling) -> dict[str, Any]:
+    """Return the names of a compiler's written-out functions: counter, interpreter, data."""
+    return {"ops": c.interp.ops, "I": c.interp, "G": c.interp.globals}
+
+
+def _assign(c: Compiling, s: N.Assign) -> Recipe | None:
     want = c.typer.type(s.target)
     if want not in _SCALARS:
         return None
     w = _Writer(c)
-    w.src.emit(f"I.line = {int(s.line)}")
+    w.src.emit(f"I.line = {w.src.bind(s.line)}")
     v = w.value(s.value, want)
     if want == NUM and v not in w.single:
         v = w.src.single(w.src.let(f"float({v})"))
     elif want == DNUM:
         v = w.src.let(f"float({v})")
     w.store(s.target, v)
-    return w.src.function()
+    return w.src.recipe()
 
 
-def fused_value(c: Compiling, e: N.Expr, want: Type) -> Callable | None:
-    """Return the expression ``e`` (a condition) as one function of the frame.
-
-    None where its root is a node not written out.
-    """
+def _value(c: Compiling, e: N.Expr) -> Recipe | None:
     if not isinstance(e, N.Num | N.Str | N.Bool | N.Name | N.Index | N.Not | N.BinOp):
         return None
     w = _Writer(c)
-    w.src.emit(f"return {w.value(e, want)}")
-    return w.src.function()
+    w.src.emit(f"return {w.value(e, BOOL)}")
+    return w.src.recipe()
 
 
 def _absent(name: str) -> None:
@@ -98,9 +113,6 @@ class _Writer:
         self.single: set[str] = set()  # the locals holding a num result, rounded
         self.src = Source(
             {
-                "ops": c.interp.ops,
-                "I": c.interp,
-                "G": c.interp.globals,
                 "_position": position,
                 "_holder": element_holder,
                 "_arith": arith,
@@ -112,7 +124,7 @@ class _Writer:
     def data(self, name: str) -> str:
         """Return the expression of data ``name`` (the frame's, else a global)."""
         key = name.lower()
-        return f"f[{key!r}]" if key in self.c.local else f"G[{key!r}]"
+        return f"{'f' if key in self.c.local else 'G'}[{self.src.bind(key)}]"
 
     def element(self, array: str, indices: list[N.Expr]) -> tuple[str, str]:
         """Emit the indices of an element of ``array``; return its list and position."""
@@ -135,7 +147,7 @@ class _Writer:
             self.src.emit(f"{self.data(target.name)} = {v}")
         elif isinstance(target, N.Component):
             base = self.value(target.base, None)
-            self.src.emit(f"{base}[{target.field.lower()!r}] = {v}")
+            self.src.emit(f"{base}[{self.src.bind(target.field.lower())}] = {v}")
         else:
             assert isinstance(target, N.Index)
             holder, k = self.element(self.value(target.base, None), target.indices)
@@ -144,7 +156,7 @@ class _Writer:
     def closure(self, e: N.Expr, want: Type | None) -> str:
         """Emit the call of ``e``'s closure; return the local of its value."""
         self.src.flush()  # the closure may count, or call a routine that does
-        return self.src.let(f"{self.src.bind(self.c.expr(e, want))}(f)")
+        return self.src.let(f"{self.src.make(lambda c: c.expr(e, want))}(f)")
 
     @node_method
     def value(self, e: N.Expr, want: Type | None) -> str:
@@ -167,12 +179,12 @@ class _Writer:
         key = e.name.lower()
         v = self.src.let(self.data(e.name))
         if key in self.c.local and self.c.local[key].kind == "OPT":
-            self.src.emit(f"if {v} is None: _absent({e.name!r})")
+            self.src.emit(f"if {v} is None: _absent({self.src.bind(e.name)})")
         return v
 
     @value.register
     def _(self, e: N.Component, want: Type | None) -> str:
-        return self.src.let(f"{self.value(e.base, None)}[{e.field.lower()!r}]")
+        return self.src.let(f"{self.value(e.base, None)}[{self.src.bind(e.field.lower())}]")
 
     @value.register
     def _(self, e: N.Index, want: Type | None) -> str:

@@ -701,7 +701,7 @@ class _Compiler:
     # ---- expressions ----
     def condition(self, e: N.Expr) -> Eval:
         """Compile a condition: written out as one function where it can be (``fused``)."""
-        return fused_value(self, e, BOOL) or self.expr(e, BOOL)
+        return fused_value(self, e) or self.expr(e, BOOL)
 
     @node_method
     def expr(self, e: N.Expr, want: Type | None) -> Eval:

@@ -24,7 +24,7 @@ from typing import Any, Protocol
 
 from wirecal.lang.syntax import node_method
 from wirecal.lang.urscript import nodes as N
-from wirecal.twin.fused_code import Source
+from wirecal.twin.fused_code import Recipe, Source, recipe_of
 from wirecal.twin.machine import f32
 from wirecal.twin.urscript.values import (
     COUNTED,
@@ -66,22 +66,8 @@ def fused_assign(c: Compiling, s: N.Assign) -> Callable | None:
 
     None where nothing is written out (a call, a member or a list assigned to a variable).
     """
-    if not s.target.indices and not isinstance(s.value, _WRITTEN):
-        return None
-    w = _Writer(c)
-    w.src.emit(f"I.where = {int(s.line)}")
-    if not s.target.indices:
-        store = "G" if c.is_global(s.target.name) else "f"
-        v = w.value(s.value)
-        w.src.emit(f"{store}[{s.target.name!r}] = {v} if type({v}) is float else _copy({v})")
-        return w.src.function()
-    container = w.read(s.target.name)
-    for ix in s.target.indices[:-1]:
-        container = w.src.let(f"_element({container}, {w.value(ix)})")
-    k = w.position(container, w.value(s.target.indices[-1]))
-    v = w.value(s.value)
-    w.src.emit(f"{container}[{k}] = {v} if type({v}) is float else _copy({v})")
-    return w.src.function()
+    recipe = recipe_of(s, lambda: _assign(c, s))
+    return None if recipe is None else recipe.function(c, _names(c))
 
 
 def fused_value(c: Compiling, e: N.Expr) -> Callable | None:
@@ -89,11 +75,40 @@ def fused_value(c: Compiling, e: N.Expr) -> Callable | None:
 
     None where its root is a node not written out.
     """
+    recipe = recipe_of(e, lambda: _value(c, e))
+    return None if recipe is None else recipe.function(c, _names(c))
+
+
+def _names(c: Compiling) -> dict[str, Any]:
+    """Return the names of a compiler's written-out functions: counter, interpreter, globals."""
+    return {"ops": c.i.ops, "I": c.i, "G": c.i.globals}
+
+
+def _assign(c: Compiling, s: N.Assign) -> Recipe | None:
+    if not s.target.indices and not isinstance(s.value, _WRITTEN):
+        return None
+    w = _Writer(c)
+    w.src.emit(f"I.where = {w.constant(s.line)}")
+    if not s.target.indices:
+        store = f"{w.scope(s.target.name)}[{w.constant(s.target.name)}]"
+        v = w.value(s.value)
+        w.src.emit(f"{store} = {v} if type({v}) is float else _copy({v})")
+        return w.src.recipe()
+    container = w.read(s.target.name)
+    for ix in s.target.indices[:-1]:
+        container = w.src.let(f"_element({container}, {w.value(ix)})")
+    k = w.position(container, w.value(s.target.indices[-1]))
+    v = w.value(s.value)
+    w.src.emit(f"{container}[{k}] = {v} if type({v}) is float else _copy({v})")
+    return w.src.recipe()
+
+
+def _value(c: Compiling, e: N.Expr) -> Recipe | None:
     if not isinstance(e, _WRITTEN):
         return None
     w = _Writer(c)
     w.src.emit(f"return {w.value(e)}")
-    return w.src.function()
+    return w.src.recipe()
 
 
 def _unset(name: str) -> None:
@@ -108,9 +123,6 @@ class _Writer:
         self.known: dict[str, type] = {}  # bound constants' types
         self.src = Source(
             {
-                "ops": c.i.ops,
-                "I": c.i,
-                "G": c.i.globals,
                 "_URError": URError,
                 "_copy": copy_value,
                 "_element": element,
@@ -124,14 +136,17 @@ class _Writer:
             }
         )
 
+    def scope(self, name: str) -> str:
+        """Return the dictionary holding the variable ``name``: the globals or the frame."""
+        return "G" if self.c.is_global(name) else "f"
+
     def read(self, name: str) -> str:
         """Emit the read of a variable (no value: the closures' error); return its local."""
-        store = "G" if self.c.is_global(name) else "f"
-        t = self.src.temp()
+        t, key = self.src.temp(), self.constant(name)
         with self.src.block("try:"):
-            self.src.emit(f"{t} = {store}[{name!r}]")
+            self.src.emit(f"{t} = {self.scope(name)}[{key}]")
         with self.src.block("except KeyError:"):
-            self.src.emit(f"_unset({name!r})")
+            self.src.emit(f"_unset({key})")
         return t
 
     def position(self, container: str, index: str) -> str:
@@ -167,7 +182,7 @@ class _Writer:
     def value(self, e: N.Expr) -> str:
         """Emit ``e``; return the local (or bound name) holding its value."""
         self.src.flush()  # the closure may count, or read the counts (sync)
-        return self.src.let(f"{self.src.bind(self.c.expr(e))}(f)")
+        return self.src.let(f"{self.src.make(lambda c: c.expr(e))}(f)")
 
     @value.register
     def _(self, e: N.Num) -> str:
@@ -248,5 +263,5 @@ class _Writer:
             head = "elif"
         with src.block("else:" if head == "elif" else "if True:"):
             src.flush()
-            src.emit(f"{r} = {src.bind(mixed(op, self.c.i.ops))}({x}, {y})")
+            src.emit(f"{r} = {src.make(lambda c: mixed(op, c.i.ops))}({x}, {y})")
         return r
