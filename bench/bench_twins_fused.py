@@ -36,20 +36,20 @@ from wirecal.twin.vplus import interp as vplus_interp
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 PLANS = {"viper_s650": "paper_plan.toml", "ur5e": "plan.toml", "abb_irb120": "plan.toml"}
 UNFUSED = [
-    (vplus_interp, "fused"),
-    (urscript_interp, "fused_assign"),
-    (urscript_interp, "fused_value"),
-    (rapid_interp, "fused_assign"),
-    (rapid_interp, "fused_value"),
+    (vplus_interp, "fused", lambda *args: None),
+    (urscript_interp, "fused_value", lambda *args: None),
+    (rapid_interp, "fused_value", lambda *args: None),
+    (urscript_interp, "fused_steps", lambda c, steps, one: [one(s) for s in steps]),
+    (rapid_interp, "fused_steps", lambda c, steps, one: [one(s) for s in steps]),
 ]
-"""The hooks that write statements out; each returning None leaves them to the closures."""
+"""The hooks that write statements out, and what leaves every statement to the closures."""
 
 
 def unfused() -> ExitStack:
     """Return a context in which no statement is written out (the closures only)."""
     stack = ExitStack()
-    for module, name in UNFUSED:
-        stack.enter_context(mock.patch.object(module, name, return_value=None))
+    for module, name, nodes in UNFUSED:
+        stack.enter_context(mock.patch.object(module, name, nodes))
     return stack
 
 

@@ -49,7 +49,7 @@ def _bits(v):
 
 
 def _unfused(monkeypatch_context, module):
-    monkeypatch_context.setattr(module, "fused_assign", lambda *args: None)
+    monkeypatch_context.setattr(module, "fused_steps", lambda c, steps, one: list(map(one, steps)))
     monkeypatch_context.setattr(module, "fused_value", lambda *args: None)
 
 
@@ -142,17 +142,33 @@ def test_urscript_fused_statements_give_the_closures_values_counts_and_errors(
     assert fused == nodes
 
 
+def _written(monkeypatch, module) -> list:
+    """Record the functions the module's hooks return (a statement's, a run's, a condition's)."""
+    made: list = []
+    for name in ("fused_steps", "fused_value"):
+        original = getattr(module, name)
+
+        def hook(*args, f=original):
+            got = f(*args)
+            made.extend(got if isinstance(got, list) else [got])
+            return got
+
+        monkeypatch.setattr(module, name, hook)
+    return made
+
+
+def _generated(made: list) -> int:
+    return sum(getattr(f, "__code__", None) is not None and f.__name__ == "fused" for f in made)
+
+
 def test_urscript_statements_are_fused(monkeypatch):
     """The comparison above is not vacuous: the program's statements are written out."""
-    made = []
-    for name in ("fused_assign", "fused_value"):
-        original = getattr(urscript_interp, name)
-        monkeypatch.setattr(
-            urscript_interp, name, lambda *a, f=original: made.append(f(*a)) or made[-1]
-        )
+    made = _written(monkeypatch, urscript_interp)
     text = "def p():\n  a = 1.5\n  b = a * a + 2\n  if b > a and a < 2:\n    b = -b\n  end\nend\n"
-    urscript_interp.Interpreter(parse_program(text, "t.script"), Log()).execute()
-    assert sum(f is not None for f in made) == 4  # three assignments and the condition
+    interp = urscript_interp.Interpreter(parse_program(text, "t.script"), Log())
+    interp.execute()
+    assert interp.globals["b"] == -4.25
+    assert _generated(made) == 3  # the first two assignments, the condition, the third
 
 
 # ---------- RAPID ----------
@@ -235,17 +251,14 @@ def test_rapid_fused_statements_give_the_closures_values_counts_and_errors(
 
 def test_rapid_statements_are_fused(monkeypatch):
     """The comparison above is not vacuous: the module's statements are written out."""
-    made = []
-    for name in ("fused_assign", "fused_value"):
-        original = getattr(rapid_interp, name)
-        monkeypatch.setattr(
-            rapid_interp, name, lambda *a, f=original: made.append(f(*a)) or made[-1]
-        )
+    made = _written(monkeypatch, rapid_interp)
     body = ["a := 1.5;", "d := NumToDnum(a) * 2;", "IF a > 1 AND d < 4 THEN", "  a := -a;"]
     text = "\n".join(["MODULE T", "VAR num a;", "VAR dnum d;", "PROC main()", *body])
     text += "\nENDIF\nENDPROC\nENDMODULE\n"
-    rapid_interp.load_module(text, "t.mod", FakeController()).execute("main")
-    assert sum(f is not None for f in made) == 4  # three assignments and the condition
+    interp = rapid_interp.load_module(text, "t.mod", FakeController())
+    interp.execute("main")
+    assert (interp.globals["a"], interp.globals["d"]) == (-1.5, 3.0)
+    assert _generated(made) == 3  # the first two assignments, the condition, the third
 
 
 # ---------- whole runs ----------

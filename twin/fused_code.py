@@ -18,7 +18,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import lru_cache, partial
 from types import CodeType, FunctionType
 from typing import Any
 
@@ -67,6 +67,38 @@ def recipe_of(node: Any, write: Callable[[], Recipe | None]) -> Recipe | None:
         del _RECIPES[next(iter(_RECIPES))]
     _RECIPES[id(node)] = (node, recipe)
     return recipe
+
+
+def fused_steps(
+    compiler: Any,
+    steps: list[Any],
+    writable: Callable[[Any], bool],
+    write: Callable[[list[Any]], Recipe],
+    names: dict[str, Any],
+    one: Callable[[Any], Callable[[Any], Any]],
+) -> list[Callable[[Any], Any]]:
+    """Compile ``steps`` in order, runs of ``writable`` ones written out together.
+
+    Each run of consecutive ``writable`` statements is one function (``write``, kept by the
+    run's first statement) doing their work in their order: a call per statement less;
+    each other statement is compiled by ``one`` (the node-by-node compiler's).
+    """
+    out: list[Callable[[Any], Any]] = []
+    k = 0
+    while k < len(steps):
+        n = 0
+        while k + n < len(steps) and writable(steps[k + n]):
+            n += 1
+        if n == 0:
+            out.append(one(steps[k]))
+            k += 1
+            continue
+        run = steps[k : k + n]
+        recipe = recipe_of(steps[k], partial(write, run))
+        assert recipe is not None
+        out.append(recipe.function(compiler, names))
+        k += n
+    return out
 
 
 class Source:

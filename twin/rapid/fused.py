@@ -24,6 +24,7 @@ from wirecal.lang.rapid import nodes as N
 from wirecal.lang.rapid.checker import BOOL, DNUM, LITERAL, NUM, STRING, Type
 from wirecal.lang.syntax import node_method
 from wirecal.twin.fused_code import Recipe, Source, recipe_of
+from wirecal.twin.fused_code import fused_steps as steps_of
 from wirecal.twin.machine import f32
 from wirecal.twin.rapid.values import (
     COUNTED,
@@ -54,14 +55,14 @@ class Compiling(Protocol):
         ...
 
 
-def fused_assign(c: Compiling, s: N.Assign) -> Callable | None:
-    """Return ``s`` (the line set first, as the closure does) as one function.
+def fused_steps(c: Compiling, steps: list[N.Stmt], one: Callable) -> list[Callable]:
+    """Compile a block's statements in order, each run of assignments as one function.
 
-    None for data of another type than num, dnum, bool and string (a record, an array:
-    copied, not written out).
+    Each assignment's line is set as it starts, as the closures do; each other statement
+    (and an assignment of a record or an array: copied, not written out) is compiled by
+    ``one``.
     """
-    recipe = recipe_of(s, lambda: _assign(c, s))
-    return None if recipe is None else recipe.function(c, _names(c))
+    return steps_of(c, steps, lambda s: _writable(c, s), lambda run: _run(c, run), _names(c), one)
 
 
 def fused_value(c: Compiling, e: N.Expr) -> Callable | None:
@@ -78,18 +79,14 @@ def _names(c: Compiling) -> dict[str, Any]:
     return {"ops": c.interp.ops, "I": c.interp, "G": c.interp.globals}
 
 
-def _assign(c: Compiling, s: N.Assign) -> Recipe | None:
-    want = c.typer.type(s.target)
-    if want not in _SCALARS:
-        return None
+def _writable(c: Compiling, s: N.Stmt) -> bool:
+    return isinstance(s, N.Assign) and c.typer.type(s.target) in _SCALARS
+
+
+def _run(c: Compiling, run: list[N.Assign]) -> Recipe:
     w = _Writer(c)
-    w.src.emit(f"I.line = {w.src.bind(s.line)}")
-    v = w.value(s.value, want)
-    if want == NUM and v not in w.single:
-        v = w.src.single(w.src.let(f"float({v})"))
-    elif want == DNUM:
-        v = w.src.let(f"float({v})")
-    w.store(s.target, v)
+    for s in run:
+        w.assign(s)
     return w.src.recipe()
 
 
@@ -120,6 +117,18 @@ class _Writer:
                 "_absent": _absent,
             }
         )
+
+    def assign(self, s: N.Assign) -> None:
+        """Emit the assignment ``s``, its line set first."""
+        self.c.typer.line = s.line  # as the closures' compiler has it for the statement
+        want = self.c.typer.type(s.target)
+        self.src.emit(f"I.line = {self.src.bind(s.line)}")
+        v = self.value(s.value, want)
+        if want == NUM and v not in self.single:
+            v = self.src.single(self.src.let(f"float({v})"))
+        elif want == DNUM:
+            v = self.src.let(f"float({v})")
+        self.store(s.target, v)
 
     def data(self, name: str) -> str:
         """Return the expression of data ``name`` (the frame's, else a global)."""
@@ -156,7 +165,13 @@ class _Writer:
     def closure(self, e: N.Expr, want: Type | None) -> str:
         """Emit the call of ``e``'s closure; return the local of its value."""
         self.src.flush()  # the closure may count, or call a routine that does
-        return self.src.let(f"{self.src.make(lambda c: c.expr(e, want))}(f)")
+        line = self.c.typer.line  # a call's closure restores the statement's line
+
+        def make(c: Compiling) -> Callable:
+            c.typer.line = line
+            return c.expr(e, want)
+
+        return self.src.let(f"{self.src.make(make)}(f)")
 
     @node_method
     def value(self, e: N.Expr, want: Type | None) -> str:

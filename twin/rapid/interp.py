@@ -58,7 +58,7 @@ from wirecal.lang.syntax import node_method
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.machine import Outcome, RunError, f32, rounded
 from wirecal.twin.rapid.controller_protocol import RapidController
-from wirecal.twin.rapid.fused import fused_assign, fused_value
+from wirecal.twin.rapid.fused import fused_steps, fused_value
 from wirecal.twin.rapid.values import (
     COUNTED,
     FAST,
@@ -436,7 +436,7 @@ class _Compiler:
     # ---- statements ----
     def block(self, stmts: list[N.Stmt]) -> Callable[[Frame], None]:
         """Compile statements in order (declarations enter the scope as they come)."""
-        steps = [self.stmt(s) for s in stmts]
+        steps = fused_steps(self, stmts, self.stmt)
 
         def run(frame: Frame) -> None:
             for step in steps:
@@ -467,9 +467,6 @@ class _Compiler:
 
     @compile_stmt.register
     def _(self, s: N.Assign) -> Callable[[Frame], None]:
-        fused = fused_assign(self, s)
-        if fused is not None:
-            return fused
         interp, line = self.interp, s.line
         want = self.typer.type(s.target)
         assert want is not None

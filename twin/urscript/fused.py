@@ -25,6 +25,7 @@ from typing import Any, Protocol
 from wirecal.lang.syntax import node_method
 from wirecal.lang.urscript import nodes as N
 from wirecal.twin.fused_code import Recipe, Source, recipe_of
+from wirecal.twin.fused_code import fused_steps as steps_of
 from wirecal.twin.machine import f32
 from wirecal.twin.urscript.values import (
     COUNTED,
@@ -61,13 +62,14 @@ _WRITTEN = (N.Num, N.Bool, N.Str, N.Var, N.Index, N.Neg, N.Not, N.Logic, N.Compa
 """The nodes written out; a statement of any other at its root is left to its closure."""
 
 
-def fused_assign(c: Compiling, s: N.Assign) -> Callable | None:
-    """Return the statement ``s`` (its line set first, as every statement's) as one function.
+def fused_steps(c: Compiling, steps: list[N.Stmt], one: Callable) -> list[Callable]:
+    """Compile a body's statements in order, each run of assignments as one function.
 
-    None where nothing is written out (a call, a member or a list assigned to a variable).
+    Each assignment's line is set as it starts, as every statement's; each other statement
+    is compiled by ``one``. An assignment of a call, a member or a list to a variable is
+    not written out (nothing to gain).
     """
-    recipe = recipe_of(s, lambda: _assign(c, s))
-    return None if recipe is None else recipe.function(c, _names(c))
+    return steps_of(c, steps, _writable, lambda run: _run(c, run), _names(c), one)
 
 
 def fused_value(c: Compiling, e: N.Expr) -> Callable | None:
@@ -84,22 +86,14 @@ def _names(c: Compiling) -> dict[str, Any]:
     return {"ops": c.i.ops, "I": c.i, "G": c.i.globals}
 
 
-def _assign(c: Compiling, s: N.Assign) -> Recipe | None:
-    if not s.target.indices and not isinstance(s.value, _WRITTEN):
-        return None
+def _writable(s: N.Stmt) -> bool:
+    return isinstance(s, N.Assign) and (bool(s.target.indices) or isinstance(s.value, _WRITTEN))
+
+
+def _run(c: Compiling, run: list[N.Assign]) -> Recipe:
     w = _Writer(c)
-    w.src.emit(f"I.where = {w.constant(s.line)}")
-    if not s.target.indices:
-        store = f"{w.scope(s.target.name)}[{w.constant(s.target.name)}]"
-        v = w.value(s.value)
-        w.src.emit(f"{store} = {v} if type({v}) is float else _copy({v})")
-        return w.src.recipe()
-    container = w.read(s.target.name)
-    for ix in s.target.indices[:-1]:
-        container = w.src.let(f"_element({container}, {w.value(ix)})")
-    k = w.position(container, w.value(s.target.indices[-1]))
-    v = w.value(s.value)
-    w.src.emit(f"{container}[{k}] = {v} if type({v}) is float else _copy({v})")
+    for s in run:
+        w.assign(s)
     return w.src.recipe()
 
 
@@ -135,6 +129,21 @@ class _Writer:
                 "_fmod": math.fmod,
             }
         )
+
+    def assign(self, s: N.Assign) -> None:
+        """Emit the assignment ``s``, its line set first."""
+        self.src.emit(f"I.where = {self.constant(s.line)}")
+        if not s.target.indices:
+            store = f"{self.scope(s.target.name)}[{self.constant(s.target.name)}]"
+            v = self.value(s.value)
+            self.src.emit(f"{store} = {v} if type({v}) is float else _copy({v})")
+            return
+        container = self.read(s.target.name)
+        for ix in s.target.indices[:-1]:
+            container = self.src.let(f"_element({container}, {self.value(ix)})")
+        k = self.position(container, self.value(s.target.indices[-1]))
+        v = self.value(s.value)
+        self.src.emit(f"{container}[{k}] = {v} if type({v}) is float else _copy({v})")
 
     def scope(self, name: str) -> str:
         """Return the dictionary holding the variable ``name``: the globals or the frame."""

@@ -41,7 +41,7 @@ from wirecal.lang.urscript import nodes as N
 from wirecal.lang.urscript.parser import Program, operands, walk
 from wirecal.solver.errors import WirecalError
 from wirecal.twin.machine import Halt, Outcome, RunError, Stopped, f32, rounded
-from wirecal.twin.urscript.fused import fused_assign, fused_value
+from wirecal.twin.urscript.fused import fused_steps, fused_value
 from wirecal.twin.urscript.values import (
     COUNTED,
     FLOAT_OPS,
@@ -204,7 +204,7 @@ class _Compiler:
         return run
 
     def body(self, steps: list[N.Stmt]) -> Callable:
-        fns = [self.stmt(s) for s in steps if not isinstance(s, N.Def)]
+        fns = fused_steps(self, [s for s in steps if not isinstance(s, N.Def)], self.stmt)
 
         def run(frame):
             for f in fns:
@@ -214,9 +214,6 @@ class _Compiler:
 
     # ---------- statements ----------
     def stmt(self, s: N.Stmt) -> Callable:
-        fused = fused_assign(self, s) if isinstance(s, N.Assign) else None
-        if fused is not None:
-            return fused
         interp, line, inner = self.i, s.line, self._stmt(s)
 
         def run(frame):
