@@ -69,6 +69,14 @@ def recipe_of(node: Any, write: Callable[[], Recipe | None]) -> Recipe | None:
     return recipe
 
 
+def written(
+    node: Any, write: Callable[[], Recipe | None], compiler: Any, names: dict[str, Any]
+) -> Callable[[Any], Any] | None:
+    """Return the function ``write`` writes for ``node`` (kept: :func:`recipe_of`), or None."""
+    recipe = recipe_of(node, write)
+    return None if recipe is None else recipe.function(compiler, names)
+
+
 def fused_steps(
     compiler: Any,
     steps: list[Any],

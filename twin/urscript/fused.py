@@ -24,7 +24,7 @@ from typing import Any, Protocol
 
 from wirecal.lang.syntax import node_method
 from wirecal.lang.urscript import nodes as N
-from wirecal.twin.fused_code import Recipe, Source, recipe_of
+from wirecal.twin.fused_code import Recipe, Source, written
 from wirecal.twin.fused_code import fused_steps as steps_of
 from wirecal.twin.machine import f32
 from wirecal.twin.urscript.values import (
@@ -77,8 +77,7 @@ def fused_value(c: Compiling, e: N.Expr) -> Callable | None:
 
     None where its root is a node not written out.
     """
-    recipe = recipe_of(e, lambda: _value(c, e))
-    return None if recipe is None else recipe.function(c, _names(c))
+    return written(e, lambda: _value(c, e), c, _names(c))
 
 
 def _names(c: Compiling) -> dict[str, Any]:
