@@ -30,7 +30,6 @@ from wirecal.twin.rapid.values import (
     COUNTED,
     RapidError,
     arith,
-    element_holder,
     position,
     string,
 )
@@ -110,7 +109,6 @@ class _Writer:
         self.src = Source(
             {
                 "_position": position,
-                "_holder": element_holder,
                 "_arith": arith,
                 "_string": string,
                 "_absent": _absent,
@@ -135,16 +133,20 @@ class _Writer:
         return f"{'f' if key in self.c.local else 'G'}[{self.src.bind(key)}]"
 
     def element(self, array: str, indices: list[N.Expr]) -> tuple[str, str]:
-        """Emit the indices of an element of ``array``; return its list and position."""
+        """Emit the indices of an element of ``array``; return its list and position.
+
+        The indices are evaluated first, then each is checked against its dimension in
+        turn (:func:`~wirecal.twin.rapid.values.element_holder`'s order and errors).
+        """
         values = [self.value(i, NUM) for i in indices]
-        if len(values) > 1:
-            holder, k = self.src.temp(), self.src.temp()
-            self.src.emit(f"{holder}, {k} = _holder({array}, [{', '.join(values)}])")
-            return holder, k
-        (i,) = values
-        k = self.src.let(f"int({i})")
-        self.src.emit(f"if {k} != {i} or not 1 <= {k} <= len({array}): _position({array}, {i})")
-        return array, self.src.let(f"{k} - 1")
+        holder = array
+        for n, i in enumerate(values):
+            k, bad = self.src.let(f"int({i})"), f"_position({holder}, {i})"
+            self.src.emit(f"if {k} != {i} or not 1 <= {k} <= len({holder}): {bad}")
+            if n == len(values) - 1:
+                return holder, self.src.let(f"{k} - 1")
+            holder = self.src.let(f"{holder}[{k} - 1]")
+        raise AssertionError("an element has an index")
 
     def store(self, target: N.Expr, v: str) -> None:
         """Emit the store of ``v`` into ``target``.
