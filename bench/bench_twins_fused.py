@@ -9,12 +9,23 @@ they were written out: ``twin/fused_code.py``). The outputs must be the same: th
 bytes, the outcomes, the solvers' results, operation counts and console lines.
 
     python bench/bench_twins_fused.py [--runs 3] [--arms viper_s650 ur5e abb_irb120]
+        [--before ../before]
+
+With ``--before`` (a checkout of the code before, e.g. ``git worktree add --detach
+../before main``) each run is a process of its own importing wirecal from that tree or
+this one, alternately: a first run, then the timed one; the outputs are compared by a
+digest of their text.
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
+import json
+import os
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from contextlib import ExitStack
@@ -33,7 +44,8 @@ from wirecal.twin.rapid import interp as rapid_interp
 from wirecal.twin.urscript import interp as urscript_interp
 from wirecal.twin.vplus import interp as vplus_interp
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+NOW = Path(__file__).resolve().parents[1]
+EXAMPLES = NOW / "examples"
 PLANS = {"viper_s650": "paper_plan.toml", "ur5e": "plan.toml", "abb_irb120": "plan.toml"}
 UNFUSED = [
     (vplus_interp, "fused", lambda *args: None),
@@ -75,27 +87,55 @@ def one_run(arm: str, folder: Path) -> tuple[float, float, tuple]:
     return t1 - t0, t3 - t2, outputs
 
 
+def child(arm: str) -> None:
+    """Print, as JSON, one warm run's CPU (after a first run) and its outputs' digest."""
+    with tempfile.TemporaryDirectory() as tmp:
+        one_run(arm, Path(tmp) / "first")
+        *cpu, outputs = one_run(arm, Path(tmp) / "timed")
+    digest = hashlib.sha256(repr(outputs).encode()).hexdigest()
+    print(json.dumps({"cpu": cpu, "digest": digest}))
+
+
+def in_child(tree: Path, arm: str) -> tuple[tuple[float, float], str]:
+    """Run :func:`child` in a process importing wirecal from ``tree``."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    command = [sys.executable, str(Path(__file__).resolve()), "--child", arm]
+    out = subprocess.run(command, cwd=tree, env=env, capture_output=True, text=True, check=True)
+    got = json.loads(out.stdout.splitlines()[-1])
+    return (got["cpu"][0], got["cpu"][1]), got["digest"]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--arms", nargs="+", default=list(PLANS))
+    parser.add_argument("--before", type=Path, help="a checkout of the code before")
+    parser.add_argument("--child", help=argparse.SUPPRESS)
     args = parser.parse_args()
-    print("CPU s per run (time.process_time), medians; before: node-by-node closures")
+    if args.child:
+        child(args.child)
+        return
+    what = f"the code in {args.before}" if args.before else "node-by-node closures"
+    print(f"CPU s per run (time.process_time), medians of {args.runs}; before: {what}")
     print(f"{'arm':<12} {'run':<22} {'before':>8} {'now':>8} {'ratio':>6}")
     with tempfile.TemporaryDirectory() as tmp:
         for arm in args.arms:
             times: dict[str, list[tuple[float, float]]] = {"before": [], "now": []}
-            outputs = {}
+            outputs: dict[str, object] = {}
             for k in range(args.runs):
                 for mode in ("before", "now"):
-                    with unfused() if mode == "before" else ExitStack():
-                        *cpu, outputs[mode] = one_run(arm, Path(tmp) / f"{arm}{mode}{k}")
+                    if args.before:
+                        tree = args.before.resolve() if mode == "before" else NOW
+                        cpu, outputs[mode] = in_child(tree, arm)
+                    else:
+                        with unfused() if mode == "before" else ExitStack():
+                            *cpu, outputs[mode] = one_run(arm, Path(tmp) / f"{arm}{mode}{k}")
                     times[mode].append((cpu[0], cpu[1]))
             same = outputs["before"] == outputs["now"]
-            for j, what in enumerate(("measurement run", "controller solver")):
+            for j, run in enumerate(("measurement run", "controller solver")):
                 before = statistics.median(t[j] for t in times["before"])
                 now = statistics.median(t[j] for t in times["now"])
-                print(f"{arm:<12} {what:<22} {before:8.2f} {now:8.2f} {now / before:6.2f}")
+                print(f"{arm:<12} {run:<22} {before:8.2f} {now:8.2f} {now / before:6.2f}")
             print(f"{arm:<12} outputs the same (log bytes, outcomes, results, counts): {same}")
             if not same:
                 raise SystemExit(f"{arm}: the fused statements changed an output")
