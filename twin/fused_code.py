@@ -22,7 +22,7 @@ from functools import lru_cache, partial
 from types import CodeType, FunctionType
 from typing import Any
 
-from wirecal.twin.machine import ROUNDING_NAMES, rounding_source
+from wirecal.twin.machine import ROUNDING_NAMES, Kept, rounding_source
 
 CODES_KEPT = 4096
 """Compiled functions kept by their text (a generated module has some hundreds)."""
@@ -48,7 +48,7 @@ class Recipe:
         return FunctionType(self.code, {**self.bound, **names, **made})
 
 
-_RECIPES: dict[int, tuple[Any, Recipe | None]] = {}
+_RECIPES = Kept(RECIPES_KEPT)
 
 
 def recipe_of(node: Any, write: Callable[[], Recipe | None]) -> Recipe | None:
@@ -59,13 +59,7 @@ def recipe_of(node: Any, write: Callable[[], Recipe | None]) -> Recipe | None:
     (the counter, the interpreter, the closures of the nodes not written out) is made
     for each compiler (:meth:`Recipe.function`).
     """
-    kept = _RECIPES.get(id(node))
-    if kept is not None and kept[0] is node:
-        return kept[1]
-    recipe = write()
-    if len(_RECIPES) >= RECIPES_KEPT:
-        del _RECIPES[next(iter(_RECIPES))]
-    _RECIPES[id(node)] = (node, recipe)
+    recipe: Recipe | None = _RECIPES.get(write, node)
     return recipe
 
 

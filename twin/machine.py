@@ -77,6 +77,30 @@ def rounding_source(value: str, result: str) -> list[str]:
     ]
 
 
+class Kept:
+    """Values kept for objects that do not change once made (a kept parse, its nodes).
+
+    Found by the objects' identity (each held, so that its ``id`` is not reused while
+    kept); beyond ``size`` values the oldest is dropped.
+    """
+
+    def __init__(self, size: int):
+        self.size = size
+        self._kept: dict[tuple[int, ...], tuple[tuple[object, ...], Any]] = {}
+
+    def get(self, make: Callable[[], Any], *owners: object) -> Any:
+        """Return the value kept for ``owners``, or ``make()``'s, then kept."""
+        key = tuple(map(id, owners))
+        kept = self._kept.get(key)
+        if kept is not None and all(a is b for a, b in zip(kept[0], owners, strict=True)):
+            return kept[1]
+        value = make()
+        if len(self._kept) >= self.size:
+            del self._kept[next(iter(self._kept))]
+        self._kept[key] = (owners, value)
+        return value
+
+
 class Halt(Exception):
     """HALT (V+) or halt (URScript): the program stops."""
 

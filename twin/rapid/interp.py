@@ -56,7 +56,7 @@ from wirecal.lang.rapid.checker import (
 from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
 from wirecal.lang.syntax import node_method
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import Outcome, RunError, f32, rounded
+from wirecal.twin.machine import Kept, Outcome, RunError, f32, rounded
 from wirecal.twin.rapid.controller_protocol import RapidController
 from wirecal.twin.rapid.fused import fused_steps, fused_value
 from wirecal.twin.rapid.values import (
@@ -320,7 +320,7 @@ CHECKS_KEPT = 8
 """Modules whose check is kept (a module's parse is kept by its text: a measurement is a
 mounting run and a measuring run of one module, and a test runs the same module often)."""
 
-_CHECKED: dict[int, tuple[N.Module, Checker, list[tuple[int, str]]]] = {}
+_CHECKED = Kept(CHECKS_KEPT)
 
 
 def _check(module: N.Module) -> tuple[Checker, list[tuple[int, str]]]:
@@ -334,14 +334,8 @@ def _checked(module: N.Module) -> tuple[Checker, list[tuple[int, str]]]:
     Neither the module (a kept parse) nor the checker's tables change once checked: the
     interpreter reads the checker's routines and global data, and copies the scope.
     """
-    kept = _CHECKED.get(id(module))
-    if kept is not None and kept[0] is module:
-        return kept[1], kept[2]
-    checker, problems = _check(module)
-    if len(_CHECKED) >= CHECKS_KEPT:
-        del _CHECKED[next(iter(_CHECKED))]
-    _CHECKED[id(module)] = (module, checker, problems)
-    return checker, problems
+    checked: tuple[Checker, list[tuple[int, str]]] = _CHECKED.get(lambda: _check(module), module)
+    return checked
 
 
 def _with_appended(module: N.Module, text: str, appended: str) -> N.Module:

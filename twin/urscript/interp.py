@@ -40,7 +40,7 @@ from wirecal.lang.syntax import node_method
 from wirecal.lang.urscript import nodes as N
 from wirecal.lang.urscript.parser import Program, operands, walk
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import Halt, Outcome, RunError, Stopped, f32, rounded
+from wirecal.twin.machine import Halt, Kept, Outcome, RunError, Stopped, f32, rounded
 from wirecal.twin.urscript.fused import fused_steps, fused_value
 from wirecal.twin.urscript.values import (
     COUNTED,
@@ -109,7 +109,7 @@ SUBSET_CHECKS_KEPT = 16
 """Programs whose subset check is kept, per kind of cell (a parse is kept by its text: the
 twin runs the same programs again and again)."""
 
-_CHECKED: dict[tuple[int, type], tuple[Program, list[str]]] = {}
+_CHECKED = Kept(SUBSET_CHECKS_KEPT)
 
 
 def _check_subset(program: Program, cell) -> None:
@@ -117,14 +117,9 @@ def _check_subset(program: Program, cell) -> None:
 
     The answer is kept per parsed program and kind of cell (:data:`SUBSET_CHECKS_KEPT`).
     """
-    key = (id(program), type(cell))
-    kept = _CHECKED.get(key)
-    if kept is None or kept[0] is not program:
-        if len(_CHECKED) >= SUBSET_CHECKS_KEPT:
-            del _CHECKED[next(iter(_CHECKED))]
-        kept = _CHECKED[key] = (program, _subset_problems(program, cell))
-    if kept[1]:
-        raise WirecalError(kept[1])
+    problems = _CHECKED.get(lambda: _subset_problems(program, cell), program, type(cell))
+    if problems:
+        raise WirecalError(problems)
 
 
 def _subset_problems(program: Program, cell) -> list[str]:
