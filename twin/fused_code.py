@@ -20,7 +20,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import lru_cache, partial
 from types import CodeType, FunctionType
-from typing import Any
+from typing import Any, Protocol
 
 from wirecal.twin.machine import ROUNDING_NAMES, Kept, rounding_source
 
@@ -71,18 +71,29 @@ def written(
     return None if recipe is None else recipe.function(compiler, names)
 
 
+class Writer(Protocol):
+    """A language's writer of statements (its nodes' semantics) into its :class:`Source`."""
+
+    src: Source
+
+    def assign(self, s: Any) -> None:
+        """Emit the assignment ``s``, its line set first."""
+        ...
+
+
 def fused_steps(
     compiler: Any,
     steps: list[Any],
     writable: Callable[[Any], bool],
-    write: Callable[[list[Any]], Recipe],
+    writer: Callable[[], Writer],
     names: dict[str, Any],
     one: Callable[[Any], Callable[[Any], Any]],
 ) -> list[Callable[[Any], Any]]:
     """Compile ``steps`` in order, runs of ``writable`` ones written out together.
 
-    Each run of consecutive ``writable`` statements is one function (``write``, kept by the
-    run's first statement) doing their work in their order: a call per statement less;
+    Each run of consecutive ``writable`` statements is one function (a new ``writer``'s,
+    kept by the run's first statement) doing their work in their order: a call per
+    statement less;
     each other statement is compiled by ``one`` (the node-by-node compiler's).
     """
     out: list[Callable[[Any], Any]] = []
@@ -96,11 +107,18 @@ def fused_steps(
             k += 1
             continue
         run = steps[k : k + n]
-        recipe = recipe_of(steps[k], partial(write, run))
+        recipe = recipe_of(steps[k], partial(_run, writer, run))
         assert recipe is not None
         out.append(recipe.function(compiler, names))
         k += n
     return out
+
+
+def _run(writer: Callable[[], Writer], run: list[Any]) -> Recipe:
+    w = writer()
+    for s in run:
+        w.assign(s)
+    return w.src.recipe()
 
 
 class Source:

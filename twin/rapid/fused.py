@@ -61,7 +61,7 @@ def fused_steps(c: Compiling, steps: list[N.Stmt], one: Callable) -> list[Callab
     (and an assignment of a record or an array: copied, not written out) is compiled by
     ``one``.
     """
-    return steps_of(c, steps, lambda s: _writable(c, s), lambda run: _run(c, run), _names(c), one)
+    return steps_of(c, steps, lambda s: _writable(c, s), lambda: _Writer(c), _names(c), one)
 
 
 def fused_value(c: Compiling, e: N.Expr) -> Callable | None:
@@ -79,13 +79,6 @@ def _names(c: Compiling) -> dict[str, Any]:
 
 def _writable(c: Compiling, s: N.Stmt) -> bool:
     return isinstance(s, N.Assign) and c.typer.type(s.target) in _SCALARS
-
-
-def _run(c: Compiling, run: list[N.Assign]) -> Recipe:
-    w = _Writer(c)
-    for s in run:
-        w.assign(s)
-    return w.src.recipe()
 
 
 def _value(c: Compiling, e: N.Expr) -> Recipe | None:

@@ -27,18 +27,7 @@ from wirecal.lang.urscript import nodes as N
 from wirecal.twin.fused_code import Recipe, Source, written
 from wirecal.twin.fused_code import fused_steps as steps_of
 from wirecal.twin.machine import f32
-from wirecal.twin.urscript.values import (
-    COUNTED,
-    URError,
-    copy_value,
-    element,
-    i32,
-    mixed,
-    negative,
-    number,
-    position,
-    truth,
-)
+from wirecal.twin.urscript import values as V
 
 _INT_FAST = {"+", "-", "*"}
 """Operators whose int case is written out (``/`` of ints is a float, ``%`` its own)."""
@@ -69,7 +58,7 @@ def fused_steps(c: Compiling, steps: list[N.Stmt], one: Callable) -> list[Callab
     is compiled by ``one``. An assignment of a call, a member or a list to a variable is
     not written out (nothing to gain).
     """
-    return steps_of(c, steps, _writable, lambda run: _run(c, run), _names(c), one)
+    return steps_of(c, steps, _writable, lambda: _Writer(c), _names(c), one)
 
 
 def fused_value(c: Compiling, e: N.Expr) -> Callable | None:
@@ -89,13 +78,6 @@ def _writable(s: N.Stmt) -> bool:
     return isinstance(s, N.Assign) and (bool(s.target.indices) or isinstance(s.value, _WRITTEN))
 
 
-def _run(c: Compiling, run: list[N.Assign]) -> Recipe:
-    w = _Writer(c)
-    for s in run:
-        w.assign(s)
-    return w.src.recipe()
-
-
 def _value(c: Compiling, e: N.Expr) -> Recipe | None:
     if not isinstance(e, _WRITTEN):
         return None
@@ -105,7 +87,7 @@ def _value(c: Compiling, e: N.Expr) -> Recipe | None:
 
 
 def _unset(name: str) -> None:
-    raise URError(f"variable {name} has no value") from None
+    raise V.URError(f"variable {name} has no value") from None
 
 
 class _Writer:
@@ -116,15 +98,15 @@ class _Writer:
         self.known: dict[str, type] = {}  # bound constants' types
         self.src = Source(
             {
-                "_URError": URError,
-                "_copy": copy_value,
-                "_element": element,
-                "_position": position,
-                "_negative": negative,
-                "_number": number,
-                "_truth": truth,
+                "_URError": V.URError,
+                "_copy": V.copy_value,
+                "_element": V.element,
+                "_position": V.position,
+                "_negative": V.negative,
+                "_number": V.number,
+                "_truth": V.truth,
                 "_unset": _unset,
-                "_i32": i32,
+                "_i32": V.i32,
                 "_fmod": math.fmod,
             }
         )
@@ -168,7 +150,7 @@ class _Writer:
         return k
 
     def condition(self, v: str) -> None:
-        """Emit the check that ``v`` is a boolean (the closures' :func:`truth`)."""
+        """Emit the check that ``v`` is a boolean (the closures' ``values.truth``)."""
         self.src.emit(f"if type({v}) is not bool: _truth({v})")
 
     def constant(self, v: Any) -> str:
@@ -251,7 +233,7 @@ class _Writer:
     @value.register
     def _(self, e: N.BinOp) -> str:
         x, y = self.value(e.left), self.value(e.right)
-        src, op, r, kind = self.src, e.op, self.src.temp(), COUNTED[e.op]
+        src, op, r, kind = self.src, e.op, self.src.temp(), V.COUNTED[e.op]
         floats, head = self.is_float(x, y), "if"
         if floats is not None:
             with src.block(f"if {floats}:" if floats else "if True:"):
@@ -271,5 +253,5 @@ class _Writer:
             head = "elif"
         with src.block("else:" if head == "elif" else "if True:"):
             src.flush()
-            src.emit(f"{r} = {src.make(lambda c: mixed(op, c.i.ops))}({x}, {y})")
+            src.emit(f"{r} = {src.make(lambda c: V.mixed(op, c.i.ops))}({x}, {y})")
         return r
