@@ -57,6 +57,50 @@ def rounded(op: Callable[[Any, Any], Any]) -> Callable[[Any, Any], float]:
     return single
 
 
+ROUNDING_NAMES: dict[str, Any] = {"_pack": _PACK, "_unpack": _UNPACK, "_f32": f32}
+"""What the lines of :func:`rounding_source` name (bound in a generated function's globals)."""
+
+
+def rounding_source(value: str, result: str) -> list[str]:
+    """Return Python lines setting ``result`` to ``value`` rounded as :func:`rounded` does.
+
+    Generated code's form of :func:`rounded` (no call): a finite result rounded here, any
+    other through :func:`f32` (its overflow error). ``value`` is a variable's name.
+    """
+    return [
+        "try:",
+        f"    {result} = _unpack(_pack({value}))[0]",
+        "except OverflowError:",
+        f"    {result} = _f32({value})",
+        f"if {result} - {result} != 0.0:",
+        f"    {result} = _f32({value})",
+    ]
+
+
+class Kept:
+    """Values kept for objects that do not change once made (a kept parse, its nodes).
+
+    Found by the objects' identity (each held, so that its ``id`` is not reused while
+    kept); beyond ``size`` values the oldest is dropped.
+    """
+
+    def __init__(self, size: int):
+        self.size = size
+        self._kept: dict[tuple[int, ...], tuple[tuple[object, ...], Any]] = {}
+
+    def get(self, make: Callable[[], Any], *owners: object) -> Any:
+        """Return the value kept for ``owners``, or ``make()``'s, then kept."""
+        key = tuple(map(id, owners))
+        kept = self._kept.get(key)
+        if kept is not None and all(a is b for a, b in zip(kept[0], owners, strict=True)):
+            return kept[1]
+        value = make()
+        if len(self._kept) >= self.size:
+            del self._kept[next(iter(self._kept))]
+        self._kept[key] = (owners, value)
+        return value
+
+
 class Halt(Exception):
     """HALT (V+) or halt (URScript): the program stops."""
 

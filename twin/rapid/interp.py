@@ -34,7 +34,6 @@ and a FOR loop's own step are not counted.
 from __future__ import annotations
 
 import math
-import operator
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -57,8 +56,18 @@ from wirecal.lang.rapid.checker import (
 from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
 from wirecal.lang.syntax import node_method
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import Outcome, RunError, f32, rounded
+from wirecal.twin.machine import Kept, Outcome, RunError, f32, rounded
 from wirecal.twin.rapid.controller_protocol import RapidController
+from wirecal.twin.rapid.fused import fused_steps, fused_value
+from wirecal.twin.rapid.values import (
+    COUNTED,
+    FAST,
+    RapidError,
+    arith,
+    element_holder,
+    position,
+    string,
+)
 
 __all__ = ["Interpreter", "RapidController", "load_module", "run_module"]
 
@@ -68,18 +77,6 @@ unconfirmed): deeper, the program stops, as a recursion without end would."""
 
 Frame = dict[str, Any]
 Eval = Callable[[Frame], Any]
-
-
-class RapidError(RunError):
-    """A RAPID run-time error: the program stops with this message.
-
-    ``errno``: the predefined error name an ERROR handler sees in ERRNO (``err_divzero`` …,
-    :data:`~wirecal.lang.rapid.tables.SUBSET_ERRORS`); None: no handler runs for it.
-    """
-
-    def __init__(self, message: str, errno: str | None = None):
-        super().__init__(-1, message)
-        self.errno = errno
 
 
 class _Raise(Exception):
@@ -183,43 +180,6 @@ def number_text(value: float, digits: int) -> str:
         return str(round(value))
     return f"{value:.{digits}g}"
 
-
-def _string(text: str) -> str:
-    if len(text) > T.STRING_MAX:
-        raise RapidError(f"a string of {len(text)} characters: RAPID holds {T.STRING_MAX}")
-    return text
-
-
-def _integer(x: float, what: str) -> int:
-    if x != int(x):
-        raise RapidError(f"{what} of {x:g}: DIV and MOD take integers")
-    return int(x)
-
-
-def _arith(op: str, a: float, b: float) -> float:
-    if op == "+":
-        return a + b
-    if op == "-":
-        return a - b
-    if op == "*":
-        return a * b
-    if b == 0:
-        raise RapidError("division by zero", "err_divzero")
-    if op == "/":
-        return a / b
-    x, y = _integer(a, op), _integer(b, op)
-    q = abs(x) // abs(y) * (1 if (x >= 0) == (y >= 0) else -1)
-    return float(q if op == "DIV" else x - q * y)
-
-
-_FAST: dict[str, Callable[[float, float], float]] = {
-    "+": operator.add,
-    "-": operator.sub,
-    "*": operator.mul,
-}
-
-_COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "DIV": "div", "MOD": "div"}
-"""The kind each arithmetic operator is counted as (:attr:`Interpreter.ops`)."""
 
 _COMPARE: dict[str, Callable[[Any, Any], bool]] = {
     "=": lambda a, b: a == b,
@@ -347,13 +307,35 @@ def load_module(
             module = _with_appended(module, text, appended)
     except SyntaxProblem as e:
         raise WirecalError([f"{source}:{e.line}: {e.message}"]) from None
-    checker = Checker(module, subset=True)
-    problems = [f"{source}:{line}: {m}" for line, m in checker.run()]
+    checker, found = _checked(module) if not appended else _check(module)
+    problems = [f"{source}:{line}: {m}" for line, m in found]
     if not problems:
         problems = _check_subset(module, source)
     if problems:
         raise WirecalError(problems)
     return Interpreter(module, checker, controller)
+
+
+CHECKS_KEPT = 8
+"""Modules whose check is kept (a module's parse is kept by its text: a measurement is a
+mounting run and a measuring run of one module, and a test runs the same module often)."""
+
+_CHECKED = Kept(CHECKS_KEPT)
+
+
+def _check(module: N.Module) -> tuple[Checker, list[tuple[int, str]]]:
+    checker = Checker(module, subset=True)
+    return checker, checker.run()
+
+
+def _checked(module: N.Module) -> tuple[Checker, list[tuple[int, str]]]:
+    """Return :func:`_check` of ``module``, kept for the same parsed module (CHECKS_KEPT).
+
+    Neither the module (a kept parse) nor the checker's tables change once checked: the
+    interpreter reads the checker's routines and global data, and copies the scope.
+    """
+    checked: tuple[Checker, list[tuple[int, str]]] = _CHECKED.get(lambda: _check(module), module)
+    return checked
 
 
 def _with_appended(module: N.Module, text: str, appended: str) -> N.Module:
@@ -448,7 +430,7 @@ class _Compiler:
     # ---- statements ----
     def block(self, stmts: list[N.Stmt]) -> Callable[[Frame], None]:
         """Compile statements in order (declarations enter the scope as they come)."""
-        steps = [self.stmt(s) for s in stmts]
+        steps = fused_steps(self, stmts, self.stmt)
 
         def run(frame: Frame) -> None:
             for step in steps:
@@ -513,7 +495,7 @@ class _Compiler:
     @compile_stmt.register
     def _(self, s: N.While) -> Callable[[Frame], None]:
         interp, line = self.interp, s.line
-        cond, body = self.expr(s.cond, BOOL), self.block(s.body)
+        cond, body = self.condition(s.cond), self.block(s.body)
 
         def while_(frame: Frame) -> None:
             interp.line = line
@@ -549,7 +531,7 @@ class _Compiler:
         return declare
 
     def if_(self, s: N.If) -> Callable[[Frame], None]:
-        branches = [(self.expr(c, BOOL), self.block(b)) for c, b in s.branches]
+        branches = [(self.condition(c), self.block(b)) for c, b in s.branches]
         orelse, interp, line = self.block(s.orelse), self.interp, s.line
 
         def if_(frame: Frame) -> None:
@@ -702,12 +684,16 @@ class _Compiler:
         indices = [self.expr(i, NUM) for i in target.indices]
 
         def set_element(frame: Frame, v: Any) -> None:
-            holder, last = _element_holder(base(frame), [i(frame) for i in indices])
+            holder, last = element_holder(base(frame), [i(frame) for i in indices])
             holder[last] = v
 
         return set_element
 
     # ---- expressions ----
+    def condition(self, e: N.Expr) -> Eval:
+        """Compile a condition: written out as one function where it can be (``fused``)."""
+        return fused_value(self, e) or self.expr(e, BOOL)
+
     @node_method
     def expr(self, e: N.Expr, want: Type | None) -> Eval:
         """Compile an expression; ``want`` is the type its context needs (literals, aggregates).
@@ -744,12 +730,12 @@ class _Compiler:
 
             def element_1(frame: Frame) -> Any:
                 array = base(frame)
-                return array[_position(array, index(frame))]
+                return array[position(array, index(frame))]
 
             return element_1
 
         def element(frame: Frame) -> Any:
-            holder, last = _element_holder(base(frame), [i(frame) for i in indices])
+            holder, last = element_holder(base(frame), [i(frame) for i in indices])
             return holder[last]
 
         return element
@@ -819,7 +805,7 @@ class _Compiler:
         ta, tb = self.typer.type(e.a), self.typer.type(e.b)
         if ta == tb == STRING and op == "+":
             sa, sb = self.expr(e.a, STRING), self.expr(e.b, STRING)
-            return lambda f: _string(sa(f) + sb(f))
+            return lambda f: string(sa(f) + sb(f))
         if op in _COMPARE:
             operand = next((t for t in (ta, tb) if t not in (LITERAL, None)), DNUM)
             a, b = self.expr(e.a, operand), self.expr(e.b, operand)
@@ -827,8 +813,8 @@ class _Compiler:
             return lambda f: compare(a(f), b(f))
         t = self.static(e, want)
         a, b = self.expr(e.a, t), self.expr(e.b, t)
-        fn = _FAST.get(op) or (lambda x, y: _arith(op, x, y))
-        ops, kind = self.interp.ops, _COUNTED[op]
+        fn = FAST.get(op) or (lambda x, y: arith(op, x, y))
+        ops, kind = self.interp.ops, COUNTED[op]
         if t == NUM:
             fn = rounded(fn)
 
@@ -877,22 +863,6 @@ def _constant(v: Any) -> Eval:
     return lambda f: v
 
 
-def _position(array: list[Any], i: float) -> int:
-    """Return the position in ``array`` of its element ``i`` (from 1)."""
-    k = int(i)
-    if k != i or not 1 <= k <= len(array):
-        raise RapidError(f"index {i:g} outside 1..{len(array)}")
-    return k - 1
-
-
-def _element_holder(array: list[Any], indices: list[float]) -> tuple[list[Any], int]:
-    """Return the list holding the element ``indices`` (from 1) and its position."""
-    holder = array
-    for i in indices[:-1]:
-        holder = holder[_position(holder, i)]
-    return holder, _position(holder, indices[-1])
-
-
 def _positional(args: list[N.Arg], n: int) -> N.Expr:
     """Return the ``n``-th required argument's expression."""
     value = [a for a in args if a.name is None][n].value
@@ -932,7 +902,7 @@ def _text_with_number(opt: dict[str, Eval | None], frame: Frame) -> str:
 def _tp_write(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
     pos, opt = c.args("tpwrite", args)
     ctl = c.interp.controller
-    return lambda f: ctl.tp_write(_string(pos[0](f) + _text_with_number(opt, f)))
+    return lambda f: ctl.tp_write(string(pos[0](f) + _text_with_number(opt, f)))
 
 
 def _write(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
@@ -943,7 +913,7 @@ def _write(c: _Compiler, args: list[N.Arg]) -> Callable[[Frame], None]:
         handle = pos[0](frame)
         if handle is None:
             raise RapidError("Write: the iodev is not open", "err_fileacc")
-        text = _string(pos[1](frame) + _text_with_number(opt, frame))
+        text = string(pos[1](frame) + _text_with_number(opt, frame))
         _file_call("err_fileacc", lambda: ctl.write_file(handle, text, newline))
 
     return run
@@ -1131,7 +1101,7 @@ def _round_half_away(x: float) -> float:
 def _to_str(name: str) -> Builder:
     def build(c: _Compiler, args: list[N.Arg]) -> Eval:
         pos, _ = c.args(name, args)
-        return lambda f: _string(fixed(pos[0](f), int(pos[1](f))))
+        return lambda f: string(fixed(pos[0](f), int(pos[1](f))))
 
     return build
 

@@ -32,7 +32,6 @@ log and popups, time — goes through the controller
 from __future__ import annotations
 
 import math
-import operator
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import fields
@@ -41,68 +40,28 @@ from wirecal.lang.syntax import node_method
 from wirecal.lang.urscript import nodes as N
 from wirecal.lang.urscript.parser import Program, operands, walk
 from wirecal.solver.errors import WirecalError
-from wirecal.twin.machine import Halt, Outcome, RunError, Stopped, f32, rounded
-
-INT_MIN = -(2**31)
-
-
-class URError(RunError):
-    """A URScript run-time error: the program stops with this message."""
-
-    def __init__(self, message: str, code: int = -1):
-        super().__init__(code, message)
+from wirecal.twin.machine import Halt, Kept, Outcome, RunError, Stopped, f32, rounded
+from wirecal.twin.urscript.fused import fused_steps, fused_value
+from wirecal.twin.urscript.values import (
+    COUNTED,
+    FLOAT_OPS,
+    URError,
+    copy_value,
+    element,
+    i32,
+    mixed,
+    negative,
+    number,
+    position,
+    to_float,
+    to_str,
+    truth,
+)
 
 
 class _Return(Exception):
     def __init__(self, value):
         self.value = value
-
-
-def i32(v: int) -> int:
-    """Wrap an int result to 32 bits, two's complement (module docstring: unconfirmed)."""
-    return (v - INT_MIN) % 2**32 + INT_MIN
-
-
-def number(v, what: str = "a number") -> float | int:
-    """Return ``v`` if it is an int or a float (not a boolean), else stop."""
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise URError(f"{what}: expected a number, got {to_str(v)!r}")
-    return v
-
-
-def to_float(v) -> float:
-    """Return a number as a URScript float (single precision)."""
-    return f32(float(number(v)))
-
-
-def truth(v) -> bool:
-    """Return a condition's value; only booleans are conditions."""
-    if not isinstance(v, bool):
-        raise URError(f"a condition must be True or False, got {to_str(v)!r}")
-    return v
-
-
-def to_str(v) -> str:
-    """Write a value as ``str_cat`` does in the twin (module docstring)."""
-    if isinstance(v, bool):
-        return "True" if v else "False"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        return f"{v:.6f}"
-    if isinstance(v, list):
-        return "[" + ", ".join(to_str(x) for x in v) + "]"
-    if isinstance(v, dict):
-        return "struct(" + ", ".join(f"{k}={to_str(x)}" for k, x in v.items()) + ")"
-    if v is None:
-        return "nil"
-    return str(v)
-
-
-def _copy(v):
-    if isinstance(v, list):
-        return [_copy(x) for x in v]
-    return dict(v) if isinstance(v, dict) else v
 
 
 class Interpreter:
@@ -146,8 +105,25 @@ _UNRUN = (N.Jump, N.Critical, N.ThreadOp, N.Pose, N.RunThread, N.RpcCall)
 """Valid URScript (the checker accepts it) that wirecal never emits and the twin does not run."""
 
 
+SUBSET_CHECKS_KEPT = 16
+"""Programs whose subset check is kept, per kind of cell (a parse is kept by its text: the
+twin runs the same programs again and again)."""
+
+_CHECKED = Kept(SUBSET_CHECKS_KEPT)
+
+
 def _check_subset(program: Program, cell) -> None:
-    """Refuse, before running, what the twin does not run: raise :class:`WirecalError`."""
+    """Refuse, before running, what the twin does not run: raise :class:`WirecalError`.
+
+    The answer is kept per parsed program and kind of cell (:data:`SUBSET_CHECKS_KEPT`).
+    """
+    problems = _CHECKED.get(lambda: _subset_problems(program, cell), program, type(cell))
+    if problems:
+        raise WirecalError(problems)
+
+
+def _subset_problems(program: Program, cell) -> list[str]:
+    """Return what the twin does not run in ``program`` on ``cell``, by line."""
     problems = []
     for s in walk([program.functions[program.name]]):
         where = f"{program.source}:{s.line}"
@@ -164,8 +140,7 @@ def _check_subset(program: Program, cell) -> None:
             for e in exprs
             if isinstance(e, N.Call) and e.name not in program.functions and not _runs(e.name, cell)
         ]
-    if problems:
-        raise WirecalError(sorted(set(problems)))
+    return sorted(set(problems))
 
 
 def _expressions(s: N.Stmt) -> list[N.Expr]:
@@ -224,7 +199,7 @@ class _Compiler:
         return run
 
     def body(self, steps: list[N.Stmt]) -> Callable:
-        fns = [self.stmt(s) for s in steps if not isinstance(s, N.Def)]
+        fns = fused_steps(self, [s for s in steps if not isinstance(s, N.Def)], self.stmt)
 
         def run(frame):
             for f in fns:
@@ -256,7 +231,7 @@ class _Compiler:
             def assign(frame):  # a list or struct is copied (_copy), a number or string not
                 v = value(frame)
                 (frame if store is None else store)[name] = (
-                    _copy(v) if isinstance(v, (list, dict)) else v
+                    copy_value(v) if isinstance(v, (list, dict)) else v
                 )
 
             return assign
@@ -266,9 +241,9 @@ class _Compiler:
         def assign_element(frame):
             container = get(frame)
             for ix in indices[:-1]:
-                container = _element(container, ix(frame))
-            k = _position(container, indices[-1](frame))
-            container[k] = _copy(value(frame))
+                container = element(container, ix(frame))
+            k = position(container, indices[-1](frame))
+            container[k] = copy_value(value(frame))
 
         return assign_element
 
@@ -295,7 +270,7 @@ class _Compiler:
 
     @_stmt.register
     def _(self, s: N.While):
-        cond, body = self.expr(s.cond), self.body(s.body)
+        cond, body = self.condition(s.cond), self.body(s.body)
 
         def while_(frame):
             while truth(cond(frame)):
@@ -305,7 +280,7 @@ class _Compiler:
 
     @_stmt.register
     def _(self, s: N.If):
-        branches = [(self.expr(c), self.body(b)) for c, b in s.branches]
+        branches = [(self.condition(c), self.body(b)) for c, b in s.branches]
         other = self.body(s.orelse)
 
         def if_(frame):
@@ -318,6 +293,10 @@ class _Compiler:
         return if_
 
     # ---------- expressions ----------
+    def condition(self, e: N.Expr) -> Callable:
+        """Compile a condition: written out as one function where it can be (``fused``)."""
+        return fused_value(self, e) or self.expr(e)
+
     def read(self, name: str) -> Callable:
         """Compile the read of a variable; reading one without a value stops the program."""
         store = self.i.globals if self.is_global(name) else None
@@ -361,7 +340,7 @@ class _Compiler:
     @expr.register
     def _(self, e: N.Index):
         base, ix = self.expr(e.base), self.expr(e.index)
-        return lambda frame: _element(base(frame), ix(frame))
+        return lambda frame: element(base(frame), ix(frame))
 
     @expr.register
     def _(self, e: N.Field):
@@ -379,11 +358,7 @@ class _Compiler:
     def _(self, e: N.Neg):
         f = self.expr(e.expr)
 
-        def neg(frame):
-            v = number(f(frame), "unary minus")
-            return i32(-v) if isinstance(v, int) else -v
-
-        return neg
+        return lambda frame: negative(f(frame))
 
     @expr.register
     def _(self, e: N.Not):
@@ -423,27 +398,13 @@ class _Compiler:
         interp = self.i
         if e.name in interp.program.functions:
             name = e.name
-            return lambda frame: interp.function(name)([_copy(a(frame)) for a in args])
+            return lambda frame: interp.function(name)([copy_value(a(frame)) for a in args])
         builtin = _builtin(interp, e.name)
 
         def call(frame):
             return builtin(*(a(frame) for a in args), **{k: v(frame) for k, v in kwargs.items()})
 
         return call
-
-
-def _element(container, index):
-    return container[_position(container, index)]
-
-
-def _position(container, index) -> int:
-    if not isinstance(container, list):
-        raise URError(f"only a list can be indexed, not {to_str(container)!r}")
-    if isinstance(index, bool) or not isinstance(index, int):
-        raise URError(f"a list index must be an int, got {to_str(index)!r}")
-    if not 0 <= index < len(container):
-        raise URError(f"index {index} out of bounds (the list has {len(container)} elements)")
-    return index
 
 
 _COMPARE: dict[str, Callable] = {
@@ -454,13 +415,12 @@ _COMPARE: dict[str, Callable] = {
     "<=": lambda x, y: x <= y,
     ">=": lambda x, y: x >= y,
 }
-_COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "%": "div"}
 
 
 def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Callable:
     """Compile ``a op b``, counting the operations as executed (module docstring)."""
-    kind, divides, ops = _COUNTED[op], op in "/%", interp.ops
-    int_op, single = _INT_OPS.get(op), rounded(_FLOAT_OPS[op])
+    kind, divides, ops = COUNTED[op], op in "/%", interp.ops
+    single, other = rounded(FLOAT_OPS[op]), mixed(op, ops)
 
     def f(frame):
         x, y = a(frame), b(frame)
@@ -469,30 +429,9 @@ def _arithmetic(interp: Interpreter, op: str, a: Callable, b: Callable) -> Calla
             if divides and y == 0:
                 raise URError("division by zero")
             return single(x, y)
-        x, y = number(x, op), number(y, op)
-        ops[kind] += 1
-        if divides and y == 0:
-            raise URError("division by zero")
-        if int_op is not None and isinstance(x, int) and isinstance(y, int):
-            return i32(int_op(x, y))
-        return single(float(x), float(y))
+        return other(x, y)
 
     return f
-
-
-_INT_OPS: dict[str, Callable[[int, int], int]] = {
-    "+": lambda x, y: x + y,
-    "-": lambda x, y: x - y,
-    "*": lambda x, y: x * y,
-    "%": lambda x, y: int(math.fmod(x, y)),
-}
-_FLOAT_OPS: dict[str, Callable[[float, float], float]] = {
-    "+": operator.add,
-    "-": operator.sub,
-    "*": operator.mul,
-    "/": operator.truediv,
-    "%": math.fmod,
-}
 
 
 def _runs(name: str, cell) -> bool:

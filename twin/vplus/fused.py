@@ -16,10 +16,10 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import cache
-from types import CodeType, FunctionType
+from types import CodeType
 
 from wirecal.lang.vplus import nodes as N
+from wirecal.twin.fused_code import Recipe, code, recipe_of
 from wirecal.twin.machine import f32
 
 _COUNTER = {"+": "add", "-": "add", "*": "mul"}
@@ -66,23 +66,25 @@ def fused(e: N.BinOp, leaf: Leaf, ops: Counter, nodes: Callable) -> Callable | N
     """Return ``e`` compiled into one function (module docstring), or None where it cannot be.
 
     ``leaf`` names the AUTO numeric scalars, ``ops`` is the interpreter's operation counter,
-    ``nodes`` the node-by-node closure of ``e`` (evaluated while a slot is undefined).
+    ``nodes`` the node-by-node closure of ``e`` (evaluated while a slot is undefined). What
+    is written is kept for the node (:func:`~wirecal.twin.fused_code.recipe_of`).
     """
+    recipe = recipe_of(e, lambda: _recipe(e, leaf))
+    return None if recipe is None else recipe.function(None, {"ops": ops, "nodes": nodes})
+
+
+def _recipe(e: N.BinOp, leaf: Leaf) -> Recipe | None:
     fusion = _Fusion()
     found = fusion.source(e, leaf)
     if found is None or not found[1]:
         return None
     counts = tuple(fusion.counts.items())
     names = {f"c{k}": v for k, v in enumerate(fusion.numbers)}
-    return FunctionType(
-        _code(tuple(fusion.slots), counts, found[0]),
-        {"ops": ops, "nodes": nodes, **names},
-    )
+    return Recipe(_code(tuple(fusion.slots), counts, found[0]), names, ())
 
 
-@cache
 def _code(slots: tuple[int, ...], counts: tuple[tuple[str, int], ...], value: str) -> CodeType:
-    """Return the fused function's code (kept: the same expressions recur run after run)."""
+    """Return the fused function's code (kept by its text, as every fused statement's)."""
     reads = "".join(f"    x{k} = frame[{slot}]\n" for k, slot in enumerate(slots))
     undefined = " or ".join(f"x{k} is None" for k in range(len(slots))) or "False"
     count = "".join(f'    ops["{kind}"] += {n}\n' for kind, n in counts)
@@ -90,6 +92,4 @@ def _code(slots: tuple[int, ...], counts: tuple[tuple[str, int], ...], value: st
         f"def fused(frame):\n{reads}    if {undefined}:\n        return nodes(frame)\n"
         f"{count}    return {value}\n"
     )
-    namespace: dict = {}
-    exec(compile(text, "<V+ fused arithmetic>", "exec"), namespace)
-    return namespace["fused"].__code__
+    return code(text)
