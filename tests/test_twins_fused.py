@@ -214,10 +214,7 @@ def _rapid_run(text: str, values: dict):
     interp = rapid_interp.load_module(text, "t.mod", ctl)
     for name, v in values.items():
         interp.globals[name] = copy.deepcopy(v)
-    try:
-        out = interp.execute("main")
-    except (ValueError, OverflowError) as e:  # int() of NaN or infinity (DIV, MOD, an index)
-        out = (type(e).__name__, str(e), interp.line)
+    out = interp.execute("main")
     named = {k: _bits(interp.globals[k]) for k in ("x", "y", "t", "r", "m", "p")}
     return out, named, list(interp.ops.items()), ctl.calls, ctl.pendant
 
@@ -292,3 +289,30 @@ def test_whole_runs_are_the_same_with_the_fused_statements(arm, tmp_path):
     fused, nodes = _both(whole_run)
     assert fused[1].status == fused[2].status == "completed"
     assert fused == nodes
+
+
+@pytest.mark.parametrize("fused", [True, False])
+@pytest.mark.parametrize(
+    ("statement", "message"),
+    [
+        ("x := a DIV 2;", "DIV of inf: DIV and MOD take integers"),
+        ("x := 7 MOD b;", "MOD of nan: DIV and MOD take integers"),
+        ("x := r{a};", "index inf outside 1..3"),
+        ("r{b} := 1;", "index nan outside 1..3"),
+        ("x := r{2.5};", "index 2.5 outside 1..3"),
+    ],
+)
+def test_rapid_nan_and_infinity_stop_the_run_with_a_rapid_error(
+    statement, message, fused, monkeypatch
+):
+    """An infinite or NaN operand of DIV/MOD or index is the run's error, not a traceback."""
+    if not fused:
+        _unfused(monkeypatch, rapid_interp)
+    text = "\n".join(
+        ["MODULE T", *RAPID_DATA, "PROC main()", statement, "ENDPROC", "ENDMODULE", ""]
+    )
+    interp = rapid_interp.load_module(text, "t.mod", FakeController())
+    interp.globals["a"], interp.globals["b"] = math.inf, math.nan
+    interp.globals["r"] = [0.0, 0.0, 0.0]
+    out = interp.execute("main")
+    assert (out.status, out.message) == ("error", message)

@@ -134,8 +134,9 @@ class _Writer:
         values = [self.value(i, NUM) for i in indices]
         holder = array
         for n, i in enumerate(values):
-            k, bad = self.src.let(f"int({i})"), f"_position({holder}, {i})"
-            self.src.emit(f"if {k} != {i} or not 1 <= {k} <= len({holder}): {bad}")
+            bad = f"_position({holder}, {i})"  # raises: NaN, infinite or outside
+            k = self.src.let(f"int({i}) if 1 <= {i} <= len({holder}) else {bad}")
+            self.src.emit(f"if {k} != {i}: {bad}")
             if n == len(values) - 1:
                 return holder, self.src.let(f"{k} - 1")
             holder = self.src.let(f"{holder}[{k} - 1]")

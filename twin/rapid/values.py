@@ -8,6 +8,7 @@ what is confirmed).
 
 from __future__ import annotations
 
+import math
 import operator
 from collections.abc import Callable
 from typing import Any
@@ -37,7 +38,7 @@ def string(text: str) -> str:
 
 def integer(x: float, what: str) -> int:
     """Return ``x`` as an int if it is one (an operand of DIV, MOD), else stop."""
-    if x != int(x):
+    if not math.isfinite(x) or x != int(x):
         raise RapidError(f"{what} of {x:g}: DIV and MOD take integers")
     return int(x)
 
@@ -71,10 +72,9 @@ COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "DIV": "div", "MOD": 
 
 def position(array: list[Any], i: float) -> int:
     """Return the position in ``array`` of its element ``i`` (from 1)."""
-    k = int(i)
-    if k != i or not 1 <= k <= len(array):
+    if not 1 <= i <= len(array) or i != int(i):  # NaN fails the first comparison
         raise RapidError(f"index {i:g} outside 1..{len(array)}")
-    return k - 1
+    return int(i) - 1
 
 
 def element_holder(array: list[Any], indices: list[float]) -> tuple[list[Any], int]:
