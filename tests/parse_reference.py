@@ -6,7 +6,8 @@ parsing it (:func:`outcome`): the SHA-256 of the node tree written out in full
 ``Token`` equal to its text would pass), or the problems with their lines; and the lint
 problems. It was written by main's parsers (dc1a97b) before the parsers were made faster,
 with ``python -m tests.parse_reference``; write it again only on purpose (a parser changed
-what it reads), saying why in the commit.
+what it reads, or a golden program of the corpus changed: then with the parsers of the commit
+before, from a copy of tests/ so that they are the ones imported), saying why in the commit.
 
 The corpus: the golden programs and the payload programs under tests/, the languages'
 conformance examples, windows of the golden programs cut out of their modules (syntax
