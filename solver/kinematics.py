@@ -34,6 +34,7 @@ import numpy as np
 from wirecal.solver import params as P
 from wirecal.solver.exit_geometry import Pulley
 from wirecal.solver.gravity import MassModel, gravity_torques_nm, with_load
+from wirecal.solver.rows import ROW_BLOCK, row_blocks
 
 
 @dataclass(frozen=True)
@@ -292,21 +293,29 @@ def rigid_frames(model: Model, q: np.ndarray) -> Frames:
     origin moves by a·X + d·Z, and RotZ(θ) turns (X, Y) by θ. Vectors are floats for one
     configuration, (3, N) arrays otherwise (:func:`_joint_terms`), so every product of a
     batch runs over contiguous memory; the arrays returned are (N, …, 3) views of one
-    (n+1, 3, 3, N) storage.
+    (n+1, 3, 3, N) storage. Over :data:`~wirecal.solver.rows.ROW_BLOCK` configurations, a
+    block of them at a time (the same numbers).
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     n = q.shape[1]
     if n != model.n_joints:
         raise ValueError(f"configurations have {n} joints; the model has {model.n_joints}")
+    if len(q) > ROW_BLOCK and (not model.batched or len(model.dh) == len(q)):
+        chain, last = np.empty((n + 1, 3, 3, len(q))), np.empty((len(q), 3, 3))
+        for rows in row_blocks(len(q)):  # the same numbers (rows.py)
+            block = replace(model, dh=model.dh[rows]) if model.batched else model
+            chain[..., rows], last[rows] = _chain(block, q[rows])
+    else:
+        chain, last = _chain(model, q)
+    chain = chain.transpose(3, 0, 1, 2)
+    return Frames(x=chain[:, :, 0], z=chain[:, :, 1], o=chain[:, :, 2], R_last=last)
+
+
+def _chain(model: Model, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the frames' storage (n+1, 3, 3, N) and the last rotation (N, 3, 3) of ``q``."""
     stored, (X, Y, Z) = _recurrence(model, q)
-    chain = np.array(stored).reshape(n + 1, 3, 3, -1).transpose(3, 0, 1, 2)
     last = np.array([X, Y, Z]).reshape(3, 3, -1).transpose(2, 1, 0)  # columns X, Y, Z
-    return Frames(
-        x=chain[:, :, 0],
-        z=chain[:, :, 1],
-        o=chain[:, :, 2],
-        R_last=np.ascontiguousarray(last),
-    )
+    return np.array(stored).reshape(q.shape[1] + 1, 3, 3, -1), np.ascontiguousarray(last)
 
 
 def _recurrence(model: Model, q: np.ndarray) -> tuple[list[tuple], tuple]:
