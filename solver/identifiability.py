@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -100,7 +101,7 @@ def right_svd(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     the same numbers (``tests/test_identifiability.py``).
     """
     if J.shape[0] >= max(TALL_ROWS, 2 * J.shape[1]):
-        J = np.linalg.qr(J, mode="r")
+        J = cast(np.ndarray, np.linalg.qr(J, mode="r"))  # R alone (the stubs say a pair)
     _, s, vt = np.linalg.svd(J, full_matrices=J.shape[0] < J.shape[1])
     return s, vt
 
