@@ -18,7 +18,13 @@ the same interpreter and that checkout first on ``PYTHONPATH``. Every plan file 
 the two is compared byte for byte.
 
     python bench/bench_speed.py --before ../before [--runs 3] [--arms viper_s650 ur5e]
-        [--no-demo] [--quick-loop] [--suite] [--test-runs 1]
+        [--no-demo] [--quick-loop] [--suite] [--test-runs 1] [--no-bytecode-cache]
+
+The test loops run with each tree's bytecode and rewritten tests cached first (a
+``pytest --collect-only`` of each, into a folder of the bench's), as a developer's loop
+runs; ``--no-bytecode-cache`` times them also with ``PYTHONDONTWRITEBYTECODE=1``, as a
+shell that sets it runs them (every module of the tree compiled and every test module's
+asserts rewritten again in every run).
 """
 
 from __future__ import annotations
@@ -27,6 +33,7 @@ import argparse
 import os
 import re
 import shlex
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -90,15 +97,47 @@ def _commands(trees: dict[str, Path], tmp: Path, arms, demo: bool):
     return out
 
 
-def _test_commands(trees: dict[str, Path], quick: bool, suite: bool):
-    """Return the test loops to time: (figure, tree's name) → command."""
+def _test_commands(trees: dict[str, Path], wanted: dict[str, bool], tmp: Path, uncached: bool):
+    """Return the test loops to time: (figure, tree's name) → command.
+
+    Each tree's bytecode and rewritten tests kept in a folder of its own under ``tmp``
+    (``PYTHONPYCACHEPREFIX``, filled by :func:`_cache_bytecode`), as a developer's loop
+    runs; ``uncached`` adds each loop again with ``PYTHONDONTWRITEBYTECODE=1`` and no
+    folder, as a shell that sets it runs (the installed libraries' bytecode read, every
+    module of the tree compiled and every test module's asserts rewritten in every run).
+    """
     out: dict[tuple[str, str], list[str]] = {}
-    wanted = {"quick loop": quick, "whole suite": suite}
-    for name, tree in trees.items():
-        for loop, args in readme_tests(tree).items():
-            if wanted[loop]:
-                out[(loop, name)] = _pytest(tree, args)
+    for variant in ("", ", no bytecode cache") if uncached else ("",):
+        for name, tree in trees.items():
+            for loop, args in readme_tests(tree).items():
+                if wanted[loop]:
+                    env = "PYTHONDONTWRITEBYTECODE=1" if variant else _cache_of(tmp, name)
+                    out[(loop + variant, name)] = ["env", env, *_pytest(tree, args)]
     return out
+
+
+def _cache_of(tmp: Path, name: str) -> str:
+    """Return the setting that keeps tree ``name``'s bytecode in a folder under ``tmp``."""
+    return f"PYTHONPYCACHEPREFIX={tmp / ('pycache_' + name)}"
+
+
+def _cache_bytecode(trees: dict[str, Path], tmp: Path) -> None:
+    """Write each tree's bytecode and rewritten tests once: ``pytest --collect-only``."""
+    for name, tree in trees.items():
+        cmd = ["env", _cache_of(tmp, name), *_pytest(tree, ["--collect-only", "-q"])]
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def _test_times(trees: dict[str, Path], args: argparse.Namespace, tmp: Path):
+    """Return the test loops' median (wall s, CPU s), keyed (figure, tree's name)."""
+    wanted = {"quick loop": args.quick_loop, "whole suite": args.suite}
+    tests = _test_commands(trees, wanted, tmp, args.no_bytecode_cache)
+    for tree in trees.values() if args.no_bytecode_cache else ():
+        if any(p.is_dir() for p in tree.rglob("__pycache__") if ".venv" not in p.parts):
+            print(f"note: {tree} holds __pycache__ folders, which the uncached loops read")
+    if tests:
+        _cache_bytecode(trees, tmp)
+    return _timed(tests, args.test_runs, warm=False)
 
 
 def _timed(cmds: dict[tuple[str, str], list[str]], runs: int, warm: bool):
@@ -119,17 +158,23 @@ def main() -> None:
     ap.add_argument("--quick-loop", action="store_true", help="time pytest -m 'not slow' too")
     ap.add_argument("--suite", action="store_true", help="time the whole suite (pytest) too")
     ap.add_argument("--test-runs", type=int, default=1, help="runs of each test loop")
+    ap.add_argument(
+        "--no-bytecode-cache",
+        action="store_true",
+        help="time the test loops also with PYTHONDONTWRITEBYTECODE=1 (nothing cached)",
+    )
     args = ap.parse_args()
     trees = {"before": args.before.resolve(), "now": NOW}
     for var in THREADS:
         os.environ.setdefault(var, "1")  # as the command line sets them (not the test loops)
     os.environ.pop("PYTHONDONTWRITEBYTECODE", None)  # the children cache bytecode, as CI's
+    os.environ.pop("PYTHONPYCACHEPREFIX", None)
     print(f"load average at the start: {os.getloadavg()[0]:.1f}")
     with tempfile.TemporaryDirectory() as tmp:
         cmds = _commands(trees, Path(tmp), args.arms, not args.no_demo)
         times = _timed(cmds, args.runs, warm=True)
-        tests = _test_commands(trees, args.quick_loop, args.suite)
-        times |= _timed(tests, args.test_runs, warm=False)
+        tests = _test_times(trees, args, Path(tmp))
+        times |= tests
         same = {
             arm: (Path(tmp) / f"before_{arm}.toml").read_bytes()
             == (Path(tmp) / f"now_{arm}.toml").read_bytes()

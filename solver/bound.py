@@ -172,9 +172,23 @@ def low_discrepancy(dim: int, draws: int, seed: int) -> np.ndarray:
     return np.asarray((shift + n * alpha) % 1.0)
 
 
+@functools.lru_cache(maxsize=16)
 def _probabilities(dim: int, draws: int, seed: int) -> np.ndarray:
-    """Return the sequence's points kept off 0 and 1 (the normal's inverse is finite)."""
-    return np.clip(low_discrepancy(dim, draws, seed), 1e-12, 1 - 1e-12)
+    """Return the sequence's points kept off 0 and 1 (the normal's inverse is finite).
+
+    The same every call: kept (read-only) for the next bound of as many dimensions.
+    """
+    u = np.clip(low_discrepancy(dim, draws, seed), 1e-12, 1 - 1e-12)
+    u.setflags(write=False)
+    return u
+
+
+@functools.lru_cache(maxsize=16)
+def _normal_scores(dim: int, m: int, draws: int, seed: int) -> np.ndarray:
+    """Return the normal's inverse of the first ``m`` coordinates of the points (read-only)."""
+    x = ndtri(_probabilities(dim, draws, seed)[:, :m])
+    x.setflags(write=False)
+    return x
 
 
 def draws_of(
@@ -190,8 +204,9 @@ def draws_of(
     root = U * np.sqrt(np.clip(w, 0.0, None))  # cov = root·rootᵀ, also when singular
     m, k, signs, t = len(w), len(model.edges), model.sign_terms(), model.truncated
     n = m + k + len(signs)
-    u = _probabilities(n + (0 if t is None else len(t.posterior.mean)), draws, seed)
-    x = ndtri(u[:, :m]) @ root.T + model.bias
+    dim = n + (0 if t is None else len(t.posterior.mean))
+    u = _probabilities(dim, draws, seed)
+    x = _normal_scores(dim, m, draws, seed) @ root.T + model.bias
     x += (2.0 * u[:, m : m + k] - 1.0) @ model.edges.reshape(k, m)
     x += np.sign(u[:, m + k : n] - 0.5) @ signs
     if t is None:
@@ -222,7 +237,9 @@ def bound_mm(
     for start in range(0, draws, _CHUNK):
         p = de[start : start + _CHUNK] @ A  # (3, chunk, Q)
         p *= p
-        E[start : start + _CHUNK] = np.sqrt(p.sum(axis=0)) @ ones
+        sq = np.add(p[0], p[1], out=p[0])  # the sum over the axis, in its order, in place
+        sq += p[2]
+        E[start : start + _CHUNK] = np.sqrt(sq, out=sq) @ ones
     if weights is None:
         return float(np.quantile(E, probability))
     order = np.argsort(E)

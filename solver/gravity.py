@@ -25,6 +25,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from wirecal.solver.rows import ROW_BLOCK, row_blocks
+
 STANDARD_GRAVITY_M_S2 = 9.80665
 """Standard acceleration of gravity (m/s²)."""
 
@@ -169,8 +171,23 @@ def gravity_torques_nm(
 
     ``x``, ``z``, ``o``: the frames' x and z axes and origins, (N, n+1, 3), frame 0 the base.
     Vectorised: the moments of the links beyond each joint are reverse cumulative sums,
-    M_j = Σ_{k≥j} r_k × F_k − o_j × Σ_{k≥j} F_k.
+    M_j = Σ_{k≥j} r_k × F_k − o_j × Σ_{k≥j} F_k. Over
+    :data:`~wirecal.solver.rows.ROW_BLOCK` configurations, a block of them at a time (the
+    same numbers).
     """
+    kg = masses.load_kg
+    if len(x) > ROW_BLOCK and (kg is None or np.shape(kg) == (len(x),)):
+        return np.concatenate(
+            [
+                _torques(masses if kg is None else replace(masses, load_kg=kg[r]), x[r], z[r], o[r])
+                for r in row_blocks(len(x))
+            ]
+        )
+    return _torques(masses, x, z, o)
+
+
+def _torques(masses: MassModel, x: np.ndarray, z: np.ndarray, o: np.ndarray) -> np.ndarray:
+    """Return :func:`gravity_torques_nm` of one batch."""
     y = np.cross(z, x)
     R = np.stack([x[:, 1:], y[:, 1:], z[:, 1:]], axis=-1)  # (N, n, 3, 3): columns x, y, z
     r = o[:, 1:] + np.einsum("nkij,kj->nki", R, masses.link_com_mm)  # (N, n, 3)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -78,13 +79,31 @@ def covariance(J: np.ndarray, sigma2: float) -> tuple[np.ndarray, np.ndarray]:
     restricted to the seen directions) and the (m,) mask of identified parameters.
     """
     m = J.shape[1]
-    # the right vectors only (m, m): U of N rows would be N × N (20,000 rows: 3 GB)
-    _, s, vt = np.linalg.svd(J, full_matrices=J.shape[0] < m)
+    s, vt = right_svd(J)
     s = np.concatenate([s, np.zeros(m - s.size)])
     seen = s > RANK_RTOL * (s[0] if s[0] > 0 else 1.0)
     cov = sigma2 * (vt[seen].T / s[seen] ** 2) @ vt[seen]
     identified = ~np.any(np.abs(vt[~seen]) > NULL_COMPONENT, axis=0)
     return cov, identified
+
+
+TALL_ROWS = 1000
+"""From this many rows (and twice the columns) :func:`right_svd` factors J = QR first."""
+
+
+def right_svd(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the singular values and the right vectors vt (m, m) of ``J`` (N, m).
+
+    Not the left vectors: N × N of them for 20,000 rows would be 3 GB, and N × m of them
+    half the time at 200,000 rows. A tall J (:data:`TALL_ROWS`) goes through its triangular
+    factor R (J = QR, m × m): the singular values and right vectors of R are J's, and
+    LAPACK's SVD (gesdd) of a J that tall starts with that very factorisation, so they are
+    the same numbers (``tests/test_identifiability.py``).
+    """
+    if J.shape[0] >= max(TALL_ROWS, 2 * J.shape[1]):
+        J = cast(np.ndarray, np.linalg.qr(J, mode="r"))  # R alone (the stubs say a pair)
+    _, s, vt = np.linalg.svd(J, full_matrices=J.shape[0] < J.shape[1])
+    return s, vt
 
 
 def std_and_correlation(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -140,7 +159,7 @@ def analyse_jacobian(J: np.ndarray, names: tuple[str, ...]) -> Identifiability:
     rest = [k for k in range(len(names)) if k not in alone]
     combos: list[tuple[tuple[str, float], ...]] = []
     if rest and rank < len(rest):
-        _, sr, vt = np.linalg.svd(J[:, rest], full_matrices=J.shape[0] < len(rest))
+        sr, vt = right_svd(J[:, rest])
         sr = np.concatenate([sr, np.zeros(len(rest) - sr.size)])
         null = vt[sr <= tol]
         for row in _rref(null):
@@ -260,7 +279,7 @@ def _null_combination(J: np.ndarray, names: tuple[str, ...], columns: list[int])
     """
     norm = np.linalg.norm(J, axis=0)
     unit = _unit_columns(J)
-    v = np.linalg.svd(unit, full_matrices=J.shape[0] < J.shape[1])[2][-1]
+    v = right_svd(unit)[1][-1]
     keep = np.abs(v) > 1e-3 * np.max(np.abs(v))
     c = v / np.where(np.any(unit, axis=0), norm, 1.0)
     c = c / c[-1] if keep[-1] else c / c[np.argmax(np.abs(v))]

@@ -34,6 +34,7 @@ import numpy as np
 from wirecal.solver import params as P
 from wirecal.solver.exit_geometry import Pulley
 from wirecal.solver.gravity import MassModel, gravity_torques_nm, with_load
+from wirecal.solver.rows import ROW_BLOCK, row_blocks
 
 
 @dataclass(frozen=True)
@@ -176,15 +177,15 @@ def _table_floats(raw: bytes, n: int) -> tuple[list, list, list, list, np.ndarra
     return ca.tolist(), sa.tolist(), dh[:, 1].tolist(), dh[:, 3].tolist(), dh[:, 2].copy()
 
 
-def _joint_terms(model: Model, q: np.ndarray) -> tuple[Iterator[tuple], tuple, Vector]:
+def _joint_terms(dh: np.ndarray, q: np.ndarray) -> tuple[Iterator[tuple], tuple, Vector]:
     """Per joint (cos α, sin α, a, d, cos θ, sin θ), and the base frame's axes and origin.
 
     Python floats and 3-tuples for one configuration of one model (array arithmetic on
     single numbers costs more in overhead than in work: the twin and the inverse
     kinematics evaluate one configuration at a time, tens of thousands of times per run);
     otherwise vectors are (3, N) arrays and each term an (N,) array or one shared float.
+    ``dh``: the model's table (n, 4), or one per configuration (N, n, 4).
     """
-    dh = model.dh
     N = q.shape[0]
     if dh.ndim == 2 and N == 1:
         terms = _one_terms(np.asarray(dh, float).tobytes(), dh.shape[0], q[0])
@@ -292,26 +293,63 @@ def rigid_frames(model: Model, q: np.ndarray) -> Frames:
     origin moves by a·X + d·Z, and RotZ(θ) turns (X, Y) by θ. Vectors are floats for one
     configuration, (3, N) arrays otherwise (:func:`_joint_terms`), so every product of a
     batch runs over contiguous memory; the arrays returned are (N, …, 3) views of one
-    (n+1, 3, 3, N) storage.
+    (n+1, 3, 3, N) storage, read-only: up to :data:`KEPT_ROWS` configurations, the frames
+    of the last :data:`KEPT_FRAMES` tables and joints asked for are kept and given again.
+    Over :data:`~wirecal.solver.rows.ROW_BLOCK` configurations, a block of them at a time
+    (the same numbers).
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     n = q.shape[1]
     if n != model.n_joints:
         raise ValueError(f"configurations have {n} joints; the model has {model.n_joints}")
-    stored, (X, Y, Z) = _recurrence(model, q)
-    chain = np.array(stored).reshape(n + 1, 3, 3, -1).transpose(3, 0, 1, 2)
+    dh = np.asarray(model.dh, dtype=float)
+    if len(q) <= KEPT_ROWS:
+        return _kept_frames(dh.tobytes(), dh.shape, q.tobytes(), q.shape)
+    if len(q) > ROW_BLOCK and (dh.ndim == 2 or len(dh) == len(q)):
+        chain, last = np.empty((n + 1, 3, 3, len(q))), np.empty((len(q), 3, 3))
+        for rows in row_blocks(len(q)):  # the same numbers (rows.py)
+            chain[..., rows], last[rows] = _chain(dh if dh.ndim == 2 else dh[rows], q[rows])
+    else:
+        chain, last = _chain(dh, q)
+    return _frames_of(chain, last)
+
+
+KEPT_ROWS = 128
+"""Frames of at most this many configurations are kept (:func:`rigid_frames`): kept frames of
+1,024 made ``wirecal plan`` of the Viper 5 % slower (the memory of 32 large batches kept
+instead of reused), of 128 none."""
+
+KEPT_FRAMES = 32
+"""How many tables and joints the kept frames are of: the solvers, the planner and the twin
+ask for the frames of the same model at the same joints again and again (a solve's steps,
+each move's clearance, the run's timing)."""
+
+
+@lru_cache(maxsize=KEPT_FRAMES)
+def _kept_frames(raw_dh: bytes, dh_shape: tuple, raw_q: bytes, q_shape: tuple) -> Frames:
+    """:func:`rigid_frames` of a table and joints given by their bytes and shapes."""
+    dh, q = np.frombuffer(raw_dh).reshape(dh_shape), np.frombuffer(raw_q).reshape(q_shape)
+    return _frames_of(*_chain(dh, q))
+
+
+def _frames_of(chain: np.ndarray, last: np.ndarray) -> Frames:
+    """Return the frames, read-only views of the storage ``chain`` and ``last``."""
+    chain.setflags(write=False)
+    last.setflags(write=False)
+    chain = chain.transpose(3, 0, 1, 2)
+    return Frames(x=chain[:, :, 0], z=chain[:, :, 1], o=chain[:, :, 2], R_last=last)
+
+
+def _chain(dh: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the frames' storage (n+1, 3, 3, N) and the last rotation (N, 3, 3) of ``q``."""
+    stored, (X, Y, Z) = _recurrence(dh, q)
     last = np.array([X, Y, Z]).reshape(3, 3, -1).transpose(2, 1, 0)  # columns X, Y, Z
-    return Frames(
-        x=chain[:, :, 0],
-        z=chain[:, :, 1],
-        o=chain[:, :, 2],
-        R_last=np.ascontiguousarray(last),
-    )
+    return np.array(stored).reshape(q.shape[1] + 1, 3, 3, -1), np.ascontiguousarray(last)
 
 
-def _recurrence(model: Model, q: np.ndarray) -> tuple[list[tuple], tuple]:
+def _recurrence(dh: np.ndarray, q: np.ndarray) -> tuple[list[tuple], tuple]:
     """Return each frame's (x, z, o) and the last frame's axes (X, Y, Z) (:func:`rigid_frames`)."""
-    terms, (X, Y, Z), P = _joint_terms(model, q)
+    terms, (X, Y, Z), P = _joint_terms(dh, q)
     if isinstance(P, tuple):  # one configuration: Python floats
         return _recurrence_floats(terms)
     stored = [(X, Z, P)]

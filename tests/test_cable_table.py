@@ -344,7 +344,8 @@ def _workbook_with_a_huge_cell(path, cell_bytes):
     book.active.append(["j1"])
     buf = io.BytesIO()
     book.save(buf)
-    with zipfile.ZipFile(buf) as src, zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as out:
+    fast = {"compression": zipfile.ZIP_DEFLATED, "compresslevel": 1}  # 0.6 MB, half the time
+    with zipfile.ZipFile(buf) as src, zipfile.ZipFile(path, "w", **fast) as out:
         for part in src.infolist():
             if part.filename != "xl/worksheets/sheet1.xml":
                 out.writestr(part, src.read(part))

@@ -20,7 +20,6 @@ language names out of the shared code: nothing outside ``lang/<key>``, ``gen/<ke
 
 from __future__ import annotations
 
-import ast
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
@@ -42,6 +41,7 @@ from wirecal.solver.robot import Robot
 from wirecal.solver.solve import solve
 
 from .conftest import ROOT
+from .source_walk import walked
 
 KEYS = sorted(languages())
 GOLDEN = ROOT / "tests" / "golden"
@@ -287,9 +287,8 @@ def key_literals(root: Path, keys: list[str]) -> set[tuple[str, str]]:
             rel = path.relative_to(root)
             if rel.parts[0] in OWN_FOLDERS and len(rel.parts) > 2 and rel.parts[1] in keys:
                 continue
-            for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-                if isinstance(node, ast.Constant) and node.value in keys:
-                    found.add((rel.as_posix(), node.value))
+            constants = walked(path).constants
+            found.update((rel.as_posix(), key) for key in keys if key in constants)
     return found
 
 

@@ -6,7 +6,13 @@ from __future__ import annotations
 import numpy as np
 
 from wirecal.solver import params as P
-from wirecal.solver.identifiability import analyse, observability_indices, select_columns
+from wirecal.solver.identifiability import (
+    TALL_ROWS,
+    analyse,
+    observability_indices,
+    right_svd,
+    select_columns,
+)
 
 
 def test_th1_unobservable_from_any_points(viper):
@@ -91,3 +97,17 @@ def test_select_columns_refuses_a_column_the_covariance_does_not_identify():
     assert sel.kept == (0,)
     assert sel.dropped[0][0] == "q"
     assert sel.dropped[0][1].startswith("not identified: nearly ")
+
+
+def test_a_tall_jacobians_svd_through_its_r_is_the_direct_one_bit_for_bit():
+    """right_svd of a tall J goes through J = QR: LAPACK's own first step for it, so the
+    singular values and right vectors are those of the SVD of J itself, bit for bit (the
+    covariances and null spaces of long fits unchanged by it)."""
+    rng = np.random.default_rng(4)
+    for rows, cols in ((TALL_ROWS, 23), (5000, 30), (3000, 7)):
+        J = rng.normal(size=(rows, cols)) * rng.uniform(0.01, 100.0, cols)
+        J[:, -1] = J[:, -2]  # a null direction too
+        s, vt = right_svd(J)
+        _, s_direct, vt_direct = np.linalg.svd(J, full_matrices=False)
+        assert np.array_equal(s, s_direct)
+        assert np.array_equal(vt, vt_direct)

@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from .conftest import ROOT
+from .source_walk import walked
 from .test_layers import FOLDERS, module_name
 
 
@@ -41,9 +42,7 @@ def import_graph(root: Path) -> dict[str, set[str]]:
     graph: dict[str, set[str]] = {}
     for importer, path in paths.items():
         graph[importer] = set()
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            if not isinstance(node, ast.Import | ast.ImportFrom):
-                continue
+        for node in walked(path).imports:
             names = _targets(node, importer, path.name == "__init__.py")
             base, members = (names[0], names[1:]) if isinstance(node, ast.ImportFrom) else ("", [])
             found = [n for n in (members or names) if n in paths]

@@ -15,11 +15,13 @@ issue 33): the test fails on any violation.
 from __future__ import annotations
 
 import ast
+from collections.abc import Iterable
 from pathlib import Path
 
 import pytest
 
 from .conftest import ROOT
+from .source_walk import walked
 
 FOLDERS = {
     "solver": "wirecal.solver",
@@ -64,10 +66,10 @@ def module_name(root: Path, path: Path) -> str:
     return ".".join(parts)
 
 
-def imported(tree: ast.AST) -> set[str]:
-    """Return every ``wirecal`` module a parsed file imports, anywhere in it."""
+def imported(statements: Iterable[ast.Import | ast.ImportFrom]) -> set[str]:
+    """Return every ``wirecal`` module a file's import ``statements`` (all of them) import."""
     names: set[str] = set()
-    for node in ast.walk(tree):
+    for node in statements:
         if isinstance(node, ast.Import):
             names.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
@@ -85,7 +87,7 @@ def violations(root: Path) -> set[tuple[str, str]]:
             importer = module_name(root, path)
             own = layer(importer)
             assert own is not None, path
-            for target in imported(ast.parse(path.read_text(encoding="utf-8"))):
+            for target in imported(walked(path).imports):
                 other = layer(target)
                 if other is not None and other != own and LAYERS[other] >= LAYERS[own]:
                     found.add((importer, target))

@@ -7,10 +7,10 @@ is split into well-named steps with one purpose each.
 
 from __future__ import annotations
 
-import ast
 from functools import cache
 
 from .conftest import ROOT
+from .source_walk import walked
 from .test_layers import FOLDERS
 
 MAX_LINES = 60
@@ -28,14 +28,11 @@ def _long_functions() -> dict[str, list[str]]:
     found: dict[str, list[str]] = {}
     for folder in [*FOLDERS, "bench"]:
         for path in sorted((ROOT / folder).rglob("*.py")):
-            tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
-            for node in ast.walk(tree):
-                if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
-                    continue
-                n = (node.end_lineno or node.lineno) - node.lineno + 1
+            for name, first, last in walked(path).functions:
+                n = last - first + 1
                 if n > MAX_LINES:
-                    where = f"{path.relative_to(ROOT)}:{node.lineno}: {node.name}, {n} lines"
-                    found.setdefault(node.name, []).append(where)
+                    where = f"{path.relative_to(ROOT)}:{first}: {name}, {n} lines"
+                    found.setdefault(name, []).append(where)
     return found
 
 

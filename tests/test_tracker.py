@@ -480,11 +480,17 @@ def test_greedy_rows_are_distinct(seed, n):
     assert len(set(rows.tolist())) == len(rows)
 
 
-def test_pool_plan_keeps_the_wire_range_and_the_joint_limits():
+@pytest.fixture(scope="module")
+def pool_plan():
+    """The UR10's plan from a pool of 300 (row 0 beyond the joint limits), planned once."""
     robot = load_robot(UR10)
     q = _ur10_pool(300, 4)
     q[0, 5] = 400.0  # beyond the joint limits: left out, counted
-    plan = plan_pool(robot, q, 30, PlanOptions())
+    return robot, q, plan_pool(robot, q, 30, PlanOptions())
+
+
+def test_pool_plan_keeps_the_wire_range_and_the_joint_limits(pool_plan):
+    robot, q, plan = pool_plan
     assert len(plan.rows) == 30
     assert plan.theta0_row not in plan.rows
     assert 0 not in plan.rows
@@ -496,15 +502,12 @@ def test_pool_plan_keeps_the_wire_range_and_the_joint_limits():
     assert wire.max() <= robot.encoder.range_mm - 50.0
 
 
-def test_pool_plan_is_the_least_predicted_of_the_anchors_tried():
-    robot = load_robot(UR10)
-    q = _ur10_pool(300, 4)
-    q[0, 5] = 400.0  # beyond the joint limits: no θ0, no pose
+def test_pool_plan_is_the_least_predicted_of_the_anchors_tried(pool_plan):
+    robot, q, chosen = pool_plan  # row 0 beyond the joint limits: no θ0, no pose
     plans = anchor_plans(robot, q, 30, PlanOptions())
     assert 1 < len(plans) <= 24
     assert len({pl.theta0_row for pl in plans}) == len(plans)
     assert all(0 not in pl.rows and pl.theta0_row != 0 and pl.outside == 1 for pl in plans)
-    chosen = plan_pool(robot, q, 30, PlanOptions())
     assert chosen.predicted_mm == min(pl.predicted_mm for pl in plans)
     assert chosen.theta0_row in {pl.theta0_row for pl in plans}
 

@@ -30,6 +30,7 @@ from wirecal.solver.kinematics import (
     tool_position,
     with_errors,
 )
+from wirecal.solver.rows import row_blocks
 from wirecal.solver.scale import PPM
 
 ANCHOR_NAMES = ("anchor_x", "anchor_y", "anchor_z")
@@ -88,23 +89,13 @@ def model_of(base: Model, layout: Layout, x: np.ndarray) -> Model:
     return with_errors(base, layout.geometry, layout.split(x)[0])
 
 
-CHUNK_ROWS = 8192
-"""Rows evaluated together: a chunk's frames stay in the processor's cache, which halves
-the time of the frames at 100,000 rows against one batch of every row."""
-
-
-def _chunks(n_rows: int) -> list[slice]:
-    """Return the slices of ``n_rows`` rows, :data:`CHUNK_ROWS` at a time."""
-    return [slice(i, i + CHUNK_ROWS) for i in range(0, n_rows, CHUNK_ROWS)]
-
-
 def lengths(
     base: Model, layout: Layout, x: np.ndarray, q_rad: np.ndarray, session: np.ndarray
 ) -> np.ndarray:
     """Return the model's lengths L (N,) in mm, without the Jacobian (module docstring)."""
     _, anchor, kappa, offsets = layout.split(x)
     model = model_of(base, layout, x)
-    p = np.concatenate([tool_position(model, q_rad[c]) for c in _chunks(len(q_rad))])
+    p = np.concatenate([tool_position(model, q_rad[c]) for c in row_blocks(len(q_rad))])
     return (1 + kappa) * np.linalg.norm(p - anchor, axis=1) + offsets[session]
 
 
@@ -113,12 +104,13 @@ def _along_wire(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return ‖p − a‖ (N,), the wire's direction u (N, 3) and uᵀ·∂p/∂e (N, m).
 
-    Row chunk by row chunk (:data:`CHUNK_ROWS`), the derivatives along the wire from
-    :func:`~wirecal.solver.kinematics.tool_gradient` (no (N, 3, m) Jacobian).
+    A block of rows at a time (:func:`~wirecal.solver.rows.row_blocks`), the derivatives
+    along the wire from :func:`~wirecal.solver.kinematics.tool_gradient` (no (N, 3, m)
+    Jacobian).
     """
     dist, u = np.empty(len(q_rad)), np.empty((len(q_rad), 3))
     along = np.empty((len(q_rad), len(names)))
-    for c in _chunks(len(q_rad)):
+    for c in row_blocks(len(q_rad)):
         f = frames(model, q_rad[c])
         p = tool_position(model, q_rad[c], f)
         span = p - anchor
