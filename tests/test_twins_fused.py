@@ -316,3 +316,57 @@ def test_rapid_nan_and_infinity_stop_the_run_with_a_rapid_error(
     interp.globals["r"] = [0.0, 0.0, 0.0]
     out = interp.execute("main")
     assert (out.status, out.message) == ("error", message)
+
+
+# ---------- one line in two programs ----------
+# The line parsers keep a line's node by its text and copy it shallowly, so a line's
+# expressions are the same objects in every program that has the line: what is written
+# for an expression must follow the program it runs in (its slots, its scopes).
+
+
+def test_a_vplus_line_in_two_programs_uses_each_programs_slots(viper, paper_plan, tmp_path):
+    """The same ``s = e*(1-e2*(…))`` lines, ``e2`` at slot 1 in one program, 0 in the next."""
+    from wirecal.lang.vplus.parser import parse_module
+    from wirecal.twin.vplus.controller import VplusController
+    from wirecal.twin.vplus.interp import Interpreter
+    from wirecal.twin.world import World
+
+    lines = "    e2 = e*e\n    s = e*(1-e2*(1-e2*3))\n"
+    first = ".PROGRAM t.main()\n    GLOBAL DOUBLE e, s\n    AUTO DOUBLE z, e2\n"
+    first += f"    z = 1\n{lines}.END\n"
+    second = f".PROGRAM t.main()\n    GLOBAL DOUBLE e, s\n    AUTO DOUBLE e2\n{lines}.END\n"
+    for text, e in ((first, 0.5), (second, 0.25)):
+        cell = VplusController(World(viper, {}, paper_plan.theta0_deg, tmp_path))
+        interp = Interpreter(parse_module(text, "t.v2"), cell)
+        interp.set_global("e", e)
+        assert interp.execute("t.main").status == "completed"
+        assert interp.get_global("s") == e * (1 - e * e * (1 - e * e * 3))
+
+
+def test_a_urscript_condition_in_two_places_reads_each_places_variable():
+    """``if n > 0:`` reads a global in one function and a local in the other."""
+    text = "\n".join(
+        [
+            "def p():",
+            "  n = 5",
+            "  def g():",
+            "    r = 0",
+            "    if n > 0:",
+            "      r = 1",
+            "    end",
+            "    return r",
+            "  end",
+            "  def f(x):",
+            "    local n = x",
+            "    r = 0",
+            "    if n > 0:",
+            "      r = 1",
+            "    end",
+            "    return r + 10 * g()",
+            "  end",
+            "end",
+        ]
+    )
+    interp = urscript_interp.Interpreter(parse_program(text, "t.script"), Log())
+    interp.globals["n"] = 5  # as p's body sets it
+    assert interp.function("f")([-1]) == 10  # f's local n is -1; g reads the global n = 5

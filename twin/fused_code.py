@@ -51,15 +51,19 @@ class Recipe:
 _RECIPES = Kept(RECIPES_KEPT)
 
 
-def recipe_of(node: Any, write: Callable[[], Recipe | None]) -> Recipe | None:
-    """Return ``write()`` for ``node``, kept for that very node (a parse is kept by its text).
+def recipe_of(node: Any, place: object, write: Callable[[], Recipe | None]) -> Recipe | None:
+    """Return ``write()`` for ``node`` at ``place``, kept for that very pair.
 
     What is written depends on the node and on its place in its program (a variable's
-    scope, a datum's type), which are the same for the same node; what depends on the run
-    (the counter, the interpreter, the closures of the nodes not written out) is made
-    for each compiler (:meth:`Recipe.function`).
+    scope, a datum's type). A parse is kept by its text, but a line parser's kept line
+    shares its expressions with every copy of that line, in other programs and functions
+    too: so a recipe is kept for the node together with the parsed object that fixes its
+    scope (``place``: a URScript function's definition, a RAPID module), which is the same
+    object whenever the node is in the same place. What depends on the run (the counter,
+    the interpreter, the closures of the nodes not written out) is made for each compiler
+    (:meth:`Recipe.function`).
     """
-    recipe: Recipe | None = _RECIPES.get(write, node)
+    recipe: Recipe | None = _RECIPES.get(write, node, place)
     return recipe
 
 
@@ -67,7 +71,7 @@ def written(
     node: Any, write: Callable[[], Recipe | None], compiler: Any, names: dict[str, Any]
 ) -> Callable[[Any], Any] | None:
     """Return the function ``write`` writes for ``node`` (kept: :func:`recipe_of`), or None."""
-    recipe = recipe_of(node, write)
+    recipe = recipe_of(node, compiler.place, write)
     return None if recipe is None else recipe.function(compiler, names)
 
 
@@ -107,7 +111,7 @@ def fused_steps(
             k += 1
             continue
         run = steps[k : k + n]
-        recipe = recipe_of(steps[k], partial(_run, writer, run))
+        recipe = recipe_of(steps[k], compiler.place, partial(_run, writer, run))
         assert recipe is not None
         out.append(recipe.function(compiler, names))
         k += n

@@ -44,6 +44,7 @@ class Compiling(Protocol):
     interp: Any  # the interpreter: its globals, ops (the counter) and line
     typer: Any  # the checker's typer, the routine's scope
     local: dict[str, Any]  # the routine's own data and parameters
+    place: object  # the parsed module: each node is in one routine of it
 
     def expr(self, e: N.Expr, want: Type | None) -> Callable:
         """Compile ``e`` node by node into a closure of the frame."""

@@ -373,6 +373,7 @@ class _Compiler:
         returns: Type | None = None,
     ):
         self.interp, self.typer, self.local, self.returns = interp, typer, local, returns
+        self.place: object = interp.module  # a node is in one routine of it (fused_code.recipe_of)
 
     @staticmethod
     def routine(interp: Interpreter, r: N.Routine) -> Callable[[list[Any]], tuple[Any, Frame]]:

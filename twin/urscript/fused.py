@@ -37,6 +37,7 @@ class Compiling(Protocol):
     """What the fused code needs of the node-by-node compiler."""
 
     i: Any  # the interpreter: its globals, ops (the counter) and where (the line)
+    place: object  # the function's definition: what fixes a name's scope
 
     def is_global(self, name: str) -> bool:
         """Tell whether the variable ``name`` is a global (else the frame's)."""

@@ -173,6 +173,7 @@ class _Compiler:
 
     def __init__(self, interp: Interpreter, d: N.Def):
         self.i, self.d = interp, d
+        self.place: object = d  # what fixes a name's scope here (fused_code.recipe_of)
         self.main = d.name == interp.program.name
         own = [s for s in walk(d.body) if not isinstance(s, N.Def)]
         self.locals = set(d.params) | {

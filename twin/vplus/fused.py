@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from types import CodeType
 
 from wirecal.lang.vplus import nodes as N
-from wirecal.twin.fused_code import Recipe, code, recipe_of
+from wirecal.twin.fused_code import Recipe, code
 from wirecal.twin.machine import f32
 
 _COUNTER = {"+": "add", "-": "add", "*": "mul"}
@@ -67,9 +67,11 @@ def fused(e: N.BinOp, leaf: Leaf, ops: Counter, nodes: Callable) -> Callable | N
 
     ``leaf`` names the AUTO numeric scalars, ``ops`` is the interpreter's operation counter,
     ``nodes`` the node-by-node closure of ``e`` (evaluated while a slot is undefined). What
-    is written is kept for the node (:func:`~wirecal.twin.fused_code.recipe_of`).
+    is written depends on the program's AUTO slots, so it is written for each program (a
+    kept line's expression is shared with its copies in other programs); its code is kept
+    by its text (:func:`~wirecal.twin.fused_code.code`).
     """
-    recipe = recipe_of(e, lambda: _recipe(e, leaf))
+    recipe = _recipe(e, leaf)
     return None if recipe is None else recipe.function(None, {"ops": ops, "nodes": nodes})
 
 
