@@ -54,6 +54,8 @@ def test_round_trip_analytic(viper, u, calibrated):
 @pytest.mark.slow
 @settings(max_examples=15, deadline=None)
 @given(u=st.lists(unit, min_size=6, max_size=6))
+# elbow near its fold (φ3 = 109°): the structural table just out of reach, two branches 3.9° apart
+@example(u=[0.3125, 0.90625, 0.484375, 0.9375, 0.0625, 0.453125])
 def test_numeric_fallback_for_a_non_spherical_wrist(viper, u):
     model = viper.model({"al4": 0.4, "a4": 0.8, "d5": 0.3})
     assert not analytic_structure(model)
@@ -116,6 +118,8 @@ UR5_ERRORS = {"th2": 0.3, "th4": -0.2, "a2": 0.8, "a3": -0.5, "d4": 0.4, "d5": 0
 
 @settings(max_examples=40, deadline=None)
 @given(u=st.lists(unit, min_size=6, max_size=6), calibrated=st.booleans())
+# wrist point inside the structural shoulder cylinder: the calibrated shoulders 1.6° apart in q1
+@example(u=[0.5, 0.4609375, 0.732421875, 0.89453125, 0.625, 0.5], calibrated=True)
 # φ5 = 177.5°: the calibrated arm has 10 solutions, two of them 7° apart on one branch
 @example(u=[0.5, 0.98, 0.296875, 0.75, 0.75, 0.5], calibrated=True)
 # wrist point just inside the structural table's shoulder cylinder (by 0.07 mm), φ5 = 0

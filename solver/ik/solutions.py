@@ -85,30 +85,48 @@ def _rot_z(a):
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
 
-def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
-    """Closed-form DH angles φ (8 at most) for a flange pose; see the module doc."""
+FOLD_SLACK = 1e-2
+"""A structural table seeding another model (:func:`solve`'s numeric fallback) clips an elbow
+cosine this far beyond ±1, not drops it: the wrist offsets the table leaves out (0.8 mm of a4
+and 0.3 mm of d5 on the tests' non-spherical wrist, 0.12 % beyond) move the wrist centre
+further than a calibration's errors move a UR's (:data:`~wirecal.solver.ik.ur.SEED_SLACK`)."""
+
+
+def _analytic(
+    model: Model, R: np.ndarray, o: np.ndarray, near_deg: float = 0.0
+) -> list[np.ndarray]:
+    """Closed-form DH angles φ (8 at most) for a flange pose; see the module doc.
+
+    ``near_deg`` > 0 when the model is another's structural table, seeding Newton on that
+    one: a pose just out of reach (by :data:`FOLD_SLACK`) is clipped, and within
+    ``near_deg`` of the elbow's fold φ3 is also seeded either side of it
+    (:func:`~wirecal.solver.ik.ur.pulled`; hypothesis found a Viper with a non-spherical
+    wrist whose two elbow branches, 3.9° apart in φ3, lie where the structural table
+    reaches neither).
+    """
     dh = model.dh
     alpha, a, off, d = dh.T
     base = _rot_x(alpha[0])
     Rb, ob = base.T @ R, base.T @ o - np.array([a[0], 0, 0])
-    s1, s3, s4, s5 = (np.sign(np.sin(alpha[k])) for k in (1, 3, 4, 5))
+    s1, s3 = (np.sign(np.sin(alpha[k])) for k in (1, 3))
     c = ob - d[5] * Rb[:, 2]
     y1 = -s1 * (d[1] + d[2])
     r2 = c[0] ** 2 + c[1] ** 2
     out: list[np.ndarray] = []
     if r2 < y1**2:
         return out
+    slack = FOLD_SLACK if near_deg > 0 else 1e-12
     for shoulder in (1, -1):
         x1 = shoulder * np.sqrt(r2 - y1**2)
         phi1 = np.arctan2(c[1], c[0]) - np.arctan2(y1, x1)
         ux, uy = x1 - a[1], s1 * (c[2] - d[0])
         k = (ux**2 + uy**2 - a[2] ** 2 - a[3] ** 2 - d[3] ** 2) / (2 * a[2])
         rr = np.hypot(a[3], d[3])
-        if abs(k) > rr * (1 + 1e-12):
+        if abs(k) > rr * (1 + slack):
             continue
         beta = np.arctan2(s3 * d[3], a[3])
-        for elbow in (1, -1):
-            phi3 = beta + elbow * np.arccos(np.clip(k / rr, -1, 1))
+        bends = ik_ur.pulled(float(np.arccos(np.clip(k / rr, -1, 1))), near_deg)
+        for phi3 in (beta + elbow * bend for elbow in (1, -1) for bend in bends):
             px = a[2] + a[3] * np.cos(phi3) + s3 * d[3] * np.sin(phi3)
             py = a[3] * np.sin(phi3) - s3 * d[3] * np.cos(phi3)
             phi2 = np.arctan2(uy, ux) - np.arctan2(py, px)
@@ -118,21 +136,28 @@ def _analytic(model: Model, R: np.ndarray, o: np.ndarray) -> list[np.ndarray]:
             X3, Z3 = chain[0][3][0], chain[0][3][1]
             R3 = np.column_stack([X3, cross3(Z3, X3), Z3])
             M = _rot_x(alpha[3]).T @ R3.T @ R
-            h = np.hypot(M[0, 2], M[1, 2])
-            for wrist in (1, -1):
-                s_phi5 = wrist * h
-                phi5 = np.arctan2(s_phi5, -s4 * s5 * M[2, 2])
-                if h > 1e-9:
-                    phi4 = np.arctan2(s5 * M[1, 2] * wrist, s5 * M[0, 2] * wrist)
-                    phi6 = np.arctan2(-s4 * M[2, 1] * wrist, s4 * M[2, 0] * wrist)
-                else:  # wrist singular: φ4 and φ6 turn about one axis; keep φ4 = 0
-                    phi4 = 0.0
-                    N = _rot_x(alpha[4]) @ _rot_z(phi5) @ _rot_x(alpha[5])
-                    X = N.T @ M
-                    phi6 = np.arctan2(X[1, 0], X[0, 0])
-                out.append(np.array([phi1, phi2, phi3, phi4, phi5, phi6]))
-                if h <= 1e-9:
-                    break
+            out += [np.array([phi1, phi2, phi3, *w]) for w in _wrist_angles(alpha, M)]
+    return out
+
+
+def _wrist_angles(alpha: np.ndarray, M: np.ndarray) -> list[tuple[float, float, float]]:
+    """Return (φ4, φ5, φ6) per wrist branch from the wrist rotation M (see the module doc)."""
+    s4, s5 = (np.sign(np.sin(alpha[k])) for k in (4, 5))
+    h = np.hypot(M[0, 2], M[1, 2])
+    out = []
+    for wrist in (1, -1):
+        s_phi5 = wrist * h
+        phi5 = np.arctan2(s_phi5, -s4 * s5 * M[2, 2])
+        if h > 1e-9:
+            phi4 = np.arctan2(s5 * M[1, 2] * wrist, s5 * M[0, 2] * wrist)
+            phi6 = np.arctan2(-s4 * M[2, 1] * wrist, s4 * M[2, 0] * wrist)
+        else:  # wrist singular: φ4 and φ6 turn about one axis; keep φ4 = 0
+            phi4 = 0.0
+            N = _rot_x(alpha[4]) @ _rot_z(phi5) @ _rot_x(alpha[5])
+            X = N.T @ M
+            phi6 = np.arctan2(X[1, 0], X[0, 0])
+            return [(phi4, phi5, phi6)]
+        out.append((phi4, phi5, phi6))
     return out
 
 
@@ -277,7 +302,10 @@ def each_solution(
         structural[:, 0] = np.round(structural[:, 0] / HALF_PI) * HALF_PI
         structural[4:, 1] = 0.0
         structural[4, 3] = 0.0
-        seeds = [phi - dh[:, 2] for phi in _analytic(Model(structural, model.tool_point), R, o)]
+        near = ik_ur.NEAR_SINGULAR_DEG
+        seeds = [
+            phi - dh[:, 2] for phi in _analytic(Model(structural, model.tool_point), R, o, near)
+        ]
         seeds += list(rng.uniform(-np.pi, np.pi, (24, 6)))
         starts = _distinct_starts(model, seeds, R, o)
     found: list[list[float]] = []

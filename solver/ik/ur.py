@@ -43,9 +43,10 @@ sought from φ6 sampled round the turn, not from the structural table's one φ6 
 WRIST_SAMPLES = 12
 """φ6 samples per wrist branch near the wrist singularity (every 30°)."""
 
-ELBOW_PULL_DEG = 2.0
-"""Near the elbow stretched or folded, a calibrated model's φ3 is also seeded this far from
-the fold on each side (:func:`_arm`)."""
+PULL_DEG = 2.0
+"""Where two branches of the structural table nearly meet (the elbow stretched or folded, the
+wrist point near the shoulder's cylinder), a calibrated model's are also seeded this far from
+the fold on each side (:func:`pulled`)."""
 
 
 ELBOW_NEAR_DEG = 2.0
@@ -61,6 +62,21 @@ def _rot_x(a: float) -> np.ndarray:
 def _rot_z(a: float) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+def pulled(half: float, near_deg: float) -> list[float]:
+    """Return a half-angle between two branches, and one pulled from a fold if near it.
+
+    ``half`` (rad, 0 … π); within ``near_deg`` of 0 or π, also :data:`PULL_DEG` from it.
+
+    Near a fold the true model's two branches may lie where the structural table has one
+    seed or two that nearly meet, and Newton from between them finds only one.
+    """
+    out = [half]
+    if min(half, np.pi - half) < np.radians(near_deg):
+        pull = np.radians(PULL_DEG)
+        out.append(pull if half < np.pi / 2 else np.pi - pull)
+    return out
 
 
 def structural(dh: np.ndarray) -> np.ndarray:
@@ -101,7 +117,7 @@ def _arm(
     Within ``near_deg`` of the elbow stretched (φ3 = 0) or folded (φ3 = ±180°) the two
     elbow branches nearly meet, and a calibrated arm's may lie where the structural table
     has none (hypothesis found a calibrated UR5 folded to 179.6°, the structural seeds both
-    at 180°): φ3 is then also seeded :data:`ELBOW_PULL_DEG` away from the fold on each side.
+    at 180°): φ3 is then also seeded :data:`PULL_DEG` away from the fold on each side.
     """
     alpha, a, _, d = dh.T
     R1 = _rot_z(phi1)
@@ -114,11 +130,7 @@ def _arm(
     c3 = (p[0] ** 2 + p[1] ** 2 - a[2] ** 2 - a[3] ** 2) / (2 * a[2] * a[3])
     if abs(c3) > 1 + SEED_SLACK:
         return []
-    bend = float(np.arccos(np.clip(c3, -1.0, 1.0)))  # 0 stretched … π folded
-    bends = [bend]
-    if min(bend, np.pi - bend) < np.radians(near_deg):
-        pull = np.radians(ELBOW_PULL_DEG)
-        bends.append(pull if bend < np.pi / 2 else np.pi - pull)
+    bends = pulled(float(np.arccos(np.clip(c3, -1.0, 1.0))), near_deg)  # 0 stretched … π folded
     M = RP.T @ R4
     out = []
     for elbow in (1.0, -1.0):
@@ -180,6 +192,11 @@ def closed_form(
     D about axis 1 (shoulder singular; a calibrated arm's pose can, the structural table's
     cannot reach it; 0.25 % of D inside at a pose found in testing) gives the one shoulder
     seed on the cylinder, and Newton on the true model decides whether it is reachable.
+    With ``near_deg`` > 0 and the two shoulders' φ1 within 2·:data:`PULL_DEG` (nearer
+    would seed them nearer each other), they are also seeded :data:`PULL_DEG` either side
+    of the cylinder (:func:`pulled`): hypothesis found a calibrated UR5 whose two shoulder
+    branches are 1.6° apart in φ1, the structural table's one seed between them, Newton
+    from it reaching only one.
     """
     dh = np.asarray(dh, dtype=float)
     alpha, a, _, d = dh.T
@@ -191,8 +208,10 @@ def closed_form(
     y1v = -s1 * (d[1] + d[2] + d[3])
     r2 = o5[0] ** 2 + o5[1] ** 2
     x1 = np.sqrt(max(r2 - y1v**2, 0.0))  # inside the cylinder: Newton decides reachability
+    half = float(np.arctan2(x1, abs(y1v)))  # half the angle between the shoulders' φ1
+    reaches = [x1] + [abs(y1v) * np.tan(h) for h in pulled(half, min(near_deg, PULL_DEG))[1:]]
     out: list[np.ndarray] = []
-    for x1v in (x1, -x1) if x1 > 0 else (0.0,):
+    for x1v in [v for x in reaches for v in ((x, -x) if x > 0 else (0.0,))]:
         phi1 = float(np.arctan2(o5[1], o5[0]) - np.arctan2(y1v, x1v))
         z2 = -s1 * _rot_z(phi1)[:, 1]
         for phi5, phi6s, first_only in _wrist(Rb, z2, s4, s5, near_deg):
