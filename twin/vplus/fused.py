@@ -16,10 +16,10 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from types import CodeType
+from types import CodeType, FunctionType
 
 from wirecal.lang.vplus import nodes as N
-from wirecal.twin.fused_code import Recipe, code
+from wirecal.twin.fused_code import code
 from wirecal.twin.machine import f32
 
 _COUNTER = {"+": "add", "-": "add", "*": "mul"}
@@ -71,18 +71,16 @@ def fused(e: N.BinOp, leaf: Leaf, ops: Counter, nodes: Callable) -> Callable | N
     kept line's expression is shared with its copies in other programs); its code is kept
     by its text (:func:`~wirecal.twin.fused_code.code`).
     """
-    recipe = _recipe(e, leaf)
-    return None if recipe is None else recipe.function(None, {"ops": ops, "nodes": nodes})
-
-
-def _recipe(e: N.BinOp, leaf: Leaf) -> Recipe | None:
     fusion = _Fusion()
     found = fusion.source(e, leaf)
     if found is None or not found[1]:
         return None
     counts = tuple(fusion.counts.items())
     names = {f"c{k}": v for k, v in enumerate(fusion.numbers)}
-    return Recipe(_code(tuple(fusion.slots), counts, found[0]), names, ())
+    return FunctionType(
+        _code(tuple(fusion.slots), counts, found[0]),
+        {"ops": ops, "nodes": nodes, **names},
+    )
 
 
 def _code(slots: tuple[int, ...], counts: tuple[tuple[str, int], ...], value: str) -> CodeType:
