@@ -96,9 +96,9 @@ def fused_steps(
     """Compile ``steps`` in order, runs of ``writable`` ones written out together.
 
     Each run of consecutive ``writable`` statements is one function (a new ``writer``'s,
-    kept by the run's first statement) doing their work in their order: a call per
-    statement less;
-    each other statement is compiled by ``one`` (the node-by-node compiler's).
+    kept for the run's first statement at the compiler's place: :func:`recipe_of`) doing
+    their work in their order, a call per statement less; each other statement is compiled
+    by ``one`` (the node-by-node compiler's).
     """
     out: list[Callable[[Any], Any]] = []
     k = 0
