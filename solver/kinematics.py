@@ -33,7 +33,7 @@ import numpy as np
 
 from wirecal.solver import params as P
 from wirecal.solver.exit_geometry import Pulley
-from wirecal.solver.gravity import MassModel, gravity_torques_nm, with_load
+from wirecal.solver.gravity import MassModel, cross, gravity_torques_nm, with_load
 from wirecal.solver.rows import ROW_BLOCK, row_blocks
 
 
@@ -159,9 +159,6 @@ def _rotate(R: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.einsum("nij,nj->ni", R, v)
 
 
-Vector = tuple[float, float, float] | np.ndarray
-"""An axis or origin along the chain: three floats for one configuration, (3, N) for a batch."""
-
 _BASE_AXES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
@@ -177,29 +174,31 @@ def _table_floats(raw: bytes, n: int) -> tuple[list, list, list, list, np.ndarra
     return ca.tolist(), sa.tolist(), dh[:, 1].tolist(), dh[:, 3].tolist(), dh[:, 2].copy()
 
 
-def _joint_terms(dh: np.ndarray, q: np.ndarray) -> tuple[Iterator[tuple], tuple, Vector]:
-    """Per joint (cos α, sin α, a, d, cos θ, sin θ), and the base frame's axes and origin.
+@lru_cache(maxsize=16)
+def _table_factors(raw: bytes, n: int) -> tuple[list, np.ndarray, np.ndarray]:
+    """Return a DH table's factors of :func:`_array_terms`, kept per table (its floats)."""
+    ca, sa, a, d, _ = _table_floats(raw, n)
+    sa_pairs = np.array([[s, -s] for s in sa]).reshape(n, 2, 1, 1)
+    return ca, sa_pairs, np.array([a, d]).T.reshape(n, 2, 1, 1)
 
-    Python floats and 3-tuples for one configuration of one model (array arithmetic on
-    single numbers costs more in overhead than in work: the twin and the inverse
-    kinematics evaluate one configuration at a time, tens of thousands of times per run);
-    otherwise vectors are (3, N) arrays and each term an (N,) array or one shared float.
-    ``dh``: the model's table (n, 4), or one per configuration (N, n, 4).
+
+def _array_terms(dh: np.ndarray, q: np.ndarray) -> Iterator[tuple]:
+    """Per joint the factors of :func:`_recurrence` for a batch ``q`` (N, n).
+
+    Per joint cos α, (sin α, −sin α), (a, d), cos θ and (sin θ, −sin θ), each pair stacked
+    (2, 1, 1) for ``dh``'s one table (n, 4), (2, 1, N) for one per configuration
+    (N, n, 4); cos θ is (N,), cos α a float or (N,).
     """
-    N = q.shape[0]
-    if dh.ndim == 2 and N == 1:
-        terms = _one_terms(np.asarray(dh, float).tobytes(), dh.shape[0], q[0])
-        return terms, _BASE_AXES, (0.0, 0.0, 0.0)
     th = np.ascontiguousarray((q + dh[..., 2]).T)  # (n, N): a row per joint
-    ca, sa, ct, st = np.cos(dh[..., 0]), np.sin(dh[..., 0]), np.cos(th), np.sin(th)
-    a, d = dh[..., 1], dh[..., 3]
+    ct, st = np.cos(th), np.sin(th)
+    st_pairs = np.stack([st, -st], axis=1)[:, :, None]  # (n, 2, 1, N)
     if dh.ndim == 2:
-        cols = (ca.tolist(), sa.tolist(), a.tolist(), d.tolist(), ct, st)
-    else:
-        cols = (ca.T, sa.T, a.T, d.T, ct, st)
-    axes = np.zeros((3, 3, N))
-    axes[0, 0] = axes[1, 1] = axes[2, 2] = 1.0
-    return zip(*cols, strict=True), tuple(axes), np.zeros((3, N))
+        ca, sa_pairs, ad_pairs = _table_factors(np.asarray(dh, float).tobytes(), dh.shape[0])
+        return zip(ca, sa_pairs, ad_pairs, ct, st_pairs, strict=True)
+    ca, sa = np.cos(dh[..., 0]).T, np.sin(dh[..., 0]).T  # (n, N)
+    sa_pairs = np.stack([sa, -sa], axis=1)[:, :, None]
+    ad_pairs = np.stack([dh[..., 1].T, dh[..., 3].T], axis=1)[:, :, None]
+    return zip(ca, sa_pairs, ad_pairs, ct, st_pairs, strict=True)
 
 
 def _one_terms(raw: bytes, n: int, q: np.ndarray) -> Iterator[tuple]:
@@ -209,21 +208,22 @@ def _one_terms(raw: bytes, n: int, q: np.ndarray) -> Iterator[tuple]:
     return zip(*table, np.cos(th).tolist(), np.sin(th).tolist(), strict=True)
 
 
-def _turn(c, s, U: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rotate the pair of axes (U, V) by the angle of cosine c, sine s: (cU + sV, cV − sU)."""
-    return c * U + s * V, c * V - s * U
+def _turn(c, s_pair: np.ndarray, UV: np.ndarray, VU: np.ndarray, T: np.ndarray, S: np.ndarray):
+    """Rotate the pair of axes UV = (U, V) in place by the angle of cosine c, sine s.
 
-
-def _advance(P: np.ndarray, a, X: np.ndarray, d, Z: np.ndarray) -> np.ndarray:
-    """Move the origin P by a along X and d along Z: P + aX + dZ."""
-    return P + a * X + d * Z
+    (cU + sV, cV − sU), as cV + (−s)U (the same number); ``s_pair`` is (s, −s), VU the
+    pair's rows in reverse, T and S scratch of UV's shape.
+    """
+    np.multiply(c, UV, out=T)
+    np.multiply(s_pair, VU, out=S)
+    np.add(T, S, out=UV)
 
 
 def _recurrence_floats(terms: Iterator[tuple]) -> tuple[list[tuple], tuple]:
     """:func:`_recurrence` of one configuration on Python floats, written out.
 
-    The same products and sums in the same order as :func:`_turn` and :func:`_advance`
-    (the same numbers), without a call per step.
+    The same products and sums in the same order as :func:`_recurrence`'s (the same
+    numbers), without arrays.
     """
     (x0, x1, x2), (y0, y1, y2), (z0, z1, z2) = _BASE_AXES
     p0 = p1 = p2 = 0.0
@@ -291,8 +291,8 @@ def rigid_frames(model: Model, q: np.ndarray) -> Frames:
     A batched model (dh (N, n, 4)) gives configuration k its own model k. The rotation
     is carried as its three columns X, Y, Z; per joint, RotX(α) turns (Y, Z) by α, the
     origin moves by a·X + d·Z, and RotZ(θ) turns (X, Y) by θ. Vectors are floats for one
-    configuration, (3, N) arrays otherwise (:func:`_joint_terms`), so every product of a
-    batch runs over contiguous memory; the arrays returned are (N, …, 3) views of one
+    configuration of one model, (3, N) arrays otherwise (:func:`_recurrence`), so every
+    product of a batch runs over contiguous rows; the arrays returned are (N, …, 3) views of one
     (n+1, 3, 3, N) storage, read-only: up to :data:`KEPT_ROWS` configurations, the frames
     of the last :data:`KEPT_FRAMES` tables and joints asked for are kept and given again.
     Over :data:`~wirecal.solver.rows.ROW_BLOCK` configurations, a block of them at a time
@@ -308,7 +308,7 @@ def rigid_frames(model: Model, q: np.ndarray) -> Frames:
     if len(q) > ROW_BLOCK and (dh.ndim == 2 or len(dh) == len(q)):
         chain, last = np.empty((n + 1, 3, 3, len(q))), np.empty((len(q), 3, 3))
         for rows in row_blocks(len(q)):  # the same numbers (rows.py)
-            chain[..., rows], last[rows] = _chain(dh if dh.ndim == 2 else dh[rows], q[rows])
+            last[rows] = _chain(dh if dh.ndim == 2 else dh[rows], q[rows], chain[..., rows])[1]
     else:
         chain, last = _chain(dh, q)
     return _frames_of(chain, last)
@@ -340,25 +340,44 @@ def _frames_of(chain: np.ndarray, last: np.ndarray) -> Frames:
     return Frames(x=chain[:, :, 0], z=chain[:, :, 1], o=chain[:, :, 2], R_last=last)
 
 
-def _chain(dh: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return the frames' storage (n+1, 3, 3, N) and the last rotation (N, 3, 3) of ``q``."""
-    stored, (X, Y, Z) = _recurrence(dh, q)
-    last = np.array([X, Y, Z]).reshape(3, 3, -1).transpose(2, 1, 0)  # columns X, Y, Z
-    return np.array(stored).reshape(q.shape[1] + 1, 3, 3, -1), np.ascontiguousarray(last)
+def _chain(
+    dh: np.ndarray, q: np.ndarray, out: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return the frames' storage (n+1, 3, 3, N) and the last rotation (N, 3, 3) of ``q``.
+
+    ``out``: the storage to fill (a batch of more than one configuration), else a new one.
+    """
+    N, n = q.shape
+    if dh.ndim == 2 and N == 1:  # one configuration: Python floats
+        stored, axes = _recurrence_floats(_one_terms(np.asarray(dh, float).tobytes(), n, q[0]))
+        last = np.array(axes).reshape(3, 3, 1).transpose(2, 1, 0)  # columns X, Y, Z
+        return np.array(stored).reshape(n + 1, 3, 3, 1), np.ascontiguousarray(last)
+    chain = np.empty((n + 1, 3, 3, N)) if out is None else out
+    return chain, _recurrence(_array_terms(dh, q), chain)
 
 
-def _recurrence(dh: np.ndarray, q: np.ndarray) -> tuple[list[tuple], tuple]:
-    """Return each frame's (x, z, o) and the last frame's axes (X, Y, Z) (:func:`rigid_frames`)."""
-    terms, (X, Y, Z), P = _joint_terms(dh, q)
-    if isinstance(P, tuple):  # one configuration: Python floats
-        return _recurrence_floats(terms)
-    stored = [(X, Z, P)]
-    for ca, sa, a, d, c, s in terms:
-        Y, Z = _turn(ca, sa, Y, Z)  # RotX(α_{i-1})
-        P = _advance(P, a, X, d, Z)  # TransX(a_{i-1}), then TransZ(d_i) along the new z
-        X, Y = _turn(c, s, X, Y)  # RotZ(θ_i + offset_i)
-        stored.append((X, Z, P))
-    return stored, (X, Y, Z)
+def _recurrence(terms: Iterator[tuple], chain: np.ndarray) -> np.ndarray:
+    """Fill ``chain`` (:func:`_chain`) from a batch's ``terms``; return the last rotation.
+
+    ``terms``: the joints' factors (:func:`_array_terms`). The frame being built is one
+    array W of rows x, z, o, y (each (3, N)), turned and moved in place: each rotation's
+    pair of axes, either way round, and the pair (x, z) the origin moves along are views
+    of it, and no step allocates; each frame's x, z, o are copied out.
+    """
+    N = chain.shape[-1]
+    W = np.zeros((4, 3, N))
+    W[0, 0] = W[1, 2] = W[3, 1] = 1.0  # the base frame: x, z, o = 0, y
+    chain[0] = W[:3]
+    T, S = np.empty((2, 3, N)), np.empty((2, 3, N))
+    XY, YX, YZ, ZY, XZ, P = W[0::3], W[3::-3], W[3:0:-2], W[1::2], W[0:2], W[2]
+    for i, (ca, sa_pair, ad_pair, c, s_pair) in enumerate(terms, 1):
+        _turn(ca, sa_pair, YZ, ZY, T, S)  # RotX(α_{i-1})
+        np.multiply(ad_pair, XZ, out=T)  # TransX(a_{i-1}), then TransZ(d_i) along the new z
+        P += T[0]
+        P += T[1]
+        _turn(c, s_pair, XY, YX, T, S)  # RotZ(θ_i + offset_i)
+        chain[i] = W[:3]
+    return np.ascontiguousarray(W[[0, 3, 1]].transpose(2, 1, 0))  # columns X, Y, Z
 
 
 def one_chain(model: Model, q: np.ndarray) -> tuple[list[tuple], tuple] | None:
@@ -407,13 +426,6 @@ def _layout(names: tuple[str, ...], n: int) -> dict[str, tuple[np.ndarray, np.nd
     return {kind: (np.array(c), np.array(f)) for kind, (c, f) in groups.items()}
 
 
-def _cross(a: np.ndarray, b: np.ndarray, axis: int = -1) -> np.ndarray:
-    """Return a × b over ``axis`` (faster than np.cross for stacks of 3-vectors)."""
-    a0, a1, a2 = np.moveaxis(a, axis, 0)
-    b0, b1, b2 = np.moveaxis(b, axis, 0)
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=axis)
-
-
 def tool_jacobian(
     model: Model, q: np.ndarray, names: Sequence[str], f: Frames | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -427,16 +439,16 @@ def tool_jacobian(
     J = np.empty((*p.shape, len(names)))
     for kind, (cols, fr) in _layout(tuple(names), model.n_joints).items():
         if kind == "th":  # rotation about z_i through o_i
-            J[:, :, cols] = _cross(f.z[:, fr], p[:, None] - f.o[:, fr]).transpose(0, 2, 1)
+            J[:, :, cols] = cross(f.z[:, fr], p[:, None] - f.o[:, fr]).transpose(0, 2, 1)
         elif kind == "al":  # rotation about x_{i-1} through o_{i-1}
-            J[:, :, cols] = _cross(f.x[:, fr], p[:, None] - f.o[:, fr]).transpose(0, 2, 1)
+            J[:, :, cols] = cross(f.x[:, fr], p[:, None] - f.o[:, fr]).transpose(0, 2, 1)
         elif kind == "d":  # translation along z_i
             J[:, :, cols] = f.z[:, fr].transpose(0, 2, 1)
         elif kind == "a":  # translation along x_{i-1}
             J[:, :, cols] = f.x[:, fr].transpose(0, 2, 1)
         elif kind == "c":  # the joint's turn c_j·τ_j: τ_j times the θ_j column
             tau = gravity_torques(model, f)[:, fr - 1, None]
-            turn = _cross(f.z[:, fr], p[:, None] - f.o[:, fr]) * tau
+            turn = cross(f.z[:, fr], p[:, None] - f.o[:, fr]) * tau
             J[:, :, cols] = turn.transpose(0, 2, 1)
         else:  # tool point component: a column of the last frame
             J[:, :, cols] = f.R_last[:, :, fr]
@@ -456,7 +468,7 @@ def tool_gradient(
     the directions.
     """
     ut = np.ascontiguousarray(u.T)  # (3, N)
-    pu = _cross(np.ascontiguousarray(p.T), ut, axis=0)
+    pu = cross(np.ascontiguousarray(p.T), ut, axis=-2)
     out = np.empty((len(p), len(names)))
     for kind, (cols, fr) in _layout(tuple(names), model.n_joints).items():
         if kind == "tool":  # a column of the last frame
@@ -467,7 +479,7 @@ def tool_gradient(
             along = np.einsum("kcn,cn->kn", axes, ut)
         else:  # rotation about the axis through the frame's origin
             o = f.o.transpose(1, 2, 0)[fr]
-            lever = pu - _cross(o, ut, axis=-2)
+            lever = pu - cross(o, ut, axis=-2)
             along = np.einsum("kcn,kcn->kn", axes, lever)
         if kind == "c":  # the joint's turn c_j·τ_j: τ_j times the θ_j column
             along *= gravity_torques(model, f)[:, fr - 1].T

@@ -26,7 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from wirecal.solver.kinematics import Model, _cross, flange_jacobian, frames, table_property
+from wirecal.solver.gravity import cross
+from wirecal.solver.kinematics import Model, flange_jacobian, frames, table_property
 
 HALF_PI = np.pi / 2
 STRUCTURE_TOL_RAD = np.radians(5.0)
@@ -266,7 +267,7 @@ def configuration(model: Model, q: np.ndarray) -> tuple[str, str, str]:
         side = (np.linalg.det(flange_jacobian(model, q, f)) > 0) ^ (sin5 > 0) ^ ahead
     else:
         o2, o3, o4 = f.o[0, 2], f.o[0, 3], f.o[0, 4]
-        side = np.dot(f.z[0, 2], _cross(o4 - o2, o3 - o2)) < 0
+        side = np.dot(f.z[0, 2], cross(o4 - o2, o3 - o2)) < 0
     phi5 = (phi[4] + np.pi) % (2 * np.pi) - np.pi
     return (
         "righty" if ahead else "lefty",
