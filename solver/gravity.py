@@ -124,21 +124,29 @@ def cross3(a: tuple, b: tuple) -> tuple[float, float, float]:
 
 
 def cross(a: np.ndarray, b: np.ndarray, axis: int = -1) -> np.ndarray:
-    """Return a × b of stacks of 3-vectors along ``axis`` (< 0): numpy's cross's operations.
+    """Return a × b of stacks of 3-vectors along ``axis`` (−1 or −2): numpy's cross's operations.
 
     ``a`` and ``b`` broadcast against each other as arrays, their components along
     ``axis``. The same products and differences, in the same order, as ``np.cross`` (the
     same numbers), without its checks and moved axes, which cost more than the arithmetic
     on small stacks.
     """
-    tail = (slice(None),) * (-1 - axis)
-    a0, a1, a2 = (a[(..., i, *tail)] for i in range(3))
-    b0, b1, b2 = (b[(..., i, *tail)] for i in range(3))
     out = np.empty(np.broadcast_shapes(np.shape(a), np.shape(b)))
-    np.subtract(a1 * b2, a2 * b1, out=out[(..., 0, *tail)])
-    np.subtract(a2 * b0, a0 * b2, out=out[(..., 1, *tail)])
-    np.subtract(a0 * b1, a1 * b0, out=out[(..., 2, *tail)])
+    a0, a1, a2 = (_component(a, i, axis) for i in range(3))
+    b0, b1, b2 = (_component(b, i, axis) for i in range(3))
+    np.subtract(a1 * b2, a2 * b1, out=_component(out, 0, axis))
+    np.subtract(a2 * b0, a0 * b2, out=_component(out, 1, axis))
+    np.subtract(a0 * b1, a1 * b0, out=_component(out, 2, axis))
     return out
+
+
+def _component(v: np.ndarray, i: int, axis: int) -> np.ndarray:
+    """Return component ``i`` of the vectors along ``axis`` (−1 or −2) of ``v``, a view."""
+    if axis == -1:
+        return v[..., i]
+    if axis == -2:
+        return v[..., i, :]
+    raise ValueError(f"vectors along axis {axis}: only -1 or -2")
 
 
 def gravity_torques_floats(

@@ -93,22 +93,48 @@ def with_errors(base: Model, names: Sequence[str], values: np.ndarray) -> Model:
     """
     values = np.asarray(values, dtype=float)
     lead = values.shape[:-1]
-    dh = np.array(np.broadcast_to(base.dh, lead + np.shape(base.dh)[-2:]), dtype=float)
-    tool = np.array(np.broadcast_to(base.tool_point, (*lead, 3)), dtype=float)
-    n = dh.shape[-2]
-    parsed = [P.parse(name, n) for name in names]
+    n = base.n_joints
+    to_dh, to_tool, to_c = _offset_places(tuple(names), n)
+    dh, tool = _filled((*lead, n, 4), base.dh), _filled((*lead, 3), base.tool_point)
+    sums = [(dh, to_dh), (tool, to_tool)]
     compliance = base.compliance
-    if any(p.kind == "c" for p in parsed):
-        start = np.zeros(n) if compliance is None else compliance
-        compliance = np.array(np.broadcast_to(start, (*lead, n)), dtype=float)
-    for k, p in enumerate(parsed):
-        if p.kind == "tool":
-            tool[..., p.row] += values[..., k]
-        elif p.kind == "c":
-            compliance[..., p.row] += values[..., k]  # type: ignore[index]
-        else:
-            dh[..., p.row, P.DH_COLUMN[p.kind]] += values[..., k]
+    if len(to_c[0]):
+        compliance = _filled((*lead, n), np.zeros(n) if compliance is None else compliance)
+        sums.append((compliance, to_c))
+    for target, (cols, *places) in sums:  # a sum per name, in their order
+        if len(cols):
+            np.add.at(target, (..., *places), values[..., cols])  # type: ignore[arg-type]
     return Model(dh, tool, base.pulley, base.masses, compliance)
+
+
+def _filled(shape: tuple[int, ...], start: np.ndarray) -> np.ndarray:
+    """Return a new array of ``shape`` holding ``start`` (broadcast) in every row.
+
+    Its memory keeps the broadcast's order (a batch's rows innermost), which the sums of
+    the products taken from it follow (``einsum``).
+    """
+    return np.array(np.broadcast_to(start, shape), dtype=float)
+
+
+@cache
+def _offset_places(names: tuple[str, ...], n: int) -> tuple[tuple[np.ndarray, ...], ...]:
+    """Where :func:`with_errors` adds each named offset: (columns of the names, places…).
+
+    For the DH table the places are a row and a column each, for the tool point and the
+    compliances an index each.
+    """
+    dh: tuple[list[int], list[int], list[int]] = ([], [], [])
+    tool: tuple[list[int], list[int]] = ([], [])
+    c: tuple[list[int], list[int]] = ([], [])
+    for k, name in enumerate(names):
+        p = P.parse(name, n)
+        if p.kind in ("tool", "c"):
+            (tool if p.kind == "tool" else c)[0].append(k)
+            (tool if p.kind == "tool" else c)[1].append(p.row)
+        else:
+            for at, i in zip(dh, (k, p.row, P.DH_COLUMN[p.kind]), strict=True):
+                at.append(i)
+    return tuple(tuple(np.array(i, dtype=int) for i in at) for at in (dh, tool, c))
 
 
 def loaded(
