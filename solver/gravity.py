@@ -213,25 +213,32 @@ def gravity_torques_nm(
 
 
 def _torques(masses: MassModel, x: np.ndarray, z: np.ndarray, o: np.ndarray) -> np.ndarray:
-    """Return :func:`gravity_torques_nm` of one batch."""
-    y = cross(z, x)
-    R = np.stack([x[:, 1:], y[:, 1:], z[:, 1:]], axis=-1)  # (N, n, 3, 3): columns x, y, z
-    r = o[:, 1:] + np.einsum("nkij,kj->nki", R, masses.link_com_mm)  # (N, n, 3)
+    """Return :func:`gravity_torques_nm` of one batch.
+
+    The centres of mass r = o + R·com of frames 1…n are summed as ``einsum`` sums its
+    three products, (x·c₀ + z·c₂) + y·c₁ (:func:`gravity_torques_floats`; the same numbers
+    on a C-ordered ``link_com_mm``), without the (N, n, 3, 3) rotations.
+    """
+    x1, z1, o1 = x[:, 1:], z[:, 1:], o[:, 1:]
+    y1 = cross(z1, x1)
+    c0, c1, c2 = np.asarray(masses.link_com_mm, dtype=float).T[:, :, None]  # each (n, 1)
+    r = o1 + ((x1 * c0 + z1 * c2) + y1 * c1)  # (N, n, 3)
+    R_last = np.stack([x[:, -1], y1[:, -1], z[:, -1]], axis=-1)  # (N, 3, 3): columns x, y, z
     weight = STANDARD_GRAVITY_M_S2 * np.asarray(masses.direction, dtype=float)
     F = np.asarray(masses.link_mass_kg, dtype=float)[:, None] * weight  # (n, 3)
     moment = cross(r, F)  # (N, n, 3), N·mm
     if masses.payload_mass_kg:
-        r_pay = o[:, -1] + R[:, -1] @ np.asarray(masses.payload_com_mm, dtype=float)
+        r_pay = o[:, -1] + R_last @ np.asarray(masses.payload_com_mm, dtype=float)
         F_pay = masses.payload_mass_kg * weight
         moment[:, -1] += cross(r_pay, F_pay)
         F = F.copy()
         F[-1] += F_pay
     if masses.load_kg is not None:
-        moment, F = _with_load_moment(masses, moment, F, o[:, -1], R[:, -1], weight)
+        moment, F = _with_load_moment(masses, moment, F, o[:, -1], R_last, weight)
     S1 = np.cumsum(moment[:, ::-1], axis=1)[:, ::-1]
     S0 = np.cumsum(F[..., ::-1, :], axis=-2)[..., ::-1, :]  # (n, 3), or (N, n, 3) with a load
-    M = S1 - cross(o[:, 1:], S0)
-    return np.einsum("nkc,nkc->nk", z[:, 1:], M) / 1000.0
+    M = S1 - cross(o1, S0)
+    return np.einsum("nkc,nkc->nk", z1, M) / 1000.0
 
 
 def _with_load_moment(

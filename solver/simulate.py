@@ -172,6 +172,8 @@ class Unmodelled:
         r = DEFAULT_REPEATABILITY_MM if self.repeatability_mm is None else self.repeatability_mm
         sigma = np.degrees(joint_sigma_rad(r))
         dq = rng.normal(0.0, sigma, np.shape(q_deg))
+        if self.compliance_deg_per_m == 0.0 and np.isfinite(q_deg).all():
+            return dq  # no sag: dq − (±0.0) is dq, a draw 0.0 + σz never −0.0
         return dq - self.sag_deg(model, q_deg).reshape(dq.shape)
 
     def sag_deg(self, model: Model, q_deg: np.ndarray) -> np.ndarray:
