@@ -28,6 +28,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from functools import cache, lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -94,16 +95,16 @@ def with_errors(base: Model, names: Sequence[str], values: np.ndarray) -> Model:
     values = np.asarray(values, dtype=float)
     lead = values.shape[:-1]
     n = base.n_joints
-    to_dh, to_tool, to_c = _offset_places(tuple(names), n)
+    places = _offset_places(tuple(names), n)
     dh, tool = _filled((*lead, n, 4), base.dh), _filled((*lead, 3), base.tool_point)
-    sums = [(dh, to_dh), (tool, to_tool)]
+    targets = {"dh": dh, "tool": tool}
     compliance = base.compliance
-    if len(to_c[0]):
+    if places["c"]:
         compliance = _filled((*lead, n), np.zeros(n) if compliance is None else compliance)
-        sums.append((compliance, to_c))
-    for target, (cols, *places) in sums:  # a sum per name, in their order
-        if len(cols):
-            np.add.at(target, (..., *places), values[..., cols])  # type: ignore[arg-type]
+        targets["c"] = compliance
+    for key, target in targets.items():
+        for cols, index in places[key]:  # one sum per name, in their order
+            target[index] += values[..., cols]
     return Model(dh, tool, base.pulley, base.masses, compliance)
 
 
@@ -116,25 +117,36 @@ def _filled(shape: tuple[int, ...], start: np.ndarray) -> np.ndarray:
     return np.array(np.broadcast_to(start, shape), dtype=float)
 
 
-@cache
-def _offset_places(names: tuple[str, ...], n: int) -> tuple[tuple[np.ndarray, ...], ...]:
-    """Where :func:`with_errors` adds each named offset: (columns of the names, places…).
+Places = list[tuple[np.ndarray, tuple[Any, ...]]]
+"""Rounds of (columns of the names, the index of the places they are added at) of one array."""
 
-    For the DH table the places are a row and a column each, for the tool point and the
-    compliances an index each.
+
+@cache
+def _offset_places(names: tuple[str, ...], n: int) -> dict[str, Places]:
+    """Where :func:`with_errors` adds each named offset, per array ("dh", "tool", "c").
+
+    A place (a DH table's row and column, a tool point's or compliance's index) is in a
+    round at most once, so that a round's sums are one array sum; a name given again is
+    added again, in a later round.
     """
-    dh: tuple[list[int], list[int], list[int]] = ([], [], [])
-    tool: tuple[list[int], list[int]] = ([], [])
-    c: tuple[list[int], list[int]] = ([], [])
+    found: dict[str, list[dict[tuple[int, ...], int]]] = {"dh": [], "tool": [], "c": []}
     for k, name in enumerate(names):
         p = P.parse(name, n)
-        if p.kind in ("tool", "c"):
-            (tool if p.kind == "tool" else c)[0].append(k)
-            (tool if p.kind == "tool" else c)[1].append(p.row)
-        else:
-            for at, i in zip(dh, (k, p.row, P.DH_COLUMN[p.kind]), strict=True):
-                at.append(i)
-    return tuple(tuple(np.array(i, dtype=int) for i in at) for at in (dh, tool, c))
+        key = p.kind if p.kind in ("tool", "c") else "dh"
+        place = (p.row,) if key != "dh" else (p.row, P.DH_COLUMN[p.kind])
+        rounds = found[key]
+        free = next((r for r in rounds if place not in r), None)
+        if free is None:
+            free = {}
+            rounds.append(free)
+        free[place] = k
+    return {
+        key: [
+            (np.array(list(r.values())), (..., *(np.array(i) for i in zip(*r, strict=True))))
+            for r in rounds
+        ]
+        for key, rounds in found.items()
+    }
 
 
 def loaded(
