@@ -131,10 +131,12 @@ def cross(a: np.ndarray, b: np.ndarray, axis: int = -1) -> np.ndarray:
     same numbers), without its checks and moved axes, which cost more than the arithmetic
     on small stacks.
     """
-    out = np.empty(np.broadcast_shapes(np.shape(a), np.shape(b)))
     a0, a1, a2 = (_component(a, i, axis) for i in range(3))
     b0, b1, b2 = (_component(b, i, axis) for i in range(3))
-    np.subtract(a1 * b2, a2 * b1, out=_component(out, 0, axis))
+    first = a1 * b2
+    at = first.ndim + axis + 1  # where the components go in the broadcast shape
+    out = np.empty((*first.shape[:at], 3, *first.shape[at:]))
+    np.subtract(first, a2 * b1, out=_component(out, 0, axis))
     np.subtract(a2 * b0, a0 * b2, out=_component(out, 1, axis))
     np.subtract(a0 * b1, a1 * b0, out=_component(out, 2, axis))
     return out

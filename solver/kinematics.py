@@ -114,6 +114,8 @@ def _filled(shape: tuple[int, ...], start: np.ndarray) -> np.ndarray:
     Its memory keeps the broadcast's order (a batch's rows innermost), which the sums of
     the products taken from it follow (``einsum``).
     """
+    if np.shape(start) == shape:
+        return np.array(start, dtype=float)  # its order, as the broadcast's
     return np.array(np.broadcast_to(start, shape), dtype=float)
 
 
@@ -229,7 +231,9 @@ def _array_terms(dh: np.ndarray, q: np.ndarray) -> Iterator[tuple]:
     """
     th = np.ascontiguousarray((q + dh[..., 2]).T)  # (n, N): a row per joint
     ct, st = np.cos(th), np.sin(th)
-    st_pairs = np.stack([st, -st], axis=1)[:, :, None]  # (n, 2, 1, N)
+    st_pairs = np.empty((len(th), 2, 1, q.shape[0]))
+    st_pairs[:, 0, 0] = st
+    np.negative(st, out=st_pairs[:, 1, 0])
     if dh.ndim == 2:
         ca, sa_pairs, ad_pairs = _table_factors(np.asarray(dh, float).tobytes(), dh.shape[0])
         return zip(ca, sa_pairs, ad_pairs, ct, st_pairs, strict=True)
