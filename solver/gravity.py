@@ -123,19 +123,22 @@ def cross3(a: tuple, b: tuple) -> tuple[float, float, float]:
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-def cross(a: np.ndarray, b: np.ndarray, axis: int = -1) -> np.ndarray:
+def cross(
+    a: np.ndarray, b: np.ndarray, axis: int = -1, out: np.ndarray | None = None
+) -> np.ndarray:
     """Return a × b of stacks of 3-vectors along ``axis`` (−1 or −2): numpy's cross's operations.
 
     ``a`` and ``b`` broadcast against each other as arrays, their components along
     ``axis``. The same products and differences, in the same order, as ``np.cross`` (the
     same numbers), without its checks and moved axes, which cost more than the arithmetic
-    on small stacks.
+    on small stacks. ``out``: where to write it (a C-ordered new array by default).
     """
     a0, a1, a2 = (_component(a, i, axis) for i in range(3))
     b0, b1, b2 = (_component(b, i, axis) for i in range(3))
     first = a1 * b2
-    at = first.ndim + axis + 1  # where the components go in the broadcast shape
-    out = np.empty((*first.shape[:at], 3, *first.shape[at:]))
+    if out is None:
+        at = first.ndim + axis + 1  # where the components go in the broadcast shape
+        out = np.empty((*first.shape[:at], 3, *first.shape[at:]))
     np.subtract(first, a2 * b1, out=_component(out, 0, axis))
     np.subtract(a2 * b0, a0 * b2, out=_component(out, 1, axis))
     np.subtract(a0 * b1, a1 * b0, out=_component(out, 2, axis))

@@ -28,7 +28,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from functools import cache, lru_cache
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -468,33 +468,86 @@ def _layout(names: tuple[str, ...], n: int) -> dict[str, tuple[np.ndarray, np.nd
     return {kind: (np.array(c), np.array(f)) for kind, (c, f) in groups.items()}
 
 
+class _Groups(NamedTuple):
+    """A Jacobian's columns gathered by what they take from the frames (:func:`_groups`)."""
+
+    turns: tuple[np.ndarray, np.ndarray, np.ndarray]  # columns; z frames, then x frames
+    bent: slice  # which of the turns are compliances' (after the θ offsets)
+    bent_joints: np.ndarray  # their joints (0-based)
+    moves: tuple[np.ndarray, np.ndarray, np.ndarray]  # columns; z frames, then x frames
+    tool: tuple[np.ndarray, np.ndarray]  # columns; rows of the last frame
+
+
+@cache
+def _groups(names: tuple[str, ...], n: int) -> _Groups:
+    """Group the columns of :func:`_layout` by what they take from the frames.
+
+    Rotations: θ and c about z, α about x; translations: d along z, a along x; the tool
+    point's.
+    """
+    layout = _layout(names, n)
+    none = (np.zeros(0, dtype=int), np.zeros(0, dtype=int))
+
+    def group(
+        along_z: tuple[str, ...], along_x: tuple[str, ...]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        z, x = ([layout.get(k, none) for k in kinds] for kinds in (along_z, along_x))
+        cols = np.concatenate([c for c, _ in z + x])
+        return cols, np.concatenate([f for _, f in z]), np.concatenate([f for _, f in x])
+
+    turns = group(("th", "c"), ("al",))
+    n_th, bent_frames = len(layout.get("th", none)[0]), layout.get("c", none)[1]
+    return _Groups(
+        turns,
+        slice(n_th, n_th + len(bent_frames)),
+        bent_frames - 1,
+        group(("d",), ("a",)),
+        layout.get("tool", none),
+    )
+
+
 def tool_jacobian(
     model: Model, q: np.ndarray, names: Sequence[str], f: Frames | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Tool point p (N, 3) and ∂p/∂e (N, 3, m) for the named parameters (mm/rad, mm/mm).
 
     ``f``: the frames of ``q`` when the caller has them already (they do not depend on
-    the tool point).
+    the tool point). The columns of a kind of derivative (module docstring) are taken
+    together: the rotations about z_i (θ_i; c_i, times τ_i) and x_{i-1} (α_{i-1}) through
+    their frames' origins, the translations along z_i (d_i) and x_{i-1} (a_{i-1}), the
+    tool point's (columns of the last frame).
     """
     f = frames(model, q) if f is None else f
     p = f.o[:, -1] + _rotate(f.R_last, model.tool_point)
     J = np.empty((*p.shape, len(names)))
-    for kind, (cols, fr) in _layout(tuple(names), model.n_joints).items():
-        if kind == "th":  # rotation about z_i through o_i
-            J[:, :, cols] = cross(f.z[:, fr], p[:, None] - f.o[:, fr]).transpose(0, 2, 1)
-        elif kind == "al":  # rotation about x_{i-1} through o_{i-1}
-            J[:, :, cols] = cross(f.x[:, fr], p[:, None] - f.o[:, fr]).transpose(0, 2, 1)
-        elif kind == "d":  # translation along z_i
-            J[:, :, cols] = f.z[:, fr].transpose(0, 2, 1)
-        elif kind == "a":  # translation along x_{i-1}
-            J[:, :, cols] = f.x[:, fr].transpose(0, 2, 1)
-        elif kind == "c":  # the joint's turn c_j·τ_j: τ_j times the θ_j column
-            tau = gravity_torques(model, f)[:, fr - 1, None]
-            turn = cross(f.z[:, fr], p[:, None] - f.o[:, fr]) * tau
-            J[:, :, cols] = turn.transpose(0, 2, 1)
-        else:  # tool point component: a column of the last frame
-            J[:, :, cols] = f.R_last[:, :, fr]
+    g = _groups(tuple(names), model.n_joints)
+    cols, fz, fx = g.turns
+    if len(cols):
+        axes = _gathered(f, fz, fx)
+        lever = np.subtract(p[:, None], f.o[:, np.concatenate([fz, fx])], out=np.empty_like(axes))
+        turn = cross(axes, lever, out=np.empty_like(axes))
+        if len(g.bent_joints):  # the joint's turn c_j·τ_j: τ_j times the θ_j column
+            turn[:, g.bent] *= gravity_torques(model, f)[:, g.bent_joints, None]
+        J[:, :, cols] = turn.transpose(0, 2, 1)
+    cols, fz, fx = g.moves
+    if len(cols):
+        J[:, :, cols] = _gathered(f, fz, fx).transpose(0, 2, 1)
+    cols, rows = g.tool
+    if len(cols):
+        J[:, :, cols] = f.R_last[:, :, rows]
     return p, J
+
+
+def _gathered(f: Frames, z_frames: np.ndarray, x_frames: np.ndarray) -> np.ndarray:
+    """Return the z axes of ``z_frames`` then the x axes of ``x_frames``, (N, k, 3).
+
+    Stored as the frames are, the configurations innermost (copies and products over them
+    run along contiguous memory).
+    """
+    axes = np.empty((len(z_frames) + len(x_frames), 3, len(f.z))).transpose(2, 0, 1)
+    axes[:, : len(z_frames)] = f.z[:, z_frames]
+    axes[:, len(z_frames) :] = f.x[:, x_frames]
+    return axes
 
 
 def tool_gradient(

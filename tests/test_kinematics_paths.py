@@ -33,6 +33,9 @@ def test_cross_is_numpys_cross_bit_for_bit(shape, data):
     a = data.draw(arrays(np.float64, (*shape, 3), elements=FINITE))
     b = data.draw(arrays(np.float64, (shape[-1], 3), elements=FINITE))  # broadcast
     assert cross(a, b).tobytes() == np.cross(a, b).tobytes()
+    into = np.empty((3, *shape)).transpose(*range(1, len(shape) + 1), 0)  # another order
+    assert cross(a, b, out=into) is into
+    assert into.tobytes() == np.cross(a, b).tobytes()
     a2, b2 = np.moveaxis(a, -1, -2), np.moveaxis(b, -1, -2)  # vectors along axis −2
     expected = np.moveaxis(np.cross(a, b), -1, -2)
     assert np.array_equal(cross(a2, b2, axis=-2), expected)
