@@ -99,12 +99,11 @@ def with_errors(base: Model, names: Sequence[str], values: np.ndarray) -> Model:
     dh, tool = _filled((*lead, n, 4), base.dh), _filled((*lead, 3), base.tool_point)
     targets = {"dh": dh, "tool": tool}
     compliance = base.compliance
-    if places["c"]:
+    if any(key == "c" for key, _, _ in places):
         compliance = _filled((*lead, n), np.zeros(n) if compliance is None else compliance)
         targets["c"] = compliance
-    for key, target in targets.items():
-        for cols, index in places[key]:  # one sum per name, in their order
-            target[index] += values[..., cols]
+    for key, index, k in places:  # one sum per name, in their order
+        targets[key][index] += values[..., k]
     return Model(dh, tool, base.pulley, base.masses, compliance)
 
 
@@ -119,36 +118,20 @@ def _filled(shape: tuple[int, ...], start: np.ndarray) -> np.ndarray:
     return np.array(np.broadcast_to(start, shape), dtype=float)
 
 
-Places = list[tuple[np.ndarray, tuple[Any, ...]]]
-"""Rounds of (columns of the names, the index of the places they are added at) of one array."""
-
-
 @cache
-def _offset_places(names: tuple[str, ...], n: int) -> dict[str, Places]:
-    """Where :func:`with_errors` adds each named offset, per array ("dh", "tool", "c").
+def _offset_places(names: tuple[str, ...], n: int) -> tuple[tuple[str, tuple[Any, ...], int], ...]:
+    """Where :func:`with_errors` adds each named offset: (array, index in it, column of values).
 
-    A place (a DH table's row and column, a tool point's or compliance's index) is in a
-    round at most once, so that a round's sums are one array sum; a name given again is
-    added again, in a later round.
+    The array is "dh" (the index a row and column of the table), "tool" or "c".
     """
-    found: dict[str, list[dict[tuple[int, ...], int]]] = {"dh": [], "tool": [], "c": []}
+    places: list[tuple[str, tuple[Any, ...], int]] = []
     for k, name in enumerate(names):
         p = P.parse(name, n)
-        key = p.kind if p.kind in ("tool", "c") else "dh"
-        place = (p.row,) if key != "dh" else (p.row, P.DH_COLUMN[p.kind])
-        rounds = found[key]
-        free = next((r for r in rounds if place not in r), None)
-        if free is None:
-            free = {}
-            rounds.append(free)
-        free[place] = k
-    return {
-        key: [
-            (np.array(list(r.values())), (..., *(np.array(i) for i in zip(*r, strict=True))))
-            for r in rounds
-        ]
-        for key, rounds in found.items()
-    }
+        if p.kind in ("tool", "c"):
+            places.append((p.kind, (..., p.row), k))
+        else:
+            places.append(("dh", (..., p.row, P.DH_COLUMN[p.kind]), k))
+    return tuple(places)
 
 
 def loaded(
