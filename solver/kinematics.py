@@ -202,7 +202,10 @@ def _table_factors(raw: bytes, n: int) -> tuple[list, np.ndarray, np.ndarray]:
     """Return a DH table's factors of :func:`_array_terms`, kept per table (its floats)."""
     ca, sa, a, d, _ = _table_floats(raw, n)
     sa_pairs = np.array([[s, -s] for s in sa]).reshape(n, 2, 1, 1)
-    return ca, sa_pairs, np.array([a, d]).T.reshape(n, 2, 1, 1)
+    ad_pairs = np.array([a, d]).T.reshape(n, 2, 1, 1)
+    for kept in (sa_pairs, ad_pairs):
+        kept.setflags(write=False)
+    return ca, sa_pairs, ad_pairs
 
 
 def _array_terms(dh: np.ndarray, q: np.ndarray) -> Iterator[tuple]:
@@ -233,7 +236,9 @@ def _one_terms(raw: bytes, n: int, q: np.ndarray) -> Iterator[tuple]:
     return zip(*table, np.cos(th).tolist(), np.sin(th).tolist(), strict=True)
 
 
-def _turn(c, s_pair: np.ndarray, UV: np.ndarray, VU: np.ndarray, T: np.ndarray, S: np.ndarray):
+def _turn(
+    c, s_pair: np.ndarray, UV: np.ndarray, VU: np.ndarray, T: np.ndarray, S: np.ndarray
+) -> None:
     """Rotate the pair of axes UV = (U, V) in place by the angle of cosine c, sine s.
 
     (cU + sV, cV − sU), as cV + (−s)U (the same number); ``s_pair`` is (s, −s), VU the
