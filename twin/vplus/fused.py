@@ -190,11 +190,19 @@ class _Writer:
         ks = []
         for x in index:
             v, _ = self.value(x)
-            ks.append(src.let(f"_floor({v} + 0.5)"))
-        if len(ks) == 1:
+            number = src.bound.get(v)  # a number's index is rounded here (a table's)
+            if type(number) is float and math.isfinite(number):
+                ks.append(src.bind(math.floor(number + 0.5)))
+            else:
+                ks.append(src.let(f"_floor({v} + 0.5)"))
+        if len(ks) > 1:
+            return src.let(f"({', '.join(ks)},)")
+        k = src.bound.get(ks[0])
+        if k is None:
             src.emit(f"if {ks[0]} < 0: _illegal_index({ks[0]})")
-            return ks[0]
-        return src.let(f"({', '.join(ks)},)")
+        elif k < 0:
+            src.emit(f"_illegal_index({ks[0]})")
+        return ks[0]
 
     def closure(self, e: N.Expr) -> tuple[str, bool]:
         """Emit the call of ``e``'s closure; return its value's local, and if it is DOUBLE."""
