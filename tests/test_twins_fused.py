@@ -64,6 +64,7 @@ def _both(run):
     with pytest.MonkeyPatch.context() as m:
         _unfused(m, urscript_interp)
         _unfused(m, rapid_interp)
+        vplus_unfused(m)
         nodes = run()
     return fused, nodes
 
@@ -273,13 +274,17 @@ def test_rapid_statements_are_fused(monkeypatch):
 
 
 # ---------- whole runs ----------
+PLAN_FILES = {"viper_s650": "paper_plan.toml"}
+"""An arm's plan where it is not plan.toml."""
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("arm", ["ur5e", "abb_irb120"])
+@pytest.mark.parametrize("arm", ["ur5e", "abb_irb120", "viper_s650"])
 def test_whole_runs_are_the_same_with_the_fused_statements(arm, tmp_path):
     """A measurement run's log bytes and outcomes, the controller solver's results, counts
     and console: the same with the fused statements and without."""
     robot = load_robot(EXAMPLES / arm / "robot.toml")
-    plan = load_plan(EXAMPLES / arm / "plan.toml", robot)
+    plan = load_plan(EXAMPLES / arm / PLAN_FILES.get(arm, "plan.toml"), robot)
     programs = generate(robot, plan)
     truth = random_errors(robot, 2.0, np.random.default_rng(5))
     folders = iter(tmp_path / str(k) for k in range(2))

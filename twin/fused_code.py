@@ -91,18 +91,6 @@ class Writer(Protocol):
         ...
 
 
-def fused_steps(
-    compiler: Any,
-    steps: list[Any],
-    writable: Callable[[Any], bool],
-    writer: Callable[[], Writer],
-    names: dict[str, Any],
-    one: Callable[[Any], Callable[[Any], Any]],
-) -> list[Callable[[Any], Any]]:
-    """Return the functions of :func:`fused_runs` (without their first statements)."""
-    return [f for _, f in fused_runs(compiler, steps, writable, writer, names, one)]
-
-
 def fused_runs(
     compiler: Any,
     steps: list[Any],

@@ -264,15 +264,12 @@ class _Writer:
         v, double = self.value(e.expr)
         return self.src.let(f"-{v}"), double
 
-    @value.register
-    def _(self, e: N.Not) -> tuple[str, bool]:
+    @value.register(N.Not)
+    @value.register(N.Com)
+    def _(self, e: N.Not | N.Com) -> tuple[str, bool]:
         v, _ = self.value(e.expr)
-        return self.src.let(f"-1.0 if {v} == 0 else 0.0"), False
-
-    @value.register
-    def _(self, e: N.Com) -> tuple[str, bool]:
-        v, _ = self.value(e.expr)
-        return self.src.let(f"float(~round({v}))"), False
+        form = "-1.0 if {v} == 0 else 0.0" if isinstance(e, N.Not) else "float(~round({v}))"
+        return self.src.let(form.format(v=v)), False
 
     @value.register
     def _(self, e: N.Compare) -> tuple[str, bool]:
@@ -289,14 +286,7 @@ class _Writer:
         x, dx = self.value(e.left)
         y, dy = self.value(e.right)
         v = src.let(f"{x} {op} {y}")
-        if dx or dy:
-            return v, True
-        r = src.temp()
-        with src.block(f"if type({v}) is float:"):
-            src.single(v, r)
-        with src.block("else:"):
-            src.emit(f"{r} = _single_result({v})")
-        return r, False
+        return self.rounded(v, dx or dy, f"_single_result({v})")
 
     def division(self, e: N.BinOp) -> tuple[str, bool]:
         """Emit ``/`` or MOD: the divisor first (zero: -409), then the dividend."""
@@ -307,11 +297,19 @@ class _Writer:
         src.emit(f"if {y} == 0: _division_by_zero()")
         x, dx = self.value(e.left)
         v = src.let(f"{x} / {y}" if e.op == "/" else f"_fmod({x}, {y})")
-        if dx or dy:
+        return self.rounded(v, dx or dy, f"{v} if isinstance({v}, str) else _f32({v})")
+
+    def rounded(self, v: str, double: bool, other: str) -> tuple[str, bool]:
+        """Return the result ``v`` as it is where DOUBLE, else rounded to single precision.
+
+        A float rounded here (:func:`~wirecal.twin.machine.f32`'s numbers and errors), any
+        other value by ``other``: its closures' rounding.
+        """
+        if double:
             return v, True
-        r = src.temp()
+        src, r = self.src, self.src.temp()
         with src.block(f"if type({v}) is float:"):
             src.single(v, r)
         with src.block("else:"):
-            src.emit(f"{r} = {v} if isinstance({v}, str) else _f32({v})")
+            src.emit(f"{r} = {other}")
         return r, False
