@@ -26,7 +26,7 @@ from wirecal.solver.solve import solve
 from wirecal.twin.rapid.adapter import ADAPTER
 from wirecal.twin.rapid.controller import IrcController
 from wirecal.twin.rapid.interp import load_module
-from wirecal.twin.rapid.solver_run import LOAD, load_routine
+from wirecal.twin.rapid.solver_run import ROUTINE, RUN
 from wirecal.twin.world import Faults, World
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -135,20 +135,19 @@ def test_slip_stops_the_run(irb, programs, tmp_path):
     assert "jumped" in run.log.read_text(encoding="ascii")
 
 
-def test_the_twins_routine_parsed_apart_is_the_joined_module_parsed(
-    irb, programs, measured, tmp_path
-):
+def test_the_twins_routine_parsed_apart_is_the_joined_module_parsed(irb, programs, tmp_path):
     """wc_solve's run parses the module and the twin's routine apart: the same module, at
-    the same line numbers, as the routine written before ENDMODULE and the text parsed."""
+    the same line numbers, as the routine written before ENDMODULE and the text parsed; the
+    joined module is kept for the next run (the routine is the same for every log)."""
     robot, plan = irb
     text = programs[MODULE_FILE]
-    routine = load_routine(plan, read_log(measured[1].log).readings)
     end = text.rindex("ENDMODULE")
-    joined = parse_module(text[:end] + routine + text[end:])
+    joined = parse_module(text[:end] + ROUTINE + text[end:])
     controller = IrcController(World(robot, {}, plan.theta0_deg, tmp_path), signal_name(robot))
-    apart = load_module(text, MODULE_FILE, controller, appended=routine)
+    apart = load_module(text, MODULE_FILE, controller, appended=ROUTINE)
     assert apart.module == joined
-    assert apart.module.routines[-1].name == LOAD
+    assert apart.module.routines[-1].name == RUN
+    assert load_module(text, MODULE_FILE, controller, appended=ROUTINE).module is apart.module
 
 
 def _agreement(robot, plan, programs, folder: Path, seed: int) -> float:

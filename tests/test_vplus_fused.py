@@ -1,8 +1,9 @@
-"""The V+ twin's fused arithmetic (twin/vplus/fused.py): the node-by-node closures' numbers.
+"""The V+ twin's written-out statements (twin/vplus/fused.py): the closures' numbers.
 
-An expression of +, - and * on AUTO scalars compiled into one function must give the very
-values, operation counts (their order of first count too) and errors of the closures it
-replaces; the tests run the same programs with fusion off and compare.
+A run of assignments, a condition or an arithmetic expression written out as one function
+must give the very values, operation counts (their order of first count too) and errors
+of the closures it replaces; the tests run the same programs with it off and compare
+(random programs: tests/test_twins_fused.py).
 """
 
 from __future__ import annotations
@@ -41,6 +42,14 @@ PROGRAM = """.PROGRAM t.main()
 FINITE = st.floats(-1e6, 1e6, allow_nan=False)
 
 
+def unfused(monkeypatch_context) -> None:
+    """Leave every V+ statement and expression to the node-by-node closures."""
+    monkeypatch_context.setattr(
+        vplus_interp, "fused_steps", lambda c, steps, one: [(s, one(s)) for s in steps]
+    )
+    monkeypatch_context.setattr(vplus_interp, "fused_value", lambda *args: None)
+
+
 def _run(viper, plan, tmp_path, source, values, *, fuse):
     cell = VplusController(World(viper, {}, plan.theta0_deg, tmp_path))
     interp = Interpreter(parse_module(source, "t.v2"), cell)
@@ -50,7 +59,7 @@ def _run(viper, plan, tmp_path, source, values, *, fuse):
         out = interp.execute("t.main")
     else:
         with pytest.MonkeyPatch.context() as m:
-            m.setattr(vplus_interp, "fused", lambda *args: None)
+            unfused(m)
             out = interp.execute("t.main")
     results = [interp.gvals.get(g) for g in ("g1", "g2", "g3")]
     return out, results, list(interp.ops.items())
@@ -82,11 +91,24 @@ def test_an_undefined_scalar_in_a_fused_expression_is_the_closures_error(
     assert fused[2] == nodes[2]
 
 
-def test_the_double_expressions_are_fused(viper, paper_plan, tmp_path, monkeypatch):
-    """The comparisons above are not vacuous: the program's DOUBLE expressions are fused."""
-    made = []
-    original = vplus_interp.fused
-    monkeypatch.setattr(vplus_interp, "fused", lambda *args: made.append(original(*args)))
+def test_the_statements_are_written_out(viper, paper_plan, tmp_path, monkeypatch):
+    """The comparisons above are not vacuous: the assignments and the condition are written."""
+    runs, values = [], []
+    steps, value = vplus_interp.fused_steps, vplus_interp.fused_value
+
+    def steps_spy(c, steps_, one):
+        out = steps(c, steps_, one)
+        runs.extend(f for _, f in out if getattr(f, "__name__", "") == "fused")
+        return out
+
+    def value_spy(c, e):
+        out = value(c, e)
+        values.append(out)
+        return out
+
+    monkeypatch.setattr(vplus_interp, "fused_steps", steps_spy)
+    monkeypatch.setattr(vplus_interp, "fused_value", value_spy)
     cell = VplusController(World(viper, {}, paper_plan.theta0_deg, tmp_path))
     Interpreter(parse_module(PROGRAM, "t.v2"), cell).execute("t.main")
-    assert sum(f is not None for f in made) >= 5  # g1 … g3, x and a*b, with their subtrees
+    assert len(runs) == 1  # the ten assignments, one function
+    assert sum(v is not None for v in values) == 1  # the IF's a*b > c

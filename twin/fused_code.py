@@ -36,11 +36,15 @@ Maker = Callable[[Any], Any]
 
 @dataclass(frozen=True)
 class Recipe:
-    """A statement written out: its code, the values it binds, the names made per compiler."""
+    """A statement written out: its code, the values it binds, the names made per compiler.
+
+    ``note``: what its writer learnt of it (V+: whether its value is DOUBLE).
+    """
 
     code: CodeType
     bound: dict[str, Any]
     made: tuple[tuple[str, Maker], ...]
+    note: Any = None
 
     def function(self, compiler: Any, names: dict[str, Any]) -> Callable[[Any], Any]:
         """Return the function for ``compiler``, with ``names`` (its counter, interpreter …)."""
@@ -59,11 +63,13 @@ def recipe_of(node: Any, place: object, write: Callable[[], Recipe | None]) -> R
     shares its expressions with every copy of that line, in other programs and functions
     too: so a recipe is kept for the node together with the parsed object that fixes its
     scope (``place``: a URScript function's definition, a RAPID module), which is the same
-    object whenever the node is in the same place. What depends on the run (the counter,
+    object whenever the node is in the same place; a tuple ``place`` is several objects that
+    together fix it (a V+ program and its module). What depends on the run (the counter,
     the interpreter, the closures of the nodes not written out) is made for each compiler
     (:meth:`Recipe.function`).
     """
-    recipe: Recipe | None = _RECIPES.get(write, node, place)
+    places = place if isinstance(place, tuple) else (place,)
+    recipe: Recipe | None = _RECIPES.get(write, node, *places)
     return recipe
 
 
@@ -85,35 +91,35 @@ class Writer(Protocol):
         ...
 
 
-def fused_steps(
+def fused_runs(
     compiler: Any,
     steps: list[Any],
     writable: Callable[[Any], bool],
     writer: Callable[[], Writer],
     names: dict[str, Any],
     one: Callable[[Any], Callable[[Any], Any]],
-) -> list[Callable[[Any], Any]]:
+) -> list[tuple[Any, Callable[[Any], Any]]]:
     """Compile ``steps`` in order, runs of ``writable`` ones written out together.
 
     Each run of consecutive ``writable`` statements is one function (a new ``writer``'s,
     kept for the run's first statement at the compiler's place: :func:`recipe_of`) doing
     their work in their order, a call per statement less; each other statement is compiled
-    by ``one`` (the node-by-node compiler's).
+    by ``one`` (the node-by-node compiler's). Each function comes with its first statement.
     """
-    out: list[Callable[[Any], Any]] = []
+    out: list[tuple[Any, Callable[[Any], Any]]] = []
     k = 0
     while k < len(steps):
         n = 0
         while k + n < len(steps) and writable(steps[k + n]):
             n += 1
         if n == 0:
-            out.append(one(steps[k]))
+            out.append((steps[k], one(steps[k])))
             k += 1
             continue
         run = steps[k : k + n]
         recipe = recipe_of(steps[k], compiler.place, partial(_run, writer, run))
         assert recipe is not None
-        out.append(recipe.function(compiler, names))
+        out.append((steps[k], recipe.function(compiler, names)))
         k += n
     return out
 
@@ -208,8 +214,8 @@ class Source:
         self.emit(*rounding_source(value, result))
         return result
 
-    def recipe(self) -> Recipe:
-        """Return the function's recipe, its code compiled once per text."""
+    def recipe(self, note: Any = None) -> Recipe:
+        """Return the function's recipe (with ``note``), its code compiled once per text."""
         lines = self.lines
         if self.kinds:
             counts = [f"if n_{k}: ops[{k!r}] += n_{k}" for k in self.kinds]
@@ -217,7 +223,7 @@ class Source:
             lines = [start, "try:", *("    " + x for x in lines), "finally:"]
             lines += ["    " + x for x in counts]
         body = "".join(f"    {line}\n" for line in lines)
-        return Recipe(code(f"def fused(f):\n{body}"), self.bound, tuple(self.made))
+        return Recipe(code(f"def fused(f):\n{body}"), self.bound, tuple(self.made), note)
 
 
 @lru_cache(maxsize=CODES_KEPT)

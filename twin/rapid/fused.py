@@ -23,8 +23,7 @@ from typing import Any, Protocol
 from wirecal.lang.rapid import nodes as N
 from wirecal.lang.rapid.checker import BOOL, DNUM, LITERAL, NUM, STRING, Type
 from wirecal.lang.syntax import node_method
-from wirecal.twin.fused_code import Recipe, Source, written
-from wirecal.twin.fused_code import fused_steps as steps_of
+from wirecal.twin.fused_code import Recipe, Source, fused_runs, written
 from wirecal.twin.machine import f32
 from wirecal.twin.rapid.values import (
     COUNTED,
@@ -62,7 +61,8 @@ def fused_steps(c: Compiling, steps: list[N.Stmt], one: Callable) -> list[Callab
     (and an assignment of a record or an array: copied, not written out) is compiled by
     ``one``.
     """
-    return steps_of(c, steps, lambda s: _writable(c, s), lambda: _Writer(c), _names(c), one)
+    runs = fused_runs(c, steps, lambda s: _writable(c, s), lambda: _Writer(c), _names(c), one)
+    return [f for _, f in runs]
 
 
 def fused_value(c: Compiling, e: N.Expr) -> Callable | None:

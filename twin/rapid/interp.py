@@ -307,7 +307,7 @@ def load_module(
             module = _with_appended(module, text, appended)
     except SyntaxProblem as e:
         raise WirecalError([f"{source}:{e.line}: {e.message}"]) from None
-    checker, found = _checked(module) if not appended else _check(module)
+    checker, found = _checked(module)
     problems = [f"{source}:{line}: {m}" for line, m in found]
     if not problems:
         problems = _check_subset(module, source)
@@ -321,6 +321,8 @@ CHECKS_KEPT = 8
 mounting run and a measuring run of one module, and a test runs the same module often)."""
 
 _CHECKED = Kept(CHECKS_KEPT)
+_JOINED = Kept(CHECKS_KEPT)
+"""Modules with routines appended, kept for the two parses joined (so is their check)."""
 
 
 def _check(module: N.Module) -> tuple[Checker, list[tuple[int, str]]]:
@@ -344,17 +346,23 @@ def _with_appended(module: N.Module, text: str, appended: str) -> N.Module:
     The module's own parse is the one kept for ``text`` (the generator's check and the
     twin's runs parse that text too); ``appended`` is parsed alone, on the lines it has in
     ``text`` with it inserted before ENDMODULE, so every line number is the joined text's.
+    The joined module is kept for the two parses (its check with it: :func:`_checked`).
     """
     before = text[: text.rindex("ENDMODULE")]
     alone = parse_module(
         f"MODULE {module.name}\n" + "\n" * (before.count("\n") - 1) + appended + "ENDMODULE\n"
     )
-    return replace(
+    joined: N.Module = _JOINED.get(
+        lambda: replace(
+            module,
+            data=[*module.data, *alone.data],
+            routines=[*module.routines, *alone.routines],
+            unsupported=[*module.unsupported, *alone.unsupported],
+        ),
         module,
-        data=[*module.data, *alone.data],
-        routines=[*module.routines, *alone.routines],
-        unsupported=[*module.unsupported, *alone.unsupported],
+        alone,
     )
+    return joined
 
 
 def run_module(text: str, source: str, controller: RapidController, entry: str = "main") -> Outcome:

@@ -1,10 +1,13 @@
 """WIRECAL.mod's controller solver (wc_solve) run in the twin on a log's readings.
 
-The twin appends a routine ``wc_twin_load`` to the module: it stores the readings as
-wc_meas would have kept them (``wc_rc``, ``wc_rj``), opens a result file, calls wc_solve
-and closes it; the result is read from that file's ``# controller:`` lines
-(:func:`~wirecal.formats.controller_result.result_in_log`), the operations from
-the interpreter's count (:attr:`~wirecal.twin.rapid.interp.Interpreter.ops`).
+The readings are stored in the module's data as wc_meas would have kept them (``wc_rc``,
+``wc_rj``: :func:`store_readings`); the twin appends a routine ``wc_twin_solve`` to the
+module that opens a result file, calls wc_solve and closes it. The result is read from
+that file's ``# controller:`` lines
+(:func:`~wirecal.formats.controller_result.result_in_log`), the operations from the
+interpreter's count (:attr:`~wirecal.twin.rapid.interp.Interpreter.ops`). The routine is
+the same for every log, so a module's joined parse, its check and its compiled
+statements are kept from one run to the next.
 """
 
 from __future__ import annotations
@@ -20,15 +23,26 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 from wirecal.twin.controller_run import ControllerRun
+from wirecal.twin.machine import f32
 from wirecal.twin.rapid.controller import IrcController
-from wirecal.twin.rapid.interp import load_module
+from wirecal.twin.rapid.interp import Interpreter, load_module
+from wirecal.twin.rapid.values import RapidError, position
 from wirecal.twin.world import World
 
 SOLVE_FILE = "WCSOLVE.LOG"
-"""The file wc_twin_load has wc_solve write to."""
+"""The file wc_twin_solve has wc_solve write to."""
 
-LOAD = "wc_twin_load"
+RUN = "wc_twin_solve"
 """The routine the twin appends to the module (module docstring)."""
+
+ROUTINE = (
+    f"  PROC {RUN}()\n"
+    f'    Open "{LOG_DIR}" \\File:="{SOLVE_FILE}", wc_log \\Write;\n'
+    "    wc_solve;\n"
+    "    Close wc_log;\n"
+    "  ENDPROC\n"
+)
+"""The routine's text: wc_solve with its result written to :data:`SOLVE_FILE`."""
 
 
 def controller_solve(
@@ -41,8 +55,12 @@ def controller_solve(
     """
     folder.mkdir(parents=True, exist_ok=True)
     controller = IrcController(World(robot, {}, plan.theta0_deg, folder), signal_name(robot))
-    interp = load_module(text, MODULE_FILE, controller, appended=load_routine(plan, readings))
-    outcome = interp.execute(LOAD)
+    interp = load_module(text, MODULE_FILE, controller, appended=ROUTINE)
+    try:
+        store_readings(interp, plan, readings)
+    except RapidError as e:
+        raise WirecalError(f"the controller solver's readings do not fit: {e}") from None
+    outcome = interp.execute(RUN)
     if outcome.status != "completed":
         raise WirecalError(
             f"the controller solver stopped: {outcome.message} ({MODULE_FILE}, line {outcome.line})"
@@ -58,25 +76,20 @@ def controller_solve(
     )
 
 
-def load_routine(plan: Plan, readings: Sequence[Reading]) -> str:
-    """Return the twin's routine wc_twin_load: the readings, then wc_solve (docstring).
+def store_readings(interp: Interpreter, plan: Plan, readings: Sequence[Reading]) -> None:
+    """Store ``readings`` in ``wc_rc`` and ``wc_rj`` as wc_meas keeps them.
 
     wc_meas's slots: each step's zero reading first (slot = step), then the points in
-    the readings' order (the closing zero reading is not kept).
+    the readings' order (the closing zero reading is not kept). Each value is the one the
+    module's assignment of the log's number (:func:`dnum_literal`, :func:`num_literal`)
+    stores: a dnum as it is read, a num rounded to single precision.
     """
     steps = len(plan.steps)
     zeros = [r for r in readings if r.kind == "zero" and r.step <= steps]
     points = [r for r in readings if r.kind == "point"]
-    lines = [f"  PROC {LOAD}()"]
+    counts, joints = interp.globals["wc_rc"], interp.globals["wc_rj"]
     for slot, r in enumerate((*zeros, *points), 1):
-        lines.append(f"    wc_rc{{{slot}}} := {dnum_literal(r.counts)};")
+        counts[position(counts, slot)] = float(dnum_literal(r.counts))
+        row = joints[position(joints, slot)]
         for k, x in enumerate(r.joints_deg, 1):
-            lines.append(f"    wc_rj{{{slot}, {k}}} := {num_literal(x)};")
-    lines += [
-        f'    Open "{LOG_DIR}" \\File:="{SOLVE_FILE}", wc_log \\Write;',
-        "    wc_solve;",
-        "    Close wc_log;",
-        "  ENDPROC",
-        "",
-    ]
-    return "\n".join(lines) + "\n"
+            row[position(row, k)] = f32(float(num_literal(x)))

@@ -24,8 +24,7 @@ from typing import Any, Protocol
 
 from wirecal.lang.syntax import node_method
 from wirecal.lang.urscript import nodes as N
-from wirecal.twin.fused_code import Recipe, Source, written
-from wirecal.twin.fused_code import fused_steps as steps_of
+from wirecal.twin.fused_code import Recipe, Source, fused_runs, written
 from wirecal.twin.machine import f32
 from wirecal.twin.urscript import values as V
 
@@ -59,7 +58,8 @@ def fused_steps(c: Compiling, steps: list[N.Stmt], one: Callable) -> list[Callab
     is compiled by ``one``. An assignment of a call, a member or a list to a variable is
     not written out (nothing to gain).
     """
-    return steps_of(c, steps, _writable, lambda: _Writer(c), _names(c), one)
+    runs = fused_runs(c, steps, _writable, lambda: _Writer(c), _names(c), one)
+    return [f for _, f in runs]
 
 
 def fused_value(c: Compiling, e: N.Expr) -> Callable | None:

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import math
 import operator
-import struct
 from collections import Counter
 from collections.abc import Callable
 
@@ -32,7 +31,8 @@ from wirecal.lang.vplus.keywords import keyword
 from wirecal.lang.vplus.parser import CONSTANTS, FUNCTIONS, Module, Program, transformation_names
 from wirecal.solver import pose
 from wirecal.twin.machine import Halt, Outcome, RunError, f32
-from wirecal.twin.vplus.fused import fused
+from wirecal.twin.vplus.errors import VError, division_by_zero, illegal_index, undefined
+from wirecal.twin.vplus.fused import fused_steps, fused_value, single_result
 
 
 class Trans:
@@ -60,10 +60,6 @@ class Trans:
     def shifted(self, dx, dy, dz):
         """Return SHIFT(t BY dx, dy, dz): the position moved, the orientation kept."""
         return Trans(self.x + dx, self.y + dy, self.z + dz, self.yaw, self.pitch, self.roll)
-
-
-class VError(RunError):
-    """A V+ run-time error: the program stops with this code and message."""
 
 
 class _Return(Exception):
@@ -180,6 +176,7 @@ class _Compiler:
                 self.locals.add(name)
         self.nslots = len(self.params) + len(self.autos)
         self.slot_of: dict[Callable, int] = {}  # a DOUBLE AUTO scalar's setter → its slot
+        self.place = (prog, interp.module)  # what fixes a node's meaning (fused_code.recipe_of)
         for name in ("expr", "_stmt"):  # bound once: each lookup of a dispatcher wraps anew
             setattr(self, name, vars(_Compiler)[name].__get__(self, _Compiler))
 
@@ -210,19 +207,11 @@ class _Compiler:
         (to an enclosing list that has the label). Each statement's place (program, line)
         goes into the interpreter's ``where`` as it starts, by the list's own loop.
         """
-        fns: list[Callable] = []
-        places: list[tuple[str, int]] = []  # each statement's place, set as it starts
-        labels: dict[int, int] = {}
-        for s in steps:
-            if isinstance(s, N.Label):
-                labels[s.number] = len(fns)
-            else:
-                fns.append(self._stmt(s))
-                places.append((self.prog.name, s.line))
-        interp = self.i
-        steps_at = list(zip(places, fns, strict=True))
-        if labels:
-            return _labelled(interp, steps_at, labels)
+        interp, name = self.i, self.prog.name
+        if any(isinstance(s, N.Label) for s in steps):
+            return self._labelled(steps)
+        # each run of assignments written out as one function, which sets their places
+        steps_at = [((name, s.line), f) for s, f in fused_steps(self, steps, self._stmt)]
         if len(steps_at) == 1:
             ((where, f),) = steps_at
 
@@ -239,6 +228,22 @@ class _Compiler:
 
         return run
 
+    def _labelled(self, steps: list[N.Stmt]) -> Callable:
+        """Compile a statement list with labels, statement by statement (:func:`_labelled`)."""
+        steps_at: list[tuple[tuple[str, int], Callable]] = []
+        labels: dict[int, int] = {}
+        for s in steps:
+            if isinstance(s, N.Label):
+                labels[s.number] = len(steps_at)
+            else:
+                steps_at.append(((self.prog.name, s.line), self._stmt(s)))
+        return _labelled(self.i, steps_at, labels)
+
+    def condition(self, e: N.Expr | None) -> Callable:
+        """Compile a condition: written out as one function where it can be (``fused``)."""
+        written = None if e is None else fused_value(self, e)
+        return written[0] if written is not None else self.expr(e)[0]
+
     # ---------- variables ----------
     def is_double(self, name: str) -> bool:
         if name in self.params:
@@ -250,15 +255,15 @@ class _Compiler:
         if kind == "n" and name in self.i.transforms:
             kind = "t"
 
-        def undefined():
-            raise VError(-406, f"*Undefined value* {name}")
+        def undefined_():
+            undefined(name)
 
         if name in self.params:
-            return self._param_storage(kind, self.params[name], index_fns, undefined)
+            return self._param_storage(kind, self.params[name], index_fns, undefined_)
         rounding = kind == "n" and not self.is_double(name)
         if name in self.autos:
-            return self._auto_storage(rounding, self.autos[name], index_fns, undefined)
-        return self._shared_storage(rounding, name, index_fns, undefined)
+            return self._auto_storage(rounding, self.autos[name], index_fns, undefined_)
+        return self._shared_storage(rounding, name, index_fns, undefined_)
 
     def _param_storage(self, kind: str, slot: int, index_fns, undefined):
         """Compile the access to a parameter: a reference in the frame."""
@@ -338,12 +343,7 @@ class _Compiler:
 
     def _shared_storage(self, rounding: bool, name: str, index_fns, undefined):
         """Compile the access to a LOCAL or global variable: a value in a dictionary."""
-        interp = self.i
-        vals, arrs = (
-            (self.local_vals, self.local_arr)
-            if name in self.locals
-            else (interp.gvals, interp.garr)
-        )
+        vals = self.local_vals if name in self.locals else self.i.gvals
         if index_fns is None:
 
             def get(frame):
@@ -358,7 +358,7 @@ class _Compiler:
 
             return get, put
         ix = self._indexer(index_fns)
-        arr = arrs.setdefault(name, {})
+        arr = self.array(name)
 
         def aget(frame):
             try:
@@ -372,6 +372,10 @@ class _Compiler:
 
         return aget, aput
 
+    def array(self, name: str) -> dict:
+        """Return the elements of the LOCAL or global array ``name`` (kept from now on)."""
+        return (self.local_arr if name in self.locals else self.i.garr).setdefault(name, {})
+
     def _indexer(self, index_fns):
         if len(index_fns) == 1:
             f = index_fns[0]
@@ -379,7 +383,7 @@ class _Compiler:
             def ix(frame):
                 k = math.floor(f(frame) + 0.5)
                 if k < 0:
-                    raise VError(-407, f"*Illegal array index* {k}")
+                    illegal_index(k)
                 return k
 
             return ix
@@ -392,17 +396,6 @@ class _Compiler:
     def var(self, v: N.Var):
         """(getter, setter) of a variable node."""
         return self.storage(v.kind, v.name, [self.expr(x)[0] for x in v.index] if v.index else None)
-
-    def _auto_leaf(self, v: N.Var) -> tuple[int, bool] | None:
-        """Return an AUTO numeric scalar's slot and whether it is DOUBLE (else None)."""
-        name = v.name
-        if v.index is not None or name in CONSTANTS or name in self.params:
-            return None
-        if name not in self.autos or v.kind != "n" or name in self.i.transforms:
-            return None
-        if _is_keyword_value(v):
-            return None
-        return self.autos[name], self.is_double(name)
 
     def ref_of(self, e: N.Expr | None) -> Callable:
         """Compile a CALL argument.
@@ -509,12 +502,14 @@ class _Compiler:
 
     @expr.register
     def _(self, e: N.BinOp):
+        written = fused_value(self, e)
+        if written is not None:
+            return written
         op = e.op
         a, da = self.expr(e.left)
         b, db = self.expr(e.right)
         if da or db:
-            nodes = _arithmetic(self.i, op, a, b)
-            return fused(e, self._auto_leaf, self.i.ops, nodes) or nodes, True
+            return _arithmetic(self.i, op, a, b), True
         if op in _SINGLE:
             return _single_arithmetic(self.i.ops, *_SINGLE[op], a, b), False
         return self._single(_arithmetic(self.i, op, a, b)), False
@@ -671,7 +666,7 @@ class _Compiler:
     @_stmt.register
     def _(self, s: N.IfGoto):
         label = s.label
-        cond = self.expr(s.cond)[0]
+        cond = self.condition(s.cond)
 
         def if_goto(frame):
             if cond(frame) != 0:
@@ -681,7 +676,7 @@ class _Compiler:
 
     @_stmt.register
     def _(self, s: N.If):
-        cond = self.expr(s.cond)[0]
+        cond = self.condition(s.cond)
         then = self.body(s.then)
         other = self.body(s.orelse) if s.orelse else None
 
@@ -712,7 +707,7 @@ class _Compiler:
 
     @_stmt.register
     def _(self, s: N.While):
-        cond = self.expr(s.cond)[0]
+        cond = self.condition(s.cond)
         body = self.body(s.body)
 
         def while_(frame):
@@ -723,7 +718,7 @@ class _Compiler:
 
     @_stmt.register
     def _(self, s: N.DoUntil):
-        cond = self.expr(s.cond)[0]
+        cond = self.condition(s.cond)
         body = self.body(s.body)
 
         def do_until(frame):
@@ -981,7 +976,6 @@ def _arithmetic(interp, op: str, a: Callable, b: Callable) -> Callable:
 
 _SINGLE = {"+": ("add", operator.add), "-": ("add", operator.sub), "*": ("mul", operator.mul)}
 """The REAL operations :func:`_single_arithmetic` compiles: the counter and the operation."""
-_PACK_F32, _UNPACK_F32 = struct.Struct("f").pack, struct.Struct("f").unpack
 
 
 def _single_arithmetic(ops: Counter, counter: str, combine: Callable, a: Callable, b: Callable):
@@ -993,12 +987,7 @@ def _single_arithmetic(ops: Counter, counter: str, combine: Callable, a: Callabl
 
     def f(frame):
         ops[counter] += 1
-        v = combine(a(frame), b(frame))
-        try:
-            r = _UNPACK_F32(_PACK_F32(v))[0]
-        except (OverflowError, struct.error):  # f32's overflow error; a string, or a fault
-            return v if isinstance(v, str) else f32(v)
-        return r if r - r == 0.0 else f32(v)  # f32's error for a finite v packed infinite
+        return single_result(combine(a(frame), b(frame)))
 
     return f
 
@@ -1012,14 +1001,14 @@ def _division(interp, op: str, a: Callable, b: Callable) -> Callable:
             ops["div"] += 1
             d = b(frame)
             if d == 0:
-                raise VError(-409, "*Division by zero*")
+                division_by_zero()
             return a(frame) / d
     else:  # MOD
 
         def f(frame):
             d = b(frame)
             if d == 0:
-                raise VError(-409, "*Division by zero*")
+                division_by_zero()
             return math.fmod(a(frame), d)
 
     return f
