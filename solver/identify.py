@@ -325,13 +325,19 @@ def joint(
     )
 
 
+KEPT_POINTS = 4
+"""Points whose residuals and Jacobian :func:`joint`'s evaluator keeps (the solution is
+often one the solver evaluated a step or two before it stopped)."""
+
+
 def _evaluator(
     problem: Problem, scale: ScalePrior | None
 ) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
     """Return x ↦ (residuals, Jacobian) of :func:`joint`'s problem (internal units).
 
     One pass over the chain gives both, kept for the same x (the solver asks for the
-    residuals and the Jacobian of a point one after the other).
+    residuals and the Jacobian of a point one after the other, and a point it moved from
+    again: :data:`KEPT_POINTS` of them are kept, the oldest dropped first).
     """
     last: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
     m = len(problem.names)
@@ -346,7 +352,8 @@ def _evaluator(
                 problem.q0,
                 problem.names,
             )
-            last.clear()
+            if len(last) >= KEPT_POINTS:
+                del last[next(iter(last))]
             if scale is None:
                 last[key] = (d - problem.d, J)
             else:

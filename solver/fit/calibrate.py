@@ -413,7 +413,8 @@ def _session_starts(ps: Pass, data: Data, values: np.ndarray | None = None) -> t
     u = offset_sequence(ps.layout, ps.x, ps.residual_mm, data) if values is None else values
     bad = data.excluded if data.excluded is not None and not data.excluded.all() else None
     kept = np.arange(u.size) if bad is None else np.flatnonzero(~bad)
-    found = place(u[kept], (0, *change_points(u[kept])), noise_sigma(u[kept]))
+    sigma = noise_sigma(u[kept])  # the search's σ and the placing's: found once
+    found = place(u[kept], (0, *change_points(u[kept], sigma)), sigma)
     return (0, *(int(kept[s]) for s in found[1:]))
 
 
