@@ -74,8 +74,23 @@ def levenberg_marquardt(
     ``evaluate(x)`` returns the residual r (N,) and ∂r/∂x (N, k) at ``x``; a point where
     either is not finite is a failed step (a start there: ``ValueError``).
     """
+    return minimised(evaluate, x0, loss=loss, f_scale=f_scale)[0]
+
+
+def minimised(
+    evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+    x0: np.ndarray,
+    *,
+    loss: SolverLoss = "linear",
+    f_scale: float = 1.0,
+    start: tuple[np.ndarray, np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return :func:`levenberg_marquardt`'s ``x`` with the residual and ∂r/∂x there.
+
+    ``start``: ``evaluate(x0)`` when the caller has it (not evaluated again).
+    """
     x = np.asarray(x0, dtype=float).copy()
-    r, J = evaluate(x)
+    r, J = evaluate(x) if start is None else start
     cost = _cost(r, loss, f_scale)
     if not (np.isfinite(cost) and np.all(np.isfinite(J))):
         raise ValueError("the residual or its Jacobian is not finite at the start")  # as scipy
@@ -98,4 +113,4 @@ def levenberg_marquardt(
             break  # converged, or at the minimum to rounding: no step can lower the cost
         if not gain:
             lam = max(10 * lam, 1e-3)
-    return x
+    return x, r, J
