@@ -22,8 +22,8 @@ T = TypeVar("T")
 
 def _feed(h: hashlib._Hash, part: object) -> None:
     """Add ``part`` to the digest ``h``, tagged by its kind."""
-    if isinstance(part, np.ndarray):
-        a = np.ascontiguousarray(part)
+    if isinstance(part, np.ndarray) and not part.dtype.hasobject:  # objects: their addresses
+        a = part if part.flags.c_contiguous else part.copy(order="C")  # keeps a 0-d shape
         h.update(f"a{a.dtype.str}{a.shape}".encode())
         h.update(a.data if a.size else b"")
     elif dataclasses.is_dataclass(part) and not isinstance(part, type):
