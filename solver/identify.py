@@ -23,6 +23,7 @@ import numpy as np
 from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.identifiability import covariance, std_and_correlation
 from wirecal.solver.kinematics import Model, loaded, with_errors
+from wirecal.solver.memo import by_point
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.scale import PPM
@@ -337,33 +338,21 @@ def _evaluator(
 
     One pass over the chain gives both, kept for the same x (the solver asks for the
     residuals and the Jacobian of a point one after the other, and a point it moved from
-    again: :data:`KEPT_POINTS` of them are kept, the oldest dropped first).
+    again: :data:`KEPT_POINTS` of them are kept, :func:`~wirecal.solver.memo.by_point`).
     """
-    last: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
     m = len(problem.names)
 
     def evaluate(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Residuals and Jacobian from one pass over the chain, reused for the same x."""
-        key = x.tobytes()
-        if key not in last:
-            d, J = wire_jacobian(
-                problem.at(x[:m]),
-                problem.q,
-                problem.q0,
-                problem.names,
-            )
-            if len(last) >= KEPT_POINTS:
-                del last[next(iter(last))]
-            if scale is None:
-                last[key] = (d - problem.d, J)
-            else:
-                s = x[m]
-                r = np.append(d - (1 + s) * problem.d, scale.weight * s)
-                col = np.append(-problem.d, scale.weight)
-                last[key] = (r, np.column_stack([np.vstack([J, np.zeros(m)]), col]))
-        return last[key]
+        """Residuals and Jacobian from one pass over the chain."""
+        d, J = wire_jacobian(problem.at(x[:m]), problem.q, problem.q0, problem.names)
+        if scale is None:
+            return d - problem.d, J
+        s = x[m]
+        r = np.append(d - (1 + s) * problem.d, scale.weight * s)
+        col = np.append(-problem.d, scale.weight)
+        return r, np.column_stack([np.vstack([J, np.zeros(m)]), col])
 
-    return evaluate
+    return by_point(evaluate, KEPT_POINTS)
 
 
 def _minimise(

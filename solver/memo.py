@@ -64,3 +64,24 @@ class Kept(Generic[T]):
             self._kept.clear()
         self._kept[key] = out
         return out
+
+
+def by_point(evaluate: Callable[[np.ndarray], T], size: int) -> Callable[[np.ndarray], T]:
+    """Return ``evaluate`` with its results at the last ``size`` points kept (oldest out first).
+
+    A point is its bytes: a solver's evaluations of one problem, float vectors of one size.
+    A solver asks again for a point it evaluated (its residual, then its Jacobian; the point
+    it stopped at, after steps it tried from there and refused).
+    """
+    kept: dict[bytes, T] = {}
+
+    def kept_evaluate(x: np.ndarray) -> T:
+        key = x.tobytes()
+        if key not in kept:
+            out = evaluate(x)
+            if len(kept) >= size:
+                del kept[next(iter(kept))]
+            kept[key] = out
+        return kept[key]
+
+    return kept_evaluate
