@@ -26,8 +26,9 @@ Three sections, medians over the seeds:
 
 5. **Cost** (``--cost``, issue 34: the quick test loop's fits) — CPU of the fits the tests
    run most: ``wirecal fit`` of 300 simulated rows (three sessions, ``--holdout half``) and
-   of 1,000 rows, and the covariance then the identifiability of a 200,000 × 30 Jacobian
-   (FT30's); each by the code now and, with ``--before CHECKOUT``, by the code there, in
+   of 1,000 rows, the wire prior's MAP fit of 80 readings (a pool plan's), a 3-D tracker
+   calibration of 80 poses, and the covariance then the identifiability of a 200,000 × 30
+   Jacobian (FT30's); each by the code now and, with ``--before CHECKOUT``, by the code there, in
    processes interleaved run by run (:func:`compare_trees`): medians, the ratio now/before
    and whether the two codes' outputs are bit for bit the same.
 
@@ -220,6 +221,27 @@ for rows, holdout in ((300, "half"), (1000, "none")):
     core = fit_table(robot, table, FitOptions(holdout=holdout)).main.core
     figures[f"fit, {rows} rows"] = time.process_time() - cpu
     outputs[f"fit, {rows} rows"] = hashlib.sha256(core.x.tobytes() + core.std.tobytes()).hexdigest()
+from wirecal.solver.fit.calibrate import Data, point_model
+from wirecal.solver.kinematics import tool_position
+from wirecal.solver.tracker.fit import calibrate
+from wirecal.solver.wire_prior import map_fit, wire_layout
+rng = np.random.default_rng(2)
+lo, hi = 0.8 * np.radians(robot.joint_min_deg), 0.8 * np.radians(robot.joint_max_deg)
+q = rng.uniform(lo, hi, (80, robot.n_joints))
+truth, base = robot.model({"th2": 0.05, "a2": 0.6, "d4": 0.3}), point_model(robot)
+p = tool_position(truth, q)
+length = np.linalg.norm(p - [400.0, -300.0, 200.0], axis=1) + rng.normal(0, 0.01, len(q))
+data = Data(q, length + 50.0, np.zeros(len(q), dtype=int), 0.007)
+name = "wire prior: MAP fit, 80 readings"
+cpu = time.process_time()
+wire = map_fit(base, wire_layout(base), data, 0.5)
+figures[name] = time.process_time() - cpu
+outputs[name] = hashlib.sha256(wire.x.tobytes() + repr(wire.sigma_mm).encode()).hexdigest()
+name = "tracker: 3-D calibration, 80 poses"
+cpu = time.process_time()
+tr = calibrate(base, q, p + rng.normal(0, 0.02, p.shape))
+figures[name] = time.process_time() - cpu
+outputs[name] = hashlib.sha256(tr.values.tobytes() + repr(tr.rms_mm).encode()).hexdigest()
 J = np.random.default_rng(0).normal(size=(200_000, 30))
 J[:, 29] = J[:, 28]
 cpu = time.process_time()
