@@ -352,7 +352,18 @@ def _evaluator(
         col = np.append(-problem.d, scale.weight)
         return r, np.column_stack([np.vstack([J, np.zeros(m)]), col])
 
-    return by_point(evaluate, KEPT_POINTS)
+    kept = by_point(evaluate, KEPT_POINTS)
+
+    def copied(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return copies of the kept residuals and Jacobian.
+
+        With a robust loss SciPy's "trf" scales the arrays it is given in place
+        (``scale_for_robust_loss_function``): the kept ones must stay as evaluated.
+        """
+        r, J = kept(x)
+        return r.copy(), J.copy()
+
+    return copied
 
 
 def _minimise(
