@@ -71,7 +71,8 @@ def by_point(evaluate: Callable[[np.ndarray], T], size: int) -> Callable[[np.nda
 
     A point is its bytes: a solver's evaluations of one problem, float vectors of one size.
     A solver asks again for a point it evaluated (its residual, then its Jacobian; the point
-    it stopped at, after steps it tried from there and refused).
+    it stopped at, after steps it tried from there and refused). The kept results are
+    handed out themselves: a caller whose solver changes them in place copies them.
     """
     kept: dict[bytes, T] = {}
 
