@@ -51,10 +51,18 @@ on the IRB 120, with its 0.1 kg tool its rated 3 kg):
 ``--compliance tests/data/payload_ur5e/robot.toml tests/data/payload_viper_s650/robot.toml
 tests/data/payload_abb_irb120/robot.toml``.
 
+``--cost`` (issue 34: the quick test loop's solves) prints instead the CPU of ``solve`` of
+the Viper's paper plan (a simulated log) and of the same log again (the tests solve the same
+logs many times over: the budgets' bounds and factorisations are kept by their inputs), and
+of a UR5e with identified compliances; by the code now and, with ``--before CHECKOUT``, by
+the code there, interleaved run by run, with the ratio and whether the budgets are the same
+bit for bit (:func:`bench_fit.compare_trees`).
+
     python bench/bench_bound.py [--trials 300] [--no-unmodelled]
     python bench/bench_bound.py --compliance ur5e viper_s650 abb_irb120 [--trials 40]
     python bench/bench_bound.py --compliance tests/data/payload_*/robot.toml [--trials 40]
     python bench/bench_bound.py --compliance viper_s650 --drift 1 [--paper-run] [--scale-ppm 500]
+    python bench/bench_bound.py --cost [--before CHECKOUT] [--runs 3]
 """
 
 from __future__ import annotations
@@ -71,6 +79,7 @@ from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from bench_fit import compare_trees  # noqa: E402 - a sibling script's runner
 
 from wirecal.app.coverage import (  # noqa: E402
     Scenario,
@@ -102,7 +111,14 @@ def main() -> None:
     ap.add_argument("--drift", type=float, default=0.0, help="zero drift, mm/h")
     ap.add_argument("--paper-run", action="store_true", help="20 % speed, 3 s settle")
     ap.add_argument("--scale-ppm", type=float, help="the true scale's error (ppm)")
+    ap.add_argument("--cost", action="store_true", help="the CPU of solving (docstring)")
+    ap.add_argument("--before", type=Path, help="a checkout of the code before (--cost)")
+    ap.add_argument("--runs", type=int, default=3, help="runs per tree (--cost)")
     args = ap.parse_args()
+    if args.cost:
+        print(f"CPU of solving (medians of {args.runs} runs, one thread)")
+        compare_trees(COST_CHILD, ["examples"], args.before, args.runs)
+        return
     if args.compliance:
         run = PAPER_RUN if args.paper_run else Scenario().run
         scenario = Scenario(args.drift, run, args.scale_ppm)
@@ -145,6 +161,41 @@ repeats to it and the solver reads the zero readings by it (:mod:`~wirecal.solve
 
 ARMS = ("viper_s650", "ur5e", "abb_irb120")
 """The arms with a shipped plan (the demo's beside each robot file, :func:`plan_beside`)."""
+
+
+COST_CHILD = """
+import hashlib, json, os, sys, time
+for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[var] = "1"
+from dataclasses import replace
+from pathlib import Path
+import numpy as np
+from wirecal.formats.log import parse_log
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.formats.simulated_log import simulate_log
+from wirecal.formats.truth import random_errors
+from wirecal.solver.log.measurements import check_log
+from wirecal.solver.solve import solve
+examples = Path(sys.argv[1])
+figures, outputs = {}, {}
+def timed(name, robot, plan, m):
+    cpu = time.process_time()
+    result = solve(robot, plan, m)
+    figures[name] = time.process_time() - cpu
+    outputs[name] = hashlib.sha256(repr(sorted(
+        (k, b.as_json()) for k, b in result.budgets.items())).encode()).hexdigest()
+for arm, plan_file in (("viper_s650", "paper_plan.toml"), ("ur5e", "plan.toml")):
+    robot = load_robot(examples / arm / "robot.toml")
+    if arm == "ur5e":
+        robot = replace(robot, compliances=("c2", "c3"), repeatability_mm=0.02)
+    plan = load_plan(examples / arm / plan_file, robot)
+    truth = random_errors(robot, 1.0, np.random.default_rng(5))
+    m = check_log(parse_log(simulate_log(robot, plan, truth, seed=5), "s.csv"), plan, robot)
+    timed(f"solve, {arm}", robot, plan, m)
+    timed(f"solve, {arm}, the same log again", robot, plan, m)
+print(json.dumps({"figures": figures, "outputs": outputs}))
+"""
 
 
 def robot_path(arm: str) -> Path:

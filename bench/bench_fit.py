@@ -24,8 +24,17 @@ Three sections, medians over the seeds:
    (github.com/Lizhibing1490183152/RobotCali, no licence: read where it is, never copied
    into the repository): ``--holdout half`` and ``random:0.2`` before and after BIC.
 
+5. **Cost** (``--cost``, issue 34: the quick test loop's fits) — CPU of the fits the tests
+   run most: ``wirecal fit`` of 300 simulated rows (three sessions, ``--holdout half``) and
+   of 1,000 rows, the wire prior's MAP fit of 80 readings (a pool plan's), a 3-D tracker
+   calibration of 80 poses, and the covariance then the identifiability of a 200,000 × 30
+   Jacobian (FT30's); each by the code now and, with ``--before CHECKOUT``, by the code there, in
+   processes interleaved run by run (:func:`compare_trees`): medians, the ratio now/before
+   and whether the two codes' outputs are bit for bit the same.
+
     python bench/bench_fit.py [--seeds N] [--skip-rows | --rows-only] [--before CHECKOUT]
         [--runs R]
+    python bench/bench_fit.py --cost [--before CHECKOUT] [--runs R]
 """
 
 from __future__ import annotations
@@ -194,6 +203,90 @@ def many_rows(before: Path | None, runs: int) -> None:
             print(f"{'':>8}  CPU now/before {cpu[0] / cpu[1]:.2f}; largest shift {shift:.2g} σ")
 
 
+COST_CHILD = """
+import hashlib, json, os, sys, time
+for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[var] = "1"
+from pathlib import Path
+import numpy as np
+from wirecal.formats.robot_file import load_robot
+from wirecal.solver.fit.result import FitOptions, fit_table
+from wirecal.solver.fit.synth import synthetic_table
+from wirecal.solver.identifiability import analyse_jacobian, covariance
+robot = load_robot(Path(sys.argv[1]))
+figures, outputs = {}, {}
+for rows, holdout in ((300, "half"), (1000, "none")):
+    table = synthetic_table(robot, rows, seed=1).table
+    cpu = time.process_time()
+    core = fit_table(robot, table, FitOptions(holdout=holdout)).main.core
+    figures[f"fit, {rows} rows"] = time.process_time() - cpu
+    outputs[f"fit, {rows} rows"] = hashlib.sha256(core.x.tobytes() + core.std.tobytes()).hexdigest()
+from wirecal.solver.fit.calibrate import Data, point_model
+from wirecal.solver.kinematics import tool_position
+from wirecal.solver.tracker.fit import calibrate
+from wirecal.solver.wire_prior import map_fit, wire_layout
+rng = np.random.default_rng(2)
+lo, hi = 0.8 * np.radians(robot.joint_min_deg), 0.8 * np.radians(robot.joint_max_deg)
+q = rng.uniform(lo, hi, (80, robot.n_joints))
+truth, base = robot.model({"th2": 0.05, "a2": 0.6, "d4": 0.3}), point_model(robot)
+p = tool_position(truth, q)
+length = np.linalg.norm(p - [400.0, -300.0, 200.0], axis=1) + rng.normal(0, 0.01, len(q))
+data = Data(q, length + 50.0, np.zeros(len(q), dtype=int), 0.007)
+name = "wire prior: MAP fit, 80 readings"
+cpu = time.process_time()
+wire = map_fit(base, wire_layout(base), data, 0.5)
+figures[name] = time.process_time() - cpu
+outputs[name] = hashlib.sha256(wire.x.tobytes() + repr(wire.sigma_mm).encode()).hexdigest()
+name = "tracker: 3-D calibration, 80 poses"
+cpu = time.process_time()
+tr = calibrate(base, q, p + rng.normal(0, 0.02, p.shape))
+figures[name] = time.process_time() - cpu
+outputs[name] = hashlib.sha256(tr.values.tobytes() + repr(tr.rms_mm).encode()).hexdigest()
+J = np.random.default_rng(0).normal(size=(200_000, 30))
+J[:, 29] = J[:, 28]
+cpu = time.process_time()
+cov = covariance(J, 1.0)[0]
+ident = analyse_jacobian(J, tuple(f"p{k}" for k in range(30)))
+figures["covariance + identifiability, 200,000 x 30"] = time.process_time() - cpu
+outputs["covariance + identifiability, 200,000 x 30"] = hashlib.sha256(
+    cov.tobytes() + repr(ident.combinations).encode()).hexdigest()
+print(json.dumps({"figures": figures, "outputs": outputs}))
+"""
+
+
+def compare_trees(child: str, args: list[str], before: Path | None, runs: int) -> None:
+    """Print the CPU of ``child``'s figures by the code now and ``before``, interleaved.
+
+    ``child`` prints ``{"figures": {name: CPU s}, "outputs": {name: digest}}`` run with
+    ``args`` (paths relative to the tree); each run is a process of its own, the trees
+    alternating so that a change of the machine's load touches both. Medians over ``runs``,
+    the ratio now/before, and whether the outputs are the same.
+    """
+    trees = {"now": NOW} if before is None else {"before": before.resolve(), "now": NOW}
+    got: dict[str, list[dict]] = {name: [] for name in trees}
+    for _ in range(runs):
+        for name, tree in trees.items():
+            cmd = [sys.executable, "-P", "-c", child, *(str(tree / a) for a in args)]
+            env = {**os.environ, "PYTHONPATH": str(tree)}
+            out = subprocess.run(cmd, check=True, capture_output=True, env=env).stdout
+            got[name].append(json.loads(out))
+    print(f"{'figure':<46}" + "".join(f"{t + ' CPU s':>14}" for t in trees), end="")
+    print(f"{'now/before':>12}{'same output':>13}" if before is not None else "")
+    for fig in got["now"][0]["figures"]:
+        med = {t: float(np.median([r["figures"][fig] for r in got[t]])) for t in trees}
+        line = f"{fig:<46}" + "".join(f"{med[t]:>14.3f}" for t in trees)
+        if before is not None:
+            same = got["now"][0]["outputs"][fig] == got["before"][0]["outputs"][fig]
+            line += f"{med['now'] / med['before']:>12.2f}{'yes' if same else 'NO':>13}"
+        print(line)
+
+
+def cost(before: Path | None, runs: int) -> None:
+    """Section 5: the CPU of the quick test loop's fits, now and before (module docstring)."""
+    print(f"\n5. cost: CPU of the tests' fits (viper_s650; medians of {runs} runs, one thread)")
+    compare_trees(COST_CHILD, ["examples/viper_s650/robot.toml"], before, runs)
+
+
 ROBOTCALI_MAP = "j1=q1,j2=q2,j3=q3,j4=q4,j5=q5,j6=q6,length=L,x=x,y=y,z=z"
 
 
@@ -226,8 +319,12 @@ def main() -> None:
     ap.add_argument("--skip-rows", action="store_true", help="leave out section 3")
     ap.add_argument("--rows-only", action="store_true", help="section 3 only")
     ap.add_argument("--before", type=Path, help="a checkout of the code before (section 3)")
-    ap.add_argument("--runs", type=int, default=1, help="runs per tree in section 3")
+    ap.add_argument("--runs", type=int, default=1, help="runs per tree in sections 3 and 5")
+    ap.add_argument("--cost", action="store_true", help="section 5 only")
     args = ap.parse_args()
+    if args.cost:
+        cost(args.before, args.runs)
+        return
     cali = os.environ.get("WIRECAL_ROBOTCALI_DATA")
     if cali:
         robotcali(Path(cali))

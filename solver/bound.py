@@ -46,6 +46,7 @@ import numpy as np
 from scipy.special import ndtri
 
 from wirecal.solver.box_gaussian import BoxGaussian
+from wirecal.solver.memo import Kept, digest
 
 BOUND_PROBABILITY = 0.95
 """The probability the bound holds with."""
@@ -226,8 +227,21 @@ def bound_mm(
 
     Weighted draws (a box-restricted term) give the weighted quantile: the least E whose
     draws at or below it weigh ``probability``. Single precision for the products (1e-7
-    beside the draws' 1 %, and half the time).
+    beside the draws' 1 %, and half the time). Kept by its inputs' contents
+    (:mod:`~wirecal.solver.memo`): a bound asked for again is not drawn again.
     """
+    key = digest(Jp, model, probability, draws, seed)
+    return _BOUNDS.get(key, lambda: _bound_mm(Jp, model, probability, draws, seed))
+
+
+_BOUNDS: Kept[float] = Kept(64)
+"""The last bounds (a float each)."""
+
+
+def _bound_mm(
+    Jp: np.ndarray, model: ErrorModel, probability: float, draws: int, seed: int
+) -> float:
+    """Return :func:`bound_mm` computed."""
     de, weights = draws_of(model, draws, seed)
     de = de.astype(np.float32)
     q = Jp.shape[0]

@@ -65,6 +65,7 @@ from wirecal.solver.box_gaussian import BoxGaussian
 from wirecal.solver.compliance import COMPLIANCE_RANGE_URAD_PER_NM
 from wirecal.solver.identifiability import RANK_RTOL, covariance
 from wirecal.solver.kinematics import Model, tool_jacobian
+from wirecal.solver.memo import Kept, digest
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.scale import ARM_PPM_PER_K, PPM, Drift
 
@@ -262,12 +263,31 @@ def budget(
     if prior is not None:
         parts["prior"] = ErrorModel(prior.share, np.zeros(len(M)), np.zeros((0, len(M))))
     errors = joined(list(parts.values()))
-    _, Jp = tool_jacobian(model, q_ws, names)
+    Jp = _workspace_jacobian(model, q_ws, names)
     errs = {k: rms_tool_error(Jp, e.second_moment()).mean_mm for k, e in parts.items()}
     if compliance is None:
         total = rms_tool_error(Jp, errors.second_moment())
         return Budget(errs, total.mean_mm, total.max_mm, _notes(src), bound_mm(Jp, errors))
     return _with_compliance(model, q_ws, (Jp, J, M), compliance, src, errors, errs)
+
+
+_WORKSPACE: Kept[np.ndarray] = Kept(8)
+"""The last tool-point Jacobians over a workspace (Q, 3, m; read-only)."""
+
+
+def _workspace_jacobian(model: Model, q_ws: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """Return ∂p/∂e (Q, 3, m) of ``names`` over the workspace ``q_ws``, kept by its inputs.
+
+    The two methods' budgets of a solve without compliances take the same one, and so do
+    the budgets of the same log solved again (:mod:`~wirecal.solver.memo`).
+    """
+
+    def computed() -> np.ndarray:
+        Jp = tool_jacobian(model, q_ws, names)[1]
+        Jp.setflags(write=False)
+        return Jp
+
+    return _WORKSPACE.get(digest(model, q_ws, tuple(names)), computed)
 
 
 def _term_errors(M: np.ndarray, noise: np.ndarray, src: Sources) -> dict[str, ErrorModel]:
@@ -380,7 +400,7 @@ def compliance_errors(
     """
     Jp, J, M = maps
     k = len(c.names)
-    _, Ju = tool_jacobian(model, q_ws, c.names)
+    Ju = _workspace_jacobian(model, q_ws, c.names)
     V = np.vstack([M @ c.wire, -np.eye(k)])  # (m + k, k)
     return np.concatenate([Jp, Ju], axis=2), truncated_model(V.T, compliance_likelihood(J, c, src))
 

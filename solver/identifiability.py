@@ -15,6 +15,7 @@ from typing import cast
 import numpy as np
 
 from wirecal.solver.kinematics import Model
+from wirecal.solver.memo import Kept, digest
 from wirecal.solver.sensitivity import sensitivity
 
 BASE_PARAMETERS = frozenset({"al0", "a0", "th1", "d1"})
@@ -100,9 +101,22 @@ def right_svd(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     LAPACK's SVD (gesdd) of a J that tall starts with that very factorisation, so they are
     the same numbers (``tests/test_identifiability.py``).
     """
+    J = np.asarray(J)
+    return _FACTORED.get(digest(J), lambda: _right_svd(J))
+
+
+_FACTORED: Kept[tuple[np.ndarray, np.ndarray]] = Kept(16)
+"""The last factorisations: a Jacobian is often factored again (its covariance, then its
+rank or null space; a budget's check, then its covariance), the same numbers each time."""
+
+
+def _right_svd(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return :func:`right_svd` of ``J`` computed, read-only (the results are kept)."""
     if J.shape[0] >= max(TALL_ROWS, 2 * J.shape[1]):
         J = cast(np.ndarray, np.linalg.qr(J, mode="r"))  # R alone (the stubs say a pair)
     _, s, vt = np.linalg.svd(J, full_matrices=J.shape[0] < J.shape[1])
+    s.setflags(write=False)
+    vt.setflags(write=False)
     return s, vt
 
 
@@ -159,7 +173,7 @@ def analyse_jacobian(J: np.ndarray, names: tuple[str, ...]) -> Identifiability:
     rest = [k for k in range(len(names)) if k not in alone]
     combos: list[tuple[tuple[str, float], ...]] = []
     if rest and rank < len(rest):
-        sr, vt = right_svd(J[:, rest])
+        sr, vt = right_svd(J if len(rest) == J.shape[1] else J[:, rest])  # J: its kept factors
         sr = np.concatenate([sr, np.zeros(len(rest) - sr.size)])
         null = vt[sr <= tol]
         for row in _rref(null):

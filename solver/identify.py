@@ -23,6 +23,7 @@ import numpy as np
 from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.identifiability import covariance, std_and_correlation
 from wirecal.solver.kinematics import Model, loaded, with_errors
+from wirecal.solver.memo import by_point
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.scale import PPM
@@ -325,38 +326,44 @@ def joint(
     )
 
 
+KEPT_POINTS = 4
+"""Points whose residuals and Jacobian :func:`joint`'s evaluator keeps (the solution is
+often one the solver evaluated a step or two before it stopped)."""
+
+
 def _evaluator(
     problem: Problem, scale: ScalePrior | None
 ) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
     """Return x ↦ (residuals, Jacobian) of :func:`joint`'s problem (internal units).
 
     One pass over the chain gives both, kept for the same x (the solver asks for the
-    residuals and the Jacobian of a point one after the other).
+    residuals and the Jacobian of a point one after the other, and a point it moved from
+    again: :data:`KEPT_POINTS` of them are kept, :func:`~wirecal.solver.memo.by_point`).
     """
-    last: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
     m = len(problem.names)
 
     def evaluate(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Residuals and Jacobian from one pass over the chain, reused for the same x."""
-        key = x.tobytes()
-        if key not in last:
-            d, J = wire_jacobian(
-                problem.at(x[:m]),
-                problem.q,
-                problem.q0,
-                problem.names,
-            )
-            last.clear()
-            if scale is None:
-                last[key] = (d - problem.d, J)
-            else:
-                s = x[m]
-                r = np.append(d - (1 + s) * problem.d, scale.weight * s)
-                col = np.append(-problem.d, scale.weight)
-                last[key] = (r, np.column_stack([np.vstack([J, np.zeros(m)]), col]))
-        return last[key]
+        """Residuals and Jacobian from one pass over the chain."""
+        d, J = wire_jacobian(problem.at(x[:m]), problem.q, problem.q0, problem.names)
+        if scale is None:
+            return d - problem.d, J
+        s = x[m]
+        r = np.append(d - (1 + s) * problem.d, scale.weight * s)
+        col = np.append(-problem.d, scale.weight)
+        return r, np.column_stack([np.vstack([J, np.zeros(m)]), col])
 
-    return evaluate
+    kept = by_point(evaluate, KEPT_POINTS)
+
+    def copied(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return copies of the kept residuals and Jacobian.
+
+        With a robust loss SciPy's "trf" scales the arrays it is given in place
+        (``scale_for_robust_loss_function``): the kept ones must stay as evaluated.
+        """
+        r, J = kept(x)
+        return r.copy(), J.copy()
+
+    return copied
 
 
 def _minimise(

@@ -45,12 +45,17 @@ from wirecal.solver.compliance import PRIOR_COMPLIANCE_URAD_PER_NM
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import Pulley
 from wirecal.solver.fit.calibrate import Data, candidates, nominal_floor, point_model, start
-from wirecal.solver.fit.model import Layout, lengths, lengths_and_jacobian, model_of
+from wirecal.solver.fit.model import Layout, lengths_and_jacobian, model_of
 from wirecal.solver.fit.solver import levenberg_marquardt
 from wirecal.solver.identifiability import RANK_RTOL
 from wirecal.solver.kinematics import Model
+from wirecal.solver.memo import by_point
 from wirecal.solver.params import TOOL_NAMES, ErrorSet
 from wirecal.solver.robot import Robot
+
+KEPT_POINTS = 8
+"""Points whose lengths and Jacobian a fit keeps: the solver's end among the steps it
+tried after it (:func:`~wirecal.solver.memo.by_point`)."""
 
 SIGMA_PASSES = 3
 """Refits with the residual's σ: the first from the starting σ, each next from the last."""
@@ -114,21 +119,22 @@ def _map_at(base: Model, layout: Layout, data: Data, prior: float) -> tuple[Wire
     q, length, session = data.q_rad, data.length_mm, data.session
     x, sigma = start(base, layout, data), prior
     robust = np.ones(len(length))  # the first pass: least squares
+    at = by_point(lambda v: lengths_and_jacobian(base, layout, v, q, session), KEPT_POINTS)
     for _ in range(SIGMA_PASSES):
         w = sigma * weight
 
         def evaluate(
             v: np.ndarray, w: np.ndarray = w, robust: np.ndarray = robust
         ) -> tuple[np.ndarray, np.ndarray]:
-            model_mm, jac = lengths_and_jacobian(base, layout, v, q, session)
+            model_mm, jac = at(v)
             r, j = robust * (model_mm - length), robust[:, None] * jac
             return np.concatenate([r, w * v]), np.vstack([j, np.diag(w)])
 
         x = levenberg_marquardt(evaluate, x)
-        r = lengths(base, layout, x, q, session) - length
+        r = at(x)[0] - length  # the solver's end: kept, as the next pass's start
         sigma = max(float(np.sqrt(np.mean(r**2))), data.floor_mm, 1e-9)
         robust = soft_l1_weight(r, ROBUST_SCALE * sigma)
-    H, scale = _scaled_hessian(lengths_and_jacobian(base, layout, x, q, session)[1] / sigma, weight)
+    H, scale = _scaled_hessian(at(x)[1] / sigma, weight)
     has = np.isfinite(sd)
     evidence = (
         -len(r) / 2

@@ -55,7 +55,7 @@ from wirecal.solver.fit.model import (
 )
 from wirecal.solver.fit.select import bic_eliminated
 from wirecal.solver.fit.sessions import change_points, noise_sigma, place, robust_sigma
-from wirecal.solver.fit.solver import SolverLoss, levenberg_marquardt
+from wirecal.solver.fit.solver import SolverLoss, minimised
 from wirecal.solver.identifiability import (
     Identifiability,
     analyse_jacobian,
@@ -247,6 +247,25 @@ def solve(
     equations, k × k, instead of a factorisation of the N × k Jacobian); each point's
     lengths and Jacobian are evaluated together.
     """
+    return _solved(base, layout, x0, data, rows, loss, f_scale, free)[0]
+
+
+def _solved(
+    base: Model,
+    layout: Layout,
+    x0: np.ndarray,
+    data: Data,
+    rows: np.ndarray,
+    loss: SolverLoss,
+    f_scale: float,
+    free: np.ndarray | None = None,
+    start: tuple[np.ndarray, np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return :func:`solve`'s ``x`` with the residual and ∂L/∂x (``free``'s) over ``rows`` there.
+
+    ``start``: the residual and ∂L/∂x (every column) over ``rows`` at ``x0`` when the caller
+    has them (the solver does not evaluate them again).
+    """
     free = np.ones(len(x0), dtype=bool) if free is None else free
     q, length, session = data.q_rad[rows], data.length_mm[rows], data.session[rows]
 
@@ -259,7 +278,17 @@ def solve(
         model, J = lengths_and_jacobian(base, layout, full(xf), q, session)
         return model - length, J[:, free]
 
-    return full(levenberg_marquardt(fun, x0[free], loss=loss, f_scale=f_scale))
+    at = None if start is None else (start[0], start[1][:, free])
+    xf, r, J = minimised(fun, x0[free], loss=loss, f_scale=f_scale, start=at)
+    return full(xf), r, J
+
+
+def _every_row(
+    base: Model, layout: Layout, x: np.ndarray, data: Data
+) -> tuple[np.ndarray, np.ndarray]:
+    """Return the residual, model − measured (N,), and ∂L/∂x (N, k) of every row at ``x``."""
+    model, J = lengths_and_jacobian(base, layout, x, data.q_rad, data.session)
+    return model - data.length_mm, J
 
 
 def _implausible(layout: Layout, x: np.ndarray) -> list[str]:
@@ -313,8 +342,7 @@ def evaluate(base: Model, layout: Layout, x: np.ndarray, data: Data, rows: np.nd
     R (k × k) has the Jacobian's singular values and right vectors: the SVD of the
     covariance runs on k rows instead of N.
     """
-    model, J = lengths_and_jacobian(base, layout, x, data.q_rad, data.session)
-    r = model - data.length_mm
+    r, J = _every_row(base, layout, x, data)
     sigma = float(np.sqrt(np.sum(r[rows] ** 2) / max(len(rows) - len(x), 1)))
     J = J[rows]
     R = np.linalg.qr(J, mode="r") if len(rows) > len(x) else J
@@ -380,15 +408,17 @@ def robust_pass(base: Model, layout: Layout, x0: np.ndarray, data: Data) -> Pass
     """Soft-L1 fit (f_scale: the residual's robust σ), then the rows beyond 5σ rejected.
 
     The first of the two solves runs on :func:`subsample`'s rows: it travels from the start
-    (the most iterations), the second, on every row, from near its end.
+    (the most iterations), the second, on every row, from near its end. Each solve starts
+    from the residual and ∂L/∂x of every row its start was evaluated at (the first solve's
+    end, when it ran on every row), and the pass's residual is the second's at its end.
     """
     n = len(data.length_mm)
     x = x0
+    r, J = _every_row(base, layout, x, data)
     for rows in (subsample(n), np.arange(n)):  # the second with the σ of the first's residual
-        r = residual(base, layout, x, data)
         sigma = max(robust_sigma(r), data.floor_mm)
-        x = solve(base, layout, x, data, rows, loss="soft_l1", f_scale=sigma)
-    r = residual(base, layout, x, data)
+        x, *end = _solved(base, layout, x, data, rows, "soft_l1", sigma, start=(r[rows], J[rows]))
+        r, J = end if rows.size == n else _every_row(base, layout, x, data)
     sigma = max(robust_sigma(r), 1e-9)
     inliers = np.abs(r - np.median(r)) <= REJECT_SIGMA * sigma
     if data.excluded is not None:
@@ -413,7 +443,8 @@ def _session_starts(ps: Pass, data: Data, values: np.ndarray | None = None) -> t
     u = offset_sequence(ps.layout, ps.x, ps.residual_mm, data) if values is None else values
     bad = data.excluded if data.excluded is not None and not data.excluded.all() else None
     kept = np.arange(u.size) if bad is None else np.flatnonzero(~bad)
-    found = place(u[kept], (0, *change_points(u[kept])), noise_sigma(u[kept]))
+    sigma = noise_sigma(u[kept])  # the search's σ and the placing's: found once
+    found = place(u[kept], (0, *change_points(u[kept], sigma)), sigma)
     return (0, *(int(kept[s]) for s in found[1:]))
 
 

@@ -52,9 +52,14 @@ def _weights(
     return cost, d1, w
 
 
-def _cost(r: np.ndarray, loss: SolverLoss, f_scale: float) -> float:
-    """Return the cost ½ f² Σ ρ((r/f)²) of residuals ``r``."""
-    return _weights(r, loss, f_scale)[0]
+def _normal_equations(
+    r: np.ndarray, J: np.ndarray, d1: np.ndarray, w: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Return H = Jᵀ W J, g = Jᵀ ρ′ r, the columns' scales √diag H and H scaled by them."""
+    H = J.T @ (w[:, None] * J)
+    g = J.T @ (d1 * r)
+    scale = np.sqrt(np.maximum(np.diag(H), np.finfo(float).tiny))
+    return H, g, scale, H / np.outer(scale, scale)
 
 
 def _negligible(predicted: float, cost: float, dof: int) -> bool:
@@ -74,28 +79,42 @@ def levenberg_marquardt(
     ``evaluate(x)`` returns the residual r (N,) and ∂r/∂x (N, k) at ``x``; a point where
     either is not finite is a failed step (a start there: ``ValueError``).
     """
+    return minimised(evaluate, x0, loss=loss, f_scale=f_scale)[0]
+
+
+def minimised(
+    evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+    x0: np.ndarray,
+    *,
+    loss: SolverLoss = "linear",
+    f_scale: float = 1.0,
+    start: tuple[np.ndarray, np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return :func:`levenberg_marquardt`'s ``x`` with the residual and ∂r/∂x there.
+
+    ``start``: ``evaluate(x0)`` when the caller has it (not evaluated again).
+    """
     x = np.asarray(x0, dtype=float).copy()
-    r, J = evaluate(x)
-    cost = _cost(r, loss, f_scale)
+    r, J = evaluate(x) if start is None else start
+    cost, d1, w = _weights(r, loss, f_scale)
     if not (np.isfinite(cost) and np.all(np.isfinite(J))):
         raise ValueError("the residual or its Jacobian is not finite at the start")  # as scipy
     lam = 0.0  # a good start: Gauss–Newton first, damped only when a step fails
+    normal = None  # H, g, the scales and the scaled H at x: kept while steps fail
     for _ in range(MAX_EVALUATIONS):
-        _, d1, w = _weights(r, loss, f_scale)
-        H = J.T @ (w[:, None] * J)
-        g = J.T @ (d1 * r)
-        scale = np.sqrt(np.maximum(np.diag(H), np.finfo(float).tiny))
-        Hs = H / np.outer(scale, scale)
+        if normal is None:
+            normal = _normal_equations(r, J, d1, w)
+        H, g, scale, Hs = normal
         step = -np.linalg.lstsq(Hs + lam * np.eye(len(x)), g / scale, rcond=None)[0] / scale
         predicted = -(g @ step + 0.5 * step @ H @ step)
         r_new, J_new = evaluate(x + step)
-        new_cost = _cost(r_new, loss, f_scale)
+        new_cost, d1_new, w_new = _weights(r_new, loss, f_scale)
         gain = cost - new_cost > 0.25 * predicted > 0 and np.all(np.isfinite(J_new))
         if gain:
-            x, r, J, cost = x + step, r_new, J_new, new_cost
+            x, r, J, cost, d1, w, normal = x + step, r_new, J_new, new_cost, d1_new, w_new, None
             lam = lam / 10 if lam > 1e-6 else 0.0
         if _negligible(predicted, cost, len(r) - len(x)):
             break  # converged, or at the minimum to rounding: no step can lower the cost
         if not gain:
             lam = max(10 * lam, 1e-3)
-    return x
+    return x, r, J

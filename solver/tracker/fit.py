@@ -33,7 +33,7 @@ from scipy.spatial.transform import Rotation
 
 from wirecal.solver import params as P
 from wirecal.solver.fit.calibrate import candidates
-from wirecal.solver.fit.solver import levenberg_marquardt
+from wirecal.solver.fit.solver import minimised
 from wirecal.solver.identifiability import select_columns
 from wirecal.solver.kinematics import Model, tool_jacobian, tool_position, with_errors
 from wirecal.solver.verdict import POORLY_IDENTIFIED
@@ -141,10 +141,9 @@ def _least_squares(
     def evaluate(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return residual_and_jacobian(base, q_rad, xyz_mm, names, rotation0, v)
 
-    v = levenberg_marquardt(evaluate, v0)
+    v, r, _ = minimised(evaluate, v0)  # r: the residual at v, as the solver left it
     m = len(names)
     rotation = Rotation.from_rotvec(v[m : m + 3]).as_matrix() @ rotation0
-    r = evaluate(v)[0]
     model = with_errors(base, names, v[:m])
     return TrackerFit(names, v[:m], model, rotation, v[m + 3 :], float(np.sqrt(r @ r / len(q_rad))))
 

@@ -1,0 +1,94 @@
+"""Results kept by their inputs' contents (issue 34): the same inputs, the same numbers, once."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from wirecal.solver import bound, budget, identifiability
+from wirecal.solver.bound import ErrorModel, bound_mm
+from wirecal.solver.kinematics import tool_jacobian
+from wirecal.solver.memo import Kept, digest
+
+
+@dataclass(frozen=True)
+class _Pair:
+    a: np.ndarray
+    b: float | None
+
+
+def test_the_digest_tells_apart_what_a_result_may_depend_on():
+    x = np.arange(6.0).reshape(2, 3)
+    one_bit = x.copy()
+    one_bit.view(np.uint64)[1, 2] ^= 1  # the least bit of one value
+    keys = [
+        digest(x),
+        digest(x.reshape(3, 2)),  # the same bytes, another shape
+        digest(x.astype(np.float32)),
+        digest(one_bit),
+        digest(x, 0.95),
+        digest(x, 0.9500000000000001),  # the next float
+        digest(x, None),
+        digest(x, 0),
+        digest(_Pair(x, None)),
+        digest(_Pair(x, 1.0)),
+        digest((x,)),
+        digest(np.array(5.0)),  # 0-d
+        digest(np.array([5.0])),
+    ]
+    assert len(set(keys)) == len(keys)
+    assert digest(x) == digest(x.copy()) == digest(np.asfortranarray(x))
+    assert digest(_Pair(x, 1.0)) == digest(_Pair(x.copy(), 1.0))
+    with pytest.raises(TypeError, match="no digest of a dict"):
+        digest({"a": 1})
+    with pytest.raises(TypeError, match="no digest of a ndarray"):  # of objects: addresses
+        digest(np.array([1.0, None]))
+
+
+def test_a_result_is_computed_once_and_the_store_stays_bounded():
+    kept: Kept[float] = Kept(2)
+    calls = []
+
+    def compute(v: float):
+        return lambda: calls.append(v) or v
+
+    assert [kept.get(b"a", compute(1.0)), kept.get(b"a", compute(2.0))] == [1.0, 1.0]
+    assert calls == [1.0]
+    kept.get(b"b", compute(3.0))
+    kept.get(b"c", compute(4.0))  # full: started afresh
+    assert kept.get(b"a", compute(5.0)) == 5.0
+    assert calls == [1.0, 3.0, 4.0, 5.0]
+
+
+def test_a_bound_asked_again_is_the_same_number_without_drawing_again(monkeypatch):
+    rng = np.random.default_rng(3)
+    Jp = rng.normal(size=(50, 3, 4))
+    model = ErrorModel(np.diag([1e-4, 2e-4, 1e-4, 3e-4]), np.full(4, 1e-3), np.zeros((0, 4)))
+    first = bound_mm(Jp, model)
+
+    def drawn(*args):
+        raise RuntimeError("drawn again")
+
+    monkeypatch.setattr(bound, "draws_of", drawn)
+    assert bound_mm(Jp.copy(), model) == first  # kept: not drawn again
+    with pytest.raises(RuntimeError, match="drawn again"):  # another model is drawn
+        bound_mm(Jp, ErrorModel(model.cov, model.bias * 2, model.edges))
+
+
+def test_kept_factors_and_jacobians_are_read_only_and_the_same_numbers(viper):
+    J = np.random.default_rng(4).normal(size=(20, 5))
+    s, vt = identifiability.right_svd(J)
+    again = identifiability.right_svd(J.copy())
+    assert again[0] is s
+    assert again[1] is vt
+    assert np.array_equal(s, np.linalg.svd(J, full_matrices=False)[1])  # computed once
+    q = np.random.default_rng(5).uniform(-2, 2, size=(30, viper.n_joints))
+    names = ("th2", "a2", "d3")
+    Jp = budget._workspace_jacobian(viper.nominal, q, names)
+    assert budget._workspace_jacobian(viper.nominal, q.copy(), names) is Jp
+    assert np.array_equal(Jp, tool_jacobian(viper.nominal, q, names)[1])
+    for a in (s, vt, Jp):
+        with pytest.raises(ValueError, match="read-only"):
+            a.flat[0] = 1.0
