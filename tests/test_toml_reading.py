@@ -3,6 +3,8 @@ bytes are read anew; a refusal stays a refusal. The UTF-16 check against its def
 
 from __future__ import annotations
 
+import math
+
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -89,3 +91,57 @@ def test_is_utf16_at_nine_of_ten_counts_every_pair_up_to_the_2048th(nul_first, n
     assert fileio.is_utf16(raw + b"a") is utf16  # an odd byte at the end is not a pair
     head = pair * 1844 + plain * 204  # 2048 pairs, 1844 (90.04 %) with a NUL
     assert fileio.is_utf16(head + plain * 5000)  # the pairs after them are not read
+
+
+BOUND = st.none() | st.floats(-1e3, 1e3)
+
+
+@given(
+    st.lists(
+        st.floats()
+        | st.integers(-(2**64), 2**64)
+        | st.booleans()
+        | st.sampled_from(["1", None, [1.0], math.nan, math.inf, -math.inf]),
+        max_size=8,
+    ),
+    st.data(),
+)
+def test_a_row_is_passed_at_once_only_when_each_value_passes_its_own_check(row, data):
+    """The fast pass over a row of numbers agrees with the per-value rule of every file."""
+    from wirecal.formats import toml_fields
+
+    each_bound = data.draw(st.booleans())
+    lo, hi = (
+        data.draw(st.lists(BOUND, min_size=len(row), max_size=len(row)) if each_bound else BOUND)
+        for _ in range(2)
+    )
+
+    def at(b, k):
+        return b[k] if isinstance(b, list) else b
+
+    passes = [
+        toml_fields._number_problem(v, at(lo, k), at(hi, k)) is None for k, v in enumerate(row)
+    ]
+    plain = all(type(v) in (int, float) for v in row)
+    assert toml_fields._all_within(row, lo, hi) == (all(passes) and plain)
+
+
+@pytest.mark.parametrize(
+    ("row", "lo", "hi", "fast"),
+    [
+        ([1.0, 2], 1.0, 2.0, True),  # on the bounds
+        ([1, 2.5], [1, 2], [1, 3], True),
+        ([1, 2.5], [1, 2], [1, 2], False),
+        ([1.0], None, 0.5, False),
+        ([0.0], 0.5, None, False),
+        ([math.nan], None, None, False),
+        ([math.inf], None, None, False),
+        ([-math.inf], None, None, False),
+        ([True], None, None, False),  # a boolean is never a number
+        ([1.0, 1.0], [0.0], None, False),  # fewer bounds than values: the per-value check
+    ],
+)
+def test_a_row_is_passed_at_once_on_its_bounds_and_never_past_them(row, lo, hi, fast):
+    from wirecal.formats import toml_fields
+
+    assert toml_fields._all_within(row, lo, hi) is fast
