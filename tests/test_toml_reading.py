@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.formats import fileio
@@ -68,18 +68,17 @@ def _utf16_by_definition(raw: bytes) -> bool:
     return any(sum(p[k] == 0 for p in pairs) / len(pairs) >= 0.9 for k in (0, 1))
 
 
+@settings(max_examples=50)
 @given(
     st.lists(
         st.sampled_from([b"\x00", b"a", b"\xff", b"\xfe", b"\x00a", b"a\x00", b"\x00\x00"]),
         max_size=40,
     ).map(b"".join)
-    | st.binary(max_size=64),
-    st.integers(0, 4200),
+    | st.binary(max_size=64)
 )
-def test_is_utf16_is_its_definition(raw, padding):
+def test_is_utf16_is_its_definition(raw):
+    """Short texts; the 2048 pairs read of a long one: the test below."""
     assert fileio.is_utf16(raw) == _utf16_by_definition(raw)
-    long = raw + b"a\x00" * padding
-    assert fileio.is_utf16(long) == _utf16_by_definition(long)
 
 
 @pytest.mark.parametrize("nul_first", [True, False])
@@ -106,6 +105,7 @@ BOUND = st.none() | st.floats(-1e3, 1e3)
     ),
     st.data(),
 )
+@settings(max_examples=50)
 def test_a_row_is_passed_at_once_only_when_each_value_passes_its_own_check(row, data):
     """The fast pass over a row of numbers agrees with the per-value rule of every file."""
     from wirecal.formats import toml_fields
