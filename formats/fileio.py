@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import errno
 import os
+import pickle
 import re
 import shutil
 import signal
@@ -297,6 +298,19 @@ _TOML_SKIP = re.compile(
 )
 """Strings and comments of a TOML text: their brackets do not nest anything."""
 
+_BRACKET_STEP = np.zeros(256, dtype=np.int64)
+_BRACKET_STEP[[ord("["), ord("{")]] = 1
+_BRACKET_STEP[[ord("]"), ord("}")]] = -1
+"""Each byte's step in the nesting: +1 opens an array or table, -1 closes one."""
+
+_PARSED_KEPT = 64
+"""How many TOML inputs :func:`read_toml` keeps parsed (the most recently read)."""
+_PARSED_MAX_BYTES = 2**16
+"""Largest input kept parsed: a robot file or plan is a few kB."""
+_PARSED: dict[bytes, bytes] = {}
+"""Input bytes -> its parsed document, pickled: read again, the same bytes parse the same."""
+_PARSED_LOCK = threading.Lock()
+
 
 def read_input(path: str | Path, what: str, max_bytes: int = MAX_INPUT_BYTES) -> tuple[bytes, str]:
     """Return an input's bytes (at most ``max_bytes``) and its name for messages.
@@ -334,10 +348,11 @@ def is_utf16(raw: bytes) -> bool:
     """
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
         return True
-    head = np.frombuffer(raw[:4096], dtype=np.uint8)[: len(raw[:4096]) // 2 * 2]
-    if head.size < 2:
+    pairs = len(raw[:4096]) // 2
+    if pairs == 0:
         return False
-    return bool(max(np.mean(head[1::2] == 0), np.mean(head[0::2] == 0)) >= 0.9)
+    head = raw[: 2 * pairs]
+    return max(head[1::2].count(0) / pairs, head[0::2].count(0) / pairs) >= 0.9
 
 
 def refuse_utf16(raw: bytes, source: str, what: str) -> None:
@@ -364,17 +379,35 @@ def decode_text(raw: bytes, source: str, what: str) -> str:
 def toml_depth(text: str) -> int:
     """Return how deep the arrays and tables of a TOML text nest (strings, comments aside)."""
     data = np.frombuffer(_TOML_SKIP.sub("", text).encode("utf-8"), dtype=np.uint8)
-    step = np.isin(data, (ord("["), ord("{"))).astype(np.int64)
-    step -= np.isin(data, (ord("]"), ord("}")))
-    return int(np.cumsum(step).max(initial=0))
+    return int(np.cumsum(_BRACKET_STEP[data]).max(initial=0))
 
 
 def read_toml(path: str | Path, what: str) -> dict[str, Any]:
     """Parse a TOML input file; any problem is a :class:`WirecalError` naming the file.
 
     Bounded: at most :data:`MAX_INPUT_BYTES`, nested at most :data:`MAX_TOML_DEPTH` deep.
+    Bytes read before and accepted are not parsed again (the commands of one process, the
+    tests', read the same robot file and plan many times): their document is a fresh copy
+    of the one parsed then, as every check and the parse depend on the bytes alone.
     """
     raw, source = read_input(path, what)
+    with _PARSED_LOCK:
+        kept = _PARSED.pop(raw, None)
+        if kept is not None:
+            _PARSED[raw] = kept  # the most recently read last: the first is dropped first
+    if kept is not None:
+        return pickle.loads(kept)
+    document = _parse_toml(raw, source, what)
+    if len(raw) <= _PARSED_MAX_BYTES:
+        with _PARSED_LOCK:
+            _PARSED[raw] = pickle.dumps(document, pickle.HIGHEST_PROTOCOL)
+            while len(_PARSED) > _PARSED_KEPT:
+                del _PARSED[next(iter(_PARSED))]
+    return document
+
+
+def _parse_toml(raw: bytes, source: str, what: str) -> dict[str, Any]:
+    """Return the TOML document of an input's bytes, refusing what :func:`read_toml` does."""
     text = decode_text(raw, source, what)
     text = text.removeprefix("\ufeff")  # a byte-order mark some editors write
     depth = toml_depth(text)

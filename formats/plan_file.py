@@ -247,8 +247,11 @@ def _check_payload(st: Table, kg: float, robot: Robot) -> None:
 
 def _check_limits(q: np.ndarray, robot: Robot, where: str, table: Table) -> None:
     lo, hi = robot.joint_min_deg, robot.joint_max_deg
+    beyond = (q < lo) | (q > hi)
+    if not beyond.any():
+        return
     for i, row in enumerate(q, 1):
-        for j in np.flatnonzero((row < lo) | (row > hi)):
+        for j in np.flatnonzero(beyond[i - 1]):
             label = where if q.shape[0] == 1 and where == "theta0_deg" else f"{where}[{i}]"
             table.problems.add(
                 label, f"joint {j + 1} = {row[j]:g} deg is beyond its limits [{lo[j]:g}, {hi[j]:g}]"

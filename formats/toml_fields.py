@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import datetime
 import difflib
+import itertools
 import math
 from collections.abc import Iterable, Sequence
 from typing import Any, TypeVar
@@ -133,6 +134,29 @@ def _number_problem(
     return (
         f"is {show(x)}; give {_expectation(lo, hi, integer=integer, above=above, unit=unit)}{hint}"
     )
+
+
+def _all_within(
+    x: list, lo: float | Sequence[float] | None, hi: float | Sequence[float] | None
+) -> bool:
+    """Whether every value of ``x`` is a finite number within its bounds, told fast.
+
+    ``True`` only for finite floats and ints (never booleans) within the bounds, the values
+    :func:`_number_problem` has nothing to say about; ``False`` says only that the values
+    need that per-value check, which names each problem (a plan's row passes here in a
+    tenth of its time).
+    """
+    if any(isinstance(b, Sequence) and len(b) < len(x) for b in (lo, hi)):
+        return False
+    los = lo if isinstance(lo, Sequence) else itertools.repeat(lo)
+    his = hi if isinstance(hi, Sequence) else itertools.repeat(hi)
+    for v, low, high in zip(x, los, his, strict=False):
+        kind = type(v)
+        if kind is not int and (kind is not float or not math.isfinite(v)):
+            return False
+        if (low is not None and v < low) or (high is not None and v > high):
+            return False
+    return True
 
 
 def _bound(b: float | Sequence[float] | None, k: int) -> float | None:
@@ -316,6 +340,8 @@ class Table:
         if length is not None and len(x) != length:
             self.add(key, f"has {len(x)} values; expected {length} {labels}".rstrip())
             return None
+        if not integer and above is None and _all_within(x, lo, hi):
+            return np.asarray(x, dtype=float)
         ok = True
         for k, v in enumerate(x):
             problem = _number_problem(

@@ -766,15 +766,26 @@ PATCH_EDITS = {
 }
 
 
-@pytest.mark.parametrize("case", PATCH_EDITS)
-def test_an_edited_patch_is_refused_naming_the_edit(tmp_path, partial_patch, case):
-    """The patch had no checksum: each of these edits passed gen --patch with exit 0."""
+@pytest.fixture(scope="module")
+def overridden_patch(tmp_path_factory, partial_patch) -> str:
+    """The partial run's patch marked overridden and sealed, as wirecal writes it: gen takes it."""
     from wirecal.formats.patch_digest import seal
 
     text = partial_patch[1].read_text()
     overridden = seal(
         re.sub(r"^plausibility = .*$", 'plausibility = "overridden: x"', text, count=1, flags=re.M)
     )
+    folder = tmp_path_factory.mktemp("sealed")
+    sealed = folder / "sealed.toml"  # the same patch as wirecal wrote it is taken
+    sealed.write_text(overridden)
+    assert invoke("gen", ROBOT, PLAN, "-o", folder / "ok", "--patch", sealed).exit_code == 0
+    return overridden
+
+
+@pytest.mark.parametrize("case", PATCH_EDITS)
+def test_an_edited_patch_is_refused_naming_the_edit(tmp_path, overridden_patch, case):
+    """The patch had no checksum: each of these edits passed gen --patch with exit 0."""
+    overridden = overridden_patch
     edit, message = PATCH_EDITS[case]
     edited = tmp_path / "patch.toml"
     edited.write_text(edit(overridden))
@@ -785,9 +796,6 @@ def test_an_edited_patch_is_refused_naming_the_edit(tmp_path, partial_patch, cas
     assert f"error: {edited}: {message}" in r.output
     assert "write it again with wirecal solve" in r.output
     assert not (tmp_path / "out").exists()
-    sealed = tmp_path / "sealed.toml"  # the same patch as wirecal wrote it is taken
-    sealed.write_text(overridden)
-    assert invoke("gen", ROBOT, PLAN, "-o", tmp_path / "ok", "--patch", sealed).exit_code == 0
 
 
 def test_a_patch_without_its_digest_is_refused(tmp_path, partial_patch):

@@ -53,12 +53,19 @@ def run(ur5, ur5_plan, texts, truth, tmp_path, **kw):
     return measure_ur_in_twin(ur5, ur5_plan, truth, tmp_path, texts=texts, seed=5, **kw)
 
 
-def test_run_completes_and_the_log_identifies_the_truth(ur5, ur5_plan, texts, truth, tmp_path):
-    r = run(ur5, ur5_plan, texts, truth, tmp_path)
+@pytest.fixture(scope="module")
+def completed(ur5, ur5_plan, texts, truth, tmp_path_factory):
+    """The run without faults and its folder, run once: the tests taking it only read it."""
+    folder = tmp_path_factory.mktemp("completed")
+    return folder, run(ur5, ur5_plan, texts, truth, folder)
+
+
+def test_run_completes_and_the_log_identifies_the_truth(ur5, ur5_plan, truth, completed):
+    folder, r = completed
     assert r.programs.mount.status == "completed"
     assert r.programs.run.status == "completed"
     assert r.received.complete
-    assert r.log == tmp_path / "run.csv"
+    assert r.log == folder / "run.csv"
     assert not r.received.journal.exists()
     m = load_measurements(r.log, ur5_plan, ur5)
     assert m.complete
@@ -69,8 +76,8 @@ def test_run_completes_and_the_log_identifies_the_truth(ur5, ur5_plan, texts, tr
     assert 300 < r.programs.world.clock < 600
 
 
-def test_every_line_sent_is_mirrored_in_the_log_tab(ur5, ur5_plan, texts, truth, tmp_path):
-    r = run(ur5, ur5_plan, texts, truth, tmp_path)
+def test_every_line_sent_is_mirrored_in_the_log_tab(ur5, ur5_plan, completed):
+    r = completed[1]
     sent = r.received.text.splitlines()
     tab = r.programs.run.console
     mirrored = [line for line in tab if line in set(sent)]
@@ -171,13 +178,13 @@ def test_fault_wire_slip(ur5, ur5_plan, texts, truth, tmp_path):
 
 
 @pytest.mark.slow
-def test_the_log_carries_the_controller_solvers_result(ur5, ur5_plan, texts, truth, tmp_path):
+def test_the_log_carries_the_controller_solvers_result(ur5, ur5_plan, completed, tmp_path):
     """wc_solve runs at the end of wc_run; its result arrives in the log as comment lines
     and agrees with the PC's stepwise estimate; solve --method controller reruns it."""
     from wirecal.app.compare import compare_controller
     from wirecal.formats.controller_result import parse_result, result_in_log
 
-    r = run(ur5, ur5_plan, texts, truth, tmp_path)
+    r = completed[1]
     text = r.log.read_text(encoding="ascii")
     assert text.splitlines()[-1] == "# end"
     result = parse_result(result_in_log(text), "log")
@@ -216,10 +223,10 @@ def test_wc_check_shows_the_pulled_wire_only_when_decoded(
         assert {line.split("mm")[-1].strip() for line in out.console[1:]} == {"0.0000"}
 
 
-def test_the_whole_log_tab_pasted_is_a_log(ur5, ur5_plan, texts, truth, tmp_path):
+def test_the_whole_log_tab_pasted_is_a_log(ur5, ur5_plan, completed):
     """wc_run's own progress lines in the log tab are '#' comments: the tab copied whole
     is a wirecal log (the paste path when the socket is lost)."""
-    r = run(ur5, ur5_plan, texts, truth, tmp_path)
+    r = completed[1]
     console = r.programs.run.console
     assert any(line.startswith("# Step 1 of ") for line in console)
     m = check_log(parse_log("\n".join(console), "<log tab>"), ur5_plan, ur5)
