@@ -32,7 +32,8 @@ Checks, each a gap (mm) that must stay ≥ 0 after ``margin_mm``:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -115,6 +116,13 @@ class Capsules:
     skipped: tuple[tuple[str, str, str], ...]  # (name, name, why) of the pairs left out
     moving: np.ndarray  # capsules checked against floor, half-spaces and boxes
 
+    @cached_property
+    def rows(self) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+        """Return the capsules of each kind, and their chain steps (:func:`capsule_ends`)."""
+        kind = np.array(self.kind)
+        rows = {k: np.flatnonzero(kind == k) for k in ("a", "d", "tool")}
+        return rows, {k: self.step[r] for k, r in rows.items()}
+
 
 def capsules(
     dh: np.ndarray, radii: np.ndarray, tool_point: np.ndarray, margin_mm: float
@@ -176,27 +184,33 @@ def _self_pairs(
 
 
 def capsule_ends(model: Model, caps: Capsules, f: Frames) -> tuple[np.ndarray, np.ndarray]:
-    """Return the capsules' ends, each (3, S, N) component-first, from q's frames ``f``."""
+    """Return the capsules' ends, each (3, S, N) component-first, from q's frames ``f``.
+
+    Each kind of capsule gathered at once (:attr:`Capsules.rows`): the same numbers as
+    one capsule at a time.
+    """
     dh = np.asarray(model.dh)
     dh = dh if dh.ndim == 2 else dh[0]
     o = f.o.transpose(2, 1, 0)  # (3, n+1, N)
-    x = f.x.transpose(2, 1, 0)
-    z = f.z.transpose(2, 1, 0)
-    starts, ends = [], []
-    for s, k in enumerate(caps.kind):
-        i = int(caps.step[s])
-        if k == "a":
-            starts.append(o[:, i - 1])
-            ends.append(o[:, i - 1] + dh[i - 1, 1] * x[:, i - 1])
-        elif k == "d":
-            starts.append(o[:, i] - dh[i - 1, 3] * z[:, i])
-            ends.append(o[:, i])
-        else:
-            R = f.R_last.transpose(1, 2, 0)  # (3, 3, N)
-            t = model.tool_point
-            starts.append(o[:, -1])
-            ends.append(o[:, -1] + R[:, 0] * t[0] + R[:, 1] * t[1] + R[:, 2] * t[2])
-    return np.stack(starts, axis=1), np.stack(ends, axis=1)
+    shape = (3, len(caps.kind), o.shape[2])
+    starts, ends = np.empty(shape), np.empty(shape)
+    rows, at = caps.rows
+    if len(rows["a"]):  # o_{i−1} → o_{i−1} + a_{i−1}·x_{i−1}
+        i = at["a"] - 1
+        starts[:, rows["a"]] = o[:, i]
+        ends[:, rows["a"]] = o[:, i] + dh[i, 1][:, None] * f.x.transpose(2, 1, 0)[:, i]
+    if len(rows["d"]):  # o_i − d_i·z_i → o_i
+        i = at["d"]
+        starts[:, rows["d"]] = o[:, i] - dh[i - 1, 3][:, None] * f.z.transpose(2, 1, 0)[:, i]
+        ends[:, rows["d"]] = o[:, i]
+    if len(rows["tool"]):
+        R = f.R_last.transpose(1, 2, 0)  # (3, 3, N)
+        t = model.tool_point
+        starts[:, rows["tool"]] = o[:, -1:]
+        ends[:, rows["tool"]] = (o[:, -1] + R[:, 0] * t[0] + R[:, 1] * t[1] + R[:, 2] * t[2])[
+            :, None
+        ]
+    return starts, ends
 
 
 @dataclass
@@ -208,12 +222,32 @@ class Gaps:
     """
 
     gap: np.ndarray  # (K, N)
-    labels: list[str] = field(default_factory=list)
-    margin_mm: float = DEFAULT_MARGIN_MM
+    cell: CellModel
+    caps: Capsules
+
+    @property
+    def margin_mm(self) -> float:
+        """Return the cell's margin (mm), which every gap is after."""
+        return self.cell.margin_mm
+
+    @cached_property
+    def labels(self) -> list[str]:
+        """Return what each check (row of ``gap``) is, in words (:func:`cell_gaps`'s order)."""
+        caps, cell = self.caps, self.cell
+        labels = [f"{caps.names[i]} and {caps.names[j]}" for i, j in caps.pairs]
+        mv = np.flatnonzero(caps.moving)
+        for name in ["floor", *(h.name for h in cell.half_spaces)]:
+            labels += [f"{caps.names[i]} and the {name}" for i in mv]
+        for box in cell.boxes:
+            labels += [f"{caps.names[i]} and box {box.name!r}" for i in mv]
+        if cell.housing is not None:
+            housed = _housing_capsules(caps)
+            labels += [f"{caps.names[i]} and the encoder's housing" for i in housed]
+        return labels
 
     def smallest(self) -> np.ndarray:
         """Return each configuration's smallest gap (mm): negative where it collides."""
-        return np.min(self.gap, axis=0) if len(self.labels) else np.full(self.gap.shape[1], np.inf)
+        return np.min(self.gap, axis=0) if len(self.gap) else np.full(self.gap.shape[1], np.inf)
 
     def cause(self, k: int) -> str:
         """Return configuration k's worst check in words (the colliding pair)."""
@@ -243,29 +277,25 @@ def cell_gaps(
     f = frames(model, q_rad) if f is None else f
     a, b = capsule_ends(model, caps, f)
     r, m = caps.radius_mm, cell.margin_mm
-    rows, labels = [], []
+    rows = []  # in the order of Gaps.labels
     if len(caps.pairs):
         s, t = caps.pairs.T
         rows.append(_pair_gaps(a, b, s, t, r[s] + r[t] + m, exact_below_mm))
-        labels += [f"{caps.names[i]} and {caps.names[j]}" for i, j in caps.pairs]
     mv = np.flatnonzero(caps.moving)
     am, bm = a[:, mv], b[:, mv]
-    planes = [("floor", (0.0, 0.0, cell.floor_z_mm), (0.0, 0.0, 1.0))]
-    planes += [(h.name, h.point_mm, h.normal) for h in cell.half_spaces]
-    for name, point, normal in planes:
+    planes = [((0.0, 0.0, cell.floor_z_mm), (0.0, 0.0, 1.0))]  # the floor, the half-spaces
+    planes += [(h.point_mm, h.normal) for h in cell.half_spaces]
+    for point, normal in planes:
         nrm, pt = np.asarray(normal)[:, None, None], np.asarray(point)[:, None, None]
         height = np.minimum(_dot(am - pt, nrm), _dot(bm - pt, nrm))
         rows.append(height - (r[mv] + m)[:, None])
-        labels += [f"{caps.names[i]} and the {name}" for i in mv]
     for box in cell.boxes:
         keep = r[mv] + m + BOX_STEP_MM / 2
         rows.append(_box_gaps(box, am, bm, keep) - keep[:, None])
-        labels += [f"{caps.names[i]} and box {box.name!r}" for i in mv]
     if cell.housing is not None:
         rows.append(_housing_gaps(cell.housing, m, caps, a, b, p0))
-        labels += [f"{caps.names[i]} and the encoder's housing" for i in _housing_capsules(caps)]
     gap = np.concatenate(rows) if rows else np.zeros((0, len(q_rad)))
-    return Gaps(gap, labels, m)
+    return Gaps(gap, cell, caps)
 
 
 def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
