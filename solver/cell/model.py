@@ -115,13 +115,17 @@ class Capsules:
     pairs: np.ndarray  # (P, 2) self-collision pairs checked
     skipped: tuple[tuple[str, str, str], ...]  # (name, name, why) of the pairs left out
     moving: np.ndarray  # capsules checked against floor, half-spaces and boxes
+    ends_at: np.ndarray  # (2, S) each capsule's start and end among capsule_ends' points
 
     @cached_property
-    def rows(self) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
-        """Return the capsules of each kind, and their chain steps (:func:`capsule_ends`)."""
-        kind = np.array(self.kind)
-        rows = {k: np.flatnonzero(kind == k) for k in ("a", "d", "tool")}
-        return rows, {k: self.step[r] for k, r in rows.items()}
+    def checked(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return the moving capsules, and those checked against the encoder's housing.
+
+        The housing's: all moving ones but the tool fixture (which sits at the exit at θ0).
+        """
+        return np.flatnonzero(self.moving), np.flatnonzero(
+            self.moving & (np.array(self.kind) != "tool")
+        )
 
 
 def capsules(
@@ -146,16 +150,25 @@ def capsules(
     fixed = np.array([row[4] for row in rows], int).reshape(-1, 2)
     length = np.array([row[5] for row in rows])
     pairs, skipped = _self_pairs(names, rad, fixed, length, margin_mm)
+    step = np.array([row[2] for row in rows], int)
+    kind = tuple(row[3] for row in rows)
     return Capsules(
-        names,
-        rad,
-        np.array([row[2] for row in rows], int),
-        tuple(row[3] for row in rows),
-        fixed,
-        pairs,
-        skipped,
-        fixed[:, 0] >= 1,
+        names, rad, step, kind, fixed, pairs, skipped, fixed[:, 0] >= 1, _ends_at(n, step, kind)
     )
+
+
+def _ends_at(n: int, step: np.ndarray, kind: tuple[str, ...]) -> np.ndarray:
+    """Return each capsule's start and end (2, S) among the points of :func:`capsule_ends`.
+
+    The points: the n+1 origins o_k, then o_{i−1} + a_{i−1}·x_{i−1} and o_i − d_i·z_i of
+    each chain step i, then the tool point.
+    """
+    at = {
+        "a": lambda i: (i - 1, n + i),  # o_{i−1} → o_{i−1} + a_{i−1}·x_{i−1}
+        "d": lambda i: (2 * n + i, i),  # o_i − d_i·z_i → o_i
+        "tool": lambda i: (n, 3 * n + 1),  # o_n → the tool point
+    }
+    return np.array([at[k](int(i)) for i, k in zip(step, kind, strict=True)], int).reshape(-1, 2).T
 
 
 def _self_pairs(
@@ -186,31 +199,19 @@ def _self_pairs(
 def capsule_ends(model: Model, caps: Capsules, f: Frames) -> tuple[np.ndarray, np.ndarray]:
     """Return the capsules' ends, each (3, S, N) component-first, from q's frames ``f``.
 
-    Each kind of capsule gathered at once (:attr:`Capsules.rows`): the same numbers as
-    one capsule at a time.
+    Every chain step's candidate ends computed at once, each capsule's then taken
+    (:attr:`Capsules.ends_at`): the same numbers as one capsule at a time.
     """
     dh = np.asarray(model.dh)
     dh = dh if dh.ndim == 2 else dh[0]
     o = f.o.transpose(2, 1, 0)  # (3, n+1, N)
-    shape = (3, len(caps.kind), o.shape[2])
-    starts, ends = np.empty(shape), np.empty(shape)
-    rows, at = caps.rows
-    if len(rows["a"]):  # o_{i−1} → o_{i−1} + a_{i−1}·x_{i−1}
-        i = at["a"] - 1
-        starts[:, rows["a"]] = o[:, i]
-        ends[:, rows["a"]] = o[:, i] + dh[i, 1][:, None] * f.x.transpose(2, 1, 0)[:, i]
-    if len(rows["d"]):  # o_i − d_i·z_i → o_i
-        i = at["d"]
-        starts[:, rows["d"]] = o[:, i] - dh[i - 1, 3][:, None] * f.z.transpose(2, 1, 0)[:, i]
-        ends[:, rows["d"]] = o[:, i]
-    if len(rows["tool"]):
-        R = f.R_last.transpose(1, 2, 0)  # (3, 3, N)
-        t = model.tool_point
-        starts[:, rows["tool"]] = o[:, -1:]
-        ends[:, rows["tool"]] = (o[:, -1] + R[:, 0] * t[0] + R[:, 1] * t[1] + R[:, 2] * t[2])[
-            :, None
-        ]
-    return starts, ends
+    along_a = o[:, :-1] + dh[:, 1, None] * f.x.transpose(2, 1, 0)[:, :-1]
+    back_d = o[:, 1:] - dh[:, 3, None] * f.z.transpose(2, 1, 0)[:, 1:]
+    R = f.R_last.transpose(1, 2, 0)  # (3, 3, N)
+    t = model.tool_point
+    tool = o[:, -1] + R[:, 0] * t[0] + R[:, 1] * t[1] + R[:, 2] * t[2]
+    points = np.concatenate([o, along_a, back_d, tool[:, None]], axis=1)
+    return points[:, caps.ends_at[0]], points[:, caps.ends_at[1]]
 
 
 @dataclass
@@ -235,13 +236,12 @@ class Gaps:
         """Return what each check (row of ``gap``) is, in words (:func:`cell_gaps`'s order)."""
         caps, cell = self.caps, self.cell
         labels = [f"{caps.names[i]} and {caps.names[j]}" for i, j in caps.pairs]
-        mv = np.flatnonzero(caps.moving)
+        mv, housed = caps.checked
         for name in ["floor", *(h.name for h in cell.half_spaces)]:
             labels += [f"{caps.names[i]} and the {name}" for i in mv]
         for box in cell.boxes:
             labels += [f"{caps.names[i]} and box {box.name!r}" for i in mv]
         if cell.housing is not None:
-            housed = _housing_capsules(caps)
             labels += [f"{caps.names[i]} and the encoder's housing" for i in housed]
         return labels
 
@@ -281,7 +281,7 @@ def cell_gaps(
     if len(caps.pairs):
         s, t = caps.pairs.T
         rows.append(_pair_gaps(a, b, s, t, r[s] + r[t] + m, exact_below_mm))
-    mv = np.flatnonzero(caps.moving)
+    mv = caps.checked[0]
     am, bm = a[:, mv], b[:, mv]
     planes = [((0.0, 0.0, cell.floor_z_mm), (0.0, 0.0, 1.0))]  # the floor, the half-spaces
     planes += [(h.point_mm, h.normal) for h in cell.half_spaces]
@@ -369,16 +369,11 @@ def _box_gaps(box: Box, a: np.ndarray, b: np.ndarray, near_mm: np.ndarray) -> np
     return best
 
 
-def _housing_capsules(caps: Capsules) -> np.ndarray:
-    """Return the capsules checked against the housing: all moving ones but the tool fixture."""
-    return np.flatnonzero(caps.moving & (np.array(caps.kind) != "tool"))
-
-
 def _housing_gaps(
     h: Housing, margin_mm: float, caps: Capsules, a: np.ndarray, b: np.ndarray, p0: np.ndarray
 ) -> np.ndarray:
     """Return the gaps (mm) of the capsules to the encoder's housing at exit ``p0``."""
-    idx = _housing_capsules(caps)
+    idx = caps.checked[1]
     start = np.asarray(p0, float).T.reshape(3, 1, -1)  # (3,) or one exit per configuration
     end = start + h.length_mm * np.asarray(h.direction)[:, None, None]
     d = segment_distance(a[:, idx], b[:, idx], start, end)
