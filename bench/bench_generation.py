@@ -8,7 +8,9 @@ forgotten, as a generation of another plan meets it (V+'s rendering parses its m
 checker then finds it parsed). With ``--before`` (a
 checkout of the code before), each run a fresh process per tree, the two trees' runs
 interleaved (:mod:`interleaved`), medians and the ratio now / before, and whether the two
-generated the same programs, byte for byte.
+generated the same programs (and cell checks' answers), byte for byte. Last, per example,
+the cell check of 200 short moves (:func:`short_moves`), the pre-flight's check as a twin
+runs it move by move.
 
     python bench/bench_generation.py [--runs N] [--before CHECKOUT]
 """
@@ -19,6 +21,7 @@ import hashlib
 import json
 import time
 from collections.abc import Callable
+from itertools import pairwise
 from pathlib import Path
 
 from interleaved import bench_main
@@ -76,6 +79,30 @@ def _parts(name: str) -> tuple[dict[str, Callable[[], object]], str]:
     }, gen.key
 
 
+def short_moves(name: str) -> Callable[[], object]:
+    """Return the cell checks of 200 short moves (0.05–3°) of an example's arm, as a twin's.
+
+    Each :func:`~wirecal.solver.cell.check.move_sweep` of a random walk from a random pose
+    (seed 0), every gap exact: the check ``wirecal gen``'s pre-flight runs over a plan's
+    moves, of a few configurations each.
+    """
+    import numpy as np
+
+    from wirecal.formats.robot_file import load_robot
+    from wirecal.solver.cell.check import move_sweep
+    from wirecal.solver.kinematics import tool_position
+
+    robot = load_robot(EXAMPLES / name / "robot.toml")
+    rng = np.random.default_rng(0)
+    lo, hi = robot.limits_deg(body=False)
+    p0 = tool_position(robot.nominal, np.radians(rng.uniform(lo, hi))[None])[0]
+    walk = [rng.uniform(lo, hi)]
+    for _ in range(200):
+        step = rng.normal(0.0, rng.choice([0.05, 0.5, 3.0]), robot.n_joints)
+        walk.append(np.clip(walk[-1] + step, lo, hi))
+    return lambda: [move_sweep(robot, robot.nominal, p0, a, b) for a, b in pairwise(walk)]
+
+
 def child() -> None:
     """One run in this process: print each example's parts' CPU seconds and digests as JSON."""
     found: dict[str, dict] = {"cpu_s": {}, "digest": {}}
@@ -83,10 +110,12 @@ def child() -> None:
         parts, key = _parts(name)
         for part, work in parts.items():
             found["cpu_s"][f"{name} {key} {part}"] = cpu_s(work)
-        text = json.dumps(parts["programs()"](), sort_keys=True).encode()
+        moves = short_moves(name)
+        found["cpu_s"][f"{name} 200 short moves' cell checks"] = cpu_s(moves)
+        text = json.dumps(parts["programs()"](), sort_keys=True).encode() + repr(moves()).encode()
         found["digest"][name] = hashlib.sha256(text).hexdigest()[:16]
     print(json.dumps(found))
 
 
 if __name__ == "__main__":
-    bench_main("bench_generation", child, __doc__, "programs")
+    bench_main("bench_generation", child, __doc__, "programs and answers")

@@ -50,7 +50,7 @@ def interleaved(bench: str, before: Path, runs: int, *args: str) -> dict[str, li
     return found
 
 
-def print_ratios(found: dict[str, list[dict]], key: str = "cpu_s", width: int = 34) -> None:
+def print_ratios(found: dict[str, list[dict]], key: str = "cpu_s", width: int = 42) -> None:
     """Print each figure under ``key`` (name → CPU s): medians before and now, and the ratio."""
     print(
         f"{'CPU s (median of ' + str(len(found['now'])) + ' runs)':{width}} before      now  ratio"
@@ -79,7 +79,7 @@ def bench_main(bench: str, child: Callable[[], None], doc: str, made: str) -> No
                 child()
             runs.append(json.loads(buf.getvalue()))
         for name in runs[0]["cpu_s"]:
-            print(f"{name:34} {statistics.median(r['cpu_s'][name] for r in runs):7.3f} s CPU")
+            print(f"{name:42} {statistics.median(r['cpu_s'][name] for r in runs):7.3f} s CPU")
         return
     found = interleaved(bench, args.before, args.runs)
     print_ratios(found)
