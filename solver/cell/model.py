@@ -99,6 +99,20 @@ class CellModel:
 
 
 @dataclass(frozen=True)
+class EndsAt:
+    """Where :func:`capsule_ends` finds the capsules' ends among the points it computes.
+
+    The points: the n+1 origins o_k, then o_{i−1} + a_{i−1}·x_{i−1} at the "a" capsules'
+    frames i−1 (``a_frames``), then o_i − d_i·z_i at the "d" capsules' frames i
+    (``d_frames``), then the tool point; ``index`` (2, S): each capsule's start and end.
+    """
+
+    index: np.ndarray
+    a_frames: np.ndarray
+    d_frames: np.ndarray
+
+
+@dataclass(frozen=True)
 class Capsules:
     """The arm's capsules and the checks between them (see the module docstring).
 
@@ -115,7 +129,7 @@ class Capsules:
     pairs: np.ndarray  # (P, 2) self-collision pairs checked
     skipped: tuple[tuple[str, str, str], ...]  # (name, name, why) of the pairs left out
     moving: np.ndarray  # capsules checked against floor, half-spaces and boxes
-    ends_at: np.ndarray  # (2, S) each capsule's start and end among capsule_ends' points
+    ends_at: EndsAt  # where capsule_ends finds each capsule's ends
 
     @cached_property
     def checked(self) -> tuple[np.ndarray, np.ndarray]:
@@ -157,18 +171,19 @@ def capsules(
     )
 
 
-def _ends_at(n: int, step: np.ndarray, kind: tuple[str, ...]) -> np.ndarray:
-    """Return each capsule's start and end (2, S) among the points of :func:`capsule_ends`.
-
-    The points: the n+1 origins o_k, then o_{i−1} + a_{i−1}·x_{i−1} and o_i − d_i·z_i of
-    each chain step i, then the tool point.
-    """
+def _ends_at(n: int, step: np.ndarray, kind: tuple[str, ...]) -> EndsAt:
+    """Return where :func:`capsule_ends` finds each capsule's ends (:class:`EndsAt`)."""
+    kinds = np.array(kind)
+    a_frames, d_frames = step[kinds == "a"] - 1, step[kinds == "d"]
+    a_row = iter(range(n + 1, n + 1 + len(a_frames)))
+    d_row = iter(range(n + 1 + len(a_frames), n + 1 + len(a_frames) + len(d_frames)))
     at = {
-        "a": lambda i: (i - 1, n + i),  # o_{i−1} → o_{i−1} + a_{i−1}·x_{i−1}
-        "d": lambda i: (2 * n + i, i),  # o_i − d_i·z_i → o_i
-        "tool": lambda i: (n, 3 * n + 1),  # o_n → the tool point
+        "a": lambda i: (i - 1, next(a_row)),  # o_{i−1} → o_{i−1} + a_{i−1}·x_{i−1}
+        "d": lambda i: (next(d_row), i),  # o_i − d_i·z_i → o_i
+        "tool": lambda i: (n, n + 1 + len(a_frames) + len(d_frames)),  # o_n → the tool point
     }
-    return np.array([at[k](int(i)) for i, k in zip(step, kind, strict=True)], int).reshape(-1, 2).T
+    ends = [at[k](int(i)) for i, k in zip(step, kind, strict=True)]
+    return EndsAt(np.array(ends, int).reshape(-1, 2).T, a_frames, d_frames)
 
 
 def _self_pairs(
@@ -199,19 +214,21 @@ def _self_pairs(
 def capsule_ends(model: Model, caps: Capsules, f: Frames) -> tuple[np.ndarray, np.ndarray]:
     """Return the capsules' ends, each (3, S, N) component-first, from q's frames ``f``.
 
-    Every chain step's candidate ends computed at once, each capsule's then taken
-    (:attr:`Capsules.ends_at`): the same numbers as one capsule at a time.
+    Each kind's computed ends at once, then each capsule's taken (:class:`EndsAt`): the
+    same numbers as one capsule at a time.
     """
     dh = np.asarray(model.dh)
     dh = dh if dh.ndim == 2 else dh[0]
+    at = caps.ends_at
     o = f.o.transpose(2, 1, 0)  # (3, n+1, N)
-    along_a = o[:, :-1] + dh[:, 1, None] * f.x.transpose(2, 1, 0)[:, :-1]
-    back_d = o[:, 1:] - dh[:, 3, None] * f.z.transpose(2, 1, 0)[:, 1:]
+    i, k = at.a_frames, at.d_frames
+    along_a = o[:, i] + dh[i, 1, None] * f.x.transpose(2, 1, 0)[:, i]
+    back_d = o[:, k] - dh[k - 1, 3, None] * f.z.transpose(2, 1, 0)[:, k]
     R = f.R_last.transpose(1, 2, 0)  # (3, 3, N)
     t = model.tool_point
     tool = o[:, -1] + R[:, 0] * t[0] + R[:, 1] * t[1] + R[:, 2] * t[2]
     points = np.concatenate([o, along_a, back_d, tool[:, None]], axis=1)
-    return points[:, caps.ends_at[0]], points[:, caps.ends_at[1]]
+    return points[:, at.index[0]], points[:, at.index[1]]
 
 
 @dataclass
