@@ -102,9 +102,25 @@ def ready_to_draw() -> None:
     _pyplot()
 
 
+DPI = 110
+"""The figures' resolution (dots per inch)."""
+
+
 def _png(fig) -> str:
+    """Return ``fig`` as an embeddable PNG, cropped to its tight box, and close it.
+
+    The PNG of ``savefig(bbox_inches="tight")``, byte for byte, drawn once: the tight box
+    is measured at the figure's resolution as matplotlib measures it, without the layout
+    pass it draws first (the figures have no layout engine for it to run).
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig.set_dpi(DPI)
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    pad = _pyplot().rcParams["savefig.pad_inches"]
+    box = fig.get_tightbbox(renderer).padded(pad)
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+    fig.savefig(buf, format="png", dpi=DPI, bbox_inches=box)
     _pyplot().close(fig)
     return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
 

@@ -2,70 +2,120 @@
 
 ``Generator.programs()`` = the pre-flight (limits, wire range, cell, software line) +
 the language's rendering + its own checker over the output (issue 33). For each shipped
-example, the median of a few runs of each part and of the whole, and the checker's share
-of the whole; the checker's memory of checked texts is cleared before each run (V+'s
-parser keeps its last few modules itself: its rendering has parsed the text already).
+example, the CPU time of each part and of the whole, each part once warmed (its grammars
+built), then timed with every memory of texts parsed or checked and of frames computed
+forgotten, as a generation of another plan meets it (V+'s rendering parses its module, the
+checker then finds it parsed). With ``--before`` (a
+checkout of the code before), each run a fresh process per tree, the two trees' runs
+interleaved (:mod:`interleaved`), medians and the ratio now / before, and whether the two
+generated the same programs (and cell checks' answers), byte for byte. Last, per example,
+the cell check of 200 short moves (:func:`short_moves`), the pre-flight's check as a twin
+runs it move by move.
 
-    python bench/bench_generation.py [--runs N]
+    python bench/bench_generation.py [--runs N] [--before CHECKOUT]
 """
 
 from __future__ import annotations
 
-import argparse
-import statistics
+import hashlib
+import json
 import time
 from collections.abc import Callable
+from itertools import pairwise
 from pathlib import Path
 
-from wirecal.app.demo import plan_beside
-from wirecal.app.languages import registered
-from wirecal.formats.plan_file import load_plan
-from wirecal.formats.robot_file import load_robot
-from wirecal.gen.preflight import _lint, output_problems, preflight
-from wirecal.gen.request import GenRequest
+from interleaved import bench_main
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 SHIPPED = ("viper_s650", "ur5e", "abb_irb120")
 """The examples timed, each with its shipped plan (the demo's, :func:`plan_beside`)."""
 
 
-def median_s(work: Callable[[], object], runs: int) -> float:
-    """Median wall time (s) of ``runs`` calls of ``work``, the checker's memory cleared."""
-    times = []
-    for _ in range(runs):
-        _lint.cache_clear()
-        t0 = time.perf_counter()
+def forget() -> None:
+    """Forget every text checked or parsed and every configuration's frames kept."""
+    from wirecal.gen.preflight import _lint
+    from wirecal.lang.rapid import parser as rapid
+    from wirecal.lang.urscript import parser as urscript
+    from wirecal.lang.vplus import parser as vplus
+    from wirecal.solver import kinematics
+
+    for cache in (_lint, rapid._parse_long, rapid._parse_short, urscript._parse_program):
+        cache.cache_clear()
+    vplus._parse_module.cache_clear()
+    kinematics._kept_frames.cache_clear()
+
+
+def cpu_s(work: Callable[[], object], repeat: int = 4) -> float:
+    """CPU time (s) of a call of ``work`` (the mean of ``repeat``), all memory forgotten first."""
+    spent = 0.0
+    for _ in range(repeat):
+        forget()
+        t0 = time.process_time()
         work()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+        spent += time.process_time() - t0
+    return spent / repeat
 
 
-def row(name: str, runs: int) -> str:
-    """Return one example's line: each part's median and the checker's share."""
+def _parts(name: str) -> tuple[dict[str, Callable[[], object]], str]:
+    """Return an example's parts to time (once warmed) and its language's key."""
+    from wirecal.app.demo import plan_beside
+    from wirecal.app.languages import registered
+    from wirecal.formats.plan_file import load_plan
+    from wirecal.formats.robot_file import load_robot
+    from wirecal.gen.preflight import output_problems, preflight
+    from wirecal.gen.request import GenRequest
+
     robot = load_robot(EXAMPLES / name / "robot.toml")
     plan_path = plan_beside(EXAMPLES / name / "robot.toml")
     assert plan_path is not None
     plan = load_plan(plan_path, robot)
     gen, request = registered(robot).generator, GenRequest()
-    out = gen.render(robot, plan, request)
-    pre = median_s(lambda: preflight(robot, plan, request, gen.language), runs)
-    render = median_s(lambda: gen.render(robot, plan, request), runs)
-    check = median_s(lambda: output_problems(robot, out, gen.language), runs)
-    whole = median_s(lambda: gen.programs(robot, plan, request), runs)
-    return (
-        f"{name:12} {gen.key:9} {pre:9.3f}s {render:6.3f}s {check:7.3f}s {whole:10.3f}s "
-        f"{check / whole:6.0%}"
-    )
+    out = gen.programs(robot, plan, request)  # warm: grammars, tables
+    return {
+        "pre-flight": lambda: preflight(robot, plan, request, gen.language),
+        "render": lambda: gen.render(robot, plan, request),
+        "checker": lambda: output_problems(robot, out, gen.language),
+        "programs()": lambda: gen.programs(robot, plan, request),
+    }, gen.key
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--runs", type=int, default=3)
-    args = ap.parse_args()
-    print("example      language  pre-flight  render  checker  programs()  checker share")
+def short_moves(name: str) -> Callable[[], object]:
+    """Return the cell checks of 200 short moves (0.05–3°) of an example's arm, as a twin's.
+
+    Each :func:`~wirecal.solver.cell.check.move_sweep` of a random walk from a random pose
+    (seed 0), every gap exact: the check ``wirecal gen``'s pre-flight runs over a plan's
+    moves, of a few configurations each.
+    """
+    import numpy as np
+
+    from wirecal.formats.robot_file import load_robot
+    from wirecal.solver.cell.check import move_sweep
+    from wirecal.solver.kinematics import tool_position
+
+    robot = load_robot(EXAMPLES / name / "robot.toml")
+    rng = np.random.default_rng(0)
+    lo, hi = robot.limits_deg(body=False)
+    p0 = tool_position(robot.nominal, np.radians(rng.uniform(lo, hi))[None])[0]
+    walk = [rng.uniform(lo, hi)]
+    for _ in range(200):
+        step = rng.normal(0.0, rng.choice([0.05, 0.5, 3.0]), robot.n_joints)
+        walk.append(np.clip(walk[-1] + step, lo, hi))
+    return lambda: [move_sweep(robot, robot.nominal, p0, a, b) for a, b in pairwise(walk)]
+
+
+def child() -> None:
+    """One run in this process: print each example's parts' CPU seconds and digests as JSON."""
+    found: dict[str, dict] = {"cpu_s": {}, "digest": {}}
     for name in SHIPPED:
-        print(row(name, args.runs))
+        parts, key = _parts(name)
+        for part, work in parts.items():
+            found["cpu_s"][f"{name} {key} {part}"] = cpu_s(work)
+        moves = short_moves(name)
+        found["cpu_s"][f"{name} 200 short moves' cell checks"] = cpu_s(moves)
+        text = json.dumps(parts["programs()"](), sort_keys=True).encode() + repr(moves()).encode()
+        found["digest"][name] = hashlib.sha256(text).hexdigest()[:16]
+    print(json.dumps(found))
 
 
 if __name__ == "__main__":
-    main()
+    bench_main("bench_generation", child, __doc__, "programs and answers")

@@ -42,7 +42,7 @@ def move_sweep(
     (:func:`~wirecal.solver.cell.model.cell_gaps`) a lower bound of it where it exceeds
     that, the same answer and words otherwise.
     """
-    q, _ = move_samples(np.r_[a][None], np.r_[b][None])
+    q, _ = move_samples(np.asarray(a)[None], np.asarray(b)[None])
     gaps = robot.cell_gaps(q, p0, model, exact_below_mm=exact_below_mm)
     smallest = gaps.smallest()
     hit = np.flatnonzero(smallest < collision_below_mm(gaps.margin_mm, contact))

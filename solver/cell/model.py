@@ -32,7 +32,8 @@ Checks, each a gap (mm) that must stay ≥ 0 after ``margin_mm``:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -98,6 +99,20 @@ class CellModel:
 
 
 @dataclass(frozen=True)
+class EndsAt:
+    """Where :func:`capsule_ends` finds the capsules' ends among the points it computes.
+
+    The points: the n+1 origins o_k, then o_{i−1} + a_{i−1}·x_{i−1} at the "a" capsules'
+    frames i−1 (``a_frames``), then o_i − d_i·z_i at the "d" capsules' frames i
+    (``d_frames``), then the tool point; ``index`` (2, S): each capsule's start and end.
+    """
+
+    index: np.ndarray
+    a_frames: np.ndarray
+    d_frames: np.ndarray
+
+
+@dataclass(frozen=True)
 class Capsules:
     """The arm's capsules and the checks between them (see the module docstring).
 
@@ -114,6 +129,17 @@ class Capsules:
     pairs: np.ndarray  # (P, 2) self-collision pairs checked
     skipped: tuple[tuple[str, str, str], ...]  # (name, name, why) of the pairs left out
     moving: np.ndarray  # capsules checked against floor, half-spaces and boxes
+    ends_at: EndsAt  # where capsule_ends finds each capsule's ends
+
+    @cached_property
+    def checked(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return the moving capsules, and those checked against the encoder's housing.
+
+        The housing's: all moving ones but the tool fixture (which sits at the exit at θ0).
+        """
+        return np.flatnonzero(self.moving), np.flatnonzero(
+            self.moving & (np.array(self.kind) != "tool")
+        )
 
 
 def capsules(
@@ -138,16 +164,26 @@ def capsules(
     fixed = np.array([row[4] for row in rows], int).reshape(-1, 2)
     length = np.array([row[5] for row in rows])
     pairs, skipped = _self_pairs(names, rad, fixed, length, margin_mm)
+    step = np.array([row[2] for row in rows], int)
+    kind = tuple(row[3] for row in rows)
     return Capsules(
-        names,
-        rad,
-        np.array([row[2] for row in rows], int),
-        tuple(row[3] for row in rows),
-        fixed,
-        pairs,
-        skipped,
-        fixed[:, 0] >= 1,
+        names, rad, step, kind, fixed, pairs, skipped, fixed[:, 0] >= 1, _ends_at(n, step, kind)
     )
+
+
+def _ends_at(n: int, step: np.ndarray, kind: tuple[str, ...]) -> EndsAt:
+    """Return where :func:`capsule_ends` finds each capsule's ends (:class:`EndsAt`)."""
+    kinds = np.array(kind)
+    a_frames, d_frames = step[kinds == "a"] - 1, step[kinds == "d"]
+    a_row = iter(range(n + 1, n + 1 + len(a_frames)))
+    d_row = iter(range(n + 1 + len(a_frames), n + 1 + len(a_frames) + len(d_frames)))
+    at = {
+        "a": lambda i: (i - 1, next(a_row)),  # o_{i−1} → o_{i−1} + a_{i−1}·x_{i−1}
+        "d": lambda i: (next(d_row), i),  # o_i − d_i·z_i → o_i
+        "tool": lambda i: (n, n + 1 + len(a_frames) + len(d_frames)),  # o_n → the tool point
+    }
+    ends = [at[k](int(i)) for i, k in zip(step, kind, strict=True)]
+    return EndsAt(np.array(ends, int).reshape(-1, 2).T, a_frames, d_frames)
 
 
 def _self_pairs(
@@ -176,27 +212,23 @@ def _self_pairs(
 
 
 def capsule_ends(model: Model, caps: Capsules, f: Frames) -> tuple[np.ndarray, np.ndarray]:
-    """Return the capsules' ends, each (3, S, N) component-first, from q's frames ``f``."""
+    """Return the capsules' ends, each (3, S, N) component-first, from q's frames ``f``.
+
+    Each kind's computed ends at once, then each capsule's taken (:class:`EndsAt`): the
+    same numbers as one capsule at a time.
+    """
     dh = np.asarray(model.dh)
     dh = dh if dh.ndim == 2 else dh[0]
+    at = caps.ends_at
     o = f.o.transpose(2, 1, 0)  # (3, n+1, N)
-    x = f.x.transpose(2, 1, 0)
-    z = f.z.transpose(2, 1, 0)
-    starts, ends = [], []
-    for s, k in enumerate(caps.kind):
-        i = int(caps.step[s])
-        if k == "a":
-            starts.append(o[:, i - 1])
-            ends.append(o[:, i - 1] + dh[i - 1, 1] * x[:, i - 1])
-        elif k == "d":
-            starts.append(o[:, i] - dh[i - 1, 3] * z[:, i])
-            ends.append(o[:, i])
-        else:
-            R = f.R_last.transpose(1, 2, 0)  # (3, 3, N)
-            t = model.tool_point
-            starts.append(o[:, -1])
-            ends.append(o[:, -1] + R[:, 0] * t[0] + R[:, 1] * t[1] + R[:, 2] * t[2])
-    return np.stack(starts, axis=1), np.stack(ends, axis=1)
+    i, k = at.a_frames, at.d_frames
+    along_a = o[:, i] + dh[i, 1, None] * f.x.transpose(2, 1, 0)[:, i]
+    back_d = o[:, k] - dh[k - 1, 3, None] * f.z.transpose(2, 1, 0)[:, k]
+    R = f.R_last.transpose(1, 2, 0)  # (3, 3, N)
+    t = model.tool_point
+    tool = o[:, -1] + R[:, 0] * t[0] + R[:, 1] * t[1] + R[:, 2] * t[2]
+    points = np.concatenate([o, along_a, back_d, tool[:, None]], axis=1)
+    return points[:, at.index[0]], points[:, at.index[1]]
 
 
 @dataclass
@@ -208,12 +240,31 @@ class Gaps:
     """
 
     gap: np.ndarray  # (K, N)
-    labels: list[str] = field(default_factory=list)
-    margin_mm: float = DEFAULT_MARGIN_MM
+    cell: CellModel
+    caps: Capsules
+
+    @property
+    def margin_mm(self) -> float:
+        """Return the cell's margin (mm), which every gap is after."""
+        return self.cell.margin_mm
+
+    @cached_property
+    def labels(self) -> list[str]:
+        """Return what each check (row of ``gap``) is, in words (:func:`cell_gaps`'s order)."""
+        caps, cell = self.caps, self.cell
+        labels = [f"{caps.names[i]} and {caps.names[j]}" for i, j in caps.pairs]
+        mv, housed = caps.checked
+        for name in ["floor", *(h.name for h in cell.half_spaces)]:
+            labels += [f"{caps.names[i]} and the {name}" for i in mv]
+        for box in cell.boxes:
+            labels += [f"{caps.names[i]} and box {box.name!r}" for i in mv]
+        if cell.housing is not None:
+            labels += [f"{caps.names[i]} and the encoder's housing" for i in housed]
+        return labels
 
     def smallest(self) -> np.ndarray:
         """Return each configuration's smallest gap (mm): negative where it collides."""
-        return np.min(self.gap, axis=0) if len(self.labels) else np.full(self.gap.shape[1], np.inf)
+        return np.min(self.gap, axis=0) if len(self.gap) else np.full(self.gap.shape[1], np.inf)
 
     def cause(self, k: int) -> str:
         """Return configuration k's worst check in words (the colliding pair)."""
@@ -243,29 +294,25 @@ def cell_gaps(
     f = frames(model, q_rad) if f is None else f
     a, b = capsule_ends(model, caps, f)
     r, m = caps.radius_mm, cell.margin_mm
-    rows, labels = [], []
+    rows = []  # in the order of Gaps.labels
     if len(caps.pairs):
         s, t = caps.pairs.T
         rows.append(_pair_gaps(a, b, s, t, r[s] + r[t] + m, exact_below_mm))
-        labels += [f"{caps.names[i]} and {caps.names[j]}" for i, j in caps.pairs]
-    mv = np.flatnonzero(caps.moving)
+    mv = caps.checked[0]
     am, bm = a[:, mv], b[:, mv]
-    planes = [("floor", (0.0, 0.0, cell.floor_z_mm), (0.0, 0.0, 1.0))]
-    planes += [(h.name, h.point_mm, h.normal) for h in cell.half_spaces]
-    for name, point, normal in planes:
+    planes = [((0.0, 0.0, cell.floor_z_mm), (0.0, 0.0, 1.0))]  # the floor, the half-spaces
+    planes += [(h.point_mm, h.normal) for h in cell.half_spaces]
+    for point, normal in planes:
         nrm, pt = np.asarray(normal)[:, None, None], np.asarray(point)[:, None, None]
         height = np.minimum(_dot(am - pt, nrm), _dot(bm - pt, nrm))
         rows.append(height - (r[mv] + m)[:, None])
-        labels += [f"{caps.names[i]} and the {name}" for i in mv]
     for box in cell.boxes:
         keep = r[mv] + m + BOX_STEP_MM / 2
         rows.append(_box_gaps(box, am, bm, keep) - keep[:, None])
-        labels += [f"{caps.names[i]} and box {box.name!r}" for i in mv]
     if cell.housing is not None:
         rows.append(_housing_gaps(cell.housing, m, caps, a, b, p0))
-        labels += [f"{caps.names[i]} and the encoder's housing" for i in _housing_capsules(caps)]
     gap = np.concatenate(rows) if rows else np.zeros((0, len(q_rad)))
-    return Gaps(gap, labels, m)
+    return Gaps(gap, cell, caps)
 
 
 def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -339,16 +386,11 @@ def _box_gaps(box: Box, a: np.ndarray, b: np.ndarray, near_mm: np.ndarray) -> np
     return best
 
 
-def _housing_capsules(caps: Capsules) -> np.ndarray:
-    """Return the capsules checked against the housing: all moving ones but the tool fixture."""
-    return np.flatnonzero(caps.moving & (np.array(caps.kind) != "tool"))
-
-
 def _housing_gaps(
     h: Housing, margin_mm: float, caps: Capsules, a: np.ndarray, b: np.ndarray, p0: np.ndarray
 ) -> np.ndarray:
     """Return the gaps (mm) of the capsules to the encoder's housing at exit ``p0``."""
-    idx = _housing_capsules(caps)
+    idx = caps.checked[1]
     start = np.asarray(p0, float).T.reshape(3, 1, -1)  # (3,) or one exit per configuration
     end = start + h.length_mm * np.asarray(h.direction)[:, None, None]
     d = segment_distance(a[:, idx], b[:, idx], start, end)
