@@ -117,5 +117,10 @@ def child() -> None:
     print(json.dumps(found))
 
 
-if __name__ == "__main__":
+def main() -> None:
+    """Time this tree and ``--before``'s alternately; print the medians and ratios."""
     bench_main("bench_generation", child, __doc__, "programs and answers")
+
+
+if __name__ == "__main__":
+    main()

@@ -79,5 +79,10 @@ def child() -> None:
     print(json.dumps(found))
 
 
-if __name__ == "__main__":
+def main() -> None:
+    """Time this tree and ``--before``'s alternately; print the medians and ratios."""
     bench_main("bench_report_figures", child, __doc__, "PNG files")
+
+
+if __name__ == "__main__":
+    main()
