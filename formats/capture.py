@@ -66,8 +66,11 @@ def clean_line(line: str) -> str:
     characters, a timestamp before the line (``[2026-11-27 05:18:38]``, ``05:18:38.123``,
     ISO 8601); tabs between fields become commas in a line without one.
     """
-    line = _CONTROL.sub("", _ESCAPE.sub("", line)).strip()
-    line = _TIMESTAMP.sub("", line, count=1) if _TIMESTAMP.match(line) else line
+    if not line.isprintable():  # (a printable line has no escape or control character)
+        line = _CONTROL.sub("", _ESCAPE.sub("", line))
+    line = line.strip()
+    stamp = _TIMESTAMP.match(line)
+    line = line[stamp.end() :] if stamp else line
     if "\t" in line and "," not in line:
         line = _TAB.sub(",", line)
     return line.replace("\t", " ").strip()
@@ -121,7 +124,7 @@ def fold(lines: list[str], width: int) -> str:
 
 def cells_of(text: str) -> tuple[str, ...]:
     """Return the stripped fields of a CSV line (no quoting: refused before)."""
-    return tuple(c.strip() for c in text.split(","))
+    return tuple(map(str.strip, text.split(",")))
 
 
 class _Lines:

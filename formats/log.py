@@ -209,7 +209,10 @@ def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bo
 
 def _readable(cells: tuple[str, ...]) -> bool:
     """Whether ``cells`` (of a version's field count) are a row whose values all parse."""
-    return _parse_row(cells, 0, lambda _line, _message: None) is not None
+    if cells[0].strip() not in KINDS:
+        return False
+    values = _values(cells)
+    return values is not None and _range_problem(values[2], values[3]) is None
 
 
 ROW_TEST = RowTest(KINDS, _readable)
@@ -264,52 +267,68 @@ def lossy_counts(rows: tuple[Row, ...], source: str) -> list[str]:
 
 
 def _parse_row(cells: tuple[str, ...], line: int, bad) -> Reading | None:
+    """Return the row's reading, or None with each problem passed to ``bad``."""
     kind = cells[0].strip()
-    ok = kind in KINDS
-    if not ok:
-        bad(line, f"kind {kind!r} is none of {', '.join(repr(k) for k in KINDS)}")
-    ints, floats, numbers_ok = _numbers(cells, line, bad)
-    if not (ok and numbers_ok):
+    values = _values(cells) if kind in KINDS else None
+    if values is None:
+        if kind not in KINDS:
+            bad(line, f"kind {kind!r} is none of {', '.join(repr(k) for k in KINDS)}")
+        _number_problems(cells, line, bad)
         return None
-    if ints["samples"] < 1:
-        bad(line, f"samples {ints['samples']} must be at least 1")
-        return None
-    negative = [name for name in ("spread", *TIME_COLUMNS) if floats.get(name, 0.0) < 0]
-    if negative:
-        bad(line, f"{negative[0]} {floats[negative[0]]:g} cannot be negative")
+    step, index, samples, floats = values
+    problem = _range_problem(samples, floats)
+    if problem is not None:
+        bad(line, problem)
         return None
     return Reading(
         kind,
-        ints["step"],
-        ints["index"],
-        np.array([floats[j] for j in JOINT_COLUMNS]),
-        floats["counts"],
-        ints["samples"],
-        floats["spread"],
+        step,
+        index,
+        np.array(floats[:6]),
+        floats[6],
+        samples,
+        floats[7],
         line,
-        floats.get("t_s"),
-        floats.get("settle_s"),
+        floats[8] if len(floats) > 8 else None,
+        floats[9] if len(floats) > 9 else None,
     )
 
 
-def _numbers(cells: tuple[str, ...], line: int, bad) -> tuple[dict, dict, bool]:
-    """Return the row's whole and finite numbers by column name, and whether all parse."""
-    ok = True
-    ints = {}
+def _values(cells: tuple[str, ...]) -> tuple[int, int, int, list[float]] | None:
+    """Return the row's step, index, samples and its other numbers in column order.
+
+    None when one is not a whole or finite number (:func:`_number_problems` says which).
+    """
+    try:
+        ints = int(cells[1]), int(cells[2]), int(cells[10])
+        floats = [float(cell) for cell in (*cells[3:10], *cells[11:])]
+    except ValueError:
+        return None
+    return (*ints, floats) if all(map(math.isfinite, floats)) else None
+
+
+def _range_problem(samples: int, floats: list[float]) -> str | None:
+    """Return what is out of range in a row of parsed numbers (:func:`_values`), if anything."""
+    if samples < 1:
+        return f"samples {samples} must be at least 1"
+    names = ("spread", *TIME_COLUMNS)[: len(floats) - 7]
+    for name, value in zip(names, floats[7:], strict=True):
+        if value < 0:
+            return f"{name} {value:g} cannot be negative"
+    return None
+
+
+def _number_problems(cells: tuple[str, ...], line: int, bad) -> None:
+    """Pass ``bad`` each field of the row that is not a whole or finite number."""
     for name, cell in (("step", cells[1]), ("index", cells[2]), ("samples", cells[10])):
         try:
-            ints[name] = int(cell)
+            int(cell)
         except ValueError:
             bad(line, f"{name} {cell.strip()!r} is not a whole number")
-            ok = False
-    floats = {}
     names = (*JOINT_COLUMNS, "counts", "spread", *TIME_COLUMNS[: len(cells) - len(COLUMNS_V1)])
     for name, cell in zip(names, [*cells[3:10], *cells[11:]], strict=True):
         try:
-            floats[name] = float(cell)
-            if not math.isfinite(floats[name]):
+            if not math.isfinite(float(cell)):
                 raise ValueError
         except ValueError:
             bad(line, f"{name} {cell.strip()!r} is not a number")
-            ok = False
-    return ints, floats, ok
