@@ -135,10 +135,17 @@ class _Lines:
         self.width = width
         self.test = test
         self._readable: dict[str, bool] = {}  # each text parsed once, however often asked
+        self._cells: dict[str, tuple[str, ...]] = {}
+
+    def cells(self, text: str) -> tuple[str, ...]:
+        """Return :func:`cells_of` ``text``, the same tuple each time it is asked."""
+        if text not in self._cells:
+            self._cells[text] = cells_of(text)
+        return self._cells[text]
 
     def readable(self, text: str) -> bool:
         if text not in self._readable:
-            cells = cells_of(text)
+            cells = self.cells(text)
             self._readable[text] = len(cells) == self.width and self.test.readable(cells)
         return self._readable[text]
 
@@ -183,7 +190,7 @@ def take_rows(lines: list[str], first: int, width: int, test: RowTest, source: s
         end = _tail(at, k, end, terminal, taken, source)
         if end > k + 1:
             taken.joined.append(k)
-        taken.rows.append((k + 1, cells_of("".join(lines[k:end]))))
+        taken.rows.append((k + 1, at.cells("".join(lines[k:end]))))
         k = end
     return taken
 

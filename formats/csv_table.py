@@ -18,7 +18,7 @@ fields. A last row cut short by a run that
 stopped while writing is a note, not an error. What it refuses with one message: fields in
 double quotes (a spreadsheet's export), rows with the wrong number of fields (each as
 ``file:line: problem``). A reader that says how to tell its rows (the measurement log's
-:data:`~wirecal.formats.log.ROW_TEST`) also takes a whole terminal capture
+:func:`~wirecal.formats.log.parse_log`) also takes a whole terminal capture
 (:mod:`wirecal.formats.capture`).
 """
 

@@ -53,6 +53,7 @@ from __future__ import annotations
 import hashlib
 import math
 import re
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -76,6 +77,8 @@ COLUMNS = (*COLUMNS_V1, *TIME_COLUMNS)
 HEADER_KEYS = ("robot", "plan", "mm_per_count")
 OPTIONAL_KEYS = ("payload_kg",)
 KINDS = ("zero", "point", "unsettled", "reference")
+_Values = tuple[int, int, int, list[float]]
+"""A row's step, index and samples, and its other numbers in column order (:func:`_values`)."""
 
 
 def format_row(reading: Reading) -> str:
@@ -155,6 +158,7 @@ def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bo
     """
     if sha256 is None:
         sha256 = text_sha256(text)
+    seen: dict[tuple[str, ...], _Values] = {}  # each row's numbers, parsed once
     table = parse_table(
         text,
         source,
@@ -164,7 +168,7 @@ def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bo
         what="log",
         columns=lambda _header, version: COLUMNS if version == VERSION else COLUMNS_V1,
         keys=(*HEADER_KEYS, *OPTIONAL_KEYS),
-        capture=ROW_TEST if terminal else None,
+        capture=RowTest(KINDS, partial(_readable, seen)) if terminal else None,
     )
     problems = [*table.problems, *table.missing(HEADER_KEYS)]
 
@@ -189,7 +193,7 @@ def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bo
                 raise ValueError
         except ValueError:
             bad(line, f"payload_kg {value!r} is not a positive mass (kg)")
-    parsed = (_parse_row(row.cells, row.line, bad) for row in table.rows)
+    parsed = (_parse_row(row.cells, row.line, bad, seen) for row in table.rows)
     readings = [r for r in parsed if r is not None]
     problems += lossy_counts(table.rows, source)
     if problems:
@@ -207,16 +211,20 @@ def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bo
     )
 
 
-def _readable(cells: tuple[str, ...]) -> bool:
-    """Whether ``cells`` (of a version's field count) are a row whose values all parse."""
+def _readable(seen: dict[tuple[str, ...], _Values], cells: tuple[str, ...]) -> bool:
+    """Whether ``cells`` (of a version's field count) are a row whose values all parse.
+
+    How a log's rows are told from the other text of a terminal capture; the numbers of
+    each row that parse are kept in ``seen`` for :func:`_parse_row` (each row parsed once).
+    """
     if cells[0].strip() not in KINDS:
         return False
     values = _values(cells)
-    return values is not None and _range_problem(values[2], values[3]) is None
+    if values is None:
+        return False
+    seen[cells] = values
+    return _range_problem(values[2], values[3]) is None
 
-
-ROW_TEST = RowTest(KINDS, _readable)
-"""How a log's rows are told from the other text of a terminal capture."""
 
 COUNTS = COLUMNS.index("counts")
 ROUNDED_MIN_ROWS = 5
@@ -266,10 +274,15 @@ def lossy_counts(rows: tuple[Row, ...], source: str) -> list[str]:
     return []
 
 
-def _parse_row(cells: tuple[str, ...], line: int, bad) -> Reading | None:
-    """Return the row's reading, or None with each problem passed to ``bad``."""
+def _parse_row(
+    cells: tuple[str, ...], line: int, bad, seen: dict[tuple[str, ...], _Values]
+) -> Reading | None:
+    """Return the row's reading, or None with each problem passed to ``bad``.
+
+    ``seen``: the numbers of the rows the capture's row test parsed (:func:`_readable`).
+    """
     kind = cells[0].strip()
-    values = _values(cells) if kind in KINDS else None
+    values = (seen.get(cells) or _values(cells)) if kind in KINDS else None
     if values is None:
         if kind not in KINDS:
             bad(line, f"kind {kind!r} is none of {', '.join(repr(k) for k in KINDS)}")
@@ -294,14 +307,14 @@ def _parse_row(cells: tuple[str, ...], line: int, bad) -> Reading | None:
     )
 
 
-def _values(cells: tuple[str, ...]) -> tuple[int, int, int, list[float]] | None:
+def _values(cells: tuple[str, ...]) -> _Values | None:
     """Return the row's step, index, samples and its other numbers in column order.
 
     None when one is not a whole or finite number (:func:`_number_problems` says which).
     """
     try:
         ints = int(cells[1]), int(cells[2]), int(cells[10])
-        floats = [float(cell) for cell in (*cells[3:10], *cells[11:])]
+        floats = list(map(float, cells[3:10] + cells[11:]))
     except ValueError:
         return None
     return (*ints, floats) if all(map(math.isfinite, floats)) else None
@@ -311,6 +324,8 @@ def _range_problem(samples: int, floats: list[float]) -> str | None:
     """Return what is out of range in a row of parsed numbers (:func:`_values`), if anything."""
     if samples < 1:
         return f"samples {samples} must be at least 1"
+    if min(floats[7:]) >= 0:
+        return None
     names = ("spread", *TIME_COLUMNS)[: len(floats) - 7]
     for name, value in zip(names, floats[7:], strict=True):
         if value < 0:
