@@ -1,15 +1,16 @@
 """What reading a log costs: the shipped arms' logs and a 10,000-row log, now and before.
 
 The logs are written once, by this tree: a simulated run of each shipped arm's plan (the
-nominal robot, seed 1), each as the file the controller writes and as a terminal capture
-of it (progress lines between the rows, broken at 60 columns), a 10,000-row log (the
-Viper's rows repeated, renumbered) in both forms, and a damaged log the reader refuses.
-Each run is a fresh process per tree (``--before``: a checkout of the code before, run with the same
-interpreter and that checkout first on ``PYTHONPATH``), the two trees' runs interleaved; a
-run reads every log ``--repeat`` times (``parse_log``, the text in memory). CPU seconds
-(``time.process_time``) per reading, median of ``--runs``, the ratio now / before, and
-whether the two trees read each log alike: a digest of the readings (every field, the
-joints' bits), the notes, the version, or of the refusal's messages.
+Puma has none; the nominal robot, seed 1), each as the file the controller writes and as a
+terminal capture of it (progress lines between the rows, broken at 60 columns), a
+10,000-row log (the Viper's rows repeated, renumbered) in both forms, and a damaged log the
+reader refuses. Each run is a fresh process per tree (``--before``: a checkout of the code
+before, run with the same interpreter and that checkout first on ``PYTHONPATH``), the two
+trees' runs interleaved; a run reads every log ``--repeat`` times (``parse_log``, the text
+in memory). CPU seconds (``time.process_time``) per reading, median of ``--runs``, the
+ratio now / before, and whether the two trees read each log alike: a digest of the
+readings (every field, the joints' bits), the notes, the version, or of the refusal's
+messages.
 
     python bench/bench_log.py --before ../before [--runs 5] [--repeat 20]
 """
@@ -20,11 +21,11 @@ import argparse
 import hashlib
 import json
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
+
+from interleaved import interleaved
 
 NOW = Path(__file__).resolve().parents[1]
 EXAMPLES = NOW / "examples"
@@ -109,7 +110,7 @@ def _digest(text: str) -> str:
     return hashlib.sha256(repr(whole).encode()).hexdigest()[:16]
 
 
-def child(path: str, repeat: int) -> None:
+def child(path: str, repeat: str) -> None:
     """One run in this process: print each log's CPU seconds per reading and digest (JSON)."""
     from wirecal.formats.log import parse_log
     from wirecal.solver.errors import WirecalError
@@ -118,30 +119,13 @@ def child(path: str, repeat: int) -> None:
     found = {}
     for name, text in texts.items():
         t0 = time.process_time()
-        for _ in range(repeat):
+        for _ in range(int(repeat)):
             try:
                 parse_log(text, "run.csv")
             except WirecalError:
                 pass
-        found[name] = ((time.process_time() - t0) / repeat, _digest(text))
+        found[name] = ((time.process_time() - t0) / int(repeat), _digest(text))
     print(json.dumps(found))
-
-
-def _run(tree: Path, path: str, repeat: int) -> dict[str, list]:
-    """Run :func:`child` on the code in ``tree``; its figures."""
-    bench = str(NOW / "bench")
-    code = (
-        f"import sys; sys.path.insert(0, {bench!r}); import bench_log; "
-        f"bench_log.child({path!r}, {repeat})"
-    )
-    out = subprocess.run(
-        [sys.executable, "-P", "-c", code],
-        env={"PYTHONPATH": str(tree), "PATH": "/usr/bin:/bin"},
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    return json.loads(out.stdout)
 
 
 def main() -> None:
@@ -154,10 +138,7 @@ def main() -> None:
         path = str(Path(tmp) / "logs.json")
         texts = logs()
         Path(path).write_text(json.dumps(texts), encoding="utf-8")
-        runs: dict[str, list[dict[str, list]]] = {"before": [], "now": []}
-        for _ in range(args.runs):
-            runs["before"].append(_run(args.before.resolve(), path, args.repeat))
-            runs["now"].append(_run(NOW, path, args.repeat))
+        runs = interleaved("bench_log", args.before, args.runs, path, str(args.repeat))
     print(f"CPU ms per reading, median of {args.runs} runs each ({args.repeat} readings each)")
     print(f"{'log':30} {'lines':>6} {'before':>8} {'now':>8} {'ratio':>6}  same result")
     totals = {"before": 0.0, "now": 0.0}

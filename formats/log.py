@@ -156,8 +156,7 @@ def parse_log(text: str, source: str, sha256: str | None = None, *, terminal: bo
     capture (module docstring); False for a log that a program sent itself
     (``wirecal receive``), where a line that is no row is an error.
     """
-    if sha256 is None:
-        sha256 = text_sha256(text)
+    sha256 = text_sha256(text) if sha256 is None else sha256
     seen: dict[tuple[str, ...], _Values] = {}  # each row's numbers, parsed once
     table = parse_table(
         text,
