@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
-from wirecal.solver import bound, budget, identifiability
+from wirecal.solver import bound, budget, identifiability, run_parameters
 from wirecal.solver.bound import ErrorModel, bound_mm
 from wirecal.solver.kinematics import tool_jacobian
 from wirecal.solver.memo import Kept, digest
@@ -92,3 +93,38 @@ def test_kept_factors_and_jacobians_are_read_only_and_the_same_numbers(viper):
     for a in (s, vt, Jp):
         with pytest.raises(ValueError, match="read-only"):
             a.flat[0] = 1.0
+
+
+def test_a_moves_profile_is_kept_read_only_and_another_arm_has_its_own(viper, monkeypatch):
+    rng = np.random.default_rng(6)
+    a, b = rng.uniform(-60, 60, (2, 4, viper.n_joints))
+    p0 = np.array([300.0, 0.0, 200.0])
+    first = run_parameters.move_profiles(viper, viper.nominal, p0, a, b)
+    fresh = run_parameters._profiles(viper, viper.nominal, p0, a, b)
+    for f in dataclasses.fields(first):
+        kept = getattr(first, f.name)
+        assert np.array_equal(kept, getattr(fresh, f.name))  # the same numbers, bit for bit
+        with pytest.raises(ValueError, match="read-only"):
+            kept.flat[0] = 1.0
+
+    def evaluated(*args):
+        raise RuntimeError("evaluated again")
+
+    monkeypatch.setattr(run_parameters, "_profiles", evaluated)
+    assert run_parameters.move_profiles(viper, viper.nominal, p0.copy(), a.copy(), b) is first
+    one_bit = viper.nominal.dh.copy()
+    one_bit.view(np.uint64)[1, 1] ^= 1  # a_1 one bit longer: another arm
+    for other in (
+        (viper, dataclasses.replace(viper.nominal, dh=one_bit), p0, a, b),
+        (viper, viper.nominal, p0 + 1e-9, a, b),
+        (viper, viper.nominal, p0, a, b[::-1]),
+        (
+            dataclasses.replace(viper, joint_speed_deg_s=viper.joint_speed_deg_s * 2),
+            viper.nominal,
+            p0,
+            a,
+            b,
+        ),
+    ):
+        with pytest.raises(RuntimeError, match="evaluated again"):
+            run_parameters.move_profiles(*other)
