@@ -8,10 +8,15 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
+from wirecal.formats.validation_files import load_setup
 from wirecal.solver import bound, budget, identifiability, run_parameters
 from wirecal.solver.bound import ErrorModel, bound_mm
 from wirecal.solver.kinematics import tool_jacobian
 from wirecal.solver.memo import Kept, digest
+from wirecal.solver.validation import design
+from wirecal.solver.validation.design import plate_grid
+
+from .conftest import VIPER
 
 
 @dataclass(frozen=True)
@@ -128,3 +133,29 @@ def test_a_moves_profile_is_kept_read_only_and_another_arm_has_its_own(viper, mo
     ):
         with pytest.raises(RuntimeError, match="evaluated again"):
             run_parameters.move_profiles(*other)
+
+
+def test_a_plates_grid_is_kept_read_only_and_another_setup_is_solved(viper, monkeypatch):
+    setup = load_setup(VIPER / "validation.toml")
+    index, points, targets = plate_grid(viper, setup)
+    fresh = design._solved_grid(viper, setup, 1.0)
+    assert index == fresh[0]
+    assert np.array_equal(points, fresh[1])
+    assert np.array_equal(targets, fresh[2])
+    for a in (points, targets):
+        with pytest.raises(ValueError, match="read-only"):
+            a.flat[0] = 1.0
+
+    def solved(*args):
+        raise RuntimeError("solved again")
+
+    monkeypatch.setattr(design, "_solved_grid", solved)
+    again = plate_grid(viper, load_setup(VIPER / "validation.toml"))
+    assert again[0] == index
+    assert again[0] is not index
+    assert again[1] is points
+    assert again[2] is targets
+    moved = dataclasses.replace(setup, plate_yaw_deg=setup.plate_yaw_deg + 1e-9)
+    for other in ((viper, moved, 1.0), (viper, setup, 2.0)):
+        with pytest.raises(RuntimeError, match="solved again"):
+            plate_grid(*other)
