@@ -11,8 +11,9 @@ interleaved (:mod:`interleaved`), medians and the ratio now / before, and whethe
 generated the same programs (and cell checks' answers), byte for byte. Last, per example,
 the cell check of 200 short moves (:func:`short_moves`), the pre-flight's check as a twin
 runs it move by move; the run timing a plan's consumers ask for (:func:`timelines`) and two
-runs of its programs on the twin (:func:`twin_runs`), with the logs and timelines among
-what must be the same.
+runs of its programs on the twin (:func:`twin_runs`), and where it ships a validation
+setup, its plate's grid asked for twice (:func:`plate_grids`), with the logs, timelines and
+grids among what must be the same.
 
     python bench/bench_generation.py [--runs N] [--before CHECKOUT]
 """
@@ -40,9 +41,12 @@ def forget() -> None:
     from wirecal.lang.urscript import parser as urscript
     from wirecal.lang.vplus import parser as vplus
     from wirecal.solver import kinematics, run_parameters
+    from wirecal.solver.validation import design
 
     if hasattr(run_parameters, "_KEPT_MOVES"):  # the moves' profiles kept (not before)
         run_parameters._KEPT_MOVES = type(run_parameters._KEPT_MOVES)(run_parameters.KEPT_MOVES)
+    if hasattr(design, "_KEPT_GRIDS"):  # the plates' grids kept (not before)
+        design._KEPT_GRIDS = type(design._KEPT_GRIDS)(design.KEPT_GRIDS)
     for cache in (_lint, rapid._parse_long, rapid._parse_short, urscript._parse_program):
         cache.cache_clear()
     vplus._parse_module.cache_clear()
@@ -145,6 +149,20 @@ def twin_runs(robot, plan) -> Callable[[], list[str]]:
     return lambda: [run(), run()]
 
 
+def plate_grids(robot, name: str) -> Callable[[], list] | None:
+    """Return the plate's grid of an example's validation setup asked for twice (None: none).
+
+    A validation module's generation and a check of the same setup ask for it again.
+    """
+    from wirecal.formats.validation_files import load_setup
+    from wirecal.solver.validation.design import plate_grid
+
+    path = EXAMPLES / name / "validation.toml"
+    if not path.exists():
+        return None
+    return lambda: [plate_grid(robot, load_setup(path)) for _ in range(2)]
+
+
 def child() -> None:
     """One run in this process: print each example's parts' CPU seconds and digests as JSON."""
     found: dict[str, dict] = {"cpu_s": {}, "digest": {}}
@@ -160,6 +178,11 @@ def child() -> None:
         found["cpu_s"][f"{name} two twin runs of its programs"] = cpu_s(twin, repeat=1)
         text = json.dumps(parts["programs()"](), sort_keys=True).encode() + repr(moves()).encode()
         text += repr(timing()).encode() + json.dumps(twin()).encode()
+        if (grids := plate_grids(robot, name)) is not None:
+            found["cpu_s"][f"{name} its plate's grid twice"] = cpu_s(grids, repeat=2)
+            text += b"".join(
+                json.dumps(i).encode() + p.tobytes() + t.tobytes() for i, p, t in grids()
+            )
         found["digest"][name] = hashlib.sha256(text).hexdigest()[:16]
     print(json.dumps(found))
 
