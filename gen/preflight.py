@@ -24,16 +24,17 @@ from wirecal.solver.cell.check import check_cell
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot, near_limits
-from wirecal.solver.wire_range import check_wire_range
+from wirecal.solver.wire_range import check_wire_range, run_samples
 
 
 def preflight(robot: Robot, plan: Plan, request: GenRequest, lang: Language) -> None:
     """Refuse, naming every broken rule, a plan the generated programs must not move through."""
     problems: list[str] = []
+    samples = run_samples(robot, plan)  # the moves' samples and frames, for both checks
     for check in (
         lambda: check_limits(robot, plan, request.margin_deg),
-        lambda: check_wire_range(robot, plan, request.range_margin_mm),
-        lambda: check_cell(robot, plan),
+        lambda: check_wire_range(robot, plan, request.range_margin_mm, samples=samples),
+        lambda: check_cell(robot, plan, samples),
         lambda: check_software(robot, lang),
     ):
         try:

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wirecal.solver.kinematics import joint_jacobian, tool_position
+from wirecal.solver.memo import Kept, digest
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.robot import Robot
 
@@ -236,6 +237,15 @@ def _finite(x: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(x), x, 0.0)
 
 
+KEPT_MOVES = 1024
+"""How many evaluations of :func:`move_profiles` are kept: a run's moves (the paper plan's
+run has about 100), asked for again by every consumer of a plan's timeline (the program's
+SPEEDs, the simulated log's and the twin's t_s, the log's timer check) and by the twin's
+every run of the same program."""
+
+_KEPT_MOVES: Kept[Moves] = Kept(KEPT_MOVES)
+
+
 def move_profiles(
     robot: Robot, model, p0_mm: np.ndarray, starts_deg: np.ndarray, ends_deg: np.ndarray
 ) -> Moves:
@@ -243,10 +253,19 @@ def move_profiles(
 
     ``model`` is the kinematic model (nominal for the program, the true one in the twin);
     ``p0_mm`` the wire's mount point (the tool point at θ0). dℓ/ds is analytic (the
-    Jacobian); d²ℓ/ds² its difference along the ``PATH_SAMPLES`` samples.
+    Jacobian); d²ℓ/ds² its difference along the ``PATH_SAMPLES`` samples. Kept by the
+    contents of what they are computed from (:mod:`~wirecal.solver.memo`): the same moves
+    of the same model are evaluated once, their arrays read-only.
     """
     a = np.atleast_2d(np.asarray(starts_deg, dtype=float))
     b = np.atleast_2d(np.asarray(ends_deg, dtype=float))
+    p0 = np.asarray(p0_mm, dtype=float)
+    key = digest(robot.joint_speed_deg_s, model, p0, a, b)
+    return _KEPT_MOVES.get(key, lambda: _profiles(robot, model, p0, a, b))
+
+
+def _profiles(robot: Robot, model, p0_mm: np.ndarray, a: np.ndarray, b: np.ndarray) -> Moves:
+    """:func:`move_profiles` of the moves a → b (M, n), computed, its arrays read-only."""
     s = np.linspace(0.0, 1.0, PATH_SAMPLES)
     dq = b - a  # (M, n) deg
     q = a[:, None, :] + s[None, :, None] * dq[:, None, :]  # (M, S, n)
@@ -261,13 +280,16 @@ def move_profiles(
     rate = np.where(length > AT_MOUNT_MM, rate, tool_rate)  # leaving the mount: tool's speed
     curve = np.gradient(rate, s, axis=1)
     seg = np.linalg.norm(np.diff(p, axis=1), axis=2).sum(axis=1)
-    return Moves(
+    out = (
         np.abs(rate).max(axis=1),
         np.abs(curve).max(axis=1),
         tool_rate.max(axis=1),
         seg,
         cruise_per_pct(robot, dq),
     )
+    for x in out:
+        x.flags.writeable = False
+    return Moves(*out)
 
 
 def cruise_per_pct(robot: Robot, dq_deg: np.ndarray) -> np.ndarray:

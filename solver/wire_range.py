@@ -10,11 +10,13 @@ length must stay within ``range_mm`` less a margin and above a few millimetres.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.exit_geometry import wire_path
-from wirecal.solver.kinematics import tool_position
+from wirecal.solver.kinematics import Frames, frames, tool_position
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.plan.moves import move_samples
 from wirecal.solver.robot import Robot
@@ -46,32 +48,58 @@ def run_moves(plan: Plan) -> list[tuple[str, np.ndarray, np.ndarray, bool]]:
     return moves
 
 
-def nominal_wire_mm(robot: Robot, theta0_deg, q_deg) -> np.ndarray:
+@dataclass(frozen=True)
+class RunSamples:
+    """The moves of ``wc.run`` sampled, and the nominal frames at the samples.
+
+    What the checks before motion (the wire's range, the cell) share: each computes them
+    alike, so a caller running both computes them once (:func:`run_samples`).
+    """
+
+    moves: list[tuple[str, np.ndarray, np.ndarray, bool]]  # :func:`run_moves`
+    q_deg: np.ndarray  # (K, n) every move's samples, in order
+    first: np.ndarray  # (M,) each move's first sample
+    frames: Frames  # the nominal model's frames of ``q_deg``
+
+
+def run_samples(robot: Robot, plan: Plan) -> RunSamples:
+    """Return the moves of ``wc.run``, sampled as the planner samples moves, and their frames."""
+    moves = run_moves(plan)
+    q, first = move_samples(np.array([m[1] for m in moves]), np.array([m[2] for m in moves]))
+    return RunSamples(moves, q, first, frames(robot.nominal, np.radians(q)))
+
+
+def nominal_wire_mm(robot: Robot, theta0_deg, q_deg, f: Frames | None = None) -> np.ndarray:
     """Return the nominal model's wire length (mm) at each configuration of ``q_deg`` (n×6).
 
     Measured from the tool position at θ0; over a pulley, arc plus span (a tip inside the
-    pulley counts as 0).
+    pulley counts as 0). ``f``: the nominal frames of ``q_deg`` when the caller has them.
     """
     model = robot.nominal
     p0 = tool_position(model, np.radians(np.asarray(theta0_deg, float))[None])[0]
-    tips = tool_position(model, np.radians(np.asarray(q_deg, float)))
+    tips = tool_position(model, np.radians(np.asarray(q_deg, float)), f)
     return np.nan_to_num(wire_path(model.pulley, tips - p0)[0])
 
 
 def check_wire_range(
-    robot: Robot, plan: Plan, margin_mm: float = RANGE_MARGIN_MM, min_mm: float = MIN_WIRE_MM
+    robot: Robot,
+    plan: Plan,
+    margin_mm: float = RANGE_MARGIN_MM,
+    min_mm: float = MIN_WIRE_MM,
+    samples: RunSamples | None = None,
 ) -> None:
     """Raise when a target's nominal wire length is out of the encoder's range.
 
     Raise :class:`WirecalError` naming every target (and the move to it) where the
     nominal wire length exceeds ``range_mm − margin_mm`` or comes within ``min_mm`` of
     zero (the moves back to θ0, where the wire is zero by construction, excepted).
+    ``samples``: the plan's :func:`run_samples` when the caller has them.
     """
     if not margin_mm >= 0:
         raise WirecalError(f"--range-margin {margin_mm:g}: give a margin of 0 mm or more")
-    moves = run_moves(plan)
-    q, first = move_samples(np.array([m[1] for m in moves]), np.array([m[2] for m in moves]))
-    d = nominal_wire_mm(robot, plan.theta0_deg, q)
+    samples = run_samples(robot, plan) if samples is None else samples
+    moves, q, first = samples.moves, samples.q_deg, samples.first
+    d = nominal_wire_mm(robot, plan.theta0_deg, q, samples.frames)
     longest = np.maximum.reduceat(d, first)
     # the wire is short near θ0 by construction: only the targets must stay above min_mm
     last = np.r_[first[1:], len(d)] - 1

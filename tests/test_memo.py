@@ -2,15 +2,21 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
-from wirecal.solver import bound, budget, identifiability
+from wirecal.formats.validation_files import load_setup
+from wirecal.solver import bound, budget, identifiability, run_parameters
 from wirecal.solver.bound import ErrorModel, bound_mm
 from wirecal.solver.kinematics import tool_jacobian
 from wirecal.solver.memo import Kept, digest
+from wirecal.solver.validation import design
+from wirecal.solver.validation.design import plate_grid
+
+from .conftest import VIPER
 
 
 @dataclass(frozen=True)
@@ -92,3 +98,64 @@ def test_kept_factors_and_jacobians_are_read_only_and_the_same_numbers(viper):
     for a in (s, vt, Jp):
         with pytest.raises(ValueError, match="read-only"):
             a.flat[0] = 1.0
+
+
+def test_a_moves_profile_is_kept_read_only_and_another_arm_has_its_own(viper, monkeypatch):
+    rng = np.random.default_rng(6)
+    a, b = rng.uniform(-60, 60, (2, 4, viper.n_joints))
+    p0 = np.array([300.0, 0.0, 200.0])
+    first = run_parameters.move_profiles(viper, viper.nominal, p0, a, b)
+    fresh = run_parameters._profiles(viper, viper.nominal, p0, a, b)
+    for f in dataclasses.fields(first):
+        kept = getattr(first, f.name)
+        assert np.array_equal(kept, getattr(fresh, f.name))  # the same numbers, bit for bit
+        with pytest.raises(ValueError, match="read-only"):
+            kept.flat[0] = 1.0
+
+    def evaluated(*args):
+        raise RuntimeError("evaluated again")
+
+    monkeypatch.setattr(run_parameters, "_profiles", evaluated)
+    assert run_parameters.move_profiles(viper, viper.nominal, p0.copy(), a.copy(), b) is first
+    one_bit = viper.nominal.dh.copy()
+    one_bit.view(np.uint64)[1, 1] ^= 1  # a_1 one bit longer: another arm
+    for other in (
+        (viper, dataclasses.replace(viper.nominal, dh=one_bit), p0, a, b),
+        (viper, viper.nominal, p0 + 1e-9, a, b),
+        (viper, viper.nominal, p0, a, b[::-1]),
+        (
+            dataclasses.replace(viper, joint_speed_deg_s=viper.joint_speed_deg_s * 2),
+            viper.nominal,
+            p0,
+            a,
+            b,
+        ),
+    ):
+        with pytest.raises(RuntimeError, match="evaluated again"):
+            run_parameters.move_profiles(*other)
+
+
+def test_a_plates_grid_is_kept_read_only_and_another_setup_is_solved(viper, monkeypatch):
+    setup = load_setup(VIPER / "validation.toml")
+    index, points, targets = plate_grid(viper, setup)
+    fresh = design._solved_grid(viper, setup, 1.0)
+    assert index == fresh[0]
+    assert np.array_equal(points, fresh[1])
+    assert np.array_equal(targets, fresh[2])
+    for a in (points, targets):
+        with pytest.raises(ValueError, match="read-only"):
+            a.flat[0] = 1.0
+
+    def solved(*args):
+        raise RuntimeError("solved again")
+
+    monkeypatch.setattr(design, "_solved_grid", solved)
+    again = plate_grid(viper, load_setup(VIPER / "validation.toml"))
+    assert again[0] == index
+    assert again[0] is not index
+    assert again[1] is points
+    assert again[2] is targets
+    moved = dataclasses.replace(setup, plate_yaw_deg=setup.plate_yaw_deg + 1e-9)
+    for other in ((viper, moved, 1.0), (viper, setup, 2.0)):
+        with pytest.raises(RuntimeError, match="solved again"):
+            plate_grid(*other)

@@ -17,7 +17,7 @@ from wirecal.solver.kinematics import Model, tool_position
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.plan.moves import move_samples
 from wirecal.solver.robot import Robot
-from wirecal.solver.wire_range import run_moves
+from wirecal.solver.wire_range import RunSamples, run_samples
 
 
 def _joints(q: np.ndarray) -> str:
@@ -68,21 +68,22 @@ def body_problem(robot: Robot, q_deg: np.ndarray) -> str | None:
     return None
 
 
-def check_cell(robot: Robot, plan: Plan) -> None:
+def check_cell(robot: Robot, plan: Plan, samples: RunSamples | None = None) -> None:
     """Raise naming every target or move of the run where the arm meets itself or the cell.
 
     Each problem names the step and point, the colliding pair and the joints where it
-    happens first.
+    happens first. ``samples``: the plan's
+    :func:`~wirecal.solver.wire_range.run_samples` when the caller has them.
     """
     model = robot.nominal
     p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
-    moves = run_moves(plan)
+    samples = run_samples(robot, plan) if samples is None else samples
+    moves, q, first = samples.moves, samples.q_deg, samples.first
     problems = []
     body = body_problem(robot, np.asarray(plan.theta0_deg, float))
     if body:
         problems.append(f"{plan.source}: theta0_deg: {body}")
-    q, first = move_samples(np.array([m[1] for m in moves]), np.array([m[2] for m in moves]))
-    gaps = robot.cell_gaps(q, p0, model)
+    gaps = robot.cell_gaps(q, p0, model, samples.frames)
     smallest = gaps.smallest()
     worst = np.minimum.reduceat(smallest, first)
     ends = np.r_[first[1:], len(q)]

@@ -29,6 +29,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.ik import solutions as ik
 from wirecal.solver.kinematics import tool_position
 from wirecal.solver.log.measurements import Measurements
+from wirecal.solver.memo import Kept, digest
 from wirecal.solver.plan.calibration_plan import Plan, Step
 from wirecal.solver.plan.moves import move_ok, move_samples
 from wirecal.solver.plan.options import PlanOptions
@@ -141,6 +142,13 @@ def config_poses(robot: Robot, setup: Setup, margin_deg: float = 1.0) -> np.ndar
     )
 
 
+KEPT_GRIDS = 8
+"""How many plates' grids are kept: a validation module's generation and the checks of the
+same robot and setup ask for the same grid, each point's inverse kinematics at two depths."""
+
+_KEPT_GRIDS: Kept[tuple[list, np.ndarray, np.ndarray]] = Kept(KEPT_GRIDS)
+
+
 def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
     """Return the plate's grid points and the flange targets above them.
 
@@ -149,8 +157,17 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
     cell, at the approach height and 5 mm below the plate's nominal top. In the order the
     probe visits them: row by row, every other
     row reversed, so that each point neighbours the one before it (the probe's search
-    starts from the depth found there).
+    starts from the depth found there). Kept by the contents of the robot, the setup and
+    the margin (:mod:`~wirecal.solver.memo`): the same grid is solved once, its arrays
+    read-only; a grid with problems is not kept (asked again, it raises again).
     """
+    key = digest(robot, setup, margin_deg)
+    index, points, targets = _KEPT_GRIDS.get(key, lambda: _solved_grid(robot, setup, margin_deg))
+    return list(index), points, targets
+
+
+def _solved_grid(robot: Robot, setup: Setup, margin_deg: float):
+    """:func:`plate_grid`, solved; its arrays read-only."""
     check_frame(robot, setup)
     nx, ny = setup.grid
     u = np.linspace(0, setup.plate_size_mm[0], nx)
@@ -192,7 +209,9 @@ def plate_grid(robot: Robot, setup: Setup, margin_deg: float = 1.0):
         raise WirecalError(
             problems[:5] + ([f"… and {len(problems) - 5} more"] if len(problems) > 5 else [])
         )
-    return index, points, np.array(targets)
+    flanges = np.array(targets)
+    points.flags.writeable = flanges.flags.writeable = False
+    return index, points, flanges
 
 
 def _grid_problem(robot, setup, margin_deg, gaps, point: str, two: list, columns: list) -> str:
