@@ -158,6 +158,19 @@ def test_division_by_zero_stops() -> None:
     assert ctl.calls[-1][0] == "stop"
 
 
+@pytest.mark.parametrize(
+    ("write", "what"),
+    [('TPWrite "" \\Dnum:=d;', "a written number"), ("TPWrite DnumToStr(d, 2);", "NumToStr")],
+)
+def test_an_infinite_number_written_stops_the_run_with_a_rapid_error(write, what) -> None:
+    """A dnum overflowed to infinity, then written: the run stops with the RAPID error and
+    its line, not Python's OverflowError (an exploring Hypothesis run found it)."""
+    outcome, ctl = run("d := 1E300;", "d := d * 1E300;", write, data=("VAR dnum d;",))
+    assert outcome.status == "error"
+    assert outcome.message.startswith(f"{what}: inf is not a finite number")
+    assert ctl.pendant == []
+
+
 def test_control_flow() -> None:
     _, ctl = run(
         "VAR num s := 0;",

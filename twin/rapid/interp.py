@@ -166,8 +166,19 @@ def copy(value: Any) -> Any:
     return value
 
 
+def _finite(value: float, what: str) -> None:
+    """Stop the run where ``value``, about to be written as text, is infinite or NaN.
+
+    A controller's num cannot be written so (what it does instead is unconfirmed); Python's
+    rounding would end the twin in a traceback.
+    """
+    if not math.isfinite(value):
+        raise RapidError(f"{what}: {value} is not a finite number (unconfirmed on a controller)")
+
+
 def fixed(value: float, decimals: int) -> str:
     """Write ``value`` with ``decimals`` decimals (NumToStr, DnumToStr: module docstring)."""
+    _finite(value, "NumToStr")
     scaled = abs(value) * 10**decimals
     rounded = math.floor(scaled + 0.5) / 10**decimals
     text = f"{rounded:.{decimals}f}"
@@ -176,6 +187,7 @@ def fixed(value: float, decimals: int) -> str:
 
 def number_text(value: float, digits: int) -> str:
     r"""Write a number as TPWrite and Write ``\Num``/``\Dnum`` do (module docstring)."""
+    _finite(value, "a written number")
     if abs(value - round(value)) < 0.000005:
         return str(round(value))
     return f"{value:.{digits}g}"
