@@ -112,8 +112,6 @@ def _ur_run(text: str, args: list):
         result = ("returned", _bits(interp.function("f")(args)))
     except RunError as e:
         result = ("error", e.message)
-    except ValueError as e:  # fmod of an infinity: Python's error, alike in both (a defect)
-        result = ("python error", str(e))
     return result, interp.where, list(interp.ops.items()), interp.cell.console
 
 

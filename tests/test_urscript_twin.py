@@ -340,3 +340,17 @@ def test_round_and_floor_at_halves():
         'textmsg(str_cat("", round(3.5)), str_cat(" ", round(-0.4)))',
     )
     assert out.console == ["-3 2", "3 -2", "4 0"]
+
+
+@pytest.mark.parametrize("divisor", ["2.5", "2"])
+def test_the_remainder_of_an_infinity_stops_the_run_with_a_urscript_error(divisor):
+    """inf % y: the run stops with the twin's URScript error, not Python's ``ValueError``
+    from math.fmod (what the controller does is unconfirmed). Arithmetic cannot make an
+    infinity (it stops on the overflow); a value handed in can."""
+    from wirecal.twin.urscript.values import URError
+
+    text = "\n".join(["def f(a):", f"  return a % {divisor}", "end", ""])
+    interp = Interpreter(parse_program(text, "t.script"), Log())
+    with pytest.raises(URError, match="no remainder of an infinite number"):
+        interp.function("f")([math.inf])
+    assert interp.function("f")([7.5]) == single(math.fmod(7.5, float(divisor)))

@@ -18,7 +18,6 @@ closures would evaluate it.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import Any, Protocol
 
@@ -108,7 +107,7 @@ class _Writer:
                 "_truth": V.truth,
                 "_unset": _unset,
                 "_i32": V.i32,
-                "_fmod": math.fmod,
+                "_fmod": V.fmod,
             }
         )
 

@@ -96,20 +96,31 @@ def negative(v):
     return i32(-v) if isinstance(v, int) else -v
 
 
+def fmod(x: float, y: float) -> float:
+    """Return ``x % y`` as :func:`math.fmod` does; an infinite ``x`` stops the run.
+
+    Python's fmod raises ``ValueError`` there, which would end the twin in a traceback;
+    what the controller does with it is unconfirmed.
+    """
+    if math.isinf(x):
+        raise URError(f"{x} % {y}: no remainder of an infinite number (unconfirmed)")
+    return math.fmod(x, y)
+
+
 COUNTED = {"+": "add", "-": "add", "*": "mul", "/": "div", "%": "div"}
 """The kind each arithmetic operator is counted as (the interpreter's ``ops``)."""
 INT_OPS: dict[str, Callable[[int, int], int]] = {
     "+": lambda x, y: x + y,
     "-": lambda x, y: x - y,
     "*": lambda x, y: x * y,
-    "%": lambda x, y: int(math.fmod(x, y)),
+    "%": lambda x, y: int(fmod(x, y)),
 }
 FLOAT_OPS: dict[str, Callable[[float, float], float]] = {
     "+": operator.add,
     "-": operator.sub,
     "*": operator.mul,
     "/": operator.truediv,
-    "%": math.fmod,
+    "%": fmod,
 }
 
 
