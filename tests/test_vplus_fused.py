@@ -112,3 +112,22 @@ def test_the_statements_are_written_out(viper, paper_plan, tmp_path, monkeypatch
     Interpreter(parse_module(PROGRAM, "t.v2"), cell).execute("t.main")
     assert len(runs) == 1  # the ten assignments, one function
     assert sum(v is not None for v in values) == 1  # the IF's a*b > c
+
+
+@pytest.mark.parametrize("k", [float("inf"), float("-inf"), float("nan")])
+def test_an_index_that_is_not_a_finite_number_is_the_illegal_index_error(
+    viper, paper_plan, tmp_path, k
+):
+    """An infinite or NaN index stops the run with -407, written out and as closures alike,
+    not with Python's OverflowError or ValueError from rounding it."""
+    source = (
+        ".PROGRAM t.main()\n    GLOBAL gk, g1, ga[]\n    AUTO b[3]\n"
+        "    b[gk] = 1\n    ga[gk] = 2\n    g1 = 0\n.END\n"
+    )
+    fused = _run(viper, paper_plan, tmp_path, source, {"gk": k}, fuse=True)
+    nodes = _run(viper, paper_plan, tmp_path, source, {"gk": k}, fuse=False)
+    for out in (fused[0], nodes[0]):
+        assert out.status == "error"
+        assert out.message == f"*Illegal array index* {k} (-407)"
+        assert (out.program, out.line) == ("t.main", 4)
+    assert fused[2] == nodes[2]

@@ -35,7 +35,7 @@ from wirecal.lang.vplus.keywords import keyword
 from wirecal.lang.vplus.parser import CONSTANTS
 from wirecal.twin.fused_code import Recipe, Source, fused_runs, recipe_of
 from wirecal.twin.machine import f32
-from wirecal.twin.vplus.errors import division_by_zero, illegal_index, undefined
+from wirecal.twin.vplus.errors import array_index, division_by_zero, illegal_index, undefined
 
 _PACK, _UNPACK = struct.Struct("f").pack, struct.Struct("f").unpack
 
@@ -141,7 +141,7 @@ class _Writer:
                 "_illegal_index": illegal_index,
                 "_division_by_zero": division_by_zero,
                 "_single_result": single_result,
-                "_floor": math.floor,
+                "_index": array_index,
                 "_fmod": math.fmod,
             }
         )
@@ -192,9 +192,9 @@ class _Writer:
             v, _ = self.value(x)
             number = src.bound.get(v)  # a number's index is rounded here (a table's)
             if type(number) is float and math.isfinite(number):
-                ks.append(src.bind(math.floor(number + 0.5)))
+                ks.append(src.bind(array_index(number)))
             else:
-                ks.append(src.let(f"_floor({v} + 0.5)"))
+                ks.append(src.let(f"_index({v})"))
         if len(ks) > 1:
             return src.let(f"({', '.join(ks)},)")
         k = src.bound.get(ks[0])

@@ -31,7 +31,13 @@ from wirecal.lang.vplus.keywords import keyword
 from wirecal.lang.vplus.parser import CONSTANTS, FUNCTIONS, Module, Program, transformation_names
 from wirecal.solver import pose
 from wirecal.twin.machine import Halt, Outcome, RunError, f32
-from wirecal.twin.vplus.errors import VError, division_by_zero, illegal_index, undefined
+from wirecal.twin.vplus.errors import (
+    VError,
+    array_index,
+    division_by_zero,
+    illegal_index,
+    undefined,
+)
 from wirecal.twin.vplus.fused import fused_steps, fused_value, single_result
 
 
@@ -381,7 +387,7 @@ class _Compiler:
             f = index_fns[0]
 
             def ix(frame):
-                k = math.floor(f(frame) + 0.5)
+                k = array_index(f(frame))
                 if k < 0:
                     illegal_index(k)
                 return k
@@ -389,7 +395,7 @@ class _Compiler:
             return ix
 
         def ixs(frame):
-            return tuple(math.floor(g(frame) + 0.5) for g in index_fns)
+            return tuple(array_index(g(frame)) for g in index_fns)
 
         return ixs
 
