@@ -79,6 +79,11 @@ OPTIONAL_KEYS = ("payload_kg",)
 KINDS = ("zero", "point", "unsettled", "reference")
 _Values = tuple[int, int, int, list[float]]
 """A row's step, index and samples, and its other numbers in column order (:func:`_values`)."""
+REAL_COLUMNS = (*JOINT_COLUMNS, "counts", "spread", *TIME_COLUMNS)
+"""A row's real numbers in column order (:func:`_values`); a version-1 row stops at spread."""
+_COUNTS, _SPREAD, _T_S, _SETTLE_S = (
+    REAL_COLUMNS.index(c) for c in ("counts", "spread", *TIME_COLUMNS)
+)
 
 
 def format_row(reading: Reading) -> str:
@@ -296,13 +301,13 @@ def _parse_row(
         kind,
         step,
         index,
-        np.array(floats[:6]),
-        floats[6],
+        np.array(floats[:_COUNTS]),
+        floats[_COUNTS],
         samples,
-        floats[7],
+        floats[_SPREAD],
         line,
-        floats[8] if len(floats) > 8 else None,
-        floats[9] if len(floats) > 9 else None,
+        floats[_T_S] if len(floats) > _T_S else None,
+        floats[_SETTLE_S] if len(floats) > _SETTLE_S else None,
     )
 
 
@@ -323,10 +328,9 @@ def _range_problem(samples: int, floats: list[float]) -> str | None:
     """Return what is out of range in a row of parsed numbers (:func:`_values`), if anything."""
     if samples < 1:
         return f"samples {samples} must be at least 1"
-    if min(floats[7:]) >= 0:
+    if min(floats[_SPREAD:]) >= 0:
         return None
-    names = ("spread", *TIME_COLUMNS)[: len(floats) - 7]
-    for name, value in zip(names, floats[7:], strict=True):
+    for name, value in zip(REAL_COLUMNS[_SPREAD:], floats[_SPREAD:], strict=False):
         if value < 0:
             return f"{name} {value:g} cannot be negative"
     return None
@@ -339,7 +343,7 @@ def _number_problems(cells: tuple[str, ...], line: int, bad) -> None:
             int(cell)
         except ValueError:
             bad(line, f"{name} {cell.strip()!r} is not a whole number")
-    names = (*JOINT_COLUMNS, "counts", "spread", *TIME_COLUMNS[: len(cells) - len(COLUMNS_V1)])
+    names = REAL_COLUMNS[: len(cells) - len(COLUMNS) + len(REAL_COLUMNS)]
     for name, cell in zip(names, [*cells[3:10], *cells[11:]], strict=True):
         try:
             if not math.isfinite(float(cell)):
