@@ -9,8 +9,8 @@ the BLAS thread settings of the bench's shell (the commands timed set one thread
 CPU time (user + system of the child and its children, which the machine's load touches far
 less than the wall time; the demo's second process and pytest-xdist's workers included) and
 wall time, median of
-``--runs`` runs (the test loops: ``--test-runs``, one by default, without the unmeasured
-first run the commands get, timed whether or not a test fails); the runs of the code before
+``--runs`` runs (the test loops: ``--test-runs``, one by default, timed whether or not a test
+fails); each command runs once unmeasured first; the runs of the code before
 and now are interleaved, so a change of the machine's load touches both alike, and each
 figure is given as the ratio now / before. The code before is a checkout of it (for example
 ``git worktree add --detach ../before main``) given as ``--before``; its commands run with
@@ -20,11 +20,14 @@ the two is compared byte for byte.
     python bench/bench_speed.py --before ../before [--runs 3] [--arms viper_s650 ur5e]
         [--no-demo] [--quick-loop] [--suite] [--test-runs 1] [--no-bytecode-cache]
 
-The test loops run with each tree's bytecode and rewritten tests cached first (a
-``pytest --collect-only`` of each, into a folder of the bench's), as a developer's loop
-runs; ``--no-bytecode-cache`` times them also with ``PYTHONDONTWRITEBYTECODE=1``, as a
-shell that sets it runs them (every module of the tree compiled and every test module's
-asserts rewritten again in every run).
+The test loops run as a developer's second loop runs: the unmeasured first run writes each
+tree's bytecode and rewritten tests (into a folder of the bench's) and Hypothesis's own caches
+(its Unicode tables, about 1.5 s of CPU the first time, and the constants it reads from the
+sources), in a Hypothesis folder of each tree's under the bench's; its example database is
+emptied before every run, so a failure one run saved is not replayed and shrunk in the next.
+``--no-bytecode-cache`` times them also with ``PYTHONDONTWRITEBYTECODE=1``, as a shell that
+sets it runs them (every module of the tree compiled and every test module's asserts
+rewritten again in every run).
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ import argparse
 import os
 import re
 import shlex
-import subprocess
+import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -101,10 +104,11 @@ def _test_commands(trees: dict[str, Path], wanted: dict[str, bool], tmp: Path, u
     """Return the test loops to time: (figure, tree's name) → command.
 
     Each tree's bytecode and rewritten tests kept in a folder of its own under ``tmp``
-    (``PYTHONPYCACHEPREFIX``, filled by :func:`_cache_bytecode`), as a developer's loop
-    runs; ``uncached`` adds each loop again with ``PYTHONDONTWRITEBYTECODE=1`` and no
-    folder, as a shell that sets it runs (the installed libraries' bytecode read, every
-    module of the tree compiled and every test module's asserts rewritten in every run).
+    (``PYTHONPYCACHEPREFIX``), as a developer's loop runs; ``uncached`` adds each loop again
+    with ``PYTHONDONTWRITEBYTECODE=1`` and no folder, as a shell that sets it runs (the
+    installed libraries' bytecode read, every module of the tree compiled and every test
+    module's asserts rewritten in every run). Either way, Hypothesis keeps its files in
+    :func:`_hypothesis_folder`.
     """
     out: dict[tuple[str, str], list[str]] = {}
     for variant in ("", ", no bytecode cache") if uncached else ("",):
@@ -112,7 +116,8 @@ def _test_commands(trees: dict[str, Path], wanted: dict[str, bool], tmp: Path, u
             for loop, args in readme_tests(tree).items():
                 if wanted[loop]:
                     env = "PYTHONDONTWRITEBYTECODE=1" if variant else _cache_of(tmp, name)
-                    out[(loop + variant, name)] = ["env", env, *_pytest(tree, args)]
+                    hypothesis = f"HYPOTHESIS_STORAGE_DIRECTORY={_hypothesis_folder(tmp, name)}"
+                    out[(loop + variant, name)] = ["env", env, hypothesis, *_pytest(tree, args)]
     return out
 
 
@@ -121,31 +126,39 @@ def _cache_of(tmp: Path, name: str) -> str:
     return f"PYTHONPYCACHEPREFIX={tmp / ('pycache_' + name)}"
 
 
-def _cache_bytecode(trees: dict[str, Path], tmp: Path) -> None:
-    """Write each tree's bytecode and rewritten tests once: ``pytest --collect-only``."""
-    for name, tree in trees.items():
-        cmd = ["env", _cache_of(tmp, name), *_pytest(tree, ["--collect-only", "-q"])]
-        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+def _hypothesis_folder(tmp: Path, name: str) -> Path:
+    """Return the folder of Hypothesis's files for tree ``name``'s loops, under ``tmp``."""
+    return tmp / f"hypothesis_{name}"
 
 
 def _test_times(trees: dict[str, Path], args: argparse.Namespace, tmp: Path):
-    """Return the test loops' median (wall s, CPU s), keyed (figure, tree's name)."""
+    """Return the test loops' median (wall s, CPU s), keyed (figure, tree's name).
+
+    Each loop runs once unmeasured first (:mod:`bench_speed`'s docstring), and Hypothesis's
+    example database of its tree is emptied before every run.
+    """
     wanted = {"quick loop": args.quick_loop, "whole suite": args.suite}
     tests = _test_commands(trees, wanted, tmp, args.no_bytecode_cache)
     for tree in trees.values() if args.no_bytecode_cache else ():
         if any(p.is_dir() for p in tree.rglob("__pycache__") if ".venv" not in p.parts):
             print(f"note: {tree} holds __pycache__ folders, which the uncached loops read")
-    if tests:
-        _cache_bytecode(trees, tmp)
-    return _timed(tests, args.test_runs, warm=False)
+    if not tests:
+        return {}
+    flat = {f"{fig} | {name}": cmd for (fig, name), cmd in tests.items()}
+
+    def empty_examples(key: str) -> None:
+        shutil.rmtree(_hypothesis_folder(tmp, key.split(" | ")[1]) / "examples", True)
+
+    times = medians_s(flat, args.test_runs, warm=True, check=False, before_each=empty_examples)
+    return {key: times[f"{key[0]} | {key[1]}"] for key in tests}
 
 
-def _timed(cmds: dict[tuple[str, str], list[str]], runs: int, warm: bool):
-    """Return each command's median (wall s, CPU s), keyed as ``cmds``."""
+def _timed(cmds: dict[tuple[str, str], list[str]], runs: int):
+    """Return each command's median (wall s, CPU s), keyed as ``cmds``: warm, checked."""
     if not cmds:
         return {}
     flat = {f"{fig} | {name}": cmd for (fig, name), cmd in cmds.items()}
-    times = medians_s(flat, runs, warm=warm, check=warm)  # a failing test: timed all the same
+    times = medians_s(flat, runs)
     return {key: times[f"{key[0]} | {key[1]}"] for key in cmds}
 
 
@@ -172,7 +185,7 @@ def main() -> None:
     print(f"load average at the start: {os.getloadavg()[0]:.1f}")
     with tempfile.TemporaryDirectory() as tmp:
         cmds = _commands(trees, Path(tmp), args.arms, not args.no_demo)
-        times = _timed(cmds, args.runs, warm=True)
+        times = _timed(cmds, args.runs)
         tests = _test_times(trees, args, Path(tmp))
         times |= tests
         same = {
@@ -182,7 +195,10 @@ def main() -> None:
         }
     print(f"load average at the end: {os.getloadavg()[0]:.1f}; median of {args.runs} runs")
     if tests:
-        print(f"(the test loops: median of {args.test_runs} run(s), no unmeasured first run)")
+        print(
+            f"(the test loops: median of {args.test_runs} run(s) after an unmeasured one; "
+            "Hypothesis's example database emptied before each)"
+        )
     print("| figure | before: CPU s / wall s | now: CPU s / wall s | ratio CPU (wall) |")
     print("|---|---|---|---|")
     for fig in dict.fromkeys(fig for fig, _ in times):

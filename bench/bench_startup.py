@@ -24,6 +24,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from wirecal.cli.main import GC_THRESHOLD
@@ -32,7 +33,11 @@ VIPER = Path(__file__).resolve().parents[1] / "examples" / "viper_s650"
 
 
 def medians_s(
-    commands: dict[str, list[str]], runs: int, warm: bool = True, check: bool = True
+    commands: dict[str, list[str]],
+    runs: int,
+    warm: bool = True,
+    check: bool = True,
+    before_each: Callable[[str], None] | None = None,
 ) -> dict[str, tuple[float, float]]:
     """Median wall and CPU time (user + system) of each command, run in turn ``runs`` times.
 
@@ -40,13 +45,18 @@ def medians_s(
     it shuts down). The CPU time of a child process hardly depends on what else the machine
     runs; the wall time does, two- to threefold on a shared machine. ``warm``: each command
     runs once unmeasured first (writing the bytecode caches); ``check``: a command that fails
-    stops the benchmark.
+    stops the benchmark; ``before_each``: called with a command's name before each of its
+    runs, unmeasured, the first included.
     """
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in commands}
-    for cmd in commands.values() if warm else ():
-        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    for name, cmd in commands.items() if warm else ():
+        if before_each:
+            before_each(name)
+        subprocess.run(cmd, check=check, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     for _ in range(runs):
         for name, cmd in commands.items():
+            if before_each:
+                before_each(name)
             before = resource.getrusage(resource.RUSAGE_CHILDREN)
             t0 = time.perf_counter()
             subprocess.run(cmd, check=check, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
