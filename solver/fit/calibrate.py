@@ -74,15 +74,6 @@ MAX_SESSION_PASSES = 6
 
 
 @dataclass(frozen=True)
-class Outlier:
-    """A rejected row: 0-based data row, its file line and its residual (model − measured)."""
-
-    row: int
-    line: int
-    residual_mm: float
-
-
-@dataclass(frozen=True)
 class Core:
     """The result of the fit on a table's rows (before the held-out validation)."""
 
