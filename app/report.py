@@ -137,7 +137,7 @@ def psi_figure(result: SolveResult) -> str:
 
 
 _PSI_FIGURES: Kept[str] = Kept(8)
-"""The last Ψ figures (PNG data URIs, some 100 kB each)."""
+"""The last Ψ figures (PNG data URIs, about 50 kB each)."""
 
 
 def _psi_png(psi: np.ndarray, step: np.ndarray, order: Sequence[str], names: Sequence[str]) -> str:
