@@ -22,6 +22,7 @@ from wirecal.solver import params as P
 from wirecal.solver.accuracy import tool_error, workspace
 from wirecal.solver.compliance import workspace_sag
 from wirecal.solver.kinematics import bends
+from wirecal.solver.memo import Kept, digest
 from wirecal.solver.solve import SolveResult
 from wirecal.solver.validation.analysis import Stats, reduction
 from wirecal.solver.verdict import OVERRIDDEN
@@ -126,17 +127,29 @@ def _png(fig) -> str:
 
 
 def psi_figure(result: SolveResult) -> str:
-    """|Ψ| of every measured point (the Ψ ``solve`` computed), steps separated."""
-    plan, step, names = result.plan, result.step, result.names
-    psi = np.abs(result.psi)
+    """|Ψ| of every measured point (the Ψ ``solve`` computed), steps separated.
+
+    Kept by what it shows (:mod:`~wirecal.solver.memo`): every run of one plan has the same
+    Ψ, and the report of another run shows the figure drawn for the first, byte for byte.
+    """
+    shown = (np.abs(result.psi), result.step, result.plan.order, result.names)
+    return _PSI_FIGURES.get(digest(*shown), lambda: _psi_png(*shown))
+
+
+_PSI_FIGURES: Kept[str] = Kept(8)
+"""The last Ψ figures (PNG data URIs, about 50 kB each)."""
+
+
+def _psi_png(psi: np.ndarray, step: np.ndarray, order: Sequence[str], names: Sequence[str]) -> str:
+    """Return :func:`psi_figure` drawn: |Ψ| (N, k), each point's step in ``order``, k names."""
     fig, ax = _pyplot().subplots(figsize=(7, 6.5))
     im = ax.imshow(psi, aspect="auto", cmap="magma_r", vmin=0)
     for b in np.flatnonzero(np.diff(step)) + 0.5:
         ax.axhline(b, color="white", lw=1.5)
     ax.set_xticks(range(len(names)), names)
-    steps = [j for j in range(1, len(plan.order) + 1) if np.any(step == j)]
+    steps = [j for j in range(1, len(order) + 1) if np.any(step == j)]
     centres = [np.mean(np.flatnonzero(step == j)) for j in steps]
-    ax.set_yticks(centres, [f"step {j}: {plan.order[j - 1]}" for j in steps])
+    ax.set_yticks(centres, [f"step {j}: {order[j - 1]}" for j in steps])
     ax.set_title("|Ψ| of every calibration point (mm/deg, mm/mm)")
     fig.colorbar(im, ax=ax, shrink=0.8)
     return _png(fig)

@@ -56,7 +56,10 @@ the Viper's paper plan (a simulated log) and of the same log again (the tests so
 logs many times over: the budgets' bounds and factorisations are kept by their inputs), and
 of a UR5e with identified compliances; by the code now and, with ``--before CHECKOUT``, by
 the code there, interleaved run by run, with the ratio and whether the budgets are the same
-bit for bit (:func:`bench_fit.compare_trees`).
+bit for bit (:func:`bench_fit.compare_trees`); and the CPU of drawing each arm's bounds
+again, ten times each (the 95 % quantile alone, not kept: :func:`wirecal.solver.bound._bound_mm`;
+the UR5e's with the compliances' box-restricted draws), and whether they are the same bit
+for bit.
 
     python bench/bench_bound.py [--trials 300] [--no-unmodelled]
     python bench/bench_bound.py --compliance ur5e viper_s650 abb_irb120 [--trials 40]
@@ -176,9 +179,15 @@ from wirecal.formats.robot_file import load_robot
 from wirecal.formats.simulated_log import simulate_log
 from wirecal.formats.truth import random_errors
 from wirecal.solver.log.measurements import check_log
+from wirecal.solver import bound
 from wirecal.solver.solve import solve
 examples = Path(sys.argv[1])
 figures, outputs = {}, {}
+asked, drawn = {}, bound._bound_mm
+def kept_inputs(*args):
+    asked.setdefault(arm, []).append(args)
+    return drawn(*args)
+bound._bound_mm = kept_inputs
 def timed(name, robot, plan, m):
     cpu = time.process_time()
     result = solve(robot, plan, m)
@@ -194,6 +203,12 @@ for arm, plan_file in (("viper_s650", "paper_plan.toml"), ("ur5e", "plan.toml"))
     m = check_log(parse_log(simulate_log(robot, plan, truth, seed=5), "s.csv"), plan, robot)
     timed(f"solve, {arm}", robot, plan, m)
     timed(f"solve, {arm}, the same log again", robot, plan, m)
+for arm, each in asked.items():
+    cpu = time.process_time()
+    again = [drawn(*args) for _ in range(10) for args in each]
+    name = f"{arm}: its solve's {len(each)} bounds drawn 10 times"
+    figures[name] = time.process_time() - cpu
+    outputs[name] = hashlib.sha256(repr(again).encode()).hexdigest()
 print(json.dumps({"figures": figures, "outputs": outputs}))
 """
 

@@ -248,8 +248,10 @@ def _bound_mm(
     A = np.ascontiguousarray(Jp.transpose(1, 2, 0)).astype(np.float32)  # (3, m, Q)
     ones = np.full(q, 1.0 / q, dtype=np.float32)  # the mean over configurations as a product
     E = np.empty(draws)
+    block = np.empty((3, _CHUNK, q), dtype=np.float32)  # written over: no array per block
     for start in range(0, draws, _CHUNK):
-        p = de[start : start + _CHUNK] @ A  # (3, chunk, Q)
+        x = de[start : start + _CHUNK]
+        p = np.matmul(x, A, out=block[:, : len(x)])  # (3, chunk, Q)
         p *= p
         sq = np.add(p[0], p[1], out=p[0])  # the sum over the axis, in its order, in place
         sq += p[2]
