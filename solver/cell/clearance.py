@@ -13,8 +13,15 @@ from wirecal.solver.kinematics import Frames, Model, frames
 
 
 def _dot(u, v) -> np.ndarray:
-    """Return u · v for vectors held component-first (3, ...)."""
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+    """Return u · v for vectors held component-first (3, ...).
+
+    The products in one call, then summed x + y + z (the last in place): the numbers
+    of ``u[0] * v[0] + u[1] * v[1] + u[2] * v[2]`` in two calls and two arrays fewer.
+    """
+    out = u[0] * v[0]
+    out += u[1] * v[1]
+    out += u[2] * v[2]
+    return out
 
 
 def _unit(x: np.ndarray) -> np.ndarray:
@@ -38,8 +45,9 @@ def segment_distance(p1, q1, p2, q2) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"):
         s = np.where(denom > 1e-12, _unit((b * f - c * e) / denom), 0.0)
         t = np.where(e > 1e-12, (b * s + f) / e, 0.0)
-        s = np.where(t < 0, _unit(-c / np.where(a > 1e-12, a, 1)), s)
-        s = np.where(t > 1, _unit((b - c) / np.where(a > 1e-12, a, 1)), s)
+        a_or_1 = np.where(a > 1e-12, a, 1)
+        s = np.where(t < 0, _unit(-c / a_or_1), s)
+        s = np.where(t > 1, _unit((b - c) / a_or_1), s)
     t = _unit(t)
     gap = (p1 + s * d1) - (p2 + t * d2)
     return np.sqrt(_dot(gap, gap))

@@ -1,0 +1,77 @@
+"""The sweeps' fast paths give their general paths' numbers bit for bit (issue 34).
+
+One move's samples (solver/plan/moves.py) are those of the same move among others, and
+the segments' distance (solver/cell/clearance.py) with its products taken a call at a time
+fewer is the clamped closest-point construction written out term by term.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from wirecal.solver.cell.clearance import segment_distance
+from wirecal.solver.plan.moves import move_samples
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    scale=st.sampled_from([0.0, 0.01, 1.0, 30.0, 400.0]),
+    others=st.integers(1, 4),
+    step=st.sampled_from([0.5, 2.0, 3.0]),
+)
+def test_one_moves_samples_are_its_samples_among_others(seed, scale, others, step):
+    rng = np.random.default_rng(seed)
+    a = rng.uniform(-180.0, 180.0, (others + 1, 6))
+    b = a + rng.normal(0.0, scale, a.shape)
+    q, first = move_samples(a[:1], b[:1], step)
+    q_all, first_all = move_samples(a, b, step)
+    count = first_all[1]
+    assert first.tolist() == [0]
+    assert q.tobytes() == q_all[:count].tobytes()
+    k = np.arange(1, count + 1)[:, None]
+    assert q.tobytes() == (a[0] + k / count * (b[0] - a[0])).tobytes()
+
+
+def _distance_written_out(p1, q1, p2, q2):
+    """The clamped closest points, each dot product as x·x' + y·y' + z·z' (the definition)."""
+
+    def dot(u, v):
+        return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+    def unit(x):
+        return np.minimum(np.maximum(x, 0.0), 1.0)
+
+    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
+    a, e, f, c, b = dot(d1, d1), dot(d2, d2), dot(d2, r), dot(d1, r), dot(d1, d2)
+    denom = a * e - b * b
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = np.where(denom > 1e-12, unit((b * f - c * e) / denom), 0.0)
+        t = np.where(e > 1e-12, (b * s + f) / e, 0.0)
+        s = np.where(t < 0, unit(-c / np.where(a > 1e-12, a, 1)), s)
+        s = np.where(t > 1, unit((b - c) / np.where(a > 1e-12, a, 1)), s)
+    t = unit(t)
+    gap = (p1 + s * d1) - (p2 + t * d2)
+    return np.sqrt(dot(gap, gap))
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    shape=st.sampled_from([(1, 1), (8, 1), (11, 3), (5, 40)]),
+    degenerate=st.sampled_from(["none", "point", "parallel", "both"]),
+)
+def test_the_segments_distance_is_the_construction_written_out(seed, shape, degenerate):
+    rng = np.random.default_rng(seed)
+    p1, q1, p2, q2 = (rng.normal(0.0, 300.0, (3, *shape)) for _ in range(4))
+    if degenerate in ("point", "both"):
+        q2[:, 0] = p2[:, 0]  # the second segment a point
+    if degenerate in ("parallel", "both"):
+        q2[:, -1] = p2[:, -1] + 2.0 * (q1[:, -1] - p1[:, -1])
+    want = _distance_written_out(p1, q1, p2, q2)
+    assert segment_distance(p1, q1, p2, q2).tobytes() == want.tobytes()
+    # broadcast as the housing's and the wire's checks ask: one segment against many
+    got = segment_distance(p1[:, :1], q1[:, :1], p2, q2)
+    assert got.tobytes() == _distance_written_out(p1[:, :1], q1[:, :1], p2, q2).tobytes()
