@@ -1,8 +1,10 @@
 """The sweeps' fast paths give their general paths' numbers bit for bit (issue 34).
 
-One move's samples (solver/plan/moves.py) are those of the same move among others, and
-the segments' distance (solver/cell/clearance.py) with its products taken a call at a time
-fewer is the clamped closest-point construction written out term by term.
+One move's samples (solver/plan/moves.py) are those of the same move among others; the
+segments' distance (solver/cell/clearance.py), its dot products summed in place, is the
+clamped closest-point construction written out term by term; a capsule's gap to a box
+(solver/cell/model.py), its sampling fractions kept, is its points' distance a segment at a
+time.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from wirecal.solver.cell.clearance import segment_distance
+from wirecal.solver.cell.model import BOX_STEP_MM, Box, _box_gaps
 from wirecal.solver.plan.moves import move_samples
 
 
@@ -75,3 +78,32 @@ def test_the_segments_distance_is_the_construction_written_out(seed, shape, dege
     # broadcast as the housing's and the wire's checks ask: one segment against many
     got = segment_distance(p1[:, :1], q1[:, :1], p2, q2)
     assert got.tobytes() == _distance_written_out(p1[:, :1], q1[:, :1], p2, q2).tobytes()
+
+
+def _box_gaps_written_out(box, a, b, near_mm):
+    """A capsule axis's distance to a box: its bounding box's, else its sampled points'."""
+
+    def to_box(lo, hi, p_lo, p_hi):
+        shape = (3,) + (1,) * (p_lo.ndim - 1)
+        out = np.maximum(np.maximum(lo.reshape(shape) - p_hi, p_lo - hi.reshape(shape)), 0.0)
+        return np.sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2])
+
+    lo, hi = np.array(box.min_mm, float), np.array(box.max_mm, float)
+    best = to_box(lo, hi, np.minimum(a, b), np.maximum(a, b))
+    for s, k in zip(*np.nonzero(best < near_mm[:, None]), strict=True):
+        d = b[:, s, k] - a[:, s, k]
+        count = int(np.ceil(np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / BOX_STEP_MM)) + 1
+        p = a[:, s, k, None] + np.linspace(0.0, 1.0, count) * d[:, None]
+        best[s, k] = np.min(to_box(lo, hi, p, p))
+    return best
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), s=st.integers(1, 12), n=st.integers(1, 20))
+def test_the_box_gaps_are_the_sampled_points_distances_written_out(seed, s, n):
+    rng = np.random.default_rng(seed)
+    a = rng.normal(0.0, 400.0, (3, s, n))
+    b = a + rng.normal(0.0, 300.0, (3, s, n))
+    box = Box("b", tuple(rng.uniform(-300.0, 0.0, 3)), tuple(rng.uniform(0.0, 300.0, 3)))
+    near = rng.uniform(0.0, 300.0, s)
+    assert _box_gaps(box, a, b, near).tobytes() == _box_gaps_written_out(box, a, b, near).tobytes()

@@ -12,11 +12,11 @@ import numpy as np
 from wirecal.solver.kinematics import Frames, Model, frames
 
 
-def _dot(u, v) -> np.ndarray:
+def dot(u, v) -> np.ndarray:
     """Return u · v for vectors held component-first (3, ...).
 
-    The products in one call, then summed x + y + z (the last in place): the numbers
-    of ``u[0] * v[0] + u[1] * v[1] + u[2] * v[2]`` in two calls and two arrays fewer.
+    Summed x + y + z in place: the numbers of ``u[0] * v[0] + u[1] * v[1] + u[2] * v[2]``
+    with two arrays fewer (the cell's checks and the wire's clearance share it).
     """
     out = u[0] * v[0]
     out += u[1] * v[1]
@@ -36,11 +36,11 @@ def segment_distance(p1, q1, p2, q2) -> np.ndarray:
     (the clamped closest-point construction).
     """
     d1, d2, r = q1 - p1, q2 - p2, p1 - p2
-    a = _dot(d1, d1)
-    e = _dot(d2, d2)
-    f = _dot(d2, r)
-    c = _dot(d1, r)
-    b = _dot(d1, d2)
+    a = dot(d1, d1)
+    e = dot(d2, d2)
+    f = dot(d2, r)
+    c = dot(d1, r)
+    b = dot(d1, d2)
     denom = a * e - b * b
     with np.errstate(invalid="ignore", divide="ignore"):
         s = np.where(denom > 1e-12, _unit((b * f - c * e) / denom), 0.0)
@@ -50,7 +50,7 @@ def segment_distance(p1, q1, p2, q2) -> np.ndarray:
         s = np.where(t > 1, _unit((b - c) / a_or_1), s)
     t = _unit(t)
     gap = (p1 + s * d1) - (p2 + t * d2)
-    return np.sqrt(_dot(gap, gap))
+    return np.sqrt(dot(gap, gap))
 
 
 def wire_trim_mm(robot) -> float:
@@ -82,7 +82,7 @@ def wire_clearance(
     t = model.tool_point
     p = o[-1] + R[:, 0] * t[0] + R[:, 1] * t[1] + R[:, 2] * t[2]
     enc = np.asarray(encoder, dtype=float)[:, None]
-    length = np.sqrt(_dot(p - enc, p - enc))
+    length = np.sqrt(dot(p - enc, p - enc))
     keep = _unit(1 - trim_mm / np.maximum(length, 1e-9))
     wire_end = enc + keep * (p - enc)
     starts = o[1:-1].transpose(1, 0, 2)  # (3, caps, N); capsule k: frame k origin → k+1
