@@ -4,17 +4,27 @@ One move's samples (solver/plan/moves.py) are those of the same move among other
 segments' distance (solver/cell/clearance.py), its dot products summed in place, is the
 clamped closest-point construction written out term by term; a capsule's gap to a box
 (solver/cell/model.py), its sampling fractions kept, is its points' distance a segment at a
-time.
+time; the pre-flight's cell check, the pairs far apart bounded, says what it says with every
+gap exact.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
+
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from wirecal.formats.plan_file import load_plan
+from wirecal.formats.robot_file import load_robot
+from wirecal.solver.cell import check
+from wirecal.solver.cell.check import check_cell
 from wirecal.solver.cell.clearance import segment_distance
 from wirecal.solver.cell.model import BOX_STEP_MM, Box, _box_gaps
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan.moves import move_samples
 
 
@@ -107,3 +117,45 @@ def test_the_box_gaps_are_the_sampled_points_distances_written_out(seed, s, n):
     box = Box("b", tuple(rng.uniform(-300.0, 0.0, 3)), tuple(rng.uniform(0.0, 300.0, 3)))
     near = rng.uniform(0.0, 300.0, s)
     assert _box_gaps(box, a, b, near).tobytes() == _box_gaps_written_out(box, a, b, near).tobytes()
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+CHECKED_PLANS = (
+    ("viper_s650", "colliding_plan.toml"),
+    ("ur5e", "colliding_plan.toml"),
+    ("abb_irb120", "plan.toml"),
+)
+
+
+def _problems(robot, plan) -> list[str] | None:
+    try:
+        check_cell(robot, plan)
+    except WirecalError as exc:
+        return exc.problems
+    return None
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    which=st.sampled_from(CHECKED_PLANS),
+    seed=st.integers(0, 2**32 - 1),
+    scale=st.sampled_from([0.0, 5.0, 30.0, 90.0]),
+)
+def test_the_cell_check_says_what_it_says_with_every_gap_exact(which, seed, scale):
+    """The pairs beyond SURE_GAP_MM left as bounds: the same refusals, word for word."""
+    arm, name = which
+    robot = load_robot(EXAMPLES / arm / "robot.toml")
+    plan = load_plan(EXAMPLES / arm / name, robot)
+    lo, hi = robot.limits_deg(body=False)
+    rng = np.random.default_rng(seed)
+    steps = tuple(
+        replace(
+            s, points_deg=np.clip(s.points_deg + rng.normal(0.0, scale, s.points_deg.shape), lo, hi)
+        )
+        for s in plan.steps
+    )
+    moved = replace(plan, steps=steps)
+    got = _problems(robot, moved)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(check, "SURE_GAP_MM", np.inf)
+        assert got == _problems(robot, moved)
