@@ -10,11 +10,13 @@ each timed in a fresh process per tree (:mod:`interleaved`), the trees' runs alt
   random poses, each move checked with every gap exact
   (:func:`~wirecal.solver.cell.check.move_sweep`) and by a twin's successive checks
   (:class:`~wirecal.solver.cell.sweep.Sweeps`), as tests/test_sweeps.py does;
+* ``cell checks``: the pre-flight's cell check (:func:`~wirecal.solver.cell.check.check_cell`)
+  of each shipped plan and of the two colliding examples, 4 times each;
 * ``fingerprints``: each shipped plan's fingerprint, 50 times.
 
-Every memory of frames and move profiles is forgotten before each timed call. What each
-made (the pool plans' rows, figures and posteriors, the sweeps' answers and last gaps, the
-fingerprints) is digested; the two trees must make the same, byte for byte.
+Every memory of frames is forgotten before each timed call. What each made (the pool
+plans' rows and predicted errors, the sweeps' answers and last gaps, the cell checks'
+refusals, the fingerprints) is digested: the two trees must make the same, byte for byte.
 
     python bench/bench_cell_plan.py [--runs N] [--before CHECKOUT]
 """
@@ -33,6 +35,7 @@ ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 ARMS = ("viper_s650", "ur5e", "abb_irb120")
 PLANS = {"viper_s650": "paper_plan.toml", "ur5e": "plan.toml", "abb_irb120": "plan.toml"}
+COLLIDING = ("viper_s650", "ur5e")
 
 
 def forget() -> None:
@@ -106,6 +109,28 @@ def short_moves(arm: str) -> Callable[[], str]:
     return walks
 
 
+def cell_checks() -> Callable[[], list]:
+    """Return the pre-flight's cell check of the shipped and the colliding plans: refusals."""
+    from wirecal.formats.plan_file import load_plan
+    from wirecal.formats.robot_file import load_robot
+    from wirecal.solver.cell.check import check_cell
+    from wirecal.solver.errors import WirecalError
+
+    cases = []
+    for arm, name in [*PLANS.items(), *((a, "colliding_plan.toml") for a in COLLIDING)]:
+        robot = load_robot(EXAMPLES / arm / "robot.toml")
+        cases.append((robot, load_plan(EXAMPLES / arm / name, robot)))
+
+    def checked(robot, plan) -> list[str]:
+        try:
+            check_cell(robot, plan)
+        except WirecalError as exc:
+            return exc.problems
+        return []
+
+    return lambda: [checked(robot, plan) for robot, plan in cases for _ in range(4)]
+
+
 def fingerprints() -> Callable[[], list[str]]:
     """Return the shipped plans' fingerprints, each asked 50 times."""
     from wirecal.formats.plan_file import load_plan
@@ -124,6 +149,7 @@ def child() -> None:
     made = hashlib.sha256()
     works = {"UR10 pool plan, 300 configurations": pool_plan()}
     works |= {f"{arm} 600 short moves, checked twice": short_moves(arm) for arm in ARMS}
+    works["cell checks of 5 plans (2 refused), 4 each"] = cell_checks()
     works["fingerprints of 3 plans, 50 times each"] = fingerprints()
     for name, work in works.items():
         found["cpu_s"][name], out = cpu_s(work)
