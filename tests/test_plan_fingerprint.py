@@ -52,7 +52,7 @@ def test_the_shipped_ur5e_plan_keeps_its_fingerprint():
     assert fingerprint(plan) == "7cd33136670c3c85482209c3ef2a70fd9e7171a587f99ccee01aa01e63955254"
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=25, deadline=None)
 @given(
     seed=st.integers(0, 2**32 - 1),
     scale=st.sampled_from([1e-7, 5e-7, 1.0, 1e6]),

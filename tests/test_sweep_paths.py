@@ -28,7 +28,7 @@ from wirecal.solver.errors import WirecalError
 from wirecal.solver.plan.moves import move_samples
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=40, deadline=None)
 @given(
     seed=st.integers(0, 2**32 - 1),
     scale=st.sampled_from([0.0, 0.01, 1.0, 30.0, 400.0]),
@@ -70,7 +70,7 @@ def _distance_written_out(p1, q1, p2, q2):
     return np.sqrt(dot(gap, gap))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=40, deadline=None)
 @given(
     seed=st.integers(0, 2**32 - 1),
     shape=st.sampled_from([(1, 1), (8, 1), (11, 3), (5, 40)]),
@@ -108,7 +108,7 @@ def _box_gaps_written_out(box, a, b, near_mm):
     return best
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), s=st.integers(1, 12), n=st.integers(1, 20))
 def test_the_box_gaps_are_the_sampled_points_distances_written_out(seed, s, n):
     rng = np.random.default_rng(seed)
@@ -135,7 +135,7 @@ def _problems(robot, plan) -> list[str] | None:
     return None
 
 
-@settings(max_examples=30, deadline=None)
+@settings(max_examples=12, deadline=None)
 @given(
     which=st.sampled_from(CHECKED_PLANS),
     seed=st.integers(0, 2**32 - 1),
