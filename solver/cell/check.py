@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from wirecal.solver.cell.model import SURE_GAP_MM
 from wirecal.solver.errors import WirecalError
 from wirecal.solver.kinematics import Model, tool_position
 from wirecal.solver.plan.calibration_plan import Plan
@@ -73,7 +74,9 @@ def check_cell(robot: Robot, plan: Plan, samples: RunSamples | None = None) -> N
 
     Each problem names the step and point, the colliding pair and the joints where it
     happens first. ``samples``: the plan's
-    :func:`~wirecal.solver.wire_range.run_samples` when the caller has them.
+    :func:`~wirecal.solver.wire_range.run_samples` when the caller has them. The capsule
+    pairs' gaps beyond :data:`~wirecal.solver.cell.model.SURE_GAP_MM` are taken as their
+    lower bounds: every answer and word the same, the pairs far apart not measured.
     """
     model = robot.nominal
     p0 = tool_position(model, np.radians(plan.theta0_deg)[None])[0]
@@ -83,7 +86,7 @@ def check_cell(robot: Robot, plan: Plan, samples: RunSamples | None = None) -> N
     body = body_problem(robot, np.asarray(plan.theta0_deg, float))
     if body:
         problems.append(f"{plan.source}: theta0_deg: {body}")
-    gaps = robot.cell_gaps(q, p0, model, samples.frames)
+    gaps = robot.cell_gaps(q, p0, model, samples.frames, SURE_GAP_MM)  # the same answers
     smallest = gaps.smallest()
     worst = np.minimum.reduceat(smallest, first)
     ends = np.r_[first[1:], len(q)]

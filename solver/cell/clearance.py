@@ -12,9 +12,16 @@ import numpy as np
 from wirecal.solver.kinematics import Frames, Model, frames
 
 
-def _dot(u, v) -> np.ndarray:
-    """Return u · v for vectors held component-first (3, ...)."""
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+def dot(u, v) -> np.ndarray:
+    """Return u · v for vectors held component-first (3, ...).
+
+    Summed x + y + z in place: the numbers of ``u[0] * v[0] + u[1] * v[1] + u[2] * v[2]``
+    with two arrays fewer (the cell's checks and the wire's clearance share it).
+    """
+    out = u[0] * v[0]
+    out += u[1] * v[1]
+    out += u[2] * v[2]
+    return out
 
 
 def _unit(x: np.ndarray) -> np.ndarray:
@@ -29,20 +36,21 @@ def segment_distance(p1, q1, p2, q2) -> np.ndarray:
     (the clamped closest-point construction).
     """
     d1, d2, r = q1 - p1, q2 - p2, p1 - p2
-    a = _dot(d1, d1)
-    e = _dot(d2, d2)
-    f = _dot(d2, r)
-    c = _dot(d1, r)
-    b = _dot(d1, d2)
+    a = dot(d1, d1)
+    e = dot(d2, d2)
+    f = dot(d2, r)
+    c = dot(d1, r)
+    b = dot(d1, d2)
     denom = a * e - b * b
     with np.errstate(invalid="ignore", divide="ignore"):
         s = np.where(denom > 1e-12, _unit((b * f - c * e) / denom), 0.0)
         t = np.where(e > 1e-12, (b * s + f) / e, 0.0)
-        s = np.where(t < 0, _unit(-c / np.where(a > 1e-12, a, 1)), s)
-        s = np.where(t > 1, _unit((b - c) / np.where(a > 1e-12, a, 1)), s)
+        a_or_1 = np.where(a > 1e-12, a, 1)
+        s = np.where(t < 0, _unit(-c / a_or_1), s)
+        s = np.where(t > 1, _unit((b - c) / a_or_1), s)
     t = _unit(t)
     gap = (p1 + s * d1) - (p2 + t * d2)
-    return np.sqrt(_dot(gap, gap))
+    return np.sqrt(dot(gap, gap))
 
 
 def wire_trim_mm(robot) -> float:
@@ -74,7 +82,7 @@ def wire_clearance(
     t = model.tool_point
     p = o[-1] + R[:, 0] * t[0] + R[:, 1] * t[1] + R[:, 2] * t[2]
     enc = np.asarray(encoder, dtype=float)[:, None]
-    length = np.sqrt(_dot(p - enc, p - enc))
+    length = np.sqrt(dot(p - enc, p - enc))
     keep = _unit(1 - trim_mm / np.maximum(length, 1e-9))
     wire_end = enc + keep * (p - enc)
     starts = o[1:-1].transpose(1, 0, 2)  # (3, caps, N); capsule k: frame k origin → k+1

@@ -33,11 +33,11 @@ Checks, each a gap (mm) that must stay ≥ 0 after ``margin_mm``:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
-from wirecal.solver.cell.clearance import segment_distance
+from wirecal.solver.cell.clearance import dot, segment_distance
 from wirecal.solver.kinematics import Frames, Model, frames
 
 DEFAULT_MARGIN_MM = 10.0
@@ -304,7 +304,7 @@ def cell_gaps(
     planes += [(h.point_mm, h.normal) for h in cell.half_spaces]
     for point, normal in planes:
         nrm, pt = np.asarray(normal)[:, None, None], np.asarray(point)[:, None, None]
-        height = np.minimum(_dot(am - pt, nrm), _dot(bm - pt, nrm))
+        height = np.minimum(dot(am - pt, nrm), dot(bm - pt, nrm))
         rows.append(height - (r[mv] + m)[:, None])
     for box in cell.boxes:
         keep = r[mv] + m + BOX_STEP_MM / 2
@@ -313,10 +313,6 @@ def cell_gaps(
         rows.append(_housing_gaps(cell.housing, m, caps, a, b, p0))
     gap = np.concatenate(rows) if rows else np.zeros((0, len(q_rad)))
     return Gaps(gap, cell, caps)
-
-
-def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 
 
 def _pair_gaps(
@@ -338,7 +334,7 @@ def _pair_gaps(
     if np.isinf(exact_below_mm):
         return segment_distance(a[:, s], b[:, s], a[:, t], b[:, t]) - reach_mm[:, None]
     lo, hi = np.minimum(a, b), np.maximum(a, b)
-    # the boxes' distance a component at a time, in place: _dot's sum in its order, on
+    # the boxes' distance a component at a time, in place: dot's sum in its order, on
     # (P, N) arrays instead of (3, P, N) ones (fewer and smaller, kept in the cache)
     gap = np.zeros(s.shape + a.shape[2:])
     for c in range(3):
@@ -359,7 +355,15 @@ def _to_box(lo: np.ndarray, hi: np.ndarray, p_lo: np.ndarray, p_hi: np.ndarray) 
     shape = (3,) + (1,) * (p_lo.ndim - 1)
     lo, hi = lo.reshape(shape), hi.reshape(shape)
     out = np.maximum(np.maximum(lo - p_hi, p_lo - hi), 0.0)
-    return np.sqrt(_dot(out, out))
+    return np.sqrt(dot(out, out))
+
+
+@lru_cache(maxsize=64)
+def _fractions(count: int) -> np.ndarray:
+    """Return ``np.linspace(0, 1, count)``, kept (read-only): a box asks the same few again."""
+    out = np.linspace(0.0, 1.0, count)
+    out.flags.writeable = False
+    return out
 
 
 def _box_gaps(box: Box, a: np.ndarray, b: np.ndarray, near_mm: np.ndarray) -> np.ndarray:
@@ -376,11 +380,11 @@ def _box_gaps(box: Box, a: np.ndarray, b: np.ndarray, near_mm: np.ndarray) -> np
     if not len(s):
         return best
     a, d = a[:, s, k], b[:, s, k] - a[:, s, k]
-    count = np.ceil(np.sqrt(_dot(d, d)) / BOX_STEP_MM).astype(int) + 1
+    count = np.ceil(np.sqrt(dot(d, d)) / BOX_STEP_MM).astype(int) + 1
     near = np.empty(len(s))
-    for c in np.unique(count):
+    for c in sorted(set(count.tolist())):  # np.unique's counts, without its sort of arrays
         m = count == c
-        p = a[:, None, m] + np.linspace(0.0, 1.0, c)[:, None] * d[:, None, m]
+        p = a[:, None, m] + _fractions(c)[:, None] * d[:, None, m]
         near[m] = np.min(_to_box(lo, hi, p, p), axis=0)
     best[s, k] = near
     return best

@@ -95,6 +95,18 @@ def _num(x: float) -> str:
     return "0.000000" if s == "-0.000000" else s
 
 
+def _nums(values: np.ndarray) -> list:
+    """Return :func:`_num`'s text of each number of a vector or a table, nested alike.
+
+    The numbers as Python floats first (``tolist``: the same values, each converted once).
+    """
+    return _num_texts(np.asarray(values, float).tolist())
+
+
+def _num_texts(values: list) -> list:
+    return [_num_texts(v) if isinstance(v, list) else _num(v) for v in values]
+
+
 def fingerprint(plan: Plan) -> str:
     """sha256 (hex) of the normalised plan: θ0, order, and each step's points and vias.
 
@@ -102,13 +114,13 @@ def fingerprint(plan: Plan) -> str:
     fingerprint it had before payload steps existed.
     """
     canon = {
-        "theta0_deg": [_num(v) for v in plan.theta0_deg],
+        "theta0_deg": _nums(plan.theta0_deg),
         "order": list(plan.order),
         "steps": [
             {
                 "parameter": s.parameter,
-                "points_deg": [[_num(v) for v in row] for row in s.points_deg],
-                "via_deg": [[_num(v) for v in row] for row in s.via_deg],
+                "points_deg": _nums(s.points_deg),
+                "via_deg": _nums(s.via_deg),
                 **_payload_canon(s),
             }
             for s in plan.steps

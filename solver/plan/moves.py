@@ -32,11 +32,16 @@ def move_samples(
     every ``step_deg`` of the largest joint motion, b included and a not; and the index of
     each move's first sample (for ``np.minimum.reduceat`` and the like).
     """
-    a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
-    count = np.maximum(1, np.ceil(np.max(np.abs(b - a), axis=1) / step_deg)).astype(int)
-    first = np.cumsum(count) - count
-    t = (np.arange(count.sum()) - np.repeat(first - 1, count)) / np.repeat(count, count)
-    return np.repeat(a, count, axis=0) + t[:, None] * np.repeat(b - a, count, axis=0), first
+    a, b = np.atleast_2d(a), np.atleast_2d(b)
+    if a.shape != b.shape:
+        a, b = np.broadcast_arrays(a, b)
+    d = b - a
+    count = np.maximum(1, np.ceil(np.abs(d).max(axis=1) / step_deg)).astype(int)
+    first = count.cumsum() - count
+    if len(count) == 1:  # one move (a twin's, a check's): its rows need no repeating
+        return a + (np.arange(1, count[0] + 1) / count[0])[:, None] * d, first
+    t = (np.arange(count.sum()) - (first - 1).repeat(count)) / count.repeat(count)
+    return a.repeat(count, axis=0) + t[:, None] * d.repeat(count, axis=0), first
 
 
 CHUNK_SAMPLES = 1536
