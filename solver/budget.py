@@ -63,6 +63,7 @@ from wirecal.solver.accuracy import rms_tool_error, stepwise_map
 from wirecal.solver.bound import ErrorModel, bound_mm, joined, truncated_model
 from wirecal.solver.box_gaussian import BoxGaussian
 from wirecal.solver.compliance import COMPLIANCE_RANGE_URAD_PER_NM
+from wirecal.solver.errors import WirecalError
 from wirecal.solver.identifiability import RANK_RTOL, covariance
 from wirecal.solver.kinematics import Model, tool_jacobian
 from wirecal.solver.memo import Kept, digest
@@ -105,6 +106,20 @@ class Budget:
     # the zero drift left in the lengths as the budget charged it (mean, σ; mm/s;
     # :func:`drift_posterior`): the joint estimate's covariance carries it too
     drift_left_mm_per_s: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        """Refuse a figure that is not a number: never a NaN budget with exit status 0."""
+        figures = {**{f"{k} term": v for k, v in self.terms.items()}, "total": self.total}
+        figures.update(worst=self.worst, bound=self.bound)
+        if self.bound_compensated is not None:
+            figures["compensated bound"] = self.bound_compensated
+        bad = [f"{k} {v}" for k, v in figures.items() if not np.isfinite(v)]
+        if bad:
+            raise WirecalError(
+                f"the error budget has no value ({', '.join(bad)}): a figure of the model is "
+                "not a number; nothing is reported (please report this with the robot file "
+                "and the plan)"
+            )
 
     def as_json(self) -> dict:
         """Return the budget as a JSON-ready dict."""

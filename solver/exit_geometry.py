@@ -178,6 +178,18 @@ def within_cone(exit_: Exit | None, v: np.ndarray) -> np.ndarray:
     return exit_angle_deg(v, exit_.axis) <= exit_.max_exit_deg
 
 
+def off_the_wire(exit_: Exit, v: np.ndarray) -> str:
+    """Return, in words, where a tool point v (3,) lies that no wire reaches (:func:`wrap`).
+
+    For the error messages of the computations that meet one.
+    """
+    return (
+        f"{np.linalg.norm(v):.3g} mm from the exit, {float(exit_angle_deg(v, exit_.axis)):.0f} "
+        f"deg off its axis, inside the circle the wire bends over ({describe(exit_)}), where "
+        "no wire reaches"
+    )
+
+
 def describe(exit_: Exit | None) -> str:
     """Return the exit in words, for the outputs of plan and solve."""
     if exit_ is None:

@@ -37,7 +37,7 @@ import numpy as np
 from wirecal.solver.counter import Counter
 from wirecal.solver.distance import wire_vectors
 from wirecal.solver.errors import WirecalError
-from wirecal.solver.exit_geometry import Exit, physical_wire_mm
+from wirecal.solver.exit_geometry import Exit, off_the_wire, physical_wire_mm
 from wirecal.solver.gravity import gravity_torques_floats, gravity_torques_nm, wrist_weight
 from wirecal.solver.kinematics import Model, loaded, one_chain, rigid_frames, tool_position
 from wirecal.solver.log.readings import REFERENCE_STEP, Reading
@@ -224,7 +224,31 @@ def sag_lengths_mm(robot: Robot, plan: Plan) -> np.ndarray:
     p, sagged = sagged_tool_points(robot, robot.nominal, np.vstack([plan.theta0_deg, q]))
     exit_ = robot.encoder.exit
     extra = physical_wire_mm(exit_, sagged - p[0]) - physical_wire_mm(exit_, p - p[0])
+    if not np.all(np.isfinite(extra)):
+        raise WirecalError(_sag_off_the_wire(robot, sagged[0] - p[0], not np.isfinite(extra[0])))
     return np.asarray(extra[1:] - extra[0], dtype=float)
+
+
+def _sag_off_the_wire(robot: Robot, sag0_mm: np.ndarray, at_theta0: bool) -> str:
+    """Return why :func:`sag_lengths_mm` has no value: a sagged point lies off the wire.
+
+    The exit is mounted where the unsagged arm stands at θ0 (as the twin mounts it); a guide
+    pulley or an eyelet's rounded edge bends the wire over a circle touching the exit, and
+    no wire reaches a point inside it. ``at_theta0``: the point is the sagged θ0
+    (``sag0_mm`` from the exit), which every reading is measured from.
+    """
+    exit_ = robot.encoder.exit
+    where = "a plan point inside the circle the wire bends over at the exit"
+    if at_theta0 and exit_ is not None:
+        where = "the tool point at θ0 " + off_the_wire(exit_, sag0_mm)
+    return (
+        f"robot file: [calibration] gravity_sag_deg_per_m = {robot.gravity_sag_deg_per_m:g}: "
+        f"the assumed gravity sag puts {where}: the error budget's sag term has no value. "
+        "The exit is modelled where the unsagged arm stands at θ0, a real one is mounted "
+        "where the arm sags (not modelled yet: docs/accuracy.md). Set "
+        "gravity_sag_deg_per_m = 0 (the budget then leaves the sag out) or declare the arm's "
+        "compliances (the model then carries the sag)"
+    )
 
 
 def realistic_encoder(

@@ -347,10 +347,16 @@ def test_budget_exit_term_predicts_an_eyelet_edge_wrap(paper_plan):
         scale_tolerance_ppm=0.0,
         temperature_coefficient_ppm_per_k=ARM_PPM_PER_K,
     )
+    # nothing else: no assumed sag either (with it the sagged θ0 point lies inside the
+    # edge's circle and solve refuses: tests/test_exit_sag_guard.py)
+    data["calibration"]["gravity_sag_deg_per_m"] = 0.0
     robot = robot_from_dict(data, "eyelet.toml")
     text = simulate_log(robot, paper_plan, TABLE5, seed=1, noise_mm=0.001)
     result = solve(robot, paper_plan, check_log(parse_log(text, "e.csv"), paper_plan, robot))
     b = result.budgets["joint"]
+    figures = [*b.terms.values(), b.total, b.worst, b.bound]
+    assert np.all(np.isfinite(figures))
+    assert b.terms["sag"] == 0.0
     q = workspace(robot)
     est = result.estimates["joint"].as_dict()
     err = np.linalg.norm(

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import copy
 import math
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -45,6 +47,12 @@ def _robot(**encoder) -> wirecal.Robot:
         data["encoder"].pop(key, None)
     data["encoder"].update(encoder)
     return robot_from_dict(data, "r.toml")
+
+
+def _no_sag(robot: wirecal.Robot) -> wirecal.Robot:
+    """``robot`` without the assumed gravity sag: with it the sagged θ0 point lies inside
+    the pulley's circle and solve refuses (tests/test_exit_sag_guard.py)."""
+    return replace(robot, gravity_sag_deg_per_m=0.0)
 
 
 def _basis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -188,7 +196,7 @@ def test_pulley_psi_is_the_jacobian_in_boundary_units(paper_plan):
 def test_pulley_robot_simulated_and_solved_recovers_the_truth(paper_plan):
     """Joint method on the paper plan with a 5 mm guide pulley: within 0.01 deg/mm of the
     truth (Table 5's offsets), while a point model on the same log is off by far more."""
-    robot = _robot(exit="pulley", axis=list(AXIS), pulley_radius_mm=5.0)
+    robot = _no_sag(_robot(exit="pulley", axis=list(AXIS), pulley_radius_mm=5.0))
     plan = load_plan(VIPER / "paper_plan.toml", robot)
     text = wirecal.simulate_log(robot, plan, TABLE5, seed=3)
     m = wirecal.check_log(wirecal.parse_log(text, "sim.csv"), plan, robot)
@@ -219,7 +227,7 @@ def test_pulley_robot_through_the_twin_and_the_controller_solver(tmp_path):
 
     from .twin_runs import measure_in_twin
 
-    robot = _robot(exit="pulley", axis=list(AXIS), pulley_radius_mm=5.0)
+    robot = _no_sag(_robot(exit="pulley", axis=list(AXIS), pulley_radius_mm=5.0))
     plan = load_plan(VIPER / "paper_plan.toml", robot)
     run = measure_in_twin(robot, plan, TABLE5, tmp_path / "run", seed=4)
     m = wirecal.load_measurements(run.log, plan, robot)
@@ -421,6 +429,9 @@ def test_cli_psi_warns_about_points_beyond_the_cone(tmp_path):
 
 def test_cli_simulate_and_solve_a_pulley_robot(tmp_path):
     robot = _robot_file(tmp_path, exit="pulley", axis=list(AXIS), pulley_radius_mm=5.0)
+    text = Path(robot).read_text()  # no assumed sag: _no_sag's reason
+    no_sag = "[calibration]\ngravity_sag_deg_per_m = 0.0\n"
+    Path(robot).write_text(text.replace("[calibration]\n", no_sag))
     plan, log = VIPER / "paper_plan.toml", tmp_path / "run.csv"
     assert _cli("simulate", robot, plan, "-o", log, "--seed", 4, "--random", 0.5).exit_code == 0
     r = _cli("solve", robot, plan, log)

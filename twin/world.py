@@ -46,7 +46,8 @@ import numpy as np
 
 from wirecal.solver.cell.sweep import Sweeps
 from wirecal.solver.counter import Counter
-from wirecal.solver.exit_geometry import physical_wire_mm
+from wirecal.solver.errors import WirecalError
+from wirecal.solver.exit_geometry import off_the_wire, physical_wire_mm
 from wirecal.solver.ik.solutions import flange_pose
 from wirecal.solver.kinematics import loaded, tool_position
 from wirecal.solver.plan.calibration_plan import Plan
@@ -446,7 +447,17 @@ class World:
             if self.mounted_kg and self.payload is not None:
                 model = loaded(model, [self.mounted_kg], self.payload[1])
             p = tool_position(model, np.radians(self.actual)[None])[0]
-            wire = float(physical_wire_mm(self.robot.encoder.exit, p - self.p0))
+            exit_ = self.robot.encoder.exit
+            wire = float(physical_wire_mm(exit_, p - self.p0))
+            if not math.isfinite(wire) and exit_ is not None:  # never a NaN count
+                raise WirecalError(
+                    f"the twin: the arm at joints {np.round(self.actual, 4).tolist()} deg "
+                    f"puts the tool point {off_the_wire(exit_, p - self.p0)}: the exit is "
+                    "modelled where the arm stood at θ0 when mounted, and the arm comes back "
+                    "with its repeatability and gravity sag, which a guide pulley's or an "
+                    "eyelet edge's circle leaves no wire for (not modelled yet: "
+                    'docs/accuracy.md); simulate this arm with exit = "point"'
+                )
             self._wire_at = (self.actual, wire)
         return self._wire_at[1]
 
