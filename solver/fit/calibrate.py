@@ -30,6 +30,7 @@ identifiable DH errors). The steps:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -50,6 +51,7 @@ from wirecal.solver.fit.model import (
     Layout,
     lengths,
     lengths_and_jacobian,
+    lengths_then_jacobian,
     multilaterate,
     session_of,
 )
@@ -274,9 +276,9 @@ def _solved(
         x[free] = xf
         return x
 
-    def fun(xf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        model, J = lengths_and_jacobian(base, layout, full(xf), q, session)
-        return model - length, J[:, free]
+    def fun(xf: np.ndarray) -> tuple[np.ndarray, Callable[[], np.ndarray]]:
+        model, jacobian = lengths_then_jacobian(base, layout, full(xf), q, session)
+        return model - length, lambda: jacobian()[:, free]  # taken where the solver accepts
 
     at = None if start is None else (start[0], start[1][:, free])
     xf, r, J = minimised(fun, x0[free], loss=loss, f_scale=f_scale, start=at)
