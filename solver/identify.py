@@ -170,7 +170,7 @@ def stepwise(
     return deepcopy(_SOLUTIONS.get(key, lambda: _stepwise(problem, omega, max_iter)))
 
 
-KEPT_SOLUTIONS = 16
+KEPT_SOLUTIONS = 64
 """How many identifications (:func:`stepwise`, :func:`joint`) are kept by their inputs'
 contents (:mod:`~wirecal.solver.memo`): a log is solved again with the same plan and
 robot (the report solves it, then its comparison with the controller's answer; the
