@@ -28,7 +28,6 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from functools import cache, lru_cache
-from itertools import islice
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -358,52 +357,9 @@ each move's clearance, the run's timing)."""
 
 @lru_cache(maxsize=KEPT_FRAMES)
 def _kept_frames(raw_dh: bytes, dh_shape: tuple, raw_q: bytes, q_shape: tuple) -> Frames:
-    """:func:`rigid_frames` of a table and joints given by their bytes and shapes.
-
-    A batch's chain continues the kept chain of the same joints from the first joint
-    whose row of the table differs (:func:`_continued_chain`).
-    """
+    """:func:`rigid_frames` of a table and joints given by their bytes and shapes."""
     dh, q = np.frombuffer(raw_dh).reshape(dh_shape), np.frombuffer(raw_q).reshape(q_shape)
-    if dh.ndim == 2 and q_shape[0] == 1:
-        return _frames_of(*_chain(dh, q))
-    return _frames_of(*_continued_chain(dh, q, (raw_q, q_shape, dh_shape)))
-
-
-_PREFIXES: dict[tuple, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-"""Per joints (their bytes, shape and the table's shape) the last table, its frames'
-storage and the y axes of its frames (:func:`_continued_chain`); the last
-:data:`KEPT_FRAMES` joints."""
-
-
-def _continued_chain(dh: np.ndarray, q: np.ndarray, key: tuple) -> tuple[np.ndarray, np.ndarray]:
-    """Return :func:`_chain`'s storage and last rotation, from a kept chain where one is.
-
-    The stepwise identification varies a parameter of one joint at a time: the frames of
-    the joints before it are those of the table evaluated before at the same joints. They
-    are copied (with each frame's y axis, kept beside them), and the recurrence goes on
-    from there on the same factors (:func:`_array_terms` of the whole table), so the
-    numbers are those of the whole chain, operation for operation. A row differs when any
-    of its bits do (−0.0 is not 0.0).
-    """
-    N, n = q.shape
-    chain, y = np.empty((n + 1, 3, 3, N)), np.empty((n + 1, 3, N))
-    kept, same = _PREFIXES.pop(key, None), 0
-    if kept is not None and (same := _same_rows(kept[0], dh)):
-        chain[: same + 1] = kept[1][: same + 1]
-        y[: same + 1] = kept[2][: same + 1]
-    terms = islice(_array_terms(dh, q), same, None)
-    last = _recurrence(terms, chain, y, same)
-    if len(_PREFIXES) >= KEPT_FRAMES:
-        del _PREFIXES[next(iter(_PREFIXES))]
-    _PREFIXES[key] = (dh, chain, y)
-    return chain, last
-
-
-def _same_rows(kept: np.ndarray, dh: np.ndarray) -> int:
-    """Return how many leading joints' rows of the tables ``kept`` and ``dh`` agree bit for bit."""
-    differ = kept.view(np.uint64) != dh.view(np.uint64)
-    rows = differ.any(axis=(*range(dh.ndim - 2), dh.ndim - 1))
-    return int(np.argmax(rows)) if rows.any() else len(rows)
+    return _frames_of(*_chain(dh, q))
 
 
 def _frames_of(chain: np.ndarray, last: np.ndarray) -> Frames:
@@ -430,39 +386,27 @@ def _chain(
     return chain, _recurrence(_array_terms(dh, q), chain)
 
 
-def _recurrence(
-    terms: Iterator[tuple], chain: np.ndarray, y: np.ndarray | None = None, start: int = 0
-) -> np.ndarray:
+def _recurrence(terms: Iterator[tuple], chain: np.ndarray) -> np.ndarray:
     """Fill ``chain`` (:func:`_chain`) from a batch's ``terms``; return the last rotation.
 
     ``terms``: the joints' factors (:func:`_array_terms`). The frame being built is one
     array W of rows x, z, o, y (each (3, N)), turned and moved in place: each rotation's
     pair of axes, either way round, and the pair (x, z) the origin moves along are views
-    of it, and no step allocates; each frame's x, z, o are copied out, and its y into
-    ``y`` (n+1, 3, N) where given. ``start``: the frames up to this one are in ``chain``
-    and ``y`` already, the recurrence goes on from it (``terms`` of the later joints).
+    of it, and no step allocates; each frame's x, z, o are copied out.
     """
     N = chain.shape[-1]
     W = np.zeros((4, 3, N))
-    if start:
-        assert y is not None  # a continued chain's y axes are kept
-        W[:3], W[3] = chain[start], y[start]
-    else:
-        W[0, 0] = W[1, 2] = W[3, 1] = 1.0  # the base frame: x, z, o = 0, y
-        chain[0] = W[:3]
-        if y is not None:
-            y[0] = W[3]
+    W[0, 0] = W[1, 2] = W[3, 1] = 1.0  # the base frame: x, z, o = 0, y
+    chain[0] = W[:3]
     T, S = np.empty((2, 3, N)), np.empty((2, 3, N))
     XY, YX, YZ, ZY, XZ, P = W[0::3], W[3::-3], W[3:0:-2], W[1::2], W[0:2], W[2]
-    for i, (ca, sa_pair, ad_pair, c, s_pair) in enumerate(terms, start + 1):
+    for i, (ca, sa_pair, ad_pair, c, s_pair) in enumerate(terms, 1):
         _turn(ca, sa_pair, YZ, ZY, T, S)  # RotX(α_{i-1})
         np.multiply(ad_pair, XZ, out=T)  # TransX(a_{i-1}), then TransZ(d_i) along the new z
         P += T[0]
         P += T[1]
         _turn(c, s_pair, XY, YX, T, S)  # RotZ(θ_i + offset_i)
         chain[i] = W[:3]
-        if y is not None:
-            y[i] = W[3]
     return np.ascontiguousarray(W[[0, 3, 1]].transpose(2, 1, 0))  # columns X, Y, Z
 
 
