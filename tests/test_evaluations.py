@@ -103,3 +103,32 @@ def test_a_step_clipped_at_its_bound_does_not_evaluate_the_point_again(viper, mo
     x, _ = identify._stepwise(problem, omega, 50)
     assert x[0] == omega[0]  # on the bound
     assert len(points) == len(set(points))
+
+
+def test_a_fit_asked_again_is_kept_and_each_caller_has_its_own(monkeypatch):
+    """``fit_core`` of the same rows and options: computed once, the same numbers, and a
+    caller changing its copy changes no other's; other options are another fit."""
+    from wirecal.formats.robot_file import load_robot
+    from wirecal.solver.fit import calibrate as F
+    from wirecal.solver.fit.result import _data
+    from wirecal.solver.fit.synth import synthetic_table
+    from wirecal.solver.memo import Kept
+
+    from .conftest import VIPER
+
+    robot = load_robot(VIPER / "robot.toml")
+    table = synthetic_table(robot, 120, seed=5, sessions=1, snags=0, typos=0).table
+    base = F.point_model(robot)
+    data = _data(base, table.q_deg, table, (0.1, 0.01), None)
+    calls = []
+    original = F._fit_core
+    monkeypatch.setattr(F, "_FITS", Kept(F.KEPT_FITS))
+    monkeypatch.setattr(F, "_fit_core", lambda *a: calls.append(1) or original(*a))
+    first = F.fit_core(base, data)
+    kept = first.x.copy()
+    first.x[:] = 0.0
+    second = F.fit_core(base, data)
+    assert len(calls) == 1
+    assert second.x.tobytes() == kept.tobytes()
+    F.fit_core(base, data, scale=True)
+    assert len(calls) == 2

@@ -31,6 +31,7 @@ identifiable DH errors). The steps:
 from __future__ import annotations
 
 from collections.abc import Callable
+from copy import deepcopy
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -65,6 +66,7 @@ from wirecal.solver.identifiability import (
     select_columns,
 )
 from wirecal.solver.kinematics import Model, tool_position
+from wirecal.solver.memo import Kept, digest
 from wirecal.solver.robot import DEFAULT_SCALE_TOLERANCE_PPM, Robot
 from wirecal.solver.verdict import POORLY_IDENTIFIED, implausible
 
@@ -509,8 +511,27 @@ def fit_core(
     """Fit the model to every row of ``data`` (module docstring, steps 1–4).
 
     ``compliances``: the c_j to try beside the DH errors (:func:`choose`; ``base`` from
-    :func:`point_model` of a robot file that asks for them).
+    :func:`point_model` of a robot file that asks for them). Kept by the contents of its
+    inputs (:data:`KEPT_FITS`); each caller is given its own copy.
     """
+    key = digest("fit_core", base, data, scale, single_session, compliances)
+    fitted = _FITS.get(key, lambda: _fit_core(base, data, scale, single_session, compliances))
+    return deepcopy(fitted)
+
+
+KEPT_FITS = 16
+"""How many fits (:func:`fit_core`) are kept by their inputs' contents
+(:mod:`~wirecal.solver.memo`): a table is fitted again with the same rows and options (the
+same table with another held-out validation, which fits its splits anew), the very same
+computation. A refusal is not kept."""
+
+_FITS: Kept[Core] = Kept(KEPT_FITS)
+
+
+def _fit_core(
+    base: Model, data: Data, scale: bool, single_session: bool, compliances: tuple[str, ...]
+) -> Core:
+    """Return :func:`fit_core` computed."""
     n = len(data.length_mm)
     data = replace(data, session=np.zeros(n, dtype=int))
     layout = Layout(P.TOOL_NAMES, base.n_joints, 1, scale)
