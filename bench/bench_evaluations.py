@@ -1,12 +1,14 @@
 """How much chain the identification and the fit ask for, and their CPU, before and now.
 
 Issue 34 (the quick test loop): the solvers' evaluations of the model are the largest
-share of the kinematics in the loop. Three figures of one process each run:
+share of the kinematics in the loop. Four figures of one process each run:
 
 * **solve** — ``wirecal solve``'s computation (stepwise, joint, budgets) of 10 simulated
   logs of the Viper s650's paper plan (69 points, the paper's Table 5 errors), each new;
 * **solved again** — the same 10 logs solved again (as the report and the tests do);
-* **fit** — ``wirecal fit`` of two simulated tables of 400 rows (``--holdout none``).
+* **fit** — ``wirecal fit`` of two simulated tables of 400 rows (``--holdout none``);
+* **fitted again** — the same tables with ``--holdout half`` (the whole table's fit
+  again, then its halves').
 
 Per figure the CPU seconds and a digest of every output (bits of every number); in a
 fresh process, the chain's work of one solve and one fit by phase (chains computed: calls
@@ -153,6 +155,9 @@ def child(mode: str = "time") -> None:
         "the same logs solved again": lambda: [solve(robot, plan, m) for m in logs[1:]],
         "fit, 2 tables of 400 rows of the Viper": lambda: [
             fit_table(robot, t, FitOptions("none")) for t in tables[1:]
+        ],
+        "the same tables, held-out half (fitted again)": lambda: [
+            fit_table(robot, t, FitOptions("half")) for t in tables[1:]
         ],
     }
     cpu, h = {}, hashlib.sha256()
