@@ -15,6 +15,7 @@ Values are internal units (rad, mm) inside; :class:`Estimate` reports deg and mm
 from __future__ import annotations
 
 from collections.abc import Callable
+from copy import deepcopy
 from dataclasses import dataclass
 from typing import Literal
 
@@ -23,7 +24,7 @@ import numpy as np
 from wirecal.solver.distance import wire_jacobian, wire_lengths
 from wirecal.solver.identifiability import covariance, std_and_correlation
 from wirecal.solver.kinematics import Model, loaded, with_errors
-from wirecal.solver.memo import by_point
+from wirecal.solver.memo import Kept, by_point, digest
 from wirecal.solver.params import ErrorSet
 from wirecal.solver.plan.calibration_plan import Plan
 from wirecal.solver.scale import PPM
@@ -162,8 +163,26 @@ def stepwise(
     """Run the paper's step-by-step identification for T data sets at once.
 
     ``omega`` (m,) bounds each parameter in internal units. Returns the estimates
-    (T, m) or (m,) and, per step, its :class:`StepDiagnostics` over T.
+    (T, m) or (m,) and, per step, its :class:`StepDiagnostics` over T. Kept by the contents
+    of its inputs (:data:`KEPT_SOLUTIONS`); each caller is given its own copy.
     """
+    key = digest("stepwise", problem, omega, max_iter)
+    return deepcopy(_SOLUTIONS.get(key, lambda: _stepwise(problem, omega, max_iter)))
+
+
+KEPT_SOLUTIONS = 64
+"""How many identifications (:func:`stepwise`, :func:`joint`) are kept by their inputs'
+contents (:mod:`~wirecal.solver.memo`): a log is solved again with the same plan and
+robot (the report solves it, then its comparison with the controller's answer; the
+plausibility gate's refusal, then the override), and it is the same computation."""
+
+_SOLUTIONS: Kept = Kept(KEPT_SOLUTIONS)
+
+
+def _stepwise(
+    problem: Problem, omega: np.ndarray, max_iter: int
+) -> tuple[np.ndarray, list[StepDiagnostics]]:
+    """Return :func:`stepwise` computed."""
     d = np.atleast_2d(problem.d)
     x = np.zeros((d.shape[0], len(problem.names)))
     info = []
@@ -188,7 +207,7 @@ def _solve_step(
         return StepDiagnostics(0, 0, np.full(T, np.nan), np.full(T, np.nan))
     qj, name = problem.q[sel], problem.names[j]
 
-    def evaluate(xj):
+    def evaluated(xj: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         x[:, j] = xj
         dist, dd = wire_jacobian(
             with_errors(problem.base, problem.names, x), qj, problem.q0, [name]
@@ -196,6 +215,8 @@ def _solve_step(
         r = dist.reshape(T, k) - dj
         return (r * r).sum(axis=1), r, dd.reshape(T, k)
 
+    # The point and a trial kept: a step clipped at the bound asks for the point again.
+    evaluate = by_point(evaluated, 2)
     xj = np.zeros(T)
     cost, r, g = evaluate(xj)
     before = cost
@@ -296,8 +317,17 @@ def joint(
     With ``scale`` the encoder's scale s is refined too: residuals d(e) − (1 + s)·d̃ and the
     prior row w·s, Jacobian column ∂/∂s = −d̃ (and w on the prior row); its estimate and σ
     are ``scale_ppm``/``scale_std_ppm``, and the parameters' σ then carry the scale's
-    uncertainty.
+    uncertainty. Kept by the contents of its inputs (:data:`KEPT_SOLUTIONS`); each caller
+    is given its own copy.
     """
+    key = digest("joint", problem, x0, loss, f_scale_mm, scale)
+    return deepcopy(_SOLUTIONS.get(key, lambda: _joint(problem, x0, loss, f_scale_mm, scale)))
+
+
+def _joint(
+    problem: Problem, x0: np.ndarray, loss: Loss, f_scale_mm: float, scale: ScalePrior | None
+) -> Estimate:
+    """Return :func:`joint` computed."""
     m = len(problem.names)
     evaluate = _evaluator(problem, scale)
 

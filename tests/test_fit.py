@@ -25,6 +25,7 @@ from wirecal.solver.fit.result import FitOptions, fit_table
 from wirecal.solver.fit.sessions import change_points, noise_sigma, place
 from wirecal.solver.fit.synth import synthetic_table, take_rows
 from wirecal.solver.kinematics import Model, tool_position
+from wirecal.solver.memo import Kept
 
 ARMS = ("viper_s650", "abb_irb120", "ur5e")
 
@@ -142,6 +143,7 @@ def test_a_boundary_that_alternates_between_two_rows_ends_the_session_search(mon
         return (0, true + 2 * (len(seen) % 2))  # true+2, true, true+2, …
 
     monkeypatch.setattr(F, "_session_starts", alternate)
+    monkeypatch.setattr(F, "_FITS", Kept(F.KEPT_FITS))  # fitted here, kept for no other test
     core = fit_table(robot, syn.table, FitOptions(holdout="none")).main.core
     assert seen == [(0,), (0, true + 2), (0, true)]  # (0, true + 2) found again: a cycle
     assert core.starts == (0, true)  # the boundary where the lengths jump fits best
@@ -324,6 +326,7 @@ def test_a_fit_whose_parameters_are_not_identified_is_refused(monkeypatch):
         return both, F._carry(layout, x, both), ()
 
     monkeypatch.setattr(F, "choose", degenerate)
+    monkeypatch.setattr(F, "_FITS", Kept(F.KEPT_FITS))  # fitted here, kept for no other test
     with pytest.raises(WirecalError, match=r"parameters d2, d3 are not identified"):
         fit_table(robot, syn.table, FitOptions(holdout="none"))
 

@@ -30,6 +30,8 @@ identifiable DH errors). The steps:
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from copy import deepcopy
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -50,6 +52,7 @@ from wirecal.solver.fit.model import (
     Layout,
     lengths,
     lengths_and_jacobian,
+    lengths_then_jacobian,
     multilaterate,
     session_of,
 )
@@ -63,6 +66,7 @@ from wirecal.solver.identifiability import (
     select_columns,
 )
 from wirecal.solver.kinematics import Model, tool_position
+from wirecal.solver.memo import Kept, digest
 from wirecal.solver.robot import DEFAULT_SCALE_TOLERANCE_PPM, Robot
 from wirecal.solver.verdict import POORLY_IDENTIFIED, implausible
 
@@ -265,9 +269,9 @@ def _solved(
         x[free] = xf
         return x
 
-    def fun(xf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        model, J = lengths_and_jacobian(base, layout, full(xf), q, session)
-        return model - length, J[:, free]
+    def fun(xf: np.ndarray) -> tuple[np.ndarray, Callable[[], np.ndarray]]:
+        model, jacobian = lengths_then_jacobian(base, layout, full(xf), q, session)
+        return model - length, lambda: jacobian()[:, free]  # taken where the solver accepts
 
     at = None if start is None else (start[0], start[1][:, free])
     xf, r, J = minimised(fun, x0[free], loss=loss, f_scale=f_scale, start=at)
@@ -498,8 +502,27 @@ def fit_core(
     """Fit the model to every row of ``data`` (module docstring, steps 1–4).
 
     ``compliances``: the c_j to try beside the DH errors (:func:`choose`; ``base`` from
-    :func:`point_model` of a robot file that asks for them).
+    :func:`point_model` of a robot file that asks for them). Kept by the contents of its
+    inputs (:data:`KEPT_FITS`); each caller is given its own copy.
     """
+    key = digest("fit_core", base, data, scale, single_session, compliances)
+    fitted = _FITS.get(key, lambda: _fit_core(base, data, scale, single_session, compliances))
+    return deepcopy(fitted)
+
+
+KEPT_FITS = 16
+"""How many fits (:func:`fit_core`) are kept by their inputs' contents
+(:mod:`~wirecal.solver.memo`): a table is fitted again with the same rows and options (the
+same table with another held-out validation, which fits its splits anew), the very same
+computation. A refusal is not kept."""
+
+_FITS: Kept[Core] = Kept(KEPT_FITS)
+
+
+def _fit_core(
+    base: Model, data: Data, scale: bool, single_session: bool, compliances: tuple[str, ...]
+) -> Core:
+    """Return :func:`fit_core` computed."""
     n = len(data.length_mm)
     data = replace(data, session=np.zeros(n, dtype=int))
     layout = Layout(P.TOOL_NAMES, base.n_joints, 1, scale)

@@ -18,6 +18,7 @@ Values are internal units (rad, mm, dimensionless κ) inside, deg/mm/ppm at the 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -102,39 +103,74 @@ def lengths(
 def _along_wire(
     model: Model, q_rad: np.ndarray, anchor: np.ndarray, names: tuple[str, ...]
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Return ‖p − a‖ (N,), the wire's direction u (N, 3) and uᵀ·∂p/∂e (N, m).
+    """Return ‖p − a‖ (N,), the wire's direction u (N, 3) and uᵀ·∂p/∂e (N, m)."""
+    dist, u, along = _spans(model, q_rad, anchor, names)
+    return dist, u, along()
+
+
+def _spans(
+    model: Model, q_rad: np.ndarray, anchor: np.ndarray, names: tuple[str, ...]
+) -> tuple[np.ndarray, np.ndarray, Callable[[], np.ndarray]]:
+    """Return ‖p − a‖ (N,), the wire's direction u (N, 3) and a function giving uᵀ·∂p/∂e.
 
     A block of rows at a time (:func:`~wirecal.solver.rows.row_blocks`), the derivatives
-    along the wire from :func:`~wirecal.solver.kinematics.tool_gradient` (no (N, 3, m)
-    Jacobian).
+    along the wire (N, m) from :func:`~wirecal.solver.kinematics.tool_gradient` (no
+    (N, 3, m) Jacobian). Rows of one block keep their frames until the derivatives are
+    asked for (a solver asks only at the points it accepts); a longer table's are taken
+    block by block at once, while each block's frames are in the processor's cache.
     """
     dist, u = np.empty(len(q_rad)), np.empty((len(q_rad), 3))
     along = np.empty((len(q_rad), len(names)))
-    for c in row_blocks(len(q_rad)):
+    blocks = row_blocks(len(q_rad))
+    for c in blocks:
         f = frames(model, q_rad[c])
         p = tool_position(model, q_rad[c], f)
         span = p - anchor
         dist[c] = np.linalg.norm(span, axis=1)
         u[c] = span / dist[c, None]
+        if len(blocks) > 1:
+            along[c] = tool_gradient(model, f, p, u[c], names)
+    if len(blocks) != 1:
+        return dist, u, lambda: along
+
+    def deferred() -> np.ndarray:
         along[c] = tool_gradient(model, f, p, u[c], names)
-    return dist, u, along
+        return along
+
+    return dist, u, deferred
 
 
 def lengths_and_jacobian(
     base: Model, layout: Layout, x: np.ndarray, q_rad: np.ndarray, session: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Return the model's lengths L (N,) and ∂L/∂x (N, k), internal units (module docstring)."""
+    L, jacobian = lengths_then_jacobian(base, layout, x, q_rad, session)
+    return L, jacobian()
+
+
+def lengths_then_jacobian(
+    base: Model, layout: Layout, x: np.ndarray, q_rad: np.ndarray, session: np.ndarray
+) -> tuple[np.ndarray, Callable[[], np.ndarray]]:
+    """Return :func:`lengths_and_jacobian`'s L and a function giving its ∂L/∂x.
+
+    ∂L/∂x is taken from the frames of L when asked for (a solver asks only at the points
+    it accepts), the very numbers of :func:`lengths_and_jacobian`.
+    """
     _, anchor, kappa, offsets = layout.split(x)
-    dist, u, along = _along_wire(model_of(base, layout, x), q_rad, anchor, layout.geometry)
-    J = np.zeros((len(q_rad), len(layout.names)))
-    g = len(layout.geometry)
-    J[:, :g] = (1 + kappa) * along
-    J[:, g : g + 3] = -(1 + kappa) * u
-    if layout.scale:
-        J[:, g + 3] = dist
-    k = g + 3 + int(layout.scale)
-    J[np.arange(len(q_rad)), k + session] = 1.0
-    return (1 + kappa) * dist + offsets[session], J
+    dist, u, along = _spans(model_of(base, layout, x), q_rad, anchor, layout.geometry)
+
+    def jacobian() -> np.ndarray:
+        J = np.zeros((len(q_rad), len(layout.names)))
+        g = len(layout.geometry)
+        J[:, :g] = (1 + kappa) * along()
+        J[:, g : g + 3] = -(1 + kappa) * u
+        if layout.scale:
+            J[:, g + 3] = dist
+        k = g + 3 + int(layout.scale)
+        J[np.arange(len(q_rad)), k + session] = 1.0
+        return J
+
+    return (1 + kappa) * dist + offsets[session], jacobian
 
 
 def geometry_jacobian(J: np.ndarray, g: int) -> np.ndarray:

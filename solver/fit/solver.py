@@ -67,8 +67,18 @@ def _negligible(predicted: float, cost: float, dof: int) -> bool:
     return predicted <= STEP_TOL**2 * cost / max(dof, 1)
 
 
+Evaluation = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray | Callable[[], np.ndarray]]]
+"""x ↦ the residual r (N,) and ∂r/∂x (N, k), or a function giving ∂r/∂x when asked: the
+solver asks for it only at the points it accepts (a refused step's is never taken)."""
+
+
+def _jacobian(J: np.ndarray | Callable[[], np.ndarray]) -> np.ndarray:
+    """Return ∂r/∂x as :data:`Evaluation` gave it: the array, or what its function gives."""
+    return J() if callable(J) else J
+
+
 def levenberg_marquardt(
-    evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+    evaluate: Evaluation,
     x0: np.ndarray,
     *,
     loss: SolverLoss = "linear",
@@ -76,14 +86,14 @@ def levenberg_marquardt(
 ) -> np.ndarray:
     """Return the ``x`` that minimises the cost of ``evaluate(x)``'s residual (module docstring).
 
-    ``evaluate(x)`` returns the residual r (N,) and ∂r/∂x (N, k) at ``x``; a point where
-    either is not finite is a failed step (a start there: ``ValueError``).
+    ``evaluate(x)`` returns the residual r (N,) and ∂r/∂x (N, k) at ``x`` (:data:`Evaluation`);
+    a point where either is not finite is a failed step (a start there: ``ValueError``).
     """
     return minimised(evaluate, x0, loss=loss, f_scale=f_scale)[0]
 
 
 def minimised(
-    evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+    evaluate: Evaluation,
     x0: np.ndarray,
     *,
     loss: SolverLoss = "linear",
@@ -95,7 +105,8 @@ def minimised(
     ``start``: ``evaluate(x0)`` when the caller has it (not evaluated again).
     """
     x = np.asarray(x0, dtype=float).copy()
-    r, J = evaluate(x) if start is None else start
+    r, at_start = evaluate(x) if start is None else start
+    J = _jacobian(at_start)
     cost, d1, w = _weights(r, loss, f_scale)
     if not (np.isfinite(cost) and np.all(np.isfinite(J))):
         raise ValueError("the residual or its Jacobian is not finite at the start")  # as scipy
@@ -107,9 +118,11 @@ def minimised(
         H, g, scale, Hs = normal
         step = -np.linalg.lstsq(Hs + lam * np.eye(len(x)), g / scale, rcond=None)[0] / scale
         predicted = -(g @ step + 0.5 * step @ H @ step)
-        r_new, J_new = evaluate(x + step)
+        r_new, at_new = evaluate(x + step)
         new_cost, d1_new, w_new = _weights(r_new, loss, f_scale)
-        gain = cost - new_cost > 0.25 * predicted > 0 and np.all(np.isfinite(J_new))
+        gain = cost - new_cost > 0.25 * predicted > 0 and np.all(
+            np.isfinite(J_new := _jacobian(at_new))
+        )
         if gain:
             x, r, J, cost, d1, w, normal = x + step, r_new, J_new, new_cost, d1_new, w_new, None
             lam = lam / 10 if lam > 1e-6 else 0.0
