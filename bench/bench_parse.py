@@ -12,7 +12,7 @@ windows of the golden programs, nested expressions; each parsed and, if short, l
 CPU seconds (``time.process_time``), median of ``--runs``, and the ratio now / before.
 
 ``--mutated N`` compares instead what the two trees make of N texts that are not in the
-repository, drawn with ``--seed``: windows of the golden programs and whole ones, each
+repository, drawn with ``--seed``: windows of the golden programs and whole ones, most
 mutated (lines dropped, doubled or swapped, characters dropped or inserted, numbers
 changed): each text's parse (the node tree written out in full, or the problems) and, for a
 short one, its lint problems must be the same; it prints how many were compared, how many
@@ -133,9 +133,9 @@ def child() -> None:
 
 
 def _mutated(text: str, rng: random.Random) -> str:
-    """``text`` with one to three mutations (see the module's docstring)."""
+    """``text`` with none to three mutations (see the module's docstring)."""
     lines = text.split("\n")
-    for _ in range(rng.randint(1, 3)):
+    for _ in range(rng.randint(0, 3)):
         k = rng.randrange(len(lines))
         how = rng.randrange(6)
         if how == 0 and len(lines) > 1:

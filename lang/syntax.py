@@ -220,8 +220,9 @@ class node_method(singledispatchmethod):
     first access (the instance finds it there before the class's descriptor) and keeps, by
     the class of the first argument, the case the dispatcher gives bound to the instance.
     The cases are registered in the class body (:meth:`register` refuses one once an
-    instance has the method) and none is registered for an abstract class, whose virtual
-    subclasses could change later, so a case kept is the one the dispatcher would give.
+    instance has the method) and none for an abstract class, whose virtual subclasses could
+    change later (the first instance's access refuses it), so a case kept is the one the
+    dispatcher would give.
     """
 
     def __set_name__(self, owner: type, name: str) -> None:
@@ -233,26 +234,26 @@ class node_method(singledispatchmethod):
         """Register a case (``singledispatchmethod.register``), in the class body only."""
         if getattr(self, "bound", False):
             raise TypeError(f"{self.attribute}: register the cases in the class body")
-        case = super().register(cls, method)
-        if any(hasattr(k, "__abstractmethods__") for k in self.dispatcher.registry):
-            raise TypeError("a case for an abstract class would not be kept")
-        return case
+        return super().register(cls, method)
 
     def __get__(self, obj: Any, cls: type | None = None) -> Any:
         """Return the dispatching wrapper, kept in ``obj`` from its first access."""
         if obj is None:
             return super().__get__(obj, cls)
+        if not self.bound and any(
+            hasattr(k, "__abstractmethods__") for k in self.dispatcher.registry
+        ):
+            raise TypeError(f"{self.attribute}: a case for an abstract class would not be kept")
         self.bound = True
         dispatch = self.dispatcher.dispatch
         cases: dict[type, Callable[..., Any]] = {}
 
-        def dispatched(*args: Any, **kwargs: Any) -> Any:
-            kind = args[0].__class__
+        def dispatched(node: Any, /, *args: Any, **kwargs: Any) -> Any:
             try:
-                case = cases[kind]
+                case = cases[node.__class__]
             except KeyError:
-                case = cases[kind] = dispatch(kind).__get__(obj, cls)
-            return case(*args, **kwargs)
+                case = cases[node.__class__] = dispatch(node.__class__).__get__(obj, cls)
+            return case(node, *args, **kwargs)
 
         dispatched.register = self.register  # type: ignore[attr-defined]  # as the base's
         dispatched.__isabstractmethod__ = self.__isabstractmethod__  # type: ignore[attr-defined]
