@@ -9,7 +9,9 @@ once), then again with the modules forgotten but the lines kept (as a process pa
 another module of the same robot meets them), then checks them (lint, the parses kept);
 last the tests' texts (the parse identity corpus of ``tests/parse_reference.py``: examples,
 windows of the golden programs, nested expressions; each parsed and, if short, linted).
-CPU seconds (``time.process_time``), median of ``--runs``, and the ratio now / before.
+CPU seconds (``time.process_time``; the garbage collected before each step, so that
+a full collection falls into the same step in both trees), median of ``--runs``, and the
+ratio now / before.
 
 ``--mutated N`` compares instead what the two trees make of N texts that are not in the
 repository, drawn with ``--seed``: windows of the golden programs and whole ones, most
@@ -25,6 +27,7 @@ each tree refused, and every text that differs.
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib.util
 import json
 import random
@@ -110,6 +113,7 @@ def child() -> None:
     for key, (parse, forget) in parsers.items():
         for step in ("", " again"):
             forget()
+            gc.collect()  # each step from the same collector's state in both trees
             t0 = time.process_time()
             for text in texts[key]:
                 parse(text)
@@ -120,11 +124,13 @@ def child() -> None:
             parsers[key][0](text)
         if key != "rapid":  # V+'s and URScript's checks are their modules' parse
             _forget_modules()
+        gc.collect()  # each step from the same collector's state in both trees
         t0 = time.process_time()
         for text in texts[key]:
             assert language(key).lint(text, "t") == []
         found[key + " check"] = time.process_time() - t0
     _forget_modules()
+    gc.collect()  # each step from the same collector's state in both trees
     t0 = time.process_time()
     for key, text in corpus.values():
         reference.outcome(key, text)
