@@ -2,7 +2,8 @@
 
 Each run is a fresh process per tree (``--before``: a checkout of the code before, run with
 the same interpreter and that checkout first on ``PYTHONPATH``), the two trees' runs
-interleaved: it builds the three grammars (timed), then parses each language's shipped
+interleaved: it builds the three grammars (timed), refuses a RAPID expression nested too
+deep (the tree parser that names its line built then, timed), then parses each language's shipped
 generated programs (tests/golden, tests/data/payload_*) once, nothing kept before (a RAPID
 module; a V+ module and a URScript program read line by line, each distinct line parsed
 once), then again with the modules forgotten but the lines kept (as a process parsing
@@ -110,6 +111,15 @@ def child() -> None:
     t0 = time.process_time()
     parsers = _parsers()
     found = {"grammars": time.process_time() - t0}
+    from wirecal.lang.rapid.parser import SyntaxProblem
+
+    gc.collect()
+    t0 = time.process_time()
+    try:  # an expression 101 deep: the parse stops, the tree parser names the line
+        parsers["rapid"][0](reference._module("x := 1" + " + 1" * 101 + ";"))
+        raise AssertionError("an expression 101 deep was not refused")
+    except SyntaxProblem:
+        found["rapid too deep"] = time.process_time() - t0
     for key, (parse, forget) in parsers.items():
         for step in ("", " again"):
             forget()
