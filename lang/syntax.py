@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Iterator
-from functools import cache, lru_cache, singledispatchmethod
+from functools import cache, lru_cache, singledispatchmethod, update_wrapper
 from typing import Any, TypeVar
 
 from wirecal.solver.errors import WirecalError
@@ -211,22 +211,52 @@ def _slots(cls: type) -> tuple[str, ...]:
 
 
 class node_method(singledispatchmethod):
-    """``functools.singledispatchmethod``, bound once per instance.
+    """``functools.singledispatchmethod``, bound once per instance, its cases found once per class.
 
     Python 3.11 builds a new wrapper (``functools.update_wrapper``) at every attribute
-    access of a ``singledispatchmethod``; a checker or compiler calls its per-node method
-    once per node, so the wrapper is kept in the instance's ``__dict__`` at its first
-    access (the instance finds it there before the class's descriptor). The cases are
-    registered in the class body, so the kept wrapper dispatches as a new one would.
+    access of a ``singledispatchmethod`` and, at every call, asks the dispatcher (a weak
+    dictionary) for the case and binds it again; a checker or compiler calls its per-node
+    method once per node. So the wrapper is kept in the instance's ``__dict__`` at its
+    first access (the instance finds it there before the class's descriptor) and keeps, by
+    the class of the first argument, the case the dispatcher gives bound to the instance.
+    The cases are registered in the class body (:meth:`register` refuses one once an
+    instance has the method) and none for an abstract class, whose virtual subclasses could
+    change later (the first instance's access refuses it), so a case kept is the one the
+    dispatcher would give.
     """
 
     def __set_name__(self, owner: type, name: str) -> None:
         """Remember the attribute's name, where an instance keeps its wrapper."""
         self.attribute = name
+        self.bound = False
+
+    def register(self, cls: Any, method: Any = None) -> Any:
+        """Register a case (``singledispatchmethod.register``), in the class body only."""
+        if getattr(self, "bound", False):
+            raise TypeError(f"{self.attribute}: register the cases in the class body")
+        return super().register(cls, method)
 
     def __get__(self, obj: Any, cls: type | None = None) -> Any:
         """Return the dispatching wrapper, kept in ``obj`` from its first access."""
-        method = super().__get__(obj, cls)
-        if obj is not None:
-            obj.__dict__[self.attribute] = method
-        return method
+        if obj is None:
+            return super().__get__(obj, cls)
+        if not self.bound and any(
+            hasattr(k, "__abstractmethods__") for k in self.dispatcher.registry
+        ):
+            raise TypeError(f"{self.attribute}: a case for an abstract class would not be kept")
+        self.bound = True
+        dispatch = self.dispatcher.dispatch
+        cases: dict[type, Callable[..., Any]] = {}
+
+        def dispatched(node: Any, /, *args: Any, **kwargs: Any) -> Any:
+            try:
+                case = cases[node.__class__]
+            except KeyError:
+                case = cases[node.__class__] = dispatch(node.__class__).__get__(obj, cls)
+            return case(node, *args, **kwargs)
+
+        dispatched.register = self.register  # type: ignore[attr-defined]  # as the base's
+        dispatched.__isabstractmethod__ = self.__isabstractmethod__  # type: ignore[attr-defined]
+        update_wrapper(dispatched, self.func)
+        obj.__dict__[self.attribute] = dispatched
+        return dispatched

@@ -13,6 +13,8 @@ import json
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from lark import Lark, Token, Tree
+from lark.exceptions import UnexpectedInput
 
 from wirecal.lang.rapid import parser as rapid
 from wirecal.lang.rapid.parser import SyntaxProblem, parse_module
@@ -81,3 +83,45 @@ def test_an_expression_is_refused_where_its_whole_tree_says(wraps: list[str], ev
     except SyntaxProblem as e:
         found = e.line, e.message
     assert found == expected
+
+
+def _written(tree: object) -> list[object]:
+    """A lark tree written out: each node's rule and lines, each token's type, text and place."""
+    out: list[object] = []
+    stack = [tree]
+    while stack:  # iterative: the corpus nests expressions beyond a few frames
+        node = stack.pop()
+        if isinstance(node, Tree):
+            meta = node.meta
+            out.append(
+                ("tree", node.data, getattr(meta, "line", None), getattr(meta, "end_line", None))
+            )
+            stack.extend(reversed(node.children))
+        elif isinstance(node, Token):
+            out.append(("token", node.type, str(node), node.line, node.column, node.end_line))
+        else:
+            out.append(("value", repr(node)))
+    return out
+
+
+def _tree_or_error(parser: Lark, text: str) -> object:
+    try:
+        return _written(parser.parse(text))
+    except UnexpectedInput as e:
+        return type(e).__name__, e.line, e.column
+
+
+@pytest.mark.slow  # about 1.2 s of CPU: the parser built anew costs what the copy saves
+def test_the_tree_parser_copied_from_the_first_reads_as_one_built_anew() -> None:
+    """The too-deep path's parser (the first's tables, copied) gives a parser built anew's trees.
+
+    Every short RAPID text of the reference corpus (the examples, the windows of the golden
+    module, the nested expressions): the same rules, lines, tokens and places, or the same
+    error at the same place.
+    """
+    built = rapid._lark(None)
+    texts = [t for key, t in CORPUS.values() if key == "rapid" and len(t) < 10_000]
+    assert len(texts) > 200
+    for text in texts:
+        plain = rapid._without_header(text)
+        assert _tree_or_error(rapid._tree_parser(), plain) == _tree_or_error(built, plain)

@@ -468,6 +468,19 @@ def _not_extended_ascii(source: str, lines: list[str]) -> list[str]:
 
 def _goes_on(text: str) -> bool:
     """Whether a statement's text goes on: brackets left open or a trailing operator."""
+    return _open_brackets(text) > 0 or (
+        bool(_CONTINUES.search(text)) and not text.rstrip().endswith(":")
+    )
+
+
+def _open_brackets(text: str) -> int:
+    """Return how many ``(``/``[`` outside strings are not closed in ``text`` (<0: too many closed).
+
+    Without a quote every bracket counts, so the count is ``str.count``'s (a generated
+    program's statements are mostly without strings, and this is asked line by line).
+    """
+    if '"' not in text and "'" not in text:
+        return text.count("(") + text.count("[") - text.count(")") - text.count("]")
     depth = 0
     quote = ""
     for ch in text:
@@ -477,7 +490,7 @@ def _goes_on(text: str) -> bool:
             quote = ch
         else:
             depth += (ch in "([") - (ch in ")]")
-    return depth > 0 or (bool(_CONTINUES.search(text)) and not text.rstrip().endswith(":"))
+    return depth
 
 
 def _layout(source: str, n: int, raw: str, first: bool, last: bool, problems: list[str]) -> None:
