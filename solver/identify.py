@@ -15,7 +15,6 @@ Values are internal units (rad, mm) inside; :class:`Estimate` reports deg and mm
 from __future__ import annotations
 
 from collections.abc import Callable
-from copy import deepcopy
 from dataclasses import dataclass
 from typing import Literal
 
@@ -167,7 +166,7 @@ def stepwise(
     of its inputs (:data:`KEPT_SOLUTIONS`); each caller is given its own copy.
     """
     key = digest("stepwise", problem, omega, max_iter)
-    return deepcopy(_SOLUTIONS.get(key, lambda: _stepwise(problem, omega, max_iter)))
+    return _SOLUTIONS.copy_of(key, lambda: _stepwise(problem, omega, max_iter))
 
 
 KEPT_SOLUTIONS = 64
@@ -321,7 +320,7 @@ def joint(
     is given its own copy.
     """
     key = digest("joint", problem, x0, loss, f_scale_mm, scale)
-    return deepcopy(_SOLUTIONS.get(key, lambda: _joint(problem, x0, loss, f_scale_mm, scale)))
+    return _SOLUTIONS.copy_of(key, lambda: _joint(problem, x0, loss, f_scale_mm, scale))
 
 
 def _joint(

@@ -10,6 +10,7 @@ so threads need none).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import hashlib
 from collections.abc import Callable
@@ -64,6 +65,10 @@ class Kept(Generic[T]):
             self._kept.clear()
         self._kept[key] = out
         return out
+
+    def copy_of(self, key: bytes, compute: Callable[[], T]) -> T:
+        """Return a deep copy of :meth:`get`'s result: for a caller that may change it."""
+        return copy.deepcopy(self.get(key, compute))
 
 
 def by_point(evaluate: Callable[[np.ndarray], T], size: int) -> Callable[[np.ndarray], T]:

@@ -159,3 +159,20 @@ def test_a_plates_grid_is_kept_read_only_and_another_setup_is_solved(viper, monk
     for other in ((viper, moved, 1.0), (viper, setup, 2.0)):
         with pytest.raises(RuntimeError, match="solved again"):
             plate_grid(*other)
+
+
+def test_a_copy_of_a_kept_result_is_computed_once_and_changing_it_leaves_the_kept_one():
+    kept: Kept[dict] = Kept(4)
+    calls = []
+
+    def compute() -> dict:
+        calls.append(1)
+        return {"x": np.array([1.0, 2.0])}
+
+    first = kept.copy_of(b"k", compute)
+    first["x"][0] = 99.0
+    second = kept.copy_of(b"k", compute)
+    assert len(calls) == 1
+    assert second is not first
+    assert second["x"] is not first["x"]
+    assert second["x"].tolist() == [1.0, 2.0]

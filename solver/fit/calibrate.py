@@ -31,7 +31,6 @@ identifiable DH errors). The steps:
 from __future__ import annotations
 
 from collections.abc import Callable
-from copy import deepcopy
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -506,8 +505,7 @@ def fit_core(
     inputs (:data:`KEPT_FITS`); each caller is given its own copy.
     """
     key = digest("fit_core", base, data, scale, single_session, compliances)
-    fitted = _FITS.get(key, lambda: _fit_core(base, data, scale, single_session, compliances))
-    return deepcopy(fitted)
+    return _FITS.copy_of(key, lambda: _fit_core(base, data, scale, single_session, compliances))
 
 
 KEPT_FITS = 16
